@@ -1,0 +1,1 @@
+"""The ``fabkiri`` command line: a thin shell over the Python API."""

@@ -1,0 +1,134 @@
+"""``fabkiri new | import | info | export``: making, importing and inspecting patterns."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+from ..errors import CheckFailed, InputError
+from ..fileio import atomic_write
+from ..mechanics.contract import adopt_state_labels, contract, with_contracted_states
+from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
+from ..pattern.io import import_obj, obj_text, read_pattern, write_pattern
+from ..pattern.lattice import standard_pattern
+from ..pattern.model import Pattern
+
+
+def parse_tiles(text: str) -> tuple[int, int]:
+    """``ROWSxCOLS`` -> (rows, cols), both >= 1."""
+    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
+    if not m:
+        raise InputError(f"--tiles expects ROWSxCOLS such as 8x8, got {text!r}")
+    rows, cols = int(m.group(1)), int(m.group(2))
+    if rows < 1 or cols < 1:
+        raise InputError(f"--tiles needs at least one row and one column, got {rows}x{cols}")
+    return rows, cols
+
+
+def load_any(path: str) -> Pattern:
+    """A pattern from ``pattern.json`` or, by suffix, a design ``.obj``."""
+    if Path(path).suffix.lower() == ".obj":
+        return adopt_state_labels(import_obj(path))
+    return read_pattern(path)
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v > 0 or v != v or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive finite number, got {text!r}")
+    return v
+
+
+def cmd_new(args: argparse.Namespace) -> int:
+    rows, cols = parse_tiles(args.tiles)
+    pattern = standard_pattern(rows, cols, tile_size=args.tile_size, angle_deg=args.angle, name=args.name or "")
+    pattern = with_contracted_states(pattern)
+    info = describe(pattern)
+    if not info.closes_both:  # cannot happen for the standard lattice; never write a wrong file
+        raise CheckFailed("; ".join(info.problems()))
+    write_pattern(pattern, args.output)
+    print(f"wrote {args.output}: standard {rows}x{cols}, tile {args.tile_size:g} mm, ψ = {args.angle:g}°, "
+          f"{info.width_mm:.1f} x {info.height_mm:.1f} mm deployed", file=sys.stderr)
+    return 0
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    pattern = adopt_state_labels(import_obj(args.design, args.contracted or [], scale=args.scale))
+    info = describe(pattern)
+    write_pattern(pattern, args.output)
+    print(f"wrote {args.output}: {info.tiles} tiles, {info.holes} holes, "
+          f"{len(pattern.contracted)} contracted state(s) stored", file=sys.stderr)
+    for problem in info.problems():
+        print(f"note: {problem}", file=sys.stderr)
+    return 0
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    pattern = load_any(args.file)
+    info = describe(pattern, tol=args.tol, tol_rad=args.tol_rad)
+    if args.json:
+        print(json.dumps(info.to_dict(), indent=2))
+    else:
+        print(info.to_text())
+    if args.check and (not info.closes_both or not info.supplied_ok):
+        print(f"fabkiri: check failed: {'; '.join(info.problems())}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    pattern = load_any(args.file)
+    state = args.state
+    if state != "deployed":
+        s = int(state)
+        if s not in pattern.contracted:
+            c = contract(pattern, s)
+            if c.max_closure > DEFAULT_TOL * pattern.tile_size:
+                raise CheckFailed(
+                    f"state {s} does not close (loop closure {c.max_closure / pattern.tile_size:.3g} tile sizes "
+                    f"at hole {c.worst_hole}); nothing exported"
+                )
+            pattern = pattern.with_contracted({**pattern.contracted, s: c.corners})
+    atomic_write(args.output, obj_text(pattern, state))
+    print(f"wrote {args.output}: state {state}, {pattern.n_tiles} faces", file=sys.stderr)
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("new", help="write a standard rotating-squares pattern with both closed states")
+    p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 8x8")
+    p.add_argument("--tile-size", type=_positive, default=10.0, metavar="MM", help="tile edge in mm (default 10)")
+    p.add_argument("--angle", type=float, default=45.0, metavar="DEG",
+                   help="deployment angle ψ in degrees, 0..90 (default 45: square holes)")
+    p.add_argument("--name", help="pattern name stored in the file")
+    p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
+    p.set_defaults(func=cmd_new)
+
+    p = sub.add_parser("import", help="import an OBJ design (and its contracted states) into pattern.json")
+    p.add_argument("design", help="deployed design .obj")
+    p.add_argument("--contracted", nargs="+", metavar="OBJ", help="contracted state files: state 1 [state 2]")
+    p.add_argument("--scale", type=_positive, default=1.0, metavar="MM", help="millimetres per OBJ unit (default 1)")
+    p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
+    p.set_defaults(func=cmd_import)
+
+    p = sub.add_parser("info", help="counts, residuals and closure of a pattern (.json or .obj)")
+    p.add_argument("file")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--check", action="store_true", help="exit 1 unless the pattern closes in both states")
+    p.add_argument("--tol", type=_positive, default=DEFAULT_TOL,
+                   help=f"closure tolerance relative to the mean tile edge (default {DEFAULT_TOL:g})")
+    p.add_argument("--tol-rad", type=_positive, default=DEFAULT_TOL_RAD,
+                   help=f"angle tolerance in radians (default {DEFAULT_TOL_RAD:g})")
+    p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("export", help="write one state of a pattern as OBJ")
+    p.add_argument("file")
+    p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.obj")
+    p.set_defaults(func=cmd_export)

@@ -1,0 +1,164 @@
+"""A quick report on a pattern: counts, residuals and whether it closes.
+
+This is what ``fabkiri info`` prints. The full geometric proof (compactness,
+overlaps, cut layouts) is :mod:`fabkiri.verify`; this module only measures the
+quantities of the inverse-design constraints and the two contractions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..pattern import geometry
+from ..pattern.model import Pattern
+from ..pattern.residuals import hinge_sums, state_residuals
+from ..pattern.topology import STATES
+from .contract import contract
+
+DEFAULT_TOL = 1e-9  # relative to the mean tile edge (spec §10, analytic tier)
+DEFAULT_TOL_RAD = 1e-9
+
+
+@dataclass
+class StateInfo:
+    state: int
+    closes: bool
+    max_closure_mm: float
+    max_closure_rel: float  # in tile sizes
+    worst_hole: int | None
+    edge_pair_max_mm: float
+    edge_pair_max_rel: float
+    ring_max_rad: float
+    wrapped_tiles: list[int]
+    supplied_match_rel: float | None = None  # aligned distance to the stored state, tile sizes
+    supplied_matches: bool | None = None
+
+
+@dataclass
+class PatternInfo:
+    name: str
+    tiles: int
+    nodes: int
+    hinges: int
+    free_corners: int
+    holes: int
+    tile_size_mm: float
+    width_mm: float
+    height_mm: float
+    self_intersecting_tiles: list[int]
+    clockwise_tiles: list[int]
+    hinge_sum_max_rad: float
+    rigid_deployable: bool
+    tolerance_rel: float
+    tolerance_rad: float
+    states: list[StateInfo] = field(default_factory=list)
+
+    @property
+    def closes_both(self) -> bool:
+        return all(s.closes for s in self.states)
+
+    @property
+    def supplied_ok(self) -> bool:
+        return all(s.supplied_matches is not False for s in self.states)
+
+    def problems(self) -> list[str]:
+        """One sentence per failed check (empty when the pattern closes in both states)."""
+        out = []
+        for s in self.states:
+            if not s.closes:
+                out.append(
+                    f"does not close in state {s.state}: loop closure {s.max_closure_rel:.3g} tile sizes "
+                    f"({s.max_closure_mm:.4g} mm) at hole {s.worst_hole}, tolerance {self.tolerance_rel:g}"
+                )
+            if s.supplied_matches is False:
+                out.append(
+                    f"stored state {s.state} differs from the computed one by {s.supplied_match_rel:.3g} "
+                    f"tile sizes after rigid alignment (tolerance {self.tolerance_rel:g})"
+                )
+        return out
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["closes_both"] = self.closes_both
+        d["problems"] = self.problems()
+        return d
+
+    def to_text(self) -> str:
+        lines = [
+            f"pattern      {self.name or '(unnamed)'}",
+            f"tiles        {self.tiles}   hinges {self.hinges}   free corners {self.free_corners}   "
+            f"holes {self.holes}   nodes {self.nodes}",
+            f"size         {self.width_mm:.3f} x {self.height_mm:.3f} mm deployed, mean tile edge "
+            f"{self.tile_size_mm:.4g} mm",
+        ]
+        if self.self_intersecting_tiles:
+            lines.append(f"WARNING      self-intersecting tiles: {self.self_intersecting_tiles}")
+        if self.clockwise_tiles:
+            lines.append(f"WARNING      clockwise (reversed) tiles: {self.clockwise_tiles}")
+        lines.append(
+            f"hinge sums   max |θA+θB-π| = {self.hinge_sum_max_rad:.3e} rad -> "
+            f"{'rigid-deployable' if self.rigid_deployable else 'not rigid-deployable'}"
+        )
+        lines.append("state  closes  loop closure (tile sizes / mm)   edge pairs (mm)   rings (rad)   stored state")
+        for s in self.states:
+            stored = "—" if s.supplied_match_rel is None else (
+                f"{'matches' if s.supplied_matches else 'DIFFERS'} ({s.supplied_match_rel:.2e})")
+            lines.append(
+                f"{s.state:>5}  {'yes' if s.closes else 'NO':>6}  {s.max_closure_rel:>12.3e} / {s.max_closure_mm:<12.3e}"
+                f"   {s.edge_pair_max_mm:>13.3e}   {s.ring_max_rad:>11.3e}   {stored}"
+            )
+            if s.wrapped_tiles:
+                lines.append(f"       ring residuals wrapped by 2π because of tiles {s.wrapped_tiles}")
+        lines.append(f"tolerance    {self.tolerance_rel:g} x tile size, {self.tolerance_rad:g} rad")
+        verdict = "closes in both states" if self.closes_both else "; ".join(self.problems())
+        lines.append(f"verdict      {verdict}")
+        return "\n".join(lines)
+
+
+def describe(pattern: Pattern, tol: float = DEFAULT_TOL, tol_rad: float = DEFAULT_TOL_RAD) -> PatternInfo:
+    """Measure a pattern: topology counts, residuals, both contractions."""
+    top = pattern.topology
+    corners = pattern.corners()
+    size = pattern.tile_size
+    lo, hi = pattern.nodes.min(0), pattern.nodes.max(0)
+    hs = hinge_sums(pattern)
+    info = PatternInfo(
+        name=pattern.name,
+        tiles=top.n_tiles,
+        nodes=len(pattern.nodes),
+        hinges=top.n_hinges,
+        free_corners=len(top.free_nodes),
+        holes=top.n_holes,
+        tile_size_mm=size,
+        width_mm=float(hi[0] - lo[0]),
+        height_mm=float(hi[1] - lo[1]),
+        self_intersecting_tiles=geometry.self_intersecting_tiles(corners).tolist(),
+        clockwise_tiles=np.flatnonzero(geometry.signed_areas(corners) <= 0).tolist(),
+        hinge_sum_max_rad=float(np.abs(hs).max(initial=0.0)),
+        rigid_deployable=bool(np.abs(hs).max(initial=0.0) <= tol_rad),
+        tolerance_rel=tol,
+        tolerance_rad=tol_rad,
+    )
+    for s in STATES:
+        c = contract(pattern, s)
+        r = state_residuals(pattern, s)
+        st = StateInfo(
+            state=s,
+            closes=bool(c.max_closure <= tol * size),
+            max_closure_mm=c.max_closure,
+            max_closure_rel=c.max_closure / size,
+            worst_hole=c.worst_hole,
+            edge_pair_max_mm=float(r.edge_pairs.max(initial=0.0)),
+            edge_pair_max_rel=float(r.edge_pairs.max(initial=0.0)) / size,
+            ring_max_rad=float(np.abs(r.rings).max(initial=0.0)),
+            wrapped_tiles=r.wrapped_tiles.tolist(),
+        )
+        if s in pattern.contracted:
+            # stored tiles must each be congruent and placed as computed (up to one rigid motion)
+            d = geometry.aligned_distance(c.corners, pattern.contracted[s]) / size
+            st.supplied_match_rel = d
+            st.supplied_matches = bool(d <= tol * np.sqrt(top.n_tiles))
+        info.states.append(st)
+    return info

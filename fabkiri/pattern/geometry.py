@@ -1,0 +1,108 @@
+"""Small vectorised planar-geometry helpers shared by every layer.
+
+All functions take numpy arrays and work on whole batches of tiles at once:
+``corners`` is always an array of shape ``(T, 4, 2)`` (tile, corner, xy) with
+corners in counter-clockwise order.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+TWO_PI = 2.0 * np.pi
+
+
+def cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """z-component of the cross product of 2D vectors (broadcasting)."""
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def dot2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1]
+
+
+def signed_angle(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Signed angle in (-pi, pi] that turns direction ``u`` onto ``v``."""
+    return np.arctan2(cross2(u, v), dot2(u, v))
+
+
+def wrap_angle(a: np.ndarray) -> np.ndarray:
+    """Map angles into (-pi, pi]."""
+    w = np.mod(np.asarray(a, dtype=float) + np.pi, TWO_PI) - np.pi
+    return np.where(w == -np.pi, np.pi, w)
+
+
+def rotation(theta: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(..., 2, 2)`` for angles ``theta``."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def rotate(points: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Rotate points ``(..., 2)`` by ``theta`` (broadcast over leading axes)."""
+    c, s = np.cos(theta), np.sin(theta)
+    x, y = points[..., 0], points[..., 1]
+    return np.stack([c * x - s * y, s * x + c * y], -1)
+
+
+def corner_angles(corners: np.ndarray) -> np.ndarray:
+    """Interior angle at every corner of CCW quads, in [0, 2*pi).
+
+    The angle at corner k turns the edge to corner k+1 onto the edge to
+    corner k-1 counter-clockwise, so a convex CCW tile has angles in (0, pi).
+    """
+    nxt = np.roll(corners, -1, axis=-2) - corners
+    prv = np.roll(corners, 1, axis=-2) - corners
+    return np.mod(signed_angle(nxt, prv), TWO_PI)
+
+
+def edge_lengths(corners: np.ndarray) -> np.ndarray:
+    """Length of edge k (corner k to k+1) of every tile, shape ``(T, 4)``."""
+    return np.linalg.norm(np.roll(corners, -1, axis=-2) - corners, axis=-1)
+
+
+def signed_areas(corners: np.ndarray) -> np.ndarray:
+    """Shoelace signed area of every polygon; positive when CCW."""
+    nxt = np.roll(corners, -1, axis=-2)
+    return 0.5 * cross2(corners, nxt).sum(axis=-1)
+
+
+def mean_edge_length(corners: np.ndarray) -> float:
+    """The mean tile edge, the length scale every relative tolerance uses."""
+    return float(edge_lengths(corners).mean()) if corners.size else 1.0
+
+
+def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[float, np.ndarray]:
+    """Proper rigid motion (no reflection) that best maps ``source`` onto ``target``.
+
+    Returns ``(theta, t)`` with ``target ≈ rotate(source, theta) + t`` in the
+    least-squares sense. In 2D the optimal rotation has a closed form.
+    """
+    p = source.reshape(-1, 2)
+    q = target.reshape(-1, 2)
+    pc, qc = p.mean(axis=0), q.mean(axis=0)
+    p0, q0 = p - pc, q - qc
+    theta = float(np.arctan2(cross2(p0, q0).sum(), dot2(p0, q0).sum()))
+    t = qc - rotate(pc, theta)
+    return theta, t
+
+
+def aligned_distance(source: np.ndarray, target: np.ndarray) -> float:
+    """Largest point distance after the best proper rigid alignment."""
+    theta, t = kabsch(source, target)
+    moved = rotate(source.reshape(-1, 2), theta) + t
+    return float(np.linalg.norm(moved - target.reshape(-1, 2), axis=1).max(initial=0.0))
+
+
+def self_intersecting_tiles(corners: np.ndarray) -> np.ndarray:
+    """Indices of tiles whose outline crosses itself (e.g. bow-tie quads).
+
+    Uses GEOS through shapely: a polygon ring that touches or crosses itself
+    is not valid.
+    """
+    import shapely
+
+    if len(corners) == 0:
+        return np.zeros(0, dtype=int)
+    polys = shapely.polygons(corners)
+    return np.flatnonzero(~shapely.is_valid(polys))

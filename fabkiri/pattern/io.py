@@ -1,0 +1,283 @@
+"""Reading and writing patterns: ``pattern.json`` and Wavefront OBJ (spec §9).
+
+``pattern.json`` is validated against the JSON Schema shipped beside this
+module, then against the model's own consistency rules. OBJ files are the
+design/contracted triples written by other kirigami tools: ``v x y z`` and
+``f a// b// c// d//`` lines, 1-based, identical face lists across a set.
+Every reader raises :class:`~fabkiri.errors.PatternError` with a one-line
+message naming the file and the problem.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import PatternError
+from ..fileio import atomic_write
+from . import geometry
+from .model import Pattern
+
+FORMAT = "fabkiri.pattern"
+VERSION = 1
+
+
+# ---------------------------------------------------------------- pattern.json
+
+
+@lru_cache(maxsize=1)
+def schema() -> dict[str, Any]:
+    """The JSON Schema of pattern.json version 1."""
+    text = resources.files(__package__).joinpath("pattern.schema.json").read_text("utf-8")
+    return json.loads(text)
+
+
+def _reject_constant(name: str) -> float:
+    raise PatternError(f"non-finite number {name} in the file")
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    text = json.dumps(value) if not isinstance(value, str) else repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _schema_error(data: Any) -> str | None:
+    from jsonschema import Draft202012Validator
+    from jsonschema.exceptions import best_match
+
+    validator = Draft202012Validator(schema())
+    err = best_match(validator.iter_errors(data))
+    if err is None:
+        return None
+    where = "/".join(str(p) for p in err.absolute_path) or "top level"
+    if err.validator in ("required", "additionalProperties", "enum", "const"):
+        what = err.message
+    else:
+        what = f"{_short(err.instance)} fails '{err.validator}' ({_short(err.validator_value, 40)})"
+    return f"{where}: {what}"[:300]
+
+
+def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
+    """Build a :class:`Pattern` from parsed ``pattern.json`` content."""
+    if not isinstance(data, dict):
+        raise PatternError(f"{source}: expected a JSON object, got {type(data).__name__}")
+    if data.get("format") != FORMAT:
+        raise PatternError(f"{source}: not a fabkiri pattern (format is {_short(data.get('format'))}, "
+                           f"expected {FORMAT!r})")
+    if data.get("version") != VERSION:
+        raise PatternError(f"{source}: unsupported pattern version {_short(data.get('version'))} "
+                           f"(this fabkiri reads version {VERSION})")
+    problem = _schema_error(data)
+    if problem:
+        raise PatternError(f"{source}: {problem}")
+    try:
+        return Pattern(
+            nodes=np.asarray(data["nodes"], dtype=float),
+            tiles=np.asarray(data["tiles"], dtype=np.int64),
+            contracted={int(k): np.asarray(v, dtype=float) for k, v in data.get("contracted", {}).items()},
+            parity=int(data.get("parity", 0)),
+            name=str(data.get("name", "")),
+            lattice=data.get("lattice"),
+            design=data.get("design"),
+        )
+    except PatternError as exc:
+        raise PatternError(f"{source}: {exc}") from None
+
+
+def loads(text: str, source: str = "pattern") -> Pattern:
+    if not text.strip():
+        raise PatternError(f"{source}: the file is empty")
+    try:
+        data = json.loads(text, parse_constant=_reject_constant)
+    except PatternError as exc:
+        raise PatternError(f"{source}: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise PatternError(f"{source}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    return pattern_from_dict(data, source)
+
+
+def read_pattern(path: str | os.PathLike) -> Pattern:
+    """Read ``pattern.json`` (validated); raises :class:`PatternError`."""
+    text = _read_text(path)
+    return loads(text, str(path))
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        v = float(value)
+        return v if math.isfinite(v) else None  # JSON has no NaN; None says "not measured"
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def _rows(rows: list, indent: str) -> str:
+    """A JSON array with one compact row per line (diff-friendly, deterministic)."""
+    if not rows:
+        return "[]"
+    inner = f",\n{indent}  ".join(json.dumps(r, separators=(", ", ": ")) for r in rows)
+    return f"[\n{indent}  {inner}\n{indent}]"
+
+
+def dumps(pattern: Pattern) -> str:
+    """``pattern.json`` text: deterministic bytes for the same pattern."""
+    head: dict[str, Any] = {"format": FORMAT, "version": VERSION, "units": "mm"}
+    if pattern.name:
+        head["name"] = pattern.name
+    head["parity"] = pattern.parity
+    parts = [f'  "{k}": {json.dumps(v)}' for k, v in head.items()]
+    if pattern.lattice:
+        parts.append(f'  "lattice": {json.dumps(_jsonable(pattern.lattice), sort_keys=True)}')
+    parts.append(f'  "nodes": {_rows(pattern.nodes.tolist(), "  ")}')
+    parts.append(f'  "tiles": {_rows(pattern.tiles.tolist(), "  ")}')
+    if pattern.contracted:
+        states = [f'    "{s}": {_rows(pattern.contracted[s].tolist(), "    ")}' for s in sorted(pattern.contracted)]
+        parts.append('  "contracted": {\n' + ",\n".join(states) + "\n  }")
+    if pattern.design:
+        design = json.dumps(_jsonable(pattern.design), indent=2, sort_keys=True).replace("\n", "\n  ")
+        parts.append(f'  "design": {design}')
+    return "{\n" + ",\n".join(parts) + "\n}\n"
+
+
+def write_pattern(pattern: Pattern, path: str | os.PathLike) -> Path:
+    return atomic_write(path, dumps(pattern))
+
+
+# ------------------------------------------------------------------------ OBJ
+
+
+def _read_text(path: str | os.PathLike) -> str:
+    p = Path(path)
+    if not p.exists():
+        raise PatternError(f"{p}: no such file")
+    if p.is_dir():
+        raise PatternError(f"{p}: is a folder, expected a file")
+    try:
+        return p.read_text("utf-8")
+    except UnicodeDecodeError:
+        raise PatternError(f"{p}: not a text file") from None
+    except OSError as exc:
+        raise PatternError(f"{p}: cannot be read ({exc.strerror})") from None
+
+
+def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
+    """Vertices ``(n, 2)`` and 0-based quad faces ``(T, 4)`` of an OBJ text."""
+    verts: list[tuple[float, float]] = []
+    faces: list[list[int]] = []
+    for lineno, raw in enumerate(text.splitlines(), 1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        tag, *rest = line.split()
+        if tag == "v":
+            try:
+                vals = [float(t) for t in rest[:3]]
+            except ValueError:
+                raise PatternError(f"{source}: line {lineno}: vertex coordinates are not numbers") from None
+            if len(vals) < 2:
+                raise PatternError(f"{source}: line {lineno}: a vertex needs at least x and y")
+            if not all(math.isfinite(v) for v in vals):
+                raise PatternError(f"{source}: line {lineno}: non-finite vertex coordinate")
+            if len(vals) == 3 and vals[2] != 0.0:
+                raise PatternError(f"{source}: line {lineno}: vertex has z = {vals[2]}; patterns are planar (z = 0)")
+            verts.append((vals[0], vals[1]))
+        elif tag == "f":
+            idx = []
+            for tok in rest:
+                try:
+                    idx.append(int(tok.split("/", 1)[0]))
+                except ValueError:
+                    raise PatternError(f"{source}: line {lineno}: face index {tok!r} is not an integer") from None
+            if len(idx) != 4:
+                raise PatternError(f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads")
+            faces.append(idx)
+        # other records (vn, vt, o, g, s, usemtl, ...) carry nothing a pattern needs
+    if not verts:
+        raise PatternError(f"{source}: no vertices (empty or not an OBJ file)")
+    if not faces:
+        raise PatternError(f"{source}: no faces")
+    f = np.asarray(faces, dtype=np.int64)
+    bad = (f < 1) | (f > len(verts))
+    if bad.any():
+        i = int(np.flatnonzero(bad.any(1))[0])
+        raise PatternError(f"{source}: face {i} references vertex {int(f[i][bad[i]][0])}, "
+                           f"but the file has vertices 1..{len(verts)}")
+    return np.asarray(verts, dtype=float), f - 1
+
+
+def read_obj(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    return parse_obj(_read_text(path), str(path))
+
+
+def import_obj(
+    design: str | os.PathLike,
+    contracted: list[str | os.PathLike] | tuple = (),
+    *,
+    scale: float = 1.0,
+    name: str | None = None,
+) -> Pattern:
+    """A pattern from an OBJ design file and optionally its contracted files.
+
+    ``scale`` is millimetres per OBJ unit. Tiles listed clockwise overall are
+    reversed. The contracted files are stored as states 1 and 2 in the given
+    order; :func:`fabkiri.mechanics.contract.adopt_state_labels` then picks the
+    fold parity that makes the computed states agree with those labels.
+    """
+    if not math.isfinite(scale) or scale <= 0:
+        raise PatternError(f"scale must be a positive number of mm per OBJ unit, got {scale}")
+    if len(contracted) > 2:
+        raise PatternError(f"at most two contracted files (states 1 and 2), got {len(contracted)}")
+    verts, faces = read_obj(design)
+    flip = geometry.signed_areas(verts[faces]).sum() < 0
+    if flip:
+        faces = faces[:, ::-1]
+    states: dict[int, np.ndarray] = {}
+    for i, path in enumerate(contracted, 1):
+        cv, cf = read_obj(path)
+        if flip:
+            cf = cf[:, ::-1]
+        if cf.shape != faces.shape or not np.array_equal(cf, faces):
+            raise PatternError(f"{path}: its face list differs from the design's ({design})")
+        if len(cv) != len(verts):
+            raise PatternError(f"{path}: has {len(cv)} vertices, the design has {len(verts)}")
+        states[i] = cv[faces] * scale
+    return Pattern(
+        nodes=verts * scale,
+        tiles=faces,
+        contracted=states,
+        name=name if name is not None else Path(design).stem,
+        design={"source": {"design": Path(design).name, "contracted": [Path(p).name for p in contracted],
+                           "scale_mm_per_unit": scale, "reversed_tiles": bool(flip)}},
+    )
+
+
+def obj_text(pattern: Pattern, state: str | int = "deployed", scale: float = 1.0) -> str:
+    """OBJ of one state with the pattern's node indexing and face list.
+
+    Closed states repeat coordinates for nodes that coincide there. ``scale``
+    divides the mm coordinates (1 writes millimetres).
+    """
+    xy = pattern.node_positions(state) / scale
+    lines = [f"# {len(xy)} vertices, {pattern.n_tiles} faces"]
+    lines += [f"v {x!r} {y!r} 0.0" for x, y in xy.tolist()]
+    lines += ["f " + " ".join(f"{i + 1}//" for i in tile) for tile in pattern.tiles.tolist()]
+    return "\n".join(lines) + "\n"
+
+
+def write_obj(pattern: Pattern, path: str | os.PathLike, state: str | int = "deployed") -> Path:
+    return atomic_write(path, obj_text(pattern, state))
