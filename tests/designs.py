@@ -19,10 +19,14 @@ from fabkiri.pattern.lattice import standard_pattern
 from fabkiri.pattern.model import Pattern
 
 
-def _residuals(pattern: Pattern, x: np.ndarray) -> np.ndarray:
+def _residuals(pattern: Pattern, x: np.ndarray, rigid: bool = False) -> np.ndarray:
     top = pattern.topology
     angles = geometry.corner_angles(x[top.tiles])
     out = []
+    if rigid:  # hinge sums θA + θB = π (spec §2.5)
+        A, B = top.hinge_tiles.T
+        cA, cB = top.hinge_corner.T
+        out.append(geometry.wrap_angle(angles[A, cA] + angles[B, cB] - np.pi) * pattern.tile_size)
     h = x[top.hinge_node]
     for s in (1, 2):
         fold = top.fold(s)
@@ -35,10 +39,16 @@ def _residuals(pattern: Pattern, x: np.ndarray) -> np.ndarray:
     return np.concatenate(out)
 
 
-def _sparsity(pattern: Pattern) -> sparse.csr_matrix:
+def _sparsity(pattern: Pattern, rigid: bool = False) -> sparse.csr_matrix:
     top = pattern.topology
     rows, cols = [], []
     r0 = 0
+    if rigid:
+        both = top.tiles[top.hinge_tiles].reshape(top.n_hinges, 8)
+        for k in range(8):
+            rows.append(np.arange(top.n_hinges))
+            cols.append(both[:, k])
+        r0 = top.n_hinges
     for s in (1, 2):
         fold = top.fold(s)
         nodes = np.stack([top.hinge_node, fold.fold_ends[:, 0], fold.fold_ends[:, 1]], -1)
@@ -61,11 +71,13 @@ def _sparsity(pattern: Pattern) -> sparse.csr_matrix:
 
 
 def reconfigurable_design(rows: int, cols: int, *, seed: int = 0, amplitude: float = 0.08,
-                          waves: float = 1.5, tile_size: float = 10.0) -> Pattern:
+                          waves: float = 1.5, tile_size: float = 10.0, rigid: bool = False) -> Pattern:
     """A reconfigurable, generically non-rigid pattern near the standard one.
 
     ``amplitude`` is the size of the smooth perturbation in tile sizes before
     the projection, ``waves`` roughly its number of waves across the pattern.
+    ``rigid`` adds the hinge sums (spec §2.5): the result is then a
+    reconfigurable, rigid-deployable design other than the standard one.
     """
     base = standard_pattern(rows, cols, tile_size=tile_size)
     rng = np.random.default_rng(seed)
@@ -78,12 +90,12 @@ def reconfigurable_design(rows: int, cols: int, *, seed: int = 0, amplitude: flo
         phase = rng.uniform(0, 2 * np.pi)
         field += rng.normal(size=2) * np.sin(u @ k + phase)[:, None]
     x_start = x0 + amplitude * tile_size * field / np.abs(field).max()
-    sparsity = _sparsity(base)
+    sparsity = _sparsity(base, rigid)
 
     def fun(flat):
-        return _residuals(base, flat.reshape(-1, 2))
+        return _residuals(base, flat.reshape(-1, 2), rigid)
 
     sol = least_squares(fun, x_start.ravel(), jac_sparsity=sparsity, method="trf", x_scale=tile_size,
                         ftol=1e-15, xtol=1e-15, gtol=1e-15, max_nfev=200)
-    return Pattern(nodes=sol.x.reshape(-1, 2), tiles=base.tiles, name=f"reconfigurable {rows}x{cols} seed {seed}",
+    return Pattern(nodes=sol.x.reshape(-1, 2), tiles=base.tiles, name=f"{'rigid ' if rigid else ''}reconfigurable {rows}x{cols} seed {seed}",
                    lattice=base.lattice)
