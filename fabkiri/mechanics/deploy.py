@@ -562,21 +562,41 @@ def minimise(sp: Springs, x0: np.ndarray, A: sparse.csr_matrix, b: np.ndarray, *
     return x
 
 
+def _driver_increments(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, driver: str) -> np.ndarray:
+    """Largest driver change over each interval of ``t``: radians (rotations) or tile sizes (tips)."""
+    if driver == "rotations":
+        deployed = pattern.corners()
+        v = {s: tile_angles(deployed, states[s]) for s in (1, 2)}
+        vals = _piecewise(t, v[1], np.zeros(pattern.n_tiles), v[2])  # (F, T)
+    else:
+        free = pattern.topology.free_nodes
+        x = {0: pattern.nodes[free], **{s: _node_positions(pattern, states[s])[free] for s in (1, 2)}}
+        vals = _piecewise(t, x[1], x[0], x[2]).reshape(len(t), -1) / pattern.tile_size
+    return np.abs(np.diff(vals, axis=0)).max(axis=1, initial=0.0)
+
+
 def elastic_path(
     pattern: Pattern, steps: int = 40, *, driver: str = "rotations", collision_tol: float = 1e-9,
-    step_tol: float = 1e-11,
+    step_tol: float = 1e-11, max_increment: float = 0.03,
 ) -> DeploymentPath:
     """The driven quasi-static path (see the module docstring for the drivers).
 
-    ``step_tol`` (relative to the mean tile edge) ends each Newton solve.
+    Between two output frames the drivers advance in internal sub-steps of at
+    most ``max_increment`` (radians of tile rotation, or tile sizes of tip
+    motion), so a coarse ``steps`` does not make the continuation jump onto
+    another branch. ``step_tol`` (relative to the mean tile edge) ends each
+    Newton solve.
     """
     if driver not in DRIVERS:
         raise InputError(f"driver must be one of {', '.join(DRIVERS)}, not {driver!r}")
     states = closed_states(pattern)
     t = path_parameter(steps)
+    n_sub = np.maximum(1, np.ceil(_driver_increments(pattern, states, t, driver) / max_increment)).astype(int)
+    fine = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in zip(t[:-1], t[1:], n_sub)] + [t[-1:]])
+    keep = np.concatenate([[0], np.cumsum(n_sub)])  # output frames within the fine grid
     sp = springs(pattern)
     make = rotation_drivers if driver == "rotations" else tip_drivers
-    drivers = make(pattern, states, t)
+    drivers = make(pattern, states, fine)
     x1 = _node_positions(pattern, states[1]).ravel()
     tol = step_tol * pattern.tile_size
     stats = MinimiseStats()
@@ -592,11 +612,11 @@ def elastic_path(
         x = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats)
         sols.append(x)
         prev2, prev = prev, x
-    nodes = np.stack(sols).reshape(len(t), -1, 2)
+    nodes = np.stack(sols)[keep].reshape(len(t), -1, 2)
     corners = nodes[:, pattern.tiles]
-    solver = {"linear_solves": stats.iterations, "factorizations": stats.factorizations,
-              "rejected_steps": stats.rejected,
-              "unconverged_steps": stats.max_iterations_hit, "step_tol_rel": step_tol}
+    solver = {"solves": len(fine), "linear_solves": stats.iterations, "factorizations": stats.factorizations,
+              "rejected_steps": stats.rejected, "unconverged_steps": stats.max_iterations_hit,
+              "step_tol_rel": step_tol, "max_increment": max_increment}
     return _finish(pattern, "elastic", driver, t, nodes, corners, sp, states, collision_tol, solver=solver)
 
 
