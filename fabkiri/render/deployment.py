@@ -41,8 +41,9 @@ def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> by
         ax.set_ylim(-0.03 * top, 1.12 * top)
     for name, tm in MARKS.items():
         ax.axvline(tm, color="0.4", lw=0.8, ls="--")
-        ax.text(tm + 0.008, 0.5, name, transform=ax.get_xaxis_transform(), ha="left", va="center", rotation=90,
-                fontsize=8, color="0.3")
+        right = tm > 0.75  # keep the last label inside the axes
+        ax.text(tm - 0.008 if right else tm + 0.008, 0.5, name, transform=ax.get_xaxis_transform(),
+                ha="right" if right else "left", va="center", rotation=90, fontsize=8, color="0.3")
     ax.set_xlim(-0.02, 1.02)
     ax.set_xlabel("path parameter t")
     ax.set_ylabel("spring energy  Σ((l - l₀)/l₀)²")
