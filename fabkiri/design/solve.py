@@ -90,6 +90,7 @@ class DesignResult:
     report: dict
     converged: bool
     closed_grids: dict  # state -> (V, 2) closed-state pattern vertices in mm
+    closed_targets: dict  # state -> Target (mm) the closed grid was fitted to, scaled to the tiles' area
 
 
 class _Problem:
@@ -109,6 +110,10 @@ class _Problem:
             first = curves[min(curves)]
             L0 = float(np.sqrt(abs(first.area) / (req.rows * req.cols)))
         self.L0 = L0
+        # a closed state has the area of its tiles: compare outlines by shape, at MN tiles of size L0
+        curves = {s: c.transformed(float(np.sqrt(req.rows * req.cols * L0 * L0 / abs(c.area))))
+                  for s, c in curves.items()}
+        self.curves_mm = curves
         self.grids: dict[int, C.ClosedGrid] = {}
         blocks = [X0]
         nv = n
@@ -346,10 +351,10 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
     if req.target is not None:
         design_meta["target"] = req.target.to_dict()
     if req.contracted:
-        design_meta["contracted_targets"] = {str(s): v.to_dict() for s, v in req.contracted.items()
-                                             if isinstance(v, Target)}
+        design_meta["contracted_targets"] = {str(s): v.to_dict() for s, v in prob.curves_mm.items()}
     nodes = Xmm[: prob.n]
     pattern = Pattern(nodes=nodes, tiles=prob.std.tiles, name=req.name or "design", lattice=lat,
                       design=design_meta)
     grids = {s: Xmm[g.offset: g.offset + g.n_vertices] for s, g in prob.grids.items()}
-    return DesignResult(pattern=pattern, report=report, converged=converged, closed_grids=grids)
+    return DesignResult(pattern=pattern, report=report, converged=converged, closed_grids=grids,
+                        closed_targets=prob.curves_mm)
