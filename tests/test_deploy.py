@@ -15,9 +15,9 @@ from fabkiri.mechanics.deploy import (
     rigid_path,
     tile_angles,
 )
-from fabkiri.pattern import geometry, import_obj, standard_pattern
+from fabkiri.pattern import geometry, import_obj, read_pattern, standard_pattern
 
-from .conftest import REPO
+from .conftest import REPO, TEMPLATES
 from .designs import reconfigurable_design
 
 
@@ -57,7 +57,8 @@ def _checkerboard_rotation(pattern, corners):
     lambda: standard_pattern(8, 8, tile_size=10.0),
     lambda: standard_pattern(5, 7, tile_size=3.0, angle_deg=30.0),
     lambda: reconfigurable_design(6, 6, seed=3, amplitude=0.3, waves=3, rigid=True),
-], ids=["standard-8x8", "standard-5x7-30deg", "rigid-design-6x6"])
+    lambda: read_pattern(TEMPLATES / "patterns" / "circle-8x8-rigid.json"),  # from `fabkiri design --rigid`
+], ids=["standard-8x8", "standard-5x7-30deg", "rigid-design-6x6", "solver-circle-8x8-rigid"])
 def test_rigid_path_zero_energy_uniform_checkerboard_no_collision(make):
     p = make()
     path = rigid_path(p, steps=40)
@@ -138,6 +139,22 @@ def test_coarse_steps_follow_the_same_branch():
     coarse = elastic_path(p, steps=4)  # sub-steps keep the continuation on the branch
     assert np.allclose(coarse.energy, fine.energy[::5], rtol=1e-6, atol=1e-20)
     assert coarse.solver["solves"] > coarse.n_frames
+
+
+def test_solver_circle_design_elastic_landscape():
+    """The solver's non-rigid circle is within 1e-8 rad of rigid-deployable (hinge sums 7e-9 rad), so
+    its barrier is tiny, yet it is resolved far above the rounding floor (~1e-26) of the states."""
+    p = read_pattern(TEMPLATES / "patterns" / "circle-8x8.json")
+    path = deployment_path(p, steps=20)
+    assert path.kind == "elastic"
+    marks = path.mark_frames()
+    at_states = path.energy[list(marks.values())]
+    assert at_states.max() <= ZERO
+    inside = np.delete(path.energy, list(marks.values()))
+    assert inside.min() > 1e4 * max(at_states.max(), 1e-26)
+    for name, d in path.state_mismatch.items():
+        assert d <= 1e-9 * p.tile_size, name
+    assert path.collisions.collision_free()
 
 
 def test_tips_driver_reaches_the_three_states():

@@ -35,8 +35,8 @@ def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> by
     top = float(max(e.max(), emax.max()))
     if top <= ZERO_ENERGY:
         ax.set_ylim(-0.05 * ZERO_ENERGY, ZERO_ENERGY)
-        ax.text(0.5, 0.55, f"zero-energy path: max E = {top:.1e}", transform=ax.transAxes, ha="center",
-                fontsize=10, color="C2")
+        ax.text(0.25, 0.72, f"zero-energy path: max E = {top:.1e}", transform=ax.transAxes, ha="center",
+                fontsize=10, color="C2", bbox=dict(facecolor="white", edgecolor="none"))
     else:
         ax.set_ylim(-0.03 * top, 1.12 * top)
     for name, tm in MARKS.items():
