@@ -75,8 +75,12 @@ def test_deploy_reference_check_fails_on_its_overlaps(run_cli, tmp_path):
     assert "tile overlaps" in err and "between tiles" in err
     # the figures are still written: a failed check reports, it does not hide
     rows = _read_csv(out / "energy.csv")
-    e = [float(r["energy"]) for r in rows]
-    assert e[0] <= 1e-12 and e[5] <= 1e-12 and e[-1] <= 1e-12 and min(e[1:5]) > 1e-9
+    e = {float(r["t"]): float(r["energy"]) for r in rows}
+    assert e[0.0] <= 1e-12 and e[0.5] <= 1e-12 and e[1.0] <= 1e-12
+    assert max(v for t, v in e.items() if t < 0.1) > 1e-9 and max(v for t, v in e.items() if t > 0.9) > 1e-9
+    assert max(v for t, v in e.items() if 0.1 < t < 0.9) <= 1e-12
+    summary = json.loads((out / "deploy.json").read_text())
+    assert len(summary["elastic_segments_t"]) == 2 and summary["energy_outside_segments_max"] <= 1e-12
     assert not (out / "frames").exists()
 
 

@@ -96,6 +96,9 @@ def cmd_deploy(args: argparse.Namespace) -> int:
           f"{marks['closed state 2']:.1e}", file=sys.stderr)
     print(f"tile rotation from state 1: 0 -> {path.rotation_magnitude[-1]:.6f} rad, spread up to "
           f"{path.rotation_spread.max():.2e} rad", file=sys.stderr)
+    for problem in check_problems(path):
+        if "misses" in problem:
+            print(f"warning: {problem} (try more --steps or the default driver)", file=sys.stderr)
     c = path.collisions
     if c.self_intersecting:
         print(f"warning: self-intersecting tiles {c.self_intersecting}; without them the path is "

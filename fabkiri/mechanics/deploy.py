@@ -36,6 +36,20 @@ warm-started from a linear extrapolation of the previous two steps. Drivers:
   interpolated linearly in position; ``4(M+N)`` linear constraints. Linear tip
   motion is not the rigid motion, so even a rigid design shows E > 0 here.
 
+Looser drivers were tried and rejected: prescribing only the mean rotation
+of each colour class (4 constraints) lets the minimiser follow zero-energy
+motions out of closed state 1 (they exist for the reference compact
+reconfigurable pattern and for generated non-rigid designs), but the
+continuation then ends up to 0.2 tile sizes away from closed state 2, so it
+is no path between the three states. With every tile driven, the landscape of
+a non-rigid design is one barrier per half of the path, zero at the three
+states; for the reference pattern the first barrier peaks at t = 0.2 (nearer
+closed state 1) and is ten times the second, which peaks at t = 0.75.
+
+Between two output frames the drivers advance in sub-steps of at most
+``max_increment`` (0.03 rad or 0.03 tile sizes), so a coarse ``steps`` still
+follows the same branch.
+
 The constrained minimisation is a Newton method on the exact sparse Hessian
 with the KKT system ``[[H + μI, Aᵀ], [A, 0]]`` (sparse LU), a Levenberg-type
 shift ``μ`` raised whenever a step fails to lower E. The constraints are linear,
@@ -132,6 +146,7 @@ class DeploymentPath:
     tile_size: float
     omega_deployed: float | None = None  # ω of the deployed state (rigid path)
     solver: dict = field(default_factory=dict)
+    elastic_segments: list[tuple[float, float]] = field(default_factory=list)  # t-ranges off the mechanism
 
     @property
     def n_frames(self) -> int:
@@ -156,6 +171,13 @@ class DeploymentPath:
         """``(F,)`` max - min of |rotation| over the tiles: 0 for a uniform checkerboard."""
         a = np.abs(self.rotation)
         return a.max(axis=1) - a.min(axis=1)
+
+    def in_segments(self) -> np.ndarray:
+        """``(F,)`` whether each frame lies strictly inside an elastic end segment."""
+        inside = np.zeros(self.n_frames, dtype=bool)
+        for a, b in self.elastic_segments:
+            inside |= (self.t > a) & (self.t < b)
+        return inside
 
     def mark_frames(self) -> dict[str, int]:
         return {name: int(np.argmin(np.abs(self.t - t))) for name, t in MARKS.items()}
@@ -188,6 +210,9 @@ class DeploymentPath:
             out["omega_deployed_rad"] = self.omega_deployed
         if self.solver:
             out["solver"] = dict(self.solver)
+        if self.elastic_segments:
+            out["elastic_segments_t"] = [list(seg) for seg in self.elastic_segments]
+            out["energy_outside_segments_max"] = float(self.energy[~self.in_segments()].max(initial=0.0))
         return out
 
 
@@ -282,7 +307,8 @@ def _hinge_gap(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
     return np.hypot(d[..., 0], d[..., 1]).max(axis=1)
 
 
-def _finish(pattern, kind, driver, t, nodes, corners, sp, states, collision_tol, omega_dep=None, solver=None):
+def _finish(pattern, kind, driver, t, nodes, corners, sp, states, collision_tol, omega_dep=None, solver=None,
+            segments=None):
     top = pattern.topology
     tile_energy = sp.tile_energies(nodes)
     rho = tile_angles(states[1][None], corners)
@@ -304,6 +330,7 @@ def _finish(pattern, kind, driver, t, nodes, corners, sp, states, collision_tol,
         tile_size=pattern.tile_size,
         omega_deployed=omega_dep,
         solver=solver or {},
+        elastic_segments=segments or [],
     )
 
 
@@ -439,13 +466,125 @@ class Drivers:
     b: np.ndarray  # (m,)
 
 
+@dataclass(frozen=True)
+class MechanismSplit:
+    """A closed state's tile rotations relative to the deployed shape, split as
+    ``θ_T = γ + ε_T a + d_T``: a common rotation γ, the uniform checkerboard
+    amplitude ``a`` (the design's zero-energy mechanism) and a residual ``d_T``
+    (zero for rigid-deployable designs). ``closing`` is the fraction of ``a``
+    the mechanism can travel from the deployed state before its first hole
+    folds flat (1 for rigid-deployable designs)."""
+
+    gamma: float
+    amplitude: float
+    residual: np.ndarray  # (T,)
+    closing: float
+
+
+def gap_angles(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
+    """``(..., H, 2)`` the two gap angles at every hinge, in [0, 2π), from per-tile corners.
+
+    Gap 0 turns counter-clockwise from A's edge to ``prev_A`` onto B's edge to
+    ``next_B``; gap 1 from B's edge to ``prev_B`` onto A's edge to ``next_A``
+    (the topology's convention). Holes are interior gaps, notches exterior ones.
+    """
+    top = pattern.topology
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    h = corners[..., A, cA, :]
+    hb = corners[..., B, cB, :]
+
+    def d(tile, corner, base):
+        return corners[..., tile, corner, :] - base
+
+    g0 = geometry.signed_angle(d(A, (cA + 3) % 4, h), d(B, (cB + 1) % 4, hb))
+    g1 = geometry.signed_angle(d(B, (cB + 3) % 4, hb), d(A, (cA + 1) % 4, h))
+    return np.mod(np.stack([g0, g1], -1), geometry.TWO_PI)
+
+
+def mechanism_split(pattern: Pattern, states: dict[int, np.ndarray]) -> dict[int, MechanismSplit]:
+    """Split both closed states' rotations into mechanism and residual (see :class:`MechanismSplit`).
+
+    Every hole of a pattern that closes in both states is a parallelogram, so
+    turning the tiles by ``±α`` in a checkerboard from the deployed state keeps
+    every hole closed around its loop: a zero-energy mechanism in which every
+    gap angle (hole corners and boundary notches) changes by ``±2α``. It ends
+    when the first gap angle reaches 0 (beyond, two tiles would overlap).
+    """
+    top = pattern.topology
+    deployed = pattern.corners()
+    eps = np.where(top.tile_color == 0, 1.0, -1.0)
+    out = {}
+    for s in (1, 2):
+        th = tile_angles(deployed, states[s])
+        if (top.tile_color == 1).any():
+            m0, m1 = _circmean(th[top.tile_color == 0]), _circmean(th[top.tile_color == 1])
+            a = float(geometry.wrap_angle(m0 - m1)) / 2
+            gamma = float(m1) + a
+        else:
+            a, gamma = 0.0, float(_circmean(th))
+        d = geometry.wrap_angle(th - gamma - eps * a)
+        closing = 1.0
+        if top.n_hinges and a != 0.0:
+            # gap angles (holes and boundary notches) are linear in α along the mechanism
+            lam = np.array([0.0, 1e-3])
+            ang = gap_angles(pattern, place_rigid(pattern, deployed, eps, lam * a))  # (2, H, 2)
+            slope = (ang[1] - ang[0]) / lam[1]
+            shrinking = slope < 0
+            if shrinking.any():
+                closing = float(min(1.0, (ang[0][shrinking] / -slope[shrinking]).min()))
+        out[s] = MechanismSplit(gamma=gamma, amplitude=a, residual=d, closing=closing)
+    return out
+
+
+def barrier_frames(split: dict[int, MechanismSplit], n: int) -> np.ndarray:
+    """Extra path parameters inside the elastic end segments, where the barriers are.
+
+    The segments are ``t ∈ [0, (1 - closing₁)/2]`` and ``[1 - (1 - closing₂)/2, 1]``;
+    they are often a few hundredths of the path, narrower than the regular steps.
+    """
+    out = []
+    for s, m in split.items():
+        width = 0.5 * (1.0 - m.closing)
+        if width <= 1e-9:
+            continue
+        inner = np.linspace(0.0, width, n + 1)[1:]  # up to and including the segment's mechanism end
+        out.append(inner if s == 1 else 1.0 - inner)
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+def rotation_targets(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray) -> np.ndarray:
+    """``(F, T)`` prescribed tile rotations (relative to the deployed shape) along the path.
+
+    On each half, with λ running from 0 (deployed) to 1 (closed state), the
+    common rotation and the checkerboard amplitude are interpolated linearly
+    (λγ + ε_T λa: the mechanism) and the residual enters as ``r(λ) d_T``, with
+    ``r = 0`` while the mechanism can still move freely (λ ≤ closing) and
+    rising linearly to 1 at the closed state.
+    """
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    split = mechanism_split(pattern, states)
+    eps = np.where(pattern.topology.tile_color == 0, 1.0, -1.0)
+    out = np.empty((len(t), pattern.n_tiles))
+    for k, tk in enumerate(t):
+        s = 1 if tk <= 0.5 else 2
+        lam = abs(1.0 - 2.0 * tk)
+        m = split[s]
+        if m.closing >= 1.0 - 1e-12:
+            r = lam
+        else:
+            r = float(np.clip((lam - m.closing) / (1.0 - m.closing), 0.0, 1.0))
+        out[k] = lam * (m.gamma + eps * m.amplitude) + r * m.residual
+    return out
+
+
 def rotation_drivers(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray) -> list[Drivers]:
-    """One driver set per ``t``: tile rotations (relative to the deployed shape) and the node centroid."""
+    """One driver set per ``t``: tile rotations (:func:`rotation_targets`) and the node centroid."""
     tiles = pattern.tiles
     T, n = len(tiles), len(pattern.nodes)
     deployed = pattern.corners()
     p = deployed - deployed.mean(axis=1, keepdims=True)  # (T, 4, 2)
-    th = {s: tile_angles(deployed, states[s]) for s in (1, 2)}
+    targets = rotation_targets(pattern, states, t)
     x = {0: pattern.nodes, **{s: _node_positions(pattern, states[s]) for s in (1, 2)}}
     cen = {s: v.mean(axis=0) for s, v in x.items()}
     rows = np.repeat(np.arange(T), 8)
@@ -453,8 +592,7 @@ def rotation_drivers(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndar
     cent_rows = np.concatenate([np.full(n, T), np.full(n, T + 1)])
     cent_cols = np.concatenate([2 * np.arange(n), 2 * np.arange(n) + 1])
     out = []
-    for tk in np.atleast_1d(t):
-        theta = _piecewise(tk, th[1], np.zeros(T), th[2])
+    for tk, theta in zip(np.atleast_1d(t), targets):
         w = geometry.rotate(p, theta[:, None])  # cross(w, x) = w_x x_y - w_y x_x
         vals = np.stack([-w[..., 1], w[..., 0]], -1).ravel()
         A = sparse.csr_matrix(
@@ -570,9 +708,7 @@ def minimise(sp: Springs, x0: np.ndarray, A: sparse.csr_matrix, b: np.ndarray, *
 def _driver_increments(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, driver: str) -> np.ndarray:
     """Largest driver change over each interval of ``t``: radians (rotations) or tile sizes (tips)."""
     if driver == "rotations":
-        deployed = pattern.corners()
-        v = {s: tile_angles(deployed, states[s]) for s in (1, 2)}
-        vals = _piecewise(t, v[1], np.zeros(pattern.n_tiles), v[2])  # (F, T)
+        vals = rotation_targets(pattern, states, t)  # (F, T)
     else:
         free = pattern.topology.free_nodes
         x = {0: pattern.nodes[free], **{s: _node_positions(pattern, states[s])[free] for s in (1, 2)}}
@@ -596,6 +732,12 @@ def elastic_path(
         raise InputError(f"driver must be one of {', '.join(DRIVERS)}, not {driver!r}")
     states = closed_states(pattern)
     t = path_parameter(steps)
+    segments = []
+    if driver == "rotations":
+        split = mechanism_split(pattern, states)
+        t = np.union1d(t, barrier_frames(split, max(8, int(steps) // 4)))
+        w1, w2 = (0.5 * (1.0 - split[s].closing) for s in (1, 2))
+        segments = [seg for seg, w in (((0.0, w1), w1), ((1.0 - w2, 1.0), w2)) if w > 1e-9]
     n_sub = np.maximum(1, np.ceil(_driver_increments(pattern, states, t, driver) / max_increment)).astype(int)
     fine = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in zip(t[:-1], t[1:], n_sub)] + [t[-1:]])
     keep = np.concatenate([[0], np.cumsum(n_sub)])  # output frames within the fine grid
@@ -622,7 +764,8 @@ def elastic_path(
     solver = {"solves": len(fine), "linear_solves": stats.iterations, "factorizations": stats.factorizations,
               "rejected_steps": stats.rejected, "unconverged_steps": stats.max_iterations_hit,
               "step_tol_rel": step_tol, "max_increment": max_increment}
-    return _finish(pattern, "elastic", driver, t, nodes, corners, sp, states, collision_tol, solver=solver)
+    return _finish(pattern, "elastic", driver, t, nodes, corners, sp, states, collision_tol, solver=solver,
+                   segments=segments)
 
 
 def deployment_path(pattern: Pattern, steps: int = 40, *, path: str = "auto", driver: str = "rotations",

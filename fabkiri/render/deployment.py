@@ -25,32 +25,66 @@ def _pyplot():
     return plt
 
 
-def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> bytes:
-    """PNG of E(t) and the largest tile energy, closed and deployed states marked."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 3.8), dpi=dpi)
-    t, e, emax = path.t, path.energy, path.max_tile_energy
+def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = True) -> None:
+    sel = (path.t >= lo - 1e-12) & (path.t <= hi + 1e-12)
+    t, e, emax = path.t[sel], path.energy[sel], path.max_tile_energy[sel]
     ax.plot(t, e, "-o", ms=2.5, lw=1.5, color="C0", label="total energy E")
     ax.plot(t, emax, "-", lw=1.0, color="C3", label="largest tile energy")
-    top = float(max(e.max(), emax.max()))
+    top = float(max(e.max(initial=0.0), emax.max(initial=0.0)))
     if top <= ZERO_ENERGY:
         ax.set_ylim(-0.05 * ZERO_ENERGY, ZERO_ENERGY)
-        ax.text(0.25, 0.72, f"zero-energy path: max E = {top:.1e}", transform=ax.transAxes, ha="center",
-                fontsize=10, color="C2", bbox=dict(facecolor="white", edgecolor="none"))
     else:
         ax.set_ylim(-0.03 * top, 1.12 * top)
+    for a, b in path.elastic_segments:
+        ax.axvspan(a, b, color="C1", alpha=0.12, lw=0)
+    if marks:
+        for name, tm in MARKS.items():
+            if lo - 1e-12 <= tm <= hi + 1e-12:
+                ax.axvline(tm, color="0.4", lw=0.8, ls="--")
+    pad = 0.02 * (hi - lo)
+    ax.set_xlim(lo - pad, hi + pad)
+    ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
+
+
+def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> bytes:
+    """PNG of E(t) and the largest tile energy, closed and deployed states marked.
+
+    An elastic path whose barriers sit in narrow end segments (shaded: where
+    the tiles leave the design's zero-energy mechanism to close up) gets two
+    zoomed panels on those segments under the full path.
+    """
+    plt = _pyplot()
+    segs = path.elastic_segments
+    zoom = bool(segs) and max(b - a for a, b in segs) < 0.15
+    if zoom:
+        fig = plt.figure(figsize=(6.4, 5.6), dpi=dpi)
+        gs = fig.add_gridspec(2, len(segs), height_ratios=[1.35, 1])
+        ax = fig.add_subplot(gs[0, :])
+    else:
+        fig, ax = plt.subplots(figsize=(6.4, 3.8), dpi=dpi)
+    _energy_axes(ax, path, 0.0, 1.0)
+    top = float(max(path.energy.max(), path.max_tile_energy.max()))
+    if top <= ZERO_ENERGY:
+        ax.text(0.25, 0.72, f"zero-energy path: max E = {top:.1e}", transform=ax.transAxes, ha="center",
+                fontsize=10, color="C2", bbox=dict(facecolor="white", edgecolor="none"))
     for name, tm in MARKS.items():
-        ax.axvline(tm, color="0.4", lw=0.8, ls="--")
         right = tm > 0.75  # keep the last label inside the axes
         ax.text(tm - 0.008 if right else tm + 0.008, 0.5, name, transform=ax.get_xaxis_transform(),
                 ha="right" if right else "left", va="center", rotation=90, fontsize=8, color="0.3")
-    ax.set_xlim(-0.02, 1.02)
     ax.set_xlabel("path parameter t")
     ax.set_ylabel("spring energy  Σ((l - l₀)/l₀)²")
     kind = "rigid path" if path.kind == "rigid" else f"elastic path, driver: {path.driver}"
     ax.set_title((f"{title} — " if title else "") + kind, fontsize=10)
-    ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
     ax.legend(fontsize=8, loc="upper center", frameon=False)
+    if zoom:
+        for k, (a, b) in enumerate(segs):
+            sub = fig.add_subplot(gs[1, k])
+            _energy_axes(sub, path, a, b)
+            near = "closed state 1" if a <= 0.0 else "closed state 2"
+            sub.set_title(f"barrier next to {near}", fontsize=8)
+            sub.set_xlabel("t", fontsize=8)
+            sub.tick_params(labelsize=7)
+            sub.yaxis.get_offset_text().set_fontsize(7)
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
