@@ -25,7 +25,7 @@ def energy_csv(path: DeploymentPath) -> str:
     rot, spread = path.rotation_magnitude, path.rotation_spread
     for f in range(path.n_frames):
         rows.append(
-            f"{path.t[f]:.6f},{path.energy[f]:.6e},{path.max_tile_energy[f]:.6e},{rot[f]:.12f},"
+            f"{path.t[f]:.10f},{path.energy[f]:.6e},{path.max_tile_energy[f]:.6e},{rot[f]:.12f},"
             f"{spread[f]:.3e},{path.hinge_gap[f]:.3e},{per_frame[f]}"
         )
     return "\n".join(rows) + "\n"

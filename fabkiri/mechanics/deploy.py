@@ -15,38 +15,47 @@ The sign ``ε`` and the deployed angle ω_d come from the tile rotations between
 state 1 and the deployed state (their colour classes differ by ``2 ε ω_d``);
 ω runs linearly 0 → ω_d on t ∈ [0, ½] and ω_d → π/2 on [½, 1].
 
-**Elastic path** (every other reconfigurable design, a reconstruction [R] of the
-paper's Fig. 2C). At each ``t`` some *drivers* are prescribed by piecewise-linear
-interpolation between the three states, and the spring energy of
+**Elastic path** (every other reconfigurable design; a reconstruction [R] of the
+paper's Fig. 2C, whose SI procedure is unknown). At each ``t`` some *drivers*
+are prescribed between the three states and the spring energy of
 :mod:`.energy` is minimised over all node coordinates with the drivers held,
 warm-started from a linear extrapolation of the previous two steps. Drivers:
 
 * ``"rotations"`` (default): the rotation of every tile, measured as the Kabsch
-  angle of its corners relative to its deployed shape, interpolated from its
-  state-1 value to 0 and on to its state-2 value; plus the centroid of the
+  angle of its corners relative to its deployed shape, plus the centroid of the
   nodes. In 2D "the Kabsch angle of tile T is θ" is the *linear* equation
   ``Σ_k cross(Rot(θ) p_k, x_k) = 0`` (``p_k`` its centred deployed corners),
-  so the drivers are ``T + 2`` linear constraints ``A x = b(t)`` and remove
-  every rigid-body mode. Tiles keep their shape only where the prescribed
-  rotations are compatible; for a rigid-deployable design the drivers trace
-  the rigid path exactly (E = 0), so the energy measures how far a design is
-  from a mechanism. This is the default because it treats every tile alike
-  and does not depend on the outline.
+  so the drivers are ``T + 2`` linear constraints ``A x = b(t)`` that remove
+  every rigid-body mode and pin each state exactly.
+
+  What they prescribe follows the design's own mechanics. Every hole of a
+  pattern that closes in both states is a parallelogram, so turning the
+  tiles from the deployed state by a uniform checkerboard ``±α`` keeps every
+  hole closed around its loop: a zero-energy mechanism in which each gap angle
+  (hole corner or boundary notch) changes by ``±2α``. Each closed state's tile
+  rotations are split into a common rotation, the checkerboard amplitude
+  ``a`` and a residual ``d_T`` (:func:`mechanism_split`); the amplitude is
+  interpolated linearly from the deployed state (λ = 0) to the closed state
+  (λ = 1), and the residual enters only after the mechanism's first gap has
+  folded flat (λ > ``closing``), linearly up to the closed state
+  (:func:`rotation_targets`). So E = 0 along the mechanism-like middle and
+  the tiles deform only in two end segments next to the closed states: the
+  barriers of Fig. 2C. A rigid-deployable design has no residual and
+  ``closing = 1``: the drivers are then its exact rigid path (E = 0).
+  Those end segments are often a few hundredths of the path, so extra frames
+  are placed inside them (``max(8, steps // 4)`` each).
 * ``"tips"``: the free boundary corners (the tips pulled in an experiment)
   interpolated linearly in position; ``4(M+N)`` linear constraints. Linear tip
-  motion is not the rigid motion, so even a rigid design shows E > 0 here.
+  motion is not the mechanism, so even a rigid design shows E > 0 all along.
 
-Looser drivers were tried and rejected: prescribing only the mean rotation
-of each colour class (4 constraints) lets the minimiser follow zero-energy
-motions out of closed state 1 (they exist for the reference compact
-reconfigurable pattern and for generated non-rigid designs), but the
-continuation then ends up to 0.2 tile sizes away from closed state 2, so it
-is no path between the three states. With every tile driven, the landscape of
-a non-rigid design is one barrier per half of the path, zero at the three
-states; for the reference pattern the first barrier peaks at t = 0.2 (nearer
-closed state 1) and is ten times the second, which peaks at t = 0.75.
+Prescribing the rotation of every tile linearly from its state-1 value to 0
+(the first version) spreads the residual over each whole half and gives one
+broad bump per half; prescribing only the mean rotation of each colour class
+lets the minimiser follow the mechanism but never leave it, so the path ends
+on the mechanism beside closed state 2 (0.2 tile sizes away for the
+reference pattern), not in it.
 
-Between two output frames the drivers advance in sub-steps of at most
+Between two frames the drivers advance in sub-steps of at most
 ``max_increment`` (0.03 rad or 0.03 tile sizes), so a coarse ``steps`` still
 follows the same branch.
 
