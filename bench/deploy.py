@@ -50,9 +50,10 @@ def main() -> int:
     print(f"elastic     {path.n_frames} frames in {t_elastic:.2f} s "
           f"({'PASS' if t_elastic < TARGET_S else 'FAIL'}: target < {TARGET_S:.0f} s); solver {path.solver}")
     print(f"            collision check alone {t_coll:.2f} s; overlaps {len(path.collisions.overlaps)}")
+    inside = path.in_segments()
     print(f"            E at states {[f'{e[f]:.1e}' for f in marks.values()]}, max E {e.max():.3e} at "
-          f"t = {path.t[int(np.argmax(e))]:.2f}, min E between states "
-          f"{np.delete(e, list(marks.values())).min():.2e}")
+          f"t = {path.t[int(np.argmax(e))]:.4f}; elastic end segments {[(round(a, 4), round(b, 4)) for a, b in path.elastic_segments]} "
+          f"(E > {e[inside].min():.1e} inside), max E on the mechanism {e[~inside].max():.1e}")
     print(f"            state mismatch (mm) {({k: float(f'{v:.1e}') for k, v in path.state_mismatch.items()})}")
 
     std = standard_pattern(n, n)

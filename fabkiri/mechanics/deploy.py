@@ -346,12 +346,29 @@ def _finish(pattern, kind, driver, t, nodes, corners, sp, states, collision_tol,
 # ----------------------------------------------------------------- collisions
 
 
+def _sat_depth(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Penetration depth of convex quads ``P[i]``, ``Q[i]`` (``(N, 4, 2)``): the least overlap
+    of their projections over the 8 edge normals; ≤ 0 means separated or touching."""
+    def normals(X):
+        e = np.roll(X, -1, axis=1) - X
+        return np.stack([-e[..., 1], e[..., 0]], -1) / np.maximum(np.hypot(e[..., 0], e[..., 1]), 1e-300)[..., None]
+
+    axes = np.concatenate([normals(P), normals(Q)], axis=1)  # (N, 8, 2)
+    pp = np.einsum("nak,nck->nac", axes, P)
+    qq = np.einsum("nak,nck->nac", axes, Q)
+    overlap = np.minimum(pp.max(-1), qq.max(-1)) - np.maximum(pp.min(-1), qq.min(-1))
+    return overlap.min(axis=1)
+
+
 def collisions(corners: np.ndarray, tile_size: float, tol: float = 1e-9) -> CollisionReport:
     """Overlapping tile pairs at every frame of ``corners`` ``(F, T, 4, 2)``.
 
     Two tiles collide when their intersection has an area above
     ``tol · tile_size²`` (contact along an edge or at a hinge has zero area).
-    Positive intersections are confirmed with snap rounding on a
+    Candidate pairs come from a GEOS STRtree (bounding boxes); convex pairs are
+    screened by the separating-axis depth (an overlap of area ``A`` between
+    tiles of diameter ``D`` is at least ``A / D`` deep), the rest get a GEOS
+    overlay, and positive areas are confirmed with snap rounding on a
     ``1e-11 · tile_size`` grid.
     """
     import shapely
@@ -367,10 +384,20 @@ def collisions(corners: np.ndarray, tile_size: float, tol: float = 1e-9) -> Coll
         if len(bad):
             bowties.update(int(b) for b in bad)
             polys[bad] = shapely.make_valid(polys[bad])
+        convex = _convex(frame)
+        convex[bad] = False
         tree = shapely.STRtree(polys)
-        a, b = tree.query(polys, predicate="intersects")
+        a, b = tree.query(polys)  # bounding boxes only
         keep = a < b
         a, b = a[keep], b[keep]
+        if not len(a):
+            continue
+        both = convex[a] & convex[b]
+        diam = np.maximum(np.ptp(frame[a], axis=1).max(-1), np.ptp(frame[b], axis=1).max(-1))
+        depth = _sat_depth(frame[a[both]], frame[b[both]])
+        maybe = ~both
+        maybe[np.flatnonzero(both)[depth > 0.5 * tol_area / (2.0 * diam[both])]] = True
+        a, b = a[maybe], b[maybe]
         if not len(a):
             continue
         area = shapely.area(shapely.intersection(polys[a], polys[b]))
@@ -383,6 +410,13 @@ def collisions(corners: np.ndarray, tile_size: float, tol: float = 1e-9) -> Coll
         for i in np.flatnonzero(area > tol_area):
             overlaps.append(Overlap(frame=f, tile_a=int(a[i]), tile_b=int(b[i]), area=float(area[i])))
     return CollisionReport(tol_area=tol_area, self_intersecting=sorted(bowties), overlaps=overlaps)
+
+
+def _convex(corners: np.ndarray) -> np.ndarray:
+    """``(T,)`` whether each CCW quad is convex (every turn left)."""
+    e = np.roll(corners, -1, axis=-2) - corners
+    turn = geometry.cross2(e, np.roll(e, -1, axis=-2))
+    return (turn > 0).all(axis=-1)
 
 
 # ----------------------------------------------------------------- rigid path
@@ -640,7 +674,7 @@ class MinimiseStats:
 
 
 def minimise(sp: Springs, x0: np.ndarray, A: sparse.csr_matrix, b: np.ndarray, *, step_tol: float,
-             max_iter: int = 60, stats: MinimiseStats | None = None) -> np.ndarray:
+             max_iter: int = 60, stats: MinimiseStats | None = None, zero_energy: float = 1e-26) -> np.ndarray:
     """Minimise the spring energy subject to ``A x = b`` from ``x0`` (flat).
 
     Newton steps on the KKT system ``[[H + μI, Aᵀ], [A, 0]]`` with the exact
@@ -648,7 +682,8 @@ def minimise(sp: Springs, x0: np.ndarray, A: sparse.csr_matrix, b: np.ndarray, *
     step does not lower E, and relaxed after successful steps. Once steps are
     small the last factorization is reused (chord steps) while each step
     shrinks at least tenfold, which saves most factorizations near convergence.
-    Stops when the largest coordinate change is below ``step_tol`` (mm).
+    Stops when the largest coordinate change is below ``step_tol`` (mm), or at
+    once if the (projected) start already has ``E <= zero_energy``.
     """
     stats = stats if stats is not None else MinimiseStats()
     x = np.asarray(x0, dtype=float).ravel().copy()
@@ -657,6 +692,8 @@ def minimise(sp: Springs, x0: np.ndarray, A: sparse.csr_matrix, b: np.ndarray, *
     if np.abs(r).max(initial=0.0) > 0:  # least-norm projection onto the drivers
         x += A.T @ spsolve((A @ A.T).tocsc(), r)
     E = sp.energy(x)
+    if E <= zero_energy:  # E >= 0: a feasible point at rounding-level energy is a global minimiser
+        return x
     mu = 0.0
     size = float(np.mean(sp.rest))
     scale = 1.0 / size**2
@@ -725,6 +762,27 @@ def _driver_increments(pattern: Pattern, states: dict[int, np.ndarray], t: np.nd
     return np.abs(np.diff(vals, axis=0)).max(axis=1, initial=0.0)
 
 
+def _mechanism_guess(pattern: Pattern, states: dict[int, np.ndarray], split: dict[int, MechanismSplit]):
+    """``t -> flat nodes`` of the zero-energy mechanism meeting the rotation drivers, or None
+    where the drivers have left it (inside the elastic end segments)."""
+    deployed = pattern.corners()
+    eps = np.where(pattern.topology.tile_color == 0, 1.0, -1.0)
+    cen = {0: pattern.nodes.mean(0), **{s: _node_positions(pattern, states[s]).mean(0) for s in (1, 2)}}
+
+    def guess(tk: float):
+        s = 1 if tk <= 0.5 else 2
+        lam = abs(1.0 - 2.0 * tk)
+        m = split[s]
+        if lam > m.closing:
+            return None
+        placed = geometry.rotate(place_rigid(pattern, deployed, eps, np.array([lam * m.amplitude]))[0],
+                                 lam * m.gamma)
+        x = _node_positions(pattern, placed)
+        return (x + (_piecewise(tk, cen[1], cen[0], cen[2]) - x.mean(0))).ravel()
+
+    return guess
+
+
 def elastic_path(
     pattern: Pattern, steps: int = 40, *, driver: str = "rotations", collision_tol: float = 1e-9,
     step_tol: float = 1e-11, max_increment: float = 0.03,
@@ -742,11 +800,13 @@ def elastic_path(
     states = closed_states(pattern)
     t = path_parameter(steps)
     segments = []
+    mechanism = None
     if driver == "rotations":
         split = mechanism_split(pattern, states)
         t = np.union1d(t, barrier_frames(split, max(8, int(steps) // 4)))
         w1, w2 = (0.5 * (1.0 - split[s].closing) for s in (1, 2))
         segments = [seg for seg, w in (((0.0, w1), w1), ((1.0 - w2, 1.0), w2)) if w > 1e-9]
+        mechanism = _mechanism_guess(pattern, states, split)
     n_sub = np.maximum(1, np.ceil(_driver_increments(pattern, states, t, driver) / max_increment)).astype(int)
     fine = np.concatenate([np.linspace(a, b, k, endpoint=False) for a, b, k in zip(t[:-1], t[1:], n_sub)] + [t[-1:]])
     keep = np.concatenate([[0], np.cumsum(n_sub)])  # output frames within the fine grid
@@ -755,17 +815,21 @@ def elastic_path(
     drivers = make(pattern, states, fine)
     x1 = _node_positions(pattern, states[1]).ravel()
     tol = step_tol * pattern.tile_size
+    zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
     stats = MinimiseStats()
     sols = []
     prev = prev2 = None
-    for drv in drivers:
-        if prev is None:
+    for tk, drv in zip(fine, drivers):
+        exact = mechanism(tk) if mechanism is not None else None
+        if exact is not None:  # on the mechanism the minimiser is known in closed form
+            guess = exact
+        elif prev is None:
             guess = x1
         elif prev2 is None:
             guess = prev
         else:
             guess = 2.0 * prev - prev2  # secant predictor
-        x = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats)
+        x = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats, zero_energy=zero)
         sols.append(x)
         prev2, prev = prev, x
     nodes = np.stack(sols)[keep].reshape(len(t), -1, 2)
