@@ -126,25 +126,22 @@ def _steps(text: str) -> int:
     return v
 
 
-def _frames(text: str) -> int:
-    v = _steps(text)
-    return v
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("deploy", help="deployment path from closed state 1 to closed state 2: energy, plot, GIF")
     p.add_argument("file", help="pattern (.json or design .obj)")
     p.add_argument("--steps", type=_steps, default=40, metavar="N",
-                   help="path steps (rounded up to even so the deployed state is a frame; default 40)")
+                   help="path steps (rounded up to even so the deployed state is a frame; the elastic path "
+                        "adds frames inside its two end segments; default 40)")
     p.add_argument("--path", choices=["auto", "rigid", "elastic"], default="auto",
                    help="auto (default): the exact rigid path if the pattern is rigid-deployable, else elastic")
     p.add_argument("--driver", choices=DRIVERS, default="rotations",
-                   help="what the elastic path prescribes: every tile's rotation (default) or the boundary tips")
+                   help="what the elastic path prescribes: every tile's rotation, following the design's "
+                        "zero-energy mechanism until it must leave it (default), or the boundary tips moved linearly")
     p.add_argument("--plot", action="store_true", help="write energy.png, E(t) with the states marked")
     p.add_argument("--gif", action="store_true", help="write deploy.gif, the animated motion")
     p.add_argument("--color", choices=["auto", "energy", "rotation"], default="auto",
                    help="GIF tile colours (auto: rotation for a rigid path, energy otherwise)")
-    p.add_argument("--gif-frames", type=_frames, default=61, metavar="K", help="most GIF frames (default 61)")
+    p.add_argument("--gif-frames", type=_steps, default=61, metavar="K", help="most GIF frames (default 61)")
     p.add_argument("--no-frames", action="store_true", help="do not write the frames as pattern files")
     p.add_argument("--check", action="store_true",
                    help="exit 1 if a tile collides, the path misses a state, or a rigid path has energy")
