@@ -267,3 +267,18 @@ def test_collision_screen_agrees_with_brute_force_overlay(seed, spread):
     truth = {(i, j) for i in range(n) for j in range(i + 1, n)
              if shapely.area(shapely.intersection(polys[i], polys[j], grid_size=1e-11)) > 1e-9}
     assert set(rep.pairs()) == truth
+
+
+@settings(max_examples=15, deadline=None)
+@given(rows=st.integers(2, 6), cols=st.integers(2, 6), angle=st.floats(5.0, 85.0), size=st.floats(0.5, 50.0))
+def test_rigid_path_of_any_standard_pattern(rows, cols, angle, size):
+    p = standard_pattern(rows, cols, tile_size=size, angle_deg=angle)
+    path = rigid_path(p, steps=8)
+    assert path.energy.max() <= ZERO
+    assert path.omega_deployed == pytest.approx(np.radians(angle), abs=1e-9)
+    spread, omega = _checkerboard_rotation(p, path.corners)
+    assert spread <= 1e-9 and abs(omega[-1] - np.pi / 2) <= 1e-9
+    assert path.collisions.collision_free()
+    # the elastic machinery agrees: no residual, the mechanism runs to both closed states
+    split = mechanism_split(p, closed_states(p))
+    assert all(split[s].closing == pytest.approx(1.0, abs=1e-9) for s in (1, 2))
