@@ -194,17 +194,23 @@ def test_coarse_steps_follow_the_same_branch():
     assert shared >= 5
 
 
-def test_solver_circle_design_is_practically_rigid():
-    """The solver's non-rigid circle is within 1e-8 rad of rigid-deployable (hinge sums 7e-9 rad): its
-    mechanism reaches both closed states to ~1e-8 rad, so the whole path has E <= 1e-12."""
+def test_solver_circle_design_landscape():
+    """The solver's non-rigid circle. As committed it is within 1e-8 rad of rigid-deployable (hinge sums
+    7e-9 rad): its mechanism reaches both closed states to ~1e-8 rad and the whole path has E <= 1e-12.
+    Should a regenerated template be genuinely non-rigid, it must show the barriers instead."""
+    from fabkiri.pattern.residuals import hinge_sums
+
     p = read_pattern(TEMPLATES / "patterns" / "circle-8x8.json")
     path = deployment_path(p, steps=20)
     assert path.kind == "elastic"
-    assert path.energy.max() <= ZERO
-    for name, d in path.state_mismatch.items():
-        assert d <= 1e-9 * p.tile_size, name
+    if np.abs(hinge_sums(p)).max() < 1e-6:
+        assert path.energy.max() <= ZERO
+        for name, d in path.state_mismatch.items():
+            assert d <= 1e-9 * p.tile_size, name
+        assert path.rotation_spread.max() <= 1e-6
+    else:
+        _assert_reconfigurable_landscape(path, p.tile_size)
     assert path.collisions.collision_free()
-    assert path.rotation_spread.max() <= 1e-6
 
 
 def test_tips_driver_reaches_the_three_states():
