@@ -502,7 +502,7 @@ def rigid_path(
 
 @dataclass(frozen=True, eq=False)
 class Drivers:
-    """Linear driver constraints ``A x = b(t)`` on the flat node coordinates."""
+    """Linear driver constraints ``A x = b`` at one ``t`` on the flat node coordinates."""
 
     name: str
     A: sparse.csr_matrix  # (m, 2n)
@@ -515,8 +515,8 @@ class MechanismSplit:
     ``θ_T = γ + ε_T a + d_T``: a common rotation γ, the uniform checkerboard
     amplitude ``a`` (the design's zero-energy mechanism) and a residual ``d_T``
     (zero for rigid-deployable designs). ``closing`` is the fraction of ``a``
-    the mechanism can travel from the deployed state before its first hole
-    folds flat (1 for rigid-deployable designs)."""
+    the mechanism can travel from the deployed state before its first gap (a
+    hole corner or a boundary notch) folds flat (1 for rigid-deployable designs)."""
 
     gamma: float
     amplitude: float
