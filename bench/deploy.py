@@ -56,6 +56,11 @@ def main() -> int:
           f"(E > {e[inside].min():.1e} inside), max E on the mechanism {e[~inside].max():.1e}")
     print(f"            state mismatch (mm) {({k: float(f'{v:.1e}') for k, v in path.state_mismatch.items()})}")
 
+    tips, t_tips = timed(elastic_path, design, steps, driver="tips")
+    print(f"tips        same design, tips driver (a Newton solve at every one of {tips.solver['solves']} steps): "
+          f"{t_tips:.2f} s ({'PASS' if t_tips < TARGET_S else 'FAIL'}), {tips.solver['factorizations']} "
+          f"factorizations, max E {tips.energy.max():.2e}, mismatch {max(tips.state_mismatch.values()):.1e} mm")
+
     std = standard_pattern(n, n)
     rigid, t_rigid = timed(rigid_path, std, steps)
     print(f"baseline    rigid path of the standard {n}x{n}, {rigid.n_frames} frames: {t_rigid:.2f} s "
