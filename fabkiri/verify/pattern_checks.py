@@ -238,8 +238,8 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     areas = shapely.area(polys)
     total = float(areas.sum())
     union = shapely.unary_union(polys)
-    deficit = abs(total - float(union.area)) / total if total > 0 else float("nan")
-    out.append(measured(f"{g}: union area = sum of tile areas", deficit, tol.length / tol.tile_size, "rel",
+    deficit = abs(total - float(union.area))
+    out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.area, 1e-9 * total), "mm²",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
                         detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²"))
     parts = list(getattr(union, "geoms", [union]))
