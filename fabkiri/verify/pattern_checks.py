@@ -216,12 +216,11 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     ``blame`` maps tiles to the self-intersecting tile they are (or are hinged
     to), so overlaps caused by a crossed tile are named as such.
     """
-    polys, repaired = geom.tile_polygons(Y)
     out = []
-    i, j, inter = geom.overlap_pairs(polys)
-    bad = np.flatnonzero(inter > tol.area)
+    i, j, inter = geom.overlap_depths(Y)
+    bad = np.flatnonzero(inter > tol.length)
     order = bad[np.argsort(-inter[bad])]
-    listed = ", ".join(f"tiles {i[k]}/{j[k]}: {inter[k]:.3g} mm²" for k in order[:10])
+    listed = ", ".join(f"tiles {i[k]}/{j[k]}: {inter[k]:.3g} mm" for k in order[:10])
     if len(order) > 10:
         listed += f", … ({len(order)} pairs)"
     k = int(np.argmax(inter)) if len(inter) else None
@@ -232,12 +231,14 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
             cause = f"; all caused by self-intersecting tile(s) {sorted(set(culprits))}"
         else:
             cause = f"; {sum(c is not None for c in culprits)} of {len(order)} caused by self-intersecting tiles"
-    out.append(measured(f"{g}: no overlaps", _max(inter), tol.area, "mm²",
+    out.append(measured(f"{g}: no overlaps", _max(inter), tol.length, "mm",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, group=g,
-                        detail=f"overlapping pairs: {listed}{cause}" if len(order) else ""))
+                        detail=(f"overlapping pairs (penetration depth): {listed}{cause}" if len(order) else
+                                "largest penetration depth between any two tiles")))
+    polys, _ = geom.tile_polygons(Y)
     areas = shapely.area(polys)
     total = float(areas.sum())
-    union = shapely.unary_union(polys)
+    union = geom.tiles_union(Y, max(tol.length, 1e-12 * tol.tile_size), coverage=not len(bad))
     deficit = abs(total - float(union.area))
     out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.area, 1e-9 * total), "mm²",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
