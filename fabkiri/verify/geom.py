@@ -180,7 +180,14 @@ def tiles_union(corners: np.ndarray, eps: float, coverage: bool = True):
     polys = shapely.polygons(S)
     valid = shapely.is_valid(polys)
     if coverage and valid.all() and _edge_matched(S):
-        return shapely.coverage_union_all(polys)
+        try:
+            u = shapely.coverage_union_all(polys)
+        except shapely.errors.GEOSException:  # not noded as a coverage (T-junctions)
+            u = None
+        # trust it only when it is what a gap-free, overlap-free coverage gives
+        if u is not None and u.is_valid and u.geom_type == "Polygon" and not len(u.interiors) \
+                and abs(u.area - shapely.area(polys).sum()) <= 1e-9 * u.area:
+            return u
     if not valid.all():
         polys = polys.copy()
         polys[~valid] = shapely.make_valid(polys[~valid])
