@@ -138,7 +138,7 @@ def _read_dxf_fast(p: Path) -> Linework | None:
                     cur[3][-1][1] = float(value)
                 elif code == 42 and float(value) != 0.0:
                     return None  # an arc segment
-    except (ValueError, IndexError, UnicodeError):
+    except Exception:  # malformed tag stream: let the full reader name the problem
         return None
     if cur is not None:
         ents.append(cur)
