@@ -59,7 +59,7 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
     size = pattern.tile_size
     if tol_mm is not None:
         return Tolerances(float(tol_mm), float(tol_rad), size, "given")
-    optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals"))
+    optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals", "report"))
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
     return Tolerances(rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data")
 
@@ -393,17 +393,39 @@ def _target_outline(design: dict[str, Any]) -> np.ndarray | None:
     return None
 
 
-def target_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
-    pts = _target_outline(pattern.design or {})
+def _target_distance(tgt: dict[str, Any], tips: np.ndarray) -> np.ndarray | None:
+    """Distance (mm) of points to a recorded target: the design layer's own curve
+    (spline or polyline, exact foot points) when it can be rebuilt, else the polyline."""
+    if tgt.get("kind") in ("spline", "polyline") and "points" in tgt:
+        try:
+            from ..design.targets import Target
+        except ImportError:  # a build without the design layer
+            Target = None
+        if Target is not None:
+            try:
+                curve = Target(str(tgt.get("name", "target")), tgt["kind"], np.asarray(tgt["points"], float),
+                               corners=np.asarray(tgt["corners"], float) if tgt.get("corners") is not None else None)
+                return np.abs(curve.signed_distance(tips))
+            except Exception:  # noqa: BLE001 - fall back to the plain polyline below
+                pass
+    pts = _target_outline({"target": tgt})
     if pts is None:
+        return None
+    return shapely.distance(shapely.points(tips), shapely.LinearRing(pts))
+
+
+def target_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
+    tgt = (pattern.design or {}).get("target")
+    if not isinstance(tgt, dict):
         return []
-    ring = shapely.LinearRing(pts)
     tips = pattern.nodes[pattern.topology.free_nodes]
-    d = shapely.distance(shapely.points(tips), ring)
-    tgt = pattern.design["target"]
-    target_tol = float(tgt.get("tolerance_mm", tol.length)) if isinstance(tgt, dict) else tol.length
+    d = _target_distance(tgt, tips)
+    if d is None:
+        return []
+    target_tol = float(tgt.get("tolerance_mm", tol.length))
     return [measured("target fit", _max(d), target_tol, "mm", worst=_worst("free corner", d), group="design",
-                     detail=f"RMS {float(np.sqrt(np.mean(d ** 2))):.3g} mm over {len(d)} boundary tips")]
+                     detail=f"RMS {float(np.sqrt(np.mean(d ** 2))):.3g} mm over {len(d)} boundary tips "
+                            f"to the {tgt.get('kind', 'polyline')} target")]
 
 
 # ----------------------------------------------------------------- entry point
