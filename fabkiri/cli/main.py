@@ -20,6 +20,7 @@ from ..errors import FabkiriError
 COMMANDS = [
     "fabkiri.cli.pattern_cmds",
     "fabkiri.cli.cut_cmd",
+    "fabkiri.cli.verify_cmd",
 ]
 
 
