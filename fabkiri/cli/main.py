@@ -21,6 +21,7 @@ COMMANDS = [
     "fabkiri.cli.pattern_cmds",
     "fabkiri.cli.cut_cmd",
     "fabkiri.cli.verify_cmd",
+    "fabkiri.cli.design_cmd",
 ]
 
 
