@@ -33,6 +33,7 @@ from .text import supported, text_strokes, text_width
 FORMATS = ("dxf", "svg", "png")
 MIN_LABEL_MM = 0.8  # below this a label is not legible; it is left out (and counted)
 PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
+FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
 ID_FRAC = 0.45  # tile IDs fit the tile scaled by this about its centroid
 CORNER_FRAC = 0.5  # corner labels fit the triangle cut off by the chord at this fraction of the edges
 
@@ -141,6 +142,29 @@ def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
     if overlap > 1e-4 * float(area.sum()):
         raise CheckFailed(f"tiles overlap by {overlap:.4g} mm² in closed state {state}; nothing cut")
     return polys
+
+
+def _check_webs(pieces, mat: Material, kind: str, scale: float, scaled: bool) -> None:
+    """Every piece of material that stays must be at least the minimum web wide.
+
+    Morphological opening at min_web/2 (mitre, so sharp corners survive): a
+    piece that loses area is thinner than the web somewhere.
+    """
+    w = mat.min_web_mm
+    r = 0.5 * w * (1 - 1e-6)
+    opened = shapely.buffer(shapely.buffer(pieces, -r, join_style="mitre", mitre_limit=10.0), r,
+                            join_style="mitre", mitre_limit=10.0)
+    area = shapely.area(pieces)
+    loss = shapely.area(shapely.difference(pieces, opened)) / np.maximum(area, 1e-300)
+    bad = np.flatnonzero(loss > 1e-3)
+    if len(bad):
+        t = int(bad[np.argmax(loss[bad])])
+        d = 2 * shapely.maximum_inscribed_circle(pieces[t], 1e-3).length
+        what = "once shrunk by gap/2 " if kind == "ligament" else ""
+        raise CheckFailed(
+            f"tile {t} is {d:.3g} mm across {what}at scale {scale:.4g}, thinner than the minimum web "
+            f"{w:g} mm of {mat.name} ({len(bad)} tile(s) too thin); cut it larger with --width or --scale"
+            + ("" if kind != "ligament" else ", or use a smaller --gap"))
 
 
 def _tape_marks(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, margin: float) -> np.ndarray:
@@ -258,6 +282,8 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         parts = hg.kerf_outset(tile_polys, offset)
         label_margin = 0.5
 
+    _check_webs(shapely.polygons(regions), mat, kind, scale, options.width is not None or options.scale is not None)
+
     # ---- layout
     sheet_wh = (float(options.sheet[0]), float(options.sheet[1]))
     spacing = 2 * kerf + 0.5 * mat.thickness_mm
@@ -312,14 +338,22 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                 sd.add("CUT", p, True)
             for p in ext:
                 sd.add("CUT", p, True)
-            tiles_poly = shapely.polygons(Q)
-            for h, st in zip(same, moved_strips):
-                free = shapely.difference(st, shapely.union(tiles_poly[A[h]], tiles_poly[B[h]]))
-                free = shapely.normalize(free)
-                hinge_features.append({"hinge": int(h), "sheet": s + 1, "polygon":
-                                       snap(np.asarray(free.exterior.coords)[:-1]).tolist()
-                                       if free.geom_type == "Polygon" else
-                                       [snap(np.asarray(g.exterior.coords)[:-1]).tolist() for g in free.geoms]})
+            # the free spans: material not in any tile, from the same snapped geometry as the cut
+            free = shapely.get_parts(shapely.difference(material, shapely.union_all(small, grid_size=hg.GRID),
+                                                        grid_size=hg.GRID))
+            free = free[shapely.area(free) > 0]
+            # a span may touch two strips (then it is listed for both)
+            owner_pt, owner = shapely.STRtree(moved_strips).query(free, predicate="intersects")
+            for j in np.unique(owner):
+                parts_j = free[owner_pt[owner == j]]
+                # padded so rounding never leaves a hairline of material joining the two tiles
+                geom = shapely.buffer(shapely.union_all(parts_j, grid_size=hg.GRID), FEATURE_PAD_MM,
+                                      join_style="mitre")
+                geom = shapely.normalize(shapely.union_all(shapely.get_parts(geom)))
+                polys_j = [np.asarray(g.exterior.coords)[:-1] for g in shapely.get_parts(geom)]
+                hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
+                                       "polygon": snap(polys_j[0]).tolist() if len(polys_j) == 1 else
+                                       [snap(q).tolist() for q in polys_j]})
         else:
             moved = place.apply(on, np.zeros((len(on), 1, 2)))  # shifts only, for rotation use coords
             for t in on:

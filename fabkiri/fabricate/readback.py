@@ -37,6 +37,7 @@ from .drawing import LAYERS
 
 SVG_NS = "{http://www.w3.org/2000/svg}"
 AGREE_MM = 1e-6
+UNDO_MITRE = 1000.0  # undoing an outset at the acute notches where a strip meets a tile needs sharp mitres
 
 
 @dataclass
@@ -231,7 +232,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
         ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
         inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
         material = shapely.difference(shapely.union_all(rings[~inside]), shapely.union_all(rings[inside]))
-        material = shapely.buffer(material, -off, join_style="mitre", mitre_limit=5.0)
+        material = shapely.buffer(material, -off, join_style="mitre", mitre_limit=UNDO_MITRE)
         feats = [shapely.Polygon(f["polygon"]) if not isinstance(f["polygon"][0][0], list)
                  else shapely.MultiPolygon([shapely.Polygon(g) for g in f["polygon"]])
                  for f in man["hinge_features"] if f["sheet"] == k]
@@ -285,20 +286,19 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
         return {"ok": False, "available": False, "detail": "fabkiri.verify is not installed"}
     out = {"ok": True, "available": True, "files": {}}
     tol = result.manifest["tolerance_mm"]
-    manifest = folder / "manifest.json"
-    for row in result.manifest["sheets"]:
-        for key in ("dxf", "svg"):
-            name = row[key]
-            if not name:
-                continue
-            try:
-                rep = verify_layout(pattern, folder / name, manifest=manifest, tol_mm=tol)
-            except FabkiriError as exc:
-                out["ok"] = False
-                out["files"][name] = {"ok": False, "error": str(exc)}
-                continue
-            out["files"][name] = rep.to_dict()
-            out["ok"] = out["ok"] and bool(rep.ok)
+    manifest = json.loads((folder / "manifest.json").read_text("utf-8"))
+    for key in ("dxf", "svg"):  # the verifier reads every sheet of one format from the first
+        names = [row[key] for row in result.manifest["sheets"] if row[key]]
+        if not names:
+            continue
+        try:
+            rep = verify_layout(pattern, folder / names[0], manifest=manifest, tol_mm=tol)
+        except FabkiriError as exc:
+            out["ok"] = False
+            out["files"][key] = {"ok": False, "error": str(exc)}
+            continue
+        out["files"][key] = rep.to_dict()
+        out["ok"] = out["ok"] and bool(rep.ok)
     return out
 
 
