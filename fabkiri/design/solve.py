@@ -40,7 +40,9 @@ from .objective import regularizer
 from .targets import Target
 
 CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay > ~1° from 0 and π
+GAP_MARGIN = 0.005  # gap angles at hinges: the penalty acts before the hard limit g >= 0 stops a step
 PENALTIES = (1e2, 1e4, 1e6)
+STALL = 1e-6  # a penalty stage ends after 3 accepted steps that each lower the merit by less than this
 
 
 @dataclass
@@ -157,7 +159,7 @@ class _Problem:
         for g in self.grids.values():
             fam.append(g.orientation(st, nv))
         self.families = fam
-        self.margin = {f.name: (CONVEX_MARGIN if "convexity" in f.name else 0.0) for f in fam if f.kind == "ineq"}
+        self.margin = {f.name: (CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN) for f in fam if f.kind == "ineq"}
 
     def of(self, kind: str) -> list[C.Family]:
         return [f for f in self.families if f.kind == kind]
@@ -173,6 +175,10 @@ def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | N
     if hard is not None:
         for f in hard:
             r, J = f(X)
+            if f.kind == "ineq":  # projection keeps inequalities with half their margin
+                act = r < 0.5 * prob.margin[f.name]
+                r = np.where(act, r - 0.5 * prob.margin[f.name], 0.0)
+                J = sparse.diags(act.astype(float)) @ J
             rs.append(r)
             Js.append(J)
         return np.concatenate(rs), sparse.vstack(Js).tocsr()
@@ -244,7 +250,7 @@ def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None
         else:
             ok = ok and ratio > 1e-4
         if ok:
-            small = (cost - cn) <= 1e-15 * max(cost, 1e-300) or np.abs(dx).max() <= 1e-13 * (1 + np.abs(x).max())
+            small = (cost - cn) <= STALL * max(cost, 1e-300) or np.abs(dx).max() <= 1e-13 * (1 + np.abs(x).max())
             x, r, J, cost, gviol = xn, rn, Jn, cn, gviol_n
             if hard is None:
                 mu *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
@@ -296,13 +302,13 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
     Xp = X
     if fits and fit_rel < 1e-2:
         # the least-squares fit is (nearly) exact: try to make it exact
-        Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits, tol_inf=0.1 * tol_abs(eqs + fits))
+        Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs + fits))
         res = family_residuals(prob, Xh, L)
         if all(v <= req.tol for v in res.values()):
             Xp, mode = Xh, "hard"
             iters["projection"] = kh
     if mode != "hard":
-        Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
+        Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
         iters["projection"] = kp
     X = Xp
     L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))

@@ -58,7 +58,7 @@ class Linework:
 
     def add(self, pts: np.ndarray, closed: bool) -> None:
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-        if len(pts) >= 2 and np.allclose(pts[0], pts[-1], rtol=0, atol=1e-9):
+        if len(pts) >= 3 and abs(pts[0, 0] - pts[-1, 0]) <= 1e-9 and abs(pts[0, 1] - pts[-1, 1]) <= 1e-9:
             pts, closed = pts[:-1], True
         if len(pts) >= 2:
             self.polylines.append(pts)
@@ -78,7 +78,93 @@ def read_cut_file(path: str | Path) -> Linework:
     raise VerifyError(f"{p}: a layout must be a .dxf or .svg file")
 
 
+_SIMPLE = {"LWPOLYLINE", "LINE"}
+_GEOMETRIC = {"POLYLINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE", "INSERT", "HATCH", "SOLID", "3DFACE"}
+
+
+def _read_dxf_fast(p: Path) -> Linework | None:
+    """Straight LWPOLYLINEs and LINEs from ezdxf's low-level tag stream.
+
+    Loading the whole document is ~5x slower on large sheets; anything this
+    does not handle (curves, bulges, blocks, binary DXF) returns None and the
+    full ezdxf reader takes over.
+    """
+    from ezdxf.lldxf.tagger import ascii_tags_loader
+
+    with open(p, "rb") as fh:
+        if fh.read(22) == b"AutoCAD Binary DXF\r\n\x1a":
+            return None
+    insunits = 0
+    ents: list[tuple[str, str, int, list, list]] = []
+    section = None
+    cur = None
+    expect_section_name = False
+    header_var = None
+    try:
+        with open(p, "rt", encoding="utf-8", errors="replace") as fh:
+            for code, value in ascii_tags_loader(fh):
+                if code == 0:
+                    if cur is not None:
+                        ents.append(cur)
+                        cur = None
+                    if value == "SECTION":
+                        expect_section_name = True
+                    elif value == "ENDSEC":
+                        section = None
+                    elif section == "ENTITIES":
+                        if value in _SIMPLE:
+                            cur = [value, "0", 0, [], []]
+                        elif value in _GEOMETRIC:
+                            return None
+                    continue
+                if expect_section_name and code == 2:
+                    section, expect_section_name = value, False
+                    continue
+                if section == "HEADER":
+                    if code == 9:
+                        header_var = value
+                    elif header_var == "$INSUNITS" and code == 70:
+                        insunits = int(value)
+                    continue
+                if cur is None:
+                    continue
+                if code == 8:
+                    cur[1] = value
+                elif code == 70:
+                    cur[2] = int(value)
+                elif code in (10, 11):
+                    cur[3].append([float(value), 0.0])
+                elif code in (20, 21):
+                    cur[3][-1][1] = float(value)
+                elif code == 42 and float(value) != 0.0:
+                    return None  # an arc segment
+    except Exception:  # malformed tag stream: let the full reader name the problem
+        return None
+    if cur is not None:
+        ents.append(cur)
+    unit = INSUNITS_MM.get(insunits)
+    if unit is None:
+        raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
+    cut = [e for e in ents if e[1].upper() == "CUT"]
+    lw = Linework(p, layer_found=bool(cut))
+    if not cut:
+        cut = [e for e in ents if e[1].upper() not in NON_CUT_LAYERS]
+    for kind, _, flags, pts, _ in cut:
+        if kind == "LINE":
+            lw.add(np.asarray(pts[:2]) * unit, False)
+        else:
+            lw.add(np.asarray(pts) * unit, bool(flags & 1))
+    return lw
+
+
 def _read_dxf(p: Path) -> Linework:
+    fast = _read_dxf_fast(p)
+    if fast is not None:
+        return fast
+    return _read_dxf_full(p)
+
+
+def _read_dxf_full(p: Path) -> Linework:
     import ezdxf
     from ezdxf import path as ezpath
 
@@ -356,6 +442,34 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
     return np.asarray(out)
 
 
+def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
+    """Corners ``(n, 4, 2)`` of recovered regions and how many are not quads.
+
+    Plain four-vertex rings take a vectorised path; the rest go through
+    :func:`quad_corners`.
+    """
+    polys = np.asarray(polys, dtype=object)
+    if len(polys) == 0:
+        return np.zeros((0, 4, 2)), 0
+    simple = (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
+    rings = shapely.get_exterior_ring(np.where(simple, polys, None))
+    npts = np.where(simple, shapely.get_num_coordinates(rings), 0)
+    four = npts == 5
+    out = []
+    if four.any():
+        C = shapely.get_coordinates(rings[four]).reshape(-1, 5, 2)[:, :4]
+        cw = geometry.signed_areas(C) < 0
+        C[cw] = C[cw, ::-1]
+        out.append(C)
+    bad = 0
+    rest = [quad_corners(p) for p in polys[~four]]
+    good = [q for q in rest if q is not None]
+    bad = len(rest) - len(good)
+    if good:
+        out.append(np.asarray(good))
+    return (np.concatenate(out) if out else np.zeros((0, 4, 2))), bad
+
+
 # ------------------------------------------------------------------ matching
 
 
@@ -431,7 +545,7 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
 
     Hypotheses pair the recovered tile nearest the layout's centre with design
     tiles nearest the design's centre (and each corner shift); the best by
-    median residual wins, then the motion is refit on all matched corners.
+    mean capped centre distance wins, then the motion is refit on all matched corners.
     Returns assign, per-tile residual, shift, rotation angle, translation.
     """
     n = len(R)
@@ -439,6 +553,7 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
     if n == 0 or len(Y) == 0:
         return assign, np.full(n, np.inf), np.zeros(n, dtype=np.int64), 0.0, np.zeros(2)
     cr, cy = R.mean(axis=1), Y.mean(axis=1)
+    cap = geometry.mean_edge_length(Y)
     r0 = int(np.argmin(np.linalg.norm(cr - cr.mean(0), axis=1)))
     cands = np.argsort(np.linalg.norm(cy - cy.mean(0), axis=1))[:n_hyp]
     tree = cKDTree(cr)
@@ -448,7 +563,9 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
             theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
             moved = geometry.rotate(Y, theta) + t  # design tiles in the sheet frame
             dist, idx = tree.query(moved.mean(axis=1))
-            score = float(np.median(dist))
+            # mean of capped distances: a hypothesis one tile off (congruent
+            # lattices) leaves a whole row unmatched and scores worse
+            score = float(np.minimum(dist, cap).mean())
             if best is None or score < best[0]:
                 best = (score, theta, t)
     _, theta, t = best
@@ -469,14 +586,16 @@ def _assign_positions(Y, R, theta, t, tree):
     assign = np.full(n, -1)
     resid = np.full(n, np.inf)
     shift = np.zeros(n, dtype=np.int64)
-    order = np.argsort(dist, kind="stable")
-    for d in order:
-        r = idx[d]
-        if assign[r] >= 0:
-            continue
-        diff = [np.linalg.norm(np.roll(R[r], -s, axis=0) - moved[d], axis=1).max() for s in range(4)]
-        s = int(np.argmin(diff))
-        assign[r], resid[r], shift[r] = d, diff[s], s
+    # one design tile per recovered tile: the nearest claims it
+    order = np.lexsort((dist, idx))
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = idx[order[1:]] != idx[order[:-1]]
+    d = order[first]
+    r = idx[d]
+    diff = np.stack([np.linalg.norm(np.roll(R[r], -s, axis=1) - moved[d], axis=-1).max(axis=1)
+                     for s in range(4)], axis=1)
+    s = diff.argmin(axis=1)
+    assign[r], resid[r], shift[r] = d, diff[np.arange(len(r)), s], s
     return assign, resid, shift
 
 
@@ -561,15 +680,10 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             lw.polylines = [p / al.scale for p in lw.polylines]
         polys, method = recover_polygons(lw, al)
         methods.add(method)
-        quads, idx = [], []
-        for k, poly in enumerate(polys):
-            q = quad_corners(poly)
-            if q is None:
-                unusable += 1
-                continue
-            quads.append(q)
-            idx.append(k)
-        sheets[sheet] = (np.asarray(quads).reshape(-1, 4, 2), [float(shapely.area(polys[k])) for k in idx])
+        polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
+        quads, bad = quads_of(polys)
+        unusable += bad
+        sheets[sheet] = (quads, [])
     rep.meta["recovery"] = sorted(methods)
 
     in_place = al.layout == "in-place"
