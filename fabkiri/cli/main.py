@@ -19,8 +19,9 @@ from ..errors import FabkiriError
 
 COMMANDS = [
     "fabkiri.cli.pattern_cmds",
-    "fabkiri.cli.design_cmd",
+    "fabkiri.cli.cut_cmd",
     "fabkiri.cli.verify_cmd",
+    "fabkiri.cli.design_cmd",
 ]
 
 
