@@ -206,7 +206,12 @@ def _read_svg(p: Path) -> Linework:
         svg = se.SVG.parse(str(p), reify=True)
     except Exception as exc:  # svgelements raises many kinds on bad XML
         raise VerifyError(f"{p}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
-    height = float(svg.height) * MM_PER_PX if svg.height else None
+    if not svg.height:
+        raise VerifyError(f"{p}: the SVG has no height; cannot flip y")
+    # svgelements' own mm constant is rounded (3.7795296 px/mm, 5e-7 off); take
+    # the px-per-mm factor from the declared size instead
+    mm_per_px = _declared_mm(svg.values.get("height"), float(svg.height))
+    height = float(svg.height) * mm_per_px
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
     cut_groups = [g for g in groups if str(g.id or "").upper() == "CUT"
                   or str(g.values.get("inkscape:label", "")).upper() == "CUT"]
@@ -217,19 +222,17 @@ def _read_svg(p: Path) -> Linework:
                 for e in g.select() if isinstance(e, se.Shape)}
         shapes = [e for e in svg.elements() if isinstance(e, se.Shape) and id(e) not in skip]
     lw = Linework(p, layer_found=bool(cut_groups))
-    if height is None:
-        raise VerifyError(f"{p}: the SVG has no height; cannot flip y")
     for shape in shapes:
         path_ = se.Path(shape)
         pts: list[tuple[float, float]] = []
         for seg in path_.segments():
             if isinstance(seg, se.Move):
                 if len(pts) >= 2:
-                    lw.add(_svg_mm(pts, height), False)
+                    lw.add(_svg_mm(pts, height, mm_per_px), False)
                 pts = [(seg.end.x, seg.end.y)]
             elif isinstance(seg, se.Close):
                 if len(pts) >= 3:
-                    lw.add(_svg_mm(pts, height), True)
+                    lw.add(_svg_mm(pts, height, mm_per_px), True)
                 pts = []
             elif isinstance(seg, se.Line):
                 pts.append((seg.end.x, seg.end.y))
@@ -238,12 +241,28 @@ def _read_svg(p: Path) -> Linework:
                     q = seg.point(t)
                     pts.append((q.x, q.y))
         if len(pts) >= 2:
-            lw.add(_svg_mm(pts, height), False)
+            lw.add(_svg_mm(pts, height, mm_per_px), False)
     return lw
 
 
-def _svg_mm(pts: list[tuple[float, float]], height_mm: float) -> np.ndarray:
-    a = np.asarray(pts, dtype=float) * MM_PER_PX
+_UNIT_MM = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6, "px": MM_PER_PX, "": MM_PER_PX}
+
+
+def _declared_mm(attr: Any, height_px: float) -> float:
+    """mm per svgelements px, from the root's declared height (e.g. '400mm')."""
+    import re
+
+    m = re.fullmatch(r"\s*([0-9.eE+-]+)\s*([a-z]*)\s*", str(attr or ""))
+    if not m or m.group(2) not in _UNIT_MM or height_px <= 0:
+        return MM_PER_PX
+    try:
+        return float(m.group(1)) * _UNIT_MM[m.group(2)] / height_px
+    except ValueError:
+        return MM_PER_PX
+
+
+def _svg_mm(pts: list[tuple[float, float]], height_mm: float, mm_per_px: float = MM_PER_PX) -> np.ndarray:
+    a = np.asarray(pts, dtype=float) * mm_per_px
     a[:, 1] = height_mm - a[:, 1]
     return a
 
@@ -427,18 +446,43 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
         return pts
     if len(pts) < 4:
         return None
+    # more than four corners (bevelled or notched corners): drop the vertex
+    # that costs the least area until four remain (Visvalingam-Whyatt) ...
+    keep = list(range(len(pts)))
+    while len(keep) > 4:
+        q = pts[keep]
+        prv, nxt = np.roll(q, 1, 0), np.roll(q, -1, 0)
+        cost = np.abs(geometry.cross2(prv - q, nxt - q))
+        keep.pop(int(np.argmin(cost)))
+    coarse = pts[keep]
+    # ... then put each corner where the longest original edges along its two
+    # sides meet, which restores an apex cut off by a bevel or notch
     e = np.roll(pts, -1, 0) - pts
-    longest = np.sort(np.argsort(-np.linalg.norm(e, axis=1))[:4])
+    elen = np.linalg.norm(e, axis=1)
+    mid = pts + 0.5 * e
+    lines = []
+    for i in range(4):
+        a, b = coarse[i], coarse[(i + 1) % 4]
+        d = b - a
+        dl = np.linalg.norm(d)
+        if dl == 0:
+            return None
+        # parallel within 10° (quad corners are far sharper turns) and close to the side
+        along = (np.abs(geometry.cross2(e, d)) <= 0.17 * elen * dl) & (geometry.dot2(e, d) > 0)
+        near = np.abs(geometry.cross2(mid - a, d)) / dl <= 0.1 * dl
+        cand = np.flatnonzero(along & near)
+        k = cand[np.argmax(elen[cand])] if len(cand) else None
+        lines.append((a, d) if k is None else (pts[k], e[k]))
     out = []
     for i in range(4):
-        k1, k2 = longest[i - 1], longest[i]
-        p1, d1 = pts[k1], e[k1]
-        p2, d2 = pts[k2], e[k2]
+        (p1, d1), (p2, d2) = lines[i - 1], lines[i]
         den = geometry.cross2(d1, d2)
-        if abs(den) < 1e-12 * np.linalg.norm(d1) * np.linalg.norm(d2):
-            return None
-        t = geometry.cross2(p2 - p1, d2) / den
-        out.append(p1 + t * d1)
+        if abs(den) < 1e-9 * np.linalg.norm(d1) * np.linalg.norm(d2):
+            out.append(coarse[i])
+            continue
+        x = p1 + geometry.cross2(p2 - p1, d2) / den * d1
+        size = np.linalg.norm(coarse - coarse.mean(0), axis=1).max()
+        out.append(x if np.linalg.norm(x - coarse[i]) <= 0.5 * size else coarse[i])
     return np.asarray(out)
 
 
@@ -562,10 +606,12 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
         for s in range(4):
             theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
             moved = geometry.rotate(Y, theta) + t  # design tiles in the sheet frame
-            dist, idx = tree.query(moved.mean(axis=1))
-            # mean of capped distances: a hypothesis one tile off (congruent
-            # lattices) leaves a whole row unmatched and scores worse
-            score = float(np.minimum(dist, cap).mean())
+            # score: mean corner residual of the nearest tiles, capped at a tile
+            # size (a hypothesis one tile off, or a near-symmetric one, loses)
+            _, idx = tree.query(moved.mean(axis=1))
+            err = np.min([np.linalg.norm(np.roll(R[idx], -k, axis=1) - moved, axis=-1).max(axis=1)
+                          for k in range(4)], axis=0)
+            score = float(np.minimum(err, cap).mean())
             if best is None or score < best[0]:
                 best = (score, theta, t)
     _, theta, t = best
@@ -660,13 +706,15 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         manifest = load_manifest(path)
     al = _allowances(manifest, str(path.parent / "manifest.json") if manifest is not None else str(path))
     files = _sheet_files(path, al)
-    L = pattern.tile_size
+    # everything is compared on the sheet, in physical mm: the design is scaled
+    # up (kerf and tolerance are physical lengths, not pattern lengths)
+    L = pattern.tile_size * al.scale
     tol = Tolerances(float(tol_mm), max(float(tol_rad), float(tol_mm) / L), L, "fabrication")
     rep = Report(subject=str(path), kind="layout",
                  meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "hinge": al.hinge,
                        "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
     g = "layout"
-    D = pattern.corners()  # design shapes (deployed = cut shapes)
+    D = pattern.corners() * al.scale  # design shapes (deployed = cut shapes), sheet mm
     T = pattern.n_tiles
 
     # ---- read and recover per sheet
@@ -676,8 +724,6 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     for sheet, f in files.items():
         lw = read_cut_file(f)
         _drop_reference(lw, al.reference.get(sheet))
-        if al.scale != 1.0:
-            lw.polylines = [p / al.scale for p in lw.polylines]
         polys, method = recover_polygons(lw, al)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
@@ -703,6 +749,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     Ystate = pattern.contracted.get(state)
     if Ystate is None:
         Ystate = contract(pattern, state).corners
+    Ystate = Ystate * al.scale
     for sheet, (R, _) in sheets.items():
         if in_place:
             design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
