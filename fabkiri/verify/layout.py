@@ -742,6 +742,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
 
     # ---- match
     assign_all = np.full(T, -1)  # design tile -> global recovered index
+    found_on = np.full(T, -1)  # design tile -> sheet it was found on
     cut_shapes = np.full((T, 4, 2), np.nan)
     resid_pos = np.full(T, np.nan)
     extra = 0
@@ -767,6 +768,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
                 extra += 1
                 continue
             assign_all[d] = r
+            found_on[d] = sheet
             cut_shapes[d] = np.roll(R[r], -sh[r], axis=0)
             if in_place:
                 resid_pos[d] = res[r]
@@ -842,8 +844,12 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         ok = np.zeros(len(A), dtype=bool)
         sel = np.flatnonzero(present)
         ok[sel] = np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol.length
+        cross = found_on[A] != found_on[B]  # split along cut lines onto two sheets
+        ok |= cross
         present &= ok
         why = "both tiles cut, hinge corners coincide on the sheet"
+        if (cross & present).any():
+            why += f" ({int((cross & present).sum())} hinges cross sheets)"
     if al.hinge == "ligament":
         listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
         present &= np.isin(np.arange(len(A)), list(listed))
