@@ -183,7 +183,7 @@ def _read_dxf_full(p: Path) -> Linework:
     for e in cut:
         kind = e.dxftype()
         if kind == "LINE":
-            lw.add(np.array([e.dxf.start[:2], e.dxf.end[:2]]) * unit, False)
+            lw.add(np.array([[e.dxf.start.x, e.dxf.start.y], [e.dxf.end.x, e.dxf.end.y]]) * unit, False)
             continue
         if kind == "LWPOLYLINE":
             pts = np.array(e.get_points("xyb"), dtype=float)
@@ -191,7 +191,7 @@ def _read_dxf_full(p: Path) -> Linework:
                 lw.add(pts[:, :2] * unit, e.closed)
                 continue
         path_ = ezpath.make_path(e)
-        pts = np.array([v[:2] for v in path_.flattening(0.001 / unit)], dtype=float)
+        pts = np.array([(v.x, v.y) for v in path_.flattening(0.001 / unit)], dtype=float)
         closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or kind == "CIRCLE")
         lw.add(pts * unit, closed)
     return lw
