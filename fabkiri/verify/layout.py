@@ -768,11 +768,18 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     cut_shapes = np.full((T, 4, 2), np.nan)
     resid_pos = np.full(T, np.nan)
     extra = 0
+    def closed(s: int) -> np.ndarray:
+        Y = pattern.contracted.get(s)
+        return (contract(pattern, s).corners if Y is None else Y) * al.scale
+
     state = al.state
-    Ystate = pattern.contracted.get(state)
-    if Ystate is None:
-        Ystate = contract(pattern, state).corners
-    Ystate = Ystate * al.scale
+    if in_place and al.hinge == "plain" and sheets:
+        # no manifest declares the state: take the closed state the sheet matches
+        R0 = next(iter(sheets.values()))[0]
+        fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
+        state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
+        rep.meta["state"] = state
+    Ystate = closed(state)
     for sheet, (R, _) in sheets.items():
         if in_place:
             design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
