@@ -293,6 +293,7 @@ class Allowances:
     hinge_features: list[dict[str, Any]]
     tile_sheet: dict[int, int]
     sheet_files: dict[int, str]
+    cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
 
 
 def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
@@ -323,11 +324,12 @@ def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
             for key in ("dxf", "svg"):
                 if sh.get(key):
                     sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
+        cross = {int(h["hinge"]) for h in manifest.get("hinges") or [] if h.get("cross_sheet")}
     except VerifyError:
         raise
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
-    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files)
+    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross)
 
 
 # ------------------------------------------------------------------ recovery
@@ -378,7 +380,7 @@ def _snapped_segments(lw: Linework) -> np.ndarray:
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
 
 
-def recover_polygons(lw: Linework, al: Allowances) -> tuple[np.ndarray, str]:
+def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.ndarray, str]:
     """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
     closed_only = all(lw.closed) and lw.polylines
     hinge = al.hinge
@@ -408,8 +410,8 @@ def recover_polygons(lw: Linework, al: Allowances) -> tuple[np.ndarray, str]:
     material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
     if al.kerf_offset:
         material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
-    feats = [shapely.Polygon(np.asarray(f["polygon"], dtype=float) / 1.0) for f in al.hinge_features
-             if f.get("polygon")]
+    feats = [shapely.Polygon(np.asarray(f["polygon"], dtype=float)) for f in al.hinge_features
+             if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
     if feats:
         material = material.difference(shapely.unary_union(feats))
     parts = shapely.get_parts(material)
@@ -422,20 +424,21 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
     """The four corners (CCW) of a recovered tile region, or None.
 
     Collinear and duplicate vertices (T-junctions, noding points) are dropped;
-    if more than four corners remain (bevelled or notched corners), the four
-    longest sides are extended to meet.
+    if more than four corners remain (bevelled or notched corners), the
+    polygon is simplified to four corners, then each corner is moved to where
+    the longest original edges along its two sides meet.
     """
     if poly.is_empty or poly.geom_type != "Polygon":
         return None
     pts = np.asarray(poly.exterior.coords)[:-1]
     if shapely.LinearRing(pts).is_ccw is False:
         pts = pts[::-1]
+    from .geom import point_segment_distance
+
     changed = True
     while changed and len(pts) > 3:
         changed = False
         prv, nxt = np.roll(pts, 1, 0), np.roll(pts, -1, 0)
-        from .geom import point_segment_distance
-
         d = point_segment_distance(pts, prv, nxt)
         dup = np.linalg.norm(pts - prv, axis=1) <= eps
         bad = (d <= eps) | dup
@@ -740,23 +743,23 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     T = pattern.n_tiles
 
     # ---- read and recover per sheet
-    sheets: dict[int, tuple[np.ndarray, list[int]]] = {}
+    sheets: dict[int, np.ndarray] = {}  # sheet -> recovered quads (n, 4, 2)
     methods = set()
     unusable = 0
     for sheet, f in files.items():
         lw = read_cut_file(f)
         _drop_reference(lw, al.reference.get(sheet))
-        polys, method = recover_polygons(lw, al)
+        polys, method = recover_polygons(lw, al, sheet)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
         quads, bad = quads_of(polys)
         unusable += bad
-        sheets[sheet] = (quads, [])
+        sheets[sheet] = quads
     rep.meta["recovery"] = sorted(methods)
 
     in_place = al.layout == "in-place"
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
-        allq = np.concatenate([q for q, _ in sheets.values()]) if sheets else np.zeros((0, 4, 2))
+        allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
         if len(allq):
             u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
             in_place = len(shapely.get_parts(u)) == 1 and len(allq) > 1
@@ -775,12 +778,12 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     state = al.state
     if in_place and al.hinge == "plain" and sheets:
         # no manifest declares the state: take the closed state the sheet matches
-        R0 = next(iter(sheets.values()))[0]
+        R0 = next(iter(sheets.values()))
         fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
         state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
         rep.meta["state"] = state
     Ystate = closed(state)
-    for sheet, (R, _) in sheets.items():
+    for sheet, R in sheets.items():
         if in_place:
             design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
                 else np.arange(T)
@@ -880,8 +883,12 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             why += f" ({int((cross & present).sum())} hinges cross sheets)"
     if al.hinge == "ligament":
         listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
-        present &= np.isin(np.arange(len(A)), list(listed))
+        h_idx = np.arange(len(A))
+        split = np.isin(h_idx, list(al.cross_sheet)) & (found_on[A] != found_on[B])
+        present &= np.isin(h_idx, list(listed)) | split
         why += ", a ligament listed"
+        if split.any():
+            why += f" or the hinge declared split across sheets ({int(split.sum())}, to be joined by hand)"
     absent = np.flatnonzero(~present)
     rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
