@@ -749,6 +749,9 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     for sheet, f in files.items():
         lw = read_cut_file(f)
         _drop_reference(lw, al.reference.get(sheet))
+        if not lw.polylines:
+            raise VerifyError(f"{f}: no cut geometry (nothing on layer CUT"
+                              f"{'' if lw.layer_found else ' or any other outline layer'})")
         polys, method = recover_polygons(lw, al, sheet)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
