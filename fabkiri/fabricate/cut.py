@@ -339,21 +339,21 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             for p in ext:
                 sd.add("CUT", p, True)
             # the free spans: material not in any tile, from the same snapped geometry as the cut
-            free = shapely.get_parts(shapely.difference(material, shapely.union_all(small, grid_size=hg.GRID),
-                                                        grid_size=hg.GRID))
+            tiles_here = shapely.union_all(small, grid_size=hg.GRID)
+            free = shapely.get_parts(shapely.difference(material, tiles_here, grid_size=hg.GRID))
             free = free[shapely.area(free) > 0]
             # a span may touch two strips (then it is listed for both)
             owner_pt, owner = shapely.STRtree(moved_strips).query(free, predicate="intersects")
             for j in np.unique(owner):
                 parts_j = free[owner_pt[owner == j]]
-                # padded so rounding never leaves a hairline of material joining the two tiles
+                # padded so rounding never leaves a hairline of material along the strip joining the
+                # two tiles, then clipped by the tiles so no tile loses a corner
                 geom = shapely.buffer(shapely.union_all(parts_j, grid_size=hg.GRID), FEATURE_PAD_MM,
                                       join_style="mitre")
-                geom = shapely.normalize(shapely.union_all(shapely.get_parts(geom)))
-                polys_j = [np.asarray(g.exterior.coords)[:-1] for g in shapely.get_parts(geom)]
-                hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
-                                       "polygon": snap(polys_j[0]).tolist() if len(polys_j) == 1 else
-                                       [snap(q).tolist() for q in polys_j]})
+                geom = shapely.normalize(shapely.difference(geom, tiles_here, grid_size=hg.GRID))
+                for g in shapely.get_parts(geom):  # one entry per polygon (a span may come in parts)
+                    hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
+                                           "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist()})
         else:
             moved = place.apply(on, np.zeros((len(on), 1, 2)))  # shifts only, for rotation use coords
             for t in on:
