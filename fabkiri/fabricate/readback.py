@@ -34,6 +34,7 @@ from ..fileio import atomic_write_many
 from ..pattern.model import Pattern
 from .cut import CutResult
 from .drawing import LAYERS
+from .hinges import MITRE_LIMIT as hg_MITRE
 
 SVG_NS = "{http://www.w3.org/2000/svg}"
 AGREE_MM = 1e-6
@@ -223,7 +224,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
         pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
         holes = np.array([])
     elif kind == "separate":
-        pieces = shapely.buffer(polys[~is_ref], -off, join_style="mitre", mitre_limit=5.0)
+        pieces = shapely.buffer(polys[~is_ref], -off, join_style="mitre", mitre_limit=hg_MITRE)
         holes = np.array([])
     else:
         rings = polys[~is_ref]
@@ -276,6 +277,17 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
 # ------------------------------------------------------------------ verifier and writing
 
 
+def _relative(value, prefix: str):
+    """The report with the scratch folder stripped from paths (the manifest must not depend on it)."""
+    if isinstance(value, dict):
+        return {k: _relative(v, prefix) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_relative(v, prefix) for v in value]
+    if isinstance(value, str):
+        return value.replace(prefix, "")
+    return value
+
+
 def scaled_pattern(pattern: Pattern, scale: float) -> Pattern:
     """The pattern with every length multiplied by ``scale``."""
     from dataclasses import replace
@@ -310,7 +322,7 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
             out["ok"] = False
             out["files"][key] = {"ok": False, "error": str(exc)}
             continue
-        out["files"][key] = rep.to_dict()
+        out["files"][key] = _relative(rep.to_dict(), str(folder) + "/")
         out["ok"] = out["ok"] and bool(rep.ok)
     return out
 
