@@ -410,7 +410,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.n
     material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
     if al.kerf_offset:
         material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
-    feats = [shapely.Polygon(np.asarray(f["polygon"], dtype=float)) for f in al.hinge_features
+    feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
              if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
     if feats:
         material = material.difference(shapely.unary_union(feats))
@@ -418,6 +418,17 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.n
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, "material minus ligaments, grown by the tile shrink"
+
+
+def _feature_geometry(poly: Any):
+    """A hinge feature: one ring ``[[x, y], ...]`` or several ``[[[x, y], ...], ...]``."""
+    try:
+        arr = np.asarray(poly, dtype=float)
+        if arr.ndim == 2 and arr.shape[1] == 2:
+            return shapely.Polygon(arr)
+        return shapely.MultiPolygon([shapely.Polygon(np.asarray(r, dtype=float)) for r in poly])
+    except (TypeError, ValueError) as exc:
+        raise VerifyError(f"malformed hinge feature polygon in the manifest ({exc})") from None
 
 
 def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | None:
