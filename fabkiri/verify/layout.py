@@ -382,7 +382,9 @@ def _snapped_segments(lw: Linework) -> np.ndarray:
 
 def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.ndarray, str]:
     """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
-    closed_only = all(lw.closed) and lw.polylines
+    if not lw.polylines:  # e.g. a sheet that holds only the reference square
+        return np.zeros(0, dtype=object), "nothing to recover"
+    closed_only = all(lw.closed)
     hinge = al.hinge
     if hinge == "plain":
         hinge = "separate" if closed_only else "tape"
@@ -755,20 +757,21 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
 
     # ---- read and recover per sheet
     sheets: dict[int, np.ndarray] = {}  # sheet -> recovered quads (n, 4, 2)
+    n_lines = 0
     methods = set()
     unusable = 0
     for sheet, f in files.items():
         lw = read_cut_file(f)
         _drop_reference(lw, al.reference.get(sheet))
-        if not lw.polylines:
-            raise VerifyError(f"{f}: no cut geometry (nothing on layer CUT"
-                              f"{'' if lw.layer_found else ' or any other outline layer'})")
+        n_lines += len(lw.polylines)
         polys, method = recover_polygons(lw, al, sheet)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
         quads, bad = quads_of(polys)
         unusable += bad
         sheets[sheet] = quads
+    if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
+        raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
     rep.meta["recovery"] = sorted(methods)
 
     in_place = al.layout == "in-place"
