@@ -332,8 +332,11 @@ def rigid_path(pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray) -> tuple[np
     X = pattern.corners()
     rot, _ = geom.tile_kabsch(Y1, X)  # state 1 -> deployed, per tile
     color = top.tile_color
-    m = [np.angle(np.exp(1j * rot[color == c]).mean()) for c in (0, 1)]
-    eps0 = 1.0 if geometry.wrap_angle(m[0] - m[1]) >= 0 else -1.0
+    if (color == 1).any():
+        m = [np.angle(np.exp(1j * rot[color == c]).mean()) for c in (0, 1)]
+        eps0 = 1.0 if geometry.wrap_angle(m[0] - m[1]) >= 0 else -1.0
+    else:  # a single tile: nothing to turn against
+        eps0 = 1.0
     eps = np.where(color == 0, eps0, -eps0)
     S = len(omegas)
     phi = omegas[:, None] * eps[None, :]  # (S, T)
