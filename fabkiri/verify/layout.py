@@ -810,6 +810,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     cut_shapes = np.full((T, 4, 2), np.nan)
     resid_pos = np.full(T, np.nan)
     extra = 0
+
     def closed(s: int) -> np.ndarray:
         Y = pattern.contracted.get(s)
         return (contract(pattern, s).corners if Y is None else Y) * al.scale
