@@ -282,7 +282,11 @@ def test_same_input_same_bytes_and_golden(tmp_path):
     for k, v in files.items():
         gold = GOLDEN / f"std2x2-{k}"
         assert gold.exists(), f"golden file {gold.name} missing (FABKIRI_REGEN_GOLDEN=1 writes it)"
-        assert gold.read_bytes() == v, f"{k} differs from its golden file"
+        if gold.read_bytes() != v:
+            import difflib
+
+            diff = list(difflib.unified_diff(gold.read_text().splitlines(), v.decode().splitlines(), lineterm="", n=1))
+            pytest.fail(f"{k} differs from its golden file:\n" + "\n".join(diff[:40]))
 
 
 # ------------------------------------------------------------------ CLI
