@@ -46,6 +46,8 @@ EARLY_STALL = 1e-3  # ... looser in the first stage: the next one refines from t
 # (penalty weight, stall tolerance, iteration cap) per stage; the projection then enforces c = 0 exactly,
 # moving x by O(|c|), so the last stage need not converge the penalty problem to high accuracy
 PENALTIES = ((1e2, EARLY_STALL, 200), (1e4, STALL, 40))
+STIFF_PENALTIES = ((1e4, 1e-4, 300), (1e6, STALL, 60))  # fallback when the first schedule gets stuck
+RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers the fallback
 
 
 @dataclass
@@ -395,10 +397,21 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
     log(f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
         + ", ".join(f.name for f in prob.families))
     iters = {}
-    for rho, stall_tol, cap in PENALTIES:
-        X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
-        iters[f"lm_rho_{rho:g}"] = k
-        log(f"rho={rho:g}: {k} iterations, max eq {max(v for kk, v in family_residuals(prob, X, 1.0).items() if kk not in ('shape',) and not kk.startswith('closed_shape')):.2e}")
+    def eq_max(Y):
+        return max((float(np.abs(f(Y)[0]).max()) for f in prob.of("eq")), default=0.0)
+
+    schedules = [PENALTIES, STIFF_PENALTIES]
+    for attempt, schedule in enumerate(schedules):
+        X = prob.X0.copy()
+        for rho, stall_tol, cap in schedule:
+            X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
+            iters[f"lm_rho_{rho:g}" + ("_restart" if attempt else "")] = k
+            log(f"rho={rho:g}: {k} iterations, max equality row {eq_max(X):.2e}")
+        if eq_max(X) <= RESTART_ABOVE:
+            break
+        # the fit dragged the pattern off the constraint manifold into a wall of inequalities:
+        # start again keeping the constraints stiff from the first step
+        log(f"max equality row {eq_max(X):.2e} > {RESTART_ABOVE:g}: restarting with stiff penalties")
     eqs = prob.of("eq")
     fits = prob.of("fit")
     L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))
