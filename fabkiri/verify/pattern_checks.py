@@ -59,7 +59,7 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
     size = pattern.tile_size
     if tol_mm is not None:
         return Tolerances(float(tol_mm), float(tol_rad), size, "given")
-    optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals"))
+    optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals", "report"))
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
     return Tolerances(rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data")
 
@@ -159,13 +159,17 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
                         "per-corner edge-length change and per-tile rigid-fit residual"))
     out.append(measured(f"{g}: tiles congruent (angles)", _max(da), tol.angle, "rad",
                         worst=_worst("tile", da), group=g))
-    # holes of zero area
+    # holes of zero area, measured as an equivalent width 2|A|/perimeter (mm)
     if top.n_holes:
-        hole_area = np.abs(geometry.signed_areas(_hole_outline(pattern, Y)))
+        outline = _hole_outline(pattern, Y)
+        hole_area = np.abs(geometry.signed_areas(outline))
+        perim = np.linalg.norm(np.roll(outline, -1, axis=1) - outline, axis=-1).sum(axis=1)
+        hole_width = 2 * hole_area / np.maximum(perim, 1e-300)
     else:
-        hole_area = np.zeros(0)
-    out.append(measured(f"{g}: holes closed (area)", _max(hole_area), tol.area, "mm²",
-                        worst=_worst("hole", hole_area), group=g))
+        hole_area = hole_width = np.zeros(0)
+    out.append(measured(f"{g}: holes closed", _max(hole_width), tol.length, "mm",
+                        worst=_worst("hole", hole_width), group=g,
+                        detail=f"equivalent width 2|area|/perimeter; largest |area| {_max(hole_area):.3g} mm²"))
     # every folded gap (hole fold corner or boundary notch) closed
     if isinstance(state, int) or str(state).isdigit():
         fold = top.fold(int(state))
@@ -240,20 +244,28 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     total = float(areas.sum())
     union = geom.tiles_union(Y, max(tol.length, 1e-12 * tol.tile_size), coverage=not len(bad))
     deficit = abs(total - float(union.area))
-    out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.area, 1e-9 * total), "mm²",
+    # a strip of the length tolerance along every tile edge, counted once
+    half_perimeter = 0.5 * float(geometry.edge_lengths(Y).sum())
+    out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.length * half_perimeter,
+                                                                             1e-9 * total), "mm²",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
                         detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²"))
     parts = list(getattr(union, "geoms", [union]))
-    gaps = [(shapely.area(shapely.Polygon(r)), r) for p in parts for r in p.interiors]
-    big = [(a, r) for a, r in gaps if a > tol.area]
+    gaps = []
+    for part in parts:
+        for r in part.interiors:
+            ring = shapely.Polygon(r)
+            gaps.append((2 * ring.area / max(ring.length, 1e-300), ring.area, ring))
+    big = [x for x in gaps if x[0] > tol.length]
     worst_gap = max(gaps, key=lambda x: x[0]) if gaps else None
     where = None
     if worst_gap is not None:
-        c = shapely.Polygon(worst_gap[1]).representative_point()
+        c = worst_gap[2].representative_point()
         where = f"at ({c.x:.4g}, {c.y:.4g}) mm"
-    out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.area, "mm²",
+    out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.length, "mm",
                         worst=where, group=g,
-                        detail=f"{len(big)} enclosed gaps above tolerance" if big else ""))
+                        detail=(f"{len(big)} enclosed gaps wider than the tolerance (largest {worst_gap[1]:.3g} mm²)"
+                                if big else "equivalent width 2|area|/perimeter of enclosed gaps")))
     # one outline: components after closing cracks narrower than the tolerance
     eps = max(tol.length, 1e-12 * tol.tile_size)
     closed = union.buffer(eps, join_style="mitre").buffer(-eps, join_style="mitre")
@@ -393,17 +405,39 @@ def _target_outline(design: dict[str, Any]) -> np.ndarray | None:
     return None
 
 
-def target_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
-    pts = _target_outline(pattern.design or {})
+def _target_distance(tgt: dict[str, Any], tips: np.ndarray) -> np.ndarray | None:
+    """Distance (mm) of points to a recorded target: the design layer's own curve
+    (spline or polyline, exact foot points) when it can be rebuilt, else the polyline."""
+    if tgt.get("kind") in ("spline", "polyline") and "points" in tgt:
+        try:
+            from ..design.targets import Target
+        except ImportError:  # a build without the design layer
+            Target = None
+        if Target is not None:
+            try:
+                curve = Target(str(tgt.get("name", "target")), tgt["kind"], np.asarray(tgt["points"], float),
+                               corners=np.asarray(tgt["corners"], float) if tgt.get("corners") is not None else None)
+                return np.abs(curve.signed_distance(tips))
+            except Exception:  # noqa: BLE001 - fall back to the plain polyline below
+                pass
+    pts = _target_outline({"target": tgt})
     if pts is None:
+        return None
+    return shapely.distance(shapely.points(tips), shapely.LinearRing(pts))
+
+
+def target_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
+    tgt = (pattern.design or {}).get("target")
+    if not isinstance(tgt, dict):
         return []
-    ring = shapely.LinearRing(pts)
     tips = pattern.nodes[pattern.topology.free_nodes]
-    d = shapely.distance(shapely.points(tips), ring)
-    tgt = pattern.design["target"]
-    target_tol = float(tgt.get("tolerance_mm", tol.length)) if isinstance(tgt, dict) else tol.length
+    d = _target_distance(tgt, tips)
+    if d is None:
+        return []
+    target_tol = float(tgt.get("tolerance_mm", tol.length))
     return [measured("target fit", _max(d), target_tol, "mm", worst=_worst("free corner", d), group="design",
-                     detail=f"RMS {float(np.sqrt(np.mean(d ** 2))):.3g} mm over {len(d)} boundary tips")]
+                     detail=f"RMS {float(np.sqrt(np.mean(d ** 2))):.3g} mm over {len(d)} boundary tips "
+                            f"to the {tgt.get('kind', 'polyline')} target")]
 
 
 # ----------------------------------------------------------------- entry point
