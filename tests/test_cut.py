@@ -169,6 +169,18 @@ def test_solver_designs_8x8(pattern, kind, material):
     assert_verified(p, r, svg_ok=kind != "ligament")
 
 
+@pytest.mark.parametrize("kind,material,extra", [("tape", "plywood-3", {}), ("separate", "plywood-3", {}),
+                                                 ("ligament", "card-0.3", {"gap_mm": 1.2})])
+def test_solver_design_32x32(kind, material, extra):
+    p = read_pattern(PATTERNS / "circle-32x32-rigid.json")
+    mat = load_material(material).override(**extra)
+    # its outer tiles are slim: 1100 mm wide keeps them above the material's minimum web
+    r = cut_pattern(p, CutOptions(material=mat, hinge=kind, width=1100.0, sheet=(1200.0, 1200.0),
+                                  formats=("dxf", "svg"), stem="c32"))
+    assert r.manifest["scale"] > 10 and (kind == "separate" or len(r.sheets) == 1)
+    assert_verified(p, r, svg_ok=kind != "ligament")
+
+
 def test_unconverged_solver_design_is_refused():
     # a 32x32 rigid circle that fabkiri design left unconverged: it closes only to ~0.5 mm
     p = read_pattern(DATA / "circle-32x32-unconverged.json")
