@@ -166,7 +166,9 @@ def _check_webs(pieces, mat: Material, kind: str, scale: float, scaled: bool) ->
     opened = shapely.buffer(shapely.buffer(pieces, -r, join_style="mitre", mitre_limit=10.0), r,
                             join_style="mitre", mitre_limit=10.0)
     area = shapely.area(pieces)
-    loss = shapely.area(shapely.difference(pieces, opened)) / np.maximum(area, 1e-300)
+    # the opening lies inside the piece, so areas suffice (an overlay of two nearly equal
+    # polygons can fail in GEOS and report the whole piece as lost)
+    loss = 1.0 - shapely.area(opened) / np.maximum(area, 1e-300)
     bad = np.flatnonzero(loss > 1e-3)
     if len(bad):
         t = int(bad[np.argmax(loss[bad])])
@@ -365,11 +367,9 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                     hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
                                            "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist()})
         else:
-            moved = place.apply(on, np.zeros((len(on), 1, 2)))  # shifts only, for rotation use coords
-            for t in on:
+            for t in on:  # each part turned and moved as placed
                 ring = np.asarray(parts[t].exterior.coords)[:-1]
                 sd.add("CUT", place.apply(np.array([t]), ring[None])[0], True)
-            del moved
     if ref is not None:
         rs, sq = ref
         sheets[rs].add("CUT", sq, True)
@@ -418,8 +418,10 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                 for p in cs[i]:
                     sheets[sheet_of[t]].add("ENGRAVE", p, False)
         if kind == "tape" and Hn:
-            mt = np.concatenate([A, B])
-            mk = np.concatenate([cA, cB])
+            # tile A's corner carries the face letter, tile B's a chord where the tape ends: one
+            # mark per tile keeps the stroke count (DXF entities) down on large patterns
+            same = ~cross
+            mt, mk = B[same], cB[same]
             marks = _tape_marks(Q, mt, mk, CORNER_FRAC, label_margin)
             for t, seg in zip(mt, marks):
                 if np.isfinite(seg).all():
@@ -474,10 +476,9 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     for h in range(Hn):
         row = {"hinge": h, "tiles": [int(A[h]), int(B[h])], "face": letters[h],
                "sheets": [int(sheet_of[A[h]]) + 1, int(sheet_of[B[h]]) + 1],
-               "position": snap(Q[A[h], cA[h]] if kind != "tape" else placed_corners[A[h], cA[h]]).tolist(),
-               "position_b": snap(placed_corners[B[h], cB[h]]).tolist(),
+               "position": snap(placed_corners[A[h], cA[h]]).tolist(),  # on tile A's sheet
+               "position_b": snap(placed_corners[B[h], cB[h]]).tolist(),  # on tile B's sheet
                "cross_sheet": bool(sheet_of[A[h]] != sheet_of[B[h]])}
-        row["position"] = snap(placed_corners[A[h], cA[h]]).tolist()
         if lig is not None:
             row["ligament_length_mm"] = round(float(lig.lengths[h]), 6)
             row["strain"] = round(float(lig.strains[h]), 6)

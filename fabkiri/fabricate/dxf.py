@@ -45,6 +45,7 @@ def dxf_bytes(sheet: SheetDrawing, colors: str = "default") -> bytes:
             for pts, closed in sheet.layers[name]:
                 msp.add_lwpolyline(pts.tolist(), format="xy", close=closed, dxfattribs=attribs)
         # the CLASSES section order depends on what ezdxf loaded earlier in the process: sort it
+        doc.classes.add_required_classes(doc.dxfversion)  # what write() would add, then sort all
         cls = doc.classes.classes
         ordered = sorted(cls.items(), key=lambda kv: str(kv[0]))
         cls.clear()

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import io
 
+import numpy as np
+
 from .drawing import COLORS, LAYERS, SheetDrawing
 
 GAP_MM = 20.0
@@ -32,7 +34,7 @@ def png_bytes(sheets: list[SheetDrawing], colors: str = "default", px_per_mm: fl
         for name in LAYERS:
             segs = []
             for pts, closed in s.layers[name]:
-                p = pts if not closed else __import__("numpy").vstack([pts, pts[:1]])
+                p = np.vstack([pts, pts[:1]]) if closed else pts
                 segs.append(p + [x0, 0.0])
             if segs:
                 ax.add_collection(LineCollection(segs, colors=COLORS[colors][name][0], linewidths=0.4))
