@@ -103,7 +103,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", default="4,8,16,32,64")
     ap.add_argument("--big", action="store_true", help="also n = 128")
-    ap.add_argument("--init", default="standard")
+    ap.add_argument("--init", default="rescaled")
     ap.add_argument("--no-baseline", action="store_true")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")] + ([128] if args.big else [])

@@ -219,8 +219,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
-    p.add_argument("--init", choices=["standard", "rescaled", "conformal"], default="standard",
-                   help="initial guess (default standard)")
+    p.add_argument("--init", choices=["standard", "rescaled", "conformal"], default="rescaled",
+                   help="initial guess (default rescaled: the standard pattern scaled to the target area)")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")

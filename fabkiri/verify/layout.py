@@ -1,0 +1,954 @@
+"""Cut-layout verification: read a DXF or SVG back and prove it closes into both states.
+
+The contract with the writers is docs/cut-files.md. Nothing but the geometry
+and the declared allowances (manifest.json) is trusted:
+
+1. read the ``CUT`` linework (all outlines for plain files from other tools),
+   in millimetres, y up;
+2. set the reference square aside, recover the tile polygons per hinge kind
+   (``tape``: polygonize the noded linework; ``separate``: each closed outline
+   shrunk by the kerf offset; ``ligament``: material minus hinge strips, grown
+   by the tile shrink) and reduce each to its four corners;
+3. match them to the design tiles (any order; one rigid motion per sheet for
+   in-place layouts, one per tile for separate ones; a mirrored tile is an
+   error) and check (a) congruence, (b) the in-place layout is the declared
+   closed state, (c) the cut tiles reassembled by the hinge correspondence
+   give the other closed state (both states for separate tiles), (d) every
+   hinge is present.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+from scipy.sparse import csgraph
+from scipy.spatial import cKDTree
+
+from ..errors import VerifyError
+from ..pattern import geometry
+from ..pattern.model import Pattern
+from ..pattern.topology import STATES
+from ..mechanics.contract import contract
+from .pattern_checks import Tolerances, closed_state_checks
+from .report import Check, Report, measured
+
+MM_PER_PX = 25.4 / 96.0
+INSUNITS_MM = {0: 1.0, 1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 13: 1e-3, 14: 0.1}
+SNAP_MM = 1e-4  # endpoints closer than this are one node of the linework
+NON_CUT_LAYERS = {"NOTES", "ENGRAVE", "SCORE"}
+
+
+# ------------------------------------------------------------------ reading
+
+
+@dataclass
+class Linework:
+    """Polylines (mm, y up) read from one cut file, and whether each is closed."""
+
+    path: Path
+    polylines: list[np.ndarray] = field(default_factory=list)
+    closed: list[bool] = field(default_factory=list)
+    layer_found: bool = True  # a CUT layer/group existed
+
+    def add(self, pts: np.ndarray, closed: bool) -> None:
+        pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+        if len(pts) >= 3 and abs(pts[0, 0] - pts[-1, 0]) <= 1e-9 and abs(pts[0, 1] - pts[-1, 1]) <= 1e-9:
+            pts, closed = pts[:-1], True
+        if len(pts) >= 2:
+            self.polylines.append(pts)
+            self.closed.append(bool(closed) and len(pts) >= 3)
+
+
+def read_cut_file(path: str | Path) -> Linework:
+    """The CUT linework of a DXF or SVG file, in mm with y up."""
+    p = Path(path)
+    if not p.exists():
+        raise VerifyError(f"{p}: no such layout file")
+    suffix = p.suffix.lower()
+    if suffix == ".dxf":
+        return _read_dxf(p)
+    if suffix == ".svg":
+        return _read_svg(p)
+    raise VerifyError(f"{p}: a layout must be a .dxf or .svg file")
+
+
+_CUT_LAYER_RE = re.compile(rb"\n[ \t]*8\nCUT[ \t]*(?=\n)", re.IGNORECASE)
+
+
+def _read_dxf_fast(p: Path) -> Linework | None:
+    """Straight LWPOLYLINEs and LINEs on layer CUT of an ASCII DXF, read from the raw tags.
+
+    A DXF is a flat list of (group code, value) line pairs; cut files carry far
+    more engraving than cutting, and building ezdxf entities for all of it
+    takes seconds on a 64x64 sheet. Entity starts (code-0 lines) are found with
+    numpy on the line table, the CUT layer tags with a regular expression, and
+    only those entities are parsed. Anything else (no CUT layer, curves,
+    bulges, blocks, binary DXF, odd structure) returns None and the full ezdxf
+    reader takes over.
+    """
+    try:
+        raw = p.read_bytes()
+        if raw.startswith(b"AutoCAD Binary DXF"):
+            return None
+        data = b"\n" + raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+        if not data.endswith(b"\n"):
+            data += b"\n"
+        buf = np.frombuffer(data, dtype=np.uint8)
+        nl = np.flatnonzero(buf == 10)  # nl[k] opens line k; code lines are even
+        k = np.arange(0, len(nl) - 1, 2)
+        end = nl[k + 1]
+        length = end - nl[k] - 1
+        zero = (buf[end - 1] == ord("0")) & ((length == 1) | (buf[end - 2] == ord(" ")))
+        starts = nl[k[zero]]  # every "0" code line: an entity, section or table boundary
+        m = re.search(rb"\n[ \t]*0\n[ \t]*SECTION[ \t]*\n[ \t]*2\n[ \t]*ENTITIES[ \t]*\n", data)
+        if m is None:
+            return None
+        lo = m.end() - 1
+        e = re.compile(rb"\n[ \t]*0\n[ \t]*ENDSEC[ \t]*(?=\n)").search(data, lo)
+        hi = e.start() if e else len(data) - 1
+        units = re.search(rb"\n[ \t]*9\n[ \t]*\$INSUNITS[ \t]*\n[ \t]*70\n[ \t]*(-?\d+)", data)
+        insunits = int(units.group(1)) if units and units.start() < lo else 0
+        unit = INSUNITS_MM.get(insunits)
+        if unit is None:
+            raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
+        starts = starts[(starts >= lo) & (starts < hi)]
+        bounds = np.append(starts, hi)
+        tags_at = np.array([t.start() for t in _CUT_LAYER_RE.finditer(data, lo, hi)], dtype=np.int64)
+        if len(tags_at) == 0:
+            return None  # no CUT layer: a plain file, read it all with ezdxf
+        tags_at = tags_at[np.searchsorted(nl, tags_at) % 2 == 0]
+        owners = np.unique(np.searchsorted(starts, tags_at, side="right") - 1)
+        lw = Linework(p, layer_found=True)
+        for o in owners[owners >= 0].tolist():
+            lines = data[bounds[o] + 1: bounds[o + 1]].decode("utf-8", "replace").split("\n")
+            tags = list(zip((c.strip() for c in lines[0::2]), lines[1::2]))
+            kind = tags[0][1].strip()
+            layer = next((v.strip().upper() for c, v in tags if c == "8"), "")
+            if layer != "CUT":
+                continue  # CUT was not this entity's layer tag
+            if kind == "LINE":
+                get = dict(tags)
+                lw.add(np.array([[float(get["10"]), float(get["20"])],
+                                 [float(get["11"]), float(get["21"])]]) * unit, False)
+                continue
+            if kind != "LWPOLYLINE":
+                return None  # curves, old-style polylines, blocks: the full reader
+            if any(c == "42" and float(v) != 0.0 for c, v in tags):
+                return None  # an arc segment
+            xs = [float(v) for c, v in tags if c == "10"]
+            ys = [float(v) for c, v in tags if c == "20"]
+            if len(xs) != len(ys):
+                return None
+            flags = next((int(v) for c, v in tags if c == "70"), 0)
+            lw.add(np.column_stack([xs, ys]).reshape(-1, 2) * unit, bool(flags & 1))
+        return lw
+    except VerifyError:
+        raise
+    except Exception:  # malformed tag stream: let the full reader name the problem
+        return None
+
+
+def _read_dxf(p: Path) -> Linework:
+    fast = _read_dxf_fast(p)
+    if fast is not None:
+        return fast
+    return _read_dxf_full(p)
+
+
+def _read_dxf_full(p: Path) -> Linework:
+    import ezdxf
+    from ezdxf import path as ezpath
+
+    try:
+        doc = ezdxf.readfile(str(p))
+    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
+        raise VerifyError(f"{p}: not a readable DXF file ({exc})") from None
+    unit = INSUNITS_MM.get(int(doc.header.get("$INSUNITS", 0)))
+    if unit is None:
+        raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={doc.header.get('$INSUNITS')}")
+    msp = doc.modelspace()
+    ents = [e for e in msp if e.dxftype() in ("LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE",
+                                              "ELLIPSE")]
+    cut = [e for e in ents if e.dxf.layer.upper() == "CUT"]
+    lw = Linework(p, layer_found=bool(cut))
+    if not cut:  # a plain file from another tool: every outline not on an annotation layer
+        cut = [e for e in ents if e.dxf.layer.upper() not in NON_CUT_LAYERS]
+    for e in cut:
+        kind = e.dxftype()
+        if kind == "LINE":
+            lw.add(np.array([[e.dxf.start.x, e.dxf.start.y], [e.dxf.end.x, e.dxf.end.y]]) * unit, False)
+            continue
+        if kind == "LWPOLYLINE":
+            pts = np.array(e.get_points("xyb"), dtype=float)
+            if len(pts) and not pts[:, 2].any():
+                lw.add(pts[:, :2] * unit, e.closed)
+                continue
+        path_ = ezpath.make_path(e)
+        pts = np.array([(v.x, v.y) for v in path_.flattening(0.001 / unit)], dtype=float)
+        closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or kind == "CIRCLE")
+        lw.add(pts * unit, closed)
+    return lw
+
+
+def _read_svg(p: Path) -> Linework:
+    import svgelements as se
+
+    try:
+        svg = se.SVG.parse(str(p), reify=True)
+    except Exception as exc:  # svgelements raises many kinds on bad XML
+        raise VerifyError(f"{p}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
+    if not svg.height:
+        raise VerifyError(f"{p}: the SVG has no height; cannot flip y")
+    # svgelements' own mm constant is rounded (3.7795296 px/mm, 5e-7 off); take
+    # the px-per-mm factor from the declared size instead
+    mm_per_px = _declared_mm(svg.values.get("height"), float(svg.height))
+    height = float(svg.height) * mm_per_px
+    groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
+    cut_groups = [g for g in groups if str(g.id or "").upper() == "CUT"
+                  or str(g.values.get("inkscape:label", "")).upper() == "CUT"]
+    if cut_groups:
+        shapes = [e for g in cut_groups for e in g.select() if isinstance(e, se.Shape)]
+    else:
+        skip = {id(e) for g in groups if str(g.id or "").upper() in NON_CUT_LAYERS
+                for e in g.select() if isinstance(e, se.Shape)}
+        shapes = [e for e in svg.elements() if isinstance(e, se.Shape) and id(e) not in skip]
+    lw = Linework(p, layer_found=bool(cut_groups))
+    for shape in shapes:
+        path_ = se.Path(shape)
+        pts: list[tuple[float, float]] = []
+        for seg in path_.segments():
+            if isinstance(seg, se.Move):
+                if len(pts) >= 2:
+                    lw.add(_svg_mm(pts, height, mm_per_px), False)
+                pts = [(seg.end.x, seg.end.y)]
+            elif isinstance(seg, se.Close):
+                if len(pts) >= 3:
+                    lw.add(_svg_mm(pts, height, mm_per_px), True)
+                pts = []
+            elif isinstance(seg, se.Line):
+                pts.append((seg.end.x, seg.end.y))
+            else:  # curves: sample finely (tile outlines are straight; be tolerant)
+                for t in np.linspace(0, 1, 17)[1:]:
+                    q = seg.point(t)
+                    pts.append((q.x, q.y))
+        if len(pts) >= 2:
+            lw.add(_svg_mm(pts, height, mm_per_px), False)
+    return lw
+
+
+_UNIT_MM = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6, "px": MM_PER_PX, "": MM_PER_PX}
+
+
+def _declared_mm(attr: Any, height_px: float) -> float:
+    """mm per svgelements px, from the root's declared height (e.g. '400mm')."""
+    import re
+
+    m = re.fullmatch(r"\s*([0-9.eE+-]+)\s*([a-z]*)\s*", str(attr or ""))
+    if not m or m.group(2) not in _UNIT_MM or height_px <= 0:
+        return MM_PER_PX
+    try:
+        return float(m.group(1)) * _UNIT_MM[m.group(2)] / height_px
+    except ValueError:
+        return MM_PER_PX
+
+
+def _svg_mm(pts: list[tuple[float, float]], height_mm: float, mm_per_px: float = MM_PER_PX) -> np.ndarray:
+    a = np.asarray(pts, dtype=float) * mm_per_px
+    a[:, 1] = height_mm - a[:, 1]
+    return a
+
+
+# ------------------------------------------------------------------ manifest
+
+
+def load_manifest(layout_path: Path) -> dict[str, Any] | None:
+    m = layout_path.parent / "manifest.json"
+    if not m.exists():
+        return None
+    try:
+        data = json.loads(m.read_text("utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise VerifyError(f"{m}: not a readable manifest ({exc})") from None
+    if not isinstance(data, dict):
+        raise VerifyError(f"{m}: a manifest is a JSON object")
+    return data
+
+
+@dataclass
+class Allowances:
+    hinge: str  # tape | separate | ligament | plain
+    layout: str  # in-place | exploded | nested | auto
+    state: int
+    scale: float
+    kerf_offset: float
+    tile_shrink: float
+    reference: dict[int, np.ndarray]  # sheet -> 4 corners
+    hinge_features: list[dict[str, Any]]
+    tile_sheet: dict[int, int]
+    sheet_files: dict[int, str]
+    cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
+
+
+def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
+    if manifest is None:
+        return Allowances("plain", "auto", 1, 1.0, 0.0, 0.0, {}, [], {}, {})
+    try:
+        hinge = str(manifest.get("hinge", "separate"))
+        if hinge not in ("tape", "separate", "ligament"):
+            raise VerifyError(f"{where}: unknown hinge kind {hinge!r} (tape, separate or ligament)")
+        layout = str(manifest.get("layout", "in-place" if hinge in ("tape", "ligament") else "exploded"))
+        state = int(manifest.get("state", 1))
+        if state not in STATES:
+            raise VerifyError(f"{where}: state must be 1 or 2, not {state}")
+        scale = float(manifest.get("scale", 1.0))
+        kerf = float(manifest.get("kerf_offset_mm", 0.0))
+        shrink = float(manifest.get("tile_shrink_mm", 0.0))
+        if not (scale > 0 and math.isfinite(scale)) or not (kerf >= 0 and math.isfinite(kerf)) \
+                or not (shrink >= 0 and math.isfinite(shrink)):
+            raise VerifyError(f"{where}: scale must be positive and kerf_offset_mm, tile_shrink_mm non-negative")
+        ref: dict[int, np.ndarray] = {}
+        rs = manifest.get("reference_square")
+        for item in ([rs] if isinstance(rs, dict) else (rs or [])):
+            ref[int(item.get("sheet", 1))] = np.asarray(item["corners"], dtype=float).reshape(-1, 2)
+        feats = list(manifest.get("hinge_features") or [])
+        tile_sheet = {int(t["tile"]): int(t.get("sheet", 1)) for t in manifest.get("tiles") or []}
+        sheet_files = {}
+        for sh in manifest.get("sheets") or []:
+            for key in ("dxf", "svg"):
+                if sh.get(key):
+                    sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
+        cross = {int(h["hinge"]) for h in manifest.get("hinges") or [] if h.get("cross_sheet")}
+    except VerifyError:
+        raise
+    except (TypeError, ValueError, KeyError, AttributeError) as exc:
+        raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
+    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross)
+
+
+# ------------------------------------------------------------------ recovery
+
+
+def _drop_reference(lw: Linework, corners: np.ndarray | None) -> int:
+    """Remove the closed polyline whose corners are the reference square's."""
+    if corners is None:
+        return 0
+    keep_p, keep_c, dropped = [], [], 0
+    for pts, cl in zip(lw.polylines, lw.closed):
+        if cl and len(pts) == len(corners) and not dropped:
+            d = np.linalg.norm(pts[:, None] - corners[None], axis=-1).min(axis=1).max()
+            if d <= 1e-3:
+                dropped += 1
+                continue
+        keep_p.append(pts)
+        keep_c.append(cl)
+    lw.polylines, lw.closed = keep_p, keep_c
+    return dropped
+
+
+def _snapped_segments(lw: Linework) -> np.ndarray:
+    """All segments ``(n, 2, 2)`` with endpoints closer than SNAP_MM merged."""
+    if not lw.polylines:
+        return np.zeros((0, 2, 2))
+    pts = np.concatenate(lw.polylines)
+    n = np.array([len(q) for q in lw.polylines])
+    start = np.concatenate([[0], np.cumsum(n)[:-1]])
+    owner = np.repeat(np.arange(len(n)), n)
+    local = np.arange(len(pts)) - start[owner]
+    nxt = start[owner] + (local + 1) % n[owner]
+    # every vertex starts a segment, except the last one of an open polyline
+    use = (local < n[owner] - 1) | np.asarray(lw.closed)[owner]
+    segs = np.stack([pts[use], pts[nxt[use]]], 1)
+    pts = segs.reshape(-1, 2)
+    pairs = cKDTree(pts).query_pairs(SNAP_MM, output_type="ndarray")
+    if len(pairs):
+        from scipy import sparse
+
+        n = len(pts)
+        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        _, label = csgraph.connected_components(g, directed=False)
+        first = np.full(label.max() + 1, -1)
+        first[label[::-1]] = np.arange(n)[::-1]
+        pts = pts[first[label]]
+    segs = pts.reshape(-1, 2, 2)
+    return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
+
+
+def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.ndarray, str]:
+    """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
+    if not lw.polylines:  # e.g. a sheet that holds only the reference square
+        return np.zeros(0, dtype=object), "nothing to recover"
+    closed_only = all(lw.closed)
+    hinge = al.hinge
+    if hinge == "plain":
+        hinge = "separate" if closed_only else "tape"
+    if hinge == "tape":
+        segs = _snapped_segments(lw)
+        if len(segs) == 0:
+            return np.zeros(0, dtype=object), "polygonize"
+        noded = shapely.unary_union(shapely.linestrings(segs))
+        faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+        return faces, "polygonize of the noded linework"
+    rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
+    if len(rings) != len(lw.polylines):
+        raise VerifyError(f"{lw.path}: {len(lw.polylines) - len(rings)} open CUT polylines in a {al.hinge} "
+                          f"layout, where every outline must be closed")
+    polys = shapely.make_valid(np.array(rings, dtype=object))
+    if hinge == "separate":
+        out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
+            else polys
+        return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
+    # ligament: outer loops minus inner loops is the material
+    tree = shapely.STRtree(polys)
+    inside = np.zeros(len(polys), dtype=bool)
+    a, b = tree.query(polys, predicate="contains_properly")
+    inside[b[a != b]] = True
+    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
+    if al.kerf_offset:
+        material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
+    feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
+             if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
+    if feats:
+        material = material.difference(shapely.unary_union(feats))
+    parts = shapely.get_parts(material)
+    if al.tile_shrink:
+        parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
+    return parts, "material minus ligaments, grown by the tile shrink"
+
+
+def _feature_geometry(poly: Any):
+    """A hinge feature: one ring ``[[x, y], ...]`` or several ``[[[x, y], ...], ...]``."""
+    try:
+        arr = np.asarray(poly, dtype=float)
+        if arr.ndim == 2 and arr.shape[1] == 2:
+            return shapely.Polygon(arr)
+        return shapely.MultiPolygon([shapely.Polygon(np.asarray(r, dtype=float)) for r in poly])
+    except (TypeError, ValueError) as exc:
+        raise VerifyError(f"malformed hinge feature polygon in the manifest ({exc})") from None
+
+
+def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | None:
+    """The four corners (CCW) of a recovered tile region, or None.
+
+    Collinear and duplicate vertices (T-junctions, noding points) are dropped;
+    if more than four corners remain (bevelled or notched corners), the
+    polygon is simplified to four corners, then each corner is moved to where
+    the longest original edges along its two sides meet.
+    """
+    if poly.is_empty or poly.geom_type != "Polygon":
+        return None
+    pts = np.asarray(poly.exterior.coords)[:-1]
+    if shapely.LinearRing(pts).is_ccw is False:
+        pts = pts[::-1]
+    from .geom import point_segment_distance
+
+    changed = True
+    while changed and len(pts) > 3:
+        changed = False
+        prv, nxt = np.roll(pts, 1, 0), np.roll(pts, -1, 0)
+        d = point_segment_distance(pts, prv, nxt)
+        dup = np.linalg.norm(pts - prv, axis=1) <= eps
+        bad = (d <= eps) | dup
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            pts = np.delete(pts, k, axis=0)
+            changed = True
+    if len(pts) == 4:
+        return pts
+    if len(pts) < 4:
+        return None
+    # more than four corners (bevelled or notched corners): drop the vertex
+    # that costs the least area until four remain (Visvalingam-Whyatt) ...
+    keep = list(range(len(pts)))
+    while len(keep) > 4:
+        q = pts[keep]
+        prv, nxt = np.roll(q, 1, 0), np.roll(q, -1, 0)
+        cost = np.abs(geometry.cross2(prv - q, nxt - q))
+        keep.pop(int(np.argmin(cost)))
+    coarse = pts[keep]
+    # ... then put each corner where the longest original edges along its two
+    # sides meet, which restores an apex cut off by a bevel or notch
+    e = np.roll(pts, -1, 0) - pts
+    elen = np.linalg.norm(e, axis=1)
+    mid = pts + 0.5 * e
+    lines = []
+    for i in range(4):
+        a, b = coarse[i], coarse[(i + 1) % 4]
+        d = b - a
+        dl = np.linalg.norm(d)
+        if dl == 0:
+            return None
+        # parallel within 10° (quad corners are far sharper turns) and close to the side
+        along = (np.abs(geometry.cross2(e, d)) <= 0.17 * elen * dl) & (geometry.dot2(e, d) > 0)
+        near = np.abs(geometry.cross2(mid - a, d)) / dl <= 0.1 * dl
+        cand = np.flatnonzero(along & near)
+        k = cand[np.argmax(elen[cand])] if len(cand) else None
+        lines.append((a, d) if k is None else (pts[k], e[k]))
+    out = []
+    for i in range(4):
+        (p1, d1), (p2, d2) = lines[i - 1], lines[i]
+        den = geometry.cross2(d1, d2)
+        if abs(den) < 1e-9 * np.linalg.norm(d1) * np.linalg.norm(d2):
+            out.append(coarse[i])
+            continue
+        x = p1 + geometry.cross2(p2 - p1, d2) / den * d1
+        size = np.linalg.norm(coarse - coarse.mean(0), axis=1).max()
+        out.append(x if np.linalg.norm(x - coarse[i]) <= 0.5 * size else coarse[i])
+    return np.asarray(out)
+
+
+def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
+    """Corners ``(n, 4, 2)`` of recovered regions and how many are not quads.
+
+    Plain four-vertex rings take a vectorised path; the rest go through
+    :func:`quad_corners`.
+    """
+    polys = np.asarray(polys, dtype=object)
+    if len(polys) == 0:
+        return np.zeros((0, 4, 2)), 0
+    simple = (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
+    rings = shapely.get_exterior_ring(polys[simple])
+    four = np.zeros(len(polys), dtype=bool)
+    out = []
+    if len(rings):
+        from .geom import point_segment_distance
+
+        xy, ring = shapely.get_coordinates(rings, return_index=True)
+        n = np.bincount(ring, minlength=len(rings))
+        start = np.concatenate([[0], np.cumsum(n)[:-1]])
+        last = start + n - 1  # the closing repeat of the first point
+        keep = np.ones(len(xy), dtype=bool)
+        keep[last] = False
+        pos = np.arange(len(xy))
+        m = n - 1  # distinct points per ring
+        local = pos - start[ring]
+        prv = start[ring] + (local - 1) % np.maximum(m[ring], 1)
+        nxt = start[ring] + (local + 1) % np.maximum(m[ring], 1)
+        # drop collinear and repeated vertices (T-junction and noding points) in one pass
+        d = point_segment_distance(xy, xy[prv], xy[nxt])
+        dup = np.linalg.norm(xy - xy[prv], axis=1) <= SNAP_MM
+        keep &= ~((d <= SNAP_MM) | dup)
+        cnt = np.bincount(ring[keep], minlength=len(rings))
+        ok4 = cnt == 4
+        if ok4.any():
+            C = xy[keep & ok4[ring]].reshape(-1, 4, 2)
+            cw = geometry.signed_areas(C) < 0
+            C[cw] = C[cw, ::-1]
+            out.append(C)
+            four[np.flatnonzero(simple)[ok4]] = True
+    bad = 0
+    rest = [quad_corners(p) for p in polys[~four]]
+    good = [q for q in rest if q is not None]
+    bad = len(rest) - len(good)
+    if good:
+        out.append(np.asarray(good))
+    return (np.concatenate(out) if out else np.zeros((0, 4, 2))), bad
+
+
+# ------------------------------------------------------------------ matching
+
+
+def _shift_fit(D: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Best cyclic corner shift of R onto D (per pair) and the max corner residual
+    after a proper rigid fit. ``D``, ``R``: (n, 4, 2)."""
+    from .geom import tile_kabsch
+
+    best = np.full(len(D), np.inf)
+    shift = np.zeros(len(D), dtype=np.int64)
+    for s in range(4):
+        _, res = tile_kabsch(D, np.roll(R, -s, axis=1))
+        better = res < best
+        best[better], shift[better] = res[better], s
+    return best, shift
+
+
+def _mirror(R: np.ndarray) -> np.ndarray:
+    M = R.copy()
+    M[..., 0] *= -1
+    return M[:, ::-1]
+
+
+def _descriptor(C: np.ndarray, L: float) -> np.ndarray:
+    """Rigid-motion and corner-shift invariant shape key of quads.
+
+    Sorted edge lengths and angles, plus a chirality term Σ l_k (θ_{k+1} - θ_k)
+    (each edge times the turn from its start to its end corner), which changes
+    sign under a reflection, so mirror-image tiles get different keys.
+    """
+    lengths = geometry.edge_lengths(C)
+    angles = geometry.corner_angles(C)
+    chiral = (lengths * (np.roll(angles, -1, axis=1) - angles)).sum(axis=1, keepdims=True)
+    return np.concatenate([np.sort(lengths, axis=1), np.sort(angles, axis=1) * L, chiral], axis=1)
+
+
+def _shape_classes(D: np.ndarray, L: float) -> np.ndarray:
+    """Class label of every design quad: tiles whose shape keys agree to 1e-6 of
+    the tile size share one (a tile pair split across a rounding boundary just
+    forms two neighbouring classes, both among a cut tile's candidates)."""
+    key = np.round(_descriptor(D, L) / (1e-6 * L)).astype(np.int64)
+    return np.unique(key, axis=0, return_inverse=True)[1].ravel()
+
+
+def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Assign recovered quads ``R`` to design quads ``D`` one-to-one by shape.
+
+    Returns ``assign`` (len R, design index or -1), residual and corner shift.
+    Congruent design tiles form one class (a lattice of identical tiles is one
+    class, matched in linear time); each recovered quad is fitted to the k
+    nearest classes and classes are filled greedily by residual. The residual
+    and corner shift are then recomputed against the member actually assigned.
+    """
+    n = len(R)
+    assign = np.full(n, -1)
+    resid = np.full(n, np.inf)
+    shift = np.zeros(n, dtype=np.int64)
+    if n == 0 or len(D) == 0:
+        return assign, resid, shift
+    label = _shape_classes(D, L)
+    reps = np.unique(label, return_index=True)[1]  # first member of every class
+    members = {c: list(np.flatnonzero(label == c)[::-1]) for c in range(len(reps))}
+    kk = min(k, len(reps))
+    _, cand = cKDTree(_descriptor(D[reps], L)).query(_descriptor(R, L), k=kk)
+    cand = cand.reshape(n, kk)
+    ri = np.repeat(np.arange(n), kk)
+    ci = cand.ravel()
+    res, _ = _shift_fit(D[reps[ci]], R[ri])
+    for m in np.argsort(res, kind="stable"):
+        r, c = ri[m], ci[m]
+        if assign[r] < 0 and members[c]:
+            assign[r] = members[c].pop()
+    # whatever is left (its nearest classes were full) pairs up by brute force
+    used = np.zeros(len(D), dtype=bool)
+    used[assign[assign >= 0]] = True
+    left_r = np.flatnonzero(assign < 0)
+    left_d = np.flatnonzero(~used)
+    if len(left_r) and len(left_d):
+        rr = np.repeat(left_r, len(left_d))
+        dd = np.tile(left_d, len(left_r))
+        res, _ = _shift_fit(D[dd], R[rr])
+        for m in np.argsort(res, kind="stable"):
+            r, d = rr[m], dd[m]
+            if assign[r] < 0 and not used[d]:
+                assign[r] = d
+                used[d] = True
+    got = np.flatnonzero(assign >= 0)
+    if len(got):
+        resid[got], shift[got] = _shift_fit(D[assign[got]], R[got])
+    return assign, resid, shift
+
+
+def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+    """Match recovered quads ``R`` to design closed-state tiles ``Y`` under ONE rigid motion.
+
+    Hypotheses pair the recovered tile nearest the layout's centre with design
+    tiles nearest the design's centre (and each corner shift); the best by
+    mean capped centre distance wins, then the motion is refit on all matched corners.
+    Returns assign, per-tile residual, shift, rotation angle, translation.
+    """
+    n = len(R)
+    assign = np.full(n, -1)
+    if n == 0 or len(Y) == 0:
+        return assign, np.full(n, np.inf), np.zeros(n, dtype=np.int64), 0.0, np.zeros(2)
+    cr, cy = R.mean(axis=1), Y.mean(axis=1)
+    cap = geometry.mean_edge_length(Y)
+    r0 = int(np.argmin(np.linalg.norm(cr - cr.mean(0), axis=1)))
+    cands = np.argsort(np.linalg.norm(cy - cy.mean(0), axis=1))[:n_hyp]
+    tree = cKDTree(cr)
+    R4 = np.stack([np.roll(R, -k, axis=1) for k in range(4)])  # every corner shift, once
+    best = None
+    for d in cands:
+        for s in range(4):
+            theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
+            moved = geometry.rotate(Y, theta) + t  # design tiles in the sheet frame
+            # score: mean corner residual of the nearest tiles, capped at a tile
+            # size (a hypothesis one tile off, or a near-symmetric one, loses)
+            _, idx = tree.query(moved.mean(axis=1))
+            err = np.linalg.norm(R4[:, idx] - moved[None], axis=-1).max(axis=2).min(axis=0)
+            score = float(np.minimum(err, cap).mean())
+            if best is None or score < best[0]:
+                best = (score, theta, t)
+    _, theta, t = best
+    assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
+    ok = assign >= 0
+    if ok.sum() >= 1:  # refit the single motion on every matched corner
+        src = Y[assign[ok]]
+        i = np.flatnonzero(ok)
+        dst = R[i[:, None], (np.arange(4)[None, :] + shift[i][:, None]) % 4]
+        theta, t = geometry.kabsch(src, dst)
+        assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
+    return assign, resid, shift, float(theta), t
+
+
+def _assign_positions(Y, R, theta, t, tree):
+    n = len(R)
+    moved = geometry.rotate(Y, theta) + t
+    dist, idx = tree.query(moved.mean(axis=1))  # design tile -> nearest recovered tile
+    assign = np.full(n, -1)
+    resid = np.full(n, np.inf)
+    shift = np.zeros(n, dtype=np.int64)
+    # one design tile per recovered tile: the nearest claims it
+    order = np.lexsort((dist, idx))
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = idx[order[1:]] != idx[order[:-1]]
+    d = order[first]
+    r = idx[d]
+    diff = np.stack([np.linalg.norm(np.roll(R[r], -s, axis=1) - moved[d], axis=-1).max(axis=1)
+                     for s in range(4)], axis=1)
+    s = diff.argmin(axis=1)
+    assign[r], resid[r], shift[r] = d, diff[np.arange(len(r)), s], s
+    return assign, resid, shift
+
+
+# ------------------------------------------------------------------ rebuilding closed states
+
+
+def place_from_shapes(pattern: Pattern, C: np.ndarray, state: int) -> tuple[np.ndarray, np.ndarray]:
+    """Assemble a closed state from per-tile shapes ``C`` (T, 4, 2), any frames.
+
+    Breadth-first from tile 0: each child turns so the edge bounding its folded
+    gap lies along the parent's, and its hinge copy sits on the parent's.
+    Returns the placed corners and every hinge's split (mm) — non-zero only on
+    non-tree hinges, where the loops fail to close.
+    """
+    top = pattern.topology
+    fold = top.fold(state)
+    T = top.n_tiles
+    Y = C.copy()
+    if T > 1:
+        adj = top.tile_adjacency
+        order, pred = csgraph.breadth_first_order(adj, 0, directed=False, return_predecessors=True)
+        depth = np.zeros(T, dtype=np.int64)
+        for t in order[1:]:
+            depth[t] = depth[pred[t]] + 1
+        child = order[1:]
+        par = pred[child]
+        h = np.asarray(adj[par, child]).ravel().astype(np.int64) - 1
+        a_is_par = top.hinge_tiles[h, 0] == par
+        cA, cB = top.hinge_corner[h].T
+        eA, eB = fold.fold_corner_ends[h].T
+        cp, ep = np.where(a_is_par, cA, cB), np.where(a_is_par, eA, eB)
+        cc, ec = np.where(a_is_par, cB, cA), np.where(a_is_par, eB, eA)
+        for d in range(1, int(depth.max()) + 1):
+            sel = np.flatnonzero(depth[child] == d)
+            p, c = par[sel], child[sel]
+            hp = Y[p, cp[sel]]
+            dp = Y[p, ep[sel]] - hp
+            loc = C[c] - C[c, cc[sel]][:, None, :]
+            dc = loc[np.arange(len(c)), ec[sel]]
+            phi = np.arctan2(dp[:, 1], dp[:, 0]) - np.arctan2(dc[:, 1], dc[:, 0])
+            Y[c] = geometry.rotate(loc, phi[:, None]) + hp[:, None, :]
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    split = np.linalg.norm(Y[A, cA] - Y[B, cB], axis=1)
+    return Y, split
+
+
+# ------------------------------------------------------------------ entry point
+
+
+def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str, Any] | None = None,
+                  tol_mm: float = 0.05, tol_rad: float = 1e-6) -> Report:
+    """Verify a cut layout (DXF or SVG) against ``pattern`` and both closed states.
+
+    ``manifest`` None loads ``manifest.json`` beside the layout if present; a
+    plain file without one is read as closed tile outlines (or, with open
+    polylines, as in-place linework), without allowances. Lengths are compared
+    with ``tol_mm``; angles derived from cut shapes with ``tol_mm`` / mean edge.
+    """
+    path = Path(layout_path)
+    if manifest is None:
+        manifest = load_manifest(path)
+    al = _allowances(manifest, str(path.parent / "manifest.json") if manifest is not None else str(path))
+    files = _sheet_files(path, al)
+    # everything is compared on the sheet, in physical mm: the design is scaled
+    # up (kerf and tolerance are physical lengths, not pattern lengths)
+    L = pattern.tile_size * al.scale
+    tol = Tolerances(float(tol_mm), max(float(tol_rad), float(tol_mm) / L), L, "fabrication")
+    rep = Report(subject=str(path), kind="layout",
+                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "hinge": al.hinge,
+                       "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
+    g = "layout"
+    D = pattern.corners() * al.scale  # design shapes (deployed = cut shapes), sheet mm
+    T = pattern.n_tiles
+
+    # ---- read and recover per sheet
+    sheets: dict[int, np.ndarray] = {}  # sheet -> recovered quads (n, 4, 2)
+    n_lines = 0
+    methods = set()
+    unusable = 0
+    for sheet, f in files.items():
+        lw = read_cut_file(f)
+        _drop_reference(lw, al.reference.get(sheet))
+        n_lines += len(lw.polylines)
+        polys, method = recover_polygons(lw, al, sheet)
+        methods.add(method)
+        polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
+        quads, bad = quads_of(polys)
+        unusable += bad
+        sheets[sheet] = quads
+    if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
+        raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
+    rep.meta["recovery"] = sorted(methods)
+
+    in_place = al.layout == "in-place"
+    if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
+        allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
+        if len(allq):
+            u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
+            in_place = len(shapely.get_parts(u)) == 1 and len(allq) > 1
+        rep.meta["layout"] = "in-place" if in_place else "separate"
+
+    # ---- match
+    assign_all = np.full(T, -1)  # design tile -> global recovered index
+    found_on = np.full(T, -1)  # design tile -> sheet it was found on
+    cut_shapes = np.full((T, 4, 2), np.nan)
+    resid_pos = np.full(T, np.nan)
+    extra = 0
+
+    def closed(s: int) -> np.ndarray:
+        Y = pattern.contracted.get(s)
+        return (contract(pattern, s).corners if Y is None else Y) * al.scale
+
+    state = al.state
+    if in_place and al.hinge == "plain" and sheets:
+        # no manifest declares the state: take the closed state the sheet matches
+        R0 = next(iter(sheets.values()))
+        fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
+        state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
+        rep.meta["state"] = state
+    Ystate = closed(state)
+    for sheet, R in sheets.items():
+        if in_place:
+            design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
+                else np.arange(T)
+            design_ids = design_ids[design_ids < T]
+            a, res, sh, _, _ = match_in_place(Ystate[design_ids], R)
+            a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
+        else:
+            free = np.flatnonzero(assign_all < 0)
+            a, res, sh = match_by_shape(D[free], R, L)
+            a = np.where(a >= 0, free[np.maximum(a, 0)], -1)
+        taken = (a >= 0) & (assign_all[np.maximum(a, 0)] < 0)
+        extra += int(len(R) - taken.sum())
+        r = np.flatnonzero(taken)
+        d = a[r]
+        assign_all[d] = r
+        found_on[d] = sheet
+        cut_shapes[d] = R[r[:, None], (np.arange(4)[None, :] + sh[r][:, None]) % 4]  # corner shift
+        if in_place:
+            resid_pos[d] = res[r]
+    missing = np.flatnonzero(assign_all < 0)
+    got = T - len(missing)
+    rep.add(Check(f"{g}: tiles recovered", ok=not len(missing) and not extra and not unusable,
+                  value=got, tol=T, unit="count", op="==", group=g,
+                  worst=f"tile {int(missing[0])}" if len(missing) else None,
+                  detail=(f"{got} of {T} design tiles found; missing {missing[:20].tolist()}; "
+                          f"{extra} unmatched cut regions; {unusable} regions that are not quads")))
+    have = assign_all >= 0
+
+    # ---- (a) congruence of every cut tile with its design tile
+    cong = np.full(T, np.nan)
+    mirrored: list[int] = []
+    if have.any():
+        from .geom import leave_one_out_residual
+
+        fit = leave_one_out_residual(D[have], cut_shapes[have])
+        dl = np.abs(geometry.edge_lengths(cut_shapes[have]) - geometry.edge_lengths(D[have])).max(axis=1)
+        cong[have] = np.maximum(fit, dl)
+        bad = np.flatnonzero(have)[cong[have] > tol.length]
+        if len(bad):
+            mres, _ = _shift_fit(D[bad], _mirror(cut_shapes[bad]))
+            mirrored = bad[mres <= np.maximum(tol.length, 0.5 * cong[bad])].tolist()
+    worst_cong = int(np.nanargmax(cong)) if have.any() else None
+    rep.add(measured(f"{g}: (a) cut tiles congruent to design", float(np.nanmax(cong)) if have.any() else np.nan,
+                     tol.length, "mm", worst=f"tile {worst_cong}" if worst_cong is not None else None, group=g,
+                     detail=(f"mirrored tiles {mirrored}; " if mirrored else "")
+                     + "largest corner offset from a proper rigid fit of the other corners, and edge-length change"))
+
+    # ---- (b) in place: the sheet is the declared closed state
+    if in_place:
+        rep.add(measured(f"{g}: (b) in place = closed state {state}",
+                         float(np.nanmax(resid_pos)) if have.any() else np.nan, tol.length, "mm",
+                         worst=f"tile {int(np.nanargmax(resid_pos))}" if have.any() else None, group=g,
+                         detail="corner distance to the design's closed state under one rigid motion per sheet"))
+        if have.all():
+            layout_state = np.stack([cut_shapes[d] for d in range(T)]) if len(sheets) == 1 else None
+            if layout_state is not None:
+                for chk in closed_state_checks(pattern, layout_state, state, tol):
+                    if "congruent" in chk.name or "loop closure" in chk.name:
+                        continue
+                    chk.name = f"{g}: (b) sheet {chk.name}"
+                    chk.group = g
+                    rep.add(chk)
+
+    # ---- (c) reassemble by the hinge correspondence
+    rebuild = [3 - state] if in_place else list(STATES)
+    for s in rebuild:
+        name = f"{g}: (c) state {s} from cut tiles"
+        if not have.all():
+            rep.add(Check(f"{name}: loop closure", ok=False, value=None, tol=tol.length, unit="mm", group=g,
+                          detail="cannot reassemble: tiles are missing"))
+            continue
+        Y, split = place_from_shapes(pattern, cut_shapes, s)
+        rep.add(measured(f"{name}: loop closure", float(split.max(initial=0.0)), tol.length, "mm",
+                         worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g))
+        for chk in closed_state_checks(pattern, Y, s, tol):
+            if "congruent" in chk.name:
+                continue
+            chk.name = f"{name}: {chk.name.split(': ', 1)[1]}"
+            chk.group = g
+            rep.add(chk)
+
+    # ---- (d) every hinge present
+    top = pattern.topology
+    A, B = top.hinge_tiles.T
+    present = have[A] & have[B]
+    why = "both tiles cut"
+    if in_place and present.any():
+        cA, cB = top.hinge_corner.T
+        ok = np.zeros(len(A), dtype=bool)
+        sel = np.flatnonzero(present)
+        ok[sel] = np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol.length
+        cross = found_on[A] != found_on[B]  # split along cut lines onto two sheets
+        ok |= cross
+        present &= ok
+        why = "both tiles cut, hinge corners coincide on the sheet"
+        if (cross & present).any():
+            why += f" ({int((cross & present).sum())} hinges cross sheets)"
+    if al.hinge == "ligament":
+        listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
+        h_idx = np.arange(len(A))
+        split = np.isin(h_idx, list(al.cross_sheet)) & (found_on[A] != found_on[B])
+        present &= np.isin(h_idx, list(listed)) | split
+        why += ", a ligament listed"
+        if split.any():
+            why += f" or the hinge declared split across sheets ({int(split.sum())}, to be joined by hand)"
+    absent = np.flatnonzero(~present)
+    rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
+                  unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
+                  detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
+    return rep
+
+
+def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
+    """Every sheet of the layout in the same format as ``path`` (just ``path`` for one sheet)."""
+    fmt = path.suffix.lower().lstrip(".")
+    named = {k: v.get(fmt) for k, v in al.sheet_files.items() if v.get(fmt)}
+    if len(named) <= 1:
+        sheet = next((k for k, v in named.items() if v == path.name), 1)
+        return {sheet: path}
+    if path.name not in named.values():
+        raise VerifyError(f"{path}: not one of the sheets listed in the manifest ({sorted(named.values())})")
+    out = {}
+    for k, name in sorted(named.items()):
+        f = path.parent / name
+        if not f.exists():
+            raise VerifyError(f"{f}: sheet {k} listed in the manifest is missing")
+        out[k] = f
+    return out
