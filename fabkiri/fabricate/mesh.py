@@ -1,0 +1,572 @@
+"""Printable solids of a closed state: manifold3d for booleans, trimesh for files.
+
+Every body is described once as an ordered list of prism operations
+(:class:`Body`), so the meshes here and the STEP solids of
+:mod:`fabkiri.fabricate.cad` are the same solids. Three styles:
+
+* ``strips`` – one flat flexible strip per hinge (for laser-cut tiles), laid
+  out on as many print beds as needed, each part named by its hinge;
+* ``tiles-and-strips`` – rigid tiles with the strips recessed flush into
+  pockets, two bodies for two materials;
+* ``pinned`` – print-in-place pin joints, the two coincident hinges of a node
+  stacked coaxially on four ear levels (see :mod:`.printgeom`).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass, field
+from typing import Iterable
+
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+
+from ..errors import CheckFailed, FabricationError
+from ..pattern.model import Pattern
+from . import printgeom
+from .printers import Printer
+
+STYLES = ("strips", "tiles-and-strips", "pinned")
+CIRCLE_SEGMENTS = 48
+
+
+# ---------------------------------------------------------------- CSG spec
+
+@dataclass(frozen=True, eq=False)
+class Prism:
+    """Disjoint polygons extruded from ``z0`` to ``z1``; with ``scale_top`` the
+    top is scaled about ``centre`` (a frustum)."""
+
+    polygons: tuple[Polygon, ...]
+    z0: float
+    z1: float
+    scale_top: float = 1.0
+    centre: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A named solid: prisms added and subtracted in order."""
+
+    name: str
+    kind: str  # "tile", "hinge", "tiles", "hinges"
+    ops: tuple[tuple[str, Prism], ...]
+    material: str = ""
+
+
+def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS) -> Polygon:
+    """An n-gon approximating a circle: vertices on it (inscribed, for solid
+    material) or edges tangent to it (circumscribed, for clearances), so that
+    polygon approximation never eats into a clearance."""
+    r = radius / np.cos(np.pi / n) if circumscribed else radius
+    a = 2 * np.pi * np.arange(n) / n
+    return Polygon(np.stack([centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)], -1))
+
+
+def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
+    rings = []
+    for p in polys:
+        for g in getattr(p, "geoms", [p]):
+            if g.is_empty:
+                continue
+            g = shapely.geometry.polygon.orient(g, 1.0)
+            rings.append(np.asarray(g.exterior.coords)[:-1])
+            rings.extend(np.asarray(r.coords)[:-1] for r in g.interiors)
+    return rings
+
+
+def _manifold(prism: Prism):
+    import manifold3d as m3d
+
+    cs = m3d.CrossSection(_rings(prism.polygons), fillrule=m3d.FillRule.Positive)
+    h = prism.z1 - prism.z0
+    if prism.scale_top != 1.0:
+        cx, cy = prism.centre
+        return (m3d.Manifold.extrude(cs.translate((-cx, -cy)), h, scale_top=(prism.scale_top, prism.scale_top))
+                .translate((cx, cy, prism.z0)))
+    return m3d.Manifold.extrude(cs, h).translate((0.0, 0.0, prism.z0))
+
+
+def realise(body: Body):
+    """The manifold3d solid of a body."""
+    import manifold3d as m3d
+
+    acc = m3d.Manifold()
+    for op, prism in body.ops:
+        m = _manifold(prism)
+        acc = acc + m if op == "add" else acc - m
+    return acc
+
+
+def to_trimesh(manifold):
+    import trimesh
+
+    mesh = manifold.to_mesh64()
+    return trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3].astype(np.float64),
+                           np.asarray(mesh.tri_verts).astype(np.int64), process=False)
+
+
+def translate_body(body: Body, dx: float, dy: float) -> Body:
+    ops = tuple((op, Prism(tuple(shapely.affinity.translate(p, dx, dy) for p in pr.polygons), pr.z0, pr.z1,
+                           pr.scale_top, (pr.centre[0] + dx, pr.centre[1] + dy))) for op, pr in body.ops)
+    return Body(body.name, body.kind, ops, body.material)
+
+
+# ------------------------------------------------------------- the styles
+
+@dataclass(frozen=True, eq=False)
+class PrintJob:
+    """Everything one ``fabkiri print`` run produces, before writing.
+
+    ``beds[k]`` lists the bodies printed together on bed k; ``shift`` moved the
+    closed-state plan onto the bed (for whole-pattern styles).
+    """
+
+    style: str
+    state: int
+    printer: Printer
+    plan: printgeom.ClosedPlan
+    beds: list[list[Body]]
+    shift: tuple[float, float] = (0.0, 0.0)
+    strips: printgeom.Strips | None = None
+    pins: printgeom.PinPlan | None = None
+    placements: list[dict] = field(default_factory=list)  # strips style: where each part went
+
+
+def _fits(bounds, printer: Printer, what: str) -> None:
+    w, h = bounds[2] - bounds[0], bounds[3] - bounds[1]
+    bx, by, _ = printer.bed_mm
+    if w > bx or h > by:
+        raise FabricationError(
+            f"{what} is {w:.1f} x {h:.1f} mm and does not fit the {bx:g} x {by:g} mm bed of printer "
+            f"{printer.name}; scale the pattern down, choose a larger printer or use --style strips"
+        )
+
+
+def _centre_shift(bounds, printer: Printer) -> tuple[float, float]:
+    bx, by, _ = printer.bed_mm
+    return 0.5 * bx - 0.5 * (bounds[0] + bounds[2]), 0.5 * by - 0.5 * (bounds[1] + bounds[3])
+
+
+def tiles_and_strips(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+    plan = printgeom.closed_plan(pattern, state, printer)
+    strips = printgeom.strip_outlines(plan, printer)
+    T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
+    _fits(plan.bounds, printer, "the closed pattern")
+    top = tuple(strips.outline[strips.top])
+    bot = tuple(strips.outline[~strips.top])
+    tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
+        ("add", Prism(tuple(plan.tiles), 0.0, T)),
+        ("sub", Prism(top, T - ts, T + 1.0)),  # +1: a clean cut through the top face
+        ("sub", Prism(bot, -1.0, ts)),
+    ), printer.tile_material)
+    hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
+        ("add", Prism(top, T - ts, T)),
+        ("add", Prism(bot, 0.0, ts)),
+    ), printer.strip_material)
+    dx, dy = _centre_shift(plan.bounds, printer)
+    beds = [[translate_body(tiles, dx, dy), translate_body(hinges, dx, dy)]]
+    return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips)
+
+
+def _min_rect_frame(poly: Polygon) -> tuple[float, Polygon]:
+    """Rotation (rad) turning the polygon's minimum rectangle axis-parallel, and the turned polygon."""
+    rect = np.asarray(poly.minimum_rotated_rectangle.exterior.coords)
+    edge = rect[1] - rect[0]
+    ang = -float(np.arctan2(edge[1], edge[0]))
+    turned = shapely.affinity.rotate(poly, ang, origin=(0, 0), use_radians=True)
+    b = turned.bounds
+    if b[3] - b[1] > b[2] - b[0]:  # lie long side along x
+        ang -= np.pi / 2
+        turned = shapely.affinity.rotate(poly, ang, origin=(0, 0), use_radians=True)
+    return ang, turned
+
+
+def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+    """One flat strip part per hinge, shelf-packed onto beds in hinge order."""
+    plan = printgeom.closed_plan(pattern, state, printer)
+    strips = printgeom.strip_outlines(plan, printer)
+    ts, gap = printer.strip_thickness_mm, printer.part_spacing_mm
+    bx, by, _ = printer.bed_mm
+    beds: list[list[Body]] = [[]]
+    placements = []
+    x = y = row_h = gap
+    for h, poly in enumerate(strips.outline):
+        ang, turned = _min_rect_frame(poly)
+        b = turned.bounds
+        w, hgt = b[2] - b[0], b[3] - b[1]
+        if w + 2 * gap > bx or hgt + 2 * gap > by:
+            raise FabricationError(f"the strip of hinge {h} ({w:.1f} x {hgt:.1f} mm) does not fit the bed")
+        if x + w + gap > bx:  # next shelf
+            x, y, row_h = gap, y + row_h + gap, 0.0
+        if y + hgt + gap > by:  # next bed
+            beds.append([])
+            x = y = gap
+            row_h = 0.0
+        placed = shapely.affinity.translate(turned, x - b[0], y - b[1])
+        name = f"hinge-{h:04d}-{plan.face(h)}"
+        beds[-1].append(Body(name, "hinge", (("add", Prism((placed,), 0.0, ts)),), printer.strip_material))
+        placements.append({"hinge": h, "bed": len(beds), "face": plan.face(h), "tiles": plan.hinge_tiles[h].tolist(),
+                           "rotation_deg": round(float(np.degrees(ang)), 6),
+                           "offset_mm": [round(x - b[0], 6), round(y - b[1], 6)]})
+        x += w + gap
+        row_h = max(row_h, hgt)
+    return PrintJob("strips", state, printer, plan, beds, strips=strips, placements=placements)
+
+
+def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+    """Print-in-place pinned tiles, or :class:`FabricationError` saying why not."""
+    plan = printgeom.closed_plan(pattern, state, printer)
+    pins = printgeom.pin_plan(pattern, plan, printer)
+    _fits(plan.bounds, printer, "the closed pattern")
+    lv, g = pins.levels, pins.geometry
+    T, az = lv.thickness, lv.axial
+    A, B = plan.hinge_tiles.T
+    H = plan.n_hinges
+    # per hinge: the z-span its ears occupy (other tiles are hollowed there)
+    span = np.where(pins.level[:, None] == 0, [[0.0, lv.level(1)[1] + az]], [[lv.level(2)[0] - az, T]])
+    hollow = [regular_polygon(plan.hinge_xy[h], g.hollow, circumscribed=True) for h in range(H)]
+    ear = [regular_polygon(plan.hinge_xy[h], g.ear, circumscribed=False) for h in range(H)]
+    # hinges whose ears pass through each tile's corner: its own and their partners
+    at_tile: dict[int, set[int]] = {t: set() for t in range(plan.tiles.shape[0])}
+    for h in range(H):
+        for t in (A[h], B[h]):
+            at_tile[int(t)].add(h)
+            if plan.partner[h] >= 0:
+                at_tile[int(t)].add(int(plan.partner[h]))
+    bodies = []
+    for t in range(len(plan.tiles)):
+        X = plan.tiles[t]
+        ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
+        hs = sorted(at_tile[t])
+        for h in hs:
+            z0, z1 = span[h]
+            ops.append(("sub", Prism((hollow[h],), z0 - (1.0 if z0 <= 0 else 0.0), z1 + (1.0 if z1 >= T else 0.0))))
+        for h in hs:
+            if t not in (A[h], B[h]):
+                continue
+            k = pins.level[h] + (0 if t == A[h] else 1)
+            z0, z1 = lv.level(k)
+            own = shapely.union(ear[h], shapely.intersection(X, hollow[h]))
+            ops.append(("add", Prism((own,), z0, z1)))
+            p = tuple(plan.hinge_xy[h])
+            if t == A[h]:  # the pin: straight through its ear and the gap, flared through the ring
+                zr0, zr1 = lv.level(k + 1)
+                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), z0, zr0)))
+                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), zr0, zr1,
+                                         g.pin_top / g.pin_bottom, p)))
+        for h in hs:
+            if t == B[h]:
+                k = pins.level[h] + 1
+                z0, z1 = lv.level(k)
+                p = tuple(plan.hinge_xy[h])
+                ops.append(("sub", Prism((regular_polygon(p, g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
+                                         g.hole_top / g.hole_bottom, p)))
+        bodies.append(Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material))
+    dx, dy = _centre_shift(plan.bounds, printer)
+    beds = [[translate_body(b, dx, dy) for b in bodies]]
+    return PrintJob("pinned", state, printer, plan, beds, (dx, dy), pins=pins)
+
+
+def build_job(pattern: Pattern, style: str, state: int, printer: Printer) -> PrintJob:
+    if style not in STYLES:
+        raise FabricationError(f"unknown print style {style!r}; choose one of {', '.join(STYLES)}")
+    return {"strips": strips_only, "tiles-and-strips": tiles_and_strips, "pinned": pinned}[style](
+        pattern, state, printer)
+
+
+# ------------------------------------------------------------------ checks
+
+@dataclass
+class MeshReport:
+    """Measured properties of the meshes of one job (mm, mm³)."""
+
+    bodies: list[dict] = field(default_factory=list)
+    intersection_volume_mm3: float = 0.0
+    min_clearance_mm: float | None = None
+    required_clearance_mm: float = 0.0
+    problems: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    def to_dict(self) -> dict:
+        return {"ok": self.ok, "bodies": self.bodies, "intersection_volume_mm3": self.intersection_volume_mm3,
+                "min_clearance_mm": self.min_clearance_mm, "required_clearance_mm": self.required_clearance_mm,
+                "problems": self.problems}
+
+
+@dataclass(eq=False)
+class Realised:
+    """A job with its solids: ``manifolds[k][i]`` is body i of bed k."""
+
+    job: PrintJob
+    manifolds: list[list]
+    meshes: list[list]
+
+
+def realise_job(job: PrintJob) -> Realised:
+    manifolds = [[realise(b) for b in bed] for bed in job.beds]
+    for bed, ms in zip(job.beds, manifolds):
+        for b, m in zip(bed, ms):
+            if m.status().name != "NoError" or m.is_empty():
+                raise FabricationError(f"body {b.name} came out empty or invalid ({m.status().name})")
+    meshes = [[to_trimesh(m) for m in ms] for ms in manifolds]
+    return Realised(job, manifolds, meshes)
+
+
+def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
+    """Watertight, consistently wound, positive volume, on the bed, no two bodies
+    sharing volume, and clearances between bodies that may move apart."""
+    import manifold3d as m3d
+
+    job, pr = r.job, r.job.printer
+    rep = MeshReport()
+    bx, by, bz = pr.bed_mm
+    eps = 1e-6
+    for k, (bed, ms, tms) in enumerate(zip(job.beds, r.manifolds, r.meshes), 1):
+        for b, m, tm in zip(bed, ms, tms):
+            lo, hi = tm.bounds
+            info = {"bed": k, "name": b.name, "kind": b.kind, "watertight": bool(tm.is_watertight),
+                    "winding_consistent": bool(tm.is_winding_consistent), "volume_mm3": float(tm.volume),
+                    "manifold_volume_mm3": float(m.volume()), "triangles": int(len(tm.faces)),
+                    "bounds_mm": [lo.round(4).tolist(), hi.round(4).tolist()]}
+            rep.bodies.append(info)
+            if not (info["watertight"] and info["winding_consistent"]):
+                rep.problems.append(f"{b.name}: mesh not watertight or not consistently wound")
+            if not tm.volume > 0 or abs(tm.volume - m.volume()) > vol_rtol * max(1.0, m.volume()) + 1e-6:
+                rep.problems.append(f"{b.name}: volume {tm.volume:.6g} mm³ disagrees with the solid")
+            if (lo < -eps).any() or hi[0] > bx + eps or hi[1] > by + eps or hi[2] > bz + eps:
+                rep.problems.append(f"{b.name}: outside the {bx:g} x {by:g} x {bz:g} mm bed")
+        # bodies printed together never share volume
+        if len(ms) > 1:
+            inter = 0.0
+            if job.style == "tiles-and-strips":
+                inter = (ms[0] ^ ms[1]).volume()
+            else:  # many small disjoint parts: their union loses no volume
+                inter = sum(m.volume() for m in ms) - m3d.Manifold.batch_boolean(ms, m3d.OpType.Add).volume()
+            rep.intersection_volume_mm3 = max(rep.intersection_volume_mm3, float(inter))
+    if rep.intersection_volume_mm3 > 1e-6:
+        rep.problems.append(f"bodies overlap by {rep.intersection_volume_mm3:.3g} mm³")
+    _check_clearances(r, rep)
+    return rep
+
+
+def _slice_polys(manifold, z: float) -> list[Polygon]:
+    polys = []
+    for ring in manifold.slice(z).to_polygons():
+        polys.append(np.asarray(ring))
+    # rings with holes: build polygons via even-odd union
+    geoms = [Polygon(p) for p in polys if len(p) >= 3]
+    return geoms
+
+
+def _check_clearances(r: Realised, rep: MeshReport) -> None:
+    job, pr = r.job, r.job.printer
+    if job.style == "strips":  # loose parts: only the spacing on the bed matters
+        rep.required_clearance_mm = pr.part_spacing_mm
+        polys = [Polygon(b.ops[0][1].polygons[0]) for b in job.beds[0]]
+        if len(polys) > 1:
+            tree = shapely.STRtree(polys)
+            i, j = tree.query(polys, predicate="dwithin", distance=3 * pr.part_spacing_mm)
+            sel = i < j
+            if sel.any():
+                arr = np.array(polys, dtype=object)
+                rep.min_clearance_mm = float(shapely.distance(arr[i[sel]], arr[j[sel]]).min())
+                if rep.min_clearance_mm < pr.part_spacing_mm - 1e-6:
+                    rep.problems.append(f"strip parts {rep.min_clearance_mm:.3f} mm apart on bed 1, "
+                                        f"under the part spacing {pr.part_spacing_mm:g} mm")
+        return
+    if job.style == "tiles-and-strips":
+        # measured on the mesh: sections of the tile body at the bottom pocket,
+        # the bare middle and the top pocket; different tiles stay a gap apart,
+        # and a strip keeps the radial clearance from the tiles it does not join
+        tiles_m, hinges_m = r.manifolds[0]
+        T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
+        req = pr.radial_clearance_mm
+        rep.required_clearance_mm = req
+        worst = np.inf
+        for z in (0.5 * ts, 0.5 * T, T - 0.5 * ts):
+            tiles = shapely.union_all(_slice_polys(tiles_m, z))
+            strips = shapely.union_all(_slice_polys(hinges_m, z))
+            parts = [tiles] if not hasattr(tiles, "geoms") else list(tiles.geoms)
+            sparts = [] if strips.is_empty else ([strips] if not hasattr(strips, "geoms") else list(strips.geoms))
+            allp = parts + sparts
+            kind = np.array([0] * len(parts) + [1] * len(sparts))
+            tree = shapely.STRtree(allp)
+            i, j = tree.query(allp, predicate="dwithin", distance=2 * pr.gap_mm)
+            sel = i < j
+            i, j = i[sel], j[sel]
+            d = shapely.distance(np.array(allp, dtype=object)[i], np.array(allp, dtype=object)[j])
+            # a strip touches (distance 0) the two tiles it is recessed into; all else must keep clear
+            mixed = kind[i] != kind[j]
+            touching = mixed & (d < 1e-6)
+            free = d[~touching]
+            if len(free):
+                worst = min(worst, float(free.min()))
+        rep.min_clearance_mm = None if worst == np.inf else worst
+        if rep.min_clearance_mm is not None and rep.min_clearance_mm < req - 1e-6:
+            rep.problems.append(f"clearance {rep.min_clearance_mm:.3f} mm below the radial clearance {req:g} mm")
+        return
+    # pinned: every pair of tiles meeting at a pivot, measured in 3D
+    plan = job.plan
+    req = min(pr.radial_clearance_mm, pr.axial_clearance_mm)
+    rep.required_clearance_mm = req
+    ms = r.manifolds[0]
+    pairs = set()
+    A, B = plan.hinge_tiles.T
+    for h in range(plan.n_hinges):
+        group = {int(A[h]), int(B[h])}
+        if plan.partner[h] >= 0:
+            group |= {int(A[plan.partner[h]]), int(B[plan.partner[h]])}
+        g = sorted(group)
+        pairs |= {(a, b) for ai, a in enumerate(g) for b in g[ai + 1:]}
+    worst = np.inf
+    for a, b in sorted(pairs):
+        worst = min(worst, ms[a].min_gap(ms[b], 2 * pr.gap_mm + 1.0))
+    rep.min_clearance_mm = None if worst == np.inf else float(worst)
+    if rep.min_clearance_mm is not None and rep.min_clearance_mm < req * (1 - 1e-6):
+        rep.problems.append(f"clearance {rep.min_clearance_mm:.4f} mm below {req:g} mm")
+    for t, m in enumerate(ms):
+        if len(m.decompose()) != 1:
+            rep.problems.append(f"tile {t} falls apart into {len(m.decompose())} pieces")
+            break
+
+
+# --------------------------------------------------------- top-face check
+
+@dataclass
+class TileCheck:
+    """Printed tile outlines recovered from the mesh against the closed state."""
+
+    state: int
+    tolerance_mm: float
+    max_deviation_mm: float
+    max_overlap_mm2: float
+    tiles: int
+    ok: bool
+
+    def to_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
+    """Recover each tile's outline from the printed tile mesh (section at the
+    bare mid-plane, grown back by the shrink), and compare with the closed state:
+    every recovered vertex within ``printer.tolerance_mm`` of its design tile
+    outline and vice versa (Hausdorff), and no two recovered tiles overlapping.
+
+    For pinned tiles the ear discs around the pivots are excluded on both sides
+    (they are round by design). ``tiles_mesh`` (a trimesh, e.g. re-read from the
+    STL) replaces the in-memory solid when given.
+    """
+    import manifold3d as m3d
+
+    job = r.job
+    if job.style == "strips":
+        raise FabricationError("the strips style prints no tiles")
+    plan, pr = job.plan, job.printer
+    dx, dy = job.shift
+    if tiles_mesh is not None:
+        man = m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(tiles_mesh.vertices, dtype=np.float32),
+                                    tri_verts=np.asarray(tiles_mesh.faces, dtype=np.uint32)))
+    elif job.style == "tiles-and-strips":
+        man = r.manifolds[0][0]
+    else:
+        man = m3d.Manifold.batch_boolean(r.manifolds[0], m3d.OpType.Add)
+    if job.style == "tiles-and-strips":
+        z = 0.5 * pr.tile_thickness_mm
+        mask = None
+    else:
+        lv = job.pins.levels
+        z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
+        mask = shapely.union_all([regular_polygon(p, job.pins.geometry.hollow + 1e-3, True)
+                                  for p in plan.hinge_xy + [dx, dy]])
+    section = shapely.union_all(_slice_polys(man, z))
+    parts = list(getattr(section, "geoms", [section]))
+    design = shapely.transform(shapely.polygons(plan.corners), lambda c: c + np.array([dx, dy]))
+    grown = [shapely.buffer(p, plan.shrink_mm, join_style="mitre") for p in parts]
+    if mask is not None:
+        design = np.array([g.difference(mask) for g in design], dtype=object)
+        grown = [g.difference(mask) for g in grown]
+    grown = [g for g in grown if not g.is_empty and g.area > 1e-6]
+    # match recovered parts to design tiles by containment of a representative point
+    tree = shapely.STRtree(design)
+    dev = 0.0
+    matched = set()
+    for g in grown:
+        pt = g.representative_point()
+        hits = tree.query(pt, predicate="intersects")
+        if len(hits) == 0:
+            dev = np.inf
+            continue
+        t = int(hits[0])
+        matched.add(t)
+        dev = max(dev, shapely.hausdorff_distance(g, design[t]))
+    # pinned tiles may come back in several pieces after masking; every tile must be seen
+    if len(matched) != len(plan.tiles):
+        dev = np.inf
+    overlap = 0.0
+    if len(grown) > 1:
+        t2 = shapely.STRtree(grown)
+        i, j = t2.query(grown, predicate="intersects")
+        sel = i < j
+        if sel.any():
+            g = np.array(grown, dtype=object)
+            overlap = float(shapely.area(shapely.intersection(g[i[sel]], g[j[sel]])).max())
+    tol = pr.tolerance_mm
+    ok = bool(dev <= tol and overlap <= tol * tol)
+    return TileCheck(state=job.state, tolerance_mm=tol, max_deviation_mm=float(dev), max_overlap_mm2=overlap,
+                     tiles=len(matched), ok=ok)
+
+
+# ----------------------------------------------------------------- writing
+
+def job_files(r: Realised, stem: str) -> dict[str, bytes]:
+    """File name -> bytes of every mesh file of a job (STL per body kind and
+    per bed, one 3MF per bed with one named object per body)."""
+    import trimesh
+
+    job = r.job
+    files: dict[str, bytes] = {}
+    for k, (bed, tms) in enumerate(zip(job.beds, r.meshes), 1):
+        suffix = "" if len(job.beds) == 1 else f"-bed{k}"
+        scene = trimesh.Scene()
+        for b, tm in zip(bed, tms):
+            scene.add_geometry(tm, geom_name=b.name, node_name=b.name)
+        files[f"{stem}{suffix}.3mf"] = scene.export(file_type="3mf")
+        if job.style == "tiles-and-strips":
+            for b, tm in zip(bed, tms):
+                files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
+        else:
+            files[f"{stem}{suffix}.stl"] = trimesh.util.concatenate(tms).export(file_type="stl")
+    return files
+
+
+def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name: str,
+             files: Iterable[str]) -> str:
+    job = r.job
+    plan = job.plan
+    d = {
+        "format": "fabkiri.print", "version": 1, "units": "mm",
+        "pattern": pattern_name, "style": job.style, "state": job.state,
+        "printer": job.printer.to_dict(),
+        "shift_mm": [round(float(v), 6) for v in job.shift],
+        "beds": [[b.name for b in bed] for bed in job.beds],
+        "hinges": [{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
+                    "coincides_with": int(plan.partner[h]) if plan.partner[h] >= 0 else None,
+                    "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
+                   for h in range(plan.n_hinges)],
+        "files": sorted(files),
+        "checks": {"meshes": rep.to_dict(), "tiles": tiles.to_dict() if tiles else None},
+    }
+    if job.placements:
+        d["placements"] = job.placements
+    if job.pins is not None:
+        d["pins"] = {"levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
+                     "geometry_mm": dict(job.pins.geometry.__dict__),
+                     "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}}
+    return json.dumps(d, indent=1, sort_keys=False) + "\n"

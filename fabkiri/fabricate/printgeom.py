@@ -1,0 +1,337 @@
+"""2D plan of 3D-printed hinges on a closed state (fabrication.md §3.1, §3.4).
+
+Everything here is planar (shapely/GEOS); :mod:`fabkiri.fabricate.mesh` turns
+it into solids. Conventions:
+
+* the closed state's tiles are shrunk by half the printer's gap (mitre joins),
+  so neighbouring printed tiles stay ``gap`` apart;
+* **coincident-hinge rule**: in a closed state the two hinges of an interior
+  node sit at one point; the hinge with the smaller index goes on the **top**
+  face, its partner on the **bottom** face; a lone (boundary) hinge goes on top;
+* a **strip** (flexible hinge) of hinge ``h`` joining tiles A and B crosses the
+  seam where A's and B's folded edges lie together: along the seam it spans
+  ``strip_width`` from where the shrunk pair begins, across it reaches
+  ``strip_reach`` into each tile; its pads follow the two tile corners.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from scipy.spatial import cKDTree
+from shapely.geometry import MultiPolygon, Polygon
+
+from ..errors import CheckFailed, FabricationError
+from ..mechanics.contract import contract
+from ..pattern.model import Pattern
+from .printers import Printer
+
+CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
+COINCIDE_TOL_REL = 1e-6  # two hinge points closer than this (tile sizes) coincide
+
+
+def closed_corners(pattern: Pattern, state: int) -> np.ndarray:
+    """Per-tile corners ``(T, 4, 2)`` of closed state ``state`` (stored, or computed and checked)."""
+    if state not in (1, 2):
+        raise FabricationError(f"closed state must be 1 or 2, not {state!r}")
+    if state in pattern.contracted:
+        return np.asarray(pattern.contracted[state], dtype=float)
+    c = contract(pattern, state)
+    if c.max_closure > CLOSURE_TOL_REL * pattern.tile_size:
+        raise CheckFailed(
+            f"state {state} does not close (loop closure {c.max_closure:.3g} mm at hole {c.worst_hole}); "
+            "nothing to print"
+        )
+    return c.corners
+
+
+def _largest(geom) -> Polygon:
+    if isinstance(geom, Polygon):
+        return geom
+    if isinstance(geom, MultiPolygon) and len(geom.geoms):
+        return max(geom.geoms, key=lambda g: g.area)
+    return Polygon()
+
+
+@dataclass(frozen=True, eq=False)
+class ClosedPlan:
+    """The printed outline of every tile and the placement of every hinge."""
+
+    state: int
+    corners: np.ndarray  # (T, 4, 2) closed-state corners, mm
+    tiles: np.ndarray  # (T,) shapely Polygons, shrunk by gap/2
+    hinge_tiles: np.ndarray  # (H, 2)
+    hinge_xy: np.ndarray  # (H, 2) hinge point in the closed state
+    seam_dir: np.ndarray  # (H, 2) unit vector along the folded seam, away from the hinge
+    partner: np.ndarray  # (H,) coincident hinge or -1
+    top: np.ndarray  # (H,) True: the hinge's strip goes on the top face
+    shrink_mm: float
+
+    @property
+    def n_hinges(self) -> int:
+        return len(self.hinge_xy)
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        return tuple(shapely.total_bounds(self.tiles).tolist())
+
+    def face(self, h: int) -> str:
+        return "top" if self.top[h] else "bottom"
+
+
+def coincident_pairs(points: np.ndarray, tol: float) -> np.ndarray:
+    """Partner index of every point (``-1`` if alone); raises if three coincide."""
+    partner = np.full(len(points), -1, dtype=np.int64)
+    if len(points) < 2:
+        return partner
+    pairs = cKDTree(points).query_pairs(tol, output_type="ndarray")
+    if len(pairs):
+        counts = np.bincount(pairs.ravel(), minlength=len(points))
+        if counts.max() > 1:
+            bad = int(np.argmax(counts))
+            raise FabricationError(
+                f"hinge {bad} coincides with {counts[bad]} other hinges in the closed state; "
+                "a quad kirigami node carries at most two"
+            )
+        partner[pairs[:, 0]] = pairs[:, 1]
+        partner[pairs[:, 1]] = pairs[:, 0]
+    return partner
+
+
+def face_rule(partner: np.ndarray) -> np.ndarray:
+    """Top (True) or bottom face per hinge: of two coincident hinges the smaller index goes on top."""
+    idx = np.arange(len(partner))
+    return (partner < 0) | (idx < partner)
+
+
+def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
+    corners = closed_corners(pattern, state)
+    top_ = pattern.topology
+    fold = top_.fold(state)
+    A, B = top_.hinge_tiles.T
+    cA, cB = top_.hinge_corner.T
+    hxy = 0.5 * (corners[A, cA] + corners[B, cB])
+    far = 0.5 * (corners[A, fold.fold_corner_ends[:, 0]] + corners[B, fold.fold_corner_ends[:, 1]])
+    seam = far - hxy
+    seam /= np.linalg.norm(seam, axis=1, keepdims=True)
+    partner = coincident_pairs(hxy, COINCIDE_TOL_REL * pattern.tile_size)
+    d = 0.5 * printer.gap_mm
+    polys = shapely.polygons(corners)
+    shrunk = shapely.buffer(polys, -d, join_style="mitre")
+    empty = shapely.is_empty(shrunk) | (shapely.get_type_id(shrunk) != 3)
+    if empty.any():
+        bad = int(np.flatnonzero(empty)[0])
+        raise FabricationError(
+            f"tile {bad} vanishes or splits when shrunk by half the printer gap ({d:g} mm)"
+        )
+    return ClosedPlan(
+        state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
+        seam_dir=seam, partner=partner, top=face_rule(partner), shrink_mm=d,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Strips:
+    """One flexible strip outline per hinge, and its two pads."""
+
+    outline: np.ndarray  # (H,) Polygons
+    pads: np.ndarray  # (H, 2) Polygons on tile A and on tile B
+    top: np.ndarray  # (H,) face
+
+
+def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
+    """Strip outlines for every hinge (see the module docstring), checked:
+    each strip crosses its seam, has a pad on both tiles, and keeps the radial
+    clearance from every other strip on the same face and from other tiles."""
+    H = plan.n_hinges
+    d = plan.shrink_mm
+    w, reach = printer.strip_width_mm, printer.strip_reach_mm
+    eps = 1e-6 * max(1.0, float(np.abs(plan.corners).max()))
+    A, B = plan.hinge_tiles.T
+    raw = shapely.polygons(plan.corners)
+    # the pair region: A and B merged along their closed seam, shrunk like the tiles
+    pair = shapely.buffer(shapely.union(shapely.buffer(raw[A], eps, join_style="mitre"),
+                                        shapely.buffer(raw[B], eps, join_style="mitre")),
+                          -(d + eps), join_style="mitre")
+    p, e = plan.hinge_xy, plan.seam_dir
+    n = np.stack([-e[:, 1], e[:, 0]], -1)
+    # where the seam line enters the pair region (t0), measured along e from p
+    L = 4.0 * (w + reach + d) + 1.0
+    seam_lines = shapely.linestrings(np.stack([p, p + L * e], 1))
+    inside = shapely.intersection(seam_lines, pair)
+    t0 = np.full(H, np.nan)
+    for h in range(H):  # a few µs each; intersections are short segments
+        g = inside[h]
+        if not g.is_empty:
+            xy = shapely.get_coordinates(g)
+            t0[h] = float(((xy - p[h]) @ e[h]).min())
+    if np.isnan(t0).any():
+        bad = int(np.flatnonzero(np.isnan(t0))[0])
+        raise FabricationError(f"hinge {bad}: its two tiles do not meet along a seam in state {plan.state}")
+    R = reach + d
+    t1 = t0 + w
+    band = np.stack([p + t0[:, None] * e - R * n, p + t1[:, None] * e - R * n,
+                     p + t1[:, None] * e + R * n, p + t0[:, None] * e + R * n], 1)
+    strips = shapely.intersection(shapely.polygons(band), pair)
+    outline = np.array([_largest(g) for g in strips], dtype=object)
+    pads = np.stack([shapely.intersection(outline, plan.tiles[A]),
+                     shapely.intersection(outline, plan.tiles[B])], -1)
+    min_pad = 0.25 * w * min(reach, w)
+    small = (shapely.area(pads) < min_pad).any(1)
+    if small.any():
+        h = int(np.flatnonzero(small)[0])
+        raise FabricationError(
+            f"hinge {h}: the strip pads on tiles {A[h]} and {B[h]} are too small "
+            f"({shapely.area(pads[h]).min():.2f} mm² < {min_pad:.2f} mm²); the tile corners are too narrow "
+            "for the strip width"
+        )
+    _check_strip_clearance(plan, outline, printer)
+    return Strips(outline=outline, pads=pads, top=plan.top.copy())
+
+
+def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Printer) -> None:
+    c = printer.radial_clearance_mm
+    tol = 1e-9
+    A, B = plan.hinge_tiles.T
+    for face in (True, False):
+        idx = np.flatnonzero(plan.top == face)
+        if len(idx) < 2:
+            continue
+        tree = shapely.STRtree(outline[idx])
+        i, j = tree.query(outline[idx], predicate="dwithin", distance=c - tol)
+        sel = i < j
+        if sel.any():
+            h, k = idx[i[sel][0]], idx[j[sel][0]]
+            dist = shapely.distance(outline[h], outline[k])
+            raise FabricationError(
+                f"strips of hinges {h} and {k} on the {'top' if face else 'bottom'} face are "
+                f"{dist:.2f} mm apart (radial clearance {c:g} mm); use a smaller --strip-width or --strip-reach"
+            )
+    # a strip touches its own two tiles only
+    tree = shapely.STRtree(plan.tiles)
+    hi, ti = tree.query(outline, predicate="dwithin", distance=c - tol)
+    foreign = (ti != A[hi]) & (ti != B[hi])
+    if foreign.any():
+        h, t = int(hi[foreign][0]), int(ti[foreign][0])
+        raise FabricationError(f"the strip of hinge {h} comes within {c:g} mm of tile {t}, which it does not join")
+
+
+# -------------------------------------------------------------------- pinned
+
+@dataclass(frozen=True)
+class PinLevels:
+    """Z layout of the four ear levels of a pinned print (mm)."""
+
+    thickness: float
+    ear: float
+    axial: float
+
+    def level(self, k: int) -> tuple[float, float]:
+        z0 = k * (self.ear + self.axial)
+        return z0, z0 + self.ear
+
+
+def pin_levels(printer: Printer) -> PinLevels:
+    T = printer.pin.tile_thickness_mm
+    az = printer.axial_clearance_mm
+    ear = (T - 3 * az) / 4
+    if ear < 3 * printer.layer_mm - 1e-9:
+        raise FabricationError(
+            f"pinned hinges need four stacked ears: a {T:g} mm tile leaves {ear:.2f} mm per ear after three "
+            f"{az:g} mm axial clearances, under three layers ({3 * printer.layer_mm:g} mm); "
+            "raise the preset's pin.tile_thickness_mm"
+        )
+    return PinLevels(thickness=T, ear=ear, axial=az)
+
+
+@dataclass(frozen=True)
+class PinGeometry:
+    """Radii of one pin joint (mm). The pin flares upward (retains the ring)."""
+
+    ear: float  # ear disc radius
+    hollow: float  # the other tiles are cleared to this radius around the pivot
+    pin_bottom: float
+    pin_top: float
+    hole_bottom: float  # ring hole, horizontal radius
+    hole_top: float
+
+
+def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
+    c = printer.radial_clearance_mm
+    r = printer.pin.ear_radius_mm
+    rp = printer.pin.pin_radius_mm
+    flare = 2.0 * c  # the ring's narrowest hole is smaller than the pin's widest point
+    slope = flare / levels.ear
+    ch = float(c * np.sqrt(1.0 + slope * slope))  # horizontal clearance giving c normal to the cone
+    g = PinGeometry(ear=r, hollow=r + c, pin_bottom=rp, pin_top=rp + flare, hole_bottom=rp + ch,
+                    hole_top=rp + flare + ch)
+    wall = r - g.hole_top
+    if wall < 2 * printer.nozzle_mm - 1e-9:
+        raise FabricationError(
+            f"pinned hinges: the ear ring wall is {wall:.2f} mm (ear radius {r:g} mm, pin {rp:g} mm, clearance "
+            f"{c:g} mm), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); raise pin.ear_radius_mm"
+        )
+    if rp < printer.nozzle_mm:
+        raise FabricationError(f"pin radius {rp:g} mm is under one nozzle width ({printer.nozzle_mm:g} mm)")
+    return g
+
+
+@dataclass(frozen=True, eq=False)
+class PinPlan:
+    """Where each pin joint sits and which ear levels it uses.
+
+    ``level[h]`` is 0 (ears at levels 0-1) for the bottom hinge of a node and 2
+    (levels 2-3) for the top one: the two coincident hinges stack coaxially.
+    Tile A of the hinge owns the lower ear and the pin, tile B the ring.
+    """
+
+    levels: PinLevels
+    geometry: PinGeometry
+    level: np.ndarray  # (H,)
+
+
+def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
+    """Plan print-in-place pins, or refuse with the reason the geometry does not allow them."""
+    from ..pattern.residuals import hinge_sums
+
+    levels = pin_levels(printer)
+    g = pin_geometry(printer, levels)
+    hs = np.abs(hinge_sums(pattern))
+    if hs.max(initial=0.0) > 1e-6:
+        h = int(np.argmax(hs))
+        raise FabricationError(
+            f"pinned hinges refused: the pattern is not rigid-deployable (hinge {h}: corner angles miss π by "
+            f"{np.degrees(hs[h]):.2f}°), so rigid pinned tiles would have to bend to reconfigure; "
+            "use --style strips or tiles-and-strips"
+        )
+    # one pivot per distinct point; the clearance discs of different pivots must not meet
+    lone = (plan.partner < 0) | (np.arange(plan.n_hinges) < plan.partner)
+    pivots = plan.hinge_xy[lone]
+    wall = 2 * printer.nozzle_mm
+    if len(pivots) > 1:
+        dist, _ = cKDTree(pivots).query(pivots, k=2)
+        i = int(np.argmin(dist[:, 1]))
+        if dist[i, 1] < 2 * g.hollow + wall:
+            raise FabricationError(
+                f"pinned hinges refused: pivots {dist[i, 1]:.2f} mm apart cannot hold two ears of radius "
+                f"{g.ear:g} mm with {printer.radial_clearance_mm:g} mm clearance and a {wall:g} mm wall; "
+                "scale the pattern up or reduce pin.ear_radius_mm"
+            )
+    # an ear may only sweep the tiles that meet at its pivot
+    A, B = plan.hinge_tiles.T
+    discs = shapely.buffer(shapely.points(plan.hinge_xy), g.hollow, quad_segs=16)
+    tree = shapely.STRtree(plan.tiles)
+    hi, ti = tree.query(discs, predicate="intersects")
+    own = (ti == A[hi]) | (ti == B[hi])
+    pa = plan.partner[hi]
+    own |= (pa >= 0) & ((ti == A[np.maximum(pa, 0)]) | (ti == B[np.maximum(pa, 0)]))
+    if not own.all():
+        h, t = int(hi[~own][0]), int(ti[~own][0])
+        raise FabricationError(
+            f"pinned hinges refused: the ear of hinge {h} (radius {g.hollow:g} mm with clearance) reaches tile "
+            f"{t}, which does not meet at its pivot"
+        )
+    level = np.where(plan.top, 2, 0)
+    return PinPlan(levels=levels, geometry=g, level=level)
