@@ -19,6 +19,7 @@ from ..errors import FabkiriError
 
 COMMANDS = [
     "fabkiri.cli.pattern_cmds",
+    "fabkiri.cli.print_cmd",
 ]
 
 

@@ -525,6 +525,33 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
 
 # ----------------------------------------------------------------- writing
 
+def export_3mf(scene) -> bytes:
+    """trimesh's 3MF with reproducible bytes: its random part UUIDs become
+    name-based ones from a counter, and zip entries get a fixed date."""
+    import uuid
+    import zipfile
+    from unittest import mock
+
+    from trimesh.exchange import threemf
+
+    counter = iter(range(1 << 30))
+
+    def next_uuid():
+        return uuid.uuid5(uuid.NAMESPACE_URL, f"fabkiri:3mf:{next(counter)}")
+
+    with mock.patch.object(threemf.uuid, "uuid4", next_uuid):
+        raw = scene.export(file_type="3mf")
+    src = zipfile.ZipFile(io.BytesIO(raw))
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as dst:
+        for info in src.infolist():
+            fixed = zipfile.ZipInfo(info.filename, date_time=(1980, 1, 1, 0, 0, 0))
+            fixed.compress_type = zipfile.ZIP_DEFLATED
+            fixed.external_attr = 0o644 << 16
+            dst.writestr(fixed, src.read(info.filename))
+    return out.getvalue()
+
+
 def job_files(r: Realised, stem: str) -> dict[str, bytes]:
     """File name -> bytes of every mesh file of a job (STL per body kind and
     per bed, one 3MF per bed with one named object per body)."""
@@ -537,7 +564,7 @@ def job_files(r: Realised, stem: str) -> dict[str, bytes]:
         scene = trimesh.Scene()
         for b, tm in zip(bed, tms):
             scene.add_geometry(tm, geom_name=b.name, node_name=b.name)
-        files[f"{stem}{suffix}.3mf"] = scene.export(file_type="3mf")
+        files[f"{stem}{suffix}.3mf"] = export_3mf(scene)
         if job.style == "tiles-and-strips":
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")

@@ -1,0 +1,71 @@
+"""``fabkiri print``: 3D-printable hinges and tiles (STL, 3MF, optional STEP)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from ..errors import CheckFailed
+from ..fileio import atomic_write_many
+from ..fabricate import mesh
+from ..fabricate.printers import available_printers, load_printer
+from .pattern_cmds import _positive, load_any
+
+
+def cmd_print(args: argparse.Namespace) -> int:
+    t0 = time.perf_counter()
+    pattern = load_any(args.file)
+    printer = load_printer(args.printer).with_overrides(
+        tile_thickness_mm=args.tile_thickness, strip_thickness_mm=args.strip_thickness,
+        strip_width_mm=args.strip_width, strip_reach_mm=args.strip_reach, gap_mm=args.gap,
+        radial_clearance_mm=args.radial_clearance, axial_clearance_mm=args.axial_clearance,
+    )
+    job = mesh.build_job(pattern, args.style, int(args.state), printer)
+    realised = mesh.realise_job(job)
+    report = mesh.check_meshes(realised)
+    tiles = None if job.style == "strips" else mesh.check_printed_tiles(realised)
+    problems = list(report.problems)
+    if tiles is not None and not tiles.ok:
+        problems.append(
+            f"printed tiles deviate {tiles.max_deviation_mm:.3g} mm from closed state {job.state} "
+            f"(tolerance {tiles.tolerance_mm:g} mm), overlap {tiles.max_overlap_mm2:.3g} mm²"
+        )
+    if problems:
+        raise CheckFailed("; ".join(problems) + "; nothing written")
+    stem = Path(args.file).stem
+    files = mesh.job_files(realised, stem)
+    if args.step:
+        from ..fabricate import cad  # lazy: OpenCascade is heavy
+
+        files[f"{stem}.step"] = cad.step_bytes([b for bed in job.beds for b in bed])
+    files["manifest.json"] = mesh.manifest(realised, report, tiles, Path(args.file).name,
+                                           list(files) + ["manifest.json"])
+    atomic_write_many(args.output, files)
+    faces = int(job.plan.top.sum())
+    print(f"wrote {len(files)} files to {args.output}: {job.style}, closed state {job.state}, printer "
+          f"{printer.name}, {len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
+          f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance "
+          f"{report.min_clearance_mm if report.min_clearance_mm is not None else float('nan'):.3f} mm, "
+          f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("print", help="3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)")
+    p.add_argument("file", help="pattern.json (or design .obj)")
+    p.add_argument("--style", choices=mesh.STYLES, default="tiles-and-strips",
+                   help="strips: one flexible strip per hinge for laser-cut tiles; tiles-and-strips: rigid tiles "
+                        "with recessed flexible strips (two materials); pinned: print-in-place pin hinges")
+    p.add_argument("--state", choices=["1", "2"], default="1", help="closed state printed (default 1)")
+    p.add_argument("--printer", metavar="NAME|FILE.json",
+                   help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")
+    p.add_argument("--step", action="store_true", help="also write STEP (needs the 'cad' extra: build123d)")
+    for flag, what in [("tile-thickness", "tile thickness"), ("strip-thickness", "strip thickness"),
+                       ("strip-width", "strip width along the seam"), ("strip-reach", "strip reach into each tile"),
+                       ("gap", "gap between printed tiles"), ("radial-clearance", "in-plane print clearance"),
+                       ("axial-clearance", "clearance between stacked parts")]:
+        p.add_argument(f"--{flag}", type=_positive, metavar="MM", help=f"override the preset's {what}")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
+    p.set_defaults(func=cmd_print)
