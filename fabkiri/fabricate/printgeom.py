@@ -65,6 +65,7 @@ class ClosedPlan:
     hinge_tiles: np.ndarray  # (H, 2)
     hinge_xy: np.ndarray  # (H, 2) hinge point in the closed state
     seam_dir: np.ndarray  # (H, 2) unit vector along the folded seam, away from the hinge
+    seam_end: np.ndarray  # (H, 2) far end of the folded seam
     partner: np.ndarray  # (H,) coincident hinge or -1
     top: np.ndarray  # (H,) True: the hinge's strip goes on the top face
     shrink_mm: float
@@ -128,7 +129,7 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
         )
     return ClosedPlan(
         state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
-        seam_dir=seam, partner=partner, top=face_rule(partner), shrink_mm=d,
+        seam_dir=seam, seam_end=far, partner=partner, top=face_rule(partner), shrink_mm=d,
     )
 
 
@@ -155,7 +156,7 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
     pair = shapely.buffer(shapely.union(shapely.buffer(raw[A], eps, join_style="mitre"),
                                         shapely.buffer(raw[B], eps, join_style="mitre")),
                           -(d + eps), join_style="mitre")
-    p, e = plan.hinge_xy, plan.seam_dir
+    p, e, far_xy = plan.hinge_xy, plan.seam_dir, plan.seam_end
     n = np.stack([-e[:, 1], e[:, 0]], -1)
     # where the seam line enters the pair region (t0), measured along e from p
     L = 4.0 * (w + reach + d) + 1.0
@@ -169,7 +170,11 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
             t0[h] = float(((xy - p[h]) @ e[h]).min())
     if np.isnan(t0).any():
         bad = int(np.flatnonzero(np.isnan(t0))[0])
-        raise FabricationError(f"hinge {bad}: its two tiles do not meet along a seam in state {plan.state}")
+        seam_len = float(np.linalg.norm(far_xy[bad] - p[bad]))
+        raise FabricationError(
+            f"hinge {bad}: tiles {A[bad]} and {B[bad]} meet along a seam of only {seam_len:.2f} mm in state "
+            f"{plan.state}, too short for a strip after the {plan.shrink_mm:g} mm shrink"
+        )
     R = reach + d
     t1 = t0 + w
     band = np.stack([p + t0[:, None] * e - R * n, p + t1[:, None] * e - R * n,
