@@ -19,6 +19,9 @@ from ..errors import FabkiriError
 
 COMMANDS = [
     "fabkiri.cli.pattern_cmds",
+    "fabkiri.cli.cut_cmd",
+    "fabkiri.cli.verify_cmd",
+    "fabkiri.cli.design_cmd",
     "fabkiri.cli.print_cmd",
 ]
 

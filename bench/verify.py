@@ -1,0 +1,62 @@
+"""Benchmark: verify a 64x64 pattern and its in-place DXF layout (target: under 2 s in total).
+
+Run: PYTHONPATH=$PWD python3 bench/verify.py [--rows 64] [--repeat 3]
+Prints the time of each stage and, as the baseline measured in the same run, the
+time of the two contractions alone (fabkiri.mechanics.contract), which every
+verification must at least do.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from fabkiri.mechanics.contract import contract_both, with_contracted_states  # noqa: E402
+from fabkiri.pattern import standard_pattern  # noqa: E402
+from fabkiri.verify import verify_layout, verify_pattern  # noqa: E402
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--rows", type=int, default=64)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--hinge", default="tape", choices=["tape", "separate"])
+    args = ap.parse_args()
+    import layout_fixtures as lf
+    import numpy as np
+
+    n = args.rows
+    p = with_contracted_states(standard_pattern(n, n, tile_size=10.0, angle_deg=40.0))
+    with tempfile.TemporaryDirectory() as tmp:
+        rng = np.random.default_rng(0)
+        C = lf.in_place_corners(p, 1, 0.3) if args.hinge == "tape" else lf.exploded_corners(p, rng)
+        path = lf.write_layout(Path(tmp) / "cut", p, C, hinge=args.hinge, fmt="dxf",
+                               kerf_offset=0.1 if args.hinge == "separate" else 0.0)
+        best = {"baseline: contract both states": 1e9, "verify_pattern": 1e9, "verify_layout": 1e9, "total": 1e9}
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            contract_both(p)
+            t1 = time.perf_counter()
+            rp = verify_pattern(p)
+            t2 = time.perf_counter()
+            rl = verify_layout(p, path)
+            t3 = time.perf_counter()
+            for k, v in (("baseline: contract both states", t1 - t0), ("verify_pattern", t2 - t1),
+                         ("verify_layout", t3 - t2), ("total", t3 - t1)):
+                best[k] = min(best[k], v)
+    print(f"{n}x{n} tiles ({p.n_tiles}), {args.hinge} DXF layout, best of {args.repeat}:")
+    for k, v in best.items():
+        print(f"  {k:32s} {v:7.3f} s")
+    print(f"  pattern report ok={rp.ok} ({len(rp.checks)} checks), layout report ok={rl.ok} ({len(rl.checks)} checks)")
+    print(f"  target: total < 2 s -> {'met' if best['total'] < 2.0 else 'NOT met'}")
+    return 0 if rp.ok and rl.ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,105 @@
+"""``fabkiri cut``: laser-cut files (DXF, SVG, PNG, manifest) from a pattern, verified before writing."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+from ..errors import InputError
+from ..fabricate.cut import FORMATS, CutOptions, cut_pattern
+from ..fabricate.drawing import COLORS
+from ..fabricate.layout import LAYOUTS
+from ..fabricate.materials import HINGE_KINDS, available, load_material, parse_setting
+from .pattern_cmds import load_any
+
+
+def _sheet(text: str) -> tuple[float, float]:
+    m = re.fullmatch(r"\s*([0-9.]+)\s*[xX×]\s*([0-9.]+)\s*", text)
+    if not m:
+        raise InputError(f"--sheet expects WxH in mm such as 600x400, got {text!r}")
+    try:
+        w, h = float(m.group(1)), float(m.group(2))
+    except ValueError:
+        raise InputError(f"--sheet expects WxH in mm such as 600x400, got {text!r}") from None
+    if w <= 0 or h <= 0:
+        raise InputError(f"--sheet needs a positive width and height, got {text!r}")
+    return w, h
+
+
+def _formats(text: str) -> tuple[str, ...]:
+    out = tuple(f.strip().lower() for f in text.split(",") if f.strip())
+    bad = [f for f in out if f not in FORMATS]
+    if bad or not out:
+        raise InputError(f"--formats takes a comma list of {', '.join(FORMATS)}, got {text!r}")
+    return tuple(f for f in FORMATS if f in out)
+
+
+def cmd_cut(args: argparse.Namespace) -> int:
+    pattern = load_any(args.file)
+    material = load_material(args.material)
+    changes = dict(thickness_mm=args.thickness, kerf_mm=args.kerf, min_web_mm=args.min_web,
+                   min_hole_mm=args.min_hole, strain_limit=args.strain_limit, gap_mm=args.gap,
+                   tolerance_mm=args.tol)
+    for setting in args.set or []:
+        key, value = parse_setting(setting)
+        changes[key] = value
+    material = material.override(**changes)
+    stem = Path(args.file).stem
+    out = Path(args.output) if args.output else Path("outputs") / stem
+    options = CutOptions(
+        material=material, hinge=args.hinge, state=args.state, sheet=_sheet(args.sheet), margin=args.margin,
+        layout=args.layout, scale=args.scale, width=args.width, formats=_formats(args.formats),
+        colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
+        reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
+        pattern_file=Path(args.file).name)
+    result = cut_pattern(pattern, options)
+    from ..fabricate.readback import write_verified
+
+    rb, written = write_verified(pattern, result, out, use_verifier=not args.no_verify)
+    for w in result.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    man = result.manifest
+    total = sum(s["cut_length_mm"] for s in man["sheets"])
+    secs = sum(s["cut_time_s"] for s in man["sheets"])
+    print(f"wrote {len(written)} files to {out}: {len(man['sheets'])} sheet(s), {man['hinge']} hinges, "
+          f"{material.name}, cut {total / 1000:.2f} m (~{secs / 60:.1f} min); "
+          f"{len(rb.checks)} read-back checks passed"
+          + ("" if args.no_verify else ", verifier passed"), file=sys.stderr)
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("cut", help="laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state")
+    p.add_argument("file", help="pattern.json (or a design .obj)")
+    p.add_argument("--material", default="acrylic-3", metavar="NAME",
+                   help=f"preset ({', '.join(available())}) or a material .json (default acrylic-3)")
+    p.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
+    p.add_argument("--state", type=int, choices=[1, 2], default=1, help="closed state to cut (default 1)")
+    p.add_argument("--sheet", default="600x400", metavar="WxH", help="sheet size in mm (default 600x400)")
+    p.add_argument("--margin", type=float, default=5.0, metavar="MM", help="sheet margin (default 5)")
+    p.add_argument("--layout", choices=LAYOUTS,
+                   help="in-place (tape, ligament), exploded or nested (separate; default exploded)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--scale", type=float, metavar="K", help="mm in the file per mm of the pattern")
+    g.add_argument("--width", type=float, metavar="MM", help="width of the cut (closed) pattern in mm")
+    p.add_argument("--formats", default=",".join(FORMATS), metavar="LIST", help="dxf,svg,png (default all)")
+    p.add_argument("--colors", choices=sorted(COLORS), help="colour preset (default: the material's)")
+    p.add_argument("--kerf", type=float, metavar="MM", help="full kerf (Boxes.py's burn is half of it)")
+    p.add_argument("--thickness", type=float, metavar="MM")
+    p.add_argument("--min-web", type=float, metavar="MM")
+    p.add_argument("--min-hole", type=float, metavar="MM")
+    p.add_argument("--strain-limit", type=float, metavar="EPS")
+    p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
+    p.add_argument("--ligament-width", type=float, metavar="MM", help="force the ligament width")
+    p.add_argument("--tol", type=float, metavar="MM", help="verification tolerance (default: the material's)")
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
+    p.add_argument("--label-height", type=float, metavar="MM", help="tile ID height (default: the material's)")
+    p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")
+    p.add_argument("--reference", type=float, default=50.0, metavar="MM",
+                   help="side of the uncompensated reference square (0: none; default 50)")
+    p.add_argument("--force", action="store_true", help="cut even if the pattern does not close in both states")
+    p.add_argument("--no-verify", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("-o", "--output", metavar="DIR", help="output folder (default outputs/<pattern stem>)")
+    p.set_defaults(func=cmd_cut)

@@ -1,0 +1,229 @@
+"""``fabkiri design``: inverse design of a reconfigurable quad kirigami pattern.
+
+The solve lives in :mod:`fabkiri.design`; this command loads the targets,
+contracts the solution into both closed states (:mod:`fabkiri.mechanics`),
+checks loop closure and tile overlaps, and writes ``pattern.json`` with the
+deployed state, both closed states, the targets and the solver report. A run
+that misses its tolerance still writes its best iterate, marked
+``design.report.status = "unconverged"`` and ``design.valid = false``, and exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+
+import numpy as np
+
+from ..design.solve import DesignRequest, design
+from ..design.targets import Target, load_target
+from ..errors import InputError
+from ..mechanics.contract import contract
+from ..pattern import geometry
+from ..pattern.io import write_pattern
+from ..pattern.model import Pattern
+from .pattern_cmds import parse_tiles
+
+CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
+
+
+def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
+    """``STATE:NAME|FILE``, ``STATE:rect`` or ``STATE:rect=RATIO``."""
+    m = re.fullmatch(r"\s*([12])\s*:\s*(.+?)\s*", text)
+    if not m:
+        raise InputError(f"--contracted-target expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}")
+    state, what = int(m.group(1)), m.group(2)
+    r = re.fullmatch(r"rect(?:=(.+))?", what)
+    if r:
+        ratio = None
+        if r.group(1) is not None:
+            try:
+                ratio = float(r.group(1))
+            except ValueError:
+                raise InputError(f"--contracted-target {text}: ratio {r.group(1)!r} is not a number") from None
+            if not (np.isfinite(ratio) and ratio > 0):
+                raise InputError(f"--contracted-target {text}: ratio must be positive")
+        return state, ("rect", ratio)
+    return state, load_target(what, size)
+
+
+def overlapping_tiles(corners: np.ndarray, tol_area: float) -> list[tuple[int, int]]:
+    """Pairs of tiles whose interiors overlap by more than ``tol_area`` (shapely/GEOS)."""
+    import shapely
+
+    polys = shapely.polygons(corners)
+    tree = shapely.STRtree(polys)
+    a, b = tree.query(polys, predicate="intersects")
+    keep = a < b
+    a, b = a[keep], b[keep]
+    if len(a) == 0:
+        return []
+    areas = shapely.area(shapely.intersection(polys[a], polys[b]))
+    bad = areas > tol_area
+    return list(zip(a[bad].tolist(), b[bad].tolist()))
+
+
+def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
+                       state: int) -> dict:
+    """Fit of the contracted state's outline (pattern-grid boundary) to its target, in mm.
+
+    The contracted tiles are rigidly aligned (proper Kabsch) to the closed grid
+    the solver fitted; the boundary grid vertices are then measured against the
+    target arcs.
+    """
+    from ..design.constraints import ClosedGrid, Stencils
+
+    st = Stencils.from_pattern(pattern)
+    g = ClosedGrid.build(st, state, 0)
+    V = g.n_vertices
+    pos = np.zeros((V, 2))
+    cnt = np.zeros(V)
+    np.add.at(pos, g.vertex.ravel(), corners.reshape(-1, 2))
+    np.add.at(cnt, g.vertex.ravel(), 1.0)
+    pos /= cnt[:, None]
+    theta, shift = geometry.kabsch(pos, grid_mm)
+    pos = geometry.rotate(pos, theta) + shift
+    d = target.signed_distance(pos[g.boundary], g.boundary_side)
+    return {"max_mm": float(np.abs(d).max()), "rms_mm": float(np.sqrt(np.mean(d * d))),
+            "max_rel_size": float(np.abs(d).max() / target.size), "points": int(len(d)),
+            "target": target.name}
+
+
+def cmd_design(args: argparse.Namespace) -> int:
+    rows, cols = parse_tiles(args.tiles)
+    if rows < 2 or cols < 2:
+        raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
+    target = load_target(args.target, args.size) if args.target else None
+    contracted: dict[int, object] = {}
+    for text in args.contracted_target or []:
+        s, spec = parse_contracted(text, args.size)
+        if s in contracted:
+            raise InputError(f"--contracted-target given twice for state {s}")
+        contracted[s] = spec
+    if target is None and not contracted:
+        raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
+    req = DesignRequest(rows=rows, cols=cols, target=target, rigid=args.rigid, symmetry=args.symmetry,
+                        holes=args.holes, contracted=contracted, init=args.init, tol=args.tol,
+                        name=args.name or "")
+    if not req.name:
+        parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
+                                                 for s, v in contracted.items()]]
+        req.name = f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if args.rigid else ''}"
+    req.validate()
+    big = rows * cols >= 256
+    result = design(req, progress=big or args.verbose)
+    pattern = result.pattern
+    report = dict(result.report)
+    size = pattern.tile_size
+    checks: dict[str, object] = {}
+    contracted_states = {}
+    problems = []
+    for s in (1, 2):
+        c = contract(pattern, s)
+        contracted_states[s] = c.corners
+        rel = c.max_closure / size
+        checks[f"closure_{s}_rel"] = rel
+        if not rel <= CLOSURE_TOL:
+            problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
+    tol_area = 1e-9 * size * size
+    for label, corners in [("deployed", pattern.corners()), *[(f"state {s}", contracted_states[s]) for s in (1, 2)]]:
+        ov = overlapping_tiles(corners, tol_area)
+        checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
+        if ov:
+            problems.append(f"{len(ov)} overlapping tile pairs in the {label} state (first {ov[0]})")
+    if args.rigid or args.holes == "parallelogram":
+        from ..pattern.residuals import hinge_sums
+
+        checks["hinge_sum_max_rad"] = float(np.abs(hinge_sums(pattern)).max())
+    closed_fit = {}
+    for s, spec in contracted.items():
+        if isinstance(spec, Target):
+            closed_fit[str(s)] = closed_outline_fit(pattern, contracted_states[s], result.closed_grids[s],
+                                                    result.closed_targets[s], s)
+    if closed_fit:
+        report["closed_outline_fit"] = closed_fit
+    report["checks"] = checks
+    valid = result.converged and not problems
+    if not result.converged:
+        problems.insert(0, f"solver did not reach the tolerance (max equality residual "
+                           f"{report['max_equality_residual']:.2e} > {args.tol:g})")
+    if problems:
+        report["status"] = "unconverged"
+        report["problems"] = problems
+    meta = dict(pattern.design or {})
+    meta["report"] = report
+    meta["valid"] = bool(valid)
+    pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
+                      name=pattern.name, lattice=pattern.lattice, design=meta)
+    write_pattern(pattern, args.output)
+    if args.json:
+        print(json.dumps(_jsonable(report), indent=2, sort_keys=True))
+    _summary(args.output, report, valid)
+    return 0 if valid else 1
+
+
+def _jsonable(v):
+    from ..pattern.io import _jsonable as j
+
+    return j(v)
+
+
+def _summary(path, report: dict, valid: bool) -> None:
+    fit = report.get("fit", {})
+    parts = [f"wrote {path}: {report['status']}", f"max equality residual {report['max_equality_residual']:.2e}",
+             f"{report['iterations_total']} iterations", f"{report['time_s']:.2f} s"]
+    if "shape" in fit:
+        parts.append(f"fit ({report['shape_matching']}) max {fit['shape']['max_mm']:.3g} mm, "
+                     f"rms {fit['shape']['rms_mm']:.3g} mm")
+    for s, f in report.get("closed_outline_fit", {}).items():
+        parts.append(f"state {s} outline vs {f['target']}: max {f['max_mm']:.3g} mm, rms {f['rms_mm']:.3g} mm")
+    print("; ".join(parts), file=sys.stderr)
+    for p in report.get("problems", []):
+        print(f"fabkiri: design failed: {p}", file=sys.stderr)
+
+
+def _tol(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (0 < v < 1e-2):
+        raise argparse.ArgumentTypeError(f"tolerance must lie in (0, 1e-2), got {text!r}")
+    return v
+
+
+def _size(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a length in mm, got {text!r}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"size must be a positive length in mm, got {text!r}")
+    return v
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("design", help="inverse design: a reconfigurable quad kirigami fitted to a target shape")
+    p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 16x16")
+    p.add_argument("--target", metavar="NAME|FILE",
+                   help="deployed target: a name from templates/targets (circle, ellipse, heart, ...) or a "
+                        ".csv/.json points file or an .svg path")
+    p.add_argument("--size", type=_size, metavar="MM",
+                   help="target size: its larger dimension in mm (named targets default to 100)")
+    p.add_argument("--rigid", action="store_true", help="rigid-deployable: hinge angle sums = π")
+    p.add_argument("--symmetry", choices=["x", "y"],
+                   help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x)")
+    p.add_argument("--holes", choices=["rhombus", "parallelogram"], default="rhombus",
+                   help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
+    p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
+                   help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
+    p.add_argument("--init", choices=["standard", "rescaled", "conformal"], default="standard",
+                   help="initial guess (default standard)")
+    p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
+    p.add_argument("--name", help="pattern name stored in the file")
+    p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
+    p.add_argument("-v", "--verbose", action="store_true", help="progress on stderr even for small solves")
+    p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
+    p.set_defaults(func=cmd_design)

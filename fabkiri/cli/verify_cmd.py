@@ -1,0 +1,83 @@
+"""``fabkiri verify FILE [--layout CUT]``: geometric proof of both compact states.
+
+Exit 0 when every check passes, 1 when any fails (failing checks listed
+first), 2 on bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+from ..errors import InputError
+from ..mechanics.contract import adopt_state_labels
+from ..pattern.io import import_obj, read_pattern
+from ..pattern.model import Pattern
+
+
+def load_for_verify(path: str) -> Pattern:
+    """pattern.json, or a design ``.obj``; ``X_design.obj`` picks up ``X_contracted1/2.obj``
+    (or ``X_contracted.obj``) beside it as stored closed states."""
+    p = Path(path)
+    if p.suffix.lower() != ".obj":
+        return read_pattern(p)
+    contracted: list[Path] = []
+    m = re.fullmatch(r"(.*)_design", p.stem)
+    if m:
+        stem = m.group(1)
+        pair = [p.with_name(f"{stem}_contracted{i}.obj") for i in (1, 2)]
+        single = p.with_name(f"{stem}_contracted.obj")
+        if pair[0].exists():
+            contracted = [q for q in pair if q.exists()]
+        elif single.exists():
+            contracted = [single]
+    return adopt_state_labels(import_obj(p, contracted))
+
+
+def _nonneg(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (v > 0 and v < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a positive finite number, got {text!r}")
+    return v
+
+
+def cmd_verify(args: argparse.Namespace) -> int:
+    from ..verify import verify_layout, verify_pattern
+
+    pattern = load_for_verify(args.file)
+    report = verify_pattern(pattern, tol_rad=args.tol_rad)
+    if args.layout:
+        if not Path(args.layout).exists():
+            raise InputError(f"{args.layout}: no such layout file")
+        report.extend(verify_layout(pattern, args.layout, tol_mm=args.tol_mm, tol_rad=args.tol_rad))
+        report.kind = "pattern and layout"
+        report.meta["layout"] = str(args.layout)
+        report.meta["layout_tol_mm"] = args.tol_mm
+    if args.json:
+        print(report.to_json())
+    else:
+        print(report.to_text())
+    if not report.ok:
+        names = ", ".join(c.name for c in report.failed()[:5])
+        more = "" if len(report.failed()) <= 5 else f" and {len(report.failed()) - 5} more"
+        print(f"fabkiri: verification failed: {names}{more}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("verify", help="prove that a pattern (and its cut layout) closes into both compact states")
+    p.add_argument("file", help="pattern.json or design .obj (X_design.obj takes X_contracted1/2.obj beside it)")
+    p.add_argument("--layout", metavar="CUT", help="cut file (.dxf or .svg) to check against the pattern")
+    p.add_argument("--tol-mm", type=_nonneg, default=0.05, metavar="MM",
+                   help="fabrication tolerance for the layout checks in mm (default 0.05); pattern checks use "
+                        "1e-9 of the mean tile edge (1e-5 for optimiser output)")
+    p.add_argument("--tol-rad", type=_nonneg, default=1e-6, metavar="RAD",
+                   help="angle tolerance in radians (default 1e-6)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.set_defaults(func=cmd_verify)

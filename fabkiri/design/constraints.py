@@ -1,0 +1,444 @@
+"""Constraint families with vectorised residuals and analytic sparse Jacobians.
+
+Every family maps the node array ``x`` (shape ``(n, 2)``, normalised units:
+the initial tile edge is 1) to a residual vector ``r`` and its Jacobian
+``J = ∂r/∂vec(x)`` as a CSR matrix, ``vec(x)[2*i + d] = x[i, d]``. The node
+array holds the deployed nodes first and, when a closed-state outline is
+controlled by a target curve, the pattern vertices of that closed state after
+them (see :class:`ClosedGrid`).
+
+Families (algorithm spec §2): edge pairs and angle rings of each closed state
+(contractibility in state 1, reconfigurability in state 2), hinge sums
+(rigid deployability), opposite-side equalities and notch pairs (parallelogram
+holes, §2.9), boundary-tip shape matching, non-overlap at every hinge and tile
+convexity (inequalities ``g >= 0``), reflection symmetry, and closed-state
+outline control (rectangle angle sums, width/height ratio, congruent closed
+grid matched to a curve).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+
+from ..errors import InputError, SolveError
+from ..pattern.lattice import DX, DY
+from ..pattern.model import Pattern
+from .targets import Target
+
+TWO_PI = 2.0 * np.pi
+
+# side (0 B, 1 R, 2 T, 3 L) of a free corner by tile parity and corner (spec §2.6)
+TIP_SIDE = np.array([[3, 0, 1, 2], [0, 1, 2, 3]])
+
+
+def jac(m: int, nvar_nodes: int, nodes: np.ndarray, grads: np.ndarray) -> sparse.csr_matrix:
+    """CSR Jacobian from per-row node indices ``(m, k)`` and gradients ``(m, k, 2)``."""
+    k = nodes.shape[1] if nodes.ndim == 2 else 0
+    rows = np.repeat(np.arange(m), 2 * k)
+    cols = (2 * nodes[:, :, None] + np.arange(2)[None, None, :]).reshape(-1)
+    vals = grads.reshape(-1)
+    return sparse.csr_matrix((vals, (rows, cols)), shape=(m, 2 * nvar_nodes))
+
+
+def wrap(a: np.ndarray) -> np.ndarray:
+    return np.mod(a + np.pi, TWO_PI) - np.pi
+
+
+def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray):
+    """Interior angle of CCW tiles ``t`` at corner ``k`` and its gradient.
+
+    Returns ``θ (m,)``, nodes ``(m, 3)`` = (corner, next, prev) and gradients
+    ``(m, 3, 2)``; θ turns the edge to ``next`` onto the edge to ``prev``.
+    """
+    v = tiles[t, k]
+    a = tiles[t, (k + 1) % 4]
+    b = tiles[t, (k + 3) % 4]
+    A = x[a] - x[v]
+    B = x[b] - x[v]
+    cr = A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
+    dt = A[:, 0] * B[:, 0] + A[:, 1] * B[:, 1]
+    th = np.mod(np.arctan2(cr, dt), TWO_PI)
+    ga = np.stack([A[:, 1], -A[:, 0]], -1) / (A * A).sum(1, keepdims=True)
+    gb = np.stack([-B[:, 1], B[:, 0]], -1) / (B * B).sum(1, keepdims=True)
+    return th, np.stack([v, a, b], -1), np.stack([-(ga + gb), ga, gb], 1)
+
+
+def cross_term(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray):
+    """g = cross(x_a - x_h, x_b - x_h) with its gradient (nodes h, a, b)."""
+    A = x[a] - x[h]
+    B = x[b] - x[h]
+    g = A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
+    ga = np.stack([B[:, 1], -B[:, 0]], -1)
+    gb = np.stack([-A[:, 1], A[:, 0]], -1)
+    return g, np.stack([h, a, b], -1), np.stack([-(ga + gb), ga, gb], 1)
+
+
+def sqlen_diff(x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray):
+    """½(|x_q - x_p|² - |x_v - x_u|²) with its gradient (nodes p, q, u, v)."""
+    E = x[q] - x[p]
+    F = x[v] - x[u]
+    r = 0.5 * ((E * E).sum(1) - (F * F).sum(1))
+    return r, np.stack([p, q, u, v], -1), np.stack([-E, E, F, -F], 1)
+
+
+@dataclass
+class Family:
+    """One constraint family: ``kind`` is 'eq', 'ineq', 'fit' or 'reg'."""
+
+    name: str
+    kind: str
+    fn: object  # callable x -> (r, J)
+    dim: int = 2  # residual units: length**dim (2: squared-length forms, 1: lengths, 0: angles)
+    meta: dict = field(default_factory=dict)
+
+    def __call__(self, x: np.ndarray):
+        return self.fn(x)
+
+
+# ------------------------------------------------------------------ stencils
+@dataclass(eq=False)
+class Stencils:
+    """Index arrays of a standard quad lattice pattern, used by every family."""
+
+    rows: int
+    cols: int
+    tiles: np.ndarray
+    n_nodes: int
+    hinge_node: np.ndarray
+    hinge_tiles: np.ndarray
+    hinge_corner: np.ndarray
+    folds: dict  # state -> FoldRule
+    hole_nodes: np.ndarray
+    gap_face: np.ndarray
+    tip_nodes: np.ndarray
+    tip_side: np.ndarray
+    tip_tile: np.ndarray
+    tip_corner: np.ndarray
+    phi: dict  # state -> (T, 4, 2) integer pattern-grid coordinates of every tile corner
+
+    @classmethod
+    def from_pattern(cls, pattern: Pattern) -> "Stencils":
+        lat = pattern.lattice or {}
+        rows, cols = int(lat.get("rows", 0)), int(lat.get("cols", 0))
+        if rows * cols != pattern.n_tiles or pattern.parity != 0:
+            raise SolveError("inverse design needs a standard quad lattice pattern (rows x cols, parity 0)")
+        top = pattern.topology
+        T = top.n_tiles
+        r, c = np.divmod(np.arange(T), cols)
+        par = (r + c) % 2
+        k = np.arange(4)
+        P = np.stack([c[:, None] + DX[None, :], r[:, None] + DY[None, :]], -1).astype(np.int64)
+        kq = (k[None, :] - 1 + 2 * par[:, None]) % 4
+        Q = np.stack([c[:, None] + DX[kq], r[:, None] + DY[kq]], -1).astype(np.int64)
+        tiles = top.tiles
+        use_t = np.full(top.n_nodes, -1)
+        use_k = np.full(top.n_nodes, -1)
+        use_t[tiles.ravel()] = np.repeat(np.arange(T), 4)
+        use_k[tiles.ravel()] = np.tile(k, T)
+        tips = top.free_nodes
+        tt, tk = use_t[tips], use_k[tips]
+        side = TIP_SIDE[par[tt], tk]
+        return cls(rows=rows, cols=cols, tiles=tiles, n_nodes=top.n_nodes, hinge_node=top.hinge_node,
+                   hinge_tiles=top.hinge_tiles, hinge_corner=top.hinge_corner,
+                   folds={s: top.fold(s) for s in (1, 2)}, hole_nodes=top.hole_nodes, gap_face=top.gap_face,
+                   tip_nodes=tips, tip_side=side, tip_tile=tt, tip_corner=tk, phi={1: P, 2: Q})
+
+    @property
+    def n_hinges(self) -> int:
+        return len(self.hinge_node)
+
+
+# ------------------------------------------------------------- families
+def edge_pairs(st: Stencils, state: int, nv: int, hinges: np.ndarray | None = None) -> Family:
+    fold = st.folds[state]
+    sel = np.arange(st.n_hinges) if hinges is None else hinges
+    h = st.hinge_node[sel]
+    a, b = fold.fold_ends[sel, 0], fold.fold_ends[sel, 1]
+
+    def fn(x):
+        r, nodes, g = sqlen_diff(x, h, a, h, b)
+        return r, jac(len(r), nv, nodes, g)
+
+    return Family(f"edge_pairs_{state}", "eq", fn, 2)
+
+
+def notch_pairs(st: Stencils, state: int, nv: int) -> Family:
+    """Edge pairs at hinges whose folded gap in ``state`` is the exterior (parallelogram mode)."""
+    fold = st.folds[state]
+    ext = st.gap_face[np.arange(st.n_hinges), fold.fold_gap] < 0
+    fam = edge_pairs(st, state, nv, np.flatnonzero(ext))
+    fam.name = f"notch_pairs_{state}"
+    return fam
+
+
+def hole_opposite_sides(st: Stencils, nv: int) -> Family:
+    """Parallelogram holes: opposite sides equal (2 rows per hole)."""
+    hn = st.hole_nodes
+    p = np.concatenate([hn[:, 0], hn[:, 1]])
+    q = np.concatenate([hn[:, 1], hn[:, 2]])
+    u = np.concatenate([hn[:, 2], hn[:, 3]])
+    v = np.concatenate([hn[:, 3], hn[:, 0]])
+
+    def fn(x):
+        r, nodes, g = sqlen_diff(x, p, q, u, v)
+        return r, jac(len(r), nv, nodes, g)
+
+    return Family("hole_opposite_sides", "eq", fn, 2)
+
+
+def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, target: np.ndarray, nv: int,
+               kind: str = "eq") -> Family:
+    """Σ_j θ_{t[i,j]}(k[i,j]) - target[i] (wrapped), ``t``/``k`` of shape ``(m, q)``."""
+    m, q = t.shape
+
+    def fn(x):
+        th, nodes, g = corner_angle(x, tiles, t.ravel(), k.ravel())
+        r = wrap(th.reshape(m, q).sum(1) - target)
+        return r, jac(m, nv, nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
+
+    return Family(name, kind, fn, 0)
+
+
+def rings(st: Stencils, state: int, nv: int) -> Family:
+    rg = st.folds[state].rings
+    return angle_sums(f"rings_{state}", st.tiles, rg[..., 0], rg[..., 1], np.full(len(rg), TWO_PI), nv)
+
+
+def hinge_sums(st: Stencils, nv: int) -> Family:
+    return angle_sums("hinge_sums", st.tiles, st.hinge_tiles, st.hinge_corner, np.full(st.n_hinges, np.pi), nv)
+
+
+def non_overlap(st: Stencils, nv: int) -> Family:
+    """Both gap angles at every hinge in [0, π]: g1, g2 >= 0 (spec §2.7)."""
+    tl = st.tiles
+    A, B = st.hinge_tiles.T
+    cA, cB = st.hinge_corner.T
+    h = st.hinge_node
+    prevA, nextA = tl[A, (cA + 3) % 4], tl[A, (cA + 1) % 4]
+    prevB, nextB = tl[B, (cB + 3) % 4], tl[B, (cB + 1) % 4]
+    hh = np.concatenate([h, h])
+    aa = np.concatenate([prevA, prevB])
+    bb = np.concatenate([nextB, nextA])
+
+    def fn(x):
+        g, nodes, gr = cross_term(x, hh, aa, bb)
+        return g, jac(len(g), nv, nodes, gr)
+
+    return Family("non_overlap", "ineq", fn, 2)
+
+
+def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:
+    """cross(next - v, prev - v) - margin >= 0 at every tile corner."""
+    tl = st.tiles
+    v = tl.ravel()
+    a = np.roll(tl, -1, 1).ravel()
+    b = np.roll(tl, 1, 1).ravel()
+
+    def fn(x):
+        g, nodes, gr = cross_term(x, v, a, b)
+        return g - margin, jac(len(g), nv, nodes, gr)
+
+    return Family("convexity", "ineq", fn, 2)
+
+
+def shape_match(nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, name: str = "shape") -> Family:
+    """Signed distance of boundary tips to their arc of the target (normalised units)."""
+
+    def fn(x):
+        _, _, d, g = target.project(x[nodes], sides)
+        return d, jac(len(d), nv, nodes[:, None], g[:, None, :])
+
+    return Family(name, "fit", fn, 1, meta={"nodes": nodes, "sides": sides, "target": target})
+
+
+def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
+    """Reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x).
+
+    Nodes are paired with their mirror images in the standard deployed state
+    ``base`` (centred). Mirror pairs give two linear rows; on-axis nodes one.
+    """
+    S = np.array([1.0, -1.0]) if axis == "x" else np.array([-1.0, 1.0])
+    mirrored = base * S
+    from scipy.spatial import cKDTree
+
+    d, partner = cKDTree(base).query(mirrored)
+    scale = np.linalg.norm(base[st.tiles[0, 1]] - base[st.tiles[0, 0]])
+    if (d > 1e-6 * scale).any():
+        raise InputError(f"symmetry {axis}: the lattice has no mirror image of itself about the {axis} axis")
+    # the mirror must map tiles to tiles and keep the fold states (primal stays primal)
+    for s in (1, 2):
+        fold = st.folds[s]
+        ends = {(int(h), int(e)) for h, e in zip(st.hinge_node.repeat(2), fold.fold_ends.ravel())}
+        mapped = {(int(partner[h]), int(partner[e])) for h, e in ends}
+        if ends != mapped:
+            which = "columns" if axis == "y" else "rows"
+            raise InputError(
+                f"symmetry {axis} swaps the primal and dual closed states for an odd number of {which}; "
+                f"use an even number of {which}")
+    idx = np.arange(len(base))
+    pair = idx < partner
+    on_axis = idx == partner
+    i, j = idx[pair], partner[pair]
+    comp = 1 if axis == "x" else 0  # coordinate that must vanish on the axis
+    rows_p = len(i)
+    m = 2 * rows_p + int(on_axis.sum())
+    r_i = np.concatenate([np.arange(rows_p) * 2, np.arange(rows_p) * 2 + 1,
+                          np.arange(rows_p) * 2, np.arange(rows_p) * 2 + 1, 2 * rows_p + np.arange(on_axis.sum())])
+    c_i = np.concatenate([2 * j, 2 * j + 1, 2 * i, 2 * i + 1, 2 * idx[on_axis] + comp])
+    vals = np.concatenate([np.ones(rows_p), np.ones(rows_p), -S[0] * np.ones(rows_p), -S[1] * np.ones(rows_p),
+                           np.ones(on_axis.sum())])
+    J = sparse.csr_matrix((vals, (r_i, c_i)), shape=(m, 2 * nv))
+
+    def fn(x):
+        return J @ x.reshape(-1), J
+
+    return Family(f"symmetry_{axis}", "eq", fn, 1)
+
+
+def _boundary_vertex_groups(st: Stencils, state: int):
+    """Boundary pattern vertices of ``state``: grid coordinate -> list of (tile, corner)."""
+    phi = st.phi[state].reshape(-1, 2)
+    M, N = st.rows, st.cols
+    on = (phi[:, 0] == 0) | (phi[:, 0] == N) | (phi[:, 1] == 0) | (phi[:, 1] == M)
+    key = phi[:, 1] * (N + 1) + phi[:, 0]
+    sel = np.flatnonzero(on)
+    order = np.argsort(key[sel], kind="stable")
+    sel = sel[order]
+    keys, start = np.unique(key[sel], return_index=True)
+    groups = np.split(sel, start[1:])
+    return keys, groups
+
+
+def rectangle_outline(st: Stencils, state: int, nv: int) -> Family:
+    """Closed state ``state`` has a rectangular outline: boundary vertex angle sums π (π/2 at corners)."""
+    keys, groups = _boundary_vertex_groups(st, state)
+    M, N = st.rows, st.cols
+    q = max(len(g) for g in groups)
+    t = np.zeros((len(groups), q), dtype=np.int64)
+    k = np.zeros((len(groups), q), dtype=np.int64)
+    mask = np.zeros((len(groups), q), dtype=bool)
+    for i, g in enumerate(groups):
+        t[i, : len(g)] = g // 4
+        k[i, : len(g)] = g % 4
+        mask[i, : len(g)] = True
+    gx, gy = keys % (N + 1), keys // (N + 1)
+    corner = ((gx == 0) | (gx == N)) & ((gy == 0) | (gy == M))
+    target = np.where(corner, np.pi / 2, np.pi)
+    tiles = st.tiles
+    m = len(groups)
+
+    def fn(x):
+        th, nodes, g = corner_angle(x, tiles, t.ravel(), k.ravel())
+        th = th.reshape(m, q) * mask
+        g = g.reshape(m, q, 3, 2) * mask[:, :, None, None]
+        r = wrap(th.sum(1) - target)
+        return r, jac(m, nv, nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
+
+    return Family(f"rectangle_{state}", "eq", fn, 0)
+
+
+def _side_edges(st: Stencils, state: int, which: str):
+    phi = st.phi[state]
+    M, N = st.rows, st.cols
+    nxt = np.roll(phi, -1, axis=1)
+    if which == "bottom":
+        sel = (phi[..., 1] == 0) & (nxt[..., 1] == 0)
+    else:  # right
+        sel = (phi[..., 0] == N) & (nxt[..., 0] == N)
+    t, k = np.nonzero(sel)
+    return st.tiles[t, k], st.tiles[t, (k + 1) % 4]
+
+
+def outline_ratio(st: Stencils, state: int, ratio: float, nv: int) -> Family:
+    """Σ bottom edge lengths - ρ Σ right edge lengths = 0 in closed state ``state``."""
+    bu, bv = _side_edges(st, state, "bottom")
+    ru, rv = _side_edges(st, state, "right")
+
+    def fn(x):
+        Eb = x[bv] - x[bu]
+        Er = x[rv] - x[ru]
+        lb = np.linalg.norm(Eb, axis=1)
+        lr = np.linalg.norm(Er, axis=1)
+        r = np.array([lb.sum() - ratio * lr.sum()])
+        nodes = np.concatenate([bu, bv, ru, rv])[None, :]
+        ub, ur = Eb / lb[:, None], Er / lr[:, None]
+        g = np.concatenate([-ub, ub, ratio * ur, -ratio * ur])[None]
+        return r, jac(1, nv, nodes, g)
+
+    return Family(f"ratio_{state}", "eq", fn, 1)
+
+
+@dataclass(eq=False)
+class ClosedGrid:
+    """Pattern vertices of one closed state appended to the node array.
+
+    In a closed state every tile corner sits on a vertex of the (M+1)×(N+1)
+    pattern grid; tile T's corner k at ``phi[T, k]``. Requiring each tile to be
+    congruent there (4 edges + 1 diagonal) makes the grid a realisation of the
+    closed state, so its outline can be matched to a target curve.
+    """
+
+    state: int
+    offset: int  # index of grid vertex 0 in the node array
+    vertex: np.ndarray  # (T, 4) node index of each tile corner's grid vertex
+    boundary: np.ndarray  # node indices of the boundary grid vertices
+    boundary_side: np.ndarray
+    n_vertices: int
+
+    @classmethod
+    def build(cls, st: Stencils, state: int, offset: int) -> "ClosedGrid":
+        M, N = st.rows, st.cols
+        phi = st.phi[state]
+        vid = phi[..., 1] * (N + 1) + phi[..., 0]
+        gx, gy = np.meshgrid(np.arange(N + 1), np.arange(M + 1))
+        gx, gy = gx.ravel(), gy.ravel()
+        # sides: bottom row (incl. BL corner) B, right column (incl. BR) R, top (incl. TR) T, left (incl. TL) L
+        side = np.full(len(gx), -1)
+        side[(gx == 0) & (gy > 0)] = 3
+        side[(gy == M) & (gx > 0)] = 2
+        side[(gx == N) & (gy < M)] = 1
+        side[(gy == 0) & (gx < N)] = 0
+        b = np.flatnonzero(side >= 0)
+        return cls(state=state, offset=offset, vertex=offset + vid, boundary=offset + b,
+                   boundary_side=side[b], n_vertices=(M + 1) * (N + 1))
+
+    def congruence(self, st: Stencils, nv: int) -> Family:
+        tl = st.tiles
+        vx = self.vertex
+        kk = np.array([0, 1, 2, 3, 0])
+        ll = np.array([1, 2, 3, 0, 2])
+        p = vx[:, kk].ravel()
+        q = vx[:, ll].ravel()
+        u = tl[:, kk].ravel()
+        v = tl[:, ll].ravel()
+
+        def fn(x):
+            r, nodes, g = sqlen_diff(x, p, q, u, v)
+            return r, jac(len(r), nv, nodes, g)
+
+        return Family(f"closed_grid_{self.state}", "eq", fn, 2)
+
+    def orientation(self, st: Stencils, nv: int) -> Family:
+        """Closed-state tiles keep their orientation (no reflected copies): cross >= 0."""
+        vx = self.vertex
+        v = vx.ravel()
+        a = np.roll(vx, -1, 1).ravel()
+        b = np.roll(vx, 1, 1).ravel()
+
+        def fn(x):
+            g, nodes, gr = cross_term(x, v, a, b)
+            return g, jac(len(g), nv, nodes, gr)
+
+        return Family(f"closed_convexity_{self.state}", "ineq", fn, 2)
+
+
+def regularizer_pairs(st: Stencils) -> np.ndarray:
+    """Tile pairs (r,c)-(r,c+2) and (r,c)-(r+2,c): same face in adjacent unit cells (spec §3)."""
+    M, N = st.rows, st.cols
+    idx = np.arange(M * N).reshape(M, N)
+    h = np.stack([idx[:, :-2].ravel(), idx[:, 2:].ravel()], -1)
+    v = np.stack([idx[:-2, :].ravel(), idx[2:, :].ravel()], -1)
+    return np.concatenate([h, v]).astype(np.int64)

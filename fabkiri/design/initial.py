@@ -1,0 +1,107 @@
+"""Initial guesses (algorithm spec §4), in normalised units (standard tile edge 1).
+
+* ``standard``: the standard deployed pattern (ψ = π/4) scaled so its bounding
+  box spans the target's larger dimension; it satisfies every equality exactly.
+* ``rescaled``: the standard pattern scaled so the polygon of its boundary tips
+  has the target's area (the spec's λ·X_std with λ chosen from the target).
+* ``conformal``: a discrete harmonic map of the standard pattern onto the
+  target. Boundary tips go to their arcs by relative position along their side;
+  every other node is the average of its tile-graph neighbours (a Tutte-style
+  embedding, solved with scipy.sparse). It violates the constraints and is only
+  a starting point, but it puts the tiles where the target needs them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse.linalg import spsolve
+
+from ..errors import InputError
+from .constraints import Stencils
+from .targets import Target
+
+INITS = ("standard", "rescaled", "conformal")
+
+
+def tip_polygon(x: np.ndarray, st: Stencils) -> np.ndarray:
+    """Boundary tips in CCW order around the pattern."""
+    tips = st.tip_nodes
+    side = st.tip_side
+    p = x[tips]
+    key = np.select([side == 0, side == 1, side == 2, side == 3], [p[:, 0], p[:, 1], -p[:, 0], -p[:, 1]])
+    order = np.lexsort((key, side))
+    return p[order]
+
+
+def polygon_area(p: np.ndarray) -> float:
+    return 0.5 * float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1]))
+
+
+def side_fractions(x: np.ndarray, st: Stencils) -> np.ndarray:
+    """Relative position in (0, 1) of every boundary tip along its side, CCW."""
+    p = x[st.tip_nodes]
+    lo, hi = x.min(0), x.max(0)
+    fx = (p[:, 0] - lo[0]) / (hi[0] - lo[0])
+    fy = (p[:, 1] - lo[1]) / (hi[1] - lo[1])
+    s = st.tip_side
+    return np.select([s == 0, s == 1, s == 2, s == 3], [fx, fy, 1 - fx, 1 - fy])
+
+
+def scale_for(base: np.ndarray, st: Stencils, target: Target, how: str) -> float:
+    """Tile size (mm) of the initial guess for ``target`` (mm)."""
+    if how == "standard":
+        ext = (base.max(0) - base.min(0)).max()
+        return target.size / ext
+    return float(np.sqrt(abs(target.area) / abs(polygon_area(tip_polygon(base, st)))))
+
+
+def harmonic_map(base: np.ndarray, st: Stencils, target: Target) -> np.ndarray:
+    """Tutte-style harmonic map of the pattern onto ``target`` (same units as target)."""
+    n = len(base)
+    tl = st.tiles
+    a = tl.ravel()
+    b = np.roll(tl, -1, 1).ravel()
+    c = np.roll(tl, 2, 1).ravel()  # diagonals keep tiles from collapsing to lines
+    i = np.concatenate([a, b, a, c])
+    j = np.concatenate([b, a, c, a])
+    w = np.concatenate([np.ones(2 * len(a)), 0.5 * np.ones(2 * len(a))])
+    W = sparse.csr_matrix((w, (i, j)), shape=(n, n))
+    W.sum_duplicates()
+    L = sparse.diags(np.asarray(W.sum(1)).ravel()) - W
+    tips = st.tip_nodes
+    f = side_fractions(base, st)
+    u = np.empty(len(tips))
+    for s in range(4):
+        sel = st.tip_side == s
+        lo, hi = target.arc_range(s)
+        u[sel] = lo + f[sel] * (hi - lo)
+    fixed = target.point(u)
+    free = np.setdiff1d(np.arange(n), tips)
+    L = L.tocsr()
+    Lff = L[free][:, free].tocsc()
+    Lfb = L[free][:, tips]
+    out = np.empty((n, 2))
+    out[tips] = fixed
+    rhs = -(Lfb @ fixed)
+    out[free] = np.column_stack([spsolve(Lff, rhs[:, 0]), spsolve(Lff, rhs[:, 1])])
+    return out
+
+
+def initial_guess(base: np.ndarray, st: Stencils, target: Target | None, how: str) -> tuple[np.ndarray, float]:
+    """Initial node positions (normalised) and the tile size L0 (mm) of the normalisation.
+
+    ``base`` is the standard deployed pattern with unit tiles centred on the
+    origin. Without a deployed target the standard pattern is returned as is.
+    """
+    if how not in INITS:
+        raise InputError(f"--init must be one of {', '.join(INITS)}, not {how!r}")
+    if target is None:
+        return base.copy(), 1.0
+    lo, hi = target.bbox
+    centre = 0.5 * (lo + hi)
+    if how in ("standard", "rescaled"):
+        L0 = scale_for(base, st, target, how)
+        return base + centre / L0, L0
+    L0 = scale_for(base, st, target, "rescaled")
+    return harmonic_map(base, st, target.transformed(1.0 / L0)), L0

@@ -1,0 +1,366 @@
+"""The inverse-design solver: sparse Levenberg-Marquardt with penalty continuation
+and a final Gauss-Newton projection onto the equality manifold.
+
+Why this design (see ``docs/design-solver.md``): the reconfigurable constraint
+set has dependent and redundant rows at every feasible point (rank deficit of
+about one row per hole, spec §2.3), which breaks LICQ-based NLP solvers
+(IPOPT refuses it, SLSQP fails). Least-squares methods do not need independent
+rows. The solver therefore
+
+1. minimises ``ρ|c(x)|² + |s(x)|² + w E_reg(x) + ρ|min(0, g(x) - m)|²`` by
+   Levenberg-Marquardt on the stacked residuals, for ρ = 1e2, 1e4, 1e6 (warm
+   started), where ``c`` are the equality families, ``s`` the signed distances
+   of the boundary tips to the target, ``E_reg`` the smoothness regulariser and
+   ``g >= 0`` the inequalities with a small margin ``m``; a step is accepted
+   only if it creates no new inequality violation;
+2. projects onto ``c = 0`` (and ``s = 0`` when the least-squares fit came out
+   exact, "hard" shape matching) with damped Gauss-Newton steps
+   ``(JᵀJ + μI) dx = -Jᵀc``, which converge quadratically whatever the rank of J.
+
+Normal equations are factorised with SuperLU (scipy.sparse) using a symmetric
+minimum-degree ordering. Units are normalised: the initial tile edge is 1.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse.linalg import splu
+
+from ..errors import InputError, SolveError
+from ..pattern.lattice import standard_pattern
+from ..pattern.model import Pattern
+from . import constraints as C
+from .initial import initial_guess
+from .objective import regularizer
+from .targets import Target
+
+CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay > ~1° from 0 and π
+GAP_MARGIN = 0.005  # gap angles at hinges: the penalty acts before the hard limit g >= 0 stops a step
+PENALTIES = (1e2, 1e4, 1e6)
+STALL = 1e-6  # a penalty stage ends after 3 accepted steps that each lower the merit by less than this
+
+
+@dataclass
+class DesignRequest:
+    """What to design. Targets are in mm."""
+
+    rows: int
+    cols: int
+    target: Target | None = None
+    rigid: bool = False
+    symmetry: str | None = None  # "x": y -> -y, "y": x -> -x
+    holes: str = "rhombus"  # or "parallelogram"
+    contracted: dict = field(default_factory=dict)  # state -> Target | ("rect", ratio or None)
+    init: str = "standard"
+    tol: float = 1e-10
+    reg_weight: float = 1e-3
+    max_iter: int = 300
+    name: str = ""
+
+    def validate(self) -> None:
+        if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
+            raise InputError(f"inverse design needs at least 2x2 tiles, got {self.rows}x{self.cols}")
+        if self.holes not in ("rhombus", "parallelogram"):
+            raise InputError(f"--holes must be rhombus or parallelogram, not {self.holes!r}")
+        if self.symmetry not in (None, "x", "y"):
+            raise InputError(f"--symmetry must be x or y, not {self.symmetry!r}")
+        if not (np.isfinite(self.tol) and 0 < self.tol < 1e-2):
+            raise InputError(f"--tol must lie in (0, 1e-2), got {self.tol}")
+        for s, spec in self.contracted.items():
+            if s not in (1, 2):
+                raise InputError(f"closed states are 1 and 2, not {s}")
+            if isinstance(spec, Target) and self.holes == "parallelogram":
+                raise InputError("a closed-state target curve needs rhombus holes (parallelogram holes leave "
+                                 "T-junctions, so the closed state is not a grid)")
+        if self.target is None and not any(isinstance(v, Target) for v in self.contracted.values()):
+            raise InputError("nothing to fit: give --target or a --contracted-target curve")
+        if self.symmetry:
+            for tgt in [self.target, *[v for v in self.contracted.values() if isinstance(v, Target)]]:
+                if tgt is not None and tgt.mirror_error(self.symmetry) > 1e-3:
+                    raise InputError(f"target {tgt.name!r} is not symmetric about the {self.symmetry} axis, "
+                                     f"so --symmetry {self.symmetry} contradicts it")
+
+
+@dataclass
+class DesignResult:
+    pattern: Pattern  # deployed design in mm (no closed states: the caller contracts)
+    report: dict
+    converged: bool
+    closed_grids: dict  # state -> (V, 2) closed-state pattern vertices in mm
+    closed_targets: dict  # state -> Target (mm) the closed grid was fitted to, scaled to the tiles' area
+
+
+class _Problem:
+    """Families over one node array (deployed nodes, then closed grids)."""
+
+    def __init__(self, req: DesignRequest):
+        self.req = req
+        std = standard_pattern(req.rows, req.cols, tile_size=1.0)
+        self.std = std
+        st = C.Stencils.from_pattern(std)
+        self.st = st
+        base = std.nodes.copy()
+        n = len(base)
+        X0, L0 = initial_guess(base, st, req.target, req.init)
+        curves = {s: v for s, v in req.contracted.items() if isinstance(v, Target)}
+        if req.target is None:
+            first = curves[min(curves)]
+            L0 = float(np.sqrt(abs(first.area) / (req.rows * req.cols)))
+        self.L0 = L0
+        # a closed state has the area of its tiles: compare outlines by shape, at MN tiles of size L0
+        curves = {s: c.transformed(float(np.sqrt(req.rows * req.cols * L0 * L0 / abs(c.area))))
+                  for s, c in curves.items()}
+        self.curves_mm = curves
+        self.grids: dict[int, C.ClosedGrid] = {}
+        blocks = [X0]
+        nv = n
+        for s in sorted(curves):
+            g = C.ClosedGrid.build(st, s, nv)
+            self.grids[s] = g
+            M, N = req.rows, req.cols
+            gx, gy = np.meshgrid(np.arange(N + 1), np.arange(M + 1))
+            grid = np.stack([gx.ravel() - N / 2, gy.ravel() - M / 2], -1).astype(float)
+            lo, hi = curves[s].bbox
+            blocks.append(grid + 0.5 * (lo + hi) / L0)
+            nv += g.n_vertices
+        self.nv = nv
+        self.n = n
+        self.X0 = np.vstack(blocks)
+        fam: list[C.Family] = []
+        if req.holes == "rhombus":
+            fam += [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv)]
+        else:
+            fam += [C.hole_opposite_sides(st, nv), C.notch_pairs(st, 1, nv), C.notch_pairs(st, 2, nv)]
+        if req.rigid or req.holes == "parallelogram":
+            fam.append(C.hinge_sums(st, nv))
+        else:
+            fam += [C.rings(st, 1, nv), C.rings(st, 2, nv)]
+        if req.symmetry:
+            fam.append(C.symmetry(st, base, req.symmetry, nv))
+        for s, spec in sorted(req.contracted.items()):
+            if isinstance(spec, Target):
+                fam.append(self.grids[s].congruence(st, nv))
+            else:
+                fam.append(C.rectangle_outline(st, s, nv))
+                if spec[1] is not None:
+                    fam.append(C.outline_ratio(st, s, float(spec[1]), nv))
+        if req.target is not None:
+            fam.append(C.shape_match(st.tip_nodes, st.tip_side, req.target.transformed(1.0 / L0), nv, "shape"))
+        for s, g in self.grids.items():
+            fam.append(C.shape_match(g.boundary, g.boundary_side, curves[s].transformed(1.0 / L0), nv,
+                                     f"closed_shape_{s}"))
+        fam.append(regularizer(st, nv))
+        fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
+        for g in self.grids.values():
+            fam.append(g.orientation(st, nv))
+        self.families = fam
+        self.margin = {f.name: (CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN) for f in fam if f.kind == "ineq"}
+
+    def of(self, kind: str) -> list[C.Family]:
+        return [f for f in self.families if f.kind == kind]
+
+
+def _ineq_values(prob: _Problem, X: np.ndarray) -> np.ndarray:
+    return np.concatenate([f(X)[0] for f in prob.of("ineq")])
+
+
+def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | None = None):
+    """Residual vector and Jacobian of the phase-1 merit (or of ``hard`` rows only)."""
+    rs, Js = [], []
+    if hard is not None:
+        for f in hard:
+            r, J = f(X)
+            if f.kind == "ineq":  # projection keeps inequalities with half their margin
+                act = r < 0.5 * prob.margin[f.name]
+                r = np.where(act, r - 0.5 * prob.margin[f.name], 0.0)
+                J = sparse.diags(act.astype(float)) @ J
+            rs.append(r)
+            Js.append(J)
+        return np.concatenate(rs), sparse.vstack(Js).tocsr()
+    sq = np.sqrt(rho)
+    w = np.sqrt(prob.req.reg_weight)
+    for f in prob.families:
+        r, J = f(X)
+        if f.kind == "eq":
+            rs.append(sq * r)
+            Js.append(sq * J)
+        elif f.kind == "fit":
+            rs.append(r)
+            Js.append(J)
+        elif f.kind == "reg":
+            rs.append(w * r)
+            Js.append(w * J)
+        else:
+            v = r - prob.margin[f.name]
+            act = v < 0
+            rs.append(sq * np.where(act, v, 0.0))
+            Js.append(sparse.diags(sq * act.astype(float)) @ J)
+    return np.concatenate(rs), sparse.vstack(Js).tocsr()
+
+
+def _solve_normal(J: sparse.csr_matrix, r: np.ndarray, mu: float) -> np.ndarray:
+    A = (J.T @ J).tocsc()
+    A = A + mu * sparse.identity(A.shape[0], format="csc")
+    lu = splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+    return -lu.solve(J.T @ r)
+
+
+class _Log:
+    def __init__(self, progress):
+        self.progress = progress
+        self.t0 = time.perf_counter()
+
+    def __call__(self, msg: str) -> None:
+        if self.progress:
+            print(f"[design {time.perf_counter() - self.t0:7.2f}s] {msg}", file=sys.stderr, flush=True)
+
+
+def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None, tol_inf=0.0):
+    """Levenberg-Marquardt on the merit (or on the hard rows); returns X, iterations."""
+    shape = X.shape
+    x = X.reshape(-1).copy()
+    r, J = _stacked(prob, x.reshape(shape), rho, hard)
+    cost = 0.5 * float(r @ r)
+    gviol = max(0.0, -_ineq_values(prob, x.reshape(shape)).min(initial=0.0))
+    diag_mean = float((J.multiply(J)).sum() / max(len(x), 1))
+    mu = (1e-3 if hard is None else 1e-12) * max(diag_mean, 1e-30)
+    nu = 2.0
+    it = 0
+    stall = 0
+    for it in range(1, max_iter + 1):
+        if hard is not None and np.abs(r).max(initial=0.0) <= tol_inf:
+            return x.reshape(shape), it - 1
+        dx = _solve_normal(J, r, mu)
+        xn = x + dx
+        rn, Jn = _stacked(prob, xn.reshape(shape), rho, hard)
+        cn = 0.5 * float(rn @ rn)
+        gv = _ineq_values(prob, xn.reshape(shape))
+        gviol_n = max(0.0, -gv.min(initial=0.0))
+        Jdx = J @ dx
+        pred = -(float(r @ Jdx) + 0.5 * float(Jdx @ Jdx))
+        ratio = (cost - cn) / pred if pred > 0 else -1.0
+        ok = np.isfinite(cn) and gviol_n <= gviol + 1e-15
+        if hard is not None:
+            ok = ok and np.abs(rn).max() < np.abs(r).max()
+        else:
+            ok = ok and ratio > 1e-4
+        if ok:
+            small = (cost - cn) <= STALL * max(cost, 1e-300) or np.abs(dx).max() <= 1e-13 * (1 + np.abs(x).max())
+            x, r, J, cost, gviol = xn, rn, Jn, cn, gviol_n
+            if hard is None:
+                mu *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
+            else:
+                mu = max(mu / 10, 1e-14 * diag_mean)
+            nu = 2.0
+            stall = stall + 1 if small else 0
+            if it % 10 == 0:
+                log(f"  rho={rho:g} it {it}: cost {cost:.3e} mu {mu:.1e}")
+            if stall >= 3:
+                break
+        else:
+            mu *= nu
+            nu *= 2
+            if mu > 1e20 * max(diag_mean, 1e-30):
+                break
+    return x.reshape(shape), it
+
+
+def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
+    out = {}
+    for f in prob.families:
+        if f.kind in ("eq", "fit"):
+            r, _ = f(X)
+            out[f.name] = float(np.abs(r).max(initial=0.0)) / L ** f.dim
+    return out
+
+
+def design(req: DesignRequest, progress: bool = False) -> DesignResult:
+    """Solve the inverse-design problem ``req``; never raises on non-convergence."""
+    req.validate()
+    log = _Log(progress)
+    t0 = time.perf_counter()
+    prob = _Problem(req)
+    X = prob.X0.copy()
+    log(f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
+        + ", ".join(f.name for f in prob.families))
+    iters = {}
+    for rho in PENALTIES:
+        X, k = _lm(prob, X, rho, req.max_iter, log)
+        iters[f"lm_rho_{rho:g}"] = k
+        log(f"rho={rho:g}: {k} iterations, max eq {max(v for kk, v in family_residuals(prob, X, 1.0).items() if kk not in ('shape',) and not kk.startswith('closed_shape')):.2e}")
+    eqs = prob.of("eq")
+    fits = prob.of("fit")
+    L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))
+    tol_abs = lambda fams: min(req.tol * L ** f.dim for f in fams)  # noqa: E731
+    fit_rel = max((float(np.abs(f(X)[0]).max()) / L for f in fits), default=0.0)
+    mode = "least-squares"
+    Xp = X
+    if fits and fit_rel < 1e-2:
+        # the least-squares fit is (nearly) exact: try to make it exact
+        Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs + fits))
+        res = family_residuals(prob, Xh, L)
+        if all(v <= req.tol for v in res.values()):
+            Xp, mode = Xh, "hard"
+            iters["projection"] = kh
+    if mode != "hard":
+        Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
+        iters["projection"] = kp
+    X = Xp
+    L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))
+    res = family_residuals(prob, X, L)
+    eq_max = max((res[f.name] for f in eqs), default=0.0)
+    gvals = {f.name: f(X)[0] for f in prob.of("ineq")}
+    ineq_min = min((float(v.min()) for v in gvals.values()), default=0.0)
+    active = {k: int((v < prob.margin[k] + 1e-6 * L * L).sum()) for k, v in gvals.items()}
+    converged = eq_max <= req.tol and ineq_min >= 0.0
+    elapsed = time.perf_counter() - t0
+    L0 = prob.L0
+    Xmm = X * L0
+    fit = {}
+    for f in fits:
+        r, _ = f(X)
+        fit[f.name] = {"max_mm": float(np.abs(r).max()) * L0, "rms_mm": float(np.sqrt(np.mean(r * r))) * L0,
+                       "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,
+                       "points": int(len(r))}
+    report = {
+        "status": "converged" if converged else "unconverged",
+        "tolerance": req.tol,
+        "max_equality_residual": eq_max,
+        "residuals": res,
+        "residual_units": "lengths relative to the mean tile edge, angles in radians",
+        "iterations": iters,
+        "iterations_total": int(sum(iters.values())),
+        "time_s": elapsed,
+        "unknowns": 2 * prob.nv,
+        "equations": int(sum(len(f(X)[0]) for f in eqs)),
+        "shape_matching": mode if fits else "none",
+        "fit": fit,
+        "min_inequality": ineq_min / (L * L),
+        "active_inequalities": active,
+        "regularizer": float(np.sum(regularizer(prob.st, prob.nv)(X)[0] ** 2)),
+        "solver": "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU",
+    }
+    log(f"{report['status']}: max equality residual {eq_max:.2e}, fit {mode}, "
+        f"{report['iterations_total']} iterations, {elapsed:.2f}s")
+    lat = {"kind": "quad", "rows": req.rows, "cols": req.cols, "angle_deg": 45.0,
+           "tile_size": float(L * L0)}
+    options = {"rigid": req.rigid, "symmetry": req.symmetry, "holes": req.holes, "init": req.init,
+               "tol": req.tol, "reg_weight": req.reg_weight,
+               "contracted": {str(s): (v.name if isinstance(v, Target) else
+                                       ({"rectangle": True, "ratio": v[1]})) for s, v in req.contracted.items()}}
+    design_meta = {"options": options, "report": report}
+    if req.target is not None:
+        design_meta["target"] = req.target.to_dict()
+    if req.contracted:
+        design_meta["contracted_targets"] = {str(s): v.to_dict() for s, v in prob.curves_mm.items()}
+    nodes = Xmm[: prob.n]
+    pattern = Pattern(nodes=nodes, tiles=prob.std.tiles, name=req.name or "design", lattice=lat,
+                      design=design_meta)
+    grids = {s: Xmm[g.offset: g.offset + g.n_vertices] for s, g in prob.grids.items()}
+    return DesignResult(pattern=pattern, report=report, converged=converged, closed_grids=grids,
+                        closed_targets=prob.curves_mm)

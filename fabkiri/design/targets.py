@@ -1,0 +1,539 @@
+"""Target shapes: closed curves in mm with projection, signed distance and the
+four-arc split used for boundary matching (algorithm spec §2.6).
+
+A :class:`Target` is a closed counter-clockwise curve, either a periodic cubic
+spline (smooth shapes, user splines) or a polyline (polygons, stars, user
+polylines). The parameter ``u`` runs over ``[0, 1)`` proportionally to chord
+length. Four split parameters cut the curve into the arcs B, R, T, L (in CCW
+order, from the BL corner to the BR corner, and so on); each boundary tip of a
+pattern is matched to the arc of its side (spec §2.6 table).
+
+Signed distance is positive outside, negative inside; its gradient with the
+foot point held fixed is the unit outward direction (envelope theorem).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.spatial import cKDTree
+
+from ..errors import InputError
+
+SIDES = ("B", "R", "T", "L")  # CCW order of the arcs; side index 0..3
+TEMPLATE_DIR = Path(__file__).resolve().parents[2] / "templates" / "targets"
+DEFAULT_SIZE = 100.0  # mm, larger bounding-box dimension of a named target
+
+
+@dataclass(eq=False)
+class Target:
+    """A closed CCW target curve in mm split into four arcs.
+
+    ``points`` are the spline knots or polyline vertices (not repeated at the
+    end); ``corners`` the parameters of the BL, BR, TR, TL split points, CCW.
+    """
+
+    name: str
+    kind: str  # "spline" | "polyline"
+    points: np.ndarray
+    corners: np.ndarray = field(default=None)  # type: ignore[assignment]
+    source: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        pts = np.asarray(self.points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 3:
+            raise InputError(f"target {self.name!r}: needs at least 3 points [x, y]")
+        if not np.isfinite(pts).all():
+            raise InputError(f"target {self.name!r}: non-finite coordinate")
+        if np.linalg.norm(pts[0] - pts[-1]) < 1e-12 * max(1.0, np.abs(pts).max()):
+            pts = pts[:-1]
+        seg = np.linalg.norm(np.roll(pts, -1, 0) - pts, axis=1)
+        if (seg <= 1e-12 * seg.max()).any():
+            keep = seg > 1e-12 * seg.max()
+            pts, seg = pts[keep], seg[keep]
+        if len(pts) < 3:
+            raise InputError(f"target {self.name!r}: needs at least 3 distinct points")
+        area = 0.5 * float(np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1]))
+        if abs(area) < 1e-12 * seg.sum() ** 2:
+            raise InputError(f"target {self.name!r}: the curve encloses no area")
+        if area < 0:
+            pts = pts[::-1].copy()
+            seg = np.linalg.norm(np.roll(pts, -1, 0) - pts, axis=1)
+        self.points = pts
+        knots = np.concatenate([[0.0], np.cumsum(seg)]) / seg.sum()
+        self._u = knots  # (K+1,) parameter of each point, closing point at 1
+        if self.kind == "spline":
+            closed = np.vstack([pts, pts[:1]])
+            self._spline = CubicSpline(knots, closed, bc_type="periodic")
+        elif self.kind != "polyline":
+            raise InputError(f"target kind must be 'spline' or 'polyline', not {self.kind!r}")
+        self._dense_u = self._sample_params()
+        dense = self.point(self._dense_u)
+        _check_simple(dense, self.name)
+        self._dense = dense
+        if self.corners is None:
+            self.corners = self._default_corners()
+        c = np.mod(np.asarray(self.corners, dtype=float), 1.0)
+        if c.shape != (4,):
+            raise InputError(f"target {self.name!r}: needs exactly 4 corner parameters")
+        # rotate so the sequence BL, BR, TR, TL is increasing from BL
+        c = np.mod(c - c[0], 1.0) + c[0]
+        if not (np.diff(c) > 0).all():
+            raise InputError(f"target {self.name!r}: corners BL, BR, TR, TL must be in CCW order")
+        self.corners = c
+        self._arc_trees: list[tuple[cKDTree, np.ndarray]] | None = None
+
+    # ----------------------------------------------------------- evaluation
+    def _sample_params(self, per_interval: int = 8) -> np.ndarray:
+        u = self._u
+        f = np.linspace(0.0, 1.0, per_interval, endpoint=False)
+        return (u[:-1, None] + f[None, :] * np.diff(u)[:, None]).ravel()
+
+    def point(self, u: np.ndarray) -> np.ndarray:
+        u = np.mod(np.asarray(u, dtype=float), 1.0)
+        if self.kind == "spline":
+            return self._spline(u)
+        i = np.clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
+        a = self.points[i]
+        b = self.points[(i + 1) % len(self.points)]
+        w = ((u - self._u[i]) / (self._u[i + 1] - self._u[i]))[..., None]
+        return a + w * (b - a)
+
+    def tangent(self, u: np.ndarray) -> np.ndarray:
+        """Unit tangent (CCW direction)."""
+        u = np.mod(np.asarray(u, dtype=float), 1.0)
+        if self.kind == "spline":
+            d = self._spline(u, 1)
+        else:
+            i = np.clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
+            d = self.points[(i + 1) % len(self.points)] - self.points[i]
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def sample(self, n: int = 400) -> np.ndarray:
+        return self.point(np.linspace(0.0, 1.0, n, endpoint=False))
+
+    @property
+    def dense(self) -> np.ndarray:
+        return self._dense
+
+    @property
+    def bbox(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._dense.min(0), self._dense.max(0)
+
+    @property
+    def size(self) -> float:
+        lo, hi = self.bbox
+        return float((hi - lo).max())
+
+    @property
+    def area(self) -> float:
+        d = self._dense
+        return 0.5 * float(np.sum(d[:, 0] * np.roll(d[:, 1], -1) - np.roll(d[:, 0], -1) * d[:, 1]))
+
+    def arc_range(self, side: int) -> tuple[float, float]:
+        """Parameter interval ``[a, b]`` (b may exceed 1) of arc B, R, T or L."""
+        c = self.corners
+        a = c[side]
+        b = c[(side + 1) % 4] + (1.0 if side == 3 else 0.0)
+        return float(a), float(b)
+
+    def corner_points(self) -> np.ndarray:
+        return self.point(self.corners)
+
+    # ------------------------------------------------------------ transform
+    def transformed(self, scale: float = 1.0, shift=(0.0, 0.0), name: str | None = None) -> "Target":
+        """A scaled and shifted copy with the same corners."""
+        return Target(name or self.name, self.kind, self.points * scale + np.asarray(shift, float),
+                      corners=self.corners.copy(), source=dict(self.source))
+
+    def scaled_to(self, size: float) -> "Target":
+        """Scaled about its bounding-box centre to ``size`` (larger dimension) and centred on the origin."""
+        lo, hi = self.bbox
+        s = size / float((hi - lo).max())
+        return Target(self.name, self.kind, (self.points - 0.5 * (lo + hi)) * s,
+                      corners=self.corners.copy(), source=dict(self.source))
+
+    def mirror_error(self, axis: str) -> float:
+        """How far the curve is from symmetric about the x or y axis (relative to its size)."""
+        d = self._dense
+        m = d * (np.array([1.0, -1.0]) if axis == "x" else np.array([-1.0, 1.0]))
+        dist, _ = cKDTree(d).query(m)
+        # dense polyline points are not mirror images of each other; compare with the spacing
+        spacing = np.linalg.norm(np.diff(d, axis=0), axis=1).max()
+        return float(max(0.0, dist.max() - spacing)) / self.size
+
+    # ----------------------------------------------------------- projection
+    def _trees(self):
+        if self._arc_trees is None:
+            trees = []
+            for s in range(4):
+                a, b = self.arc_range(s)
+                uu = np.mod(self._dense_u - a, 1.0) + a
+                sel = uu <= b
+                us = np.concatenate([uu[sel], [a, b]])
+                trees.append((cKDTree(self.point(us)), us))
+            self._arc_trees = trees
+        return self._arc_trees
+
+    def project(self, p: np.ndarray, side: np.ndarray | None = None):
+        """Foot points on the arcs of ``side`` (or the whole curve).
+
+        Returns ``(u, foot, d, n)``: foot parameter, foot point, signed distance
+        (positive outside) and its gradient with respect to ``p``.
+        """
+        p = np.asarray(p, dtype=float).reshape(-1, 2)
+        if side is None:
+            side_arr = np.full(len(p), -1)
+        else:
+            side_arr = np.asarray(side).reshape(-1)
+        u = np.empty(len(p))
+        lo = np.empty(len(p))
+        hi = np.empty(len(p))
+        for s in np.unique(side_arr):
+            sel = side_arr == s
+            if s < 0:
+                tree, us = cKDTree(self._dense), self._dense_u
+                a, b = -np.inf, np.inf
+            else:
+                tree, us = self._trees()[s]
+                a, b = self.arc_range(int(s))
+            _, idx = tree.query(p[sel])
+            u[sel] = us[idx]
+            lo[sel], hi[sel] = a, b
+        if self.kind == "spline":
+            u = self._newton_foot(p, u, lo, hi)
+        else:
+            u = self._polyline_foot(p, u, lo, hi)
+        foot = self.point(u)
+        diff = p - foot
+        dist = np.linalg.norm(diff, axis=1)
+        n = self._normal(u, foot)
+        sgn = np.where((diff * n).sum(1) >= 0, 1.0, -1.0)
+        d = sgn * dist
+        safe = dist > 1e-13 * max(self.size, 1e-300)
+        grad = np.where(safe[:, None], sgn[:, None] * diff / np.where(safe, dist, 1.0)[:, None], n)
+        return u, foot, d, grad
+
+    def signed_distance(self, p: np.ndarray, side: np.ndarray | None = None) -> np.ndarray:
+        return self.project(p, side)[2]
+
+    def _normal(self, u: np.ndarray, foot: np.ndarray) -> np.ndarray:
+        """Outward unit normal; at polyline vertices the mean of both sides."""
+        if self.kind == "spline":
+            t = self.tangent(u)
+        else:
+            um = np.mod(u, 1.0)
+            i = np.searchsorted(self._u, um)
+            at_vertex = np.isclose(self._u[np.clip(i, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13)
+            at_vertex |= np.isclose(self._u[np.clip(i - 1, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13)
+            t = self.tangent(u)
+            t_before = self.tangent(u - 1e-9)
+            mean = t + t_before
+            norm = np.linalg.norm(mean, axis=1, keepdims=True)
+            t = np.where(at_vertex[:, None] & (norm > 1e-12), mean / np.maximum(norm, 1e-300), t)
+        return np.stack([t[:, 1], -t[:, 0]], -1)
+
+    def _newton_foot(self, p, u, lo, hi, iters: int = 8):
+        sp = self._spline
+        for _ in range(iters):
+            um = np.mod(u, 1.0)
+            g, d1, d2 = sp(um), sp(um, 1), sp(um, 2)
+            r = g - p
+            f = (d1 * r).sum(1)
+            fp = (d2 * r).sum(1) + (d1 * d1).sum(1)
+            step = np.where(fp > 0, -f / np.where(fp > 0, fp, 1.0), 0.0)
+            h = np.diff(self._u).min()
+            step = np.clip(step, -2 * h, 2 * h)
+            u = np.clip(u + step, lo, hi)
+        return u
+
+    def _polyline_foot(self, p, u, lo, hi):
+        K = len(self.points)
+        um = np.mod(u, 1.0)
+        i0 = np.clip(np.searchsorted(self._u, um, side="right") - 1, 0, K - 1)
+        best_u, best_d = u.copy(), np.full(len(p), np.inf)
+        base = u - um  # keep the period offset of the arc range
+        for off in (-1, 0, 1):
+            i = (i0 + off) % K
+            a, b = self.points[i], self.points[(i + 1) % K]
+            ab = b - a
+            w = np.clip(((p - a) * ab).sum(1) / (ab * ab).sum(1), 0.0, 1.0)
+            uu = self._u[i] + w * (self._u[i + 1] - self._u[i])
+            # bring into the arc's period and clamp to it
+            for shift in (-1.0, 0.0, 1.0):
+                cand = np.clip(uu + base + shift, lo, hi)
+                dd = np.linalg.norm(self.point(cand) - p, axis=1)
+                better = dd < best_d - 1e-15
+                best_u = np.where(better, cand, best_u)
+                best_d = np.where(better, dd, best_d)
+        return best_u
+
+    def default_corner_split(self) -> np.ndarray:
+        return self._default_corners()
+
+    def _default_corners(self) -> np.ndarray:
+        """Split where rays from the bounding-box centre to its corners meet the curve."""
+        d = self._dense
+        lo, hi = d.min(0), d.max(0)
+        c = 0.5 * (lo + hi)
+        rel = d - c
+        ang = np.arctan2(rel[:, 1], rel[:, 0])
+        out = []
+        for cx, cy in ((lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1])):
+            target = math.atan2(cy - c[1], cx - c[0])
+            diff = np.abs(np.angle(np.exp(1j * (ang - target))))
+            # nearest in angle, farthest from the centre among near-ties (star-shaped or not)
+            cand = np.flatnonzero(diff <= diff.min() + 1e-9)
+            k = cand[np.argmax(np.linalg.norm(rel[cand], axis=1))]
+            out.append(self._dense_u[k])
+        return np.array(out)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "kind": self.kind, "points": self.points.tolist(),
+                "corners": self.corners.tolist(), "source": self.source,
+                "size_mm": self.size, "area_mm2": self.area}
+
+
+def _check_simple(dense: np.ndarray, name: str) -> None:
+    import shapely
+
+    ring = shapely.LinearRing(dense)
+    if not ring.is_simple:
+        raise InputError(f"target {name!r}: the curve intersects itself")
+
+
+# ------------------------------------------------------------------ shapes
+def _param_samples(n: int) -> np.ndarray:
+    return np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+
+
+def circle(n: int = 1024) -> Target:
+    t = _param_samples(n)
+    return Target("circle", "spline", np.stack([np.cos(t), np.sin(t)], -1))
+
+
+def ellipse(aspect: float = 2.0, n: int = 1024) -> Target:
+    _positive(aspect, "ellipse aspect")
+    t = _param_samples(n)
+    return Target(f"ellipse {aspect:g}:1", "spline", np.stack([aspect * np.cos(t), np.sin(t)], -1))
+
+
+def rectangle(aspect: float = 1.0) -> Target:
+    _positive(aspect, "rectangle aspect")
+    a = aspect
+    pts = np.array([[-a, -1], [a, -1], [a, 1], [-a, 1]], float)
+    name = "square" if aspect == 1 else f"rectangle {aspect:g}:1"
+    return Target(name, "polyline", pts, corners=np.array([0.0, a, a + 1, 2 * a + 1]) / (2 * a + 2))
+
+
+def superellipse(p: float = 4.0, aspect: float = 1.0, n: int = 2048) -> Target:
+    _positive(p, "superellipse exponent")
+    t = _param_samples(n)
+    c, s = np.cos(t), np.sin(t)
+    x = np.sign(c) * np.abs(c) ** (2.0 / p)
+    y = np.sign(s) * np.abs(s) ** (2.0 / p)
+    return Target(f"superellipse p={p:g}", "spline", np.stack([aspect * x, y], -1))
+
+
+def polygon(sides: int = 6, rotation_deg: float | None = None) -> Target:
+    if int(sides) != sides or sides < 3:
+        raise InputError(f"a regular polygon needs at least 3 sides, got {sides}")
+    rot = np.radians(rotation_deg) if rotation_deg is not None else -np.pi / 2 + np.pi / sides
+    t = rot + 2 * np.pi * np.arange(sides) / sides
+    return Target(f"{sides}-gon", "polyline", np.stack([np.cos(t), np.sin(t)], -1))
+
+
+def star(points: int = 5, inner: float = 0.5) -> Target:
+    if int(points) != points or points < 3:
+        raise InputError(f"a star needs at least 3 points, got {points}")
+    if not 0 < inner < 1:
+        raise InputError(f"star inner radius ratio must lie in (0, 1), got {inner}")
+    t = np.pi / 2 + np.pi * np.arange(2 * points) / points
+    r = np.where(np.arange(2 * points) % 2 == 0, 1.0, inner)
+    return Target(f"{points}-point star", "polyline", np.stack([r * np.cos(t), r * np.sin(t)], -1))
+
+
+def heart(n: int = 2048) -> Target:
+    """The classic heart curve with its top cusp rounded off so it is a smooth spline."""
+    t = _param_samples(n) + np.pi  # start at the bottom tip
+    x = 16 * np.sin(t) ** 3
+    y = 13 * np.cos(t) - 5 * np.cos(2 * t) - 2 * np.cos(3 * t) - np.cos(4 * t)
+    pts = np.stack([x, y], -1) / 17.0
+    # the top notch is a cusp: a polyline keeps it exact where a spline would loop
+    return Target("heart", "polyline", pts)
+
+
+SHAPES = {
+    "circle": circle,
+    "ellipse": ellipse,
+    "square": lambda **kw: rectangle(1.0),
+    "rectangle": rectangle,
+    "superellipse": superellipse,
+    "polygon": polygon,
+    "star": star,
+    "heart": heart,
+}
+
+
+def _positive(v, what):
+    if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+        raise InputError(f"{what} must be a positive number, got {v!r}")
+
+
+def from_spec(spec: dict, name: str = "target") -> Target:
+    """A target from a JSON description: ``{"shape": "ellipse", "aspect": 2}``,
+    ``{"points": [[x, y], ...], "curve": "spline" | "polyline"}`` or ``{"svg_path": "M ..."}``.
+    Optional ``"corners"``: four split parameters in [0, 1) or four points [x, y]."""
+    if not isinstance(spec, dict):
+        raise InputError(f"{name}: a target description must be a JSON object")
+    args = {k: v for k, v in spec.items() if k not in ("shape", "name", "corners", "description", "size")}
+    if "shape" in spec:
+        shape = spec["shape"]
+        if shape not in SHAPES:
+            raise InputError(f"{name}: unknown shape {shape!r} (known: {', '.join(sorted(SHAPES))})")
+        try:
+            tgt = SHAPES[shape](**args)
+        except TypeError as exc:
+            raise InputError(f"{name}: bad parameters for shape {shape!r} ({exc})") from None
+    elif "points" in spec:
+        tgt = from_points(spec["points"], spec.get("curve", "polyline"), name)
+    elif "svg_path" in spec:
+        tgt = from_svg_path(spec["svg_path"], name, spec.get("curve", "polyline"))
+    else:
+        raise InputError(f"{name}: a target needs 'shape', 'points' or 'svg_path'")
+    tgt.name = spec.get("name", tgt.name if "shape" in spec else name)
+    if "corners" in spec:
+        tgt = _with_corners(tgt, spec["corners"], name)
+    tgt.source = {k: v for k, v in spec.items() if k != "points"}
+    return tgt
+
+
+def _with_corners(tgt: Target, corners, name: str) -> Target:
+    c = np.asarray(corners, dtype=float)
+    if c.shape == (4, 2):
+        u, _, _, _ = tgt.project(c)
+        c = u
+    elif c.shape != (4,):
+        raise InputError(f"{name}: 'corners' must be 4 parameters or 4 points [x, y] (BL, BR, TR, TL)")
+    return Target(tgt.name, tgt.kind, tgt.points, corners=c, source=tgt.source)
+
+
+def from_points(points, curve: str = "polyline", name: str = "points") -> Target:
+    try:
+        pts = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: points must be a list of [x, y] numbers") from None
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise InputError(f"{name}: points must be pairs [x, y], got shape {pts.shape}")
+    if curve not in ("polyline", "spline"):
+        raise InputError(f"{name}: curve must be 'polyline' or 'spline', not {curve!r}")
+    return Target(name, curve, pts)
+
+
+def from_svg_path(d: str, name: str = "svg", curve: str = "polyline", samples: int = 1024) -> Target:
+    """A target from an SVG path ``d`` string (first closed subpath), sampled densely."""
+    try:
+        from svgpathtools import parse_path
+    except ImportError as exc:  # pragma: no cover - declared dependency
+        raise InputError(f"{name}: SVG paths need the svgpathtools package ({exc})") from None
+    try:
+        path = parse_path(d)
+    except Exception as exc:  # svgpathtools raises bare errors on bad syntax
+        raise InputError(f"{name}: cannot parse the SVG path ({exc})") from None
+    subs = path.continuous_subpaths() if len(path) else []
+    if not subs:
+        raise InputError(f"{name}: the SVG path is empty")
+    sub = subs[0]
+    lengths = np.array([seg.length() for seg in sub])
+    pts = []
+    for seg, length in zip(sub, lengths):
+        if type(seg).__name__ == "Line":
+            pts.append(seg.start)
+            continue
+        k = max(2, int(round(samples * length / lengths.sum())))
+        pts.extend(seg.point(t) for t in np.linspace(0, 1, k, endpoint=False))
+    z = np.array(pts, dtype=complex)
+    xy = np.stack([z.real, -z.imag], -1)  # SVG's y axis points down
+    return Target(name, curve, xy)
+
+
+def read_svg(path: Path, curve: str = "polyline") -> Target:
+    from lxml import etree
+
+    try:
+        tree = etree.parse(str(path))
+    except (OSError, etree.XMLSyntaxError) as exc:
+        raise InputError(f"{path}: not a readable SVG file ({exc})") from None
+    paths = tree.getroot().iter("{http://www.w3.org/2000/svg}path", "path")
+    for el in paths:
+        d = el.get("d")
+        if d:
+            return from_svg_path(d, path.stem, curve)
+    raise InputError(f"{path}: the SVG has no <path d=...> element")
+
+
+def read_points_file(path: Path) -> Target:
+    """CSV (``x,y`` per line, optional header) or JSON (list of points or a target description)."""
+    try:
+        text = path.read_text("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot be read ({exc})") from None
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{path}: malformed JSON at line {exc.lineno}: {exc.msg}") from None
+        if isinstance(data, list):
+            return from_points(data, "polyline", path.stem)
+        return from_spec(data, path.stem)
+    rows = []
+    for lineno, line in enumerate(text.splitlines(), 1):
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        parts = [p for p in re.split(r"[,;\s]+", line) if p]
+        try:
+            vals = [float(p) for p in parts[:2]]
+        except ValueError:
+            if not rows:
+                continue  # a header line
+            raise InputError(f"{path}: line {lineno}: {line!r} is not 'x,y'") from None
+        if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
+            raise InputError(f"{path}: line {lineno}: expected two finite numbers x,y")
+        rows.append(vals)
+    return from_points(rows, "polyline", path.stem)
+
+
+def named_targets() -> list[str]:
+    return sorted(p.stem for p in TEMPLATE_DIR.glob("*.json"))
+
+
+def load_target(ref: str, size: float | None = None, curve: str | None = None) -> Target:
+    """A target by template name (``templates/targets/NAME.json``) or file
+    (``.csv``, ``.json``, ``.svg``), scaled so its larger dimension is ``size`` mm.
+
+    Named targets default to 100 mm; files keep their own mm coordinates
+    unless ``size`` is given. Every target is centred on the origin.
+    """
+    p = Path(ref)
+    named = TEMPLATE_DIR / f"{ref}.json"
+    if named.exists() and not p.exists():
+        tgt = read_points_file(named)
+        return tgt.scaled_to(size or DEFAULT_SIZE)
+    if p.suffix.lower() in (".csv", ".txt", ".json", ".svg") or p.exists():
+        if not p.exists():
+            raise InputError(f"target file {p} does not exist")
+        tgt = read_svg(p, curve or "polyline") if p.suffix.lower() == ".svg" else read_points_file(p)
+        if curve and curve != tgt.kind:
+            tgt = Target(tgt.name, curve, tgt.points, source=tgt.source)
+        if size:
+            return tgt.scaled_to(size)
+        lo, hi = tgt.bbox
+        return tgt.transformed(shift=-0.5 * (lo + hi))
+    raise InputError(f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)")

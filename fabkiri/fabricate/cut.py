@@ -1,0 +1,513 @@
+"""``cut_pattern``: a pattern's closed state -> laser-cut sheets, all in memory.
+
+Steps (fabrication spec §6.2): pick the closed state, scale it, check it is
+cuttable (closes, simple tiles, no overlaps), assign tape faces, apply the
+hinge kind, lay the parts out on sheets, add labels and the reference square,
+and render DXF/SVG/PNG bytes plus the manifest. Nothing touches the disk
+here; :mod:`fabkiri.fabricate.readback` verifies and writes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import shapely
+
+from .. import __version__
+from ..errors import CheckFailed, FabricationError, InputError
+from ..mechanics.contract import contract
+from ..mechanics.info import describe
+from ..pattern.model import Pattern
+from . import hinges as hg
+from . import layout as lay
+from .drawing import COLORS, SheetDrawing, snap
+from .dxf import DXF_VERSION, dxf_bytes
+from .materials import HINGE_KINDS, Material
+from .preview import png_bytes
+from .svg import STROKE_MM, svg_bytes
+from .text import supported, text_strokes, text_width
+
+FORMATS = ("dxf", "svg", "png")
+MIN_LABEL_MM = 0.8  # below this a label is not legible; it is left out (and counted)
+PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
+FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
+ID_FRAC = 0.45  # tile IDs fit the tile scaled by this about its centroid
+CORNER_FRAC = 0.5  # corner labels fit the triangle cut off by the chord at this fraction of the edges
+
+
+def _incentre(tri: np.ndarray) -> np.ndarray:
+    """Incentres of triangles ``(N, 3, 2)``: the anchor that leaves the most room for a label."""
+    a = np.linalg.norm(tri[:, 1] - tri[:, 2], axis=1)
+    b = np.linalg.norm(tri[:, 2] - tri[:, 0], axis=1)
+    c = np.linalg.norm(tri[:, 0] - tri[:, 1], axis=1)
+    w = np.stack([a, b, c], 1)
+    return (w[:, :, None] * tri).sum(1) / np.maximum(w.sum(1), 1e-300)[:, None]
+
+
+@dataclass
+class CutOptions:
+    """Everything ``fabkiri cut`` can be told. ``None`` means "from the material"."""
+
+    material: Material
+    hinge: str | None = None
+    state: int = 1
+    sheet: tuple[float, float] = (600.0, 400.0)
+    margin: float = 5.0
+    layout: str | None = None
+    scale: float | None = None
+    width: float | None = None
+    formats: tuple[str, ...] = FORMATS
+    colors: str | None = None
+    labels: bool = True
+    label_height: float | None = None
+    reference_mm: float = 50.0
+    ligament_width: float | None = None
+    turn_deg: float = 180.0
+    force: bool = False
+    stem: str = "pattern"
+    pattern_file: str = ""
+
+
+@dataclass
+class CutResult:
+    """The sheets, the files to write (name -> bytes) and the manifest."""
+
+    sheets: list[SheetDrawing]
+    files: dict[str, bytes]
+    manifest: dict[str, Any]
+    warnings: list[str] = field(default_factory=list)
+    tile_regions: np.ndarray | None = None  # (T, 4, 2) label regions in sheet coordinates
+    tile_sheet: np.ndarray | None = None
+
+    def manifest_bytes(self) -> bytes:
+        return (json.dumps(self.manifest, indent=1, ensure_ascii=False) + "\n").encode("utf-8")
+
+
+def _resolve(options: CutOptions) -> tuple[str, str, str]:
+    mat = options.material
+    kind = options.hinge or mat.hinge
+    if kind not in HINGE_KINDS:
+        raise InputError(f"hinge kind must be one of {', '.join(HINGE_KINDS)}, got {kind!r}")
+    layout = options.layout or ("exploded" if kind == "separate" else "in-place")
+    if layout not in lay.LAYOUTS:
+        raise InputError(f"layout must be one of {', '.join(lay.LAYOUTS)}, got {layout!r}")
+    if kind in ("tape", "ligament") and layout != "in-place":
+        raise InputError(f"{kind} hinges are cut in place; --layout {layout} is for --hinge separate")
+    if kind == "separate" and layout == "in-place":
+        raise InputError("separate tiles are offset by half the kerf and would overlap in place; "
+                         "use --layout exploded or nested")
+    colors = options.colors or mat.colors
+    if colors not in COLORS:
+        raise InputError(f"colour preset must be one of {', '.join(COLORS)}, got {colors!r}")
+    if options.state not in (1, 2):
+        raise InputError(f"--state must be 1 or 2, got {options.state}")
+    W, H = options.sheet
+    if not (np.isfinite(W) and np.isfinite(H) and W > 0 and H > 0):
+        raise InputError(f"sheet size must be positive, got {W}x{H}")
+    if not (np.isfinite(options.margin) and options.margin >= 0):
+        raise InputError(f"margin must be >= 0 mm, got {options.margin}")
+    if options.scale is not None and options.width is not None:
+        raise InputError("give --scale or --width, not both")
+    for f in options.formats:
+        if f not in FORMATS:
+            raise InputError(f"unknown format {f!r} (known: {', '.join(FORMATS)})")
+    if options.reference_mm < 0:
+        raise InputError(f"reference square size must be >= 0, got {options.reference_mm}")
+    return kind, layout, colors
+
+
+def closed_states(pattern: Pattern) -> dict[int, np.ndarray]:
+    """Both closed states: the stored ones, the missing ones contracted."""
+    out = {}
+    for s in (1, 2):
+        out[s] = pattern.contracted[s] if s in pattern.contracted else contract(pattern, s).corners
+    return out
+
+
+def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
+    polys = shapely.polygons(corners)
+    bad = np.flatnonzero(~shapely.is_valid(polys))
+    if len(bad):
+        raise FabricationError(f"tile {int(bad[0])} is self-intersecting (a bow-tie) in closed state {state}; "
+                               "it cannot be cut")
+    area = shapely.area(polys)
+    cw = np.flatnonzero(shapely.is_ccw(shapely.get_exterior_ring(polys)) == False)  # noqa: E712
+    if len(cw):
+        raise FabricationError(f"tile {int(cw[0])} is mirrored (clockwise) in closed state {state}")
+    union = shapely.union_all(polys, grid_size=hg.GRID).area
+    overlap = float(area.sum() - union)
+    if overlap > 1e-4 * float(area.sum()):
+        raise CheckFailed(f"tiles overlap by {overlap:.4g} mm² in closed state {state}; nothing cut")
+    return polys
+
+
+def _check_webs(pieces, mat: Material, kind: str, scale: float, scaled: bool) -> None:
+    """Every piece of material that stays must be at least the minimum web wide.
+
+    Morphological opening at min_web/2 (mitre, so sharp corners survive): a
+    piece that loses area is thinner than the web somewhere.
+    """
+    w = mat.min_web_mm
+    r = 0.5 * w * (1 - 1e-6)
+    opened = shapely.buffer(shapely.buffer(pieces, -r, join_style="mitre", mitre_limit=10.0), r,
+                            join_style="mitre", mitre_limit=10.0)
+    area = shapely.area(pieces)
+    loss = shapely.area(shapely.difference(pieces, opened)) / np.maximum(area, 1e-300)
+    bad = np.flatnonzero(loss > 1e-3)
+    if len(bad):
+        t = int(bad[np.argmax(loss[bad])])
+        d = 2 * shapely.maximum_inscribed_circle(pieces[t], 1e-3).length
+        what = "once shrunk by gap/2 " if kind == "ligament" else ""
+        raise CheckFailed(
+            f"tile {t} is {d:.3g} mm across {what}at scale {scale:.4g}, thinner than the minimum web "
+            f"{w:g} mm of {mat.name} ({len(bad)} tile(s) too thin); cut it larger with --width or --scale"
+            + ("" if kind != "ligament" else ", or use a smaller --gap"))
+
+
+def _tape_marks(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, margin: float) -> np.ndarray:
+    """A chord across each hinged corner, ``margin`` inside both tile edges: where the tape ends."""
+    q = Q[tiles, ks]
+    q1 = Q[tiles, (ks + 1) % 4]
+    q0 = Q[tiles, (ks + 3) % 4]
+    a = q + frac * (q1 - q)
+    b = q + frac * (q0 - q)
+    chord = b - a
+    L = np.linalg.norm(chord, axis=1)
+    u = chord / np.maximum(L, 1e-300)[:, None]
+    e1 = (q1 - q) / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300)[:, None]
+    e0 = (q0 - q) / np.maximum(np.linalg.norm(q0 - q, axis=1), 1e-300)[:, None]
+    s1 = np.abs(e1[:, 0] * u[:, 1] - e1[:, 1] * u[:, 0])
+    s0 = np.abs(e0[:, 0] * u[:, 1] - e0[:, 1] * u[:, 0])
+    t1 = margin / np.maximum(s1, 1e-12)
+    t0 = margin / np.maximum(s0, 1e-12)
+    ok = t1 + t0 < 0.8 * L
+    seg = np.stack([a + t1[:, None] * u, b - t0[:, None] * u], 1)
+    seg[~ok] = np.nan
+    return seg
+
+
+def _fit_labels(Q, tiles, texts, anchors, region, hmax, margin):
+    """Fit text boxes; re-check containment in the tile with shapely (non-convex tiles) and shrink."""
+    ratio = np.array([text_width(t) for t in texts])
+    h = lay.fit_heights(anchors, ratio, np.full(len(texts), hmax), region, margin)
+    h = np.where(h >= MIN_LABEL_MM, h, 0.0)
+    if len(h):
+        tile_polys = shapely.buffer(shapely.polygons(Q[tiles]), -margin + 1e-9, join_style="mitre")
+        for _ in range(8):
+            w = ratio * h
+            boxes = shapely.box(anchors[:, 0] - w / 2, anchors[:, 1] - h / 2, anchors[:, 0] + w / 2,
+                                anchors[:, 1] + h / 2)
+            bad = (h > 0) & ~shapely.covers(tile_polys, boxes)
+            if not bad.any():
+                break
+            h[bad] *= 0.7
+            h[bad & (h < MIN_LABEL_MM)] = 0.0
+    return h
+
+
+def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
+    """Build every sheet, file and the manifest for ``pattern`` in memory."""
+    mat = options.material
+    kind, layout, colors = _resolve(options)
+    warnings: list[str] = []
+    states = closed_states(pattern)
+    state = options.state
+    raw = states[state]
+    if options.width is not None:
+        span = float(raw[..., 0].max() - raw[..., 0].min())
+        if not options.width > 0:
+            raise InputError(f"--width must be positive, got {options.width}")
+        scale = options.width / span
+    else:
+        scale = 1.0 if options.scale is None else float(options.scale)
+        if not (np.isfinite(scale) and scale > 0):
+            raise InputError(f"--scale must be positive, got {options.scale}")
+
+    # the pattern must close in both states at the material's tolerance (in the file's mm)
+    tol_rel = mat.tolerance_mm / (scale * pattern.tile_size)
+    info = describe(pattern, tol=tol_rel)
+    if not info.closes_both:
+        msg = "; ".join(info.problems())
+        if not options.force:
+            raise CheckFailed(f"{msg} (at the material tolerance {mat.tolerance_mm:g} mm); nothing cut "
+                              "(--force cuts it anyway)")
+        warnings.append(f"cut with --force: {msg}")
+    if not info.supplied_ok:
+        warnings.append("; ".join(info.problems()))
+    if info.self_intersecting_tiles:
+        raise FabricationError(f"tile {info.self_intersecting_tiles[0]} is self-intersecting (a bow-tie); "
+                               "it cannot be cut")
+
+    corners = raw * scale
+    tile_polys = _check_tiles(corners, state)
+    top = pattern.topology
+    T, Hn = top.n_tiles, top.n_hinges
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    faces = hg.assign_faces(pattern, states)
+    if faces.conflicts:
+        warnings.append(f"{faces.conflicts} pair(s) of coincident hinges share a tape face "
+                        "(an odd cycle of coincidences)")
+    letters = faces.letters()
+    kerf = mat.kerf_mm
+    label_h = options.label_height or mat.label_height_mm
+
+    # ---- hinge kind: parts (for placement), label regions, offsets
+    lig = None
+    strips = None
+    shrink = 0.0
+    offset = 0.0
+    if kind == "tape":
+        corners = hg.snap_corners(corners, 1e-4)
+        regions = corners
+        parts = shapely.polygons(corners)
+        label_margin = 0.5 + kerf / 2
+    elif kind == "ligament":
+        shrink = mat.gap_mm / 2
+        offset = mat.kerf_offset_mm
+        regions = hg.shrink_tiles(corners, shrink)
+        lig = hg.ligament_design(pattern, corners, regions, gap=mat.gap_mm, width_max=mat.ligament_width_mm,
+                                 min_web=mat.min_web_mm, kerf=kerf, strain_limit=mat.strain_limit,
+                                 turn_rad=np.radians(options.turn_deg), width=options.ligament_width)
+        warnings.extend(lig.warnings)
+        strips = hg.ligament_strips(lig.apex, lig.width_mm, embed=max(0.5, lig.width_mm))
+        parts = shapely.polygons(corners)
+        label_margin = 0.5
+    else:
+        offset = mat.kerf_offset_mm
+        regions = corners
+        parts = hg.kerf_outset(tile_polys, offset)
+        label_margin = 0.5
+
+    _check_webs(shapely.polygons(regions), mat, kind, scale, options.width is not None or options.scale is not None)
+
+    # ---- layout
+    sheet_wh = (float(options.sheet[0]), float(options.sheet[1]))
+    spacing = 2 * kerf + 0.5 * mat.thickness_mm
+    if layout == "in-place":
+        place = lay.in_place(corners, sheet_wh, options.margin)
+    elif layout == "exploded":
+        place = lay.exploded(corners, parts, spacing, sheet_wh, options.margin)
+    else:
+        place = lay.nested(parts, spacing, sheet_wh, options.margin)
+    tidx = np.arange(T)
+    placed_corners = place.apply(tidx, corners)
+    Q = place.apply(tidx, regions)
+    sheet_of = place.sheet
+
+    # content boxes -> reference square
+    n_sheets = place.n_sheets
+    boxes = []
+    part_bounds = shapely.bounds(parts)
+    for s in range(n_sheets):
+        sel = sheet_of == s
+        pts = place.apply(tidx[sel], np.stack([part_bounds[sel, :2], part_bounds[sel, 2:],
+                                               part_bounds[sel][:, [0, 3]], part_bounds[sel][:, [2, 1]]], 1))
+        boxes.append(np.concatenate([pts.reshape(-1, 2).min(0), pts.reshape(-1, 2).max(0)]))
+    ref = None
+    if options.reference_mm > 0:
+        rs, ll = lay.place_reference(boxes, options.reference_mm, sheet_wh, options.margin, max(5.0, spacing))
+        n_sheets = max(n_sheets, rs + 1)
+        r = options.reference_mm
+        ref = (rs, snap(ll + np.array([[0, 0], [r, 0], [r, r], [0, r]])))
+
+    sheets = [SheetDrawing(index=k + 1, width=sheet_wh[0], height=sheet_wh[1]) for k in range(n_sheets)]
+
+    # ---- cut geometry per sheet
+    hinge_features = []
+    for s in range(place.n_sheets):
+        sd = sheets[s]
+        on = np.flatnonzero(sheet_of == s)
+        if kind == "tape":
+            rings, lines = hg.tape_linework(placed_corners[on])
+            for p in lines:
+                sd.add("CUT", p, False)
+            for p in rings:
+                sd.add("CUT", p, True)
+        elif kind == "ligament":
+            same = np.flatnonzero((sheet_of[A] == s) & (sheet_of[B] == s))
+            shift = place.shift[on[0]]
+            small = shapely.polygons(Q[on])
+            moved_strips = shapely.transform(strips[same], lambda c, d=shift: c + d)
+            material = shapely.union_all(np.concatenate([small, moved_strips]), grid_size=hg.GRID)
+            ext, inner = hg.rings_of(hg.kerf_outset(material, offset))
+            for p in inner:
+                sd.add("CUT", p, True)
+            for p in ext:
+                sd.add("CUT", p, True)
+            # the free spans: material not in any tile, from the same snapped geometry as the cut
+            free = shapely.get_parts(shapely.difference(material, shapely.union_all(small, grid_size=hg.GRID),
+                                                        grid_size=hg.GRID))
+            free = free[shapely.area(free) > 0]
+            # a span may touch two strips (then it is listed for both)
+            owner_pt, owner = shapely.STRtree(moved_strips).query(free, predicate="intersects")
+            for j in np.unique(owner):
+                parts_j = free[owner_pt[owner == j]]
+                # padded so rounding never leaves a hairline of material joining the two tiles
+                geom = shapely.buffer(shapely.union_all(parts_j, grid_size=hg.GRID), FEATURE_PAD_MM,
+                                      join_style="mitre")
+                geom = shapely.normalize(shapely.union_all(shapely.get_parts(geom)))
+                polys_j = [np.asarray(g.exterior.coords)[:-1] for g in shapely.get_parts(geom)]
+                hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
+                                       "polygon": snap(polys_j[0]).tolist() if len(polys_j) == 1 else
+                                       [snap(q).tolist() for q in polys_j]})
+        else:
+            moved = place.apply(on, np.zeros((len(on), 1, 2)))  # shifts only, for rotation use coords
+            for t in on:
+                ring = np.asarray(parts[t].exterior.coords)[:-1]
+                sd.add("CUT", place.apply(np.array([t]), ring[None])[0], True)
+            del moved
+    if ref is not None:
+        rs, sq = ref
+        sheets[rs].add("CUT", sq, True)
+        cap_h = min(5.0, options.reference_mm / 8)
+        for p in text_strokes(f"{options.reference_mm:g} MM", cap_h,
+                              sq.mean(0)):
+            sheets[rs].add("NOTES", p, False)
+
+    # ---- labels (ENGRAVE): tile IDs, corner labels, tape marks
+    omitted = 0
+    label_heights = np.zeros(T)
+    if options.labels:
+        cent = shapely.get_coordinates(shapely.centroid(shapely.polygons(Q)))
+        id_region = cent[:, None, :] + ID_FRAC * (Q - cent[:, None, :])
+        ids = [str(t) for t in range(T)]
+        hid = _fit_labels(Q, tidx, ids, cent, id_region, label_h, 0.0)
+        label_heights = hid
+        omitted += int((hid <= 0).sum())
+        strokes = lay.label_strokes(ids, hid, cent)
+        for t in range(T):
+            for p in strokes[t]:
+                sheets[sheet_of[t]].add("ENGRAVE", p, False)
+
+        cross = sheet_of[A] != sheet_of[B]
+        c_tiles, c_k, c_text = [], [], []
+        for h in range(Hn):
+            f = letters[h]
+            if kind == "separate" or cross[h]:
+                c_tiles += [A[h], B[h]]
+                c_k += [cA[h], cB[h]]
+                c_text += [f"{B[h]}{f}", f"{A[h]}{f}"]
+            elif kind == "tape":
+                c_tiles.append(A[h])
+                c_k.append(cA[h])
+                c_text.append(f)
+        if c_tiles:
+            ct, ck = np.array(c_tiles), np.array(c_k)
+            q = Q[ct, ck]
+            tri = np.stack([q, q + CORNER_FRAC * (Q[ct, (ck + 1) % 4] - q),
+                            q + CORNER_FRAC * (Q[ct, (ck + 3) % 4] - q)], 1)
+            anchor = _incentre(tri)
+            hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
+            omitted += int((hc <= 0).sum())
+            cs = lay.label_strokes(c_text, hc, anchor)
+            for i, t in enumerate(ct):
+                for p in cs[i]:
+                    sheets[sheet_of[t]].add("ENGRAVE", p, False)
+        if kind == "tape" and Hn:
+            mt = np.concatenate([A, B])
+            mk = np.concatenate([cA, cB])
+            marks = _tape_marks(Q, mt, mk, CORNER_FRAC, label_margin)
+            for t, seg in zip(mt, marks):
+                if np.isfinite(seg).all():
+                    sheets[sheet_of[t]].add("ENGRAVE", seg, False)
+        if omitted:
+            warnings.append(f"{omitted} label(s) left out: no room for {MIN_LABEL_MM:g} mm text inside the tile")
+
+    # ---- notes: sheet frame and caption
+    for sd in sheets:
+        sd.add("NOTES", np.array([[0, 0], [sd.width, 0], [sd.width, sd.height], [0, sd.height]], float), True)
+        cap = f"{options.stem} {sd.index}/{len(sheets)} {mat.name} {kind} state {state} kerf {kerf:g}"
+        cap = "".join(ch if supported(ch) else "-" for ch in cap)
+        ch_h = min(2.5, 0.5 * options.margin)
+        if ch_h >= 1.0:
+            w = ch_h * text_width(cap)
+            if w > sd.width - 2 * options.margin:
+                ch_h *= (sd.width - 2 * options.margin) / w
+                w = ch_h * text_width(cap)
+            if ch_h > 0.3:
+                for p in text_strokes(cap, ch_h, (options.margin + w / 2, options.margin / 2)):
+                    sd.add("NOTES", p, False)
+
+    # ---- files
+    multi = len(sheets) > 1
+    names = [f"{options.stem}-sheet{sd.index}" if multi else options.stem for sd in sheets]
+    files: dict[str, bytes] = {}
+    for sd, name in zip(sheets, names):
+        if "dxf" in options.formats:
+            files[f"{name}.dxf"] = dxf_bytes(sd, colors)
+        if "svg" in options.formats:
+            files[f"{name}.svg"] = svg_bytes(sd, colors)
+    if "png" in options.formats:
+        files[f"{options.stem}.png"] = png_bytes(sheets, colors)
+
+    # ---- manifest
+    sheet_rows = []
+    for sd, name in zip(sheets, names):
+        cut_len = sd.length("CUT")
+        eng_len = sd.length("ENGRAVE") + sd.length("SCORE")
+        paths = sd.count("CUT") + sd.count("ENGRAVE") + sd.count("SCORE")
+        sheet_rows.append({
+            "index": sd.index, "width_mm": sd.width, "height_mm": sd.height,
+            "dxf": f"{name}.dxf" if "dxf" in options.formats else None,
+            "svg": f"{name}.svg" if "svg" in options.formats else None,
+            "tiles": int((sheet_of == sd.index - 1).sum()),
+            "cut_paths": sd.count("CUT"), "engrave_paths": sd.count("ENGRAVE"),
+            "cut_length_mm": round(cut_len, 3), "engrave_length_mm": round(eng_len, 3),
+            "cut_time_s": round(cut_len / mat.cut_speed_mm_s + eng_len / mat.engrave_speed_mm_s
+                                + PIERCE_S * paths, 1),
+        })
+    hinge_rows = []
+    for h in range(Hn):
+        row = {"hinge": h, "tiles": [int(A[h]), int(B[h])], "face": letters[h],
+               "sheets": [int(sheet_of[A[h]]) + 1, int(sheet_of[B[h]]) + 1],
+               "position": snap(Q[A[h], cA[h]] if kind != "tape" else placed_corners[A[h], cA[h]]).tolist(),
+               "position_b": snap(placed_corners[B[h], cB[h]]).tolist(),
+               "cross_sheet": bool(sheet_of[A[h]] != sheet_of[B[h]])}
+        row["position"] = snap(placed_corners[A[h], cA[h]]).tolist()
+        if lig is not None:
+            row["ligament_length_mm"] = round(float(lig.lengths[h]), 6)
+            row["strain"] = round(float(lig.strains[h]), 6)
+        hinge_rows.append(row)
+    manifest = {
+        "format": "fabkiri.cut", "version": 1, "units": "mm", "generator": f"fabkiri {__version__}",
+        "pattern": options.pattern_file or pattern.name, "pattern_name": pattern.name,
+        "hinge": kind, "state": state, "layout": layout, "scale": scale,
+        "kerf_mm": kerf, "kerf_offset_mm": offset, "kerf_join": "mitre", "mitre_limit": hg.MITRE_LIMIT,
+        "tile_shrink_mm": shrink, "tolerance_mm": mat.tolerance_mm,
+        "parameters": {
+            "sheet_mm": list(sheet_wh), "margin_mm": options.margin, "formats": list(options.formats),
+            "colors": colors, "stroke_mm": STROKE_MM, "dxf_version": DXF_VERSION, "labels": options.labels,
+            "label_height_mm": label_h, "label_margin_mm": label_margin, "part_spacing_mm": spacing,
+            "reference_mm": options.reference_mm, "force": options.force, "turn_deg": options.turn_deg,
+            "ligament_width_mm": None if lig is None else lig.width_mm,
+            "time_model": f"cut_length/cut_speed + engrave_length/engrave_speed + {PIERCE_S} s per path",
+        },
+        "material": mat.to_dict(),
+        "closure": {"tolerance_mm": mat.tolerance_mm, "closes_both": info.closes_both,
+                    "max_closure_mm": [round(s.max_closure_mm * scale, 12) for s in info.states]},
+        "reference_square": None if ref is None else {"sheet": ref[0] + 1, "size_mm": options.reference_mm,
+                                                      "corners": ref[1].tolist()},
+        "sheets": sheet_rows,
+        "tiles": [{"tile": t, "sheet": int(sheet_of[t]) + 1,
+                   "label": str(t) if label_heights[t] > 0 else "",
+                   "label_height_mm": round(float(label_heights[t]), 4),
+                   "rotation_rad": round(float(place.theta[t]), 12),
+                   "shift_mm": snap(place.shift[t]).tolist()} for t in range(T)],
+        "hinges": hinge_rows,
+        "hinge_features": hinge_features,
+        "face_conflicts": faces.conflicts,
+        "ligament": None if lig is None else {
+            "width_mm": lig.width_mm, "turn_deg": float(np.degrees(lig.turn_rad)),
+            "min_length_mm": float(lig.lengths.min(initial=0.0)) if Hn else 0.0,
+            "max_strain": float(lig.strains.max(initial=0.0)) if Hn else 0.0,
+            "strain_limit": mat.strain_limit},
+        "warnings": warnings,
+        "files": sorted(list(files) + ["manifest.json"]),
+        "verification": None,
+    }
+    return CutResult(sheets=sheets, files=files, manifest=manifest, warnings=warnings, tile_regions=Q,
+                     tile_sheet=sheet_of)

@@ -1,0 +1,304 @@
+"""Hinge kinds: from a closed state to cut geometry (fabrication spec §3).
+
+* ``tape`` — tiles cut in place; every shared cut line is cut once
+  (:func:`tape_linework`); tape joins the tiles, one hinge of every coincident
+  pair on the top face and the other on the bottom (:func:`assign_faces`).
+* ``ligament`` — one sheet: tiles shrunk by gap/2 (mitre) and joined by strips
+  sized by the strain rule ε ≈ w·Δθ/(2L) (:func:`ligament_strips`).
+* ``separate`` — loose tiles, each offset outward by kerf/2 (mitre).
+
+All offsets are GEOS buffers through shapely. Coordinates are millimetres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from scipy import sparse
+from scipy.sparse import csgraph
+from scipy.spatial import cKDTree
+
+from ..errors import FabricationError
+from ..pattern.model import Pattern
+
+GRID = 1e-6  # mm: every coordinate written is snapped to this grid
+MITRE_LIMIT = 5.0
+FACES = ("T", "B")
+
+
+def hinge_points(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
+    """Position of every hinge in a placed state: tile A's corner at the hinge node."""
+    top = pattern.topology
+    return corners[top.hinge_tiles[:, 0], top.hinge_corner[:, 0]]
+
+
+def coincident_pairs(points: np.ndarray, eps: float) -> np.ndarray:
+    """Index pairs ``(i, j)``, ``i < j``, of points closer than ``eps``."""
+    if len(points) < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    return cKDTree(points).query_pairs(eps, output_type="ndarray").astype(np.int64)
+
+
+@dataclass(frozen=True)
+class FaceAssignment:
+    """Tape face of every hinge: 0 = top (T), 1 = bottom (B).
+
+    Hinges that coincide in a closed state must go on opposite faces, or the
+    tape of one would glue the other pair of tiles together. ``conflicts``
+    counts coincident pairs that still share a face (an odd cycle of
+    coincidences; 0 for every pattern seen so far).
+    """
+
+    face: np.ndarray
+    pairs: np.ndarray
+    conflicts: int
+
+    def letters(self) -> list[str]:
+        return [FACES[int(f)] for f in self.face]
+
+
+def assign_faces(pattern: Pattern, states: dict[int, np.ndarray]) -> FaceAssignment:
+    """Two-colour the graph "hinges coincide in some closed state" by BFS depth."""
+    H = pattern.topology.n_hinges
+    eps = 1e-6 * pattern.tile_size
+    pairs = [coincident_pairs(hinge_points(pattern, c), eps) for c in states.values()]
+    pairs = np.unique(np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64), axis=0)
+    face = np.zeros(H, dtype=np.int64)
+    if len(pairs) and H:
+        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(H, H)).tocsr()
+        n, comp = csgraph.connected_components(g, directed=False)
+        for c in range(n):
+            members = np.flatnonzero(comp == c)
+            if len(members) < 2:
+                continue
+            root = int(members.min())  # lowest hinge of the group gets the top face
+            order, pred = csgraph.breadth_first_order(g, root, directed=False, return_predecessors=True)
+            for node in order[1:]:
+                face[node] = 1 - face[pred[node]]
+    conflicts = int((face[pairs[:, 0]] == face[pairs[:, 1]]).sum()) if len(pairs) else 0
+    return FaceAssignment(face=face, pairs=pairs, conflicts=conflicts)
+
+
+def snap_corners(corners: np.ndarray, eps: float) -> np.ndarray:
+    """Make nearly coincident tile corners exactly equal (lowest index wins).
+
+    Closed states from a solver close to ~1e-9 of a tile; cut-once linework
+    needs shared corners to be bit-identical before noding.
+    """
+    flat = corners.reshape(-1, 2)
+    pairs = coincident_pairs(flat, eps)
+    if len(pairs) == 0:
+        return corners.copy()
+    n = len(flat)
+    g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = csgraph.connected_components(g, directed=False)
+    rep = np.full(label.max() + 1, n, dtype=np.int64)
+    np.minimum.at(rep, label, np.arange(n))
+    return flat[rep[label]].reshape(corners.shape)
+
+
+def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, bool]]:
+    """Chain 2-point segments into polylines.
+
+    Segments continue through nodes of degree 2 and, where several lines
+    cross, straight on (so a grid line is one polyline, not one per cell).
+    Returns ``(points, closed)`` pairs in a deterministic order.
+    """
+    if len(segments) == 0:
+        return []
+    pts = segments.reshape(-1, 2)
+    keys, node = np.unique(np.round(pts / GRID).astype(np.int64), axis=0, return_inverse=True)
+    node = node.reshape(-1, 2)
+    xy = keys.astype(float) * GRID
+    S = len(node)
+    # half-edge 2*s leaves node[s,0], 2*s+1 leaves node[s,1]
+    he_from = node.ravel()
+    he_to = node[:, ::-1].ravel()
+    d = xy[he_to] - xy[he_from]
+    ang = np.arctan2(d[:, 1], d[:, 0])
+    partner = np.full(2 * S, -1, dtype=np.int64)  # half-edge arriving straight-through continues as partner
+    order = np.argsort(he_from, kind="stable")
+    starts = np.searchsorted(he_from[order], np.arange(len(xy)))
+    ends = np.append(starts[1:], len(order))
+    for v in range(len(xy)):
+        hs = order[starts[v]:ends[v]]
+        if len(hs) == 2:
+            partner[hs[0]], partner[hs[1]] = hs[1], hs[0]
+        elif len(hs) > 2:
+            used = set()
+            for i in range(len(hs)):
+                if hs[i] in used:
+                    continue
+                for j in range(i + 1, len(hs)):
+                    if hs[j] in used:
+                        continue
+                    diff = abs(((ang[hs[i]] - ang[hs[j]]) % (2 * np.pi)) - np.pi)
+                    if diff < 1e-7:
+                        partner[hs[i]], partner[hs[j]] = hs[j], hs[i]
+                        used.update((hs[i], hs[j]))
+                        break
+    seen = np.zeros(S, dtype=bool)
+    out = []
+
+    def walk(h):  # follow half-edge h and its straight/degree-2 continuations
+        nodes = [he_from[h], he_to[h]]
+        seen[h // 2] = True
+        while True:
+            nxt = partner[h ^ 1]  # leaves the node h arrives at, along the next segment
+            if nxt < 0 or seen[nxt // 2]:
+                return nodes
+            h = nxt
+            seen[h // 2] = True
+            nodes.append(he_to[h])
+
+    for h in range(2 * S):  # open chains start at their ends
+        if not seen[h // 2] and partner[h] < 0:
+            out.append((xy[walk(h)], False))
+    for s in range(S):  # what is left are loops
+        if not seen[s]:
+            nodes = walk(2 * s)
+            closed = nodes[0] == nodes[-1]
+            out.append((xy[nodes[:-1]] if closed else xy[nodes], closed))
+    return out
+
+
+def _segments_of(geom) -> np.ndarray:
+    """All 2-point segments of a (multi)linestring, ``(n, 2, 2)``."""
+    coords, idx = shapely.get_coordinates(shapely.get_parts(geom), return_index=True)
+    same = idx[1:] == idx[:-1]
+    return np.stack([coords[:-1][same], coords[1:][same]], 1)
+
+
+def tape_linework(corners: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Cut-once linework of tiles placed edge to edge.
+
+    Returns ``(rings, lines)``: closed boundary loops of the union (cut last)
+    and the open interior lines shared by two tiles, each cut once. Tile
+    corners must already be snapped (:func:`snap_corners`); noding at
+    T-junctions uses snap-rounding on the 1e-6 mm grid.
+    """
+    T = len(corners)
+    seg = np.stack([corners, np.roll(corners, -1, axis=1)], 2).reshape(-1, 2, 2)
+    lines = shapely.linestrings(seg)
+    noded = shapely.union_all(lines, grid_size=GRID)
+    segs = _segments_of(noded)
+    segs = segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
+    mids = shapely.points(segs.mean(axis=1))
+    tree = shapely.STRtree(shapely.boundary(shapely.polygons(corners)))
+    hit_seg, _ = tree.query(mids, predicate="dwithin", distance=10 * GRID)
+    count = np.bincount(hit_seg, minlength=len(segs))
+    boundary = segs[count == 1]
+    interior = segs[count >= 2]
+    rings = [p for p, closed in _chain(boundary, False) if closed]
+    open_b = [p for p, closed in _chain(boundary, False) if not closed]
+    if open_b:
+        raise FabricationError("the outline of the closed state is not a closed loop (tiles overlap or gap)")
+    chains = _chain(interior, True)
+    inner = [p for p, closed in chains if not closed] + [np.vstack([p, p[:1]]) for p, closed in chains if closed]
+    return rings, inner
+
+
+@dataclass(frozen=True)
+class LigamentDesign:
+    """Strips joining shrunk tiles: widths, free lengths and strains per hinge."""
+
+    width_mm: float
+    turn_rad: float
+    lengths: np.ndarray  # (H,) free length L between the two apexes
+    strains: np.ndarray  # (H,) ε = w Δθ / (2 L)
+    apex: np.ndarray  # (H, 2, 2) apex of tile A and of tile B
+    warnings: list[str]
+
+
+def shrink_tiles(corners: np.ndarray, shrink: float) -> np.ndarray:
+    """Tiles offset inward by ``shrink`` (mitre), returned as ``(T, 4, 2)`` in corner order.
+
+    Each shrunk corner is the shrunk polygon's vertex nearest the original
+    corner; a tile that does not stay a quad is an error naming it.
+    """
+    polys = shapely.polygons(corners)
+    small = shapely.buffer(polys, -shrink, join_style="mitre", mitre_limit=MITRE_LIMIT)
+    out = np.empty_like(corners)
+    for t, g in enumerate(small):
+        if g.is_empty or g.geom_type != "Polygon":
+            raise FabricationError(f"tile {t} vanishes when shrunk by {shrink:g} mm (gap/2); use a smaller gap")
+        ring = shapely.get_coordinates(shapely.simplify(g.exterior, 1e-9))[:-1]
+        if len(ring) != 4:
+            raise FabricationError(f"tile {t} is not a quad once shrunk by {shrink:g} mm; use a smaller gap")
+        d = np.linalg.norm(ring[None, :, :] - corners[t][:, None, :], axis=-1)
+        pick = np.argmin(d, axis=1)
+        if len(set(pick.tolist())) != 4:
+            raise FabricationError(f"tile {t} changes shape when shrunk by {shrink:g} mm; use a smaller gap")
+        out[t] = ring[pick]
+    return out
+
+
+def ligament_design(pattern: Pattern, corners: np.ndarray, shrunk: np.ndarray, *, gap: float, width_max: float,
+                    min_web: float, kerf: float, strain_limit: float, turn_rad: float = np.pi,
+                    width: float | None = None) -> LigamentDesign:
+    """Size the strips by the strain rule of fabrication spec §3.1(f).
+
+    The strip width is the widest that keeps ε = w·Δθ/(2L) within the strain
+    limit at the shortest strip, capped by ``width_max`` and never below the
+    minimum web (then a warning says the strain is exceeded). ``width``
+    forces a value. The clear spacing 2d − w between the two strips at a
+    node must stay ≥ min web + kerf.
+    """
+    top = pattern.topology
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    apex = np.stack([shrunk[A, cA], shrunk[B, cB]], 1)
+    lengths = np.linalg.norm(apex[:, 1] - apex[:, 0], axis=1)
+    warnings = []
+    if len(lengths) == 0:
+        return LigamentDesign(0.0, turn_rad, lengths, lengths, apex, warnings)
+    Lmin = float(lengths.min())
+    if width is None:
+        w = max(min_web, min(width_max, 2.0 * Lmin * strain_limit / turn_rad))
+    else:
+        w = float(width)
+    if w < min_web - 1e-12:
+        raise FabricationError(f"ligament width {w:g} mm is below the minimum web {min_web:g} mm")
+    spacing = gap - w
+    if spacing < min_web + kerf - 1e-9:
+        raise FabricationError(
+            f"ligaments {w:.3g} mm wide leave {spacing:.3g} mm between the two strips of a node, less than "
+            f"min web + kerf = {min_web + kerf:.3g} mm; use a gap of at least {w + min_web + kerf:.3g} mm")
+    strains = w * turn_rad / (2.0 * lengths)
+    worst = float(strains.max())
+    if worst > strain_limit:
+        h = int(np.argmax(strains))
+        warnings.append(
+            f"ligament strain {worst:.3g} at hinge {h} exceeds the material's limit {strain_limit:g} "
+            f"(w {w:.3g} mm, L {lengths[h]:.3g} mm, Δθ {np.degrees(turn_rad):.0f}°); use a larger gap")
+    return LigamentDesign(w, turn_rad, lengths, strains, apex, warnings)
+
+
+def ligament_strips(apex: np.ndarray, width: float, embed: float) -> np.ndarray:
+    """Strip polygons from apex A to apex B, reaching ``embed`` mm into each tile."""
+    a, b = apex[:, 0], apex[:, 1]
+    u = b - a
+    n = np.linalg.norm(u, axis=1, keepdims=True)
+    u = u / np.where(n > 0, n, 1.0)
+    lines = shapely.linestrings(np.stack([a - embed * u, b + embed * u], 1))
+    return shapely.buffer(lines, 0.5 * width, cap_style="flat", join_style="mitre")
+
+
+def kerf_outset(polys, offset: float):
+    """Toolpath outside a part by ``offset`` = kerf/2 (holes shrink), mitre joins."""
+    if offset == 0:
+        return polys
+    return shapely.buffer(polys, offset, join_style="mitre", mitre_limit=MITRE_LIMIT)
+
+
+def rings_of(geom) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """(exteriors, interiors) of a (multi)polygon as open coordinate arrays, snapped to the grid."""
+    ext, inner = [], []
+    for poly in shapely.get_parts(geom):
+        if poly.is_empty:
+            continue
+        ext.append(np.asarray(poly.exterior.coords)[:-1])
+        inner.extend(np.asarray(r.coords)[:-1] for r in poly.interiors)
+    return ext, inner

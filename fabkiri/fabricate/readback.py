@@ -1,0 +1,344 @@
+"""Read the written files back and check them; write them only if every check passes.
+
+Two layers of checks:
+
+* :func:`self_checks` — the writer's own promises, read from the bytes:
+  the DXF re-reads and audits clean, ``$INSUNITS`` = 4, only LWPOLYLINEs on
+  known layers, no duplicate segments; the SVG declares mm equal to its
+  viewBox; DXF and SVG hold the same polylines after the y flip (1e-6 mm);
+  closed contours are valid polygons; the tiles come back from the cut
+  linework; webs, holes and labels respect the material.
+* the independent verifier, :func:`fabkiri.verify.verify_layout`, which
+  trusts nothing but the geometry and the manifest (docs/cut-files.md), run
+  on every written DXF and SVG against both closed states.
+
+:func:`write_verified` writes the files all-or-nothing only when both pass.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+import tempfile
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+
+from ..errors import CheckFailed, FabkiriError
+from ..fileio import atomic_write_many
+from ..pattern.model import Pattern
+from .cut import CutResult
+from .drawing import LAYERS
+
+SVG_NS = "{http://www.w3.org/2000/svg}"
+AGREE_MM = 1e-6
+UNDO_MITRE = 1000.0  # undoing an outset at the acute notches where a strip meets a tile needs sharp mitres
+
+
+@dataclass
+class CheckResult:
+    name: str
+    ok: bool
+    detail: str = ""
+    value: float | None = None
+
+
+@dataclass
+class Readback:
+    checks: list[CheckResult] = field(default_factory=list)
+    verifier: dict[str, Any] | None = None
+
+    @property
+    def ok(self) -> bool:
+        return all(c.ok for c in self.checks) and (self.verifier is None or bool(self.verifier.get("ok")))
+
+    def failed(self) -> list[CheckResult]:
+        return [c for c in self.checks if not c.ok]
+
+    def add(self, name: str, ok: bool, detail: str = "", value: float | None = None) -> None:
+        self.checks.append(CheckResult(name, bool(ok), detail, value))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"ok": self.ok,
+                "self_checks": [{"check": c.name, "ok": c.ok, "detail": c.detail,
+                                 **({"value": c.value} if c.value is not None else {})} for c in self.checks],
+                "verifier": self.verifier}
+
+
+# ------------------------------------------------------------------ readers
+
+
+def read_dxf(data: bytes):
+    """``(doc, auditor, layers)`` with ``layers[name] = [(points, closed), ...]``."""
+    import ezdxf
+
+    doc = ezdxf.read(io.StringIO(data.decode("ascii")))
+    auditor = doc.audit()
+    layers: dict[str, list] = {}
+    others = []
+    for e in doc.modelspace():
+        if e.dxftype() != "LWPOLYLINE":
+            others.append(e.dxftype())
+            continue
+        pts = np.asarray([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
+        layers.setdefault(e.dxf.layer, []).append((pts, bool(e.closed)))
+    return doc, auditor, layers, others
+
+
+_NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def read_svg(data: bytes):
+    """``(width_mm, height_mm, viewbox, layers)``; layers from ``<g id=...>`` groups, y flipped back to y-up."""
+    root = ET.fromstring(data)
+    w, h = root.get("width", ""), root.get("height", "")
+    vb = [float(v) for v in root.get("viewBox", "").split()]
+    wmm = float(w[:-2]) if w.endswith("mm") else float("nan")
+    hmm = float(h[:-2]) if h.endswith("mm") else float("nan")
+    H = vb[3] if len(vb) == 4 else float("nan")
+    layers: dict[str, list] = {}
+    for g in root.iter(f"{SVG_NS}g"):
+        name = g.get("id")
+        for el in g:
+            tag = el.tag.replace(SVG_NS, "")
+            if tag == "path":
+                d = el.get("d", "")
+                nums = np.asarray([float(v) for v in _NUM.findall(d)], dtype=float).reshape(-1, 2)
+                closed = d.strip().upper().endswith("Z")
+            elif tag in ("polyline", "polygon"):
+                nums = np.asarray([float(v) for v in _NUM.findall(el.get("points", ""))]).reshape(-1, 2)
+                closed = tag == "polygon"
+            else:
+                continue
+            pts = np.column_stack([nums[:, 0], H - nums[:, 1]])
+            layers.setdefault(name, []).append((pts, closed))
+    return wmm, hmm, vb, layers
+
+
+def _segments(polylines) -> np.ndarray:
+    segs = []
+    for pts, closed in polylines:
+        p = np.vstack([pts, pts[:1]]) if closed else pts
+        segs.append(np.stack([p[:-1], p[1:]], 1))
+    return np.concatenate(segs) if segs else np.zeros((0, 2, 2))
+
+
+def duplicate_segments(polylines, decimals: int = 6) -> int:
+    """Segments that appear twice (either direction) — they would be cut twice."""
+    s = np.round(_segments(polylines), decimals)
+    if len(s) == 0:
+        return 0
+    a, b = s[:, 0], s[:, 1]
+    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
+    lo = np.where(swap[:, None], b, a)
+    hi = np.where(swap[:, None], a, b)
+    key = np.concatenate([lo, hi], 1)
+    return int(len(key) - len(np.unique(key, axis=0)))
+
+
+# ------------------------------------------------------------------ self checks
+
+
+def _opening_loss(piece, width: float) -> float:
+    """Relative area lost by a morphological opening of radius width/2 (mitre): >0 where the piece is thinner."""
+    r = 0.5 * width * (1 - 1e-6)
+    opened = shapely.buffer(shapely.buffer(piece, -r, join_style="mitre", mitre_limit=10.0), r,
+                            join_style="mitre", mitre_limit=10.0)
+    area = shapely.area(piece)
+    return float(np.max(shapely.area(shapely.difference(piece, opened)) / np.maximum(area, 1e-300), initial=0.0))
+
+
+def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None = None) -> Readback:
+    """The writer's own checks on the bytes it produced (see the module docstring)."""
+    rb = rb or Readback()
+    man = result.manifest
+    mat = man["material"]
+    kind = man["hinge"]
+    ref = man["reference_square"]
+    Q = result.tile_regions
+    for row in man["sheets"]:
+        k = row["index"]
+        dxf_layers = svg_layers = None
+        if row["dxf"]:
+            doc, aud, dxf_layers, others = read_dxf(files[row["dxf"]])
+            rb.add(f"sheet {k} dxf audit", len(aud.errors) == 0, f"{len(aud.errors)} errors", len(aud.errors))
+            rb.add(f"sheet {k} dxf units", doc.header.get("$INSUNITS") == 4 and doc.dxfversion == "AC1024",
+                   f"$INSUNITS={doc.header.get('$INSUNITS')}, {doc.dxfversion}")
+            rb.add(f"sheet {k} dxf entities", not others and set(dxf_layers) <= set(LAYERS),
+                   f"non-LWPOLYLINE: {sorted(set(others))}, layers {sorted(dxf_layers)}")
+            dups = sum(duplicate_segments(v) for v in dxf_layers.values())
+            rb.add(f"sheet {k} dxf duplicate segments", dups == 0, f"{dups} duplicates", dups)
+        if row["svg"]:
+            wmm, hmm, vb, svg_layers = read_svg(files[row["svg"]])
+            ok = len(vb) == 4 and vb[:2] == [0, 0] and wmm == vb[2] and hmm == vb[3] \
+                and wmm == row["width_mm"] and hmm == row["height_mm"]
+            rb.add(f"sheet {k} svg size", ok, f"{wmm}mm x {hmm}mm, viewBox {vb}")
+        if dxf_layers is not None and svg_layers is not None:
+            worst, same = 0.0, True
+            for name in LAYERS:
+                a, b = dxf_layers.get(name, []), svg_layers.get(name, [])
+                if len(a) != len(b):
+                    same = False
+                    continue
+                for (pa, ca), (pb, cb) in zip(a, b):
+                    if ca != cb or pa.shape != pb.shape:
+                        same = False
+                        continue
+                    worst = max(worst, float(np.abs(pa - pb).max(initial=0.0)))
+            rb.add(f"sheet {k} dxf = svg", same and worst <= AGREE_MM, f"max difference {worst:.2e} mm", worst)
+        layers = dxf_layers if dxf_layers is not None else svg_layers
+        if layers is None:
+            continue
+        _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, result.tile_sheet)
+    return rb
+
+
+def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
+    cut = layers.get("CUT", [])
+    closed = [p for p, c in cut if c]
+    polys = np.array([shapely.Polygon(p) for p in closed], dtype=object)
+    invalid = int((~shapely.is_valid(polys)).sum()) if len(polys) else 0
+    rb.add(f"sheet {k} closed contours valid", invalid == 0, f"{invalid} invalid of {len(polys)}", invalid)
+    is_ref = np.zeros(len(closed), dtype=bool)
+    if ref and ref["sheet"] == k:
+        sq = np.asarray(ref["corners"])
+        is_ref = np.array([p.shape == sq.shape and np.allclose(p, sq, atol=1e-9) for p in closed])
+        side = float(np.linalg.norm(sq[1] - sq[0]))
+        rb.add(f"sheet {k} reference square", is_ref.sum() == 1 and abs(side - ref["size_mm"]) <= 1e-9,
+               f"{int(is_ref.sum())} found, side {side:.6f} mm", side)
+    on = np.flatnonzero(tile_sheet == k - 1)
+    expected = shapely.polygons(Q[on])
+    off = man["kerf_offset_mm"]
+    # recover the pieces the laser leaves
+    if kind == "tape":
+        sq = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
+        lines = [shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in cut
+                 if not (c and sq is not None and p.shape == sq.shape and np.allclose(p, sq, atol=1e-9))]
+        noded = shapely.union_all(lines) if lines else shapely.GeometryCollection()
+        pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
+        holes = np.array([])
+    elif kind == "separate":
+        pieces = shapely.buffer(polys[~is_ref], -off, join_style="mitre", mitre_limit=5.0)
+        holes = np.array([])
+    else:
+        rings = polys[~is_ref]
+        area = shapely.area(rings)
+        # a ring inside another ring is a hole of that material piece
+        ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
+        inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
+        material = shapely.difference(shapely.union_all(rings[~inside]), shapely.union_all(rings[inside]))
+        material = shapely.buffer(material, -off, join_style="mitre", mitre_limit=UNDO_MITRE)
+        feats = [shapely.Polygon(f["polygon"]) if not isinstance(f["polygon"][0][0], list)
+                 else shapely.MultiPolygon([shapely.Polygon(g) for g in f["polygon"]])
+                 for f in man["hinge_features"] if f["sheet"] == k]
+        cores = shapely.difference(material, shapely.union_all(feats)) if feats else material
+        pieces = shapely.get_parts(cores)
+        pieces = pieces[shapely.area(pieces) > 1e-6]
+        holes = np.array([shapely.Polygon(r) for g in shapely.get_parts(material) for r in g.interiors],
+                         dtype=object)
+        del area
+    # every expected tile comes back (one piece each, same shape within the material tolerance)
+    tol = man["tolerance_mm"]
+    matched = 0
+    worst = 0.0
+    if len(pieces) and len(expected):
+        tree = shapely.STRtree(pieces)
+        idx_e, idx_p = tree.query(shapely.centroid(expected), predicate="within")
+        best = {}
+        for e, p in zip(idx_e, idx_p):
+            d = shapely.hausdorff_distance(expected[e], pieces[p])
+            best[e] = min(best.get(e, np.inf), d)
+        matched = sum(1 for d in best.values() if d <= tol)
+        worst = max(best.values(), default=np.inf)
+    rb.add(f"sheet {k} tiles recovered", matched == len(expected) and len(pieces) == len(expected),
+           f"{matched}/{len(expected)} tiles within {tol:g} mm, {len(pieces)} pieces, worst {worst:.2e} mm", worst)
+    # webs and holes
+    loss = _opening_loss(pieces, mat["min_web_mm"]) if len(pieces) else 0.0
+    rb.add(f"sheet {k} min web {mat['min_web_mm']:g} mm", loss <= 1e-3, f"opening loses {loss:.2e} of a piece", loss)
+    if len(holes):
+        diam = 2 * np.array([shapely.maximum_inscribed_circle(hl, mat["min_hole_mm"] / 50).length for hl in holes])
+        rb.add(f"sheet {k} min hole {mat['min_hole_mm']:g} mm", bool((diam >= mat["min_hole_mm"]).all()),
+               f"smallest hole fits a {diam.min():.3g} mm circle", float(diam.min()))
+    # labels inside tiles
+    eng = layers.get("ENGRAVE", [])
+    if eng:
+        strokes = np.array([shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in eng])
+        region = shapely.STRtree(expected)
+        ii, _ = region.query(strokes, predicate="within")
+        outside = len(strokes) - len(np.unique(ii))
+        rb.add(f"sheet {k} labels inside tiles", outside == 0, f"{outside} of {len(strokes)} strokes outside",
+               outside)
+
+
+# ------------------------------------------------------------------ verifier and writing
+
+
+def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str, Any]:
+    """:func:`fabkiri.verify.verify_layout` on every written DXF and SVG, both closed states."""
+    try:
+        from ..verify import verify_layout
+    except ImportError:
+        return {"ok": False, "available": False, "detail": "fabkiri.verify is not installed"}
+    out = {"ok": True, "available": True, "files": {}}
+    tol = result.manifest["tolerance_mm"]
+    manifest = json.loads((folder / "manifest.json").read_text("utf-8"))
+    for key in ("dxf", "svg"):  # the verifier reads every sheet of one format from the first
+        names = [row[key] for row in result.manifest["sheets"] if row[key]]
+        if not names:
+            continue
+        try:
+            rep = verify_layout(pattern, folder / names[0], manifest=manifest, tol_mm=tol)
+        except FabkiriError as exc:
+            out["ok"] = False
+            out["files"][key] = {"ok": False, "error": str(exc)}
+            continue
+        out["files"][key] = rep.to_dict()
+        out["ok"] = out["ok"] and bool(rep.ok)
+    return out
+
+
+def verify_result(pattern: Pattern, result: CutResult, *, use_verifier: bool = True) -> Readback:
+    """Self checks on the bytes, then the verifier on the files in a private scratch folder."""
+    files = dict(result.files)
+    files["manifest.json"] = result.manifest_bytes()
+    rb = self_checks(result, files)
+    if use_verifier:
+        with tempfile.TemporaryDirectory(prefix="fabkiri-cut-") as tmp:
+            for name, data in files.items():
+                (Path(tmp) / name).write_bytes(data)
+            rb.verifier = run_verifier(pattern, result, Path(tmp))
+    return rb
+
+
+def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True
+                   ) -> tuple[Readback, list[Path]]:
+    """Verify, then write every file (manifest with the verification report) all-or-nothing.
+
+    Raises :class:`CheckFailed` naming the failed checks, writing nothing.
+    """
+    rb = verify_result(pattern, result, use_verifier=use_verifier)
+    result.manifest["verification"] = rb.to_dict()
+    if not rb.ok:
+        failed = [f"{c.name} ({c.detail})" for c in rb.failed()]
+        if rb.verifier is not None and not rb.verifier.get("ok"):
+            v = rb.verifier
+            if not v.get("available", True):
+                failed.append(f"verifier: {v.get('detail')}")
+            for name, rep in v.get("files", {}).items():
+                if not rep.get("ok"):
+                    failed.append(f"verifier on {name}: {rep.get('error') or _failed_names(rep)}")
+        raise CheckFailed("read-back verification failed, nothing written: " + "; ".join(failed[:6]))
+    files = dict(result.files)
+    files["manifest.json"] = result.manifest_bytes()
+    return rb, atomic_write_many(folder, files)
+
+
+def _failed_names(rep: dict) -> str:
+    checks = rep.get("checks") or []
+    bad = [c.get("name", "?") for c in checks if isinstance(c, dict) and not c.get("ok", True)]
+    return ", ".join(bad[:4]) or json.dumps(rep)[:200]

@@ -1,0 +1,45 @@
+"""SVG writer (svgwrite): millimetre-sized, 1 user unit = 1 mm, one group per layer.
+
+The drawing is y-up; SVG is y-down, so every point is written as
+``(x, H - y)``. Strokes are hairlines (0.01 mm), fills none, so laser software
+reads every element as a vector path. No ``<text>``: labels are strokes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import svgwrite
+
+from .drawing import COLORS, DECIMALS, LAYERS, SheetDrawing
+
+STROKE_MM = 0.01
+INKSCAPE_NS = "http://www.inkscape.org/namespaces/inkscape"
+
+
+def _num(v: float) -> str:
+    s = f"{v:.{DECIMALS}f}".rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def path_data(points: np.ndarray, closed: bool, height: float) -> str:
+    """``M x,y L x,y ... [Z]`` with y flipped."""
+    ys = np.round(height - points[:, 1], DECIMALS) + 0.0
+    xy = [f"{_num(x)},{_num(y)}" for x, y in zip(points[:, 0].tolist(), ys.tolist())]
+    return "M" + " L".join(xy) + (" Z" if closed else "")
+
+
+def svg_bytes(sheet: SheetDrawing, colors: str = "default", stroke_mm: float = STROKE_MM) -> bytes:
+    W, H = sheet.width, sheet.height
+    dwg = svgwrite.Drawing(size=(f"{_num(W)}mm", f"{_num(H)}mm"), profile="full", debug=False)
+    dwg.attribs["viewBox"] = f"0 0 {_num(W)} {_num(H)}"
+    dwg.attribs["xmlns:inkscape"] = INKSCAPE_NS
+    for name in LAYERS:
+        stroke = COLORS[colors][name][0]
+        g = dwg.g(id=name, fill="none", stroke=stroke, stroke_width=_num(stroke_mm))
+        g.attribs["stroke-linejoin"] = "round"
+        g.attribs["inkscape:groupmode"] = "layer"
+        g.attribs["inkscape:label"] = name
+        for pts, closed in sheet.layers[name]:
+            g.add(dwg.path(d=path_data(pts, closed, H)))
+        dwg.add(g)
+    return ('<?xml version="1.0" encoding="utf-8" ?>\n' + dwg.tostring() + "\n").encode("utf-8")

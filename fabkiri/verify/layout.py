@@ -1,0 +1,826 @@
+"""Cut-layout verification: read a DXF or SVG back and prove it closes into both states.
+
+The contract with the writers is docs/cut-files.md. Nothing but the geometry
+and the declared allowances (manifest.json) is trusted:
+
+1. read the ``CUT`` linework (all outlines for plain files from other tools),
+   in millimetres, y up;
+2. set the reference square aside, recover the tile polygons per hinge kind
+   (``tape``: polygonize the noded linework; ``separate``: each closed outline
+   shrunk by the kerf offset; ``ligament``: material minus hinge strips, grown
+   by the tile shrink) and reduce each to its four corners;
+3. match them to the design tiles (any order; one rigid motion per sheet for
+   in-place layouts, one per tile for separate ones; a mirrored tile is an
+   error) and check (a) congruence, (b) the in-place layout is the declared
+   closed state, (c) the cut tiles reassembled by the hinge correspondence
+   give the other closed state (both states for separate tiles), (d) every
+   hinge is present.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+from scipy.sparse import csgraph
+from scipy.spatial import cKDTree
+
+from ..errors import VerifyError
+from ..pattern import geometry
+from ..pattern.model import Pattern
+from ..pattern.topology import STATES
+from ..mechanics.contract import contract
+from .pattern_checks import Tolerances, closed_state_checks
+from .report import Check, Report, measured
+
+MM_PER_PX = 25.4 / 96.0
+INSUNITS_MM = {0: 1.0, 1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 13: 1e-3, 14: 0.1}
+SNAP_MM = 1e-4  # endpoints closer than this are one node of the linework
+NON_CUT_LAYERS = {"NOTES", "ENGRAVE", "SCORE"}
+
+
+# ------------------------------------------------------------------ reading
+
+
+@dataclass
+class Linework:
+    """Polylines (mm, y up) read from one cut file, and whether each is closed."""
+
+    path: Path
+    polylines: list[np.ndarray] = field(default_factory=list)
+    closed: list[bool] = field(default_factory=list)
+    layer_found: bool = True  # a CUT layer/group existed
+
+    def add(self, pts: np.ndarray, closed: bool) -> None:
+        pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+        if len(pts) >= 3 and abs(pts[0, 0] - pts[-1, 0]) <= 1e-9 and abs(pts[0, 1] - pts[-1, 1]) <= 1e-9:
+            pts, closed = pts[:-1], True
+        if len(pts) >= 2:
+            self.polylines.append(pts)
+            self.closed.append(bool(closed) and len(pts) >= 3)
+
+
+def read_cut_file(path: str | Path) -> Linework:
+    """The CUT linework of a DXF or SVG file, in mm with y up."""
+    p = Path(path)
+    if not p.exists():
+        raise VerifyError(f"{p}: no such layout file")
+    suffix = p.suffix.lower()
+    if suffix == ".dxf":
+        return _read_dxf(p)
+    if suffix == ".svg":
+        return _read_svg(p)
+    raise VerifyError(f"{p}: a layout must be a .dxf or .svg file")
+
+
+_SIMPLE = {"LWPOLYLINE", "LINE"}
+_GEOMETRIC = {"POLYLINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE", "INSERT", "HATCH", "SOLID", "3DFACE"}
+
+
+def _read_dxf_fast(p: Path) -> Linework | None:
+    """Straight LWPOLYLINEs and LINEs from ezdxf's low-level tag stream.
+
+    Loading the whole document is ~5x slower on large sheets; anything this
+    does not handle (curves, bulges, blocks, binary DXF) returns None and the
+    full ezdxf reader takes over.
+    """
+    from ezdxf.lldxf.tagger import ascii_tags_loader
+
+    with open(p, "rb") as fh:
+        if fh.read(22) == b"AutoCAD Binary DXF\r\n\x1a":
+            return None
+    insunits = 0
+    ents: list[tuple[str, str, int, list, list]] = []
+    section = None
+    cur = None
+    expect_section_name = False
+    header_var = None
+    try:
+        with open(p, "rt", encoding="utf-8", errors="replace") as fh:
+            for code, value in ascii_tags_loader(fh):
+                if code == 0:
+                    if cur is not None:
+                        ents.append(cur)
+                        cur = None
+                    if value == "SECTION":
+                        expect_section_name = True
+                    elif value == "ENDSEC":
+                        section = None
+                    elif section == "ENTITIES":
+                        if value in _SIMPLE:
+                            cur = [value, "0", 0, [], []]
+                        elif value in _GEOMETRIC:
+                            return None
+                    continue
+                if expect_section_name and code == 2:
+                    section, expect_section_name = value, False
+                    continue
+                if section == "HEADER":
+                    if code == 9:
+                        header_var = value
+                    elif header_var == "$INSUNITS" and code == 70:
+                        insunits = int(value)
+                    continue
+                if cur is None:
+                    continue
+                if code == 8:
+                    cur[1] = value
+                elif code == 70:
+                    cur[2] = int(value)
+                elif code in (10, 11):
+                    cur[3].append([float(value), 0.0])
+                elif code in (20, 21):
+                    cur[3][-1][1] = float(value)
+                elif code == 42 and float(value) != 0.0:
+                    return None  # an arc segment
+    except Exception:  # malformed tag stream: let the full reader name the problem
+        return None
+    if cur is not None:
+        ents.append(cur)
+    unit = INSUNITS_MM.get(insunits)
+    if unit is None:
+        raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
+    cut = [e for e in ents if e[1].upper() == "CUT"]
+    lw = Linework(p, layer_found=bool(cut))
+    if not cut:
+        cut = [e for e in ents if e[1].upper() not in NON_CUT_LAYERS]
+    for kind, _, flags, pts, _ in cut:
+        if kind == "LINE":
+            lw.add(np.asarray(pts[:2]) * unit, False)
+        else:
+            lw.add(np.asarray(pts) * unit, bool(flags & 1))
+    return lw
+
+
+def _read_dxf(p: Path) -> Linework:
+    fast = _read_dxf_fast(p)
+    if fast is not None:
+        return fast
+    return _read_dxf_full(p)
+
+
+def _read_dxf_full(p: Path) -> Linework:
+    import ezdxf
+    from ezdxf import path as ezpath
+
+    try:
+        doc = ezdxf.readfile(str(p))
+    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
+        raise VerifyError(f"{p}: not a readable DXF file ({exc})") from None
+    unit = INSUNITS_MM.get(int(doc.header.get("$INSUNITS", 0)))
+    if unit is None:
+        raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={doc.header.get('$INSUNITS')}")
+    msp = doc.modelspace()
+    ents = [e for e in msp if e.dxftype() in ("LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE",
+                                              "ELLIPSE")]
+    cut = [e for e in ents if e.dxf.layer.upper() == "CUT"]
+    lw = Linework(p, layer_found=bool(cut))
+    if not cut:  # a plain file from another tool: every outline not on an annotation layer
+        cut = [e for e in ents if e.dxf.layer.upper() not in NON_CUT_LAYERS]
+    for e in cut:
+        kind = e.dxftype()
+        if kind == "LINE":
+            lw.add(np.array([e.dxf.start[:2], e.dxf.end[:2]]) * unit, False)
+            continue
+        if kind == "LWPOLYLINE":
+            pts = np.array(e.get_points("xyb"), dtype=float)
+            if len(pts) and not pts[:, 2].any():
+                lw.add(pts[:, :2] * unit, e.closed)
+                continue
+        path_ = ezpath.make_path(e)
+        pts = np.array([v[:2] for v in path_.flattening(0.001 / unit)], dtype=float)
+        closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or kind == "CIRCLE")
+        lw.add(pts * unit, closed)
+    return lw
+
+
+def _read_svg(p: Path) -> Linework:
+    import svgelements as se
+
+    try:
+        svg = se.SVG.parse(str(p), reify=True)
+    except Exception as exc:  # svgelements raises many kinds on bad XML
+        raise VerifyError(f"{p}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
+    height = float(svg.height) * MM_PER_PX if svg.height else None
+    groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
+    cut_groups = [g for g in groups if str(g.id or "").upper() == "CUT"
+                  or str(g.values.get("inkscape:label", "")).upper() == "CUT"]
+    if cut_groups:
+        shapes = [e for g in cut_groups for e in g.select() if isinstance(e, se.Shape)]
+    else:
+        skip = {id(e) for g in groups if str(g.id or "").upper() in NON_CUT_LAYERS
+                for e in g.select() if isinstance(e, se.Shape)}
+        shapes = [e for e in svg.elements() if isinstance(e, se.Shape) and id(e) not in skip]
+    lw = Linework(p, layer_found=bool(cut_groups))
+    if height is None:
+        raise VerifyError(f"{p}: the SVG has no height; cannot flip y")
+    for shape in shapes:
+        path_ = se.Path(shape)
+        pts: list[tuple[float, float]] = []
+        for seg in path_.segments():
+            if isinstance(seg, se.Move):
+                if len(pts) >= 2:
+                    lw.add(_svg_mm(pts, height), False)
+                pts = [(seg.end.x, seg.end.y)]
+            elif isinstance(seg, se.Close):
+                if len(pts) >= 3:
+                    lw.add(_svg_mm(pts, height), True)
+                pts = []
+            elif isinstance(seg, se.Line):
+                pts.append((seg.end.x, seg.end.y))
+            else:  # curves: sample finely (tile outlines are straight; be tolerant)
+                for t in np.linspace(0, 1, 17)[1:]:
+                    q = seg.point(t)
+                    pts.append((q.x, q.y))
+        if len(pts) >= 2:
+            lw.add(_svg_mm(pts, height), False)
+    return lw
+
+
+def _svg_mm(pts: list[tuple[float, float]], height_mm: float) -> np.ndarray:
+    a = np.asarray(pts, dtype=float) * MM_PER_PX
+    a[:, 1] = height_mm - a[:, 1]
+    return a
+
+
+# ------------------------------------------------------------------ manifest
+
+
+def load_manifest(layout_path: Path) -> dict[str, Any] | None:
+    m = layout_path.parent / "manifest.json"
+    if not m.exists():
+        return None
+    try:
+        data = json.loads(m.read_text("utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise VerifyError(f"{m}: not a readable manifest ({exc})") from None
+    if not isinstance(data, dict):
+        raise VerifyError(f"{m}: a manifest is a JSON object")
+    return data
+
+
+@dataclass
+class Allowances:
+    hinge: str  # tape | separate | ligament | plain
+    layout: str  # in-place | exploded | nested | auto
+    state: int
+    scale: float
+    kerf_offset: float
+    tile_shrink: float
+    reference: dict[int, np.ndarray]  # sheet -> 4 corners
+    hinge_features: list[dict[str, Any]]
+    tile_sheet: dict[int, int]
+    sheet_files: dict[int, str]
+
+
+def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
+    if manifest is None:
+        return Allowances("plain", "auto", 1, 1.0, 0.0, 0.0, {}, [], {}, {})
+    try:
+        hinge = str(manifest.get("hinge", "separate"))
+        if hinge not in ("tape", "separate", "ligament"):
+            raise VerifyError(f"{where}: unknown hinge kind {hinge!r} (tape, separate or ligament)")
+        layout = str(manifest.get("layout", "in-place" if hinge in ("tape", "ligament") else "exploded"))
+        state = int(manifest.get("state", 1))
+        if state not in STATES:
+            raise VerifyError(f"{where}: state must be 1 or 2, not {state}")
+        scale = float(manifest.get("scale", 1.0))
+        kerf = float(manifest.get("kerf_offset_mm", 0.0))
+        shrink = float(manifest.get("tile_shrink_mm", 0.0))
+        if not (scale > 0 and math.isfinite(scale)) or not (kerf >= 0 and math.isfinite(kerf)) \
+                or not (shrink >= 0 and math.isfinite(shrink)):
+            raise VerifyError(f"{where}: scale must be positive and kerf_offset_mm, tile_shrink_mm non-negative")
+        ref: dict[int, np.ndarray] = {}
+        rs = manifest.get("reference_square")
+        for item in ([rs] if isinstance(rs, dict) else (rs or [])):
+            ref[int(item.get("sheet", 1))] = np.asarray(item["corners"], dtype=float).reshape(-1, 2)
+        feats = list(manifest.get("hinge_features") or [])
+        tile_sheet = {int(t["tile"]): int(t.get("sheet", 1)) for t in manifest.get("tiles") or []}
+        sheet_files = {}
+        for sh in manifest.get("sheets") or []:
+            for key in ("dxf", "svg"):
+                if sh.get(key):
+                    sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
+    except VerifyError:
+        raise
+    except (TypeError, ValueError, KeyError, AttributeError) as exc:
+        raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
+    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files)
+
+
+# ------------------------------------------------------------------ recovery
+
+
+def _drop_reference(lw: Linework, corners: np.ndarray | None) -> int:
+    """Remove the closed polyline whose corners are the reference square's."""
+    if corners is None:
+        return 0
+    keep_p, keep_c, dropped = [], [], 0
+    for pts, cl in zip(lw.polylines, lw.closed):
+        if cl and len(pts) == len(corners) and not dropped:
+            d = np.linalg.norm(pts[:, None] - corners[None], axis=-1).min(axis=1).max()
+            if d <= 1e-3:
+                dropped += 1
+                continue
+        keep_p.append(pts)
+        keep_c.append(cl)
+    lw.polylines, lw.closed = keep_p, keep_c
+    return dropped
+
+
+def _snapped_segments(lw: Linework) -> np.ndarray:
+    """All segments ``(n, 2, 2)`` with endpoints closer than SNAP_MM merged."""
+    segs = []
+    for pts, cl in zip(lw.polylines, lw.closed):
+        nxt = np.roll(pts, -1, axis=0)
+        s = np.stack([pts, nxt], 1)
+        segs.append(s if cl else s[:-1])
+    if not segs:
+        return np.zeros((0, 2, 2))
+    segs = np.concatenate(segs)
+    pts = segs.reshape(-1, 2)
+    pairs = cKDTree(pts).query_pairs(SNAP_MM, output_type="ndarray")
+    if len(pairs):
+        from scipy import sparse
+
+        n = len(pts)
+        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        _, label = csgraph.connected_components(g, directed=False)
+        first = np.full(label.max() + 1, -1)
+        first[label[::-1]] = np.arange(n)[::-1]
+        pts = pts[first[label]]
+    segs = pts.reshape(-1, 2, 2)
+    return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
+
+
+def recover_polygons(lw: Linework, al: Allowances) -> tuple[np.ndarray, str]:
+    """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
+    closed_only = all(lw.closed) and lw.polylines
+    hinge = al.hinge
+    if hinge == "plain":
+        hinge = "separate" if closed_only else "tape"
+    if hinge == "tape":
+        segs = _snapped_segments(lw)
+        if len(segs) == 0:
+            return np.zeros(0, dtype=object), "polygonize"
+        noded = shapely.unary_union(shapely.linestrings(segs))
+        faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+        return faces, "polygonize of the noded linework"
+    rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
+    if len(rings) != len(lw.polylines):
+        raise VerifyError(f"{lw.path}: {len(lw.polylines) - len(rings)} open CUT polylines in a {al.hinge} "
+                          f"layout, where every outline must be closed")
+    polys = shapely.make_valid(np.array(rings, dtype=object))
+    if hinge == "separate":
+        out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
+            else polys
+        return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
+    # ligament: outer loops minus inner loops is the material
+    tree = shapely.STRtree(polys)
+    inside = np.zeros(len(polys), dtype=bool)
+    a, b = tree.query(polys, predicate="contains_properly")
+    inside[b[a != b]] = True
+    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
+    if al.kerf_offset:
+        material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
+    feats = [shapely.Polygon(np.asarray(f["polygon"], dtype=float) / 1.0) for f in al.hinge_features
+             if f.get("polygon")]
+    if feats:
+        material = material.difference(shapely.unary_union(feats))
+    parts = shapely.get_parts(material)
+    if al.tile_shrink:
+        parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
+    return parts, "material minus ligaments, grown by the tile shrink"
+
+
+def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | None:
+    """The four corners (CCW) of a recovered tile region, or None.
+
+    Collinear and duplicate vertices (T-junctions, noding points) are dropped;
+    if more than four corners remain (bevelled or notched corners), the four
+    longest sides are extended to meet.
+    """
+    if poly.is_empty or poly.geom_type != "Polygon":
+        return None
+    pts = np.asarray(poly.exterior.coords)[:-1]
+    if shapely.LinearRing(pts).is_ccw is False:
+        pts = pts[::-1]
+    changed = True
+    while changed and len(pts) > 3:
+        changed = False
+        prv, nxt = np.roll(pts, 1, 0), np.roll(pts, -1, 0)
+        from .geom import point_segment_distance
+
+        d = point_segment_distance(pts, prv, nxt)
+        dup = np.linalg.norm(pts - prv, axis=1) <= eps
+        bad = (d <= eps) | dup
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            pts = np.delete(pts, k, axis=0)
+            changed = True
+    if len(pts) == 4:
+        return pts
+    if len(pts) < 4:
+        return None
+    e = np.roll(pts, -1, 0) - pts
+    longest = np.sort(np.argsort(-np.linalg.norm(e, axis=1))[:4])
+    out = []
+    for i in range(4):
+        k1, k2 = longest[i - 1], longest[i]
+        p1, d1 = pts[k1], e[k1]
+        p2, d2 = pts[k2], e[k2]
+        den = geometry.cross2(d1, d2)
+        if abs(den) < 1e-12 * np.linalg.norm(d1) * np.linalg.norm(d2):
+            return None
+        t = geometry.cross2(p2 - p1, d2) / den
+        out.append(p1 + t * d1)
+    return np.asarray(out)
+
+
+def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
+    """Corners ``(n, 4, 2)`` of recovered regions and how many are not quads.
+
+    Plain four-vertex rings take a vectorised path; the rest go through
+    :func:`quad_corners`.
+    """
+    polys = np.asarray(polys, dtype=object)
+    if len(polys) == 0:
+        return np.zeros((0, 4, 2)), 0
+    simple = (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
+    rings = shapely.get_exterior_ring(np.where(simple, polys, None))
+    npts = np.where(simple, shapely.get_num_coordinates(rings), 0)
+    four = npts == 5
+    out = []
+    if four.any():
+        C = shapely.get_coordinates(rings[four]).reshape(-1, 5, 2)[:, :4]
+        cw = geometry.signed_areas(C) < 0
+        C[cw] = C[cw, ::-1]
+        out.append(C)
+    bad = 0
+    rest = [quad_corners(p) for p in polys[~four]]
+    good = [q for q in rest if q is not None]
+    bad = len(rest) - len(good)
+    if good:
+        out.append(np.asarray(good))
+    return (np.concatenate(out) if out else np.zeros((0, 4, 2))), bad
+
+
+# ------------------------------------------------------------------ matching
+
+
+def _shift_fit(D: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Best cyclic corner shift of R onto D (per pair) and the max corner residual
+    after a proper rigid fit. ``D``, ``R``: (n, 4, 2)."""
+    from .geom import tile_kabsch
+
+    best = np.full(len(D), np.inf)
+    shift = np.zeros(len(D), dtype=np.int64)
+    for s in range(4):
+        _, res = tile_kabsch(D, np.roll(R, -s, axis=1))
+        better = res < best
+        best[better], shift[better] = res[better], s
+    return best, shift
+
+
+def _mirror(R: np.ndarray) -> np.ndarray:
+    M = R.copy()
+    M[..., 0] *= -1
+    return M[:, ::-1]
+
+
+def _descriptor(C: np.ndarray, L: float) -> np.ndarray:
+    """Rigid-motion and corner-shift invariant shape key of quads (reflections too)."""
+    return np.concatenate([np.sort(geometry.edge_lengths(C), axis=1),
+                           np.sort(geometry.corner_angles(C), axis=1) * L], axis=1)
+
+
+def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Assign recovered quads ``R`` to design quads ``D`` one-to-one by shape.
+
+    Returns ``assign`` (len R, design index or -1), residual and corner shift.
+    Candidates are the k nearest design shapes; assignment is greedy by residual.
+    """
+    n = len(R)
+    assign = np.full(n, -1)
+    resid = np.full(n, np.inf)
+    shift = np.zeros(n, dtype=np.int64)
+    if n == 0 or len(D) == 0:
+        return assign, resid, shift
+    k = min(k, len(D))
+    tree = cKDTree(_descriptor(D, L))
+    _, cand = tree.query(_descriptor(R, L), k=k)
+    cand = cand.reshape(n, k)
+    ri = np.repeat(np.arange(n), k)
+    di = cand.ravel()
+    res, sh = _shift_fit(D[di], R[ri])
+    order = np.argsort(res, kind="stable")
+    used = np.zeros(len(D), dtype=bool)
+    for m in order:
+        r, d = ri[m], di[m]
+        if assign[r] < 0 and not used[d]:
+            assign[r], resid[r], shift[r] = d, res[m], sh[m]
+            used[d] = True
+    # whatever is left (more tiles congruent than k) pairs up by brute force
+    left_r = np.flatnonzero(assign < 0)
+    left_d = np.flatnonzero(~used)
+    if len(left_r) and len(left_d):
+        rr = np.repeat(left_r, len(left_d))
+        dd = np.tile(left_d, len(left_r))
+        res, sh = _shift_fit(D[dd], R[rr])
+        for m in np.argsort(res, kind="stable"):
+            r, d = rr[m], dd[m]
+            if assign[r] < 0 and not used[d]:
+                assign[r], resid[r], shift[r] = d, res[m], sh[m]
+                used[d] = True
+    return assign, resid, shift
+
+
+def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+    """Match recovered quads ``R`` to design closed-state tiles ``Y`` under ONE rigid motion.
+
+    Hypotheses pair the recovered tile nearest the layout's centre with design
+    tiles nearest the design's centre (and each corner shift); the best by
+    mean capped centre distance wins, then the motion is refit on all matched corners.
+    Returns assign, per-tile residual, shift, rotation angle, translation.
+    """
+    n = len(R)
+    assign = np.full(n, -1)
+    if n == 0 or len(Y) == 0:
+        return assign, np.full(n, np.inf), np.zeros(n, dtype=np.int64), 0.0, np.zeros(2)
+    cr, cy = R.mean(axis=1), Y.mean(axis=1)
+    cap = geometry.mean_edge_length(Y)
+    r0 = int(np.argmin(np.linalg.norm(cr - cr.mean(0), axis=1)))
+    cands = np.argsort(np.linalg.norm(cy - cy.mean(0), axis=1))[:n_hyp]
+    tree = cKDTree(cr)
+    best = None
+    for d in cands:
+        for s in range(4):
+            theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
+            moved = geometry.rotate(Y, theta) + t  # design tiles in the sheet frame
+            dist, idx = tree.query(moved.mean(axis=1))
+            # mean of capped distances: a hypothesis one tile off (congruent
+            # lattices) leaves a whole row unmatched and scores worse
+            score = float(np.minimum(dist, cap).mean())
+            if best is None or score < best[0]:
+                best = (score, theta, t)
+    _, theta, t = best
+    assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
+    ok = assign >= 0
+    if ok.sum() >= 1:  # refit the single motion on every matched corner
+        src = Y[assign[ok]]
+        dst = np.stack([np.roll(R[i], -shift[i], axis=0) for i in np.flatnonzero(ok)])
+        theta, t = geometry.kabsch(src, dst)
+        assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
+    return assign, resid, shift, float(theta), t
+
+
+def _assign_positions(Y, R, theta, t, tree):
+    n = len(R)
+    moved = geometry.rotate(Y, theta) + t
+    dist, idx = tree.query(moved.mean(axis=1))  # design tile -> nearest recovered tile
+    assign = np.full(n, -1)
+    resid = np.full(n, np.inf)
+    shift = np.zeros(n, dtype=np.int64)
+    # one design tile per recovered tile: the nearest claims it
+    order = np.lexsort((dist, idx))
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = idx[order[1:]] != idx[order[:-1]]
+    d = order[first]
+    r = idx[d]
+    diff = np.stack([np.linalg.norm(np.roll(R[r], -s, axis=1) - moved[d], axis=-1).max(axis=1)
+                     for s in range(4)], axis=1)
+    s = diff.argmin(axis=1)
+    assign[r], resid[r], shift[r] = d, diff[np.arange(len(r)), s], s
+    return assign, resid, shift
+
+
+# ------------------------------------------------------------------ rebuilding closed states
+
+
+def place_from_shapes(pattern: Pattern, C: np.ndarray, state: int) -> tuple[np.ndarray, np.ndarray]:
+    """Assemble a closed state from per-tile shapes ``C`` (T, 4, 2), any frames.
+
+    Breadth-first from tile 0: each child turns so the edge bounding its folded
+    gap lies along the parent's, and its hinge copy sits on the parent's.
+    Returns the placed corners and every hinge's split (mm) — non-zero only on
+    non-tree hinges, where the loops fail to close.
+    """
+    top = pattern.topology
+    fold = top.fold(state)
+    T = top.n_tiles
+    Y = C.copy()
+    if T > 1:
+        adj = top.tile_adjacency
+        order, pred = csgraph.breadth_first_order(adj, 0, directed=False, return_predecessors=True)
+        depth = np.zeros(T, dtype=np.int64)
+        for t in order[1:]:
+            depth[t] = depth[pred[t]] + 1
+        child = order[1:]
+        par = pred[child]
+        h = np.asarray(adj[par, child]).ravel().astype(np.int64) - 1
+        a_is_par = top.hinge_tiles[h, 0] == par
+        cA, cB = top.hinge_corner[h].T
+        eA, eB = fold.fold_corner_ends[h].T
+        cp, ep = np.where(a_is_par, cA, cB), np.where(a_is_par, eA, eB)
+        cc, ec = np.where(a_is_par, cB, cA), np.where(a_is_par, eB, eA)
+        for d in range(1, int(depth.max()) + 1):
+            sel = np.flatnonzero(depth[child] == d)
+            p, c = par[sel], child[sel]
+            hp = Y[p, cp[sel]]
+            dp = Y[p, ep[sel]] - hp
+            loc = C[c] - C[c, cc[sel]][:, None, :]
+            dc = loc[np.arange(len(c)), ec[sel]]
+            phi = np.arctan2(dp[:, 1], dp[:, 0]) - np.arctan2(dc[:, 1], dc[:, 0])
+            Y[c] = geometry.rotate(loc, phi[:, None]) + hp[:, None, :]
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    split = np.linalg.norm(Y[A, cA] - Y[B, cB], axis=1)
+    return Y, split
+
+
+# ------------------------------------------------------------------ entry point
+
+
+def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str, Any] | None = None,
+                  tol_mm: float = 0.05, tol_rad: float = 1e-6) -> Report:
+    """Verify a cut layout (DXF or SVG) against ``pattern`` and both closed states.
+
+    ``manifest`` None loads ``manifest.json`` beside the layout if present; a
+    plain file without one is read as closed tile outlines (or, with open
+    polylines, as in-place linework), without allowances. Lengths are compared
+    with ``tol_mm``; angles derived from cut shapes with ``tol_mm`` / mean edge.
+    """
+    path = Path(layout_path)
+    if manifest is None:
+        manifest = load_manifest(path)
+    al = _allowances(manifest, str(path.parent / "manifest.json") if manifest is not None else str(path))
+    files = _sheet_files(path, al)
+    L = pattern.tile_size
+    tol = Tolerances(float(tol_mm), max(float(tol_rad), float(tol_mm) / L), L, "fabrication")
+    rep = Report(subject=str(path), kind="layout",
+                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "hinge": al.hinge,
+                       "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
+    g = "layout"
+    D = pattern.corners()  # design shapes (deployed = cut shapes)
+    T = pattern.n_tiles
+
+    # ---- read and recover per sheet
+    sheets: dict[int, tuple[np.ndarray, list[int]]] = {}
+    methods = set()
+    unusable = 0
+    for sheet, f in files.items():
+        lw = read_cut_file(f)
+        _drop_reference(lw, al.reference.get(sheet))
+        if al.scale != 1.0:
+            lw.polylines = [p / al.scale for p in lw.polylines]
+        polys, method = recover_polygons(lw, al)
+        methods.add(method)
+        polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
+        quads, bad = quads_of(polys)
+        unusable += bad
+        sheets[sheet] = (quads, [])
+    rep.meta["recovery"] = sorted(methods)
+
+    in_place = al.layout == "in-place"
+    if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
+        allq = np.concatenate([q for q, _ in sheets.values()]) if sheets else np.zeros((0, 4, 2))
+        if len(allq):
+            u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
+            in_place = len(shapely.get_parts(u)) == 1 and len(allq) > 1
+        rep.meta["layout"] = "in-place" if in_place else "separate"
+
+    # ---- match
+    assign_all = np.full(T, -1)  # design tile -> global recovered index
+    cut_shapes = np.full((T, 4, 2), np.nan)
+    resid_pos = np.full(T, np.nan)
+    extra = 0
+    state = al.state
+    Ystate = pattern.contracted.get(state)
+    if Ystate is None:
+        Ystate = contract(pattern, state).corners
+    for sheet, (R, _) in sheets.items():
+        if in_place:
+            design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
+                else np.arange(T)
+            design_ids = design_ids[design_ids < T]
+            a, res, sh, _, _ = match_in_place(Ystate[design_ids], R)
+            a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
+        else:
+            free = np.flatnonzero(assign_all < 0)
+            a, res, sh = match_by_shape(D[free], R, L)
+            a = np.where(a >= 0, free[np.maximum(a, 0)], -1)
+        for r in range(len(R)):
+            d = a[r]
+            if d < 0 or assign_all[d] >= 0:
+                extra += 1
+                continue
+            assign_all[d] = r
+            cut_shapes[d] = np.roll(R[r], -sh[r], axis=0)
+            if in_place:
+                resid_pos[d] = res[r]
+    missing = np.flatnonzero(assign_all < 0)
+    got = T - len(missing)
+    rep.add(Check(f"{g}: tiles recovered", ok=not len(missing) and not extra and not unusable,
+                  value=got, tol=T, unit="count", op="==", group=g,
+                  worst=f"tile {int(missing[0])}" if len(missing) else None,
+                  detail=(f"{got} of {T} design tiles found; missing {missing[:20].tolist()}; "
+                          f"{extra} unmatched cut regions; {unusable} regions that are not quads")))
+    have = assign_all >= 0
+
+    # ---- (a) congruence of every cut tile with its design tile
+    cong = np.full(T, np.nan)
+    mirrored: list[int] = []
+    if have.any():
+        from .geom import leave_one_out_residual
+
+        fit = leave_one_out_residual(D[have], cut_shapes[have])
+        dl = np.abs(geometry.edge_lengths(cut_shapes[have]) - geometry.edge_lengths(D[have])).max(axis=1)
+        cong[have] = np.maximum(fit, dl)
+        bad = np.flatnonzero(have)[cong[have] > tol.length]
+        if len(bad):
+            mres, _ = _shift_fit(D[bad], _mirror(cut_shapes[bad]))
+            mirrored = bad[mres <= np.maximum(tol.length, 0.5 * cong[bad])].tolist()
+    worst_cong = int(np.nanargmax(cong)) if have.any() else None
+    rep.add(measured(f"{g}: (a) cut tiles congruent to design", float(np.nanmax(cong)) if have.any() else np.nan,
+                     tol.length, "mm", worst=f"tile {worst_cong}" if worst_cong is not None else None, group=g,
+                     detail=(f"mirrored tiles {mirrored}; " if mirrored else "")
+                     + "largest corner offset from a proper rigid fit of the other corners, and edge-length change"))
+
+    # ---- (b) in place: the sheet is the declared closed state
+    if in_place:
+        rep.add(measured(f"{g}: (b) in place = closed state {state}",
+                         float(np.nanmax(resid_pos)) if have.any() else np.nan, tol.length, "mm",
+                         worst=f"tile {int(np.nanargmax(resid_pos))}" if have.any() else None, group=g,
+                         detail="corner distance to the design's closed state under one rigid motion per sheet"))
+        if have.all():
+            layout_state = np.stack([cut_shapes[d] for d in range(T)]) if len(sheets) == 1 else None
+            if layout_state is not None:
+                for chk in closed_state_checks(pattern, layout_state, state, tol):
+                    if "congruent" in chk.name or "loop closure" in chk.name:
+                        continue
+                    chk.name = f"{g}: (b) sheet {chk.name}"
+                    chk.group = g
+                    rep.add(chk)
+
+    # ---- (c) reassemble by the hinge correspondence
+    rebuild = [3 - state] if in_place else list(STATES)
+    for s in rebuild:
+        name = f"{g}: (c) state {s} from cut tiles"
+        if not have.all():
+            rep.add(Check(f"{name}: loop closure", ok=False, value=None, tol=tol.length, unit="mm", group=g,
+                          detail="cannot reassemble: tiles are missing"))
+            continue
+        Y, split = place_from_shapes(pattern, cut_shapes, s)
+        rep.add(measured(f"{name}: loop closure", float(split.max(initial=0.0)), tol.length, "mm",
+                         worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g))
+        for chk in closed_state_checks(pattern, Y, s, tol):
+            if "congruent" in chk.name:
+                continue
+            chk.name = f"{name}: {chk.name.split(': ', 1)[1]}"
+            chk.group = g
+            rep.add(chk)
+
+    # ---- (d) every hinge present
+    top = pattern.topology
+    A, B = top.hinge_tiles.T
+    present = have[A] & have[B]
+    why = "both tiles cut"
+    if in_place and present.any():
+        cA, cB = top.hinge_corner.T
+        ok = np.zeros(len(A), dtype=bool)
+        sel = np.flatnonzero(present)
+        ok[sel] = np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol.length
+        present &= ok
+        why = "both tiles cut, hinge corners coincide on the sheet"
+    if al.hinge == "ligament":
+        listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
+        present &= np.isin(np.arange(len(A)), list(listed))
+        why += ", a ligament listed"
+    absent = np.flatnonzero(~present)
+    rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
+                  unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
+                  detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
+    return rep
+
+
+def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
+    """Every sheet of the layout in the same format as ``path`` (just ``path`` for one sheet)."""
+    fmt = path.suffix.lower().lstrip(".")
+    named = {k: v.get(fmt) for k, v in al.sheet_files.items() if v.get(fmt)}
+    if len(named) <= 1:
+        sheet = next((k for k, v in named.items() if v == path.name), 1)
+        return {sheet: path}
+    if path.name not in named.values():
+        raise VerifyError(f"{path}: not one of the sheets listed in the manifest ({sorted(named.values())})")
+    out = {}
+    for k, name in sorted(named.items()):
+        f = path.parent / name
+        if not f.exists():
+            raise VerifyError(f"{f}: sheet {k} listed in the manifest is missing")
+        out[k] = f
+    return out

@@ -1,0 +1,469 @@
+"""Geometric proof that a pattern closes into both compact states (spec §6, §10).
+
+:func:`verify_pattern` measures, with named tolerances:
+
+* every tile simple (GEOS-valid, interior angles summing to 2π), CCW and not
+  degenerate;
+* per closed state: loop closure per hole, tiles congruent to the deployed
+  tiles, holes of zero area, every folded gap closed (endpoints coincident for
+  rhombus holes, or collinear with a T-junction for parallelogram holes),
+  compactness (no overlaps, union area = sum of tile areas, no interior gaps,
+  one outline), and agreement with a stored closed state;
+* design residuals: edge pairs (or the parallelogram conditions) and rings per
+  state, hinge sums when rigid deployability is claimed;
+* the rigid deployment path, sampled at ``path_steps`` + 1 angles, when claimed;
+* the fit of the boundary tips to a recorded target outline.
+
+Closed states come from :func:`fabkiri.mechanics.contract.contract` (never
+averaged); stored closed states are checked against them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import shapely
+from scipy.sparse import csgraph
+
+from ..mechanics.contract import contract
+from ..pattern import geometry
+from ..pattern.model import Pattern
+from ..pattern.residuals import hinge_sums, state_residuals
+from ..pattern.topology import STATES
+from . import geom
+from .report import Check, Report, measured
+
+TIER_EXPORTED = 1e-9  # analytic or exported data, relative to the mean tile edge (spec §10)
+TIER_OPTIMISED = 1e-5  # optimiser output
+MIN_EDGE_REL = 1e-3
+MIN_ANGLE_RAD = 1e-3
+DEFAULT_PATH_STEPS = 32
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    length: float  # mm
+    angle: float  # rad
+    tile_size: float  # mm (mean tile edge)
+    tier: str
+
+    @property
+    def area(self) -> float:  # mm²: a length tolerance times the tile size
+        return self.length * self.tile_size
+
+
+def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6) -> Tolerances:
+    """Resolve the tolerances: explicit mm, or the relative tier of spec §10."""
+    size = pattern.tile_size
+    if tol_mm is not None:
+        return Tolerances(float(tol_mm), float(tol_rad), size, "given")
+    optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals", "report"))
+    rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
+    return Tolerances(rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data")
+
+
+def rigid_claimed(pattern: Pattern) -> bool:
+    """Whether the pattern claims rigid deployability.
+
+    A design report may say so (``rigid``, ``rigid_deployable`` or
+    ``options.rigid``); an undesigned standard lattice is rigid-deployable.
+    """
+    d = pattern.design or {}
+    for src in (d, d.get("options") or {}, d.get("constraints") or {}):
+        if isinstance(src, dict):
+            for key in ("rigid_deployable", "rigid"):
+                if key in src and src[key] is not None:
+                    return bool(src[key])
+    lat = pattern.lattice or {}
+    return not d and lat.get("kind") == "quad"
+
+
+# ----------------------------------------------------------------- helpers
+
+
+def _corner_index(tiles: np.ndarray, t: np.ndarray, n: np.ndarray) -> np.ndarray:
+    return (tiles[t] == n[..., None]).argmax(axis=-1)
+
+
+def _hole_outline(pattern: Pattern, Y: np.ndarray) -> np.ndarray:
+    """``(K, 8, 2)``: each hole walked along its four tile edges, in state ``Y``."""
+    top = pattern.topology
+    K = top.n_holes
+    t = top.hole_tiles  # edge c -> c+1 belongs to hole_tiles[:, c]
+    n0 = top.hole_nodes
+    n1 = np.roll(top.hole_nodes, -1, axis=1)
+    p0 = Y[t, _corner_index(top.tiles, t, n0)]
+    p1 = Y[t, _corner_index(top.tiles, t, n1)]
+    return np.stack([p0, p1], axis=2).reshape(K, 8, 2)
+
+
+def _worst(prefix: str, values: np.ndarray) -> str | None:
+    return f"{prefix} {int(np.argmax(values))}" if len(values) else None
+
+
+def _max(values: np.ndarray) -> float:
+    return float(np.max(values, initial=0.0)) if len(values) else 0.0
+
+
+# ----------------------------------------------------------------- checks
+
+
+def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
+    corners = pattern.corners()
+    angles = geometry.corner_angles(corners)
+    angle_sum_off = np.abs(angles.sum(axis=1) - geometry.TWO_PI)
+    invalid = ~shapely.is_valid(shapely.polygons(corners))
+    crossed = np.flatnonzero(invalid | (angle_sum_off > 1e-6))
+    out = []
+    detail = ""
+    if len(crossed):
+        sums = ", ".join(f"tile {t}: angle sum {np.degrees(angles[t].sum()):.0f}°" for t in crossed[:8])
+        detail = f"self-intersecting tiles {crossed.tolist()} ({sums})"
+    out.append(Check("tiles simple", ok=not len(crossed), value=int(len(crossed)), tol=0, unit="count",
+                     worst=f"tile {int(crossed[0])}" if len(crossed) else None, detail=detail, group="tiles"))
+    area = geometry.signed_areas(corners)
+    out.append(measured("tiles counter-clockwise", float(area.min()), 0.0, "mm²", op=">=",
+                        worst=_worst("tile", -area), group="tiles",
+                        detail=f"clockwise or flat tiles: {np.flatnonzero(area <= 0).tolist()[:20]}"))
+    edges = geometry.edge_lengths(corners)
+    out.append(measured("tiles min edge", float(edges.min()), MIN_EDGE_REL * tol.tile_size, "mm", op=">=",
+                        worst=_worst("tile", -edges.min(axis=1)), group="tiles"))
+    inner = np.minimum(angles, geometry.TWO_PI - angles)  # distance from a flat or folded corner
+    out.append(measured("tiles min angle", float(inner.min()), MIN_ANGLE_RAD, "rad", op=">=",
+                        worst=_worst("tile", -inner.min(axis=1)), group="tiles"))
+    return out
+
+
+def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances,
+                        closure: np.ndarray | None = None) -> list[Check]:
+    """Closedness and compactness of one closed state ``Y`` (T, 4, 2)."""
+    top = pattern.topology
+    g = f"state {state}"
+    out = []
+    if closure is not None:
+        out.append(measured(f"{g}: loop closure", _max(closure), tol.length, "mm",
+                            worst=_worst("hole", closure), group=g))
+    # congruence with the deployed tiles
+    X = pattern.corners()
+    dl = np.abs(geometry.edge_lengths(Y) - geometry.edge_lengths(X)).max(axis=1)
+    da = np.abs(geometry.wrap_angle(geometry.corner_angles(Y) - geometry.corner_angles(X))).max(axis=1)
+    _, fit = geom.tile_kabsch(X, Y)
+    mirrored = np.flatnonzero(np.sign(geometry.signed_areas(Y)) != np.sign(geometry.signed_areas(X)))
+    cong = np.maximum(dl, fit)
+    cong[mirrored] = np.inf
+    out.append(measured(f"{g}: tiles congruent (lengths)", _max(cong), tol.length, "mm",
+                        worst=_worst("tile", cong), group=g,
+                        detail=f"mirrored tiles {mirrored.tolist()}" if len(mirrored) else
+                        "per-corner edge-length change and per-tile rigid-fit residual"))
+    out.append(measured(f"{g}: tiles congruent (angles)", _max(da), tol.angle, "rad",
+                        worst=_worst("tile", da), group=g))
+    # holes of zero area
+    if top.n_holes:
+        hole_area = np.abs(geometry.signed_areas(_hole_outline(pattern, Y)))
+    else:
+        hole_area = np.zeros(0)
+    out.append(measured(f"{g}: holes closed (area)", _max(hole_area), tol.area, "mm²",
+                        worst=_worst("hole", hole_area), group=g))
+    # every folded gap (hole fold corner or boundary notch) closed
+    if isinstance(state, int) or str(state).isdigit():
+        fold = top.fold(int(state))
+        out.append(_folded_gaps(pattern, Y, fold, tol, g))
+    out.extend(compactness_checks(Y, tol, g, _blame(pattern)))
+    return out
+
+
+def _blame(pattern: Pattern) -> dict[int, int]:
+    """Self-intersecting tiles and the tiles hinged to them -> the crossed tile."""
+    crossed = geometry.self_intersecting_tiles(pattern.corners())
+    out: dict[int, int] = {}
+    for t in crossed.tolist():
+        out[t] = t
+        ht = pattern.topology.hinge_tiles
+        for n in ht[(ht == t).any(1)].ravel().tolist():
+            out.setdefault(n, t)
+    return out
+
+
+def _folded_gaps(pattern, Y, fold, tol: Tolerances, g: str) -> Check:
+    top = pattern.topology
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    eA, eB = fold.fold_corner_ends.T
+    hA, hB = Y[A, cA], Y[B, cB]
+    a, b = Y[A, eA], Y[B, eB]
+    split = np.linalg.norm(hA - hB, axis=1)  # the hinge's two copies
+    coincide = np.linalg.norm(a - b, axis=1)
+    la, lb = np.linalg.norm(a - hA, axis=1), np.linalg.norm(b - hB, axis=1)
+    a_short = la <= lb
+    short_end = np.where(a_short[:, None], a, b)
+    long_h = np.where(a_short[:, None], hB, hA)
+    long_end = np.where(a_short[:, None], b, a)
+    collinear = geom.point_segment_distance(short_end, long_h, long_end)
+    gap = np.maximum(split, np.minimum(coincide, collinear))
+    tjunction = int(((coincide > tol.length) & (collinear <= tol.length)).sum())
+    kind = (f"{tjunction} folded gaps close as T-junctions (parallelogram holes)" if tjunction
+            else "every folded gap closes with coincident endpoints (rhombus holes)")
+    return measured(f"{g}: folded gaps closed", _max(gap), tol.length, "mm", worst=_worst("hinge", gap),
+                    group=g, detail=kind)
+
+
+def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
+                       blame: dict[int, int] | None = None) -> list[Check]:
+    """No overlaps, union area = sum of tile areas, no interior gaps, one outline.
+
+    ``blame`` maps tiles to the self-intersecting tile they are (or are hinged
+    to), so overlaps caused by a crossed tile are named as such.
+    """
+    out = []
+    i, j, inter = geom.overlap_depths(Y)
+    bad = np.flatnonzero(inter > tol.length)
+    order = bad[np.argsort(-inter[bad])]
+    listed = ", ".join(f"tiles {i[k]}/{j[k]}: {inter[k]:.3g} mm" for k in order[:10])
+    if len(order) > 10:
+        listed += f", … ({len(order)} pairs)"
+    k = int(np.argmax(inter)) if len(inter) else None
+    cause = ""
+    if len(order) and blame:
+        culprits = [blame.get(int(i[m]), blame.get(int(j[m]))) for m in order]
+        if all(c is not None for c in culprits):
+            cause = f"; all caused by self-intersecting tile(s) {sorted(set(culprits))}"
+        else:
+            cause = f"; {sum(c is not None for c in culprits)} of {len(order)} caused by self-intersecting tiles"
+    out.append(measured(f"{g}: no overlaps", _max(inter), tol.length, "mm",
+                        worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, group=g,
+                        detail=(f"overlapping pairs (penetration depth): {listed}{cause}" if len(order) else
+                                "largest penetration depth between any two tiles")))
+    polys, _ = geom.tile_polygons(Y)
+    areas = shapely.area(polys)
+    total = float(areas.sum())
+    union = geom.tiles_union(Y, max(tol.length, 1e-12 * tol.tile_size), coverage=not len(bad))
+    deficit = abs(total - float(union.area))
+    out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.area, 1e-9 * total), "mm²",
+                        worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
+                        detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²"))
+    parts = list(getattr(union, "geoms", [union]))
+    gaps = [(shapely.area(shapely.Polygon(r)), r) for p in parts for r in p.interiors]
+    big = [(a, r) for a, r in gaps if a > tol.area]
+    worst_gap = max(gaps, key=lambda x: x[0]) if gaps else None
+    where = None
+    if worst_gap is not None:
+        c = shapely.Polygon(worst_gap[1]).representative_point()
+        where = f"at ({c.x:.4g}, {c.y:.4g}) mm"
+    out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.area, "mm²",
+                        worst=where, group=g,
+                        detail=f"{len(big)} enclosed gaps above tolerance" if big else ""))
+    # one outline: components after closing cracks narrower than the tolerance
+    eps = max(tol.length, 1e-12 * tol.tile_size)
+    closed = union.buffer(eps, join_style="mitre").buffer(-eps, join_style="mitre")
+    n_parts = len(getattr(closed, "geoms", [closed])) if not closed.is_empty else 0
+    out.append(Check(f"{g}: one outline", ok=n_parts == 1, value=n_parts, tol=1, unit="count", group=g,
+                     op="==", detail="" if n_parts == 1 else f"the tiles form {n_parts} separate pieces"))
+    return out
+
+
+def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Check]:
+    top = pattern.topology
+    x = pattern.nodes
+    out = []
+    if top.n_holes:
+        hole_len = np.linalg.norm(x[np.roll(top.hole_nodes, -1, 1)] - x[top.hole_nodes], axis=-1)
+        para = np.maximum(np.abs(hole_len[:, 0] - hole_len[:, 2]), np.abs(hole_len[:, 1] - hole_len[:, 3]))
+    else:
+        para = np.zeros(0)
+    rhombus = bool((para <= tol.length).all()) and bool(
+        (np.abs(hole_len - hole_len[:, :1]) <= tol.length).all()) if top.n_holes else True
+    for s in STATES:
+        g = f"state {s}"
+        r = state_residuals(pattern, s)
+        fold = top.fold(s)
+        # a hole's fold pair may differ when the hole is a parallelogram (spec §2.9)
+        res = r.edge_pairs.copy()
+        gap_face = top.gap_face[np.arange(top.n_hinges), fold.fold_gap]
+        in_hole = gap_face >= 0
+        res[in_hole] = np.minimum(res[in_hole], para[gap_face[in_hole]])
+        detail = "equal fold-pair lengths, or opposite hole sides equal (parallelogram)"
+        notch = ~in_hole
+        if not rhombus and notch.any() and res[notch].max() > tol.length:
+            # with parallelogram holes a notch may close as a T-junction on the
+            # outline; whether it closes is the 'folded gaps closed' check
+            detail += (f"; notch pairs differ by up to {res[notch].max():.3g} mm (T-junctions on the outline, "
+                       f"not counted)")
+            res[notch] = 0.0
+        out.append(measured(f"{g}: edge pairs", _max(res), tol.length, "mm", worst=_worst("hinge", res),
+                            group="design", detail=detail))
+        rings = np.abs(r.rings)
+        wrapped = r.wrapped_tiles.tolist()
+        out.append(measured(f"{g}: rings", _max(rings), tol.angle, "rad", worst=_worst("hole", rings),
+                            group="design",
+                            detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else ""))
+    hs = np.abs(hinge_sums(pattern))
+    out.append(measured("hinge sums", _max(hs), tol.angle, "rad", worst=_worst("hinge", hs), group="design",
+                        applies=claimed,
+                        detail="" if claimed else "rigid deployability not claimed; measured for information"))
+    return out
+
+
+# ----------------------------------------------------------------- rigid path
+
+
+def rigid_path(pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tile corners along the rigid path from state 1 (spec §7), and hinge mismatch per step.
+
+    Tiles turn by ±ω (checkerboard, sign from the deployed state); translations
+    are placed breadth-first so each tree hinge's two copies coincide; the
+    mismatch of every hinge is then measured. Returns ``(S, T, 4, 2)`` and ``(S,)``.
+    """
+    top = pattern.topology
+    T = top.n_tiles
+    X = pattern.corners()
+    rot, _ = geom.tile_kabsch(Y1, X)  # state 1 -> deployed, per tile
+    color = top.tile_color
+    m = [np.angle(np.exp(1j * rot[color == c]).mean()) for c in (0, 1)]
+    eps0 = 1.0 if geometry.wrap_angle(m[0] - m[1]) >= 0 else -1.0
+    eps = np.where(color == 0, eps0, -eps0)
+    S = len(omegas)
+    phi = omegas[:, None] * eps[None, :]  # (S, T)
+    trans = np.zeros((S, T, 2))
+    if T > 1:
+        adj = top.tile_adjacency
+        order, pred = csgraph.breadth_first_order(adj, 0, directed=False, return_predecessors=True)
+        depth = np.zeros(T, dtype=np.int64)
+        for t in order[1:]:
+            depth[t] = depth[pred[t]] + 1
+        child = order[1:]
+        par = pred[child]
+        hinge = np.asarray(adj[par, child]).ravel().astype(np.int64) - 1
+        A, B = top.hinge_tiles[hinge].T
+        cA, cB = top.hinge_corner[hinge].T
+        hp = np.where((A == par)[:, None], Y1[A, cA], Y1[B, cB])  # hinge copy in the parent
+        hc = np.where((A == par)[:, None], Y1[B, cB], Y1[A, cA])  # and in the child
+        for d in range(1, int(depth.max()) + 1):
+            sel = depth[child] == d
+            p, c = par[sel], child[sel]
+            trans[:, c] = (geometry.rotate(hp[sel][None], phi[:, p]) + trans[:, p]
+                           - geometry.rotate(hc[sel][None], phi[:, c]))
+    corners = geometry.rotate(Y1[None], phi[:, :, None]) + trans[:, :, None, :]
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    mismatch = np.linalg.norm(corners[:, A, cA] - corners[:, B, cB], axis=-1).max(axis=1, initial=0.0)
+    return corners, mismatch
+
+
+def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tolerances,
+                      steps: int = DEFAULT_PATH_STEPS) -> list[Check]:
+    omegas = np.linspace(0.0, np.pi / 2, steps + 1)
+    corners, mismatch = rigid_path(pattern, Y1, omegas)
+    out = [measured("rigid path: hinge closure", _max(mismatch), tol.length, "mm",
+                    worst=f"ω = {np.degrees(omegas[int(np.argmax(mismatch))]):.4g}°", group="rigid path",
+                    detail=f"{len(omegas)} samples of ω on [0, 90°]")]
+    is_convex = geom.convex(Y1)
+    depth = np.zeros(len(omegas))
+    pairs = [None] * len(omegas)
+    for s in range(len(omegas)):
+        depth[s], pairs[s] = geom.max_overlap_depth(corners[s], is_convex)
+    k = int(np.argmax(depth))
+    out.append(measured("rigid path: no overlap", _max(depth), tol.length, "mm",
+                        worst=(f"tiles {pairs[k][0]}/{pairs[k][1]} at ω = {np.degrees(omegas[k]):.4g}°"
+                               if pairs[k] else None), group="rigid path",
+                        detail="largest penetration depth between any two tiles"))
+    end = geometry.aligned_distance(corners[-1], Y2)
+    out.append(measured("rigid path: ends in state 2", end, tol.length * np.sqrt(len(Y1)), "mm",
+                        group="rigid path", detail="aligned distance of the ω = 90° frame to state 2"))
+    return out
+
+
+# ----------------------------------------------------------------- target
+
+
+def _target_outline(design: dict[str, Any]) -> np.ndarray | None:
+    tgt = design.get("target") if isinstance(design, dict) else None
+    if not isinstance(tgt, dict):
+        return None
+    for key in ("polygon", "points", "outline", "boundary", "samples"):
+        pts = tgt.get(key)
+        if isinstance(pts, list) and len(pts) >= 3:
+            try:
+                arr = np.asarray(pts, dtype=float)
+            except (TypeError, ValueError):
+                continue
+            if arr.ndim == 2 and arr.shape[1] == 2:
+                return arr
+    return None
+
+
+def _target_distance(tgt: dict[str, Any], tips: np.ndarray) -> np.ndarray | None:
+    """Distance (mm) of points to a recorded target: the design layer's own curve
+    (spline or polyline, exact foot points) when it can be rebuilt, else the polyline."""
+    if tgt.get("kind") in ("spline", "polyline") and "points" in tgt:
+        try:
+            from ..design.targets import Target
+        except ImportError:  # a build without the design layer
+            Target = None
+        if Target is not None:
+            try:
+                curve = Target(str(tgt.get("name", "target")), tgt["kind"], np.asarray(tgt["points"], float),
+                               corners=np.asarray(tgt["corners"], float) if tgt.get("corners") is not None else None)
+                return np.abs(curve.signed_distance(tips))
+            except Exception:  # noqa: BLE001 - fall back to the plain polyline below
+                pass
+    pts = _target_outline({"target": tgt})
+    if pts is None:
+        return None
+    return shapely.distance(shapely.points(tips), shapely.LinearRing(pts))
+
+
+def target_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
+    tgt = (pattern.design or {}).get("target")
+    if not isinstance(tgt, dict):
+        return []
+    tips = pattern.nodes[pattern.topology.free_nodes]
+    d = _target_distance(tgt, tips)
+    if d is None:
+        return []
+    target_tol = float(tgt.get("tolerance_mm", tol.length))
+    return [measured("target fit", _max(d), target_tol, "mm", worst=_worst("free corner", d), group="design",
+                     detail=f"RMS {float(np.sqrt(np.mean(d ** 2))):.3g} mm over {len(d)} boundary tips "
+                            f"to the {tgt.get('kind', 'polyline')} target")]
+
+
+# ----------------------------------------------------------------- entry point
+
+
+def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6, *,
+                   rigid: bool | None = None, path_steps: int = DEFAULT_PATH_STEPS) -> Report:
+    """Verify that ``pattern`` closes into both compact states.
+
+    ``tol_mm`` None uses the relative tier of spec §10 (1e-9 of the mean tile
+    edge for exported data, 1e-5 for optimiser output). ``rigid`` overrides
+    whether rigid deployability is claimed (default: :func:`rigid_claimed`);
+    when claimed, the rigid path is sampled at ``path_steps`` + 1 angles.
+    """
+    tol = tolerances(pattern, tol_mm, tol_rad)
+    claimed = rigid_claimed(pattern) if rigid is None else bool(rigid)
+    rep = Report(subject=pattern.name or "(unnamed pattern)", kind="pattern",
+                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": tol.tile_size,
+                       "tier": tol.tier, "tiles": pattern.n_tiles, "holes": pattern.topology.n_holes,
+                       "rigid_claimed": claimed})
+    for c in tile_checks(pattern, tol):
+        rep.add(c)
+    states = {}
+    for s in STATES:
+        c = contract(pattern, s)
+        Y = pattern.contracted.get(s, c.corners)
+        states[s] = Y
+        for chk in closed_state_checks(pattern, Y, s, tol, closure=c.hole_closure):
+            rep.add(chk)
+        if s in pattern.contracted:
+            d = geometry.aligned_distance(c.corners, Y)
+            rep.add(measured(f"state {s}: stored state matches computed", d, tol.length * np.sqrt(pattern.n_tiles),
+                             "mm", group=f"state {s}", detail="after one proper rigid alignment"))
+    for chk in residual_checks(pattern, tol, claimed):
+        rep.add(chk)
+    if claimed:
+        for chk in rigid_path_checks(pattern, states[1], states[2], tol, path_steps):
+            rep.add(chk)
+    for chk in target_checks(pattern, tol):
+        rep.add(chk)
+    return rep

@@ -1,0 +1,260 @@
+"""Inverse design: targets, constraint Jacobians, solver and the design CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as hst
+
+from fabkiri.design import constraints as C
+from fabkiri.design import targets as T
+from fabkiri.design.objective import regularizer
+from fabkiri.design.solve import DesignRequest, design
+from fabkiri.errors import InputError
+from fabkiri.pattern import read_pattern, standard_pattern
+from fabkiri.pattern.residuals import hinge_sums
+
+from .conftest import TEMPLATES
+
+
+def _families(rows=4, cols=6):
+    std = standard_pattern(rows, cols, tile_size=1.0)
+    st = C.Stencils.from_pattern(std)
+    n = len(std.nodes)
+    g1 = C.ClosedGrid.build(st, 1, n)
+    g2 = C.ClosedGrid.build(st, 2, n + g1.n_vertices)
+    nv = n + g1.n_vertices + g2.n_vertices
+    fams = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.rings(st, 1, nv), C.rings(st, 2, nv),
+            C.hinge_sums(st, nv), C.hole_opposite_sides(st, nv), C.notch_pairs(st, 1, nv),
+            C.notch_pairs(st, 2, nv), C.non_overlap(st, nv), C.convexity(st, nv),
+            C.symmetry(st, std.nodes, "x", nv), C.symmetry(st, std.nodes, "y", nv),
+            C.rectangle_outline(st, 1, nv), C.rectangle_outline(st, 2, nv), C.outline_ratio(st, 2, 1.3, nv),
+            g1.congruence(st, nv), g2.congruence(st, nv), g1.orientation(st, nv),
+            C.shape_match(st.tip_nodes, st.tip_side, T.circle().transformed(4.0), nv),
+            C.shape_match(st.tip_nodes, st.tip_side, T.star().transformed(4.0), nv, "star"),
+            C.shape_match(g2.boundary, g2.boundary_side, T.heart().transformed(4.0), nv, "closed"),
+            regularizer(st, nv)]
+    gx, gy = np.meshgrid(np.arange(cols + 1), np.arange(rows + 1))
+    grid = np.stack([gx.ravel(), gy.ravel()], -1).astype(float)
+    X = np.vstack([std.nodes, grid, grid])
+    return fams, X, st
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_jacobians_match_finite_differences(seed):
+    fams, X, _ = _families()
+    rng = np.random.default_rng(seed)
+    X = X + 0.05 * rng.normal(size=X.shape)
+    eps = 1e-6
+    for f in fams:
+        r0, J = f(X)
+        Jd = J.toarray()
+        x = X.reshape(-1)
+        cols = rng.choice(len(x), size=40, replace=False)
+        for c in cols:
+            xp, xm = x.copy(), x.copy()
+            xp[c] += eps
+            xm[c] -= eps
+            fd = (f(xp.reshape(X.shape))[0] - f(xm.reshape(X.shape))[0]) / (2 * eps)
+            assert np.allclose(Jd[:, c], fd, atol=2e-6, rtol=1e-5), (f.name, c, np.abs(Jd[:, c] - fd).max())
+
+
+def test_standard_pattern_satisfies_every_equality():
+    """The standard lattice is rigid-deployable and closes into rectangles of ratio N/M in both states."""
+    rows, cols = 4, 6
+    std = standard_pattern(rows, cols, tile_size=1.0)
+    st = C.Stencils.from_pattern(std)
+    n = len(std.nodes)
+    x = std.nodes
+    for f in [C.edge_pairs(st, 1, n), C.edge_pairs(st, 2, n), C.rings(st, 1, n), C.rings(st, 2, n),
+              C.hinge_sums(st, n), C.hole_opposite_sides(st, n), C.rectangle_outline(st, 1, n),
+              C.rectangle_outline(st, 2, n), C.outline_ratio(st, 1, cols / rows, n),
+              C.outline_ratio(st, 2, cols / rows, n), C.symmetry(st, x, "x", n), C.symmetry(st, x, "y", n)]:
+        assert np.abs(f(x)[0]).max() < 1e-12, f.name
+    assert C.outline_ratio(st, 1, 1.0, n)(x)[0][0] == pytest.approx(cols - rows)
+    for f in [C.non_overlap(st, n), C.convexity(st, n)]:
+        assert f(x)[0].min() > 0.1
+    # the standard closed grid (unit squares) is congruent to the tiles in both states
+    for s in (1, 2):
+        g = C.ClosedGrid.build(st, s, n)
+        gx, gy = np.meshgrid(np.arange(cols + 1), np.arange(rows + 1))
+        grid = np.stack([gx.ravel(), gy.ravel()], -1).astype(float)
+        assert np.abs(g.congruence(st, n + g.n_vertices)(np.vstack([x, grid]))[0]).max() < 1e-12
+    # shape-matching sides: one tip per tile on each side of the lattice
+    assert np.bincount(st.tip_side).tolist() == [cols, rows, cols, rows]
+
+
+def test_odd_symmetry_breaks_primal_dual():
+    std = standard_pattern(5, 5, tile_size=1.0)
+    st = C.Stencils.from_pattern(std)
+    with pytest.raises(InputError, match="swaps the primal and dual"):
+        C.symmetry(st, std.nodes, "y", len(std.nodes))
+
+
+# ------------------------------------------------------------------ targets
+@pytest.mark.parametrize("name", ["circle", "ellipse", "square", "rectangle", "superellipse", "hexagon",
+                                  "heart", "star"])
+def test_named_targets_project_consistently(name):
+    tgt = T.load_target(name, 80.0)
+    assert tgt.size == pytest.approx(80.0, rel=1e-6)
+    dense = tgt.sample(200)
+    # points pushed along the outward normal by d have signed distance d
+    u = np.linspace(0.01, 0.99, 37)
+    p = tgt.point(u)
+    t = tgt.tangent(u)
+    nrm = np.stack([t[:, 1], -t[:, 0]], -1)
+    for d in (-0.3, 0.0, 0.4):
+        dist = tgt.signed_distance(p + d * nrm)
+        # at polygon corners the normal offset is not the nearest point; compare where smooth
+        smooth = np.abs(np.abs(dist) - abs(d)) < 1e-6
+        assert smooth.mean() > 0.8
+        assert np.allclose(dist[smooth], d, atol=1e-7)
+    # the centre is inside, far points outside
+    assert tgt.signed_distance(np.array([[0.0, 0.0]]))[0] < 0 or name == "heart"
+    assert (tgt.signed_distance(dense * 3.0) > 0).all()
+    # arcs split the curve in CCW order: B, R, T, L
+    a = [tgt.arc_range(s) for s in range(4)]
+    assert all(lo < hi for lo, hi in a) and a[3][1] == pytest.approx(a[0][0] + 1.0)
+
+
+@settings(max_examples=30, deadline=None)
+@given(hst.floats(-3, 3), hst.floats(-3, 3), hst.floats(0.3, 3.0))
+def test_circle_signed_distance_is_exact(x, y, r):
+    tgt = T.circle().transformed(r)
+    d = tgt.signed_distance(np.array([[x, y]]))[0]
+    assert d == pytest.approx(np.hypot(x, y) - r, abs=1e-8 * r)
+
+
+def test_user_targets(tmp_path):
+    csv = tmp_path / "shape.csv"
+    csv.write_text("x,y\n0,0\n40,0\n40,20\n0,20\n")
+    tgt = T.load_target(str(csv))
+    assert tgt.kind == "polyline" and tgt.size == pytest.approx(40.0)
+    js = tmp_path / "s.json"
+    js.write_text(json.dumps({"points": [[np.cos(t), np.sin(t)] for t in np.linspace(0, 6, 12)],
+                              "curve": "spline"}))
+    assert T.load_target(str(js), 50.0).kind == "spline"
+    svg = tmp_path / "s.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 L 30 0 '
+                   'C 40 10 40 20 30 30 L 0 30 Z"/></svg>')
+    s = T.load_target(str(svg))
+    assert s.size == pytest.approx(37.5, rel=0.02)
+    bad = tmp_path / "bow.csv"
+    bad.write_text("0,0\n10,10\n10,0\n0,10\n5,-3\n")
+    with pytest.raises(InputError):
+        T.load_target(str(bad))
+    pentagram = tmp_path / "p.json"
+    pentagram.write_text(json.dumps([[np.cos(a), np.sin(a)] for a in np.pi / 2 + 4 * np.pi * np.arange(5) / 5]))
+    with pytest.raises(InputError, match="intersects itself"):
+        T.load_target(str(pentagram))
+    with pytest.raises(InputError, match="unknown target"):
+        T.load_target("no-such-shape")
+
+
+# ------------------------------------------------------------------- solver
+def test_design_circle_rigid_api():
+    res = design(DesignRequest(8, 8, T.load_target("circle", 100.0), rigid=True))
+    assert res.converged and res.report["status"] == "converged"
+    assert res.report["max_equality_residual"] <= 1e-10
+    p = res.pattern
+    assert np.abs(hinge_sums(p)).max() <= 1e-10
+    assert res.report["fit"]["shape"]["max_mm"] < 1.0
+    assert res.report["min_inequality"] >= 0
+
+
+def test_cli_design_circle_rigid(tmp_path, run_cli):
+    out = tmp_path / "c.json"
+    code, stdout, err = run_cli("design", "--tiles", "8x8", "--target", "circle", "--size", "80", "--rigid",
+                                "--json", "-o", out)
+    assert code == 0, err
+    report = json.loads(stdout)
+    assert report["status"] == "converged" and report["max_equality_residual"] <= 1e-10
+    assert report["checks"]["closure_1_rel"] <= 1e-9 and report["checks"]["closure_2_rel"] <= 1e-9
+    assert report["checks"]["hinge_sum_max_rad"] <= 1e-10
+    assert all(report["checks"][f"overlaps_{s}"] == 0 for s in ("deployed", "state_1", "state_2"))
+    p = read_pattern(out)
+    assert p.design["valid"] is True and sorted(p.contracted) == [1, 2]
+    code, _, err = run_cli("info", out, "--check")
+    assert code == 0, err
+
+
+def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
+    out = tmp_path / "h.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "heart", "--symmetry", "y", "--rigid",
+                                "--json", "-o", out)
+    assert code == 0, err
+    x = read_pattern(out).nodes
+    # mirror image of the node set about the y axis is the node set
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(x).query(x * [-1, 1])
+    assert d.max() < 1e-9
+    out2 = tmp_path / "b.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", TEMPLATES / "targets" / "blob-points.csv",
+                                "--json", "-o", out2)
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["shape_matching"] in ("hard", "least-squares") and rep["fit"]["shape"]["rms_mm"] >= 0
+
+
+def test_cli_parallelogram_holes(tmp_path, run_cli):
+    out = tmp_path / "p.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "ellipse", "--holes", "parallelogram",
+                                "--json", "-o", out)
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["checks"]["closure_1_rel"] <= 1e-9 and rep["checks"]["hinge_sum_max_rad"] <= 1e-10
+
+
+def test_cli_contracted_targets(tmp_path, run_cli):
+    out = tmp_path / "sq.json"
+    code, stdout, err = run_cli("design", "--tiles", "5x5", "--rigid", "--contracted-target", "1:square",
+                                "--contracted-target", "2:circle", "--json", "-o", out)
+    assert code in (0, 1), err
+    rep = json.loads(stdout)
+    fits = rep["closed_outline_fit"]
+    assert set(fits) == {"1", "2"} and fits["1"]["target"] == "square" and fits["2"]["target"] == "circle"
+    if code == 0:
+        assert rep["max_equality_residual"] <= 1e-10
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["--tiles", "0x4", "--target", "circle"], "at least"),
+    (["--tiles", "8x8", "--target", "no-such-target"], "unknown target"),
+    (["--tiles", "7x7", "--target", "circle", "--symmetry", "y"], "swaps the primal and dual"),
+    (["--tiles", "8x8", "--target", "heart", "--symmetry", "x"], "not symmetric"),
+    (["--tiles", "8x8"], "give --target"),
+    (["--tiles", "8x8", "--contracted-target", "3:circle"], "STATE"),
+    (["--tiles", "8x8", "--holes", "parallelogram", "--contracted-target", "2:circle"], "rhombus"),
+])
+def test_cli_rejects_bad_requests(tmp_path, run_cli, argv, msg):
+    out = tmp_path / "x.json"
+    code, _, err = run_cli("design", *argv, "-o", out)
+    assert code == 2 and msg in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_cli_self_intersecting_target(tmp_path, run_cli):
+    f = tmp_path / "pent.json"
+    f.write_text(json.dumps([[np.cos(a), np.sin(a)] for a in np.pi / 2 + 4 * np.pi * np.arange(5) / 5]))
+    out = tmp_path / "x.json"
+    code, _, err = run_cli("design", "--tiles", "8x8", "--target", f, "-o", out)
+    assert code == 2 and "intersects itself" in err and not out.exists()
+
+
+def test_cli_unreachable_tolerance_saves_unconverged(tmp_path, run_cli):
+    out = tmp_path / "u.json"
+    code, _, err = run_cli("design", "--tiles", "4x4", "--target", "circle", "--tol", "1e-30", "-o", out)
+    assert code == 1 and "did not reach" in err
+    p = read_pattern(out)
+    assert p.design["report"]["status"] == "unconverged" and p.design["valid"] is False
+
+
+def test_committed_example_patterns_are_valid():
+    for name in ("circle-8x8.json", "circle-8x8-rigid.json"):
+        p = read_pattern(TEMPLATES / "patterns" / name)
+        assert p.design["valid"] is True and p.design["report"]["status"] == "converged"
+        assert p.design["report"]["max_equality_residual"] <= 1e-10
