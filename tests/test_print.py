@@ -73,6 +73,13 @@ def test_coincident_hinges_go_on_opposite_faces(rows, cols, state, angle, printe
     assert (pa[pa[paired]] == paired).all()
     assert np.allclose(plan.hinge_xy[paired], plan.hinge_xy[pa[paired]], atol=1e-6)
     assert (plan.top[paired] != plan.top[pa[paired]]).all()
+    # the faces also keep the hinges that meet in the *other* closed state apart
+    other = printgeom.closed_corners(pat, 3 - state)
+    top_ = pat.topology
+    hx = other[top_.hinge_tiles[:, 0], top_.hinge_corner[:, 0]]
+    po = printgeom.coincident_pairs(hx, 1e-6 * pat.tile_size)
+    sel = np.flatnonzero(po >= 0)
+    assert (plan.top[sel] != plan.top[po[sel]]).all()
     # every interior hole closes to one point carrying exactly two hinges
     assert len(paired) == 2 * pat.topology.n_holes
     # any two hinges at distinct points are far apart (the clustering is not fooled)
@@ -155,6 +162,14 @@ def test_files_reload_with_the_same_volumes_and_names(printer):
     assert stl.is_watertight and stl.is_winding_consistent
     tc = mesh.check_printed_tiles(r, tiles_mesh=stl)
     assert tc.ok, tc
+    # the layout verifier accepts the STL's top faces as closed state 1 (both states reassemble)
+    vr = mesh.verify_printed_tiles(pat, r, tiles_mesh=stl)
+    assert vr.ok, vr.to_text()
+    assert vr.get("layout: (b) in place = closed state 1").value < 1e-4
+    assert vr.get("layout: (d) every hinge present").value == 0
+    # ... and rejects them for a pattern whose tiles are 0.5 mm larger (tolerance 0.4 mm)
+    bigger = standard_pattern(3, 4, tile_size=10.5)
+    assert not mesh.verify_printed_tiles(bigger, r, tiles_mesh=stl).ok
     # reproducible bytes
     again = mesh.job_files(mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer)), "k")
     assert again == files

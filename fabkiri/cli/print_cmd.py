@@ -32,6 +32,11 @@ def cmd_print(args: argparse.Namespace) -> int:
             f"printed tiles deviate {tiles.max_deviation_mm:.3g} mm from closed state {job.state} "
             f"(tolerance {tiles.tolerance_mm:g} mm), overlap {tiles.max_overlap_mm2:.3g} mm²"
         )
+    verifier = None
+    if job.style == "tiles-and-strips":  # the layout verifier on the printed top faces
+        verifier = mesh.verify_printed_tiles(pattern, realised)
+        problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
+                     for c in verifier.failed()]
     if problems:
         raise CheckFailed("; ".join(problems) + "; nothing written")
     stem = Path(args.file).stem
@@ -41,7 +46,7 @@ def cmd_print(args: argparse.Namespace) -> int:
 
         files[f"{stem}.step"] = cad.step_bytes([b for bed in job.beds for b in bed])
     files["manifest.json"] = mesh.manifest(realised, report, tiles, Path(args.file).name,
-                                           list(files) + ["manifest.json"])
+                                           list(files) + ["manifest.json"], verifier)
     atomic_write_many(args.output, files)
     faces = int(job.plan.top.sum())
     print(f"wrote {len(files)} files to {args.output}: {job.style}, closed state {job.state}, printer "

@@ -225,28 +225,23 @@ def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     T, az = lv.thickness, lv.axial
     A, B = plan.hinge_tiles.T
     H = plan.n_hinges
-    # per hinge: the z-span its ears occupy (other tiles are hollowed there)
-    span = np.where(pins.level[:, None] == 0, [[0.0, lv.level(1)[1] + az]], [[lv.level(2)[0] - az, T]])
     hollow = [regular_polygon(plan.hinge_xy[h], g.hollow, circumscribed=True) for h in range(H)]
     ear = [regular_polygon(plan.hinge_xy[h], g.ear, circumscribed=False) for h in range(H)]
-    # hinges whose ears pass through each tile's corner: its own and their partners
-    at_tile: dict[int, set[int]] = {t: set() for t in range(plan.tiles.shape[0])}
+    # A tile's corner at a pivot is cleared through the full height: the pivot's
+    # own partner turns in one half, and the hinge that meets it in either
+    # closed state stacks its ears in the other half. Its own ear is added back.
+    at_tile: dict[int, list[int]] = {t: [] for t in range(len(plan.tiles))}
     for h in range(H):
-        for t in (A[h], B[h]):
-            at_tile[int(t)].add(h)
-            if plan.partner[h] >= 0:
-                at_tile[int(t)].add(int(plan.partner[h]))
+        at_tile[int(A[h])].append(h)
+        at_tile[int(B[h])].append(h)
     bodies = []
     for t in range(len(plan.tiles)):
         X = plan.tiles[t]
         ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
-        hs = sorted(at_tile[t])
+        hs = at_tile[t]
         for h in hs:
-            z0, z1 = span[h]
-            ops.append(("sub", Prism((hollow[h],), z0 - (1.0 if z0 <= 0 else 0.0), z1 + (1.0 if z1 >= T else 0.0))))
+            ops.append(("sub", Prism((hollow[h],), -1.0, T + 1.0)))
         for h in hs:
-            if t not in (A[h], B[h]):
-                continue
             k = pins.level[h] + (0 if t == A[h] else 1)
             z0, z1 = lv.level(k)
             own = shapely.union(ear[h], shapely.intersection(X, hollow[h]))
@@ -523,6 +518,78 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
                      tiles=len(matched), ok=ok)
 
 
+def top_face_dxf(r: Realised, tiles_mesh=None) -> bytes:
+    """The printed tiles' outlines (section of the tile body at its bare
+    mid-plane, at printed size) as a plain DXF: closed LWPOLYLINEs on ``CUT``."""
+    import ezdxf
+    import manifold3d as m3d
+
+    job = r.job
+    if job.style != "tiles-and-strips":
+        raise FabricationError("top faces as a layout exist for tiles-and-strips only")
+    man = r.manifolds[0][0] if tiles_mesh is None else m3d.Manifold(m3d.Mesh(
+        vert_properties=np.asarray(tiles_mesh.vertices, dtype=np.float32),
+        tri_verts=np.asarray(tiles_mesh.faces, dtype=np.uint32)))
+    doc = ezdxf.new("R2010", units=ezdxf.units.MM)
+    doc.layers.add("CUT", color=1)
+    msp = doc.modelspace()
+    for ring in man.slice(0.5 * job.printer.tile_thickness_mm).to_polygons():
+        msp.add_lwpolyline(np.asarray(ring, dtype=float).tolist(), format="xy", close=True,
+                           dxfattribs={"layer": "CUT"})
+    out = io.StringIO()
+    doc.write(out)
+    return out.getvalue().encode("utf-8")
+
+
+def printed_bridges(r: Realised) -> list[dict]:
+    """The flexible material spanning each gap, measured on the hinge mesh:
+    sections of the strips at the middle of their thickness, minus the tiles,
+    each attributed to the hinge whose planned strip holds it."""
+    job, pr = r.job, r.job.printer
+    tiles_m, hinges_m = r.manifolds[0]
+    T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
+    planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
+    tree = shapely.STRtree(planned)
+    feats = []
+    tiles = shapely.union_all(_slice_polys(tiles_m, 0.5 * T))
+    for z in (0.5 * ts, T - 0.5 * ts):
+        for part in _slice_polys(hinges_m, z):
+            bridge = part.difference(tiles)
+            if bridge.is_empty:
+                continue
+            hit = tree.query(part.representative_point(), predicate="within")
+            if len(hit) != 1:
+                continue
+            for piece in getattr(bridge, "geoms", [bridge]):
+                feats.append({"hinge": int(hit[0]), "sheet": 1,
+                              "polygon": np.asarray(piece.exterior.coords)[:-1].round(6).tolist()})
+    return sorted(feats, key=lambda f: f["hinge"])
+
+
+def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
+    """Run the layout verifier (:func:`fabkiri.verify.verify_layout`) on the
+    printed tiles' top faces: read back as an in-place layout of the printed
+    closed state whose tiles were shrunk by half the gap, at the printer's
+    tolerance. Returns the verifier's :class:`~fabkiri.verify.Report`."""
+    import tempfile
+    from pathlib import Path
+
+    from ..verify import verify_layout
+
+    job = r.job
+    data = top_face_dxf(r, tiles_mesh)
+    manifest = {"format": "fabkiri.cut", "version": 1, "units": "mm", "hinge": "ligament", "layout": "in-place",
+                "state": job.state, "scale": 1.0, "kerf_offset_mm": 0.0, "tile_shrink_mm": job.plan.shrink_mm,
+                "hinge_features": printed_bridges(r)}
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "printed-top-faces.dxf"
+        path.write_bytes(data)
+        rep = verify_layout(pattern, path, manifest=manifest, tol_mm=job.printer.tolerance_mm)
+    rep.subject = "printed tile top faces"
+    rep.meta["files"] = []
+    return rep
+
+
 # ----------------------------------------------------------------- writing
 
 def export_3mf(scene) -> bytes:
@@ -574,7 +641,7 @@ def job_files(r: Realised, stem: str) -> dict[str, bytes]:
 
 
 def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name: str,
-             files: Iterable[str]) -> str:
+             files: Iterable[str], verifier=None) -> str:
     job = r.job
     plan = job.plan
     d = {
@@ -588,7 +655,8 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
                     "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
                    for h in range(plan.n_hinges)],
         "files": sorted(files),
-        "checks": {"meshes": rep.to_dict(), "tiles": tiles.to_dict() if tiles else None},
+        "checks": {"meshes": rep.to_dict(), "tiles": tiles.to_dict() if tiles else None,
+                   "verifier": verifier.to_dict() if verifier is not None else None},
     }
     if job.placements:
         d["placements"] = job.placements

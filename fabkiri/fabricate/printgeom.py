@@ -6,8 +6,11 @@ it into solids. Conventions:
 * the closed state's tiles are shrunk by half the printer's gap (mitre joins),
   so neighbouring printed tiles stay ``gap`` apart;
 * **coincident-hinge rule**: in a closed state the two hinges of an interior
-  node sit at one point; the hinge with the smaller index goes on the **top**
-  face, its partner on the **bottom** face; a lone (boundary) hinge goes on top;
+  node sit at one point, so they go on opposite faces (top/bottom). The faces
+  come from :func:`fabkiri.fabricate.hinges.assign_faces`, shared with the
+  laser-cut tape hinges: a two-colouring over *both* closed states (the lowest
+  hinge of each group on top), so a printed piece also reconfigures into the
+  other state without two strips or pin stacks meeting;
 * a **strip** (flexible hinge) of hinge ``h`` joining tiles A and B crosses the
   seam where A's and B's folded edges lie together: along the seam it spans
   ``strip_width`` from where the shrunk pair begins, across it reaches
@@ -101,10 +104,18 @@ def coincident_pairs(points: np.ndarray, tol: float) -> np.ndarray:
     return partner
 
 
-def face_rule(partner: np.ndarray) -> np.ndarray:
-    """Top (True) or bottom face per hinge: of two coincident hinges the smaller index goes on top."""
-    idx = np.arange(len(partner))
-    return (partner < 0) | (idx < partner)
+def face_rule(pattern: Pattern, states: dict[int, np.ndarray]) -> np.ndarray:
+    """Top (True) or bottom face per hinge, opposite for hinges that coincide in any given state."""
+    from .hinges import assign_faces
+
+    faces = assign_faces(pattern, states)
+    if faces.conflicts:
+        i, j = next((int(a), int(b)) for a, b in faces.pairs if faces.face[a] == faces.face[b])
+        raise FabricationError(
+            f"hinges {i} and {j} coincide in a closed state but cannot take opposite faces "
+            f"({faces.conflicts} conflicting pairs); no printed strip or pin layout exists"
+        )
+    return faces.face == 0
 
 
 def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
@@ -118,6 +129,12 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
     seam = far - hxy
     seam /= np.linalg.norm(seam, axis=1, keepdims=True)
     partner = coincident_pairs(hxy, COINCIDE_TOL_REL * pattern.tile_size)
+    states = {state: corners}
+    try:
+        states[3 - state] = closed_corners(pattern, 3 - state)
+    except CheckFailed:  # a pattern that closes one way only is still printable that way
+        pass
+    top = face_rule(pattern, states)
     d = 0.5 * printer.gap_mm
     polys = shapely.polygons(corners)
     shrunk = shapely.buffer(polys, -d, join_style="mitre")
@@ -129,7 +146,7 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
         )
     return ClosedPlan(
         state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
-        seam_dir=seam, seam_end=far, partner=partner, top=face_rule(partner), shrink_mm=d,
+        seam_dir=seam, seam_end=far, partner=partner, top=top, shrink_mm=d,
     )
 
 
