@@ -60,11 +60,12 @@ def main() -> None:
     r, _ = stage("solids (manifold3d) + meshes", mesh.realise_job, job)
     rep, _ = stage("mesh checks (watertight, clearance)", mesh.check_meshes, r)
     tc, _ = stage("printed tiles vs closed state", mesh.check_printed_tiles, r)
+    vr, _ = stage("layout verifier on the top faces", mesh.verify_printed_tiles, pattern, r)
     files, _ = stage("STL + 3MF bytes", mesh.job_files, r, "bench")
     with tempfile.TemporaryDirectory() as d:
         _, _ = stage("write files", lambda: [Path(d, k).write_bytes(v) for k, v in files.items()])
     total = time.perf_counter() - t0
-    ok = rep.ok and tc.ok
+    ok = rep.ok and tc.ok and vr.ok
     print(f"TOTAL pattern -> 3MF + STLs: {total:.2f} s (target < 10 s: {'met' if total < 10 else 'MISSED'}); "
           f"checks {'pass' if ok else 'FAIL'}; 3MF {len(files['bench.3mf']) / 1e6:.1f} MB; "
           f"triangles {sum(b['triangles'] for b in rep.bodies)}")

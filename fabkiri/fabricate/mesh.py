@@ -351,12 +351,24 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
 
 
 def _slice_polys(manifold, z: float) -> list[Polygon]:
-    polys = []
-    for ring in manifold.slice(z).to_polygons():
-        polys.append(np.asarray(ring))
-    # rings with holes: build polygons via even-odd union
-    geoms = [Polygon(p) for p in polys if len(p) >= 3]
-    return geoms
+    """The section of a solid at height ``z`` as disjoint polygons (holes kept)."""
+    rings = [np.asarray(r, dtype=float) for r in manifold.slice(z).to_polygons()]
+    rings = [r for r in rings if len(r) >= 3]
+    if not rings:
+        return []
+    idx = np.repeat(np.arange(len(rings)), [len(r) for r in rings])
+    lr = shapely.linearrings(np.concatenate(rings), indices=idx)
+    polys = shapely.polygons(lr)
+    ccw = shapely.is_ccw(lr)
+    outer, holes = polys[ccw], polys[~ccw]
+    if not len(holes):
+        return list(outer)
+    out = []
+    tree = shapely.STRtree(holes)
+    for o in outer:
+        inside = holes[tree.query(o, predicate="contains_properly")]
+        out.append(o.difference(shapely.union_all(inside)) if len(inside) else o)
+    return out
 
 
 def _check_clearances(r: Realised, rep: MeshReport) -> None:
@@ -385,10 +397,8 @@ def _check_clearances(r: Realised, rep: MeshReport) -> None:
         rep.required_clearance_mm = req
         worst = np.inf
         for z in (0.5 * ts, 0.5 * T, T - 0.5 * ts):
-            tiles = shapely.union_all(_slice_polys(tiles_m, z))
-            strips = shapely.union_all(_slice_polys(hinges_m, z))
-            parts = [tiles] if not hasattr(tiles, "geoms") else list(tiles.geoms)
-            sparts = [] if strips.is_empty else ([strips] if not hasattr(strips, "geoms") else list(strips.geoms))
+            parts = _slice_polys(tiles_m, z)
+            sparts = _slice_polys(hinges_m, z)
             allp = parts + sparts
             kind = np.array([0] * len(parts) + [1] * len(sparts))
             tree = shapely.STRtree(allp)
@@ -480,8 +490,7 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
         z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
         mask = shapely.union_all([regular_polygon(p, job.pins.geometry.hollow + 1e-3, True)
                                   for p in plan.hinge_xy + [dx, dy]])
-    section = shapely.union_all(_slice_polys(man, z))
-    parts = list(getattr(section, "geoms", [section]))
+    parts = _slice_polys(man, z)
     design = shapely.transform(shapely.polygons(plan.corners), lambda c: c + np.array([dx, dy]))
     grown = [shapely.buffer(p, plan.shrink_mm, join_style="mitre") for p in parts]
     if mask is not None:
@@ -551,15 +560,23 @@ def printed_bridges(r: Realised) -> list[dict]:
     planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
     tree = shapely.STRtree(planned)
     feats = []
-    tiles = shapely.union_all(_slice_polys(tiles_m, 0.5 * T))
+    tiles = np.array(_slice_polys(tiles_m, 0.5 * T), dtype=object)
+    tile_tree = shapely.STRtree(tiles)
     for z in (0.5 * ts, T - 0.5 * ts):
-        for part in _slice_polys(hinges_m, z):
-            bridge = part.difference(tiles)
+        parts = np.array(_slice_polys(hinges_m, z), dtype=object)
+        pi, hi = tree.query(shapely.point_on_surface(parts), predicate="within")
+        owner = np.full(len(parts), -1)
+        once = np.bincount(pi, minlength=len(parts)) == 1
+        owner[pi[once[pi]]] = hi[once[pi]]
+        qi, ti = tile_tree.query(parts, predicate="intersects")
+        for k, part in enumerate(parts):
+            if owner[k] < 0:
+                continue
+            near = tiles[ti[qi == k]]
+            bridge = part.difference(shapely.union_all(near)) if len(near) else part
             if bridge.is_empty:
                 continue
-            hit = tree.query(part.representative_point(), predicate="within")
-            if len(hit) != 1:
-                continue
+            hit = [owner[k]]
             for piece in getattr(bridge, "geoms", [bridge]):
                 feats.append({"hinge": int(hit[0]), "sheet": 1,
                               "polygon": np.asarray(piece.exterior.coords)[:-1].round(6).tolist()})
