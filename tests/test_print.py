@@ -340,3 +340,27 @@ def test_cli_does_not_load_build123d_without_step(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
                           env={**os.environ, "PYTHONPATH": str(REPO)})
     assert proc.returncode == 0, proc.stderr
+
+
+def test_cli_strips_with_pad_marks_on_the_laser_files(tmp_path, run_cli):
+    src = tmp_path / "sq.json"
+    pat = with_contracted_states(standard_pattern(3, 3))
+    write_pattern(pat, src)
+    code, _, err = run_cli("print", src, "--style", "strips", "--marks", "-o", tmp_path / "out")
+    assert code == 0, err
+    laser = json.loads((tmp_path / "out" / "laser" / "manifest.json").read_text())
+    H = pat.topology.n_hinges
+    assert laser["hinge"] == "tape" and laser["verification"]["ok"]
+    assert laser["pad_marks"]["count"] == 2 * H  # one outline per pad, both tiles of every hinge
+    # the engraved pad outlines sit inside the tiles, and each matches a printed pad's area
+    import ezdxf
+
+    doc = ezdxf.readfile(tmp_path / "out" / "laser" / "sq.dxf")
+    closed = [e for e in doc.modelspace().query("LWPOLYLINE") if e.dxf.layer == "ENGRAVE" and e.closed]
+    areas = sorted(shapely.Polygon([p[:2] for p in e.get_points()]).area for e in closed)
+    assert len(areas) >= 2 * H
+    job = mesh.build_job(pat, "strips", 1, load_printer())
+    pad_area = float(np.median(shapely.area(job.strips.pads)))
+    assert areas[-1] < pad_area  # kept inside the tile's engraving margin
+    code, _, err = run_cli("print", src, "--marks", "-o", tmp_path / "bad")
+    assert code == 2 and "--style strips" in err and not (tmp_path / "bad").exists()

@@ -7,7 +7,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..errors import CheckFailed
+from ..errors import CheckFailed, InputError
 from ..fileio import atomic_write_many
 from ..fabricate import mesh
 from ..fabricate.printers import available_printers, load_printer
@@ -40,6 +40,9 @@ def cmd_print(args: argparse.Namespace) -> int:
     if problems:
         raise CheckFailed("; ".join(problems) + "; nothing written")
     stem = Path(args.file).stem
+    laser = {}
+    if args.marks:
+        laser = _laser_files(pattern, job, args, stem)
     files = mesh.job_files(realised, stem)
     if args.step:
         from ..fabricate import cad  # lazy: OpenCascade is heavy
@@ -47,6 +50,7 @@ def cmd_print(args: argparse.Namespace) -> int:
         files[f"{stem}.step"] = cad.step_bytes([b for bed in job.beds for b in bed])
     files["manifest.json"] = mesh.manifest(realised, report, tiles, Path(args.file).name,
                                            list(files) + ["manifest.json"], verifier)
+    files.update(laser)
     atomic_write_many(args.output, files)
     faces = int(job.plan.top.sum())
     print(f"wrote {len(files)} files to {args.output}: {job.style}, closed state {job.state}, printer "
@@ -55,6 +59,26 @@ def cmd_print(args: argparse.Namespace) -> int:
           f"{report.min_clearance_mm if report.min_clearance_mm is not None else float('nan'):.3f} mm, "
           f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0
+
+
+def _laser_files(pattern, job, args, stem: str) -> dict[str, bytes]:
+    """Laser files of the tiles with the pads engraved (``laser/``), verified like ``fabkiri cut``."""
+    from ..fabricate.marks import marked_cut
+    from ..fabricate.materials import load_material
+    from ..fabricate.readback import verify_result
+
+    if job.style != "strips":
+        raise InputError("--marks engraves strip pads on laser-cut tiles: it needs --style strips")
+    res, n = marked_cut(pattern, job.state, job.strips, job.plan.corners, load_material(args.material), stem,
+                        Path(args.file).name)
+    rb = verify_result(pattern, res)
+    res.manifest["verification"] = rb.to_dict()
+    if not rb.ok:
+        raise CheckFailed("laser files with pad marks failed their read-back checks: "
+                          + "; ".join(f"{c.name} ({c.detail})" for c in rb.failed()[:4]) + "; nothing written")
+    out = {f"laser/{k}": v for k, v in res.files.items()}
+    out["laser/manifest.json"] = res.manifest_bytes()
+    return out
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -72,5 +96,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                        ("gap", "gap between printed tiles"), ("radial-clearance", "in-plane print clearance"),
                        ("axial-clearance", "clearance between stacked parts")]:
         p.add_argument(f"--{flag}", type=_positive, metavar="MM", help=f"override the preset's {what}")
+    p.add_argument("--marks", action="store_true",
+                   help="strips style: also write the laser files of the tiles (laser/, as 'fabkiri cut --hinge "
+                        "tape') with every pad outline engraved where its strip is glued")
+    p.add_argument("--material", default="acrylic-3", metavar="NAME|FILE.json",
+                   help="laser material for --marks (default acrylic-3)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.set_defaults(func=cmd_print)
