@@ -35,7 +35,7 @@ def _b3d():
 def _prism_solids(b3d, prism: Prism, polys) -> list:
     out = []
     h = prism.z1 - prism.z0
-    for poly in polys:
+    for poly in shapely.get_parts(np.asarray(list(polys), dtype=object)):
         ring = np.asarray(shapely.geometry.polygon.orient(poly, 1.0).exterior.coords)[:-1]
         pts = [(float(x), float(y), prism.z0) for x, y in ring]
         wire = b3d.Wire.make_polygon(pts, close=True)

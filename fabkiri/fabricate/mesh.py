@@ -133,6 +133,7 @@ class PrintJob:
     strips: printgeom.Strips | None = None
     pins: printgeom.PinPlan | None = None
     placements: list[dict] = field(default_factory=list)  # strips style: where each part went
+    unlabelled: list[int] = field(default_factory=list)  # strips too small for their engraved ID
 
 
 def _fits(bounds, printer: Printer, what: str) -> None:
@@ -171,6 +172,32 @@ def tiles_and_strips(pattern: Pattern, state: int, printer: Printer) -> PrintJob
     return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips)
 
 
+LABEL_MAX_MM = 2.5  # cap height of a strip's engraved hinge ID
+LABEL_MIN_MM = 1.2  # smaller is not legible in 0.4 mm lines
+
+
+def hinge_label(strip: Polygon, text: str, printer: Printer) -> Polygon | None:
+    """The hinge ID as single-stroke lines one nozzle wide, centred on a strip laid
+    long side along x, kept a nozzle inside its outline; ``None`` if it does not fit."""
+    from .text import text_strokes, text_width
+
+    line = printer.nozzle_mm
+    room = strip.buffer(-line, join_style="mitre")
+    if room.is_empty:
+        return None
+    b = room.bounds
+    c = shapely.centroid(strip)
+    h = min(LABEL_MAX_MM, b[3] - b[1] - line, (b[2] - b[0] - line) / max(text_width(text), 1e-9))
+    while h >= LABEL_MIN_MM:
+        strokes = text_strokes(text, h, (c.x, c.y))
+        glyphs = shapely.union_all([shapely.LineString(p).buffer(0.5 * line, cap_style="round", quad_segs=4)
+                                    for p in strokes if len(p) >= 2])
+        if room.contains(glyphs):
+            return glyphs if isinstance(glyphs, Polygon) else shapely.unary_union(glyphs)
+        h *= 0.85
+    return None
+
+
 def _min_rect_frame(poly: Polygon) -> tuple[float, Polygon]:
     """Rotation (rad) turning the polygon's minimum rectangle axis-parallel, and the turned polygon."""
     rect = np.asarray(poly.minimum_rotated_rectangle.exterior.coords)
@@ -193,6 +220,7 @@ def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     beds: list[list[Body]] = [[]]
     placements = []
     x = y = row_h = gap
+    unlabelled: list[int] = []
     for h, poly in enumerate(strips.outline):
         ang, turned = _min_rect_frame(poly)
         b = turned.bounds
@@ -207,13 +235,20 @@ def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
             row_h = 0.0
         placed = shapely.affinity.translate(turned, x - b[0], y - b[1])
         name = f"hinge-{h:04d}-{plan.face(h)}"
-        beds[-1].append(Body(name, "hinge", (("add", Prism((placed,), 0.0, ts)),), printer.strip_material))
+        ops = [("add", Prism((placed,), 0.0, ts))]
+        label = hinge_label(placed, str(h), printer)
+        if label is not None:
+            ops.append(("sub", Prism((label,), ts - printer.layer_mm, ts + 1.0)))
+        else:
+            unlabelled.append(h)
+        beds[-1].append(Body(name, "hinge", tuple(ops), printer.strip_material))
         placements.append({"hinge": h, "bed": len(beds), "face": plan.face(h), "tiles": plan.hinge_tiles[h].tolist(),
                            "rotation_deg": round(float(np.degrees(ang)), 6),
                            "offset_mm": [round(x - b[0], 6), round(y - b[1], 6)]})
         x += w + gap
         row_h = max(row_h, hgt)
-    return PrintJob("strips", state, printer, plan, beds, strips=strips, placements=placements)
+    return PrintJob("strips", state, printer, plan, beds, strips=strips, placements=placements,
+                    unlabelled=unlabelled)
 
 
 def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
