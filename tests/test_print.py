@@ -331,8 +331,8 @@ def test_cli_print_writes_everything(tmp_path, run_cli):
     assert code == 2 and "strips of hinges" in err and not (tmp_path / "bad").exists()
     code, _, err = run_cli("print", src, "--printer", "nope", "-o", tmp_path / "bad")
     assert code == 2 and "unknown printer" in err
-    code, _, err = run_cli("print", src, "--style", "pinned", "--tile-thickness", "1", "-o", tmp_path / "bad")
-    assert code == 2 and err.count("\n") == 1 and not (tmp_path / "bad").exists()
+    code, _, err = run_cli("print", src, "--style", "pinned", "--tile-thickness", "3", "-o", tmp_path / "bad")
+    assert code == 2 and "four stacked ears" in err and err.count("\n") == 1 and not (tmp_path / "bad").exists()
 
 
 def test_cli_does_not_load_build123d_without_step(tmp_path):

@@ -17,8 +17,11 @@ from .pattern_cmds import _positive, load_any
 def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     pattern = load_any(args.file)
+    pinned = args.style == "pinned"  # pinned tiles have their own (thicker) preset thickness
     printer = load_printer(args.printer).with_overrides(
-        tile_thickness_mm=args.tile_thickness, strip_thickness_mm=args.strip_thickness,
+        tile_thickness_mm=None if pinned else args.tile_thickness,
+        pin_tile_thickness_mm=args.tile_thickness if pinned else None,
+        strip_thickness_mm=args.strip_thickness,
         strip_width_mm=args.strip_width, strip_reach_mm=args.strip_reach, gap_mm=args.gap,
         radial_clearance_mm=args.radial_clearance, axial_clearance_mm=args.axial_clearance,
     )
