@@ -135,6 +135,28 @@ def test_tiles_and_strips_meshes(rows, cols, state, printer):
     assert tc.ok and tc.tiles == rows * cols and tc.max_deviation_mm < 1e-5
 
 
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(rows=st.integers(1, 5), cols=st.integers(2, 5), state=st.sampled_from([1, 2]),
+       tile=st.floats(9.0, 20.0), angle=st.floats(5, 85))
+def test_tiles_and_strips_invariants(rows, cols, state, tile, angle, printer):
+    pat = standard_pattern(rows, cols, tile_size=tile, angle_deg=angle)
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert rep.intersection_volume_mm3 <= 1e-6
+    assert rep.min_clearance_mm >= printer.radial_clearance_mm - 1e-6
+    assert mesh.check_printed_tiles(r).ok
+
+
+@pytest.mark.parametrize("state", [1, 2])
+def test_pinned_in_either_state(state, printer):
+    pat = standard_pattern(2, 3, tile_size=12.0)
+    r = mesh.realise_job(mesh.build_job(pat, "pinned", state, printer))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert mesh.check_printed_tiles(r).ok
+
+
 def _bridge_volume(r) -> float:
     """Strip volume outside the tiles (over the gaps)."""
     s = r.job.strips.outline

@@ -64,7 +64,7 @@ def body_solid(body: Body):
     op0, first = body.ops[0]
     if op0 != "add":
         raise FabricationError(f"body {body.name} must start by adding material")
-    later = body.ops[1:]
+    later = [(op, pr) for op, pr in body.ops[1:] if pr.polygons]
     later_polys = [np.array(pr.polygons, dtype=object) for _, pr in later]
     trees = [shapely.STRtree(p) for p in later_polys]
     parts = []

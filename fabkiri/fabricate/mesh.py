@@ -95,6 +95,8 @@ def realise(body: Body):
 
     acc = m3d.Manifold()
     for op, prism in body.ops:
+        if not any(not p.is_empty for p in prism.polygons):
+            continue  # e.g. no strip on the bottom face
         m = _manifold(prism)
         acc = acc + m if op == "add" else acc - m
     return acc
