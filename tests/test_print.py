@@ -390,3 +390,38 @@ def test_cli_strips_with_pad_marks_on_the_laser_files(tmp_path, run_cli):
     assert areas[-1] < pad_area  # kept inside the tile's engraving margin
     code, _, err = run_cli("print", src, "--marks", "-o", tmp_path / "bad")
     assert code == 2 and "--style strips" in err and not (tmp_path / "bad").exists()
+
+
+def _scaled(pattern, k):
+    from dataclasses import replace
+
+    return replace(pattern, nodes=pattern.nodes * k, contracted={s: c * k for s, c in pattern.contracted.items()})
+
+
+@pytest.mark.parametrize("state", [1, 2])
+def test_solver_design_prints_and_passes_the_verifier(state):
+    """The solver's rigid circle design (irregular tiles), doubled in size."""
+    from fabkiri.pattern.io import read_pattern
+
+    pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
+    pr = load_printer("prusa-xl")
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, pr))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert rep.min_clearance_mm >= pr.radial_clearance_mm
+    vr = mesh.verify_printed_tiles(pat, r)
+    assert vr.ok, vr.to_text()
+    # at its own size its narrow corners cannot hold the preset's 4 mm strips: refused, not mangled
+    with pytest.raises(FabricationError, match="strip"):
+        mesh.build_job(_scaled(pat, 0.5), "tiles-and-strips", state, pr)
+
+
+def test_solver_design_pinned():
+    from fabkiri.pattern.io import read_pattern
+
+    pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
+    pr = load_printer("prusa-xl")
+    r = mesh.realise_job(mesh.build_job(pat, "pinned", 1, pr))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert mesh.check_printed_tiles(r).ok

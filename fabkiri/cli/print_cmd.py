@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import CheckFailed, InputError
@@ -17,6 +18,9 @@ from .pattern_cmds import _positive, load_any
 def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     pattern = load_any(args.file)
+    if args.scale != 1.0:  # mm printed per mm of the pattern
+        pattern = replace(pattern, nodes=pattern.nodes * args.scale,
+                          contracted={k: v * args.scale for k, v in pattern.contracted.items()})
     pinned = args.style == "pinned"  # pinned tiles have their own (thicker) preset thickness
     printer = load_printer(args.printer).with_overrides(
         tile_thickness_mm=None if pinned else args.tile_thickness,
@@ -93,6 +97,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--state", choices=["1", "2"], default="1", help="closed state printed (default 1)")
     p.add_argument("--printer", metavar="NAME|FILE.json",
                    help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")
+    p.add_argument("--scale", type=_positive, default=1.0, metavar="K",
+                   help="print the pattern K times its size (default 1)")
     p.add_argument("--step", action="store_true", help="also write STEP (needs the 'cad' extra: build123d)")
     for flag, what in [("tile-thickness", "tile thickness"), ("strip-thickness", "strip thickness"),
                        ("strip-width", "strip width along the seam"), ("strip-reach", "strip reach into each tile"),

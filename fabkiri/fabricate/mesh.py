@@ -162,8 +162,8 @@ def tiles_and_strips(pattern: Pattern, state: int, printer: Printer) -> PrintJob
     bot = tuple(strips.outline[~strips.top])
     tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
         ("add", Prism(tuple(plan.tiles), 0.0, T)),
-        ("sub", Prism(top, T - ts, T + 1.0)),  # +1: a clean cut through the top face
-        ("sub", Prism(bot, -1.0, ts)),
+        ("sub", Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0)),  # +1: a clean cut through the face
+        ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
     ), printer.tile_material)
     hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
         ("add", Prism(top, T - ts, T)),
@@ -425,28 +425,42 @@ def _check_clearances(r: Realised, rep: MeshReport) -> None:
                                         f"under the part spacing {pr.part_spacing_mm:g} mm")
         return
     if job.style == "tiles-and-strips":
-        # measured on the mesh: sections of the tile body at the bottom pocket,
-        # the bare middle and the top pocket; different tiles stay a gap apart,
-        # and a strip keeps the radial clearance from the tiles it does not join
+        # measured on the mesh: sections of both bodies at the bottom pocket, the
+        # bare middle and the top pocket. Each section piece is attributed to
+        # the tile or strip it belongs to; pieces of different tiles keep the
+        # gap, a strip touches only the two tiles it joins and keeps the radial
+        # clearance from everything else.
         tiles_m, hinges_m = r.manifolds[0]
         T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
         req = pr.radial_clearance_mm
         rep.required_clearance_mm = req
+        shift = np.asarray(job.shift)
+        design_t = shapely.transform(job.plan.tiles, lambda c: c + shift)
+        design_s = shapely.transform(job.strips.outline, lambda c: c + shift)
+        A, B = job.plan.hinge_tiles.T
         worst = np.inf
         for z in (0.5 * ts, 0.5 * T, T - 0.5 * ts):
             parts = _slice_polys(tiles_m, z)
             sparts = _slice_polys(hinges_m, z)
-            allp = parts + sparts
+            allp = np.array(parts + sparts, dtype=object)
             kind = np.array([0] * len(parts) + [1] * len(sparts))
-            tree = shapely.STRtree(allp)
-            i, j = tree.query(allp, predicate="dwithin", distance=2 * pr.gap_mm)
-            sel = i < j
+            owner = np.full(len(allp), -1)
+            pts = shapely.point_on_surface(allp)
+            for k, design in ((0, design_t), (1, design_s)):
+                sel = np.flatnonzero(kind == k)
+                qi, di = shapely.STRtree(design).query(pts[sel], predicate="dwithin", distance=1e-3)
+                owner[sel[qi]] = di
+            if (owner < 0).any():
+                rep.problems.append(f"a section piece at z = {z:g} mm belongs to no planned tile or strip")
+            i, j = shapely.STRtree(allp).query(allp, predicate="dwithin", distance=2 * pr.gap_mm)
+            sel = (i < j) & ~((kind[i] == kind[j]) & (owner[i] == owner[j]))  # same body: no clearance
             i, j = i[sel], j[sel]
-            d = shapely.distance(np.array(allp, dtype=object)[i], np.array(allp, dtype=object)[j])
-            # a strip touches (distance 0) the two tiles it is recessed into; all else must keep clear
+            d = shapely.distance(allp[i], allp[j])
             mixed = kind[i] != kind[j]
-            touching = mixed & (d < 1e-6)
-            free = d[~touching]
+            st_, tl = np.where(kind[i] == 1, i, j)[mixed], np.where(kind[i] == 1, j, i)[mixed]
+            joined = np.zeros(len(i), dtype=bool)
+            joined[mixed] = (owner[tl] == A[owner[st_]]) | (owner[tl] == B[owner[st_]])
+            free = d[~joined]
             if len(free):
                 worst = min(worst, float(free.min()))
         rep.min_clearance_mm = None if worst == np.inf else worst
@@ -587,6 +601,9 @@ def top_face_dxf(r: Realised, tiles_mesh=None) -> bytes:
     return out.getvalue().encode("utf-8")
 
 
+BRIDGE_INSET_MM = 1e-3
+
+
 def printed_bridges(r: Realised) -> list[dict]:
     """The flexible material spanning each gap, measured on the hinge mesh:
     sections of the strips at the middle of their thickness, minus the tiles,
@@ -614,9 +631,14 @@ def printed_bridges(r: Realised) -> list[dict]:
             if bridge.is_empty:
                 continue
             hit = [owner[k]]
-            for piece in getattr(bridge, "geoms", [bridge]):
+            # drawn a hair inside the bridge, so the verifier's "material minus
+            # ligaments" never leaves slivers along the tile edges it shares
+            core = shapely.buffer(bridge, -BRIDGE_INSET_MM, join_style="mitre")
+            for piece in shapely.get_parts(core):
+                if piece.geom_type != "Polygon" or piece.area < 1e-4:
+                    continue  # slivers where a strip edge meets a tile edge
                 feats.append({"hinge": int(hit[0]), "sheet": 1,
-                              "polygon": np.asarray(piece.exterior.coords)[:-1].round(6).tolist()})
+                              "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
     return sorted(feats, key=lambda f: f["hinge"])
 
 

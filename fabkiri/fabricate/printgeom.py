@@ -32,7 +32,8 @@ from ..pattern.model import Pattern
 from .printers import Printer
 
 CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
-COINCIDE_TOL_REL = 1e-6  # two hinge points closer than this (tile sizes) coincide
+COINCIDE_TOL_REL = 1e-6
+POCKET_OVERSHOOT_MM = 0.05  # two hinge points closer than this (tile sizes) coincide
 
 
 def closed_corners(pattern: Pattern, state: int) -> np.ndarray:
@@ -157,6 +158,7 @@ class Strips:
     outline: np.ndarray  # (H,) Polygons
     pads: np.ndarray  # (H, 2) Polygons on tile A and on tile B
     top: np.ndarray  # (H,) face
+    pocket: np.ndarray  # (H,) what is cut from the tiles: the strip, reaching past the tile edges
 
 
 def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
@@ -210,7 +212,13 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
             "for the strip width"
         )
     _check_strip_clearance(plan, outline, printer)
-    return Strips(outline=outline, pads=pads, top=plan.top.copy())
+    # the pocket overshoots the tile edges (into the gap, never near another
+    # tile) so no micrometre sliver of tile survives where strip and tile edges meet
+    over = min(POCKET_OVERSHOOT_MM, 0.25 * printer.gap_mm)
+    grown = shapely.buffer(shapely.union(plan.tiles[A], plan.tiles[B]), over, join_style="mitre")
+    pocket = shapely.union(outline, shapely.intersection(shapely.polygons(band), grown))
+    pocket = np.array([_largest(g) for g in pocket], dtype=object)
+    return Strips(outline=outline, pads=pads, top=plan.top.copy(), pocket=pocket)
 
 
 def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Printer) -> None:
