@@ -29,7 +29,6 @@ def stage(label, fn, *a):
 def naive_tiles(job):
     """Baseline: every tile extruded and pocketed on its own, then unioned."""
     import manifold3d as m3d
-    import shapely
 
     plan, strips, pr = job.plan, job.strips, job.printer
     T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import shapely
+from shapely.geometry.polygon import orient
 
 from ..errors import FabricationError
 from .mesh import Body, Prism
@@ -36,7 +37,7 @@ def _prism_solids(b3d, prism: Prism, polys) -> list:
     out = []
     h = prism.z1 - prism.z0
     for poly in shapely.get_parts(np.asarray(list(polys), dtype=object)):
-        ring = np.asarray(shapely.geometry.polygon.orient(poly, 1.0).exterior.coords)[:-1]
+        ring = np.asarray(orient(poly, 1.0).exterior.coords)[:-1]
         pts = [(float(x), float(y), prism.z0) for x, y in ring]
         wire = b3d.Wire.make_polygon(pts, close=True)
         if prism.scale_top != 1.0:

@@ -21,9 +21,11 @@ from typing import Iterable
 
 import numpy as np
 import shapely
+import shapely.affinity
+from shapely.geometry.polygon import orient
 from shapely.geometry import Polygon
 
-from ..errors import CheckFailed, FabricationError
+from ..errors import FabricationError
 from ..pattern.model import Pattern
 from . import printgeom
 from .printers import Printer
@@ -71,7 +73,7 @@ def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
         for g in getattr(p, "geoms", [p]):
             if g.is_empty:
                 continue
-            g = shapely.geometry.polygon.orient(g, 1.0)
+            g = orient(g, 1.0)
             rings.append(np.asarray(g.exterior.coords)[:-1])
             rings.extend(np.asarray(r.coords)[:-1] for r in g.interiors)
     return rings
@@ -630,14 +632,13 @@ def printed_bridges(r: Realised) -> list[dict]:
             bridge = part.difference(shapely.union_all(near)) if len(near) else part
             if bridge.is_empty:
                 continue
-            hit = [owner[k]]
             # drawn a hair inside the bridge, so the verifier's "material minus
             # ligaments" never leaves slivers along the tile edges it shares
             core = shapely.buffer(bridge, -BRIDGE_INSET_MM, join_style="mitre")
             for piece in shapely.get_parts(core):
                 if piece.geom_type != "Polygon" or piece.area < 1e-4:
                     continue  # slivers where a strip edge meets a tile edge
-                feats.append({"hinge": int(hit[0]), "sheet": 1,
+                feats.append({"hinge": int(owner[k]), "sheet": 1,
                               "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
     return sorted(feats, key=lambda f: f["hinge"])
 
