@@ -22,6 +22,7 @@ COMMANDS = [
     "fabkiri.cli.cut_cmd",
     "fabkiri.cli.verify_cmd",
     "fabkiri.cli.design_cmd",
+    "fabkiri.cli.deploy_cmd",
     "fabkiri.cli.print_cmd",
 ]
 

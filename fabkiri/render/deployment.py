@@ -1,0 +1,184 @@
+"""E(t) plot and deployment GIF of a :class:`~fabkiri.mechanics.deploy.DeploymentPath`.
+
+Both are deterministic bytes (no timestamps in the metadata). The GIF reuses
+one figure and updates its collections frame by frame, so a 32×32 pattern
+renders in a few seconds.
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from ..mechanics.deploy import MARKS, DeploymentPath
+
+ZERO_ENERGY = 1e-12  # below this the path is reported as zero-energy
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = True) -> None:
+    sel = (path.t >= lo - 1e-12) & (path.t <= hi + 1e-12)
+    t, e, emax = path.t[sel], path.energy[sel], path.max_tile_energy[sel]
+    ax.plot(t, e, "-o", ms=2.5, lw=1.5, color="C0", label="total energy E")
+    ax.plot(t, emax, "-", lw=1.0, color="C3", label="largest tile energy")
+    top = float(max(e.max(initial=0.0), emax.max(initial=0.0)))
+    if top <= ZERO_ENERGY:
+        ax.set_ylim(-0.05 * ZERO_ENERGY, ZERO_ENERGY)
+    else:
+        ax.set_ylim(-0.03 * top, 1.12 * top)
+    for a, b in path.elastic_segments:
+        ax.axvspan(a, b, color="C1", alpha=0.12, lw=0)
+    if marks:
+        for name, tm in MARKS.items():
+            if lo - 1e-12 <= tm <= hi + 1e-12:
+                ax.axvline(tm, color="0.4", lw=0.8, ls="--")
+    pad = 0.02 * (hi - lo)
+    ax.set_xlim(lo - pad, hi + pad)
+    ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
+
+
+def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> bytes:
+    """PNG of E(t) and the largest tile energy, closed and deployed states marked.
+
+    An elastic path whose barriers sit in narrow end segments (shaded: where
+    the tiles leave the design's zero-energy mechanism to close up) gets two
+    zoomed panels on those segments under the full path.
+    """
+    plt = _pyplot()
+    segs = path.elastic_segments
+    zoom = bool(segs) and max(b - a for a, b in segs) < 0.15
+    if zoom:
+        fig = plt.figure(figsize=(6.4, 5.6), dpi=dpi)
+        gs = fig.add_gridspec(2, len(segs), height_ratios=[1.35, 1])
+        ax = fig.add_subplot(gs[0, :])
+    else:
+        fig, ax = plt.subplots(figsize=(6.4, 3.8), dpi=dpi)
+    _energy_axes(ax, path, 0.0, 1.0)
+    top = float(max(path.energy.max(), path.max_tile_energy.max()))
+    if top <= ZERO_ENERGY:
+        ax.text(0.25, 0.72, f"zero-energy path: max E = {top:.1e}", transform=ax.transAxes, ha="center",
+                fontsize=10, color="C2", bbox=dict(facecolor="white", edgecolor="none"))
+    for name, tm in MARKS.items():
+        right = tm > 0.75  # keep the last label inside the axes
+        ax.text(tm - 0.008 if right else tm + 0.008, 0.5, name, transform=ax.get_xaxis_transform(),
+                ha="right" if right else "left", va="center", rotation=90, fontsize=8, color="0.3")
+    ax.set_xlabel("path parameter t")
+    ax.set_ylabel("spring energy  Σ((l - l₀)/l₀)²")
+    kind = "rigid path" if path.kind == "rigid" else f"elastic path, driver: {path.driver}"
+    ax.set_title((f"{title} — " if title else "") + kind, fontsize=10)
+    ax.legend(fontsize=8, loc="upper center", frameon=False)
+    if zoom:
+        for k, (a, b) in enumerate(segs):
+            sub = fig.add_subplot(gs[1, k])
+            _energy_axes(sub, path, a, b)
+            near = "closed state 1" if a <= 0.0 else "closed state 2"
+            sub.set_title(f"barrier next to {near}", fontsize=8)
+            sub.set_xlabel("t", fontsize=8)
+            sub.tick_params(labelsize=7)
+            sub.yaxis.get_offset_text().set_fontsize(7)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", metadata={"Software": None})
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _frame_indices(n: int, max_frames: int) -> np.ndarray:
+    if n <= max_frames:
+        return np.arange(n)
+    return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
+
+
+def deployment_gif(
+    path: DeploymentPath,
+    color: str = "auto",
+    *,
+    max_frames: int = 61,
+    size_px: int = 420,
+    frame_ms: int = 80,
+    trajectories: bool = True,
+    title: str = "",
+) -> bytes:
+    """Animated GIF of the motion.
+
+    ``color``: ``"energy"`` (tile energy, log scale), ``"rotation"`` (signed
+    rotation from state 1, common rotation removed) or ``"auto"`` (rotation for
+    the rigid path, energy otherwise). Tile-centre trajectories are drawn up to
+    the current frame, the current centre as a dot. At most ``max_frames``
+    evenly spaced frames are drawn.
+    """
+    plt = _pyplot()
+    from matplotlib import colors as mcolors
+    from matplotlib.collections import LineCollection, PolyCollection
+    from PIL import Image
+
+    if color == "auto":
+        color = "rotation" if path.kind == "rigid" else "energy"
+    if color not in ("energy", "rotation"):
+        raise ValueError(f"color must be energy, rotation or auto, not {color!r}")
+    idx = _frame_indices(path.n_frames, max_frames)
+    corners, centres = path.corners, path.centres
+    if color == "energy":
+        values = path.tile_energy
+        vmax = max(float(values.max()), ZERO_ENERGY * 10)
+        norm = mcolors.LogNorm(vmin=max(vmax * 1e-6, ZERO_ENERGY), vmax=vmax, clip=True)
+        cmap = plt.get_cmap("viridis")
+        label = "tile energy e"
+    else:
+        values = path.rotation
+        norm = mcolors.Normalize(vmin=-np.pi / 2, vmax=np.pi / 2)
+        cmap = plt.get_cmap("coolwarm")
+        label = "rotation θ from state 1 (rad)"
+
+    dpi = 100
+    fig = plt.figure(figsize=(size_px / dpi, size_px / dpi * 1.08), dpi=dpi)
+    ax = fig.add_axes([0.02, 0.16, 0.96, 0.78])
+    cax = fig.add_axes([0.2, 0.09, 0.6, 0.025])
+    lo = corners.reshape(-1, 2).min(0)
+    hi = corners.reshape(-1, 2).max(0)
+    pad = 0.03 * float((hi - lo).max())
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    tiles = PolyCollection(corners[0], cmap=cmap, norm=norm, edgecolors="k", linewidths=0.3)
+    tiles.set_array(np.asarray(values[0], dtype=float))
+    ax.add_collection(tiles)
+    cb = fig.colorbar(tiles, cax=cax, orientation="horizontal")
+    cb.set_label(label, fontsize=7)
+    cb.ax.tick_params(labelsize=6)
+    lines = dots = None
+    if trajectories:
+        lines = LineCollection([], colors="k", linewidths=0.5)
+        ax.add_collection(lines)
+        dots = ax.scatter(centres[0, :, 0], centres[0, :, 1], s=2, c="k", zorder=3)
+    head = ax.set_title("", fontsize=8)
+
+    images = []
+    for f in idx:
+        tiles.set_verts(corners[f])
+        tiles.set_array(np.asarray(values[f], dtype=float))
+        if trajectories:
+            lines.set_segments(list(np.swapaxes(centres[: f + 1], 0, 1)) if f > 0 else [])
+            dots.set_offsets(centres[f])
+        head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
+        fig.canvas.draw()
+        rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3]
+        images.append(Image.fromarray(np.ascontiguousarray(rgb)))
+    plt.close(fig)
+    # one shared palette keeps colours steady and the file small
+    palette = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
+    frames = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
+    buf = io.BytesIO()
+    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=frame_ms, loop=0,
+                   optimize=False, disposal=1)
+    return buf.getvalue()
