@@ -425,3 +425,26 @@ def test_solver_design_pinned():
     rep = mesh.check_meshes(r)
     assert rep.ok, rep.problems
     assert mesh.check_printed_tiles(r).ok
+    sw = mesh.sweep_pinned(pat, r)
+    assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm
+
+
+def test_pinned_sweep_along_the_deployment(printer):
+    """The pinned tiles reconfigure from one closed state to the other without
+    touching; a tile whose corner was not cleared collides in the sweep."""
+    import manifold3d as m3d
+
+    pat = standard_pattern(3, 3, tile_size=12.0)
+    r = mesh.realise_job(mesh.build_job(pat, "pinned", 1, printer))
+    sw = mesh.sweep_pinned(pat, r)
+    assert sw.ok and sw.max_overlap_mm2 == 0.0 and sw.frames >= 20
+    assert sw.min_distance_mm >= printer.radial_clearance_mm
+    # fill tile 0's clearing at one of its pivots through the full height: it now hits the partner's ears
+    job = r.job
+    h = int(np.flatnonzero((job.plan.hinge_tiles == 0).any(1))[0])
+    p = job.plan.hinge_xy[h] + job.shift
+    plug = m3d.Manifold.cylinder(job.pins.levels.thickness, job.pins.geometry.ear, job.pins.geometry.ear,
+                                 48).translate((p[0], p[1], 0.0))
+    bad = mesh.Realised(job, [[r.manifolds[0][0] + plug] + r.manifolds[0][1:]], r.meshes)
+    sw_bad = mesh.sweep_pinned(pat, bad)
+    assert not sw_bad.ok and sw_bad.max_overlap_mm2 > 1.0 and "tiles 0/" in sw_bad.worst

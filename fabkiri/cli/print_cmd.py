@@ -40,6 +40,12 @@ def cmd_print(args: argparse.Namespace) -> int:
             f"(tolerance {tiles.tolerance_mm:g} mm), overlap {tiles.max_overlap_mm2:.3g} mm²"
         )
     verifier = None
+    if job.style == "pinned":  # the printed tiles moved along the rigid deployment path
+        sweep = mesh.sweep_pinned(pattern, realised)
+        report.sweep = sweep.to_dict()
+        if not sweep.ok:
+            problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
+                            f"({sweep.worst})")
     if job.style == "tiles-and-strips":  # the layout verifier on the printed top faces
         verifier = mesh.verify_printed_tiles(pattern, realised)
         problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"

@@ -322,6 +322,7 @@ class MeshReport:
     min_clearance_mm: float | None = None
     required_clearance_mm: float = 0.0
     problems: list[str] = field(default_factory=list)
+    sweep: dict | None = None  # pinned: collision sweep along the deployment path
 
     @property
     def ok(self) -> bool:
@@ -330,7 +331,7 @@ class MeshReport:
     def to_dict(self) -> dict:
         return {"ok": self.ok, "bodies": self.bodies, "intersection_volume_mm3": self.intersection_volume_mm3,
                 "min_clearance_mm": self.min_clearance_mm, "required_clearance_mm": self.required_clearance_mm,
-                "problems": self.problems}
+                "problems": self.problems, "deployment_sweep": self.sweep}
 
 
 @dataclass(eq=False)
@@ -492,6 +493,71 @@ def _check_clearances(r: Realised, rep: MeshReport) -> None:
         if len(m.decompose()) != 1:
             rep.problems.append(f"tile {t} falls apart into {len(m.decompose())} pieces")
             break
+
+
+# ------------------------------------------------------------ pinned sweep
+
+@dataclass
+class SweepCheck:
+    """Pinned tiles moved along the rigid deployment path (closed state 1 ->
+    deployed -> closed state 2), level by level: the largest overlap area
+    between two different tiles and their smallest distance, over all frames."""
+
+    frames: int
+    levels_mm: list[float]
+    max_overlap_mm2: float
+    min_distance_mm: float
+    worst: str
+    ok: bool
+
+    def to_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2: float = 1e-6) -> SweepCheck:
+    """Collision sweep of the printed pinned tiles (sections of the solids at
+    every ear level and axial gap) along :func:`fabkiri.mechanics.deploy.rigid_path`."""
+    from ..mechanics.deploy import rigid_path
+    from ..pattern import geometry
+
+    job = r.job
+    if job.style != "pinned":
+        raise FabricationError("the deployment sweep is for pinned tiles")
+    lv = job.pins.levels
+    zs = [0.5 * sum(lv.level(k)) for k in range(4)] + [lv.level(k)[1] + 0.5 * lv.axial for k in range(3)]
+    back = -np.asarray(job.shift)
+    T = len(job.plan.tiles)
+    sections = {z: [np.array(_slice_polys(m, z), dtype=object) for m in r.manifolds[0]] for z in zs}
+    for z in zs:
+        sections[z] = [shapely.transform(g, lambda c: c + back) for g in sections[z]]
+    path = rigid_path(pattern, steps, tol_rad=1e-6)
+    src = job.plan.corners
+    worst_area, worst_dist, worst = 0.0, np.inf, ""
+    for f in range(len(path.t)):
+        poses = [geometry.kabsch(src[t], path.corners[f, t]) for t in range(T)]
+        for z in zs:
+            geoms, owner = [], []
+            for t in range(T):
+                th, tr = poses[t]
+                moved = shapely.transform(sections[z][t], lambda c, th=th, tr=tr: geometry.rotate(c, th) + tr)
+                geoms.extend(moved)
+                owner.extend([t] * len(moved))
+            geoms = np.array(geoms, dtype=object)
+            owner = np.asarray(owner)
+            i, j = shapely.STRtree(geoms).query(geoms, predicate="dwithin", distance=1.0)
+            sel = (i < j) & (owner[i] != owner[j])
+            if not sel.any():
+                continue
+            i, j = i[sel], j[sel]
+            area = shapely.area(shapely.intersection(geoms[i], geoms[j]))
+            dist = shapely.distance(geoms[i], geoms[j])
+            k = int(np.argmax(area))
+            if area[k] > worst_area:
+                worst_area = float(area[k])
+                worst = f"tiles {owner[i[k]]}/{owner[j[k]]} at z = {z:.2f} mm, t = {path.t[f]:.3f}"
+            worst_dist = min(worst_dist, float(dist.min()))
+    return SweepCheck(frames=len(path.t), levels_mm=[round(z, 4) for z in zs], max_overlap_mm2=worst_area,
+                      min_distance_mm=worst_dist, worst=worst, ok=worst_area <= overlap_tol_mm2)
 
 
 # --------------------------------------------------------- top-face check
