@@ -57,6 +57,19 @@ def test_presets_load_and_validate(printer):
     assert printer.with_overrides(strip_width_mm=None) == printer
 
 
+def test_printer_preset_files(tmp_path):
+    good = json.loads((REPO / "templates" / "printers" / "prusa-mk4.json").read_text())
+    path = tmp_path / "mine.json"
+    path.write_text(json.dumps({**good, "name": "mine", "gap_mm": 0.5}))
+    assert load_printer(str(path)).gap_mm == 0.5
+    for bad, msg in [({k: v for k, v in good.items() if k != "nozzle_mm"}, "missing printer field"),
+                     ({**good, "bed_mm": "big"}, "bed_mm"), ({**good, "layer_mm": -0.2}, "positive"),
+                     ({**good, "colour": "red"}, "unknown printer field"), ({"name": "x"}, "not a fabkiri printer")]:
+        path.write_text(json.dumps(bad))
+        with pytest.raises((InputError, FabricationError), match=msg):
+            load_printer(str(path))
+
+
 # --------------------------------------------------------------- face rule
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])

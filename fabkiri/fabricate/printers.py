@@ -10,7 +10,7 @@ starting points (fabrication.md §3.4); print a clearance coupon to calibrate.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import MISSING, asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -51,7 +51,10 @@ class Printer:
     pin: PinSpec = field(default_factory=PinSpec)
 
     def __post_init__(self) -> None:
-        bed = tuple(float(v) for v in self.bed_mm)
+        try:
+            bed = tuple(float(v) for v in self.bed_mm)
+        except (TypeError, ValueError):
+            raise FabricationError(f"printer {self.name}: bed_mm must be [x, y, z] in mm, got {self.bed_mm!r}") from None
         if len(bed) != 3:
             raise FabricationError(f"printer {self.name}: bed_mm must be [x, y, z], got {list(self.bed_mm)}")
         object.__setattr__(self, "bed_mm", bed)
@@ -118,10 +121,14 @@ def printer_from_dict(data: dict[str, Any], source: str = "preset") -> Printer:
     pin_known = {f.name for f in fields(PinSpec)}
     if not isinstance(pin, dict) or set(pin) - pin_known:
         raise InputError(f"{source}: pin must be an object with {', '.join(sorted(pin_known))}")
+    required = [f.name for f in fields(Printer) if f.default is MISSING and f.default_factory is MISSING]
+    missing = [k for k in required if k not in body]
+    if missing:
+        raise InputError(f"{source}: missing printer field(s) {', '.join(missing)}")
     try:
         return Printer(**body, pin=PinSpec(**pin))
-    except TypeError as exc:
-        raise InputError(f"{source}: {exc}") from None
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{source}: malformed printer preset ({exc})") from None
 
 
 def load_printer(name_or_path: str | None = None) -> Printer:
