@@ -461,3 +461,17 @@ def test_pinned_sweep_along_the_deployment(printer):
     bad = mesh.Realised(job, [[r.manifolds[0][0] + plug] + r.manifolds[0][1:]], r.meshes)
     sw_bad = mesh.sweep_pinned(pat, bad)
     assert not sw_bad.ok and sw_bad.max_overlap_mm2 > 1.0 and "tiles 0/" in sw_bad.worst
+
+
+def test_cli_step_per_bed(tmp_path, run_cli):
+    pytest.importorskip("build123d")
+    from fabkiri.fabricate import cad
+
+    src = tmp_path / "sq.json"
+    write_pattern(standard_pattern(2, 2), src)
+    code, _, err = run_cli("print", src, "--style", "strips", "--step", "-o", tmp_path / "out")
+    assert code == 0, err
+    man = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    vol = sum(b["volume_mm3"] for b in man["checks"]["meshes"]["bodies"])
+    assert "sq.step" in man["files"]
+    assert cad.step_volume(tmp_path / "out" / "sq.step") == pytest.approx(vol, rel=1e-3)

@@ -60,7 +60,8 @@ def cmd_print(args: argparse.Namespace) -> int:
     if args.step:
         from ..fabricate import cad  # lazy: OpenCascade is heavy
 
-        files[f"{stem}.step"] = cad.step_bytes([b for bed in job.beds for b in bed])
+        for k, bed in enumerate(job.beds, 1):  # one STEP per bed, like the meshes
+            files[f"{stem}.step" if len(job.beds) == 1 else f"{stem}-bed{k}.step"] = cad.step_bytes(bed)
     files["manifest.json"] = mesh.manifest(realised, report, tiles, Path(args.file).name,
                                            list(files) + ["manifest.json"], verifier)
     files.update(laser)
