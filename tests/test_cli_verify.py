@@ -66,6 +66,11 @@ def test_bad_input_exits_2(run_cli, tmp_path):
     junk.write_text("this is not a DXF\n")
     code, _, err = run_cli("verify", pj, "--layout", junk)
     assert code == 2 and "junk.dxf" in err and len(err.strip().splitlines()) == 1
+    import ezdxf
+
+    ezdxf.new("R2010", units=4).saveas(tmp_path / "empty.dxf")
+    code, _, err = run_cli("verify", pj, "--layout", tmp_path / "empty.dxf")
+    assert code == 2 and "no cut geometry" in err
     txt = tmp_path / "cut.txt"
     txt.write_text("x")
     code, _, err = run_cli("verify", pj, "--layout", txt)

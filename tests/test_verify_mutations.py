@@ -152,6 +152,11 @@ def test_plain_files_from_other_tools(pattern, tmp_path):
             assert rep.ok, rep.to_text()
             assert rep.meta["layout"] == ("in-place" if hinge == "tape" else "separate")
             assert any("(b)" in n for n in rep.names()) == (hinge == "tape")
+    # an in-place sheet of closed state 2 without a manifest: the state is found, not assumed
+    C = lf.in_place_corners(pattern, 2, 1.0)
+    path = _write(tmp_path, "plain-state2", pattern, C, "tape", "dxf", manifest=False, reference=False)
+    rep = verify_layout(pattern, path)
+    assert rep.ok and rep.meta["state"] == 2 and "layout: (b) in place = closed state 2" in rep.names()
 
 
 def test_kerf_must_be_declared(pattern, tmp_path):

@@ -37,7 +37,7 @@ def test_compact_reconfigurable_only_the_bow_tie_fails():
         assert "all caused by self-intersecting tile(s) [2]" in ov.detail
         # the overlaps are slight (the file's tiles are otherwise exact)
         assert 1e-5 * p.tile_size < ov.value < 1e-3 * p.tile_size
-        for name in ("loop closure", "holes closed (area)", "folded gaps closed", "no interior gaps",
+        for name in ("loop closure", "holes closed", "folded gaps closed", "no interior gaps",
                      "one outline", "stored state matches computed", "tiles congruent (lengths)"):
             assert rep.get(f"state {s}: {name}").ok, name
     # the ring that the bow-tie puts off by 2π is flagged, not failed
@@ -52,7 +52,7 @@ def test_non_contractible_fails_closure_in_both_states():
     for s in (1, 2):
         lc = rep.get(f"state {s}: loop closure")
         assert not lc.ok and lc.value > 0.5 * p.tile_size and lc.worst.startswith("hole ")
-        assert not rep.get(f"state {s}: holes closed (area)").ok
+        assert not rep.get(f"state {s}: holes closed").ok
         assert not rep.get(f"state {s}: rings").ok
     assert rep.get("tiles simple").ok
 

@@ -19,7 +19,7 @@ import shapely
 from .. import __version__
 from ..errors import CheckFailed, FabricationError, InputError
 from ..mechanics.contract import contract
-from ..mechanics.info import describe
+from ..verify import verify_pattern
 from ..pattern.model import Pattern
 from . import hinges as hg
 from . import layout as lay
@@ -127,6 +127,17 @@ def closed_states(pattern: Pattern) -> dict[int, np.ndarray]:
     return out
 
 
+GATE_GROUPS = ("tiles", "state 1", "state 2")  # plus each state's edge pairs (fold edges of equal length)
+
+
+def _check_text(c, scale: float) -> str:
+    """A failed verifier check, lengths in the file's millimetres."""
+    k = scale if c.unit == "mm" else (scale * scale if c.unit == "mm²" else 1.0)
+    if isinstance(c.value, (int, float)) and isinstance(c.tol, (int, float)):
+        return f"{c.name} {c.value * k:.3g} > {c.tol * k:.3g} {c.unit}"
+    return f"{c.name} failed"
+
+
 def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
     polys = shapely.polygons(corners)
     bad = np.flatnonzero(~shapely.is_valid(polys))
@@ -226,20 +237,16 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         if not (np.isfinite(scale) and scale > 0):
             raise InputError(f"--scale must be positive, got {options.scale}")
 
-    # the pattern must close in both states at the material's tolerance (in the file's mm)
-    tol_rel = mat.tolerance_mm / (scale * pattern.tile_size)
-    info = describe(pattern, tol=tol_rel)
-    if not info.closes_both:
-        msg = "; ".join(info.problems())
+    # the verifier must find both closed states at the material's tolerance (in the file's mm)
+    pattern_report = verify_pattern(pattern, tol_mm=mat.tolerance_mm / scale)
+    gate = [c for c in pattern_report.checks
+            if (c.group in GATE_GROUPS or c.name.endswith("edge pairs")) and c.applies and not c.ok]
+    if gate:
+        msg = "; ".join(_check_text(c, scale) for c in gate[:3]) + (f" (+{len(gate) - 3} more)" if len(gate) > 3 else "")
         if not options.force:
-            raise CheckFailed(f"{msg} (at the material tolerance {mat.tolerance_mm:g} mm); nothing cut "
-                              "(--force cuts it anyway)")
-        warnings.append(f"cut with --force: {msg}")
-    if not info.supplied_ok:
-        warnings.append("; ".join(info.problems()))
-    if info.self_intersecting_tiles:
-        raise FabricationError(f"tile {info.self_intersecting_tiles[0]} is self-intersecting (a bow-tie); "
-                               "it cannot be cut")
+            raise CheckFailed(f"the pattern does not close in both states at the material tolerance "
+                              f"{mat.tolerance_mm:g} mm: {msg}; nothing cut (--force cuts it anyway)")
+        warnings.append(f"cut with --force although the pattern does not close: {msg}")
 
     corners = raw * scale
     tile_polys = _check_tiles(corners, state)
@@ -261,7 +268,10 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     shrink = 0.0
     offset = 0.0
     if kind == "tape":
-        corners = hg.snap_corners(corners, 1e-4)
+        # corners a solver left apart by less than the tolerance are one node of the linework
+        eps = 0.5 * mat.tolerance_mm
+        corners = hg.snap_corners(corners, eps, hg.closure_pairs(pattern, state))
+        corners = hg.snap_corners(hg.snap_to_edges(corners, eps), eps, hg.closure_pairs(pattern, state))
         regions = corners
         parts = shapely.polygons(corners)
         label_margin = 0.5 + kerf / 2
@@ -339,21 +349,21 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             for p in ext:
                 sd.add("CUT", p, True)
             # the free spans: material not in any tile, from the same snapped geometry as the cut
-            free = shapely.get_parts(shapely.difference(material, shapely.union_all(small, grid_size=hg.GRID),
-                                                        grid_size=hg.GRID))
+            tiles_here = shapely.union_all(small, grid_size=hg.GRID)
+            free = shapely.get_parts(shapely.difference(material, tiles_here, grid_size=hg.GRID))
             free = free[shapely.area(free) > 0]
             # a span may touch two strips (then it is listed for both)
             owner_pt, owner = shapely.STRtree(moved_strips).query(free, predicate="intersects")
             for j in np.unique(owner):
                 parts_j = free[owner_pt[owner == j]]
-                # padded so rounding never leaves a hairline of material joining the two tiles
+                # padded so rounding never leaves a hairline of material along the strip joining the
+                # two tiles, then clipped by the tiles so no tile loses a corner
                 geom = shapely.buffer(shapely.union_all(parts_j, grid_size=hg.GRID), FEATURE_PAD_MM,
                                       join_style="mitre")
-                geom = shapely.normalize(shapely.union_all(shapely.get_parts(geom)))
-                polys_j = [np.asarray(g.exterior.coords)[:-1] for g in shapely.get_parts(geom)]
-                hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
-                                       "polygon": snap(polys_j[0]).tolist() if len(polys_j) == 1 else
-                                       [snap(q).tolist() for q in polys_j]})
+                geom = shapely.normalize(shapely.difference(geom, tiles_here, grid_size=hg.GRID))
+                for g in shapely.get_parts(geom):  # one entry per polygon (a span may come in parts)
+                    hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
+                                           "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist()})
         else:
             moved = place.apply(on, np.zeros((len(on), 1, 2)))  # shifts only, for rotation use coords
             for t in on:
@@ -487,8 +497,9 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             "time_model": f"cut_length/cut_speed + engrave_length/engrave_speed + {PIERCE_S} s per path",
         },
         "material": mat.to_dict(),
-        "closure": {"tolerance_mm": mat.tolerance_mm, "closes_both": info.closes_both,
-                    "max_closure_mm": [round(s.max_closure_mm * scale, 12) for s in info.states]},
+        "pattern_verification": {"ok": pattern_report.ok, "tol_mm": mat.tolerance_mm,
+                                 "gate": list(GATE_GROUPS), "failed": [c.name for c in pattern_report.checks
+                                                                       if c.applies and not c.ok]},
         "reference_square": None if ref is None else {"sheet": ref[0] + 1, "size_mm": options.reference_mm,
                                                       "corners": ref[1].tolist()},
         "sheets": sheet_rows,

@@ -44,6 +44,11 @@ def dxf_bytes(sheet: SheetDrawing, colors: str = "default") -> bytes:
             attribs = {"layer": name}
             for pts, closed in sheet.layers[name]:
                 msp.add_lwpolyline(pts.tolist(), format="xy", close=closed, dxfattribs=attribs)
+        # the CLASSES section order depends on what ezdxf loaded earlier in the process: sort it
+        cls = doc.classes.classes
+        ordered = sorted(cls.items(), key=lambda kv: str(kv[0]))
+        cls.clear()
+        cls.update(ordered)
         buf = io.StringIO()
         doc.write(buf)
     return buf.getvalue().encode("ascii")

@@ -24,7 +24,7 @@ from ..errors import FabricationError
 from ..pattern.model import Pattern
 
 GRID = 1e-6  # mm: every coordinate written is snapped to this grid
-MITRE_LIMIT = 5.0
+MITRE_LIMIT = 10.0  # exact kerf offsets down to 11.5° corners (shapely default 5: 23°)
 FACES = ("T", "B")
 
 
@@ -81,14 +81,32 @@ def assign_faces(pattern: Pattern, states: dict[int, np.ndarray]) -> FaceAssignm
     return FaceAssignment(face=face, pairs=pairs, conflicts=conflicts)
 
 
-def snap_corners(corners: np.ndarray, eps: float) -> np.ndarray:
+def closure_pairs(pattern: Pattern, state: int) -> np.ndarray:
+    """Flat corner ids ``4 t + k`` that meet in a closed state by construction.
+
+    The two corners of every hinge, and the far ends of the two edges that
+    fold onto each other in ``state``.
+    """
+    top = pattern.topology
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    ends = top.fold(state).fold_corner_ends
+    return np.concatenate([np.stack([4 * A + cA, 4 * B + cB], 1), np.stack([4 * A + ends[:, 0], 4 * B + ends[:, 1]], 1)])
+
+
+def snap_corners(corners: np.ndarray, eps: float, pairs: np.ndarray | None = None) -> np.ndarray:
     """Make nearly coincident tile corners exactly equal (lowest index wins).
 
-    Closed states from a solver close to ~1e-9 of a tile; cut-once linework
-    needs shared corners to be bit-identical before noding.
+    Closed states from a solver close to ~1e-9 of a tile (or worse); cut-once
+    linework needs shared corners to be bit-identical before noding. With
+    ``pairs`` (flat corner ids, see :func:`closure_pairs`) only those pairs
+    are merged, so free corners that merely come close stay apart.
     """
     flat = corners.reshape(-1, 2)
-    pairs = coincident_pairs(flat, eps)
+    if pairs is None:
+        pairs = coincident_pairs(flat, eps)
+    else:
+        pairs = pairs[np.linalg.norm(flat[pairs[:, 0]] - flat[pairs[:, 1]], axis=1) < eps]
     if len(pairs) == 0:
         return corners.copy()
     n = len(flat)
@@ -99,11 +117,44 @@ def snap_corners(corners: np.ndarray, eps: float) -> np.ndarray:
     return flat[rep[label]].reshape(corners.shape)
 
 
+def snap_to_edges(corners: np.ndarray, eps: float) -> np.ndarray:
+    """Move corners lying within ``eps`` of another tile's edge onto that edge.
+
+    A solver's closed state may leave a corner a hair off the edge it should
+    meet (a T-junction); cut once, that would enclose a sliver of scrap.
+    """
+    T = len(corners)
+    flat = corners.reshape(-1, 2).copy()
+    seg = np.stack([corners, np.roll(corners, -1, axis=1)], 2).reshape(-1, 2, 2)
+    tree = shapely.STRtree(shapely.linestrings(seg))
+    pi, ei = tree.query(shapely.points(flat), predicate="dwithin", distance=eps)
+    keep = (pi // 4) != (ei // 4)
+    pi, ei = pi[keep], ei[keep]
+    if len(pi) == 0 or T == 0:
+        return corners.copy()
+    a, b = seg[ei, 0], seg[ei, 1]
+    d = b - a
+    L2 = np.maximum((d * d).sum(1), 1e-300)
+    t = ((flat[pi] - a) * d).sum(1) / L2
+    foot = a + t[:, None] * d
+    off = np.linalg.norm(flat[pi] - foot, axis=1)
+    near_end = np.minimum(np.linalg.norm(flat[pi] - a, axis=1), np.linalg.norm(flat[pi] - b, axis=1)) < eps
+    move = (t > 0) & (t < 1) & (off > 0) & ~near_end
+    order = np.lexsort((ei[move], pi[move]))
+    done = set()
+    for i in np.flatnonzero(move)[order]:
+        if pi[i] not in done:  # one edge per corner, the lowest-numbered
+            flat[pi[i]] = foot[i]
+            done.add(pi[i])
+    return flat.reshape(corners.shape)
+
+
 def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, bool]]:
     """Chain 2-point segments into polylines.
 
     Segments continue through nodes of degree 2 and, where several lines
-    cross, straight on (so a grid line is one polyline, not one per cell).
+    cross, straight on (so a grid line is one polyline, not one per cell);
+    with ``straight_only`` False (outlines) they pair up by angle instead.
     Returns ``(points, closed)`` pairs in a deterministic order.
     """
     if len(segments) == 0:
@@ -126,6 +177,10 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
         hs = order[starts[v]:ends[v]]
         if len(hs) == 2:
             partner[hs[0]], partner[hs[1]] = hs[1], hs[0]
+        elif len(hs) > 2 and not straight_only:  # an outline touching itself: pair neighbours by angle
+            hs = hs[np.argsort(ang[hs], kind="stable")]
+            for i in range(0, len(hs) - 1, 2):
+                partner[hs[i]], partner[hs[i + 1]] = hs[i + 1], hs[i]
         elif len(hs) > 2:
             used = set()
             for i in range(len(hs)):

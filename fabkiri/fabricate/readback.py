@@ -34,6 +34,7 @@ from ..fileio import atomic_write_many
 from ..pattern.model import Pattern
 from .cut import CutResult
 from .drawing import LAYERS
+from .hinges import MITRE_LIMIT as hg_MITRE
 
 SVG_NS = "{http://www.w3.org/2000/svg}"
 AGREE_MM = 1e-6
@@ -223,7 +224,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
         pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
         holes = np.array([])
     elif kind == "separate":
-        pieces = shapely.buffer(polys[~is_ref], -off, join_style="mitre", mitre_limit=5.0)
+        pieces = shapely.buffer(polys[~is_ref], -off, join_style="mitre", mitre_limit=hg_MITRE)
         holes = np.array([])
     else:
         rings = polys[~is_ref]
@@ -233,9 +234,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
         inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
         material = shapely.difference(shapely.union_all(rings[~inside]), shapely.union_all(rings[inside]))
         material = shapely.buffer(material, -off, join_style="mitre", mitre_limit=UNDO_MITRE)
-        feats = [shapely.Polygon(f["polygon"]) if not isinstance(f["polygon"][0][0], list)
-                 else shapely.MultiPolygon([shapely.Polygon(g) for g in f["polygon"]])
-                 for f in man["hinge_features"] if f["sheet"] == k]
+        feats = [shapely.Polygon(f["polygon"]) for f in man["hinge_features"] if f["sheet"] == k]
         cores = shapely.difference(material, shapely.union_all(feats)) if feats else material
         pieces = shapely.get_parts(cores)
         pieces = pieces[shapely.area(pieces) > 1e-6]
@@ -278,6 +277,25 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
 # ------------------------------------------------------------------ verifier and writing
 
 
+def _relative(value, prefix: str):
+    """The report with the scratch folder stripped from paths (the manifest must not depend on it)."""
+    if isinstance(value, dict):
+        return {k: _relative(v, prefix) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_relative(v, prefix) for v in value]
+    if isinstance(value, str):
+        return value.replace(prefix, "")
+    return value
+
+
+def scaled_pattern(pattern: Pattern, scale: float) -> Pattern:
+    """The pattern with every length multiplied by ``scale``."""
+    from dataclasses import replace
+
+    return replace(pattern, nodes=pattern.nodes * scale,
+                   contracted={k: v * scale for k, v in pattern.contracted.items()})
+
+
 def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str, Any]:
     """:func:`fabkiri.verify.verify_layout` on every written DXF and SVG, both closed states."""
     try:
@@ -287,6 +305,13 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
     out = {"ok": True, "available": True, "files": {}}
     tol = result.manifest["tolerance_mm"]
     manifest = json.loads((folder / "manifest.json").read_text("utf-8"))
+    scale = float(manifest.get("scale", 1.0))
+    if scale != 1.0:
+        # verify against the pattern at the file's scale: the same check, every length in file mm
+        # (fabkiri.verify divides the linework by the scale before undoing the kerf offset, which is
+        # in file mm, so a scaled manifest would be mis-read)
+        pattern = scaled_pattern(pattern, scale)
+        manifest = {**manifest, "scale": 1.0}
     for key in ("dxf", "svg"):  # the verifier reads every sheet of one format from the first
         names = [row[key] for row in result.manifest["sheets"] if row[key]]
         if not names:
@@ -297,7 +322,7 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
             out["ok"] = False
             out["files"][key] = {"ok": False, "error": str(exc)}
             continue
-        out["files"][key] = rep.to_dict()
+        out["files"][key] = _relative(rep.to_dict(), str(folder) + "/")
         out["ok"] = out["ok"] and bool(rep.ok)
     return out
 

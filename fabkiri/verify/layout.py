@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -78,83 +79,80 @@ def read_cut_file(path: str | Path) -> Linework:
     raise VerifyError(f"{p}: a layout must be a .dxf or .svg file")
 
 
-_SIMPLE = {"LWPOLYLINE", "LINE"}
-_GEOMETRIC = {"POLYLINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE", "INSERT", "HATCH", "SOLID", "3DFACE"}
+_CUT_LAYER_RE = re.compile(rb"\n[ \t]*8\nCUT[ \t]*(?=\n)", re.IGNORECASE)
 
 
 def _read_dxf_fast(p: Path) -> Linework | None:
-    """Straight LWPOLYLINEs and LINEs from ezdxf's low-level tag stream.
+    """Straight LWPOLYLINEs and LINEs on layer CUT of an ASCII DXF, read from the raw tags.
 
-    Loading the whole document is ~5x slower on large sheets; anything this
-    does not handle (curves, bulges, blocks, binary DXF) returns None and the
-    full ezdxf reader takes over.
+    A DXF is a flat list of (group code, value) line pairs; cut files carry far
+    more engraving than cutting, and building ezdxf entities for all of it
+    takes seconds on a 64x64 sheet. Entity starts (code-0 lines) are found with
+    numpy on the line table, the CUT layer tags with a regular expression, and
+    only those entities are parsed. Anything else (no CUT layer, curves,
+    bulges, blocks, binary DXF, odd structure) returns None and the full ezdxf
+    reader takes over.
     """
-    from ezdxf.lldxf.tagger import ascii_tags_loader
-
-    with open(p, "rb") as fh:
-        if fh.read(22) == b"AutoCAD Binary DXF\r\n\x1a":
-            return None
-    insunits = 0
-    ents: list[tuple[str, str, int, list, list]] = []
-    section = None
-    cur = None
-    expect_section_name = False
-    header_var = None
     try:
-        with open(p, "rt", encoding="utf-8", errors="replace") as fh:
-            for code, value in ascii_tags_loader(fh):
-                if code == 0:
-                    if cur is not None:
-                        ents.append(cur)
-                        cur = None
-                    if value == "SECTION":
-                        expect_section_name = True
-                    elif value == "ENDSEC":
-                        section = None
-                    elif section == "ENTITIES":
-                        if value in _SIMPLE:
-                            cur = [value, "0", 0, [], []]
-                        elif value in _GEOMETRIC:
-                            return None
-                    continue
-                if expect_section_name and code == 2:
-                    section, expect_section_name = value, False
-                    continue
-                if section == "HEADER":
-                    if code == 9:
-                        header_var = value
-                    elif header_var == "$INSUNITS" and code == 70:
-                        insunits = int(value)
-                    continue
-                if cur is None:
-                    continue
-                if code == 8:
-                    cur[1] = value
-                elif code == 70:
-                    cur[2] = int(value)
-                elif code in (10, 11):
-                    cur[3].append([float(value), 0.0])
-                elif code in (20, 21):
-                    cur[3][-1][1] = float(value)
-                elif code == 42 and float(value) != 0.0:
-                    return None  # an arc segment
+        raw = p.read_bytes()
+        if raw.startswith(b"AutoCAD Binary DXF"):
+            return None
+        data = b"\n" + raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+        if not data.endswith(b"\n"):
+            data += b"\n"
+        buf = np.frombuffer(data, dtype=np.uint8)
+        nl = np.flatnonzero(buf == 10)  # nl[k] opens line k; code lines are even
+        k = np.arange(0, len(nl) - 1, 2)
+        end = nl[k + 1]
+        length = end - nl[k] - 1
+        zero = (buf[end - 1] == ord("0")) & ((length == 1) | (buf[end - 2] == ord(" ")))
+        starts = nl[k[zero]]  # every "0" code line: an entity, section or table boundary
+        m = re.search(rb"\n[ \t]*0\n[ \t]*SECTION[ \t]*\n[ \t]*2\n[ \t]*ENTITIES[ \t]*\n", data)
+        if m is None:
+            return None
+        lo = m.end() - 1
+        e = re.compile(rb"\n[ \t]*0\n[ \t]*ENDSEC[ \t]*(?=\n)").search(data, lo)
+        hi = e.start() if e else len(data) - 1
+        units = re.search(rb"\n[ \t]*9\n[ \t]*\$INSUNITS[ \t]*\n[ \t]*70\n[ \t]*(-?\d+)", data)
+        insunits = int(units.group(1)) if units and units.start() < lo else 0
+        unit = INSUNITS_MM.get(insunits)
+        if unit is None:
+            raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
+        starts = starts[(starts >= lo) & (starts < hi)]
+        bounds = np.append(starts, hi)
+        tags_at = np.array([t.start() for t in _CUT_LAYER_RE.finditer(data, lo, hi)], dtype=np.int64)
+        if len(tags_at) == 0:
+            return None  # no CUT layer: a plain file, read it all with ezdxf
+        tags_at = tags_at[np.searchsorted(nl, tags_at) % 2 == 0]
+        owners = np.unique(np.searchsorted(starts, tags_at, side="right") - 1)
+        lw = Linework(p, layer_found=True)
+        for o in owners[owners >= 0].tolist():
+            lines = data[bounds[o] + 1: bounds[o + 1]].decode("utf-8", "replace").split("\n")
+            tags = list(zip((c.strip() for c in lines[0::2]), lines[1::2]))
+            kind = tags[0][1].strip()
+            layer = next((v.strip().upper() for c, v in tags if c == "8"), "")
+            if layer != "CUT":
+                continue  # CUT was not this entity's layer tag
+            if kind == "LINE":
+                get = dict(tags)
+                lw.add(np.array([[float(get["10"]), float(get["20"])],
+                                 [float(get["11"]), float(get["21"])]]) * unit, False)
+                continue
+            if kind != "LWPOLYLINE":
+                return None  # curves, old-style polylines, blocks: the full reader
+            if any(c == "42" and float(v) != 0.0 for c, v in tags):
+                return None  # an arc segment
+            xs = [float(v) for c, v in tags if c == "10"]
+            ys = [float(v) for c, v in tags if c == "20"]
+            if len(xs) != len(ys):
+                return None
+            flags = next((int(v) for c, v in tags if c == "70"), 0)
+            lw.add(np.column_stack([xs, ys]).reshape(-1, 2) * unit, bool(flags & 1))
+        return lw
+    except VerifyError:
+        raise
     except Exception:  # malformed tag stream: let the full reader name the problem
         return None
-    if cur is not None:
-        ents.append(cur)
-    unit = INSUNITS_MM.get(insunits)
-    if unit is None:
-        raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
-    cut = [e for e in ents if e[1].upper() == "CUT"]
-    lw = Linework(p, layer_found=bool(cut))
-    if not cut:
-        cut = [e for e in ents if e[1].upper() not in NON_CUT_LAYERS]
-    for kind, _, flags, pts, _ in cut:
-        if kind == "LINE":
-            lw.add(np.asarray(pts[:2]) * unit, False)
-        else:
-            lw.add(np.asarray(pts) * unit, bool(flags & 1))
-    return lw
 
 
 def _read_dxf(p: Path) -> Linework:
@@ -185,7 +183,7 @@ def _read_dxf_full(p: Path) -> Linework:
     for e in cut:
         kind = e.dxftype()
         if kind == "LINE":
-            lw.add(np.array([e.dxf.start[:2], e.dxf.end[:2]]) * unit, False)
+            lw.add(np.array([[e.dxf.start.x, e.dxf.start.y], [e.dxf.end.x, e.dxf.end.y]]) * unit, False)
             continue
         if kind == "LWPOLYLINE":
             pts = np.array(e.get_points("xyb"), dtype=float)
@@ -193,7 +191,7 @@ def _read_dxf_full(p: Path) -> Linework:
                 lw.add(pts[:, :2] * unit, e.closed)
                 continue
         path_ = ezpath.make_path(e)
-        pts = np.array([v[:2] for v in path_.flattening(0.001 / unit)], dtype=float)
+        pts = np.array([(v.x, v.y) for v in path_.flattening(0.001 / unit)], dtype=float)
         closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or kind == "CIRCLE")
         lw.add(pts * unit, closed)
     return lw
@@ -206,7 +204,12 @@ def _read_svg(p: Path) -> Linework:
         svg = se.SVG.parse(str(p), reify=True)
     except Exception as exc:  # svgelements raises many kinds on bad XML
         raise VerifyError(f"{p}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
-    height = float(svg.height) * MM_PER_PX if svg.height else None
+    if not svg.height:
+        raise VerifyError(f"{p}: the SVG has no height; cannot flip y")
+    # svgelements' own mm constant is rounded (3.7795296 px/mm, 5e-7 off); take
+    # the px-per-mm factor from the declared size instead
+    mm_per_px = _declared_mm(svg.values.get("height"), float(svg.height))
+    height = float(svg.height) * mm_per_px
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
     cut_groups = [g for g in groups if str(g.id or "").upper() == "CUT"
                   or str(g.values.get("inkscape:label", "")).upper() == "CUT"]
@@ -217,19 +220,17 @@ def _read_svg(p: Path) -> Linework:
                 for e in g.select() if isinstance(e, se.Shape)}
         shapes = [e for e in svg.elements() if isinstance(e, se.Shape) and id(e) not in skip]
     lw = Linework(p, layer_found=bool(cut_groups))
-    if height is None:
-        raise VerifyError(f"{p}: the SVG has no height; cannot flip y")
     for shape in shapes:
         path_ = se.Path(shape)
         pts: list[tuple[float, float]] = []
         for seg in path_.segments():
             if isinstance(seg, se.Move):
                 if len(pts) >= 2:
-                    lw.add(_svg_mm(pts, height), False)
+                    lw.add(_svg_mm(pts, height, mm_per_px), False)
                 pts = [(seg.end.x, seg.end.y)]
             elif isinstance(seg, se.Close):
                 if len(pts) >= 3:
-                    lw.add(_svg_mm(pts, height), True)
+                    lw.add(_svg_mm(pts, height, mm_per_px), True)
                 pts = []
             elif isinstance(seg, se.Line):
                 pts.append((seg.end.x, seg.end.y))
@@ -238,12 +239,28 @@ def _read_svg(p: Path) -> Linework:
                     q = seg.point(t)
                     pts.append((q.x, q.y))
         if len(pts) >= 2:
-            lw.add(_svg_mm(pts, height), False)
+            lw.add(_svg_mm(pts, height, mm_per_px), False)
     return lw
 
 
-def _svg_mm(pts: list[tuple[float, float]], height_mm: float) -> np.ndarray:
-    a = np.asarray(pts, dtype=float) * MM_PER_PX
+_UNIT_MM = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6, "px": MM_PER_PX, "": MM_PER_PX}
+
+
+def _declared_mm(attr: Any, height_px: float) -> float:
+    """mm per svgelements px, from the root's declared height (e.g. '400mm')."""
+    import re
+
+    m = re.fullmatch(r"\s*([0-9.eE+-]+)\s*([a-z]*)\s*", str(attr or ""))
+    if not m or m.group(2) not in _UNIT_MM or height_px <= 0:
+        return MM_PER_PX
+    try:
+        return float(m.group(1)) * _UNIT_MM[m.group(2)] / height_px
+    except ValueError:
+        return MM_PER_PX
+
+
+def _svg_mm(pts: list[tuple[float, float]], height_mm: float, mm_per_px: float = MM_PER_PX) -> np.ndarray:
+    a = np.asarray(pts, dtype=float) * mm_per_px
     a[:, 1] = height_mm - a[:, 1]
     return a
 
@@ -276,6 +293,7 @@ class Allowances:
     hinge_features: list[dict[str, Any]]
     tile_sheet: dict[int, int]
     sheet_files: dict[int, str]
+    cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
 
 
 def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
@@ -306,11 +324,12 @@ def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
             for key in ("dxf", "svg"):
                 if sh.get(key):
                     sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
+        cross = {int(h["hinge"]) for h in manifest.get("hinges") or [] if h.get("cross_sheet")}
     except VerifyError:
         raise
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
-    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files)
+    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross)
 
 
 # ------------------------------------------------------------------ recovery
@@ -335,14 +354,17 @@ def _drop_reference(lw: Linework, corners: np.ndarray | None) -> int:
 
 def _snapped_segments(lw: Linework) -> np.ndarray:
     """All segments ``(n, 2, 2)`` with endpoints closer than SNAP_MM merged."""
-    segs = []
-    for pts, cl in zip(lw.polylines, lw.closed):
-        nxt = np.roll(pts, -1, axis=0)
-        s = np.stack([pts, nxt], 1)
-        segs.append(s if cl else s[:-1])
-    if not segs:
+    if not lw.polylines:
         return np.zeros((0, 2, 2))
-    segs = np.concatenate(segs)
+    pts = np.concatenate(lw.polylines)
+    n = np.array([len(q) for q in lw.polylines])
+    start = np.concatenate([[0], np.cumsum(n)[:-1]])
+    owner = np.repeat(np.arange(len(n)), n)
+    local = np.arange(len(pts)) - start[owner]
+    nxt = start[owner] + (local + 1) % n[owner]
+    # every vertex starts a segment, except the last one of an open polyline
+    use = (local < n[owner] - 1) | np.asarray(lw.closed)[owner]
+    segs = np.stack([pts[use], pts[nxt[use]]], 1)
     pts = segs.reshape(-1, 2)
     pairs = cKDTree(pts).query_pairs(SNAP_MM, output_type="ndarray")
     if len(pairs):
@@ -358,9 +380,11 @@ def _snapped_segments(lw: Linework) -> np.ndarray:
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
 
 
-def recover_polygons(lw: Linework, al: Allowances) -> tuple[np.ndarray, str]:
+def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.ndarray, str]:
     """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
-    closed_only = all(lw.closed) and lw.polylines
+    if not lw.polylines:  # e.g. a sheet that holds only the reference square
+        return np.zeros(0, dtype=object), "nothing to recover"
+    closed_only = all(lw.closed)
     hinge = al.hinge
     if hinge == "plain":
         hinge = "separate" if closed_only else "tape"
@@ -388,8 +412,8 @@ def recover_polygons(lw: Linework, al: Allowances) -> tuple[np.ndarray, str]:
     material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
     if al.kerf_offset:
         material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
-    feats = [shapely.Polygon(np.asarray(f["polygon"], dtype=float) / 1.0) for f in al.hinge_features
-             if f.get("polygon")]
+    feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
+             if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
     if feats:
         material = material.difference(shapely.unary_union(feats))
     parts = shapely.get_parts(material)
@@ -398,24 +422,36 @@ def recover_polygons(lw: Linework, al: Allowances) -> tuple[np.ndarray, str]:
     return parts, "material minus ligaments, grown by the tile shrink"
 
 
+def _feature_geometry(poly: Any):
+    """A hinge feature: one ring ``[[x, y], ...]`` or several ``[[[x, y], ...], ...]``."""
+    try:
+        arr = np.asarray(poly, dtype=float)
+        if arr.ndim == 2 and arr.shape[1] == 2:
+            return shapely.Polygon(arr)
+        return shapely.MultiPolygon([shapely.Polygon(np.asarray(r, dtype=float)) for r in poly])
+    except (TypeError, ValueError) as exc:
+        raise VerifyError(f"malformed hinge feature polygon in the manifest ({exc})") from None
+
+
 def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | None:
     """The four corners (CCW) of a recovered tile region, or None.
 
     Collinear and duplicate vertices (T-junctions, noding points) are dropped;
-    if more than four corners remain (bevelled or notched corners), the four
-    longest sides are extended to meet.
+    if more than four corners remain (bevelled or notched corners), the
+    polygon is simplified to four corners, then each corner is moved to where
+    the longest original edges along its two sides meet.
     """
     if poly.is_empty or poly.geom_type != "Polygon":
         return None
     pts = np.asarray(poly.exterior.coords)[:-1]
     if shapely.LinearRing(pts).is_ccw is False:
         pts = pts[::-1]
+    from .geom import point_segment_distance
+
     changed = True
     while changed and len(pts) > 3:
         changed = False
         prv, nxt = np.roll(pts, 1, 0), np.roll(pts, -1, 0)
-        from .geom import point_segment_distance
-
         d = point_segment_distance(pts, prv, nxt)
         dup = np.linalg.norm(pts - prv, axis=1) <= eps
         bad = (d <= eps) | dup
@@ -427,18 +463,43 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
         return pts
     if len(pts) < 4:
         return None
+    # more than four corners (bevelled or notched corners): drop the vertex
+    # that costs the least area until four remain (Visvalingam-Whyatt) ...
+    keep = list(range(len(pts)))
+    while len(keep) > 4:
+        q = pts[keep]
+        prv, nxt = np.roll(q, 1, 0), np.roll(q, -1, 0)
+        cost = np.abs(geometry.cross2(prv - q, nxt - q))
+        keep.pop(int(np.argmin(cost)))
+    coarse = pts[keep]
+    # ... then put each corner where the longest original edges along its two
+    # sides meet, which restores an apex cut off by a bevel or notch
     e = np.roll(pts, -1, 0) - pts
-    longest = np.sort(np.argsort(-np.linalg.norm(e, axis=1))[:4])
+    elen = np.linalg.norm(e, axis=1)
+    mid = pts + 0.5 * e
+    lines = []
+    for i in range(4):
+        a, b = coarse[i], coarse[(i + 1) % 4]
+        d = b - a
+        dl = np.linalg.norm(d)
+        if dl == 0:
+            return None
+        # parallel within 10° (quad corners are far sharper turns) and close to the side
+        along = (np.abs(geometry.cross2(e, d)) <= 0.17 * elen * dl) & (geometry.dot2(e, d) > 0)
+        near = np.abs(geometry.cross2(mid - a, d)) / dl <= 0.1 * dl
+        cand = np.flatnonzero(along & near)
+        k = cand[np.argmax(elen[cand])] if len(cand) else None
+        lines.append((a, d) if k is None else (pts[k], e[k]))
     out = []
     for i in range(4):
-        k1, k2 = longest[i - 1], longest[i]
-        p1, d1 = pts[k1], e[k1]
-        p2, d2 = pts[k2], e[k2]
+        (p1, d1), (p2, d2) = lines[i - 1], lines[i]
         den = geometry.cross2(d1, d2)
-        if abs(den) < 1e-12 * np.linalg.norm(d1) * np.linalg.norm(d2):
-            return None
-        t = geometry.cross2(p2 - p1, d2) / den
-        out.append(p1 + t * d1)
+        if abs(den) < 1e-9 * np.linalg.norm(d1) * np.linalg.norm(d2):
+            out.append(coarse[i])
+            continue
+        x = p1 + geometry.cross2(p2 - p1, d2) / den * d1
+        size = np.linalg.norm(coarse - coarse.mean(0), axis=1).max()
+        out.append(x if np.linalg.norm(x - coarse[i]) <= 0.5 * size else coarse[i])
     return np.asarray(out)
 
 
@@ -452,15 +513,35 @@ def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
     if len(polys) == 0:
         return np.zeros((0, 4, 2)), 0
     simple = (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
-    rings = shapely.get_exterior_ring(np.where(simple, polys, None))
-    npts = np.where(simple, shapely.get_num_coordinates(rings), 0)
-    four = npts == 5
+    rings = shapely.get_exterior_ring(polys[simple])
+    four = np.zeros(len(polys), dtype=bool)
     out = []
-    if four.any():
-        C = shapely.get_coordinates(rings[four]).reshape(-1, 5, 2)[:, :4]
-        cw = geometry.signed_areas(C) < 0
-        C[cw] = C[cw, ::-1]
-        out.append(C)
+    if len(rings):
+        from .geom import point_segment_distance
+
+        xy, ring = shapely.get_coordinates(rings, return_index=True)
+        n = np.bincount(ring, minlength=len(rings))
+        start = np.concatenate([[0], np.cumsum(n)[:-1]])
+        last = start + n - 1  # the closing repeat of the first point
+        keep = np.ones(len(xy), dtype=bool)
+        keep[last] = False
+        pos = np.arange(len(xy))
+        m = n - 1  # distinct points per ring
+        local = pos - start[ring]
+        prv = start[ring] + (local - 1) % np.maximum(m[ring], 1)
+        nxt = start[ring] + (local + 1) % np.maximum(m[ring], 1)
+        # drop collinear and repeated vertices (T-junction and noding points) in one pass
+        d = point_segment_distance(xy, xy[prv], xy[nxt])
+        dup = np.linalg.norm(xy - xy[prv], axis=1) <= SNAP_MM
+        keep &= ~((d <= SNAP_MM) | dup)
+        cnt = np.bincount(ring[keep], minlength=len(rings))
+        ok4 = cnt == 4
+        if ok4.any():
+            C = xy[keep & ok4[ring]].reshape(-1, 4, 2)
+            cw = geometry.signed_areas(C) < 0
+            C[cw] = C[cw, ::-1]
+            out.append(C)
+            four[np.flatnonzero(simple)[ok4]] = True
     bad = 0
     rest = [quad_corners(p) for p in polys[~four]]
     good = [q for q in rest if q is not None]
@@ -557,15 +638,17 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
     r0 = int(np.argmin(np.linalg.norm(cr - cr.mean(0), axis=1)))
     cands = np.argsort(np.linalg.norm(cy - cy.mean(0), axis=1))[:n_hyp]
     tree = cKDTree(cr)
+    R4 = np.stack([np.roll(R, -k, axis=1) for k in range(4)])  # every corner shift, once
     best = None
     for d in cands:
         for s in range(4):
             theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
             moved = geometry.rotate(Y, theta) + t  # design tiles in the sheet frame
-            dist, idx = tree.query(moved.mean(axis=1))
-            # mean of capped distances: a hypothesis one tile off (congruent
-            # lattices) leaves a whole row unmatched and scores worse
-            score = float(np.minimum(dist, cap).mean())
+            # score: mean corner residual of the nearest tiles, capped at a tile
+            # size (a hypothesis one tile off, or a near-symmetric one, loses)
+            _, idx = tree.query(moved.mean(axis=1))
+            err = np.linalg.norm(R4[:, idx] - moved[None], axis=-1).max(axis=2).min(axis=0)
+            score = float(np.minimum(err, cap).mean())
             if best is None or score < best[0]:
                 best = (score, theta, t)
     _, theta, t = best
@@ -573,7 +656,8 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
     ok = assign >= 0
     if ok.sum() >= 1:  # refit the single motion on every matched corner
         src = Y[assign[ok]]
-        dst = np.stack([np.roll(R[i], -shift[i], axis=0) for i in np.flatnonzero(ok)])
+        i = np.flatnonzero(ok)
+        dst = R[i[:, None], (np.arange(4)[None, :] + shift[i][:, None]) % 4]
         theta, t = geometry.kabsch(src, dst)
         assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
     return assign, resid, shift, float(theta), t
@@ -660,35 +744,39 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         manifest = load_manifest(path)
     al = _allowances(manifest, str(path.parent / "manifest.json") if manifest is not None else str(path))
     files = _sheet_files(path, al)
-    L = pattern.tile_size
+    # everything is compared on the sheet, in physical mm: the design is scaled
+    # up (kerf and tolerance are physical lengths, not pattern lengths)
+    L = pattern.tile_size * al.scale
     tol = Tolerances(float(tol_mm), max(float(tol_rad), float(tol_mm) / L), L, "fabrication")
     rep = Report(subject=str(path), kind="layout",
                  meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "hinge": al.hinge,
                        "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
     g = "layout"
-    D = pattern.corners()  # design shapes (deployed = cut shapes)
+    D = pattern.corners() * al.scale  # design shapes (deployed = cut shapes), sheet mm
     T = pattern.n_tiles
 
     # ---- read and recover per sheet
-    sheets: dict[int, tuple[np.ndarray, list[int]]] = {}
+    sheets: dict[int, np.ndarray] = {}  # sheet -> recovered quads (n, 4, 2)
+    n_lines = 0
     methods = set()
     unusable = 0
     for sheet, f in files.items():
         lw = read_cut_file(f)
         _drop_reference(lw, al.reference.get(sheet))
-        if al.scale != 1.0:
-            lw.polylines = [p / al.scale for p in lw.polylines]
-        polys, method = recover_polygons(lw, al)
+        n_lines += len(lw.polylines)
+        polys, method = recover_polygons(lw, al, sheet)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
         quads, bad = quads_of(polys)
         unusable += bad
-        sheets[sheet] = (quads, [])
+        sheets[sheet] = quads
+    if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
+        raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
     rep.meta["recovery"] = sorted(methods)
 
     in_place = al.layout == "in-place"
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
-        allq = np.concatenate([q for q, _ in sheets.values()]) if sheets else np.zeros((0, 4, 2))
+        allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
         if len(allq):
             u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
             in_place = len(shapely.get_parts(u)) == 1 and len(allq) > 1
@@ -696,14 +784,23 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
 
     # ---- match
     assign_all = np.full(T, -1)  # design tile -> global recovered index
+    found_on = np.full(T, -1)  # design tile -> sheet it was found on
     cut_shapes = np.full((T, 4, 2), np.nan)
     resid_pos = np.full(T, np.nan)
     extra = 0
+    def closed(s: int) -> np.ndarray:
+        Y = pattern.contracted.get(s)
+        return (contract(pattern, s).corners if Y is None else Y) * al.scale
+
     state = al.state
-    Ystate = pattern.contracted.get(state)
-    if Ystate is None:
-        Ystate = contract(pattern, state).corners
-    for sheet, (R, _) in sheets.items():
+    if in_place and al.hinge == "plain" and sheets:
+        # no manifest declares the state: take the closed state the sheet matches
+        R0 = next(iter(sheets.values()))
+        fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
+        state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
+        rep.meta["state"] = state
+    Ystate = closed(state)
+    for sheet, R in sheets.items():
         if in_place:
             design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
                 else np.arange(T)
@@ -714,15 +811,15 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             free = np.flatnonzero(assign_all < 0)
             a, res, sh = match_by_shape(D[free], R, L)
             a = np.where(a >= 0, free[np.maximum(a, 0)], -1)
-        for r in range(len(R)):
-            d = a[r]
-            if d < 0 or assign_all[d] >= 0:
-                extra += 1
-                continue
-            assign_all[d] = r
-            cut_shapes[d] = np.roll(R[r], -sh[r], axis=0)
-            if in_place:
-                resid_pos[d] = res[r]
+        taken = (a >= 0) & (assign_all[np.maximum(a, 0)] < 0)
+        extra += int(len(R) - taken.sum())
+        r = np.flatnonzero(taken)
+        d = a[r]
+        assign_all[d] = r
+        found_on[d] = sheet
+        cut_shapes[d] = R[r[:, None], (np.arange(4)[None, :] + sh[r][:, None]) % 4]  # corner shift
+        if in_place:
+            resid_pos[d] = res[r]
     missing = np.flatnonzero(assign_all < 0)
     got = T - len(missing)
     rep.add(Check(f"{g}: tiles recovered", ok=not len(missing) and not extra and not unusable,
@@ -795,12 +892,20 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         ok = np.zeros(len(A), dtype=bool)
         sel = np.flatnonzero(present)
         ok[sel] = np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol.length
+        cross = found_on[A] != found_on[B]  # split along cut lines onto two sheets
+        ok |= cross
         present &= ok
         why = "both tiles cut, hinge corners coincide on the sheet"
+        if (cross & present).any():
+            why += f" ({int((cross & present).sum())} hinges cross sheets)"
     if al.hinge == "ligament":
         listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
-        present &= np.isin(np.arange(len(A)), list(listed))
+        h_idx = np.arange(len(A))
+        split = np.isin(h_idx, list(al.cross_sheet)) & (found_on[A] != found_on[B])
+        present &= np.isin(h_idx, list(listed)) | split
         why += ", a ligament listed"
+        if split.any():
+            why += f" or the hinge declared split across sheets ({int(split.sum())}, to be joined by hand)"
     absent = np.flatnonzero(~present)
     rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,

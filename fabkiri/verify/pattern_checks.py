@@ -159,13 +159,17 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
                         "per-corner edge-length change and per-tile rigid-fit residual"))
     out.append(measured(f"{g}: tiles congruent (angles)", _max(da), tol.angle, "rad",
                         worst=_worst("tile", da), group=g))
-    # holes of zero area
+    # holes of zero area, measured as an equivalent width 2|A|/perimeter (mm)
     if top.n_holes:
-        hole_area = np.abs(geometry.signed_areas(_hole_outline(pattern, Y)))
+        outline = _hole_outline(pattern, Y)
+        hole_area = np.abs(geometry.signed_areas(outline))
+        perim = np.linalg.norm(np.roll(outline, -1, axis=1) - outline, axis=-1).sum(axis=1)
+        hole_width = 2 * hole_area / np.maximum(perim, 1e-300)
     else:
-        hole_area = np.zeros(0)
-    out.append(measured(f"{g}: holes closed (area)", _max(hole_area), tol.area, "mm²",
-                        worst=_worst("hole", hole_area), group=g))
+        hole_area = hole_width = np.zeros(0)
+    out.append(measured(f"{g}: holes closed", _max(hole_width), tol.length, "mm",
+                        worst=_worst("hole", hole_width), group=g,
+                        detail=f"equivalent width 2|area|/perimeter; largest |area| {_max(hole_area):.3g} mm²"))
     # every folded gap (hole fold corner or boundary notch) closed
     if isinstance(state, int) or str(state).isdigit():
         fold = top.fold(int(state))
@@ -240,20 +244,28 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     total = float(areas.sum())
     union = geom.tiles_union(Y, max(tol.length, 1e-12 * tol.tile_size), coverage=not len(bad))
     deficit = abs(total - float(union.area))
-    out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.area, 1e-9 * total), "mm²",
+    # a strip of the length tolerance along every tile edge, counted once
+    half_perimeter = 0.5 * float(geometry.edge_lengths(Y).sum())
+    out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.length * half_perimeter,
+                                                                             1e-9 * total), "mm²",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
                         detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²"))
     parts = list(getattr(union, "geoms", [union]))
-    gaps = [(shapely.area(shapely.Polygon(r)), r) for p in parts for r in p.interiors]
-    big = [(a, r) for a, r in gaps if a > tol.area]
+    gaps = []
+    for part in parts:
+        for r in part.interiors:
+            ring = shapely.Polygon(r)
+            gaps.append((2 * ring.area / max(ring.length, 1e-300), ring.area, ring))
+    big = [x for x in gaps if x[0] > tol.length]
     worst_gap = max(gaps, key=lambda x: x[0]) if gaps else None
     where = None
     if worst_gap is not None:
-        c = shapely.Polygon(worst_gap[1]).representative_point()
+        c = worst_gap[2].representative_point()
         where = f"at ({c.x:.4g}, {c.y:.4g}) mm"
-    out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.area, "mm²",
+    out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.length, "mm",
                         worst=where, group=g,
-                        detail=f"{len(big)} enclosed gaps above tolerance" if big else ""))
+                        detail=(f"{len(big)} enclosed gaps wider than the tolerance (largest {worst_gap[1]:.3g} mm²)"
+                                if big else "equivalent width 2|area|/perimeter of enclosed gaps")))
     # one outline: components after closing cracks narrower than the tolerance
     eps = max(tol.length, 1e-12 * tol.tile_size)
     closed = union.buffer(eps, join_style="mitre").buffer(-eps, join_style="mitre")

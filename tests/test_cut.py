@@ -1,0 +1,366 @@
+"""fabkiri cut: materials, hinge kinds, layout, writers, read-back verification, CLI."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fabkiri.errors import CheckFailed, FabricationError, InputError
+from fabkiri.fabricate import hinges as hg
+from fabkiri.fabricate.cut import CutOptions, cut_pattern
+from fabkiri.fabricate.materials import available, load_material
+from fabkiri.fabricate.readback import duplicate_segments, read_dxf, read_svg, verify_result
+from fabkiri.fabricate.text import GLYPHS, text_strokes, text_width
+from fabkiri.mechanics.contract import with_contracted_states
+from fabkiri.pattern.io import read_pattern, write_pattern
+from fabkiri.pattern.lattice import standard_pattern
+
+REPO = Path(__file__).resolve().parents[1]
+PATTERNS = REPO / "templates" / "patterns"
+GOLDEN = Path(__file__).parent / "golden"
+DATA = Path(__file__).parent / "data"
+
+
+def std(rows=4, cols=4, angle=45.0, size=10.0):
+    return with_contracted_states(standard_pattern(rows, cols, angle_deg=angle, tile_size=size))
+
+
+def cut(pattern, material="acrylic-3", **kw):
+    kw.setdefault("stem", "p")
+    return cut_pattern(pattern, CutOptions(material=load_material(material), **kw))
+
+
+def assert_verified(pattern, result, svg_ok=True):
+    rb = verify_result(pattern, result)
+    bad = [(c.name, c.detail) for c in rb.failed()]
+    assert not bad, bad
+    v = rb.verifier
+    assert v["available"], v
+    assert v["files"]["dxf"]["ok"], [c for c in v["files"]["dxf"]["checks"] if not c["ok"]]
+    if svg_ok:
+        assert v["files"]["svg"]["ok"], [c for c in v["files"]["svg"].get("checks", []) if not c["ok"]]
+    return rb
+
+
+# ------------------------------------------------------------------ materials and font
+
+
+def test_presets_load_and_are_consistent():
+    names = available()
+    for need in ("acrylic-3", "plywood-3", "pp-0.5", "card-0.3", "felt-2"):
+        assert need in names
+    for name in names:
+        m = load_material(name)
+        assert m.kerf_mm < m.min_web_mm
+        assert m.hinge in ("tape", "ligament", "separate")
+    assert load_material("acrylic-3").hinge == "tape"
+    assert load_material("pp-0.5").hinge == "ligament"
+
+
+def test_override_and_kerf_not_below_web():
+    m = load_material("acrylic-3").override(kerf_mm=0.3, gap_mm=None)
+    assert m.kerf_mm == 0.3 and m.gap_mm == load_material("acrylic-3").gap_mm
+    with pytest.raises(FabricationError, match="not smaller than the minimum web"):
+        load_material("acrylic-3").override(kerf_mm=3.0)
+    with pytest.raises(InputError, match="unknown material field"):
+        load_material("acrylic-3").override(colour="red")
+    with pytest.raises(InputError, match="unknown material"):
+        load_material("unobtainium-9")
+
+
+def test_glyphs_stay_in_their_cell_and_never_retrace():
+    for ch, strokes in GLYPHS.items():
+        for s in strokes:
+            assert s[:, 0].min() >= 0 and s[:, 0].max() <= 0.6 + 1e-12, ch
+            assert s[:, 1].min() >= 0 and s[:, 1].max() <= 1 + 1e-12, ch
+        assert duplicate_segments([(s, False) for s in strokes]) == 0, ch
+    strokes = text_strokes("0123456789TB", 2.0, (10.0, 5.0))
+    pts = np.concatenate(strokes)
+    w = 2.0 * text_width("0123456789TB")
+    assert pts[:, 0].min() >= 10 - w / 2 - 1e-9 and pts[:, 0].max() <= 10 + w / 2 + 1e-9
+    assert pts[:, 1].min() >= 4 - 1e-9 and pts[:, 1].max() <= 6 + 1e-9
+
+
+# ------------------------------------------------------------------ hinge geometry
+
+
+@settings(max_examples=12, deadline=None)
+@given(rows=st.integers(1, 5), cols=st.integers(1, 5), angle=st.floats(5, 85), state=st.sampled_from([1, 2]))
+def test_tape_linework_cuts_every_edge_once_and_gives_the_tiles_back(rows, cols, angle, state):
+    p = std(rows, cols, angle)
+    c = hg.snap_corners(p.contracted[state], 1e-4)
+    rings, lines = hg.tape_linework(c)
+    polylines = [(r, True) for r in rings] + [(ln, False) for ln in lines]
+    assert duplicate_segments(polylines) == 0
+    ls = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings] + [shapely.LineString(ln) for ln in lines]
+    faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.union_all(ls))))
+    assert len(faces) == rows * cols
+    tiles = shapely.polygons(c)
+    for t in tiles:
+        d = min(shapely.hausdorff_distance(t, f) for f in faces)
+        assert d < 1e-6
+    # cut length = outline + every shared edge once
+    total = sum(g.length for g in ls)
+    edges = shapely.length(shapely.boundary(tiles)).sum()
+    outline = shapely.union_all(tiles, grid_size=1e-6).exterior.length
+    # coordinates are snapped to the 1e-6 mm output grid: each segment end may move by that much
+    assert total == pytest.approx(0.5 * (edges + outline), abs=2e-6 * 4 * rows * cols)
+
+
+@pytest.mark.parametrize("pattern", ["standard-8x8", "circle-8x8", "circle-8x8-rigid"])
+def test_coincident_hinges_get_opposite_faces(pattern):
+    p = read_pattern(PATTERNS / f"{pattern}.json")
+    faces = hg.assign_faces(p, p.contracted)
+    assert faces.conflicts == 0
+    assert len(faces.pairs) > 0
+    assert (faces.face[faces.pairs[:, 0]] != faces.face[faces.pairs[:, 1]]).all()
+
+
+def test_ligament_strain_rule_and_warning():
+    p = std(3, 3)
+    c = p.contracted[1]
+    small = hg.shrink_tiles(c, 2.0)
+    d = hg.ligament_design(p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.2)
+    assert d.lengths == pytest.approx(4.0)  # 90° corners: apex to apex is the gap
+    assert d.strains == pytest.approx(d.width_mm * np.pi / (2 * 4.0))
+    assert not d.warnings and d.strains.max() <= 0.2
+    stiff = hg.ligament_design(p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.05)
+    assert stiff.width_mm == 0.4 and "exceeds the material's limit" in stiff.warnings[0]
+    with pytest.raises(FabricationError, match="between the two strips"):
+        hg.ligament_design(p, c, small, gap=4.0, width_max=3.5, min_web=3.5, kerf=0.1, strain_limit=0.9)
+
+
+# ------------------------------------------------------------------ full pipeline, read back
+
+
+KINDS = {"tape": ["acrylic-3", "plywood-3", "pp-0.5", "card-0.3", "felt-2"],
+         "ligament": ["pp-0.5", "card-0.3", "felt-2"],
+         "separate": ["acrylic-3", "plywood-3", "pp-0.5", "card-0.3", "felt-2"]}
+CASES = [(k, m) for k, ms in KINDS.items() for m in ms]
+
+
+@pytest.mark.parametrize("kind,material", CASES)
+def test_standard_pattern_every_kind_and_preset(kind, material):
+    p = std(4, 4, size=20.0)
+    r = cut(p, material, hinge=kind, formats=("dxf", "svg"))
+    rb = assert_verified(p, r)
+    names = {c.name.split(" ", 2)[-1] for c in rb.checks}
+    assert {"dxf audit", "dxf units", "svg size", "dxf = svg", "labels inside tiles"} <= names
+    assert r.manifest["hinge"] == kind and r.manifest["material"]["name"] == material
+
+
+@pytest.mark.parametrize("kind,material", [("tape", "acrylic-3"), ("tape", "felt-2"), ("separate", "acrylic-3"),
+                                           ("separate", "pp-0.5"), ("ligament", "pp-0.5"),
+                                           ("ligament", "card-0.3")])
+@pytest.mark.parametrize("pattern", ["circle-8x8", "circle-8x8-rigid"])
+def test_solver_designs_8x8(pattern, kind, material):
+    p = read_pattern(PATTERNS / f"{pattern}.json")
+    r = cut(p, material, hinge=kind, width=300.0, formats=("dxf", "svg"))
+    # fabkiri.verify reads SVG through svgelements' rounded mm constant (~2e-4 mm off at 300 mm); ligament
+    # recovery subtracts strips from the material and is the one kind that notices, so only the DXF is
+    # held to the verifier there (see the report); the self checks still compare SVG and DXF to 1e-6 mm.
+    assert_verified(p, r, svg_ok=kind != "ligament")
+
+
+def test_unconverged_solver_design_is_refused():
+    # a 32x32 rigid circle that fabkiri design left unconverged: it closes only to ~0.5 mm
+    p = read_pattern(DATA / "circle-32x32-unconverged.json")
+    with pytest.raises(CheckFailed, match="does not close in both states"):
+        cut(p, "plywood-3", width=1100.0, sheet=(1200.0, 1200.0))
+
+
+def test_ligament_on_acrylic_is_refused():
+    with pytest.raises(FabricationError, match="min web"):
+        cut(std(3, 3), "acrylic-3", hinge="ligament")
+
+
+def test_state_2_and_scaling():
+    p = std(3, 3)
+    r = cut(p, state=2, width=120.0, formats=("dxf", "svg"))
+    assert r.manifest["state"] == 2
+    assert r.manifest["scale"] == pytest.approx(120.0 / 30.0)
+    assert_verified(p, r)
+    doc, _, layers, _ = read_dxf(r.files["p.dxf"])
+    cut_pts = np.concatenate([q for q, _ in layers["CUT"]])
+    ref = np.asarray(r.manifest["reference_square"]["corners"])
+    tiles = cut_pts[~np.isin(cut_pts[:, 0], ref[:, 0]) | ~np.isin(cut_pts[:, 1], ref[:, 1])]
+    assert np.ptp(tiles[:, 0]) == pytest.approx(120.0, abs=1e-6)
+
+
+def test_split_onto_sheets_labels_cross_sheet_hinges_on_both_tiles():
+    p = std(6, 6, size=20.0)  # 120 x 120 mm closed
+    r = cut(p, sheet=(90.0, 80.0), reference_mm=0.0, formats=("dxf", "svg"))
+    assert len(r.sheets) >= 2
+    cross = [h for h in r.manifest["hinges"] if h["cross_sheet"]]
+    assert cross
+    rb = verify_result(p, r)
+    assert not rb.failed(), [(c.name, c.detail) for c in rb.failed()]
+    # fabkiri.verify (d) asks hinge corners to coincide on the sheet, which a hinge split across two
+    # sheets cannot do: the only failure allowed is exactly the cross-sheet hinges (see the report)
+    for key in ("dxf", "svg"):
+        rep = rb.verifier["files"][key]
+        bad = [c for c in rep["checks"] if not c["ok"]]
+        assert [c["name"] for c in bad] in ([], ["layout: (d) every hinge present"]), bad
+        if bad:
+            assert 0 < bad[0]["value"] <= len(cross)  # a split hinge may coincide by chance
+    # both tiles of a cross-sheet hinge carry the partner's ID: more ENGRAVE strokes than in one piece
+    one = cut(p, reference_mm=0.0, formats=("dxf",))
+    n_split = sum(s.count("ENGRAVE") for s in r.sheets)
+    assert n_split > one.sheets[0].count("ENGRAVE")
+    for s in r.sheets:
+        on = [t for t in r.manifest["tiles"] if t["sheet"] == s.index]
+        assert on and max(max(q[:, 0].max(), 0) for q, _ in s.layers["CUT"]) <= s.width - 5.0 + 1e-9
+
+
+@pytest.mark.parametrize("layout", ["exploded", "nested"])
+def test_separate_layouts(layout):
+    p = std(5, 5, size=20.0)
+    r = cut(p, "plywood-3", hinge="separate", layout=layout, sheet=(200.0, 150.0), formats=("dxf", "svg"))
+    assert_verified(p, r)
+    parts = [shapely.Polygon(q) for s in r.sheets for q, c in s.layers["CUT"] if c]
+    assert len(parts) == 25 + 1  # tiles and the reference square
+    # kerf compensation: each part is the tile grown by half the kerf (mitre)
+    area = 400.0
+    grown = sorted(shapely.area(parts))[:25]
+    assert grown == pytest.approx([(20 + 0.2) ** 2] * 25, rel=1e-9) and grown[0] > area
+
+
+def test_reference_square_is_uncompensated_50mm():
+    r = cut(std(3, 3), "plywood-3", hinge="separate", formats=("dxf", "svg"))
+    sq = np.asarray(r.manifest["reference_square"]["corners"])
+    assert np.linalg.norm(sq[1] - sq[0]) == pytest.approx(50.0, abs=1e-9)
+    assert shapely.Polygon(sq).area == pytest.approx(2500.0, abs=1e-9)
+
+
+def test_labels_are_single_stroke_inside_their_tiles():
+    p = std(3, 3, size=25.0)
+    r = cut(p, formats=("dxf", "svg"))
+    tiles = shapely.polygons(r.tile_regions)
+    eng = [shapely.LineString(q) for q, _ in r.sheets[0].layers["ENGRAVE"]]
+    assert len(eng) > 9 * 1  # IDs, face letters and tape marks
+    for g in eng:
+        assert any(t.buffer(-0.5).covers(g) for t in tiles)
+    assert all(t["label"] == str(t["tile"]) for t in r.manifest["tiles"])
+    assert b"<text" not in r.files["p.svg"]
+
+
+# ------------------------------------------------------------------ files: format, determinism, golden
+
+
+def test_dxf_and_svg_structure_and_agreement():
+    r = cut(std(3, 3))
+    doc, aud, layers, others = read_dxf(r.files["p.dxf"])
+    assert len(aud.errors) == 0 and doc.header["$INSUNITS"] == 4 and doc.dxfversion == "AC1024"
+    assert not others and set(layers) <= {"CUT", "SCORE", "ENGRAVE", "NOTES"}
+    sq = np.asarray(r.manifest["reference_square"]["corners"])
+    assert [c for q, c in layers["CUT"] if q.shape == sq.shape and np.allclose(q, sq)] == [True]
+    assert sum(c for _, c in layers["CUT"]) == 2  # the outline (cut last) and the reference square
+    w, h, vb, svg_layers = read_svg(r.files["p.svg"])
+    assert (w, h) == (600.0, 400.0) and vb == [0, 0, 600.0, 400.0]
+    for name in layers:
+        for (a, ca), (b, cb) in zip(layers[name], svg_layers[name]):
+            assert ca == cb and np.abs(a - b).max() <= 1e-6
+
+
+def test_same_input_same_bytes_and_golden(tmp_path):
+    p = std(2, 2, size=20.0)
+    a = cut(p, formats=("dxf", "svg", "png"))
+    b = cut(p, formats=("dxf", "svg", "png"))
+    assert a.files == b.files and a.manifest_bytes() == b.manifest_bytes()
+    files = {**{k: v for k, v in a.files.items() if not k.endswith(".png")}, "manifest.json": a.manifest_bytes()}
+    if os.environ.get("FABKIRI_REGEN_GOLDEN"):
+        GOLDEN.mkdir(exist_ok=True)
+        for k, v in files.items():
+            (GOLDEN / f"std2x2-{k}").write_bytes(v)
+    for k, v in files.items():
+        gold = GOLDEN / f"std2x2-{k}"
+        assert gold.exists(), f"golden file {gold.name} missing (FABKIRI_REGEN_GOLDEN=1 writes it)"
+        assert gold.read_bytes() == v, f"{k} differs from its golden file"
+
+
+# ------------------------------------------------------------------ CLI
+
+
+def test_cli_default_command(run_cli, tmp_path):
+    out = tmp_path / "standard-8x8"
+    code, stdout, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out)
+    assert code == 0, err
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["manifest.json", "standard-8x8.dxf", "standard-8x8.png", "standard-8x8.svg"]
+    man = json.loads((out / "manifest.json").read_text())
+    assert man["verification"]["ok"] and man["verification"]["verifier"]["ok"]
+    assert man["hinge"] == "tape" and man["material"]["name"] == "acrylic-3"
+    assert all(h["face"] in "TB" for h in man["hinges"])
+    assert man["sheets"][0]["cut_length_mm"] > 0 and man["sheets"][0]["cut_time_s"] > 0
+    assert stdout == ""
+    # the same command again gives the same bytes
+    out2 = tmp_path / "again"
+    assert run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out2)[0] == 0
+    for f in out.iterdir():
+        assert (out2 / f.name).read_bytes() == f.read_bytes(), f.name
+
+
+def _no_output(folder: Path):
+    assert not folder.exists() or not any(folder.iterdir())
+    assert not [p for p in folder.parent.iterdir() if p.name.startswith(f".{folder.name}.")]
+
+
+def test_cli_refuses_a_pattern_that_does_not_close(run_cli, tmp_path):
+    p = std(3, 3)
+    nodes = p.nodes.copy()
+    inner = int(p.topology.hole_nodes[0, 0])
+    nodes[inner] += [0.8, -0.5]
+    from dataclasses import replace
+
+    bad = replace(p, nodes=nodes, contracted={})
+    f = tmp_path / "bad.json"
+    write_pattern(bad, f)
+    out = tmp_path / "out"
+    code, _, err = run_cli("cut", f, "-o", out)
+    assert code == 1 and "does not close" in err and "--force" in err
+    assert len(err.strip().splitlines()) == 1
+    _no_output(out)
+
+
+@pytest.mark.parametrize("args,code,words", [
+    (["--kerf", "3"], 2, "not smaller than the minimum web"),
+    (["--sheet", "12x12"], 2, "smaller than tile"),
+    (["--sheet", "axb"], 2, "--sheet"),
+    (["--material", "nope"], 2, "unknown material"),
+    (["--hinge", "ligament"], 2, "min web"),
+    (["--width", "20"], 1, "thinner than the minimum web"),
+])
+def test_cli_bad_input_one_line_nothing_written(run_cli, tmp_path, args, code, words):
+    out = tmp_path / "out"
+    got, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out, *args)
+    assert got == code, err
+    assert words in err and len(err.strip().splitlines()) == 1
+    _no_output(out)
+
+
+def test_cli_unwritable_output(run_cli, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    code, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", blocker)
+    assert code == 2 and "not a folder" in err
+    code, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", blocker / "sub")
+    assert code == 2 and "does not exist" in err
+    assert blocker.read_text() == "x" and sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+def test_cli_material_overrides_reach_the_manifest(run_cli, tmp_path):
+    out = tmp_path / "o"
+    code, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "--material", "plywood-3", "--kerf", "0.25",
+                           "--set", "cut_speed_mm_s=40", "--colors", "ponoko", "--formats", "dxf,svg", "-o", out)
+    assert code == 0, err
+    man = json.loads((out / "manifest.json").read_text())
+    assert man["material"]["kerf_mm"] == 0.25 and man["material"]["cut_speed_mm_s"] == 40.0
+    assert man["parameters"]["colors"] == "ponoko" and not (out / "standard-8x8.png").exists()
+    assert 'stroke="#0000FF"' in (out / "standard-8x8.svg").read_text().split('id="CUT"')[1][:200]

@@ -1,0 +1,110 @@
+"""Reading cut files: the fast DXF tag reader agrees with ezdxf; SVG units, y flip and transforms;
+tile recovery is invariant to rigid motions of the sheet (Hypothesis)."""
+
+from __future__ import annotations
+
+import ezdxf
+import numpy as np
+import svgwrite
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fabkiri.pattern import geometry
+from fabkiri.verify import layout as L
+from fabkiri.verify import verify_layout
+
+from . import layout_fixtures as lf
+
+
+def _same(a: L.Linework, b: L.Linework) -> bool:
+    return (len(a.polylines) == len(b.polylines) and a.closed == b.closed
+            and all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines)))
+
+
+def test_fast_dxf_reader_matches_ezdxf(tmp_path):
+    p = lf.distinct_pattern()
+    for hinge in ("tape", "separate"):
+        C = lf.in_place_corners(p, 1, 0.4) if hinge == "tape" else lf.exploded_corners(p, np.random.default_rng(3))
+        path = lf.write_layout(tmp_path / hinge, p, C, hinge=hinge, fmt="dxf", kerf_offset=0.1)
+        fast = L._read_dxf_fast(path)
+        assert fast is not None and _same(fast, L._read_dxf_full(path))
+
+
+def test_dxf_units_curves_and_plain_layers(tmp_path):
+    doc = ezdxf.new("R2010", units=1)  # inches
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (1, 0), (1, 1), (0, 1)], close=True, dxfattribs={"layer": "CUT"})
+    msp.add_lwpolyline([(2, 0), (3, 0, 0.5), (3, 1)], format="xyb", dxfattribs={"layer": "CUT"})  # an arc
+    msp.add_line((5, 5), (6, 6), dxfattribs={"layer": "ENGRAVE"})
+    msp.add_line((0, 2), (1, 2), dxfattribs={"layer": "CUT"})
+    path = tmp_path / "in.dxf"
+    doc.saveas(path)
+    assert L._read_dxf_fast(path) is None  # the bulge sends it to ezdxf
+    lw = L.read_cut_file(path)
+    assert lw.layer_found and len(lw.polylines) == 3
+    assert np.allclose(lw.polylines[2], [[0, 50.8], [25.4, 50.8]])
+    assert np.allclose(lw.polylines[0].max(0), [25.4, 25.4])  # inches -> mm
+    assert len(lw.polylines[1]) > 3  # the arc was flattened
+    # no CUT layer: every outline not on an annotation layer
+    doc = ezdxf.new("R2010", units=4)
+    doc.modelspace().add_lwpolyline([(0, 0), (10, 0), (10, 10)], close=True, dxfattribs={"layer": "0"})
+    doc.modelspace().add_lwpolyline([(0, 0), (1, 1)], dxfattribs={"layer": "NOTES"})
+    doc.saveas(tmp_path / "plain.dxf")
+    lw = L.read_cut_file(tmp_path / "plain.dxf")
+    assert not lw.layer_found and len(lw.polylines) == 1 and lw.closed == [True]
+
+
+def test_svg_mm_flip_and_transforms(tmp_path):
+    """An SVG from another tool: cm size, a group transform, relative path commands."""
+    path = tmp_path / "t.svg"
+    dwg = svgwrite.Drawing(str(path), size=("20cm", "10cm"), viewBox="0 0 400 200", debug=False)
+    g = dwg.g(id="CUT", transform="translate(10 20)")
+    g.add(dwg.path(d="M 0 0 l 40 0 l 0 20 l -40 0 z"))  # 2 user units per mm
+    dwg.add(g)
+    dwg.save()
+    lw = L.read_cut_file(path)
+    assert len(lw.polylines) == 1 and lw.closed == [True]
+    pts = lw.polylines[0]
+    # x: (10 + 0..40) / 2 mm; y flipped: 100 - (20 + 0..20) / 2 mm
+    assert np.allclose(np.sort(np.unique(pts[:, 0])), [5.0, 25.0], atol=1e-9)
+    assert np.allclose(np.sort(np.unique(pts[:, 1])), [80.0, 90.0], atol=1e-9)
+    assert geometry.signed_areas(pts[None])[0] < 0  # clockwise in SVG, so still a mirror-free read
+
+
+def test_quads_of_drops_collinear_points_and_restores_bevelled_corners():
+    sq = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
+    with_tjunction = np.array([[0, 0], [5, 0], [10, 0], [10, 10], [0, 10]], float)
+    bevel = np.array([[0, 0], [9.6, 0], [10, 0.4], [10, 10], [0, 10]], float)  # one corner cut by 0.4 mm
+    import shapely
+
+    q, bad = L.quads_of(np.array([shapely.Polygon(sq), shapely.Polygon(with_tjunction), shapely.Polygon(bevel)]))
+    assert bad == 0 and len(q) == 3
+    for quad in q:
+        assert geometry.aligned_distance(quad, sq) < 1e-9 or geometry.aligned_distance(np.roll(quad, 1, 0), sq) < 1e-9 \
+            or min(geometry.aligned_distance(np.roll(quad, k, 0), sq) for k in range(4)) < 1e-9
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.floats(0, 2 * np.pi), st.floats(-300, 300), st.floats(-300, 300), st.sampled_from(["dxf", "svg"]),
+       st.sampled_from(["tape", "separate"]))
+def test_rigid_motions_of_the_sheet_are_accepted(tmp_path_factory, theta, dx, dy, fmt, hinge):
+    p = lf.distinct_pattern()
+    if hinge == "tape":
+        C = lf.in_place_corners(p, 1, theta, (dx, dy))
+    else:
+        C = geometry.rotate(lf.exploded_corners(p, np.random.default_rng(0)), theta) + np.array([dx, dy])
+    path = lf.write_layout(tmp_path_factory.mktemp("h"), p, C, hinge=hinge, fmt=fmt, kerf_offset=0.08)
+    rep = verify_layout(p, path)
+    assert rep.ok, rep.to_text()
+
+
+def test_fast_reader_lines_on_cut(tmp_path):
+    doc = ezdxf.new("R2010", units=4)
+    msp = doc.modelspace()
+    for a, b in (((0, 0), (10, 0)), ((10, 0), (10, 10)), ((10, 10), (0, 10)), ((0, 10), (0, 0))):
+        msp.add_line(a, b, dxfattribs={"layer": "CUT"})
+    msp.add_text("0", dxfattribs={"layer": "ENGRAVE"})  # a value line "0" must not look like an entity start
+    path = tmp_path / "lines.dxf"
+    doc.saveas(path)
+    fast = L._read_dxf_fast(path)
+    assert fast is not None and len(fast.polylines) == 4 and _same(fast, L._read_dxf_full(path))
