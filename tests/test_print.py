@@ -335,7 +335,12 @@ def test_prusaslicer_slices_stl_and_3mf(tmp_path, printer):
     r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer))
     for name, data in mesh.job_files(r, "k").items():
         (tmp_path / name).write_bytes(data)
-    for src, extra in [("k_tiles.stl", []), ("k_hinges.stl", []), ("k.3mf", ["--dont-arrange"])]:
+    for style in ("strips", "pinned"):
+        rs = mesh.realise_job(mesh.build_job(standard_pattern(2, 2, tile_size=12.0), style, 1, printer))
+        for name, data in mesh.job_files(rs, style).items():
+            (tmp_path / name).write_bytes(data)
+    for src, extra in [("k_tiles.stl", []), ("k_hinges.stl", []), ("k.3mf", ["--dont-arrange"]),
+                       ("strips.3mf", ["--dont-arrange"]), ("pinned.stl", [])]:
         out = tmp_path / (src + ".gcode")
         proc = subprocess.run(["prusa-slicer", "--export-gcode", *extra, str(tmp_path / src), "-o", str(out)],
                               capture_output=True, text=True, timeout=300)
