@@ -803,6 +803,9 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
     }
     if job.placements:
         d["placements"] = job.placements
+        d["assembly"] = ("glue every strip with its engraved face up, as seen from above the pattern: top-face "
+                         "strips on the tiles, bottom-face strips under them with the engraved face against them")
+        d["unlabelled_hinges"] = job.unlabelled
     if job.pins is not None:
         d["pins"] = {"levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
                      "geometry_mm": dict(job.pins.geometry.__dict__),
