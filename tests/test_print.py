@@ -229,6 +229,12 @@ def test_tile_check_measures_the_deviation(shift, passes, printer):
     assert tc.ok is passes
 
 
+@pytest.mark.parametrize("style", mesh.STYLES)
+def test_single_tile_is_refused(style, printer):
+    with pytest.raises(FabricationError, match="no hinges"):
+        mesh.build_job(standard_pattern(1, 1), style, 1, printer)
+
+
 def test_pattern_larger_than_the_bed_is_refused(printer):
     pat = standard_pattern(30, 30)
     with pytest.raises(FabricationError, match="does not fit the 250 x 210 mm bed"):

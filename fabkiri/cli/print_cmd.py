@@ -70,7 +70,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     print(f"wrote {len(files)} files to {args.output}: {job.style}, closed state {job.state}, printer "
           f"{printer.name}, {len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
           f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance "
-          f"{report.min_clearance_mm if report.min_clearance_mm is not None else float('nan'):.3f} mm, "
+          f"{'n/a' if report.min_clearance_mm is None else f'{report.min_clearance_mm:.3f} mm'}, "
           f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0
 

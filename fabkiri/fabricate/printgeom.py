@@ -120,6 +120,8 @@ def face_rule(pattern: Pattern, states: dict[int, np.ndarray]) -> np.ndarray:
 
 
 def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
+    if pattern.topology.n_hinges == 0:
+        raise FabricationError("the pattern has a single tile and no hinges: there is nothing to hinge")
     corners = closed_corners(pattern, state)
     top_ = pattern.topology
     fold = top_.fold(state)
