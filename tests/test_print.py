@@ -486,3 +486,19 @@ def test_cli_step_per_bed(tmp_path, run_cli):
     vol = sum(b["volume_mm3"] for b in man["checks"]["meshes"]["bodies"])
     assert "sq.step" in man["files"]
     assert cad.step_volume(tmp_path / "out" / "sq.step") == pytest.approx(vol, rel=1e-3)
+
+
+def test_pattern_closing_one_way_only_prints_that_way(tmp_path, run_cli):
+    """The paper's contractible (not reconfigurable) example closes in state 2 only."""
+    from tests.conftest import ref
+
+    src = ref("contractible_design")
+    code, _, err = run_cli("print", src, "--state", "2", "--scale", "10", "--strip-width", "1.5",
+                           "--strip-reach", "1.5", "-o", tmp_path / "ok")
+    assert code == 0, err
+    assert "does not close" in err  # the reassembly into state 1 is reported as moot, not as a failure
+    man = json.loads((tmp_path / "ok" / "manifest.json").read_text())
+    assert man["checks"]["tiles"]["ok"] and man["checks"]["meshes"]["ok"]
+    assert man["checks"]["verifier"]["meta"]["not_applicable"]
+    code, _, err = run_cli("print", src, "--state", "1", "--scale", "10", "-o", tmp_path / "no")
+    assert code == 1 and "does not close" in err and not (tmp_path / "no").exists()

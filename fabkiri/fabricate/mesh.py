@@ -611,7 +611,7 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
                                   for p in plan.hinge_xy + [dx, dy]])
     parts = _slice_polys(man, z)
     design = shapely.transform(shapely.polygons(plan.corners), lambda c: c + np.array([dx, dy]))
-    grown = [shapely.buffer(p, plan.shrink_mm, join_style="mitre") for p in parts]
+    grown = [shapely.buffer(p, plan.shrink_mm, join_style="mitre", mitre_limit=printgeom.MITRE_LIMIT) for p in parts]
     if mask is not None:
         design = np.array([g.difference(mask) for g in design], dtype=object)
         grown = [g.difference(mask) for g in grown]

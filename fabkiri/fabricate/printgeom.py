@@ -33,7 +33,8 @@ from .printers import Printer
 
 CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
 COINCIDE_TOL_REL = 1e-6
-POCKET_OVERSHOOT_MM = 0.05  # two hinge points closer than this (tile sizes) coincide
+POCKET_OVERSHOOT_MM = 0.05
+MITRE_LIMIT = 10.0  # as the laser-cut layer and the verifier: sharp tips shrink and grow back exactly  # two hinge points closer than this (tile sizes) coincide
 
 
 def closed_corners(pattern: Pattern, state: int) -> np.ndarray:
@@ -73,6 +74,7 @@ class ClosedPlan:
     partner: np.ndarray  # (H,) coincident hinge or -1
     top: np.ndarray  # (H,) True: the hinge's strip goes on the top face
     shrink_mm: float
+    other_state_closes: bool = True  # False: a pattern that closes in the printed state only
 
     @property
     def n_hinges(self) -> int:
@@ -138,9 +140,10 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
     except CheckFailed:  # a pattern that closes one way only is still printable that way
         pass
     top = face_rule(pattern, states)
+    other_closes = len(states) == 2
     d = 0.5 * printer.gap_mm
     polys = shapely.polygons(corners)
-    shrunk = shapely.buffer(polys, -d, join_style="mitre")
+    shrunk = shapely.buffer(polys, -d, join_style="mitre", mitre_limit=MITRE_LIMIT)
     empty = shapely.is_empty(shrunk) | (shapely.get_type_id(shrunk) != 3)
     if empty.any():
         bad = int(np.flatnonzero(empty)[0])
@@ -149,7 +152,7 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
         )
     return ClosedPlan(
         state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
-        seam_dir=seam, seam_end=far, partner=partner, top=top, shrink_mm=d,
+        seam_dir=seam, seam_end=far, partner=partner, top=top, shrink_mm=d, other_state_closes=other_closes,
     )
 
 
@@ -174,9 +177,9 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
     A, B = plan.hinge_tiles.T
     raw = shapely.polygons(plan.corners)
     # the pair region: A and B merged along their closed seam, shrunk like the tiles
-    pair = shapely.buffer(shapely.union(shapely.buffer(raw[A], eps, join_style="mitre"),
-                                        shapely.buffer(raw[B], eps, join_style="mitre")),
-                          -(d + eps), join_style="mitre")
+    pair = shapely.buffer(shapely.union(shapely.buffer(raw[A], eps, join_style="mitre", mitre_limit=MITRE_LIMIT),
+                                        shapely.buffer(raw[B], eps, join_style="mitre", mitre_limit=MITRE_LIMIT)),
+                          -(d + eps), join_style="mitre", mitre_limit=MITRE_LIMIT)
     p, e, far_xy = plan.hinge_xy, plan.seam_dir, plan.seam_end
     n = np.stack([-e[:, 1], e[:, 0]], -1)
     # where the seam line enters the pair region (t0), measured along e from p
