@@ -23,6 +23,7 @@ COMMANDS = [
     "fabkiri.cli.verify_cmd",
     "fabkiri.cli.design_cmd",
     "fabkiri.cli.deploy_cmd",
+    "fabkiri.cli.print_cmd",
 ]
 
 

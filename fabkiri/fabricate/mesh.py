@@ -1,0 +1,813 @@
+"""Printable solids of a closed state: manifold3d for booleans, trimesh for files.
+
+Every body is described once as an ordered list of prism operations
+(:class:`Body`), so the meshes here and the STEP solids of
+:mod:`fabkiri.fabricate.cad` are the same solids. Three styles:
+
+* ``strips`` – one flat flexible strip per hinge (for laser-cut tiles), laid
+  out on as many print beds as needed, each part named by its hinge;
+* ``tiles-and-strips`` – rigid tiles with the strips recessed flush into
+  pockets, two bodies for two materials;
+* ``pinned`` – print-in-place pin joints, the two coincident hinges of a node
+  stacked coaxially on four ear levels (see :mod:`.printgeom`).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass, field
+from typing import Iterable
+
+import numpy as np
+import shapely
+import shapely.affinity
+from shapely.geometry.polygon import orient
+from shapely.geometry import Polygon
+
+from ..errors import FabricationError
+from ..pattern.model import Pattern
+from . import printgeom
+from .printers import Printer
+
+STYLES = ("strips", "tiles-and-strips", "pinned")
+CIRCLE_SEGMENTS = 48
+
+
+# ---------------------------------------------------------------- CSG spec
+
+@dataclass(frozen=True, eq=False)
+class Prism:
+    """Disjoint polygons extruded from ``z0`` to ``z1``; with ``scale_top`` the
+    top is scaled about ``centre`` (a frustum)."""
+
+    polygons: tuple[Polygon, ...]
+    z0: float
+    z1: float
+    scale_top: float = 1.0
+    centre: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A named solid: prisms added and subtracted in order."""
+
+    name: str
+    kind: str  # "tile", "hinge", "tiles", "hinges"
+    ops: tuple[tuple[str, Prism], ...]
+    material: str = ""
+
+
+def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS) -> Polygon:
+    """An n-gon approximating a circle: vertices on it (inscribed, for solid
+    material) or edges tangent to it (circumscribed, for clearances), so that
+    polygon approximation never eats into a clearance."""
+    r = radius / np.cos(np.pi / n) if circumscribed else radius
+    a = 2 * np.pi * np.arange(n) / n
+    return Polygon(np.stack([centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)], -1))
+
+
+def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
+    rings = []
+    for p in polys:
+        for g in getattr(p, "geoms", [p]):
+            if g.is_empty:
+                continue
+            g = orient(g, 1.0)
+            rings.append(np.asarray(g.exterior.coords)[:-1])
+            rings.extend(np.asarray(r.coords)[:-1] for r in g.interiors)
+    return rings
+
+
+def _manifold(prism: Prism):
+    import manifold3d as m3d
+
+    cs = m3d.CrossSection(_rings(prism.polygons), fillrule=m3d.FillRule.Positive)
+    h = prism.z1 - prism.z0
+    if prism.scale_top != 1.0:
+        cx, cy = prism.centre
+        return (m3d.Manifold.extrude(cs.translate((-cx, -cy)), h, scale_top=(prism.scale_top, prism.scale_top))
+                .translate((cx, cy, prism.z0)))
+    return m3d.Manifold.extrude(cs, h).translate((0.0, 0.0, prism.z0))
+
+
+def realise(body: Body):
+    """The manifold3d solid of a body."""
+    import manifold3d as m3d
+
+    acc = m3d.Manifold()
+    for op, prism in body.ops:
+        if not any(not p.is_empty for p in prism.polygons):
+            continue  # e.g. no strip on the bottom face
+        m = _manifold(prism)
+        acc = acc + m if op == "add" else acc - m
+    return acc
+
+
+def to_trimesh(manifold):
+    import trimesh
+
+    mesh = manifold.to_mesh64()
+    return trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3].astype(np.float64),
+                           np.asarray(mesh.tri_verts).astype(np.int64), process=False)
+
+
+def translate_body(body: Body, dx: float, dy: float) -> Body:
+    ops = tuple((op, Prism(tuple(shapely.affinity.translate(p, dx, dy) for p in pr.polygons), pr.z0, pr.z1,
+                           pr.scale_top, (pr.centre[0] + dx, pr.centre[1] + dy))) for op, pr in body.ops)
+    return Body(body.name, body.kind, ops, body.material)
+
+
+# ------------------------------------------------------------- the styles
+
+@dataclass(frozen=True, eq=False)
+class PrintJob:
+    """Everything one ``fabkiri print`` run produces, before writing.
+
+    ``beds[k]`` lists the bodies printed together on bed k; ``shift`` moved the
+    closed-state plan onto the bed (for whole-pattern styles).
+    """
+
+    style: str
+    state: int
+    printer: Printer
+    plan: printgeom.ClosedPlan
+    beds: list[list[Body]]
+    shift: tuple[float, float] = (0.0, 0.0)
+    strips: printgeom.Strips | None = None
+    pins: printgeom.PinPlan | None = None
+    placements: list[dict] = field(default_factory=list)  # strips style: where each part went
+    unlabelled: list[int] = field(default_factory=list)  # strips too small for their engraved ID
+
+
+def _fits(bounds, printer: Printer, what: str) -> None:
+    w, h = bounds[2] - bounds[0], bounds[3] - bounds[1]
+    bx, by, _ = printer.bed_mm
+    if w > bx or h > by:
+        raise FabricationError(
+            f"{what} is {w:.1f} x {h:.1f} mm and does not fit the {bx:g} x {by:g} mm bed of printer "
+            f"{printer.name}; scale the pattern down, choose a larger printer or use --style strips"
+        )
+
+
+def _centre_shift(bounds, printer: Printer) -> tuple[float, float]:
+    bx, by, _ = printer.bed_mm
+    return 0.5 * bx - 0.5 * (bounds[0] + bounds[2]), 0.5 * by - 0.5 * (bounds[1] + bounds[3])
+
+
+def tiles_and_strips(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+    plan = printgeom.closed_plan(pattern, state, printer)
+    strips = printgeom.strip_outlines(plan, printer)
+    T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
+    _fits(plan.bounds, printer, "the closed pattern")
+    top = tuple(strips.outline[strips.top])
+    bot = tuple(strips.outline[~strips.top])
+    tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
+        ("add", Prism(tuple(plan.tiles), 0.0, T)),
+        ("sub", Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0)),  # +1: a clean cut through the face
+        ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
+    ), printer.tile_material)
+    hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
+        ("add", Prism(top, T - ts, T)),
+        ("add", Prism(bot, 0.0, ts)),
+    ), printer.strip_material)
+    dx, dy = _centre_shift(plan.bounds, printer)
+    beds = [[translate_body(tiles, dx, dy), translate_body(hinges, dx, dy)]]
+    return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips)
+
+
+LABEL_MAX_MM = 2.5  # cap height of a strip's engraved hinge ID
+LABEL_MIN_MM = 1.2  # smaller is not legible in 0.4 mm lines
+
+
+def hinge_label(strip: Polygon, text: str, printer: Printer) -> Polygon | None:
+    """The hinge ID as single-stroke lines one nozzle wide, centred on a strip laid
+    long side along x, kept a nozzle inside its outline; ``None`` if it does not fit."""
+    from .text import text_strokes, text_width
+
+    line = printer.nozzle_mm
+    room = strip.buffer(-line, join_style="mitre")
+    if room.is_empty:
+        return None
+    b = room.bounds
+    c = shapely.centroid(strip)
+    h = min(LABEL_MAX_MM, b[3] - b[1] - line, (b[2] - b[0] - line) / max(text_width(text), 1e-9))
+    while h >= LABEL_MIN_MM:
+        strokes = text_strokes(text, h, (c.x, c.y))
+        glyphs = shapely.union_all([shapely.LineString(p).buffer(0.5 * line, cap_style="round", quad_segs=4)
+                                    for p in strokes if len(p) >= 2])
+        if room.contains(glyphs):
+            return glyphs if isinstance(glyphs, Polygon) else shapely.unary_union(glyphs)
+        h *= 0.85
+    return None
+
+
+def _min_rect_frame(poly: Polygon) -> tuple[float, Polygon]:
+    """Rotation (rad) turning the polygon's minimum rectangle axis-parallel, and the turned polygon."""
+    rect = np.asarray(poly.minimum_rotated_rectangle.exterior.coords)
+    edge = rect[1] - rect[0]
+    ang = -float(np.arctan2(edge[1], edge[0]))
+    turned = shapely.affinity.rotate(poly, ang, origin=(0, 0), use_radians=True)
+    b = turned.bounds
+    if b[3] - b[1] > b[2] - b[0]:  # lie long side along x
+        ang -= np.pi / 2
+        turned = shapely.affinity.rotate(poly, ang, origin=(0, 0), use_radians=True)
+    return ang, turned
+
+
+def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+    """One flat strip part per hinge, shelf-packed onto beds in hinge order."""
+    plan = printgeom.closed_plan(pattern, state, printer)
+    strips = printgeom.strip_outlines(plan, printer)
+    ts, gap = printer.strip_thickness_mm, printer.part_spacing_mm
+    bx, by, _ = printer.bed_mm
+    beds: list[list[Body]] = [[]]
+    placements = []
+    x = y = row_h = gap
+    unlabelled: list[int] = []
+    for h, poly in enumerate(strips.outline):
+        ang, turned = _min_rect_frame(poly)
+        b = turned.bounds
+        w, hgt = b[2] - b[0], b[3] - b[1]
+        if w + 2 * gap > bx or hgt + 2 * gap > by:
+            raise FabricationError(f"the strip of hinge {h} ({w:.1f} x {hgt:.1f} mm) does not fit the bed")
+        if x + w + gap > bx:  # next shelf
+            x, y, row_h = gap, y + row_h + gap, 0.0
+        if y + hgt + gap > by:  # next bed
+            beds.append([])
+            x = y = gap
+            row_h = 0.0
+        placed = shapely.affinity.translate(turned, x - b[0], y - b[1])
+        name = f"hinge-{h:04d}-{plan.face(h)}"
+        ops = [("add", Prism((placed,), 0.0, ts))]
+        label = hinge_label(placed, str(h), printer)
+        if label is not None:
+            ops.append(("sub", Prism((label,), ts - printer.layer_mm, ts + 1.0)))
+        else:
+            unlabelled.append(h)
+        beds[-1].append(Body(name, "hinge", tuple(ops), printer.strip_material))
+        placements.append({"hinge": h, "bed": len(beds), "face": plan.face(h), "tiles": plan.hinge_tiles[h].tolist(),
+                           "rotation_deg": round(float(np.degrees(ang)), 6),
+                           "offset_mm": [round(x - b[0], 6), round(y - b[1], 6)]})
+        x += w + gap
+        row_h = max(row_h, hgt)
+    return PrintJob("strips", state, printer, plan, beds, strips=strips, placements=placements,
+                    unlabelled=unlabelled)
+
+
+def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+    """Print-in-place pinned tiles, or :class:`FabricationError` saying why not."""
+    plan = printgeom.closed_plan(pattern, state, printer)
+    pins = printgeom.pin_plan(pattern, plan, printer)
+    _fits(plan.bounds, printer, "the closed pattern")
+    lv, g = pins.levels, pins.geometry
+    T, az = lv.thickness, lv.axial
+    A, B = plan.hinge_tiles.T
+    H = plan.n_hinges
+    hollow = [regular_polygon(plan.hinge_xy[h], g.hollow, circumscribed=True) for h in range(H)]
+    ear = [regular_polygon(plan.hinge_xy[h], g.ear, circumscribed=False) for h in range(H)]
+    # A tile's corner at a pivot is cleared through the full height: the pivot's
+    # own partner turns in one half, and the hinge that meets it in either
+    # closed state stacks its ears in the other half. Its own ear is added back.
+    at_tile: dict[int, list[int]] = {t: [] for t in range(len(plan.tiles))}
+    for h in range(H):
+        at_tile[int(A[h])].append(h)
+        at_tile[int(B[h])].append(h)
+    bodies = []
+    for t in range(len(plan.tiles)):
+        X = plan.tiles[t]
+        ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
+        hs = at_tile[t]
+        for h in hs:
+            ops.append(("sub", Prism((hollow[h],), -1.0, T + 1.0)))
+        for h in hs:
+            k = pins.level[h] + (0 if t == A[h] else 1)
+            z0, z1 = lv.level(k)
+            own = shapely.union(ear[h], shapely.intersection(X, hollow[h]))
+            ops.append(("add", Prism((own,), z0, z1)))
+            p = tuple(plan.hinge_xy[h])
+            if t == A[h]:  # the pin: straight through its ear and the gap, flared through the ring
+                zr0, zr1 = lv.level(k + 1)
+                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), z0, zr0)))
+                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), zr0, zr1,
+                                         g.pin_top / g.pin_bottom, p)))
+        for h in hs:
+            if t == B[h]:
+                k = pins.level[h] + 1
+                z0, z1 = lv.level(k)
+                p = tuple(plan.hinge_xy[h])
+                ops.append(("sub", Prism((regular_polygon(p, g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
+                                         g.hole_top / g.hole_bottom, p)))
+        bodies.append(Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material))
+    dx, dy = _centre_shift(plan.bounds, printer)
+    beds = [[translate_body(b, dx, dy) for b in bodies]]
+    return PrintJob("pinned", state, printer, plan, beds, (dx, dy), pins=pins)
+
+
+def build_job(pattern: Pattern, style: str, state: int, printer: Printer) -> PrintJob:
+    if style not in STYLES:
+        raise FabricationError(f"unknown print style {style!r}; choose one of {', '.join(STYLES)}")
+    return {"strips": strips_only, "tiles-and-strips": tiles_and_strips, "pinned": pinned}[style](
+        pattern, state, printer)
+
+
+# ------------------------------------------------------------------ checks
+
+@dataclass
+class MeshReport:
+    """Measured properties of the meshes of one job (mm, mm³)."""
+
+    bodies: list[dict] = field(default_factory=list)
+    intersection_volume_mm3: float = 0.0
+    min_clearance_mm: float | None = None
+    required_clearance_mm: float = 0.0
+    problems: list[str] = field(default_factory=list)
+    sweep: dict | None = None  # pinned: collision sweep along the deployment path
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    def to_dict(self) -> dict:
+        return {"ok": self.ok, "bodies": self.bodies, "intersection_volume_mm3": self.intersection_volume_mm3,
+                "min_clearance_mm": self.min_clearance_mm, "required_clearance_mm": self.required_clearance_mm,
+                "problems": self.problems, "deployment_sweep": self.sweep}
+
+
+@dataclass(eq=False)
+class Realised:
+    """A job with its solids: ``manifolds[k][i]`` is body i of bed k."""
+
+    job: PrintJob
+    manifolds: list[list]
+    meshes: list[list]
+
+
+def realise_job(job: PrintJob) -> Realised:
+    manifolds = [[realise(b) for b in bed] for bed in job.beds]
+    for bed, ms in zip(job.beds, manifolds):
+        for b, m in zip(bed, ms):
+            if m.status().name != "NoError" or m.is_empty():
+                raise FabricationError(f"body {b.name} came out empty or invalid ({m.status().name})")
+    meshes = [[to_trimesh(m) for m in ms] for ms in manifolds]
+    return Realised(job, manifolds, meshes)
+
+
+def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
+    """Watertight, consistently wound, positive volume, on the bed, no two bodies
+    sharing volume, and clearances between bodies that may move apart."""
+    import manifold3d as m3d
+
+    job, pr = r.job, r.job.printer
+    rep = MeshReport()
+    bx, by, bz = pr.bed_mm
+    eps = 1e-6
+    for k, (bed, ms, tms) in enumerate(zip(job.beds, r.manifolds, r.meshes), 1):
+        for b, m, tm in zip(bed, ms, tms):
+            lo, hi = tm.bounds
+            info = {"bed": k, "name": b.name, "kind": b.kind, "watertight": bool(tm.is_watertight),
+                    "winding_consistent": bool(tm.is_winding_consistent), "volume_mm3": float(tm.volume),
+                    "manifold_volume_mm3": float(m.volume()), "triangles": int(len(tm.faces)),
+                    "bounds_mm": [lo.round(4).tolist(), hi.round(4).tolist()]}
+            rep.bodies.append(info)
+            if not (info["watertight"] and info["winding_consistent"]):
+                rep.problems.append(f"{b.name}: mesh not watertight or not consistently wound")
+            if not tm.volume > 0 or abs(tm.volume - m.volume()) > vol_rtol * max(1.0, m.volume()) + 1e-6:
+                rep.problems.append(f"{b.name}: volume {tm.volume:.6g} mm³ disagrees with the solid")
+            if (lo < -eps).any() or hi[0] > bx + eps or hi[1] > by + eps or hi[2] > bz + eps:
+                rep.problems.append(f"{b.name}: outside the {bx:g} x {by:g} x {bz:g} mm bed")
+        # bodies printed together never share volume
+        if len(ms) > 1:
+            inter = 0.0
+            if job.style == "tiles-and-strips":
+                inter = (ms[0] ^ ms[1]).volume()
+            else:  # many small disjoint parts: their union loses no volume
+                inter = sum(m.volume() for m in ms) - m3d.Manifold.batch_boolean(ms, m3d.OpType.Add).volume()
+            rep.intersection_volume_mm3 = max(rep.intersection_volume_mm3, float(inter))
+    if rep.intersection_volume_mm3 > 1e-6:
+        rep.problems.append(f"bodies overlap by {rep.intersection_volume_mm3:.3g} mm³")
+    _check_clearances(r, rep)
+    return rep
+
+
+def _slice_polys(manifold, z: float) -> list[Polygon]:
+    """The section of a solid at height ``z`` as disjoint polygons (holes kept)."""
+    rings = [np.asarray(r, dtype=float) for r in manifold.slice(z).to_polygons()]
+    rings = [r for r in rings if len(r) >= 3]
+    if not rings:
+        return []
+    idx = np.repeat(np.arange(len(rings)), [len(r) for r in rings])
+    lr = shapely.linearrings(np.concatenate(rings), indices=idx)
+    polys = shapely.polygons(lr)
+    ccw = shapely.is_ccw(lr)
+    outer, holes = polys[ccw], polys[~ccw]
+    if not len(holes):
+        return list(outer)
+    out = []
+    tree = shapely.STRtree(holes)
+    for o in outer:
+        inside = holes[tree.query(o, predicate="contains_properly")]
+        out.append(o.difference(shapely.union_all(inside)) if len(inside) else o)
+    return out
+
+
+def _check_clearances(r: Realised, rep: MeshReport) -> None:
+    job, pr = r.job, r.job.printer
+    if job.style == "strips":  # loose parts: only the spacing on the bed matters
+        rep.required_clearance_mm = pr.part_spacing_mm
+        polys = [Polygon(b.ops[0][1].polygons[0]) for b in job.beds[0]]
+        if len(polys) > 1:
+            tree = shapely.STRtree(polys)
+            i, j = tree.query(polys, predicate="dwithin", distance=3 * pr.part_spacing_mm)
+            sel = i < j
+            if sel.any():
+                arr = np.array(polys, dtype=object)
+                rep.min_clearance_mm = float(shapely.distance(arr[i[sel]], arr[j[sel]]).min())
+                if rep.min_clearance_mm < pr.part_spacing_mm - 1e-6:
+                    rep.problems.append(f"strip parts {rep.min_clearance_mm:.3f} mm apart on bed 1, "
+                                        f"under the part spacing {pr.part_spacing_mm:g} mm")
+        return
+    if job.style == "tiles-and-strips":
+        # measured on the mesh: sections of both bodies at the bottom pocket, the
+        # bare middle and the top pocket. Each section piece is attributed to
+        # the tile or strip it belongs to; pieces of different tiles keep the
+        # gap, a strip touches only the two tiles it joins and keeps the radial
+        # clearance from everything else.
+        tiles_m, hinges_m = r.manifolds[0]
+        T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
+        req = pr.radial_clearance_mm
+        rep.required_clearance_mm = req
+        shift = np.asarray(job.shift)
+        design_t = shapely.transform(job.plan.tiles, lambda c: c + shift)
+        design_s = shapely.transform(job.strips.outline, lambda c: c + shift)
+        A, B = job.plan.hinge_tiles.T
+        worst = np.inf
+        for z in (0.5 * ts, 0.5 * T, T - 0.5 * ts):
+            parts = _slice_polys(tiles_m, z)
+            sparts = _slice_polys(hinges_m, z)
+            allp = np.array(parts + sparts, dtype=object)
+            kind = np.array([0] * len(parts) + [1] * len(sparts))
+            owner = np.full(len(allp), -1)
+            pts = shapely.point_on_surface(allp)
+            for k, design in ((0, design_t), (1, design_s)):
+                sel = np.flatnonzero(kind == k)
+                qi, di = shapely.STRtree(design).query(pts[sel], predicate="dwithin", distance=1e-3)
+                owner[sel[qi]] = di
+            if (owner < 0).any():
+                rep.problems.append(f"a section piece at z = {z:g} mm belongs to no planned tile or strip")
+            i, j = shapely.STRtree(allp).query(allp, predicate="dwithin", distance=2 * pr.gap_mm)
+            sel = (i < j) & ~((kind[i] == kind[j]) & (owner[i] == owner[j]))  # same body: no clearance
+            i, j = i[sel], j[sel]
+            d = shapely.distance(allp[i], allp[j])
+            mixed = kind[i] != kind[j]
+            st_, tl = np.where(kind[i] == 1, i, j)[mixed], np.where(kind[i] == 1, j, i)[mixed]
+            joined = np.zeros(len(i), dtype=bool)
+            joined[mixed] = (owner[tl] == A[owner[st_]]) | (owner[tl] == B[owner[st_]])
+            free = d[~joined]
+            if len(free):
+                worst = min(worst, float(free.min()))
+        rep.min_clearance_mm = None if worst == np.inf else worst
+        if rep.min_clearance_mm is not None and rep.min_clearance_mm < req - 1e-6:
+            rep.problems.append(f"clearance {rep.min_clearance_mm:.3f} mm below the radial clearance {req:g} mm")
+        return
+    # pinned: every pair of tiles meeting at a pivot, measured in 3D
+    plan = job.plan
+    req = min(pr.radial_clearance_mm, pr.axial_clearance_mm)
+    rep.required_clearance_mm = req
+    ms = r.manifolds[0]
+    pairs = set()
+    A, B = plan.hinge_tiles.T
+    for h in range(plan.n_hinges):
+        group = {int(A[h]), int(B[h])}
+        if plan.partner[h] >= 0:
+            group |= {int(A[plan.partner[h]]), int(B[plan.partner[h]])}
+        g = sorted(group)
+        pairs |= {(a, b) for ai, a in enumerate(g) for b in g[ai + 1:]}
+    worst = np.inf
+    for a, b in sorted(pairs):
+        worst = min(worst, ms[a].min_gap(ms[b], 2 * pr.gap_mm + 1.0))
+    rep.min_clearance_mm = None if worst == np.inf else float(worst)
+    if rep.min_clearance_mm is not None and rep.min_clearance_mm < req * (1 - 1e-6):
+        rep.problems.append(f"clearance {rep.min_clearance_mm:.4f} mm below {req:g} mm")
+    for t, m in enumerate(ms):
+        if len(m.decompose()) != 1:
+            rep.problems.append(f"tile {t} falls apart into {len(m.decompose())} pieces")
+            break
+
+
+# ------------------------------------------------------------ pinned sweep
+
+@dataclass
+class SweepCheck:
+    """Pinned tiles moved along the rigid deployment path (closed state 1 ->
+    deployed -> closed state 2), level by level: the largest overlap area
+    between two different tiles and their smallest distance, over all frames."""
+
+    frames: int
+    levels_mm: list[float]
+    max_overlap_mm2: float
+    min_distance_mm: float
+    worst: str
+    ok: bool
+
+    def to_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2: float = 1e-6) -> SweepCheck:
+    """Collision sweep of the printed pinned tiles (sections of the solids at
+    every ear level and axial gap) along :func:`fabkiri.mechanics.deploy.rigid_path`."""
+    from ..mechanics.deploy import rigid_path
+    from ..pattern import geometry
+
+    job = r.job
+    if job.style != "pinned":
+        raise FabricationError("the deployment sweep is for pinned tiles")
+    lv = job.pins.levels
+    zs = [0.5 * sum(lv.level(k)) for k in range(4)] + [lv.level(k)[1] + 0.5 * lv.axial for k in range(3)]
+    back = -np.asarray(job.shift)
+    T = len(job.plan.tiles)
+    sections = {z: [np.array(_slice_polys(m, z), dtype=object) for m in r.manifolds[0]] for z in zs}
+    for z in zs:
+        sections[z] = [shapely.transform(g, lambda c: c + back) for g in sections[z]]
+    path = rigid_path(pattern, steps, tol_rad=1e-6)
+    src = job.plan.corners
+    worst_area, worst_dist, worst = 0.0, np.inf, ""
+    for f in range(len(path.t)):
+        poses = [geometry.kabsch(src[t], path.corners[f, t]) for t in range(T)]
+        for z in zs:
+            geoms, owner = [], []
+            for t in range(T):
+                th, tr = poses[t]
+                moved = shapely.transform(sections[z][t], lambda c, th=th, tr=tr: geometry.rotate(c, th) + tr)
+                geoms.extend(moved)
+                owner.extend([t] * len(moved))
+            geoms = np.array(geoms, dtype=object)
+            owner = np.asarray(owner)
+            i, j = shapely.STRtree(geoms).query(geoms, predicate="dwithin", distance=1.0)
+            sel = (i < j) & (owner[i] != owner[j])
+            if not sel.any():
+                continue
+            i, j = i[sel], j[sel]
+            area = shapely.area(shapely.intersection(geoms[i], geoms[j]))
+            dist = shapely.distance(geoms[i], geoms[j])
+            k = int(np.argmax(area))
+            if area[k] > worst_area:
+                worst_area = float(area[k])
+                worst = f"tiles {owner[i[k]]}/{owner[j[k]]} at z = {z:.2f} mm, t = {path.t[f]:.3f}"
+            worst_dist = min(worst_dist, float(dist.min()))
+    return SweepCheck(frames=len(path.t), levels_mm=[round(z, 4) for z in zs], max_overlap_mm2=worst_area,
+                      min_distance_mm=worst_dist, worst=worst, ok=worst_area <= overlap_tol_mm2)
+
+
+# --------------------------------------------------------- top-face check
+
+@dataclass
+class TileCheck:
+    """Printed tile outlines recovered from the mesh against the closed state."""
+
+    state: int
+    tolerance_mm: float
+    max_deviation_mm: float
+    max_overlap_mm2: float
+    tiles: int
+    ok: bool
+
+    def to_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
+    """Recover each tile's outline from the printed tile mesh (section at the
+    bare mid-plane, grown back by the shrink), and compare with the closed state:
+    every recovered vertex within ``printer.tolerance_mm`` of its design tile
+    outline and vice versa (Hausdorff), and no two recovered tiles overlapping.
+
+    For pinned tiles the ear discs around the pivots are excluded on both sides
+    (they are round by design). ``tiles_mesh`` (a trimesh, e.g. re-read from the
+    STL) replaces the in-memory solid when given.
+    """
+    import manifold3d as m3d
+
+    job = r.job
+    if job.style == "strips":
+        raise FabricationError("the strips style prints no tiles")
+    plan, pr = job.plan, job.printer
+    dx, dy = job.shift
+    if tiles_mesh is not None:
+        man = m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(tiles_mesh.vertices, dtype=np.float32),
+                                    tri_verts=np.asarray(tiles_mesh.faces, dtype=np.uint32)))
+    elif job.style == "tiles-and-strips":
+        man = r.manifolds[0][0]
+    else:
+        man = m3d.Manifold.batch_boolean(r.manifolds[0], m3d.OpType.Add)
+    if job.style == "tiles-and-strips":
+        z = 0.5 * pr.tile_thickness_mm
+        mask = None
+    else:
+        lv = job.pins.levels
+        z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
+        mask = shapely.union_all([regular_polygon(p, job.pins.geometry.hollow + 1e-3, True)
+                                  for p in plan.hinge_xy + [dx, dy]])
+    parts = _slice_polys(man, z)
+    design = shapely.transform(shapely.polygons(plan.corners), lambda c: c + np.array([dx, dy]))
+    grown = [shapely.buffer(p, plan.shrink_mm, join_style="mitre", mitre_limit=printgeom.MITRE_LIMIT) for p in parts]
+    if mask is not None:
+        design = np.array([g.difference(mask) for g in design], dtype=object)
+        grown = [g.difference(mask) for g in grown]
+    grown = [g for g in grown if not g.is_empty and g.area > 1e-6]
+    # match recovered parts to design tiles by containment of a representative point
+    tree = shapely.STRtree(design)
+    dev = 0.0
+    matched = set()
+    for g in grown:
+        pt = g.representative_point()
+        hits = tree.query(pt, predicate="intersects")
+        if len(hits) == 0:
+            dev = np.inf
+            continue
+        t = int(hits[0])
+        matched.add(t)
+        dev = max(dev, shapely.hausdorff_distance(g, design[t]))
+    # pinned tiles may come back in several pieces after masking; every tile must be seen
+    if len(matched) != len(plan.tiles):
+        dev = np.inf
+    overlap = 0.0
+    if len(grown) > 1:
+        t2 = shapely.STRtree(grown)
+        i, j = t2.query(grown, predicate="intersects")
+        sel = i < j
+        if sel.any():
+            g = np.array(grown, dtype=object)
+            overlap = float(shapely.area(shapely.intersection(g[i[sel]], g[j[sel]])).max())
+    tol = pr.tolerance_mm
+    ok = bool(dev <= tol and overlap <= tol * tol)
+    return TileCheck(state=job.state, tolerance_mm=tol, max_deviation_mm=float(dev), max_overlap_mm2=overlap,
+                     tiles=len(matched), ok=ok)
+
+
+def top_face_dxf(r: Realised, tiles_mesh=None) -> bytes:
+    """The printed tiles' outlines (section of the tile body at its bare
+    mid-plane, at printed size) as a plain DXF: closed LWPOLYLINEs on ``CUT``."""
+    import ezdxf
+    import manifold3d as m3d
+
+    job = r.job
+    if job.style != "tiles-and-strips":
+        raise FabricationError("top faces as a layout exist for tiles-and-strips only")
+    man = r.manifolds[0][0] if tiles_mesh is None else m3d.Manifold(m3d.Mesh(
+        vert_properties=np.asarray(tiles_mesh.vertices, dtype=np.float32),
+        tri_verts=np.asarray(tiles_mesh.faces, dtype=np.uint32)))
+    doc = ezdxf.new("R2010", units=ezdxf.units.MM)
+    doc.layers.add("CUT", color=1)
+    msp = doc.modelspace()
+    for ring in man.slice(0.5 * job.printer.tile_thickness_mm).to_polygons():
+        msp.add_lwpolyline(np.asarray(ring, dtype=float).tolist(), format="xy", close=True,
+                           dxfattribs={"layer": "CUT"})
+    out = io.StringIO()
+    doc.write(out)
+    return out.getvalue().encode("utf-8")
+
+
+BRIDGE_INSET_MM = 1e-3
+
+
+def printed_bridges(r: Realised) -> list[dict]:
+    """The flexible material spanning each gap, measured on the hinge mesh:
+    sections of the strips at the middle of their thickness, minus the tiles,
+    each attributed to the hinge whose planned strip holds it."""
+    job, pr = r.job, r.job.printer
+    tiles_m, hinges_m = r.manifolds[0]
+    T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
+    planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
+    tree = shapely.STRtree(planned)
+    feats = []
+    tiles = np.array(_slice_polys(tiles_m, 0.5 * T), dtype=object)
+    tile_tree = shapely.STRtree(tiles)
+    for z in (0.5 * ts, T - 0.5 * ts):
+        parts = np.array(_slice_polys(hinges_m, z), dtype=object)
+        pi, hi = tree.query(shapely.point_on_surface(parts), predicate="within")
+        owner = np.full(len(parts), -1)
+        once = np.bincount(pi, minlength=len(parts)) == 1
+        owner[pi[once[pi]]] = hi[once[pi]]
+        qi, ti = tile_tree.query(parts, predicate="intersects")
+        for k, part in enumerate(parts):
+            if owner[k] < 0:
+                continue
+            near = tiles[ti[qi == k]]
+            bridge = part.difference(shapely.union_all(near)) if len(near) else part
+            if bridge.is_empty:
+                continue
+            # drawn a hair inside the bridge, so the verifier's "material minus
+            # ligaments" never leaves slivers along the tile edges it shares
+            core = shapely.buffer(bridge, -BRIDGE_INSET_MM, join_style="mitre")
+            for piece in shapely.get_parts(core):
+                if piece.geom_type != "Polygon" or piece.area < 1e-4:
+                    continue  # slivers where a strip edge meets a tile edge
+                feats.append({"hinge": int(owner[k]), "sheet": 1,
+                              "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
+    return sorted(feats, key=lambda f: f["hinge"])
+
+
+def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
+    """Run the layout verifier (:func:`fabkiri.verify.verify_layout`) on the
+    printed tiles' top faces: read back as an in-place layout of the printed
+    closed state whose tiles were shrunk by half the gap, at the printer's
+    tolerance. Returns the verifier's :class:`~fabkiri.verify.Report`."""
+    import tempfile
+    from pathlib import Path
+
+    from ..verify import verify_layout
+
+    job = r.job
+    data = top_face_dxf(r, tiles_mesh)
+    manifest = {"format": "fabkiri.cut", "version": 1, "units": "mm", "hinge": "ligament", "layout": "in-place",
+                "state": job.state, "scale": 1.0, "kerf_offset_mm": 0.0, "tile_shrink_mm": job.plan.shrink_mm,
+                "hinge_features": printed_bridges(r)}
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "printed-top-faces.dxf"
+        path.write_bytes(data)
+        rep = verify_layout(pattern, path, manifest=manifest, tol_mm=job.printer.tolerance_mm)
+    rep.subject = "printed tile top faces"
+    rep.meta["files"] = []
+    return rep
+
+
+# ----------------------------------------------------------------- writing
+
+def export_3mf(scene) -> bytes:
+    """trimesh's 3MF with reproducible bytes: its random part UUIDs become
+    name-based ones from a counter, and zip entries get a fixed date."""
+    import uuid
+    import zipfile
+    from unittest import mock
+
+    from trimesh.exchange import threemf
+
+    counter = iter(range(1 << 30))
+
+    def next_uuid():
+        return uuid.uuid5(uuid.NAMESPACE_URL, f"fabkiri:3mf:{next(counter)}")
+
+    with mock.patch.object(threemf.uuid, "uuid4", next_uuid):
+        raw = scene.export(file_type="3mf")
+    src = zipfile.ZipFile(io.BytesIO(raw))
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as dst:
+        for info in src.infolist():
+            fixed = zipfile.ZipInfo(info.filename, date_time=(1980, 1, 1, 0, 0, 0))
+            fixed.compress_type = zipfile.ZIP_DEFLATED
+            fixed.external_attr = 0o644 << 16
+            dst.writestr(fixed, src.read(info.filename))
+    return out.getvalue()
+
+
+def job_files(r: Realised, stem: str) -> dict[str, bytes]:
+    """File name -> bytes of every mesh file of a job (STL per body kind and
+    per bed, one 3MF per bed with one named object per body)."""
+    import trimesh
+
+    job = r.job
+    files: dict[str, bytes] = {}
+    for k, (bed, tms) in enumerate(zip(job.beds, r.meshes), 1):
+        suffix = "" if len(job.beds) == 1 else f"-bed{k}"
+        scene = trimesh.Scene()
+        for b, tm in zip(bed, tms):
+            scene.add_geometry(tm, geom_name=b.name, node_name=b.name)
+        files[f"{stem}{suffix}.3mf"] = export_3mf(scene)
+        if job.style == "tiles-and-strips":
+            for b, tm in zip(bed, tms):
+                files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
+        else:
+            files[f"{stem}{suffix}.stl"] = trimesh.util.concatenate(tms).export(file_type="stl")
+    return files
+
+
+def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name: str,
+             files: Iterable[str], verifier=None) -> str:
+    job = r.job
+    plan = job.plan
+    d = {
+        "format": "fabkiri.print", "version": 1, "units": "mm",
+        "pattern": pattern_name, "style": job.style, "state": job.state,
+        "printer": job.printer.to_dict(),
+        "shift_mm": [round(float(v), 6) for v in job.shift],
+        "beds": [[b.name for b in bed] for bed in job.beds],
+        "hinges": [{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
+                    "coincides_with": int(plan.partner[h]) if plan.partner[h] >= 0 else None,
+                    "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
+                   for h in range(plan.n_hinges)],
+        "files": sorted(files),
+        "checks": {"meshes": rep.to_dict(), "tiles": tiles.to_dict() if tiles else None,
+                   "verifier": verifier.to_dict() if verifier is not None else None},
+    }
+    if job.placements:
+        d["placements"] = job.placements
+        d["assembly"] = ("glue every strip with its engraved face up, as seen from above the pattern: top-face "
+                         "strips on the tiles, bottom-face strips under them with the engraved face against them")
+        d["unlabelled_hinges"] = job.unlabelled
+    if job.pins is not None:
+        d["pins"] = {"levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
+                     "geometry_mm": dict(job.pins.geometry.__dict__),
+                     "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}}
+    return json.dumps(d, indent=1, sort_keys=False) + "\n"

@@ -1,0 +1,146 @@
+"""Printer presets for 3D-printed kirigami (templates/printers/*.json).
+
+A preset fixes what the slicer and the machine impose: nozzle and layer
+height, the clearances that keep print-in-place parts apart (radial: in the
+plane, axial: between stacked layers), the gap between tiles, and the sizes of
+the printed parts. Every field can be overridden from the CLI. Values are
+starting points (fabrication.md §3.4); print a clearance coupon to calibrate.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import MISSING, asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+from ..errors import FabricationError, InputError
+
+PRINTERS_DIR = Path(__file__).resolve().parents[2] / "templates" / "printers"
+DEFAULT_PRINTER = "prusa-mk4"
+
+
+@dataclass(frozen=True)
+class PinSpec:
+    """Print-in-place pin hinge sizes (``--style pinned``)."""
+
+    ear_radius_mm: float = 3.0
+    pin_radius_mm: float = 1.0
+    tile_thickness_mm: float = 6.0
+
+
+@dataclass(frozen=True)
+class Printer:
+    """One printer preset, all lengths in mm."""
+
+    name: str
+    bed_mm: tuple[float, float, float]
+    nozzle_mm: float
+    layer_mm: float
+    radial_clearance_mm: float
+    axial_clearance_mm: float
+    gap_mm: float
+    tile_thickness_mm: float
+    strip_thickness_mm: float
+    strip_width_mm: float
+    strip_reach_mm: float
+    part_spacing_mm: float = 3.0
+    tile_material: str = "PLA"
+    strip_material: str = "TPU"
+    description: str = ""
+    pin: PinSpec = field(default_factory=PinSpec)
+
+    def __post_init__(self) -> None:
+        try:
+            bed = tuple(float(v) for v in self.bed_mm)
+        except (TypeError, ValueError):
+            raise FabricationError(f"printer {self.name}: bed_mm must be [x, y, z] in mm, got {self.bed_mm!r}") from None
+        if len(bed) != 3:
+            raise FabricationError(f"printer {self.name}: bed_mm must be [x, y, z], got {list(self.bed_mm)}")
+        object.__setattr__(self, "bed_mm", bed)
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name.endswith("_mm") and f.name != "bed_mm" and not (isinstance(v, (int, float)) and v > 0):
+                raise FabricationError(f"printer {self.name}: {f.name} must be a positive length, got {v!r}")
+        if min(bed) <= 0:
+            raise FabricationError(f"printer {self.name}: bed size must be positive, got {list(bed)}")
+        for f in fields(PinSpec):
+            v = getattr(self.pin, f.name)
+            if not (isinstance(v, (int, float)) and v > 0):
+                raise FabricationError(f"printer {self.name}: pin.{f.name} must be a positive length, got {v!r}")
+        if self.gap_mm < self.radial_clearance_mm:
+            raise FabricationError(
+                f"printer {self.name}: the tile gap {self.gap_mm} mm is below the radial clearance "
+                f"{self.radial_clearance_mm} mm; neighbouring tiles would fuse"
+            )
+        if self.strip_thickness_mm < self.layer_mm:
+            raise FabricationError(
+                f"printer {self.name}: strip thickness {self.strip_thickness_mm} mm is thinner than one "
+                f"layer ({self.layer_mm} mm)"
+            )
+        if 2 * self.strip_thickness_mm >= self.tile_thickness_mm:
+            raise FabricationError(
+                f"printer {self.name}: two recessed strips ({self.strip_thickness_mm} mm each, top and "
+                f"bottom) do not fit in a {self.tile_thickness_mm} mm tile"
+            )
+
+    @property
+    def tolerance_mm(self) -> float:
+        """How far a printed edge may sit from the design: half the tile gap
+        (each tile is shrunk by it) plus half a nozzle width of print error."""
+        return 0.5 * self.gap_mm + 0.5 * self.nozzle_mm
+
+    def with_overrides(self, **kw: Any) -> "Printer":
+        """A copy with some fields replaced; ``None`` values are ignored."""
+        kw = {k: v for k, v in kw.items() if v is not None}
+        pin_kw = {k[4:]: kw.pop(k) for k in list(kw) if k.startswith("pin_")}
+        out = replace(self, **kw)
+        if pin_kw:
+            out = replace(out, pin=replace(out.pin, **pin_kw))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["bed_mm"] = list(self.bed_mm)
+        return d
+
+
+def available_printers() -> list[str]:
+    return sorted(p.stem for p in PRINTERS_DIR.glob("*.json"))
+
+
+def printer_from_dict(data: dict[str, Any], source: str = "preset") -> Printer:
+    if not isinstance(data, dict) or data.get("format") != "fabkiri.printer":
+        raise InputError(f"{source} is not a fabkiri printer preset (\"format\": \"fabkiri.printer\" missing)")
+    known = {f.name for f in fields(Printer)}
+    body = {k: v for k, v in data.items() if k not in ("format", "version")}
+    unknown = sorted(set(body) - known)
+    if unknown:
+        raise InputError(f"{source}: unknown printer field(s) {', '.join(unknown)}")
+    pin = body.pop("pin", {}) or {}
+    pin_known = {f.name for f in fields(PinSpec)}
+    if not isinstance(pin, dict) or set(pin) - pin_known:
+        raise InputError(f"{source}: pin must be an object with {', '.join(sorted(pin_known))}")
+    required = [f.name for f in fields(Printer) if f.default is MISSING and f.default_factory is MISSING]
+    missing = [k for k in required if k not in body]
+    if missing:
+        raise InputError(f"{source}: missing printer field(s) {', '.join(missing)}")
+    try:
+        return Printer(**body, pin=PinSpec(**pin))
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{source}: malformed printer preset ({exc})") from None
+
+
+def load_printer(name_or_path: str | None = None) -> Printer:
+    """A preset by name (``templates/printers/NAME.json``) or by path to a JSON file."""
+    name = name_or_path or DEFAULT_PRINTER
+    path = Path(name)
+    if not (path.suffix == ".json" and path.is_file()):
+        path = PRINTERS_DIR / f"{name}.json"
+        if not path.is_file():
+            raise InputError(f"unknown printer {name!r}; presets: {', '.join(available_printers())}")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise InputError(f"cannot read printer preset {path}: {exc}") from None
+    return printer_from_dict(data, str(path))

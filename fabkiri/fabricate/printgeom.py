@@ -1,0 +1,372 @@
+"""2D plan of 3D-printed hinges on a closed state (fabrication.md §3.1, §3.4).
+
+Everything here is planar (shapely/GEOS); :mod:`fabkiri.fabricate.mesh` turns
+it into solids. Conventions:
+
+* the closed state's tiles are shrunk by half the printer's gap (mitre joins),
+  so neighbouring printed tiles stay ``gap`` apart;
+* **coincident-hinge rule**: in a closed state the two hinges of an interior
+  node sit at one point, so they go on opposite faces (top/bottom). The faces
+  come from :func:`fabkiri.fabricate.hinges.assign_faces`, shared with the
+  laser-cut tape hinges: a two-colouring over *both* closed states (the lowest
+  hinge of each group on top), so a printed piece also reconfigures into the
+  other state without two strips or pin stacks meeting;
+* a **strip** (flexible hinge) of hinge ``h`` joining tiles A and B crosses the
+  seam where A's and B's folded edges lie together: along the seam it spans
+  ``strip_width`` from where the shrunk pair begins, across it reaches
+  ``strip_reach`` into each tile; its pads follow the two tile corners.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from scipy.spatial import cKDTree
+from shapely.geometry import MultiPolygon, Polygon
+
+from ..errors import CheckFailed, FabricationError
+from ..mechanics.contract import contract
+from ..pattern.model import Pattern
+from .printers import Printer
+
+CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
+COINCIDE_TOL_REL = 1e-6
+POCKET_OVERSHOOT_MM = 0.05
+MITRE_LIMIT = 10.0  # as the laser-cut layer and the verifier: sharp tips shrink and grow back exactly  # two hinge points closer than this (tile sizes) coincide
+
+
+def closed_corners(pattern: Pattern, state: int) -> np.ndarray:
+    """Per-tile corners ``(T, 4, 2)`` of closed state ``state`` (stored, or computed and checked)."""
+    if state not in (1, 2):
+        raise FabricationError(f"closed state must be 1 or 2, not {state!r}")
+    if state in pattern.contracted:
+        return np.asarray(pattern.contracted[state], dtype=float)
+    c = contract(pattern, state)
+    if c.max_closure > CLOSURE_TOL_REL * pattern.tile_size:
+        raise CheckFailed(
+            f"state {state} does not close (loop closure {c.max_closure:.3g} mm at hole {c.worst_hole}); "
+            "nothing to print"
+        )
+    return c.corners
+
+
+def _largest(geom) -> Polygon:
+    if isinstance(geom, Polygon):
+        return geom
+    if isinstance(geom, MultiPolygon) and len(geom.geoms):
+        return max(geom.geoms, key=lambda g: g.area)
+    return Polygon()
+
+
+@dataclass(frozen=True, eq=False)
+class ClosedPlan:
+    """The printed outline of every tile and the placement of every hinge."""
+
+    state: int
+    corners: np.ndarray  # (T, 4, 2) closed-state corners, mm
+    tiles: np.ndarray  # (T,) shapely Polygons, shrunk by gap/2
+    hinge_tiles: np.ndarray  # (H, 2)
+    hinge_xy: np.ndarray  # (H, 2) hinge point in the closed state
+    seam_dir: np.ndarray  # (H, 2) unit vector along the folded seam, away from the hinge
+    seam_end: np.ndarray  # (H, 2) far end of the folded seam
+    partner: np.ndarray  # (H,) coincident hinge or -1
+    top: np.ndarray  # (H,) True: the hinge's strip goes on the top face
+    shrink_mm: float
+    other_state_closes: bool = True  # False: a pattern that closes in the printed state only
+
+    @property
+    def n_hinges(self) -> int:
+        return len(self.hinge_xy)
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        return tuple(shapely.total_bounds(self.tiles).tolist())
+
+    def face(self, h: int) -> str:
+        return "top" if self.top[h] else "bottom"
+
+
+def coincident_pairs(points: np.ndarray, tol: float) -> np.ndarray:
+    """Partner index of every point (``-1`` if alone); raises if three coincide."""
+    partner = np.full(len(points), -1, dtype=np.int64)
+    if len(points) < 2:
+        return partner
+    pairs = cKDTree(points).query_pairs(tol, output_type="ndarray")
+    if len(pairs):
+        counts = np.bincount(pairs.ravel(), minlength=len(points))
+        if counts.max() > 1:
+            bad = int(np.argmax(counts))
+            raise FabricationError(
+                f"hinge {bad} coincides with {counts[bad]} other hinges in the closed state; "
+                "a quad kirigami node carries at most two"
+            )
+        partner[pairs[:, 0]] = pairs[:, 1]
+        partner[pairs[:, 1]] = pairs[:, 0]
+    return partner
+
+
+def face_rule(pattern: Pattern, states: dict[int, np.ndarray]) -> np.ndarray:
+    """Top (True) or bottom face per hinge, opposite for hinges that coincide in any given state."""
+    from .hinges import assign_faces
+
+    faces = assign_faces(pattern, states)
+    if faces.conflicts:
+        i, j = next((int(a), int(b)) for a, b in faces.pairs if faces.face[a] == faces.face[b])
+        raise FabricationError(
+            f"hinges {i} and {j} coincide in a closed state but cannot take opposite faces "
+            f"({faces.conflicts} conflicting pairs); no printed strip or pin layout exists"
+        )
+    return faces.face == 0
+
+
+def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
+    if pattern.topology.n_hinges == 0:
+        raise FabricationError("the pattern has a single tile and no hinges: there is nothing to hinge")
+    corners = closed_corners(pattern, state)
+    top_ = pattern.topology
+    fold = top_.fold(state)
+    A, B = top_.hinge_tiles.T
+    cA, cB = top_.hinge_corner.T
+    hxy = 0.5 * (corners[A, cA] + corners[B, cB])
+    far = 0.5 * (corners[A, fold.fold_corner_ends[:, 0]] + corners[B, fold.fold_corner_ends[:, 1]])
+    seam = far - hxy
+    seam /= np.linalg.norm(seam, axis=1, keepdims=True)
+    partner = coincident_pairs(hxy, COINCIDE_TOL_REL * pattern.tile_size)
+    states = {state: corners}
+    try:
+        states[3 - state] = closed_corners(pattern, 3 - state)
+    except CheckFailed:  # a pattern that closes one way only is still printable that way
+        pass
+    top = face_rule(pattern, states)
+    other_closes = len(states) == 2
+    d = 0.5 * printer.gap_mm
+    polys = shapely.polygons(corners)
+    shrunk = shapely.buffer(polys, -d, join_style="mitre", mitre_limit=MITRE_LIMIT)
+    empty = shapely.is_empty(shrunk) | (shapely.get_type_id(shrunk) != 3)
+    if empty.any():
+        bad = int(np.flatnonzero(empty)[0])
+        raise FabricationError(
+            f"tile {bad} vanishes or splits when shrunk by half the printer gap ({d:g} mm)"
+        )
+    return ClosedPlan(
+        state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
+        seam_dir=seam, seam_end=far, partner=partner, top=top, shrink_mm=d, other_state_closes=other_closes,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Strips:
+    """One flexible strip outline per hinge, and its two pads."""
+
+    outline: np.ndarray  # (H,) Polygons
+    pads: np.ndarray  # (H, 2) Polygons on tile A and on tile B
+    top: np.ndarray  # (H,) face
+    pocket: np.ndarray  # (H,) what is cut from the tiles: the strip, reaching past the tile edges
+
+
+def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
+    """Strip outlines for every hinge (see the module docstring), checked:
+    each strip crosses its seam, has a pad on both tiles, and keeps the radial
+    clearance from every other strip on the same face and from other tiles."""
+    H = plan.n_hinges
+    d = plan.shrink_mm
+    w, reach = printer.strip_width_mm, printer.strip_reach_mm
+    eps = 1e-6 * max(1.0, float(np.abs(plan.corners).max()))
+    A, B = plan.hinge_tiles.T
+    raw = shapely.polygons(plan.corners)
+    # the pair region: A and B merged along their closed seam, shrunk like the tiles
+    pair = shapely.buffer(shapely.union(shapely.buffer(raw[A], eps, join_style="mitre", mitre_limit=MITRE_LIMIT),
+                                        shapely.buffer(raw[B], eps, join_style="mitre", mitre_limit=MITRE_LIMIT)),
+                          -(d + eps), join_style="mitre", mitre_limit=MITRE_LIMIT)
+    p, e, far_xy = plan.hinge_xy, plan.seam_dir, plan.seam_end
+    n = np.stack([-e[:, 1], e[:, 0]], -1)
+    # where the seam line enters the pair region (t0), measured along e from p
+    L = 4.0 * (w + reach + d) + 1.0
+    seam_lines = shapely.linestrings(np.stack([p, p + L * e], 1))
+    inside = shapely.intersection(seam_lines, pair)
+    t0 = np.full(H, np.nan)
+    for h in range(H):  # a few µs each; intersections are short segments
+        g = inside[h]
+        if not g.is_empty:
+            xy = shapely.get_coordinates(g)
+            t0[h] = float(((xy - p[h]) @ e[h]).min())
+    if np.isnan(t0).any():
+        bad = int(np.flatnonzero(np.isnan(t0))[0])
+        seam_len = float(np.linalg.norm(far_xy[bad] - p[bad]))
+        raise FabricationError(
+            f"hinge {bad}: tiles {A[bad]} and {B[bad]} meet along a seam of only {seam_len:.2f} mm in state "
+            f"{plan.state}, too short for a strip after the {plan.shrink_mm:g} mm shrink"
+        )
+    R = reach + d
+    t1 = t0 + w
+    band = np.stack([p + t0[:, None] * e - R * n, p + t1[:, None] * e - R * n,
+                     p + t1[:, None] * e + R * n, p + t0[:, None] * e + R * n], 1)
+    strips = shapely.intersection(shapely.polygons(band), pair)
+    outline = np.array([_largest(g) for g in strips], dtype=object)
+    pads = np.stack([shapely.intersection(outline, plan.tiles[A]),
+                     shapely.intersection(outline, plan.tiles[B])], -1)
+    min_pad = 0.25 * w * min(reach, w)
+    small = (shapely.area(pads) < min_pad).any(1)
+    if small.any():
+        h = int(np.flatnonzero(small)[0])
+        raise FabricationError(
+            f"hinge {h}: the strip pads on tiles {A[h]} and {B[h]} are too small "
+            f"({shapely.area(pads[h]).min():.2f} mm² < {min_pad:.2f} mm²); the tile corners are too narrow "
+            "for the strip width"
+        )
+    _check_strip_clearance(plan, outline, printer)
+    # the pocket overshoots the tile edges (into the gap, never near another
+    # tile) so no micrometre sliver of tile survives where strip and tile edges meet
+    over = min(POCKET_OVERSHOOT_MM, 0.25 * printer.gap_mm)
+    grown = shapely.buffer(shapely.union(plan.tiles[A], plan.tiles[B]), over, join_style="mitre")
+    pocket = shapely.union(outline, shapely.intersection(shapely.polygons(band), grown))
+    pocket = np.array([_largest(g) for g in pocket], dtype=object)
+    return Strips(outline=outline, pads=pads, top=plan.top.copy(), pocket=pocket)
+
+
+def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Printer) -> None:
+    c = printer.radial_clearance_mm
+    tol = 1e-9
+    A, B = plan.hinge_tiles.T
+    for face in (True, False):
+        idx = np.flatnonzero(plan.top == face)
+        if len(idx) < 2:
+            continue
+        tree = shapely.STRtree(outline[idx])
+        i, j = tree.query(outline[idx], predicate="dwithin", distance=c - tol)
+        sel = i < j
+        if sel.any():
+            h, k = idx[i[sel][0]], idx[j[sel][0]]
+            dist = shapely.distance(outline[h], outline[k])
+            raise FabricationError(
+                f"strips of hinges {h} and {k} on the {'top' if face else 'bottom'} face are "
+                f"{dist:.2f} mm apart (radial clearance {c:g} mm); use a smaller --strip-width or --strip-reach"
+            )
+    # a strip touches its own two tiles only
+    tree = shapely.STRtree(plan.tiles)
+    hi, ti = tree.query(outline, predicate="dwithin", distance=c - tol)
+    foreign = (ti != A[hi]) & (ti != B[hi])
+    if foreign.any():
+        h, t = int(hi[foreign][0]), int(ti[foreign][0])
+        raise FabricationError(f"the strip of hinge {h} comes within {c:g} mm of tile {t}, which it does not join")
+
+
+# -------------------------------------------------------------------- pinned
+
+@dataclass(frozen=True)
+class PinLevels:
+    """Z layout of the four ear levels of a pinned print (mm)."""
+
+    thickness: float
+    ear: float
+    axial: float
+
+    def level(self, k: int) -> tuple[float, float]:
+        z0 = k * (self.ear + self.axial)
+        return z0, z0 + self.ear
+
+
+def pin_levels(printer: Printer) -> PinLevels:
+    T = printer.pin.tile_thickness_mm
+    az = printer.axial_clearance_mm
+    ear = (T - 3 * az) / 4
+    if ear < 3 * printer.layer_mm - 1e-9:
+        raise FabricationError(
+            f"pinned hinges need four stacked ears: a {T:g} mm tile leaves {ear:.2f} mm per ear after three "
+            f"{az:g} mm axial clearances, under three layers ({3 * printer.layer_mm:g} mm); "
+            "raise the preset's pin.tile_thickness_mm"
+        )
+    return PinLevels(thickness=T, ear=ear, axial=az)
+
+
+@dataclass(frozen=True)
+class PinGeometry:
+    """Radii of one pin joint (mm). The pin flares upward (retains the ring)."""
+
+    ear: float  # ear disc radius
+    hollow: float  # the other tiles are cleared to this radius around the pivot
+    pin_bottom: float
+    pin_top: float
+    hole_bottom: float  # ring hole, horizontal radius
+    hole_top: float
+
+
+def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
+    c = printer.radial_clearance_mm
+    r = printer.pin.ear_radius_mm
+    rp = printer.pin.pin_radius_mm
+    flare = 2.0 * c  # the ring's narrowest hole is smaller than the pin's widest point
+    slope = flare / levels.ear
+    ch = float(c * np.sqrt(1.0 + slope * slope))  # horizontal clearance giving c normal to the cone
+    g = PinGeometry(ear=r, hollow=r + c, pin_bottom=rp, pin_top=rp + flare, hole_bottom=rp + ch,
+                    hole_top=rp + flare + ch)
+    wall = r - g.hole_top
+    if wall < 2 * printer.nozzle_mm - 1e-9:
+        raise FabricationError(
+            f"pinned hinges: the ear ring wall is {wall:.2f} mm (ear radius {r:g} mm, pin {rp:g} mm, clearance "
+            f"{c:g} mm), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); raise pin.ear_radius_mm"
+        )
+    if rp < printer.nozzle_mm:
+        raise FabricationError(f"pin radius {rp:g} mm is under one nozzle width ({printer.nozzle_mm:g} mm)")
+    return g
+
+
+@dataclass(frozen=True, eq=False)
+class PinPlan:
+    """Where each pin joint sits and which ear levels it uses.
+
+    ``level[h]`` is 0 (ears at levels 0-1) for the bottom hinge of a node and 2
+    (levels 2-3) for the top one: the two coincident hinges stack coaxially.
+    Tile A of the hinge owns the lower ear and the pin, tile B the ring.
+    """
+
+    levels: PinLevels
+    geometry: PinGeometry
+    level: np.ndarray  # (H,)
+
+
+def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
+    """Plan print-in-place pins, or refuse with the reason the geometry does not allow them."""
+    from ..pattern.residuals import hinge_sums
+
+    levels = pin_levels(printer)
+    g = pin_geometry(printer, levels)
+    hs = np.abs(hinge_sums(pattern))
+    if hs.max(initial=0.0) > 1e-6:
+        h = int(np.argmax(hs))
+        raise FabricationError(
+            f"pinned hinges refused: the pattern is not rigid-deployable (hinge {h}: corner angles miss π by "
+            f"{np.degrees(hs[h]):.2f}°), so rigid pinned tiles would have to bend to reconfigure; "
+            "use --style strips or tiles-and-strips"
+        )
+    # one pivot per distinct point; the clearance discs of different pivots must not meet
+    lone = (plan.partner < 0) | (np.arange(plan.n_hinges) < plan.partner)
+    pivots = plan.hinge_xy[lone]
+    wall = 2 * printer.nozzle_mm
+    if len(pivots) > 1:
+        dist, _ = cKDTree(pivots).query(pivots, k=2)
+        i = int(np.argmin(dist[:, 1]))
+        if dist[i, 1] < 2 * g.hollow + wall:
+            raise FabricationError(
+                f"pinned hinges refused: pivots {dist[i, 1]:.2f} mm apart cannot hold two ears of radius "
+                f"{g.ear:g} mm with {printer.radial_clearance_mm:g} mm clearance and a {wall:g} mm wall; "
+                "scale the pattern up or reduce pin.ear_radius_mm"
+            )
+    # an ear may only sweep the tiles that meet at its pivot
+    A, B = plan.hinge_tiles.T
+    discs = shapely.buffer(shapely.points(plan.hinge_xy), g.hollow, quad_segs=16)
+    tree = shapely.STRtree(plan.tiles)
+    hi, ti = tree.query(discs, predicate="intersects")
+    own = (ti == A[hi]) | (ti == B[hi])
+    pa = plan.partner[hi]
+    own |= (pa >= 0) & ((ti == A[np.maximum(pa, 0)]) | (ti == B[np.maximum(pa, 0)]))
+    if not own.all():
+        h, t = int(hi[~own][0]), int(ti[~own][0])
+        raise FabricationError(
+            f"pinned hinges refused: the ear of hinge {h} (radius {g.hollow:g} mm with clearance) reaches tile "
+            f"{t}, which does not meet at its pivot"
+        )
+    level = np.where(plan.top, 2, 0)
+    return PinPlan(levels=levels, geometry=g, level=level)

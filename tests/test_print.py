@@ -1,0 +1,504 @@
+"""3D-printed hinges: plan, meshes, files, slicer, CLI (issue 6)."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+import trimesh
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from fabkiri.errors import FabricationError, InputError
+from fabkiri.fabricate import mesh, printgeom
+from fabkiri.fabricate.printers import Printer, available_printers, load_printer
+from fabkiri.mechanics.contract import with_contracted_states
+from fabkiri.pattern.io import write_pattern
+from fabkiri.pattern.lattice import standard_pattern
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def printer() -> Printer:
+    return load_printer("prusa-mk4")
+
+
+def _reload_volumes(data: bytes, file_type: str) -> dict[str, float]:
+    loaded = trimesh.load(io.BytesIO(data), file_type=file_type, process=False)
+    if isinstance(loaded, trimesh.Scene):
+        return {name: float(g.volume) for name, g in loaded.geometry.items()}
+    return {"": float(loaded.volume)}
+
+
+# ------------------------------------------------------------------ presets
+
+def test_presets_load_and_validate(printer):
+    names = available_printers()
+    assert {"prusa-mk4", "prusa-xl", "bambu-x1-petg"} <= set(names)
+    for n in names:
+        p = load_printer(n)
+        assert p.name == n and p.gap_mm >= p.radial_clearance_mm and p.bed_mm[0] > 0
+    with pytest.raises(InputError, match="unknown printer"):
+        load_printer("no-such-printer")
+    with pytest.raises(FabricationError, match="radial clearance"):
+        printer.with_overrides(gap_mm=0.1)
+    with pytest.raises(FabricationError, match="do not fit"):
+        printer.with_overrides(strip_thickness_mm=1.6)
+    assert printer.with_overrides(strip_width_mm=None) == printer
+
+
+def test_printer_preset_files(tmp_path):
+    good = json.loads((REPO / "templates" / "printers" / "prusa-mk4.json").read_text())
+    path = tmp_path / "mine.json"
+    path.write_text(json.dumps({**good, "name": "mine", "gap_mm": 0.5}))
+    assert load_printer(str(path)).gap_mm == 0.5
+    for bad, msg in [({k: v for k, v in good.items() if k != "nozzle_mm"}, "missing printer field"),
+                     ({**good, "bed_mm": "big"}, "bed_mm"), ({**good, "layer_mm": -0.2}, "positive"),
+                     ({**good, "colour": "red"}, "unknown printer field"), ({"name": "x"}, "not a fabkiri printer")]:
+        path.write_text(json.dumps(bad))
+        with pytest.raises((InputError, FabricationError), match=msg):
+            load_printer(str(path))
+
+
+# --------------------------------------------------------------- face rule
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(rows=st.integers(1, 6), cols=st.integers(1, 6), state=st.sampled_from([1, 2]),
+       angle=st.floats(10, 80))
+def test_coincident_hinges_go_on_opposite_faces(rows, cols, state, angle, printer):
+    if rows * cols < 2:
+        return
+    pat = standard_pattern(rows, cols, angle_deg=angle)
+    plan = printgeom.closed_plan(pat, state, printer)
+    pa = plan.partner
+    paired = np.flatnonzero(pa >= 0)
+    # partners are mutual, really coincide, and take opposite faces
+    assert (pa[pa[paired]] == paired).all()
+    assert np.allclose(plan.hinge_xy[paired], plan.hinge_xy[pa[paired]], atol=1e-6)
+    assert (plan.top[paired] != plan.top[pa[paired]]).all()
+    # the faces also keep the hinges that meet in the *other* closed state apart
+    other = printgeom.closed_corners(pat, 3 - state)
+    top_ = pat.topology
+    hx = other[top_.hinge_tiles[:, 0], top_.hinge_corner[:, 0]]
+    po = printgeom.coincident_pairs(hx, 1e-6 * pat.tile_size)
+    sel = np.flatnonzero(po >= 0)
+    assert (plan.top[sel] != plan.top[po[sel]]).all()
+    # every interior hole closes to one point carrying exactly two hinges
+    assert len(paired) == 2 * pat.topology.n_holes
+    # any two hinges at distinct points are far apart (the clustering is not fooled)
+    lone = np.flatnonzero(pa < 0)
+    if len(lone) > 1:
+        d = np.linalg.norm(plan.hinge_xy[lone, None] - plan.hinge_xy[None, lone], axis=-1)
+        assert d[~np.eye(len(lone), dtype=bool)].min() > 1.0
+
+
+def test_strips_cross_their_seam_and_join_only_their_tiles(printer):
+    pat = standard_pattern(4, 5, tile_size=12.0)
+    plan = printgeom.closed_plan(pat, 2, printer)
+    s = printgeom.strip_outlines(plan, printer)
+    A, B = plan.hinge_tiles.T
+    pads = shapely.area(s.pads)
+    assert (pads > 0.5 * printer.strip_width_mm * printer.strip_reach_mm).all()
+    # the strip covers a seam point just beside the hinge, inside the gap
+    probe = shapely.points(plan.hinge_xy + (plan.shrink_mm + 0.5 * printer.strip_width_mm) * plan.seam_dir)
+    assert shapely.contains(s.outline, probe).all()
+    # no strip comes near a third tile; same-face strips keep the radial clearance
+    for h in range(plan.n_hinges):
+        others = [t for t in range(len(plan.tiles)) if t not in (A[h], B[h])]
+        assert min(shapely.distance(s.outline[h], plan.tiles[others])) >= printer.gap_mm - 1e-9
+    for face in (True, False):
+        idx = np.flatnonzero(s.top == face)
+        for i in idx:
+            for j in idx[idx > i]:
+                assert shapely.distance(s.outline[i], s.outline[j]) >= printer.radial_clearance_mm
+
+
+# --------------------------------------------------------- tiles-and-strips
+
+@pytest.mark.parametrize("rows,cols,state", [(3, 3, 1), (2, 5, 2)])
+def test_tiles_and_strips_meshes(rows, cols, state, printer):
+    pat = standard_pattern(rows, cols, tile_size=11.0, angle_deg=30.0)
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert all(b["watertight"] and b["winding_consistent"] for b in rep.bodies)
+    tiles, hinges = r.manifolds[0]
+    assert (tiles ^ hinges).volume() == pytest.approx(0.0, abs=1e-6)
+    assert rep.min_clearance_mm >= printer.radial_clearance_mm
+    # one connected body per tile and per strip
+    assert len(tiles.decompose()) == rows * cols
+    assert len(hinges.decompose()) == pat.topology.n_hinges
+    # strips are exactly as thick as the preset and flush with the tile faces
+    T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
+    assert hinges.volume() == pytest.approx(ts * shapely.area(r.job.strips.outline).sum(), rel=1e-9)
+    assert tiles.volume() + hinges.volume() == pytest.approx(
+        T * shapely.area(r.job.plan.tiles).sum() + _bridge_volume(r), rel=1e-7)
+    # the printed tiles' outlines match the closed state within the printer's tolerance
+    tc = mesh.check_printed_tiles(r)
+    assert tc.ok and tc.tiles == rows * cols and tc.max_deviation_mm < 1e-5
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(rows=st.integers(1, 5), cols=st.integers(2, 5), state=st.sampled_from([1, 2]),
+       tile=st.floats(9.0, 20.0), angle=st.floats(5, 85))
+def test_tiles_and_strips_invariants(rows, cols, state, tile, angle, printer):
+    pat = standard_pattern(rows, cols, tile_size=tile, angle_deg=angle)
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert rep.intersection_volume_mm3 <= 1e-6
+    assert rep.min_clearance_mm >= printer.radial_clearance_mm - 1e-6
+    assert mesh.check_printed_tiles(r).ok
+
+
+@pytest.mark.parametrize("state", [1, 2])
+def test_pinned_in_either_state(state, printer):
+    pat = standard_pattern(2, 3, tile_size=12.0)
+    r = mesh.realise_job(mesh.build_job(pat, "pinned", state, printer))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert mesh.check_printed_tiles(r).ok
+
+
+def _bridge_volume(r) -> float:
+    """Strip volume outside the tiles (over the gaps)."""
+    s = r.job.strips.outline
+    inside = shapely.area(shapely.intersection(s, shapely.union_all(r.job.plan.tiles)))
+    return float(r.job.printer.strip_thickness_mm * (shapely.area(s) - inside).sum())
+
+
+def test_files_reload_with_the_same_volumes_and_names(printer):
+    pat = standard_pattern(3, 4)
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer))
+    files = mesh.job_files(r, "k")
+    assert set(files) == {"k.3mf", "k_tiles.stl", "k_hinges.stl"}
+    vols = {b.name: m.volume() for b, m in zip(r.job.beds[0], r.manifolds[0])}
+    got = _reload_volumes(files["k.3mf"], "3mf")
+    assert set(got) == {"tiles_PLA", "hinges_TPU"}
+    for name, v in vols.items():
+        assert got[name] == pytest.approx(v, rel=1e-6)
+    # STL stores float32 coordinates: compare with the same mesh rounded to float32
+    for kind, tm in zip(("tiles", "hinges"), r.meshes[0]):
+        f32 = trimesh.Trimesh(tm.vertices.astype(np.float32).astype(np.float64), tm.faces, process=False)
+        assert _reload_volumes(files[f"k_{kind}.stl"], "stl")[""] == pytest.approx(f32.volume, rel=1e-9)
+        assert f32.volume == pytest.approx(tm.volume, rel=1e-5)
+    # the tiles re-read from the STL still pass the closed-state check
+    stl = trimesh.load(io.BytesIO(files["k_tiles.stl"]), file_type="stl")
+    assert stl.is_watertight and stl.is_winding_consistent
+    tc = mesh.check_printed_tiles(r, tiles_mesh=stl)
+    assert tc.ok, tc
+    # the layout verifier accepts the STL's top faces as closed state 1 (both states reassemble)
+    vr = mesh.verify_printed_tiles(pat, r, tiles_mesh=stl)
+    assert vr.ok, vr.to_text()
+    assert vr.get("layout: (b) in place = closed state 1").value < 1e-4
+    assert vr.get("layout: (d) every hinge present").value == 0
+    # ... and rejects them for a pattern whose tiles are 0.5 mm larger (tolerance 0.4 mm)
+    bigger = standard_pattern(3, 4, tile_size=10.5)
+    assert not mesh.verify_printed_tiles(bigger, r, tiles_mesh=stl).ok
+    # reproducible bytes
+    again = mesh.job_files(mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer)), "k")
+    assert again == files
+    assert all(i.date_time == (1980, 1, 1, 0, 0, 0) for i in zipfile.ZipFile(io.BytesIO(files["k.3mf"])).infolist())
+
+
+@pytest.mark.parametrize("shift,passes", [(0.3, True), (0.5, False)])
+def test_tile_check_measures_the_deviation(shift, passes, printer):
+    """A design tile moved by ``shift`` mm: the printed tiles deviate by exactly that,
+    against the printer's tolerance (half the gap plus half a nozzle = 0.4 mm)."""
+    pat = standard_pattern(3, 3, angle_deg=30.0)
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer))
+    corners = r.job.plan.corners.copy()
+    corners[4] += [shift, 0.0]
+    fake = mesh.Realised(job=mesh.PrintJob("tiles-and-strips", 1, printer,
+                                           printgeom.ClosedPlan(**{**r.job.plan.__dict__, "corners": corners}),
+                                           r.job.beds, r.job.shift, r.job.strips), manifolds=r.manifolds,
+                         meshes=r.meshes)
+    tc = mesh.check_printed_tiles(fake)
+    assert tc.tolerance_mm == pytest.approx(0.4)
+    assert tc.max_deviation_mm == pytest.approx(shift, abs=1e-6)
+    assert tc.ok is passes
+
+
+@pytest.mark.parametrize("style", mesh.STYLES)
+def test_single_tile_is_refused(style, printer):
+    with pytest.raises(FabricationError, match="no hinges"):
+        mesh.build_job(standard_pattern(1, 1), style, 1, printer)
+
+
+def test_pattern_larger_than_the_bed_is_refused(printer):
+    pat = standard_pattern(30, 30)
+    with pytest.raises(FabricationError, match="does not fit the 250 x 210 mm bed"):
+        mesh.build_job(pat, "tiles-and-strips", 1, printer)
+
+
+# ------------------------------------------------------------------ strips
+
+def test_strip_parts_on_beds(printer):
+    small_bed = printer.with_overrides(bed_mm=(40.0, 30.0, 50.0))
+    pat = standard_pattern(4, 4)
+    job = mesh.build_job(pat, "strips", 1, small_bed)
+    assert len(job.beds) > 1
+    names = [b.name for bed in job.beds for b in bed]
+    H = pat.topology.n_hinges
+    assert names == [f"hinge-{h:04d}-{job.plan.face(h)}" for h in range(H)]
+    r = mesh.realise_job(job)
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    # each part is its strip outline, moved rigidly and laid flat
+    for h, (bed, pl) in enumerate(zip([b for bed in job.beds for b in bed], job.placements)):
+        m = r.manifolds[pl["bed"] - 1][[b.name for b in job.beds[pl["bed"] - 1]].index(bed.name)]
+        # minus its engraved hinge ID, one layer deep
+        label = bed.ops[1][1].polygons[0] if len(bed.ops) > 1 else shapely.Polygon()
+        assert h not in job.unlabelled and label.area > 1.0
+        assert m.volume() == pytest.approx(job.strips.outline[h].area * printer.strip_thickness_mm
+                                           - label.area * printer.layer_mm, rel=1e-7)
+        lo, hi = m.bounding_box()[:3], m.bounding_box()[3:]
+        assert lo[2] == pytest.approx(0.0) and hi[2] == pytest.approx(printer.strip_thickness_mm)
+    files = mesh.job_files(r, "s")
+    assert {f"s-bed{k}.3mf" for k in range(1, len(job.beds) + 1)} <= set(files)
+    got = _reload_volumes(files["s-bed1.3mf"], "3mf")
+    assert set(got) == {b.name for b in job.beds[0]}
+
+
+# ------------------------------------------------------------------ pinned
+
+def test_pinned_hinges(printer):
+    pat = standard_pattern(3, 3, tile_size=12.0)
+    r = mesh.realise_job(mesh.build_job(pat, "pinned", 1, printer))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert rep.min_clearance_mm >= min(printer.radial_clearance_mm, printer.axial_clearance_mm)
+    assert all(len(m.decompose()) == 1 for m in r.manifolds[0])
+    assert all(b["watertight"] and b["winding_consistent"] for b in rep.bodies)
+    tc = mesh.check_printed_tiles(r)
+    assert tc.ok, tc
+    # the pin of each hinge passes through its partner's ring: the ring tile is
+    # pierced where the pin stands, and the pin's tile owns material there
+    job = r.job
+    lv = job.pins.levels
+    for h in range(job.plan.n_hinges):
+        a, b = job.plan.hinge_tiles[h]
+        k = job.pins.level[h] + 1
+        z = 0.5 * sum(lv.level(k))
+        p = shapely.Point(job.plan.hinge_xy[h] + job.shift)
+        sec_a = shapely.union_all([shapely.Polygon(x) for x in r.manifolds[0][a].slice(z).to_polygons()])
+        ring_b = r.manifolds[0][b].slice(z).to_polygons()
+        assert sec_a.contains(p)
+        assert len(ring_b) >= 2  # outline plus the pin hole
+
+
+def test_pinned_refusals(printer):
+    with pytest.raises(FabricationError, match="pivots .* apart"):
+        mesh.build_job(standard_pattern(3, 3, tile_size=5.0), "pinned", 1, printer)
+    with pytest.raises(FabricationError, match="four stacked ears"):
+        mesh.build_job(standard_pattern(2, 2), "pinned", 1, printer.with_overrides(pin_tile_thickness_mm=3.0))
+    with pytest.raises(FabricationError, match="ring wall"):
+        mesh.build_job(standard_pattern(2, 2), "pinned", 1, printer.with_overrides(pin_ear_radius_mm=1.8))
+
+
+def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
+    from tests.conftest import ref
+    from fabkiri.pattern.io import import_obj
+    from fabkiri.mechanics.contract import adopt_state_labels
+
+    pat = adopt_state_labels(import_obj(ref("compact_reconfigurable_design"), scale=10.0))
+    with pytest.raises(FabricationError, match="not rigid-deployable"):
+        mesh.build_job(pat, "pinned", 1, printer)
+
+
+# -------------------------------------------------------------------- STEP
+
+def test_step_has_the_same_volume(tmp_path, printer):
+    pytest.importorskip("build123d")
+    from fabkiri.fabricate import cad
+
+    pat = standard_pattern(2, 2)
+    job = mesh.build_job(pat, "tiles-and-strips", 1, printer)
+    r = mesh.realise_job(job)
+    data = cad.step_bytes(job.beds[0])
+    assert b"1970-01-01T00:00:00" in data
+    path = tmp_path / "k.step"
+    path.write_bytes(data)
+    vol = sum(m.volume() for m in r.manifolds[0])
+    assert cad.step_volume(path) == pytest.approx(vol, rel=1e-3)
+
+
+# ---------------------------------------------------------------- slicer
+
+@pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="PrusaSlicer is not installed")
+def test_prusaslicer_slices_stl_and_3mf(tmp_path, printer):
+    pat = standard_pattern(3, 3)
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer))
+    for name, data in mesh.job_files(r, "k").items():
+        (tmp_path / name).write_bytes(data)
+    for style in ("strips", "pinned"):
+        rs = mesh.realise_job(mesh.build_job(standard_pattern(2, 2, tile_size=12.0), style, 1, printer))
+        for name, data in mesh.job_files(rs, style).items():
+            (tmp_path / name).write_bytes(data)
+    for src, extra in [("k_tiles.stl", []), ("k_hinges.stl", []), ("k.3mf", ["--dont-arrange"]),
+                       ("strips.3mf", ["--dont-arrange"]), ("pinned.stl", [])]:
+        out = tmp_path / (src + ".gcode")
+        proc = subprocess.run(["prusa-slicer", "--export-gcode", *extra, str(tmp_path / src), "-o", str(out)],
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        text = out.read_text()
+        assert "; filament used [mm]" in text and text.count("\nG1 ") > 100
+
+
+# -------------------------------------------------------------------- CLI
+
+def test_cli_print_writes_everything(tmp_path, run_cli):
+    src = tmp_path / "sq.json"
+    write_pattern(with_contracted_states(standard_pattern(3, 3)), src)
+    code, out, err = run_cli("print", src, "--state", "2", "-o", tmp_path / "out")
+    assert code == 0, err
+    names = {p.name for p in (tmp_path / "out").iterdir()}
+    assert names == {"sq.3mf", "sq_tiles.stl", "sq_hinges.stl", "manifest.json"}
+    man = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert man["style"] == "tiles-and-strips" and man["state"] == 2
+    assert man["checks"]["meshes"]["ok"] and man["checks"]["tiles"]["ok"]
+    faces = {h["hinge"]: h["face"] for h in man["hinges"]}
+    for h in man["hinges"]:
+        if h["coincides_with"] is not None:
+            assert faces[h["coincides_with"]] != h["face"]
+    assert out == ""
+
+    code, _, err = run_cli("print", src, "--style", "strips", "--strip-width", "9", "-o", tmp_path / "bad")
+    assert code == 2 and "strips of hinges" in err and not (tmp_path / "bad").exists()
+    code, _, err = run_cli("print", src, "--printer", "nope", "-o", tmp_path / "bad")
+    assert code == 2 and "unknown printer" in err
+    code, _, err = run_cli("print", src, "--style", "pinned", "--tile-thickness", "3", "-o", tmp_path / "bad")
+    assert code == 2 and "four stacked ears" in err and err.count("\n") == 1 and not (tmp_path / "bad").exists()
+
+
+def test_cli_does_not_load_build123d_without_step(tmp_path):
+    src = tmp_path / "sq.json"
+    write_pattern(standard_pattern(2, 2), src)
+    code = ("import sys; from fabkiri.cli.main import main; "
+            f"rc = main(['print', {str(src)!r}, '-o', {str(tmp_path / 'o')!r}]); "
+            "assert rc == 0; assert 'build123d' not in sys.modules and 'OCP' not in sys.modules")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_cli_strips_with_pad_marks_on_the_laser_files(tmp_path, run_cli):
+    src = tmp_path / "sq.json"
+    pat = with_contracted_states(standard_pattern(3, 3))
+    write_pattern(pat, src)
+    code, _, err = run_cli("print", src, "--style", "strips", "--marks", "-o", tmp_path / "out")
+    assert code == 0, err
+    laser = json.loads((tmp_path / "out" / "laser" / "manifest.json").read_text())
+    H = pat.topology.n_hinges
+    assert laser["hinge"] == "tape" and laser["verification"]["ok"]
+    assert laser["pad_marks"]["count"] == 2 * H  # one outline per pad, both tiles of every hinge
+    # the engraved pad outlines sit inside the tiles, and each matches a printed pad's area
+    import ezdxf
+
+    doc = ezdxf.readfile(tmp_path / "out" / "laser" / "sq.dxf")
+    closed = [e for e in doc.modelspace().query("LWPOLYLINE") if e.dxf.layer == "ENGRAVE" and e.closed]
+    areas = sorted(shapely.Polygon([p[:2] for p in e.get_points()]).area for e in closed)
+    assert len(areas) >= 2 * H
+    job = mesh.build_job(pat, "strips", 1, load_printer())
+    pad_area = float(np.median(shapely.area(job.strips.pads)))
+    assert areas[-1] < pad_area  # kept inside the tile's engraving margin
+    code, _, err = run_cli("print", src, "--marks", "-o", tmp_path / "bad")
+    assert code == 2 and "--style strips" in err and not (tmp_path / "bad").exists()
+
+
+def _scaled(pattern, k):
+    from dataclasses import replace
+
+    return replace(pattern, nodes=pattern.nodes * k, contracted={s: c * k for s, c in pattern.contracted.items()})
+
+
+@pytest.mark.parametrize("state", [1, 2])
+def test_solver_design_prints_and_passes_the_verifier(state):
+    """The solver's rigid circle design (irregular tiles), doubled in size."""
+    from fabkiri.pattern.io import read_pattern
+
+    pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
+    pr = load_printer("prusa-xl")
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, pr))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert rep.min_clearance_mm >= pr.radial_clearance_mm
+    vr = mesh.verify_printed_tiles(pat, r)
+    assert vr.ok, vr.to_text()
+    # at its own size its narrow corners cannot hold the preset's 4 mm strips: refused, not mangled
+    with pytest.raises(FabricationError, match="strip"):
+        mesh.build_job(_scaled(pat, 0.5), "tiles-and-strips", state, pr)
+
+
+def test_solver_design_pinned():
+    from fabkiri.pattern.io import read_pattern
+
+    pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
+    pr = load_printer("prusa-xl")
+    r = mesh.realise_job(mesh.build_job(pat, "pinned", 1, pr))
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    assert mesh.check_printed_tiles(r).ok
+    sw = mesh.sweep_pinned(pat, r)
+    assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm
+
+
+def test_pinned_sweep_along_the_deployment(printer):
+    """The pinned tiles reconfigure from one closed state to the other without
+    touching; a tile whose corner was not cleared collides in the sweep."""
+    import manifold3d as m3d
+
+    pat = standard_pattern(3, 3, tile_size=12.0)
+    r = mesh.realise_job(mesh.build_job(pat, "pinned", 1, printer))
+    sw = mesh.sweep_pinned(pat, r)
+    assert sw.ok and sw.max_overlap_mm2 == 0.0 and sw.frames >= 20
+    assert sw.min_distance_mm >= printer.radial_clearance_mm
+    # fill tile 0's clearing at one of its pivots through the full height: it now hits the partner's ears
+    job = r.job
+    h = int(np.flatnonzero((job.plan.hinge_tiles == 0).any(1))[0])
+    p = job.plan.hinge_xy[h] + job.shift
+    plug = m3d.Manifold.cylinder(job.pins.levels.thickness, job.pins.geometry.ear, job.pins.geometry.ear,
+                                 48).translate((p[0], p[1], 0.0))
+    bad = mesh.Realised(job, [[r.manifolds[0][0] + plug] + r.manifolds[0][1:]], r.meshes)
+    sw_bad = mesh.sweep_pinned(pat, bad)
+    assert not sw_bad.ok and sw_bad.max_overlap_mm2 > 1.0 and "tiles 0/" in sw_bad.worst
+
+
+def test_cli_step_per_bed(tmp_path, run_cli):
+    pytest.importorskip("build123d")
+    from fabkiri.fabricate import cad
+
+    src = tmp_path / "sq.json"
+    write_pattern(standard_pattern(2, 2), src)
+    code, _, err = run_cli("print", src, "--style", "strips", "--step", "-o", tmp_path / "out")
+    assert code == 0, err
+    man = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    vol = sum(b["volume_mm3"] for b in man["checks"]["meshes"]["bodies"])
+    assert "sq.step" in man["files"]
+    assert cad.step_volume(tmp_path / "out" / "sq.step") == pytest.approx(vol, rel=1e-3)
+
+
+def test_pattern_closing_one_way_only_prints_that_way(tmp_path, run_cli):
+    """The paper's contractible (not reconfigurable) example closes in state 2 only."""
+    from tests.conftest import ref
+
+    src = ref("contractible_design")
+    code, _, err = run_cli("print", src, "--state", "2", "--scale", "10", "--strip-width", "1.5",
+                           "--strip-reach", "1.5", "-o", tmp_path / "ok")
+    assert code == 0, err
+    assert "does not close" in err  # the reassembly into state 1 is reported as moot, not as a failure
+    man = json.loads((tmp_path / "ok" / "manifest.json").read_text())
+    assert man["checks"]["tiles"]["ok"] and man["checks"]["meshes"]["ok"]
+    assert man["checks"]["verifier"]["meta"]["not_applicable"]
+    code, _, err = run_cli("print", src, "--state", "1", "--scale", "10", "-o", tmp_path / "no")
+    assert code == 1 and "does not close" in err and not (tmp_path / "no").exists()
