@@ -352,20 +352,33 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                 sd.add("CUT", p, True)
             # the free spans: material not in any tile, from the same snapped geometry as the cut
             tiles_here = shapely.union_all(small, grid_size=hg.GRID)
+            tile_tree = shapely.STRtree(small)
             free = shapely.get_parts(shapely.difference(material, tiles_here, grid_size=hg.GRID))
             free = free[shapely.area(free) > 0]
             # a span may touch two strips (then it is listed for both)
-            owner_pt, owner = shapely.STRtree(moved_strips).query(free, predicate="intersects")
-            for j in np.unique(owner):
-                parts_j = free[owner_pt[owner == j]]
-                # padded so rounding never leaves a hairline of material along the strip joining the
-                # two tiles, then clipped by the tiles so no tile loses a corner
-                geom = shapely.buffer(shapely.union_all(parts_j, grid_size=hg.GRID), FEATURE_PAD_MM,
-                                      join_style="mitre")
-                geom = shapely.normalize(shapely.difference(geom, tiles_here, grid_size=hg.GRID))
+            part_i, strip_i = shapely.STRtree(moved_strips).query(free, predicate="intersects")
+            order = np.lexsort((part_i, strip_i))
+            part_i, strip_i = part_i[order], strip_i[order]
+            owners, first, counts = np.unique(strip_i, return_index=True, return_counts=True)
+            spans = np.array([free[part_i[f]] if c == 1 else shapely.union_all(free[part_i[f:f + c]],
+                                                                                 grid_size=hg.GRID)
+                              for f, c in zip(first, counts)], dtype=object)
+            # padded so rounding never leaves a hairline of material along the strip joining the
+            # two tiles, then clipped by the tiles so no tile loses a corner
+            spans = shapely.buffer(spans, FEATURE_PAD_MM, join_style="mitre")
+            si, ti = tile_tree.query(spans, predicate="intersects")
+            rank = np.zeros(len(si), dtype=np.int64)
+            for r in range(1, len(si)):
+                rank[r] = rank[r - 1] + 1 if si[r] == si[r - 1] else 0
+            for r in range(int(rank.max(initial=-1)) + 1):
+                sel = rank == r
+                spans[si[sel]] = shapely.difference(spans[si[sel]], small[ti[sel]], grid_size=hg.GRID)
+            spans = shapely.normalize(spans)
+            for j, geom in zip(owners, spans):
                 for g in shapely.get_parts(geom):  # one entry per polygon (a span may come in parts)
-                    hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
-                                           "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist()})
+                    if g.geom_type == "Polygon" and not g.is_empty:
+                        hinge_features.append({"hinge": int(same[j]), "sheet": s + 1,
+                                               "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist()})
         else:
             for t in on:  # each part turned and moved as placed
                 ring = np.asarray(parts[t].exterior.coords)[:-1]

@@ -261,9 +261,14 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
     loss = _opening_loss(pieces, mat["min_web_mm"]) if len(pieces) else 0.0
     rb.add(f"sheet {k} min web {mat['min_web_mm']:g} mm", loss <= 1e-3, f"opening loses {loss:.2e} of a piece", loss)
     if len(holes):
-        diam = 2 * np.array([shapely.maximum_inscribed_circle(hl, mat["min_hole_mm"] / 50).length for hl in holes])
-        rb.add(f"sheet {k} min hole {mat['min_hole_mm']:g} mm", bool((diam >= mat["min_hole_mm"]).all()),
-               f"smallest hole fits a {diam.min():.3g} mm circle", float(diam.min()))
+        # a hole is cuttable when a disc of the minimum hole diameter fits inside it
+        core = shapely.buffer(holes, -0.5 * mat["min_hole_mm"] * (1 - 1e-6))
+        small = np.flatnonzero(shapely.is_empty(core))
+        detail = f"{len(holes)} holes, all fit a {mat['min_hole_mm']:g} mm disc"
+        if len(small):
+            d = 2 * shapely.maximum_inscribed_circle(holes[small[0]], 1e-3).length
+            detail = f"{len(small)} of {len(holes)} holes too small, e.g. one fits only a {d:.3g} mm disc"
+        rb.add(f"sheet {k} min hole {mat['min_hole_mm']:g} mm", len(small) == 0, detail, len(small))
     # labels inside tiles
     eng = layers.get("ENGRAVE", [])
     if eng:
