@@ -36,6 +36,7 @@ PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
 FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
 ID_FRAC = 0.45  # tile IDs fit the tile scaled by this about its centroid
 CORNER_FRAC = 0.5  # corner labels fit the triangle cut off by the chord at this fraction of the edges
+TAPE_REACH_MM = 8.0  # ... but no further than this along an edge: a tape piece covers a corner, not a tile
 
 
 def _incentre(tri: np.ndarray) -> np.ndarray:
@@ -180,13 +181,18 @@ def _check_webs(pieces, mat: Material, kind: str, scale: float, scaled: bool) ->
             + ("" if kind != "ligament" else ", or use a smaller --gap"))
 
 
+def _reach(q: np.ndarray, q1: np.ndarray, frac: float) -> np.ndarray:
+    """Fraction of the edge q -> q1 covered by a corner's tape: ``frac``, at most TAPE_REACH_MM."""
+    return np.minimum(frac, TAPE_REACH_MM / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300))
+
+
 def _tape_marks(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, margin: float) -> np.ndarray:
     """A chord across each hinged corner, ``margin`` inside both tile edges: where the tape ends."""
     q = Q[tiles, ks]
     q1 = Q[tiles, (ks + 1) % 4]
     q0 = Q[tiles, (ks + 3) % 4]
-    a = q + frac * (q1 - q)
-    b = q + frac * (q0 - q)
+    a = q + _reach(q, q1, frac)[:, None] * (q1 - q)
+    b = q + _reach(q, q0, frac)[:, None] * (q0 - q)
     chord = b - a
     L = np.linalg.norm(chord, axis=1)
     u = chord / np.maximum(L, 1e-300)[:, None]
@@ -421,8 +427,9 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         if c_tiles:
             ct, ck = np.array(c_tiles), np.array(c_k)
             q = Q[ct, ck]
-            tri = np.stack([q, q + CORNER_FRAC * (Q[ct, (ck + 1) % 4] - q),
-                            q + CORNER_FRAC * (Q[ct, (ck + 3) % 4] - q)], 1)
+            q1, q0 = Q[ct, (ck + 1) % 4], Q[ct, (ck + 3) % 4]
+            tri = np.stack([q, q + _reach(q, q1, CORNER_FRAC)[:, None] * (q1 - q),
+                            q + _reach(q, q0, CORNER_FRAC)[:, None] * (q0 - q)], 1)
             anchor = _incentre(tri)
             hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
             omitted += int((hc <= 0).sum())
