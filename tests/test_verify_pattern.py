@@ -6,6 +6,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.sparse.csgraph import breadth_first_order
 
 from fabkiri.mechanics import adopt_state_labels, with_contracted_states
@@ -199,3 +201,10 @@ def test_report_serialises_and_lists_failures_first():
     assert marks[: len(rep.failed())] == ["FAIL"] * len(rep.failed())
     assert "FAIL" not in marks[len(rep.failed()):]
     assert lines[-1].startswith("verdict: FAIL")
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(1, 6), st.integers(1, 6), st.floats(5.0, 85.0), st.floats(1.0, 40.0))
+def test_every_standard_lattice_passes(rows, cols, angle, size):
+    rep = verify_pattern(standard_pattern(rows, cols, tile_size=size, angle_deg=angle))
+    assert rep.ok, rep.to_text()

@@ -575,16 +575,34 @@ def _mirror(R: np.ndarray) -> np.ndarray:
 
 
 def _descriptor(C: np.ndarray, L: float) -> np.ndarray:
-    """Rigid-motion and corner-shift invariant shape key of quads (reflections too)."""
-    return np.concatenate([np.sort(geometry.edge_lengths(C), axis=1),
-                           np.sort(geometry.corner_angles(C), axis=1) * L], axis=1)
+    """Rigid-motion and corner-shift invariant shape key of quads.
+
+    Sorted edge lengths and angles, plus a chirality term Σ l_k (θ_{k+1} - θ_k)
+    (each edge times the turn from its start to its end corner), which changes
+    sign under a reflection, so mirror-image tiles get different keys.
+    """
+    lengths = geometry.edge_lengths(C)
+    angles = geometry.corner_angles(C)
+    chiral = (lengths * (np.roll(angles, -1, axis=1) - angles)).sum(axis=1, keepdims=True)
+    return np.concatenate([np.sort(lengths, axis=1), np.sort(angles, axis=1) * L, chiral], axis=1)
+
+
+def _shape_classes(D: np.ndarray, L: float) -> np.ndarray:
+    """Class label of every design quad: tiles whose shape keys agree to 1e-6 of
+    the tile size share one (a tile pair split across a rounding boundary just
+    forms two neighbouring classes, both among a cut tile's candidates)."""
+    key = np.round(_descriptor(D, L) / (1e-6 * L)).astype(np.int64)
+    return np.unique(key, axis=0, return_inverse=True)[1].ravel()
 
 
 def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Assign recovered quads ``R`` to design quads ``D`` one-to-one by shape.
 
     Returns ``assign`` (len R, design index or -1), residual and corner shift.
-    Candidates are the k nearest design shapes; assignment is greedy by residual.
+    Congruent design tiles form one class (a lattice of identical tiles is one
+    class, matched in linear time); each recovered quad is fitted to the k
+    nearest classes and classes are filled greedily by residual. The residual
+    and corner shift are then recomputed against the member actually assigned.
     """
     n = len(R)
     assign = np.full(n, -1)
@@ -592,32 +610,36 @@ def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[
     shift = np.zeros(n, dtype=np.int64)
     if n == 0 or len(D) == 0:
         return assign, resid, shift
-    k = min(k, len(D))
-    tree = cKDTree(_descriptor(D, L))
-    _, cand = tree.query(_descriptor(R, L), k=k)
-    cand = cand.reshape(n, k)
-    ri = np.repeat(np.arange(n), k)
-    di = cand.ravel()
-    res, sh = _shift_fit(D[di], R[ri])
-    order = np.argsort(res, kind="stable")
+    label = _shape_classes(D, L)
+    reps = np.unique(label, return_index=True)[1]  # first member of every class
+    members = {c: list(np.flatnonzero(label == c)[::-1]) for c in range(len(reps))}
+    kk = min(k, len(reps))
+    _, cand = cKDTree(_descriptor(D[reps], L)).query(_descriptor(R, L), k=kk)
+    cand = cand.reshape(n, kk)
+    ri = np.repeat(np.arange(n), kk)
+    ci = cand.ravel()
+    res, _ = _shift_fit(D[reps[ci]], R[ri])
+    for m in np.argsort(res, kind="stable"):
+        r, c = ri[m], ci[m]
+        if assign[r] < 0 and members[c]:
+            assign[r] = members[c].pop()
+    # whatever is left (its nearest classes were full) pairs up by brute force
     used = np.zeros(len(D), dtype=bool)
-    for m in order:
-        r, d = ri[m], di[m]
-        if assign[r] < 0 and not used[d]:
-            assign[r], resid[r], shift[r] = d, res[m], sh[m]
-            used[d] = True
-    # whatever is left (more tiles congruent than k) pairs up by brute force
+    used[assign[assign >= 0]] = True
     left_r = np.flatnonzero(assign < 0)
     left_d = np.flatnonzero(~used)
     if len(left_r) and len(left_d):
         rr = np.repeat(left_r, len(left_d))
         dd = np.tile(left_d, len(left_r))
-        res, sh = _shift_fit(D[dd], R[rr])
+        res, _ = _shift_fit(D[dd], R[rr])
         for m in np.argsort(res, kind="stable"):
             r, d = rr[m], dd[m]
             if assign[r] < 0 and not used[d]:
-                assign[r], resid[r], shift[r] = d, res[m], sh[m]
+                assign[r] = d
                 used[d] = True
+    got = np.flatnonzero(assign >= 0)
+    if len(got):
+        resid[got], shift[got] = _shift_fit(D[assign[got]], R[got])
     return assign, resid, shift
 
 
@@ -788,6 +810,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     cut_shapes = np.full((T, 4, 2), np.nan)
     resid_pos = np.full(T, np.nan)
     extra = 0
+
     def closed(s: int) -> np.ndarray:
         Y = pattern.contracted.get(s)
         return (contract(pattern, s).corners if Y is None else Y) * al.scale

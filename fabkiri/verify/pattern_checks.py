@@ -136,6 +136,27 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
     return out
 
 
+def topology_checks(pattern: Pattern) -> list[Check]:
+    """Counts of spec §10.2: one hole per independent cycle of the tile graph,
+    every hinge a corner of one or two holes."""
+    top = pattern.topology
+    T, H, K = top.n_tiles, top.n_hinges, top.n_holes
+    expected = H - T + 1
+    holes_per_hinge = (top.gap_face >= 0).sum(axis=1)
+    orphan = np.flatnonzero(holes_per_hinge == 0) if K else np.zeros(0, dtype=np.int64)
+    bad = abs(K - expected) + len(orphan)
+    lat = pattern.lattice or {}
+    detail = f"{T} tiles, {H} hinges, {len(top.free_nodes)} free corners, {K} holes (cycles: {expected})"
+    if lat.get("rows") and lat.get("cols"):
+        m, n = int(lat["rows"]), int(lat["cols"])
+        bad += abs(K - (m - 1) * (n - 1)) + abs(len(top.free_nodes) - 2 * (m + n))
+        detail += f"; a {m}x{n} lattice expects {(m - 1) * (n - 1)} holes and {2 * (m + n)} free corners"
+    if len(orphan):
+        detail += f"; hinges bordering no hole: {orphan[:10].tolist()}"
+    return [Check("topology", ok=bad == 0, value=int(bad), tol=0, unit="count", group="tiles",
+                  worst=f"hinge {int(orphan[0])}" if len(orphan) else None, detail=detail)]
+
+
 def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances,
                         closure: np.ndarray | None = None) -> list[Check]:
     """Closedness and compactness of one closed state ``Y`` (T, 4, 2)."""
@@ -332,8 +353,11 @@ def rigid_path(pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray) -> tuple[np
     X = pattern.corners()
     rot, _ = geom.tile_kabsch(Y1, X)  # state 1 -> deployed, per tile
     color = top.tile_color
-    m = [np.angle(np.exp(1j * rot[color == c]).mean()) for c in (0, 1)]
-    eps0 = 1.0 if geometry.wrap_angle(m[0] - m[1]) >= 0 else -1.0
+    if (color == 1).any():
+        m = [np.angle(np.exp(1j * rot[color == c]).mean()) for c in (0, 1)]
+        eps0 = 1.0 if geometry.wrap_angle(m[0] - m[1]) >= 0 else -1.0
+    else:  # a single tile: nothing to turn against
+        eps0 = 1.0
     eps = np.where(color == 0, eps0, -eps0)
     S = len(omegas)
     phi = omegas[:, None] * eps[None, :]  # (S, T)
@@ -458,7 +482,7 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
                  meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": tol.tile_size,
                        "tier": tol.tier, "tiles": pattern.n_tiles, "holes": pattern.topology.n_holes,
                        "rigid_claimed": claimed})
-    for c in tile_checks(pattern, tol):
+    for c in topology_checks(pattern) + tile_checks(pattern, tol):
         rep.add(c)
     states = {}
     for s in STATES:
