@@ -382,3 +382,34 @@ def test_cli_material_overrides_reach_the_manifest(run_cli, tmp_path):
     assert man["material"]["kerf_mm"] == 0.25 and man["material"]["cut_speed_mm_s"] == 40.0
     assert man["parameters"]["colors"] == "ponoko" and not (out / "standard-8x8.png").exists()
     assert 'stroke="#0000FF"' in (out / "standard-8x8.svg").read_text().split('id="CUT"')[1][:200]
+
+
+def test_cli_failed_readback_writes_nothing(run_cli, tmp_path, monkeypatch):
+    from fabkiri.fabricate import readback
+
+    def broken(pattern, result, folder):
+        return {"ok": False, "available": True, "files": {"dxf": {"ok": False, "checks": [
+            {"name": "layout: tiles recovered", "ok": False}]}}}
+
+    monkeypatch.setattr(readback, "run_verifier", broken)
+    out = tmp_path / "out"
+    code, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out)
+    assert code == 1 and "verification failed, nothing written" in err and "tiles recovered" in err
+    assert len(err.strip().splitlines()) == 1
+    _no_output(out)
+
+
+def test_png_preview_shows_every_sheet():
+    from io import BytesIO
+
+    from PIL import Image
+
+    p = std(6, 6, size=20.0)
+    one = cut(p, reference_mm=0.0)
+    two = cut(p, sheet=(90.0, 80.0), reference_mm=0.0)
+    a = Image.open(BytesIO(one.files["p.png"]))
+    b = Image.open(BytesIO(two.files["p.png"]))
+    assert a.format == b.format == "PNG"
+    assert a.size == (1200, 800)  # 600 x 400 mm at 2 px/mm
+    assert b.size[0] > b.size[1] and len(two.sheets) >= 2  # sheets side by side
+    assert len(np.unique(np.asarray(a.convert("RGB")).reshape(-1, 3), axis=0)) > 2  # drawn on the white page
