@@ -37,15 +37,14 @@ def cut(pattern, material="acrylic-3", **kw):
     return cut_pattern(pattern, CutOptions(material=load_material(material), **kw))
 
 
-def assert_verified(pattern, result, svg_ok=True):
+def assert_verified(pattern, result):
     rb = verify_result(pattern, result)
     bad = [(c.name, c.detail) for c in rb.failed()]
     assert not bad, bad
     v = rb.verifier
     assert v["available"], v
     assert v["files"]["dxf"]["ok"], [c for c in v["files"]["dxf"]["checks"] if not c["ok"]]
-    if svg_ok:
-        assert v["files"]["svg"]["ok"], [c for c in v["files"]["svg"].get("checks", []) if not c["ok"]]
+    assert v["files"]["svg"]["ok"], [c for c in v["files"]["svg"].get("checks", []) if not c["ok"]]
     return rb
 
 
@@ -163,10 +162,7 @@ def test_standard_pattern_every_kind_and_preset(kind, material):
 def test_solver_designs_8x8(pattern, kind, material):
     p = read_pattern(PATTERNS / f"{pattern}.json")
     r = cut(p, material, hinge=kind, width=300.0, formats=("dxf", "svg"))
-    # fabkiri.verify reads SVG through svgelements' rounded mm constant (~2e-4 mm off at 300 mm); ligament
-    # recovery subtracts strips from the material and is the one kind that notices, so only the DXF is
-    # held to the verifier there (see the report); the self checks still compare SVG and DXF to 1e-6 mm.
-    assert_verified(p, r, svg_ok=kind != "ligament")
+    assert_verified(p, r)
 
 
 @pytest.mark.parametrize("kind,material,extra", [("tape", "plywood-3", {}), ("separate", "plywood-3", {}),
@@ -180,7 +176,7 @@ def test_solver_design_32x32(kind, material, extra):
     r = cut_pattern(p, CutOptions(material=mat, hinge=kind, width=1100.0, sheet=(1200.0, 1200.0),
                                   formats=("dxf", "svg"), stem="c32", labels=kind != "separate"))
     assert r.manifest["scale"] > 10 and (kind == "separate" or len(r.sheets) == 1)
-    assert_verified(p, r, svg_ok=kind != "ligament")
+    assert_verified(p, r)
 
 
 def test_unconverged_solver_design_is_refused():
