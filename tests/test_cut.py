@@ -332,6 +332,17 @@ def test_cli_refuses_a_pattern_that_does_not_close(run_cli, tmp_path):
     assert code == 1 and "does not close" in err and "--force" in err
     assert len(err.strip().splitlines()) == 1
     _no_output(out)
+    # --force cuts it anyway as separate tiles (in place its tiles would overlap: the writer's own checks
+    # still refuse that); the manifest says what failed
+    code, _, err = run_cli("cut", f, "-o", out, "--force")
+    assert code == 1 and "nothing written" in err
+    _no_output(out)
+    code, _, err = run_cli("cut", f, "-o", out, "--force", "--hinge", "separate")
+    assert code == 0, err
+    assert "--force" in err
+    man = json.loads((out / "manifest.json").read_text())
+    assert not man["pattern_verification"]["ok"] and man["parameters"]["force"]
+    assert all(c["ok"] for c in man["verification"]["self_checks"])
 
 
 @pytest.mark.parametrize("args,code,words", [

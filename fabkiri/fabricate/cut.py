@@ -145,14 +145,10 @@ def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
     if len(bad):
         raise FabricationError(f"tile {int(bad[0])} is self-intersecting (a bow-tie) in closed state {state}; "
                                "it cannot be cut")
-    area = shapely.area(polys)
     cw = np.flatnonzero(shapely.is_ccw(shapely.get_exterior_ring(polys)) == False)  # noqa: E712
     if len(cw):
         raise FabricationError(f"tile {int(cw[0])} is mirrored (clockwise) in closed state {state}")
-    union = shapely.union_all(polys, grid_size=hg.GRID).area
-    overlap = float(area.sum() - union)
-    if overlap > 1e-4 * float(area.sum()):
-        raise CheckFailed(f"tiles overlap by {overlap:.4g} mm² in closed state {state}; nothing cut")
+    # overlaps are the verifier gate's business ("state N: no overlaps"), checked before this
     return polys
 
 

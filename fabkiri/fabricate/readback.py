@@ -346,15 +346,18 @@ def verify_result(pattern: Pattern, result: CutResult, *, use_verifier: bool = T
     return rb
 
 
-def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True
-                   ) -> tuple[Readback, list[Path]]:
+def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True,
+                   force: bool = False) -> tuple[Readback, list[Path]]:
     """Verify, then write every file (manifest with the verification report) all-or-nothing.
 
-    Raises :class:`CheckFailed` naming the failed checks, writing nothing.
+    Raises :class:`CheckFailed` naming the failed checks, writing nothing. With
+    ``force`` (a pattern cut although it does not close) the verifier's verdict
+    is recorded in the manifest and returned but does not stop the writing;
+    the writer's own checks on the files still do.
     """
     rb = verify_result(pattern, result, use_verifier=use_verifier)
     result.manifest["verification"] = rb.to_dict()
-    if not rb.ok:
+    if not rb.ok and not (force and not rb.failed()):
         failed = [f"{c.name} ({c.detail})" for c in rb.failed()]
         if rb.verifier is not None and not rb.verifier.get("ok"):
             v = rb.verifier
