@@ -411,3 +411,26 @@ def test_png_preview_shows_every_sheet():
     assert a.size == (1200, 800)  # 600 x 400 mm at 2 px/mm
     assert b.size[0] > b.size[1] and len(two.sheets) >= 2  # sheets side by side
     assert len(np.unique(np.asarray(a.convert("RGB")).reshape(-1, 3), axis=0)) > 2  # drawn on the white page
+
+
+def test_cli_material_file_with_kerf_not_below_web(run_cli, tmp_path):
+    data = json.loads((REPO / "templates" / "materials" / "pp-0.5.json").read_text())
+    data.update(name="bad-pp", kerf_mm=0.5, min_web_mm=0.4)
+    f = tmp_path / "bad-pp.json"
+    f.write_text(json.dumps(data))
+    out = tmp_path / "out"
+    code, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "--material", f, "-o", out)
+    assert code == 2 and "bad-pp" in err and "not smaller than the minimum web" in err
+    assert len(err.strip().splitlines()) == 1
+    _no_output(out)
+
+
+@settings(max_examples=25, deadline=None)
+@given(rows=st.integers(1, 4), cols=st.integers(1, 4), angle=st.floats(15, 75), size=st.floats(15, 40),
+       state=st.sampled_from([1, 2]), case=st.sampled_from([("tape", "acrylic-3"), ("ligament", "pp-0.5"),
+                                                           ("separate", "plywood-3"), ("ligament", "felt-2")]))
+def test_any_standard_pattern_cuts_and_verifies(rows, cols, angle, size, state, case):
+    kind, material = case
+    p = std(rows, cols, angle, size)
+    r = cut(p, material, hinge=kind, state=state, formats=("dxf", "svg"))
+    assert_verified(p, r)
