@@ -311,13 +311,6 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
     out = {"ok": True, "available": True, "files": {}}
     tol = result.manifest["tolerance_mm"]
     manifest = json.loads((folder / "manifest.json").read_text("utf-8"))
-    scale = float(manifest.get("scale", 1.0))
-    if scale != 1.0:
-        # verify against the pattern at the file's scale: the same check, every length in file mm
-        # (fabkiri.verify divides the linework by the scale before undoing the kerf offset, which is
-        # in file mm, so a scaled manifest would be mis-read)
-        pattern = scaled_pattern(pattern, scale)
-        manifest = {**manifest, "scale": 1.0}
     for key in ("dxf", "svg"):  # the verifier reads every sheet of one format from the first
         names = [row[key] for row in result.manifest["sheets"] if row[key]]
         if not names:
