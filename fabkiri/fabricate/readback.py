@@ -294,14 +294,6 @@ def _relative(value, prefix: str):
     return value
 
 
-def scaled_pattern(pattern: Pattern, scale: float) -> Pattern:
-    """The pattern with every length multiplied by ``scale``."""
-    from dataclasses import replace
-
-    return replace(pattern, nodes=pattern.nodes * scale,
-                   contracted={k: v * scale for k, v in pattern.contracted.items()})
-
-
 def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str, Any]:
     """:func:`fabkiri.verify.verify_layout` on every written DXF and SVG, both closed states."""
     try:
