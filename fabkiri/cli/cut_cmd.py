@@ -57,16 +57,18 @@ def cmd_cut(args: argparse.Namespace) -> int:
     result = cut_pattern(pattern, options)
     from ..fabricate.readback import write_verified
 
-    rb, written = write_verified(pattern, result, out, use_verifier=not args.no_verify)
+    rb, written = write_verified(pattern, result, out, use_verifier=not args.no_verify, force=args.force)
     for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)
+    if not rb.ok:
+        print("warning: written with --force although the verifier failed (see manifest.json)", file=sys.stderr)
     man = result.manifest
     total = sum(s["cut_length_mm"] for s in man["sheets"])
     secs = sum(s["cut_time_s"] for s in man["sheets"])
     print(f"wrote {len(written)} files to {out}: {len(man['sheets'])} sheet(s), {man['hinge']} hinges, "
           f"{material.name}, cut {total / 1000:.2f} m (~{secs / 60:.1f} min); "
           f"{len(rb.checks)} read-back checks passed"
-          + ("" if args.no_verify else ", verifier passed"), file=sys.stderr)
+          + ("" if args.no_verify or not rb.ok else ", verifier passed"), file=sys.stderr)
     return 0
 
 

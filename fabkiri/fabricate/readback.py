@@ -261,9 +261,14 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
     loss = _opening_loss(pieces, mat["min_web_mm"]) if len(pieces) else 0.0
     rb.add(f"sheet {k} min web {mat['min_web_mm']:g} mm", loss <= 1e-3, f"opening loses {loss:.2e} of a piece", loss)
     if len(holes):
-        diam = 2 * np.array([shapely.maximum_inscribed_circle(hl, mat["min_hole_mm"] / 50).length for hl in holes])
-        rb.add(f"sheet {k} min hole {mat['min_hole_mm']:g} mm", bool((diam >= mat["min_hole_mm"]).all()),
-               f"smallest hole fits a {diam.min():.3g} mm circle", float(diam.min()))
+        # a hole is cuttable when a disc of the minimum hole diameter fits inside it
+        core = shapely.buffer(holes, -0.5 * mat["min_hole_mm"] * (1 - 1e-6))
+        small = np.flatnonzero(shapely.is_empty(core))
+        detail = f"{len(holes)} holes, all fit a {mat['min_hole_mm']:g} mm disc"
+        if len(small):
+            d = 2 * shapely.maximum_inscribed_circle(holes[small[0]], 1e-3).length
+            detail = f"{len(small)} of {len(holes)} holes too small, e.g. one fits only a {d:.3g} mm disc"
+        rb.add(f"sheet {k} min hole {mat['min_hole_mm']:g} mm", len(small) == 0, detail, len(small))
     # labels inside tiles
     eng = layers.get("ENGRAVE", [])
     if eng:
@@ -289,14 +294,6 @@ def _relative(value, prefix: str):
     return value
 
 
-def scaled_pattern(pattern: Pattern, scale: float) -> Pattern:
-    """The pattern with every length multiplied by ``scale``."""
-    from dataclasses import replace
-
-    return replace(pattern, nodes=pattern.nodes * scale,
-                   contracted={k: v * scale for k, v in pattern.contracted.items()})
-
-
 def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str, Any]:
     """:func:`fabkiri.verify.verify_layout` on every written DXF and SVG, both closed states."""
     try:
@@ -306,13 +303,6 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
     out = {"ok": True, "available": True, "files": {}}
     tol = result.manifest["tolerance_mm"]
     manifest = json.loads((folder / "manifest.json").read_text("utf-8"))
-    scale = float(manifest.get("scale", 1.0))
-    if scale != 1.0:
-        # verify against the pattern at the file's scale: the same check, every length in file mm
-        # (fabkiri.verify divides the linework by the scale before undoing the kerf offset, which is
-        # in file mm, so a scaled manifest would be mis-read)
-        pattern = scaled_pattern(pattern, scale)
-        manifest = {**manifest, "scale": 1.0}
     for key in ("dxf", "svg"):  # the verifier reads every sheet of one format from the first
         names = [row[key] for row in result.manifest["sheets"] if row[key]]
         if not names:
@@ -341,15 +331,18 @@ def verify_result(pattern: Pattern, result: CutResult, *, use_verifier: bool = T
     return rb
 
 
-def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True
-                   ) -> tuple[Readback, list[Path]]:
+def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True,
+                   force: bool = False) -> tuple[Readback, list[Path]]:
     """Verify, then write every file (manifest with the verification report) all-or-nothing.
 
-    Raises :class:`CheckFailed` naming the failed checks, writing nothing.
+    Raises :class:`CheckFailed` naming the failed checks, writing nothing. With
+    ``force`` (a pattern cut although it does not close) the verifier's verdict
+    is recorded in the manifest and returned but does not stop the writing;
+    the writer's own checks on the files still do.
     """
     rb = verify_result(pattern, result, use_verifier=use_verifier)
     result.manifest["verification"] = rb.to_dict()
-    if not rb.ok:
+    if not rb.ok and not (force and not rb.failed()):
         failed = [f"{c.name} ({c.detail})" for c in rb.failed()]
         if rb.verifier is not None and not rb.verifier.get("ok"):
             v = rb.verifier
