@@ -25,9 +25,10 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..templates import template_dir
 
 SIDES = ("B", "R", "T", "L")  # CCW order of the arcs; side index 0..3
-TEMPLATE_DIR = Path(__file__).resolve().parents[2] / "templates" / "targets"
+TEMPLATE_DIR = template_dir("targets")
 DEFAULT_SIZE = 100.0  # mm, larger bounding-box dimension of a named target
 
 

@@ -15,10 +15,11 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import FabricationError, InputError
+from ..templates import template_dir
 
 HINGE_KINDS = ("tape", "ligament", "separate")
 COLOR_PRESETS = ("default", "boxes", "ponoko")
-MATERIALS_DIR = Path(__file__).resolve().parents[2] / "templates" / "materials"
+MATERIALS_DIR = template_dir("materials")
 
 
 @dataclass(frozen=True)

@@ -15,8 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import FabricationError, InputError
+from ..templates import template_dir
 
-PRINTERS_DIR = Path(__file__).resolve().parents[2] / "templates" / "printers"
+PRINTERS_DIR = template_dir("printers")
 DEFAULT_PRINTER = "prusa-mk4"
 
 
