@@ -258,3 +258,17 @@ def test_committed_example_patterns_are_valid():
         p = read_pattern(TEMPLATES / "patterns" / name)
         assert p.design["valid"] is True and p.design["report"]["status"] == "converged"
         assert p.design["report"]["max_equality_residual"] <= 1e-10
+
+
+def test_overlap_check_survives_near_degenerate_shared_edge():
+    """Two closed-state tiles sharing an edge at x ≈ -4e-10: GEOS alone reports a full overlap."""
+    from fabkiri.cli.design_cmd import overlapping_tiles
+
+    a = [[-3.9277336938425833e-10, 1.6579325376061398], [-4.133902109515475e-10, 5.922048704407096],
+         [-4.1397303240137155, 5.922048704418469], [-4.020767288704813, 1.4778850882464676]]
+    b = [[-4.133902109515475e-10, 5.922048704407096], [-3.9277336938425833e-10, 1.6579325376061402],
+         [4.02076728792443, 1.4778850882086814], [4.139730323186935, 5.922048704395724]]
+    assert overlapping_tiles(np.array([a, b]), 1e-9 * 17.0, 4e-9) == []
+    # a real overlap is still found
+    c = np.array(b) - [0.5, 0.0]
+    assert overlapping_tiles(np.array([a, c]), 1e-9 * 17.0, 4e-9) == [(0, 1)]
