@@ -344,11 +344,16 @@ def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None
         if hard is not None and np.abs(r).max(initial=0.0) <= tol_inf:
             return x.reshape(shape), it - 1
         dx = prob.normal.solve(J, r, mu, rtol=1e-8 if hard is None else 1e-13)
-        xn = x + dx
+        # step limiting: halve the step until it creates no new inequality violation
+        for _ in range(6):
+            xn = x + dx
+            gv = _ineq_values(prob, xn.reshape(shape))
+            gviol_n = max(0.0, -gv.min(initial=0.0))
+            if gviol_n <= gviol + 1e-15:
+                break
+            dx = 0.5 * dx
         rn, Jn = _stacked(prob, xn.reshape(shape), rho, hard)
         cn = 0.5 * float(rn @ rn)
-        gv = _ineq_values(prob, xn.reshape(shape))
-        gviol_n = max(0.0, -gv.min(initial=0.0))
         Jdx = J @ dx
         pred = -(float(r @ Jdx) + 0.5 * float(Jdx @ Jdx))
         ratio = (cost - cn) / pred if pred > 0 else -1.0
