@@ -272,3 +272,23 @@ def test_overlap_check_survives_near_degenerate_shared_edge():
     # a real overlap is still found
     c = np.array(b) - [0.5, 0.0]
     assert overlapping_tiles(np.array([a, c]), 1e-9 * 17.0, 4e-9) == [(0, 1)]
+
+
+def test_cli_rectangular_closed_state(tmp_path, run_cli):
+    """`2:rect=1.5`: boundary angle sums π (π/2 at corners) and width/height 1.5 in closed state 2."""
+    out = tmp_path / "r.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "2:rect=1.5",
+                                "--json", "-o", out)
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["residuals"]["rectangle_2"] <= 1e-10 and rep["residuals"]["ratio_2"] <= 1e-10
+    c = read_pattern(out).contracted[2].reshape(-1, 2)
+    # the closed outline is a rectangle: its convex hull has 4 corners and width/height 1.5
+    import shapely
+
+    hull = shapely.MultiPoint(c).convex_hull
+    rect = shapely.minimum_rotated_rectangle(hull)
+    assert hull.area == pytest.approx(rect.area, rel=1e-8)
+    xy = np.asarray(rect.exterior.coords)[:4]
+    sides = sorted(np.linalg.norm(np.roll(xy, -1, 0) - xy, axis=1))
+    assert sides[2] / sides[0] == pytest.approx(1.5, rel=1e-8)
