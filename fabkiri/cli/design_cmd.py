@@ -27,6 +27,7 @@ from ..pattern.model import Pattern
 from .pattern_cmds import parse_tiles
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
+AUTO_INITS = ("rescaled", "standard")  # tried in turn when --init is not given
 
 
 def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
@@ -118,7 +119,40 @@ def cmd_design(args: argparse.Namespace) -> int:
         req.name = f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if args.rigid else ''}"
     req.validate()
     big = rows * cols >= 256
-    result = design(req, progress=big or args.verbose)
+    # without an explicit --init, a design that fails a check is retried from the next guess
+    inits = [args.init] if args.init else list(AUTO_INITS)
+    attempts = []
+    best = None
+    for init in inits:
+        req.init = init
+        result = design(req, progress=big or args.verbose)
+        outcome = _check(result, contracted, args)
+        attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
+                         "time_s": outcome[1]["time_s"]})
+        if best is None or (outcome[3] and not best[3]) or (
+                outcome[3] == best[3] and len(outcome[2]) < len(best[2])):
+            best = outcome
+        if outcome[3]:
+            break
+        if len(inits) > 1 and init != inits[-1]:
+            print(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying", file=sys.stderr)
+    pattern, report, problems, valid, contracted_states = best
+    report["attempts"] = attempts
+    report["time_s_total"] = float(sum(a["time_s"] for a in attempts))
+    meta = dict(pattern.design or {})
+    meta["report"] = report
+    meta["valid"] = bool(valid)
+    pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
+                      name=pattern.name, lattice=pattern.lattice, design=meta)
+    write_pattern(pattern, args.output)
+    if args.json:
+        print(json.dumps(_jsonable(report), indent=2, sort_keys=True))
+    _summary(args.output, report, valid)
+    return 0 if valid else 1
+
+
+def _check(result, contracted, args):
+    """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
     pattern = result.pattern
     report = dict(result.report)
     size = pattern.tile_size
@@ -137,7 +171,8 @@ def cmd_design(args: argparse.Namespace) -> int:
         ov = overlapping_tiles(corners, tol_area, CLOSURE_TOL * size)
         checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
         if ov:
-            problems.append(f"{len(ov)} overlapping tile pairs in the {label} state (first {ov[0]})")
+            where = "the deployed state" if label == "deployed" else label
+            problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
     if args.rigid or args.holes == "parallelogram":
         from ..pattern.residuals import hinge_sums
 
@@ -157,16 +192,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     if problems:
         report["status"] = "unconverged"
         report["problems"] = problems
-    meta = dict(pattern.design or {})
-    meta["report"] = report
-    meta["valid"] = bool(valid)
-    pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
-                      name=pattern.name, lattice=pattern.lattice, design=meta)
-    write_pattern(pattern, args.output)
-    if args.json:
-        print(json.dumps(_jsonable(report), indent=2, sort_keys=True))
-    _summary(args.output, report, valid)
-    return 0 if valid else 1
+    return pattern, report, problems, valid, contracted_states
 
 
 def _jsonable(v):
@@ -224,8 +250,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
-    p.add_argument("--init", choices=["standard", "rescaled", "conformal"], default="rescaled",
-                   help="initial guess (default rescaled: the standard pattern scaled to the target area)")
+    p.add_argument("--init", choices=["standard", "rescaled", "conformal"],
+                   help="initial guess; by default rescaled (the standard pattern scaled to the target area), "
+                        "then standard if that design fails a check")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
