@@ -292,3 +292,29 @@ def test_cli_rectangular_closed_state(tmp_path, run_cli):
     xy = np.asarray(rect.exterior.coords)[:4]
     sides = sorted(np.linalg.norm(np.roll(xy, -1, 0) - xy, axis=1))
     assert sides[2] / sides[0] == pytest.approx(1.5, rel=1e-8)
+
+
+def test_cli_svg_target_and_conformal_init(tmp_path, run_cli):
+    svg = tmp_path / "blob.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 50 5 C 80 5 95 30 95 50 C 95 75 75 95 '
+                   '50 95 C 25 95 5 75 5 50 C 5 25 20 5 50 5 Z"/></svg>')
+    out = tmp_path / "s.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", svg, "--size", "60", "--rigid",
+                                "--init", "conformal", "--json", "-o", out)
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["attempts"][0]["init"] == "conformal" and rep["max_equality_residual"] <= 1e-10
+    assert read_pattern(out).design["target"]["size_mm"] == pytest.approx(60.0, rel=1e-6)
+
+
+def test_conformal_guess_refuses_to_fold(tmp_path, run_cli):
+    out = tmp_path / "h.json"
+    code, _, err = run_cli("design", "--tiles", "16x16", "--target", "heart", "--init", "conformal", "-o", out)
+    assert code == 2 and "folds" in err and not out.exists()
+
+
+def test_overlap_check_reports_self_intersecting_tiles():
+    from fabkiri.cli.design_cmd import overlapping_tiles
+
+    bowtie = np.array([[[0, 0], [1, 1], [1, 0], [0, 1]], [[2, 0], [3, 0], [3, 1], [2, 1]]], float)
+    assert overlapping_tiles(bowtie, 1e-9, 1e-9) == [(0, 0)]

@@ -14,12 +14,13 @@ import argparse
 import json
 import re
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from ..design.solve import DesignRequest, design
 from ..design.targets import Target, load_target
-from ..errors import InputError
+from ..errors import InputError, SolveError
 from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.io import write_pattern
@@ -27,7 +28,7 @@ from ..pattern.model import Pattern
 from .pattern_cmds import parse_tiles
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
-AUTO_INITS = ("rescaled", "standard")  # tried in turn when --init is not given
+AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
 
 
 def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
@@ -60,15 +61,19 @@ def overlapping_tiles(corners: np.ndarray, tol_area: float, grid: float) -> list
     import shapely
 
     polys = shapely.polygons(corners)
-    tree = shapely.STRtree(polys)
-    a, b = tree.query(polys, predicate="intersects")
+    valid = shapely.is_valid(polys)
+    # a self-intersecting tile overlaps itself: report it as the pair (t, t)
+    out = [(int(t), int(t)) for t in np.flatnonzero(~valid)]
+    idx = np.flatnonzero(valid)
+    tree = shapely.STRtree(polys[idx])
+    a, b = tree.query(polys[idx], predicate="intersects")
     keep = a < b
-    a, b = a[keep], b[keep]
-    if len(a) == 0:
-        return []
-    areas = shapely.area(shapely.intersection(polys[a], polys[b], grid_size=grid))
-    bad = areas > tol_area
-    return list(zip(a[bad].tolist(), b[bad].tolist()))
+    a, b = idx[a[keep]], idx[b[keep]]
+    if len(a):
+        areas = shapely.area(shapely.intersection(polys[a], polys[b], grid_size=grid))
+        bad = areas > tol_area
+        out += list(zip(a[bad].tolist(), b[bad].tolist()))
+    return out
 
 
 def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
@@ -99,6 +104,9 @@ def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarra
 
 def cmd_design(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
+    out_dir = Path(args.output).parent
+    if not out_dir.is_dir():  # fail before a long solve, not after
+        raise InputError(f"output folder {out_dir} does not exist")
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     target = load_target(args.target, args.size) if args.target else None
@@ -125,7 +133,14 @@ def cmd_design(args: argparse.Namespace) -> int:
     best = None
     for init in inits:
         req.init = init
-        result = design(req, progress=big or args.verbose)
+        try:
+            result = design(req, progress=big or args.verbose)
+        except SolveError as exc:
+            if len(inits) == 1:
+                raise
+            print(f"fabkiri: no {init} initial guess ({exc}); trying the next one", file=sys.stderr)
+            attempts.append({"init": init, "status": "skipped", "problems": [str(exc)], "time_s": 0.0})
+            continue
         outcome = _check(result, contracted, args)
         attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
                          "time_s": outcome[1]["time_s"]})
@@ -136,6 +151,8 @@ def cmd_design(args: argparse.Namespace) -> int:
             break
         if len(inits) > 1 and init != inits[-1]:
             print(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying", file=sys.stderr)
+    if best is None:
+        raise SolveError("no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts))
     pattern, report, problems, valid, contracted_states = best
     report["attempts"] = attempts
     report["time_s_total"] = float(sum(a["time_s"] for a in attempts))
@@ -251,8 +268,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
     p.add_argument("--init", choices=["standard", "rescaled", "conformal"],
-                   help="initial guess; by default rescaled (the standard pattern scaled to the target area), "
-                        "then standard if that design fails a check")
+                   help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
+                        "(standard pattern at the target's area), then standard, until a design passes every check")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
