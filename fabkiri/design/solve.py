@@ -8,17 +8,20 @@ about one row per hole, spec §2.3), which breaks LICQ-based NLP solvers
 rows. The solver therefore
 
 1. minimises ``ρ|c(x)|² + |s(x)|² + w E_reg(x) + ρ|min(0, g(x) - m)|²`` by
-   Levenberg-Marquardt on the stacked residuals, for ρ = 1e2, 1e4, 1e6 (warm
+   Levenberg-Marquardt on the stacked residuals, for ρ = 1e2 then 1e4 (warm
    started), where ``c`` are the equality families, ``s`` the signed distances
    of the boundary tips to the target, ``E_reg`` the smoothness regulariser and
-   ``g >= 0`` the inequalities with a small margin ``m``; a step is accepted
-   only if it creates no new inequality violation;
+   ``g >= 0`` the inequalities with a small margin ``m``; a step that would
+   make an inequality more violated is halved (step limiting);
 2. projects onto ``c = 0`` (and ``s = 0`` when the least-squares fit came out
    exact, "hard" shape matching) with damped Gauss-Newton steps
-   ``(JᵀJ + μI) dx = -Jᵀc``, which converge quadratically whatever the rank of J.
+   ``(JᵀJ + μI) dx = -Jᵀc``, which converge quadratically whatever the rank of J;
+3. if the first schedule leaves the constraint manifold or the projection
+   stalls, restarts with stiff penalties (1e4, 1e6) and keeps the best attempt.
 
-Normal equations are factorised with SuperLU (scipy.sparse) using a symmetric
-minimum-degree ordering. Units are normalised: the initial tile edge is 1.
+Normal equations are factorised with SuperLU (scipy.sparse) in a geometric
+nested-dissection order; LU-preconditioned CG reuses a factorisation across
+steps. Units are normalised: the initial tile edge is 1.
 """
 
 from __future__ import annotations
