@@ -22,14 +22,14 @@ from fabkiri.design import targets as T
 from fabkiri.design.solve import DesignRequest, _Problem, _ineq_values, design
 
 
-def slsqp(n: int, independent: bool, max_iter: int = 500):
+def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
     """The same rigid circle problem with scipy's dense SLSQP.
 
     As written, the equality set has dependent rows and SLSQP stops at once;
     with ``independent`` the rows are first reduced to a maximal independent
     set at the initial guess (pivoted QR), which is what SLSQP needs.
     """
-    req = DesignRequest(n, n, T.load_target("circle", 100.0), rigid=True)
+    req = DesignRequest(n, n, T.load_target("circle", 100.0), rigid=True, init=init)
     prob = _Problem(req)
     shape = prob.X0.shape
     eqs, fits, ineqs = prob.of("eq"), prob.of("fit"), prob.of("ineq")
@@ -120,7 +120,7 @@ def main() -> None:
     if args.no_baseline:
         return
     for n, indep in ((4, False), (8, False), (4, True), (8, True)):
-        b = slsqp(n, indep)
+        b = slsqp(n, indep, args.init)
         ok = "converged" if b["success"] else "failed"
         label = "SLSQP-ind" if indep else "SLSQP"
         print(f"{label:<8} {n:>4} {ok:<12} {b['time']:>8.3f} {b['iterations']:>6} {b['eq']:>10.2e} "

@@ -254,7 +254,68 @@ def test_cli_unreachable_tolerance_saves_unconverged(tmp_path, run_cli):
 
 
 def test_committed_example_patterns_are_valid():
-    for name in ("circle-8x8.json", "circle-8x8-rigid.json"):
+    for name in ("circle-8x8.json", "circle-8x8-rigid.json", "circle-16x16-rigid.json", "heart-16x16-rigid.json",
+                 "square-circle-9x9-rigid.json", "circle-32x32-rigid.json"):
         p = read_pattern(TEMPLATES / "patterns" / name)
         assert p.design["valid"] is True and p.design["report"]["status"] == "converged"
         assert p.design["report"]["max_equality_residual"] <= 1e-10
+
+
+def test_overlap_check_survives_near_degenerate_shared_edge():
+    """Two closed-state tiles sharing an edge at x ≈ -4e-10: GEOS alone reports a full overlap."""
+    from fabkiri.cli.design_cmd import overlapping_tiles
+
+    a = [[-3.9277336938425833e-10, 1.6579325376061398], [-4.133902109515475e-10, 5.922048704407096],
+         [-4.1397303240137155, 5.922048704418469], [-4.020767288704813, 1.4778850882464676]]
+    b = [[-4.133902109515475e-10, 5.922048704407096], [-3.9277336938425833e-10, 1.6579325376061402],
+         [4.02076728792443, 1.4778850882086814], [4.139730323186935, 5.922048704395724]]
+    assert overlapping_tiles(np.array([a, b]), 1e-9 * 17.0, 4e-9) == []
+    # a real overlap is still found
+    c = np.array(b) - [0.5, 0.0]
+    assert overlapping_tiles(np.array([a, c]), 1e-9 * 17.0, 4e-9) == [(0, 1)]
+
+
+def test_cli_rectangular_closed_state(tmp_path, run_cli):
+    """`2:rect=1.5`: boundary angle sums π (π/2 at corners) and width/height 1.5 in closed state 2."""
+    out = tmp_path / "r.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "2:rect=1.5",
+                                "--json", "-o", out)
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["residuals"]["rectangle_2"] <= 1e-10 and rep["residuals"]["ratio_2"] <= 1e-10
+    c = read_pattern(out).contracted[2].reshape(-1, 2)
+    # the closed outline is a rectangle: its convex hull has 4 corners and width/height 1.5
+    import shapely
+
+    hull = shapely.MultiPoint(c).convex_hull
+    rect = shapely.minimum_rotated_rectangle(hull)
+    assert hull.area == pytest.approx(rect.area, rel=1e-8)
+    xy = np.asarray(rect.exterior.coords)[:4]
+    sides = sorted(np.linalg.norm(np.roll(xy, -1, 0) - xy, axis=1))
+    assert sides[2] / sides[0] == pytest.approx(1.5, rel=1e-8)
+
+
+def test_cli_svg_target_and_conformal_init(tmp_path, run_cli):
+    svg = tmp_path / "blob.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 50 5 C 80 5 95 30 95 50 C 95 75 75 95 '
+                   '50 95 C 25 95 5 75 5 50 C 5 25 20 5 50 5 Z"/></svg>')
+    out = tmp_path / "s.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", svg, "--size", "60", "--rigid",
+                                "--init", "conformal", "--json", "-o", out)
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["attempts"][0]["init"] == "conformal" and rep["max_equality_residual"] <= 1e-10
+    assert read_pattern(out).design["target"]["size_mm"] == pytest.approx(60.0, rel=1e-6)
+
+
+def test_conformal_guess_refuses_to_fold(tmp_path, run_cli):
+    out = tmp_path / "h.json"
+    code, _, err = run_cli("design", "--tiles", "16x16", "--target", "heart", "--init", "conformal", "-o", out)
+    assert code == 2 and "folds" in err and not out.exists()
+
+
+def test_overlap_check_reports_self_intersecting_tiles():
+    from fabkiri.cli.design_cmd import overlapping_tiles
+
+    bowtie = np.array([[[0, 0], [1, 1], [1, 0], [0, 1]], [[2, 0], [3, 0], [3, 1], [2, 1]]], float)
+    assert overlapping_tiles(bowtie, 1e-9, 1e-9) == [(0, 0)]

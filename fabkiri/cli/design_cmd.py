@@ -14,12 +14,13 @@ import argparse
 import json
 import re
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from ..design.solve import DesignRequest, design
 from ..design.targets import Target, load_target
-from ..errors import InputError
+from ..errors import InputError, SolveError
 from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.io import write_pattern
@@ -27,6 +28,7 @@ from ..pattern.model import Pattern
 from .pattern_cmds import parse_tiles
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
+AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
 
 
 def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
@@ -49,20 +51,29 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
     return state, load_target(what, size)
 
 
-def overlapping_tiles(corners: np.ndarray, tol_area: float) -> list[tuple[int, int]]:
-    """Pairs of tiles whose interiors overlap by more than ``tol_area`` (shapely/GEOS)."""
+def overlapping_tiles(corners: np.ndarray, tol_area: float, grid: float) -> list[tuple[int, int]]:
+    """Pairs of tiles whose interiors overlap by more than ``tol_area`` (shapely/GEOS).
+
+    Intersections are computed on a ``grid`` (snap size, mm): GEOS 3.14 returns a
+    whole tile as the intersection of two tiles that share a nearly vertical edge
+    at x ≈ -4e-10 (seen on a closed state); snapping makes shared edges exact.
+    """
     import shapely
 
     polys = shapely.polygons(corners)
-    tree = shapely.STRtree(polys)
-    a, b = tree.query(polys, predicate="intersects")
+    valid = shapely.is_valid(polys)
+    # a self-intersecting tile overlaps itself: report it as the pair (t, t)
+    out = [(int(t), int(t)) for t in np.flatnonzero(~valid)]
+    idx = np.flatnonzero(valid)
+    tree = shapely.STRtree(polys[idx])
+    a, b = tree.query(polys[idx], predicate="intersects")
     keep = a < b
-    a, b = a[keep], b[keep]
-    if len(a) == 0:
-        return []
-    areas = shapely.area(shapely.intersection(polys[a], polys[b]))
-    bad = areas > tol_area
-    return list(zip(a[bad].tolist(), b[bad].tolist()))
+    a, b = idx[a[keep]], idx[b[keep]]
+    if len(a):
+        areas = shapely.area(shapely.intersection(polys[a], polys[b], grid_size=grid))
+        bad = areas > tol_area
+        out += list(zip(a[bad].tolist(), b[bad].tolist()))
+    return out
 
 
 def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
@@ -93,6 +104,9 @@ def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarra
 
 def cmd_design(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
+    out_dir = Path(args.output).parent
+    if not out_dir.is_dir():  # fail before a long solve, not after
+        raise InputError(f"output folder {out_dir} does not exist")
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     target = load_target(args.target, args.size) if args.target else None
@@ -113,7 +127,49 @@ def cmd_design(args: argparse.Namespace) -> int:
         req.name = f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if args.rigid else ''}"
     req.validate()
     big = rows * cols >= 256
-    result = design(req, progress=big or args.verbose)
+    # without an explicit --init, a design that fails a check is retried from the next guess
+    inits = [args.init] if args.init else list(AUTO_INITS)
+    attempts = []
+    best = None
+    for init in inits:
+        req.init = init
+        try:
+            result = design(req, progress=big or args.verbose)
+        except SolveError as exc:
+            if len(inits) == 1:
+                raise
+            print(f"fabkiri: no {init} initial guess ({exc}); trying the next one", file=sys.stderr)
+            attempts.append({"init": init, "status": "skipped", "problems": [str(exc)], "time_s": 0.0})
+            continue
+        outcome = _check(result, contracted, args)
+        attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
+                         "time_s": outcome[1]["time_s"]})
+        if best is None or (outcome[3] and not best[3]) or (
+                outcome[3] == best[3] and len(outcome[2]) < len(best[2])):
+            best = outcome
+        if outcome[3]:
+            break
+        if len(inits) > 1 and init != inits[-1]:
+            print(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying", file=sys.stderr)
+    if best is None:
+        raise SolveError("no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts))
+    pattern, report, problems, valid, contracted_states = best
+    report["attempts"] = attempts
+    report["time_s_total"] = float(sum(a["time_s"] for a in attempts))
+    meta = dict(pattern.design or {})
+    meta["report"] = report
+    meta["valid"] = bool(valid)
+    pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
+                      name=pattern.name, lattice=pattern.lattice, design=meta)
+    write_pattern(pattern, args.output)
+    if args.json:
+        print(json.dumps(_jsonable(report), indent=2, sort_keys=True))
+    _summary(args.output, report, valid)
+    return 0 if valid else 1
+
+
+def _check(result, contracted, args):
+    """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
     pattern = result.pattern
     report = dict(result.report)
     size = pattern.tile_size
@@ -129,10 +185,11 @@ def cmd_design(args: argparse.Namespace) -> int:
             problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
     tol_area = 1e-9 * size * size
     for label, corners in [("deployed", pattern.corners()), *[(f"state {s}", contracted_states[s]) for s in (1, 2)]]:
-        ov = overlapping_tiles(corners, tol_area)
+        ov = overlapping_tiles(corners, tol_area, CLOSURE_TOL * size)
         checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
         if ov:
-            problems.append(f"{len(ov)} overlapping tile pairs in the {label} state (first {ov[0]})")
+            where = "the deployed state" if label == "deployed" else label
+            problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
     if args.rigid or args.holes == "parallelogram":
         from ..pattern.residuals import hinge_sums
 
@@ -152,16 +209,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     if problems:
         report["status"] = "unconverged"
         report["problems"] = problems
-    meta = dict(pattern.design or {})
-    meta["report"] = report
-    meta["valid"] = bool(valid)
-    pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
-                      name=pattern.name, lattice=pattern.lattice, design=meta)
-    write_pattern(pattern, args.output)
-    if args.json:
-        print(json.dumps(_jsonable(report), indent=2, sort_keys=True))
-    _summary(args.output, report, valid)
-    return 0 if valid else 1
+    return pattern, report, problems, valid, contracted_states
 
 
 def _jsonable(v):
@@ -219,8 +267,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
-    p.add_argument("--init", choices=["standard", "rescaled", "conformal"], default="rescaled",
-                   help="initial guess (default rescaled: the standard pattern scaled to the target area)")
+    p.add_argument("--init", choices=["standard", "rescaled", "conformal"],
+                   help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
+                        "(standard pattern at the target's area), then standard, until a design passes every check")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")

@@ -8,17 +8,20 @@ about one row per hole, spec §2.3), which breaks LICQ-based NLP solvers
 rows. The solver therefore
 
 1. minimises ``ρ|c(x)|² + |s(x)|² + w E_reg(x) + ρ|min(0, g(x) - m)|²`` by
-   Levenberg-Marquardt on the stacked residuals, for ρ = 1e2, 1e4, 1e6 (warm
+   Levenberg-Marquardt on the stacked residuals, for ρ = 1e2 then 1e4 (warm
    started), where ``c`` are the equality families, ``s`` the signed distances
    of the boundary tips to the target, ``E_reg`` the smoothness regulariser and
-   ``g >= 0`` the inequalities with a small margin ``m``; a step is accepted
-   only if it creates no new inequality violation;
+   ``g >= 0`` the inequalities with a small margin ``m``; a step that would
+   make an inequality more violated is halved (step limiting);
 2. projects onto ``c = 0`` (and ``s = 0`` when the least-squares fit came out
    exact, "hard" shape matching) with damped Gauss-Newton steps
-   ``(JᵀJ + μI) dx = -Jᵀc``, which converge quadratically whatever the rank of J.
+   ``(JᵀJ + μI) dx = -Jᵀc``, which converge quadratically whatever the rank of J;
+3. if the first schedule leaves the constraint manifold or the projection
+   stalls, restarts with stiff penalties (1e4, 1e6) and keeps the best attempt.
 
-Normal equations are factorised with SuperLU (scipy.sparse) using a symmetric
-minimum-degree ordering. Units are normalised: the initial tile edge is 1.
+Normal equations are factorised with SuperLU (scipy.sparse) in a geometric
+nested-dissection order; LU-preconditioned CG reuses a factorisation across
+steps. Units are normalised: the initial tile edge is 1.
 """
 
 from __future__ import annotations
@@ -344,11 +347,16 @@ def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None
         if hard is not None and np.abs(r).max(initial=0.0) <= tol_inf:
             return x.reshape(shape), it - 1
         dx = prob.normal.solve(J, r, mu, rtol=1e-8 if hard is None else 1e-13)
-        xn = x + dx
+        # step limiting: halve the step until it creates no new inequality violation
+        for _ in range(6):
+            xn = x + dx
+            gv = _ineq_values(prob, xn.reshape(shape))
+            gviol_n = max(0.0, -gv.min(initial=0.0))
+            if gviol_n <= gviol + 1e-15:
+                break
+            dx = 0.5 * dx
         rn, Jn = _stacked(prob, xn.reshape(shape), rho, hard)
         cn = 0.5 * float(rn @ rn)
-        gv = _ineq_values(prob, xn.reshape(shape))
-        gviol_n = max(0.0, -gv.min(initial=0.0))
         Jdx = J @ dx
         pred = -(float(r @ Jdx) + 0.5 * float(Jdx @ Jdx))
         ratio = (cost - cn) / pred if pred > 0 else -1.0
@@ -400,43 +408,62 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
     def eq_max(Y):
         return max((float(np.abs(f(Y)[0]).max()) for f in prob.of("eq")), default=0.0)
 
-    schedules = [PENALTIES, STIFF_PENALTIES]
-    for attempt, schedule in enumerate(schedules):
+    eqs = prob.of("eq")
+    fits = prob.of("fit")
+
+    def mean_edge(Y):
+        return float(np.mean(np.linalg.norm(np.roll(Y[prob.st.tiles], -1, 1) - Y[prob.st.tiles], axis=-1)))
+
+    def project(X):
+        """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
+        L = mean_edge(X)
+        tol_abs = lambda fams: min(req.tol * L ** f.dim for f in fams)  # noqa: E731
+        fit_rel = max((float(np.abs(f(X)[0]).max()) / L for f in fits), default=0.0)
+        if fits and fit_rel < 1e-2:
+            # the least-squares fit is (nearly) exact: try to make it exact
+            Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits + prob.of("ineq"),
+                         tol_inf=0.1 * tol_abs(eqs + fits))
+            if all(v <= req.tol for v in family_residuals(prob, Xh, mean_edge(Xh)).values()):
+                return Xh, "hard", kh
+        Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
+        if max((float(np.abs(f(Xp)[0]).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(eqs):
+            # the half margins may block the last steps: project on the equalities alone (steps that
+            # would violate g >= 0 are still halved or refused)
+            Xq, kq = _lm(prob, Xp, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
+            return Xq, "least-squares", kp + kq
+        return Xp, "least-squares", kp
+
+    best = None
+    for attempt, schedule in enumerate((PENALTIES, STIFF_PENALTIES)):
+        tag = "_restart" if attempt else ""
         X = prob.X0.copy()
         for rho, stall_tol, cap in schedule:
             X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
-            iters[f"lm_rho_{rho:g}" + ("_restart" if attempt else "")] = k
+            iters[f"lm_rho_{rho:g}{tag}"] = k
             log(f"rho={rho:g}: {k} iterations, max equality row {eq_max(X):.2e}")
-        if eq_max(X) <= RESTART_ABOVE:
+        if attempt == 0 and eq_max(X) > RESTART_ABOVE:
+            # the fit dragged the pattern off the constraint manifold into a wall of inequalities:
+            # start again keeping the constraints stiff from the first step
+            log(f"max equality row {eq_max(X):.2e} > {RESTART_ABOVE:g}: restarting with stiff penalties")
+            continue
+        Xp, mode, kp = project(X)
+        iters[f"projection{tag}"] = kp
+        res = family_residuals(prob, Xp, mean_edge(Xp))
+        worst = max((res[f.name] for f in eqs), default=0.0)
+        if best is None or worst < best[0]:
+            best = (worst, Xp, mode)
+        if worst <= req.tol:
             break
-        # the fit dragged the pattern off the constraint manifold into a wall of inequalities:
-        # start again keeping the constraints stiff from the first step
-        log(f"max equality row {eq_max(X):.2e} > {RESTART_ABOVE:g}: restarting with stiff penalties")
-    eqs = prob.of("eq")
-    fits = prob.of("fit")
-    L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))
-    tol_abs = lambda fams: min(req.tol * L ** f.dim for f in fams)  # noqa: E731
-    fit_rel = max((float(np.abs(f(X)[0]).max()) / L for f in fits), default=0.0)
-    mode = "least-squares"
-    Xp = X
-    if fits and fit_rel < 1e-2:
-        # the least-squares fit is (nearly) exact: try to make it exact
-        Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs + fits))
-        res = family_residuals(prob, Xh, L)
-        if all(v <= req.tol for v in res.values()):
-            Xp, mode = Xh, "hard"
-            iters["projection"] = kh
-    if mode != "hard":
-        Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
-        iters["projection"] = kp
-    X = Xp
+        log(f"projection stopped at {worst:.2e} > tol: " + ("restarting with stiff penalties" if not attempt
+                                                             else "giving up"))
+    _, X, mode = best
     L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))
     res = family_residuals(prob, X, L)
-    eq_max = max((res[f.name] for f in eqs), default=0.0)
+    eq_worst = max((res[f.name] for f in eqs), default=0.0)
     gvals = {f.name: f(X)[0] for f in prob.of("ineq")}
     ineq_min = min((float(v.min()) for v in gvals.values()), default=0.0)
     active = {k: int((v < prob.margin[k] + 1e-6 * L * L).sum()) for k, v in gvals.items()}
-    converged = eq_max <= req.tol and ineq_min >= 0.0
+    converged = eq_worst <= req.tol and ineq_min >= 0.0
     elapsed = time.perf_counter() - t0
     L0 = prob.L0
     Xmm = X * L0
@@ -449,7 +476,7 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
     report = {
         "status": "converged" if converged else "unconverged",
         "tolerance": req.tol,
-        "max_equality_residual": eq_max,
+        "max_equality_residual": eq_worst,
         "residuals": res,
         "residual_units": "lengths relative to the mean tile edge, angles in radians",
         "iterations": iters,
@@ -466,7 +493,7 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
         "cg_iterations": prob.normal.cg_steps,
         "solver": "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU",
     }
-    log(f"{report['status']}: max equality residual {eq_max:.2e}, fit {mode}, "
+    log(f"{report['status']}: max equality residual {eq_worst:.2e}, fit {mode}, "
         f"{report['iterations_total']} iterations, {elapsed:.2f}s")
     lat = {"kind": "quad", "rows": req.rows, "cols": req.cols, "angle_deg": 45.0,
            "tile_size": float(L * L0)}
