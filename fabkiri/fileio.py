@@ -14,6 +14,17 @@ from pathlib import Path
 from .errors import InputError
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _publish_mode(fd_or_path) -> None:
+    """mkstemp makes 0600 files; outputs get the usual rw-r--r-- (per umask)."""
+    os.chmod(fd_or_path, 0o666 & ~_umask())
+
+
 def _parent(path: Path) -> Path:
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
@@ -34,6 +45,7 @@ def atomic_write(path: str | os.PathLike, data: bytes | str) -> Path:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)
+        _publish_mode(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -52,7 +64,7 @@ def atomic_write_many(folder: str | os.PathLike, files: dict[str, bytes | str]) 
         raise InputError(f"output {folder} exists and is not a folder")
     parent = _parent(folder)
     created = not folder.exists()
-    scratch = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=parent))
+    scratch = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=parent))  # mode 0700, never published
     try:
         for name, data in files.items():
             target = scratch / name

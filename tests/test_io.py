@@ -130,3 +130,19 @@ def test_console_script_runs(tmp_path):
     r = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", "info", str(out), "--check", "--json"],
                        capture_output=True, text=True)
     assert r.returncode == 0 and json.loads(r.stdout)["closes_both"] is True
+
+
+def test_written_files_are_readable_by_others(tmp_path):
+    import os
+    import stat
+
+    from fabkiri.fileio import atomic_write, atomic_write_many
+
+    old = os.umask(0o022)
+    try:
+        f = atomic_write(tmp_path / "a.txt", "x")
+        g = atomic_write_many(tmp_path / "d", {"b.txt": "y"})[0]
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(f.stat().st_mode) == 0o644
+    assert stat.S_IMODE(g.stat().st_mode) == 0o644
