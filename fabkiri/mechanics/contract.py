@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csgraph
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
@@ -108,24 +107,12 @@ def contract(pattern: Pattern, state: int) -> Contraction:
     T = top.n_tiles
     phi = np.zeros(T)
     t = np.zeros((T, 2))
-    if T > 1:
-        adj = top.tile_adjacency
-        order, pred = csgraph.breadth_first_order(adj, root, directed=False, return_predecessors=True)
-        depth = np.zeros(T, dtype=np.int64)
-        for tile in order[1:]:
-            depth[tile] = depth[pred[tile]] + 1
-        children = order[1:]
-        parents = pred[children]
-        hinge = np.asarray(adj[parents, children]).ravel().astype(np.int64) - 1
-        sign = np.where(top.hinge_tiles[hinge, 0] == parents, 1.0, -1.0)
-        hxy = x[top.hinge_node[hinge]]
-        cdepth = depth[children]
-        for d in range(1, int(depth.max()) + 1):  # one vectorised step per BFS level
-            sel = cdepth == d
-            p = parents[sel]
-            phi_b, t_b = _step(phi[p], t[p], sign[sel] * delta[hinge[sel]], hxy[sel])
-            phi[children[sel]] = phi_b
-            t[children[sel]] = t_b
+    tree = top.spanning_tree(root)
+    sign = np.where(tree.parent_is_a, 1.0, -1.0)
+    hxy = x[top.hinge_node[tree.hinges]]
+    for sel in tree.levels():
+        p, c = tree.parents[sel], tree.children[sel]
+        phi[c], t[c] = _step(phi[p], t[p], sign[sel] * delta[tree.hinges[sel]], hxy[sel])
     placed = geometry.rotate(corners, phi[:, None]) + t[:, None, :]
     theta, shift = geometry.kabsch(placed.mean(axis=1), centres)  # back to the mm frame
     placed = geometry.rotate(placed, theta) + shift

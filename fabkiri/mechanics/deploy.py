@@ -76,7 +76,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
-from scipy.sparse import csgraph
 from scipy.sparse.linalg import splu, spsolve
 
 from ..errors import CheckFailed, InputError
@@ -449,24 +448,14 @@ def place_rigid(pattern: Pattern, state1: np.ndarray, eps: np.ndarray, omega: np
     rotated = geometry.rotate(local[None], phi[:, :, None])  # (F, T, 4, 2)
     T = top.n_tiles
     tau = np.zeros((len(omega), T, 2))
-    if T > 1:
-        root = int(np.argmin(np.linalg.norm(centre - centre.mean(0), axis=1)))
-        adj = top.tile_adjacency
-        order, pred = csgraph.breadth_first_order(adj, root, directed=False, return_predecessors=True)
-        depth = np.zeros(T, dtype=np.int64)
-        for tile in order[1:]:
-            depth[tile] = depth[pred[tile]] + 1
-        children = order[1:]
-        parents = pred[children]
-        hinge = np.asarray(adj[parents, children]).ravel().astype(np.int64) - 1
-        is_a = top.hinge_tiles[hinge, 0] == parents
-        c_parent = np.where(is_a, top.hinge_corner[hinge, 0], top.hinge_corner[hinge, 1])
-        c_child = np.where(is_a, top.hinge_corner[hinge, 1], top.hinge_corner[hinge, 0])
-        cdepth = depth[children]
-        for d in range(1, int(depth.max()) + 1):
-            sel = cdepth == d
-            p, c = parents[sel], children[sel]
-            tau[:, c] = rotated[:, p, c_parent[sel]] + tau[:, p] - rotated[:, c, c_child[sel]]
+    root = int(np.argmin(np.linalg.norm(centre - centre.mean(0), axis=1)))
+    tree = top.spanning_tree(root)
+    corner = top.hinge_corner[tree.hinges]
+    c_parent = np.where(tree.parent_is_a, corner[:, 0], corner[:, 1])
+    c_child = np.where(tree.parent_is_a, corner[:, 1], corner[:, 0])
+    for sel in tree.levels():
+        p, c = tree.parents[sel], tree.children[sel]
+        tau[:, c] = rotated[:, p, c_parent[sel]] + tau[:, p] - rotated[:, c, c_child[sel]]
     return rotated + tau[:, :, None, :] + centre.mean(axis=0)
 
 

@@ -101,6 +101,10 @@ class Topology:
             (np.concatenate([h, h]), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(T, T)
         )
 
+    def spanning_tree(self, root: int = 0) -> "SpanningTree":
+        """Breadth-first spanning tree of the tile graph from ``root``."""
+        return _spanning_tree(self, root)
+
     def even_tiles(self) -> np.ndarray:
         return self.tile_color == self.parity
 
@@ -112,6 +116,44 @@ class Topology:
     @cached_property
     def _folds(self) -> dict[int, FoldRule]:
         return {s: _fold_rule(self, s) for s in STATES}
+
+
+@dataclass(frozen=True, eq=False)
+class SpanningTree:
+    """A breadth-first tree of tiles: every non-root tile with its parent and hinge.
+
+    Placing tiles rigidly along it (contraction, rigid paths, reassembly from
+    cut shapes) is one vectorised step per BFS level: ``levels()`` yields the
+    positions (into ``children``) of each level, parents always placed first.
+    """
+
+    root: int
+    children: np.ndarray  # (T-1,) tiles in BFS order, root excluded
+    parents: np.ndarray  # (T-1,) parent of each child
+    hinges: np.ndarray  # (T-1,) hinge joining child and parent
+    depth: np.ndarray  # (T-1,) BFS depth of each child (>= 1)
+    parent_is_a: np.ndarray  # (T-1,) bool: the parent is the hinge's tile A
+
+    def levels(self):
+        for d in range(1, int(self.depth.max(initial=0)) + 1):
+            yield np.flatnonzero(self.depth == d)
+
+
+def _spanning_tree(top: Topology, root: int) -> SpanningTree:
+    T = top.n_tiles
+    if T == 1:
+        empty = np.zeros(0, dtype=np.int64)
+        return SpanningTree(root, empty, empty, empty, empty, np.zeros(0, dtype=bool))
+    adj = top.tile_adjacency
+    order, pred = csgraph.breadth_first_order(adj, root, directed=False, return_predecessors=True)
+    depth = np.zeros(T, dtype=np.int64)
+    for tile in order[1:]:  # BFS order: a parent's depth is known before its children's
+        depth[tile] = depth[pred[tile]] + 1
+    children = order[1:].astype(np.int64)
+    parents = pred[children].astype(np.int64)
+    hinges = np.asarray(adj[parents, children]).ravel().astype(np.int64) - 1
+    return SpanningTree(root, children, parents, hinges, depth[children],
+                        top.hinge_tiles[hinges, 0] == parents)
 
 
 def _fold_rule(top: Topology, state: int) -> FoldRule:

@@ -718,31 +718,21 @@ def place_from_shapes(pattern: Pattern, C: np.ndarray, state: int) -> tuple[np.n
     """
     top = pattern.topology
     fold = top.fold(state)
-    T = top.n_tiles
     Y = C.copy()
-    if T > 1:
-        adj = top.tile_adjacency
-        order, pred = csgraph.breadth_first_order(adj, 0, directed=False, return_predecessors=True)
-        depth = np.zeros(T, dtype=np.int64)
-        for t in order[1:]:
-            depth[t] = depth[pred[t]] + 1
-        child = order[1:]
-        par = pred[child]
-        h = np.asarray(adj[par, child]).ravel().astype(np.int64) - 1
-        a_is_par = top.hinge_tiles[h, 0] == par
-        cA, cB = top.hinge_corner[h].T
-        eA, eB = fold.fold_corner_ends[h].T
-        cp, ep = np.where(a_is_par, cA, cB), np.where(a_is_par, eA, eB)
-        cc, ec = np.where(a_is_par, cB, cA), np.where(a_is_par, eB, eA)
-        for d in range(1, int(depth.max()) + 1):
-            sel = np.flatnonzero(depth[child] == d)
-            p, c = par[sel], child[sel]
-            hp = Y[p, cp[sel]]
-            dp = Y[p, ep[sel]] - hp
-            loc = C[c] - C[c, cc[sel]][:, None, :]
-            dc = loc[np.arange(len(c)), ec[sel]]
-            phi = np.arctan2(dp[:, 1], dp[:, 0]) - np.arctan2(dc[:, 1], dc[:, 0])
-            Y[c] = geometry.rotate(loc, phi[:, None]) + hp[:, None, :]
+    tree = top.spanning_tree(0)
+    a_is_par = tree.parent_is_a
+    cA, cB = top.hinge_corner[tree.hinges].T
+    eA, eB = fold.fold_corner_ends[tree.hinges].T
+    cp, ep = np.where(a_is_par, cA, cB), np.where(a_is_par, eA, eB)
+    cc, ec = np.where(a_is_par, cB, cA), np.where(a_is_par, eB, eA)
+    for sel in tree.levels():
+        p, c = tree.parents[sel], tree.children[sel]
+        hp = Y[p, cp[sel]]
+        dp = Y[p, ep[sel]] - hp
+        loc = C[c] - C[c, cc[sel]][:, None, :]
+        dc = loc[np.arange(len(c)), ec[sel]]
+        phi = np.arctan2(dp[:, 1], dp[:, 0]) - np.arctan2(dc[:, 1], dc[:, 0])
+        Y[c] = geometry.rotate(loc, phi[:, None]) + hp[:, None, :]
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
     split = np.linalg.norm(Y[A, cA] - Y[B, cB], axis=1)

@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 import shapely
-from scipy.sparse import csgraph
 
 from ..mechanics.contract import contract
+from ..mechanics.deploy import place_rigid, rigid_angles
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums, state_residuals
@@ -348,39 +348,9 @@ def rigid_path(pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray) -> tuple[np
     are placed breadth-first so each tree hinge's two copies coincide; the
     mismatch of every hinge is then measured. Returns ``(S, T, 4, 2)`` and ``(S,)``.
     """
+    eps, _ = rigid_angles(pattern, {1: Y1})
+    corners = place_rigid(pattern, Y1, eps, np.asarray(omegas, dtype=float))
     top = pattern.topology
-    T = top.n_tiles
-    X = pattern.corners()
-    rot, _ = geom.tile_kabsch(Y1, X)  # state 1 -> deployed, per tile
-    color = top.tile_color
-    if (color == 1).any():
-        m = [np.angle(np.exp(1j * rot[color == c]).mean()) for c in (0, 1)]
-        eps0 = 1.0 if geometry.wrap_angle(m[0] - m[1]) >= 0 else -1.0
-    else:  # a single tile: nothing to turn against
-        eps0 = 1.0
-    eps = np.where(color == 0, eps0, -eps0)
-    S = len(omegas)
-    phi = omegas[:, None] * eps[None, :]  # (S, T)
-    trans = np.zeros((S, T, 2))
-    if T > 1:
-        adj = top.tile_adjacency
-        order, pred = csgraph.breadth_first_order(adj, 0, directed=False, return_predecessors=True)
-        depth = np.zeros(T, dtype=np.int64)
-        for t in order[1:]:
-            depth[t] = depth[pred[t]] + 1
-        child = order[1:]
-        par = pred[child]
-        hinge = np.asarray(adj[par, child]).ravel().astype(np.int64) - 1
-        A, B = top.hinge_tiles[hinge].T
-        cA, cB = top.hinge_corner[hinge].T
-        hp = np.where((A == par)[:, None], Y1[A, cA], Y1[B, cB])  # hinge copy in the parent
-        hc = np.where((A == par)[:, None], Y1[B, cB], Y1[A, cA])  # and in the child
-        for d in range(1, int(depth.max()) + 1):
-            sel = depth[child] == d
-            p, c = par[sel], child[sel]
-            trans[:, c] = (geometry.rotate(hp[sel][None], phi[:, p]) + trans[:, p]
-                           - geometry.rotate(hc[sel][None], phi[:, c]))
-    corners = geometry.rotate(Y1[None], phi[:, :, None]) + trans[:, :, None, :]
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
     mismatch = np.linalg.norm(corners[:, A, cA] - corners[:, B, cB], axis=-1).max(axis=1, initial=0.0)
