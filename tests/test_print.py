@@ -440,17 +440,57 @@ def test_solver_design_prints_and_passes_the_verifier(state):
         mesh.build_job(_scaled(pat, 0.5), "tiles-and-strips", state, pr)
 
 
-def test_solver_design_pinned():
+@pytest.mark.parametrize("state", [1, 2])
+def test_solver_design_pinned_refused_where_corners_are_too_narrow(state):
+    """Doubled, the solver's circle design has tiles whose edge from a pivot is
+    only ~3.5 mm long and whose next edge runs almost tangent to the 3.3 mm pivot
+    clearance: what is left there is a sliver under one nozzle wide, and the
+    tile outline cannot be printed within the printer's tolerance. Refused up
+    front, naming the tile and hinge, rather than built and failing the tile check."""
     from fabkiri.pattern.io import read_pattern
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     pr = load_printer("prusa-xl")
-    r = mesh.realise_job(mesh.build_job(pat, "pinned", 1, pr))
+    with pytest.raises(FabricationError, match=r"tile (\d+) is too narrow beside the 3.3 mm clearance around the "
+                                               r"pivot of hinge (\d+).*nozzle.*tolerance 0.4 mm") as exc:
+        mesh.build_job(pat, "pinned", state, pr)
+    plan = printgeom.closed_plan(pat, state, pr)
+    g = printgeom.pin_geometry(pr, printgeom.pin_levels(pr))
+    rep = printgeom.clearance_slivers(plan, g, pr)
+    t = int(np.argmax(rep.deviation))
+    assert rep.deviation[t] > pr.tolerance_mm and rep.slivers[t] > 0
+    h = rep.near_hinge[t]
+    assert f"tile {t} " in str(exc.value) and f"hinge {h}:" in str(exc.value)
+    assert t in plan.hinge_tiles[h]
+    # the tile's corner next to that pivot lies just outside the clearance disc
+    d = np.linalg.norm(plan.corners[t] - plan.hinge_xy[h], axis=1)
+    assert ((d > g.hollow) & (d < g.hollow + pr.nozzle_mm)).any()
+
+
+def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
+    """At 2.3x the same design's narrow corners keep a nozzle of material beside
+    every clearance: it builds, and the printed tiles pass every check (this
+    scale also exercises the tile check's robustness to float noise in mesh sections)."""
+    from fabkiri.pattern.io import read_pattern
+
+    pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.3)
+    pr = load_printer("prusa-xl")
+    job = mesh.build_job(pat, "pinned", 1, pr)
+    rep_s = printgeom.clearance_slivers(job.plan, job.pins.geometry, pr)
+    assert rep_s.deviation.max() <= pr.tolerance_mm
+    r = mesh.realise_job(job)
     rep = mesh.check_meshes(r)
     assert rep.ok, rep.problems
-    assert mesh.check_printed_tiles(r).ok
+    tc = mesh.check_printed_tiles(r)
+    assert tc.ok and tc.tiles == len(job.plan.tiles), tc
     sw = mesh.sweep_pinned(pat, r)
     assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm
+    # the CLI refuses the doubled design (exit 2, one line, nothing written)
+    src = REPO / "templates" / "patterns" / "circle-8x8-rigid.json"
+    code, _, err = run_cli("print", src, "--style", "pinned", "--printer", "prusa-xl", "--scale", "2",
+                           "-o", tmp_path / "no")
+    assert code == 2 and "too narrow beside" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "no").exists()
 
 
 def test_pinned_sweep_along_the_deployment(printer):

@@ -28,10 +28,11 @@ from shapely.geometry import Polygon
 from ..errors import FabricationError
 from ..pattern.model import Pattern
 from . import printgeom
+from .printgeom import CIRCLE_SEGMENTS, regular_polygon  # noqa: F401  (re-exported)
 from .printers import Printer
 
 STYLES = ("strips", "tiles-and-strips", "pinned")
-CIRCLE_SEGMENTS = 48
+SECTION_NOISE_MM = 1e-4  # vertex noise of sliced meshes (float32 STL: ~1e-5 mm at bed size)
 
 
 # ---------------------------------------------------------------- CSG spec
@@ -56,15 +57,6 @@ class Body:
     kind: str  # "tile", "hinge", "tiles", "hinges"
     ops: tuple[tuple[str, Prism], ...]
     material: str = ""
-
-
-def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS) -> Polygon:
-    """An n-gon approximating a circle: vertices on it (inscribed, for solid
-    material) or edges tangent to it (circumscribed, for clearances), so that
-    polygon approximation never eats into a clearance."""
-    r = radius / np.cos(np.pi / n) if circumscribed else radius
-    a = 2 * np.pi * np.arange(n) / n
-    return Polygon(np.stack([centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)], -1))
 
 
 def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
@@ -607,11 +599,13 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
     else:
         lv = job.pins.levels
         z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
-        mask = shapely.union_all([regular_polygon(p, job.pins.geometry.hollow + 1e-3, True)
-                                  for p in plan.hinge_xy + [dx, dy]])
-    parts = _slice_polys(man, z)
+        mask = printgeom.clearance_mask(plan.hinge_xy + [dx, dy], job.pins.geometry)
+    # mesh sections carry float noise (near-duplicate vertices where booleans meet);
+    # the mitre growth would turn such a zero-length edge into a spike of up to
+    # MITRE_LIMIT x the shrink, so drop vertices that deviate less than SECTION_NOISE_MM
+    parts = list(shapely.simplify(np.array(_slice_polys(man, z), dtype=object), SECTION_NOISE_MM))
     design = shapely.transform(shapely.polygons(plan.corners), lambda c: c + np.array([dx, dy]))
-    grown = [shapely.buffer(p, plan.shrink_mm, join_style="mitre", mitre_limit=printgeom.MITRE_LIMIT) for p in parts]
+    grown = list(printgeom.grow_back(np.array(parts, dtype=object), plan.shrink_mm)) if parts else []
     if mask is not None:
         design = np.array([g.difference(mask) for g in design], dtype=object)
         grown = [g.difference(mask) for g in grown]

@@ -32,9 +32,20 @@ from ..pattern.model import Pattern
 from .printers import Printer
 
 CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
-COINCIDE_TOL_REL = 1e-6
+COINCIDE_TOL_REL = 1e-6  # two hinge points closer than this (tile sizes) coincide
+CIRCLE_SEGMENTS = 48
 POCKET_OVERSHOOT_MM = 0.05
-MITRE_LIMIT = 10.0  # as the laser-cut layer and the verifier: sharp tips shrink and grow back exactly  # two hinge points closer than this (tile sizes) coincide
+MITRE_LIMIT = 10.0  # as the laser-cut layer and the verifier: sharp tips shrink and grow back exactly
+MASK_MARGIN_MM = 1e-3  # the tile check masks the pivot clearances with this margin
+
+
+def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS) -> Polygon:
+    """An n-gon approximating a circle: vertices on it (inscribed, for solid
+    material) or edges tangent to it (circumscribed, for clearances), so that
+    polygon approximation never eats into a clearance."""
+    r = radius / np.cos(np.pi / n) if circumscribed else radius
+    a = 2 * np.pi * np.arange(n) / n
+    return Polygon(np.stack([centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)], -1))
 
 
 def closed_corners(pattern: Pattern, state: int) -> np.ndarray:
@@ -368,5 +379,119 @@ def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
             f"pinned hinges refused: the ear of hinge {h} (radius {g.hollow:g} mm with clearance) reaches tile "
             f"{t}, which does not meet at its pivot"
         )
+    _refuse_slivers(plan, g, printer)
     level = np.where(plan.top, 2, 0)
     return PinPlan(levels=levels, geometry=g, level=level)
+
+
+def clearance_discs(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
+    """Per hinge, the disc cleared around its pivot (circumscribed polygon, as the solids)."""
+    return np.array([regular_polygon(p, g.hollow, circumscribed=True) for p in plan.hinge_xy], dtype=object)
+
+
+def clearance_mask(points: np.ndarray, g: PinGeometry) -> Polygon | MultiPolygon:
+    """The pivot discs left out of the tile-outline comparison (round by design)."""
+    return shapely.union_all([regular_polygon(p, g.hollow + MASK_MARGIN_MM, True) for p in points])
+
+
+def grow_back(polys, shrink: float):
+    """Printed outlines grown back to design size (mitre, as the shrink)."""
+    return shapely.buffer(polys, shrink, join_style="mitre", mitre_limit=MITRE_LIMIT)
+
+
+def pinned_sections(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
+    """Per tile, its section where it carries no ear of its own (the axial
+    gaps): the shrunk tile minus the clearance discs of all its pivots."""
+    discs = clearance_discs(plan, g)
+    A, B = plan.hinge_tiles.T
+    out = np.empty(len(plan.tiles), dtype=object)
+    for t in range(len(plan.tiles)):
+        hs = np.flatnonzero((A == t) | (B == t))
+        out[t] = plan.tiles[t].difference(shapely.union_all(discs[hs])) if len(hs) else plan.tiles[t]
+    return out
+
+
+def _outline_deviation(grown: np.ndarray, design: np.ndarray) -> np.ndarray:
+    dev = shapely.hausdorff_distance(grown, design)
+    e1, e2 = shapely.is_empty(grown), shapely.is_empty(design)
+    return np.where(e1 & e2, 0.0, np.where(e1 | e2, np.inf, dev))
+
+
+@dataclass(frozen=True, eq=False)
+class SliverReport:
+    """Per tile, how far its outline at the axial gaps (recovered as
+    :func:`fabkiri.fabricate.mesh.check_printed_tiles` does: grown back by the
+    shrink, pivot discs masked) lies from the design (Hausdorff, mm): as built,
+    and without the slivers beside a clearance that are narrower than a nozzle
+    (what a nozzle can actually lay down)."""
+
+    as_built: np.ndarray  # (T,)
+    printable: np.ndarray  # (T,)
+    slivers: np.ndarray  # (T,) removed sliver area beside the clearances, mm²
+    near_hinge: np.ndarray  # (T,) hinge whose clearance leaves the largest sliver (-1: none)
+
+    @property
+    def deviation(self) -> np.ndarray:
+        return np.maximum(self.as_built, self.printable)
+
+
+def clearance_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> SliverReport:
+    """Measure what the pivot clearances leave of every tile (see :class:`SliverReport`).
+
+    A tile corner next to a pivot whose edge runs almost tangent to the
+    clearance disc keeps a feather of material thinner than a nozzle: it
+    cannot be printed, and the design corner there is not reproduced."""
+    S = pinned_sections(plan, g)
+    r = 0.5 * printer.nozzle_mm
+    core = shapely.buffer(shapely.buffer(S, -r), r)  # where a nozzle fits (morphological opening)
+    thin = shapely.difference(S, core)
+    discs = clearance_discs(plan, g)
+    A, B = plan.hinge_tiles.T
+    eps = 1e-6 * max(1.0, float(np.abs(plan.corners).max()))
+    printable = S.copy()
+    sliver_area = np.zeros(len(S))
+    near = np.full(len(S), -1, dtype=np.int64)
+    for t in np.flatnonzero(~shapely.is_empty(thin)):
+        hs = np.flatnonzero((A == t) | (B == t))
+        if not len(hs):
+            continue
+        # only material within a nozzle of the clearance: the opening also trims the
+        # tile's own sharp corners and leaves hairlines along straight edges
+        near_disc = shapely.buffer(shapely.union_all(discs[hs]), 2 * r)
+        pieces = shapely.get_parts(shapely.intersection(thin[t], near_disc))
+        pieces = pieces[shapely.area(pieces) > 0]
+        if not len(pieces):
+            continue
+        dist = shapely.distance(pieces[:, None], discs[hs][None, :])  # (pieces, hinges)
+        beside = dist.min(1) < eps
+        if not beside.any():
+            continue  # thin corners of the tile itself: not the pins' doing
+        cut = pieces[beside]
+        sliver_area[t] = float(shapely.area(cut).sum())
+        biggest = int(np.argmax(shapely.area(cut)))
+        near[t] = int(hs[int(np.argmin(dist[beside][biggest]))])
+        printable[t] = S[t].difference(shapely.buffer(shapely.union_all(cut), eps, join_style="mitre"))
+    mask = clearance_mask(plan.hinge_xy, g)
+    design = shapely.difference(shapely.polygons(plan.corners), mask)
+    built = _outline_deviation(shapely.difference(grow_back(S, plan.shrink_mm), mask), design)
+    core_dev = _outline_deviation(shapely.difference(grow_back(printable, plan.shrink_mm), mask), design)
+    return SliverReport(as_built=built, printable=core_dev, slivers=sliver_area, near_hinge=near)
+
+
+def _refuse_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> None:
+    rep = clearance_slivers(plan, g, printer)
+    dev = rep.deviation
+    tol = printer.tolerance_mm
+    if dev.max(initial=0.0) <= tol:
+        return
+    t = int(np.argmax(dev))
+    h = int(rep.near_hinge[t])
+    if h < 0:  # no sliver found: name the tile's pivot nearest to its worst point
+        hs = np.flatnonzero((plan.hinge_tiles == t).any(1))
+        h = int(hs[np.argmin(shapely.distance(shapely.points(plan.hinge_xy[hs]), plan.tiles[t].exterior))])
+    raise FabricationError(
+        f"pinned hinges refused: tile {t} is too narrow beside the {g.hollow:g} mm clearance around the pivot of "
+        f"hinge {h}: it keeps a sliver under one nozzle ({printer.nozzle_mm:g} mm) wide there, so its printed "
+        f"outline would be {dev[t]:.2f} mm off the design (tolerance {tol:g} mm); "
+        "scale the pattern up or reduce pin.ear_radius_mm"
+    )
