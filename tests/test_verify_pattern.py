@@ -208,3 +208,22 @@ def test_report_serialises_and_lists_failures_first():
 def test_every_standard_lattice_passes(rows, cols, angle, size):
     rep = verify_pattern(standard_pattern(rows, cols, tile_size=size, angle_deg=angle))
     assert rep.ok, rep.to_text()
+
+
+def test_least_squares_fit_is_checked_against_the_solver_claim():
+    """A least-squares design passes when its fit is what the solver reported, fails when worse."""
+    import dataclasses
+    import json
+
+    from fabkiri.pattern.io import read_pattern
+    from fabkiri.verify import verify_pattern
+
+    from .conftest import TEMPLATES
+
+    p = read_pattern(TEMPLATES / "patterns" / "heart-16x16-rigid.json")
+    assert p.design["report"]["shape_matching"] == "least-squares"
+    fit = verify_pattern(p).get("target fit")
+    assert fit.ok and fit.value > 1e-3  # really inexact, and within the reported figure
+    worse = json.loads(json.dumps(p.design))
+    worse["report"]["fit"]["shape"]["max_mm"] = fit.value / 2  # claim a better fit than the file has
+    assert not verify_pattern(dataclasses.replace(p, design=worse)).get("target fit").ok

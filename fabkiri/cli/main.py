@@ -52,6 +52,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except FabkiriError as exc:
         print(f"fabkiri: error: {exc}", file=sys.stderr)
         return exc.exit_code
+    except BrokenPipeError:  # e.g. `fabkiri verify p.json | head`: the reader left, say nothing more
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
     except KeyboardInterrupt:
         print("fabkiri: interrupted; nothing was written", file=sys.stderr)
         return 130
