@@ -288,3 +288,16 @@ def test_rigid_path_of_any_standard_pattern(rows, cols, angle, size):
     # the elastic machinery agrees: no residual, the mechanism runs to both closed states
     split = mechanism_split(p, closed_states(p))
     assert all(split[s].closing == pytest.approx(1.0, abs=1e-9) for s in (1, 2))
+
+
+def test_solver_heart_design_is_genuinely_reconfigurable():
+    """`fabkiri design --tiles 8x8 --target heart` (no --rigid): hinge sums far from π, so the
+    landscape has the paper's barriers next to both closed states and a zero-energy middle."""
+    from fabkiri.pattern.residuals import hinge_sums
+
+    p = read_pattern(TEMPLATES / "patterns" / "heart-8x8.json")
+    assert np.abs(hinge_sums(p)).max() > 1e-2
+    path = deployment_path(p, steps=20)
+    assert path.kind == "elastic"
+    _assert_reconfigurable_landscape(path, p.tile_size)
+    assert path.collisions.collision_free()
