@@ -270,6 +270,17 @@ def test_dxf_and_svg_structure_and_agreement():
             assert ca == cb and np.abs(a - b).max() <= 1e-6
 
 
+def test_bulk_dxf_is_byte_identical_to_ezdxf_objects():
+    # the bulk ENGRAVE writer must give exactly what add_lwpolyline per stroke gives
+    from fabkiri.fabricate.dxf import dxf_bytes
+
+    for kind in ("tape", "separate"):
+        r = cut(std(3, 4), hinge=kind)
+        for sd in r.sheets:
+            assert sd.count("ENGRAVE") > 10
+            assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
+
+
 def test_same_input_same_bytes_and_golden(tmp_path):
     p = std(2, 2, size=20.0)
     a = cut(p, formats=("dxf", "svg", "png"))
