@@ -281,6 +281,59 @@ def test_bulk_dxf_is_byte_identical_to_ezdxf_objects():
             assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
 
 
+def _same_layers(a, b):
+    return a.keys() == b.keys() and all(
+        len(a[k]) == len(b[k]) and all(ca == cb and np.array_equal(pa, pb) for (pa, ca), (pb, cb) in zip(a[k], b[k]))
+        for k in a)
+
+
+def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
+    from fabkiri.fabricate.readback import read_dxf_checked
+
+    data = cut(std(4, 4)).files["p.dxf"]
+    full, fast = read_dxf_checked(data, full_max=10**9), read_dxf_checked(data, full_max=0)
+    assert full.bulk_entities == 0 and fast.bulk_entities > 100
+    assert full.audit_errors == fast.audit_errors == [] and fast.others == full.others == []
+    assert (fast.insunits, fast.dxfversion) == (full.insunits, full.dxfversion) == (4, "AC1024")
+    assert _same_layers(fast.layers, full.layers)
+    text = data.decode("ascii")
+    head = "  0\nLWPOLYLINE\n  5\n"
+    i = text.index(head, text.index("ENTITIES")) + len(head)
+    h = text[i:text.index("\n", i)]
+    j = text.index("\n330\n", i) + 5
+    owner = text[j:text.index("\n", j)]
+    k = text.index(head, i) + len(head)
+    h2 = text[k:text.index("\n", k)]
+    broken = {
+        "owner": text[:j] + "ABCDE" + text[j + len(owner):],
+        "layer": text.replace("\n  8\nENGRAVE\n", "\n  8\nNOSUCH\n", 1),
+        "handle": text[:k] + h + text[k + len(h2):],
+        "coordinate": text[:i] + text[i:].replace("\n 10\n", "\n 10\nnan", 1),
+    }
+    for what, t in broken.items():
+        res = read_dxf_checked(t.encode("ascii"), full_max=0)
+        assert res.audit_errors and "cannot read" not in res.audit_errors[0], what
+    # a vertex count that does not match sends the entity to ezdxf, which reads what is there
+    res = read_dxf_checked(text.replace(" 90\n2\n", " 90\n3\n", 1).encode("ascii"), full_max=0)
+    assert res.bulk_entities == fast.bulk_entities - 1
+
+
+def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tmp_path):
+    import fabkiri.verify.layout as L
+
+    r = cut(std(3, 3))
+    f = tmp_path / "p.svg"
+    f.write_bytes(r.files["p.svg"])
+    assert not isinstance(L._without_annotation_layers(f), str)  # pruned
+    a = L._read_svg(f)
+    f2 = tmp_path / "q.svg"  # a <use> keeps the whole file
+    f2.write_bytes(r.files["p.svg"].replace(b"</svg>", b'<use href="#CUT" x="0"/></svg>'))
+    assert isinstance(L._without_annotation_layers(f2), str)
+    b = L._read_svg(f2)
+    assert len(a.polylines) > 0 and a.closed == b.closed[:len(a.closed)]
+    assert all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines))
+
+
 def test_same_input_same_bytes_and_golden(tmp_path):
     p = std(2, 2, size=20.0)
     a = cut(p, formats=("dxf", "svg", "png"))

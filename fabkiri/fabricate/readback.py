@@ -91,6 +91,156 @@ def read_dxf(data: bytes):
     return doc, auditor, layers, others
 
 
+FULL_AUDIT_MAX = 2000  # files with at most this many canonical stroke entities are loaded whole by ezdxf
+_CANON_CODES = ("  0", "  5", "330", "100", "  8", "100", " 90", " 70")  # then " 10"/" 20" per vertex
+ENTITIES_HEAD = "  0\nSECTION\n  2\nENTITIES\n"
+
+
+@dataclass
+class DxfReadback:
+    """What the self checks need from a DXF: header facts, audit errors, polylines per layer."""
+
+    insunits: Any
+    dxfversion: str
+    audit_errors: list[str]
+    layers: dict[str, list]
+    others: list[str]
+    bulk_entities: int = 0  # entities checked from their tags instead of being loaded by ezdxf
+
+
+def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback:
+    """Read a DXF once for the self checks, with the ezdxf audit.
+
+    Small files: ezdxf loads and audits everything (:func:`read_dxf`). Large
+    ones hold tens of thousands of label strokes, and loading each as an ezdxf
+    object costs seconds, so the ENTITIES section is split with numpy: every
+    entity in the canonical form of a straight LWPOLYLINE (exactly the tags
+    ``0 5 330 100 8 100 90 70`` then ``10 20`` per vertex, ``90`` = vertex
+    count, flags 0 or 1, subclass markers ``AcDbEntity``/``AcDbPolyline``) is
+    read from its tags and checked the way the audit checks such an entity
+    (unique handle below ``$HANDSEED``, owned by the modelspace, on a layer of
+    the LAYER table, finite coordinates); ezdxf loads and audits the rest of
+    the file (header, tables, blocks, objects and every other entity) in full.
+    """
+    import ezdxf
+
+    text = data.decode("ascii")
+    at = text.find(ENTITIES_HEAD)
+    lo = at + len(ENTITIES_HEAD)
+    hi = text.find("  0\nENDSEC\n", lo)
+    if at < 0 or hi < 0:
+        return _full(data)
+    lines = text[lo:hi].split("\n")[:-1]
+    if len(lines) % 2 or not lines:
+        return _full(data)
+    codes = np.array(lines[0::2])
+    vals = lines[1::2]
+    starts = np.flatnonzero(codes == "  0")
+    if len(starts) == 0 or starts[0] != 0:
+        return _full(data)
+    ends = np.append(starts[1:], len(codes))
+    size = ends - starts
+    n_ent = len(starts)
+    # expected code of every tag if its entity were canonical
+    eid = np.repeat(np.arange(n_ent), size)
+    off = np.arange(len(codes)) - starts[eid]
+    head = np.array(_CANON_CODES)
+    expect = np.where(off % 2 == 0, " 10", " 20")
+    expect[off < len(head)] = head[off[off < len(head)]]
+    bad = np.bincount(eid, weights=(codes != expect), minlength=n_ent) > 0
+    bad |= size < len(head) + 4  # at least two vertices
+    ok_idx = np.flatnonzero(~bad)
+    vals_at = lambda rows, o: [vals[i] for i in (starts[rows] + o).tolist()]  # noqa: E731
+    kind = np.array(vals_at(ok_idx, 0))
+    sub1 = np.array(vals_at(ok_idx, 3))
+    sub2 = np.array(vals_at(ok_idx, 5))
+    count = np.array(vals_at(ok_idx, 6))
+    flags = np.array(vals_at(ok_idx, 7))
+    nv = (size[ok_idx] - len(head)) // 2
+    good = (kind == "LWPOLYLINE") & (sub1 == "AcDbEntity") & (sub2 == "AcDbPolyline") \
+        & np.isin(flags, ["0", "1"]) & (count == nv.astype(str))
+    bad[ok_idx[~good]] = True
+    canon = np.flatnonzero(~bad)
+    if len(canon) <= full_max:
+        return _full(data)
+    # ezdxf: everything but the canonical entities
+    keep = np.flatnonzero(bad)
+    rest = "".join("\n".join(lines[2 * starts[k]: 2 * ends[k]]) + "\n" for k in keep.tolist())
+    try:
+        doc = ezdxf.read(io.StringIO(text[:lo] + rest + text[hi:]))
+    except Exception as exc:  # an unreadable file is a failed check, not a crash
+        return DxfReadback(None, "", [f"ezdxf cannot read the file: {exc}"], {}, [])
+    errors = [f"{e.code}: {e.message}" for e in doc.audit().errors]
+    handles = np.array(vals_at(canon, 1))
+    owners = np.array(vals_at(canon, 2))
+    layer_of = np.array(vals_at(canon, 4))
+    try:
+        hv = np.array([int(h, 16) for h in handles.tolist()], dtype=np.int64)
+        seed = int(doc.header.get("$HANDSEED", "0"), 16)
+    except ValueError:
+        hv, seed = np.zeros(len(canon), dtype=np.int64), -1
+        errors.append("stroke entity with a handle that is not hexadecimal")
+    if len(np.unique(handles)) != len(handles) or any(h in doc.entitydb for h in set(handles.tolist())):
+        errors.append("stroke entities with duplicate handles")
+    if (hv <= 0).any() or (hv >= seed).any():
+        errors.append("stroke entity handle not below $HANDSEED")
+    if (owners != doc.modelspace().layout_key).any():
+        errors.append(f"{int((owners != doc.modelspace().layout_key).sum())} stroke entities not owned by the modelspace")
+    from ezdxf.lldxf.validator import is_valid_layer_name
+
+    names = set(layer_of.tolist())
+    invalid = sorted(n for n in names if not is_valid_layer_name(n))
+    if invalid:
+        errors.append(f"stroke entities with invalid layer names {invalid}")
+    missing = sorted(n for n in names if n not in doc.layers)
+    if missing:
+        errors.append(f"stroke entities on undefined layers {missing}")
+    # coordinates: the 10/20 values of the canonical entities
+    tag = np.flatnonzero(~bad[eid] & (off >= len(head)))
+    try:
+        xy = np.array([vals[i] for i in tag.tolist()], dtype=float).reshape(-1, 2)
+    except ValueError:
+        errors.append("stroke entity with a coordinate that is not a number")
+        xy = np.full((len(tag) // 2, 2), np.nan)
+    if not np.isfinite(xy).all():
+        errors.append("stroke entity with a non-finite coordinate")
+    n_canon = nv[good]
+    split = np.split(xy, np.cumsum(n_canon)[:-1]) if len(canon) else []
+    closed = (flags[good] == "1").tolist()
+    # polylines per layer in file order: canonical ones from the tags, the others from ezdxf
+    per_entity: dict[int, tuple] = {int(k): (str(l), (p, c)) for k, l, p, c in zip(canon, layer_of, split, closed)}
+    _, _, rest_layers_in_order, others = _entities_of(doc)
+    if len(rest_layers_in_order) != len(keep):  # entities outside the modelspace: read it all with ezdxf
+        return _full(data)
+    for k, item in zip(keep.tolist(), rest_layers_in_order):
+        if item is not None:
+            per_entity[k] = item
+    layers: dict[str, list] = {}
+    for k in sorted(per_entity):
+        name, pl = per_entity[k]
+        layers.setdefault(name, []).append(pl)
+    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon))
+
+
+def _entities_of(doc):
+    """``(None, None, items, others)``: per modelspace entity ``(layer, (points, closed))`` or None."""
+    items, others = [], []
+    for e in doc.modelspace():
+        if e.dxftype() != "LWPOLYLINE":
+            others.append(e.dxftype())
+            items.append(None)
+            continue
+        pts = np.asarray([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
+        items.append((e.dxf.layer, (pts, bool(e.closed))))
+    return None, None, items, others
+
+
+def _full(data: bytes) -> DxfReadback:
+    doc, aud, layers, others = read_dxf(data)
+    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion,
+                       [f"{e.code}: {e.message}" for e in aud.errors], layers, others)
+
+
 _NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
@@ -167,10 +317,13 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
         k = row["index"]
         dxf_layers = svg_layers = None
         if row["dxf"]:
-            doc, aud, dxf_layers, others = read_dxf(files[row["dxf"]])
-            rb.add(f"sheet {k} dxf audit", len(aud.errors) == 0, f"{len(aud.errors)} errors", len(aud.errors))
-            rb.add(f"sheet {k} dxf units", doc.header.get("$INSUNITS") == 4 and doc.dxfversion == "AC1024",
-                   f"$INSUNITS={doc.header.get('$INSUNITS')}, {doc.dxfversion}")
+            dx = read_dxf_checked(files[row["dxf"]])
+            dxf_layers, others, errs = dx.layers, dx.others, dx.audit_errors
+            how = f" ({dx.bulk_entities} stroke entities checked from their tags)" if dx.bulk_entities else ""
+            rb.add(f"sheet {k} dxf audit", len(errs) == 0, f"{len(errs)} errors{how}" + (f": {errs[0]}" if errs else ""),
+                   len(errs))
+            rb.add(f"sheet {k} dxf units", dx.insunits == 4 and dx.dxfversion == "AC1024",
+                   f"$INSUNITS={dx.insunits}, {dx.dxfversion}")
             rb.add(f"sheet {k} dxf entities", not others and set(dxf_layers) <= set(LAYERS),
                    f"non-LWPOLYLINE: {sorted(set(others))}, layers {sorted(dxf_layers)}")
             dups = sum(duplicate_segments(v) for v in dxf_layers.values())
