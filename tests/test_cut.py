@@ -334,6 +334,24 @@ def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tm
     assert all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines))
 
 
+def test_text_strokes_many_matches_text_strokes_label_by_label():
+    from fabkiri.fabricate.text import text_strokes_many
+
+    rng = np.random.default_rng(3)
+    chars = sorted(GLYPHS)
+    texts = ["".join(rng.choice(chars, rng.integers(0, 6))) for _ in range(60)] + ["12t", "4095"]
+    heights = rng.uniform(-1, 5, len(texts))
+    centres = rng.uniform(-100, 500, (len(texts), 2))
+    pts, counts, label = text_strokes_many(texts, heights, centres)
+    got = np.split(pts, np.cumsum(counts)[:-1]) if len(counts) else []
+    want = [(k, s) for k, (t, h, c) in enumerate(zip(texts, heights, centres)) if h > 0
+            for s in text_strokes(t, float(h), c)]
+    assert [k for k, _ in want] == label.tolist()
+    assert all(np.array_equal(a, b) for a, (_, b) in zip(got, want))  # the same floats, bit for bit
+    with pytest.raises(KeyError):
+        text_strokes_many(["A\u00e9"], np.array([1.0]), np.zeros((1, 2)))
+
+
 def test_same_input_same_bytes_and_golden(tmp_path):
     p = std(2, 2, size=20.0)
     a = cut(p, formats=("dxf", "svg", "png"))

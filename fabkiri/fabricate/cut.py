@@ -28,7 +28,7 @@ from .dxf import DXF_VERSION, dxf_bytes
 from .materials import HINGE_KINDS, Material
 from .preview import png_bytes
 from .svg import STROKE_MM, svg_bytes
-from .text import supported, text_strokes, text_width
+from .text import supported, text_strokes, text_strokes_many, text_width
 
 FORMATS = ("dxf", "svg", "png")
 MIN_LABEL_MM = 0.8  # below this a label is not legible; it is left out (and counted)
@@ -202,6 +202,16 @@ def _tape_marks(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, m
     seg = np.stack([a + t1[:, None] * u, b - t0[:, None] * u], 1)
     seg[~ok] = np.nan
     return seg
+
+
+def _add_labels(sheets, sheet_of_label: np.ndarray, pts: np.ndarray, counts: np.ndarray, label: np.ndarray) -> None:
+    """Open strokes (``pts`` split by ``counts``, stroke j of label ``label[j]``) onto their labels' sheets, in order."""
+    if not len(counts):
+        return
+    on = np.asarray(sheet_of_label)[label]
+    point_sheet = np.repeat(on, counts)
+    for s in np.unique(on).tolist():
+        sheets[s].add_many("ENGRAVE", pts[point_sheet == s], counts[on == s])
 
 
 def _fit_labels(Q, tiles, texts, anchors, region, hmax, margin):
@@ -403,10 +413,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         hid = _fit_labels(Q, tidx, ids, cent, id_region, label_h, 0.0)
         label_heights = hid
         omitted += int((hid <= 0).sum())
-        strokes = lay.label_strokes(ids, hid, cent)
-        for t in range(T):
-            for p in strokes[t]:
-                sheets[sheet_of[t]].add("ENGRAVE", p, False)
+        _add_labels(sheets, sheet_of, *text_strokes_many(ids, hid, cent))
 
         cross = sheet_of[A] != sheet_of[B]
         c_tiles, c_k, c_text = [], [], []
@@ -429,19 +436,16 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             anchor = _incentre(tri)
             hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
             omitted += int((hc <= 0).sum())
-            cs = lay.label_strokes(c_text, hc, anchor)
-            for i, t in enumerate(ct):
-                for p in cs[i]:
-                    sheets[sheet_of[t]].add("ENGRAVE", p, False)
+            _add_labels(sheets, sheet_of[ct], *text_strokes_many(c_text, hc, anchor))
         if kind == "tape" and Hn:
             # tile A's corner carries the face letter, tile B's a chord where the tape ends: one
             # mark per tile keeps the stroke count (DXF entities) down on large patterns
             same = ~cross
             mt, mk = B[same], cB[same]
             marks = _tape_marks(Q, mt, mk, CORNER_FRAC, label_margin)
-            for t, seg in zip(mt, marks):
-                if np.isfinite(seg).all():
-                    sheets[sheet_of[t]].add("ENGRAVE", seg, False)
+            ok = np.isfinite(marks).all(axis=(1, 2))
+            _add_labels(sheets, sheet_of[mt[ok]], marks[ok].reshape(-1, 2), np.full(int(ok.sum()), 2),
+                        np.arange(int(ok.sum())))
         if omitted:
             warnings.append(f"{omitted} label(s) left out: no room for {MIN_LABEL_MM:g} mm text inside the tile")
 

@@ -47,12 +47,25 @@ class SheetDrawing:
             return
         self.layers[layer].append((pts, closed))
 
+    def add_many(self, layer: str, points: np.ndarray, counts: np.ndarray) -> None:
+        """Open polylines ``points[sum(counts[:j]):][:counts[j]]``, in order: :meth:`add` for each, at once."""
+        pts = snap(points)
+        self.layers[layer].extend((p, False) for p in np.split(pts, np.cumsum(counts)[:-1]) if len(p) >= 2)
+
     def length(self, layer: str) -> float:
-        total = 0.0
-        for pts, closed in self.layers[layer]:
-            p = np.vstack([pts, pts[:1]]) if closed else pts
-            total += float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
-        return total
+        polylines = self.layers[layer]
+        if not polylines:
+            return 0.0
+        # all segments at once: each polyline's points, then its closing segment where closed
+        pts = np.concatenate([p for p, _ in polylines])
+        n = np.array([len(p) for p, _ in polylines])
+        end = np.cumsum(n)
+        last = np.zeros(len(pts), dtype=bool)
+        last[end - 1] = True
+        d = np.linalg.norm(pts[1:] - pts[:-1], axis=1)[~last[:-1]].sum()
+        closed = np.array([c for _, c in polylines])
+        d += np.linalg.norm(pts[end - 1][closed] - pts[end - n][closed], axis=1).sum()
+        return float(d)
 
     def count(self, layer: str) -> int:
         return len(self.layers[layer])
