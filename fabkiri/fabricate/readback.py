@@ -244,8 +244,15 @@ def _full(data: bytes) -> DxfReadback:
 _NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
+_SUBPATH = re.compile(r"(?=[Mm])")
+
+
 def read_svg(data: bytes):
-    """``(width_mm, height_mm, viewbox, layers)``; layers from ``<g id=...>`` groups, y flipped back to y-up."""
+    """``(width_mm, height_mm, viewbox, layers)``; layers from ``<g id=...>`` groups, y flipped back to y-up.
+
+    A path with several subpaths (``M ... M ...``: the SVG writes each tile's strokes as one
+    path) gives one polyline per subpath.
+    """
     root = ET.fromstring(data)
     w, h = root.get("width", ""), root.get("height", "")
     vb = [float(v) for v in root.get("viewBox", "").split()]
@@ -255,19 +262,32 @@ def read_svg(data: bytes):
     layers: dict[str, list] = {}
     for g in root.iter(f"{SVG_NS}g"):
         name = g.get("id")
+        nums: list[str] = []
+        counts: list[int] = []
+        closed: list[bool] = []
         for el in g:
             tag = el.tag.replace(SVG_NS, "")
             if tag == "path":
-                d = el.get("d", "")
-                nums = np.asarray([float(v) for v in _NUM.findall(d)], dtype=float).reshape(-1, 2)
-                closed = d.strip().upper().endswith("Z")
+                for sub in _SUBPATH.split(el.get("d", "")):
+                    if not sub.strip():
+                        continue
+                    found = _NUM.findall(sub)
+                    nums += found
+                    counts.append(len(found))
+                    closed.append(sub.strip().upper().endswith("Z"))
             elif tag in ("polyline", "polygon"):
-                nums = np.asarray([float(v) for v in _NUM.findall(el.get("points", ""))]).reshape(-1, 2)
-                closed = tag == "polygon"
-            else:
-                continue
-            pts = np.column_stack([nums[:, 0], H - nums[:, 1]])
-            layers.setdefault(name, []).append((pts, closed))
+                found = _NUM.findall(el.get("points", ""))
+                nums += found
+                counts.append(len(found))
+                closed.append(tag == "polygon")
+        if not counts:
+            continue
+        if any(c % 2 for c in counts):
+            raise ValueError(f"SVG group {name}: a path with an odd number of coordinates")
+        xy = np.asarray(nums, dtype=float).reshape(-1, 2)
+        pts = np.column_stack([xy[:, 0], H - xy[:, 1]])
+        parts = np.split(pts, np.cumsum(np.asarray(counts) // 2)[:-1])
+        layers.setdefault(name, []).extend(zip(parts, closed))
     return wmm, hmm, vb, layers
 
 
