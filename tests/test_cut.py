@@ -352,6 +352,22 @@ def test_text_strokes_many_matches_text_strokes_label_by_label():
         text_strokes_many(["A\u00e9"], np.array([1.0]), np.zeros((1, 2)))
 
 
+@given(st.lists(st.tuples(st.integers(2, 6), st.booleans()), min_size=1, max_size=20), st.integers(0, 10**6))
+@settings(max_examples=30, deadline=None)
+def test_bulk_segments_and_linestrings_match_one_polyline_at_a_time(shape, seed):
+    from fabkiri.fabricate.readback import _linestrings, _segments
+
+    rng = np.random.default_rng(seed)
+    pl = [(rng.normal(size=(n, 2)), c) for n, c in shape]
+    want = np.concatenate([np.stack([q[:-1], q[1:]], 1)
+                           for q in (np.vstack([p, p[:1]]) if c else p for p, c in pl)])
+    assert np.array_equal(_segments(pl), want)
+    lines = _linestrings(pl)
+    assert len(lines) == len(pl)
+    for g, (p, c) in zip(lines, pl):
+        assert np.array_equal(shapely.get_coordinates(g), np.vstack([p, p[:1]]) if c else p)
+
+
 def test_same_input_same_bytes_and_golden(tmp_path):
     p = std(2, 2, size=20.0)
     a = cut(p, formats=("dxf", "svg", "png"))

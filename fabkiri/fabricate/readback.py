@@ -291,12 +291,25 @@ def read_svg(data: bytes):
     return wmm, hmm, vb, layers
 
 
+def _flat(polylines) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(points (P, 2), counts, closed)`` of a list of ``(points, closed)``."""
+    if not polylines:
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+    return (np.concatenate([np.asarray(p, dtype=float).reshape(-1, 2) for p, _ in polylines]),
+            np.array([len(p) for p, _ in polylines]), np.array([bool(c) for _, c in polylines]))
+
+
 def _segments(polylines) -> np.ndarray:
-    segs = []
-    for pts, closed in polylines:
-        p = np.vstack([pts, pts[:1]]) if closed else pts
-        segs.append(np.stack([p[:-1], p[1:]], 1))
-    return np.concatenate(segs) if segs else np.zeros((0, 2, 2))
+    """Every segment ``(S, 2, 2)`` of the polylines (closing segments included), polyline by polyline."""
+    pts, n, closed = _flat(polylines)
+    if len(pts) == 0:
+        return np.zeros((0, 2, 2))
+    end = np.cumsum(n)
+    first = end - n
+    nxt = np.arange(1, len(pts) + 1)
+    nxt[end - 1] = np.where(closed, first, -1)  # the last point goes back to the first, or nowhere
+    keep = nxt >= 0
+    return np.stack([pts[keep], pts[nxt[keep]]], 1)
 
 
 def duplicate_segments(polylines, decimals: int = 6) -> int:
@@ -356,21 +369,30 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
         if dxf_layers is not None and svg_layers is not None:
             worst, same = 0.0, True
             for name in LAYERS:
-                a, b = dxf_layers.get(name, []), svg_layers.get(name, [])
-                if len(a) != len(b):
+                (pa, na, ca), (pb, nb, cb) = _flat(dxf_layers.get(name, [])), _flat(svg_layers.get(name, []))
+                if len(na) != len(nb) or not (np.array_equal(na, nb) and np.array_equal(ca, cb)):
                     same = False
                     continue
-                for (pa, ca), (pb, cb) in zip(a, b):
-                    if ca != cb or pa.shape != pb.shape:
-                        same = False
-                        continue
-                    worst = max(worst, float(np.abs(pa - pb).max(initial=0.0)))
+                worst = max(worst, float(np.abs(pa - pb).max(initial=0.0)))
             rb.add(f"sheet {k} dxf = svg", same and worst <= AGREE_MM, f"max difference {worst:.2e} mm", worst)
         layers = dxf_layers if dxf_layers is not None else svg_layers
         if layers is None:
             continue
         _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, result.tile_sheet)
     return rb
+
+
+def _linestrings(polylines) -> np.ndarray:
+    """One LineString per polyline (closed ones back to their first point), built at once."""
+    pts, n, closed = _flat(polylines)
+    end = np.cumsum(n)
+    reps = np.ones(len(pts), dtype=np.int64)
+    reps[end[closed] - 1] = 2  # repeat the last point's slot: filled with the first point below
+    coords = np.repeat(pts, reps, axis=0)
+    owner = np.repeat(np.repeat(np.arange(len(n)), n), reps)
+    closing = np.cumsum(reps)[end[closed] - 1] - 1
+    coords[closing] = pts[(end - n)[closed]]
+    return shapely.linestrings(coords, indices=owner)
 
 
 def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
@@ -445,7 +467,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
     # labels inside tiles
     eng = layers.get("ENGRAVE", [])
     if eng:
-        strokes = np.array([shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in eng])
+        strokes = _linestrings(eng)
         region = shapely.STRtree(expected)
         ii, _ = region.query(strokes, predicate="within")
         outside = len(strokes) - len(np.unique(ii))
