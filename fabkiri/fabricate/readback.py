@@ -24,6 +24,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -89,6 +90,35 @@ def read_dxf(data: bytes):
         pts = np.asarray([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
         layers.setdefault(e.dxf.layer, []).append((pts, bool(e.closed)))
     return doc, auditor, layers, others
+
+
+class Polylines(Sequence):
+    """``(points, closed)`` pairs kept flat (points ``(P, 2)``, counts, closed flags); items made on demand."""
+
+    def __init__(self, pts: np.ndarray, counts: np.ndarray, closed: np.ndarray):
+        self.pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+        self.counts = np.asarray(counts, dtype=np.int64)
+        self.closed = np.asarray(closed, dtype=bool)
+        self._items: list | None = None
+
+    @classmethod
+    def of(cls, items) -> "Polylines":
+        return cls(*_flat(items))
+
+    def _list(self) -> list:
+        if self._items is None:
+            parts = np.split(self.pts, np.cumsum(self.counts)[:-1]) if len(self.counts) else []
+            self._items = list(zip(parts, self.closed.tolist()))
+        return self._items
+
+    def __len__(self) -> int:
+        return len(self.counts)
+
+    def __getitem__(self, i):
+        return self._list()[i]
+
+    def __iter__(self):
+        return iter(self._list())
 
 
 FULL_AUDIT_MAX = 2000  # files with at most this many canonical stroke entities are loaded whole by ezdxf
@@ -205,20 +235,22 @@ def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback
     if not np.isfinite(xy).all():
         errors.append("stroke entity with a non-finite coordinate")
     n_canon = nv[good]
-    split = np.split(xy, np.cumsum(n_canon)[:-1]) if len(canon) else []
-    closed = (flags[good] == "1").tolist()
+    closed = flags[good] == "1"
+    point_layer = np.repeat(layer_of, n_canon)
     # polylines per layer in file order: canonical ones from the tags, the others from ezdxf
-    per_entity: dict[int, tuple] = {int(k): (str(l), (p, c)) for k, l, p, c in zip(canon, layer_of, split, closed)}
-    _, _, rest_layers_in_order, others = _entities_of(doc)
-    if len(rest_layers_in_order) != len(keep):  # entities outside the modelspace: read it all with ezdxf
+    _, _, rest_in_order, others = _entities_of(doc)
+    if len(rest_in_order) != len(keep):  # entities outside the modelspace: read it all with ezdxf
         return _full(data)
-    for k, item in zip(keep.tolist(), rest_layers_in_order):
-        if item is not None:
-            per_entity[k] = item
-    layers: dict[str, list] = {}
-    for k in sorted(per_entity):
-        name, pl = per_entity[k]
-        layers.setdefault(name, []).append(pl)
+    rest = [(int(k), item) for k, item in zip(keep.tolist(), rest_in_order) if item is not None]
+    layers: dict[str, Polylines] = {}
+    for name in sorted(names | {item[0] for _, item in rest}, key=lambda n: LAYERS.index(n) if n in LAYERS else 99):
+        sel = layer_of == name
+        mine = Polylines(xy[point_layer == name], n_canon[sel], closed[sel])
+        extra = [(k, item[1]) for k, item in rest if item[0] == name]
+        if extra:  # merge by position in the file
+            both = sorted([(int(k), pl) for k, pl in zip(canon[sel].tolist(), mine)] + extra, key=lambda kv: kv[0])
+            mine = Polylines.of([pl for _, pl in both])
+        layers[name] = mine
     return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon))
 
 
@@ -285,14 +317,19 @@ def read_svg(data: bytes):
         if any(c % 2 for c in counts):
             raise ValueError(f"SVG group {name}: a path with an odd number of coordinates")
         xy = np.asarray(nums, dtype=float).reshape(-1, 2)
-        pts = np.column_stack([xy[:, 0], H - xy[:, 1]])
-        parts = np.split(pts, np.cumsum(np.asarray(counts) // 2)[:-1])
-        layers.setdefault(name, []).extend(zip(parts, closed))
+        pl = Polylines(np.column_stack([xy[:, 0], H - xy[:, 1]]), np.asarray(counts) // 2, closed)
+        if name in layers:  # two groups with one id: one layer
+            old = layers[name]
+            pl = Polylines(np.concatenate([old.pts, pl.pts]), np.concatenate([old.counts, pl.counts]),
+                           np.concatenate([old.closed, pl.closed]))
+        layers[name] = pl
     return wmm, hmm, vb, layers
 
 
 def _flat(polylines) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(points (P, 2), counts, closed)`` of a list of ``(points, closed)``."""
+    if isinstance(polylines, Polylines):
+        return polylines.pts, polylines.counts, polylines.closed
     if not polylines:
         return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
     return (np.concatenate([np.asarray(p, dtype=float).reshape(-1, 2) for p, _ in polylines]),
