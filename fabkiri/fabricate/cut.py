@@ -497,16 +497,19 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                                 + PIERCE_S * paths, 1),
         })
     hinge_rows = []
+    pos_a = snap(placed_corners[A, cA]).tolist()
+    pos_b = snap(placed_corners[B, cB]).tolist()
     for h in range(Hn):
         row = {"hinge": h, "tiles": [int(A[h]), int(B[h])], "face": letters[h],
                "sheets": [int(sheet_of[A[h]]) + 1, int(sheet_of[B[h]]) + 1],
-               "position": snap(placed_corners[A[h], cA[h]]).tolist(),  # on tile A's sheet
-               "position_b": snap(placed_corners[B[h], cB[h]]).tolist(),  # on tile B's sheet
+               "position": pos_a[h],  # on tile A's sheet
+               "position_b": pos_b[h],  # on tile B's sheet
                "cross_sheet": bool(sheet_of[A[h]] != sheet_of[B[h]])}
         if lig is not None:
             row["ligament_length_mm"] = round(float(lig.lengths[h]), 6)
             row["strain"] = round(float(lig.strains[h]), 6)
         hinge_rows.append(row)
+    shifts = snap(place.shift).tolist()
     manifest = {
         "format": "fabkiri.cut", "version": 1, "units": "mm", "generator": f"fabkiri {__version__}",
         "pattern": options.pattern_file or pattern.name, "pattern_name": pattern.name,
@@ -532,7 +535,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                    "label": str(t) if label_heights[t] > 0 else "",
                    "label_height_mm": round(float(label_heights[t]), 4),
                    "rotation_rad": round(float(place.theta[t]), 12),
-                   "shift_mm": snap(place.shift[t]).tolist()} for t in range(T)],
+                   "shift_mm": shifts[t]} for t in range(T)],
         "hinges": hinge_rows,
         "hinge_features": hinge_features,
         "face_conflicts": faces.conflicts,
