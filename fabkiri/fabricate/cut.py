@@ -72,6 +72,9 @@ class CutOptions:
     pattern_file: str = ""
 
 
+ROW_LISTS = ("tiles", "hinges", "hinge_features")  # manifest lists written one row per line
+
+
 @dataclass
 class CutResult:
     """The sheets, the files to write (name -> bytes) and the manifest."""
@@ -84,7 +87,25 @@ class CutResult:
     tile_sheet: np.ndarray | None = None
 
     def manifest_bytes(self) -> bytes:
-        return (json.dumps(self.manifest, indent=1, ensure_ascii=False) + "\n").encode("utf-8")
+        """The manifest as JSON: indented, but each row of the long lists on one line.
+
+        (One row per line reads well and lets json's C encoder write the thousands of
+        rows of a large pattern; ``indent`` alone runs the pure-Python encoder.)
+        """
+        m = dict(self.manifest)
+        rows = {}
+        for k in ROW_LISTS:
+            if isinstance(m.get(k), list) and m[k]:
+                rows[k] = m[k]
+                m[k] = f"\u0000rows {k}"
+        text = json.dumps(m, indent=1, ensure_ascii=False)
+        for k, v in rows.items():
+            at = f'\n "{k}": ' + json.dumps(m[k], ensure_ascii=False)
+            body = ",\n".join("  " + json.dumps(r, ensure_ascii=False) for r in v)
+            if text.count(at) != 1:  # cannot happen: a top-level key is written once
+                raise RuntimeError(f"manifest key {k!r} not found once")
+            text = text.replace(at, f'\n "{k}": [\n{body}\n ]')
+        return (text + "\n").encode("utf-8")
 
 
 def _resolve(options: CutOptions) -> tuple[str, str, str]:
