@@ -3,7 +3,9 @@
 Two layers of checks:
 
 * :func:`self_checks` — the writer's own promises, read from the bytes:
-  the DXF re-reads and audits clean, ``$INSUNITS`` = 4, only LWPOLYLINEs on
+  the DXF re-reads and audits clean (large files: the stroke entities are
+  checked from their tags, everything else by ezdxf's loader and auditor; see
+  :func:`read_dxf_checked`), ``$INSUNITS`` = 4, only LWPOLYLINEs on
   known layers, no duplicate segments; the SVG declares mm equal to its
   viewBox; DXF and SVG hold the same polylines after the y flip (1e-6 mm);
   closed contours are valid polygons; the tiles come back from the cut
