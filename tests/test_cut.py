@@ -279,6 +279,8 @@ def test_bulk_dxf_is_byte_identical_to_ezdxf_objects():
         for sd in r.sheets:
             assert sd.count("ENGRAVE") > 10
             assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
+            sd.add("ENGRAVE", np.array([[1.0, 1.0], [2.5, 1.0], [2.0, 1e-5]]), True)  # closed, tiny coordinate
+            assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
 
 
 def _same_layers(a, b):
