@@ -24,6 +24,7 @@ from ..pattern.model import Pattern
 from . import hinges as hg
 from . import layout as lay
 from .drawing import COLORS, SheetDrawing, snap
+from .gcpause import gc_paused
 from .dxf import DXF_VERSION, dxf_bytes
 from .materials import HINGE_KINDS, Material
 from .preview import png_bytes
@@ -256,6 +257,7 @@ def _fit_labels(Q, tiles, texts, anchors, region, hmax, margin):
     return h
 
 
+@gc_paused
 def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     """Build every sheet, file and the manifest for ``pattern`` in memory."""
     mat = options.material

@@ -37,6 +37,7 @@ from ..fileio import atomic_write_many
 from ..pattern.model import Pattern
 from .cut import CutResult
 from .drawing import LAYERS
+from .gcpause import gc_paused
 from .hinges import MITRE_LIMIT as hg_MITRE
 
 SVG_NS = "{http://www.w3.org/2000/svg}"
@@ -377,6 +378,7 @@ def _opening_loss(piece, width: float) -> float:
     return float(np.max(1.0 - shapely.area(opened) / np.maximum(area, 1e-300), initial=0.0))
 
 
+@gc_paused
 def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None = None) -> Readback:
     """The writer's own checks on the bytes it produced (see the module docstring)."""
     rb = rb or Readback()
@@ -528,6 +530,7 @@ def _relative(value, prefix: str):
     return value
 
 
+@gc_paused
 def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str, Any]:
     """:func:`fabkiri.verify.verify_layout` on every written DXF and SVG, both closed states."""
     try:
