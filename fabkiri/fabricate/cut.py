@@ -228,7 +228,8 @@ def _tape_marks(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, m
 
 def _add_labels(sheets, sheet_of_label: np.ndarray, tile_of_label: np.ndarray, pts: np.ndarray, counts: np.ndarray,
                 label: np.ndarray) -> None:
-    """Open strokes (``pts`` split by ``counts``, stroke j of label ``label[j]``) onto their labels' sheets, in order."""
+    """Open strokes (``pts`` split by ``counts``, stroke j of label ``label[j]``) onto their labels'
+    sheets, in order, grouped by tile."""
     if not len(counts):
         return
     on = np.asarray(sheet_of_label)[label]

@@ -217,8 +217,9 @@ def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback
         errors.append("stroke entities with duplicate handles")
     if (hv <= 0).any() or (hv >= seed).any():
         errors.append("stroke entity handle not below $HANDSEED")
-    if (owners != doc.modelspace().layout_key).any():
-        errors.append(f"{int((owners != doc.modelspace().layout_key).sum())} stroke entities not owned by the modelspace")
+    foreign = int((owners != doc.modelspace().layout_key).sum())
+    if foreign:
+        errors.append(f"{foreign} stroke entities not owned by the modelspace")
     from ezdxf.lldxf.validator import is_valid_layer_name
 
     names = set(layer_of.tolist())
@@ -394,8 +395,8 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
             dx = read_dxf_checked(files[row["dxf"]])
             dxf_layers, others, errs = dx.layers, dx.others, dx.audit_errors
             how = f" ({dx.bulk_entities} stroke entities checked from their tags)" if dx.bulk_entities else ""
-            rb.add(f"sheet {k} dxf audit", len(errs) == 0, f"{len(errs)} errors{how}" + (f": {errs[0]}" if errs else ""),
-                   len(errs))
+            rb.add(f"sheet {k} dxf audit", len(errs) == 0,
+                   f"{len(errs)} errors{how}" + (f": {errs[0]}" if errs else ""), len(errs))
             rb.add(f"sheet {k} dxf units", dx.insunits == 4 and dx.dxfversion == "AC1024",
                    f"$INSUNITS={dx.insunits}, {dx.dxfversion}")
             rb.add(f"sheet {k} dxf entities", not others and set(dxf_layers) <= set(LAYERS),
