@@ -270,6 +270,106 @@ def test_dxf_and_svg_structure_and_agreement():
             assert ca == cb and np.abs(a - b).max() <= 1e-6
 
 
+def test_bulk_dxf_is_byte_identical_to_ezdxf_objects():
+    # the bulk ENGRAVE writer must give exactly what add_lwpolyline per stroke gives
+    from fabkiri.fabricate.dxf import dxf_bytes
+
+    for kind in ("tape", "separate"):
+        r = cut(std(3, 4), hinge=kind)
+        for sd in r.sheets:
+            assert sd.count("ENGRAVE") > 10
+            assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
+            sd.add("ENGRAVE", np.array([[1.0, 1.0], [2.5, 1.0], [2.0, 1e-5]]), True)  # closed, tiny coordinate
+            assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
+
+
+def _same_layers(a, b):
+    return a.keys() == b.keys() and all(
+        len(a[k]) == len(b[k]) and all(ca == cb and np.array_equal(pa, pb) for (pa, ca), (pb, cb) in zip(a[k], b[k]))
+        for k in a)
+
+
+def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
+    from fabkiri.fabricate.readback import read_dxf_checked
+
+    data = cut(std(4, 4)).files["p.dxf"]
+    full, fast = read_dxf_checked(data, full_max=10**9), read_dxf_checked(data, full_max=0)
+    assert full.bulk_entities == 0 and fast.bulk_entities > 100
+    assert full.audit_errors == fast.audit_errors == [] and fast.others == full.others == []
+    assert (fast.insunits, fast.dxfversion) == (full.insunits, full.dxfversion) == (4, "AC1024")
+    assert _same_layers(fast.layers, full.layers)
+    text = data.decode("ascii")
+    head = "  0\nLWPOLYLINE\n  5\n"
+    i = text.index(head, text.index("ENTITIES")) + len(head)
+    h = text[i:text.index("\n", i)]
+    j = text.index("\n330\n", i) + 5
+    owner = text[j:text.index("\n", j)]
+    k = text.index(head, i) + len(head)
+    h2 = text[k:text.index("\n", k)]
+    broken = {
+        "owner": text[:j] + "ABCDE" + text[j + len(owner):],
+        "layer": text.replace("\n  8\nENGRAVE\n", "\n  8\nNOSUCH\n", 1),
+        "handle": text[:k] + h + text[k + len(h2):],
+        "coordinate": text[:i] + text[i:].replace("\n 10\n", "\n 10\nnan", 1),
+    }
+    for what, t in broken.items():
+        res = read_dxf_checked(t.encode("ascii"), full_max=0)
+        assert res.audit_errors and "cannot read" not in res.audit_errors[0], what
+    # a vertex count that does not match sends the entity to ezdxf, which reads what is there
+    res = read_dxf_checked(text.replace(" 90\n2\n", " 90\n3\n", 1).encode("ascii"), full_max=0)
+    assert res.bulk_entities == fast.bulk_entities - 1
+
+
+def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tmp_path):
+    import fabkiri.verify.layout as L
+
+    r = cut(std(3, 3))
+    f = tmp_path / "p.svg"
+    f.write_bytes(r.files["p.svg"])
+    assert not isinstance(L._without_annotation_layers(f), str)  # pruned
+    a = L._read_svg(f)
+    f2 = tmp_path / "q.svg"  # a <use> keeps the whole file
+    f2.write_bytes(r.files["p.svg"].replace(b"</svg>", b'<use href="#CUT" x="0"/></svg>'))
+    assert isinstance(L._without_annotation_layers(f2), str)
+    b = L._read_svg(f2)
+    assert len(a.polylines) > 0 and a.closed == b.closed[:len(a.closed)]
+    assert all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines))
+
+
+def test_text_strokes_many_matches_text_strokes_label_by_label():
+    from fabkiri.fabricate.text import text_strokes_many
+
+    rng = np.random.default_rng(3)
+    chars = sorted(GLYPHS)
+    texts = ["".join(rng.choice(chars, rng.integers(0, 6))) for _ in range(60)] + ["12t", "4095"]
+    heights = rng.uniform(-1, 5, len(texts))
+    centres = rng.uniform(-100, 500, (len(texts), 2))
+    pts, counts, label = text_strokes_many(texts, heights, centres)
+    got = np.split(pts, np.cumsum(counts)[:-1]) if len(counts) else []
+    want = [(k, s) for k, (t, h, c) in enumerate(zip(texts, heights, centres)) if h > 0
+            for s in text_strokes(t, float(h), c)]
+    assert [k for k, _ in want] == label.tolist()
+    assert all(np.array_equal(a, b) for a, (_, b) in zip(got, want))  # the same floats, bit for bit
+    with pytest.raises(KeyError):
+        text_strokes_many(["A\u00e9"], np.array([1.0]), np.zeros((1, 2)))
+
+
+@given(st.lists(st.tuples(st.integers(2, 6), st.booleans()), min_size=1, max_size=20), st.integers(0, 10**6))
+@settings(max_examples=30, deadline=None)
+def test_bulk_segments_and_linestrings_match_one_polyline_at_a_time(shape, seed):
+    from fabkiri.fabricate.readback import _linestrings, _segments
+
+    rng = np.random.default_rng(seed)
+    pl = [(rng.normal(size=(n, 2)), c) for n, c in shape]
+    want = np.concatenate([np.stack([q[:-1], q[1:]], 1)
+                           for q in (np.vstack([p, p[:1]]) if c else p for p, c in pl)])
+    assert np.array_equal(_segments(pl), want)
+    lines = _linestrings(pl)
+    assert len(lines) == len(pl)
+    for g, (p, c) in zip(lines, pl):
+        assert np.array_equal(shapely.get_coordinates(g), np.vstack([p, p[:1]]) if c else p)
+
+
 def test_same_input_same_bytes_and_golden(tmp_path):
     p = std(2, 2, size=20.0)
     a = cut(p, formats=("dxf", "svg", "png"))

@@ -24,11 +24,12 @@ from ..pattern.model import Pattern
 from . import hinges as hg
 from . import layout as lay
 from .drawing import COLORS, SheetDrawing, snap
+from .gcpause import gc_paused
 from .dxf import DXF_VERSION, dxf_bytes
 from .materials import HINGE_KINDS, Material
 from .preview import png_bytes
 from .svg import STROKE_MM, svg_bytes
-from .text import supported, text_strokes, text_width
+from .text import supported, text_strokes, text_strokes_many, text_width
 
 FORMATS = ("dxf", "svg", "png")
 MIN_LABEL_MM = 0.8  # below this a label is not legible; it is left out (and counted)
@@ -72,6 +73,9 @@ class CutOptions:
     pattern_file: str = ""
 
 
+ROW_LISTS = ("tiles", "hinges", "hinge_features")  # manifest lists written one row per line
+
+
 @dataclass
 class CutResult:
     """The sheets, the files to write (name -> bytes) and the manifest."""
@@ -84,7 +88,25 @@ class CutResult:
     tile_sheet: np.ndarray | None = None
 
     def manifest_bytes(self) -> bytes:
-        return (json.dumps(self.manifest, indent=1, ensure_ascii=False) + "\n").encode("utf-8")
+        """The manifest as JSON: indented, but each row of the long lists on one line.
+
+        (One row per line reads well and lets json's C encoder write the thousands of
+        rows of a large pattern; ``indent`` alone runs the pure-Python encoder.)
+        """
+        m = dict(self.manifest)
+        rows = {}
+        for k in ROW_LISTS:
+            if isinstance(m.get(k), list) and m[k]:
+                rows[k] = m[k]
+                m[k] = f"\u0000rows {k}"
+        text = json.dumps(m, indent=1, ensure_ascii=False)
+        for k, v in rows.items():
+            at = f'\n "{k}": ' + json.dumps(m[k], ensure_ascii=False)
+            body = ",\n".join("  " + json.dumps(r, ensure_ascii=False) for r in v)
+            if text.count(at) != 1:  # cannot happen: a top-level key is written once
+                raise RuntimeError(f"manifest key {k!r} not found once")
+            text = text.replace(at, f'\n "{k}": [\n{body}\n ]')
+        return (text + "\n").encode("utf-8")
 
 
 def _resolve(options: CutOptions) -> tuple[str, str, str]:
@@ -204,6 +226,19 @@ def _tape_marks(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, m
     return seg
 
 
+def _add_labels(sheets, sheet_of_label: np.ndarray, tile_of_label: np.ndarray, pts: np.ndarray, counts: np.ndarray,
+                label: np.ndarray) -> None:
+    """Open strokes (``pts`` split by ``counts``, stroke j of label ``label[j]``) onto their labels'
+    sheets, in order, grouped by tile."""
+    if not len(counts):
+        return
+    on = np.asarray(sheet_of_label)[label]
+    tile = np.asarray(tile_of_label)[label]
+    point_sheet = np.repeat(on, counts)
+    for s in np.unique(on).tolist():
+        sheets[s].add_many("ENGRAVE", pts[point_sheet == s], counts[on == s], tile[on == s])
+
+
 def _fit_labels(Q, tiles, texts, anchors, region, hmax, margin):
     """Fit text boxes; re-check containment in the tile with shapely (non-convex tiles) and shrink."""
     ratio = np.array([text_width(t) for t in texts])
@@ -223,6 +258,7 @@ def _fit_labels(Q, tiles, texts, anchors, region, hmax, margin):
     return h
 
 
+@gc_paused
 def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     """Build every sheet, file and the manifest for ``pattern`` in memory."""
     mat = options.material
@@ -403,10 +439,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         hid = _fit_labels(Q, tidx, ids, cent, id_region, label_h, 0.0)
         label_heights = hid
         omitted += int((hid <= 0).sum())
-        strokes = lay.label_strokes(ids, hid, cent)
-        for t in range(T):
-            for p in strokes[t]:
-                sheets[sheet_of[t]].add("ENGRAVE", p, False)
+        _add_labels(sheets, sheet_of, tidx, *text_strokes_many(ids, hid, cent))
 
         cross = sheet_of[A] != sheet_of[B]
         c_tiles, c_k, c_text = [], [], []
@@ -429,19 +462,18 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             anchor = _incentre(tri)
             hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
             omitted += int((hc <= 0).sum())
-            cs = lay.label_strokes(c_text, hc, anchor)
-            for i, t in enumerate(ct):
-                for p in cs[i]:
-                    sheets[sheet_of[t]].add("ENGRAVE", p, False)
+            _add_labels(sheets, sheet_of[ct], ct, *text_strokes_many(c_text, hc, anchor))
         if kind == "tape" and Hn:
             # tile A's corner carries the face letter, tile B's a chord where the tape ends: one
             # mark per tile keeps the stroke count (DXF entities) down on large patterns
             same = ~cross
             mt, mk = B[same], cB[same]
             marks = _tape_marks(Q, mt, mk, CORNER_FRAC, label_margin)
-            for t, seg in zip(mt, marks):
-                if np.isfinite(seg).all():
-                    sheets[sheet_of[t]].add("ENGRAVE", seg, False)
+            ok = np.isfinite(marks).all(axis=(1, 2))
+            _add_labels(sheets, sheet_of[mt[ok]], mt[ok], marks[ok].reshape(-1, 2), np.full(int(ok.sum()), 2),
+                        np.arange(int(ok.sum())))
+        for sd in sheets:  # each tile's engraving together: one SVG path per tile, less head travel
+            sd.sort_by_group("ENGRAVE")
         if omitted:
             warnings.append(f"{omitted} label(s) left out: no room for {MIN_LABEL_MM:g} mm text inside the tile")
 
@@ -489,16 +521,19 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                                 + PIERCE_S * paths, 1),
         })
     hinge_rows = []
+    pos_a = snap(placed_corners[A, cA]).tolist()
+    pos_b = snap(placed_corners[B, cB]).tolist()
     for h in range(Hn):
         row = {"hinge": h, "tiles": [int(A[h]), int(B[h])], "face": letters[h],
                "sheets": [int(sheet_of[A[h]]) + 1, int(sheet_of[B[h]]) + 1],
-               "position": snap(placed_corners[A[h], cA[h]]).tolist(),  # on tile A's sheet
-               "position_b": snap(placed_corners[B[h], cB[h]]).tolist(),  # on tile B's sheet
+               "position": pos_a[h],  # on tile A's sheet
+               "position_b": pos_b[h],  # on tile B's sheet
                "cross_sheet": bool(sheet_of[A[h]] != sheet_of[B[h]])}
         if lig is not None:
             row["ligament_length_mm"] = round(float(lig.lengths[h]), 6)
             row["strain"] = round(float(lig.strains[h]), 6)
         hinge_rows.append(row)
+    shifts = snap(place.shift).tolist()
     manifest = {
         "format": "fabkiri.cut", "version": 1, "units": "mm", "generator": f"fabkiri {__version__}",
         "pattern": options.pattern_file or pattern.name, "pattern_name": pattern.name,
@@ -524,7 +559,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                    "label": str(t) if label_heights[t] > 0 else "",
                    "label_height_mm": round(float(label_heights[t]), 4),
                    "rotation_rad": round(float(place.theta[t]), 12),
-                   "shift_mm": snap(place.shift[t]).tolist()} for t in range(T)],
+                   "shift_mm": shifts[t]} for t in range(T)],
         "hinges": hinge_rows,
         "hinge_features": hinge_features,
         "face_conflicts": faces.conflicts,

@@ -236,7 +236,12 @@ def tape_linework(corners: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarra
     """
     T = len(corners)
     seg = np.stack([corners, np.roll(corners, -1, axis=1)], 2).reshape(-1, 2, 2)
-    lines = shapely.linestrings(seg)
+    # an edge shared by two tiles is the same segment twice (corners are snapped): node it once
+    a, b = seg[:, 0], seg[:, 1]
+    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
+    key = np.concatenate([np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)], 1)
+    _, first = np.unique(key, axis=0, return_index=True)
+    lines = shapely.linestrings(seg[np.sort(first)])
     noded = shapely.union_all(lines, grid_size=GRID)
     segs = _segments_of(noded)
     segs = segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]

@@ -3,7 +3,9 @@
 Two layers of checks:
 
 * :func:`self_checks` — the writer's own promises, read from the bytes:
-  the DXF re-reads and audits clean, ``$INSUNITS`` = 4, only LWPOLYLINEs on
+  the DXF re-reads and audits clean (large files: the stroke entities are
+  checked from their tags, everything else by ezdxf's loader and auditor; see
+  :func:`read_dxf_checked`), ``$INSUNITS`` = 4, only LWPOLYLINEs on
   known layers, no duplicate segments; the SVG declares mm equal to its
   viewBox; DXF and SVG hold the same polylines after the y flip (1e-6 mm);
   closed contours are valid polygons; the tiles come back from the cut
@@ -24,6 +26,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -34,6 +37,7 @@ from ..fileio import atomic_write_many
 from ..pattern.model import Pattern
 from .cut import CutResult
 from .drawing import LAYERS
+from .gcpause import gc_paused
 from .hinges import MITRE_LIMIT as hg_MITRE
 
 SVG_NS = "{http://www.w3.org/2000/svg}"
@@ -91,11 +95,200 @@ def read_dxf(data: bytes):
     return doc, auditor, layers, others
 
 
+class Polylines(Sequence):
+    """``(points, closed)`` pairs kept flat (points ``(P, 2)``, counts, closed flags); items made on demand."""
+
+    def __init__(self, pts: np.ndarray, counts: np.ndarray, closed: np.ndarray):
+        self.pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+        self.counts = np.asarray(counts, dtype=np.int64)
+        self.closed = np.asarray(closed, dtype=bool)
+        self._items: list | None = None
+
+    @classmethod
+    def of(cls, items) -> "Polylines":
+        return cls(*_flat(items))
+
+    def _list(self) -> list:
+        if self._items is None:
+            parts = np.split(self.pts, np.cumsum(self.counts)[:-1]) if len(self.counts) else []
+            self._items = list(zip(parts, self.closed.tolist()))
+        return self._items
+
+    def __len__(self) -> int:
+        return len(self.counts)
+
+    def __getitem__(self, i):
+        return self._list()[i]
+
+    def __iter__(self):
+        return iter(self._list())
+
+
+FULL_AUDIT_MAX = 2000  # files with at most this many canonical stroke entities are loaded whole by ezdxf
+_CANON_CODES = ("  0", "  5", "330", "100", "  8", "100", " 90", " 70")  # then " 10"/" 20" per vertex
+ENTITIES_HEAD = "  0\nSECTION\n  2\nENTITIES\n"
+
+
+@dataclass
+class DxfReadback:
+    """What the self checks need from a DXF: header facts, audit errors, polylines per layer."""
+
+    insunits: Any
+    dxfversion: str
+    audit_errors: list[str]
+    layers: dict[str, list]
+    others: list[str]
+    bulk_entities: int = 0  # entities checked from their tags instead of being loaded by ezdxf
+
+
+def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback:
+    """Read a DXF once for the self checks, with the ezdxf audit.
+
+    Small files: ezdxf loads and audits everything (:func:`read_dxf`). Large
+    ones hold tens of thousands of label strokes, and loading each as an ezdxf
+    object costs seconds, so the ENTITIES section is split with numpy: every
+    entity in the canonical form of a straight LWPOLYLINE (exactly the tags
+    ``0 5 330 100 8 100 90 70`` then ``10 20`` per vertex, ``90`` = vertex
+    count, flags 0 or 1, subclass markers ``AcDbEntity``/``AcDbPolyline``) is
+    read from its tags and checked the way the audit checks such an entity
+    (unique handle below ``$HANDSEED``, owned by the modelspace, on a layer of
+    the LAYER table, finite coordinates); ezdxf loads and audits the rest of
+    the file (header, tables, blocks, objects and every other entity) in full.
+    """
+    import ezdxf
+
+    text = data.decode("ascii")
+    at = text.find(ENTITIES_HEAD)
+    lo = at + len(ENTITIES_HEAD)
+    hi = text.find("  0\nENDSEC\n", lo)
+    if at < 0 or hi < 0:
+        return _full(data)
+    lines = text[lo:hi].split("\n")[:-1]
+    if len(lines) % 2 or not lines:
+        return _full(data)
+    codes = np.array(lines[0::2])
+    vals = lines[1::2]
+    starts = np.flatnonzero(codes == "  0")
+    if len(starts) == 0 or starts[0] != 0:
+        return _full(data)
+    ends = np.append(starts[1:], len(codes))
+    size = ends - starts
+    n_ent = len(starts)
+    # expected code of every tag if its entity were canonical
+    eid = np.repeat(np.arange(n_ent), size)
+    off = np.arange(len(codes)) - starts[eid]
+    head = np.array(_CANON_CODES)
+    expect = np.where(off % 2 == 0, " 10", " 20")
+    expect[off < len(head)] = head[off[off < len(head)]]
+    bad = np.bincount(eid, weights=(codes != expect), minlength=n_ent) > 0
+    bad |= size < len(head) + 4  # at least two vertices
+    ok_idx = np.flatnonzero(~bad)
+    vals_at = lambda rows, o: [vals[i] for i in (starts[rows] + o).tolist()]  # noqa: E731
+    kind = np.array(vals_at(ok_idx, 0))
+    sub1 = np.array(vals_at(ok_idx, 3))
+    sub2 = np.array(vals_at(ok_idx, 5))
+    count = np.array(vals_at(ok_idx, 6))
+    flags = np.array(vals_at(ok_idx, 7))
+    nv = (size[ok_idx] - len(head)) // 2
+    good = (kind == "LWPOLYLINE") & (sub1 == "AcDbEntity") & (sub2 == "AcDbPolyline") \
+        & np.isin(flags, ["0", "1"]) & (count == nv.astype(str))
+    bad[ok_idx[~good]] = True
+    canon = np.flatnonzero(~bad)
+    if len(canon) <= full_max:
+        return _full(data)
+    # ezdxf: everything but the canonical entities
+    keep = np.flatnonzero(bad)
+    rest = "".join("\n".join(lines[2 * starts[k]: 2 * ends[k]]) + "\n" for k in keep.tolist())
+    try:
+        doc = ezdxf.read(io.StringIO(text[:lo] + rest + text[hi:]))
+    except Exception as exc:  # an unreadable file is a failed check, not a crash
+        return DxfReadback(None, "", [f"ezdxf cannot read the file: {exc}"], {}, [])
+    errors = [f"{e.code}: {e.message}" for e in doc.audit().errors]
+    handles = np.array(vals_at(canon, 1))
+    owners = np.array(vals_at(canon, 2))
+    layer_of = np.array(vals_at(canon, 4))
+    try:
+        hv = np.array([int(h, 16) for h in handles.tolist()], dtype=np.int64)
+        seed = int(doc.header.get("$HANDSEED", "0"), 16)
+    except ValueError:
+        hv, seed = np.zeros(len(canon), dtype=np.int64), -1
+        errors.append("stroke entity with a handle that is not hexadecimal")
+    if len(np.unique(handles)) != len(handles) or any(h in doc.entitydb for h in set(handles.tolist())):
+        errors.append("stroke entities with duplicate handles")
+    if (hv <= 0).any() or (hv >= seed).any():
+        errors.append("stroke entity handle not below $HANDSEED")
+    foreign = int((owners != doc.modelspace().layout_key).sum())
+    if foreign:
+        errors.append(f"{foreign} stroke entities not owned by the modelspace")
+    from ezdxf.lldxf.validator import is_valid_layer_name
+
+    names = set(layer_of.tolist())
+    invalid = sorted(n for n in names if not is_valid_layer_name(n))
+    if invalid:
+        errors.append(f"stroke entities with invalid layer names {invalid}")
+    missing = sorted(n for n in names if n not in doc.layers)
+    if missing:
+        errors.append(f"stroke entities on undefined layers {missing}")
+    # coordinates: the 10/20 values of the canonical entities
+    tag = np.flatnonzero(~bad[eid] & (off >= len(head)))
+    try:
+        xy = np.array([vals[i] for i in tag.tolist()], dtype=float).reshape(-1, 2)
+    except ValueError:
+        errors.append("stroke entity with a coordinate that is not a number")
+        xy = np.full((len(tag) // 2, 2), np.nan)
+    if not np.isfinite(xy).all():
+        errors.append("stroke entity with a non-finite coordinate")
+    n_canon = nv[good]
+    closed = flags[good] == "1"
+    point_layer = np.repeat(layer_of, n_canon)
+    # polylines per layer in file order: canonical ones from the tags, the others from ezdxf
+    _, _, rest_in_order, others = _entities_of(doc)
+    if len(rest_in_order) != len(keep):  # entities outside the modelspace: read it all with ezdxf
+        return _full(data)
+    rest = [(int(k), item) for k, item in zip(keep.tolist(), rest_in_order) if item is not None]
+    layers: dict[str, Polylines] = {}
+    for name in sorted(names | {item[0] for _, item in rest}, key=lambda n: LAYERS.index(n) if n in LAYERS else 99):
+        sel = layer_of == name
+        mine = Polylines(xy[point_layer == name], n_canon[sel], closed[sel])
+        extra = [(k, item[1]) for k, item in rest if item[0] == name]
+        if extra:  # merge by position in the file
+            both = sorted([(int(k), pl) for k, pl in zip(canon[sel].tolist(), mine)] + extra, key=lambda kv: kv[0])
+            mine = Polylines.of([pl for _, pl in both])
+        layers[name] = mine
+    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon))
+
+
+def _entities_of(doc):
+    """``(None, None, items, others)``: per modelspace entity ``(layer, (points, closed))`` or None."""
+    items, others = [], []
+    for e in doc.modelspace():
+        if e.dxftype() != "LWPOLYLINE":
+            others.append(e.dxftype())
+            items.append(None)
+            continue
+        pts = np.asarray([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
+        items.append((e.dxf.layer, (pts, bool(e.closed))))
+    return None, None, items, others
+
+
+def _full(data: bytes) -> DxfReadback:
+    doc, aud, layers, others = read_dxf(data)
+    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion,
+                       [f"{e.code}: {e.message}" for e in aud.errors], layers, others)
+
+
 _NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
+_SUBPATH = re.compile(r"(?=[Mm])")
+
+
 def read_svg(data: bytes):
-    """``(width_mm, height_mm, viewbox, layers)``; layers from ``<g id=...>`` groups, y flipped back to y-up."""
+    """``(width_mm, height_mm, viewbox, layers)``; layers from ``<g id=...>`` groups, y flipped back to y-up.
+
+    A path with several subpaths (``M ... M ...``: the SVG writes each tile's strokes as one
+    path) gives one polyline per subpath.
+    """
     root = ET.fromstring(data)
     w, h = root.get("width", ""), root.get("height", "")
     vb = [float(v) for v in root.get("viewBox", "").split()]
@@ -105,28 +298,59 @@ def read_svg(data: bytes):
     layers: dict[str, list] = {}
     for g in root.iter(f"{SVG_NS}g"):
         name = g.get("id")
+        nums: list[str] = []
+        counts: list[int] = []
+        closed: list[bool] = []
         for el in g:
             tag = el.tag.replace(SVG_NS, "")
             if tag == "path":
-                d = el.get("d", "")
-                nums = np.asarray([float(v) for v in _NUM.findall(d)], dtype=float).reshape(-1, 2)
-                closed = d.strip().upper().endswith("Z")
+                for sub in _SUBPATH.split(el.get("d", "")):
+                    if not sub.strip():
+                        continue
+                    found = _NUM.findall(sub)
+                    nums += found
+                    counts.append(len(found))
+                    closed.append(sub.strip().upper().endswith("Z"))
             elif tag in ("polyline", "polygon"):
-                nums = np.asarray([float(v) for v in _NUM.findall(el.get("points", ""))]).reshape(-1, 2)
-                closed = tag == "polygon"
-            else:
-                continue
-            pts = np.column_stack([nums[:, 0], H - nums[:, 1]])
-            layers.setdefault(name, []).append((pts, closed))
+                found = _NUM.findall(el.get("points", ""))
+                nums += found
+                counts.append(len(found))
+                closed.append(tag == "polygon")
+        if not counts:
+            continue
+        if any(c % 2 for c in counts):
+            raise ValueError(f"SVG group {name}: a path with an odd number of coordinates")
+        xy = np.asarray(nums, dtype=float).reshape(-1, 2)
+        pl = Polylines(np.column_stack([xy[:, 0], H - xy[:, 1]]), np.asarray(counts) // 2, closed)
+        if name in layers:  # two groups with one id: one layer
+            old = layers[name]
+            pl = Polylines(np.concatenate([old.pts, pl.pts]), np.concatenate([old.counts, pl.counts]),
+                           np.concatenate([old.closed, pl.closed]))
+        layers[name] = pl
     return wmm, hmm, vb, layers
 
 
+def _flat(polylines) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(points (P, 2), counts, closed)`` of a list of ``(points, closed)``."""
+    if isinstance(polylines, Polylines):
+        return polylines.pts, polylines.counts, polylines.closed
+    if not polylines:
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+    return (np.concatenate([np.asarray(p, dtype=float).reshape(-1, 2) for p, _ in polylines]),
+            np.array([len(p) for p, _ in polylines]), np.array([bool(c) for _, c in polylines]))
+
+
 def _segments(polylines) -> np.ndarray:
-    segs = []
-    for pts, closed in polylines:
-        p = np.vstack([pts, pts[:1]]) if closed else pts
-        segs.append(np.stack([p[:-1], p[1:]], 1))
-    return np.concatenate(segs) if segs else np.zeros((0, 2, 2))
+    """Every segment ``(S, 2, 2)`` of the polylines (closing segments included), polyline by polyline."""
+    pts, n, closed = _flat(polylines)
+    if len(pts) == 0:
+        return np.zeros((0, 2, 2))
+    end = np.cumsum(n)
+    first = end - n
+    nxt = np.arange(1, len(pts) + 1)
+    nxt[end - 1] = np.where(closed, first, -1)  # the last point goes back to the first, or nowhere
+    keep = nxt >= 0
+    return np.stack([pts[keep], pts[nxt[keep]]], 1)
 
 
 def duplicate_segments(polylines, decimals: int = 6) -> int:
@@ -155,6 +379,7 @@ def _opening_loss(piece, width: float) -> float:
     return float(np.max(1.0 - shapely.area(opened) / np.maximum(area, 1e-300), initial=0.0))
 
 
+@gc_paused
 def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None = None) -> Readback:
     """The writer's own checks on the bytes it produced (see the module docstring)."""
     rb = rb or Readback()
@@ -167,10 +392,13 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
         k = row["index"]
         dxf_layers = svg_layers = None
         if row["dxf"]:
-            doc, aud, dxf_layers, others = read_dxf(files[row["dxf"]])
-            rb.add(f"sheet {k} dxf audit", len(aud.errors) == 0, f"{len(aud.errors)} errors", len(aud.errors))
-            rb.add(f"sheet {k} dxf units", doc.header.get("$INSUNITS") == 4 and doc.dxfversion == "AC1024",
-                   f"$INSUNITS={doc.header.get('$INSUNITS')}, {doc.dxfversion}")
+            dx = read_dxf_checked(files[row["dxf"]])
+            dxf_layers, others, errs = dx.layers, dx.others, dx.audit_errors
+            how = f" ({dx.bulk_entities} stroke entities checked from their tags)" if dx.bulk_entities else ""
+            rb.add(f"sheet {k} dxf audit", len(errs) == 0,
+                   f"{len(errs)} errors{how}" + (f": {errs[0]}" if errs else ""), len(errs))
+            rb.add(f"sheet {k} dxf units", dx.insunits == 4 and dx.dxfversion == "AC1024",
+                   f"$INSUNITS={dx.insunits}, {dx.dxfversion}")
             rb.add(f"sheet {k} dxf entities", not others and set(dxf_layers) <= set(LAYERS),
                    f"non-LWPOLYLINE: {sorted(set(others))}, layers {sorted(dxf_layers)}")
             dups = sum(duplicate_segments(v) for v in dxf_layers.values())
@@ -183,21 +411,30 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
         if dxf_layers is not None and svg_layers is not None:
             worst, same = 0.0, True
             for name in LAYERS:
-                a, b = dxf_layers.get(name, []), svg_layers.get(name, [])
-                if len(a) != len(b):
+                (pa, na, ca), (pb, nb, cb) = _flat(dxf_layers.get(name, [])), _flat(svg_layers.get(name, []))
+                if len(na) != len(nb) or not (np.array_equal(na, nb) and np.array_equal(ca, cb)):
                     same = False
                     continue
-                for (pa, ca), (pb, cb) in zip(a, b):
-                    if ca != cb or pa.shape != pb.shape:
-                        same = False
-                        continue
-                    worst = max(worst, float(np.abs(pa - pb).max(initial=0.0)))
+                worst = max(worst, float(np.abs(pa - pb).max(initial=0.0)))
             rb.add(f"sheet {k} dxf = svg", same and worst <= AGREE_MM, f"max difference {worst:.2e} mm", worst)
         layers = dxf_layers if dxf_layers is not None else svg_layers
         if layers is None:
             continue
         _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, result.tile_sheet)
     return rb
+
+
+def _linestrings(polylines) -> np.ndarray:
+    """One LineString per polyline (closed ones back to their first point), built at once."""
+    pts, n, closed = _flat(polylines)
+    end = np.cumsum(n)
+    reps = np.ones(len(pts), dtype=np.int64)
+    reps[end[closed] - 1] = 2  # repeat the last point's slot: filled with the first point below
+    coords = np.repeat(pts, reps, axis=0)
+    owner = np.repeat(np.repeat(np.arange(len(n)), n), reps)
+    closing = np.cumsum(reps)[end[closed] - 1] - 1
+    coords[closing] = pts[(end - n)[closed]]
+    return shapely.linestrings(coords, indices=owner)
 
 
 def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
@@ -272,7 +509,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
     # labels inside tiles
     eng = layers.get("ENGRAVE", [])
     if eng:
-        strokes = np.array([shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in eng])
+        strokes = _linestrings(eng)
         region = shapely.STRtree(expected)
         ii, _ = region.query(strokes, predicate="within")
         outside = len(strokes) - len(np.unique(ii))
@@ -294,6 +531,7 @@ def _relative(value, prefix: str):
     return value
 
 
+@gc_paused
 def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str, Any]:
     """:func:`fabkiri.verify.verify_layout` on every written DXF and SVG, both closed states."""
     try:

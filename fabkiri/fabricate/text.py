@@ -93,6 +93,55 @@ def text_strokes(text: str, height: float, centre: tuple[float, float] | np.ndar
     return out
 
 
+_IDS: dict[str, list[int]] = {}
+_UNIT: list[np.ndarray] = []
+for _ch, _strokes in GLYPHS.items():
+    _IDS[_ch] = list(range(len(_UNIT), len(_UNIT) + len(_strokes)))
+    _UNIT.extend(_strokes)
+_UNIT_N = np.array([len(s) for s in _UNIT])
+_UNIT_START = np.concatenate([[0], np.cumsum(_UNIT_N)[:-1]])
+_UNIT_PTS = np.concatenate(_UNIT)
+
+
+def text_strokes_many(texts: list[str], heights: np.ndarray, centres: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The strokes of many labels at once: ``(points (P, 2), counts (S,), label (S,))``.
+
+    Stroke ``j`` is ``points[sum(counts[:j]):][:counts[j]]`` and belongs to
+    ``texts[label[j]]``; labels with a height <= 0 have none. The same numbers
+    as :func:`text_strokes` label by label (the same float operations, in order).
+    """
+    lab: list[int] = []
+    pos: list[int] = []
+    sid: list[int] = []
+    for k, (text, h) in enumerate(zip(texts, np.asarray(heights, dtype=float).tolist())):
+        if not h > 0:
+            continue
+        for i, ch in enumerate(text):
+            ids = _IDS.get(ch.upper())
+            if ids is None:
+                raise KeyError(f"no glyph for {ch!r} in the single-stroke font")
+            for s in ids:
+                lab.append(k)
+                pos.append(i)
+                sid.append(s)
+    if not sid:
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    lab_a, sid_a = np.array(lab), np.array(sid)
+    h = np.asarray(heights, dtype=float)[lab_a]
+    c = np.asarray(centres, dtype=float)[lab_a]
+    width = np.array([text_width(t) for t in texts])[lab_a]
+    x0 = c[:, 0] - 0.5 * h * width
+    y0 = c[:, 1] - 0.5 * h
+    ox = x0 + np.array(pos, dtype=float) * ADVANCE * h
+    counts = _UNIT_N[sid_a]
+    rep = np.repeat(np.arange(len(sid_a)), counts)
+    first = np.cumsum(counts) - counts
+    unit = _UNIT_PTS[_UNIT_START[sid_a][rep] + np.arange(int(counts.sum())) - first[rep]]
+    pts = np.column_stack([ox[rep] + h[rep] * unit[:, 0], y0[rep] + h[rep] * unit[:, 1]])
+    return pts, counts, lab_a
+
+
 def text_box(height: float, centre, text: str) -> tuple[float, float, float, float]:
     """(xmin, ymin, xmax, ymax) of the text's cells; every glyph stays inside."""
     w = height * text_width(text)

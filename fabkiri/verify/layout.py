@@ -201,7 +201,7 @@ def _read_svg(p: Path) -> Linework:
     import svgelements as se
 
     try:
-        svg = se.SVG.parse(str(p), reify=True)
+        svg = se.SVG.parse(_without_annotation_layers(p), reify=True)
     except Exception as exc:  # svgelements raises many kinds on bad XML
         raise VerifyError(f"{p}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
     if not svg.height:
@@ -241,6 +241,44 @@ def _read_svg(p: Path) -> Linework:
         if len(pts) >= 2:
             lw.add(_svg_mm(pts, height, mm_per_px), False)
     return lw
+
+
+def _without_annotation_layers(p: Path):
+    """The SVG with its NOTES/ENGRAVE/SCORE groups removed, when it has a CUT group; else the path.
+
+    Only the CUT group is read when there is one, and svgelements would spend
+    seconds building the tens of thousands of label strokes of a 64x64 sheet.
+    Kept as is (the whole file goes to svgelements) when anything could reach
+    into a removed group (``<use>``, a CUT group inside an annotation group)
+    or ElementTree cannot parse it (svgelements then names the problem).
+    """
+    import io
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(p).getroot()
+    except (ET.ParseError, OSError):
+        return str(p)
+
+    def name(el) -> str:
+        return str(el.get("id") or el.get(INKSCAPE_LABEL) or "").upper()
+
+    groups = [el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == "g"]
+    if not any(name(g) == "CUT" for g in groups):
+        return str(p)
+    if any(el.tag.rsplit("}", 1)[-1] == "use" for el in root.iter()):
+        return str(p)
+    drop = {id(g) for g in groups if name(g) in NON_CUT_LAYERS
+            and not any(name(d) == "CUT" for d in g.iter() if d.tag.rsplit("}", 1)[-1] == "g")}
+    if not drop:
+        return str(p)
+    for parent in list(root.iter()):
+        for child in [c for c in parent if id(c) in drop]:
+            parent.remove(child)
+    return io.BytesIO(ET.tostring(root))
+
+
+INKSCAPE_LABEL = "{http://www.inkscape.org/namespaces/inkscape}label"
 
 
 _UNIT_MM = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6, "px": MM_PER_PX, "": MM_PER_PX}
