@@ -59,9 +59,9 @@ STIFF_PENALTIES = ((1e4, 1e-4, 300), (1e6, STALL, 60))  # fallback when the firs
 RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers the fallback
 # inexact LM: penalty-stage steps solve the normal equations to 1e-3 (the gain ratio judges the step that
 # was actually taken); the projection keeps 1e-13 so its Gauss-Newton steps stay quadratically convergent.
-# Measured: a third of the CG iterations and fewer factorisations than 1e-8, same iterates to ~1e-13.
+# Measured (64x64): 464 CG steps and 36 factorisations instead of 1714 and 45 at 1e-8; same fits to 3 digits.
 LM_CG_RTOL = 1e-3
-MAX_CG = 10  # CG iterations on a stale factorisation before factorising afresh (measured: 10 beats 25, 50)
+MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64 CPU: 10 beats 5, 20, 40)
 
 
 @dataclass
