@@ -5,7 +5,9 @@ Prints, in one run, time / iterations / residual / fit for n = 4, 8, 16, 32, 64
 and 8 with scipy's dense SLSQP (exact Jacobians, the same families, shape
 matching as the objective) as the baseline, with the speed ratio: once with the
 constraint rows as written (SLSQP stops at once on the dependent rows) and once
-("SLSQP-ind") with the rows cut to an independent set by pivoted QR.
+("SLSQP-ind") with the rows cut to an independent set by pivoted QR. Both run with
+single-threaded BLAS, as ``design`` does (threaded OpenBLAS on a loaded 2-core box
+slows SLSQP's dense algebra ~10x, which would flatter the ratio).
 
     PYTHONPATH=. python3 bench/solve.py [--sizes 4,8,16,32,64] [--big] [--init standard]
 """
@@ -20,6 +22,16 @@ from scipy.optimize import minimize
 
 from fabkiri.design import targets as T
 from fabkiri.design.solve import DesignRequest, _Problem, _ineq_values, design
+
+
+def _blas_limit():
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover
+        import contextlib
+
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
@@ -79,9 +91,11 @@ def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
         return np.vstack([f(x.reshape(shape))[1].toarray() for f in ineqs])
 
     t0 = time.perf_counter()
-    res = minimize(obj, prob.X0.reshape(-1), jac=obj_grad, method="SLSQP",
-                   constraints=[{"type": "eq", "fun": ceq, "jac": ceq_j}, {"type": "ineq", "fun": cin, "jac": cin_j}],
-                   options={"maxiter": max_iter, "ftol": 1e-12})
+    with _blas_limit():  # same BLAS threading as design() (single thread), so the ratio compares solvers
+        res = minimize(obj, prob.X0.reshape(-1), jac=obj_grad, method="SLSQP",
+                       constraints=[{"type": "eq", "fun": ceq, "jac": ceq_j},
+                                    {"type": "ineq", "fun": cin, "jac": cin_j}],
+                       options={"maxiter": max_iter, "ftol": 1e-12})
     dt = time.perf_counter() - t0
     X = res.x.reshape(shape)
     eq = float(np.abs(ceq_all(res.x)).max())

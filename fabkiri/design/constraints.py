@@ -37,10 +37,14 @@ TIP_SIDE = np.array([[3, 0, 1, 2], [0, 1, 2, 3]])
 def jac(m: int, nvar_nodes: int, nodes: np.ndarray, grads: np.ndarray) -> sparse.csr_matrix:
     """CSR Jacobian from per-row node indices ``(m, k)`` and gradients ``(m, k, 2)``."""
     k = nodes.shape[1] if nodes.ndim == 2 else 0
-    rows = np.repeat(np.arange(m), 2 * k)
+    # every row has exactly 2k entries: build the CSR arrays directly (skips the COO constructor's checks,
+    # the main cost at small sizes); nodes repeated in a row are summed in place
     cols = (2 * nodes[:, :, None] + np.arange(2)[None, None, :]).reshape(-1)
-    vals = grads.reshape(-1)
-    return sparse.csr_matrix((vals, (rows, cols)), shape=(m, 2 * nvar_nodes))
+    vals = np.array(grads, dtype=float).reshape(-1)  # a copy: sum_duplicates reorders it in place
+    indptr = np.arange(0, 2 * k * m + 1, max(2 * k, 1)) if k else np.zeros(m + 1, dtype=np.intp)
+    J = sparse.csr_matrix((vals, cols, indptr), shape=(m, 2 * nvar_nodes))
+    J.sum_duplicates()
+    return J
 
 
 def wrap(a: np.ndarray) -> np.ndarray:
