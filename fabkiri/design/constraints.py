@@ -346,7 +346,7 @@ def rectangle_outline(st: Stencils, state: int, nv: int) -> Family:
 
 def _side_edges(st: Stencils, state: int, which: str):
     phi = st.phi[state]
-    M, N = st.rows, st.cols
+    N = st.cols
     nxt = np.roll(phi, -1, axis=1)
     if which == "bottom":
         sel = (phi[..., 1] == 0) & (nxt[..., 1] == 0)

@@ -40,7 +40,7 @@ try:  # single-threaded BLAS: the solver's vector operations are too small to ga
 except ImportError:  # pragma: no cover
     threadpool_limits = None
 
-from ..errors import InputError, SolveError
+from ..errors import InputError
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C

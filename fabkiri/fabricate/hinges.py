@@ -234,7 +234,6 @@ def tape_linework(corners: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarra
     corners must already be snapped (:func:`snap_corners`); noding at
     T-junctions uses snap-rounding on the 1e-6 mm grid.
     """
-    T = len(corners)
     seg = np.stack([corners, np.roll(corners, -1, axis=1)], 2).reshape(-1, 2, 2)
     # an edge shared by two tiles is the same segment twice (corners are snapped): node it once
     a, b = seg[:, 0], seg[:, 1]

@@ -253,7 +253,7 @@ def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     pins = printgeom.pin_plan(pattern, plan, printer)
     _fits(plan.bounds, printer, "the closed pattern")
     lv, g = pins.levels, pins.geometry
-    T, az = lv.thickness, lv.axial
+    T = lv.thickness
     A, B = plan.hinge_tiles.T
     H = plan.n_hinges
     hollow = [regular_polygon(plan.hinge_xy[h], g.hollow, circumscribed=True) for h in range(H)]

@@ -466,7 +466,6 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
         holes = np.array([])
     else:
         rings = polys[~is_ref]
-        area = shapely.area(rings)
         # a ring inside another ring is a hole of that material piece
         ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
         inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
@@ -478,7 +477,6 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
         pieces = pieces[shapely.area(pieces) > 1e-6]
         holes = np.array([shapely.Polygon(r) for g in shapely.get_parts(material) for r in g.interiors],
                          dtype=object)
-        del area
     # every expected tile comes back (one piece each, same shape within the material tolerance)
     tol = man["tolerance_mm"]
     matched = 0
