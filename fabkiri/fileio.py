@@ -41,12 +41,18 @@ def atomic_write(path: str | os.PathLike, data: bytes | str) -> Path:
         raise InputError(f"output {path} is a folder, expected a file name")
     parent = _parent(path)
     payload = data.encode("utf-8") if isinstance(data, str) else data
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
+    except OSError as exc:
+        raise InputError(f"cannot write {path}: {exc.strerror or exc}") from None
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)
         _publish_mode(tmp)
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise InputError(f"cannot write {path}: {exc.strerror or exc}") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
@@ -64,7 +70,10 @@ def atomic_write_many(folder: str | os.PathLike, files: dict[str, bytes | str]) 
         raise InputError(f"output {folder} exists and is not a folder")
     parent = _parent(folder)
     created = not folder.exists()
-    scratch = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=parent))  # mode 0700, never published
+    try:
+        scratch = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=parent))  # mode 0700, never published
+    except OSError as exc:
+        raise InputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
     try:
         for name, data in files.items():
             target = scratch / name
@@ -79,5 +88,7 @@ def atomic_write_many(folder: str | os.PathLike, files: dict[str, bytes | str]) 
             os.replace(scratch / name, dest)
             out.append(dest)
         return out
+    except OSError as exc:
+        raise InputError(f"cannot write {folder}: {exc.strerror or exc}") from None
     finally:
         shutil.rmtree(scratch, ignore_errors=True)

@@ -146,3 +146,14 @@ def test_written_files_are_readable_by_others(tmp_path):
         os.umask(old)
     assert stat.S_IMODE(f.stat().st_mode) == 0o644
     assert stat.S_IMODE(g.stat().st_mode) == 0o644
+
+
+def test_unwritable_output_is_a_one_line_error(run_cli, tmp_path):
+    import os
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    target = "/proc/fabkiri-test.json" if os.geteuid() == 0 else str(ro / "p.json")  # root ignores modes
+    code, _, err = run_cli("new", "--tiles", "2x2", "-o", target)
+    assert code == 2 and err.count("\n") == 1 and "write" in err, err
