@@ -267,7 +267,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
-    p.add_argument("--init", choices=["standard", "rescaled", "conformal"],
+    p.add_argument("--init", choices=["standard", "rescaled", "conformal", "coarse"],
                    help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
                         "(standard pattern at the target's area), then standard, until a design passes every check")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")

@@ -9,6 +9,13 @@
   every other node is the average of its tile-graph neighbours (a Tutte-style
   embedding, solved with scipy.sparse). It violates the constraints and is only
   a starting point, but it puts the tiles where the target needs them.
+* ``coarse``: coarse to fine. The same problem is solved at half resolution
+  (recursively down to 16 tiles a side, then from ``rescaled``); the map from
+  the coarse standard pattern to the coarse design (piecewise linear over a
+  Delaunay triangulation of the coarse nodes, nearest node outside it) is
+  applied to the fine standard pattern scaled to the coarse one's extent. The
+  coarse solve lives in ``solve.py`` (it needs the solver); :func:`coarse_map`
+  is the mapping.
 """
 
 from __future__ import annotations
@@ -21,7 +28,7 @@ from ..errors import InputError, SolveError
 from .constraints import Stencils
 from .targets import Target
 
-INITS = ("standard", "rescaled", "conformal")
+INITS = ("standard", "rescaled", "conformal", "coarse")
 
 
 def tip_polygon(x: np.ndarray, st: Stencils) -> np.ndarray:
@@ -88,6 +95,67 @@ def harmonic_map(base: np.ndarray, st: Stencils, target: Target) -> np.ndarray:
     return out
 
 
+def coarse_map(base_coarse: np.ndarray, x_coarse: np.ndarray, base_fine: np.ndarray) -> np.ndarray:
+    """Push ``base_fine`` through the map ``base_coarse -> x_coarse`` (both node arrays of one pattern).
+
+    The fine standard pattern is first scaled and centred onto the coarse one's
+    bounding box; the map is piecewise linear over a Delaunay triangulation of
+    the coarse standard nodes, nearest coarse node for points outside its hull.
+    """
+    from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
+
+    lo_c, hi_c = base_coarse.min(0), base_coarse.max(0)
+    lo_f, hi_f = base_fine.min(0), base_fine.max(0)
+    q = lo_c + (base_fine - lo_f) * ((hi_c - lo_c) / (hi_f - lo_f))
+    lin = LinearNDInterpolator(base_coarse, x_coarse)
+    out = lin(q)
+    bad = ~np.isfinite(out).all(1)
+    if bad.any():
+        out[bad] = NearestNDInterpolator(base_coarse, x_coarse)(q[bad])
+    return out
+
+
+def coarse_tile_map(base_coarse: np.ndarray, x_coarse: np.ndarray, tiles_coarse: np.ndarray, cols_coarse: int,
+                    base_fine: np.ndarray, tiles_fine: np.ndarray, cols_fine: int) -> np.ndarray:
+    """Coarse-to-fine by tiles: fine tile centres go through the piecewise-linear centre map; each fine
+    tile takes the rotation and scale (a complex factor) of the nearest coarse tile of its checkerboard
+    parity, so the alternating counter-rotation of the deployed pattern survives; shared nodes average."""
+    from scipy.interpolate import LinearNDInterpolator
+    from scipy.spatial import cKDTree
+
+    lo_c, hi_c = base_coarse.min(0), base_coarse.max(0)
+    lo_f, hi_f = base_fine.min(0), base_fine.max(0)
+    k = (hi_c - lo_c) / (hi_f - lo_f)
+    bf = lo_c + (base_fine - lo_f) * k
+    Pc, Qc = base_coarse[tiles_coarse], x_coarse[tiles_coarse]
+    cc, qc = Pc.mean(1), Qc.mean(1)
+    pz = (Pc - cc[:, None]) @ np.array([1, 1j])
+    qz = (Qc - qc[:, None]) @ np.array([1, 1j])
+    a = (np.conj(pz) * qz).sum(1) / (np.abs(pz) ** 2).sum(1)
+    Pf = bf[tiles_fine]
+    cf = Pf.mean(1)
+    lin = LinearNDInterpolator(cc, qc)(cf)
+    bad = ~np.isfinite(lin).all(1)
+    if bad.any():  # outside the hull of coarse centres: extend by the nearest coarse tile's similarity
+        _, nn = cKDTree(cc).query(cf[bad])
+        z = qc[nn] @ np.array([1, 1j]) + a[nn] * ((cf[bad] - cc[nn]) @ np.array([1, 1j]))
+        lin[bad] = np.stack([z.real, z.imag], -1)
+    par_c = np.add(*np.divmod(np.arange(len(tiles_coarse)), cols_coarse)) % 2
+    par_f = np.add(*np.divmod(np.arange(len(tiles_fine)), cols_fine)) % 2
+    af = np.empty(len(tiles_fine), complex)
+    for p in (0, 1):
+        sc, sf = np.flatnonzero(par_c == p), np.flatnonzero(par_f == p)
+        _, idx = cKDTree(cc[sc]).query(cf[sf])
+        af[sf] = a[sc[idx]]
+    off = (Pf - cf[:, None]) @ np.array([1, 1j])
+    wz = (lin @ np.array([1, 1j]))[:, None] + af[:, None] * off
+    out = np.zeros((len(base_fine), 2))
+    cnt = np.zeros(len(base_fine))
+    np.add.at(out, tiles_fine.ravel(), np.stack([wz.real.ravel(), wz.imag.ravel()], -1))
+    np.add.at(cnt, tiles_fine.ravel(), 1.0)
+    return out / cnt[:, None]
+
+
 def initial_guess(base: np.ndarray, st: Stencils, target: Target | None, how: str) -> tuple[np.ndarray, float]:
     """Initial node positions (normalised) and the tile size L0 (mm) of the normalisation.
 
@@ -100,6 +168,8 @@ def initial_guess(base: np.ndarray, st: Stencils, target: Target | None, how: st
         return base.copy(), 1.0
     lo, hi = target.bbox
     centre = 0.5 * (lo + hi)
+    if how == "coarse":
+        raise SolveError("the coarse initial guess needs the solver (fabkiri.design.solve builds it)")
     if how in ("standard", "rescaled"):
         L0 = scale_for(base, st, target, how)
         return base + centre / L0, L0

@@ -44,7 +44,7 @@ from ..errors import InputError
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
-from .initial import initial_guess
+from .initial import coarse_map, coarse_tile_map, initial_guess
 from .objective import regularizer
 from .targets import Target
 
@@ -56,6 +56,9 @@ EARLY_STALL = 1e-3  # ... looser in the first stage: the next one refines from t
 # moving x by O(|c|), so the last stage need not converge the penalty problem to high accuracy
 PENALTIES = ((1e2, EARLY_STALL, 200), (1e4, STALL, 40))
 STIFF_PENALTIES = ((1e4, 1e-4, 300), (1e6, STALL, 60))  # fallback when the first schedule gets stuck
+COARSE_PENALTIES = ((1e2, EARLY_STALL, 200), (1e4, EARLY_STALL, 40))  # from a coarse-to-fine start
+COARSE_MAP = "tiles"  # or "nodes" (piecewise linear on the nodes: breaks the hinge sums by ~1 rad)
+COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers the fallback
 # inexact LM: penalty-stage steps solve the normal equations to 1e-5 (the gain ratio judges the step that
 # was actually taken); the projection keeps 1e-13 so its Gauss-Newton steps stay quadratically convergent.
@@ -126,7 +129,11 @@ class _Problem:
         self.st = st
         base = std.nodes.copy()
         n = len(base)
-        X0, L0 = initial_guess(base, st, req.target, req.init)
+        self.coarse = None
+        if req.init == "coarse":
+            X0, L0 = self._coarse_guess(base, st)
+        else:
+            X0, L0 = initial_guess(base, st, req.target, req.init)
         curves = {s: v for s, v in req.contracted.items() if isinstance(v, Target)}
         if req.target is None:
             first = curves[min(curves)]
@@ -181,6 +188,32 @@ class _Problem:
         self.families = fam
         self.normal = _Normal(self._ordering())
         self.margin = {f.name: (CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN) for f in fam if f.kind == "ineq"}
+
+    def _coarse_guess(self, base: np.ndarray, st: C.Stencils) -> tuple[np.ndarray, float]:
+        """Coarse-to-fine start: solve at half resolution, map the result onto the standard pattern."""
+        req = self.req
+        rc, cc = req.rows // 2, req.cols // 2
+        if req.target is None or min(rc, cc) < 4:
+            return initial_guess(base, st, req.target, "rescaled")
+        sub = DesignRequest(rc, cc, req.target, rigid=req.rigid, symmetry=req.symmetry, holes=req.holes,
+                            contracted=dict(req.contracted),
+                            init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
+                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter)
+        res = _design(sub, False)
+        sc = standard_pattern(rc, cc, tile_size=1.0)
+        if COARSE_MAP == "tiles":
+            xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
+        else:
+            xmm = coarse_map(sc.nodes, res.pattern.nodes, base)
+        c = xmm[st.tiles]
+        area = 0.5 * (c[..., 0] * np.roll(c[..., 1], -1, 1) - np.roll(c[..., 0], -1, 1) * c[..., 1]).sum(1)
+        self.coarse = {"rows": rc, "cols": cc, "status": res.report["status"], "time_s": res.report["time_s"],
+                       "iterations_total": res.report["iterations_total"],
+                       "factorisations": res.report["factorisations"], "folded_tiles": int((area <= 0).sum())}
+        if (area <= 0).any():  # the map folded tiles: fall back rather than start from a tangle
+            return initial_guess(base, st, req.target, "rescaled")
+        L0 = float(np.mean(np.linalg.norm(np.roll(c, -1, 1) - c, axis=-1)))
+        return xmm / L0, L0
 
     def _ordering(self) -> np.ndarray | None:
         """Variable order for the normal equations, from the union of all Jacobian patterns."""
@@ -452,10 +485,14 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
             return Xq, "least-squares", kp + kq
         return Xp, "least-squares", kp
 
+    X0 = prob.X0
+    first = PENALTIES
+    if prob.coarse is not None and not prob.coarse["folded_tiles"]:
+        first = COARSE_PENALTIES
     best = None
-    for attempt, schedule in enumerate((PENALTIES, STIFF_PENALTIES)):
+    for attempt, schedule in enumerate((first, STIFF_PENALTIES)):
         tag = "_restart" if attempt else ""
-        X = prob.X0.copy()
+        X = (X0 if attempt == 0 else prob.X0).copy()
         for rho, stall_tol, cap in schedule:
             X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
             iters[f"lm_rho_{rho:g}{tag}"] = k
@@ -510,6 +547,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         "regularizer": float(np.sum(regularizer(prob.st, prob.nv)(X)[0] ** 2)),
         "factorisations": prob.normal.factorisations,
         "cg_iterations": prob.normal.cg_steps,
+        "coarse": prob.coarse,
         "solver": "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU",
     }
     log(f"{report['status']}: max equality residual {eq_worst:.2e}, fit {mode}, "
