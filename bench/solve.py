@@ -9,6 +9,8 @@ constraint rows as written (SLSQP stops at once on the dependent rows) and once
 single-threaded BLAS, as ``design`` does (threaded OpenBLAS on a loaded 2-core box
 slows SLSQP's dense algebra ~10x, which would flatter the ratio).
 
+From n = 32 on, a ``coarse`` line gives the same problem from ``--init coarse``.
+
     PYTHONPATH=. python3 bench/solve.py [--sizes 4,8,16,32,64] [--big] [--init standard]
 """
 
@@ -131,6 +133,11 @@ def main() -> None:
         mine[n] = r
         print(f"{'fabkiri':<8} {n:>4} {r['status']:<12} {r['time']:>8.3f} {r['iterations']:>6} {r['eq']:>10.2e} "
               f"{r['fit_mm']:>9.3g} {r['fit_rel_radius']:>8.2%}  {r['mode']}", flush=True)
+        if n >= 32 and args.init != "coarse":  # the coarse-to-fine start, in the same run
+            c = ours(n, "coarse")
+            print(f"{'coarse':<8} {n:>4} {c['status']:<12} {c['time']:>8.3f} {c['iterations']:>6} {c['eq']:>10.2e} "
+                  f"{c['fit_mm']:>9.3g} {c['fit_rel_radius']:>8.2%}  {c['mode']} (--init coarse, coarse levels "
+                  f"included; {c['time'] / r['time']:.2f}x the {args.init} time)", flush=True)
     if args.no_baseline:
         return
     for n, indep in ((4, False), (8, False), (4, True), (8, True)):

@@ -319,3 +319,19 @@ def test_overlap_check_reports_self_intersecting_tiles():
 
     bowtie = np.array([[[0, 0], [1, 1], [1, 0], [0, 1]], [[2, 0], [3, 0], [3, 1], [2, 1]]], float)
     assert overlapping_tiles(bowtie, 1e-9, 1e-9) == [(0, 0)]
+
+
+def test_cli_design_coarse_init(tmp_path, run_cli):
+    """--init coarse: an 8x8 solve mapped onto 16x16 starts the fine solve; same tolerances, both states close."""
+    out = tmp_path / "c.json"
+    code, stdout, err = run_cli("design", "--tiles", "16x16", "--target", "circle", "--size", "80", "--rigid",
+                                "--init", "coarse", "--json", "-o", out)
+    assert code == 0, err
+    report = json.loads(stdout)
+    assert report["status"] == "converged" and report["max_equality_residual"] <= 1e-10
+    assert report["min_inequality"] >= 0
+    assert report["coarse"]["rows"] == 8 and report["coarse"]["used"] is True
+    assert report["checks"]["closure_1_rel"] <= 1e-9 and report["checks"]["closure_2_rel"] <= 1e-9
+    assert report["checks"]["hinge_sum_max_rad"] <= 1e-10
+    assert all(report["checks"][f"overlaps_{s}"] == 0 for s in ("deployed", "state_1", "state_2"))
+    assert read_pattern(out).design["valid"] is True

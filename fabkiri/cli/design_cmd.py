@@ -269,7 +269,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
     p.add_argument("--init", choices=["standard", "rescaled", "conformal", "coarse"],
                    help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
-                        "(standard pattern at the target's area), then standard, until a design passes every check")
+                        "(standard pattern at the target's area), then standard, until a design passes every check; "
+                        "coarse solves at half resolution first and maps that design onto the tiles")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")

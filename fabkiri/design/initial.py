@@ -10,12 +10,10 @@
   embedding, solved with scipy.sparse). It violates the constraints and is only
   a starting point, but it puts the tiles where the target needs them.
 * ``coarse``: coarse to fine. The same problem is solved at half resolution
-  (recursively down to 16 tiles a side, then from ``rescaled``); the map from
-  the coarse standard pattern to the coarse design (piecewise linear over a
-  Delaunay triangulation of the coarse nodes, nearest node outside it) is
-  applied to the fine standard pattern scaled to the coarse one's extent. The
-  coarse solve lives in ``solve.py`` (it needs the solver); :func:`coarse_map`
-  is the mapping.
+  (recursively down to 16 tiles a side, then from ``rescaled``) and mapped onto
+  the fine standard pattern scaled to the coarse one's extent, tile by tile
+  (:func:`coarse_tile_map`; a node map breaks the hinge sums by ~1 rad). The
+  coarse solve lives in ``solve.py`` (it needs the solver).
 """
 
 from __future__ import annotations
@@ -92,26 +90,6 @@ def harmonic_map(base: np.ndarray, st: Stencils, target: Target) -> np.ndarray:
     out[tips] = fixed
     rhs = -(Lfb @ fixed)
     out[free] = np.column_stack([spsolve(Lff, rhs[:, 0]), spsolve(Lff, rhs[:, 1])])
-    return out
-
-
-def coarse_map(base_coarse: np.ndarray, x_coarse: np.ndarray, base_fine: np.ndarray) -> np.ndarray:
-    """Push ``base_fine`` through the map ``base_coarse -> x_coarse`` (both node arrays of one pattern).
-
-    The fine standard pattern is first scaled and centred onto the coarse one's
-    bounding box; the map is piecewise linear over a Delaunay triangulation of
-    the coarse standard nodes, nearest coarse node for points outside its hull.
-    """
-    from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
-
-    lo_c, hi_c = base_coarse.min(0), base_coarse.max(0)
-    lo_f, hi_f = base_fine.min(0), base_fine.max(0)
-    q = lo_c + (base_fine - lo_f) * ((hi_c - lo_c) / (hi_f - lo_f))
-    lin = LinearNDInterpolator(base_coarse, x_coarse)
-    out = lin(q)
-    bad = ~np.isfinite(out).all(1)
-    if bad.any():
-        out[bad] = NearestNDInterpolator(base_coarse, x_coarse)(q[bad])
     return out
 
 

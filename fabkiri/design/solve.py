@@ -44,7 +44,7 @@ from ..errors import InputError
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
-from .initial import coarse_map, coarse_tile_map, initial_guess
+from .initial import coarse_tile_map, initial_guess
 from .objective import regularizer
 from .targets import Target
 
@@ -56,8 +56,7 @@ EARLY_STALL = 1e-3  # ... looser in the first stage: the next one refines from t
 # moving x by O(|c|), so the last stage need not converge the penalty problem to high accuracy
 PENALTIES = ((1e2, EARLY_STALL, 200), (1e4, STALL, 40))
 STIFF_PENALTIES = ((1e4, 1e-4, 300), (1e6, STALL, 60))  # fallback when the first schedule gets stuck
-COARSE_PENALTIES = ((1e2, EARLY_STALL, 200), (1e4, EARLY_STALL, 40))  # from a coarse-to-fine start
-COARSE_MAP = "tiles"  # or "nodes" (piecewise linear on the nodes: breaks the hinge sums by ~1 rad)
+COARSE_PENALTIES = ((1e4, STALL, 40),)  # from a coarse-to-fine start: repair the constraints stiffly, then project
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers the fallback
 # inexact LM: penalty-stage steps solve the normal equations to 1e-5 (the gain ratio judges the step that
@@ -201,16 +200,15 @@ class _Problem:
                             tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
-        if COARSE_MAP == "tiles":
-            xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
-        else:
-            xmm = coarse_map(sc.nodes, res.pattern.nodes, base)
+        xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
         c = xmm[st.tiles]
         area = 0.5 * (c[..., 0] * np.roll(c[..., 1], -1, 1) - np.roll(c[..., 0], -1, 1) * c[..., 1]).sum(1)
         self.coarse = {"rows": rc, "cols": cc, "status": res.report["status"], "time_s": res.report["time_s"],
                        "iterations_total": res.report["iterations_total"],
                        "factorisations": res.report["factorisations"], "folded_tiles": int((area <= 0).sum())}
-        if (area <= 0).any():  # the map folded tiles: fall back rather than start from a tangle
+        # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
+        self.coarse["used"] = bool(res.converged and not (area <= 0).any())
+        if not self.coarse["used"]:
             return initial_guess(base, st, req.target, "rescaled")
         L0 = float(np.mean(np.linalg.norm(np.roll(c, -1, 1) - c, axis=-1)))
         return xmm / L0, L0
@@ -487,7 +485,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
 
     X0 = prob.X0
     first = PENALTIES
-    if prob.coarse is not None and not prob.coarse["folded_tiles"]:
+    if prob.coarse is not None and prob.coarse["used"]:
         first = COARSE_PENALTIES
     best = None
     for attempt, schedule in enumerate((first, STIFF_PENALTIES)):
