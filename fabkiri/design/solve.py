@@ -483,14 +483,11 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
             return Xq, "least-squares", kp + kq
         return Xp, "least-squares", kp
 
-    X0 = prob.X0
-    first = PENALTIES
-    if prob.coarse is not None and prob.coarse["used"]:
-        first = COARSE_PENALTIES
+    first = COARSE_PENALTIES if prob.coarse is not None and prob.coarse["used"] else PENALTIES
     best = None
     for attempt, schedule in enumerate((first, STIFF_PENALTIES)):
         tag = "_restart" if attempt else ""
-        X = (X0 if attempt == 0 else prob.X0).copy()
+        X = prob.X0.copy()
         for rho, stall_tol, cap in schedule:
             X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
             iters[f"lm_rho_{rho:g}{tag}"] = k
