@@ -24,6 +24,7 @@ import numpy as np
 from scipy import sparse
 
 from ..errors import InputError, SolveError
+from ..pattern.geometry import wrap_angle
 from ..pattern.lattice import DX, DY
 from ..pattern.model import Pattern
 from .targets import Target
@@ -45,10 +46,6 @@ def jac(m: int, nvar_nodes: int, nodes: np.ndarray, grads: np.ndarray) -> sparse
     J = sparse.csr_matrix((vals, cols, indptr), shape=(m, 2 * nvar_nodes))
     J.sum_duplicates()
     return J
-
-
-def wrap(a: np.ndarray) -> np.ndarray:
-    return np.mod(a + np.pi, TWO_PI) - np.pi
 
 
 def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray):
@@ -200,7 +197,7 @@ def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, targe
 
     def fn(x):
         th, nodes, g = corner_angle(x, tiles, t.ravel(), k.ravel())
-        r = wrap(th.reshape(m, q).sum(1) - target)
+        r = wrap_angle(th.reshape(m, q).sum(1) - target)
         return r, jac(m, nv, nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
 
     return Family(name, kind, fn, 0)
@@ -234,18 +231,22 @@ def non_overlap(st: Stencils, nv: int) -> Family:
     return Family("non_overlap", "ineq", fn, 2)
 
 
-def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:
-    """cross(next - v, prev - v) - margin >= 0 at every tile corner."""
-    tl = st.tiles
-    v = tl.ravel()
-    a = np.roll(tl, -1, 1).ravel()
-    b = np.roll(tl, 1, 1).ravel()
+def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0) -> Family:
+    """cross(next - v, prev - v) - margin >= 0 at every corner of CCW ``quads`` (node indices)."""
+    v = quads.ravel()
+    a = np.roll(quads, -1, 1).ravel()
+    b = np.roll(quads, 1, 1).ravel()
 
     def fn(x):
         g, nodes, gr = cross_term(x, v, a, b)
         return g - margin, jac(len(g), nv, nodes, gr)
 
-    return Family("convexity", "ineq", fn, 2)
+    return Family(name, "ineq", fn, 2)
+
+
+def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:
+    """Deployed tiles stay convex and counter-clockwise."""
+    return corner_convexity("convexity", st.tiles, nv, margin)
 
 
 def shape_match(nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, name: str = "shape") -> Family:
@@ -338,7 +339,7 @@ def rectangle_outline(st: Stencils, state: int, nv: int) -> Family:
         th, nodes, g = corner_angle(x, tiles, t.ravel(), k.ravel())
         th = th.reshape(m, q) * mask
         g = g.reshape(m, q, 3, 2) * mask[:, :, None, None]
-        r = wrap(th.sum(1) - target)
+        r = wrap_angle(th.sum(1) - target)
         return r, jac(m, nv, nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
 
     return Family(f"rectangle_{state}", "eq", fn, 0)
@@ -427,16 +428,7 @@ class ClosedGrid:
 
     def orientation(self, st: Stencils, nv: int) -> Family:
         """Closed-state tiles keep their orientation (no reflected copies): cross >= 0."""
-        vx = self.vertex
-        v = vx.ravel()
-        a = np.roll(vx, -1, 1).ravel()
-        b = np.roll(vx, 1, 1).ravel()
-
-        def fn(x):
-            g, nodes, gr = cross_term(x, v, a, b)
-            return g, jac(len(g), nv, nodes, gr)
-
-        return Family(f"closed_convexity_{self.state}", "ineq", fn, 2)
+        return corner_convexity(f"closed_convexity_{self.state}", self.vertex, nv)
 
 
 def regularizer_pairs(st: Stencils) -> np.ndarray:

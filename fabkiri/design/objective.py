@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .constraints import Family, Stencils, corner_angle, jac, regularizer_pairs, wrap
+from ..pattern.geometry import wrap_angle
+from .constraints import Family, Stencils, corner_angle, jac, regularizer_pairs
 
 
 def regularizer(st: Stencils, nv: int) -> Family:
@@ -38,7 +39,7 @@ def regularizer(st: Stencils, nv: int) -> Family:
         Jl = jac(m, nv, np.stack([a1, b1, a2, b2], -1), w * np.stack([-e1, e1, e2, -e2], 1))
         th1, n1, g1 = corner_angle(x, tl, tT, kk)
         th2, n2, g2 = corner_angle(x, tl, tU, kk)
-        ra = w * wrap(th1 - th2)
+        ra = w * wrap_angle(th1 - th2)
         Ja = jac(m, nv, np.concatenate([n1, n2], 1), w * np.concatenate([g1, -g2], 1))
         from scipy import sparse
 
