@@ -247,9 +247,7 @@ def _piecewise(t: np.ndarray, v1, v0, v2):
 
 def tile_angles(reference: np.ndarray, corners: np.ndarray) -> np.ndarray:
     """Kabsch rotation angle of each tile from ``reference`` to ``corners`` (``(..., T, 4, 2)``)."""
-    p = reference - reference.mean(axis=-2, keepdims=True)
-    q = corners - corners.mean(axis=-2, keepdims=True)
-    return np.arctan2(geometry.cross2(p, q).sum(-1), geometry.dot2(p, q).sum(-1))
+    return geometry.kabsch_angles(reference, corners)
 
 
 def _circmean(a: np.ndarray, axis=-1) -> np.ndarray:

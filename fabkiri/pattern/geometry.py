@@ -72,6 +72,17 @@ def mean_edge_length(corners: np.ndarray) -> float:
     return float(edge_lengths(corners).mean()) if corners.size else 1.0
 
 
+def kabsch_angles(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Rotation angle of the best proper fit of each polygon onto its target.
+
+    ``source`` and ``target`` are ``(..., n, 2)``; the fit is over the last two
+    axes (one rotation per polygon, e.g. per tile), returned as ``(...)``.
+    """
+    p = source - source.mean(axis=-2, keepdims=True)
+    q = target - target.mean(axis=-2, keepdims=True)
+    return np.arctan2(cross2(p, q).sum(-1), dot2(p, q).sum(-1))
+
+
 def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[float, np.ndarray]:
     """Proper rigid motion (no reflection) that best maps ``source`` onto ``target``.
 
@@ -80,10 +91,8 @@ def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[float, np.ndarray]:
     """
     p = source.reshape(-1, 2)
     q = target.reshape(-1, 2)
-    pc, qc = p.mean(axis=0), q.mean(axis=0)
-    p0, q0 = p - pc, q - qc
-    theta = float(np.arctan2(cross2(p0, q0).sum(), dot2(p0, q0).sum()))
-    t = qc - rotate(pc, theta)
+    theta = float(kabsch_angles(p, q))
+    t = q.mean(axis=0) - rotate(p.mean(axis=0), theta)
     return theta, t
 
 

@@ -15,11 +15,9 @@ def tile_kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.
     Returns the rotation angle of every tile ``(T,)`` and the largest corner
     residual after the fit ``(T,)``.
     """
-    pc = source.mean(axis=1, keepdims=True)
-    qc = target.mean(axis=1, keepdims=True)
-    p0, q0 = source - pc, target - qc
-    theta = np.arctan2(geometry.cross2(p0, q0).sum(1), geometry.dot2(p0, q0).sum(1))
-    moved = geometry.rotate(p0, theta[:, None]) + qc
+    theta = geometry.kabsch_angles(source, target)
+    moved = geometry.rotate(source - source.mean(axis=1, keepdims=True), theta[:, None]) \
+        + target.mean(axis=1, keepdims=True)
     return theta, np.linalg.norm(moved - target, axis=-1).max(axis=1)
 
 
@@ -157,8 +155,7 @@ def leave_one_out_residual(source: np.ndarray, target: np.ndarray) -> np.ndarray
         keep = [i for i in range(n) if i != k]
         p, q = source[:, keep], target[:, keep]
         pc, qc = p.mean(axis=1), q.mean(axis=1)
-        p0, q0 = p - pc[:, None], q - qc[:, None]
-        theta = np.arctan2(geometry.cross2(p0, q0).sum(1), geometry.dot2(p0, q0).sum(1))
+        theta = geometry.kabsch_angles(p, q)
         moved = geometry.rotate(source[:, k] - pc, theta) + qc
         out = np.maximum(out, np.linalg.norm(moved - target[:, k], axis=-1))
     return out
