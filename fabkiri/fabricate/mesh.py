@@ -28,7 +28,7 @@ from shapely.geometry import Polygon
 from ..errors import FabricationError
 from ..pattern.model import Pattern
 from . import printgeom
-from .printgeom import CIRCLE_SEGMENTS, regular_polygon  # noqa: F401  (re-exported)
+from .printgeom import regular_polygon
 from .printers import Printer
 
 STYLES = ("strips", "tiles-and-strips", "pinned")
