@@ -46,6 +46,8 @@ from ..pattern.model import Pattern
 from . import constraints as C
 from .initial import coarse_tile_map, initial_guess
 from .objective import regularizer
+from .reduced import solve_reduced
+from .rigid import RigidFamily
 from .targets import Target
 
 CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay > ~1° from 0 and π
@@ -64,6 +66,11 @@ RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers 
 # 1e-3 and 1e-4 were faster on the rigid circle but landed in worse local minima on must-show targets
 # (heart 16x16 fit 12.8 mm instead of 0.09 mm, blob 8x8 rigid 0.92 mm instead of 0.16 mm); 1e-5 did not.
 LM_CG_RTOL = 1e-5
+SOLVERS = ("auto", "reduced", "full")
+# auto: a least-squares fit from the rigid family that misses the target by more than this fraction of its
+# size also gets the full solver, and the better objective wins (the family's LM can stop in a worse local
+# minimum: rigid heart 8x8 0.91 mm vs 0.17 mm; it also wins some: ellipse 16x16 0.41 mm vs 1.84 mm)
+FULL_ABOVE = 5e-3
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 
 
@@ -79,6 +86,7 @@ class DesignRequest:
     holes: str = "rhombus"  # or "parallelogram"
     contracted: dict = field(default_factory=dict)  # state -> Target | ("rect", ratio or None)
     init: str = "rescaled"
+    solver: str = "auto"  # "reduced": closed-form rigid family only; "full": all nodes; "auto": see _design
     tol: float = 1e-10
     reg_weight: float = 1e-3
     max_iter: int = 300
@@ -89,6 +97,11 @@ class DesignRequest:
             raise InputError(f"inverse design needs at least 2x2 tiles, got {self.rows}x{self.cols}")
         if self.holes not in ("rhombus", "parallelogram"):
             raise InputError(f"--holes must be rhombus or parallelogram, not {self.holes!r}")
+        if self.solver not in SOLVERS:
+            raise InputError(f"--solver must be one of {', '.join(SOLVERS)}, not {self.solver!r}")
+        if self.solver == "reduced" and not reduced_applies(self):
+            raise InputError("--solver reduced needs --rigid, rhombus holes, a --target, and no --symmetry or "
+                             "--contracted-target (the closed-form rigid family covers only that)")
         if self.symmetry not in (None, "x", "y"):
             raise InputError(f"--symmetry must be x or y, not {self.symmetry!r}")
         if not (np.isfinite(self.tol) and 0 < self.tol < 1e-2):
@@ -185,7 +198,7 @@ class _Problem:
         for g in self.grids.values():
             fam.append(g.orientation(st, nv))
         self.families = fam
-        self.normal = _Normal(self._ordering())
+        self._normal = None
         self.margin = {f.name: (CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN) for f in fam if f.kind == "ineq"}
 
     def _coarse_guess(self, base: np.ndarray, st: C.Stencils) -> tuple[np.ndarray, float]:
@@ -226,6 +239,13 @@ class _Problem:
         node = sparse.csr_matrix((np.ones(S.nnz), (S.row // 2, S.col // 2)), shape=(self.nv, self.nv))
         o = nested_dissection(node, self.X0)
         return np.stack([2 * o, 2 * o + 1], 1).ravel()
+
+    @property
+    def normal(self) -> "_Normal":
+        """Normal-equation solver of the full problem, built on first use (its ordering costs a Jacobian)."""
+        if self._normal is None:
+            self._normal = _Normal(self._ordering())
+        return self._normal
 
     def of(self, kind: str) -> list[C.Family]:
         return [f for f in self.families if f.kind == kind]
@@ -447,14 +467,51 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
         return _design(req, progress)
 
 
-def _design(req: DesignRequest, progress: bool) -> DesignResult:
-    log = _Log(progress)
-    t0 = time.perf_counter()
-    prob = _Problem(req)
-    X = prob.X0.copy()
-    log(f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
-        + ", ".join(f.name for f in prob.families))
-    iters = {}
+def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
+    t = prob.st.tiles
+    return float(np.mean(np.linalg.norm(np.roll(X[t], -1, 1) - X[t], axis=-1)))
+
+
+def reduced_applies(req: DesignRequest) -> bool:
+    """The closed-form rigid family covers the request (see ``rigid.py``)."""
+    return (req.rigid and req.holes == "rhombus" and not req.symmetry and not req.contracted
+            and req.target is not None)
+
+
+def _objective(prob: _Problem, X: np.ndarray) -> float:
+    """Σ fit² + w E_reg: what both solvers minimise over the feasible set."""
+    fit = sum(float(np.sum(f(X)[0] ** 2)) for f in prob.of("fit"))
+    return fit + prob.req.reg_weight * sum(float(np.sum(f(X)[0] ** 2)) for f in prob.of("reg"))
+
+
+def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
+    res = family_residuals(prob, X, _mean_edge(prob, X))
+    worst = max((res[f.name] for f in prob.of("eq")), default=0.0)
+    return worst <= prob.req.tol and float(_ineq_values(prob, X).min(initial=0.0)) >= 0.0
+
+
+def _solve_reduced(prob: _Problem, log, iters: dict):
+    """Solve in the rigid family; ``(X, mode)`` if every family checks out, else None."""
+    req = prob.req
+    fam = RigidFamily.build(prob.st, prob.std.topology.spanning_tree(0))
+    log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
+    X, mode, its = solve_reduced(fam, prob.X0, np.pi / 4, prob.families, prob.margin, req.reg_weight,
+                                 0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
+                                 max_iter=req.max_iter, miss_tol=FULL_ABOVE)
+    iters.update(its)
+    if _acceptable(prob, X) or req.solver == "reduced":
+        return X, mode
+    log("the rigid family's result fails a family check: falling back to the full solver")
+    return None
+
+
+def _solve_full(prob: _Problem, log, iters: dict, start: np.ndarray | None = None):
+    """Penalty LM stages then projection (module docstring); returns ``(X, mode)``.
+
+    ``start`` replaces the initial guess of the first schedule (a warm start).
+    """
+    req = prob.req
+
     def eq_max(Y):
         return max((float(np.abs(f(Y)[0]).max()) for f in prob.of("eq")), default=0.0)
 
@@ -462,7 +519,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     fits = prob.of("fit")
 
     def mean_edge(Y):
-        return float(np.mean(np.linalg.norm(np.roll(Y[prob.st.tiles], -1, 1) - Y[prob.st.tiles], axis=-1)))
+        return _mean_edge(prob, Y)
 
     def project(X):
         """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
@@ -487,7 +544,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     best = None
     for attempt, schedule in enumerate((first, STIFF_PENALTIES)):
         tag = "_restart" if attempt else ""
-        X = prob.X0.copy()
+        X = start.copy() if start is not None and attempt == 0 else prob.X0.copy()
         for rho, stall_tol, cap in schedule:
             X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
             iters[f"lm_rho_{rho:g}{tag}"] = k
@@ -508,6 +565,39 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         log(f"projection stopped at {worst:.2e} > tol: " + ("restarting with stiff penalties" if not attempt
                                                              else "giving up"))
     _, X, mode = best
+    return X, mode
+
+
+def _design(req: DesignRequest, progress: bool) -> DesignResult:
+    log = _Log(progress)
+    t0 = time.perf_counter()
+    prob = _Problem(req)
+    log(f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
+        + ", ".join(f.name for f in prob.families))
+    iters: dict = {}
+    eqs = prob.of("eq")
+    fits = prob.of("fit")
+    reduced_name = "closed-form rigid family (reduced Levenberg-Marquardt)"
+    full_name = "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU"
+    out = None
+    if req.solver != "full" and reduced_applies(req):
+        out = _solve_reduced(prob, log, iters)
+    solver = reduced_name
+    if out is not None and req.solver == "auto" and out[1] != "hard":
+        # fit rows and the family's target are both in normalised units
+        miss = max((float(np.abs(f(out[0])[0]).max()) / f.meta["target"].size for f in fits), default=0.0)
+        if miss > FULL_ABOVE:
+            log(f"rigid family fit misses by {miss:.2%} of the target size: trying the full solver too")
+            full = _solve_full(prob, log, iters)
+            f_red, f_full = _objective(prob, out[0]), _objective(prob, full[0])
+            ok_full = _acceptable(prob, full[0])
+            log(f"objective: rigid family {f_red:.4e}, full {f_full:.4e}" + ("" if ok_full else " (unconverged)"))
+            if ok_full and f_full < f_red:
+                out, solver = full, full_name
+    if out is None:
+        out = _solve_full(prob, log, iters)
+        solver = full_name
+    X, mode = out
     L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))
     res = family_residuals(prob, X, L)
     eq_worst = max((res[f.name] for f in eqs), default=0.0)
@@ -540,10 +630,10 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         "min_inequality": ineq_min / (L * L),
         "active_inequalities": active,
         "regularizer": float(np.sum(regularizer(prob.st, prob.nv)(X)[0] ** 2)),
-        "factorisations": prob.normal.factorisations,
-        "cg_iterations": prob.normal.cg_steps,
+        "factorisations": prob._normal.factorisations if prob._normal else 0,
+        "cg_iterations": prob._normal.cg_steps if prob._normal else 0,
         "coarse": prob.coarse,
-        "solver": "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU",
+        "solver": solver,
     }
     log(f"{report['status']}: max equality residual {eq_worst:.2e}, fit {mode}, "
         f"{report['iterations_total']} iterations, {elapsed:.2f}s")
