@@ -1,7 +1,9 @@
 """Benchmark of the inverse-design solver: rigid-deployable circle, n x n tiles.
 
 Prints, in one run, time / iterations / residual / fit for n = 4, 8, 16, 32, 64
-(128 with --big) with fabkiri's sparse solver, and the same problem at n = 4
+(128 with --big) with fabkiri's default solver (``auto``: the closed-form rigid
+family, design/rigid.py), the full sparse solver on the same problem (``full``
+lines, skip with --no-full), and the same problem at n = 4
 and 8 with scipy's dense SLSQP (exact Jacobians, the same families, shape
 matching as the objective) as the baseline, with the speed ratio: once with the
 constraint rows as written (SLSQP stops at once on the dependent rows) and once
@@ -9,9 +11,9 @@ constraint rows as written (SLSQP stops at once on the dependent rows) and once
 single-threaded BLAS, as ``design`` does (threaded OpenBLAS on a loaded 2-core box
 slows SLSQP's dense algebra ~10x, which would flatter the ratio).
 
-From n = 32 on, a ``coarse`` line gives the same problem from ``--init coarse``.
+``--init coarse`` benchmarks the coarse-to-fine start instead.
 
-    PYTHONPATH=. python3 bench/solve.py [--sizes 4,8,16,32,64] [--big] [--init standard]
+    PYTHONPATH=. python3 bench/solve.py [--sizes 4,8,16,32,64] [--big] [--init standard] [--no-full]
 """
 
 from __future__ import annotations
@@ -106,13 +108,13 @@ def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
             "ineq_min": float(_ineq_values(prob, X).min()), "success": bool(res.success and eq <= 1e-10)}
 
 
-def ours(n: int, init: str):
-    res = design(DesignRequest(n, n, T.load_target("circle", 100.0), rigid=True, init=init))
+def ours(n: int, init: str, solver: str = "auto"):
+    res = design(DesignRequest(n, n, T.load_target("circle", 100.0), rigid=True, init=init, solver=solver))
     r = res.report
     fit = r["fit"]["shape"]
     return {"time": r["time_s"], "iterations": r["iterations_total"], "eq": r["max_equality_residual"],
             "fit_mm": fit["max_mm"], "fit_rel_radius": fit["max_mm"] / 50.0, "status": r["status"],
-            "mode": r["shape_matching"], "success": res.converged}
+            "mode": r["shape_matching"], "success": res.converged, "solver": r["solver"].split(" (")[0]}
 
 
 def main() -> None:
@@ -121,6 +123,7 @@ def main() -> None:
     ap.add_argument("--big", action="store_true", help="also n = 128")
     ap.add_argument("--init", default="rescaled")
     ap.add_argument("--no-baseline", action="store_true")
+    ap.add_argument("--no-full", action="store_true", help="skip the full-solver comparison lines")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")] + ([128] if args.big else [])
     print(f"rigid-deployable circle (diameter 100 mm), init {args.init}; residual = max equality residual "
@@ -132,12 +135,12 @@ def main() -> None:
         r = ours(n, args.init)
         mine[n] = r
         print(f"{'fabkiri':<8} {n:>4} {r['status']:<12} {r['time']:>8.3f} {r['iterations']:>6} {r['eq']:>10.2e} "
-              f"{r['fit_mm']:>9.3g} {r['fit_rel_radius']:>8.2%}  {r['mode']}", flush=True)
-        if n >= 32 and args.init != "coarse":  # the coarse-to-fine start, in the same run
-            c = ours(n, "coarse")
-            print(f"{'coarse':<8} {n:>4} {c['status']:<12} {c['time']:>8.3f} {c['iterations']:>6} {c['eq']:>10.2e} "
-                  f"{c['fit_mm']:>9.3g} {c['fit_rel_radius']:>8.2%}  {c['mode']} (--init coarse, coarse levels "
-                  f"included; {c['time'] / r['time']:.2f}x the {args.init} time)", flush=True)
+              f"{r['fit_mm']:>9.3g} {r['fit_rel_radius']:>8.2%}  {r['mode']}; {r['solver']}", flush=True)
+        if not args.no_full:
+            f = ours(n, args.init, "full")
+            print(f"{'full':<8} {n:>4} {f['status']:<12} {f['time']:>8.3f} {f['iterations']:>6} {f['eq']:>10.2e} "
+                  f"{f['fit_mm']:>9.3g} {f['fit_rel_radius']:>8.2%}  {f['mode']}; --solver full "
+                  f"({f['time'] / r['time']:.1f}x the default's time)", flush=True)
     if args.no_baseline:
         return
     for n, indep in ((4, False), (8, False), (4, True), (8, True)):

@@ -120,6 +120,7 @@ def cmd_design(args: argparse.Namespace) -> int:
         raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=args.rigid, symmetry=args.symmetry,
                         holes=args.holes, contracted=contracted, init=args.init, tol=args.tol,
+                        solver=args.solver,
                         name=args.name or "")
     if not req.name:
         parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
@@ -271,6 +272,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
                         "(standard pattern at the target's area), then standard, until a design passes every check; "
                         "coarse solves at half resolution first and maps that design onto the tiles")
+    p.add_argument("--solver", choices=["auto", "reduced", "full"], default="auto",
+                   help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "
+                        "solve in the closed-form rigid family, and add the full solver when that fit misses the "
+                        "target by more than 0.5 %% of its size; reduced: the rigid family only; full: the sparse "
+                        "solver over all nodes")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")

@@ -208,7 +208,7 @@ def _hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
                 break
             dp = 0.5 * dp
         rn, Jn = merit.rows(Xn, hard=True)
-        if gviol_n <= gviol + 1e-15 and np.abs(rn).max() < np.abs(r).max():
+        if gviol_n <= gviol + 1e-15 and float(rn @ rn) < float(r @ r):
             p, X, r, gviol = p + dp, Xn, rn, gviol_n
             Jr = Jn @ fam.jacobian(*merit.unpack(p))
             mu = max(mu / 10.0, 1e-14 * scale)

@@ -68,9 +68,10 @@ RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers 
 LM_CG_RTOL = 1e-5
 SOLVERS = ("auto", "reduced", "full")
 # auto: a least-squares fit from the rigid family that misses the target by more than this fraction of its
-# size also gets the full solver, and the better objective wins (the family's LM can stop in a worse local
-# minimum: rigid heart 8x8 0.91 mm vs 0.17 mm; it also wins some: ellipse 16x16 0.41 mm vs 1.84 mm)
-FULL_ABOVE = 5e-3
+# size also gets the full solver, and the better objective wins. The family's LM can stop in a worse local
+# minimum (rigid 100 mm heart 8x8: 0.42 mm vs 0.15 mm with the full solver), while on the rigid circle both
+# reach the same least-squares fit (32x32 0.16 mm, 64x64 0.20 mm) and the full solver only costs time.
+FULL_ABOVE = 2.5e-3
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 
 

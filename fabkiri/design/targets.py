@@ -30,6 +30,7 @@ from ..templates import template_dir
 SIDES = ("B", "R", "T", "L")  # CCW order of the arcs; side index 0..3
 TEMPLATE_DIR = template_dir("targets")
 DEFAULT_SIZE = 100.0  # mm, larger bounding-box dimension of a named target
+ARC_PAD = 0.1  # fraction of an arc's parameter range its feet may pass its ends by
 
 
 @dataclass(eq=False)
@@ -204,6 +205,11 @@ class Target:
             else:
                 tree, us = self._trees()[s]
                 a, b = self.arc_range(int(s))
+                # the foot may slide a little past the arc's ends: a tip at a split point is then measured
+                # to the curve itself, which is smooth there, not to a clamped end point (a cone in the
+                # distance, which turned Gauss-Newton's quadratic convergence into linear at corner tips)
+                pad = ARC_PAD * (b - a)
+                a, b = a - pad, b + pad
             _, idx = tree.query(p[sel])
             u[sel] = us[idx]
             lo[sel], hi[sel] = a, b
@@ -241,17 +247,26 @@ class Target:
         return np.stack([t[:, 1], -t[:, 0]], -1)
 
     def _newton_foot(self, p, u, lo, hi, iters: int = 8):
+        """Newton on d/du |γ(u) - p|² = 0, clamped to each point's arc; stops once every step is tiny."""
         sp = self._spline
+        brk, c = sp.x, sp.c  # piecewise cubic: γ = ((c0 t + c1) t + c2) t + c3 on [brk_i, brk_i+1)
+        h = np.diff(self._u).min()
         for _ in range(iters):
             um = np.mod(u, 1.0)
-            g, d1, d2 = sp(um), sp(um, 1), sp(um, 2)
+            i = np.clip(np.searchsorted(brk, um, side="right") - 1, 0, len(brk) - 2)
+            t = (um - brk[i])[:, None]
+            c0, c1, c2, c3 = c[0, i], c[1, i], c[2, i], c[3, i]
+            g = ((c0 * t + c1) * t + c2) * t + c3
+            d1 = (3 * c0 * t + 2 * c1) * t + c2
+            d2 = 6 * c0 * t + 2 * c1
             r = g - p
             f = (d1 * r).sum(1)
             fp = (d2 * r).sum(1) + (d1 * d1).sum(1)
             step = np.where(fp > 0, -f / np.where(fp > 0, fp, 1.0), 0.0)
-            h = np.diff(self._u).min()
             step = np.clip(step, -2 * h, 2 * h)
             u = np.clip(u + step, lo, hi)
+            if np.abs(step).max(initial=0.0) <= 1e-12 * h:
+                break
         return u
 
     def _polyline_foot(self, p, u, lo, hi):

@@ -1,0 +1,132 @@
+"""The closed-form rigid-deployable family (design/rigid.py) and the reduced solver on it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as hst
+
+from fabkiri.design import constraints as C
+from fabkiri.design import targets as T
+from fabkiri.design.rigid import RigidFamily
+from fabkiri.design.solve import DesignRequest, design
+from fabkiri.errors import InputError
+from fabkiri.mechanics.contract import contract
+from fabkiri.pattern import Pattern, standard_pattern
+
+
+def _family(rows, cols):
+    std = standard_pattern(rows, cols, tile_size=1.0)
+    st = C.Stencils.from_pattern(std)
+    return std, st, RigidFamily.build(st, std.topology.spanning_tree(0))
+
+
+@pytest.mark.parametrize("rows,cols", [(2, 2), (2, 5), (4, 4), (5, 7), (8, 6)])
+def test_dimension_is_m_plus_n_plus_2_per_coordinate(rows, cols):
+    """Spec §2.3: rigid + reconfigurable has 2(M+N)+2 DOF = 2(M+N+2) seed coordinates - 3 + ψ."""
+    _, _, fam = _family(rows, cols)
+    assert fam.n_seeds == rows + cols + 2
+    assert np.linalg.matrix_rank(fam.Z) == fam.n_seeds
+    G = (rows + 1) * (cols + 1)
+    m = len(fam.midpoint)
+    A = np.zeros((m, G))
+    np.add.at(A, (np.arange(m), fam.midpoint[:, 0]), 1.0)
+    np.add.at(A, (np.arange(m), fam.midpoint[:, 1]), -0.5)
+    np.add.at(A, (np.arange(m), fam.midpoint[:, 2]), -0.5)
+    assert np.abs(A @ fam.Z).max() <= 1e-12
+    assert np.linalg.matrix_rank(A) == G - fam.n_seeds  # every midpoint row is independent
+
+
+@pytest.mark.parametrize("deg", [10.0, 45.0, 80.0])
+def test_standard_pattern_is_a_member_at_every_angle(deg):
+    std = standard_pattern(6, 5, tile_size=1.0, angle_deg=deg)
+    st = C.Stencils.from_pattern(standard_pattern(6, 5, tile_size=1.0))
+    fam = RigidFamily.build(st, std.topology.spanning_tree(0))
+    S, gap = fam.fit(std.nodes, np.radians(deg))
+    assert gap <= 1e-12
+    # ψ = 0 puts every node on its closed-state-1 grid vertex: the unit grid, up to a translation
+    X0 = fam.nodes(S, 0.0)
+    grid = fam.grid(S)
+    assert np.abs(X0 - grid[fam.node_vertex]).max() <= 1e-12
+    gi, gj = np.divmod(np.arange(len(grid)), 6)
+    unit = np.stack([gj, gi], -1).astype(float)
+    assert np.abs((grid - grid[0]) - unit).max() <= 1e-12
+
+
+@settings(max_examples=25, deadline=None)
+@given(rows=hst.integers(2, 7), cols=hst.integers(2, 7), psi=hst.floats(0.15, 1.4),
+       seed=hst.integers(0, 2 ** 16), amp=hst.floats(0.0, 0.08))
+def test_every_member_is_rigid_and_reconfigurable(rows, cols, psi, seed, amp):
+    """Perturbed seeds at any ψ: edge pairs of both states and hinge sums hold, and both states close."""
+    std, st, fam = _family(rows, cols)
+    S, _ = fam.fit(std.nodes, np.pi / 4)
+    S = S + amp * np.random.default_rng(seed).normal(size=S.shape)
+    X = fam.nodes(S, psi)
+    nv = len(X)
+    for f in (C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.hinge_sums(st, nv)):
+        assert np.abs(f(X)[0]).max() <= 1e-11, f.name
+    p = Pattern(nodes=X, tiles=std.tiles, lattice=std.lattice)
+    for s in (1, 2):
+        assert contract(p, s).max_closure <= 1e-10
+
+
+def test_jacobian_matches_finite_differences():
+    std, _, fam = _family(5, 6)
+    S, _ = fam.fit(std.nodes, np.pi / 4)
+    S = S + 0.03 * np.random.default_rng(3).normal(size=S.shape)
+    nf = fam.n_seeds
+    p0 = np.concatenate([S[:, 0], S[:, 1], [0.6]])
+
+    def x(p):
+        return fam.nodes(np.stack([p[:nf], p[nf:2 * nf]], -1), p[-1]).ravel()
+
+    D = fam.jacobian(S, 0.6)
+    eps = 1e-6
+    Dn = np.stack([(x(p0 + eps * e) - x(p0 - eps * e)) / (2 * eps) for e in np.eye(len(p0))], 1)
+    assert np.abs(D - Dn).max() <= 1e-7 * max(1.0, np.abs(D).max())
+
+
+# ------------------------------------------------------------------ solver paths
+def test_reduced_solver_circle_is_exact_and_rigid():
+    res = design(DesignRequest(8, 8, T.load_target("circle", 100.0), rigid=True, solver="reduced"))
+    r = res.report
+    assert res.converged and r["solver"].startswith("closed-form rigid family")
+    assert r["shape_matching"] == "hard" and r["fit"]["shape"]["max_mm"] <= 1e-9
+    assert r["max_equality_residual"] <= 1e-12  # identities of the family, not a converged residual
+    assert r["min_inequality"] >= 0 and r["factorisations"] == 0
+
+
+def test_full_solver_still_selectable():
+    res = design(DesignRequest(6, 6, T.load_target("circle", 80.0), rigid=True, solver="full"))
+    assert res.converged and res.report["solver"].startswith("sparse Levenberg-Marquardt")
+    assert res.report["factorisations"] > 0
+
+
+def test_auto_uses_full_solver_outside_the_family():
+    res = design(DesignRequest(6, 6, T.load_target("circle", 80.0), rigid=False))
+    assert res.converged and res.report["solver"].startswith("sparse Levenberg-Marquardt")
+
+
+@pytest.mark.parametrize("kw,msg", [
+    ({"rigid": False}, "--rigid"),
+    ({"rigid": True, "symmetry": "x"}, "--symmetry"),
+    ({"rigid": True, "holes": "parallelogram"}, "rhombus"),
+    ({"rigid": True, "solver": "magic"}, "--solver must be"),
+])
+def test_reduced_solver_refuses_what_it_cannot_cover(kw, msg):
+    kw = {"solver": "reduced", **kw}
+    with pytest.raises(InputError, match=msg):
+        DesignRequest(6, 6, T.load_target("circle", 80.0), **kw).validate()
+
+
+def test_cli_solver_flag(tmp_path, run_cli):
+    out = tmp_path / "r.json"
+    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--rigid", "--solver", "reduced",
+                                "--json", "-o", out)
+    assert code == 0, err
+    assert '"solver": "closed-form rigid family' in stdout
+    code, _, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--symmetry", "x", "--rigid",
+                           "--solver", "reduced", "-o", tmp_path / "s.json")
+    assert code == 2 and "--solver reduced needs" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "s.json").exists()
