@@ -11,8 +11,8 @@ with dense normal matrices ``Dᵀ (JᵀJ) D`` (``D = ∂x/∂p``; ``JᵀJ`` stay
 in node space, so the large regulariser block is never formed densely), with
 the same step limiting on the inequalities as the full solver. When the fit
 comes out nearly exact, minimum-norm Gauss-Newton steps on the fit rows make
-it exact ("hard" shape matching). The caller checks every family on the
-result and falls back to the full solver when this does not converge.
+it exact ("hard" shape matching). The caller (``solve.py``) checks every family
+on the result and falls back to the full solver when a check fails.
 """
 
 from __future__ import annotations
@@ -186,8 +186,9 @@ def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[
 def _hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
     """Damped Gauss-Newton on the fit rows (plus half-margin inequality rows): ``X, p, iterations``.
 
-    The rows are fewer than the unknowns, so a step is the damped minimum-norm one; the
-    damping falls tenfold after every step that lowers the largest row and rises tenfold otherwise.
+    The fit rows are fewer than the unknowns, so with little damping a step is close to the
+    minimum-norm one; the damping falls tenfold after every step that lowers the sum of squares
+    (without a new inequality violation) and rises tenfold otherwise.
     ``X`` is None when the rows could not be brought under ``fit_tol``.
     """
     fam = merit.fam

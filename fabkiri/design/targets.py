@@ -79,6 +79,7 @@ class Target:
         dense = self.point(self._dense_u)
         _check_simple(dense, self.name)
         self._dense = dense
+        self._bbox = (dense.min(0), dense.max(0))  # the curve is fixed after construction
         if self.corners is None:
             self.corners = self._default_corners()
         c = np.mod(np.asarray(self.corners, dtype=float), 1.0)
@@ -126,7 +127,7 @@ class Target:
 
     @property
     def bbox(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._dense.min(0), self._dense.max(0)
+        return self._bbox[0].copy(), self._bbox[1].copy()
 
     @property
     def size(self) -> float:
