@@ -115,6 +115,24 @@ class RigidFamily:
         return cls(M, N, node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), np.ascontiguousarray(Y))
 
     # ---------------------------------------------------------------- maps
+    @staticmethod
+    def deployment_angle(X: np.ndarray, st: Stencils) -> float:
+        """ψ of a pattern near the family: half the mean hole angle at the state-1 fold corners.
+
+        (Every hole of a member is a rhombus with angle 2ψ there; spec §2.5.)
+        """
+        hn = st.hole_nodes
+        if not len(hn):
+            return float(np.pi / 4)
+        folds = st.folds[1].hole_folds
+        v = X[hn]
+        a = np.roll(v, -1, 1) - v
+        b = np.roll(v, 1, 1) - v
+        ang = np.arctan2(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0], (a * b).sum(-1))
+        ang = np.abs(ang[folds])
+        return float(np.clip(0.5 * np.median(ang), 0.05, np.pi / 2 - 0.05))
+
+
     def grid(self, S: np.ndarray) -> np.ndarray:
         """Closed-state-1 pattern vertices ``(G, 2)``."""
         return self.Z @ S

@@ -72,6 +72,8 @@ SOLVERS = ("auto", "reduced", "full")
 # minimum (rigid 100 mm heart 8x8: 0.42 mm vs 0.15 mm with the full solver), while on the rigid circle both
 # reach the same least-squares fit (32x32 0.16 mm, 64x64 0.20 mm) and the full solver only costs time.
 FULL_ABOVE = 2.5e-3
+# ... but not above this many tiles, where the full solver takes minutes to hours (64x64: 66 s)
+FULL_MAX_TILES = 64 * 64
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 
 
@@ -496,7 +498,9 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     req = prob.req
     fam = RigidFamily.build(prob.st, prob.std.topology.spanning_tree(0))
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
-    X, mode, its = solve_reduced(fam, prob.X0, np.pi / 4, prob.families, prob.margin, req.reg_weight,
+    # the standard starts sit at ψ = π/4; a coarse-to-fine start at whatever the coarse design opened to
+    psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
+    X, mode, its = solve_reduced(fam, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
                                  0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
                                  max_iter=req.max_iter, miss_tol=FULL_ABOVE)
     iters.update(its)
@@ -587,7 +591,10 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     if out is not None and req.solver == "auto" and out[1] != "hard":
         # fit rows and the family's target are both in normalised units
         miss = max((float(np.abs(f(out[0])[0]).max()) / f.meta["target"].size for f in fits), default=0.0)
-        if miss > FULL_ABOVE:
+        if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
+            log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
+                f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)")
+        elif miss > FULL_ABOVE:
             log(f"rigid family fit misses by {miss:.2%} of the target size: trying the full solver too")
             full = _solve_full(prob, log, iters)
             f_red, f_full = _objective(prob, out[0]), _objective(prob, full[0])
