@@ -128,6 +128,21 @@ def test_circle_signed_distance_is_exact(x, y, r):
     assert d == pytest.approx(np.hypot(x, y) - r, abs=1e-8 * r)
 
 
+def test_arc_feet_pass_the_split_points_smoothly():
+    """A tip assigned to one arc but lying just past its end is measured to the curve, not to the clamped
+    end point: the signed distance stays the circle's |p| - r (smooth) instead of a cone around the end."""
+    tgt = T.circle().transformed(2.0)
+    for side in range(4):
+        a, b = tgt.arc_range(side)
+        for u, sgn in ((a, -1.0), (b, 1.0)):
+            u_past = u + sgn * 0.02 * (b - a)  # 2 % past the end, inside the 10 % pad
+            q = tgt.point(np.array([u_past]))[0]
+            for d in (-1e-3, 0.0, 1e-3):
+                p = q * (1 + d / 2.0)
+                got = tgt.signed_distance(p[None], np.array([side]))[0]
+                assert got == pytest.approx(np.hypot(*p) - 2.0, abs=1e-9)
+
+
 def test_user_targets(tmp_path):
     csv = tmp_path / "shape.csv"
     csv.write_text("x,y\n0,0\n40,0\n40,20\n0,20\n")

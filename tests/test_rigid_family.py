@@ -130,3 +130,17 @@ def test_cli_solver_flag(tmp_path, run_cli):
                            "--solver", "reduced", "-o", tmp_path / "s.json")
     assert code == 2 and "--solver reduced needs" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "s.json").exists()
+
+
+def test_cli_keeps_the_closest_valid_fit():
+    """Among valid attempts the closer fit wins; an invalid one never beats a valid one."""
+    from fabkiri.cli.design_cmd import _fit_miss, _rank
+
+    def outcome(valid, problems, miss):
+        return (None, {"fit": {"shape": {"max_rel_size": miss}}}, problems, valid, None)
+
+    loose, tight = outcome(True, [], 0.0186), outcome(True, [], 0.0008)
+    broken = outcome(False, ["1 overlapping tile pairs"], 0.0)
+    assert _fit_miss(loose[1]) == pytest.approx(0.0186)
+    assert min([loose, tight, broken], key=_rank) is tight
+    assert min([broken, loose], key=_rank) is loose
