@@ -144,3 +144,19 @@ def test_cli_keeps_the_closest_valid_fit():
     assert _fit_miss(loose[1]) == pytest.approx(0.0186)
     assert min([loose, tight, broken], key=_rank) is tight
     assert min([broken, loose], key=_rank) is loose
+
+
+def test_auto_keeps_the_better_of_both_solvers():
+    """On a small least-squares case auto runs both solvers and keeps the lower objective."""
+    from fabkiri.design.solve import _objective, _Problem
+
+    target = T.load_target("heart", 80.0)
+    out = {}
+    for solver in ("reduced", "full", "auto"):
+        req = DesignRequest(6, 6, target, rigid=True, solver=solver)
+        res = design(req)
+        assert res.converged, solver
+        prob = _Problem(req)
+        out[solver] = (_objective(prob, res.pattern.nodes / prob.L0), res.report["solver"])
+    assert out["reduced"][0] != pytest.approx(out["full"][0], rel=1e-6)  # a case where the choice matters
+    assert out["auto"][0] == pytest.approx(min(out["reduced"][0], out["full"][0]), rel=1e-9)

@@ -300,8 +300,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "first and maps that design onto the tiles")
     p.add_argument("--solver", choices=["auto", "reduced", "full"], default="auto",
                    help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "
-                        "solve in the closed-form rigid family, and add the full solver when that fit misses the "
-                        "target by more than 0.5 %% of its size; reduced: the rigid family only; full: the sparse "
+                        "solve in the closed-form rigid family, and when that fit is least-squares also run the "
+                        "full solver (up to 16x16 tiles, or up to 64x64 when the fit misses by more than 0.25 %% "
+                        "of the target size) and keep the better; reduced: the rigid family only; full: the sparse "
                         "solver over all nodes")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")

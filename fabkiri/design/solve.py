@@ -67,10 +67,13 @@ RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers 
 # (heart 16x16 fit 12.8 mm instead of 0.09 mm, blob 8x8 rigid 0.92 mm instead of 0.16 mm); 1e-5 did not.
 LM_CG_RTOL = 1e-5
 SOLVERS = ("auto", "reduced", "full")
-# auto: a least-squares fit from the rigid family that misses the target by more than this fraction of its
-# size also gets the full solver, and the better objective wins. The family's LM can stop in a worse local
-# minimum (rigid 100 mm heart 8x8: 0.42 mm vs 0.15 mm with the full solver), while on the rigid circle both
-# reach the same least-squares fit (32x32 0.16 mm, 64x64 0.20 mm) and the full solver only costs time.
+# auto: a least-squares fit from the rigid family also gets the full solver when the pattern is small
+# (up to FULL_ALWAYS_TILES, where that costs a few seconds) or when it misses the target by more than
+# FULL_ABOVE of its size; the lower objective wins. The family's LM often stops in a worse local minimum
+# on non-convex or elongated targets (rigid 100 mm, 16x16 rectangle 0.088 vs 0.022 mm, 8x8 heart 0.42 vs
+# 0.15 mm), while on the rigid circle both reach the same fit (32x32 0.16 vs 0.14 mm, 64x64 0.22 vs 0.21 mm)
+# and the full solver would only cost time (3.9 s and 63 s).
+FULL_ALWAYS_TILES = 16 * 16
 FULL_ABOVE = 2.5e-3
 # ... but not above this many tiles, where the full solver takes minutes to hours (64x64: 66 s)
 FULL_MAX_TILES = 64 * 64
@@ -502,7 +505,9 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
     X, mode, its = solve_reduced(fam, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
                                  0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
-                                 max_iter=req.max_iter, miss_tol=FULL_ABOVE)
+                                 max_iter=req.max_iter,
+                                 # small patterns get the full solver's second opinion anyway
+                                 miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE)
     iters.update(its)
     if _acceptable(prob, X) or req.solver == "reduced":
         return X, mode
@@ -594,8 +599,9 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
             log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
                 f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)")
-        elif miss > FULL_ABOVE:
-            log(f"rigid family fit misses by {miss:.2%} of the target size: trying the full solver too")
+        elif miss > FULL_ABOVE or req.rows * req.cols <= FULL_ALWAYS_TILES:
+            log(f"rigid family fit is least-squares (misses by {miss:.2%} of the target size): "
+                f"trying the full solver too")
             full = _solve_full(prob, log, iters)
             f_red, f_full = _objective(prob, out[0]), _objective(prob, full[0])
             ok_full = _acceptable(prob, full[0])
