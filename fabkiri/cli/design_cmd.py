@@ -29,10 +29,11 @@ from .pattern_cmds import parse_tiles
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
-# above 64x64 tiles a rigid design starts coarse to fine: from the standard pattern the rigid family's LM
-# stalls against the inequalities (128x128 circle: 11 % of the size off; coarse: 0.22 %, 97 s)
+# from 32x32 tiles a rigid design starts coarse to fine: from the standard pattern the rigid family's LM
+# stalls against the inequalities (128x128 circle: 11 % of the size off, coarse 0.22 % in 97 s; 64x64 heart
+# 21.6 mm in 204 s, coarse 0.082 mm in 16 s; 32x32 ellipse 2.6 mm in 54 s, coarse 0.094 mm in 8.6 s)
 BIG_RIGID_INITS = ("coarse", "rescaled")
-BIG_TILES = 64 * 64
+BIG_TILES = 32 * 32
 # a valid design whose least-squares fit misses by more than this fraction of the target size is retried
 # from the next guess and the closest valid fit kept (ellipse 16x16: rescaled 1.86 %, standard 0.08 %)
 RETRY_FIT_ABOVE = 5e-3
@@ -138,7 +139,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     # without an explicit --init, a design that fails a check is retried from the next guess
     if args.init:
         inits = [args.init]
-    elif args.rigid and rows * cols > BIG_TILES:
+    elif args.rigid and rows * cols >= BIG_TILES:
         inits = list(BIG_RIGID_INITS)
     else:
         inits = list(AUTO_INITS)
@@ -296,12 +297,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--init", choices=["standard", "rescaled", "conformal", "coarse"],
                    help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
                         "(standard pattern at the target's area), then standard, until a design passes every check "
-                        "(--rigid above 64x64 tiles: coarse, then rescaled); coarse solves at half resolution "
+                        "(--rigid from 32x32 tiles: coarse, then rescaled); coarse solves at half resolution "
                         "first and maps that design onto the tiles")
     p.add_argument("--solver", choices=["auto", "reduced", "full"], default="auto",
                    help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "
                         "solve in the closed-form rigid family, and when that fit is least-squares also run the "
-                        "full solver (up to 16x16 tiles, or up to 64x64 when the fit misses by more than 0.25 %% "
+                        "full solver (up to 16x16 tiles, or up to 32x32 when the fit misses by more than 0.25 %% "
                         "of the target size) and keep the better; reduced: the rigid family only; full: the sparse "
                         "solver over all nodes")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
