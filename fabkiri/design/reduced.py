@@ -87,6 +87,11 @@ class _Merit:
         return np.concatenate(rs), sparse.vstack(Js, format="csr")
 
 
+def fit_miss(fits: list[Family], X: np.ndarray) -> float:
+    """Largest |fit row| relative to its target's size (both in normalised units)."""
+    return max((float(np.abs(f(X)[0]).max()) / f.meta["target"].size for f in fits), default=0.0)
+
+
 def _normal(J: sparse.csr_matrix, r: np.ndarray, D: np.ndarray):
     """Reduced Gauss-Newton matrix ``Dᵀ JᵀJ D`` and gradient ``Dᵀ Jᵀ r``."""
     H = (J.T @ J).tocsr()
@@ -174,7 +179,7 @@ def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[
                     return Xh, "hard", iters
         r, _ = judge.rows(X)
         cost = float(r @ r)
-        miss = max((float(np.abs(f(X)[0]).max()) / f.meta["target"].size for f in merit.fits), default=0.0)
+        miss = fit_miss(merit.fits, X)
         log(f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size")
         if best is None or cost < best[0]:
             best = (cost, X)

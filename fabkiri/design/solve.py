@@ -1,5 +1,10 @@
-"""The inverse-design solver: sparse Levenberg-Marquardt with penalty continuation
-and a final Gauss-Newton projection onto the equality manifold.
+"""The inverse-design solvers.
+
+``--rigid`` designs with rhombus holes (no symmetry, no closed-state targets)
+are solved in the closed-form rigid family (``rigid.py``, ``reduced.py``);
+``_design`` says when the full solver below is asked as well. The full solver:
+sparse Levenberg-Marquardt with penalty continuation and a final Gauss-Newton
+projection onto the equality manifold.
 
 Why this design (see ``docs/design-solver.md``): the reconfigurable constraint
 set has dependent and redundant rows at every feasible point (rank deficit of
@@ -46,7 +51,7 @@ from ..pattern.model import Pattern
 from . import constraints as C
 from .initial import coarse_tile_map, initial_guess
 from .objective import regularizer
-from .reduced import solve_reduced
+from .reduced import fit_miss, solve_reduced
 from .rigid import RigidFamily
 from .targets import Target
 
@@ -516,11 +521,8 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     return None
 
 
-def _solve_full(prob: _Problem, log, iters: dict, start: np.ndarray | None = None):
-    """Penalty LM stages then projection (module docstring); returns ``(X, mode)``.
-
-    ``start`` replaces the initial guess of the first schedule (a warm start).
-    """
+def _solve_full(prob: _Problem, log, iters: dict):
+    """Penalty LM stages then projection (module docstring); returns ``(X, mode)``."""
     req = prob.req
 
     def eq_max(Y):
@@ -555,7 +557,7 @@ def _solve_full(prob: _Problem, log, iters: dict, start: np.ndarray | None = Non
     best = None
     for attempt, schedule in enumerate((first, STIFF_PENALTIES)):
         tag = "_restart" if attempt else ""
-        X = start.copy() if start is not None and attempt == 0 else prob.X0.copy()
+        X = prob.X0.copy()
         for rho, stall_tol, cap in schedule:
             X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
             iters[f"lm_rho_{rho:g}{tag}"] = k
@@ -595,8 +597,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         out = _solve_reduced(prob, log, iters)
     solver = reduced_name
     if out is not None and req.solver == "auto" and out[1] != "hard":
-        # fit rows and the family's target are both in normalised units
-        miss = max((float(np.abs(f(out[0])[0]).max()) / f.meta["target"].size for f in fits), default=0.0)
+        miss = fit_miss(fits, out[0])
         if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
             log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
                 f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)")
@@ -613,7 +614,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         out = _solve_full(prob, log, iters)
         solver = full_name
     X, mode = out
-    L = float(np.mean(np.linalg.norm(np.roll(X[prob.st.tiles], -1, 1) - X[prob.st.tiles], axis=-1)))
+    L = _mean_edge(prob, X)
     res = family_residuals(prob, X, L)
     eq_worst = max((res[f.name] for f in eqs), default=0.0)
     gvals = {f.name: f(X)[0] for f in prob.of("ineq")}
