@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -160,3 +162,13 @@ def test_auto_keeps_the_better_of_both_solvers():
         out[solver] = (_objective(prob, res.pattern.nodes / prob.L0), res.report["solver"])
     assert out["reduced"][0] != pytest.approx(out["full"][0], rel=1e-6)  # a case where the choice matters
     assert out["auto"][0] == pytest.approx(min(out["reduced"][0], out["full"][0]), rel=1e-9)
+
+
+def test_cli_starts_big_rigid_designs_coarse_to_fine(tmp_path, run_cli):
+    out = tmp_path / "c32.json"
+    code, stdout, err = run_cli("design", "--tiles", "32x32", "--target", "circle", "--rigid", "--json", "-o", out)
+    assert code == 0, err
+    report = json.loads(stdout)
+    assert report["attempts"][0]["init"] == "coarse" and report["coarse"]["used"]
+    assert report["solver"].startswith("closed-form rigid family")
+    assert report["fit"]["shape"]["max_rel_size"] < 5e-3
