@@ -250,16 +250,10 @@ class Target:
     def _newton_foot(self, p, u, lo, hi, iters: int = 8):
         """Newton on d/du |γ(u) - p|² = 0, clamped to each point's arc; stops once every step is tiny."""
         sp = self._spline
-        brk, c = sp.x, sp.c  # piecewise cubic: γ = ((c0 t + c1) t + c2) t + c3 on [brk_i, brk_i+1)
         h = np.diff(self._u).min()
         for _ in range(iters):
             um = np.mod(u, 1.0)
-            i = np.clip(np.searchsorted(brk, um, side="right") - 1, 0, len(brk) - 2)
-            t = (um - brk[i])[:, None]
-            c0, c1, c2, c3 = c[0, i], c[1, i], c[2, i], c[3, i]
-            g = ((c0 * t + c1) * t + c2) * t + c3
-            d1 = (3 * c0 * t + 2 * c1) * t + c2
-            d2 = 6 * c0 * t + 2 * c1
+            g, d1, d2 = sp(um), sp(um, 1), sp(um, 2)
             r = g - p
             f = (d1 * r).sum(1)
             fp = (d2 * r).sum(1) + (d1 * d1).sum(1)
