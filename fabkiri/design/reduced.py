@@ -173,7 +173,7 @@ def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[
             iters[f"reduced_{scaling}_rho_{rho:g}"] = k
             fit_max = max((float(np.abs(f(X)[0]).max()) for f in merit.fits), default=0.0)
             if merit.fits and fit_max < 1e-2 * mean_edge(X):
-                Xh, _, kh = _hard_fit(merit, p, fit_tol)
+                Xh, kh = _hard_fit(merit, p, fit_tol)
                 iters[f"reduced_{scaling}_hard"] = kh
                 if Xh is not None:  # an exact fit: nothing left to compare
                     return Xh, "hard", iters
@@ -189,7 +189,7 @@ def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[
 
 
 def _hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
-    """Damped Gauss-Newton on the fit rows (plus half-margin inequality rows): ``X, p, iterations``.
+    """Damped Gauss-Newton on the fit rows (plus half-margin inequality rows): ``X, iterations``.
 
     The fit rows are fewer than the unknowns, so with little damping a step is close to the
     minimum-norm one; the damping falls tenfold after every step that lowers the sum of squares
@@ -205,7 +205,7 @@ def _hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
     mu = 1e-12 * scale
     for it in range(1, max_iter + 1):
         if np.abs(r).max(initial=0.0) <= fit_tol:
-            return X, p, it - 1
+            return X, it - 1
         dp = -np.linalg.solve(Jr.T @ Jr + mu * np.eye(len(p)), Jr.T @ r)
         for _ in range(6):
             Xn = merit.nodes(p + dp)
@@ -222,4 +222,4 @@ def _hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
             mu *= 10.0
             if mu > 1e4 * scale:
                 break
-    return (X if np.abs(r).max(initial=0.0) <= fit_tol else None), p, it
+    return (X if np.abs(r).max(initial=0.0) <= fit_tol else None), it

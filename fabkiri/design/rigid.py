@@ -45,8 +45,6 @@ from .constraints import Stencils
 class RigidFamily:
     """Closed-form rigid-deployable reconfigurable patterns of one lattice."""
 
-    rows: int
-    cols: int
     node_vertex: np.ndarray  # (V,) closed-state-1 grid vertex of every deployed node
     midpoint: np.ndarray  # (m, 3) grid vertices (z, a, b): c_z = (c_a + c_b) / 2
     seeds: np.ndarray  # (nf,) free grid vertices
@@ -112,12 +110,11 @@ class RigidFamily:
         use_t[tl.ravel()] = np.repeat(np.arange(T), 4)
         Zn = Z[node_vertex]
         Y = tau[use_t] - sigma[use_t, None] * Zn
-        return cls(M, N, node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), np.ascontiguousarray(Y))
+        return cls(node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), np.ascontiguousarray(Y))
 
-    # ---------------------------------------------------------------- maps
     @staticmethod
     def deployment_angle(X: np.ndarray, st: Stencils) -> float:
-        """ψ of a pattern near the family: half the mean hole angle at the state-1 fold corners.
+        """ψ of a pattern near the family: half the median hole angle at the state-1 fold corners.
 
         (Every hole of a member is a rhombus with angle 2ψ there; spec §2.5.)
         """
@@ -132,7 +129,7 @@ class RigidFamily:
         ang = np.abs(ang[folds])
         return float(np.clip(0.5 * np.median(ang), 0.05, np.pi / 2 - 0.05))
 
-
+    # ---------------------------------------------------------------- maps
     def grid(self, S: np.ndarray) -> np.ndarray:
         """Closed-state-1 pattern vertices ``(G, 2)``."""
         return self.Z @ S

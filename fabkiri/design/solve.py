@@ -531,19 +531,16 @@ def _solve_full(prob: _Problem, log, iters: dict):
     eqs = prob.of("eq")
     fits = prob.of("fit")
 
-    def mean_edge(Y):
-        return _mean_edge(prob, Y)
-
     def project(X):
         """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
-        L = mean_edge(X)
+        L = _mean_edge(prob, X)
         tol_abs = lambda fams: min(req.tol * L ** f.dim for f in fams)  # noqa: E731
         fit_rel = max((float(np.abs(f(X)[0]).max()) / L for f in fits), default=0.0)
         if fits and fit_rel < 1e-2:
             # the least-squares fit is (nearly) exact: try to make it exact
             Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits + prob.of("ineq"),
                          tol_inf=0.1 * tol_abs(eqs + fits))
-            if all(v <= req.tol for v in family_residuals(prob, Xh, mean_edge(Xh)).values()):
+            if all(v <= req.tol for v in family_residuals(prob, Xh, _mean_edge(prob, Xh)).values()):
                 return Xh, "hard", kh
         Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
         if max((float(np.abs(f(Xp)[0]).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(eqs):
@@ -569,7 +566,7 @@ def _solve_full(prob: _Problem, log, iters: dict):
             continue
         Xp, mode, kp = project(X)
         iters[f"projection{tag}"] = kp
-        res = family_residuals(prob, Xp, mean_edge(Xp))
+        res = family_residuals(prob, Xp, _mean_edge(prob, Xp))
         worst = max((res[f.name] for f in eqs), default=0.0)
         if best is None or worst < best[0]:
             best = (worst, Xp, mode)
