@@ -91,12 +91,23 @@ class Family:
 
     name: str
     kind: str
-    fn: object  # callable x -> (r, J)
+    # callable x -> (r, J): J is a sparse matrix or, for the usual per-row stencil, a pair ``(nodes (m, k),
+    # gradients (m, k, 2))`` that becomes CSR only when asked (residual-only calls skip it)
+    fn: object
     dim: int = 2  # residual units: length**dim (2: squared-length forms, 1: lengths, 0: angles)
     meta: dict = field(default_factory=dict)
+    nv: int = 0  # nodes in the node array (Jacobian columns / 2)
 
     def __call__(self, x: np.ndarray):
-        return self.fn(x)
+        """Residuals ``r`` and their Jacobian (CSR)."""
+        r, J = self.fn(x)
+        if isinstance(J, tuple):
+            J = jac(len(r), self.nv, *J)
+        return r, J
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        """Residuals only (no Jacobian assembly)."""
+        return self.fn(x)[0]
 
 
 # ------------------------------------------------------------------ stencils
@@ -161,9 +172,9 @@ def edge_pairs(st: Stencils, state: int, nv: int, hinges: np.ndarray | None = No
 
     def fn(x):
         r, nodes, g = sqlen_diff(x, h, a, h, b)
-        return r, jac(len(r), nv, nodes, g)
+        return r, (nodes, g)
 
-    return Family(f"edge_pairs_{state}", "eq", fn, 2)
+    return Family(f"edge_pairs_{state}", "eq", fn, 2, nv=nv)
 
 
 def notch_pairs(st: Stencils, state: int, nv: int) -> Family:
@@ -185,9 +196,9 @@ def hole_opposite_sides(st: Stencils, nv: int) -> Family:
 
     def fn(x):
         r, nodes, g = sqlen_diff(x, p, q, u, v)
-        return r, jac(len(r), nv, nodes, g)
+        return r, (nodes, g)
 
-    return Family("hole_opposite_sides", "eq", fn, 2)
+    return Family("hole_opposite_sides", "eq", fn, 2, nv=nv)
 
 
 def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, target: np.ndarray, nv: int,
@@ -198,9 +209,9 @@ def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, targe
     def fn(x):
         th, nodes, g = corner_angle(x, tiles, t.ravel(), k.ravel())
         r = wrap_angle(th.reshape(m, q).sum(1) - target)
-        return r, jac(m, nv, nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
+        return r, (nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
 
-    return Family(name, kind, fn, 0)
+    return Family(name, kind, fn, 0, nv=nv)
 
 
 def rings(st: Stencils, state: int, nv: int) -> Family:
@@ -226,9 +237,9 @@ def non_overlap(st: Stencils, nv: int) -> Family:
 
     def fn(x):
         g, nodes, gr = cross_term(x, hh, aa, bb)
-        return g, jac(len(g), nv, nodes, gr)
+        return g, (nodes, gr)
 
-    return Family("non_overlap", "ineq", fn, 2)
+    return Family("non_overlap", "ineq", fn, 2, nv=nv)
 
 
 def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0) -> Family:
@@ -239,9 +250,9 @@ def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0)
 
     def fn(x):
         g, nodes, gr = cross_term(x, v, a, b)
-        return g - margin, jac(len(g), nv, nodes, gr)
+        return g - margin, (nodes, gr)
 
-    return Family(name, "ineq", fn, 2)
+    return Family(name, "ineq", fn, 2, nv=nv)
 
 
 def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:
@@ -254,9 +265,9 @@ def shape_match(nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, n
 
     def fn(x):
         _, _, d, g = target.project(x[nodes], sides)
-        return d, jac(len(d), nv, nodes[:, None], g[:, None, :])
+        return d, (nodes[:, None], g[:, None, :])
 
-    return Family(name, "fit", fn, 1, meta={"nodes": nodes, "sides": sides, "target": target})
+    return Family(name, "fit", fn, 1, meta={"nodes": nodes, "sides": sides, "target": target}, nv=nv)
 
 
 def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
@@ -300,7 +311,7 @@ def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
     def fn(x):
         return J @ x.reshape(-1), J
 
-    return Family(f"symmetry_{axis}", "eq", fn, 1)
+    return Family(f"symmetry_{axis}", "eq", fn, 1, nv=nv)
 
 
 def _boundary_vertex_groups(st: Stencils, state: int):
@@ -340,9 +351,9 @@ def rectangle_outline(st: Stencils, state: int, nv: int) -> Family:
         th = th.reshape(m, q) * mask
         g = g.reshape(m, q, 3, 2) * mask[:, :, None, None]
         r = wrap_angle(th.sum(1) - target)
-        return r, jac(m, nv, nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
+        return r, (nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
 
-    return Family(f"rectangle_{state}", "eq", fn, 0)
+    return Family(f"rectangle_{state}", "eq", fn, 0, nv=nv)
 
 
 def _side_edges(st: Stencils, state: int, which: str):
@@ -371,9 +382,9 @@ def outline_ratio(st: Stencils, state: int, ratio: float, nv: int) -> Family:
         nodes = np.concatenate([bu, bv, ru, rv])[None, :]
         ub, ur = Eb / lb[:, None], Er / lr[:, None]
         g = np.concatenate([-ub, ub, ratio * ur, -ratio * ur])[None]
-        return r, jac(1, nv, nodes, g)
+        return r, (nodes, g)
 
-    return Family(f"ratio_{state}", "eq", fn, 1)
+    return Family(f"ratio_{state}", "eq", fn, 1, nv=nv)
 
 
 @dataclass(eq=False)
@@ -422,9 +433,9 @@ class ClosedGrid:
 
         def fn(x):
             r, nodes, g = sqlen_diff(x, p, q, u, v)
-            return r, jac(len(r), nv, nodes, g)
+            return r, (nodes, g)
 
-        return Family(f"closed_grid_{self.state}", "eq", fn, 2)
+        return Family(f"closed_grid_{self.state}", "eq", fn, 2, nv=nv)
 
     def orientation(self, st: Stencils, nv: int) -> Family:
         """Closed-state tiles keep their orientation (no reflected copies): cross >= 0."""

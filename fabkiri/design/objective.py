@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..pattern.geometry import wrap_angle
-from .constraints import Family, Stencils, corner_angle, jac, regularizer_pairs
+from .constraints import Family, Stencils, corner_angle, regularizer_pairs
 
 
 def regularizer(st: Stencils, nv: int) -> Family:
@@ -27,27 +27,27 @@ def regularizer(st: Stencils, nv: int) -> Family:
     kk = np.tile(k, P)
     w = 1.0 / np.sqrt(max(P, 1))
 
+    # edge k: corner k -> k+1, in tile T (1) and tile U (2) of every pair
+    a1, b1 = tl[tT, kk], tl[tT, (kk + 1) % 4]
+    a2, b2 = tl[tU, kk], tl[tU, (kk + 1) % 4]
+    m = len(kk)
+    t_both, k_both = np.concatenate([tT, tU]), np.concatenate([kk, kk])
+    # one stencil of 6 nodes a row: a length row uses 4 (the other two repeat a node with zero gradient)
+    len_nodes = np.stack([a1, b1, a2, b2, a1, a1], -1)
+
     def fn(x):
-        m = 4 * P
-        # edge k: corner k -> k+1
-        a1, b1 = tl[tT, kk], tl[tT, (kk + 1) % 4]
-        a2, b2 = tl[tU, kk], tl[tU, (kk + 1) % 4]
         E1, E2 = x[b1] - x[a1], x[b2] - x[a2]
         l1, l2 = np.linalg.norm(E1, axis=1), np.linalg.norm(E2, axis=1)
         e1, e2 = E1 / l1[:, None], E2 / l2[:, None]
-        rl = w * (l1 - l2)
-        Jl = jac(m, nv, np.stack([a1, b1, a2, b2], -1), w * np.stack([-e1, e1, e2, -e2], 1))
-        th1, n1, g1 = corner_angle(x, tl, tT, kk)
-        th2, n2, g2 = corner_angle(x, tl, tU, kk)
-        ra = w * wrap_angle(th1 - th2)
-        Ja = jac(m, nv, np.concatenate([n1, n2], 1), w * np.concatenate([g1, -g2], 1))
-        from scipy import sparse
+        th, n, g = corner_angle(x, tl, t_both, k_both)
+        zero = np.zeros_like(e1)
+        nodes = np.concatenate([len_nodes, np.concatenate([n[:m], n[m:]], 1)])
+        grads = w * np.concatenate([np.stack([-e1, e1, e2, -e2, zero, zero], 1), np.concatenate([g[:m], -g[m:]], 1)])
+        return w * np.concatenate([l1 - l2, wrap_angle(th[:m] - th[m:])]), (nodes, grads)
 
-        return np.concatenate([rl, ra]), sparse.vstack([Jl, Ja]).tocsr()
-
-    return Family("regularizer", "reg", fn, 0)
+    return Family("regularizer", "reg", fn, 0, nv=nv)
 
 
 def energy(fam: Family, x: np.ndarray) -> float:
-    r, _ = fam(x)
+    r = fam.residual(x)
     return float(r @ r)

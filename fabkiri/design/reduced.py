@@ -61,7 +61,7 @@ class _Merit:
         return self.fam.nodes(S, psi)
 
     def ineq_violation(self, X: np.ndarray) -> float:
-        return max(0.0, -min((float(f(X)[0].min(initial=np.inf)) for f in self.ineqs), default=0.0))
+        return max(0.0, -min((float(f.residual(X).min(initial=np.inf)) for f in self.ineqs), default=0.0))
 
     def rows(self, X: np.ndarray, hard: bool = False):
         """Residual vector and node-space Jacobian (CSR) of the merit, or of the hard-fit rows."""
@@ -89,11 +89,19 @@ class _Merit:
 
 def fit_miss(fits: list[Family], X: np.ndarray) -> float:
     """Largest |fit row| relative to its target's size (both in normalised units)."""
-    return max((float(np.abs(f(X)[0]).max()) / f.meta["target"].size for f in fits), default=0.0)
+    return max((float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0)
+
+
+# below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: 8x8 0.14 ms
+# vs 0.55 ms through the sparse JᵀJ, 32x32 15 vs 24 ms; 64x64, 1.7e7 entries, 181 vs 150 ms)
+DENSE_JD = 4e6
 
 
 def _normal(J: sparse.csr_matrix, r: np.ndarray, D: np.ndarray):
     """Reduced Gauss-Newton matrix ``Dᵀ JᵀJ D`` and gradient ``Dᵀ Jᵀ r``."""
+    if J.shape[0] * D.shape[1] <= DENSE_JD:
+        JD = J @ D
+        return JD.T @ JD, JD.T @ r
     H = (J.T @ J).tocsr()
     return D.T @ (H @ D), D.T @ (J.T @ r)
 
@@ -171,7 +179,7 @@ def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[
             merit = _Merit(fam, families, margin, reg_weight, rho, scaling if n == 0 else "marquardt")
             p, X, k = _lm(merit, p, min(cap, max_iter), stall_tol, log)
             iters[f"reduced_{scaling}_rho_{rho:g}"] = k
-            fit_max = max((float(np.abs(f(X)[0]).max()) for f in merit.fits), default=0.0)
+            fit_max = max((float(np.abs(f.residual(X)).max()) for f in merit.fits), default=0.0)
             if merit.fits and fit_max < 1e-2 * mean_edge(X):
                 Xh, kh = _hard_fit(merit, p, fit_tol)
                 iters[f"reduced_{scaling}_hard"] = kh

@@ -264,7 +264,7 @@ class _Problem:
 
 
 def _ineq_values(prob: _Problem, X: np.ndarray) -> np.ndarray:
-    return np.concatenate([f(X)[0] for f in prob.of("ineq")])
+    return np.concatenate([f.residual(X) for f in prob.of("ineq")])
 
 
 def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | None = None):
@@ -465,7 +465,7 @@ def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
     out = {}
     for f in prob.families:
         if f.kind in ("eq", "fit"):
-            r, _ = f(X)
+            r = f.residual(X)
             out[f.name] = float(np.abs(r).max(initial=0.0)) / L ** f.dim
     return out
 
@@ -492,8 +492,8 @@ def reduced_applies(req: DesignRequest) -> bool:
 
 def _objective(prob: _Problem, X: np.ndarray) -> float:
     """Σ fit² + w E_reg: what both solvers minimise over the feasible set."""
-    fit = sum(float(np.sum(f(X)[0] ** 2)) for f in prob.of("fit"))
-    return fit + prob.req.reg_weight * sum(float(np.sum(f(X)[0] ** 2)) for f in prob.of("reg"))
+    fit = sum(float(np.sum(f.residual(X) ** 2)) for f in prob.of("fit"))
+    return fit + prob.req.reg_weight * sum(float(np.sum(f.residual(X) ** 2)) for f in prob.of("reg"))
 
 
 def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
@@ -526,7 +526,7 @@ def _solve_full(prob: _Problem, log, iters: dict):
     req = prob.req
 
     def eq_max(Y):
-        return max((float(np.abs(f(Y)[0]).max()) for f in prob.of("eq")), default=0.0)
+        return max((float(np.abs(f.residual(Y)).max()) for f in prob.of("eq")), default=0.0)
 
     eqs = prob.of("eq")
     fits = prob.of("fit")
@@ -535,7 +535,7 @@ def _solve_full(prob: _Problem, log, iters: dict):
         """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
         L = _mean_edge(prob, X)
         tol_abs = lambda fams: min(req.tol * L ** f.dim for f in fams)  # noqa: E731
-        fit_rel = max((float(np.abs(f(X)[0]).max()) / L for f in fits), default=0.0)
+        fit_rel = max((float(np.abs(f.residual(X)).max()) / L for f in fits), default=0.0)
         if fits and fit_rel < 1e-2:
             # the least-squares fit is (nearly) exact: try to make it exact
             Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits + prob.of("ineq"),
@@ -543,7 +543,7 @@ def _solve_full(prob: _Problem, log, iters: dict):
             if all(v <= req.tol for v in family_residuals(prob, Xh, _mean_edge(prob, Xh)).values()):
                 return Xh, "hard", kh
         Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
-        if max((float(np.abs(f(Xp)[0]).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(eqs):
+        if max((float(np.abs(f.residual(Xp)).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(eqs):
             # the half margins may block the last steps: project on the equalities alone (steps that
             # would violate g >= 0 are still halved or refused)
             Xq, kq = _lm(prob, Xp, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
@@ -614,7 +614,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     L = _mean_edge(prob, X)
     res = family_residuals(prob, X, L)
     eq_worst = max((res[f.name] for f in eqs), default=0.0)
-    gvals = {f.name: f(X)[0] for f in prob.of("ineq")}
+    gvals = {f.name: f.residual(X) for f in prob.of("ineq")}
     ineq_min = min((float(v.min()) for v in gvals.values()), default=0.0)
     active = {k: int((v < prob.margin[k] + 1e-6 * L * L).sum()) for k, v in gvals.items()}
     converged = eq_worst <= req.tol and ineq_min >= 0.0
@@ -623,7 +623,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     Xmm = X * L0
     fit = {}
     for f in fits:
-        r, _ = f(X)
+        r = f.residual(X)
         fit[f.name] = {"max_mm": float(np.abs(r).max()) * L0, "rms_mm": float(np.sqrt(np.mean(r * r))) * L0,
                        "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,
                        "points": int(len(r))}
@@ -637,12 +637,12 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         "iterations_total": int(sum(iters.values())),
         "time_s": elapsed,
         "unknowns": 2 * prob.nv,
-        "equations": int(sum(len(f(X)[0]) for f in eqs)),
+        "equations": int(sum(len(f.residual(X)) for f in eqs)),
         "shape_matching": mode if fits else "none",
         "fit": fit,
         "min_inequality": ineq_min / (L * L),
         "active_inequalities": active,
-        "regularizer": float(np.sum(regularizer(prob.st, prob.nv)(X)[0] ** 2)),
+        "regularizer": float(np.sum(prob.of("reg")[0].residual(X) ** 2)),
         "factorisations": prob._normal.factorisations if prob._normal else 0,
         "cg_iterations": prob._normal.cg_steps if prob._normal else 0,
         "coarse": prob.coarse,

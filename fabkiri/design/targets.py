@@ -14,6 +14,7 @@ foot point held fixed is the unit outward direction (envelope theorem).
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import re
@@ -21,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import CubicSpline, PPoly
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
@@ -151,9 +152,27 @@ class Target:
 
     # ------------------------------------------------------------ transform
     def transformed(self, scale: float = 1.0, shift=(0.0, 0.0), name: str | None = None) -> "Target":
-        """A scaled and shifted copy with the same corners."""
-        return Target(name or self.name, self.kind, self.points * scale + np.asarray(shift, float),
-                      corners=self.corners.copy(), source=dict(self.source))
+        """A scaled and shifted copy with the same corners.
+
+        A similarity keeps the curve simple and its arc-length parameters, so the copy reuses them: the
+        spline is the same piecewise cubic with scaled coefficients (no refit, no re-validation).
+        """
+        if not (np.isfinite(scale) and scale > 0):
+            raise InputError(f"target {self.name!r}: scale must be positive, got {scale}")
+        shift = np.asarray(shift, dtype=float)
+        new = copy.copy(self)
+        new.name = name or self.name
+        new.points = self.points * scale + shift
+        new.corners = self.corners.copy()
+        new.source = dict(self.source)
+        if self.kind == "spline":
+            c = self._spline.c * scale
+            c[-1] += shift  # the constant term of each piece carries the shift
+            new._spline = PPoly(c, self._spline.x, extrapolate="periodic")
+        new._dense = self._dense * scale + shift
+        new._bbox = (self._bbox[0] * scale + shift, self._bbox[1] * scale + shift)
+        new._arc_trees = None
+        return new
 
     def scaled_to(self, size: float) -> "Target":
         """Scaled about its bounding-box centre to ``size`` (larger dimension) and centred on the origin."""
