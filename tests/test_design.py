@@ -284,10 +284,32 @@ def test_overlap_check_survives_near_degenerate_shared_edge():
          [-4.1397303240137155, 5.922048704418469], [-4.020767288704813, 1.4778850882464676]]
     b = [[-4.133902109515475e-10, 5.922048704407096], [-3.9277336938425833e-10, 1.6579325376061402],
          [4.02076728792443, 1.4778850882086814], [4.139730323186935, 5.922048704395724]]
-    assert overlapping_tiles(np.array([a, b]), 1e-9 * 17.0, 4e-9) == []
+    assert overlapping_tiles(np.array([a, b]), 4e-9) == []
     # a real overlap is still found
     c = np.array(b) - [0.5, 0.0]
-    assert overlapping_tiles(np.array([a, c]), 1e-9 * 17.0, 4e-9) == [(0, 1)]
+    assert overlapping_tiles(np.array([a, c]), 4e-9) == [(0, 1)]
+
+
+def test_overlap_check_is_a_depth_not_an_area():
+    """Closed-state-1 tiles 3746/3747 of a rigid 64x64 ellipse (mm): they share a 1.55 mm edge up to 1e-9 mm.
+
+    Their GEOS intersection (snapped to 1e-9 tile sizes) has 1.4e-9 mm², more than the old area tolerance
+    1e-9 size² = 8.2e-10 mm², but they penetrate by less than 1e-9 tile sizes; a shift by 1e-8 mm is real.
+    """
+    import shapely
+
+    from fabkiri.cli.design_cmd import overlapping_tiles
+
+    a = [[-7.870798019350355, 34.4230784404786], [-7.223358822429531, 34.131578843332065],
+         [-7.313372669224364, 35.68108797819961], [-7.960596625750248, 36.03086343612596]]
+    b = [[-7.223358822559069, 34.131578843315644], [-6.607442768421662, 33.76419556215104],
+         [-6.6661487128369155, 35.33131252026108], [-7.313372669365404, 35.68108797818256]]
+    size = 0.9065759084017538
+    sliver = shapely.intersection(shapely.Polygon(a), shapely.Polygon(b), grid_size=1e-9 * size)
+    assert shapely.area(sliver) > 1e-9 * size * size  # what the area check rejected
+    assert overlapping_tiles(np.array([a, b]), 1e-9 * size) == []
+    shifted = np.array(b) - [1e-8, 0.0]
+    assert overlapping_tiles(np.array([a, shifted]), 1e-9 * size) == [(0, 1)]
 
 
 def test_cli_rectangular_closed_state(tmp_path, run_cli):
@@ -333,7 +355,7 @@ def test_overlap_check_reports_self_intersecting_tiles():
     from fabkiri.cli.design_cmd import overlapping_tiles
 
     bowtie = np.array([[[0, 0], [1, 1], [1, 0], [0, 1]], [[2, 0], [3, 0], [3, 1], [2, 1]]], float)
-    assert overlapping_tiles(bowtie, 1e-9, 1e-9) == [(0, 0)]
+    assert overlapping_tiles(bowtie, 1e-9) == [(0, 0)]
 
 
 def test_cli_design_coarse_init(tmp_path, run_cli):

@@ -172,3 +172,81 @@ def test_cli_starts_big_rigid_designs_coarse_to_fine(tmp_path, run_cli):
     assert report["attempts"][0]["init"] == "coarse" and report["coarse"]["used"]
     assert report["solver"].startswith("closed-form rigid family")
     assert report["fit"]["shape"]["max_rel_size"] < 5e-3
+
+
+@settings(max_examples=30, deadline=None)
+@given(rows=hst.integers(1, 6), cols=hst.integers(1, 6), seed=hst.integers(0, 2**31 - 1))
+def test_refined_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed):
+    """Each convex cell splits into four convex cells (bilinear), coarse vertices unchanged."""
+    from fabkiri.design.rigid import refine_grid
+
+    rng = np.random.default_rng(seed)
+    gx, gy = np.meshgrid(np.arange(cols + 1.0), np.arange(rows + 1.0))
+    grid = np.stack([gx, gy], -1) + rng.uniform(-0.2, 0.2, (rows + 1, cols + 1, 2))  # cells stay convex
+    fine = refine_grid(grid)
+    assert fine.shape == (2 * rows + 1, 2 * cols + 1, 2)
+    assert np.array_equal(fine[::2, ::2], grid)
+
+    def cross(g):  # corner cross products of every cell, CCW (x right, y up)
+        q = np.stack([g[:-1, :-1], g[:-1, 1:], g[1:, 1:], g[1:, :-1]], 2)
+        e = np.roll(q, -1, 2) - q
+        f = np.roll(q, 1, 2) - q
+        return e[..., 0] * f[..., 1] - e[..., 1] * f[..., 0]
+
+    assert (cross(grid) > 0).all() and (cross(fine) > 0).all()
+
+
+def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
+    """--init coarse for a rigid design: the fine start is a member of the fine family, deployed to the coarse
+    design's ψ, and nearer the target than the rescaled start."""
+    from fabkiri.design.solve import _Problem
+
+    tgt = T.load_target("ellipse", 100.0)
+    coarse = design(DesignRequest(8, 8, tgt, rigid=True))
+    prob = _Problem(DesignRequest(16, 16, tgt, rigid=True, init="coarse"))
+    assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid refined")
+    assert prob.coarse["folded_tiles"] == 0
+    fam, st = prob.rigid_family, prob.st
+    psi = RigidFamily.deployment_angle(prob.X0, st)
+    assert fam.fit(prob.X0, psi)[1] <= 1e-9  # the start is a member of the fine family
+    st_c = C.Stencils.from_pattern(standard_pattern(8, 8, tile_size=1.0))
+    assert psi == pytest.approx(RigidFamily.deployment_angle(coarse.pattern.nodes, st_c), abs=1e-9)
+
+    def tip_distances(p):
+        return np.abs(tgt.project(p.X0[p.st.tip_nodes] * p.L0, p.st.tip_side)[2])
+
+    near, far = tip_distances(prob), tip_distances(_Problem(DesignRequest(16, 16, tgt, rigid=True)))
+    assert near.max() < 0.75 * far.max() and np.sqrt(np.mean(near ** 2)) < 0.5 * np.sqrt(np.mean(far ** 2))
+
+
+def test_deployment_angle_is_not_clipped_near_the_closed_states():
+    _, st, fam = _family(6, 6)
+    S, _ = fam.fit(standard_pattern(6, 6, tile_size=1.0, angle_deg=45.0).nodes, np.pi / 4)
+    for psi in (0.01, 1.55):
+        assert RigidFamily.deployment_angle(fam.nodes(S, psi), st) == pytest.approx(psi, abs=1e-12)
+
+
+def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypatch):
+    """A start that leaves an inequality violated (g < 0) loses to a feasible result, whatever the merit."""
+    from fabkiri.design import reduced as R
+    from fabkiri.design.solve import _Problem, _mean_edge
+
+    prob = _Problem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
+    fam = prob.rigid_family
+    p0 = np.concatenate([*fam.fit(prob.X0, np.pi / 4)[0].T, [np.pi / 4]])
+    folded = p0.copy()
+    folded[-1] = -0.3  # ψ < 0 turns every hole inside out: non-overlap fails, g < 0
+    calls = []
+
+    def fake_lm(merit, p, max_iter, stall_tol, log):
+        calls.append(merit.scaling)
+        q = folded if merit.scaling == "marquardt" and len(calls) <= 2 else p0
+        return q, merit.nodes(q), 1
+
+    monkeypatch.setattr(R, "_lm", fake_lm)
+    judge = R._Merit(fam, prob.families, prob.margin, 1e-3)
+    assert judge.ineq_violation(judge.nodes(folded)) > 0 and judge.ineq_violation(judge.nodes(p0)) == 0
+    X, mode, _ = R.solve_reduced(fam, prob.X0, np.pi / 4, prob.families, prob.margin, 1e-3, 1e-12,
+                                 lambda Y: _mean_edge(prob, Y), lambda m: None, miss_tol=np.inf)
+    assert "levenberg" in calls  # miss_tol = inf would stop after the first start, but it was infeasible
+    assert np.allclose(X, judge.nodes(p0)) and mode == "least-squares"

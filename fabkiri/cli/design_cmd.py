@@ -59,29 +59,26 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
     return state, load_target(what, size)
 
 
-def overlapping_tiles(corners: np.ndarray, tol_area: float, grid: float) -> list[tuple[int, int]]:
-    """Pairs of tiles whose interiors overlap by more than ``tol_area`` (shapely/GEOS).
+def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
+    """Pairs of tiles that penetrate each other deeper than ``tol`` (mm).
 
-    Intersections are computed on a ``grid`` (snap size, mm): GEOS 3.14 returns a
-    whole tile as the intersection of two tiles that share a nearly vertical edge
-    at x ≈ -4e-10 (seen on a closed state); snapping makes shared edges exact.
+    The verifier's measure (:func:`fabkiri.verify.geom.overlap_depths`): the
+    separating-axis penetration depth for convex pairs, intersection area over
+    the mean edge otherwise. A length, so it compares with the closure
+    tolerance directly; an intersection area does not (a sliver along a shared
+    edge of a closed state grows with the edge length, and GEOS snapping adds
+    its own: a rigid 64x64 ellipse was rejected for 1.4e-9 mm² slivers whose
+    depth was 3.8e-10 tile sizes). A self-intersecting tile is the pair (t, t).
     """
     import shapely
 
-    polys = shapely.polygons(corners)
-    valid = shapely.is_valid(polys)
-    # a self-intersecting tile overlaps itself: report it as the pair (t, t)
+    from ..verify.geom import overlap_depths
+
+    valid = shapely.is_valid(shapely.polygons(corners))
     out = [(int(t), int(t)) for t in np.flatnonzero(~valid)]
-    idx = np.flatnonzero(valid)
-    tree = shapely.STRtree(polys[idx])
-    a, b = tree.query(polys[idx], predicate="intersects")
-    keep = a < b
-    a, b = idx[a[keep]], idx[b[keep]]
-    if len(a):
-        areas = shapely.area(shapely.intersection(polys[a], polys[b], grid_size=grid))
-        bad = areas > tol_area
-        out += list(zip(a[bad].tolist(), b[bad].tolist()))
-    return out
+    i, j, depth = overlap_depths(corners)
+    bad = (depth > tol) & valid[i] & valid[j]
+    return out + list(zip(i[bad].tolist(), j[bad].tolist()))
 
 
 def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
@@ -210,9 +207,8 @@ def _check(result, contracted, args):
         checks[f"closure_{s}_rel"] = rel
         if not rel <= CLOSURE_TOL:
             problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
-    tol_area = 1e-9 * size * size
     for label, corners in [("deployed", pattern.corners()), *[(f"state {s}", contracted_states[s]) for s in (1, 2)]]:
-        ov = overlapping_tiles(corners, tol_area, CLOSURE_TOL * size)
+        ov = overlapping_tiles(corners, CLOSURE_TOL * size)
         checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
         if ov:
             where = "the deployed state" if label == "deployed" else label

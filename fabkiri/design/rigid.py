@@ -127,7 +127,8 @@ class RigidFamily:
         b = np.roll(v, 1, 1) - v
         ang = np.arctan2(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0], (a * b).sum(-1))
         ang = np.abs(ang[folds])
-        return float(np.clip(0.5 * np.median(ang), 0.05, np.pi / 2 - 0.05))
+        # members exist up to the closed states themselves (a rigid 16x16 ellipse opens to 1.533)
+        return float(np.clip(0.5 * np.median(ang), 1e-3, np.pi / 2 - 1e-3))
 
     # ---------------------------------------------------------------- maps
     def grid(self, S: np.ndarray) -> np.ndarray:
@@ -156,6 +157,11 @@ class RigidFamily:
         D[:, 1, -1] = -s * a[:, 1] + c * b[:, 0]
         return D.reshape(2 * V, 2 * nf + 1)
 
+    def seeds_for_grid(self, grid: np.ndarray) -> np.ndarray:
+        """Seeds ``S`` whose closed-state-1 grid is closest to ``grid`` ``(G, 2)`` (least squares)."""
+        S, *_ = np.linalg.lstsq(self.Z, grid, rcond=None)
+        return S
+
     def fit(self, X: np.ndarray, psi: float) -> tuple[np.ndarray, float]:
         """Seeds ``S`` whose pattern at ``psi`` is closest to ``X`` (least squares), and the rms gap."""
         c, s = np.cos(psi), np.sin(psi)
@@ -168,3 +174,17 @@ class RigidFamily:
         gap = float(np.sqrt(np.mean((self.nodes(S, psi) - X) ** 2)))
         return S, gap
 
+
+
+def refine_grid(grid: np.ndarray) -> np.ndarray:
+    """Split every cell of a closed-state grid ``(m+1, n+1, 2)`` in four: ``(2m+1, 2n+1, 2)``, bilinear.
+
+    A coarse-to-fine start inside the rigid family: the quads of a convex cell stay convex, so unlike a
+    map of the deployed tiles this cannot fold a tile.
+    """
+    m, n = grid.shape[0] - 1, grid.shape[1] - 1
+    out = np.empty((2 * m + 1, 2 * n + 1, 2))
+    out[::2, ::2] = grid
+    out[1::2, ::2] = 0.5 * (grid[1:] + grid[:-1])
+    out[:, 1::2] = 0.5 * (out[:, 2::2] + out[:, :-2:2])
+    return out

@@ -52,7 +52,7 @@ from . import constraints as C
 from .initial import coarse_tile_map, initial_guess
 from .objective import regularizer
 from .reduced import fit_miss, solve_reduced
-from .rigid import RigidFamily
+from .rigid import RigidFamily, refine_grid
 from .targets import Target
 
 CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay > ~1° from 0 and π
@@ -154,6 +154,7 @@ class _Problem:
         base = std.nodes.copy()
         n = len(base)
         self.coarse = None
+        self._rigid: RigidFamily | None = None
         if req.init == "coarse":
             X0, L0 = self._coarse_guess(base, st)
         else:
@@ -225,10 +226,16 @@ class _Problem:
                             tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
-        xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
+        if reduced_applies(req) and req.solver != "full" and (req.rows, req.cols) == (2 * rc, 2 * cc):
+            xmm = self._rigid_refinement(sc, res.pattern.nodes)
+            how = "closed-state grid refined in the rigid family"
+        else:
+            xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
+            how = "deployed tiles mapped"
         c = xmm[st.tiles]
         area = 0.5 * (c[..., 0] * np.roll(c[..., 1], -1, 1) - np.roll(c[..., 0], -1, 1) * c[..., 1]).sum(1)
-        self.coarse = {"rows": rc, "cols": cc, "status": res.report["status"], "time_s": res.report["time_s"],
+        self.coarse = {"rows": rc, "cols": cc, "map": how, "status": res.report["status"],
+                       "time_s": res.report["time_s"],
                        "iterations_total": res.report["iterations_total"],
                        "factorisations": res.report["factorisations"], "folded_tiles": int((area <= 0).sum())}
         # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
@@ -237,6 +244,27 @@ class _Problem:
             return initial_guess(base, st, req.target, "rescaled")
         L0 = float(np.mean(np.linalg.norm(np.roll(c, -1, 1) - c, axis=-1)))
         return xmm / L0, L0
+
+    def _rigid_refinement(self, coarse: Pattern, x_mm: np.ndarray) -> np.ndarray:
+        """Fine start (mm) from a coarse rigid design: its closed-state-1 grid, each cell split in four.
+
+        The coarse design is a member of its own rigid family at its deployment angle ψ (every hole opens
+        to 2ψ); the fine start is the fine member nearest the refined grid, deployed to the same ψ.
+        """
+        st_c = C.Stencils.from_pattern(coarse)
+        fam_c = RigidFamily.build(st_c, coarse.topology.spanning_tree(0))
+        psi = RigidFamily.deployment_angle(x_mm, st_c)
+        S_c, _ = fam_c.fit(x_mm, psi)
+        grid = refine_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2))
+        fam = self.rigid_family
+        return fam.nodes(fam.seeds_for_grid(grid.reshape(-1, 2)), psi)
+
+    @property
+    def rigid_family(self) -> RigidFamily:
+        """The closed-form rigid family of this lattice (``rigid.py``), built on first use."""
+        if self._rigid is None:
+            self._rigid = RigidFamily.build(self.st, self.std.topology.spanning_tree(0))
+        return self._rigid
 
     def _ordering(self) -> np.ndarray | None:
         """Variable order for the normal equations, from the union of all Jacobian patterns."""
@@ -505,7 +533,7 @@ def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
 def _solve_reduced(prob: _Problem, log, iters: dict):
     """Solve in the rigid family; ``(X, mode)`` if every family checks out, else None."""
     req = prob.req
-    fam = RigidFamily.build(prob.st, prob.std.topology.spanning_tree(0))
+    fam = prob.rigid_family
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
     # the standard starts sit at ψ = π/4; a coarse-to-fine start at whatever the coarse design opened to
     psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
