@@ -175,12 +175,11 @@ class RigidFamily:
         return S, gap
 
 
-
 def refine_grid(grid: np.ndarray) -> np.ndarray:
     """Split every cell of a closed-state grid ``(m+1, n+1, 2)`` in four: ``(2m+1, 2n+1, 2)``, bilinear.
 
-    A coarse-to-fine start inside the rigid family: the quads of a convex cell stay convex, so unlike a
-    map of the deployed tiles this cannot fold a tile.
+    A coarse-to-fine start inside the rigid family: the four quads of a convex cell are convex, so the
+    refined grid folds no cell (a map of the deployed tiles can fold tiles).
     """
     m, n = grid.shape[0] - 1, grid.shape[1] - 1
     out = np.empty((2 * m + 1, 2 * n + 1, 2))
