@@ -176,16 +176,18 @@ def test_cli_starts_big_rigid_designs_coarse_to_fine(tmp_path, run_cli):
 
 @settings(max_examples=30, deadline=None)
 @given(rows=hst.integers(1, 6), cols=hst.integers(1, 6), seed=hst.integers(0, 2**31 - 1))
-def test_refined_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed):
-    """Each convex cell splits into four convex cells (bilinear), coarse vertices unchanged."""
-    from fabkiri.design.rigid import refine_grid
+def test_doubled_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed):
+    """Resampled to twice the cells, each convex cell splits into four convex cells, coarse vertices unchanged."""
+    from fabkiri.design.rigid import resample_grid
 
     rng = np.random.default_rng(seed)
     gx, gy = np.meshgrid(np.arange(cols + 1.0), np.arange(rows + 1.0))
     grid = np.stack([gx, gy], -1) + rng.uniform(-0.2, 0.2, (rows + 1, cols + 1, 2))  # cells stay convex
-    fine = refine_grid(grid)
+    fine = resample_grid(grid, 2 * rows, 2 * cols)
     assert fine.shape == (2 * rows + 1, 2 * cols + 1, 2)
-    assert np.array_equal(fine[::2, ::2], grid)
+    assert np.allclose(fine[::2, ::2], grid, rtol=0, atol=1e-12)
+    assert np.allclose(fine[1::2, 1::2], 0.25 * (grid[1:, 1:] + grid[1:, :-1] + grid[:-1, 1:] + grid[:-1, :-1]),
+                       rtol=0, atol=1e-12)  # cell centres: the mean of the four corners
 
     def cross(g):  # corner cross products of every cell, CCW (x right, y up)
         q = np.stack([g[:-1, :-1], g[:-1, 1:], g[1:, 1:], g[1:, :-1]], 2)
@@ -204,7 +206,7 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     tgt = T.load_target("ellipse", 100.0)
     coarse = design(DesignRequest(8, 8, tgt, rigid=True))
     prob = _Problem(DesignRequest(16, 16, tgt, rigid=True, init="coarse"))
-    assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid refined")
+    assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid resampled")
     assert prob.coarse["folded_tiles"] == 0
     fam, st = prob.rigid_family, prob.st
     psi = RigidFamily.deployment_angle(prob.X0, st)
@@ -217,6 +219,19 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
 
     near, far = tip_distances(prob), tip_distances(_Problem(DesignRequest(16, 16, tgt, rigid=True)))
     assert near.max() < 0.75 * far.max() and np.sqrt(np.mean(near ** 2)) < 0.5 * np.sqrt(np.mean(far ** 2))
+
+
+def test_rigid_coarse_to_fine_start_for_odd_sizes():
+    """9x11 tiles from a 4x5 design: the grid is resampled, not doubled; the start is still a member."""
+    from fabkiri.design.solve import _Problem
+
+    prob = _Problem(DesignRequest(9, 11, T.load_target("circle", 80.0), rigid=True, init="coarse"))
+    assert (prob.coarse["rows"], prob.coarse["cols"]) == (4, 5)
+    assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid resampled")
+    psi = RigidFamily.deployment_angle(prob.X0, prob.st)
+    assert prob.rigid_family.fit(prob.X0, psi)[1] <= 1e-9
+    res = design(DesignRequest(9, 11, T.load_target("circle", 80.0), rigid=True, init="coarse"))
+    assert res.converged and res.report["max_equality_residual"] <= 1e-10
 
 
 def test_deployment_angle_is_not_clipped_near_the_closed_states():

@@ -175,15 +175,16 @@ class RigidFamily:
         return S, gap
 
 
-def refine_grid(grid: np.ndarray) -> np.ndarray:
-    """Split every cell of a closed-state grid ``(m+1, n+1, 2)`` in four: ``(2m+1, 2n+1, 2)``, bilinear.
+def resample_grid(grid: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    """The closed-state grid ``(m+1, n+1, 2)`` resampled to ``(rows+1, cols+1, 2)`` vertices, bilinear per cell.
 
-    A coarse-to-fine start inside the rigid family: the four quads of a convex cell are convex, so the
-    refined grid folds no cell (a map of the deployed tiles can fold tiles).
+    A coarse-to-fine start inside the rigid family. Doubling splits every cell in four, and the four
+    quads of a convex cell are convex, so that refined grid folds no cell (a map of the deployed tiles
+    can fold tiles); other ratios sample the same piecewise-bilinear map.
     """
+    from scipy.interpolate import RegularGridInterpolator
+
     m, n = grid.shape[0] - 1, grid.shape[1] - 1
-    out = np.empty((2 * m + 1, 2 * n + 1, 2))
-    out[::2, ::2] = grid
-    out[1::2, ::2] = 0.5 * (grid[1:] + grid[:-1])
-    out[:, 1::2] = 0.5 * (out[:, 2::2] + out[:, :-2:2])
-    return out
+    at = RegularGridInterpolator((np.arange(m + 1.0), np.arange(n + 1.0)), grid, method="linear")
+    yi, xi = np.meshgrid(np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1), indexing="ij")
+    return at(np.stack([yi, xi], -1))

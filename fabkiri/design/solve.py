@@ -52,7 +52,7 @@ from . import constraints as C
 from .initial import coarse_tile_map, initial_guess
 from .objective import regularizer
 from .reduced import fit_miss, solve_reduced
-from .rigid import RigidFamily, refine_grid
+from .rigid import RigidFamily, resample_grid
 from .targets import Target
 
 CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay > ~1° from 0 and π
@@ -226,9 +226,9 @@ class _Problem:
                             tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
-        if reduced_applies(req) and req.solver != "full" and (req.rows, req.cols) == (2 * rc, 2 * cc):
+        if reduced_applies(req) and req.solver != "full":
             xmm = self._rigid_refinement(sc, res.pattern.nodes)
-            how = "closed-state grid refined in the rigid family"
+            how = "closed-state grid resampled in the rigid family"
         else:
             xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
             how = "deployed tiles mapped"
@@ -246,16 +246,17 @@ class _Problem:
         return xmm / L0, L0
 
     def _rigid_refinement(self, coarse: Pattern, x_mm: np.ndarray) -> np.ndarray:
-        """Fine start (mm) from a coarse rigid design: its closed-state-1 grid, each cell split in four.
+        """Fine start (mm) from a coarse rigid design: its closed-state-1 grid resampled to this lattice.
 
         The coarse design is a member of its own rigid family at its deployment angle ψ (every hole opens
-        to 2ψ); the fine start is the fine member nearest the refined grid, deployed to the same ψ.
+        to 2ψ); the fine start is the fine member nearest the resampled grid, deployed to the same ψ.
         """
         st_c = C.Stencils.from_pattern(coarse)
         fam_c = RigidFamily.build(st_c, coarse.topology.spanning_tree(0))
         psi = RigidFamily.deployment_angle(x_mm, st_c)
         S_c, _ = fam_c.fit(x_mm, psi)
-        grid = refine_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2))
+        grid = resample_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2),
+                             self.req.rows, self.req.cols)
         fam = self.rigid_family
         return fam.nodes(fam.seeds_for_grid(grid.reshape(-1, 2)), psi)
 
