@@ -259,9 +259,58 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
         return q, merit.nodes(q), 1
 
     monkeypatch.setattr(R, "_lm", fake_lm)
-    judge = R._Merit(fam, prob.families, prob.margin, 1e-3)
-    assert judge.ineq_violation(judge.nodes(folded)) > 0 and judge.ineq_violation(judge.nodes(p0)) == 0
-    X, mode, _ = R.solve_reduced(fam, prob.X0, np.pi / 4, prob.families, prob.margin, 1e-3, 1e-12,
+    judge = R._Merit(fam, prob.families, prob.margin, 1e-3,
+                     grid_families=R.grid_families(fam, prob.st, prob.families))
+    assert judge.ineq_violation(judge.state(folded)) > 0 and judge.ineq_violation(judge.state(p0)) == 0
+    X, mode, _ = R.solve_reduced(fam, prob.st, prob.X0, np.pi / 4, prob.families, prob.margin, 1e-3, 1e-12,
                                  lambda Y: _mean_edge(prob, Y), lambda m: None, miss_tol=np.inf)
     assert "levenberg" in calls  # miss_tol = inf would stop after the first start, but it was infeasible
     assert np.allclose(X, judge.nodes(p0)) and mode == "least-squares"
+
+
+@settings(max_examples=20, deadline=None)
+@given(rows=hst.integers(2, 6), cols=hst.integers(2, 6), psi=hst.floats(0.1, 1.45),
+       seed=hst.integers(0, 2**31 - 1))
+def test_tile_shape_families_are_the_same_on_the_closed_grid(rows, cols, psi, seed):
+    """Every tile of a member is a rigid copy of its closed-state-1 grid cell: the regulariser and the
+    convexity rows evaluated on the grid equal those on the deployed nodes (what the reduced solver uses)."""
+    from fabkiri.design.objective import regularizer
+    from fabkiri.design.reduced import TILE_SHAPE, grid_families
+
+    std, st, fam = _family(rows, cols)
+    S0, _ = fam.fit(std.nodes, np.pi / 4)
+    S = S0 + 0.05 * np.random.default_rng(seed).normal(size=S0.shape)
+    X, c = fam.nodes(S, psi), fam.grid(S)
+    nv = st.n_nodes
+    on_nodes = [regularizer(st, nv), C.convexity(st, nv)]
+    on_grid = grid_families(fam, st, on_nodes)
+    assert [f.name for f in on_grid] == list(TILE_SHAPE)
+    for a, b in zip(on_nodes, on_grid):
+        assert len(a.residual(X)) == len(b.residual(c))
+        assert np.abs(a.residual(X) - b.residual(c)).max(initial=0.0) <= 1e-10
+
+
+def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
+    from fabkiri.design import reduced as R
+    from fabkiri.design.solve import _Problem
+
+    prob = _Problem(DesignRequest(10, 12, T.load_target("heart", 100.0), rigid=True))
+    fam = prob.rigid_family
+    m = R._Merit(fam, prob.families, prob.margin, 1e-3, grid_families=R.grid_families(fam, prob.st, prob.families))
+    S, _ = fam.fit(prob.X0, np.pi / 4)
+    p = np.concatenate([S[:, 0], S[:, 1], [np.pi / 4]])
+    r, Jx, Jc = m.rows(m.state(p))
+    dense = (Jc @ m.C).T @ (Jc @ m.C)
+    monkeypatch.setattr(R, "DENSE_JD", 0)  # force the block path
+    blocks = m._grid_normal(Jc, r[Jx.shape[0]:])
+    assert np.abs(blocks - dense).max() <= 1e-12 * np.abs(dense).max()
+    # and the reduced Jacobian of all rows agrees with finite differences of the stacked residuals
+    Jr = m.reduced_jacobian(Jx, Jc, p)
+    h = 1e-6
+    for j in (0, fam.n_seeds + 3, len(p) - 1):
+        e = np.zeros(len(p))
+        e[j] = h
+        rp = m.rows(m.state(p + e))[0]
+        rm = m.rows(m.state(p - e))[0]
+        if len(rp) == len(r) == len(rm):
+            assert np.abs((rp - rm) / (2 * h) - Jr[:, j]).max() <= 1e-5 * max(1.0, np.abs(Jr).max())

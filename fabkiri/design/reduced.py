@@ -17,10 +17,13 @@ on the result and falls back to the full solver when a check fails.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy import sparse
 
-from .constraints import Family
+from .constraints import Family, Stencils, convexity
+from .objective import regularizer
 from .rigid import RigidFamily
 
 # (penalty weight, stall tolerance, iteration cap) per stage, softest first as in the full solver: a stiff
@@ -40,20 +43,39 @@ SCALINGS = ("marquardt", "levenberg")
 MAX_STALL = 3
 
 
+# families that see only tile shapes: on a member every tile is a rigid copy of its closed-state-1 grid cell,
+# so they are evaluated on the grid c = Z S (G vertices, no ψ) instead of the V deployed nodes
+TILE_SHAPE = ("regularizer", "convexity")
+
+
 class _Merit:
-    """Stacked residuals of the reduced problem and their node-space Jacobians."""
+    """Stacked residuals of the reduced problem and their Jacobians.
+
+    Rows come in two blocks: on the deployed nodes ``x(p)`` (fit, non-overlap; Jacobian ∂x/∂p = ``D``)
+    and on the closed-state-1 grid ``c = Z S`` (the ``TILE_SHAPE`` families; ∂c/∂p = ``C``, constant).
+    The grid block is the large one (the regulariser), and its normal matrix ``Cᵀ JᵀJ C`` costs G·P²
+    instead of 2V·P² (G ≈ V/2 grid vertices).
+    """
 
     def __init__(self, fam: RigidFamily, families: list[Family], margin: dict, reg_weight: float,
-                 rho: float = STAGES[0][0], scaling: str = "marquardt"):
+                 rho: float = STAGES[0][0], scaling: str = "marquardt", grid_families: list[Family] = ()):
         self.fam = fam
         self.nf = fam.n_seeds
+        on_grid = {f.name for f in grid_families}
         self.fits = [f for f in families if f.kind == "fit"]
-        self.regs = [f for f in families if f.kind == "reg"]
-        self.ineqs = [f for f in families if f.kind == "ineq"]
+        self.regs = [f for f in families if f.kind == "reg" and f.name not in on_grid]
+        self.ineqs = [f for f in families if f.kind == "ineq" and f.name not in on_grid]
+        self.grid_regs = [f for f in grid_families if f.kind == "reg"]
+        self.grid_ineqs = [f for f in grid_families if f.kind == "ineq"]
         self.margin = margin
         self.w = float(np.sqrt(reg_weight))
         self.sq = float(np.sqrt(rho))
         self.scaling = scaling
+        nf, G = self.nf, fam.Z.shape[0]
+        C = np.zeros((G, 2, 2 * nf + 1))
+        C[:, 0, :nf] = fam.Z
+        C[:, 1, nf:2 * nf] = fam.Z
+        self.C = C.reshape(2 * G, 2 * nf + 1)
 
     def unpack(self, p: np.ndarray):
         nf = self.nf
@@ -63,31 +85,76 @@ class _Merit:
         S, psi = self.unpack(p)
         return self.fam.nodes(S, psi)
 
-    def ineq_violation(self, X: np.ndarray) -> float:
-        return max(0.0, -min((float(f.residual(X).min(initial=np.inf)) for f in self.ineqs), default=0.0))
+    def state(self, p: np.ndarray):
+        """``(X, c)``: deployed nodes and closed-state-1 grid of member ``p``."""
+        S, psi = self.unpack(p)
+        return self.fam.nodes(S, psi), self.fam.grid(S)
 
-    def rows(self, X: np.ndarray, hard: bool = False):
-        """Residual vector and node-space Jacobian (CSR) of the merit, or of the hard-fit rows."""
-        rs, Js = [], []
-        for f in self.fits:
-            r, J = f(X)
-            rs.append(r)
-            Js.append(J)
-        if not hard:
-            for f in self.regs:
-                r, J = f(X)
-                rs.append(self.w * r)
-                Js.append(self.w * J)
-        for f in self.ineqs:
-            r, J = f(X)
-            m = self.margin[f.name] * (0.5 if hard else 1.0)
-            v = r - m
-            act = np.flatnonzero(v < 0)
-            if len(act):
-                s = 1.0 if hard else self.sq
-                rs.append(s * v[act])
-                Js.append(s * J[act])
-        return np.concatenate(rs), sparse.vstack(Js, format="csr")
+    def ineq_violation(self, Xc) -> float:
+        X, c = Xc
+        vals = [f.residual(X) for f in self.ineqs] + [f.residual(c) for f in self.grid_ineqs]
+        return max(0.0, -min((float(v.min(initial=np.inf)) for v in vals), default=0.0))
+
+    def rows(self, Xc, hard: bool = False):
+        """Residuals and Jacobians of the merit (or of the hard-fit rows): ``(r, Jx, Jc)``.
+
+        ``r`` stacks the node rows (``Jx``, CSR over the nodes) and then the grid rows (``Jc``, over the grid).
+        """
+        X, c = Xc
+        blocks = []
+        for arr, fits, regs, ineqs in ((X, self.fits, self.regs, self.ineqs),
+                                       (c, [], self.grid_regs, self.grid_ineqs)):
+            rs, Js = [], []
+            for f in fits:
+                r, J = f(arr)
+                rs.append(r)
+                Js.append(J)
+            if not hard:
+                for f in regs:
+                    r, J = f(arr)
+                    rs.append(self.w * r)
+                    Js.append(self.w * J)
+            for f in ineqs:
+                r, J = f(arr)
+                m = self.margin[f.name] * (0.5 if hard else 1.0)
+                v = r - m
+                act = np.flatnonzero(v < 0)
+                if len(act):
+                    s = 1.0 if hard else self.sq
+                    rs.append(s * v[act])
+                    Js.append(s * J[act])
+            n = 2 * len(arr)
+            blocks.append((np.concatenate(rs) if rs else np.zeros(0),
+                           sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n))))
+        (rx, Jx), (rc, Jc) = blocks
+        return np.concatenate([rx, rc]), Jx, Jc
+
+    def reduced_jacobian(self, Jx, Jc, p: np.ndarray) -> np.ndarray:
+        """Dense ∂r/∂p of the stacked rows."""
+        return np.vstack([Jx @ self.fam.jacobian(*self.unpack(p)), Jc @ self.C])
+
+    def normal(self, r: np.ndarray, Jx, Jc, p: np.ndarray):
+        """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
+        D = self.fam.jacobian(*self.unpack(p))
+        nx = Jx.shape[0]
+        Hx, gx = _normal(Jx, r[:nx], D)
+        return Hx + self._grid_normal(Jc, r[nx:]), gx + self.C.T @ (Jc.T @ r[nx:])
+
+    def _grid_normal(self, Jc, rc: np.ndarray) -> np.ndarray:
+        """``Cᵀ JcᵀJc C`` by coordinate blocks: C is block-diagonal (Z for x, Z for y, nothing for ψ), so
+        ``Zᵀ (Jaᵀ Jb) Z`` for a, b in {x, y} does a third of the work of the full product."""
+        P = self.C.shape[1]
+        if Jc.shape[0] * P <= DENSE_JD:
+            JC = Jc @ self.C
+            return JC.T @ JC
+        Z, nf = self.fam.Z, self.nf
+        Ja, Jb = Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()
+        H = np.zeros((P, P))
+        H[:nf, :nf] = Z.T @ ((Ja.T @ Ja) @ Z)
+        H[nf:2 * nf, nf:2 * nf] = Z.T @ ((Jb.T @ Jb) @ Z)
+        H[:nf, nf:2 * nf] = Z.T @ ((Ja.T @ Jb) @ Z)
+        H[nf:2 * nf, :nf] = H[:nf, nf:2 * nf].T
+        return H
 
 
 def fit_miss(fits: list[Family], X: np.ndarray) -> float:
@@ -111,13 +178,11 @@ def _normal(J: sparse.csr_matrix, r: np.ndarray, D: np.ndarray):
 
 def _lm(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
     """Levenberg-Marquardt on the merit; returns ``p, X, iterations``."""
-    fam = merit.fam
-    X = merit.nodes(p)
-    r, J = merit.rows(X)
-    D = fam.jacobian(*merit.unpack(p))
-    Hr, g = _normal(J, r, D)
+    Xc = merit.state(p)
+    r, Jx, Jc = merit.rows(Xc)
+    Hr, g = merit.normal(r, Jx, Jc, p)
     cost = 0.5 * float(r @ r)
-    gviol = merit.ineq_violation(X)
+    gviol = merit.ineq_violation(Xc)
     mu = 1e-3
     nu = 2.0
     stall = 0
@@ -133,20 +198,19 @@ def _lm(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
             mu *= 10.0
             continue
         for _ in range(6):  # step limiting: no new inequality violation
-            Xn = merit.nodes(p + dp)
-            gviol_n = merit.ineq_violation(Xn)
+            Xcn = merit.state(p + dp)
+            gviol_n = merit.ineq_violation(Xcn)
             if gviol_n <= gviol + 1e-15:
                 break
             dp = 0.5 * dp
-        rn, Jn = merit.rows(Xn)
+        rn, Jxn, Jcn = merit.rows(Xcn)
         cn = 0.5 * float(rn @ rn)
         pred = -(float(g @ dp) + 0.5 * float(dp @ (Hr @ dp)))
         ratio = (cost - cn) / pred if pred > 0 else -1.0
         if np.isfinite(cn) and gviol_n <= gviol + 1e-15 and ratio > 1e-4:
             small = (cost - cn) <= stall_tol * max(cost, 1e-300)
-            p, X, r, J, cost, gviol = p + dp, Xn, rn, Jn, cn, gviol_n
-            D = fam.jacobian(*merit.unpack(p))
-            Hr, g = _normal(J, r, D)
+            p, Xc, r, cost, gviol = p + dp, Xcn, rn, cn, gviol_n
+            Hr, g = merit.normal(r, Jxn, Jcn, p)
             mu *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
             nu = 2.0
             stall = stall + 1 if small else 0
@@ -159,11 +223,19 @@ def _lm(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
             nu *= 2.0
             if mu > 1e16:
                 break
-    return p, X, it
+    return p, Xc[0], it
 
 
-def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[Family], margin: dict,
-                  reg_weight: float, fit_tol: float, mean_edge, log, max_iter: int = 200,
+def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
+    """The ``TILE_SHAPE`` families among ``families``, rebuilt on the closed-state-1 grid of ``fam``."""
+    G = fam.Z.shape[0]
+    grid = replace(st, tiles=fam.node_vertex[st.tiles], n_nodes=G)
+    build = {"regularizer": lambda: regularizer(grid, G), "convexity": lambda: convexity(grid, G)}
+    return [build[f.name]() for f in families if f.name in TILE_SHAPE]
+
+
+def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, families: list[Family],
+                  margin: dict, reg_weight: float, fit_tol: float, mean_edge, log, max_iter: int = 200,
                   miss_tol: float = 0.0):
     """Fit within the rigid family from the member nearest ``X0`` at ``psi0``.
 
@@ -175,11 +247,12 @@ def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[
     p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
     iters: dict = {}
     best = None
-    judge = _Merit(fam, families, margin, reg_weight, STAGES[-1][0])
+    on_grid = grid_families(fam, st, families)
+    judge = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
     for scaling in SCALINGS:
         p = p0
         for n, (rho, stall_tol, cap) in enumerate(STAGES):
-            merit = _Merit(fam, families, margin, reg_weight, rho, scaling if n == 0 else "marquardt")
+            merit = _Merit(fam, families, margin, reg_weight, rho, scaling if n == 0 else "marquardt", on_grid)
             p, X, k = _lm(merit, p, min(cap, max_iter), stall_tol, log)
             iters[f"reduced_{scaling}_rho_{rho:g}"] = k
             fit_max = max((float(np.abs(f.residual(X)).max()) for f in merit.fits), default=0.0)
@@ -188,10 +261,10 @@ def solve_reduced(fam: RigidFamily, X0: np.ndarray, psi0: float, families: list[
                 iters[f"reduced_{scaling}_hard"] = kh
                 if Xh is not None:  # an exact fit: nothing left to compare
                     return Xh, "hard", iters
-        r, _ = judge.rows(X)
+        r = judge.rows(judge.state(p))[0]
         cost = float(r @ r)
         miss = fit_miss(merit.fits, X)
-        viol = judge.ineq_violation(X)
+        viol = judge.ineq_violation(judge.state(p))
         log(f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
             + (f", an inequality violated by {viol:.2e}" if viol > 0 else ""))
         if best is None or (viol > 0, cost) < best[0]:
@@ -209,30 +282,29 @@ def _hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
     (without a new inequality violation) and rises tenfold otherwise.
     ``X`` is None when the rows could not be brought under ``fit_tol``.
     """
-    fam = merit.fam
-    X = merit.nodes(p)
-    gviol = merit.ineq_violation(X)
-    r, J = merit.rows(X, hard=True)
-    Jr = J @ fam.jacobian(*merit.unpack(p))
+    Xc = merit.state(p)
+    gviol = merit.ineq_violation(Xc)
+    r, Jx, Jc = merit.rows(Xc, hard=True)
+    Jr = merit.reduced_jacobian(Jx, Jc, p)
     scale = max(float((Jr * Jr).sum(0).mean()), 1e-300)
     mu = 1e-12 * scale
     for it in range(1, max_iter + 1):
         if np.abs(r).max(initial=0.0) <= fit_tol:
-            return X, it - 1
+            return Xc[0], it - 1
         dp = -np.linalg.solve(Jr.T @ Jr + mu * np.eye(len(p)), Jr.T @ r)
         for _ in range(6):
-            Xn = merit.nodes(p + dp)
-            gviol_n = merit.ineq_violation(Xn)
+            Xcn = merit.state(p + dp)
+            gviol_n = merit.ineq_violation(Xcn)
             if gviol_n <= gviol + 1e-15:
                 break
             dp = 0.5 * dp
-        rn, Jn = merit.rows(Xn, hard=True)
+        rn, Jxn, Jcn = merit.rows(Xcn, hard=True)
         if gviol_n <= gviol + 1e-15 and float(rn @ rn) < float(r @ r):
-            p, X, r, gviol = p + dp, Xn, rn, gviol_n
-            Jr = Jn @ fam.jacobian(*merit.unpack(p))
+            p, Xc, r, gviol = p + dp, Xcn, rn, gviol_n
+            Jr = merit.reduced_jacobian(Jxn, Jcn, p)
             mu = max(mu / 10.0, 1e-14 * scale)
         else:
             mu *= 10.0
             if mu > 1e4 * scale:
                 break
-    return (X if np.abs(r).max(initial=0.0) <= fit_tol else None), it
+    return (Xc[0] if np.abs(r).max(initial=0.0) <= fit_tol else None), it

@@ -538,7 +538,7 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
     # the standard starts sit at ψ = π/4; a coarse-to-fine start at whatever the coarse design opened to
     psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
-    X, mode, its = solve_reduced(fam, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
+    X, mode, its = solve_reduced(fam, prob.st, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
                                  0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
                                  max_iter=req.max_iter,
                                  # small patterns get the full solver's second opinion anyway
