@@ -31,8 +31,8 @@ CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
 # from 32x32 tiles a rigid design starts coarse to fine (the coarse closed-state grid resampled inside the
 # rigid family): from the standard pattern the rigid family's LM stalls against the inequalities (128x128
-# circle: 11 % of the size off, coarse 0.23 %; 64x64 heart 21.6 mm in 204 s, coarse 0.098 mm in 16 s; 64x64
-# ellipse 7.3 mm, coarse 0.016 mm in 49 s). Below 32x32 it was mixed (16x16: heart better, ellipse, star,
+# circle: 11 % of the size off, coarse 0.23 %; 64x64 heart 21.6 mm in 204 s, coarse 0.098 mm in 12 s; 64x64
+# ellipse 7.3 mm, coarse 0.019 mm in 30 s). Below 32x32 it was mixed (16x16: heart better, ellipse, star,
 # rectangle and a points file worse), so the usual order stays there.
 BIG_RIGID_INITS = ("coarse", "rescaled")
 BIG_TILES = 32 * 32
