@@ -296,14 +296,25 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
 
     prob = _Problem(DesignRequest(10, 12, T.load_target("heart", 100.0), rigid=True))
     fam = prob.rigid_family
+    monkeypatch.setattr(R, "DENSE_JD", 0)  # force the block paths (no dense ∂c/∂p, block normal matrix)
     m = R._Merit(fam, prob.families, prob.margin, 1e-3, grid_families=R.grid_families(fam, prob.st, prob.families))
+    assert m._C is None
     S, _ = fam.fit(prob.X0, np.pi / 4)
     p = np.concatenate([S[:, 0], S[:, 1], [np.pi / 4]])
     r, Jx, Jc = m.rows(m.state(p))
-    dense = (Jc @ m.C).T @ (Jc @ m.C)
-    monkeypatch.setattr(R, "DENSE_JD", 0)  # force the block path
-    blocks = m._grid_normal(Jc, r[Jx.shape[0]:])
+    G, nf = fam.Z.shape
+    Cm = np.zeros((G, 2, 2 * nf + 1))  # ∂c/∂p formed densely, as the reference
+    Cm[:, 0, :nf] = fam.Z
+    Cm[:, 1, nf:2 * nf] = fam.Z
+    JC = Jc @ Cm.reshape(2 * G, -1)
+    dense = JC.T @ JC
+    assert np.abs(m._grid_to_p(Jc) - JC).max() <= 1e-12 * np.abs(JC).max()
+    blocks = m._grid_normal(Jc)
     assert np.abs(blocks - dense).max() <= 1e-12 * np.abs(dense).max()
+    H, g = m.normal(r, Jx, Jc, p)
+    D = fam.jacobian(*m.unpack(p))
+    nx = Jx.shape[0]
+    assert np.abs(g - ((Jx @ D).T @ r[:nx] + JC.T @ r[nx:])).max() <= 1e-10 * max(1.0, np.abs(g).max())
     # and the reduced Jacobian of all rows agrees with finite differences of the stacked residuals
     Jr = m.reduced_jacobian(Jx, Jc, p)
     h = 1e-6
