@@ -256,7 +256,7 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
     def fake_lm(merit, p, max_iter, stall_tol, log):
         calls.append(merit.scaling)
         q = folded if merit.scaling == "marquardt" and len(calls) <= 2 else p0
-        return q, merit.nodes(q), 1
+        return q, merit.state(q)[0], 1
 
     monkeypatch.setattr(R, "_lm", fake_lm)
     judge = R._Merit(fam, prob.families, prob.margin, 1e-3,
@@ -265,7 +265,7 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
     X, mode, _ = R.solve_reduced(fam, prob.st, prob.X0, np.pi / 4, prob.families, prob.margin, 1e-3, 1e-12,
                                  lambda Y: _mean_edge(prob, Y), lambda m: None, miss_tol=np.inf)
     assert "levenberg" in calls  # miss_tol = inf would stop after the first start, but it was infeasible
-    assert np.allclose(X, judge.nodes(p0)) and mode == "least-squares"
+    assert np.allclose(X, judge.state(p0)[0]) and mode == "least-squares"
 
 
 @settings(max_examples=20, deadline=None)
@@ -309,7 +309,8 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
     JC = Jc @ Cm.reshape(2 * G, -1)
     dense = JC.T @ JC
     assert np.abs(m._grid_to_p(Jc) - JC).max() <= 1e-12 * np.abs(JC).max()
-    blocks = m._grid_normal(Jc)
+    blocks, g_blocks = m._grid_normal(Jc, r[Jx.shape[0]:])
+    assert np.abs(g_blocks - JC.T @ r[Jx.shape[0]:]).max() <= 1e-10 * max(1.0, np.abs(g_blocks).max())
     assert np.abs(blocks - dense).max() <= 1e-12 * np.abs(dense).max()
     H, g = m.normal(r, Jx, Jc, p)
     D = fam.jacobian(*m.unpack(p))

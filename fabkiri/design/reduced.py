@@ -7,9 +7,9 @@ problem left is small and unconstrained but for the inequalities:
     min_p  |s(x)|² + w E_reg(x) + ρ |min(0, g(x) - m)|²,   x = x(p), p = (S, ψ),
 
 with 2(M+N+2)+1 unknowns instead of 2V. It is solved by Levenberg-Marquardt
-with dense normal matrices ``Dᵀ (JᵀJ) D`` (``D = ∂x/∂p``; ``JᵀJ`` stays sparse
-in node space, so the large regulariser block is never formed densely), with
-the same step limiting on the inequalities as the full solver. When the fit
+with dense reduced normal matrices (see ``_Merit``: the tile-shape rows live on
+the closed-state-1 grid, the rest on the deployed nodes), with the same step
+limiting on the inequalities as the full solver. When the fit
 comes out nearly exact, minimum-norm Gauss-Newton steps on the fit rows make
 it exact ("hard" shape matching). The caller (``solve.py``) checks every family
 on the result and falls back to the full solver when a check fails.
@@ -37,9 +37,6 @@ STAGES = ((1e2, 1e-3, 200), (1e4, 1e-6, 40))
 # heart 13.3 mm vs 0.43 mm, circle exact vs 0.04 mm). The second runs only when the first misses the
 # target by more than ``miss_tol`` of its size; the better merit is kept.
 SCALINGS = ("marquardt", "levenberg")
-# A result that violates an inequality (g < 0: a coarse-to-fine start can leave a reflex corner that the fit
-# holds against any penalty; 32x32 rigid ellipse from a coarse start) ranks below every feasible one, and
-# the other scaling is tried as well.
 MAX_STALL = 3
 
 
@@ -82,10 +79,6 @@ class _Merit:
     def unpack(self, p: np.ndarray):
         nf = self.nf
         return np.stack([p[:nf], p[nf:2 * nf]], -1), float(p[-1])
-
-    def nodes(self, p: np.ndarray) -> np.ndarray:
-        S, psi = self.unpack(p)
-        return self.fam.nodes(S, psi)
 
     def state(self, p: np.ndarray):
         """``(X, c)``: deployed nodes and closed-state-1 grid of member ``p``."""
@@ -136,20 +129,11 @@ class _Merit:
         return np.vstack([Jx @ self.fam.jacobian(*self.unpack(p)), self._grid_to_p(Jc)])
 
     def normal(self, r: np.ndarray, Jx, Jc, p: np.ndarray):
-        """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``.
-
-        ``C = ∂c/∂p`` is block-diagonal (``Z`` for x, ``Z`` for y, nothing for ψ) and never formed.
-        """
-        D = self.fam.jacobian(*self.unpack(p))
+        """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
         nx = Jx.shape[0]
-        Hx, gx = _normal(Jx, r[:nx], D)
-        v = Jc.T @ r[nx:]
-        if self._C is not None:
-            gc = self._C.T @ v
-        else:
-            Z = self.fam.Z
-            gc = np.concatenate([Z.T @ v[0::2], Z.T @ v[1::2], [0.0]])
-        return Hx + self._grid_normal(Jc), gx + gc
+        Hx, gx = _normal(Jx, r[:nx], self.fam.jacobian(*self.unpack(p)))
+        Hc, gc = self._grid_normal(Jc, r[nx:])
+        return Hx + Hc, gx + gc
 
     def _grid_to_p(self, Jc) -> np.ndarray:
         """``Jc C`` (dense): the grid rows' Jacobian with respect to ``p``."""
@@ -158,14 +142,15 @@ class _Merit:
         Z = self.fam.Z
         return np.hstack([Jc[:, 0::2] @ Z, Jc[:, 1::2] @ Z, np.zeros((Jc.shape[0], 1))])
 
-    def _grid_normal(self, Jc) -> np.ndarray:
-        """``Cᵀ JcᵀJc C`` by coordinate blocks ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}: a third of the work of the
-        product through a dense C (and no 2G × P matrix in memory: 138 MB at 128x128)."""
+    def _grid_normal(self, Jc, rc: np.ndarray):
+        """``Cᵀ JcᵀJc C`` and ``Cᵀ Jcᵀ rc``. C = ∂c/∂p is block-diagonal (Z for x, Z for y, nothing for ψ):
+        above the dense threshold the matrix is assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}, a third of the
+        work of the product through a dense C (and no 2G × P matrix in memory: 138 MB at 128x128)."""
         nf = self.nf
         P = 2 * nf + 1
         if Jc.shape[0] * P <= DENSE_JD:
             JC = self._grid_to_p(Jc)
-            return JC.T @ JC
+            return JC.T @ JC, JC.T @ rc
         Z = self.fam.Z
         Ja, Jb = Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()
         H = np.zeros((P, P))
@@ -173,7 +158,7 @@ class _Merit:
         H[nf:2 * nf, nf:2 * nf] = Z.T @ ((Jb.T @ Jb) @ Z)
         H[:nf, nf:2 * nf] = Z.T @ ((Ja.T @ Jb) @ Z)
         H[nf:2 * nf, :nf] = H[:nf, nf:2 * nf].T
-        return H
+        return H, np.concatenate([Z.T @ (Ja.T @ rc), Z.T @ (Jb.T @ rc), [0.0]])
 
 
 def fit_miss(fits: list[Family], X: np.ndarray) -> float:
@@ -248,6 +233,8 @@ def _lm(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
 def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
     """The ``TILE_SHAPE`` families among ``families``, rebuilt on the closed-state-1 grid of ``fam``."""
     G = fam.Z.shape[0]
+    # only ``tiles``, ``rows`` and ``cols`` are read by these families; the hinge and fold fields still index
+    # deployed nodes and are not used on the grid
     grid = replace(st, tiles=fam.node_vertex[st.tiles], n_nodes=G)
     build = {"regularizer": lambda: regularizer(grid, G), "convexity": lambda: convexity(grid, G)}
     return [build[f.name]() for f in families if f.name in TILE_SHAPE]
@@ -286,6 +273,9 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
         viol = judge.ineq_violation(judge.state(p))
         log(f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
             + (f", an inequality violated by {viol:.2e}" if viol > 0 else ""))
+        # a result that violates an inequality (g < 0: a coarse-to-fine start can leave a reflex corner that
+        # the fit holds against any penalty; rigid 32x32 ellipse) ranks below every feasible one, and the other
+        # scaling is tried as well
         if best is None or (viol > 0, cost) < best[0]:
             best = ((viol > 0, cost), X)
         if miss <= miss_tol and not viol > 0:
