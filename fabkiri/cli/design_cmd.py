@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..design.initial import INITS
 from ..design.solve import DesignRequest, design
 from ..design.targets import Target, load_target
 from ..errors import InputError, SolveError
@@ -72,12 +73,12 @@ def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
     its own: a rigid 64x64 ellipse was rejected for 1.4e-9 mm² slivers whose
     depth was 3.8e-10 tile sizes). A self-intersecting tile is the pair (t, t).
     """
-    import shapely
-
     from ..verify.geom import overlap_depths
 
-    valid = shapely.is_valid(shapely.polygons(corners))
-    out = [(int(t), int(t)) for t in np.flatnonzero(~valid)]
+    crossed = geometry.self_intersecting_tiles(corners)
+    valid = np.ones(len(corners), dtype=bool)
+    valid[crossed] = False
+    out = [(int(t), int(t)) for t in crossed]
     i, j, depth = overlap_depths(corners)
     bad = (depth > tol) & valid[i] & valid[j]
     return out + list(zip(i[bad].tolist(), j[bad].tolist()))
@@ -292,7 +293,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
-    p.add_argument("--init", choices=["standard", "rescaled", "conformal", "coarse"],
+    p.add_argument("--init", choices=INITS,
                    help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
                         "(standard pattern at the target's area), then standard, until a design passes every check "
                         "(--rigid from 32x32 tiles: coarse, then rescaled); coarse solves at half resolution "

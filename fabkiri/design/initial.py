@@ -23,6 +23,7 @@ from scipy import sparse
 from scipy.sparse.linalg import spsolve
 
 from ..errors import InputError, SolveError
+from ..pattern import geometry
 from .constraints import Stencils
 from .targets import Target
 
@@ -153,8 +154,7 @@ def initial_guess(base: np.ndarray, st: Stencils, target: Target | None, how: st
         return base + centre / L0, L0
     L0 = scale_for(base, st, target, "rescaled")
     x = harmonic_map(base, st, target.transformed(1.0 / L0))
-    c = x[st.tiles]
-    area = 0.5 * (c[..., 0] * np.roll(c[..., 1], -1, 1) - np.roll(c[..., 0], -1, 1) * c[..., 1]).sum(1)
+    area = geometry.signed_areas(x[st.tiles])
     if (area <= 0).any():
         raise SolveError(f"the harmonic map onto {target.name!r} folds {int((area <= 0).sum())} tiles "
                          f"(a non-convex target); use --init rescaled or standard")

@@ -46,11 +46,12 @@ except ImportError:  # pragma: no cover
     threadpool_limits = None
 
 from ..errors import InputError
+from ..pattern import geometry
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
 from .initial import coarse_tile_map, initial_guess
-from .objective import regularizer
+from .objective import energy, regularizer
 from .reduced import fit_miss, solve_reduced
 from .rigid import RigidFamily, resample_grid
 from .targets import Target
@@ -233,7 +234,7 @@ class _Problem:
             xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
             how = "deployed tiles mapped"
         c = xmm[st.tiles]
-        area = 0.5 * (c[..., 0] * np.roll(c[..., 1], -1, 1) - np.roll(c[..., 0], -1, 1) * c[..., 1]).sum(1)
+        area = geometry.signed_areas(c)
         self.coarse = {"rows": rc, "cols": cc, "map": how, "status": res.report["status"],
                        "time_s": res.report["time_s"],
                        "iterations_total": res.report["iterations_total"],
@@ -242,7 +243,7 @@ class _Problem:
         self.coarse["used"] = bool(res.converged and not (area <= 0).any())
         if not self.coarse["used"]:
             return initial_guess(base, st, req.target, "rescaled")
-        L0 = float(np.mean(np.linalg.norm(np.roll(c, -1, 1) - c, axis=-1)))
+        L0 = geometry.mean_edge_length(c)
         return xmm / L0, L0
 
     def _rigid_refinement(self, coarse: Pattern, x_mm: np.ndarray) -> np.ndarray:
@@ -509,8 +510,7 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
 
 
 def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
-    t = prob.st.tiles
-    return float(np.mean(np.linalg.norm(np.roll(X[t], -1, 1) - X[t], axis=-1)))
+    return geometry.mean_edge_length(X[prob.st.tiles])
 
 
 def reduced_applies(req: DesignRequest) -> bool:
@@ -521,8 +521,7 @@ def reduced_applies(req: DesignRequest) -> bool:
 
 def _objective(prob: _Problem, X: np.ndarray) -> float:
     """Σ fit² + w E_reg: what both solvers minimise over the feasible set."""
-    fit = sum(float(np.sum(f.residual(X) ** 2)) for f in prob.of("fit"))
-    return fit + prob.req.reg_weight * sum(float(np.sum(f.residual(X) ** 2)) for f in prob.of("reg"))
+    return sum(energy(f, X) for f in prob.of("fit")) + prob.req.reg_weight * sum(energy(f, X) for f in prob.of("reg"))
 
 
 def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
@@ -671,7 +670,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         "fit": fit,
         "min_inequality": ineq_min / (L * L),
         "active_inequalities": active,
-        "regularizer": float(np.sum(prob.of("reg")[0].residual(X) ** 2)),
+        "regularizer": energy(prob.of("reg")[0], X),
         "factorisations": prob._normal.factorisations if prob._normal else 0,
         "cg_iterations": prob._normal.cg_steps if prob._normal else 0,
         "coarse": prob.coarse,
