@@ -252,7 +252,7 @@ def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0)
         g, nodes, gr = cross_term(x, v, a, b)
         return g - margin, (nodes, gr)
 
-    return Family(name, "ineq", fn, 2, nv=nv)
+    return Family(name, "ineq", fn, 2, meta={"quads": quads, "margin": margin}, nv=nv)
 
 
 def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:
@@ -263,8 +263,10 @@ def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:
 def shape_match(nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, name: str = "shape") -> Family:
     """Signed distance of boundary tips to their arc of the target (normalised units)."""
 
+    project = target.projector(sides)
+
     def fn(x):
-        _, _, d, g = target.project(x[nodes], sides)
+        _, _, d, g = project(x[nodes])
         return d, (nodes[:, None], g[:, None, :])
 
     return Family(name, "fit", fn, 1, meta={"nodes": nodes, "sides": sides, "target": target}, nv=nv)

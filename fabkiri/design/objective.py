@@ -6,46 +6,101 @@ over pairs of same-parity tiles two apart in a row or a column. It is written
 as ``E_reg = |r|²`` with ``r`` the stacked differences divided by ``√|Π|``, so
 the solver can treat it with Gauss-Newton like every other family. Lengths are
 in normalised units (initial tile edge 1).
+
+Every tile corner's length and angle is computed once (:func:`tile_corners`)
+and the rows are differences of those: a tile sits in up to four pairs.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..pattern.geometry import wrap_angle
-from .constraints import Family, Stencils, corner_angle, regularizer_pairs
+from .constraints import TWO_PI, Family, Stencils, regularizer_pairs
+
+
+@dataclass(frozen=True)
+class TileCorners:
+    """Per tile corner ``(T, 4)`` of quads ``x[quads]``: edge ``A`` to the next corner (edge k runs from
+    corner k to k+1), edge ``B`` to the previous one, their lengths, the interior angle ``theta`` (turning
+    ``A`` onto ``B``), ``cross(A, B)`` and the angle's gradients ``ga``, ``gb`` with respect to ``A``, ``B``."""
+
+    A: np.ndarray
+    B: np.ndarray
+    length: np.ndarray
+    theta: np.ndarray
+    cross: np.ndarray
+    ga: np.ndarray
+    gb: np.ndarray
+
+
+_NEXT = np.array([1, 2, 3, 0])
+_PREV = np.array([3, 0, 1, 2])
+
+
+def tile_corners(x: np.ndarray, quads: np.ndarray) -> TileCorners:
+    P = x[quads]
+    A = P[:, _NEXT] - P
+    B = P[:, _PREV] - P
+    Ax, Ay, Bx, By = A[..., 0], A[..., 1], B[..., 0], B[..., 1]
+    la2 = Ax * Ax + Ay * Ay
+    lb2 = la2[:, _PREV]
+    cr = Ax * By - Ay * Bx
+    th = np.mod(np.arctan2(cr, Ax * Bx + Ay * By), TWO_PI)
+    ga = np.empty_like(A)
+    ga[..., 0], ga[..., 1] = Ay / la2, -Ax / la2
+    gb = np.empty_like(B)
+    gb[..., 0], gb[..., 1] = -By / lb2, Bx / lb2
+    return TileCorners(A, B, np.sqrt(la2), th, cr, ga, gb)
+
+
+@dataclass(frozen=True)
+class RegularizerRows:
+    """Row ``i`` of each half (lengths, then angles) compares flat tile corner ``first[i]`` with
+    ``second[i]`` (index ``4 t + k``), weighted by ``weight`` = 1/√|Π|."""
+
+    first: np.ndarray
+    second: np.ndarray
+    weight: float
+
+    def residual(self, tc: TileCorners) -> np.ndarray:
+        l, th = tc.length.reshape(-1), tc.theta.reshape(-1)
+        i, j, w = self.first, self.second, self.weight
+        return w * np.concatenate([l[i] - l[j], wrap_angle(th[i] - th[j])])
+
+
+def regularizer_rows(st: Stencils) -> RegularizerRows:
+    pairs = regularizer_pairs(st)
+    k = np.arange(4)
+    first = (4 * pairs[:, 0, None] + k).reshape(-1)
+    second = (4 * pairs[:, 1, None] + k).reshape(-1)
+    return RegularizerRows(first, second, 1.0 / np.sqrt(max(len(pairs), 1)))
 
 
 def regularizer(st: Stencils, nv: int) -> Family:
-    pairs = regularizer_pairs(st)
-    P = len(pairs)
+    rows = regularizer_rows(st)
     tl = st.tiles
-    T, U = pairs[:, 0], pairs[:, 1]
-    k = np.arange(4)
-    tT = np.repeat(T, 4)
-    tU = np.repeat(U, 4)
-    kk = np.tile(k, P)
-    w = 1.0 / np.sqrt(max(P, 1))
-
-    # edge k: corner k -> k+1, in tile T (1) and tile U (2) of every pair
-    a1, b1 = tl[tT, kk], tl[tT, (kk + 1) % 4]
-    a2, b2 = tl[tU, kk], tl[tU, (kk + 1) % 4]
-    m = len(kk)
-    t_both, k_both = np.concatenate([tT, tU]), np.concatenate([kk, kk])
+    i, j, w = rows.first, rows.second, rows.weight
+    flat = tl.reshape(-1)
+    nxt = np.roll(tl, -1, 1).reshape(-1)
+    prv = np.roll(tl, 1, 1).reshape(-1)
     # one stencil of 6 nodes a row: a length row uses 4 (the other two repeat a node with zero gradient)
-    len_nodes = np.stack([a1, b1, a2, b2, a1, a1], -1)
+    len_nodes = np.stack([flat[i], nxt[i], flat[j], nxt[j], flat[i], flat[i]], -1)
+    ang_nodes = np.stack([flat[i], nxt[i], prv[i], flat[j], nxt[j], prv[j]], -1)
+    nodes = np.concatenate([len_nodes, ang_nodes])
 
     def fn(x):
-        E1, E2 = x[b1] - x[a1], x[b2] - x[a2]
-        l1, l2 = np.linalg.norm(E1, axis=1), np.linalg.norm(E2, axis=1)
-        e1, e2 = E1 / l1[:, None], E2 / l2[:, None]
-        th, n, g = corner_angle(x, tl, t_both, k_both)
-        zero = np.zeros_like(e1)
-        nodes = np.concatenate([len_nodes, np.concatenate([n[:m], n[m:]], 1)])
-        grads = w * np.concatenate([np.stack([-e1, e1, e2, -e2, zero, zero], 1), np.concatenate([g[:m], -g[m:]], 1)])
-        return w * np.concatenate([l1 - l2, wrap_angle(th[:m] - th[m:])]), (nodes, grads)
+        tc = tile_corners(x, tl)
+        e = (tc.A / tc.length[..., None]).reshape(-1, 2)
+        ga, gb = tc.ga.reshape(-1, 2), tc.gb.reshape(-1, 2)
+        zero = np.zeros((len(i), 2))
+        g_len = np.stack([-e[i], e[i], e[j], -e[j], zero, zero], 1)
+        g_ang = np.stack([-(ga[i] + gb[i]), ga[i], gb[i], ga[j] + gb[j], -ga[j], -gb[j]], 1)
+        return rows.residual(tc), (nodes, w * np.concatenate([g_len, g_ang]))
 
-    return Family("regularizer", "reg", fn, 0, nv=nv)
+    return Family("regularizer", "reg", fn, 0, meta={"rows": rows}, nv=nv)
 
 
 def energy(fam: Family, x: np.ndarray) -> float:

@@ -9,7 +9,9 @@ problem left is small and unconstrained but for the inequalities:
 with 2(M+N+2)+1 unknowns instead of 2V. It is solved by Levenberg-Marquardt
 with dense reduced normal matrices (see ``_Merit``: the tile-shape rows live on
 the closed-state-1 grid, the rest on the deployed nodes), with the same step
-limiting on the inequalities as the full solver. When the fit
+limiting on the inequalities as the full solver. Small lattices form the dense
+reduced Jacobian directly (``_TileShapeRows``: per tile corner, then pair
+differences; inequality rows only where active), large ones by sparse blocks. When the fit
 comes out nearly exact, minimum-norm Gauss-Newton steps on the fit rows make
 it exact ("hard" shape matching). The caller (``solve.py``) checks every family
 on the result and falls back to the full solver when a check fails.
@@ -17,13 +19,13 @@ on the result and falls back to the full solver when a check fails.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import sparse
 
 from .constraints import Family, Stencils, convexity
-from .objective import regularizer
+from .objective import _NEXT, _PREV, RegularizerRows, TileCorners, regularizer, tile_corners
 from .rigid import RigidFamily
 
 # (penalty weight, stall tolerance, iteration cap) per stage, softest first as in the full solver: a stiff
@@ -75,6 +77,14 @@ class _Merit:
             C[:, 0, :nf] = fam.Z
             C[:, 1, nf:2 * nf] = fam.Z
             self._C = C.reshape(2 * G, 2 * nf + 1)
+        # the dense path needs the grid families to be exactly the regulariser and tile convexity
+        self._tiles = None
+        names = [f.name for f in self.grid_regs] + [f.name for f in self.grid_ineqs]
+        if names == list(TILE_SHAPE):
+            reg, conv = self.grid_regs[0], self.grid_ineqs[0]
+            rows = reg.meta["rows"]
+            if (2 * len(rows.first) + len(conv.meta["quads"]) * 4) * (2 * nf + 1) <= DENSE_JD:
+                self._tiles = _TileShapeRows(fam, conv.meta["quads"], rows, self.margin[conv.name])
 
     def unpack(self, p: np.ndarray):
         nf = self.nf
@@ -124,6 +134,74 @@ class _Merit:
         (rx, Jx), (rc, Jc) = blocks
         return np.concatenate([rx, rc]), Jx, Jc
 
+    def evaluate(self, p: np.ndarray, hard: bool = False) -> "_Evaluation":
+        """Member ``p``: its nodes, grid, inequality violation and (merit or hard-fit) rows."""
+        if self._tiles is not None:
+            return self._evaluate_dense(p, hard)
+        Xc = self.state(p)
+        return _Evaluation(self, p, Xc, self.ineq_violation(Xc), hard)
+
+    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> "_Evaluation":
+        """The dense reduced Jacobian row block by row block: node rows through ``∂x/∂p`` at the nodes
+        they touch, tile-shape rows from ``_TileShapeRows``; inequality Jacobians only where active."""
+        S, psi = self.unpack(p)
+        X, c = self.fam.nodes(S, psi), self.fam.grid(S)
+        tc = tile_corners(c, self._tiles.quads)
+        rs, Js = [], []
+        gmin = np.inf
+
+        def node_rows(f, scale=1.0, rows=None):
+            r, J = f.fn(X)
+            if rows is not None:
+                r = r[rows]
+            rs.append(scale * r)
+            Js.append(scale * self._node_jacobian(J, S, psi, rows))
+
+        for f in self.fits:
+            node_rows(f)
+        if not hard:
+            for f in self.regs:
+                node_rows(f, self.w)
+        s = 1.0 if hard else self.sq
+        for f in self.ineqs:
+            r, J = f.fn(X)
+            gmin = min(gmin, float(r.min(initial=np.inf)))
+            v = r - self.margin[f.name] * (0.5 if hard else 1.0)
+            act = np.flatnonzero(v < 0)
+            if len(act):
+                rs.append(s * v[act])
+                Js.append(s * self._node_jacobian(J, S, psi, act))
+        t = self._tiles
+        if not hard:
+            rs.append(self.w * t.rows.residual(tc))
+            Js.append(self.w * t.regularizer_jacobian(tc))
+        g = tc.cross.reshape(-1)
+        gmin = min(gmin, float(g.min(initial=np.inf)))
+        v = g - t.margin * (0.5 if hard else 1.0)
+        act = np.flatnonzero(v < 0)
+        if len(act):
+            rs.append(s * v[act])
+            Js.append(s * t.convexity_jacobian(tc, act))
+        P = len(p)
+        J = np.zeros((sum(len(r) for r in rs), P))
+        o = 0
+        for Jb in Js:
+            J[o:o + len(Jb), :Jb.shape[1]] = Jb  # grid blocks have no ψ column
+            o += len(Jb)
+        return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, np.concatenate(rs) if rs else np.zeros(0), J)
+
+    def _node_jacobian(self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None) -> np.ndarray:
+        """``∂r/∂p`` (dense) of node rows whose Jacobian is a stencil ``(nodes, grads)`` or a sparse matrix."""
+        if isinstance(J, tuple):
+            nodes, grads = J
+            if rows is not None:
+                nodes, grads = nodes[rows], grads[rows]
+            m, k = nodes.shape
+            D = self.fam.jacobian_at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
+            return np.einsum("mkd,mkdp->mp", grads, D)
+        J = sparse.csr_matrix(J)
+        return (J if rows is None else J[rows]) @ self.fam.jacobian(S, psi)
+
     def reduced_jacobian(self, Jx, Jc, p: np.ndarray) -> np.ndarray:
         """Dense ∂r/∂p of the stacked rows."""
         return np.vstack([Jx @ self.fam.jacobian(*self.unpack(p)), self._grid_to_p(Jc)])
@@ -161,6 +239,87 @@ class _Merit:
         return H, np.concatenate([Z.T @ (Ja.T @ rc), Z.T @ (Jb.T @ rc), [0.0]])
 
 
+class _TileShapeRows:
+    """The ``TILE_SHAPE`` rows on the closed-state-1 grid with their dense Jacobian in ``S``.
+
+    Every tile corner's edge ``A`` (to the next corner) and ``B`` (to the previous one) is linear in the
+    seeds, ``∂A/∂S = ZE`` and ``∂B/∂S = ZB`` per coordinate (constant ``(T, 4, nf)``), so each corner's
+    length, angle and cross product gets its gradient in ``S`` once, and a regulariser row is the
+    difference of two corners' (a tile sits in up to four pairs).
+    """
+
+    def __init__(self, fam: RigidFamily, quads: np.ndarray, rows: RegularizerRows, margin: float):
+        Z = fam.Z
+        self.quads = quads
+        self.ZE = Z[quads[:, _NEXT]] - Z[quads]
+        self.ZB = Z[quads[:, _PREV]] - Z[quads]
+        self.rows = rows
+        self.margin = margin
+        n = quads.size
+        self.first = np.concatenate([rows.first, n + rows.first])
+        self.second = np.concatenate([rows.second, n + rows.second])
+
+    def regularizer_jacobian(self, tc: TileCorners) -> np.ndarray:
+        """``(2 m, 2 nf)``: length rows, then angle rows, as ``RegularizerRows.residual`` stacks them."""
+        T, _, nf = self.ZE.shape
+        ZE, ZB = self.ZE, self.ZB
+        e = tc.A / tc.length[..., None]
+        F = np.empty((2, T, 4, 2, nf))
+        F[0, :, :, 0] = e[..., 0, None] * ZE
+        F[0, :, :, 1] = e[..., 1, None] * ZE
+        F[1, :, :, 0] = tc.ga[..., 0, None] * ZE + tc.gb[..., 0, None] * ZB
+        F[1, :, :, 1] = tc.ga[..., 1, None] * ZE + tc.gb[..., 1, None] * ZB
+        F = F.reshape(8 * T, 2 * nf)
+        return self.rows.weight * (F[self.first] - F[self.second])
+
+    def convexity_jacobian(self, tc: TileCorners, corners: np.ndarray) -> np.ndarray:
+        """``∂ cross(A, B) / ∂S`` at flat corners ``corners`` (index ``4 t + k``)."""
+        t, k = np.divmod(corners, 4)
+        A, B, ZE, ZB = tc.A[t, k], tc.B[t, k], self.ZE[t, k], self.ZB[t, k]
+        return np.hstack([B[:, 1, None] * ZE - A[:, 1, None] * ZB, A[:, 0, None] * ZB - B[:, 0, None] * ZE])
+
+
+class _Evaluation:
+    """The merit (or hard-fit) rows of one member ``p`` and, on demand, its normal matrix or Jacobian.
+
+    The dense path hands over ``r`` and the dense ``J``; the block path computes its sparse rows only
+    when asked (a step refused for a new inequality violation needs none).
+    """
+
+    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, J=None):
+        self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
+        self._r, self._J, self._blocks = r, J, None
+
+    @property
+    def X(self) -> np.ndarray:
+        return self.Xc[0]
+
+    def _rows(self):
+        if self._blocks is None:
+            self._blocks = self.merit.rows(self.Xc, self.hard)
+        return self._blocks
+
+    @property
+    def r(self) -> np.ndarray:
+        if self._r is None:
+            self._r = self._rows()[0]
+        return self._r
+
+    def normal(self):
+        """Reduced Gauss-Newton matrix ``JᵀJ`` and gradient ``Jᵀr``."""
+        if self._J is not None:
+            return self._J.T @ self._J, self._J.T @ self._r
+        r, Jx, Jc = self._rows()
+        return self.merit.normal(r, Jx, Jc, self.p)
+
+    def jacobian(self) -> np.ndarray:
+        """Dense ``∂r/∂p``."""
+        if self._J is None:
+            r, Jx, Jc = self._rows()
+            self._J = self.merit.reduced_jacobian(Jx, Jc, self.p)
+        return self._J
+
+
 def fit_miss(fits: list[Family], X: np.ndarray) -> float:
     """Largest |fit row| relative to its target's size (both in normalised units)."""
     return max((float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0)
@@ -182,11 +341,10 @@ def _normal(J: sparse.csr_matrix, r: np.ndarray, D: np.ndarray):
 
 def _lm(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
     """Levenberg-Marquardt on the merit; returns ``p, X, iterations``."""
-    Xc = merit.state(p)
-    r, Jx, Jc = merit.rows(Xc)
-    Hr, g = merit.normal(r, Jx, Jc, p)
-    cost = 0.5 * float(r @ r)
-    gviol = merit.ineq_violation(Xc)
+    ev = merit.evaluate(p)
+    Hr, g = ev.normal()
+    cost = 0.5 * float(ev.r @ ev.r)
+    gviol = ev.gviol
     mu = 1e-3
     nu = 2.0
     stall = 0
@@ -202,19 +360,17 @@ def _lm(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
             mu *= 10.0
             continue
         for _ in range(6):  # step limiting: no new inequality violation
-            Xcn = merit.state(p + dp)
-            gviol_n = merit.ineq_violation(Xcn)
-            if gviol_n <= gviol + 1e-15:
+            evn = merit.evaluate(p + dp)
+            if evn.gviol <= gviol + 1e-15:
                 break
             dp = 0.5 * dp
-        rn, Jxn, Jcn = merit.rows(Xcn)
-        cn = 0.5 * float(rn @ rn)
+        cn = 0.5 * float(evn.r @ evn.r)
         pred = -(float(g @ dp) + 0.5 * float(dp @ (Hr @ dp)))
         ratio = (cost - cn) / pred if pred > 0 else -1.0
-        if np.isfinite(cn) and gviol_n <= gviol + 1e-15 and ratio > 1e-4:
+        if np.isfinite(cn) and evn.gviol <= gviol + 1e-15 and ratio > 1e-4:
             small = (cost - cn) <= stall_tol * max(cost, 1e-300)
-            p, Xc, r, cost, gviol = p + dp, Xcn, rn, cn, gviol_n
-            Hr, g = merit.normal(r, Jxn, Jcn, p)
+            p, ev, cost, gviol = p + dp, evn, cn, evn.gviol
+            Hr, g = ev.normal()
             mu *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
             nu = 2.0
             stall = stall + 1 if small else 0
@@ -227,7 +383,7 @@ def _lm(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
             nu *= 2.0
             if mu > 1e16:
                 break
-    return p, Xc[0], it
+    return p, ev.X, it
 
 
 def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
@@ -267,10 +423,10 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
                 iters[f"reduced_{scaling}_hard"] = kh
                 if Xh is not None:  # an exact fit: nothing left to compare
                     return Xh, "hard", iters
-        r = judge.rows(judge.state(p))[0]
-        cost = float(r @ r)
+        ev = judge.evaluate(p)
+        cost = float(ev.r @ ev.r)
         miss = fit_miss(merit.fits, X)
-        viol = judge.ineq_violation(judge.state(p))
+        viol = ev.gviol
         log(f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
             + (f", an inequality violated by {viol:.2e}" if viol > 0 else ""))
         # a result that violates an inequality (g < 0: a coarse-to-fine start can leave a reflex corner that
@@ -291,29 +447,26 @@ def _hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
     (without a new inequality violation) and rises tenfold otherwise.
     ``X`` is None when the rows could not be brought under ``fit_tol``.
     """
-    Xc = merit.state(p)
-    gviol = merit.ineq_violation(Xc)
-    r, Jx, Jc = merit.rows(Xc, hard=True)
-    Jr = merit.reduced_jacobian(Jx, Jc, p)
+    ev = merit.evaluate(p, hard=True)
+    Jr = ev.jacobian()
     scale = max(float((Jr * Jr).sum(0).mean()), 1e-300)
     mu = 1e-12 * scale
     for it in range(1, max_iter + 1):
+        r = ev.r
         if np.abs(r).max(initial=0.0) <= fit_tol:
-            return Xc[0], it - 1
+            return ev.X, it - 1
         dp = -np.linalg.solve(Jr.T @ Jr + mu * np.eye(len(p)), Jr.T @ r)
         for _ in range(6):
-            Xcn = merit.state(p + dp)
-            gviol_n = merit.ineq_violation(Xcn)
-            if gviol_n <= gviol + 1e-15:
+            evn = merit.evaluate(p + dp, hard=True)
+            if evn.gviol <= ev.gviol + 1e-15:
                 break
             dp = 0.5 * dp
-        rn, Jxn, Jcn = merit.rows(Xcn, hard=True)
-        if gviol_n <= gviol + 1e-15 and float(rn @ rn) < float(r @ r):
-            p, Xc, r, gviol = p + dp, Xcn, rn, gviol_n
-            Jr = merit.reduced_jacobian(Jxn, Jcn, p)
+        if evn.gviol <= ev.gviol + 1e-15 and float(evn.r @ evn.r) < float(r @ r):
+            p, ev = p + dp, evn
+            Jr = ev.jacobian()
             mu = max(mu / 10.0, 1e-14 * scale)
         else:
             mu *= 10.0
             if mu > 1e4 * scale:
                 break
-    return (Xc[0] if np.abs(r).max(initial=0.0) <= fit_tol else None), it
+    return (ev.X if np.abs(ev.r).max(initial=0.0) <= fit_tol else None), it

@@ -144,18 +144,24 @@ class RigidFamily:
 
     def jacobian(self, S: np.ndarray, psi: float) -> np.ndarray:
         """``∂vec(x)/∂p`` (dense, ``(2V, 2 nf + 1)``) for ``p = (S[:, 0], S[:, 1], ψ)``."""
+        return self.jacobian_at(S, psi).reshape(2 * len(self.Zn), -1)
+
+    def jacobian_at(self, S: np.ndarray, psi: float, nodes: np.ndarray | None = None) -> np.ndarray:
+        """``∂x[nodes]/∂p`` as ``(n, 2, 2 nf + 1)``: coordinate ``d`` of node ``i`` in ``[i, d]`` (all nodes
+        when ``nodes`` is None)."""
+        Zn, Y = (self.Zn, self.Y) if nodes is None else (self.Zn[nodes], self.Y[nodes])
         c, s = np.cos(psi), np.sin(psi)
-        V, nf = self.Zn.shape
-        D = np.empty((V, 2, 2 * nf + 1))
-        D[:, 0, :nf] = c * self.Zn
-        D[:, 0, nf:2 * nf] = -s * self.Y
-        D[:, 1, :nf] = s * self.Y
-        D[:, 1, nf:2 * nf] = c * self.Zn
-        a = self.Zn @ S
-        b = self.Y @ S
+        n, nf = Zn.shape
+        D = np.empty((n, 2, 2 * nf + 1))
+        D[:, 0, :nf] = c * Zn
+        D[:, 0, nf:2 * nf] = -s * Y
+        D[:, 1, :nf] = s * Y
+        D[:, 1, nf:2 * nf] = c * Zn
+        a = Zn @ S
+        b = Y @ S
         D[:, 0, -1] = -s * a[:, 0] - c * b[:, 1]
         D[:, 1, -1] = -s * a[:, 1] + c * b[:, 0]
-        return D.reshape(2 * V, 2 * nf + 1)
+        return D
 
     def seeds_for_grid(self, grid: np.ndarray) -> np.ndarray:
         """Seeds ``S`` whose closed-state-1 grid is closest to ``grid`` ``(G, 2)`` (least squares)."""

@@ -71,6 +71,7 @@ class Target:
         self.points = pts
         knots = np.concatenate([[0.0], np.cumsum(seg)]) / seg.sum()
         self._u = knots  # (K+1,) parameter of each point, closing point at 1
+        self._h = float(np.diff(knots).min())
         if self.kind == "spline":
             closed = np.vstack([pts, pts[:1]])
             self._spline = CubicSpline(knots, closed, bc_type="periodic")
@@ -91,7 +92,8 @@ class Target:
         if not (np.diff(c) > 0).all():
             raise InputError(f"target {self.name!r}: corners BL, BR, TR, TL must be in CCW order")
         self.corners = c
-        self._arc_trees: list[tuple[cKDTree, np.ndarray]] | None = None
+        self._arc_trees: tuple | None = None  # (corners, arc tree, arc params, lift, curve tree), on first use
+        self._frame = (self, 1.0, np.zeros(2))  # (owner, a, b): this curve is a · owner + b, owner has the trees
 
     # ----------------------------------------------------------- evaluation
     def _sample_params(self, per_interval: int = 8) -> np.ndarray:
@@ -171,7 +173,8 @@ class Target:
             new._spline = PPoly(c, self._spline.x, extrapolate="periodic")
         new._dense = self._dense * scale + shift
         new._bbox = (self._bbox[0] * scale + shift, self._bbox[1] * scale + shift)
-        new._arc_trees = None
+        owner, a, b = self._frame
+        new._frame = (owner, a * scale, b * scale + shift)  # a similarity keeps nearest samples: share the trees
         return new
 
     def scaled_to(self, size: float) -> "Target":
@@ -191,17 +194,32 @@ class Target:
         return float(max(0.0, dist.max() - spacing)) / self.size
 
     # ----------------------------------------------------------- projection
-    def _trees(self):
-        if self._arc_trees is None:
-            trees = []
+    def _arc_index(self):
+        """``(tree, params, lift, whole, a, b)``: one KD-tree over the dense samples of all four arcs, arc
+        ``s`` lifted to height ``s · lift``, and a tree of the whole curve, both in the frame of the curve
+        this one is a similar copy of (points there are ``(p - b) / a``).
+
+        A query lifted the same way finds the nearest sample of its own arc in one call: any two points
+        of the curve are closer than ``lift``, so a sample of another arc never wins (four trees cost four
+        queries). Copies made by :meth:`transformed` share the trees (building them cost more than the
+        whole 8x8 solve's projections).
+        """
+        owner, a, b = self._frame
+        if owner._arc_trees is None or not np.array_equal(owner._arc_trees[0], self.corners):
+            if not np.array_equal(owner.corners, self.corners):  # corners reassigned on a copy: own trees
+                self._frame = owner, a, b = self, 1.0, np.zeros(2)
+            lift = 4.0 * max(owner.size, 1e-300)
+            pts, params = [], []
             for s in range(4):
-                a, b = self.arc_range(s)
-                uu = np.mod(self._dense_u - a, 1.0) + a
-                sel = uu <= b
-                us = np.concatenate([uu[sel], [a, b]])
-                trees.append((cKDTree(self.point(us)), us))
-            self._arc_trees = trees
-        return self._arc_trees
+                lo, hi = owner.arc_range(s)
+                uu = np.mod(owner._dense_u - lo, 1.0) + lo
+                us = np.concatenate([uu[uu <= hi], [lo, hi]])
+                pts.append(np.column_stack([owner.point(us), np.full(len(us), s * lift)]))
+                params.append(us)
+            owner._arc_trees = (owner.corners.copy(), cKDTree(np.vstack(pts)), np.concatenate(params), lift,
+                                cKDTree(owner._dense))
+        _, tree, us, lift, whole = owner._arc_trees
+        return tree, us, lift, whole, a, b
 
     def project(self, p: np.ndarray, side: np.ndarray | None = None):
         """Foot points on the arcs of ``side`` (or the whole curve).
@@ -210,42 +228,12 @@ class Target:
         (positive outside) and its gradient with respect to ``p``.
         """
         p = np.asarray(p, dtype=float).reshape(-1, 2)
-        if side is None:
-            side_arr = np.full(len(p), -1)
-        else:
-            side_arr = np.asarray(side).reshape(-1)
-        u = np.empty(len(p))
-        lo = np.empty(len(p))
-        hi = np.empty(len(p))
-        for s in np.unique(side_arr):
-            sel = side_arr == s
-            if s < 0:
-                tree, us = cKDTree(self._dense), self._dense_u
-                a, b = -np.inf, np.inf
-            else:
-                tree, us = self._trees()[s]
-                a, b = self.arc_range(int(s))
-                # the foot may slide a little past the arc's ends: a tip at a split point is then measured
-                # to the curve itself, which is smooth there, not to a clamped end point (a cone in the
-                # distance, which turned Gauss-Newton's quadratic convergence into linear at corner tips)
-                pad = ARC_PAD * (b - a)
-                a, b = a - pad, b + pad
-            _, idx = tree.query(p[sel])
-            u[sel] = us[idx]
-            lo[sel], hi[sel] = a, b
-        if self.kind == "spline":
-            u = self._newton_foot(p, u, lo, hi)
-        else:
-            u = self._polyline_foot(p, u, lo, hi)
-        foot = self.point(u)
-        diff = p - foot
-        dist = np.linalg.norm(diff, axis=1)
-        n = self._normal(u, foot)
-        sgn = np.where((diff * n).sum(1) >= 0, 1.0, -1.0)
-        d = sgn * dist
-        safe = dist > 1e-13 * max(self.size, 1e-300)
-        grad = np.where(safe[:, None], sgn[:, None] * diff / np.where(safe, dist, 1.0)[:, None], n)
-        return u, foot, d, grad
+        return self.projector(np.full(len(p), -1) if side is None else side)(p)
+
+    def projector(self, side: np.ndarray) -> "Projector":
+        """:meth:`project` for points on fixed arcs ``side`` (-1: the whole curve), with the per-arc
+        bounds and lifted queries worked out once (a constraint family projects the same tips every call)."""
+        return Projector(self, np.asarray(side, dtype=np.int64).reshape(-1))
 
     def signed_distance(self, p: np.ndarray, side: np.ndarray | None = None) -> np.ndarray:
         return self.project(p, side)[2]
@@ -266,22 +254,37 @@ class Target:
             t = np.where(at_vertex[:, None] & (norm > 1e-12), mean / np.maximum(norm, 1e-300), t)
         return np.stack([t[:, 1], -t[:, 0]], -1)
 
+    def _spline_012(self, u: np.ndarray):
+        """Spline point and first two derivatives at ``u`` in [0, 1], from one piece lookup.
+
+        (Three ``PPoly`` calls each search the breakpoints again; the Newton foot needs all three.)
+        """
+        x, c = self._spline.x, self._spline.c
+        i = np.searchsorted(x[1:-1], u, side="right")  # the piece, 0 .. K-1 without clipping
+        a0, a1, a2, a3 = c[:, i]
+        t = (u - x[i])[:, None]
+        return ((a0 * t + a1) * t + a2) * t + a3, (3.0 * a0 * t + 2.0 * a1) * t + a2, 6.0 * a0 * t + 2.0 * a1
+
     def _newton_foot(self, p, u, lo, hi, iters: int = 8):
-        """Newton on d/du |γ(u) - p|² = 0, clamped to each point's arc; stops once every step is tiny."""
-        sp = self._spline
-        h = np.diff(self._u).min()
+        """Newton on d/du |γ(u) - p|² = 0, clamped to each point's arc: ``u, γ(u), γ'(u)``.
+
+        Quadratic convergence: after a step below 1e-6 h the foot is within ~1e-12 h, where the distance
+        is stationary in u, so the point and tangent come from the last evaluation moved by that step
+        (its square is below round-off).
+        """
+        h = self._h
         for _ in range(iters):
-            um = np.mod(u, 1.0)
-            g, d1, d2 = sp(um), sp(um, 1), sp(um, 2)
+            g, d1, d2 = self._spline_012(np.mod(u, 1.0))
             r = g - p
-            f = (d1 * r).sum(1)
-            fp = (d2 * r).sum(1) + (d1 * d1).sum(1)
-            step = np.where(fp > 0, -f / np.where(fp > 0, fp, 1.0), 0.0)
-            step = np.clip(step, -2 * h, 2 * h)
-            u = np.clip(u + step, lo, hi)
-            if np.abs(step).max(initial=0.0) <= 1e-12 * h:
-                break
-        return u
+            f = d1[:, 0] * r[:, 0] + d1[:, 1] * r[:, 1]
+            fp = d2[:, 0] * r[:, 0] + d2[:, 1] * r[:, 1] + d1[:, 0] ** 2 + d1[:, 1] ** 2
+            step = np.divide(-f, fp, out=np.zeros_like(f), where=fp > 0)
+            un = np.minimum(np.maximum(u + np.minimum(np.maximum(step, -2.0 * h), 2.0 * h), lo), hi)
+            du, u = (un - u)[:, None], un
+            if np.abs(step).max(initial=0.0) <= 1e-6 * h:
+                return u, g + d1 * du, d1 + d2 * du
+        g, d1, _ = self._spline_012(np.mod(u, 1.0))
+        return u, g, d1
 
     def _polyline_foot(self, p, u, lo, hi):
         K = len(self.points)
@@ -328,6 +331,56 @@ class Target:
         return {"name": self.name, "kind": self.kind, "points": self.points.tolist(),
                 "corners": self.corners.tolist(), "source": self.source,
                 "size_mm": self.size, "area_mm2": self.area}
+
+
+class Projector:
+    """Projection of points on fixed arcs onto a target (see :meth:`Target.project`)."""
+
+    def __init__(self, target: Target, side: np.ndarray):
+        self.target = target
+        self.side = side
+        self.whole = side < 0
+        lo, hi = np.full(len(side), -np.inf), np.full(len(side), np.inf)
+        on = ~self.whole
+        s = side[on]
+        a = target.corners[s]
+        b = target.corners[(s + 1) % 4] + (s == 3)
+        # the foot may slide a little past the arc's ends: a tip at a split point is then measured
+        # to the curve itself, which is smooth there, not to a clamped end point (a cone in the
+        # distance, which turned Gauss-Newton's quadratic convergence into linear at corner tips)
+        pad = ARC_PAD * (b - a)
+        lo[on], hi[on] = a - pad, b + pad
+        self.lo, self.hi = lo, hi
+        self.any_whole, self.all_whole = bool(self.whole.any()), bool(self.whole.all())
+
+    def __call__(self, p: np.ndarray):
+        """``(u, foot, d, n)`` as :meth:`Target.project` returns them."""
+        tgt = self.target
+        tree, us, lift, whole, a, b = tgt._arc_index()
+        q = (p - b) / a
+        if self.all_whole:
+            u = tgt._dense_u[whole.query(q)[1]]
+        elif self.any_whole:
+            u = np.empty(len(p))
+            u[self.whole] = tgt._dense_u[whole.query(q[self.whole])[1]]
+            on = ~self.whole
+            u[on] = us[tree.query(np.column_stack([q[on], self.side[on] * lift]))[1]]
+        else:
+            u = us[tree.query(np.column_stack([q, self.side * lift]))[1]]
+        if tgt.kind == "spline":
+            u, foot, d1 = tgt._newton_foot(p, u, self.lo, self.hi)
+            n = np.stack([d1[:, 1], -d1[:, 0]], -1)
+            n /= np.sqrt(n[:, 0] ** 2 + n[:, 1] ** 2)[:, None]
+        else:
+            u = tgt._polyline_foot(p, u, self.lo, self.hi)
+            foot = tgt.point(u)
+            n = tgt._normal(u, foot)
+        diff = p - foot
+        dist = np.sqrt(diff[:, 0] ** 2 + diff[:, 1] ** 2)
+        sgn = np.where(diff[:, 0] * n[:, 0] + diff[:, 1] * n[:, 1] >= 0, 1.0, -1.0)
+        safe = dist > 1e-13 * max(tgt.size, 1e-300)
+        grad = np.where(safe[:, None], (sgn / np.where(safe, dist, 1.0))[:, None] * diff, n)
+        return u, foot, sgn * dist, grad
 
 
 def _check_simple(dense: np.ndarray, name: str) -> None:
