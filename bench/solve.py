@@ -28,17 +28,11 @@ from scipy.optimize import minimize
 
 from fabkiri.cli.design_cmd import BIG_TILES
 from fabkiri.design import targets as T
-from fabkiri.design.solve import DesignRequest, _Problem, _ineq_values, design
+from fabkiri.design.solve import DesignRequest, _Problem, _ineq_values, design, single_thread_blas
 
 
 def _blas_limit():
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover
-        import contextlib
-
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
+    return single_thread_blas()
 
 
 def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):

@@ -326,3 +326,65 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
         rm = m.rows(m.state(p - e))[0]
         if len(rp) == len(r) == len(rm):
             assert np.abs((rp - rm) / (2 * h) - Jr[:, j]).max() <= 1e-5 * max(1.0, np.abs(Jr).max())
+
+
+def _merits(rows, cols, target, rho):
+    """The same reduced merit twice: the dense path (small lattices) and the sparse block path."""
+    from fabkiri.design import reduced as R
+    from fabkiri.design.solve import _Problem
+
+    prob = _Problem(DesignRequest(rows, cols, T.load_target(target, 100.0), rigid=True))
+    fam = prob.rigid_family
+    on_grid = R.grid_families(fam, prob.st, prob.families)
+    dense = R._Merit(fam, prob.families, prob.margin, 1e-3, rho, grid_families=on_grid)
+    saved = R.DENSE_JD
+    R.DENSE_JD = 0
+    try:
+        block = R._Merit(fam, prob.families, prob.margin, 1e-3, rho, grid_families=on_grid)
+    finally:
+        R.DENSE_JD = saved
+    assert dense._tiles is not None and block._tiles is None
+    return prob, fam, dense, block
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=hst.integers(0, 2**31 - 1), psi=hst.floats(0.05, 1.5), amp=hst.floats(0.0, 0.4),
+       hard=hst.booleans())
+def test_dense_reduced_rows_equal_the_block_rows(seed, psi, amp, hard):
+    """Tile-corner features with pair differences (and active-only inequality rows) give the same merit,
+    normal matrix, gradient and Jacobian as the sparse blocks, inequalities active or not."""
+    prob, fam, dense, block = _merits(5, 6, "heart", 1e2)
+    S, _ = fam.fit(prob.X0, np.pi / 4)
+    S = S + amp * np.random.default_rng(seed).normal(size=S.shape)
+    p = np.concatenate([S[:, 0], S[:, 1], [psi]])
+    a, b = dense.evaluate(p, hard), block.evaluate(p, hard)
+    assert a.gviol == pytest.approx(b.gviol, abs=1e-12)
+    assert len(a.r) == len(b.r)
+    assert float(a.r @ a.r) == pytest.approx(float(b.r @ b.r), rel=1e-12, abs=1e-14)
+    if not hard:
+        (Ha, ga), (Hb, gb) = a.normal(), b.normal()
+        assert np.abs(Ha - Hb).max() <= 1e-10 * max(1.0, np.abs(Hb).max())
+        assert np.abs(ga - gb).max() <= 1e-10 * max(1.0, np.abs(gb).max())
+    Ja, Jb = a.jacobian(), b.jacobian()
+    assert Ja.shape == Jb.shape
+    JJ = Jb.T @ Jb
+    assert np.abs(Ja.T @ Ja - JJ).max() <= 1e-10 * max(1.0, np.abs(JJ).max())
+    assert np.abs(Ja.T @ a.r - Jb.T @ b.r).max() <= 1e-10 * max(1.0, np.abs(Jb.T @ b.r).max())
+
+
+def test_dense_reduced_jacobian_matches_finite_differences():
+    prob, fam, dense, _ = _merits(6, 6, "ellipse", 1e4)
+    S, _ = fam.fit(prob.X0, np.pi / 4)
+    S = S + 0.2 * np.random.default_rng(3).normal(size=S.shape)  # some inequality rows active
+    p = np.concatenate([S[:, 0], S[:, 1], [0.001]])  # nearly closed: gap angles inside their margin
+    ev = dense.evaluate(p)
+    n_fit = len(prob.st.tip_nodes)
+    assert len(ev.r) > dense._tiles.diff.shape[0] + n_fit  # some inequality rows are active
+    J = ev.jacobian()
+    h = 1e-6
+    rng = np.random.default_rng(4)
+    for _ in range(3):
+        d = rng.normal(size=len(p))
+        rp, rm = dense.evaluate(p + h * d).r, dense.evaluate(p - h * d).r
+        assert len(rp) == len(rm) == len(ev.r)  # the active set did not change
+        assert np.abs((rp - rm) / (2 * h) - J @ d).max() <= 1e-5 * max(1.0, np.abs(J @ d).max())

@@ -172,9 +172,6 @@ class _Merit:
                 rs.append(s * v[act])
                 Js.append(s * self._node_jacobian(J, S, psi, act))
         t = self._tiles
-        if not hard:
-            rs.append(self.w * t.rows.residual(tc))
-            Js.append(self.w * t.regularizer_jacobian(tc))
         g = tc.cross.reshape(-1)
         gmin = min(gmin, float(g.min(initial=np.inf)))
         v = g - t.margin * (0.5 if hard else 1.0)
@@ -188,7 +185,15 @@ class _Merit:
         for Jb in Js:
             J[o:o + len(Jb), :Jb.shape[1]] = Jb  # grid blocks have no ψ column
             o += len(Jb)
-        return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, np.concatenate(rs) if rs else np.zeros(0), J)
+        ev = _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, None, J)
+        ev._other = np.concatenate(rs) if rs else np.zeros(0)
+        if hard:
+            ev._r = ev._other
+        else:  # the regulariser rows come last; their normal-matrix block is formed now, from the buffer
+            reg = self.w * t.rows.residual(tc)
+            ev._r = np.concatenate([ev._other, reg])
+            ev._reg = (tc, *t.regularizer_normal(tc, reg, self.w))
+        return ev
 
     def _node_jacobian(self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None) -> np.ndarray:
         """``∂r/∂p`` (dense) of node rows whose Jacobian is a stencil ``(nodes, grads)`` or a sparse matrix."""
@@ -256,21 +261,38 @@ class _TileShapeRows:
         self.rows = rows
         self.margin = margin
         n = quads.size
-        self.first = np.concatenate([rows.first, n + rows.first])
-        self.second = np.concatenate([rows.second, n + rows.second])
+        m = len(rows.first)
+        # Δ: row i of each half is corner first[i] minus corner second[i] (lengths: 0..n-1, angles: n..2n-1)
+        i = np.arange(2 * m)
+        first = np.concatenate([rows.first, n + rows.first])
+        second = np.concatenate([rows.second, n + rows.second])
+        self.diff = sparse.csr_matrix((np.r_[np.ones(2 * m), -np.ones(2 * m)], (np.r_[i, i], np.r_[first, second])),
+                                      shape=(2 * m, 2 * n))
+        self.laplacian = (self.diff.T @ self.diff).tocsr()
+        # reused by every evaluation: fresh megabyte-size temporaries cost page faults (16x16: 1.6 ms a call)
+        self._F = np.empty((2, *self.ZE.shape[:2], 2, self.ZE.shape[2]))
 
-    def regularizer_jacobian(self, tc: TileCorners) -> np.ndarray:
-        """``(2 m, 2 nf)``: length rows, then angle rows, as ``RegularizerRows.residual`` stacks them."""
+    def features(self, tc: TileCorners, out: np.ndarray | None = None) -> np.ndarray:
+        """``(2 n, 2 nf)``: ``∂ℓ/∂S`` of every tile corner, then ``∂θ/∂S`` (``n = 4 T``)."""
         T, _, nf = self.ZE.shape
         ZE, ZB = self.ZE, self.ZB
         e = tc.A / tc.length[..., None]
-        F = np.empty((2, T, 4, 2, nf))
-        F[0, :, :, 0] = e[..., 0, None] * ZE
-        F[0, :, :, 1] = e[..., 1, None] * ZE
-        F[1, :, :, 0] = tc.ga[..., 0, None] * ZE + tc.gb[..., 0, None] * ZB
-        F[1, :, :, 1] = tc.ga[..., 1, None] * ZE + tc.gb[..., 1, None] * ZB
-        F = F.reshape(8 * T, 2 * nf)
-        return self.rows.weight * (F[self.first] - F[self.second])
+        F = np.empty((2, T, 4, 2, nf)) if out is None else out
+        np.multiply(e[..., None], ZE[:, :, None, :], out=F[0])
+        np.multiply(tc.ga[..., None], ZE[:, :, None, :], out=F[1])
+        F[1] += tc.gb[..., None] * ZB[:, :, None, :]
+        return F.reshape(8 * T, 2 * nf)
+
+    def regularizer_jacobian(self, tc: TileCorners) -> np.ndarray:
+        """``(2 m, 2 nf)``: length rows, then angle rows, as ``RegularizerRows.residual`` stacks them."""
+        return self.rows.weight * (self.diff @ self.features(tc))
+
+    def regularizer_normal(self, tc: TileCorners, r: np.ndarray, scale: float):
+        """``JᵀJ`` and ``Jᵀ r`` of the rows ``scale · regulariser`` without forming ``J = w Δ F``:
+        ``w² Fᵀ (ΔᵀΔ) F`` and ``w Fᵀ Δᵀ r`` (a tile corner sits in up to four rows)."""
+        F = self.features(tc, self._F)
+        w = scale * self.rows.weight
+        return w * w * (F.T @ (self.laplacian @ F)), w * (F.T @ (self.diff.T @ r))
 
     def convexity_jacobian(self, tc: TileCorners, corners: np.ndarray) -> np.ndarray:
         """``∂ cross(A, B) / ∂S`` at flat corners ``corners`` (index ``4 t + k``)."""
@@ -289,6 +311,7 @@ class _Evaluation:
     def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, J=None):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
         self._r, self._J, self._blocks = r, J, None
+        self._reg = None  # dense path: (tile corners, JᵀJ, Jᵀr) of the regulariser rows, which follow J's
 
     @property
     def X(self) -> np.ndarray:
@@ -307,17 +330,28 @@ class _Evaluation:
 
     def normal(self):
         """Reduced Gauss-Newton matrix ``JᵀJ`` and gradient ``Jᵀr``."""
-        if self._J is not None:
-            return self._J.T @ self._J, self._J.T @ self._r
-        r, Jx, Jc = self._rows()
-        return self.merit.normal(r, Jx, Jc, self.p)
+        if self._J is None:
+            r, Jx, Jc = self._rows()
+            return self.merit.normal(r, Jx, Jc, self.p)
+        J = self._J
+        H, g = J.T @ J, J.T @ self._other
+        if self._reg is not None:
+            _, Hr, gr = self._reg
+            k = len(gr)
+            H[:k, :k] += Hr
+            g[:k] += gr
+        return H, g
 
     def jacobian(self) -> np.ndarray:
         """Dense ``∂r/∂p``."""
         if self._J is None:
             r, Jx, Jc = self._rows()
             self._J = self.merit.reduced_jacobian(Jx, Jc, self.p)
-        return self._J
+        if self._reg is None:
+            return self._J
+        t = self.merit._tiles
+        Jr = self.merit.w * t.regularizer_jacobian(self._reg[0])
+        return np.vstack([self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])])
 
 
 def fit_miss(fits: list[Family], X: np.ndarray) -> float:

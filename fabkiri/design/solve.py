@@ -41,9 +41,22 @@ from scipy.sparse.linalg import splu
 
 try:  # single-threaded BLAS: the solver's vector operations are too small to gain from threads, and on a
     # loaded machine OpenBLAS threads contend (measured: a 16k-vector dot took 1.7 ms instead of 7 µs)
-    from threadpoolctl import threadpool_limits
+    from threadpoolctl import ThreadpoolController
 except ImportError:  # pragma: no cover
-    threadpool_limits = None
+    ThreadpoolController = None
+_BLAS = None  # one controller per process: finding the loaded BLAS libraries costs ~1.3 ms a call
+
+
+def single_thread_blas():
+    """Context manager that limits BLAS to one thread (a no-op without threadpoolctl)."""
+    global _BLAS
+    if ThreadpoolController is None:  # pragma: no cover
+        import contextlib
+
+        return contextlib.nullcontext()
+    if _BLAS is None:
+        _BLAS = ThreadpoolController()
+    return _BLAS.limit(limits=1, user_api="blas")
 
 from ..errors import InputError
 from ..pattern import geometry
@@ -503,9 +516,7 @@ def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
 def design(req: DesignRequest, progress: bool = False) -> DesignResult:
     """Solve the inverse-design problem ``req``; never raises on non-convergence."""
     req.validate()
-    if threadpool_limits is None:  # pragma: no cover
-        return _design(req, progress)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_thread_blas():
         return _design(req, progress)
 
 
