@@ -67,6 +67,13 @@ def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray)
     return th, np.stack([v, a, b], -1), np.stack([-(ga + gb), ga, gb], 1)
 
 
+def cross_value(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """g = cross(x_a - x_h, x_b - x_h)."""
+    A = x[a] - x[h]
+    B = x[b] - x[h]
+    return A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
+
+
 def cross_term(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray):
     """g = cross(x_a - x_h, x_b - x_h) with its gradient (nodes h, a, b)."""
     A = x[a] - x[h]
@@ -97,6 +104,8 @@ class Family:
     dim: int = 2  # residual units: length**dim (2: squared-length forms, 1: lengths, 0: angles)
     meta: dict = field(default_factory=dict)
     nv: int = 0  # nodes in the node array (Jacobian columns / 2)
+    # optional x -> r without the gradients (inequalities are checked far more often than they are active)
+    res: object = None
 
     def __call__(self, x: np.ndarray):
         """Residuals ``r`` and their Jacobian (CSR)."""
@@ -107,7 +116,7 @@ class Family:
 
     def residual(self, x: np.ndarray) -> np.ndarray:
         """Residuals only (no Jacobian assembly)."""
-        return self.fn(x)[0]
+        return self.fn(x)[0] if self.res is None else self.res(x)
 
 
 # ------------------------------------------------------------------ stencils
@@ -239,7 +248,7 @@ def non_overlap(st: Stencils, nv: int) -> Family:
         g, nodes, gr = cross_term(x, hh, aa, bb)
         return g, (nodes, gr)
 
-    return Family("non_overlap", "ineq", fn, 2, nv=nv)
+    return Family("non_overlap", "ineq", fn, 2, nv=nv, res=lambda x: cross_value(x, hh, aa, bb))
 
 
 def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0) -> Family:
@@ -252,7 +261,8 @@ def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0)
         g, nodes, gr = cross_term(x, v, a, b)
         return g - margin, (nodes, gr)
 
-    return Family(name, "ineq", fn, 2, meta={"quads": quads, "margin": margin}, nv=nv)
+    return Family(name, "ineq", fn, 2, meta={"quads": quads, "margin": margin}, nv=nv,
+                  res=lambda x: cross_value(x, v, a, b) - margin)
 
 
 def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:

@@ -19,7 +19,8 @@ on the result and falls back to the full solver when a check fails.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import copy
+from dataclasses import replace
 
 import numpy as np
 from scipy import sparse
@@ -85,6 +86,12 @@ class _Merit:
             rows = reg.meta["rows"]
             if (2 * len(rows.first) + len(conv.meta["quads"]) * 4) * (2 * nf + 1) <= DENSE_JD:
                 self._tiles = _TileShapeRows(fam, conv.meta["quads"], rows, self.margin[conv.name])
+
+    def staged(self, rho: float, scaling: str) -> "_Merit":
+        """The same rows with another penalty weight and LM scaling (sharing every precomputed array)."""
+        new = copy.copy(self)
+        new.sq, new.scaling = float(np.sqrt(rho)), scaling
+        return new
 
     def unpack(self, p: np.ndarray):
         nf = self.nf
@@ -164,13 +171,13 @@ class _Merit:
                 node_rows(f, self.w)
         s = 1.0 if hard else self.sq
         for f in self.ineqs:
-            r, J = f.fn(X)
+            r = f.residual(X)
             gmin = min(gmin, float(r.min(initial=np.inf)))
             v = r - self.margin[f.name] * (0.5 if hard else 1.0)
             act = np.flatnonzero(v < 0)
-            if len(act):
+            if len(act):  # rarely: the gradients only now
                 rs.append(s * v[act])
-                Js.append(s * self._node_jacobian(J, S, psi, act))
+                Js.append(s * self._node_jacobian(f.fn(X)[1], S, psi, act))
         t = self._tiles
         g = tc.cross.reshape(-1)
         gmin = min(gmin, float(g.min(initial=np.inf)))
@@ -268,7 +275,8 @@ class _TileShapeRows:
         second = np.concatenate([rows.second, n + rows.second])
         self.diff = sparse.csr_matrix((np.r_[np.ones(2 * m), -np.ones(2 * m)], (np.r_[i, i], np.r_[first, second])),
                                       shape=(2 * m, 2 * n))
-        self.laplacian = (self.diff.T @ self.diff).tocsr()
+        self.diff_t = self.diff.T.tocsr()
+        self.laplacian = (self.diff_t @ self.diff).tocsr()
         # reused by every evaluation: fresh megabyte-size temporaries cost page faults (16x16: 1.6 ms a call)
         self._F = np.empty((2, *self.ZE.shape[:2], 2, self.ZE.shape[2]))
 
@@ -292,7 +300,7 @@ class _TileShapeRows:
         ``w² Fᵀ (ΔᵀΔ) F`` and ``w Fᵀ Δᵀ r`` (a tile corner sits in up to four rows)."""
         F = self.features(tc, self._F)
         w = scale * self.rows.weight
-        return w * w * (F.T @ (self.laplacian @ F)), w * (F.T @ (self.diff.T @ r))
+        return w * w * (F.T @ (self.laplacian @ F)), w * (F.T @ (self.diff_t @ r))
 
     def convexity_jacobian(self, tc: TileCorners, corners: np.ndarray) -> np.ndarray:
         """``∂ cross(A, B) / ∂S`` at flat corners ``corners`` (index ``4 t + k``)."""
@@ -448,7 +456,7 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
     for scaling in SCALINGS:
         p = p0
         for n, (rho, stall_tol, cap) in enumerate(STAGES):
-            merit = _Merit(fam, families, margin, reg_weight, rho, scaling if n == 0 else "marquardt", on_grid)
+            merit = judge.staged(rho, scaling if n == 0 else "marquardt")
             p, X, k = _lm(merit, p, min(cap, max_iter), stall_tol, log)
             iters[f"reduced_{scaling}_rho_{rho:g}"] = k
             fit_max = max((float(np.abs(f.residual(X)).max()) for f in merit.fits), default=0.0)

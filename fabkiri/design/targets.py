@@ -195,7 +195,7 @@ class Target:
 
     # ----------------------------------------------------------- projection
     def _arc_index(self):
-        """``(tree, params, lift, whole, a, b)``: one KD-tree over the dense samples of all four arcs, arc
+        """``(tree, params, lift, whole, whole_params, a, b)``: one KD-tree over samples of all four arcs, arc
         ``s`` lifted to height ``s · lift``, and a tree of the whole curve, both in the frame of the curve
         this one is a similar copy of (points there are ``(p - b) / a``).
 
@@ -210,16 +210,19 @@ class Target:
                 self._frame = owner, a, b = self, 1.0, np.zeros(2)
             lift = 4.0 * max(owner.size, 1e-300)
             pts, params = [], []
+            # seeds for the foot: 8 samples per interval, but about 2048 at most (a 1024-knot circle need
+            # not seed Newton from 8192; the tree's build was most of a small design's set-up)
+            seeds = owner._sample_params(int(np.clip(np.ceil(2048 / (len(owner._u) - 1)), 1, 8)))
             for s in range(4):
                 lo, hi = owner.arc_range(s)
-                uu = np.mod(owner._dense_u - lo, 1.0) + lo
+                uu = np.mod(seeds - lo, 1.0) + lo
                 us = np.concatenate([uu[uu <= hi], [lo, hi]])
                 pts.append(np.column_stack([owner.point(us), np.full(len(us), s * lift)]))
                 params.append(us)
             owner._arc_trees = (owner.corners.copy(), cKDTree(np.vstack(pts)), np.concatenate(params), lift,
-                                cKDTree(owner._dense))
-        _, tree, us, lift, whole = owner._arc_trees
-        return tree, us, lift, whole, a, b
+                                cKDTree(owner.point(seeds)), seeds)
+        _, tree, us, lift, whole, whole_u = owner._arc_trees
+        return tree, us, lift, whole, whole_u, a, b
 
     def project(self, p: np.ndarray, side: np.ndarray | None = None):
         """Foot points on the arcs of ``side`` (or the whole curve).
@@ -278,7 +281,7 @@ class Target:
             r = g - p
             f = d1[:, 0] * r[:, 0] + d1[:, 1] * r[:, 1]
             fp = d2[:, 0] * r[:, 0] + d2[:, 1] * r[:, 1] + d1[:, 0] ** 2 + d1[:, 1] ** 2
-            step = np.divide(-f, fp, out=np.zeros_like(f), where=fp > 0)
+            step = -f / np.where(fp > 0, fp, np.inf)  # no step where the curve turns away
             un = np.minimum(np.maximum(u + np.minimum(np.maximum(step, -2.0 * h), 2.0 * h), lo), hi)
             du, u = (un - u)[:, None], un
             if np.abs(step).max(initial=0.0) <= 1e-6 * h:
@@ -356,13 +359,13 @@ class Projector:
     def __call__(self, p: np.ndarray):
         """``(u, foot, d, n)`` as :meth:`Target.project` returns them."""
         tgt = self.target
-        tree, us, lift, whole, a, b = tgt._arc_index()
+        tree, us, lift, whole, whole_u, a, b = tgt._arc_index()
         q = (p - b) / a
         if self.all_whole:
-            u = tgt._dense_u[whole.query(q)[1]]
+            u = whole_u[whole.query(q)[1]]
         elif self.any_whole:
             u = np.empty(len(p))
-            u[self.whole] = tgt._dense_u[whole.query(q[self.whole])[1]]
+            u[self.whole] = whole_u[whole.query(q[self.whole])[1]]
             on = ~self.whole
             u[on] = us[tree.query(np.column_stack([q[on], self.side[on] * lift]))[1]]
         else:

@@ -8,6 +8,7 @@ from the tiles on first use and cached; it is never stored.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
@@ -22,6 +23,25 @@ from .topology import STATES, Topology, derive_topology
 def _readonly(a: np.ndarray) -> np.ndarray:
     a.setflags(write=False)
     return a
+
+
+_TOPOLOGIES: OrderedDict = OrderedDict()  # (tiles bytes, shape, nodes, parity) -> Topology, newest last
+_TOPOLOGY_CACHE = 8
+
+
+def _topology(tiles: np.ndarray, n_nodes: int, parity: int) -> Topology:
+    """``derive_topology``, memoised on the tiles' contents: a pattern and its copies (new states, a
+    designed pattern on the standard lattice's tiles) share one topology instead of deriving it again."""
+    key = (tiles.tobytes(), tiles.shape, n_nodes, parity)
+    top = _TOPOLOGIES.get(key)
+    if top is None:
+        top = derive_topology(tiles, n_nodes, parity)  # raises on a bad pattern: nothing is cached
+        _TOPOLOGIES[key] = top
+        if len(_TOPOLOGIES) > _TOPOLOGY_CACHE:
+            _TOPOLOGIES.popitem(last=False)
+    else:
+        _TOPOLOGIES.move_to_end(key)
+    return top
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +109,7 @@ class Pattern:
 
     @cached_property
     def topology(self) -> Topology:
-        return derive_topology(self.tiles, len(self.nodes), self.parity)
+        return _topology(self.tiles, len(self.nodes), self.parity)
 
     @property
     def n_tiles(self) -> int:
