@@ -127,14 +127,14 @@ class _Merit:
                     rs.append(self.w * r)
                     Js.append(self.w * J)
             for f in ineqs:
-                r, J = f(arr)
+                r = f.residual(arr)
                 m = self.margin[f.name] * (0.5 if hard else 1.0)
                 v = r - m
                 act = np.flatnonzero(v < 0)
-                if len(act):
+                if len(act):  # the Jacobian only for active rows
                     s = 1.0 if hard else self.sq
                     rs.append(s * v[act])
-                    Js.append(s * J[act])
+                    Js.append(s * f(arr)[1][act])
             n = 2 * len(arr)
             blocks.append((np.concatenate(rs) if rs else np.zeros(0),
                            sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n))))
@@ -214,14 +214,24 @@ class _Merit:
         J = sparse.csr_matrix(J)
         return (J if rows is None else J[rows]) @ self.fam.jacobian(S, psi)
 
+    def _touched(self, Jx, p: np.ndarray):
+        """``Jx`` on the columns of the nodes its rows touch and ``∂x/∂p`` at those nodes only: the node rows
+        (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix is 540 MB at
+        128x128."""
+        nodes = np.unique(Jx.indices // 2)
+        cols = np.stack([2 * nodes, 2 * nodes + 1], 1).reshape(-1)
+        D = self.fam.jacobian_at(*self.unpack(p), nodes).reshape(2 * len(nodes), -1)
+        return Jx[:, cols], D
+
     def reduced_jacobian(self, Jx, Jc, p: np.ndarray) -> np.ndarray:
         """Dense ∂r/∂p of the stacked rows."""
-        return np.vstack([Jx @ self.fam.jacobian(*self.unpack(p)), self._grid_to_p(Jc)])
+        Js, D = self._touched(Jx, p)
+        return np.vstack([Js @ D, self._grid_to_p(Jc)])
 
     def normal(self, r: np.ndarray, Jx, Jc, p: np.ndarray):
         """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
         nx = Jx.shape[0]
-        Hx, gx = _normal(Jx, r[:nx], self.fam.jacobian(*self.unpack(p)))
+        Hx, gx = _normal(*self._touched(Jx, p), r[:nx])
         Hc, gc = self._grid_normal(Jc, r[nx:])
         return Hx + Hc, gx + gc
 
@@ -372,7 +382,7 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
 DENSE_JD = 4e6
 
 
-def _normal(J: sparse.csr_matrix, r: np.ndarray, D: np.ndarray):
+def _normal(J: sparse.csr_matrix, D: np.ndarray, r: np.ndarray):
     """Reduced Gauss-Newton matrix ``Dᵀ JᵀJ D`` and gradient ``Dᵀ Jᵀ r``."""
     if J.shape[0] * D.shape[1] <= DENSE_JD:
         JD = J @ D
