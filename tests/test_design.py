@@ -143,6 +143,37 @@ def test_arc_feet_pass_the_split_points_smoothly():
                 assert got == pytest.approx(np.hypot(*p) - 2.0, abs=1e-9)
 
 
+@settings(max_examples=25, deadline=None)
+@given(name=hst.sampled_from(["circle", "ellipse", "superellipse", "hexagon", "star"]),
+       scale=hst.floats(0.05, 20.0), sx=hst.floats(-5, 5), sy=hst.floats(-5, 5), seed=hst.integers(0, 2**31 - 1))
+def test_projection_finds_the_nearest_point_of_each_arc(name, scale, sx, sy, seed):
+    """One lifted KD-tree for all four arcs, shared by a scaled and shifted copy, seeds each point's foot on
+    its own arc: the foot is as near as the nearest of 20 000 samples of that (padded) arc."""
+    base = T.load_target(name, 1.0)
+    base.project(np.zeros((1, 2)), np.array([0]))  # the copy below shares the trees the base built
+    tgt = base.transformed(scale, (sx, sy))
+    rng = np.random.default_rng(seed)
+    side = rng.integers(0, 4, 24)
+    u = np.array([rng.uniform(*tgt.arc_range(s)) for s in side])
+    t = tgt.tangent(u)
+    p = tgt.point(u) + rng.uniform(-0.1, 0.1, (len(u), 1)) * scale * np.stack([t[:, 1], -t[:, 0]], -1)
+    away = np.zeros(len(side), dtype=bool)
+    away[::3] = True  # a third sit on another arc than their own: a seed from the wrong arc would show there
+    side[away] = (side[away] + rng.integers(1, 4, away.sum())) % 4
+    _, foot, d, _ = tgt.project(p, side)
+    for s in range(4):
+        lo, hi = tgt.arc_range(s)
+        pad = T.ARC_PAD * (hi - lo)
+        for sel, a, b in ((~away & (side == s), lo - pad, hi + pad), (away & (side == s), lo, hi)):
+            if sel.any():
+                samples = tgt.point(np.linspace(a, b, 20_000))
+                brute = np.linalg.norm(p[sel, None, :] - samples[None], axis=2).min(1)
+                assert (np.abs(d[sel]) <= brute + 1e-9 * scale).all()
+                if a < lo:  # near its own arc the foot is the nearest point of the padded arc
+                    assert (np.abs(d[sel]) >= brute - 1e-4 * scale).all()  # the samples' spacing, squared
+    assert np.allclose(np.linalg.norm(p - foot, axis=1), np.abs(d))
+
+
 def test_user_targets(tmp_path):
     csv = tmp_path / "shape.csv"
     csv.write_text("x,y\n0,0\n40,0\n40,20\n0,20\n")

@@ -36,17 +36,17 @@ class TileCorners:
     gb: np.ndarray
 
 
-_NEXT = np.array([1, 2, 3, 0])
-_PREV = np.array([3, 0, 1, 2])
+NEXT = np.array([1, 2, 3, 0])  # the corner after / before corner k of a CCW quad
+PREV = np.array([3, 0, 1, 2])
 
 
 def tile_corners(x: np.ndarray, quads: np.ndarray) -> TileCorners:
     P = x[quads]
-    A = P[:, _NEXT] - P
-    B = P[:, _PREV] - P
+    A = P[:, NEXT] - P
+    B = P[:, PREV] - P
     Ax, Ay, Bx, By = A[..., 0], A[..., 1], B[..., 0], B[..., 1]
     la2 = Ax * Ax + Ay * Ay
-    lb2 = la2[:, _PREV]
+    lb2 = la2[:, PREV]
     cr = Ax * By - Ay * Bx
     th = np.mod(np.arctan2(cr, Ax * Bx + Ay * By), TWO_PI)
     ga = np.empty_like(A)

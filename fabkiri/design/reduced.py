@@ -26,7 +26,7 @@ import numpy as np
 from scipy import sparse
 
 from .constraints import Family, Stencils, convexity
-from .objective import _NEXT, _PREV, RegularizerRows, TileCorners, regularizer, tile_corners
+from .objective import NEXT, PREV, RegularizerRows, TileCorners, regularizer, tile_corners
 from .rigid import RigidFamily
 
 # (penalty weight, stall tolerance, iteration cap) per stage, softest first as in the full solver: a stiff
@@ -192,15 +192,13 @@ class _Merit:
         for Jb in Js:
             J[o:o + len(Jb), :Jb.shape[1]] = Jb  # grid blocks have no ψ column
             o += len(Jb)
-        ev = _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, None, J)
-        ev._other = np.concatenate(rs) if rs else np.zeros(0)
-        if hard:
-            ev._r = ev._other
-        else:  # the regulariser rows come last; their normal-matrix block is formed now, from the buffer
-            reg = self.w * t.rows.residual(tc)
-            ev._r = np.concatenate([ev._other, reg])
-            ev._reg = (tc, *t.regularizer_normal(tc, reg, self.w))
-        return ev
+        r = np.concatenate(rs) if rs else np.zeros(0)
+        reg = None
+        if not hard:  # the regulariser rows come last; their normal-matrix block is formed now, from the buffer
+            rr = self.w * t.rows.residual(tc)
+            r = np.concatenate([r, rr])
+            reg = (tc, *t.regularizer_normal(tc, rr, self.w))
+        return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, r, J, reg)
 
     def _node_jacobian(self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None) -> np.ndarray:
         """``∂r/∂p`` (dense) of node rows whose Jacobian is a stencil ``(nodes, grads)`` or a sparse matrix."""
@@ -273,8 +271,8 @@ class _TileShapeRows:
     def __init__(self, fam: RigidFamily, quads: np.ndarray, rows: RegularizerRows, margin: float):
         Z = fam.Z
         self.quads = quads
-        self.ZE = Z[quads[:, _NEXT]] - Z[quads]
-        self.ZB = Z[quads[:, _PREV]] - Z[quads]
+        self.ZE = Z[quads[:, NEXT]] - Z[quads]
+        self.ZB = Z[quads[:, PREV]] - Z[quads]
         self.rows = rows
         self.margin = margin
         n = quads.size
@@ -322,14 +320,14 @@ class _TileShapeRows:
 class _Evaluation:
     """The merit (or hard-fit) rows of one member ``p`` and, on demand, its normal matrix or Jacobian.
 
-    The dense path hands over ``r`` and the dense ``J``; the block path computes its sparse rows only
-    when asked (a step refused for a new inequality violation needs none).
+    The dense path hands over all rows ``r``, the dense Jacobian ``J`` of the first ``len(J)`` of them
+    and, for the regulariser rows after those, ``reg = (tile corners, JᵀJ, Jᵀr)``; the block path
+    computes its sparse rows only when asked (a step refused for a new inequality violation needs none).
     """
 
-    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, J=None):
+    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, J=None, reg=None):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
-        self._r, self._J, self._blocks = r, J, None
-        self._reg = None  # dense path: (tile corners, JᵀJ, Jᵀr) of the regulariser rows, which follow J's
+        self._r, self._J, self._reg, self._blocks = r, J, reg, None
 
     @property
     def X(self) -> np.ndarray:
@@ -352,7 +350,7 @@ class _Evaluation:
             r, Jx, Jc = self._rows()
             return self.merit.normal(r, Jx, Jc, self.p)
         J = self._J
-        H, g = J.T @ J, J.T @ self._other
+        H, g = J.T @ J, J.T @ self._r[:len(J)]
         if self._reg is not None:
             _, Hr, gr = self._reg
             k = len(gr)

@@ -44,6 +44,18 @@ try:  # single-threaded BLAS: the solver's vector operations are too small to ga
     from threadpoolctl import ThreadpoolController
 except ImportError:  # pragma: no cover
     ThreadpoolController = None
+
+from ..errors import InputError
+from ..pattern import geometry
+from ..pattern.lattice import standard_pattern
+from ..pattern.model import Pattern
+from . import constraints as C
+from .initial import coarse_tile_map, initial_guess
+from .objective import energy, regularizer
+from .reduced import fit_miss, solve_reduced
+from .rigid import RigidFamily, resample_grid
+from .targets import Target
+
 _BLAS = None  # one controller per process: finding the loaded BLAS libraries costs ~1.3 ms a call
 
 
@@ -58,16 +70,6 @@ def single_thread_blas():
         _BLAS = ThreadpoolController()
     return _BLAS.limit(limits=1, user_api="blas")
 
-from ..errors import InputError
-from ..pattern import geometry
-from ..pattern.lattice import standard_pattern
-from ..pattern.model import Pattern
-from . import constraints as C
-from .initial import coarse_tile_map, initial_guess
-from .objective import energy, regularizer
-from .reduced import fit_miss, solve_reduced
-from .rigid import RigidFamily, resample_grid
-from .targets import Target
 
 CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay > ~1° from 0 and π
 GAP_MARGIN = 0.005  # gap angles at hinges: the penalty acts before the hard limit g >= 0 stops a step

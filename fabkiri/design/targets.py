@@ -175,6 +175,7 @@ class Target:
         new._bbox = (self._bbox[0] * scale + shift, self._bbox[1] * scale + shift)
         owner, a, b = self._frame
         new._frame = (owner, a * scale, b * scale + shift)  # a similarity keeps nearest samples: share the trees
+        new._arc_trees = None  # used only if the copy's corners are changed and it builds trees of its own
         return new
 
     def scaled_to(self, size: float) -> "Target":
