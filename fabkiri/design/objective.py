@@ -41,6 +41,7 @@ PREV = np.array([3, 0, 1, 2])
 
 
 def tile_corners(x: np.ndarray, quads: np.ndarray) -> TileCorners:
+    """:class:`TileCorners` of the quads ``x[quads]`` (the same formulas as ``constraints.corner_angle``)."""
     P = x[quads]
     A = P[:, NEXT] - P
     B = P[:, PREV] - P
@@ -66,9 +67,9 @@ class RegularizerRows:
     weight: float
 
     def residual(self, tc: TileCorners) -> np.ndarray:
-        l, th = tc.length.reshape(-1), tc.theta.reshape(-1)
+        ln, th = tc.length.reshape(-1), tc.theta.reshape(-1)
         i, j, w = self.first, self.second, self.weight
-        return w * np.concatenate([l[i] - l[j], wrap_angle(th[i] - th[j])])
+        return w * np.concatenate([ln[i] - ln[j], wrap_angle(th[i] - th[j])])
 
 
 def regularizer_rows(st: Stencils) -> RegularizerRows:
