@@ -62,6 +62,21 @@ def test_jacobians_match_finite_differences(seed):
             assert np.allclose(Jd[:, c], fd, atol=2e-6, rtol=1e-5), (f.name, c, np.abs(Jd[:, c] - fd).max())
 
 
+@settings(max_examples=10, deadline=None)
+@given(seed=hst.integers(0, 2**31 - 1), amp=hst.floats(0.0, 0.3))
+def test_residual_only_paths_equal_the_full_evaluation(seed, amp):
+    """Families with a residual-only shortcut (``Family.res``: edge pairs, angle sums, cross-product
+    inequalities) give exactly the residuals of their full evaluation."""
+    fams, X, _ = _families()
+    X = X + amp * np.random.default_rng(seed).normal(size=X.shape)
+    checked = 0
+    for f in fams:
+        if f.res is not None:
+            assert np.array_equal(f.residual(X), f.fn(X)[0]), f.name
+            checked += 1
+    assert checked >= 8
+
+
 def test_standard_pattern_satisfies_every_equality():
     """The standard lattice is rigid-deployable and closes into rectangles of ratio N/M in both states."""
     rows, cols = 4, 6

@@ -84,6 +84,13 @@ def cross_term(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray):
     return g, np.stack([h, a, b], -1), np.stack([-(ga + gb), ga, gb], 1)
 
 
+def sqlen_value(x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """½(|x_q - x_p|² - |x_v - x_u|²)."""
+    E = x[q] - x[p]
+    F = x[v] - x[u]
+    return 0.5 * ((E * E).sum(1) - (F * F).sum(1))
+
+
 def sqlen_diff(x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray):
     """½(|x_q - x_p|² - |x_v - x_u|²) with its gradient (nodes p, q, u, v)."""
     E = x[q] - x[p]
@@ -183,7 +190,7 @@ def edge_pairs(st: Stencils, state: int, nv: int, hinges: np.ndarray | None = No
         r, nodes, g = sqlen_diff(x, h, a, h, b)
         return r, (nodes, g)
 
-    return Family(f"edge_pairs_{state}", "eq", fn, 2, nv=nv)
+    return Family(f"edge_pairs_{state}", "eq", fn, 2, nv=nv, res=lambda x: sqlen_value(x, h, a, h, b))
 
 
 def notch_pairs(st: Stencils, state: int, nv: int) -> Family:
@@ -214,13 +221,21 @@ def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, targe
                kind: str = "eq") -> Family:
     """Σ_j θ_{t[i,j]}(k[i,j]) - target[i] (wrapped), ``t``/``k`` of shape ``(m, q)``."""
     m, q = t.shape
+    tt, kk = t.ravel(), k.ravel()
+    v, a, b = tiles[tt, kk], tiles[tt, (kk + 1) % 4], tiles[tt, (kk + 3) % 4]
 
     def fn(x):
-        th, nodes, g = corner_angle(x, tiles, t.ravel(), k.ravel())
+        th, nodes, g = corner_angle(x, tiles, tt, kk)
         r = wrap_angle(th.reshape(m, q).sum(1) - target)
         return r, (nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
 
-    return Family(name, kind, fn, 0, nv=nv)
+    def res(x):  # corner_angle's θ without its gradients
+        A = x[a] - x[v]
+        B = x[b] - x[v]
+        th = np.mod(np.arctan2(A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0], A[:, 0] * B[:, 0] + A[:, 1] * B[:, 1]), TWO_PI)
+        return wrap_angle(th.reshape(m, q).sum(1) - target)
+
+    return Family(name, kind, fn, 0, nv=nv, res=res)
 
 
 def rings(st: Stencils, state: int, nv: int) -> Family:
