@@ -24,7 +24,7 @@ import numpy as np
 from scipy import sparse
 
 from ..errors import InputError, SolveError
-from ..pattern.geometry import wrap_angle
+from ..pattern.geometry import cross2, signed_angle, wrap_angle
 from ..pattern.lattice import DX, DY
 from ..pattern.model import Pattern
 from .targets import Target
@@ -68,10 +68,8 @@ def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray)
 
 
 def cross_value(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """g = cross(x_a - x_h, x_b - x_h)."""
-    A = x[a] - x[h]
-    B = x[b] - x[h]
-    return A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
+    """g = cross(x_a - x_h, x_b - x_h) (``cross_term`` without the gradient)."""
+    return cross2(x[a] - x[h], x[b] - x[h])
 
 
 def cross_term(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray):
@@ -230,9 +228,7 @@ def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, targe
         return r, (nodes.reshape(m, 3 * q), g.reshape(m, 3 * q, 2))
 
     def res(x):  # corner_angle's θ without its gradients
-        A = x[a] - x[v]
-        B = x[b] - x[v]
-        th = np.mod(np.arctan2(A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0], A[:, 0] * B[:, 0] + A[:, 1] * B[:, 1]), TWO_PI)
+        th = np.mod(signed_angle(x[a] - x[v], x[b] - x[v]), TWO_PI)
         return wrap_angle(th.reshape(m, q).sum(1) - target)
 
     return Family(name, kind, fn, 0, nv=nv, res=res)
@@ -276,7 +272,7 @@ def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0)
         g, nodes, gr = cross_term(x, v, a, b)
         return g - margin, (nodes, gr)
 
-    return Family(name, "ineq", fn, 2, meta={"quads": quads, "margin": margin}, nv=nv,
+    return Family(name, "ineq", fn, 2, meta={"quads": quads}, nv=nv,
                   res=lambda x: cross_value(x, v, a, b) - margin)
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..pattern.geometry import wrap_angle
+from ..pattern.geometry import cross2, dot2, wrap_angle
 from .constraints import TWO_PI, Family, Stencils, regularizer_pairs
 
 
@@ -46,10 +46,10 @@ def tile_corners(x: np.ndarray, quads: np.ndarray) -> TileCorners:
     A = P[:, NEXT] - P
     B = P[:, PREV] - P
     Ax, Ay, Bx, By = A[..., 0], A[..., 1], B[..., 0], B[..., 1]
-    la2 = Ax * Ax + Ay * Ay
+    la2 = dot2(A, A)
     lb2 = la2[:, PREV]
-    cr = Ax * By - Ay * Bx
-    th = np.mod(np.arctan2(cr, Ax * Bx + Ay * By), TWO_PI)
+    cr = cross2(A, B)
+    th = np.mod(np.arctan2(cr, dot2(A, B)), TWO_PI)  # geometry.signed_angle, keeping its cross product
     ga = np.empty_like(A)
     ga[..., 0], ga[..., 1] = Ay / la2, -Ax / la2
     gb = np.empty_like(B)

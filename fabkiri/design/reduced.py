@@ -157,12 +157,10 @@ class _Merit:
         rs, Js = [], []
         gmin = np.inf
 
-        def node_rows(f, scale=1.0, rows=None):
+        def node_rows(f, scale=1.0):
             r, J = f.fn(X)
-            if rows is not None:
-                r = r[rows]
             rs.append(scale * r)
-            Js.append(scale * self._node_jacobian(J, S, psi, rows))
+            Js.append(scale * self._node_jacobian(J, S, psi))
 
         for f in self.fits:
             node_rows(f)
@@ -201,16 +199,14 @@ class _Merit:
         return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, r, J, reg)
 
     def _node_jacobian(self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None) -> np.ndarray:
-        """``∂r/∂p`` (dense) of node rows whose Jacobian is a stencil ``(nodes, grads)`` or a sparse matrix."""
-        if isinstance(J, tuple):
-            nodes, grads = J
-            if rows is not None:
-                nodes, grads = nodes[rows], grads[rows]
-            m, k = nodes.shape
-            D = self.fam.jacobian_at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
-            return np.einsum("mkd,mkdp->mp", grads, D)
-        J = sparse.csr_matrix(J)
-        return (J if rows is None else J[rows]) @ self.fam.jacobian(S, psi)
+        """``∂r/∂p`` (dense) of node rows from their stencil Jacobian ``(nodes, grads)`` (what the fit and
+        inequality families return), through ``∂x/∂p`` at those nodes only."""
+        nodes, grads = J
+        if rows is not None:
+            nodes, grads = nodes[rows], grads[rows]
+        m, k = nodes.shape
+        D = self.fam.jacobian_at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
+        return np.einsum("mkd,mkdp->mp", grads, D)
 
     def _touched(self, Jx, p: np.ndarray):
         """``Jx`` on the columns of the nodes its rows touch and ``∂x/∂p`` at those nodes only: the node rows

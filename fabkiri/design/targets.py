@@ -26,6 +26,7 @@ from scipy.interpolate import CubicSpline, PPoly
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..pattern.geometry import dot2
 from ..templates import template_dir
 
 SIDES = ("B", "R", "T", "L")  # CCW order of the arcs; side index 0..3
@@ -280,8 +281,8 @@ class Target:
         for _ in range(iters):
             g, d1, d2 = self._spline_012(np.mod(u, 1.0))
             r = g - p
-            f = d1[:, 0] * r[:, 0] + d1[:, 1] * r[:, 1]
-            fp = d2[:, 0] * r[:, 0] + d2[:, 1] * r[:, 1] + d1[:, 0] ** 2 + d1[:, 1] ** 2
+            f = dot2(d1, r)
+            fp = dot2(d2, r) + dot2(d1, d1)
             step = -f / np.where(fp > 0, fp, np.inf)  # no step where the curve turns away
             un = np.minimum(np.maximum(u + np.minimum(np.maximum(step, -2.0 * h), 2.0 * h), lo), hi)
             du, u = (un - u)[:, None], un
@@ -374,14 +375,14 @@ class Projector:
         if tgt.kind == "spline":
             u, foot, d1 = tgt._newton_foot(p, u, self.lo, self.hi)
             n = np.stack([d1[:, 1], -d1[:, 0]], -1)
-            n /= np.sqrt(n[:, 0] ** 2 + n[:, 1] ** 2)[:, None]
+            n /= np.sqrt(dot2(n, n))[:, None]
         else:
             u = tgt._polyline_foot(p, u, self.lo, self.hi)
             foot = tgt.point(u)
             n = tgt._normal(u, foot)
         diff = p - foot
-        dist = np.sqrt(diff[:, 0] ** 2 + diff[:, 1] ** 2)
-        sgn = np.where(diff[:, 0] * n[:, 0] + diff[:, 1] * n[:, 1] >= 0, 1.0, -1.0)
+        dist = np.sqrt(dot2(diff, diff))
+        sgn = np.where(dot2(diff, n) >= 0, 1.0, -1.0)
         safe = dist > 1e-13 * max(tgt.size, 1e-300)
         grad = np.where(safe[:, None], (sgn / np.where(safe, dist, 1.0))[:, None] * diff, n)
         return u, foot, sgn * dist, grad
