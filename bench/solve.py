@@ -39,10 +39,6 @@ from fabkiri.design import targets as T
 from fabkiri.design.solve import DesignRequest, _Problem, _ineq_values, design, single_thread_blas
 
 
-def _blas_limit():
-    return single_thread_blas()
-
-
 def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
     """The same rigid circle problem with scipy's dense SLSQP.
 
@@ -100,7 +96,7 @@ def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
         return np.vstack([f(x.reshape(shape))[1].toarray() for f in ineqs])
 
     t0 = time.perf_counter()
-    with _blas_limit():  # same BLAS threading as design() (single thread), so the ratio compares solvers
+    with single_thread_blas():  # same BLAS threading as design() (single thread), so the ratio compares solvers
         res = minimize(obj, prob.X0.reshape(-1), jac=obj_grad, method="SLSQP",
                        constraints=[{"type": "eq", "fun": ceq, "jac": ceq_j},
                                     {"type": "ineq", "fun": cin, "jac": cin_j}],

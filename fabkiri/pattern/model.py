@@ -8,9 +8,8 @@ from the tiles on first use and cached; it is never stored.
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Any
 
 import numpy as np
@@ -25,23 +24,12 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
-_TOPOLOGIES: OrderedDict = OrderedDict()  # (tiles bytes, shape, nodes, parity) -> Topology, newest last
-_TOPOLOGY_CACHE = 8
-
-
-def _topology(tiles: np.ndarray, n_nodes: int, parity: int) -> Topology:
-    """``derive_topology``, memoised on the tiles' contents: a pattern and its copies (new states, a
-    designed pattern on the standard lattice's tiles) share one topology instead of deriving it again."""
-    key = (tiles.tobytes(), tiles.shape, n_nodes, parity)
-    top = _TOPOLOGIES.get(key)
-    if top is None:
-        top = derive_topology(tiles, n_nodes, parity)  # raises on a bad pattern: nothing is cached
-        _TOPOLOGIES[key] = top
-        if len(_TOPOLOGIES) > _TOPOLOGY_CACHE:
-            _TOPOLOGIES.popitem(last=False)
-    else:
-        _TOPOLOGIES.move_to_end(key)
-    return top
+@lru_cache(maxsize=8)
+def _topology(tiles: bytes, shape: tuple, n_nodes: int, parity: int) -> Topology:
+    """``derive_topology`` memoised on the tiles' contents: a pattern and its copies (new states, a designed
+    pattern on the standard lattice's tiles) share one topology instead of deriving it again. A bad
+    pattern raises, and nothing is cached."""
+    return derive_topology(np.frombuffer(tiles, dtype=np.int64).reshape(shape), n_nodes, parity)
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,7 +97,7 @@ class Pattern:
 
     @cached_property
     def topology(self) -> Topology:
-        return _topology(self.tiles, len(self.nodes), self.parity)
+        return _topology(self.tiles.tobytes(), self.tiles.shape, len(self.nodes), self.parity)
 
     @property
     def n_tiles(self) -> int:
