@@ -72,12 +72,6 @@ class _Merit:
         self.sq = float(np.sqrt(rho))
         self.scaling = scaling
         G, nf = fam.Z.shape
-        self._C = None  # ∂c/∂p, dense only while small (column slicing of Jc costs more there)
-        if 2 * G * (2 * nf + 1) <= DENSE_JD:
-            C = np.zeros((G, 2, 2 * nf + 1))
-            C[:, 0, :nf] = fam.Z
-            C[:, 1, nf:2 * nf] = fam.Z
-            self._C = C.reshape(2 * G, 2 * nf + 1)
         # the dense path needs the grid families to be exactly the regulariser and tile convexity
         self._tiles = None
         names = [f.name for f in self.grid_regs] + [f.name for f in self.grid_ineqs]
@@ -86,6 +80,13 @@ class _Merit:
             rows = reg.meta["rows"]
             if (2 * len(rows.first) + len(conv.meta["quads"]) * 4) * (2 * nf + 1) <= DENSE_JD:
                 self._tiles = _TileShapeRows(fam, conv.meta["quads"], rows, self.margin[conv.name])
+        # block path: ∂c/∂p, dense only while small (column slicing of Jc costs more there)
+        self._C = None
+        if self._tiles is None and 2 * G * (2 * nf + 1) <= DENSE_JD:
+            C = np.zeros((G, 2, 2 * nf + 1))
+            C[:, 0, :nf] = fam.Z
+            C[:, 1, nf:2 * nf] = fam.Z
+            self._C = C.reshape(2 * G, 2 * nf + 1)
 
     def staged(self, rho: float, scaling: str) -> "_Merit":
         """The same rows with another penalty weight and LM scaling (sharing every precomputed array)."""

@@ -357,11 +357,13 @@ class Projector:
         lo[on], hi[on] = a - pad, b + pad
         self.lo, self.hi = lo, hi
         self.any_whole, self.all_whole = bool(self.whole.any()), bool(self.whole.all())
+        # the trees for these corners, fetched once (not on every call of a constraint family)
+        self.index = target._arc_index()
 
     def __call__(self, p: np.ndarray):
         """``(u, foot, d, n)`` as :meth:`Target.project` returns them."""
         tgt = self.target
-        tree, us, lift, whole, whole_u, a, b = tgt._arc_index()
+        tree, us, lift, whole, whole_u, a, b = self.index
         q = (p - b) / a
         if self.all_whole:
             u = whole_u[whole.query(q)[1]]
