@@ -103,17 +103,23 @@ class _Merit:
         S, psi = self.unpack(p)
         return self.fam.nodes(S, psi), self.fam.grid(S)
 
-    def ineq_violation(self, Xc) -> float:
+    def ineq_values(self, Xc) -> dict:
+        """Every inequality family's values ``g``, node families on ``X``, grid families on ``c``."""
         X, c = Xc
-        vals = [f.residual(X) for f in self.ineqs] + [f.residual(c) for f in self.grid_ineqs]
+        return {**{f.name: f.residual(X) for f in self.ineqs}, **{f.name: f.residual(c) for f in self.grid_ineqs}}
+
+    def ineq_violation(self, Xc, values: dict | None = None) -> float:
+        vals = (self.ineq_values(Xc) if values is None else values).values()
         return max(0.0, -min((float(v.min(initial=np.inf)) for v in vals), default=0.0))
 
-    def rows(self, Xc, hard: bool = False):
+    def rows(self, Xc, hard: bool = False, values: dict | None = None):
         """Residuals and Jacobians of the merit (or of the hard-fit rows): ``(r, Jx, Jc)``.
 
         ``r`` stacks the node rows (``Jx``, CSR over the nodes) and then the grid rows (``Jc``, over the grid).
+        ``values``: the inequality values of ``Xc`` when already known (``ineq_values``).
         """
         X, c = Xc
+        values = self.ineq_values(Xc) if values is None else values
         blocks = []
         for arr, fits, regs, ineqs in ((X, self.fits, self.regs, self.ineqs),
                                        (c, [], self.grid_regs, self.grid_ineqs)):
@@ -128,9 +134,8 @@ class _Merit:
                     rs.append(self.w * r)
                     Js.append(self.w * J)
             for f in ineqs:
-                r = f.residual(arr)
                 m = self.margin[f.name] * (0.5 if hard else 1.0)
-                v = r - m
+                v = values[f.name] - m
                 act = np.flatnonzero(v < 0)
                 if len(act):  # the Jacobian only for active rows
                     s = 1.0 if hard else self.sq
@@ -147,7 +152,8 @@ class _Merit:
         if self._tiles is not None:
             return self._evaluate_dense(p, hard)
         Xc = self.state(p)
-        return _Evaluation(self, p, Xc, self.ineq_violation(Xc), hard)
+        values = self.ineq_values(Xc)
+        return _Evaluation(self, p, Xc, self.ineq_violation(Xc, values), hard, values=values)
 
     def _evaluate_dense(self, p: np.ndarray, hard: bool) -> "_Evaluation":
         """The dense reduced Jacobian row block by row block: node rows through ``∂x/∂p`` at the nodes
@@ -322,9 +328,11 @@ class _Evaluation:
     computes its sparse rows only when asked (a step refused for a new inequality violation needs none).
     """
 
-    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, J=None, reg=None):
+    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, J=None, reg=None,
+                 values: dict | None = None):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
         self._r, self._J, self._reg, self._blocks = r, J, reg, None
+        self._values = values  # block path: the inequality values gviol came from, reused by the rows
 
     @property
     def X(self) -> np.ndarray:
@@ -332,7 +340,7 @@ class _Evaluation:
 
     def _rows(self):
         if self._blocks is None:
-            self._blocks = self.merit.rows(self.Xc, self.hard)
+            self._blocks = self.merit.rows(self.Xc, self.hard, self._values)
         return self._blocks
 
     @property
