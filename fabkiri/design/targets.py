@@ -260,15 +260,10 @@ class Target:
         return np.stack([t[:, 1], -t[:, 0]], -1)
 
     def _spline_012(self, u: np.ndarray):
-        """Spline point and first two derivatives at ``u`` in [0, 1], from one piece lookup.
-
-        (Three ``PPoly`` calls each search the breakpoints again; the Newton foot needs all three.)
-        """
-        x, c = self._spline.x, self._spline.c
-        i = np.searchsorted(x[1:-1], u, side="right")  # the piece, 0 .. K-1 without clipping
-        a0, a1, a2, a3 = c[:, i]
-        t = (u - x[i])[:, None]
-        return ((a0 * t + a1) * t + a2) * t + a3, (3.0 * a0 * t + 2.0 * a1) * t + a2, 6.0 * a0 * t + 2.0 * a1
+        """Spline point and first two derivatives at ``u`` in [0, 1] (scipy's ``PPoly``; a hand-written
+        single-lookup Horner measured no faster on the 8x8 design)."""
+        sp = self._spline
+        return sp(u), sp(u, 1), sp(u, 2)
 
     def _newton_foot(self, p, u, lo, hi, iters: int = 8):
         """Newton on d/du |γ(u) - p|² = 0, clamped to each point's arc: ``u, γ(u), γ'(u)``.
