@@ -36,8 +36,26 @@ def _formats(text: str) -> tuple[str, ...]:
     return tuple(f for f in FORMATS if f in out)
 
 
+def _scale_or_auto(text: str):
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number or 'auto', got {text!r}") from None
+
+
+def intent(pattern, key: str):
+    """What the design was made for (``design.options.fabrication``): the defaults of ``cut``/``print``."""
+    fabrication = ((pattern.design or {}).get("options") or {}).get("fabrication") or {}
+    return fabrication.get(key)
+
+
 def cmd_cut(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
+    if args.material is None:
+        args.material = intent(pattern, "material") or "acrylic-3"
+        args.hinge = args.hinge or intent(pattern, "hinge")
     material = load_material(args.material)
     changes = dict(thickness_mm=args.thickness, kerf_mm=args.kerf, min_web_mm=args.min_web,
                    min_hole_mm=args.min_hole, strain_limit=args.strain_limit, gap_mm=args.gap,
@@ -75,8 +93,9 @@ def cmd_cut(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("cut", help="laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state")
     p.add_argument("file", help="pattern.json (or a design .obj)")
-    p.add_argument("--material", default="acrylic-3", metavar="NAME",
-                   help=f"preset ({', '.join(available())}) or a material .json (default acrylic-3)")
+    p.add_argument("--material", metavar="NAME",
+                   help=f"preset ({', '.join(available())}) or a material .json (default: the one the design "
+                        "was made for, else acrylic-3)")
     p.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
     p.add_argument("--state", type=int, choices=[1, 2], default=1, help="closed state to cut (default 1)")
     p.add_argument("--sheet", default="600x400", metavar="WxH", help="sheet size in mm (default 600x400)")
@@ -84,8 +103,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--layout", choices=LAYOUTS,
                    help="in-place (tape, ligament), exploded or nested (separate; default exploded)")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--scale", type=float, metavar="K", help="mm in the file per mm of the pattern")
-    g.add_argument("--width", type=float, metavar="MM", help="width of the cut (closed) pattern in mm")
+    g.add_argument("--scale", type=_scale_or_auto, metavar="K|auto",
+                   help="mm in the file per mm of the pattern (auto: the smallest the material accepts)")
+    g.add_argument("--width", type=_scale_or_auto, metavar="MM|auto",
+                   help="width of the cut (closed) pattern in mm (auto: the smallest the material accepts)")
     p.add_argument("--formats", default=",".join(FORMATS), metavar="LIST", help="dxf,svg,png (default all)")
     p.add_argument("--colors", choices=sorted(COLORS), help="colour preset (default: the material's)")
     p.add_argument("--kerf", type=float, metavar="MM", help="full kerf (Boxes.py's burn is half of it)")

@@ -21,6 +21,8 @@ from ..errors import CheckFailed, FabricationError, InputError
 from ..mechanics.contract import contract
 from ..verify import verify_pattern
 from ..pattern.model import Pattern
+from ..pattern import fabricability as fab
+from . import fabricability as fb
 from . import hinges as hg
 from . import layout as lay
 from .drawing import COLORS, SheetDrawing, snap
@@ -59,8 +61,8 @@ class CutOptions:
     sheet: tuple[float, float] = (600.0, 400.0)
     margin: float = 5.0
     layout: str | None = None
-    scale: float | None = None
-    width: float | None = None
+    scale: float | str | None = None  # "auto": the smallest the checks accept
+    width: float | str | None = None
     formats: tuple[str, ...] = FORMATS
     colors: str | None = None
     labels: bool = True
@@ -174,31 +176,6 @@ def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
     return polys
 
 
-def _check_webs(pieces, mat: Material, kind: str, scale: float, scaled: bool) -> None:
-    """Every piece of material that stays must be at least the minimum web wide.
-
-    Morphological opening at min_web/2 (mitre, so sharp corners survive): a
-    piece that loses area is thinner than the web somewhere.
-    """
-    w = mat.min_web_mm
-    r = 0.5 * w * (1 - 1e-6)
-    opened = shapely.buffer(shapely.buffer(pieces, -r, join_style="mitre", mitre_limit=10.0), r,
-                            join_style="mitre", mitre_limit=10.0)
-    area = shapely.area(pieces)
-    # the opening lies inside the piece, so areas suffice (an overlay of two nearly equal
-    # polygons can fail in GEOS and report the whole piece as lost)
-    loss = 1.0 - shapely.area(opened) / np.maximum(area, 1e-300)
-    bad = np.flatnonzero(loss > 1e-3)
-    if len(bad):
-        t = int(bad[np.argmax(loss[bad])])
-        d = 2 * shapely.maximum_inscribed_circle(pieces[t], 1e-3).length
-        what = "once shrunk by gap/2 " if kind == "ligament" else ""
-        raise CheckFailed(
-            f"tile {t} is {d:.3g} mm across {what}at scale {scale:.4g}, thinner than the minimum web "
-            f"{w:g} mm of {mat.name} ({len(bad)} tile(s) too thin); cut it larger with --width or --scale"
-            + ("" if kind != "ligament" else ", or use a smaller --gap"))
-
-
 def _reach(q: np.ndarray, q1: np.ndarray, frac: float) -> np.ndarray:
     """Fraction of the edge q -> q1 covered by a corner's tape: ``frac``, at most TAPE_REACH_MM."""
     return np.minimum(frac, TAPE_REACH_MM / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300))
@@ -267,7 +244,13 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     states = closed_states(pattern)
     state = options.state
     raw = states[state]
-    if options.width is not None:
+    if options.scale == "auto" or options.width == "auto":  # the smallest size the checks below accept
+        need = fb.cut_minimum(raw, mat, kind)
+        if need.scale is None:
+            raise CheckFailed(f"--{'scale' if options.scale == 'auto' else 'width'} auto: {mat.name} with "
+                              f"{kind} hinges: {need.advice()}")
+        scale = need.scale
+    elif options.width is not None:
         span = float(raw[..., 0].max() - raw[..., 0].min())
         if not options.width > 0:
             raise InputError(f"--width must be positive, got {options.width}")
@@ -318,7 +301,11 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     elif kind == "ligament":
         shrink = mat.gap_mm / 2
         offset = mat.kerf_offset_mm
-        regions = hg.shrink_tiles(corners, shrink)
+        try:
+            regions = hg.shrink_tiles(corners, shrink)
+        except FabricationError as exc:
+            lost = np.flatnonzero((fab.shrunk_edges(corners, shrink) <= fab.EDGE_EPS_MM).any(-1))
+            raise fb.lost_edge(corners, mat, kind, scale, int(lost[0])) from exc
         lig = hg.ligament_design(pattern, corners, regions, gap=mat.gap_mm, width_max=mat.ligament_width_mm,
                                  min_web=mat.min_web_mm, kerf=kerf, strain_limit=mat.strain_limit,
                                  turn_rad=np.radians(options.turn_deg), width=options.ligament_width)
@@ -332,7 +319,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         parts = hg.kerf_outset(tile_polys, offset)
         label_margin = 0.5
 
-    _check_webs(shapely.polygons(regions), mat, kind, scale, options.width is not None or options.scale is not None)
+    fb.check_webs(regions, mat, kind, corners, scale)
 
     # ---- layout
     sheet_wh = (float(options.sheet[0]), float(options.sheet[1]))

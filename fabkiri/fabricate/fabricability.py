@@ -1,0 +1,277 @@
+"""At what size a pattern can be cut or printed: the numbers behind ``cut``/``print`` refusals and
+``--scale auto``, and the fabricability summary ``design`` and ``info`` show.
+
+Cutting: every tile that stays (shrunk by gap/2 for a ligament sheet) must be at least the material's
+minimum web wide, in the thinnest-width sense of :mod:`fabkiri.pattern.fabricability` (the check
+``cut`` runs), and a shrunk tile must keep its four edges; both are linear in the scale, so the
+smallest scale is exact (:func:`cut_minimum`). Printing: the printer's plan checks (tile shrink,
+strip seams, pads and clearances, pins) are shapely geometry, monotone in the scale, so the smallest
+scale is found by bisection on those very checks (:func:`print_minimum`), and the bed sets the largest.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import CheckFailed, FabricationError
+from ..pattern import fabricability as fab
+from ..pattern.model import Pattern
+from .materials import HINGE_KINDS, Material, available, load_material
+from .printers import Printer, available_printers, load_printer
+
+DIGITS = 4  # stated minima are rounded up to this many significant digits (so the stated value passes)
+BISECT_RTOL = 1e-3  # print minimum: the bracket is this tight before the upper end is stated
+MAX_SCALE = 1e3
+
+
+def ceil_sig(x: float, digits: int = DIGITS) -> float:
+    """``x`` rounded up to ``digits`` significant digits (never below ``x``)."""
+    if not (np.isfinite(x) and x > 0):
+        return x
+    q = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    v = float(f"{math.ceil(x / q) * q:.{digits + 1}g}")
+    return v if v >= x else float(f"{v + q:.{digits + 1}g}")
+
+
+def floor_sig(x: float, digits: int = DIGITS) -> float:
+    """``x`` rounded down to ``digits`` significant digits (never above ``x``)."""
+    if not (np.isfinite(x) and x > 0):
+        return x
+    q = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    v = float(f"{math.floor(x / q) * q:.{digits + 1}g}")
+    return v if v <= x else float(f"{v - q:.{digits + 1}g}")
+
+
+def shrink_of(material: Material, kind: str) -> float:
+    """How far ``cut`` shrinks every tile for this hinge kind (mm)."""
+    return 0.5 * material.gap_mm if kind == "ligament" else 0.0
+
+
+def closed_span(corners: np.ndarray) -> float:
+    """x extent of a closed state: ``cut --width`` is this times the scale."""
+    return float(corners[..., 0].max() - corners[..., 0].min())
+
+
+@dataclass(frozen=True)
+class CutMinimum:
+    """Smallest scale (and --width) at which ``cut`` accepts a closed state; ``scale`` None: never."""
+
+    scale: float | None
+    width_mm: float | None
+    tile: int = -1
+    limit: str = ""  # "width" (thinnest tile), "edge" (a shrunk tile loses an edge) or why never
+    exact: float | None = None  # unrounded
+
+    def advice(self) -> str:
+        if self.scale is None:
+            return f"no scale works ({self.limit})"
+        return f"cut at --scale ≥ {self.scale:g}, --width ≥ {self.width_mm:g} mm (or --scale auto)"
+
+    def to_dict(self) -> dict:
+        return {"min_scale": self.scale, "min_width_mm": self.width_mm, "tile": self.tile, "limit": self.limit}
+
+
+def ligament_never(material: Material) -> str:
+    """Why a ligament sheet of this material cannot be cut at any scale ('' if it can)."""
+    spacing = material.gap_mm - max(material.min_web_mm, 0.0)
+    if spacing < material.min_web_mm + material.kerf_mm - 1e-9:
+        return (f"gap {material.gap_mm:g} mm leaves less than min web + kerf between the two ligaments of a node "
+                f"at any scale")
+    return ""
+
+
+def cut_minimum(corners: np.ndarray, material: Material, kind: str) -> CutMinimum:
+    """Smallest scale of the closed state ``corners`` (pattern units) that ``cut`` accepts for ``kind``."""
+    if kind == "ligament":
+        why = ligament_never(material)
+        if why:
+            return CutMinimum(None, None, -1, why)
+    shrink = shrink_of(material, kind)
+    s, t, limit = fab.min_scale(corners, material.min_web_mm, shrink, min_edge=material.min_web_mm if shrink else 0.0)
+    if not np.isfinite(s):
+        return CutMinimum(None, None, t, "a tile is degenerate")
+    scale = ceil_sig(s)
+    return CutMinimum(scale, ceil_sig(scale * closed_span(corners)), t, limit, s)
+
+
+def check_webs(regions: np.ndarray, material: Material, kind: str, corners: np.ndarray, scale: float) -> None:
+    """``cut``'s web check: every tile that stays is at least the minimum web wide (thinnest width)."""
+    w = fab.widths(regions)
+    if kind == "ligament":  # a shrunk tile's edge shorter than a web is a sliver corner: as thin as it
+        w = np.minimum(w, fab.shrunk_edges(regions, 0.0).min(-1))
+    bad = np.flatnonzero(w < material.min_web_mm - fab.WEB_SLACK_MM)
+    if len(bad):
+        t = int(bad[np.argmin(w[bad])])
+        what = f" once shrunk by gap/2 ({shrink_of(material, kind):g} mm)" if kind == "ligament" else ""
+        need = cut_minimum(corners / scale, material, kind)
+        raise CheckFailed(
+            f"tile {t} is {w[t]:.3g} mm wide at its thinnest{what} at scale {scale:.4g}, thinner than the minimum "
+            f"web {material.min_web_mm:g} mm of {material.name} ({len(bad)} tile(s) too thin); " + need.advice()
+            + ("" if kind != "ligament" else "; or use a smaller --gap"))
+
+
+def lost_edge(corners: np.ndarray, material: Material, kind: str, scale: float, tile: int) -> CheckFailed:
+    """The refusal for a ligament tile that loses an edge when shrunk, with the scale that avoids it."""
+    need = cut_minimum(corners / scale, material, kind)
+    return CheckFailed(f"tile {tile} loses an edge once shrunk by gap/2 ({shrink_of(material, kind):g} mm) at scale "
+                       f"{scale:.4g}; {need.advice()}; or use a smaller --gap")
+
+
+# ------------------------------------------------------------------ printing
+@dataclass(frozen=True)
+class PrintMinimum:
+    """Scales at which ``print`` accepts the plan (``min_scale``) and the closed pattern fits the bed."""
+
+    min_scale: float | None
+    max_scale: float | None  # None: any (strips are packed part by part)
+    limit: str = ""
+
+    @property
+    def possible(self) -> bool:
+        return self.min_scale is not None and (self.max_scale is None or self.min_scale <= self.max_scale)
+
+    def advice(self, printer: str) -> str:
+        if self.min_scale is None:
+            return f"no scale works ({self.limit})"
+        top = "" if self.max_scale is None else f"; the bed of {printer} takes up to --scale {self.max_scale:g}"
+        if not self.possible:
+            return f"it needs --scale ≥ {self.min_scale:g} but the bed of {printer} takes at most {self.max_scale:g}"
+        return f"print at --scale ≥ {self.min_scale:g} (or --scale auto){top}"
+
+    def to_dict(self, at: float = 1.0) -> dict:
+        ok = self.possible and self.min_scale <= at and (self.max_scale is None or at <= self.max_scale)
+        return {"min_scale": self.min_scale, "max_scale": self.max_scale, "fits_bed": self.possible,
+                "ok_at_scale_1": bool(ok), "limit": self.limit}
+
+
+def scaled(pattern: Pattern, k: float) -> Pattern:
+    """The pattern ``k`` times its size (nodes and stored closed states)."""
+    return replace(pattern, nodes=pattern.nodes * k, contracted={s: v * k for s, v in pattern.contracted.items()})
+
+
+def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> str:
+    """Why the print plan of ``style`` is refused at this size ('' if accepted; the bed is not asked)."""
+    from . import printgeom
+
+    try:
+        plan = printgeom.closed_plan(pattern, state, printer)
+        if style == "pinned":
+            printgeom.pin_plan(pattern, plan, printer)
+        else:
+            printgeom.strip_outlines(plan, printer)
+    except FabricationError as exc:
+        return str(exc)
+    return ""
+
+
+def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer) -> float | None:
+    if style == "strips":
+        return None
+    from .printgeom import closed_corners
+
+    c = closed_corners(pattern, state)
+    w = np.ptp(c[..., 0])
+    h = np.ptp(c[..., 1])
+    bx, by, _ = printer.bed_mm
+    return float(min(bx / w, by / h) * (1 - 1e-12)) if w > 0 and h > 0 else None
+
+
+def _never(pattern: Pattern, style: str, error: str) -> bool:
+    """A refusal no scale changes (a non-rigid pattern for pins, a single tile, three hinges at a point)."""
+    return ("not rigid-deployable" in error or "nothing to hinge" in error or "coincides with" in error
+            or "cannot take opposite faces" in error)
+
+
+def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1) -> PrintMinimum:
+    """Smallest scale at which the print plan checks pass (bisection on them), and the bed's largest."""
+    top = _bed_scale(pattern, style, state, printer)
+    err = _plan_error(pattern, style, state, printer)
+    if err and _never(pattern, style, err):
+        return PrintMinimum(None, top, err)
+    lo, hi = (None, 1.0) if not err else (1.0, None)
+    k = 1.0
+    while hi is None:  # bracket: double until accepted
+        k *= 2.0
+        if k > MAX_SCALE:
+            return PrintMinimum(None, top, f"refused up to scale {MAX_SCALE:g}: {err}")
+        e = _plan_error(scaled(pattern, k), style, state, printer)
+        (lo, hi) = (k, None) if e else (lo, k)
+    k = 1.0
+    while lo is None:  # ... or halve until refused
+        k *= 0.5
+        e = _plan_error(scaled(pattern, k), style, state, printer)
+        if e:
+            lo = k
+        else:
+            hi = k
+        if k < 1e-6:
+            lo = 0.0
+    while hi - lo > BISECT_RTOL * hi:
+        mid = 0.5 * (lo + hi)
+        if _plan_error(scaled(pattern, mid), style, state, printer):
+            lo = mid
+        else:
+            hi = mid
+    return PrintMinimum(ceil_sig(hi), None if top is None else floor_sig(top), "plan checks")
+
+
+# ------------------------------------------------------------------ summary
+def summary(pattern: Pattern, printers: bool = True) -> dict:
+    """Fabricability of a pattern at its stored size (mm): the measures, and per material preset and
+    hinge kind the smallest cut scale and width, per printer preset and style the smallest print scale
+    and whether the closed pattern then fits the bed."""
+    from .cut import closed_states
+
+    top = pattern.topology
+    states = closed_states(pattern)
+    c1 = states[1]
+    out = {"definition": "thinnest width = smallest altitude: min over a tile's edges of the largest distance of "
+                         "its corners from that edge's line (the tile's minimum width)",
+           **fab.measures(c1, top.hinge_tiles, top.hinge_corner)}
+    cut = {}
+    for name in available():
+        mat = load_material(name)
+        cut[name] = {kind: cut_minimum(c1, mat, kind).to_dict() for kind in HINGE_KINDS}
+    out["cut"] = cut
+    if printers:
+        pr = {}
+        for name in available_printers():
+            p = load_printer(name)
+            strip = print_minimum(pattern, "tiles-and-strips", p)
+            pinned = print_minimum(pattern, "pinned", p)
+            strips_only = PrintMinimum(strip.min_scale, None, strip.limit)
+            pr[name] = {"tiles-and-strips": strip.to_dict(), "strips": strips_only.to_dict(),
+                        "pinned": pinned.to_dict()}
+        out["print"] = pr
+    return out
+
+
+def summary_lines(s: dict) -> list[str]:
+    """The summary as a few text lines (design's stderr, ``info``)."""
+    lines = [f"fabricability: thinnest tile {s['thinnest_tile_mm']:.3g} mm (tile {s['thinnest_tile']}), shortest edge "
+             f"{s['shortest_edge_mm']:.3g} mm, closest hinge pair "
+             + ("n/a" if s["closest_hinge_pair_mm"] is None else f"{s['closest_hinge_pair_mm']:.3g} mm")]
+    cells = []
+    for mat, kinds in s["cut"].items():
+        part = []
+        for kind, m in kinds.items():
+            part.append(f"{kind} never" if m["min_scale"] is None else
+                        f"{kind} ≥ {m['min_scale']:g}× ({m['min_width_mm']:g} mm)")
+        cells.append(f"{mat}: " + ", ".join(part))
+    lines.append("  cut (--scale, --width): " + "; ".join(cells))
+    if "print" in s:
+        cells = []
+        for pr, styles in s["print"].items():
+            part = []
+            for style, m in styles.items():
+                if m["min_scale"] is None:
+                    part.append(f"{style} never")
+                else:
+                    bed = "" if m["max_scale"] is None else f"..{m['max_scale']:g}"
+                    part.append(f"{style} {m['min_scale']:g}{bed}×" + ("" if m["fits_bed"] else " (bed too small)"))
+            cells.append(f"{pr}: " + ", ".join(part))
+        lines.append("  print (--scale): " + "; ".join(cells))
+    return lines

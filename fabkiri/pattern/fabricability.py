@@ -1,0 +1,166 @@
+"""How thin a pattern's tiles are: the one definition ``design``, ``info``, ``cut`` and ``print`` share.
+
+**Thinnest width** of a convex tile: its minimum width, the smallest distance
+between two parallel lines enclosing it. For a convex polygon one of those lines
+carries an edge, so it is the smallest altitude
+
+    w(T) = min over edges e of  max over corners j of  dist(j, line e).
+
+A tile *shrunk* by ``d`` (every edge moved inward by ``d``, mitre corners: the
+ligament sheet's gap/2, the printer's gap/2) has the same edge directions; its
+corner ``j`` moves by ``d · m_j`` with the mitre vector ``m_j = (n_a + n_b) / (1 + n_a·n_b)``
+(``n`` the inward unit normals of the two edges at ``j``). At scale ``s`` its
+distances are ``s · h_je - d (1 - n_e·m_j)``, linear in ``s``, so the smallest
+scale at which every shrunk tile is at least ``w`` wide (and keeps four edges)
+has a closed form (:func:`min_scale`). Pure numpy, millimetres or any unit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .geometry import cross2, dot2
+
+EDGE_EPS_MM = 1e-6  # a shrunk edge shorter than this is gone
+WEB_SLACK_MM = 1e-5  # web checks forgive this much: cut files snap every coordinate to a 1e-6 mm grid
+
+
+def _frame(corners: np.ndarray):
+    """Per tile and edge ``e`` (corner e to e+1): unit direction ``u``, inward normal ``n``, length."""
+    E = np.roll(corners, -1, axis=-2) - corners
+    L = np.linalg.norm(E, axis=-1)
+    u = E / np.where(L > 0, L, 1.0)[..., None]
+    n = np.stack([-u[..., 1], u[..., 0]], -1)  # inward for counter-clockwise tiles
+    return u, n, L
+
+
+def _mitres(n: np.ndarray) -> np.ndarray:
+    """Mitre vector of every corner: corner j moves by ``d · m_j`` when the tile shrinks by ``d``."""
+    na = np.roll(n, 1, axis=-2)  # edge j-1 -> j
+    nb = n  # edge j -> j+1
+    return (na + nb) / (1.0 + dot2(na, nb))[..., None]
+
+
+def _distances(corners: np.ndarray, n: np.ndarray):
+    """``h[t, e, j]``: distance of corner j from the line of edge e (positive inside)."""
+    rel = corners[..., None, :, :] - corners[..., :, None, :]  # (T, e, j, 2): corner j minus corner e
+    return dot2(rel, n[..., :, None, :])
+
+
+def widths(corners: np.ndarray, shrink: float = 0.0) -> np.ndarray:
+    """Thinnest width of every tile ``(T, 4, 2)`` (CCW), after shrinking by ``shrink``.
+
+    A tile that loses an edge when shrunk (or is not convex and CCW) gets width 0.
+    """
+    corners = np.asarray(corners, dtype=float)
+    u, n, L = _frame(corners)
+    h = _distances(corners, n)
+    if shrink:
+        m = _mitres(n)
+        h = h - shrink * (1.0 - dot2(n[..., :, None, :], m[..., None, :, :]))
+    w = h.max(-1).min(-1)
+    ok = (shrunk_edges(corners, shrink) > EDGE_EPS_MM * (shrink > 0)).all(-1) & (h.min(-1) > -1e-9 * L.max(-1)[..., None]).all(-1)
+    return np.where(ok, np.maximum(w, 0.0), 0.0)
+
+
+def shrunk_edges(corners: np.ndarray, shrink: float) -> np.ndarray:
+    """Signed length of every edge once the tile is shrunk by ``shrink`` ``(T, 4)``."""
+    u, n, L = _frame(corners)
+    if not shrink:
+        return L
+    m = _mitres(n)
+    return L + shrink * dot2(u, np.roll(m, -1, axis=-2) - m)
+
+
+def shrunk_quads(corners: np.ndarray, shrink: float) -> np.ndarray:
+    """Corners of every tile shrunk by ``shrink`` (mitre), in corner order (valid while its edges last)."""
+    corners = np.asarray(corners, dtype=float)
+    if not shrink:
+        return corners.copy()
+    return corners + shrink * _mitres(_frame(corners)[1])
+
+
+def min_scale(corners: np.ndarray, width: float, shrink: float = 0.0, min_edge: float = 0.0) -> tuple[float, int, str]:
+    """Smallest scale ``s`` at which every tile of ``s · corners``, shrunk by ``shrink`` (not scaled),
+    is at least ``width`` wide and keeps four edges at least ``min_edge`` long (and > ``EDGE_EPS_MM``);
+    ``(s, tile, reason)`` with the tile that sets it.
+
+    Exact: distances and shrunk edge lengths are linear in ``s`` (module docstring), so each tile's
+    threshold is ``max_e min_j (width + b_je) / a_je`` (and the edges' own), no search.
+    """
+    corners = np.asarray(corners, dtype=float)
+    T = len(corners)
+    if T == 0:
+        return 0.0, -1, ""
+    u, n, L = _frame(corners)
+    a = _distances(corners, n)  # (T, e, j)
+    b = np.zeros_like(a)
+    if shrink:
+        m = _mitres(n)
+        b = shrink * (1.0 - dot2(n[..., :, None, :], m[..., None, :, :]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        need = np.where(a > 0, (width + b) / a, np.inf)
+    s_width = need.min(-1).max(-1)  # (T,)
+    s_edges = np.zeros(T)
+    if shrink:
+        m = _mitres(n)
+        loss = -shrink * dot2(u, np.roll(m, -1, axis=-2) - m)  # shrunk edge = s L - loss
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s_edges = np.where(L > 0, (loss + max(min_edge, EDGE_EPS_MM)) / L, np.inf).max(-1)
+    s = np.maximum(s_width, s_edges)
+    t = int(np.argmax(s))
+    reason = "width" if s_width[t] >= s_edges[t] else "edge"
+    return float(s[t]), t, reason
+
+
+def polygon_width(points: np.ndarray) -> float:
+    """Thinnest width of the convex hull of ``points`` ``(n, 2)``, any number of corners (the same
+    definition as :func:`widths`: min over hull edges of the largest distance from that edge's line)."""
+    from scipy.spatial import ConvexHull
+
+    pts = np.unique(np.asarray(points, dtype=float), axis=0)
+    if len(pts) < 3:
+        return 0.0
+    try:
+        hull = pts[ConvexHull(pts).vertices]
+    except Exception:  # collinear points: no area, no width
+        return 0.0
+    E = np.roll(hull, -1, axis=0) - hull
+    n = np.stack([-E[:, 1], E[:, 0]], -1) / np.linalg.norm(E, axis=1, keepdims=True)
+    rel = hull[None, :, :] - hull[:, None, :]  # [e, j]: corner j minus corner e
+    return float(np.abs(np.einsum("ejd,ed->ej", rel, n)).max(1).min())
+
+
+def hinge_corner_distances(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray):
+    """Closest pair of hinges on one tile: ``(distance, tile)``, ``(inf, -1)`` if no tile has two."""
+    T = len(corners)
+    has = np.zeros((T, 4), dtype=bool)
+    has[hinge_tiles.ravel(), hinge_corner.ravel()] = True
+    d = np.linalg.norm(corners[:, :, None, :] - corners[:, None, :, :], axis=-1)
+    pair = has[:, :, None] & has[:, None, :] & ~np.eye(4, dtype=bool)[None]
+    d = np.where(pair, d, np.inf).min((1, 2))
+    t = int(np.argmin(d)) if T else -1
+    return (float(d[t]), t) if T and np.isfinite(d[t]) else (float("inf"), -1)
+
+
+def measures(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray) -> dict:
+    """Thinnest tile, shortest edge and closest hinge pair of one placed state (its units)."""
+    w = widths(corners)
+    L = np.linalg.norm(np.roll(corners, -1, axis=-2) - corners, axis=-1)
+    hd, ht = hinge_corner_distances(corners, hinge_tiles, hinge_corner)
+    t, e = divmod(int(np.argmin(L)), 4)
+    return {"thinnest_tile_mm": float(w.min()), "thinnest_tile": int(np.argmin(w)),
+            "shortest_edge_mm": float(L.min()), "shortest_edge_tile": t,
+            "closest_hinge_pair_mm": hd if np.isfinite(hd) else None, "closest_hinge_pair_tile": ht}
+
+
+def pal_bound(n_tiles: int, width: float) -> float:
+    """Least total area of ``n_tiles`` convex tiles each at least ``width`` wide (Pál: a convex set of
+    minimum width w has area at least w²/√3, the equilateral triangle's)."""
+    return n_tiles * width * width / np.sqrt(3.0)
+
+
+def cross_signs_ok(corners: np.ndarray) -> bool:
+    """Every tile convex and counter-clockwise (the widths above assume it)."""
+    E = np.roll(corners, -1, axis=-2) - corners
+    return bool((cross2(E, np.roll(E, -1, axis=-2)) > 0).all())
