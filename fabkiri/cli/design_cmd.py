@@ -21,7 +21,12 @@ import numpy as np
 from ..design.initial import INITS
 from ..design.solve import DesignRequest, design
 from ..design.targets import Target, load_target
-from ..errors import InputError, SolveError
+from ..design.fabrication import FabricationLimits, smallest_size
+from ..errors import FabricationError, InputError, SolveError
+from ..fabricate import fabricability
+from ..fabricate.materials import load_material
+from ..fabricate.printers import load_printer
+from ..pattern.fabricability import pal_bound
 from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.io import write_pattern
@@ -126,9 +131,18 @@ def cmd_design(args: argparse.Namespace) -> int:
         contracted[s] = spec
     if target is None and not contracted:
         raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
+    limits, intent = _fabrication(args, target)
+    if limits is not None and target is not None:  # a request no design can meet: say so before solving
+        least = smallest_size(target.size, abs(target.area), rows * cols, limits)
+        if least is not None:
+            raise InputError(
+                f"{rows}x{cols} tiles each at least {limits.required_width_mm():.3g} mm wide ({limits.source}) "
+                f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
+                f"{pal_bound(rows * cols, limits.required_width_mm()):.4g} mm² (Pál) but the target has "
+                f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=args.rigid, symmetry=args.symmetry,
                         holes=args.holes, contracted=contracted, init=args.init, tol=args.tol,
-                        solver=args.solver,
+                        solver=args.solver, fabrication=limits, fabrication_intent=intent,
                         name=args.name or "")
     if not req.name:
         parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
@@ -178,6 +192,9 @@ def cmd_design(args: argparse.Namespace) -> int:
     meta["valid"] = bool(valid)
     pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
                       name=pattern.name, lattice=pattern.lattice, design=meta)
+    intent = (meta.get("options") or {}).get("fabrication") or {}
+    prints = ((intent["printer"], (intent["style"],)),) if intent.get("printer") else fabricability.DEFAULT_PRINTS
+    report["fabricability"] = fabricability.summary(pattern, prints)
     write_pattern(pattern, args.output)
     if args.json:
         print(json.dumps(_jsonable(report), indent=2, sort_keys=True))
@@ -254,8 +271,53 @@ def _summary(path, report: dict, valid: bool) -> None:
     for s, f in report.get("closed_outline_fit", {}).items():
         parts.append(f"state {s} outline vs {f['target']}: max {f['max_mm']:.3g} mm, rms {f['rms_mm']:.3g} mm")
     print("; ".join(parts), file=sys.stderr)
+    fr = report.get("fabrication")
+    if fr:
+        print("fabrication rows: " + ", ".join(
+            f"{k[len('fabrication_'):]} {fr['active'][k]}/{fr['rows'][k]} active (min slack {fr['min_mm'][k]:.3g} mm)"
+            for k in fr["rows"]), file=sys.stderr)
+    if report.get("fabricability"):
+        for line in fabricability.summary_lines(report["fabricability"]):
+            print(line, file=sys.stderr)
     for p in report.get("problems", []):
         print(f"fabkiri: design failed: {p}", file=sys.stderr)
+
+
+def _fabrication(args: argparse.Namespace, target) -> tuple[FabricationLimits | None, dict]:
+    """``--material/--hinge``, ``--printer/--style`` and ``--min-feature`` as plain mm limits, and the intent
+    stored for ``cut``/``print``."""
+    parts, names, intent = [], [], {}
+    if args.hinge and not args.material:
+        raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
+    if args.style and not args.printer:
+        raise InputError("--style needs --printer")
+    if args.material:
+        mat = load_material(args.material)
+        kind = args.hinge or mat.hinge
+        try:
+            parts.append(fabricability.material_limits(mat, kind))
+        except FabricationError as exc:
+            raise InputError(str(exc)) from None
+        names.append(f"{mat.name} {kind}")
+        intent.update(material=args.material, hinge=kind)
+    if args.printer:
+        pr = load_printer(args.printer)
+        style = args.style or "tiles-and-strips"
+        parts.append(fabricability.printer_limits(pr, style))
+        names.append(f"{pr.name} {style}")
+        intent.update(printer=args.printer, style=style)
+    if args.min_feature:
+        parts.append({"min_width_mm": args.min_feature})
+        names.append(f"--min-feature {args.min_feature:g}")
+    if args.min_hole:
+        parts.append({"min_hole_mm": args.min_hole})
+        names.append(f"--min-hole {args.min_hole:g}")
+    if not parts:
+        return None, {}
+    if target is not None:
+        intent["size_mm"] = float(target.size)
+    intent["scale"] = 1.0  # the design is made at the size it will be cut or printed
+    return FabricationLimits(**fabricability.combine(*parts), source=", ".join(names)), intent
 
 
 def _tol(text: str) -> float:
@@ -304,6 +366,18 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "full solver (up to 16x16 tiles, or up to 32x32 when the fit misses by more than 0.25 %% "
                         "of the target size) and keep the better; reduced: the rigid family only; full: the sparse "
                         "solver over all nodes")
+    g = p.add_argument_group("fabrication (inequality rows at the target's --size; stored for cut and print)")
+    g.add_argument("--material", metavar="NAME|FILE.json",
+                   help="laser material preset: every tile at least its minimum web wide at its thinnest (shrunk by "
+                        "gap/2 for ligaments), hinges its allowance apart")
+    g.add_argument("--hinge", choices=["tape", "ligament", "separate"], help="hinge kind (default: the material's)")
+    g.add_argument("--printer", metavar="NAME|FILE.json",
+                   help="printer preset: tiles two nozzles wide once shrunk by gap/2, hinge corners wide enough for "
+                        "a strip pad (or pivots far enough apart for pins)")
+    g.add_argument("--style", choices=["tiles-and-strips", "strips", "pinned"], help="print style (default "
+                   "tiles-and-strips)")
+    g.add_argument("--min-feature", type=_size, metavar="MM", help="every tile at least this wide at its thinnest")
+    g.add_argument("--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")

@@ -8,19 +8,25 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from ..errors import CheckFailed, InputError
+from ..errors import CheckFailed, FabricationError, InputError
 from ..fileio import atomic_write_many
+from ..fabricate import fabricability as fb
 from ..fabricate import mesh
 from ..fabricate.printers import available_printers, load_printer
 from .pattern_cmds import _positive, load_any
 
 
+def _scale_auto(text: str):
+    return "auto" if text.strip().lower() == "auto" else _positive(text)
+
+
 def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     pattern = load_any(args.file)
-    if args.scale != 1.0:  # mm printed per mm of the pattern
-        pattern = replace(pattern, nodes=pattern.nodes * args.scale,
-                          contracted={k: v * args.scale for k, v in pattern.contracted.items()})
+    from .cut_cmd import intent
+
+    args.printer = args.printer or intent(pattern, "printer")
+    args.style = args.style or intent(pattern, "style") or "tiles-and-strips"
     pinned = args.style == "pinned"  # pinned tiles have their own (thicker) preset thickness
     printer = load_printer(args.printer).with_overrides(
         tile_thickness_mm=None if pinned else args.tile_thickness,
@@ -29,7 +35,25 @@ def cmd_print(args: argparse.Namespace) -> int:
         strip_width_mm=args.strip_width, strip_reach_mm=args.strip_reach, gap_mm=args.gap,
         radial_clearance_mm=args.radial_clearance, axial_clearance_mm=args.axial_clearance,
     )
-    job = mesh.build_job(pattern, args.style, int(args.state), printer)
+    if args.scale == "auto":  # the smallest scale the plan checks accept
+        need = fb.print_minimum(pattern, args.style, printer, int(args.state))
+        if not need.possible:
+            raise CheckFailed(f"--scale auto: {args.style} on {printer.name}: {need.advice(printer.name)}")
+        args.scale = need.min_scale
+    if args.scale != 1.0:  # mm printed per mm of the pattern
+        pattern = replace(pattern, nodes=pattern.nodes * args.scale,
+                          contracted={k: v * args.scale for k, v in pattern.contracted.items()})
+    try:
+        job = mesh.build_job(pattern, args.style, int(args.state), printer)
+    except FabricationError as exc:  # say at which scale it would print, if any
+        need = fb.print_minimum(pattern, args.style, printer, int(args.state))
+        if need.min_scale is None or need.min_scale <= 1.0:
+            raise
+        k = args.scale
+        at = need.advice(printer.name).replace(f"≥ {need.min_scale:g}", f"≥ {fb.ceil_sig(need.min_scale * k):g}")
+        at = at.replace(f"--scale {need.max_scale:g}", f"--scale {fb.floor_sig(need.max_scale * k):g}") \
+            if need.max_scale is not None else at
+        raise type(exc)(f"{exc} (at --scale {k:g}); {at}") from None
     realised = mesh.realise_job(job)
     report = mesh.check_meshes(realised)
     tiles = None if job.style == "strips" else mesh.check_printed_tiles(realised)
@@ -104,14 +128,15 @@ def _laser_files(pattern, job, args, stem: str) -> dict[str, bytes]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("print", help="3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)")
     p.add_argument("file", help="pattern.json (or design .obj)")
-    p.add_argument("--style", choices=mesh.STYLES, default="tiles-and-strips",
+    p.add_argument("--style", choices=mesh.STYLES,
                    help="strips: one flexible strip per hinge for laser-cut tiles; tiles-and-strips: rigid tiles "
-                        "with recessed flexible strips (two materials); pinned: print-in-place pin hinges")
+                        "with recessed flexible strips (two materials, the default unless the design was made for "
+                        "another); pinned: print-in-place pin hinges")
     p.add_argument("--state", choices=["1", "2"], default="1", help="closed state printed (default 1)")
     p.add_argument("--printer", metavar="NAME|FILE.json",
                    help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")
-    p.add_argument("--scale", type=_positive, default=1.0, metavar="K",
-                   help="print the pattern K times its size (default 1)")
+    p.add_argument("--scale", type=_scale_auto, default=1.0, metavar="K|auto",
+                   help="print the pattern K times its size (default 1; auto: the smallest the plan checks accept)")
     p.add_argument("--step", action="store_true", help="also write STEP (needs the 'cad' extra: build123d)")
     for flag, what in [("tile-thickness", "tile thickness"), ("strip-thickness", "strip thickness"),
                        ("strip-width", "strip width along the seam"), ("strip-reach", "strip reach into each tile"),

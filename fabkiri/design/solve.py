@@ -50,6 +50,7 @@ from ..pattern import geometry
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
+from .fabrication import FabricationLimits, families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
 from .reduced import fit_miss, solve_reduced
@@ -119,6 +120,8 @@ class DesignRequest:
     reg_weight: float = 1e-3
     max_iter: int = 300
     name: str = ""
+    fabrication: FabricationLimits | None = None  # mm limits at the target's size (design/fabrication.py)
+    fabrication_intent: dict = field(default_factory=dict)  # material/printer names: stored for cut and print
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -224,6 +227,7 @@ class _Problem:
                                      f"closed_shape_{s}"))
         fam.append(regularizer(st, nv))
         fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
+        fam += fabrication_families(st, nv, req.fabrication, L0, base)
         for g in self.grids.values():
             fam.append(g.orientation(st, nv))
         self.families = fam
@@ -239,7 +243,8 @@ class _Problem:
         sub = DesignRequest(rc, cc, req.target, rigid=req.rigid, symmetry=req.symmetry, holes=req.holes,
                             contracted=dict(req.contracted),
                             init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
-                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver)
+                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver,
+                            fabrication=req.fabrication)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
@@ -689,12 +694,18 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         "coarse": prob.coarse,
         "solver": solver,
     }
+    fab_names = [f.name for f in prob.of("ineq") if f.name.startswith("fabrication_")]
+    if fab_names:  # the fabrication family: its rows, how many are active, the smallest (mm)
+        report["fabrication"] = {"limits": req.fabrication.to_dict(), "rows": {k: int(len(gvals[k])) for k in fab_names},
+                                 "active": {k: active[k] for k in fab_names},
+                                 "min_mm": {k: float(gvals[k].min()) * L0 for k in fab_names}}
     log(f"{report['status']}: max equality residual {eq_worst:.2e}, fit {mode}, "
         f"{report['iterations_total']} iterations, {elapsed:.2f}s")
     lat = {"kind": "quad", "rows": req.rows, "cols": req.cols, "angle_deg": 45.0,
            "tile_size": float(L * L0)}
     options = {"rigid": req.rigid, "symmetry": req.symmetry, "holes": req.holes, "init": req.init,
                "tol": req.tol, "reg_weight": req.reg_weight,
+               **({"fabrication": dict(req.fabrication_intent)} if req.fabrication_intent else {}),
                "contracted": {str(s): (v.name if isinstance(v, Target) else
                                        ({"rectangle": True, "ratio": v[1]})) for s, v in req.contracted.items()}}
     design_meta = {"options": options, "report": report}

@@ -219,15 +219,18 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
 
 
 # ------------------------------------------------------------------ summary
-def summary(pattern: Pattern, printers: bool = True) -> dict:
-    """Fabricability of a pattern at its stored size (mm): the measures, and per material preset and
-    hinge kind the smallest cut scale and width, per printer preset and style the smallest print scale
-    and whether the closed pattern then fits the bed."""
+DEFAULT_PRINTS = (("prusa-mk4", ("tiles-and-strips", "strips")),)
+
+
+def summary(pattern: Pattern, prints=DEFAULT_PRINTS) -> dict:
+    """Fabricability of a pattern at its stored size (mm): the measures, per material preset and hinge
+    kind the smallest cut scale and width, and per ``(printer, styles)`` of ``prints`` the smallest print
+    scale and whether the closed pattern then fits the bed. (Every printer preset and style would cost
+    seconds: each print minimum is a bisection on shapely plan checks of 0.1-0.8 s at 8x8.)"""
     from .cut import closed_states
 
     top = pattern.topology
-    states = closed_states(pattern)
-    c1 = states[1]
+    c1 = closed_states(pattern)[1]
     out = {"definition": "thinnest width = smallest altitude: min over a tile's edges of the largest distance of "
                          "its corners from that edge's line (the tile's minimum width)",
            **fab.measures(c1, top.hinge_tiles, top.hinge_corner)}
@@ -236,16 +239,19 @@ def summary(pattern: Pattern, printers: bool = True) -> dict:
         mat = load_material(name)
         cut[name] = {kind: cut_minimum(c1, mat, kind).to_dict() for kind in HINGE_KINDS}
     out["cut"] = cut
-    if printers:
-        pr = {}
-        for name in available_printers():
-            p = load_printer(name)
-            strip = print_minimum(pattern, "tiles-and-strips", p)
-            pinned = print_minimum(pattern, "pinned", p)
-            strips_only = PrintMinimum(strip.min_scale, None, strip.limit)
-            pr[name] = {"tiles-and-strips": strip.to_dict(), "strips": strips_only.to_dict(),
-                        "pinned": pinned.to_dict()}
-        out["print"] = pr
+    pr: dict = {}
+    for name, styles in prints or ():
+        p = load_printer(name)
+        rows = pr.setdefault(p.name, {})
+        strip = None
+        for style in styles:
+            if style in ("tiles-and-strips", "strips"):  # the same plan checks; strips are packed part by part
+                strip = strip or print_minimum(pattern, "tiles-and-strips", p)
+                m = strip if style == "tiles-and-strips" else PrintMinimum(strip.min_scale, None, strip.limit)
+            else:
+                m = print_minimum(pattern, style, p)
+            rows[style] = m.to_dict()
+    out["print"] = pr
     return out
 
 
@@ -262,7 +268,7 @@ def summary_lines(s: dict) -> list[str]:
                         f"{kind} ≥ {m['min_scale']:g}× ({m['min_width_mm']:g} mm)")
         cells.append(f"{mat}: " + ", ".join(part))
     lines.append("  cut (--scale, --width): " + "; ".join(cells))
-    if "print" in s:
+    if s.get("print"):
         cells = []
         for pr, styles in s["print"].items():
             part = []
@@ -275,3 +281,50 @@ def summary_lines(s: dict) -> list[str]:
             cells.append(f"{pr}: " + ", ".join(part))
         lines.append("  print (--scale): " + "; ".join(cells))
     return lines
+
+
+# ------------------------------------------------------------------ design limits from presets
+# how far apart two hinges of one tile must be, per hinge kind (mm): a tape piece reaches about half a
+# web along each edge from its corner; a ligament strip is its width plus a web from the next one
+HINGE_ALLOWANCE = {
+    "tape": lambda m: m.min_web_mm,
+    "ligament": lambda m: m.ligament_width_mm + m.min_web_mm,
+    "separate": lambda m: 0.0,
+}
+PAD_MARGIN_DEG = 5.0  # above the corner angle at which a strip pad reaches the printer's minimum area
+
+
+def material_limits(material: Material, kind: str | None = None) -> dict:
+    """What ``cut`` needs of every tile, as plain numbers for ``design`` (mm)."""
+    kind = kind or material.hinge
+    if kind not in HINGE_KINDS:
+        raise FabricationError(f"hinge kind must be one of {', '.join(HINGE_KINDS)}, got {kind!r}")
+    if kind == "ligament" and ligament_never(material):
+        raise FabricationError(f"{material.name} cannot be cut as a ligament sheet: {ligament_never(material)}")
+    shrink = shrink_of(material, kind)
+    return {"min_width_mm": material.min_web_mm, "shrink_mm": shrink, "min_edge_mm": material.min_web_mm if shrink else 0.0,
+            "hinge_spacing_mm": HINGE_ALLOWANCE[kind](material)}
+
+
+def printer_limits(printer: Printer, style: str) -> dict:
+    """What ``print`` needs of every tile (mm): two perimeters wide once shrunk by gap/2, hinge corners
+    wide enough for a strip pad (strip styles) or pivots far enough apart for two ears (pinned)."""
+    out = {"min_width_mm": 2.0 * printer.nozzle_mm, "shrink_mm": 0.5 * printer.gap_mm,
+           "min_edge_mm": printer.nozzle_mm}
+    if style == "pinned":
+        hollow = printer.pin.ear_radius_mm + printer.radial_clearance_mm
+        out["hinge_spacing_mm"] = 2.0 * hollow + 2.0 * printer.nozzle_mm
+    else:  # a pad on an acute corner is about a triangle: ½ tan α w² against the printer's 0.25 w min(reach, w)
+        w, reach = printer.strip_width_mm, printer.strip_reach_mm
+        out["min_hinge_angle_deg"] = float(np.degrees(np.arctan(0.5 * min(reach, w) / w))) + PAD_MARGIN_DEG
+        out["hinge_spacing_mm"] = w + printer.radial_clearance_mm
+    return out
+
+
+def combine(*limits: dict) -> dict:
+    """The strictest of several requirements (shrinking by more and needing more width is conservative)."""
+    out: dict = {}
+    for lim in limits:
+        for k, v in lim.items():
+            out[k] = max(out.get(k, 0.0), v)
+    return out

@@ -1,0 +1,247 @@
+"""Fabrication inequalities: a design that can be cut or printed at the size it was asked for.
+
+Plain numbers in millimetres (:class:`FabricationLimits`; the CLI resolves a material or printer
+preset into them, this layer never sees a preset). At the design's size every tile must be
+
+* at least ``min_width_mm`` wide at its thinnest once shrunk by ``shrink_mm`` (the smallest
+  altitude of :mod:`fabkiri.pattern.fabricability`, the definition ``cut`` checks): one row per
+  tile edge, ``max_j dist(q_j, line e) - w >= 0`` over the two far corners (the larger one's
+  gradient: the max is piecewise smooth);
+* with ``shrink_mm``, every shrunk edge at least ``min_edge_mm`` long;
+* ``hinge_spacing_mm`` between any two of its hinge corners (tape, ligament or strip allowance);
+* at every hinge corner, an angle whose sine is at least ``sin(min_hinge_angle_deg)`` (a printed
+  strip's pad on an acute corner is too small at any scale);
+* and every deployed hole at least ``min_hole_mm`` wide (opt-in).
+
+Rows are plain functions of a tile's (or hole's) four corners; their gradients are exact, carried
+forward through every operation (:class:`_D`, forward-mode differentiation over the 8 coordinates of
+the four corners) and checked against finite differences in ``tests/test_fabrication.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..pattern import fabricability as fab
+from .constraints import Family, Stencils
+
+
+@dataclass(frozen=True)
+class FabricationLimits:
+    """What the design must respect at its size, in mm (0: no such row)."""
+
+    min_width_mm: float = 0.0
+    shrink_mm: float = 0.0
+    min_edge_mm: float = 0.0
+    hinge_spacing_mm: float = 0.0
+    min_hinge_angle_deg: float = 0.0
+    min_hole_mm: float = 0.0
+    source: str = ""  # what the numbers came from (material/printer names), for the report
+
+    @property
+    def active(self) -> bool:
+        return any(v > 0 for k, v in asdict(self).items() if k != "source")
+
+    def required_width_mm(self) -> float:
+        """Unshrunk width every tile needs at least (erosion by d takes at least 2d off a width)."""
+        return self.min_width_mm + 2.0 * self.shrink_mm if self.min_width_mm > 0 else 0.0
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+class _D:
+    """A value per row with its gradient in the 8 coordinates of the row's four corners."""
+
+    __slots__ = ("v", "g")
+
+    def __init__(self, v, g):
+        self.v, self.g = v, g
+
+    @staticmethod
+    def lift(o, like: "_D") -> "_D":
+        return o if isinstance(o, _D) else _D(np.broadcast_to(o, like.v.shape), np.zeros_like(like.g))
+
+    def __add__(self, o):
+        o = _D.lift(o, self)
+        return _D(self.v + o.v, self.g + o.g)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return _D(-self.v, -self.g)
+
+    def __sub__(self, o):
+        return self + (-_D.lift(o, self))
+
+    def __rsub__(self, o):
+        return _D.lift(o, self) - self
+
+    def __mul__(self, o):
+        if not isinstance(o, _D):
+            return _D(self.v * o, self.g * np.asarray(o)[..., None] if np.ndim(o) else self.g * o)
+        return _D(self.v * o.v, self.g * o.v[:, None] + o.g * self.v[:, None])
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, o):
+        if not isinstance(o, _D):
+            return self * (1.0 / o)
+        return _D(self.v / o.v, (self.g * o.v[:, None] - o.g * self.v[:, None]) / (o.v * o.v)[:, None])
+
+    def sqrt(self):
+        r = np.sqrt(self.v)
+        return _D(r, self.g / (2.0 * r)[:, None])
+
+
+def _corners(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
+    """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`_D` seeded on its 8 coordinates."""
+    m = len(rows)
+    p = x[quads[rows, k]]
+    gx = np.zeros((m, 8))
+    gy = np.zeros((m, 8))
+    gx[np.arange(m), 2 * k] = 1.0
+    gy[np.arange(m), 2 * k + 1] = 1.0
+    return _D(p[:, 0], gx), _D(p[:, 1], gy)
+
+
+def _sub(a, b):
+    return a[0] - b[0], a[1] - b[1]
+
+
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1]
+
+
+def _normal(a, b):
+    """Inward unit normal of the CCW edge a -> b."""
+    e = _sub(b, a)
+    ln = _dot(e, e).sqrt()
+    return -e[1] / ln, e[0] / ln
+
+
+def _mitre(x, quads, rows, j):
+    """Mitre vector at corner j: the corner moves by d times it when the quad shrinks by d."""
+    prev, here, nxt = (_corners(x, quads, rows, (j + s) % 4) for s in (-1, 0, 1))
+    na, nb = _normal(prev, here), _normal(here, nxt)
+    s = 1.0 + _dot(na, nb)
+    return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
+
+
+def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) -> _D:
+    """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major)."""
+    Q = len(quads)
+    rows = np.repeat(np.arange(Q), 4)
+    e = np.tile(np.arange(4), Q)
+    a, b = _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % 4)
+    n = _normal(a, b)
+    best = None
+    for off in (2, 3):
+        j = (e + off) % 4
+        g = _dot(n, _sub(_corners(x, quads, rows, j), a))
+        if shrink:
+            g = g + shrink * (_dot(n, _mitre(x, quads, rows, j)) - 1.0)
+        if best is None:
+            best = g
+        else:
+            take = g.v > best.v
+            best = _D(np.where(take, g.v, best.v), np.where(take[:, None], g.g, best.g))
+    return best - width
+
+
+def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float) -> _D:
+    """Signed length of every shrunk edge minus ``min_edge``."""
+    Q = len(quads)
+    rows = np.repeat(np.arange(Q), 4)
+    e = np.tile(np.arange(4), Q)
+    a, b = _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % 4)
+    E = _sub(b, a)
+    ln = _dot(E, E).sqrt()
+    u = E[0] / ln, E[1] / ln
+    ma, mb = _mitre(x, quads, rows, e), _mitre(x, quads, rows, (e + 1) % 4)
+    return ln + shrink * _dot(u, _sub(mb, ma)) - min_edge
+
+
+def hinge_angle_rows(x: np.ndarray, quads: np.ndarray, t: np.ndarray, k: np.ndarray, sin_min: float) -> _D:
+    """sin of the corner angle at hinge corners ``(t, k)`` minus ``sin_min``."""
+    v, a, b = (_corners(x, quads, t, (k + s) % 4) for s in (0, 1, -1))
+    A, B = _sub(a, v), _sub(b, v)
+    return (A[0] * B[1] - A[1] * B[0]) / (_dot(A, A) * _dot(B, B)).sqrt() - sin_min
+
+
+def spacing_rows(x: np.ndarray, quads: np.ndarray, t: np.ndarray, i: np.ndarray, j: np.ndarray,
+                 spacing: float) -> _D:
+    """Distance between corners ``i`` and ``j`` of quads ``t`` minus ``spacing``."""
+    d = _sub(_corners(x, quads, t, i), _corners(x, quads, t, j))
+    return _dot(d, d).sqrt() - spacing
+
+
+def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
+    """An inequality family from ``rows_of(x) -> _D`` over the quads named by ``meta['quad_of_row']``."""
+    owner = meta["quad_of_row"]
+
+    def fn(x):
+        r = rows_of(x)
+        return r.v, (quads[owner], r.g.reshape(len(owner), 4, 2))
+
+    return Family(name, "ineq", fn, 1, meta=meta, nv=nv, res=lambda x: rows_of(x).v)
+
+
+def _ccw(quads: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Quads reordered counter-clockwise in ``x`` (holes come either way round)."""
+    p = x[quads]
+    area = 0.5 * (p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1]).sum(1)
+    out = quads.copy()
+    out[area < 0] = out[area < 0][:, ::-1]
+    return out
+
+
+def families(st: Stencils, nv: int, limits: FabricationLimits | None, unit_mm: float,
+             base: np.ndarray) -> list[Family]:
+    """The fabrication rows of ``limits`` in normalised units (1 = ``unit_mm``); ``base`` orients holes."""
+    if limits is None or not limits.active:
+        return []
+    tiles = st.tiles
+    T = len(tiles)
+    out = []
+    d = limits.shrink_mm / unit_mm
+    per_edge = {"quad_of_row": np.repeat(np.arange(T), 4)}
+    if limits.min_width_mm > 0:
+        w = limits.min_width_mm / unit_mm
+        out.append(_family("fabrication_width", tiles, lambda x, w=w: width_rows(x, tiles, w, d), nv, dict(per_edge)))
+    if d > 0:
+        e_min = max(limits.min_edge_mm, fab.EDGE_EPS_MM) / unit_mm
+        out.append(_family("fabrication_shrunk_edges", tiles, lambda x: shrunk_edge_rows(x, tiles, d, e_min), nv,
+                           dict(per_edge)))
+    ht, hk = st.hinge_tiles.ravel(), st.hinge_corner.ravel()
+    if limits.min_hinge_angle_deg > 0:
+        s_min = float(np.sin(np.radians(limits.min_hinge_angle_deg)))
+        out.append(_family("fabrication_hinge_angles", tiles, lambda x: hinge_angle_rows(x, tiles, ht, hk, s_min),
+                           nv, {"quad_of_row": ht}))
+    if limits.hinge_spacing_mm > 0:
+        has = np.zeros((T, 4), dtype=bool)
+        has[ht, hk] = True
+        i, j = np.triu_indices(4, 1)
+        t, p = np.nonzero(has[:, i] & has[:, j])
+        s = limits.hinge_spacing_mm / unit_mm
+        out.append(_family("fabrication_hinge_spacing", tiles,
+                           lambda x: spacing_rows(x, tiles, t, i[p], j[p], s), nv, {"quad_of_row": t}))
+    if limits.min_hole_mm > 0 and len(st.hole_nodes):
+        holes = _ccw(st.hole_nodes, base)
+        wh = limits.min_hole_mm / unit_mm
+        out.append(_family("fabrication_holes", holes, lambda x: width_rows(x, holes, wh, 0.0), nv,
+                           {"quad_of_row": np.repeat(np.arange(len(holes)), 4)}))
+    return out
+
+
+def smallest_size(size_mm: float, area_mm2: float, n_tiles: int, limits: FabricationLimits) -> float | None:
+    """The smallest target size (same shape) at which the tiles could be wide enough, or None when
+    ``size_mm`` already could: ``n_tiles`` tiles each ``w`` wide cover at least ``n · w²/√3`` (Pál),
+    and they lie inside the deployed outline, so its area must be at least that."""
+    w = limits.required_width_mm()
+    need = fab.pal_bound(n_tiles, w)
+    if w <= 0 or area_mm2 >= need:
+        return None
+    return float(size_mm * np.sqrt(need / area_mm2))
