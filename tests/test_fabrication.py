@@ -175,7 +175,7 @@ def test_print_refusal_states_the_minimum(run_cli, tmp_path):
 
 # ---------------------------------------------------------------- design rows
 LIMITS = F.FabricationLimits(min_width_mm=0.3, shrink_mm=0.05, min_edge_mm=0.02, hinge_spacing_mm=0.2,
-                             min_hinge_angle_deg=20, min_hole_mm=0.1)
+                             hinge_edge_mm=0.25, min_hinge_angle_deg=20, min_hole_mm=0.1)
 
 
 @settings(max_examples=10, deadline=None)
@@ -186,7 +186,7 @@ def test_fabrication_jacobians_match_finite_differences(seed):
     x = p.nodes + 0.05 * np.random.default_rng(seed).standard_normal(p.nodes.shape)
     fams = F.families(stc, len(x), LIMITS, 1.0, p.nodes)
     assert {f.name for f in fams} == {"fabrication_width", "fabrication_shrunk_edges", "fabrication_hinge_angles",
-                                      "fabrication_hinge_spacing", "fabrication_holes"}
+                                      "fabrication_hinge_spacing", "fabrication_hinge_edges", "fabrication_holes"}
     h = 1e-6
     for f in fams:
         r, J = f(x)
@@ -205,7 +205,8 @@ def test_width_rows_are_the_shared_definition():
     x = p.nodes + 0.05 * np.random.default_rng(1).standard_normal(p.nodes.shape)
     for d in (0.0, 0.05):
         rows = F.width_rows(x, stc.tiles, 0.0, d).v.reshape(-1, 4).min(1)
-        assert np.allclose(rows, fab.widths(x[stc.tiles], d), atol=1e-12)
+        w = fab.widths(x[stc.tiles], d)
+        assert (rows <= w + 1e-12).all() and (rows >= w - F.SMOOTH).all()  # the smooth max: never above
 
 
 @pytest.mark.parametrize("rigid", [True, False])

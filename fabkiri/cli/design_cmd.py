@@ -274,7 +274,8 @@ def _summary(path, report: dict, valid: bool) -> None:
     fr = report.get("fabrication")
     if fr:
         print("fabrication rows: " + ", ".join(
-            f"{k[len('fabrication_'):]} {fr['active'][k]}/{fr['rows'][k]} active (min slack {fr['min_mm'][k]:.3g} mm)"
+            f"{k[len('fabrication_'):]} {fr['active'][k]}/{fr['rows'][k]} active (min slack {fr['min'][k]:.3g}"
+            f"{'' if 'angle' in k else ' mm'})"
             for k in fr["rows"]), file=sys.stderr)
     if report.get("fabricability"):
         for line in fabricability.summary_lines(report["fabricability"]):

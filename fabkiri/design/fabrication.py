@@ -5,10 +5,11 @@ preset into them, this layer never sees a preset). At the design's size every ti
 
 * at least ``min_width_mm`` wide at its thinnest once shrunk by ``shrink_mm`` (the smallest
   altitude of :mod:`fabkiri.pattern.fabricability`, the definition ``cut`` checks): one row per
-  tile edge, ``max_j dist(q_j, line e) - w >= 0`` over the two far corners (the larger one's
-  gradient: the max is piecewise smooth);
+  tile edge, ``max_j dist(q_j, line e) - w >= 0`` over the two far corners, the max taken smoothly
+  (:func:`smooth_max`, never above it, so a design that meets the rows meets ``cut``'s check);
 * with ``shrink_mm``, every shrunk edge at least ``min_edge_mm`` long;
-* ``hinge_spacing_mm`` between any two of its hinge corners (tape, ligament or strip allowance);
+* ``hinge_spacing_mm`` between any two of its hinge corners (tape, ligament or strip allowance), and
+  every edge that ends at a hinge ``hinge_edge_mm`` long (a printed strip runs along it);
 * at every hinge corner, an angle whose sine is at least ``sin(min_hinge_angle_deg)`` (a printed
   strip's pad on an acute corner is too small at any scale);
 * and every deployed hole at least ``min_hole_mm`` wide (opt-in).
@@ -36,6 +37,7 @@ class FabricationLimits:
     shrink_mm: float = 0.0
     min_edge_mm: float = 0.0
     hinge_spacing_mm: float = 0.0
+    hinge_edge_mm: float = 0.0  # every edge with a hinge at an end at least this long (a strip's seam)
     min_hinge_angle_deg: float = 0.0
     min_hole_mm: float = 0.0
     source: str = ""  # what the numbers came from (material/printer names), for the report
@@ -137,18 +139,26 @@ def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) ->
     e = np.tile(np.arange(4), Q)
     a, b = _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % 4)
     n = _normal(a, b)
-    best = None
+    far = []
     for off in (2, 3):
         j = (e + off) % 4
         g = _dot(n, _sub(_corners(x, quads, rows, j), a))
         if shrink:
             g = g + shrink * (_dot(n, _mitre(x, quads, rows, j)) - 1.0)
-        if best is None:
-            best = g
-        else:
-            take = g.v > best.v
-            best = _D(np.where(take, g.v, best.v), np.where(take[:, None], g.g, best.g))
-    return best - width
+        far.append(g)
+    return smooth_max(*far) - width
+
+
+SMOOTH = 0.02  # normalised (tile edges): the smooth max is at most this much below the max, never above
+
+
+def smooth_max(a: _D, b: _D, eps: float = SMOOTH) -> _D:
+    """``(a+b)/2 + sqrt(((a-b)/2)² + ε²) - ε``: smooth, in [max - ε, max], equal to it where a = b.
+
+    The far corners of a near-parallelogram tile (most tiles of a rotating-squares pattern) are nearly
+    equidistant from an edge, and the plain max switched gradients there from step to step."""
+    h = (a - b) * 0.5
+    return (a + b) * 0.5 + (h * h + eps * eps).sqrt() - eps
 
 
 def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float) -> _D:
@@ -228,6 +238,14 @@ def families(st: Stencils, nv: int, limits: FabricationLimits | None, unit_mm: f
         s = limits.hinge_spacing_mm / unit_mm
         out.append(_family("fabrication_hinge_spacing", tiles,
                            lambda x: spacing_rows(x, tiles, t, i[p], j[p], s), nv, {"quad_of_row": t}))
+    if limits.hinge_edge_mm > 0:
+        has = np.zeros((T, 4), dtype=bool)
+        has[ht, hk] = True
+        k = np.arange(4)
+        te, e = np.nonzero(has | has[:, (k + 1) % 4])
+        s_e = limits.hinge_edge_mm / unit_mm
+        out.append(_family("fabrication_hinge_edges", tiles,
+                           lambda x: spacing_rows(x, tiles, te, e, (e + 1) % 4, s_e), nv, {"quad_of_row": te}))
     if limits.min_hole_mm > 0 and len(st.hole_nodes):
         holes = _ccw(st.hole_nodes, base)
         wh = limits.min_hole_mm / unit_mm

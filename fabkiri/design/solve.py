@@ -698,7 +698,9 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     if fab_names:  # the fabrication family: its rows, how many are active, the smallest (mm)
         report["fabrication"] = {"limits": req.fabrication.to_dict(), "rows": {k: int(len(gvals[k])) for k in fab_names},
                                  "active": {k: active[k] for k in fab_names},
-                                 "min_mm": {k: float(gvals[k].min()) * L0 for k in fab_names}}
+                                 # smallest row: mm for lengths, a sine for the hinge angles
+                                 "min": {k: float(gvals[k].min()) * (L0 if "angle" not in k else 1.0)
+                                         for k in fab_names}}
     log(f"{report['status']}: max equality residual {eq_worst:.2e}, fit {mode}, "
         f"{report['iterations_total']} iterations, {elapsed:.2f}s")
     lat = {"kind": "quad", "rows": req.rows, "cols": req.cols, "angle_deg": 45.0,

@@ -328,8 +328,13 @@ def printer_limits(printer: Printer, style: str) -> dict:
         out["hinge_spacing_mm"] = 2.0 * hollow + 2.0 * printer.nozzle_mm
     else:  # a pad on an acute corner is about a triangle: ½ tan α w² against the printer's 0.25 w min(reach, w)
         w, reach = printer.strip_width_mm, printer.strip_reach_mm
+        # two strips on one face reach into a tile from opposite edges: it must hold both and a clearance
+        out["min_width_mm"] = max(out["min_width_mm"], 2.0 * reach + printer.radial_clearance_mm)
         out["min_hinge_angle_deg"] = float(np.degrees(np.arctan(0.5 * min(reach, w) / w))) + PAD_MARGIN_DEG
-        out["hinge_spacing_mm"] = w + printer.radial_clearance_mm
+        # two strips on one face run w along their seams towards each other: 2w + clearance + the gap
+        # (the standard 16x16 pattern prints from 8.7 mm tiles on prusa-mk4: 2·4 + 0.3 + 0.4)
+        out["hinge_spacing_mm"] = 2.0 * w + printer.radial_clearance_mm + printer.gap_mm
+        out["hinge_edge_mm"] = w + printer.gap_mm  # the strip runs w along the seam from the shrunk corner
     return out
 
 
