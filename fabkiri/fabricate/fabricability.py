@@ -314,7 +314,10 @@ def material_limits(material: Material, kind: str | None = None) -> dict:
     if kind == "ligament" and ligament_never(material):
         raise FabricationError(f"{material.name} cannot be cut as a ligament sheet: {ligament_never(material)}")
     shrink = shrink_of(material, kind)
-    return {"min_width_mm": material.min_web_mm, "shrink_mm": shrink, "min_edge_mm": material.min_web_mm if shrink else 0.0,
+    # a ligament strip's root reaches into the shrunk tile: the tile holds it and a web (cut itself asks a web;
+    # at a web alone the layout verifier's four-corner recovery failed on 0.46 mm pp tiles, 16x16 circle)
+    width = material.min_web_mm + (material.ligament_width_mm if kind == "ligament" else 0.0)
+    return {"min_width_mm": width, "shrink_mm": shrink, "min_edge_mm": material.min_web_mm if shrink else 0.0,
             "hinge_spacing_mm": HINGE_ALLOWANCE[kind](material)}
 
 
