@@ -132,12 +132,16 @@ def _mitre(x, quads, rows, j):
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
 
 
+def _edges(x: np.ndarray, quads: np.ndarray):
+    """Every quad's edge e (quad-major): row quads, e, and the edge's two ends."""
+    rows = np.repeat(np.arange(len(quads)), 4)
+    e = np.tile(np.arange(4), len(quads))
+    return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % 4)
+
+
 def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) -> _D:
     """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major)."""
-    Q = len(quads)
-    rows = np.repeat(np.arange(Q), 4)
-    e = np.tile(np.arange(4), Q)
-    a, b = _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % 4)
+    rows, e, a, b = _edges(x, quads)
     n = _normal(a, b)
     far = []
     for off in (2, 3):
@@ -163,10 +167,7 @@ def smooth_max(a: _D, b: _D, eps: float = SMOOTH) -> _D:
 
 def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float) -> _D:
     """Signed length of every shrunk edge minus ``min_edge``."""
-    Q = len(quads)
-    rows = np.repeat(np.arange(Q), 4)
-    e = np.tile(np.arange(4), Q)
-    a, b = _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % 4)
+    rows, e, a, b = _edges(x, quads)
     E = _sub(b, a)
     ln = _dot(E, E).sqrt()
     u = E[0] / ln, E[1] / ln
