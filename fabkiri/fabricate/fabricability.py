@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+import shapely
+import shapely.errors
 
 from ..errors import CheckFailed, FabricationError
 from ..pattern import fabricability as fab
@@ -166,6 +168,8 @@ def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> s
             printgeom.strip_outlines(plan, printer)
     except FabricationError as exc:
         return str(exc)
+    except shapely.errors.GEOSException as exc:  # seen once in a bisection (ellipse 16x16 rigid, prusa-mk4):
+        return f"the plan geometry failed in GEOS ({exc})"  # refused there, never a crash of design or info
     return ""
 
 
