@@ -24,6 +24,7 @@ COMMANDS = [
     "fabkiri.cli.design_cmd",
     "fabkiri.cli.deploy_cmd",
     "fabkiri.cli.print_cmd",
+    "fabkiri.cli.tolerance_cmd",
 ]
 
 
