@@ -25,6 +25,7 @@ COMMANDS = [
     "fabkiri.cli.deploy_cmd",
     "fabkiri.cli.print_cmd",
     "fabkiri.cli.tolerance_cmd",
+    "fabkiri.cli.coupon_cmd",
 ]
 
 
