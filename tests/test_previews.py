@@ -41,3 +41,40 @@ def test_svg_renders_visible_in_inkscape(run_cli, tmp_path):
     assert dark.mean() > 1e-3  # lines drawn, not an all-white page
     red = a[..., 0] - np.maximum(a[..., 1], a[..., 2]) > 40  # reddish, antialiased at 0.38 px
     assert red.sum() > 1000  # the CUT colour survives (laser convention: red cuts)
+
+
+def _path(name, **kw):
+    from fabkiri.mechanics.deploy import deployment_path
+    from fabkiri.pattern.io import read_pattern
+
+    return deployment_path(read_pattern(TEMPLATES / "patterns" / f"{name}.json"), 12, **kw)
+
+
+def test_gif_is_large_and_greys_out_energy_below_noise():
+    from io import BytesIO
+
+    from fabkiri.render.deployment import deployment_gif
+
+    path = _path("circle-8x8-rigid")
+    assert path.tile_energy.max() < 1e-12
+    im = Image.open(BytesIO(deployment_gif(path, color="energy", max_frames=5)))
+    assert min(im.size) >= 800 and im.n_frames == 5
+    im.seek(2)
+    a = np.asarray(im.convert("RGB")).astype(int)
+    # no energy colour map on noise: every pixel is grey (R = G = B)
+    assert (a.max(axis=2) - a.min(axis=2)).max() <= 6
+
+
+def test_energy_zoom_axes_have_no_offset():
+    from fabkiri.render.deployment import _energy_axes, _pyplot
+
+    plt = _pyplot()
+    path = _path("heart-8x8")
+    fig, ax = plt.subplots()
+    a, b = path.elastic_segments[-1]
+    _energy_axes(ax, path, b - 1e-8, b, anchor=1.0)
+    fig.canvas.draw()
+    assert "+" not in ax.xaxis.get_offset_text().get_text()
+    labels = [t.get_text() for t in ax.get_xticklabels()]
+    assert all(len(s) <= 6 for s in labels), labels
+    plt.close(fig)
