@@ -398,7 +398,7 @@ def test_cli_default_command(run_cli, tmp_path):
     code, stdout, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out)
     assert code == 0, err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["manifest.json", "standard-8x8.dxf", "standard-8x8.png", "standard-8x8.svg"]
+    assert names == ["assembly.png", "manifest.json", "standard-8x8.dxf", "standard-8x8.png", "standard-8x8.svg"]
     man = json.loads((out / "manifest.json").read_text())
     assert man["verification"]["ok"] and man["verification"]["verifier"]["ok"]
     assert man["hinge"] == "tape" and man["material"]["name"] == "acrylic-3"

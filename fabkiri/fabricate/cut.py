@@ -75,7 +75,7 @@ class CutOptions:
     stroke_mm: float = STROKE_MM  # SVG stroke width: what a viewer draws; the colour says cut/score/engrave
 
 
-ROW_LISTS = ("tiles", "hinges", "hinge_features")  # manifest lists written one row per line
+ROW_LISTS = ("tiles", "hinges", "hinge_features", "assembly_pieces")  # manifest lists written one row per line
 
 
 @dataclass
@@ -510,6 +510,15 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         smallest = min((float(h[h > 0].min()) for h in shown), default=None)
         files[f"{options.stem}.png"] = png_bytes(sheets, colors, label_mm=smallest)
 
+    # ---- assembly: tape pieces numbered in join order, and their map
+    from . import assembly as asm
+
+    pieces = asm.tape_pieces(pattern, Q, sheet_of, letters, kind, CORNER_FRAC, TAPE_REACH_MM)
+    if "png" in options.formats and pieces:
+        by_sheet = [Q[sheet_of == s] for s in range(place.n_sheets)]
+        files["assembly.png"] = asm.map_png(by_sheet, pieces, asm.tape_shapes(pattern, Q, pieces, CORNER_FRAC,
+                                                                             TAPE_REACH_MM), options.stem)
+
     # ---- manifest
     sheet_rows = []
     for sd, name in zip(sheets, names):
@@ -579,5 +588,13 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         "files": sorted(list(files) + ["manifest.json"]),
         "verification": None,
     }
+    n_top = sum(p["face"] == "T" for p in pieces)
+    manifest["assembly"] = {"joins": "tape" if pieces else None, "order": "top face first, then the bottom; "
+                            "breadth-first spanning tree from tile 0, then the loop-closing joins",
+                            "steps": asm.assembly_steps(kind, n_top, len(pieces) - n_top),
+                            "map": "assembly.png" if "assembly.png" in files else None}
+    manifest["assembly_pieces"] = pieces
+    manifest["bill_of_materials"] = asm.cut_bom(manifest, pieces, float(shapely.area(shapely.polygons(corners)).sum()),
+                                                Hn)
     return CutResult(sheets=sheets, files=files, manifest=manifest, warnings=warnings, tile_regions=Q,
                      tile_sheet=sheet_of)
