@@ -225,7 +225,7 @@ def print_pieces(pattern: Pattern, r) -> tuple[list[dict], dict[int, np.ndarray]
     """Strips numbered in join order (strips style: glued by hand) with their outlines on the plan."""
     job = r.job
     plan = job.plan
-    if job.strips is None:
+    if job.style != "strips" or job.strips is None:  # other styles print their hinges in place
         return [], {}
     H = plan.n_hinges
     order = join_order(pattern, np.arange(H), plan.top)
