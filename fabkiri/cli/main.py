@@ -26,6 +26,7 @@ COMMANDS = [
     "fabkiri.cli.print_cmd",
     "fabkiri.cli.tolerance_cmd",
     "fabkiri.cli.coupon_cmd",
+    "fabkiri.cli.report_cmd",
 ]
 
 
