@@ -216,8 +216,8 @@ def print_assembly(r) -> dict[str, Any]:
            "strips_top": 0 if job.style == "pinned" else n_top,
            "strips_bottom": 0 if job.style == "pinned" else plan.n_hinges - n_top,
            "beds": len(job.beds), "bodies": bodies, "filament": filament,
-           "filament_note": f"{FILAMENT_DIAMETER_MM} mm filament, typical densities; the slicer adds infill and "
-                            "supports rules of its own: these are solid volumes"}
+           "filament_note": f"{FILAMENT_DIAMETER_MM} mm filament, typical densities; solid volumes (the "
+                            "slicer's infill and supports change them)"}
     return out
 
 

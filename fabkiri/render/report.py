@@ -74,12 +74,16 @@ def _missing(text: str) -> str:
 
 
 def _fmt(v: Any) -> str:
+    if v is None:
+        return "n/a"
     if isinstance(v, bool):
         return '<span class="ok">yes</span>' if v else '<span class="fail">no</span>'
     if isinstance(v, float):
-        return f"{v:.4g}"
+        return f"{v:.6g}" if abs(v) >= 1e3 else f"{v:.4g}"
     if isinstance(v, (list, tuple)) and len(v) <= 8 and all(not isinstance(x, (dict, list)) for x in v):
         return ", ".join(_fmt(x) for x in v)
+    if isinstance(v, (list, tuple)) and len(v) <= 8 and all(isinstance(x, (list, tuple)) and len(x) <= 4 for x in v):
+        return "; ".join(" x ".join(_fmt(y) for y in x) for x in v)
     if isinstance(v, (dict, list)):
         return f"<pre>{html.escape(json.dumps(v, indent=1)[:3000])}</pre>"
     return html.escape(str(v))
@@ -222,8 +226,9 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
         body = _img(states_png(pattern, states, targets), ".png", "closed states")
         if not targets:
             body += _missing("no outline targets stored for the closed states")
-        body += table({f"closed state {s.state}": {"closes": s.closes, "loop closure (tile sizes)": s.max_closure_rel,
-                                                   "edge pairs (mm)": s.edge_pair_max_mm} for s in info.states})
+        body += rows_table([{"closed state": s.state, "closes": s.closes, "loop closure (tile sizes)": s.max_closure_rel,
+                             "edge pairs (mm)": s.edge_pair_max_mm, "rings (rad)": s.ring_max_rad}
+                            for s in info.states])
     else:
         body = _missing("the pattern does not close in both states: " + "; ".join(info.problems()))
     parts["states"] = body
@@ -299,8 +304,41 @@ def _print_section(d: Path | None, man: dict | None) -> str:
                   "meshes ok": meshes.get("ok"), "tiles check": (checks.get("tiles") or {}).get("ok"),
                   "verifier": (checks.get("verifier") or {}).get("ok") if checks.get("verifier") else "n/a"})
     previews = [n for n in man.get("files", []) if n.endswith(".png") and n != "assembly.png"]
-    body += _pictures(d, previews, "print preview") or _missing("no print previews in the folder")
-    return body
+    shown = _pictures(d, previews, "print preview")
+    if not shown:  # no preview written by print: draw the plates from the meshes, seen from above
+        meshes = [n for n in man.get("files", []) if n.endswith(".stl") and (d / n).is_file()]
+        shown = '<div class="grid">' + "".join(
+            _img(plate_png(d / n), ".png", n, f"plate seen from above, drawn from {n}") for n in meshes[:4]) + "</div>"
+    return body + (shown if meshes_or(shown) else _missing("no print previews or meshes in the folder"))
+
+
+def meshes_or(html_text: str) -> bool:
+    return "<img" in html_text
+
+
+def plate_png(stl: Path) -> bytes:
+    """A mesh seen from above: its triangles projected onto the bed, shaded by height."""
+    import trimesh
+    from matplotlib.collections import PolyCollection
+
+    m = trimesh.load(stl, force="mesh")
+    up = m.face_normals[:, 2] > 1e-6  # faces seen from above
+    tri = m.triangles[up]
+    z = tri[:, :, 2].mean(1)
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
+    ax.add_collection(PolyCollection(tri[:, :, :2], array=z, cmap="viridis", edgecolors="none"))
+    lo, hi = m.bounds[0], m.bounds[1]
+    ax.set_xlim(lo[0] - 2, hi[0] + 2)
+    ax.set_ylim(lo[1] - 2, hi[1] + 2)
+    ax.set_aspect("equal")
+    ax.ticklabel_format(useOffset=False, style="plain")
+    ax.set_xlabel("bed x (mm)", fontsize=8)
+    ax.set_ylabel("bed y (mm)", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.set_title(f"{stl.name}: {len(m.faces)} triangles, {m.bounds[1][0] - lo[0]:.0f} x {hi[1] - lo[1]:.0f} x "
+                 f"{hi[2] - lo[2]:.1f} mm", fontsize=9)
+    return _fig_png(fig)
 
 
 def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
