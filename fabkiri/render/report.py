@@ -84,6 +84,8 @@ def _fmt(v: Any) -> str:
         return ", ".join(_fmt(x) for x in v)
     if isinstance(v, (list, tuple)) and len(v) <= 8 and all(isinstance(x, (list, tuple)) and len(x) <= 4 for x in v):
         return "; ".join(" x ".join(_fmt(y) for y in x) for x in v)
+    if isinstance(v, dict) and len(v) <= 8 and all(not isinstance(x, (dict, list)) for x in v.values()):
+        return "<br>".join(f"{html.escape(str(k))}: {_fmt(x)}" for k, x in v.items())
     if isinstance(v, (dict, list)):
         return f"<pre>{html.escape(json.dumps(v, indent=1)[:3000])}</pre>"
     return html.escape(str(v))
