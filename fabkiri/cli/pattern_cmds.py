@@ -40,8 +40,9 @@ def import_other(path: str, scale: float) -> Pattern | None:
     p = Path(path)
     if p.suffix.lower() == ".fold":
         from ..pattern.fold import loads_fold
+        from ..pattern.io import _read_text
 
-        pat = loads_fold(p.read_text("utf-8"), str(p))
+        pat = loads_fold(_read_text(p), str(p))
         if scale != 1.0:
             pat = Pattern(nodes=pat.nodes * scale, tiles=pat.tiles,
                           contracted={k: v * scale for k, v in pat.contracted.items()}, name=pat.name,

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PatternError
+from .io import _read_text
 from .model import Pattern
 
 FILES = ("vertices.txt", "constraints.txt", "target.txt")
@@ -59,7 +60,7 @@ def pykirigami_files(pattern: Pattern, start: np.ndarray, unit_mm: float | None 
 
 def _read_tiles(path: Path) -> np.ndarray:
     rows = []
-    for k, line in enumerate(path.read_text("utf-8").splitlines(), 1):
+    for k, line in enumerate(_read_text(path).splitlines(), 1):
         try:
             vals = [float(v) for v in line.split()]
         except ValueError:
@@ -95,7 +96,7 @@ def read_pykirigami(folder: str | os.PathLike, unit_mm: float = 1.0) -> Pattern:
             i = parent[i]
         return i
 
-    for k, line in enumerate((d / "constraints.txt").read_text("utf-8").splitlines(), 1):
+    for k, line in enumerate(_read_text(d / "constraints.txt").splitlines(), 1):
         parts = line.split()
         if not parts:
             continue
