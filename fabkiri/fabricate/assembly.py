@@ -26,6 +26,7 @@ import shapely
 from ..pattern.model import Pattern
 from .text import text_strokes_many, text_width
 
+MAP_MAX_PIECES = 3000  # above this the numbers are not legible on one picture; the manifest still lists them
 FILAMENT_DIAMETER_MM = 1.75
 DENSITY_G_CM3 = {"PLA": 1.24, "PETG": 1.27, "TPU": 1.21, "ABS": 1.04, "ASA": 1.07}  # typical datasheet values
 
@@ -63,23 +64,18 @@ def tape_pieces(pattern: Pattern, Q: np.ndarray, sheet_of: np.ndarray, letters: 
     order = join_order(pattern, np.arange(top_.n_hinges), face_top)
     ta = _corner_triangles(Q, A, cA, frac, reach_mm)
     tb = _corner_triangles(Q, B, cB, frac, reach_mm)
-    cross = sheet_of[A] != sheet_of[B]
-    rows = []
-    for n, h in enumerate(order.tolist(), 1):
-        ca, cb = ta[h].mean(0), tb[h].mean(0)
-        if cross[h] or kind == "separate":  # the tiles are apart on the sheet: the piece spans one corner pair
-            length = 2.0 * float(np.max(np.linalg.norm(ta[h] - ta[h][0], axis=1)))
-            where = ta[h][0]
-        else:
-            u = (ca - cb) / max(float(np.linalg.norm(ca - cb)), 1e-12)
-            pts = np.concatenate([ta[h], tb[h]])
-            s = pts @ u
-            length = float(s.max() - s.min())
-            where = 0.5 * (ta[h][0] + tb[h][0])
-        rows.append({"piece": n, "hinge": int(h), "tiles": [int(A[h]), int(B[h])], "face": letters[h],
-                     "sheet": int(sheet_of[A[h]]) + 1, "at_mm": np.round(where, 3).tolist(),
-                     "length_mm": round(length, 3)})
-    return rows
+    # tiles apart on the sheet (separate tiles, split sheets): the piece spans one corner pair, twice A's reach
+    apart = (sheet_of[A] != sheet_of[B]) | (kind == "separate")
+    u = ta.mean(1) - tb.mean(1)
+    u = u / np.maximum(np.linalg.norm(u, axis=1), 1e-12)[:, None]
+    s = np.einsum("hkd,hd->hk", np.concatenate([ta, tb], 1), u)
+    length = np.where(apart, 2.0 * np.linalg.norm(ta - ta[:, :1], axis=2).max(1), s.max(1) - s.min(1))
+    where = np.where(apart[:, None], ta[:, 0], 0.5 * (ta[:, 0] + tb[:, 0]))
+    where, length = np.round(where, 3).tolist(), np.round(length, 3).tolist()
+    sheet = (sheet_of[A] + 1).tolist()
+    A, B = A.tolist(), B.tolist()
+    return [{"piece": n, "hinge": h, "tiles": [A[h], B[h]], "face": letters[h], "sheet": sheet[h],
+             "at_mm": where[h], "length_mm": length[h]} for n, h in enumerate(order.tolist(), 1)]
 
 
 def cut_bom(manifest: dict, pieces: list[dict], tile_area_mm2: float, n_hinges: int) -> dict[str, Any]:
@@ -177,19 +173,18 @@ def map_png(corners_by_sheet: list[np.ndarray], pieces: list[dict], shapes: dict
 
 def tape_shapes(pattern: Pattern, Q: np.ndarray, pieces: list[dict], frac: float, reach_mm: float
                 ) -> dict[int, np.ndarray]:
-    """Each tape piece's outline: the convex hull of its two corner triangles (one, for split joins)."""
+    """Each tape piece's outline: the convex hull of its two corner triangles (A's only, for tiles apart)."""
     top_ = pattern.topology
-    out = {}
-    for p in pieces:
-        h = p["hinge"]
-        A, B = top_.hinge_tiles[h]
-        cA, cB = top_.hinge_corner[h]
-        tri = [_corner_triangles(Q, np.array([A]), np.array([cA]), frac, reach_mm)[0]]
-        if np.linalg.norm(Q[A, cA] - Q[B, cB]) < 1e-6:
-            tri.append(_corner_triangles(Q, np.array([B]), np.array([cB]), frac, reach_mm)[0])
-        hull = shapely.convex_hull(shapely.multipoints(np.concatenate(tri)))
-        out[p["piece"]] = np.asarray(hull.exterior.coords)[:-1]
-    return out
+    h = np.array([p["hinge"] for p in pieces], dtype=np.int64)
+    A, B = top_.hinge_tiles[h].T
+    cA, cB = top_.hinge_corner[h].T
+    ta = _corner_triangles(Q, A, cA, frac, reach_mm)
+    tb = _corner_triangles(Q, B, cB, frac, reach_mm)
+    together = np.linalg.norm(Q[A, cA] - Q[B, cB], axis=1) < 1e-6
+    pts = np.concatenate([ta, np.where(together[:, None, None], tb, ta)], 1)  # (N, 6, 2)
+    hulls = shapely.convex_hull(shapely.multipoints(pts.reshape(-1, 2), indices=np.repeat(np.arange(len(h)), 6)))
+    rings = shapely.get_exterior_ring(hulls)
+    return {p["piece"]: shapely.get_coordinates(r)[:-1] for p, r in zip(pieces, rings)}
 
 
 # ----------------------------------------------------------------------- print

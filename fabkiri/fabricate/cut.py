@@ -514,7 +514,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     from . import assembly as asm
 
     pieces = asm.tape_pieces(pattern, Q, sheet_of, letters, kind, CORNER_FRAC, TAPE_REACH_MM)
-    if "png" in options.formats and pieces:
+    if "png" in options.formats and 0 < len(pieces) <= asm.MAP_MAX_PIECES:
         by_sheet = [Q[sheet_of == s] for s in range(place.n_sheets)]
         files["assembly.png"] = asm.map_png(by_sheet, pieces, asm.tape_shapes(pattern, Q, pieces, CORNER_FRAC,
                                                                              TAPE_REACH_MM), options.stem)
@@ -592,7 +592,9 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     manifest["assembly"] = {"joins": "tape" if pieces else None, "order": "top face first, then the bottom; "
                             "breadth-first spanning tree from tile 0, then the loop-closing joins",
                             "steps": asm.assembly_steps(kind, n_top, len(pieces) - n_top),
-                            "map": "assembly.png" if "assembly.png" in files else None}
+                            "map": "assembly.png" if "assembly.png" in files else None,
+                            "map_note": None if len(pieces) <= asm.MAP_MAX_PIECES else
+                            f"no map: {len(pieces)} pieces are more than {asm.MAP_MAX_PIECES} legible numbers"}
     manifest["assembly_pieces"] = pieces
     manifest["bill_of_materials"] = asm.cut_bom(manifest, pieces, float(shapely.area(shapely.polygons(corners)).sum()),
                                                 Hn)
