@@ -14,6 +14,9 @@ import trimesh
 def _cut_polylines_dxf(path):
     doc = ezdxf.readfile(path)
     assert doc.header["$INSUNITS"] == 4  # millimetres
+    auditor = doc.audit()
+    assert not auditor.has_errors and not auditor.has_fixes  # a clean DXF for laser software
+    assert {e.dxf.layer for e in doc.modelspace()} <= {"CUT", "ENGRAVE", "SCORE", "NOTES"}
     out = []
     for e in doc.modelspace().query("LWPOLYLINE[layer=='CUT']"):
         pts = np.array([p[:2] for p in e.get_points()])
