@@ -50,6 +50,7 @@ from ..pattern import geometry
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
+from . import outline
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
 from .reduced import fit_miss, solve_reduced
@@ -562,6 +563,38 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     return None
 
 
+def _solve_outline(prob: _Problem, log, iters: dict):
+    """Square/circle closed-state outlines in the rigid family (``outline.py``); ``(X, mode)`` or None.
+
+    A circle target is size-free: its state's target becomes the fitted circle (centre and radius), so the
+    report and the CLI's outline check measure against that circle.
+    """
+    res = outline.solve_outline(prob, log, iters)
+    if res is None:
+        return None
+    X, mode, fitted = res
+    saved = dict(prob.curves_mm), list(prob.families)
+    M, N = prob.req.rows, prob.req.cols
+    for s, (centre, radius) in fitted.items():
+        g = prob.grids[s]
+        # the fitted circle, split into its four arcs at the directions of the grid's corners (BL, BR, TR, TL)
+        corners = X[g.offset + np.array([0, N, (M + 1) * (N + 1) - 1, M * (N + 1)])] - centre
+        unit = prob.req.contracted[s]
+        lo, hi = unit.bbox
+        start = unit.points[0] - 0.5 * (lo + hi)  # a circle's parameter is its angle from the first point over 2π
+        u = np.mod((np.arctan2(corners[:, 1], corners[:, 0]) - np.arctan2(start[1], start[0])) / (2 * np.pi), 1.0)
+        pts = (unit.points - 0.5 * (lo + hi)) * (radius * prob.L0 / (0.5 * float((hi - lo).max()))) + centre * prob.L0
+        mm = Target(unit.name, unit.kind, pts, corners=u, source=dict(unit.source))
+        prob.curves_mm[s] = mm
+        prob.families = [C.shape_match(g.boundary, g.boundary_side, mm.transformed(1.0 / prob.L0), prob.nv,
+                                       f.name) if f.name == f"closed_shape_{s}" else f for f in prob.families]
+    if _acceptable(prob, X):
+        return X, mode
+    log("the closed-state outline design fails a family check: falling back to the full solver")
+    prob.curves_mm, prob.families = saved
+    return None
+
+
 def _solve_full(prob: _Problem, log, iters: dict):
     """Penalty LM stages then projection (module docstring); returns ``(X, mode)``."""
     req = prob.req
@@ -648,6 +681,9 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
             log(f"objective: rigid family {f_red:.4e}, full {f_full:.4e}" + ("" if ok_full else " (unconverged)"))
             if ok_full and f_full < f_red:
                 out, solver = full, full_name
+    if out is None and req.solver == "auto" and outline.applies(req):
+        out = _solve_outline(prob, log, iters)
+        solver = "closed-form rigid family, closed-state outlines (exact square, size-free circle)"
     if out is None:
         out = _solve_full(prob, log, iters)
         solver = full_name
