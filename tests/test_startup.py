@@ -74,3 +74,16 @@ def test_periodic_spline_equals_scipy(k, seed):
         scale = np.abs(ref(u, nu)).max() + 1.0
         assert np.abs(ours(u, nu) - ref(u, nu)).max() <= 1e-9 * scale
         assert np.abs(vals[nu] - ref(u, nu)).max() <= 1e-9 * scale
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(1, 9), st.integers(1, 9), st.integers(1, 20), st.integers(1, 20), st.integers(0, 2 ** 32 - 1))
+def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
+    from scipy.interpolate import RegularGridInterpolator
+
+    from fabkiri.design.rigid import resample_grid
+
+    grid = np.random.default_rng(seed).normal(size=(m + 1, n + 1, 2))
+    at = RegularGridInterpolator((np.arange(m + 1.0), np.arange(n + 1.0)), grid, method="linear")
+    yi, xi = np.meshgrid(np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1), indexing="ij")
+    assert np.abs(resample_grid(grid, rows, cols) - at(np.stack([yi, xi], -1))).max() <= 1e-12

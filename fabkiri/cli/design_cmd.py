@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..design.initial import INITS
-from ..design.solve import DesignRequest, design
+from ..design.solve import DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..errors import InputError, SolveError
 from ..mechanics.contract import contract
@@ -141,6 +141,8 @@ def cmd_design(args: argparse.Namespace) -> int:
         inits = [args.init]
     elif args.rigid and rows * cols >= BIG_TILES:
         inits = list(BIG_RIGID_INITS)
+    elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
+        inits = ["coarse"]
     else:
         inits = list(AUTO_INITS)
     attempts = []

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import sparse
@@ -100,6 +100,11 @@ FULL_ABOVE = 2.5e-3
 # ... but not above this many tiles: at 64x64 the full solver takes 1-8 minutes and did not find the better
 # design on hard targets (rigid heart from rescaled: 21.6 mm either way; ellipse: 7.4 mm after 7.8 min)
 FULL_MAX_TILES = 32 * 32
+# from this many tiles a non-rigid rhombus design (no symmetry, no closed-state target) is solved as the rigid
+# one, coarse to fine: a rigid member satisfies every non-rigid equality, and there the full solver over all
+# nodes was slower and mostly worse (API, rescaled, 100 mm: 32x32 heart 90 s CPU, Hausdorff 7.1 % of the
+# target's diagonal; 32x32 ellipse 84 s CPU and unconverged, 11.8 %; rigid family: 9.5 s / 7.5 %, 3.9 s / 1.2 %)
+VIA_RIGID_TILES = 32 * 32
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 
 
@@ -171,6 +176,7 @@ class _Problem:
         base = std.nodes.copy()
         n = len(base)
         self.coarse = None
+        self.start_member = None  # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
         self._rigid: RigidFamily | None = None
         if req.init == "coarse":
             X0, L0 = self._coarse_guess(base, st)
@@ -275,7 +281,9 @@ class _Problem:
         grid = resample_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2),
                              self.req.rows, self.req.cols)
         fam = self.rigid_family
-        return fam.nodes(fam.seeds_for_grid(grid.reshape(-1, 2)), psi)
+        S = fam.seeds_for_grid(grid.reshape(-1, 2))
+        self.start_member = (S, psi)  # the start's seeds: the reduced solver need not fit them again
+        return fam.nodes(S, psi)
 
     @property
     def rigid_family(self) -> RigidFamily:
@@ -527,6 +535,26 @@ def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
     return geometry.mean_edge_length(X[prob.st.tiles])
 
 
+def via_rigid_applies(req: DesignRequest) -> bool:
+    """A non-rigid request answered by the rigid family (``VIA_RIGID_TILES``)."""
+    return (req.solver == "auto" and not req.rigid and req.holes == "rhombus" and not req.symmetry
+            and not req.contracted and req.target is not None and req.rows * req.cols >= VIA_RIGID_TILES)
+
+
+def _solve_via_rigid(prob: _Problem, log, iters: dict):
+    """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
+    the non-rigid problem, else None."""
+    sub = replace(prob.req, rigid=True, init="coarse", name="")
+    log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
+    res = _design(sub, False)
+    iters.update({f"rigid_{k}": v for k, v in res.report["iterations"].items()})
+    X = res.pattern.nodes / prob.L0
+    if res.converged and _acceptable(prob, X):
+        return X, res.report["shape_matching"], res.report["solver"]
+    log("the rigid-family design fails a non-rigid family check: the full solver takes over")
+    return None
+
+
 def reduced_applies(req: DesignRequest) -> bool:
     """The closed-form rigid family covers the request (see ``rigid.py``)."""
     return (req.rigid and req.holes == "rhombus" and not req.symmetry and not req.contracted
@@ -551,11 +579,15 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
     # the standard starts sit at ψ = π/4; a coarse-to-fine start at whatever the coarse design opened to
     psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
+    S0 = None
+    if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
+        S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
     X, mode, its = solve_reduced(fam, prob.st, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
                                  0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
                                  max_iter=req.max_iter,
                                  # small patterns get the full solver's second opinion anyway
-                                 miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE)
+                                 miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE,
+                                 S0=S0)
     iters.update(its)
     if _acceptable(prob, X) or req.solver == "reduced":
         return X, mode
@@ -655,7 +687,8 @@ def _solve_full(prob: _Problem, log, iters: dict):
 def _design(req: DesignRequest, progress: bool) -> DesignResult:
     log = _Log(progress)
     t0 = time.perf_counter()
-    prob = _Problem(req)
+    # a non-rigid request answered by the rigid family needs no guess of its own (least of all a coarse solve)
+    prob = _Problem(replace(req, init="rescaled") if via_rigid_applies(req) else req)
     log(f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
         + ", ".join(f.name for f in prob.families))
     iters: dict = {}
@@ -681,6 +714,10 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
             log(f"objective: rigid family {f_red:.4e}, full {f_full:.4e}" + ("" if ok_full else " (unconverged)"))
             if ok_full and f_full < f_red:
                 out, solver = full, full_name
+    if out is None and via_rigid_applies(req):
+        via = _solve_via_rigid(prob, log, iters)
+        if via is not None:
+            out, solver = via[:2], f"{via[2]}, for a non-rigid request"
     if out is None and req.solver == "auto" and outline.applies(req):
         out = _solve_outline(prob, log, iters)
         solver = "closed-form rigid family, closed-state outlines (exact square, size-free circle)"
