@@ -109,7 +109,7 @@ def worker_design(spec: dict) -> dict:
             **conformance(res.pattern.nodes, tip_order(n, n), req.target)}
 
 
-def _closed_outline(pattern, state: int) -> np.ndarray:
+def closed_outline(pattern, state: int) -> np.ndarray:
     """Boundary vertices of a closed state's grid, CCW, from the contracted tiles."""
     from fabkiri.design.constraints import ClosedGrid, Stencils
 
@@ -138,8 +138,8 @@ def square_error(p: np.ndarray, n: int) -> float:
     return float(max(err) / a)
 
 
-def circle_rms(p: np.ndarray) -> float:
-    """Geometric least-squares circle (Gauss-Newton from the algebraic one): RMS radial residual / radius."""
+def lsq_circle(p: np.ndarray):
+    """Geometric least-squares circle through ``p`` (Gauss-Newton from the algebraic one): centre, radius."""
     sol = np.linalg.lstsq(np.c_[2 * p, np.ones(len(p))], (p * p).sum(1), rcond=None)[0]
     c = sol[:2]
     for _ in range(100):
@@ -149,8 +149,13 @@ def circle_rms(p: np.ndarray) -> float:
         c = c + step
         if np.abs(step).max() < 1e-14 * d.mean():
             break
-    d = np.linalg.norm(p - c, axis=1)
-    return float(np.sqrt(np.mean((d - d.mean()) ** 2)) / d.mean())
+    return c, float(np.linalg.norm(p - c, axis=1).mean())
+
+
+def circle_rms(p: np.ndarray) -> float:
+    """RMS radial residual of the least-squares circle, relative to its radius."""
+    c, R = lsq_circle(p)
+    return float(np.sqrt(np.mean((np.linalg.norm(p - c, axis=1) - R) ** 2)) / R)
 
 
 def worker_square_circle(spec: dict) -> dict:
@@ -173,8 +178,8 @@ def worker_square_circle(spec: dict) -> dict:
     rep = pat.design["report"]
     checks = rep.get("checks", {})
     return {"exit": code, "solve_s": rep["time_s"], "cpu": cpu, "status": rep["status"],
-            "eq": rep["max_equality_residual"], "square_err": square_error(_closed_outline(pat, 1), n),
-            "circle_rms": circle_rms(_closed_outline(pat, 2)),
+            "eq": rep["max_equality_residual"], "square_err": square_error(closed_outline(pat, 1), n),
+            "circle_rms": circle_rms(closed_outline(pat, 2)),
             "overlaps": sum(int(v) for k, v in checks.items() if k.startswith("overlaps_")),
             "solver": rep["solver"].split(" (")[0]}
 

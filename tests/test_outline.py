@@ -2,45 +2,20 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from fabkiri.design import outline
 from fabkiri.design import targets as T
-from fabkiri.design.constraints import ClosedGrid, Stencils
 from fabkiri.design.solve import DesignRequest, design
 from fabkiri.pattern.io import read_pattern
 
-
-def _ring(M: int, N: int) -> np.ndarray:
-    idx = np.arange((M + 1) * (N + 1)).reshape(M + 1, N + 1)
-    return np.concatenate([idx[0, :-1], idx[:-1, -1], idx[-1, :0:-1], idx[:0:-1, 0]])
-
-
-def _outline(pattern, state: int) -> np.ndarray:
-    """Boundary vertices of a closed state, from the contracted tiles the CLI wrote (CCW)."""
-    st = Stencils.from_pattern(pattern)
-    g = ClosedGrid.build(st, state, 0)
-    pos = np.zeros((g.n_vertices, 2))
-    cnt = np.zeros(g.n_vertices)
-    np.add.at(pos, g.vertex.ravel(), np.asarray(pattern.contracted[state]).reshape(-1, 2))
-    np.add.at(cnt, g.vertex.ravel(), 1.0)
-    return (pos / cnt[:, None])[_ring(st.rows, st.cols)]
-
-
-def _lsq_circle(p: np.ndarray):
-    """Geometric least-squares circle (Gauss-Newton from the algebraic one): centre, radius, rms."""
-    sol = np.linalg.lstsq(np.c_[2 * p, np.ones(len(p))], (p * p).sum(1), rcond=None)[0]
-    c = sol[:2]
-    for _ in range(100):
-        d = np.linalg.norm(p - c, axis=1)
-        J = -(p - c) / d[:, None]
-        step = np.linalg.lstsq(J - J.mean(0), -(d - d.mean()), rcond=None)[0]
-        c = c + step
-        if np.abs(step).max() < 1e-14 * d.mean():
-            break
-    d = np.linalg.norm(p - c, axis=1)
-    return c, d.mean(), float(np.sqrt(np.mean((d - d.mean()) ** 2)))
+# the bench's measures of a closed state's outline, so the test checks what the bench reports
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+import speed  # noqa: E402
 
 
 @pytest.mark.parametrize("n", [5, 7])
@@ -55,21 +30,15 @@ def test_square_to_circle_exact_square_and_least_squares_circle(run_cli, tmp_pat
     assert rep["max_equality_residual"] <= 1e-10
     assert all(rep["checks"][k] == 0 for k in ("overlaps_deployed", "overlaps_state_1", "overlaps_state_2"))
     # state 1: a square of the target's side (100 mm), to rounding
-    p1 = _outline(pat, 1)
+    p1 = speed.closed_outline(pat, 1)
     corners = p1[[0, n, 2 * n, 3 * n]]
-    side = 100.0
-    assert np.abs(np.linalg.norm(np.roll(corners, -1, 0) - corners, axis=1) - side).max() <= 1e-9 * side
-    worst = 0.0  # every boundary vertex on the line through its side's two corners (the file's frame is rotated)
-    for k in range(4):
-        a, b = corners[k], corners[(k + 1) % 4]
-        t = (b - a) / np.linalg.norm(b - a)
-        q = p1[np.arange(k * n, (k + 1) * n + 1) % (4 * n)] - a
-        worst = max(worst, float(np.abs(q[:, 0] * t[1] - q[:, 1] * t[0]).max()))
-    assert worst <= 1e-9 * side
+    assert np.abs(np.linalg.norm(np.roll(corners, -1, 0) - corners, axis=1) - 100.0).max() <= 1e-7
+    assert speed.square_error(p1, n) <= 1e-9
     # state 2: the stored circle target is the least-squares circle of the outline (size-free), up to the
     # rigid motion between the solver's grid and the contracted tiles
-    p2 = _outline(pat, 2)
-    c, R, rms = _lsq_circle(p2)
+    p2 = speed.closed_outline(pat, 2)
+    c, R = speed.lsq_circle(p2)
+    rms = float(np.sqrt(np.mean((np.linalg.norm(p2 - c, axis=1) - R) ** 2)))
     fit = rep["closed_outline_fit"]["2"]
     assert fit["rms_mm"] == pytest.approx(rms, rel=1e-6)
     assert 0.5 * pat.design["contracted_targets"]["2"]["size_mm"] == pytest.approx(R, rel=1e-6)
