@@ -41,6 +41,7 @@ def outline_kind(spec) -> str | None:
 
 
 def applies(req) -> bool:
+    """``req`` (a ``solve.DesignRequest``) is a rigid rhombus design of square/circle closed-state outlines only."""
     return (req.rigid and req.holes == "rhombus" and not req.symmetry and req.target is None
             and bool(req.contracted) and all(outline_kind(v) for v in req.contracted.values()))
 
