@@ -306,7 +306,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "full solver (up to 16x16 tiles, or up to 32x32 when the fit misses by more than 0.25 %% "
                         "of the target size) and keep the better; also the rigid family for --rigid square/circle "
                         "--contracted-target outlines (square exact, circle of any size) and for non-rigid rhombus "
-                        "designs from 32x32 tiles; reduced: the rigid family only; full: the sparse solver over all nodes")
+                        "designs from 32x32 tiles; reduced: the rigid family only; full: the sparse solver over "
+                        "all nodes")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
