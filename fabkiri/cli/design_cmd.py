@@ -129,7 +129,7 @@ def cmd_design(args: argparse.Namespace) -> int:
         raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=args.rigid, symmetry=args.symmetry,
                         holes=args.holes, contracted=contracted, init=args.init, tol=args.tol,
-                        solver=args.solver,
+                        solver=args.solver, outline=args.fit == "outline",
                         name=args.name or "")
     if not req.name:
         parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
@@ -370,6 +370,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="largest Hausdorff distance between each outline and its target: a percentage of the "
                         "target size (larger side of its bounding box) like 2%% (default), or a length like "
                         "0.5mm; a design that misses it is still written, marked shape: missed, and exits 1")
+    p.add_argument("--fit", choices=["outline", "tips"], default="outline",
+                   help="outline (default): fit the whole tip polygon — tips on their arcs, chord midpoints and "
+                        "samples of the target (its corners and cusps included) to the other curve; tips: only the "
+                        "boundary tips on their arcs (tips may bunch and cut corners)")
     p.add_argument("--no-preview", action="store_true",
                    help="do not write the preview PNG (tiles over the targets) beside the pattern")
     p.add_argument("--name", help="pattern name stored in the file")
