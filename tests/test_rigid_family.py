@@ -91,12 +91,27 @@ def test_jacobian_matches_finite_differences():
 
 # ------------------------------------------------------------------ solver paths
 def test_reduced_solver_circle_is_exact_and_rigid():
-    res = design(DesignRequest(8, 8, T.load_target("circle", 100.0), rigid=True, solver="reduced"))
+    # tips only (--fit tips): every tip can sit exactly on the circle
+    res = design(DesignRequest(8, 8, T.load_target("circle", 100.0), rigid=True, solver="reduced", outline=False))
     r = res.report
     assert res.converged and r["solver"].startswith("closed-form rigid family")
     assert r["shape_matching"] == "hard" and r["fit"]["shape"]["max_mm"] <= 1e-9
     assert r["max_equality_residual"] <= 1e-12  # identities of the family, not a converged residual
     assert r["min_inequality"] >= 0 and r["factorisations"] == 0
+
+
+def test_outline_rows_bring_the_whole_outline_closer():
+    """The default fit (tips, chord midpoints, target samples) halves the circle's Hausdorff distance that
+    tips exactly on the curve leave (the chords' sagitta), keeping the family's identities."""
+    from fabkiri.design.conformance import deployed
+
+    tgt = T.load_target("circle", 100.0)
+    h = {}
+    for outline in (False, True):
+        res = design(DesignRequest(8, 8, tgt, rigid=True, solver="reduced", outline=outline))
+        assert res.converged and res.report["max_equality_residual"] <= 1e-12
+        h[outline] = deployed(res.pattern.nodes, res.pattern.topology, tgt)["hausdorff_mm"]
+    assert h[True] < 0.7 * h[False]
 
 
 def test_full_solver_still_selectable():

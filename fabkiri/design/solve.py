@@ -679,7 +679,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         r = f.residual(X)
         fit[f.name] = {"max_mm": float(np.abs(r).max()) * L0, "rms_mm": float(np.sqrt(np.mean(r * r))) * L0,
                        "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,
-                       "points": int(len(r))}
+                       "points": int(len(r)), "soft": bool(f.meta.get("soft"))}
     report = {
         "status": "converged" if converged else "unconverged",
         "tolerance": req.tol,

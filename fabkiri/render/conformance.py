@@ -73,7 +73,7 @@ def conformance_png(pattern: Pattern, conformance: dict, shape: dict | None = No
         ax.set_xlim(lo[0] - pad, hi[0] + pad)
         ax.set_ylim(lo[1] - pad, hi[1] + pad)
         ax.set_aspect("equal")
-        ax.legend(loc="lower right", fontsize=7, framealpha=0.8)
+        ax.legend(loc="best", fontsize=7, framealpha=0.8)
         ax.tick_params(labelsize=7)
         ax.set_xlabel("mm", fontsize=7)
     if not panels:
