@@ -246,7 +246,8 @@ class _Problem:
         sub = DesignRequest(rc, cc, req.target, rigid=req.rigid, symmetry=req.symmetry, holes=req.holes,
                             contracted=dict(req.contracted),
                             init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
-                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver)
+                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver,
+                            outline=req.outline)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
