@@ -333,14 +333,14 @@ def outline_match(order: np.ndarray, target: Target, nv: int, name: str = "shape
         j = np.argmin(dist, axis=1)
         k = np.arange(len(pts))
         tj, fj, dj = t[k, j], foot[k, j], dist[k, j]
-        ej = e[j]
-        nrm = np.stack([ej[:, 1], -ej[:, 0]], -1) / np.sqrt(ee[j])[:, None]  # outward for a CCW polygon
+        # the sign from the tip polygon itself (inside: negative), not from the nearest chord's normal, which
+        # flips between the two chords of a tip; the gradient moves the foot (1-t) a + t b towards the sample
+        side = np.where(_inside(pts, A, B), -1.0, 1.0)
         off = pts - fj
-        side = np.where(dot2(off, nrm) >= 0, 1.0, -1.0)
-        inner = (tj > 0) & (tj < 1)
-        # interior foot: distance to the chord's line, gradient -ν (1-t), -ν t; at a tip: the distance to it
+        ej = e[j]
+        nrm = np.stack([ej[:, 1], -ej[:, 0]], -1) / np.sqrt(ee[j])[:, None]
         unit = np.where((dj > 1e-300)[:, None], off / np.maximum(dj, 1e-300)[:, None], nrm)
-        g = np.where(inner[:, None], nrm, side[:, None] * unit)
+        g = side[:, None] * unit
         ga = -g * (1.0 - tj)[:, None]
         gb = -g * tj[:, None]
         r = np.concatenate([CHORD_WEIGHT * dm, ws * side * dj])
@@ -349,6 +349,16 @@ def outline_match(order: np.ndarray, target: Target, nv: int, name: str = "shape
         return r, (nodes, grads)
 
     return Family(name, "fit", fn, 1, meta={"nodes": order, "target": target, "soft": True}, nv=nv)
+
+
+def _inside(pts: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Points inside the closed polygon with edges A -> B (even-odd crossings of a ray to +x)."""
+    ay, by = A[None, :, 1], B[None, :, 1]
+    py = pts[:, None, 1]
+    straddle = (ay > py) != (by > py)
+    dy = np.where(straddle, by - ay, 1.0)
+    xc = A[None, :, 0] + (py - ay) * (B[None, :, 0] - A[None, :, 0]) / dy
+    return ((straddle & (pts[:, None, 0] < xc)).sum(1) % 2) == 1
 
 
 def _outline_samples(target: Target, n: int) -> np.ndarray:
