@@ -247,7 +247,9 @@ class _Problem:
                             contracted=dict(req.contracted),
                             init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
                             tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver,
-                            outline=req.outline)
+                            # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
+                            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
+                            outline=False)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
