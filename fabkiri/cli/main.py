@@ -24,6 +24,9 @@ COMMANDS = [
     "fabkiri.cli.design_cmd",
     "fabkiri.cli.deploy_cmd",
     "fabkiri.cli.print_cmd",
+    "fabkiri.cli.tolerance_cmd",
+    "fabkiri.cli.coupon_cmd",
+    "fabkiri.cli.report_cmd",
 ]
 
 
