@@ -243,10 +243,10 @@ def summary(pattern: Pattern, prints=DEFAULT_PRINTS) -> dict:
     kind the smallest cut scale and width, and per ``(printer, styles)`` of ``prints`` the smallest print
     scale and whether the closed pattern then fits the bed. (Every printer preset and style would cost
     seconds: each print minimum is a bisection on shapely plan checks of 0.1-0.8 s at 8x8.)"""
-    from .cut import closed_states
+    from ..mechanics.contract import contract  # not .cut: design would import the DXF/SVG writers
 
     top = pattern.topology
-    c1 = closed_states(pattern)[1]
+    c1 = pattern.contracted[1] if 1 in pattern.contracted else contract(pattern, 1).corners
     out = {"definition": "thinnest width = smallest altitude: min over a tile's edges of the largest distance of "
                          "its corners from that edge's line (the tile's minimum width)",
            **fab.measures(c1, top.hinge_tiles, top.hinge_corner)}
