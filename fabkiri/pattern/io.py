@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from .. import limits
 from ..errors import PatternError
-from ..fileio import atomic_write
+from ..fileio import atomic_write, read_input
 from . import geometry
 from .model import Pattern
 
@@ -37,10 +38,6 @@ def schema() -> dict[str, Any]:
     """The JSON Schema of pattern.json version 1."""
     text = resources.files(__package__).joinpath("pattern.schema.json").read_text("utf-8")
     return json.loads(text)
-
-
-def _reject_constant(name: str) -> float:
-    raise PatternError(f"non-finite number {name} in the file")
 
 
 def _short(value: Any, limit: int = 60) -> str:
@@ -117,11 +114,21 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
     problem = _schema_error(_skeleton(data)) or _array_error(data)
     if problem:
         raise PatternError(f"{source}: {problem}")
+    nodes = np.asarray(data["nodes"], dtype=float)
+    tiles = np.asarray(data["tiles"], dtype=np.int64)
+    contracted = {int(k): np.asarray(v, dtype=float) for k, v in data.get("contracted", {}).items()}
+    if tiles.size and int(tiles.max()) >= len(nodes):
+        t = int(np.flatnonzero((tiles >= len(nodes)).any(1))[0])
+        raise PatternError(f"{source}: tile {t} references node {int(tiles[t].max())}, outside the "
+                           f"{len(nodes)} nodes")
+    problem = limits.coordinate_problem(nodes, tiles, contracted)
+    if problem:
+        raise PatternError(f"{source}: {problem}")
     try:
         return Pattern(
-            nodes=np.asarray(data["nodes"], dtype=float),
-            tiles=np.asarray(data["tiles"], dtype=np.int64),
-            contracted={int(k): np.asarray(v, dtype=float) for k, v in data.get("contracted", {}).items()},
+            nodes=nodes,
+            tiles=tiles,
+            contracted=contracted,
             parity=int(data.get("parity", 0)),
             name=str(data.get("name", "")),
             lattice=data.get("lattice"),
@@ -134,12 +141,7 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
 def loads(text: str, source: str = "pattern") -> Pattern:
     if not text.strip():
         raise PatternError(f"{source}: the file is empty")
-    try:
-        data = json.loads(text, parse_constant=_reject_constant)
-    except PatternError as exc:
-        raise PatternError(f"{source}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise PatternError(f"{source}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    data = limits.loads_json(text, source, PatternError)
     return pattern_from_dict(data, source)
 
 
@@ -202,17 +204,7 @@ def write_pattern(pattern: Pattern, path: str | os.PathLike) -> Path:
 
 
 def _read_text(path: str | os.PathLike) -> str:
-    p = Path(path)
-    if not p.exists():
-        raise PatternError(f"{p}: no such file")
-    if p.is_dir():
-        raise PatternError(f"{p}: is a folder, expected a file")
-    try:
-        return p.read_text("utf-8")
-    except UnicodeDecodeError:
-        raise PatternError(f"{p}: not a text file") from None
-    except OSError as exc:
-        raise PatternError(f"{p}: cannot be read ({exc.strerror})") from None
+    return read_input(path, max_bytes=limits.MAX_PATTERN_BYTES, what="pattern file", error=PatternError)
 
 
 def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
@@ -296,6 +288,9 @@ def import_obj(
         if len(cv) != len(verts):
             raise PatternError(f"{path}: has {len(cv)} vertices, the design has {len(verts)}")
         states[i] = cv[faces] * scale
+    problem = limits.coordinate_problem(verts * scale, faces, states)
+    if problem:
+        raise PatternError(f"{design}: {problem}")
     return Pattern(
         nodes=verts * scale,
         tiles=faces,
