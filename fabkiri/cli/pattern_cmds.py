@@ -8,7 +8,9 @@ import re
 import sys
 from pathlib import Path
 
+from .. import limits
 from ..errors import CheckFailed, InputError
+from ..fabricate.gate import closes_gate
 from ..fileio import atomic_write
 from ..mechanics.contract import adopt_state_labels, contract, with_contracted_states
 from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
@@ -45,8 +47,20 @@ def _positive(text: str) -> float:
     return v
 
 
+def _nonneg(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not 0 <= v < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return v
+
+
 def cmd_new(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
+    limits.check_tiles(rows, cols, "new", args.i_know)
+    limits.check_length(args.tile_size, "--tile-size")
     pattern = standard_pattern(rows, cols, tile_size=args.tile_size, angle_deg=args.angle, name=args.name or "")
     pattern = with_contracted_states(pattern)
     info = describe(pattern)
@@ -85,7 +99,9 @@ def cmd_info(args: argparse.Namespace) -> int:
 def cmd_export(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     state = args.state
-    if state != "deployed":
+    if state != "deployed":  # a closed state is what gets fabricated: the fabrication gate
+        for w in closes_gate(pattern, None, force=args.force, action="export").warnings:
+            print(f"warning: {w}", file=sys.stderr)
         s = int(state)
         if s not in pattern.contracted:
             c = contract(pattern, s)
@@ -100,6 +116,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_i_know(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--i-know", action="store_true",
+                   help="try a lattice larger than the largest tested (the refusal says what it would need)")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("new", help="write a standard rotating-squares pattern with both closed states")
     p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 8x8")
@@ -107,6 +128,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--angle", type=float, default=45.0, metavar="DEG",
                    help="deployment angle ψ in degrees, 0..90 (default 45: square holes)")
     p.add_argument("--name", help="pattern name stored in the file")
+    add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_new)
 
@@ -130,5 +152,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="write one state of a pattern as OBJ")
     p.add_argument("file")
     p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed")
+    p.add_argument("--force", action="store_true",
+                   help="export a closed state even if the pattern does not close in both states")
     p.add_argument("-o", "--output", required=True, metavar="OUT.obj")
     p.set_defaults(func=cmd_export)
