@@ -12,7 +12,7 @@ from ..fabricate.cut import FORMATS, CutOptions, cut_pattern
 from ..fabricate.drawing import COLORS
 from ..fabricate.layout import LAYOUTS
 from ..fabricate.materials import HINGE_KINDS, available, load_material, parse_setting
-from .pattern_cmds import load_any
+from .pattern_cmds import _nonneg, _positive, load_any
 
 
 def _sheet(text: str) -> tuple[float, float]:
@@ -80,7 +80,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
     p.add_argument("--state", type=int, choices=[1, 2], default=1, help="closed state to cut (default 1)")
     p.add_argument("--sheet", default="600x400", metavar="WxH", help="sheet size in mm (default 600x400)")
-    p.add_argument("--margin", type=float, default=5.0, metavar="MM", help="sheet margin (default 5)")
+    p.add_argument("--margin", type=_nonneg, default=5.0, metavar="MM", help="sheet margin (default 5)")
     p.add_argument("--layout", choices=LAYOUTS,
                    help="in-place (tape, ligament), exploded or nested (separate; default exploded)")
     g = p.add_mutually_exclusive_group()
@@ -94,12 +94,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--min-hole", type=float, metavar="MM")
     p.add_argument("--strain-limit", type=float, metavar="EPS")
     p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
-    p.add_argument("--ligament-width", type=float, metavar="MM", help="force the ligament width")
-    p.add_argument("--tol", type=float, metavar="MM", help="verification tolerance (default: the material's)")
+    p.add_argument("--ligament-width", type=_positive, metavar="MM", help="force the ligament width")
+    p.add_argument("--tol", type=_positive, metavar="MM", help="verification tolerance (default: the material's)")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
-    p.add_argument("--label-height", type=float, metavar="MM", help="tile ID height (default: the material's)")
+    p.add_argument("--label-height", type=_positive, metavar="MM", help="tile ID height (default: the material's)")
     p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")
-    p.add_argument("--reference", type=float, default=50.0, metavar="MM",
+    p.add_argument("--reference", type=_nonneg, default=50.0, metavar="MM",
                    help="side of the uncompensated reference square (0: none; default 50)")
     p.add_argument("--force", action="store_true", help="cut even if the pattern does not close in both states")
     p.add_argument("--no-verify", action="store_true", help=argparse.SUPPRESS)

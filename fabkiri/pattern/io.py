@@ -13,8 +13,6 @@ from __future__ import annotations
 import json
 import math
 import os
-from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +21,8 @@ import numpy as np
 from .. import limits
 from ..errors import PatternError
 from ..fileio import atomic_write, read_input
+from ..schemas import load_schema, schema_problem
+from ..schemas import short as _short
 from . import geometry
 from .model import Pattern
 
@@ -33,32 +33,13 @@ VERSION = 1
 # ---------------------------------------------------------------- pattern.json
 
 
-@lru_cache(maxsize=1)
 def schema() -> dict[str, Any]:
     """The JSON Schema of pattern.json version 1."""
-    text = resources.files(__package__).joinpath("pattern.schema.json").read_text("utf-8")
-    return json.loads(text)
-
-
-def _short(value: Any, limit: int = 60) -> str:
-    text = json.dumps(value) if not isinstance(value, str) else repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+    return load_schema(__package__, "pattern.schema.json")
 
 
 def _schema_error(data: Any) -> str | None:
-    from jsonschema import Draft202012Validator
-    from jsonschema.exceptions import best_match
-
-    validator = Draft202012Validator(schema())
-    err = best_match(validator.iter_errors(data))
-    if err is None:
-        return None
-    where = "/".join(str(p) for p in err.absolute_path) or "top level"
-    if err.validator in ("required", "additionalProperties", "enum", "const"):
-        what = err.message
-    else:
-        what = f"{_short(err.instance)} fails '{err.validator}' ({_short(err.validator_value, 40)})"
-    return f"{where}: {what}"[:300]
+    return schema_problem(data, schema())
 
 
 _BULK = ("nodes", "tiles")
