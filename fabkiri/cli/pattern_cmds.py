@@ -10,7 +10,7 @@ from pathlib import Path
 
 from .. import limits
 from ..errors import CheckFailed, InputError
-from ..fabricate.gate import closes_gate
+from ..fabricate.gate import claimed_states, closes_gate
 from ..fileio import atomic_write
 from ..mechanics.contract import adopt_state_labels, contract, with_contracted_states
 from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
@@ -100,7 +100,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     state = args.state
     if state != "deployed":  # a closed state is what gets fabricated: the fabrication gate
-        for w in closes_gate(pattern, None, force=args.force, action="export").warnings:
+        for w in closes_gate(pattern, None, force=args.force, action="export",
+                             states=claimed_states(pattern, int(state))).warnings:
             print(f"warning: {w}", file=sys.stderr)
         s = int(state)
         if s not in pattern.contracted:

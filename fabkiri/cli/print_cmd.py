@@ -11,7 +11,7 @@ from pathlib import Path
 from ..errors import CheckFailed, InputError
 from ..fileio import atomic_write_many
 from ..fabricate import mesh
-from ..fabricate.gate import closes_gate
+from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import available_printers, load_printer
 from .pattern_cmds import _positive, load_any
 
@@ -30,8 +30,8 @@ def cmd_print(args: argparse.Namespace) -> int:
         strip_width_mm=args.strip_width, strip_reach_mm=args.strip_reach, gap_mm=args.gap,
         radial_clearance_mm=args.radial_clearance, axial_clearance_mm=args.axial_clearance,
     )
-    for w in closes_gate(pattern, printer.tolerance_mm, force=args.force, action="print",
-                         tolerance="printer").warnings:  # the gate `cut` passes, at the printer's tolerance
+    for w in closes_gate(pattern, printer.tolerance_mm, force=args.force, action="print", tolerance="printer",
+                         states=claimed_states(pattern, int(args.state))).warnings:  # as `cut`, printer tolerance
         print(f"warning: {w}", file=sys.stderr)
     job = mesh.build_job(pattern, args.style, int(args.state), printer)
     realised = mesh.realise_job(job)

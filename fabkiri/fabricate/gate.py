@@ -3,7 +3,10 @@
 ``cut``, ``print`` and ``export`` of a closed state call :func:`closes_gate`
 before building any file, with their process's tolerance (the material's, the
 printer's, the verifier's own) and the same ``--force``. The gate is the
-verifier's tile checks, both closed states and their edge pairs.
+verifier's tile checks, the closed states and their edge pairs: both states
+for ``cut`` (its read-back reassembles the other state), the printed or
+exported state and any other state the pattern stores for ``print`` and
+``export`` (see :func:`claimed_states`).
 """
 
 from __future__ import annotations
@@ -34,13 +37,22 @@ class GateResult:
     warnings: list[str] = field(default_factory=list)
 
 
+def claimed_states(pattern: Pattern, state: int) -> tuple[int, ...]:
+    """The closed states a fabrication of ``state`` must find closing: that one, and the other one
+    too when the pattern stores it (a contractible pattern, closing one way only, stores neither)."""
+    other = 3 - state
+    return (state, other) if other in pattern.contracted else (state,)
+
+
 def closes_gate(pattern: Pattern, tol_mm: float | None, *, scale: float = 1.0, force: bool = False,
-                action: str = "cut", tolerance: str = "material") -> GateResult:
+                action: str = "cut", tolerance: str = "material", states: tuple[int, ...] = (1, 2)) -> GateResult:
     """Verify ``pattern`` at ``tol_mm`` (in the file's mm, the pattern drawn ``scale`` times its size;
-    None: the verifier's own tolerance); raise :class:`CheckFailed` unless it closes or ``force``."""
+    None: the verifier's own tolerance); raise :class:`CheckFailed` unless its tiles and ``states``
+    close, or ``force``."""
     report = verify_pattern(pattern, tol_mm=None if tol_mm is None else tol_mm / scale)
-    gate = [c for c in report.checks
-            if (c.group in GATE_GROUPS or c.name.endswith("edge pairs")) and c.applies and not c.ok]
+    groups = ("tiles", *(f"state {s}" for s in states))
+    gate = [c for c in report.checks if c.applies and not c.ok
+            and (c.group in groups or any(c.name == f"state {s}: edge pairs" for s in states))]
     out = GateResult(report, gate)
     if not gate:
         return out
@@ -48,7 +60,8 @@ def closes_gate(pattern: Pattern, tol_mm: float | None, *, scale: float = 1.0, f
     done, does = VERBS[action]
     if not force:
         at = f"at the {tolerance} tolerance {tol_mm:g} mm" if tol_mm is not None else "at the verifier's tolerance"
-        raise CheckFailed(f"the pattern does not close in both states {at}: {msg}; nothing {done} "
+        which = "in both states" if len(states) == 2 else f"in closed state {states[0]}"
+        raise CheckFailed(f"the pattern does not close {which} {at}: {msg}; nothing {done} "
                           f"(--force {does} it anyway)")
     out.warnings.append(f"{done} with --force although the pattern does not close: {msg}")
     return out
