@@ -27,13 +27,14 @@ MAX_INT = 2**53  # beyond it a JSON integer is no longer exact as a float (and o
 MAX_COORD_MM = 1e6  # a kilometre: larger coordinates are a unit mistake, and their squares overflow sooner
 MIN_EDGE_REL = 1e-9  # a tile edge shorter than this fraction of the pattern's extent is two coinciding corners
 MAX_LENGTH_MM = 1e5  # a length parameter (tile size, target size): 100 m
+MIN_LENGTH_MM = 1e-3  # ... and at least a micrometre: below it shapely's snapping and the tolerances break
 
 # (tiles, seconds, peak MB above the interpreter) per command, measured by bench/limits.py (load ~2, 2 cores);
 # the largest row is the largest size tested
 MEASURED = {
-    "new": [[16384, 1.1, 52.0], [65536, 3.3, 180.0]],
+    "new": [[65536, 3.9, 190.3], [262144, 19.8, 802.7]],
     "design full": [[1024, 5.5, 69.0], [4096, 65.0, 270.0]],
-    "design rigid": [[4096, 9.3, 108.0], [16384, 42.4, 420.0]],
+    "design rigid": [[4096, 6.7, 116.9], [16384, 46.4, 750.4]],
 }
 
 
@@ -88,10 +89,24 @@ def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
 
 
 def check_length(value: float, name: str) -> float:
-    """A positive finite length in mm no larger than :data:`MAX_LENGTH_MM`."""
-    if not (math.isfinite(value) and 0 < value <= MAX_LENGTH_MM):
-        raise InputError(f"{name} must be a length in (0, {MAX_LENGTH_MM:g}] mm, got {value:g}")
+    """A finite length in mm within [:data:`MIN_LENGTH_MM`, :data:`MAX_LENGTH_MM`]."""
+    if not (math.isfinite(value) and MIN_LENGTH_MM <= value <= MAX_LENGTH_MM):
+        raise InputError(f"{name} must be a length in [{MIN_LENGTH_MM:g}, {MAX_LENGTH_MM:g}] mm, got {value:g}")
     return value
+
+
+def check_scale(nodes: np.ndarray, tiles: np.ndarray, k: float, name: str) -> float:
+    """A scale factor that keeps the pattern within the coordinate bound and its tile edges a micrometre."""
+    if not (math.isfinite(k) and k > 0):
+        raise InputError(f"{name} must be a positive number, got {k:g}")
+    q = np.asarray(nodes, dtype=float)[np.asarray(tiles)]
+    extent = float(np.abs(q).max()) * k
+    edge = float(np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2).min()) * k
+    if not (math.isfinite(extent) and extent <= MAX_COORD_MM):
+        raise InputError(f"{name} {k:g} puts the pattern {extent:.3g} mm from the origin (at most {MAX_COORD_MM:g} mm)")
+    if not edge >= MIN_LENGTH_MM:
+        raise InputError(f"{name} {k:g} makes the shortest tile edge {edge:.3g} mm (at least {MIN_LENGTH_MM:g} mm)")
+    return k
 
 
 # -------------------------------------------------------------------- JSON

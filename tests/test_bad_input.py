@@ -71,6 +71,7 @@ FILES = {
     "one-point.json": _variant(lambda d: (d.update(nodes=[[1.0, 1.0]] * len(d["nodes"])), d.pop("contracted"))),
     "triangle.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n",
     "missing-vertex.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1// 2// 3// 5//\n",
+    "big-index.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 99999999999999999999999\n",
     "huge.obj": "v 0 0 0\nv 1e308 0 0\nv 1e308 1e308 0\nv 0 1e308 0\nf 1 2 3 4\n",
     "junk.dxf": "this is not a DXF\n",
     "bad.svg": "<svg",
@@ -115,7 +116,10 @@ CASES = {
     "import coordinates near 1e308": (["import", "huge.obj", "-o", "o.json"], 2, "from the origin", ()),
     "deploy all nodes at one point": (["deploy", "one-point.json", "-o", "o"], 2, "one point", ()),
     "export all nodes at one point": (["export", "one-point.json", "-o", "o.obj"], 2, "one point", ()),
+    "import face index beyond C long": (["import", "big-index.obj", "-o", "o.json"], 2, "face index", ()),
     # noise: numbers whose arithmetic overflows
+    "print --scale 1e300": (["print", "good.json", "--scale", "1e300", "-o", "o"], 2, "from the origin", ()),
+    "cut --width 1e-300": (["cut", "good.json", "--width", "1e-300", "-o", "o"], 2, "--width", ()),
     "new --tile-size 1e308": (["new", "--tiles", "3x3", "--tile-size", "1e308", "-o", "o.json"], 2, "--tile-size", ()),
     "design 1e308 target": (["design", "--tiles", "4x4", "--target", "huge.csv", "-o", "o.json"], 2, "huge", ()),
     # accepted when it should refuse
@@ -243,3 +247,68 @@ def test_bad_input_as_a_real_process(case, workspace):
     r = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", *argv], capture_output=True, text=True,
                        env=env, cwd=workspace)
     _check(r.returncode, r.stderr, before, workspace, case)
+
+
+# ------------------------------------------------------------- the publisher itself
+
+
+def test_a_failed_move_restores_the_folder_exactly(tmp_path, monkeypatch):
+    from fabkiri import fileio
+    from fabkiri.errors import InputError
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.txt").write_text("old a")
+    before = snapshot(tmp_path)
+    real, calls = os.replace, []
+
+    def full_disk(src, dst):  # the 4th move fails: a.txt (backup, new), sub/b.txt done, c.txt fails
+        calls.append(dst)
+        if len(calls) == 4:
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(fileio.os, "replace", full_disk)
+    with pytest.raises(InputError, match="No space left on device; nothing written"):
+        fileio.atomic_write_many(out, {"a.txt": "new a", "sub/b.txt": "b", "c.txt": "c"})
+    assert len(calls) == 5  # the 5th put the old a.txt back
+    assert snapshot(tmp_path) == before
+
+
+def test_a_good_write_replaces_old_files_and_leaves_no_scratch(tmp_path):
+    from fabkiri.fileio import atomic_write_many
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.txt").write_text("old a")
+    (out / "keep.txt").write_text("keep")
+    atomic_write_many(out, {"a.txt": "new a", "sub/b.txt": "b"})
+    assert snapshot(tmp_path).keys() == {"out", "out/a.txt", "out/keep.txt", "out/sub", "out/sub/b.txt"}
+    assert (out / "a.txt").read_text() == "new a" and (out / "keep.txt").read_text() == "keep"
+
+
+def test_library_writers_refuse_an_input_of_the_running_command(tmp_path):
+    from fabkiri.errors import InputError
+    from fabkiri.fileio import inputs_scope
+    from fabkiri.pattern import read_pattern, write_pattern
+
+    src = tmp_path / "p.json"
+    src.write_text(GOOD)
+    (tmp_path / "alias.json").symlink_to(src)
+    with inputs_scope():
+        p = read_pattern(src)  # readers record what they read
+        with pytest.raises(InputError, match="same file as the input"):
+            write_pattern(p, tmp_path / "alias.json")
+    write_pattern(p, tmp_path / "alias.json")  # outside a command nothing is recorded
+    assert not (tmp_path / "alias.json").is_symlink() and src.read_text() == GOOD
+
+
+def test_files_past_the_size_bound_are_refused_before_reading(workspace, run_cli, monkeypatch):
+    from fabkiri import limits
+
+    monkeypatch.setattr(limits, "MAX_PATTERN_BYTES", 200)
+    before = snapshot(workspace)
+    for argv in (["info", "good.json"], ["cut", "good.json", "-o", "o"], ["import", "d_design.obj", "-o", "o.json"]):
+        code, _, err = run_cli(*argv)
+        assert code == 2 and "larger than" in err and len(err.strip().splitlines()) == 1, err
+    assert snapshot(workspace) == before

@@ -7,6 +7,7 @@ import re
 import sys
 from pathlib import Path
 
+from .. import limits
 from ..errors import InputError
 from ..fabricate.cut import FORMATS, CutOptions, cut_pattern
 from ..fabricate.drawing import COLORS
@@ -54,6 +55,10 @@ def cmd_cut(args: argparse.Namespace) -> int:
         colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
         reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
         pattern_file=Path(args.file).name)
+    if isinstance(args.scale, float):  # numbers that would overflow the geometry: one line, up front
+        limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
+    if isinstance(args.width, float):
+        limits.check_length(args.width, "--width")
     result = cut_pattern(pattern, options)
     from ..fabricate.readback import write_verified
 

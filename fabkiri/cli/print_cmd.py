@@ -8,6 +8,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from .. import limits
 from ..errors import CheckFailed, InputError
 from ..fileio import atomic_write_many
 from ..fabricate import mesh
@@ -19,6 +20,7 @@ from .pattern_cmds import _positive, load_any
 def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     pattern = load_any(args.file)
+    limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
     if args.scale != 1.0:  # mm printed per mm of the pattern
         pattern = replace(pattern, nodes=pattern.nodes * args.scale,
                           contracted={k: v * args.scale for k, v in pattern.contracted.items()})

@@ -218,6 +218,8 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
                     raise PatternError(f"{source}: line {lineno}: face index {tok!r} is not an integer") from None
             if len(idx) != 4:
                 raise PatternError(f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads")
+            if any(abs(i) > limits.MAX_INT for i in idx):
+                raise PatternError(f"{source}: line {lineno}: face index beyond ±2**53")
             faces.append(idx)
         # other records (vn, vt, o, g, s, usemtl, ...) carry nothing a pattern needs
     if not verts:
