@@ -88,6 +88,14 @@ def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
                          f"— pass --i-know to try")
 
 
+def check_file_size(path, limit: int | None = None) -> None:
+    """Refuse a file larger than ``limit`` bytes (default :data:`MAX_PATTERN_BYTES`) before it is read."""
+    limit = MAX_PATTERN_BYTES if limit is None else limit
+    size = os.stat(path).st_size
+    if size > limit:
+        raise InputError(f"{path}: {size / 2**20:.1f} MB is larger than the {limit / 2**20:.0f} MB an input may have")
+
+
 def check_length(value: float, name: str) -> float:
     """A finite length in mm within [:data:`MIN_LENGTH_MM`, :data:`MAX_LENGTH_MM`]."""
     if not (math.isfinite(value) and MIN_LENGTH_MM <= value <= MAX_LENGTH_MM):

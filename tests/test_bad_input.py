@@ -15,6 +15,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from fabkiri.mechanics import with_contracted_states
@@ -307,8 +308,10 @@ def test_files_past_the_size_bound_are_refused_before_reading(workspace, run_cli
     from fabkiri import limits
 
     monkeypatch.setattr(limits, "MAX_PATTERN_BYTES", 200)
+    (workspace / "big.csv").write_text("".join(f"{np.cos(a):.6f},{np.sin(a):.6f}\n" for a in np.linspace(0, 6, 40)))
     before = snapshot(workspace)
-    for argv in (["info", "good.json"], ["cut", "good.json", "-o", "o"], ["import", "d_design.obj", "-o", "o.json"]):
+    for argv in (["info", "good.json"], ["cut", "good.json", "-o", "o"], ["import", "d_design.obj", "-o", "o.json"],
+                 ["design", "--tiles", "4x4", "--target", "big.csv", "-o", "o.json"]):
         code, _, err = run_cli(*argv)
         assert code == 2 and "larger than" in err and len(err.strip().splitlines()) == 1, err
     assert snapshot(workspace) == before

@@ -114,7 +114,9 @@ def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarra
 def cmd_design(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
-    limits.check_tiles(rows, cols, "design rigid" if args.rigid else "design full", args.i_know)
+    family = (args.rigid and args.solver != "full" and args.holes == "rhombus" and not args.symmetry
+              and not args.contracted_target)  # solved in the rigid family (docs/design-solver.md)
+    limits.check_tiles(rows, cols, "design rigid" if family else "design full", args.i_know)
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     target = load_target(args.target, args.size) if args.target else None

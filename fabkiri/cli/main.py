@@ -17,7 +17,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from .. import __version__
+from .. import __version__, limits
 from ..errors import FabkiriError
 from ..fileio import inputs_scope, note_inputs, refuse_input
 
@@ -72,7 +72,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     try:
-        note_inputs(*named_files(args))
+        files = named_files(args)
+        for f in files:  # targets, layouts, presets: bounded before any reader sees them
+            limits.check_file_size(f)
+        note_inputs(*files)
         if isinstance(getattr(args, "output", None), str):
             refuse_input(args.output)
         code = args.func(args)
