@@ -139,8 +139,12 @@ CASES = {
     "printer negative pin": (["print", "good.json", "--printer", "neg-pin.json", "-o", "o"], 2, "pin/ear_radius_mm", ()),
     "printer missing field": (["print", "good.json", "--printer", "no-nozzle.json", "-o", "o"], 2, "nozzle_mm", ()),
     # no bound on work
+    "design -o a folder": (["design", "--tiles", "4x4", "--target", "circle", "-o", "out"], 2, "is a folder",
+                           ("out",)),
+    "design --size 1e308": (["design", "--tiles", "4x4", "--target", "circle", "--size", "1e308", "-o", "o.json"], 2,
+                            "--size", ()),
     "design 300x300": (["design", "--tiles", "300x300", "--target", "circle", "-o", "o.json"], 2, "largest tested", ()),
-    "new 300x300": (["new", "--tiles", "300x300", "-o", "o.json"], 2, "--i-know", ()),
+    "new 600x600": (["new", "--tiles", "600x600", "-o", "o.json"], 2, "--i-know", ()),
     # the classes the older tests cover, over every command
     "info malformed": (["info", "malformed.json"], 2, "malformed JSON", ()),
     "verify empty": (["verify", "empty.json"], 2, "empty", ()),
@@ -176,7 +180,7 @@ CASES = {
 
 COMMANDS = {"new", "import", "design", "info", "verify", "cut", "print", "deploy", "export"}
 SUBPROCESS = ["new 100000x100000", "new --tile-size 1e308", "verify coordinates near 1e308", "design 1e308 target",
-              "info nested 100000 deep", "export -o symlink", "print shifted tile"]
+              "info nested 100000 deep", "export -o symlink"]
 
 
 def snapshot(root: Path) -> dict[str, str]:
