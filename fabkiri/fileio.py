@@ -21,8 +21,8 @@ from pathlib import Path
 
 from .errors import InputError
 
-# the files read by the running command (set by :func:`inputs_scope`; empty outside one)
-_INPUTS: contextvars.ContextVar[tuple[Path, ...]] = contextvars.ContextVar("fabkiri_inputs", default=())
+# the files read by the running command (set by :func:`inputs_scope`; None outside one: nothing recorded)
+_INPUTS: contextvars.ContextVar[tuple[Path, ...] | None] = contextvars.ContextVar("fabkiri_inputs", default=None)
 
 
 def _umask() -> int:
@@ -51,6 +51,8 @@ def inputs_scope():
 
 def note_inputs(*paths: str | os.PathLike) -> None:
     """Record files as inputs of the running command (existing regular files only)."""
+    if _INPUTS.get() is None:
+        return
     known = list(_INPUTS.get())
     for p in paths:
         p = Path(p)
@@ -64,7 +66,7 @@ def input_named_by(path: str | os.PathLike) -> Path | None:
     path = Path(path)
     if not path.exists():
         return None
-    for p in _INPUTS.get():
+    for p in _INPUTS.get() or ():
         try:
             if os.path.samefile(p, path):
                 return p

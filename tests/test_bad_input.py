@@ -304,6 +304,7 @@ def test_library_writers_refuse_an_input_of_the_running_command(tmp_path):
         p = read_pattern(src)  # readers record what they read
         with pytest.raises(InputError, match="same file as the input"):
             write_pattern(p, tmp_path / "alias.json")
+    p = read_pattern(src)
     write_pattern(p, tmp_path / "alias.json")  # outside a command nothing is recorded
     assert not (tmp_path / "alias.json").is_symlink() and src.read_text() == GOOD
 
