@@ -29,13 +29,16 @@ MIN_EDGE_REL = 1e-9  # a tile edge shorter than this fraction of the pattern's e
 MAX_LENGTH_MM = 1e5  # a length parameter (tile size, target size): 100 m
 MIN_LENGTH_MM = 1e-3  # ... and at least a micrometre: below it shapely's snapping and the tolerances break
 
-# (tiles, seconds, peak MB above the interpreter) per command, measured by bench/limits.py (load ~2, 2 cores);
-# the largest row is the largest size tested
+# (tiles, CPU seconds, peak MB above the interpreter) per command, measured by bench/limits.py on this 2-core
+# box at load 7-20 (CPU time: wall time was 3-15x more). The 64x64 full design is a lower bound: that run was
+# stopped unfinished after 458 CPU s (57 min wall) at 392 MB resident (LM still at rho=1e4, iteration 180).
 MEASURED = {
     "new": [[65536, 3.9, 190.3], [262144, 19.8, 802.7]],
-    "design full": [[1024, 5.5, 69.0], [4096, 65.0, 270.0]],
+    "design full": [[256, 1.8, 56.3], [1024, 7.9, 72.8], [4096, 458.0, 270.0]],
     "design rigid": [[4096, 6.7, 116.9], [16384, 46.4, 750.4]],
 }
+TESTED = {"new": 512 * 512, "design full": 32 * 32, "design rigid": 128 * 128}  # largest run to the end
+LOWER_BOUND = {"design full"}  # its largest row is a lower bound, so are its extrapolations
 
 
 @dataclass(frozen=True)
@@ -44,21 +47,23 @@ class Estimate:
     seconds: float
     megabytes: float
     tested_tiles: int
+    lower_bound: bool = False
 
     def text(self) -> str:
         mb, s = self.megabytes, self.seconds
         mem = f"{mb / 1024:.3g} GB" if mb >= 1024 else f"{mb:.0f} MB"
         t = f"{s / 3600:.3g} hours" if s >= 3600 else (f"{s / 60:.3g} minutes" if s >= 60 else f"{s:.0f} s")
-        return f"about {mem} and {t}"
+        return f"{'at least' if self.lower_bound else 'about'} {mem} and {t}"
 
 
 def estimate(kind: str, tiles: int) -> Estimate:
-    """Memory and time for ``tiles`` tiles: the power law through the two largest measured sizes."""
+    """Memory and time for ``tiles`` tiles: the power law through the two largest measured sizes
+    (time and memory each grow as tiles**p, p fitted on those two rows)."""
     (n0, s0, m0), (n1, s1, m1) = MEASURED[kind][-2:]
     r = max(tiles / n1, 1e-300)
     pt = math.log(s1 / s0) / math.log(n1 / n0)
     pm = math.log(m1 / m0) / math.log(n1 / n0)
-    return Estimate(tiles, s1 * r ** pt, m1 * r ** pm, int(n1))
+    return Estimate(tiles, s1 * r ** pt, m1 * r ** pm, TESTED[kind], kind in LOWER_BOUND and tiles >= n1)
 
 
 def available_mb() -> float:
