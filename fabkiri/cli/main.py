@@ -4,6 +4,12 @@ Exit codes: 0 ok, 1 a check, verification or solve failed its tolerance,
 2 bad input or usage, 3 an internal error (a bug; set FABKIRI_DEBUG=1 for the
 traceback). Each subcommand lives in its own module listed in ``COMMANDS`` and
 exposes ``register(subparsers)``.
+
+Start-up is lazy: ``SUMMARIES`` names each command's module and one-line help,
+so ``fabkiri --help`` imports no command module and ``fabkiri CMD`` imports only
+CMD's (the others get a stub parser with their help line). A command module
+missing from ``SUMMARIES`` is imported as before (tests check the table against
+what the modules register).
 """
 
 from __future__ import annotations
@@ -17,7 +23,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from .. import __version__, limits
+from .. import __version__
 from ..errors import FabkiriError
 from ..fileio import inputs_scope, note_inputs, refuse_input
 
@@ -28,7 +34,23 @@ COMMANDS = [
     "fabkiri.cli.design_cmd",
     "fabkiri.cli.deploy_cmd",
     "fabkiri.cli.print_cmd",
+    "fabkiri.cli.tolerance_cmd",
+    "fabkiri.cli.coupon_cmd",
+    "fabkiri.cli.report_cmd",
 ]
+# command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
+# (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
+SUMMARIES = {
+    "new": ("fabkiri.cli.pattern_cmds", "write a standard rotating-squares pattern with both closed states"),
+    "import": ("fabkiri.cli.pattern_cmds", "import an OBJ design (and its contracted states) into pattern.json"),
+    "info": ("fabkiri.cli.pattern_cmds", "counts, residuals and closure of a pattern (.json or .obj)"),
+    "export": ("fabkiri.cli.pattern_cmds", "write one state of a pattern as OBJ"),
+    "cut": ("fabkiri.cli.cut_cmd", "laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state"),
+    "verify": ("fabkiri.cli.verify_cmd", "prove that a pattern (and its cut layout) closes into both compact states"),
+    "design": ("fabkiri.cli.design_cmd", "inverse design: a reconfigurable quad kirigami fitted to a target shape"),
+    "deploy": ("fabkiri.cli.deploy_cmd", "deployment path from closed state 1 to closed state 2: energy, plot, GIF"),
+    "print": ("fabkiri.cli.print_cmd", "3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)"),
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -37,13 +59,30 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command(argv: Sequence[str]) -> str | None:
+    """The subcommand named on the command line (the first word that is not a top-level option)."""
+    return next((a for a in argv if not a.startswith("-")), None)
+
+
+def build_parser(command: str | None = "") -> argparse.ArgumentParser:
+    """The parser; with a ``command`` known to ``SUMMARIES`` only that command's module is imported.
+
+    ``command=""`` (the default) imports every module, ``None`` none of those in ``SUMMARIES``.
+    """
     parser = _Parser(prog="fabkiri", description="Compact reconfigurable kirigami: design, verify, fabricate.")
     parser.add_argument("--version", action="version", version=f"fabkiri {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name in COMMANDS:
-        importlib.import_module(name).register(sub)
+    covered = {module for module, _ in SUMMARIES.values()}
+    wanted = SUMMARIES[command][0] if command in SUMMARIES else (None if command is None else "*")
+    stubs = []
+    for module in COMMANDS:
+        if module not in covered or wanted in ("*", module):
+            importlib.import_module(module).register(sub)
+        else:
+            stubs += [name for name, (m, _) in SUMMARIES.items() if m == module]
+    for name in stubs:  # never parsed: the command given is registered for real above
+        sub.add_parser(name, help=SUMMARIES[name][1])
     return parser
 
 
@@ -60,18 +99,21 @@ def named_files(args: argparse.Namespace) -> list[str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
     # numpy's RuntimeWarnings (and any library warning) never reach the user: real problems are
     # refused as one-line errors by the input checks; FABKIRI_DEBUG=1 shows them
     with warnings.catch_warnings(), inputs_scope():
         if not os.environ.get("FABKIRI_DEBUG"):
             warnings.simplefilter("ignore")
-        parser = build_parser()
+        parser = build_parser(_command(argv))
         args = parser.parse_args(argv)
         return _run(args)
 
 
 def _run(args: argparse.Namespace) -> int:
     try:
+        from .. import limits  # numpy: not for `fabkiri --help`
+
         files = named_files(args)
         for f in files:  # targets, layouts, presets: bounded before any reader sees them
             limits.check_file_size(f)
