@@ -204,6 +204,14 @@ def coordinate_problem(nodes: np.ndarray, tiles: np.ndarray | None = None,
     return None
 
 
+def check_pattern(pattern, source: str):
+    """``pattern`` unchanged, or :class:`InputError` naming ``source`` and its coordinate problem."""
+    problem = coordinate_problem(pattern.nodes, pattern.tiles, pattern.contracted)
+    if problem:
+        raise InputError(f"{source}: {problem}")
+    return pattern
+
+
 def _index(a: np.ndarray, bad: np.ndarray) -> int:
     i = int(np.flatnonzero(bad)[0])
     return i // 4 if a.ndim == 3 else i

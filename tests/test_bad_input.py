@@ -45,6 +45,14 @@ def _scale_nodes(k):
     return fn
 
 
+def _huge_fold() -> str:
+    from fabkiri.pattern.fold import fold_text
+
+    d = json.loads(fold_text(PATTERN_2x2))
+    d["vertices_coords"] = [[x * 1e306, y * 1e306] for x, y in d["vertices_coords"]]
+    return json.dumps(d)
+
+
 def _preset(kind: str, name: str, **changes) -> str:
     data = json.loads((TEMPLATES / kind / f"{name}.json").read_text())
     data.update(changes)
@@ -73,6 +81,8 @@ FILES = {
     "triangle.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n",
     "missing-vertex.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1// 2// 3// 5//\n",
     "big-index.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 99999999999999999999999\n",
+    "deep.fold": "[" * 100_000 + "]" * 100_000,
+    "huge.fold": _huge_fold(),
     "huge.obj": "v 0 0 0\nv 1e308 0 0\nv 1e308 1e308 0\nv 0 1e308 0\nf 1 2 3 4\n",
     "junk.dxf": "this is not a DXF\n",
     "bad.svg": "<svg",
@@ -117,6 +127,8 @@ CASES = {
     "import coordinates near 1e308": (["import", "huge.obj", "-o", "o.json"], 2, "from the origin", ()),
     "deploy all nodes at one point": (["deploy", "one-point.json", "-o", "o"], 2, "one point", ()),
     "export all nodes at one point": (["export", "one-point.json", "-o", "o.obj"], 2, "one point", ()),
+    "import .fold nested 100000 deep": (["import", "deep.fold", "-o", "o.json"], 2, "nested 100000 deep", ()),
+    "import .fold near 1e308": (["import", "huge.fold", "-o", "o.json"], 2, "from the origin", ()),
     "import face index beyond C long": (["import", "big-index.obj", "-o", "o.json"], 2, "face index", ()),
     # noise: numbers whose arithmetic overflows
     "print --scale 1e300": (["print", "good.json", "--scale", "1e300", "-o", "o"], 2, "from the origin", ()),

@@ -48,11 +48,11 @@ def import_other(path: str, scale: float) -> Pattern | None:
             pat = Pattern(nodes=pat.nodes * scale, tiles=pat.tiles,
                           contracted={k: v * scale for k, v in pat.contracted.items()}, name=pat.name,
                           design=pat.design)
-        return adopt_state_labels(pat)
+        return adopt_state_labels(limits.check_pattern(pat, str(p)))
     if p.is_dir():
         from ..pattern.pykirigami import read_pykirigami
 
-        return adopt_state_labels(read_pykirigami(p, unit_mm=scale))
+        return adopt_state_labels(limits.check_pattern(read_pykirigami(p, unit_mm=scale), str(p)))
     return None
 
 
