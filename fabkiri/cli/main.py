@@ -42,14 +42,19 @@ COMMANDS = [
 # (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
 SUMMARIES = {
     "new": ("fabkiri.cli.pattern_cmds", "write a standard rotating-squares pattern with both closed states"),
-    "import": ("fabkiri.cli.pattern_cmds", "import an OBJ design (and its contracted states) into pattern.json"),
+    "import": ("fabkiri.cli.pattern_cmds", "import an OBJ design (and its contracted states), a .fold file or a PyKirigami model folder "
+               "into pattern.json"),
     "info": ("fabkiri.cli.pattern_cmds", "counts, residuals and closure of a pattern (.json or .obj)"),
-    "export": ("fabkiri.cli.pattern_cmds", "write one state of a pattern as OBJ"),
+    "export": ("fabkiri.cli.pattern_cmds", "write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder"),
     "cut": ("fabkiri.cli.cut_cmd", "laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state"),
     "verify": ("fabkiri.cli.verify_cmd", "prove that a pattern (and its cut layout) closes into both compact states"),
     "design": ("fabkiri.cli.design_cmd", "inverse design: a reconfigurable quad kirigami fitted to a target shape"),
     "deploy": ("fabkiri.cli.deploy_cmd", "deployment path from closed state 1 to closed state 2: energy, plot, GIF"),
     "print": ("fabkiri.cli.print_cmd", "3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)"),
+    "tolerance": ("fabkiri.cli.tolerance_cmd", "Monte-Carlo of cut and hinge errors: closure gaps, overlaps, outline"),
+    "coupon": ("fabkiri.cli.coupon_cmd", "calibration coupon: laser (--material) or print (--printer) test pieces"),
+    "report": ("fabkiri.cli.report_cmd", "one self-contained HTML page: design vs target, states, deployment, "
+               "cut and print files, assembly, bill of materials"),
 }
 
 
