@@ -172,6 +172,8 @@ CASES = {
     "new no such folder": (["new", "--tiles", "2x2", "-o", "nofolder/x.json"], 2, "does not exist", ()),
     "new --tiles banana": (["new", "--tiles", "banana", "-o", "o.json"], 2, "--tiles", ()),
     "new --angle 120": (["new", "--tiles", "3x3", "--angle", "120", "-o", "o.json"], 2, "angle", ()),
+    "verify manifest nested 100000 deep": (["verify", "good.json", "--layout", "L/x.svg"], 2, "nested 100000 deep",
+                                           ("L",)),
     "verify junk layout": (["verify", "good.json", "--layout", "junk.dxf"], 2, "junk.dxf", ()),
     "verify bad svg": (["verify", "good.json", "--layout", "bad.svg"], 2, "bad.svg", ()),
     "verify no layout": (["verify", "good.json", "--layout", "nope.dxf"], 2, "no such layout", ()),
@@ -226,6 +228,9 @@ def _prepare(root: Path, folders) -> dict[str, str]:
         (root / f).mkdir(parents=True)
     if "F" in folders:  # deploy writes frames/ inside: a file of that name blocks it
         (root / "F" / "frames").write_text("not a folder")
+    if "L" in folders:  # a layout with a manifest beside it
+        (root / "L" / "x.svg").write_text(FILES["bad.svg"])
+        (root / "L" / "manifest.json").write_text(FILES["deep.json"])
     return snapshot(root)
 
 
