@@ -740,6 +740,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         out = _solve_full(prob, log, iters)
         solver = full_name
     X, mode = out
+    fits = prob.of("fit")  # again: a size-free circle replaces its state's fit family with the fitted circle
     L = _mean_edge(prob, X)
     res = family_residuals(prob, X, L)
     eq_worst = max((res[f.name] for f in eqs), default=0.0)
