@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import limits
 from ..design import conformance as conf
 from ..design.initial import INITS
 from ..design.solve import DesignRequest, design, via_rigid_applies
@@ -27,12 +28,13 @@ from ..errors import FabricationError, InputError, SolveError
 from ..fabricate import fabricability
 from ..fabricate.materials import load_material
 from ..fabricate.printers import load_printer
+from ..fileio import check_output_file
 from ..pattern.fabricability import pal_bound
 from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.io import write_pattern
 from ..pattern.model import Pattern
-from .pattern_cmds import parse_tiles
+from .pattern_cmds import add_i_know, parse_tiles
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
@@ -118,9 +120,7 @@ def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarra
 
 def cmd_design(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
-    out_dir = Path(args.output).parent
-    if not out_dir.is_dir():  # fail before a long solve, not after
-        raise InputError(f"output folder {out_dir} does not exist")
+    check_output_file(args.output)  # fail before a long solve, not after
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     target = load_target(args.target, args.size) if args.target else None
@@ -151,6 +151,9 @@ def cmd_design(args: argparse.Namespace) -> int:
                                                  for s, v in contracted.items()]]
         req.name = f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if args.rigid else ''}"
     req.validate()
+    family = via_rigid_applies(req) or (args.rigid and args.solver != "full" and args.holes == "rhombus"
+                                        and not args.symmetry and not contracted)  # the rigid family's figures
+    limits.check_tiles(rows, cols, "design rigid" if family else "design full", args.i_know)
     args.shape_tol_parsed = conf.parse_shape_tol(args.shape_tol)
     big = rows * cols >= 256
     # without an explicit --init, a design that fails a check is retried from the next guess
@@ -402,8 +405,9 @@ def _size(text: str) -> float:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a length in mm, got {text!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"size must be a positive length in mm, got {text!r}")
+    if not (np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM):
+        raise argparse.ArgumentTypeError(f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, "
+                                         f"got {text!r}")
     return v
 
 
@@ -461,5 +465,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
     p.add_argument("-v", "--verbose", action="store_true", help="progress on stderr even for small solves")
+    add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_design)

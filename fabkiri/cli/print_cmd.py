@@ -8,10 +8,12 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from .. import limits
 from ..errors import CheckFailed, FabricationError, InputError
 from ..fileio import atomic_write_many
 from ..fabricate import fabricability as fb
 from ..fabricate import mesh
+from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import available_printers, load_printer
 from .pattern_cmds import _positive, load_any
 
@@ -40,9 +42,13 @@ def cmd_print(args: argparse.Namespace) -> int:
         if not need.possible:
             raise CheckFailed(f"--scale auto: {args.style} on {printer.name}: {need.advice(printer.name)}")
         args.scale = need.min_scale
+    limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
     if args.scale != 1.0:  # mm printed per mm of the pattern
         pattern = replace(pattern, nodes=pattern.nodes * args.scale,
                           contracted={k: v * args.scale for k, v in pattern.contracted.items()})
+    for w in closes_gate(pattern, printer.tolerance_mm, force=args.force, action="print", tolerance="printer",
+                         states=claimed_states(pattern, int(args.state))).warnings:  # as `cut`, printer tolerance
+        print(f"warning: {w}", file=sys.stderr)
     try:
         job = mesh.build_job(pattern, args.style, int(args.state), printer)
     except FabricationError as exc:  # say at which scale it would print, if any
@@ -152,5 +158,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "tape') with every pad outline engraved where its strip is glued")
     p.add_argument("--material", default="acrylic-3", metavar="NAME|FILE.json",
                    help="laser material for --marks (default acrylic-3)")
+    p.add_argument("--force", action="store_true",
+                   help="print even if the pattern does not close in both states (as 'fabkiri cut --force')")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.set_defaults(func=cmd_print)
