@@ -132,18 +132,18 @@ def cmd_design(args: argparse.Namespace) -> int:
         contracted[s] = spec
     if target is None and not contracted:
         raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
-    limits, intent = _fabrication(args, target)
-    if limits is not None and target is not None:  # a request no design can meet: say so before solving
-        least = smallest_size(target.size, abs(target.area), rows * cols, limits)
+    fab_limits, intent = _fabrication(args, target)
+    if fab_limits is not None and target is not None:  # a request no design can meet: say so before solving
+        least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
         if least is not None:
             raise InputError(
-                f"{rows}x{cols} tiles each at least {limits.required_width_mm():.3g} mm wide ({limits.source}) "
+                f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
                 f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
-                f"{pal_bound(rows * cols, limits.required_width_mm()):.4g} mm² (Pál) but the target has "
+                f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
                 f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=args.rigid, symmetry=args.symmetry,
                         holes=args.holes, contracted=contracted, init=args.init, tol=args.tol,
-                        solver=args.solver, outline=args.fit == "outline", fabrication=limits,
+                        solver=args.solver, outline=args.fit == "outline", fabrication=fab_limits,
                         fabrication_intent=intent,
                         name=args.name or "")
     if not req.name:
