@@ -271,12 +271,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
                                                                              1e-9 * total), "mm²",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
                         detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²"))
-    parts = list(getattr(union, "geoms", [union]))
-    gaps = []
-    for part in parts:
-        for r in part.interiors:
-            ring = shapely.Polygon(r)
-            gaps.append((2 * ring.area / max(ring.length, 1e-300), ring.area, ring))
+    gaps = [(2 * g.area / max(g.length, 1e-300), g.area, g) for g in enclosed_gaps(union)]
     big = [x for x in gaps if x[0] > tol.length]
     worst_gap = max(gaps, key=lambda x: x[0]) if gaps else None
     where = None
@@ -294,6 +289,22 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     out.append(Check(f"{g}: one outline", ok=n_parts == 1, value=n_parts, tol=1, unit="count", group=g,
                      op="==", detail="" if n_parts == 1 else f"the tiles form {n_parts} separate pieces"))
     return out
+
+
+def enclosed_gaps(union) -> list:
+    """The uncovered regions enclosed by a tile union, as polygons.
+
+    A hole ring of the union may enclose islands of tiles (a crack of rounding
+    width around a block of tiles, as T-junctions of parallelogram holes
+    leave): the gap is the ring minus the tiles inside it, not the ring.
+    """
+    parts = list(getattr(union, "geoms", [union]))
+    rings = [shapely.Polygon(r) for part in parts for r in part.interiors]
+    if not rings:
+        return []
+    if len(parts) > 1:  # islands exist: take them out of the rings they sit in
+        rings = shapely.get_parts(shapely.difference(np.array(rings, dtype=object), union)).tolist()
+    return [g for g in rings if not g.is_empty and g.area > 0]
 
 
 def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Check]:
