@@ -43,3 +43,17 @@ def test_parallelogram_design_verifies_and_cuts(parallelogram, tmp_path, run_cli
         assert lay.ok, lay.to_text()
         for s in (1, 2):
             assert lay.get(f"layout: (c) state {s} from cut tiles: no interior gaps").value < 1e-3
+
+
+def test_deploy_exits_1_on_its_own_failed_check_and_sizes_the_overlaps(run_cli, tmp_path):
+    from .conftest import ref
+
+    out = tmp_path / "ref"
+    code, _, err = run_cli("deploy", ref("compact_reconfigurable_design"), "--steps", "10", "--no-frames", "-o", out)
+    assert code == 1  # without --check too
+    assert (out / "energy.csv").exists()  # the figures are written first
+    import re
+
+    m = re.search(r"collisions: (\d+) overlaps .* largest tiles \d+/\d+ ([0-9.e+-]+) mm² \(([0-9.e+-]+) mm deep\)", err)
+    assert m, err
+    assert float(m.group(2)) > 0 and float(m.group(3)) > 0
