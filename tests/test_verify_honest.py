@@ -57,3 +57,46 @@ def test_deploy_exits_1_on_its_own_failed_check_and_sizes_the_overlaps(run_cli, 
     m = re.search(r"collisions: (\d+) overlaps .* largest tiles \d+/\d+ ([0-9.e+-]+) mm² \(([0-9.e+-]+) mm deep\)", err)
     assert m, err
     assert float(m.group(2)) > 0 and float(m.group(3)) > 0
+
+
+def _outline_checks(rep):
+    return {c.name: c for c in rep.checks if "outline" in c.name and "one outline" not in c.name}
+
+
+def test_closed_state_outline_targets_are_checked():
+    from fabkiri.pattern import Pattern
+
+    from .conftest import TEMPLATES
+
+    p = read_pattern(TEMPLATES / "patterns" / "square-circle-9x9-rigid.json")
+    rep = verify_pattern(p)
+    got = _outline_checks(rep)
+    assert set(got) == {"state 1: outline fits its target", "state 2: outline fits its target"}
+    assert all(c.ok for c in got.values()) and got["state 2: outline fits its target"].value > 0.1
+    # the square state measured against the circle curve (and the reverse) fails
+    import copy
+
+    d = copy.deepcopy(p.design)
+    d["contracted_targets"]["1"], d["contracted_targets"]["2"] = d["contracted_targets"]["2"], d["contracted_targets"]["1"]
+    swapped = Pattern(nodes=p.nodes, tiles=p.tiles, name=p.name, lattice=p.lattice, design=d)
+    bad = _outline_checks(verify_pattern(swapped))
+    assert not bad["state 1: outline fits its target"].ok and not bad["state 2: outline fits its target"].ok
+    # asked for a 2:1 rectangle, the square state is refused
+    d = copy.deepcopy(p.design)
+    del d["contracted_targets"]["1"]
+    d["options"]["contracted"]["1"] = {"rectangle": True, "ratio": 2.0}
+    rect = _outline_checks(verify_pattern(Pattern(nodes=p.nodes, tiles=p.tiles, lattice=p.lattice, design=d)))
+    assert not rect["state 1: outline aspect ratio"].ok and rect["state 1: outline aspect ratio"].value > 10
+
+
+def test_a_degenerate_contracted_rectangle_is_reported(tmp_path, run_cli):
+    path = tmp_path / "rr.json"
+    code, _, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "1:rect",
+                           "--contracted-target", "2:rect", "-o", path)
+    assert code == 0, err
+    code, out, _ = run_cli("verify", path)
+    assert code == 1
+    chk = verify_pattern(read_pattern(path)).get("state 1: outline not degenerate")
+    assert not chk.ok and chk.value > 10 and "collapsed strip" in chk.detail
+    code, _, err = run_cli("cut", path, "-o", tmp_path / "c")
+    assert code == 1 and "outline not degenerate" in err and not (tmp_path / "c").exists()

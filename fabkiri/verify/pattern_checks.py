@@ -493,4 +493,8 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
             rep.add(chk)
     for chk in target_checks(pattern, tol):
         rep.add(chk)
+    from .outlines import contracted_outline_checks
+
+    for chk in contracted_outline_checks(pattern, states, tol):
+        rep.add(chk)
     return rep
