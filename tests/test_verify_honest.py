@@ -100,3 +100,44 @@ def test_a_degenerate_contracted_rectangle_is_reported(tmp_path, run_cli):
     assert not chk.ok and chk.value > 10 and "collapsed strip" in chk.detail
     code, _, err = run_cli("cut", path, "-o", tmp_path / "c")
     assert code == 1 and "outline not degenerate" in err and not (tmp_path / "c").exists()
+
+
+def _near_closed(pattern, d_mm: float, tile: int = 7):
+    """``pattern`` with one corner of one tile of its stored closed state 2 moved by ``d_mm``
+    (published patterns close to about 1e-6 of the tile size, not 1e-9)."""
+    from dataclasses import replace
+
+    Y = pattern.contracted[2].copy()
+    Y[tile, 1] += d_mm * np.array([0.6, 0.8])
+    return replace(pattern, contracted={1: pattern.contracted[1], 2: Y})
+
+
+def test_one_tolerance_in_mm_angles_as_displacement(tmp_path, run_cli):
+    from fabkiri.pattern import write_pattern
+
+    from . import layout_fixtures as lf
+
+    base = lf.distinct_pattern()  # 20 mm tiles
+    p = _near_closed(base, 3e-4)
+    exact = verify_pattern(p)  # the relative tier: 1e-9 of the tile edge
+    assert not exact.get("state 2: tiles congruent (angles)").ok and exact.get(
+        "state 2: tiles congruent (angles)").unit == "rad"
+    mm = verify_pattern(p, tol_mm=0.05)
+    assert mm.ok, mm.to_text()
+    ang = mm.get("state 2: tiles congruent (angles)")
+    assert ang.unit == "mm" and 1e-5 < ang.value < 1e-3 and ang.tol == 0.05 and "displacement" in mm.meta["tolerance"]
+    # a real error is still one at 0.05 mm, named by tile
+    bad = verify_pattern(_near_closed(base, 0.2), tol_mm=0.05)
+    for name in ("state 2: tiles congruent (lengths)", "state 2: tiles congruent (angles)"):
+        assert not bad.get(name).ok and bad.get(name).worst == "tile 7"
+    # the CLI: 0.05 mm by default, --exact for solver output, and the report says which
+    pj = tmp_path / "near.json"
+    write_pattern(p, pj)
+    code, out, _ = run_cli("verify", pj)
+    assert code == 0 and "0.05 mm for lengths, and for angles as their displacement" in out.splitlines()[0]
+    code, out, _ = run_cli("verify", pj, "--exact")
+    assert code == 1 and "exact" in out.splitlines()[0]
+    code, _, err = run_cli("cut", pj, "--hinge", "separate", "--formats", "dxf", "-o", tmp_path / "c")
+    assert code == 0, err
+    code, _, err = run_cli("cut", pj, "--hinge", "separate", "--formats", "dxf", "--exact", "-o", tmp_path / "x")
+    assert code == 1 and "tiles congruent" in err and not (tmp_path / "x").exists()

@@ -53,7 +53,7 @@ def cmd_cut(args: argparse.Namespace) -> int:
         layout=args.layout, scale=args.scale, width=args.width, formats=_formats(args.formats),
         colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
         reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
-        pattern_file=Path(args.file).name)
+        pattern_file=Path(args.file).name, exact=args.exact)
     result = cut_pattern(pattern, options)
     from ..fabricate.readback import write_verified
 
@@ -95,7 +95,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--strain-limit", type=float, metavar="EPS")
     p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
     p.add_argument("--ligament-width", type=float, metavar="MM", help="force the ligament width")
-    p.add_argument("--tol", type=float, metavar="MM", help="verification tolerance (default: the material's)")
+    p.add_argument("--tol-mm", "--tol", dest="tol", type=float, metavar="MM",
+                   help="verification tolerance in mm for the pattern and the read-back (default: the material's); "
+                        "angle residuals count as their displacement at the tile size")
+    p.add_argument("--exact", action="store_true",
+                   help="check the pattern at the relative tier for solver output (1e-9 of the tile edge, 1e-5 "
+                        "for optimiser output) instead of --tol-mm; the read-back stays at --tol-mm")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
     p.add_argument("--label-height", type=float, metavar="MM", help="tile ID height (default: the material's)")
     p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")

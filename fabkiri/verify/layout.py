@@ -36,7 +36,7 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
 from ..mechanics.contract import contract
-from .pattern_checks import Tolerances, closed_state_checks
+from .pattern_checks import closed_state_checks, fabrication_tolerances
 from .report import Check, Report, measured
 
 MM_PER_PX = 25.4 / 96.0
@@ -797,9 +797,10 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     # everything is compared on the sheet, in physical mm: the design is scaled
     # up (kerf and tolerance are physical lengths, not pattern lengths)
     L = pattern.tile_size * al.scale
-    tol = Tolerances(float(tol_mm), max(float(tol_rad), float(tol_mm) / L), L, "fabrication")
+    tol = fabrication_tolerances(float(tol_mm), L)
     rep = Report(subject=str(path), kind="layout",
-                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "hinge": al.hinge,
+                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "tolerance": tol.describe(),
+                       "hinge": al.hinge,
                        "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
     g = "layout"
     D = pattern.corners() * al.scale  # design shapes (deployed = cut shapes), sheet mm
