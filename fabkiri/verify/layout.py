@@ -56,14 +56,34 @@ class Linework:
     polylines: list[np.ndarray] = field(default_factory=list)
     closed: list[bool] = field(default_factory=list)
     layer_found: bool = True  # a CUT layer/group existed
+    layers: list[str] = field(default_factory=list)  # per polyline: its layer or group name ("" if none)
+    colours: list[str] = field(default_factory=list)  # per polyline: its stroke colour ("" if none)
 
-    def add(self, pts: np.ndarray, closed: bool) -> None:
+    def add(self, pts: np.ndarray, closed: bool, layer: str = "CUT", colour: str = "") -> None:
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         if len(pts) >= 3 and abs(pts[0, 0] - pts[-1, 0]) <= 1e-9 and abs(pts[0, 1] - pts[-1, 1]) <= 1e-9:
             pts, closed = pts[:-1], True
         if len(pts) >= 2:
             self.polylines.append(pts)
             self.closed.append(bool(closed) and len(pts) >= 3)
+            self.layers.append(str(layer))
+            self.colours.append(str(colour))
+
+    def subset(self, keep) -> "Linework":
+        keep = list(keep)
+        return Linework(self.path, [self.polylines[i] for i in keep], [self.closed[i] for i in keep],
+                        self.layer_found, [self.layers[i] for i in keep], [self.colours[i] for i in keep])
+
+    def cut_classes(self) -> list["Linework"]:
+        """The candidate cut linework: the CUT layer if there is one, else every colour class outside the
+        annotation layers (one candidate per colour: a colour-only file keeps its layers as colours)."""
+        if self.layer_found or not self.polylines:
+            return [self]
+        rest = [i for i, name in enumerate(self.layers) if name.upper() not in NON_CUT_LAYERS]
+        colours = sorted({self.colours[i] for i in rest})
+        if len(colours) <= 1:
+            return [self.subset(rest)]
+        return [self.subset([i for i in rest if self.colours[i] == c]) for c in colours]
 
 
 def read_cut_file(path: str | Path) -> Linework:
@@ -138,6 +158,8 @@ def _read_dxf_fast(p: Path) -> Linework | None:
                 lw.add(np.array([[float(get["10"]), float(get["20"])],
                                  [float(get["11"]), float(get["21"])]]) * unit, False)
                 continue
+            if any(c in ("210", "220", "230") for c, _ in tags):
+                return None  # an extrusion direction (OCS): the full reader maps it to world coordinates
             if kind != "LWPOLYLINE":
                 return None  # curves, old-style polylines, blocks: the full reader
             if any(c == "42" and float(v) != 0.0 for c, v in tags):
@@ -162,38 +184,45 @@ def _read_dxf(p: Path) -> Linework:
     return _read_dxf_full(p)
 
 
+CURVE_TYPES = {"LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE"}
+
+
 def _read_dxf_full(p: Path) -> Linework:
+    """Every curve of the modelspace in world coordinates, blocks exploded, with its layer and colour.
+
+    ezdxf does the work: ``recover`` reads damaged files, ``disassemble.recursive_decompose``
+    expands INSERTs (any depth, with their transforms), ``to_primitives`` gives each entity's path
+    in WCS (its OCS applied, curves flattened to 1 µm).
+    """
     import ezdxf
-    from ezdxf import path as ezpath
+    from ezdxf import disassemble, recover
 
     try:
-        doc = ezdxf.readfile(str(p))
+        doc, _ = recover.readfile(str(p))
     except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
         raise VerifyError(f"{p}: not a readable DXF file ({exc})") from None
     unit = INSUNITS_MM.get(int(doc.header.get("$INSUNITS", 0)))
     if unit is None:
         raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={doc.header.get('$INSUNITS')}")
-    msp = doc.modelspace()
-    ents = [e for e in msp if e.dxftype() in ("LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE",
-                                              "ELLIPSE")]
-    cut = [e for e in ents if e.dxf.layer.upper() == "CUT"]
-    lw = Linework(p, layer_found=bool(cut))
-    if not cut:  # a plain file from another tool: every outline not on an annotation layer
-        cut = [e for e in ents if e.dxf.layer.upper() not in NON_CUT_LAYERS]
-    for e in cut:
-        kind = e.dxftype()
-        if kind == "LINE":
-            lw.add(np.array([[e.dxf.start.x, e.dxf.start.y], [e.dxf.end.x, e.dxf.end.y]]) * unit, False)
+    lw = Linework(p, layer_found=False)
+    layer_colour = {layer.dxf.name.upper(): layer.color for layer in doc.layers}
+    flat = 0.001 / unit
+    for prim in disassemble.to_primitives(disassemble.recursive_decompose(doc.modelspace()), flat):
+        e = prim.entity
+        if e is None or e.dxftype() not in CURVE_TYPES or prim.path is None:
             continue
-        if kind == "LWPOLYLINE":
-            pts = np.array(e.get_points("xyb"), dtype=float)
-            if len(pts) and not pts[:, 2].any():
-                lw.add(pts[:, :2] * unit, e.closed)
-                continue
-        path_ = ezpath.make_path(e)
-        pts = np.array([(v.x, v.y) for v in path_.flattening(0.001 / unit)], dtype=float)
-        closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or kind == "CIRCLE")
-        lw.add(pts * unit, closed)
+        layer = e.dxf.layer.upper()
+        aci = e.dxf.get("color", 256)
+        colour = str(layer_colour.get(layer, 7) if aci in (0, 256) else aci)
+        closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or e.dxftype() == "CIRCLE")
+        for sub in prim.path.sub_paths():
+            pts = np.array([(v.x, v.y) for v in sub.flattening(flat)], dtype=float)
+            lw.add(pts * unit, closed, layer, colour)
+    if any(name == "CUT" for name in lw.layers):
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name == "CUT")
+        lw.layer_found = True
+    else:  # a plain file from another tool: every outline not on an annotation layer
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name not in NON_CUT_LAYERS)
     return lw
 
 
@@ -211,26 +240,36 @@ def _read_svg(p: Path) -> Linework:
     mm_per_px = _declared_mm(svg.values.get("height"), float(svg.height))
     height = float(svg.height) * mm_per_px
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
-    cut_groups = [g for g in groups if str(g.id or "").upper() == "CUT"
-                  or str(g.values.get("inkscape:label", "")).upper() == "CUT"]
-    if cut_groups:
-        shapes = [e for g in cut_groups for e in g.select() if isinstance(e, se.Shape)]
-    else:
-        skip = {id(e) for g in groups if str(g.id or "").upper() in NON_CUT_LAYERS
-                for e in g.select() if isinstance(e, se.Shape)}
-        shapes = [e for e in svg.elements() if isinstance(e, se.Shape) and id(e) not in skip]
-    lw = Linework(p, layer_found=bool(cut_groups))
+
+    def name(g) -> str:
+        for v in (g.values.get("inkscape:label"), g.id):
+            if str(v or "").upper() in NON_CUT_LAYERS | {"CUT"}:
+                return str(v).upper()
+        return ""
+
+    layer_of: dict[int, str] = {}
+    for g in groups:  # document order: an inner named group overrides its parent
+        if name(g):
+            for e in g.select():
+                if isinstance(e, se.Shape):
+                    layer_of[id(e)] = name(g)
+    cut_found = "CUT" in layer_of.values()
+    shapes = [e for e in svg.elements() if isinstance(e, se.Shape)
+              and (layer_of.get(id(e)) == "CUT" if cut_found else layer_of.get(id(e), "") not in NON_CUT_LAYERS)]
+    lw = Linework(p, layer_found=cut_found)
     for shape in shapes:
         path_ = se.Path(shape)
+        layer = layer_of.get(id(shape), "")
+        colour = str(shape.stroke.hex) if shape.stroke is not None and shape.stroke.value is not None else ""
         pts: list[tuple[float, float]] = []
         for seg in path_.segments():
             if isinstance(seg, se.Move):
                 if len(pts) >= 2:
-                    lw.add(_svg_mm(pts, height, mm_per_px), False)
+                    lw.add(_svg_mm(pts, height, mm_per_px), False, layer, colour)
                 pts = [(seg.end.x, seg.end.y)]
             elif isinstance(seg, se.Close):
                 if len(pts) >= 3:
-                    lw.add(_svg_mm(pts, height, mm_per_px), True)
+                    lw.add(_svg_mm(pts, height, mm_per_px), True, layer, colour)
                 pts = []
             elif isinstance(seg, se.Line):
                 pts.append((seg.end.x, seg.end.y))
@@ -239,7 +278,7 @@ def _read_svg(p: Path) -> Linework:
                     q = seg.point(t)
                     pts.append((q.x, q.y))
         if len(pts) >= 2:
-            lw.add(_svg_mm(pts, height, mm_per_px), False)
+            lw.add(_svg_mm(pts, height, mm_per_px), False, layer, colour)
     return lw
 
 
@@ -390,8 +429,8 @@ def _drop_reference(lw: Linework, corners: np.ndarray | None) -> int:
     return dropped
 
 
-def _snapped_segments(lw: Linework) -> np.ndarray:
-    """All segments ``(n, 2, 2)`` with endpoints closer than SNAP_MM merged."""
+def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
+    """All segments ``(n, 2, 2)`` with endpoints closer than ``eps`` merged."""
     if not lw.polylines:
         return np.zeros((0, 2, 2))
     pts = np.concatenate(lw.polylines)
@@ -404,7 +443,7 @@ def _snapped_segments(lw: Linework) -> np.ndarray:
     use = (local < n[owner] - 1) | np.asarray(lw.closed)[owner]
     segs = np.stack([pts[use], pts[nxt[use]]], 1)
     pts = segs.reshape(-1, 2)
-    pairs = cKDTree(pts).query_pairs(SNAP_MM, output_type="ndarray")
+    pairs = cKDTree(pts).query_pairs(eps, output_type="ndarray")
     if len(pairs):
         from scipy import sparse
 
@@ -418,19 +457,77 @@ def _snapped_segments(lw: Linework) -> np.ndarray:
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
 
 
+JOIN_MM = 2e-3  # cut ends closer than this meet (rounding to 1 µm moves a point by 0.7 µm; a 10 µm bridge is not cut)
+
+
+def _node(segs: np.ndarray, eps: float = JOIN_MM):
+    """Segments ``(n, 2, 2)`` noded: ends within ``eps`` of another line are put on it (T-junctions
+    rounded off their edge), then every crossing and touch is a node. Returns the union."""
+    lines = shapely.multilinestrings(shapely.linestrings(segs))
+    ends = shapely.multipoints(np.unique(segs.reshape(-1, 2), axis=0))
+    return shapely.unary_union(shapely.snap(lines, ends, eps))
+
+
+def _noded(lw: Linework, eps: float = JOIN_MM):
+    """The CUT linework as noded line parts (shapely), endpoints within ``eps`` merged."""
+    segs = _snapped_segments(lw, eps)
+    if len(segs) == 0:
+        return np.zeros(0, dtype=object)
+    return shapely.get_parts(_node(segs, eps))
+
+
+def join_pieces(lw: Linework, eps: float = JOIN_MM) -> Linework:
+    """Open pieces and LINEs chained end to end into closed outlines where they close (within ``eps``).
+
+    What stays open is a cut that ends in the material (see :func:`dangling_ends`).
+    """
+    if all(lw.closed):
+        return lw
+    merged = shapely.get_parts(shapely.line_merge(shapely.union_all(_noded(lw, eps))))
+    out = Linework(lw.path, layer_found=lw.layer_found)
+    for g in merged:
+        pts = np.asarray(g.coords)
+        out.add(pts, bool(g.is_ring))
+    return out
+
+
+def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
+    """Points ``(n, 2)`` where a cut line stops without meeting another cut (farther than ``eps``).
+
+    Every line of a valid layout bounds a part: it ends where other lines meet it. An end in
+    the material is a slit cut short (the tiles stay joined) or an extra cut into a part.
+    """
+    parts = _noded(lw, eps)
+    if len(parts) == 0:
+        return np.zeros((0, 2))
+    ends = np.concatenate([shapely.get_coordinates(shapely.get_point(parts, 0)),
+                           shapely.get_coordinates(shapely.get_point(parts, -1))])
+    owner = np.concatenate([np.arange(len(parts)), np.arange(len(parts))])
+    tree = shapely.STRtree(parts)
+    pi, gi = tree.query(shapely.points(ends), predicate="dwithin", distance=eps)
+    other = np.zeros(len(ends), dtype=bool)
+    other[pi[gi != owner[pi]]] = True
+    # a closed part meets itself at its ends
+    ring = shapely.is_closed(parts)[owner]
+    return ends[~other & ~ring]
+
+
 def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.ndarray, str]:
     """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
     if not lw.polylines:  # e.g. a sheet that holds only the reference square
         return np.zeros(0, dtype=object), "nothing to recover"
-    closed_only = all(lw.closed)
     hinge = al.hinge
-    if hinge == "plain":
-        hinge = "separate" if closed_only else "tape"
+    if hinge != "tape":
+        joined = join_pieces(lw)
+        if hinge == "plain":  # no manifest: outlines that all close are separate tiles, else in-place linework
+            hinge = "separate" if all(joined.closed) else "tape"
+        if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
+            lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
     if hinge == "tape":
-        segs = _snapped_segments(lw)
+        segs = _snapped_segments(lw, JOIN_MM)
         if len(segs) == 0:
             return np.zeros(0, dtype=object), "polygonize"
-        noded = shapely.unary_union(shapely.linestrings(segs))
+        noded = _node(segs)
         faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
         return faces, "polygonize of the noded linework"
     rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
@@ -458,6 +555,47 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.n
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, "material minus ligaments, grown by the tile shrink"
+
+
+def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.ndarray, L: float,
+                tol: float) -> Linework:
+    """The candidate linework (a colour class of a file without a CUT layer) that forms the most
+    design tiles; with one candidate, that one."""
+    if len(candidates) == 1:
+        return candidates[0]
+    best, score = candidates[0], -1
+    for lw in candidates:
+        try:
+            polys, _ = recover_polygons(lw, al, sheet)
+        except VerifyError:
+            continue
+        quads, _ = quads_of(polys[shapely.area(polys) > tol ** 2])
+        _, res, _ = match_by_shape(D, quads, L)
+        n = int((res <= tol).sum())
+        if n > score:
+            best, score = lw, n
+    return best
+
+
+def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float) -> tuple[np.ndarray, float | None]:
+    """Take out the reference square (a square that is no design tile, the largest such), by geometry.
+
+    fabkiri cuts an uncompensated square beside the parts so the kerf can be measured; a file
+    moved, turned or without its manifest still has it. Returns the other quads and its side.
+    """
+    if not len(quads):
+        return quads, None
+    e = geometry.edge_lengths(quads)
+    diag = np.linalg.norm(quads[:, 2] - quads[:, 0], axis=1), np.linalg.norm(quads[:, 3] - quads[:, 1], axis=1)
+    square = (e.max(axis=1) - e.min(axis=1) <= tol) & (np.abs(diag[0] - diag[1]) <= tol)
+    if not square.any():
+        return quads, None
+    _, res, _ = match_by_shape(D, quads[square], L)
+    cand = np.flatnonzero(square)[res > tol]
+    if not len(cand):
+        return quads, None
+    k = int(cand[np.argmax(e[cand].mean(axis=1))])
+    return np.delete(quads, k, axis=0), float(e[k].mean())
 
 
 def _feature_geometry(poly: Any):
@@ -811,19 +949,27 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     n_lines = 0
     methods = set()
     unusable = 0
+    dangling: list[np.ndarray] = []
+    references: list[float] = []
     for sheet, f in files.items():
-        lw = read_cut_file(f)
+        lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol.length)
         _drop_reference(lw, al.reference.get(sheet))
         n_lines += len(lw.polylines)
         polys, method = recover_polygons(lw, al, sheet)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
         quads, bad = quads_of(polys)
+        quads, side = _set_reference_aside(quads, D, L, tol.length)
+        if side is not None:
+            references.append(side)
         unusable += bad
         sheets[sheet] = quads
+        dangling.append(dangling_ends(lw))
     if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
         raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
     rep.meta["recovery"] = sorted(methods)
+    if references:
+        rep.meta["reference_square_mm"] = references
 
     in_place = al.layout == "in-place"
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
@@ -934,6 +1080,10 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             chk.group = g
             rep.add(chk)
 
+    # ---- every cut runs its full length: no cut ends inside the material
+    ends = np.concatenate(dangling) if dangling else np.zeros((0, 2))
+    rep.add(_dangling_check(ends, cut_shapes, have, g, tol.length))
+
     # ---- (d) every hinge present
     top = pattern.topology
     A, B = top.hinge_tiles.T
@@ -963,6 +1113,31 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
                   detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
     return rep
+
+
+def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, g: str, tol: float) -> Check:
+    """A cut that stops in the material: a slit short of its end leaves two tiles joined, a stray
+    cut weakens a part. Names the tiles nearest the first such end."""
+    worst, detail = None, "every cut line ends on another cut"
+    if len(ends):
+        ids = np.flatnonzero(have)
+        where = []
+        if len(ids):
+            polys = shapely.polygons(cut_shapes[ids])
+            d = shapely.distance(polys[None, :], shapely.points(ends[:1])[:, None])[0]
+            near = ids[np.argsort(d)[:2]]
+            where = [int(t) for t, dd in zip(near, np.sort(d)[:2]) if dd <= max(10 * tol, 1.0)]
+        if len(where) == 2:
+            worst = f"tiles {where[0]}/{where[1]}"
+            detail = f"the slit between tiles {where[0]} and {where[1]} stops short: they stay joined"
+        elif where:
+            worst = f"tile {where[0]}"
+            detail = f"a cut ends inside tile {where[0]}"
+        else:
+            detail = "a cut ends in the material"
+        detail += f" ({len(ends)} cut ends in the material, first at ({ends[0, 0]:.4g}, {ends[0, 1]:.4g}) mm)"
+    return Check(f"{g}: cuts run their full length", ok=not len(ends), value=int(len(ends)), tol=0, unit="count",
+                 group=g, worst=worst, detail=detail)
 
 
 def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
