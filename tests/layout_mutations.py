@@ -80,7 +80,20 @@ def load_base(folder: Path, fmt: str, pattern) -> Base:
         R = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
         k = int(t["tile"])
         tiles[k] = src[k] @ R.T + np.asarray(t["shift_mm"])
-    return Base(folder, fmt, pattern, man, sheet, tiles)
+    b = Base(folder, fmt, pattern, man, sheet, tiles)
+    b.extra["mirror_symmetric"] = _mirror_symmetric(tiles)
+    return b
+
+
+def _mirror_symmetric(tiles: np.ndarray, tol: float = 0.05) -> bool:
+    """Whether the sheet's tiles mirrored are the same tiles after a rigid motion (a mirror is then no breakage)."""
+    from fabkiri.verify.layout import match_in_place
+
+    M = tiles.copy()
+    M[..., 0] *= -1
+    M = M[:, ::-1]
+    a, res, _, _, _ = match_in_place(tiles, M)
+    return bool((a >= 0).all() and np.max(res) <= tol)
 
 
 # ------------------------------------------------------------------ writers
@@ -522,6 +535,7 @@ class Kind:
     style: str = ""  # writer style
     manifest: str = "keep"  # keep | drop-ok (valid only without manifest changes) | kerf0 (undeclared kerf)
     hinges: tuple = ("tape", "separate", "ligament")
+    chiral: bool = False  # a mirror of the whole sheet: a breakage only for a sheet without mirror symmetry
 
 
 def then(change, after):
@@ -601,12 +615,12 @@ BROKEN = [
     Kind("sheet scaled 0.995", False, "any", sheet(lambda p: p * 0.995)),
     Kind("sheet stretched 1% in x", False, "any", sheet(lambda p: p * np.array([1.01, 1.0]))),
     Kind("sheet sheared 1%", False, "any", sheet(lambda p: p + np.column_stack([0.01 * p[:, 1], 0 * p[:, 0]]))),
-    Kind("sheet mirrored", False, "any", sheet_mirrored),
-    Kind("mirrored through the OCS", False, "dxf", _keep, "ocs-mirror"),
+    Kind("sheet mirrored", False, "any", sheet_mirrored, chiral=True),
+    Kind("mirrored through the OCS", False, "dxf", _keep, "ocs-mirror", chiral=True),
     Kind("inch-for-mm", False, "dxf", _keep, "inch-for-mm"),
     Kind("inch-for-mm (SVG size)", False, "svg", _keep, "inch-for-mm"),
     Kind("viewBox 1% off", False, "svg", _keep, "viewbox-scaled"),
-    Kind("mirror transform", False, "svg", _keep, "mirror"),
+    Kind("mirror transform", False, "svg", _keep, "mirror", chiral=True),
     Kind("slit shortened 10 µm", False, "any", slit_shortened(0.01), hinges=("tape",)),
     Kind("slit shortened 0.1 mm", False, "any", slit_shortened(0.1), hinges=("tape",)),
     Kind("slit cut halfway", False, "any", slit_halfway, hinges=("tape",)),
@@ -625,7 +639,7 @@ BROKEN = [
     Kind("tile turned 1° in a block", False, "dxf", tile_turned(1.0), "block-moved", hinges=("tape", "ligament")),
     Kind("slit shortened 10 µm, LINEs", False, "dxf", slit_shortened(0.01), "lines", hinges=("tape",)),
     Kind("extra cut, polyline elements", False, "svg", extra_cut(1.0), "polyline"),
-    Kind("sheet mirrored, R2018", False, "dxf", sheet_mirrored, "r2018"),
+    Kind("sheet mirrored, R2018", False, "dxf", sheet_mirrored, "r2018", chiral=True),
     Kind("tile scaled 1%, split pieces", False, "any", then(tile_scaled(1.01), _split_closed)),
     Kind("corner moved 0.1 mm, rounded 0.001", False, "any", then(corner_moved(0.1), _round(3))),
     Kind("tile mirrored in a turned sheet", False, "any",
@@ -643,6 +657,8 @@ def make_case(b: Base, kind: Kind, out: Path, with_manifest: bool, seed: int = 0
     if b.hinge not in kind.hinges or kind.fmt not in ("any", b.fmt):
         return None
     if kind.manifest == "kerf0" and not with_manifest:
+        return None
+    if kind.chiral and b.extra.get("mirror_symmetric"):
         return None
     rng = np.random.default_rng(seed)
     sh, _ = kind.change(b, rng)

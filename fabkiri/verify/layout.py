@@ -577,6 +577,25 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
     return best
 
 
+MAX_FITTED_OFFSET_MM = 0.25  # a kerf up to 0.5 mm: any more is not a laser's kerf
+
+
+def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float) -> float:
+    """The outward (mitre) offset of separate outlines from their design tiles, 0 if none is needed.
+
+    Per matched tile the offset that explains its area, (A_cut - A) / perimeter; their median, if
+    it lies within [0, MAX_FITTED_OFFSET_MM]. Each tile's congruence is still checked after it is undone.
+    """
+    a, _, _ = match_by_shape(D, R, L)
+    ok = a >= 0
+    if not ok.any():
+        return 0.0
+    A = np.abs(geometry.signed_areas(D[a[ok]]))
+    P = geometry.edge_lengths(D[a[ok]]).sum(axis=1)
+    k = float(np.median((np.abs(geometry.signed_areas(R[ok])) - A) / P))
+    return k if 0.1 * tol < k <= MAX_FITTED_OFFSET_MM else 0.0
+
+
 def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float) -> tuple[np.ndarray, float | None]:
     """Take out the reference square (a square that is no design tile, the largest such), by geometry.
 
@@ -978,6 +997,16 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
             in_place = len(shapely.get_parts(u)) == 1 and len(allq) > 1
         rep.meta["layout"] = "in-place" if in_place else "separate"
+    fitted = None
+    if al.hinge == "plain" and not in_place and sheets:
+        # no manifest declares the kerf: take the one outward offset the outlines share
+        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol.length)
+        if fitted:
+            for k, R in sheets.items():
+                sheets[k], bad = quads_of(shapely.buffer(shapely.polygons(R), -fitted, join_style="mitre",
+                                                         mitre_limit=10.0))
+                unusable += bad
+        rep.meta["kerf_offset_fitted_mm"] = fitted
 
     # ---- match
     assign_all = np.full(T, -1)  # design tile -> global recovered index
