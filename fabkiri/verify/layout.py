@@ -371,6 +371,8 @@ class Allowances:
     tile_sheet: dict[int, int]
     sheet_files: dict[int, str]
     cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
+    ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
+    tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)
 
 
 def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
@@ -402,11 +404,16 @@ def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
                 if sh.get(key):
                     sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
         cross = {int(h["hinge"]) for h in manifest.get("hinges") or [] if h.get("cross_sheet")}
+        lig = manifest.get("ligament") if isinstance(manifest.get("ligament"), dict) else {}
+        lig_w = float(lig["width_mm"]) if lig.get("width_mm") else None
+        placed = {int(t["tile"]): (float(t["rotation_rad"]), np.asarray(t["shift_mm"], dtype=float))
+                  for t in manifest.get("tiles") or [] if "rotation_rad" in t and "shift_mm" in t}
     except VerifyError:
         raise
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
-    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross)
+    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross, lig_w,
+                      placed)
 
 
 # ------------------------------------------------------------------ recovery
@@ -519,8 +526,9 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.n
     hinge = al.hinge
     if hinge != "tape":
         joined = join_pieces(lw)
-        if hinge == "plain":  # no manifest: outlines that all close are separate tiles, else in-place linework
-            hinge = "separate" if all(joined.closed) else "tape"
+        if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
+            # ligament sheet), else in-place linework
+            hinge = ("ligament" if _nested(joined) else "separate") if all(joined.closed) else "tape"
         if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
             lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
     if hinge == "tape":
@@ -549,12 +557,48 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.n
         material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
     feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
              if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
-    if feats:
-        material = material.difference(shapely.unary_union(feats))
-    parts = shapely.get_parts(material)
+    strips = shapely.unary_union(feats) if feats else None
+    parts = shapely.get_parts(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
+    # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
+    if strips is not None and (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4):
+        how = "material minus the declared ligaments"
+    else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
+        parts = _open_ligaments(material, al.ligament_width)
+        how = "material opened to drop the ligaments"
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
-    return parts, "material minus ligaments, grown by the tile shrink"
+    return parts, how + ", grown by the tile shrink"
+
+
+def _nested(lw: Linework) -> bool:
+    """Whether a closed outline holds another (the outline of one sheet piece and its holes)."""
+    polys = np.array([shapely.Polygon(p) for p in lw.polylines], dtype=object)
+    if len(polys) < 2:
+        return False
+    a, b = shapely.STRtree(polys).query(polys, predicate="contains_properly")
+    return bool((a != b).any())
+
+
+def _open_ligaments(material, width: float | None):
+    """The tile cores of a ligament sheet: an opening (mitre: convex tiles come back exactly) of
+    radius above half the ligament width drops the strips. Without a declared width, the smallest
+    radius from 10 µm up (x1.25) after which the piece count no longer grows."""
+    def opened(r):
+        g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre", mitre_limit=10.0)
+        parts = shapely.get_parts(g)
+        return parts[shapely.area(parts) > 4 * r * r]
+    if width:
+        return opened(0.6 * width)
+    best, first, r = opened(0.01), 0.01, 0.01
+    while r < 5.0:
+        r *= 1.25
+        nxt = opened(r)
+        if len(nxt) < len(best) and len(best) > 1:
+            break
+        if len(nxt) > len(best):
+            best, first = nxt, r
+    margin = opened(1.5 * first)  # clear of the strips' roots, when that keeps every tile
+    return margin if len(margin) == len(best) else best
 
 
 def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.ndarray, L: float,
@@ -577,10 +621,14 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
     return best
 
 
+UNDO_MITRE = 1000.0  # undoing an offset must keep sharp corners sharp
 MAX_FITTED_OFFSET_MM = 0.25  # a kerf up to 0.5 mm: any more is not a laser's kerf
 
 
-def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float) -> float:
+MAX_FITTED_SHRINK_MM = 2.5  # a ligament sheet's tiles shrunk by up to half a 5 mm gap
+
+
+def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float, lo: float = 0.0) -> float:
     """The outward (mitre) offset of separate outlines from their design tiles, 0 if none is needed.
 
     Per matched tile the offset that explains its area, (A_cut - A) / perimeter; their median, if
@@ -593,7 +641,7 @@ def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float) -> float:
     A = np.abs(geometry.signed_areas(D[a[ok]]))
     P = geometry.edge_lengths(D[a[ok]]).sum(axis=1)
     k = float(np.median((np.abs(geometry.signed_areas(R[ok])) - A) / P))
-    return k if 0.1 * tol < k <= MAX_FITTED_OFFSET_MM else 0.0
+    return k if 0.1 * tol < abs(k) and lo <= k <= MAX_FITTED_OFFSET_MM else 0.0
 
 
 def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float) -> tuple[np.ndarray, float | None]:
@@ -1000,11 +1048,13 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     fitted = None
     if al.hinge == "plain" and not in_place and sheets:
         # no manifest declares the kerf: take the one outward offset the outlines share
-        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol.length)
+        sheet_piece = any(m.startswith("material") for m in methods)  # a ligament sheet: tiles shrunk by the gap
+        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol.length,
+                             lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
         if fitted:
             for k, R in sheets.items():
                 sheets[k], bad = quads_of(shapely.buffer(shapely.polygons(R), -fitted, join_style="mitre",
-                                                         mitre_limit=10.0))
+                                                         mitre_limit=UNDO_MITRE))
                 unusable += bad
         rep.meta["kerf_offset_fitted_mm"] = fitted
 
