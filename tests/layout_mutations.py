@@ -337,7 +337,8 @@ def corner_moved(d: float):
         out = b.sheet.copy()
         P = b.tiles[t, k]
         items = []
-        r = 0.3 if b.hinge != "tape" else 1e-3
+        # the cut lines around a tile corner: offset by the kerf (and, in a ligament sheet, the tile shrink)
+        r = 1e-3 if b.hinge == "tape" else 0.3 + b.manifest["kerf_offset_mm"] + b.manifest["tile_shrink_mm"]
         for p, c in out.layers["CUT"]:
             near = np.linalg.norm(p - P, axis=1) <= r
             if near.any():

@@ -242,7 +242,7 @@ def _read_svg(p: Path) -> Linework:
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
 
     def name(g) -> str:
-        for v in (g.values.get("inkscape:label"), g.id):
+        for v in (g.values.get(INKSCAPE_LABEL), g.values.get("inkscape:label"), g.id):
             if str(v or "").upper() in NON_CUT_LAYERS | {"CUT"}:
                 return str(v).upper()
         return ""
@@ -613,11 +613,12 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
             polys, _ = recover_polygons(lw, al, sheet)
         except VerifyError:
             continue
-        quads, _ = quads_of(polys[shapely.area(polys) > tol ** 2])
+        quads, bad = quads_of(polys[shapely.area(polys) > tol ** 2])
         _, res, _ = match_by_shape(D, quads, L)
-        n = int((res <= tol).sum())
-        if n > score:
-            best, score = lw, n
+        n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
+        key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions
+        if score == -1 or key > score:
+            best, score = lw, key
     return best
 
 
@@ -1039,16 +1040,16 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         rep.meta["reference_square_mm"] = references
 
     in_place = al.layout == "in-place"
+    sheet_piece = any(m.startswith("material") for m in methods)  # a ligament sheet: tiles in place, shrunk
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
         allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
         if len(allq):
             u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
-            in_place = len(shapely.get_parts(u)) == 1 and len(allq) > 1
+            in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
         rep.meta["layout"] = "in-place" if in_place else "separate"
     fitted = None
-    if al.hinge == "plain" and not in_place and sheets:
-        # no manifest declares the kerf: take the one outward offset the outlines share
-        sheet_piece = any(m.startswith("material") for m in methods)  # a ligament sheet: tiles shrunk by the gap
+    if al.hinge == "plain" and (not in_place or sheet_piece) and sheets:
+        # no manifest declares the kerf (or the gap): take the one offset the outlines share
         fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol.length,
                              lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
         if fitted:
