@@ -602,8 +602,8 @@ VALID = [
 ]
 
 BROKEN = [
-    Kind("corner moved 0.1 mm", False, "any", corner_moved(0.1)),
-    Kind("corner moved 0.06 mm", False, "any", corner_moved(0.06)),
+    Kind("corner moved 0.1 mm", False, "any", corner_moved(0.1), hinges=("tape", "separate")),
+    Kind("corner moved 0.06 mm", False, "any", corner_moved(0.06), hinges=("tape", "separate")),
     Kind("tile scaled 1%", False, "any", tile_scaled(1.01)),
     Kind("tile scaled 0.99", False, "any", tile_scaled(0.99)),
     Kind("tile turned 0.5°", False, "any", tile_turned(0.5), hinges=("tape", "ligament")),
@@ -636,13 +636,13 @@ BROKEN = [
          sheet(lambda p: rigid(math.radians(40), (0, 0))(p) * 1.01)),
     Kind("tile scaled 1% in LINEs", False, "dxf", tile_scaled(1.01), "lines"),
     Kind("tile mirrored, colour only", False, "svg", tile_mirrored, "colour"),
-    Kind("corner moved 0.1 mm, Inkscape layers", False, "svg", corner_moved(0.1), "labels"),
+    Kind("corner moved 0.1 mm, Inkscape layers", False, "svg", corner_moved(0.1), "labels", hinges=("tape", "separate")),
     Kind("tile turned 1° in a block", False, "dxf", tile_turned(1.0), "block-moved", hinges=("tape", "ligament")),
     Kind("slit shortened 10 µm, LINEs", False, "dxf", slit_shortened(0.01), "lines", hinges=("tape",)),
     Kind("extra cut, polyline elements", False, "svg", extra_cut(1.0), "polyline"),
     Kind("sheet mirrored, R2018", False, "dxf", sheet_mirrored, "r2018", chiral=True),
     Kind("tile scaled 1%, split pieces", False, "any", then(tile_scaled(1.01), _split_closed)),
-    Kind("corner moved 0.1 mm, rounded 0.001", False, "any", then(corner_moved(0.1), _round(3))),
+    Kind("corner moved 0.1 mm, rounded 0.001", False, "any", then(corner_moved(0.1), _round(3)), hinges=("tape", "separate")),
     Kind("tile mirrored in a turned sheet", False, "any",
          then(tile_mirrored, lambda s: s.map_points(rigid(math.radians(75), (0, 0))))),
     Kind("a ligament severed, LINEs", False, "dxf", ligament_severed(False), "lines", hinges=("ligament",)),
