@@ -519,8 +519,13 @@ def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
     return ends[~other & ~ring]
 
 
-def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.ndarray, str]:
-    """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
+def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
+                     frame_tiles: np.ndarray | None = None) -> tuple[np.ndarray, str]:
+    """Tile regions (shapely polygons) from one file's CUT linework, and the method used.
+
+    ``frame_tiles``: the design tiles where the manifest puts them (its sheet frame), to find the
+    declared ligaments on a sheet that was moved or turned since.
+    """
     if not lw.polylines:  # e.g. a sheet that holds only the reference square
         return np.zeros(0, dtype=object), "nothing to recover"
     hinge = al.hinge
@@ -560,18 +565,46 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.n
     strips = shapely.unary_union(feats) if feats else None
     # a file rounded to 1 µm may keep a hairline of material beside a declared strip: an opening at the
     # join tolerance drops it (and leaves convex tiles exactly as they are)
-    parts = shapely.get_parts(material.difference(strips).buffer(-JOIN_MM, join_style="mitre", mitre_limit=10.0)
-                              .buffer(JOIN_MM, join_style="mitre", mitre_limit=10.0)) \
-        if strips is not None else np.zeros(0, dtype=object)
+    parts = _hairline_free(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
     # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
-    if strips is not None and (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4):
+    def cuts_tiles(parts) -> bool:
+        return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
+
+    if strips is not None and cuts_tiles(parts):
         how = "material minus the declared ligaments"
     else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
         parts = _open_ligaments(material, al.ligament_width)
         how = "material opened to drop the ligaments"
+        moved = _declared_strips_moved(parts, strips, frame_tiles, al)
+        if moved is not None:
+            again = _hairline_free(material.difference(moved))
+            if cuts_tiles(again):
+                parts, how = again, "material minus the declared ligaments, moved with the sheet"
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, how + ", grown by the tile shrink"
+
+
+def _hairline_free(g) -> np.ndarray:
+    """The parts of ``g`` after an opening at the join tolerance (drops 1 µm hairlines, keeps convex parts)."""
+    g = g.buffer(-JOIN_MM, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(JOIN_MM, join_style="mitre",
+                                                                             mitre_limit=UNDO_MITRE)
+    return shapely.get_parts(g)
+
+
+def _declared_strips_moved(parts, strips, frame_tiles, al: Allowances):
+    """The declared ligaments moved with the sheet: the rigid motion that takes the manifest's tile
+    placement onto the tiles an opening found, applied to the strips. None if it cannot be found."""
+    if strips is None or frame_tiles is None or not len(parts):
+        return None
+    grown = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0) if al.tile_shrink else parts
+    quads, _ = quads_of(grown)
+    a, res, _, theta, t = match_in_place(frame_tiles, quads)
+    if (a >= 0).sum() < max(3, len(frame_tiles) // 2):
+        return None
+    from shapely import affinity
+
+    return affinity.translate(affinity.rotate(strips, theta, origin=(0, 0), use_radians=True), t[0], t[1])
 
 
 def _nested(lw: Linework) -> bool:
@@ -588,7 +621,8 @@ def _open_ligaments(material, width: float | None):
     radius above half the ligament width drops the strips. Without a declared width, the smallest
     radius from 10 µm up (x1.25) after which the piece count no longer grows."""
     def opened(r):
-        g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre", mitre_limit=10.0)
+        g = material.buffer(-r, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(r, join_style="mitre",
+                                                                                   mitre_limit=UNDO_MITRE)
         parts = shapely.get_parts(g)
         return parts[shapely.area(parts) > 4 * r * r]
     if width:
@@ -1023,11 +1057,13 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     unusable = 0
     dangling: list[np.ndarray] = []
     references: list[float] = []
+    frame = _frame_tiles(pattern, al)
     for sheet, f in files.items():
         lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol.length)
         _drop_reference(lw, al.reference.get(sheet))
         n_lines += len(lw.polylines)
-        polys, method = recover_polygons(lw, al, sheet)
+        on = [t for t in range(T) if al.tile_sheet.get(t, 1) == sheet]
+        polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
         quads, bad = quads_of(polys)
@@ -1197,6 +1233,18 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
                   detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
     return rep
+
+
+def _frame_tiles(pattern: Pattern, al: Allowances) -> np.ndarray | None:
+    """Design tiles where the manifest placed them: Rot(rotation) (scaled closed-state tile) + shift."""
+    if al.layout != "in-place" or len(al.tiles_placed) != pattern.n_tiles:
+        return None
+    Y = pattern.contracted.get(al.state)
+    Y = (contract(pattern, al.state).corners if Y is None else Y) * al.scale
+    out = np.empty_like(Y)
+    for t, (th, shift) in al.tiles_placed.items():
+        out[t] = geometry.rotate(Y[t], th) + shift
+    return out
 
 
 def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, g: str, tol: float) -> Check:
