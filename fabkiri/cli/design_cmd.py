@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..design.initial import INITS
-from ..design.solve import DesignRequest, design
+from ..design.solve import DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..errors import InputError, SolveError
 from ..mechanics.contract import contract
@@ -141,6 +141,8 @@ def cmd_design(args: argparse.Namespace) -> int:
         inits = [args.init]
     elif args.rigid and rows * cols >= BIG_TILES:
         inits = list(BIG_RIGID_INITS)
+    elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
+        inits = ["coarse"]
     else:
         inits = list(AUTO_INITS)
     attempts = []
@@ -302,8 +304,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "
                         "solve in the closed-form rigid family, and when that fit is least-squares also run the "
                         "full solver (up to 16x16 tiles, or up to 32x32 when the fit misses by more than 0.25 %% "
-                        "of the target size) and keep the better; reduced: the rigid family only; full: the sparse "
-                        "solver over all nodes")
+                        "of the target size) and keep the better; also the rigid family for --rigid square/circle "
+                        "--contracted-target outlines (square exact, circle of any size) and for non-rigid rhombus "
+                        "designs from 32x32 tiles; reduced: the rigid family only; full: the sparse solver over "
+                        "all nodes")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
