@@ -66,27 +66,24 @@ def _cases(names, valid=False):
     return out
 
 
-@pytest.mark.parametrize("name,hinge,with_manifest", _cases(VALID, valid=True))
-def test_valid_variant_accepted(bases, tmp_path, name, hinge, with_manifest):
+def _verify_case(bases, tmp_path, name, hinge, with_manifest):
     kind = KINDS[name]
-    fmt = "svg" if kind.fmt == "svg" else "dxf"
-    b = bases[hinge, fmt]
+    b = bases[hinge, "svg" if kind.fmt == "svg" else "dxf"]
     path = lm.make_case(b, kind, tmp_path / "c", with_manifest)
     if path is None:
         pytest.skip("not applicable")
-    rep = verify_layout(b.pattern, path)
+    return verify_layout(b.pattern, path)
+
+
+@pytest.mark.parametrize("name,hinge,with_manifest", _cases(VALID, valid=True))
+def test_valid_variant_accepted(bases, tmp_path, name, hinge, with_manifest):
+    rep = _verify_case(bases, tmp_path, name, hinge, with_manifest)
     assert rep.ok, rep.to_text()
 
 
 @pytest.mark.parametrize("name,hinge,with_manifest", _cases(BROKEN))
 def test_breakage_rejected_and_named(bases, tmp_path, name, hinge, with_manifest):
-    kind = KINDS[name]
-    fmt = "svg" if kind.fmt == "svg" else "dxf"
-    b = bases[hinge, fmt]
-    path = lm.make_case(b, kind, tmp_path / "c", with_manifest)
-    if path is None:
-        pytest.skip("not applicable")
-    rep = verify_layout(b.pattern, path)
+    rep = _verify_case(bases, tmp_path, name, hinge, with_manifest)
     assert not rep.ok, f"{name} accepted"
     worst = [c.worst or "" for c in rep.failed()]
     assert any(w.startswith(("tile", "hinge")) for w in worst), worst
