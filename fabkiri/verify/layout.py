@@ -575,7 +575,9 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
         parts = _open_ligaments(material, al.ligament_width)
         how = "material opened to drop the ligaments"
-        moved = _declared_strips_moved(parts, strips, frame_tiles, al)
+        # only when the opening left tiles joined: on a symmetric lattice the motion can be a quarter turn off
+        short = frame_tiles is not None and (shapely.area(parts) > 1.0).sum() < len(frame_tiles)
+        moved = _declared_strips_moved(parts, strips, frame_tiles, al) if short else None
         if moved is not None:
             again = _hairline_free(material.difference(moved))
             if cuts_tiles(again):
@@ -621,8 +623,8 @@ def _open_ligaments(material, width: float | None):
     radius above half the ligament width drops the strips. Without a declared width, the smallest
     radius from 10 µm up (x1.25) after which the piece count no longer grows."""
     def opened(r):
-        g = material.buffer(-r, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(r, join_style="mitre",
-                                                                                   mitre_limit=UNDO_MITRE)
+        g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre",
+                                                                                   mitre_limit=10.0)
         parts = shapely.get_parts(g)
         return parts[shapely.area(parts) > 4 * r * r]
     if width:
