@@ -1,17 +1,28 @@
-"""Atomic file output: nothing half-written ever appears under a final name.
+"""Safe file input and output: nothing half-written, never an input overwritten.
 
-Every writer in fabkiri produces bytes in memory (or in a scratch folder) and
-hands them here; files appear under their final names only by ``os.replace``.
+Every writer in fabkiri produces bytes in memory and hands them here.
+:func:`publish` checks every destination first (not a folder, not an input of
+the running command, its folder creatable), writes all files into a scratch
+folder beside the destination, and only then moves them in; if a move fails,
+the files already moved are taken back and the old ones restored, so the
+destination is left as it was. Readers register the files they read
+(:func:`read_input`, :func:`note_inputs`) so a writer can refuse to replace
+one of them, whatever path (symlink, ``./x``, hard link) names it.
 """
 
 from __future__ import annotations
 
+import contextvars
 import os
 import shutil
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import InputError
+
+# the files read by the running command (set by :func:`inputs_scope`; None outside one: nothing recorded)
+_INPUTS: contextvars.ContextVar[tuple[Path, ...] | None] = contextvars.ContextVar("fabkiri_inputs", default=None)
 
 
 def _umask() -> int:
@@ -25,70 +36,207 @@ def _publish_mode(fd_or_path) -> None:
     os.chmod(fd_or_path, 0o666 & ~_umask())
 
 
-def _parent(path: Path) -> Path:
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"output folder {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise InputError(f"output folder {parent} is not writable")
-    return parent
+# ------------------------------------------------------------------ inputs
+
+
+@contextmanager
+def inputs_scope():
+    """One command's record of the files it reads (the CLI opens one per run)."""
+    token = _INPUTS.set(())
+    try:
+        yield
+    finally:
+        _INPUTS.reset(token)
+
+
+def note_inputs(*paths: str | os.PathLike) -> None:
+    """Record files as inputs of the running command (existing regular files only)."""
+    if _INPUTS.get() is None:
+        return
+    known = list(_INPUTS.get())
+    for p in paths:
+        p = Path(p)
+        if p.is_file() and p not in known:
+            known.append(p)
+    _INPUTS.set(tuple(known))
+
+
+def input_named_by(path: str | os.PathLike) -> Path | None:
+    """The recorded input that ``path`` is (same file: symlink, hard link or another spelling)."""
+    path = Path(path)
+    if not path.exists():
+        return None
+    for p in _INPUTS.get() or ():
+        try:
+            if os.path.samefile(p, path):
+                return p
+        except OSError:
+            continue
+    return None
+
+
+def refuse_input(path: str | os.PathLike) -> None:
+    """Raise :class:`InputError` if writing ``path`` would replace an input file."""
+    src = input_named_by(path)
+    if src is not None:
+        same = "" if Path(src) == Path(path) else f" (the same file as the input {src})"
+        raise InputError(f"refusing to write {path}: it is an input of this command{same}; "
+                         f"choose another output")
+
+
+def read_input(path: str | os.PathLike, *, max_bytes: int, what: str = "file", error=InputError) -> str:
+    """A UTF-8 text input, size-bounded and recorded; one-line ``error`` on any problem."""
+    p = Path(path)
+    if not p.exists():
+        raise error(f"{p}: no such file")
+    if p.is_dir():
+        raise error(f"{p}: is a folder, expected a file")
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise error(f"{p}: cannot be read ({exc.strerror})") from None
+    if size > max_bytes:
+        raise error(f"{p}: {size / 2**20:.1f} MB is larger than the {max_bytes / 2**20:.0f} MB a {what} "
+                    f"may have")
+    note_inputs(p)
+    try:
+        return p.read_text("utf-8")
+    except UnicodeDecodeError:
+        raise error(f"{p}: not a text file") from None
+    except OSError as exc:
+        raise error(f"{p}: cannot be read ({exc.strerror})") from None
+
+
+# ----------------------------------------------------------------- outputs
+
+
+def _first_existing(path: Path) -> Path:
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+def _check_destination(dest: Path) -> None:
+    """``dest`` can take a file: not a folder, not an input, every missing folder creatable."""
+    refuse_input(dest)
+    if dest.is_dir():
+        raise InputError(f"output {dest} is a folder where a file must go; nothing written")
+    base = _first_existing(dest.parent)
+    if not base.is_dir():
+        raise InputError(f"output {dest}: {base} exists and is not a folder; nothing written")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write {dest}: folder {base} is not writable")
+
+
+def _root_folder(root: Path) -> Path:
+    if not root.is_dir():
+        raise InputError(f"output folder {root} does not exist")
+    if not os.access(root, os.W_OK):
+        raise InputError(f"output folder {root} is not writable")
+    return root
+
+
+def publish(files: dict[Path, bytes | str], root: str | os.PathLike) -> list[Path]:
+    """Write every file all-or-nothing; ``root`` (an existing folder) holds them all.
+
+    Missing folders between ``root`` and a file are created (and removed again
+    on failure). Raises :class:`InputError` with nothing changed on disk.
+    """
+    root = _root_folder(Path(root) if str(root) else Path("."))
+    dests = [Path(d) for d in files]
+    for d in dests:
+        _check_destination(d)
+    try:
+        scratch = Path(tempfile.mkdtemp(prefix=".fabkiri-", suffix=".tmp", dir=root))  # 0700, never published
+    except OSError as exc:
+        raise InputError(f"cannot write into {root}: {exc.strerror or exc}") from None
+    try:
+        staged = []
+        for i, data in enumerate(files.values()):
+            tmp = scratch / f"new-{i}"
+            tmp.write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
+            _publish_mode(tmp)
+            staged.append(tmp)
+        _move_in(dests, staged, scratch)
+    except OSError as exc:
+        raise InputError(f"cannot write {root}: {exc.strerror or exc}; nothing written") from None
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    return dests
+
+
+def _move_in(dests: list[Path], staged: list[Path], scratch: Path) -> None:
+    """Move the staged files to their destinations; on any failure undo every step taken."""
+    made: list[Path] = []  # folders created, outermost first
+    done: list[tuple[Path, Path | None]] = []  # (destination, backup of the file it replaced)
+    try:
+        for i, (dest, tmp) in enumerate(zip(dests, staged)):
+            missing = []
+            p = dest.parent
+            while not p.exists():
+                missing.append(p)
+                p = p.parent
+            for folder in reversed(missing):
+                folder.mkdir()
+                made.append(folder)
+            backup = None
+            if dest.exists() or dest.is_symlink():
+                backup = scratch / f"old-{i}"
+                os.replace(dest, backup)
+            done.append((dest, backup))
+            os.replace(tmp, dest)
+    except BaseException:
+        for dest, backup in reversed(done):
+            try:
+                if backup is not None and backup.exists():
+                    os.replace(backup, dest)
+                elif backup is None:
+                    dest.unlink(missing_ok=True)
+            except OSError:
+                pass
+        for folder in reversed(made):
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        raise
 
 
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same folder."""
+    """Write ``data`` to ``path`` (its folder must exist) through a scratch file beside it."""
     path = Path(path)
+    refuse_input(path)
     if path.is_dir():
         raise InputError(f"output {path} is a folder, expected a file name")
-    parent = _parent(path)
-    payload = data.encode("utf-8") if isinstance(data, str) else data
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
-    except OSError as exc:
-        raise InputError(f"cannot write {path}: {exc.strerror or exc}") from None
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(payload)
-        _publish_mode(tmp)
-        os.replace(tmp, path)
-    except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
-        raise InputError(f"cannot write {path}: {exc.strerror or exc}") from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return publish({path: data}, path.parent)[0]
+
+
+def check_output_file(path: str | os.PathLike) -> None:
+    """Up-front check of a single-file output (before a long computation)."""
+    path = Path(path)
+    refuse_input(path)
+    if path.is_dir():
+        raise InputError(f"output {path} is a folder, expected a file name")
+    _root_folder(path.parent if str(path.parent) else Path("."))
+
+
+def check_output_folder(folder: str | os.PathLike) -> None:
+    """Up-front check of a folder output: a folder (or creatable as one), not an input."""
+    folder = Path(folder)
+    refuse_input(folder)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"output {folder} exists and is not a folder")
+    _root_folder(folder.parent if str(folder.parent) else Path("."))
 
 
 def atomic_write_many(folder: str | os.PathLike, files: dict[str, bytes | str]) -> list[Path]:
     """Write several files into ``folder`` (created if missing) all-or-nothing.
 
-    Everything is first written to a scratch folder beside ``folder``; only when
-    every file is complete are they moved into place.
+    Every destination is checked before anything is written; everything is
+    written to a scratch folder beside ``folder`` and moved in only when every
+    file is complete (see :func:`publish`).
     """
     folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"output {folder} exists and is not a folder")
-    parent = _parent(folder)
-    created = not folder.exists()
-    try:
-        scratch = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=parent))  # mode 0700, never published
-    except OSError as exc:
-        raise InputError(f"cannot write into {parent}: {exc.strerror or exc}") from None
-    try:
-        for name, data in files.items():
-            target = scratch / name
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
-        if created:
-            folder.mkdir()
-        out = []
-        for name in files:
-            dest = folder / name
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(scratch / name, dest)
-            out.append(dest)
-        return out
-    except OSError as exc:
-        raise InputError(f"cannot write {folder}: {exc.strerror or exc}") from None
-    finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+    check_output_folder(folder)
+    root = folder.parent if str(folder.parent) else Path(".")
+    return publish({folder / name: data for name, data in files.items()}, root)

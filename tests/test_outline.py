@@ -21,8 +21,14 @@ import speed  # noqa: E402
 @pytest.mark.parametrize("n", [5, 7])
 def test_square_to_circle_exact_square_and_least_squares_circle(run_cli, tmp_path, n):
     out = tmp_path / "p.json"
-    code, _, err = run_cli("design", "--tiles", f"{n}x{n}", "--rigid", "--contracted-target", "1:square",
-                           "--contracted-target", "2:circle", "-o", out)
+    args = ("design", "--tiles", f"{n}x{n}", "--rigid", "--contracted-target", "1:square",
+            "--contracted-target", "2:circle", "--no-preview", "-o", out)
+    if n == 5:
+        # the rigid family's best 5x5 circle is 2.3 % off (Hausdorff): the default 2 % shape check says so
+        code, _, err = run_cli(*args)
+        assert code == 1 and "shape missed (state 2)" in err.splitlines()[-1], err
+        args += ("--shape-tol", "3%")
+    code, _, err = run_cli(*args)
     assert code == 0, err
     pat = read_pattern(out)
     rep = pat.design["report"]

@@ -7,13 +7,14 @@ import re
 import sys
 from pathlib import Path
 
+from .. import limits
 from ..errors import InputError
 from ..fabricate.cut import FORMATS, CutOptions, cut_pattern
 from ..fabricate.drawing import COLORS
 from ..fabricate.layout import LAYOUTS
 from ..fabricate.materials import HINGE_KINDS, available, load_material, parse_setting
 from ..fabricate.svg import STROKE_MM
-from .pattern_cmds import _positive, load_any
+from .pattern_cmds import _nonneg, _positive, load_any
 
 
 def _sheet(text: str) -> tuple[float, float]:
@@ -55,6 +56,10 @@ def cmd_cut(args: argparse.Namespace) -> int:
         colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
         reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
         pattern_file=Path(args.file).name, notes=not args.no_notes, stroke_mm=args.stroke, exact=args.exact)
+    if isinstance(args.scale, float):  # numbers that would overflow the geometry: one line, up front
+        limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
+    if isinstance(args.width, float):
+        limits.check_length(args.width, "--width")
     result = cut_pattern(pattern, options)
     from ..fabricate.readback import write_verified
 
@@ -81,7 +86,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
     p.add_argument("--state", type=int, choices=[1, 2], default=1, help="closed state to cut (default 1)")
     p.add_argument("--sheet", default="600x400", metavar="WxH", help="sheet size in mm (default 600x400)")
-    p.add_argument("--margin", type=float, default=5.0, metavar="MM", help="sheet margin (default 5)")
+    p.add_argument("--margin", type=_nonneg, default=5.0, metavar="MM", help="sheet margin (default 5)")
     p.add_argument("--layout", choices=LAYOUTS,
                    help="in-place (tape, ligament), exploded or nested (separate; default exploded)")
     g = p.add_mutually_exclusive_group()
@@ -95,17 +100,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--min-hole", type=float, metavar="MM")
     p.add_argument("--strain-limit", type=float, metavar="EPS")
     p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
-    p.add_argument("--ligament-width", type=float, metavar="MM", help="force the ligament width")
-    p.add_argument("--tol-mm", "--tol", dest="tol", type=float, metavar="MM",
+    p.add_argument("--ligament-width", type=_positive, metavar="MM", help="force the ligament width")
+    p.add_argument("--tol-mm", "--tol", dest="tol", type=_positive, metavar="MM",
                    help="verification tolerance in mm for the pattern and the read-back (default: the material's); "
                         "angle residuals count as their displacement at the tile size")
     p.add_argument("--exact", action="store_true",
                    help="check the pattern at the relative tier for solver output (1e-9 of the tile edge, 1e-5 "
                         "for optimiser output) instead of --tol-mm; the read-back stays at --tol-mm")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
-    p.add_argument("--label-height", type=float, metavar="MM", help="tile ID height (default: the material's)")
+    p.add_argument("--label-height", type=_positive, metavar="MM", help="tile ID height (default: the material's)")
     p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")
-    p.add_argument("--reference", type=float, default=50.0, metavar="MM",
+    p.add_argument("--reference", type=_nonneg, default=50.0, metavar="MM",
                    help="side of the uncompensated reference square (0: none; default 50)")
     p.add_argument("--no-notes", action="store_true",
                    help="leave out the NOTES layer (sheet frame, caption, reference-square size) that some laser "

@@ -17,11 +17,15 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import sys
+import warnings
 from collections.abc import Sequence
+from pathlib import Path
 
 from .. import __version__
 from ..errors import FabkiriError
+from ..fileio import inputs_scope, note_inputs, refuse_input
 
 COMMANDS = [
     "fabkiri.cli.pattern_cmds",
@@ -87,11 +91,40 @@ def build_parser(command: str | None = "") -> argparse.ArgumentParser:
     return parser
 
 
+def named_files(args: argparse.Namespace) -> list[str]:
+    """Every existing file an argument other than the output names (``STATE:FILE`` included)."""
+    out = []
+    for key, value in vars(args).items():
+        if key in ("output", "func", "command"):
+            continue
+        for v in value if isinstance(value, (list, tuple)) else [value]:
+            if isinstance(v, str):
+                out += [c for c in (v, re.sub(r"^\s*[12]\s*:", "", v)) if c and Path(c).is_file()]
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    parser = build_parser(_command(argv))
-    args = parser.parse_args(argv)
+    # numpy's RuntimeWarnings (and any library warning) never reach the user: real problems are
+    # refused as one-line errors by the input checks; FABKIRI_DEBUG=1 shows them
+    with warnings.catch_warnings(), inputs_scope():
+        if not os.environ.get("FABKIRI_DEBUG"):
+            warnings.simplefilter("ignore")
+        parser = build_parser(_command(argv))
+        args = parser.parse_args(argv)
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
+        from .. import limits  # numpy: not for `fabkiri --help`
+
+        files = named_files(args)
+        for f in files:  # targets, layouts, presets: bounded before any reader sees them
+            limits.check_file_size(f)
+        note_inputs(*files)
+        if isinstance(getattr(args, "output", None), str):
+            refuse_input(args.output)
         code = args.func(args)
         return int(code or 0)
     except FabkiriError as exc:
@@ -104,6 +137,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("fabkiri: interrupted; nothing was written", file=sys.stderr)
         return 130
+    except MemoryError:  # past the up-front estimates (fabkiri.limits): still one line, nothing written
+        print("fabkiri: error: out of memory; try fewer tiles or a smaller input; nothing written",
+              file=sys.stderr)
+        return 2
     except Exception as exc:  # a bug: still one line unless asked
         if os.environ.get("FABKIRI_DEBUG"):
             raise

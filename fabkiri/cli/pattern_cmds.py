@@ -8,6 +8,7 @@ import re
 import sys
 from pathlib import Path
 
+from .. import limits
 from ..errors import CheckFailed, InputError
 from ..fileio import atomic_write
 from ..mechanics.contract import adopt_state_labels, contract, with_contracted_states
@@ -47,11 +48,11 @@ def import_other(path: str, scale: float) -> Pattern | None:
             pat = Pattern(nodes=pat.nodes * scale, tiles=pat.tiles,
                           contracted={k: v * scale for k, v in pat.contracted.items()}, name=pat.name,
                           design=pat.design)
-        return adopt_state_labels(pat)
+        return adopt_state_labels(limits.check_pattern(pat, str(p)))
     if p.is_dir():
         from ..pattern.pykirigami import read_pykirigami
 
-        return adopt_state_labels(read_pykirigami(p, unit_mm=scale))
+        return adopt_state_labels(limits.check_pattern(read_pykirigami(p, unit_mm=scale), str(p)))
     return None
 
 
@@ -65,8 +66,20 @@ def _positive(text: str) -> float:
     return v
 
 
+def _nonneg(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not 0 <= v < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return v
+
+
 def cmd_new(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
+    limits.check_tiles(rows, cols, "new", args.i_know)
+    limits.check_length(args.tile_size, "--tile-size")
     pattern = standard_pattern(rows, cols, tile_size=args.tile_size, angle_deg=args.angle, name=args.name or "")
     pattern = with_contracted_states(pattern)
     info = describe(pattern)
@@ -121,6 +134,12 @@ def cmd_export(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     state = args.state
     fmt = args.format
+    if state != "deployed" or fmt != "obj":  # closed states are what gets fabricated: the fabrication gate
+        from ..fabricate.gate import claimed_states, closes_gate  # lazy: `design` imports this module
+
+        states = (1, 2) if fmt == "fold" else claimed_states(pattern, 1 if state == "deployed" else int(state))
+        for w in closes_gate(pattern, None, force=args.force, action="export", states=states).warnings:
+            print(f"warning: {w}", file=sys.stderr)
     if fmt == "fold":  # every state, one frame each
         from ..pattern.fold import fold_text
 
@@ -147,6 +166,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_i_know(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--i-know", action="store_true",
+                   help="try a lattice larger than the largest tested (the refusal says what it would need)")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("new", help="write a standard rotating-squares pattern with both closed states")
     p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 8x8")
@@ -154,6 +178,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--angle", type=float, default=45.0, metavar="DEG",
                    help="deployment angle ψ in degrees, 0..90 (default 45: square holes)")
     p.add_argument("--name", help="pattern name stored in the file")
+    add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_new)
 
@@ -184,5 +209,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator")
     p.add_argument("--unit", type=_positive, metavar="MM",
                    help="pykirigami: mm per file unit (default: the mean tile edge, so tiles are about 1 unit)")
+    p.add_argument("--force", action="store_true",
+                   help="export a closed state even if the pattern does not close in both states")
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.obj, OUT.fold or a folder (pykirigami)")
     p.set_defaults(func=cmd_export)

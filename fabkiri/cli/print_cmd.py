@@ -8,9 +8,11 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from .. import limits
 from ..errors import CheckFailed, InputError
 from ..fileio import atomic_write_many
 from ..fabricate import mesh
+from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import available_printers, load_printer
 from .pattern_cmds import _positive, load_any
 
@@ -18,6 +20,7 @@ from .pattern_cmds import _positive, load_any
 def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     pattern = load_any(args.file)
+    limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
     if args.scale != 1.0:  # mm printed per mm of the pattern
         pattern = replace(pattern, nodes=pattern.nodes * args.scale,
                           contracted={k: v * args.scale for k, v in pattern.contracted.items()})
@@ -29,6 +32,9 @@ def cmd_print(args: argparse.Namespace) -> int:
         strip_width_mm=args.strip_width, strip_reach_mm=args.strip_reach, gap_mm=args.gap,
         radial_clearance_mm=args.radial_clearance, axial_clearance_mm=args.axial_clearance,
     )
+    for w in closes_gate(pattern, printer.tolerance_mm, force=args.force, action="print", tolerance="printer",
+                         states=claimed_states(pattern, int(args.state))).warnings:  # as `cut`, printer tolerance
+        print(f"warning: {w}", file=sys.stderr)
     job = mesh.build_job(pattern, args.style, int(args.state), printer)
     realised = mesh.realise_job(job)
     report = mesh.check_meshes(realised)
@@ -127,5 +133,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "tape') with every pad outline engraved where its strip is glued")
     p.add_argument("--material", default="acrylic-3", metavar="NAME|FILE.json",
                    help="laser material for --marks (default acrylic-3)")
+    p.add_argument("--force", action="store_true",
+                   help="print even if the pattern does not close in both states (as 'fabkiri cut --force')")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.set_defaults(func=cmd_print)

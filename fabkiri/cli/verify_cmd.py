@@ -52,9 +52,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from ..verify import verify_layout, verify_pattern
 
     pattern = load_for_verify(args.file)
+    from ..design.conformance import parse_shape_tol
+
     tol_mm = DEFAULT_TOL_MM if args.tol_mm is None else args.tol_mm
     # --exact: the relative tier for solver output; otherwise one tolerance in mm (angles as displacement)
-    report = verify_pattern(pattern, tol_mm=None if args.exact else tol_mm, tol_rad=args.tol_rad)
+    report = verify_pattern(pattern, tol_mm=None if args.exact else tol_mm, tol_rad=args.tol_rad,
+                            shape_tol=parse_shape_tol(args.shape_tol))
     if args.layout:
         if not Path(args.layout).exists():
             raise InputError(f"{args.layout}: no such layout file")
@@ -89,5 +92,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "tile edge, 1e-5 for optimiser output; angles in rad); layout checks keep --tol-mm")
     p.add_argument("--tol-rad", type=_nonneg, default=1e-6, metavar="RAD",
                    help="angle tolerance in radians with --exact (default 1e-6)")
+    p.add_argument("--shape-tol", default="2%", metavar="TOL",
+                   help="largest Hausdorff distance between an outline and its stored target: a percentage of "
+                        "the target size (default 2%%) or a length like 0.5mm")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=cmd_verify)

@@ -130,6 +130,8 @@ class _Merit:
                                        (c, [], self.grid_regs, self.grid_ineqs)):
             rs, Js = [], []
             for f in fits:
+                if hard and f.meta.get("soft"):  # the exact fit leaves the soft outline rows out
+                    continue
                 r, J = f(arr)
                 rs.append(r)
                 Js.append(J)
@@ -175,7 +177,8 @@ class _Merit:
             Js.append(scale * self._node_jacobian(J, S, psi))
 
         for f in self.fits:
-            node_rows(f)
+            if not (hard and f.meta.get("soft")):
+                node_rows(f)
         if not hard:
             for f in self.regs:
                 node_rows(f, self.w)
@@ -481,7 +484,8 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
                 cap = min(cap, POLISH_STEPS)
             p, X, k = _lm(merit, p, min(cap, max_iter), stall_tol, log)
             iters[f"reduced_{scaling}_rho_{rho:g}"] = k
-            fit_max = max((float(np.abs(f.residual(X)).max()) for f in merit.fits), default=0.0)
+            fit_max = max((float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
+                          default=0.0)
             if merit.fits and fit_max < 1e-2 * mean_edge(X):
                 Xh, kh = _hard_fit(merit, p, fit_tol)
                 iters[f"reduced_{scaling}_hard"] = kh
@@ -489,7 +493,7 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
                     return Xh, "hard", iters
         ev = judge.evaluate(p)
         cost = float(ev.r @ ev.r)
-        miss = fit_miss(merit.fits, X)
+        miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
         viol = ev.gviol
         log(f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
             + (f", an inequality violated by {viol:.2e}" if viol > 0 else ""))

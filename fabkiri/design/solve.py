@@ -47,6 +47,7 @@ except ImportError:  # pragma: no cover
 
 from ..errors import InputError
 from ..pattern import geometry
+from ..pattern.conformance import boundary_tip_order
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
@@ -125,6 +126,7 @@ class DesignRequest:
     reg_weight: float = 1e-3
     max_iter: int = 300
     name: str = ""
+    outline: bool = True  # also fit the tip polygon's chords and the target's samples (``C.outline_match``)
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -225,7 +227,12 @@ class _Problem:
                 if spec[1] is not None:
                     fam.append(C.outline_ratio(st, s, float(spec[1]), nv))
         if req.target is not None:
-            fam.append(C.shape_match(st.tip_nodes, st.tip_side, req.target.transformed(1.0 / L0), nv, "shape"))
+            tgt = req.target.transformed(1.0 / L0)
+            fam.append(C.shape_match(st.tip_nodes, st.tip_side, tgt, nv, "shape"))
+            if req.outline:
+                top = std.topology
+                order = boundary_tip_order(top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes)
+                fam.append(C.outline_match(order, tgt, nv))
         for s, g in self.grids.items():
             fam.append(C.shape_match(g.boundary, g.boundary_side, curves[s].transformed(1.0 / L0), nv,
                                      f"closed_shape_{s}"))
@@ -246,7 +253,10 @@ class _Problem:
         sub = DesignRequest(rc, cc, req.target, rigid=req.rigid, symmetry=req.symmetry, holes=req.holes,
                             contracted=dict(req.contracted),
                             init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
-                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver)
+                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver,
+                            # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
+                            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
+                            outline=False)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
@@ -515,10 +525,15 @@ def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None
     return x.reshape(shape), it
 
 
+def exact_fits(fits: list[C.Family]) -> list[C.Family]:
+    """The fit rows an exact fit drives to zero (not the soft outline rows, whose minimum is not zero)."""
+    return [f for f in fits if not f.meta.get("soft")]
+
+
 def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
     out = {}
     for f in prob.families:
-        if f.kind in ("eq", "fit"):
+        if f.kind == "eq" or (f.kind == "fit" and not f.meta.get("soft")):
             r = f.residual(X)
             out[f.name] = float(np.abs(r).max(initial=0.0)) / L ** f.dim
     return out
@@ -635,7 +650,7 @@ def _solve_full(prob: _Problem, log, iters: dict):
         return max((float(np.abs(f.residual(Y)).max()) for f in prob.of("eq")), default=0.0)
 
     eqs = prob.of("eq")
-    fits = prob.of("fit")
+    fits = exact_fits(prob.of("fit"))
 
     def project(X):
         """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
@@ -701,7 +716,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         out = _solve_reduced(prob, log, iters)
     solver = reduced_name
     if out is not None and req.solver == "auto" and out[1] != "hard":
-        miss = fit_miss(fits, out[0])
+        miss = fit_miss(exact_fits(fits), out[0])
         if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
             log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
                 f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)")
@@ -725,6 +740,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         out = _solve_full(prob, log, iters)
         solver = full_name
     X, mode = out
+    fits = prob.of("fit")  # again: a size-free circle replaces its state's fit family with the fitted circle
     L = _mean_edge(prob, X)
     res = family_residuals(prob, X, L)
     eq_worst = max((res[f.name] for f in eqs), default=0.0)
@@ -740,7 +756,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         r = f.residual(X)
         fit[f.name] = {"max_mm": float(np.abs(r).max()) * L0, "rms_mm": float(np.sqrt(np.mean(r * r))) * L0,
                        "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,
-                       "points": int(len(r))}
+                       "points": int(len(r)), "soft": bool(f.meta.get("soft"))}
     report = {
         "status": "converged" if converged else "unconverged",
         "tolerance": req.tol,

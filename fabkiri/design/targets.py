@@ -621,3 +621,18 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
         lo, hi = tgt.bbox
         return tgt.transformed(shift=-0.5 * (lo + hi))
     raise InputError(f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)")
+
+
+def target_from_dict(d: dict, name: str = "target") -> Target:
+    """The :class:`Target` stored in a pattern (``Target.to_dict``): the same curve, kind and corners."""
+    if not isinstance(d, dict) or "points" not in d:
+        raise InputError(f"{name}: a stored target needs 'points'")
+    kind = d.get("kind", "polyline")
+    corners = d.get("corners")
+    try:
+        pts = np.asarray(d["points"], dtype=float)
+        c = None if corners is None else np.asarray(corners, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: stored target points must be numbers") from None
+    return Target(str(d.get("name", name)), kind if kind in ("spline", "polyline") else "polyline", pts,
+                  corners=c, source=dict(d.get("source") or {}))

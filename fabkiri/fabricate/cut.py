@@ -19,11 +19,11 @@ import shapely
 from .. import __version__
 from ..errors import CheckFailed, FabricationError, InputError
 from ..mechanics.contract import contract
-from ..verify import verify_pattern
 from ..pattern.model import Pattern
 from . import hinges as hg
 from . import layout as lay
 from .drawing import COLORS, SheetDrawing, snap
+from .gate import GATE_GROUPS, closes_gate
 from .gcpause import gc_paused
 from .dxf import DXF_VERSION, dxf_bytes
 from .materials import HINGE_KINDS, Material
@@ -153,17 +153,6 @@ def closed_states(pattern: Pattern) -> dict[int, np.ndarray]:
     return out
 
 
-GATE_GROUPS = ("tiles", "state 1", "state 2")  # plus each state's edge pairs (fold edges of equal length)
-
-
-def _check_text(c, scale: float) -> str:
-    """A failed verifier check, lengths in the file's millimetres."""
-    k = scale if c.unit == "mm" else (scale * scale if c.unit == "mm²" else 1.0)
-    if isinstance(c.value, (int, float)) and isinstance(c.tol, (int, float)):
-        return f"{c.name} {c.value * k:.3g} > {c.tol * k:.3g} {c.unit}"
-    return f"{c.name} failed"
-
-
 def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
     polys = shapely.polygons(corners)
     bad = np.flatnonzero(~shapely.is_valid(polys))
@@ -281,15 +270,10 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             raise InputError(f"--scale must be positive, got {options.scale}")
 
     # the verifier must find both closed states at the material's tolerance (in the file's mm)
-    pattern_report = verify_pattern(pattern, tol_mm=None if options.exact else mat.tolerance_mm / scale)
-    gate = [c for c in pattern_report.checks
-            if (c.group in GATE_GROUPS or c.name.endswith("edge pairs")) and c.applies and not c.ok]
-    if gate:
-        msg = "; ".join(_check_text(c, scale) for c in gate[:3]) + (f" (+{len(gate) - 3} more)" if len(gate) > 3 else "")
-        if not options.force:
-            raise CheckFailed(f"the pattern does not close in both states at the material tolerance "
-                              f"{mat.tolerance_mm:g} mm: {msg}; nothing cut (--force cuts it anyway)")
-        warnings.append(f"cut with --force although the pattern does not close: {msg}")
+    gated = closes_gate(pattern, None if options.exact else mat.tolerance_mm, scale=scale, force=options.force,
+                        action="cut")
+    pattern_report = gated.report
+    warnings += gated.warnings
 
     corners = raw * scale
     tile_polys = _check_tiles(corners, state)

@@ -8,13 +8,15 @@ applies command-line overrides. Every length is in millimetres. Values marked
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 from ..errors import FabricationError, InputError
+from ..fileio import read_input
+from ..limits import MAX_PRESET_BYTES, loads_json
+from ..schemas import load_schema, schema_problem
 from ..templates import template_dir
 
 HINGE_KINDS = ("tape", "ligament", "separate")
@@ -108,20 +110,17 @@ def load_material(name_or_path: str) -> Material:
         path = MATERIALS_DIR / f"{name_or_path}.json"
         if not path.exists():
             raise InputError(f"unknown material {name_or_path!r} (presets: {', '.join(available())})")
-    try:
-        data = json.loads(path.read_text("utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"material file {path} does not exist") from None
-    except (OSError, json.JSONDecodeError) as exc:
-        raise InputError(f"material file {path}: {exc}") from None
-    if not isinstance(data, dict):
-        raise InputError(f"material file {path}: expected a JSON object")
+    text = read_input(path, max_bytes=MAX_PRESET_BYTES, what="material preset")
+    data = loads_json(text, f"material file {path}")
+    if not isinstance(data, dict) or data.get("format") != "fabkiri.material":
+        got = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise InputError(f"material file {path} is not a fabkiri material preset (format {got!r}, "
+                         f"expected 'fabkiri.material')")
+    problem = schema_problem(data, load_schema(__package__, "material.schema.json"))
+    if problem:
+        raise InputError(f"material file {path}: {problem}")
     data = {k: v for k, v in data.items() if k not in ("format", "version")}
     data.setdefault("name", path.stem)
-    known = {f.name for f in fields(Material)}
-    unknown = sorted(set(data) - known)
-    if unknown:
-        raise InputError(f"material file {path}: unknown field(s) {', '.join(unknown)}")
     return Material(**data)
 
 

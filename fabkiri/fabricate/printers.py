@@ -9,12 +9,14 @@ starting points (fabrication.md §3.4); print a clearance coupon to calibrate.
 
 from __future__ import annotations
 
-import json
 from dataclasses import MISSING, asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
 from ..errors import FabricationError, InputError
+from ..fileio import read_input
+from ..limits import MAX_PRESET_BYTES, loads_json
+from ..schemas import load_schema, schema_problem
 from ..templates import template_dir
 
 PRINTERS_DIR = template_dir("printers")
@@ -112,7 +114,8 @@ def available_printers() -> list[str]:
 
 def printer_from_dict(data: dict[str, Any], source: str = "preset") -> Printer:
     if not isinstance(data, dict) or data.get("format") != "fabkiri.printer":
-        raise InputError(f"{source} is not a fabkiri printer preset (\"format\": \"fabkiri.printer\" missing)")
+        got = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise InputError(f"{source} is not a fabkiri printer preset (format {got!r}, expected 'fabkiri.printer')")
     known = {f.name for f in fields(Printer)}
     body = {k: v for k, v in data.items() if k not in ("format", "version")}
     unknown = sorted(set(body) - known)
@@ -126,6 +129,9 @@ def printer_from_dict(data: dict[str, Any], source: str = "preset") -> Printer:
     missing = [k for k in required if k not in body]
     if missing:
         raise InputError(f"{source}: missing printer field(s) {', '.join(missing)}")
+    problem = schema_problem(data, load_schema(__package__, "printer.schema.json"))
+    if problem:
+        raise InputError(f"{source}: {problem}")
     try:
         return Printer(**body, pin=PinSpec(**pin))
     except (TypeError, ValueError) as exc:
@@ -140,8 +146,5 @@ def load_printer(name_or_path: str | None = None) -> Printer:
         path = PRINTERS_DIR / f"{name}.json"
         if not path.is_file():
             raise InputError(f"unknown printer {name!r}; presets: {', '.join(available_printers())}")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise InputError(f"cannot read printer preset {path}: {exc}") from None
-    return printer_from_dict(data, str(path))
+    text = read_input(path, max_bytes=MAX_PRESET_BYTES, what="printer preset")
+    return printer_from_dict(loads_json(text, f"printer preset {path}"), str(path))

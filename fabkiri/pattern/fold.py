@@ -133,8 +133,6 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
 
 
 def loads_fold(text: str, source: str = "fold") -> Pattern:
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise PatternError(f"{source}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
-    return pattern_from_fold(data, source)
+    from ..limits import loads_json  # depth, integer and float bounds, as pattern.json
+
+    return pattern_from_fold(loads_json(text, source, PatternError), source)

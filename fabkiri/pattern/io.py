@@ -13,15 +13,16 @@ from __future__ import annotations
 import json
 import math
 import os
-from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .. import limits
 from ..errors import PatternError
-from ..fileio import atomic_write
+from ..fileio import atomic_write, read_input
+from ..schemas import load_schema, schema_problem
+from ..schemas import short as _short
 from . import geometry
 from .model import Pattern
 
@@ -32,36 +33,13 @@ VERSION = 1
 # ---------------------------------------------------------------- pattern.json
 
 
-@lru_cache(maxsize=1)
 def schema() -> dict[str, Any]:
     """The JSON Schema of pattern.json version 1."""
-    text = resources.files(__package__).joinpath("pattern.schema.json").read_text("utf-8")
-    return json.loads(text)
-
-
-def _reject_constant(name: str) -> float:
-    raise PatternError(f"non-finite number {name} in the file")
-
-
-def _short(value: Any, limit: int = 60) -> str:
-    text = json.dumps(value) if not isinstance(value, str) else repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+    return load_schema(__package__, "pattern.schema.json")
 
 
 def _schema_error(data: Any) -> str | None:
-    from jsonschema import Draft202012Validator
-    from jsonschema.exceptions import best_match
-
-    validator = Draft202012Validator(schema())
-    err = best_match(validator.iter_errors(data))
-    if err is None:
-        return None
-    where = "/".join(str(p) for p in err.absolute_path) or "top level"
-    if err.validator in ("required", "additionalProperties", "enum", "const"):
-        what = err.message
-    else:
-        what = f"{_short(err.instance)} fails '{err.validator}' ({_short(err.validator_value, 40)})"
-    return f"{where}: {what}"[:300]
+    return schema_problem(data, schema())
 
 
 _BULK = ("nodes", "tiles")
@@ -117,11 +95,21 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
     problem = _schema_error(_skeleton(data)) or _array_error(data)
     if problem:
         raise PatternError(f"{source}: {problem}")
+    nodes = np.asarray(data["nodes"], dtype=float)
+    tiles = np.asarray(data["tiles"], dtype=np.int64)
+    contracted = {int(k): np.asarray(v, dtype=float) for k, v in data.get("contracted", {}).items()}
+    if tiles.size and int(tiles.max()) >= len(nodes):
+        t = int(np.flatnonzero((tiles >= len(nodes)).any(1))[0])
+        raise PatternError(f"{source}: tile {t} references node {int(tiles[t].max())}, outside the "
+                           f"{len(nodes)} nodes")
+    problem = limits.coordinate_problem(nodes, tiles, contracted)
+    if problem:
+        raise PatternError(f"{source}: {problem}")
     try:
         return Pattern(
-            nodes=np.asarray(data["nodes"], dtype=float),
-            tiles=np.asarray(data["tiles"], dtype=np.int64),
-            contracted={int(k): np.asarray(v, dtype=float) for k, v in data.get("contracted", {}).items()},
+            nodes=nodes,
+            tiles=tiles,
+            contracted=contracted,
             parity=int(data.get("parity", 0)),
             name=str(data.get("name", "")),
             lattice=data.get("lattice"),
@@ -134,12 +122,7 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
 def loads(text: str, source: str = "pattern") -> Pattern:
     if not text.strip():
         raise PatternError(f"{source}: the file is empty")
-    try:
-        data = json.loads(text, parse_constant=_reject_constant)
-    except PatternError as exc:
-        raise PatternError(f"{source}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise PatternError(f"{source}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    data = limits.loads_json(text, source, PatternError)
     return pattern_from_dict(data, source)
 
 
@@ -202,17 +185,7 @@ def write_pattern(pattern: Pattern, path: str | os.PathLike) -> Path:
 
 
 def _read_text(path: str | os.PathLike) -> str:
-    p = Path(path)
-    if not p.exists():
-        raise PatternError(f"{p}: no such file")
-    if p.is_dir():
-        raise PatternError(f"{p}: is a folder, expected a file")
-    try:
-        return p.read_text("utf-8")
-    except UnicodeDecodeError:
-        raise PatternError(f"{p}: not a text file") from None
-    except OSError as exc:
-        raise PatternError(f"{p}: cannot be read ({exc.strerror})") from None
+    return read_input(path, max_bytes=limits.MAX_PATTERN_BYTES, what="pattern file", error=PatternError)
 
 
 def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
@@ -245,6 +218,8 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
                     raise PatternError(f"{source}: line {lineno}: face index {tok!r} is not an integer") from None
             if len(idx) != 4:
                 raise PatternError(f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads")
+            if any(abs(i) > limits.MAX_INT for i in idx):
+                raise PatternError(f"{source}: line {lineno}: face index beyond ±2**53")
             faces.append(idx)
         # other records (vn, vt, o, g, s, usemtl, ...) carry nothing a pattern needs
     if not verts:
@@ -296,6 +271,9 @@ def import_obj(
         if len(cv) != len(verts):
             raise PatternError(f"{path}: has {len(cv)} vertices, the design has {len(verts)}")
         states[i] = cv[faces] * scale
+    problem = limits.coordinate_problem(verts * scale, faces, states)
+    if problem:
+        raise PatternError(f"{design}: {problem}")
     return Pattern(
         nodes=verts * scale,
         tiles=faces,

@@ -34,6 +34,7 @@ SECTIONS = ("summary", "design", "states", "fabricability", "verification", "dep
 MIME = {".png": "image/png", ".gif": "image/gif", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}
 
 CSS = """
+ul.steps{list-style:none;padding-left:0}
 body{font:15px/1.45 system-ui,-apple-system,'Segoe UI',sans-serif;margin:0;color:#1d232a;background:#f6f7f9}
 header{background:#24313f;color:#fff;padding:18px 28px}header h1{margin:0;font-size:24px}
 nav{background:#fff;border-bottom:1px solid #dde;padding:8px 28px;position:sticky;top:0}
@@ -350,7 +351,8 @@ def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
             continue
         a = man.get("assembly")
         if isinstance(a, dict) and a.get("steps"):
-            body += f"<h3>{what}</h3><ol>" + "".join(f"<li>{html.escape(s)}</li>" for s in a["steps"]) + "</ol>"
+            steps = "".join(f"<li>{html.escape(s)}</li>" for s in a["steps"])  # the steps carry their own numbers
+            body += f"<h3>{what}</h3><ul class=\"steps\">{steps}</ul>"
         elif isinstance(a, str):
             body += f"<h3>{what}</h3><p>{html.escape(a)}</p>"
         body += _pictures(d, ["assembly.png"], f"{what} assembly map")

@@ -19,7 +19,6 @@ and the declared allowances (manifest.json) is trusted:
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from dataclasses import dataclass, field
@@ -349,9 +348,11 @@ def load_manifest(layout_path: Path) -> dict[str, Any] | None:
     m = layout_path.parent / "manifest.json"
     if not m.exists():
         return None
+    from ..limits import loads_json  # nesting depth and number bounds, as pattern.json
+
     try:
-        data = json.loads(m.read_text("utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        data = loads_json(m.read_text("utf-8"), f"{m} (manifest)", VerifyError)
+    except (OSError, UnicodeDecodeError) as exc:
         raise VerifyError(f"{m}: not a readable manifest ({exc})") from None
     if not isinstance(data, dict):
         raise VerifyError(f"{m}: a manifest is a JSON object")

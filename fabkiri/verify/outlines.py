@@ -6,9 +6,7 @@ The design section records, per closed state, either a target curve
 closed state computed from the tiles (never the solver's own grid) is checked
 against it:
 
-* curve: the outline's corners after the rigid placement that minimises their
-  largest distance to the curve, against the solver's reported fit (a
-  least-squares fit is not exact by design) plus the length tolerance;
+* curve: measured by :func:`fabkiri.verify.pattern_checks.target_checks` (outline shape);
 * rectangle: the outline's corners on the minimum rotated rectangle, the
   aspect ratio when one was asked, and, when none was, a degenerate strip
   (aspect beyond ``DEGENERATE_ASPECT`` times the lattice's own) is reported as
@@ -35,49 +33,6 @@ def outline_corners(Y: np.ndarray, eps: float) -> tuple[np.ndarray, Any]:
     union = tiles_union(Y, eps)
     part = max(getattr(union, "geoms", [union]), key=lambda g: g.area)
     return np.asarray(part.exterior.coords)[:-1], part
-
-
-def _minimax_placement(pts: np.ndarray, centre: np.ndarray, dist) -> float:
-    """Smallest largest distance of ``pts`` to a curve over rigid placements (``dist(points) -> (n,)``)."""
-    from scipy.optimize import minimize
-
-    c = pts.mean(axis=0)
-    local = pts - c
-
-    def placed(v):
-        ct, st = np.cos(v[0]), np.sin(v[0])
-        return local @ np.array([[ct, st], [-st, ct]]) + centre + v[1:3]
-
-    def worst(v):
-        return float(np.max(dist(placed(v))))
-
-    starts = sorted((worst(np.array([a, 0.0, 0.0])), a) for a in np.linspace(0, 2 * np.pi, 72, endpoint=False))
-    best = np.inf
-    scale = float(np.linalg.norm(local, axis=1).max())
-    for _, a in starts[:4]:
-        r = minimize(worst, np.array([a, 0.0, 0.0]), method="Nelder-Mead",
-                     options={"xatol": 1e-9 * scale, "fatol": 1e-9 * scale, "maxiter": 2000,
-                              "initial_simplex": np.array([[a, 0, 0], [a + 0.05, 0, 0], [a, 0.01 * scale, 0],
-                                                           [a, 0, 0.01 * scale]])})
-        best = min(best, float(r.fun))
-    return best
-
-
-def _curve_check(pattern: Pattern, s: int, Y: np.ndarray, tgt: dict, tol) -> Check:
-    from .pattern_checks import _target_distance
-
-    pts, union = outline_corners(Y, max(tol.length, 1e-12 * tol.tile_size))
-    curve = shapely.Polygon(np.asarray(tgt["points"], dtype=float))
-    centre = np.asarray(curve.centroid.coords[0]) - np.asarray(union.centroid.coords[0]) + pts.mean(axis=0)
-    d = _minimax_placement(pts, centre, lambda q: _target_distance(tgt, q))
-    report = (pattern.design or {}).get("report") or {}
-    claim = ((report.get("fit") or {}).get(f"closed_shape_{s}") or {}).get("max_mm")
-    detail = f"{len(pts)} outline corners to the {tgt.get('name', 'target')} curve, best rigid placement"
-    limit = tol.length
-    if report.get("shape_matching") == "least-squares" and isinstance(claim, (int, float)):
-        limit = float(claim) + tol.length
-        detail += f"; least-squares fit, solver reported max {float(claim):.3g} mm"
-    return measured(f"state {s}: outline fits its target", d, limit, "mm", group=f"state {s}", detail=detail)
 
 
 def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol) -> list[Check]:
@@ -123,8 +78,8 @@ def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], t
         if s not in states:
             continue
         if isinstance(curves.get(str(s)), dict) and curves[str(s)].get("points"):
-            out.append(_curve_check(pattern, s, states[s], curves[str(s)], tol))
-        elif isinstance(spec, dict) and spec.get("rectangle"):
+            continue  # a target curve: target_checks measures the outline's shape against it
+        if isinstance(spec, dict) and spec.get("rectangle"):
             r = spec.get("ratio")
             out.extend(_rectangle_checks(pattern, s, states[s], float(r) if r else None, tol))
     return out

@@ -1,0 +1,217 @@
+"""Bounds on what fabkiri accepts, checked before any work starts.
+
+Input that would exhaust the machine or overflow the numerics is refused with a
+one-line :class:`~fabkiri.errors.InputError` that names the figure: tile
+counts past the largest size measured (with the extrapolated memory and time),
+files past a size bound, JSON nested too deep, integers past 2**53, numbers
+that are not finite, coordinates past a kilometre, tiles with coinciding
+corners. The figures in :data:`MEASURED` come from ``bench/limits.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+
+MAX_PATTERN_BYTES = 256 * 2**20  # pattern.json / OBJ / target files (a 128x128 pattern is about 9 MB)
+MAX_PRESET_BYTES = 2**20  # material and printer presets are a few hundred bytes
+MAX_JSON_DEPTH = 64  # pattern.json nests 6 deep (design reports a few more)
+MAX_INT = 2**53  # beyond it a JSON integer is no longer exact as a float (and overflows C long at 2**63)
+MAX_COORD_MM = 1e6  # a kilometre: larger coordinates are a unit mistake, and their squares overflow sooner
+MIN_EDGE_REL = 1e-9  # a tile edge shorter than this fraction of the pattern's extent is two coinciding corners
+MAX_LENGTH_MM = 1e5  # a length parameter (tile size, target size): 100 m
+MIN_LENGTH_MM = 1e-3  # ... and at least a micrometre: below it shapely's snapping and the tolerances break
+
+# (tiles, CPU seconds, peak MB above the interpreter) per command, measured by bench/limits.py on this 2-core
+# box at load 7-20 (CPU time: wall time was 3-15x more). The 64x64 full design is a lower bound: that run was
+# stopped unfinished after 458 CPU s (57 min wall) at 392 MB resident (LM still at rho=1e4, iteration 180).
+MEASURED = {
+    "new": [[65536, 3.9, 190.3], [262144, 19.8, 802.7]],
+    "design full": [[256, 1.8, 56.3], [1024, 7.9, 72.8], [4096, 458.0, 270.0]],
+    "design rigid": [[4096, 6.7, 116.9], [16384, 46.4, 750.4]],
+}
+TESTED = {"new": 512 * 512, "design full": 32 * 32, "design rigid": 128 * 128}  # largest run to the end
+LOWER_BOUND = {"design full"}  # its largest row is a lower bound, so are its extrapolations
+
+
+@dataclass(frozen=True)
+class Estimate:
+    tiles: int
+    seconds: float
+    megabytes: float
+    tested_tiles: int
+    lower_bound: bool = False
+
+    def text(self) -> str:
+        mb, s = self.megabytes, self.seconds
+        mem = f"{mb / 1024:.3g} GB" if mb >= 1024 else f"{mb:.0f} MB"
+        t = f"{s / 3600:.3g} hours" if s >= 3600 else (f"{s / 60:.3g} minutes" if s >= 60 else f"{s:.0f} s")
+        return f"{'at least' if self.lower_bound else 'about'} {mem} and {t}"
+
+
+def estimate(kind: str, tiles: int) -> Estimate:
+    """Memory and time for ``tiles`` tiles: the power law through the two largest measured sizes
+    (time and memory each grow as tiles**p, p fitted on those two rows)."""
+    (n0, s0, m0), (n1, s1, m1) = MEASURED[kind][-2:]
+    r = max(tiles / n1, 1e-300)
+    pt = math.log(s1 / s0) / math.log(n1 / n0)
+    pm = math.log(m1 / m0) / math.log(n1 / n0)
+    return Estimate(tiles, s1 * r ** pt, m1 * r ** pm, TESTED[kind], kind in LOWER_BOUND and tiles >= n1)
+
+
+def available_mb() -> float:
+    """Memory this machine can still give (``MemAvailable``), in MB; infinite if unknown."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return math.inf
+
+
+def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
+    """Refuse a lattice past the largest measured size (unless ``i_know``) or past the free memory."""
+    if os.environ.get("FABKIRI_NO_LIMITS"):  # bench/limits.py measures past the limits
+        return
+    tiles = rows * cols
+    est = estimate(kind, tiles)
+    side = int(math.isqrt(est.tested_tiles))
+    if est.megabytes > available_mb():
+        raise InputError(f"{rows}x{cols} tiles need {est.text()}; this machine has "
+                         f"{available_mb() / 1024:.3g} GB free ({side}x{side} is the largest tested)")
+    if tiles > est.tested_tiles and not i_know:
+        raise InputError(f"{side}x{side} is the largest tested; {rows}x{cols} needs {est.text()} "
+                         f"— pass --i-know to try")
+
+
+def check_file_size(path, limit: int | None = None) -> None:
+    """Refuse a file larger than ``limit`` bytes (default :data:`MAX_PATTERN_BYTES`) before it is read."""
+    limit = MAX_PATTERN_BYTES if limit is None else limit
+    size = os.stat(path).st_size
+    if size > limit:
+        raise InputError(f"{path}: {size / 2**20:.1f} MB is larger than the {limit / 2**20:.0f} MB an input may have")
+
+
+def check_length(value: float, name: str) -> float:
+    """A finite length in mm within [:data:`MIN_LENGTH_MM`, :data:`MAX_LENGTH_MM`]."""
+    if not (math.isfinite(value) and MIN_LENGTH_MM <= value <= MAX_LENGTH_MM):
+        raise InputError(f"{name} must be a length in [{MIN_LENGTH_MM:g}, {MAX_LENGTH_MM:g}] mm, got {value:g}")
+    return value
+
+
+def check_scale(nodes: np.ndarray, tiles: np.ndarray, k: float, name: str) -> float:
+    """A scale factor that keeps the pattern within the coordinate bound and its tile edges a micrometre."""
+    if not (math.isfinite(k) and k > 0):
+        raise InputError(f"{name} must be a positive number, got {k:g}")
+    q = np.asarray(nodes, dtype=float)[np.asarray(tiles)]
+    extent = float(np.abs(q).max()) * k
+    edge = float(np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2).min()) * k
+    if not (math.isfinite(extent) and extent <= MAX_COORD_MM):
+        raise InputError(f"{name} {k:g} puts the pattern {extent:.3g} mm from the origin (at most {MAX_COORD_MM:g} mm)")
+    if not edge >= MIN_LENGTH_MM:
+        raise InputError(f"{name} {k:g} makes the shortest tile edge {edge:.3g} mm (at least {MIN_LENGTH_MM:g} mm)")
+    return k
+
+
+# -------------------------------------------------------------------- JSON
+
+_STRING = re.compile(r'"(?:[^"\\]|\\.)*"', re.S)
+
+
+def json_depth(text: str) -> int:
+    """Deepest nesting of arrays/objects in a JSON text (strings skipped), without parsing it."""
+    if "[" not in text and "{" not in text:
+        return 0
+    bare = _STRING.sub('""', text) if '"' in text else text
+    b = np.frombuffer(bare.encode("utf-8", "replace"), dtype=np.uint8)
+    step = (b == ord("[")).astype(np.int32) + (b == ord("{"))
+    step -= (b == ord("]")).astype(np.int32) + (b == ord("}"))
+    return int(np.cumsum(step).max(initial=0))
+
+
+def _int(text: str) -> int:
+    v = int(text)
+    if abs(v) > MAX_INT:
+        raise ValueError(f"integer {text[:24]}{'...' if len(text) > 24 else ''} is beyond ±2**53")
+    return v
+
+
+def _float(text: str) -> float:
+    v = float(text)
+    if not math.isfinite(v):
+        raise ValueError(f"number {text[:24]} is out of the double range")
+    return v
+
+
+def _constant(name: str) -> float:
+    raise ValueError(f"non-finite number {name}")
+
+
+def loads_json(text: str, source: str, error=InputError):
+    """``json.loads`` with the bounds above; any problem is one ``error`` line naming ``source``."""
+    depth = json_depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise error(f"{source}: JSON nested {depth} deep (at most {MAX_JSON_DEPTH})")
+    try:
+        return json.loads(text, parse_int=_int, parse_float=_float, parse_constant=_constant)
+    except json.JSONDecodeError as exc:
+        raise error(f"{source}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+    except ValueError as exc:
+        raise error(f"{source}: {exc}") from None
+    except RecursionError:
+        raise error(f"{source}: JSON nested too deep") from None
+
+
+# ------------------------------------------------------------- coordinates
+
+
+def coordinate_problem(nodes: np.ndarray, tiles: np.ndarray | None = None,
+                       corners: dict | None = None) -> str | None:
+    """Why these coordinates cannot be a pattern (non-finite, absurd, coinciding corners), or None."""
+    arrays = [("node", np.asarray(nodes, dtype=float))]
+    arrays += [(f"contracted state {k} tile", np.asarray(v, dtype=float)) for k, v in (corners or {}).items()]
+    for what, a in arrays:
+        if a.size == 0:
+            continue
+        flat = a.reshape(-1, 2) if a.ndim >= 2 else a.reshape(-1, 1)
+        bad = ~np.isfinite(flat).all(1)
+        if bad.any():
+            return f"{what} {_index(a, bad)} has a non-finite coordinate"
+        far = np.abs(flat).max(1) > MAX_COORD_MM
+        if far.any():
+            i = int(np.flatnonzero(far)[0])
+            return (f"{what} {_index(a, far)} lies {float(np.abs(flat[i]).max()):.3g} mm from the origin "
+                    f"(at most {MAX_COORD_MM:g} mm)")
+    if tiles is not None and len(tiles) and len(nodes):
+        q = np.asarray(nodes, dtype=float)[np.asarray(tiles)]  # (T, 4, 2)
+        extent = float(np.ptp(q.reshape(-1, 2), axis=0).max())
+        if extent == 0.0:
+            return "all nodes lie at one point"
+        edge = np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2)
+        short = edge.min(1) <= MIN_EDGE_REL * extent
+        if short.any():
+            t = int(np.flatnonzero(short)[0])
+            return f"tile {t} has two coinciding corners (an edge of {edge[t].min():.3g} mm)"
+    return None
+
+
+def check_pattern(pattern, source: str):
+    """``pattern`` unchanged, or :class:`InputError` naming ``source`` and its coordinate problem."""
+    problem = coordinate_problem(pattern.nodes, pattern.tiles, pattern.contracted)
+    if problem:
+        raise InputError(f"{source}: {problem}")
+    return pattern
+
+
+def _index(a: np.ndarray, bad: np.ndarray) -> int:
+    i = int(np.flatnonzero(bad)[0])
+    return i // 4 if a.ndim == 3 else i

@@ -1,0 +1,339 @@
+"""Bad input loses nothing: every command refuses with one line, writes nothing, keeps its input.
+
+Each case runs one command in a folder of small inputs and checks the exit code (2 bad input, 1 a
+check that fails), exactly one stderr line with no traceback or warning, and that no file anywhere in
+the folder is new, gone or changed (hashes before and after). A few run as real subprocesses, where
+warnings printed by the interpreter would show.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fabkiri.mechanics import with_contracted_states
+from fabkiri.pattern import dumps, obj_text, standard_pattern
+
+from .conftest import REPO, TEMPLATES
+
+PATTERN_2x2 = with_contracted_states(standard_pattern(2, 2, tile_size=20.0))
+GOOD = dumps(PATTERN_2x2)
+GOOD_DICT = json.loads(GOOD)
+
+
+def _variant(fn) -> str:
+    d = json.loads(GOOD)
+    fn(d)
+    return json.dumps(d)
+
+
+def _shift_state2(d):  # one tile of stored closed state 2 moved 0.5 mm: verify and cut reject it
+    d["contracted"]["2"][1] = [[x + 0.5, y] for x, y in d["contracted"]["2"][1]]
+
+
+def _scale_nodes(k):
+    def fn(d):
+        d["nodes"] = [[x * k, y * k] for x, y in d["nodes"]]
+        d.pop("contracted")
+    return fn
+
+
+def _huge_fold() -> str:
+    from fabkiri.pattern.fold import fold_text
+
+    d = json.loads(fold_text(PATTERN_2x2))
+    d["vertices_coords"] = [[x * 1e306, y * 1e306] for x, y in d["vertices_coords"]]
+    return json.dumps(d)
+
+
+def _preset(kind: str, name: str, **changes) -> str:
+    data = json.loads((TEMPLATES / kind / f"{name}.json").read_text())
+    data.update(changes)
+    return json.dumps({k: v for k, v in data.items() if v is not None})
+
+
+FILES = {
+    "good.json": GOOD,
+    "d_design.obj": obj_text(PATTERN_2x2, "deployed"),
+    "t.csv": "x,y\n0,0\n40,0\n40,30\n0,30\n",
+    "shifted.json": _variant(_shift_state2),
+    "malformed.json": GOOD[:80],
+    "empty.json": "",
+    "wrong-format.json": _variant(lambda d: d.update(format="fabkiri.material")),
+    "wrong-version.json": _variant(lambda d: d.update(version=7)),
+    "nan.json": GOOD.replace(json.dumps(GOOD_DICT["nodes"][0][0]), "NaN", 1),
+    "non-quad.json": _variant(lambda d: d["tiles"][0].pop()),
+    "missing-node.json": _variant(lambda d: d["tiles"][0].__setitem__(0, 999)),
+    "unknown-key.json": _variant(lambda d: d.update(colour="red")),
+    "deep.json": "[" * 100_000 + "]" * 100_000,
+    "deep-design.json": GOOD[:-2] + ',\n  "x": ' + "[" * 100_000 + "]" * 100_000 + "\n}\n",
+    "bigint.json": _variant(lambda d: d["tiles"][0].__setitem__(0, 10 ** 30)),
+    "bigint-node.json": GOOD.replace(json.dumps(GOOD_DICT["nodes"][0][0]), "1" + "0" * 400, 1),
+    "e308.json": _variant(_scale_nodes(1e306)),
+    "one-point.json": _variant(lambda d: (d.update(nodes=[[1.0, 1.0]] * len(d["nodes"])), d.pop("contracted"))),
+    "triangle.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n",
+    "missing-vertex.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1// 2// 3// 5//\n",
+    "big-index.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 99999999999999999999999\n",
+    "deep.fold": "[" * 100_000 + "]" * 100_000,
+    "huge.fold": _huge_fold(),
+    "huge.obj": "v 0 0 0\nv 1e308 0 0\nv 1e308 1e308 0\nv 0 1e308 0\nf 1 2 3 4\n",
+    "junk.dxf": "this is not a DXF\n",
+    "bad.svg": "<svg",
+    "huge.csv": "0,0\n1e308,0\n1e308,1e308\n0,1e308\n",
+    "printer-as-material.json": _preset("printers", "prusa-mk4"),
+    "neg-label.json": _preset("materials", "acrylic-3", label_height_mm=-4.0),
+    "no-kerf.json": _preset("materials", "acrylic-3", kerf_mm=None),
+    "kerf-over-web.json": _preset("materials", "pp-0.5", kerf_mm=0.5, min_web_mm=0.4),
+    "material-as-printer.json": _preset("materials", "acrylic-3"),
+    "neg-pin.json": _preset("printers", "prusa-mk4", pin={"ear_radius_mm": -1.0}),
+    "no-nozzle.json": _preset("printers", "prusa-mk4", nozzle_mm=None),
+}
+
+# id: (argv, expected exit code, words in the message, folders made before the run)
+CASES = {
+    # data loss: an output that is (or resolves to) an input
+    "import -o its input": (["import", "d_design.obj", "-o", "d_design.obj"], 2, "is an input", ()),
+    "export -o its input": (["export", "good.json", "-o", "good.json"], 2, "is an input", ()),
+    "export -o ./input": (["export", "good.json", "-o", "./good.json"], 2, "is an input", ()),
+    "export -o symlink": (["export", "good.json", "-o", "link.json"], 2, "same file as the input", ()),
+    "export -o hard link": (["export", "good.json", "-o", "hard.json"], 2, "same file as the input", ()),
+    "design -o its target": (["design", "--tiles", "4x4", "--target", "t.csv", "-o", "t.csv"], 2, "is an input", ()),
+    "cut -o its input": (["cut", "good.json", "-o", "good.json"], 2, "is an input", ()),
+    "new -o a folder": (["new", "--tiles", "2x2", "-o", "out"], 2, "is a folder", ("out",)),
+    # half-written output: a folder where one of the files must go
+    "cut: last file is a folder": (["cut", "good.json", "-o", "D"], 2, "D/manifest.json is a folder",
+                                   ("D/manifest.json",)),
+    "cut: first file is a folder": (["cut", "good.json", "-o", "D"], 2, "D/good.dxf is a folder", ("D/good.dxf",)),
+    "print: manifest is a folder": (["print", "good.json", "-o", "P"], 2, "P/manifest.json is a folder",
+                                    ("P/manifest.json",)),
+    "deploy: deploy.json is a folder": (["deploy", "good.json", "-o", "E"], 2, "E/deploy.json is a folder",
+                                        ("E/deploy.json",)),
+    "deploy: frames is a file": (["deploy", "good.json", "-o", "F"], 2, "is not a folder", ("F",)),
+    # internal errors that are bad input
+    "new 100000x100000": (["new", "--tiles", "100000x100000", "-o", "big.json"], 2, "GB", ()),
+    "info nested 100000 deep": (["info", "deep.json"], 2, "nested 100000 deep", ()),
+    "verify deep design block": (["verify", "deep-design.json"], 2, "nested", ()),
+    "cut int beyond C long": (["cut", "bigint.json", "-o", "o"], 2, "beyond", ()),
+    "info int node": (["info", "bigint-node.json"], 2, "beyond", ()),
+    "verify coordinates near 1e308": (["verify", "e308.json"], 2, "from the origin", ()),
+    "print coordinates near 1e308": (["print", "e308.json", "-o", "o"], 2, "from the origin", ()),
+    "import coordinates near 1e308": (["import", "huge.obj", "-o", "o.json"], 2, "from the origin", ()),
+    "deploy all nodes at one point": (["deploy", "one-point.json", "-o", "o"], 2, "one point", ()),
+    "export all nodes at one point": (["export", "one-point.json", "-o", "o.obj"], 2, "one point", ()),
+    "import .fold nested 100000 deep": (["import", "deep.fold", "-o", "o.json"], 2, "nested 100000 deep", ()),
+    "import .fold near 1e308": (["import", "huge.fold", "-o", "o.json"], 2, "from the origin", ()),
+    "import face index beyond C long": (["import", "big-index.obj", "-o", "o.json"], 2, "face index", ()),
+    # noise: numbers whose arithmetic overflows
+    "print --scale 1e300": (["print", "good.json", "--scale", "1e300", "-o", "o"], 2, "from the origin", ()),
+    "cut --width 1e-300": (["cut", "good.json", "--width", "1e-300", "-o", "o"], 2, "--width", ()),
+    "new --tile-size 1e308": (["new", "--tiles", "3x3", "--tile-size", "1e308", "-o", "o.json"], 2, "--tile-size", ()),
+    "design 1e308 target": (["design", "--tiles", "4x4", "--target", "huge.csv", "-o", "o.json"], 2, "huge", ()),
+    # accepted when it should refuse
+    "print shifted tile": (["print", "shifted.json", "-o", "o"], 1, "does not close", ()),
+    "cut shifted tile": (["cut", "shifted.json", "-o", "o"], 1, "does not close", ()),
+    "export shifted closed state": (["export", "shifted.json", "--state", "2", "-o", "o.obj"], 1, "does not close", ()),
+    "verify shifted tile": (["verify", "shifted.json"], 1, "verification failed", ()),
+    "material given a printer file": (["cut", "good.json", "--material", "printer-as-material.json", "-o", "o"], 2,
+                                      "not a fabkiri material", ()),
+    "material negative label": (["cut", "good.json", "--material", "neg-label.json", "-o", "o"], 2,
+                                 "label_height_mm: must be positive", ()),
+    "material missing field": (["cut", "good.json", "--material", "no-kerf.json", "-o", "o"], 2, "kerf_mm", ()),
+    "cut --label-height -3": (["cut", "good.json", "--label-height", "-3", "-o", "o"], 2, "--label-height", ()),
+    "printer given a material file": (["print", "good.json", "--printer", "material-as-printer.json", "-o", "o"], 2,
+                                      "not a fabkiri printer", ()),
+    "printer negative pin": (["print", "good.json", "--printer", "neg-pin.json", "-o", "o"], 2, "pin/ear_radius_mm", ()),
+    "printer missing field": (["print", "good.json", "--printer", "no-nozzle.json", "-o", "o"], 2, "nozzle_mm", ()),
+    # no bound on work
+    "design -o a folder": (["design", "--tiles", "4x4", "--target", "circle", "-o", "out"], 2, "is a folder",
+                           ("out",)),
+    "design --size 1e308": (["design", "--tiles", "4x4", "--target", "circle", "--size", "1e308", "-o", "o.json"], 2,
+                            "--size", ()),
+    "design 300x300": (["design", "--tiles", "300x300", "--target", "circle", "-o", "o.json"], 2, "largest tested", ()),
+    "new 600x600": (["new", "--tiles", "600x600", "-o", "o.json"], 2, "--i-know", ()),
+    # the classes the older tests cover, over every command
+    "info malformed": (["info", "malformed.json"], 2, "malformed JSON", ()),
+    "verify empty": (["verify", "empty.json"], 2, "empty", ()),
+    "cut wrong format": (["cut", "wrong-format.json", "-o", "o"], 2, "not a fabkiri pattern", ()),
+    "print wrong version": (["print", "wrong-version.json", "-o", "o"], 2, "unsupported pattern version", ()),
+    "deploy NaN": (["deploy", "nan.json", "-o", "o"], 2, "non-finite", ()),
+    "export non-quad": (["export", "non-quad.json", "-o", "o.obj"], 2, "tiles/0", ()),
+    "info missing node": (["info", "missing-node.json"], 2, "outside", ()),
+    "verify unknown key": (["verify", "unknown-key.json"], 2, "colour", ()),
+    "import triangle": (["import", "triangle.obj", "-o", "o.json"], 2, "quads", ()),
+    "import missing vertex": (["import", "missing-vertex.obj", "-o", "o.json"], 2, "references vertex 5", ()),
+    "info missing file": (["info", "missing.json"], 2, "no such file", ()),
+    "new no such folder": (["new", "--tiles", "2x2", "-o", "nofolder/x.json"], 2, "does not exist", ()),
+    "new --tiles banana": (["new", "--tiles", "banana", "-o", "o.json"], 2, "--tiles", ()),
+    "new --angle 120": (["new", "--tiles", "3x3", "--angle", "120", "-o", "o.json"], 2, "angle", ()),
+    "verify manifest nested 100000 deep": (["verify", "good.json", "--layout", "L/x.svg"], 2, "nested 100000 deep",
+                                           ("L",)),
+    "verify junk layout": (["verify", "good.json", "--layout", "junk.dxf"], 2, "junk.dxf", ()),
+    "verify bad svg": (["verify", "good.json", "--layout", "bad.svg"], 2, "bad.svg", ()),
+    "verify no layout": (["verify", "good.json", "--layout", "nope.dxf"], 2, "no such layout", ()),
+    "design unknown target": (["design", "--tiles", "8x8", "--target", "no-such", "-o", "o.json"], 2, "unknown target", ()),
+    "design no target": (["design", "--tiles", "8x8", "-o", "o.json"], 2, "give --target", ()),
+    "cut kerf 3": (["cut", "good.json", "--kerf", "3", "-o", "o"], 2, "not smaller than the minimum web", ()),
+    "cut material kerf over web": (["cut", "good.json", "--material", "kerf-over-web.json", "-o", "o"], 2,
+                                   "not smaller than the minimum web", ()),
+    "cut unknown material": (["cut", "good.json", "--material", "nope", "-o", "o"], 2, "unknown material", ()),
+    "cut too thin": (["cut", "good.json", "--width", "3", "-o", "o"], 1, "thinner than the minimum web", ()),
+    "cut output is a file": (["cut", "good.json", "-o", "t.csv"], 2, "not a folder", ()),
+    "print unknown printer": (["print", "good.json", "--printer", "nope", "-o", "o"], 2, "unknown printer", ()),
+    "print --marks without strips": (["print", "good.json", "--marks", "-o", "o"], 2, "--style strips", ()),
+    "deploy --steps 1": (["deploy", "good.json", "--steps", "1", "-o", "o"], 2, "steps", ()),
+    "deploy missing file": (["deploy", "missing.json", "-o", "o"], 2, "no such file", ()),
+    "export unknown state": (["export", "good.json", "--state", "3", "-o", "o.obj"], 2, "--state", ()),
+}
+
+COMMANDS = {"new", "import", "design", "info", "verify", "cut", "print", "deploy", "export"}
+SUBPROCESS = ["new 100000x100000", "new --tile-size 1e308", "verify coordinates near 1e308", "design 1e308 target",
+              "info nested 100000 deep", "export -o symlink"]
+
+
+def snapshot(root: Path) -> dict[str, str]:
+    """Every entry under ``root`` (hidden ones too): a file's hash, a link's target, 'dir'."""
+    out = {}
+    for dirpath, dirs, files in os.walk(root):
+        for name in dirs + files:
+            p = Path(dirpath) / name
+            key = str(p.relative_to(root))
+            if p.is_symlink():
+                out[key] = "-> " + os.readlink(p)
+            elif p.is_dir():
+                out[key] = "dir"
+            else:
+                out[key] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+@pytest.fixture
+def workspace(tmp_path, monkeypatch):
+    for name, text in FILES.items():
+        (tmp_path / name).write_text(text)
+    (tmp_path / "link.json").symlink_to("good.json")
+    os.link(tmp_path / "good.json", tmp_path / "hard.json")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def _prepare(root: Path, folders) -> dict[str, str]:
+    for f in folders:
+        (root / f).mkdir(parents=True)
+    if "F" in folders:  # deploy writes frames/ inside: a file of that name blocks it
+        (root / "F" / "frames").write_text("not a folder")
+    if "L" in folders:  # a layout with a manifest beside it
+        (root / "L" / "x.svg").write_text(FILES["bad.svg"])
+        (root / "L" / "manifest.json").write_text(FILES["deep.json"])
+    return snapshot(root)
+
+
+def _check(code, err, before, root, case):
+    argv, want, words, _ = CASES[case]
+    lines = err.strip().splitlines()
+    assert code == want, (case, err)
+    assert len(lines) == 1, (case, err)
+    assert words in err, (case, err)
+    assert "Traceback" not in err and "Warning" not in err and "internal error" not in err, (case, err)
+    assert snapshot(root) == before, f"{case}: files changed"
+
+
+def test_every_command_and_class_is_covered():
+    assert {argv[0] for argv, *_ in CASES.values()} == COMMANDS
+    assert {code for _, code, *_ in CASES.values()} == {1, 2}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_bad_input_loses_nothing(case, workspace, run_cli, capsys):
+    argv, _, _, folders = CASES[case]
+    before = _prepare(workspace, folders)
+    try:
+        code, _, err = run_cli(*argv)
+    except SystemExit as exc:  # argparse refuses usage errors itself (one line, exit 2)
+        code, err = exc.code, capsys.readouterr().err
+    _check(code, err, before, workspace, case)
+
+
+@pytest.mark.parametrize("case", SUBPROCESS)
+def test_bad_input_as_a_real_process(case, workspace):
+    argv, _, _, folders = CASES[case]
+    before = _prepare(workspace, folders)
+    env = {**os.environ, "PYTHONPATH": str(REPO), "PYTHONWARNINGS": "default"}
+    env.pop("FABKIRI_DEBUG", None)
+    r = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", *argv], capture_output=True, text=True,
+                       env=env, cwd=workspace)
+    _check(r.returncode, r.stderr, before, workspace, case)
+
+
+# ------------------------------------------------------------- the publisher itself
+
+
+def test_a_failed_move_restores_the_folder_exactly(tmp_path, monkeypatch):
+    from fabkiri import fileio
+    from fabkiri.errors import InputError
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.txt").write_text("old a")
+    before = snapshot(tmp_path)
+    real, calls = os.replace, []
+
+    def full_disk(src, dst):  # the 4th move fails: a.txt (backup, new), sub/b.txt done, c.txt fails
+        calls.append(dst)
+        if len(calls) == 4:
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(fileio.os, "replace", full_disk)
+    with pytest.raises(InputError, match="No space left on device; nothing written"):
+        fileio.atomic_write_many(out, {"a.txt": "new a", "sub/b.txt": "b", "c.txt": "c"})
+    assert len(calls) == 5  # the 5th put the old a.txt back
+    assert snapshot(tmp_path) == before
+
+
+def test_a_good_write_replaces_old_files_and_leaves_no_scratch(tmp_path):
+    from fabkiri.fileio import atomic_write_many
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.txt").write_text("old a")
+    (out / "keep.txt").write_text("keep")
+    atomic_write_many(out, {"a.txt": "new a", "sub/b.txt": "b"})
+    assert snapshot(tmp_path).keys() == {"out", "out/a.txt", "out/keep.txt", "out/sub", "out/sub/b.txt"}
+    assert (out / "a.txt").read_text() == "new a" and (out / "keep.txt").read_text() == "keep"
+
+
+def test_library_writers_refuse_an_input_of_the_running_command(tmp_path):
+    from fabkiri.errors import InputError
+    from fabkiri.fileio import inputs_scope
+    from fabkiri.pattern import read_pattern, write_pattern
+
+    src = tmp_path / "p.json"
+    src.write_text(GOOD)
+    (tmp_path / "alias.json").symlink_to(src)
+    with inputs_scope():
+        p = read_pattern(src)  # readers record what they read
+        with pytest.raises(InputError, match="same file as the input"):
+            write_pattern(p, tmp_path / "alias.json")
+    p = read_pattern(src)
+    write_pattern(p, tmp_path / "alias.json")  # outside a command nothing is recorded
+    assert not (tmp_path / "alias.json").is_symlink() and src.read_text() == GOOD
+
+
+def test_files_past_the_size_bound_are_refused_before_reading(workspace, run_cli, monkeypatch):
+    from fabkiri import limits
+
+    monkeypatch.setattr(limits, "MAX_PATTERN_BYTES", 200)
+    (workspace / "big.csv").write_text("".join(f"{np.cos(a):.6f},{np.sin(a):.6f}\n" for a in np.linspace(0, 6, 40)))
+    before = snapshot(workspace)
+    for argv in (["info", "good.json"], ["cut", "good.json", "-o", "o"], ["import", "d_design.obj", "-o", "o.json"],
+                 ["design", "--tiles", "4x4", "--target", "big.csv", "-o", "o.json"]):
+        code, _, err = run_cli(*argv)
+        assert code == 2 and "larger than" in err and len(err.strip().splitlines()) == 1, err
+    assert snapshot(workspace) == before
