@@ -83,7 +83,7 @@ def test_a_degenerate_contracted_rectangle_is_reported(tmp_path, run_cli):
     path = tmp_path / "rr.json"
     code, _, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "1:rect",
                            "--contracted-target", "2:rect", "-o", path)
-    assert code == 0, err
+    assert path.exists(), err  # (design itself exits 1 when the deployed circle is missed: written anyway)
     code, out, _ = run_cli("verify", path)
     assert code == 1
     chk = verify_pattern(read_pattern(path)).get("state 1: outline not degenerate")
