@@ -73,7 +73,7 @@ def cmd_cut(args: argparse.Namespace) -> int:
         layout=args.layout, scale=args.scale, width=args.width, formats=_formats(args.formats),
         colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
         reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
-        pattern_file=Path(args.file).name, notes=not args.no_notes, stroke_mm=args.stroke)
+        pattern_file=Path(args.file).name, notes=not args.no_notes, stroke_mm=args.stroke, exact=args.exact)
     if isinstance(args.scale, float):  # numbers that would overflow the geometry: one line, up front
         limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
     if isinstance(args.width, float):
@@ -122,7 +122,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--strain-limit", type=float, metavar="EPS")
     p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
     p.add_argument("--ligament-width", type=_positive, metavar="MM", help="force the ligament width")
-    p.add_argument("--tol", type=_positive, metavar="MM", help="verification tolerance (default: the material's)")
+    p.add_argument("--tol-mm", "--tol", dest="tol", type=_positive, metavar="MM",
+                   help="verification tolerance in mm for the pattern and the read-back (default: the material's); "
+                        "angle residuals count as their displacement at the tile size")
+    p.add_argument("--exact", action="store_true",
+                   help="check the pattern at the relative tier for solver output (1e-9 of the tile edge, 1e-5 "
+                        "for optimiser output) instead of --tol-mm; the read-back stays at --tol-mm")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
     p.add_argument("--label-height", type=_positive, metavar="MM", help="tile ID height (default: the material's)")
     p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")

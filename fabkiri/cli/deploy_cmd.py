@@ -63,8 +63,17 @@ def check_problems(path: DeploymentPath, tol: float = 1e-9) -> list[str]:
     if not c.collision_free():
         o = max(c.overlaps, key=lambda o: o.area)
         out.append(f"{len(c.overlaps)} tile overlaps in {len(c.frames)} frames, the largest {o.area:.3g} mm² "
-                   f"between tiles {o.tile_a} and {o.tile_b} at t = {path.t[o.frame]:.3f}")
+                   f"({overlap_depth(path, o):.3g} mm deep) between tiles {o.tile_a} and {o.tile_b} "
+                   f"at t = {path.t[o.frame]:.3f}")
     return out
+
+
+def overlap_depth(path: DeploymentPath, o) -> float:
+    """How far (mm) the two tiles of an overlap reach into each other: the separating-axis depth."""
+    from ..verify.geom import sat_penetration
+
+    frame = path.corners[o.frame]
+    return float(sat_penetration(frame[[o.tile_a]], frame[[o.tile_b]])[0])
 
 
 def cmd_deploy(args: argparse.Namespace) -> int:
@@ -104,15 +113,20 @@ def cmd_deploy(args: argparse.Namespace) -> int:
         print(f"warning: self-intersecting tiles {c.self_intersecting}; without them the path is "
               f"{'collision-free' if c.collision_free(c.self_intersecting) else 'NOT collision-free'}",
               file=sys.stderr)
-    print(f"collisions: {'none' if c.collision_free() else f'{len(c.overlaps)} overlaps, pairs {c.pairs()[:8]}'}",
-          file=sys.stderr)
+    if c.collision_free():
+        print("collisions: none", file=sys.stderr)
+    else:
+        worst = sorted(c.overlaps, key=lambda o: -o.area)[:4]
+        sizes = ", ".join(f"tiles {o.tile_a}/{o.tile_b} {o.area:.3g} mm² ({overlap_depth(path, o):.3g} mm deep) "
+                          f"at t = {path.t[o.frame]:.3f}" for o in worst)
+        print(f"collisions: {len(c.overlaps)} overlaps in {len(c.frames)} frames, {len(c.pairs())} tile pairs, "
+              f"largest {sizes}", file=sys.stderr)
     n_frames = 0 if args.no_frames else path.n_frames
     print(f"wrote {args.output}: {', '.join(k for k in files if not k.startswith('frames/'))}"
           f"{f', frames/ ({n_frames} patterns)' if n_frames else ''}", file=sys.stderr)
-    if args.check:
-        problems = check_problems(path)
-        if problems:
-            raise CheckFailed("; ".join(problems))
+    problems = check_problems(path)
+    if problems:  # the figures are written either way; a failed check is never exit 0
+        raise CheckFailed("; ".join(problems))
     return 0
 
 
@@ -144,6 +158,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gif-frames", type=_steps, default=61, metavar="K", help="most GIF frames (default 61)")
     p.add_argument("--no-frames", action="store_true", help="do not write the frames as pattern files")
     p.add_argument("--check", action="store_true",
-                   help="exit 1 if a tile collides, the path misses a state, or a rigid path has energy")
+                   help="kept for old scripts: deploy always exits 1 if a tile collides, the path misses a "
+                        "state, or a rigid path has energy (the files are written first)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.set_defaults(func=cmd_deploy)

@@ -16,6 +16,8 @@ from ..mechanics.contract import adopt_state_labels
 from ..pattern.io import import_obj, read_pattern
 from ..pattern.model import Pattern
 
+DEFAULT_TOL_MM = 0.05  # the default material's (acrylic-3) tolerance
+
 
 def load_for_verify(path: str) -> Pattern:
     """pattern.json, or a design ``.obj``; ``X_design.obj`` picks up ``X_contracted1/2.obj``
@@ -52,14 +54,19 @@ def cmd_verify(args: argparse.Namespace) -> int:
     pattern = load_for_verify(args.file)
     from ..design.conformance import parse_shape_tol
 
-    report = verify_pattern(pattern, tol_rad=args.tol_rad, shape_tol=parse_shape_tol(args.shape_tol))
+    tol_mm = DEFAULT_TOL_MM if args.tol_mm is None else args.tol_mm
+    # --exact: the relative tier for solver output; otherwise one tolerance in mm (angles as displacement)
+    report = verify_pattern(pattern, tol_mm=None if args.exact else tol_mm, tol_rad=args.tol_rad,
+                            shape_tol=parse_shape_tol(args.shape_tol))
     if args.layout:
         if not Path(args.layout).exists():
             raise InputError(f"{args.layout}: no such layout file")
-        report.extend(verify_layout(pattern, args.layout, tol_mm=args.tol_mm, tol_rad=args.tol_rad))
+        layout = verify_layout(pattern, args.layout, tol_mm=tol_mm, tol_rad=args.tol_rad)
+        report.extend(layout)
         report.kind = "pattern and layout"
         report.meta["layout"] = str(args.layout)
-        report.meta["layout_tol_mm"] = args.tol_mm
+        report.meta["layout_tol_mm"] = tol_mm
+        report.meta["tolerance"] = f"pattern {report.meta['tolerance']}; layout {layout.meta['tolerance']}"
     if args.json:
         print(report.to_json())
     else:
@@ -76,11 +83,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("verify", help="prove that a pattern (and its cut layout) closes into both compact states")
     p.add_argument("file", help="pattern.json or design .obj (X_design.obj takes X_contracted1/2.obj beside it)")
     p.add_argument("--layout", metavar="CUT", help="cut file (.dxf or .svg) to check against the pattern")
-    p.add_argument("--tol-mm", type=_nonneg, default=0.05, metavar="MM",
-                   help="fabrication tolerance for the layout checks in mm (default 0.05); pattern checks use "
-                        "1e-9 of the mean tile edge (1e-5 for optimiser output)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--tol-mm", type=_nonneg, default=None, metavar="MM",
+                   help=f"fabrication tolerance in mm for the pattern and layout checks (default {DEFAULT_TOL_MM:g}, "
+                        "the default material's); angle residuals count as their displacement at the tile size")
+    g.add_argument("--exact", action="store_true",
+                   help="pattern checks at the relative tier for exported data and solver output (1e-9 of the mean "
+                        "tile edge, 1e-5 for optimiser output; angles in rad); layout checks keep --tol-mm")
     p.add_argument("--tol-rad", type=_nonneg, default=1e-6, metavar="RAD",
-                   help="angle tolerance in radians (default 1e-6)")
+                   help="angle tolerance in radians with --exact (default 1e-6)")
     p.add_argument("--shape-tol", default="2%", metavar="TOL",
                    help="largest Hausdorff distance between an outline and its stored target: a percentage of "
                         "the target size (default 2%%) or a length like 0.5mm")

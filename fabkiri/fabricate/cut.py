@@ -71,6 +71,7 @@ class CutOptions:
     ligament_width: float | None = None
     turn_deg: float = 180.0
     force: bool = False
+    exact: bool = False  # pattern checked at the relative tier for solver output instead of the material's mm
     stem: str = "pattern"
     pattern_file: str = ""
     notes: bool = True  # the NOTES layer: sheet frame, caption, reference-square size (never cut)
@@ -252,7 +253,8 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             raise InputError(f"--scale must be positive, got {options.scale}")
 
     # the verifier must find both closed states at the material's tolerance (in the file's mm)
-    gated = closes_gate(pattern, mat.tolerance_mm, scale=scale, force=options.force, action="cut")
+    gated = closes_gate(pattern, None if options.exact else mat.tolerance_mm, scale=scale, force=options.force,
+                        action="cut")
     pattern_report = gated.report
     warnings += gated.warnings
 
@@ -535,7 +537,8 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             "time_model": f"cut_length/cut_speed + engrave_length/engrave_speed + {PIERCE_S} s per path",
         },
         "material": mat.to_dict(),
-        "pattern_verification": {"ok": pattern_report.ok, "tol_mm": mat.tolerance_mm,
+        "pattern_verification": {"ok": pattern_report.ok,
+                                 "tol_mm": pattern_report.meta["tol_mm"] * scale if options.exact else mat.tolerance_mm,
                                  "gate": list(GATE_GROUPS), "failed": [c.name for c in pattern_report.checks
                                                                        if c.applies and not c.ok]},
         "reference_square": None if ref is None else {"sheet": ref[0] + 1, "size_mm": options.reference_mm,

@@ -35,7 +35,7 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
 from ..mechanics.contract import contract
-from .pattern_checks import Tolerances, closed_state_checks
+from .pattern_checks import closed_state_checks, fabrication_tolerances
 from .report import Check, Report, measured
 
 MM_PER_PX = 25.4 / 96.0
@@ -55,14 +55,34 @@ class Linework:
     polylines: list[np.ndarray] = field(default_factory=list)
     closed: list[bool] = field(default_factory=list)
     layer_found: bool = True  # a CUT layer/group existed
+    layers: list[str] = field(default_factory=list)  # per polyline: its layer or group name ("" if none)
+    colours: list[str] = field(default_factory=list)  # per polyline: its stroke colour ("" if none)
 
-    def add(self, pts: np.ndarray, closed: bool) -> None:
+    def add(self, pts: np.ndarray, closed: bool, layer: str = "CUT", colour: str = "") -> None:
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         if len(pts) >= 3 and abs(pts[0, 0] - pts[-1, 0]) <= 1e-9 and abs(pts[0, 1] - pts[-1, 1]) <= 1e-9:
             pts, closed = pts[:-1], True
         if len(pts) >= 2:
             self.polylines.append(pts)
             self.closed.append(bool(closed) and len(pts) >= 3)
+            self.layers.append(str(layer))
+            self.colours.append(str(colour))
+
+    def subset(self, keep) -> "Linework":
+        keep = list(keep)
+        return Linework(self.path, [self.polylines[i] for i in keep], [self.closed[i] for i in keep],
+                        self.layer_found, [self.layers[i] for i in keep], [self.colours[i] for i in keep])
+
+    def cut_classes(self) -> list["Linework"]:
+        """The candidate cut linework: the CUT layer if there is one, else every colour class outside the
+        annotation layers (one candidate per colour: a colour-only file keeps its layers as colours)."""
+        if self.layer_found or not self.polylines:
+            return [self]
+        rest = [i for i, name in enumerate(self.layers) if name.upper() not in NON_CUT_LAYERS]
+        colours = sorted({self.colours[i] for i in rest})
+        if len(colours) <= 1:
+            return [self.subset(rest)]
+        return [self.subset([i for i in rest if self.colours[i] == c]) for c in colours]
 
 
 def read_cut_file(path: str | Path) -> Linework:
@@ -137,6 +157,8 @@ def _read_dxf_fast(p: Path) -> Linework | None:
                 lw.add(np.array([[float(get["10"]), float(get["20"])],
                                  [float(get["11"]), float(get["21"])]]) * unit, False)
                 continue
+            if any(c in ("210", "220", "230") for c, _ in tags):
+                return None  # an extrusion direction (OCS): the full reader maps it to world coordinates
             if kind != "LWPOLYLINE":
                 return None  # curves, old-style polylines, blocks: the full reader
             if any(c == "42" and float(v) != 0.0 for c, v in tags):
@@ -161,38 +183,45 @@ def _read_dxf(p: Path) -> Linework:
     return _read_dxf_full(p)
 
 
+CURVE_TYPES = {"LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE"}
+
+
 def _read_dxf_full(p: Path) -> Linework:
+    """Every curve of the modelspace in world coordinates, blocks exploded, with its layer and colour.
+
+    ezdxf does the work: ``recover`` reads damaged files, ``disassemble.recursive_decompose``
+    expands INSERTs (any depth, with their transforms), ``to_primitives`` gives each entity's path
+    in WCS (its OCS applied, curves flattened to 1 µm).
+    """
     import ezdxf
-    from ezdxf import path as ezpath
+    from ezdxf import disassemble, recover
 
     try:
-        doc = ezdxf.readfile(str(p))
+        doc, _ = recover.readfile(str(p))
     except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
         raise VerifyError(f"{p}: not a readable DXF file ({exc})") from None
     unit = INSUNITS_MM.get(int(doc.header.get("$INSUNITS", 0)))
     if unit is None:
         raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={doc.header.get('$INSUNITS')}")
-    msp = doc.modelspace()
-    ents = [e for e in msp if e.dxftype() in ("LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE",
-                                              "ELLIPSE")]
-    cut = [e for e in ents if e.dxf.layer.upper() == "CUT"]
-    lw = Linework(p, layer_found=bool(cut))
-    if not cut:  # a plain file from another tool: every outline not on an annotation layer
-        cut = [e for e in ents if e.dxf.layer.upper() not in NON_CUT_LAYERS]
-    for e in cut:
-        kind = e.dxftype()
-        if kind == "LINE":
-            lw.add(np.array([[e.dxf.start.x, e.dxf.start.y], [e.dxf.end.x, e.dxf.end.y]]) * unit, False)
+    lw = Linework(p, layer_found=False)
+    layer_colour = {layer.dxf.name.upper(): layer.color for layer in doc.layers}
+    flat = 0.001 / unit
+    for prim in disassemble.to_primitives(disassemble.recursive_decompose(doc.modelspace()), flat):
+        e = prim.entity
+        if e is None or e.dxftype() not in CURVE_TYPES or prim.path is None:
             continue
-        if kind == "LWPOLYLINE":
-            pts = np.array(e.get_points("xyb"), dtype=float)
-            if len(pts) and not pts[:, 2].any():
-                lw.add(pts[:, :2] * unit, e.closed)
-                continue
-        path_ = ezpath.make_path(e)
-        pts = np.array([(v.x, v.y) for v in path_.flattening(0.001 / unit)], dtype=float)
-        closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or kind == "CIRCLE")
-        lw.add(pts * unit, closed)
+        layer = e.dxf.layer.upper()
+        aci = e.dxf.get("color", 256)
+        colour = str(layer_colour.get(layer, 7) if aci in (0, 256) else aci)
+        closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or e.dxftype() == "CIRCLE")
+        for sub in prim.path.sub_paths():
+            pts = np.array([(v.x, v.y) for v in sub.flattening(flat)], dtype=float)
+            lw.add(pts * unit, closed, layer, colour)
+    if any(name == "CUT" for name in lw.layers):
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name == "CUT")
+        lw.layer_found = True
+    else:  # a plain file from another tool: every outline not on an annotation layer
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name not in NON_CUT_LAYERS)
     return lw
 
 
@@ -210,26 +239,36 @@ def _read_svg(p: Path) -> Linework:
     mm_per_px = _declared_mm(svg.values.get("height"), float(svg.height))
     height = float(svg.height) * mm_per_px
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
-    cut_groups = [g for g in groups if str(g.id or "").upper() == "CUT"
-                  or str(g.values.get("inkscape:label", "")).upper() == "CUT"]
-    if cut_groups:
-        shapes = [e for g in cut_groups for e in g.select() if isinstance(e, se.Shape)]
-    else:
-        skip = {id(e) for g in groups if str(g.id or "").upper() in NON_CUT_LAYERS
-                for e in g.select() if isinstance(e, se.Shape)}
-        shapes = [e for e in svg.elements() if isinstance(e, se.Shape) and id(e) not in skip]
-    lw = Linework(p, layer_found=bool(cut_groups))
+
+    def name(g) -> str:
+        for v in (g.values.get(INKSCAPE_LABEL), g.values.get("inkscape:label"), g.id):
+            if str(v or "").upper() in NON_CUT_LAYERS | {"CUT"}:
+                return str(v).upper()
+        return ""
+
+    layer_of: dict[int, str] = {}
+    for g in groups:  # document order: an inner named group overrides its parent
+        if name(g):
+            for e in g.select():
+                if isinstance(e, se.Shape):
+                    layer_of[id(e)] = name(g)
+    cut_found = "CUT" in layer_of.values()
+    shapes = [e for e in svg.elements() if isinstance(e, se.Shape)
+              and (layer_of.get(id(e)) == "CUT" if cut_found else layer_of.get(id(e), "") not in NON_CUT_LAYERS)]
+    lw = Linework(p, layer_found=cut_found)
     for shape in shapes:
         path_ = se.Path(shape)
+        layer = layer_of.get(id(shape), "")
+        colour = str(shape.stroke.hex) if shape.stroke is not None and shape.stroke.value is not None else ""
         pts: list[tuple[float, float]] = []
         for seg in path_.segments():
             if isinstance(seg, se.Move):
                 if len(pts) >= 2:
-                    lw.add(_svg_mm(pts, height, mm_per_px), False)
+                    lw.add(_svg_mm(pts, height, mm_per_px), False, layer, colour)
                 pts = [(seg.end.x, seg.end.y)]
             elif isinstance(seg, se.Close):
                 if len(pts) >= 3:
-                    lw.add(_svg_mm(pts, height, mm_per_px), True)
+                    lw.add(_svg_mm(pts, height, mm_per_px), True, layer, colour)
                 pts = []
             elif isinstance(seg, se.Line):
                 pts.append((seg.end.x, seg.end.y))
@@ -238,7 +277,7 @@ def _read_svg(p: Path) -> Linework:
                     q = seg.point(t)
                     pts.append((q.x, q.y))
         if len(pts) >= 2:
-            lw.add(_svg_mm(pts, height, mm_per_px), False)
+            lw.add(_svg_mm(pts, height, mm_per_px), False, layer, colour)
     return lw
 
 
@@ -333,6 +372,8 @@ class Allowances:
     tile_sheet: dict[int, int]
     sheet_files: dict[int, str]
     cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
+    ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
+    tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)
 
 
 def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
@@ -364,11 +405,16 @@ def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
                 if sh.get(key):
                     sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
         cross = {int(h["hinge"]) for h in manifest.get("hinges") or [] if h.get("cross_sheet")}
+        lig = manifest.get("ligament") if isinstance(manifest.get("ligament"), dict) else {}
+        lig_w = float(lig["width_mm"]) if lig.get("width_mm") else None
+        placed = {int(t["tile"]): (float(t["rotation_rad"]), np.asarray(t["shift_mm"], dtype=float))
+                  for t in manifest.get("tiles") or [] if "rotation_rad" in t and "shift_mm" in t}
     except VerifyError:
         raise
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
-    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross)
+    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross, lig_w,
+                      placed)
 
 
 # ------------------------------------------------------------------ recovery
@@ -391,8 +437,8 @@ def _drop_reference(lw: Linework, corners: np.ndarray | None) -> int:
     return dropped
 
 
-def _snapped_segments(lw: Linework) -> np.ndarray:
-    """All segments ``(n, 2, 2)`` with endpoints closer than SNAP_MM merged."""
+def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
+    """All segments ``(n, 2, 2)`` with endpoints closer than ``eps`` merged."""
     if not lw.polylines:
         return np.zeros((0, 2, 2))
     pts = np.concatenate(lw.polylines)
@@ -405,7 +451,7 @@ def _snapped_segments(lw: Linework) -> np.ndarray:
     use = (local < n[owner] - 1) | np.asarray(lw.closed)[owner]
     segs = np.stack([pts[use], pts[nxt[use]]], 1)
     pts = segs.reshape(-1, 2)
-    pairs = cKDTree(pts).query_pairs(SNAP_MM, output_type="ndarray")
+    pairs = cKDTree(pts).query_pairs(eps, output_type="ndarray")
     if len(pairs):
         from scipy import sparse
 
@@ -419,19 +465,83 @@ def _snapped_segments(lw: Linework) -> np.ndarray:
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
 
 
-def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.ndarray, str]:
-    """Tile regions (shapely polygons) from one file's CUT linework, and the method used."""
+JOIN_MM = 2e-3  # cut ends closer than this meet (rounding to 1 µm moves a point by 0.7 µm; a 10 µm bridge is not cut)
+
+
+def _node(segs: np.ndarray, eps: float = JOIN_MM):
+    """Segments ``(n, 2, 2)`` noded: ends within ``eps`` of another line are put on it (T-junctions
+    rounded off their edge), then every crossing and touch is a node. Returns the union."""
+    lines = shapely.multilinestrings(shapely.linestrings(segs))
+    ends = shapely.multipoints(np.unique(segs.reshape(-1, 2), axis=0))
+    return shapely.unary_union(shapely.snap(lines, ends, eps))
+
+
+def _noded(lw: Linework, eps: float = JOIN_MM):
+    """The CUT linework as noded line parts (shapely), endpoints within ``eps`` merged."""
+    segs = _snapped_segments(lw, eps)
+    if len(segs) == 0:
+        return np.zeros(0, dtype=object)
+    return shapely.get_parts(_node(segs, eps))
+
+
+def join_pieces(lw: Linework, eps: float = JOIN_MM) -> Linework:
+    """Open pieces and LINEs chained end to end into closed outlines where they close (within ``eps``).
+
+    What stays open is a cut that ends in the material (see :func:`dangling_ends`).
+    """
+    if all(lw.closed):
+        return lw
+    merged = shapely.get_parts(shapely.line_merge(shapely.union_all(_noded(lw, eps))))
+    out = Linework(lw.path, layer_found=lw.layer_found)
+    for g in merged:
+        pts = np.asarray(g.coords)
+        out.add(pts, bool(g.is_ring))
+    return out
+
+
+def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
+    """Points ``(n, 2)`` where a cut line stops without meeting another cut (farther than ``eps``).
+
+    Every line of a valid layout bounds a part: it ends where other lines meet it. An end in
+    the material is a slit cut short (the tiles stay joined) or an extra cut into a part.
+    """
+    parts = _noded(lw, eps)
+    if len(parts) == 0:
+        return np.zeros((0, 2))
+    ends = np.concatenate([shapely.get_coordinates(shapely.get_point(parts, 0)),
+                           shapely.get_coordinates(shapely.get_point(parts, -1))])
+    owner = np.concatenate([np.arange(len(parts)), np.arange(len(parts))])
+    tree = shapely.STRtree(parts)
+    pi, gi = tree.query(shapely.points(ends), predicate="dwithin", distance=eps)
+    other = np.zeros(len(ends), dtype=bool)
+    other[pi[gi != owner[pi]]] = True
+    # a closed part meets itself at its ends
+    ring = shapely.is_closed(parts)[owner]
+    return ends[~other & ~ring]
+
+
+def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
+                     frame_tiles: np.ndarray | None = None) -> tuple[np.ndarray, str]:
+    """Tile regions (shapely polygons) from one file's CUT linework, and the method used.
+
+    ``frame_tiles``: the design tiles where the manifest puts them (its sheet frame), to find the
+    declared ligaments on a sheet that was moved or turned since.
+    """
     if not lw.polylines:  # e.g. a sheet that holds only the reference square
         return np.zeros(0, dtype=object), "nothing to recover"
-    closed_only = all(lw.closed)
     hinge = al.hinge
-    if hinge == "plain":
-        hinge = "separate" if closed_only else "tape"
+    if hinge != "tape":
+        joined = join_pieces(lw)
+        if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
+            # ligament sheet), else in-place linework
+            hinge = ("ligament" if _nested(joined) else "separate") if all(joined.closed) else "tape"
+        if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
+            lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
     if hinge == "tape":
-        segs = _snapped_segments(lw)
+        segs = _snapped_segments(lw, JOIN_MM)
         if len(segs) == 0:
             return np.zeros(0, dtype=object), "polygonize"
-        noded = shapely.unary_union(shapely.linestrings(segs))
+        noded = _node(segs)
         faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
         return faces, "polygonize of the noded linework"
     rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
@@ -453,12 +563,148 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1) -> tuple[np.n
         material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
     feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
              if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
-    if feats:
-        material = material.difference(shapely.unary_union(feats))
-    parts = shapely.get_parts(material)
+    strips = shapely.unary_union(feats) if feats else None
+    # a file rounded to 1 µm may keep a hairline of material beside a declared strip: an opening at the
+    # join tolerance drops it (and leaves convex tiles exactly as they are)
+    parts = _hairline_free(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
+    # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
+    def cuts_tiles(parts) -> bool:
+        return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
+
+    if strips is not None and cuts_tiles(parts):
+        how = "material minus the declared ligaments"
+    else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
+        parts = _open_ligaments(material, al.ligament_width)
+        how = "material opened to drop the ligaments"
+        # only when the opening left tiles joined: on a symmetric lattice the motion can be a quarter turn off
+        short = frame_tiles is not None and (shapely.area(parts) > 1.0).sum() < len(frame_tiles)
+        moved = _declared_strips_moved(parts, strips, frame_tiles, al) if short else None
+        if moved is not None:
+            again = _hairline_free(material.difference(moved))
+            if cuts_tiles(again):
+                parts, how = again, "material minus the declared ligaments, moved with the sheet"
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
-    return parts, "material minus ligaments, grown by the tile shrink"
+    return parts, how + ", grown by the tile shrink"
+
+
+def _hairline_free(g) -> np.ndarray:
+    """The parts of ``g`` after an opening at the join tolerance (drops 1 µm hairlines, keeps convex parts)."""
+    g = g.buffer(-JOIN_MM, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(JOIN_MM, join_style="mitre",
+                                                                             mitre_limit=UNDO_MITRE)
+    return shapely.get_parts(g)
+
+
+def _declared_strips_moved(parts, strips, frame_tiles, al: Allowances):
+    """The declared ligaments moved with the sheet: the rigid motion that takes the manifest's tile
+    placement onto the tiles an opening found, applied to the strips. None if it cannot be found."""
+    if strips is None or frame_tiles is None or not len(parts):
+        return None
+    grown = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0) if al.tile_shrink else parts
+    quads, _ = quads_of(grown)
+    a, res, _, theta, t = match_in_place(frame_tiles, quads)
+    if (a >= 0).sum() < max(3, len(frame_tiles) // 2):
+        return None
+    from shapely import affinity
+
+    return affinity.translate(affinity.rotate(strips, theta, origin=(0, 0), use_radians=True), t[0], t[1])
+
+
+def _nested(lw: Linework) -> bool:
+    """Whether a closed outline holds another (the outline of one sheet piece and its holes)."""
+    polys = np.array([shapely.Polygon(p) for p in lw.polylines], dtype=object)
+    if len(polys) < 2:
+        return False
+    a, b = shapely.STRtree(polys).query(polys, predicate="contains_properly")
+    return bool((a != b).any())
+
+
+def _open_ligaments(material, width: float | None):
+    """The tile cores of a ligament sheet: an opening (mitre: convex tiles come back exactly) of
+    radius above half the ligament width drops the strips. Without a declared width, the smallest
+    radius from 10 µm up (x1.25) after which the piece count no longer grows."""
+    def opened(r):
+        g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre",
+                                                                                   mitre_limit=10.0)
+        parts = shapely.get_parts(g)
+        return parts[shapely.area(parts) > 4 * r * r]
+    if width:
+        return opened(0.6 * width)
+    best, first, r = opened(0.01), 0.01, 0.01
+    while r < 5.0:
+        r *= 1.25
+        nxt = opened(r)
+        if len(nxt) < len(best) and len(best) > 1:
+            break
+        if len(nxt) > len(best):
+            best, first = nxt, r
+    margin = opened(1.5 * first)  # clear of the strips' roots, when that keeps every tile
+    return margin if len(margin) == len(best) else best
+
+
+def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.ndarray, L: float,
+                tol: float) -> Linework:
+    """The candidate linework (a colour class of a file without a CUT layer) that forms the most
+    design tiles; with one candidate, that one."""
+    if len(candidates) == 1:
+        return candidates[0]
+    best, score = candidates[0], -1
+    for lw in candidates:
+        try:
+            polys, _ = recover_polygons(lw, al, sheet)
+        except VerifyError:
+            continue
+        quads, bad = quads_of(polys[shapely.area(polys) > tol ** 2])
+        _, res, _ = match_by_shape(D, quads, L)
+        n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
+        key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions
+        if score == -1 or key > score:
+            best, score = lw, key
+    return best
+
+
+UNDO_MITRE = 1000.0  # undoing an offset must keep sharp corners sharp
+MAX_FITTED_OFFSET_MM = 0.25  # a kerf up to 0.5 mm: any more is not a laser's kerf
+
+
+MAX_FITTED_SHRINK_MM = 2.5  # a ligament sheet's tiles shrunk by up to half a 5 mm gap
+
+
+def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float, lo: float = 0.0) -> float:
+    """The outward (mitre) offset of separate outlines from their design tiles, 0 if none is needed.
+
+    Per matched tile the offset that explains its area, (A_cut - A) / perimeter; their median, if
+    it lies within [0, MAX_FITTED_OFFSET_MM]. Each tile's congruence is still checked after it is undone.
+    """
+    a, _, _ = match_by_shape(D, R, L)
+    ok = a >= 0
+    if not ok.any():
+        return 0.0
+    A = np.abs(geometry.signed_areas(D[a[ok]]))
+    P = geometry.edge_lengths(D[a[ok]]).sum(axis=1)
+    k = float(np.median((np.abs(geometry.signed_areas(R[ok])) - A) / P))
+    return k if 0.1 * tol < abs(k) and lo <= k <= MAX_FITTED_OFFSET_MM else 0.0
+
+
+def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float) -> tuple[np.ndarray, float | None]:
+    """Take out the reference square (a square that is no design tile, the largest such), by geometry.
+
+    fabkiri cuts an uncompensated square beside the parts so the kerf can be measured; a file
+    moved, turned or without its manifest still has it. Returns the other quads and its side.
+    """
+    if not len(quads):
+        return quads, None
+    e = geometry.edge_lengths(quads)
+    diag = np.linalg.norm(quads[:, 2] - quads[:, 0], axis=1), np.linalg.norm(quads[:, 3] - quads[:, 1], axis=1)
+    square = (e.max(axis=1) - e.min(axis=1) <= tol) & (np.abs(diag[0] - diag[1]) <= tol)
+    if not square.any():
+        return quads, None
+    _, res, _ = match_by_shape(D, quads[square], L)
+    cand = np.flatnonzero(square)[res > tol]
+    if not len(cand):
+        return quads, None
+    k = int(cand[np.argmax(e[cand].mean(axis=1))])
+    return np.delete(quads, k, axis=0), float(e[k].mean())
 
 
 def _feature_geometry(poly: Any):
@@ -798,9 +1044,10 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     # everything is compared on the sheet, in physical mm: the design is scaled
     # up (kerf and tolerance are physical lengths, not pattern lengths)
     L = pattern.tile_size * al.scale
-    tol = Tolerances(float(tol_mm), max(float(tol_rad), float(tol_mm) / L), L, "fabrication")
+    tol = fabrication_tolerances(float(tol_mm), L)
     rep = Report(subject=str(path), kind="layout",
-                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "hinge": al.hinge,
+                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "tolerance": tol.describe(),
+                       "hinge": al.hinge,
                        "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
     g = "layout"
     D = pattern.corners() * al.scale  # design shapes (deployed = cut shapes), sheet mm
@@ -811,27 +1058,49 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     n_lines = 0
     methods = set()
     unusable = 0
+    dangling: list[np.ndarray] = []
+    references: list[float] = []
+    frame = _frame_tiles(pattern, al)
     for sheet, f in files.items():
-        lw = read_cut_file(f)
+        lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol.length)
         _drop_reference(lw, al.reference.get(sheet))
         n_lines += len(lw.polylines)
-        polys, method = recover_polygons(lw, al, sheet)
+        on = [t for t in range(T) if al.tile_sheet.get(t, 1) == sheet]
+        polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None)
         methods.add(method)
         polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
         quads, bad = quads_of(polys)
+        quads, side = _set_reference_aside(quads, D, L, tol.length)
+        if side is not None:
+            references.append(side)
         unusable += bad
         sheets[sheet] = quads
+        dangling.append(dangling_ends(lw))
     if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
         raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
     rep.meta["recovery"] = sorted(methods)
+    if references:
+        rep.meta["reference_square_mm"] = references
 
     in_place = al.layout == "in-place"
+    sheet_piece = any(m.startswith("material") for m in methods)  # a ligament sheet: tiles in place, shrunk
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
         allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
         if len(allq):
             u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
-            in_place = len(shapely.get_parts(u)) == 1 and len(allq) > 1
+            in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
         rep.meta["layout"] = "in-place" if in_place else "separate"
+    fitted = None
+    if al.hinge == "plain" and (not in_place or sheet_piece) and sheets:
+        # no manifest declares the kerf (or the gap): take the one offset the outlines share
+        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol.length,
+                             lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
+        if fitted:
+            for k, R in sheets.items():
+                sheets[k], bad = quads_of(shapely.buffer(shapely.polygons(R), -fitted, join_style="mitre",
+                                                         mitre_limit=UNDO_MITRE))
+                unusable += bad
+        rep.meta["kerf_offset_fitted_mm"] = fitted
 
     # ---- match
     assign_all = np.full(T, -1)  # design tile -> global recovered index
@@ -934,6 +1203,10 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             chk.group = g
             rep.add(chk)
 
+    # ---- every cut runs its full length: no cut ends inside the material
+    ends = np.concatenate(dangling) if dangling else np.zeros((0, 2))
+    rep.add(_dangling_check(ends, cut_shapes, have, g, tol.length))
+
     # ---- (d) every hinge present
     top = pattern.topology
     A, B = top.hinge_tiles.T
@@ -963,6 +1236,43 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
                   detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
     return rep
+
+
+def _frame_tiles(pattern: Pattern, al: Allowances) -> np.ndarray | None:
+    """Design tiles where the manifest placed them: Rot(rotation) (scaled closed-state tile) + shift."""
+    if al.layout != "in-place" or len(al.tiles_placed) != pattern.n_tiles:
+        return None
+    Y = pattern.contracted.get(al.state)
+    Y = (contract(pattern, al.state).corners if Y is None else Y) * al.scale
+    out = np.empty_like(Y)
+    for t, (th, shift) in al.tiles_placed.items():
+        out[t] = geometry.rotate(Y[t], th) + shift
+    return out
+
+
+def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, g: str, tol: float) -> Check:
+    """A cut that stops in the material: a slit short of its end leaves two tiles joined, a stray
+    cut weakens a part. Names the tiles nearest the first such end."""
+    worst, detail = None, "every cut line ends on another cut"
+    if len(ends):
+        ids = np.flatnonzero(have)
+        where = []
+        if len(ids):
+            polys = shapely.polygons(cut_shapes[ids])
+            d = shapely.distance(polys[None, :], shapely.points(ends[:1])[:, None])[0]
+            near = ids[np.argsort(d)[:2]]
+            where = [int(t) for t, dd in zip(near, np.sort(d)[:2]) if dd <= max(10 * tol, 1.0)]
+        if len(where) == 2:
+            worst = f"tiles {where[0]}/{where[1]}"
+            detail = f"the slit between tiles {where[0]} and {where[1]} stops short: they stay joined"
+        elif where:
+            worst = f"tile {where[0]}"
+            detail = f"a cut ends inside tile {where[0]}"
+        else:
+            detail = "a cut ends in the material"
+        detail += f" ({len(ends)} cut ends in the material, first at ({ends[0, 0]:.4g}, {ends[0, 1]:.4g}) mm)"
+    return Check(f"{g}: cuts run their full length", ok=not len(ends), value=int(len(ends)), tol=0, unit="count",
+                 group=g, worst=worst, detail=detail)
 
 
 def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:

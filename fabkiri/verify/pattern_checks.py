@@ -49,17 +49,42 @@ class Tolerances:
     angle: float  # rad
     tile_size: float  # mm (mean tile edge)
     tier: str
+    mm_angles: bool = False  # angle residuals compared as their displacement (rad x tile size) with ``length``
 
     @property
     def area(self) -> float:  # mm²: a length tolerance times the tile size
         return self.length * self.tile_size
 
+    def describe(self) -> str:
+        if self.mm_angles:
+            return (f"{self.tier}: {self.length:.3g} mm for lengths, and for angles as their displacement at "
+                    f"the tile size")
+        return f"exact ({self.tier}): {self.length:.3g} mm, {self.angle:.3g} rad"
+
+
+def fabrication_tolerances(tol_mm: float, tile_size: float, tier: str = "fabrication") -> Tolerances:
+    """One tolerance in mm: lengths compare with it, angles by the displacement they cause at ``tile_size``."""
+    return Tolerances(float(tol_mm), float(tol_mm) / float(tile_size), float(tile_size), tier, mm_angles=True)
+
+
+def angle_check(name: str, rad: np.ndarray, sizes: np.ndarray | float, tol: Tolerances, worst: str, *,
+                group: str, detail: str = "", applies: bool = True) -> Check:
+    """An angle residual check: in rad (exact tier) or as mm of displacement at each item's tile size."""
+    rad = np.asarray(rad, dtype=float)
+    if not tol.mm_angles:
+        return measured(name, _max(rad), tol.angle, "rad", worst=_worst(worst, rad), group=group, detail=detail,
+                        applies=applies)
+    mm = rad * np.broadcast_to(np.asarray(sizes, dtype=float), rad.shape)
+    note = f"angle residual x tile size (largest angle {_max(rad):.3g} rad)"
+    return measured(name, _max(mm), tol.length, "mm", worst=_worst(worst, mm), group=group,
+                    detail=f"{detail}; {note}" if detail else note, applies=applies)
+
 
 def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6) -> Tolerances:
-    """Resolve the tolerances: explicit mm, or the relative tier of spec §10."""
+    """Resolve the tolerances: explicit mm (angles as displacement at the tile size), or the relative tier of spec §10."""
     size = pattern.tile_size
     if tol_mm is not None:
-        return Tolerances(float(tol_mm), float(tol_rad), size, "given")
+        return fabrication_tolerances(float(tol_mm), size)
     optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals", "report"))
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
     return Tolerances(rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data")
@@ -179,8 +204,8 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
                         worst=_worst("tile", cong), group=g,
                         detail=f"mirrored tiles {mirrored.tolist()}" if len(mirrored) else
                         "per-corner edge-length change and per-tile rigid-fit residual"))
-    out.append(measured(f"{g}: tiles congruent (angles)", _max(da), tol.angle, "rad",
-                        worst=_worst("tile", da), group=g))
+    out.append(angle_check(f"{g}: tiles congruent (angles)", da, geometry.edge_lengths(X).mean(axis=1), tol, "tile",
+                           group=g))
     # holes of zero area, measured as an equivalent width 2|A|/perimeter (mm)
     if top.n_holes:
         outline = _hole_outline(pattern, Y)
@@ -272,12 +297,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
                                                                              1e-9 * total), "mm²",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
                         detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²"))
-    parts = list(getattr(union, "geoms", [union]))
-    gaps = []
-    for part in parts:
-        for r in part.interiors:
-            ring = shapely.Polygon(r)
-            gaps.append((2 * ring.area / max(ring.length, 1e-300), ring.area, ring))
+    gaps = [(2 * g.area / max(g.length, 1e-300), g.area, g) for g in enclosed_gaps(union)]
     big = [x for x in gaps if x[0] > tol.length]
     worst_gap = max(gaps, key=lambda x: x[0]) if gaps else None
     where = None
@@ -295,6 +315,22 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     out.append(Check(f"{g}: one outline", ok=n_parts == 1, value=n_parts, tol=1, unit="count", group=g,
                      op="==", detail="" if n_parts == 1 else f"the tiles form {n_parts} separate pieces"))
     return out
+
+
+def enclosed_gaps(union) -> list:
+    """The uncovered regions enclosed by a tile union, as polygons.
+
+    A hole ring of the union may enclose islands of tiles (a crack of rounding
+    width around a block of tiles, as T-junctions of parallelogram holes
+    leave): the gap is the ring minus the tiles inside it, not the ring.
+    """
+    parts = list(getattr(union, "geoms", [union]))
+    rings = [shapely.Polygon(r) for part in parts for r in part.interiors]
+    if not rings:
+        return []
+    if len(parts) > 1:  # islands exist: take them out of the rings they sit in
+        rings = shapely.get_parts(shapely.difference(np.array(rings, dtype=object), union)).tolist()
+    return [g for g in rings if not g.is_empty and g.area > 0]
 
 
 def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Check]:
@@ -329,13 +365,11 @@ def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Ch
                             group="design", detail=detail))
         rings = np.abs(r.rings)
         wrapped = r.wrapped_tiles.tolist()
-        out.append(measured(f"{g}: rings", _max(rings), tol.angle, "rad", worst=_worst("hole", rings),
-                            group="design",
-                            detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else ""))
+        out.append(angle_check(f"{g}: rings", rings, tol.tile_size, tol, "hole", group="design",
+                               detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else ""))
     hs = np.abs(hinge_sums(pattern))
-    out.append(measured("hinge sums", _max(hs), tol.angle, "rad", worst=_worst("hinge", hs), group="design",
-                        applies=claimed,
-                        detail="" if claimed else "rigid deployability not claimed; measured for information"))
+    out.append(angle_check("hinge sums", hs, tol.tile_size, tol, "hinge", group="design", applies=claimed,
+                           detail="" if claimed else "rigid deployability not claimed; measured for information"))
     return out
 
 
@@ -443,7 +477,7 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
     claimed = rigid_claimed(pattern) if rigid is None else bool(rigid)
     rep = Report(subject=pattern.name or "(unnamed pattern)", kind="pattern",
                  meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": tol.tile_size,
-                       "tier": tol.tier, "tiles": pattern.n_tiles, "holes": pattern.topology.n_holes,
+                       "tier": tol.tier, "tolerance": tol.describe(), "tiles": pattern.n_tiles, "holes": pattern.topology.n_holes,
                        "rigid_claimed": claimed})
     for c in topology_checks(pattern) + tile_checks(pattern, tol):
         rep.add(c)
@@ -464,5 +498,9 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
         for chk in rigid_path_checks(pattern, states[1], states[2], tol, path_steps):
             rep.add(chk)
     for chk in target_checks(pattern, states, shape_tol):
+        rep.add(chk)
+    from .outlines import contracted_outline_checks
+
+    for chk in contracted_outline_checks(pattern, states, tol):
         rep.add(chk)
     return rep

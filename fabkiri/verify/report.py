@@ -129,6 +129,8 @@ class Report:
         for meta_key in ("tol_mm", "tol_rad", "tile_size_mm"):
             if meta_key in self.meta:
                 lines[0] += f"  {meta_key}={_fmt(self.meta[meta_key], '')}"
+        if self.meta.get("tolerance"):
+            lines[0] += f"  [{self.meta['tolerance']}]"
         for i, r in enumerate(rows):
             lines.append(f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:>{w[2]}}  {r[3]:<{w[3]}}  {r[4]}".rstrip())
             if i and ordered[i - 1].detail and (not ordered[i - 1].ok or not ordered[i - 1].applies):

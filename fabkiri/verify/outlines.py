@@ -1,0 +1,85 @@
+"""Closed-state outline targets (``design --contracted-target``): does each closed state have the outline asked for?
+
+The design section records, per closed state, either a target curve
+(``contracted_targets[s]``, in mm, at the area of the tiles) or a rectangle
+(``options.contracted[s] = {"rectangle": true, "ratio": r | null}``). The
+closed state computed from the tiles (never the solver's own grid) is checked
+against it:
+
+* curve: measured by :func:`fabkiri.verify.pattern_checks.target_checks` (outline shape);
+* rectangle: the outline's corners on the minimum rotated rectangle, the
+  aspect ratio when one was asked, and, when none was, a degenerate strip
+  (aspect beyond ``DEGENERATE_ASPECT`` times the lattice's own) is reported as
+  a failure rather than passed as "a rectangle".
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import shapely
+
+from ..pattern.model import Pattern
+from .report import Check, measured
+
+DEGENERATE_ASPECT = 4.0  # an unasked aspect this many times the lattice's rows:cols is a collapsed strip
+
+
+def outline_corners(Y: np.ndarray, eps: float) -> tuple[np.ndarray, Any]:
+    """The corners of a closed state's outline (exterior of the tile union) and the union."""
+    from .geom import tiles_union
+
+    union = tiles_union(Y, eps)
+    part = max(getattr(union, "geoms", [union]), key=lambda g: g.area)
+    return np.asarray(part.exterior.coords)[:-1], part
+
+
+def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol) -> list[Check]:
+    pts, union = outline_corners(Y, max(tol.length, 1e-12 * tol.tile_size))
+    rect = union.minimum_rotated_rectangle
+    off = shapely.distance(shapely.points(pts), rect.exterior)
+    c = np.asarray(rect.exterior.coords)[:4]
+    sides = np.linalg.norm(np.roll(c, -1, axis=0) - c, axis=1)[:2]
+    long, short = float(sides.max()), float(sides.min())
+    aspect = long / max(short, 1e-300)
+    g = f"state {s}"
+    out = [measured(f"{g}: outline is a rectangle", float(off.max(initial=0.0)), tol.length, "mm", group=g,
+                    detail=f"outline corners off the minimum rotated rectangle ({long:.4g} x {short:.4g} mm)")]
+    if ratio is not None:
+        want = max(float(ratio), 1.0 / float(ratio))
+        out.append(measured(f"{g}: outline aspect ratio", abs(long - want * short), tol.length, "mm", group=g,
+                            detail=f"{long:.4g} x {short:.4g} mm is {aspect:.4g}:1, asked {want:.4g}:1 "
+                                   f"(long side minus asked ratio times the short side)"))
+    else:
+        lat = pattern.lattice or {}
+        m, n = int(lat.get("rows") or 1), int(lat.get("cols") or 1)
+        limit = DEGENERATE_ASPECT * max(m / n, n / m)
+        out.append(measured(f"{g}: outline not degenerate", aspect, limit, "ratio", group=g,
+                            detail=f"{long:.4g} x {short:.4g} mm is {aspect:.3g}:1 with no aspect asked; a "
+                                   f"{m}x{n} lattice closing to more than {limit:.3g}:1 is a collapsed strip "
+                                   f"(ask for one with rect=W/H)"))
+    return out
+
+
+def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], tol) -> list[Check]:
+    """Checks of every closed-state outline target the design recorded (none if it recorded none)."""
+    d = pattern.design or {}
+    asked = (d.get("options") or {}).get("contracted") or {}
+    curves = d.get("contracted_targets") or {}
+    out: list[Check] = []
+    if not isinstance(asked, dict):
+        return out
+    for key, spec in sorted(asked.items()):
+        try:
+            s = int(key)
+        except (TypeError, ValueError):
+            continue
+        if s not in states:
+            continue
+        if isinstance(curves.get(str(s)), dict) and curves[str(s)].get("points"):
+            continue  # a target curve: target_checks measures the outline's shape against it
+        if isinstance(spec, dict) and spec.get("rectangle"):
+            r = spec.get("ratio")
+            out.extend(_rectangle_checks(pattern, s, states[s], float(r) if r else None, tol))
+    return out

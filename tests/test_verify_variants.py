@@ -1,0 +1,147 @@
+"""A fast subset of bench/verify_mutations.py: valid variants of real cut files are accepted,
+breakages rejected with the tile, hinge or sheet at fault named; real re-saves by Inkscape and ezdxf."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from fabkiri.mechanics.contract import with_contracted_states
+from fabkiri.pattern import read_pattern, standard_pattern, write_pattern
+from fabkiri.verify import verify_layout
+
+from . import layout_fixtures as lf
+from . import layout_mutations as lm
+
+pytest.importorskip("fabkiri.fabricate.cut")
+
+VALID = ["re-save R2018", "LINE segments", "in a block, INSERT moved and turned 30°", "flipped OCS (extrusion -Z)",
+         "colour only, all on layer 0", "declared inches", "Inkscape layers (inkscape:label only)",
+         "colour only, no groups", "group transform (rigid)", "px user units", "turned 33°",
+         "every segment a separate piece", "rounded to 0.001 mm", "NOTES layer removed"]
+BROKEN = ["corner moved 0.1 mm", "tile scaled 1%", "tile turned 0.5°", "tile mirrored", "tile missing",
+          "sheet scaled 1%", "sheet mirrored", "mirrored through the OCS", "inch-for-mm", "viewBox 1% off",
+          "slit shortened 10 µm", "slit cut halfway", "extra cut halfway into a tile", "a ligament severed",
+          "undeclared kerf"]
+KINDS = {k.name: k for k in lm.VALID + lm.BROKEN}
+
+
+@pytest.fixture(scope="module")
+def bases(tmp_path_factory):
+    """Real `fabkiri cut` files of a chiral pattern at scale 1 (so a file without manifest can be checked)."""
+    from fabkiri.cli.main import main
+
+    root = tmp_path_factory.mktemp("variants")
+    p = lf.distinct_pattern()
+    pj = root / "p.json"
+    write_pattern(p, pj)
+    p = read_pattern(pj)
+    out = {}
+    for h in ("tape", "separate", "ligament"):
+        d = root / h
+        assert main(["cut", str(pj), "--hinge", h, "--material", "pp-0.5", "--gap", "1.5", "--formats", "dxf,svg",
+                     "--no-verify", "-o", str(d)]) == 0
+        for fmt in ("dxf", "svg"):
+            out[h, fmt] = lm.load_base(d, fmt, p)
+    return out
+
+
+MOVED_OR_ROUNDED = {"in a block, INSERT moved and turned 30°", "group transform (rigid)", "turned 33°",
+                    "rounded to 0.001 mm"}
+LIGAMENT_GAP = pytest.mark.xfail(reason="known limit (issue 15 report): a ligament sheet of this irregular pattern "
+                                        "without its manifest, moved off the manifest's frame or rounded to 1 µm "
+                                        "loses a tile corner where a ligament meets it", strict=False)
+
+
+def _cases(names, valid=False):
+    out = []
+    for n in names:
+        for h in ("tape", "separate", "ligament"):
+            for m in (True, False):
+                gap = valid and h == "ligament" and (not m or n in MOVED_OR_ROUNDED)
+                out.append(pytest.param(n, h, m, marks=LIGAMENT_GAP) if gap else (n, h, m))
+    return out
+
+
+def _verify_case(bases, tmp_path, name, hinge, with_manifest):
+    kind = KINDS[name]
+    b = bases[hinge, "svg" if kind.fmt == "svg" else "dxf"]
+    path = lm.make_case(b, kind, tmp_path / "c", with_manifest)
+    if path is None:
+        pytest.skip("not applicable")
+    return verify_layout(b.pattern, path)
+
+
+@pytest.mark.parametrize("name,hinge,with_manifest", _cases(VALID, valid=True))
+def test_valid_variant_accepted(bases, tmp_path, name, hinge, with_manifest):
+    rep = _verify_case(bases, tmp_path, name, hinge, with_manifest)
+    assert rep.ok, rep.to_text()
+
+
+@pytest.mark.parametrize("name,hinge,with_manifest", _cases(BROKEN))
+def test_breakage_rejected_and_named(bases, tmp_path, name, hinge, with_manifest):
+    rep = _verify_case(bases, tmp_path, name, hinge, with_manifest)
+    assert not rep.ok, f"{name} accepted"
+    worst = [c.worst or "" for c in rep.failed()]
+    assert any(w.startswith(("tile", "hinge")) for w in worst), worst
+
+
+def test_slit_short_names_the_joined_tiles(bases, tmp_path):
+    b = bases["tape", "dxf"]
+    path = lm.make_case(b, KINDS["slit shortened 10 µm"], tmp_path / "s", False)
+    chk = verify_layout(b.pattern, path).get("layout: cuts run their full length")
+    assert not chk.ok and chk.worst.startswith("tiles ") and "stay joined" in chk.detail
+
+
+def test_no_manifest_reference_square_and_frame_set_aside(bases, tmp_path):
+    for h in ("tape", "separate"):
+        b = bases[h, "dxf"]
+        path = lm.make_case(b, KINDS["colour only, all on layer 0"], tmp_path / h, False)
+        rep = verify_layout(b.pattern, path)
+        assert rep.ok and rep.meta["reference_square_mm"] == [pytest.approx(50.0, abs=1e-6)], rep.to_text()
+
+
+def test_ezdxf_r2018_round_trip(bases, tmp_path):
+    import ezdxf
+
+    for h in ("tape", "separate", "ligament"):
+        b = bases[h, "dxf"]
+        dst = tmp_path / h
+        shutil.copytree(b.folder, dst)
+        path = dst / b.manifest["sheets"][0]["dxf"]
+        doc = ezdxf.readfile(path)
+        doc.dxfversion = "R2018"
+        doc.saveas(path)
+        assert ezdxf.readfile(path).dxfversion == "AC1032"
+        assert verify_layout(b.pattern, path).ok
+        if h != "ligament":  # see LIGAMENT_GAP
+            (dst / "manifest.json").unlink()
+            assert verify_layout(b.pattern, path).ok
+
+
+@pytest.mark.skipif(shutil.which("inkscape") is None, reason="inkscape is not installed")
+@pytest.mark.parametrize("hinge", ["tape", "separate", pytest.param("ligament", marks=LIGAMENT_GAP)])
+def test_inkscape_plain_svg_export(bases, tmp_path, hinge):
+    b = bases[hinge, "svg"]
+    src = b.folder / b.manifest["sheets"][0]["svg"]
+    dst = tmp_path / src.name
+    run = subprocess.run(["inkscape", str(src), "--export-plain-svg", f"--export-filename={dst}"],
+                         capture_output=True, text=True, timeout=300)
+    if run.returncode != 0 or not dst.exists():
+        pytest.skip(f"inkscape could not export here: {run.stderr[-200:]}")
+    assert b"inkscape:label" not in dst.read_bytes()  # plain SVG: Inkscape's namespace is gone
+    rep = verify_layout(b.pattern, dst)  # no manifest beside it: the file alone
+    assert rep.ok, rep.to_text()
+    shutil.copy(b.folder / "manifest.json", tmp_path / "manifest.json")
+    assert verify_layout(b.pattern, dst).ok
+
+
+def test_standard_pattern_mirror_is_no_breakage():
+    """The bench skips a mirror of a mirror-symmetric sheet: the standard lattice is one."""
+    p = with_contracted_states(standard_pattern(4, 4, tile_size=10.0))
+    assert lm._mirror_symmetric(p.contracted[1])
+    assert not lm._mirror_symmetric(lf.distinct_pattern().contracted[1])
+    assert np.isfinite(p.tile_size)
