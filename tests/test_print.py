@@ -484,7 +484,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     tc = mesh.check_printed_tiles(r)
     assert tc.ok and tc.tiles == len(job.plan.tiles), tc
     sw = mesh.sweep_pinned(pat, r)
-    assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm
+    assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm * (1 - 1e-6)  # as check_meshes: section float noise
     # the CLI refuses the doubled design (exit 2, one line, nothing written)
     src = REPO / "templates" / "patterns" / "circle-8x8-rigid.json"
     code, _, err = run_cli("print", src, "--style", "pinned", "--printer", "prusa-xl", "--scale", "2",

@@ -68,8 +68,14 @@ def cmd_print(args: argparse.Namespace) -> int:
 
         for k, bed in enumerate(job.beds, 1):  # one STEP per bed, like the meshes
             files[f"{stem}.step" if len(job.beds) == 1 else f"{stem}-bed{k}.step"] = cad.step_bytes(bed)
+    read_back = mesh.read_back_files(files)  # watertight as written, not as held in memory
+    bad = [f"{n} ({v['edges_not_shared_by_two_faces']} edges not shared by two faces)"
+           for n, v in read_back.items() if not v["ok"]]
+    if bad:
+        raise CheckFailed("written meshes are not closed 2-manifolds when read back: " + ", ".join(bad)
+                          + "; nothing written")
     files["manifest.json"] = mesh.manifest(realised, report, tiles, Path(args.file).name,
-                                           list(files) + ["manifest.json"], verifier)
+                                           list(files) + ["manifest.json"], verifier, read_back)
     files.update(laser)
     atomic_write_many(args.output, files)
     faces = int(job.plan.top.sum())

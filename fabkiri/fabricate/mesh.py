@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import io
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterable
 
 import numpy as np
@@ -57,6 +57,7 @@ class Body:
     kind: str  # "tile", "hinge", "tiles", "hinges"
     ops: tuple[tuple[str, Prism], ...]
     material: str = ""
+    variants: tuple["Body", ...] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
 
 
 def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
@@ -107,7 +108,7 @@ def to_trimesh(manifold):
 def translate_body(body: Body, dx: float, dy: float) -> Body:
     ops = tuple((op, Prism(tuple(shapely.affinity.translate(p, dx, dy) for p in pr.polygons), pr.z0, pr.z1,
                            pr.scale_top, (pr.centre[0] + dx, pr.centre[1] + dy))) for op, pr in body.ops)
-    return Body(body.name, body.kind, ops, body.material)
+    return Body(body.name, body.kind, ops, body.material, tuple(translate_body(v, dx, dy) for v in body.variants))
 
 
 # ------------------------------------------------------------- the styles
@@ -256,41 +257,54 @@ def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     T = lv.thickness
     A, B = plan.hinge_tiles.T
     H = plan.n_hinges
-    hollow = [regular_polygon(plan.hinge_xy[h], g.hollow, circumscribed=True) for h in range(H)]
-    ear = [regular_polygon(plan.hinge_xy[h], g.ear, circumscribed=False) for h in range(H)]
+    ph = pins.phase if pins.phase is not None else np.zeros(H)
     # A tile's corner at a pivot is cleared through the full height: the pivot's
     # own partner turns in one half, and the hinge that meets it in either
-    # closed state stacks its ears in the other half. Its own ear is added back.
+    # closed state stacks its ears in the other half; at its own ear level the
+    # tile is left whole and the ear disc added. (Cutting the full height and
+    # adding back tile ∩ disc would meet the cut at points computed twice, a
+    # nanometre apart: edges shared by four faces once written as float32.)
     at_tile: dict[int, list[int]] = {t: [] for t in range(len(plan.tiles))}
     for h in range(H):
         at_tile[int(A[h])].append(h)
         at_tile[int(B[h])].append(h)
-    bodies = []
-    for t in range(len(plan.tiles)):
+    def tile_body(t: int, turn: float) -> Body:
         X = plan.tiles[t]
         ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
         hs = at_tile[t]
+        poly = {h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn)) for h in hs}
         for h in hs:
-            ops.append(("sub", Prism((hollow[h],), -1.0, T + 1.0)))
+            z0, z1 = lv.level(pins.level[h] + (0 if t == A[h] else 1))
+            if z0 > 0.0:  # (a cut merely touching a face would leave a zero-thickness seam)
+                ops.append(("sub", Prism((poly[h](g.hollow, True),), -1.0, z0)))
+            if z1 < T:
+                ops.append(("sub", Prism((poly[h](g.hollow, True),), z1, T + 1.0)))
         for h in hs:
             k = pins.level[h] + (0 if t == A[h] else 1)
             z0, z1 = lv.level(k)
-            own = shapely.union(ear[h], shapely.intersection(X, hollow[h]))
-            ops.append(("add", Prism((own,), z0, z1)))
+            ops.append(("add", Prism((poly[h](g.ear, False),), z0, z1)))
             p = tuple(plan.hinge_xy[h])
             if t == A[h]:  # the pin: straight through its ear and the gap, flared through the ring
                 zr0, zr1 = lv.level(k + 1)
-                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), z0, zr0)))
-                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), zr0, zr1,
-                                         g.pin_top / g.pin_bottom, p)))
+                ops.append(("add", Prism((poly[h](g.pin_bottom, False),), z0, zr0)))
+                ops.append(("add", Prism((poly[h](g.pin_bottom, False),), zr0, zr1, g.pin_top / g.pin_bottom, p)))
         for h in hs:
             if t == B[h]:
-                k = pins.level[h] + 1
-                z0, z1 = lv.level(k)
+                z0, z1 = lv.level(pins.level[h] + 1)
                 p = tuple(plan.hinge_xy[h])
-                ops.append(("sub", Prism((regular_polygon(p, g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
+                ops.append(("sub", Prism((poly[h](g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
                                          g.hole_top / g.hole_bottom, p)))
-        bodies.append(Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material))
+        return Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material)
+
+    # the same tile with its pivot polygons turned: tried in turn when a turn
+    # leaves a near-degenerate meeting that a float32 file cannot keep 2-manifold
+    # (each tile's clearances are circumscribed and its ears inscribed, so
+    # tiles need not share a turn)
+    bodies = []
+    for t in range(len(plan.tiles)):
+        first = tile_body(t, 0.0)
+        alts = tuple(tile_body(t, (j + 0.5) / printgeom.PHASES) for j in range(printgeom.PHASES))
+        bodies.append(replace(first, variants=alts))
     dx, dy = _centre_shift(plan.bounds, printer)
     beds = [[translate_body(b, dx, dy) for b in bodies]]
     return PrintJob("pinned", state, printer, plan, beds, (dx, dy), pins=pins)
@@ -335,14 +349,40 @@ class Realised:
     meshes: list[list]
 
 
+def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> int:
+    """Edges not used by exactly two faces, plus faces with a repeated vertex,
+    once the vertices are welded by position, as any STL reader does."""
+    _, weld = np.unique(np.asarray(vertices), axis=0, return_inverse=True)
+    f = weld.reshape(-1)[np.asarray(faces)]
+    degenerate = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(e, axis=0, return_counts=True)
+    return int((counts != 2).sum() + degenerate.sum())
+
+
+def float32_defects(tm) -> int:
+    """:func:`edge_defects` of a mesh as a file stores it (float32 coordinates)."""
+    return edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces)
+
+
+def _realise_clean(body: Body):
+    """The body (or its first variant) whose float32 mesh is a closed 2-manifold;
+    the last one tried if none is (the mesh check then reports it)."""
+    for b in (body, *body.variants):
+        m = realise(b)
+        if m.status().name != "NoError" or m.is_empty():
+            raise FabricationError(f"body {b.name} came out empty or invalid ({m.status().name})")
+        tm = to_trimesh(m)
+        if float32_defects(tm) == 0:
+            break
+    return b, m, tm
+
+
 def realise_job(job: PrintJob) -> Realised:
-    manifolds = [[realise(b) for b in bed] for bed in job.beds]
-    for bed, ms in zip(job.beds, manifolds):
-        for b, m in zip(bed, ms):
-            if m.status().name != "NoError" or m.is_empty():
-                raise FabricationError(f"body {b.name} came out empty or invalid ({m.status().name})")
-    meshes = [[to_trimesh(m) for m in ms] for ms in manifolds]
-    return Realised(job, manifolds, meshes)
+    done = [[_realise_clean(b) for b in bed] for bed in job.beds]
+    beds = [[replace(b, variants=()) for b, _, _ in bed] for bed in done]
+    job = replace(job, beds=beds)
+    return Realised(job, [[m for _, m, _ in bed] for bed in done], [[tm for _, _, tm in bed] for bed in done])
 
 
 def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
@@ -361,7 +401,11 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
                     "winding_consistent": bool(tm.is_winding_consistent), "volume_mm3": float(tm.volume),
                     "manifold_volume_mm3": float(m.volume()), "triangles": int(len(tm.faces)),
                     "bounds_mm": [lo.round(4).tolist(), hi.round(4).tolist()]}
+            info["float32_edge_defects"] = float32_defects(tm)
             rep.bodies.append(info)
+            if info["float32_edge_defects"]:
+                rep.problems.append(f"{b.name}: {info['float32_edge_defects']} edges not shared by exactly two faces "
+                                    "once written with float32 coordinates")
             if not (info["watertight"] and info["winding_consistent"]):
                 rep.problems.append(f"{b.name}: mesh not watertight or not consistently wound")
             if not tm.volume > 0 or abs(tm.volume - m.volume()) > vol_rtol * max(1.0, m.volume()) + 1e-6:
@@ -777,8 +821,36 @@ def job_files(r: Realised, stem: str) -> dict[str, bytes]:
     return files
 
 
+def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
+    """Every STL/3MF as written, re-read by trimesh (vertices welded, as slicers
+    do) and by manifold3d: watertight, every edge used by exactly two faces, one
+    valid manifold per body. This, not the in-memory solid, is what the manifest reports."""
+    import manifold3d as m3d
+    import trimesh
+
+    out = {}
+    for name, data in sorted(files.items()):
+        ext = name.rsplit(".", 1)[-1]
+        if ext not in ("stl", "3mf"):
+            continue
+        loaded = trimesh.load(io.BytesIO(data), file_type=ext, process=True)
+        geoms = list(loaded.geometry.values()) if isinstance(loaded, trimesh.Scene) else [loaded]
+        bad_edges, watertight, m3d_ok, volume = 0, True, True, 0.0
+        for g in geoms:
+            bad_edges += edge_defects(g.vertices, g.faces)
+            watertight &= bool(g.is_watertight and g.is_winding_consistent)
+            man = m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(g.vertices, dtype=np.float32),
+                                        tri_verts=np.asarray(g.faces, dtype=np.uint32)))
+            m3d_ok &= man.status().name == "NoError" and not man.is_empty()
+            volume += float(g.volume)
+        out[name] = {"meshes": len(geoms), "watertight": watertight, "edges_not_shared_by_two_faces": bad_edges,
+                     "manifold3d_ok": bool(m3d_ok), "volume_mm3": volume,
+                     "ok": bool(watertight and bad_edges == 0 and m3d_ok)}
+    return out
+
+
 def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name: str,
-             files: Iterable[str], verifier=None) -> str:
+             files: Iterable[str], verifier=None, read_back: dict | None = None) -> str:
     job = r.job
     plan = job.plan
     d = {
@@ -792,7 +864,7 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
                     "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
                    for h in range(plan.n_hinges)],
         "files": sorted(files),
-        "checks": {"meshes": rep.to_dict(), "tiles": tiles.to_dict() if tiles else None,
+        "checks": {"meshes": rep.to_dict(), "files": read_back, "tiles": tiles.to_dict() if tiles else None,
                    "verifier": verifier.to_dict() if verifier is not None else None},
     }
     if job.placements:
