@@ -29,7 +29,12 @@ def cmd_print(args: argparse.Namespace) -> int:
         strip_width_mm=args.strip_width, strip_reach_mm=args.strip_reach, gap_mm=args.gap,
         radial_clearance_mm=args.radial_clearance, axial_clearance_mm=args.axial_clearance,
     )
-    job = mesh.build_job(pattern, args.style, int(args.state), printer)
+    style = args.style
+    if style is None:
+        style, why = mesh.default_style(printer)
+        print(f"note: --style {style}: {why}", file=sys.stderr)
+    job = mesh.build_job(pattern, style, int(args.state), printer)
+    plan = mesh.print_plan(job)  # refuses a print the printer cannot make
     realised = mesh.realise_job(job)
     report = mesh.check_meshes(realised)
     tiles = None if job.style == "strips" else mesh.check_printed_tiles(realised)
@@ -82,7 +87,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     print(f"wrote {len(files)} files to {args.output}: {job.style}, closed state {job.state}, printer "
           f"{printer.name}, {len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
           f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance "
-          f"{'n/a' if report.min_clearance_mm is None else f'{report.min_clearance_mm:.3f} mm'}, "
+          f"{'n/a' if report.min_clearance_mm is None else f'{report.min_clearance_mm:.3f} mm'}, {plan}, "
           f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0
 
@@ -110,9 +115,10 @@ def _laser_files(pattern, job, args, stem: str) -> dict[str, bytes]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("print", help="3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)")
     p.add_argument("file", help="pattern.json (or design .obj)")
-    p.add_argument("--style", choices=mesh.STYLES, default="tiles-and-strips",
+    p.add_argument("--style", choices=mesh.STYLES, default=None,
                    help="strips: one flexible strip per hinge for laser-cut tiles; tiles-and-strips: rigid tiles "
-                        "with recessed flexible strips (two materials); pinned: print-in-place pin hinges")
+                        "with recessed flexible strips (two materials: needs two extruders); pinned: print-in-place "
+                        "pin hinges (default: tiles-and-strips on a multi-material printer, else strips)")
     p.add_argument("--state", choices=["1", "2"], default="1", help="closed state printed (default 1)")
     p.add_argument("--printer", metavar="NAME|FILE.json",
                    help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")

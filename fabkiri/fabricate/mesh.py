@@ -773,52 +773,56 @@ def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
 
 # ----------------------------------------------------------------- writing
 
-def export_3mf(scene) -> bytes:
-    """trimesh's 3MF with reproducible bytes: its random part UUIDs become
-    name-based ones from a counter, and zip entries get a fixed date."""
-    import uuid
-    import zipfile
-    from unittest import mock
+def _parts(bed: list[Body], tms: list) -> list:
+    from .threemf import Part
 
-    from trimesh.exchange import threemf
-
-    counter = iter(range(1 << 30))
-
-    def next_uuid():
-        return uuid.uuid5(uuid.NAMESPACE_URL, f"fabkiri:3mf:{next(counter)}")
-
-    with mock.patch.object(threemf.uuid, "uuid4", next_uuid):
-        raw = scene.export(file_type="3mf")
-    src = zipfile.ZipFile(io.BytesIO(raw))
-    out = io.BytesIO()
-    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as dst:
-        for info in src.infolist():
-            fixed = zipfile.ZipInfo(info.filename, date_time=(1980, 1, 1, 0, 0, 0))
-            fixed.compress_type = zipfile.ZIP_DEFLATED
-            fixed.external_attr = 0o644 << 16
-            dst.writestr(fixed, src.read(info.filename))
-    return out.getvalue()
+    return [Part(b.name, b.material, np.asarray(tm.vertices), np.asarray(tm.faces)) for b, tm in zip(bed, tms)]
 
 
 def job_files(r: Realised, stem: str) -> dict[str, bytes]:
-    """File name -> bytes of every mesh file of a job (STL per body kind and
-    per bed, one 3MF per bed with one named object per body)."""
+    """File name -> bytes of every mesh file of a job: per bed one 3MF project
+    (one object, one volume per body, see :mod:`.threemf`), and STLs (per body
+    kind for tiles-and-strips, per bed otherwise)."""
     import trimesh
+
+    from .threemf import project_3mf
 
     job = r.job
     files: dict[str, bytes] = {}
     for k, (bed, tms) in enumerate(zip(job.beds, r.meshes), 1):
         suffix = "" if len(job.beds) == 1 else f"-bed{k}"
-        scene = trimesh.Scene()
-        for b, tm in zip(bed, tms):
-            scene.add_geometry(tm, geom_name=b.name, node_name=b.name)
-        files[f"{stem}{suffix}.3mf"] = export_3mf(scene)
+        files[f"{stem}{suffix}.3mf"] = project_3mf(f"{stem}{suffix}", _parts(bed, tms), job.printer)
         if job.style == "tiles-and-strips":
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
-        else:
+        else:  # disjoint bodies: their concatenation is still a closed 2-manifold
             files[f"{stem}{suffix}.stl"] = trimesh.util.concatenate(tms).export(file_type="stl")
     return files
+
+
+def print_plan(job: PrintJob) -> str:
+    """How the job prints on its printer (one line for the user), or
+    :class:`FabricationError` when it cannot print there."""
+    pr = job.printer
+    mats = sorted({b.material for bed in job.beds for b in bed})
+    if len(mats) == 1:
+        return f"one material ({mats[0]}), extruder 1"
+    if pr.extruders >= 2:
+        return ", ".join(f"{m} on extruder {pr.extruder_of(m)}" for m in mats) + " (tool changes in one print)"
+    raise FabricationError(
+        f"printer {pr.name} has one extruder and {job.style} puts {' and '.join(mats)} in the same layers (the "
+        f"recessed strips share the tiles' bottom and top {pr.strip_thickness_mm:g} mm), which no pause or colour "
+        "change can split; use a multi-material printer (--printer prusa-xl-2t) or --style strips "
+        "(flexible strips to glue onto laser-cut tiles)"
+    )
+
+
+def default_style(printer: Printer) -> tuple[str, str]:
+    """The style ``fabkiri print`` uses when none is given, and why."""
+    if printer.extruders >= 2:
+        return "tiles-and-strips", f"printer {printer.name} has {printer.extruders} extruders"
+    return "strips", (f"printer {printer.name} has one extruder, and tiles-and-strips needs two materials in the "
+                      "same layers; printing the flexible strips alone (glue them onto laser-cut tiles: --marks)")
 
 
 def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
@@ -828,13 +832,17 @@ def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
     import manifold3d as m3d
     import trimesh
 
+    from .threemf import read_volumes
+
     out = {}
     for name, data in sorted(files.items()):
         ext = name.rsplit(".", 1)[-1]
         if ext not in ("stl", "3mf"):
             continue
-        loaded = trimesh.load(io.BytesIO(data), file_type=ext, process=True)
-        geoms = list(loaded.geometry.values()) if isinstance(loaded, trimesh.Scene) else [loaded]
+        if ext == "3mf":  # one object of several volumes (parts): each volume is a closed body
+            geoms = [trimesh.Trimesh(v, f, process=True) for _, _, _, v, f in read_volumes(data)]
+        else:
+            geoms = [trimesh.load(io.BytesIO(data), file_type=ext, process=True)]
         bad_edges, watertight, m3d_ok, volume = 0, True, True, 0.0
         for g in geoms:
             bad_edges += edge_defects(g.vertices, g.faces)
