@@ -34,6 +34,10 @@ def printer() -> Printer:
 
 
 def _reload_volumes(data: bytes, file_type: str) -> dict[str, float]:
+    if file_type == "3mf":  # one object, one volume per body
+        from fabkiri.fabricate.threemf import read_volumes
+
+        return {n: float(trimesh.Trimesh(v, f, process=False).volume) for n, _, _, v, f in read_volumes(data)}
     loaded = trimesh.load(io.BytesIO(data), file_type=file_type, process=False)
     if isinstance(loaded, trimesh.Scene):
         return {name: float(g.volume) for name, g in loaded.geometry.items()}
@@ -257,11 +261,11 @@ def test_strip_parts_on_beds(printer):
     # each part is its strip outline, moved rigidly and laid flat
     for h, (bed, pl) in enumerate(zip([b for bed in job.beds for b in bed], job.placements)):
         m = r.manifolds[pl["bed"] - 1][[b.name for b in job.beds[pl["bed"] - 1]].index(bed.name)]
-        # minus its engraved hinge ID, one layer deep
+        # minus its engraved hinge ID, two layers deep
         label = bed.ops[1][1].polygons[0] if len(bed.ops) > 1 else shapely.Polygon()
         assert h not in job.unlabelled and label.area > 1.0
         assert m.volume() == pytest.approx(job.strips.outline[h].area * printer.strip_thickness_mm
-                                           - label.area * printer.layer_mm, rel=1e-7)
+                                           - label.area * mesh.ENGRAVE_LAYERS * printer.layer_mm, rel=1e-7)
         lo, hi = m.bounding_box()[:3], m.bounding_box()[3:]
         assert lo[2] == pytest.approx(0.0) and hi[2] == pytest.approx(printer.strip_thickness_mm)
     files = mesh.job_files(r, "s")
@@ -360,8 +364,9 @@ def test_prusaslicer_slices_stl_and_3mf(tmp_path, printer):
 def test_cli_print_writes_everything(tmp_path, run_cli):
     src = tmp_path / "sq.json"
     write_pattern(with_contracted_states(standard_pattern(3, 3)), src)
-    code, out, err = run_cli("print", src, "--state", "2", "-o", tmp_path / "out")
+    code, out, err = run_cli("print", src, "--state", "2", "--printer", "prusa-xl-2t", "-o", tmp_path / "out")
     assert code == 0, err
+    assert "PLA on extruder 1, TPU on extruder 2" in err
     names = {p.name for p in (tmp_path / "out").iterdir()}
     assert names == {"sq.3mf", "sq_tiles.stl", "sq_hinges.stl", "manifest.json"}
     man = json.loads((tmp_path / "out" / "manifest.json").read_text())
@@ -373,6 +378,12 @@ def test_cli_print_writes_everything(tmp_path, run_cli):
             assert faces[h["coincides_with"]] != h["face"]
     assert out == ""
 
+    # a single-extruder printer: strips by default (saying why), tiles-and-strips refused with the reason
+    code, _, err = run_cli("print", src, "-o", tmp_path / "one")
+    assert code == 0 and "--style strips: printer prusa-mk4 has one extruder" in err
+    assert {p.name for p in (tmp_path / "one").iterdir()} == {"sq.3mf", "sq.stl", "manifest.json"}
+    code, _, err = run_cli("print", src, "--style", "tiles-and-strips", "-o", tmp_path / "bad")
+    assert code == 2 and "one extruder" in err and "prusa-xl-2t" in err and not (tmp_path / "bad").exists()
     code, _, err = run_cli("print", src, "--style", "strips", "--strip-width", "9", "-o", tmp_path / "bad")
     assert code == 2 and "strips of hinges" in err and not (tmp_path / "bad").exists()
     code, _, err = run_cli("print", src, "--printer", "nope", "-o", tmp_path / "bad")
@@ -412,7 +423,7 @@ def test_cli_strips_with_pad_marks_on_the_laser_files(tmp_path, run_cli):
     job = mesh.build_job(pat, "strips", 1, load_printer())
     pad_area = float(np.median(shapely.area(job.strips.pads)))
     assert areas[-1] < pad_area  # kept inside the tile's engraving margin
-    code, _, err = run_cli("print", src, "--marks", "-o", tmp_path / "bad")
+    code, _, err = run_cli("print", src, "--marks", "--printer", "prusa-xl-2t", "-o", tmp_path / "bad")
     assert code == 2 and "--style strips" in err and not (tmp_path / "bad").exists()
 
 
@@ -534,7 +545,7 @@ def test_pattern_closing_one_way_only_prints_that_way(tmp_path, run_cli):
 
     src = ref("contractible_design")
     code, _, err = run_cli("print", src, "--state", "2", "--scale", "10", "--strip-width", "1.5",
-                           "--strip-reach", "1.5", "-o", tmp_path / "ok")
+                           "--strip-reach", "1.5", "--printer", "prusa-xl-2t", "-o", tmp_path / "ok")
     assert code == 0, err
     assert "does not close" in err  # the reassembly into state 1 is reported as moot, not as a failure
     man = json.loads((tmp_path / "ok" / "manifest.json").read_text())

@@ -171,6 +171,7 @@ def tiles_and_strips(pattern: Pattern, state: int, printer: Printer) -> PrintJob
 
 LABEL_MAX_MM = 2.5  # cap height of a strip's engraved hinge ID
 LABEL_MIN_MM = 1.2  # smaller is not legible in 0.4 mm lines
+ENGRAVE_LAYERS = 2  # depth of a strip's engraved ID, in layers
 
 
 def hinge_label(strip: Polygon, text: str, printer: Printer) -> Polygon | None:
@@ -214,6 +215,11 @@ def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     strips = printgeom.strip_outlines(plan, printer)
     ts, gap = printer.strip_thickness_mm, printer.part_spacing_mm
     bx, by, _ = printer.bed_mm
+    depth = ENGRAVE_LAYERS * printer.layer_mm  # whole layers, so the slicer resolves the ID
+    if ts - depth < printer.first_layer_mm - 1e-9:
+        raise FabricationError(f"a {ts:g} mm strip cannot hold an ID engraved {ENGRAVE_LAYERS} layers "
+                               f"({depth:g} mm) deep above a {printer.first_layer_mm:g} mm first layer; "
+                               "raise --strip-thickness")
     beds: list[list[Body]] = [[]]
     placements = []
     x = y = row_h = gap
@@ -235,7 +241,7 @@ def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
         ops = [("add", Prism((placed,), 0.0, ts))]
         label = hinge_label(placed, str(h), printer)
         if label is not None:
-            ops.append(("sub", Prism((label,), ts - printer.layer_mm, ts + 1.0)))
+            ops.append(("sub", Prism((label,), ts - depth, ts + 1.0)))
         else:
             unlabelled.append(h)
         beds[-1].append(Body(name, "hinge", tuple(ops), printer.strip_material))

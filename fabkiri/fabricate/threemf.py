@@ -12,7 +12,7 @@ settings the geometry depends on (bed, nozzle, layer heights, one filament per
 extruder), so slicing the file as it is gives the intended print.
 
 Bytes are deterministic: fixed zip dates, no UUIDs, vertices written with
-``repr``-stable float32 formatting.
+coordinates rounded to 1 nm.
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ class LayerChange:
 
 
 def _fmt(a: np.ndarray) -> list[str]:
-    return [np.format_float_positional(float(v), precision=7, trim="-") for v in a]
+    return [np.format_float_positional(float(v), precision=6, trim="-") for v in a]  # 1 nm
 
 
 def model_xml(object_name: str, parts: list[Part]) -> str:
@@ -81,7 +81,7 @@ def model_xml(object_name: str, parts: list[Part]) -> str:
     offset = 0
     tris = []
     for p in parts:
-        v = np.asarray(p.vertices, dtype=np.float32)
+        v = np.asarray(p.vertices, dtype=np.float64)
         xs, ys, zs = _fmt(v[:, 0]), _fmt(v[:, 1]), _fmt(v[:, 2])
         out.extend(f'     <vertex x="{x}" y="{y}" z="{z}"/>\n' for x, y, z in zip(xs, ys, zs))
         k = mats.index(p.material)
