@@ -785,12 +785,13 @@ def _parts(bed: list[Body], tms: list) -> list:
     return [Part(b.name, b.material, np.asarray(tm.vertices), np.asarray(tm.faces)) for b, tm in zip(bed, tms)]
 
 
-def job_files(r: Realised, stem: str) -> dict[str, bytes]:
-    """File name -> bytes of every mesh file of a job: per bed one 3MF project
-    (one object, one volume per body, see :mod:`.threemf`), and STLs (per body
-    kind for tiles-and-strips, per bed otherwise)."""
+def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
+    """File name -> bytes of every file of a job: per bed one 3MF project (one
+    object, one volume per body, see :mod:`.threemf`) and a preview PNG, and
+    STLs (per body kind for tiles-and-strips, per bed otherwise)."""
     import trimesh
 
+    from .printpreview import preview_png
     from .threemf import project_3mf
 
     job = r.job
@@ -798,6 +799,9 @@ def job_files(r: Realised, stem: str) -> dict[str, bytes]:
     for k, (bed, tms) in enumerate(zip(job.beds, r.meshes), 1):
         suffix = "" if len(job.beds) == 1 else f"-bed{k}"
         files[f"{stem}{suffix}.3mf"] = project_3mf(f"{stem}{suffix}", _parts(bed, tms), job.printer)
+        if preview:
+            files[f"{stem}{suffix}.png"] = preview_png(bed, r.manifolds[k - 1], job.printer,
+                                                       f"{stem}{suffix} ({job.style})")
         if job.style == "tiles-and-strips":
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
