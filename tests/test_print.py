@@ -348,8 +348,9 @@ SLICER_WARNINGS = ("empty layer", "outside", "could not fit", "not printable", "
 def _gcode_xy_extent(text: str) -> tuple[float, float, float, float]:
     import re
 
-    xs = [float(v) for v in re.findall(r"^G1 [^;\n]*X(-?[\d.]+)", text, flags=re.M)]
-    ys = [float(v) for v in re.findall(r"^G1 [^;\n]*Y(-?[\d.]+)", text, flags=re.M)]
+    body = text[text.index(";LAYER_CHANGE"):]  # the print itself, not the start/end moves
+    moves = re.findall(r"^G1 X(-?[\d.]+) Y(-?[\d.]+) E", body, flags=re.M)  # extrusions
+    xs, ys = [float(x) for x, _ in moves], [float(y) for _, y in moves]
     return min(xs), min(ys), max(xs), max(ys)
 
 
