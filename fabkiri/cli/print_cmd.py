@@ -33,7 +33,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     if style is None:
         style, why = mesh.default_style(printer)
         print(f"note: --style {style}: {why}", file=sys.stderr)
-    job = mesh.build_job(pattern, style, int(args.state), printer)
+    job = mesh.build_job(pattern, style, int(args.state), printer, advise_scale=args.scale)
     plan = mesh.print_plan(job)  # refuses a print the printer cannot make
     realised = mesh.realise_job(job)
     report = mesh.check_meshes(realised)

@@ -316,11 +316,82 @@ def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     return PrintJob("pinned", state, printer, plan, beds, (dx, dy), pins=pins)
 
 
-def build_job(pattern: Pattern, style: str, state: int, printer: Printer) -> PrintJob:
+def scaled(pattern: Pattern, k: float) -> Pattern:
+    """The pattern ``k`` times its size (nodes and stored closed states)."""
+    return replace(pattern, nodes=pattern.nodes * k, contracted={s: c * k for s, c in pattern.contracted.items()})
+
+
+def _pinned_plans(pattern: Pattern, state: int, printer: Printer) -> str | None:
+    """Why pinned hinges cannot be printed at this size on this bed (``None``: they can)."""
+    try:
+        plan = printgeom.closed_plan(pattern, state, printer)
+        printgeom.pin_plan(pattern, plan, printer)
+        _fits(plan.bounds, printer, "the closed pattern")
+    except FabricationError as exc:
+        return str(exc)
+    return None
+
+
+def pinned_scale_range(pattern: Pattern, state: int, printer: Printer, step: float = 0.01
+                       ) -> tuple[float, float] | None:
+    """The smallest scale factor (to ``step``) at which the pattern prints pinned on
+    the printer's bed, and the largest that fits the bed; ``None`` if none does.
+
+    The refusals that depend on size (pivots too close, ears reaching foreign
+    tiles, slivers beside a clearance) ease as the pattern grows, until it no
+    longer fits the bed: bisect between the given size and the largest that fits."""
+    c = printgeom.closed_corners(pattern, state).reshape(-1, 2)
+    (x0, y0), (x1, y1) = c.min(0), c.max(0)
+    bx, by, _ = printer.bed_mm
+    kmax = np.floor(min(bx / (x1 - x0), by / (y1 - y0)) / step) * step  # the shrunk tiles fit inside
+    if _pinned_plans(scaled(pattern, kmax), state, printer) is not None:
+        return None
+    lo, hi = step, kmax  # lo: fails or below every feasible size
+    if _pinned_plans(scaled(pattern, lo), state, printer) is None:
+        return lo, kmax
+    while hi - lo > step * 0.999:
+        mid = np.round(0.5 * (lo + hi) / step) * step
+        if mid in (lo, hi):
+            break
+        if _pinned_plans(scaled(pattern, mid), state, printer) is None:
+            hi = mid
+        else:
+            lo = mid
+    return float(hi), float(kmax)
+
+
+def pinned_advice(pattern: Pattern, state: int, printer: Printer, scale: float = 1.0) -> str:
+    """Which ``--scale`` prints the pattern pinned on this printer (``scale``: the
+    factor already applied to ``pattern``)."""
+    try:
+        rng = pinned_scale_range(pattern, state, printer)
+    except FabricationError as exc:
+        return f"no scale was searched ({exc})"
+    bx, by, _ = printer.bed_mm
+    if rng is None:
+        c = printgeom.closed_corners(pattern, state).reshape(-1, 2)
+        kmax = min(bx / np.ptp(c[:, 0]), by / np.ptp(c[:, 1]))
+        why = _pinned_plans(scaled(pattern, np.floor(kmax * 100) / 100), state, printer)
+        return (f"no scale prints it pinned on the {bx:g} x {by:g} mm bed of {printer.name}: at the largest that "
+                f"fits ({scale * kmax:.2f}x) {why}")
+    lo, hi = rng
+    return (f"it prints pinned on the {bx:g} x {by:g} mm bed of {printer.name} from --scale {scale * lo:.2f} "
+            f"to {scale * hi:.2f}")
+
+
+def build_job(pattern: Pattern, style: str, state: int, printer: Printer, advise_scale: float | None = None
+              ) -> PrintJob:
+    """The print job of a style; with ``advise_scale`` (the scale the pattern was
+    given at) a refused pinned job names the scales that print on this bed."""
     if style not in STYLES:
         raise FabricationError(f"unknown print style {style!r}; choose one of {', '.join(STYLES)}")
-    return {"strips": strips_only, "tiles-and-strips": tiles_and_strips, "pinned": pinned}[style](
-        pattern, state, printer)
+    try:
+        return {"strips": strips_only, "tiles-and-strips": tiles_and_strips, "pinned": pinned}[style](
+            pattern, state, printer)
+    except FabricationError as exc:
+        if style != "pinned" or advise_scale is None:
+            raise
+        raise FabricationError(f"{exc}; {pinned_advice(pattern, state, printer, advise_scale)}") from None
 
 
 # ------------------------------------------------------------------ checks

@@ -146,7 +146,7 @@ def project_config(printer: Printer, loaded: list[str]) -> dict[str, str]:
         "pause_print_gcode": "M601",
         "color_change_gcode": "M600",
         "perimeters": "2",
-        "skirts": "1",
+        "skirts": "0",  # a skirt round a full bed of strips would run off it
         "wipe_tower": "1" if n > 1 else "0",
     }
     if n > 1:  # the wipe tower in the bed's front-left corner, clear of the centred parts
