@@ -61,6 +61,66 @@ def test_presets_load_and_validate(printer):
     assert printer.with_overrides(strip_width_mm=None) == printer
 
 
+def test_multi_material_preset_and_extruders():
+    xl2 = load_printer("prusa-xl-2t")
+    assert xl2.extruders == 2 and xl2.materials == ("PLA", "TPU")
+    assert (xl2.extruder_of("PLA"), xl2.extruder_of("TPU")) == (1, 2)
+    mk4 = load_printer("prusa-mk4")
+    assert mk4.extruders == 1 and mk4.extruder_of("TPU") == 1  # one extruder, loaded for the job
+    assert all(load_printer(n).first_layer_mm > 0 and load_printer(n).min_feature_mm > 0 for n in available_printers())
+    with pytest.raises(FabricationError, match="one material per extruder"):
+        xl2.with_overrides(materials=("PLA",))
+    with pytest.raises(FabricationError, match="among the extruders' materials"):
+        xl2.with_overrides(materials=("PLA", "PETG"))
+    with pytest.raises(FabricationError, match="extruders must be"):
+        mk4.with_overrides(extruders=0)
+    with pytest.raises(FabricationError, match="unknown material"):
+        mk4.with_overrides(tile_material="wood")
+
+
+def test_3mf_project_volumes_materials_and_settings():
+    from fabkiri.fabricate import threemf
+
+    pr = load_printer("prusa-xl-2t")
+    r = mesh.realise_job(mesh.build_job(standard_pattern(3, 3), "tiles-and-strips", 1, pr))
+    data = mesh.job_files(r, "k")["k.3mf"]
+    zf = zipfile.ZipFile(io.BytesIO(data))
+    model = zf.read("3D/3dmodel.model").decode()
+    assert model.count("<object ") == 1 and model.count("<item ") == 1  # one object: the assembly
+    assert '<base name="PLA"' in model and '<base name="TPU"' in model
+    vols = threemf.read_volumes(data)
+    assert [(n, m, e) for n, m, e, _, _ in vols] == [("tiles_PLA", "PLA", 1), ("hinges_TPU", "TPU", 2)]
+    for (_, _, _, v, f), tm in zip(vols, r.meshes[0]):  # each volume is its body, watertight
+        back = trimesh.Trimesh(v, f, process=True)
+        assert back.is_watertight and mesh.edge_defects(back.vertices, back.faces) == 0
+        assert back.volume == pytest.approx(tm.volume, rel=1e-6)
+    cfg = zf.read("Metadata/Slic3r_PE.config").decode()
+    for line in ("; layer_height = 0.2", "; first_layer_height = 0.2", "; nozzle_diameter = 0.4,0.4",
+                 "; filament_type = PLA;FLEX", "; bed_shape = 0x0,360x0,360x360,0x360", "; wipe_tower = 1"):
+        assert line in cfg
+    # placed centred on the bed
+    lo = np.min([v.min(0) for _, _, _, v, _ in vols], axis=0)
+    hi = np.max([v.max(0) for _, _, _, v, _ in vols], axis=0)
+    assert np.allclose(0.5 * (lo + hi)[:2], [180.0, 180.0], atol=1e-6) and lo[2] == pytest.approx(0.0)
+    # the custom G-code table PrusaSlicer reads (M600 colour change / M601 pause at a height)
+    xml = threemf.custom_gcode_xml([threemf.LayerChange(0.8, "colour-change", "PLA"),
+                                    threemf.LayerChange(3.2, "pause", "TPU")])
+    assert '<code print_z="0.8000" type="0"' in xml and 'gcode="M600"' in xml
+    assert '<code print_z="3.2000" type="1"' in xml and 'gcode="M601"' in xml
+    assert '<mode value="SingleExtruder"/>' in xml
+
+
+def test_preview_png_per_bed(tmp_path, printer):
+    from PIL import Image
+
+    files = mesh.job_files(mesh.realise_job(mesh.build_job(standard_pattern(3, 3), "strips", 1, printer)), "p")
+    img = Image.open(io.BytesIO(files["p.png"]))
+    assert img.size[0] > 1000 and img.size[1] > 500
+    # the parts are drawn in the strip material's colour
+    tpu = tuple(int(printer_colour, 16) for printer_colour in ("F1", "C2", "32"))
+    assert tpu in {c for _, c in img.convert("RGB").getcolors(1 << 20)}
+
+
 def test_printer_preset_files(tmp_path):
     good = json.loads((REPO / "templates" / "printers" / "prusa-mk4.json").read_text())
     path = tmp_path / "mine.json"
@@ -185,7 +245,7 @@ def test_files_reload_with_the_same_volumes_and_names(printer):
     pat = standard_pattern(3, 4)
     r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer))
     files = mesh.job_files(r, "k")
-    assert set(files) == {"k.3mf", "k_tiles.stl", "k_hinges.stl"}
+    assert set(files) == {"k.3mf", "k.png", "k_tiles.stl", "k_hinges.stl"}
     vols = {b.name: m.volume() for b, m in zip(r.job.beds[0], r.manifolds[0])}
     got = _reload_volumes(files["k.3mf"], "3mf")
     assert set(got) == {"tiles_PLA", "hinges_TPU"}
@@ -301,6 +361,29 @@ def test_pinned_hinges(printer):
         assert len(ring_b) >= 2  # outline plus the pin hole
 
 
+def test_pinned_refusal_names_the_scales_that_print():
+    """The scale range offered for a refused pinned print is measured: one step
+    below its start the plan is refused, at its start it plans, at its end it fits
+    the bed and one step beyond it does not."""
+    from fabkiri.pattern.io import read_pattern
+
+    pat = read_pattern(REPO / "templates" / "patterns" / "square-circle-9x9-rigid.json")
+    pr = load_printer("prusa-mk4")
+    lo, hi = mesh.pinned_scale_range(pat, 1, pr)
+    assert 0.5 < lo < hi
+    assert mesh._pinned_plans(mesh.scaled(pat, lo), 1, pr) is None
+    assert mesh._pinned_plans(mesh.scaled(pat, lo - 0.01), 1, pr) is not None
+    assert mesh._pinned_plans(mesh.scaled(pat, hi), 1, pr) is None
+    assert "does not fit" in mesh._pinned_plans(mesh.scaled(pat, hi + 0.02), 1, pr)
+    # the CLI's message for the pattern given at --scale 0.5 (refused: pivots too close)
+    half = mesh.scaled(pat, 0.5)
+    lo2, hi2 = mesh.pinned_scale_range(half, 1, pr)
+    assert abs(0.5 * lo2 - lo) <= 0.01 and abs(0.5 * hi2 - hi) <= 0.01
+    with pytest.raises(FabricationError, match=rf"prints pinned on the 250 x 210 mm bed of prusa-mk4 from --scale "
+                                               rf"{0.5 * lo2:.2f} to {0.5 * hi2:.2f}"):
+        mesh.build_job(half, "pinned", 1, pr, advise_scale=0.5)
+
+
 def test_pinned_refusals(printer):
     with pytest.raises(FabricationError, match="pivots .* apart"):
         mesh.build_job(standard_pattern(3, 3, tile_size=5.0), "pinned", 1, printer)
@@ -396,8 +479,10 @@ def test_prusaslicer_slices_the_written_3mf_as_it_is(style, preset, template, tm
         if style == "tiles-and-strips":  # two tools, both materials, tool changes
             assert "; filament_type = PLA;FLEX" in text and tools == {"T0", "T1"}
             assert len(used) == 2 and min(used) > 0
-        else:  # one material: one tool, no pause or colour change needed
-            assert sum(u > 0 for u in used) == 1 and "T1" not in tools
+        else:  # one material, on its own tool; no pause or colour change needed
+            mat = pr.strip_material if style == "strips" else pr.tile_material
+            k = pr.extruder_of(mat)
+            assert [i + 1 for i, u in enumerate(used) if u > 0] == [k] and tools <= {f"T{k - 1}"}
             assert "\nM600" not in text and "\nM601" not in text
 
 

@@ -429,11 +429,12 @@ class Realised:
 def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> int:
     """Edges not used by exactly two faces, plus faces with a repeated vertex,
     once the vertices are welded by position, as any STL reader does."""
-    _, weld = np.unique(np.asarray(vertices), axis=0, return_inverse=True)
+    v = np.ascontiguousarray(vertices)
+    _, weld = np.unique(v.view(np.dtype((np.void, 3 * v.dtype.itemsize))).ravel(), return_inverse=True)
     f = weld.reshape(-1)[np.asarray(faces)]
     degenerate = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
-    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(e, axis=0, return_counts=True)
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1).astype(np.int64)
+    _, counts = np.unique(e[:, 0] * (int(weld.max(initial=0)) + 1) + e[:, 1], return_counts=True)
     return int((counts != 2).sum() + degenerate.sum())
 
 

@@ -63,8 +63,9 @@ class LayerChange:
     material: str
 
 
-def _fmt(a: np.ndarray) -> list[str]:
-    return [np.format_float_positional(float(v), precision=6, trim="-") for v in a]  # 1 nm
+def _rows(fmt: str, a: np.ndarray) -> str:
+    line = fmt + "\n"
+    return "".join(map(line.__mod__, map(tuple, a.tolist())))
 
 
 def model_xml(object_name: str, parts: list[Part]) -> str:
@@ -81,12 +82,11 @@ def model_xml(object_name: str, parts: list[Part]) -> str:
     offset = 0
     tris = []
     for p in parts:
-        v = np.asarray(p.vertices, dtype=np.float64)
-        xs, ys, zs = _fmt(v[:, 0]), _fmt(v[:, 1]), _fmt(v[:, 2])
-        out.extend(f'     <vertex x="{x}" y="{y}" z="{z}"/>\n' for x, y, z in zip(xs, ys, zs))
+        v = np.round(np.asarray(p.vertices, dtype=np.float64), 6) + 0.0  # 1 nm; + 0.0 turns -0 into 0
+        out.append(_rows('     <vertex x="%.6f" y="%.6f" z="%.6f"/>', v))
         k = mats.index(p.material)
         f = np.asarray(p.faces, dtype=np.int64) + offset
-        tris.extend(f'     <triangle v1="{a}" v2="{b}" v3="{c}" pid="1" p1="{k}"/>\n' for a, b, c in f.tolist())
+        tris.append(_rows(f'     <triangle v1="%d" v2="%d" v3="%d" pid="1" p1="{k}"/>', f))
         offset += len(v)
     out.append('    </vertices>\n    <triangles>\n')
     out.extend(tris)
@@ -198,17 +198,20 @@ def read_volumes(data: bytes) -> list[tuple[str, str, int, np.ndarray, np.ndarra
     """Per volume of a project 3MF as written: (name, material, extruder,
     vertices, faces), split by the model config's triangle ranges and
     checked against the triangles' basematerials."""
+    import re
+
     from lxml import etree
 
     zf = zipfile.ZipFile(io.BytesIO(data))
-    ns = {"m": CORE_NS}
-    model = etree.fromstring(zf.read("3D/3dmodel.model"))
-    bases = [b.get("name") for b in model.findall(".//m:basematerials/m:base", ns)]
-    obj = model.find(".//m:object", ns)
-    v = np.array([[float(e.get(k)) for k in "xyz"] for e in obj.iterfind(".//m:vertex", ns)])
-    tri = obj.findall(".//m:triangle", ns)
-    f = np.array([[int(e.get(k)) for k in ("v1", "v2", "v3")] for e in tri], dtype=np.int64)
-    mat = np.array([int(e.get("p1", obj.get("pindex", "0"))) for e in tri], dtype=np.int64)
+    text = zf.read("3D/3dmodel.model").decode("utf-8")
+    if text.count("<object ") != 1:
+        raise ValueError("a fabkiri 3MF project holds exactly one object")
+    bases = re.findall(r'<base name="([^"]*)"', text)
+    v = np.array(re.findall(r'<vertex x="([^"]+)" y="([^"]+)" z="([^"]+)"', text), dtype=float)
+    t = np.array(re.findall(r'<triangle v1="(\d+)" v2="(\d+)" v3="(\d+)" pid="1" p1="(\d+)"', text), dtype=np.int64)
+    if len(t) != text.count("<triangle "):
+        raise ValueError("triangles without their basematerial")
+    f, mat = t[:, :3], t[:, 3]
     cfg = etree.fromstring(zf.read("Metadata/Slic3r_PE_model.config"))
     out = []
     for vol in cfg.iter("volume"):
