@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -31,6 +32,12 @@ REPO = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def printer() -> Printer:
     return load_printer("prusa-mk4")
+
+
+@pytest.fixture(scope="module")
+def printer2() -> Printer:
+    """Two extruders: tiles-and-strips recessed (strips flush in pockets)."""
+    return load_printer("prusa-xl-2t")
 
 
 def _reload_volumes(data: bytes, file_type: str) -> dict[str, float]:
@@ -190,20 +197,20 @@ def test_strips_cross_their_seam_and_join_only_their_tiles(printer):
 # --------------------------------------------------------- tiles-and-strips
 
 @pytest.mark.parametrize("rows,cols,state", [(3, 3, 1), (2, 5, 2)])
-def test_tiles_and_strips_meshes(rows, cols, state, printer):
+def test_tiles_and_strips_meshes(rows, cols, state, printer2):
     pat = standard_pattern(rows, cols, tile_size=11.0, angle_deg=30.0)
-    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer))
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer2))
     rep = mesh.check_meshes(r)
     assert rep.ok, rep.problems
     assert all(b["watertight"] and b["winding_consistent"] for b in rep.bodies)
     tiles, hinges = r.manifolds[0]
     assert (tiles ^ hinges).volume() == pytest.approx(0.0, abs=1e-6)
-    assert rep.min_clearance_mm >= printer.radial_clearance_mm
+    assert rep.min_clearance_mm >= printer2.radial_clearance_mm
     # one connected body per tile and per strip
     assert len(tiles.decompose()) == rows * cols
     assert len(hinges.decompose()) == pat.topology.n_hinges
     # strips are exactly as thick as the preset and flush with the tile faces
-    T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
+    T, ts = printer2.tile_thickness_mm, printer2.strip_thickness_mm
     assert hinges.volume() == pytest.approx(ts * shapely.area(r.job.strips.outline).sum(), rel=1e-9)
     assert tiles.volume() + hinges.volume() == pytest.approx(
         T * shapely.area(r.job.plan.tiles).sum() + _bridge_volume(r), rel=1e-7)
@@ -215,13 +222,13 @@ def test_tiles_and_strips_meshes(rows, cols, state, printer):
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(rows=st.integers(1, 5), cols=st.integers(2, 5), state=st.sampled_from([1, 2]),
        tile=st.floats(9.0, 20.0), angle=st.floats(5, 85))
-def test_tiles_and_strips_invariants(rows, cols, state, tile, angle, printer):
+def test_tiles_and_strips_invariants(rows, cols, state, tile, angle, printer2):
     pat = standard_pattern(rows, cols, tile_size=tile, angle_deg=angle)
-    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer))
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer2))
     rep = mesh.check_meshes(r)
     assert rep.ok, rep.problems
     assert rep.intersection_volume_mm3 <= 1e-6
-    assert rep.min_clearance_mm >= printer.radial_clearance_mm - 1e-6
+    assert rep.min_clearance_mm >= printer2.radial_clearance_mm - 1e-6
     assert mesh.check_printed_tiles(r).ok
 
 
@@ -234,6 +241,37 @@ def test_pinned_in_either_state(state, printer):
     assert mesh.check_printed_tiles(r).ok
 
 
+def test_stacked_tiles_and_strips_for_one_extruder(printer):
+    """One extruder: a flexible base sheet, rigid tiles on it, top strips on
+    them; every layer holds one material and the colour changes fall on the
+    first layer of each material; the verifier passes on the printed tiles."""
+    pat = standard_pattern(3, 4, tile_size=11.0, angle_deg=30.0)
+    job = mesh.build_job(pat, "tiles-and-strips", 1, printer)
+    assert job.layout == "stacked" and printer.extruders == 1
+    T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
+    assert job.layer_changes == [(pytest.approx(ts + printer.layer_mm), "colour-change", "PLA"),
+                                 (pytest.approx(T + printer.layer_mm), "colour-change", "TPU")]
+    r = mesh.realise_job(job)
+    rep = mesh.check_meshes(r)
+    assert rep.ok, rep.problems
+    tiles, hinges = r.manifolds[0]
+    for z in np.arange(0.1, T + ts, 0.2):  # one material per layer
+        has_t, has_h = bool(tiles.slice(z).area()), bool(hinges.slice(z).area())
+        assert has_t != has_h and has_t == (ts < z < T)
+    # the base sheet is every tile plus the bottom strips; the top strips lie on the tiles
+    bottom = shapely.union_all(list(job.plan.tiles) + list(job.strips.outline[~job.strips.top]))
+    assert hinges.volume() == pytest.approx(ts * (bottom.area + shapely.area(job.strips.outline[job.strips.top]).sum()),
+                                            rel=1e-6)
+    assert tiles.volume() == pytest.approx((T - ts) * shapely.area(job.plan.tiles).sum(), rel=1e-7)
+    assert mesh.check_printed_tiles(r).ok
+    vr = mesh.verify_printed_tiles(pat, r)
+    assert vr.ok, vr.to_text()
+    assert vr.get("layout: (d) every hinge present").value == 0
+    files = mesh.job_files(r, "k")
+    assert b"Prusa_Slicer_custom_gcode_per_print_z.xml" in files["k.3mf"]
+    assert all(v["ok"] for v in mesh.read_back_files(files).values())
+
+
 def _bridge_volume(r) -> float:
     """Strip volume outside the tiles (over the gaps)."""
     s = r.job.strips.outline
@@ -241,9 +279,9 @@ def _bridge_volume(r) -> float:
     return float(r.job.printer.strip_thickness_mm * (shapely.area(s) - inside).sum())
 
 
-def test_files_reload_with_the_same_volumes_and_names(printer):
+def test_files_reload_with_the_same_volumes_and_names(printer2):
     pat = standard_pattern(3, 4)
-    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer))
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer2))
     files = mesh.job_files(r, "k")
     assert set(files) == {"k.3mf", "k.png", "k_tiles.stl", "k_hinges.stl"}
     vols = {b.name: m.volume() for b, m in zip(r.job.beds[0], r.manifolds[0])}
@@ -270,20 +308,20 @@ def test_files_reload_with_the_same_volumes_and_names(printer):
     bigger = standard_pattern(3, 4, tile_size=10.5)
     assert not mesh.verify_printed_tiles(bigger, r, tiles_mesh=stl).ok
     # reproducible bytes
-    again = mesh.job_files(mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer)), "k")
+    again = mesh.job_files(mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer2)), "k")
     assert again == files
     assert all(i.date_time == (1980, 1, 1, 0, 0, 0) for i in zipfile.ZipFile(io.BytesIO(files["k.3mf"])).infolist())
 
 
 @pytest.mark.parametrize("shift,passes", [(0.3, True), (0.5, False)])
-def test_tile_check_measures_the_deviation(shift, passes, printer):
+def test_tile_check_measures_the_deviation(shift, passes, printer2):
     """A design tile moved by ``shift`` mm: the printed tiles deviate by exactly that,
     against the printer's tolerance (half the gap plus half a nozzle = 0.4 mm)."""
     pat = standard_pattern(3, 3, angle_deg=30.0)
-    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer))
+    r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer2))
     corners = r.job.plan.corners.copy()
     corners[4] += [shift, 0.0]
-    fake = mesh.Realised(job=mesh.PrintJob("tiles-and-strips", 1, printer,
+    fake = mesh.Realised(job=mesh.PrintJob("tiles-and-strips", 1, printer2,
                                            printgeom.ClosedPlan(**{**r.job.plan.__dict__, "corners": corners}),
                                            r.job.beds, r.job.shift, r.job.strips), manifolds=r.manifolds,
                          meshes=r.meshes)
@@ -405,12 +443,12 @@ def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
 
 # -------------------------------------------------------------------- STEP
 
-def test_step_has_the_same_volume(tmp_path, printer):
+def test_step_has_the_same_volume(tmp_path, printer2):
     pytest.importorskip("build123d")
     from fabkiri.fabricate import cad
 
     pat = standard_pattern(2, 2)
-    job = mesh.build_job(pat, "tiles-and-strips", 1, printer)
+    job = mesh.build_job(pat, "tiles-and-strips", 1, printer2)
     r = mesh.realise_job(job)
     data = cad.step_bytes(job.beds[0])
     assert b"1970-01-01T00:00:00" in data
@@ -430,8 +468,6 @@ SLICER_WARNINGS = ("empty layer", "outside", "could not fit", "not printable", "
 
 
 def _gcode_xy_extent(text: str) -> tuple[float, float, float, float]:
-    import re
-
     body = text[text.index(";LAYER_CHANGE"):]  # the print itself, not the start/end moves
     moves = re.findall(r"^G1 X(-?[\d.]+) Y(-?[\d.]+) E", body, flags=re.M)  # extrusions
     xs, ys = [float(x) for x, _ in moves], [float(y) for _, y in moves]
@@ -455,9 +491,6 @@ def test_prusaslicer_slices_the_written_3mf_as_it_is(style, preset, template, tm
     code, _, err = run_cli("print", src, "--style", style, "--printer", preset, "--scale",
                            str(SLICER_TEMPLATES.get(template, 1.0)), "-o", tmp_path / "out")
     pr = load_printer(preset)
-    if style == "tiles-and-strips" and pr.extruders == 1:  # two materials in the same layers: refused, saying why
-        assert code == 2 and "one extruder" in err and not (tmp_path / "out").exists()
-        return
     assert code == 0, err
     man = json.loads((tmp_path / "out" / "manifest.json").read_text())
     assert all(v["ok"] and v["edges_not_shared_by_two_faces"] == 0 for v in man["checks"]["files"].values())
@@ -476,9 +509,14 @@ def test_prusaslicer_slices_the_written_3mf_as_it_is(style, preset, template, tm
         assert x0 >= 0 and y0 >= 0 and x1 <= pr.bed_mm[0] and y1 <= pr.bed_mm[1]
         used = [float(v) for v in text.split("; filament used [mm] = ")[1].split("\n")[0].split(",")]
         tools = {ln.strip() for ln in text.splitlines() if ln.strip() in ("T0", "T1")}
-        if style == "tiles-and-strips":  # two tools, both materials, tool changes
+        if style == "tiles-and-strips" and pr.extruders == 2:  # two tools, both materials, tool changes
             assert "; filament_type = PLA;FLEX" in text and tools == {"T0", "T1"}
             assert len(used) == 2 and min(used) > 0
+        elif style == "tiles-and-strips":  # one extruder: colour changes at the first layer of each material
+            T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
+            heights = [float(z) for z in re.findall(r"^G1 Z([\d.]+)[^\n]*\n(?:[^\n]*\n){0,3}?M600", text, flags=re.M)]
+            assert heights == [pytest.approx(ts + pr.layer_mm), pytest.approx(T + pr.layer_mm)], heights
+            assert "\nM601" not in text and "T1" not in tools
         else:  # one material, on its own tool; no pause or colour change needed
             mat = pr.strip_material if style == "strips" else pr.tile_material
             k = pr.extruder_of(mat)
@@ -495,7 +533,7 @@ def test_cli_print_writes_everything(tmp_path, run_cli):
     assert code == 0, err
     assert "PLA on extruder 1, TPU on extruder 2" in err
     names = {p.name for p in (tmp_path / "out").iterdir()}
-    assert names == {"sq.3mf", "sq_tiles.stl", "sq_hinges.stl", "manifest.json"}
+    assert names == {"sq.3mf", "sq.png", "sq_tiles.stl", "sq_hinges.stl", "manifest.json"}
     man = json.loads((tmp_path / "out" / "manifest.json").read_text())
     assert man["style"] == "tiles-and-strips" and man["state"] == 2
     assert man["checks"]["meshes"]["ok"] and man["checks"]["tiles"]["ok"]
@@ -505,12 +543,13 @@ def test_cli_print_writes_everything(tmp_path, run_cli):
             assert faces[h["coincides_with"]] != h["face"]
     assert out == ""
 
-    # a single-extruder printer: strips by default (saying why), tiles-and-strips refused with the reason
+    # a single-extruder printer: stacked, with the colour changes named
     code, _, err = run_cli("print", src, "-o", tmp_path / "one")
-    assert code == 0 and "--style strips: printer prusa-mk4 has one extruder" in err
-    assert {p.name for p in (tmp_path / "one").iterdir()} == {"sq.3mf", "sq.stl", "manifest.json"}
-    code, _, err = run_cli("print", src, "--style", "tiles-and-strips", "-o", tmp_path / "bad")
-    assert code == 2 and "one extruder" in err and "prusa-xl-2t" in err and not (tmp_path / "bad").exists()
+    assert code == 0 and "one extruder: tiles-and-strips stacked" in err and "z = 0.80 mm (load PLA)" in err
+    assert {p.name for p in (tmp_path / "one").iterdir()} == {"sq.3mf", "sq.png", "sq_tiles.stl", "sq_hinges.stl",
+                                                              "manifest.json"}
+    one = json.loads((tmp_path / "one" / "manifest.json").read_text())
+    assert one["layout"] == "stacked" and [c["print_z_mm"] for c in one["layer_changes"]] == [0.8, 3.2]
     code, _, err = run_cli("print", src, "--style", "strips", "--strip-width", "9", "-o", tmp_path / "bad")
     assert code == 2 and "strips of hinges" in err and not (tmp_path / "bad").exists()
     code, _, err = run_cli("print", src, "--printer", "nope", "-o", tmp_path / "bad")

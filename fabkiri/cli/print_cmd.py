@@ -29,11 +29,7 @@ def cmd_print(args: argparse.Namespace) -> int:
         strip_width_mm=args.strip_width, strip_reach_mm=args.strip_reach, gap_mm=args.gap,
         radial_clearance_mm=args.radial_clearance, axial_clearance_mm=args.axial_clearance,
     )
-    style = args.style
-    if style is None:
-        style, why = mesh.default_style(printer)
-        print(f"note: --style {style}: {why}", file=sys.stderr)
-    job = mesh.build_job(pattern, style, int(args.state), printer, advise_scale=args.scale)
+    job = mesh.build_job(pattern, args.style, int(args.state), printer, advise_scale=args.scale)
     plan = mesh.print_plan(job)  # refuses a print the printer cannot make
     realised = mesh.realise_job(job)
     report = mesh.check_meshes(realised)
@@ -115,10 +111,10 @@ def _laser_files(pattern, job, args, stem: str) -> dict[str, bytes]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("print", help="3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)")
     p.add_argument("file", help="pattern.json (or design .obj)")
-    p.add_argument("--style", choices=mesh.STYLES, default=None,
+    p.add_argument("--style", choices=mesh.STYLES, default="tiles-and-strips",
                    help="strips: one flexible strip per hinge for laser-cut tiles; tiles-and-strips: rigid tiles "
-                        "with recessed flexible strips (two materials: needs two extruders); pinned: print-in-place "
-                        "pin hinges (default: tiles-and-strips on a multi-material printer, else strips)")
+                        "joined by flexible strips (two materials: recessed with two extruders, stacked with colour "
+                        "changes on one); pinned: print-in-place pin hinges")
     p.add_argument("--state", choices=["1", "2"], default="1", help="closed state printed (default 1)")
     p.add_argument("--printer", metavar="NAME|FILE.json",
                    help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")

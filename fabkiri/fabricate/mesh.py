@@ -131,6 +131,15 @@ class PrintJob:
     pins: printgeom.PinPlan | None = None
     placements: list[dict] = field(default_factory=list)  # strips style: where each part went
     unlabelled: list[int] = field(default_factory=list)  # strips too small for their engraved ID
+    layout: str = "recessed"  # tiles-and-strips: "recessed" or "stacked" (see tiles_and_strips)
+    layer_changes: list = field(default_factory=list)  # (print_z, kind, material) filament swaps, one extruder
+
+    def z_levels(self) -> dict[str, float]:
+        """Heights (mm) of the sections the checks take: bottom strips, bare tile, top strips."""
+        T, ts = self.printer.tile_thickness_mm, self.printer.strip_thickness_mm
+        if self.layout == "stacked":
+            return {"bottom": 0.5 * ts, "tiles": 0.5 * (ts + T), "top": T + 0.5 * ts}
+        return {"bottom": 0.5 * ts, "tiles": 0.5 * T, "top": T - 0.5 * ts}
 
 
 def _fits(bounds, printer: Printer, what: str) -> None:
@@ -148,25 +157,62 @@ def _centre_shift(bounds, printer: Printer) -> tuple[float, float]:
     return 0.5 * bx - 0.5 * (bounds[0] + bounds[2]), 0.5 * by - 0.5 * (bounds[1] + bounds[3])
 
 
-def tiles_and_strips(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+LAYOUTS = ("recessed", "stacked")
+
+
+def layer_top_above(z: float, printer: Printer) -> float:
+    """Print height (top) of the first slicer layer lying above ``z``."""
+    first, h = printer.first_layer_mm, printer.layer_mm
+    if z < first - 1e-9:
+        return first
+    return first + (np.floor((z - first) / h + 1e-6) + 1) * h
+
+
+def tiles_and_strips(pattern: Pattern, state: int, printer: Printer, layout: str | None = None) -> PrintJob:
+    """Rigid tiles joined by flexible strips, in one of two layouts:
+
+    * ``recessed`` (two extruders): strips flush in pockets of the top and bottom
+      faces, so both materials share the bottom and top ``strip_thickness`` layers;
+    * ``stacked`` (one extruder, the default there): a flexible base sheet
+      (every tile plus the bottom-face strips) ``strip_thickness`` thick, the
+      rigid tiles on it, the top-face strips lying on the tiles. Each layer holds
+      one material, so two colour changes (M600 at the first rigid layer and at
+      the first top-strip layer) swap the filament.
+    """
+    layout = layout or ("recessed" if printer.extruders >= 2 else "stacked")
+    if layout not in LAYOUTS:
+        raise FabricationError(f"unknown tiles-and-strips layout {layout!r}; choose one of {', '.join(LAYOUTS)}")
     plan = printgeom.closed_plan(pattern, state, printer)
     strips = printgeom.strip_outlines(plan, printer)
     T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
     _fits(plan.bounds, printer, "the closed pattern")
     top = tuple(strips.outline[strips.top])
     bot = tuple(strips.outline[~strips.top])
-    tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
-        ("add", Prism(tuple(plan.tiles), 0.0, T)),
-        ("sub", Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0)),  # +1: a clean cut through the face
-        ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
-    ), printer.tile_material)
-    hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
-        ("add", Prism(top, T - ts, T)),
-        ("add", Prism(bot, 0.0, ts)),
-    ), printer.strip_material)
+    changes: list[tuple[float, str, str]] = []
+    if layout == "recessed":
+        tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
+            ("add", Prism(tuple(plan.tiles), 0.0, T)),
+            ("sub", Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0)),  # +1: a clean cut through the face
+            ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
+        ), printer.tile_material)
+        hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
+            ("add", Prism(top, T - ts, T)),
+            ("add", Prism(bot, 0.0, ts)),
+        ), printer.strip_material)
+    else:
+        base = shapely.simplify(shapely.union_all(list(plan.tiles) + list(bot)), printgeom.NOISE_MM)
+        tiles = Body(f"tiles_{printer.tile_material}", "tiles", (("add", Prism(tuple(plan.tiles), ts, T)),),
+                     printer.tile_material)
+        hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
+            ("add", Prism(tuple(shapely.get_parts(base)), 0.0, ts)),
+            ("add", Prism(top, T, T + ts)),
+        ), printer.strip_material)
+        changes = [(float(layer_top_above(ts, printer)), "colour-change", printer.tile_material),
+                   (float(layer_top_above(T, printer)), "colour-change", printer.strip_material)]
     dx, dy = _centre_shift(plan.bounds, printer)
     beds = [[translate_body(tiles, dx, dy), translate_body(hinges, dx, dy)]]
-    return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips)
+    return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips, layout=layout,
+                    layer_changes=changes)
 
 
 LABEL_MAX_MM = 2.5  # cap height of a strip's engraved hinge ID
@@ -556,7 +602,16 @@ def _check_clearances(r: Realised, rep: MeshReport) -> None:
         design_s = shapely.transform(job.strips.outline, lambda c: c + shift)
         A, B = job.plan.hinge_tiles.T
         worst = np.inf
-        for z in (0.5 * ts, 0.5 * T, T - 0.5 * ts):
+        lv = job.z_levels()
+        zs = (lv["bottom"], lv["tiles"], lv["top"])
+        if job.layout == "stacked":  # the base sheet joins tiles by design: it must be the planned sheet
+            zs = zs[1:]
+            planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
+            got = shapely.union_all(_slice_polys(hinges_m, lv["bottom"]))
+            off = float(shapely.area(shapely.symmetric_difference(planned, got)))
+            if off > 1e-6 * max(1.0, planned.area):
+                rep.problems.append(f"the base sheet deviates from its plan by {off:.3g} mm²")
+        for z in zs:
             parts = _slice_polys(tiles_m, z)
             sparts = _slice_polys(hinges_m, z)
             allp = np.array(parts + sparts, dtype=object)
@@ -716,7 +771,7 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
     else:
         man = m3d.Manifold.batch_boolean(r.manifolds[0], m3d.OpType.Add)
     if job.style == "tiles-and-strips":
-        z = 0.5 * pr.tile_thickness_mm
+        z = job.z_levels()["tiles"]
         mask = None
     else:
         lv = job.pins.levels
@@ -777,7 +832,7 @@ def top_face_dxf(r: Realised, tiles_mesh=None) -> bytes:
     doc = ezdxf.new("R2010", units=ezdxf.units.MM)
     doc.layers.add("CUT", color=1)
     msp = doc.modelspace()
-    for ring in man.slice(0.5 * job.printer.tile_thickness_mm).to_polygons():
+    for ring in man.slice(job.z_levels()["tiles"]).to_polygons():
         msp.add_lwpolyline(np.asarray(ring, dtype=float).tolist(), format="xy", close=True,
                            dxfattribs={"layer": "CUT"})
     out = io.StringIO()
@@ -798,10 +853,14 @@ def printed_bridges(r: Realised) -> list[dict]:
     planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
     tree = shapely.STRtree(planned)
     feats = []
-    tiles = np.array(_slice_polys(tiles_m, 0.5 * T), dtype=object)
+    lv = job.z_levels()
+    tiles = np.array(_slice_polys(tiles_m, lv["tiles"]), dtype=object)
     tile_tree = shapely.STRtree(tiles)
-    for z in (0.5 * ts, T - 0.5 * ts):
+    for z in (lv["bottom"], lv["top"]):
         parts = np.array(_slice_polys(hinges_m, z), dtype=object)
+        if job.layout == "stacked" and z == lv["bottom"]:  # a base sheet: each bottom strip's share of it
+            mine = shapely.intersection(shapely.union_all(parts), planned[~job.strips.top])
+            parts = np.array([g for g in shapely.get_parts(mine) if g.area > 1e-4], dtype=object)
         pi, hi = tree.query(shapely.point_on_surface(parts), predicate="within")
         owner = np.full(len(parts), -1)
         once = np.bincount(pi, minlength=len(parts)) == 1
@@ -864,13 +923,14 @@ def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
     import trimesh
 
     from .printpreview import preview_png
-    from .threemf import project_3mf
+    from .threemf import LayerChange, project_3mf
 
     job = r.job
     files: dict[str, bytes] = {}
     for k, (bed, tms) in enumerate(zip(job.beds, r.meshes), 1):
         suffix = "" if len(job.beds) == 1 else f"-bed{k}"
-        files[f"{stem}{suffix}.3mf"] = project_3mf(f"{stem}{suffix}", _parts(bed, tms), job.printer)
+        changes = [LayerChange(z, kind, m) for z, kind, m in job.layer_changes]
+        files[f"{stem}{suffix}.3mf"] = project_3mf(f"{stem}{suffix}", _parts(bed, tms), job.printer, changes)
         if preview:
             files[f"{stem}{suffix}.png"] = preview_png(bed, r.manifolds[k - 1], job.printer,
                                                        f"{stem}{suffix} ({job.style})")
@@ -891,6 +951,12 @@ def print_plan(job: PrintJob) -> str:
         return f"one material ({mats[0]}), extruder 1"
     if pr.extruders >= 2:
         return ", ".join(f"{m} on extruder {pr.extruder_of(m)}" for m in mats) + " (tool changes in one print)"
+    if job.layer_changes:
+        T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
+        swaps = " and ".join(f"z = {z:.2f} mm (load {m})" for z, _, m in job.layer_changes)
+        return (f"one extruder: {job.style} stacked ({pr.strip_material} base sheet 0-{ts:g} mm, {pr.tile_material} "
+                f"tiles {ts:g}-{T:g} mm, {pr.strip_material} top strips {T:g}-{T + ts:g} mm), colour changes (M600) "
+                f"in the 3MF at {swaps}")
     raise FabricationError(
         f"printer {pr.name} has one extruder and {job.style} puts {' and '.join(mats)} in the same layers (the "
         f"recessed strips share the tiles' bottom and top {pr.strip_thickness_mm:g} mm), which no pause or colour "
@@ -899,12 +965,6 @@ def print_plan(job: PrintJob) -> str:
     )
 
 
-def default_style(printer: Printer) -> tuple[str, str]:
-    """The style ``fabkiri print`` uses when none is given, and why."""
-    if printer.extruders >= 2:
-        return "tiles-and-strips", f"printer {printer.name} has {printer.extruders} extruders"
-    return "strips", (f"printer {printer.name} has one extruder, and tiles-and-strips needs two materials in the "
-                      "same layers; printing the flexible strips alone (glue them onto laser-cut tiles: --marks)")
 
 
 def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
@@ -948,6 +1008,9 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
         "pattern": pattern_name, "style": job.style, "state": job.state,
         "printer": job.printer.to_dict(),
         "shift_mm": [round(float(v), 6) for v in job.shift],
+        "layout": job.layout if job.style == "tiles-and-strips" else None,
+        "layer_changes": [{"print_z_mm": round(z, 6), "gcode": "M600" if k == "colour-change" else "M601",
+                           "load": m} for z, k, m in job.layer_changes],
         "beds": [[b.name for b in bed] for bed in job.beds],
         "hinges": [{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
                     "coincides_with": int(plan.partner[h]) if plan.partner[h] >= 0 else None,

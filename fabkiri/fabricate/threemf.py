@@ -113,11 +113,12 @@ def model_config_xml(object_name: str, parts: list[Part], printer: Printer) -> s
     return "".join(out)
 
 
-def extruder_materials(printer: Printer, materials: list[str]) -> list[str]:
-    """The filament loaded in each extruder for this print."""
+def extruder_materials(printer: Printer, parts: list[Part]) -> list[str]:
+    """The filament loaded in each extruder at the start of this print (one
+    extruder: the material of the lowest part, the first one printed)."""
     if printer.extruders > 1:
         return list(printer.materials or (printer.tile_material, printer.strip_material))
-    return [materials[0]]
+    return [min(parts, key=lambda p: float(np.min(p.vertices[:, 2]))).material]
 
 
 def project_config(printer: Printer, loaded: list[str]) -> dict[str, str]:
@@ -174,7 +175,7 @@ def custom_gcode_xml(changes: list[LayerChange]) -> str:
 def project_3mf(object_name: str, parts: list[Part], printer: Printer,
                 changes: list[LayerChange] | None = None) -> bytes:
     """The 3MF bytes of one bed: one object, one volume per part, project settings."""
-    loaded = extruder_materials(printer, [p.material for p in parts])
+    loaded = extruder_materials(printer, parts)
     entries = {
         "[Content_Types].xml": CONTENT_TYPES,
         "_rels/.rels": RELS,
