@@ -1,10 +1,10 @@
 """Preview PNG of a print bed: the bed outline, every part in its material's
 colour, seen from the top and from below, with millimetre axes (matplotlib).
 
-Each view paints the sections of the solids at the middle of every slab
-between the bodies' prism heights, lowest first for the top view (what lies
-higher hides what lies lower) and highest first for the bottom view, which is
-mirrored left-right as seen from under the bed.
+Each view paints, per body, the section at the middle of its slab nearest
+the face seen (slabs lie between the body's prism heights), lowest first for
+the top view (what lies higher hides what lies lower) and highest first for
+the bottom view, which is mirrored left-right as seen from under the bed.
 """
 
 from __future__ import annotations
@@ -21,15 +21,28 @@ def _heights(body) -> list[float]:
     return [0.5 * (a + b) for a, b in zip(zs, zs[1:])]
 
 
-def _layers(bed, manifolds) -> list[tuple[float, str, list[np.ndarray]]]:
+def _layers(bed, manifolds, view: str) -> list[tuple[float, str, list]]:
+    """Per body, the slab section nearest the face seen (the top one for the top
+    view) as polygons with their holes, in painting order."""
+    from .mesh import _slice_polys
+
     out = []
     for body, m in zip(bed, manifolds):
         lo, hi = m.bounding_box()[2], m.bounding_box()[5]
-        for z in _heights(body):
-            if lo < z < hi:
-                rings = [np.asarray(r) for r in m.slice(z).to_polygons() if len(r) >= 3]
-                out.append((z, body.material, rings))
-    return sorted(out, key=lambda t: t[0])
+        zs = [z for z in _heights(body) if lo < z < hi]
+        for z in (zs[-1:] if view == "top" else zs[:1]) if zs else []:
+            out.append((z, body.material, _slice_polys(m, z)))
+    out.sort(key=lambda t: t[0])
+    return out if view == "top" else out[::-1]
+
+
+def _path(poly, mirror_x: float | None):
+    from matplotlib.path import Path
+
+    rings = [np.asarray(poly.exterior.coords)] + [np.asarray(r.coords) for r in poly.interiors]
+    if mirror_x is not None:
+        rings = [np.column_stack([mirror_x - r[:, 0], r[:, 1]]) for r in rings]
+    return Path.make_compound_path(*[Path(r, closed=True) for r in rings])
 
 
 def preview_png(bed, manifolds, printer, title: str) -> bytes:
@@ -37,22 +50,17 @@ def preview_png(bed, manifolds, printer, title: str) -> bytes:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.collections import PolyCollection
+    from matplotlib.collections import PathCollection
     from matplotlib.patches import Patch, Rectangle
 
     bx, by, _ = printer.bed_mm
-    layers = _layers(bed, manifolds)
     fig, axes = plt.subplots(1, 2, figsize=(12, 6.2), dpi=110)
     for ax, view in zip(axes, ("top", "bottom")):
         ax.add_patch(Rectangle((0, 0), bx, by, facecolor="#f4f4f4", edgecolor="black", linewidth=1.0))
-        order = layers if view == "top" else layers[::-1]
-        for _, mat, rings in order:
+        for _, mat, polys in _layers(bed, manifolds, view):
             colour = MATERIALS[mat].colour if mat in MATERIALS else "#808080"
-            # only outer rings (counter-clockwise) are filled; holes are left to the layers below
-            outer = [r for r in rings if _signed_area(r) > 0]
-            if view == "bottom":
-                outer = [np.column_stack([bx - r[:, 0], r[:, 1]]) for r in outer]
-            ax.add_collection(PolyCollection(outer, facecolors=colour, edgecolors="#333333", linewidths=0.2))
+            paths = [_path(p, bx if view == "bottom" else None) for p in polys]  # holes stay open
+            ax.add_collection(PathCollection(paths, facecolors=colour, edgecolors="#333333", linewidths=0.2))
         ax.set_xlim(-0.02 * bx, 1.02 * bx)
         ax.set_ylim(-0.02 * by, 1.02 * by)
         ax.set_aspect("equal")
@@ -69,8 +77,3 @@ def preview_png(bed, manifolds, printer, title: str) -> bytes:
     fig.savefig(out, format="png", metadata={"Software": None})
     plt.close(fig)
     return out.getvalue()
-
-
-def _signed_area(r: np.ndarray) -> float:
-    x, y = r[:, 0], r[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
