@@ -32,6 +32,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     job = mesh.build_job(pattern, args.style, int(args.state), printer, advise_scale=args.scale)
     plan = mesh.print_plan(job)  # refuses a print the printer cannot make
     realised = mesh.realise_job(job)
+    job = realised.job  # the bodies as realised (a pinned tile may have been rebuilt with turned pivot polygons)
     report = mesh.check_meshes(realised)
     tiles = None if job.style == "strips" else mesh.check_printed_tiles(realised)
     problems = list(report.problems)
