@@ -241,6 +241,25 @@ def test_pinned_in_either_state(state, printer):
     assert mesh.check_printed_tiles(r).ok
 
 
+@pytest.mark.parametrize("preset", ["prusa-mk4", "prusa-xl-2t"])
+def test_written_meshes_are_closed_2_manifolds(preset):
+    """The issue's case (the solver's circle at 2x, whose tiles STL had 87-114
+    edges shared by four or six triangles): every STL and every 3MF volume, re-read
+    by trimesh with its vertices welded, uses every edge exactly twice."""
+    from fabkiri.pattern.io import read_pattern
+
+    pat = mesh.scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
+    files = mesh.job_files(mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, load_printer(preset))), "c",
+                           preview=False)
+    for name in ("c_tiles.stl", "c_hinges.stl"):
+        m = trimesh.load(io.BytesIO(files[name]), file_type="stl")
+        _, counts = np.unique(np.sort(m.edges, axis=1), axis=0, return_counts=True)
+        assert m.is_watertight and (counts == 2).all(), (name, np.bincount(counts))
+    rb = mesh.read_back_files(files)
+    assert set(rb) == {"c.3mf", "c_tiles.stl", "c_hinges.stl"}
+    assert all(v["ok"] and v["edges_not_shared_by_two_faces"] == 0 and v["manifold3d_ok"] for v in rb.values())
+
+
 def test_stacked_tiles_and_strips_for_one_extruder(printer):
     """One extruder: a flexible base sheet, rigid tiles on it, top strips on
     them; every layer holds one material and the colour changes fall on the
