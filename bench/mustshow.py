@@ -49,6 +49,9 @@ def line(label: str, code: int, r: dict) -> str:
     for s, g in r.get("closed_outline_fit", {}).items():
         parts.append(f"state {s} vs {g['target']}: max {g['max_mm']:.3g} rms {g['rms_mm']:.3g} mm "
                      f"({g['max_rel_size']:.2%})")
+    for k, g in (r.get("conformance") or {}).items():
+        parts.append(f"{k} Hausdorff {g['hausdorff_mm']:.3g} mm ({g['hausdorff_rel']:.2%}) 1-IoU "
+                     f"{g['one_minus_iou']:.3g} {r['shape'][k]['status']}")
     parts.append(f"{r.get('time_s_total', r['time_s']):.1f} s, {r['iterations_total']} it (last attempt)"
                  + (f", inits {[a['init'] for a in r['attempts']]}" if len(r.get("attempts", [])) > 1 else ""))
     return "  ".join(parts)

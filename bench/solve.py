@@ -21,15 +21,24 @@ the first and fastest run; the speed ratio compares medians. Every run builds it
 topology (``Pattern.topology``), about 0.5 ms at 8x8. SLSQP's time excludes its set-up (problem and
 pivoted QR), fabkiri's includes all of ``design()``.
 
+Then the solver-speed lines (``bench/speed.py``, each in a fresh process, with the baseline checkout
+given by ``--baseline DIR`` measured in the same run): whole-process start-up of ``fabkiri --help`` and an
+8x8 rigid design (median of 5); the full solver (non-rigid heart and ellipse 2:1) through the API with the
+tip polygon's conformance to the target; the rigid circle at the large sizes; square->circle outlines.
+
     PYTHONPATH=. python3 bench/solve.py [--sizes 4,8,16,32,64] [--big] [--init standard] [--no-full]
-                                        [--slsqp-sizes 4,8,16] [--repeat 5]
+                                        [--slsqp-sizes 8,16] [--repeat 5] [--baseline /tmp/base]
+                                        [--full-sizes 16,32,64] [--square-circle 5,7,9,13,17]
+                                        [--rigid-sizes 64,128] [--only startup,full,rigid,square,slsqp,circle]
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import minimize
@@ -37,6 +46,11 @@ from scipy.optimize import minimize
 from fabkiri.cli.design_cmd import BIG_TILES
 from fabkiri.design import targets as T
 from fabkiri.design.solve import DesignRequest, _Problem, _ineq_values, design, single_thread_blas
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import speed  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
@@ -131,20 +145,69 @@ def _times(r: dict) -> str:
     return f" [median of {r['runs']}: first {r['first']:.3f}, fastest {r['fastest']:.3f} s]" if r["runs"] > 1 else ""
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sizes", default="4,8,16,32,64")
-    ap.add_argument("--big", action="store_true", help="also n = 128")
-    ap.add_argument("--init", default="rescaled")
-    ap.add_argument("--no-baseline", action="store_true")
-    ap.add_argument("--slsqp-sizes", default="4,8",
-                    help="sizes for the SLSQP baseline (16 takes about a minute; the rows as written only at 4, 8)")
-    ap.add_argument("--no-full", action="store_true", help="skip the full-solver comparison lines")
-    ap.add_argument("--repeat", type=int, default=5,
-                    help="runs per line for fabkiri up to 16x16 and SLSQP up to 8x8 (the median is printed)")
-    args = ap.parse_args()
-    sizes = [int(s) for s in args.sizes.split(",")] + ([128] if args.big else [])
-    k_small = max(1, args.repeat)
+def _codes(args) -> list[tuple[str, Path]]:
+    return [("this", ROOT)] + ([("baseline", Path(args.baseline))] if args.baseline else [])
+
+
+def _fmt_design(r: dict) -> str:
+    if "error" in r:
+        return f"ERROR {r['error']} (load {r['load']:.1f})"
+    return (f"wall {r['wall']:7.2f} s  cpu {r['cpu']:7.2f} s  {r['status']:<11} res {r['eq']:.1e}  "
+            f"fit {r['fit_mm']:.3g} mm {r['mode']:<13} Hausdorff {r['hausdorff_pct']:5.2f} %  "
+            f"1-IoU {r['one_minus_iou']:.4f}  [{r['solver']}; load {r['load']:.1f}]")
+
+
+def section_startup(args) -> None:
+    print("\nstart-up: whole process, median of 5 (goals: --help < 0.25 s, 8x8 rigid design < 0.6 s)")
+    cmds = [["--help"], ["design", "--tiles", "8x8", "--target", "circle", "--rigid", "-o", "/tmp/bench-startup.json"]]
+    for label, code in _codes(args):
+        for argv in cmds:
+            r = speed.startup(code, argv)
+            print(f"  {label:<8} fabkiri {' '.join(argv[:6]):<48} median {r['median']:.3f} s (fastest "
+                  f"{r['fastest']:.3f}; CPU {r['cpu']:.3f} s; load {r['load']:.1f})", flush=True)
+
+
+def section_full(args) -> None:
+    sizes = [int(v) for v in args.full_sizes.split(",") if v]
+    print("\nfull solver, non-rigid, through the API (goals 16/32/64: < 2 / 10 / 60 s; conformance no worse)")
+    for n in sizes:
+        for tgt in ("heart", "ellipse"):
+            for label, code in _codes(args):
+                opts = {} if label == "baseline" else dict(args.full_options)
+                r = speed.run_worker(code, "design", {"n": n, "target": tgt, "options": opts}, args.full_timeout)
+                print(f"  {label:<8} {tgt:<7} {n:>3}  {_fmt_design(r)}", flush=True)
+
+
+def section_rigid(args) -> None:
+    sizes = [int(v) for v in args.rigid_sizes.split(",") if v]
+    print("\nrigid circle, coarse to fine as the CLI (goals: 64x64 < 3 s, 128x128 < 20 s)")
+    for n in sizes:
+        for label, code in _codes(args):
+            spec = {"n": n, "target": "circle", "options": {"rigid": True, "init": "coarse"}}
+            r = speed.run_worker(code, "design", spec, args.full_timeout)
+            print(f"  {label:<8} circle  {n:>3}  {_fmt_design(r)}", flush=True)
+
+
+def section_square(args) -> None:
+    sizes = [int(v) for v in args.square_circle.split(",") if v]
+    goal = {5: 0.017, 7: 0.010}
+    print("\nsquare->circle (--rigid --contracted-target 1:square --contracted-target 2:circle), CLI in-process; "
+          "goals: square to 1e-9 of its side, circle rms <= 1.7 % (5x5), 1.0 % (7x7), < 0.8 % from 9x9, "
+          "solve < 1 s")
+    for n in sizes:
+        for label, code in _codes(args):
+            r = speed.run_worker(code, "square_circle", {"n": n}, args.full_timeout)
+            if "error" in r:
+                print(f"  {label:<8} {n:>3}  ERROR {r['error']}")
+                continue
+            ok = r["square_err"] <= 1e-9 and r["circle_rms"] <= goal.get(n, 0.008) and r["solve_s"] < 1.0
+            print(f"  {label:<8} {n:>3}  exit {r['exit']} {r['status']:<11} res {r['eq']:.1e}  square error "
+                  f"{r['square_err']:.2e}  circle rms {r['circle_rms']:.3%}  solve {r['solve_s']:.3f} s  cpu "
+                  f"{r['cpu']:.2f} s  overlaps {r['overlaps']}  {'meets' if ok else 'misses'} the goal  "
+                  f"[{r['solver']}; load {r['load']:.1f}]", flush=True)
+
+
+def section_circle(args, sizes, k_small) -> dict:
     print(f"rigid-deployable circle (diameter 100 mm), init {args.init}; residual = max equality residual "
           f"relative to the tile size; fit = max |signed distance| of the boundary tips")
     print(f"{'solver':<8} {'n':>4} {'status':<12} {'time s':>8} {'iters':>6} {'residual':>10} {'fit mm':>9} "
@@ -165,12 +228,16 @@ def main() -> None:
                   f"{f['fit_mm']:>9.3g} {f['fit_rel_radius']:>8.2%}  {f['mode']}; --solver full"
                   f"{'' if init == args.init else f', --init {init}'} "
                   f"({f['time'] / r['time']:.1f}x the default's time)", flush=True)
-    if args.no_baseline:
-        return
-    slsqp_sizes = [int(s) for s in args.slsqp_sizes.split(",")]
+    return mine
+
+
+def section_slsqp(args, mine, k_small) -> None:
+    slsqp_sizes = [int(s) for s in args.slsqp_sizes.split(",") if s]
     # as written (dependent rows) SLSQP stops at its first iteration: shown at the small sizes only
     runs = [(n, False) for n in slsqp_sizes if n <= 8] + [(n, True) for n in slsqp_sizes]
     for n, indep in runs:
+        if n not in mine and indep:
+            mine[n] = repeated(lambda: ours(n, args.init), k_small if n <= 16 else 1)
         b = repeated(lambda: slsqp(n, indep, args.init), k_small if indep and n <= 8 else 1)
         ok = "converged" if b["success"] else "failed"
         label = "SLSQP-ind" if indep else "SLSQP"
@@ -178,8 +245,46 @@ def main() -> None:
               f"{b['fit_mm']:>9.3g} {b['fit_mm'] / 50:>8.2%}  ({b['status']}; min inequality {b['ineq_min']:.2e})"
               f"{_times(b)}", flush=True)
         if n in mine and indep:
-            print(f"         speed ratio at n={n}: SLSQP / fabkiri = {b['time'] / mine[n]['time']:.1f}x"
+            print(f"         speed ratio at n={n}: SLSQP / fabkiri = {b['time'] / mine[n]['time']:.1f}x "
+                  f"(fabkiri {mine[n]['time']:.3f} s)"
                   f"{'' if b['success'] else ' (SLSQP did not even reach the tolerance)'}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sizes", default="4,8,16,32,64")
+    ap.add_argument("--big", action="store_true", help="also n = 128")
+    ap.add_argument("--init", default="rescaled")
+    ap.add_argument("--no-baseline", action="store_true", help="skip SLSQP")
+    ap.add_argument("--slsqp-sizes", default="8,16",
+                    help="sizes for the SLSQP reference (16 takes about a minute; the rows as written only at <= 8)")
+    ap.add_argument("--no-full", action="store_true", help="skip the full-solver comparison lines")
+    ap.add_argument("--repeat", type=int, default=5,
+                    help="runs per line for fabkiri up to 16x16 and SLSQP up to 8x8 (the median is printed)")
+    ap.add_argument("--baseline", help="a checkout of the baseline code (e.g. `git worktree add --detach /tmp/base "
+                                       "main`), measured by the speed lines in the same run")
+    ap.add_argument("--full-sizes", default="16,32,64")
+    ap.add_argument("--full-timeout", type=float, default=1800.0, help="seconds per speed line before it is cut")
+    ap.add_argument("--rigid-sizes", default="64,128")
+    ap.add_argument("--square-circle", default="5,7,9,13,17")
+    ap.add_argument("--only", default="startup,full,rigid,square,circle,slsqp",
+                    help="sections to run, in this order")
+    args = ap.parse_args()
+    args.full_options = {}
+    k_small = max(1, args.repeat)
+    only = args.only.split(",")
+    print(f"load average at start: {speed.load():.2f}")
+    sections = {"startup": section_startup, "full": section_full, "rigid": section_rigid, "square": section_square}
+    for name in only:
+        if name in sections:
+            sections[name](args)
+    mine = {}
+    if "circle" in only:
+        print()
+        mine = section_circle(args, [int(s) for s in args.sizes.split(",") if s] + ([128] if args.big else []), k_small)
+    if "slsqp" in only and not args.no_baseline:
+        section_slsqp(args, mine, k_small)
+    print(f"load average at end: {speed.load():.2f}")
 
 
 if __name__ == "__main__":

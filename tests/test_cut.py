@@ -398,7 +398,7 @@ def test_cli_default_command(run_cli, tmp_path):
     code, stdout, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out)
     assert code == 0, err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["manifest.json", "standard-8x8.dxf", "standard-8x8.png", "standard-8x8.svg"]
+    assert names == ["assembly.png", "manifest.json", "standard-8x8.dxf", "standard-8x8.png", "standard-8x8.svg"]
     man = json.loads((out / "manifest.json").read_text())
     assert man["verification"]["ok"] and man["verification"]["verifier"]["ok"]
     assert man["hinge"] == "tape" and man["material"]["name"] == "acrylic-3"
@@ -508,7 +508,14 @@ def test_png_preview_shows_every_sheet():
     a = Image.open(BytesIO(one.files["p.png"]))
     b = Image.open(BytesIO(two.files["p.png"]))
     assert a.format == b.format == "PNG"
-    assert a.size == (1200, 800)  # 600 x 400 mm at 2 px/mm
+    # cropped to the parts (not the 600 x 400 mm sheet), at a scale where the smallest label is legible
+    from fabkiri.fabricate.preview import LABEL_PX, content_box
+
+    box = content_box(one.sheets[0])
+    px_per_mm = a.size[0] / (box[2] - box[0])
+    assert box[2] - box[0] < 200 and a.size[0] < 0.5 * 600 * px_per_mm
+    smallest = min(t["label_height_mm"] for t in one.manifest["tiles"] if t["label_height_mm"] > 0)
+    assert px_per_mm * smallest >= LABEL_PX - 0.5
     assert b.size[0] > b.size[1] and len(two.sheets) >= 2  # sheets side by side
     assert len(np.unique(np.asarray(a.convert("RGB")).reshape(-1, 3), axis=0)) > 2  # drawn on the white page
 

@@ -244,8 +244,9 @@ def test_cli_design_circle_rigid(tmp_path, run_cli):
 
 def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
     out = tmp_path / "h.json"
+    # 6x6 tiles follow a heart to a few % only (bench/shapes.py); this test is about the symmetry
     code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "heart", "--symmetry", "y", "--rigid",
-                                "--json", "-o", out)
+                                "--shape-tol", "10%", "--json", "-o", out)
     assert code == 0, err
     x = read_pattern(out).nodes
     # mirror image of the node set about the y axis is the node set
@@ -255,7 +256,7 @@ def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
     assert d.max() < 1e-9
     out2 = tmp_path / "b.json"
     code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", TEMPLATES / "targets" / "blob-points.csv",
-                                "--json", "-o", out2)
+                                "--shape-tol", "10%", "--json", "-o", out2)
     assert code == 0, err
     rep = json.loads(stdout)
     assert rep["shape_matching"] in ("hard", "least-squares") and rep["fit"]["shape"]["rms_mm"] >= 0
@@ -264,7 +265,7 @@ def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
 def test_cli_parallelogram_holes(tmp_path, run_cli):
     out = tmp_path / "p.json"
     code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "ellipse", "--holes", "parallelogram",
-                                "--json", "-o", out)
+                                "--shape-tol", "10%", "--json", "-o", out)  # about the holes, not the 6x6 shape
     assert code == 0, err
     rep = json.loads(stdout)
     assert rep["checks"]["closure_1_rel"] <= 1e-9 and rep["checks"]["hinge_sum_max_rad"] <= 1e-10
@@ -361,8 +362,9 @@ def test_overlap_check_is_a_depth_not_an_area():
 def test_cli_rectangular_closed_state(tmp_path, run_cli):
     """`2:rect=1.5`: boundary angle sums π (π/2 at corners) and width/height 1.5 in closed state 2."""
     out = tmp_path / "r.json"
+    # a rectangular closed state pulls the 6x6 deployed circle a few % off (the test is about the rectangle)
     code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "2:rect=1.5",
-                                "--json", "-o", out)
+                                "--shape-tol", "10%", "--json", "-o", out)
     assert code == 0, err
     rep = json.loads(stdout)
     assert rep["residuals"]["rectangle_2"] <= 1e-10 and rep["residuals"]["ratio_2"] <= 1e-10

@@ -12,7 +12,8 @@ from ..fabricate.cut import FORMATS, CutOptions, cut_pattern
 from ..fabricate.drawing import COLORS
 from ..fabricate.layout import LAYOUTS
 from ..fabricate.materials import HINGE_KINDS, available, load_material, parse_setting
-from .pattern_cmds import load_any
+from ..fabricate.svg import STROKE_MM
+from .pattern_cmds import _positive, load_any
 
 
 def _sheet(text: str) -> tuple[float, float]:
@@ -53,7 +54,7 @@ def cmd_cut(args: argparse.Namespace) -> int:
         layout=args.layout, scale=args.scale, width=args.width, formats=_formats(args.formats),
         colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
         reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
-        pattern_file=Path(args.file).name)
+        pattern_file=Path(args.file).name, notes=not args.no_notes, stroke_mm=args.stroke)
     result = cut_pattern(pattern, options)
     from ..fabricate.readback import write_verified
 
@@ -101,6 +102,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")
     p.add_argument("--reference", type=float, default=50.0, metavar="MM",
                    help="side of the uncompensated reference square (0: none; default 50)")
+    p.add_argument("--no-notes", action="store_true",
+                   help="leave out the NOTES layer (sheet frame, caption, reference-square size) that some laser "
+                        "software would cut")
+    p.add_argument("--stroke", type=_positive, default=STROKE_MM, metavar="MM",
+                   help=f"SVG stroke width (default {STROKE_MM:g}: visible in viewers; the colour tells the laser "
+                        "what to do; 0.01 for software that wants hairlines)")
     p.add_argument("--force", action="store_true", help="cut even if the pattern does not close in both states")
     p.add_argument("--no-verify", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("-o", "--output", metavar="DIR", help="output folder (default outputs/<pattern stem>)")

@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..design import conformance as conf
 from ..design.initial import INITS
-from ..design.solve import DesignRequest, design
+from ..design.solve import DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..errors import InputError, SolveError
 from ..mechanics.contract import contract
@@ -128,19 +129,22 @@ def cmd_design(args: argparse.Namespace) -> int:
         raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=args.rigid, symmetry=args.symmetry,
                         holes=args.holes, contracted=contracted, init=args.init, tol=args.tol,
-                        solver=args.solver,
+                        solver=args.solver, outline=args.fit == "outline",
                         name=args.name or "")
     if not req.name:
         parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
                                                  for s, v in contracted.items()]]
         req.name = f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if args.rigid else ''}"
     req.validate()
+    args.shape_tol_parsed = conf.parse_shape_tol(args.shape_tol)
     big = rows * cols >= 256
     # without an explicit --init, a design that fails a check is retried from the next guess
     if args.init:
         inits = [args.init]
     elif args.rigid and rows * cols >= BIG_TILES:
         inits = list(BIG_RIGID_INITS)
+    elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
+        inits = ["coarse"]
     else:
         inits = list(AUTO_INITS)
     attempts = []
@@ -155,17 +159,20 @@ def cmd_design(args: argparse.Namespace) -> int:
             print(f"fabkiri: no {init} initial guess ({exc}); trying the next one", file=sys.stderr)
             attempts.append({"init": init, "status": "skipped", "problems": [str(exc)], "time_s": 0.0})
             continue
-        outcome = _check(result, contracted, args)
+        outcome = _check(result, contracted, args, target)
         miss = _fit_miss(outcome[1])
+        shape_met = _shape_met(outcome[1])
         attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
-                         "time_s": outcome[1]["time_s"], "fit_max_rel_size": miss})
+                         "time_s": outcome[1]["time_s"], "fit_max_rel_size": miss,
+                         "hausdorff_max_rel": _hausdorff(outcome[1]), "shape": "met" if shape_met else "missed"})
         if best is None or _rank(outcome) < _rank(best):
             best = outcome
-        if outcome[3] and miss <= RETRY_FIT_ABOVE:
+        if outcome[3] and miss <= RETRY_FIT_ABOVE and shape_met:
             break
         if outcome[3] and init != inits[-1]:
-            print(f"fabkiri: design from the {init} guess misses the target by {miss:.2%} of its size; "
-                  f"trying the next guess too", file=sys.stderr)
+            why = (f"misses the target by {miss:.2%} of its size" if miss > RETRY_FIT_ABOVE else
+                   f"misses the shape tolerance (Hausdorff {_hausdorff(outcome[1]):.2%} of the size)")
+            print(f"fabkiri: design from the {init} guess {why}; trying the next guess too", file=sys.stderr)
         elif len(inits) > 1 and init != inits[-1]:
             print(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying", file=sys.stderr)
     if best is None:
@@ -176,26 +183,59 @@ def cmd_design(args: argparse.Namespace) -> int:
     meta = dict(pattern.design or {})
     meta["report"] = report
     meta["valid"] = bool(valid)
+    shape_met = _shape_met(report)
+    meta["shape"] = "met" if shape_met else "missed"
     pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
                       name=pattern.name, lattice=pattern.lattice, design=meta)
+    png = None if args.no_preview else _preview(pattern, report, args.output)
     write_pattern(pattern, args.output)
+    if png is not None:
+        png[0].write_bytes(png[1])
     if args.json:
         print(json.dumps(_jsonable(report), indent=2, sort_keys=True))
     _summary(args.output, report, valid)
-    return 0 if valid else 1
+    return 0 if valid and shape_met else 1
+
+
+def _shape_met(report: dict) -> bool:
+    return all(j["status"] == "met" for j in (report.get("shape") or {}).values())
+
+
+def _hausdorff(report: dict) -> float:
+    """Worst Hausdorff distance of any outline relative to its target's size."""
+    return max((c["hausdorff_rel"] for c in (report.get("conformance") or {}).values()), default=0.0)
+
+
+def preview_path(output) -> Path:
+    """Where the design preview goes: ``NAME.png`` beside ``NAME.json``."""
+    p = Path(output)
+    return p.with_name((p.stem if p.suffix.lower() == ".json" else p.name) + ".png")
+
+
+def _preview(pattern: Pattern, report: dict, output) -> tuple[Path, bytes]:
+    """The preview's path and bytes (rendered before anything is written); its name goes in the report."""
+    from ..render.conformance import conformance_png
+
+    path = preview_path(output)
+    report["preview"] = path.name
+    return path, conformance_png(pattern, report.get("conformance") or {}, report.get("shape") or {})
 
 
 def _fit_miss(report: dict) -> float:
-    """Worst fit of any target (deployed or closed-state outline) relative to its size."""
-    return max((float(f.get("max_rel_size", 0.0)) for f in (report.get("fit") or {}).values()), default=0.0)
+    """Worst fit of the tips (deployed or closed-state outline) to any target relative to its size (the soft
+    outline rows never reach zero: ``_hausdorff`` judges the whole outline)."""
+    return max((float(f.get("max_rel_size", 0.0)) for f in (report.get("fit") or {}).values() if not f.get("soft")),
+               default=0.0)
 
 
 def _rank(outcome) -> tuple:
-    """Order of preference among attempts: valid first, then fewer problems, then the closer fit."""
-    return (not outcome[3], len(outcome[2]), _fit_miss(outcome[1]))
+    """Order of preference among attempts: valid first, then fewer problems, then the shape tolerance met,
+    then the smaller Hausdorff distance, then the closer fit of the tips."""
+    return (not outcome[3], len(outcome[2]), not _shape_met(outcome[1]), _hausdorff(outcome[1]),
+            _fit_miss(outcome[1]))
 
 
-def _check(result, contracted, args):
+def _check(result, contracted, args, target: Target | None = None):
     """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
     pattern = result.pattern
     report = dict(result.report)
@@ -227,6 +267,8 @@ def _check(result, contracted, args):
                                                     result.closed_targets[s], s)
     if closed_fit:
         report["closed_outline_fit"] = closed_fit
+    report["conformance"], report["shape"] = _conformance(pattern, result, contracted_states, target,
+                                                              args.shape_tol_parsed)
     report["checks"] = checks
     valid = result.converged and not problems
     if not result.converged:
@@ -236,6 +278,19 @@ def _check(result, contracted, args):
         report["status"] = "unconverged"
         report["problems"] = problems
     return pattern, report, problems, valid, contracted_states
+
+
+def _conformance(pattern: Pattern, result, contracted_states: dict, target: Target | None,
+                 shape_tol: tuple) -> tuple[dict, dict]:
+    """Conformance of the deployed tips and of each closed-state outline with a target curve, and each
+    judged against ``--shape-tol``."""
+    measured = {}
+    tiles = (pattern.lattice["rows"], pattern.lattice["cols"])
+    if target is not None:
+        measured["deployed"] = conf.deployed(pattern.nodes, pattern.topology, target)
+    for s, tgt in sorted(result.closed_targets.items()):
+        measured[f"state_{s}"] = conf.closed(contracted_states[s], tgt)
+    return measured, {k: conf.judge(c, shape_tol, tiles) for k, c in measured.items()}
 
 
 def _jsonable(v):
@@ -253,9 +308,19 @@ def _summary(path, report: dict, valid: bool) -> None:
                      f"rms {fit['shape']['rms_mm']:.3g} mm")
     for s, f in report.get("closed_outline_fit", {}).items():
         parts.append(f"state {s} outline vs {f['target']}: max {f['max_mm']:.3g} mm, rms {f['rms_mm']:.3g} mm")
+    for k, c in (report.get("conformance") or {}).items():
+        j = report["shape"][k]
+        parts.append(f"shape {k.replace('_', ' ')}: {j['status']}, Hausdorff {c['hausdorff_mm']:.3g} mm "
+                     f"({100 * c['hausdorff_rel']:.2f} %, tol {100 * j['tol_rel']:.2g} %), "
+                     f"1-IoU {c['one_minus_iou']:.3g}, tip spacing min/mean {c['spacing_min_mm']:.3g}/"
+                     f"{c['spacing_mean_mm']:.3g} mm")
     print("; ".join(parts), file=sys.stderr)
     for p in report.get("problems", []):
         print(f"fabkiri: design failed: {p}", file=sys.stderr)
+    for k, c in (report.get("conformance") or {}).items():
+        if report["shape"][k]["status"] == "missed":
+            print(f"fabkiri: design failed: {conf.describe_miss(k.replace('_', ' '), report['shape'][k], c)}",
+                  file=sys.stderr)
 
 
 def _tol(text: str) -> float:
@@ -302,9 +367,21 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "
                         "solve in the closed-form rigid family, and when that fit is least-squares also run the "
                         "full solver (up to 16x16 tiles, or up to 32x32 when the fit misses by more than 0.25 %% "
-                        "of the target size) and keep the better; reduced: the rigid family only; full: the sparse "
-                        "solver over all nodes")
+                        "of the target size) and keep the better; also the rigid family for --rigid square/circle "
+                        "--contracted-target outlines (square exact, circle of any size) and for non-rigid rhombus "
+                        "designs from 32x32 tiles; reduced: the rigid family only; full: the sparse solver over "
+                        "all nodes")
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
+    p.add_argument("--shape-tol", default=conf.DEFAULT_SHAPE_TOL, metavar="TOL",
+                   help="largest Hausdorff distance between each outline and its target: a percentage of the "
+                        "target size (larger side of its bounding box) like 2%% (default), or a length like "
+                        "0.5mm; a design that misses it is still written, marked shape: missed, and exits 1")
+    p.add_argument("--fit", choices=["outline", "tips"], default="outline",
+                   help="outline (default): fit the whole tip polygon — tips on their arcs, chord midpoints and "
+                        "samples of the target (its corners and cusps included) to the other curve; tips: only the "
+                        "boundary tips on their arcs (tips may bunch and cut corners)")
+    p.add_argument("--no-preview", action="store_true",
+                   help="do not write the preview PNG (tiles over the targets) beside the pattern")
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
     p.add_argument("-v", "--verbose", action="store_true", help="progress on stderr even for small solves")

@@ -4,6 +4,12 @@ Exit codes: 0 ok, 1 a check, verification or solve failed its tolerance,
 2 bad input or usage, 3 an internal error (a bug; set FABKIRI_DEBUG=1 for the
 traceback). Each subcommand lives in its own module listed in ``COMMANDS`` and
 exposes ``register(subparsers)``.
+
+Start-up is lazy: ``SUMMARIES`` names each command's module and one-line help,
+so ``fabkiri --help`` imports no command module and ``fabkiri CMD`` imports only
+CMD's (the others get a stub parser with their help line). A command module
+missing from ``SUMMARIES`` is imported as before (tests check the table against
+what the modules register).
 """
 
 from __future__ import annotations
@@ -24,7 +30,28 @@ COMMANDS = [
     "fabkiri.cli.design_cmd",
     "fabkiri.cli.deploy_cmd",
     "fabkiri.cli.print_cmd",
+    "fabkiri.cli.tolerance_cmd",
+    "fabkiri.cli.coupon_cmd",
+    "fabkiri.cli.report_cmd",
 ]
+# command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
+# (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
+SUMMARIES = {
+    "new": ("fabkiri.cli.pattern_cmds", "write a standard rotating-squares pattern with both closed states"),
+    "import": ("fabkiri.cli.pattern_cmds", "import an OBJ design (and its contracted states), a .fold file or a PyKirigami model folder "
+               "into pattern.json"),
+    "info": ("fabkiri.cli.pattern_cmds", "counts, residuals and closure of a pattern (.json or .obj)"),
+    "export": ("fabkiri.cli.pattern_cmds", "write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder"),
+    "cut": ("fabkiri.cli.cut_cmd", "laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state"),
+    "verify": ("fabkiri.cli.verify_cmd", "prove that a pattern (and its cut layout) closes into both compact states"),
+    "design": ("fabkiri.cli.design_cmd", "inverse design: a reconfigurable quad kirigami fitted to a target shape"),
+    "deploy": ("fabkiri.cli.deploy_cmd", "deployment path from closed state 1 to closed state 2: energy, plot, GIF"),
+    "print": ("fabkiri.cli.print_cmd", "3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)"),
+    "tolerance": ("fabkiri.cli.tolerance_cmd", "Monte-Carlo of cut and hinge errors: closure gaps, overlaps, outline"),
+    "coupon": ("fabkiri.cli.coupon_cmd", "calibration coupon: laser (--material) or print (--printer) test pieces"),
+    "report": ("fabkiri.cli.report_cmd", "one self-contained HTML page: design vs target, states, deployment, "
+               "cut and print files, assembly, bill of materials"),
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -33,18 +60,36 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command(argv: Sequence[str]) -> str | None:
+    """The subcommand named on the command line (the first word that is not a top-level option)."""
+    return next((a for a in argv if not a.startswith("-")), None)
+
+
+def build_parser(command: str | None = "") -> argparse.ArgumentParser:
+    """The parser; with a ``command`` known to ``SUMMARIES`` only that command's module is imported.
+
+    ``command=""`` (the default) imports every module, ``None`` none of those in ``SUMMARIES``.
+    """
     parser = _Parser(prog="fabkiri", description="Compact reconfigurable kirigami: design, verify, fabricate.")
     parser.add_argument("--version", action="version", version=f"fabkiri {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name in COMMANDS:
-        importlib.import_module(name).register(sub)
+    covered = {module for module, _ in SUMMARIES.values()}
+    wanted = SUMMARIES[command][0] if command in SUMMARIES else (None if command is None else "*")
+    stubs = []
+    for module in COMMANDS:
+        if module not in covered or wanted in ("*", module):
+            importlib.import_module(module).register(sub)
+        else:
+            stubs += [name for name, (m, _) in SUMMARIES.items() if m == module]
+    for name in stubs:  # never parsed: the command given is registered for real above
+        sub.add_parser(name, help=SUMMARIES[name][1])
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command(argv))
     args = parser.parse_args(argv)
     try:
         code = args.func(args)

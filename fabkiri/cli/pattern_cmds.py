@@ -35,6 +35,26 @@ def load_any(path: str) -> Pattern:
     return read_pattern(path)
 
 
+def import_other(path: str, scale: float) -> Pattern | None:
+    """A FOLD file (``.fold``) or a PyKirigami model folder; None for anything else."""
+    p = Path(path)
+    if p.suffix.lower() == ".fold":
+        from ..pattern.fold import loads_fold
+        from ..pattern.io import _read_text
+
+        pat = loads_fold(_read_text(p), str(p))
+        if scale != 1.0:
+            pat = Pattern(nodes=pat.nodes * scale, tiles=pat.tiles,
+                          contracted={k: v * scale for k, v in pat.contracted.items()}, name=pat.name,
+                          design=pat.design)
+        return adopt_state_labels(pat)
+    if p.is_dir():
+        from ..pattern.pykirigami import read_pykirigami
+
+        return adopt_state_labels(read_pykirigami(p, unit_mm=scale))
+    return None
+
+
 def _positive(text: str) -> float:
     try:
         v = float(text)
@@ -59,7 +79,9 @@ def cmd_new(args: argparse.Namespace) -> int:
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    pattern = adopt_state_labels(import_obj(args.design, args.contracted or [], scale=args.scale))
+    pattern = None if args.contracted else import_other(args.design, args.scale)
+    if pattern is None:
+        pattern = adopt_state_labels(import_obj(args.design, args.contracted or [], scale=args.scale))
     info = describe(pattern)
     write_pattern(pattern, args.output)
     print(f"wrote {args.output}: {info.tiles} tiles, {info.holes} holes, "
@@ -82,19 +104,44 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _with_state(pattern: Pattern, s: int) -> Pattern:
+    """The pattern with closed state ``s`` stored (contracted if missing; it must close)."""
+    if s in pattern.contracted:
+        return pattern
+    c = contract(pattern, s)
+    if c.max_closure > DEFAULT_TOL * pattern.tile_size:
+        raise CheckFailed(
+            f"state {s} does not close (loop closure {c.max_closure / pattern.tile_size:.3g} tile sizes "
+            f"at hole {c.worst_hole}); nothing exported"
+        )
+    return pattern.with_contracted({**pattern.contracted, s: c.corners})
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     state = args.state
+    fmt = args.format
+    if fmt == "fold":  # every state, one frame each
+        from ..pattern.fold import fold_text
+
+        pattern = _with_state(_with_state(pattern, 1), 2)
+        atomic_write(args.output, fold_text(pattern))
+        print(f"wrote {args.output}: FOLD 1.2, frames deployed / closed 1 / closed 2, {pattern.n_tiles} faces",
+              file=sys.stderr)
+        return 0
+    if fmt == "pykirigami":  # start in a closed state, pulled to the deployed target
+        from ..fileio import atomic_write_many
+        from ..pattern.pykirigami import pykirigami_files
+
+        s = 1 if state == "deployed" else int(state)
+        pattern = _with_state(pattern, s)
+        unit = args.unit or pattern.tile_size
+        atomic_write_many(args.output, pykirigami_files(pattern, pattern.contracted[s], unit))
+        print(f"wrote {args.output}/vertices.txt (closed state {s}), target.txt (deployed), constraints.txt "
+              f"({pattern.topology.n_hinges} joints); 1 unit = {unit:.6g} mm", file=sys.stderr)
+        return 0
     if state != "deployed":
-        s = int(state)
-        if s not in pattern.contracted:
-            c = contract(pattern, s)
-            if c.max_closure > DEFAULT_TOL * pattern.tile_size:
-                raise CheckFailed(
-                    f"state {s} does not close (loop closure {c.max_closure / pattern.tile_size:.3g} tile sizes "
-                    f"at hole {c.worst_hole}); nothing exported"
-                )
-            pattern = pattern.with_contracted({**pattern.contracted, s: c.corners})
+        pattern = _with_state(pattern, int(state))
     atomic_write(args.output, obj_text(pattern, state))
     print(f"wrote {args.output}: state {state}, {pattern.n_tiles} faces", file=sys.stderr)
     return 0
@@ -110,10 +157,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_new)
 
-    p = sub.add_parser("import", help="import an OBJ design (and its contracted states) into pattern.json")
-    p.add_argument("design", help="deployed design .obj")
+    p = sub.add_parser("import", help="import an OBJ design (and its contracted states), a .fold file or a "
+                                       "PyKirigami model folder into pattern.json")
+    p.add_argument("design", help="deployed design .obj, a .fold file or a PyKirigami folder")
     p.add_argument("--contracted", nargs="+", metavar="OBJ", help="contracted state files: state 1 [state 2]")
-    p.add_argument("--scale", type=_positive, default=1.0, metavar="MM", help="millimetres per OBJ unit (default 1)")
+    p.add_argument("--scale", type=_positive, default=1.0, metavar="MM", help="millimetres per file unit (default 1)")
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_import)
 
@@ -127,8 +175,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"angle tolerance in radians (default {DEFAULT_TOL_RAD:g})")
     p.set_defaults(func=cmd_info)
 
-    p = sub.add_parser("export", help="write one state of a pattern as OBJ")
+    p = sub.add_parser("export", help="write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder")
     p.add_argument("file")
-    p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.obj")
+    p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed",
+                   help="obj: the state written; pykirigami: the closed start state (default 1)")
+    p.add_argument("--format", choices=["obj", "fold", "pykirigami"], default="obj",
+                   help="obj (default); fold: FOLD 1.2 JSON, frame 0 deployed, frames 1, 2 the closed states; "
+                        "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator")
+    p.add_argument("--unit", type=_positive, metavar="MM",
+                   help="pykirigami: mm per file unit (default: the mean tile edge, so tiles are about 1 unit)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.obj, OUT.fold or a folder (pykirigami)")
     p.set_defaults(func=cmd_export)

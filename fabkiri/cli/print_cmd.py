@@ -78,6 +78,10 @@ def cmd_print(args: argparse.Namespace) -> int:
                           + "; nothing written")
     files["manifest.json"] = mesh.manifest(realised, report, tiles, Path(args.file).name,
                                            list(files) + ["manifest.json"], verifier, read_back)
+    from ..fabricate.assembly import add_to_print
+
+    files["manifest.json"], extra = add_to_print(files["manifest.json"], pattern, realised, stem)
+    files.update(extra)
     files.update(laser)
     atomic_write_many(args.output, files)
     faces = int(job.plan.top.sum())

@@ -50,7 +50,9 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from ..verify import verify_layout, verify_pattern
 
     pattern = load_for_verify(args.file)
-    report = verify_pattern(pattern, tol_rad=args.tol_rad)
+    from ..design.conformance import parse_shape_tol
+
+    report = verify_pattern(pattern, tol_rad=args.tol_rad, shape_tol=parse_shape_tol(args.shape_tol))
     if args.layout:
         if not Path(args.layout).exists():
             raise InputError(f"{args.layout}: no such layout file")
@@ -79,5 +81,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "1e-9 of the mean tile edge (1e-5 for optimiser output)")
     p.add_argument("--tol-rad", type=_nonneg, default=1e-6, metavar="RAD",
                    help="angle tolerance in radians (default 1e-6)")
+    p.add_argument("--shape-tol", default="2%", metavar="TOL",
+                   help="largest Hausdorff distance between an outline and its stored target: a percentage of "
+                        "the target size (default 2%%) or a length like 0.5mm")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=cmd_verify)

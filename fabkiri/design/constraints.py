@@ -24,7 +24,7 @@ import numpy as np
 from scipy import sparse
 
 from ..errors import InputError, SolveError
-from ..pattern.geometry import cross2, signed_angle, wrap_angle
+from ..pattern.geometry import cross2, dot2, signed_angle, wrap_angle
 from ..pattern.lattice import DX, DY
 from ..pattern.model import Pattern
 from .targets import Target
@@ -291,6 +291,85 @@ def shape_match(nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, n
         return d, (nodes[:, None], g[:, None, :])
 
     return Family(name, "fit", fn, 1, meta={"nodes": nodes, "sides": sides, "target": target}, nv=nv)
+
+
+# weights of the outline rows against the tip rows (weight 1): every chord midpoint, and target samples
+# (OUTLINE_SAMPLES per tip, each row weighted so all samples together count as much as the tips)
+CHORD_WEIGHT = 1.0
+OUTLINE_SAMPLES = 4
+SAMPLE_WEIGHT = 1.0
+
+
+def outline_match(order: np.ndarray, target: Target, nv: int, name: str = "shape_outline",
+                  samples: int = OUTLINE_SAMPLES) -> Family:
+    """The whole tip polygon against the target, not just its vertices (``shape_match``): soft rows.
+
+    * the midpoint of every chord between consecutive tips (``order``: tips in boundary order), signed
+      distance to the whole target curve — a chord that cuts a corner or spans an uncovered stretch has its
+      midpoint far from the curve;
+    * target samples (``samples`` per tip, uniform in arc length, plus every sharp vertex of a polyline target:
+      corners and cusps), signed distance to their nearest chord (positive when the target is outside the tip
+      polygon) — a star point or heart cusp that no tip reaches pulls the nearest chord's tips towards it.
+
+    Their minimum is not zero (a chord cannot follow a curve), so the exact-fit projection leaves them out
+    (``meta["soft"]``).
+    """
+    order = np.asarray(order, dtype=np.int64)
+    E = len(order)
+    a_idx, b_idx = order, np.roll(order, -1)
+    whole = target.projector(np.full(E, -1))
+    pts = _outline_samples(target, samples * E)
+    ws = SAMPLE_WEIGHT * np.sqrt(1.0 / samples)
+
+    def fn(x):
+        A, B = x[a_idx], x[b_idx]
+        _, _, dm, gm = whole(0.5 * (A + B))
+        e = B - A
+        ee = np.maximum(dot2(e, e), 1e-300)
+        rel = pts[:, None, :] - A[None, :, :]  # (K, E, 2)
+        t = np.clip(dot2(rel, e[None]) / ee[None], 0.0, 1.0)
+        foot = A[None] + t[..., None] * e[None]
+        dist = np.sqrt(dot2(pts[:, None, :] - foot, pts[:, None, :] - foot))
+        j = np.argmin(dist, axis=1)
+        k = np.arange(len(pts))
+        tj, fj, dj = t[k, j], foot[k, j], dist[k, j]
+        # the sign from the tip polygon itself (inside: negative), not from the nearest chord's normal, which
+        # flips between the two chords of a tip; the gradient moves the foot (1-t) a + t b towards the sample
+        side = np.where(_inside(pts, A, B), -1.0, 1.0)
+        off = pts - fj
+        ej = e[j]
+        nrm = np.stack([ej[:, 1], -ej[:, 0]], -1) / np.sqrt(ee[j])[:, None]
+        unit = np.where((dj > 1e-300)[:, None], off / np.maximum(dj, 1e-300)[:, None], nrm)
+        g = side[:, None] * unit
+        ga = -g * (1.0 - tj)[:, None]
+        gb = -g * tj[:, None]
+        r = np.concatenate([CHORD_WEIGHT * dm, ws * side * dj])
+        nodes = np.concatenate([np.stack([a_idx, b_idx], -1), np.stack([a_idx[j], b_idx[j]], -1)])
+        grads = np.concatenate([CHORD_WEIGHT * 0.5 * np.stack([gm, gm], 1), ws * np.stack([ga, gb], 1)])
+        return r, (nodes, grads)
+
+    return Family(name, "fit", fn, 1, meta={"nodes": order, "target": target, "soft": True}, nv=nv)
+
+
+def _inside(pts: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Points inside the closed polygon with edges A -> B (even-odd crossings of a ray to +x)."""
+    ay, by = A[None, :, 1], B[None, :, 1]
+    py = pts[:, None, 1]
+    straddle = (ay > py) != (by > py)
+    dy = np.where(straddle, by - ay, 1.0)
+    xc = A[None, :, 0] + (py - ay) * (B[None, :, 0] - A[None, :, 0]) / dy
+    return ((straddle & (pts[:, None, 0] < xc)).sum(1) % 2) == 1
+
+
+def _outline_samples(target: Target, n: int) -> np.ndarray:
+    """``n`` points uniform in the target's parameter (chord length) and its sharp polyline vertices."""
+    pts = target.point(np.linspace(0.0, 1.0, n, endpoint=False))
+    if target.kind == "polyline":
+        P = target.points
+        d0, d1 = P - np.roll(P, 1, 0), np.roll(P, -1, 0) - P
+        turn = np.abs(np.arctan2(cross2(d0, d1), dot2(d0, d1)))
+        pts = np.vstack([pts, P[turn > np.radians(20.0)]])
+    return pts
 
 
 def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:

@@ -186,11 +186,14 @@ def resample_grid(grid: np.ndarray, rows: int, cols: int) -> np.ndarray:
 
     A coarse-to-fine start inside the rigid family. Doubling splits every cell in four, and the four
     quads of a convex cell are convex, so that refined grid folds no cell (a map of the deployed tiles
-    can fold tiles); other ratios sample the same piecewise-bilinear map.
+    can fold tiles); other ratios sample the same piecewise-bilinear map. (numpy, not scipy's
+    ``RegularGridInterpolator``: importing ``scipy.interpolate`` cost more than the resampling.)
     """
-    from scipy.interpolate import RegularGridInterpolator
-
     m, n = grid.shape[0] - 1, grid.shape[1] - 1
-    at = RegularGridInterpolator((np.arange(m + 1.0), np.arange(n + 1.0)), grid, method="linear")
-    yi, xi = np.meshgrid(np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1), indexing="ij")
-    return at(np.stack([yi, xi], -1))
+    yi, xi = np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1)
+    i = np.minimum(np.floor(yi).astype(np.int64), m - 1)
+    j = np.minimum(np.floor(xi).astype(np.int64), n - 1)
+    a, b = (yi - i)[:, None, None], (xi - j)[None, :, None]
+    g00, g01 = grid[i][:, j], grid[i][:, j + 1]
+    g10, g11 = grid[i + 1][:, j], grid[i + 1][:, j + 1]
+    return (1 - a) * ((1 - b) * g00 + b * g01) + a * ((1 - b) * g10 + b * g11)

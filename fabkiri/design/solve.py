@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import sparse
@@ -47,9 +47,11 @@ except ImportError:  # pragma: no cover
 
 from ..errors import InputError
 from ..pattern import geometry
+from ..pattern.conformance import boundary_tip_order
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
+from . import outline
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
 from .reduced import fit_miss, solve_reduced
@@ -99,6 +101,11 @@ FULL_ABOVE = 2.5e-3
 # ... but not above this many tiles: at 64x64 the full solver takes 1-8 minutes and did not find the better
 # design on hard targets (rigid heart from rescaled: 21.6 mm either way; ellipse: 7.4 mm after 7.8 min)
 FULL_MAX_TILES = 32 * 32
+# from this many tiles a non-rigid rhombus design (no symmetry, no closed-state target) is solved as the rigid
+# one, coarse to fine: a rigid member satisfies every non-rigid equality, and there the full solver over all
+# nodes was slower and mostly worse (API, rescaled, 100 mm: 32x32 heart 90 s CPU, Hausdorff 7.1 % of the
+# target's diagonal; 32x32 ellipse 84 s CPU and unconverged, 11.8 %; rigid family: 9.5 s / 7.5 %, 3.9 s / 1.2 %)
+VIA_RIGID_TILES = 32 * 32
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 
 
@@ -119,6 +126,7 @@ class DesignRequest:
     reg_weight: float = 1e-3
     max_iter: int = 300
     name: str = ""
+    outline: bool = True  # also fit the tip polygon's chords and the target's samples (``C.outline_match``)
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -170,6 +178,7 @@ class _Problem:
         base = std.nodes.copy()
         n = len(base)
         self.coarse = None
+        self.start_member = None  # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
         self._rigid: RigidFamily | None = None
         if req.init == "coarse":
             X0, L0 = self._coarse_guess(base, st)
@@ -218,7 +227,12 @@ class _Problem:
                 if spec[1] is not None:
                     fam.append(C.outline_ratio(st, s, float(spec[1]), nv))
         if req.target is not None:
-            fam.append(C.shape_match(st.tip_nodes, st.tip_side, req.target.transformed(1.0 / L0), nv, "shape"))
+            tgt = req.target.transformed(1.0 / L0)
+            fam.append(C.shape_match(st.tip_nodes, st.tip_side, tgt, nv, "shape"))
+            if req.outline:
+                top = std.topology
+                order = boundary_tip_order(top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes)
+                fam.append(C.outline_match(order, tgt, nv))
         for s, g in self.grids.items():
             fam.append(C.shape_match(g.boundary, g.boundary_side, curves[s].transformed(1.0 / L0), nv,
                                      f"closed_shape_{s}"))
@@ -239,7 +253,10 @@ class _Problem:
         sub = DesignRequest(rc, cc, req.target, rigid=req.rigid, symmetry=req.symmetry, holes=req.holes,
                             contracted=dict(req.contracted),
                             init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
-                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver)
+                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver,
+                            # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
+                            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
+                            outline=False)
         res = _design(sub, False)
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
@@ -274,7 +291,9 @@ class _Problem:
         grid = resample_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2),
                              self.req.rows, self.req.cols)
         fam = self.rigid_family
-        return fam.nodes(fam.seeds_for_grid(grid.reshape(-1, 2)), psi)
+        S = fam.seeds_for_grid(grid.reshape(-1, 2))
+        self.start_member = (S, psi)  # the start's seeds: the reduced solver need not fit them again
+        return fam.nodes(S, psi)
 
     @property
     def rigid_family(self) -> RigidFamily:
@@ -506,10 +525,15 @@ def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None
     return x.reshape(shape), it
 
 
+def exact_fits(fits: list[C.Family]) -> list[C.Family]:
+    """The fit rows an exact fit drives to zero (not the soft outline rows, whose minimum is not zero)."""
+    return [f for f in fits if not f.meta.get("soft")]
+
+
 def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
     out = {}
     for f in prob.families:
-        if f.kind in ("eq", "fit"):
+        if f.kind == "eq" or (f.kind == "fit" and not f.meta.get("soft")):
             r = f.residual(X)
             out[f.name] = float(np.abs(r).max(initial=0.0)) / L ** f.dim
     return out
@@ -524,6 +548,26 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
 
 def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
     return geometry.mean_edge_length(X[prob.st.tiles])
+
+
+def via_rigid_applies(req: DesignRequest) -> bool:
+    """A non-rigid request answered by the rigid family (``VIA_RIGID_TILES``)."""
+    return (req.solver == "auto" and not req.rigid and req.holes == "rhombus" and not req.symmetry
+            and not req.contracted and req.target is not None and req.rows * req.cols >= VIA_RIGID_TILES)
+
+
+def _solve_via_rigid(prob: _Problem, log, iters: dict):
+    """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
+    the non-rigid problem, else None."""
+    sub = replace(prob.req, rigid=True, init="coarse", name="")
+    log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
+    res = _design(sub, False)
+    iters.update({f"rigid_{k}": v for k, v in res.report["iterations"].items()})
+    X = res.pattern.nodes / prob.L0
+    if res.converged and _acceptable(prob, X):
+        return X, res.report["shape_matching"], res.report["solver"]
+    log("the rigid-family design fails a non-rigid family check: the full solver takes over")
+    return None
 
 
 def reduced_applies(req: DesignRequest) -> bool:
@@ -550,15 +594,51 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
     # the standard starts sit at ψ = π/4; a coarse-to-fine start at whatever the coarse design opened to
     psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
+    S0 = None
+    if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
+        S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
     X, mode, its = solve_reduced(fam, prob.st, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
                                  0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
                                  max_iter=req.max_iter,
                                  # small patterns get the full solver's second opinion anyway
-                                 miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE)
+                                 miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE,
+                                 S0=S0)
     iters.update(its)
     if _acceptable(prob, X) or req.solver == "reduced":
         return X, mode
     log("the rigid family's result fails a family check: falling back to the full solver")
+    return None
+
+
+def _solve_outline(prob: _Problem, log, iters: dict):
+    """Square/circle closed-state outlines in the rigid family (``outline.py``); ``(X, mode)`` or None.
+
+    A circle target is size-free: its state's target becomes the fitted circle (centre and radius), so the
+    report and the CLI's outline check measure against that circle.
+    """
+    res = outline.solve_outline(prob, log, iters)
+    if res is None:
+        return None
+    X, mode, fitted = res
+    saved = dict(prob.curves_mm), list(prob.families)
+    M, N = prob.req.rows, prob.req.cols
+    for s, (centre, radius) in fitted.items():
+        g = prob.grids[s]
+        # the fitted circle, split into its four arcs at the directions of the grid's corners (BL, BR, TR, TL)
+        corners = X[g.offset + np.array([0, N, (M + 1) * (N + 1) - 1, M * (N + 1)])] - centre
+        unit = prob.req.contracted[s]
+        lo, hi = unit.bbox
+        start = unit.points[0] - 0.5 * (lo + hi)  # a circle's parameter is its angle from the first point over 2π
+        u = np.mod((np.arctan2(corners[:, 1], corners[:, 0]) - np.arctan2(start[1], start[0])) / (2 * np.pi), 1.0)
+        pts = (unit.points - 0.5 * (lo + hi)) * (radius * prob.L0 / (0.5 * float((hi - lo).max()))) + centre * prob.L0
+        mm = Target(unit.name, unit.kind, pts, corners=u, source=dict(unit.source))
+        prob.curves_mm[s] = mm
+        prob.families = [C.shape_match(g.boundary, g.boundary_side, mm.transformed(1.0 / prob.L0), prob.nv,
+                                       f.name) if f.name == f"closed_shape_{s}" else f for f in prob.families]
+    if _acceptable(prob, X):
+        return X, mode
+    log("the closed-state outline design fails a family check: falling back to the full solver")
+    prob.curves_mm, prob.families = saved
     return None
 
 
@@ -570,7 +650,7 @@ def _solve_full(prob: _Problem, log, iters: dict):
         return max((float(np.abs(f.residual(Y)).max()) for f in prob.of("eq")), default=0.0)
 
     eqs = prob.of("eq")
-    fits = prob.of("fit")
+    fits = exact_fits(prob.of("fit"))
 
     def project(X):
         """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
@@ -622,7 +702,8 @@ def _solve_full(prob: _Problem, log, iters: dict):
 def _design(req: DesignRequest, progress: bool) -> DesignResult:
     log = _Log(progress)
     t0 = time.perf_counter()
-    prob = _Problem(req)
+    # a non-rigid request answered by the rigid family needs no guess of its own (least of all a coarse solve)
+    prob = _Problem(replace(req, init="rescaled") if via_rigid_applies(req) else req)
     log(f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
         + ", ".join(f.name for f in prob.families))
     iters: dict = {}
@@ -635,7 +716,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         out = _solve_reduced(prob, log, iters)
     solver = reduced_name
     if out is not None and req.solver == "auto" and out[1] != "hard":
-        miss = fit_miss(fits, out[0])
+        miss = fit_miss(exact_fits(fits), out[0])
         if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
             log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
                 f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)")
@@ -648,6 +729,13 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
             log(f"objective: rigid family {f_red:.4e}, full {f_full:.4e}" + ("" if ok_full else " (unconverged)"))
             if ok_full and f_full < f_red:
                 out, solver = full, full_name
+    if out is None and via_rigid_applies(req):
+        via = _solve_via_rigid(prob, log, iters)
+        if via is not None:
+            out, solver = via[:2], f"{via[2]}, for a non-rigid request"
+    if out is None and req.solver == "auto" and outline.applies(req):
+        out = _solve_outline(prob, log, iters)
+        solver = "closed-form rigid family, closed-state outlines (exact square, size-free circle)"
     if out is None:
         out = _solve_full(prob, log, iters)
         solver = full_name
@@ -667,7 +755,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         r = f.residual(X)
         fit[f.name] = {"max_mm": float(np.abs(r).max()) * L0, "rms_mm": float(np.sqrt(np.mean(r * r))) * L0,
                        "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,
-                       "points": int(len(r))}
+                       "points": int(len(r)), "soft": bool(f.meta.get("soft"))}
     report = {
         "status": "converged" if converged else "unconverged",
         "tolerance": req.tol,

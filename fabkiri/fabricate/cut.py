@@ -71,9 +71,11 @@ class CutOptions:
     force: bool = False
     stem: str = "pattern"
     pattern_file: str = ""
+    notes: bool = True  # the NOTES layer: sheet frame, caption, reference-square size (never cut)
+    stroke_mm: float = STROKE_MM  # SVG stroke width: what a viewer draws; the colour says cut/score/engrave
 
 
-ROW_LISTS = ("tiles", "hinges", "hinge_features")  # manifest lists written one row per line
+ROW_LISTS = ("tiles", "hinges", "hinge_features", "assembly_pieces")  # manifest lists written one row per line
 
 
 @dataclass
@@ -426,12 +428,13 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         sheets[rs].add("CUT", sq, True)
         cap_h = min(5.0, options.reference_mm / 8)
         for p in text_strokes(f"{options.reference_mm:g} MM", cap_h,
-                              sq.mean(0)):
+                              sq.mean(0)) if options.notes else []:
             sheets[rs].add("NOTES", p, False)
 
     # ---- labels (ENGRAVE): tile IDs, corner labels, tape marks
     omitted = 0
     label_heights = np.zeros(T)
+    hc_all = None
     if options.labels:
         cent = shapely.get_coordinates(shapely.centroid(shapely.polygons(Q)))
         id_region = cent[:, None, :] + ID_FRAC * (Q - cent[:, None, :])
@@ -461,6 +464,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
                             q + _reach(q, q0, CORNER_FRAC)[:, None] * (q0 - q)], 1)
             anchor = _incentre(tri)
             hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
+            hc_all = hc
             omitted += int((hc <= 0).sum())
             _add_labels(sheets, sheet_of[ct], ct, *text_strokes_many(c_text, hc, anchor))
         if kind == "tape" and Hn:
@@ -478,7 +482,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             warnings.append(f"{omitted} label(s) left out: no room for {MIN_LABEL_MM:g} mm text inside the tile")
 
     # ---- notes: sheet frame and caption
-    for sd in sheets:
+    for sd in sheets if options.notes else []:
         sd.add("NOTES", np.array([[0, 0], [sd.width, 0], [sd.width, sd.height], [0, sd.height]], float), True)
         cap = f"{options.stem} {sd.index}/{len(sheets)} {mat.name} {kind} state {state} kerf {kerf:g}"
         cap = "".join(ch if supported(ch) else "-" for ch in cap)
@@ -500,9 +504,20 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         if "dxf" in options.formats:
             files[f"{name}.dxf"] = dxf_bytes(sd, colors)
         if "svg" in options.formats:
-            files[f"{name}.svg"] = svg_bytes(sd, colors)
+            files[f"{name}.svg"] = svg_bytes(sd, colors, options.stroke_mm)
     if "png" in options.formats:
-        files[f"{options.stem}.png"] = png_bytes(sheets, colors)
+        shown = [h for h in (label_heights, hc_all) if h is not None and (h > 0).any()]
+        smallest = min((float(h[h > 0].min()) for h in shown), default=None)
+        files[f"{options.stem}.png"] = png_bytes(sheets, colors, label_mm=smallest)
+
+    # ---- assembly: tape pieces numbered in join order, and their map
+    from . import assembly as asm
+
+    pieces = asm.tape_pieces(pattern, Q, sheet_of, letters, kind, CORNER_FRAC, TAPE_REACH_MM)
+    if "png" in options.formats and 0 < len(pieces) <= asm.MAP_MAX_PIECES:
+        by_sheet = [Q[sheet_of == s] for s in range(place.n_sheets)]
+        files["assembly.png"] = asm.map_png(by_sheet, pieces, asm.tape_shapes(pattern, Q, pieces, CORNER_FRAC,
+                                                                             TAPE_REACH_MM), options.stem)
 
     # ---- manifest
     sheet_rows = []
@@ -542,7 +557,8 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         "tile_shrink_mm": shrink, "tolerance_mm": mat.tolerance_mm,
         "parameters": {
             "sheet_mm": list(sheet_wh), "margin_mm": options.margin, "formats": list(options.formats),
-            "colors": colors, "stroke_mm": STROKE_MM, "dxf_version": DXF_VERSION, "labels": options.labels,
+            "colors": colors, "stroke_mm": options.stroke_mm, "notes": options.notes, "dxf_version": DXF_VERSION,
+            "labels": options.labels,
             "label_height_mm": label_h, "label_margin_mm": label_margin, "part_spacing_mm": spacing,
             "reference_mm": options.reference_mm, "force": options.force, "turn_deg": options.turn_deg,
             "ligament_width_mm": None if lig is None else lig.width_mm,
@@ -572,5 +588,15 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         "files": sorted(list(files) + ["manifest.json"]),
         "verification": None,
     }
+    n_top = sum(p["face"] == "T" for p in pieces)
+    manifest["assembly"] = {"joins": "tape" if pieces else None, "order": "top face first, then the bottom; "
+                            "breadth-first spanning tree from tile 0, then the loop-closing joins",
+                            "steps": asm.assembly_steps(kind, n_top, len(pieces) - n_top),
+                            "map": "assembly.png" if "assembly.png" in files else None,
+                            "map_note": None if len(pieces) <= asm.MAP_MAX_PIECES else
+                            f"no map: {len(pieces)} pieces are more than {asm.MAP_MAX_PIECES} legible numbers"}
+    manifest["assembly_pieces"] = pieces
+    manifest["bill_of_materials"] = asm.cut_bom(manifest, pieces, float(shapely.area(shapely.polygons(corners)).sum()),
+                                                Hn)
     return CutResult(sheets=sheets, files=files, manifest=manifest, warnings=warnings, tile_regions=Q,
                      tile_sheet=sheet_of)

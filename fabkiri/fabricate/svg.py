@@ -1,7 +1,7 @@
 """SVG writer (svgwrite): millimetre-sized, 1 user unit = 1 mm, one group per layer.
 
 The drawing is y-up; SVG is y-down, so every point is written as
-``(x, H - y)``. Strokes are hairlines (0.01 mm), fills none, so laser software
+``(x, H - y)``. Strokes are 0.1 mm (a kerf: visible in viewers), fills none, so laser software
 reads every element as a vector path. No ``<text>``: labels are strokes.
 """
 
@@ -12,7 +12,7 @@ import svgwrite
 
 from .drawing import COLORS, DECIMALS, LAYERS, SheetDrawing
 
-STROKE_MM = 0.01
+STROKE_MM = 0.1  # visible when rendered (0.01 exports from Inkscape as all white); colour, not width, says cut
 INKSCAPE_NS = "http://www.inkscape.org/namespaces/inkscape"
 
 

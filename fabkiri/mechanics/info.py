@@ -54,6 +54,7 @@ class PatternInfo:
     tolerance_rel: float
     tolerance_rad: float
     states: list[StateInfo] = field(default_factory=list)
+    conformance: dict = field(default_factory=dict)  # "deployed" / "state_S" -> design.conformance measure
 
     @property
     def closes_both(self) -> bool:
@@ -111,6 +112,13 @@ class PatternInfo:
             )
             if s.wrapped_tiles:
                 lines.append(f"       ring residuals wrapped by 2π because of tiles {s.wrapped_tiles}")
+        for key, c in self.conformance.items():
+            lines.append(
+                f"shape        {key.replace('_', ' ')} vs {c.get('target', 'target')}: Hausdorff "
+                f"{c['hausdorff_mm']:.3g} mm ({100 * c['hausdorff_rel']:.2f} % of {c['size_mm']:.4g} mm), 1-IoU "
+                f"{c['one_minus_iou']:.3g}, mean distance {c['mean_outline_to_target_mm']:.3g}/"
+                f"{c['mean_target_to_outline_mm']:.3g} mm, spacing min/mean {c['spacing_min_mm']:.3g}/"
+                f"{c['spacing_mean_mm']:.3g} mm")
         lines.append(f"tolerance    {self.tolerance_rel:g} x tile size, {self.tolerance_rad:g} rad")
         verdict = "closes in both states" if self.closes_both else "; ".join(self.problems())
         lines.append(f"verdict      {verdict}")
@@ -161,4 +169,26 @@ def describe(pattern: Pattern, tol: float = DEFAULT_TOL, tol_rad: float = DEFAUL
             st.supplied_match_rel = d
             st.supplied_matches = bool(d <= tol * np.sqrt(top.n_tiles))
         info.states.append(st)
+    info.conformance = _conformance(pattern)
     return info
+
+
+def _conformance(pattern: Pattern) -> dict:
+    """Shape conformance of the outline to every stored target curve (see ``fabkiri.design.conformance``);
+    targets that cannot be rebuilt are left out (``verify`` reports them)."""
+    from ..design import conformance as conf
+    from ..design.targets import target_from_dict
+    from ..errors import InputError
+
+    d = pattern.design or {}
+    out = {}
+    try:
+        if isinstance(d.get("target"), dict):
+            out["deployed"] = conf.deployed(pattern.nodes, pattern.topology, target_from_dict(d["target"]))
+        for s, tgt in sorted((d.get("contracted_targets") or {}).items()):
+            if int(s) in STATES:
+                c = contract(pattern, int(s))
+                out[f"state_{s}"] = conf.closed(pattern.contracted.get(int(s), c.corners), target_from_dict(tgt))
+    except (InputError, ValueError, TypeError, KeyError):
+        pass
+    return out

@@ -25,9 +25,10 @@ def _pyplot():
     return plt
 
 
-def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = True) -> None:
+def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = True, anchor: float = 0.0) -> None:
+    """E(t) on [lo, hi], plotted against ``t - anchor`` (a zoom next to t = 1 reads "t - 1", not "1e-9+1")."""
     sel = (path.t >= lo - 1e-12) & (path.t <= hi + 1e-12)
-    t, e, emax = path.t[sel], path.energy[sel], path.max_tile_energy[sel]
+    t, e, emax = path.t[sel] - anchor, path.energy[sel], path.max_tile_energy[sel]
     ax.plot(t, e, "-o", ms=2.5, lw=1.5, color="C0", label="total energy E")
     ax.plot(t, emax, "-", lw=1.0, color="C3", label="largest tile energy")
     top = float(max(e.max(initial=0.0), emax.max(initial=0.0)))
@@ -36,14 +37,22 @@ def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = T
     else:
         ax.set_ylim(-0.03 * top, 1.12 * top)
     for a, b in path.elastic_segments:
-        ax.axvspan(a, b, color="C1", alpha=0.12, lw=0)
+        ax.axvspan(a - anchor, b - anchor, color="C1", alpha=0.12, lw=0)
     if marks:
         for name, tm in MARKS.items():
             if lo - 1e-12 <= tm <= hi + 1e-12:
-                ax.axvline(tm, color="0.4", lw=0.8, ls="--")
+                ax.axvline(tm - anchor, color="0.4", lw=0.8, ls="--")
     pad = 0.02 * (hi - lo)
-    ax.set_xlim(lo - pad, hi + pad)
-    ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
+    ax.set_xlim(lo - anchor - pad, hi - anchor + pad)
+    ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3), useOffset=False)
+    ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 3), useOffset=False)
+    ax.xaxis.set_major_locator(_ticker().MaxNLocator(4))
+
+
+def _ticker():
+    import matplotlib.ticker as ticker
+
+    return ticker
 
 
 def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> bytes:
@@ -79,10 +88,11 @@ def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> by
     if zoom:
         for k, (a, b) in enumerate(segs):
             sub = fig.add_subplot(gs[1, k])
-            _energy_axes(sub, path, a, b)
-            near = "closed state 1" if a <= 0.0 else "closed state 2"
+            first = a <= 0.0
+            _energy_axes(sub, path, a, b, anchor=0.0 if first else 1.0)
+            near = "closed state 1" if first else "closed state 2"
             sub.set_title(f"barrier next to {near}", fontsize=8)
-            sub.set_xlabel("t", fontsize=8)
+            sub.set_xlabel("t" if first else "t - 1", fontsize=8)
             sub.tick_params(labelsize=7)
             sub.yaxis.get_offset_text().set_fontsize(7)
     fig.tight_layout()
@@ -90,6 +100,23 @@ def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> by
     fig.savefig(buf, format="png", metadata={"Software": None})
     plt.close(fig)
     return buf.getvalue()
+
+
+def _state_label(t: float, marks: dict[str, int], ts: np.ndarray, f: int) -> str:
+    """"closed state 1" / "deployed" / "closed state 2" on their frames, else where the motion goes."""
+    for name, k in marks.items():
+        if k == f:
+            return name
+    return "closed state 1 → deployed" if t < ts[marks["deployed"]] else "deployed → closed state 2"
+
+
+def _scale_bar(ax, lo: np.ndarray, hi: np.ndarray, pad: float) -> None:
+    """A round length in mm under the lower left of the drawing."""
+    span = float(hi[0] - lo[0])
+    L = next((v for v in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000) if v >= span / 5), 1000)
+    x0, y0 = lo[0], lo[1] - 0.6 * pad
+    ax.plot([x0, x0 + L], [y0, y0], color="k", lw=3, solid_capstyle="butt", clip_on=False)
+    ax.text(x0 + L + 0.01 * span, y0, f"{L:g} mm", va="center", fontsize=11, clip_on=False)
 
 
 def _frame_indices(n: int, max_frames: int) -> np.ndarray:
@@ -103,7 +130,7 @@ def deployment_gif(
     color: str = "auto",
     *,
     max_frames: int = 61,
-    size_px: int = 420,
+    size_px: int = 840,
     frame_ms: int = 80,
     trajectories: bool = True,
     title: str = "",
@@ -127,7 +154,13 @@ def deployment_gif(
         raise ValueError(f"color must be energy, rotation or auto, not {color!r}")
     idx = _frame_indices(path.n_frames, max_frames)
     corners, centres = path.corners, path.centres
-    if color == "energy":
+    flat = color == "energy" and float(path.tile_energy.max()) <= ZERO_ENERGY  # noise: colours would mean nothing
+    if flat:
+        values = np.zeros_like(path.tile_energy)
+        norm = mcolors.Normalize(vmin=-1.0, vmax=1.0)
+        cmap = plt.get_cmap("Greys")
+        label = ""
+    elif color == "energy":
         values = path.tile_energy
         vmax = max(float(values.max()), ZERO_ENERGY * 10)
         norm = mcolors.LogNorm(vmin=max(vmax * 1e-6, ZERO_ENERGY), vmax=vmax, clip=True)
@@ -141,8 +174,8 @@ def deployment_gif(
 
     dpi = 100
     fig = plt.figure(figsize=(size_px / dpi, size_px / dpi * 1.08), dpi=dpi)
-    ax = fig.add_axes([0.02, 0.16, 0.96, 0.78])
-    cax = fig.add_axes([0.2, 0.09, 0.6, 0.025])
+    ax = fig.add_axes([0.02, 0.16, 0.96, 0.76])
+    cax = fig.add_axes([0.2, 0.09, 0.6, 0.022])
     lo = corners.reshape(-1, 2).min(0)
     hi = corners.reshape(-1, 2).max(0)
     pad = 0.03 * float((hi - lo).max())
@@ -153,15 +186,23 @@ def deployment_gif(
     tiles = PolyCollection(corners[0], cmap=cmap, norm=norm, edgecolors="k", linewidths=0.3)
     tiles.set_array(np.asarray(values[0], dtype=float))
     ax.add_collection(tiles)
-    cb = fig.colorbar(tiles, cax=cax, orientation="horizontal")
-    cb.set_label(label, fontsize=7)
-    cb.ax.tick_params(labelsize=6)
+    if flat:
+        cax.axis("off")
+        cax.text(0.5, 0.5, f"tile energy below noise everywhere (max {path.tile_energy.max():.1e} <= "
+                           f"{ZERO_ENERGY:g}): no energy colours", ha="center", va="center", fontsize=10)
+    else:
+        cb = fig.colorbar(tiles, cax=cax, orientation="horizontal")
+        cb.set_label(label, fontsize=10)
+        cb.ax.tick_params(labelsize=9)
+    _scale_bar(ax, lo, hi, pad)
     lines = dots = None
     if trajectories:
         lines = LineCollection([], colors="k", linewidths=0.5)
         ax.add_collection(lines)
         dots = ax.scatter(centres[0, :, 0], centres[0, :, 1], s=2, c="k", zorder=3)
-    head = ax.set_title("", fontsize=8)
+    head = ax.set_title("", fontsize=12)
+    state = ax.text(0.02, 0.98, "", transform=ax.transAxes, ha="left", va="top", fontsize=15, weight="bold")
+    marks = path.mark_frames()
 
     images = []
     for f in idx:
@@ -171,6 +212,7 @@ def deployment_gif(
             lines.set_segments(list(np.swapaxes(centres[: f + 1], 0, 1)) if f > 0 else [])
             dots.set_offsets(centres[f])
         head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
+        state.set_text(_state_label(path.t[f], marks, path.t, f))
         fig.canvas.draw()
         rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3]
         images.append(Image.fromarray(np.ascontiguousarray(rgb)))

@@ -12,7 +12,8 @@
 * design residuals: edge pairs (or the parallelogram conditions) and rings per
   state, hinge sums when rigid deployability is claimed;
 * the rigid deployment path, sampled at ``path_steps`` + 1 angles, when claimed;
-* the fit of the boundary tips to a recorded target outline.
+* the shape of the outline against each recorded target curve (Hausdorff distance over the whole outline,
+  deployed and closed states, against ``shape_tol``).
 
 Closed states come from :func:`fabkiri.mechanics.contract.contract` (never
 averaged); stored closed states are checked against them.
@@ -383,78 +384,60 @@ def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tol
 # ----------------------------------------------------------------- target
 
 
-def _target_outline(design: dict[str, Any]) -> np.ndarray | None:
-    tgt = design.get("target") if isinstance(design, dict) else None
-    if not isinstance(tgt, dict):
-        return None
-    for key in ("polygon", "points", "outline", "boundary", "samples"):
-        pts = tgt.get(key)
-        if isinstance(pts, list) and len(pts) >= 3:
-            try:
-                arr = np.asarray(pts, dtype=float)
-            except (TypeError, ValueError):
-                continue
-            if arr.ndim == 2 and arr.shape[1] == 2:
-                return arr
-    return None
+def target_checks(pattern: Pattern, states: dict | None = None, shape_tol: str | tuple = "2%") -> list[Check]:
+    """The outline against every stored target curve, over the whole outline (Hausdorff distance of the
+    boundary-tip polygon, or of each closed state's outline, to the target), checked against ``shape_tol``
+    (a share of the target's size or a length, ``design --shape-tol``) — never against a figure the
+    design claims about itself."""
+    from ..design import conformance as conf
+    from ..design.targets import target_from_dict
+    from ..errors import InputError
 
-
-def _target_distance(tgt: dict[str, Any], tips: np.ndarray) -> np.ndarray | None:
-    """Distance (mm) of points to a recorded target: the design layer's own curve
-    (spline or polyline, exact foot points) when it can be rebuilt, else the polyline."""
-    if tgt.get("kind") in ("spline", "polyline") and "points" in tgt:
+    d = pattern.design or {}
+    tol = conf.parse_shape_tol(shape_tol) if isinstance(shape_tol, str) else shape_tol
+    jobs = []
+    if isinstance(d.get("target"), dict):
+        jobs.append(("target shape", "deployed", None, d["target"]))
+    for s, tgt in sorted((d.get("contracted_targets") or {}).items()):
+        if isinstance(tgt, dict) and states is not None and int(s) in states:
+            jobs.append((f"state {s}: outline shape", f"state {s}", int(s), tgt))
+    out = []
+    for name, group, s, spec in jobs:
         try:
-            from ..design.targets import Target
-        except ImportError:  # a build without the design layer
-            Target = None
-        if Target is not None:
-            try:
-                curve = Target(str(tgt.get("name", "target")), tgt["kind"], np.asarray(tgt["points"], float),
-                               corners=np.asarray(tgt["corners"], float) if tgt.get("corners") is not None else None)
-                return np.abs(curve.signed_distance(tips))
-            except Exception:  # noqa: BLE001 - fall back to the plain polyline below
-                pass
-    pts = _target_outline({"target": tgt})
-    if pts is None:
-        return None
-    return shapely.distance(shapely.points(tips), shapely.LinearRing(pts))
-
-
-def target_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
-    tgt = (pattern.design or {}).get("target")
-    if not isinstance(tgt, dict):
-        return []
-    tips = pattern.nodes[pattern.topology.free_nodes]
-    d = _target_distance(tgt, tips)
-    if d is None:
-        return []
-    detail = (f"RMS {float(np.sqrt(np.mean(d ** 2))):.3g} mm over {len(d)} boundary tips "
-              f"to the {tgt.get('kind', 'polyline')} target")
-    report = (pattern.design or {}).get("report") or {}
-    reported = ((report.get("fit") or {}).get("shape") or {}).get("max_mm")
-    if "tolerance_mm" in tgt:
-        target_tol = float(tgt["tolerance_mm"])
-    elif report.get("shape_matching") == "least-squares" and isinstance(reported, (int, float)):
-        # a least-squares fit is not exact by design: check the solver's claim, not exactness
-        target_tol = float(reported) + tol.length
-        detail += f"; least-squares fit, solver reported max {float(reported):.3g} mm"
-    else:
-        target_tol = tol.length
-    return [measured("target fit", _max(d), target_tol, "mm", worst=_worst("free corner", d), group="design",
-                     detail=detail)]
+            target = target_from_dict(spec, name)
+        except InputError as exc:
+            out.append(Check(name, ok=False, value=float("nan"), tol=0.0, unit="mm", group="design",
+                             detail=f"the stored target cannot be rebuilt: {exc}"))
+            continue
+        c = (conf.deployed(pattern.nodes, pattern.topology, target) if s is None
+             else conf.closed(states[s], target))
+        j = conf.judge(c, tol)
+        x, y = c["worst"]["at"]
+        out.append(measured(name, c["hausdorff_mm"], j["tol_mm"], "mm", group="design",
+                            worst=f"({x:.1f}, {y:.1f}) mm on the {c['worst']['on']}",
+                            detail=(f"Hausdorff {100 * c['hausdorff_rel']:.3g} % of the target size "
+                                    f"{c['size_mm']:.4g} mm (tolerance {100 * j['tol_rel']:.3g} %); 1-IoU "
+                                    f"{c['one_minus_iou']:.3g}; mean distance {c['mean_outline_to_target_mm']:.3g} /"
+                                    f" {c['mean_target_to_outline_mm']:.3g} mm; spacing min/mean "
+                                    f"{c['spacing_min_mm']:.3g}/{c['spacing_mean_mm']:.3g} mm over {c['points']} "
+                                    f"{'boundary tips' if s is None else 'outline vertices'} vs the "
+                                    f"{target.kind} target {target.name!r}")))
+    return out
 
 
 # ----------------------------------------------------------------- entry point
 
 
 def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6, *,
-                   rigid: bool | None = None, path_steps: int = DEFAULT_PATH_STEPS) -> Report:
+                   rigid: bool | None = None, path_steps: int = DEFAULT_PATH_STEPS,
+                   shape_tol: str | tuple = "2%") -> Report:
     """Verify that ``pattern`` closes into both compact states.
 
     ``tol_mm`` None uses the relative tier of spec §10 (1e-9 of the mean tile
     edge for exported data, 1e-5 for optimiser output). ``rigid`` overrides
     whether rigid deployability is claimed (default: :func:`rigid_claimed`);
-    when claimed, the rigid path is sampled at ``path_steps`` + 1 angles.
+    when claimed, the rigid path is sampled at ``path_steps`` + 1 angles. ``shape_tol``: the largest
+    Hausdorff distance of an outline to its stored target (:func:`target_checks`).
     """
     tol = tolerances(pattern, tol_mm, tol_rad)
     claimed = rigid_claimed(pattern) if rigid is None else bool(rigid)
@@ -480,6 +463,6 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
     if claimed:
         for chk in rigid_path_checks(pattern, states[1], states[2], tol, path_steps):
             rep.add(chk)
-    for chk in target_checks(pattern, tol):
+    for chk in target_checks(pattern, states, shape_tol):
         rep.add(chk)
     return rep

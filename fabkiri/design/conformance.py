@@ -1,0 +1,95 @@
+"""Shape conformance of a design to its targets and the ``--shape-tol`` check.
+
+The measure itself is :mod:`fabkiri.pattern.conformance` (plain polygons); this module turns a
+:class:`~fabkiri.design.targets.Target` into its polygon, measures the deployed boundary tips and each
+closed-state outline, and judges the result against the shape tolerance (default 2 % of the target's
+size, the larger side of its bounding box).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from ..errors import InputError
+from ..pattern import conformance as pc
+from .targets import Target
+
+DEFAULT_SHAPE_TOL = "2%"
+SPLINE_SAMPLES = 4096  # a spline target as a polygon: chord error ~1e-5 of the size for the named shapes
+
+
+def target_polygon(target: Target) -> np.ndarray:
+    """The target as a closed polygon in mm: a polyline's own vertices, a spline densely sampled."""
+    if target.kind == "polyline":
+        return np.asarray(target.points, float)
+    return target.sample(max(SPLINE_SAMPLES, 4 * len(target.points)))
+
+
+def deployed(nodes: np.ndarray, topology, target: Target) -> dict:
+    """Conformance of the deployed boundary tips (in boundary order) to ``target``."""
+    order = pc.boundary_tip_order(topology.tiles, topology.hole_nodes, topology.hole_tiles, topology.free_nodes)
+    out = pc.measure(np.asarray(nodes, float)[order], target_polygon(target), target.size)
+    out["target"] = target.name
+    return out
+
+
+def closed(corners: np.ndarray, target: Target) -> dict:
+    """Conformance of a closed state's outline, rigidly placed on ``target`` (closed-state targets fix the
+    shape and size, not the placement)."""
+    poly = target_polygon(target)
+    outline = pc.closed_outline(corners)
+    R, t = pc.align_rigid(outline, poly)
+    out = pc.measure(outline @ R.T + t, poly, target.size)
+    out["target"] = target.name
+    out["outline"] = "closed-state tile union, rigidly aligned (centroid, rotation search, ICP)"
+    out["placement"] = {"rotation_rad": float(np.arctan2(R[1, 0], R[0, 0])), "shift_mm": t.tolist()}
+    return out
+
+
+def parse_shape_tol(text: str) -> tuple[float, str]:
+    """``2%``, ``0.02`` (a fraction) or ``0.5mm``: ``(value, "rel" | "mm")``; InputError otherwise."""
+    m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:e[-+]?[0-9]+)?)\s*(%|mm)?\s*", str(text), re.I)
+    if not m:
+        raise InputError(f"--shape-tol expects a percentage of the target size (2%) or a length (0.5mm), "
+                         f"got {text!r}")
+    v, unit = float(m.group(1)), (m.group(2) or "").lower()
+    if unit == "%":
+        v, unit = v / 100.0, "rel"
+    elif unit == "":
+        unit = "rel"
+    if not (math.isfinite(v) and v > 0) or (unit == "rel" and v >= 1):
+        raise InputError(f"--shape-tol must be positive (and below 100 % of the size), got {text!r}")
+    return v, unit
+
+
+def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = None) -> dict:
+    """``{"status": "met" | "missed", "tol_mm", "hausdorff_mm", "by_mm", ...}`` of one measured outline.
+
+    A miss suggests a lattice: the Hausdorff distance of a converged design is bounded by the tip spacing
+    (a stretch between two tips is cut off as a chord), which scales as 1 / tiles per side, so the
+    estimate scales the tile count by Hausdorff / tolerance (``bench/shapes.py`` measures the trend).
+    """
+    value, unit = tol
+    tol_mm = value * conf["size_mm"] if unit == "rel" else value
+    h = conf["hausdorff_mm"]
+    out = {"status": "met" if h <= tol_mm else "missed", "tol_mm": tol_mm, "tol_rel": tol_mm / conf["size_mm"],
+           "hausdorff_mm": h, "hausdorff_rel": conf["hausdorff_rel"], "by_mm": max(0.0, h - tol_mm)}
+    if out["status"] == "missed" and tiles is not None:
+        f = h / tol_mm
+        out["suggested_tiles"] = [int(2 * math.ceil(n * f / 2)) for n in tiles]
+    return out
+
+
+def describe_miss(label: str, j: dict, conf: dict) -> str:
+    """One line for a missed shape tolerance."""
+    x, y = conf["worst"]["at"]
+    line = (f"shape missed ({label}): Hausdorff {j['hausdorff_mm']:.3g} mm ({100 * j['hausdorff_rel']:.2f} % of "
+            f"the size) > tolerance {j['tol_mm']:.3g} mm ({100 * j['tol_rel']:.2f} %), by {j['by_mm']:.3g} mm, "
+            f"worst at ({x:.1f}, {y:.1f}) mm")
+    if "suggested_tiles" in j:
+        r, c = j["suggested_tiles"]
+        line += f"; about {r}x{c} tiles would reach it (estimate: Hausdorff ~ 1/tiles per side)"
+    return line

@@ -1,0 +1,243 @@
+"""Closed-state outline design inside the rigid family: the paper's "circling the square".
+
+For ``--rigid`` with rhombus holes, no deployed target and closed-state targets that are each a square or
+a circle, both closed states are linear in the rigid family's seeds ``S`` (``rigid.py``): closed state 1 is
+the grid ``c₁ = Z S``, closed state 2 the member at ψ = π/2, ``c₂ = J Y S`` at one node per grid vertex.
+So every equality family holds by construction, and
+
+* a **square** outline is a set of linear equalities on ``S`` (each boundary vertex on its side of the
+  axis-aligned square of the target's side, centred on the origin): the seeds are restricted to that
+  affine subspace, ``S = S₀ + N u``, and the square holds to rounding — exact, not fitted;
+* a **circle** outline is size-free: the residuals are ``|c_i − o| − R`` over the state's boundary
+  vertices with the centre ``o`` and radius ``R`` unknowns — the geometric least-squares circle of the
+  outline. Without a square to fix the scale they are taken relative to R, ``R₀ (|c_i − o| / R − 1)``
+  (``R₀``, the start's radius, sets the units), or shrinking the pattern would fit any circle.
+
+What is left — ``u``, ``o``, ``R`` — is minimised by Levenberg–Marquardt with a dense normal matrix on
+circle fit + w·E_reg + ρ|min(0, g − m)|² (the deployed tiles at ψ = π/4, the closed-state grids'
+orientation), with the same step limiting on the inequalities as the other solvers. A square that cannot
+be made exact (rank-deficient rows, e.g. a square in both states) is left to the full solver.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .constraints import ClosedGrid, Stencils
+from .rigid import RigidFamily
+from .targets import Target
+
+PSI_DEPLOYED = np.pi / 4  # deployment angle of the written pattern (any member angle in (0, π/2) works)
+STAGES = ((1e2, 1e-9, 200), (1e4, 1e-12, 100))  # (penalty, stall tolerance, iteration cap)
+REG_WEIGHT = 1e-6  # the circle residuals are ~1e-2 of a tile: a regulariser at 1e-3 would outweigh them
+SQUARE_TOL = 1e-12  # relative residual of the square rows that counts as feasible
+
+
+def outline_kind(spec) -> str | None:
+    """"square" or "circle" for closed-state targets this solver handles exactly, else None."""
+    if isinstance(spec, Target) and spec.name in ("square", "circle"):
+        return spec.name
+    return None
+
+
+def applies(req) -> bool:
+    """``req`` (a ``solve.DesignRequest``) is a rigid rhombus design of square/circle closed-state outlines only."""
+    return (req.rigid and req.holes == "rhombus" and not req.symmetry and req.target is None
+            and bool(req.contracted) and all(outline_kind(v) for v in req.contracted.values()))
+
+
+class _Maps:
+    """Dense linear maps from ``vec S = (Sx, Sy)`` to the node array ``[deployed nodes; grids of the
+    target states]`` that the families of ``solve._Problem`` evaluate."""
+
+    def __init__(self, fam: RigidFamily, st: Stencils, states: list[int]):
+        M, N = st.rows, st.cols
+        G = (M + 1) * (N + 1)
+        nf = fam.n_seeds
+        c, s = np.cos(PSI_DEPLOYED), np.sin(PSI_DEPLOYED)
+        # node x = c Zn Sx − s Y Sy, y = c Zn Sy + s Y Sx (RigidFamily.nodes), rows interleaved x, y
+        blocks = [np.stack([np.hstack([c * fam.Zn, -s * fam.Y]), np.hstack([s * fam.Y, c * fam.Zn])], 1)]
+        self.grid = {}
+        for state in states:
+            if state == 1:
+                Zx, Zy = np.hstack([fam.Z, np.zeros_like(fam.Z)]), np.hstack([np.zeros_like(fam.Z), fam.Z])
+            else:  # closed state 2 = the member at ψ = π/2: x = −Y Sy, y = Y Sx at one node per grid vertex
+                vid = ClosedGrid.build(st, 2, 0).vertex.ravel()
+                rep = np.empty(G, dtype=np.int64)
+                rep[vid] = st.tiles.ravel()
+                Yr = fam.Y[rep]
+                Zx, Zy = np.hstack([np.zeros_like(Yr), -Yr]), np.hstack([Yr, np.zeros_like(Yr)])
+            self.grid[state] = (Zx, Zy)
+            blocks.append(np.stack([Zx, Zy], 1))
+        self.A = np.concatenate(blocks).reshape(-1, 2 * nf)  # (2 nv, 2 nf)
+        self.nf = nf
+
+
+def _square_rows(maps: _Maps, st: Stencils, state: int, half: float):
+    """``E vec S = e``: every boundary vertex of the state's grid on its side of the square."""
+    M, N = st.rows, st.cols
+    gi, gj = np.divmod(np.arange((M + 1) * (N + 1)), N + 1)
+    Zx, Zy = maps.grid[state]
+    rows, rhs = [], []
+    for on_side, coord, value in [(gi == 0, Zy, -half), (gi == M, Zy, half), (gj == 0, Zx, -half),
+                                  (gj == N, Zx, half)]:
+        rows.append(coord[on_side])
+        rhs.append(np.full(int(on_side.sum()), value))
+    return np.vstack(rows), np.concatenate(rhs)
+
+
+def _circle_residuals(maps: _Maps, st: Stencils, state: int):
+    """Boundary vertices of the state's grid: ``(B, 2, 2 nf)`` maps from ``vec S``."""
+    g = ClosedGrid.build(st, state, 0)
+    Zx, Zy = maps.grid[state]
+    return np.stack([Zx[g.boundary], Zy[g.boundary]], 1)
+
+
+def solve_outline(prob, log, iters: dict):
+    """Design in the rigid family for square/circle closed-state targets; ``(X, mode, fitted)`` or None
+    when a square cannot be exact. ``fitted`` maps each circle state to its (centre, radius) in
+    normalised units."""
+    req, st = prob.req, prob.st
+    fam: RigidFamily = prob.rigid_family
+    states = sorted(prob.grids)
+    maps = _Maps(fam, st, states)
+    nf2 = 2 * maps.nf
+    # the start: the member nearest the initial guess (standard pattern), its seeds
+    S0, _ = fam.fit(prob.X0[: prob.n], PSI_DEPLOYED)
+    s0 = np.concatenate([S0[:, 0], S0[:, 1]])
+    kinds = {s: outline_kind(req.contracted[s]) for s in states}
+    E, e = [], []
+    for s in states:
+        if kinds[s] == "square":
+            lo, hi = prob.curves_mm[s].bbox
+            half = 0.5 * float((hi - lo).max()) / prob.L0
+            Es, es = _square_rows(maps, st, s, half)
+            E.append(Es)
+            e.append(es)
+    if E:
+        E, e = np.vstack(E), np.concatenate(e)
+        U, sv, Vt = np.linalg.svd(E, full_matrices=True)
+        rank = int((sv > 1e-10 * sv[0]).sum())
+        base = Vt[:rank].T @ ((U[:, :rank].T @ e) / sv[:rank])
+        if np.abs(E @ base - e).max() > SQUARE_TOL * max(1.0, np.abs(e).max()):
+            log("outline: the square rows are inconsistent; leaving the design to the full solver")
+            return None
+        Nsp = Vt[rank:].T  # null space of the square rows
+        u0 = Nsp.T @ (s0 - base)
+    else:
+        base, Nsp, u0 = np.zeros(nf2), np.eye(nf2), s0
+    k = Nsp.shape[1]
+    AN = maps.A @ Nsp
+    Ab = maps.A @ base
+    circles = [s for s in states if kinds[s] == "circle"]
+    Bc = {s: np.einsum("bdf,fk->bdk", _circle_residuals(maps, st, s), Nsp) for s in circles}
+    bc = {s: np.einsum("bdf,f->bd", _circle_residuals(maps, st, s), base) for s in circles}
+    # circle unknowns (o_x, o_y, R) per circle state, started from the start's algebraic circle
+    p0 = [u0]
+    R0 = {}
+    for s in circles:
+        q = Bc[s] @ u0 + bc[s]
+        A = np.c_[2 * q, np.ones(len(q))]
+        sol = np.linalg.lstsq(A, (q * q).sum(1), rcond=None)[0]
+        R0[s] = float(np.sqrt(sol[2] + sol[:2] @ sol[:2]))
+        p0.append(np.array([sol[0], sol[1], R0[s]]))
+    p = np.concatenate(p0)
+    relative = not any(kinds[s] == "square" for s in states)
+    fams_reg = prob.of("reg")
+    fams_ineq = prob.of("ineq")
+    margin = prob.margin
+    w = np.sqrt(REG_WEIGHT)
+
+    def nodes(p):
+        return (Ab + AN @ p[:k]).reshape(-1, 2)
+
+    def ineq_viol(X):
+        return max(0.0, -min((float(f.residual(X).min(initial=0.0)) for f in fams_ineq), default=0.0))
+
+    def evaluate(p, rho, jac=True):
+        X = nodes(p)
+        rs, Js = [], []
+        off = k
+        for s in circles:
+            q = Bc[s] @ p[:k] + bc[s]
+            o, R = p[off:off + 2], p[off + 2]
+            d = q - o
+            dist = np.sqrt((d * d).sum(1))
+            # with a square fixing the scale: the geometric least-squares circle, |c - o| - R; without, the
+            # same relative to R (else shrinking the pattern would fit any circle)
+            a = R0[s] / R if relative else 1.0
+            rs.append(a * (dist - R))
+            if jac:
+                unit = d / dist[:, None]
+                J = np.zeros((len(q), len(p)))
+                J[:, :k] = a * np.einsum("bd,bdk->bk", unit, Bc[s])
+                J[:, off:off + 2] = -a * unit
+                J[:, off + 2] = -R0[s] * dist / R ** 2 if relative else -1.0
+                Js.append(J)
+            off += 3
+        for f in fams_reg:
+            r, Jx = f(X) if jac else (f.residual(X), None)
+            rs.append(w * r)
+            if jac:
+                Js.append(np.hstack([w * (Jx @ AN), np.zeros((len(r), len(p) - k))]))
+        sq = np.sqrt(rho)
+        for f in fams_ineq:
+            v = f.residual(X) - margin[f.name]
+            act = v < 0
+            rs.append(sq * v[act])
+            if jac and act.any():
+                _, Jx = f(X)
+                Js.append(np.hstack([sq * (Jx[np.flatnonzero(act)] @ AN), np.zeros((int(act.sum()), len(p) - k))]))
+        r = np.concatenate(rs)
+        return X, r, (np.vstack(Js) if jac else None)
+
+    for rho, stall_tol, cap in STAGES:
+        p, it = _lm(evaluate, ineq_viol, nodes, p, rho, cap, stall_tol)
+        iters[f"outline_rho_{rho:g}"] = it
+        log(f"outline rho={rho:g}: {it} iterations")
+    X = nodes(p)
+    fitted = {}
+    off = k
+    for s in circles:
+        fitted[s] = (p[off:off + 2].copy(), float(p[off + 2]))
+        off += 3
+    return X, "least-squares" if circles else "hard", fitted
+
+
+def _lm(evaluate, ineq_viol, nodes, p, rho, max_iter, stall_tol):
+    """Levenberg-Marquardt (Marquardt scaling) with step limiting on the inequalities."""
+    X, r, J = evaluate(p, rho)
+    cost = float(r @ r)
+    gviol = ineq_viol(X)
+    JtJ = J.T @ J
+    mu = 1e-3 * max(float(np.diag(JtJ).mean()), 1e-30)
+    stall = 0
+    it = 0
+    for it in range(1, max_iter + 1):
+        D = np.diag(JtJ) + 1e-12 * float(np.diag(JtJ).max())
+        dp = -np.linalg.solve(JtJ + mu * np.diag(D / D.mean()), J.T @ r)
+        for _ in range(6):  # step limiting: no new inequality violation
+            gv = ineq_viol(nodes(p + dp))
+            if gv <= gviol + 1e-15:
+                break
+            dp = 0.5 * dp
+        pn = p + dp
+        Xn, rn, Jn = evaluate(pn, rho)
+        cn = float(rn @ rn)
+        Jdp = J @ dp
+        pred = -(2 * float(r @ Jdp) + float(Jdp @ Jdp))
+        ratio = (cost - cn) / pred if pred > 0 else -1.0
+        if np.isfinite(cn) and gv <= gviol + 1e-15 and ratio > 1e-4:
+            small = cost - cn <= stall_tol * max(cost, 1e-300)
+            p, r, J, cost, gviol = pn, rn, Jn, cn, gv
+            JtJ = J.T @ J
+            mu *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
+            stall = stall + 1 if small else 0
+            if stall >= 3:
+                break
+        else:
+            mu *= 4.0
+            if mu > 1e20:
+                break
+    return p, it
+

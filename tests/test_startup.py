@@ -1,0 +1,89 @@
+"""Lazy start-up: the command table matches what the modules register, and a command loads only its own
+module (timings live in bench/solve.py, not here)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fabkiri.cli import main as cli
+
+
+def _registered(parser) -> dict[str, str]:
+    sub = next(a for a in parser._actions if a.dest == "command")
+    return {a.dest: a.help for a in sub._choices_actions}
+
+
+def test_summaries_match_the_modules():
+    full = _registered(cli.build_parser(""))
+    assert {k: v[1] for k, v in cli.SUMMARIES.items()} == {k: full[k] for k in cli.SUMMARIES}
+    for name, (module, _) in cli.SUMMARIES.items():
+        assert module in cli.COMMANDS, name
+
+
+def test_lazy_parser_has_every_command():
+    assert set(_registered(cli.build_parser(None))) == set(_registered(cli.build_parser("")))
+    assert set(_registered(cli.build_parser("design"))) == set(_registered(cli.build_parser("")))
+
+
+def _modules_after(argv: list[str]) -> set[str]:
+    code = ("import sys\nfrom fabkiri.cli.main import main\n"
+            f"try:\n    main({argv!r})\nexcept SystemExit:\n    pass\n"
+            "print('\\n'.join(sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    return set(out.split())
+
+
+def test_help_imports_no_numerics():
+    mods = _modules_after(["--help"])
+    assert not {"numpy", "scipy", "shapely", "ezdxf", "trimesh", "matplotlib"} & mods
+    assert not any(m.startswith("fabkiri.cli.") and m != "fabkiri.cli.main" for m in mods)
+
+
+def test_design_imports_only_what_it_uses(tmp_path):
+    mods = _modules_after(["design", "--tiles", "3x3", "--target", "circle", "--rigid",
+                           "-o", str(tmp_path / "p.json")])
+    assert (tmp_path / "p.json").exists()
+    assert "fabkiri.design.solve" in mods
+    assert not {"scipy.interpolate", "scipy.optimize", "ezdxf", "trimesh", "matplotlib", "svgwrite"} & mods
+    assert not {"fabkiri.cli.cut_cmd", "fabkiri.cli.print_cmd", "fabkiri.cli.deploy_cmd"} & mods
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(3, 60), st.integers(0, 2 ** 32 - 1))
+def test_periodic_spline_equals_scipy(k, seed):
+    from scipy.interpolate import CubicSpline
+
+    from fabkiri.design.spline import PeriodicCubic
+
+    rng = np.random.default_rng(seed)
+    x = np.concatenate([[0.0], np.cumsum(rng.uniform(0.2, 2.0, k))])
+    x /= x[-1]
+    y = rng.normal(size=(k + 1, 2))
+    y[-1] = y[0]
+    ref = CubicSpline(x, y, bc_type="periodic")
+    ours = PeriodicCubic.interpolate(x, y)
+    u = rng.uniform(-1.0, 2.0, 50)
+    vals = ours.value_and_derivatives(u)
+    for nu in (0, 1, 2):
+        scale = np.abs(ref(u, nu)).max() + 1.0
+        assert np.abs(ours(u, nu) - ref(u, nu)).max() <= 1e-9 * scale
+        assert np.abs(vals[nu] - ref(u, nu)).max() <= 1e-9 * scale
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(1, 9), st.integers(1, 9), st.integers(1, 20), st.integers(1, 20), st.integers(0, 2 ** 32 - 1))
+def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
+    from scipy.interpolate import RegularGridInterpolator
+
+    from fabkiri.design.rigid import resample_grid
+
+    grid = np.random.default_rng(seed).normal(size=(m + 1, n + 1, 2))
+    at = RegularGridInterpolator((np.arange(m + 1.0), np.arange(n + 1.0)), grid, method="linear")
+    yi, xi = np.meshgrid(np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1), indexing="ij")
+    assert np.abs(resample_grid(grid, rows, cols) - at(np.stack([yi, xi], -1))).max() <= 1e-12
