@@ -910,6 +910,14 @@ def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
 
 # ----------------------------------------------------------------- writing
 
+def export_3mf(scene) -> bytes:
+    """A trimesh scene as a plain 3MF, one object per geometry, reproducible bytes
+    (:func:`.threemf.objects_3mf`; print jobs write projects with :func:`job_files`)."""
+    from .threemf import objects_3mf
+
+    return objects_3mf({name: (np.asarray(g.vertices), np.asarray(g.faces)) for name, g in scene.geometry.items()})
+
+
 def _parts(bed: list[Body], tms: list) -> list:
     from .threemf import Part
 

@@ -172,6 +172,35 @@ def custom_gcode_xml(changes: list[LayerChange]) -> str:
     return "".join(out)
 
 
+def _zip(entries: dict[str, str]) -> bytes:
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for name, text in entries.items():
+            info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            zf.writestr(info, text.encode("utf-8"))
+    return out.getvalue()
+
+
+def objects_3mf(meshes: dict[str, tuple[np.ndarray, np.ndarray]]) -> bytes:
+    """A plain 3MF with one object (and build item) per named mesh (vertices, faces),
+    for files that are not print projects (e.g. the calibration coupon)."""
+    out = [f'<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xml:lang="en-US" xmlns="{CORE_NS}">\n'
+           ' <resources>\n']
+    for i, (name, (v, f)) in enumerate(meshes.items(), 1):
+        v = np.round(np.asarray(v, dtype=np.float64), 6) + 0.0
+        out.append(f'  <object id="{i}" type="model" name={quoteattr(name)}>\n   <mesh>\n    <vertices>\n')
+        out.append(_rows('     <vertex x="%.6f" y="%.6f" z="%.6f"/>', v))
+        out.append('    </vertices>\n    <triangles>\n')
+        out.append(_rows('     <triangle v1="%d" v2="%d" v3="%d"/>', np.asarray(f, dtype=np.int64)))
+        out.append('    </triangles>\n   </mesh>\n  </object>\n')
+    out.append(' </resources>\n <build>\n')
+    out.extend(f'  <item objectid="{i}"/>\n' for i in range(1, len(meshes) + 1))
+    out.append(' </build>\n</model>\n')
+    return _zip({"[Content_Types].xml": CONTENT_TYPES, "_rels/.rels": RELS, "3D/3dmodel.model": "".join(out)})
+
+
 def project_3mf(object_name: str, parts: list[Part], printer: Printer,
                 changes: list[LayerChange] | None = None) -> bytes:
     """The 3MF bytes of one bed: one object, one volume per part, project settings."""
@@ -185,14 +214,7 @@ def project_3mf(object_name: str, parts: list[Part], printer: Printer,
     }
     if changes:
         entries["Metadata/Prusa_Slicer_custom_gcode_per_print_z.xml"] = custom_gcode_xml(changes)
-    out = io.BytesIO()
-    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for name, text in entries.items():
-            info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            zf.writestr(info, text.encode("utf-8"))
-    return out.getvalue()
+    return _zip(entries)
 
 
 def read_volumes(data: bytes) -> list[tuple[str, str, int, np.ndarray, np.ndarray]]:
