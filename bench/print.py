@@ -47,7 +47,7 @@ def naive_tiles(job):
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--rows", type=int, default=32)
-    ap.add_argument("--printer", default="prusa-xl")
+    ap.add_argument("--printer", default="prusa-xl-2t")
     ap.add_argument("--step", action="store_true", help="also time the STEP export (needs build123d)")
     args = ap.parse_args()
     n = args.rows
@@ -60,11 +60,12 @@ def main() -> None:
     rep, _ = stage("mesh checks (watertight, clearance)", mesh.check_meshes, r)
     tc, _ = stage("printed tiles vs closed state", mesh.check_printed_tiles, r)
     vr, _ = stage("layout verifier on the top faces", mesh.verify_printed_tiles, pattern, r)
-    files, _ = stage("STL + 3MF bytes", mesh.job_files, r, "bench")
+    files, _ = stage("STL + 3MF + preview PNG bytes", mesh.job_files, r, "bench")
+    rb, _ = stage("read back the written meshes", mesh.read_back_files, files)
     with tempfile.TemporaryDirectory() as d:
         _, _ = stage("write files", lambda: [Path(d, k).write_bytes(v) for k, v in files.items()])
     total = time.perf_counter() - t0
-    ok = rep.ok and tc.ok and vr.ok
+    ok = rep.ok and tc.ok and vr.ok and all(v["ok"] for v in rb.values())
     print(f"TOTAL pattern -> 3MF + STLs: {total:.2f} s (target < 10 s: {'met' if total < 10 else 'MISSED'}); "
           f"checks {'pass' if ok else 'FAIL'}; 3MF {len(files['bench.3mf']) / 1e6:.1f} MB; "
           f"triangles {sum(b['triangles'] for b in rep.bodies)}")

@@ -50,8 +50,11 @@ def cmd_print(args: argparse.Namespace) -> int:
                          states=claimed_states(pattern, int(args.state))).warnings:  # as `cut`, printer tolerance
         print(f"warning: {w}", file=sys.stderr)
     try:
-        job = mesh.build_job(pattern, args.style, int(args.state), printer)
+        job = mesh.build_job(pattern, args.style, int(args.state), printer, advise_scale=args.scale)
+        plan = mesh.print_plan(job)  # refuses a print the printer cannot make
     except FabricationError as exc:  # say at which scale it would print, if any
+        if args.style == "pinned":  # build_job named the scales that print pinned on this bed
+            raise
         need = fb.print_minimum(pattern, args.style, printer, int(args.state))
         if need.min_scale is None or need.min_scale <= 1.0:
             raise
@@ -61,6 +64,7 @@ def cmd_print(args: argparse.Namespace) -> int:
             if need.max_scale is not None else at
         raise type(exc)(f"{exc} (at --scale {k:g}); {at}") from None
     realised = mesh.realise_job(job)
+    job = realised.job  # the bodies as realised (a pinned tile may have been rebuilt with turned pivot polygons)
     report = mesh.check_meshes(realised)
     tiles = None if job.style == "strips" else mesh.check_printed_tiles(realised)
     problems = list(report.problems)
@@ -98,8 +102,14 @@ def cmd_print(args: argparse.Namespace) -> int:
 
         for k, bed in enumerate(job.beds, 1):  # one STEP per bed, like the meshes
             files[f"{stem}.step" if len(job.beds) == 1 else f"{stem}-bed{k}.step"] = cad.step_bytes(bed)
+    read_back = mesh.read_back_files(files)  # watertight as written, not as held in memory
+    bad = [f"{n} ({v['edges_not_shared_by_two_faces']} edges not shared by two faces)"
+           for n, v in read_back.items() if not v["ok"]]
+    if bad:
+        raise CheckFailed("written meshes are not closed 2-manifolds when read back: " + ", ".join(bad)
+                          + "; nothing written")
     files["manifest.json"] = mesh.manifest(realised, report, tiles, Path(args.file).name,
-                                           list(files) + ["manifest.json"], verifier)
+                                           list(files) + ["manifest.json"], verifier, read_back)
     from ..fabricate.assembly import add_to_print
 
     files["manifest.json"], extra = add_to_print(files["manifest.json"], pattern, realised, stem)
@@ -110,7 +120,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     print(f"wrote {len(files)} files to {args.output}: {job.style}, closed state {job.state}, printer "
           f"{printer.name}, {len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
           f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance "
-          f"{'n/a' if report.min_clearance_mm is None else f'{report.min_clearance_mm:.3f} mm'}, "
+          f"{'n/a' if report.min_clearance_mm is None else f'{report.min_clearance_mm:.3f} mm'}, {plan}, "
           f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0
 
@@ -140,8 +150,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file", help="pattern.json (or design .obj)")
     p.add_argument("--style", choices=mesh.STYLES,
                    help="strips: one flexible strip per hinge for laser-cut tiles; tiles-and-strips: rigid tiles "
-                        "with recessed flexible strips (two materials, the default unless the design was made for "
-                        "another); pinned: print-in-place pin hinges")
+                        "joined by flexible strips (two materials: recessed with two extruders, stacked with colour "
+                        "changes on one; the default unless the design was made for another); pinned: "
+                        "print-in-place pin hinges")
     p.add_argument("--state", choices=["1", "2"], default="1", help="closed state printed (default 1)")
     p.add_argument("--printer", metavar="NAME|FILE.json",
                    help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")

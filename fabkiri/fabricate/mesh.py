@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import io
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterable
 
 import numpy as np
@@ -57,6 +57,7 @@ class Body:
     kind: str  # "tile", "hinge", "tiles", "hinges"
     ops: tuple[tuple[str, Prism], ...]
     material: str = ""
+    variants: tuple["Body", ...] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
 
 
 def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
@@ -107,7 +108,7 @@ def to_trimesh(manifold):
 def translate_body(body: Body, dx: float, dy: float) -> Body:
     ops = tuple((op, Prism(tuple(shapely.affinity.translate(p, dx, dy) for p in pr.polygons), pr.z0, pr.z1,
                            pr.scale_top, (pr.centre[0] + dx, pr.centre[1] + dy))) for op, pr in body.ops)
-    return Body(body.name, body.kind, ops, body.material)
+    return Body(body.name, body.kind, ops, body.material, tuple(translate_body(v, dx, dy) for v in body.variants))
 
 
 # ------------------------------------------------------------- the styles
@@ -130,6 +131,15 @@ class PrintJob:
     pins: printgeom.PinPlan | None = None
     placements: list[dict] = field(default_factory=list)  # strips style: where each part went
     unlabelled: list[int] = field(default_factory=list)  # strips too small for their engraved ID
+    layout: str = "recessed"  # tiles-and-strips: "recessed" or "stacked" (see tiles_and_strips)
+    layer_changes: list = field(default_factory=list)  # (print_z, kind, material) filament swaps, one extruder
+
+    def z_levels(self) -> dict[str, float]:
+        """Heights (mm) of the sections the checks take: bottom strips, bare tile, top strips."""
+        T, ts = self.printer.tile_thickness_mm, self.printer.strip_thickness_mm
+        if self.layout == "stacked":
+            return {"bottom": 0.5 * ts, "tiles": 0.5 * (ts + T), "top": T + 0.5 * ts}
+        return {"bottom": 0.5 * ts, "tiles": 0.5 * T, "top": T - 0.5 * ts}
 
 
 def _fits(bounds, printer: Printer, what: str) -> None:
@@ -147,29 +157,67 @@ def _centre_shift(bounds, printer: Printer) -> tuple[float, float]:
     return 0.5 * bx - 0.5 * (bounds[0] + bounds[2]), 0.5 * by - 0.5 * (bounds[1] + bounds[3])
 
 
-def tiles_and_strips(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
+LAYOUTS = ("recessed", "stacked")
+
+
+def layer_top_above(z: float, printer: Printer) -> float:
+    """Print height (top) of the first slicer layer lying above ``z``."""
+    first, h = printer.first_layer_mm, printer.layer_mm
+    if z < first - 1e-9:
+        return first
+    return first + (np.floor((z - first) / h + 1e-6) + 1) * h
+
+
+def tiles_and_strips(pattern: Pattern, state: int, printer: Printer, layout: str | None = None) -> PrintJob:
+    """Rigid tiles joined by flexible strips, in one of two layouts:
+
+    * ``recessed`` (two extruders): strips flush in pockets of the top and bottom
+      faces, so both materials share the bottom and top ``strip_thickness`` layers;
+    * ``stacked`` (one extruder, the default there): a flexible base sheet
+      (every tile plus the bottom-face strips) ``strip_thickness`` thick, the
+      rigid tiles on it, the top-face strips lying on the tiles. Each layer holds
+      one material, so two colour changes (M600 at the first rigid layer and at
+      the first top-strip layer) swap the filament.
+    """
+    layout = layout or ("recessed" if printer.extruders >= 2 else "stacked")
+    if layout not in LAYOUTS:
+        raise FabricationError(f"unknown tiles-and-strips layout {layout!r}; choose one of {', '.join(LAYOUTS)}")
     plan = printgeom.closed_plan(pattern, state, printer)
     strips = printgeom.strip_outlines(plan, printer)
     T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
     _fits(plan.bounds, printer, "the closed pattern")
     top = tuple(strips.outline[strips.top])
     bot = tuple(strips.outline[~strips.top])
-    tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
-        ("add", Prism(tuple(plan.tiles), 0.0, T)),
-        ("sub", Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0)),  # +1: a clean cut through the face
-        ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
-    ), printer.tile_material)
-    hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
-        ("add", Prism(top, T - ts, T)),
-        ("add", Prism(bot, 0.0, ts)),
-    ), printer.strip_material)
+    changes: list[tuple[float, str, str]] = []
+    if layout == "recessed":
+        tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
+            ("add", Prism(tuple(plan.tiles), 0.0, T)),
+            ("sub", Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0)),  # +1: a clean cut through the face
+            ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
+        ), printer.tile_material)
+        hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
+            ("add", Prism(top, T - ts, T)),
+            ("add", Prism(bot, 0.0, ts)),
+        ), printer.strip_material)
+    else:
+        base = shapely.simplify(shapely.union_all(list(plan.tiles) + list(bot)), printgeom.NOISE_MM)
+        tiles = Body(f"tiles_{printer.tile_material}", "tiles", (("add", Prism(tuple(plan.tiles), ts, T)),),
+                     printer.tile_material)
+        hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
+            ("add", Prism(tuple(shapely.get_parts(base)), 0.0, ts)),
+            ("add", Prism(top, T, T + ts)),
+        ), printer.strip_material)
+        changes = [(float(layer_top_above(ts, printer)), "colour-change", printer.tile_material),
+                   (float(layer_top_above(T, printer)), "colour-change", printer.strip_material)]
     dx, dy = _centre_shift(plan.bounds, printer)
     beds = [[translate_body(tiles, dx, dy), translate_body(hinges, dx, dy)]]
-    return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips)
+    return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips, layout=layout,
+                    layer_changes=changes)
 
 
 LABEL_MAX_MM = 2.5  # cap height of a strip's engraved hinge ID
 LABEL_MIN_MM = 1.2  # smaller is not legible in 0.4 mm lines
+ENGRAVE_LAYERS = 2  # depth of a strip's engraved ID, in layers
 
 
 def hinge_label(strip: Polygon, text: str, printer: Printer) -> Polygon | None:
@@ -213,6 +261,11 @@ def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     strips = printgeom.strip_outlines(plan, printer)
     ts, gap = printer.strip_thickness_mm, printer.part_spacing_mm
     bx, by, _ = printer.bed_mm
+    depth = ENGRAVE_LAYERS * printer.layer_mm  # whole layers, so the slicer resolves the ID
+    if ts - depth < printer.first_layer_mm - 1e-9:
+        raise FabricationError(f"a {ts:g} mm strip cannot hold an ID engraved {ENGRAVE_LAYERS} layers "
+                               f"({depth:g} mm) deep above a {printer.first_layer_mm:g} mm first layer; "
+                               "raise --strip-thickness")
     beds: list[list[Body]] = [[]]
     placements = []
     x = y = row_h = gap
@@ -234,7 +287,7 @@ def strips_only(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
         ops = [("add", Prism((placed,), 0.0, ts))]
         label = hinge_label(placed, str(h), printer)
         if label is not None:
-            ops.append(("sub", Prism((label,), ts - printer.layer_mm, ts + 1.0)))
+            ops.append(("sub", Prism((label,), ts - depth, ts + 1.0)))
         else:
             unlabelled.append(h)
         beds[-1].append(Body(name, "hinge", tuple(ops), printer.strip_material))
@@ -256,51 +309,135 @@ def pinned(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     T = lv.thickness
     A, B = plan.hinge_tiles.T
     H = plan.n_hinges
-    hollow = [regular_polygon(plan.hinge_xy[h], g.hollow, circumscribed=True) for h in range(H)]
-    ear = [regular_polygon(plan.hinge_xy[h], g.ear, circumscribed=False) for h in range(H)]
+    ph = pins.phase if pins.phase is not None else np.zeros(H)
     # A tile's corner at a pivot is cleared through the full height: the pivot's
     # own partner turns in one half, and the hinge that meets it in either
-    # closed state stacks its ears in the other half. Its own ear is added back.
+    # closed state stacks its ears in the other half; at its own ear level the
+    # tile is left whole and the ear disc added. (Cutting the full height and
+    # adding back tile ∩ disc would meet the cut at points computed twice, a
+    # nanometre apart: edges shared by four faces once written as float32.)
     at_tile: dict[int, list[int]] = {t: [] for t in range(len(plan.tiles))}
     for h in range(H):
         at_tile[int(A[h])].append(h)
         at_tile[int(B[h])].append(h)
-    bodies = []
-    for t in range(len(plan.tiles)):
+    def tile_body(t: int, turn: float) -> Body:
         X = plan.tiles[t]
         ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
         hs = at_tile[t]
+        poly = {h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn)) for h in hs}
         for h in hs:
-            ops.append(("sub", Prism((hollow[h],), -1.0, T + 1.0)))
+            z0, z1 = lv.level(pins.level[h] + (0 if t == A[h] else 1))
+            if z0 > 0.0:  # (a cut merely touching a face would leave a zero-thickness seam)
+                ops.append(("sub", Prism((poly[h](g.hollow, True),), -1.0, z0)))
+            if z1 < T:
+                ops.append(("sub", Prism((poly[h](g.hollow, True),), z1, T + 1.0)))
         for h in hs:
             k = pins.level[h] + (0 if t == A[h] else 1)
             z0, z1 = lv.level(k)
-            own = shapely.union(ear[h], shapely.intersection(X, hollow[h]))
-            ops.append(("add", Prism((own,), z0, z1)))
+            ops.append(("add", Prism((poly[h](g.ear, False),), z0, z1)))
             p = tuple(plan.hinge_xy[h])
             if t == A[h]:  # the pin: straight through its ear and the gap, flared through the ring
                 zr0, zr1 = lv.level(k + 1)
-                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), z0, zr0)))
-                ops.append(("add", Prism((regular_polygon(p, g.pin_bottom, False),), zr0, zr1,
-                                         g.pin_top / g.pin_bottom, p)))
+                ops.append(("add", Prism((poly[h](g.pin_bottom, False),), z0, zr0)))
+                ops.append(("add", Prism((poly[h](g.pin_bottom, False),), zr0, zr1, g.pin_top / g.pin_bottom, p)))
         for h in hs:
             if t == B[h]:
-                k = pins.level[h] + 1
-                z0, z1 = lv.level(k)
+                z0, z1 = lv.level(pins.level[h] + 1)
                 p = tuple(plan.hinge_xy[h])
-                ops.append(("sub", Prism((regular_polygon(p, g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
+                ops.append(("sub", Prism((poly[h](g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
                                          g.hole_top / g.hole_bottom, p)))
-        bodies.append(Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material))
+        return Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material)
+
+    # the same tile with its pivot polygons turned: tried in turn when a turn
+    # leaves a near-degenerate meeting that a float32 file cannot keep 2-manifold
+    # (each tile's clearances are circumscribed and its ears inscribed, so
+    # tiles need not share a turn)
+    bodies = []
+    for t in range(len(plan.tiles)):
+        first = tile_body(t, 0.0)
+        alts = tuple(tile_body(t, (j + 0.5) / printgeom.PHASES) for j in range(printgeom.PHASES))
+        bodies.append(replace(first, variants=alts))
     dx, dy = _centre_shift(plan.bounds, printer)
     beds = [[translate_body(b, dx, dy) for b in bodies]]
     return PrintJob("pinned", state, printer, plan, beds, (dx, dy), pins=pins)
 
 
-def build_job(pattern: Pattern, style: str, state: int, printer: Printer) -> PrintJob:
+def scaled(pattern: Pattern, k: float) -> Pattern:
+    """The pattern ``k`` times its size (nodes and stored closed states)."""
+    return replace(pattern, nodes=pattern.nodes * k, contracted={s: c * k for s, c in pattern.contracted.items()})
+
+
+def _pinned_plans(pattern: Pattern, state: int, printer: Printer) -> str | None:
+    """Why pinned hinges cannot be printed at this size on this bed (``None``: they can)."""
+    try:
+        plan = printgeom.closed_plan(pattern, state, printer)
+        printgeom.pin_plan(pattern, plan, printer)
+        _fits(plan.bounds, printer, "the closed pattern")
+    except FabricationError as exc:
+        return str(exc)
+    return None
+
+
+def pinned_scale_range(pattern: Pattern, state: int, printer: Printer, step: float = 0.01
+                       ) -> tuple[float, float] | None:
+    """The smallest scale factor (to ``step``) at which the pattern prints pinned on
+    the printer's bed, and the largest that fits the bed; ``None`` if none does.
+
+    The refusals that depend on size (pivots too close, ears reaching foreign
+    tiles, slivers beside a clearance) ease as the pattern grows, until it no
+    longer fits the bed: bisect between the given size and the largest that fits."""
+    c = printgeom.closed_corners(pattern, state).reshape(-1, 2)
+    (x0, y0), (x1, y1) = c.min(0), c.max(0)
+    bx, by, _ = printer.bed_mm
+    kmax = np.floor(min(bx / (x1 - x0), by / (y1 - y0)) / step) * step  # the shrunk tiles fit inside
+    if _pinned_plans(scaled(pattern, kmax), state, printer) is not None:
+        return None
+    lo, hi = step, kmax  # lo: fails or below every feasible size
+    if _pinned_plans(scaled(pattern, lo), state, printer) is None:
+        return lo, kmax
+    while hi - lo > step * 0.999:
+        mid = np.round(0.5 * (lo + hi) / step) * step
+        if mid in (lo, hi):
+            break
+        if _pinned_plans(scaled(pattern, mid), state, printer) is None:
+            hi = mid
+        else:
+            lo = mid
+    return float(hi), float(kmax)
+
+
+def pinned_advice(pattern: Pattern, state: int, printer: Printer, scale: float = 1.0) -> str:
+    """Which ``--scale`` prints the pattern pinned on this printer (``scale``: the
+    factor already applied to ``pattern``)."""
+    try:
+        rng = pinned_scale_range(pattern, state, printer)
+    except FabricationError as exc:
+        return f"no scale was searched ({exc})"
+    bx, by, _ = printer.bed_mm
+    if rng is None:
+        c = printgeom.closed_corners(pattern, state).reshape(-1, 2)
+        kmax = min(bx / np.ptp(c[:, 0]), by / np.ptp(c[:, 1]))
+        why = _pinned_plans(scaled(pattern, np.floor(kmax * 100) / 100), state, printer)
+        return (f"no scale prints it pinned on the {bx:g} x {by:g} mm bed of {printer.name}: at the largest that "
+                f"fits ({scale * kmax:.2f}x) {why}")
+    lo, hi = rng
+    return (f"it prints pinned on the {bx:g} x {by:g} mm bed of {printer.name} from --scale {scale * lo:.2f} "
+            f"to {scale * hi:.2f}")
+
+
+def build_job(pattern: Pattern, style: str, state: int, printer: Printer, advise_scale: float | None = None
+              ) -> PrintJob:
+    """The print job of a style; with ``advise_scale`` (the scale the pattern was
+    given at) a refused pinned job names the scales that print on this bed."""
     if style not in STYLES:
         raise FabricationError(f"unknown print style {style!r}; choose one of {', '.join(STYLES)}")
-    return {"strips": strips_only, "tiles-and-strips": tiles_and_strips, "pinned": pinned}[style](
-        pattern, state, printer)
+    try:
+        return {"strips": strips_only, "tiles-and-strips": tiles_and_strips, "pinned": pinned}[style](
+            pattern, state, printer)
+    except FabricationError as exc:
+        if style != "pinned" or advise_scale is None:
+            raise
+        raise FabricationError(f"{exc}; {pinned_advice(pattern, state, printer, advise_scale)}") from None
 
 
 # ------------------------------------------------------------------ checks
@@ -335,14 +472,41 @@ class Realised:
     meshes: list[list]
 
 
+def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> int:
+    """Edges not used by exactly two faces, plus faces with a repeated vertex,
+    once the vertices are welded by position, as any STL reader does."""
+    v = np.ascontiguousarray(vertices)
+    _, weld = np.unique(v.view(np.dtype((np.void, 3 * v.dtype.itemsize))).ravel(), return_inverse=True)
+    f = weld.reshape(-1)[np.asarray(faces)]
+    degenerate = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1).astype(np.int64)
+    _, counts = np.unique(e[:, 0] * (int(weld.max(initial=0)) + 1) + e[:, 1], return_counts=True)
+    return int((counts != 2).sum() + degenerate.sum())
+
+
+def float32_defects(tm) -> int:
+    """:func:`edge_defects` of a mesh as a file stores it (float32 coordinates)."""
+    return edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces)
+
+
+def _realise_clean(body: Body):
+    """The body (or its first variant) whose float32 mesh is a closed 2-manifold;
+    the last one tried if none is (the mesh check then reports it)."""
+    for b in (body, *body.variants):
+        m = realise(b)
+        if m.status().name != "NoError" or m.is_empty():
+            raise FabricationError(f"body {b.name} came out empty or invalid ({m.status().name})")
+        tm = to_trimesh(m)
+        if float32_defects(tm) == 0:
+            break
+    return b, m, tm
+
+
 def realise_job(job: PrintJob) -> Realised:
-    manifolds = [[realise(b) for b in bed] for bed in job.beds]
-    for bed, ms in zip(job.beds, manifolds):
-        for b, m in zip(bed, ms):
-            if m.status().name != "NoError" or m.is_empty():
-                raise FabricationError(f"body {b.name} came out empty or invalid ({m.status().name})")
-    meshes = [[to_trimesh(m) for m in ms] for ms in manifolds]
-    return Realised(job, manifolds, meshes)
+    done = [[_realise_clean(b) for b in bed] for bed in job.beds]
+    beds = [[replace(b, variants=()) for b, _, _ in bed] for bed in done]
+    job = replace(job, beds=beds)
+    return Realised(job, [[m for _, m, _ in bed] for bed in done], [[tm for _, _, tm in bed] for bed in done])
 
 
 def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
@@ -361,7 +525,11 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
                     "winding_consistent": bool(tm.is_winding_consistent), "volume_mm3": float(tm.volume),
                     "manifold_volume_mm3": float(m.volume()), "triangles": int(len(tm.faces)),
                     "bounds_mm": [lo.round(4).tolist(), hi.round(4).tolist()]}
+            info["float32_edge_defects"] = float32_defects(tm)
             rep.bodies.append(info)
+            if info["float32_edge_defects"]:
+                rep.problems.append(f"{b.name}: {info['float32_edge_defects']} edges not shared by exactly two faces "
+                                    "once written with float32 coordinates")
             if not (info["watertight"] and info["winding_consistent"]):
                 rep.problems.append(f"{b.name}: mesh not watertight or not consistently wound")
             if not tm.volume > 0 or abs(tm.volume - m.volume()) > vol_rtol * max(1.0, m.volume()) + 1e-6:
@@ -434,7 +602,16 @@ def _check_clearances(r: Realised, rep: MeshReport) -> None:
         design_s = shapely.transform(job.strips.outline, lambda c: c + shift)
         A, B = job.plan.hinge_tiles.T
         worst = np.inf
-        for z in (0.5 * ts, 0.5 * T, T - 0.5 * ts):
+        lv = job.z_levels()
+        zs = (lv["bottom"], lv["tiles"], lv["top"])
+        if job.layout == "stacked":  # the base sheet joins tiles by design: it must be the planned sheet
+            zs = zs[1:]
+            planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
+            got = shapely.union_all(_slice_polys(hinges_m, lv["bottom"]))
+            off = float(shapely.area(shapely.symmetric_difference(planned, got)))
+            if off > 1e-6 * max(1.0, planned.area):
+                rep.problems.append(f"the base sheet deviates from its plan by {off:.3g} mm²")
+        for z in zs:
             parts = _slice_polys(tiles_m, z)
             sparts = _slice_polys(hinges_m, z)
             allp = np.array(parts + sparts, dtype=object)
@@ -594,7 +771,7 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
     else:
         man = m3d.Manifold.batch_boolean(r.manifolds[0], m3d.OpType.Add)
     if job.style == "tiles-and-strips":
-        z = 0.5 * pr.tile_thickness_mm
+        z = job.z_levels()["tiles"]
         mask = None
     else:
         lv = job.pins.levels
@@ -655,7 +832,7 @@ def top_face_dxf(r: Realised, tiles_mesh=None) -> bytes:
     doc = ezdxf.new("R2010", units=ezdxf.units.MM)
     doc.layers.add("CUT", color=1)
     msp = doc.modelspace()
-    for ring in man.slice(0.5 * job.printer.tile_thickness_mm).to_polygons():
+    for ring in man.slice(job.z_levels()["tiles"]).to_polygons():
         msp.add_lwpolyline(np.asarray(ring, dtype=float).tolist(), format="xy", close=True,
                            dxfattribs={"layer": "CUT"})
     out = io.StringIO()
@@ -676,10 +853,14 @@ def printed_bridges(r: Realised) -> list[dict]:
     planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
     tree = shapely.STRtree(planned)
     feats = []
-    tiles = np.array(_slice_polys(tiles_m, 0.5 * T), dtype=object)
+    lv = job.z_levels()
+    tiles = np.array(_slice_polys(tiles_m, lv["tiles"]), dtype=object)
     tile_tree = shapely.STRtree(tiles)
-    for z in (0.5 * ts, T - 0.5 * ts):
+    for z in (lv["bottom"], lv["top"]):
         parts = np.array(_slice_polys(hinges_m, z), dtype=object)
+        if job.layout == "stacked" and z == lv["bottom"]:  # a base sheet: each bottom strip's share of it
+            mine = shapely.intersection(shapely.union_all(parts), planned[~job.strips.top])
+            parts = np.array([g for g in shapely.get_parts(mine) if g.area > 1e-4], dtype=object)
         pi, hi = tree.query(shapely.point_on_surface(parts), predicate="within")
         owner = np.full(len(parts), -1)
         once = np.bincount(pi, minlength=len(parts)) == 1
@@ -730,55 +911,104 @@ def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
 # ----------------------------------------------------------------- writing
 
 def export_3mf(scene) -> bytes:
-    """trimesh's 3MF with reproducible bytes: its random part UUIDs become
-    name-based ones from a counter, and zip entries get a fixed date."""
-    import uuid
-    import zipfile
-    from unittest import mock
+    """A trimesh scene as a plain 3MF, one object per geometry, reproducible bytes
+    (:func:`.threemf.objects_3mf`; print jobs write projects with :func:`job_files`)."""
+    from .threemf import objects_3mf
 
-    from trimesh.exchange import threemf
-
-    counter = iter(range(1 << 30))
-
-    def next_uuid():
-        return uuid.uuid5(uuid.NAMESPACE_URL, f"fabkiri:3mf:{next(counter)}")
-
-    with mock.patch.object(threemf.uuid, "uuid4", next_uuid):
-        raw = scene.export(file_type="3mf")
-    src = zipfile.ZipFile(io.BytesIO(raw))
-    out = io.BytesIO()
-    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as dst:
-        for info in src.infolist():
-            fixed = zipfile.ZipInfo(info.filename, date_time=(1980, 1, 1, 0, 0, 0))
-            fixed.compress_type = zipfile.ZIP_DEFLATED
-            fixed.external_attr = 0o644 << 16
-            dst.writestr(fixed, src.read(info.filename))
-    return out.getvalue()
+    return objects_3mf({name: (np.asarray(g.vertices), np.asarray(g.faces)) for name, g in scene.geometry.items()})
 
 
-def job_files(r: Realised, stem: str) -> dict[str, bytes]:
-    """File name -> bytes of every mesh file of a job (STL per body kind and
-    per bed, one 3MF per bed with one named object per body)."""
+def _parts(bed: list[Body], tms: list) -> list:
+    from .threemf import Part
+
+    return [Part(b.name, b.material, np.asarray(tm.vertices), np.asarray(tm.faces)) for b, tm in zip(bed, tms)]
+
+
+def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
+    """File name -> bytes of every file of a job: per bed one 3MF project (one
+    object, one volume per body, see :mod:`.threemf`) and a preview PNG, and
+    STLs (per body kind for tiles-and-strips, per bed otherwise)."""
     import trimesh
+
+    from .printpreview import preview_png
+    from .threemf import LayerChange, project_3mf
 
     job = r.job
     files: dict[str, bytes] = {}
     for k, (bed, tms) in enumerate(zip(job.beds, r.meshes), 1):
         suffix = "" if len(job.beds) == 1 else f"-bed{k}"
-        scene = trimesh.Scene()
-        for b, tm in zip(bed, tms):
-            scene.add_geometry(tm, geom_name=b.name, node_name=b.name)
-        files[f"{stem}{suffix}.3mf"] = export_3mf(scene)
+        changes = [LayerChange(z, kind, m) for z, kind, m in job.layer_changes]
+        files[f"{stem}{suffix}.3mf"] = project_3mf(f"{stem}{suffix}", _parts(bed, tms), job.printer, changes)
+        if preview:
+            files[f"{stem}{suffix}.png"] = preview_png(bed, r.manifolds[k - 1], job.printer,
+                                                       f"{stem}{suffix} ({job.style})")
         if job.style == "tiles-and-strips":
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
-        else:
+        else:  # disjoint bodies: their concatenation is still a closed 2-manifold
             files[f"{stem}{suffix}.stl"] = trimesh.util.concatenate(tms).export(file_type="stl")
     return files
 
 
+def print_plan(job: PrintJob) -> str:
+    """How the job prints on its printer (one line for the user), or
+    :class:`FabricationError` when it cannot print there."""
+    pr = job.printer
+    mats = sorted({b.material for bed in job.beds for b in bed})
+    if len(mats) == 1:
+        return f"one material ({mats[0]}), extruder 1"
+    if pr.extruders >= 2:
+        return ", ".join(f"{m} on extruder {pr.extruder_of(m)}" for m in mats) + " (tool changes in one print)"
+    if job.layer_changes:
+        T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
+        swaps = " and ".join(f"z = {z:.2f} mm (load {m})" for z, _, m in job.layer_changes)
+        return (f"one extruder: {job.style} stacked ({pr.strip_material} base sheet 0-{ts:g} mm, {pr.tile_material} "
+                f"tiles {ts:g}-{T:g} mm, {pr.strip_material} top strips {T:g}-{T + ts:g} mm), colour changes (M600) "
+                f"in the 3MF at {swaps}")
+    raise FabricationError(
+        f"printer {pr.name} has one extruder and {job.style} puts {' and '.join(mats)} in the same layers (the "
+        f"recessed strips share the tiles' bottom and top {pr.strip_thickness_mm:g} mm), which no pause or colour "
+        "change can split; use a multi-material printer (--printer prusa-xl-2t) or --style strips "
+        "(flexible strips to glue onto laser-cut tiles)"
+    )
+
+
+
+
+def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
+    """Every STL/3MF as written, re-read by trimesh (vertices welded, as slicers
+    do) and by manifold3d: watertight, every edge used by exactly two faces, one
+    valid manifold per body. This, not the in-memory solid, is what the manifest reports."""
+    import manifold3d as m3d
+    import trimesh
+
+    from .threemf import read_volumes
+
+    out = {}
+    for name, data in sorted(files.items()):
+        ext = name.rsplit(".", 1)[-1]
+        if ext not in ("stl", "3mf"):
+            continue
+        if ext == "3mf":  # one object of several volumes (parts): each volume is a closed body
+            geoms = [trimesh.Trimesh(v, f, process=True) for _, _, _, v, f in read_volumes(data)]
+        else:
+            geoms = [trimesh.load(io.BytesIO(data), file_type=ext, process=True)]
+        bad_edges, watertight, m3d_ok, volume = 0, True, True, 0.0
+        for g in geoms:
+            bad_edges += edge_defects(g.vertices, g.faces)
+            watertight &= bool(g.is_watertight and g.is_winding_consistent)
+            man = m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(g.vertices, dtype=np.float32),
+                                        tri_verts=np.asarray(g.faces, dtype=np.uint32)))
+            m3d_ok &= man.status().name == "NoError" and not man.is_empty()
+            volume += float(g.volume)
+        out[name] = {"meshes": len(geoms), "watertight": watertight, "edges_not_shared_by_two_faces": bad_edges,
+                     "manifold3d_ok": bool(m3d_ok), "volume_mm3": volume,
+                     "ok": bool(watertight and bad_edges == 0 and m3d_ok)}
+    return out
+
+
 def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name: str,
-             files: Iterable[str], verifier=None) -> str:
+             files: Iterable[str], verifier=None, read_back: dict | None = None) -> str:
     job = r.job
     plan = job.plan
     d = {
@@ -786,13 +1016,16 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
         "pattern": pattern_name, "style": job.style, "state": job.state,
         "printer": job.printer.to_dict(),
         "shift_mm": [round(float(v), 6) for v in job.shift],
+        "layout": job.layout if job.style == "tiles-and-strips" else None,
+        "layer_changes": [{"print_z_mm": round(z, 6), "gcode": "M600" if k == "colour-change" else "M601",
+                           "load": m} for z, k, m in job.layer_changes],
         "beds": [[b.name for b in bed] for bed in job.beds],
         "hinges": [{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
                     "coincides_with": int(plan.partner[h]) if plan.partner[h] >= 0 else None,
                     "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
                    for h in range(plan.n_hinges)],
         "files": sorted(files),
-        "checks": {"meshes": rep.to_dict(), "tiles": tiles.to_dict() if tiles else None,
+        "checks": {"meshes": rep.to_dict(), "files": read_back, "tiles": tiles.to_dict() if tiles else None,
                    "verifier": verifier.to_dict() if verifier is not None else None},
     }
     if job.placements:

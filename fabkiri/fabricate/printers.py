@@ -52,6 +52,12 @@ class Printer:
     strip_material: str = "TPU"
     description: str = ""
     pin: PinSpec = field(default_factory=PinSpec)
+    extruders: int = 1
+    # what each extruder is loaded with (multi-material printers); a single
+    # extruder is loaded with whatever the job prints
+    materials: tuple[str, ...] = ()
+    first_layer_mm: float = 0.2
+    min_feature_mm: float = 0.8  # narrowest wall the slicer prints solid (two perimeters)
 
     def __post_init__(self) -> None:
         try:
@@ -71,6 +77,22 @@ class Printer:
             v = getattr(self.pin, f.name)
             if not (isinstance(v, (int, float)) and v > 0):
                 raise FabricationError(f"printer {self.name}: pin.{f.name} must be a positive length, got {v!r}")
+        if not (isinstance(self.extruders, int) and 1 <= self.extruders <= 16):
+            raise FabricationError(f"printer {self.name}: extruders must be a whole number 1-16, got {self.extruders!r}")
+        mats = tuple(self.materials)
+        object.__setattr__(self, "materials", mats)
+        if mats and (len(mats) != self.extruders or not all(isinstance(m, str) and m for m in mats)):
+            raise FabricationError(f"printer {self.name}: materials must name one material per extruder "
+                                   f"({self.extruders}), got {list(mats)}")
+        for m in {self.tile_material, self.strip_material}:
+            if m not in MATERIALS:
+                raise FabricationError(f"printer {self.name}: unknown material {m!r}; known: {', '.join(MATERIALS)}")
+        if self.extruders > 1 and mats and not {self.tile_material, self.strip_material} <= set(mats):
+            raise FabricationError(f"printer {self.name}: tile and strip materials must be among the extruders' "
+                                   f"materials {list(mats)}")
+        if self.first_layer_mm > 2 * self.layer_mm or self.layer_mm > 0.8 * self.nozzle_mm:
+            raise FabricationError(f"printer {self.name}: layer {self.layer_mm} mm / first layer "
+                                   f"{self.first_layer_mm} mm do not suit a {self.nozzle_mm} mm nozzle")
         if self.gap_mm < self.radial_clearance_mm:
             raise FabricationError(
                 f"printer {self.name}: the tile gap {self.gap_mm} mm is below the radial clearance "
@@ -86,6 +108,16 @@ class Printer:
                 f"printer {self.name}: two recessed strips ({self.strip_thickness_mm} mm each, top and "
                 f"bottom) do not fit in a {self.tile_thickness_mm} mm tile"
             )
+
+    def extruder_of(self, material: str) -> int:
+        """1-based extruder printing ``material``: its place in ``materials`` on a
+        multi-material printer, else 1 (a single extruder is loaded for the job)."""
+        if self.extruders > 1:
+            mats = self.materials or (self.tile_material, self.strip_material)
+            if material in mats:
+                return mats.index(material) + 1
+            raise FabricationError(f"printer {self.name} has no extruder loaded with {material}")
+        return 1
 
     @property
     def tolerance_mm(self) -> float:
@@ -105,7 +137,25 @@ class Printer:
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["bed_mm"] = list(self.bed_mm)
+        d["materials"] = list(self.materials)
         return d
+
+
+@dataclass(frozen=True)
+class MaterialSettings:
+    """What the slicer project needs per filament (PrusaSlicer names)."""
+
+    slicer_type: str  # filament_type
+    colour: str
+    nozzle_c: int
+    bed_c: int
+
+
+MATERIALS: dict[str, MaterialSettings] = {
+    "PLA": MaterialSettings("PLA", "#3C78D8", 215, 60),
+    "PETG": MaterialSettings("PETG", "#6AA84F", 240, 85),
+    "TPU": MaterialSettings("FLEX", "#F1C232", 230, 50),
+}
 
 
 def available_printers() -> list[str]:

@@ -36,15 +36,18 @@ COINCIDE_TOL_REL = 1e-6  # two hinge points closer than this (tile sizes) coinci
 CIRCLE_SEGMENTS = 48
 POCKET_OVERSHOOT_MM = 0.05
 MITRE_LIMIT = 10.0  # as the laser-cut layer and the verifier: sharp tips shrink and grow back exactly
+NOISE_MM = 1e-5  # outline vertices closer than this to their neighbours' line are dropped
 MASK_MARGIN_MM = 1e-3  # the tile check masks the pivot clearances with this margin
 
 
-def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS) -> Polygon:
+def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS,
+                    phase: float = 0.0) -> Polygon:
     """An n-gon approximating a circle: vertices on it (inscribed, for solid
     material) or edges tangent to it (circumscribed, for clearances), so that
-    polygon approximation never eats into a clearance."""
+    polygon approximation never eats into a clearance; turned by ``phase``
+    (in vertex steps)."""
     r = radius / np.cos(np.pi / n) if circumscribed else radius
-    a = 2 * np.pi * np.arange(n) / n
+    a = 2 * np.pi * (np.arange(n) + phase) / n
     return Polygon(np.stack([centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)], -1))
 
 
@@ -215,7 +218,9 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
     band = np.stack([p + t0[:, None] * e - R * n, p + t1[:, None] * e - R * n,
                      p + t1[:, None] * e + R * n, p + t0[:, None] * e + R * n], 1)
     strips = shapely.intersection(shapely.polygons(band), pair)
-    outline = np.array([_largest(g) for g in strips], dtype=object)
+    # the band's corners can land within micrometres of the pair's: drop such
+    # near-duplicate vertices, which a float32 file would weld into degenerate faces
+    outline = shapely.simplify(np.array([_largest(g) for g in strips], dtype=object), NOISE_MM)
     pads = np.stack([shapely.intersection(outline, plan.tiles[A]),
                      shapely.intersection(outline, plan.tiles[B])], -1)
     min_pad = 0.25 * w * min(reach, w)
@@ -229,11 +234,18 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
         )
     _check_strip_clearance(plan, outline, printer)
     # the pocket overshoots the tile edges (into the gap, never near another
-    # tile) so no micrometre sliver of tile survives where strip and tile edges meet
+    # tile) so no micrometre sliver of tile survives where strip and tile edges
+    # meet. It is the band cut by the pair region grown by the overshoot, so its
+    # outline runs clear of every tile edge: a pocket corner lying on a tile edge
+    # (as band ∩ pair has) leaves manifold3d two vertices a nanometre apart,
+    # which a float32 STL merges into edges shared by four faces.
     over = min(POCKET_OVERSHOOT_MM, 0.25 * printer.gap_mm)
-    grown = shapely.buffer(shapely.union(plan.tiles[A], plan.tiles[B]), over, join_style="mitre")
-    pocket = shapely.union(outline, shapely.intersection(shapely.polygons(band), grown))
-    pocket = np.array([_largest(g) for g in pocket], dtype=object)
+    grown = shapely.buffer(pair, over, join_style="mitre", mitre_limit=MITRE_LIMIT)
+    # ... and begins the overshoot before the band, whose end may lie along a tile edge
+    t0o = t0 - over
+    pband = np.stack([p + t0o[:, None] * e - R * n, p + t1[:, None] * e - R * n,
+                      p + t1[:, None] * e + R * n, p + t0o[:, None] * e + R * n], 1)
+    pocket = np.array([_largest(g) for g in shapely.intersection(shapely.polygons(pband), grown)], dtype=object)
     return Strips(outline=outline, pads=pads, top=plan.top.copy(), pocket=pocket)
 
 
@@ -336,6 +348,7 @@ class PinPlan:
     levels: PinLevels
     geometry: PinGeometry
     level: np.ndarray  # (H,)
+    phase: np.ndarray | None = None  # (H,) turn of the pivot polygons (pivot_phases)
 
 
 def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
@@ -381,7 +394,38 @@ def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
         )
     _refuse_slivers(plan, g, printer)
     level = np.where(plan.top, 2, 0)
-    return PinPlan(levels=levels, geometry=g, level=level)
+    return PinPlan(levels=levels, geometry=g, level=level, phase=pivot_phases(plan, g))
+
+
+PHASES = 8  # candidate turns of a pivot's polygons, in 1/PHASES of a vertex step
+
+
+def pivot_phases(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
+    """Per hinge, the turn of its pivot's polygons (ear, clearance, pin, ring
+    hole) that keeps their vertices farthest from the edges of the tiles meeting
+    there. A polygon vertex within float noise of a tile edge leaves manifold3d
+    two vertices a nanometre apart, which merge in a float32 STL into edges
+    shared by four faces; coincident hinges get the same turn (one pivot)."""
+    n = CIRCLE_SEGMENTS
+    radii = np.array([g.ear, g.pin_bottom, g.pin_top]
+                     + [r / np.cos(np.pi / n) for r in (g.hollow, g.hole_bottom, g.hole_top)])
+    A, B = plan.hinge_tiles.T
+    rings = shapely.get_exterior_ring(plan.tiles)
+    cand = np.arange(PHASES) / PHASES
+    ang = 2 * np.pi * (np.arange(n)[None, :] + cand[:, None]) / n  # (P, n)
+    phase = np.zeros(plan.n_hinges)
+    for h in range(plan.n_hinges):
+        pa = plan.partner[h]
+        if 0 <= pa < h:
+            phase[h] = phase[pa]
+            continue
+        tiles = {int(A[h]), int(B[h])} | ({int(A[pa]), int(B[pa])} if pa >= 0 else set())
+        edges = shapely.union_all(rings[sorted(tiles)])
+        c = plan.hinge_xy[h]
+        xy = c + radii[None, :, None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)[:, None]  # (P, R, n, 2)
+        d = shapely.distance(shapely.multipoints(xy.reshape(PHASES, -1, 2)), edges)
+        phase[h] = cand[int(np.argmax(d))]
+    return phase
 
 
 def clearance_discs(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
