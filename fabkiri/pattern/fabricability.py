@@ -50,7 +50,8 @@ def _distances(corners: np.ndarray, n: np.ndarray):
 def widths(corners: np.ndarray, shrink: float = 0.0) -> np.ndarray:
     """Thinnest width of every tile ``(T, 4, 2)`` (CCW), after shrinking by ``shrink``.
 
-    A tile that loses an edge when shrunk (or is not convex and CCW) gets width 0.
+    A tile that loses an edge when shrunk (or is not counter-clockwise) gets width 0. A non-convex tile
+    is measured the same way, over all its edges' lines: the linear measure :func:`min_scale` inverts.
     """
     corners = np.asarray(corners, dtype=float)
     u, n, L = _frame(corners)
@@ -59,7 +60,8 @@ def widths(corners: np.ndarray, shrink: float = 0.0) -> np.ndarray:
         m = _mitres(n)
         h = h - shrink * (1.0 - dot2(n[..., :, None, :], m[..., None, :, :]))
     w = h.max(-1).min(-1)
-    ok = (shrunk_edges(corners, shrink) > EDGE_EPS_MM * (shrink > 0)).all(-1) & (h.min(-1) > -1e-9 * L.max(-1)[..., None]).all(-1)
+    ccw = cross2(corners, np.roll(corners, -1, axis=-2)).sum(-1) > 0
+    ok = (shrunk_edges(corners, shrink) > EDGE_EPS_MM * (shrink > 0)).all(-1) & ccw
     return np.where(ok, np.maximum(w, 0.0), 0.0)
 
 
