@@ -7,17 +7,7 @@ import json
 import sys
 
 from ..fileio import atomic_write_many
-from .pattern_cmds import _positive, load_any
-
-
-def _non_negative(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v >= 0 or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return v
+from .pattern_cmds import _nonneg, _positive, load_any
 
 
 def _count(text: str) -> int:
@@ -61,9 +51,9 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("tolerance", help="Monte-Carlo of cut and hinge errors: closure gaps, overlaps, outline")
     p.add_argument("file", help="pattern (.json or design .obj)")
-    p.add_argument("--kerf-sd", type=_non_negative, default=0.02, metavar="MM",
+    p.add_argument("--kerf-sd", type=_nonneg, default=0.02, metavar="MM",
                    help="sd of each tile edge's position along its normal (default 0.02)")
-    p.add_argument("--hinge-sd", type=_non_negative, default=0.05, metavar="MM",
+    p.add_argument("--hinge-sd", type=_nonneg, default=0.05, metavar="MM",
                    help="sd of each pivot's position off its tile corner, per axis (default 0.05)")
     p.add_argument("--n", type=_count, default=1000, help="samples (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
