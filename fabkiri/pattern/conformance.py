@@ -22,6 +22,8 @@ import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 
+from .geometry import kabsch
+
 SAMPLES_PER_SIZE = 4000  # sampling spacing h = size / this: Hausdorff exact to 1.25e-4 of the size
 SIZE_DEFINITION = "larger side of the target's bounding box"
 
@@ -216,12 +218,10 @@ def align_rigid(outline: np.ndarray, target: np.ndarray, iterations: int = 40, s
 
 
 def _fit(src: np.ndarray, dst: np.ndarray):
-    ps, pd = src.mean(0), dst.mean(0)
-    p, q = src - ps, dst - pd
-    th = np.arctan2((p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]).sum(), (p * q).sum())
+    """``(R, t)`` of :func:`geometry.kabsch` (``dst ≈ src @ R.T + t``)."""
+    th, t = kabsch(src, dst)
     c, s = np.cos(th), np.sin(th)
-    R = np.array([[c, -s], [s, c]])
-    return R, pd - R @ ps
+    return np.array([[c, -s], [s, c]]), t
 
 
 def _icp_step(src: np.ndarray, P: np.ndarray, Bd: np.ndarray, tree: cKDTree):
