@@ -222,7 +222,7 @@ def _lm(evaluate, ineq_viol, nodes, p, rho, max_iter, stall_tol):
                 break
             dp = 0.5 * dp
         pn = p + dp
-        Xn, rn, Jn = evaluate(pn, rho)
+        _, rn, Jn = evaluate(pn, rho)
         cn = float(rn @ rn)
         Jdp = J @ dp
         pred = -(2 * float(r @ Jdp) + float(Jdp @ Jdp))

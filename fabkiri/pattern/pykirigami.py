@@ -30,7 +30,6 @@ from .model import Pattern
 
 FILES = ("vertices.txt", "constraints.txt", "target.txt")
 JOINT_BOTH_FACES = 3
-LOADER_MAX_DISTANCE = 0.05  # what PyKirigami's validate_constraints allows, in file units
 
 
 def _tile_lines(corners: np.ndarray) -> str:
