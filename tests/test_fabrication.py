@@ -54,6 +54,8 @@ def test_width_is_the_minimum_width(q):
     poly = shapely.Polygon(q)
     if not (poly.is_valid and shapely.is_ccw(poly.exterior)) or not fab.cross_signs_ok(q[None]):
         return
+    if (np.linalg.norm(np.roll(q, -1, 0) - q, axis=1) < 1e-9).any():
+        return  # coinciding corners (hypothesis found angles 0 and 1e-217): not a tile, limits refuses it
     w = fab.widths(q[None])[0]
     b = brute_width(q)  # sampled directions only overestimate the minimum, by O(step²)
     assert w <= b + 1e-12 and w == pytest.approx(b, rel=1e-6)
