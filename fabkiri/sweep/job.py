@@ -14,7 +14,7 @@ import time
 from dataclasses import replace
 
 from ..api.design import PatternRequest, design_pattern
-from ..errors import CheckFailed
+from ..errors import CheckFailed, FabkiriError
 from .spec import Job, parse_tiles
 
 REQUEST_KEYS = ("target", "size", "rigid", "symmetry", "holes", "contracted_target", "init", "solver", "fit", "tol",
@@ -69,12 +69,14 @@ def _run(job: Job) -> tuple[dict, dict[str, bytes]]:
     if not out.valid and set(job.actions) - {"design"}:
         row["notes"] = "not cut, printed or deployed: the design failed its checks"
         return row, _encoded(files)
-    if "cut" in job.actions:
-        files.update(_cut(pattern, job.params, row))
-    if "print" in job.actions:
-        files.update(_print(pattern, job.params, row))
-    if "deploy" in job.actions:
-        files.update(_deploy(pattern, job.params, row))
+    for stage, make in (("cut", _cut), ("print", _print), ("deploy", _deploy)):
+        if stage not in job.actions:
+            continue
+        try:
+            files.update(make(pattern, job.params, row))
+        except FabkiriError as exc:  # a refusal of this stage: the design and the other stages are kept
+            row["status"] = f"{stage} failed" if row["status"] == "ok" else row["status"]
+            row["error"] = "; ".join(filter(None, [row.get("error"), f"{stage}: {describe_error(exc)}"]))
     return row, _encoded(files)
 
 
@@ -101,8 +103,8 @@ def _cut(pattern, params: dict, row: dict) -> dict[str, bytes]:
     from ..fabricate.readback import verify_result
 
     material = load_material(params.get("cut_material") or params.get("material") or DEFAULT_CUT_MATERIAL)
-    result = cut_pattern(pattern, CutOptions(material=material, hinge=params.get("hinge"), width="auto",
-                                             stem="pattern", pattern_file="pattern.json"))
+    result = cut_pattern(pattern, CutOptions(material=material, hinge=params.get("hinge"), stem="pattern",
+                                             pattern_file="pattern.json"))  # at the designed size, as `cut`
     rb = verify_result(pattern, result)
     result.manifest["verification"] = rb.to_dict()
     if not rb.ok:
