@@ -62,6 +62,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"fabkiri: {len(spec.jobs)} jobs ({'+'.join(spec.actions)})", file=sys.stderr)
         res = sweep(spec, client, output=args.output, workers=args.workers, job_timeout=args.job_timeout,
                     retry_failed=args.retry_failed, progress=Bar(), on_cluster=_show_cluster)
+    except KeyboardInterrupt:  # every finished job is in DIR already: say so (not the CLI's "nothing written")
+        print(f"\nfabkiri: interrupted; the jobs finished so far are in {args.output}; run the same command "
+              f"again to resume", file=sys.stderr)
+        return 130
     finally:
         if client is not None:
             client.close()

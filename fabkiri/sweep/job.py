@@ -64,7 +64,7 @@ def run_job(job: Job) -> tuple[dict, dict[str, bytes]]:
 def _run(job: Job) -> tuple[dict, dict[str, bytes]]:
     out = design_pattern(request_of(job.params))
     files = {str(k): v for k, v in out.files("pattern.json").items()}
-    row = design_figures(out)
+    row = design_figures(out, job.params)
     pattern = out.pattern
     if not out.valid and set(job.actions) - {"design"}:
         row["notes"] = "not cut, printed or deployed: the design failed its checks"
@@ -80,8 +80,10 @@ def _run(job: Job) -> tuple[dict, dict[str, bytes]]:
     return row, _encoded(files)
 
 
-def design_figures(out) -> dict:
-    """The row figures of a design: status, residual, conformance, fabricability."""
+def design_figures(out, params: dict | None = None) -> dict:
+    """The row figures of a design: status, residual, conformance, fabricability (the smallest cut width for
+    the job's material and hinge, acrylic-3 with tape hinges when it names none)."""
+    params = params or {}
     r = out.report
     conf = r.get("conformance") or {}
     worst = max(conf.values(), key=lambda c: c["hausdorff_rel"], default=None)
@@ -91,9 +93,11 @@ def design_figures(out) -> dict:
            "one_minus_iou": worst and worst["one_minus_iou"], "shape": "met" if out.shape_met else "missed",
            "thinnest_tile_mm": fab.get("thinnest_tile_mm"), "design_time_s": r.get("time_s_total"),
            "problems": "; ".join(out.problems)}
-    cut = (fab.get("cut") or {}).get(DEFAULT_CUT_MATERIAL) or {}
-    tape = cut.get("tape") or {}
-    row["min_cut_width_mm"] = tape.get("min_width_mm")  # smallest --width acrylic-3 with tape hinges allows
+    name = params.get("cut_material") or params.get("material") or DEFAULT_CUT_MATERIAL
+    cut = (fab.get("cut") or {}).get(name) or {}
+    hinge = params.get("hinge") or ("tape" if "tape" in cut else next(iter(cut), None))
+    row["min_cut_width_mm"] = (cut.get(hinge) or {}).get("min_width_mm")  # the smallest `cut --width` allowed
+    row["cut_material"] = f"{name} {hinge}" if hinge else name
     return row
 
 

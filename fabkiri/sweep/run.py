@@ -142,11 +142,19 @@ def _publish(out: Path, job: Job, row: dict, files: dict[str, bytes]) -> dict:
 
 def _execute(client, todo: list[Job], out: Path, timeout: float | None, runner, progress):
     """Yield (job, row) as jobs end: at most one job per worker thread in flight."""
-    from distributed import wait
-
     pending = deque(todo)
     flight: dict = {}  # future -> (job, submitted at)
     counts = {"total": len(todo), "done": 0, "failed": 0, "running": 0, "started": time.perf_counter()}
+    try:
+        yield from _loop(client, pending, flight, counts, out, timeout, runner, progress)
+    finally:  # interrupted: nothing left running on a cluster that outlives the sweep
+        if flight:
+            client.cancel(list(flight))
+
+
+def _loop(client, pending: deque, flight: dict, counts: dict, out: Path, timeout, runner, progress):
+    from distributed import wait
+
     while pending or flight:
         slots = max(1, sum(client.nthreads().values()))
         while pending and len(flight) < slots:
@@ -184,7 +192,10 @@ def _finish(fut, job: Job, out: Path) -> dict:
     if fut.status == "finished":
         row, files = fut.result()
         return _publish(out, job, row, files)
-    exc = fut.exception()
+    try:
+        exc = fut.exception()
+    except Exception as lost:  # cancelled or lost by the cluster (e.g. restarted under it)
+        exc = lost
     name = type(exc).__name__
     error = describe_error(exc)
     if name == "KilledWorker":  # the scheduler gave up after the job's workers died allowed-failures times
