@@ -108,7 +108,7 @@ def local_client(workers: int | None = None):
 
     n = workers or len(os.sched_getaffinity(0))
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address="127.0.0.1:0", silence_logs=40)
+                           dashboard_address="127.0.0.1:0", silence_logs=40, preload=["fabkiri.sweep.quiet"])
     return Client(cluster), cluster
 
 
