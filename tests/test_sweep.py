@@ -110,6 +110,7 @@ def _dask(*args, log: Path) -> subprocess.Popen:
                             stdout=log.open("w"), stderr=subprocess.STDOUT, start_new_session=True)
 
 
+@pytest.mark.slow  # ~20-30 s on the shared 2-core box: three more interpreters and the 12 designs again
 def test_the_same_sweep_on_dask_scheduler_and_two_dask_workers(local_run, tmp_path):
     _, res, folder = local_run
     port = _free_port()
@@ -162,6 +163,7 @@ def faulty_runner(job):
     return run_job(job)
 
 
+@pytest.mark.slow  # ~30 s: waits out a 20 s job time-out (short ones would time out honest jobs on a loaded box)
 def test_a_raising_a_hanging_and_a_killed_job_are_recorded_or_retried(tmp_path, monkeypatch):
     import cloudpickle
     from distributed import Client, LocalCluster
