@@ -41,3 +41,14 @@ def test_a_missed_shape_is_returned_not_raised():
 def test_bad_requests_raise_input_errors(kw, words):
     with pytest.raises(InputError, match=words):
         design_pattern(PatternRequest(**kw))
+
+
+def test_a_seed_starts_the_full_solver_elsewhere():
+    import numpy as np
+
+    base = dict(tiles=(4, 4), target="heart", init="rescaled", solver="full", shape_tol="25%")
+    a = design_pattern(PatternRequest(**base))
+    b = design_pattern(PatternRequest(**base, seed=3))
+    assert a.valid and b.valid  # both converge to a reconfigurable design
+    assert b.pattern.design["options"]["seed"] == 3 and "seed" not in a.pattern.design["options"]
+    assert not np.allclose(a.pattern.nodes, b.pattern.nodes, atol=1e-6)  # from another start, another design
