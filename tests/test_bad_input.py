@@ -94,6 +94,10 @@ FILES = {
     "material-as-printer.json": _preset("materials", "acrylic-3"),
     "neg-pin.json": _preset("printers", "prusa-mk4", pin={"ear_radius_mm": -1.0}),
     "no-nozzle.json": _preset("printers", "prusa-mk4", nozzle_mm=None),
+    "bad.toml": "[axes\ntarget = [\"circle\"\n",
+    "unknown-axis.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\ncolour = ["red"]\n',
+    "bad-tiles.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4by4"]\n',
+    "missing-target.toml": '[axes]\ntarget = ["no-such-shape"]\ntiles = ["4x4"]\n',
 }
 
 # id: (argv, expected exit code, words in the message, folders made before the run)
@@ -190,9 +194,17 @@ CASES = {
     "deploy --steps 1": (["deploy", "good.json", "--steps", "1", "-o", "o"], 2, "steps", ()),
     "deploy missing file": (["deploy", "missing.json", "-o", "o"], 2, "no such file", ()),
     "export unknown state": (["export", "good.json", "--state", "3", "-o", "o.obj"], 2, "--state", ()),
+    "sweep bad TOML": (["sweep", "bad.toml", "-o", "S"], 2, "not valid TOML", ()),
+    "sweep unknown axis": (["sweep", "unknown-axis.toml", "-o", "S"], 2, "unknown axis 'colour'", ()),
+    "sweep bad tiles": (["sweep", "bad-tiles.toml", "-o", "S"], 2, "ROWSxCOLS", ()),
+    "sweep unknown target": (["sweep", "missing-target.toml", "-o", "S"], 2, "no-such-shape", ()),
+    "sweep -o its input": (["sweep", "bad.toml", "-o", "bad.toml"], 2, "is an input", ()),
+    "sweep --workers 0": (["sweep", "unknown-axis.toml", "--workers", "0", "-o", "S"], 2, "1 to 1024", ()),
+    "sweep --scheduler http": (["sweep", "unknown-axis.toml", "--scheduler", "http://x", "-o", "S"], 2,
+                               "tcp://HOST:PORT", ()),
 }
 
-COMMANDS = {"new", "import", "design", "info", "verify", "cut", "print", "deploy", "export"}
+COMMANDS = {"new", "import", "design", "info", "verify", "cut", "print", "deploy", "export", "sweep"}
 SUBPROCESS = ["new 100000x100000", "new --tile-size 1e308", "verify coordinates near 1e308", "design 1e308 target",
               "info nested 100000 deep", "export -o symlink"]
 

@@ -8,7 +8,7 @@ import pytest
 
 from .conftest import REPO
 
-ORDER = ["pattern", "design", "mechanics", "verify", "fabricate", "render", "cli"]
+ORDER = ["pattern", "design", "mechanics", "verify", "fabricate", "render", "api", "sweep", "cli"]
 
 
 def imported_layers(path):

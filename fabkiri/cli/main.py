@@ -37,6 +37,7 @@ COMMANDS = [
     "fabkiri.cli.tolerance_cmd",
     "fabkiri.cli.coupon_cmd",
     "fabkiri.cli.report_cmd",
+    "fabkiri.cli.sweep_cmd",
 ]
 # command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
 # (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
@@ -55,6 +56,7 @@ SUMMARIES = {
     "coupon": ("fabkiri.cli.coupon_cmd", "calibration coupon: laser (--material) or print (--printer) test pieces"),
     "report": ("fabkiri.cli.report_cmd", "one self-contained HTML page: design vs target, states, deployment, "
                "cut and print files, assembly, bill of materials"),
+    "sweep": ("fabkiri.cli.sweep_cmd", "many designs from a sweep file (TOML axes) on a local or existing Dask cluster"),
 }
 
 

@@ -130,6 +130,7 @@ class DesignRequest:
     outline: bool = True  # also fit the tip polygon's chords and the target's samples (``C.outline_match``)
     fabrication: FabricationLimits | None = None  # mm limits at the target's size (design/fabrication.py)
     fabrication_intent: dict = field(default_factory=dict)  # material/printer names: stored for cut and print
+    seed: int | None = None  # jitter the initial nodes (2 % of a tile edge) to explore other local minima
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -187,6 +188,8 @@ class _Problem:
             X0, L0 = self._coarse_guess(base, st)
         else:
             X0, L0 = initial_guess(base, st, req.target, req.init)
+        if req.seed is not None:  # a sweep's seeds axis: another start of the same guess (not the rigid family's)
+            X0 = X0 + np.random.default_rng(req.seed).normal(0.0, 0.02, X0.shape)
         curves = {s: v for s, v in req.contracted.items() if isinstance(v, Target)}
         if req.target is None:
             first = curves[min(curves)]
@@ -794,7 +797,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     lat = {"kind": "quad", "rows": req.rows, "cols": req.cols, "angle_deg": 45.0,
            "tile_size": float(L * L0)}
     options = {"rigid": req.rigid, "symmetry": req.symmetry, "holes": req.holes, "init": req.init,
-               "tol": req.tol, "reg_weight": req.reg_weight,
+               "tol": req.tol, "reg_weight": req.reg_weight, **({"seed": req.seed} if req.seed is not None else {}),
                **({"fabrication": dict(req.fabrication_intent)} if req.fabrication_intent else {}),
                "contracted": {str(s): (v.name if isinstance(v, Target) else
                                        ({"rectangle": True, "ratio": v[1]})) for s, v in req.contracted.items()}}

@@ -1,0 +1,428 @@
+"""The design front door: :func:`design_pattern` turns a :class:`PatternRequest` into a :class:`DesignOutcome`.
+
+The solve lives in :mod:`fabkiri.design`; this module holds the policy around
+it: which initial guesses to try and when to retry, contraction into both
+closed states (:mod:`fabkiri.mechanics`), loop closure and tile overlaps
+(:mod:`fabkiri.verify`), closed-outline fits, the conformance verdict against
+the shape tolerance and the fabricability summary. A design that misses its
+tolerance is still returned (its best iterate, marked
+``design.report.status = "unconverged"`` and ``design.valid = false``);
+:attr:`DesignOutcome.success` says whether it passed everything.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import limits
+from ..design import conformance as conf
+from ..design.solve import DesignRequest, design, via_rigid_applies
+from ..design.targets import Target, load_target
+from ..design.fabrication import FabricationLimits, smallest_size
+from ..errors import FabricationError, InputError, SolveError
+from ..fabricate import fabricability
+from ..fabricate.materials import load_material
+from ..fabricate.printers import load_printer
+from ..fileio import atomic_write
+from ..pattern.fabricability import pal_bound
+from ..mechanics.contract import contract
+from ..pattern import geometry
+from ..pattern.io import dumps
+from ..pattern.model import Pattern
+
+CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
+AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
+# from 32x32 tiles a rigid design starts coarse to fine (the coarse closed-state grid resampled inside the
+# rigid family): from the standard pattern the rigid family's LM stalls against the inequalities (128x128
+# circle: 11 % of the size off, coarse 0.23 %; 64x64 heart 21.6 mm in 204 s, coarse 0.098 mm in 12 s; 64x64
+# ellipse 7.3 mm, coarse 0.019 mm in 30 s). Below 32x32 it was mixed (16x16: heart better, ellipse, star,
+# rectangle and a points file worse), so the usual order stays there.
+BIG_RIGID_INITS = ("coarse", "rescaled")
+BIG_TILES = 32 * 32
+# a valid design whose least-squares fit misses by more than this fraction of the target size is retried
+# from the next guess and the closest valid fit kept (ellipse 16x16: rescaled 1.86 %, standard 0.08 %)
+RETRY_FIT_ABOVE = 5e-3
+
+
+def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
+    """``STATE:NAME|FILE``, ``STATE:rect`` or ``STATE:rect=RATIO``."""
+    m = re.fullmatch(r"\s*([12])\s*:\s*(.+?)\s*", text)
+    if not m:
+        raise InputError(f"--contracted-target expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}")
+    state, what = int(m.group(1)), m.group(2)
+    r = re.fullmatch(r"rect(?:=(.+))?", what)
+    if r:
+        ratio = None
+        if r.group(1) is not None:
+            try:
+                ratio = float(r.group(1))
+            except ValueError:
+                raise InputError(f"--contracted-target {text}: ratio {r.group(1)!r} is not a number") from None
+            if not (np.isfinite(ratio) and ratio > 0):
+                raise InputError(f"--contracted-target {text}: ratio must be positive")
+        return state, ("rect", ratio)
+    return state, load_target(what, size)
+
+
+def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
+    """Pairs of tiles that penetrate each other deeper than ``tol`` (mm).
+
+    The verifier's measure (:func:`fabkiri.verify.geom.overlap_depths`): the
+    separating-axis penetration depth for convex pairs, intersection area over
+    the mean edge otherwise. A length, so it compares with the closure
+    tolerance directly; an intersection area does not (a sliver along a shared
+    edge of a closed state grows with the edge length, and GEOS snapping adds
+    its own: a rigid 64x64 ellipse was rejected for 1.4e-9 mm² slivers whose
+    depth was 3.8e-10 tile sizes). A self-intersecting tile is the pair (t, t).
+    """
+    from ..verify.geom import overlap_depths
+
+    crossed = geometry.self_intersecting_tiles(corners)
+    valid = np.ones(len(corners), dtype=bool)
+    valid[crossed] = False
+    out = [(int(t), int(t)) for t in crossed]
+    i, j, depth = overlap_depths(corners)
+    bad = (depth > tol) & valid[i] & valid[j]
+    return out + list(zip(i[bad].tolist(), j[bad].tolist()))
+
+
+def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
+                       state: int) -> dict:
+    """Fit of the contracted state's outline (pattern-grid boundary) to its target, in mm.
+
+    The contracted tiles are rigidly aligned (proper Kabsch) to the closed grid
+    the solver fitted; the boundary grid vertices are then measured against the
+    target arcs.
+    """
+    from ..design.constraints import ClosedGrid, Stencils
+
+    st = Stencils.from_pattern(pattern)
+    g = ClosedGrid.build(st, state, 0)
+    V = g.n_vertices
+    pos = np.zeros((V, 2))
+    cnt = np.zeros(V)
+    np.add.at(pos, g.vertex.ravel(), corners.reshape(-1, 2))
+    np.add.at(cnt, g.vertex.ravel(), 1.0)
+    pos /= cnt[:, None]
+    theta, shift = geometry.kabsch(pos, grid_mm)
+    pos = geometry.rotate(pos, theta) + shift
+    d = target.signed_distance(pos[g.boundary], g.boundary_side)
+    return {"max_mm": float(np.abs(d).max()), "rms_mm": float(np.sqrt(np.mean(d * d))),
+            "max_rel_size": float(np.abs(d).max() / target.size), "points": int(len(d)),
+            "target": target.name}
+
+
+@dataclass
+class PatternRequest:
+    """Everything ``fabkiri design`` can be told (the same names as its options)."""
+
+    tiles: tuple[int, int]  # rows, cols
+    target: str | None = None  # a name from templates/targets or a .csv/.json/.svg file
+    size: float | None = None  # the target's larger dimension in mm (named targets default to 100)
+    rigid: bool = False
+    symmetry: str | None = None  # "x" or "y"
+    holes: str = "rhombus"
+    contracted_target: tuple[str, ...] = ()  # "STATE:NAME|FILE", "STATE:rect" or "STATE:rect=RATIO"
+    init: str | None = None  # None: the retry order of AUTO_INITS / BIG_RIGID_INITS
+    solver: str = "auto"
+    fit: str = "outline"
+    tol: float = 1e-10
+    shape_tol: str = conf.DEFAULT_SHAPE_TOL
+    material: str | None = None
+    hinge: str | None = None
+    printer: str | None = None
+    style: str | None = None
+    min_feature: float | None = None
+    min_hole: float | None = None
+    name: str | None = None
+    seed: int | None = None  # jitters the full solver's initial nodes (the rigid family ignores it)
+    i_know: bool = False
+    verbose: bool = False  # solver progress on stderr even for small solves
+    quiet: bool = False  # no solver progress even for big solves (a sweep's workers)
+
+
+@dataclass
+class DesignOutcome:
+    """The design and its figures, like scipy's ``OptimizeResult``: the best attempt, judged.
+
+    ``pattern`` carries both closed states and ``pattern.design["report"]`` (the
+    same dict as ``report``); ``messages`` are the retry notes in the order they arose.
+    """
+
+    pattern: Pattern
+    report: dict
+    valid: bool  # converged, closes, no overlaps
+    shape_met: bool  # every outline within the shape tolerance
+    problems: list[str] = field(default_factory=list)
+    messages: list[str] = field(default_factory=list)
+
+    @property
+    def success(self) -> bool:
+        return self.valid and self.shape_met
+
+    @property
+    def exit_code(self) -> int:
+        return 0 if self.success else 1
+
+    @property
+    def status(self) -> str:
+        """``ok``, ``unconverged`` (a check failed) or ``shape missed``."""
+        return "ok" if self.success else ("unconverged" if not self.valid else "shape missed")
+
+    def files(self, output, preview: bool = True) -> dict[Path, bytes | str]:
+        """``pattern.json`` text and the preview PNG beside it (its name goes in the report first)."""
+        png = _preview(self.pattern, self.report, output) if preview else None
+        out: dict[Path, bytes | str] = {Path(output): dumps(self.pattern)}
+        if png is not None:
+            out[png[0]] = png[1]
+        return out
+
+    def write(self, output, preview: bool = True) -> None:
+        """Write the pattern (atomically) and its preview, as ``fabkiri design`` does."""
+        png = _preview(self.pattern, self.report, output) if preview else None
+        atomic_write(output, dumps(self.pattern))
+        if png is not None:
+            png[0].write_bytes(png[1])
+
+
+def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None = None) -> DesignOutcome:
+    """Design, contract, check and judge a pattern; ``notify`` receives each retry note as it arises.
+
+    Raises :class:`InputError` for a request no design can meet and :class:`SolveError`
+    when no initial guess could be built; a design that misses a check is returned, not raised.
+    """
+    messages: list[str] = []
+
+    def say(text: str) -> None:
+        messages.append(text)
+        if notify is not None:
+            notify(text)
+
+    rows, cols = request.tiles
+    if rows < 2 or cols < 2:
+        raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
+    target = load_target(request.target, request.size) if request.target else None
+    contracted: dict[int, object] = {}
+    for text in request.contracted_target or []:
+        s, spec = parse_contracted(text, request.size)
+        if s in contracted:
+            raise InputError(f"--contracted-target given twice for state {s}")
+        contracted[s] = spec
+    if target is None and not contracted:
+        raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
+    fab_limits, intent = _fabrication(request, target)
+    if fab_limits is not None and target is not None:  # a request no design can meet: say so before solving
+        least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
+        if least is not None:
+            raise InputError(
+                f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
+                f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
+                f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
+                f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
+    req = DesignRequest(rows=rows, cols=cols, target=target, rigid=request.rigid, symmetry=request.symmetry,
+                        holes=request.holes, contracted=contracted, init=request.init, tol=request.tol,
+                        solver=request.solver, outline=request.fit == "outline", fabrication=fab_limits,
+                        fabrication_intent=intent, seed=request.seed,
+                        name=request.name or "")
+    if not req.name:
+        parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
+                                                 for s, v in contracted.items()]]
+        req.name = f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if request.rigid else ''}"
+    req.validate()
+    family = via_rigid_applies(req) or (request.rigid and request.solver != "full" and request.holes == "rhombus"
+                                        and not request.symmetry and not contracted)  # the rigid family's figures
+    limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
+    shape_tol = conf.parse_shape_tol(request.shape_tol)
+    big = rows * cols >= 256
+    # without an explicit --init, a design that fails a check is retried from the next guess
+    if request.init:
+        inits = [request.init]
+    elif request.rigid and rows * cols >= BIG_TILES:
+        inits = list(BIG_RIGID_INITS)
+    elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
+        inits = ["coarse"]
+    else:
+        inits = list(AUTO_INITS)
+    attempts = []
+    best = None
+    for init in inits:
+        req.init = init
+        try:
+            result = design(req, progress=(big or request.verbose) and not request.quiet)
+        except SolveError as exc:
+            if len(inits) == 1:
+                raise
+            say(f"fabkiri: no {init} initial guess ({exc}); trying the next one")
+            attempts.append({"init": init, "status": "skipped", "problems": [str(exc)], "time_s": 0.0})
+            continue
+        outcome = _check(result, contracted, request, target, shape_tol)
+        miss = _fit_miss(outcome[1])
+        shape_met = _shape_met(outcome[1])
+        attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
+                         "time_s": outcome[1]["time_s"], "fit_max_rel_size": miss,
+                         "hausdorff_max_rel": _hausdorff(outcome[1]), "shape": "met" if shape_met else "missed"})
+        if best is None or _rank(outcome) < _rank(best):
+            best = outcome
+        if outcome[3] and miss <= RETRY_FIT_ABOVE and shape_met:
+            break
+        if outcome[3] and init != inits[-1]:
+            why = (f"misses the target by {miss:.2%} of its size" if miss > RETRY_FIT_ABOVE else
+                   f"misses the shape tolerance (Hausdorff {_hausdorff(outcome[1]):.2%} of the size)")
+            say(f"fabkiri: design from the {init} guess {why}; trying the next guess too")
+        elif len(inits) > 1 and init != inits[-1]:
+            say(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying")
+    if best is None:
+        raise SolveError("no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts))
+    pattern, report, problems, valid, contracted_states = best
+    report["attempts"] = attempts
+    report["time_s_total"] = float(sum(a["time_s"] for a in attempts))
+    meta = dict(pattern.design or {})
+    meta["report"] = report
+    meta["valid"] = bool(valid)
+    shape_met = _shape_met(report)
+    meta["shape"] = "met" if shape_met else "missed"
+    pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
+                      name=pattern.name, lattice=pattern.lattice, design=meta)
+    intent = (meta.get("options") or {}).get("fabrication") or {}
+    prints = ((intent["printer"], (intent["style"],)),) if intent.get("printer") else fabricability.DEFAULT_PRINTS
+    report["fabricability"] = fabricability.summary(pattern, prints)
+    return DesignOutcome(pattern=pattern, report=report, valid=bool(valid), shape_met=shape_met,
+                         problems=list(problems), messages=messages)
+
+
+def _shape_met(report: dict) -> bool:
+    return all(j["status"] == "met" for j in (report.get("shape") or {}).values())
+
+
+def _hausdorff(report: dict) -> float:
+    """Worst Hausdorff distance of any outline relative to its target's size."""
+    return max((c["hausdorff_rel"] for c in (report.get("conformance") or {}).values()), default=0.0)
+
+
+def preview_path(output) -> Path:
+    """Where the design preview goes: ``NAME.png`` beside ``NAME.json``."""
+    p = Path(output)
+    return p.with_name((p.stem if p.suffix.lower() == ".json" else p.name) + ".png")
+
+
+def _preview(pattern: Pattern, report: dict, output) -> tuple[Path, bytes]:
+    """The preview's path and bytes (rendered before anything is written); its name goes in the report."""
+    from ..render.conformance import conformance_png
+
+    path = preview_path(output)
+    report["preview"] = path.name
+    return path, conformance_png(pattern, report.get("conformance") or {}, report.get("shape") or {})
+
+
+def _fit_miss(report: dict) -> float:
+    """Worst fit of the tips (deployed or closed-state outline) to any target relative to its size (the soft
+    outline rows never reach zero: ``_hausdorff`` judges the whole outline)."""
+    return max((float(f.get("max_rel_size", 0.0)) for f in (report.get("fit") or {}).values() if not f.get("soft")),
+               default=0.0)
+
+
+def _rank(outcome) -> tuple:
+    """Order of preference among attempts: valid first, then fewer problems, then the shape tolerance met,
+    then the smaller Hausdorff distance, then the closer fit of the tips."""
+    return (not outcome[3], len(outcome[2]), not _shape_met(outcome[1]), _hausdorff(outcome[1]),
+            _fit_miss(outcome[1]))
+
+
+def _check(result, contracted, request: "PatternRequest", target: Target | None, shape_tol: tuple):
+    """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
+    pattern = result.pattern
+    report = dict(result.report)
+    size = pattern.tile_size
+    checks: dict[str, object] = {}
+    contracted_states = {}
+    problems = []
+    for s in (1, 2):
+        c = contract(pattern, s)
+        contracted_states[s] = c.corners
+        rel = c.max_closure / size
+        checks[f"closure_{s}_rel"] = rel
+        if not rel <= CLOSURE_TOL:
+            problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
+    for label, corners in [("deployed", pattern.corners()), *[(f"state {s}", contracted_states[s]) for s in (1, 2)]]:
+        ov = overlapping_tiles(corners, CLOSURE_TOL * size)
+        checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
+        if ov:
+            where = "the deployed state" if label == "deployed" else label
+            problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
+    if request.rigid or request.holes == "parallelogram":
+        from ..pattern.residuals import hinge_sums
+
+        checks["hinge_sum_max_rad"] = float(np.abs(hinge_sums(pattern)).max())
+    closed_fit = {}
+    for s, spec in contracted.items():
+        if isinstance(spec, Target):
+            closed_fit[str(s)] = closed_outline_fit(pattern, contracted_states[s], result.closed_grids[s],
+                                                    result.closed_targets[s], s)
+    if closed_fit:
+        report["closed_outline_fit"] = closed_fit
+    report["conformance"], report["shape"] = _conformance(pattern, result, contracted_states, target,
+                                                              shape_tol)
+    report["checks"] = checks
+    valid = result.converged and not problems
+    if not result.converged:
+        problems.insert(0, f"solver did not reach the tolerance (max equality residual "
+                           f"{report['max_equality_residual']:.2e} > {request.tol:g})")
+    if problems:
+        report["status"] = "unconverged"
+        report["problems"] = problems
+    return pattern, report, problems, valid, contracted_states
+
+
+def _conformance(pattern: Pattern, result, contracted_states: dict, target: Target | None,
+                 shape_tol: tuple) -> tuple[dict, dict]:
+    """Conformance of the deployed tips and of each closed-state outline with a target curve, and each
+    judged against ``--shape-tol``."""
+    measured = {}
+    tiles = (pattern.lattice["rows"], pattern.lattice["cols"])
+    if target is not None:
+        measured["deployed"] = conf.deployed(pattern.nodes, pattern.topology, target)
+    for s, tgt in sorted(result.closed_targets.items()):
+        measured[f"state_{s}"] = conf.closed(contracted_states[s], tgt)
+    return measured, {k: conf.judge(c, shape_tol, tiles) for k, c in measured.items()}
+
+
+def _fabrication(request: "PatternRequest", target) -> tuple[FabricationLimits | None, dict]:
+    """``material/hinge``, ``printer/style``, ``min_feature`` and ``min_hole`` as plain mm limits, and the intent
+    stored for ``cut``/``print``."""
+    parts, names, intent = [], [], {}
+    if request.hinge and not request.material:
+        raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
+    if request.style and not request.printer:
+        raise InputError("--style needs --printer")
+    if request.material:
+        mat = load_material(request.material)
+        kind = request.hinge or mat.hinge
+        try:
+            parts.append(fabricability.material_limits(mat, kind))
+        except FabricationError as exc:
+            raise InputError(str(exc)) from None
+        names.append(f"{mat.name} {kind}")
+        intent.update(material=request.material, hinge=kind)
+    if request.printer:
+        pr = load_printer(request.printer)
+        style = request.style or "tiles-and-strips"
+        parts.append(fabricability.printer_limits(pr, style))
+        names.append(f"{pr.name} {style}")
+        intent.update(printer=request.printer, style=style)
+    if request.min_feature:
+        parts.append({"min_width_mm": request.min_feature})
+        names.append(f"--min-feature {request.min_feature:g}")
+    if request.min_hole:
+        parts.append({"min_hole_mm": request.min_hole})
+        names.append(f"--min-hole {request.min_hole:g}")
+    if not parts:
+        return None, {}
+    if target is not None:
+        intent["size_mm"] = float(target.size)
+    intent["scale"] = 1.0  # the design is made at the size it will be cut or printed
+    return FabricationLimits(**fabricability.combine(*parts), source=", ".join(names)), intent
