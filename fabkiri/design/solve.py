@@ -57,6 +57,7 @@ from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
 from .reduced import fit_miss, solve_reduced
 from .rigid import RigidFamily, resample_grid
+from .unfold import convex_member
 from .targets import Target
 
 _BLAS = None  # one controller per process: finding the loaded BLAS libraries costs ~1.3 ms a call
@@ -182,6 +183,7 @@ class _Problem:
         n = len(base)
         self.coarse = None
         self.start_member = None  # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
+        self.unfold = None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
         self._rigid: RigidFamily | None = None
         if req.init == "coarse":
             X0, L0 = self._coarse_guess(base, st)
@@ -275,6 +277,8 @@ class _Problem:
                        "time_s": res.report["time_s"],
                        "iterations_total": res.report["iterations_total"],
                        "factorisations": res.report["factorisations"], "folded_tiles": int((area <= 0).sum())}
+        if self.unfold is not None:
+            self.coarse["unfold"] = self.unfold
         # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
         self.coarse["used"] = bool(res.converged and not (area <= 0).any())
         if not self.coarse["used"]:
@@ -295,7 +299,8 @@ class _Problem:
         grid = resample_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2),
                              self.req.rows, self.req.cols)
         fam = self.rigid_family
-        S = fam.seeds_for_grid(grid.reshape(-1, 2))
+        # the nearest fine member can fold cells the resampled grid does not: repaired (``unfold.py``)
+        S, self.unfold = convex_member(fam, fam.node_vertex[self.st.tiles], grid.reshape(-1, 2))
         self.start_member = (S, psi)  # the start's seeds: the reduced solver need not fit them again
         return fam.nodes(S, psi)
 

@@ -1,0 +1,62 @@
+"""Fold repair of a coarse-to-fine rigid start (``fabkiri.design.unfold``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fabkiri.design import constraints as C
+from fabkiri.design.rigid import RigidFamily
+from fabkiri.design.unfold import MARGIN, convex_member
+from fabkiri.pattern import standard_pattern
+
+
+def _family(n):
+    std = standard_pattern(n, n, tile_size=1.0)
+    st = C.Stencils.from_pattern(std)
+    fam = RigidFamily.build(st, std.topology.spanning_tree(0))
+    return fam, fam.node_vertex[st.tiles]
+
+
+def _corner_crosses(grid, quads):
+    q = grid[quads]
+    e, f = np.roll(q, -1, 1) - q, np.roll(q, 1, 1) - q
+    return e[..., 0] * f[..., 1] - e[..., 1] * f[..., 0]
+
+
+def _unit_grid(n):
+    gx, gy = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0))
+    return np.stack([gx, gy], -1).reshape(-1, 2)
+
+
+def test_a_convex_member_is_left_alone():
+    fam, quads = _family(6)
+    grid = _unit_grid(6)
+    S, info = convex_member(fam, quads, grid)
+    assert info["ok"] and info["folded_cells"] == 0 and info["move_rel"] == 0.0
+    assert np.allclose(S, fam.seeds_for_grid(grid), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("shift", [(2.5, 2.5), (1.8, 1.8), (0.0, 1.5)])
+def test_a_folded_member_is_unfolded_to_the_margin(shift):
+    """A corner seed pushed across its cell: the nearest member folds (or has a reflex corner); the repaired
+    member has every corner of every cell above half the margin, and stays close to the folded grid."""
+    fam, quads = _family(6)
+    S_bad = fam.seeds_for_grid(_unit_grid(6))
+    S_bad[1 if shift[0] == 0.0 else 0] += shift
+    grid = fam.Z @ S_bad
+    before = _corner_crosses(grid, quads)
+    assert before.min() < 0.0  # the precondition: the start is not convex
+    S, info = convex_member(fam, quads, grid)
+    after = _corner_crosses(fam.Z @ S, quads)
+    assert info["ok"] and info["corners_below_margin"] >= 1
+    q = grid[quads]
+    l2 = np.mean(0.5 * np.abs(_cross2(q[:, 2] - q[:, 0], q[:, 3] - q[:, 1])))  # the margin's unit, mean cell area
+    assert after.min() >= 0.5 * MARGIN * l2
+    # the repair moves the grid less than the fold it undoes
+    move = np.abs(fam.Z @ S - grid).max()
+    assert move == pytest.approx(info["move_rel"] * np.sqrt(l2), rel=1e-9) and move < np.hypot(*shift)
+
+
+def _cross2(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
