@@ -108,6 +108,9 @@ FULL_MAX_TILES = 32 * 32
 # nodes was slower and mostly worse (API, rescaled, 100 mm: 32x32 heart 90 s CPU, Hausdorff 7.1 % of the
 # target's diagonal; 32x32 ellipse 84 s CPU and unconverged, 11.8 %; rigid family: 9.5 s / 7.5 %, 3.9 s / 1.2 %)
 VIA_RIGID_TILES = 32 * 32
+# below that, the CLI's last guess for a non-rigid design that missed: answered by the rigid family as well
+# (leaf SVG 16x16: conformal unconverged, rescaled overlapping, standard 22.6 % off; the rigid family 1 %)
+VIA_RIGID_INIT = "rigid"
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 
 
@@ -562,13 +565,15 @@ def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
 def via_rigid_applies(req: DesignRequest) -> bool:
     """A non-rigid request answered by the rigid family (``VIA_RIGID_TILES``)."""
     return (req.solver == "auto" and not req.rigid and req.holes == "rhombus" and not req.symmetry
-            and not req.contracted and req.target is not None and req.rows * req.cols >= VIA_RIGID_TILES)
+            and not req.contracted and req.target is not None
+            and (req.rows * req.cols >= VIA_RIGID_TILES or req.init == VIA_RIGID_INIT))
 
 
 def _solve_via_rigid(prob: _Problem, log, iters: dict):
     """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
     the non-rigid problem, else None."""
-    sub = replace(prob.req, rigid=True, init="coarse", name="")
+    big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
+    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="")
     log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
     res = _design(sub, False)
     iters.update({f"rigid_{k}": v for k, v in res.report["iterations"].items()})
