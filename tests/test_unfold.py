@@ -42,13 +42,24 @@ def test_a_convex_member_is_left_alone():
     assert np.allclose(S, fam.seeds_for_grid(grid), rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("shift", [(2.5, 2.5), (1.8, 1.8), (0.0, 1.5)])
-def test_a_folded_member_is_unfolded_to_the_margin(shift):
-    """A corner seed pushed across its cell: the nearest member folds (or has a reflex corner); the repaired
-    member has every corner of every cell above half the margin, and stays close to the folded grid."""
+def test_a_reflex_corner_without_a_fold_is_left_to_the_solver():
     fam, quads = _family(6)
     S_bad = fam.seeds_for_grid(_unit_grid(6))
-    S_bad[1 if shift[0] == 0.0 else 0] += shift
+    S_bad[1] += (0.0, 1.5)
+    grid = fam.Z @ S_bad
+    assert _corner_crosses(grid, quads).min() < 0.0
+    S, info = convex_member(fam, quads, grid)
+    assert info["ok"] and info["folded_cells"] == 0 and info["corners_below_margin"] >= 1
+    assert np.allclose(S, S_bad, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("shift", [(2.5, 2.5), (1.8, 1.8)])
+def test_a_folded_member_is_unfolded_to_the_margin(shift):
+    """A corner seed pushed across its cell: the nearest member folds a cell; the repaired member has every
+    corner of every cell above half the margin, and stays close to the folded grid."""
+    fam, quads = _family(6)
+    S_bad = fam.seeds_for_grid(_unit_grid(6))
+    S_bad[0] += shift
     grid = fam.Z @ S_bad
     before = _corner_crosses(grid, quads)
     assert before.min() < 0.0  # the precondition: the start is not convex
@@ -74,12 +85,11 @@ def test_the_leaf_svg_coarse_start_is_repaired_not_discarded():
     tgt = load_target(str(REPO / "bench" / "data" / "leaf.svg"), 100.0)
     prob = _Problem(DesignRequest(32, 32, tgt, rigid=True, init="coarse", outline=True))
     un = prob.coarse["unfold"]
-    # the nearest member is not convex (its 16x16 level, itself repaired now, gives 42 corners below the margin)
-    assert un["corners_below_margin"] >= 1 and un["ok"]
+    assert un["folded_cells"] >= 1 and un["ok"]  # the nearest member folded: the case this repair is for
     assert prob.coarse["used"] and prob.coarse["folded_tiles"] == 0
     assert geometry.signed_areas(prob.X0[prob.st.tiles]).min() > 0
     q = prob.rigid_family.grid(prob.start_member[0])[prob.rigid_family.node_vertex[prob.st.tiles]]
-    assert _corner_crosses_q(q).min() > 0  # every start tile convex
+    assert _corner_crosses_q(q).min() > 0  # every start tile convex (the repair's margin)
     psi = RigidFamily.deployment_angle(prob.X0, prob.st)
     assert prob.rigid_family.fit(prob.X0, psi)[1] <= 1e-9  # still a member of the fine family
 
