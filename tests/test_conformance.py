@@ -180,3 +180,30 @@ def test_info_reports_conformance(run_cli):
     d = json.loads(out)
     assert set(d["conformance"]) == {"state_1", "state_2"}
     assert d["conformance"]["state_2"]["hausdorff_rel"] < 0.02
+
+
+def test_a_miss_of_many_tip_spacings_is_called_a_local_minimum_and_promises_no_tile_count():
+    from fabkiri.design.conformance import describe_miss
+
+    resolution = {"hausdorff_mm": 3.0, "hausdorff_rel": 0.03, "size_mm": 100.0, "spacing_mean_mm": 9.0,
+                  "worst": {"at": [0.0, 0.0]}}
+    basin = dict(resolution, hausdorff_mm=13.0, hausdorff_rel=0.13, spacing_mean_mm=1.9)
+    j = judge(resolution, (0.02, "rel"), (8, 8))
+    assert j["suggested_tiles"] == [12, 12] and "local_minimum" not in j
+    j = judge(basin, (0.02, "rel"), (32, 32))
+    assert j["local_minimum"] and "suggested_tiles" not in j and j["spacings"] == pytest.approx(13.0 / 1.9)
+    line = describe_miss("deployed", j, basin)
+    assert "local minimum" in line and "tiles would reach" not in line and "\n" not in line
+
+
+def test_the_suggested_tile_count_reaches_the_tolerance(tmp_path, run_cli):
+    """The honest part of the suggestion: design again at the suggested lattice and it meets the tolerance."""
+    code, out, _ = run_cli("design", "--tiles", "6x6", "--target", "circle", "--rigid", "--shape-tol", "0.5%",
+                           "--json", "--no-preview", "-o", tmp_path / "a.json")
+    j = json.loads(out)["shape"]["deployed"]
+    assert code == 1 and j["status"] == "missed" and not j.get("local_minimum")
+    r, c = j["suggested_tiles"]
+    assert (r, c) != (6, 6)
+    code, out, _ = run_cli("design", "--tiles", f"{r}x{c}", "--target", "circle", "--rigid", "--shape-tol", "0.5%",
+                           "--json", "--no-preview", "-o", tmp_path / "b.json")
+    assert code == 0 and json.loads(out)["shape"]["deployed"]["status"] == "met"

@@ -14,14 +14,14 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .. import limits
 from ..design import conformance as conf
-from ..design.solve import DesignRequest, design, via_rigid_applies
+from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..errors import FabricationError, InputError, SolveError
@@ -247,10 +247,13 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
     elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
         inits = ["coarse"]
     else:
-        inits = list(AUTO_INITS)
+        # last, when every guess misses: the rigid family (its members satisfy every non-rigid equality)
+        inits = list(AUTO_INITS) + [VIA_RIGID_INIT] * via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
     attempts = []
     best = None
     for init in inits:
+        if init == VIA_RIGID_INIT and best is not None and best[3] and _shape_met(best[1]):
+            break  # the rigid family is the last resort for a miss, not a second opinion
         req.init = init
         try:
             result = design(req, progress=(big or request.verbose) and not request.quiet)

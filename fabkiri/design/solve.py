@@ -57,6 +57,7 @@ from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
 from .reduced import fit_miss, solve_reduced
 from .rigid import RigidFamily, resample_grid
+from .unfold import convex_member
 from .targets import Target
 
 _BLAS = None  # one controller per process: finding the loaded BLAS libraries costs ~1.3 ms a call
@@ -107,6 +108,9 @@ FULL_MAX_TILES = 32 * 32
 # nodes was slower and mostly worse (API, rescaled, 100 mm: 32x32 heart 90 s CPU, Hausdorff 7.1 % of the
 # target's diagonal; 32x32 ellipse 84 s CPU and unconverged, 11.8 %; rigid family: 9.5 s / 7.5 %, 3.9 s / 1.2 %)
 VIA_RIGID_TILES = 32 * 32
+# below that, the CLI's last guess for a non-rigid design that missed: answered by the rigid family as well
+# (leaf SVG 16x16: conformal unconverged, rescaled overlapping, standard 22.6 % off; the rigid family 1 %)
+VIA_RIGID_INIT = "rigid"
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 
 
@@ -183,6 +187,7 @@ class _Problem:
         n = len(base)
         self.coarse = None
         self.start_member = None  # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
+        self.unfold = None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
         self._rigid: RigidFamily | None = None
         if req.init == "coarse":
             X0, L0 = self._coarse_guess(base, st)
@@ -278,6 +283,8 @@ class _Problem:
                        "time_s": res.report["time_s"],
                        "iterations_total": res.report["iterations_total"],
                        "factorisations": res.report["factorisations"], "folded_tiles": int((area <= 0).sum())}
+        if self.unfold is not None:
+            self.coarse["unfold"] = self.unfold
         # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
         self.coarse["used"] = bool(res.converged and not (area <= 0).any())
         if not self.coarse["used"]:
@@ -298,7 +305,8 @@ class _Problem:
         grid = resample_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2),
                              self.req.rows, self.req.cols)
         fam = self.rigid_family
-        S = fam.seeds_for_grid(grid.reshape(-1, 2))
+        # the nearest fine member can fold cells the resampled grid does not: repaired (``unfold.py``)
+        S, self.unfold = convex_member(fam, fam.node_vertex[self.st.tiles], grid.reshape(-1, 2))
         self.start_member = (S, psi)  # the start's seeds: the reduced solver need not fit them again
         return fam.nodes(S, psi)
 
@@ -560,13 +568,15 @@ def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
 def via_rigid_applies(req: DesignRequest) -> bool:
     """A non-rigid request answered by the rigid family (``VIA_RIGID_TILES``)."""
     return (req.solver == "auto" and not req.rigid and req.holes == "rhombus" and not req.symmetry
-            and not req.contracted and req.target is not None and req.rows * req.cols >= VIA_RIGID_TILES)
+            and not req.contracted and req.target is not None
+            and (req.rows * req.cols >= VIA_RIGID_TILES or req.init == VIA_RIGID_INIT))
 
 
 def _solve_via_rigid(prob: _Problem, log, iters: dict):
     """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
     the non-rigid problem, else None."""
-    sub = replace(prob.req, rigid=True, init="coarse", name="")
+    big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
+    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="")
     log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
     res = _design(sub, False)
     iters.update({f"rigid_{k}": v for k, v in res.report["iterations"].items()})
