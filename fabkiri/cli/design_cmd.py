@@ -205,9 +205,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     meta["shape"] = "met" if shape_met else "missed"
     pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
                       name=pattern.name, lattice=pattern.lattice, design=meta)
-    intent = (meta.get("options") or {}).get("fabrication") or {}
-    prints = ((intent["printer"], (intent["style"],)),) if intent.get("printer") else fabricability.DEFAULT_PRINTS
-    report["fabricability"] = fabricability.summary(pattern, prints)
+    report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
     png = None if args.no_preview else _preview(pattern, report, args.output)
     write_pattern(pattern, args.output)
     if png is not None:
