@@ -646,25 +646,6 @@ def _solve_outline(prob: _Problem, log, iters: dict):
     return None
 
 
-def _free_start(prob: _Problem, X: np.ndarray, schedule, log, iters: dict) -> np.ndarray:
-    """With fabrication rows: the penalty stages without them first, and the rows then added from there.
-    Held from the start, their step limiting walls the fit in: the 16x16 heart at 200 mm for acrylic-3
-    stopped at a Hausdorff of 16 % with them, 1.75 % without."""
-    fab = [f for f in prob.families if f.name.startswith("fabrication_")]
-    if not fab:
-        return X
-    saved = prob.families
-    prob.families = [f for f in saved if not f.name.startswith("fabrication_")]
-    try:
-        for rho, stall_tol, cap in schedule:
-            X, k = _lm(prob, X, rho, min(cap, prob.req.max_iter), log, stall_tol=stall_tol)
-            iters[f"lm_rho_{rho:g}_free"] = k
-    finally:
-        prob.families = saved
-    log("fabrication rows added to the design made without them")
-    return X
-
-
 def _solve_full(prob: _Problem, log, iters: dict):
     """Penalty LM stages then projection (module docstring); returns ``(X, mode)``."""
     req = prob.req
@@ -698,9 +679,7 @@ def _solve_full(prob: _Problem, log, iters: dict):
     best = None
     for attempt, schedule in enumerate((first, STIFF_PENALTIES)):
         tag = "_restart" if attempt else ""
-        if attempt == 0:
-            free = _free_start(prob, prob.X0.copy(), schedule, log, iters)
-        X = free.copy()
+        X = prob.X0.copy()
         for rho, stall_tol, cap in schedule:
             X, k = _lm(prob, X, rho, min(cap, req.max_iter), log, stall_tol=stall_tol)
             iters[f"lm_rho_{rho:g}{tag}"] = k
