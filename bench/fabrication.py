@@ -1,18 +1,22 @@
-"""Must-show runs of fabrication-aware design (issue 14): design for a material or printer, then cut or
-print with no flags. ``PYTHONPATH=. python3 bench/fabrication.py [--quick] [--out DIR]``.
+"""Must-show runs of fabrication-aware design (issue 14) in one run, and the README designs' table.
 
-Each line: target, lattice, rigid, what the design was made for, design exit code and status, the
-fabrication rows active, thinnest tile (mm), fit max (mm), then the exit code of ``cut``/``print`` with
-no flags and the wall time of both.
+``PYTHONPATH=. python3 bench/fabrication.py [--quick] [--jobs 2] [--out DIR]``: every target (circle,
+ellipse, heart, the blob CSV) at 8x8 and 16x16, rigid and not, designed for acrylic-3 and for pp-0.5
+ligaments at 300 mm (then ``cut`` with no flags) and for prusa-mk4 at 200 mm (then ``print`` with no flags
+and ``prusa-slicer --export-gcode`` on every 3MF); then the 16x16 heart at 200 mm with and without
+acrylic-3, the impossible 64x64 star, and the summary's cost (closed form for every printer preset and
+style) against the bisection it replaced, measured in the same run. ``--table``: the README designs.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 TARGETS = ("circle", "ellipse", "heart", "templates/targets/blob-points.csv")
@@ -29,24 +33,103 @@ def run(*args: str) -> tuple[int, str, float]:
     return p.returncode, p.stderr, time.perf_counter() - t0
 
 
-def hausdorff(path: Path) -> float:
-    """Hausdorff distance (mm, shapely) between the deployed tip polygon and the target outline."""
-    import numpy as np
-    import shapely
+def last(err: str) -> str:
+    lines = [ln for ln in err.strip().splitlines() if ln.startswith("fabkiri:")] or err.strip().splitlines() or [""]
+    return lines[-1][:170]
 
-    from fabkiri.design.constraints import Stencils
-    from fabkiri.design.initial import tip_polygon
+
+def slice_all(folder: Path) -> str:
+    """prusa-slicer on every 3MF of a print folder, no extra flags: 'ok N' or the first failure."""
+    exe = shutil.which("prusa-slicer")
+    if exe is None:
+        return "no prusa-slicer"
+    files = sorted(folder.glob("*.3mf"))
+    for f in files:
+        p = subprocess.run([exe, "--export-gcode", str(f), "-o", str(f.with_suffix(".gcode"))],
+                           capture_output=True, text=True, timeout=900)
+        if p.returncode or not f.with_suffix(".gcode").exists():
+            return f"slice FAIL {f.name}: {(p.stderr or p.stdout).strip().splitlines()[-1:]}"
+    return f"sliced {len(files)}"
+
+
+def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> str:
+    flags, after = CONFIGS[name]
+    stem = f"{Path(tgt).stem}-{tiles}{'-rigid' if rigid else ''}-{name.replace(' ', '-')}"
+    pj = out / f"{stem}.json"
+    code, err, t = run("design", "--tiles", tiles, "--target", tgt, *flags, *(["--rigid"] if rigid else []),
+                       "--no-preview", "-o", str(pj))
+    line = f"{stem:44s} design {code}"
+    if not pj.exists():
+        return line + "  " + last(err)
+    rep = json.loads(pj.read_text())["design"]["report"]
+    fr = rep.get("fabrication") or {}
+    act = sum(fr.get("active", {}).values())
+    conf = (rep.get("conformance") or {}).get("deployed") or {}
+    thin = rep["fabricability"]["thinnest_tile_mm"]
+    line += (f" {rep['status']:11s} active {act:3d} thinnest {thin:6.3g} mm Hausdorff "
+             f"{100 * conf.get('hausdorff_rel', float('nan')):5.2f} %")
+    c2, e2, t2 = run(after, str(pj), "-o", str(out / stem))
+    line += f"  {after} {c2}"
+    if c2:
+        line += "  " + last(e2)
+    elif after == "print":
+        line += "  " + slice_all(out / stem)
+    return line + f"  ({t + t2:.0f} s)"
+
+
+def matrix(out: Path, sizes, configs, jobs: int) -> None:
+    cases = [(n, tg, ti, r) for n in configs for tg in TARGETS for ti in sizes for r in (False, True)]
+    with ThreadPoolExecutor(jobs) as ex:
+        for line in ex.map(lambda c: one(out, *c), cases):
+            print(line, flush=True)
+
+
+def heart(out: Path) -> None:
+    """The 16x16 heart at 200 mm, with and without acrylic-3 (thinnest tile, Hausdorff)."""
+    for what, flags in (("without", []), ("acrylic-3", ["--material", "acrylic-3"])):
+        pj = out / f"heart16-200-{what}.json"
+        code, err, t = run("design", "--tiles", "16x16", "--target", "heart", "--size", "200", *flags,
+                           "--no-preview", "-o", str(pj))
+        if not pj.exists():
+            print(f"heart 16x16 200 mm {what}: exit {code} {last(err)}")
+            continue
+        rep = json.loads(pj.read_text())["design"]["report"]
+        conf = rep["conformance"]["deployed"]
+        print(f"heart 16x16 200 mm {what:9s}: exit {code} {rep['status']}, thinnest tile "
+              f"{rep['fabricability']['thinnest_tile_mm']:.3g} mm, Hausdorff {conf['hausdorff_mm']:.3g} mm "
+              f"({100 * conf['hausdorff_rel']:.2f} %) ({t:.0f} s)", flush=True)
+
+
+def impossible(out: Path) -> None:
+    pj = out / "star64.json"
+    code, err, t = run("design", "--tiles", "64x64", "--target", "star", "--size", "50", "--material", "acrylic-3",
+                       "-o", str(pj))
+    print(f"64x64 star at 50 mm, acrylic-3: exit {code}, wrote {pj.exists()}: {err.strip()}")
+
+
+def summary_cost() -> None:
+    """CPU s of the summary (every material, every printer preset and style, closed form) against the
+    bisection on the plan checks for the same presets (what one printer's minimum cost before)."""
+    from fabkiri.fabricate import fabricability as fb
+    from fabkiri.fabricate.printers import available_printers, load_printer
     from fabkiri.pattern.io import read_pattern
 
-    p = read_pattern(path)
-    tips = tip_polygon(p.nodes, Stencils.from_pattern(p))
-    target = np.asarray(p.design["target"]["points"])
-    return float(shapely.hausdorff_distance(shapely.Polygon(tips), shapely.Polygon(target), densify=0.01))
+    for name in ("circle-8x8-rigid", "heart-16x16-rigid", "circle-32x32-rigid"):
+        p = read_pattern(Path("templates/patterns") / f"{name}.json")
+        t = time.process_time()
+        fb.summary(p)
+        ts = time.process_time() - t
+        t = time.process_time()
+        for pr in available_printers():
+            fb.print_minimum(p, "tiles-and-strips", load_printer(pr))
+        tb = time.process_time() - t
+        print(f"summary {name}: {ts:.3f} CPU s (all {len(available_printers())} printers x 3 styles, closed form); "
+              f"bisection, tiles-and-strips only: {tb:.2f} CPU s", flush=True)
 
 
 README_DESIGNS = {  # the designs of README.md's "Designing" section
     "circle 16x16 rigid 120 mm": ["--tiles", "16x16", "--target", "circle", "--size", "120", "--rigid"],
-    "heart 8x8": ["--tiles", "8x8", "--target", "heart"],
+    "heart 16x16": ["--tiles", "16x16", "--target", "heart"],
     "blob-points.csv 8x8": ["--tiles", "8x8", "--target", "templates/targets/blob-points.csv"],
     "square/circle 9x9 rigid": ["--tiles", "9x9", "--rigid", "--contracted-target", "1:square",
                                 "--contracted-target", "2:circle"],
@@ -68,10 +151,10 @@ def table(out: Path) -> None:
     print("|" + "---|" * (4 + len(mats)))
     for name, args in README_DESIGNS.items():
         for what, flags in TABLE_FOR.items():
-            pj = out / f"table-{abs(hash((name, what)))}.json"
-            code, err, t = run("design", *args, *flags, "-o", str(pj))
+            pj = out / f"table-{name.replace('/', '-').replace(' ', '_')}-{what.replace(' ', '_')}.json"
+            code, err, t = run("design", *args, *flags, "--no-preview", "-o", str(pj))
             if not pj.exists():
-                print(f"| {name} | {what} | exit {code}: {err.strip().splitlines()[-1][:80]} |")
+                print(f"| {name} | {what} | exit {code}: {last(err)[:80]} |")
                 continue
             rep = json.loads(pj.read_text())["design"]["report"]
             fb = rep["fabricability"]
@@ -79,59 +162,34 @@ def table(out: Path) -> None:
             for m in mats:
                 c = fb["cut"][m][load_material(m).hinge]
                 cells.append("never" if c["min_width_mm"] is None else f"{c['min_width_mm']:.4g}")
-            print(f"| {name} | {what} | {rep['status']} ({t:.0f} s) | {fb['thinnest_tile_mm']:.3g} | "
+            shape = (rep.get("conformance") or {}).get("deployed", {}).get("hausdorff_rel")
+            extra = "" if shape is None else f", H {100 * shape:.2f} %"
+            print(f"| {name} | {what} | {rep['status']}{extra} ({t:.0f} s) | {fb['thinnest_tile_mm']:.3g} | "
                   + " | ".join(cells) + " |", flush=True)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--table", action="store_true", help="the README designs' table, before and after")
-    ap.add_argument("--hausdorff", nargs="+", metavar="PATTERN", help="only print the Hausdorff distance of these")
     ap.add_argument("--quick", action="store_true", help="8x8 only")
+    ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="/tmp/fabkiri-bench-fabrication")
     ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--only", default="summary,impossible,heart,matrix", help="parts to run")
     a = ap.parse_args()
-    if a.table:
-        Path(a.out).mkdir(parents=True, exist_ok=True)
-        return table(Path(a.out))
-    if a.hausdorff:
-        for f in a.hausdorff:
-            from fabkiri.pattern import fabricability
-            from fabkiri.pattern.io import read_pattern
-
-            rep = json.loads(Path(f).read_text())["design"]["report"]
-            thin = fabricability.widths(read_pattern(f).contracted[1]).min()
-            print(f"{f}: Hausdorff {hausdorff(Path(f)):.4g} mm, thinnest tile {thin:.4g} mm, "
-                  f"fit max {rep['fit']['shape']['max_mm']:.4g} mm, status {rep['status']}")
-        return
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    sizes = ("8x8",) if a.quick else ("8x8", "16x16")
-    for name in a.configs.split(","):
-        flags, after = CONFIGS[name]
-        for tgt in TARGETS:
-            for tiles in sizes:
-                for rigid in (False, True):
-                    stem = f"{Path(tgt).stem}-{tiles}{'-rigid' if rigid else ''}-{name.replace(' ', '-')}"
-                    pj = out / f"{stem}.json"
-                    code, err, t = run("design", "--tiles", tiles, "--target", tgt, *flags,
-                                       *(["--rigid"] if rigid else []), "-o", str(pj))
-                    line = f"{stem:44s} design {code}"
-                    if pj.exists():
-                        rep = json.loads(pj.read_text())["design"]["report"]
-                        fr = rep.get("fabrication") or {}
-                        act = sum(fr.get("active", {}).values())
-                        fit = rep.get("fit", {}).get("shape", {}).get("max_mm", float("nan"))
-                        thin = rep["fabricability"]["thinnest_tile_mm"]
-                        line += (f" {rep['status']:11s} active {act:3d} thinnest {thin:6.3g} mm fit {fit:7.3g} mm"
-                                 f" H {hausdorff(pj):7.3g} mm")
-                        c2, e2, t2 = run(after, str(pj), "-o", str(out / stem))
-                        line += f"  {after} {c2}  {t + t2:5.1f} s"
-                        if c2:
-                            line += "  " + e2.strip().splitlines()[-1][:160]
-                    else:
-                        line += "  " + err.strip().splitlines()[-1][:160]
-                    print(line, flush=True)
+    if a.table:
+        return table(out)
+    parts = a.only.split(",")
+    if "summary" in parts:
+        summary_cost()
+    if "impossible" in parts:
+        impossible(out)
+    if "heart" in parts:
+        heart(out)
+    if "matrix" in parts:
+        matrix(out, ("8x8",) if a.quick else ("8x8", "16x16"), a.configs.split(","), a.jobs)
 
 
 if __name__ == "__main__":

@@ -177,7 +177,8 @@ def test_print_refusal_states_the_minimum(run_cli, tmp_path):
 
 # ---------------------------------------------------------------- design rows
 LIMITS = F.FabricationLimits(min_width_mm=0.3, shrink_mm=0.05, min_edge_mm=0.02, hinge_spacing_mm=0.2,
-                             hinge_edge_mm=0.25, min_hinge_angle_deg=20, min_hole_mm=0.1)
+                             hinge_edge_mm=0.25, min_hinge_angle_deg=20, min_hole_mm=0.1,
+                             strip_clearance_mm=0.03, strip_width_mm=0.4, strip_reach_mm=0.4)
 
 
 @settings(max_examples=10, deadline=None)
@@ -188,7 +189,8 @@ def test_fabrication_jacobians_match_finite_differences(seed):
     x = p.nodes + 0.05 * np.random.default_rng(seed).standard_normal(p.nodes.shape)
     fams = F.families(stc, len(x), LIMITS, 1.0, p.nodes)
     assert {f.name for f in fams} == {"fabrication_width", "fabrication_shrunk_edges", "fabrication_hinge_angles",
-                                      "fabrication_hinge_spacing", "fabrication_hinge_edges", "fabrication_holes"}
+                                      "fabrication_hinge_spacing", "fabrication_hinge_edges", "fabrication_holes",
+                                      "fabrication_strip_clearance"}
     h = 1e-6
     for f in fams:
         r, J = f(x)
@@ -249,3 +251,65 @@ def test_info_shows_fabricability(run_cli):
     assert "prusa-mk4" in s["print"]
     code, out, _ = run_cli("info", PATTERNS / "circle-8x8-rigid.json")
     assert "fabricability: thinnest tile" in out and "acrylic-3: tape ≥" in out
+
+
+# ---------------------------------------------------------------- printed strips in closed form
+STRIP_CASES = ["circle-8x8-rigid", "square-circle-9x9-rigid", "standard-8x8", "heart-8x8"]
+
+
+@pytest.mark.parametrize("name", STRIP_CASES)
+def test_strip_faces_from_the_fold_rules_are_prints_faces(name):
+    from fabkiri.fabricate.hinges import assign_faces
+
+    p = read_pattern(PATTERNS / f"{name}.json")
+    top = p.topology
+    pairs = np.concatenate([fab.coincident_hinges(top.hinge_tiles, top.hinge_corner, top.fold(s).fold_corner_ends,
+                                                  top.n_tiles) for s in (1, 2)])
+    face = fab.strip_faces(np.unique(pairs, axis=0), top.n_hinges)
+    assert (face == assign_faces(p, dict(p.contracted)).face).all()
+
+
+@pytest.mark.parametrize("printer", ["prusa-mk4", "bambu-x1-petg"])
+@pytest.mark.parametrize("name", STRIP_CASES)
+def test_print_bound_is_accepted_and_close_to_the_minimum(name, printer):
+    """The closed form: print's plan checks accept it, and it is at most 5 % above their bisected minimum
+    (pinned: a lower bound, never above it)."""
+    p, pr = read_pattern(PATTERNS / f"{name}.json"), load_printer(printer)
+    b = fb.print_bound(p, "tiles-and-strips", pr)
+    m = fb.print_minimum(p, "tiles-and-strips", pr)
+    assert not b.exact and b.min_scale is not None and m.min_scale is not None
+    assert fb._plan_error(fb.scaled(p, b.min_scale), "tiles-and-strips", 1, pr) == ""
+    assert m.min_scale * (1 - fb.BISECT_RTOL) <= b.min_scale <= 1.05 * m.min_scale
+    pin = fb.print_bound(p, "pinned", pr)
+    if pin.min_scale is not None:
+        assert pin.min_scale <= fb.print_minimum(p, "pinned", pr).min_scale
+
+
+def test_summary_covers_every_printer_and_style():
+    from fabkiri.fabricate.printers import available_printers
+
+    s = fb.summary(read_pattern(PATTERNS / "circle-8x8-rigid.json"))
+    assert set(s["print"]) == set(available_printers())
+    for styles in s["print"].values():
+        assert set(styles) == set(fb.PRINT_STYLES)
+        assert styles["strips"]["max_scale"] is None and styles["pinned"]["max_scale"] is not None
+
+
+def test_strip_rows_met_means_print_accepts():
+    """The standard 8x8 pattern: where the strip clearance rows hold, print's plan checks pass; 3 % below the
+    plan's own minimum (8.7 mm tiles on prusa-mk4) the rows fail."""
+    pr = load_printer("prusa-mk4")
+    lim = F.FabricationLimits(**fb.printer_limits(pr, "tiles-and-strips"))
+    p = standard_pattern(8, 8, tile_size=1.0)
+    stc = Stencils.from_pattern(p)
+
+    def rows(L):  # the rows in units of the tile (1 = L mm)
+        return next(f for f in F.families(stc, len(p.nodes), lim, L, p.nodes)
+                    if f.name == "fabrication_strip_clearance").residual(p.nodes)
+
+    sizes = np.linspace(8.4, 9.6, 25)
+    ok = [rows(L).min() >= 0 for L in sizes]
+    assert len(rows(9.0)) > 0 and any(ok) and not ok[0]
+    first = float(sizes[int(np.argmax(ok))])
+    assert fb._plan_error(standard_pattern(8, 8, tile_size=first), "tiles-and-strips", 1, pr) == ""
+    assert fb._plan_error(standard_pattern(8, 8, tile_size=0.97 * 8.7), "tiles-and-strips", 1, pr) != ""

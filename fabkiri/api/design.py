@@ -291,9 +291,7 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
     meta["shape"] = "met" if shape_met else "missed"
     pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
                       name=pattern.name, lattice=pattern.lattice, design=meta)
-    intent = (meta.get("options") or {}).get("fabrication") or {}
-    prints = ((intent["printer"], (intent["style"],)),) if intent.get("printer") else fabricability.DEFAULT_PRINTS
-    report["fabricability"] = fabricability.summary(pattern, prints)
+    report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
     return DesignOutcome(pattern=pattern, report=report, valid=bool(valid), shape_met=shape_met,
                          problems=list(problems), messages=messages)
 

@@ -123,13 +123,10 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def _fabricability(pattern: Pattern) -> dict:
-    """The fabricability summary (fabricate.fabricability) for the printer the design was made for."""
+    """The fabricability summary (fabricate.fabricability) for every material and printer preset."""
     from ..fabricate import fabricability as fb
-    from .cut_cmd import intent
 
-    prints = ((intent(pattern, "printer"), (intent(pattern, "style") or "tiles-and-strips",))
-              if intent(pattern, "printer") else fb.DEFAULT_PRINTS)
-    return fb.summary(pattern, prints)
+    return fb.summary(pattern)
 
 
 def _with_state(pattern: Pattern, s: int) -> Pattern:

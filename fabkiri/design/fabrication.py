@@ -12,7 +12,11 @@ preset into them, this layer never sees a preset). At the design's size every ti
   every edge that ends at a hinge ``hinge_edge_mm`` long (a printed strip runs along it);
 * at every hinge corner, an angle whose sine is at least ``sin(min_hinge_angle_deg)`` (a printed
   strip's pad on an acute corner is too small at any scale);
-* and every deployed hole at least ``min_hole_mm`` wide (opt-in).
+* and every deployed hole at least ``min_hole_mm`` wide (opt-in);
+* printed strips: two strips on one face of a tile at least ``strip_clearance_mm`` apart, each taken as
+  the box it fills in the tile (along its seam from the hinge corner, ``strip_width`` plus the mitre
+  start; across, ``strip_reach`` plus the shrink), separated along one of the four box axes
+  (:func:`strip_rows`, the closed form of ``fabkiri.pattern.fabricability.strip_clearance_scales``).
 
 Rows are plain functions of a tile's (or hole's) four corners; their gradients are exact, carried
 forward through every operation (:class:`_D`, forward-mode differentiation over the 8 coordinates of
@@ -40,6 +44,10 @@ class FabricationLimits:
     hinge_edge_mm: float = 0.0  # every edge with a hinge at an end at least this long (a strip's seam)
     min_hinge_angle_deg: float = 0.0
     min_hole_mm: float = 0.0
+    # printed strips (fabkiri.fabricate.printgeom): two strips on one face of a tile keep this clearance
+    strip_clearance_mm: float = 0.0
+    strip_width_mm: float = 0.0
+    strip_reach_mm: float = 0.0
     source: str = ""  # what the numbers came from (material/printer names), for the report
 
     @property
@@ -189,6 +197,55 @@ def spacing_rows(x: np.ndarray, quads: np.ndarray, t: np.ndarray, i: np.ndarray,
     return _dot(d, d).sqrt() - spacing
 
 
+SOFT = 0.002  # normalised: the soft min/max of the strip rows are at most this far on the safe side
+STRIP_SMOOTH = 0.002  # ... and their smooth max over the eight axis gaps
+
+
+def _soft_min0(v: _D) -> _D:
+    """A smooth lower bound of ``min(v, 0)``."""
+    return (v - (v * v + SOFT * SOFT).sqrt()) * 0.5
+
+
+def _soft_max0(v: _D) -> _D:
+    """A smooth upper bound of ``max(v, 0)``."""
+    return (v + (v * v + SOFT * SOFT).sqrt()) * 0.5
+
+
+def _strip_box(x, quads, t, c, end):
+    """Hinge corner ``c`` of quads ``t``, the unit direction of its seam (to corner ``end``) and the inward
+    normal of that edge (tiles counter-clockwise)."""
+    p = _corners(x, quads, t, c)
+    q = _corners(x, quads, t, end)
+    ev = _sub(q, p)
+    ln = _dot(ev, ev).sqrt()
+    e = ev[0] / ln, ev[1] / ln
+    sgn = np.where(end == (c + 1) % 4, 1.0, -1.0)
+    return p, e, (-e[1] * sgn, e[0] * sgn)
+
+
+def strip_rows(x: np.ndarray, quads: np.ndarray, t: np.ndarray, ch: np.ndarray, eh: np.ndarray, ck: np.ndarray,
+               ek: np.ndarray, a0: float, along: float, across: float, clearance: float) -> _D:
+    """Separating-axis gap between the strip boxes of hinge corners ``ch`` and ``ck`` of quads ``t`` (seams
+    towards corners ``eh``, ``ek``; box ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile)
+    minus ``clearance``; soft min/max and the smooth max over the eight axis gaps are all on the safe side."""
+    ph, e_h, n_h = _strip_box(x, quads, t, ch, eh)
+    pk, e_k, n_k = _strip_box(x, quads, t, ck, ek)
+
+    def extent(e, n, u, lower):
+        eu, nu = _dot(e, u), _dot(n, u)
+        soft = _soft_min0 if lower else _soft_max0
+        return eu * a0 + soft(eu) * along + soft(nu) * across
+
+    gaps = []
+    for u in (e_h, n_h, e_k, n_k):
+        dp = _dot(_sub(pk, ph), u)
+        gaps.append(dp + extent(e_k, n_k, u, True) - extent(e_h, n_h, u, False))
+        gaps.append(-dp + extent(e_h, n_h, u, True) - extent(e_k, n_k, u, False))
+    while len(gaps) > 1:  # a balanced tree of smooth maxima: at most 3 · STRIP_SMOOTH below the max
+        gaps = [smooth_max(a, b, STRIP_SMOOTH) for a, b in zip(gaps[::2], gaps[1::2])]
+    return gaps[0] - clearance
+
+
 def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
     """An inequality family from ``rows_of(x) -> _D`` over the quads named by ``meta['quad_of_row']``."""
     owner = meta["quad_of_row"]
@@ -247,12 +304,36 @@ def families(st: Stencils, nv: int, limits: FabricationLimits | None, unit_mm: f
         s_e = limits.hinge_edge_mm / unit_mm
         out.append(_family("fabrication_hinge_edges", tiles,
                            lambda x: spacing_rows(x, tiles, te, e, (e + 1) % 4, s_e), nv, {"quad_of_row": te}))
+    if limits.strip_clearance_mm > 0:
+        out += _strip_family(st, nv, limits, unit_mm, tiles)
     if limits.min_hole_mm > 0 and len(st.hole_nodes):
         holes = _ccw(st.hole_nodes, base)
         wh = limits.min_hole_mm / unit_mm
         out.append(_family("fabrication_holes", holes, lambda x: width_rows(x, holes, wh, 0.0), nv,
                            {"quad_of_row": np.repeat(np.arange(len(holes)), 4)}))
     return out
+
+
+def _strip_family(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, tiles) -> list[Family]:
+    """Strip clearance rows for every two hinge corners of a tile whose strips share a face (closed state 1,
+    the one ``print`` makes; faces from the fold rules, as ``print`` assigns them)."""
+    T = len(tiles)
+    pairs = np.concatenate([fab.coincident_hinges(st.hinge_tiles, st.hinge_corner, st.folds[s].fold_corner_ends, T)
+                            for s in (1, 2)])
+    face = fab.strip_faces(np.unique(pairs, axis=0), len(st.hinge_tiles))
+    t, h, sh, k, sk = fab.same_face_pairs(st.hinge_tiles, face, T)
+    if not len(t):
+        return []
+    ends = st.folds[1].fold_corner_ends
+    d = limits.shrink_mm
+    sin_min = float(np.sin(np.radians(limits.min_hinge_angle_deg))) if limits.min_hinge_angle_deg > 0 else 1.0
+    a0 = d / unit_mm  # the strip starts t0 = d / sin(sharper corner) along the seam: at least d, at most
+    along = (d / sin_min - d + limits.strip_width_mm) / unit_mm  # d / sin(min hinge angle), kept by the angle rows
+    across = (limits.strip_reach_mm + d) / unit_mm
+    cl = limits.strip_clearance_mm / unit_mm
+    args = (t, st.hinge_corner[h, sh], ends[h, sh], st.hinge_corner[k, sk], ends[k, sk])
+    return [_family("fabrication_strip_clearance", tiles,
+                    lambda x: strip_rows(x, tiles, *args, a0, along, across, cl), nv, {"quad_of_row": t})]
 
 
 def smallest_size(size_mm: float, area_mm2: float, n_tiles: int, limits: FabricationLimits) -> float | None:

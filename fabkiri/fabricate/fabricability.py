@@ -130,6 +130,7 @@ class PrintMinimum:
     min_scale: float | None
     max_scale: float | None  # None: any (strips are packed part by part)
     limit: str = ""
+    exact: bool = True  # False: the closed form of print_bound (see its docstring for how it relates)
 
     @property
     def possible(self) -> bool:
@@ -146,7 +147,7 @@ class PrintMinimum:
     def to_dict(self, at: float = 1.0) -> dict:
         ok = self.possible and self.min_scale <= at and (self.max_scale is None or at <= self.max_scale)
         return {"min_scale": self.min_scale, "max_scale": self.max_scale, "fits_bed": self.possible,
-                "ok_at_scale_1": bool(ok), "limit": self.limit}
+                "ok_at_scale_1": bool(ok), "limit": self.limit, "exact": self.exact}
 
 
 def scaled(pattern: Pattern, k: float) -> Pattern:
@@ -183,12 +184,13 @@ def _closes(pattern: Pattern) -> bool:
     return True
 
 
-def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer) -> float | None:
+def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer,
+               corners: np.ndarray | None = None) -> float | None:
     if style == "strips":
         return None
     from .printgeom import closed_corners
 
-    c = closed_corners(pattern, state)
+    c = corners if corners is not None else closed_corners(pattern, state)
     w = np.ptp(c[..., 0])
     h = np.ptp(c[..., 1])
     bx, by, _ = printer.bed_mm
@@ -202,20 +204,31 @@ def _never(pattern: Pattern, style: str, error: str) -> bool:
 
 
 def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1) -> PrintMinimum:
-    """Smallest scale at which the print plan checks pass (bisection on them), and the bed's largest."""
+    """Smallest scale at which the print plan checks pass (bisection on them to 0.1 %, started from the
+    closed-form :func:`print_bound`), and the bed's largest."""
     top = _bed_scale(pattern, style, state, printer)
     err = _plan_error(pattern, style, state, printer)
     if err and _never(pattern, style, err):
         return PrintMinimum(None, top, err)
     lo, hi = (None, 1.0) if not err else (1.0, None)
-    k = 1.0
+    guess = print_bound(pattern, style, printer, state)
+    if guess.min_scale is not None and MIN_GUESS < guess.min_scale < MAX_SCALE:  # bracket around the bound
+        g = guess.min_scale
+        for k in ((g, g * (1 - GUESS_BRACKET)) if style != "pinned" else (g * (1 - 1e-9), g * (1 + GUESS_BRACKET))):
+            if _plan_error(scaled(pattern, k), style, state, printer):
+                lo = k if lo is None else max(lo, k)
+            else:
+                hi = k if hi is None else min(hi, k)
+        if lo is not None and hi is not None and lo >= hi:
+            lo, hi = (None, 1.0) if not err else (1.0, None)  # not monotone there: the plain search
+    k = hi if hi is not None else (lo or 1.0)
     while hi is None:  # bracket: double until accepted
         k *= 2.0
         if k > MAX_SCALE:
             return PrintMinimum(None, top, f"refused up to scale {MAX_SCALE:g}: {err}")
         e = _plan_error(scaled(pattern, k), style, state, printer)
         (lo, hi) = (k, None) if e else (lo, k)
-    k = 1.0
+    k = hi
     while lo is None:  # ... or halve until refused
         k *= 0.5
         e = _plan_error(scaled(pattern, k), style, state, printer)
@@ -234,15 +247,139 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
     return PrintMinimum(ceil_sig(hi), None if top is None else floor_sig(top), "plan checks")
 
 
+MIN_GUESS = 1e-6
+GUESS_BRACKET = 0.03  # the closed-form bound is within a few % of the plan checks' minimum (tests)
+
+
+def _plan_key(printer: Printer, style: str) -> tuple:
+    """The preset fields the plan checks of ``style`` read (not the bed)."""
+    base = (printer.gap_mm, printer.radial_clearance_mm, printer.nozzle_mm)
+    if style == "pinned":
+        return base + (printer.pin.ear_radius_mm, printer.pin.pin_radius_mm, printer.pin.tile_thickness_mm,
+                       printer.axial_clearance_mm, printer.layer_mm, printer.tolerance_mm)
+    return base + (printer.strip_width_mm, printer.strip_reach_mm)
+
+
+def _closed(pattern: Pattern, state: int) -> np.ndarray | None:
+    from .printgeom import closed_corners
+
+    try:
+        return closed_corners(pattern, state)
+    except CheckFailed:
+        return None
+
+
+def print_bound(pattern: Pattern, style: str, printer: Printer, state: int = 1,
+                corners: np.ndarray | None = None) -> PrintMinimum:
+    """The smallest print scale in closed form, no plan geometry (``exact`` False).
+
+    Strip styles: the largest of the scale at which every tile survives the gap/2 shrink
+    (:func:`fabkiri.pattern.fabricability.min_scale`), at which same-face strips keep the radial
+    clearance (:func:`fabkiri.pattern.fabricability.strip_clearance_scales`, their boxes: a bound, so
+    ``print`` accepts it) and at which every strip pad has its area (a vectorised bisection on the pads,
+    band ∩ shrunk tile, only for pads short at the other two). Pinned: the pivot spacing only, a lower
+    bound (``print`` also checks the slivers beside the clearances)."""
+    top_ = pattern.topology
+    if top_.n_hinges == 0:
+        return PrintMinimum(None, None, "the pattern has a single tile and no hinges: there is nothing to hinge")
+    c = corners if corners is not None and state == 1 else _closed(pattern, state)
+    if c is None:
+        return PrintMinimum(None, None, "the pattern does not close: nothing to hinge")
+    d = 0.5 * printer.gap_mm
+    folds = [top_.fold(s).fold_corner_ends for s in (1, 2) if s == state or s in pattern.contracted]
+    pairs = np.concatenate([fab.coincident_hinges(top_.hinge_tiles, top_.hinge_corner, f, top_.n_tiles)
+                            for f in folds])
+    face = fab.strip_faces(np.unique(pairs, axis=0), top_.n_hinges)
+    if len(pairs) and (face[pairs[:, 0]] == face[pairs[:, 1]]).any():
+        return PrintMinimum(None, None, "hinges that coincide in a closed state cannot take opposite faces")
+    s_shrink, t_shrink, _ = fab.min_scale(c, fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
+    if style == "pinned":
+        return _pin_bound(pattern, c, printer, s_shrink)
+    ends = top_.fold(state).fold_corner_ends
+    same = fab.same_face_pairs(top_.hinge_tiles, face, top_.n_tiles)
+    clear = fab.strip_clearance_scales(c, top_.hinge_tiles, top_.hinge_corner, ends, same, d,
+                                       printer.strip_width_mm, printer.strip_reach_mm, printer.radial_clearance_mm)
+    s_clear = float(clear.max(initial=0.0))
+    s = max(s_shrink, s_clear)
+    s_pad = _pad_scale(c, top_.hinge_tiles, top_.hinge_corner, ends, printer, max(s, MIN_GUESS))
+    if s_pad is None:
+        return PrintMinimum(None, None, "a strip pad is too small at any scale: a hinge corner is too sharp for "
+                                        "the strip width")
+    why = "strip pads" if s_pad > s else "strip clearance" if s_clear >= s_shrink else "tile shrink"
+    return PrintMinimum(ceil_sig(max(s, s_pad)), None, f"{why} (closed form)", exact=False)
+
+
+def _pad_areas(c, hinge_tiles, hinge_corner, ends, printer: Printer, scale: np.ndarray, which: np.ndarray):
+    """Area of both pads (band ∩ tile shrunk by gap/2) of hinges ``which`` at their ``scale``: ``(n, 2)``."""
+    d = 0.5 * printer.gap_mm
+    w, R = printer.strip_width_mm, printer.strip_reach_mm + d
+    cs = c[hinge_tiles[which]] * scale[:, None, None, None]  # (n, 2, 4, 2)
+    sub = np.arange(len(which))
+    tiles = cs.reshape(-1, 4, 2)
+    p, e, n, t0 = fab.strip_frames(tiles, np.stack([2 * sub, 2 * sub + 1], 1), hinge_corner[which], ends[which], d)
+    perp = n[:, 0]
+    band = np.stack([p + t0[:, None] * e - R * perp, p + (t0 + w)[:, None] * e - R * perp,
+                     p + (t0 + w)[:, None] * e + R * perp, p + t0[:, None] * e + R * perp], 1)
+    shrunk = fab.shrunk_quads(tiles, d)
+    ok = fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM
+    inter = shapely.intersection(np.repeat(shapely.polygons(band), 2), shapely.polygons(shrunk))
+    return np.where(ok, shapely.area(inter), 0.0).reshape(-1, 2)
+
+
+def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) -> float | None:
+    """Smallest scale ≥ s0 at which every pad has the plan's area (bisection on the short pads only)."""
+    need = 0.25 * printer.strip_width_mm * min(printer.strip_reach_mm, printer.strip_width_mm)
+    H = len(hinge_tiles)
+    short = np.flatnonzero(_pad_areas(c, hinge_tiles, hinge_corner, ends, printer, np.full(H, s0),
+                                      np.arange(H)).min(1) < need)
+    if not len(short):
+        return s0
+    top = np.full(len(short), MAX_SCALE)
+    if (_pad_areas(c, hinge_tiles, hinge_corner, ends, printer, top, short).min(1) < need).any():
+        return None
+    lo, hi = np.full(len(short), s0), top
+    while (hi - lo > 1e-4 * hi).any():
+        mid = 0.5 * (lo + hi)
+        bad = _pad_areas(c, hinge_tiles, hinge_corner, ends, printer, mid, short).min(1) < need
+        lo, hi = np.where(bad, mid, lo), np.where(bad, hi, mid)
+    return float(hi.max())
+
+
+def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float) -> PrintMinimum:
+    """Pinned: the checks that need no geometry (ear levels, ring wall, rigid-deployable) and the pivot
+    spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
+    from ..pattern.residuals import hinge_sums
+    from . import printgeom
+
+    try:
+        g = printgeom.pin_geometry(printer, printgeom.pin_levels(printer))
+    except FabricationError as exc:
+        return PrintMinimum(None, None, str(exc))
+    if np.abs(hinge_sums(pattern)).max(initial=0.0) > 1e-6:
+        return PrintMinimum(None, None, "not rigid-deployable: pinned tiles would have to bend")
+    top_ = pattern.topology
+    A, B = top_.hinge_tiles.T
+    xy = 0.5 * (c[A, top_.hinge_corner[:, 0]] + c[B, top_.hinge_corner[:, 1]])
+    pts = np.unique(np.round(xy / (1e-6 * max(pattern.tile_size, 1e-12))), axis=0, return_index=True)[1]
+    piv = xy[np.sort(pts)]
+    s = s_shrink
+    if len(piv) > 1:
+        dd = np.linalg.norm(piv[:, None] - piv[None], axis=-1)
+        np.fill_diagonal(dd, np.inf)
+        s = max(s, (2 * g.hollow + 2 * printer.nozzle_mm) / float(dd.min()))
+    return PrintMinimum(ceil_sig(s), None, "pivot spacing (closed form, a lower bound: print also checks the "
+                                           "slivers beside the clearances)", exact=False)
+
+
 # ------------------------------------------------------------------ summary
-DEFAULT_PRINTS = (("prusa-mk4", ("tiles-and-strips", "strips")),)
+PRINT_STYLES = ("tiles-and-strips", "strips", "pinned")
 
 
-def summary(pattern: Pattern, prints=DEFAULT_PRINTS) -> dict:
+def summary(pattern: Pattern, prints=None) -> dict:
     """Fabricability of a pattern at its stored size (mm): the measures, per material preset and hinge
-    kind the smallest cut scale and width, and per ``(printer, styles)`` of ``prints`` the smallest print
-    scale and whether the closed pattern then fits the bed. (Every printer preset and style would cost
-    seconds: each print minimum is a bisection on shapely plan checks of 0.1-0.8 s at 8x8.)"""
+    kind the smallest cut scale and width, and per printer preset (``prints``: ``(name, styles)`` pairs,
+    default every preset and style) the smallest print scale in closed form (:func:`print_bound`) and
+    whether the closed pattern then fits the bed. No plan geometry is built: a few ms at 8x8."""
     from ..mechanics.contract import contract  # not .cut: design would import the DXF/SVG writers
 
     top = pattern.topology
@@ -255,17 +392,21 @@ def summary(pattern: Pattern, prints=DEFAULT_PRINTS) -> dict:
         mat = load_material(name)
         cut[name] = {kind: cut_minimum(c1, mat, kind).to_dict() for kind in HINGE_KINDS}
     out["cut"] = cut
+    if prints is None:
+        prints = tuple((name, PRINT_STYLES) for name in available_printers())
     pr: dict = {}
+    memo: dict = {}
     for name, styles in prints or ():
         p = load_printer(name)
         rows = pr.setdefault(p.name, {})
-        strip = None
         for style in styles:
-            if style in ("tiles-and-strips", "strips"):  # the same plan checks; strips are packed part by part
-                strip = strip or print_minimum(pattern, "tiles-and-strips", p)
-                m = strip if style == "tiles-and-strips" else PrintMinimum(strip.min_scale, None, strip.limit)
-            else:
-                m = print_minimum(pattern, style, p)
+            key = (style == "pinned", _plan_key(p, style))  # presets that differ only in the bed share a bound
+            if key not in memo:
+                memo[key] = print_bound(pattern, "tiles-and-strips" if style == "strips" else style, p, 1, c1)
+            m = memo[key]
+            bed = None if style == "strips" else _bed_scale(pattern, style, 1, p, c1)
+            m = PrintMinimum(m.min_scale, None if bed is None else floor_sig(bed),
+                             m.limit, m.exact)
             rows[style] = m.to_dict()
     out["print"] = pr
     return out
@@ -293,7 +434,8 @@ def summary_lines(s: dict) -> list[str]:
                     part.append(f"{style} never")
                 else:
                     bed = "" if m["max_scale"] is None else f"..{m['max_scale']:g}"
-                    part.append(f"{style} {m['min_scale']:g}{bed}×" + ("" if m["fits_bed"] else " (bed too small)"))
+                    low = "" if m.get("exact", True) or "lower bound" not in m["limit"] else " from"
+                    part.append(f"{style}{low} {m['min_scale']:g}{bed}×" + ("" if m["fits_bed"] else " (bed too small)"))
             cells.append(f"{pr}: " + ", ".join(part))
         lines.append("  print (--scale): " + "; ".join(cells))
     return lines
@@ -335,12 +477,11 @@ def printer_limits(printer: Printer, style: str) -> dict:
         out["hinge_spacing_mm"] = 2.0 * hollow + 2.0 * printer.nozzle_mm
     else:  # a pad on an acute corner is about a triangle: ½ tan α w² against the printer's 0.25 w min(reach, w)
         w, reach = printer.strip_width_mm, printer.strip_reach_mm
-        # two strips on one face reach into a tile from opposite edges: it must hold both and a clearance
-        out["min_width_mm"] = max(out["min_width_mm"], 2.0 * reach + printer.radial_clearance_mm)
         out["min_hinge_angle_deg"] = float(np.degrees(np.arctan(0.5 * min(reach, w) / w))) + PAD_MARGIN_DEG
-        # two strips on one face run w along their seams towards each other: 2w + clearance + the gap
-        # (the standard 16x16 pattern prints from 8.7 mm tiles on prusa-mk4: 2·4 + 0.3 + 0.4)
-        out["hinge_spacing_mm"] = 2.0 * w + printer.radial_clearance_mm + printer.gap_mm
+        # two strips on one face of a tile keep the radial clearance (their boxes, as print_bound); a thin
+        # tile is no obstacle by itself, the strip is clipped to it (the old 2·reach + clearance width row
+        # asked 8.3 mm of every tile on prusa-mk4 where print accepts the 8x8 circle from 1.6 mm tiles)
+        out.update(strip_clearance_mm=printer.radial_clearance_mm, strip_width_mm=w, strip_reach_mm=reach)
         out["hinge_edge_mm"] = w + printer.gap_mm  # the strip runs w along the seam from the shrunk corner
     return out
 

@@ -166,3 +166,136 @@ def cross_signs_ok(corners: np.ndarray) -> bool:
     """Every tile convex and counter-clockwise (the widths above assume it)."""
     E = np.roll(corners, -1, axis=-2) - corners
     return bool((cross2(E, np.roll(E, -1, axis=-2)) > 0).all())
+
+
+# ------------------------------------------------------------------ printed strips (closed form)
+# A printed strip of hinge h (``fabkiri.fabricate.printgeom.strip_outlines``) crosses its closed seam: along
+# the seam it spans ``[t0, t0 + w]`` from the hinge point (t0 where the seam enters the pair of tiles shrunk
+# by d), across it reaches ``reach + d`` into each tile. Strips on one face must keep the radial clearance.
+# Inside a tile the strip lies in that box (clipped further by the tile), so the separation of two boxes is
+# a lower bound on the strips' distance; along any axis it is linear in the scale (the box has a fixed size
+# in mm, its anchor moves with the pattern), which gives the smallest scale in closed form.
+
+
+def hinge_of_corner(hinge_tiles: np.ndarray, hinge_corner: np.ndarray, n_tiles: int) -> np.ndarray:
+    """``(T, 4)`` hinge at each tile corner, -1 where there is none."""
+    out = np.full((n_tiles, 4), -1, dtype=np.int64)
+    H = len(hinge_tiles)
+    out[hinge_tiles[:, 0], hinge_corner[:, 0]] = np.arange(H)
+    out[hinge_tiles[:, 1], hinge_corner[:, 1]] = np.arange(H)
+    return out
+
+
+def coincident_hinges(hinge_tiles: np.ndarray, hinge_corner: np.ndarray, fold_ends: np.ndarray,
+                      n_tiles: int) -> np.ndarray:
+    """Hinge pairs that meet in a closed state by its fold rule (the far ends of a folded seam are one
+    node, and each may carry a hinge): ``(P, 2)``, each pair once, lower index first."""
+    hc = hinge_of_corner(hinge_tiles, hinge_corner, n_tiles)
+    a = hc[hinge_tiles[:, 0], fold_ends[:, 0]]
+    b = hc[hinge_tiles[:, 1], fold_ends[:, 1]]
+    ok = (a >= 0) & (b >= 0) & (a != b)
+    pairs = np.sort(np.stack([a[ok], b[ok]], 1), axis=1)
+    return np.unique(pairs, axis=0) if len(pairs) else np.zeros((0, 2), np.int64)
+
+
+def strip_faces(pairs: np.ndarray, n_hinges: int) -> np.ndarray:
+    """Face per hinge (0 top, 1 bottom): hinges that meet go on opposite faces, the lowest of each group on
+    top (the two-colouring ``fabkiri.fabricate.hinges.assign_faces`` makes from the placed states)."""
+    face = np.full(n_hinges, -1, dtype=np.int64)
+    nbr: list[list[int]] = [[] for _ in range(n_hinges)]
+    for i, j in pairs.tolist():
+        nbr[i].append(j)
+        nbr[j].append(i)
+    for root in range(n_hinges):
+        if face[root] >= 0:
+            continue
+        face[root] = 0
+        queue = [root]
+        for h in queue:  # breadth first: the order assign_faces colours in
+            for g in sorted(nbr[h]):
+                if face[g] < 0:
+                    face[g] = 1 - face[h]
+                    queue.append(g)
+    return face
+
+
+def same_face_pairs(hinge_tiles: np.ndarray, face: np.ndarray, n_tiles: int):
+    """Every two hinges on one tile and one face: ``(tile, h, side_h, k, side_k)`` arrays (side 0: the tile
+    is the hinge's tile A, 1: its tile B)."""
+    H = len(hinge_tiles)
+    t = hinge_tiles.ravel()
+    h = np.repeat(np.arange(H), 2)
+    side = np.tile([0, 1], H)
+    order = np.lexsort((h, t))
+    t, h, side = t[order], h[order], side[order]
+    start = np.searchsorted(t, np.arange(n_tiles))
+    end = np.searchsorted(t, np.arange(n_tiles), side="right")
+    out = []
+    for a, b in zip(start, end):
+        for i in range(a, b):
+            for j in range(i + 1, b):
+                if face[h[i]] == face[h[j]]:
+                    out.append((t[i], h[i], side[i], h[j], side[j]))
+    arr = np.asarray(out, dtype=np.int64).reshape(-1, 5)
+    return tuple(arr.T)
+
+
+def strip_frames(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray, fold_ends: np.ndarray,
+                 shrink: float):
+    """Per hinge of a placed closed state: hinge point ``p`` (H, 2), seam direction ``e`` (H, 2), the
+    normal into tile A and into tile B ``n`` (H, 2, 2), and ``t0`` (H,) where the seam enters the pair of
+    tiles shrunk by ``shrink`` (mitre: ``shrink / sin`` of the sharper of the two corners at the hinge)."""
+    A, B = hinge_tiles.T
+    p = 0.5 * (corners[A, hinge_corner[:, 0]] + corners[B, hinge_corner[:, 1]])
+    far = 0.5 * (corners[A, fold_ends[:, 0]] + corners[B, fold_ends[:, 1]])
+    e = far - p
+    e = e / np.linalg.norm(e, axis=1, keepdims=True)
+    perp = np.stack([-e[:, 1], e[:, 0]], -1)
+    n = np.empty((len(p), 2, 2))
+    sines = []
+    for side, (X, c) in enumerate(((A, hinge_corner[:, 0]), (B, hinge_corner[:, 1]))):
+        centre = corners[X].mean(1)
+        sgn = np.sign(dot2(centre - p, perp))
+        n[:, side] = perp * np.where(sgn == 0, 1.0, sgn)[:, None]
+        here = corners[X, c]
+        u = corners[X, (c + 1) % 4] - here
+        v = corners[X, (c - 1) % 4] - here
+        sines.append(np.abs(cross2(u, v)) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1)))
+    t0 = shrink / np.maximum(np.minimum(*sines), 1e-12)
+    return p, e, n, t0
+
+
+def _box_extent(axis: np.ndarray, e: np.ndarray, n: np.ndarray, a0: np.ndarray, a1: float, b1: float):
+    """min and max over the box ``{a e + b n: a in [a0, a0 + a1], b in [0, b1]}`` of its dot with ``axis``."""
+    ea, nb = dot2(e, axis), dot2(n, axis)
+    lo = a0 * ea + a1 * np.minimum(ea, 0.0) + b1 * np.minimum(nb, 0.0)
+    hi = a0 * ea + a1 * np.maximum(ea, 0.0) + b1 * np.maximum(nb, 0.0)
+    return lo, hi
+
+
+def strip_clearance_scales(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray,
+                           fold_ends: np.ndarray, pairs: tuple, shrink: float, width: float, reach: float,
+                           clearance: float) -> np.ndarray:
+    """Per same-face pair (:func:`same_face_pairs`) the smallest scale from which their boxes on the shared
+    tile are at least ``clearance`` apart along one of the four box axes (separating-axis gap, a lower
+    bound on the distance): linear in the scale per axis, so exact for the boxes; 0 where no scale brings
+    them closer."""
+    tile, h, sh, k, sk = pairs
+    if not len(tile):
+        return np.zeros(0)
+    p, e, n, t0 = strip_frames(corners, hinge_tiles, hinge_corner, fold_ends, shrink)
+    R = reach + shrink
+    nh, nk = n[h, sh], n[k, sk]
+    upper = np.full(len(tile), np.inf)  # the boxes are closer than the clearance along every axis for s in
+    lower = np.full(len(tile), -np.inf)  # (lower, upper): each axis' gap is linear in s
+    for axis in (e[h], nh, e[k], nk):
+        lo_h, hi_h = _box_extent(axis, e[h], nh, t0[h], width, R)
+        lo_k, hi_k = _box_extent(axis, e[k], nk, t0[k], width, R)
+        dp = dot2(p[k] - p[h], axis)
+        for slope, off in ((dp, lo_k - hi_h), (-dp, lo_h - hi_k)):  # k beyond h along the axis, or before
+            with np.errstate(divide="ignore", invalid="ignore"):
+                root = (clearance - off) / slope
+            upper = np.where(slope > 0, np.minimum(upper, root), upper)
+            lower = np.where(slope < 0, np.maximum(lower, root), lower)
+            lower = np.where((slope == 0) & (off >= clearance), np.inf, lower)  # this axis always separates
+    return np.where(lower < upper, np.maximum(upper, 0.0), 0.0)
