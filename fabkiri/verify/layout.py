@@ -85,23 +85,24 @@ class Linework:
         return [self.subset([i for i in rest if self.colours[i] == c]) for c in colours]
 
 
-def read_cut_file(path: str | Path) -> Linework:
-    """The CUT linework of a DXF or SVG file, in mm with y up."""
+def read_cut_file(path: str | Path, layer: str = "CUT") -> Linework:
+    """The CUT linework of a DXF or SVG file, in mm with y up (``layer``: another named layer, e.g. ENGRAVE;
+    a file without it gives an empty linework with ``layer_found`` False)."""
     p = Path(path)
     if not p.exists():
         raise VerifyError(f"{p}: no such layout file")
     suffix = p.suffix.lower()
     if suffix == ".dxf":
-        return _read_dxf(p)
+        return _read_dxf(p, layer)
     if suffix == ".svg":
-        return _read_svg(p)
+        return _read_svg(p, layer)
     raise VerifyError(f"{p}: a layout must be a .dxf or .svg file")
 
 
 _CUT_LAYER_RE = re.compile(rb"\n[ \t]*8\nCUT[ \t]*(?=\n)", re.IGNORECASE)
 
 
-def _read_dxf_fast(p: Path) -> Linework | None:
+def _read_dxf_fast(p: Path, layer_name: str = "CUT") -> Linework | None:
     """Straight LWPOLYLINEs and LINEs on layer CUT of an ASCII DXF, read from the raw tags.
 
     A DXF is a flat list of (group code, value) line pairs; cut files carry far
@@ -139,7 +140,9 @@ def _read_dxf_fast(p: Path) -> Linework | None:
             raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
         starts = starts[(starts >= lo) & (starts < hi)]
         bounds = np.append(starts, hi)
-        tags_at = np.array([t.start() for t in _CUT_LAYER_RE.finditer(data, lo, hi)], dtype=np.int64)
+        layer_re = _CUT_LAYER_RE if layer_name == "CUT" else \
+            re.compile(rb"\n[ \t]*8\n" + layer_name.encode() + rb"[ \t]*(?=\n)", re.IGNORECASE)
+        tags_at = np.array([t.start() for t in layer_re.finditer(data, lo, hi)], dtype=np.int64)
         if len(tags_at) == 0:
             return None  # no CUT layer: a plain file, read it all with ezdxf
         tags_at = tags_at[np.searchsorted(nl, tags_at) % 2 == 0]
@@ -150,8 +153,8 @@ def _read_dxf_fast(p: Path) -> Linework | None:
             tags = list(zip((c.strip() for c in lines[0::2]), lines[1::2]))
             kind = tags[0][1].strip()
             layer = next((v.strip().upper() for c, v in tags if c == "8"), "")
-            if layer != "CUT":
-                continue  # CUT was not this entity's layer tag
+            if layer != layer_name:
+                continue  # the layer was not this entity's layer tag
             if kind == "LINE":
                 get = dict(tags)
                 lw.add(np.array([[float(get["10"]), float(get["20"])],
@@ -176,17 +179,17 @@ def _read_dxf_fast(p: Path) -> Linework | None:
         return None
 
 
-def _read_dxf(p: Path) -> Linework:
-    fast = _read_dxf_fast(p)
+def _read_dxf(p: Path, layer: str = "CUT") -> Linework:
+    fast = _read_dxf_fast(p, layer)
     if fast is not None:
         return fast
-    return _read_dxf_full(p)
+    return _read_dxf_full(p, layer)
 
 
 CURVE_TYPES = {"LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE"}
 
 
-def _read_dxf_full(p: Path) -> Linework:
+def _read_dxf_full(p: Path, layer_name: str = "CUT") -> Linework:
     """Every curve of the modelspace in world coordinates, blocks exploded, with its layer and colour.
 
     ezdxf does the work: ``recover`` reads damaged files, ``disassemble.recursive_decompose``
@@ -217,19 +220,20 @@ def _read_dxf_full(p: Path) -> Linework:
         for sub in prim.path.sub_paths():
             pts = np.array([(v.x, v.y) for v in sub.flattening(flat)], dtype=float)
             lw.add(pts * unit, closed, layer, colour)
-    if any(name == "CUT" for name in lw.layers):
-        lw = lw.subset(i for i, name in enumerate(lw.layers) if name == "CUT")
-        lw.layer_found = True
+    if layer_name != "CUT" or any(name == "CUT" for name in lw.layers):
+        found = any(name == layer_name for name in lw.layers)
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name == layer_name)
+        lw.layer_found = found
     else:  # a plain file from another tool: every outline not on an annotation layer
         lw = lw.subset(i for i, name in enumerate(lw.layers) if name not in NON_CUT_LAYERS)
     return lw
 
 
-def _read_svg(p: Path) -> Linework:
+def _read_svg(p: Path, layer_name: str = "CUT") -> Linework:
     import svgelements as se
 
     try:
-        svg = se.SVG.parse(_without_annotation_layers(p), reify=True)
+        svg = se.SVG.parse(_without_annotation_layers(p, layer_name), reify=True)
     except Exception as exc:  # svgelements raises many kinds on bad XML
         raise VerifyError(f"{p}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
     if not svg.height:
@@ -252,9 +256,10 @@ def _read_svg(p: Path) -> Linework:
             for e in g.select():
                 if isinstance(e, se.Shape):
                     layer_of[id(e)] = name(g)
-    cut_found = "CUT" in layer_of.values()
+    cut_found = layer_name in layer_of.values()
     shapes = [e for e in svg.elements() if isinstance(e, se.Shape)
-              and (layer_of.get(id(e)) == "CUT" if cut_found else layer_of.get(id(e), "") not in NON_CUT_LAYERS)]
+              and (layer_of.get(id(e)) == layer_name if cut_found or layer_name != "CUT"
+                   else layer_of.get(id(e), "") not in NON_CUT_LAYERS)]
     lw = Linework(p, layer_found=cut_found)
     for shape in shapes:
         path_ = se.Path(shape)
@@ -281,7 +286,7 @@ def _read_svg(p: Path) -> Linework:
     return lw
 
 
-def _without_annotation_layers(p: Path):
+def _without_annotation_layers(p: Path, keep: str = "CUT"):
     """The SVG with its NOTES/ENGRAVE/SCORE groups removed, when it has a CUT group; else the path.
 
     Only the CUT group is read when there is one, and svgelements would spend
@@ -302,12 +307,12 @@ def _without_annotation_layers(p: Path):
         return str(el.get("id") or el.get(INKSCAPE_LABEL) or "").upper()
 
     groups = [el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == "g"]
-    if not any(name(g) == "CUT" for g in groups):
+    if not any(name(g) == keep for g in groups):
         return str(p)
     if any(el.tag.rsplit("}", 1)[-1] == "use" for el in root.iter()):
         return str(p)
-    drop = {id(g) for g in groups if name(g) in NON_CUT_LAYERS
-            and not any(name(d) == "CUT" for d in g.iter() if d.tag.rsplit("}", 1)[-1] == "g")}
+    drop = {id(g) for g in groups if name(g) in (NON_CUT_LAYERS | {"CUT"}) - {keep}
+            and not any(name(d) == keep for d in g.iter() if d.tag.rsplit("}", 1)[-1] == "g")}
     if not drop:
         return str(p)
     for parent in list(root.iter()):
@@ -374,6 +379,7 @@ class Allowances:
     cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
     ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
     tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)
+    labels: bool = False  # the manifest says the layout is labelled (fabkiri's tape marks come with the labels)
 
 
 def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
@@ -413,8 +419,9 @@ def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
         raise
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
+    params = manifest.get("parameters") if isinstance(manifest.get("parameters"), dict) else {}
     return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross, lig_w,
-                      placed)
+                      placed, bool(params.get("labels", False)))
 
 
 # ------------------------------------------------------------------ recovery
@@ -553,14 +560,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
             else polys
         return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
-    # ligament: outer loops minus inner loops is the material
-    tree = shapely.STRtree(polys)
-    inside = np.zeros(len(polys), dtype=bool)
-    a, b = tree.query(polys, predicate="contains_properly")
-    inside[b[a != b]] = True
-    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
-    if al.kerf_offset:
-        material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
+    material = _material(polys, al.kerf_offset)
     feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
              if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
     strips = shapely.unary_union(feats) if feats else None
@@ -587,6 +587,25 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, how + ", grown by the tile shrink"
+
+
+def _material(polys: np.ndarray, kerf_offset: float):
+    """A ligament sheet's material: outer loops minus the loops inside them, less the kerf offset."""
+    tree = shapely.STRtree(polys)
+    inside = np.zeros(len(polys), dtype=bool)
+    a, b = tree.query(polys, predicate="contains_properly")
+    inside[b[a != b]] = True
+    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
+    if kerf_offset:
+        material = material.buffer(-kerf_offset, join_style="mitre", mitre_limit=10.0)
+    return material
+
+
+def sheet_material(lw: Linework, kerf_offset: float):
+    """The material of a ligament sheet's CUT linework (its closed outlines)."""
+    joined = join_pieces(lw)
+    rings = [shapely.Polygon(p) for p, c in zip(joined.polylines, joined.closed) if c]
+    return _material(shapely.make_valid(np.array(rings, dtype=object)), kerf_offset)
 
 
 EDGE_ON_MM = 0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core
@@ -1141,9 +1160,11 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     dangling: list[np.ndarray] = []
     references: list[float] = []
     frame = _frame_tiles(pattern, al)
+    linework: dict[int, Linework] = {}
     for sheet, f in files.items():
         lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol.length)
         _drop_reference(lw, al.reference.get(sheet))
+        linework[sheet] = lw
         n_lines += len(lw.polylines)
         on = [t for t in range(T) if al.tile_sheet.get(t, 1) == sheet]
         polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None)
@@ -1167,7 +1188,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
         allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
         if len(allq):
-            u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
+            u = shapely.unary_union(shapely.make_valid(shapely.polygons(allq))).buffer(tol.length)
             in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
         rep.meta["layout"] = "in-place" if in_place else "separate"
     fitted = None
@@ -1316,7 +1337,44 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
                   detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
+    _physical_checks(rep, pattern, al, files, linework, cut_shapes, have, found_on, sheet_piece, in_place,
+                     fitted, g)
     return rep
+
+
+def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
+                     linework: dict[int, Linework], cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
+                     sheet_piece: bool, in_place: bool, fitted: float | None, g: str) -> None:
+    """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout)."""
+    from .physical import ligament_check, tape_mark_check
+
+    A, B = pattern.topology.hinge_tiles.T
+    if sheet_piece and have.any():
+        shrink = al.tile_shrink if al.hinge != "plain" else -(fitted or 0.0)
+        kerf = al.kerf_offset if al.hinge != "plain" else 0.0
+        cores = np.full(len(cut_shapes), None, dtype=object)
+        cores[have] = shapely.buffer(shapely.polygons(cut_shapes[have]), -shrink, join_style="mitre",
+                                     mitre_limit=10.0)
+        for sheet, lw in linework.items():
+            on = have & (found_on == sheet)
+            hinges = np.flatnonzero(on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet)))
+            if not len(hinges):
+                continue
+            c = cores.copy()
+            c[~on] = None
+            rep.add(ligament_check(pattern, sheet_material(lw, kerf), c, on, list(lw.polylines), hinges, g))
+    elif in_place and al.hinge in ("tape", "plain") and not sheet_piece and have.any():
+        marks = {}
+        for sheet, f in files.items():
+            m = read_cut_file(f, "ENGRAVE")
+            if m.layer_found:
+                marks[sheet] = m.polylines
+        if not marks:
+            return  # no named engrave layer (a colour-only file): marks cannot be told from cuts
+        expected = True if al.hinge == "tape" and al.labels else None
+        chk = tape_mark_check(pattern, cut_shapes, have, found_on, marks, expected, g)
+        if chk is not None:
+            rep.add(chk)
 
 
 def _frame_tiles(pattern: Pattern, al: Allowances) -> np.ndarray | None:
