@@ -541,7 +541,11 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         joined = join_pieces(lw)
         if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
             # ligament sheet), else in-place linework
-            hinge = ("ligament" if _nested(joined) else "separate") if all(joined.closed) else "tape"
+            rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
+            n_open = len(joined.closed) - len(rings.closed)
+            # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
+            hinge = "ligament" if n_open < len(rings.closed) and _nested(rings) else \
+                "separate" if not n_open else "tape"
         if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
             lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
     if hinge == "tape":
