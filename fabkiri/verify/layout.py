@@ -1019,13 +1019,16 @@ def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[
     return assign, resid, shift
 
 
-def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: list | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
     """Match recovered quads ``R`` to design closed-state tiles ``Y`` under ONE rigid motion.
 
     Hypotheses pair the recovered tile nearest the layout's centre with design
     tiles nearest the design's centre (and each corner shift); the best by
     mean capped centre distance wins, then the motion is refit on all matched corners.
-    Returns assign, per-tile residual, shift, rotation angle, translation.
+    Returns assign, per-tile residual, shift, rotation angle, translation. ``alternatives``: a list
+    that receives every other hypothesis as good as the best within 1 µm (a symmetric sheet matches
+    several ways), each refitted as (assign, residual, shift).
     """
     n = len(R)
     assign = np.full(n, -1)
@@ -1038,6 +1041,7 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
     tree = cKDTree(cr)
     R4 = np.stack([np.roll(R, -k, axis=1) for k in range(4)])  # every corner shift, once
     best = None
+    hyps = []
     for d in cands:
         for s in range(4):
             theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
@@ -1047,12 +1051,24 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
             _, idx = tree.query(moved.mean(axis=1))
             err = np.linalg.norm(R4[:, idx] - moved[None], axis=-1).max(axis=2).min(axis=0)
             score = float(np.minimum(err, cap).mean())
+            hyps.append((score, theta, t))
             if best is None or score < best[0]:
                 best = (score, theta, t)
     _, theta, t = best
+    assign, resid, shift, theta, t = _refit(Y, R, theta, t, tree)
+    if alternatives is not None:
+        for score, th, tt in hyps:
+            if score <= best[0] + 1e-3 and (abs(geometry.wrap_angle(th - theta)) > 1e-6 or
+                                            np.linalg.norm(tt - t) > 1e-3):
+                alternatives.append(_refit(Y, R, th, tt, tree)[:3])
+    return assign, resid, shift, float(theta), t
+
+
+def _refit(Y, R, theta, t, tree):
+    """Assignment under one motion, then the motion refitted on every matched corner and applied."""
     assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
     ok = assign >= 0
-    if ok.sum() >= 1:  # refit the single motion on every matched corner
+    if ok.sum() >= 1:
         src = Y[assign[ok]]
         i = np.flatnonzero(ok)
         dst = R[i[:, None], (np.arange(4)[None, :] + shift[i][:, None]) % 4]
@@ -1219,6 +1235,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         return (contract(pattern, s).corners if Y is None else Y) * al.scale
 
     state = al.state
+    labelings: list[np.ndarray] = []  # cut shapes under other, equally good labelings of a symmetric sheet
     if in_place and al.hinge == "plain" and sheets:
         # no manifest declares the state: take the closed state the sheet matches
         R0 = next(iter(sheets.values()))
@@ -1231,8 +1248,16 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
                 else np.arange(T)
             design_ids = design_ids[design_ids < T]
-            a, res, sh, _, _ = match_in_place(Ystate[design_ids], R)
+            alts: list = []
+            a, res, sh, _, _ = match_in_place(Ystate[design_ids], R, alternatives=alts)
             a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
+            if len(sheets) == 1:  # a symmetric sheet: the other labelings as good as this one
+                for aa, rr, ss in alts:
+                    if (aa >= 0).sum() == T and np.max(rr[aa >= 0]) <= tol.length:
+                        C = np.full((T, 4, 2), np.nan)
+                        k = np.flatnonzero(aa >= 0)
+                        C[design_ids[aa[k]]] = R[k[:, None], (np.arange(4)[None, :] + ss[k][:, None]) % 4]
+                        labelings.append(C)
         else:
             free = np.flatnonzero(assign_all < 0)
             a, res, sh = match_by_shape(D[free], R, L)
@@ -1342,15 +1367,18 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
                   detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
     _physical_checks(rep, pattern, al, files, linework, cut_shapes, have, found_on, sheet_piece, in_place,
-                     fitted, g)
+                     fitted, g, labelings)
     return rep
 
 
 def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
                      linework: dict[int, Linework], cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
-                     sheet_piece: bool, in_place: bool, fitted: float | None, g: str) -> None:
-    """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout)."""
-    from .physical import ligament_check, tape_mark_check
+                     sheet_piece: bool, in_place: bool, fitted: float | None, g: str,
+                     labelings: list[np.ndarray] = ()) -> None:
+    """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
+    A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
+    hinges at different corners; its marks say which one was cut, so the best of them is reported."""
+    from .physical import ligament_check, mark_status, tape_mark_check
 
     A, B = pattern.topology.hinge_tiles.T
     if sheet_piece and have.any():
@@ -1375,10 +1403,16 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
                 marks[sheet] = m.polylines
         if not marks:
             return  # no named engrave layer (a colour-only file): marks cannot be told from cuts
-        expected = True if al.hinge == "tape" and al.labels else None
-        chk = tape_mark_check(pattern, cut_shapes, have, found_on, marks, expected, g)
-        if chk is not None:
-            rep.add(chk)
+        # the labeling whose hinges carry the most marks (a symmetric sheet has several)
+        status = [mark_status(pattern, C, have, found_on, marks) for C in [cut_shapes, *labelings]]
+        k = max(range(len(status)), key=lambda i: (status[i][1].sum(), -i))
+        hs, marked, room = status[k]
+        if not len(hs) or not (al.hinge == "tape" and al.labels) and marked.sum() < 0.5 * len(hs):
+            return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
+        chk = tape_mark_check(hs, marked, room, g)
+        if k:
+            chk.detail += " (the sheet is symmetric: hinges placed by the labeling its marks fit best)"
+        rep.add(chk)
 
 
 def _frame_tiles(pattern: Pattern, al: Allowances) -> np.ndarray | None:

@@ -85,28 +85,28 @@ def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
     return bool((spans & long).any())
 
 
-def tape_mark_check(pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
-                    marks: dict[int, list[np.ndarray]], expected: bool | None, g: str) -> Check | None:
-    """Every tape hinge has a mark across its corner on one of its two tiles (a chord on the
-    ENGRAVE layer where the tape ends). ``expected`` True: the manifest says the layout carries
-    marks; None: it does when at least half the hinges have one. None when there is nothing to check."""
+def mark_status(pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
+                marks: dict[int, list[np.ndarray]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For the tape hinges whose two tiles are on one sheet: their indices, whether each has a mark
+    across its corner on one of its two tiles (an ENGRAVE chord where the tape ends), and whether its
+    corners have room for one."""
     top = pattern.topology
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
-    same = have[A] & have[B] & (found_on[A] == found_on[B])
-    if not same.any():
-        return None
+    hs = np.flatnonzero(have[A] & have[B] & (found_on[A] == found_on[B]))
     segs = {s: np.array([q[i:i + 2] for q in v for i in range(len(q) - 1)]).reshape(-1, 2, 2)
             for s, v in marks.items()}
-    hs = np.flatnonzero(same)
-    marked = np.array([_corner_marked(cut_shapes[B[h]], cB[h], segs.get(int(found_on[B[h]]), np.zeros((0, 2, 2))))
-                       or _corner_marked(cut_shapes[A[h]], cA[h], segs.get(int(found_on[A[h]]), np.zeros((0, 2, 2))))
-                       for h in hs], dtype=bool)
-    if expected is None and marked.sum() < 0.5 * len(hs):
-        return None  # a layout without tape marks
-    # a corner too small for a mark (both tiles) needs none
+    none = np.zeros((0, 2, 2))
+    marked = np.array([_corner_marked(cut_shapes[B[h]], cB[h], segs.get(int(found_on[B[h]]), none))
+                       or _corner_marked(cut_shapes[A[h]], cA[h], segs.get(int(found_on[A[h]]), none))
+                       for h in hs], dtype=bool).reshape(-1)
     room = np.array([min(geometry.edge_lengths(cut_shapes[t])[[c, (c + 3) % 4]].min() for t, c in
-                         ((A[h], cA[h]), (B[h], cB[h]))) >= MARK_ROOM_MM for h in hs], dtype=bool)
+                         ((A[h], cA[h]), (B[h], cB[h]))) >= MARK_ROOM_MM for h in hs], dtype=bool).reshape(-1)
+    return hs, marked, room
+
+
+def tape_mark_check(hs: np.ndarray, marked: np.ndarray, room: np.ndarray, g: str) -> Check:
+    """Every tape hinge with room for a mark has one (see :func:`mark_status`)."""
     lacking = hs[room & ~marked]
     return Check(f"{g}: tape marks at every hinge", ok=not len(lacking), value=int(len(lacking)), tol=0,
                  unit="count", group=g, worst=f"hinge {int(lacking[0])}" if len(lacking) else None,
