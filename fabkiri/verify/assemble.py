@@ -121,10 +121,11 @@ class Assembly:
 def fit_assembly(pattern: Pattern, C: np.ndarray, state: int, Y0: np.ndarray) -> np.ndarray:
     """Corners (T, 4, 2) of the least-squares assembly of shapes ``C`` in ``state``, from ``Y0``.
 
-    Gauss-Newton on the sparse Jacobian (tile 0's motion fixed: the gauge), stopped when a step
+    Gauss-Newton on the sparse Jacobian, each step a direct solve of the normal equations (tile 0's
+    motion fixed: the gauge), stopped when a step
     moves no corner by more than 1 nm or after MAX_ITER steps.
     """
-    from scipy.sparse.linalg import lsqr
+    from scipy.sparse.linalg import spsolve
 
     asm = Assembly(pattern, C, state)
     if asm.H == 0:
@@ -138,7 +139,10 @@ def fit_assembly(pattern: Pattern, C: np.ndarray, state: int, Y0: np.ndarray) ->
         r = asm.residuals(x)
         J = asm.jacobian(x)[:, free]
         D = np.where(free < T, scale, 1.0)
-        step = lsqr(J @ sparse.diags(1.0 / D), -r, atol=1e-14, btol=1e-14, iter_lim=10 * len(free))[0] / D
+        Js = (J @ sparse.diags(1.0 / D)).tocsc()
+        N = (Js.T @ Js).tocsc()  # normal equations: sparse, banded by the hinges; a direct solve
+        N = N + sparse.diags(np.full(N.shape[0], 1e-12 * max(float(N.diagonal().max()), 1e-300)))
+        step = spsolve(N, -(Js.T @ r)) / D
         x = x.copy()
         x[free] += step
         cost = float(np.sum(asm.residuals(x) ** 2))
