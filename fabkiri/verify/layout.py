@@ -1394,7 +1394,10 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
                 continue
             c = cores.copy()
             c[~on] = None
-            rep.add(ligament_check(pattern, sheet_material(lw, kerf), c, on, list(lw.polylines), hinges, g))
+            material = sheet_material(lw, kerf)
+            if len(shapely.get_parts(material)) >= on.sum():
+                continue  # no piece joins two tiles: the ligaments are not in this file (e.g. printed top faces)
+            rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
     elif in_place and al.hinge in ("tape", "plain") and not sheet_piece and have.any():
         marks = {}
         for sheet, f in files.items():
