@@ -515,6 +515,76 @@ def ligament_severed(every: bool):
     return m
 
 
+def _mark_items(b: Base, h: int) -> list[int]:
+    """ENGRAVE items of the tape mark at hinge ``h``: two-point strokes of 2.5 mm or more inside tile B
+    within 12 mm of the hinge (fabkiri puts the face letter on tile A and this chord on tile B)."""
+    row = b.manifest["hinges"][h]
+    poly = shapely.Polygon(b.tiles[int(row["tiles"][1])]).buffer(1e-6)
+    pos = np.asarray(row["position_b"], float)
+    out = []
+    for i, (p, c) in enumerate(b.sheet.layers.get("ENGRAVE", [])):
+        if len(p) == 2 and not c and np.linalg.norm(p[1] - p[0]) >= 2.5 \
+                and shapely.contains_xy(poly, p[:, 0], p[:, 1]).all() and np.linalg.norm(p - pos, axis=1).max() < 12:
+            out.append(i)
+    return out
+
+
+def _marked_hinges(b: Base) -> list[int]:
+    return [h for h in range(len(b.manifest.get("hinges", []))) if _mark_items(b, h)]
+
+
+def tape_mark_missing(b: Base, rng):
+    if b.hinge != "tape" or not (hs := _marked_hinges(b)):
+        return None, ""
+    h = hs[int(rng.integers(len(hs)))]
+    out = b.sheet.copy()
+    drop = set(_mark_items(b, h))
+    out.layers["ENGRAVE"] = [it for i, it in enumerate(out.layers["ENGRAVE"]) if i not in drop]
+    return out, f"hinge {h}"
+
+
+def tape_mark_moved(b: Base, rng):
+    """The chord moved 3 mm towards its tile's centre: it no longer spans the corner."""
+    if b.hinge != "tape" or not (hs := _marked_hinges(b)):
+        return None, ""
+    h = hs[int(rng.integers(len(hs)))]
+    out = b.sheet.copy()
+    c = b.tiles[int(b.manifest["hinges"][h]["tiles"][1])].mean(0)
+    for i in _mark_items(b, h):
+        p, cl = out.layers["ENGRAVE"][i]
+        u = c - p.mean(0)
+        out.layers["ENGRAVE"][i] = (p + 3.0 * u / np.linalg.norm(u), cl)
+    return out, f"hinge {h}"
+
+
+def tape_marks_removed(b: Base, rng):
+    if b.hinge != "tape" or not (hs := _marked_hinges(b)):
+        return None, ""
+    drop = {i for h in hs for i in _mark_items(b, h)}
+    out = b.sheet.copy()
+    out.layers["ENGRAVE"] = [it for i, it in enumerate(out.layers["ENGRAVE"]) if i not in drop]
+    return out, f"hinge {hs[0]}"
+
+
+def ligament_cut_into(b: Base, rng):
+    """A cut from one side of a ligament to its middle (the ligament is weakened, not severed)."""
+    if b.hinge != "ligament":
+        return None, ""
+    feats = b.manifest["hinge_features"]
+    f = feats[int(rng.integers(len(feats)))]
+    r = shapely.Polygon(f["polygon"]).minimum_rotated_rectangle
+    c = np.asarray(r.exterior.coords)[:4]
+    e = np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)
+    k = int(np.argmax(e))
+    mid = c.mean(0)
+    short = c[(k + 2) % 4] - c[(k + 1) % 4]
+    u = short / np.linalg.norm(short)
+    w = float(e.min())
+    out = b.sheet.copy()
+    out.layers["CUT"].append((np.array([mid - u * (0.5 * w + 0.3), mid]), False))
+    return out, f"hinge {f['hinge']}"
+
+
 def sheet(fn) -> Callable:
     return lambda b, rng: (b.sheet.map_points(fn), "sheet")
 
@@ -534,7 +604,7 @@ class Kind:
     fmt: str  # dxf | svg | any
     change: Callable | None  # (Base, rng) -> (Sheet | None, what) ; None: the sheet as is
     style: str = ""  # writer style
-    manifest: str = "keep"  # keep | drop-ok (valid only without manifest changes) | kerf0 (undeclared kerf)
+    manifest: str = "keep"  # keep | kerf0 (undeclared kerf) | needs-manifest (only the manifest tells it broken)
     hinges: tuple = ("tape", "separate", "ligament")
     chiral: bool = False  # a mirror of the whole sheet: a breakage only for a sheet without mirror symmetry
 
@@ -646,6 +716,11 @@ BROKEN = [
     Kind("tile mirrored in a turned sheet", False, "any",
          then(tile_mirrored, lambda s: s.map_points(rigid(math.radians(75), (0, 0))))),
     Kind("a ligament severed, LINEs", False, "dxf", ligament_severed(False), "lines", hinges=("ligament",)),
+    Kind("a ligament cut halfway", False, "any", ligament_cut_into, hinges=("ligament",)),
+    Kind("a tape mark missing", False, "any", tape_mark_missing, hinges=("tape",)),
+    Kind("a tape mark moved off its corner", False, "any", tape_mark_moved, hinges=("tape",)),
+    Kind("every tape mark removed (labels kept)", False, "any", tape_marks_removed, manifest="needs-manifest",
+         hinges=("tape",)),
 ]
 
 
@@ -657,8 +732,8 @@ def make_case(b: Base, kind: Kind, out: Path, with_manifest: bool, seed: int = 0
     """Write the variant ``kind`` of ``b`` into folder ``out``; None when the kind does not apply."""
     if b.hinge not in kind.hinges or kind.fmt not in ("any", b.fmt):
         return None
-    if kind.manifest == "kerf0" and not with_manifest:
-        return None
+    if kind.manifest in ("kerf0", "needs-manifest") and not with_manifest:
+        return None  # a breakage only the manifest can tell (it declares the kerf, or that marks are cut)
     if kind.chiral and b.extra.get("mirror_symmetric"):
         return None
     rng = np.random.default_rng(seed)

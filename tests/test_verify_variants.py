@@ -25,7 +25,7 @@ VALID = ["re-save R2018", "LINE segments", "in a block, INSERT moved and turned 
 BROKEN = ["corner moved 0.1 mm", "tile scaled 1%", "tile turned 0.5°", "tile mirrored", "tile missing",
           "sheet scaled 1%", "sheet mirrored", "mirrored through the OCS", "inch-for-mm", "viewBox 1% off",
           "slit shortened 10 µm", "slit cut halfway", "extra cut halfway into a tile", "a ligament severed",
-          "undeclared kerf"]
+          "undeclared kerf", "a ligament cut halfway", "a tape mark missing", "a tape mark moved off its corner"]
 KINDS = {k.name: k for k in lm.VALID + lm.BROKEN}
 
 
@@ -49,21 +49,8 @@ def bases(tmp_path_factory):
     return out
 
 
-MOVED_OR_ROUNDED = {"in a block, INSERT moved and turned 30°", "group transform (rigid)", "turned 33°",
-                    "rounded to 0.001 mm"}
-LIGAMENT_GAP = pytest.mark.xfail(reason="known limit (issue 15 report): a ligament sheet of this irregular pattern "
-                                        "without its manifest, moved off the manifest's frame or rounded to 1 µm "
-                                        "loses a tile corner where a ligament meets it", strict=False)
-
-
-def _cases(names, valid=False):
-    out = []
-    for n in names:
-        for h in ("tape", "separate", "ligament"):
-            for m in (True, False):
-                gap = valid and h == "ligament" and (not m or n in MOVED_OR_ROUNDED)
-                out.append(pytest.param(n, h, m, marks=LIGAMENT_GAP) if gap else (n, h, m))
-    return out
+def _cases(names):
+    return [(n, h, m) for n in names for h in ("tape", "separate", "ligament") for m in (True, False)]
 
 
 def _verify_case(bases, tmp_path, name, hinge, with_manifest):
@@ -75,7 +62,7 @@ def _verify_case(bases, tmp_path, name, hinge, with_manifest):
     return verify_layout(b.pattern, path)
 
 
-@pytest.mark.parametrize("name,hinge,with_manifest", _cases(VALID, valid=True))
+@pytest.mark.parametrize("name,hinge,with_manifest", _cases(VALID))
 def test_valid_variant_accepted(bases, tmp_path, name, hinge, with_manifest):
     rep = _verify_case(bases, tmp_path, name, hinge, with_manifest)
     assert rep.ok, rep.to_text()
@@ -117,13 +104,12 @@ def test_ezdxf_r2018_round_trip(bases, tmp_path):
         doc.saveas(path)
         assert ezdxf.readfile(path).dxfversion == "AC1032"
         assert verify_layout(b.pattern, path).ok
-        if h != "ligament":  # see LIGAMENT_GAP
-            (dst / "manifest.json").unlink()
-            assert verify_layout(b.pattern, path).ok
+        (dst / "manifest.json").unlink()
+        assert verify_layout(b.pattern, path).ok
 
 
 @pytest.mark.skipif(shutil.which("inkscape") is None, reason="inkscape is not installed")
-@pytest.mark.parametrize("hinge", ["tape", "separate", pytest.param("ligament", marks=LIGAMENT_GAP)])
+@pytest.mark.parametrize("hinge", ["tape", "separate", "ligament"])
 def test_inkscape_plain_svg_export(bases, tmp_path, hinge):
     b = bases[hinge, "svg"]
     src = b.folder / b.manifest["sheets"][0]["svg"]
@@ -145,3 +131,45 @@ def test_standard_pattern_mirror_is_no_breakage():
     assert lm._mirror_symmetric(p.contracted[1])
     assert not lm._mirror_symmetric(lf.distinct_pattern().contracted[1])
     assert np.isfinite(p.tile_size)
+
+
+def _named(bases, tmp_path, hinge, change, check, with_manifest, seed=0):
+    """Write ``change`` of the DXF base; the check ``check`` fails naming what the change broke."""
+    b = bases[hinge, "dxf"]
+    sh, what = change(b, np.random.default_rng(seed))
+    out = tmp_path / f"{hinge}-{int(with_manifest)}-{seed}"
+    out.mkdir()
+    path = out / b.manifest["sheets"][0]["dxf"]
+    lm.write_dxf(sh, path)
+    if with_manifest:
+        shutil.copy(b.folder / "manifest.json", out / "manifest.json")
+    chk = verify_layout(b.pattern, path).get(check)
+    assert chk is not None and not chk.ok and chk.worst == what, (what, chk)
+
+
+@pytest.mark.parametrize("with_manifest", [True, False])
+@pytest.mark.parametrize("change", [lm.ligament_severed(False), lm.ligament_cut_into])
+def test_cut_ligament_names_its_hinge(bases, tmp_path, change, with_manifest):
+    for seed in range(3):
+        _named(bases, tmp_path, "ligament", change, "layout: every ligament present and unsevered", with_manifest,
+               seed)
+
+
+@pytest.mark.parametrize("with_manifest", [True, False])
+@pytest.mark.parametrize("change", [lm.tape_mark_missing, lm.tape_mark_moved])
+def test_missing_tape_mark_names_its_hinge(bases, tmp_path, change, with_manifest):
+    for seed in range(3):
+        _named(bases, tmp_path, "tape", change, "layout: tape marks at every hinge", with_manifest, seed)
+
+
+def test_every_mark_removed_needs_the_manifest_to_tell(bases, tmp_path):
+    """With the manifest (the layout is labelled) every hinge lacks its mark; without it, a layout with
+    no marks at all is a layout without marks, and the check is not made."""
+    b = bases["tape", "dxf"]
+    sh, _ = lm.tape_marks_removed(b, np.random.default_rng(0))
+    path = tmp_path / b.manifest["sheets"][0]["dxf"]
+    lm.write_dxf(sh, path)
+    assert not any("tape marks" in c.name for c in verify_layout(b.pattern, path).checks)
+    shutil.copy(b.folder / "manifest.json", tmp_path / "manifest.json")
+    chk = verify_layout(b.pattern, path).get("layout: tape marks at every hinge")
+    assert not chk.ok and chk.value == len(lm._marked_hinges(b))

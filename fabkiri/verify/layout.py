@@ -85,23 +85,24 @@ class Linework:
         return [self.subset([i for i in rest if self.colours[i] == c]) for c in colours]
 
 
-def read_cut_file(path: str | Path) -> Linework:
-    """The CUT linework of a DXF or SVG file, in mm with y up."""
+def read_cut_file(path: str | Path, layer: str = "CUT") -> Linework:
+    """The CUT linework of a DXF or SVG file, in mm with y up (``layer``: another named layer, e.g. ENGRAVE;
+    a file without it gives an empty linework with ``layer_found`` False)."""
     p = Path(path)
     if not p.exists():
         raise VerifyError(f"{p}: no such layout file")
     suffix = p.suffix.lower()
     if suffix == ".dxf":
-        return _read_dxf(p)
+        return _read_dxf(p, layer)
     if suffix == ".svg":
-        return _read_svg(p)
+        return _read_svg(p, layer)
     raise VerifyError(f"{p}: a layout must be a .dxf or .svg file")
 
 
 _CUT_LAYER_RE = re.compile(rb"\n[ \t]*8\nCUT[ \t]*(?=\n)", re.IGNORECASE)
 
 
-def _read_dxf_fast(p: Path) -> Linework | None:
+def _read_dxf_fast(p: Path, layer_name: str = "CUT") -> Linework | None:
     """Straight LWPOLYLINEs and LINEs on layer CUT of an ASCII DXF, read from the raw tags.
 
     A DXF is a flat list of (group code, value) line pairs; cut files carry far
@@ -139,7 +140,9 @@ def _read_dxf_fast(p: Path) -> Linework | None:
             raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
         starts = starts[(starts >= lo) & (starts < hi)]
         bounds = np.append(starts, hi)
-        tags_at = np.array([t.start() for t in _CUT_LAYER_RE.finditer(data, lo, hi)], dtype=np.int64)
+        layer_re = _CUT_LAYER_RE if layer_name == "CUT" else \
+            re.compile(rb"\n[ \t]*8\n" + layer_name.encode() + rb"[ \t]*(?=\n)", re.IGNORECASE)
+        tags_at = np.array([t.start() for t in layer_re.finditer(data, lo, hi)], dtype=np.int64)
         if len(tags_at) == 0:
             return None  # no CUT layer: a plain file, read it all with ezdxf
         tags_at = tags_at[np.searchsorted(nl, tags_at) % 2 == 0]
@@ -150,8 +153,8 @@ def _read_dxf_fast(p: Path) -> Linework | None:
             tags = list(zip((c.strip() for c in lines[0::2]), lines[1::2]))
             kind = tags[0][1].strip()
             layer = next((v.strip().upper() for c, v in tags if c == "8"), "")
-            if layer != "CUT":
-                continue  # CUT was not this entity's layer tag
+            if layer != layer_name:
+                continue  # the layer was not this entity's layer tag
             if kind == "LINE":
                 get = dict(tags)
                 lw.add(np.array([[float(get["10"]), float(get["20"])],
@@ -176,17 +179,17 @@ def _read_dxf_fast(p: Path) -> Linework | None:
         return None
 
 
-def _read_dxf(p: Path) -> Linework:
-    fast = _read_dxf_fast(p)
+def _read_dxf(p: Path, layer: str = "CUT") -> Linework:
+    fast = _read_dxf_fast(p, layer)
     if fast is not None:
         return fast
-    return _read_dxf_full(p)
+    return _read_dxf_full(p, layer)
 
 
 CURVE_TYPES = {"LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE"}
 
 
-def _read_dxf_full(p: Path) -> Linework:
+def _read_dxf_full(p: Path, layer_name: str = "CUT") -> Linework:
     """Every curve of the modelspace in world coordinates, blocks exploded, with its layer and colour.
 
     ezdxf does the work: ``recover`` reads damaged files, ``disassemble.recursive_decompose``
@@ -217,19 +220,20 @@ def _read_dxf_full(p: Path) -> Linework:
         for sub in prim.path.sub_paths():
             pts = np.array([(v.x, v.y) for v in sub.flattening(flat)], dtype=float)
             lw.add(pts * unit, closed, layer, colour)
-    if any(name == "CUT" for name in lw.layers):
-        lw = lw.subset(i for i, name in enumerate(lw.layers) if name == "CUT")
-        lw.layer_found = True
+    if layer_name != "CUT" or any(name == "CUT" for name in lw.layers):
+        found = any(name == layer_name for name in lw.layers)
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name == layer_name)
+        lw.layer_found = found
     else:  # a plain file from another tool: every outline not on an annotation layer
         lw = lw.subset(i for i, name in enumerate(lw.layers) if name not in NON_CUT_LAYERS)
     return lw
 
 
-def _read_svg(p: Path) -> Linework:
+def _read_svg(p: Path, layer_name: str = "CUT") -> Linework:
     import svgelements as se
 
     try:
-        svg = se.SVG.parse(_without_annotation_layers(p), reify=True)
+        svg = se.SVG.parse(_without_annotation_layers(p, layer_name), reify=True)
     except Exception as exc:  # svgelements raises many kinds on bad XML
         raise VerifyError(f"{p}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
     if not svg.height:
@@ -252,9 +256,10 @@ def _read_svg(p: Path) -> Linework:
             for e in g.select():
                 if isinstance(e, se.Shape):
                     layer_of[id(e)] = name(g)
-    cut_found = "CUT" in layer_of.values()
+    cut_found = layer_name in layer_of.values()
     shapes = [e for e in svg.elements() if isinstance(e, se.Shape)
-              and (layer_of.get(id(e)) == "CUT" if cut_found else layer_of.get(id(e), "") not in NON_CUT_LAYERS)]
+              and (layer_of.get(id(e)) == layer_name if cut_found or layer_name != "CUT"
+                   else layer_of.get(id(e), "") not in NON_CUT_LAYERS)]
     lw = Linework(p, layer_found=cut_found)
     for shape in shapes:
         path_ = se.Path(shape)
@@ -281,7 +286,7 @@ def _read_svg(p: Path) -> Linework:
     return lw
 
 
-def _without_annotation_layers(p: Path):
+def _without_annotation_layers(p: Path, keep: str = "CUT"):
     """The SVG with its NOTES/ENGRAVE/SCORE groups removed, when it has a CUT group; else the path.
 
     Only the CUT group is read when there is one, and svgelements would spend
@@ -302,12 +307,12 @@ def _without_annotation_layers(p: Path):
         return str(el.get("id") or el.get(INKSCAPE_LABEL) or "").upper()
 
     groups = [el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == "g"]
-    if not any(name(g) == "CUT" for g in groups):
+    if not any(name(g) == keep for g in groups):
         return str(p)
     if any(el.tag.rsplit("}", 1)[-1] == "use" for el in root.iter()):
         return str(p)
-    drop = {id(g) for g in groups if name(g) in NON_CUT_LAYERS
-            and not any(name(d) == "CUT" for d in g.iter() if d.tag.rsplit("}", 1)[-1] == "g")}
+    drop = {id(g) for g in groups if name(g) in (NON_CUT_LAYERS | {"CUT"}) - {keep}
+            and not any(name(d) == keep for d in g.iter() if d.tag.rsplit("}", 1)[-1] == "g")}
     if not drop:
         return str(p)
     for parent in list(root.iter()):
@@ -374,6 +379,7 @@ class Allowances:
     cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
     ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
     tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)
+    labels: bool = False  # the manifest says the layout is labelled (fabkiri's tape marks come with the labels)
 
 
 def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
@@ -413,8 +419,9 @@ def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
         raise
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
+    params = manifest.get("parameters") if isinstance(manifest.get("parameters"), dict) else {}
     return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross, lig_w,
-                      placed)
+                      placed, bool(params.get("labels", False)))
 
 
 # ------------------------------------------------------------------ recovery
@@ -534,7 +541,11 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         joined = join_pieces(lw)
         if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
             # ligament sheet), else in-place linework
-            hinge = ("ligament" if _nested(joined) else "separate") if all(joined.closed) else "tape"
+            rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
+            n_open = len(joined.closed) - len(rings.closed)
+            # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
+            hinge = "ligament" if n_open < len(rings.closed) and _nested(rings) else \
+                "separate" if not n_open else "tape"
         if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
             lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
     if hinge == "tape":
@@ -553,14 +564,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
             else polys
         return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
-    # ligament: outer loops minus inner loops is the material
-    tree = shapely.STRtree(polys)
-    inside = np.zeros(len(polys), dtype=bool)
-    a, b = tree.query(polys, predicate="contains_properly")
-    inside[b[a != b]] = True
-    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
-    if al.kerf_offset:
-        material = material.buffer(-al.kerf_offset, join_style="mitre", mitre_limit=10.0)
+    material = _material(polys, al.kerf_offset)
     feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
              if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
     strips = shapely.unary_union(feats) if feats else None
@@ -572,20 +576,102 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
 
     if strips is not None and cuts_tiles(parts):
-        how = "material minus the declared ligaments"
+        parts = _on_cut_edges(parts, material)
+        how = "material minus the declared ligaments, corners on the cut edges"
     else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
-        parts = _open_ligaments(material, al.ligament_width)
-        how = "material opened to drop the ligaments"
+        parts = _on_cut_edges(_open_ligaments(material, al.ligament_width), material)
+        how = "material opened to drop the ligaments, corners on the cut edges"
         # only when the opening left tiles joined: on a symmetric lattice the motion can be a quarter turn off
         short = frame_tiles is not None and (shapely.area(parts) > 1.0).sum() < len(frame_tiles)
         moved = _declared_strips_moved(parts, strips, frame_tiles, al) if short else None
         if moved is not None:
             again = _hairline_free(material.difference(moved))
             if cuts_tiles(again):
-                parts, how = again, "material minus the declared ligaments, moved with the sheet"
+                parts, how = _on_cut_edges(again, material), "material minus the declared ligaments, moved with the sheet"
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, how + ", grown by the tile shrink"
+
+
+def _material(polys: np.ndarray, kerf_offset: float):
+    """A ligament sheet's material: outer loops minus the loops inside them, less the kerf offset."""
+    tree = shapely.STRtree(polys)
+    inside = np.zeros(len(polys), dtype=bool)
+    a, b = tree.query(polys, predicate="contains_properly")
+    inside[b[a != b]] = True
+    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
+    if kerf_offset:
+        material = material.buffer(-kerf_offset, join_style="mitre", mitre_limit=10.0)
+    return material
+
+
+def sheet_material(lw: Linework, kerf_offset: float):
+    """The material of a ligament sheet's CUT linework (its closed outlines)."""
+    joined = join_pieces(lw)
+    rings = [shapely.Polygon(p) for p, c in zip(joined.polylines, joined.closed) if c]
+    return _material(shapely.make_valid(np.array(rings, dtype=object)), kerf_offset)
+
+
+EDGE_ON_MM = 0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core
+
+
+def _on_cut_edges(parts: np.ndarray, material) -> np.ndarray:
+    """Opened tile cores as quads whose sides lie on the material's own cut edges.
+
+    An opening leaves each tile's sides exact away from the ligament roots, but a root leaves a
+    bump (or, at a mitre, a spike) that can pull a corner off. Each core's coarse quad is kept only
+    to say which side is which: every side is put on the longest cut edge of the material that runs
+    along it (parallel within 10°) with its midpoint on the core, and the corners are where those
+    lines meet. Cores with no such edge on some side are left as they are.
+    """
+    if not len(parts):
+        return parts
+    xy, ring = shapely.get_coordinates(shapely.get_rings(shapely.get_parts(material)), return_index=True)
+    same = ring[1:] == ring[:-1]
+    segs = np.stack([xy[:-1][same], xy[1:][same]], 1)
+    segs = segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
+    mids = shapely.points(segs.mean(axis=1))
+    out = np.array(parts, dtype=object)
+    rings = shapely.get_exterior_ring(out)
+    pi, si = shapely.STRtree(mids).query(rings, predicate="dwithin", distance=EDGE_ON_MM)
+    for k, part in enumerate(out):
+        q = quad_corners(part) if part.geom_type == "Polygon" else None
+        mine = si[pi == k]
+        if q is None or not len(mine):
+            continue
+        from .geom import point_segment_distance
+
+        e = segs[mine, 1] - segs[mine, 0]
+        elen = np.linalg.norm(e, axis=1)
+        side = np.roll(q, -1, 0) - q
+        # every edge to the side it runs along (parallel within 10°) and lies nearest; near-parallel
+        # sides (a corner near 180°) each keep their own edges
+        m = segs[mine].mean(axis=1)
+        dist = np.stack([point_segment_distance(m, np.broadcast_to(q[i], m.shape), np.broadcast_to(q[(i + 1) % 4], m.shape))
+                         for i in range(4)], 1)
+        along = np.abs(geometry.cross2(e[:, None, :], side[None])) <= 0.17 * elen[:, None] * np.linalg.norm(side, axis=1)
+        dist = np.where(along & (dist <= 0.1 * np.linalg.norm(side, axis=1)), dist, np.inf)
+        which = np.where(np.isfinite(dist).any(axis=1), dist.argmin(axis=1), -1)
+        lines = []
+        for i in range(4):
+            cand = np.flatnonzero(which == i)
+            if not len(cand):
+                break
+            j = cand[np.argmax(elen[cand])]
+            lines.append((segs[mine[j], 0], e[j]))
+        if len(lines) < 4:
+            continue
+        corners = []
+        for i in range(4):
+            (p1, d1), (p2, d2) = lines[i - 1], lines[i]
+            den = geometry.cross2(d1, d2)
+            if abs(den) < 1e-9 * np.linalg.norm(d1) * np.linalg.norm(d2):
+                break
+            corners.append(p1 + geometry.cross2(p2 - p1, d2) / den * d1)
+        size = np.linalg.norm(q - q.mean(0), axis=1).max()
+        if len(corners) == 4 and np.linalg.norm(np.asarray(corners) - q, axis=1).max() <= 0.5 * size:
+            out[k] = shapely.Polygon(np.asarray(corners))
+    return out
 
 
 def _hairline_free(g) -> np.ndarray:
@@ -621,16 +707,15 @@ def _nested(lw: Linework) -> bool:
 
 def _open_ligaments(material, width: float | None):
     """The tile cores of a ligament sheet: an opening (mitre: convex tiles come back exactly) of
-    radius above half the ligament width drops the strips. Without a declared width, the smallest
-    radius from 10 µm up (x1.25) after which the piece count no longer grows."""
+    radius above half the ligament width drops the strips: the smallest radius (x1.25 steps, from
+    0.6 times the declared width, else from 10 µm) after which the piece count no longer grows."""
     def opened(r):
         g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre",
                                                                                    mitre_limit=10.0)
         parts = shapely.get_parts(g)
         return parts[shapely.area(parts) > 4 * r * r]
-    if width:
-        return opened(0.6 * width)
-    best, first, r = opened(0.01), 0.01, 0.01
+    r = 0.6 * width if width else 0.01  # a declared width is where the search starts
+    best, first = opened(r), r
     while r < 5.0:
         r *= 1.25
         nxt = opened(r)
@@ -682,7 +767,13 @@ def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float, lo: float = 
         return 0.0
     A = np.abs(geometry.signed_areas(D[a[ok]]))
     P = geometry.edge_lengths(D[a[ok]]).sum(axis=1)
-    k = float(np.median((np.abs(geometry.signed_areas(R[ok])) - A) / P))
+    # a mitre offset k of a convex quad has area A + P k + k^2 sum cot(alpha/2): the root near the
+    # first-order k (that alone is 0.02 mm off for a 0.7 mm shrink of 20 mm tiles)
+    c2 = (1.0 / np.tan(0.5 * geometry.corner_angles(D[a[ok]]))).sum(axis=1)
+    dA = np.abs(geometry.signed_areas(R[ok])) - A
+    disc = np.maximum(P * P + 4 * c2 * dA, 0.0)
+    k_each = np.where(np.abs(c2) > 1e-12, 2 * dA / (P + np.sqrt(disc)), dA / P)
+    k = float(np.median(k_each))
     return k if 0.1 * tol < abs(k) and lo <= k <= MAX_FITTED_OFFSET_MM else 0.0
 
 
@@ -928,13 +1019,16 @@ def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[
     return assign, resid, shift
 
 
-def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: list | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
     """Match recovered quads ``R`` to design closed-state tiles ``Y`` under ONE rigid motion.
 
     Hypotheses pair the recovered tile nearest the layout's centre with design
     tiles nearest the design's centre (and each corner shift); the best by
     mean capped centre distance wins, then the motion is refit on all matched corners.
-    Returns assign, per-tile residual, shift, rotation angle, translation.
+    Returns assign, per-tile residual, shift, rotation angle, translation. ``alternatives``: a list
+    that receives every other hypothesis as good as the best within 1 µm (a symmetric sheet matches
+    several ways), each refitted as (assign, residual, shift).
     """
     n = len(R)
     assign = np.full(n, -1)
@@ -947,6 +1041,7 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
     tree = cKDTree(cr)
     R4 = np.stack([np.roll(R, -k, axis=1) for k in range(4)])  # every corner shift, once
     best = None
+    hyps = []
     for d in cands:
         for s in range(4):
             theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
@@ -956,12 +1051,24 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6) -> tuple[np.nda
             _, idx = tree.query(moved.mean(axis=1))
             err = np.linalg.norm(R4[:, idx] - moved[None], axis=-1).max(axis=2).min(axis=0)
             score = float(np.minimum(err, cap).mean())
+            hyps.append((score, theta, t))
             if best is None or score < best[0]:
                 best = (score, theta, t)
     _, theta, t = best
+    assign, resid, shift, theta, t = _refit(Y, R, theta, t, tree)
+    if alternatives is not None:
+        for score, th, tt in hyps:
+            if score <= best[0] + 1e-3 and (abs(geometry.wrap_angle(th - theta)) > 1e-6 or
+                                            np.linalg.norm(tt - t) > 1e-3):
+                alternatives.append(_refit(Y, R, th, tt, tree)[:3])
+    return assign, resid, shift, float(theta), t
+
+
+def _refit(Y, R, theta, t, tree):
+    """Assignment under one motion, then the motion refitted on every matched corner and applied."""
     assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
     ok = assign >= 0
-    if ok.sum() >= 1:  # refit the single motion on every matched corner
+    if ok.sum() >= 1:
         src = Y[assign[ok]]
         i = np.flatnonzero(ok)
         dst = R[i[:, None], (np.arange(4)[None, :] + shift[i][:, None]) % 4]
@@ -1024,6 +1131,18 @@ def place_from_shapes(pattern: Pattern, C: np.ndarray, state: int) -> tuple[np.n
     return Y, split
 
 
+def assembled(pattern: Pattern, C: np.ndarray, state: int) -> tuple[np.ndarray, np.ndarray]:
+    """The cut shapes ``C`` assembled into ``state``: the tree placement refined to the least-squares
+    fit of every hinge at once (see :mod:`.assemble`), and every hinge's split (mm)."""
+    from .assemble import fit_assembly
+
+    Y0, _ = place_from_shapes(pattern, C, state)
+    Y = fit_assembly(pattern, C, state, Y0)
+    A, B = pattern.topology.hinge_tiles.T
+    cA, cB = pattern.topology.hinge_corner.T
+    return Y, np.linalg.norm(Y[A, cA] - Y[B, cB], axis=1)
+
+
 # ------------------------------------------------------------------ entry point
 
 
@@ -1061,9 +1180,11 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     dangling: list[np.ndarray] = []
     references: list[float] = []
     frame = _frame_tiles(pattern, al)
+    linework: dict[int, Linework] = {}
     for sheet, f in files.items():
         lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol.length)
         _drop_reference(lw, al.reference.get(sheet))
+        linework[sheet] = lw
         n_lines += len(lw.polylines)
         on = [t for t in range(T) if al.tile_sheet.get(t, 1) == sheet]
         polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None)
@@ -1087,7 +1208,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
         allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
         if len(allq):
-            u = shapely.unary_union(shapely.polygons(allq)).buffer(tol.length)
+            u = shapely.unary_union(shapely.make_valid(shapely.polygons(allq))).buffer(tol.length)
             in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
         rep.meta["layout"] = "in-place" if in_place else "separate"
     fitted = None
@@ -1114,6 +1235,7 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         return (contract(pattern, s).corners if Y is None else Y) * al.scale
 
     state = al.state
+    labelings: list[np.ndarray] = []  # cut shapes under other, equally good labelings of a symmetric sheet
     if in_place and al.hinge == "plain" and sheets:
         # no manifest declares the state: take the closed state the sheet matches
         R0 = next(iter(sheets.values()))
@@ -1126,8 +1248,16 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
                 else np.arange(T)
             design_ids = design_ids[design_ids < T]
-            a, res, sh, _, _ = match_in_place(Ystate[design_ids], R)
+            alts: list = []
+            a, res, sh, _, _ = match_in_place(Ystate[design_ids], R, alternatives=alts)
             a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
+            if len(sheets) == 1:  # a symmetric sheet: the other labelings as good as this one
+                for aa, rr, ss in alts:
+                    if (aa >= 0).sum() == T and np.max(rr[aa >= 0]) <= tol.length:
+                        C = np.full((T, 4, 2), np.nan)
+                        k = np.flatnonzero(aa >= 0)
+                        C[design_ids[aa[k]]] = R[k[:, None], (np.arange(4)[None, :] + ss[k][:, None]) % 4]
+                        labelings.append(C)
         else:
             free = np.flatnonzero(assign_all < 0)
             a, res, sh = match_by_shape(D[free], R, L)
@@ -1193,9 +1323,10 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             rep.add(Check(f"{name}: loop closure", ok=False, value=None, tol=tol.length, unit="mm", group=g,
                           detail="cannot reassemble: tiles are missing"))
             continue
-        Y, split = place_from_shapes(pattern, cut_shapes, s)
+        Y, split = assembled(pattern, cut_shapes, s)
         rep.add(measured(f"{name}: loop closure", float(split.max(initial=0.0)), tol.length, "mm",
-                         worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g))
+                         worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g,
+                         detail="hinge split of the least-squares assembly of the cut tiles"))
         for chk in closed_state_checks(pattern, Y, s, tol):
             if "congruent" in chk.name:
                 continue
@@ -1235,7 +1366,56 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
                   detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
+    _physical_checks(rep, pattern, al, files, linework, cut_shapes, have, found_on, sheet_piece, in_place,
+                     fitted, g, labelings)
     return rep
+
+
+def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
+                     linework: dict[int, Linework], cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
+                     sheet_piece: bool, in_place: bool, fitted: float | None, g: str,
+                     labelings: list[np.ndarray] = ()) -> None:
+    """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
+    A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
+    hinges at different corners; its marks say which one was cut, so the best of them is reported."""
+    from .physical import ligament_check, mark_status, tape_mark_check
+
+    A, B = pattern.topology.hinge_tiles.T
+    if sheet_piece and have.any():
+        shrink = al.tile_shrink if al.hinge != "plain" else -(fitted or 0.0)
+        kerf = al.kerf_offset if al.hinge != "plain" else 0.0
+        cores = np.full(len(cut_shapes), None, dtype=object)
+        cores[have] = shapely.buffer(shapely.polygons(cut_shapes[have]), -shrink, join_style="mitre",
+                                     mitre_limit=10.0)
+        for sheet, lw in linework.items():
+            on = have & (found_on == sheet)
+            hinges = np.flatnonzero(on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet)))
+            if not len(hinges):
+                continue
+            c = cores.copy()
+            c[~on] = None
+            material = sheet_material(lw, kerf)
+            if len(shapely.get_parts(material)) >= on.sum():
+                continue  # no piece joins two tiles: the ligaments are not in this file (e.g. printed top faces)
+            rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
+    elif in_place and al.hinge in ("tape", "plain") and not sheet_piece and have.any():
+        marks = {}
+        for sheet, f in files.items():
+            m = read_cut_file(f, "ENGRAVE")
+            if m.layer_found:
+                marks[sheet] = m.polylines
+        if not marks:
+            return  # no named engrave layer (a colour-only file): marks cannot be told from cuts
+        # the labeling whose hinges carry the most marks (a symmetric sheet has several)
+        status = [mark_status(pattern, C, have, found_on, marks) for C in [cut_shapes, *labelings]]
+        k = max(range(len(status)), key=lambda i: (status[i][1].sum(), -i))
+        hs, marked, room = status[k]
+        if not len(hs) or not (al.hinge == "tape" and al.labels) and marked.sum() < 0.5 * len(hs):
+            return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
+        chk = tape_mark_check(hs, marked, room, g)
+        if k:
+            chk.detail += " (the sheet is symmetric: hinges placed by the labeling its marks fit best)"
+        rep.add(chk)
 
 
 def _frame_tiles(pattern: Pattern, al: Allowances) -> np.ndarray | None:
