@@ -516,7 +516,7 @@ def test_prusaslicer_slices_the_written_3mf_as_it_is(style, preset, template, tm
     for f in sorted((tmp_path / "out").glob("*.3mf")):
         out = tmp_path / (f.stem + ".gcode")
         proc = subprocess.run(["prusa-slicer", "--export-gcode", str(f), "-o", str(out)],
-                              capture_output=True, text=True, timeout=600)
+                              capture_output=True, text=True, timeout=1800)
         log = "\n".join(ln for ln in (proc.stdout + proc.stderr).splitlines()
                         if "[trace]" not in ln and "[debug]" not in ln and "[info]" not in ln)
         assert proc.returncode == 0, log[-2000:]
