@@ -117,7 +117,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     files.update(laser)
     atomic_write_many(args.output, files)
     faces = int(job.plan.top.sum())
-    print(f"wrote {len(files)} files to {args.output}: {job.style}, closed state {job.state}, printer "
+    print(f"wrote {len(files)} files to {args.output}: {job.style} at --scale {args.scale:g}, closed state {job.state}, printer "
           f"{printer.name}, {len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
           f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance "
           f"{'n/a' if report.min_clearance_mm is None else f'{report.min_clearance_mm:.3f} mm'}, {plan}, "

@@ -15,6 +15,7 @@ Every body is described once as an ordered list of prism operations
 from __future__ import annotations
 
 import io
+import itertools
 import json
 from dataclasses import dataclass, field, replace
 from typing import Iterable
@@ -89,10 +90,10 @@ def realise(body: Body):
     import manifold3d as m3d
 
     acc = m3d.Manifold()
-    for op, prism in body.ops:
-        if not any(not p.is_empty for p in prism.polygons):
-            continue  # e.g. no strip on the bottom face
-        m = _manifold(prism)
+    ops = [(op, prism) for op, prism in body.ops if any(not p.is_empty for p in prism.polygons)]  # e.g. no bottom strip
+    for op, run in itertools.groupby(ops, key=lambda o: o[0]):  # a run of adds (or subs) as one batched union
+        ms = [_manifold(prism) for _, prism in run]
+        m = ms[0] if len(ms) == 1 else m3d.Manifold.batch_boolean(ms, m3d.OpType.Add)
         acc = acc + m if op == "add" else acc - m
     return acc
 

@@ -478,9 +478,16 @@ JOIN_MM = 2e-3  # cut ends closer than this meet (rounding to 1 µm moves a poin
 def _node(segs: np.ndarray, eps: float = JOIN_MM):
     """Segments ``(n, 2, 2)`` noded: ends within ``eps`` of another line are put on it (T-junctions
     rounded off their edge), then every crossing and touch is a node. Returns the union."""
-    lines = shapely.multilinestrings(shapely.linestrings(segs))
-    ends = shapely.multipoints(np.unique(segs.reshape(-1, 2), axis=0))
-    return shapely.unary_union(shapely.snap(lines, ends, eps))
+    lines = shapely.linestrings(segs)
+    ends = shapely.points(np.unique(segs.reshape(-1, 2), axis=0))
+    # each line snapped to the ends within eps of it only: the same snap as one
+    # multiline to all ends (farther ends never move a vertex), without its n x m cost
+    li, ei = shapely.STRtree(ends).query(lines, predicate="dwithin", distance=eps)
+    order = np.lexsort((ei, li))
+    has, rank = np.unique(li[order], return_inverse=True)
+    near = shapely.multipoints(ends[ei[order]], indices=rank)  # one multipoint per line with ends near it
+    lines[has] = shapely.snap(lines[has], near, eps)
+    return shapely.unary_union(lines)
 
 
 def _noded(lw: Linework, eps: float = JOIN_MM):
