@@ -181,6 +181,8 @@ def worker_square_circle(spec: dict) -> dict:
             "eq": rep["max_equality_residual"], "square_err": square_error(closed_outline(pat, 1), n),
             "circle_rms": circle_rms(closed_outline(pat, 2)),
             "overlaps": sum(int(v) for k, v in checks.items() if k.startswith("overlaps_")),
+            "hausdorff_2": rep.get("conformance", {}).get("state_2", {}).get("hausdorff_rel", float("nan")),
+            "holes": pat.design["options"]["holes"],
             "solver": rep["solver"].split(" (")[0]}
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from .. import limits
 from ..design import conformance as conf
 from ..design.initial import INITS
+from ..design.offset_outline import preferred_holes
 from ..design.solve import DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..design.fabrication import FabricationLimits, smallest_size
@@ -141,6 +142,8 @@ def cmd_design(args: argparse.Namespace) -> int:
                 f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
                 f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
                 f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
+    if args.holes is None:
+        args.holes = preferred_holes(rows, cols, args.rigid, args.symmetry, target, contracted)
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=args.rigid, symmetry=args.symmetry,
                         holes=args.holes, contracted=contracted, init=args.init, tol=args.tol,
                         solver=args.solver, outline=args.fit == "outline", fabrication=fab_limits,
@@ -422,8 +425,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rigid", action="store_true", help="rigid-deployable: hinge angle sums = π")
     p.add_argument("--symmetry", choices=["x", "y"],
                    help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x)")
-    p.add_argument("--holes", choices=["rhombus", "parallelogram"], default="rhombus",
-                   help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
+    p.add_argument("--holes", choices=["rhombus", "parallelogram"], default=None,
+                   help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums); "
+                        "default rhombus, but parallelogram for --rigid square/circle --contracted-target "
+                        "designs up to 11x11 tiles")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
     p.add_argument("--init", choices=INITS,

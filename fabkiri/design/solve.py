@@ -51,7 +51,7 @@ from ..pattern.conformance import boundary_tip_order
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
-from . import outline
+from . import offset_outline, outline
 from .fabrication import FabricationLimits, families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
@@ -148,7 +148,7 @@ class DesignRequest:
         for s, spec in self.contracted.items():
             if s not in (1, 2):
                 raise InputError(f"closed states are 1 and 2, not {s}")
-            if isinstance(spec, Target) and self.holes == "parallelogram":
+            if isinstance(spec, Target) and self.holes == "parallelogram" and not offset_outline.covers(self):
                 raise InputError("a closed-state target curve needs rhombus holes (parallelogram holes leave "
                                  "T-junctions, so the closed state is not a grid)")
         if self.target is None and not any(isinstance(v, Target) for v in self.contracted.values()):
@@ -224,7 +224,9 @@ class _Problem:
             fam.append(C.symmetry(st, base, req.symmetry, nv))
         for s, spec in sorted(req.contracted.items()):
             if isinstance(spec, Target):
-                fam.append(self.grids[s].congruence(st, nv))
+                # with parallelogram holes only the grid's boundary is a closed state's (T-junctions inside)
+                if req.holes == "rhombus":
+                    fam.append(self.grids[s].congruence(st, nv))
             else:
                 fam.append(C.rectangle_outline(st, s, nv))
                 if spec[1] is not None:
@@ -242,7 +244,7 @@ class _Problem:
         fam.append(regularizer(st, nv))
         fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
-        for g in self.grids.values():
+        for g in self.grids.values() if req.holes == "rhombus" else ():
             fam.append(g.orientation(st, nv))
         self.families = fam
         self._normal = None
@@ -591,6 +593,14 @@ def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
     return worst <= prob.req.tol and float(_ineq_values(prob, X).min(initial=0.0)) >= 0.0
 
 
+def _why_not(prob: _Problem, X: np.ndarray) -> str:
+    """The worst equality family and the smallest inequality, for the log."""
+    res = family_residuals(prob, X, _mean_edge(prob, X))
+    eq = max(((res[f.name], f.name) for f in prob.of("eq")), default=(0.0, "none"))
+    g = min(((float(f.residual(X).min(initial=0.0)), f.name) for f in prob.of("ineq")), default=(0.0, "none"))
+    return f"worst equality {eq[1]} {eq[0]:.1e}, smallest inequality {g[1]} {g[0]:.1e}"
+
+
 def _solve_reduced(prob: _Problem, log, iters: dict):
     """Solve in the rigid family; ``(X, mode)`` if every family checks out, else None."""
     req = prob.req
@@ -614,13 +624,13 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     return None
 
 
-def _solve_outline(prob: _Problem, log, iters: dict):
+def _solve_outline(prob: _Problem, log, iters: dict, solver=None):
     """Square/circle closed-state outlines in the rigid family (``outline.py``); ``(X, mode)`` or None.
 
     A circle target is size-free: its state's target becomes the fitted circle (centre and radius), so the
     report and the CLI's outline check measure against that circle.
     """
-    res = outline.solve_outline(prob, log, iters)
+    res = (solver or outline.solve_outline)(prob, log, iters)
     if res is None:
         return None
     X, mode, fitted = res
@@ -641,7 +651,8 @@ def _solve_outline(prob: _Problem, log, iters: dict):
                                        f.name) if f.name == f"closed_shape_{s}" else f for f in prob.families]
     if _acceptable(prob, X):
         return X, mode
-    log("the closed-state outline design fails a family check: falling back to the full solver")
+    log("the closed-state outline design fails a family check: falling back to the full solver "
+        f"({_why_not(prob, X)})")
     prob.curves_mm, prob.families = saved
     return None
 
@@ -705,6 +716,9 @@ def _solve_full(prob: _Problem, log, iters: dict):
 
 def _design(req: DesignRequest, progress: bool) -> DesignResult:
     log = _Log(progress)
+    if offset_outline.covers(req) and not offset_outline.applies(req):
+        log(f"parallelogram holes above {offset_outline.OFFSET_MAX_TILES} tiles: rhombus holes (zero offsets)")
+        return _design(replace(req, holes="rhombus"), progress)
     t0 = time.perf_counter()
     # a non-rigid request answered by the rigid family needs no guess of its own (least of all a coarse solve)
     prob = _Problem(replace(req, init="rescaled") if via_rigid_applies(req) else req)
@@ -740,6 +754,13 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     if out is None and req.solver == "auto" and outline.applies(req):
         out = _solve_outline(prob, log, iters)
         solver = "closed-form rigid family, closed-state outlines (exact square, size-free circle)"
+    if out is None and offset_outline.applies(req):
+        out = _solve_outline(prob, log, iters, offset_outline.solve_offset_outline)
+        if out is None:  # no other solver takes parallelogram holes with closed-state curves
+            log("the parallelogram-hole outline design failed its checks: designing with rhombus holes")
+            return _design(replace(req, holes="rhombus"), progress)
+        solver = ("closed-form rigid family with parallelogram holes (an offset per hole), closed-state "
+                  "outlines (exact square, size-free circle)")
     if out is None:
         out = _solve_full(prob, log, iters)
         solver = full_name
