@@ -164,6 +164,8 @@ def cmd_design(args: argparse.Namespace) -> int:
         inits = [args.init]
     elif args.rigid and rows * cols >= BIG_TILES:
         inits = list(BIG_RIGID_INITS)
+    elif target is None:  # closed-state targets only: every guess is the standard pattern, retries repeat it
+        inits = [AUTO_INITS[0]]
     elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
         inits = ["coarse"]
     else:
