@@ -142,15 +142,26 @@ class OffsetFamily:
                                shape=self.A0.shape)
         return (self.A0 + At).tocsc()
 
+    def _factor(self, t: np.ndarray):
+        """``A(t)`` and the LU of its dependent columns; the last one is kept (LM's step limiting and its
+        next evaluation ask for the same offsets)."""
+        key = np.asarray(t, dtype=float).tobytes()
+        cached = getattr(self, "_last", None)
+        if cached is not None and cached[0] == key:
+            return cached[1], cached[2]
+        A = self.matrix(t)
+        try:
+            lu = splu(A[:, self.dep].tocsc(), permc_spec="COLAMD")
+        except RuntimeError as exc:
+            raise SolveError(f"offset family: singular at these offsets ({exc})") from None
+        self._last = (key, A, lu)
+        return A, lu
+
     def state1(self, S: np.ndarray, t: np.ndarray, jac: bool = False):
         """State-1 nodes ``y`` ``(V, 2)`` of seeds ``S`` ``(nf, 2)`` and offsets ``t``; with ``jac`` also
         ``Z = ∂y/∂S`` ``(V, nf)`` (both coordinates) and ``Dt = ∂y/∂t`` ``(V, 2, K)``."""
-        A = self.matrix(t)
-        Ad, As = A[:, self.dep], A[:, self.seeds]
-        try:
-            lu = splu(Ad.tocsc(), permc_spec="COLAMD")
-        except RuntimeError as exc:
-            raise SolveError(f"offset family: singular at these offsets ({exc})") from None
+        A, lu = self._factor(t)
+        As = A[:, self.seeds]
         V = self.W.shape[0]
         y = np.zeros((V, 2))
         y[self.seeds] = S
