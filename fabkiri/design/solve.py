@@ -130,6 +130,7 @@ class DesignRequest:
     outline: bool = True  # also fit the tip polygon's chords and the target's samples (``C.outline_match``)
     fabrication: FabricationLimits | None = None  # mm limits at the target's size (design/fabrication.py)
     fabrication_intent: dict = field(default_factory=dict)  # material/printer names: stored for cut and print
+    second_opinion: bool = True  # auto: also run the full solver when the rigid family's fit is least-squares
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -565,7 +566,10 @@ def via_rigid_applies(req: DesignRequest) -> bool:
 def _solve_via_rigid(prob: _Problem, log, iters: dict):
     """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
     the non-rigid problem, else None."""
-    sub = replace(prob.req, rigid=True, init="coarse", name="")
+    # no full-solver second opinion on the rigid problem at this level (its coarse levels keep theirs): at
+    # 32x32 it took about 45 of the 52 CPU s of a heart and lost (the non-rigid full solver below still takes
+    # over when the rigid design fails a non-rigid check)
+    sub = replace(prob.req, rigid=True, init="coarse", name="", second_opinion=False)
     log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
     res = _design(sub, False)
     iters.update({f"rigid_{k}": v for k, v in res.report["iterations"].items()})
@@ -734,7 +738,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     if req.solver != "full" and reduced_applies(req):
         out = _solve_reduced(prob, log, iters)
     solver = reduced_name
-    if out is not None and req.solver == "auto" and out[1] != "hard":
+    if out is not None and req.solver == "auto" and req.second_opinion and out[1] != "hard":
         miss = fit_miss(exact_fits(fits), out[0])
         if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
             log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
