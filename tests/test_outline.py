@@ -79,6 +79,7 @@ def test_parallelogram_outlines_above_the_offset_size_use_rhombus_holes():
     assert offset_outline.preferred_holes(9, 9, True, None, None, {1: sq, 2: ci}) == "parallelogram"
     assert offset_outline.preferred_holes(9, 9, False, None, None, {1: sq, 2: ci}) == "rhombus"
     assert offset_outline.preferred_holes(9, 9, True, None, ci, {}) == "rhombus"
+    assert offset_outline.preferred_holes(9, 9, True, None, None, {1: ci, 2: sq}) == "rhombus"  # square in 2
 
 
 def test_applies_only_to_square_and_circle_rigid_outlines():

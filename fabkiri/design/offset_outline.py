@@ -14,6 +14,8 @@ on circle fit + w·E_reg + ρ|min(0, g − m)|², with two inequality rows per h
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from .constraints import ClosedGrid
@@ -37,8 +39,10 @@ MID_WEIGHT = 1.0  # 5x5: vertex RMS 1.61 %, Hausdorff 1.06 %; at 0.5: 1.28 % but
 
 def covers(req) -> bool:
     """A rigid parallelogram-hole design of square/circle closed-state outlines only."""
+    # a square only in state 1: there it is linear in the seeds (state 2's outline moves with the offsets)
     return (req.rigid and req.holes == "parallelogram" and not req.symmetry and req.target is None
-            and bool(req.contracted) and all(outline_kind(v) for v in req.contracted.values()))
+            and bool(req.contracted) and all(outline_kind(v) for v in req.contracted.values())
+            and all(outline_kind(v) != "square" or s == 1 for s, v in req.contracted.items()))
 
 
 def applies(req) -> bool:
@@ -48,12 +52,8 @@ def applies(req) -> bool:
 
 def preferred_holes(rows: int, cols: int, rigid: bool, symmetry, target, contracted: dict) -> str:
     """The hole shape when the user gives none: parallelogram where this solver applies, else rhombus."""
-    class _R:  # the request's fields that ``applies`` reads
-        pass
-
-    r = _R()
-    r.rows, r.cols, r.rigid, r.symmetry, r.target, r.contracted = rows, cols, rigid, symmetry, target, contracted
-    r.holes = "parallelogram"
+    r = SimpleNamespace(rows=rows, cols=cols, rigid=rigid, symmetry=symmetry, target=target, contracted=contracted,
+                        holes="parallelogram")  # the request's fields that ``applies`` reads
     return "parallelogram" if applies(r) else "rhombus"
 
 
