@@ -177,10 +177,12 @@ def worker_square_circle(spec: dict) -> dict:
         pat = read_pattern(out)
     rep = pat.design["report"]
     checks = rep.get("checks", {})
-    return {"exit": code, "solve_s": rep["time_s"], "cpu": cpu, "status": rep["status"],
+    return {"exit": code, "solve_s": rep["time_s"], "solve_cpu": rep.get("cpu_s", float("nan")), "cpu": cpu, "status": rep["status"],
             "eq": rep["max_equality_residual"], "square_err": square_error(closed_outline(pat, 1), n),
             "circle_rms": circle_rms(closed_outline(pat, 2)),
             "overlaps": sum(int(v) for k, v in checks.items() if k.startswith("overlaps_")),
+            "hausdorff_2": rep.get("conformance", {}).get("state_2", {}).get("hausdorff_rel", float("nan")),
+            "holes": pat.design["options"]["holes"],
             "solver": rep["solver"].split(" (")[0]}
 
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import limits
 from ..design import conformance as conf
+from ..design.offset_outline import preferred_holes
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..design.fabrication import FabricationLimits, smallest_size
@@ -126,7 +127,7 @@ class PatternRequest:
     size: float | None = None  # the target's larger dimension in mm (named targets default to 100)
     rigid: bool = False
     symmetry: str | None = None  # "x" or "y"
-    holes: str = "rhombus"
+    holes: str | None = None  # None: rhombus, but parallelogram where offset_outline.preferred_holes says
     contracted_target: tuple[str, ...] = ()  # "STATE:NAME|FILE", "STATE:rect" or "STATE:rect=RATIO"
     init: str | None = None  # None: the retry order of AUTO_INITS / BIG_RIGID_INITS
     solver: str = "auto"
@@ -224,6 +225,9 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
                 f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
                 f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
                 f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
+    if request.holes is None:
+        request = replace(request, holes=preferred_holes(rows, cols, request.rigid, request.symmetry, target,
+                                                         contracted))
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=request.rigid, symmetry=request.symmetry,
                         holes=request.holes, contracted=contracted, init=request.init, tol=request.tol,
                         solver=request.solver, outline=request.fit == "outline", fabrication=fab_limits,
@@ -244,6 +248,8 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
         inits = [request.init]
     elif request.rigid and rows * cols >= BIG_TILES:
         inits = list(BIG_RIGID_INITS)
+    elif target is None:  # closed-state targets only: every guess is the standard pattern, retries repeat it
+        inits = [AUTO_INITS[0]]
     elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
         inits = ["coarse"]
     else:

@@ -113,8 +113,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rigid", action="store_true", help="rigid-deployable: hinge angle sums = π")
     p.add_argument("--symmetry", choices=["x", "y"],
                    help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x)")
-    p.add_argument("--holes", choices=["rhombus", "parallelogram"], default="rhombus",
-                   help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums)")
+    p.add_argument("--holes", choices=["rhombus", "parallelogram"], default=None,
+                   help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums); "
+                        "default rhombus, but parallelogram for --rigid square/circle --contracted-target "
+                        "designs up to 11x11 tiles")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
     p.add_argument("--init", choices=INITS,

@@ -51,7 +51,7 @@ from ..pattern.conformance import boundary_tip_order
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
 from . import constraints as C
-from . import outline
+from . import offset_outline, outline
 from .fabrication import FabricationLimits, families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
@@ -135,6 +135,7 @@ class DesignRequest:
     fabrication: FabricationLimits | None = None  # mm limits at the target's size (design/fabrication.py)
     fabrication_intent: dict = field(default_factory=dict)  # material/printer names: stored for cut and print
     seed: int | None = None  # jitter the initial nodes (2 % of a tile edge) to explore other local minima
+    second_opinion: bool = True  # auto: also run the full solver when the rigid family's fit is least-squares
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -153,7 +154,7 @@ class DesignRequest:
         for s, spec in self.contracted.items():
             if s not in (1, 2):
                 raise InputError(f"closed states are 1 and 2, not {s}")
-            if isinstance(spec, Target) and self.holes == "parallelogram":
+            if isinstance(spec, Target) and self.holes == "parallelogram" and not offset_outline.covers(self):
                 raise InputError("a closed-state target curve needs rhombus holes (parallelogram holes leave "
                                  "T-junctions, so the closed state is not a grid)")
         if self.target is None and not any(isinstance(v, Target) for v in self.contracted.values()):
@@ -232,7 +233,9 @@ class _Problem:
             fam.append(C.symmetry(st, base, req.symmetry, nv))
         for s, spec in sorted(req.contracted.items()):
             if isinstance(spec, Target):
-                fam.append(self.grids[s].congruence(st, nv))
+                # with parallelogram holes only the grid's boundary is a closed state's (T-junctions inside)
+                if req.holes == "rhombus":
+                    fam.append(self.grids[s].congruence(st, nv))
             else:
                 fam.append(C.rectangle_outline(st, s, nv))
                 if spec[1] is not None:
@@ -250,7 +253,7 @@ class _Problem:
         fam.append(regularizer(st, nv))
         fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
-        for g in self.grids.values():
+        for g in self.grids.values() if req.holes == "rhombus" else ():
             fam.append(g.orientation(st, nv))
         self.families = fam
         self._normal = None
@@ -576,7 +579,10 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict):
     """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
     the non-rigid problem, else None."""
     big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
-    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="")
+    # no full-solver second opinion on a big rigid problem at this level (its coarse levels keep theirs): at
+    # 32x32 it took about 45 of the 52 CPU s of a heart and lost (the non-rigid full solver below still takes
+    # over when the rigid design fails a non-rigid check); below that it is the CLI's last resort, kept whole
+    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="", second_opinion=not big)
     log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
     res = _design(sub, False)
     iters.update({f"rigid_{k}": v for k, v in res.report["iterations"].items()})
@@ -604,6 +610,14 @@ def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
     return worst <= prob.req.tol and float(_ineq_values(prob, X).min(initial=0.0)) >= 0.0
 
 
+def _why_not(prob: _Problem, X: np.ndarray) -> str:
+    """The worst equality family and the smallest inequality, for the log."""
+    res = family_residuals(prob, X, _mean_edge(prob, X))
+    eq = max(((res[f.name], f.name) for f in prob.of("eq")), default=(0.0, "none"))
+    g = min(((float(f.residual(X).min(initial=0.0)), f.name) for f in prob.of("ineq")), default=(0.0, "none"))
+    return f"worst equality {eq[1]} {eq[0]:.1e}, smallest inequality {g[1]} {g[0]:.1e}"
+
+
 def _solve_reduced(prob: _Problem, log, iters: dict):
     """Solve in the rigid family; ``(X, mode)`` if every family checks out, else None."""
     req = prob.req
@@ -627,13 +641,13 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     return None
 
 
-def _solve_outline(prob: _Problem, log, iters: dict):
+def _solve_outline(prob: _Problem, log, iters: dict, solver=None):
     """Square/circle closed-state outlines in the rigid family (``outline.py``); ``(X, mode)`` or None.
 
     A circle target is size-free: its state's target becomes the fitted circle (centre and radius), so the
     report and the CLI's outline check measure against that circle.
     """
-    res = outline.solve_outline(prob, log, iters)
+    res = (solver or outline.solve_outline)(prob, log, iters)
     if res is None:
         return None
     X, mode, fitted = res
@@ -654,7 +668,8 @@ def _solve_outline(prob: _Problem, log, iters: dict):
                                        f.name) if f.name == f"closed_shape_{s}" else f for f in prob.families]
     if _acceptable(prob, X):
         return X, mode
-    log("the closed-state outline design fails a family check: falling back to the full solver")
+    log("the closed-state outline design fails a family check: falling back to the full solver "
+        f"({_why_not(prob, X)})")
     prob.curves_mm, prob.families = saved
     return None
 
@@ -718,6 +733,10 @@ def _solve_full(prob: _Problem, log, iters: dict):
 
 def _design(req: DesignRequest, progress: bool) -> DesignResult:
     log = _Log(progress)
+    c0 = time.process_time()
+    if offset_outline.covers(req) and not offset_outline.applies(req):
+        log(f"parallelogram holes above {offset_outline.OFFSET_MAX_TILES} tiles: rhombus holes (zero offsets)")
+        return _design(replace(req, holes="rhombus"), progress)
     t0 = time.perf_counter()
     # a non-rigid request answered by the rigid family needs no guess of its own (least of all a coarse solve)
     prob = _Problem(replace(req, init="rescaled") if via_rigid_applies(req) else req)
@@ -732,7 +751,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     if req.solver != "full" and reduced_applies(req):
         out = _solve_reduced(prob, log, iters)
     solver = reduced_name
-    if out is not None and req.solver == "auto" and out[1] != "hard":
+    if out is not None and req.solver == "auto" and req.second_opinion and out[1] != "hard":
         miss = fit_miss(exact_fits(fits), out[0])
         if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
             log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
@@ -753,6 +772,13 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     if out is None and req.solver == "auto" and outline.applies(req):
         out = _solve_outline(prob, log, iters)
         solver = "closed-form rigid family, closed-state outlines (exact square, size-free circle)"
+    if out is None and offset_outline.applies(req):
+        out = _solve_outline(prob, log, iters, offset_outline.solve_offset_outline)
+        if out is None:  # no other solver takes parallelogram holes with closed-state curves
+            log("the parallelogram-hole outline design failed its checks: designing with rhombus holes")
+            return _design(replace(req, holes="rhombus"), progress)
+        solver = ("closed-form rigid family with parallelogram holes (an offset per hole), closed-state "
+                  "outlines (exact square, size-free circle)")
     if out is None:
         out = _solve_full(prob, log, iters)
         solver = full_name
@@ -783,6 +809,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         "iterations": iters,
         "iterations_total": int(sum(iters.values())),
         "time_s": elapsed,
+        "cpu_s": time.process_time() - c0,  # on a loaded machine wall time says more about the neighbours
         "unknowns": 2 * prob.nv,
         "equations": int(sum(len(f.residual(X)) for f in eqs)),
         "shape_matching": mode if fits else "none",
