@@ -301,7 +301,10 @@ def print_bound(pattern: Pattern, style: str, printer: Printer, state: int = 1,
                                        printer.strip_width_mm, printer.strip_reach_mm, printer.radial_clearance_mm)
     s_clear = float(clear.max(initial=0.0))
     s = max(s_shrink, s_clear)
-    s_pad = _pad_scale(c, top_.hinge_tiles, top_.hinge_corner, ends, printer, max(s, MIN_GUESS))
+    try:
+        s_pad = _pad_scale(c, top_.hinge_tiles, top_.hinge_corner, ends, printer, max(s, MIN_GUESS))
+    except shapely.errors.GEOSException as exc:  # a self-intersecting tile (the shared bow-tie reference)
+        return PrintMinimum(None, None, f"the pad geometry failed in GEOS ({exc})")
     if s_pad is None:
         return PrintMinimum(None, None, "a strip pad is too small at any scale: a hinge corner is too sharp for "
                                         "the strip width")
@@ -321,9 +324,14 @@ def _pad_areas(c, hinge_tiles, hinge_corner, ends, printer: Printer, scale: np.n
     band = np.stack([p + t0[:, None] * e - R * perp, p + (t0 + w)[:, None] * e - R * perp,
                      p + (t0 + w)[:, None] * e + R * perp, p + t0[:, None] * e + R * perp], 1)
     shrunk = fab.shrunk_quads(tiles, d)
-    ok = fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM
-    inter = shapely.intersection(np.repeat(shapely.polygons(band), 2), shapely.polygons(shrunk))
-    return np.where(ok, shapely.area(inter), 0.0).reshape(-1, 2)
+    band = np.repeat(band, 2, axis=0)
+    # a degenerate tile (a bow-tie, a zero-length seam) has no pad: it gets no polygon, area 0
+    ok = (fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM) & np.isfinite(band).all((1, 2)) \
+        & np.isfinite(shrunk).all((1, 2))
+    area = np.zeros(len(tiles))
+    inter = shapely.intersection(shapely.polygons(band[ok]), shapely.polygons(shrunk[ok]))
+    area[ok] = shapely.area(inter)
+    return area.reshape(-1, 2)
 
 
 def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) -> float | None:
