@@ -5,7 +5,8 @@ family: its nearest member (least squares over all grid vertices) can fold a few
 deployed tiles are rigid copies of its grid cells, so those tiles fold too (leaf SVG at 32x32: 3 boundary
 cells, the start was thrown away and the solve from the rescaled start ended at 13 % Hausdorff; repaired:
 0.43 %). When it
-folds, the start is instead the member nearest the resampled grid whose cells are all convex with a margin: a least-squares
+folds, the start is instead the member nearest the resampled grid whose cells are all convex with a margin:
+a least-squares
 fit to the grid plus a penalty on every corner below the margin, by Gauss-Newton with the penalty raised
 until no corner is below half the margin.
 """
