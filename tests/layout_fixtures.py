@@ -19,6 +19,7 @@ from scipy.optimize import least_squares
 
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import Pattern, geometry, standard_pattern
+from fabkiri.pattern.fabricability import widths
 from fabkiri.pattern.residuals import hinge_sums
 
 
@@ -49,9 +50,15 @@ def distinct_pattern(rows: int = 4, cols: int = 5, seed: int = 3, size: float = 
     def f(v):
         return _residuals(base, v.reshape(-1, 2))
 
-    sol = least_squares(f, x0.ravel(), method="trf", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=400)
+    # x_scale is explicit: scipy's default for trf is 1 in 1.17, and from there the solve lands on
+    # another member with a 1.8 mm tile that the tests' materials cannot cut at scale 1.
+    sol = least_squares(f, x0.ravel(), method="trf", x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                        max_nfev=400)
     nodes = sol.x.reshape(-1, 2)
     assert np.abs(f(sol.x)).max() < 1e-10, np.abs(f(sol.x)).max()
+    # the tests cut it at scale 1 in every material: a thin member would fail them for the wrong reason
+    thinnest = widths(nodes[base.tiles]).min()
+    assert thinnest > 0.5 * size, f"fixture member has a {thinnest:.2f} mm tile"
     p = Pattern(nodes=nodes, tiles=base.tiles, name=f"distinct {rows}x{cols} seed {seed}",
                 design={"rigid_deployable": True, "source": "test fixture"})
     return with_contracted_states(p)
