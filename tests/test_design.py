@@ -262,7 +262,7 @@ def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
                                 "--shape-tol", "10%", "--json", "-o", out2)
     assert code == 0, err
     rep = json.loads(stdout)
-    assert rep["shape_matching"] in ("hard", "least-squares") and rep["fit"]["shape"]["rms_mm"] >= 0
+    assert rep["shape_matching"] in ("hard", "least-squares") and rep["shape"]["deployed"]["status"] == "met"
 
 
 def test_cli_parallelogram_holes(tmp_path, run_cli):
@@ -278,12 +278,13 @@ def test_cli_contracted_targets(tmp_path, run_cli):
     out = tmp_path / "sq.json"
     code, stdout, err = run_cli("design", "--tiles", "5x5", "--rigid", "--contracted-target", "1:square",
                                 "--contracted-target", "2:circle", "--json", "-o", out)
-    assert code in (0, 1), err
+    # parallelogram holes (the default here) meet the 2 % shape check at 5x5: the square exactly
+    assert code == 0, err
     rep = json.loads(stdout)
     fits = rep["closed_outline_fit"]
     assert set(fits) == {"1", "2"} and fits["1"]["target"] == "square" and fits["2"]["target"] == "circle"
-    if code == 0:
-        assert rep["max_equality_residual"] <= 1e-10
+    assert rep["max_equality_residual"] <= 1e-10 and fits["1"]["max_rel_size"] <= 1e-9
+    assert fits["2"]["max_rel_size"] < 0.02 and rep["shape"]["state_2"]["status"] == "met"
 
 
 @pytest.mark.parametrize("argv, msg", [

@@ -14,7 +14,6 @@ from fabkiri.verify import verify_layout
 
 from .conftest import TEMPLATES
 
-pytest.importorskip("fabkiri.fabricate.cut")
 
 PATTERN = TEMPLATES / "patterns" / "circle-8x8.json"
 

@@ -16,7 +16,6 @@ from fabkiri.verify import verify_layout
 from . import layout_fixtures as lf
 from . import layout_mutations as lm
 
-pytest.importorskip("fabkiri.fabricate.cut")
 
 VALID = ["re-save R2018", "LINE segments", "in a block, INSERT moved and turned 30°", "flipped OCS (extrusion -Z)",
          "colour only, all on layer 0", "declared inches", "Inkscape layers (inkscape:label only)",
