@@ -94,8 +94,8 @@ RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers 
 LM_CG_RTOL = 1e-5
 SOLVERS = ("auto", "reduced", "full")
 # auto: a least-squares fit from the rigid family also gets the full solver when the pattern is small
-# (up to FULL_ALWAYS_TILES, where that costs a few seconds) or when it misses the target by more than
-# FULL_ABOVE of its size; the lower objective wins. The family's LM often stops in a worse local minimum
+# (up to FULL_ALWAYS_TILES) and its outline misses ``second_opinion_above`` (the CLI's --shape-tol), or
+# when it misses the target by more than FULL_ABOVE of its size; the lower objective wins. The family's LM often stops in a worse local minimum
 # on non-convex or elongated targets (rigid 100 mm, 16x16 rectangle 0.088 vs 0.022 mm, 8x8 heart 0.42 vs
 # 0.15 mm), while on the rigid circle both reach the same fit (32x32 0.16 vs 0.14 mm, 64x64 0.22 vs 0.21 mm)
 # and the full solver would only cost time (3.9 s and 63 s).
