@@ -5,8 +5,8 @@ the same worker measures this checkout and a baseline checkout (``--baseline DIR
 worker prints one JSON object. Workers:
 
 - ``design``: one ``design()`` call through the API; wall and CPU seconds, status, residual, tip fit, and
-  the conformance of the tip polygon (boundary tips in outline order) to the densely sampled target, by
-  shapely: Hausdorff distance in % of the target's bounding-box diagonal, and 1 − IoU;
+  the shape conformance ``design`` reports (``design/conformance.py``: Hausdorff distance in % of the
+  target's size, 1 − IoU);
 - ``square_circle``: ``fabkiri design --tiles NxN --rigid --contracted-target 1:square
   --contracted-target 2:circle`` in-process; state 1's distance from a square (relative to its side:
   side lengths, diagonals, each boundary vertex from its side's line) and state 2's least-squares circle
@@ -70,27 +70,14 @@ def startup(code_dir: Path, argv: list[str], k: int = 5) -> dict:
 
 
 # ------------------------------------------------------------------ workers (run in the child process)
-def tip_order(rows: int, cols: int) -> np.ndarray:
-    """Boundary tips in outline order: by angle about the centre of the standard pattern, whose outline is
-    star-shaped about it (the order is the same for every design of the lattice)."""
-    from fabkiri.design.constraints import Stencils
-    from fabkiri.pattern.lattice import standard_pattern
+def outline_conformance(pattern, target) -> dict:
+    """The shape-conformance measure ``design`` reports and ``--shape-tol`` judges (``design/conformance.py``):
+    the boundary tips in outline order against the target polygon, Hausdorff distance in % of the target's
+    size (the larger side of its bounding box), and 1 - IoU."""
+    from fabkiri.design.conformance import deployed
 
-    std = standard_pattern(rows, cols, tile_size=1.0)
-    st = Stencils.from_pattern(std)
-    p = std.nodes[st.tip_nodes] - std.nodes.mean(0)
-    return st.tip_nodes[np.argsort(np.arctan2(p[:, 1], p[:, 0]))]
-
-
-def conformance(nodes: np.ndarray, order: np.ndarray, target) -> dict:
-    import shapely
-
-    tips = shapely.Polygon(nodes[order])
-    tgt = shapely.Polygon(target.sample(4096))
-    lo, hi = target.bbox
-    h = shapely.hausdorff_distance(tips.exterior, tgt.exterior, densify=0.05)
-    iou = shapely.area(shapely.intersection(tips, tgt)) / shapely.area(shapely.union(tips, tgt))
-    return {"hausdorff_pct": 100 * float(h) / float(np.hypot(*(hi - lo))), "one_minus_iou": 1 - float(iou)}
+    c = deployed(pattern.nodes, pattern.topology, target)
+    return {"hausdorff_pct": 100 * c["hausdorff_rel"], "one_minus_iou": c["one_minus_iou"]}
 
 
 def worker_design(spec: dict) -> dict:
@@ -106,7 +93,7 @@ def worker_design(spec: dict) -> dict:
     fit = r["fit"]["shape"]
     return {"wall": wall, "cpu": cpu, "status": r["status"], "eq": r["max_equality_residual"],
             "fit_mm": fit["max_mm"], "mode": r["shape_matching"], "solver": r["solver"].split(" (")[0],
-            **conformance(res.pattern.nodes, tip_order(n, n), req.target)}
+            **outline_conformance(res.pattern, req.target)}
 
 
 def closed_outline(pattern, state: int) -> np.ndarray:

@@ -406,3 +406,14 @@ def test_dense_reduced_jacobian_matches_finite_differences():
         rp, rm = dense.evaluate(p + h * d).r, dense.evaluate(p - h * d).r
         assert len(rp) == len(rm) == len(ev.r)  # the active set did not change
         assert np.abs((rp - rm) / (2 * h) - J @ d).max() <= 1e-5 * max(1.0, np.abs(J @ d).max())
+
+
+def test_auto_skips_the_second_opinion_within_the_shape_tolerance():
+    """Up to 16x16 the full solver's second opinion runs only when the rigid family's outline misses the
+    tolerance it is given (the CLI passes --shape-tol); a tolerance it cannot meet brings it back."""
+    target = T.load_target("circle", 100.0)
+    met = design(DesignRequest(8, 8, target, rigid=True, second_opinion_above=0.02))
+    strict = design(DesignRequest(8, 8, target, rigid=True, second_opinion_above=1e-6))
+    assert met.converged and strict.converged
+    assert not any(k.startswith("lm_rho") for k in met.report["iterations"])  # the full solver never ran
+    assert any(k.startswith("lm_rho") for k in strict.report["iterations"])

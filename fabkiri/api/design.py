@@ -242,6 +242,7 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
                                         and not request.symmetry and not contracted)  # the rigid family's figures
     limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
     shape_tol = conf.parse_shape_tol(request.shape_tol)
+    req.second_opinion_above = _tol_rel(shape_tol, target)
     big = rows * cols >= 256
     # without an explicit --init, a design that fails a check is retried from the next guess
     if request.init:
@@ -300,6 +301,12 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
     report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
     return DesignOutcome(pattern=pattern, report=report, valid=bool(valid), shape_met=shape_met,
                          problems=list(problems), messages=messages)
+
+
+def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
+    """``--shape-tol`` as a share of the deployed target's size (the solver skips its second opinion within it)."""
+    value, unit = shape_tol
+    return value / target.size if unit == "mm" and target is not None else value
 
 
 def _shape_met(report: dict) -> bool:

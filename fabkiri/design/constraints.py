@@ -326,16 +326,10 @@ def outline_match(order: np.ndarray, target: Target, nv: int, name: str = "shape
         _, _, dm, gm = whole(0.5 * (A + B))
         e = B - A
         ee = np.maximum(dot2(e, e), 1e-300)
-        rel = pts[:, None, :] - A[None, :, :]  # (K, E, 2)
-        t = np.clip(dot2(rel, e[None]) / ee[None], 0.0, 1.0)
-        foot = A[None] + t[..., None] * e[None]
-        dist = np.sqrt(dot2(pts[:, None, :] - foot, pts[:, None, :] - foot))
-        j = np.argmin(dist, axis=1)
-        k = np.arange(len(pts))
-        tj, fj, dj = t[k, j], foot[k, j], dist[k, j]
+        j, tj, fj, dj = nearest_chords(pts, A, B)
         # the sign from the tip polygon itself (inside: negative), not from the nearest chord's normal, which
         # flips between the two chords of a tip; the gradient moves the foot (1-t) a + t b towards the sample
-        side = np.where(_inside(pts, A, B), -1.0, 1.0)
+        side = np.where(inside_polygon(pts, A, B), -1.0, 1.0)
         off = pts - fj
         ej = e[j]
         nrm = np.stack([ej[:, 1], -ej[:, 0]], -1) / np.sqrt(ee[j])[:, None]
@@ -351,14 +345,68 @@ def outline_match(order: np.ndarray, target: Target, nv: int, name: str = "shape
     return Family(name, "fit", fn, 1, meta={"nodes": order, "target": target, "soft": True}, nv=nv)
 
 
-def _inside(pts: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Points inside the closed polygon with edges A -> B (even-odd crossings of a ray to +x)."""
-    ay, by = A[None, :, 1], B[None, :, 1]
-    py = pts[:, None, 1]
-    straddle = (ay > py) != (by > py)
-    dy = np.where(straddle, by - ay, 1.0)
-    xc = A[None, :, 0] + (py - ay) * (B[None, :, 0] - A[None, :, 0]) / dy
-    return ((straddle & (pts[:, None, 0] < xc)).sum(1) % 2) == 1
+def _chord_feet(pts: np.ndarray, A: np.ndarray, B: np.ndarray):
+    """Foot parameter, foot point and distance of each point to each paired chord A -> B (broadcasting)."""
+    e = B - A
+    ee = np.maximum(dot2(e, e), 1e-300)
+    t = np.clip(dot2(pts - A, e) / ee, 0.0, 1.0)
+    foot = A + t[..., None] * e
+    return t, foot, np.sqrt(dot2(pts - foot, pts - foot))
+
+
+NEAREST_CANDIDATES = 8  # chords tried per point before the exactness bound is checked
+
+
+def nearest_chords(pts: np.ndarray, A: np.ndarray, B: np.ndarray):
+    """For every point its nearest chord (lowest index on a tie), foot parameter, foot point and distance.
+
+    Exact, in O((K + E) log E) instead of the K x E distance table: the chords with the nearest midpoints are
+    measured first, and a point is settled when its best distance is below the next midpoint's distance less
+    the longest half chord (no other chord can come closer); the rest (rare) are measured against every chord.
+    """
+    from scipy.spatial import cKDTree
+
+    E = len(A)
+    k = min(NEAREST_CANDIDATES, E)
+    mid = 0.5 * (A + B)
+    half = 0.5 * float(np.sqrt(dot2(B - A, B - A)).max(initial=0.0))
+    dk, cand = cKDTree(mid).query(pts, k=k + 1 if k < E else k)
+    bound = dk[:, k] - half if k < E else np.full(len(pts), np.inf)
+    cand = np.sort(cand[:, :k], axis=1)  # argmin keeps the first minimum: the lowest index, as a full table
+    t, foot, dist = _chord_feet(pts[:, None, :], A[cand], B[cand])
+    best = np.argmin(dist, axis=1)
+    rows = np.arange(len(pts))
+    j, tj, fj, dj = cand[rows, best], t[rows, best], foot[rows, best], dist[rows, best]
+    open_ = np.flatnonzero(~(dj < bound))
+    if len(open_):
+        t, foot, dist = _chord_feet(pts[open_, None, :], A[None], B[None])
+        b = np.argmin(dist, axis=1)
+        r = np.arange(len(open_))
+        j[open_], tj[open_], fj[open_], dj[open_] = b, t[r, b], foot[r, b], dist[r, b]
+    return j, tj, fj, dj
+
+
+def inside_polygon(pts: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Points inside the closed polygon with edges A -> B (even-odd crossings of a ray to +x).
+
+    Only the (point, edge) pairs whose edge straddles the point's height are formed: with the points sorted
+    by height each edge's are one contiguous run, so the work is the number of crossings, not K x E.
+    """
+    order = np.argsort(pts[:, 1], kind="stable")
+    ys = pts[order, 1]
+    ay, by = A[:, 1], B[:, 1]
+    # edge straddles py iff min(ay, by) <= py < max(ay, by), as (ay > py) != (by > py)
+    lo = np.searchsorted(ys, np.minimum(ay, by), side="left")
+    hi = np.searchsorted(ys, np.maximum(ay, by), side="left")
+    n = np.maximum(hi - lo, 0)
+    edge = np.repeat(np.arange(len(A)), n)
+    start = np.repeat(np.cumsum(n) - n, n)
+    p = order[np.repeat(lo, n) + np.arange(int(n.sum())) - start]
+    ax, bx = A[edge, 0], B[edge, 0]
+    py = pts[p, 1]
+    xc = ax + (py - ay[edge]) * (bx - ax) / (by[edge] - ay[edge])
+    hits = np.bincount(p[pts[p, 0] < xc], minlength=len(pts))
+    return hits % 2 == 1
 
 
 def _outline_samples(target: Target, n: int) -> np.ndarray:
