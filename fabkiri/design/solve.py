@@ -136,6 +136,7 @@ class DesignRequest:
     fabrication_intent: dict = field(default_factory=dict)  # material/printer names: stored for cut and print
     seed: int | None = None  # jitter the initial nodes (2 % of a tile edge) to explore other local minima
     second_opinion: bool = True  # auto: also run the full solver when the rigid family's fit is least-squares
+    start: np.ndarray | None = None  # deployed nodes (mm) to start from instead of ``init`` (a warm start)
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -190,7 +191,10 @@ class _Problem:
         self.start_member = None  # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
         self.unfold = None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
         self._rigid: RigidFamily | None = None
-        if req.init == "coarse":
+        if req.start is not None:  # a warm start (continuation): its own tile size is the unit
+            L0 = geometry.mean_edge_length(np.asarray(req.start, float)[st.tiles])
+            X0 = np.asarray(req.start, float) / L0
+        elif req.init == "coarse":
             X0, L0 = self._coarse_guess(base, st)
         else:
             X0, L0 = initial_guess(base, st, req.target, req.init)
@@ -623,8 +627,8 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     req = prob.req
     fam = prob.rigid_family
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
-    # the standard starts sit at ψ = π/4; a coarse-to-fine start at whatever the coarse design opened to
-    psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
+    # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
+    psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse or req.start is not None else np.pi / 4
     S0 = None
     if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
         S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
