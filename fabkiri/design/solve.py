@@ -261,7 +261,9 @@ class _Problem:
             fam.append(g.orientation(st, nv))
         self.families = fam
         self._normal = None
-        self.margin = {f.name: (CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN) for f in fam if f.kind == "ineq"}
+        # a family may ask its own margin (``meta["margin"]``, tile units: the fabrication rows of a continuation step)
+        self.margin = {f.name: f.meta.get("margin", CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN)
+                       for f in fam if f.kind == "ineq"}
 
     def _coarse_guess(self, base: np.ndarray, st: C.Stencils) -> tuple[np.ndarray, float]:
         """Coarse-to-fine start: solve at half resolution, map the result onto the standard pattern."""
