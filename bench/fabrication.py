@@ -68,36 +68,49 @@ def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> str:
     thin = rep["fabricability"]["thinnest_tile_mm"]
     line += (f" {rep['status']:11s} active {act:3d} thinnest {thin:6.3g} mm Hausdorff "
              f"{100 * conf.get('hausdorff_rel', float('nan')):5.2f} %")
+    cont = rep.get("continuation")
+    if cont:
+        line += f" [{cont['how']}]"
     c2, e2, t2 = run(after, str(pj), "-o", str(out / stem))
     line += f"  {after} {c2}"
     if c2:
         line += "  " + last(e2)
-    elif after == "print":
-        line += "  " + slice_all(out / stem)
-    return line + f"  ({t + t2:.0f} s)"
+    return line + f"  ({t + t2:.0f} s)", (out / stem if after == "print" and not c2 else None)
 
 
 def matrix(out: Path, sizes, configs, jobs: int) -> None:
+    """Designs and cut/print on ``jobs`` workers; the slow slices of each printed folder in the background,
+    one at a time, printed as they finish."""
     cases = [(n, tg, ti, r) for n in configs for tg in TARGETS for ti in sizes for r in (False, True)]
-    with ThreadPoolExecutor(jobs) as ex:
-        for line in ex.map(lambda c: one(out, *c), cases):
+
+    def sliced(folder: Path) -> None:
+        t = time.perf_counter()
+        print(f"{folder.name:44s} {slice_all(folder)}  ({time.perf_counter() - t:.0f} s)", flush=True)
+
+    with ThreadPoolExecutor(1) as slicer, ThreadPoolExecutor(jobs) as ex:
+        for line, folder in ex.map(lambda c: one(out, *c), cases):
             print(line, flush=True)
+            if folder is not None:
+                slicer.submit(sliced, folder)
 
 
 def heart(out: Path) -> None:
     """The 16x16 heart at 200 mm, with and without acrylic-3 (thinnest tile, Hausdorff)."""
-    for what, flags in (("without", []), ("acrylic-3", ["--material", "acrylic-3"])):
-        pj = out / f"heart16-200-{what}.json"
-        code, err, t = run("design", "--tiles", "16x16", "--target", "heart", "--size", "200", *flags,
-                           "--no-preview", "-o", str(pj))
-        if not pj.exists():
-            print(f"heart 16x16 200 mm {what}: exit {code} {last(err)}")
-            continue
-        rep = json.loads(pj.read_text())["design"]["report"]
-        conf = rep["conformance"]["deployed"]
-        print(f"heart 16x16 200 mm {what:9s}: exit {code} {rep['status']}, thinnest tile "
-              f"{rep['fabricability']['thinnest_tile_mm']:.3g} mm, Hausdorff {conf['hausdorff_mm']:.3g} mm "
-              f"({100 * conf['hausdorff_rel']:.2f} %) ({t:.0f} s)", flush=True)
+    for rigid in ([], ["--rigid"]):
+        for what, flags in (("without", []), ("acrylic-3", ["--material", "acrylic-3"])):
+            pj = out / f"heart16-200-{what}{''.join(rigid)}.json"
+            code, err, t = run("design", "--tiles", "16x16", "--target", "heart", "--size", "200", *flags, *rigid,
+                               "--no-preview", "-o", str(pj))
+            name = f"heart 16x16 200 mm {what:9s}{' rigid' if rigid else ''}"
+            if not pj.exists():
+                print(f"{name}: exit {code} {last(err)}")
+                continue
+            rep = json.loads(pj.read_text())["design"]["report"]
+            conf = rep["conformance"]["deployed"]
+            how = (rep.get("continuation") or {}).get("how", "")
+            print(f"{name}: exit {code} {rep['status']}, thinnest tile "
+                  f"{rep['fabricability']['thinnest_tile_mm']:.3g} mm, Hausdorff {conf['hausdorff_mm']:.3g} mm "
+                  f"({100 * conf['hausdorff_rel']:.2f} %) {how} ({t:.0f} s)", flush=True)
 
 
 def impossible(out: Path) -> None:

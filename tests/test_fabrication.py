@@ -313,3 +313,31 @@ def test_strip_rows_met_means_print_accepts():
     first = float(sizes[int(np.argmax(ok))])
     assert fb._plan_error(standard_pattern(8, 8, tile_size=first), "tiles-and-strips", 1, pr) == ""
     assert fb._plan_error(standard_pattern(8, 8, tile_size=0.97 * 8.7), "tiles-and-strips", 1, pr) != ""
+
+
+def test_scaled_limits_scale_every_requirement_and_set_the_margin():
+    lim = F.FabricationLimits(**fb.printer_limits(load_printer("prusa-mk4"), "tiles-and-strips"), source="mk4")
+    half = lim.scaled(0.5, 0.02)
+    for k, v in lim.to_dict().items():
+        if k not in ("source", "margin"):
+            assert getattr(half, k) == pytest.approx(0.5 * v)
+    assert half.source == "mk4" and half.margin == 0.02 and lim.margin == 0.0
+    st_ = Stencils.from_pattern(standard_pattern(4, 4, tile_size=1.0))
+    base = standard_pattern(4, 4, tile_size=1.0).nodes
+    assert all(f.meta["margin"] == 0.02 for f in F.families(st_, len(base), half, 10.0, base))
+    assert all("margin" not in f.meta for f in F.families(st_, len(base), lim, 10.0, base))
+
+
+@pytest.mark.slow
+def test_continuation_is_tried_and_the_kept_design_keeps_the_rows():
+    """The 8x8 heart at 150 mm for acrylic-3 misses the shape (it does without rows too): the continuation
+    from the design without the rows is tried, and the design kept, whichever attempt won, has every tile
+    at least 3 mm wide."""
+    from fabkiri.api.design import PatternRequest, design_pattern
+
+    out = design_pattern(PatternRequest(tiles=(8, 8), target="heart", size=150, material="acrylic-3", quiet=True))
+    cont = [a for a in out.report["attempts"] if a["init"].startswith("continuation")]
+    assert len(cont) == 1 and cont[0]["hausdorff_max_rel"] > 0
+    assert out.valid
+    assert out.report["fabricability"]["thinnest_tile_mm"] >= 3.0 - 1e-9
+    assert out.report["fabrication"]["min"]["fabrication_width"] >= 0.0

@@ -145,6 +145,7 @@ class DesignRequest:
     # ... up to 16x16 tiles only when its outline misses by more than this share of the target's size (the
     # CLI passes its --shape-tol): where the rigid design already meets the tolerance the full solver is skipped
     second_opinion_above: float = 0.02
+    start: np.ndarray | None = None  # deployed nodes (mm) to start from instead of ``init`` (a warm start)
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -199,7 +200,10 @@ class _Problem:
         self.start_member = None  # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
         self.unfold = None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
         self._rigid: RigidFamily | None = None
-        if req.init == "coarse":
+        if req.start is not None:  # a warm start (continuation): its own tile size is the unit
+            L0 = geometry.mean_edge_length(np.asarray(req.start, float)[st.tiles])
+            X0 = np.asarray(req.start, float) / L0
+        elif req.init == "coarse":
             X0, L0 = self._coarse_guess(base, st)
         else:
             X0, L0 = initial_guess(base, st, req.target, req.init)
@@ -266,7 +270,9 @@ class _Problem:
             fam.append(g.orientation(st, nv))
         self.families = fam
         self._normal = None
-        self.margin = {f.name: (CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN) for f in fam if f.kind == "ineq"}
+        # a family may ask its own margin (``meta["margin"]``, tile units: the fabrication rows of a continuation step)
+        self.margin = {f.name: f.meta.get("margin", CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN)
+                       for f in fam if f.kind == "ineq"}
 
     def _coarse_guess(self, base: np.ndarray, st: C.Stencils) -> tuple[np.ndarray, float]:
         """Coarse-to-fine start: solve at half resolution, map the result onto the standard pattern."""
@@ -649,8 +655,8 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     req = prob.req
     fam = prob.rigid_family
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
-    # the standard starts sit at ψ = π/4; a coarse-to-fine start at whatever the coarse design opened to
-    psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse else np.pi / 4
+    # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
+    psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse or req.start is not None else np.pi / 4
     S0 = None
     if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
         S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
