@@ -215,6 +215,28 @@ def test_pair_region_of_nearly_meeting_corners_is_one_valid_polygon():
     assert not shapely.intersection(seam, pair).is_empty
 
 
+def test_outline_vertices_a_float32_file_would_weld_are_snapped_before_writing(printer):
+    """A strip outline with a jog whose two corners lie 3 µm apart on the bed (distinct in
+    float64, one point in float32): written as designed its mesh has edges shared by four faces
+    (the 16x16 non-rigid circle's hinges_TPU had 14); the body is realised again with its outlines
+    snap-rounded to the bed's float32 grid, and comes out a closed 2-manifold as written, with the
+    same volume to the grid's area."""
+    x, d = 200.0, 3e-6
+    jog = shapely.Polygon([(x - 20, 100), (x, 100), (x, 105), (x + 0.3 * d, 105 + d), (x + 0.3 * d, 110),
+                           (x - 20, 110)])
+    body = mesh.Body("hinges_TPU", "hinges", (("add", mesh.Prism((jog,), 0.0, 0.6)),), "TPU")
+    assert mesh.float32_defects(mesh.to_trimesh(mesh.realise(body))) > 0  # the defect this guards against
+    grid = mesh.bed_grid(printer)
+    assert np.float32(150.0 + grid) != np.float32(150.0) and grid <= 6.2e-5
+    b, m, tm, snap = mesh._realise_clean(body, grid)
+    assert snap == grid and mesh.float32_defects(tm) == 0
+    assert mesh.edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces) == 0
+    assert m.volume() == pytest.approx(0.6 * jog.area, abs=0.6 * grid * jog.length)
+    # an outline a float32 file keeps as it is stays exact
+    plain = mesh.Body("tiles_PLA", "tiles", (("add", mesh.Prism((shapely.box(10, 10, 30, 20),), 0.0, 3.0)),), "PLA")
+    assert mesh._realise_clean(plain, grid)[3] == 0.0
+
+
 # --------------------------------------------------------- tiles-and-strips
 
 @pytest.mark.parametrize("rows,cols,state", [(3, 3, 1), (2, 5, 2)])
