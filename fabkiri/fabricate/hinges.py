@@ -108,14 +108,19 @@ def snap_corners(corners: np.ndarray, eps: float, pairs: np.ndarray | None = Non
         pairs = coincident_pairs(flat, eps)
     else:
         pairs = pairs[np.linalg.norm(flat[pairs[:, 0]] - flat[pairs[:, 1]], axis=1) < eps]
+    return _merged(flat, pairs).reshape(corners.shape)
+
+
+def _merged(points: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Points with every connected group of ``pairs`` replaced by its lowest-index member."""
     if len(pairs) == 0:
-        return corners.copy()
-    n = len(flat)
+        return points.copy()
+    n = len(points)
     g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, label = csgraph.connected_components(g, directed=False)
     rep = np.full(label.max() + 1, n, dtype=np.int64)
     np.minimum.at(rep, label, np.arange(n))
-    return flat[rep[label]].reshape(corners.shape)
+    return points[rep[label]]
 
 
 def snap_to_edges(corners: np.ndarray, eps: float) -> np.ndarray:
@@ -239,15 +244,12 @@ def _welded(segs: np.ndarray) -> np.ndarray:
     share is then cut twice 1e-6 mm apart, enclosing a sliver piece (the additive-kirigami
     random triple at 10 mm tiles: 122 pieces for 121 tiles)."""
     pts = segs.reshape(-1, 2)
-    pairs = coincident_pairs(pts, WELD_GRIDS * GRID)
-    if len(pairs):
-        n = len(pts)
-        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-        _, label = csgraph.connected_components(g, directed=False)
-        rep = np.full(label.max() + 1, n, dtype=np.int64)
-        np.minimum.at(rep, label, np.arange(n))
-        pts = pts[rep[label]]
-    segs = _split_at_near_points(pts.reshape(-1, 2, 2), WELD_GRIDS * GRID)
+    pts = _merged(pts, coincident_pairs(pts, WELD_GRIDS * GRID))
+    return _once(_split_at_near_points(pts.reshape(-1, 2, 2), WELD_GRIDS * GRID))
+
+
+def _once(segs: np.ndarray) -> np.ndarray:
+    """Each segment once, whichever way round it was given (first occurrence kept, in order)."""
     a, b = segs[:, 0], segs[:, 1]
     swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
     key = np.concatenate([np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)], 1)
@@ -286,11 +288,7 @@ def tape_linework(corners: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarra
     """
     seg = np.stack([corners, np.roll(corners, -1, axis=1)], 2).reshape(-1, 2, 2)
     # an edge shared by two tiles is the same segment twice (corners are snapped): node it once
-    a, b = seg[:, 0], seg[:, 1]
-    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
-    key = np.concatenate([np.where(swap[:, None], b, a), np.where(swap[:, None], a, b)], 1)
-    _, first = np.unique(key, axis=0, return_index=True)
-    lines = shapely.linestrings(seg[np.sort(first)])
+    lines = shapely.linestrings(_once(seg))
     noded = shapely.union_all(lines, grid_size=GRID)
     segs = _welded(_segments_of(noded))
     mids = shapely.points(segs.mean(axis=1))
