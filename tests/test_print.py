@@ -194,6 +194,49 @@ def test_strips_cross_their_seam_and_join_only_their_tiles(printer):
                 assert shapely.distance(s.outline[i], s.outline[j]) >= printer.radial_clearance_mm
 
 
+def test_pair_region_of_nearly_meeting_corners_is_one_valid_polygon():
+    """Two tiles of a 16x16 ellipse's closed state 2 (fabkiri design --tiles 16x16 --target ellipse
+    --printer prusa-mk4 --size 200, hinge 125) whose far corners meet within 1e-13 mm: GEOS's
+    mitre shrink of their union came back self-touching and the seam intersection raised a
+    TopologyException (print exited 3). The pair region is valid, holeless and holds both tiles'
+    shrunk outlines."""
+    a = shapely.Polygon([[-84.81509145992317, -28.434673553572484], [-83.37483533624076, -41.46938310873785],
+                         [-74.01560049138152, -40.56872899793756], [-76.30839451276796, -31.317374977642718]])
+    b = shapely.Polygon([[-76.30839451276793, -31.31737497764276], [-78.60118853415439, -22.066020957347916],
+                         [-90.13884306043629, -23.54181527412007], [-84.81509145992314, -28.434673553572548]])
+    d, eps = 0.2, 9.837419638851498e-05
+    pair = printgeom._pair_regions(np.array([a], dtype=object), np.array([b], dtype=object), d, eps)[0]
+    assert pair.is_valid and pair.geom_type == "Polygon" and not pair.interiors
+    for t in (a, b):
+        shrunk = t.buffer(-d, join_style="mitre", mitre_limit=printgeom.MITRE_LIMIT)
+        assert shrunk.difference(pair).area < 1e-6
+    # the seam line from the shared corner meets it (this raised before)
+    seam = shapely.LineString([a.exterior.coords[3], a.exterior.coords[0]])
+    assert not shapely.intersection(seam, pair).is_empty
+
+
+def test_outline_vertices_a_float32_file_would_weld_are_snapped_before_writing(printer):
+    """A strip outline with a jog whose two corners lie 3 µm apart on the bed (distinct in
+    float64, one point in float32): written as designed its mesh has edges shared by four faces
+    (the 16x16 non-rigid circle's hinges_TPU had 14); the body is realised again with its outlines
+    snap-rounded to the bed's float32 grid, and comes out a closed 2-manifold as written, with the
+    same volume to the grid's area."""
+    x, d = 200.0, 3e-6
+    jog = shapely.Polygon([(x - 20, 100), (x, 100), (x, 105), (x + 0.3 * d, 105 + d), (x + 0.3 * d, 110),
+                           (x - 20, 110)])
+    body = mesh.Body("hinges_TPU", "hinges", (("add", mesh.Prism((jog,), 0.0, 0.6)),), "TPU")
+    assert mesh.float32_defects(mesh.to_trimesh(mesh.realise(body))) > 0  # the defect this guards against
+    grid = mesh.bed_grid(printer)
+    assert np.float32(150.0 + grid) != np.float32(150.0) and grid <= 6.2e-5
+    b, m, tm, snap = mesh._realise_clean(body, grid)
+    assert snap == grid and mesh.float32_defects(tm) == 0
+    assert mesh.edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces) == 0
+    assert m.volume() == pytest.approx(0.6 * jog.area, abs=0.6 * grid * jog.length)
+    # an outline a float32 file keeps as it is stays exact
+    plain = mesh.Body("tiles_PLA", "tiles", (("add", mesh.Prism((shapely.box(10, 10, 30, 20),), 0.0, 3.0)),), "PLA")
+    assert mesh._realise_clean(plain, grid)[3] == 0.0
+
+
 # --------------------------------------------------------- tiles-and-strips
 
 @pytest.mark.parametrize("rows,cols,state", [(3, 3, 1), (2, 5, 2)])

@@ -73,10 +73,25 @@ def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
     return rings
 
 
-def _manifold(prism: Prism):
+def float32_grid(extent_mm: float) -> float:
+    """The finest power-of-two grid (mm) whose points up to ``extent_mm`` from the origin
+    float32 stores exactly (24-bit significand)."""
+    return float(2.0 ** (np.ceil(np.log2(max(extent_mm, 1.0))) - 23))
+
+
+def bed_grid(printer: Printer) -> float:
+    """:func:`float32_grid` of everything printed on this bed (cutting prisms reach 1 mm past it)."""
+    return float32_grid(max(printer.bed_mm) + 2.0)
+
+
+def _manifold(prism: Prism, grid: float = 0.0):
+    """The prism as a manifold; with ``grid`` its outlines are snap-rounded onto it first,
+    so two distinct outline vertices never become one once written in float32 (a weld
+    that leaves edges shared by four faces) and no edge is shorter than the grid."""
     import manifold3d as m3d
 
-    cs = m3d.CrossSection(_rings(prism.polygons), fillrule=m3d.FillRule.Positive)
+    polys = prism.polygons if not grid else (shapely.set_precision(shapely.union_all(prism.polygons), grid),)
+    cs = m3d.CrossSection(_rings(polys), fillrule=m3d.FillRule.Positive)
     h = prism.z1 - prism.z0
     if prism.scale_top != 1.0:
         cx, cy = prism.centre
@@ -85,14 +100,14 @@ def _manifold(prism: Prism):
     return m3d.Manifold.extrude(cs, h).translate((0.0, 0.0, prism.z0))
 
 
-def realise(body: Body):
-    """The manifold3d solid of a body."""
+def realise(body: Body, grid: float = 0.0):
+    """The manifold3d solid of a body (outlines snapped to ``grid`` mm, see :func:`_manifold`)."""
     import manifold3d as m3d
 
     acc = m3d.Manifold()
     ops = [(op, prism) for op, prism in body.ops if any(not p.is_empty for p in prism.polygons)]  # e.g. no bottom strip
     for op, run in itertools.groupby(ops, key=lambda o: o[0]):  # a run of adds (or subs) as one batched union
-        ms = [_manifold(prism) for _, prism in run]
+        ms = [_manifold(prism, grid) for _, prism in run]
         m = ms[0] if len(ms) == 1 else m3d.Manifold.batch_boolean(ms, m3d.OpType.Add)
         acc = acc + m if op == "add" else acc - m
     return acc
@@ -471,6 +486,7 @@ class Realised:
     job: PrintJob
     manifolds: list[list]
     meshes: list[list]
+    snaps: list[list[float]] = field(default_factory=list)  # grid (mm) a body's outlines were snapped to, 0: exact
 
 
 def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> int:
@@ -490,24 +506,28 @@ def float32_defects(tm) -> int:
     return edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces)
 
 
-def _realise_clean(body: Body):
-    """The body (or its first variant) whose float32 mesh is a closed 2-manifold;
-    the last one tried if none is (the mesh check then reports it)."""
-    for b in (body, *body.variants):
-        m = realise(b)
+def _realise_clean(body: Body, grid: float):
+    """The body (or its first variant) whose float32 mesh is a closed 2-manifold, each
+    tried as designed and then with its outlines snapped to the float32 ``grid`` (which
+    merges vertices a file would weld; the exact solid is kept whenever it writes
+    cleanly); the last one tried if none is (the mesh check then reports it)."""
+    for b, g in itertools.product((body, *body.variants), (0.0, grid)):
+        m = realise(b, g)
         if m.status().name != "NoError" or m.is_empty():
             raise FabricationError(f"body {b.name} came out empty or invalid ({m.status().name})")
         tm = to_trimesh(m)
         if float32_defects(tm) == 0:
             break
-    return b, m, tm
+    return b, m, tm, g
 
 
 def realise_job(job: PrintJob) -> Realised:
-    done = [[_realise_clean(b) for b in bed] for bed in job.beds]
-    beds = [[replace(b, variants=()) for b, _, _ in bed] for bed in done]
+    grid = bed_grid(job.printer)
+    done = [[_realise_clean(b, grid) for b in bed] for bed in job.beds]
+    beds = [[replace(b, variants=()) for b, *_ in bed] for bed in done]
     job = replace(job, beds=beds)
-    return Realised(job, [[m for _, m, _ in bed] for bed in done], [[tm for _, _, tm in bed] for bed in done])
+    return Realised(job, [[d[1] for d in bed] for bed in done], [[d[2] for d in bed] for bed in done],
+                    [[d[3] for d in bed] for bed in done])
 
 
 def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
@@ -520,13 +540,15 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
     bx, by, bz = pr.bed_mm
     eps = 1e-6
     for k, (bed, ms, tms) in enumerate(zip(job.beds, r.manifolds, r.meshes), 1):
-        for b, m, tm in zip(bed, ms, tms):
+        snaps = r.snaps[k - 1] if r.snaps else [0.0] * len(bed)
+        for b, m, tm, snap in zip(bed, ms, tms, snaps):
             lo, hi = tm.bounds
             info = {"bed": k, "name": b.name, "kind": b.kind, "watertight": bool(tm.is_watertight),
                     "winding_consistent": bool(tm.is_winding_consistent), "volume_mm3": float(tm.volume),
                     "manifold_volume_mm3": float(m.volume()), "triangles": int(len(tm.faces)),
                     "bounds_mm": [lo.round(4).tolist(), hi.round(4).tolist()]}
             info["float32_edge_defects"] = float32_defects(tm)
+            info["outlines_snapped_to_mm"] = snap  # 0: as designed; else the float32 grid it needed
             rep.bodies.append(info)
             if info["float32_edge_defects"]:
                 rep.problems.append(f"{b.name}: {info['float32_edge_defects']} edges not shared by exactly two faces "

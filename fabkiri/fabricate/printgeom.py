@@ -180,6 +180,27 @@ class Strips:
     pocket: np.ndarray  # (H,) what is cut from the tiles: the strip, reaching past the tile edges
 
 
+def _pair_regions(a: np.ndarray, b: np.ndarray, d: float, eps: float) -> np.ndarray:
+    """Tiles a and b merged along their closed seam (each grown by ``eps`` so they
+    overlap), then shrunk like the tiles by ``d``.
+
+    Where the two tiles' far corners nearly meet, the union keeps a notch ``eps``
+    wide; shrinking it with mitres can make GEOS return a self-touching hole (a
+    closed state-2 ellipse 16x16 raised a TopologyException in the seam
+    intersection). The notch is simplified away first, and a merged pair, which
+    has no hole by construction, keeps only its largest polygon's outline.
+    """
+    grow = dict(join_style="mitre", mitre_limit=MITRE_LIMIT)
+    union = shapely.simplify(shapely.union(shapely.buffer(a, eps, **grow), shapely.buffer(b, eps, **grow)), 2 * eps)
+    pair = shapely.buffer(union, -(d + eps), **grow)
+    bad = np.flatnonzero(~shapely.is_valid(pair) | (shapely.get_num_interior_rings(pair) > 0))
+    for k in bad:
+        parts = shapely.get_parts(shapely.make_valid(pair[k]))
+        parts = parts[shapely.get_type_id(parts) == 3]
+        pair[k] = shapely.Polygon(parts[np.argmax(shapely.area(parts))].exterior) if len(parts) else Polygon()
+    return pair
+
+
 def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
     """Strip outlines for every hinge (see the module docstring), checked:
     each strip crosses its seam, has a pad on both tiles, and keeps the radial
@@ -191,9 +212,7 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
     A, B = plan.hinge_tiles.T
     raw = shapely.polygons(plan.corners)
     # the pair region: A and B merged along their closed seam, shrunk like the tiles
-    pair = shapely.buffer(shapely.union(shapely.buffer(raw[A], eps, join_style="mitre", mitre_limit=MITRE_LIMIT),
-                                        shapely.buffer(raw[B], eps, join_style="mitre", mitre_limit=MITRE_LIMIT)),
-                          -(d + eps), join_style="mitre", mitre_limit=MITRE_LIMIT)
+    pair = _pair_regions(raw[A], raw[B], d, eps)
     p, e, far_xy = plan.hinge_xy, plan.seam_dir, plan.seam_end
     n = np.stack([-e[:, 1], e[:, 0]], -1)
     # where the seam line enters the pair region (t0), measured along e from p
