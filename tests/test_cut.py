@@ -568,3 +568,17 @@ def test_any_standard_pattern_cuts_and_verifies(rows, cols, angle, size, state, 
     p = std(rows, cols, angle, size)
     r = cut(p, material, hinge=kind, state=state, formats=("dxf", "svg"))
     assert_verified(p, r)
+
+
+def test_tape_marks_asked_for_only_where_the_writer_draws_a_readable_one(run_cli, tmp_path):
+    # heart-16x16-rigid at its smallest acrylic-3 scale: tile 9's 18.7° corner at hinge 16 gets a 1.4 mm
+    # chord, which the mark check reads as too short for a mark; it used to ask for one anyway, so cut
+    # refused its own file ("tape marks at every hinge")
+    out = tmp_path / "h"
+    code, _, err = run_cli("cut", PATTERNS / "heart-16x16-rigid.json", "--material", "acrylic-3", "--scale", "auto",
+                           "-o", out)
+    assert code == 0, err
+    man = json.loads((out / "manifest.json").read_text())
+    marks = [c for f in man["verification"]["verifier"]["files"].values() for c in f["checks"]
+             if c["name"].endswith("tape marks at every hinge")]
+    assert marks and all(c["ok"] for c in marks) and "462 of 464" in marks[0]["detail"]

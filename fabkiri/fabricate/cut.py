@@ -32,14 +32,15 @@ from .materials import HINGE_KINDS, Material
 from .preview import png_bytes
 from .svg import STROKE_MM, svg_bytes
 from .text import supported, text_strokes, text_strokes_many, text_width
+from ..verify.physical import MARK_CORNER_FRAC, MARK_REACH_MM, tape_mark_chords, tape_reach
 
 FORMATS = ("dxf", "svg", "png")
 MIN_LABEL_MM = 0.8  # below this a label is not legible; it is left out (and counted)
 PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
 FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
 ID_FRAC = 0.45  # tile IDs fit the tile scaled by this about its centroid
-CORNER_FRAC = 0.5  # corner labels fit the triangle cut off by the chord at this fraction of the edges
-TAPE_REACH_MM = 8.0  # ... but no further than this along an edge: a tape piece covers a corner, not a tile
+# corner labels fit the triangle cut off by the tape's chord (this fraction of the edges, at most TAPE_REACH_MM)
+CORNER_FRAC, TAPE_REACH_MM = MARK_CORNER_FRAC, MARK_REACH_MM
 
 
 def _incentre(tri: np.ndarray) -> np.ndarray:
@@ -166,33 +167,6 @@ def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
         raise FabricationError(f"tile {int(cw[0])} is mirrored (clockwise) in closed state {state}")
     # overlaps are the verifier gate's business ("state N: no overlaps"), checked before this
     return polys
-
-
-def _reach(q: np.ndarray, q1: np.ndarray, frac: float) -> np.ndarray:
-    """Fraction of the edge q -> q1 covered by a corner's tape: ``frac``, at most TAPE_REACH_MM."""
-    return np.minimum(frac, TAPE_REACH_MM / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300))
-
-
-def _tape_marks(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, margin: float) -> np.ndarray:
-    """A chord across each hinged corner, ``margin`` inside both tile edges: where the tape ends."""
-    q = Q[tiles, ks]
-    q1 = Q[tiles, (ks + 1) % 4]
-    q0 = Q[tiles, (ks + 3) % 4]
-    a = q + _reach(q, q1, frac)[:, None] * (q1 - q)
-    b = q + _reach(q, q0, frac)[:, None] * (q0 - q)
-    chord = b - a
-    L = np.linalg.norm(chord, axis=1)
-    u = chord / np.maximum(L, 1e-300)[:, None]
-    e1 = (q1 - q) / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300)[:, None]
-    e0 = (q0 - q) / np.maximum(np.linalg.norm(q0 - q, axis=1), 1e-300)[:, None]
-    s1 = np.abs(e1[:, 0] * u[:, 1] - e1[:, 1] * u[:, 0])
-    s0 = np.abs(e0[:, 0] * u[:, 1] - e0[:, 1] * u[:, 0])
-    t1 = margin / np.maximum(s1, 1e-12)
-    t0 = margin / np.maximum(s0, 1e-12)
-    ok = t1 + t0 < 0.8 * L
-    seg = np.stack([a + t1[:, None] * u, b - t0[:, None] * u], 1)
-    seg[~ok] = np.nan
-    return seg
 
 
 def _add_labels(sheets, sheet_of_label: np.ndarray, tile_of_label: np.ndarray, pts: np.ndarray, counts: np.ndarray,
@@ -432,8 +406,8 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             ct, ck = np.array(c_tiles), np.array(c_k)
             q = Q[ct, ck]
             q1, q0 = Q[ct, (ck + 1) % 4], Q[ct, (ck + 3) % 4]
-            tri = np.stack([q, q + _reach(q, q1, CORNER_FRAC)[:, None] * (q1 - q),
-                            q + _reach(q, q0, CORNER_FRAC)[:, None] * (q0 - q)], 1)
+            tri = np.stack([q, q + tape_reach(q, q1, CORNER_FRAC)[:, None] * (q1 - q),
+                            q + tape_reach(q, q0, CORNER_FRAC)[:, None] * (q0 - q)], 1)
             anchor = _incentre(tri)
             hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
             hc_all = hc
@@ -444,7 +418,7 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             # mark per tile keeps the stroke count (DXF entities) down on large patterns
             same = ~cross
             mt, mk = B[same], cB[same]
-            marks = _tape_marks(Q, mt, mk, CORNER_FRAC, label_margin)
+            marks = tape_mark_chords(Q, mt, mk, label_margin)
             ok = np.isfinite(marks).all(axis=(1, 2))
             _add_labels(sheets, sheet_of[mt[ok]], mt[ok], marks[ok].reshape(-1, 2), np.full(int(ok.sum()), 2),
                         np.arange(int(ok.sum())))

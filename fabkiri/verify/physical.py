@@ -17,7 +17,11 @@ from .report import Check
 
 TOUCH_MM = 0.01  # a strip meets a tile core within this
 MARK_EDGE_MM = 1.0  # a mark's end lies within this of its corner's edge
-MARK_ROOM_MM = 4.0  # a corner with both edges at least this long has room for a mark
+MARK_CORNER_FRAC = 0.5  # a tape piece covers this fraction of each corner edge ...
+MARK_REACH_MM = 8.0  # ... but no further than this along an edge
+MARK_FIT = 0.8  # the writer draws a mark when its margins take less than this share of the chord
+MARK_EXPECT = 0.6  # the verifier asks for one only below this share (recovered tiles are ~µm off the writer's)
+MARK_EXPECT_MARGIN_MM = 0.75  # ... with the writer's margin for a kerf up to 0.5 mm (0.5 + kerf / 2)
 MARK_SPAN = 0.3  # a mark spans at least this fraction of the corner's shorter edge (at most 16 mm), times sin(angle)
 
 
@@ -86,6 +90,33 @@ def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
     return bool((spans & long).any())
 
 
+def tape_reach(q: np.ndarray, q1: np.ndarray, frac: float = MARK_CORNER_FRAC) -> np.ndarray:
+    """Fraction of the edge q -> q1 covered by a corner's tape: ``frac``, at most MARK_REACH_MM."""
+    return np.minimum(frac, MARK_REACH_MM / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300))
+
+
+def tape_mark_chords(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, margin: float,
+                     fit: float = MARK_FIT) -> np.ndarray:
+    """The tape mark of corner ``ks`` of each tile in ``tiles``: the chord where the tape ends,
+    ``margin`` inside both tile edges, ``(n, 2, 2)``; NaN where the margins take ``fit`` of the chord
+    or more (no room). One rule for the writer (``fit=MARK_FIT``) and the check (``MARK_EXPECT``)."""
+    q = Q[tiles, ks]
+    q1 = Q[tiles, (ks + 1) % 4]
+    q0 = Q[tiles, (ks + 3) % 4]
+    a = q + tape_reach(q, q1)[:, None] * (q1 - q)
+    b = q + tape_reach(q, q0)[:, None] * (q0 - q)
+    chord = b - a
+    L = np.linalg.norm(chord, axis=1)
+    u = chord / np.maximum(L, 1e-300)[:, None]
+    e1 = (q1 - q) / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300)[:, None]
+    e0 = (q0 - q) / np.maximum(np.linalg.norm(q0 - q, axis=1), 1e-300)[:, None]
+    t1 = margin / np.maximum(np.abs(geometry.cross2(e1, u)), 1e-12)
+    t0 = margin / np.maximum(np.abs(geometry.cross2(e0, u)), 1e-12)
+    seg = np.stack([a + t1[:, None] * u, b - t0[:, None] * u], 1)
+    seg[~(t1 + t0 < fit * L)] = np.nan
+    return seg
+
+
 def _segments_near(segs: dict[int, np.ndarray]):
     """``near(sheet, Q, k)``: the sheet's segments whose first end is close enough to corner ``k`` of
     ``Q`` to span it (a KD-tree per sheet: every corner against every engraved segment, labels
@@ -105,7 +136,9 @@ def mark_status(pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray, foun
                 marks: dict[int, list[np.ndarray]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For the tape hinges whose two tiles are on one sheet: their indices, whether each has a mark
     across its corner on one of its two tiles (an ENGRAVE chord where the tape ends), and whether its
-    corners have room for one."""
+    second tile's corner (where ``fabkiri cut`` draws it) has room for one: :func:`tape_mark_chords`,
+    stricter than the writer (``MARK_EXPECT``, ``MARK_EXPECT_MARGIN_MM``) and long enough to be told from
+    a letter, so a mark the writer left out, or drew too short to recognise, is never asked for."""
     top = pattern.topology
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
@@ -115,8 +148,11 @@ def mark_status(pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray, foun
     marked = np.array([_corner_marked(cut_shapes[B[h]], cB[h], near(int(found_on[B[h]]), cut_shapes[B[h]], cB[h]))
                        or _corner_marked(cut_shapes[A[h]], cA[h], near(int(found_on[A[h]]), cut_shapes[A[h]], cA[h]))
                        for h in hs], dtype=bool).reshape(-1)
-    room = np.array([min(geometry.edge_lengths(cut_shapes[t])[[c, (c + 3) % 4]].min() for t, c in
-                         ((A[h], cA[h]), (B[h], cB[h]))) >= MARK_ROOM_MM for h in hs], dtype=bool).reshape(-1)
+    # room: the writer's chord, taken stricter, exists and is one this check recognises (a sharp corner's
+    # short chord is drawn but reads as a letter stroke)
+    chords = tape_mark_chords(cut_shapes, B[hs], cB[hs], MARK_EXPECT_MARGIN_MM, MARK_EXPECT)
+    room = np.array([np.isfinite(ch).all() and _corner_marked(cut_shapes[B[h]], cB[h], ch[None])
+                     for h, ch in zip(hs, chords)], dtype=bool).reshape(-1)
     return hs, marked, room
 
 
