@@ -95,10 +95,10 @@ LM_CG_RTOL = 1e-5
 SOLVERS = ("auto", "reduced", "full")
 # auto: a least-squares fit from the rigid family also gets the full solver when the pattern is small
 # (up to FULL_ALWAYS_TILES) and its outline misses ``second_opinion_above`` (the CLI's --shape-tol), or
-# when it misses the target by more than FULL_ABOVE of its size; the lower objective wins. The family's LM often stops in a worse local minimum
-# on non-convex or elongated targets (rigid 100 mm, 16x16 rectangle 0.088 vs 0.022 mm, 8x8 heart 0.42 vs
-# 0.15 mm), while on the rigid circle both reach the same fit (32x32 0.16 vs 0.14 mm, 64x64 0.22 vs 0.21 mm)
-# and the full solver would only cost time (3.9 s and 63 s).
+# when it misses the target by more than FULL_ABOVE of its size; the lower objective wins. The family's LM
+# often stops in a worse local minimum on non-convex or elongated targets (rigid 100 mm, 16x16 rectangle
+# 0.088 vs 0.022 mm, 8x8 heart 0.42 vs 0.15 mm), while on the rigid circle both reach the same fit (32x32
+# 0.16 vs 0.14 mm, 64x64 0.22 vs 0.21 mm) and the full solver would only cost time (3.9 s and 63 s).
 FULL_ALWAYS_TILES = 16 * 16
 FULL_ABOVE = 2.5e-3
 # ... but not above this many tiles: at 64x64 the full solver takes 1-8 minutes and did not find the better
