@@ -39,8 +39,6 @@ MIN_LABEL_MM = 0.8  # below this a label is not legible; it is left out (and cou
 PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
 FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
 ID_FRAC = 0.45  # tile IDs fit the tile scaled by this about its centroid
-# corner labels fit the triangle cut off by the tape's chord (this fraction of the edges, at most TAPE_REACH_MM)
-CORNER_FRAC, TAPE_REACH_MM = MARK_CORNER_FRAC, MARK_REACH_MM
 
 
 def _incentre(tri: np.ndarray) -> np.ndarray:
@@ -406,8 +404,9 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
             ct, ck = np.array(c_tiles), np.array(c_k)
             q = Q[ct, ck]
             q1, q0 = Q[ct, (ck + 1) % 4], Q[ct, (ck + 3) % 4]
-            tri = np.stack([q, q + tape_reach(q, q1, CORNER_FRAC)[:, None] * (q1 - q),
-                            q + tape_reach(q, q0, CORNER_FRAC)[:, None] * (q0 - q)], 1)
+            # corner labels fit the triangle the tape covers (its chord is the tape mark's)
+            tri = np.stack([q, q + tape_reach(q, q1)[:, None] * (q1 - q),
+                            q + tape_reach(q, q0)[:, None] * (q0 - q)], 1)
             anchor = _incentre(tri)
             hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
             hc_all = hc
@@ -459,11 +458,11 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     # ---- assembly: tape pieces numbered in join order, and their map
     from . import assembly as asm
 
-    pieces = asm.tape_pieces(pattern, Q, sheet_of, letters, kind, CORNER_FRAC, TAPE_REACH_MM)
+    pieces = asm.tape_pieces(pattern, Q, sheet_of, letters, kind, MARK_CORNER_FRAC, MARK_REACH_MM)
     if "png" in options.formats and 0 < len(pieces) <= asm.MAP_MAX_PIECES:
         by_sheet = [Q[sheet_of == s] for s in range(place.n_sheets)]
-        files["assembly.png"] = asm.map_png(by_sheet, pieces, asm.tape_shapes(pattern, Q, pieces, CORNER_FRAC,
-                                                                             TAPE_REACH_MM), options.stem)
+        files["assembly.png"] = asm.map_png(by_sheet, pieces, asm.tape_shapes(pattern, Q, pieces, MARK_CORNER_FRAC,
+                                                                             MARK_REACH_MM), options.stem)
 
     # ---- manifest
     sheet_rows = []
