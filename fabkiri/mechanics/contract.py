@@ -21,7 +21,6 @@ import numpy as np
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from ..pattern.topology import STATES
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,24 +79,24 @@ def hole_closure(pattern: Pattern, state: int, delta: np.ndarray | None = None) 
         delta = hinge_turns(pattern, state)
     x = pattern.nodes
     tiles_around = top.hole_tiles  # tile owning edge c -> c+1
+    m = top.hole_hinges.shape[1]  # corners per hole (the tessellation's hole arity)
     phi = np.zeros(K)
     t = np.zeros((K, 2))
-    for c in range(4):
+    for c in range(m):
         # corner c+1 joins tile owning edge c with tile owning edge c+1
-        hinge = top.hole_hinges[:, (c + 1) % 4]
+        hinge = top.hole_hinges[:, (c + 1) % m]
         frm = tiles_around[:, c]
         sign = np.where(top.hinge_tiles[hinge, 0] == frm, 1.0, -1.0)
         phi, t = _step(phi, t, sign * delta[hinge], x[top.hinge_node[hinge]])
-    first = x[top.tiles[tiles_around[:, 0]]]  # (K, 4, 2)
+    first = x[top.tiles[tiles_around[:, 0]]]  # (K, n, 2)
     moved = geometry.rotate(first, phi[:, None]) + t[:, None, :]
     return np.linalg.norm(moved - first, axis=-1).max(axis=1)
 
 
 def contract(pattern: Pattern, state: int) -> Contraction:
     """Closed state ``state`` (1 or 2) by breadth-first rigid placement."""
-    if state not in STATES:
-        raise ValueError(f"state must be 1 or 2, not {state!r}")
     top = pattern.topology
+    top.fold(state)  # ValueError naming the kind's states
     centres = pattern.nodes[top.tiles].mean(axis=1)
     root = int(np.argmin(np.linalg.norm(centres - centres.mean(0), axis=1)))
     x = pattern.nodes - centres[root]  # local frame keeps rounding small far from the origin
@@ -116,11 +115,13 @@ def contract(pattern: Pattern, state: int) -> Contraction:
     placed = geometry.rotate(corners, phi[:, None]) + t[:, None, :]
     theta, shift = geometry.kabsch(placed.mean(axis=1), centres)  # back to the mm frame
     placed = geometry.rotate(placed, theta) + shift
-    return Contraction(state=state, corners=placed, hole_closure=hole_closure(pattern, state, delta), root=root)
+    return Contraction(
+        state=state, corners=placed, hole_closure=hole_closure(pattern, state, delta), root=root
+    )
 
 
 def contract_both(pattern: Pattern) -> dict[int, Contraction]:
-    return {s: contract(pattern, s) for s in STATES}
+    return {s: contract(pattern, s) for s in pattern.topology.states}
 
 
 def with_contracted_states(pattern: Pattern) -> Pattern:

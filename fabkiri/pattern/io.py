@@ -25,6 +25,7 @@ from ..schemas import load_schema, schema_problem
 from ..schemas import short as _short
 from . import geometry
 from .model import Pattern
+from .tessellation import DEFAULT_KIND, tessellation
 
 FORMAT = "fabkiri.pattern"
 VERSION = 1
@@ -57,7 +58,9 @@ def _skeleton(data: dict) -> dict:
         if isinstance(out.get(key), list):
             out[key] = out[key][:4]
     if isinstance(out.get("contracted"), dict):
-        out["contracted"] = {k: (v[:4] if isinstance(v, list) else v) for k, v in out["contracted"].items()}
+        out["contracted"] = {
+            k: (v[:4] if isinstance(v, list) else v) for k, v in out["contracted"].items()
+        }
     return out
 
 
@@ -65,20 +68,30 @@ def _is_num(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _array_error(data: dict) -> str | None:
-    """Row-by-row shape and type check of the bulk arrays (what the schema says)."""
+def _array_error(data: dict, n: int) -> str | None:
+    """Row-by-row shape and type check of the bulk arrays (what the schema says; ``n`` corners a tile)."""
     for i, row in enumerate(data["nodes"]):
         if not (isinstance(row, list) and len(row) == 2 and _is_num(row[0]) and _is_num(row[1])):
             return f"nodes/{i}: {_short(row)} is not an [x, y] pair of numbers"
     for i, row in enumerate(data["tiles"]):
-        if not (isinstance(row, list) and len(row) == 4
-                and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in row)):
-            return f"tiles/{i}: {_short(row)} is not a quad of 4 node indices"
+        if not (
+            isinstance(row, list)
+            and len(row) == n
+            and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in row)
+        ):
+            noun = "a quad" if n == 4 else "a tile"
+            return f"tiles/{i}: {_short(row)} is not {noun} of {n} node indices"
     for key, rows in data.get("contracted", {}).items():
         for i, tile in enumerate(rows):
-            if not (isinstance(tile, list) and len(tile) == 4 and all(
-                    isinstance(c, list) and len(c) == 2 and _is_num(c[0]) and _is_num(c[1]) for c in tile)):
-                return f"contracted/{key}/{i}: {_short(tile)} is not 4 corners [x, y]"
+            if not (
+                isinstance(tile, list)
+                and len(tile) == n
+                and all(
+                    isinstance(c, list) and len(c) == 2 and _is_num(c[0]) and _is_num(c[1])
+                    for c in tile
+                )
+            ):
+                return f"contracted/{key}/{i}: {_short(tile)} is not {n} corners [x, y]"
     return None
 
 
@@ -87,12 +100,23 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
     if not isinstance(data, dict):
         raise PatternError(f"{source}: expected a JSON object, got {type(data).__name__}")
     if data.get("format") != FORMAT:
-        raise PatternError(f"{source}: not a fabkiri pattern (format is {_short(data.get('format'))}, "
-                           f"expected {FORMAT!r})")
+        raise PatternError(
+            f"{source}: not a fabkiri pattern (format is {_short(data.get('format'))}, "
+            f"expected {FORMAT!r})"
+        )
     if data.get("version") != VERSION:
-        raise PatternError(f"{source}: unsupported pattern version {_short(data.get('version'))} "
-                           f"(this fabkiri reads version {VERSION})")
-    problem = _schema_error(_skeleton(data)) or _array_error(data)
+        raise PatternError(
+            f"{source}: unsupported pattern version {_short(data.get('version'))} "
+            f"(this fabkiri reads version {VERSION})"
+        )
+    problem = _schema_error(_skeleton(data))
+    if problem:
+        raise PatternError(f"{source}: {problem}")
+    try:
+        tess = tessellation(str(data.get("kind", DEFAULT_KIND)))
+    except PatternError as exc:
+        raise PatternError(f"{source}: {exc}") from None
+    problem = _array_error(data, tess.arity)
     if problem:
         raise PatternError(f"{source}: {problem}")
     nodes = np.asarray(data["nodes"], dtype=float)
@@ -100,8 +124,10 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
     contracted = {int(k): np.asarray(v, dtype=float) for k, v in data.get("contracted", {}).items()}
     if tiles.size and int(tiles.max()) >= len(nodes):
         t = int(np.flatnonzero((tiles >= len(nodes)).any(1))[0])
-        raise PatternError(f"{source}: tile {t} references node {int(tiles[t].max())}, outside the "
-                           f"{len(nodes)} nodes")
+        raise PatternError(
+            f"{source}: tile {t} references node {int(tiles[t].max())}, outside the "
+            f"{len(nodes)} nodes"
+        )
     problem = limits.coordinate_problem(nodes, tiles, contracted)
     if problem:
         raise PatternError(f"{source}: {problem}")
@@ -114,6 +140,7 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
             name=str(data.get("name", "")),
             lattice=data.get("lattice"),
             design=data.get("design"),
+            kind=tess.kind,
         )
     except PatternError as exc:
         raise PatternError(f"{source}: {exc}") from None
@@ -162,6 +189,8 @@ def dumps(pattern: Pattern) -> str:
     head: dict[str, Any] = {"format": FORMAT, "version": VERSION, "units": "mm"}
     if pattern.name:
         head["name"] = pattern.name
+    if pattern.kind != DEFAULT_KIND:  # absent means quad: files from before kinds read the same
+        head["kind"] = pattern.kind
     head["parity"] = pattern.parity
     parts = [f'  "{k}": {json.dumps(v)}' for k, v in head.items()]
     if pattern.lattice:
@@ -169,10 +198,15 @@ def dumps(pattern: Pattern) -> str:
     parts.append(f'  "nodes": {_rows(pattern.nodes.tolist(), "  ")}')
     parts.append(f'  "tiles": {_rows(pattern.tiles.tolist(), "  ")}')
     if pattern.contracted:
-        states = [f'    "{s}": {_rows(pattern.contracted[s].tolist(), "    ")}' for s in sorted(pattern.contracted)]
+        states = [
+            f'    "{s}": {_rows(pattern.contracted[s].tolist(), "    ")}'
+            for s in sorted(pattern.contracted)
+        ]
         parts.append('  "contracted": {\n' + ",\n".join(states) + "\n  }")
     if pattern.design:
-        design = json.dumps(_jsonable(pattern.design), indent=2, sort_keys=True).replace("\n", "\n  ")
+        design = json.dumps(_jsonable(pattern.design), indent=2, sort_keys=True).replace(
+            "\n", "\n  "
+        )
         parts.append(f'  "design": {design}')
     return "{\n" + ",\n".join(parts) + "\n}\n"
 
@@ -185,7 +219,9 @@ def write_pattern(pattern: Pattern, path: str | os.PathLike) -> Path:
 
 
 def _read_text(path: str | os.PathLike) -> str:
-    return read_input(path, max_bytes=limits.MAX_PATTERN_BYTES, what="pattern file", error=PatternError)
+    return read_input(
+        path, max_bytes=limits.MAX_PATTERN_BYTES, what="pattern file", error=PatternError
+    )
 
 
 def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
@@ -201,13 +237,17 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
             try:
                 vals = [float(t) for t in rest[:3]]
             except ValueError:
-                raise PatternError(f"{source}: line {lineno}: vertex coordinates are not numbers") from None
+                raise PatternError(
+                    f"{source}: line {lineno}: vertex coordinates are not numbers"
+                ) from None
             if len(vals) < 2:
                 raise PatternError(f"{source}: line {lineno}: a vertex needs at least x and y")
             if not all(math.isfinite(v) for v in vals):
                 raise PatternError(f"{source}: line {lineno}: non-finite vertex coordinate")
             if len(vals) == 3 and vals[2] != 0.0:
-                raise PatternError(f"{source}: line {lineno}: vertex has z = {vals[2]}; patterns are planar (z = 0)")
+                raise PatternError(
+                    f"{source}: line {lineno}: vertex has z = {vals[2]}; patterns are planar (z = 0)"
+                )
             verts.append((vals[0], vals[1]))
         elif tag == "f":
             idx = []
@@ -215,9 +255,13 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
                 try:
                     idx.append(int(tok.split("/", 1)[0]))
                 except ValueError:
-                    raise PatternError(f"{source}: line {lineno}: face index {tok!r} is not an integer") from None
+                    raise PatternError(
+                        f"{source}: line {lineno}: face index {tok!r} is not an integer"
+                    ) from None
             if len(idx) != 4:
-                raise PatternError(f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads")
+                raise PatternError(
+                    f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads"
+                )
             if any(abs(i) > limits.MAX_INT for i in idx):
                 raise PatternError(f"{source}: line {lineno}: face index beyond ±2**53")
             faces.append(idx)
@@ -230,8 +274,10 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
     bad = (f < 1) | (f > len(verts))
     if bad.any():
         i = int(np.flatnonzero(bad.any(1))[0])
-        raise PatternError(f"{source}: face {i} references vertex {int(f[i][bad[i]][0])}, "
-                           f"but the file has vertices 1..{len(verts)}")
+        raise PatternError(
+            f"{source}: face {i} references vertex {int(f[i][bad[i]][0])}, "
+            f"but the file has vertices 1..{len(verts)}"
+        )
     return np.asarray(verts, dtype=float), f - 1
 
 
@@ -279,8 +325,14 @@ def import_obj(
         tiles=faces,
         contracted=states,
         name=name if name is not None else Path(design).stem,
-        design={"source": {"design": Path(design).name, "contracted": [Path(p).name for p in contracted],
-                           "scale_mm_per_unit": scale, "reversed_tiles": bool(flip)}},
+        design={
+            "source": {
+                "design": Path(design).name,
+                "contracted": [Path(p).name for p in contracted],
+                "scale_mm_per_unit": scale,
+                "reversed_tiles": bool(flip),
+            }
+        },
     )
 
 

@@ -1,7 +1,7 @@
 """The one pattern model: topology + embeddings + metadata.
 
-A :class:`Pattern` holds the deployed node coordinates (mm), the CCW quad
-tiles, and optionally the two closed (contracted) states stored per tile,
+A :class:`Pattern` holds the deployed node coordinates (mm), the CCW tiles
+of its tessellation kind (quads by default), and optionally the two closed (contracted) states stored per tile,
 because closed states put several nodes at one point. The topology is derived
 from the tiles on first use and cached; it is never stored.
 """
@@ -16,7 +16,8 @@ import numpy as np
 
 from ..errors import PatternError
 from . import geometry
-from .topology import STATES, Topology, derive_topology
+from .tessellation import DEFAULT_KIND, tessellation
+from .topology import Topology, derive_topology
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -25,25 +26,27 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 @lru_cache(maxsize=8)
-def _topology(tiles: bytes, shape: tuple, n_nodes: int, parity: int) -> Topology:
+def _topology(tiles: bytes, shape: tuple, n_nodes: int, parity: int, kind: str) -> Topology:
     """``derive_topology`` memoised on the tiles' contents: a pattern and its copies (new states, a designed
     pattern on the standard lattice's tiles) share one topology instead of deriving it again. A bad
     pattern raises, and nothing is cached."""
-    return derive_topology(np.frombuffer(tiles, dtype=np.int64).reshape(shape), n_nodes, parity)
+    return derive_topology(
+        np.frombuffer(tiles, dtype=np.int64).reshape(shape), n_nodes, parity, kind
+    )
 
 
 @dataclass(frozen=True, eq=False)
 class Pattern:
-    """A quad kirigami pattern.
+    """A kirigami pattern: quads (rotating squares) unless ``kind`` names another tessellation.
 
     Parameters
     ----------
     nodes:
         ``(n, 2)`` deployed node coordinates in millimetres.
     tiles:
-        ``(T, 4)`` node indices of each tile, counter-clockwise.
+        ``(T, n)`` node indices of each tile, counter-clockwise (``n`` is the kind's arity, 4 for quads).
     contracted:
-        Optional closed states, ``{1: (T, 4, 2), 2: (T, 4, 2)}`` per-tile corner
+        Optional closed states, ``{1: (T, n, 2), 2: (T, n, 2)}`` per-tile corner
         coordinates in millimetres, tile corners in the same order as ``tiles``.
     parity:
         Which tile colour is "even" for the fold rules (0: tile 0). It decides
@@ -51,6 +54,9 @@ class Pattern:
     name, lattice, design:
         Free-form metadata: a name, the lattice it came from (kind, rows, cols,
         angle, tile size) and how it was designed (target, options, solver report).
+    kind:
+        The tessellation (:mod:`fabkiri.pattern.tessellation`): tile and hole arity, closed
+        states, fold rules.
     """
 
     nodes: np.ndarray
@@ -60,8 +66,11 @@ class Pattern:
     name: str = ""
     lattice: dict[str, Any] | None = None
     design: dict[str, Any] | None = None
+    kind: str = DEFAULT_KIND
 
     def __post_init__(self) -> None:
+        tess = tessellation(self.kind)
+        n = tess.arity
         nodes = np.array(self.nodes, dtype=float)
         if nodes.ndim != 2 or nodes.shape[1] != 2:
             raise PatternError(f"nodes must be a list of [x, y] pairs, got shape {nodes.shape}")
@@ -71,18 +80,22 @@ class Pattern:
         try:
             tiles = np.array(self.tiles, dtype=np.int64)
         except (ValueError, TypeError) as exc:
-            raise PatternError(f"tiles must be lists of 4 node indices ({exc})") from None
-        if tiles.ndim != 2 or tiles.shape[1] != 4:
-            raise PatternError(f"every tile must be a quad of 4 node indices, got shape {tiles.shape}")
+            raise PatternError(f"tiles must be lists of {n} node indices ({exc})") from None
+        if tiles.ndim != 2 or tiles.shape[1] != n:
+            noun = "a quad" if self.kind == "quad" else f"a {self.kind} tile"
+            raise PatternError(
+                f"every tile must be {noun} of {n} node indices, got shape {tiles.shape}"
+            )
         contracted = {}
         for key, val in dict(self.contracted).items():
             state = int(key)
-            if state not in STATES:
-                raise PatternError(f"contracted state must be 1 or 2, not {key!r}")
+            if state not in tess.states:
+                names = " or ".join(str(s) for s in tess.states)
+                raise PatternError(f"contracted state must be {names}, not {key!r}")
             arr = np.array(val, dtype=float)
-            if arr.shape != (len(tiles), 4, 2):
+            if arr.shape != (len(tiles), n, 2):
                 raise PatternError(
-                    f"contracted state {state} must hold 4 corners per tile "
+                    f"contracted state {state} must hold {n} corners per tile "
                     f"({len(tiles)} tiles), got shape {arr.shape}"
                 )
             if not np.isfinite(arr).all():
@@ -97,14 +110,16 @@ class Pattern:
 
     @cached_property
     def topology(self) -> Topology:
-        return _topology(self.tiles.tobytes(), self.tiles.shape, len(self.nodes), self.parity)
+        return _topology(
+            self.tiles.tobytes(), self.tiles.shape, len(self.nodes), self.parity, self.kind
+        )
 
     @property
     def n_tiles(self) -> int:
         return len(self.tiles)
 
     def corners(self, state: str | int = "deployed") -> np.ndarray:
-        """Per-tile corners ``(T, 4, 2)`` of the deployed state or a closed state."""
+        """Per-tile corners ``(T, n, 2)`` of the deployed state or a closed state."""
         if state in ("deployed", 0, "0"):
             return self.nodes[self.tiles]
         s = int(state)
@@ -128,10 +143,10 @@ class Pattern:
         """Mean tile edge in mm: the scale of every relative tolerance."""
         return geometry.mean_edge_length(self.corners())
 
-    def with_contracted(self, contracted: dict[int, np.ndarray]) -> "Pattern":
+    def with_contracted(self, contracted: dict[int, np.ndarray]) -> Pattern:
         return replace(self, contracted=contracted)
 
-    def with_parity(self, parity: int) -> "Pattern":
+    def with_parity(self, parity: int) -> Pattern:
         return replace(self, parity=parity)
 
     def __repr__(self) -> str:

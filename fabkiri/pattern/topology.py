@@ -1,4 +1,4 @@
-"""Topology of a quad kirigami pattern, derived once from its tiles.
+"""Topology of a kirigami pattern, derived once from its tiles.
 
 Vocabulary (algorithm spec §1-§2):
 
@@ -8,9 +8,10 @@ Vocabulary (algorithm spec §1-§2):
   counter-clockwise inside each tile, gap 0 lies between ``A``'s edge to
   ``prev_A(h)`` and ``B``'s edge to ``next_B(h)``, gap 1 between ``B``'s edge to
   ``prev_B(h)`` and ``A``'s edge to ``next_A(h)``;
-* a **hole** is a bounded face of the cut: four tile edges of four distinct
-  tiles meeting at four hinges;
-* a closed **state** folds exactly one gap at every hinge. The tile adjacency
+* a **hole** is a bounded face of the cut: tile edges of distinct tiles meeting at hinges, as many
+  as the tessellation's ``hole_arity`` (four in a quad pattern);
+* a closed **state** folds exactly one gap at every hinge; which one is the tessellation's fold rule
+  (:mod:`fabkiri.pattern.tessellation`; the quad rule is in :mod:`fabkiri.pattern.quad`). The tile adjacency
   graph of a quad tessellation is bipartite; in state 1 every hinge folds the
   gap on the ``prev`` side of its *even* tile, in state 2 the other gap. With the
   lattice's corner order (BL, BR, TR, TL) this is the primal pattern (ψ = 0) for
@@ -31,6 +32,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from ..errors import PatternError
+from .tessellation import DEFAULT_KIND, tessellation
 
 STATES = (1, 2)
 
@@ -56,9 +58,9 @@ class FoldRule:
 
 @dataclass(frozen=True, eq=False)
 class Topology:
-    """Hinges, free corners, holes and fold rules of a set of CCW quad tiles."""
+    """Hinges, free corners, holes and fold rules of a set of CCW tiles (``n`` corners each)."""
 
-    tiles: np.ndarray  # (T, 4) node indices, CCW
+    tiles: np.ndarray  # (T, n) node indices, CCW
     n_nodes: int
     hinge_node: np.ndarray  # (H,)
     hinge_tiles: np.ndarray  # (H, 2) tiles A < B
@@ -66,11 +68,12 @@ class Topology:
     free_nodes: np.ndarray  # (F,)
     tile_color: np.ndarray  # (T,) bipartite colour, tile 0 has colour 0
     gap_face: np.ndarray  # (H, 2) hole index of each gap, -1 for the exterior
-    hole_nodes: np.ndarray  # (K, 4) hinge nodes, CCW around the hole
-    hole_hinges: np.ndarray  # (K, 4) hinge index of each hole corner
-    hole_gap: np.ndarray  # (K, 4) which gap of that hinge is this hole
-    hole_tiles: np.ndarray  # (K, 4) tile owning the hole edge from corner c to c+1
+    hole_nodes: np.ndarray  # (K, m) hinge nodes, CCW around the hole
+    hole_hinges: np.ndarray  # (K, m) hinge index of each hole corner
+    hole_gap: np.ndarray  # (K, m) which gap of that hinge is this hole
+    hole_tiles: np.ndarray  # (K, m) tile owning the hole edge from corner c to c+1
     parity: int = 0
+    kind: str = DEFAULT_KIND  # the tessellation: arity, hole arity, fold rules
 
     @property
     def n_tiles(self) -> int:
@@ -101,21 +104,29 @@ class Topology:
             (np.concatenate([h, h]), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(T, T)
         )
 
-    def spanning_tree(self, root: int = 0) -> "SpanningTree":
+    def spanning_tree(self, root: int = 0) -> SpanningTree:
         """Breadth-first spanning tree of the tile graph from ``root``."""
         return _spanning_tree(self, root)
 
     def even_tiles(self) -> np.ndarray:
         return self.tile_color == self.parity
 
+    @property
+    def arity(self) -> int:
+        """Corners per tile."""
+        return int(self.tiles.shape[1])
+
+    @property
+    def states(self) -> tuple[int, ...]:
+        return tessellation(self.kind).states
+
     def fold(self, state: int) -> FoldRule:
-        if state not in STATES:
-            raise ValueError(f"state must be 1 or 2, not {state!r}")
-        return self._folds[state]
+        return self._folds[tessellation(self.kind).check_state(state)]
 
     @cached_property
     def _folds(self) -> dict[int, FoldRule]:
-        return {s: _fold_rule(self, s) for s in STATES}
+        rule = tessellation(self.kind).fold_rule
+        return {s: rule(self, s) for s in self.states}
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,65 +163,53 @@ def _spanning_tree(top: Topology, root: int) -> SpanningTree:
     children = order[1:].astype(np.int64)
     parents = pred[children].astype(np.int64)
     hinges = np.asarray(adj[parents, children]).ravel().astype(np.int64) - 1
-    return SpanningTree(root, children, parents, hinges, depth[children],
-                        top.hinge_tiles[hinges, 0] == parents)
-
-
-def _fold_rule(top: Topology, state: int) -> FoldRule:
-    tiles = top.tiles
-    A, B = top.hinge_tiles.T
-    cA, cB = top.hinge_corner.T
-    a_even = top.even_tiles()[A]
-    fold_gap = np.where(a_even, 0, 1) if state == 1 else np.where(a_even, 1, 0)
-    # gap 0: (prev_A, next_B); gap 1: (next_A, prev_B)
-    end_cA = np.where(fold_gap == 0, (cA + 3) % 4, (cA + 1) % 4)
-    end_cB = np.where(fold_gap == 0, (cB + 1) % 4, (cB + 3) % 4)
-    fold_ends = np.stack([tiles[A, end_cA], tiles[B, end_cB]], -1)
-
-    K = top.n_holes
-    hole_folds = fold_gap[top.hole_hinges] == top.hole_gap if K else np.zeros((0, 4), bool)
-    if K:
-        alternating = (hole_folds == np.array([True, False, True, False])).all(1) | (
-            hole_folds == np.array([False, True, False, True])
-        ).all(1)
-        if not alternating.all():
-            bad = int(np.flatnonzero(~alternating)[0])
-            raise PatternError(
-                f"hole {bad} (nodes {top.hole_nodes[bad].tolist()}) does not fold at two opposite "
-                f"corners in state {state}: not a rotating-squares quad tessellation"
-            )
-    # merge corners: the two corners where this hole does not fold
-    merge = np.argsort(hole_folds, axis=1, kind="stable")[:, :2] if K else np.zeros((0, 2), int)
-    mh = np.take_along_axis(top.hole_hinges, merge, 1) if K else np.zeros((0, 2), int)
-    ring_tiles = top.hinge_tiles[mh].reshape(K, 4)
-    ring_corners = top.hinge_corner[mh].reshape(K, 4)
-    rings = np.stack([ring_tiles, ring_corners], -1)
-    return FoldRule(
-        state=state,
-        fold_gap=fold_gap.astype(np.int64),
-        fold_ends=fold_ends,
-        fold_corner_ends=np.stack([end_cA, end_cB], -1),
-        hole_folds=hole_folds,
-        rings=rings,
+    return SpanningTree(
+        root, children, parents, hinges, depth[children], top.hinge_tiles[hinges, 0] == parents
     )
 
 
-def derive_topology(tiles: np.ndarray, n_nodes: int, parity: int = 0) -> Topology:
-    """Derive hinges, holes and fold rules from CCW quad tiles.
+def derive_topology(
+    tiles: np.ndarray, n_nodes: int, parity: int = 0, kind: str = DEFAULT_KIND
+) -> Topology:
+    """Derive hinges, holes and fold rules from CCW tiles of the tessellation ``kind``.
 
     Raises :class:`PatternError` naming the first inconsistency: a node used by
     three or more tiles, two tiles sharing an edge, a disconnected pattern, a
-    tile graph that is not two-colourable, or a face that is not a quad hole.
+    tile graph that is not two-colourable, or a face that is not a hole of the kind.
     """
+    tess = tessellation(kind)
+    tiles = _checked_tiles(tiles, n_nodes, parity, kind, tess.arity)
+    use = np.bincount(tiles.ravel(), minlength=n_nodes)
+    hinge_node, hinge_tiles, hinge_corner = _hinges(tiles, use)
+    color = _two_colouring(hinge_tiles, len(tiles))
+    holes = _holes(tiles, n_nodes, hinge_node, hinge_tiles, hinge_corner, kind, tess.hole_arity)
+    return Topology(
+        tiles=tiles,
+        n_nodes=int(n_nodes),
+        hinge_node=hinge_node,
+        hinge_tiles=hinge_tiles,
+        hinge_corner=hinge_corner,
+        free_nodes=np.flatnonzero(use == 1),
+        tile_color=color,
+        parity=int(parity),
+        kind=kind,
+        **holes,
+    )
+
+
+def _checked_tiles(tiles: np.ndarray, n_nodes: int, parity: int, kind: str, n: int) -> np.ndarray:
+    """The tiles as an int array, or :class:`PatternError` on the first malformed tile or node use."""
     tiles = np.asarray(tiles, dtype=np.int64)
-    T = len(tiles)
-    if T == 0:
+    if len(tiles) == 0:
         raise PatternError("the pattern has no tiles")
-    if tiles.ndim != 2 or tiles.shape[1] != 4:
-        raise PatternError(f"tiles must be quads (4 node indices each), got shape {tiles.shape}")
+    if tiles.ndim != 2 or tiles.shape[1] != n:
+        noun = "quads" if kind == "quad" else f"{kind} tiles"
+        raise PatternError(f"tiles must be {noun} ({n} node indices each), got shape {tiles.shape}")
     if tiles.min() < 0 or tiles.max() >= n_nodes:
         bad = int(np.flatnonzero((tiles < 0).any(1) | (tiles >= n_nodes).any(1))[0])
-        raise PatternError(f"tile {bad} references node {tiles[bad].tolist()} outside 0..{n_nodes - 1}")
+        raise PatternError(
+            f"tile {bad} references node {tiles[bad].tolist()} outside 0..{n_nodes - 1}"
+        )
     srt = np.sort(tiles, axis=1)
     dup = (srt[:, 1:] == srt[:, :-1]).any(1)
     if dup.any():
@@ -218,39 +217,56 @@ def derive_topology(tiles: np.ndarray, n_nodes: int, parity: int = 0) -> Topolog
         raise PatternError(f"tile {bad} uses the same node twice: {tiles[bad].tolist()}")
     if parity not in (0, 1):
         raise PatternError(f"parity must be 0 or 1, not {parity!r}")
-
-    flat = tiles.ravel()
-    use = np.bincount(flat, minlength=n_nodes)
+    use = np.bincount(tiles.ravel(), minlength=n_nodes)
     if (use > 2).any():
         bad = int(np.flatnonzero(use > 2)[0])
         who = sorted({int(t) for t in np.flatnonzero((tiles == bad).any(1))})
-        raise PatternError(f"node {bad} is shared by {use[bad]} tiles {who}; a hinge joins exactly two")
+        raise PatternError(
+            f"node {bad} is shared by {use[bad]} tiles {who}; a hinge joins exactly two"
+        )
     if (use == 0).any():
         raise PatternError(f"node {int(np.flatnonzero(use == 0)[0])} is not used by any tile")
+    return tiles
 
+
+def _hinges(tiles: np.ndarray, use: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Hinge nodes (used by two tiles), their tiles ``A < B`` and the hinge's corner in each."""
+    T, n = tiles.shape
+    flat = tiles.ravel()
     order = np.argsort(flat, kind="stable")
-    sorted_nodes = flat[order]
-    first = np.searchsorted(sorted_nodes, np.arange(n_nodes))
+    first = np.searchsorted(flat[order], np.arange(len(use)))
     hinge_node = np.flatnonzero(use == 2)
     i0, i1 = order[first[hinge_node]], order[first[hinge_node] + 1]
-    hinge_tiles = np.stack([i0 // 4, i1 // 4], -1)
-    hinge_corner = np.stack([i0 % 4, i1 % 4], -1)
+    hinge_tiles = np.stack([i0 // n, i1 // n], -1)
+    hinge_corner = np.stack([i0 % n, i1 % n], -1)
     swap = hinge_tiles[:, 0] > hinge_tiles[:, 1]
     hinge_tiles[swap] = hinge_tiles[swap][:, ::-1]
     hinge_corner[swap] = hinge_corner[swap][:, ::-1]
-    free_nodes = np.flatnonzero(use == 1)
-    H = len(hinge_node)
-
     # Two tiles may share one node only: a shared edge is not a kirigami cut.
-    if H:
+    if len(hinge_node):
         key = hinge_tiles[:, 0] * T + hinge_tiles[:, 1]
         uniq, counts = np.unique(key, return_counts=True)
         if (counts > 1).any():
             k = uniq[counts > 1][0]
-            raise PatternError(f"tiles {k // T} and {k % T} share more than one node (an uncut edge)")
+            raise PatternError(
+                f"tiles {k // T} and {k % T} share more than one node (an uncut edge)"
+            )
+    return hinge_node, hinge_tiles, hinge_corner
 
-    adj = sparse.csr_matrix((np.ones(2 * H), (np.r_[hinge_tiles[:, 0], hinge_tiles[:, 1]],
-                                               np.r_[hinge_tiles[:, 1], hinge_tiles[:, 0]])), shape=(T, T))
+
+def _two_colouring(hinge_tiles: np.ndarray, T: int) -> np.ndarray:
+    """The tile graph's bipartite colouring (tile 0 has colour 0); it must be connected and bipartite."""
+    H = len(hinge_tiles)
+    adj = sparse.csr_matrix(
+        (
+            np.ones(2 * H),
+            (
+                np.r_[hinge_tiles[:, 0], hinge_tiles[:, 1]],
+                np.r_[hinge_tiles[:, 1], hinge_tiles[:, 0]],
+            ),
+        ),
+        shape=(T, T),
+    )
     n_comp, _ = csgraph.connected_components(adj, directed=False)
     if n_comp > 1:
         raise PatternError(f"the tiles form {n_comp} disconnected pieces; a pattern is one piece")
@@ -262,14 +278,22 @@ def derive_topology(tiles: np.ndarray, n_nodes: int, parity: int = 0) -> Topolog
     if clash.any():
         a, b = hinge_tiles[np.flatnonzero(clash)[0]]
         raise PatternError(
-            f"tiles {a} and {b} close an odd cycle of tiles: a quad kirigami tile graph is a checkerboard"
+            f"tiles {a} and {b} close an odd cycle of tiles: a kirigami tile graph is two-coloured"
         )
+    return color
 
-    # Faces of the cut: follow tile edges backwards with the face on the left.
-    # Half-edge 4*t+k is the edge of tile t from corner k to k+1, walked from
-    # k+1 to k. At a hinge the walk continues on the other tile, else on the same.
-    he = np.arange(4 * T)
-    t_of, k_of = he // 4, he % 4
+
+def _holes(tiles, n_nodes, hinge_node, hinge_tiles, hinge_corner, kind: str, m: int) -> dict:
+    """The bounded faces of the cut (``hole_*`` arrays, ``m`` corners each) and each gap's hole.
+
+    Faces are found by following tile edges backwards with the face on the left: half-edge
+    ``n*t+k`` is the edge of tile ``t`` from corner ``k`` to ``k+1``, walked from ``k+1`` to ``k``;
+    at a hinge the walk continues on the other tile, at a free corner on the same one.
+    """
+    T, n = tiles.shape
+    H = len(hinge_node)
+    he = np.arange(n * T)
+    t_of, k_of = he // n, he % n
     node_at = tiles[t_of, k_of]
     hinge_of_node = np.full(n_nodes, -1, dtype=np.int64)
     hinge_of_node[hinge_node] = np.arange(H)
@@ -281,58 +305,44 @@ def derive_topology(tiles: np.ndarray, n_nodes: int, parity: int = 0) -> Topolog
     arrives_on_A = ht[h_at, 0] == t_of
     other_t = np.where(is_h, np.where(arrives_on_A, ht[h_at, 1], ht[h_at, 0]), t_of)
     other_k = np.where(is_h, np.where(arrives_on_A, hc[h_at, 1], hc[h_at, 0]), k_of)
-    nxt = 4 * other_t + (other_k + 3) % 4
-    perm = sparse.csr_matrix((np.ones(4 * T), (he, nxt)), shape=(4 * T, 4 * T))
+    nxt = n * other_t + (other_k + n - 1) % n
+    perm = sparse.csr_matrix((np.ones(n * T), (he, nxt)), shape=(n * T, n * T))
     n_faces, face_of = csgraph.connected_components(perm, directed=True, connection="strong")
     face_size = np.bincount(face_of, minlength=n_faces)
     face_free = np.bincount(face_of, weights=(~is_h).astype(float), minlength=n_faces) > 0
-
-    # which gap of the hinge the half-edge's face fills (see module docstring)
-    gap_idx = np.where(arrives_on_A, 1, 0)
+    gap_idx = np.where(arrives_on_A, 1, 0)  # which gap of the hinge the half-edge's face fills
 
     bounded = np.flatnonzero(~face_free)
-    bad = bounded[face_size[bounded] != 4]
+    bad = bounded[face_size[bounded] != m]
     if len(bad):
         raise PatternError(
-            f"the cut has a hole with {face_size[bad[0]]} corners; quad kirigami holes have 4"
+            f"the cut has a hole with {face_size[bad[0]]} corners; {kind} kirigami holes have {m}"
         )
-    # order holes by their smallest half-edge, walk 4 steps from it
-    first_he = np.full(n_faces, 4 * T, dtype=np.int64)
+    # order holes by their smallest half-edge, walk m steps from it
+    first_he = np.full(n_faces, n * T, dtype=np.int64)
     np.minimum.at(first_he, face_of, he)
     hole_faces = bounded[np.argsort(first_he[bounded], kind="stable")]
     K = len(hole_faces)
     hole_index = np.full(n_faces, -1, dtype=np.int64)
     hole_index[hole_faces] = np.arange(K)
-    walk = np.empty((K, 4), dtype=np.int64)
+    walk = np.empty((K, m), dtype=np.int64)
     if K:
         walk[:, 0] = first_he[hole_faces]
-        for i in range(1, 4):
+        for i in range(1, m):
             walk[:, i] = nxt[walk[:, i - 1]]
     # corner c of a hole is where the walk arrives at step c; the edge from
     # corner c to corner c+1 (CCW) is the one walked at step c+1.
-    hole_nodes = node_at[walk]
-    hole_hinges = h_at[walk]
-    hole_gap = gap_idx[walk]
     hole_tiles = t_of[np.roll(walk, -1, axis=1)]
     if K and (np.sort(hole_tiles, 1)[:, 1:] == np.sort(hole_tiles, 1)[:, :-1]).any():
-        raise PatternError("a hole is bounded twice by the same tile; not a quad kirigami tessellation")
-
+        raise PatternError(
+            f"a hole is bounded twice by the same tile; not a {kind} kirigami tessellation"
+        )
     gap_face = np.full((H, 2), -1, dtype=np.int64)
-    sel = is_h
-    gap_face[h_at[sel], gap_idx[sel]] = hole_index[face_of[sel]]
-
-    return Topology(
-        tiles=tiles,
-        n_nodes=int(n_nodes),
-        hinge_node=hinge_node,
-        hinge_tiles=hinge_tiles,
-        hinge_corner=hinge_corner,
-        free_nodes=free_nodes,
-        tile_color=color,
-        gap_face=gap_face,
-        hole_nodes=hole_nodes,
-        hole_hinges=hole_hinges,
-        hole_gap=hole_gap,
-        hole_tiles=hole_tiles,
-        parity=int(parity),
-    )
+    gap_face[h_at[is_h], gap_idx[is_h]] = hole_index[face_of[is_h]]
+    return {
+        "gap_face": gap_face,
+        "hole_nodes": node_at[walk],
+        "hole_hinges": h_at[walk],
+        "hole_gap": gap_idx[walk],
+        "hole_tiles": hole_tiles,
+    }

@@ -1,0 +1,116 @@
+"""The tessellation seam: kinds are looked up by name and own arity, holes and fold rules."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from fabkiri.errors import PatternError
+from fabkiri.mechanics.contract import contract
+from fabkiri.pattern import io
+from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.model import Pattern
+from fabkiri.pattern.quad import quad_fold_rule
+from fabkiri.pattern.tessellation import Tessellation, kinds, register, tessellation
+from fabkiri.pattern.topology import derive_topology
+
+
+def test_quad_is_the_default_kind_and_owns_the_quad_rules():
+    q = tessellation()
+    assert (q.kind, q.arity, q.hole_arity, q.states) == ("quad", 4, 4, (1, 2))
+    assert q.boundary_sides == ("B", "R", "T", "L") and q.rigid_family
+    p = standard_pattern(3, 4)
+    assert p.kind == "quad" and p.topology.kind == "quad" and p.topology.arity == 4
+    assert "quad" in kinds()
+
+
+def test_unknown_kind_is_a_one_line_error_naming_the_known_kinds(tmp_path):
+    with pytest.raises(PatternError, match=r"unknown tessellation kind 'hexagons' \(known: .*quad"):
+        tessellation("hexagons")
+    p = standard_pattern(2, 2)
+    with pytest.raises(PatternError, match="unknown tessellation kind"):
+        replace(p, kind="hexagons")
+    data = json.loads(io.dumps(p))
+    data["kind"] = "hexagons"
+    src = tmp_path / "p.json"
+    src.write_text(json.dumps(data))
+    r = subprocess.run(
+        [sys.executable, "-m", "fabkiri.cli.main", "info", str(src)], capture_output=True, text=True
+    )
+    assert r.returncode == 2 and "unknown tessellation kind 'hexagons'" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_quad_files_do_not_carry_a_kind_and_read_back_as_quad():
+    p = standard_pattern(2, 3)
+    text = io.dumps(p)
+    assert '"kind"' not in text.split('"lattice"')[0]  # the lattice's own "kind" is metadata
+    assert io.loads(text).kind == "quad"
+
+
+def test_tile_arity_comes_from_the_kind():
+    p = standard_pattern(2, 2)
+    with pytest.raises(PatternError, match="quads \\(4 node indices each\\)"):
+        derive_topology(p.tiles[:, :3], len(p.nodes))
+    data = json.loads(io.dumps(p))
+    data["tiles"][1] = data["tiles"][1][:3]
+    with pytest.raises(PatternError, match="tiles/1: .* is not a quad of 4 node indices"):
+        io.pattern_from_dict(data)
+
+
+def _swapped_rule(top, state):
+    """The quad rule with the two closed states exchanged: a kind that differs only in its rules."""
+    r = quad_fold_rule(top, 3 - state)
+    return replace(r, state=state)
+
+
+def test_the_topology_and_contraction_use_the_registered_kinds_fold_rule():
+    q = tessellation("quad")
+    register(
+        Tessellation(
+            kind="quad-swapped-test",
+            arity=4,
+            hole_arity=4,
+            states=q.states,
+            fold_rule=_swapped_rule,
+            standard=q.standard,
+            boundary_sides=q.boundary_sides,
+        )
+    )
+    p = standard_pattern(4, 5, angle_deg=30.0)
+    s = replace(p, kind="quad-swapped-test")
+    assert s.topology is not p.topology  # topology is cached per kind
+    for state in (1, 2):
+        np.testing.assert_array_equal(
+            s.topology.fold(state).fold_gap, p.topology.fold(3 - state).fold_gap
+        )
+        assert np.abs(contract(s, state).corners - contract(p, 3 - state).corners).max() <= 1e-12
+    assert (
+        io.loads(io.dumps(s)).kind == "quad-swapped-test"
+    )  # a non-default kind is written and read
+    with pytest.raises(ValueError, match="state must be 1 or 2"):
+        s.topology.fold(3)
+
+
+def test_a_kind_with_another_arity_is_checked_against_it():
+    q = tessellation("quad")
+    register(
+        Tessellation(
+            kind="triangles-test",
+            arity=3,
+            hole_arity=6,
+            states=q.states,
+            fold_rule=quad_fold_rule,
+            standard=q.standard,
+            boundary_sides=(),
+        )
+    )
+    p = standard_pattern(2, 2)
+    with pytest.raises(
+        PatternError, match="every tile must be a triangles-test tile of 3 node indices"
+    ):
+        Pattern(nodes=p.nodes, tiles=p.tiles, kind="triangles-test")
