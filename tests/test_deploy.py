@@ -14,13 +14,12 @@ from fabkiri.mechanics.deploy import (
     collisions,
     deployment_path,
     elastic_path,
-    gap_angles,
     mechanism_split,
-    path_parameter,
     place_rigid,
     rigid_path,
-    tile_angles,
 )
+from fabkiri.mechanics.elastic import gap_angles
+from fabkiri.mechanics.path import path_parameter, tile_angles
 from fabkiri.pattern import geometry, import_obj, read_pattern, standard_pattern
 
 from .conftest import REPO, TEMPLATES
@@ -35,14 +34,17 @@ def ref(name: str):
             return path
     pytest.skip(f"reference data not available: Example_{name}.obj")
 
+
 ZERO = 1e-12
 
 
 def compact_reconfigurable():
-    return adopt_state_labels(import_obj(
-        ref("compact_reconfigurable_design"),
-        [ref("compact_reconfigurable_contracted1"), ref("compact_reconfigurable_contracted2")],
-    ))
+    return adopt_state_labels(
+        import_obj(
+            ref("compact_reconfigurable_design"),
+            [ref("compact_reconfigurable_contracted1"), ref("compact_reconfigurable_contracted2")],
+        )
+    )
 
 
 def _checkerboard_rotation(pattern, corners):
@@ -59,12 +61,18 @@ def _checkerboard_rotation(pattern, corners):
     return spread, omega
 
 
-@pytest.mark.parametrize("make", [
-    lambda: standard_pattern(8, 8, tile_size=10.0),
-    lambda: standard_pattern(5, 7, tile_size=3.0, angle_deg=30.0),
-    lambda: reconfigurable_design(6, 6, seed=3, amplitude=0.3, waves=3, rigid=True),
-    lambda: read_pattern(TEMPLATES / "patterns" / "circle-8x8-rigid.json"),  # from `fabkiri design --rigid`
-], ids=["standard-8x8", "standard-5x7-30deg", "rigid-design-6x6", "solver-circle-8x8-rigid"])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: standard_pattern(8, 8, tile_size=10.0),
+        lambda: standard_pattern(5, 7, tile_size=3.0, angle_deg=30.0),
+        lambda: reconfigurable_design(6, 6, seed=3, amplitude=0.3, waves=3, rigid=True),
+        lambda: read_pattern(
+            TEMPLATES / "patterns" / "circle-8x8-rigid.json"
+        ),  # from `fabkiri design --rigid`
+    ],
+    ids=["standard-8x8", "standard-5x7-30deg", "rigid-design-6x6", "solver-circle-8x8-rigid"],
+)
 def test_rigid_path_zero_energy_uniform_checkerboard_no_collision(make):
     p = make()
     path = rigid_path(p, steps=40)
@@ -190,7 +198,10 @@ def test_coarse_steps_follow_the_same_branch():
         g = np.flatnonzero(np.isclose(fine.t, tf, rtol=0, atol=1e-12))
         if len(g):
             shared += 1
-            assert geometry.aligned_distance(coarse.corners[f], fine.corners[g[0]]) <= 1e-9 * p.tile_size
+            assert (
+                geometry.aligned_distance(coarse.corners[f], fine.corners[g[0]])
+                <= 1e-9 * p.tile_size
+            )
     assert shared >= 5
 
 
@@ -270,13 +281,22 @@ def test_collision_screen_agrees_with_brute_force_overlay(seed, spread):
     quads = centres[:, None] + rad[..., None] * np.stack([np.cos(ang), np.sin(ang)], -1)
     rep = collisions(quads[None], tile_size=1.0)
     polys = shapely.make_valid(shapely.polygons(quads))
-    truth = {(i, j) for i in range(n) for j in range(i + 1, n)
-             if shapely.area(shapely.intersection(polys[i], polys[j], grid_size=1e-11)) > 1e-9}
+    truth = {
+        (i, j)
+        for i in range(n)
+        for j in range(i + 1, n)
+        if shapely.area(shapely.intersection(polys[i], polys[j], grid_size=1e-11)) > 1e-9
+    }
     assert set(rep.pairs()) == truth
 
 
 @settings(max_examples=15, deadline=None)
-@given(rows=st.integers(2, 6), cols=st.integers(2, 6), angle=st.floats(5.0, 85.0), size=st.floats(0.5, 50.0))
+@given(
+    rows=st.integers(2, 6),
+    cols=st.integers(2, 6),
+    angle=st.floats(5.0, 85.0),
+    size=st.floats(0.5, 50.0),
+)
 def test_rigid_path_of_any_standard_pattern(rows, cols, angle, size):
     p = standard_pattern(rows, cols, tile_size=size, angle_deg=angle)
     path = rigid_path(p, steps=8)

@@ -134,7 +134,9 @@ def springs(pattern: Pattern) -> Springs:
     short = rest <= 1e-9 * max(float(rest.max(initial=0.0)), 1e-300)
     if short.any():  # a relative strain needs a length to be relative to
         s = int(np.flatnonzero(short)[0])
-        raise PatternError(f"tile {s // 6} has a zero-length edge or diagonal; it cannot carry a spring")
+        raise PatternError(
+            f"tile {s // 6} has a zero-length edge or diagonal; it cannot carry a spring"
+        )
     tile = np.repeat(np.arange(len(tiles)), len(SPRING_CORNERS))
     return Springs(pairs=pairs, rest=rest, tile=tile, n_nodes=len(x), n_tiles=len(tiles))
 

@@ -54,7 +54,9 @@ class PatternInfo:
     tolerance_rel: float
     tolerance_rad: float
     states: list[StateInfo] = field(default_factory=list)
-    conformance: dict = field(default_factory=dict)  # "deployed" / "state_S" -> design.conformance measure
+    conformance: dict = field(
+        default_factory=dict
+    )  # "deployed" / "state_S" -> design.conformance measure
 
     @property
     def closes_both(self) -> bool:
@@ -102,30 +104,42 @@ class PatternInfo:
             f"hinge sums   max |θA+θB-π| = {self.hinge_sum_max_rad:.3e} rad -> "
             f"{'rigid-deployable' if self.rigid_deployable else 'not rigid-deployable'}"
         )
-        lines.append("state  closes  loop closure (tile sizes / mm)   edge pairs (mm)   rings (rad)   stored state")
+        lines.append(
+            "state  closes  loop closure (tile sizes / mm)   edge pairs (mm)   rings (rad)   stored state"
+        )
         for s in self.states:
-            stored = "—" if s.supplied_match_rel is None else (
-                f"{'matches' if s.supplied_matches else 'DIFFERS'} ({s.supplied_match_rel:.2e})")
+            stored = (
+                "—"
+                if s.supplied_match_rel is None
+                else (
+                    f"{'matches' if s.supplied_matches else 'DIFFERS'} ({s.supplied_match_rel:.2e})"
+                )
+            )
             lines.append(
                 f"{s.state:>5}  {'yes' if s.closes else 'NO':>6}  {s.max_closure_rel:>12.3e} / {s.max_closure_mm:<12.3e}"
                 f"   {s.edge_pair_max_mm:>13.3e}   {s.ring_max_rad:>11.3e}   {stored}"
             )
             if s.wrapped_tiles:
-                lines.append(f"       ring residuals wrapped by 2π because of tiles {s.wrapped_tiles}")
+                lines.append(
+                    f"       ring residuals wrapped by 2π because of tiles {s.wrapped_tiles}"
+                )
         for key, c in self.conformance.items():
             lines.append(
                 f"shape        {key.replace('_', ' ')} vs {c.get('target', 'target')}: Hausdorff "
                 f"{c['hausdorff_mm']:.3g} mm ({100 * c['hausdorff_rel']:.2f} % of {c['size_mm']:.4g} mm), 1-IoU "
                 f"{c['one_minus_iou']:.3g}, mean distance {c['mean_outline_to_target_mm']:.3g}/"
                 f"{c['mean_target_to_outline_mm']:.3g} mm, spacing min/mean {c['spacing_min_mm']:.3g}/"
-                f"{c['spacing_mean_mm']:.3g} mm")
+                f"{c['spacing_mean_mm']:.3g} mm"
+            )
         lines.append(f"tolerance    {self.tolerance_rel:g} x tile size, {self.tolerance_rad:g} rad")
         verdict = "closes in both states" if self.closes_both else "; ".join(self.problems())
         lines.append(f"verdict      {verdict}")
         return "\n".join(lines)
 
 
-def describe(pattern: Pattern, tol: float = DEFAULT_TOL, tol_rad: float = DEFAULT_TOL_RAD) -> PatternInfo:
+def describe(
+    pattern: Pattern, tol: float = DEFAULT_TOL, tol_rad: float = DEFAULT_TOL_RAD
+) -> PatternInfo:
     """Measure a pattern: topology counts, residuals, both contractions."""
     top = pattern.topology
     corners = pattern.corners()
@@ -184,11 +198,15 @@ def _conformance(pattern: Pattern) -> dict:
     out = {}
     try:
         if isinstance(d.get("target"), dict):
-            out["deployed"] = conf.deployed(pattern.nodes, pattern.topology, target_from_dict(d["target"]))
+            out["deployed"] = conf.deployed(
+                pattern.nodes, pattern.topology, target_from_dict(d["target"])
+            )
         for s, tgt in sorted((d.get("contracted_targets") or {}).items()):
             if int(s) in STATES:
                 c = contract(pattern, int(s))
-                out[f"state_{s}"] = conf.closed(pattern.contracted.get(int(s), c.corners), target_from_dict(tgt))
+                out[f"state_{s}"] = conf.closed(
+                    pattern.contracted.get(int(s), c.corners), target_from_dict(tgt)
+                )
     except (InputError, ValueError, TypeError, KeyError):
         pass
     return out

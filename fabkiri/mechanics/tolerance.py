@@ -56,38 +56,63 @@ class ToleranceResult:
     gap: dict[str, np.ndarray]  # state -> (N,) largest hinge gap, mm
     overlap_max: dict[str, np.ndarray]  # closed state -> (N,) largest pair overlap, mm²
     overlap_total: dict[str, np.ndarray]  # closed state -> (N,) summed overlap, mm²
-    seam_gap: dict[str, np.ndarray]  # closed state -> (N,) widest opening between edges meant to lie flush, mm
+    seam_gap: dict[
+        str, np.ndarray
+    ]  # closed state -> (N,) widest opening between edges meant to lie flush, mm
     outline: np.ndarray  # (N,) deployed outline error, mm
     outline_reference: str  # what the outline error is measured from
-    outline_fit_mm: float | None  # the design's own distance to its target (design.report.fit), if stored
+    outline_fit_mm: (
+        float | None
+    )  # the design's own distance to its target (design.report.fit), if stored
     sensitivity: np.ndarray  # (T,) correlation of each tile's error size with the worst gap
     tile_gap_mean: np.ndarray  # (T,) mean over samples of the largest gap at the tile's hinges
     time_s: float = 0.0
 
     def _dist(self, a: np.ndarray) -> dict:
         p = np.percentile(a, PERCENTILES)
-        return {"mean": float(a.mean()), "sd": float(a.std()), "max": float(a.max()),
-                **{f"p{q}": float(v) for q, v in zip(PERCENTILES, p)}}
+        return {
+            "mean": float(a.mean()),
+            "sd": float(a.std()),
+            "max": float(a.max()),
+            **{f"p{q}": float(v) for q, v in zip(PERCENTILES, p)},
+        }
 
     def most_sensitive(self, k: int = 5) -> list[dict]:
         order = np.argsort(-self.sensitivity, kind="stable")[:k]
-        return [{"tile": int(t), "correlation": round(float(self.sensitivity[t]), 4),
-                 "mean_gap_at_tile_mm": float(self.tile_gap_mean[t])} for t in order]
+        return [
+            {
+                "tile": int(t),
+                "correlation": round(float(self.sensitivity[t]), 4),
+                "mean_gap_at_tile_mm": float(self.tile_gap_mean[t]),
+            }
+            for t in order
+        ]
 
     def to_dict(self) -> dict:
         return {
-            "format": "fabkiri.tolerance", "version": 1, "units": "mm",
-            "model": {"kerf_sd_mm": self.kerf_sd_mm, "hinge_sd_mm": self.hinge_sd_mm, "samples": self.n,
-                      "seed": self.seed, "scale": self.scale, "tile_size_mm": self.tile_size_mm,
-                      "cut": "each tile edge offset along its normal by N(0, kerf_sd)",
-                      "hinge": "each pivot off its tile corner by a 2D N(0, hinge_sd)",
-                      "assembly": "design rotations per state, least-squares translations over all hinges"},
+            "format": "fabkiri.tolerance",
+            "version": 1,
+            "units": "mm",
+            "model": {
+                "kerf_sd_mm": self.kerf_sd_mm,
+                "hinge_sd_mm": self.hinge_sd_mm,
+                "samples": self.n,
+                "seed": self.seed,
+                "scale": self.scale,
+                "tile_size_mm": self.tile_size_mm,
+                "cut": "each tile edge offset along its normal by N(0, kerf_sd)",
+                "hinge": "each pivot off its tile corner by a 2D N(0, hinge_sd)",
+                "assembly": "design rotations per state, least-squares translations over all hinges",
+            },
             "closure_gap_mm": {s: self._dist(v) for s, v in self.gap.items()},
             "seam_gap_mm": {s: self._dist(v) for s, v in self.seam_gap.items()},
             "overlap_max_mm2": {s: self._dist(v) for s, v in self.overlap_max.items()},
             "overlap_total_mm2": {s: self._dist(v) for s, v in self.overlap_total.items()},
-            "deployed_outline_mm": {**self._dist(self.outline), "reference": self.outline_reference,
-                                    "design_fit_to_target_mm": self.outline_fit_mm},
+            "deployed_outline_mm": {
+                **self._dist(self.outline),
+                "reference": self.outline_reference,
+                "design_fit_to_target_mm": self.outline_fit_mm,
+            },
             "most_sensitive_tiles": self.most_sensitive(),
             "time_s": round(self.time_s, 3),
         }
@@ -113,8 +138,10 @@ class _Assembly:
 
     def __init__(self, A: np.ndarray, B: np.ndarray, n_tiles: int):
         H = len(A)
-        D = sparse.csr_matrix((np.r_[np.ones(H), -np.ones(H)], (np.r_[np.arange(H), np.arange(H)], np.r_[A, B])),
-                              shape=(H, n_tiles))
+        D = sparse.csr_matrix(
+            (np.r_[np.ones(H), -np.ones(H)], (np.r_[np.arange(H), np.arange(H)], np.r_[A, B])),
+            shape=(H, n_tiles),
+        )
         self.D = D
         self.lu = splu((D.T @ D).tocsc()[1:, 1:])
 
@@ -150,7 +177,9 @@ def seam_edges(corners: np.ndarray, eps: float) -> np.ndarray:
     return np.stack([i[ok], k[ok], j[ok], l[ok]], 1)
 
 
-def _clipped_integrals(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _clipped_integrals(
+    a: np.ndarray, b: np.ndarray, w: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """∫ max(0, f) and ∫ max(0, -f) over a width ``w`` where f runs linearly from ``a`` to ``b``."""
     pos = np.where((a >= 0) & (b >= 0), 0.5 * (a + b) * w, 0.0)
     neg = np.where((a <= 0) & (b <= 0), -0.5 * (a + b) * w, 0.0)
@@ -161,7 +190,9 @@ def _clipped_integrals(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tuple[np.
     return pos, neg
 
 
-def seam_misfit(corners: np.ndarray, seams: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def seam_misfit(
+    corners: np.ndarray, seams: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per sample and seam (tile edges that should lie flush): overlap area (mm², tile j reaching into
     tile i), opening area (mm²) and largest opening (mm). First order in the errors: edge j's
     endpoints are measured from edge i's line, over the part of edge i they span."""
@@ -186,15 +217,26 @@ def _outline_reference(pattern: Pattern, scale: float):
     """The boundary nodes and the design's outline ring (exterior of the deployed tiles' union), in mm."""
     top = pattern.topology
     boundary = np.unique(np.r_[top.free_nodes, top.hinge_node[(top.gap_face < 0).any(axis=1)]])
-    eps = 1e-9 * pattern.tile_size * scale  # joins tiles that meet at points; moves the outline by ~eps
-    union = shapely.union_all(shapely.buffer(shapely.polygons(pattern.corners() * scale), eps, join_style="mitre"))
+    eps = (
+        1e-9 * pattern.tile_size * scale
+    )  # joins tiles that meet at points; moves the outline by ~eps
+    union = shapely.union_all(
+        shapely.buffer(shapely.polygons(pattern.corners() * scale), eps, join_style="mitre")
+    )
     if union.geom_type != "Polygon":  # tiles not joined into one piece: no single outline
         return boundary, None
     return boundary, shapely.LinearRing(union.exterior.coords)
 
 
-def tolerance_analysis(pattern: Pattern, *, kerf_sd: float = 0.02, hinge_sd: float = 0.05, n: int = 1000,
-                       seed: int = 0, scale: float = 1.0) -> ToleranceResult:
+def tolerance_analysis(
+    pattern: Pattern,
+    *,
+    kerf_sd: float = 0.02,
+    hinge_sd: float = 0.05,
+    n: int = 1000,
+    seed: int = 0,
+    scale: float = 1.0,
+) -> ToleranceResult:
     """Run the Monte-Carlo (see the module doc); lengths in mm at ``scale`` × the pattern."""
     import time
 
@@ -247,21 +289,40 @@ def tolerance_analysis(pattern: Pattern, *, kerf_sd: float = 0.02, hinge_sd: flo
             nodes = _first_corner_nodes(pattern, placed)[:, ref_nodes]
             ref_xy = pattern.nodes[ref_nodes] * scale
             aligned = _align_many(nodes, ref_xy)
-            if ring is not None:  # how far the outline moved: boundary points from the design outline
-                outline = shapely.distance(shapely.points(aligned.reshape(-1, 2)), ring).reshape(n, -1).max(axis=1)
+            if (
+                ring is not None
+            ):  # how far the outline moved: boundary points from the design outline
+                outline = (
+                    shapely.distance(shapely.points(aligned.reshape(-1, 2)), ring)
+                    .reshape(n, -1)
+                    .max(axis=1)
+                )
             else:
                 outline = np.linalg.norm(aligned - ref_xy, axis=-1).max(axis=1)
     worst = np.maximum(gap["closed state 1"], gap["closed state 2"])
-    err2 = (edge_off ** 2).sum(axis=2)  # each tile's own errors: its edges and its pivots
+    err2 = (edge_off**2).sum(axis=2)  # each tile's own errors: its edges and its pivots
     np.add.at(err2.T, A, (piv[:, :, 0] ** 2).sum(-1).T)
     np.add.at(err2.T, B, (piv[:, :, 1] ** 2).sum(-1).T)
     size_t = np.sqrt(err2)
     sens = np.array([_corr(size_t[:, t], worst) for t in range(T)])
-    return ToleranceResult(n=int(n), seed=int(seed), kerf_sd_mm=float(kerf_sd), hinge_sd_mm=float(hinge_sd),
-                           scale=float(scale), tile_size_mm=float(size), gap=gap, overlap_max=omax,
-                           overlap_total=otot, seam_gap=seam, outline=outline, outline_reference="design outline" if ring is not None
-                           else "design points", outline_fit_mm=_fit_mm(pattern, scale), sensitivity=sens, tile_gap_mean=tile_gap,
-                           time_s=time.perf_counter() - t0)
+    return ToleranceResult(
+        n=int(n),
+        seed=int(seed),
+        kerf_sd_mm=float(kerf_sd),
+        hinge_sd_mm=float(hinge_sd),
+        scale=float(scale),
+        tile_size_mm=float(size),
+        gap=gap,
+        overlap_max=omax,
+        overlap_total=otot,
+        seam_gap=seam,
+        outline=outline,
+        outline_reference="design outline" if ring is not None else "design points",
+        outline_fit_mm=_fit_mm(pattern, scale),
+        sensitivity=sens,
+        tile_gap_mean=tile_gap,
+        time_s=time.perf_counter() - t0,
+    )
 
 
 def _fit_mm(pattern: Pattern, scale: float) -> float | None:
@@ -273,7 +334,9 @@ def _fit_mm(pattern: Pattern, scale: float) -> float | None:
 
 def _corr(x: np.ndarray, y: np.ndarray) -> float:
     sx, sy = x.std(), y.std()
-    return 0.0 if sx == 0 or sy == 0 else float(((x - x.mean()) * (y - y.mean())).mean() / (sx * sy))
+    return (
+        0.0 if sx == 0 or sy == 0 else float(((x - x.mean()) * (y - y.mean())).mean() / (sx * sy))
+    )
 
 
 def _place(c: np.ndarray, pa: np.ndarray, pb: np.ndarray, assembly: _Assembly) -> np.ndarray:
