@@ -34,11 +34,20 @@ def test_deploy_standard_writes_everything(run_cli, tmp_path):
     assert max(float(r["energy"]) for r in rows) <= 1e-12
     assert abs(float(rows[-1]["rotation_rad"]) - np.pi / 2) <= 1e-9
     summary = json.loads((out / "deploy.json").read_text())
-    assert summary["path"] == "rigid" and summary["collision_free"] and summary["rotation_spread_max_rad"] <= 1e-9
+    assert (
+        summary["path"] == "rigid"
+        and summary["collision_free"]
+        and summary["rotation_spread_max_rad"] <= 1e-9
+    )
     png = (out / "energy.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     gif = Image.open(out / "deploy.gif")
-    assert gif.format == "GIF" and gif.n_frames == 11 and 800 <= min(gif.size) and max(gif.size) <= 1000
+    assert (
+        gif.format == "GIF"
+        and gif.n_frames == 11
+        and 800 <= min(gif.size)
+        and max(gif.size) <= 1000
+    )
     assert (out / "deploy.gif").stat().st_size < 2_000_000
     frames = sorted((out / "frames").iterdir())
     assert len(frames) == 11
@@ -97,7 +106,24 @@ def test_deploy_bad_input_writes_nothing(run_cli, tmp_path):
     with pytest.raises(SystemExit) as exc:  # argparse usage errors exit 2 from the parser
         run_cli("deploy", src, "--steps", "1", "-o", out)
     assert exc.value.code == 2 and not out.exists()
-    code, _, err = run_cli("deploy", ref("compact_reconfigurable_design"), "--path", "rigid", "-o", out)
+    code, _, err = run_cli(
+        "deploy", ref("compact_reconfigurable_design"), "--path", "rigid", "-o", out
+    )
     assert code == 1 and "not rigid-deployable" in err and not out.exists()
     code, _, err = run_cli("deploy", ref("non-contractible_design"), "-o", out)
     assert code == 1 and "does not close" in err and not out.exists()
+
+
+def test_deploy_front_door_gives_the_commands_verdict_without_the_cli():
+    from fabkiri.api.deploy import deploy_pattern
+    from fabkiri.mechanics import adopt_state_labels
+    from fabkiri.pattern import import_obj
+
+    good = deploy_pattern(with_contracted_states(standard_pattern(3, 3)), 8, frames=True)
+    assert good.success and good.path.kind == "rigid" and good.n_frame_files == good.path.n_frames
+    assert {"energy.csv", "deploy.json"} <= set(good.files)
+    bad = deploy_pattern(
+        adopt_state_labels(import_obj(ref("compact_reconfigurable_design"))), 10, frames=False
+    )
+    assert not bad.success and any("tile overlaps" in p for p in bad.problems)
+    assert bad.n_frame_files == 0 and set(bad.files) == {"energy.csv", "deploy.json"}

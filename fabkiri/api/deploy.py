@@ -1,0 +1,144 @@
+"""``deploy_pattern``: a pattern's deployment path and everything written about it.
+
+The path itself is :func:`fabkiri.mechanics.deploy.deployment_path`; this front door adds what a user
+of the path gets from ``fabkiri deploy``: the energy table, the summary, the plot and animation, one
+pattern file per frame, and the checks that make the command exit 1 (a collision, a missed closed
+state, a rigid path with energy). Notebooks and sweeps call it and get the same verdict.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+from ..mechanics.collisions import Overlap
+from ..mechanics.deploy import DeploymentPath, deployment_path
+from ..pattern.io import dumps
+from ..pattern.model import Pattern
+
+ZERO_ENERGY = 1e-12  # the rigid path's energy must be zero to rounding
+
+
+@dataclass(frozen=True, eq=False)
+class DeployOutcome:
+    """The path, its summary, the files to write and what failed (like scipy's ``OptimizeResult``).
+
+    ``files`` maps names relative to the output folder to their contents; ``problems`` is empty
+    exactly when the path reaches both closed states without a collision (and, rigid, at zero energy).
+    """
+
+    path: DeploymentPath
+    summary: dict
+    files: dict[str, bytes | str]
+    problems: list[str] = field(default_factory=list)
+
+    @property
+    def success(self) -> bool:
+        return not self.problems
+
+    @property
+    def n_frame_files(self) -> int:
+        return sum(1 for k in self.files if k.startswith("frames/"))
+
+
+def deploy_pattern(
+    pattern: Pattern,
+    steps: int = 40,
+    *,
+    path: str = "auto",
+    driver: str = "rotations",
+    plot: bool = False,
+    gif: bool = False,
+    color: str = "auto",
+    gif_frames: int = 61,
+    frames: bool = True,
+) -> DeployOutcome:
+    """Compute the deployment path of ``pattern`` and everything ``fabkiri deploy`` writes about it."""
+    p = deployment_path(pattern, steps, path=path, driver=driver)
+    summary = p.summary()
+    files: dict[str, bytes | str] = {
+        "energy.csv": energy_csv(p),
+        "deploy.json": json.dumps(summary, indent=2, sort_keys=True) + "\n",
+    }
+    if plot:
+        from ..render.deployment import energy_plot_png
+
+        files["energy.png"] = energy_plot_png(p, title=pattern.name)
+    if gif:
+        from ..render.deployment import deployment_gif
+
+        files["deploy.gif"] = deployment_gif(p, color=color, max_frames=gif_frames)
+    if frames:
+        files.update(frame_patterns(pattern, p))
+    return DeployOutcome(path=p, summary=summary, files=files, problems=check_problems(p))
+
+
+def energy_csv(path: DeploymentPath) -> str:
+    """One row per frame: t, E, the largest tile energy and the other per-frame figures."""
+    rows = ["t,energy,max_tile_energy,rotation_rad,rotation_spread_rad,hinge_gap_mm,overlaps"]
+    per_frame = [0] * path.n_frames
+    for o in path.collisions.overlaps:
+        per_frame[o.frame] += 1
+    rot, spread = path.rotation_magnitude, path.rotation_spread
+    for f in range(path.n_frames):
+        rows.append(
+            f"{path.t[f]:.10f},{path.energy[f]:.6e},{path.max_tile_energy[f]:.6e},{rot[f]:.12f},"
+            f"{spread[f]:.3e},{path.hinge_gap[f]:.3e},{per_frame[f]}"
+        )
+    return "\n".join(rows) + "\n"
+
+
+def frame_patterns(pattern: Pattern, path: DeploymentPath) -> dict[str, str]:
+    """``frames/frame-NNNN.json``: each frame as a pattern whose deployed state is that frame."""
+    out = {}
+    width = max(4, len(str(path.n_frames - 1)))
+    base = pattern.name or "pattern"
+    for f in range(path.n_frames):
+        frame = Pattern(
+            nodes=path.nodes[f],
+            tiles=pattern.tiles,
+            parity=pattern.parity,
+            name=f"{base} deployment frame {f} (t = {path.t[f]:.4f})",
+            lattice=pattern.lattice,
+            design={
+                "deployment": {
+                    "source": base,
+                    "path": path.kind,
+                    "driver": path.driver,
+                    "frame": f,
+                    "t": float(path.t[f]),
+                    "energy": float(path.energy[f]),
+                }
+            },
+            kind=pattern.kind,
+        )
+        out[f"frames/frame-{f:0{width}d}.json"] = dumps(frame)
+    return out
+
+
+def check_problems(path: DeploymentPath, tol: float = 1e-9) -> list[str]:
+    """What makes ``deploy`` exit 1, one sentence each."""
+    out = []
+    size = path.tile_size
+    for name, d in path.state_mismatch.items():
+        if d > tol * size * max(1.0, path.corners.shape[1] ** 0.5):
+            out.append(f"the path misses the {name} by {d:.3g} mm")
+    if path.kind == "rigid" and path.energy.max() > ZERO_ENERGY:
+        out.append(f"the rigid path has energy {path.energy.max():.3g} > {ZERO_ENERGY:g}")
+    c = path.collisions
+    if not c.collision_free():
+        o = max(c.overlaps, key=lambda o: o.area)
+        out.append(
+            f"{len(c.overlaps)} tile overlaps in {len(c.frames)} frames, the largest {o.area:.3g} mm² "
+            f"({overlap_depth(path, o):.3g} mm deep) between tiles {o.tile_a} and {o.tile_b} "
+            f"at t = {path.t[o.frame]:.3f}"
+        )
+    return out
+
+
+def overlap_depth(path: DeploymentPath, o: Overlap) -> float:
+    """How far (mm) the two tiles of an overlap reach into each other: the separating-axis depth."""
+    from ..verify.geom import sat_penetration
+
+    frame = path.corners[o.frame]
+    return float(sat_penetration(frame[[o.tile_a]], frame[[o.tile_b]])[0])
