@@ -889,22 +889,35 @@ def printed_bridges(r: Realised) -> list[dict]:
         once = np.bincount(pi, minlength=len(parts)) == 1
         owner[pi[once[pi]]] = hi[once[pi]]
         qi, ti = tile_tree.query(parts, predicate="intersects")
-        for k, part in enumerate(parts):
-            if owner[k] < 0:
-                continue
-            near = tiles[ti[qi == k]]
-            bridge = part.difference(shapely.union_all(near)) if len(near) else part
-            if bridge.is_empty:
-                continue
-            # drawn a hair inside the bridge, so the verifier's "material minus
-            # ligaments" never leaves slivers along the tile edges it shares
-            core = shapely.buffer(bridge, -BRIDGE_INSET_MM, join_style="mitre")
-            for piece in shapely.get_parts(core):
-                if piece.geom_type != "Polygon" or piece.area < 1e-4:
-                    continue  # slivers where a strip edge meets a tile edge
-                feats.append({"hinge": int(owner[k]), "sheet": 1,
-                              "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
+        feats += _bridge_features(parts, owner, tiles, qi, ti)
     return sorted(feats, key=lambda f: f["hinge"])
+
+
+def _bridge_features(parts, owner, tiles, qi, ti) -> list[dict]:
+    """Each owned strip section minus the tiles it touches, drawn a hair inside;
+    the differences and insets run as one vectorised call each."""
+    keep = np.flatnonzero(owner >= 0)
+    order = np.argsort(qi, kind="stable")  # stable: each part's tiles in query order, as before
+    firsts, starts = np.unique(qi[order], return_index=True)
+    span = {int(q): (lo, hi) for q, lo, hi in zip(firsts, starts, np.append(starts[1:], len(qi)))}
+    cutters = np.array([shapely.union_all(tiles[ti[order[slice(*span[k])]]]) if k in span else None
+                        for k in keep], dtype=object)
+    has = np.array([c is not None for c in cutters], dtype=bool)
+    bridges = parts[keep].copy()
+    if has.any():
+        bridges[has] = shapely.difference(parts[keep][has], cutters[has])
+    live = ~shapely.is_empty(bridges)
+    # drawn a hair inside the bridge, so the verifier's "material minus
+    # ligaments" never leaves slivers along the tile edges it shares
+    cores = shapely.buffer(bridges[live], -BRIDGE_INSET_MM, join_style="mitre")
+    feats = []
+    for k, core in zip(keep[live], cores):
+        for piece in shapely.get_parts(core):
+            if piece.geom_type != "Polygon" or piece.area < 1e-4:
+                continue  # slivers where a strip edge meets a tile edge
+            feats.append({"hinge": int(owner[k]), "sheet": 1,
+                          "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
+    return feats
 
 
 def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
