@@ -125,6 +125,49 @@ def _frame_indices(n: int, max_frames: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
 
 
+def _colouring(path: DeploymentPath, color: str, plt):
+    """The per-frame tile values and how they are coloured, for ``color``
+    (``"energy"``, ``"rotation"`` or ``"auto"``): ``(values, norm, cmap,
+    label, flat)``; ``flat`` when the energy is noise everywhere."""
+    from matplotlib import colors as mcolors
+
+    if color == "auto":
+        color = "rotation" if path.kind == "rigid" else "energy"
+    if color not in ("energy", "rotation"):
+        raise ValueError(f"color must be energy, rotation or auto, not {color!r}")
+    flat = color == "energy" and float(path.tile_energy.max()) <= ZERO_ENERGY  # noise: colours would mean nothing
+    if flat:
+        values = np.zeros_like(path.tile_energy)
+        norm = mcolors.Normalize(vmin=-1.0, vmax=1.0)
+        cmap = plt.get_cmap("Greys")
+        label = ""
+    elif color == "energy":
+        values = path.tile_energy
+        vmax = max(float(values.max()), ZERO_ENERGY * 10)
+        norm = mcolors.LogNorm(vmin=max(vmax * 1e-6, ZERO_ENERGY), vmax=vmax, clip=True)
+        cmap = plt.get_cmap("viridis")
+        label = "tile energy e"
+    else:
+        values = path.rotation
+        norm = mcolors.Normalize(vmin=-np.pi / 2, vmax=np.pi / 2)
+        cmap = plt.get_cmap("coolwarm")
+        label = "rotation θ from state 1 (rad)"
+    return values, norm, cmap, label, flat
+
+
+def _gif_bytes(images: list, frame_ms: int) -> bytes:
+    """The frames as one looping GIF."""
+    from PIL import Image
+
+    # one shared palette keeps colours steady and the file small
+    palette = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
+    frames = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
+    buf = io.BytesIO()
+    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=frame_ms, loop=0,
+                   optimize=False, disposal=1)
+    return buf.getvalue()
+
+
 def deployment_gif(
     path: DeploymentPath,
     color: str = "auto",
@@ -144,33 +187,12 @@ def deployment_gif(
     evenly spaced frames are drawn.
     """
     plt = _pyplot()
-    from matplotlib import colors as mcolors
     from matplotlib.collections import LineCollection, PolyCollection
     from PIL import Image
 
-    if color == "auto":
-        color = "rotation" if path.kind == "rigid" else "energy"
-    if color not in ("energy", "rotation"):
-        raise ValueError(f"color must be energy, rotation or auto, not {color!r}")
+    values, norm, cmap, label, flat = _colouring(path, color, plt)
     idx = _frame_indices(path.n_frames, max_frames)
     corners, centres = path.corners, path.centres
-    flat = color == "energy" and float(path.tile_energy.max()) <= ZERO_ENERGY  # noise: colours would mean nothing
-    if flat:
-        values = np.zeros_like(path.tile_energy)
-        norm = mcolors.Normalize(vmin=-1.0, vmax=1.0)
-        cmap = plt.get_cmap("Greys")
-        label = ""
-    elif color == "energy":
-        values = path.tile_energy
-        vmax = max(float(values.max()), ZERO_ENERGY * 10)
-        norm = mcolors.LogNorm(vmin=max(vmax * 1e-6, ZERO_ENERGY), vmax=vmax, clip=True)
-        cmap = plt.get_cmap("viridis")
-        label = "tile energy e"
-    else:
-        values = path.rotation
-        norm = mcolors.Normalize(vmin=-np.pi / 2, vmax=np.pi / 2)
-        cmap = plt.get_cmap("coolwarm")
-        label = "rotation θ from state 1 (rad)"
 
     dpi = 100
     fig = plt.figure(figsize=(size_px / dpi, size_px / dpi * 1.08), dpi=dpi)
@@ -217,10 +239,4 @@ def deployment_gif(
         rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3]
         images.append(Image.fromarray(np.ascontiguousarray(rgb)))
     plt.close(fig)
-    # one shared palette keeps colours steady and the file small
-    palette = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
-    frames = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
-    buf = io.BytesIO()
-    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=frame_ms, loop=0,
-                   optimize=False, disposal=1)
-    return buf.getvalue()
+    return _gif_bytes(images, frame_ms)
