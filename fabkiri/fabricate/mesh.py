@@ -914,12 +914,11 @@ def _bridge_features(parts, owner, tiles, qi, ti) -> list[dict]:
     order = np.argsort(qi, kind="stable")  # stable: each part's tiles in query order, as before
     firsts, starts = np.unique(qi[order], return_index=True)
     span = {int(q): (lo, hi) for q, lo, hi in zip(firsts, starts, np.append(starts[1:], len(qi)))}
-    cutters = np.array([shapely.union_all(tiles[ti[order[slice(*span[k])]]]) if k in span else None
-                        for k in keep], dtype=object)
-    has = np.array([c is not None for c in cutters], dtype=bool)
+    cut = [shapely.union_all(tiles[ti[order[slice(*span[k])]]]) if k in span else None for k in keep.tolist()]
+    has = np.array([c is not None for c in cut], dtype=bool)
     bridges = parts[keep].copy()
     if has.any():
-        bridges[has] = shapely.difference(parts[keep][has], cutters[has])
+        bridges[has] = shapely.difference(parts[keep][has], np.array([c for c in cut if c is not None]))
     live = ~shapely.is_empty(bridges)
     # drawn a hair inside the bridge, so the verifier's "material minus
     # ligaments" never leaves slivers along the tile edges it shares

@@ -230,7 +230,7 @@ def deployment_gif(
     for f in idx:
         tiles.set_verts(corners[f])
         tiles.set_array(np.asarray(values[f], dtype=float))
-        if trajectories:
+        if lines is not None and dots is not None:  # set exactly when trajectories are drawn
             lines.set_segments(list(np.swapaxes(centres[: f + 1], 0, 1)) if f > 0 else [])
             dots.set_offsets(centres[f])
         head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
