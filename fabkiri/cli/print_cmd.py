@@ -10,11 +10,11 @@ from pathlib import Path
 
 from .. import limits
 from ..errors import CheckFailed, FabricationError, InputError
-from ..fileio import atomic_write_many
 from ..fabricate import fabricability as fb
 from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import available_printers, load_printer
+from ..fileio import atomic_write_many
 from .pattern_cmds import _positive, load_any
 
 

@@ -17,20 +17,20 @@ from __future__ import annotations
 import io
 import itertools
 import json
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
-from typing import Iterable
 
 import numpy as np
 import shapely
 import shapely.affinity
-from shapely.geometry.polygon import orient
 from shapely.geometry import Polygon
+from shapely.geometry.polygon import orient
 
 from ..errors import FabricationError
 from ..pattern.model import Pattern
 from . import printgeom
-from .printgeom import regular_polygon
 from .printers import Printer
+from .printgeom import regular_polygon
 
 STYLES = ("strips", "tiles-and-strips", "pinned")
 SECTION_NOISE_MM = 1e-4  # vertex noise of sliced meshes (float32 STL: ~1e-5 mm at bed size)
@@ -58,7 +58,7 @@ class Body:
     kind: str  # "tile", "hinge", "tiles", "hinges"
     ops: tuple[tuple[str, Prism], ...]
     material: str = ""
-    variants: tuple["Body", ...] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
+    variants: tuple[Body, ...] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
 
 
 def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
