@@ -39,7 +39,7 @@ def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = T
     for a, b in path.elastic_segments:
         ax.axvspan(a - anchor, b - anchor, color="C1", alpha=0.12, lw=0)
     if marks:
-        for name, tm in MARKS.items():
+        for tm in MARKS.values():
             if lo - 1e-12 <= tm <= hi + 1e-12:
                 ax.axvline(tm - anchor, color="0.4", lw=0.8, ls="--")
     pad = 0.02 * (hi - lo)
