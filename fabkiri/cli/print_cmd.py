@@ -10,11 +10,11 @@ from pathlib import Path
 
 from .. import limits
 from ..errors import CheckFailed, FabricationError, InputError
-from ..fileio import atomic_write_many
 from ..fabricate import fabricability as fb
 from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import available_printers, load_printer
+from ..fileio import atomic_write_many
 from .pattern_cmds import _positive, load_any
 
 
@@ -49,20 +49,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     for w in closes_gate(pattern, printer.tolerance_mm, force=args.force, action="print", tolerance="printer",
                          states=claimed_states(pattern, int(args.state))).warnings:  # as `cut`, printer tolerance
         print(f"warning: {w}", file=sys.stderr)
-    try:
-        job = mesh.build_job(pattern, args.style, int(args.state), printer, advise_scale=args.scale)
-        plan = mesh.print_plan(job)  # refuses a print the printer cannot make
-    except FabricationError as exc:  # say at which scale it would print, if any
-        if args.style == "pinned":  # build_job named the scales that print pinned on this bed
-            raise
-        need = fb.print_minimum(pattern, args.style, printer, int(args.state))
-        if need.min_scale is None or need.min_scale <= 1.0:
-            raise
-        k = args.scale
-        at = need.advice(printer.name).replace(f"≥ {need.min_scale:g}", f"≥ {fb.ceil_sig(need.min_scale * k):g}")
-        at = at.replace(f"--scale {need.max_scale:g}", f"--scale {fb.floor_sig(need.max_scale * k):g}") \
-            if need.max_scale is not None else at
-        raise type(exc)(f"{exc} (at --scale {k:g}); {at}") from None
+    job, plan = _build_job(pattern, args, printer)
     realised = mesh.realise_job(job)
     job = realised.job  # the bodies as realised (a pinned tile may have been rebuilt with turned pivot polygons)
     report = mesh.check_meshes(realised)
@@ -73,23 +60,7 @@ def cmd_print(args: argparse.Namespace) -> int:
             f"printed tiles deviate {tiles.max_deviation_mm:.3g} mm from closed state {job.state} "
             f"(tolerance {tiles.tolerance_mm:g} mm), overlap {tiles.max_overlap_mm2:.3g} mm²"
         )
-    verifier = None
-    if job.style == "pinned":  # the printed tiles moved along the rigid deployment path
-        sweep = mesh.sweep_pinned(pattern, realised)
-        report.sweep = sweep.to_dict()
-        if not sweep.ok:
-            problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
-                            f"({sweep.worst})")
-    if job.style == "tiles-and-strips":  # the layout verifier on the printed top faces
-        verifier = mesh.verify_printed_tiles(pattern, realised)
-        # (c) reassembles the other closed state: moot for a pattern that closes one way only
-        moot = [] if job.plan.other_state_closes else [c.name for c in verifier.failed() if "(c)" in c.name]
-        if moot:
-            verifier.meta["not_applicable"] = moot
-            print(f"note: closed state {3 - job.state} does not close; the verifier's reassembly checks are moot",
-                  file=sys.stderr)
-        problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
-                     for c in verifier.failed() if c.name not in moot]
+    verifier = _style_checks(pattern, realised, report, problems)
     if problems:
         raise CheckFailed("; ".join(problems) + "; nothing written")
     stem = Path(args.file).stem
@@ -123,6 +94,50 @@ def cmd_print(args: argparse.Namespace) -> int:
           f"{'n/a' if report.min_clearance_mm is None else f'{report.min_clearance_mm:.3f} mm'}, {plan}, "
           f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0
+
+
+def _build_job(pattern, args: argparse.Namespace, printer):
+    """The print job and its plan; a refusal says at which scale it would print, if any."""
+    try:
+        job = mesh.build_job(pattern, args.style, int(args.state), printer, advise_scale=args.scale)
+        plan = mesh.print_plan(job)  # refuses a print the printer cannot make
+    except FabricationError as exc:  # say at which scale it would print, if any
+        if args.style == "pinned":  # build_job named the scales that print pinned on this bed
+            raise
+        need = fb.print_minimum(pattern, args.style, printer, int(args.state))
+        if need.min_scale is None or need.min_scale <= 1.0:
+            raise
+        k = args.scale
+        at = need.advice(printer.name).replace(f"≥ {need.min_scale:g}", f"≥ {fb.ceil_sig(need.min_scale * k):g}")
+        at = at.replace(f"--scale {need.max_scale:g}", f"--scale {fb.floor_sig(need.max_scale * k):g}") \
+            if need.max_scale is not None else at
+        raise type(exc)(f"{exc} (at --scale {k:g}); {at}") from None
+    return job, plan
+
+
+def _style_checks(pattern, realised, report, problems: list[str]):
+    """The checks one print style adds (pinned: the sweep along the deployment
+    path; tiles-and-strips: the layout verifier), appending to ``problems``;
+    returns the verifier's report, if run."""
+    job = realised.job
+    verifier = None
+    if job.style == "pinned":  # the printed tiles moved along the rigid deployment path
+        sweep = mesh.sweep_pinned(pattern, realised)
+        report.sweep = sweep.to_dict()
+        if not sweep.ok:
+            problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
+                            f"({sweep.worst})")
+    if job.style == "tiles-and-strips":  # the layout verifier on the printed top faces
+        verifier = mesh.verify_printed_tiles(pattern, realised)
+        # (c) reassembles the other closed state: moot for a pattern that closes one way only
+        moot = [] if job.plan.other_state_closes else [c.name for c in verifier.failed() if "(c)" in c.name]
+        if moot:
+            verifier.meta["not_applicable"] = moot
+            print(f"note: closed state {3 - job.state} does not close; the verifier's reassembly checks are moot",
+                  file=sys.stderr)
+        problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
+                     for c in verifier.failed() if c.name not in moot]
+    return verifier
 
 
 def _laser_files(pattern, job, args, stem: str) -> dict[str, bytes]:

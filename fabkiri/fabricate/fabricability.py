@@ -145,7 +145,7 @@ class PrintMinimum:
         return f"print at --scale ≥ {self.min_scale:g} (or --scale auto){top}"
 
     def to_dict(self, at: float = 1.0) -> dict:
-        ok = self.possible and self.min_scale <= at and (self.max_scale is None or at <= self.max_scale)
+        ok = self.possible and self.min_scale is not None and self.min_scale <= at and (self.max_scale is None or at <= self.max_scale)
         return {"min_scale": self.min_scale, "max_scale": self.max_scale, "fits_bed": self.possible,
                 "ok_at_scale_1": bool(ok), "limit": self.limit, "exact": self.exact}
 

@@ -17,20 +17,20 @@ from __future__ import annotations
 import io
 import itertools
 import json
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
-from typing import Iterable
 
 import numpy as np
 import shapely
 import shapely.affinity
-from shapely.geometry.polygon import orient
 from shapely.geometry import Polygon
+from shapely.geometry.polygon import orient
 
 from ..errors import FabricationError
 from ..pattern.model import Pattern
 from . import printgeom
-from .printgeom import regular_polygon
 from .printers import Printer
+from .printgeom import regular_polygon
 
 STYLES = ("strips", "tiles-and-strips", "pinned")
 SECTION_NOISE_MM = 1e-4  # vertex noise of sliced meshes (float32 STL: ~1e-5 mm at bed size)
@@ -58,7 +58,7 @@ class Body:
     kind: str  # "tile", "hinge", "tiles", "hinges"
     ops: tuple[tuple[str, Prism], ...]
     material: str = ""
-    variants: tuple["Body", ...] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
+    variants: tuple[Body, ...] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
 
 
 def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
@@ -595,74 +595,85 @@ def _slice_polys(manifold, z: float) -> list[Polygon]:
 
 
 def _check_clearances(r: Realised, rep: MeshReport) -> None:
+    """Clearances between bodies that may move apart, measured the way the
+    print style needs (registry :data:`_CLEARANCE_CHECKS`, by style)."""
+    _CLEARANCE_CHECKS[r.job.style](r, rep)
+
+
+def _strips_clearances(r: Realised, rep: MeshReport) -> None:
+    """Strips style: loose parts, so only the spacing on the bed matters."""
     job, pr = r.job, r.job.printer
-    if job.style == "strips":  # loose parts: only the spacing on the bed matters
-        rep.required_clearance_mm = pr.part_spacing_mm
-        polys = [Polygon(b.ops[0][1].polygons[0]) for b in job.beds[0]]
-        if len(polys) > 1:
-            tree = shapely.STRtree(polys)
-            i, j = tree.query(polys, predicate="dwithin", distance=3 * pr.part_spacing_mm)
-            sel = i < j
-            if sel.any():
-                arr = np.array(polys, dtype=object)
-                rep.min_clearance_mm = float(shapely.distance(arr[i[sel]], arr[j[sel]]).min())
-                if rep.min_clearance_mm < pr.part_spacing_mm - 1e-6:
-                    rep.problems.append(f"strip parts {rep.min_clearance_mm:.3f} mm apart on bed 1, "
-                                        f"under the part spacing {pr.part_spacing_mm:g} mm")
-        return
-    if job.style == "tiles-and-strips":
-        # measured on the mesh: sections of both bodies at the bottom pocket, the
-        # bare middle and the top pocket. Each section piece is attributed to
-        # the tile or strip it belongs to; pieces of different tiles keep the
-        # gap, a strip touches only the two tiles it joins and keeps the radial
-        # clearance from everything else.
-        tiles_m, hinges_m = r.manifolds[0]
-        T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
-        req = pr.radial_clearance_mm
-        rep.required_clearance_mm = req
-        shift = np.asarray(job.shift)
-        design_t = shapely.transform(job.plan.tiles, lambda c: c + shift)
-        design_s = shapely.transform(job.strips.outline, lambda c: c + shift)
-        A, B = job.plan.hinge_tiles.T
-        worst = np.inf
-        lv = job.z_levels()
-        zs = (lv["bottom"], lv["tiles"], lv["top"])
-        if job.layout == "stacked":  # the base sheet joins tiles by design: it must be the planned sheet
-            zs = zs[1:]
-            planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
-            got = shapely.union_all(_slice_polys(hinges_m, lv["bottom"]))
-            off = float(shapely.area(shapely.symmetric_difference(planned, got)))
-            if off > 1e-6 * max(1.0, planned.area):
-                rep.problems.append(f"the base sheet deviates from its plan by {off:.3g} mm²")
-        for z in zs:
-            parts = _slice_polys(tiles_m, z)
-            sparts = _slice_polys(hinges_m, z)
-            allp = np.array(parts + sparts, dtype=object)
-            kind = np.array([0] * len(parts) + [1] * len(sparts))
-            owner = np.full(len(allp), -1)
-            pts = shapely.point_on_surface(allp)
-            for k, design in ((0, design_t), (1, design_s)):
-                sel = np.flatnonzero(kind == k)
-                qi, di = shapely.STRtree(design).query(pts[sel], predicate="dwithin", distance=1e-3)
-                owner[sel[qi]] = di
-            if (owner < 0).any():
-                rep.problems.append(f"a section piece at z = {z:g} mm belongs to no planned tile or strip")
-            i, j = shapely.STRtree(allp).query(allp, predicate="dwithin", distance=2 * pr.gap_mm)
-            sel = (i < j) & ~((kind[i] == kind[j]) & (owner[i] == owner[j]))  # same body: no clearance
-            i, j = i[sel], j[sel]
-            d = shapely.distance(allp[i], allp[j])
-            mixed = kind[i] != kind[j]
-            st_, tl = np.where(kind[i] == 1, i, j)[mixed], np.where(kind[i] == 1, j, i)[mixed]
-            joined = np.zeros(len(i), dtype=bool)
-            joined[mixed] = (owner[tl] == A[owner[st_]]) | (owner[tl] == B[owner[st_]])
-            free = d[~joined]
-            if len(free):
-                worst = min(worst, float(free.min()))
-        rep.min_clearance_mm = None if worst == np.inf else worst
-        if rep.min_clearance_mm is not None and rep.min_clearance_mm < req - 1e-6:
-            rep.problems.append(f"clearance {rep.min_clearance_mm:.3f} mm below the radial clearance {req:g} mm")
-        return
-    # pinned: every pair of tiles meeting at a pivot, measured in 3D
+    rep.required_clearance_mm = pr.part_spacing_mm
+    polys = [Polygon(b.ops[0][1].polygons[0]) for b in job.beds[0]]
+    if len(polys) > 1:
+        tree = shapely.STRtree(polys)
+        i, j = tree.query(polys, predicate="dwithin", distance=3 * pr.part_spacing_mm)
+        sel = i < j
+        if sel.any():
+            arr = np.array(polys, dtype=object)
+            rep.min_clearance_mm = float(shapely.distance(arr[i[sel]], arr[j[sel]]).min())
+            if rep.min_clearance_mm < pr.part_spacing_mm - 1e-6:
+                rep.problems.append(f"strip parts {rep.min_clearance_mm:.3f} mm apart on bed 1, "
+                                    f"under the part spacing {pr.part_spacing_mm:g} mm")
+
+
+def _tiles_and_strips_clearances(r: Realised, rep: MeshReport) -> None:
+    """Tiles-and-strips style: clearances measured on sections of the mesh."""
+    job, pr = r.job, r.job.printer
+    # measured on the mesh: sections of both bodies at the bottom pocket, the
+    # bare middle and the top pocket. Each section piece is attributed to
+    # the tile or strip it belongs to; pieces of different tiles keep the
+    # gap, a strip touches only the two tiles it joins and keeps the radial
+    # clearance from everything else.
+    tiles_m, hinges_m = r.manifolds[0]
+    req = pr.radial_clearance_mm
+    rep.required_clearance_mm = req
+    shift = np.asarray(job.shift)
+    design_t = shapely.transform(job.plan.tiles, lambda c: c + shift)
+    design_s = shapely.transform(job.strips.outline, lambda c: c + shift)
+    A, B = job.plan.hinge_tiles.T
+    worst = np.inf
+    lv = job.z_levels()
+    zs = (lv["bottom"], lv["tiles"], lv["top"])
+    if job.layout == "stacked":  # the base sheet joins tiles by design: it must be the planned sheet
+        zs = zs[1:]
+        planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
+        got = shapely.union_all(_slice_polys(hinges_m, lv["bottom"]))
+        off = float(shapely.area(shapely.symmetric_difference(planned, got)))
+        if off > 1e-6 * max(1.0, planned.area):
+            rep.problems.append(f"the base sheet deviates from its plan by {off:.3g} mm²")
+    for z in zs:
+        parts = _slice_polys(tiles_m, z)
+        sparts = _slice_polys(hinges_m, z)
+        allp = np.array(parts + sparts, dtype=object)
+        kind = np.array([0] * len(parts) + [1] * len(sparts))
+        owner = np.full(len(allp), -1)
+        pts = shapely.point_on_surface(allp)
+        for k, design in ((0, design_t), (1, design_s)):
+            sel = np.flatnonzero(kind == k)
+            qi, di = shapely.STRtree(design).query(pts[sel], predicate="dwithin", distance=1e-3)
+            owner[sel[qi]] = di
+        if (owner < 0).any():
+            rep.problems.append(f"a section piece at z = {z:g} mm belongs to no planned tile or strip")
+        i, j = shapely.STRtree(allp).query(allp, predicate="dwithin", distance=2 * pr.gap_mm)
+        sel = (i < j) & ~((kind[i] == kind[j]) & (owner[i] == owner[j]))  # same body: no clearance
+        i, j = i[sel], j[sel]
+        d = shapely.distance(allp[i], allp[j])
+        mixed = kind[i] != kind[j]
+        st_, tl = np.where(kind[i] == 1, i, j)[mixed], np.where(kind[i] == 1, j, i)[mixed]
+        joined = np.zeros(len(i), dtype=bool)
+        joined[mixed] = (owner[tl] == A[owner[st_]]) | (owner[tl] == B[owner[st_]])
+        free = d[~joined]
+        if len(free):
+            worst = min(worst, float(free.min()))
+    rep.min_clearance_mm = None if worst == np.inf else worst
+    if rep.min_clearance_mm is not None and rep.min_clearance_mm < req - 1e-6:
+        rep.problems.append(f"clearance {rep.min_clearance_mm:.3f} mm below the radial clearance {req:g} mm")
+
+
+def _pinned_clearances(r: Realised, rep: MeshReport) -> None:
+    """Pinned style: every pair of tiles meeting at a pivot, measured in 3D."""
+    job, pr = r.job, r.job.printer
     plan = job.plan
     req = min(pr.radial_clearance_mm, pr.axial_clearance_mm)
     rep.required_clearance_mm = req
@@ -685,6 +696,10 @@ def _check_clearances(r: Realised, rep: MeshReport) -> None:
         if len(m.decompose()) != 1:
             rep.problems.append(f"tile {t} falls apart into {len(m.decompose())} pieces")
             break
+
+
+_CLEARANCE_CHECKS = {"strips": _strips_clearances, "tiles-and-strips": _tiles_and_strips_clearances,
+                     "pinned": _pinned_clearances}
 
 
 # ------------------------------------------------------------ pinned sweep
@@ -870,9 +885,8 @@ def printed_bridges(r: Realised) -> list[dict]:
     """The flexible material spanning each gap, measured on the hinge mesh:
     sections of the strips at the middle of their thickness, minus the tiles,
     each attributed to the hinge whose planned strip holds it."""
-    job, pr = r.job, r.job.printer
+    job = r.job
     tiles_m, hinges_m = r.manifolds[0]
-    T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
     planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
     tree = shapely.STRtree(planned)
     feats = []
@@ -889,22 +903,34 @@ def printed_bridges(r: Realised) -> list[dict]:
         once = np.bincount(pi, minlength=len(parts)) == 1
         owner[pi[once[pi]]] = hi[once[pi]]
         qi, ti = tile_tree.query(parts, predicate="intersects")
-        for k, part in enumerate(parts):
-            if owner[k] < 0:
-                continue
-            near = tiles[ti[qi == k]]
-            bridge = part.difference(shapely.union_all(near)) if len(near) else part
-            if bridge.is_empty:
-                continue
-            # drawn a hair inside the bridge, so the verifier's "material minus
-            # ligaments" never leaves slivers along the tile edges it shares
-            core = shapely.buffer(bridge, -BRIDGE_INSET_MM, join_style="mitre")
-            for piece in shapely.get_parts(core):
-                if piece.geom_type != "Polygon" or piece.area < 1e-4:
-                    continue  # slivers where a strip edge meets a tile edge
-                feats.append({"hinge": int(owner[k]), "sheet": 1,
-                              "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
+        feats += _bridge_features(parts, owner, tiles, qi, ti)
     return sorted(feats, key=lambda f: f["hinge"])
+
+
+def _bridge_features(parts, owner, tiles, qi, ti) -> list[dict]:
+    """Each owned strip section minus the tiles it touches, drawn a hair inside;
+    the differences and insets run as one vectorised call each."""
+    keep = np.flatnonzero(owner >= 0)
+    order = np.argsort(qi, kind="stable")  # stable: each part's tiles in query order, as before
+    firsts, starts = np.unique(qi[order], return_index=True)
+    span = {int(q): (lo, hi) for q, lo, hi in zip(firsts, starts, np.append(starts[1:], len(qi)))}
+    cut = [shapely.union_all(tiles[ti[order[slice(*span[k])]]]) if k in span else None for k in keep.tolist()]
+    has = np.array([c is not None for c in cut], dtype=bool)
+    bridges = parts[keep].copy()
+    if has.any():
+        bridges[has] = shapely.difference(parts[keep][has], np.array([c for c in cut if c is not None]))
+    live = ~shapely.is_empty(bridges)
+    # drawn a hair inside the bridge, so the verifier's "material minus
+    # ligaments" never leaves slivers along the tile edges it shares
+    cores = shapely.buffer(bridges[live], -BRIDGE_INSET_MM, join_style="mitre")
+    feats = []
+    for k, core in zip(keep[live], cores):
+        for piece in shapely.get_parts(core):
+            if piece.geom_type != "Polygon" or piece.area < 1e-4:
+                continue  # slivers where a strip edge meets a tile edge
+            feats.append({"hinge": int(owner[k]), "sheet": 1,
+                          "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
+    return feats
 
 
 def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):

@@ -39,7 +39,7 @@ def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = T
     for a, b in path.elastic_segments:
         ax.axvspan(a - anchor, b - anchor, color="C1", alpha=0.12, lw=0)
     if marks:
-        for name, tm in MARKS.items():
+        for tm in MARKS.values():
             if lo - 1e-12 <= tm <= hi + 1e-12:
                 ax.axvline(tm - anchor, color="0.4", lw=0.8, ls="--")
     pad = 0.02 * (hi - lo)
@@ -125,6 +125,49 @@ def _frame_indices(n: int, max_frames: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
 
 
+def _colouring(path: DeploymentPath, color: str, plt):
+    """The per-frame tile values and how they are coloured, for ``color``
+    (``"energy"``, ``"rotation"`` or ``"auto"``): ``(values, norm, cmap,
+    label, flat)``; ``flat`` when the energy is noise everywhere."""
+    from matplotlib import colors as mcolors
+
+    if color == "auto":
+        color = "rotation" if path.kind == "rigid" else "energy"
+    if color not in ("energy", "rotation"):
+        raise ValueError(f"color must be energy, rotation or auto, not {color!r}")
+    flat = color == "energy" and float(path.tile_energy.max()) <= ZERO_ENERGY  # noise: colours would mean nothing
+    if flat:
+        values = np.zeros_like(path.tile_energy)
+        norm = mcolors.Normalize(vmin=-1.0, vmax=1.0)
+        cmap = plt.get_cmap("Greys")
+        label = ""
+    elif color == "energy":
+        values = path.tile_energy
+        vmax = max(float(values.max()), ZERO_ENERGY * 10)
+        norm = mcolors.LogNorm(vmin=max(vmax * 1e-6, ZERO_ENERGY), vmax=vmax, clip=True)
+        cmap = plt.get_cmap("viridis")
+        label = "tile energy e"
+    else:
+        values = path.rotation
+        norm = mcolors.Normalize(vmin=-np.pi / 2, vmax=np.pi / 2)
+        cmap = plt.get_cmap("coolwarm")
+        label = "rotation θ from state 1 (rad)"
+    return values, norm, cmap, label, flat
+
+
+def _gif_bytes(images: list, frame_ms: int) -> bytes:
+    """The frames as one looping GIF."""
+    from PIL import Image
+
+    # one shared palette keeps colours steady and the file small
+    palette = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
+    frames = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
+    buf = io.BytesIO()
+    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=frame_ms, loop=0,
+                   optimize=False, disposal=1)
+    return buf.getvalue()
+
+
 def deployment_gif(
     path: DeploymentPath,
     color: str = "auto",
@@ -144,33 +187,12 @@ def deployment_gif(
     evenly spaced frames are drawn.
     """
     plt = _pyplot()
-    from matplotlib import colors as mcolors
     from matplotlib.collections import LineCollection, PolyCollection
     from PIL import Image
 
-    if color == "auto":
-        color = "rotation" if path.kind == "rigid" else "energy"
-    if color not in ("energy", "rotation"):
-        raise ValueError(f"color must be energy, rotation or auto, not {color!r}")
+    values, norm, cmap, label, flat = _colouring(path, color, plt)
     idx = _frame_indices(path.n_frames, max_frames)
     corners, centres = path.corners, path.centres
-    flat = color == "energy" and float(path.tile_energy.max()) <= ZERO_ENERGY  # noise: colours would mean nothing
-    if flat:
-        values = np.zeros_like(path.tile_energy)
-        norm = mcolors.Normalize(vmin=-1.0, vmax=1.0)
-        cmap = plt.get_cmap("Greys")
-        label = ""
-    elif color == "energy":
-        values = path.tile_energy
-        vmax = max(float(values.max()), ZERO_ENERGY * 10)
-        norm = mcolors.LogNorm(vmin=max(vmax * 1e-6, ZERO_ENERGY), vmax=vmax, clip=True)
-        cmap = plt.get_cmap("viridis")
-        label = "tile energy e"
-    else:
-        values = path.rotation
-        norm = mcolors.Normalize(vmin=-np.pi / 2, vmax=np.pi / 2)
-        cmap = plt.get_cmap("coolwarm")
-        label = "rotation θ from state 1 (rad)"
 
     dpi = 100
     fig = plt.figure(figsize=(size_px / dpi, size_px / dpi * 1.08), dpi=dpi)
@@ -208,7 +230,7 @@ def deployment_gif(
     for f in idx:
         tiles.set_verts(corners[f])
         tiles.set_array(np.asarray(values[f], dtype=float))
-        if trajectories:
+        if lines is not None and dots is not None:  # set exactly when trajectories are drawn
             lines.set_segments(list(np.swapaxes(centres[: f + 1], 0, 1)) if f > 0 else [])
             dots.set_offsets(centres[f])
         head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
@@ -217,10 +239,4 @@ def deployment_gif(
         rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3]
         images.append(Image.fromarray(np.ascontiguousarray(rgb)))
     plt.close(fig)
-    # one shared palette keeps colours steady and the file small
-    palette = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
-    frames = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
-    buf = io.BytesIO()
-    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=frame_ms, loop=0,
-                   optimize=False, disposal=1)
-    return buf.getvalue()
+    return _gif_bytes(images, frame_ms)
