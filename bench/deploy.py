@@ -16,7 +16,6 @@ import argparse
 import time
 
 import numpy as np
-
 from fabkiri.mechanics.deploy import collisions, elastic_path, rigid_path
 from fabkiri.pattern import standard_pattern
 from fabkiri.pattern.residuals import hinge_sums

@@ -41,11 +41,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import minimize
-
 from fabkiri.cli.design_cmd import BIG_TILES
 from fabkiri.design import targets as T
-from fabkiri.design.solve import DesignRequest, _Problem, _ineq_values, design, single_thread_blas
+from fabkiri.design.solve import DesignRequest, _ineq_values, _Problem, design, single_thread_blas
+from scipy.optimize import minimize
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import speed  # noqa: E402
@@ -220,7 +219,7 @@ def section_circle(args, sizes, k_small) -> dict:
         # from BIG_TILES the CLI starts a rigid design coarse to fine (design_cmd.BIG_RIGID_INITS): so does the
         # bench, for both solvers (coarse levels included in the time)
         init = "coarse" if n * n >= BIG_TILES and args.init == "rescaled" else args.init
-        r = repeated(lambda: ours(n, init), k_small if n <= 16 else 1)
+        r = repeated(lambda n=n, init=init: ours(n, init), k_small if n <= 16 else 1)
         mine[n] = r
         print(f"{'fabkiri':<8} {n:>4} {r['status']:<12} {r['time']:>8.3f} {r['iterations']:>6} {r['eq']:>10.2e} "
               f"{r['fit_mm']:>9.3g} {r['fit_rel_radius']:>8.2%}  {r['mode']}; {r['solver']}"
@@ -240,8 +239,8 @@ def section_slsqp(args, mine, k_small) -> None:
     runs = [(n, False) for n in slsqp_sizes if n <= 8] + [(n, True) for n in slsqp_sizes]
     for n, indep in runs:
         if n not in mine and indep:
-            mine[n] = repeated(lambda: ours(n, args.init), k_small if n <= 16 else 1)
-        b = repeated(lambda: slsqp(n, indep, args.init), k_small if indep and n <= 8 else 1)
+            mine[n] = repeated(lambda n=n: ours(n, args.init), k_small if n <= 16 else 1)
+        b = repeated(lambda n=n, indep=indep: slsqp(n, indep, args.init), k_small if indep and n <= 8 else 1)
         ok = "converged" if b["success"] else "failed"
         label = "SLSQP-ind" if indep else "SLSQP"
         print(f"{label:<8} {n:>4} {ok:<12} {b['time']:>8.3f} {b['iterations']:>6} {b['eq']:>10.2e} "

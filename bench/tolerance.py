@@ -16,7 +16,6 @@ import time
 
 import numpy as np
 import shapely
-
 from fabkiri.mechanics.deploy import closed_states
 from fabkiri.mechanics.tolerance import seam_edges, tolerance_analysis
 from fabkiri.pattern.io import read_pattern

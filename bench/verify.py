@@ -32,8 +32,9 @@ def main() -> int:
                     help="who writes the DXF: `fabkiri cut` (the real writer, with labels and marks) "
                          "or the minimal test fixture; auto: cut when fabkiri.fabricate is present")
     args = ap.parse_args()
-    import layout_fixtures as lf
     import numpy as np
+
+    import layout_fixtures as lf
 
     n = args.rows
     p = with_contracted_states(standard_pattern(n, n, tile_size=10.0, angle_deg=40.0))

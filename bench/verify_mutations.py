@@ -25,11 +25,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-import layout_mutations as lm  # noqa: E402
-
 from fabkiri.mechanics.contract import with_contracted_states  # noqa: E402
 from fabkiri.pattern import read_pattern, standard_pattern, write_pattern  # noqa: E402
 from fabkiri.verify import verify_layout  # noqa: E402
+
+import layout_mutations as lm  # noqa: E402
 
 PATTERNS = {"std6": None, "heart-8x8": "heart-8x8.json", "circle-8x8-rigid": "circle-8x8-rigid.json"}
 WIDTH = {"std6": 250.0, "heart-8x8": 500.0, "circle-8x8-rigid": 250.0}  # closed width every hinge kind can cut

@@ -4,12 +4,12 @@ validator that turns the first problem into a short ``where: what`` sentence."""
 from __future__ import annotations
 
 import json
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 from typing import Any
 
 
-@lru_cache(maxsize=None)
+@cache
 def load_schema(package: str, name: str) -> dict[str, Any]:
     """The schema ``name`` shipped in ``package`` (e.g. ``fabkiri.pattern``, ``pattern.schema.json``)."""
     return json.loads(resources.files(package).joinpath(name).read_text("utf-8"))

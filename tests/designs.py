@@ -11,12 +11,11 @@ not the inverse-design solver.
 from __future__ import annotations
 
 import numpy as np
-from scipy import sparse
-from scipy.optimize import least_squares
-
 from fabkiri.pattern import geometry
 from fabkiri.pattern.lattice import standard_pattern
 from fabkiri.pattern.model import Pattern
+from scipy import sparse
+from scipy.optimize import least_squares
 
 
 def _residuals(pattern: Pattern, x: np.ndarray, rigid: bool = False) -> np.ndarray:

@@ -15,12 +15,11 @@ import ezdxf
 import numpy as np
 import shapely
 import svgwrite
-from scipy.optimize import least_squares
-
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import Pattern, geometry, standard_pattern
 from fabkiri.pattern.fabricability import widths
 from fabkiri.pattern.residuals import hinge_sums
+from scipy.optimize import least_squares
 
 
 def _residuals(pattern: Pattern, x: np.ndarray) -> np.ndarray:

@@ -14,14 +14,13 @@ from __future__ import annotations
 import json
 import math
 import shutil
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import ezdxf
 import numpy as np
 import shapely
-
 from fabkiri.mechanics.contract import contract
 
 ACI = {"CUT": 1, "SCORE": 5, "ENGRAVE": 7, "NOTES": 3}
@@ -34,10 +33,10 @@ class Sheet:
     width: float
     height: float
 
-    def copy(self) -> "Sheet":
+    def copy(self) -> Sheet:
         return Sheet({k: [(p.copy(), c) for p, c in v] for k, v in self.layers.items()}, self.width, self.height)
 
-    def map_points(self, fn, layers=None) -> "Sheet":
+    def map_points(self, fn, layers=None) -> Sheet:
         out = self.copy()
         for k, v in out.layers.items():
             if layers is None or k in layers:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 
 import pytest
-
 from fabkiri.api import DesignOutcome, PatternRequest, design_pattern
 from fabkiri.errors import InputError
 

@@ -6,9 +6,8 @@ import json
 
 import numpy as np
 import pytest
-from PIL import Image
-
 from fabkiri.pattern.io import read_pattern
+from PIL import Image
 
 from .conftest import TEMPLATES
 

@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import dumps, obj_text, standard_pattern
 

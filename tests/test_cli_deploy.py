@@ -8,10 +8,9 @@ import json
 
 import numpy as np
 import pytest
-from PIL import Image
-
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import read_pattern, standard_pattern, write_pattern
+from PIL import Image
 
 from .designs import reconfigurable_design
 from .test_deploy import ref

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 
 import numpy as np
-
 from fabkiri.pattern import read_pattern
 from fabkiri.pattern.io import read_obj
 

@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-
 from fabkiri.pattern import write_pattern
 
 from . import layout_fixtures as lf

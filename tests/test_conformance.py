@@ -6,14 +6,13 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from fabkiri.design.conformance import judge, parse_shape_tol
 from fabkiri.errors import InputError
 from fabkiri.pattern import conformance as pc
 from fabkiri.pattern.io import read_pattern
 from fabkiri.pattern.lattice import standard_pattern
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from .conftest import TEMPLATES
 

@@ -9,9 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from fabkiri.errors import CheckFailed, FabricationError, InputError
 from fabkiri.fabricate import hinges as hg
 from fabkiri.fabricate.cut import CutOptions, cut_pattern
@@ -21,6 +18,8 @@ from fabkiri.fabricate.text import GLYPHS, text_strokes, text_width
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.io import read_pattern, write_pattern
 from fabkiri.pattern.lattice import standard_pattern
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 REPO = Path(__file__).resolve().parents[1]
 PATTERNS = REPO / "templates" / "patterns"

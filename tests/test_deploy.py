@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from fabkiri.errors import CheckFailed, InputError
 from fabkiri.mechanics import adopt_state_labels, contract
 from fabkiri.mechanics.deploy import (
@@ -21,6 +18,8 @@ from fabkiri.mechanics.deploy import (
 from fabkiri.mechanics.elastic import gap_angles
 from fabkiri.mechanics.path import path_parameter, tile_angles
 from fabkiri.pattern import geometry, import_obj, read_pattern, standard_pattern
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from .conftest import REPO, TEMPLATES
 from .designs import reconfigurable_design

@@ -6,9 +6,6 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as hst
-
 from fabkiri.design import constraints as C
 from fabkiri.design import targets as T
 from fabkiri.design.objective import regularizer
@@ -16,6 +13,8 @@ from fabkiri.design.solve import DesignRequest, design
 from fabkiri.errors import InputError
 from fabkiri.pattern import read_pattern, standard_pattern
 from fabkiri.pattern.residuals import hinge_sums
+from hypothesis import given, settings
+from hypothesis import strategies as hst
 
 from .conftest import TEMPLATES
 
@@ -348,7 +347,6 @@ def test_overlap_check_is_a_depth_not_an_area():
     1e-9 size² = 8.2e-10 mm², but they penetrate by less than 1e-9 tile sizes; a shift by 1e-8 mm is real.
     """
     import shapely
-
     from fabkiri.cli.design_cmd import overlapping_tiles
 
     a = [[-7.870798019350355, 34.4230784404786], [-7.223358822429531, 34.131578843332065],

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from fabkiri.errors import PatternError
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.mechanics.energy import corner_energy, springs
 from fabkiri.pattern import Pattern, geometry, standard_pattern
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from .designs import reconfigurable_design
 

@@ -8,9 +8,6 @@ import json
 import numpy as np
 import pytest
 import shapely
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from fabkiri.design import fabrication as F
 from fabkiri.design.constraints import Stencils
 from fabkiri.fabricate import fabricability as fb
@@ -19,6 +16,8 @@ from fabkiri.fabricate.printers import load_printer
 from fabkiri.pattern import fabricability as fab
 from fabkiri.pattern.io import read_pattern
 from fabkiri.pattern.lattice import standard_pattern
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from .conftest import TEMPLATES
 

@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pytest
-
 from fabkiri.pattern.io import read_pattern
 
 from .conftest import TEMPLATES

@@ -8,7 +8,6 @@ import sys
 
 import numpy as np
 import pytest
-
 from fabkiri.errors import PatternError
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import Pattern, dumps, loads, obj_text, read_pattern, standard_pattern

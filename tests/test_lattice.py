@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from fabkiri.mechanics import contract_both
 from fabkiri.pattern import geometry, standard_pattern
 from fabkiri.pattern.lattice import quad_corners

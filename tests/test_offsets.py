@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from fabkiri.design import constraints as C
 from fabkiri.design.offsets import OffsetFamily
 from fabkiri.design.rigid import RigidFamily

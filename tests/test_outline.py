@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from fabkiri.design import outline
 from fabkiri.design import targets as T
 from fabkiri.design.solve import DesignRequest, design

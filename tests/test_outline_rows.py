@@ -2,10 +2,9 @@
 ``constraints.inside_polygon``) equal the brute-force K x E tables they replace, ties included."""
 
 import numpy as np
+from fabkiri.design import constraints as C
 from hypothesis import given, settings
 from hypothesis import strategies as hst
-
-from fabkiri.design import constraints as C
 
 
 def brute_nearest(pts, A, B):

@@ -16,15 +16,14 @@ import numpy as np
 import pytest
 import shapely
 import trimesh
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
 from fabkiri.errors import FabricationError, InputError
 from fabkiri.fabricate import mesh, printgeom
 from fabkiri.fabricate.printers import Printer, available_printers, load_printer
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.io import write_pattern
 from fabkiri.pattern.lattice import standard_pattern
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -463,7 +462,7 @@ def test_strip_parts_on_beds(printer):
     rep = mesh.check_meshes(r)
     assert rep.ok, rep.problems
     # each part is its strip outline, moved rigidly and laid flat
-    for h, (bed, pl) in enumerate(zip([b for bed in job.beds for b in bed], job.placements)):
+    for h, (bed, pl) in enumerate(zip([b for beds in job.beds for b in beds], job.placements)):
         m = r.manifolds[pl["bed"] - 1][[b.name for b in job.beds[pl["bed"] - 1]].index(bed.name)]
         # minus its engraved hinge ID, two layers deep
         label = bed.ops[1][1].polygons[0] if len(bed.ops) > 1 else shapely.Polygon()
@@ -538,9 +537,10 @@ def test_pinned_refusals(printer):
 
 
 def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
-    from tests.conftest import ref
-    from fabkiri.pattern.io import import_obj
     from fabkiri.mechanics.contract import adopt_state_labels
+    from fabkiri.pattern.io import import_obj
+
+    from tests.conftest import ref
 
     pat = adopt_state_labels(import_obj(ref("compact_reconfigurable_design"), scale=10.0))
     with pytest.raises(FabricationError, match="not rigid-deployable"):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-
 from fabkiri.mechanics import adopt_state_labels, contract_both, describe
 from fabkiri.pattern import geometry, import_obj
 from fabkiri.pattern.residuals import state_residuals

@@ -8,9 +8,8 @@ import subprocess
 
 import numpy as np
 import pytest
-from PIL import Image
-
 from fabkiri.render.report import SECTIONS
+from PIL import Image
 
 from .conftest import TEMPLATES
 

@@ -6,9 +6,6 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as hst
-
 from fabkiri.design import constraints as C
 from fabkiri.design import targets as T
 from fabkiri.design.rigid import RigidFamily
@@ -16,6 +13,8 @@ from fabkiri.design.solve import DesignRequest, design
 from fabkiri.errors import InputError
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern import Pattern, standard_pattern
+from hypothesis import given, settings
+from hypothesis import strategies as hst
 
 
 def _family(rows, cols):
@@ -259,7 +258,7 @@ def test_deployment_angle_is_not_clipped_near_the_closed_states():
 def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypatch):
     """A start that leaves an inequality violated (g < 0) loses to a feasible result, whatever the merit."""
     from fabkiri.design import reduced as R
-    from fabkiri.design.solve import _Problem, _mean_edge
+    from fabkiri.design.solve import _mean_edge, _Problem
 
     prob = _Problem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family

@@ -7,11 +7,9 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
+from fabkiri.cli import main as cli
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from fabkiri.cli import main as cli
 
 
 def _registered(parser) -> dict[str, str]:
@@ -58,9 +56,8 @@ def test_design_imports_only_what_it_uses(tmp_path):
 @settings(max_examples=30, deadline=None)
 @given(st.integers(3, 60), st.integers(0, 2 ** 32 - 1))
 def test_periodic_spline_equals_scipy(k, seed):
-    from scipy.interpolate import CubicSpline
-
     from fabkiri.design.spline import PeriodicCubic
+    from scipy.interpolate import CubicSpline
 
     rng = np.random.default_rng(seed)
     x = np.concatenate([[0.0], np.cumsum(rng.uniform(0.2, 2.0, k))])
@@ -80,9 +77,8 @@ def test_periodic_spline_equals_scipy(k, seed):
 @settings(max_examples=20, deadline=None)
 @given(st.integers(1, 9), st.integers(1, 9), st.integers(1, 20), st.integers(1, 20), st.integers(0, 2 ** 32 - 1))
 def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
-    from scipy.interpolate import RegularGridInterpolator
-
     from fabkiri.design.rigid import resample_grid
+    from scipy.interpolate import RegularGridInterpolator
 
     grid = np.random.default_rng(seed).normal(size=(m + 1, n + 1, 2))
     at = RegularGridInterpolator((np.arange(m + 1.0), np.arange(n + 1.0)), grid, method="linear")

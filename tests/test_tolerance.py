@@ -7,7 +7,6 @@ import json
 import numpy as np
 import pytest
 import shapely
-
 from fabkiri.mechanics.deploy import closed_states
 from fabkiri.mechanics.tolerance import corner_shift, seam_edges, seam_misfit, tolerance_analysis
 from fabkiri.pattern.io import read_pattern

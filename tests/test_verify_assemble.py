@@ -5,7 +5,6 @@ a tile cut 1 % too large still fails to close."""
 from __future__ import annotations
 
 import numpy as np
-
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import geometry, standard_pattern
 from fabkiri.verify.assemble import Assembly

@@ -8,12 +8,10 @@ import shutil
 import ezdxf
 import numpy as np
 import pytest
-
 from fabkiri.pattern import read_pattern
 from fabkiri.verify import verify_layout
 
 from .conftest import TEMPLATES
-
 
 PATTERN = TEMPLATES / "patterns" / "circle-8x8.json"
 

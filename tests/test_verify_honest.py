@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
-
 from fabkiri.pattern import read_pattern
 from fabkiri.verify import verify_layout, verify_pattern
 from fabkiri.verify.pattern_checks import enclosed_gaps

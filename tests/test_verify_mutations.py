@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from fabkiri.verify import verify_layout
 
 from . import layout_fixtures as lf
@@ -48,24 +47,24 @@ def mutations(pattern, rng):
         t, k = rng.integers(T), rng.integers(4)
         C = lf.move_corner(_base(pattern, hinge, rng), t, k, 0.1, rng.uniform(0, 2 * np.pi))
         out.append((f"corner {k} of tile {t} moved 0.1 mm", hinge, C))
-    for n in range(30):  # one tile rotated 0.5° in place (only meaningful in place)
+    for _ in range(30):  # one tile rotated 0.5° in place (only meaningful in place)
         t = rng.integers(T)
         C = lf.rotate_tile(_base(pattern, "tape", rng), t, 0.5 * rng.choice([-1, 1]))
         out.append((f"tile {t} rotated 0.5°", "tape", C))
-    for n in range(30):  # two tiles swapped on the sheet
+    for _ in range(30):  # two tiles swapped on the sheet
         i, j = rng.choice(T, 2, replace=False)
         C = lf.swap_tiles(_base(pattern, "tape", rng), i, j)
         out.append((f"tiles {i} and {j} swapped", "tape", C))
-    for n in range(30):  # a tile mirrored
+    for _ in range(30):  # a tile mirrored
         hinge = ("tape", "separate")[n % 2]
         t = rng.integers(T)
         out.append((f"tile {t} mirrored", hinge, lf.mirror_tile(_base(pattern, hinge, rng), t)))
     edge = boundary_tiles(pattern)
-    for n in range(30):  # a tile dropped (in place: a boundary tile; interior ones have no own cut)
+    for _ in range(30):  # a tile dropped (in place: a boundary tile; interior ones have no own cut)
         hinge = ("tape", "separate")[n % 2]
         t = rng.choice(edge) if hinge == "tape" else rng.integers(T)
         out.append((f"tile {t} dropped", hinge, lf.drop_tile(_base(pattern, hinge, rng), t)))
-    for n in range(30):  # a tile scaled 1 %
+    for _ in range(30):  # a tile scaled 1 %
         hinge = ("tape", "separate")[n % 2]
         t = rng.integers(T)
         f = rng.choice([0.99, 1.01])

@@ -6,15 +6,14 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-from scipy.sparse.csgraph import breadth_first_order
-
 from fabkiri.mechanics import adopt_state_labels, with_contracted_states
 from fabkiri.pattern import Pattern, geometry, import_obj, standard_pattern
 from fabkiri.pattern.lattice import DX, DY, quad_topology
 from fabkiri.verify import Report, rigid_claimed, tolerances, verify_pattern
 from fabkiri.verify.pattern_checks import rigid_path
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.sparse.csgraph import breadth_first_order
 
 from . import layout_fixtures as lf
 from .conftest import ref

@@ -6,12 +6,11 @@ from __future__ import annotations
 import ezdxf
 import numpy as np
 import svgwrite
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from fabkiri.pattern import geometry
 from fabkiri.verify import layout as L
 from fabkiri.verify import verify_layout
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from . import layout_fixtures as lf
 

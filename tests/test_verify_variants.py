@@ -8,14 +8,12 @@ import subprocess
 
 import numpy as np
 import pytest
-
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import read_pattern, standard_pattern, write_pattern
 from fabkiri.verify import verify_layout
 
 from . import layout_fixtures as lf
 from . import layout_mutations as lm
-
 
 VALID = ["re-save R2018", "LINE segments", "in a block, INSERT moved and turned 30°", "flipped OCS (extrusion -Z)",
          "colour only, all on layer 0", "declared inches", "Inkscape layers (inkscape:label only)",

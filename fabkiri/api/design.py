@@ -21,18 +21,18 @@ import numpy as np
 
 from .. import limits
 from ..design import conformance as conf
+from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.offset_outline import preferred_holes
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
-from ..design.fabrication import FabricationLimits, smallest_size
 from ..errors import FabricationError, InputError, SolveError
 from ..fabricate import fabricability
 from ..fabricate.materials import load_material
 from ..fabricate.printers import load_printer
 from ..fileio import atomic_write
-from ..pattern.fabricability import pal_bound
 from ..mechanics.contract import contract
 from ..pattern import geometry
+from ..pattern.fabricability import pal_bound
 from ..pattern.io import dumps
 from ..pattern.model import Pattern
 
@@ -329,7 +329,7 @@ def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
             and req.rows * req.cols < BIG_TILES and not (best[3] and _shape_met(best[1])))
 
 
-def _continuation(request: "PatternRequest", req: DesignRequest, target: Target, shape_tol: tuple,
+def _continuation(request: PatternRequest, req: DesignRequest, target: Target, shape_tol: tuple,
                   attempts: list):
     """The design without fabrication rows, then the rows raised in steps (``CONTINUATION``) from it, each warm
     started from the last; a last step that does not converge is tried in the rigid family (where it may) from
@@ -404,7 +404,7 @@ def _rank(outcome) -> tuple:
             _fit_miss(outcome[1]))
 
 
-def _check(result, contracted, request: "PatternRequest", target: Target | None, shape_tol: tuple):
+def _check(result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple):
     """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
     pattern = result.pattern
     report = dict(result.report)
@@ -462,7 +462,7 @@ def _conformance(pattern: Pattern, result, contracted_states: dict, target: Targ
     return measured, {k: conf.judge(c, shape_tol, tiles) for k, c in measured.items()}
 
 
-def _fabrication(request: "PatternRequest", target) -> tuple[FabricationLimits | None, dict]:
+def _fabrication(request: PatternRequest, target) -> tuple[FabricationLimits | None, dict]:
     """``material/hinge``, ``printer/style``, ``min_feature`` and ``min_hole`` as plain mm limits, and the intent
     stored for ``cut``/``print``."""
     parts, names, intent = [], [], {}

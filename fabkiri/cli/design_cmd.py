@@ -17,7 +17,14 @@ import sys
 import numpy as np
 
 from .. import limits
-from ..api.design import BIG_TILES, PatternRequest, _fit_miss, _rank, design_pattern, overlapping_tiles  # noqa: F401
+from ..api.design import (  # noqa: F401
+    BIG_TILES,
+    PatternRequest,
+    _fit_miss,
+    _rank,
+    design_pattern,
+    overlapping_tiles,
+)
 from ..design import conformance as conf
 from ..design.initial import INITS
 from ..fabricate import fabricability

@@ -147,7 +147,10 @@ def cmd_export(args: argparse.Namespace) -> int:
     state = args.state
     fmt = args.format
     if state != "deployed" or fmt != "obj":  # closed states are what gets fabricated: the fabrication gate
-        from ..fabricate.gate import claimed_states, closes_gate  # lazy: `design` imports this module
+        from ..fabricate.gate import (  # lazy: `design` imports this module
+            claimed_states,
+            closes_gate,
+        )
 
         states = (1, 2) if fmt == "fold" else claimed_states(pattern, 1 if state == "deployed" else int(state))
         for w in closes_gate(pattern, None, force=args.force, action="export", states=states).warnings:

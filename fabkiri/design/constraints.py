@@ -146,7 +146,7 @@ class Stencils:
     phi: dict  # state -> (T, 4, 2) integer pattern-grid coordinates of every tile corner
 
     @classmethod
-    def from_pattern(cls, pattern: Pattern) -> "Stencils":
+    def from_pattern(cls, pattern: Pattern) -> Stencils:
         lat = pattern.lattice or {}
         rows, cols = int(lat.get("rows", 0)), int(lat.get("cols", 0))
         if rows * cols != pattern.n_tiles or pattern.parity != 0:
@@ -555,7 +555,7 @@ class ClosedGrid:
     n_vertices: int
 
     @classmethod
-    def build(cls, st: Stencils, state: int, offset: int) -> "ClosedGrid":
+    def build(cls, st: Stencils, state: int, offset: int) -> ClosedGrid:
         M, N = st.rows, st.cols
         phi = st.phi[state]
         vid = phi[..., 1] * (N + 1) + phi[..., 0]

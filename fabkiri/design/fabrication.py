@@ -58,7 +58,7 @@ class FabricationLimits:
     def active(self) -> bool:
         return any(v > 0 for k, v in asdict(self).items() if k not in ("source", "margin"))
 
-    def scaled(self, fraction: float, margin: float = 0.0) -> "FabricationLimits":
+    def scaled(self, fraction: float, margin: float = 0.0) -> FabricationLimits:
         """Every requirement times ``fraction`` (a step of the continuation in the limits)."""
         return replace(self, margin=margin, **{f.name: getattr(self, f.name) * fraction for f in fields(self)
                                                if f.name not in ("source", "margin")})
@@ -80,7 +80,7 @@ class _D:
         self.v, self.g = v, g
 
     @staticmethod
-    def lift(o, like: "_D") -> "_D":
+    def lift(o, like: _D) -> _D:
         return o if isinstance(o, _D) else _D(np.broadcast_to(o, like.v.shape), np.zeros_like(like.g))
 
     def __add__(self, o):

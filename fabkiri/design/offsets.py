@@ -60,7 +60,7 @@ class OffsetFamily:
         return len(self.off_row)
 
     @classmethod
-    def build(cls, st: Stencils, tree: SpanningTree) -> "OffsetFamily":
+    def build(cls, st: Stencils, tree: SpanningTree) -> OffsetFamily:
         V = st.n_nodes
         tl = st.tiles
         hn = st.hole_nodes
@@ -137,7 +137,6 @@ class OffsetFamily:
     # ---------------------------------------------------------------- maps
     def matrix(self, t: np.ndarray) -> sparse.csc_matrix:
         """``A(t)``."""
-        K = self.n_holes
         At = sparse.csc_matrix((np.r_[-t, t], (np.r_[self.off_row, self.off_row], np.r_[self.off_a, self.off_b])),
                                shape=self.A0.shape)
         return (self.A0 + At).tocsc()

@@ -213,7 +213,7 @@ def _lm(evaluate, ineq_viol, nodes, p, rho, max_iter, stall_tol):
     mu = 1e-3 * max(float(np.diag(JtJ).mean()), 1e-30)
     stall = 0
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (it is reported after the loop)
         D = np.diag(JtJ) + 1e-12 * float(np.diag(JtJ).max())
         dp = -np.linalg.solve(JtJ + mu * np.diag(D / D.mean()), J.T @ r)
         for _ in range(6):  # step limiting: no new inequality violation

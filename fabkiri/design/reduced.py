@@ -93,7 +93,7 @@ class _Merit:
             C[:, 1, nf:2 * nf] = fam.Z
             self._C = C.reshape(2 * G, 2 * nf + 1)
 
-    def staged(self, rho: float, scaling: str) -> "_Merit":
+    def staged(self, rho: float, scaling: str) -> _Merit:
         """The same rows with another penalty weight and LM scaling (sharing every precomputed array)."""
         new = copy.copy(self)
         new.sq, new.scaling = float(np.sqrt(rho)), scaling
@@ -154,7 +154,7 @@ class _Merit:
         (rx, Jx), (rc, Jc) = blocks
         return np.concatenate([rx, rc]), Jx, Jc
 
-    def evaluate(self, p: np.ndarray, hard: bool = False) -> "_Evaluation":
+    def evaluate(self, p: np.ndarray, hard: bool = False) -> _Evaluation:
         """Member ``p``: its nodes, grid, inequality violation and (merit or hard-fit) rows."""
         if self._tiles is not None:
             return self._evaluate_dense(p, hard)
@@ -162,7 +162,7 @@ class _Merit:
         values = self.ineq_values(Xc)
         return _Evaluation(self, p, Xc, self.ineq_violation(Xc, values), hard, values=values)
 
-    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> "_Evaluation":
+    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
         """The dense reduced Jacobian row block by row block: node rows through ``∂x/∂p`` at the nodes
         they touch, tile-shape rows from ``_TileShapeRows``; inequality Jacobians only where active."""
         S, psi = self.unpack(p)

@@ -57,7 +57,7 @@ class RigidFamily:
         return len(self.seeds)
 
     @classmethod
-    def build(cls, st: Stencils, tree: SpanningTree) -> "RigidFamily":
+    def build(cls, st: Stencils, tree: SpanningTree) -> RigidFamily:
         """``tree``: a spanning tree of the tile graph (``Topology.spanning_tree``)."""
         M, N = st.rows, st.cols
         tl = st.tiles

@@ -53,13 +53,14 @@ from ..pattern.model import Pattern
 from . import constraints as C
 from . import offset_outline, outline
 from .conformance import deployed as deployed_conformance
-from .fabrication import FabricationLimits, families as fabrication_families
+from .fabrication import FabricationLimits
+from .fabrication import families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer
 from .reduced import fit_miss, solve_reduced
 from .rigid import RigidFamily, resample_grid
-from .unfold import convex_member
 from .targets import Target
+from .unfold import convex_member
 
 _BLAS = None  # one controller per process: finding the loaded BLAS libraries costs ~1.3 ms a call
 
@@ -350,7 +351,7 @@ class _Problem:
         return np.stack([2 * o, 2 * o + 1], 1).ravel()
 
     @property
-    def normal(self) -> "_Normal":
+    def normal(self) -> _Normal:
         """Normal-equation solver of the full problem, built on first use (its ordering costs a Jacobian)."""
         if self._normal is None:
             self._normal = _Normal(self._ordering())

@@ -25,7 +25,7 @@ class PeriodicCubic:
         self.x = np.asarray(x, dtype=float)
 
     @classmethod
-    def interpolate(cls, x: np.ndarray, y: np.ndarray) -> "PeriodicCubic":
+    def interpolate(cls, x: np.ndarray, y: np.ndarray) -> PeriodicCubic:
         """The C² periodic spline through ``y`` (K+1, dim) at ``x``; ``y[0]`` must equal ``y[-1]``."""
         x = np.asarray(x, dtype=float)
         y = np.asarray(y, dtype=float)

@@ -154,7 +154,7 @@ class Target:
         return self.point(self.corners)
 
     # ------------------------------------------------------------ transform
-    def transformed(self, scale: float = 1.0, shift=(0.0, 0.0), name: str | None = None) -> "Target":
+    def transformed(self, scale: float = 1.0, shift=(0.0, 0.0), name: str | None = None) -> Target:
         """A scaled and shifted copy with the same corners.
 
         A similarity keeps the curve simple and its arc-length parameters, so the copy reuses them: the
@@ -179,7 +179,7 @@ class Target:
         new._arc_trees = None  # used only if the copy's corners are changed and it builds trees of its own
         return new
 
-    def scaled_to(self, size: float) -> "Target":
+    def scaled_to(self, size: float) -> Target:
         """Scaled about its bounding-box centre to ``size`` (larger dimension) and centred on the origin."""
         lo, hi = self.bbox
         s = size / float((hi - lo).max())
@@ -235,7 +235,7 @@ class Target:
         p = np.asarray(p, dtype=float).reshape(-1, 2)
         return self.projector(np.full(len(p), -1) if side is None else side)(p)
 
-    def projector(self, side: np.ndarray) -> "Projector":
+    def projector(self, side: np.ndarray) -> Projector:
         """:meth:`project` for points on fixed arcs ``side`` (-1: the whole curve), with the per-arc
         bounds and lifted queries worked out once (a constraint family projects the same tips every call)."""
         return Projector(self, np.asarray(side, dtype=np.int64).reshape(-1))

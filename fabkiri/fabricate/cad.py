@@ -81,7 +81,7 @@ def body_solid(body: Body):
         parts.append(solid)
     if body.kind == "hinges":  # strips are disjoint parts added in several prisms
         parts = []
-        for op, pr in body.ops:
+        for _op, pr in body.ops:
             parts.extend(_prism_solids(b3d, pr, pr.polygons))
     return b3d.Compound(children=[p for p in parts])
 

@@ -27,7 +27,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import shapely
 
 from ..mechanics.contract import with_contracted_states
 from ..pattern.lattice import standard_pattern

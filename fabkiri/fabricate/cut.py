@@ -19,20 +19,20 @@ import shapely
 from .. import __version__
 from ..errors import CheckFailed, FabricationError, InputError
 from ..mechanics.contract import contract
-from ..pattern.model import Pattern
 from ..pattern import fabricability as fab
+from ..pattern.model import Pattern
+from ..verify.physical import MARK_CORNER_FRAC, MARK_REACH_MM, tape_mark_chords, tape_reach
 from . import fabricability as fb
 from . import hinges as hg
 from . import layout as lay
 from .drawing import COLORS, SheetDrawing, snap
+from .dxf import DXF_VERSION, dxf_bytes
 from .gate import GATE_GROUPS, closes_gate
 from .gcpause import gc_paused
-from .dxf import DXF_VERSION, dxf_bytes
 from .materials import HINGE_KINDS, Material
 from .preview import png_bytes
 from .svg import STROKE_MM, svg_bytes
 from .text import supported, text_strokes, text_strokes_many, text_width
-from ..verify.physical import MARK_CORNER_FRAC, MARK_REACH_MM, tape_mark_chords, tape_reach
 
 FORMATS = ("dxf", "svg", "png")
 MIN_LABEL_MM = 0.8  # below this a label is not legible; it is left out (and counted)

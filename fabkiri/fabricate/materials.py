@@ -82,7 +82,7 @@ class Material:
         """Half the kerf: how far a compensated toolpath sits outside the part."""
         return 0.5 * self.kerf_mm
 
-    def override(self, **changes: Any) -> "Material":
+    def override(self, **changes: Any) -> Material:
         """A copy with the given fields replaced (``None`` values are ignored)."""
         known = {f.name: f for f in fields(self)}
         clean = {}

@@ -125,7 +125,7 @@ class Printer:
         (each tile is shrunk by it) plus half a nozzle width of print error."""
         return 0.5 * self.gap_mm + 0.5 * self.nozzle_mm
 
-    def with_overrides(self, **kw: Any) -> "Printer":
+    def with_overrides(self, **kw: Any) -> Printer:
         """A copy with some fields replaced; ``None`` values are ignored."""
         kw = {k: v for k, v in kw.items() if v is not None}
         pin_kw = {k[4:]: kw.pop(k) for k in list(kw) if k.startswith("pin_")}
