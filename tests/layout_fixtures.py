@@ -19,7 +19,6 @@ from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import Pattern, geometry, standard_pattern
 from fabkiri.pattern.fabricability import widths
 from fabkiri.pattern.residuals import hinge_sums
-from scipy.optimize import least_squares
 
 
 def _residuals(pattern: Pattern, x: np.ndarray) -> np.ndarray:
@@ -40,21 +39,28 @@ def distinct_pattern(rows: int = 4, cols: int = 5, seed: int = 3, size: float = 
     """A rigid-deployable reconfigurable pattern whose tiles are pairwise non-congruent and chiral.
 
     The standard lattice is perturbed at random and projected back onto the
-    constraint set (edge pairs of both states and hinge sums) by least squares.
+    constraint set (edge pairs of both states and hinge sums) by Gauss-Newton.
     """
     base = standard_pattern(rows, cols, tile_size=size)
     rng = np.random.default_rng(seed)
-    x0 = base.nodes + rng.normal(scale=0.06 * size, size=base.nodes.shape)
+    x0 = base.nodes + rng.normal(scale=0.03 * size, size=base.nodes.shape)
 
     def f(v):
         return _residuals(base, v.reshape(-1, 2))
 
-    # x_scale is explicit: scipy's default for trf is 1 in 1.17, and from there the solve lands on
-    # another member with a 1.8 mm tile that the tests' materials cannot cut at scale 1.
-    sol = least_squares(f, x0.ravel(), method="trf", x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15,
-                        max_nfev=400)
-    nodes = sol.x.reshape(-1, 2)
-    assert np.abs(f(sol.x)).max() < 1e-10, np.abs(f(sol.x)).max()
+    # Gauss-Newton with minimum-norm steps (dense central differences: a fixture, 5 steps). scipy's
+    # least_squares from a larger perturbation landed on members with 1.8 mm and 0 mm tiles as
+    # its defaults and builds changed; minimum-norm steps stay on the member nearest the start.
+    x = x0.ravel()
+    eye = 1e-7 * np.eye(len(x))
+    for _ in range(40):
+        r = f(x)
+        if np.abs(r).max() < 1e-13:
+            break
+        J = np.stack([(f(x + e) - f(x - e)) / 2e-7 for e in eye], 1)
+        x = x - np.linalg.lstsq(J, r, rcond=None)[0]
+    nodes = x.reshape(-1, 2)
+    assert np.abs(f(x)).max() < 1e-10, np.abs(f(x)).max()
     # the tests cut it at scale 1 in every material: a thin member would fail them for the wrong reason
     thinnest = widths(nodes[base.tiles]).min()
     assert thinnest > 0.5 * size, f"fixture member has a {thinnest:.2f} mm tile"
