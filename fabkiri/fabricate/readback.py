@@ -24,17 +24,17 @@ import json
 import re
 import tempfile
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import shapely
 
-from ..pattern import fabricability as fab
 from ..errors import CheckFailed, FabkiriError
 from ..fileio import atomic_write_many
+from ..pattern import fabricability as fab
 from ..pattern.model import Pattern
 from .cut import CutResult
 from .drawing import LAYERS
@@ -106,7 +106,7 @@ class Polylines(Sequence):
         self._items: list | None = None
 
     @classmethod
-    def of(cls, items) -> "Polylines":
+    def of(cls, items) -> Polylines:
         return cls(*_flat(items))
 
     def _list(self) -> list:

@@ -31,10 +31,10 @@ from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
 from ..errors import VerifyError
+from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
-from ..mechanics.contract import contract
 from .pattern_checks import closed_state_checks, fabrication_tolerances
 from .report import Check, Report, measured
 
@@ -68,12 +68,12 @@ class Linework:
             self.layers.append(str(layer))
             self.colours.append(str(colour))
 
-    def subset(self, keep) -> "Linework":
+    def subset(self, keep) -> Linework:
         keep = list(keep)
         return Linework(self.path, [self.polylines[i] for i in keep], [self.closed[i] for i in keep],
                         self.layer_found, [self.layers[i] for i in keep], [self.colours[i] for i in keep])
 
-    def cut_classes(self) -> list["Linework"]:
+    def cut_classes(self) -> list[Linework]:
         """The candidate cut linework: the CUT layer if there is one, else every colour class outside the
         annotation layers (one candidate per colour: a colour-only file keeps its layers as colours)."""
         if self.layer_found or not self.polylines:

@@ -22,7 +22,6 @@ averaged); stored closed states are checked against them.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import shapely
@@ -436,7 +435,7 @@ def target_checks(pattern: Pattern, states: dict | None = None, shape_tol: str |
         if isinstance(tgt, dict) and states is not None and int(s) in states:
             jobs.append((f"state {s}: outline shape", f"state {s}", int(s), tgt))
     out = []
-    for name, group, s, spec in jobs:
+    for name, _group, s, spec in jobs:
         try:
             target = target_from_dict(spec, name)
         except InputError as exc:

@@ -85,7 +85,7 @@ class Report:
         self.checks.append(check)
         return check
 
-    def extend(self, other: "Report") -> None:
+    def extend(self, other: Report) -> None:
         self.checks.extend(other.checks)
 
     @property
