@@ -130,4 +130,4 @@ def _convex(corners: np.ndarray) -> np.ndarray:
     """``(T,)`` whether each CCW quad is convex (every turn left)."""
     e = np.roll(corners, -1, axis=-2) - corners
     turn = geometry.cross2(e, np.roll(e, -1, axis=-2))
-    return (turn > 0).all(axis=-1)
+    return np.asarray((turn > 0).all(axis=-1))

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from typing import Any
+
 import numpy as np
 
 from ..errors import CheckFailed, InputError
@@ -87,7 +89,7 @@ class DeploymentPath:
     def summary(self) -> dict:
         marks = self.mark_frames()
         e = self.energy
-        out = {
+        out: dict[str, Any] = {
             "path": self.kind,
             "driver": self.driver,
             "frames": self.n_frames,
@@ -130,7 +132,7 @@ def path_parameter(steps: int) -> np.ndarray:
     return np.linspace(0.0, 1.0, 2 * half + 1)
 
 
-def piecewise(t: np.ndarray, v1, v0, v2):
+def piecewise(t: np.ndarray | float, v1, v0, v2):
     """Linear v1 → v0 on [0, ½], v0 → v2 on [½, 1]; broadcasts over trailing axes."""
     t = np.asarray(t, dtype=float)
     shape = t.shape + (1,) * np.ndim(v0)

@@ -253,9 +253,8 @@ def tolerance_analysis(
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
     deployed = pattern.corners() * scale
-    states = {"closed state 1": None, "deployed": deployed, "closed state 2": None}
     closed = closed_states(pattern)  # raises if a state does not close
-    states["closed state 1"], states["closed state 2"] = closed[1] * scale, closed[2] * scale
+    states = {"closed state 1": closed[1] * scale, "deployed": deployed, "closed state 2": closed[2] * scale}
     rng = np.random.default_rng(seed)
     edge_off = rng.normal(0.0, kerf_sd, (n, T, 4))
     piv = rng.normal(0.0, hinge_sd, (n, len(A), 2, 2))  # per hinge, per side

@@ -153,9 +153,10 @@ def boundary_tip_order(tiles: np.ndarray, hole_nodes: np.ndarray, hole_tiles: np
     if not free:
         return np.zeros(0, dtype=np.int64)
     start = int(free_nodes[0])
-    order, v = [], start
+    order: list[int] = []
+    v: int | None = start
     for _ in range(len(nxt) + 1):
-        if v in free:
+        if v is not None and v in free:
             order.append(v)
         v = nxt.get(v)
         if v is None or v == start:
@@ -207,6 +208,7 @@ def align_rigid(outline: np.ndarray, target: np.ndarray, iterations: int = 40, s
         err = float(np.mean(tree.query(P)[0] ** 2))
         if best is None or err < best[0]:
             best = (err, P)
+    assert best is not None  # starts >= 1
     P = best[1]
     for _ in range(iterations):
         Pn, R, t = _icp_step(Ad0, P, Bd, tree)

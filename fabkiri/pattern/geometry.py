@@ -38,7 +38,7 @@ def rotation(theta: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
 
 
-def rotate(points: np.ndarray, theta: np.ndarray) -> np.ndarray:
+def rotate(points: np.ndarray, theta: np.ndarray | float) -> np.ndarray:
     """Rotate points ``(..., 2)`` by ``theta`` (broadcast over leading axes)."""
     c, s = np.cos(theta), np.sin(theta)
     x, y = points[..., 0], points[..., 1]
