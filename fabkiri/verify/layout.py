@@ -35,6 +35,7 @@ from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
+from .geom import point_segment_distance
 from .pattern_checks import closed_state_checks, fabrication_tolerances
 from .report import Check, Report, measured
 
@@ -629,7 +630,8 @@ def _on_cut_edges(parts: np.ndarray, material) -> np.ndarray:
     bump (or, at a mitre, a spike) that can pull a corner off. Each core's coarse quad is kept only
     to say which side is which: every side is put on the longest cut edge of the material that runs
     along it (parallel within 10°) with its midpoint on the core, and the corners are where those
-    lines meet. Cores with no such edge on some side are left as they are.
+    lines meet. Cores with no such edge on some side are left as they are. Vectorised over all
+    (core, edge) pairs; ties between equally long edges go to the first the STRtree query lists.
     """
     if not len(parts):
         return parts
@@ -641,43 +643,49 @@ def _on_cut_edges(parts: np.ndarray, material) -> np.ndarray:
     out = np.array(parts, dtype=object)
     rings = shapely.get_exterior_ring(out)
     pi, si = shapely.STRtree(mids).query(rings, predicate="dwithin", distance=EDGE_ON_MM)
-    for k, part in enumerate(out):
-        q = quad_corners(part) if part.geom_type == "Polygon" else None
-        mine = si[pi == k]
-        if q is None or not len(mine):
-            continue
-        from .geom import point_segment_distance
-
-        e = segs[mine, 1] - segs[mine, 0]
-        elen = np.linalg.norm(e, axis=1)
-        side = np.roll(q, -1, 0) - q
-        # every edge to the side it runs along (parallel within 10°) and lies nearest; near-parallel
-        # sides (a corner near 180°) each keep their own edges
-        m = segs[mine].mean(axis=1)
-        dist = np.stack([point_segment_distance(m, np.broadcast_to(q[i], m.shape), np.broadcast_to(q[(i + 1) % 4], m.shape))
-                         for i in range(4)], 1)
-        along = np.abs(geometry.cross2(e[:, None, :], side[None])) <= 0.17 * elen[:, None] * np.linalg.norm(side, axis=1)
-        dist = np.where(along & (dist <= 0.1 * np.linalg.norm(side, axis=1)), dist, np.inf)
-        which = np.where(np.isfinite(dist).any(axis=1), dist.argmin(axis=1), -1)
-        lines = []
-        for i in range(4):
-            cand = np.flatnonzero(which == i)
-            if not len(cand):
-                break
-            j = cand[np.argmax(elen[cand])]
-            lines.append((segs[mine[j], 0], e[j]))
-        if len(lines) < 4:
-            continue
-        corners = []
-        for i in range(4):
-            (p1, d1), (p2, d2) = lines[i - 1], lines[i]
-            den = geometry.cross2(d1, d2)
-            if abs(den) < 1e-9 * np.linalg.norm(d1) * np.linalg.norm(d2):
-                break
-            corners.append(p1 + geometry.cross2(p2 - p1, d2) / den * d1)
-        size = np.linalg.norm(q - q.mean(0), axis=1).max()
-        if len(corners) == 4 and np.linalg.norm(np.asarray(corners) - q, axis=1).max() <= 0.5 * size:
-            out[k] = shapely.Polygon(np.asarray(corners))
+    # one pass over every (part, cut edge) pair: the coarse quad of each part that has pairs
+    K = len(out)
+    Q = np.full((K, 4, 2), np.nan)
+    has_q = np.zeros(K, bool)
+    for k in np.unique(pi):
+        if out[k].geom_type == "Polygon":
+            q = quad_corners(out[k])
+            if q is not None:
+                Q[k], has_q[k] = q, True
+    keep = has_q[pi]
+    pi, si = pi[keep], si[keep]
+    q = Q[pi]  # (P, 4, 2) the quad of each pair's part
+    e = segs[si, 1] - segs[si, 0]
+    elen = np.linalg.norm(e, axis=1)
+    side = np.roll(q, -1, 1) - q
+    slen = np.linalg.norm(side, axis=-1)
+    m = segs[si].mean(axis=1)
+    dist = np.stack([point_segment_distance(m, q[:, i], q[:, (i + 1) % 4]) for i in range(4)], 1)
+    along = np.abs(geometry.cross2(e[:, None, :], side)) <= 0.17 * elen[:, None] * slen
+    dist = np.where(along & (dist <= 0.1 * slen), dist, np.inf)
+    which = np.where(np.isfinite(dist).any(axis=1), dist.argmin(axis=1), -1)
+    # per (part, side) the longest edge, the first of equals in query order (as argmax picks)
+    ok = which >= 0
+    order = np.lexsort((np.arange(len(pi))[ok], -elen[ok], which[ok], pi[ok]))
+    idx = np.flatnonzero(ok)[order]
+    key = pi[idx] * 4 + which[idx]
+    first = np.r_[True, key[1:] != key[:-1]]
+    best = np.full((K, 4), -1)
+    best.reshape(-1)[key[first]] = idx[first]
+    full = (best >= 0).all(axis=1)
+    ks = np.flatnonzero(full)
+    b = best[ks]  # (n, 4) pair index of each side's line
+    P0, D = segs[si[b], 0], e[b]  # (n, 4, 2)
+    p1, d1 = np.roll(P0, 1, axis=1), np.roll(D, 1, axis=1)  # side i-1 meets side i at corner i
+    den = geometry.cross2(d1, D)
+    par = np.abs(den) < 1e-9 * np.linalg.norm(d1, axis=-1) * np.linalg.norm(D, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        C = p1 + (geometry.cross2(P0 - p1, D) / den)[..., None] * d1
+    qk = Q[ks]
+    size = np.linalg.norm(qk - qk.mean(1, keepdims=True), axis=-1).max(axis=1)
+    good = ~par.any(axis=1) & (np.linalg.norm(C - qk, axis=-1).max(axis=1) <= 0.5 * size)
+    for k, c in zip(ks[good], C[good]):
+        out[k] = shapely.Polygon(c)
     return out
 
 
@@ -829,7 +837,6 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
     pts = np.asarray(poly.exterior.coords)[:-1]
     if shapely.LinearRing(pts).is_ccw is False:
         pts = pts[::-1]
-    from .geom import point_segment_distance
 
     changed = True
     while changed and len(pts) > 3:
@@ -900,7 +907,6 @@ def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
     four = np.zeros(len(polys), dtype=bool)
     out = []
     if len(rings):
-        from .geom import point_segment_distance
 
         xy, ring = shapely.get_coordinates(rings, return_index=True)
         n = np.bincount(ring, minlength=len(rings))
