@@ -86,7 +86,7 @@ def load_base(folder: Path, fmt: str, pattern) -> Base:
 
 def _mirror_symmetric(tiles: np.ndarray, tol: float = 0.05) -> bool:
     """Whether the sheet's tiles mirrored are the same tiles after a rigid motion (a mirror is then no breakage)."""
-    from fabkiri.verify.layout import match_in_place
+    from fabkiri.verify.matching import match_in_place
 
     M = tiles.copy()
     M[..., 0] *= -1

@@ -347,7 +347,7 @@ def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
 
 
 def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tmp_path):
-    import fabkiri.verify.layout as L
+    import fabkiri.verify.readers as L
 
     r = cut(std(3, 3))
     f = tmp_path / "p.svg"

@@ -8,7 +8,7 @@ import numpy as np
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import geometry, standard_pattern
 from fabkiri.verify.assemble import Assembly
-from fabkiri.verify.layout import assembled, place_from_shapes
+from fabkiri.verify.matching import assembled, place_from_shapes
 
 from . import layout_fixtures as lf
 

@@ -7,8 +7,9 @@ import ezdxf
 import numpy as np
 import svgwrite
 from fabkiri.pattern import geometry
-from fabkiri.verify import layout as L
+from fabkiri.verify import readers as L
 from fabkiri.verify import verify_layout
+from fabkiri.verify.quads import quads_of
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -76,7 +77,7 @@ def test_quads_of_drops_collinear_points_and_restores_bevelled_corners():
     bevel = np.array([[0, 0], [9.6, 0], [10, 0.4], [10, 10], [0, 10]], float)  # one corner cut by 0.4 mm
     import shapely
 
-    q, bad = L.quads_of(np.array([shapely.Polygon(sq), shapely.Polygon(with_tjunction), shapely.Polygon(bevel)]))
+    q, bad = quads_of(np.array([shapely.Polygon(sq), shapely.Polygon(with_tjunction), shapely.Polygon(bevel)]))
     assert bad == 0 and len(q) == 3
     for quad in q:
         assert geometry.aligned_distance(quad, sq) < 1e-9 or geometry.aligned_distance(np.roll(quad, 1, 0), sq) < 1e-9 \

@@ -7,7 +7,6 @@ the deployed (design) state and ``t = 1`` closed state 2 (:data:`MARKS`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-
 from typing import Any
 
 import numpy as np

@@ -1,0 +1,313 @@
+"""Tile cores to quads: cut edges, ligament openings, fitted offsets and the four corners of a tile."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import shapely
+
+from ..errors import VerifyError
+from ..pattern import geometry
+from .geom import point_segment_distance
+from .manifest import Allowances
+from .matching import match_by_shape, match_in_place
+from .readers import JOIN_MM, SNAP_MM, Linework
+
+EDGE_ON_MM = 0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core
+
+
+def _on_cut_edges(parts: np.ndarray, material) -> np.ndarray:
+    """Opened tile cores as quads whose sides lie on the material's own cut edges.
+
+    An opening leaves each tile's sides exact away from the ligament roots, but a root leaves a
+    bump (or, at a mitre, a spike) that can pull a corner off. Each core's coarse quad is kept only
+    to say which side is which: every side is put on the longest cut edge of the material that runs
+    along it (parallel within 10°) with its midpoint on the core, and the corners are where those
+    lines meet. Cores with no such edge on some side are left as they are. Vectorised over all
+    (core, edge) pairs; ties between equally long edges go to the first the STRtree query lists.
+    """
+    if not len(parts):
+        return parts
+    xy, ring = shapely.get_coordinates(shapely.get_rings(shapely.get_parts(material)), return_index=True)
+    same = ring[1:] == ring[:-1]
+    segs = np.stack([xy[:-1][same], xy[1:][same]], 1)
+    segs = segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
+    mids = shapely.points(segs.mean(axis=1))
+    out = np.array(parts, dtype=object)
+    rings = shapely.get_exterior_ring(out)
+    pi, si = shapely.STRtree(mids).query(rings, predicate="dwithin", distance=EDGE_ON_MM)
+    # one pass over every (part, cut edge) pair: the coarse quad of each part that has pairs
+    K = len(out)
+    Q = np.full((K, 4, 2), np.nan)
+    has_q = np.zeros(K, bool)
+    for k in np.unique(pi):
+        if out[k].geom_type == "Polygon":
+            q = quad_corners(out[k])
+            if q is not None:
+                Q[k], has_q[k] = q, True
+    keep = has_q[pi]
+    pi, si = pi[keep], si[keep]
+    q = Q[pi]  # (P, 4, 2) the quad of each pair's part
+    e = segs[si, 1] - segs[si, 0]
+    elen = np.linalg.norm(e, axis=1)
+    side = np.roll(q, -1, 1) - q
+    slen = np.linalg.norm(side, axis=-1)
+    m = segs[si].mean(axis=1)
+    dist = np.stack([point_segment_distance(m, q[:, i], q[:, (i + 1) % 4]) for i in range(4)], 1)
+    along = np.abs(geometry.cross2(e[:, None, :], side)) <= 0.17 * elen[:, None] * slen
+    dist = np.where(along & (dist <= 0.1 * slen), dist, np.inf)
+    which = np.where(np.isfinite(dist).any(axis=1), dist.argmin(axis=1), -1)
+    # per (part, side) the longest edge, the first of equals in query order (as argmax picks)
+    ok = which >= 0
+    order = np.lexsort((np.arange(len(pi))[ok], -elen[ok], which[ok], pi[ok]))
+    idx = np.flatnonzero(ok)[order]
+    key = pi[idx] * 4 + which[idx]
+    first = np.r_[True, key[1:] != key[:-1]]
+    best = np.full((K, 4), -1)
+    best.reshape(-1)[key[first]] = idx[first]
+    full = (best >= 0).all(axis=1)
+    ks = np.flatnonzero(full)
+    b = best[ks]  # (n, 4) pair index of each side's line
+    P0, D = segs[si[b], 0], e[b]  # (n, 4, 2)
+    p1, d1 = np.roll(P0, 1, axis=1), np.roll(D, 1, axis=1)  # side i-1 meets side i at corner i
+    den = geometry.cross2(d1, D)
+    par = np.abs(den) < 1e-9 * np.linalg.norm(d1, axis=-1) * np.linalg.norm(D, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        C = p1 + (geometry.cross2(P0 - p1, D) / den)[..., None] * d1
+    qk = Q[ks]
+    size = np.linalg.norm(qk - qk.mean(1, keepdims=True), axis=-1).max(axis=1)
+    good = ~par.any(axis=1) & (np.linalg.norm(C - qk, axis=-1).max(axis=1) <= 0.5 * size)
+    for k, c in zip(ks[good], C[good]):
+        out[k] = shapely.Polygon(c)
+    return out
+
+
+def _hairline_free(g) -> np.ndarray:
+    """The parts of ``g`` after an opening at the join tolerance (drops 1 µm hairlines, keeps convex parts)."""
+    g = g.buffer(-JOIN_MM, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(JOIN_MM, join_style="mitre",
+                                                                             mitre_limit=UNDO_MITRE)
+    return shapely.get_parts(g)
+
+
+def _declared_strips_moved(parts, strips, frame_tiles, al: Allowances):
+    """The declared ligaments moved with the sheet: the rigid motion that takes the manifest's tile
+    placement onto the tiles an opening found, applied to the strips. None if it cannot be found."""
+    if strips is None or frame_tiles is None or not len(parts):
+        return None
+    grown = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0) if al.tile_shrink else parts
+    quads, _ = quads_of(grown)
+    a, res, _, theta, t = match_in_place(frame_tiles, quads)
+    if (a >= 0).sum() < max(3, len(frame_tiles) // 2):
+        return None
+    from shapely import affinity
+
+    return affinity.translate(affinity.rotate(strips, theta, origin=(0, 0), use_radians=True), t[0], t[1])
+
+
+def _nested(lw: Linework) -> bool:
+    """Whether a closed outline holds another (the outline of one sheet piece and its holes)."""
+    polys = np.array([shapely.Polygon(p) for p in lw.polylines], dtype=object)
+    if len(polys) < 2:
+        return False
+    a, b = shapely.STRtree(polys).query(polys, predicate="contains_properly")
+    return bool((a != b).any())
+
+
+def _open_ligaments(material, width: float | None):
+    """The tile cores of a ligament sheet: an opening (mitre: convex tiles come back exactly) of
+    radius above half the ligament width drops the strips: the smallest radius (x1.25 steps, from
+    0.6 times the declared width, else from 10 µm) after which the piece count no longer grows."""
+    def opened(r):
+        g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre",
+                                                                                   mitre_limit=10.0)
+        parts = shapely.get_parts(g)
+        return parts[shapely.area(parts) > 4 * r * r]
+    r = 0.6 * width if width else 0.01  # a declared width is where the search starts
+    best, first = opened(r), r
+    while r < 5.0:
+        r *= 1.25
+        nxt = opened(r)
+        if len(nxt) < len(best) and len(best) > 1:
+            break
+        if len(nxt) > len(best):
+            best, first = nxt, r
+    margin = opened(1.5 * first)  # clear of the strips' roots, when that keeps every tile
+    return margin if len(margin) == len(best) else best
+
+
+UNDO_MITRE = 1000.0  # undoing an offset must keep sharp corners sharp
+MAX_FITTED_OFFSET_MM = 0.25  # a kerf up to 0.5 mm: any more is not a laser's kerf
+
+
+MAX_FITTED_SHRINK_MM = 2.5  # a ligament sheet's tiles shrunk by up to half a 5 mm gap
+
+
+def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float, lo: float = 0.0) -> float:
+    """The outward (mitre) offset of separate outlines from their design tiles, 0 if none is needed.
+
+    Per matched tile the offset that explains its area, (A_cut - A) / perimeter; their median, if
+    it lies within [0, MAX_FITTED_OFFSET_MM]. Each tile's congruence is still checked after it is undone.
+    """
+    a, _, _ = match_by_shape(D, R, L)
+    ok = a >= 0
+    if not ok.any():
+        return 0.0
+    A = np.abs(geometry.signed_areas(D[a[ok]]))
+    P = geometry.edge_lengths(D[a[ok]]).sum(axis=1)
+    # a mitre offset k of a convex quad has area A + P k + k^2 sum cot(alpha/2): the root near the
+    # first-order k (that alone is 0.02 mm off for a 0.7 mm shrink of 20 mm tiles)
+    c2 = (1.0 / np.tan(0.5 * geometry.corner_angles(D[a[ok]]))).sum(axis=1)
+    dA = np.abs(geometry.signed_areas(R[ok])) - A
+    disc = np.maximum(P * P + 4 * c2 * dA, 0.0)
+    k_each = np.where(np.abs(c2) > 1e-12, 2 * dA / (P + np.sqrt(disc)), dA / P)
+    k = float(np.median(k_each))
+    return k if 0.1 * tol < abs(k) and lo <= k <= MAX_FITTED_OFFSET_MM else 0.0
+
+
+def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float) -> tuple[np.ndarray, float | None]:
+    """Take out the reference square (a square that is no design tile, the largest such), by geometry.
+
+    fabkiri cuts an uncompensated square beside the parts so the kerf can be measured; a file
+    moved, turned or without its manifest still has it. Returns the other quads and its side.
+    """
+    if not len(quads):
+        return quads, None
+    e = geometry.edge_lengths(quads)
+    diag = np.linalg.norm(quads[:, 2] - quads[:, 0], axis=1), np.linalg.norm(quads[:, 3] - quads[:, 1], axis=1)
+    square = (e.max(axis=1) - e.min(axis=1) <= tol) & (np.abs(diag[0] - diag[1]) <= tol)
+    if not square.any():
+        return quads, None
+    _, res, _ = match_by_shape(D, quads[square], L)
+    cand = np.flatnonzero(square)[res > tol]
+    if not len(cand):
+        return quads, None
+    k = int(cand[np.argmax(e[cand].mean(axis=1))])
+    return np.delete(quads, k, axis=0), float(e[k].mean())
+
+
+def _feature_geometry(poly: Any):
+    """A hinge feature: one ring ``[[x, y], ...]`` or several ``[[[x, y], ...], ...]``."""
+    try:
+        arr = np.asarray(poly, dtype=float)
+        if arr.ndim == 2 and arr.shape[1] == 2:
+            return shapely.Polygon(arr)
+        return shapely.MultiPolygon([shapely.Polygon(np.asarray(r, dtype=float)) for r in poly])
+    except (TypeError, ValueError) as exc:
+        raise VerifyError(f"malformed hinge feature polygon in the manifest ({exc})") from None
+
+
+def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | None:
+    """The four corners (CCW) of a recovered tile region, or None.
+
+    Collinear and duplicate vertices (T-junctions, noding points) are dropped;
+    if more than four corners remain (bevelled or notched corners), the
+    polygon is simplified to four corners, then each corner is moved to where
+    the longest original edges along its two sides meet.
+    """
+    if poly.is_empty or poly.geom_type != "Polygon":
+        return None
+    pts = np.asarray(poly.exterior.coords)[:-1]
+    if shapely.LinearRing(pts).is_ccw is False:
+        pts = pts[::-1]
+
+    changed = True
+    while changed and len(pts) > 3:
+        changed = False
+        prv, nxt = np.roll(pts, 1, 0), np.roll(pts, -1, 0)
+        d = point_segment_distance(pts, prv, nxt)
+        dup = np.linalg.norm(pts - prv, axis=1) <= eps
+        bad = (d <= eps) | dup
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            pts = np.delete(pts, k, axis=0)
+            changed = True
+    if len(pts) == 4:
+        return pts
+    if len(pts) < 4:
+        return None
+    # more than four corners (bevelled or notched corners): drop the vertex
+    # that costs the least area until four remain (Visvalingam-Whyatt) ...
+    keep = list(range(len(pts)))
+    while len(keep) > 4:
+        q = pts[keep]
+        prv, nxt = np.roll(q, 1, 0), np.roll(q, -1, 0)
+        cost = np.abs(geometry.cross2(prv - q, nxt - q))
+        keep.pop(int(np.argmin(cost)))
+    coarse = pts[keep]
+    # ... then put each corner where the longest original edges along its two
+    # sides meet, which restores an apex cut off by a bevel or notch
+    e = np.roll(pts, -1, 0) - pts
+    elen = np.linalg.norm(e, axis=1)
+    mid = pts + 0.5 * e
+    lines = []
+    for i in range(4):
+        a, b = coarse[i], coarse[(i + 1) % 4]
+        d = b - a
+        dl = np.linalg.norm(d)
+        if dl == 0:
+            return None
+        # parallel within 10° (quad corners are far sharper turns) and close to the side
+        along = (np.abs(geometry.cross2(e, d)) <= 0.17 * elen * dl) & (geometry.dot2(e, d) > 0)
+        near = np.abs(geometry.cross2(mid - a, d)) / dl <= 0.1 * dl
+        cand = np.flatnonzero(along & near)
+        k = cand[np.argmax(elen[cand])] if len(cand) else None
+        lines.append((a, d) if k is None else (pts[k], e[k]))
+    out = []
+    for i in range(4):
+        (p1, d1), (p2, d2) = lines[i - 1], lines[i]
+        den = geometry.cross2(d1, d2)
+        if abs(den) < 1e-9 * np.linalg.norm(d1) * np.linalg.norm(d2):
+            out.append(coarse[i])
+            continue
+        x = p1 + geometry.cross2(p2 - p1, d2) / den * d1
+        size = np.linalg.norm(coarse - coarse.mean(0), axis=1).max()
+        out.append(x if np.linalg.norm(x - coarse[i]) <= 0.5 * size else coarse[i])
+    return np.asarray(out)
+
+
+def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
+    """Corners ``(n, 4, 2)`` of recovered regions and how many are not quads.
+
+    Plain four-vertex rings take a vectorised path; the rest go through
+    :func:`quad_corners`.
+    """
+    polys = np.asarray(polys, dtype=object)
+    if len(polys) == 0:
+        return np.zeros((0, 4, 2)), 0
+    simple = (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
+    rings = shapely.get_exterior_ring(polys[simple])
+    four = np.zeros(len(polys), dtype=bool)
+    out = []
+    if len(rings):
+
+        xy, ring = shapely.get_coordinates(rings, return_index=True)
+        n = np.bincount(ring, minlength=len(rings))
+        start = np.concatenate([[0], np.cumsum(n)[:-1]])
+        last = start + n - 1  # the closing repeat of the first point
+        keep = np.ones(len(xy), dtype=bool)
+        keep[last] = False
+        pos = np.arange(len(xy))
+        m = n - 1  # distinct points per ring
+        local = pos - start[ring]
+        prv = start[ring] + (local - 1) % np.maximum(m[ring], 1)
+        nxt = start[ring] + (local + 1) % np.maximum(m[ring], 1)
+        # drop collinear and repeated vertices (T-junction and noding points) in one pass
+        d = point_segment_distance(xy, xy[prv], xy[nxt])
+        dup = np.linalg.norm(xy - xy[prv], axis=1) <= SNAP_MM
+        keep &= ~((d <= SNAP_MM) | dup)
+        cnt = np.bincount(ring[keep], minlength=len(rings))
+        ok4 = cnt == 4
+        if ok4.any():
+            C = xy[keep & ok4[ring]].reshape(-1, 4, 2)
+            cw = geometry.signed_areas(C) < 0
+            C[cw] = C[cw, ::-1]
+            out.append(C)
+            four[np.flatnonzero(simple)[ok4]] = True
+    bad = 0
+    rest = [quad_corners(p) for p in polys[~four]]
+    good = [q for q in rest if q is not None]
+    bad = len(rest) - len(good)
+    if good:
+        out.append(np.asarray(good))
+    return (np.concatenate(out) if out else np.zeros((0, 4, 2))), bad

@@ -1,0 +1,241 @@
+"""Tile recovery: from the cut linework to one polygon per tile, per hinge kind.
+
+``tape``: the noded linework polygonized; ``separate``: each closed outline shrunk by the kerf
+offset; ``ligament``: the material minus the hinge strips, grown by the tile shrink. See
+:mod:`.quads` for reducing each polygon to its four corners.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from scipy.sparse import csgraph
+from scipy.spatial import cKDTree
+
+from ..errors import VerifyError
+from .manifest import Allowances
+from .matching import match_by_shape
+from .quads import (
+    _declared_strips_moved,
+    _feature_geometry,
+    _hairline_free,
+    _nested,
+    _on_cut_edges,
+    _open_ligaments,
+    quads_of,
+)
+from .readers import JOIN_MM, SNAP_MM, Linework
+
+# ------------------------------------------------------------------ recovery
+
+
+def _drop_reference(lw: Linework, corners: np.ndarray | None) -> int:
+    """Remove the closed polyline whose corners are the reference square's."""
+    if corners is None:
+        return 0
+    keep_p, keep_c, dropped = [], [], 0
+    for pts, cl in zip(lw.polylines, lw.closed):
+        if cl and len(pts) == len(corners) and not dropped:
+            d = np.linalg.norm(pts[:, None] - corners[None], axis=-1).min(axis=1).max()
+            if d <= 1e-3:
+                dropped += 1
+                continue
+        keep_p.append(pts)
+        keep_c.append(cl)
+    lw.polylines, lw.closed = keep_p, keep_c
+    return dropped
+
+
+def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
+    """All segments ``(n, 2, 2)`` with endpoints closer than ``eps`` merged."""
+    if not lw.polylines:
+        return np.zeros((0, 2, 2))
+    pts = np.concatenate(lw.polylines)
+    n = np.array([len(q) for q in lw.polylines])
+    start = np.concatenate([[0], np.cumsum(n)[:-1]])
+    owner = np.repeat(np.arange(len(n)), n)
+    local = np.arange(len(pts)) - start[owner]
+    nxt = start[owner] + (local + 1) % n[owner]
+    # every vertex starts a segment, except the last one of an open polyline
+    use = (local < n[owner] - 1) | np.asarray(lw.closed)[owner]
+    segs = np.stack([pts[use], pts[nxt[use]]], 1)
+    pts = segs.reshape(-1, 2)
+    pairs = cKDTree(pts).query_pairs(eps, output_type="ndarray")
+    if len(pairs):
+        from scipy import sparse
+
+        n = len(pts)
+        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        _, label = csgraph.connected_components(g, directed=False)
+        first = np.full(label.max() + 1, -1)
+        first[label[::-1]] = np.arange(n)[::-1]
+        pts = pts[first[label]]
+    segs = pts.reshape(-1, 2, 2)
+    return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
+
+
+
+
+def _node(segs: np.ndarray, eps: float = JOIN_MM):
+    """Segments ``(n, 2, 2)`` noded: ends within ``eps`` of another line are put on it (T-junctions
+    rounded off their edge), then every crossing and touch is a node. Returns the union."""
+    lines = shapely.linestrings(segs)
+    ends = shapely.points(np.unique(segs.reshape(-1, 2), axis=0))
+    # each line snapped to the ends within eps of it only: the same snap as one
+    # multiline to all ends (farther ends never move a vertex), without its n x m cost
+    li, ei = shapely.STRtree(ends).query(lines, predicate="dwithin", distance=eps)
+    order = np.lexsort((ei, li))
+    has, rank = np.unique(li[order], return_inverse=True)
+    near = shapely.multipoints(ends[ei[order]], indices=rank)  # one multipoint per line with ends near it
+    lines[has] = shapely.snap(lines[has], near, eps)
+    return shapely.unary_union(lines)
+
+
+def _noded(lw: Linework, eps: float = JOIN_MM):
+    """The CUT linework as noded line parts (shapely), endpoints within ``eps`` merged."""
+    segs = _snapped_segments(lw, eps)
+    if len(segs) == 0:
+        return np.zeros(0, dtype=object)
+    return shapely.get_parts(_node(segs, eps))
+
+
+def join_pieces(lw: Linework, eps: float = JOIN_MM) -> Linework:
+    """Open pieces and LINEs chained end to end into closed outlines where they close (within ``eps``).
+
+    What stays open is a cut that ends in the material (see :func:`dangling_ends`).
+    """
+    if all(lw.closed):
+        return lw
+    merged = shapely.get_parts(shapely.line_merge(shapely.union_all(_noded(lw, eps))))
+    out = Linework(lw.path, layer_found=lw.layer_found)
+    for g in merged:
+        pts = np.asarray(g.coords)
+        out.add(pts, bool(g.is_ring))
+    return out
+
+
+def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
+    """Points ``(n, 2)`` where a cut line stops without meeting another cut (farther than ``eps``).
+
+    Every line of a valid layout bounds a part: it ends where other lines meet it. An end in
+    the material is a slit cut short (the tiles stay joined) or an extra cut into a part.
+    """
+    parts = _noded(lw, eps)
+    if len(parts) == 0:
+        return np.zeros((0, 2))
+    ends = np.concatenate([shapely.get_coordinates(shapely.get_point(parts, 0)),
+                           shapely.get_coordinates(shapely.get_point(parts, -1))])
+    owner = np.concatenate([np.arange(len(parts)), np.arange(len(parts))])
+    tree = shapely.STRtree(parts)
+    pi, gi = tree.query(shapely.points(ends), predicate="dwithin", distance=eps)
+    other = np.zeros(len(ends), dtype=bool)
+    other[pi[gi != owner[pi]]] = True
+    # a closed part meets itself at its ends
+    ring = shapely.is_closed(parts)[owner]
+    return ends[~other & ~ring]
+
+
+def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
+                     frame_tiles: np.ndarray | None = None) -> tuple[np.ndarray, str]:
+    """Tile regions (shapely polygons) from one file's CUT linework, and the method used.
+
+    ``frame_tiles``: the design tiles where the manifest puts them (its sheet frame), to find the
+    declared ligaments on a sheet that was moved or turned since.
+    """
+    if not lw.polylines:  # e.g. a sheet that holds only the reference square
+        return np.zeros(0, dtype=object), "nothing to recover"
+    hinge = al.hinge
+    if hinge != "tape":
+        joined = join_pieces(lw)
+        if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
+            # ligament sheet), else in-place linework
+            rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
+            n_open = len(joined.closed) - len(rings.closed)
+            # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
+            hinge = "ligament" if n_open < len(rings.closed) and _nested(rings) else \
+                "separate" if not n_open else "tape"
+        if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
+            lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
+    if hinge == "tape":
+        segs = _snapped_segments(lw, JOIN_MM)
+        if len(segs) == 0:
+            return np.zeros(0, dtype=object), "polygonize"
+        noded = _node(segs)
+        faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+        return faces, "polygonize of the noded linework"
+    rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
+    if len(rings) != len(lw.polylines):
+        raise VerifyError(f"{lw.path}: {len(lw.polylines) - len(rings)} open CUT polylines in a {al.hinge} "
+                          f"layout, where every outline must be closed")
+    polys = shapely.make_valid(np.array(rings, dtype=object))
+    if hinge == "separate":
+        out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
+            else polys
+        return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
+    material = _material(polys, al.kerf_offset)
+    feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
+             if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
+    strips = shapely.unary_union(feats) if feats else None
+    # a file rounded to 1 µm may keep a hairline of material beside a declared strip: an opening at the
+    # join tolerance drops it (and leaves convex tiles exactly as they are)
+    parts = _hairline_free(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
+    # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
+    def cuts_tiles(parts) -> bool:
+        return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
+
+    if strips is not None and cuts_tiles(parts):
+        parts = _on_cut_edges(parts, material)
+        how = "material minus the declared ligaments, corners on the cut edges"
+    else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
+        parts = _on_cut_edges(_open_ligaments(material, al.ligament_width), material)
+        how = "material opened to drop the ligaments, corners on the cut edges"
+        # only when the opening left tiles joined: on a symmetric lattice the motion can be a quarter turn off
+        short = frame_tiles is not None and (shapely.area(parts) > 1.0).sum() < len(frame_tiles)
+        moved = _declared_strips_moved(parts, strips, frame_tiles, al) if short else None
+        if moved is not None:
+            again = _hairline_free(material.difference(moved))
+            if cuts_tiles(again):
+                parts, how = _on_cut_edges(again, material), "material minus the declared ligaments, moved with the sheet"
+    if al.tile_shrink:
+        parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
+    return parts, how + ", grown by the tile shrink"
+
+
+def _material(polys: np.ndarray, kerf_offset: float):
+    """A ligament sheet's material: outer loops minus the loops inside them, less the kerf offset."""
+    tree = shapely.STRtree(polys)
+    inside = np.zeros(len(polys), dtype=bool)
+    a, b = tree.query(polys, predicate="contains_properly")
+    inside[b[a != b]] = True
+    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
+    if kerf_offset:
+        material = material.buffer(-kerf_offset, join_style="mitre", mitre_limit=10.0)
+    return material
+
+
+def sheet_material(lw: Linework, kerf_offset: float):
+    """The material of a ligament sheet's CUT linework (its closed outlines)."""
+    joined = join_pieces(lw)
+    rings = [shapely.Polygon(p) for p, c in zip(joined.polylines, joined.closed) if c]
+    return _material(shapely.make_valid(np.array(rings, dtype=object)), kerf_offset)
+
+
+def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.ndarray, L: float,
+                tol: float) -> Linework:
+    """The candidate linework (a colour class of a file without a CUT layer) that forms the most
+    design tiles; with one candidate, that one."""
+    if len(candidates) == 1:
+        return candidates[0]
+    best, score = candidates[0], -1
+    for lw in candidates:
+        try:
+            polys, _ = recover_polygons(lw, al, sheet)
+        except VerifyError:
+            continue
+        quads, bad = quads_of(polys[shapely.area(polys) > tol ** 2])
+        _, res, _ = match_by_shape(D, quads, L)
+        n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
+        key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions
+        if score == -1 or key > score:
+            best, score = lw, key
+    return best
