@@ -19,6 +19,7 @@ and the declared allowances (manifest.json) is trusted:
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -65,117 +66,178 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
                        "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
     g = "layout"
     D = pattern.corners() * al.scale  # design shapes (deployed = cut shapes), sheet mm
-    T = pattern.n_tiles
+    rec = _recover_sheets(pattern, al, files, D, L, tol.length, path)
+    rep.meta["recovery"] = sorted(rec.methods)
+    if rec.references:
+        rep.meta["reference_square_mm"] = rec.references
+    in_place, sheet_piece, fitted = _layout_kind(rec, al, D, L, tol.length, rep)
+    m = _match_tiles(pattern, al, rec, in_place, D, L, tol.length, rep)
+    have = m.assign >= 0
+    _recovered_check(rep, m, rec.unusable, g)
+    _congruence_check(rep, D, m.cut_shapes, have, tol.length, g)
+    if in_place:
+        _in_place_checks(rep, pattern, m, have, tol, g, len(rec.sheets))
+    _reassembly_checks(rep, pattern, m.cut_shapes, have, [3 - m.state] if in_place else list(STATES), tol, g)
+    # every cut runs its full length: no cut ends inside the material
+    ends = np.concatenate(rec.dangling) if rec.dangling else np.zeros((0, 2))
+    rep.add(_dangling_check(ends, m.cut_shapes, have, g, tol.length))
+    _hinge_check(rep, pattern, al, m, have, in_place, tol.length, g)
+    _physical_checks(rep, pattern, al, files, rec.linework, m.cut_shapes, have, m.found_on, sheet_piece, in_place,
+                     fitted, g, m.labelings)
+    return rep
 
-    # ---- read and recover per sheet
-    sheets: dict[int, np.ndarray] = {}  # sheet -> recovered quads (n, 4, 2)
+
+@dataclass
+class _Recovered:
+    """What each sheet's cut linework gave: its quads, linework, recovery methods and loose ends."""
+
+    sheets: dict[int, np.ndarray] = field(default_factory=dict)  # sheet -> recovered quads (n, 4, 2)
+    linework: dict[int, Linework] = field(default_factory=dict)
+    methods: set[str] = field(default_factory=set)
+    unusable: int = 0  # regions that are not quads
+    dangling: list[np.ndarray] = field(default_factory=list)
+    references: list[float] = field(default_factory=list)
+
+
+def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D: np.ndarray, L: float,
+                    tol: float, path: Path) -> _Recovered:
+    """Read every sheet, set its reference square aside and recover its tiles as quads."""
+    rec = _Recovered()
     n_lines = 0
-    methods = set()
-    unusable = 0
-    dangling: list[np.ndarray] = []
-    references: list[float] = []
     frame = _frame_tiles(pattern, al)
-    linework: dict[int, Linework] = {}
     for sheet, f in files.items():
-        lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol.length)
+        lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol)
         _drop_reference(lw, al.reference.get(sheet))
-        linework[sheet] = lw
+        rec.linework[sheet] = lw
         n_lines += len(lw.polylines)
-        on = [t for t in range(T) if al.tile_sheet.get(t, 1) == sheet]
+        on = [t for t in range(pattern.n_tiles) if al.tile_sheet.get(t, 1) == sheet]
         polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None)
-        methods.add(method)
-        polys = polys[shapely.area(polys) > tol.length ** 2]  # double-cut hairlines are not tiles
+        rec.methods.add(method)
+        polys = polys[shapely.area(polys) > tol ** 2]  # double-cut hairlines are not tiles
         quads, bad = quads_of(polys)
-        quads, side = _set_reference_aside(quads, D, L, tol.length)
+        quads, side = _set_reference_aside(quads, D, L, tol)
         if side is not None:
-            references.append(side)
-        unusable += bad
-        sheets[sheet] = quads
-        dangling.append(dangling_ends(lw))
+            rec.references.append(side)
+        rec.unusable += bad
+        rec.sheets[sheet] = quads
+        rec.dangling.append(dangling_ends(lw))
     if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
         raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
-    rep.meta["recovery"] = sorted(methods)
-    if references:
-        rep.meta["reference_square_mm"] = references
+    return rec
 
+
+def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: float,
+                 rep: Report) -> tuple[bool, bool, float | None]:
+    """In place or separate, a ligament sheet or not, and (plain files) the kerf offset fitted."""
     in_place = al.layout == "in-place"
-    sheet_piece = any(m.startswith("material") for m in methods)  # a ligament sheet: tiles in place, shrunk
+    sheet_piece = any(m.startswith("material") for m in rec.methods)  # a ligament sheet: tiles in place, shrunk
+    sheets = rec.sheets
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
         allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
         if len(allq):
-            u = shapely.unary_union(shapely.make_valid(shapely.polygons(allq))).buffer(tol.length)
+            u = shapely.unary_union(shapely.make_valid(shapely.polygons(allq))).buffer(tol)
             in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
         rep.meta["layout"] = "in-place" if in_place else "separate"
     fitted = None
     if al.hinge == "plain" and (not in_place or sheet_piece) and sheets:
         # no manifest declares the kerf (or the gap): take the one offset the outlines share
-        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol.length,
+        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol,
                              lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
         if fitted:
             for k, R in sheets.items():
                 sheets[k], bad = quads_of(shapely.buffer(shapely.polygons(R), -fitted, join_style="mitre",
                                                          mitre_limit=UNDO_MITRE))
-                unusable += bad
+                rec.unusable += bad
         rep.meta["kerf_offset_fitted_mm"] = fitted
+    return in_place, sheet_piece, fitted
 
-    # ---- match
-    assign_all = np.full(T, -1)  # design tile -> global recovered index
-    found_on = np.full(T, -1)  # design tile -> sheet it was found on
-    cut_shapes = np.full((T, 4, 2), np.nan)
-    resid_pos = np.full(T, np.nan)
-    extra = 0
+
+@dataclass
+class _Matched:
+    """Recovered tiles matched to design tiles."""
+
+    state: int  # the closed state the sheet is laid out in
+    assign: np.ndarray  # design tile -> global recovered index, -1 if not found
+    found_on: np.ndarray  # design tile -> sheet it was found on
+    cut_shapes: np.ndarray  # (T, 4, 2) each design tile's cut shape, corners in design order
+    resid_pos: np.ndarray  # in place: corner distance to the closed state
+    extra: int  # recovered regions matched to no design tile
+    labelings: list[np.ndarray]  # cut shapes under other, equally good labelings of a symmetric sheet
+
+
+def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bool, D: np.ndarray, L: float,
+                 tol: float, rep: Report) -> _Matched:
+    """Match every sheet's quads to the design tiles: by position in place, by shape when separate."""
+    T = pattern.n_tiles
 
     def closed(s: int) -> np.ndarray:
         Y = pattern.contracted.get(s)
         return (contract(pattern, s).corners if Y is None else Y) * al.scale
 
     state = al.state
-    labelings: list[np.ndarray] = []  # cut shapes under other, equally good labelings of a symmetric sheet
+    sheets = rec.sheets
     if in_place and al.hinge == "plain" and sheets:
         # no manifest declares the state: take the closed state the sheet matches
         R0 = next(iter(sheets.values()))
         fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
         state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
         rep.meta["state"] = state
+    m = _Matched(state, np.full(T, -1), np.full(T, -1), np.full((T, 4, 2), np.nan), np.full(T, np.nan), 0, [])
     Ystate = closed(state)
     for sheet, R in sheets.items():
         if in_place:
-            design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
-                else np.arange(T)
-            design_ids = design_ids[design_ids < T]
-            alts: list = []
-            a, res, sh, _, _ = match_in_place(Ystate[design_ids], R, alternatives=alts)
-            a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
-            if len(sheets) == 1:  # a symmetric sheet: the other labelings as good as this one
-                for aa, rr, ss in alts:
-                    if (aa >= 0).sum() == T and np.max(rr[aa >= 0]) <= tol.length:
-                        C = np.full((T, 4, 2), np.nan)
-                        k = np.flatnonzero(aa >= 0)
-                        C[design_ids[aa[k]]] = R[k[:, None], (np.arange(4)[None, :] + ss[k][:, None]) % 4]
-                        labelings.append(C)
+            a, res, sh = _match_sheet_in_place(al, m, sheet, R, Ystate, T, tol, len(sheets) == 1)
         else:
-            free = np.flatnonzero(assign_all < 0)
+            free = np.flatnonzero(m.assign < 0)
             a, res, sh = match_by_shape(D[free], R, L)
             a = np.where(a >= 0, free[np.maximum(a, 0)], -1)
-        taken = (a >= 0) & (assign_all[np.maximum(a, 0)] < 0)
-        extra += int(len(R) - taken.sum())
+        taken = (a >= 0) & (m.assign[np.maximum(a, 0)] < 0)
+        m.extra += int(len(R) - taken.sum())
         r = np.flatnonzero(taken)
         d = a[r]
-        assign_all[d] = r
-        found_on[d] = sheet
-        cut_shapes[d] = R[r[:, None], (np.arange(4)[None, :] + sh[r][:, None]) % 4]  # corner shift
+        m.assign[d] = r
+        m.found_on[d] = sheet
+        m.cut_shapes[d] = R[r[:, None], (np.arange(4)[None, :] + sh[r][:, None]) % 4]  # corner shift
         if in_place:
-            resid_pos[d] = res[r]
-    missing = np.flatnonzero(assign_all < 0)
+            m.resid_pos[d] = res[r]
+    return m
+
+
+def _match_sheet_in_place(al: Allowances, m: _Matched, sheet: int, R: np.ndarray, Ystate: np.ndarray, T: int,
+                          tol: float, only_sheet: bool):
+    """One in-place sheet matched to its design tiles; a symmetric single sheet also records the other
+    labelings that fit as well (``m.labelings``)."""
+    design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
+        else np.arange(T)
+    design_ids = design_ids[design_ids < T]
+    alts: list = []
+    a, res, sh, _, _ = match_in_place(Ystate[design_ids], R, alternatives=alts)
+    a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
+    if only_sheet:  # a symmetric sheet: the other labelings as good as this one
+        for aa, rr, ss in alts:
+            if (aa >= 0).sum() == T and np.max(rr[aa >= 0]) <= tol:
+                C = np.full((T, 4, 2), np.nan)
+                k = np.flatnonzero(aa >= 0)
+                C[design_ids[aa[k]]] = R[k[:, None], (np.arange(4)[None, :] + ss[k][:, None]) % 4]
+                m.labelings.append(C)
+    return a, res, sh
+
+
+def _recovered_check(rep: Report, m: _Matched, unusable: int, g: str) -> None:
+    T = len(m.assign)
+    missing = np.flatnonzero(m.assign < 0)
     got = T - len(missing)
-    rep.add(Check(f"{g}: tiles recovered", ok=not len(missing) and not extra and not unusable,
+    rep.add(Check(f"{g}: tiles recovered", ok=not len(missing) and not m.extra and not unusable,
                   value=got, tol=T, unit="count", op="==", group=g,
                   worst=f"tile {int(missing[0])}" if len(missing) else None,
                   detail=(f"{got} of {T} design tiles found; missing {missing[:20].tolist()}; "
-                          f"{extra} unmatched cut regions; {unusable} regions that are not quads")))
-    have = assign_all >= 0
+                          f"{m.extra} unmatched cut regions; {unusable} regions that are not quads")))
 
-    # ---- (a) congruence of every cut tile with its design tile
+
+def _congruence_check(rep: Report, D: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, tol: float,
+                      g: str) -> None:
+    """(a) congruence of every cut tile with its design tile."""
+    T = len(D)
     cong = np.full(T, np.nan)
     mirrored: list[int] = []
     if have.any():
@@ -184,34 +246,38 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
         fit = leave_one_out_residual(D[have], cut_shapes[have])
         dl = np.abs(geometry.edge_lengths(cut_shapes[have]) - geometry.edge_lengths(D[have])).max(axis=1)
         cong[have] = np.maximum(fit, dl)
-        bad = np.flatnonzero(have)[cong[have] > tol.length]
+        bad = np.flatnonzero(have)[cong[have] > tol]
         if len(bad):
             mres, _ = _shift_fit(D[bad], _mirror(cut_shapes[bad]))
-            mirrored = bad[mres <= np.maximum(tol.length, 0.5 * cong[bad])].tolist()
+            mirrored = bad[mres <= np.maximum(tol, 0.5 * cong[bad])].tolist()
     worst_cong = int(np.nanargmax(cong)) if have.any() else None
     rep.add(measured(f"{g}: (a) cut tiles congruent to design", float(np.nanmax(cong)) if have.any() else np.nan,
-                     tol.length, "mm", worst=f"tile {worst_cong}" if worst_cong is not None else None, group=g,
+                     tol, "mm", worst=f"tile {worst_cong}" if worst_cong is not None else None, group=g,
                      detail=(f"mirrored tiles {mirrored}; " if mirrored else "")
                      + "largest corner offset from a proper rigid fit of the other corners, and edge-length change"))
 
-    # ---- (b) in place: the sheet is the declared closed state
-    if in_place:
-        rep.add(measured(f"{g}: (b) in place = closed state {state}",
-                         float(np.nanmax(resid_pos)) if have.any() else np.nan, tol.length, "mm",
-                         worst=f"tile {int(np.nanargmax(resid_pos))}" if have.any() else None, group=g,
-                         detail="corner distance to the design's closed state under one rigid motion per sheet"))
-        if have.all():
-            layout_state = np.stack([cut_shapes[d] for d in range(T)]) if len(sheets) == 1 else None
-            if layout_state is not None:
-                for chk in closed_state_checks(pattern, layout_state, state, tol):
-                    if "congruent" in chk.name or "loop closure" in chk.name:
-                        continue
-                    chk.name = f"{g}: (b) sheet {chk.name}"
-                    chk.group = g
-                    rep.add(chk)
 
-    # ---- (c) reassemble by the hinge correspondence
-    rebuild = [3 - state] if in_place else list(STATES)
+def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarray, tol, g: str,
+                     n_sheets: int) -> None:
+    """(b) in place: the sheet is the declared closed state."""
+    rep.add(measured(f"{g}: (b) in place = closed state {m.state}",
+                     float(np.nanmax(m.resid_pos)) if have.any() else np.nan, tol.length, "mm",
+                     worst=f"tile {int(np.nanargmax(m.resid_pos))}" if have.any() else None, group=g,
+                     detail="corner distance to the design's closed state under one rigid motion per sheet"))
+    if not have.all() or n_sheets != 1:
+        return
+    layout_state = np.stack([m.cut_shapes[d] for d in range(pattern.n_tiles)])
+    for chk in closed_state_checks(pattern, layout_state, m.state, tol):
+        if "congruent" in chk.name or "loop closure" in chk.name:
+            continue
+        chk.name = f"{g}: (b) sheet {chk.name}"
+        chk.group = g
+        rep.add(chk)
+
+
+def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray,
+                       rebuild: list[int], tol, g: str) -> None:
+    """(c) the cut tiles reassembled by the hinge correspondence give the closed states in ``rebuild``."""
     for s in rebuild:
         name = f"{g}: (c) state {s} from cut tiles"
         if not have.all():
@@ -229,20 +295,20 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
             chk.group = g
             rep.add(chk)
 
-    # ---- every cut runs its full length: no cut ends inside the material
-    ends = np.concatenate(dangling) if dangling else np.zeros((0, 2))
-    rep.add(_dangling_check(ends, cut_shapes, have, g, tol.length))
 
-    # ---- (d) every hinge present
+def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, have: np.ndarray, in_place: bool,
+                 tol: float, g: str) -> None:
+    """(d) every hinge present: both tiles cut (in place: their hinge corners coincide; ligament: listed)."""
     top = pattern.topology
     A, B = top.hinge_tiles.T
+    found_on, cut_shapes = m.found_on, m.cut_shapes
     present = have[A] & have[B]
     why = "both tiles cut"
     if in_place and present.any():
         cA, cB = top.hinge_corner.T
         ok = np.zeros(len(A), dtype=bool)
         sel = np.flatnonzero(present)
-        ok[sel] = np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol.length
+        ok[sel] = np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol
         cross = found_on[A] != found_on[B]  # split along cut lines onto two sheets
         ok |= cross
         present &= ok
@@ -261,9 +327,6 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str,
     rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
                   unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
                   detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
-    _physical_checks(rep, pattern, al, files, linework, cut_shapes, have, found_on, sheet_piece, in_place,
-                     fitted, g, labelings)
-    return rep
 
 
 def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
