@@ -6,7 +6,7 @@ The design section records, per closed state, either a target curve
 closed state computed from the tiles (never the solver's own grid) is checked
 against it:
 
-* curve: measured by :func:`fabkiri.verify.pattern_checks.target_checks` (outline shape);
+* curve: measured by :func:`fabkiri.verify.outlines.target_checks` (outline shape);
 * rectangle: the outline's corners on the minimum rotated rectangle, the
   aspect ratio when one was asked, and, when none was, a degenerate strip
   (aspect beyond ``DEGENERATE_ASPECT`` times the lattice's own) is reported as
@@ -82,4 +82,45 @@ def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], t
         if isinstance(spec, dict) and spec.get("rectangle"):
             r = spec.get("ratio")
             out.extend(_rectangle_checks(pattern, s, states[s], float(r) if r else None, tol))
+    return out
+
+
+def target_checks(pattern: Pattern, states: dict | None = None, shape_tol: str | tuple = "2%") -> list[Check]:
+    """The outline against every stored target curve, over the whole outline (Hausdorff distance of the
+    boundary-tip polygon, or of each closed state's outline, to the target), checked against ``shape_tol``
+    (a share of the target's size or a length, ``design --shape-tol``) — never against a figure the
+    design claims about itself."""
+    from ..design import conformance as conf
+    from ..design.targets import target_from_dict
+    from ..errors import InputError
+
+    d = pattern.design or {}
+    tol = conf.parse_shape_tol(shape_tol) if isinstance(shape_tol, str) else shape_tol
+    jobs = []
+    if isinstance(d.get("target"), dict):
+        jobs.append(("target shape", "deployed", None, d["target"]))
+    for s, tgt in sorted((d.get("contracted_targets") or {}).items()):
+        if isinstance(tgt, dict) and states is not None and int(s) in states:
+            jobs.append((f"state {s}: outline shape", f"state {s}", int(s), tgt))
+    out = []
+    for name, _group, s, spec in jobs:
+        try:
+            target = target_from_dict(spec, name)
+        except InputError as exc:
+            out.append(Check(name, ok=False, value=float("nan"), tol=0.0, unit="mm", group="design",
+                             detail=f"the stored target cannot be rebuilt: {exc}"))
+            continue
+        c = (conf.deployed(pattern.nodes, pattern.topology, target) if s is None
+             else conf.closed(states[s], target))
+        j = conf.judge(c, tol)
+        x, y = c["worst"]["at"]
+        out.append(measured(name, c["hausdorff_mm"], j["tol_mm"], "mm", group="design",
+                            worst=f"({x:.1f}, {y:.1f}) mm on the {c['worst']['on']}",
+                            detail=(f"Hausdorff {100 * c['hausdorff_rel']:.3g} % of the target size "
+                                    f"{c['size_mm']:.4g} mm (tolerance {100 * j['tol_rel']:.3g} %); 1-IoU "
+                                    f"{c['one_minus_iou']:.3g}; mean distance {c['mean_outline_to_target_mm']:.3g} /"
+                                    f" {c['mean_target_to_outline_mm']:.3g} mm; spacing min/mean "
+                                    f"{c['spacing_min_mm']:.3g}/{c['spacing_mean_mm']:.3g} mm over {c['points']} "
+                                    f"{'boundary tips' if s is None else 'outline vertices'} vs the "
+                                    f"{target.kind} target {target.name!r}")))
     return out

@@ -33,6 +33,7 @@ from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums, state_residuals
 from ..pattern.topology import STATES
 from . import geom
+from .outlines import target_checks
 from .report import Check, Report, measured
 
 TIER_EXPORTED = 1e-9  # analytic or exported data, relative to the mean tile edge (spec §10)
@@ -411,50 +412,6 @@ def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tol
     end = geometry.aligned_distance(corners[-1], Y2)
     out.append(measured("rigid path: ends in state 2", end, tol.length * np.sqrt(len(Y1)), "mm",
                         group="rigid path", detail="aligned distance of the ω = 90° frame to state 2"))
-    return out
-
-
-# ----------------------------------------------------------------- target
-
-
-def target_checks(pattern: Pattern, states: dict | None = None, shape_tol: str | tuple = "2%") -> list[Check]:
-    """The outline against every stored target curve, over the whole outline (Hausdorff distance of the
-    boundary-tip polygon, or of each closed state's outline, to the target), checked against ``shape_tol``
-    (a share of the target's size or a length, ``design --shape-tol``) — never against a figure the
-    design claims about itself."""
-    from ..design import conformance as conf
-    from ..design.targets import target_from_dict
-    from ..errors import InputError
-
-    d = pattern.design or {}
-    tol = conf.parse_shape_tol(shape_tol) if isinstance(shape_tol, str) else shape_tol
-    jobs = []
-    if isinstance(d.get("target"), dict):
-        jobs.append(("target shape", "deployed", None, d["target"]))
-    for s, tgt in sorted((d.get("contracted_targets") or {}).items()):
-        if isinstance(tgt, dict) and states is not None and int(s) in states:
-            jobs.append((f"state {s}: outline shape", f"state {s}", int(s), tgt))
-    out = []
-    for name, _group, s, spec in jobs:
-        try:
-            target = target_from_dict(spec, name)
-        except InputError as exc:
-            out.append(Check(name, ok=False, value=float("nan"), tol=0.0, unit="mm", group="design",
-                             detail=f"the stored target cannot be rebuilt: {exc}"))
-            continue
-        c = (conf.deployed(pattern.nodes, pattern.topology, target) if s is None
-             else conf.closed(states[s], target))
-        j = conf.judge(c, tol)
-        x, y = c["worst"]["at"]
-        out.append(measured(name, c["hausdorff_mm"], j["tol_mm"], "mm", group="design",
-                            worst=f"({x:.1f}, {y:.1f}) mm on the {c['worst']['on']}",
-                            detail=(f"Hausdorff {100 * c['hausdorff_rel']:.3g} % of the target size "
-                                    f"{c['size_mm']:.4g} mm (tolerance {100 * j['tol_rel']:.3g} %); 1-IoU "
-                                    f"{c['one_minus_iou']:.3g}; mean distance {c['mean_outline_to_target_mm']:.3g} /"
-                                    f" {c['mean_target_to_outline_mm']:.3g} mm; spacing min/mean "
-                                    f"{c['spacing_min_mm']:.3g}/{c['spacing_mean_mm']:.3g} mm over {c['points']} "
-                                    f"{'boundary tips' if s is None else 'outline vertices'} vs the "
-                                    f"{target.kind} target {target.name!r}")))
     return out
 
 
