@@ -10,6 +10,7 @@ import pytest
 import shapely
 from fabkiri.design import fabrication as F
 from fabkiri.design.constraints import Stencils
+from fabkiri.fabricate import design_limits
 from fabkiri.fabricate import fabricability as fb
 from fabkiri.fabricate.materials import load_material
 from fabkiri.fabricate.printers import load_printer
@@ -298,7 +299,7 @@ def test_strip_rows_met_means_print_accepts():
     """The standard 8x8 pattern: where the strip clearance rows hold, print's plan checks pass; 3 % below the
     plan's own minimum (8.7 mm tiles on prusa-mk4) the rows fail."""
     pr = load_printer("prusa-mk4")
-    lim = F.FabricationLimits(**fb.printer_limits(pr, "tiles-and-strips"))
+    lim = F.FabricationLimits(**design_limits.printer_limits(pr, "tiles-and-strips"))
     p = standard_pattern(8, 8, tile_size=1.0)
     stc = Stencils.from_pattern(p)
 
@@ -315,7 +316,7 @@ def test_strip_rows_met_means_print_accepts():
 
 
 def test_scaled_limits_scale_every_requirement_and_set_the_margin():
-    lim = F.FabricationLimits(**fb.printer_limits(load_printer("prusa-mk4"), "tiles-and-strips"), source="mk4")
+    lim = F.FabricationLimits(**design_limits.printer_limits(load_printer("prusa-mk4"), "tiles-and-strips"), source="mk4")
     half = lim.scaled(0.5, 0.02)
     for k, v in lim.to_dict().items():
         if k not in ("source", "margin"):

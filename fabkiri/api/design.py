@@ -26,7 +26,7 @@ from ..design.offset_outline import preferred_holes
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..errors import FabricationError, InputError, SolveError
-from ..fabricate import fabricability
+from ..fabricate import design_limits, fabricability
 from ..fabricate.materials import load_material
 from ..fabricate.printers import load_printer
 from ..fileio import atomic_write
@@ -474,7 +474,7 @@ def _fabrication(request: PatternRequest, target) -> tuple[FabricationLimits | N
         mat = load_material(request.material)
         kind = request.hinge or mat.hinge
         try:
-            parts.append(fabricability.material_limits(mat, kind))
+            parts.append(design_limits.material_limits(mat, kind))
         except FabricationError as exc:
             raise InputError(str(exc)) from None
         names.append(f"{mat.name} {kind}")
@@ -482,7 +482,7 @@ def _fabrication(request: PatternRequest, target) -> tuple[FabricationLimits | N
     if request.printer:
         pr = load_printer(request.printer)
         style = request.style or "tiles-and-strips"
-        parts.append(fabricability.printer_limits(pr, style))
+        parts.append(design_limits.printer_limits(pr, style))
         names.append(f"{pr.name} {style}")
         intent.update(printer=request.printer, style=style)
     if request.min_feature:
@@ -496,4 +496,4 @@ def _fabrication(request: PatternRequest, target) -> tuple[FabricationLimits | N
     if target is not None:
         intent["size_mm"] = float(target.size)
     intent["scale"] = 1.0  # the design is made at the size it will be cut or printed
-    return FabricationLimits(**fabricability.combine(*parts), source=", ".join(names)), intent
+    return FabricationLimits(**design_limits.combine(*parts), source=", ".join(names)), intent
