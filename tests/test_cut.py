@@ -13,7 +13,8 @@ from fabkiri.errors import CheckFailed, FabricationError, InputError
 from fabkiri.fabricate import hinges as hg
 from fabkiri.fabricate.cut import CutOptions, cut_pattern
 from fabkiri.fabricate.materials import available, load_material
-from fabkiri.fabricate.readback import duplicate_segments, read_dxf, read_svg, verify_result
+from fabkiri.fabricate.readback import verify_result
+from fabkiri.fabricate.reread import duplicate_segments, read_dxf, read_svg
 from fabkiri.fabricate.text import GLYPHS, text_strokes, text_width
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.io import read_pattern, write_pattern
@@ -316,7 +317,7 @@ def _same_layers(a, b):
 
 
 def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
-    from fabkiri.fabricate.readback import read_dxf_checked
+    from fabkiri.fabricate.reread import read_dxf_checked
 
     data = cut(std(4, 4)).files["p.dxf"]
     full, fast = read_dxf_checked(data, full_max=10**9), read_dxf_checked(data, full_max=0)
@@ -383,7 +384,8 @@ def test_text_strokes_many_matches_text_strokes_label_by_label():
 @given(st.lists(st.tuples(st.integers(2, 6), st.booleans()), min_size=1, max_size=20), st.integers(0, 10**6))
 @settings(max_examples=30, deadline=None)
 def test_bulk_segments_and_linestrings_match_one_polyline_at_a_time(shape, seed):
-    from fabkiri.fabricate.readback import _linestrings, _segments
+    from fabkiri.fabricate.readback import _linestrings
+    from fabkiri.fabricate.reread import _segments
 
     rng = np.random.default_rng(seed)
     pl = [(rng.normal(size=(n, 2)), c) for n, c in shape]
