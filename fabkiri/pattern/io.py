@@ -25,7 +25,7 @@ from ..schemas import load_schema, schema_problem
 from ..schemas import short as _short
 from . import geometry
 from .model import Pattern
-from .tessellation import DEFAULT_KIND, tessellation
+from .tessellation import DEFAULT_KIND, Tessellation, tessellation
 
 FORMAT = "fabkiri.pattern"
 VERSION = 1
@@ -68,8 +68,9 @@ def _is_num(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _array_error(data: dict, n: int) -> str | None:
-    """Row-by-row shape and type check of the bulk arrays (what the schema says; ``n`` corners a tile)."""
+def _array_error(data: dict, tess: Tessellation) -> str | None:
+    """Row-by-row shape and type check of the bulk arrays (what the schema says; the kind's tile arity)."""
+    n = tess.arity
     for i, row in enumerate(data["nodes"]):
         if not (isinstance(row, list) and len(row) == 2 and _is_num(row[0]) and _is_num(row[1])):
             return f"nodes/{i}: {_short(row)} is not an [x, y] pair of numbers"
@@ -79,8 +80,7 @@ def _array_error(data: dict, n: int) -> str | None:
             and len(row) == n
             and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in row)
         ):
-            noun = "a quad" if n == 4 else "a tile"
-            return f"tiles/{i}: {_short(row)} is not {noun} of {n} node indices"
+            return f"tiles/{i}: {_short(row)} is not a {tess.tile_noun} of {n} node indices"
     for key, rows in data.get("contracted", {}).items():
         for i, tile in enumerate(rows):
             if not (
@@ -116,7 +116,7 @@ def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
         tess = tessellation(str(data.get("kind", DEFAULT_KIND)))
     except PatternError as exc:
         raise PatternError(f"{source}: {exc}") from None
-    problem = _array_error(data, tess.arity)
+    problem = _array_error(data, tess)
     if problem:
         raise PatternError(f"{source}: {problem}")
     nodes = np.asarray(data["nodes"], dtype=float)

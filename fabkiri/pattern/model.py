@@ -82,9 +82,8 @@ class Pattern:
         except (ValueError, TypeError) as exc:
             raise PatternError(f"tiles must be lists of {n} node indices ({exc})") from None
         if tiles.ndim != 2 or tiles.shape[1] != n:
-            noun = "a quad" if self.kind == "quad" else f"a {self.kind} tile"
             raise PatternError(
-                f"every tile must be {noun} of {n} node indices, got shape {tiles.shape}"
+                f"every tile must be a {tess.tile_noun} of {n} node indices, got shape {tiles.shape}"
             )
         contracted = {}
         for key, val in dict(self.contracted).items():

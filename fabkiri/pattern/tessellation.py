@@ -63,6 +63,11 @@ class Tessellation:
     boundary_sides: tuple[str, ...]
     rigid_family: bool = False
 
+    @property
+    def tile_noun(self) -> str:
+        """What one tile is called in messages: ``quad`` for quads, ``<kind> tile`` otherwise."""
+        return "quad" if self.kind == DEFAULT_KIND else f"{self.kind} tile"
+
     def check_state(self, state: Any) -> int:
         """``state`` as an int, or :class:`ValueError` naming the kind's states."""
         if state not in self.states:

@@ -32,7 +32,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from ..errors import PatternError
-from .tessellation import DEFAULT_KIND, tessellation
+from .tessellation import DEFAULT_KIND, Tessellation, tessellation
 
 STATES = (1, 2)
 
@@ -178,8 +178,7 @@ def derive_topology(
     tile graph that is not two-colourable, or a face that is not a hole of the kind.
     """
     tess = tessellation(kind)
-    tiles = _checked_tiles(tiles, n_nodes, parity, kind, tess.arity)
-    use = np.bincount(tiles.ravel(), minlength=n_nodes)
+    tiles, use = _checked_tiles(tiles, n_nodes, parity, tess)
     hinge_node, hinge_tiles, hinge_corner = _hinges(tiles, use)
     color = _two_colouring(hinge_tiles, len(tiles))
     holes = _holes(tiles, n_nodes, hinge_node, hinge_tiles, hinge_corner, kind, tess.hole_arity)
@@ -197,14 +196,19 @@ def derive_topology(
     )
 
 
-def _checked_tiles(tiles: np.ndarray, n_nodes: int, parity: int, kind: str, n: int) -> np.ndarray:
-    """The tiles as an int array, or :class:`PatternError` on the first malformed tile or node use."""
+def _checked_tiles(
+    tiles: np.ndarray, n_nodes: int, parity: int, tess: Tessellation
+) -> tuple[np.ndarray, np.ndarray]:
+    """The tiles as an int array and how many tiles use each node, or :class:`PatternError` on the
+    first malformed tile or node use."""
+    n = tess.arity
     tiles = np.asarray(tiles, dtype=np.int64)
     if len(tiles) == 0:
         raise PatternError("the pattern has no tiles")
     if tiles.ndim != 2 or tiles.shape[1] != n:
-        noun = "quads" if kind == "quad" else f"{kind} tiles"
-        raise PatternError(f"tiles must be {noun} ({n} node indices each), got shape {tiles.shape}")
+        raise PatternError(
+            f"tiles must be {tess.tile_noun}s ({n} node indices each), got shape {tiles.shape}"
+        )
     if tiles.min() < 0 or tiles.max() >= n_nodes:
         bad = int(np.flatnonzero((tiles < 0).any(1) | (tiles >= n_nodes).any(1))[0])
         raise PatternError(
@@ -226,7 +230,7 @@ def _checked_tiles(tiles: np.ndarray, n_nodes: int, parity: int, kind: str, n: i
         )
     if (use == 0).any():
         raise PatternError(f"node {int(np.flatnonzero(use == 0)[0])} is not used by any tile")
-    return tiles
+    return tiles, use
 
 
 def _hinges(tiles: np.ndarray, use: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
