@@ -12,6 +12,7 @@ import pytest
 from fabkiri.errors import PatternError
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern import io
+from fabkiri.pattern import tessellation as tess_module
 from fabkiri.pattern.lattice import standard_pattern
 from fabkiri.pattern.model import Pattern
 from fabkiri.pattern.quad import quad_fold_rule
@@ -68,19 +69,19 @@ def _swapped_rule(top, state):
     return replace(r, state=state)
 
 
-def test_the_topology_and_contraction_use_the_registered_kinds_fold_rule():
-    q = tessellation("quad")
-    register(
-        Tessellation(
-            kind="quad-swapped-test",
-            arity=4,
-            hole_arity=4,
-            states=q.states,
-            fold_rule=_swapped_rule,
-            standard=q.standard,
-            boundary_sides=q.boundary_sides,
-        )
-    )
+@pytest.fixture
+def test_kind(monkeypatch):
+    """Register a quad-like kind for one test; the registry is restored afterwards."""
+
+    def make(kind: str, **changes) -> Tessellation:
+        monkeypatch.setitem(tess_module._REGISTRY, kind, None)  # restored on teardown
+        return register(replace(tessellation("quad"), kind=kind, **changes))
+
+    return make
+
+
+def test_the_topology_and_contraction_use_the_registered_kinds_fold_rule(test_kind):
+    test_kind("quad-swapped-test", fold_rule=_swapped_rule)
     p = standard_pattern(4, 5, angle_deg=30.0)
     s = replace(p, kind="quad-swapped-test")
     assert s.topology is not p.topology  # topology is cached per kind
@@ -89,26 +90,14 @@ def test_the_topology_and_contraction_use_the_registered_kinds_fold_rule():
             s.topology.fold(state).fold_gap, p.topology.fold(3 - state).fold_gap
         )
         assert np.abs(contract(s, state).corners - contract(p, 3 - state).corners).max() <= 1e-12
-    assert (
-        io.loads(io.dumps(s)).kind == "quad-swapped-test"
-    )  # a non-default kind is written and read
+    # a non-default kind is written and read
+    assert io.loads(io.dumps(s)).kind == "quad-swapped-test"
     with pytest.raises(ValueError, match="state must be 1 or 2"):
         s.topology.fold(3)
 
 
-def test_a_kind_with_another_arity_is_checked_against_it():
-    q = tessellation("quad")
-    register(
-        Tessellation(
-            kind="triangles-test",
-            arity=3,
-            hole_arity=6,
-            states=q.states,
-            fold_rule=quad_fold_rule,
-            standard=q.standard,
-            boundary_sides=(),
-        )
-    )
+def test_a_kind_with_another_arity_is_checked_against_it(test_kind):
+    test_kind("triangles-test", arity=3, hole_arity=6, boundary_sides=())
     p = standard_pattern(2, 2)
     with pytest.raises(
         PatternError, match="every tile must be a triangles-test tile of 3 node indices"
