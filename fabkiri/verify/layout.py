@@ -31,6 +31,7 @@ from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
+from .geom import leave_one_out_residual
 from .manifest import Allowances, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
 from .pattern_checks import closed_state_checks, fabrication_tolerances
@@ -241,8 +242,6 @@ def _congruence_check(rep: Report, D: np.ndarray, cut_shapes: np.ndarray, have: 
     cong = np.full(T, np.nan)
     mirrored: list[int] = []
     if have.any():
-        from .geom import leave_one_out_residual
-
         fit = leave_one_out_residual(D[have], cut_shapes[have])
         dl = np.abs(geometry.edge_lengths(cut_shapes[have]) - geometry.edge_lengths(D[have])).max(axis=1)
         cong[have] = np.maximum(fit, dl)
@@ -266,8 +265,7 @@ def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarra
                      detail="corner distance to the design's closed state under one rigid motion per sheet"))
     if not have.all() or n_sheets != 1:
         return
-    layout_state = np.stack([m.cut_shapes[d] for d in range(pattern.n_tiles)])
-    for chk in closed_state_checks(pattern, layout_state, m.state, tol):
+    for chk in closed_state_checks(pattern, m.cut_shapes, m.state, tol):  # every tile found: the sheet's state
         if "congruent" in chk.name or "loop closure" in chk.name:
             continue
         chk.name = f"{g}: (b) sheet {chk.name}"
