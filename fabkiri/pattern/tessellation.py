@@ -78,7 +78,7 @@ class Tessellation:
 
 _REGISTRY: dict[str, Tessellation] = {}
 # built-in kinds, imported when first asked for (their modules call register())
-_BUILTIN = {"quad": "fabkiri.pattern.quad"}
+_BUILTIN = {"quad": "fabkiri.pattern.quad", "kagome": "fabkiri.pattern.kagome"}
 
 
 def register(tessellation: Tessellation) -> Tessellation:

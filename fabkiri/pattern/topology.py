@@ -45,8 +45,8 @@ class FoldRule:
     fold_gap: np.ndarray  # (H,) which gap (0/1) folds at each hinge
     fold_ends: np.ndarray  # (H, 2) far node of A's and of B's edge bounding the folded gap
     fold_corner_ends: np.ndarray  # (H, 2) corner index of those nodes in A and in B
-    hole_folds: np.ndarray  # (K, 4) bool: the hole folds at that corner in this state
-    rings: np.ndarray  # (K, 4, 2) (tile, corner) of the four angles at the hole's two merge corners
+    hole_folds: np.ndarray  # (K, m) bool: the hole folds at that corner in this state
+    rings: np.ndarray  # (K, m, 2) (tile, corner) of the m angles at the hole's m/2 merge corners
 
     def edge_pairs(self, hinge_node: np.ndarray) -> np.ndarray:
         """``(H, 2, 2)`` node pairs ``((h, a), (h, b))`` whose lengths must agree."""
