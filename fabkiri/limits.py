@@ -214,4 +214,4 @@ def check_pattern(pattern, source: str):
 
 def _index(a: np.ndarray, bad: np.ndarray) -> int:
     i = int(np.flatnonzero(bad)[0])
-    return i // 4 if a.ndim == 3 else i
+    return i // a.shape[1] if a.ndim == 3 else i  # a per-tile corner array: the tile

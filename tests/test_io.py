@@ -88,7 +88,8 @@ def test_bad_pattern_json_exit_2_one_line_nothing_written(case, tmp_path, run_cl
 BAD_OBJ = {
     "missing vertex": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1// 2// 3// 5//\n", "references vertex 5"),
     "empty": ("", "no vertices"),
-    "triangle": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n", "tiles must be quads"),
+    "pentagon": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\nf 1 2 3 4 5\n", "tiles must be quads"),
+    "quads and triangles": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf 1 2 3\n", "all of one kind"),
     "garbage": ("v a b c\n", "not numbers"),
     "not planar": ("v 0 0 1\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", "planar"),
 }

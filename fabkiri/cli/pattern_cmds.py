@@ -14,8 +14,8 @@ from ..fileio import atomic_write
 from ..mechanics.contract import adopt_state_labels, contract, with_contracted_states
 from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
 from ..pattern.io import import_obj, obj_text, read_pattern, write_pattern
-from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
+from ..pattern.tessellation import kinds, tessellation
 
 
 def parse_tiles(text: str) -> tuple[int, int]:
@@ -80,13 +80,18 @@ def cmd_new(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
     limits.check_tiles(rows, cols, "new", args.i_know)
     limits.check_length(args.tile_size, "--tile-size")
-    pattern = standard_pattern(rows, cols, tile_size=args.tile_size, angle_deg=args.angle, name=args.name or "")
+    angle = {} if args.angle is None else {"angle_deg": args.angle}  # None: the kind's open state
+    pattern = tessellation(args.lattice).standard(
+        rows, cols, tile_size=args.tile_size, name=args.name or "", **angle
+    )
     pattern = with_contracted_states(pattern)
     info = describe(pattern)
     if not info.closes_both:  # cannot happen for the standard lattice; never write a wrong file
         raise CheckFailed("; ".join(info.problems()))
     write_pattern(pattern, args.output)
-    print(f"wrote {args.output}: standard {rows}x{cols}, tile {args.tile_size:g} mm, ψ = {args.angle:g}°, "
+    what = "" if args.lattice == "quad" else f"{args.lattice} "
+    print(f"wrote {args.output}: standard {what}{rows}x{cols}, tile {args.tile_size:g} mm, "
+          f"ψ = {pattern.lattice['angle_deg']:g}°, "
           f"{info.width_mm:.1f} x {info.height_mm:.1f} mm deployed", file=sys.stderr)
     return 0
 
@@ -187,11 +192,16 @@ def add_i_know(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("new", help="write a standard rotating-squares pattern with both closed states")
-    p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 8x8")
+    p = sub.add_parser("new", help="write a standard pattern (rotating squares or kagome triangles) with both "
+                                    "closed states")
+    p.add_argument("--tiles", required=True, metavar="ROWSxCOLS",
+                   help="lattice size, e.g. 8x8 (kagome: ROWS rows of COLS triangles)")
+    p.add_argument("--lattice", choices=kinds(), default="quad",
+                   help="tessellation: quad (rotating squares, default) or kagome (rotating triangles)")
     p.add_argument("--tile-size", type=_positive, default=10.0, metavar="MM", help="tile edge in mm (default 10)")
-    p.add_argument("--angle", type=float, default=45.0, metavar="DEG",
-                   help="deployment angle ψ in degrees, 0..90 (default 45: square holes)")
+    p.add_argument("--angle", type=float, default=None, metavar="DEG",
+                   help="deployment angle ψ in degrees: quad 0..90 (default 45: square holes), "
+                        "kagome 0..120 (default 60: hexagonal holes)")
     p.add_argument("--name", help="pattern name stored in the file")
     add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")

@@ -14,6 +14,7 @@ import numpy as np
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums, state_residuals
+from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .contract import contract
 
@@ -49,7 +50,7 @@ class PatternInfo:
     height_mm: float
     self_intersecting_tiles: list[int]
     clockwise_tiles: list[int]
-    hinge_sum_max_rad: float
+    hinge_sum_max_rad: float | None  # None where the kind has no hinge-sum rigid family
     rigid_deployable: bool
     tolerance_rel: float
     tolerance_rad: float
@@ -100,10 +101,13 @@ class PatternInfo:
             lines.append(f"WARNING      self-intersecting tiles: {self.self_intersecting_tiles}")
         if self.clockwise_tiles:
             lines.append(f"WARNING      clockwise (reversed) tiles: {self.clockwise_tiles}")
-        lines.append(
-            f"hinge sums   max |θA+θB-π| = {self.hinge_sum_max_rad:.3e} rad -> "
-            f"{'rigid-deployable' if self.rigid_deployable else 'not rigid-deployable'}"
-        )
+        if self.hinge_sum_max_rad is None:  # the hinge-sum test is the quad rigid family's
+            lines.append("hinge sums   n/a (the quad rigid-deployability test)")
+        else:
+            lines.append(
+                f"hinge sums   max |θA+θB-π| = {self.hinge_sum_max_rad:.3e} rad -> "
+                f"{'rigid-deployable' if self.rigid_deployable else 'not rigid-deployable'}"
+            )
         lines.append(
             "state  closes  loop closure (tile sizes / mm)   edge pairs (mm)   rings (rad)   stored state"
         )
@@ -146,6 +150,7 @@ def describe(
     size = pattern.tile_size
     lo, hi = pattern.nodes.min(0), pattern.nodes.max(0)
     hs = hinge_sums(pattern)
+    quad_rigid = tessellation(pattern.kind).rigid_family
     info = PatternInfo(
         name=pattern.name,
         tiles=top.n_tiles,
@@ -158,8 +163,8 @@ def describe(
         height_mm=float(hi[1] - lo[1]),
         self_intersecting_tiles=geometry.self_intersecting_tiles(corners).tolist(),
         clockwise_tiles=np.flatnonzero(geometry.signed_areas(corners) <= 0).tolist(),
-        hinge_sum_max_rad=float(np.abs(hs).max(initial=0.0)),
-        rigid_deployable=bool(np.abs(hs).max(initial=0.0) <= tol_rad),
+        hinge_sum_max_rad=float(np.abs(hs).max(initial=0.0)) if quad_rigid else None,
+        rigid_deployable=quad_rigid and bool(np.abs(hs).max(initial=0.0) <= tol_rad),
         tolerance_rel=tol,
         tolerance_rad=tol_rad,
     )

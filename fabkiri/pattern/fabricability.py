@@ -48,7 +48,7 @@ def _distances(corners: np.ndarray, n: np.ndarray):
 
 
 def widths(corners: np.ndarray, shrink: float = 0.0) -> np.ndarray:
-    """Thinnest width of every tile ``(T, 4, 2)`` (CCW), after shrinking by ``shrink``.
+    """Thinnest width of every tile ``(T, n, 2)`` (CCW), after shrinking by ``shrink``.
 
     A tile that loses an edge when shrunk (or is not counter-clockwise) gets width 0. A non-convex tile
     is measured the same way, over all its edges' lines: the linear measure :func:`min_scale` inverts.
@@ -66,7 +66,7 @@ def widths(corners: np.ndarray, shrink: float = 0.0) -> np.ndarray:
 
 
 def shrunk_edges(corners: np.ndarray, shrink: float) -> np.ndarray:
-    """Signed length of every edge once the tile is shrunk by ``shrink`` ``(T, 4)``."""
+    """Signed length of every edge once the tile is shrunk by ``shrink`` ``(T, n)``."""
     u, n, L = _frame(corners)
     if not shrink:
         return L
@@ -135,11 +135,11 @@ def polygon_width(points: np.ndarray) -> float:
 
 def hinge_corner_distances(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray):
     """Closest pair of hinges on one tile: ``(distance, tile)``, ``(inf, -1)`` if no tile has two."""
-    T = len(corners)
-    has = np.zeros((T, 4), dtype=bool)
+    T, n = corners.shape[:2]
+    has = np.zeros((T, n), dtype=bool)
     has[hinge_tiles.ravel(), hinge_corner.ravel()] = True
     d = np.linalg.norm(corners[:, :, None, :] - corners[:, None, :, :], axis=-1)
-    pair = has[:, :, None] & has[:, None, :] & ~np.eye(4, dtype=bool)[None]
+    pair = has[:, :, None] & has[:, None, :] & ~np.eye(n, dtype=bool)[None]
     d = np.where(pair, d, np.inf).min((1, 2))
     t = int(np.argmin(d)) if T else -1
     return (float(d[t]), t) if T and np.isfinite(d[t]) else (float("inf"), -1)
@@ -150,7 +150,7 @@ def measures(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndar
     w = widths(corners)
     L = np.linalg.norm(np.roll(corners, -1, axis=-2) - corners, axis=-1)
     hd, ht = hinge_corner_distances(corners, hinge_tiles, hinge_corner)
-    t, e = divmod(int(np.argmin(L)), 4)
+    t, e = divmod(int(np.argmin(L)), corners.shape[1])
     return {"thinnest_tile_mm": float(w.min()), "thinnest_tile": int(np.argmin(w)),
             "shortest_edge_mm": float(L.min()), "shortest_edge_tile": t,
             "closest_hinge_pair_mm": hd if np.isfinite(hd) else None, "closest_hinge_pair_tile": ht}
@@ -177,9 +177,10 @@ def cross_signs_ok(corners: np.ndarray) -> bool:
 # in mm, its anchor moves with the pattern), which gives the smallest scale in closed form.
 
 
-def hinge_of_corner(hinge_tiles: np.ndarray, hinge_corner: np.ndarray, n_tiles: int) -> np.ndarray:
-    """``(T, 4)`` hinge at each tile corner, -1 where there is none."""
-    out = np.full((n_tiles, 4), -1, dtype=np.int64)
+def hinge_of_corner(hinge_tiles: np.ndarray, hinge_corner: np.ndarray, n_tiles: int,
+                    arity: int = 4) -> np.ndarray:
+    """``(T, arity)`` hinge at each tile corner, -1 where there is none."""
+    out = np.full((n_tiles, arity), -1, dtype=np.int64)
     H = len(hinge_tiles)
     out[hinge_tiles[:, 0], hinge_corner[:, 0]] = np.arange(H)
     out[hinge_tiles[:, 1], hinge_corner[:, 1]] = np.arange(H)
@@ -258,8 +259,9 @@ def strip_frames(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.
         sgn = np.sign(dot2(centre - p, perp))
         n[:, side] = perp * np.where(sgn == 0, 1.0, sgn)[:, None]
         here = corners[X, c]
-        u = corners[X, (c + 1) % 4] - here
-        v = corners[X, (c - 1) % 4] - here
+        k = corners.shape[1]
+        u = corners[X, (c + 1) % k] - here
+        v = corners[X, (c - 1) % k] - here
         sines.append(np.abs(cross2(u, v)) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1)))
     t0 = shrink / np.maximum(np.minimum(*sines), 1e-12)
     return p, e, n, t0

@@ -19,13 +19,14 @@ import numpy as np
 from .. import __version__
 from ..errors import PatternError
 from .model import Pattern
+from .tessellation import kind_of_arity
 
 FILE_SPEC = 1.2
 STATE_KEY = "fabkiri:state"  # custom frame property (a colon marks it as ours, per the spec)
 
 
 def _edges(tiles: np.ndarray) -> np.ndarray:
-    """``(4T, 2)`` tile edges in tile order, each CCW along its tile."""
+    """``(nT, 2)`` tile edges in tile order, each CCW along its tile."""
     return np.stack([tiles, np.roll(tiles, -1, axis=1)], -1).reshape(-1, 2)
 
 
@@ -46,7 +47,7 @@ def fold_dict(pattern: Pattern) -> dict[str, Any]:
         "vertices_coords": pattern.nodes.tolist(),
         "edges_vertices": edges.tolist(),
         "edges_assignment": ["B"] * len(edges),
-        "edges_faces": [[int(f)] for f in np.repeat(np.arange(len(tiles)), 4)],
+        "edges_faces": [[int(f)] for f in np.repeat(np.arange(len(tiles)), tiles.shape[1])],
         "faces_vertices": tiles.tolist(),
     }
     frames = []
@@ -101,7 +102,8 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
     """A pattern from a FOLD object: key frame deployed, frames tagged with a closed state stored.
 
     Frames without our state tag are read as closed states 1, 2 in order when
-    they are 2D and inherit the mesh. Quads only; z must be 0.
+    they are 2D and inherit the mesh. The faces' arity names the kind (quads, kagome triangles);
+    z must be 0.
     """
     if not isinstance(data, dict):
         raise PatternError(f"{source}: expected a FOLD JSON object")
@@ -112,7 +114,11 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
         coords = coords[:, :2]
     elif coords.shape[1] != 2:
         raise PatternError(f"{source}: vertices_coords must be [x, y] or [x, y, z]")
-    faces = _array(data, "faces_vertices", source, 4)
+    faces = _array(data, "faces_vertices", source)
+    kind = kind_of_arity(faces.shape[1])
+    if kind is None:
+        raise PatternError(f"{source}: faces_vertices must have 4 entries per row (quads) or 3 "
+                           f"(kagome triangles), got shape {faces.shape}")
     tiles = faces.astype(np.int64)
     if not np.array_equal(tiles, faces) or tiles.min(initial=0) < 0 or tiles.max(initial=0) >= len(coords):
         raise PatternError(f"{source}: faces_vertices must be vertex indices 0..{len(coords) - 1}")
@@ -127,7 +133,7 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
         if len(xy) != len(coords):
             raise PatternError(f"{source} frame {k}: {len(xy)} vertices, the key frame has {len(coords)}")
         contracted[int(state)] = xy[tiles]
-    return Pattern(nodes=coords, tiles=tiles, contracted=contracted,
+    return Pattern(nodes=coords, tiles=tiles, contracted=contracted, kind=kind,
                    name=str(data.get("file_title", "")) or source,
                    design={"source": {"fold": source, "file_creator": data.get("file_creator")}})
 

@@ -25,7 +25,10 @@ from ..schemas import load_schema, schema_problem
 from ..schemas import short as _short
 from . import geometry
 from .model import Pattern
-from .tessellation import DEFAULT_KIND, Tessellation, tessellation
+from .tessellation import DEFAULT_KIND, Tessellation, kind_of_arity, tessellation
+
+# OBJ faces of the kinds other than quads, for the one-line error
+_OTHER_TILES = " or kagome triangles"
 
 FORMAT = "fabkiri.pattern"
 VERSION = 1
@@ -225,7 +228,8 @@ def _read_text(path: str | os.PathLike) -> str:
 
 
 def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
-    """Vertices ``(n, 2)`` and 0-based quad faces ``(T, 4)`` of an OBJ text."""
+    """Vertices ``(n, 2)`` and 0-based faces ``(T, n)`` of an OBJ text: quads, or the tiles of
+    another kind (kagome triangles), all faces of one kind."""
     verts: list[tuple[float, float]] = []
     faces: list[list[int]] = []
     for lineno, raw in enumerate(text.splitlines(), 1):
@@ -258,9 +262,10 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
                     raise PatternError(
                         f"{source}: line {lineno}: face index {tok!r} is not an integer"
                     ) from None
-            if len(idx) != 4:
+            if kind_of_arity(len(idx)) is None or (faces and len(idx) != len(faces[0])):
                 raise PatternError(
                     f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads"
+                    f"{_OTHER_TILES} and all of one kind"
                 )
             if any(abs(i) > limits.MAX_INT for i in idx):
                 raise PatternError(f"{source}: line {lineno}: face index beyond ±2**53")
@@ -323,6 +328,7 @@ def import_obj(
     return Pattern(
         nodes=verts * scale,
         tiles=faces,
+        kind=kind_of_arity(faces.shape[1]) or DEFAULT_KIND,
         contracted=states,
         name=name if name is not None else Path(design).stem,
         design={

@@ -123,9 +123,33 @@ def standard_kagome(
     )
 
 
+def kagome_counts(rows: int, cols: int) -> tuple[int, int, int]:
+    """Holes, free corners and hinges bordering no hole of the standard R x C kagome, counted on its
+    brick-wall tile graph: between rows r and r+1 the up tiles (r, c), r + c even, join the row
+    above, and two consecutive such links bound one hexagonal hole (tiles c..c+2 of both rows).
+    A row's end tiles outside every hole hang on one hinge that borders no hole."""
+    starts = [np.arange(r % 2, cols - 2, 2) for r in range(rows - 1)]  # first column of each hole
+    links = sum(len(range(r % 2, cols, 2)) for r in range(rows - 1))
+    hinges = rows * (cols - 1) + links
+    holes = sum(len(s) for s in starts)
+    covered = np.zeros((rows, cols - 1), dtype=bool) if cols > 1 else np.zeros((rows, 0), bool)
+    for r, s in enumerate(starts):  # a hole covers the in-row hinges c..c+1 of rows r and r+1
+        for d in (0, 1):
+            covered[r, s + d] = True
+            covered[r + 1, s + d] = True
+    link_holes = [len(s) for s in starts]  # a link borders a hole when its row gap has one
+    holeless = int((~covered).sum()) + sum(
+        len(range(r % 2, cols, 2)) for r, n in enumerate(link_holes) if n == 0
+    )
+    return holes, 3 * rows * cols - 2 * hinges, holeless
+
+
 def _check_size(rows: int, cols: int) -> None:
     if int(rows) != rows or int(cols) != cols or rows < 1 or cols < 1:
         raise InputError(f"a kagome lattice needs at least 1x1 tiles, got {rows}x{cols}")
+    if rows > 2 and cols < 2:  # rows r and r+1 join at (r, c) with r + c even only
+        raise InputError(f"a kagome lattice of more than 2 rows needs 2 columns to be one piece, got "
+                         f"{rows}x{cols}")
 
 
 KAGOME = register(
@@ -138,5 +162,7 @@ KAGOME = register(
         standard=standard_kagome,
         boundary_sides=("B", "R", "T", "L"),
         rigid_family=False,
+        lattice_counts=kagome_counts,
+        hinges_border_holes=False,
     )
 )

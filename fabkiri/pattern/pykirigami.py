@@ -27,14 +27,15 @@ import numpy as np
 from ..errors import PatternError
 from .io import _read_text
 from .model import Pattern
+from .tessellation import kind_of_arity
 
 FILES = ("vertices.txt", "constraints.txt", "target.txt")
 JOINT_BOTH_FACES = 3
 
 
 def _tile_lines(corners: np.ndarray) -> str:
-    T = len(corners)
-    xyz = np.concatenate([corners, np.zeros((T, 4, 1))], axis=2).reshape(T, 12)
+    T, n = corners.shape[:2]
+    xyz = np.concatenate([corners, np.zeros((T, n, 1))], axis=2).reshape(T, 3 * n)
     return "".join(" ".join(repr(float(v)) for v in row) + "\n" for row in xyz)
 
 
@@ -64,12 +65,14 @@ def _read_tiles(path: Path) -> np.ndarray:
             vals = [float(v) for v in line.split()]
         except ValueError:
             raise PatternError(f"{path}: line {k}: not numbers") from None
-        if len(vals) != 12:
-            raise PatternError(f"{path}: line {k}: {len(vals)} values; fabkiri reads quads (12 values)")
+        n = len(vals) // 3
+        if len(vals) % 3 or kind_of_arity(n) is None or (rows and len(vals) != len(rows[0])):
+            raise PatternError(f"{path}: line {k}: {len(vals)} values; fabkiri reads quads (12 values) "
+                               f"or kagome triangles (9), all of one kind")
         rows.append(vals)
     if not rows:
         raise PatternError(f"{path}: no tiles")
-    a = np.asarray(rows).reshape(-1, 4, 3)
+    a = np.asarray(rows).reshape(len(rows), -1, 3)
     if np.abs(a[..., 2]).max() > 0:
         raise PatternError(f"{path}: z != 0; fabkiri patterns are planar")
     return a[..., :2]
@@ -86,8 +89,8 @@ def read_pykirigami(folder: str | os.PathLike, unit_mm: float = 1.0) -> Pattern:
     target = _read_tiles(d / "target.txt") * unit_mm
     if start.shape != target.shape:
         raise PatternError(f"{d}: vertices.txt has {len(start)} tiles, target.txt {len(target)}")
-    T = len(target)
-    parent = np.arange(4 * T)
+    T, n = target.shape[:2]
+    parent = np.arange(n * T)
 
     def root(i: int) -> int:
         while parent[i] != i:
@@ -103,15 +106,16 @@ def read_pykirigami(folder: str | os.PathLike, unit_mm: float = 1.0) -> Pattern:
             a, ca, b, cb = (int(v) for v in parts[:4])
         except ValueError:
             raise PatternError(f"{d / 'constraints.txt'}: line {k}: not integers") from None
-        if not (0 <= a < T and 0 <= b < T and 0 <= ca < 4 and 0 <= cb < 4):
+        if not (0 <= a < T and 0 <= b < T and 0 <= ca < n and 0 <= cb < n):
             raise PatternError(f"{d / 'constraints.txt'}: line {k}: index out of range")
-        parent[root(4 * a + ca)] = root(4 * b + cb)
-    roots = np.array([root(i) for i in range(4 * T)])
+        parent[root(n * a + ca)] = root(n * b + cb)
+    roots = np.array([root(i) for i in range(n * T)])
     uniq, first, inverse = np.unique(roots, return_index=True, return_inverse=True)
     rank = np.empty(len(uniq), dtype=np.int64)
     rank[np.argsort(first)] = np.arange(len(uniq))  # nodes numbered by first corner, tile by tile
     tiles = rank[inverse]
     nodes = np.zeros((len(uniq), 2))
     nodes[tiles] = target.reshape(-1, 2)  # joined corners coincide in the target (the loader checks it)
-    return Pattern(nodes=nodes, tiles=tiles.reshape(T, 4), contracted={1: start}, name=d.name,
+    return Pattern(nodes=nodes, tiles=tiles.reshape(T, n), contracted={1: start}, name=d.name,
+                   kind=kind_of_arity(n) or "quad",
                    design={"source": {"pykirigami": d.name, "unit_mm": unit_mm}})

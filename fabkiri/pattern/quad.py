@@ -21,6 +21,11 @@ def quad_fold_rule(top: Topology, state: int) -> FoldRule:
     )
 
 
+def quad_counts(rows: int, cols: int) -> tuple[int, int, int]:
+    """Holes, free corners and hinges bordering no hole of the standard ``rows x cols`` lattice."""
+    return (rows - 1) * (cols - 1), 2 * (rows + cols), 0
+
+
 QUAD = register(
     Tessellation(
         kind="quad",
@@ -31,5 +36,6 @@ QUAD = register(
         standard=standard_pattern,
         boundary_sides=("B", "R", "T", "L"),
         rigid_family=True,
+        lattice_counts=quad_counts,
     )
 )

@@ -21,7 +21,7 @@ from .model import Pattern
 class StateResiduals:
     state: int
     edge_pairs: np.ndarray  # (H,) |l(h,a) - l(h,b)| in mm
-    rings: np.ndarray  # (K,) wrapped sum of the four merge-corner angles minus 2π
+    rings: np.ndarray  # (K,) wrapped sum of the merge-corner angles minus 2π
     wrapped_tiles: np.ndarray  # tiles whose angles needed wrapping in some ring
 
 
@@ -39,9 +39,10 @@ def state_residuals(pattern: Pattern, state: int, nodes: np.ndarray | None = Non
         rings = geometry.wrap_angle(raw)
         needed = np.abs(raw - rings) > np.pi
         suspects = np.unique(fold.rings[needed][..., 0])
-        # blame only tiles that are not simple quads (angle sum != 2π); a ring
-        # that is merely far from closing needs no excuse
-        off = np.abs(angles[suspects].sum(axis=1) - geometry.TWO_PI) > 1e-6
+        # blame only tiles that are not simple polygons (angle sum != (n-2)π); a
+        # ring that is merely far from closing needs no excuse
+        simple_sum = (top.arity - 2) * np.pi
+        off = np.abs(angles[suspects].sum(axis=1) - simple_sum) > 1e-6
         wrapped = suspects[off]
     else:
         rings, wrapped = np.zeros(0), np.zeros(0, dtype=np.int64)

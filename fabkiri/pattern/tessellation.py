@@ -52,6 +52,13 @@ class Tessellation:
         split into one arc per side.
     rigid_family:
         Whether a closed-form rigid-deployable family exists for this kind (``design --rigid``).
+    lattice_counts:
+        ``lattice_counts(rows, cols) -> (holes, free corners, hinges bordering no hole)`` of the
+        standard lattice, which the verifier's topology check compares a pattern that names its
+        lattice against.
+    hinges_border_holes:
+        Whether every hinge of a pattern of this kind must border a hole (true for quads; a kagome
+        row may end in a tile hanging on one hinge outside every hole).
     """
 
     kind: str
@@ -62,6 +69,8 @@ class Tessellation:
     standard: Callable[..., Pattern]
     boundary_sides: tuple[str, ...]
     rigid_family: bool = False
+    lattice_counts: Callable[[int, int], tuple[int, int, int]] | None = None
+    hinges_border_holes: bool = True
 
     @property
     def tile_noun(self) -> str:
@@ -101,3 +110,12 @@ def tessellation(kind: str = DEFAULT_KIND) -> Tessellation:
 def kinds() -> tuple[str, ...]:
     """Names of every known kind, built-in or registered."""
     return tuple(sorted(set(_BUILTIN) | set(_REGISTRY)))
+
+
+def kind_of_arity(arity: int) -> str | None:
+    """The built-in or registered kind whose tiles have ``arity`` corners (a file format that
+    stores only faces, such as OBJ, names its kind this way); None if no kind has that arity."""
+    for kind in kinds():
+        if tessellation(kind).arity == arity:
+            return kind
+    return None

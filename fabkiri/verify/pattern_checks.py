@@ -31,6 +31,7 @@ from ..mechanics.deploy import place_rigid, rigid_angles
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums, state_residuals
+from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from . import geom
 from .outlines import target_checks
@@ -114,7 +115,7 @@ def _corner_index(tiles: np.ndarray, t: np.ndarray, n: np.ndarray) -> np.ndarray
 
 
 def _hole_outline(pattern: Pattern, Y: np.ndarray) -> np.ndarray:
-    """``(K, 8, 2)``: each hole walked along its four tile edges, in state ``Y``."""
+    """``(K, 2m, 2)``: each hole walked along its ``m`` tile edges, in state ``Y``."""
     top = pattern.topology
     K = top.n_holes
     t = top.hole_tiles  # edge c -> c+1 belongs to hole_tiles[:, c]
@@ -122,7 +123,7 @@ def _hole_outline(pattern: Pattern, Y: np.ndarray) -> np.ndarray:
     n1 = np.roll(top.hole_nodes, -1, axis=1)
     p0 = Y[t, _corner_index(top.tiles, t, n0)]
     p1 = Y[t, _corner_index(top.tiles, t, n1)]
-    return np.stack([p0, p1], axis=2).reshape(K, 8, 2)
+    return np.stack([p0, p1], axis=2).reshape(K, 2 * n0.shape[1], 2)
 
 
 def _worst(prefix: str, values: np.ndarray) -> str | None:
@@ -139,7 +140,8 @@ def _max(values: np.ndarray) -> float:
 def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
     corners = pattern.corners()
     angles = geometry.corner_angles(corners)
-    angle_sum_off = np.abs(angles.sum(axis=1) - geometry.TWO_PI)
+    simple_sum = (corners.shape[1] - 2) * np.pi  # a simple CCW n-gon's angle sum
+    angle_sum_off = np.abs(angles.sum(axis=1) - simple_sum)
     invalid = ~shapely.is_valid(shapely.polygons(corners))
     crossed = np.flatnonzero(invalid | (angle_sum_off > 1e-6))
     out = []
@@ -164,19 +166,26 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
 
 def topology_checks(pattern: Pattern) -> list[Check]:
     """Counts of spec §10.2: one hole per independent cycle of the tile graph,
-    every hinge a corner of one or two holes."""
+    every hinge a corner of one or two holes (or as many hole-less hinges as the kind's lattice has)."""
     top = pattern.topology
+    tess = tessellation(pattern.kind)
     T, H, K = top.n_tiles, top.n_hinges, top.n_holes
     expected = H - T + 1
     holes_per_hinge = (top.gap_face >= 0).sum(axis=1)
     orphan = np.flatnonzero(holes_per_hinge == 0) if K else np.zeros(0, dtype=np.int64)
-    bad = abs(K - expected) + len(orphan)
+    bad = abs(K - expected)
     lat = pattern.lattice or {}
     detail = f"{T} tiles, {H} hinges, {len(top.free_nodes)} free corners, {K} holes (cycles: {expected})"
-    if lat.get("rows") and lat.get("cols"):
+    counts = tess.lattice_counts
+    if lat.get("rows") and lat.get("cols") and counts is not None:
         m, n = int(lat["rows"]), int(lat["cols"])
-        bad += abs(K - (m - 1) * (n - 1)) + abs(len(top.free_nodes) - 2 * (m + n))
-        detail += f"; a {m}x{n} lattice expects {(m - 1) * (n - 1)} holes and {2 * (m + n)} free corners"
+        holes, free, holeless = counts(m, n)
+        bad += abs(K - holes) + abs(len(top.free_nodes) - free) + abs(len(orphan) - holeless)
+        detail += f"; a {m}x{n} lattice expects {holes} holes and {free} free corners"
+        if holeless:
+            detail += f" and {holeless} hinges bordering no hole"
+    elif tess.hinges_border_holes:
+        bad += len(orphan)
     if len(orphan):
         detail += f"; hinges bordering no hole: {orphan[:10].tolist()}"
     return [Check("topology", ok=bad == 0, value=int(bad), tol=0, unit="count", group="tiles",
@@ -185,7 +194,7 @@ def topology_checks(pattern: Pattern) -> list[Check]:
 
 def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances,
                         closure: np.ndarray | None = None) -> list[Check]:
-    """Closedness and compactness of one closed state ``Y`` (T, 4, 2)."""
+    """Closedness and compactness of one closed state ``Y`` (T, n, 2)."""
     top = pattern.topology
     g = f"state {state}"
     out = []
@@ -337,13 +346,15 @@ def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Ch
     top = pattern.topology
     x = pattern.nodes
     out = []
-    if top.n_holes:
+    # parallelogram holes (spec §2.9) are a quad fact; other kinds' fold pairs must be equal
+    quad_holes = top.n_holes and top.hole_nodes.shape[1] == 4
+    if quad_holes:
         hole_len = np.linalg.norm(x[np.roll(top.hole_nodes, -1, 1)] - x[top.hole_nodes], axis=-1)
         para = np.maximum(np.abs(hole_len[:, 0] - hole_len[:, 2]), np.abs(hole_len[:, 1] - hole_len[:, 3]))
     else:
-        para = np.zeros(0)
+        para = np.full(top.n_holes, np.inf)
     rhombus = bool((para <= tol.length).all()) and bool(
-        (np.abs(hole_len - hole_len[:, :1]) <= tol.length).all()) if top.n_holes else True
+        (np.abs(hole_len - hole_len[:, :1]) <= tol.length).all()) if quad_holes else True
     for s in STATES:
         g = f"state {s}"
         r = state_residuals(pattern, s)
@@ -367,6 +378,8 @@ def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Ch
         wrapped = r.wrapped_tiles.tolist()
         out.append(angle_check(f"{g}: rings", rings, tol.tile_size, tol, "hole", group="design",
                                detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else ""))
+    if not claimed and not tessellation(pattern.kind).rigid_family:
+        return out  # θA+θB = π is the quad rigid family's test; nothing to report for other kinds
     hs = np.abs(hinge_sums(pattern))
     out.append(angle_check("hinge sums", hs, tol.tile_size, tol, "hinge", group="design", applies=claimed,
                            detail="" if claimed else "rigid deployability not claimed; measured for information"))
