@@ -116,8 +116,9 @@ def gap_angles(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
     def d(tile, corner, base):
         return corners[..., tile, corner, :] - base
 
-    g0 = geometry.signed_angle(d(A, (cA + 3) % 4, h), d(B, (cB + 1) % 4, hb))
-    g1 = geometry.signed_angle(d(B, (cB + 3) % 4, hb), d(A, (cA + 1) % 4, h))
+    n = corners.shape[-2]  # corners per tile
+    g0 = geometry.signed_angle(d(A, (cA + n - 1) % n, h), d(B, (cB + 1) % n, hb))
+    g1 = geometry.signed_angle(d(B, (cB + n - 1) % n, hb), d(A, (cA + 1) % n, h))
     return np.mod(np.stack([g0, g1], -1), geometry.TWO_PI)
 
 
@@ -206,12 +207,12 @@ def rotation_drivers(
     tiles = pattern.tiles
     T, n = len(tiles), len(pattern.nodes)
     deployed = pattern.corners()
-    p = deployed - deployed.mean(axis=1, keepdims=True)  # (T, 4, 2)
+    p = deployed - deployed.mean(axis=1, keepdims=True)  # (T, k, 2), k corners per tile
     targets = rotation_targets(pattern, states, t)
     x = {0: pattern.nodes, **{s: node_positions(pattern, states[s]) for s in (1, 2)}}
     cen = {s: v.mean(axis=0) for s, v in x.items()}
-    rows = np.repeat(np.arange(T), 8)
-    cols = np.stack([2 * tiles, 2 * tiles + 1], -1).ravel()  # (T, 4, 2) flattened
+    rows = np.repeat(np.arange(T), 2 * tiles.shape[1])
+    cols = np.stack([2 * tiles, 2 * tiles + 1], -1).ravel()  # (T, k, 2) flattened
     cent_rows = np.concatenate([np.full(n, T), np.full(n, T + 1)])
     cent_cols = np.concatenate([2 * np.arange(n), 2 * np.arange(n) + 1])
     out = []

@@ -1,6 +1,7 @@
-"""Spring model of a quad kirigami pattern (algorithm spec §7, [P] Eq. 6).
+"""Spring model of a kirigami pattern (algorithm spec §7, [P] Eq. 6).
 
-Every tile carries six springs: its four edges and its two diagonals. Their
+Every quad carries six springs: its four edges and its two diagonals (a kagome triangle its
+three edges: enough to keep any tile rigid). Their
 rest lengths ``l`` are the designed (deployed) tile dimensions; the nodes are
 the deployed nodes, so a hinge shared by two tiles is an ideal pin. With
 ``d = |x_i - x_j|`` the residual of a spring is its relative strain
@@ -27,8 +28,18 @@ from scipy import sparse
 from ..errors import PatternError
 from ..pattern.model import Pattern
 
-# corner pairs of a tile: 4 edges, then the 2 diagonals
+# corner pairs of a quad: 4 edges, then the 2 diagonals
 SPRING_CORNERS = np.array([[0, 1], [1, 2], [2, 3], [3, 0], [0, 2], [1, 3]])
+
+
+def spring_corners(n: int) -> np.ndarray:
+    """Corner pairs that carry a spring in an ``n``-corner tile: its edges, then its diagonals
+    (every other pair), so the tile is rigid (a triangle needs only its three edges)."""
+    if n == 4:
+        return SPRING_CORNERS
+    edges = [[k, (k + 1) % n] for k in range(n)]
+    diagonals = [[i, j] for i in range(n) for j in range(i + 2, n) if (i, j) != (0, n - 1)]
+    return np.array(edges + diagonals, dtype=np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -37,7 +48,7 @@ class Springs:
 
     pairs: np.ndarray  # (S, 2) node indices
     rest: np.ndarray  # (S,) rest lengths, mm
-    tile: np.ndarray  # (S,) tile owning each spring (6 per tile, in tile order)
+    tile: np.ndarray  # (S,) tile owning each spring (6 per quad, 3 per triangle, in tile order)
     n_nodes: int
     n_tiles: int
 
@@ -71,16 +82,16 @@ class Springs:
         return float(r @ r)
 
     def tile_energy(self, x: np.ndarray) -> np.ndarray:
-        """``(T,)`` energy of every tile (sum of its six spring terms)."""
+        """``(T,)`` energy of every tile (sum of its spring terms)."""
         r = self.strains(x)
-        return (r * r).reshape(self.n_tiles, 6).sum(axis=1)
+        return (r * r).reshape(self.n_tiles, -1).sum(axis=1)
 
     def tile_energies(self, frames: np.ndarray) -> np.ndarray:
         """``(F, T)`` tile energies of many node arrays ``(F, n, 2)`` at once."""
         frames = np.asarray(frames, dtype=float)
         v = frames[:, self.pairs[:, 0]] - frames[:, self.pairs[:, 1]]
         r = (np.hypot(v[..., 0], v[..., 1]) - self.rest) / self.rest
-        return (r * r).reshape(len(frames), self.n_tiles, 6).sum(axis=2)
+        return (r * r).reshape(len(frames), self.n_tiles, -1).sum(axis=2)
 
     def gradient(self, x: np.ndarray) -> np.ndarray:
         """``∇E`` as a flat ``(2n,)`` array."""
@@ -128,27 +139,31 @@ class Springs:
 def springs(pattern: Pattern) -> Springs:
     """The six springs of every tile, rest lengths from the deployed nodes."""
     tiles = pattern.tiles
-    pairs = tiles[:, SPRING_CORNERS].reshape(-1, 2)
+    corner_pairs = spring_corners(tiles.shape[1])
+    pairs = tiles[:, corner_pairs].reshape(-1, 2)
     x = pattern.nodes
     rest = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
     short = rest <= 1e-9 * max(float(rest.max(initial=0.0)), 1e-300)
     if short.any():  # a relative strain needs a length to be relative to
         s = int(np.flatnonzero(short)[0])
         raise PatternError(
-            f"tile {s // 6} has a zero-length edge or diagonal; it cannot carry a spring"
+            f"tile {s // len(corner_pairs)} has a zero-length edge or diagonal; it cannot carry a "
+            f"spring"
         )
-    tile = np.repeat(np.arange(len(tiles)), len(SPRING_CORNERS))
+    tile = np.repeat(np.arange(len(tiles)), len(corner_pairs))
     return Springs(pairs=pairs, rest=rest, tile=tile, n_nodes=len(x), n_tiles=len(tiles))
 
 
 def corner_energy(sp: Springs, corners: np.ndarray) -> np.ndarray:
-    """``(T,)`` energy of tiles given by their own corners ``(T, 4, 2)``.
+    """``(T,)`` energy of tiles given by their own corners ``(T, n, 2)``.
 
     Used for states stored per tile (closed states, rigid-path frames), where
     the two copies of a hinge are separate points: it measures tile distortion
     only, not hinge gaps.
     """
     c = np.asarray(corners, dtype=float)
-    v = c[:, SPRING_CORNERS[:, 0]] - c[:, SPRING_CORNERS[:, 1]]  # (T, 6, 2)
-    r = (np.hypot(v[..., 0], v[..., 1]) - sp.rest.reshape(-1, 6)) / sp.rest.reshape(-1, 6)
+    cp = spring_corners(c.shape[1])
+    v = c[:, cp[:, 0]] - c[:, cp[:, 1]]  # (T, springs per tile, 2)
+    rest = sp.rest.reshape(len(c), -1)
+    r = (np.hypot(v[..., 0], v[..., 1]) - rest) / rest
     return (r * r).sum(axis=1)

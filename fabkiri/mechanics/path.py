@@ -15,6 +15,7 @@ from ..errors import CheckFailed, InputError
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums
+from ..pattern.tessellation import tessellation
 from .collisions import CollisionReport, collisions
 from .contract import contract_both
 
@@ -195,6 +196,9 @@ def closed_states(pattern: Pattern, tol: float = CLOSURE_TOL) -> dict[int, np.nd
 
 
 def is_rigid_deployable(pattern: Pattern, tol_rad: float = RIGID_TOL_RAD) -> bool:
+    """Whether the pattern is in its kind's closed-form rigid family (quads: hinge sums π)."""
+    if not tessellation(pattern.kind).rigid_family:
+        return False
     return bool(np.abs(hinge_sums(pattern)).max(initial=0.0) <= tol_rad)
 
 

@@ -19,6 +19,7 @@ from ..errors import CheckFailed
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums
+from ..pattern.tessellation import tessellation
 from .energy import springs
 from .path import (
     RIGID_TOL_RAD,
@@ -86,6 +87,11 @@ def rigid_path(
     Raises :class:`CheckFailed` if the pattern is not rigid-deployable (hinge
     sums above ``tol_rad``) or does not close in both states.
     """
+    if not tessellation(pattern.kind).rigid_family:
+        raise CheckFailed(
+            f"the rigid path is the quad hinge-sum family's; a {pattern.kind} pattern deploys on the "
+            f"elastic path"
+        )
     hs = np.abs(hinge_sums(pattern))
     if hs.max(initial=0.0) > tol_rad:
         h = int(np.argmax(hs))
