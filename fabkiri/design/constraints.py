@@ -54,9 +54,10 @@ def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray)
     Returns ``θ (m,)``, nodes ``(m, 3)`` = (corner, next, prev) and gradients
     ``(m, 3, 2)``; θ turns the edge to ``next`` onto the edge to ``prev``.
     """
+    n = tiles.shape[1]  # corners per tile
     v = tiles[t, k]
-    a = tiles[t, (k + 1) % 4]
-    b = tiles[t, (k + 3) % 4]
+    a = tiles[t, (k + 1) % n]
+    b = tiles[t, (k + n - 1) % n]
     A = x[a] - x[v]
     B = x[b] - x[v]
     cr = A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
@@ -220,7 +221,8 @@ def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, targe
     """Σ_j θ_{t[i,j]}(k[i,j]) - target[i] (wrapped), ``t``/``k`` of shape ``(m, q)``."""
     m, q = t.shape
     tt, kk = t.ravel(), k.ravel()
-    v, a, b = tiles[tt, kk], tiles[tt, (kk + 1) % 4], tiles[tt, (kk + 3) % 4]
+    n = tiles.shape[1]
+    v, a, b = tiles[tt, kk], tiles[tt, (kk + 1) % n], tiles[tt, (kk + n - 1) % n]
 
     def fn(x):
         th, nodes, g = corner_angle(x, tiles, tt, kk)

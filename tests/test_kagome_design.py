@@ -1,0 +1,94 @@
+"""Kagome inverse-design constraints: Jacobians, ranks and the dimension of the families."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from fabkiri.design import kagome as K
+from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern.residuals import state_residuals
+from fabkiri.verify import verify_pattern
+
+
+@pytest.mark.parametrize("state", [1, 2])
+def test_family_jacobians_match_finite_differences(state):
+    p = standard_kagome(3, 4, angle_deg=50.0)
+    rng = np.random.default_rng(4)
+    x = p.nodes / p.tile_size + 0.05 * rng.standard_normal(p.nodes.shape)
+    for fam in K.families(p, (state,)):
+        r, J = fam(x)
+        assert np.array_equal(r, fam.residual(x))
+        fd = np.zeros(J.shape)
+        h = 1e-6
+        for i in range(x.size):
+            d = np.zeros(x.size)
+            d[i] = h
+            fd[:, i] = (fam.residual(x + d.reshape(x.shape)) - fam.residual(x - d.reshape(x.shape))) / (2 * h)
+        assert np.abs(J.toarray() - fd).max() <= 1e-7, fam.name
+
+
+def test_families_vanish_exactly_where_the_pattern_closes():
+    p = standard_kagome(4, 4, angle_deg=35.0)
+    x = p.nodes / p.tile_size
+    r, _ = K.stacked(K.families(p), x)
+    assert np.abs(r).max() <= 1e-13
+    # and they measure what the reported residuals measure
+    for s in (1, 2):
+        rings = K.ring_family(p, s).residual(x + 0.01)
+        assert np.allclose(rings, state_residuals(p, s, x + 0.01).rings)
+
+
+@pytest.mark.parametrize("rows, cols", [(4, 4), (7, 5)])
+def test_reconfigurable_family_loses_one_equation_per_hole(rows, cols):
+    """Both states' edge pairs chain the six edges of a hole around a cycle: one of the six
+    equalities follows from the others. Nothing else is dependent at these sizes, so the family
+    has dimension 2n - 3 - (2H + K) = 2F - K - 3 (F free corners)."""
+    p = standard_kagome(rows, cols)
+    top = p.topology
+    H, Kh, F = top.n_hinges, top.n_holes, len(top.free_nodes)
+    one = K.count(p, (1,))
+    assert one.equations == one.rank == H + Kh  # contractibility alone: independent
+    both = K.count(p, (1, 2))
+    assert both.equations == 2 * (H + Kh) and both.rank == 2 * H + Kh
+    assert both.dimension == 2 * F - Kh - 3
+    # the same at two generic (non-symmetric) points of the family: it is a manifold there
+    for seed in (1, 2):
+        x = K.nearby_solution(p, (1, 2), seed=seed, step=0.01)
+        assert np.abs(x - p.nodes / p.tile_size).max() > 1e-3  # really moved
+        c = K.count(p, (1, 2), x)
+        assert c.residual <= 1e-13 and c.rank == both.rank
+
+
+def test_a_generic_reconfigurable_kagome_closes_in_both_states():
+    p = standard_kagome(4, 4)
+    x = K.nearby_solution(p, (1, 2), seed=5, step=0.01)
+    q = replace(p, nodes=x * p.tile_size, lattice=None, name="generic")
+    assert not verify_pattern(q).failed()
+    # only contractible: state 2 breaks
+    y = K.nearby_solution(p, (1,), seed=5, step=0.01)
+    failed = {c.name for c in verify_pattern(replace(q, nodes=y * p.tile_size)).failed()}
+    assert "state 2: loop closure" in failed and not any(n.startswith("state 1") for n in failed)
+
+
+@pytest.mark.parametrize("rows, cols", [(4, 4), (7, 5), (6, 6)])
+def test_the_kagome_linkage_is_a_mechanism_with_independent_hinges(rows, cols):
+    """3(T - 1) - 2H degrees of freedom, i.e. 2R + C - 3 for the R x C lattice (the quad lattice
+    is over-constrained instead)."""
+    p = standard_kagome(rows, cols)
+    top = p.topology
+    m = K.linkage_mobility(p)
+    assert m == 3 * (top.n_tiles - 1) - 2 * top.n_hinges == 2 * rows + cols - 3
+
+
+@pytest.mark.slow
+def test_16x16_family_dimension_is_the_same_at_the_standard_and_a_generic_point():
+    p = standard_kagome(16, 16)
+    top = p.topology
+    std = K.count(p, (1, 2))
+    x = K.nearby_solution(p, (1, 2), seed=3, step=0.003)
+    gen = K.count(p, (1, 2), x)
+    assert gen.residual <= 1e-13 and gen.rank == std.rank
+    # beyond one length equality per hole, angle sums become dependent at this size
+    assert std.rank < 2 * top.n_hinges + top.n_holes and std.dimension > 0
