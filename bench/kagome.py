@@ -1,0 +1,85 @@
+"""Kagome counts table and pictures for docs/kagome.md (run on demand).
+
+    PYTHONPATH=. python3 bench/kagome.py [--sizes 4x4,7x5,16x16] [--png docs/img/kagome-states.png]
+
+Prints, per size, the counts of the standard R x C kagome (tiles, hinges, holes, free corners,
+nodes), the equations, Jacobian rank and local dimension of the contractible (state 1) and the
+reconfigurable (states 1 and 2) families at the standard pattern and at a generic point of the
+family, the linkage mobility, and the CPU time. Draws the deployed state and both closed states of
+the standard 4x4 and of a generic reconfigurable 4x4 design.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from fabkiri.design import kagome as K
+from fabkiri.mechanics.contract import contract
+from fabkiri.pattern.kagome import standard_kagome
+
+
+def table(sizes: list[tuple[int, int]]) -> None:
+    print("| R×C | tiles | hinges | holes | free | unknowns | contractible eqs / rank / dim "
+          "| reconfigurable eqs / rank / dim (standard; generic) | mobility | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for rows, cols in sizes:
+        t0 = time.process_time()
+        p = standard_kagome(rows, cols)
+        top = p.topology
+        one, both = K.count(p, (1,)), K.count(p, (1, 2))
+        x = K.nearby_solution(p, (1, 2), seed=3, step=0.003)
+        gen = K.count(p, (1, 2), x)
+        print(f"| {rows}×{cols} | {top.n_tiles} | {top.n_hinges} | {top.n_holes} | "
+              f"{len(top.free_nodes)} | {one.unknowns} | {one.equations} / {one.rank} / {one.dimension} | "
+              f"{both.equations} / {both.rank} / {both.dimension}; {gen.rank} / {gen.dimension} | "
+              f"{K.linkage_mobility(p)} | {time.process_time() - t0:.1f} |", flush=True)
+
+
+def _draw(ax, corners: np.ndarray, up: np.ndarray, title: str) -> None:
+    from matplotlib.collections import PolyCollection
+
+    colours = np.where(up[:, None], [[0.85, 0.45, 0.25]], [[0.25, 0.5, 0.8]])
+    ax.add_collection(PolyCollection(corners, facecolors=colours, edgecolors="k", linewidths=0.6))
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.set_axis_off()
+    ax.set_title(title, fontsize=9)
+
+
+def figure(path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    std = standard_kagome(4, 4, angle_deg=45.0)
+    x = K.nearby_solution(std, (1, 2), seed=5, step=0.02)
+    gen = replace(std, nodes=x * std.tile_size, name="generic reconfigurable 4x4")
+    fig, axes = plt.subplots(2, 3, figsize=(7.5, 6.4))
+    for row, (p, label) in enumerate(((std, "standard 4×4, ψ = 45°"), (gen, "generic design"))):
+        up = p.topology.tile_color == 0
+        _draw(axes[row, 0], p.corners(), up, f"{label}: deployed")
+        for s in (1, 2):
+            c = contract(p, s)
+            _draw(axes[row, s], c.corners, up, f"closed state {s} (closure {c.max_closure:.0e} mm)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    print(f"wrote {path} ({path.stat().st_size // 1024} kB)")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="4x4,7x5,16x16")
+    ap.add_argument("--png", type=Path, default=None)
+    args = ap.parse_args()
+    table([tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")])
+    if args.png:
+        figure(args.png)
+
+
+if __name__ == "__main__":
+    main()
