@@ -136,32 +136,40 @@ def boundary_tip_order(tiles: np.ndarray, hole_nodes: np.ndarray, hole_tiles: np
     it is one cycle traversed in the tiles' own edge direction, so following it from a tip visits every
     tip in order.
     """
-    T = len(tiles)
+    T, n = tiles.shape
     a = tiles.reshape(-1)
     b = np.roll(tiles, -1, axis=1).reshape(-1)
-    t = np.repeat(np.arange(T), 4)
+    t = np.repeat(np.arange(T), n)
     hole = set()
     if len(hole_nodes):
         n0, n1 = hole_nodes, np.roll(hole_nodes, -1, axis=1)
         for tt, x, y in zip(hole_tiles.ravel().tolist(), n0.ravel().tolist(), n1.ravel().tolist()):
             hole.add((tt, min(x, y), max(x, y)))
+    # boundary half-edges keyed by (tile, start node): a hinge bordering no hole (a kagome row's end
+    # tile) starts two boundary edges, one per tile, so the node alone does not name the edge
     nxt = {}
+    users: dict[int, list[int]] = {}
     for tt, x, y in zip(t.tolist(), a.tolist(), b.tolist()):
+        users.setdefault(x, []).append(tt)
         if (tt, min(x, y), max(x, y)) not in hole:
-            nxt[x] = y
+            nxt[(tt, x)] = y
     free = set(free_nodes.tolist())
     if not free:
         return np.zeros(0, dtype=np.int64)
     start = int(free_nodes[0])
     order: list[int] = []
-    v: int | None = start
+    key: tuple[int, int] | None = (users[start][0], start)
     for _ in range(len(nxt) + 1):
-        if v is not None and v in free:
-            order.append(v)
-        v = nxt.get(v)
-        if v is None or v == start:
+        if key is None:
             break
-    if len(order) != len(free):  # not one simple boundary cycle: fall back to the angle about the centroid
+        if key[1] in free:
+            order.append(key[1])
+        y = nxt.get(key)
+        if y is None or y == start:
+            break
+        # arriving at y along tile key[0]: at a hinge the boundary goes on along the other tile
+        key = (next((u for u in users[y] if u != key[0]), key[0]), y)
+    if len(order) != len(free):  # not one simple boundary cycle
         return np.asarray(free_nodes)
     return np.asarray(order, dtype=np.int64)
 
