@@ -42,7 +42,8 @@ COMMANDS = [
 # command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
 # (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
 SUMMARIES = {
-    "new": ("fabkiri.cli.pattern_cmds", "write a standard rotating-squares pattern with both closed states"),
+    "new": ("fabkiri.cli.pattern_cmds", "write a standard pattern (rotating squares or kagome triangles) with both "
+                                        "closed states"),
     "import": ("fabkiri.cli.pattern_cmds", "import an OBJ design (and its contracted states), a .fold file or a PyKirigami model folder "
                "into pattern.json"),
     "info": ("fabkiri.cli.pattern_cmds", "counts, residuals and closure of a pattern (.json or .obj)"),
