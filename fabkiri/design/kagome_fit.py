@@ -42,7 +42,8 @@ class KagomeDesign:
     max_equality: float  # largest |edge pair| (normalised squared length) or |ring| (rad)
     max_tip_distance_mm: float  # largest distance of a boundary tip from the target
     iterations: int
-    converged: bool
+    converged: bool  # the projection onto the equalities reached |r| <= 1e-13
+    penalty_status: int  # scipy least_squares status of stage 1 (0: stopped at max_nfev)
 
 
 def initial_nodes(standard: Pattern, target: Target) -> np.ndarray:
@@ -92,7 +93,7 @@ def _tip_family(target: Target, tips: np.ndarray, scale: float, nv: int):
     return fn
 
 
-def design(standard: Pattern, target: Target, *, max_nfev: int = 200, refine: int = 20) -> KagomeDesign:
+def design(standard: Pattern, target: Target, *, max_nfev: int = 200) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips lie on ``target`` (mm).
 
     ``standard`` fixes the lattice and the tile size (its mm scale); ``target`` is in mm.
@@ -139,22 +140,12 @@ def design(standard: Pattern, target: Target, *, max_nfev: int = 200, refine: in
                         x_scale=1.0, max_nfev=max_nfev, xtol=1e-12, ftol=1e-12, gtol=1e-12)
     x, converged, it = _project(fams, sol.x.reshape(-1, 2))
 
-    def fit(v):  # the stage-1 residuals without the equalities, and their Jacobian
-        x_ = v.reshape(-1, 2)
-        d, Jt = tips(x_)
-        sa, Ja = areas(x_)
-        return (np.concatenate([d, pull * (v - x0.ravel()), sa]),
-                sparse.vstack([Jt, sparse.diags(pull), Ja]).tocsr())
-
-    if converged:
-        x, steps = _refine_on_family(fams, fit, x, refine)
-        it += steps
     r, _ = K.stacked(fams, x)
     d, _ = tips(x)
     pattern = replace(standard, nodes=x * scale, contracted={}, name=f"kagome {target.name}",
                       design={"target": target.to_dict(), "solver": "kagome penalty + projection"})
     return KagomeDesign(pattern, float(np.abs(r).max()), float(np.abs(d).max() * scale),
-                        int(sol.nfev) + it, converged)
+                        int(sol.nfev) + it, converged, int(sol.status))
 
 
 def _project(fams, x: np.ndarray, tol: float = 1e-13, max_iter: int = 30):
@@ -168,28 +159,3 @@ def _project(fams, x: np.ndarray, tol: float = 1e-13, max_iter: int = 30):
     r, _ = K.stacked(fams, x)
     return x, bool(np.abs(r).max(initial=0.0) <= tol), max_iter
 
-
-def _refine_on_family(fams, fit, x: np.ndarray, steps: int) -> tuple[np.ndarray, int]:
-    """Damped Gauss-Newton on the fit residuals inside the family: each step lies in the null
-    space of the equalities' Jacobian and is projected back; a step is kept only if the fit
-    improves (Levenberg-Marquardt damping otherwise). Returns the point and the steps taken."""
-    lam = 1e-3
-    f, A = fit(x.ravel())
-    cost = float(f @ f)
-    for k in range(steps):
-        _, Jc = K.stacked(fams, x)
-        _, sv, vt = np.linalg.svd(Jc.toarray())
-        rank = int((sv > 1e-9 * sv.max()).sum())
-        Z = vt[rank:].T  # tangent directions of the family
-        AZ = A @ Z
-        while lam < 1e8:
-            y = np.linalg.solve(AZ.T @ AZ + lam * np.eye(Z.shape[1]), -AZ.T @ f)
-            trial, ok, _ = _project(fams, x + (Z @ y).reshape(x.shape))
-            ft, At = fit(trial.ravel())
-            if ok and float(ft @ ft) < cost:
-                x, f, A, cost, lam = trial, ft, At, float(ft @ ft), max(lam / 3, 1e-9)
-                break
-            lam *= 4
-        else:
-            return x, k
-    return x, steps
