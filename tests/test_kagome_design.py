@@ -131,3 +131,19 @@ def test_a_kagome_fitted_to_a_circle_closes_in_both_states_and_reports_its_confo
     assert conf["hausdorff_rel"] <= 0.05
     start = DC.deployed(std.nodes * (120.0 / np.ptp(std.nodes, 0).max()), std.topology, target)
     assert conf["hausdorff_rel"] < 0.5 * start["hausdorff_rel"]
+
+
+@pytest.mark.slow
+def test_an_ellipse_on_a_lattice_of_its_aspect_passes_every_check():
+    from fabkiri.design import conformance as DC
+    from fabkiri.design import targets as TG
+    from fabkiri.design.kagome_fit import design
+    from fabkiri.mechanics.contract import with_contracted_states
+
+    std = standard_kagome(5, 18)
+    target = TG.ellipse(2.0).scaled_to(198.0)
+    d = design(std, target)
+    assert d.converged and d.max_equality <= 1e-10
+    p = with_contracted_states(d.pattern)
+    assert not verify_pattern(p, tol_mm=0.05).failed()  # includes the 2 % target-shape check
+    assert DC.deployed(p.nodes, p.topology, target)["hausdorff_rel"] <= 0.02
