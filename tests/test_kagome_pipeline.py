@@ -100,3 +100,33 @@ def test_a_hole_with_unequal_edges_fails_verify_in_the_state_it_breaks(kept, tmp
     io.write_pattern(q, src)
     code, out, err = run_cli("verify", src, "--exact")
     assert code == 1 and f"state {broken}: loop closure" in err and f"state {kept}:" not in err
+
+
+def test_design_kagome_heart_is_written_but_fails_naming_the_shape(tmp_path, run_cli):
+    out = tmp_path / "h.json"
+    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x10", "--target", "heart",
+                           "--size", "120", "-o", out)
+    # the heart is not matched (docs/kagome.md): the best iterate is written, closed in both
+    # states, and the verdict names the shape
+    assert code == 1 and "shape missed" in err and "FAIL target shape" in err, err
+    p = io.read_pattern(out)
+    assert p.kind == "kagome" and p.design["valid"] is False
+    assert p.design["report"]["max_equality_residual"] <= 1e-10
+    assert {c.name for c in verify_pattern(p).failed()} == {"target shape"}
+
+
+def test_design_kagome_refuses_quad_only_options(tmp_path, run_cli):
+    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x10", "--rigid",
+                           "-o", tmp_path / "x.json")
+    assert code == 2 and "--rigid is not available for kagome designs" in err
+    assert not (tmp_path / "x.json").exists()
+
+
+@pytest.mark.slow
+def test_design_kagome_circle_meets_every_check(tmp_path, run_cli):
+    out = tmp_path / "c.json"
+    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "9x15", "--target", "circle",
+                           "--size", "180", "-o", out)
+    assert code == 0 and "shape met" in err and "verify: pass" in err, err
+    code, _, err = run_cli("verify", out, "--exact")
+    assert code == 0, err

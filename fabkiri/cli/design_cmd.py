@@ -35,6 +35,8 @@ from .pattern_cmds import add_i_know, parse_tiles
 def cmd_design(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
+    if args.lattice == "kagome":
+        return _design_kagome(args, rows, cols)
     request = PatternRequest(
         tiles=(rows, cols), target=args.target, size=args.size, rigid=args.rigid, symmetry=args.symmetry,
         holes=args.holes, contracted_target=tuple(args.contracted_target or ()), init=args.init, solver=args.solver,
@@ -46,6 +48,24 @@ def cmd_design(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(_jsonable(out.report), indent=2, sort_keys=True))
     _summary(args.output, out.report, out.valid)
+    return out.exit_code
+
+
+def _design_kagome(args: argparse.Namespace, rows: int, cols: int) -> int:
+    from ..api.kagome import check_options, design_kagome
+
+    check_options(**{k: getattr(args, k) for k in ("rigid", "symmetry", "holes", "contracted_target",
+                                                   "material", "printer", "min_feature", "min_hole")})
+    out = design_kagome(rows, cols, args.target or "circle", args.size, tol=args.tol,
+                        shape_tol=args.shape_tol, name=args.name)
+    out.write(args.output)
+    r = out.report
+    if args.json:
+        print(json.dumps(_jsonable(r), indent=2, sort_keys=True))
+    print(f"wrote {args.output}: kagome {rows}x{cols} {r['status']}, max equality residual "
+          f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of the "
+          f"size (shape {r['shape']['status']}), verify: "
+          f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}", file=sys.stderr)
     return out.exit_code
 
 
@@ -112,6 +132,9 @@ def _size(text: str) -> float:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("design", help="inverse design: a reconfigurable quad kirigami fitted to a target shape")
     p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 16x16")
+    p.add_argument("--lattice", choices=["quad", "kagome"], default="quad",
+                   help="quad (default) or kagome: the kagome prototype fits the deployed tips to the target "
+                        "(docs/kagome.md)")
     p.add_argument("--target", metavar="NAME|FILE",
                    help="deployed target: a name from templates/targets (circle, ellipse, heart, ...) or a "
                         ".csv/.json points file or an .svg path")
