@@ -112,7 +112,8 @@ def cmd_import(args: argparse.Namespace) -> int:
 def cmd_info(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     info = describe(pattern, tol=args.tol, tol_rad=args.tol_rad)
-    fabric = _fabricability(pattern) if info.closes_both else None
+    # cut and print make quad patterns only (fabricate/gate.py): no fabricability for other kinds
+    fabric = _fabricability(pattern) if info.closes_both and pattern.kind == "quad" else None
     if args.json:
         print(json.dumps({**info.to_dict(), "fabricability": fabric}, indent=2))
     else:

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..errors import CheckFailed
+from ..errors import CheckFailed, InputError
 from ..pattern.model import Pattern
+from ..pattern.tessellation import DEFAULT_KIND
 from ..verify import Report, verify_pattern
 
 GATE_GROUPS = ("tiles", "state 1", "state 2")  # plus each state's edge pairs (fold edges of equal length)
@@ -49,6 +50,9 @@ def closes_gate(pattern: Pattern, tol_mm: float | None, *, scale: float = 1.0, f
     """Verify ``pattern`` at ``tol_mm`` (in the file's mm, the pattern drawn ``scale`` times its size;
     None: the verifier's own tolerance); raise :class:`CheckFailed` unless its tiles and ``states``
     close, or ``force``."""
+    if action in ("cut", "print") and pattern.kind != DEFAULT_KIND:
+        # the hinge geometry and the cut-file read-back are quad-only (docs/kagome.md)
+        raise InputError(f"{action} makes quad patterns only, not {pattern.kind} patterns yet")
     report = verify_pattern(pattern, tol_mm=None if tol_mm is None else tol_mm / scale)
     groups = ("tiles", *(f"state {s}" for s in states))
     gate = [c for c in report.checks if c.applies and not c.ok
