@@ -147,3 +147,40 @@ def test_an_ellipse_on_a_lattice_of_its_aspect_passes_every_check():
     p = with_contracted_states(d.pattern)
     assert not verify_pattern(p, tol_mm=0.05).failed()  # includes the 2 % target-shape check
     assert DC.deployed(p.nodes, p.topology, target)["hausdorff_rel"] <= 0.02
+
+
+@pytest.mark.parametrize("state", [1, 2])
+def test_rigid_family_jacobians_match_finite_differences(state):
+    p = standard_kagome(3, 4, angle_deg=50.0)
+    x = p.nodes / p.tile_size + 0.05 * np.random.default_rng(2).standard_normal(p.nodes.shape)
+    for fam in (K.alternating_sums(p), K.equal_gaps(p, state)):
+        r, J = fam(x)
+        fd = np.zeros(J.shape)
+        for i in range(x.size):
+            d = np.zeros(x.size)
+            d[i] = 1e-6
+            fd[:, i] = (fam(x + d.reshape(x.shape))[0] - fam(x - d.reshape(x.shape))[0]) / 2e-6
+        assert np.abs(J.toarray() - fd).max() <= 1e-7, fam.name
+
+
+@pytest.mark.parametrize("rows, cols", [(4, 4), (7, 5)])
+def test_a_four_dimensional_counter_rotating_rigid_subfamily_exists(rows, cols):
+    """Up tiles +ω, down tiles -ω: every hole's up-tile edges sum to zero and each state's folded
+    gaps are equal. The family has dimension 4 (modulo rigid motions) whatever the size; its
+    generic members close in both states and deploy along a zero-energy path."""
+    from fabkiri.mechanics.deploy import deployment_path
+
+    p = standard_kagome(rows, cols)
+    fams = K.rigid_families(p)
+    r, J = K.stacked(fams, p.nodes / p.tile_size)
+    assert np.abs(r).max() <= 1e-13  # the standard lattice is in it (at every ψ)
+    assert 2 * len(p.nodes) - K.numerical_rank(J) - 3 == 4
+    x = K.nearby_solution(p, (1, 2), seed=7, step=0.02, fams=fams)
+    assert np.abs(x - p.nodes / p.tile_size).max() > 0.05  # a different pattern
+    _, Jg = K.stacked(fams, x)
+    assert K.numerical_rank(Jg) == K.numerical_rank(J)
+    q = replace(p, nodes=x * p.tile_size, lattice=None, name="rigid generic")
+    assert not verify_pattern(q).failed()
+    path = deployment_path(q, 20)
+    assert path.energy.max() <= 1e-20 and path.collisions.collision_free()
+    assert max(path.state_mismatch.values()) <= 1e-9 * p.tile_size

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 
+from ..pattern.geometry import cross2, dot2
 from ..pattern.model import Pattern
 from .constraints import TWO_PI, Family, angle_sums, sqlen_diff, sqlen_value
 
@@ -54,6 +55,61 @@ def families(pattern: Pattern, states: tuple[int, ...] = (1, 2)) -> list[Family]
     for s in states:
         out += [edge_pair_family(pattern, s), ring_family(pattern, s)]
     return out
+
+
+def alternating_sums(pattern: Pattern) -> Family:
+    """Σ of a hole's edge vectors on up tiles = 0 (2 rows per hole): the hole's loop stays closed
+    when up tiles turn by +ω and down tiles by -ω (``Σ_c Rot(σ_c ω) e_c = 0`` for every ω)."""
+    top = pattern.topology
+    K = top.n_holes
+    w = (top.tile_color[top.hole_tiles] == 0).astype(float)  # (K, 6): edge c -> c+1 on an up tile
+    n0, n1 = top.hole_nodes, np.roll(top.hole_nodes, -1, axis=1)
+    # linear: row 2k + d takes +w at (n1, d) and -w at (n0, d)
+    nodes = np.concatenate([n1, n0], 1)  # (K, 12)
+    sign = np.concatenate([w, -w], 1)
+    rows = 2 * np.arange(K)[:, None, None] + np.arange(2)[None, :, None]  # (K, 2, 1)
+    R = np.broadcast_to(rows, (K, 2, 12)).ravel()
+    C = (2 * nodes[:, None, :] + np.arange(2)[None, :, None]).ravel()
+    V = np.broadcast_to(sign[:, None, :], (K, 2, 12)).ravel()
+    J = sparse.csr_matrix((V, (R, C)), shape=(2 * K, 2 * top.n_nodes))
+
+    def fn(x):
+        return ((x[n1] - x[n0]) * w[..., None]).sum(1).ravel(), J
+
+    return Family("alternating_sums", "eq", fn, 1, nv=top.n_nodes)
+
+
+def fold_gap_angles(pattern: Pattern, state: int, x: np.ndarray):
+    """Angle of every hinge's folded gap in ``state`` (rad) and its gradient (nodes h, a, b)."""
+    top = pattern.topology
+    fold = top.fold(state)
+    h = top.hinge_node
+    # gap 0 turns from A's edge onto B's (ends (prev_A, next_B)), gap 1 from B's onto A's
+    first = np.where(fold.fold_gap == 0, fold.fold_ends[:, 0], fold.fold_ends[:, 1])
+    second = np.where(fold.fold_gap == 0, fold.fold_ends[:, 1], fold.fold_ends[:, 0])
+    A = x[first] - x[h]
+    B = x[second] - x[h]
+    th = np.mod(np.arctan2(cross2(A, B), dot2(A, B)), TWO_PI)
+    ga = np.stack([A[:, 1], -A[:, 0]], -1) / (A * A).sum(1, keepdims=True)
+    gb = np.stack([-B[:, 1], B[:, 0]], -1) / (B * B).sum(1, keepdims=True)
+    return th, np.stack([h, first, second], -1), np.stack([-(ga + gb), ga, gb], 1)
+
+
+def equal_gaps(pattern: Pattern, state: int) -> Family:
+    """Every folded gap of ``state`` equal to hinge 0's (H - 1 rows): under the counter-rotation
+    all gaps shrink at the same rate, so they must close together."""
+    def fn(x):
+        th, nodes, g = fold_gap_angles(pattern, state, x)
+        r = th[1:] - th[0]
+        return r, (np.concatenate([nodes[1:], np.repeat(nodes[:1], len(r), 0)], 1),
+                   np.concatenate([g[1:], -np.repeat(g[:1], len(r), 0)], 1))
+
+    return Family(f"equal_gaps_{state}", "eq", fn, 0, nv=pattern.topology.n_nodes)
+
+
+def rigid_families(pattern: Pattern) -> list[Family]:
+    """Reconfigurability plus the counter-rotating rigid mechanism (docs/kagome.md)."""
+    return families(pattern) + [alternating_sums(pattern), equal_gaps(pattern, 1), equal_gaps(pattern, 2)]
 
 
 def stacked(fams: list[Family], x: np.ndarray) -> tuple[np.ndarray, sparse.csr_matrix]:
@@ -91,10 +147,11 @@ def count(pattern: Pattern, states: tuple[int, ...], x: np.ndarray | None = None
 
 
 def nearby_solution(pattern: Pattern, states: tuple[int, ...], seed: int = 0, step: float = 0.05,
-                    tol: float = 1e-13, max_iter: int = 50) -> np.ndarray:
+                    tol: float = 1e-13, max_iter: int = 50, fams: list[Family] | None = None) -> np.ndarray:
     """A generic (non-symmetric) point of the family near the standard pattern: the nodes moved
-    at random by ``step`` tile edges, then projected back by minimum-norm Gauss-Newton steps."""
-    fams = families(pattern, states)
+    at random by ``step`` tile edges, then projected back by minimum-norm Gauss-Newton steps.
+    ``fams`` replaces the families of ``states`` (e.g. :func:`rigid_families`)."""
+    fams = families(pattern, states) if fams is None else fams
     rng = np.random.default_rng(seed)
     x = pattern.nodes / pattern.tile_size
     x = x + step * rng.standard_normal(x.shape)
