@@ -16,6 +16,7 @@ from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
 from ..pattern.io import import_obj, obj_text, read_pattern, write_pattern
 from ..pattern.lattice import standard_pattern
 from ..pattern.model import Pattern
+from ..pattern.periodic import standard_tube
 
 
 def parse_tiles(text: str) -> tuple[int, int]:
@@ -78,15 +79,16 @@ def _nonneg(text: str) -> float:
 
 def cmd_new(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
-    limits.check_tiles(rows, cols, "new", args.i_know)
+    limits.check_tiles(rows, cols + bool(args.tube), "new", args.i_know)
     limits.check_length(args.tile_size, "--tile-size")
-    pattern = standard_pattern(rows, cols, tile_size=args.tile_size, angle_deg=args.angle, name=args.name or "")
+    make = standard_tube if args.tube else standard_pattern  # a tube's sheet has one seam copy column more
+    pattern = make(rows, cols, tile_size=args.tile_size, angle_deg=args.angle, name=args.name or "")
     pattern = with_contracted_states(pattern)
     info = describe(pattern)
     if not info.closes_both:  # cannot happen for the standard lattice; never write a wrong file
         raise CheckFailed("; ".join(info.problems()))
     write_pattern(pattern, args.output)
-    print(f"wrote {args.output}: standard {rows}x{cols}, tile {args.tile_size:g} mm, ψ = {args.angle:g}°, "
+    print(f"wrote {args.output}: standard {'tube ' if args.tube else ''}{rows}x{cols}, tile {args.tile_size:g} mm, ψ = {args.angle:g}°, "
           f"{info.width_mm:.1f} x {info.height_mm:.1f} mm deployed", file=sys.stderr)
     return 0
 
@@ -193,6 +195,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--angle", type=float, default=45.0, metavar="DEG",
                    help="deployment angle ψ in degrees, 0..90 (default 45: square holes)")
     p.add_argument("--name", help="pattern name stored in the file")
+    p.add_argument("--tube", action="store_true",
+                   help="a periodic tube of COLS columns around (even): the sheet's last column is the seam "
+                        "copy of the first (docs/tubes.md)")
     add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_new)
