@@ -145,6 +145,10 @@ def _with_state(pattern: Pattern, s: int) -> Pattern:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    if args.format == "tube3d":
+        from .tube_cmd import cmd_export_tube3d
+
+        return cmd_export_tube3d(args)
     pattern = load_any(args.file)
     state = args.state
     fmt = args.format
@@ -224,9 +228,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file")
     p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed",
                    help="obj: the state written; pykirigami: the closed start state (default 1)")
-    p.add_argument("--format", choices=["obj", "fold", "pykirigami"], default="obj",
+    p.add_argument("--format", choices=["obj", "fold", "pykirigami", "tube3d"], default="obj",
                    help="obj (default); fold: FOLD 1.2 JSON, frame 0 deployed, frames 1, 2 the closed states; "
-                        "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator")
+                        "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator; "
+                        "tube3d: a folder with every state of a tube rolled into 3D (OBJ, thin-plate STL, PNG, GIF)")
+    p.add_argument("--copies", type=int, default=1, metavar="K", help="tube3d: K copies around the circumference")
+    p.add_argument("--thickness", type=_positive, default=1.0, metavar="MM", help="tube3d: plate thickness")
+    p.add_argument("--no-gif", action="store_true", help="tube3d: skip the 3D deployment GIF")
     p.add_argument("--unit", type=_positive, metavar="MM",
                    help="pykirigami: mm per file unit (default: the mean tile edge, so tiles are about 1 unit)")
     p.add_argument("--force", action="store_true",

@@ -18,14 +18,14 @@ from ..pattern.periodic import seam_map, seam_of, tube_tiles
 from .deployment import _gif_bytes, _pyplot
 
 
-def _draw(ax, tiles: np.ndarray, f: TubeFrame, lim: float, title: str) -> None:
+def _draw(ax, tiles: np.ndarray, f: TubeFrame, lim: float, title: str, even: np.ndarray) -> None:
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     mesh = surface_mesh(tiles, f, n=4)
     tri = mesh.vertices[mesh.faces]
     shade = 0.55 + 0.4 * np.abs(mesh.face_normals @ np.array([0.3, -0.6, 0.75]))
-    colours = np.repeat(np.arange(len(tiles)) % 2, len(mesh.faces) // len(tiles))
-    base = np.where(colours[:, None] == 0, [[0.25, 0.45, 0.75]], [[0.85, 0.55, 0.25]])
+    colours = np.repeat(even, len(mesh.faces) // len(tiles))
+    base = np.where(colours[:, None], [[0.25, 0.45, 0.75]], [[0.85, 0.55, 0.25]])
     ax.add_collection3d(Poly3DCollection(tri, facecolors=base * shade[:, None], edgecolors="none"))
     centre = mesh.vertices.mean(0)
     for i, c in enumerate(centre):
@@ -37,7 +37,12 @@ def _draw(ax, tiles: np.ndarray, f: TubeFrame, lim: float, title: str) -> None:
 
 
 def _half_extent(meshes: list) -> float:
-    return max(0.5 * float(np.ptp(m.vertices, axis=0).max()) for m in meshes) * 1.05
+    return max(0.5 * float(np.ptp(m.vertices, axis=0).max()) for m in meshes) * 0.8
+
+
+def _even(pattern: Pattern) -> np.ndarray:
+    """Tile colour (fold parity) of the tube's tiles, in tube order."""
+    return pattern.topology.even_tiles()[tube_tiles(pattern, seam_of(pattern))]
 
 
 def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
@@ -46,12 +51,13 @@ def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
     states = ["deployed", *sorted(pattern.contracted)]
     rolled = [state_frame(pattern, s, copies) for s in states]
     lim = _half_extent([surface_mesh(t, f, n=2) for t, f in rolled])
-    fig = plt.figure(figsize=(4.0 * len(states), 4.4), dpi=dpi)
+    fig = plt.figure(figsize=(4.0 * len(states), 4.6), dpi=dpi)
     for i, (s, (tiles, f)) in enumerate(zip(states, rolled, strict=True)):
         ax = fig.add_subplot(1, len(states), i + 1, projection="3d")
         r = f.period / (2 * np.pi) if f.apex is None else None
         label = "deployed" if s == "deployed" else f"closed state {s}"
-        _draw(ax, tiles, f, lim, f"{label}" + (f", radius {r:.3g} mm" if r else ", cone"))
+        _draw(ax, tiles, f, lim, f"{label}" + (f", radius {r:.3g} mm" if r else ", cone"),
+              np.tile(_even(pattern), copies))
     fig.suptitle(pattern.name or "tube", fontsize=10)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
@@ -83,7 +89,8 @@ def deployment_gif_3d(pattern: Pattern, path: DeploymentPath, max_frames: int = 
         fig = plt.figure(figsize=(4.2, 4.4), dpi=dpi)
         ax = fig.add_subplot(projection="3d")
         note = "" if dev <= 1e-6 * path.tile_size else f", seam open {dev:.2g} mm"
-        _draw(ax, tiles, f, lim, f"t = {path.t[k]:+.2f}, radius {f.period / (2 * np.pi):.3g} mm{note}")
+        _draw(ax, tiles, f, lim, f"t = {path.t[k]:+.2f}, radius {f.period / (2 * np.pi):.3g} mm{note}",
+              _even(pattern))
         buf = io.BytesIO()
         fig.savefig(buf, format="png", metadata={"Software": None})
         plt.close(fig)
