@@ -18,25 +18,11 @@ import numpy as np
 from ..errors import CheckFailed
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
-from ..pattern.periodic import Seam, seam_map, seam_of, tube_tiles
+from ..pattern.periodic import Seam, flat_sheet, seam_map, seam_of, tube_tiles
 from ..verify.pattern_checks import tolerances
 from ..verify.seam import seam_checks
 
 CORNER = ("BL", "BR", "TR", "TL")
-
-
-def flat_sheet(pattern: Pattern, seam: Seam) -> Pattern:
-    """The tube's tiles once each, as a planar pattern with both closed states (tiles renumbered in
-    tube order: row by row, the copy column left out)."""
-    keep = tube_tiles(pattern, seam)
-    used, tiles = np.unique(pattern.tiles[keep], return_inverse=True)
-    closed = {s: pattern.contracted.get(s, contract(pattern, s).corners)[keep] for s in (1, 2)}
-    lattice = {k: v for k, v in (pattern.lattice or {}).items() if k != "seam"}
-    if "cols" in lattice:
-        lattice["cols"] = seam.columns
-    return Pattern(nodes=pattern.nodes[used], tiles=tiles.reshape(-1, pattern.tiles.shape[1]), contracted=closed,
-                   parity=pattern.parity, name=f"{pattern.name or 'tube'} (flat sheet)", lattice=lattice,
-                   kind=pattern.kind)
 
 
 def seam_hinges(pattern: Pattern, seam: Seam) -> list[dict]:

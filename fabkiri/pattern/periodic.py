@@ -93,6 +93,21 @@ def tube_tiles(pattern: Pattern, seam: Seam) -> np.ndarray:
     return np.flatnonzero(keep)
 
 
+def flat_sheet(pattern: Pattern, seam: Seam) -> Pattern:
+    """The tube's tiles once each, as a planar pattern (tiles renumbered in tube order: row by row, the
+    copy column left out) with the stored closed states: the sheet that is cut, and that cut files are
+    verified against."""
+    keep = tube_tiles(pattern, seam)
+    used, tiles = np.unique(pattern.tiles[keep], return_inverse=True)
+    closed = {s: Y[keep] for s, Y in pattern.contracted.items()}
+    lattice = {k: v for k, v in (pattern.lattice or {}).items() if k != "seam"}
+    if "cols" in lattice:
+        lattice["cols"] = seam.columns
+    return Pattern(nodes=pattern.nodes[used], tiles=tiles.reshape(-1, pattern.tiles.shape[1]), contracted=closed,
+                   parity=pattern.parity, name=f"{pattern.name or 'tube'} (flat sheet)", lattice=lattice,
+                   kind=pattern.kind)
+
+
 @dataclass(frozen=True)
 class SeamMap:
     """The seam map of one state: the best rigid motion first column -> copy, and how far from it.
