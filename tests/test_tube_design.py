@@ -145,3 +145,31 @@ def test_designed_tubes_converge_verify_and_roll(spec, state, axial, radial, tmp
     rad = out.tube["states"]["1"]["radius_min_mm"]
     obj = trimesh.load(trimesh.util.wrap_as_stream(files["t_closed1.obj"]), file_type="obj", process=False)
     assert np.abs(np.hypot(obj.vertices[:, 0], obj.vertices[:, 1]) - rad).max() < 1e-9 * rad
+
+
+def test_k_copies_make_a_tube_k_periods_round():
+    from fabkiri.fabricate.tube3d import surface_mesh
+    from fabkiri.mechanics.contract import with_contracted_states
+    from fabkiri.pattern.periodic import standard_tube
+
+    tube = with_contracted_states(standard_tube(6, 8))
+    one, f1 = state_frame(tube, 1)
+    four, f4 = state_frame(tube, 1, copies=4)
+    assert len(four) == 4 * len(one) and f4.period == pytest.approx(4 * 80.0, rel=1e-12)
+    v = surface_mesh(four, f4).vertices
+    assert np.abs(np.hypot(v[:, 0], v[:, 1]) - 320.0 / (2 * np.pi)).max() < 1e-9
+    with pytest.raises(InputError, match="whole number"):
+        state_frame(tube, 1, copies=0)
+
+
+@pytest.mark.slow
+def test_standard_tube_3d_files_with_deployment_gif():
+    from fabkiri.mechanics.contract import with_contracted_states
+    from fabkiri.pattern.periodic import standard_tube
+    from PIL import Image
+
+    files = tube_3d_files(with_contracted_states(standard_tube(6, 8)), stem="s")
+    gif = Image.open(trimesh.util.wrap_as_stream(files["s_deploy.gif"]))
+    assert gif.n_frames == 24
+    png = Image.open(trimesh.util.wrap_as_stream(files["s_states.png"]))
+    assert png.size[0] > 2 * png.size[1]  # three states side by side
