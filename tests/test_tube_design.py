@@ -7,6 +7,7 @@ import pytest
 import scipy.linalg
 import trimesh
 from fabkiri.api.tube import design_tube_pattern, tube_3d_files
+from fabkiri.design import constraints as C
 from fabkiri.design import periodic as P
 from fabkiri.design import tube_solve as TS
 from fabkiri.design.constraints import Stencils
@@ -173,3 +174,17 @@ def test_standard_tube_3d_files_with_deployment_gif():
     assert gif.n_frames == 24
     png = Image.open(trimesh.util.wrap_as_stream(files["s_states.png"]))
     assert png.size[0] > 2 * png.size[1]  # three states side by side
+
+
+def test_tubes_reached_from_perturbed_starts_are_rigid_deployable():
+    """Finding behind the cone lock (docs/tubes.md): projecting perturbed sheets onto reconfigurability
+    plus translation seams in both closed states lands on rigid-deployable tubes (hinge sums 0), whose
+    same-colour tiles all turn by one angle, so the deployed seam turns exactly as the closed ones."""
+    prob = TS._TubeProblem(TS.TubeRequest(4, 6, P.parse_tube_target(f"cylinder:{60 * np.sqrt(2)},{40 * np.sqrt(2)}")))
+    hinge_sums = C.hinge_sums(prob.st, prob.st.n_nodes)
+    for seed in (1, 2):
+        start = prob.X0 + 0.02 * np.random.default_rng(seed).normal(size=prob.X0.shape)
+        assert np.abs(hinge_sums(start)[0]).max() > 1e-2  # the start is far from rigid
+        x, eq_max, _ = TS._project(prob, start, 1e-12, 60)
+        assert eq_max <= 1e-12
+        assert np.abs(hinge_sums(x)[0]).max() < 1e-10
