@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from fabkiri.fabricate.tube_cut import seam_hinges
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.io import write_pattern
+from fabkiri.pattern.io import read_pattern, write_pattern
 from fabkiri.pattern.periodic import flat_sheet, lattice_seam, seam_of, standard_tube, with_seam
 
 from tests.designs import reconfigurable_design
@@ -37,7 +37,18 @@ def test_cut_a_tube_writes_the_flat_sheet_and_the_seam_note(tmp_path, run_cli):
     code, _, err = run_cli("cut", src, "-o", out)
     assert code == 0, err
     note = (out / "seam.txt").read_text()
-    assert note.count("<->") == 6 and "circumference" in note
+    assert note.count("<->") == 6 and "circumference" in note and "S6:" in note
+    # both ends of every seam hinge engraved: S1..S6 twice each beside the tile labels
+    from fabkiri.verify.readers import read_cut_file
+
+    flat = tmp_path / "flat.json"  # the same sheet as a plain pattern: no seam, no marks
+    write_pattern(flat_sheet(read_pattern(src), seam_of(read_pattern(src))), flat)
+    code, _, _ = run_cli("cut", flat, "-o", tmp_path / "plain", "--formats", "dxf")
+    assert code == 0
+    marked = read_cut_file(out / "tube.dxf", "ENGRAVE").polylines
+    plain = read_cut_file(tmp_path / "plain" / "flat.dxf", "ENGRAVE").polylines
+    assert len(marked) - len(plain) >= 12 * 2  # a tick and at least a letter at each of the 12 corners
+    assert read_cut_file(out / "tube.dxf").polylines  # the CUT layer is still there
     man = json.loads((out / "manifest.json").read_text())
     assert man["seam"]["columns"] == 8 and len(man["seam"]["hinges"]) == 6
     code, text, err = run_cli("verify", src, "--layout", out / "tube.dxf")
