@@ -96,6 +96,8 @@ class PatternInfo:
 
     def to_dict(self) -> dict:
         d = asdict(self)
+        if d["tube"] is None:  # a flat pattern's report stays as it was
+            del d["tube"]
         d["closes_both"] = self.closes_both
         d["problems"] = self.problems()
         return d
