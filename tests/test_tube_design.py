@@ -133,6 +133,10 @@ def test_designed_tubes_converge_verify_and_roll(spec, state, axial, radial, tmp
     files = tube_3d_files(out.pattern, stem="t", gif=False)
     assert set(files) == {f"t_{s}.{e}" for s in ("deployed", "closed1", "closed2") for e in ("obj", "stl")} | {
         "t_states.png"}
+    from fabkiri.fabricate.tube3d import plate_overlap
+
+    for s in (1, 2):  # both closed states non-overlapping in 3D, plate against plate
+        assert plate_overlap(plate_meshes(*state_frame(out.pattern, s), 1.0))[0] < 1e-9
     tiles, frame = state_frame(out.pattern, 1)
     plates = plate_meshes(tiles, frame, 1.0)
     assert len(plates) == 48 and all(p.is_watertight and p.volume > 0 for p in plates)
@@ -188,3 +192,18 @@ def test_tubes_reached_from_perturbed_starts_are_rigid_deployable():
         x, eq_max, _ = TS._project(prob, start, 1e-12, 60)
         assert eq_max <= 1e-12
         assert np.abs(hinge_sums(x)[0]).max() < 1e-10
+
+
+def test_plate_overlap_finds_tiles_rolled_onto_too_small_a_tube():
+    from dataclasses import replace
+
+    from fabkiri.fabricate.tube3d import plate_overlap
+    from fabkiri.mechanics.contract import with_contracted_states
+    from fabkiri.pattern.periodic import standard_tube
+
+    tube = with_contracted_states(standard_tube(4, 6))
+    tiles, frame = state_frame(tube, 1)
+    worst, _ = plate_overlap(plate_meshes(tiles, frame, 0.5))
+    assert worst < 1e-9  # touching neighbours only
+    worst, pair = plate_overlap(plate_meshes(tiles, replace(frame, period=0.8 * frame.period), 0.5))
+    assert worst > 0.05 and pair is not None  # the sheet wraps past its seam

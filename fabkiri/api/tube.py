@@ -25,6 +25,7 @@ from ..verify.pattern_checks import verify_pattern
 from ..verify.report import Report
 
 CLOSE_TOL = 1e-9  # loop closure a closed state must meet to be stored, in tile sizes (as ``info``)
+PLATE_OVERLAP = 1e-9  # largest intersection of two rolled plates, share of a plate (touching: ~1e-15)
 
 
 @dataclass
@@ -100,7 +101,14 @@ def tube_3d_files(pattern: Pattern, *, stem: str = "tube", copies: int = 1, thic
     The pattern must be a tube that closes in both states with pure-translation seams; otherwise
     :class:`CheckFailed` names what fails and nothing is produced.
     """
-    from ..fabricate.tube3d import obj_bytes, plate_meshes, state_frame, stl_bytes, surface_mesh
+    from ..fabricate.tube3d import (
+        obj_bytes,
+        plate_meshes,
+        plate_overlap,
+        state_frame,
+        stl_bytes,
+        surface_mesh,
+    )
     from ..render.tube import deployment_gif_3d, states_png
 
     if seam_of(pattern) is None:
@@ -115,8 +123,13 @@ def tube_3d_files(pattern: Pattern, *, stem: str = "tube", copies: int = 1, thic
     for s in ("deployed", 1, 2):
         tiles, f = state_frame(pattern, s, copies)
         label = "deployed" if s == "deployed" else f"closed{s}"
+        plates = plate_meshes(tiles, f, thickness)
+        worst, pair = plate_overlap(plates)
+        if worst > PLATE_OVERLAP:  # e.g. plates thicker than the tube is wide: nothing is written
+            raise CheckFailed(f"{label}: plates {pair[0]} and {pair[1]} overlap in 3D by {worst:.3g} of a plate's "
+                              f"volume (tolerance {PLATE_OVERLAP:g}); try a thinner --thickness")
         files[f"{stem}_{label}.obj"] = obj_bytes(surface_mesh(tiles, f))
-        files[f"{stem}_{label}.stl"] = stl_bytes(plate_meshes(tiles, f, thickness))
+        files[f"{stem}_{label}.stl"] = stl_bytes(plates)
     files[f"{stem}_states.png"] = states_png(pattern, copies)
     if gif and copies == 1:
         from ..mechanics.deploy import deployment_path
