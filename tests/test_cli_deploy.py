@@ -60,6 +60,7 @@ def test_deploy_standard_writes_everything(run_cli, tmp_path):
     assert geometry.aligned_distance(mid.nodes, read_pattern(src).nodes) <= 1e-9 * 5.0
 
 
+@pytest.mark.slow
 def test_deploy_is_deterministic(run_cli, tmp_path):
     src = tmp_path / "d.json"
     write_pattern(reconfigurable_design(4, 4, seed=2, amplitude=0.2), src)

@@ -60,6 +60,7 @@ radii = st.lists(st.floats(10.0, 60.0), min_size=3, max_size=24)
 
 @settings(max_examples=30, deadline=None)
 @given(radii, radii, st.floats(-20, 20), st.floats(-20, 20))
+@pytest.mark.slow
 def test_measure_invariants(ra, rb, dx, dy):
     A = star_shaped(ra) + [dx, dy]
     B = star_shaped(rb)

@@ -194,6 +194,7 @@ def test_solver_designs_8x8(pattern, kind, material):
 
 @pytest.mark.parametrize("kind,material,extra", [("tape", "plywood-3", {}), ("separate", "plywood-3", {}),
                                                  ("ligament", "card-0.3", {"gap_mm": 1.2})])
+@pytest.mark.slow
 def test_solver_design_32x32(kind, material, extra):
     p = read_pattern(PATTERNS / "circle-32x32-rigid.json")
     mat = load_material(material).override(**extra)
@@ -564,6 +565,7 @@ def test_cli_material_file_with_kerf_not_below_web(run_cli, tmp_path):
 @given(rows=st.integers(1, 4), cols=st.integers(1, 4), angle=st.floats(15, 75), size=st.floats(15, 40),
        state=st.sampled_from([1, 2]), case=st.sampled_from([("tape", "acrylic-3"), ("ligament", "pp-0.5"),
                                                            ("separate", "plywood-3"), ("ligament", "felt-2")]))
+@pytest.mark.slow
 def test_any_standard_pattern_cuts_and_verifies(rows, cols, angle, size, state, case):
     kind, material = case
     p = std(rows, cols, angle, size)

@@ -244,6 +244,7 @@ def test_cli_design_circle_rigid(tmp_path, run_cli):
     assert code == 0, err
 
 
+@pytest.mark.slow
 def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
     out = tmp_path / "h.json"
     # 6x6 tiles follow a heart to a few % only (bench/shapes.py); this test is about the symmetry
@@ -310,6 +311,7 @@ def test_cli_self_intersecting_target(tmp_path, run_cli):
     assert code == 2 and "intersects itself" in err and not out.exists()
 
 
+@pytest.mark.slow
 def test_cli_unreachable_tolerance_saves_unconverged(tmp_path, run_cli):
     out = tmp_path / "u.json"
     code, _, err = run_cli("design", "--tiles", "4x4", "--target", "circle", "--tol", "1e-30", "-o", out)

@@ -183,6 +183,7 @@ LIMITS = F.FabricationLimits(min_width_mm=0.3, shrink_mm=0.05, min_edge_mm=0.02,
 
 @settings(max_examples=10, deadline=None)
 @given(st.integers(0, 2 ** 31 - 1))
+@pytest.mark.slow
 def test_fabrication_jacobians_match_finite_differences(seed):
     p = standard_pattern(4, 4, tile_size=1.0)
     stc = Stencils.from_pattern(p)
@@ -271,6 +272,7 @@ def test_strip_faces_from_the_fold_rules_are_prints_faces(name):
 
 @pytest.mark.parametrize("printer", ["prusa-mk4", "bambu-x1-petg"])
 @pytest.mark.parametrize("name", STRIP_CASES)
+@pytest.mark.slow
 def test_print_bound_is_accepted_and_close_to_the_minimum(name, printer):
     """The closed form: print's plan checks accept it, and it is at most 5 % above their bisected minimum
     (pinned: a lower bound, never above it)."""

@@ -18,6 +18,7 @@ import speed  # noqa: E402
 
 
 @pytest.mark.parametrize("n", [5, 7])
+@pytest.mark.slow
 def test_square_to_circle_exact_square_and_least_squares_circle(run_cli, tmp_path, n):
     out = tmp_path / "p.json"
     args = ("design", "--tiles", f"{n}x{n}", "--rigid", "--contracted-target", "1:square",

@@ -504,6 +504,7 @@ def test_pinned_hinges(printer):
         assert len(ring_b) >= 2  # outline plus the pin hole
 
 
+@pytest.mark.slow
 def test_pinned_refusal_names_the_scales_that_print():
     """The scale range offered for a refused pinned print is measured: one step
     below its start the plan is refused, at its start it plans, at its end it fits
@@ -549,6 +550,7 @@ def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
 
 # -------------------------------------------------------------------- STEP
 
+@pytest.mark.slow
 def test_step_has_the_same_volume(tmp_path, printer2):
     pytest.importorskip("build123d")
     from fabkiri.fabricate import cad
@@ -665,6 +667,7 @@ def test_cli_print_writes_everything(tmp_path, run_cli):
     assert code == 2 and "four stacked ears" in err and err.count("\n") == 1 and not (tmp_path / "bad").exists()
 
 
+@pytest.mark.slow
 def test_cli_does_not_load_build123d_without_step(tmp_path):
     src = tmp_path / "sq.json"
     write_pattern(standard_pattern(2, 2), src)
@@ -751,6 +754,7 @@ def test_solver_design_pinned_refused_where_corners_are_too_narrow(state):
     assert ((d > g.hollow) & (d < g.hollow + pr.nozzle_mm)).any()
 
 
+@pytest.mark.slow
 def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     """At 2.3x the same design's narrow corners keep a nozzle of material beside
     every clearance: it builds, and the printed tiles pass every check (this

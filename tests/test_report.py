@@ -62,6 +62,7 @@ def _dom(page, tmp_path):
 
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')")
+@pytest.mark.slow
 def test_chromium_loads_it_clean_and_draws_it(report, tmp_path):
     dom = _dom(report, tmp_path)
     assert 'data-loaded="1"' in dom  # the page's script ran to the end

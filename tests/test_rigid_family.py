@@ -212,6 +212,7 @@ def test_doubled_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed
     assert (cross(grid) > 0).all() and (cross(fine) > 0).all()
 
 
+@pytest.mark.slow
 def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     """--init coarse for a rigid design: the fine start is a member of the fine family, deployed to the coarse
     design's ψ, and nearer the target than the rescaled start."""

@@ -52,6 +52,7 @@ def local_run(tmp_path_factory):
     return spec, res, folder
 
 
+@pytest.mark.slow
 def test_twelve_jobs_on_a_two_worker_local_cluster(local_run):
     spec, res, folder = local_run
     out = folder / "out"

@@ -61,6 +61,7 @@ def test_seam_overlap_matches_exact_overlay():
     assert np.median(np.abs(over[0][big] - exact[big]) / exact[big]) < 0.05
 
 
+@pytest.mark.slow
 def test_cli_writes_json_and_plot(run_cli, tmp_path):
     code, _, err = run_cli("tolerance", CIRCLE, "--kerf-sd", "0.02", "--n", "200", "-o", tmp_path / "t")
     assert code == 0, err

@@ -78,6 +78,7 @@ def test_closed_state_outline_targets_are_checked():
     assert not rect["state 1: outline aspect ratio"].ok and rect["state 1: outline aspect ratio"].value > 10
 
 
+@pytest.mark.slow
 def test_a_degenerate_contracted_rectangle_is_reported(tmp_path, run_cli):
     path = tmp_path / "rr.json"
     code, _, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "1:rect",

@@ -76,6 +76,7 @@ def mutations(pattern, rng):
     return out
 
 
+@pytest.mark.slow
 def test_at_least_200_mutations_all_rejected(pattern, tmp_path):
     rng = np.random.default_rng(2024)
     cases = mutations(pattern, rng)
@@ -120,6 +121,7 @@ def valid_variants(pattern, rng):
     return out
 
 
+@pytest.mark.slow
 def test_at_least_50_valid_variants_all_accepted(pattern, tmp_path):
     rng = np.random.default_rng(99)
     cases = valid_variants(pattern, rng)

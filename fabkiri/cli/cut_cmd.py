@@ -14,6 +14,7 @@ from ..fabricate.drawing import COLORS
 from ..fabricate.layout import LAYOUTS
 from ..fabricate.materials import HINGE_KINDS, available, load_material, parse_setting
 from ..fabricate.svg import STROKE_MM
+from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
 from .pattern_cmds import _nonneg, _positive, load_any
 
 
@@ -78,7 +79,12 @@ def cmd_cut(args: argparse.Namespace) -> int:
         limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
     if isinstance(args.width, float):
         limits.check_length(args.width, "--width")
+    pattern, seam_files, seam_entry = tube_cut_inputs(pattern, args.state)  # a tube: its flat sheet
     result = cut_pattern(pattern, options)
+    if seam_files:  # both ends of every seam hinge engraved, the note and the manifest entry added
+        mark_seam(result, seam_entry["hinges"], pattern, args.state, options)
+        result.files.update(seam_files)
+        result.manifest["seam"] = seam_entry
     from ..fabricate.readback import write_verified
 
     rb, written = write_verified(pattern, result, out, use_verifier=not args.no_verify, force=args.force)

@@ -33,6 +33,10 @@ from .pattern_cmds import add_i_know, parse_tiles
 
 
 def cmd_design(args: argparse.Namespace) -> int:
+    if args.tube:  # a periodic sheet: its own solver and checks (docs/tubes.md)
+        from .tube_cmd import cmd_design_tube
+
+        return cmd_design_tube(args)
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
     if args.lattice == "kagome":
@@ -141,6 +145,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size", type=_size, metavar="MM",
                    help="target size: its larger dimension in mm (named targets default to 100)")
     p.add_argument("--rigid", action="store_true", help="rigid-deployable: hinge angle sums = π")
+    p.add_argument("--tube", metavar="cylinder:CIRC,LENGTH|cone:R_BOTTOM,R_TOP,LENGTH",
+                   help="a reconfigurable tube of COLS columns around: the unrolled deployed target in mm; both "
+                        "closed states roll into cylinders (docs/tubes.md)")
     p.add_argument("--symmetry", choices=["x", "y"],
                    help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x)")
     p.add_argument("--holes", choices=["rhombus", "parallelogram"], default=None,

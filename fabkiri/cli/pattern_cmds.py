@@ -15,6 +15,7 @@ from ..mechanics.contract import adopt_state_labels, contract, with_contracted_s
 from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
 from ..pattern.io import import_obj, obj_text, read_pattern, write_pattern
 from ..pattern.model import Pattern
+from ..pattern.periodic import standard_tube
 from ..pattern.tessellation import kinds, tessellation
 
 
@@ -78,18 +79,20 @@ def _nonneg(text: str) -> float:
 
 def cmd_new(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
-    limits.check_tiles(rows, cols, "new", args.i_know)
+    limits.check_tiles(rows, cols + bool(args.tube), "new", args.i_know)
     limits.check_length(args.tile_size, "--tile-size")
+    if args.tube and args.lattice != "quad":
+        raise InputError(f"--tube makes quad tubes only, not {args.lattice} ones")
     angle = {} if args.angle is None else {"angle_deg": args.angle}  # None: the kind's open state
-    pattern = tessellation(args.lattice).standard(
-        rows, cols, tile_size=args.tile_size, name=args.name or "", **angle
-    )
+    # a tube's sheet has one seam copy column more
+    make = standard_tube if args.tube else tessellation(args.lattice).standard
+    pattern = make(rows, cols, tile_size=args.tile_size, name=args.name or "", **angle)
     pattern = with_contracted_states(pattern)
     info = describe(pattern)
     if not info.closes_both:  # cannot happen for the standard lattice; never write a wrong file
         raise CheckFailed("; ".join(info.problems()))
     write_pattern(pattern, args.output)
-    what = "" if args.lattice == "quad" else f"{args.lattice} "
+    what = "tube " if args.tube else ("" if args.lattice == "quad" else f"{args.lattice} ")
     print(f"wrote {args.output}: standard {what}{rows}x{cols}, tile {args.tile_size:g} mm, "
           f"ψ = {pattern.lattice['angle_deg']:g}°, "
           f"{info.width_mm:.1f} x {info.height_mm:.1f} mm deployed", file=sys.stderr)
@@ -149,6 +152,10 @@ def _with_state(pattern: Pattern, s: int) -> Pattern:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    if args.format == "tube3d":
+        from .tube_cmd import cmd_export_tube3d
+
+        return cmd_export_tube3d(args)
     pattern = load_any(args.file)
     state = args.state
     fmt = args.format
@@ -204,6 +211,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="deployment angle ψ in degrees: quad 0..90 (default 45: square holes), "
                         "kagome 0..120 (default 60: hexagonal holes)")
     p.add_argument("--name", help="pattern name stored in the file")
+    p.add_argument("--tube", action="store_true",
+                   help="a periodic tube of COLS columns around (even): the sheet's last column is the seam "
+                        "copy of the first (docs/tubes.md)")
     add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_new)
@@ -230,9 +240,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file")
     p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed",
                    help="obj: the state written; pykirigami: the closed start state (default 1)")
-    p.add_argument("--format", choices=["obj", "fold", "pykirigami"], default="obj",
+    p.add_argument("--format", choices=["obj", "fold", "pykirigami", "tube3d"], default="obj",
                    help="obj (default); fold: FOLD 1.2 JSON, frame 0 deployed, frames 1, 2 the closed states; "
-                        "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator")
+                        "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator; "
+                        "tube3d: a folder with every state of a tube rolled into 3D (OBJ, thin-plate STL, PNG, GIF)")
+    p.add_argument("--copies", type=int, default=1, metavar="K", help="tube3d: K copies around the circumference")
+    p.add_argument("--thickness", type=_positive, default=1.0, metavar="MM", help="tube3d: plate thickness")
+    p.add_argument("--no-gif", action="store_true", help="tube3d: skip the 3D deployment GIF")
     p.add_argument("--unit", type=_positive, metavar="MM",
                    help="pykirigami: mm per file unit (default: the mean tile edge, so tiles are about 1 unit)")
     p.add_argument("--force", action="store_true",

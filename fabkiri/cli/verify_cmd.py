@@ -49,6 +49,7 @@ def _nonneg(text: str) -> float:
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
+    from ..pattern.periodic import flat_sheet, seam_of
     from ..verify import verify_layout, verify_pattern
 
     pattern = load_for_verify(args.file)
@@ -61,7 +62,9 @@ def cmd_verify(args: argparse.Namespace) -> int:
     if args.layout:
         if not Path(args.layout).exists():
             raise InputError(f"{args.layout}: no such layout file")
-        layout = verify_layout(pattern, args.layout, tol_mm=tol_mm, tol_rad=args.tol_rad)
+        seam = seam_of(pattern)  # a tube is cut as its flat sheet (docs/tubes.md)
+        cut = pattern if seam is None else flat_sheet(pattern, seam)
+        layout = verify_layout(cut, args.layout, tol_mm=tol_mm, tol_rad=args.tol_rad)
         report.extend(layout)
         report.kind = "pattern and layout"
         report.meta["layout"] = str(args.layout)

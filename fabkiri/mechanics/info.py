@@ -17,6 +17,7 @@ from ..pattern.residuals import hinge_sums, state_residuals
 from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .contract import contract
+from .tube import tube_report
 
 DEFAULT_TOL = 1e-9  # relative to the mean tile edge (spec §10, analytic tier)
 DEFAULT_TOL_RAD = 1e-9
@@ -58,10 +59,21 @@ class PatternInfo:
     conformance: dict = field(
         default_factory=dict
     )  # "deployed" / "state_S" -> design.conformance measure
+    tube: dict | None = None  # a periodic pattern's tube per state (mechanics.tube.tube_report)
+
+    def seam_problems(self) -> list[str]:
+        """A tube's closed states whose seam is not a pure translation (within the tolerance)."""
+        if not self.tube:
+            return []
+        return [f"state {k}: the seam does not close by a pure translation (off by "
+                f"{s['seam_translation_dev_rel']:.3g} tile sizes, rotation {s['seam_rotation_rad']:.3g} rad, "
+                f"tolerance {self.tolerance_rel:g})"
+                for k, s in self.tube["states"].items()
+                if k != "deployed" and not s["seam_translation_dev_rel"] <= self.tolerance_rel]
 
     @property
     def closes_both(self) -> bool:
-        return all(s.closes for s in self.states)
+        return all(s.closes for s in self.states) and not self.seam_problems()
 
     @property
     def supplied_ok(self) -> bool:
@@ -81,10 +93,12 @@ class PatternInfo:
                     f"stored state {s.state} differs from the computed one by {s.supplied_match_rel:.3g} "
                     f"tile sizes after rigid alignment (tolerance {self.tolerance_rel:g})"
                 )
-        return out
+        return out + self.seam_problems()
 
     def to_dict(self) -> dict:
         d = asdict(self)
+        if d["tube"] is None:  # a flat pattern's report stays as it was
+            del d["tube"]
         d["closes_both"] = self.closes_both
         d["problems"] = self.problems()
         return d
@@ -135,6 +149,10 @@ class PatternInfo:
                 f"{c['mean_target_to_outline_mm']:.3g} mm, spacing min/mean {c['spacing_min_mm']:.3g}/"
                 f"{c['spacing_mean_mm']:.3g} mm"
             )
+        if self.tube:
+            from .tube import tube_lines
+
+            lines += tube_lines(self.tube)
         lines.append(f"tolerance    {self.tolerance_rel:g} x tile size, {self.tolerance_rad:g} rad")
         verdict = "closes in both states" if self.closes_both else "; ".join(self.problems())
         lines.append(f"verdict      {verdict}")
@@ -168,8 +186,10 @@ def describe(
         tolerance_rel=tol,
         tolerance_rad=tol_rad,
     )
+    closed = {}
     for s in STATES:
         c = contract(pattern, s)
+        closed[s] = pattern.contracted.get(s, c.corners)
         r = state_residuals(pattern, s)
         st = StateInfo(
             state=s,
@@ -189,6 +209,7 @@ def describe(
             st.supplied_matches = bool(d <= tol * np.sqrt(top.n_tiles))
         info.states.append(st)
     info.conformance = _conformance(pattern)
+    info.tube = tube_report(pattern, closed)
     return info
 
 

@@ -469,7 +469,8 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
     for chk in target_checks(pattern, states, shape_tol):
         rep.add(chk)
     from .outlines import contracted_outline_checks
+    from .seam import seam_checks
 
-    for chk in contracted_outline_checks(pattern, states, tol):
+    for chk in contracted_outline_checks(pattern, states, tol) + seam_checks(pattern, states, tol):
         rep.add(chk)
     return rep

@@ -1,0 +1,41 @@
+"""Tube options of ``fabkiri design --tube`` and ``fabkiri export --format tube3d`` (docs/tubes.md).
+
+Parsing and printing only: the policy is in :mod:`fabkiri.api.tube`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..fileio import atomic_write, atomic_write_many, check_output_file, check_output_folder
+
+
+def cmd_design_tube(args: argparse.Namespace) -> int:
+    """``design --tube SPEC --tiles ROWSxCOLS``: write the tube's sheet; exit 1 unless it converged and
+    verified (the best iterate is still written, marked ``design.valid = false``)."""
+    from ..api.tube import design_tube_pattern
+    from .pattern_cmds import parse_tiles
+
+    rows, cols = parse_tiles(args.tiles)
+    check_output_file(args.output)
+    out = design_tube_pattern((rows, cols), args.tube, rigid=args.rigid, tol=args.tol, name=args.name or "")
+    atomic_write(args.output, out.text())
+    print(f"wrote {args.output}: tube {rows}x{cols}", file=sys.stderr)
+    print("\n".join(out.summary()))
+    return out.exit_code
+
+
+def cmd_export_tube3d(args: argparse.Namespace) -> int:
+    """``export FILE --format tube3d -o DIR``: every state rolled onto its tube (OBJ, STL, PNG, GIF)."""
+    from ..api.tube import tube_3d_files
+    from .pattern_cmds import load_any
+
+    check_output_folder(args.output)
+    pattern = load_any(args.file)
+    files = tube_3d_files(pattern, stem=Path(args.file).stem, copies=args.copies, thickness=args.thickness,
+                          gif=not args.no_gif)
+    atomic_write_many(args.output, files)
+    print(f"wrote {args.output}/: {', '.join(sorted(files))}", file=sys.stderr)
+    return 0

@@ -1,0 +1,153 @@
+"""A periodic pattern's tube in every state: radius, length, and the sheet rolled into 3D.
+
+Rolling is an isometry of the plane onto a cylinder (or cone), so a state whose seam map is a pure
+translation ``t`` rolls onto a cylinder of circumference ``|t|``: its radius is ``|t| / 2π``, its axis
+runs along ``t`` turned by 90°, and its length is the extent of the tube's tiles along that axis. A
+deployed state whose seam map is a rotation by ``α`` about an apex rolls onto a cone: a point at
+distance ``ρ`` from the apex lands at radius ``ρ |α| / 2π`` and height ``ρ sqrt(1 - (α / 2π)²)``.
+
+How a state changes into another is reported as ratios, as in the paper's Fig. 5: the **axial change**
+(length ratio) and the **radial change** (radius ratio, at the tube's two ends; the two differ when the
+change is not uniform along the axis).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..pattern.model import Pattern
+from ..pattern.periodic import Seam, seam_map, seam_of, tube_tiles
+from .contract import contract
+
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class TubeFrame:
+    """Where a planar state rolls to: a cylinder (``apex`` None) or a cone about ``apex``.
+
+    Cylinder: ``origin`` is on the seam, ``u`` the unit period direction, ``v`` the axis; ``period`` the
+    circumference. Cone: ``apex``, ``u`` the direction of the first seam edge, ``alpha`` the sector angle.
+    """
+
+    origin: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    period: float
+    apex: np.ndarray | None = None
+    alpha: float = 0.0
+
+    def roll(self, pts: np.ndarray) -> np.ndarray:
+        """Planar points ``(..., 2)`` mm -> their place on the tube ``(..., 3)`` mm (isometric)."""
+        if self.apex is None:
+            d = pts - self.origin
+            s, z = d @ self.u, d @ self.v
+            R = self.period / TWO_PI
+            return np.stack([R * np.cos(s / R), R * np.sin(s / R), z], -1)
+        d = pts - self.apex
+        rho = np.linalg.norm(d, axis=-1)
+        phi = np.arctan2(d @ self.v, d @ self.u)  # angle from the seam, in [0, alpha) on the sheet
+        k = abs(self.alpha) / TWO_PI
+        az = phi / k
+        return np.stack([rho * k * np.cos(az), rho * k * np.sin(az), rho * np.sqrt(1.0 - k * k)], -1)
+
+
+@dataclass
+class TubeState:
+    """One state's tube: radii at the two ends, length along the axis, and how periodic its seam is."""
+
+    state: str
+    shape: str  # "cylinder" or "cone"
+    radius_min_mm: float
+    radius_max_mm: float
+    length_mm: float
+    seam_rotation_rad: float
+    seam_translation_dev_rel: float  # largest corner distance from a pure translation, tile sizes
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def frame(corners: np.ndarray, seam: Seam, state) -> TubeFrame:
+    """The tube frame of one state's per-tile corners (a cone only for a cone-seam deployed state)."""
+    m = seam_map(corners, seam)
+    first = corners[seam.first]
+    if state == "deployed" and seam.deployed == "cone" and abs(m.rotation) > 1e-12:
+        # the seam map x -> R x + t fixes the apex c = (I - R)^-1 t
+        c, s = np.cos(m.rotation), np.sin(m.rotation)
+        apex = np.linalg.solve(np.eye(2) - np.array([[c, -s], [s, c]]), m.translation)
+        d = first.reshape(-1, 2).mean(0) - apex
+        u = d / np.linalg.norm(d)
+        v = np.array([-u[1], u[0]]) * np.sign(m.rotation)  # angles grow from the first column to its copy
+        return TubeFrame(origin=apex, u=u, v=v, period=0.0, apex=apex, alpha=m.rotation)
+    t = m.translation
+    u = t / np.linalg.norm(t)
+    v = np.array([-u[1], u[0]])
+    origin = first[:, 0].mean(0)
+    return TubeFrame(origin=origin, u=u, v=v, period=m.period)
+
+
+def tube_state(pattern: Pattern, seam: Seam, corners: np.ndarray, state) -> TubeState:
+    """Radius, length and seam figures of one state."""
+    m = seam_map(corners, seam)
+    f = frame(corners, seam, state)
+    pts = corners[tube_tiles(pattern, seam)].reshape(-1, 2)
+    if f.apex is None:
+        z = (pts - f.origin) @ f.v
+        r = f.period / TWO_PI
+        rmin = rmax = r
+        shape = "cylinder"
+    else:
+        xyz = f.roll(pts)
+        z = xyz[:, 2]
+        rad = np.hypot(xyz[:, 0], xyz[:, 1])
+        rmin, rmax = float(rad.min()), float(rad.max())
+        shape = "cone"
+    return TubeState(state=str(state), shape=shape, radius_min_mm=float(rmin), radius_max_mm=float(rmax),
+                     length_mm=float(z.max() - z.min()), seam_rotation_rad=m.rotation,
+                     seam_translation_dev_rel=m.translation_dev / pattern.tile_size)
+
+
+def tube_report(pattern: Pattern, closed: dict | None = None) -> dict | None:
+    """The tube in every state and its changes (None for a planar pattern).
+
+    ``closed`` maps state -> corners; missing states are contracted here. Changes are ratios closed ->
+    deployed: ``axial`` = deployed length / closed length, ``radial_min``/``radial_max`` = deployed
+    radius / closed radius at the narrow and the wide end.
+    """
+    seam = seam_of(pattern)
+    if seam is None:
+        return None
+    closed = dict(closed or {})
+    states = {"deployed": pattern.corners()}
+    for s in (1, 2):
+        states[str(s)] = closed[s] if s in closed else pattern.contracted.get(s, contract(pattern, s).corners)
+    out = {k: tube_state(pattern, seam, Y, "deployed" if k == "deployed" else int(k)) for k, Y in states.items()}
+    dep = out["deployed"]
+    changes = {}
+    for k in ("1", "2"):
+        c = out[k]
+        changes[k] = {"axial": dep.length_mm / c.length_mm,
+                      "radial_min": dep.radius_min_mm / c.radius_min_mm,
+                      "radial_max": dep.radius_max_mm / c.radius_max_mm}
+    return {"columns": seam.columns, "rows": len(seam.pairs), "deployed_seam": seam.deployed,
+            "states": {k: v.to_dict() for k, v in out.items()}, "changes_from_closed": changes}
+
+
+def tube_lines(rep: dict) -> list[str]:
+    """The tube report as text lines for ``info`` and ``design``."""
+    lines = [f"tube         {rep['rows']} rows x {rep['columns']} columns around, deployed seam "
+             f"{rep['deployed_seam']} (sheet stores one seam copy column)"]
+    for k, s in rep["states"].items():
+        name = "deployed" if k == "deployed" else f"state {k}"
+        radius = (f"radius {s['radius_min_mm']:.4g} mm" if s["shape"] == "cylinder" else
+                  f"radius {s['radius_min_mm']:.4g}..{s['radius_max_mm']:.4g} mm")
+        lines.append(f"  {name:<9} {s['shape']:<8} {radius}, length {s['length_mm']:.4g} mm; seam rotation "
+                     f"{s['seam_rotation_rad']:.2e} rad, off a translation by {s['seam_translation_dev_rel']:.2e} "
+                     f"tile sizes")
+    for k, c in rep["changes_from_closed"].items():
+        lines.append(f"  state {k} -> deployed: axial x{c['axial']:.4g}, radial x{c['radial_min']:.4g}"
+                     + ("" if abs(c["radial_max"] - c["radial_min"]) < 1e-9 else f"..x{c['radial_max']:.4g}"))
+    return lines
