@@ -32,7 +32,7 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
-from .manifest import Allowances, _allowances, load_manifest
+from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
 from .pattern_checks import closed_state_checks, fabrication_tolerances
 from .quads import MAX_FITTED_SHRINK_MM, UNDO_MITRE, _fit_offset, _set_reference_aside, quads_of
@@ -43,7 +43,7 @@ from .report import Check, Report, measured
 # ------------------------------------------------------------------ entry point
 
 
-def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str, Any] | None = None,
+def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: CutManifest | dict[str, Any] | None = None,
                   tol_mm: float = 0.05, tol_rad: float = 1e-6) -> Report:
     """Verify a cut layout (DXF or SVG) against ``pattern`` and both closed states.
 
@@ -342,7 +342,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
         kerf = al.kerf_offset if al.hinge != "plain" else 0.0
         cores = np.full(len(cut_shapes), None, dtype=object)
         cores[have] = shapely.buffer(shapely.polygons(cut_shapes[have]), -shrink, join_style="mitre",
-                                     mitre_limit=10.0)
+                                     mitre_limit=al.mitre_limit)
         for sheet, lw in linework.items():
             on = have & (found_on == sheet)
             hinges = np.flatnonzero(on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet)))
