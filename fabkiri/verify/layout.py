@@ -34,7 +34,7 @@ from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
-from .pattern_checks import closed_state_checks, fabrication_tolerances
+from .pattern_checks import closed_state_checks, fabrication_tolerances, state_check_id
 from .quads import MAX_FITTED_SHRINK_MM, UNDO_MITRE, _fit_offset, _set_reference_aside, quads_of
 from .readers import Linework, read_cut_file
 from .recovery import _choose_cut, _drop_reference, dangling_ends, recover_polygons, sheet_material
@@ -265,11 +265,14 @@ def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarra
                      detail="corner distance to the design's closed state under one rigid motion per sheet"))
     if not have.all() or n_sheets != 1:
         return
-    for chk in closed_state_checks(pattern, m.cut_shapes, m.state, tol):  # every tile found: the sheet's state
-        if "congruent" in chk.name or "loop closure" in chk.name:
+    # every tile found: the sheet's state (congruence is (a); the in-place fit replaces loop closure)
+    skip = {state_check_id(m.state, k) for k in ("congruent-lengths", "congruent-angles", "loop-closure")}
+    for chk in closed_state_checks(pattern, m.cut_shapes, m.state, tol):
+        if chk.id in skip:
             continue
         chk.name = f"{g}: (b) sheet {chk.name}"
         chk.group = g
+        chk.id = f"{g}.sheet.{chk.id}" if chk.id else ""
         rep.add(chk)
 
 
@@ -286,11 +289,13 @@ def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, ha
         rep.add(measured(f"{name}: loop closure", float(split.max(initial=0.0)), tol.length, "mm",
                          worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g,
                          detail="hinge split of the least-squares assembly of the cut tiles"))
+        congruent = {state_check_id(s, k) for k in ("congruent-lengths", "congruent-angles")}
         for chk in closed_state_checks(pattern, Y, s, tol):
-            if "congruent" in chk.name:
+            if chk.id in congruent:  # the cut tiles' congruence is (a)
                 continue
             chk.name = f"{name}: {chk.name.split(': ', 1)[1]}"
             chk.group = g
+            chk.id = f"{g}.reassembled.{chk.id}" if chk.id else ""
             rep.add(chk)
 
 
