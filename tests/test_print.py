@@ -18,7 +18,7 @@ import pytest
 import shapely
 import trimesh
 from fabkiri.errors import FabricationError, InputError
-from fabkiri.fabricate import mesh, printgeom, solid
+from fabkiri.fabricate import mesh, pingeom, printgeom, solid
 from fabkiri.fabricate.printers import Printer, available_printers, load_printer
 from fabkiri.fabricate.styles import pinned, strips
 from fabkiri.mechanics.contract import with_contracted_states
@@ -741,8 +741,8 @@ def test_solver_design_pinned_refused_where_corners_are_too_narrow(state):
                                                r"pivot of hinge (\d+).*nozzle.*tolerance 0.4 mm") as exc:
         mesh.build_job(pat, "pinned", state, pr)
     plan = printgeom.closed_plan(pat, state, pr)
-    g = printgeom.pin_geometry(pr, printgeom.pin_levels(pr))
-    rep = printgeom.clearance_slivers(plan, g, pr)
+    g = pingeom.pin_geometry(pr, pingeom.pin_levels(pr))
+    rep = pingeom.clearance_slivers(plan, g, pr)
     t = int(np.argmax(rep.deviation))
     assert rep.deviation[t] > pr.tolerance_mm and rep.slivers[t] > 0
     h = rep.near_hinge[t]
@@ -762,7 +762,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.3)
     pr = load_printer("prusa-xl")
     job = mesh.build_job(pat, "pinned", 1, pr)
-    rep_s = printgeom.clearance_slivers(job.plan, job.pins.geometry, pr)
+    rep_s = pingeom.clearance_slivers(job.plan, job.pins.geometry, pr)
     assert rep_s.deviation.max() <= pr.tolerance_mm
     r = mesh.realise_job(job)
     rep = mesh.check_meshes(r)

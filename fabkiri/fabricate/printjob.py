@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from ..errors import FabricationError
-from . import printgeom
+from . import pingeom, printgeom
 from .printers import Printer
 from .solid import Body
 
@@ -39,7 +39,7 @@ class PrintJob:
     beds: list[list[Body]]
     shift: tuple[float, float] = (0.0, 0.0)
     strips: printgeom.Strips | None = None
-    pins: printgeom.PinPlan | None = None
+    pins: pingeom.PinPlan | None = None
     placements: list[dict] = field(default_factory=list)  # strips style: where each part went
     unlabelled: list[int] = field(default_factory=list)  # strips too small for their engraved ID
     layout: str = "recessed"  # tiles-and-strips: "recessed" or "stacked" (see tiles_and_strips)

@@ -16,7 +16,7 @@ import shapely
 
 from ...errors import FabricationError
 from ...pattern.model import Pattern
-from .. import printgeom
+from .. import pingeom, printgeom
 from ..printers import Printer
 from ..printgeom import regular_polygon
 from ..printjob import PrintJob, PrintStyle, Realised, centre_shift, fits, register_style, scaled
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     """Print-in-place pinned tiles, or :class:`FabricationError` saying why not."""
     plan = printgeom.closed_plan(pattern, state, printer)
-    pins = printgeom.pin_plan(pattern, plan, printer)
+    pins = pingeom.pin_plan(pattern, plan, printer)
     fits(plan.bounds, printer, "the closed pattern")
     lv, g = pins.levels, pins.geometry
     T = lv.thickness
@@ -81,7 +81,7 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     bodies = []
     for t in range(len(plan.tiles)):
         first = tile_body(t, 0.0)
-        alts = tuple(tile_body(t, (j + 0.5) / printgeom.PHASES) for j in range(printgeom.PHASES))
+        alts = tuple(tile_body(t, (j + 0.5) / pingeom.PHASES) for j in range(pingeom.PHASES))
         bodies.append(replace(first, variants=alts))
     dx, dy = centre_shift(plan.bounds, printer)
     beds = [[translate_body(b, dx, dy) for b in bodies]]
@@ -92,7 +92,7 @@ def _pinned_plans(pattern: Pattern, state: int, printer: Printer) -> str | None:
     """Why pinned hinges cannot be printed at this size on this bed (``None``: they can)."""
     try:
         plan = printgeom.closed_plan(pattern, state, printer)
-        printgeom.pin_plan(pattern, plan, printer)
+        pingeom.pin_plan(pattern, plan, printer)
         fits(plan.bounds, printer, "the closed pattern")
     except FabricationError as exc:
         return str(exc)
@@ -182,7 +182,7 @@ def tiles(r: Realised, mesh=None):
     job = r.job
     lv = job.pins.levels
     z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
-    mask = printgeom.clearance_mask(job.plan.hinge_xy + list(job.shift), job.pins.geometry)
+    mask = pingeom.clearance_mask(job.plan.hinge_xy + list(job.shift), job.pins.geometry)
     solid = manifold_of(mesh) if mesh is not None else m3d.Manifold.batch_boolean(r.manifolds[0], m3d.OpType.Add)
     return solid, z, mask
 
