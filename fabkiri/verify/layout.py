@@ -283,12 +283,14 @@ def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, ha
         name = f"{g}: (c) state {s} from cut tiles"
         if not have.all():
             rep.add(Check(f"{name}: loop closure", ok=False, value=None, tol=tol.length, unit="mm", group=g,
-                          detail="cannot reassemble: tiles are missing"))
+                          detail="cannot reassemble: tiles are missing",
+                          id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}"))
             continue
         Y, split = assembled(pattern, cut_shapes, s)
         rep.add(measured(f"{name}: loop closure", float(split.max(initial=0.0)), tol.length, "mm",
                          worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g,
-                         detail="hinge split of the least-squares assembly of the cut tiles"))
+                         detail="hinge split of the least-squares assembly of the cut tiles",
+                         id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}"))
         congruent = {state_check_id(s, k) for k in ("congruent-lengths", "congruent-angles")}
         for chk in closed_state_checks(pattern, Y, s, tol):
             if chk.id in congruent:  # the cut tiles' congruence is (a)
