@@ -36,6 +36,7 @@ from .svg import STROKE_MM, svg_bytes
 from .text import text_strokes
 
 FORMATS = ("dxf", "svg", "png")
+PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
 
 
 @dataclass

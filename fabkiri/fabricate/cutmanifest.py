@@ -7,7 +7,7 @@ verifier that reads it back) from a finished :class:`~.cut.CutJob`.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import shapely
@@ -16,20 +16,14 @@ from .. import __version__
 from ..verify.manifest import CutManifest
 from . import assembly as asm
 from . import hinges as hg
+from .cut import PIERCE_S, CutJob, sheet_names
 from .drawing import snap
 from .dxf import DXF_VERSION
 from .gate import GATE_GROUPS
 
-if TYPE_CHECKING:
-    from .cut import CutJob
-
-PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
-
 
 def _sheet_rows(job: CutJob) -> list[dict[str, Any]]:
     """Per sheet: its files, tiles, paths, lengths and the time model's cutting time."""
-    from .cut import sheet_names
-
     mat, formats = job.material, job.options.formats
     rows = []
     for sd, name in zip(job.sheets, sheet_names(job)):
