@@ -10,7 +10,6 @@ disk here; :mod:`fabkiri.fabricate.readback` verifies and writes.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,6 +19,7 @@ import shapely
 from ..errors import CheckFailed, FabricationError, InputError
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
+from ..verify.manifest import dumps_manifest
 from ..verify.physical import MARK_CORNER_FRAC, MARK_REACH_MM
 from . import fabricability as fb
 from . import hinges as hg
@@ -66,9 +66,6 @@ class CutOptions:
     stroke_mm: float = STROKE_MM  # SVG stroke width: what a viewer draws; the colour says cut/score/engrave
 
 
-ROW_LISTS = ("tiles", "hinges", "hinge_features", "assembly_pieces")  # manifest lists written one row per line
-
-
 @dataclass
 class CutResult:
     """The sheets, the files to write (name -> bytes) and the manifest."""
@@ -81,25 +78,8 @@ class CutResult:
     tile_sheet: np.ndarray | None = None
 
     def manifest_bytes(self) -> bytes:
-        """The manifest as JSON: indented, but each row of the long lists on one line.
-
-        (One row per line reads well and lets json's C encoder write the thousands of
-        rows of a large pattern; ``indent`` alone runs the pure-Python encoder.)
-        """
-        m = dict(self.manifest)
-        rows = {}
-        for k in ROW_LISTS:
-            if isinstance(m.get(k), list) and m[k]:
-                rows[k] = m[k]
-                m[k] = f"\u0000rows {k}"
-        text = json.dumps(m, indent=1, ensure_ascii=False)
-        for k, v in rows.items():
-            at = f'\n "{k}": ' + json.dumps(m[k], ensure_ascii=False)
-            body = ",\n".join("  " + json.dumps(r, ensure_ascii=False) for r in v)
-            if text.count(at) != 1:  # cannot happen: a top-level key is written once
-                raise RuntimeError(f"manifest key {k!r} not found once")
-            text = text.replace(at, f'\n "{k}": [\n{body}\n ]')
-        return (text + "\n").encode("utf-8")
+        """The manifest as written (:func:`fabkiri.verify.manifest.dumps_manifest`)."""
+        return dumps_manifest(self.manifest).encode("utf-8")
 
 
 @dataclass(eq=False)

@@ -75,7 +75,8 @@ class CutManifest:
         return out
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=1, ensure_ascii=False) + "\n"
+        """The manifest as written (:func:`dumps_manifest`)."""
+        return dumps_manifest(self.to_dict())
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "manifest") -> CutManifest:
@@ -95,6 +96,31 @@ class CutManifest:
         from ..limits import loads_json  # nesting depth and number bounds, as pattern.json
 
         return cls.from_dict(loads_json(text, f"{where} (manifest)", VerifyError), where)
+
+
+ROW_LISTS = ("tiles", "hinges", "hinge_features", "assembly_pieces")  # lists written one row per line
+
+
+def dumps_manifest(manifest: dict[str, Any]) -> str:
+    """A manifest as JSON: indented, but each row of the long lists on one line.
+
+    (One row per line reads well and lets json's C encoder write the thousands of
+    rows of a large pattern; ``indent`` alone runs the pure-Python encoder.)
+    """
+    m = dict(manifest)
+    rows = {}
+    for k in ROW_LISTS:
+        if isinstance(m.get(k), list) and m[k]:
+            rows[k] = m[k]
+            m[k] = f"\u0000rows {k}"
+    text = json.dumps(m, indent=1, ensure_ascii=False)
+    for k, v in rows.items():
+        at = f'\n "{k}": ' + json.dumps(m[k], ensure_ascii=False)
+        body = ",\n".join("  " + json.dumps(r, ensure_ascii=False) for r in v)
+        if text.count(at) != 1:  # cannot happen: a top-level key is written once
+            raise RuntimeError(f"manifest key {k!r} not found once")
+        text = text.replace(at, f'\n "{k}": [\n{body}\n ]')
+    return text + "\n"
 
 
 def load_manifest(layout_path: Path) -> dict[str, Any] | None:
