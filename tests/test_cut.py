@@ -632,7 +632,9 @@ def test_cut_manifest_round_trips_and_is_checked_on_read():
     assert g.to_json() == golden and list(g.extra) == ["bill_of_materials"]
     assert _allowances({**r.manifest, "mitre_limit": 4.0}, "m").mitre_limit == 4.0
     assert _allowances({"hinge": "tape"}, "m").layout == "in-place"  # the kind's usual layout when unsaid
-    with pytest.raises(VerifyError, match=r"m: malformed manifest \(state: "):
+    with pytest.raises(VerifyError, match=r"^m: state must be 1 or 2, not 3$"):  # as the verifier always said
         CutManifest.from_dict({**r.manifest, "state": 3}, "m")
+    with pytest.raises(VerifyError, match=r"^m: malformed manifest \(mitre_limit: must be >= 1, got 0.5\)$"):
+        CutManifest.from_dict({**r.manifest, "mitre_limit": 0.5}, "m")
     with pytest.raises(VerifyError, match=r"malformed manifest \(tiles/0: 'tile' is a required property"):
         CutManifest.from_dict({**r.manifest, "tiles": [{"sheet": 1}]}, "m")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -10,12 +11,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import VerifyError
+from ..pattern.topology import STATES
 from ..schemas import load_schema, schema_problem
 
 # ------------------------------------------------------------------ manifest
 
 MITRE_LIMIT = 10.0  # the mitre limit fabkiri's writer has always used (manifests that do not say)
 SCHEMA = "cut-manifest.schema.json"
+HINGE_KINDS = ("tape", "separate", "ligament")  # the kinds the verifier reads (recovery, physical checks)
 
 
 @dataclass
@@ -84,6 +87,7 @@ class CutManifest:
         one line naming the first problem, if it does not conform)."""
         if not isinstance(data, dict):
             raise VerifyError(f"{where}: a manifest is a JSON object")
+        _named_problems(data, where)
         problem = schema_problem(data, load_schema("fabkiri.verify", SCHEMA))
         if problem is not None:
             raise VerifyError(f"{where}: malformed manifest ({problem})")
@@ -96,6 +100,26 @@ class CutManifest:
         from ..limits import loads_json  # nesting depth and number bounds, as pattern.json
 
         return cls.from_dict(loads_json(text, f"{where} (manifest)", VerifyError), where)
+
+
+def _named_problems(data: dict[str, Any], where: str) -> None:
+    """The problems the verifier has always named in its own words, before the schema's:
+    an unknown hinge kind, a state that is not 1 or 2, a scale that is not positive or
+    a negative kerf offset or shrink."""
+    hinge = str(data.get("hinge", "separate"))
+    if hinge not in HINGE_KINDS:
+        raise VerifyError(f"{where}: unknown hinge kind {hinge!r} (tape, separate or ligament)")
+    try:
+        state = int(data.get("state", 1))
+        scale, kerf, shrink = (float(data.get(k, d)) for k, d in
+                               (("scale", 1.0), ("kerf_offset_mm", 0.0), ("tile_shrink_mm", 0.0)))
+    except (TypeError, ValueError):
+        return  # not numbers: the schema names the field
+    if state not in STATES:
+        raise VerifyError(f"{where}: state must be 1 or 2, not {state}")
+    if not (scale > 0 and math.isfinite(scale)) or not (kerf >= 0 and math.isfinite(kerf)) \
+            or not (shrink >= 0 and math.isfinite(shrink)):
+        raise VerifyError(f"{where}: scale must be positive and kerf_offset_mm, tile_shrink_mm non-negative")
 
 
 ROW_LISTS = ("tiles", "hinges", "hinge_features", "assembly_pieces")  # lists written one row per line
