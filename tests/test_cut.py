@@ -597,7 +597,7 @@ def test_a_hinge_kind_is_one_registered_strategy(monkeypatch):
     from fabkiri.fabricate import hingekinds
     from fabkiri.fabricate.hingekinds.tape import Tape
 
-    monkeypatch.setattr(hingekinds, "_REGISTRY", dict(hingekinds._REGISTRY))
+    monkeypatch.setattr(hingekinds._KINDS, "members", dict(hingekinds._KINDS.members))
 
     class Scored(Tape):
         name = "scored"

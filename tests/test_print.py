@@ -841,7 +841,7 @@ def test_a_print_style_is_one_registered_strategy(printer, monkeypatch):
     from fabkiri.fabricate import printjob
     from fabkiri.fabricate.styles import strips as strips_style
 
-    monkeypatch.setattr(printjob, "_REGISTRY", dict(printjob._REGISTRY))
+    monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
     measured = []
 
     def build(pattern, state, pr):

@@ -74,7 +74,7 @@ def test_kind(monkeypatch):
     """Register a quad-like kind for one test; the registry is restored afterwards."""
 
     def make(kind: str, **changes) -> Tessellation:
-        monkeypatch.setitem(tess_module._REGISTRY, kind, None)  # restored on teardown
+        monkeypatch.setitem(tess_module._KINDS.members, kind, None)  # restored on teardown
         return register(replace(tessellation("quad"), kind=kind, **changes))
 
     return make

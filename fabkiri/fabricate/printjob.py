@@ -4,17 +4,17 @@ A print style turns a closed state into the bodies printed on each bed
 (:class:`PrintJob`) and says how the clearances between them are measured. The
 styles are one module each in :mod:`fabkiri.fabricate.styles`, loaded on first
 use as trimesh loads its file-format handlers; a new style is one module that
-calls :func:`register_style` and one line in :data:`_BUILTIN`.
+calls :func:`register_style` and one line in the built-in table of :data:`_STYLES`.
 """
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from ..errors import FabricationError
+from ..registry import Registry
 from . import pingeom, printgeom
 from .printers import Printer
 from .solid import Body
@@ -106,26 +106,22 @@ class PrintStyle:
 
 
 # built-in styles, imported when first asked for (their modules call register_style())
-_BUILTIN = {"strips": "fabkiri.fabricate.styles.strips",
-            "tiles-and-strips": "fabkiri.fabricate.styles.tiles_and_strips",
-            "pinned": "fabkiri.fabricate.styles.pinned"}
-STYLES = tuple(_BUILTIN)
-_REGISTRY: dict[str, PrintStyle] = {}
+_STYLES: Registry[PrintStyle] = Registry({
+    "strips": "fabkiri.fabricate.styles.strips",
+    "tiles-and-strips": "fabkiri.fabricate.styles.tiles_and_strips",
+    "pinned": "fabkiri.fabricate.styles.pinned"})
+STYLES = tuple(_STYLES.builtin)
 
 
 def register_style(style: PrintStyle) -> PrintStyle:
     """Add a style to the registry (a style's module calls this when it is imported)."""
-    _REGISTRY[style.name] = style
-    return style
+    return _STYLES.add(style.name, style)
 
 
 def print_style(name: str) -> PrintStyle:
     """The registered style of this name, or :class:`FabricationError` naming the known ones."""
-    found = _REGISTRY.get(name)
-    if found is None and name in _BUILTIN:
-        importlib.import_module(_BUILTIN[name])
-        found = _REGISTRY.get(name)
+    found = _STYLES.find(name)
     if found is None:
-        known = ", ".join(dict.fromkeys((*STYLES, *_REGISTRY)))
+        known = ", ".join(_STYLES.names())
         raise FabricationError(f"unknown print style {name!r}; choose one of {known}")
     return found

@@ -14,12 +14,12 @@ costs nothing and cannot form an import cycle with the model.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..errors import PatternError
+from ..registry import Registry
 
 if TYPE_CHECKING:
     from .model import Pattern
@@ -85,23 +85,18 @@ class Tessellation:
         return int(state)
 
 
-_REGISTRY: dict[str, Tessellation] = {}
 # built-in kinds, imported when first asked for (their modules call register())
-_BUILTIN = {"quad": "fabkiri.pattern.quad", "kagome": "fabkiri.pattern.kagome"}
+_KINDS: Registry[Tessellation] = Registry({"quad": "fabkiri.pattern.quad", "kagome": "fabkiri.pattern.kagome"})
 
 
 def register(tessellation: Tessellation) -> Tessellation:
     """Add a kind to the registry (a kind's module calls this when it is imported)."""
-    _REGISTRY[tessellation.kind] = tessellation
-    return tessellation
+    return _KINDS.add(tessellation.kind, tessellation)
 
 
 def tessellation(kind: str = DEFAULT_KIND) -> Tessellation:
     """The registered :class:`Tessellation` named ``kind``; :class:`PatternError` if unknown."""
-    found = _REGISTRY.get(kind)
-    if found is None and kind in _BUILTIN:
-        importlib.import_module(_BUILTIN[kind])
-        found = _REGISTRY.get(kind)
+    found = _KINDS.find(kind)
     if found is None:
         raise PatternError(f"unknown tessellation kind {kind!r} (known: {', '.join(kinds())})")
     return found
@@ -109,7 +104,7 @@ def tessellation(kind: str = DEFAULT_KIND) -> Tessellation:
 
 def kinds() -> tuple[str, ...]:
     """Names of every known kind, built-in or registered."""
-    return tuple(sorted(set(_BUILTIN) | set(_REGISTRY)))
+    return tuple(sorted(_KINDS.names()))
 
 
 def kind_of_arity(arity: int) -> str | None:

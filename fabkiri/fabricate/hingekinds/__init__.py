@@ -6,18 +6,18 @@ outlines, the cut linework of one sheet, and which corner labels and tape marks
 tell the maker how the tiles join. The kinds are one module each (``tape``,
 ``ligament``, ``separate``), loaded on first use as trimesh loads its file-format
 handlers; a new kind is one module that calls :func:`register` and one line in
-:data:`_BUILTIN` (and, in :mod:`..materials`, the name in ``HINGE_KINDS``).
+the built-in table of :data:`_KINDS` (and, in :mod:`..materials`, the name in ``HINGE_KINDS``).
 """
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ...errors import InputError
+from ...registry import Registry
 
 if TYPE_CHECKING:
     from ...pattern.model import Pattern
@@ -87,23 +87,19 @@ class HingeKind:
 
 
 # built-in kinds, imported when first asked for (their modules call register())
-_BUILTIN = {"tape": "fabkiri.fabricate.hingekinds.tape", "ligament": "fabkiri.fabricate.hingekinds.ligament",
-            "separate": "fabkiri.fabricate.hingekinds.separate"}
-_REGISTRY: dict[str, HingeKind] = {}
+_KINDS: Registry[HingeKind] = Registry({
+    "tape": "fabkiri.fabricate.hingekinds.tape", "ligament": "fabkiri.fabricate.hingekinds.ligament",
+    "separate": "fabkiri.fabricate.hingekinds.separate"})
 
 
 def register(kind: HingeKind) -> HingeKind:
     """Add a kind to the registry (a kind's module calls this when it is imported)."""
-    _REGISTRY[kind.name] = kind
-    return kind
+    return _KINDS.add(kind.name, kind)
 
 
 def hinge_kind(name: str) -> HingeKind:
     """The registered kind of this name, or :class:`InputError` naming the known ones."""
-    found = _REGISTRY.get(name)
-    if found is None and name in _BUILTIN:
-        importlib.import_module(_BUILTIN[name])
-        found = _REGISTRY.get(name)
+    found = _KINDS.find(name)
     if found is None:
         from ..materials import HINGE_KINDS
 
