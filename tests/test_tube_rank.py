@@ -80,3 +80,18 @@ def test_generic_tube_is_rigid_and_its_deployed_seam_does_not_turn():
     for closed, turns in [((1,), True), ((1, 2), False)]:
         null = scipy.linalg.null_space(TR.tube_jacobian(prob.st, prob.seam, x, closed).toarray(), rcond=1e-10)
         assert (np.abs(null[beta]).max() > 1e-3) == turns
+
+
+@pytest.mark.parametrize("spec, seed, amp", [("cone:18,9,56.6", 0, 0.0), ("cone:16,11,56.6", 2, 0.1)])
+def test_a_cone_sheet_projects_onto_a_rigid_cylinder_when_the_seam_is_free(spec, seed, amp):
+    """Globally, not only near the standard tube: a sheet laid on a cone's unrolled sector (deployed seam
+    turned by 0.5-1 rad), projected onto the tube family with the deployed seam map left free, lands on a
+    rigid-deployable cylinder: the projection itself turns the seam back to 0."""
+    prob = TS._TubeProblem(TS.TubeRequest(4, 6, P.parse_tube_target(spec)))
+    start = prob.X0 + amp * np.random.default_rng(seed).normal(size=prob.X0.shape)
+    assert seam_map(start[prob.st.tiles], prob.seam).rotation > 0.5
+    x, eq_max, beta, _ = TR.project_free(prob.st, prob.seam, start)
+    assert eq_max <= 1e-12
+    assert abs(beta) < 1e-10
+    assert np.abs(C.hinge_sums(prob.st, prob.st.n_nodes)(x)[0]).max() < 1e-10
+    assert C.non_overlap(prob.st, prob.st.n_nodes)(x)[0].min() > 0.05  # a proper sheet, not collapsed

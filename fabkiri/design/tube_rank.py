@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse.linalg import lsqr
 
 from ..pattern.periodic import Seam, seam_map
 from . import constraints as C
@@ -94,3 +95,39 @@ def family_dimensions(st: C.Stencils, seam: Seam, x: np.ndarray) -> dict:
             out[name + tag] = {"unknowns": J.shape[1], "equations": J.shape[0], "rank": r,
                                "dimension": J.shape[1] - r, "gap": gap}
     return out
+
+
+def _free_residual(fams: list, seam: Seam, st: C.Stencils, x: np.ndarray) -> tuple[np.ndarray, float]:
+    """Equality residuals with the deployed seam map fitted (Kabsch) to the sheet, and its turn β."""
+    m = seam_map(x[st.tiles], seam)
+    pairs = seam.node_pairs(st.tiles)
+    c, s = np.cos(m.rotation), np.sin(m.rotation)
+    seam_r = x[pairs[:, 1]] - x[pairs[:, 0]] @ np.array([[c, -s], [s, c]]).T - m.translation
+    return np.concatenate([f(x)[0] for f in fams] + [seam_r.ravel()]), m.rotation
+
+
+def project_free(st: C.Stencils, seam: Seam, x: np.ndarray, tol: float = 1e-12, max_iter: int = 80):
+    """Gauss-Newton minimum-norm steps onto the tube family with the deployed seam map *free*.
+
+    Unlike the design solver, which fixes the deployed seam by its target, this lets the projection pick
+    any rigid seam map, a cone's rotation included; it answers where a sheet near ``x`` that is a tube in
+    both closed states can be. Returns ``(x, max |r|, deployed seam turn β in rad, steps)``.
+    """
+    nv = st.n_nodes
+    fams = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.rings(st, 1, nv), C.rings(st, 2, nv),
+            P.closed_seam(seam, st, 1, nv), P.closed_seam(seam, st, 2, nv)]
+    r, beta = _free_residual(fams, seam, st, x)
+    steps = 0
+    while np.abs(r).max() > tol and steps < max_iter:
+        J = tube_jacobian(st, seam, x)
+        dx = lsqr(J, -r, atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0][:-3].reshape(-1, 2)
+        for _ in range(14):  # halve until the residual norm drops (β, τ are refitted to the new sheet)
+            r_new, beta_new = _free_residual(fams, seam, st, x + dx)
+            if np.linalg.norm(r_new) < np.linalg.norm(r):
+                break
+            dx = 0.5 * dx
+        else:
+            break
+        x, r, beta = x + dx, r_new, beta_new
+        steps += 1
+    return x, float(np.abs(r).max()), float(beta), steps
