@@ -64,4 +64,4 @@ def test_relaxed_contract_a_rigid_tube_can_be_a_cone_in_every_state():
         assert closed.seam_rotation_rad == pytest.approx(dep.seam_rotation_rad, abs=1e-9)
         assert closed.shape == "cone"
         narrow, wide = dep.radius_min_mm / closed.radius_min_mm, dep.radius_max_mm / closed.radius_max_mm
-        assert abs(narrow - wide) > 0.01  # a non-uniform radial change
+        assert abs(narrow - wide) > 0.05  # a non-uniform radial change (measured 0.08 and 0.37)
