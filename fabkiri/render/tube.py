@@ -12,7 +12,7 @@ import numpy as np
 
 from ..fabricate.tube3d import state_frame, surface_mesh
 from ..mechanics.deploy import DeploymentPath
-from ..mechanics.tube import TubeFrame
+from ..mechanics.tube import TubeFrame, frame
 from ..pattern.model import Pattern
 from ..pattern.periodic import seam_map, seam_of, tube_tiles
 from .deployment import _gif_bytes, _pyplot
@@ -68,6 +68,8 @@ def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
 def _frame_of(corners: np.ndarray, pattern: Pattern) -> tuple[np.ndarray, TubeFrame, float]:
     seam = seam_of(pattern)
     m = seam_map(corners, seam)
+    if seam.closed == "cone":  # a rigid cone tube: every frame's seam turns alike, each frame is a cone
+        return corners[tube_tiles(pattern, seam)], frame(corners, seam, 1), m.rigid_dev
     t = corners[seam.copy].reshape(-1, 2).mean(0) - corners[seam.first].reshape(-1, 2).mean(0)
     u = t / np.linalg.norm(t)
     f = TubeFrame(origin=corners[seam.first][:, 0].mean(0), u=u, v=np.array([-u[1], u[0]]),
