@@ -77,6 +77,14 @@ def _frame_of(corners: np.ndarray, pattern: Pattern) -> tuple[np.ndarray, TubeFr
     return corners[tube_tiles(pattern, seam)], f, m.translation_dev
 
 
+def _radius_text(tiles: np.ndarray, f: TubeFrame) -> str:
+    """A cylinder's radius, or a cone's radius at its narrow and wide end (over the tile corners)."""
+    if f.apex is None:
+        return f"{f.period / (2 * np.pi):.3g}"
+    rad = np.hypot(*f.roll(tiles.reshape(-1, 2))[:, :2].T)
+    return f"{rad.min():.3g}..{rad.max():.3g}"
+
+
 def deployment_gif_3d(pattern: Pattern, path: DeploymentPath, max_frames: int = 24, frame_ms: int = 120,
                       dpi: int = 80) -> bytes:
     """The deployment path, every frame rolled onto its tube (closed 1 -> deployed -> closed 2)."""
@@ -91,8 +99,7 @@ def deployment_gif_3d(pattern: Pattern, path: DeploymentPath, max_frames: int = 
         fig = plt.figure(figsize=(4.2, 4.4), dpi=dpi)
         ax = fig.add_subplot(projection="3d")
         note = "" if dev <= 1e-6 * path.tile_size else f", seam open {dev:.2g} mm"
-        _draw(ax, tiles, f, lim, f"t = {path.t[k]:+.2f}, radius {f.period / (2 * np.pi):.3g} mm{note}",
-              _even(pattern))
+        _draw(ax, tiles, f, lim, f"t = {path.t[k]:+.2f}, radius {_radius_text(tiles, f)} mm{note}", _even(pattern))
         buf = io.BytesIO()
         fig.savefig(buf, format="png", metadata={"Software": None})
         plt.close(fig)
