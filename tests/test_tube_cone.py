@@ -90,3 +90,19 @@ def test_cone_tube_cli_info_cut_and_3d(cone_tube, tmp_path, run_cli):
         assert np.abs(rad / obj.vertices[:, 2] - k / np.sqrt(1 - k * k)).max() < 1e-9
         # distance from the apex is convex, so its largest value over the tiles is at a reported corner
         assert rad.max() == pytest.approx(info["radius_max_mm"], rel=1e-9)
+
+
+def test_gif_label_gives_a_cones_end_radii():
+    """A cone frame has no circumference: the deployment GIF labels its radius at both ends."""
+    from fabkiri.mechanics.tube import TubeFrame
+    from fabkiri.render.tube import _radius_text
+
+    alpha = 0.5  # sector angle: a point at distance ρ from the apex rolls to radius ρ α / 2π
+    f = TubeFrame(origin=np.zeros(2), u=np.array([0.0, -1.0]), v=np.array([1.0, 0.0]), period=0.0,
+                  apex=np.zeros(2), alpha=alpha)
+    quad = np.array([[[0.0, -10.0], [1.0, -10.0], [1.0, -12.0], [0.0, -12.0]]])
+    k = alpha / (2 * np.pi)
+    lo, hi = 10.0 * k, np.hypot(1.0, 12.0) * k
+    assert _radius_text(quad, f) == f"{lo:.3g}..{hi:.3g}"
+    cyl = TubeFrame(origin=np.zeros(2), u=np.array([1.0, 0.0]), v=np.array([0.0, 1.0]), period=20 * np.pi)
+    assert _radius_text(quad, cyl) == "10"
