@@ -106,3 +106,14 @@ def test_gif_label_gives_a_cones_end_radii():
     assert _radius_text(quad, f) == f"{lo:.3g}..{hi:.3g}"
     cyl = TubeFrame(origin=np.zeros(2), u=np.array([1.0, 0.0]), v=np.array([0.0, 1.0]), period=20 * np.pi)
     assert _radius_text(quad, cyl) == "10"
+
+
+@pytest.mark.slow
+def test_cone_between_two_cylinders_fails_honestly_and_points_to_closed_cone(tmp_path, run_cli):
+    """The issue's contract (cylinders when closed) with a deployed cone: not converged, exit 1, figures
+    printed, the best iterate written marked invalid, and the opt-in named."""
+    out = tmp_path / "c.json"
+    code, text, _ = run_cli("design", "--tube", SPEC, "--tiles", "6x8", "-o", out)
+    assert code == 1
+    assert "not converged" in text and "--closed cone" in text
+    assert json.loads(out.read_text())["design"]["valid"] is False

@@ -72,8 +72,9 @@ def design_tube_pattern(tiles: tuple[int, int], spec: str, *, rigid: bool = Fals
         problems.append(f"the solver stopped at max equality residual {res.report['equality_max']:.3g} "
                         f"(tol {tol:g}) after {res.report['continuation_steps']} continuation step(s)")
         if req.target.kind == "cone" and closed == "cylinder":  # the measured lock, not a tuning problem (docs/tubes.md)
-            problems.append("a deployed cone between two cylindrical closed states: the tubes found are "
-                            "rigid-deployable and keep the seam's rotation in every state (docs/tubes.md)")
+            problems.append("a deployed cone between two cylindrical closed states: reconfigurable tubes are "
+                            "locally rigid-deployable and keep the seam's rotation in every state (docs/tubes.md); "
+                            "--closed cone lets the closed states be cones too")
     closed = {}
     for s in (1, 2):
         c = contract(pattern, s)
