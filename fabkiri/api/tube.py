@@ -61,19 +61,20 @@ class TubeOutcome:
 
 
 def design_tube_pattern(tiles: tuple[int, int], spec: str, *, rigid: bool = False, tol: float = 1e-10,
-                        name: str = "") -> TubeOutcome:
+                        name: str = "", closed: str = "cylinder") -> TubeOutcome:
     """Design, contract, verify and report a tube of ``tiles = (rows, cols around)`` for target ``spec``
     (``cylinder:CIRC,LENGTH`` or ``cone:R_BOTTOM,R_TOP,LENGTH``, mm)."""
-    req = TubeRequest(tiles[0], tiles[1], parse_tube_target(spec), rigid=rigid, tol=tol, name=name)
+    req = TubeRequest(tiles[0], tiles[1], parse_tube_target(spec), rigid=rigid, tol=tol, name=name, closed=closed)
     res = design_tube(req)
     pattern = res.pattern
     problems: list[str] = []
     if not res.converged:
         problems.append(f"the solver stopped at max equality residual {res.report['equality_max']:.3g} "
                         f"(tol {tol:g}) after {res.report['continuation_steps']} continuation step(s)")
-        if req.target.kind == "cone":  # the measured lock, not a tuning problem (docs/tubes.md)
-            problems.append("a deployed cone between two cylindrical closed states: the tubes found are "
-                            "rigid-deployable and keep the seam's rotation in every state (docs/tubes.md)")
+        if req.target.kind == "cone" and closed == "cylinder":  # the measured lock, not a tuning problem (docs/tubes.md)
+            problems.append("a deployed cone between two cylindrical closed states: reconfigurable tubes are "
+                            "locally rigid-deployable and keep the seam's rotation in every state (docs/tubes.md); "
+                            "--closed cone lets the closed states be cones too")
     closed = {}
     for s in (1, 2):
         c = contract(pattern, s)
@@ -85,7 +86,7 @@ def design_tube_pattern(tiles: tuple[int, int], spec: str, *, rigid: bool = Fals
     pattern = pattern.with_contracted(closed)
     verification = tube = None
     if len(closed) == 2:
-        verification = verify_pattern(pattern, rigid=rigid)
+        verification = verify_pattern(pattern, rigid=res.report["rigid"])
         problems += [f"{c.name}: {c.value:.3g} {c.unit} (tol {c.tol:g})" for c in verification.failed()]
         tube = tube_report(pattern)
     valid = res.converged and not problems

@@ -27,6 +27,7 @@ from ..api.design import (  # noqa: F401
 )
 from ..design import conformance as conf
 from ..design.initial import INITS
+from ..errors import InputError
 from ..fabricate import fabricability
 from ..fileio import check_output_file
 from .pattern_cmds import add_i_know, parse_tiles
@@ -37,6 +38,8 @@ def cmd_design(args: argparse.Namespace) -> int:
         from .tube_cmd import cmd_design_tube
 
         return cmd_design_tube(args)
+    if args.closed:
+        raise InputError("--closed applies to --tube designs only")
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
     if args.lattice == "kagome":
@@ -148,6 +151,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--tube", metavar="cylinder:CIRC,LENGTH|cone:R_BOTTOM,R_TOP,LENGTH",
                    help="a reconfigurable tube of COLS columns around: the unrolled deployed target in mm; both "
                         "closed states roll into cylinders (docs/tubes.md)")
+    p.add_argument("--closed", choices=["cylinder", "cone"], default=None,
+                   help="with --tube cone:...: cone lets both closed states be cones too (a rigid tube whose seam "
+                        "turns alike in every state); default cylinder, the closed states' pure-translation seam")
     p.add_argument("--symmetry", choices=["x", "y"],
                    help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x)")
     p.add_argument("--holes", choices=["rhombus", "parallelogram"], default=None,

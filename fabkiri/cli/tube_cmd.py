@@ -20,7 +20,8 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
 
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)
-    out = design_tube_pattern((rows, cols), args.tube, rigid=args.rigid, tol=args.tol, name=args.name or "")
+    out = design_tube_pattern((rows, cols), args.tube, rigid=args.rigid, tol=args.tol, name=args.name or "",
+                              closed=args.closed or "cylinder")
     atomic_write(args.output, out.text())
     print(f"wrote {args.output}: tube {rows}x{cols}", file=sys.stderr)
     print("\n".join(out.summary()))

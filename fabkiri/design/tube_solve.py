@@ -45,6 +45,7 @@ class TubeRequest:
     cols: int
     target: P.TubeTarget
     rigid: bool = False
+    closed: str = "cylinder"  # "cone": closed seams free, hinge sums instead (docs/tubes.md, cone in every state)
     tol: float = 1e-10
     reg_weight: float = 1e-2
     max_iter: int = 200
@@ -54,6 +55,10 @@ class TubeRequest:
         if int(self.rows) != self.rows or int(self.cols) != self.cols:
             raise InputError(f"--tiles must be whole numbers, got {self.rows}x{self.cols}")
         check_tube_size(self.rows, self.cols)
+        if self.closed not in ("cylinder", "cone"):
+            raise InputError(f"--closed must be cylinder or cone, got {self.closed!r}")
+        if self.closed == "cone" and self.target.kind != "cone":
+            raise InputError("--closed cone needs a cone target (--tube cone:R_BOTTOM,R_TOP,LENGTH)")
         if not (np.isfinite(self.tol) and 0 < self.tol < 1e-2):
             raise InputError(f"--tol must lie in (0, 1e-2), got {self.tol}")
 
@@ -72,13 +77,17 @@ class _TubeProblem:
         self.req = req
         self.std = standard_pattern(req.rows, req.cols + 1, tile_size=1.0)
         self.st = st = C.Stencils.from_pattern(self.std)
-        self.seam = lattice_seam(req.rows, req.cols, req.target.kind)
+        cone_closed = req.closed == "cone"
+        self.seam = lattice_seam(req.rows, req.cols, req.target.kind,
+                                 req.closed if req.target.kind == "cone" else "cylinder")
         self.geo = geo = P.unit_geometry(req.target, req.cols * np.sqrt(2.0))
         nv = st.n_nodes
         fam = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv)]
-        fam += [C.hinge_sums(st, nv)] if req.rigid else [C.rings(st, 1, nv), C.rings(st, 2, nv)]
-        fam += [P.deployed_seam(self.seam, st, geo, nv), P.closed_seam(self.seam, st, 1, nv),
-                P.closed_seam(self.seam, st, 2, nv)]
+        # closed cones: hinge sums make every state's seam turn alike (a rigid tube), so no closed-seam rows
+        rigid = req.rigid or cone_closed
+        fam += [C.hinge_sums(st, nv)] if rigid else [C.rings(st, 1, nv), C.rings(st, 2, nv)]
+        fam += [P.deployed_seam(self.seam, st, geo, nv)]
+        fam += [] if cone_closed else [P.closed_seam(self.seam, st, s, nv) for s in (1, 2)]
         self.eq = fam
         self.fit = P.tube_fit(st, geo, nv)
         self.reg = regularizer(st, nv)
@@ -182,12 +191,12 @@ def design_tube(req: TubeRequest) -> TubeResult:
         "continuation_steps": len(steps), "families": fams,
         "fit_max_mm": float(np.abs(fit).max()), "fit_rms_mm": float(np.sqrt(np.mean(fit ** 2))),
         "ineq_min": {f.name: float(f(x)[0].min()) for f, _ in prob.ineq}, "scale_mm_per_unit": geo.scale,
-        "target": req.target.to_dict(), "rigid": req.rigid,
+        "target": req.target.to_dict(), "rigid": req.rigid or req.closed == "cone", "closed": req.closed,
         "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
     }
     sheet = Pattern(nodes=x * geo.scale, tiles=prob.std.tiles,
                     name=req.name or f"tube {req.rows}x{req.cols} {req.target.kind}",
                     lattice={**prob.std.lattice, "tile_size": geo.scale},
-                    design={"kind": "tube", "tube_target": req.target.to_dict(), "rigid": req.rigid,
+                    design={"kind": "tube", "tube_target": req.target.to_dict(), "rigid": report["rigid"],
                             "report": report})
     return TubeResult(pattern=with_seam(sheet, prob.seam), converged=converged, report=report)

@@ -36,7 +36,7 @@ def state_frame(pattern: Pattern, state, copies: int = 1) -> tuple[np.ndarray, T
     if copies == 1:
         return tiles, f
     if f.apex is not None:
-        raise InputError("copies of a cone-shaped state are not a tube: use a closed state")
+        raise InputError("copies of a cone-shaped state are not a tube: use a state that is a cylinder")
     t = seam_map(Y, seam).translation
     tiles = np.concatenate([tiles + j * t for j in range(copies)])
     return tiles, replace(f, period=f.period * copies)
@@ -87,14 +87,20 @@ def plate_meshes(tiles: np.ndarray, f: TubeFrame, thickness: float, n: int = SUB
     grid_faces = _grid_faces(n)
     ring = np.concatenate([np.arange(n - 1), np.arange(n - 1, n * n - 1, n),
                            np.arange(n * n - 1, n * n - n, -1), np.arange(n * n - n, 0, -n)])
-    walls = np.concatenate([np.stack([ring, np.roll(ring, -1), np.roll(ring, -1) + n * n], -1),
-                            np.stack([ring, np.roll(ring, -1) + n * n, ring + n * n], -1)])
+    # a wall quad is fanned about its centre: two neighbours sharing an edge then mesh their common wall
+    # alike (a diagonal splits it one way for one tile and the other way for the other; on a cone, where
+    # the quad is not planar, the plates would then interpenetrate by slivers of ~1e-5 of a plate)
+    a, b = ring, np.roll(ring, -1)
+    m = 2 * n * n + np.arange(len(ring))
+    walls = np.concatenate([np.stack([a, b, m], -1), np.stack([b, b + n * n, m], -1),
+                            np.stack([b + n * n, a + n * n, m], -1), np.stack([a + n * n, a, m], -1)])
     out = []
     for quad in tiles:
         inner = f.roll(_tile_grid(quad, n).reshape(-1, 2))
         outer = inner + thickness * _outward(f, inner)
+        centre = 0.25 * (inner[a] + inner[b] + outer[a] + outer[b])
         faces = np.concatenate([grid_faces[:, ::-1], grid_faces + n * n, walls])
-        mesh = trimesh.Trimesh(np.concatenate([inner, outer]), faces, process=True)
+        mesh = trimesh.Trimesh(np.concatenate([inner, outer, centre]), faces, process=True)
         if mesh.volume < 0:
             mesh.invert()
         out.append(mesh)
@@ -116,8 +122,9 @@ def plate_overlap(plates: list[trimesh.Trimesh]) -> tuple[float, tuple[int, int]
     that only touch (neighbours in a closed state) intersect in round-off (~1e-15)."""
     import manifold3d as m3
 
-    bodies = [m3.Manifold(m3.Mesh(vert_properties=np.asarray(p.vertices, np.float32),
-                                  tri_verts=np.asarray(p.faces, np.uint32))) for p in plates]
+    # double precision: float32 vertices turn the shared walls of a cone's neighbours into slivers (~1e-8)
+    bodies = [m3.Manifold(m3.Mesh64(vert_properties=np.asarray(p.vertices, np.float64),
+                                    tri_verts=np.asarray(p.faces, np.uint64))) for p in plates]
     lo = np.array([p.bounds[0] for p in plates])
     hi = np.array([p.bounds[1] for p in plates])
     vol = np.array([p.volume for p in plates])

@@ -19,6 +19,7 @@ import shapely
 
 from ..errors import CheckFailed
 from ..mechanics.contract import contract
+from ..mechanics.tube import tube_state
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.periodic import Seam, flat_sheet, seam_map, seam_of, tube_tiles
@@ -51,11 +52,17 @@ def seam_note(pattern: Pattern, seam: Seam, state: int, hinges: list[dict]) -> s
     """The assembly note: which corners to join across the seam, and the tube each state makes."""
     Y = pattern.contracted.get(state, contract(pattern, state).corners)
     m = seam_map(Y, seam)
+    if seam.closed == "cone":
+        ts = tube_state(pattern, seam, Y, state)
+        roll = (f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
+                f"rotation of {m.rotation:.4f} rad about an apex, so it rolls into a cone of radius "
+                f"{ts.radius_min_mm:.3f} to {ts.radius_max_mm:.3f} mm, {ts.length_mm:.3f} mm long.")
+    else:
+        roll = (f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
+                f"pure translation of {m.period:.3f} mm (rotation {m.rotation:.1e} rad), the circumference; the "
+                f"tube's radius is {m.period / (2 * np.pi):.3f} mm.")
     lines = [f"Seam of {pattern.name or 'the tube'}: {len(hinges)} hinges join the sheet's right edge to its left "
-             f"edge after cutting.",
-             f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
-             f"pure translation of {m.period:.3f} mm (rotation {m.rotation:.1e} rad), the circumference; the "
-             f"tube's radius is {m.period / (2 * np.pi):.3f} mm.",
+             f"edge after cutting.", roll,
              "Join each pair with the sheet's hinge kind across the seam (tape over both corners, or a glued "
              "tab for ligament hinges):"]
     lines += [f"  S{i + 1}: tile {h['tile']} corner {h['corner']}  <->  tile {h['joins_tile']} corner "

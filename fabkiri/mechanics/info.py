@@ -62,14 +62,16 @@ class PatternInfo:
     tube: dict | None = None  # a periodic pattern's tube per state (mechanics.tube.tube_report)
 
     def seam_problems(self) -> list[str]:
-        """A tube's closed states whose seam is not a pure translation (within the tolerance)."""
+        """A tube's closed states whose seam is not a pure translation (a rigid motion for a tube recorded
+        as a cone in every state), within the tolerance."""
         if not self.tube:
             return []
-        return [f"state {k}: the seam does not close by a pure translation (off by "
-                f"{s['seam_translation_dev_rel']:.3g} tile sizes, rotation {s['seam_rotation_rad']:.3g} rad, "
+        return [f"state {k}: the seam does not close by a "
+                f"{'rigid motion' if s['seam_kind'] == 'cone' else 'pure translation'} (off by "
+                f"{s['seam_dev_rel']:.3g} tile sizes, rotation {s['seam_rotation_rad']:.3g} rad, "
                 f"tolerance {self.tolerance_rel:g})"
                 for k, s in self.tube["states"].items()
-                if k != "deployed" and not s["seam_translation_dev_rel"] <= self.tolerance_rel]
+                if k != "deployed" and not s["seam_dev_rel"] <= self.tolerance_rel]
 
     @property
     def closes_both(self) -> bool:

@@ -65,16 +65,18 @@ class TubeState:
     length_mm: float
     seam_rotation_rad: float
     seam_translation_dev_rel: float  # largest corner distance from a pure translation, tile sizes
+    seam_kind: str = "cylinder"  # what the seam record asks of this state's seam map
+    seam_dev_rel: float = 0.0  # distance from that kind: a translation (cylinder), a rigid motion (cone)
 
     def to_dict(self) -> dict:
         return asdict(self)
 
 
 def frame(corners: np.ndarray, seam: Seam, state) -> TubeFrame:
-    """The tube frame of one state's per-tile corners (a cone only for a cone-seam deployed state)."""
+    """The tube frame of one state's per-tile corners (a cone where the seam record allows one)."""
     m = seam_map(corners, seam)
     first = corners[seam.first]
-    if state == "deployed" and seam.deployed == "cone" and abs(m.rotation) > 1e-12:
+    if seam.state_kind(state) == "cone" and abs(m.rotation) > 1e-12:
         # the seam map x -> R x + t fixes the apex c = (I - R)^-1 t
         c, s = np.cos(m.rotation), np.sin(m.rotation)
         apex = np.linalg.solve(np.eye(2) - np.array([[c, -s], [s, c]]), m.translation)
@@ -107,7 +109,9 @@ def tube_state(pattern: Pattern, seam: Seam, corners: np.ndarray, state) -> Tube
         shape = "cone"
     return TubeState(state=str(state), shape=shape, radius_min_mm=float(rmin), radius_max_mm=float(rmax),
                      length_mm=float(z.max() - z.min()), seam_rotation_rad=m.rotation,
-                     seam_translation_dev_rel=m.translation_dev / pattern.tile_size)
+                     seam_translation_dev_rel=m.translation_dev / pattern.tile_size, seam_kind=seam.state_kind(state),
+                     seam_dev_rel=(m.rigid_dev if seam.state_kind(state) == "cone" else m.translation_dev)
+                     / pattern.tile_size)
 
 
 def tube_report(pattern: Pattern, closed: dict | None = None) -> dict | None:
@@ -132,7 +136,7 @@ def tube_report(pattern: Pattern, closed: dict | None = None) -> dict | None:
         changes[k] = {"axial": dep.length_mm / c.length_mm,
                       "radial_min": dep.radius_min_mm / c.radius_min_mm,
                       "radial_max": dep.radius_max_mm / c.radius_max_mm}
-    return {"columns": seam.columns, "rows": len(seam.pairs), "deployed_seam": seam.deployed,
+    return {"columns": seam.columns, "rows": len(seam.pairs), "deployed_seam": seam.deployed, "closed_seam": seam.closed,
             "states": {k: v.to_dict() for k, v in out.items()}, "changes_from_closed": changes}
 
 
@@ -145,7 +149,8 @@ def tube_lines(rep: dict) -> list[str]:
         radius = (f"radius {s['radius_min_mm']:.4g} mm" if s["shape"] == "cylinder" else
                   f"radius {s['radius_min_mm']:.4g}..{s['radius_max_mm']:.4g} mm")
         lines.append(f"  {name:<9} {s['shape']:<8} {radius}, length {s['length_mm']:.4g} mm; seam rotation "
-                     f"{s['seam_rotation_rad']:.2e} rad, off a translation by {s['seam_translation_dev_rel']:.2e} "
+                     f"{s['seam_rotation_rad']:.2e} rad, off a "
+                     f"{'rigid motion' if s['seam_kind'] == 'cone' else 'translation'} by {s['seam_dev_rel']:.2e} "
                      f"tile sizes")
     for k, c in rep["changes_from_closed"].items():
         lines.append(f"  state {k} -> deployed: axial x{c['axial']:.4g}, radial x{c['radial_min']:.4g}"

@@ -33,12 +33,15 @@ class Seam:
 
     ``pairs`` is ``(R, 2)``: tile of the first column, its copy in the seam column (corner ``k`` of one
     is corner ``k`` of the other). ``columns`` counts the tube's own columns (the copy excluded);
-    ``deployed`` names the deployed seam map (``"cylinder"`` or ``"cone"``).
+    ``deployed`` names the deployed seam map (``"cylinder"`` or ``"cone"``); ``closed`` the closed
+    states' (``"cylinder"``: a pure translation, the issue's contract; ``"cone"``: a rotation about an
+    apex, allowed only with a cone deployed seam, docs/tubes.md "cone in every state").
     """
 
     pairs: np.ndarray
     columns: int
     deployed: str = "cylinder"
+    closed: str = "cylinder"  # "cone": the closed seams turn as the deployed one (a rigid cone tube)
 
     @property
     def first(self) -> np.ndarray:
@@ -49,8 +52,12 @@ class Seam:
         return self.pairs[:, 1]
 
     def to_dict(self) -> dict:
-        return {"columns": int(self.columns), "deployed": self.deployed,
-                "pairs": self.pairs.tolist()}
+        out = {"columns": int(self.columns), "deployed": self.deployed, "pairs": self.pairs.tolist()}
+        return out if self.closed == "cylinder" else {**out, "closed": self.closed}
+
+    def state_kind(self, state) -> str:
+        """``"cylinder"`` or ``"cone"``: what the seam map of ``state`` ("deployed", 1 or 2) must be."""
+        return self.deployed if state == "deployed" else self.closed
 
     def node_pairs(self, tiles: np.ndarray) -> np.ndarray:
         """``(m, 2)`` distinct (first-column node, copy node) pairs identified by the seam."""
@@ -80,10 +87,13 @@ def seam_of(pattern: Pattern) -> Seam | None:
     kind = rec.get("deployed", "cylinder")
     if kind not in SEAM_KINDS:
         raise PatternError(f"lattice.seam.deployed must be {' or '.join(SEAM_KINDS)}, not {kind!r}")
+    closed = rec.get("closed", "cylinder")
+    if closed not in SEAM_KINDS or (closed == "cone" and kind != "cone"):
+        raise PatternError(f"lattice.seam.closed must be cylinder, or cone with a cone deployed seam, not {closed!r}")
     columns = rec["columns"]
     if not isinstance(columns, int) or columns < 2 or columns % 2:
         raise PatternError(f"lattice.seam.columns must be an even count >= 2, got {columns!r}")
-    return Seam(pairs=pairs, columns=columns, deployed=kind)
+    return Seam(pairs=pairs, columns=columns, deployed=kind, closed=closed)
 
 
 def tube_tiles(pattern: Pattern, seam: Seam) -> np.ndarray:
@@ -144,11 +154,11 @@ def seam_map(corners: np.ndarray, seam: Seam) -> SeamMap:
                    rigid_dev=float(dev_r.max()), translation_dev=float(dev_t.max()), worst_tile=worst)
 
 
-def lattice_seam(rows: int, cols: int, deployed: str = "cylinder") -> Seam:
+def lattice_seam(rows: int, cols: int, deployed: str = "cylinder", closed: str = "cylinder") -> Seam:
     """The seam of a standard lattice of ``rows x (cols + 1)`` tiles: column 0 and its copy, column ``cols``."""
     r = np.arange(rows)
     width = cols + 1
-    return Seam(pairs=np.stack([r * width, r * width + cols], -1), columns=cols, deployed=deployed)
+    return Seam(pairs=np.stack([r * width, r * width + cols], -1), columns=cols, deployed=deployed, closed=closed)
 
 
 def check_tube_size(rows: int, cols: int) -> None:

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..fabricate.tube3d import state_frame, surface_mesh
 from ..mechanics.deploy import DeploymentPath
-from ..mechanics.tube import TubeFrame
+from ..mechanics.tube import TubeFrame, frame
 from ..pattern.model import Pattern
 from ..pattern.periodic import seam_map, seam_of, tube_tiles
 from .deployment import _gif_bytes, _pyplot
@@ -68,11 +68,21 @@ def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
 def _frame_of(corners: np.ndarray, pattern: Pattern) -> tuple[np.ndarray, TubeFrame, float]:
     seam = seam_of(pattern)
     m = seam_map(corners, seam)
+    if seam.closed == "cone":  # a rigid cone tube: every frame's seam turns alike, each frame is a cone
+        return corners[tube_tiles(pattern, seam)], frame(corners, seam, 1), m.rigid_dev
     t = corners[seam.copy].reshape(-1, 2).mean(0) - corners[seam.first].reshape(-1, 2).mean(0)
     u = t / np.linalg.norm(t)
     f = TubeFrame(origin=corners[seam.first][:, 0].mean(0), u=u, v=np.array([-u[1], u[0]]),
                   period=float(np.linalg.norm(t)))
     return corners[tube_tiles(pattern, seam)], f, m.translation_dev
+
+
+def _radius_text(tiles: np.ndarray, f: TubeFrame) -> str:
+    """A cylinder's radius, or a cone's radius at its narrow and wide end (over the tile corners)."""
+    if f.apex is None:
+        return f"{f.period / (2 * np.pi):.3g}"
+    rad = np.hypot(*f.roll(tiles.reshape(-1, 2))[:, :2].T)
+    return f"{rad.min():.3g}..{rad.max():.3g}"
 
 
 def deployment_gif_3d(pattern: Pattern, path: DeploymentPath, max_frames: int = 24, frame_ms: int = 120,
@@ -89,8 +99,7 @@ def deployment_gif_3d(pattern: Pattern, path: DeploymentPath, max_frames: int = 
         fig = plt.figure(figsize=(4.2, 4.4), dpi=dpi)
         ax = fig.add_subplot(projection="3d")
         note = "" if dev <= 1e-6 * path.tile_size else f", seam open {dev:.2g} mm"
-        _draw(ax, tiles, f, lim, f"t = {path.t[k]:+.2f}, radius {f.period / (2 * np.pi):.3g} mm{note}",
-              _even(pattern))
+        _draw(ax, tiles, f, lim, f"t = {path.t[k]:+.2f}, radius {_radius_text(tiles, f)} mm{note}", _even(pattern))
         buf = io.BytesIO()
         fig.savefig(buf, format="png", metadata={"Software": None})
         plt.close(fig)

@@ -40,11 +40,11 @@ def _state_checks(pattern: Pattern, seam: Seam, s, Y: np.ndarray, tol) -> list[C
     size = tol.tile_size
     figures = (f"rotation {m.rotation:.3g} rad, period {m.period:.6g} mm; first column tiles "
                f"{seam.first.tolist()} -> copies {seam.copy.tolist()}")
-    if s == "deployed" and seam.deployed == "cone":
+    if seam.state_kind(s) == "cone":
         out = [measured(f"{g}: seam is a rigid motion (cone)", m.rigid_dev, tol.length, "mm",
                         worst=f"tile {m.worst_tile}", group=g,
                         detail=f"largest corner distance from the best rigid seam map ({figures})")]
-        return out  # a cone's deployed sheet is periodic by a rotation: no translation overlap test
+        return out  # a cone's sheet is periodic by a rotation: no translation overlap test
     out = [measured(f"{g}: seam closes by a pure translation", m.translation_dev, tol.length, "mm",
                     worst=f"tile {m.worst_tile}", group=g,
                     detail=f"largest corner distance from the best translation, "
