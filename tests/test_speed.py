@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -78,3 +79,51 @@ def test_a_preset_file_by_path_is_still_checked_against_the_schema(tmp_path):
         bad.write_text(json.dumps(data))
         with pytest.raises(InputError, match=key):
             load(str(bad))
+
+
+def test_rigid_first_applies_to_mid_size_non_rigid_rhombus_designs_only():
+    from dataclasses import replace
+
+    from fabkiri.design import targets as T
+    from fabkiri.design.solve import DesignRequest, rigid_first_applies
+
+    req = DesignRequest(16, 16, T.load_target("heart", 100.0))
+    assert rigid_first_applies(req)
+    for other in (dict(rows=8, cols=8), dict(rows=32, cols=32), dict(rigid=True), dict(symmetry="y"),
+                  dict(holes="parallelogram"), dict(solver="full"), dict(seed=1), dict(rigid_first=False),
+                  dict(start=np.zeros((2, 2))), dict(init="rigid")):
+        assert not rigid_first_applies(replace(req, **other)), other
+
+
+def test_a_mid_size_non_rigid_design_is_a_rigid_member_when_that_meets_the_shape():
+    from fabkiri.design import targets as T
+    from fabkiri.design.conformance import deployed
+    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.pattern.residuals import hinge_sums
+
+    req = DesignRequest(16, 16, T.load_target("ellipse", 100.0))
+    res = design(req)
+    assert res.converged and res.report["rigid_first"]
+    assert res.report["max_equality_residual"] <= 1e-10  # the non-rigid families (rings) on the member
+    assert set(res.report["residuals"]) >= {"rings_1", "rings_2", "edge_pairs_1", "edge_pairs_2"}
+    assert np.abs(hinge_sums(res.pattern)).max() <= 1e-8  # it is rigid-deployable
+    assert deployed(res.pattern.nodes, res.pattern.topology, req.target)["hausdorff_rel"] <= req.second_opinion_above
+    assert res.pattern.design["options"]["rigid"] is False
+
+
+@pytest.mark.slow
+def test_the_full_solver_takes_over_when_no_rigid_member_meets_the_shape():
+    from fabkiri.design import targets as T
+    from fabkiri.design.solve import DesignRequest, design
+
+    res = design(DesignRequest(16, 16, T.load_target("ellipse", 100.0), second_opinion_above=1e-5))
+    assert not res.report["rigid_first"] and res.report["solver"].startswith("sparse Levenberg-Marquardt")
+    assert any(k.startswith("rigid_coarse_") for k in res.report["iterations"])  # it was tried first
+
+
+def test_the_api_stops_at_a_rigid_member_that_meets_the_shape():
+    from fabkiri.api.design import PatternRequest, design_pattern
+
+    out = design_pattern(PatternRequest(tiles=(16, 16), target="ellipse"))
+    assert out.valid and out.shape_met and out.report["rigid_first"]
+    assert [a["init"] for a in out.report["attempts"]] == ["conformal"]
