@@ -127,3 +127,19 @@ def test_the_api_stops_at_a_rigid_member_that_meets_the_shape():
     out = design_pattern(PatternRequest(tiles=(16, 16), target="ellipse"))
     assert out.valid and out.shape_met and out.report["rigid_first"]
     assert [a["init"] for a in out.report["attempts"]] == ["conformal"]
+
+
+def test_an_explicit_guess_skips_the_rigid_family_first(monkeypatch):
+    from fabkiri.api import design as api
+
+    seen = []
+    real = api.design
+
+    def spy(req, **kw):
+        seen.append(req.rigid_first)
+        return real(req, **kw)
+
+    monkeypatch.setattr(api, "design", spy)
+    api.design_pattern(api.PatternRequest(tiles=(4, 4), target="circle", init="rescaled"))
+    api.design_pattern(api.PatternRequest(tiles=(4, 4), target="circle"))
+    assert seen[0] is False and seen[1] is True

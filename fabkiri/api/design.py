@@ -231,7 +231,7 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=request.rigid, symmetry=request.symmetry,
                         holes=request.holes, contracted=contracted, init=request.init, tol=request.tol,
                         solver=request.solver, outline=request.fit == "outline", fabrication=fab_limits,
-                        fabrication_intent=intent, seed=request.seed,
+                        fabrication_intent=intent, seed=request.seed, rigid_first=not request.init,
                         name=request.name or "")
     if not req.name:
         parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
