@@ -143,3 +143,18 @@ def test_an_explicit_guess_skips_the_rigid_family_first(monkeypatch):
     api.design_pattern(api.PatternRequest(tiles=(4, 4), target="circle", init="rescaled"))
     api.design_pattern(api.PatternRequest(tiles=(4, 4), target="circle"))
     assert seen[0] is False and seen[1] is True
+
+
+@pytest.mark.slow
+def test_a_32x32_non_rigid_heart_falls_back_to_the_reduced_chain_not_the_full_solver():
+    # main: the rigid auto rules ended unconverged in the full solver (rigid, then non-rigid): 14 % off
+    from fabkiri.design import targets as T
+    from fabkiri.design.conformance import deployed
+    from fabkiri.design.solve import DesignRequest, design
+
+    req = DesignRequest(32, 32, T.load_target("heart", 100.0))
+    res = design(req)
+    assert res.converged and res.report["max_equality_residual"] <= 1e-10
+    assert res.report["solver"].startswith("closed-form rigid family")
+    assert any(k.startswith("rigid_reduced_") for k in res.report["iterations"])
+    assert deployed(res.pattern.nodes, res.pattern.topology, req.target)["hausdorff_rel"] <= 0.02
