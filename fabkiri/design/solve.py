@@ -156,6 +156,7 @@ class DesignRequest:
     second_opinion_above: float = 0.02
     start: np.ndarray | None = None  # deployed nodes (mm) to start from instead of ``init`` (a warm start)
     rigid_first: bool = True  # a mid-size non-rigid design tries the rigid family first (VIA_RIGID_FIRST_TILES)
+    coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -293,7 +294,8 @@ class _Problem:
         sub = DesignRequest(rc, cc, req.target, rigid=req.rigid, symmetry=req.symmetry, holes=req.holes,
                             contracted=dict(req.contracted),
                             init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
-                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter, solver=req.solver,
+                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter,
+                            solver=req.coarse_solver or req.solver,
                             # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
                             # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
                             outline=False, fabrication=req.fabrication)
@@ -646,10 +648,11 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict):
     # over when the rigid design fails a non-rigid check); below that it is the CLI's last resort, kept whole
     sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="", second_opinion=not big)
     log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
-    # when the rigid auto rules end in the full solver on the rigid problem and it does not converge (main's
-    # 32x32 heart: its reduced design failed a family check, the rigid full solver stopped at 5e-5, then the
-    # non-rigid one at 6e-3, 14 % off, 66 CPU s), the reduced solver alone down the coarse levels (1.37 %)
-    for tag, attempt in (("rigid", sub), ("rigid_reduced", replace(sub, solver="reduced"))):
+    # a big design keeps the rigid auto rules on its coarse levels only: main's 32x32 heart went on to the full
+    # solver on the rigid problem when its reduced design failed a family check, stopped at 5e-5, then the
+    # non-rigid one at 6e-3 (14 % off, 66 CPU s). Next, the reduced solver alone down the coarse levels (1.37 %).
+    first = replace(sub, solver="reduced", coarse_solver="auto") if big else sub
+    for tag, attempt in (("rigid", first), ("rigid_reduced", replace(sub, solver="reduced"))):
         res = _design(attempt, False)
         iters.update({f"{tag}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
