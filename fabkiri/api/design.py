@@ -272,8 +272,7 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
             continue
         req.rigid_first = False  # tried once: later guesses go to the full solver
         outcome = _check(result, contracted, request, target, shape_tol)
-        miss = _fit_miss(outcome[1])
-        shape_met = _shape_met(outcome[1])
+        miss, shape_met = _fit_miss(outcome[1]), _shape_met(outcome[1])
         attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
                          "time_s": outcome[1]["time_s"], "fit_max_rel_size": miss,
                          "hausdorff_max_rel": _hausdorff(outcome[1]), "shape": "met" if shape_met else "missed"})
