@@ -165,7 +165,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--init", choices=INITS,
                    help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
                         "(standard pattern at the target's area), then standard, until a design passes every check "
-                        "(--rigid from 32x32 tiles: coarse, then rescaled); coarse solves at half resolution "
+                        "(--rigid from 32x32 tiles: coarse, then rescaled; non-rigid from 16x16 tiles: the rigid "
+                        "family first, kept when it meets --shape-tol); coarse solves at half resolution "
                         "first and maps that design onto the tiles")
     p.add_argument("--solver", choices=["auto", "reduced", "full"], default="auto",
                    help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "

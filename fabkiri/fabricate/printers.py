@@ -162,7 +162,9 @@ def available_printers() -> list[str]:
     return sorted(p.stem for p in PRINTERS_DIR.glob("*.json"))
 
 
-def printer_from_dict(data: dict[str, Any], source: str = "preset") -> Printer:
+def printer_from_dict(data: dict[str, Any], source: str = "preset", schema: bool = True) -> Printer:
+    """A printer from preset JSON; ``schema=False`` skips the JSON Schema check (shipped presets, which the tests
+    check against it: jsonschema's import alone is 0.1 CPU s of every ``design``)."""
     if not isinstance(data, dict) or data.get("format") != "fabkiri.printer":
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise InputError(f"{source} is not a fabkiri printer preset (format {got!r}, expected 'fabkiri.printer')")
@@ -179,7 +181,7 @@ def printer_from_dict(data: dict[str, Any], source: str = "preset") -> Printer:
     missing = [k for k in required if k not in body]
     if missing:
         raise InputError(f"{source}: missing printer field(s) {', '.join(missing)}")
-    problem = schema_problem(data, load_schema(__package__, "printer.schema.json"))
+    problem = schema_problem(data, load_schema(__package__, "printer.schema.json")) if schema else None
     if problem:
         raise InputError(f"{source}: {problem}")
     try:
@@ -192,9 +194,10 @@ def load_printer(name_or_path: str | None = None) -> Printer:
     """A preset by name (``templates/printers/NAME.json``) or by path to a JSON file."""
     name = name_or_path or DEFAULT_PRINTER
     path = Path(name)
-    if not (path.suffix == ".json" and path.is_file()):
+    shipped = not (path.suffix == ".json" and path.is_file())
+    if shipped:
         path = PRINTERS_DIR / f"{name}.json"
         if not path.is_file():
             raise InputError(f"unknown printer {name!r}; presets: {', '.join(available_printers())}")
     text = read_input(path, max_bytes=MAX_PRESET_BYTES, what="printer preset")
-    return printer_from_dict(loads_json(text, f"printer preset {path}"), str(path))
+    return printer_from_dict(loads_json(text, f"printer preset {path}"), str(path), schema=not shipped)

@@ -1,4 +1,4 @@
-"""Pictures: energy plots and deployment animations (matplotlib Agg + pillow).
+"""Pictures: energy plots and deployment animations (matplotlib Agg + pillow), the design preview (pillow).
 
 Renderers return bytes; the caller writes them with :mod:`fabkiri.fileio`.
 """

@@ -1,0 +1,160 @@
+"""Issue #18 (solver speed and start-up): the fast paths give the answers of the slow ones they replace
+(timings live in bench/solve.py, not here)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(2, 200), st.integers(0, 2 ** 32 - 1))
+def test_closest_pair_equals_the_pairwise_minimum(n, seed):
+    from fabkiri.fabricate.fabricability import closest_pair
+
+    p = np.random.default_rng(seed).normal(size=(n, 2)) * 30.0
+    dd = np.linalg.norm(p[:, None] - p[None], axis=-1)
+    np.fill_diagonal(dd, np.inf)
+    assert abs(closest_pair(p) - dd.min()) <= 1e-13 * dd.min()
+
+
+def test_design_with_its_preview_imports_no_matplotlib(tmp_path):
+    from tests.test_startup import _modules_after
+
+    mods = _modules_after(["design", "--tiles", "3x3", "--target", "circle", "--rigid", "-o", str(tmp_path / "p.json")])
+    png = (tmp_path / "p.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not {"matplotlib", "jsonschema"} & mods
+
+
+def test_preview_is_deterministic_with_a_panel_per_outline(tmp_path):
+    import io
+
+    from fabkiri.api.design import PatternRequest, design_pattern
+    from fabkiri.render import conformance as rc
+    from PIL import Image
+
+    out = design_pattern(PatternRequest(tiles=(3, 3), rigid=True, contracted_target=("1:square", "2:circle")))
+    conf, shape = out.report["conformance"], out.report["shape"]
+    png = rc.conformance_png(out.pattern, conf, shape)
+    assert png == rc.conformance_png(out.pattern, conf, shape)
+    img = Image.open(io.BytesIO(png))
+    assert img.size[0] == 2 * (rc.PANEL_PX[0] + 2 * rc.MARGIN_PX)  # closed states 1 and 2
+    pixels = np.asarray(img.convert("RGB")).reshape(-1, 3)
+    for colour in ("tile", "target", "worst"):  # each layer is on the picture
+        assert (pixels == rc.COLOURS[colour]).all(1).any(), colour
+
+
+def test_every_shipped_preset_passes_its_schema():
+    # load_material / load_printer skip the JSON Schema for shipped presets by name: this is their check
+    import json
+
+    from fabkiri.fabricate import materials, printers
+    from fabkiri.schemas import load_schema, schema_problem
+
+    for folder, package, schema, names in (
+            (materials.MATERIALS_DIR, "fabkiri.fabricate", "material.schema.json", materials.available()),
+            (printers.PRINTERS_DIR, "fabkiri.fabricate", "printer.schema.json", printers.available_printers())):
+        assert names
+        for name in names:
+            data = json.loads((folder / f"{name}.json").read_text("utf-8"))
+            assert schema_problem(data, load_schema(package, schema)) is None, name
+
+
+def test_a_preset_file_by_path_is_still_checked_against_the_schema(tmp_path):
+    import json
+
+    import pytest
+    from fabkiri.errors import InputError
+    from fabkiri.fabricate import materials, printers
+
+    for folder, name, load in ((materials.MATERIALS_DIR, materials.available()[0], materials.load_material),
+                               (printers.PRINTERS_DIR, printers.available_printers()[0], printers.load_printer)):
+        data = json.loads((folder / f"{name}.json").read_text("utf-8"))
+        key = next(k for k, v in data.items() if isinstance(v, float) and v > 0)
+        data[key] = -1.0
+        bad = tmp_path / f"{name}.json"
+        bad.write_text(json.dumps(data))
+        with pytest.raises(InputError, match=key):
+            load(str(bad))
+
+
+def test_rigid_first_applies_to_mid_size_non_rigid_rhombus_designs_only():
+    from dataclasses import replace
+
+    from fabkiri.design import targets as T
+    from fabkiri.design.solve import DesignRequest, rigid_first_applies
+
+    req = DesignRequest(16, 16, T.load_target("heart", 100.0))
+    assert rigid_first_applies(req)
+    for other in (dict(rows=8, cols=8), dict(rows=32, cols=32), dict(rigid=True), dict(symmetry="y"),
+                  dict(holes="parallelogram"), dict(solver="full"), dict(seed=1), dict(rigid_first=False),
+                  dict(start=np.zeros((2, 2))), dict(init="rigid")):
+        assert not rigid_first_applies(replace(req, **other)), other
+
+
+def test_a_mid_size_non_rigid_design_is_a_rigid_member_when_that_meets_the_shape():
+    from fabkiri.design import targets as T
+    from fabkiri.design.conformance import deployed
+    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.pattern.residuals import hinge_sums
+
+    req = DesignRequest(16, 16, T.load_target("ellipse", 100.0))
+    res = design(req)
+    assert res.converged and res.report["rigid_first"]
+    assert res.report["max_equality_residual"] <= 1e-10  # the non-rigid families (rings) on the member
+    assert set(res.report["residuals"]) >= {"rings_1", "rings_2", "edge_pairs_1", "edge_pairs_2"}
+    assert np.abs(hinge_sums(res.pattern)).max() <= 1e-8  # it is rigid-deployable
+    assert deployed(res.pattern.nodes, res.pattern.topology, req.target)["hausdorff_rel"] <= req.second_opinion_above
+    assert res.pattern.design["options"]["rigid"] is False
+
+
+@pytest.mark.slow
+def test_the_full_solver_takes_over_when_no_rigid_member_meets_the_shape():
+    from fabkiri.design import targets as T
+    from fabkiri.design.solve import DesignRequest, design
+
+    res = design(DesignRequest(16, 16, T.load_target("ellipse", 100.0), second_opinion_above=1e-5))
+    assert not res.report["rigid_first"] and res.report["solver"].startswith("sparse Levenberg-Marquardt")
+    assert any(k.startswith("rigid_coarse_") for k in res.report["iterations"])  # it was tried first
+
+
+def test_the_api_stops_at_a_rigid_member_that_meets_the_shape():
+    from fabkiri.api.design import PatternRequest, design_pattern
+
+    out = design_pattern(PatternRequest(tiles=(16, 16), target="ellipse"))
+    assert out.valid and out.shape_met and out.report["rigid_first"]
+    assert [a["init"] for a in out.report["attempts"]] == ["conformal"]
+
+
+def test_an_explicit_guess_skips_the_rigid_family_first(monkeypatch):
+    from fabkiri.api import design as api
+
+    seen = []
+    real = api.design
+
+    def spy(req, **kw):
+        seen.append(req.rigid_first)
+        return real(req, **kw)
+
+    monkeypatch.setattr(api, "design", spy)
+    api.design_pattern(api.PatternRequest(tiles=(4, 4), target="circle", init="rescaled"))
+    api.design_pattern(api.PatternRequest(tiles=(4, 4), target="circle"))
+    assert seen[0] is False and seen[1] is True
+
+
+@pytest.mark.slow
+def test_a_32x32_non_rigid_heart_falls_back_to_the_reduced_chain_not_the_full_solver():
+    # main: the rigid auto rules ended unconverged in the full solver (rigid, then non-rigid): 14 % off
+    from fabkiri.design import targets as T
+    from fabkiri.design.conformance import deployed
+    from fabkiri.design.solve import DesignRequest, design
+
+    req = DesignRequest(32, 32, T.load_target("heart", 100.0))
+    res = design(req)
+    assert res.converged and res.report["max_equality_residual"] <= 1e-10
+    assert res.report["solver"].startswith("closed-form rigid family")
+    assert any(k.startswith("rigid_reduced_") for k in res.report["iterations"])
+    assert deployed(res.pattern.nodes, res.pattern.topology, req.target)["hausdorff_rel"] <= 0.02
