@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from .lattice import centred_standard
 from .model import Pattern
 from .rotating import alternating_fold_rule
 from .tessellation import Tessellation, register
@@ -110,17 +111,8 @@ def standard_kagome(
         )
     tiles, rep = kagome_topology(rows, cols)
     corners = kagome_corners(rows, cols, np.radians(angle_deg), tile_size)
-    nodes = corners.reshape(-1, 2)[rep]
-    lo, hi = nodes.min(0), nodes.max(0)
-    nodes = nodes - 0.5 * (lo + hi)
-    return Pattern(
-        nodes=nodes,
-        tiles=tiles,
-        name=name or f"standard kagome {rows}x{cols}",
-        lattice={"kind": "kagome", "rows": rows, "cols": cols, "angle_deg": float(angle_deg),
-                 "tile_size": float(tile_size)},
-        kind="kagome",
-    )
+    return centred_standard("kagome", tiles, corners.reshape(-1, 2)[rep], rows, cols, angle_deg,
+                            tile_size, name or f"standard kagome {rows}x{cols}")
 
 
 def kagome_counts(rows: int, cols: int) -> tuple[int, int, int]:
