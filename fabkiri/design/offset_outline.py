@@ -20,7 +20,7 @@ import numpy as np
 
 from .constraints import ClosedGrid
 from .offsets import OffsetFamily
-from .outline import PSI_DEPLOYED, REG_WEIGHT, SQUARE_TOL, _lm, outline_kind
+from .outline import PSI_DEPLOYED, REG_WEIGHT, _lm, outline_kind, square_affine
 
 # |t| above T_SOFT is penalised like any inequality inside its margin; T_HARD is never crossed (step
 # limiting). A hard wall alone at the soft bound left LM halving every step that touched it: 5x5 ended at
@@ -113,17 +113,11 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
                 Zs = Z0[rep1[on]]
                 E.append(np.hstack([Zs, zr[rep1[on]]]) if xy == 0 else np.hstack([zr[rep1[on]], Zs]))
                 e.append(np.full(int(on.sum()), val))
-    if E:
-        E, e = np.vstack(E), np.concatenate(e)
-        U, sv, Vt = np.linalg.svd(E, full_matrices=True)
-        rank = int((sv > 1e-10 * sv[0]).sum())
-        base = Vt[:rank].T @ ((U[:, :rank].T @ e) / sv[:rank])
-        if np.abs(E @ base - e).max() > SQUARE_TOL * max(1.0, np.abs(e).max()):
-            log("offset outline: the square rows are inconsistent")
-            return None
-        Nsp = Vt[rank:].T
-    else:
-        base, Nsp = np.zeros(2 * nf), np.eye(2 * nf)
+    affine = square_affine(E, e, 2 * nf)
+    if affine is None:
+        log("offset outline: the square rows are inconsistent")
+        return None
+    base, Nsp = affine
     k = Nsp.shape[1]
     u0 = Nsp.T @ (s0 - base)
     circles = [s for s in states if kinds[s] == "circle"]

@@ -33,6 +33,23 @@ REG_WEIGHT = 1e-6  # the circle residuals are ~1e-2 of a tile: a regulariser at 
 SQUARE_TOL = 1e-12  # relative residual of the square rows that counts as feasible
 
 
+def square_affine(
+    E: list[np.ndarray], e: list[np.ndarray], n: int
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(base, N)`` with every solution of the stacked square rows ``E x = e`` written
+    ``base + N u`` (N an orthonormal null-space basis); the whole space when there are no rows,
+    None when the rows are inconsistent (no exact square in this family)."""
+    if not E:
+        return np.zeros(n), np.eye(n)
+    A, b = np.vstack(E), np.concatenate(e)
+    U, sv, Vt = np.linalg.svd(A, full_matrices=True)
+    rank = int((sv > 1e-10 * sv[0]).sum())
+    base = Vt[:rank].T @ ((U[:, :rank].T @ b) / sv[:rank])
+    if np.abs(A @ base - b).max() > SQUARE_TOL * max(1.0, np.abs(b).max()):
+        return None
+    return base, Vt[rank:].T
+
+
 def outline_kind(spec) -> str | None:
     """"square" or "circle" for closed-state targets this solver handles exactly, else None."""
     if isinstance(spec, Target) and spec.name in ("square", "circle"):
@@ -114,18 +131,12 @@ def solve_outline(prob, log, iters: dict):
             Es, es = _square_rows(maps, st, s, half)
             E.append(Es)
             e.append(es)
-    if E:
-        E, e = np.vstack(E), np.concatenate(e)
-        U, sv, Vt = np.linalg.svd(E, full_matrices=True)
-        rank = int((sv > 1e-10 * sv[0]).sum())
-        base = Vt[:rank].T @ ((U[:, :rank].T @ e) / sv[:rank])
-        if np.abs(E @ base - e).max() > SQUARE_TOL * max(1.0, np.abs(e).max()):
-            log("outline: the square rows are inconsistent; leaving the design to the full solver")
-            return None
-        Nsp = Vt[rank:].T  # null space of the square rows
-        u0 = Nsp.T @ (s0 - base)
-    else:
-        base, Nsp, u0 = np.zeros(nf2), np.eye(nf2), s0
+    affine = square_affine(E, e, nf2)
+    if affine is None:
+        log("outline: the square rows are inconsistent; leaving the design to the full solver")
+        return None
+    base, Nsp = affine
+    u0 = Nsp.T @ (s0 - base)
     k = Nsp.shape[1]
     AN = maps.A @ Nsp
     Ab = maps.A @ base
