@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from fabkiri.fabricate import mesh
+from fabkiri.fabricate import mesh, solid
 from fabkiri.fabricate.printers import load_printer
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.lattice import standard_pattern
@@ -35,13 +35,13 @@ def naive_tiles(job):
     T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
     parts = []
     for t, poly in enumerate(plan.tiles):
-        ops = [("add", mesh.Prism((poly,), 0.0, T))]
+        ops = [("add", solid.Prism((poly,), 0.0, T))]
         for h in range(plan.n_hinges):
             if t in plan.hinge_tiles[h]:
                 s = strips.outline[h]
                 z = (T - ts, T + 1) if strips.top[h] else (-1.0, ts)
-                ops.append(("sub", mesh.Prism((s,), *z)))
-        parts.append(mesh.realise(mesh.Body(f"t{t}", "tile", tuple(ops))))
+                ops.append(("sub", solid.Prism((s,), *z)))
+        parts.append(solid.realise(solid.Body(f"t{t}", "tile", tuple(ops))))
     return m3d.Manifold.batch_boolean(parts, m3d.OpType.Add)
 
 

@@ -585,3 +585,56 @@ def test_tape_marks_asked_for_only_where_the_writer_draws_a_readable_one(run_cli
     marks = [c for f in man["verification"]["verifier"]["files"].values() for c in f["checks"]
              if c["name"].endswith("tape marks at every hinge")]
     assert marks and all(c["ok"] for c in marks) and "462 of 464" in marks[0]["detail"]
+
+
+# ------------------------------------------------------------------ hinge kinds and the manifest
+
+
+def test_a_hinge_kind_is_one_registered_strategy(monkeypatch):
+    """A kind registered from outside (as a new kind's module would) is chosen by
+    name: its linework is what the sheet gets and the manifest names it; an
+    unknown name is refused with one line."""
+    from fabkiri.fabricate import hingekinds
+    from fabkiri.fabricate.hingekinds.tape import Tape
+
+    monkeypatch.setattr(hingekinds, "_REGISTRY", dict(hingekinds._REGISTRY))
+
+    class Scored(Tape):
+        name = "scored"
+
+        def draw(self, sd, sheet, cutting):
+            out = super().draw(sd, sheet, cutting)
+            for t in sheet.tiles:  # a score line across every tile
+                sd.add("SCORE", sheet.corners[t, [0, 2]], False)
+            return out
+
+    hingekinds.register(Scored())
+    p = std(2, 3)
+    r = cut(p, hinge="scored", formats=("dxf",))
+    assert r.manifest["hinge"] == "scored" and r.sheets[0].count("SCORE") == p.n_tiles
+    assert r.sheets[0].count("CUT") == cut(p, hinge="tape", formats=("dxf",)).sheets[0].count("CUT")
+    with pytest.raises(InputError, match="hinge kind must be one of tape, ligament, separate, got 'glued'"):
+        cut(p, hinge="glued")
+
+
+def test_cut_manifest_round_trips_and_is_checked_on_read():
+    """The manifest a cut writes reads back as a CutManifest and writes out the same
+    keys in the same order; the shipped golden manifest too; the schema refuses a
+    manifest that breaks it, naming the field."""
+    from fabkiri.errors import VerifyError
+    from fabkiri.verify.manifest import CutManifest, _allowances
+
+    r = cut(std(3, 3), material="pp-0.5", hinge="ligament", formats=("dxf",))
+    m = CutManifest.from_dict(json.loads(json.dumps(r.manifest)))
+    assert m.hinge == "ligament" and m.tile_shrink_mm == load_material("pp-0.5").gap_mm / 2 and m.mitre_limit == hg.MITRE_LIMIT
+    assert json.dumps(m.to_dict()) == json.dumps(r.manifest)  # same keys, same order, same values
+    assert m.to_json().encode("utf-8") == r.manifest_bytes()  # and the same bytes as written
+    golden = (Path(__file__).parent / "golden" / "std2x2-manifest.json").read_text("utf-8")
+    g = CutManifest.from_json(golden)
+    assert g.to_json() == golden and list(g.extra) == ["bill_of_materials"]
+    assert _allowances({**r.manifest, "mitre_limit": 4.0}, "m").mitre_limit == 4.0
+    assert _allowances({"hinge": "tape"}, "m").layout == "in-place"  # the kind's usual layout when unsaid
+    with pytest.raises(VerifyError, match=r"m: malformed manifest \(state: "):
+        CutManifest.from_dict({**r.manifest, "state": 3}, "m")
+    with pytest.raises(VerifyError, match=r"malformed manifest \(tiles/0: 'tile' is a required property"):
+        CutManifest.from_dict({**r.manifest, "tiles": [{"sheet": 1}]}, "m")

@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +18,9 @@ import pytest
 import shapely
 import trimesh
 from fabkiri.errors import FabricationError, InputError
-from fabkiri.fabricate import mesh, printgeom
+from fabkiri.fabricate import mesh, pingeom, printgeom, solid
 from fabkiri.fabricate.printers import Printer, available_printers, load_printer
+from fabkiri.fabricate.styles import pinned, strips
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.io import write_pattern
 from fabkiri.pattern.lattice import standard_pattern
@@ -98,7 +100,7 @@ def test_3mf_project_volumes_materials_and_settings():
     assert [(n, m, e) for n, m, e, _, _ in vols] == [("tiles_PLA", "PLA", 1), ("hinges_TPU", "TPU", 2)]
     for (_, _, _, v, f), tm in zip(vols, r.meshes[0]):  # each volume is its body, watertight
         back = trimesh.Trimesh(v, f, process=True)
-        assert back.is_watertight and mesh.edge_defects(back.vertices, back.faces) == 0
+        assert back.is_watertight and solid.edge_defects(back.vertices, back.faces) == 0
         assert back.volume == pytest.approx(tm.volume, rel=1e-6)
     cfg = zf.read("Metadata/Slic3r_PE.config").decode()
     for line in ("; layer_height = 0.2", "; first_layer_height = 0.2", "; nozzle_diameter = 0.4,0.4",
@@ -223,16 +225,16 @@ def test_outline_vertices_a_float32_file_would_weld_are_snapped_before_writing(p
     x, d = 200.0, 3e-6
     jog = shapely.Polygon([(x - 20, 100), (x, 100), (x, 105), (x + 0.3 * d, 105 + d), (x + 0.3 * d, 110),
                            (x - 20, 110)])
-    body = mesh.Body("hinges_TPU", "hinges", (("add", mesh.Prism((jog,), 0.0, 0.6)),), "TPU")
-    assert mesh.float32_defects(mesh.to_trimesh(mesh.realise(body))) > 0  # the defect this guards against
-    grid = mesh.bed_grid(printer)
+    body = solid.Body("hinges_TPU", "hinges", (("add", solid.Prism((jog,), 0.0, 0.6)),), "TPU")
+    assert solid.float32_defects(solid.to_trimesh(solid.realise(body))) > 0  # the defect this guards against
+    grid = solid.bed_grid(printer)
     assert np.float32(150.0 + grid) != np.float32(150.0) and grid <= 6.2e-5
     b, m, tm, snap = mesh._realise_clean(body, grid)
-    assert snap == grid and mesh.float32_defects(tm) == 0
-    assert mesh.edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces) == 0
+    assert snap == grid and solid.float32_defects(tm) == 0
+    assert solid.edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces) == 0
     assert m.volume() == pytest.approx(0.6 * jog.area, abs=0.6 * grid * jog.length)
     # an outline a float32 file keeps as it is stays exact
-    plain = mesh.Body("tiles_PLA", "tiles", (("add", mesh.Prism((shapely.box(10, 10, 30, 20),), 0.0, 3.0)),), "PLA")
+    plain = solid.Body("tiles_PLA", "tiles", (("add", solid.Prism((shapely.box(10, 10, 30, 20),), 0.0, 3.0)),), "PLA")
     assert mesh._realise_clean(plain, grid)[3] == 0.0
 
 
@@ -468,7 +470,7 @@ def test_strip_parts_on_beds(printer):
         label = bed.ops[1][1].polygons[0] if len(bed.ops) > 1 else shapely.Polygon()
         assert h not in job.unlabelled and label.area > 1.0
         assert m.volume() == pytest.approx(job.strips.outline[h].area * printer.strip_thickness_mm
-                                           - label.area * mesh.ENGRAVE_LAYERS * printer.layer_mm, rel=1e-7)
+                                           - label.area * strips.ENGRAVE_LAYERS * printer.layer_mm, rel=1e-7)
         lo, hi = m.bounding_box()[:3], m.bounding_box()[3:]
         assert lo[2] == pytest.approx(0.0) and hi[2] == pytest.approx(printer.strip_thickness_mm)
     files = mesh.job_files(r, "s")
@@ -515,10 +517,10 @@ def test_pinned_refusal_names_the_scales_that_print():
     pr = load_printer("prusa-mk4")
     lo, hi = mesh.pinned_scale_range(pat, 1, pr)
     assert 0.5 < lo < hi
-    assert mesh._pinned_plans(mesh.scaled(pat, lo), 1, pr) is None
-    assert mesh._pinned_plans(mesh.scaled(pat, lo - 0.01), 1, pr) is not None
-    assert mesh._pinned_plans(mesh.scaled(pat, hi), 1, pr) is None
-    assert "does not fit" in mesh._pinned_plans(mesh.scaled(pat, hi + 0.02), 1, pr)
+    assert pinned._pinned_plans(mesh.scaled(pat, lo), 1, pr) is None
+    assert pinned._pinned_plans(mesh.scaled(pat, lo - 0.01), 1, pr) is not None
+    assert pinned._pinned_plans(mesh.scaled(pat, hi), 1, pr) is None
+    assert "does not fit" in pinned._pinned_plans(mesh.scaled(pat, hi + 0.02), 1, pr)
     # the CLI's message for the pattern given at --scale 0.5 (refused: pivots too close)
     half = mesh.scaled(pat, 0.5)
     lo2, hi2 = mesh.pinned_scale_range(half, 1, pr)
@@ -742,8 +744,8 @@ def test_solver_design_pinned_refused_where_corners_are_too_narrow(state):
                                                r"pivot of hinge (\d+).*nozzle.*tolerance 0.4 mm") as exc:
         mesh.build_job(pat, "pinned", state, pr)
     plan = printgeom.closed_plan(pat, state, pr)
-    g = printgeom.pin_geometry(pr, printgeom.pin_levels(pr))
-    rep = printgeom.clearance_slivers(plan, g, pr)
+    g = pingeom.pin_geometry(pr, pingeom.pin_levels(pr))
+    rep = pingeom.clearance_slivers(plan, g, pr)
     t = int(np.argmax(rep.deviation))
     assert rep.deviation[t] > pr.tolerance_mm and rep.slivers[t] > 0
     h = rep.near_hinge[t]
@@ -764,7 +766,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.3)
     pr = load_printer("prusa-xl")
     job = mesh.build_job(pat, "pinned", 1, pr)
-    rep_s = printgeom.clearance_slivers(job.plan, job.pins.geometry, pr)
+    rep_s = pingeom.clearance_slivers(job.plan, job.pins.geometry, pr)
     assert rep_s.deviation.max() <= pr.tolerance_mm
     r = mesh.realise_job(job)
     rep = mesh.check_meshes(r)
@@ -830,3 +832,33 @@ def test_pattern_closing_one_way_only_prints_that_way(tmp_path, run_cli):
     assert man["checks"]["verifier"]["meta"]["not_applicable"]
     code, _, err = run_cli("print", src, "--state", "1", "--scale", "10", "-o", tmp_path / "no")
     assert code == 1 and "does not close" in err and not (tmp_path / "no").exists()
+
+
+def test_a_print_style_is_one_registered_strategy(printer, monkeypatch):
+    """A style registered from outside (as a new style module would) is chosen by
+    name: build_job builds with it, check_meshes measures with its clearance check,
+    and an unknown name is refused naming the styles there are."""
+    from fabkiri.fabricate import printjob
+    from fabkiri.fabricate.styles import strips as strips_style
+
+    monkeypatch.setattr(printjob, "_REGISTRY", dict(printjob._REGISTRY))
+    measured = []
+
+    def build(pattern, state, pr):
+        return replace(strips_style.build(pattern, state, pr), style="wide-strips")
+
+    def clearances(r, rep):
+        measured.append(r.job.style)
+        strips_style.clearances(r, rep)
+
+    printjob.register_style(printjob.PrintStyle("wide-strips", build, clearances))
+    pat = with_contracted_states(standard_pattern(2, 2))
+    job = mesh.build_job(pat, "wide-strips", 1, printer)
+    rep = mesh.check_meshes(mesh.realise_job(job))
+    assert job.style == "wide-strips" and measured == ["wide-strips"] and rep.ok, rep.problems
+    assert rep.required_clearance_mm == printer.part_spacing_mm
+    with pytest.raises(FabricationError, match="unknown print style 'pleated'; choose one of strips, "
+                                               "tiles-and-strips, pinned, wide-strips"):
+        mesh.build_job(pat, "pleated", 1, printer)
+    with pytest.raises(FabricationError, match="the wide-strips style prints no tiles"):
+        mesh.check_printed_tiles(mesh.realise_job(job))

@@ -227,3 +227,19 @@ def test_target_shape_ignores_the_solver_claim():
     claims["target"]["tolerance_mm"] = 1e6
     assert verify_pattern(dataclasses.replace(p, design=claims)).get("target shape").value == chk.value
     assert not verify_pattern(p, shape_tol=(0.5 * chk.value, "mm")).get("target shape").ok
+
+
+def test_closed_state_checks_carry_stable_ids():
+    """Code selects checks by id, not by display name: every closed-state check
+    of both states has its id, and the gate's edge-pair checks are found by it."""
+    from fabkiri.mechanics.contract import with_contracted_states
+    from fabkiri.pattern.lattice import standard_pattern
+    from fabkiri.verify import verify_pattern
+
+    rep = verify_pattern(with_contracted_states(standard_pattern(3, 3)))
+    for s in (1, 2):
+        for what in ("loop-closure", "congruent-lengths", "congruent-angles", "holes-closed", "edge-pairs", "rings"):
+            assert rep.by_id(f"state{s}.{what}").ok
+        assert rep.by_id(f"state{s}.edge-pairs").name == f"state {s}: edge pairs"
+    ids = [c.id for c in rep.checks if c.id]
+    assert len(ids) == len(set(ids))

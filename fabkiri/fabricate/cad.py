@@ -1,6 +1,6 @@
 """STEP export of the printed solids with build123d (optional extra ``cad``).
 
-The solids are built from the same :class:`~fabkiri.fabricate.mesh.Body`
+The solids are built from the same :class:`~fabkiri.fabricate.solid.Body`
 descriptions as the meshes, so STEP and STL/3MF describe the same geometry
 (circles are the same regular polygons). build123d (OpenCascade) is imported
 lazily: ``fabkiri print`` without ``--step`` never loads it.
@@ -18,7 +18,7 @@ import shapely
 from shapely.geometry.polygon import orient
 
 from ..errors import FabricationError
-from .mesh import Body, Prism
+from .solid import Body, Prism
 
 _STAMP = re.compile(rb"(FILE_NAME\s*\(\s*'[^']*'\s*,\s*)'[^']*'")
 

@@ -241,7 +241,8 @@ def printer_coupon(pr: Printer) -> Coupon:
     """The printer coupon (see the module doc), centred on the bed."""
     import trimesh
 
-    from .mesh import export_3mf, to_trimesh
+    from .mesh import export_3mf
+    from .solid import to_trimesh
 
     bodies = printer_bodies(pr)
     widths = bodies.pop("widths")

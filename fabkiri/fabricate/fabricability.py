@@ -157,14 +157,14 @@ def scaled(pattern: Pattern, k: float) -> Pattern:
 
 def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> str:
     """Why the print plan of ``style`` is refused at this size ('' if accepted; the bed is not asked)."""
-    from . import printgeom
+    from . import pingeom, printgeom
 
     if not pattern.contracted and not _closes(pattern):
         return "the pattern does not close: nothing to hinge"
     try:
         plan = printgeom.closed_plan(pattern, state, printer)
         if style == "pinned":
-            printgeom.pin_plan(pattern, plan, printer)
+            pingeom.pin_plan(pattern, plan, printer)
         else:
             printgeom.strip_outlines(plan, printer)
     except FabricationError as exc:
@@ -357,10 +357,10 @@ def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: floa
     """Pinned: the checks that need no geometry (ear levels, ring wall, rigid-deployable) and the pivot
     spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
     from ..pattern.residuals import hinge_sums
-    from . import printgeom
+    from . import pingeom
 
     try:
-        g = printgeom.pin_geometry(printer, printgeom.pin_levels(printer))
+        g = pingeom.pin_geometry(printer, pingeom.pin_levels(printer))
     except FabricationError as exc:
         return PrintMinimum(None, None, str(exc))
     if np.abs(hinge_sums(pattern)).max(initial=0.0) > 1e-6:

@@ -17,6 +17,7 @@ from ..errors import CheckFailed, InputError
 from ..pattern.model import Pattern
 from ..pattern.tessellation import DEFAULT_KIND
 from ..verify import Report, verify_pattern
+from ..verify.pattern_checks import state_check_id
 
 GATE_GROUPS = ("tiles", "state 1", "state 2")  # plus each state's edge pairs (fold edges of equal length)
 # action -> (past participle, third person) for the message
@@ -56,7 +57,7 @@ def closes_gate(pattern: Pattern, tol_mm: float | None, *, scale: float = 1.0, f
     report = verify_pattern(pattern, tol_mm=None if tol_mm is None else tol_mm / scale)
     groups = ("tiles", *(f"state {s}" for s in states))
     gate = [c for c in report.checks if c.applies and not c.ok
-            and (c.group in groups or any(c.name == f"state {s}: edge pairs" for s in states))]
+            and (c.group in groups or c.id in {state_check_id(s, "edge-pairs") for s in states})]
     out = GateResult(report, gate)
     if not gate:
         return out

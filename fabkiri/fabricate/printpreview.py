@@ -24,14 +24,14 @@ def _heights(body) -> list[float]:
 def _layers(bed, manifolds, view: str) -> list[tuple[float, str, list]]:
     """Per body, the slab section nearest the face seen (the top one for the top
     view) as polygons with their holes, in painting order."""
-    from .mesh import _slice_polys
+    from .solid import section_polys
 
     out = []
     for body, m in zip(bed, manifolds):
         lo, hi = m.bounding_box()[2], m.bounding_box()[5]
         zs = [z for z in _heights(body) if lo < z < hi]
         for z in (zs[-1:] if view == "top" else zs[:1]) if zs else []:
-            out.append((z, body.material, _slice_polys(m, z)))
+            out.append((z, body.material, section_polys(m, z)))
     out.sort(key=lambda t: t[0])
     return out if view == "top" else out[::-1]
 

@@ -233,16 +233,24 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
     """:func:`fabkiri.verify.verify_layout` on every written DXF and SVG, both closed states."""
     try:
         from ..verify import verify_layout
+        from ..verify.manifest import CutManifest
     except ImportError:
         return {"ok": False, "available": False, "detail": "fabkiri.verify is not installed"}
     out = {"ok": True, "available": True, "files": {}}
     tol = result.manifest["tolerance_mm"]
-    manifest = json.loads((folder / "manifest.json").read_text("utf-8"))
+    where = str(folder / "manifest.json")
+    try:  # read and checked against its schema once, for every file
+        manifest: CutManifest | FabkiriError = CutManifest.from_json((folder / "manifest.json").read_text("utf-8"),
+                                                                     where)
+    except FabkiriError as exc:
+        manifest = exc
     for key in ("dxf", "svg"):  # the verifier reads every sheet of one format from the first
         names = [row[key] for row in result.manifest["sheets"] if row[key]]
         if not names:
             continue
         try:
+            if isinstance(manifest, FabkiriError):
+                raise manifest
             rep = verify_layout(pattern, folder / names[0], manifest=manifest, tol_mm=tol)
         except FabkiriError as exc:
             out["ok"] = False

@@ -83,6 +83,102 @@ class DxfReadback:
     bulk_entities: int = 0  # entities checked from their tags instead of being loaded by ezdxf
 
 
+@dataclass(eq=False)
+class _Tags:
+    """The ENTITIES section of a DXF split into tags, and which entities are canonical."""
+
+    lines: list[str]  # the section's lines (code, value, code, value, ...)
+    vals: list[str]  # the tag values
+    starts: np.ndarray  # first tag of every entity
+    ends: np.ndarray
+    eid: np.ndarray  # entity of every tag
+    off: np.ndarray  # tag offset within its entity
+    bad: np.ndarray  # (entities,) not in the canonical form
+    good: np.ndarray  # of the entities with canonical codes: canonical values too
+    nv: np.ndarray  # vertex counts of the entities with canonical codes
+    flags: np.ndarray
+
+    def at(self, rows: np.ndarray, o: int) -> np.ndarray:
+        """The values at tag offset ``o`` of the entities ``rows``."""
+        return np.array([self.vals[i] for i in (self.starts[rows] + o).tolist()])
+
+
+def _split_tags(lines: list[str]) -> _Tags | None:
+    """The entities of an ENTITIES section, read by tag codes with numpy; ``None`` if the
+    section is not a sequence of (code, value) tags starting with an entity."""
+    if len(lines) % 2 or not lines:
+        return None
+    codes = np.array(lines[0::2])
+    vals = lines[1::2]
+    starts = np.flatnonzero(codes == "  0")
+    if len(starts) == 0 or starts[0] != 0:
+        return None
+    ends = np.append(starts[1:], len(codes))
+    size = ends - starts
+    n_ent = len(starts)
+    # expected code of every tag if its entity were canonical
+    eid = np.repeat(np.arange(n_ent), size)
+    off = np.arange(len(codes)) - starts[eid]
+    head = np.array(_CANON_CODES)
+    expect = np.where(off % 2 == 0, " 10", " 20")
+    expect[off < len(head)] = head[off[off < len(head)]]
+    bad = np.bincount(eid, weights=(codes != expect), minlength=n_ent) > 0
+    bad |= size < len(head) + 4  # at least two vertices
+    tags = _Tags(lines, vals, starts, ends, eid, off, bad, np.zeros(0, bool), np.zeros(0, int), np.zeros(0))
+    ok_idx = np.flatnonzero(~bad)
+    kind, sub1, sub2 = tags.at(ok_idx, 0), tags.at(ok_idx, 3), tags.at(ok_idx, 5)
+    count, tags.flags = tags.at(ok_idx, 6), tags.at(ok_idx, 7)
+    tags.nv = (size[ok_idx] - len(head)) // 2
+    tags.good = (kind == "LWPOLYLINE") & (sub1 == "AcDbEntity") & (sub2 == "AcDbPolyline") \
+        & np.isin(tags.flags, ["0", "1"]) & (count == tags.nv.astype(str))
+    bad[ok_idx[~tags.good]] = True
+    return tags
+
+
+def _audit_strokes(doc, tags: _Tags, canon: np.ndarray, layer_of: np.ndarray) -> list[str]:
+    """What ezdxf's audit would say of the canonical entities: handles unique and below
+    ``$HANDSEED``, owned by the modelspace, on valid layers of the LAYER table."""
+    from ezdxf.lldxf.validator import is_valid_layer_name
+
+    errors = []
+    handles, owners = tags.at(canon, 1), tags.at(canon, 2)
+    try:
+        hv = np.array([int(h, 16) for h in handles.tolist()], dtype=np.int64)
+        seed = int(doc.header.get("$HANDSEED", "0"), 16)
+    except ValueError:
+        hv, seed = np.zeros(len(canon), dtype=np.int64), -1
+        errors.append("stroke entity with a handle that is not hexadecimal")
+    if len(np.unique(handles)) != len(handles) or any(h in doc.entitydb for h in set(handles.tolist())):
+        errors.append("stroke entities with duplicate handles")
+    if (hv <= 0).any() or (hv >= seed).any():
+        errors.append("stroke entity handle not below $HANDSEED")
+    foreign = int((owners != doc.modelspace().layout_key).sum())
+    if foreign:
+        errors.append(f"{foreign} stroke entities not owned by the modelspace")
+    names = set(layer_of.tolist())
+    invalid = sorted(n for n in names if not is_valid_layer_name(n))
+    if invalid:
+        errors.append(f"stroke entities with invalid layer names {invalid}")
+    missing = sorted(n for n in names if n not in doc.layers)
+    if missing:
+        errors.append(f"stroke entities on undefined layers {missing}")
+    return errors
+
+
+def _stroke_coords(tags: _Tags, errors: list[str]) -> np.ndarray:
+    """The 10/20 values of the canonical entities as ``(P, 2)`` floats (NaN, and an
+    error, where one is not a number)."""
+    tag = np.flatnonzero(~tags.bad[tags.eid] & (tags.off >= len(_CANON_CODES)))
+    try:
+        xy = np.array([tags.vals[i] for i in tag.tolist()], dtype=float).reshape(-1, 2)
+    except ValueError:
+        errors.append("stroke entity with a coordinate that is not a number")
+        xy = np.full((len(tag) // 2, 2), np.nan)
+    if not np.isfinite(xy).all():
+        errors.append("stroke entity with a non-finite coordinate")
+    return xy
+
+
 def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback:
     """Read a DXF once for the self checks, with the ezdxf audit.
 
@@ -105,99 +201,48 @@ def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback
     hi = text.find("  0\nENDSEC\n", lo)
     if at < 0 or hi < 0:
         return _full(data)
-    lines = text[lo:hi].split("\n")[:-1]
-    if len(lines) % 2 or not lines:
+    tags = _split_tags(text[lo:hi].split("\n")[:-1])
+    if tags is None:
         return _full(data)
-    codes = np.array(lines[0::2])
-    vals = lines[1::2]
-    starts = np.flatnonzero(codes == "  0")
-    if len(starts) == 0 or starts[0] != 0:
-        return _full(data)
-    ends = np.append(starts[1:], len(codes))
-    size = ends - starts
-    n_ent = len(starts)
-    # expected code of every tag if its entity were canonical
-    eid = np.repeat(np.arange(n_ent), size)
-    off = np.arange(len(codes)) - starts[eid]
-    head = np.array(_CANON_CODES)
-    expect = np.where(off % 2 == 0, " 10", " 20")
-    expect[off < len(head)] = head[off[off < len(head)]]
-    bad = np.bincount(eid, weights=(codes != expect), minlength=n_ent) > 0
-    bad |= size < len(head) + 4  # at least two vertices
-    ok_idx = np.flatnonzero(~bad)
-    vals_at = lambda rows, o: [vals[i] for i in (starts[rows] + o).tolist()]  # noqa: E731
-    kind = np.array(vals_at(ok_idx, 0))
-    sub1 = np.array(vals_at(ok_idx, 3))
-    sub2 = np.array(vals_at(ok_idx, 5))
-    count = np.array(vals_at(ok_idx, 6))
-    flags = np.array(vals_at(ok_idx, 7))
-    nv = (size[ok_idx] - len(head)) // 2
-    good = (kind == "LWPOLYLINE") & (sub1 == "AcDbEntity") & (sub2 == "AcDbPolyline") \
-        & np.isin(flags, ["0", "1"]) & (count == nv.astype(str))
-    bad[ok_idx[~good]] = True
-    canon = np.flatnonzero(~bad)
+    canon = np.flatnonzero(~tags.bad)
     if len(canon) <= full_max:
         return _full(data)
     # ezdxf: everything but the canonical entities
-    keep = np.flatnonzero(bad)
+    keep = np.flatnonzero(tags.bad)
+    lines, starts, ends = tags.lines, tags.starts, tags.ends
     rest = "".join("\n".join(lines[2 * starts[k]: 2 * ends[k]]) + "\n" for k in keep.tolist())
     try:
         doc = ezdxf.read(io.StringIO(text[:lo] + rest + text[hi:]))
     except Exception as exc:  # an unreadable file is a failed check, not a crash
         return DxfReadback(None, "", [f"ezdxf cannot read the file: {exc}"], {}, [])
     errors = [f"{e.code}: {e.message}" for e in doc.audit().errors]
-    handles = np.array(vals_at(canon, 1))
-    owners = np.array(vals_at(canon, 2))
-    layer_of = np.array(vals_at(canon, 4))
-    try:
-        hv = np.array([int(h, 16) for h in handles.tolist()], dtype=np.int64)
-        seed = int(doc.header.get("$HANDSEED", "0"), 16)
-    except ValueError:
-        hv, seed = np.zeros(len(canon), dtype=np.int64), -1
-        errors.append("stroke entity with a handle that is not hexadecimal")
-    if len(np.unique(handles)) != len(handles) or any(h in doc.entitydb for h in set(handles.tolist())):
-        errors.append("stroke entities with duplicate handles")
-    if (hv <= 0).any() or (hv >= seed).any():
-        errors.append("stroke entity handle not below $HANDSEED")
-    foreign = int((owners != doc.modelspace().layout_key).sum())
-    if foreign:
-        errors.append(f"{foreign} stroke entities not owned by the modelspace")
-    from ezdxf.lldxf.validator import is_valid_layer_name
-
-    names = set(layer_of.tolist())
-    invalid = sorted(n for n in names if not is_valid_layer_name(n))
-    if invalid:
-        errors.append(f"stroke entities with invalid layer names {invalid}")
-    missing = sorted(n for n in names if n not in doc.layers)
-    if missing:
-        errors.append(f"stroke entities on undefined layers {missing}")
-    # coordinates: the 10/20 values of the canonical entities
-    tag = np.flatnonzero(~bad[eid] & (off >= len(head)))
-    try:
-        xy = np.array([vals[i] for i in tag.tolist()], dtype=float).reshape(-1, 2)
-    except ValueError:
-        errors.append("stroke entity with a coordinate that is not a number")
-        xy = np.full((len(tag) // 2, 2), np.nan)
-    if not np.isfinite(xy).all():
-        errors.append("stroke entity with a non-finite coordinate")
-    n_canon = nv[good]
-    closed = flags[good] == "1"
-    point_layer = np.repeat(layer_of, n_canon)
+    layer_of = tags.at(canon, 4)
+    errors += _audit_strokes(doc, tags, canon, layer_of)
+    xy = _stroke_coords(tags, errors)
     # polylines per layer in file order: canonical ones from the tags, the others from ezdxf
     _, _, rest_in_order, others = _entities_of(doc)
     if len(rest_in_order) != len(keep):  # entities outside the modelspace: read it all with ezdxf
         return _full(data)
-    rest = [(int(k), item) for k, item in zip(keep.tolist(), rest_in_order) if item is not None]
+    items = [(int(k), item) for k, item in zip(keep.tolist(), rest_in_order) if item is not None]
+    layers = _layers_in_file_order(xy, canon, layer_of, tags.nv[tags.good], tags.flags[tags.good] == "1", items)
+    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon))
+
+
+def _layers_in_file_order(xy, canon, layer_of, n_canon, closed, items) -> dict[str, Polylines]:
+    """Polylines per layer in the file's order: the canonical ones from their tags,
+    merged by position with the ``items`` ``(entity, (layer, polyline))`` ezdxf read."""
+    point_layer = np.repeat(layer_of, n_canon)
+    names = set(layer_of.tolist())
     layers: dict[str, Polylines] = {}
-    for name in sorted(names | {item[0] for _, item in rest}, key=lambda n: LAYERS.index(n) if n in LAYERS else 99):
+    for name in sorted(names | {item[0] for _, item in items}, key=lambda n: LAYERS.index(n) if n in LAYERS else 99):
         sel = layer_of == name
         mine = Polylines(xy[point_layer == name], n_canon[sel], closed[sel])
-        extra = [(k, item[1]) for k, item in rest if item[0] == name]
+        extra = [(k, item[1]) for k, item in items if item[0] == name]
         if extra:  # merge by position in the file
             both = sorted([(int(k), pl) for k, pl in zip(canon[sel].tolist(), mine)] + extra, key=lambda kv: kv[0])
             mine = Polylines.of([pl for _, pl in both])
         layers[name] = mine
-    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon))
+    return layers
 
 
 def _entities_of(doc):

@@ -32,9 +32,9 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
-from .manifest import Allowances, _allowances, load_manifest
+from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
-from .pattern_checks import closed_state_checks, fabrication_tolerances
+from .pattern_checks import closed_state_checks, fabrication_tolerances, state_check_id
 from .quads import MAX_FITTED_SHRINK_MM, UNDO_MITRE, _fit_offset, _set_reference_aside, quads_of
 from .readers import Linework, read_cut_file
 from .recovery import _choose_cut, _drop_reference, dangling_ends, recover_polygons, sheet_material
@@ -43,7 +43,7 @@ from .report import Check, Report, measured
 # ------------------------------------------------------------------ entry point
 
 
-def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: dict[str, Any] | None = None,
+def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: CutManifest | dict[str, Any] | None = None,
                   tol_mm: float = 0.05, tol_rad: float = 1e-6) -> Report:
     """Verify a cut layout (DXF or SVG) against ``pattern`` and both closed states.
 
@@ -265,11 +265,14 @@ def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarra
                      detail="corner distance to the design's closed state under one rigid motion per sheet"))
     if not have.all() or n_sheets != 1:
         return
-    for chk in closed_state_checks(pattern, m.cut_shapes, m.state, tol):  # every tile found: the sheet's state
-        if "congruent" in chk.name or "loop closure" in chk.name:
+    # every tile found: the sheet's state (congruence is (a); the in-place fit replaces loop closure)
+    skip = {state_check_id(m.state, k) for k in ("congruent-lengths", "congruent-angles", "loop-closure")}
+    for chk in closed_state_checks(pattern, m.cut_shapes, m.state, tol):
+        if chk.id in skip:
             continue
         chk.name = f"{g}: (b) sheet {chk.name}"
         chk.group = g
+        chk.id = f"{g}.sheet.{chk.id}" if chk.id else ""
         rep.add(chk)
 
 
@@ -280,17 +283,21 @@ def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, ha
         name = f"{g}: (c) state {s} from cut tiles"
         if not have.all():
             rep.add(Check(f"{name}: loop closure", ok=False, value=None, tol=tol.length, unit="mm", group=g,
-                          detail="cannot reassemble: tiles are missing"))
+                          detail="cannot reassemble: tiles are missing",
+                          id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}"))
             continue
         Y, split = assembled(pattern, cut_shapes, s)
         rep.add(measured(f"{name}: loop closure", float(split.max(initial=0.0)), tol.length, "mm",
                          worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g,
-                         detail="hinge split of the least-squares assembly of the cut tiles"))
+                         detail="hinge split of the least-squares assembly of the cut tiles",
+                         id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}"))
+        congruent = {state_check_id(s, k) for k in ("congruent-lengths", "congruent-angles")}
         for chk in closed_state_checks(pattern, Y, s, tol):
-            if "congruent" in chk.name:
+            if chk.id in congruent:  # the cut tiles' congruence is (a)
                 continue
             chk.name = f"{name}: {chk.name.split(': ', 1)[1]}"
             chk.group = g
+            chk.id = f"{g}.reassembled.{chk.id}" if chk.id else ""
             rep.add(chk)
 
 
@@ -342,7 +349,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
         kerf = al.kerf_offset if al.hinge != "plain" else 0.0
         cores = np.full(len(cut_shapes), None, dtype=object)
         cores[have] = shapely.buffer(shapely.polygons(cut_shapes[have]), -shrink, join_style="mitre",
-                                     mitre_limit=10.0)
+                                     mitre_limit=al.mitre_limit)
         for sheet, lw in linework.items():
             on = have & (found_on == sheet)
             hinges = np.flatnonzero(on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet)))

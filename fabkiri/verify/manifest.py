@@ -2,17 +2,125 @@
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+import json
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import VerifyError
-from ..pattern.topology import STATES
+from ..schemas import load_schema, schema_problem
 
 # ------------------------------------------------------------------ manifest
+
+MITRE_LIMIT = 10.0  # the mitre limit fabkiri's writer has always used (manifests that do not say)
+SCHEMA = "cut-manifest.schema.json"
+
+
+@dataclass
+class CutManifest:
+    """``manifest.json`` beside fabkiri's cut files: the one definition the writer
+    fills (:mod:`fabkiri.fabricate.cutmanifest`) and the verifier reads.
+
+    Fields are in the order written. The defaults are what a manifest that leaves a
+    field out means (older fabkiri, a hand-made manifest, the printed tiles' top
+    faces): no kerf offset, no shrink, scale 1, closed state 1, the hinge kind's
+    usual layout (``layout`` None). Keys this version does not know are kept in
+    ``extra`` and written after the known ones. The JSON Schema (``SCHEMA``, shipped
+    beside this module) is checked on read.
+    """
+
+    format: str = "fabkiri.cut"
+    version: int = 1
+    units: str = "mm"
+    generator: str | None = None
+    pattern: str | None = None
+    pattern_name: str | None = None
+    hinge: str = "separate"
+    state: int = 1
+    layout: str | None = None
+    scale: float = 1.0
+    kerf_mm: float | None = None
+    kerf_offset_mm: float = 0.0
+    kerf_join: str = "mitre"
+    mitre_limit: float = MITRE_LIMIT
+    tile_shrink_mm: float = 0.0
+    tolerance_mm: float | None = None
+    parameters: dict[str, Any] = field(default_factory=dict)
+    material: dict[str, Any] | None = None
+    pattern_verification: dict[str, Any] | None = None
+    reference_square: dict[str, Any] | list[dict[str, Any]] | None = None
+    sheets: list[dict[str, Any]] = field(default_factory=list)
+    tiles: list[dict[str, Any]] = field(default_factory=list)
+    hinges: list[dict[str, Any]] = field(default_factory=list)
+    hinge_features: list[dict[str, Any]] = field(default_factory=list)
+    face_conflicts: int = 0
+    ligament: dict[str, Any] | None = None
+    warnings: list[str] = field(default_factory=list)
+    files: list[str] = field(default_factory=list)
+    verification: dict[str, Any] | None = None
+    assembly: dict[str, Any] | None = None
+    assembly_pieces: list[dict[str, Any]] = field(default_factory=list)
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def default_layout(self) -> str:
+        """The layout a manifest without one means: tape and ligament sheets are cut in place."""
+        return "in-place" if self.hinge in ("tape", "ligament") else "exploded"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The manifest as written (shallow: the lists and dicts are the manifest's own)."""
+        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "extra"}
+        out.update(self.extra)
+        return out
+
+    def to_json(self) -> str:
+        """The manifest as written (:func:`dumps_manifest`)."""
+        return dumps_manifest(self.to_dict())
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "manifest") -> CutManifest:
+        """A manifest read back, checked against the schema (:class:`VerifyError`,
+        one line naming the first problem, if it does not conform)."""
+        if not isinstance(data, dict):
+            raise VerifyError(f"{where}: a manifest is a JSON object")
+        problem = schema_problem(data, load_schema("fabkiri.verify", SCHEMA))
+        if problem is not None:
+            raise VerifyError(f"{where}: malformed manifest ({problem})")
+        known = {f.name for f in fields(cls)} - {"extra"}
+        return cls(**{k: v for k, v in data.items() if k in known},
+                   extra={k: v for k, v in data.items() if k not in known})
+
+    @classmethod
+    def from_json(cls, text: str, where: str = "manifest") -> CutManifest:
+        from ..limits import loads_json  # nesting depth and number bounds, as pattern.json
+
+        return cls.from_dict(loads_json(text, f"{where} (manifest)", VerifyError), where)
+
+
+ROW_LISTS = ("tiles", "hinges", "hinge_features", "assembly_pieces")  # lists written one row per line
+
+
+def dumps_manifest(manifest: dict[str, Any]) -> str:
+    """A manifest as JSON: indented, but each row of the long lists on one line.
+
+    (One row per line reads well and lets json's C encoder write the thousands of
+    rows of a large pattern; ``indent`` alone runs the pure-Python encoder.)
+    """
+    m = dict(manifest)
+    rows = {}
+    for k in ROW_LISTS:
+        if isinstance(m.get(k), list) and m[k]:
+            rows[k] = m[k]
+            m[k] = f"\u0000rows {k}"
+    text = json.dumps(m, indent=1, ensure_ascii=False)
+    for k, v in rows.items():
+        at = f'\n "{k}": ' + json.dumps(m[k], ensure_ascii=False)
+        body = ",\n".join("  " + json.dumps(r, ensure_ascii=False) for r in v)
+        if text.count(at) != 1:  # cannot happen: a top-level key is written once
+            raise RuntimeError(f"manifest key {k!r} not found once")
+        text = text.replace(at, f'\n "{k}": [\n{body}\n ]')
+    return text + "\n"
 
 
 def load_manifest(layout_path: Path) -> dict[str, Any] | None:
@@ -46,45 +154,27 @@ class Allowances:
     ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
     tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)
     labels: bool = False  # the manifest says the layout is labelled (fabkiri's tape marks come with the labels)
+    mitre_limit: float = MITRE_LIMIT  # the writer's mitre limit for its kerf offsets and shrunk tiles
 
 
-def _allowances(manifest: dict[str, Any] | None, where: str) -> Allowances:
+def _allowances(manifest: CutManifest | dict[str, Any] | None, where: str) -> Allowances:
     if manifest is None:
         return Allowances("plain", "auto", 1, 1.0, 0.0, 0.0, {}, [], {}, {})
-    try:
-        hinge = str(manifest.get("hinge", "separate"))
-        if hinge not in ("tape", "separate", "ligament"):
-            raise VerifyError(f"{where}: unknown hinge kind {hinge!r} (tape, separate or ligament)")
-        layout = str(manifest.get("layout", "in-place" if hinge in ("tape", "ligament") else "exploded"))
-        state = int(manifest.get("state", 1))
-        if state not in STATES:
-            raise VerifyError(f"{where}: state must be 1 or 2, not {state}")
-        scale = float(manifest.get("scale", 1.0))
-        kerf = float(manifest.get("kerf_offset_mm", 0.0))
-        shrink = float(manifest.get("tile_shrink_mm", 0.0))
-        if not (scale > 0 and math.isfinite(scale)) or not (kerf >= 0 and math.isfinite(kerf)) \
-                or not (shrink >= 0 and math.isfinite(shrink)):
-            raise VerifyError(f"{where}: scale must be positive and kerf_offset_mm, tile_shrink_mm non-negative")
-        ref: dict[int, np.ndarray] = {}
-        rs = manifest.get("reference_square")
-        for item in ([rs] if isinstance(rs, dict) else (rs or [])):
-            ref[int(item.get("sheet", 1))] = np.asarray(item["corners"], dtype=float).reshape(-1, 2)
-        feats = list(manifest.get("hinge_features") or [])
-        tile_sheet = {int(t["tile"]): int(t.get("sheet", 1)) for t in manifest.get("tiles") or []}
-        sheet_files = {}
-        for sh in manifest.get("sheets") or []:
-            for key in ("dxf", "svg"):
-                if sh.get(key):
-                    sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
-        cross = {int(h["hinge"]) for h in manifest.get("hinges") or [] if h.get("cross_sheet")}
-        lig = manifest.get("ligament") if isinstance(manifest.get("ligament"), dict) else {}
-        lig_w = float(lig["width_mm"]) if lig.get("width_mm") else None
-        placed = {int(t["tile"]): (float(t["rotation_rad"]), np.asarray(t["shift_mm"], dtype=float))
-                  for t in manifest.get("tiles") or [] if "rotation_rad" in t and "shift_mm" in t}
-    except VerifyError:
-        raise
-    except (TypeError, ValueError, KeyError, AttributeError) as exc:
-        raise VerifyError(f"{where}: malformed manifest ({type(exc).__name__}: {exc})") from None
-    params = manifest.get("parameters") if isinstance(manifest.get("parameters"), dict) else {}
-    return Allowances(hinge, layout, state, scale, kerf, shrink, ref, feats, tile_sheet, sheet_files, cross, lig_w,
-                      placed, bool(params.get("labels", False)))
+    m = manifest if isinstance(manifest, CutManifest) else CutManifest.from_dict(manifest, where)
+    ref: dict[int, np.ndarray] = {}
+    rs = m.reference_square
+    for item in ([rs] if isinstance(rs, dict) else (rs or [])):
+        ref[int(item.get("sheet", 1))] = np.asarray(item["corners"], dtype=float).reshape(-1, 2)
+    tile_sheet = {int(t["tile"]): int(t.get("sheet", 1)) for t in m.tiles}
+    sheet_files: dict[int, dict[str, str]] = {}
+    for sh in m.sheets:
+        for key in ("dxf", "svg"):
+            if sh.get(key):
+                sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
+    cross = {int(h["hinge"]) for h in m.hinges if h.get("cross_sheet")}
+    lig_w = float(m.ligament["width_mm"]) if m.ligament and m.ligament.get("width_mm") else None
+    placed = {int(t["tile"]): (float(t["rotation_rad"]), np.asarray(t["shift_mm"], dtype=float))
+              for t in m.tiles if "rotation_rad" in t and "shift_mm" in t}
+    return Allowances(m.hinge, m.layout or m.default_layout(), m.state, float(m.scale), float(m.kerf_offset_mm),
+                      float(m.tile_shrink_mm), ref, list(m.hinge_features), tile_sheet, sheet_files, cross, lig_w,
+                      placed, bool(m.parameters.get("labels", False)), mitre_limit=float(m.mitre_limit))

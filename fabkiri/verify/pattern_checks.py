@@ -69,16 +69,16 @@ def fabrication_tolerances(tol_mm: float, tile_size: float, tier: str = "fabrica
 
 
 def angle_check(name: str, rad: np.ndarray, sizes: np.ndarray | float, tol: Tolerances, worst: str, *,
-                group: str, detail: str = "", applies: bool = True) -> Check:
+                group: str, detail: str = "", applies: bool = True, id: str = "") -> Check:
     """An angle residual check: in rad (exact tier) or as mm of displacement at each item's tile size."""
     rad = np.asarray(rad, dtype=float)
     if not tol.mm_angles:
         return measured(name, _max(rad), tol.angle, "rad", worst=_worst(worst, rad), group=group, detail=detail,
-                        applies=applies)
+                        applies=applies, id=id)
     mm = rad * np.broadcast_to(np.asarray(sizes, dtype=float), rad.shape)
     note = f"angle residual x tile size (largest angle {_max(rad):.3g} rad)"
     return measured(name, _max(mm), tol.length, "mm", worst=_worst(worst, mm), group=group,
-                    detail=f"{detail}; {note}" if detail else note, applies=applies)
+                    detail=f"{detail}; {note}" if detail else note, applies=applies, id=id)
 
 
 def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6) -> Tolerances:
@@ -192,6 +192,11 @@ def topology_checks(pattern: Pattern) -> list[Check]:
                   worst=f"hinge {int(orphan[0])}" if len(orphan) else None, detail=detail)]
 
 
+def state_check_id(state: int | str, what: str) -> str:
+    """The stable :attr:`Check.id` of a closed-state check, e.g. ``state1.loop-closure``."""
+    return f"state{state}.{what}"
+
+
 def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances,
                         closure: np.ndarray | None = None) -> list[Check]:
     """Closedness and compactness of one closed state ``Y`` (T, n, 2)."""
@@ -200,7 +205,7 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
     out = []
     if closure is not None:
         out.append(measured(f"{g}: loop closure", _max(closure), tol.length, "mm",
-                            worst=_worst("hole", closure), group=g))
+                            worst=_worst("hole", closure), group=g, id=state_check_id(state, "loop-closure")))
     # congruence with the deployed tiles
     X = pattern.corners()
     dl = np.abs(geometry.edge_lengths(Y) - geometry.edge_lengths(X)).max(axis=1)
@@ -212,9 +217,10 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
     out.append(measured(f"{g}: tiles congruent (lengths)", _max(cong), tol.length, "mm",
                         worst=_worst("tile", cong), group=g,
                         detail=f"mirrored tiles {mirrored.tolist()}" if len(mirrored) else
-                        "per-corner edge-length change and per-tile rigid-fit residual"))
+                        "per-corner edge-length change and per-tile rigid-fit residual",
+                        id=state_check_id(state, "congruent-lengths")))
     out.append(angle_check(f"{g}: tiles congruent (angles)", da, geometry.edge_lengths(X).mean(axis=1), tol, "tile",
-                           group=g))
+                           group=g, id=state_check_id(state, "congruent-angles")))
     # holes of zero area, measured as an equivalent width 2|A|/perimeter (mm)
     if top.n_holes:
         outline = _hole_outline(pattern, Y)
@@ -225,7 +231,8 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
         hole_area = hole_width = np.zeros(0)
     out.append(measured(f"{g}: holes closed", _max(hole_width), tol.length, "mm",
                         worst=_worst("hole", hole_width), group=g,
-                        detail=f"equivalent width 2|area|/perimeter; largest |area| {_max(hole_area):.3g} mm²"))
+                        detail=f"equivalent width 2|area|/perimeter; largest |area| {_max(hole_area):.3g} mm²",
+                        id=state_check_id(state, "holes-closed")))
     # every folded gap (hole fold corner or boundary notch) closed
     if isinstance(state, int) or str(state).isdigit():
         fold = top.fold(int(state))
@@ -373,11 +380,11 @@ def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Ch
                        f"not counted)")
             res[notch] = 0.0
         out.append(measured(f"{g}: edge pairs", _max(res), tol.length, "mm", worst=_worst("hinge", res),
-                            group="design", detail=detail))
+                            group="design", detail=detail, id=state_check_id(s, "edge-pairs")))
         rings = np.abs(r.rings)
         wrapped = r.wrapped_tiles.tolist()
         out.append(angle_check(f"{g}: rings", rings, tol.tile_size, tol, "hole", group="design",
-                               detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else ""))
+                               id=state_check_id(s, "rings"), detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else ""))
     if not claimed and not tessellation(pattern.kind).rigid_family:
         return out  # θA+θB = π is the quad rigid family's test; nothing to report for other kinds
     hs = np.abs(hinge_sums(pattern))

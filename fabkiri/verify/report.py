@@ -34,6 +34,9 @@ class Check:
     count that must stay small) or ``">="`` (a size that must stay large).
     ``applies`` is False for figures measured for information only (e.g. hinge
     sums of a pattern that does not claim rigid deployability); they never fail.
+    ``id`` is a stable dotted identifier (e.g. ``state1.edge-pairs``) for code that
+    selects checks: the display ``name`` may be reworded, the id may not. (It is
+    not serialised: reports and manifests stay as they were written.)
     """
 
     name: str
@@ -46,6 +49,7 @@ class Check:
     group: str = ""
     op: str = "<="
     applies: bool = True
+    id: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -56,7 +60,7 @@ class Check:
 
 
 def measured(name: str, value: float, tol: float, unit: str, *, worst: str | None = None, detail: str = "",
-             group: str = "", op: str = "<=", applies: bool = True) -> Check:
+             group: str = "", op: str = "<=", applies: bool = True, id: str = "") -> Check:
     """A check whose verdict is the comparison of ``value`` with ``tol``.
 
     A NaN value (nothing could be measured) fails.
@@ -69,7 +73,7 @@ def measured(name: str, value: float, tol: float, unit: str, *, worst: str | Non
     else:
         ok = v >= tol
     return Check(name=name, ok=bool(ok) or not applies, value=v, tol=tol, unit=unit, worst=worst,
-                 detail=detail, group=group, op=op, applies=applies)
+                 detail=detail, group=group, op=op, applies=applies, id=id)
 
 
 @dataclass
@@ -101,6 +105,13 @@ class Report:
             if c.name == name:
                 return c
         raise KeyError(name)
+
+    def by_id(self, id: str) -> Check:
+        """The check whose stable :attr:`Check.id` is ``id`` (KeyError if absent)."""
+        for c in self.checks:
+            if c.id == id:
+                return c
+        raise KeyError(id)
 
     def names(self) -> list[str]:
         return [c.name for c in self.checks]

@@ -1,0 +1,90 @@
+"""Ligament hinges: the tiles shrunk by half the gap and joined by strips of the
+sheet itself (living hinges), cut in place as one piece of material.
+
+The free spans of the strips (material not in any tile) are declared in the
+manifest, so the verifier can check each ligament's width and length.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+from ...errors import FabricationError
+from ...pattern import fabricability as fab
+from .. import fabricability as fb
+from .. import hinges as hg
+from ..drawing import snap
+from . import Cutting, HingeKind, register
+
+FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
+
+
+class Ligament(HingeKind):
+    name = "ligament"
+
+    def prepare(self, pattern, corners, tile_polys, mat, *, state, scale, options) -> Cutting:
+        shrink = mat.gap_mm / 2
+        try:
+            regions = hg.shrink_tiles(corners, shrink)
+        except FabricationError as exc:
+            lost = np.flatnonzero((fab.shrunk_edges(corners, shrink) <= fab.EDGE_EPS_MM).any(-1))
+            raise fb.lost_edge(corners, mat, self.name, scale, int(lost[0])) from exc
+        lig = hg.ligament_design(pattern, corners, regions, gap=mat.gap_mm, width_max=mat.ligament_width_mm,
+                                 min_web=mat.min_web_mm, kerf=mat.kerf_mm, strain_limit=mat.strain_limit,
+                                 turn_rad=np.radians(options.turn_deg), width=options.ligament_width)
+        strips = hg.ligament_strips(lig.apex, lig.width_mm, embed=max(0.5, lig.width_mm))
+        return Cutting(corners, regions, shapely.polygons(corners), label_margin=0.5, offset=mat.kerf_offset_mm,
+                       shrink=shrink, ligament=lig, strips=strips, warnings=list(lig.warnings))
+
+    def draw(self, sd, sheet, cutting) -> list[dict]:
+        s, on, place = sheet.index, sheet.tiles, sheet.place
+        A, B = sheet.hinge_tiles.T
+        same = np.flatnonzero((sheet.sheet_of[A] == s) & (sheet.sheet_of[B] == s))
+        shift = place.shift[on[0]]
+        small = shapely.polygons(sheet.regions[on])
+        moved_strips = shapely.transform(cutting.strips[same], lambda c, d=shift: c + d)
+        material = shapely.union_all(np.concatenate([small, moved_strips]), grid_size=hg.GRID)
+        ext, inner = hg.rings_of(hg.kerf_outset(material, cutting.offset))
+        for p in inner:
+            sd.add("CUT", p, True)
+        for p in ext:
+            sd.add("CUT", p, True)
+        return _spans(material, small, moved_strips, same, s)
+
+
+def _spans(material, small: np.ndarray, moved_strips: np.ndarray, same: np.ndarray, s: int) -> list[dict]:
+    """The free spans: material not in any tile, from the same snapped geometry as
+    the cut, one manifest entry per polygon of each hinge's span."""
+    tiles_here = shapely.union_all(small, grid_size=hg.GRID)
+    tile_tree = shapely.STRtree(small)
+    free = shapely.get_parts(shapely.difference(material, tiles_here, grid_size=hg.GRID))
+    free = free[shapely.area(free) > 0]
+    # a span may touch two strips (then it is listed for both)
+    part_i, strip_i = shapely.STRtree(moved_strips).query(free, predicate="intersects")
+    order = np.lexsort((part_i, strip_i))
+    part_i, strip_i = part_i[order], strip_i[order]
+    owners, first, counts = np.unique(strip_i, return_index=True, return_counts=True)
+    spans = np.array([free[part_i[f]] if c == 1 else shapely.union_all(free[part_i[f:f + c]], grid_size=hg.GRID)
+                      for f, c in zip(first, counts)], dtype=object)
+    # padded so rounding never leaves a hairline of material along the strip joining the
+    # two tiles, then clipped by the tiles so no tile loses a corner
+    spans = shapely.buffer(spans, FEATURE_PAD_MM, join_style="mitre")
+    si, ti = tile_tree.query(spans, predicate="intersects")
+    rank = np.zeros(len(si), dtype=np.int64)
+    for r in range(1, len(si)):
+        rank[r] = rank[r - 1] + 1 if si[r] == si[r - 1] else 0
+    for r in range(int(rank.max(initial=-1)) + 1):
+        sel = rank == r
+        spans[si[sel]] = shapely.difference(spans[si[sel]], small[ti[sel]], grid_size=hg.GRID)
+    spans = shapely.normalize(spans)
+    feats = []
+    for j, geom in zip(owners, spans):
+        for g in shapely.get_parts(geom):  # one entry per polygon (a span may come in parts)
+            if g.geom_type == "Polygon" and not g.is_empty:
+                feats.append({"hinge": int(same[j]), "sheet": s + 1,
+                              "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist()})
+    return feats
+
+
+LIGAMENT = register(Ligament())

@@ -1,0 +1,39 @@
+"""Tape hinges: the tiles cut in place, side by side, and joined with tape after cutting.
+
+Coincident tile corners are one node of the linework, so the laser cuts each
+shared edge once; tile A's corner of a hinge carries its face letter and tile
+B's a chord where the tape ends.
+"""
+
+from __future__ import annotations
+
+import shapely
+
+from .. import hinges as hg
+from . import Cutting, HingeKind, register
+
+
+class Tape(HingeKind):
+    name = "tape"
+    face_letter_corners = True
+    tape_marks = True
+
+    def prepare(self, pattern, corners, tile_polys, mat, *, state, scale, options) -> Cutting:
+        # corners a solver left apart by less than the tolerance are one node of the linework
+        eps = 0.5 * mat.tolerance_mm
+        corners = hg.snap_corners(corners, eps, hg.closure_pairs(pattern, state))
+        corners = hg.snap_corners(hg.snap_to_edges(corners, eps), eps, hg.closure_pairs(pattern, state))
+        return Cutting(corners, corners, shapely.polygons(corners), label_margin=0.5 + mat.kerf_mm / 2)
+
+    def draw(self, sd, sheet, cutting) -> list[dict]:
+        rings, lines = hg.tape_linework(sheet.corners[sheet.tiles])
+        for p in lines:
+            sd.add("CUT", p, False)
+        for p in rings:
+            sd.add("CUT", p, True)
+        return []
+
+
+TAPE = register(Tape())
+
+

@@ -1,0 +1,131 @@
+"""A print job, its solids, and the registry of print styles.
+
+A print style turns a closed state into the bodies printed on each bed
+(:class:`PrintJob`) and says how the clearances between them are measured. The
+styles are one module each in :mod:`fabkiri.fabricate.styles`, loaded on first
+use as trimesh loads its file-format handlers; a new style is one module that
+calls :func:`register_style` and one line in :data:`_BUILTIN`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
+
+from ..errors import FabricationError
+from . import pingeom, printgeom
+from .printers import Printer
+from .solid import Body
+
+if TYPE_CHECKING:
+    from ..pattern.model import Pattern
+    from .meshchecks import MeshReport
+
+
+@dataclass(frozen=True, eq=False)
+class PrintJob:
+    """Everything one ``fabkiri print`` run produces, before writing.
+
+    ``beds[k]`` lists the bodies printed together on bed k; ``shift`` moved the
+    closed-state plan onto the bed (for whole-pattern styles).
+    """
+
+    style: str
+    state: int
+    printer: Printer
+    plan: printgeom.ClosedPlan
+    beds: list[list[Body]]
+    shift: tuple[float, float] = (0.0, 0.0)
+    strips: printgeom.Strips | None = None
+    pins: pingeom.PinPlan | None = None
+    placements: list[dict] = field(default_factory=list)  # strips style: where each part went
+    unlabelled: list[int] = field(default_factory=list)  # strips too small for their engraved ID
+    layout: str = "recessed"  # tiles-and-strips: "recessed" or "stacked" (see tiles_and_strips)
+    layer_changes: list = field(default_factory=list)  # (print_z, kind, material) filament swaps, one extruder
+
+    def z_levels(self) -> dict[str, float]:
+        """Heights (mm) of the sections the checks take: bottom strips, bare tile, top strips."""
+        T, ts = self.printer.tile_thickness_mm, self.printer.strip_thickness_mm
+        if self.layout == "stacked":
+            return {"bottom": 0.5 * ts, "tiles": 0.5 * (ts + T), "top": T + 0.5 * ts}
+        return {"bottom": 0.5 * ts, "tiles": 0.5 * T, "top": T - 0.5 * ts}
+
+
+def fits(bounds, printer: Printer, what: str) -> None:
+    """Refuse a plan whose ``bounds`` (x0, y0, x1, y1 in mm) overhang the printer's bed."""
+    w, h = bounds[2] - bounds[0], bounds[3] - bounds[1]
+    bx, by, _ = printer.bed_mm
+    if w > bx or h > by:
+        raise FabricationError(
+            f"{what} is {w:.1f} x {h:.1f} mm and does not fit the {bx:g} x {by:g} mm bed of printer "
+            f"{printer.name}; scale the pattern down, choose a larger printer or use --style strips"
+        )
+
+
+def centre_shift(bounds, printer: Printer) -> tuple[float, float]:
+    """The shift that centres ``bounds`` on the bed."""
+    bx, by, _ = printer.bed_mm
+    return 0.5 * bx - 0.5 * (bounds[0] + bounds[2]), 0.5 * by - 0.5 * (bounds[1] + bounds[3])
+
+
+def scaled(pattern: Pattern, k: float) -> Pattern:
+    """The pattern ``k`` times its size (nodes and stored closed states)."""
+    return replace(pattern, nodes=pattern.nodes * k, contracted={s: c * k for s, c in pattern.contracted.items()})
+
+
+@dataclass(eq=False)
+class Realised:
+    """A job with its solids: ``manifolds[k][i]`` is body i of bed k."""
+
+    job: PrintJob
+    manifolds: list[list]
+    meshes: list[list]
+    snaps: list[list[float]] = field(default_factory=list)  # grid (mm) a body's outlines were snapped to, 0: exact
+
+@dataclass(frozen=True, eq=False)
+class PrintStyle:
+    """One way of printing a closed state (a strategy object, chosen by name).
+
+    ``build`` makes the job; ``clearances`` measures, on the realised solids,
+    the clearances between bodies that may move apart, filling a
+    :class:`~.meshchecks.MeshReport`. ``tiles`` gives the solid of the printed
+    tiles, the height of the section the tile check takes, and what that check
+    masks out (``None``: the style prints no tiles). ``advise`` adds to a refusal
+    what would make the job print. With ``body_per_material`` each bed holds one
+    body per material (one STL each; their overlap is their intersection).
+    """
+
+    name: str
+    build: Callable[[Pattern, int, Printer], PrintJob]
+    clearances: Callable[[Realised, MeshReport], None]
+    tiles: Callable[..., tuple[Any, float, Any]] | None = None
+    advise: Callable[[Pattern, int, Printer, float], str] | None = None
+    body_per_material: bool = False
+
+
+# built-in styles, imported when first asked for (their modules call register_style())
+_BUILTIN = {"strips": "fabkiri.fabricate.styles.strips",
+            "tiles-and-strips": "fabkiri.fabricate.styles.tiles_and_strips",
+            "pinned": "fabkiri.fabricate.styles.pinned"}
+STYLES = tuple(_BUILTIN)
+_REGISTRY: dict[str, PrintStyle] = {}
+
+
+def register_style(style: PrintStyle) -> PrintStyle:
+    """Add a style to the registry (a style's module calls this when it is imported)."""
+    _REGISTRY[style.name] = style
+    return style
+
+
+def print_style(name: str) -> PrintStyle:
+    """The registered style of this name, or :class:`FabricationError` naming the known ones."""
+    found = _REGISTRY.get(name)
+    if found is None and name in _BUILTIN:
+        importlib.import_module(_BUILTIN[name])
+        found = _REGISTRY.get(name)
+    if found is None:
+        known = ", ".join(dict.fromkeys((*STYLES, *_REGISTRY)))
+        raise FabricationError(f"unknown print style {name!r}; choose one of {known}")
+    return found
