@@ -132,8 +132,8 @@ def test_design_kagome_circle_meets_every_check(tmp_path, run_cli):
     assert code == 0, err
 
 
-@pytest.mark.parametrize("command", ["cut", "print"])
-def test_cut_and_print_refuse_kagome_patterns_and_write_nothing(command, tmp_path, run_cli):
+@pytest.mark.parametrize("command", ["print"])  # cut takes kagome: tests/test_kagome_cut.py
+def test_print_refuses_kagome_patterns_and_write_nothing(command, tmp_path, run_cli):
     src = tmp_path / "k.json"
     io.write_pattern(with_contracted_states(standard_kagome(3, 4)), src)
     out = tmp_path / "out"

@@ -44,7 +44,8 @@ def join_order(pattern: Pattern, hinges: np.ndarray, top: np.ndarray) -> np.ndar
 
 def _corner_triangles(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: float, reach_mm: float) -> np.ndarray:
     q = Q[tiles, ks]
-    q1, q0 = Q[tiles, (ks + 1) % 4], Q[tiles, (ks + 3) % 4]
+    n = Q.shape[1]  # the tile arity
+    q1, q0 = Q[tiles, (ks + 1) % n], Q[tiles, (ks - 1) % n]
 
     def reach(a, b):
         return np.minimum(frac, reach_mm / np.maximum(np.linalg.norm(b - a, axis=1), 1e-300))[:, None]

@@ -51,8 +51,8 @@ def closes_gate(pattern: Pattern, tol_mm: float | None, *, scale: float = 1.0, f
     """Verify ``pattern`` at ``tol_mm`` (in the file's mm, the pattern drawn ``scale`` times its size;
     None: the verifier's own tolerance); raise :class:`CheckFailed` unless its tiles and ``states``
     close, or ``force``."""
-    if action in ("cut", "print") and pattern.kind != DEFAULT_KIND:
-        # the hinge geometry and the cut-file read-back are quad-only (docs/kagome.md)
+    if action == "print" and pattern.kind != DEFAULT_KIND:
+        # the printed hinges (strips, pins) are quad-only; cut reads the tile arity (docs/kagome.md)
         raise InputError(f"{action} makes quad patterns only, not {pattern.kind} patterns yet")
     report = verify_pattern(pattern, tol_mm=None if tol_mm is None else tol_mm / scale)
     groups = ("tiles", *(f"state {s}" for s in states))

@@ -23,6 +23,7 @@ from scipy.spatial import cKDTree
 from ..errors import FabricationError
 from ..pattern import fabricability as fab
 from ..pattern.model import Pattern
+from ..pattern.tessellation import tessellation
 
 GRID = 1e-6  # mm: every coordinate written is snapped to this grid
 MITRE_LIMIT = 10.0  # exact kerf offsets down to 11.5° corners (shapely default 5: 23°)
@@ -83,7 +84,7 @@ def assign_faces(pattern: Pattern, states: dict[int, np.ndarray]) -> FaceAssignm
 
 
 def closure_pairs(pattern: Pattern, state: int) -> np.ndarray:
-    """Flat corner ids ``4 t + k`` that meet in a closed state by construction.
+    """Flat corner ids ``n t + k`` (``n`` the tile arity) that meet in a closed state by construction.
 
     The two corners of every hinge, and the far ends of the two edges that
     fold onto each other in ``state``.
@@ -92,7 +93,8 @@ def closure_pairs(pattern: Pattern, state: int) -> np.ndarray:
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
     ends = top.fold(state).fold_corner_ends
-    return np.concatenate([np.stack([4 * A + cA, 4 * B + cB], 1), np.stack([4 * A + ends[:, 0], 4 * B + ends[:, 1]], 1)])
+    n = tessellation(pattern.kind).arity
+    return np.concatenate([np.stack([n * A + cA, n * B + cB], 1), np.stack([n * A + ends[:, 0], n * B + ends[:, 1]], 1)])
 
 
 def snap_corners(corners: np.ndarray, eps: float, pairs: np.ndarray | None = None) -> np.ndarray:
@@ -134,7 +136,8 @@ def snap_to_edges(corners: np.ndarray, eps: float) -> np.ndarray:
     seg = np.stack([corners, np.roll(corners, -1, axis=1)], 2).reshape(-1, 2, 2)
     tree = shapely.STRtree(shapely.linestrings(seg))
     pi, ei = tree.query(shapely.points(flat), predicate="dwithin", distance=eps)
-    keep = (pi // 4) != (ei // 4)
+    n = corners.shape[1]  # the tile arity: flat point and edge ids are n t + k
+    keep = (pi // n) != (ei // n)
     pi, ei = pi[keep], ei[keep]
     if len(pi) == 0 or T == 0:
         return corners.copy()

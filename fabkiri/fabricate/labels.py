@@ -84,7 +84,8 @@ def engrave_labels(sheets: list[SheetDrawing], Q: np.ndarray, sheet_of: np.ndarr
     ct, ck, c_text = _corner_labels(A, B, cA, cB, letters, cross, kind)
     if len(ct):
         q = Q[ct, ck]
-        q1, q0 = Q[ct, (ck + 1) % 4], Q[ct, (ck + 3) % 4]
+        n = Q.shape[1]  # the tile arity
+        q1, q0 = Q[ct, (ck + 1) % n], Q[ct, (ck - 1) % n]
         # corner labels fit the triangle the tape covers (its chord is the tape mark's)
         tri = np.stack([q, q + tape_reach(q, q1)[:, None] * (q1 - q),
                         q + tape_reach(q, q0)[:, None] * (q0 - q)], 1)

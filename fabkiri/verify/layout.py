@@ -30,12 +30,20 @@ from ..errors import VerifyError
 from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.model import Pattern
+from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
 from .pattern_checks import closed_state_checks, fabrication_tolerances, state_check_id
-from .quads import MAX_FITTED_SHRINK_MM, UNDO_MITRE, _fit_offset, _set_reference_aside, quads_of
+from .quads import (
+    MAX_FITTED_SHRINK_MM,
+    UNDO_MITRE,
+    _fit_offset,
+    _set_reference_aside,
+    quads_of,
+    tiles_of,
+)
 from .readers import Linework, read_cut_file
 from .recovery import _choose_cut, _drop_reference, dangling_ends, recover_polygons, sheet_material
 from .report import Check, Report, measured
@@ -106,17 +114,17 @@ def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D:
     rec = _Recovered()
     n_lines = 0
     frame = _frame_tiles(pattern, al)
+    arity = tessellation(pattern.kind).arity  # corners per tile
     for sheet, f in files.items():
         lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol)
         _drop_reference(lw, al.reference.get(sheet))
         rec.linework[sheet] = lw
         n_lines += len(lw.polylines)
         on = [t for t in range(pattern.n_tiles) if al.tile_sheet.get(t, 1) == sheet]
-        polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None)
+        polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None, arity)
         rec.methods.add(method)
         polys = polys[shapely.area(polys) > tol ** 2]  # double-cut hairlines are not tiles
-        quads, bad = quads_of(polys)
-        quads, side = _set_reference_aside(quads, D, L, tol)
+        quads, side, bad = _tiles_and_reference(polys, arity, D, L, tol)
         if side is not None:
             rec.references.append(side)
         rec.unusable += bad
@@ -127,6 +135,19 @@ def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D:
     return rec
 
 
+def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float, tol: float):
+    """The tiles (corners in the design's arity), the reference square's side (None without one) and
+    how many regions are neither. The square is looked for among the quads: the tiles themselves
+    when they are quads, the regions that are not tiles otherwise."""
+    tiles, ok = tiles_of(polys, arity)
+    if arity == 4:
+        tiles, side = _set_reference_aside(tiles, D, L, tol)
+        return tiles, side, int((~ok).sum())
+    squares, _ = quads_of(polys[~ok], 4)
+    _, side = _set_reference_aside(squares, D, L, tol)
+    return tiles, side, int((~ok).sum()) - (side is not None)
+
+
 def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: float,
                  rep: Report) -> tuple[bool, bool, float | None]:
     """In place or separate, a ligament sheet or not, and (plain files) the kerf offset fitted."""
@@ -134,7 +155,7 @@ def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: 
     sheet_piece = any(m.startswith("material") for m in rec.methods)  # a ligament sheet: tiles in place, shrunk
     sheets = rec.sheets
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
-        allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, 4, 2))
+        allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, D.shape[1], 2))
         if len(allq):
             u = shapely.unary_union(shapely.make_valid(shapely.polygons(allq))).buffer(tol)
             in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
@@ -147,7 +168,7 @@ def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: 
         if fitted:
             for k, R in sheets.items():
                 sheets[k], bad = quads_of(shapely.buffer(shapely.polygons(R), -fitted, join_style="mitre",
-                                                         mitre_limit=UNDO_MITRE))
+                                                         mitre_limit=UNDO_MITRE), R.shape[1])
                 rec.unusable += bad
         rep.meta["kerf_offset_fitted_mm"] = fitted
     return in_place, sheet_piece, fitted
@@ -183,7 +204,8 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
         fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
         state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
         rep.meta["state"] = state
-    m = _Matched(state, np.full(T, -1), np.full(T, -1), np.full((T, 4, 2), np.nan), np.full(T, np.nan), 0, [])
+    k = D.shape[1]  # the tile arity
+    m = _Matched(state, np.full(T, -1), np.full(T, -1), np.full((T, k, 2), np.nan), np.full(T, np.nan), 0, [])
     Ystate = closed(state)
     for sheet, R in sheets.items():
         if in_place:
@@ -198,7 +220,7 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
         d = a[r]
         m.assign[d] = r
         m.found_on[d] = sheet
-        m.cut_shapes[d] = R[r[:, None], (np.arange(4)[None, :] + sh[r][:, None]) % 4]  # corner shift
+        m.cut_shapes[d] = R[r[:, None], (np.arange(k)[None, :] + sh[r][:, None]) % k]  # corner shift
         if in_place:
             m.resid_pos[d] = res[r]
     return m
@@ -217,9 +239,10 @@ def _match_sheet_in_place(al: Allowances, m: _Matched, sheet: int, R: np.ndarray
     if only_sheet:  # a symmetric sheet: the other labelings as good as this one
         for aa, rr, ss in alts:
             if (aa >= 0).sum() == T and np.max(rr[aa >= 0]) <= tol:
-                C = np.full((T, 4, 2), np.nan)
+                n = R.shape[1]  # the tile arity
+                C = np.full((T, n, 2), np.nan)
                 k = np.flatnonzero(aa >= 0)
-                C[design_ids[aa[k]]] = R[k[:, None], (np.arange(4)[None, :] + ss[k][:, None]) % 4]
+                C[design_ids[aa[k]]] = R[k[:, None], (np.arange(n)[None, :] + ss[k][:, None]) % n]
                 m.labelings.append(C)
     return a, res, sh
 

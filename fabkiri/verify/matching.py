@@ -17,12 +17,12 @@ from ..pattern.model import Pattern
 
 def _shift_fit(D: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Best cyclic corner shift of R onto D (per pair) and the max corner residual
-    after a proper rigid fit. ``D``, ``R``: (n, 4, 2)."""
+    after a proper rigid fit. ``D``, ``R``: (n, k, 2), k the tile arity."""
     from .geom import tile_kabsch
 
     best = np.full(len(D), np.inf)
     shift = np.zeros(len(D), dtype=np.int64)
-    for s in range(4):
+    for s in range(R.shape[1]):
         _, res = tile_kabsch(D, np.roll(R, -s, axis=1))
         better = res < best
         best[better], shift[better] = res[better], s
@@ -124,11 +124,12 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: l
     r0 = int(np.argmin(np.linalg.norm(cr - cr.mean(0), axis=1)))
     cands = np.argsort(np.linalg.norm(cy - cy.mean(0), axis=1))[:n_hyp]
     tree = cKDTree(cr)
-    R4 = np.stack([np.roll(R, -k, axis=1) for k in range(4)])  # every corner shift, once
+    k_ar = R.shape[1]  # the tile arity
+    R4 = np.stack([np.roll(R, -k, axis=1) for k in range(k_ar)])  # every corner shift, once
     best = None
     hyps = []
     for d in cands:
-        for s in range(4):
+        for s in range(k_ar):
             theta, t = geometry.kabsch(Y[d], np.roll(R[r0], -s, axis=0))
             moved = geometry.rotate(Y, theta) + t  # design tiles in the sheet frame
             # score: mean corner residual of the nearest tiles, capped at a tile
@@ -156,7 +157,8 @@ def _refit(Y, R, theta, t, tree):
     if ok.sum() >= 1:
         src = Y[assign[ok]]
         i = np.flatnonzero(ok)
-        dst = R[i[:, None], (np.arange(4)[None, :] + shift[i][:, None]) % 4]
+        k = R.shape[1]  # the tile arity
+        dst = R[i[:, None], (np.arange(k)[None, :] + shift[i][:, None]) % k]
         theta, t = geometry.kabsch(src, dst)
         assign, resid, shift = _assign_positions(Y, R, theta, t, tree)
     return assign, resid, shift, float(theta), t
@@ -176,7 +178,7 @@ def _assign_positions(Y, R, theta, t, tree):
     d = order[first]
     r = idx[d]
     diff = np.stack([np.linalg.norm(np.roll(R[r], -s, axis=1) - moved[d], axis=-1).max(axis=1)
-                     for s in range(4)], axis=1)
+                     for s in range(R.shape[1])], axis=1)
     s = diff.argmin(axis=1)
     assign[r], resid[r], shift[r] = d, diff[np.arange(len(r)), s], s
     return assign, resid, shift

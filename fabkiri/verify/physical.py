@@ -72,7 +72,8 @@ def ligament_check(pattern: Pattern, material, cores: np.ndarray, have: np.ndarr
 def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
     """Whether a segment of ``segs`` (n, 2, 2) spans corner ``k`` of tile ``Q``: one end within
     MARK_EDGE_MM of each of its two edges, both inside the corner, long enough not to be a letter."""
-    q, q1, q0 = Q[k], Q[(k + 1) % 4], Q[(k + 3) % 4]
+    n = len(Q)  # the tile arity
+    q, q1, q0 = Q[k], Q[(k + 1) % n], Q[(k - 1) % n]
     e1, e0 = q1 - q, q0 - q
     l1, l0 = np.linalg.norm(e1), np.linalg.norm(e0)
     if not len(segs) or l1 == 0 or l0 == 0:
@@ -101,8 +102,9 @@ def tape_mark_chords(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, margin: f
     ``margin`` inside both tile edges, ``(n, 2, 2)``; NaN where the margins take ``fit`` of the chord
     or more (no room). One rule for the writer (``fit=MARK_FIT``) and the check (``MARK_EXPECT``)."""
     q = Q[tiles, ks]
-    q1 = Q[tiles, (ks + 1) % 4]
-    q0 = Q[tiles, (ks + 3) % 4]
+    n = Q.shape[1]  # the tile arity
+    q1 = Q[tiles, (ks + 1) % n]
+    q0 = Q[tiles, (ks - 1) % n]
     a = q + tape_reach(q, q1)[:, None] * (q1 - q)
     b = q + tape_reach(q, q0)[:, None] * (q0 - q)
     chord = b - a
@@ -127,7 +129,7 @@ def _segments_near(segs: dict[int, np.ndarray]):
     def near(sheet: int, Q: np.ndarray, k: int) -> np.ndarray:
         if sheet not in trees:
             return none
-        reach = geometry.edge_lengths(Q)[[k, (k + 3) % 4]].max() + 2 * MARK_EDGE_MM
+        reach = geometry.edge_lengths(Q)[[k, (k - 1) % len(Q)]].max() + 2 * MARK_EDGE_MM
         return segs[sheet][trees[sheet].query_ball_point(Q[k], reach)]
     return near
 

@@ -17,8 +17,8 @@ from .readers import JOIN_MM, SNAP_MM, Linework
 EDGE_ON_MM = 0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core
 
 
-def _on_cut_edges(parts: np.ndarray, material) -> np.ndarray:
-    """Opened tile cores as quads whose sides lie on the material's own cut edges.
+def _on_cut_edges(parts: np.ndarray, material, arity: int = 4) -> np.ndarray:
+    """Opened tile cores as ``arity``-gons whose sides lie on the material's own cut edges.
 
     An opening leaves each tile's sides exact away from the ligament roots, but a root leaves a
     bump (or, at a mitre, a spike) that can pull a corner off. Each core's coarse quad is kept only
@@ -39,22 +39,22 @@ def _on_cut_edges(parts: np.ndarray, material) -> np.ndarray:
     pi, si = shapely.STRtree(mids).query(rings, predicate="dwithin", distance=EDGE_ON_MM)
     # one pass over every (part, cut edge) pair: the coarse quad of each part that has pairs
     K = len(out)
-    Q = np.full((K, 4, 2), np.nan)
+    Q = np.full((K, arity, 2), np.nan)
     has_q = np.zeros(K, bool)
     for k in np.unique(pi):
         if out[k].geom_type == "Polygon":
-            q = quad_corners(out[k])
+            q = quad_corners(out[k], n=arity)
             if q is not None:
                 Q[k], has_q[k] = q, True
     keep = has_q[pi]
     pi, si = pi[keep], si[keep]
-    q = Q[pi]  # (P, 4, 2) the quad of each pair's part
+    q = Q[pi]  # (P, arity, 2) the polygon of each pair's part
     e = segs[si, 1] - segs[si, 0]
     elen = np.linalg.norm(e, axis=1)
     side = np.roll(q, -1, 1) - q
     slen = np.linalg.norm(side, axis=-1)
     m = segs[si].mean(axis=1)
-    dist = np.stack([point_segment_distance(m, q[:, i], q[:, (i + 1) % 4]) for i in range(4)], 1)
+    dist = np.stack([point_segment_distance(m, q[:, i], q[:, (i + 1) % arity]) for i in range(arity)], 1)
     along = np.abs(geometry.cross2(e[:, None, :], side)) <= 0.17 * elen[:, None] * slen
     dist = np.where(along & (dist <= 0.1 * slen), dist, np.inf)
     which = np.where(np.isfinite(dist).any(axis=1), dist.argmin(axis=1), -1)
@@ -62,14 +62,14 @@ def _on_cut_edges(parts: np.ndarray, material) -> np.ndarray:
     ok = which >= 0
     order = np.lexsort((np.arange(len(pi))[ok], -elen[ok], which[ok], pi[ok]))
     idx = np.flatnonzero(ok)[order]
-    key = pi[idx] * 4 + which[idx]
+    key = pi[idx] * arity + which[idx]
     first = np.r_[True, key[1:] != key[:-1]]
-    best = np.full((K, 4), -1)
+    best = np.full((K, arity), -1)
     best.reshape(-1)[key[first]] = idx[first]
     full = (best >= 0).all(axis=1)
     ks = np.flatnonzero(full)
-    b = best[ks]  # (n, 4) pair index of each side's line
-    P0, D = segs[si[b], 0], e[b]  # (n, 4, 2)
+    b = best[ks]  # (n, arity) pair index of each side's line
+    P0, D = segs[si[b], 0], e[b]  # (n, arity, 2)
     p1, d1 = np.roll(P0, 1, axis=1), np.roll(D, 1, axis=1)  # side i-1 meets side i at corner i
     den = geometry.cross2(d1, D)
     par = np.abs(den) < 1e-9 * np.linalg.norm(d1, axis=-1) * np.linalg.norm(D, axis=-1)
@@ -96,7 +96,7 @@ def _declared_strips_moved(parts, strips, frame_tiles, al: Allowances):
     if strips is None or frame_tiles is None or not len(parts):
         return None
     grown = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0) if al.tile_shrink else parts
-    quads, _ = quads_of(grown)
+    quads, _ = quads_of(grown, frame_tiles.shape[1])
     a, res, _, theta, t = match_in_place(frame_tiles, quads)
     if (a >= 0).sum() < max(3, len(frame_tiles) // 2):
         return None
@@ -178,8 +178,10 @@ def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float)
     square = (e.max(axis=1) - e.min(axis=1) <= tol) & (np.abs(diag[0] - diag[1]) <= tol)
     if not square.any():
         return quads, None
-    _, res, _ = match_by_shape(D, quads[square], L)
-    cand = np.flatnonzero(square)[res > tol]
+    cand = np.flatnonzero(square)
+    if D.shape[1] == 4:  # a square may be a design tile; other tiles never are
+        _, res, _ = match_by_shape(D, quads[square], L)
+        cand = cand[res > tol]
     if not len(cand):
         return quads, None
     k = int(cand[np.argmax(e[cand].mean(axis=1))])
@@ -197,12 +199,15 @@ def _feature_geometry(poly: Any):
         raise VerifyError(f"malformed hinge feature polygon in the manifest ({exc})") from None
 
 
-def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | None:
-    """The four corners (CCW) of a recovered tile region, or None.
+MAX_SIMPLIFIED_AREA = 0.25  # dropping the extra vertices of a bevelled or notched tile changes its area less
+
+
+def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM, n: int = 4) -> np.ndarray | None:
+    """The ``n`` corners (CCW; ``n`` the tile arity, four for quads) of a recovered tile region, or None.
 
     Collinear and duplicate vertices (T-junctions, noding points) are dropped;
-    if more than four corners remain (bevelled or notched corners), the
-    polygon is simplified to four corners, then each corner is moved to where
+    if more than ``n`` corners remain (bevelled or notched corners), the
+    polygon is simplified to ``n`` corners, then each corner is moved to where
     the longest original edges along its two sides meet.
     """
     if poly.is_empty or poly.geom_type != "Polygon":
@@ -222,27 +227,30 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
             k = int(np.flatnonzero(bad)[0])
             pts = np.delete(pts, k, axis=0)
             changed = True
-    if len(pts) == 4:
+    if len(pts) == n:
         return pts
-    if len(pts) < 4:
+    if len(pts) < n:
         return None
     # more than four corners (bevelled or notched corners): drop the vertex
     # that costs the least area until four remain (Visvalingam-Whyatt) ...
     keep = list(range(len(pts)))
-    while len(keep) > 4:
+    while len(keep) > n:
         q = pts[keep]
         prv, nxt = np.roll(q, 1, 0), np.roll(q, -1, 0)
         cost = np.abs(geometry.cross2(prv - q, nxt - q))
         keep.pop(int(np.argmin(cost)))
     coarse = pts[keep]
+    area = abs(geometry.signed_areas(pts[None])[0])
+    if abs(abs(geometry.signed_areas(coarse[None])[0]) - area) > MAX_SIMPLIFIED_AREA * area:
+        return None  # not an n-gon with a bevel or notch (e.g. a square is no triangle)
     # ... then put each corner where the longest original edges along its two
     # sides meet, which restores an apex cut off by a bevel or notch
     e = np.roll(pts, -1, 0) - pts
     elen = np.linalg.norm(e, axis=1)
     mid = pts + 0.5 * e
     lines = []
-    for i in range(4):
-        a, b = coarse[i], coarse[(i + 1) % 4]
+    for i in range(n):
+        a, b = coarse[i], coarse[(i + 1) % n]
         d = b - a
         dl = np.linalg.norm(d)
         if dl == 0:
@@ -254,7 +262,7 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
         k = cand[np.argmax(elen[cand])] if len(cand) else None
         lines.append((a, d) if k is None else (pts[k], e[k]))
     out = []
-    for i in range(4):
+    for i in range(n):
         (p1, d1), (p2, d2) = lines[i - 1], lines[i]
         den = geometry.cross2(d1, d2)
         if abs(den) < 1e-9 * np.linalg.norm(d1) * np.linalg.norm(d2):
@@ -266,15 +274,22 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM) -> np.ndarray | No
     return np.asarray(out)
 
 
-def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
-    """Corners ``(n, 4, 2)`` of recovered regions and how many are not quads.
+def quads_of(polys: np.ndarray, arity: int = 4) -> tuple[np.ndarray, int]:
+    """Corners ``(n, arity, 2)`` of recovered regions and how many are not ``arity``-gons.
 
-    Plain four-vertex rings take a vectorised path; the rest go through
+    Plain ``arity``-vertex rings take a vectorised path; the rest go through
     :func:`quad_corners`.
     """
+    C, ok = tiles_of(polys, arity)
+    return C, int((~ok).sum())
+
+
+def tiles_of(polys: np.ndarray, arity: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`quads_of` with, per region, whether it gave a tile (the corners: plain rings first, then
+    the others, each in the regions' order)."""
     polys = np.asarray(polys, dtype=object)
     if len(polys) == 0:
-        return np.zeros((0, 4, 2)), 0
+        return np.zeros((0, arity, 2)), np.zeros(0, dtype=bool)
     simple = (shapely.get_type_id(polys) == 3) & (shapely.get_num_interior_rings(polys) == 0)
     rings = shapely.get_exterior_ring(polys[simple])
     four = np.zeros(len(polys), dtype=bool)
@@ -297,17 +312,17 @@ def quads_of(polys: np.ndarray) -> tuple[np.ndarray, int]:
         dup = np.linalg.norm(xy - xy[prv], axis=1) <= SNAP_MM
         keep &= ~((d <= SNAP_MM) | dup)
         cnt = np.bincount(ring[keep], minlength=len(rings))
-        ok4 = cnt == 4
+        ok4 = cnt == arity
         if ok4.any():
-            C = xy[keep & ok4[ring]].reshape(-1, 4, 2)
+            C = xy[keep & ok4[ring]].reshape(-1, arity, 2)
             cw = geometry.signed_areas(C) < 0
             C[cw] = C[cw, ::-1]
             out.append(C)
             four[np.flatnonzero(simple)[ok4]] = True
-    bad = 0
-    rest = [quad_corners(p) for p in polys[~four]]
+    rest = [quad_corners(p, n=arity) for p in polys[~four]]
     good = [q for q in rest if q is not None]
-    bad = len(rest) - len(good)
+    ok = four.copy()
+    ok[np.flatnonzero(~four)] = [q is not None for q in rest]
     if good:
         out.append(np.asarray(good))
-    return (np.concatenate(out) if out else np.zeros((0, 4, 2))), bad
+    return (np.concatenate(out) if out else np.zeros((0, arity, 2))), ok

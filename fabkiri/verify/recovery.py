@@ -136,11 +136,11 @@ def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
 
 
 def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
-                     frame_tiles: np.ndarray | None = None) -> tuple[np.ndarray, str]:
+                     frame_tiles: np.ndarray | None = None, arity: int = 4) -> tuple[np.ndarray, str]:
     """Tile regions (shapely polygons) from one file's CUT linework, and the method used.
 
     ``frame_tiles``: the design tiles where the manifest puts them (its sheet frame), to find the
-    declared ligaments on a sheet that was moved or turned since.
+    declared ligaments on a sheet that was moved or turned since. ``arity``: corners per tile.
     """
     if not lw.polylines:  # e.g. a sheet that holds only the reference square
         return np.zeros(0, dtype=object), "nothing to recover"
@@ -184,10 +184,10 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
 
     if strips is not None and cuts_tiles(parts):
-        parts = _on_cut_edges(parts, material)
+        parts = _on_cut_edges(parts, material, arity)
         how = "material minus the declared ligaments, corners on the cut edges"
     else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
-        parts = _on_cut_edges(_open_ligaments(material, al.ligament_width), material)
+        parts = _on_cut_edges(_open_ligaments(material, al.ligament_width), material, arity)
         how = "material opened to drop the ligaments, corners on the cut edges"
         # only when the opening left tiles joined: on a symmetric lattice the motion can be a quarter turn off
         short = frame_tiles is not None and (shapely.area(parts) > 1.0).sum() < len(frame_tiles)
@@ -195,7 +195,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         if moved is not None:
             again = _hairline_free(material.difference(moved))
             if cuts_tiles(again):
-                parts, how = _on_cut_edges(again, material), "material minus the declared ligaments, moved with the sheet"
+                parts, how = _on_cut_edges(again, material, arity), "material minus the declared ligaments, moved with the sheet"
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, how + ", grown by the tile shrink"
@@ -229,10 +229,10 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
     best, score = candidates[0], -1
     for lw in candidates:
         try:
-            polys, _ = recover_polygons(lw, al, sheet)
+            polys, _ = recover_polygons(lw, al, sheet, arity=D.shape[1])
         except VerifyError:
             continue
-        quads, bad = quads_of(polys[shapely.area(polys) > tol ** 2])
+        quads, bad = quads_of(polys[shapely.area(polys) > tol ** 2], D.shape[1])
         _, res, _ = match_by_shape(D, quads, L)
         n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
         key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions

@@ -12,12 +12,14 @@ import shapely
 
 from ...errors import FabricationError
 from ...pattern import fabricability as fab
+from ...verify.quads import UNDO_MITRE
 from .. import fabricability as fb
 from .. import hinges as hg
 from ..drawing import snap
 from . import Cutting, HingeKind, register
 
 FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
+NOTCH_AREA_MM2 = 1e-6  # a notch the kerf toolpath fills counts from this area (float noise is far smaller)
 
 
 class Ligament(HingeKind):
@@ -45,12 +47,27 @@ class Ligament(HingeKind):
         small = shapely.polygons(sheet.regions[on])
         moved_strips = shapely.transform(cutting.strips[same], lambda c, d=shift: c + d)
         material = shapely.union_all(np.concatenate([small, moved_strips]), grid_size=hg.GRID)
-        ext, inner = hg.rings_of(hg.kerf_outset(material, cutting.offset))
+        outline = hg.kerf_outset(material, cutting.offset)
+        ext, inner = hg.rings_of(outline)
         for p in inner:
             sd.add("CUT", p, True)
         for p in ext:
             sd.add("CUT", p, True)
-        return _spans(material, small, moved_strips, same, s)
+        return _spans(_left_by_laser(material, outline, cutting.offset), small, moved_strips, same, s)
+
+
+def _left_by_laser(material, outline, offset: float):
+    """The material the laser leaves: ``material`` and the notches narrower than the kerf that its
+    offset toolpath fills (a strip meeting a small tile's edge at a shallow angle leaves one), so the
+    declared spans cover them. ``material`` itself where the toolpath fills nothing (any quad sheet)."""
+    if not offset:
+        return material
+    back = shapely.buffer(outline, -offset, join_style="mitre", mitre_limit=UNDO_MITRE)
+    filled = shapely.get_parts(shapely.difference(back, material, grid_size=hg.GRID))
+    if not (shapely.area(filled) > NOTCH_AREA_MM2).any():
+        return material
+    return shapely.union_all(np.concatenate([[material], filled[shapely.area(filled) > NOTCH_AREA_MM2]]),
+                             grid_size=hg.GRID)
 
 
 def _spans(material, small: np.ndarray, moved_strips: np.ndarray, same: np.ndarray, s: int) -> list[dict]:
