@@ -1,7 +1,7 @@
 """Shape conformance of a design to its targets and the ``--shape-tol`` check.
 
 The measure itself is :mod:`fabkiri.pattern.conformance` (plain polygons); this module turns a
-:class:`~fabkiri.design.targets.Target` into its polygon, measures the deployed boundary tips and each
+:class:`~fabkiri.design.target_curve.Target` into its polygon, measures the deployed boundary tips and each
 closed-state outline, and judges the result against the shape tolerance (default 2 % of the target's
 size, the larger side of its bounding box).
 """
@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..pattern import conformance as pc
-from .targets import Target
+from .target_curve import Target
 
 DEFAULT_SHAPE_TOL = "2%"
 # a miss of more than this many mean tip spacings is a local minimum, not the lattice's resolution (measured:

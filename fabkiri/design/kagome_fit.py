@@ -26,7 +26,7 @@ from scipy.sparse.linalg import spsolve
 from ..pattern import conformance as pc
 from ..pattern.model import Pattern
 from . import kagome as K
-from .targets import Target
+from .target_curve import Target
 
 EQ_WEIGHT = 30.0  # penalty weight of the equalities in stage 1 (normalised units)
 PULL = 1e-3  # pull towards the initial guess, per coordinate
