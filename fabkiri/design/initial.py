@@ -24,8 +24,8 @@ from scipy.sparse.linalg import spsolve
 
 from ..errors import InputError, SolveError
 from ..pattern import geometry
-from .constraints import Stencils
-from .targets import Target
+from .stencils import Stencils
+from .target_curve import Target
 
 INITS = ("standard", "rescaled", "conformal", "coarse")
 

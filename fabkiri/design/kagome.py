@@ -23,7 +23,8 @@ from scipy import sparse
 
 from ..pattern.geometry import cross2, dot2
 from ..pattern.model import Pattern
-from .constraints import TWO_PI, Family, angle_sums, sqlen_diff, sqlen_value
+from .constraints import angle_sums
+from .stencils import TWO_PI, Family, sqlen_diff, sqlen_value
 
 
 def edge_pair_family(pattern: Pattern, state: int) -> Family:

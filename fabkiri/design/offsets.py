@@ -35,8 +35,8 @@ from scipy.sparse.linalg import splu
 
 from ..errors import SolveError
 from ..pattern.topology import SpanningTree
-from .constraints import Stencils
 from .rigid import RigidFamily
+from .stencils import Stencils
 
 
 @dataclass(eq=False)

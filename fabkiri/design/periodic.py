@@ -24,7 +24,7 @@ from scipy import sparse
 from ..errors import InputError
 from ..pattern.geometry import signed_angle, wrap_angle
 from ..pattern.periodic import Seam
-from .constraints import Family, Stencils
+from .stencils import Family, Stencils
 
 TWO_PI = 2.0 * np.pi
 

@@ -38,7 +38,7 @@ from scipy.sparse.linalg import splu
 
 from ..errors import SolveError
 from ..pattern.topology import SpanningTree
-from .constraints import Stencils
+from .stencils import Stencils
 
 
 @dataclass(eq=False)

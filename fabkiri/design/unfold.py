@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .constraints import corner_convexity
 from .rigid import RigidFamily
+from .stencils import corner_convexity
 
 MARGIN = 0.05  # cross(next - v, prev - v) >= MARGIN l^2 at every corner (the solver's own margin is 0.02)
 WEIGHTS = 10.0 ** np.arange(0, 9)  # penalty continuation
