@@ -273,7 +273,7 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
         q = folded if merit.scaling == "marquardt" and len(calls) <= 2 else p0
         return q, merit.state(q)[0], 1
 
-    monkeypatch.setattr(R, "_lm", fake_lm)
+    monkeypatch.setattr(R, "levenberg_marquardt", fake_lm)
     judge = R._Merit(fam, prob.families, prob.margin, 1e-3,
                      grid_families=R.grid_families(fam, prob.st, prob.families))
     assert judge.ineq_violation(judge.state(folded)) > 0 and judge.ineq_violation(judge.state(p0)) == 0
