@@ -18,7 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .constraints import ClosedGrid
+from .closed_families import ClosedGrid
 from .offsets import OffsetFamily
 from .outline import PSI_DEPLOYED, REG_WEIGHT, _lm, outline_kind, square_affine
 
@@ -77,17 +77,11 @@ def closed_grid(fam: OffsetFamily, st, y: np.ndarray, state: int) -> np.ndarray:
     return acc / cnt[:, None]
 
 
-def solve_offset_outline(prob, log, iters: dict, t_start=None):
-    """``(X, mode, fitted)`` like ``outline.solve_outline`` (X: deployed nodes at ψ = π/4, then each target
-    state's grid), or None when a square cannot be exact."""
-    req, st = prob.req, prob.st
-    fam = OffsetFamily.build(st, prob.std.topology.spanning_tree(0))
-    nf, K, n = fam.n_seeds, fam.n_holes, prob.n
-    states = sorted(prob.grids)
-    kinds = {s: outline_kind(req.contracted[s]) for s in states}
-    t0 = np.zeros(K)
+def _start_seeds(prob, fam: OffsetFamily, t0: np.ndarray):
+    """The rhombus member nearest the initial guess (least squares over the deployed nodes), centred:
+    ``(vec S, Z0, rep1, g1)`` with ``Z0`` the state-1 map of the zero offsets ``t0``."""
+    st, nf, n = prob.st, fam.n_seeds, prob.n
     _, Z0, _ = fam.state1(np.zeros((nf, 2)), t0, jac=True)
-    # the start: the rhombus member nearest the initial guess (least squares over the deployed nodes)
     c, s_ = np.cos(PSI_DEPLOYED), np.sin(PSI_DEPLOYED)
     WZ = fam.W @ Z0
     Kx = np.block([[c * Z0, -s_ * WZ], [s_ * WZ, c * Z0]])
@@ -97,7 +91,12 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
     # orthogonal projection onto the square rows is not, and would fold tiles when far off)
     y0 = Z0 @ np.stack([sol[:nf], sol[nf:]], -1)
     lo, hi = y0[rep1[g1.boundary]].min(0), y0[rep1[g1.boundary]].max(0)
-    s0 = sol - np.repeat(0.5 * (lo + hi), nf)  # vec S = (Sx, Sy)
+    return sol - np.repeat(0.5 * (lo + hi), nf), Z0, rep1, g1  # vec S = (Sx, Sy)
+
+
+def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict, log):
+    """The linear rows ``E vec S = e`` of a square state-1 outline, or None for a square in state 2."""
+    st = prob.st
     E, e = [], []
     for s in states:
         if kinds[s] == "square":
@@ -113,104 +112,160 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
                 Zs = Z0[rep1[on]]
                 E.append(np.hstack([Zs, zr[rep1[on]]]) if xy == 0 else np.hstack([zr[rep1[on]], Zs]))
                 e.append(np.full(int(on.sum()), val))
-    affine = square_affine(E, e, 2 * nf)
+    return E, e
+
+
+def solve_offset_outline(prob, log, iters: dict, t_start=None):
+    """``(X, mode, fitted)`` like ``outline.solve_outline`` (X: deployed nodes at ψ = π/4, then each target
+    state's grid), or None when a square cannot be exact."""
+    req, st = prob.req, prob.st
+    fam = OffsetFamily.build(st, prob.std.topology.spanning_tree(0))
+    states = sorted(prob.grids)
+    kinds = {s: outline_kind(req.contracted[s]) for s in states}
+    t0 = np.zeros(fam.n_holes)
+    s0, Z0, rep1, g1 = _start_seeds(prob, fam, t0)
+    rows = _square_rows(prob, fam.n_seeds, Z0, rep1, g1, states, kinds, log)
+    if rows is None:
+        return None
+    affine = square_affine(*rows, 2 * fam.n_seeds)
     if affine is None:
         log("offset outline: the square rows are inconsistent")
         return None
     base, Nsp = affine
-    k = Nsp.shape[1]
-    u0 = Nsp.T @ (s0 - base)
     circles = [s for s in states if kinds[s] == "circle"]
-    rep2, g2 = _reps(st, 2)
-    M, N = st.rows, st.cols
-    idx = np.arange((M + 1) * (N + 1)).reshape(M + 1, N + 1)
-    ring = np.concatenate([idx[0, :-1], idx[:-1, -1], idx[-1, :0:-1], idx[:0:-1, 0]])
-    bnodes = {s: (rep1 if s == 1 else rep2)[ring] for s in circles}
-    # the circle's points: the outline's vertices (in ring order) and, weighted by MID_WEIGHT, its edge
-    # midpoints, so that the vertices also spread round the circle
-    B = len(ring)
-    P = np.vstack([np.eye(B), MID_WEIGHT * 0.5 * (np.eye(B) + np.roll(np.eye(B), 1, 1))])
-    wts = np.r_[np.ones(B), np.full(B, MID_WEIGHT)]
     relative = not any(kinds[s] == "square" for s in states)
-    fams_reg, fams_ineq, margin = prob.of("reg"), prob.of("ineq"), prob.margin
-    w = np.sqrt(REG_WEIGHT)
-
-    def seeds(p):
-        v = base + Nsp @ p[:k]
-        return np.stack([v[:nf], v[nf:]], -1)
-
-    def member(p, jac):
-        return fam.state1(seeds(p), p[k:k + K], jac=jac)
-
-    def states_of(y):
-        return {1: y, 2: fam.at(y, np.pi / 2)}
-
-    def deployed(y):
-        X = np.zeros((prob.nv, 2))
-        X[:n] = fam.at(y, PSI_DEPLOYED)
-        return X
-
-    def nodes(p):
-        """What the step limiting checks: the deployed nodes and the offsets."""
-        return deployed(member(p, False)), p[k:k + K]
-
-    def viol(Xt):
-        X, t = Xt
-        g = min((float(f.residual(X).min(initial=0.0)) for f in fams_ineq), default=0.0)
-        return max(0.0, -g, float(np.abs(t).max(initial=0.0)) - T_HARD)
-
+    op = _OffsetOutline(prob, fam, base, Nsp, circles, relative, rep1)
     # circle start from the start member's algebraic circle
     if t_start is not None:
         t0 = np.asarray(t_start, dtype=float)
-    y0 = member(np.r_[u0, t0], False)
-    p0, R0 = [u0, t0], {}
-    for s in circles:
-        q = states_of(y0)[s][bnodes[s]]
-        A = np.c_[2 * q, np.ones(len(q))]
-        so = np.linalg.lstsq(A, (q * q).sum(1), rcond=None)[0]
-        R0[s] = float(np.sqrt(so[2] + so[:2] @ so[:2]))
-        p0.append(np.array([so[0], so[1], R0[s]]))
-    p = np.concatenate(p0)
-    npar = len(p)
+    p = op.start(Nsp.T @ (s0 - base), t0)
+    log(f"offset outline start: violation {op.viol(op.nodes(p)):.2e}")
+    for rho, stall_tol, cap in STAGES:
+        p, it = _lm(op.evaluate, op.viol, op.nodes, p, rho, cap, stall_tol)
+        iters[f"offset_outline_rho_{rho:g}"] = it
+        log(f"offset outline rho={rho:g}: {it} iterations, violation {op.viol(op.nodes(p)):.2e}")
+    y = op.member(p, False)
+    X = op.deployed(y)
+    for s_, g in prob.grids.items():
+        X[g.offset:g.offset + g.n_vertices] = closed_grid(fam, st, y, s_)
+    # the stored circle is the outline's own: the geometric least-squares circle of its vertices (the
+    # solver's circle also saw the edge midpoints)
+    fitted = {s: _lsq_circle(op.states_of(y)[s][op.bnodes[s]]) for s in circles}
+    prob.offsets = p[op.k:op.k + op.K].copy()
+    log(f"offsets: |t| max {np.abs(prob.offsets).max():.3f}, mean {np.abs(prob.offsets).mean():.3f}")
+    return X, "least-squares" if circles else "hard", fitted
 
-    def dmember(Z, Dt):
+
+class _OffsetOutline:
+    """The least-squares problem in ``p = (u, t, (o, R) per circle)``: seeds ``S = base + N u`` (the square
+    rows' solution space), offsets ``t``, and each circle's centre and radius."""
+
+    def __init__(self, prob, fam: OffsetFamily, base: np.ndarray, Nsp: np.ndarray, circles: list, relative: bool,
+                 rep1: np.ndarray):
+        st = prob.st
+        self.prob, self.fam, self.base, self.Nsp = prob, fam, base, Nsp
+        self.nf, self.K, self.n, self.k = fam.n_seeds, fam.n_holes, prob.n, Nsp.shape[1]
+        self.circles, self.relative = circles, relative
+        rep2, _ = _reps(st, 2)
+        M, N = st.rows, st.cols
+        idx = np.arange((M + 1) * (N + 1)).reshape(M + 1, N + 1)
+        ring = np.concatenate([idx[0, :-1], idx[:-1, -1], idx[-1, :0:-1], idx[:0:-1, 0]])
+        self.bnodes = {s: (rep1 if s == 1 else rep2)[ring] for s in circles}
+        # the circle's points: the outline's vertices (in ring order) and, weighted by MID_WEIGHT, its edge
+        # midpoints, so that the vertices also spread round the circle
+        B = len(ring)
+        self.P = np.vstack([np.eye(B), MID_WEIGHT * 0.5 * (np.eye(B) + np.roll(np.eye(B), 1, 1))])
+        self.wts = np.r_[np.ones(B), np.full(B, MID_WEIGHT)]
+        self.fams_reg, self.fams_ineq, self.margin = prob.of("reg"), prob.of("ineq"), prob.margin
+        self.w = np.sqrt(REG_WEIGHT)
+        self.R0: dict = {}
+        self.npar = 0
+
+    def seeds(self, p):
+        v = self.base + self.Nsp @ p[:self.k]
+        return np.stack([v[:self.nf], v[self.nf:]], -1)
+
+    def member(self, p, jac):
+        return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=jac)
+
+    def states_of(self, y):
+        return {1: y, 2: self.fam.at(y, np.pi / 2)}
+
+    def deployed(self, y):
+        X = np.zeros((self.prob.nv, 2))
+        X[:self.n] = self.fam.at(y, PSI_DEPLOYED)
+        return X
+
+    def nodes(self, p):
+        """What the step limiting checks: the deployed nodes and the offsets."""
+        return self.deployed(self.member(p, False)), p[self.k:self.k + self.K]
+
+    def viol(self, Xt):
+        X, t = Xt
+        g = min((float(f.residual(X).min(initial=0.0)) for f in self.fams_ineq), default=0.0)
+        return max(0.0, -g, float(np.abs(t).max(initial=0.0)) - T_HARD)
+
+    def start(self, u0: np.ndarray, t0: np.ndarray) -> np.ndarray:
+        """The start ``p``: each circle the algebraic circle of the start member's outline (sets ``R0``)."""
+        y0 = self.member(np.r_[u0, t0], False)
+        p0 = [u0, t0]
+        for s in self.circles:
+            q = self.states_of(y0)[s][self.bnodes[s]]
+            A = np.c_[2 * q, np.ones(len(q))]
+            so = np.linalg.lstsq(A, (q * q).sum(1), rcond=None)[0]
+            self.R0[s] = float(np.sqrt(so[2] + so[:2] @ so[:2]))
+            p0.append(np.array([so[0], so[1], self.R0[s]]))
+        p = np.concatenate(p0)
+        self.npar = len(p)
+        return p
+
+    def dmember(self, Z, Dt):
         """``∂y/∂(u, t)`` and ``J W ∂y/∂(u, t)``, each ``(V, 2, k + K)``: closed state 1 and closed state 2;
         the deployed nodes at ψ are ``cos ψ`` and ``sin ψ`` times them."""
-        V = Z.shape[0]
-        Dy = np.concatenate([Z @ Nsp[:nf], Z @ Nsp[nf:]], 1).reshape(V, 2, k)
+        V, k, nf = Z.shape[0], self.k, self.nf
+        Dy = np.concatenate([Z @ self.Nsp[:nf], Z @ self.Nsp[nf:]], 1).reshape(V, 2, k)
         Dy = np.concatenate([Dy, Dt], 2)
-        WD = (fam.W @ Dy.reshape(V, -1)).reshape(Dy.shape)
+        WD = (self.fam.W @ Dy.reshape(V, -1)).reshape(Dy.shape)
         return Dy, np.stack([-WD[:, 1], WD[:, 0]], 1)
 
-    def evaluate(p, rho, jac=True):
-        if jac:
-            y, Z, Dt = member(p, True)
-        else:
-            y = member(p, False)
-        X = deployed(y)
-        st_pos = states_of(y)
-        rs, Js = [], []
+    def _circle_rows(self, p, st_pos, D1, D2, jac, rs, Js):
+        """Each circle's weighted point-to-circle distances (relative to the start radius when no square fixes
+        the size), appended to ``rs`` and ``Js``."""
+        k, K, npar, P, wts = self.k, self.K, self.npar, self.P, self.wts
         off = k + K
-        D1, D2 = dmember(Z, Dt) if jac else (None, None)
-        for s in circles:
-            q = (P @ st_pos[s][bnodes[s]]) / wts[:, None]
+        for s in self.circles:
+            q = (P @ st_pos[s][self.bnodes[s]]) / wts[:, None]
             o, R = p[off:off + 2], p[off + 2]
             d = q - o
             dist = np.sqrt((d * d).sum(1))
-            a = wts * (R0[s] / R if relative else 1.0)
+            a = wts * (self.R0[s] / R if self.relative else 1.0)
             rs.append(a * (dist - R))
             if jac:
                 unit = d / dist[:, None]
-                Dq = np.einsum("pb,bdk->pdk", P / wts[:, None], (D2 if s == 2 else D1)[bnodes[s]])
+                Dq = np.einsum("pb,bdk->pdk", P / wts[:, None], (D2 if s == 2 else D1)[self.bnodes[s]])
                 J = np.zeros((len(q), npar))
                 J[:, :k + K] = a[:, None] * np.einsum("bd,bdk->bk", unit, Dq)
                 J[:, off:off + 2] = -a[:, None] * unit
-                J[:, off + 2] = -wts * R0[s] * dist / R ** 2 if relative else -wts
+                J[:, off + 2] = -wts * self.R0[s] * dist / R ** 2 if self.relative else -wts
                 Js.append(J)
             off += 3
+
+    def evaluate(self, p, rho, jac=True):
+        """``((X, t), r, J)``: circle rows, the regulariser, active inequalities and the offsets' soft bound."""
+        k, K, n, npar = self.k, self.K, self.n, self.npar
+        if jac:
+            y, Z, Dt = self.member(p, True)
+        else:
+            y = self.member(p, False)
+        X = self.deployed(y)
+        rs: list = []
+        Js: list = []
+        D1, D2 = self.dmember(Z, Dt) if jac else (None, None)
+        self._circle_rows(p, self.states_of(y), D1, D2, jac, rs, Js)
         Dd = (np.cos(PSI_DEPLOYED) * D1 + np.sin(PSI_DEPLOYED) * D2).reshape(2 * len(y), -1) if jac else None
         pad = npar - k - K
-        for f in fams_reg:
+        w = self.w
+        for f in self.fams_reg:
             if jac:
                 r, Jx = f(X)
                 Js.append(np.hstack([w * (Jx[:, :2 * n] @ Dd), np.zeros((len(r), pad))]))
@@ -218,8 +273,8 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
                 r = f.residual(X)
             rs.append(w * r)
         sq = np.sqrt(rho)
-        for f in fams_ineq:
-            v = f.residual(X) - margin[f.name]
+        for f in self.fams_ineq:
+            v = f.residual(X) - self.margin[f.name]
             act = v < 0
             rs.append(sq * v[act])
             if jac and act.any():
@@ -236,22 +291,6 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
             Jt[K + np.arange(K), k + np.arange(K)] = 1.0
             Js.append(sq * Jt[act])
         return (X, t), np.concatenate(rs), (np.vstack(Js) if jac else None)
-
-    log(f"offset outline start: violation {viol(nodes(p)):.2e}")
-    for rho, stall_tol, cap in STAGES:
-        p, it = _lm(evaluate, viol, nodes, p, rho, cap, stall_tol)
-        iters[f"offset_outline_rho_{rho:g}"] = it
-        log(f"offset outline rho={rho:g}: {it} iterations, violation {viol(nodes(p)):.2e}")
-    y = member(p, False)
-    X = deployed(y)
-    for s_, g in prob.grids.items():
-        X[g.offset:g.offset + g.n_vertices] = closed_grid(fam, st, y, s_)
-    # the stored circle is the outline's own: the geometric least-squares circle of its vertices (the
-    # solver's circle also saw the edge midpoints)
-    fitted = {s: _lsq_circle(states_of(y)[s][bnodes[s]]) for s in circles}
-    prob.offsets = p[k:k + K].copy()
-    log(f"offsets: |t| max {np.abs(prob.offsets).max():.3f}, mean {np.abs(prob.offsets).mean():.3f}")
-    return X, "least-squares" if circles else "hard", fitted
 
 
 def _lsq_circle(q: np.ndarray, iters: int = 50) -> tuple[np.ndarray, float]:

@@ -23,9 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .constraints import ClosedGrid, Stencils
+from .closed_families import ClosedGrid
 from .rigid import RigidFamily
-from .targets import Target
+from .stencils import Stencils
+from .target_curve import Target
 
 PSI_DEPLOYED = np.pi / 4  # deployment angle of the written pattern (any member angle in (0, π/2) works)
 STAGES = ((1e2, 1e-9, 200), (1e4, 1e-12, 100))  # (penalty, stall tolerance, iteration cap)
@@ -110,19 +111,8 @@ def _circle_residuals(maps: _Maps, st: Stencils, state: int):
     return np.stack([Zx[g.boundary], Zy[g.boundary]], 1)
 
 
-def solve_outline(prob, log, iters: dict):
-    """Design in the rigid family for square/circle closed-state targets; ``(X, mode, fitted)`` or None
-    when a square cannot be exact. ``fitted`` maps each circle state to its (centre, radius) in
-    normalised units."""
-    req, st = prob.req, prob.st
-    fam: RigidFamily = prob.rigid_family
-    states = sorted(prob.grids)
-    maps = _Maps(fam, st, states)
-    nf2 = 2 * maps.nf
-    # the start: the member nearest the initial guess (standard pattern), its seeds
-    S0, _ = fam.fit(prob.X0[: prob.n], PSI_DEPLOYED)
-    s0 = np.concatenate([S0[:, 0], S0[:, 1]])
-    kinds = {s: outline_kind(req.contracted[s]) for s in states}
+def _square_state_rows(prob, maps: _Maps, st: Stencils, states: list, kinds: dict):
+    """The square rows ``E vec S = e`` of every square target state (the side half-length in tile units)."""
     E, e = [], []
     for s in states:
         if kinds[s] == "square":
@@ -131,46 +121,83 @@ def solve_outline(prob, log, iters: dict):
             Es, es = _square_rows(maps, st, s, half)
             E.append(Es)
             e.append(es)
-    affine = square_affine(E, e, nf2)
+    return E, e
+
+
+def solve_outline(prob, log, iters: dict):
+    """Design in the rigid family for square/circle closed-state targets; ``(X, mode, fitted)`` or None
+    when a square cannot be exact. ``fitted`` maps each circle state to its (centre, radius) in
+    normalised units."""
+    req, st = prob.req, prob.st
+    fam: RigidFamily = prob.rigid_family
+    states = sorted(prob.grids)
+    maps = _Maps(fam, st, states)
+    # the start: the member nearest the initial guess (standard pattern), its seeds
+    S0, _ = fam.fit(prob.X0[: prob.n], PSI_DEPLOYED)
+    s0 = np.concatenate([S0[:, 0], S0[:, 1]])
+    kinds = {s: outline_kind(req.contracted[s]) for s in states}
+    affine = square_affine(*_square_state_rows(prob, maps, st, states, kinds), 2 * maps.nf)
     if affine is None:
         log("outline: the square rows are inconsistent; leaving the design to the full solver")
         return None
     base, Nsp = affine
-    u0 = Nsp.T @ (s0 - base)
-    k = Nsp.shape[1]
-    AN = maps.A @ Nsp
-    Ab = maps.A @ base
     circles = [s for s in states if kinds[s] == "circle"]
-    Bc = {s: np.einsum("bdf,fk->bdk", _circle_residuals(maps, st, s), Nsp) for s in circles}
-    bc = {s: np.einsum("bdf,f->bd", _circle_residuals(maps, st, s), base) for s in circles}
-    # circle unknowns (o_x, o_y, R) per circle state, started from the start's algebraic circle
-    p0 = [u0]
-    R0 = {}
-    for s in circles:
-        q = Bc[s] @ u0 + bc[s]
-        A = np.c_[2 * q, np.ones(len(q))]
-        sol = np.linalg.lstsq(A, (q * q).sum(1), rcond=None)[0]
-        R0[s] = float(np.sqrt(sol[2] + sol[:2] @ sol[:2]))
-        p0.append(np.array([sol[0], sol[1], R0[s]]))
-    p = np.concatenate(p0)
     relative = not any(kinds[s] == "square" for s in states)
-    fams_reg = prob.of("reg")
-    fams_ineq = prob.of("ineq")
-    margin = prob.margin
-    w = np.sqrt(REG_WEIGHT)
+    op = _CircleOutline(prob, maps, st, base, Nsp, circles, relative)
+    p = op.start(Nsp.T @ (s0 - base))
+    for rho, stall_tol, cap in STAGES:
+        p, it = _lm(op.evaluate, op.ineq_viol, op.nodes, p, rho, cap, stall_tol)
+        iters[f"outline_rho_{rho:g}"] = it
+        log(f"outline rho={rho:g}: {it} iterations")
+    X = op.nodes(p)
+    fitted = {}
+    off = op.k
+    for s in circles:
+        fitted[s] = (p[off:off + 2].copy(), float(p[off + 2]))
+        off += 3
+    return X, "least-squares" if circles else "hard", fitted
 
-    def nodes(p):
-        return (Ab + AN @ p[:k]).reshape(-1, 2)
 
-    def ineq_viol(X):
-        return max(0.0, -min((float(f.residual(X).min(initial=0.0)) for f in fams_ineq), default=0.0))
+class _CircleOutline:
+    """The least-squares problem in ``p = (u, (o, R) per circle)`` with seeds ``S = base + N u`` (the square
+    rows' solution space): circle fit + w·E_reg + ρ|min(0, g − m)|², the deployed nodes linear in ``u``."""
 
-    def evaluate(p, rho, jac=True):
-        X = nodes(p)
-        rs, Js = [], []
+    def __init__(self, prob, maps: _Maps, st: Stencils, base: np.ndarray, Nsp: np.ndarray, circles: list,
+                 relative: bool):
+        self.k = Nsp.shape[1]
+        self.AN = maps.A @ Nsp
+        self.Ab = maps.A @ base
+        self.circles, self.relative = circles, relative
+        self.Bc = {s: np.einsum("bdf,fk->bdk", _circle_residuals(maps, st, s), Nsp) for s in circles}
+        self.bc = {s: np.einsum("bdf,f->bd", _circle_residuals(maps, st, s), base) for s in circles}
+        self.fams_reg = prob.of("reg")
+        self.fams_ineq = prob.of("ineq")
+        self.margin = prob.margin
+        self.w = np.sqrt(REG_WEIGHT)
+        self.R0: dict = {}
+
+    def start(self, u0: np.ndarray) -> np.ndarray:
+        """Circle unknowns (o_x, o_y, R) per circle state, started from the start's algebraic circle."""
+        p0 = [u0]
+        for s in self.circles:
+            q = self.Bc[s] @ u0 + self.bc[s]
+            A = np.c_[2 * q, np.ones(len(q))]
+            sol = np.linalg.lstsq(A, (q * q).sum(1), rcond=None)[0]
+            self.R0[s] = float(np.sqrt(sol[2] + sol[:2] @ sol[:2]))
+            p0.append(np.array([sol[0], sol[1], self.R0[s]]))
+        return np.concatenate(p0)
+
+    def nodes(self, p):
+        return (self.Ab + self.AN @ p[:self.k]).reshape(-1, 2)
+
+    def ineq_viol(self, X):
+        return max(0.0, -min((float(f.residual(X).min(initial=0.0)) for f in self.fams_ineq), default=0.0))
+
+    def _circle_rows(self, p, jac, rs, Js):
+        k, R0, relative = self.k, self.R0, self.relative
         off = k
-        for s in circles:
-            q = Bc[s] @ p[:k] + bc[s]
+        for s in self.circles:
+            q = self.Bc[s] @ p[:k] + self.bc[s]
             o, R = p[off:off + 2], p[off + 2]
             d = q - o
             dist = np.sqrt((d * d).sum(1))
@@ -181,19 +208,27 @@ def solve_outline(prob, log, iters: dict):
             if jac:
                 unit = d / dist[:, None]
                 J = np.zeros((len(q), len(p)))
-                J[:, :k] = a * np.einsum("bd,bdk->bk", unit, Bc[s])
+                J[:, :k] = a * np.einsum("bd,bdk->bk", unit, self.Bc[s])
                 J[:, off:off + 2] = -a * unit
                 J[:, off + 2] = -R0[s] * dist / R ** 2 if relative else -1.0
                 Js.append(J)
             off += 3
-        for f in fams_reg:
+
+    def evaluate(self, p, rho, jac=True):
+        """``(X, r, J)``: circle rows, the regulariser and the active inequalities."""
+        k, AN, w = self.k, self.AN, self.w
+        X = self.nodes(p)
+        rs: list = []
+        Js: list = []
+        self._circle_rows(p, jac, rs, Js)
+        for f in self.fams_reg:
             r, Jx = f(X) if jac else (f.residual(X), None)
             rs.append(w * r)
             if jac:
                 Js.append(np.hstack([w * (Jx @ AN), np.zeros((len(r), len(p) - k))]))
         sq = np.sqrt(rho)
-        for f in fams_ineq:
-            v = f.residual(X) - margin[f.name]
+        for f in self.fams_ineq:
+            v = f.residual(X) - self.margin[f.name]
             act = v < 0
             rs.append(sq * v[act])
             if jac and act.any():
@@ -201,18 +236,6 @@ def solve_outline(prob, log, iters: dict):
                 Js.append(np.hstack([sq * (Jx[np.flatnonzero(act)] @ AN), np.zeros((int(act.sum()), len(p) - k))]))
         r = np.concatenate(rs)
         return X, r, (np.vstack(Js) if jac else None)
-
-    for rho, stall_tol, cap in STAGES:
-        p, it = _lm(evaluate, ineq_viol, nodes, p, rho, cap, stall_tol)
-        iters[f"outline_rho_{rho:g}"] = it
-        log(f"outline rho={rho:g}: {it} iterations")
-    X = nodes(p)
-    fitted = {}
-    off = k
-    for s in circles:
-        fitted[s] = (p[off:off + 2].copy(), float(p[off + 2]))
-        off += 3
-    return X, "least-squares" if circles else "hard", fitted
 
 
 def _lm(evaluate, ineq_viol, nodes, p, rho, max_iter, stall_tol):
