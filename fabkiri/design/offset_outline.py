@@ -20,7 +20,7 @@ import numpy as np
 
 from .closed_families import ClosedGrid
 from .offsets import OffsetFamily
-from .outline import PSI_DEPLOYED, REG_WEIGHT, _lm, outline_kind, square_affine
+from .outline import PSI_DEPLOYED, REG_WEIGHT, _lm, active_rows, outline_kind, square_affine
 
 # |t| above T_SOFT is penalised like any inequality inside its margin; T_HARD is never crossed (step
 # limiting). A hard wall alone at the soft bound left LM halving every step that touched it: 5x5 ended at
@@ -273,14 +273,7 @@ class _OffsetOutline:
                 r = f.residual(X)
             rs.append(w * r)
         sq = np.sqrt(rho)
-        for f in self.fams_ineq:
-            v = f.residual(X) - self.margin[f.name]
-            act = v < 0
-            rs.append(sq * v[act])
-            if jac and act.any():
-                _, Jx = f(X)
-                Js.append(np.hstack([sq * (Jx[np.flatnonzero(act)][:, :2 * n] @ Dd),
-                                     np.zeros((int(act.sum()), pad))]))
+        active_rows(self.fams_ineq, self.margin, X, sq, jac and (lambda Jx: Jx[:, :2 * n] @ Dd), pad, rs, Js)
         t = p[k:k + K]
         v = np.r_[T_SOFT - t, T_SOFT + t]
         act = v < 0

@@ -226,16 +226,22 @@ class _CircleOutline:
             rs.append(w * r)
             if jac:
                 Js.append(np.hstack([w * (Jx @ AN), np.zeros((len(r), len(p) - k))]))
-        sq = np.sqrt(rho)
-        for f in self.fams_ineq:
-            v = f.residual(X) - self.margin[f.name]
-            act = v < 0
-            rs.append(sq * v[act])
-            if jac and act.any():
-                _, Jx = f(X)
-                Js.append(np.hstack([sq * (Jx[np.flatnonzero(act)] @ AN), np.zeros((int(act.sum()), len(p) - k))]))
+        active_rows(self.fams_ineq, self.margin, X, np.sqrt(rho), jac and (lambda Jx: Jx @ AN), len(p) - k, rs, Js)
         r = np.concatenate(rs)
         return X, r, (np.vstack(Js) if jac else None)
+
+
+def active_rows(fams_ineq, margin: dict, X: np.ndarray, sq: float, to_p, pad: int, rs: list, Js: list) -> None:
+    """Append ``sq·(g − m)`` of every inequality row inside its margin to ``rs`` and, unless ``to_p`` is
+    False, its Jacobian in the unknowns to ``Js``: ``to_p`` maps the node Jacobian rows to the leading
+    unknowns, ``pad`` zero columns follow for the rest."""
+    for f in fams_ineq:
+        v = f.residual(X) - margin[f.name]
+        act = v < 0
+        rs.append(sq * v[act])
+        if to_p and act.any():
+            _, Jx = f(X)
+            Js.append(np.hstack([sq * to_p(Jx[np.flatnonzero(act)]), np.zeros((int(act.sum()), pad))]))
 
 
 def _lm(evaluate, ineq_viol, nodes, p, rho, max_iter, stall_tol):
