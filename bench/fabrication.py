@@ -52,15 +52,15 @@ def slice_all(folder: Path) -> str:
     return f"sliced {len(files)}"
 
 
-def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> str:
+def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> tuple[str, Path | None]:
     flags, after = CONFIGS[name]
-    stem = f"{Path(tgt).stem}-{tiles}{'-rigid' if rigid else ''}-{name.replace(' ', '-')}"
+    stem = stem_of(name, tgt, tiles, rigid)
     pj = out / f"{stem}.json"
     code, err, t = run("design", "--tiles", tiles, "--target", tgt, *flags, *(["--rigid"] if rigid else []),
                        "--no-preview", "-o", str(pj))
     line = f"{stem:44s} design {code}"
     if not pj.exists():
-        return line + "  " + last(err)
+        return line + "  " + last(err), None
     rep = json.loads(pj.read_text())["design"]["report"]
     fr = rep.get("fabrication") or {}
     act = sum(fr.get("active", {}).values())
@@ -78,10 +78,17 @@ def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> str:
     return line + f"  ({t + t2:.0f} s)", (out / stem if after == "print" and not c2 else None)
 
 
-def matrix(out: Path, sizes, configs, jobs: int) -> None:
+def stem_of(name: str, tgt: str, tiles: str, rigid: bool) -> str:
+    return f"{Path(tgt).stem}-{tiles}{'-rigid' if rigid else ''}-{name.replace(' ', '-')}"
+
+
+def matrix(out: Path, sizes, configs, jobs: int, pick: list[str] | None = None) -> None:
     """Designs and cut/print on ``jobs`` workers; the slow slices of each printed folder in the background,
-    one at a time, printed as they finish."""
+    one at a time, printed as they finish. ``pick``: only the cases whose stem is listed, in that order."""
     cases = [(n, tg, ti, r) for n in configs for tg in TARGETS for ti in sizes for r in (False, True)]
+    if pick:
+        by_stem = {stem_of(*c): c for c in cases}
+        cases = [by_stem[s] for s in pick]
 
     def sliced(folder: Path) -> None:
         t = time.perf_counter()
@@ -188,6 +195,7 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="/tmp/fabkiri-bench-fabrication")
     ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--pick", default="", help="comma-separated case stems to run, in that order")
     ap.add_argument("--only", default="summary,impossible,heart,matrix", help="parts to run")
     a = ap.parse_args()
     out = Path(a.out)
@@ -202,7 +210,8 @@ def main() -> None:
     if "heart" in parts:
         heart(out)
     if "matrix" in parts:
-        matrix(out, ("8x8",) if a.quick else ("8x8", "16x16"), a.configs.split(","), a.jobs)
+        matrix(out, ("8x8",) if a.quick else ("8x8", "16x16"), a.configs.split(","), a.jobs,
+               [s for s in a.pick.split(",") if s])
 
 
 if __name__ == "__main__":
