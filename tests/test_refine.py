@@ -74,3 +74,19 @@ def test_refinement_lowers_the_hausdorff_distance_and_keeps_the_rows():
     shape = next(f for f in prob.of("fit") if f.name == "shape")
     real = float(np.abs(shape.residual(prob.X0)).max()) * prob.L0
     assert best.report["fit"]["shape"]["max_mm"] == pytest.approx(real, rel=1e-9)
+
+
+@pytest.mark.slow
+def test_heart_16x16_at_200mm_for_acrylic_keeps_its_shape():
+    """Issue 14's must-show: the 16x16 heart at 200 mm for acrylic-3 (rigid family, about 35 CPU s): every tile
+    at least 3 mm wide, Hausdorff within 2 % of the size and at most 10 % above the design without the rows."""
+    from fabkiri.api.design import PatternRequest, design_pattern
+
+    ask = PatternRequest(tiles=(16, 16), target="heart", size=200, rigid=True, quiet=True)
+    free = design_pattern(ask)
+    out = design_pattern(replace(ask, material="acrylic-3"))
+    h_free = free.report["conformance"]["deployed"]["hausdorff_rel"]
+    h = out.report["conformance"]["deployed"]["hausdorff_rel"]
+    assert out.success and out.report["fabricability"]["thinnest_tile_mm"] >= 3.0
+    assert h <= 0.02 and h <= 1.1 * h_free
+    assert "minimax refinement" in out.report["continuation"]["how"]
