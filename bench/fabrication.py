@@ -6,6 +6,7 @@ ligaments at 300 mm (then ``cut`` with no flags) and for prusa-mk4 at 200 mm (th
 and ``prusa-slicer --export-gcode`` on every 3MF); then the 16x16 heart at 200 mm with and without
 acrylic-3, the impossible 64x64 star, and the summary's cost (closed form for every printer preset and
 style) against the bisection it replaced, measured in the same run. ``--table``: the README designs.
+``--only frontier``: the 16x16 heart's Hausdorff against the tile width at 200 mm (docs/fabricability.md).
 """
 
 from __future__ import annotations
@@ -120,6 +121,35 @@ def heart(out: Path) -> None:
                   f"({100 * conf['hausdorff_rel']:.2f} %) {how} ({t:.0f} s)", flush=True)
 
 
+def frontier(out: Path, widths=(2.0, 3.0, 3.5, 4.0, 4.5, 5.0)) -> None:
+    """Hausdorff of the 16x16 heart at 200 mm against the tile width w (hinge spacing w too, as acrylic tape):
+    rigid family, one step from the design without rows, then the minimax refinement. Scale-free: 3 mm tiles
+    meet the same figure at 200 * 3 / w mm."""
+    from dataclasses import replace
+
+    from fabkiri.design.conformance import deployed
+    from fabkiri.design.fabrication import FabricationLimits
+    from fabkiri.design.refine import refine_minimax
+    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.design.targets import load_target
+    from fabkiri.pattern import fabricability as fab
+
+    tgt = load_target("heart", 200)
+    base = DesignRequest(rows=16, cols=16, target=tgt, rigid=True, init="rescaled", second_opinion=False)
+    free = design(base).pattern.nodes
+    for w in widths:
+        c0 = time.process_time()
+        req = replace(base, fabrication=FabricationLimits(min_width_mm=w, hinge_spacing_mm=w, margin=0.02))
+        one = design(replace(req, start=free))
+        h0 = deployed(one.pattern.nodes, one.pattern.topology, tgt)["hausdorff_rel"]
+        best, trace, _ = refine_minimax(req, one.pattern.nodes)
+        kept = best if best is not None and min(trace) < h0 else one
+        print(f"w {w:4.1f} mm (w/size {w / 200:.4f}): one step H {100 * h0:.2f} %, refined H "
+              f"{100 * min([h0, *[t for t in trace if t == t]]):.2f} %, thinnest "
+              f"{fab.widths(kept.pattern.corners()).min():.2f} mm; 3 mm tiles at {600 / w:.0f} mm "
+              f"({time.process_time() - c0:.1f} CPU s)", flush=True)
+
+
 def impossible(out: Path) -> None:
     pj = out / "star64.json"
     code, err, t = run("design", "--tiles", "64x64", "--target", "star", "--size", "50", "--material", "acrylic-3",
@@ -209,6 +239,8 @@ def main() -> None:
         impossible(out)
     if "heart" in parts:
         heart(out)
+    if "frontier" in parts:
+        frontier(out)
     if "matrix" in parts:
         matrix(out, ("8x8",) if a.quick else ("8x8", "16x16"), a.configs.split(","), a.jobs,
                [s for s in a.pick.split(",") if s])
