@@ -190,9 +190,9 @@ TABLE_FOR = {"before": [], "acrylic-3": ["--material", "acrylic-3"],
              "pp-0.5 ligament": ["--material", "pp-0.5", "--hinge", "ligament"]}
 
 
-def table(out: Path) -> None:
+def table(out: Path, pick: list[str] | None = None) -> None:
     """Markdown rows: per README design and what it was made for, thinnest tile and the smallest cut width
-    per material (its default hinge kind)."""
+    per material (its default hinge kind); ``pick``: only these designs (README_DESIGNS names)."""
     from fabkiri.fabricate.materials import available, load_material
 
     mats = available()
@@ -200,6 +200,8 @@ def table(out: Path) -> None:
                                                                   for m in mats) + " |")
     print("|" + "---|" * (4 + len(mats)))
     for name, args in README_DESIGNS.items():
+        if pick and name not in pick:
+            continue
         for what, flags in TABLE_FOR.items():
             pj = out / f"table-{name.replace('/', '-').replace(' ', '_')}-{what.replace(' ', '_')}.json"
             code, err, t = run("design", *args, *flags, "--no-preview", "-o", str(pj))
@@ -231,7 +233,7 @@ def main() -> None:
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     if a.table:
-        return table(out)
+        return table(out, [s for s in a.pick.split(",") if s])
     parts = a.only.split(",")
     if "summary" in parts:
         summary_cost()
