@@ -104,3 +104,11 @@ def resolve(material: str | None, hinge: str | None, printer: str | None, style:
         intent["size_mm"] = float(target.size)
     intent["scale"] = 1.0  # the design is made at the size it will be cut or printed
     return FabricationLimits(**combine(*parts), source=", ".join(names)), intent
+
+
+def fits_bed(corners: np.ndarray, printer: str) -> bool:
+    """Whether a closed state's tiles ``(T, 4, 2)`` (mm) lie within ``printer``'s bed, as ``print`` lays them
+    (axis-aligned, not turned)."""
+    bx, by, _ = load_printer(printer).bed_mm
+    w, h = np.ptp(np.asarray(corners, float).reshape(-1, 2), axis=0)
+    return bool(w <= bx and h <= by)
