@@ -74,6 +74,9 @@ def test_refinement_lowers_the_hausdorff_distance_and_keeps_the_rows():
     shape = next(f for f in prob.of("fit") if f.name == "shape")
     real = float(np.abs(shape.residual(prob.X0)).max()) * prob.L0
     assert best.report["fit"]["shape"]["max_mm"] == pytest.approx(real, rel=1e-9)
+    # a caller's veto keeps a step out of the candidates, and the steps go on
+    none, trace2, _ = refine_minimax(req, start.pattern.nodes, steps=2, accept=lambda r: False)
+    assert none is None and len(trace2) == 2
 
 
 @pytest.mark.slow

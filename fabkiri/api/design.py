@@ -359,9 +359,12 @@ def _continuation(request: PatternRequest, req: DesignRequest, target: Target, s
         if _rank(rigid) < _rank(outcome):
             outcome, how = rigid, "continuation, rigid family last"
     trace: list[float] = []
-    if outcome[3] and not _shape_met(outcome[1]):  # the fit was least squares, the tolerance is a maximum
+    if not (outcome[3] and _shape_met(outcome[1])):  # the fit was least squares, the tolerance is a maximum;
+        # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
+        bed = None if not request.printer else (  # keep only steps whose closed state 1 fits the bed
+            lambda r: design_limits.fits_bed(contract(r.pattern, 1).corners, request.printer))
         refined, trace, secs = refine_minimax(replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
-                                              outcome[0].nodes)
+                                              outcome[0].nodes, accept=bed)
         spent += secs
         if refined is not None and _rank(cand := _check(refined, {}, request, target, shape_tol)) < _rank(outcome):
             outcome, how = cand, how + ", minimax refinement"

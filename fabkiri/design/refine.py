@@ -14,6 +14,7 @@ reweighting without memory, p = 4 to 12, oscillated: 2.1-4.5 %).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -42,13 +43,15 @@ def lawson_weights(req: DesignRequest, nodes_mm: np.ndarray, previous: dict | No
 
 
 def refine_minimax(req: DesignRequest, start_mm: np.ndarray, steps: int = LAWSON_STEPS,
-                   gamma: float = LAWSON_GAMMA) -> tuple[DesignResult | None, list[float], float]:
+                   gamma: float = LAWSON_GAMMA, accept: Callable[[DesignResult], bool] | None = None
+                   ) -> tuple[DesignResult | None, list[float], float]:
     """Lawson steps from the design ``start_mm`` (deployed nodes, mm) under ``req``'s rows.
 
     Returns the converged step with the smallest Hausdorff distance to ``req.target`` (None when no step
     converged) and the Hausdorff distance of every step (fractions of the target size, NaN: unconverged;
     the weights are then raised again from the last converged design) and the wall seconds of the steps.
-    The start itself is not among the candidates: the caller compares with it."""
+    The start itself is not among the candidates: the caller compares with it. ``accept`` (optional) vetoes a
+    converged step as a candidate (the caller's own check, e.g. a printer's bed); the steps go on from it."""
     X = np.asarray(start_mm, float)
     weights = lawson_weights(req, X, None, gamma)
     best, trace, spent = None, [], 0.0
@@ -58,7 +61,7 @@ def refine_minimax(req: DesignRequest, start_mm: np.ndarray, steps: int = LAWSON
         h = deployed(result.pattern.nodes, result.pattern.topology, req.target)["hausdorff_rel"]
         trace.append(h if result.converged else float("nan"))
         if result.converged:  # an unconverged step moves nothing but the weights
-            if best is None or h < best[0]:
+            if (best is None or h < best[0]) and (accept is None or accept(result)):
                 best = (h, result)
             X = result.pattern.nodes
         weights = lawson_weights(req, X, weights, gamma)
