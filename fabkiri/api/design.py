@@ -324,9 +324,11 @@ CONTINUATION_MARGIN = 0.02  # the rows' penalty margin in a step (tile edges; Fa
 
 
 def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
-    """A fabrication-aware deployed-target design below BIG_TILES that is invalid or misses the shape."""
+    """A fabrication-aware deployed-target design below BIG_TILES that is invalid, misses the shape or (for a
+    printer) does not fit the bed (8x8 ellipse at 200 mm for prusa-mk4: 116 x 261 mm; its continuation fits)."""
     return (req.fabrication is not None and req.target is not None and not contracted
-            and req.rows * req.cols < BIG_TILES and not (best[3] and _shape_met(best[1])))
+            and req.rows * req.cols < BIG_TILES
+            and not (best[3] and _shape_met(best[1]) and best[1]["checks"].get("fits_bed", True)))
 
 
 def _continuation(request: PatternRequest, req: DesignRequest, target: Target, shape_tol: tuple,
