@@ -6,6 +6,7 @@ ligaments at 300 mm (then ``cut`` with no flags) and for prusa-mk4 at 200 mm (th
 and ``prusa-slicer --export-gcode`` on every 3MF); then the 16x16 heart at 200 mm with and without
 acrylic-3, the impossible 64x64 star, and the summary's cost (closed form for every printer preset and
 style) against the bisection it replaced, measured in the same run. ``--table``: the README designs.
+``--only frontier``: the 16x16 heart's Hausdorff against the tile width at 200 mm (docs/fabricability.md).
 """
 
 from __future__ import annotations
@@ -52,15 +53,15 @@ def slice_all(folder: Path) -> str:
     return f"sliced {len(files)}"
 
 
-def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> str:
+def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> tuple[str, Path | None]:
     flags, after = CONFIGS[name]
-    stem = f"{Path(tgt).stem}-{tiles}{'-rigid' if rigid else ''}-{name.replace(' ', '-')}"
+    stem = stem_of(name, tgt, tiles, rigid)
     pj = out / f"{stem}.json"
     code, err, t = run("design", "--tiles", tiles, "--target", tgt, *flags, *(["--rigid"] if rigid else []),
                        "--no-preview", "-o", str(pj))
     line = f"{stem:44s} design {code}"
     if not pj.exists():
-        return line + "  " + last(err)
+        return line + "  " + last(err), None
     rep = json.loads(pj.read_text())["design"]["report"]
     fr = rep.get("fabrication") or {}
     act = sum(fr.get("active", {}).values())
@@ -78,10 +79,17 @@ def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> str:
     return line + f"  ({t + t2:.0f} s)", (out / stem if after == "print" and not c2 else None)
 
 
-def matrix(out: Path, sizes, configs, jobs: int) -> None:
+def stem_of(name: str, tgt: str, tiles: str, rigid: bool) -> str:
+    return f"{Path(tgt).stem}-{tiles}{'-rigid' if rigid else ''}-{name.replace(' ', '-')}"
+
+
+def matrix(out: Path, sizes, configs, jobs: int, pick: list[str] | None = None) -> None:
     """Designs and cut/print on ``jobs`` workers; the slow slices of each printed folder in the background,
-    one at a time, printed as they finish."""
+    one at a time, printed as they finish. ``pick``: only the cases whose stem is listed, in that order."""
     cases = [(n, tg, ti, r) for n in configs for tg in TARGETS for ti in sizes for r in (False, True)]
+    if pick:
+        by_stem = {stem_of(*c): c for c in cases}
+        cases = [by_stem[s] for s in pick]
 
     def sliced(folder: Path) -> None:
         t = time.perf_counter()
@@ -111,6 +119,35 @@ def heart(out: Path) -> None:
             print(f"{name}: exit {code} {rep['status']}, thinnest tile "
                   f"{rep['fabricability']['thinnest_tile_mm']:.3g} mm, Hausdorff {conf['hausdorff_mm']:.3g} mm "
                   f"({100 * conf['hausdorff_rel']:.2f} %) {how} ({t:.0f} s)", flush=True)
+
+
+def frontier(out: Path, widths=(2.0, 3.0, 3.5, 4.0, 4.5, 5.0)) -> None:
+    """Hausdorff of the 16x16 heart at 200 mm against the tile width w (hinge spacing w too, as acrylic tape):
+    rigid family, one step from the design without rows, then the minimax refinement. Scale-free: 3 mm tiles
+    meet the same figure at 200 * 3 / w mm."""
+    from dataclasses import replace
+
+    from fabkiri.design.conformance import deployed
+    from fabkiri.design.fabrication import FabricationLimits
+    from fabkiri.design.refine import refine_minimax
+    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.design.targets import load_target
+    from fabkiri.pattern import fabricability as fab
+
+    tgt = load_target("heart", 200)
+    base = DesignRequest(rows=16, cols=16, target=tgt, rigid=True, init="rescaled", second_opinion=False)
+    free = design(base).pattern.nodes
+    for w in widths:
+        c0 = time.process_time()
+        req = replace(base, fabrication=FabricationLimits(min_width_mm=w, hinge_spacing_mm=w, margin=0.02))
+        one = design(replace(req, start=free))
+        h0 = deployed(one.pattern.nodes, one.pattern.topology, tgt)["hausdorff_rel"]
+        best, trace, _ = refine_minimax(req, one.pattern.nodes)
+        kept = best if best is not None and min(trace) < h0 else one
+        print(f"w {w:4.1f} mm (w/size {w / 200:.4f}): one step H {100 * h0:.2f} %, refined H "
+              f"{100 * min([h0, *[t for t in trace if t == t]]):.2f} %, thinnest "
+              f"{fab.widths(kept.pattern.corners()).min():.2f} mm; 3 mm tiles at {600 / w:.0f} mm "
+              f"({time.process_time() - c0:.1f} CPU s)", flush=True)
 
 
 def impossible(out: Path) -> None:
@@ -153,9 +190,9 @@ TABLE_FOR = {"before": [], "acrylic-3": ["--material", "acrylic-3"],
              "pp-0.5 ligament": ["--material", "pp-0.5", "--hinge", "ligament"]}
 
 
-def table(out: Path) -> None:
+def table(out: Path, pick: list[str] | None = None) -> None:
     """Markdown rows: per README design and what it was made for, thinnest tile and the smallest cut width
-    per material (its default hinge kind)."""
+    per material (its default hinge kind); ``pick``: only these designs (README_DESIGNS names)."""
     from fabkiri.fabricate.materials import available, load_material
 
     mats = available()
@@ -163,6 +200,8 @@ def table(out: Path) -> None:
                                                                   for m in mats) + " |")
     print("|" + "---|" * (4 + len(mats)))
     for name, args in README_DESIGNS.items():
+        if pick and name not in pick:
+            continue
         for what, flags in TABLE_FOR.items():
             pj = out / f"table-{name.replace('/', '-').replace(' ', '_')}-{what.replace(' ', '_')}.json"
             code, err, t = run("design", *args, *flags, "--no-preview", "-o", str(pj))
@@ -188,12 +227,13 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="/tmp/fabkiri-bench-fabrication")
     ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--pick", default="", help="comma-separated case stems to run, in that order")
     ap.add_argument("--only", default="summary,impossible,heart,matrix", help="parts to run")
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     if a.table:
-        return table(out)
+        return table(out, [s for s in a.pick.split(",") if s])
     parts = a.only.split(",")
     if "summary" in parts:
         summary_cost()
@@ -201,8 +241,11 @@ def main() -> None:
         impossible(out)
     if "heart" in parts:
         heart(out)
+    if "frontier" in parts:
+        frontier(out)
     if "matrix" in parts:
-        matrix(out, ("8x8",) if a.quick else ("8x8", "16x16"), a.configs.split(","), a.jobs)
+        matrix(out, ("8x8",) if a.quick else ("8x8", "16x16"), a.configs.split(","), a.jobs,
+               [s for s in a.pick.split(",") if s])
 
 
 if __name__ == "__main__":

@@ -343,3 +343,22 @@ def test_continuation_is_tried_and_the_kept_design_keeps_the_rows():
     assert out.valid
     assert out.report["fabricability"]["thinnest_tile_mm"] >= 3.0 - 1e-9
     assert out.report["fabrication"]["min"]["fabrication_width"] >= 0.0
+
+
+def test_a_design_for_a_printer_that_fits_its_bed_ranks_first():
+    """prusa-mk4's bed is 250 x 210 mm: a 240 x 200 mm closed state fits, 200 x 227 mm does not (the refined 8x8
+    heart); a valid design that fits ranks above one with a better shape that does not."""
+    from fabkiri.api.design import _rank
+
+    box = lambda w, h: np.array([[[0, 0], [w, 0], [w, h], [0, h]]], float)  # noqa: E731
+    assert design_limits.fits_bed(box(240, 200), "prusa-mk4")
+    assert not design_limits.fits_bed(box(200, 227), "prusa-mk4")
+    assert not design_limits.fits_bed(box(260, 100), "prusa-mk4")
+
+    def outcome(fits, h):
+        rep = {"checks": {"fits_bed": fits}, "conformance": {"deployed": {"hausdorff_rel": h}},
+               "shape": {"deployed": {"status": "missed"}}}
+        return (None, rep, [], True, {})
+
+    assert _rank(outcome(True, 0.06)) < _rank(outcome(False, 0.03))
+    assert _rank(outcome(True, 0.03)) < _rank(outcome(True, 0.06))

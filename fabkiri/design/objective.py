@@ -107,3 +107,19 @@ def regularizer(st: Stencils, nv: int) -> Family:
 def energy(fam: Family, x: np.ndarray) -> float:
     r = fam.residual(x)
     return float(r @ r)
+
+
+def weighted(fam: Family, w: np.ndarray) -> Family:
+    """``fam`` with row i multiplied by ``w[i]`` (residuals and Jacobian): a weighted least-squares fit.
+
+    The unweighted family stays in ``meta["unweighted"]`` so reports measure the real distances."""
+    w = np.asarray(w, dtype=float)
+
+    def fn(x):
+        r, J = fam.fn(x)
+        if isinstance(J, tuple):  # the per-row stencil (nodes, gradients)
+            return w * r, (J[0], J[1] * w[:, None, None])
+        return w * r, J.multiply(w[:, None]).tocsr()
+
+    return Family(fam.name, fam.kind, fn, fam.dim, meta={**fam.meta, "unweighted": fam}, nv=fam.nv,
+                  res=lambda x: w * fam.residual(x))

@@ -56,7 +56,7 @@ from .conformance import deployed as deployed_conformance
 from .fabrication import FabricationLimits
 from .fabrication import families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
-from .objective import energy, regularizer
+from .objective import energy, regularizer, weighted
 from .reduced import fit_miss, solve_reduced
 from .rigid import RigidFamily, resample_grid
 from .targets import Target
@@ -157,6 +157,7 @@ class DesignRequest:
     start: np.ndarray | None = None  # deployed nodes (mm) to start from instead of ``init`` (a warm start)
     rigid_first: bool = True  # a mid-size non-rigid design tries the rigid family first (VIA_RIGID_FIRST_TILES)
     coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
+    fit_weights: dict | None = None  # fit family name -> row weights (``refine.py``: towards the minimax fit)
 
     def validate(self) -> None:
         if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
@@ -277,6 +278,8 @@ class _Problem:
         fam.append(regularizer(st, nv))
         fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
+        if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
+            fam = [weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f for f in fam]
         for g in self.grids.values() if req.holes == "rhombus" else ():
             fam.append(g.orientation(st, nv))
         self.families = fam
@@ -646,7 +649,8 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict):
     # no full-solver second opinion on a big rigid problem at this level (its coarse levels keep theirs): at
     # 32x32 it took about 45 of the 52 CPU s of a heart and lost (the non-rigid full solver below still takes
     # over when the rigid design fails a non-rigid check); below that it is the CLI's last resort, kept whole
-    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="", second_opinion=not big)
+    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="",
+                  second_opinion=prob.req.second_opinion and not big)
     log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
     # a big design keeps the rigid auto rules on its coarse levels only: main's 32x32 heart went on to the full
     # solver on the rigid problem when its reduced design failed a family check, stopped at 5e-5, then the
@@ -886,6 +890,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     Xmm = X * L0
     fit = {}
     for f in fits:
+        f = f.meta.get("unweighted", f)
         r = f.residual(X)
         fit[f.name] = {"max_mm": float(np.abs(r).max()) * L0, "rms_mm": float(np.sqrt(np.mean(r * r))) * L0,
                        "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,

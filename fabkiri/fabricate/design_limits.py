@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import FabricationError
+from ..design.fabrication import FabricationLimits
+from ..errors import FabricationError, InputError
 from .fabricability import ligament_never, shrink_of
-from .materials import HINGE_KINDS, Material
-from .printers import Printer
+from .materials import HINGE_KINDS, Material, load_material
+from .printers import Printer, load_printer
 
 # how far apart two hinges of one tile must be, per hinge kind (mm): a tape piece reaches about half a
 # web along each edge from its corner; a ligament strip is its width plus a web from the next one
@@ -65,3 +66,49 @@ def combine(*limits: dict) -> dict:
         for k, v in lim.items():
             out[k] = max(out.get(k, 0.0), v)
     return out
+
+
+def resolve(material: str | None, hinge: str | None, printer: str | None, style: str | None,
+            min_feature: float | None, min_hole: float | None, target) -> tuple[FabricationLimits | None, dict]:
+    """``design``'s ``--material/--hinge``, ``--printer/--style``, ``--min-feature`` and ``--min-hole`` as plain
+    mm limits (None: no fabrication rows), and the intent stored in the design for ``cut``/``print``."""
+    parts, names, intent = [], [], {}
+    if hinge and not material:
+        raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
+    if style and not printer:
+        raise InputError("--style needs --printer")
+    if material:
+        mat = load_material(material)
+        kind = hinge or mat.hinge
+        try:
+            parts.append(material_limits(mat, kind))
+        except FabricationError as exc:
+            raise InputError(str(exc)) from None
+        names.append(f"{mat.name} {kind}")
+        intent.update(material=material, hinge=kind)
+    if printer:
+        pr = load_printer(printer)
+        style = style or "tiles-and-strips"
+        parts.append(printer_limits(pr, style))
+        names.append(f"{pr.name} {style}")
+        intent.update(printer=printer, style=style)
+    if min_feature:
+        parts.append({"min_width_mm": min_feature})
+        names.append(f"--min-feature {min_feature:g}")
+    if min_hole:
+        parts.append({"min_hole_mm": min_hole})
+        names.append(f"--min-hole {min_hole:g}")
+    if not parts:
+        return None, {}
+    if target is not None:
+        intent["size_mm"] = float(target.size)
+    intent["scale"] = 1.0  # the design is made at the size it will be cut or printed
+    return FabricationLimits(**combine(*parts), source=", ".join(names)), intent
+
+
+def fits_bed(corners: np.ndarray, printer: str) -> bool:
+    """Whether a closed state's tiles ``(T, 4, 2)`` (mm) lie within ``printer``'s bed, as ``print`` lays them
+    (axis-aligned, not turned)."""
+    bx, by, _ = load_printer(printer).bed_mm
+    w, h = np.ptp(np.asarray(corners, float).reshape(-1, 2), axis=0)
+    return bool(w <= bx and h <= by)

@@ -1,0 +1,68 @@
+"""Minimax refinement of a deployed outline: Lawson's reweighting of the fit rows.
+
+The solvers minimise the *sum of squares* of the fit rows (tips to the target arcs, chord midpoints and
+target samples to the tip polygon); the shape tolerance judges the *largest* miss, the Hausdorff distance.
+Where few rows see a feature (a heart's cusp) the least-squares fit gives it up first: with fabrication
+rows that keep every tile 3 mm wide, the 16x16 heart at 200 mm fits 3.00 % of its size, all of it at the
+cusp. Lawson's algorithm turns a least-squares solver into a minimax one: after each solve, every row's
+squared weight is multiplied by its own unweighted miss, so the rows that miss most count more in the next
+solve. Each step is warm-started from the last converged design; the best design by Hausdorff distance is
+kept (the iteration is not monotone: a weight that grows too much moves the worst point elsewhere).
+Measured on that heart (rigid family, acrylic-3): 3.00 % -> 1.52 % in 10 steps, 10 CPU s (a p-norm
+reweighting without memory, p = 4 to 12, oscillated: 2.1-4.5 %).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from .conformance import deployed
+from .solve import DesignRequest, DesignResult, _Problem, design
+
+LAWSON_STEPS = 10
+LAWSON_GAMMA = 1.0  # exponent of the miss in the update (Lawson's; 16x16 heart: 1.52 %, ½: 1.56 %, ¼: 1.73 %)
+WEIGHT_RANGE = (1e-3, 1e3)  # squared weights relative to their mean
+
+
+def lawson_weights(req: DesignRequest, nodes_mm: np.ndarray, previous: dict | None,
+                   gamma: float = LAWSON_GAMMA) -> dict:
+    """Next row weights of every fit family: squared weights times (unweighted miss / mean miss)^gamma,
+    normalised to mean 1 and clipped to ``WEIGHT_RANGE``."""
+    prob = _Problem(replace(req, start=nodes_mm, fit_weights=None, fabrication=None))
+    X = prob.X0
+    out = {}
+    for f in prob.of("fit"):
+        miss = np.abs(f.residual(X))
+        w2 = previous[f.name] ** 2 if previous and f.name in previous else np.ones_like(miss)
+        w2 = w2 * (miss / max(float(miss.mean()), 1e-300)) ** gamma
+        out[f.name] = np.sqrt(np.clip(w2 / max(float(w2.mean()), 1e-300), *WEIGHT_RANGE))
+    return out
+
+
+def refine_minimax(req: DesignRequest, start_mm: np.ndarray, steps: int = LAWSON_STEPS,
+                   gamma: float = LAWSON_GAMMA, accept: Callable[[DesignResult], bool] | None = None
+                   ) -> tuple[DesignResult | None, list[float], float]:
+    """Lawson steps from the design ``start_mm`` (deployed nodes, mm) under ``req``'s rows.
+
+    Returns the converged step with the smallest Hausdorff distance to ``req.target`` (None when no step
+    converged) and the Hausdorff distance of every step (fractions of the target size, NaN: unconverged;
+    the weights are then raised again from the last converged design) and the wall seconds of the steps.
+    The start itself is not among the candidates: the caller compares with it. ``accept`` (optional) vetoes a
+    converged step as a candidate (the caller's own check, e.g. a printer's bed); the steps go on from it."""
+    X = np.asarray(start_mm, float)
+    weights = lawson_weights(req, X, None, gamma)
+    best, trace, spent = None, [], 0.0
+    for _ in range(steps):
+        result = design(replace(req, start=X, fit_weights=weights, second_opinion=False))
+        spent += result.report["time_s"]
+        h = deployed(result.pattern.nodes, result.pattern.topology, req.target)["hausdorff_rel"]
+        trace.append(h if result.converged else float("nan"))
+        if result.converged:  # an unconverged step moves nothing but the weights
+            if (best is None or h < best[0]) and (accept is None or accept(result)):
+                best = (h, result)
+            X = result.pattern.nodes
+        weights = lawson_weights(req, X, weights, gamma)
+    return (best[1] if best else None), trace, spent
