@@ -51,9 +51,10 @@ def inputs_scope():
 
 def note_inputs(*paths: str | os.PathLike) -> None:
     """Record files as inputs of the running command (existing regular files only)."""
-    if _INPUTS.get() is None:
+    current = _INPUTS.get()
+    if current is None:
         return
-    known = list(_INPUTS.get())
+    known = list(current)
     for p in paths:
         p = Path(p)
         if p.is_file() and p not in known:

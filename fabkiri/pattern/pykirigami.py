@@ -59,7 +59,7 @@ def pykirigami_files(pattern: Pattern, start: np.ndarray, unit_mm: float | None 
 
 
 def _read_tiles(path: Path) -> np.ndarray:
-    rows = []
+    rows: list[list[float]] = []
     for k, line in enumerate(_read_text(path).splitlines(), 1):
         try:
             vals = [float(v) for v in line.split()]
