@@ -23,6 +23,7 @@ from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import load_printer
 from ..pattern.model import Pattern
+from .cut import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
 
@@ -97,8 +98,8 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
         if notify is not None:
             notify(text)
 
-    style = options.style or _intent(pattern, "style") or DEFAULT_STYLE
-    printer = _printer(options.printer or _intent(pattern, "printer"), style == "pinned", options)
+    style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
+    printer = _printer(options.printer or design_intent(pattern, "printer"), style == "pinned", options)
     pattern, scale = _scaled(pattern, style, printer, options)
     for w in closes_gate(pattern, printer.tolerance_mm, force=options.force, action="print", tolerance="printer",
                          states=claimed_states(pattern, options.state)).warnings:  # as `cut`, printer tolerance
@@ -119,12 +120,6 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
     files = _files(pattern, realised, report, tiles, verifier, options, stem, source)
     return PrintOutcome(files=files, realised=realised, mesh_report=report, scale=scale, printer=printer,
                         plan=plan, verifier=verifier, messages=messages)
-
-
-def _intent(pattern: Pattern, key: str):
-    """What the design was made for (``design.options.fabrication``): the defaults of ``cut``/``print``."""
-    fabrication = ((pattern.design or {}).get("options") or {}).get("fabrication") or {}
-    return fabrication.get(key)
 
 
 def _printer(name: str | None, pinned: bool, o: PrintOptions):
