@@ -7,14 +7,14 @@ import re
 import sys
 from pathlib import Path
 
-from .. import limits
+from ..api.cut import cut_files, cut_material
 from ..errors import InputError
-from ..fabricate.cut import FORMATS, CutOptions, cut_pattern
+from ..fabricate.cut import FORMATS, CutOptions
 from ..fabricate.drawing import COLORS
 from ..fabricate.layout import LAYOUTS
-from ..fabricate.materials import HINGE_KINDS, available, load_material, parse_setting
+from ..fabricate.materials import HINGE_KINDS, available
 from ..fabricate.svg import STROKE_MM
-from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
+from ..fileio import atomic_write_many
 from .pattern_cmds import _nonneg, _positive, load_any
 
 
@@ -48,46 +48,22 @@ def _scale_or_auto(text: str):
         raise argparse.ArgumentTypeError(f"expected a number or 'auto', got {text!r}") from None
 
 
-def intent(pattern, key: str):
-    """What the design was made for (``design.options.fabrication``): the defaults of ``cut``/``print``."""
-    fabrication = ((pattern.design or {}).get("options") or {}).get("fabrication") or {}
-    return fabrication.get(key)
-
-
 def cmd_cut(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
-    if args.material is None:
-        args.material = intent(pattern, "material") or "acrylic-3"
-        args.hinge = args.hinge or intent(pattern, "hinge")
-    material = load_material(args.material)
-    changes = dict(thickness_mm=args.thickness, kerf_mm=args.kerf, min_web_mm=args.min_web,
-                   min_hole_mm=args.min_hole, strain_limit=args.strain_limit, gap_mm=args.gap,
-                   tolerance_mm=args.tol)
-    for setting in args.set or []:
-        key, value = parse_setting(setting)
-        changes[key] = value
-    material = material.override(**changes)
+    material, hinge = cut_material(pattern, args.material, args.hinge, settings=args.set or [], changes=dict(
+        thickness_mm=args.thickness, kerf_mm=args.kerf, min_web_mm=args.min_web, min_hole_mm=args.min_hole,
+        strain_limit=args.strain_limit, gap_mm=args.gap, tolerance_mm=args.tol))
     stem = Path(args.file).stem
     out = Path(args.output) if args.output else Path("outputs") / stem
     options = CutOptions(
-        material=material, hinge=args.hinge, state=args.state, sheet=_sheet(args.sheet), margin=args.margin,
+        material=material, hinge=hinge, state=args.state, sheet=_sheet(args.sheet), margin=args.margin,
         layout=args.layout, scale=args.scale, width=args.width, formats=_formats(args.formats),
         colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
         reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
         pattern_file=Path(args.file).name, notes=not args.no_notes, stroke_mm=args.stroke, exact=args.exact)
-    if isinstance(args.scale, float):  # numbers that would overflow the geometry: one line, up front
-        limits.check_scale(pattern.nodes, pattern.tiles, args.scale, "--scale")
-    if isinstance(args.width, float):
-        limits.check_length(args.width, "--width")
-    pattern, seam_files, seam_entry = tube_cut_inputs(pattern, args.state)  # a tube: its flat sheet
-    result = cut_pattern(pattern, options)
-    if seam_files:  # both ends of every seam hinge engraved, the note and the manifest entry added
-        mark_seam(result, seam_entry["hinges"], pattern, args.state, options)
-        result.files.update(seam_files)
-        result.manifest["seam"] = seam_entry
-    from ..fabricate.readback import write_verified
-
-    rb, written = write_verified(pattern, result, out, use_verifier=not args.no_verify, force=args.force)
+    cut = cut_files(pattern, options, use_verifier=not args.no_verify)
+    rb, result = cut.readback, cut.result
+    written = atomic_write_many(out, cut.files)
     for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if not rb.ok:

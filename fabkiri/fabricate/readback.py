@@ -274,14 +274,13 @@ def verify_result(pattern: Pattern, result: CutResult, *, use_verifier: bool = T
     return rb
 
 
-def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True,
-                   force: bool = False) -> tuple[Readback, list[Path]]:
-    """Verify, then write every file (manifest with the verification report) all-or-nothing.
+def verified_files(pattern: Pattern, result: CutResult, *, use_verifier: bool = True,
+                   force: bool = False) -> tuple[Readback, dict[str, bytes]]:
+    """Verify, then return every file to write (the manifest with the verification report).
 
-    Raises :class:`CheckFailed` naming the failed checks, writing nothing. With
-    ``force`` (a pattern cut although it does not close) the verifier's verdict
-    is recorded in the manifest and returned but does not stop the writing;
-    the writer's own checks on the files still do.
+    Raises :class:`CheckFailed` naming the failed checks. With ``force`` (a pattern cut although
+    it does not close) the verifier's verdict is recorded in the manifest and returned but does
+    not stop the files; the writer's own checks on the files still do.
     """
     rb = verify_result(pattern, result, use_verifier=use_verifier)
     result.manifest["verification"] = rb.to_dict()
@@ -297,6 +296,13 @@ def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, u
         raise CheckFailed("read-back verification failed, nothing written: " + "; ".join(failed[:6]))
     files = dict(result.files)
     files["manifest.json"] = result.manifest_bytes()
+    return rb, files
+
+
+def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True,
+                   force: bool = False) -> tuple[Readback, list[Path]]:
+    """:func:`verified_files`, then write them all-or-nothing (a failed check writes nothing)."""
+    rb, files = verified_files(pattern, result, use_verifier=use_verifier, force=force)
     return rb, atomic_write_many(folder, files)
 
 

@@ -280,9 +280,7 @@ def minimise(
     stats = stats if stats is not None else MinimiseStats()
     x = np.asarray(x0, dtype=float).ravel().copy()
     m, n2 = A.shape
-    r = b - A @ x
-    if np.abs(r).max(initial=0.0) > 0:  # least-norm projection onto the drivers
-        x += A.T @ spsolve((A @ A.T).tocsc(), r)
+    _project(x, A, b)
     E = sp.energy(x)
     if E <= zero_energy:  # E >= 0: a feasible point at rounding-level energy is a global minimiser
         return x
@@ -297,13 +295,8 @@ def minimise(
     for _ in range(max_iter):
         g = sp.gradient(x)
         if lu is None:
-            H = sp.hessian(x)
-            if mu:
-                H = H + mu * eye
-            K = sparse.bmat([[H, At], [A, None]], format="csc")
-            try:
-                lu = splu(K)
-            except RuntimeError:  # exactly singular: shift and retry
+            lu = _kkt_lu(sp, x, mu, A, At, eye)
+            if lu is None:  # exactly singular: shift and retry
                 mu = max(10.0 * mu, 1e-6 * scale)
                 stats.rejected += 1
                 continue
@@ -341,6 +334,25 @@ def minimise(
             lu = None
     stats.max_iterations_hit += 1
     return x
+
+
+def _project(x: np.ndarray, A: sparse.csr_matrix, b: np.ndarray) -> None:
+    """Move ``x`` (in place) by the least-norm step onto ``A x = b``, if it is off it."""
+    r = b - A @ x
+    if np.abs(r).max(initial=0.0) > 0:
+        x += A.T @ spsolve((A @ A.T).tocsc(), r)
+
+
+def _kkt_lu(sp: Springs, x: np.ndarray, mu: float, A: sparse.csr_matrix, At: sparse.csr_matrix, eye):
+    """Sparse LU of the KKT matrix ``[[H + μI, Aᵀ], [A, 0]]`` at ``x``, or None if it is exactly singular."""
+    H = sp.hessian(x)
+    if mu:
+        H = H + mu * eye
+    K = sparse.bmat([[H, At], [A, None]], format="csc")
+    try:
+        return splu(K)
+    except RuntimeError:
+        return None
 
 
 def _driver_increments(
@@ -386,6 +398,43 @@ def _mechanism_guess(
     return guess
 
 
+def _fine_grid(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, driver: str,
+               max_increment: float) -> tuple[np.ndarray, np.ndarray]:
+    """The internal sub-steps (no driver moves more than ``max_increment`` between two) and where
+    the output frames ``t`` sit among them."""
+    n_sub = np.maximum(
+        1, np.ceil(_driver_increments(pattern, states, t, driver) / max_increment)
+    ).astype(int)
+    fine = np.concatenate(
+        [np.linspace(a, b, k, endpoint=False) for a, b, k in zip(t[:-1], t[1:], n_sub)] + [t[-1:]]
+    )
+    return fine, np.concatenate([[0], np.cumsum(n_sub)])
+
+
+def _continue(pattern: Pattern, sp: Springs, states: dict[int, np.ndarray], fine: np.ndarray,
+              drivers: list[Drivers], mechanism, tol: float, stats: MinimiseStats) -> list[np.ndarray]:
+    """The minimiser at every sub-step, each started from the best guess at hand: the mechanism's
+    closed form where the drivers are on it, else closed state 1, the last solution or a secant."""
+    x1 = node_positions(pattern, states[1]).ravel()
+    zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
+    sols = []
+    prev = prev2 = None
+    for tk, drv in zip(fine, drivers):
+        exact = mechanism(tk) if mechanism is not None else None
+        if exact is not None:  # on the mechanism the minimiser is known in closed form
+            guess = exact
+        elif prev is None:
+            guess = x1
+        elif prev2 is None:
+            guess = prev
+        else:
+            guess = 2.0 * prev - prev2  # secant predictor
+        x = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats, zero_energy=zero)
+        sols.append(x)
+        prev2, prev = prev, x
+    return sols
+
+
 def elastic_path(
     pattern: Pattern,
     steps: int = 40,
@@ -415,35 +464,12 @@ def elastic_path(
         w1, w2 = (0.5 * (1.0 - split[s].closing) for s in (1, 2))
         segments = [seg for seg, w in (((0.0, w1), w1), ((1.0 - w2, 1.0), w2)) if w > 1e-9]
         mechanism = _mechanism_guess(pattern, states, split)
-    n_sub = np.maximum(
-        1, np.ceil(_driver_increments(pattern, states, t, driver) / max_increment)
-    ).astype(int)
-    fine = np.concatenate(
-        [np.linspace(a, b, k, endpoint=False) for a, b, k in zip(t[:-1], t[1:], n_sub)] + [t[-1:]]
-    )
-    keep = np.concatenate([[0], np.cumsum(n_sub)])  # output frames within the fine grid
+    fine, keep = _fine_grid(pattern, states, t, driver, max_increment)
     sp = springs(pattern)
     make = rotation_drivers if driver == "rotations" else tip_drivers
     drivers = make(pattern, states, fine)
-    x1 = node_positions(pattern, states[1]).ravel()
-    tol = step_tol * pattern.tile_size
-    zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
     stats = MinimiseStats()
-    sols = []
-    prev = prev2 = None
-    for tk, drv in zip(fine, drivers):
-        exact = mechanism(tk) if mechanism is not None else None
-        if exact is not None:  # on the mechanism the minimiser is known in closed form
-            guess = exact
-        elif prev is None:
-            guess = x1
-        elif prev2 is None:
-            guess = prev
-        else:
-            guess = 2.0 * prev - prev2  # secant predictor
-        x = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats, zero_energy=zero)
-        sols.append(x)
-        prev2, prev = prev, x
+    sols = _continue(pattern, sp, states, fine, drivers, mechanism, step_tol * pattern.tile_size, stats)
     nodes = np.stack(sols)[keep].reshape(len(t), -1, 2)
     corners = nodes[:, pattern.tiles]
     solver = {

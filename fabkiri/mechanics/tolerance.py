@@ -240,18 +240,11 @@ def tolerance_analysis(
     """Run the Monte-Carlo (see the module doc); lengths in mm at ``scale`` × the pattern."""
     import time
 
-    for name, v in (("--kerf-sd", kerf_sd), ("--hinge-sd", hinge_sd)):
-        if not (np.isfinite(v) and v >= 0):
-            raise InputError(f"{name} must be a finite number >= 0 mm, got {v}")
-    if not (np.isfinite(scale) and scale > 0):
-        raise InputError(f"--scale must be positive, got {scale}")
-    if int(n) != n or not 2 <= n <= 1_000_000:
-        raise InputError(f"--n must be a whole number of samples in 2..1000000, got {n}")
+    _check_inputs(kerf_sd, hinge_sd, n, scale)
     t0 = time.perf_counter()
     top = pattern.topology
     T = top.n_tiles
     A, B = top.hinge_tiles.T
-    cA, cB = top.hinge_corner.T
     deployed = pattern.corners() * scale
     closed = closed_states(pattern)  # raises if a state does not close
     states = {"closed state 1": closed[1] * scale, "deployed": deployed, "closed state 2": closed[2] * scale}
@@ -267,43 +260,17 @@ def tolerance_analysis(
     tile_gap = np.zeros(T)
     ref_nodes, ring = _outline_reference(pattern, scale)
     for name, nominal_c in states.items():
-        theta = geometry.kabsch_angles(deployed, nominal_c)  # (T,)
-        rot = lambda v, th: geometry.rotate(v, th)  # noqa: E731
-        c = nominal_c[None] + rot(d_corner, theta[None, :, None])
-        pa = c[:, A, cA] + rot(piv[:, :, 0], theta[A][None])
-        pb = c[:, B, cB] + rot(piv[:, :, 1], theta[B][None])
-        g = assembly.residual(pb - pa)  # (N, H)
+        g, placed = _assemble_state(top, deployed, nominal_c, d_corner, piv, assembly)
         gap[name] = g.max(axis=1)
-        at = np.zeros((n, T))
-        np.maximum.at(at.T, A, g.T)
-        np.maximum.at(at.T, B, g.T)
-        tile_gap = np.maximum(tile_gap, at.mean(axis=0))
-        placed = _place(c, pa, pb, assembly)
+        tile_gap = np.maximum(tile_gap, _tile_gap_mean(g, A, B, n, T))
         if name != "deployed":
             over, _, opening = seam_misfit(placed, seam_edges(nominal_c, 1e-3 * size))
             omax[name] = over.max(axis=1, initial=0.0)
             otot[name] = over.sum(axis=1)
             seam[name] = opening.max(axis=1, initial=0.0)
         else:
-            nodes = _first_corner_nodes(pattern, placed)[:, ref_nodes]
-            ref_xy = pattern.nodes[ref_nodes] * scale
-            aligned = _align_many(nodes, ref_xy)
-            if (
-                ring is not None
-            ):  # how far the outline moved: boundary points from the design outline
-                outline = (
-                    shapely.distance(shapely.points(aligned.reshape(-1, 2)), ring)
-                    .reshape(n, -1)
-                    .max(axis=1)
-                )
-            else:
-                outline = np.linalg.norm(aligned - ref_xy, axis=-1).max(axis=1)
+            outline = _outline_error(pattern, placed, ref_nodes, ring, scale, n)
     worst = np.maximum(gap["closed state 1"], gap["closed state 2"])
-    err2 = (edge_off**2).sum(axis=2)  # each tile's own errors: its edges and its pivots
-    np.add.at(err2.T, A, (piv[:, :, 0] ** 2).sum(-1).T)
-    np.add.at(err2.T, B, (piv[:, :, 1] ** 2).sum(-1).T)
-    size_t = np.sqrt(err2)
-    sens = np.array([_corr(size_t[:, t], worst) for t in range(T)])
     return ToleranceResult(
         n=int(n),
         seed=int(seed),
@@ -318,10 +285,68 @@ def tolerance_analysis(
         outline=outline,
         outline_reference="design outline" if ring is not None else "design points",
         outline_fit_mm=_fit_mm(pattern, scale),
-        sensitivity=sens,
+        sensitivity=_sensitivity(edge_off, piv, A, B, worst),
         tile_gap_mean=tile_gap,
         time_s=time.perf_counter() - t0,
     )
+
+
+def _check_inputs(kerf_sd: float, hinge_sd: float, n: int, scale: float) -> None:
+    """Refuse error sizes, scales and sample counts the model cannot take (InputError, one line)."""
+    for name, v in (("--kerf-sd", kerf_sd), ("--hinge-sd", hinge_sd)):
+        if not (np.isfinite(v) and v >= 0):
+            raise InputError(f"{name} must be a finite number >= 0 mm, got {v}")
+    if not (np.isfinite(scale) and scale > 0):
+        raise InputError(f"--scale must be positive, got {scale}")
+    if int(n) != n or not 2 <= n <= 1_000_000:
+        raise InputError(f"--n must be a whole number of samples in 2..1000000, got {n}")
+
+
+def _assemble_state(top, deployed: np.ndarray, nominal_c: np.ndarray, d_corner: np.ndarray, piv: np.ndarray,
+                    assembly: _Assembly) -> tuple[np.ndarray, np.ndarray]:
+    """Every sample's fabricated tiles assembled in one state: the hinge gaps (N, H) and the placed corners.
+
+    Each tile keeps its design rotation in the state (its errors turn with it); the translations are
+    the least-squares fit of the pivot pairs.
+    """
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    theta = geometry.kabsch_angles(deployed, nominal_c)  # (T,)
+    c = nominal_c[None] + geometry.rotate(d_corner, theta[None, :, None])
+    pa = c[:, A, cA] + geometry.rotate(piv[:, :, 0], theta[A][None])
+    pb = c[:, B, cB] + geometry.rotate(piv[:, :, 1], theta[B][None])
+    g = assembly.residual(pb - pa)  # (N, H)
+    return g, _place(c, pa, pb, assembly)
+
+
+def _tile_gap_mean(g: np.ndarray, A: np.ndarray, B: np.ndarray, n: int, T: int) -> np.ndarray:
+    """Each tile's largest hinge gap, averaged over the samples (T,)."""
+    at = np.zeros((n, T))
+    np.maximum.at(at.T, A, g.T)
+    np.maximum.at(at.T, B, g.T)
+    return at.mean(axis=0)
+
+
+def _outline_error(pattern: Pattern, placed: np.ndarray, ref_nodes: np.ndarray, ring, scale: float,
+                   n: int) -> np.ndarray:
+    """Deployed: each sample's largest distance of the aligned boundary points from the design outline
+    (or, tiles not joined into one piece, from the design's own boundary points)."""
+    nodes = _first_corner_nodes(pattern, placed)[:, ref_nodes]
+    ref_xy = pattern.nodes[ref_nodes] * scale
+    aligned = _align_many(nodes, ref_xy)
+    if ring is not None:  # how far the outline moved: boundary points from the design outline
+        return shapely.distance(shapely.points(aligned.reshape(-1, 2)), ring).reshape(n, -1).max(axis=1)
+    return np.linalg.norm(aligned - ref_xy, axis=-1).max(axis=1)
+
+
+def _sensitivity(edge_off: np.ndarray, piv: np.ndarray, A: np.ndarray, B: np.ndarray,
+                 worst: np.ndarray) -> np.ndarray:
+    """Per tile: the correlation of the size of its own errors (edges and pivots) with the worst gap."""
+    err2 = (edge_off**2).sum(axis=2)
+    np.add.at(err2.T, A, (piv[:, :, 0] ** 2).sum(-1).T)
+    np.add.at(err2.T, B, (piv[:, :, 1] ** 2).sum(-1).T)
+    size_t = np.sqrt(err2)
+    return np.array([_corr(size_t[:, t], worst) for t in range(err2.shape[1])])
 
 
 def _fit_mm(pattern: Pattern, scale: float) -> float | None:

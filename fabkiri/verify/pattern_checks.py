@@ -236,8 +236,8 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
     # every folded gap (hole fold corner or boundary notch) closed
     if isinstance(state, int) or str(state).isdigit():
         fold = top.fold(int(state))
-        out.append(_folded_gaps(pattern, Y, fold, tol, g))
-    out.extend(compactness_checks(Y, tol, g, _blame(pattern)))
+        out.append(_folded_gaps(pattern, Y, fold, tol, g, state))
+    out.extend(compactness_checks(Y, tol, g, _blame(pattern), state=state))
     return out
 
 
@@ -253,7 +253,7 @@ def _blame(pattern: Pattern) -> dict[int, int]:
     return out
 
 
-def _folded_gaps(pattern, Y, fold, tol: Tolerances, g: str) -> Check:
+def _folded_gaps(pattern, Y, fold, tol: Tolerances, g: str, state: int | str) -> Check:
     top = pattern.topology
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
@@ -273,16 +273,19 @@ def _folded_gaps(pattern, Y, fold, tol: Tolerances, g: str) -> Check:
     kind = (f"{tjunction} folded gaps close as T-junctions (parallelogram holes)" if tjunction
             else "every folded gap closes with coincident endpoints (rhombus holes)")
     return measured(f"{g}: folded gaps closed", _max(gap), tol.length, "mm", worst=_worst("hinge", gap),
-                    group=g, detail=kind)
+                    group=g, detail=kind, id=state_check_id(state, "folded-gaps"))
 
 
 def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
-                       blame: dict[int, int] | None = None) -> list[Check]:
+                       blame: dict[int, int] | None = None, state: int | str | None = None) -> list[Check]:
     """No overlaps, union area = sum of tile areas, no interior gaps, one outline.
 
     ``blame`` maps tiles to the self-intersecting tile they are (or are hinged
-    to), so overlaps caused by a crossed tile are named as such.
+    to), so overlaps caused by a crossed tile are named as such. Given a
+    ``state``, the checks carry its stable ids (``state1.no-overlaps``, ...).
     """
+    ids = {w: "" if state is None else state_check_id(state, w)
+           for w in ("no-overlaps", "union-area", "no-interior-gaps", "one-outline")}
     out = []
     i, j, inter = geom.overlap_depths(Y)
     bad = np.flatnonzero(inter > tol.length)
@@ -301,7 +304,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     out.append(measured(f"{g}: no overlaps", _max(inter), tol.length, "mm",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, group=g,
                         detail=(f"overlapping pairs (penetration depth): {listed}{cause}" if len(order) else
-                                "largest penetration depth between any two tiles")))
+                                "largest penetration depth between any two tiles"), id=ids["no-overlaps"]))
     polys, _ = geom.tile_polygons(Y)
     areas = shapely.area(polys)
     total = float(areas.sum())
@@ -312,7 +315,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     out.append(measured(f"{g}: union area = sum of tile areas", deficit, max(tol.length * half_perimeter,
                                                                              1e-9 * total), "mm²",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None and len(order) else None, group=g,
-                        detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²"))
+                        detail=f"sum {total:.6g} mm², union {float(union.area):.6g} mm²", id=ids["union-area"]))
     gaps = [(2 * g.area / max(g.length, 1e-300), g.area, g) for g in enclosed_gaps(union)]
     big = [x for x in gaps if x[0] > tol.length]
     worst_gap = max(gaps, key=lambda x: x[0]) if gaps else None
@@ -323,13 +326,15 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.length, "mm",
                         worst=where, group=g,
                         detail=(f"{len(big)} enclosed gaps wider than the tolerance (largest {worst_gap[1]:.3g} mm²)"
-                                if big else "equivalent width 2|area|/perimeter of enclosed gaps")))
+                                if big else "equivalent width 2|area|/perimeter of enclosed gaps"),
+                        id=ids["no-interior-gaps"]))
     # one outline: components after closing cracks narrower than the tolerance
     eps = max(tol.length, 1e-12 * tol.tile_size)
     closed = union.buffer(eps, join_style="mitre").buffer(-eps, join_style="mitre")
     n_parts = len(getattr(closed, "geoms", [closed])) if not closed.is_empty else 0
     out.append(Check(f"{g}: one outline", ok=n_parts == 1, value=n_parts, tol=1, unit="count", group=g,
-                     op="==", detail="" if n_parts == 1 else f"the tiles form {n_parts} separate pieces"))
+                     op="==", detail="" if n_parts == 1 else f"the tiles form {n_parts} separate pieces",
+                     id=ids["one-outline"]))
     return out
 
 

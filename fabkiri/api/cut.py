@@ -1,0 +1,72 @@
+"""``cut_files``: a pattern's laser-cut files, verified by reading them back, as :class:`CutOutcome`.
+
+The sheets are made by :func:`fabkiri.fabricate.cut.cut_pattern`; this front door holds the policy
+``fabkiri cut`` applies around it: the material and hinge kind the design was made for, the bounds
+on ``scale`` and ``width``, a tube's flat sheet with its seam marks and note, and the read-back
+verification that must pass before anything may be written. A failed check raises
+:class:`~fabkiri.errors.CheckFailed`; bad input raises :class:`~fabkiri.errors.InputError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from .. import limits
+from ..fabricate.cut import CutOptions, CutResult, cut_pattern
+from ..fabricate.materials import Material, load_material, parse_setting
+from ..fabricate.readback import Readback, verified_files
+from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
+from ..pattern.model import Pattern
+
+DEFAULT_MATERIAL = "acrylic-3"
+
+
+def design_intent(pattern: Pattern, key: str):
+    """What the design was made for (``design.options.fabrication``): the defaults of ``cut``/``print``."""
+    fabrication = ((pattern.design or {}).get("options") or {}).get("fabrication") or {}
+    return fabrication.get(key)
+
+
+def cut_material(pattern: Pattern, name: str | None = None, hinge: str | None = None, *,
+                 changes: dict[str, Any] | None = None, settings: Iterable[str] = ()) -> tuple[Material, str | None]:
+    """The material and hinge kind to cut with: a named material (or, none named, the design's
+    material and hinge kind, else acrylic-3), with ``changes`` (None values ignored) and then the
+    ``FIELD=VALUE`` ``settings`` applied."""
+    if name is None:
+        name = design_intent(pattern, "material") or DEFAULT_MATERIAL
+        hinge = hinge or design_intent(pattern, "hinge")
+    material = load_material(name)
+    changes = dict(changes or {})
+    for setting in settings:
+        key, value = parse_setting(setting)
+        changes[key] = value
+    return material.override(**changes), hinge
+
+
+@dataclass(frozen=True, eq=False)
+class CutOutcome:
+    """A verified cut: ``files`` (names relative to the output folder, ``manifest.json`` included),
+    the cut ``result`` (sheets, manifest, warnings) and the ``readback`` report that passed (with
+    ``force``, one whose verifier failed on a pattern that does not close)."""
+
+    result: CutResult
+    readback: Readback
+    files: dict[str, bytes]
+
+
+def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = True) -> CutOutcome:
+    """Cut ``pattern`` as ``options`` say (a tube: its flat sheet and seam), then read the files back."""
+    if isinstance(options.scale, float):  # numbers that would overflow the geometry: one line, up front
+        limits.check_scale(pattern.nodes, pattern.tiles, options.scale, "--scale")
+    if isinstance(options.width, float):
+        limits.check_length(options.width, "--width")
+    pattern, seam_files, seam_entry = tube_cut_inputs(pattern, options.state)  # a tube: its flat sheet
+    result = cut_pattern(pattern, options)
+    if seam_files:  # both ends of every seam hinge engraved, the note and the manifest entry added
+        mark_seam(result, seam_entry["hinges"], pattern, options.state, options)
+        result.files.update(seam_files)
+        result.manifest["seam"] = seam_entry
+    rb, files = verified_files(pattern, result, use_verifier=use_verifier, force=options.force)
+    return CutOutcome(result=result, readback=rb, files=files)

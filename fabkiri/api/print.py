@@ -1,0 +1,243 @@
+"""``print_pattern``: a pattern's 3D-print files, verified, as :class:`PrintOutcome`.
+
+The bodies, meshes and files are made in :mod:`fabkiri.fabricate.mesh`; this front door holds
+the policy ``fabkiri print`` applies around them: the defaults the design was made for, the
+printer's overrides, ``scale="auto"``, the fabrication gate at the printer's tolerance, the
+refusal that names the scale at which a design would print, the mesh and printed-tile checks,
+each style's own checks (pinned: the sweep along the deployment path; tiles-and-strips: the
+layout verifier on the printed top faces), the optional laser files and STEP, and the read-back
+of every written mesh. A failed check raises :class:`~fabkiri.errors.CheckFailed` (nothing is
+returned, so nothing can be written); bad input raises :class:`~fabkiri.errors.InputError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from .. import limits
+from ..errors import CheckFailed, FabricationError, InputError
+from ..fabricate import fabricability as fb
+from ..fabricate import mesh
+from ..fabricate.gate import claimed_states, closes_gate
+from ..fabricate.printers import load_printer
+from ..pattern.model import Pattern
+from .cut import design_intent
+
+DEFAULT_STYLE = "tiles-and-strips"
+
+
+@dataclass(frozen=True)
+class PrintOptions:
+    """What to print and how; ``None`` keeps the design's intent or the printer preset's value.
+
+    ``scale`` is mm printed per mm of the pattern, or ``"auto"``: the smallest scale the plan
+    checks accept. Thicknesses, widths, gaps and clearances (mm) override the printer preset;
+    ``tile_thickness`` is the pinned tiles' thickness for ``style="pinned"``.
+    """
+
+    style: str | None = None
+    state: int = 1
+    printer: str | None = None
+    scale: float | str = 1.0
+    tile_thickness: float | None = None
+    strip_thickness: float | None = None
+    strip_width: float | None = None
+    strip_reach: float | None = None
+    gap: float | None = None
+    radial_clearance: float | None = None
+    axial_clearance: float | None = None
+    step: bool = False
+    marks: bool = False
+    material: str = "acrylic-3"
+    force: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class PrintOutcome:
+    """A verified print: the files to write (names relative to the output folder) and its figures.
+
+    ``realised`` is the job as realised (its beds, plan and printer), ``mesh_report`` the mesh
+    checks (with the pinned sweep, if any), ``plan`` how it prints on ``printer``, ``verifier`` the layout verifier's report on the
+    printed top faces (tiles-and-strips only) and ``messages`` the warnings and notes, in order.
+    """
+
+    files: dict[str, Any]
+    realised: Any
+    mesh_report: Any
+    scale: float
+    printer: Any
+    plan: str
+    verifier: Any = None
+    messages: list[str] = field(default_factory=list)
+
+    @property
+    def job(self):
+        return self.realised.job
+
+    def describe(self) -> str:
+        """One line: style, scale, state, printer, tiles, hinges (top/bottom faces), beds, clearance, plan."""
+        job, report = self.job, self.mesh_report
+        faces = int(job.plan.top.sum())
+        clearance = "n/a" if report.min_clearance_mm is None else f"{report.min_clearance_mm:.3f} mm"
+        return (f"{job.style} at --scale {self.scale:g}, closed state {job.state}, printer {self.printer.name}, "
+                f"{len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
+                f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance {clearance}, "
+                f"{self.plan}")
+
+
+def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, stem: str = "pattern",
+                  source: str = "pattern.json", notify: Callable[[str], None] | None = None) -> PrintOutcome:
+    """Build, check and serialise the print of ``pattern``; ``stem`` names the files, ``source`` is
+    the pattern file named in the manifests; ``notify`` receives each warning or note as it arises."""
+    messages: list[str] = []
+
+    def say(text: str) -> None:
+        messages.append(text)
+        if notify is not None:
+            notify(text)
+
+    style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
+    printer = _printer(options.printer or design_intent(pattern, "printer"), style == "pinned", options)
+    pattern, scale = _scaled(pattern, style, printer, options)
+    for w in closes_gate(pattern, printer.tolerance_mm, force=options.force, action="print", tolerance="printer",
+                         states=claimed_states(pattern, options.state)).warnings:  # as `cut`, printer tolerance
+        say(f"warning: {w}")
+    job, plan = _build_job(pattern, style, options.state, printer, scale)
+    realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
+    report = mesh.check_meshes(realised)
+    tiles = None if realised.job.style == "strips" else mesh.check_printed_tiles(realised)
+    problems = list(report.problems)
+    if tiles is not None and not tiles.ok:
+        problems.append(
+            f"printed tiles deviate {tiles.max_deviation_mm:.3g} mm from closed state {realised.job.state} "
+            f"(tolerance {tiles.tolerance_mm:g} mm), overlap {tiles.max_overlap_mm2:.3g} mm²"
+        )
+    verifier = _style_checks(pattern, realised, report, problems, say)
+    if problems:
+        raise CheckFailed("; ".join(problems) + "; nothing written")
+    files = _files(pattern, realised, report, tiles, verifier, options, stem, source)
+    return PrintOutcome(files=files, realised=realised, mesh_report=report, scale=scale, printer=printer,
+                        plan=plan, verifier=verifier, messages=messages)
+
+
+def _printer(name: str | None, pinned: bool, o: PrintOptions):
+    """The printer preset with the options' overrides (pinned tiles have their own, thicker, preset thickness)."""
+    return load_printer(name).with_overrides(
+        tile_thickness_mm=None if pinned else o.tile_thickness,
+        pin_tile_thickness_mm=o.tile_thickness if pinned else None,
+        strip_thickness_mm=o.strip_thickness,
+        strip_width_mm=o.strip_width, strip_reach_mm=o.strip_reach, gap_mm=o.gap,
+        radial_clearance_mm=o.radial_clearance, axial_clearance_mm=o.axial_clearance,
+    )
+
+
+def _scaled(pattern: Pattern, style: str, printer, o: PrintOptions) -> tuple[Pattern, float]:
+    """The pattern at the print's scale, and the scale (``"auto"``: the smallest the plan checks accept)."""
+    scale = o.scale
+    if scale == "auto":
+        need = fb.print_minimum(pattern, style, printer, int(o.state))
+        if not need.possible:
+            raise CheckFailed(f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}")
+        scale = need.min_scale
+    limits.check_scale(pattern.nodes, pattern.tiles, scale, "--scale")
+    if scale != 1.0:  # mm printed per mm of the pattern
+        pattern = replace(pattern, nodes=pattern.nodes * scale,
+                          contracted={k: v * scale for k, v in pattern.contracted.items()})
+    return pattern, scale
+
+
+def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float):
+    """The print job and its plan; a refusal says at which scale it would print, if any."""
+    try:
+        job = mesh.build_job(pattern, style, int(state), printer, advise_scale=scale)
+        plan = mesh.print_plan(job)  # refuses a print the printer cannot make
+    except FabricationError as exc:  # say at which scale it would print, if any
+        if style == "pinned":  # build_job named the scales that print pinned on this bed
+            raise
+        need = fb.print_minimum(pattern, style, printer, int(state))
+        if need.min_scale is None or need.min_scale <= 1.0:
+            raise
+        k = scale
+        at = need.advice(printer.name).replace(f"≥ {need.min_scale:g}", f"≥ {fb.ceil_sig(need.min_scale * k):g}")
+        at = at.replace(f"--scale {need.max_scale:g}", f"--scale {fb.floor_sig(need.max_scale * k):g}") \
+            if need.max_scale is not None else at
+        raise type(exc)(f"{exc} (at --scale {k:g}); {at}") from None
+    return job, plan
+
+
+def _style_checks(pattern: Pattern, realised, report, problems: list[str], say: Callable[[str], None]):
+    """The checks one print style adds (pinned: the sweep along the deployment path; tiles-and-strips:
+    the layout verifier), appending to ``problems``; returns the verifier's report, if run."""
+    job = realised.job
+    verifier = None
+    if job.style == "pinned":  # the printed tiles moved along the rigid deployment path
+        sweep = mesh.sweep_pinned(pattern, realised)
+        report.sweep = sweep.to_dict()
+        if not sweep.ok:
+            problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
+                            f"({sweep.worst})")
+    if job.style == "tiles-and-strips":  # the layout verifier on the printed top faces
+        verifier = mesh.verify_printed_tiles(pattern, realised)
+        # (c) reassembles the other closed state: moot for a pattern that closes one way only
+        moot = [] if job.plan.other_state_closes else [c.name for c in verifier.failed() if _reassembly(c.id)]
+        if moot:
+            verifier.meta["not_applicable"] = moot
+            say(f"note: closed state {3 - job.state} does not close; the verifier's reassembly checks are moot")
+        problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
+                     for c in verifier.failed() if c.name not in moot]
+    return verifier
+
+
+def _reassembly(check_id: str) -> bool:
+    """Whether a layout-verifier check is one of (c), the cut tiles reassembled into a closed state
+    (ids ``GROUP.reassembled.stateS.WHAT``)."""
+    return ".reassembled.state" in check_id
+
+
+def _files(pattern: Pattern, realised, report, tiles, verifier, o: PrintOptions, stem: str,
+           source: str) -> dict[str, Any]:
+    """Every file of the print: meshes (and 3MF), STEP, laser files, assembly map and the manifest,
+    after the written meshes were read back as closed 2-manifolds."""
+    job = realised.job
+    laser = _laser_files(pattern, job, o.material, stem, source) if o.marks else {}
+    files = mesh.job_files(realised, stem)
+    if o.step:
+        from ..fabricate import cad  # lazy: OpenCascade is heavy
+
+        for k, bed in enumerate(job.beds, 1):  # one STEP per bed, like the meshes
+            files[f"{stem}.step" if len(job.beds) == 1 else f"{stem}-bed{k}.step"] = cad.step_bytes(bed)
+    read_back = mesh.read_back_files(files)  # watertight as written, not as held in memory
+    bad = [f"{n} ({v['edges_not_shared_by_two_faces']} edges not shared by two faces)"
+           for n, v in read_back.items() if not v["ok"]]
+    if bad:
+        raise CheckFailed("written meshes are not closed 2-manifolds when read back: " + ", ".join(bad)
+                          + "; nothing written")
+    files["manifest.json"] = mesh.manifest(realised, report, tiles, source, list(files) + ["manifest.json"],
+                                           verifier, read_back)
+    from ..fabricate.assembly import add_to_print
+
+    files["manifest.json"], extra = add_to_print(files["manifest.json"], pattern, realised, stem)
+    files.update(extra)
+    files.update(laser)
+    return files
+
+
+def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -> dict[str, bytes]:
+    """Laser files of the tiles with the pads engraved (``laser/``), verified like ``fabkiri cut``."""
+    from ..fabricate.marks import marked_cut
+    from ..fabricate.materials import load_material
+    from ..fabricate.readback import verify_result
+
+    if job.style != "strips":
+        raise InputError("--marks engraves strip pads on laser-cut tiles: it needs --style strips")
+    res, n = marked_cut(pattern, job.state, job.strips, job.plan.corners, load_material(material), stem, source)
+    rb = verify_result(pattern, res)
+    res.manifest["verification"] = rb.to_dict()
+    if not rb.ok:
+        raise CheckFailed("laser files with pad marks failed their read-back checks: "
+                          + "; ".join(f"{c.name} ({c.detail})" for c in rb.failed()[:4]) + "; nothing written")
+    out = {f"laser/{k}": v for k, v in res.files.items()}
+    out["laser/manifest.json"] = res.manifest_bytes()
+    return out
