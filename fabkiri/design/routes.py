@@ -1,0 +1,188 @@
+"""The rigid-family routes of the design solver: each answers a request, or says None and the next one tries.
+
+``_solve_reduced`` solves a rigid request in the closed-form family (and
+``_second_opinion`` asks the full solver too where that family's fit is
+least-squares); ``_solve_rigid_first`` and ``_solve_via_rigid`` answer a
+non-rigid request with a rigid member; ``_solve_outline`` fits square/circle
+closed-state outlines. Each returns ``(X, mode)`` (tile units) or None.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..pattern.model import Pattern
+from . import constraints as C
+from . import outline
+from .conformance import deployed as deployed_conformance
+from .penalty import _solve_full
+from .problem import _acceptable, _mean_edge, _objective, _Problem, _why_not, exact_fits
+from .reduced import fit_miss, solve_reduced
+from .request import VIA_RIGID_TILES
+from .rigid import RigidFamily
+from .targets import Target
+
+REDUCED_NAME = "closed-form rigid family (reduced Levenberg-Marquardt)"
+FULL_NAME = "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU"
+# auto: a least-squares fit from the rigid family also gets the full solver when the pattern is small
+# (up to FULL_ALWAYS_TILES) and its outline misses ``second_opinion_above`` (the CLI's --shape-tol), or
+# when it misses the target by more than FULL_ABOVE of its size; the lower objective wins. The family's LM
+# often stops in a worse local minimum on non-convex or elongated targets (rigid 100 mm, 16x16 rectangle
+# 0.088 vs 0.022 mm, 8x8 heart 0.42 vs 0.15 mm), while on the rigid circle both reach the same fit (32x32
+# 0.16 vs 0.14 mm, 64x64 0.22 vs 0.21 mm) and the full solver would only cost time (3.9 s and 63 s).
+FULL_ALWAYS_TILES = 16 * 16
+FULL_ABOVE = 2.5e-3
+# ... but not above this many tiles: at 64x64 the full solver takes 1-8 minutes and did not find the better
+# design on hard targets (rigid heart from rescaled: 21.6 mm either way; ellipse: 7.4 mm after 7.8 min)
+FULL_MAX_TILES = 32 * 32
+# the rigid-first route (``request.VIA_RIGID_FIRST_TILES``): its starts, and the outline that ends the search
+RIGID_FIRST_INITS = ("coarse", "rescaled")
+RIGID_FIRST_GOOD = 5e-3
+
+
+def _solve_reduced(prob: _Problem, log, iters: dict):
+    """Solve in the rigid family; ``(X, mode)`` if every family checks out, else None."""
+    req = prob.req
+    fam = prob.rigid_family
+    log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
+    # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
+    psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse or req.start is not None else np.pi / 4
+    S0 = None
+    if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
+        S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
+    X, mode, its = solve_reduced(fam, prob.st, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
+                                 0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
+                                 max_iter=req.max_iter,
+                                 # small patterns get the full solver's second opinion anyway
+                                 miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE,
+                                 S0=S0)
+    iters.update(its)
+    if _acceptable(prob, X) or req.solver == "reduced":
+        return X, mode
+    log("the rigid family's result fails a family check: falling back to the full solver")
+    return None
+
+
+def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
+    """Whether the deployed outline's Hausdorff distance to the target (``design/conformance.py``, the measure
+    ``--shape-tol`` judges) exceeds ``above`` of the target's size: below it the full solver's second opinion
+    is skipped. With the outline fit it reached the same outline at 8x8 on circle, ellipse, superellipse,
+    hexagon and heart (Hausdorff within 0.005 % of the size) for 4-6x the rigid family's time."""
+    pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
+    h = deployed_conformance(pat.nodes, pat.topology, prob.req.target)["hausdorff_rel"]
+    if h <= above:
+        log(f"rigid family outline within {h:.2%} of the target size (<= {above:.2%}): no second opinion")
+    return h > above
+
+
+def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[tuple, str]:
+    """The full solver as well, where the rigid family's least-squares fit may be a worse local minimum
+    (``FULL_ALWAYS_TILES``, ``FULL_ABOVE``, ``FULL_MAX_TILES``); ``(out, solver name)``, the lower objective.
+    ``req`` is the caller's request (``_design``'s), which ``prob.req`` may not be."""
+    solver = REDUCED_NAME
+    miss = fit_miss(exact_fits(prob.of("fit")), out[0])
+    if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
+        log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
+            f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)")
+    elif miss > FULL_ABOVE and req.rows * req.cols > FULL_ALWAYS_TILES or (
+            req.rows * req.cols <= FULL_ALWAYS_TILES and _outline_misses(prob, out[0], req.second_opinion_above,
+                                                                         log)):
+        log(f"rigid family fit is least-squares (misses by {miss:.2%} of the target size): "
+            f"trying the full solver too")
+        full = _solve_full(prob, log, iters)
+        f_red, f_full = _objective(prob, out[0]), _objective(prob, full[0])
+        ok_full = _acceptable(prob, full[0])
+        log(f"objective: rigid family {f_red:.4e}, full {f_full:.4e}" + ("" if ok_full else " (unconverged)"))
+        if ok_full and f_full < f_red:
+            out, solver = full, FULL_NAME
+    return out, solver
+
+
+def _solve_rigid_first(prob: _Problem, log, iters: dict):
+    """The rigid family's closest member to the target (reduced solver only, from each of ``RIGID_FIRST_INITS``)
+    that passes every family of the non-rigid problem: ``(X, mode, solver)`` if its outline is within the shape
+    tolerance (``second_opinion_above``), else None and the full solver takes over."""
+    from .solve import _design  # a rigid design of the same target is a whole design
+
+    best = None
+    for init in RIGID_FIRST_INITS:
+        sub = replace(prob.req, rigid=True, init=init, name="", solver="reduced", second_opinion=False)
+        res = _design(sub, False)
+        iters.update({f"rigid_{init}_{k}": v for k, v in res.report["iterations"].items()})
+        X = res.pattern.nodes / prob.L0
+        if not (res.converged and _acceptable(prob, X)):
+            log(f"rigid family from {init}: fails a non-rigid family check ({_why_not(prob, X)})")
+            continue
+        h = deployed_conformance(res.pattern.nodes, res.pattern.topology, prob.req.target)["hausdorff_rel"]
+        log(f"rigid family from {init}: outline within {h:.2%} of the target size")
+        if best is None or h < best[0]:
+            best = (h, X, res.report["shape_matching"], res.report["solver"])
+        if h <= RIGID_FIRST_GOOD:
+            break
+    if best is None or best[0] > prob.req.second_opinion_above:
+        log("no rigid-family member within the shape tolerance: the full solver takes over")
+        return None
+    return best[1:]
+
+
+def _solve_via_rigid(prob: _Problem, log, iters: dict):
+    """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
+    the non-rigid problem, else None."""
+    from .solve import _design  # a rigid design of the same target is a whole design
+
+    big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
+    # no full-solver second opinion on a big rigid problem at this level (its coarse levels keep theirs): at
+    # 32x32 it took about 45 of the 52 CPU s of a heart and lost (the non-rigid full solver below still takes
+    # over when the rigid design fails a non-rigid check); below that it is the CLI's last resort, kept whole
+    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="",
+                  second_opinion=prob.req.second_opinion and not big)
+    log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
+    # a big design keeps the rigid auto rules on its coarse levels only: main's 32x32 heart went on to the full
+    # solver on the rigid problem when its reduced design failed a family check, stopped at 5e-5, then the
+    # non-rigid one at 6e-3 (14 % off, 66 CPU s). Next, the reduced solver alone down the coarse levels (1.37 %).
+    first = replace(sub, solver="reduced", coarse_solver="auto") if big else sub
+    for tag, attempt in (("rigid", first), ("rigid_reduced", replace(sub, solver="reduced"))):
+        res = _design(attempt, False)
+        iters.update({f"{tag}_{k}": v for k, v in res.report["iterations"].items()})
+        X = res.pattern.nodes / prob.L0
+        if res.converged and _acceptable(prob, X):
+            return X, res.report["shape_matching"], res.report["solver"]
+        log(f"the {'rigid-family' if tag == 'rigid' else 'reduced-only'} design fails a non-rigid family check "
+            f"({_why_not(prob, X)})")
+    log("the full solver takes over")
+    return None
+
+
+def _solve_outline(prob: _Problem, log, iters: dict, solver=None):
+    """Square/circle closed-state outlines in the rigid family (``outline.py``); ``(X, mode)`` or None.
+
+    A circle target is size-free: its state's target becomes the fitted circle (centre and radius), so the
+    report and the CLI's outline check measure against that circle.
+    """
+    res = (solver or outline.solve_outline)(prob, log, iters)
+    if res is None:
+        return None
+    X, mode, fitted = res
+    saved = dict(prob.curves_mm), list(prob.families)
+    M, N = prob.req.rows, prob.req.cols
+    for s, (centre, radius) in fitted.items():
+        g = prob.grids[s]
+        # the fitted circle, split into its four arcs at the directions of the grid's corners (BL, BR, TR, TL)
+        corners = X[g.offset + np.array([0, N, (M + 1) * (N + 1) - 1, M * (N + 1)])] - centre
+        unit = prob.req.contracted[s]
+        lo, hi = unit.bbox
+        start = unit.points[0] - 0.5 * (lo + hi)  # a circle's parameter is its angle from the first point over 2π
+        u = np.mod((np.arctan2(corners[:, 1], corners[:, 0]) - np.arctan2(start[1], start[0])) / (2 * np.pi), 1.0)
+        pts = (unit.points - 0.5 * (lo + hi)) * (radius * prob.L0 / (0.5 * float((hi - lo).max()))) + centre * prob.L0
+        mm = Target(unit.name, unit.kind, pts, corners=u, source=dict(unit.source))
+        prob.curves_mm[s] = mm
+        prob.families = [C.shape_match(g.boundary, g.boundary_side, mm.transformed(1.0 / prob.L0), prob.nv,
+                                       f.name) if f.name == f"closed_shape_{s}" else f for f in prob.families]
+    if _acceptable(prob, X):
+        return X, mode
+    log("the closed-state outline design fails a family check: falling back to the full solver "
+        f"({_why_not(prob, X)})")
+    prob.curves_mm, prob.families = saved
+    return None
