@@ -203,6 +203,22 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
         if notify is not None:
             notify(text)
 
+    request, req, target, contracted = _solver_request(request)
+    shape_tol = conf.parse_shape_tol(request.shape_tol)
+    req.second_opinion_above = _tol_rel(shape_tol, target)
+    attempts: list[dict] = []
+    best = _attempts(request, req, target, contracted, shape_tol, attempts, say)
+    if _continuation_applies(req, best, contracted):
+        say("fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
+            "without the fabrication rows")
+        cont = _continuation(request, req, target, shape_tol, attempts)
+        if cont is not None and _rank(cont) < _rank(best):
+            best = cont
+    return _outcome(best, attempts, messages)
+
+
+def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequest, Target | None, dict]:
+    """``(request with its holes resolved, solver request, target, closed-state specs)``, or InputError."""
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
@@ -241,22 +257,28 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
     family = via_rigid_applies(req) or (request.rigid and request.solver != "full" and request.holes == "rhombus"
                                         and not request.symmetry and not contracted)  # the rigid family's figures
     limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
-    shape_tol = conf.parse_shape_tol(request.shape_tol)
-    req.second_opinion_above = _tol_rel(shape_tol, target)
-    big = rows * cols >= 256
-    # without an explicit --init, a design that fails a check is retried from the next guess
+    return request, req, target, contracted
+
+
+def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -> list[str]:
+    """The initial guesses to try in turn: without an explicit --init, a design that fails a check is retried."""
     if request.init:
-        inits = [request.init]
-    elif request.rigid and rows * cols >= BIG_TILES:
-        inits = list(BIG_RIGID_INITS)
-    elif target is None:  # closed-state targets only: every guess is the standard pattern, retries repeat it
-        inits = [AUTO_INITS[0]]
-    elif via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
-        inits = ["coarse"]
-    else:
-        # last, when every guess misses: the rigid family (its members satisfy every non-rigid equality)
-        inits = list(AUTO_INITS) + [VIA_RIGID_INIT] * via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
-    attempts = []
+        return [request.init]
+    if request.rigid and req.rows * req.cols >= BIG_TILES:
+        return list(BIG_RIGID_INITS)
+    if target is None:  # closed-state targets only: every guess is the standard pattern, retries repeat it
+        return [AUTO_INITS[0]]
+    if via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
+        return ["coarse"]
+    # last, when every guess misses: the rigid family (its members satisfy every non-rigid equality)
+    return list(AUTO_INITS) + [VIA_RIGID_INIT] * via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
+
+
+def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None, contracted: dict,
+              shape_tol: tuple, attempts: list[dict], say: Callable[[str], None]):
+    """The best outcome (``_rank``) over the guesses of :func:`_inits`, each appended to ``attempts``."""
+    big = req.rows * req.cols >= 256
+    inits = _inits(request, req, target)
     best = None
     for init in inits:
         if init == VIA_RIGID_INIT and best is not None and best[3] and _shape_met(best[1]):
@@ -288,12 +310,11 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
             say(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying")
     if best is None:
         raise SolveError("no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts))
-    if _continuation_applies(req, best, contracted):
-        say("fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
-            "without the fabrication rows")
-        cont = _continuation(request, req, target, shape_tol, attempts)
-        if cont is not None and _rank(cont) < _rank(best):
-            best = cont
+    return best
+
+
+def _outcome(best, attempts: list[dict], messages: list[str]) -> DesignOutcome:
+    """The judged outcome: the best design with its attempts, validity, shape verdict and fabricability."""
     pattern, report, problems, valid, contracted_states = best
     report["attempts"] = attempts
     report["time_s_total"] = float(sum(a["time_s"] for a in attempts))
