@@ -414,7 +414,7 @@ def _rank(outcome) -> tuple:
     """Order of preference among attempts: valid first, then (for a printer) closed state 1 within its bed, then
     fewer problems, then the shape tolerance met, then the smaller Hausdorff distance, then the closer fit of
     the tips (the heart 8x8 for prusa-mk4: the refined design, 3.27 %, was 227 mm tall on the 210 mm bed)."""
-    return (not outcome[3], not outcome[1]["checks"].get("fits_bed", True), len(outcome[2]),
+    return (not outcome[3], not outcome[1].get("checks", {}).get("fits_bed", True), len(outcome[2]),
             not _shape_met(outcome[1]), _hausdorff(outcome[1]), _fit_miss(outcome[1]))
 
 
