@@ -7,8 +7,8 @@ import ezdxf
 import numpy as np
 import svgwrite
 from fabkiri.pattern import geometry
+from fabkiri.verify import dxfcodec, verify_layout
 from fabkiri.verify import readers as L
-from fabkiri.verify import verify_layout
 from fabkiri.verify.quads import quads_of
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -26,7 +26,7 @@ def test_fast_dxf_reader_matches_ezdxf(tmp_path):
     for hinge in ("tape", "separate"):
         C = lf.in_place_corners(p, 1, 0.4) if hinge == "tape" else lf.exploded_corners(p, np.random.default_rng(3))
         path = lf.write_layout(tmp_path / hinge, p, C, hinge=hinge, fmt="dxf", kerf_offset=0.1)
-        fast = L._read_dxf_fast(path)
+        fast = dxfcodec.read_layer_tags(path)
         assert fast is not None and _same(fast, L._read_dxf_full(path))
 
 
@@ -39,7 +39,7 @@ def test_dxf_units_curves_and_plain_layers(tmp_path):
     msp.add_line((0, 2), (1, 2), dxfattribs={"layer": "CUT"})
     path = tmp_path / "in.dxf"
     doc.saveas(path)
-    assert L._read_dxf_fast(path) is None  # the bulge sends it to ezdxf
+    assert dxfcodec.read_layer_tags(path) is None  # the bulge sends it to ezdxf
     lw = L.read_cut_file(path)
     assert lw.layer_found and len(lw.polylines) == 3
     assert np.allclose(lw.polylines[2], [[0, 50.8], [25.4, 50.8]])
@@ -106,5 +106,5 @@ def test_fast_reader_lines_on_cut(tmp_path):
     msp.add_text("0", dxfattribs={"layer": "ENGRAVE"})  # a value line "0" must not look like an entity start
     path = tmp_path / "lines.dxf"
     doc.saveas(path)
-    fast = L._read_dxf_fast(path)
+    fast = dxfcodec.read_layer_tags(path)
     assert fast is not None and len(fast.polylines) == 4 and _same(fast, L._read_dxf_full(path))
