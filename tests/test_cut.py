@@ -349,17 +349,17 @@ def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
 
 
 def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tmp_path):
-    import fabkiri.verify.readers as L
+    import fabkiri.verify.svgread as L
 
     r = cut(std(3, 3))
     f = tmp_path / "p.svg"
     f.write_bytes(r.files["p.svg"])
-    assert not isinstance(L._without_annotation_layers(f), str)  # pruned
-    a = L._read_svg(f)
+    assert not isinstance(L.without_annotation_layers(f), str)  # pruned
+    a = L.read_cut_svg(f)
     f2 = tmp_path / "q.svg"  # a <use> keeps the whole file
     f2.write_bytes(r.files["p.svg"].replace(b"</svg>", b'<use href="#CUT" x="0"/></svg>'))
-    assert isinstance(L._without_annotation_layers(f2), str)
-    b = L._read_svg(f2)
+    assert isinstance(L.without_annotation_layers(f2), str)
+    b = L.read_cut_svg(f2)
     assert len(a.polylines) > 0 and a.closed == b.closed[:len(a.closed)]
     assert all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines))
 

@@ -4,6 +4,7 @@ fabrication rows, and the intent ``cut``/``print`` read back."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -297,11 +298,12 @@ def test_summary_covers_every_printer_and_style():
         assert styles["strips"]["max_scale"] is None and styles["pinned"]["max_scale"] is not None
 
 
-def test_strip_rows_met_means_print_accepts():
-    """The standard 8x8 pattern: where the strip clearance rows hold, print's plan checks pass; 3 % below the
-    plan's own minimum (8.7 mm tiles on prusa-mk4) the rows fail."""
+@pytest.mark.parametrize("state", [1, 2])
+def test_strip_rows_met_means_print_accepts(state):
+    """The standard 8x8 pattern: where the strip clearance rows of the printed closed state hold, print's plan
+    checks for that state pass; 3 % below the plan's own minimum (8.7 mm tiles on prusa-mk4) the rows fail."""
     pr = load_printer("prusa-mk4")
-    lim = F.FabricationLimits(**design_limits.printer_limits(pr, "tiles-and-strips"))
+    lim = F.FabricationLimits(**design_limits.printer_limits(pr, "tiles-and-strips"), print_state=state)
     p = standard_pattern(8, 8, tile_size=1.0)
     stc = Stencils.from_pattern(p)
 
@@ -313,17 +315,18 @@ def test_strip_rows_met_means_print_accepts():
     ok = [rows(L).min() >= 0 for L in sizes]
     assert len(rows(9.0)) > 0 and any(ok) and not ok[0]
     first = float(sizes[int(np.argmax(ok))])
-    assert fb._plan_error(standard_pattern(8, 8, tile_size=first), "tiles-and-strips", 1, pr) == ""
-    assert fb._plan_error(standard_pattern(8, 8, tile_size=0.97 * 8.7), "tiles-and-strips", 1, pr) != ""
+    assert fb._plan_error(standard_pattern(8, 8, tile_size=first), "tiles-and-strips", state, pr) == ""
+    assert fb._plan_error(standard_pattern(8, 8, tile_size=0.97 * 8.7), "tiles-and-strips", state, pr) != ""
 
 
 def test_scaled_limits_scale_every_requirement_and_set_the_margin():
     lim = F.FabricationLimits(**design_limits.printer_limits(load_printer("prusa-mk4"), "tiles-and-strips"), source="mk4")
     half = lim.scaled(0.5, 0.02)
     for k, v in lim.to_dict().items():
-        if k not in ("source", "margin"):
+        if k not in F.NOT_LIMITS:
             assert getattr(half, k) == pytest.approx(0.5 * v)
     assert half.source == "mk4" and half.margin == 0.02 and lim.margin == 0.0
+    assert replace(lim, print_state=2).scaled(0.5).print_state == 2 and not F.FabricationLimits(print_state=2).active
     st_ = Stencils.from_pattern(standard_pattern(4, 4, tile_size=1.0))
     base = standard_pattern(4, 4, tile_size=1.0).nodes
     assert all(f.meta["margin"] == 0.02 for f in F.families(st_, len(base), half, 10.0, base))
@@ -362,3 +365,57 @@ def test_a_design_for_a_printer_that_fits_its_bed_ranks_first():
 
     assert _rank(outcome(True, 0.06)) < _rank(outcome(False, 0.03))
     assert _rank(outcome(True, 0.03)) < _rank(outcome(True, 0.06))
+
+
+def test_the_printed_state_is_the_one_that_fits_the_bed():
+    """prusa-mk4 (250 x 210 mm): the 16x16 2:1 ellipse at 200 mm closes 176 x 298 mm in state 1 and 215 x 164 mm
+    in state 2, so state 2 is printed; state 1 when it fits, and state 1 (reported as not fitting) when neither does."""
+    box = lambda w, h: np.array([[[0, 0], [w, 0], [w, h], [0, h]]], float)  # noqa: E731
+    assert design_limits.bed_state({1: box(176, 298), 2: box(215, 164)}, "prusa-mk4") == 2
+    assert design_limits.bed_state({1: box(200, 200), 2: box(215, 164)}, "prusa-mk4") == 1
+    assert design_limits.bed_state({1: box(176, 298), 2: box(300, 100)}, "prusa-mk4") == 1
+    assert design_limits.bed_state({1: box(176, 298)}, "prusa-mk4") == 1
+
+
+def test_print_state_defaults_to_the_designs_intent(monkeypatch):
+    """``print`` with no ``--state`` makes the state stored in the design's intent (else 1); ``--state`` overrides."""
+    from fabkiri.api import print as api_print
+
+    class Built(Exception):
+        pass
+
+    def build(pattern, style, state, printer, scale):  # the state the job is asked for, before any meshing
+        raise Built(state)
+
+    monkeypatch.setattr(api_print, "_build_job", build)
+    p = standard_pattern(4, 4, tile_size=30.0)
+    for intent, asked, printed in ((2, None, 2), (None, None, 1), (2, 1, 1), (None, 2, 2)):
+        design = {"options": {"fabrication": {"state": intent}}} if intent else {}
+        with pytest.raises(Built) as got:
+            api_print.print_pattern(replace(p, design=design), api_print.PrintOptions(state=asked))
+        assert got.value.args == (printed,)
+
+
+@pytest.mark.slow
+def test_ellipse_for_prusa_mk4_prints_the_state_that_fits_with_no_flags(run_cli, tmp_path):
+    """The 8x8 2:1 ellipse at 200 mm closes 118 x 236 mm in state 1, off prusa-mk4's 250 x 210 mm bed: the design
+    picks state 2 (199 x 99 mm), raises that state's strip rows, stores it, and `print p.json` prints it; the
+    3MF slices when prusa-slicer is installed."""
+    import shutil
+    import subprocess
+
+    f = tmp_path / "e.json"
+    code, _, err = run_cli("design", "--tiles", "8x8", "--target", "ellipse", "--size", "200", "--printer",
+                           "prusa-mk4", "-o", f)
+    assert code == 0, err
+    d = json.loads(f.read_text())
+    assert d["design"]["options"]["fabrication"]["state"] == 2 and d["design"]["report"]["checks"]["fits_bed"]
+    w, h = np.ptp(np.asarray(d["contracted"]["2"], float).reshape(-1, 2), axis=0)
+    assert w <= 250 and h <= 210
+    code, _, err = run_cli("print", f, "-o", tmp_path / "D")
+    assert code == 0, err
+    assert "closed state 2" in err and (tmp_path / "D" / "e.3mf").exists()
+    if shutil.which("prusa-slicer"):
+        done = subprocess.run(["prusa-slicer", "--export-gcode", str(tmp_path / "D" / "e.3mf"), "-o",
+                               str(tmp_path / "x.gcode")], capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0 and (tmp_path / "x.gcode").stat().st_size > 0, done.stderr[-500:]

@@ -7,8 +7,8 @@ import ezdxf
 import numpy as np
 import svgwrite
 from fabkiri.pattern import geometry
+from fabkiri.verify import dxfcodec, verify_layout
 from fabkiri.verify import readers as L
-from fabkiri.verify import verify_layout
 from fabkiri.verify.quads import quads_of
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -26,7 +26,7 @@ def test_fast_dxf_reader_matches_ezdxf(tmp_path):
     for hinge in ("tape", "separate"):
         C = lf.in_place_corners(p, 1, 0.4) if hinge == "tape" else lf.exploded_corners(p, np.random.default_rng(3))
         path = lf.write_layout(tmp_path / hinge, p, C, hinge=hinge, fmt="dxf", kerf_offset=0.1)
-        fast = L._read_dxf_fast(path)
+        fast = dxfcodec.read_layer_tags(path)
         assert fast is not None and _same(fast, L._read_dxf_full(path))
 
 
@@ -39,7 +39,7 @@ def test_dxf_units_curves_and_plain_layers(tmp_path):
     msp.add_line((0, 2), (1, 2), dxfattribs={"layer": "CUT"})
     path = tmp_path / "in.dxf"
     doc.saveas(path)
-    assert L._read_dxf_fast(path) is None  # the bulge sends it to ezdxf
+    assert dxfcodec.read_layer_tags(path) is None  # the bulge sends it to ezdxf
     lw = L.read_cut_file(path)
     assert lw.layer_found and len(lw.polylines) == 3
     assert np.allclose(lw.polylines[2], [[0, 50.8], [25.4, 50.8]])
@@ -106,5 +106,39 @@ def test_fast_reader_lines_on_cut(tmp_path):
     msp.add_text("0", dxfattribs={"layer": "ENGRAVE"})  # a value line "0" must not look like an entity start
     path = tmp_path / "lines.dxf"
     doc.saveas(path)
-    fast = L._read_dxf_fast(path)
+    fast = dxfcodec.read_layer_tags(path)
     assert fast is not None and len(fast.polylines) == 4 and _same(fast, L._read_dxf_full(path))
+
+
+def test_one_dxf_codec_reads_what_it_writes(tmp_path):
+    """The writer's bulk entities are exactly the canonical form the tag readers take: every ENGRAVE
+    stroke split from the ENTITIES section is canonical, with its points and closed flag, and the
+    verifier's layer scan returns the same polylines; a prototype export of another shape is refused."""
+    from fabkiri.fabricate.drawing import SheetDrawing
+    from fabkiri.fabricate.dxf import dxf_bytes
+
+    rng = np.random.default_rng(3)
+    sd = SheetDrawing(1, 200.0, 100.0)
+    strokes = [(rng.uniform(0, 100, (int(n), 2)), bool(n % 2)) for n in rng.integers(2, 7, 40)]
+    for pts, closed in strokes:
+        sd.add("ENGRAVE", pts, closed)
+    sd.add("CUT", np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]), True)
+    text = dxf_bytes(sd).decode("ascii")
+    lo, hi = dxfcodec.entities_span(text)
+    tags = dxfcodec.split_tags(text[lo:hi].split("\n")[:-1])
+    canon = np.flatnonzero(~tags.bad)
+    assert len(canon) == len(strokes) + 1 and set(tags.at(canon, 4).tolist()) == {"ENGRAVE", "CUT"}
+    written = sd.layers["ENGRAVE"]
+    assert tags.nv[tags.good][:len(written)].tolist() == [len(p) for p, _ in written]
+    assert (tags.flags[tags.good][:len(written)] == "1").tolist() == [c for _, c in written]
+    path = tmp_path / "s.dxf"
+    path.write_text(text)
+    lw = dxfcodec.read_layer_tags(path, "ENGRAVE")
+    assert lw is not None and len(lw.polylines) == len(written)
+    for (p, c), q, cq in zip(written, lw.polylines, lw.closed):
+        assert np.array_equal(p, q) and c == cq
+    proto = "  0\nLWPOLYLINE\n  5\nF0\n330\n1F\n100\nAcDbEntity\n  8\nL\n370\n0\n100\nAcDbPolyline\n 90\n2\n 70\n0\n"
+    pts = [(1.25, 2.5), (3.75, 4.5)]
+    verts = "".join(f" 10\n{x}\n 20\n{y}\n" for x, y in pts)
+    assert dxfcodec.split_prototype(proto + verts, "F0", pts) is None  # a lineweight tag: not canonical
+    assert dxfcodec.split_prototype(proto.replace("370\n0\n", "") + verts, "F0", pts) is not None

@@ -363,6 +363,10 @@ def _continuation(request: PatternRequest, req: DesignRequest, target: Target, s
         return None
     X = last_ok = free.pattern.nodes
     spent = free.report.get("time_s_total", 0.0)  # wall s, as the attempts
+    if request.printer:  # the strip rows follow the closed state that fits the bed (2:1 ellipse: state 2)
+        state = design_limits.bed_state(free.pattern.contracted, request.printer)
+        req = replace(req, fabrication=replace(req.fabrication, print_state=state),
+                      fabrication_intent={**req.fabrication_intent, "state": state})
     # a non-rigid request below 32x32 steps in the rigid family when it may (a member meets every non-rigid
     # equality): with the full solver the steps from 7/8 of the limits on stalled against closed holes
     # (hundreds of non-overlap rows at zero; heart 16x16: equality 1e-5 to 6e-5, unconverged, 2.2-3.3 %)
@@ -384,8 +388,9 @@ def _continuation(request: PatternRequest, req: DesignRequest, target: Target, s
     trace: list[float] = []
     if not (outcome[3] and _shape_met(outcome[1])):  # the fit was least squares, the tolerance is a maximum;
         # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
-        bed = None if not request.printer else (  # keep only steps whose closed state 1 fits the bed
-            lambda r: design_limits.fits_bed(contract(r.pattern, 1).corners, request.printer))
+        bed = None if not request.printer else (  # keep only steps whose printed closed state fits the bed
+            lambda r: design_limits.fits_bed(contract(r.pattern, req.fabrication.print_state).corners,
+                                             request.printer))
         refined, trace, secs = refine_minimax(replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
                                               outcome[0].nodes, accept=bed)
         spent += secs
@@ -435,7 +440,7 @@ def _rank(outcome) -> tuple:
     """Order of preference among attempts: valid first, then (for a printer) closed state 1 within its bed, then
     fewer problems, then the shape tolerance met, then the smaller Hausdorff distance, then the closer fit of
     the tips (the heart 8x8 for prusa-mk4: the refined design, 3.27 %, was 227 mm tall on the 210 mm bed)."""
-    return (not outcome[3], not outcome[1]["checks"].get("fits_bed", True), len(outcome[2]),
+    return (not outcome[3], not outcome[1].get("checks", {}).get("fits_bed", True), len(outcome[2]),
             not _shape_met(outcome[1]), _hausdorff(outcome[1]), _fit_miss(outcome[1]))
 
 
@@ -460,8 +465,9 @@ def _check(result, contracted, request: PatternRequest, target: Target | None, s
         if ov:
             where = "the deployed state" if label == "deployed" else label
             problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
-    if request.printer:  # `print` makes closed state 1: a design that does not fit the bed ranks below one that does
-        checks["fits_bed"] = design_limits.fits_bed(contracted_states[1], request.printer)
+    if request.printer:  # in the state `print` makes: a design that does not fit the bed ranks below one that does
+        state = (((pattern.design or {}).get("options") or {}).get("fabrication") or {}).get("state", 1)
+        checks["fits_bed"] = design_limits.fits_bed(contracted_states[state], request.printer)
     if request.rigid or request.holes == "parallelogram":
         from ..pattern.residuals import hinge_sums
 

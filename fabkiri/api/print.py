@@ -38,7 +38,7 @@ class PrintOptions:
     """
 
     style: str | None = None
-    state: int = 1
+    state: int | None = None  # None: the state the design was made to print (its intent), else 1
     printer: str | None = None
     scale: float | str = 1.0
     tile_thickness: float | None = None
@@ -98,6 +98,7 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
         if notify is not None:
             notify(text)
 
+    options = replace(options, state=int(options.state or design_intent(pattern, "state") or 1))
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
     printer = _printer(options.printer or design_intent(pattern, "printer"), style == "pinned", options)
     pattern, scale = _scaled(pattern, style, printer, options)

@@ -22,7 +22,7 @@ def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     pattern = load_any(args.file)
     options = PrintOptions(
-        style=args.style, state=int(args.state), printer=args.printer, scale=args.scale,
+        style=args.style, state=int(args.state) if args.state else None, printer=args.printer, scale=args.scale,
         tile_thickness=args.tile_thickness, strip_thickness=args.strip_thickness, strip_width=args.strip_width,
         strip_reach=args.strip_reach, gap=args.gap, radial_clearance=args.radial_clearance,
         axial_clearance=args.axial_clearance, step=args.step, marks=args.marks, material=args.material,
@@ -43,7 +43,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "joined by flexible strips (two materials: recessed with two extruders, stacked with colour "
                         "changes on one; the default unless the design was made for another); pinned: "
                         "print-in-place pin hinges")
-    p.add_argument("--state", choices=["1", "2"], default="1", help="closed state printed (default 1)")
+    p.add_argument("--state", choices=["1", "2"], default=None,
+                   help="closed state printed (default: the one the design was made for, else 1)")
     p.add_argument("--printer", metavar="NAME|FILE.json",
                    help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")
     p.add_argument("--scale", type=_scale_auto, default=1.0, metavar="K|auto",

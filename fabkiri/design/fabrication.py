@@ -32,6 +32,8 @@ import numpy as np
 from ..pattern import fabricability as fab
 from .constraints import Family, Stencils
 
+NOT_LIMITS = ("source", "margin", "print_state")  # fields that are no requirement in mm
+
 
 @dataclass(frozen=True)
 class FabricationLimits:
@@ -53,15 +55,17 @@ class FabricationLimits:
     # with 0.005 the penalty stages left width rows at exactly zero and the projection stalled against them
     # (16x16 heart at 200 mm, acrylic-3 at 3/4 of its limits: equality 1e-5, unconverged; 0.02: converged)
     margin: float = 0.0
+    # the closed state ``print`` makes (the strip rows follow its folds): the one that fits the printer's bed
+    print_state: int = 1
 
     @property
     def active(self) -> bool:
-        return any(v > 0 for k, v in asdict(self).items() if k not in ("source", "margin"))
+        return any(v > 0 for k, v in asdict(self).items() if k not in NOT_LIMITS)
 
     def scaled(self, fraction: float, margin: float = 0.0) -> FabricationLimits:
         """Every requirement times ``fraction`` (a step of the continuation in the limits)."""
         return replace(self, margin=margin, **{f.name: getattr(self, f.name) * fraction for f in fields(self)
-                                               if f.name not in ("source", "margin")})
+                                               if f.name not in NOT_LIMITS})
 
     def required_width_mm(self) -> float:
         """Unshrunk width every tile needs at least (erosion by d takes at least 2d off a width)."""
@@ -332,8 +336,8 @@ def _families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, 
 
 
 def _strip_family(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, tiles) -> list[Family]:
-    """Strip clearance rows for every two hinge corners of a tile whose strips share a face (closed state 1,
-    the one ``print`` makes; faces from the fold rules, as ``print`` assigns them)."""
+    """Strip clearance rows for every two hinge corners of a tile whose strips share a face (in closed state
+    ``limits.print_state``, the one ``print`` makes; faces from the fold rules, as ``print`` assigns them)."""
     T = len(tiles)
     pairs = np.concatenate([fab.coincident_hinges(st.hinge_tiles, st.hinge_corner, st.folds[s].fold_corner_ends, T)
                             for s in (1, 2)])
@@ -341,7 +345,7 @@ def _strip_family(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: flo
     t, h, sh, k, sk = fab.same_face_pairs(st.hinge_tiles, face, T)
     if not len(t):
         return []
-    ends = st.folds[1].fold_corner_ends
+    ends = st.folds[limits.print_state].fold_corner_ends
     d = limits.shrink_mm
     sin_min = float(np.sin(np.radians(limits.min_hinge_angle_deg))) if limits.min_hinge_angle_deg > 0 else 1.0
     a0 = d / unit_mm  # the strip starts t0 = d / sin(sharper corner) along the seam: at least d, at most

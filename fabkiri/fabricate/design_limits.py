@@ -112,3 +112,11 @@ def fits_bed(corners: np.ndarray, printer: str) -> bool:
     bx, by, _ = load_printer(printer).bed_mm
     w, h = np.ptp(np.asarray(corners, float).reshape(-1, 2), axis=0)
     return bool(w <= bx and h <= by)
+
+
+def bed_state(states: dict, printer: str) -> int:
+    """The closed state ``print`` should make on ``printer``: 1 when its tiles ``states[1]`` (mm) fit the bed,
+    else 2 when those do, else 1 (neither fits; the design reports ``fits_bed`` false)."""
+    if fits_bed(states[1], printer) or 2 not in states or not fits_bed(states[2], printer):
+        return 1
+    return 2

@@ -8,7 +8,7 @@ Bulk strokes: a 64x64 sheet engraves tens of thousands of label strokes, and
 ezdxf spends ~80 µs building and exporting each LWPOLYLINE object. The
 ``ENGRAVE`` layer is therefore written in bulk: ezdxf exports one prototype
 LWPOLYLINE of the document, and every stroke is that prototype's tag text with
-its own handle (reserved from the document's handle generator, so
+its own handle (the tag codec :mod:`fabkiri.verify.dxfcodec`; reserved from the document's handle generator, so
 ``$HANDSEED`` and every later handle are what ezdxf would give), vertex count,
 flags and vertices (formatted as ezdxf does: ``%s`` of a float). The result is
 byte-identical to adding each stroke with ``add_lwpolyline`` (tested);
@@ -22,16 +22,15 @@ import io
 from contextlib import contextmanager
 
 import ezdxf
-import numpy as np
 from ezdxf import units
 from ezdxf.entities import LWPolyline
 from ezdxf.lldxf.tagwriter import TagWriter
 
+from ..verify.dxfcodec import insert_entities, lwpolyline_tags, split_prototype
 from .drawing import COLORS, LAYERS, SheetDrawing
 
 DXF_VERSION = "R2010"
 BULK_LAYERS = ("ENGRAVE",)  # first in LAYERS: its entities open the ENTITIES section
-ENTITIES_HEAD = "  0\nSECTION\n  2\nENTITIES\n"
 _PROBE_HANDLE = "FFFFF0"
 _PROBE_POINTS = [(1.25, 2.5), (3.75, 4.5)]
 
@@ -47,38 +46,13 @@ def _fixed_metadata():
 
 
 def _prototype(doc, msp, layer: str) -> tuple[str, str] | None:
-    """``(head, mid)`` of ezdxf's own export of an open 2-point LWPOLYLINE on ``layer``.
-
-    An entity is ``head + handle + mid + " 90\\n{n}\\n 70\\n{flags}\\n" + vertices``;
-    None when ezdxf's export does not have that shape.
-    """
+    """``(head, mid)`` of ezdxf's own export of an open 2-point LWPOLYLINE on ``layer``
+    (:func:`~fabkiri.verify.dxfcodec.split_prototype`); None when it is not canonical."""
     e = LWPolyline.new(handle=_PROBE_HANDLE, owner=msp.layout_key, dxfattribs={"layer": layer}, doc=doc)
     e.set_points(_PROBE_POINTS, format="xy")
     buf = io.StringIO()
     e.export_dxf(TagWriter(buf, dxfversion=doc.dxfversion))
-    text = buf.getvalue()
-    head, sep, rest = text.partition(f"  5\n{_PROBE_HANDLE}\n")
-    mid, sep2, verts = rest.partition(" 90\n2\n 70\n0\n")
-    if not sep or not sep2 or verts != "".join(f" 10\n{x}\n 20\n{y}\n" for x, y in _PROBE_POINTS):
-        return None
-    return head + "  5\n", "\n" + mid
-
-
-def _bulk_text(polylines, handles: list[str], head: str, mid: str) -> str:
-    """Every polyline as the prototype's tags (vertices formatted like ezdxf: ``%s`` of a float)."""
-    if not polylines:
-        return ""
-    pts = np.concatenate([p for p, _ in polylines])
-    vtx = [f" 10\n{x!r}\n 20\n{y!r}\n" for x, y in zip(pts[:, 0].tolist(), pts[:, 1].tolist())]
-    counts = [len(p) for p, _ in polylines]
-    ends = np.cumsum(counts).tolist()
-    out = []
-    start = 0
-    for h, n, end, (_, closed) in zip(handles, counts, ends, polylines):
-        out.append(f"{head}{h}{mid} 90\n{n}\n 70\n{1 if closed else 0}\n")
-        out.append("".join(vtx[start:end]))
-        start = end
-    return "".join(out)
+    return split_prototype(buf.getvalue(), _PROBE_HANDLE, _PROBE_POINTS)
 
 
 def dxf_bytes(sheet: SheetDrawing, colors: str = "default", *, bulk: bool = True) -> bytes:
@@ -102,7 +76,7 @@ def dxf_bytes(sheet: SheetDrawing, colors: str = "default", *, bulk: bool = True
             if proto is not None:
                 # the handles add_lwpolyline would have drawn, in the same order
                 handles = [doc.entitydb.next_handle() for _ in polylines]
-                bulk_text.append(_bulk_text(polylines, handles, *proto))
+                bulk_text.append(lwpolyline_tags(polylines, handles, *proto))
                 continue
             attribs = {"layer": name}
             for pts, closed in polylines:
@@ -118,6 +92,5 @@ def dxf_bytes(sheet: SheetDrawing, colors: str = "default", *, bulk: bool = True
     text = buf.getvalue()
     if bulk_text:
         # the bulk layers come first in the modelspace, so first in the ENTITIES section
-        at = text.index(ENTITIES_HEAD) + len(ENTITIES_HEAD)
-        text = text[:at] + "".join(bulk_text) + text[at:]
+        text = insert_entities(text, "".join(bulk_text))
     return text.encode("ascii")
