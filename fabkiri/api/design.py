@@ -206,8 +206,7 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
     request, req, target, contracted = _solver_request(request)
     shape_tol = conf.parse_shape_tol(request.shape_tol)
     req.second_opinion_above = _tol_rel(shape_tol, target)
-    attempts: list[dict] = []
-    best = _attempts(request, req, target, contracted, shape_tol, attempts, say)
+    best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
     if _continuation_applies(req, best, contracted):
         say("fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
             "without the fabrication rows")
@@ -275,17 +274,16 @@ def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -
 
 
 def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None, contracted: dict,
-              shape_tol: tuple, attempts: list[dict], say: Callable[[str], None]):
-    """The best outcome (``_rank``) over the guesses of :func:`_inits`, each appended to ``attempts``."""
-    big = req.rows * req.cols >= 256
+              shape_tol: tuple, say: Callable[[str], None]) -> tuple[tuple, list[dict]]:
+    """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
-    best = None
+    best, attempts = None, []
     for init in inits:
         if init == VIA_RIGID_INIT and best is not None and best[3] and _shape_met(best[1]):
             break  # the rigid family is the last resort for a miss, not a second opinion
         req.init = init
         try:
-            result = design(req, progress=(big or request.verbose) and not request.quiet)
+            result = design(req, progress=(req.rows * req.cols >= 256 or request.verbose) and not request.quiet)
         except SolveError as exc:
             if len(inits) == 1:
                 raise
@@ -298,8 +296,7 @@ def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None
         attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
                          "time_s": outcome[1]["time_s"], "fit_max_rel_size": miss,
                          "hausdorff_max_rel": _hausdorff(outcome[1]), "shape": "met" if shape_met else "missed"})
-        if best is None or _rank(outcome) < _rank(best):
-            best = outcome
+        best = outcome if best is None or _rank(outcome) < _rank(best) else best
         if outcome[3] and shape_met and (miss <= RETRY_FIT_ABOVE or outcome[1].get("rigid_first")):
             break  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
         if outcome[3] and init != inits[-1]:
@@ -310,19 +307,16 @@ def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None
             say(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying")
     if best is None:
         raise SolveError("no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts))
-    return best
+    return best, attempts
 
 
 def _outcome(best, attempts: list[dict], messages: list[str]) -> DesignOutcome:
     """The judged outcome: the best design with its attempts, validity, shape verdict and fabricability."""
     pattern, report, problems, valid, contracted_states = best
-    report["attempts"] = attempts
-    report["time_s_total"] = float(sum(a["time_s"] for a in attempts))
-    meta = dict(pattern.design or {})
-    meta["report"] = report
-    meta["valid"] = bool(valid)
+    report.update(attempts=attempts, time_s_total=float(sum(a["time_s"] for a in attempts)))
     shape_met = _shape_met(report)
-    meta["shape"] = "met" if shape_met else "missed"
+    meta = {**(pattern.design or {}), "report": report, "valid": bool(valid),
+            "shape": "met" if shape_met else "missed"}
     pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
                       name=pattern.name, lattice=pattern.lattice, design=meta)
     report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
