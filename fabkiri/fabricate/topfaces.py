@@ -51,17 +51,20 @@ def printed_bridges(r: Realised) -> list[dict]:
     job = r.job
     tiles_m, hinges_m = r.manifolds[0]
     planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
-    tree = shapely.STRtree(planned)
     feats = []
     lv = job.z_levels()
     tiles = np.array(section_polys(tiles_m, lv["tiles"]), dtype=object)
     tile_tree = shapely.STRtree(tiles)
-    for z in (lv["bottom"], lv["top"]):
+    top = job.strips.top
+    for z, face in ((lv["bottom"], np.flatnonzero(~top)), (lv["top"], np.flatnonzero(top))):
         parts = np.array(section_polys(hinges_m, z), dtype=object)
         if job.layout == "stacked" and z == lv["bottom"]:  # a base sheet: each bottom strip's share of it
-            mine = shapely.intersection(shapely.union_all(parts), planned[~job.strips.top])
+            mine = shapely.intersection(shapely.union_all(parts), planned[~top])
             parts = np.array([g for g in shapely.get_parts(mine) if g.area > 1e-4], dtype=object)
-        pi, hi = tree.query(shapely.point_on_surface(parts), predicate="within")
+        # only the strips printed at this level own its sections: a bottom strip may lie under a top
+        # strip of a neighbouring hinge in plan, and a point in both would leave its hinge unowned
+        pi, hi = shapely.STRtree(planned[face]).query(shapely.point_on_surface(parts), predicate="within")
+        hi = face[hi]
         owner = np.full(len(parts), -1)
         once = np.bincount(pi, minlength=len(parts)) == 1
         owner[pi[once[pi]]] = hi[once[pi]]
