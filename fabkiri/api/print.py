@@ -23,6 +23,7 @@ from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import load_printer
 from ..pattern.model import Pattern
+from ..pattern.tessellation import DEFAULT_KIND
 from .cut import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
@@ -91,6 +92,9 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
                   source: str = "pattern.json", notify: Callable[[str], None] | None = None) -> PrintOutcome:
     """Build, check and serialise the print of ``pattern``; ``stem`` names the files, ``source`` is
     the pattern file named in the manifests; ``notify`` receives each warning or note as it arises."""
+    if pattern.kind != DEFAULT_KIND:
+        # the printed hinges (strips, pins) are quad-only; cut reads the tile arity (docs/kagome.md)
+        raise InputError(f"print makes quad patterns only, not {pattern.kind} patterns yet")
     messages: list[str] = []
 
     def say(text: str) -> None:

@@ -13,9 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..errors import CheckFailed, InputError
+from ..errors import CheckFailed
 from ..pattern.model import Pattern
-from ..pattern.tessellation import DEFAULT_KIND
 from ..verify import Report, verify_pattern
 from ..verify.pattern_checks import state_check_id
 
@@ -51,9 +50,6 @@ def closes_gate(pattern: Pattern, tol_mm: float | None, *, scale: float = 1.0, f
     """Verify ``pattern`` at ``tol_mm`` (in the file's mm, the pattern drawn ``scale`` times its size;
     None: the verifier's own tolerance); raise :class:`CheckFailed` unless its tiles and ``states``
     close, or ``force``."""
-    if action == "print" and pattern.kind != DEFAULT_KIND:
-        # the printed hinges (strips, pins) are quad-only; cut reads the tile arity (docs/kagome.md)
-        raise InputError(f"{action} makes quad patterns only, not {pattern.kind} patterns yet")
     report = verify_pattern(pattern, tol_mm=None if tol_mm is None else tol_mm / scale)
     groups = ("tiles", *(f"state {s}" for s in states))
     gate = [c for c in report.checks if c.applies and not c.ok
