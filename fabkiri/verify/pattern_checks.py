@@ -155,6 +155,11 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
     out.append(measured("tiles counter-clockwise", float(area.min()), 0.0, "mm²", op=">=",
                         worst=_worst("tile", -area), group="tiles",
                         detail=f"clockwise or flat tiles: {np.flatnonzero(area <= 0).tolist()[:20]}"))
+    i, j, depth = geom.overlap_depths(corners)  # hinged neighbours touch only at a corner: depth 0
+    k = int(np.argmax(depth)) if len(depth) else None
+    out.append(measured("deployed: no overlaps", _max(depth), tol.length, "mm", group="tiles",
+                        worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, id="deployed.no-overlaps",
+                        detail=f"{int((depth > tol.length).sum())} overlapping pairs in the deployed state"))
     edges = geometry.edge_lengths(corners)
     out.append(measured("tiles min edge", float(edges.min()), MIN_EDGE_REL * tol.tile_size, "mm", op=">=",
                         worst=_worst("tile", -edges.min(axis=1)), group="tiles"))
