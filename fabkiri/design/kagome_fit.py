@@ -1,17 +1,26 @@
 """Inverse design of kagome patterns: a reconfigurable kagome whose deployed outline follows a target.
 
-Unknowns are the deployed nodes in normalised units (the standard tile edge is 1). The equalities
-are both closed states' edge pairs and rings (:mod:`fabkiri.design.kagome`); the fit asks every free
-corner (boundary tip) to lie on the target curve (its signed distance). The solve has two stages:
+Unknowns are the deployed nodes in normalised units (the standard tile edge is 1). The rows:
 
-1. a penalty least-squares (``scipy.optimize.least_squares``, sparse analytic Jacobian): the
-   equalities weighted by ``EQ_WEIGHT``, the tips' signed distances, and a small pull towards the
-   initial guess that keeps the problem well posed along the curve;
-2. a projection onto the equalities by minimum-norm Gauss-Newton steps, so the design closes in
-   both states to rounding (the fit moves by the tiny amount the penalty left).
+* **equalities**: both closed states' edge pairs and rings (:mod:`fabkiri.design.kagome`), and a mirror
+  symmetry of the lattice wherever the target has the same one (:mod:`fabkiri.design.kagome_rows`);
+* **fit** (soft): every boundary tip on its own side's arc of the target (B, R, T, L, as the quad solver
+  assigns them), and the whole tip polygon against the target (chord midpoints, target samples to their
+  nearest chord: a cusp no tip reaches still pulls), as in :mod:`fabkiri.design.target_families`;
+* **inequalities** (soft, one-sided): both gaps at every hinge and every tile's shape quality above a
+  floor, so no tile folds over or overlaps its neighbour; the quality is scale free, so the tiles may grow
+  and shrink to follow the target; and every boundary fan of a closed state short of a full turn, so a
+  row's end tile (on one hinge) does not fold onto the next row's in a closed state.
+
+The solve (:mod:`fabkiri.design.kagome_solve`) moves the fit in the family's tangent space (equality-
+constrained Levenberg-Marquardt), then refines the largest misses by Lawson's reweighting of the fit
+rows (as :mod:`fabkiri.design.refine` does for quads) and keeps the step with the smallest Hausdorff
+distance; a last projection takes the equalities to rounding.
 
 The initial guess maps the standard R x C kagome onto the target: its boundary tips spread along the
-target by arc length, the other nodes by a harmonic (Tutte-style) embedding.
+target by arc length from the bottom of the vertical centre line (so a symmetric lattice lands
+symmetrically), the other nodes by a harmonic (Tutte-style) embedding. The target's four arcs are split
+midway between the last tip of one side and the first of the next.
 """
 
 from __future__ import annotations
@@ -20,18 +29,22 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import sparse
-from scipy.optimize import least_squares
 from scipy.sparse.linalg import spsolve
 
-from ..pattern import conformance as pc
 from ..pattern.model import Pattern
 from . import kagome as K
+from . import kagome_rows as KR
+from . import kagome_solve as KS
+from .conformance import deployed
 from .target_curve import Target
+from .target_families import outline_match, shape_match
 
-EQ_WEIGHT = 30.0  # penalty weight of the equalities in stage 1 (normalised units)
-PULL = 1e-3  # pull towards the initial guess, per coordinate
-TIP_PULL = 0.1  # the tips' pull towards their initial places: keeps them spread along the target
-MIN_AREA = 0.2  # smallest tile area (normalised; the standard triangle's is 0.433) before a penalty
+GAP_FLOOR = np.radians(10.0)  # smallest gap at a hinge (the standard's are 120°)
+QUALITY_FLOOR = 0.35  # smallest tile quality 4√3A/Σℓ² (equilateral 1; 0.35 ≈ a 13° corner)
+INEQ_WEIGHT = 100.0
+LAWSON_STEPS = 8
+WEIGHT_RANGE = (1e-3, 1e3)  # squared Lawson weights relative to their mean
+MIRROR_TOL = 1e-3  # a target this close to mirror symmetric (of its size) gets the lattice's mirror
 
 
 @dataclass(frozen=True)
@@ -39,123 +52,171 @@ class KagomeDesign:
     """A designed kagome pattern (mm) and how the solve went."""
 
     pattern: Pattern
-    max_equality: float  # largest |edge pair| (normalised squared length) or |ring| (rad)
+    max_equality: float  # largest |edge pair| (normalised squared length), |ring| (rad) or |mirror|
     max_tip_distance_mm: float  # largest distance of a boundary tip from the target
     iterations: int
     converged: bool  # the projection onto the equalities reached |r| <= 1e-13
-    penalty_status: int  # scipy least_squares status of stage 1 (0: stopped at max_nfev)
+    symmetry: tuple[str, ...] = ()  # mirror axes imposed ("y": the vertical centre line, "x": horizontal)
+    min_gap_deg: float = 0.0  # smallest gap at a hinge, deployed
+    min_quality: float = 0.0  # smallest tile quality 4√3A/Σℓ²
+    hausdorff_trace: tuple[float, ...] = ()  # the first solve's and each Lawson step's (fractions of the size)
+    # every converged, unfolded step as (Hausdorff fraction, deployed nodes in mm), nearest first: the
+    # caller may check each (closed-state overlaps are a mechanics question) and keep the first that passes
+    candidates: tuple[tuple[float, np.ndarray], ...] = ()
 
 
-def initial_nodes(standard: Pattern, target: Target) -> np.ndarray:
-    """The standard kagome mapped onto the target, normalised units: its boundary tips placed on the
-    target at the arc-length fractions they have along the standard outline (from the direction of
-    the first tip), every other node where the tile-edge graph's Laplacian puts it (a Tutte-style
-    harmonic embedding, free of fold-overs for a convex target)."""
-    top = standard.topology
+def _bottom_arc(poly: np.ndarray, cx: float) -> np.ndarray:
+    """Arc-length fraction of each vertex of the closed CCW polygon, from its lowest crossing of the
+    vertical line x = cx."""
+    q = np.roll(poly, -1, 0)
+    seg = np.linalg.norm(q - poly, axis=1)
+    s = np.r_[0.0, np.cumsum(seg)[:-1]]
+    cross = (poly[:, 0] - cx) * (q[:, 0] - cx) <= 0
+    cross &= poly[:, 0] != q[:, 0]
+    t = np.where(cross, (cx - poly[:, 0]) / np.where(cross, q[:, 0] - poly[:, 0], 1.0), 0.0)
+    y = np.where(cross, poly[:, 1] + t * (q[:, 1] - poly[:, 1]), np.inf)
+    i = int(np.argmin(y))
+    zero = s[i] + t[i] * seg[i]
+    return np.mod(s - zero, seg.sum()) / seg.sum()
+
+
+def initial_nodes(standard: Pattern, target: Target, order: np.ndarray, us: int = 8192):
+    """The standard kagome mapped onto the target (normalised units) and the target parameter of each
+    tip: tips at the arc-length fractions they have along the standard's tip outline, counted from the
+    bottom of the vertical centre line on both; every other node harmonic on the tile-edge graph."""
     x = standard.nodes / standard.tile_size
-    order = pc.boundary_tip_order(top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes)
-    tips = x[order]
-    seg = np.linalg.norm(np.roll(tips, -1, 0) - tips, axis=1)
-    frac = np.r_[0.0, np.cumsum(seg)[:-1]] / seg.sum()
-    curve = target.sample(4096) / standard.tile_size
-    centre = curve.mean(0)
-    start = int(np.argmin(np.abs(_angle(curve - centre) - _angle(tips[:1] - x.mean(0)))))
-    curve = np.roll(curve, -start, axis=0)
-    arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(np.vstack([curve, curve[:1]]), axis=0), axis=1))]
-    closed = np.vstack([curve, curve[:1]])
-    placed = np.stack([np.interp(frac * arc[-1], arc, closed[:, k]) for k in range(2)], -1)
-    # harmonic interior: L x = 0 on the tile-edge graph with the tips fixed
+    f_tip = _bottom_arc(x[order], 0.5 * (x[:, 0].min() + x[:, 0].max()))
+    u = np.linspace(0.0, 1.0, us, endpoint=False)
+    curve = target.point(u)
+    lo, hi = target.bbox
+    f_curve = _bottom_arc(curve, 0.5 * (lo[0] + hi[0]))
+    k = np.argsort(f_curve)
+    uu = np.unwrap(2 * np.pi * u[k]) / (2 * np.pi)  # the parameter increases with the fraction
+    u_tip = np.mod(np.interp(f_tip, np.r_[f_curve[k], 1.0], np.r_[uu, uu[0] + 1.0]), 1.0)
+    placed = target.point(u_tip) / standard.tile_size
+    return _harmonic(standard, order, placed), u_tip
+
+
+def _harmonic(standard: Pattern, fixed: np.ndarray, placed: np.ndarray) -> np.ndarray:
+    """Nodes with ``fixed`` at ``placed`` and the others solving L x = 0 on the tile-edge graph."""
+    top = standard.topology
     n = top.n_nodes
     e = np.stack([top.tiles, np.roll(top.tiles, -1, 1)], -1).reshape(-1, 2)
     W = sparse.csr_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
     W = ((W + W.T) > 0).astype(float)
     L = (sparse.diags(np.asarray(W.sum(1)).ravel()) - W).tocsr()
-    free = np.setdiff1d(np.arange(n), order)
+    free = np.setdiff1d(np.arange(n), fixed)
     out = np.zeros((n, 2))
-    out[order] = placed
-    rhs = -L[free][:, order] @ placed
+    out[fixed] = placed
+    rhs = -L[free][:, fixed] @ placed
     out[free] = np.column_stack([spsolve(L[free][:, free].tocsc(), rhs[:, k]) for k in range(2)])
     return out
 
 
-def _angle(v: np.ndarray) -> np.ndarray:
-    return np.arctan2(v[:, 1], v[:, 0])
+def side_split(target: Target, u_tip: np.ndarray, sides: np.ndarray) -> Target:
+    """``target`` with its B, R, T, L arcs split midway between the tips of consecutive sides."""
+    corners = []
+    for a, b in ((3, 0), (0, 1), (1, 2), (2, 3)):  # BL, BR, TR, TL
+        i = np.flatnonzero((sides == a) & (np.roll(sides, -1) == b))[0]
+        u0, u1 = u_tip[i], u_tip[(i + 1) % len(u_tip)]
+        corners.append(np.mod(u0 + 0.5 * np.mod(u1 - u0, 1.0), 1.0))
+    return Target(target.name, target.kind, target.points, corners=np.array(corners), source=target.source)
 
 
-def _tip_family(target: Target, tips: np.ndarray, scale: float, nv: int):
-    """Signed distances (normalised) of the tips from the target (mm = normalised × scale)."""
-    def fn(x):
-        _, _, d, grad = target.project(x[tips] * scale)
-        rows = np.repeat(np.arange(len(tips)), 2)
-        cols = (2 * tips[:, None] + np.arange(2)[None, :]).ravel()
-        J = sparse.csr_matrix((grad.ravel(), (rows, cols)), shape=(len(tips), 2 * nv))
-        return d / scale, J
-    return fn
+def mirror_axes(standard: Pattern, target: Target) -> list[tuple[str, np.ndarray]]:
+    """The mirrors both the lattice and the target (about its bounding-box centre) have."""
+    out = []
+    lo, hi = target.bbox
+    centred = target.transformed(1.0, -0.5 * (lo + hi))
+    for axis in ("y", "x"):
+        m = KR.mirror_map(standard, axis)
+        if m is not None and centred.mirror_error(axis) <= MIRROR_TOL:
+            out.append((axis, m))
+    return out
 
 
-def design(standard: Pattern, target: Target, *, max_nfev: int = 200) -> KagomeDesign:
-    """A reconfigurable kagome on ``standard``'s tiles whose deployed tips lie on ``target`` (mm).
-
-    ``standard`` fixes the lattice and the tile size (its mm scale); ``target`` is in mm.
-    """
-    fams = K.families(standard, (1, 2))
+def fit_rows(standard: Pattern, target: Target, symmetry: bool = True):
+    """``(rows, x0, axes)``: every row of the fit of ``standard`` to ``target`` (mm, centred on its
+    bounding box), and the initial guess (normalised units)."""
     top = standard.topology
-    nv = top.n_nodes
+    nv, scale = top.n_nodes, standard.tile_size
+    order = KR.tip_order(standard)
+    sides = KR.tip_sides(standard, order)
+    x0, u_tip = initial_nodes(standard, target, order)
+    tgt = side_split(target, u_tip, sides).transformed(1.0 / scale)
+    axes = mirror_axes(standard, target) if symmetry else []
+    eq = K.families(standard, (1, 2)) + [KR.symmetry_family(m, a, nv) for a, m in axes]
+    fit = [shape_match(order, sides, tgt, nv, "shape"), outline_match(order, tgt, nv)]
+    ineq = [KR.gap_family(standard, GAP_FLOOR), KR.quality_family(standard, QUALITY_FLOOR),
+            KR.fan_family(standard, GAP_FLOOR)]
+    rows = KS.Rows(eq, fit, ineq, {}, INEQ_WEIGHT)
+    return rows, x0, tuple(a for a, _ in axes)
+
+
+def lawson(rows: KS.Rows, x: np.ndarray) -> dict:
+    """Next weights of the fit rows: squared weights times the row's miss over the mean miss, normalised
+    to mean 1 and clipped (Lawson's minimax reweighting, as design/refine.py)."""
+    out = {}
+    for f in rows.fit:
+        miss = np.abs(f.residual(x))
+        w2 = np.broadcast_to(rows.weights.get(f.name, 1.0), miss.shape) ** 2
+        w2 = w2 * miss / max(float(miss.mean()), 1e-300)
+        out[f.name] = np.sqrt(np.clip(w2 / max(float(w2.mean()), 1e-300), *WEIGHT_RANGE))
+    return out
+
+
+def design(standard: Pattern, target: Target, *, symmetry: bool = True, refine_steps: int = LAWSON_STEPS,
+           max_iter: int = 60) -> KagomeDesign:
+    """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
+
+    ``standard`` fixes the lattice and the starting tile size (its mm scale); ``target`` is in mm.
+    ``symmetry`` imposes every mirror the lattice and the target share; ``refine_steps`` Lawson steps
+    follow the first solve. The design returned is the converged one nearest the target (Hausdorff).
+    """
+    lo, hi = target.bbox
+    shift = 0.5 * (lo + hi)
+    centred = target.transformed(1.0, -shift)
     scale = standard.tile_size
-    x0 = initial_nodes(standard, target)
-    tips = _tip_family(target, top.free_nodes, scale, nv)
-
-    pull = np.full((nv, 2), PULL)
-    pull[top.free_nodes] = TIP_PULL
-    pull = pull.ravel()
-    tl = top.tiles
-
-    def areas(x):
-        """Tile areas below MIN_AREA (0 above) and their gradient: keeps tiles from folding over."""
-        p0, p1, p2 = x[tl[:, 0]], x[tl[:, 1]], x[tl[:, 2]]
-        a = 0.5 * ((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0]))
-        short = np.minimum(a - MIN_AREA, 0.0)
-        act = (a < MIN_AREA).astype(float)[:, None]
-        g = 0.5 * np.stack([np.stack([p1[:, 1] - p2[:, 1], p2[:, 0] - p1[:, 0]], -1),
-                            np.stack([p2[:, 1] - p0[:, 1], p0[:, 0] - p2[:, 0]], -1),
-                            np.stack([p0[:, 1] - p1[:, 1], p1[:, 0] - p0[:, 0]], -1)], 1) * act[:, None]
-        cols = (2 * tl[:, :, None] + np.arange(2)).reshape(len(tl), -1)
-        J = sparse.csr_matrix((g.reshape(len(tl), -1).ravel(), (np.repeat(np.arange(len(tl)), 6), cols.ravel())),
-                              shape=(len(tl), 2 * nv))
-        return short, J
-
-    def residuals(v):
-        x = v.reshape(-1, 2)
-        r, _ = K.stacked(fams, x)
-        d, _ = tips(x)
-        return np.concatenate([EQ_WEIGHT * r, d, pull * (v - x0.ravel()), areas(x)[0]])
-
-    def jacobian(v):
-        x = v.reshape(-1, 2)
-        _, J = K.stacked(fams, x)
-        _, Jt = tips(x)
-        return sparse.vstack([EQ_WEIGHT * J, Jt, sparse.diags(pull), areas(x)[1]]).tocsr()
-
-    sol = least_squares(residuals, x0.ravel(), jac=jacobian, method="trf", tr_solver="lsmr",
-                        x_scale=1.0, max_nfev=max_nfev, xtol=1e-12, ftol=1e-12, gtol=1e-12)
-    x, converged, it = _project(fams, sol.x.reshape(-1, 2))
-
-    r, _ = K.stacked(fams, x)
-    d, _ = tips(x)
-    pattern = replace(standard, nodes=x * scale, contracted={}, name=f"kagome {target.name}",
-                      design={"target": target.to_dict(), "solver": "kagome penalty + projection"})
-    return KagomeDesign(pattern, float(np.abs(r).max()), float(np.abs(d).max() * scale),
-                        int(sol.nfev) + it, converged, int(sol.status))
+    rows, x, axes = fit_rows(standard, centred, symmetry)
+    best, trace, its, cands = None, [], 0, []
+    for step in range(refine_steps + 1):
+        if step:
+            rows = replace(rows, weights=lawson(rows, x))
+        sol = KS.solve(rows, x, max_iter=max_iter)
+        its += sol.iterations
+        xp, ok, k = KS.project(rows.eq, sol.x)
+        its += k
+        h = deployed(xp * scale, standard.topology, centred)["hausdorff_rel"] if ok else np.nan
+        trace.append(float(h))
+        if ok and _no_fold(standard, xp):
+            cands.append((float(h), xp * scale + shift))
+            if best is None or h < best[0]:
+                best = (h, xp)
+        x = sol.x
+    xb = best[1] if best else xp
+    out = _result(standard, target, rows, xb, shift, best is not None, axes, its, tuple(trace))
+    return replace(out, candidates=tuple(sorted(cands, key=lambda c: c[0])))
 
 
-def _project(fams, x: np.ndarray, tol: float = 1e-13, max_iter: int = 30):
-    """Minimum-norm Gauss-Newton steps onto the equalities; (x, converged, steps)."""
-    for k in range(max_iter):
-        r, J = K.stacked(fams, x)
-        if np.abs(r).max(initial=0.0) <= tol:
-            return x, True, k
-        dx = np.linalg.lstsq(J.toarray(), -r, rcond=1e-10)[0]
-        x = x + dx.reshape(x.shape)
-    r, _ = K.stacked(fams, x)
-    return x, bool(np.abs(r).max(initial=0.0) <= tol), max_iter
+def _no_fold(standard: Pattern, x: np.ndarray) -> bool:
+    """Every deployed gap and tile quality positive (the inequalities' hard core)."""
+    return bool(_min_gap(standard, x) > 0 and KR.tile_quality(x, standard.topology.tiles)[0].min() > 0)
 
+
+def _min_gap(standard: Pattern, x: np.ndarray) -> float:
+    g = [np.mod(K.fold_gap_angles(standard, s, x)[0] + KR.GAP_WRAP, 2 * np.pi) - KR.GAP_WRAP for s in (1, 2)]
+    return float(np.concatenate(g).min())
+
+
+def _result(standard, target, rows, x, shift, converged, axes, its, trace) -> KagomeDesign:
+    scale = standard.tile_size
+    r, _ = KS.stacked(rows.eq, x)
+    nodes = x * scale + shift
+    order = KR.tip_order(standard)
+    d = np.abs(target.signed_distance(nodes[order]))
+    pattern = replace(standard, nodes=nodes, contracted={}, name=f"kagome {target.name}",
+                      design={"target": target.to_dict(), "symmetry": list(axes),
+                              "solver": "kagome constrained LM + Lawson + projection"})
+    return KagomeDesign(pattern, float(np.abs(r).max()), float(d.max()), its, converged, axes,
+                        float(np.degrees(_min_gap(standard, x))),
+                        float(KR.tile_quality(x, standard.topology.tiles)[0].min()), trace)
