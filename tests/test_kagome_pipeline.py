@@ -102,12 +102,13 @@ def test_a_hole_with_unequal_edges_fails_verify_in_the_state_it_breaks(kept, tmp
     assert code == 1 and f"state {broken}: loop closure" in err and f"state {kept}:" not in err
 
 
+@pytest.mark.slow
 def test_design_kagome_heart_is_written_but_fails_naming_the_shape(tmp_path, run_cli):
     out = tmp_path / "h.json"
-    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x10", "--target", "heart",
+    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x11", "--target", "heart",
                            "--size", "120", "-o", out)
-    # the heart is not matched (docs/kagome.md): the best iterate is written, closed in both
-    # states, and the verdict names the shape
+    # the heart is not matched to 2 % on this lattice (docs/kagome.md): the design is written, closed
+    # in both states without overlaps, and the verdict names the shape
     assert code == 1 and "shape missed" in err and "FAIL target shape" in err, err
     p = io.read_pattern(out)
     assert p.kind == "kagome" and p.design["valid"] is False
