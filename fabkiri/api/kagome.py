@@ -45,13 +45,17 @@ class KagomeOutcome:
 
 
 def design_kagome(rows: int, cols: int, target: str, size: float | None = None, *, tol: float = 1e-10,
-                  shape_tol: str = conf.DEFAULT_SHAPE_TOL, name: str | None = None) -> KagomeOutcome:
-    """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm)."""
+                  shape_tol: str = conf.DEFAULT_SHAPE_TOL, name: str | None = None,
+                  symmetry: bool = True) -> KagomeOutcome:
+    """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm).
+
+    ``symmetry`` imposes every mirror the lattice and the target share (vertical for C odd, horizontal
+    for R even; docs/kagome.md); False leaves the design free (about twice the fitting freedom)."""
     tgt = load_target(target, size)
     shape = conf.parse_shape_tol(shape_tol)
     unit = standard_kagome(rows, cols, tile_size=1.0)
     tile = tgt.size / float(np.ptp(unit.nodes, axis=0).max())  # the standard spans the target
-    d = design(standard_kagome(rows, cols, tile_size=tile), tgt)
+    d = design(standard_kagome(rows, cols, tile_size=tile), tgt, symmetry=symmetry)
     pattern, rejected = _first_closing(d, tgt)
     measured = conf.deployed(pattern.nodes, pattern.topology, tgt)
     verdict = conf.judge(measured, shape, (rows, cols))
