@@ -43,6 +43,7 @@ GAP_FLOOR = np.radians(10.0)  # smallest gap at a hinge (the standard's are 120�
 QUALITY_FLOOR = 0.35  # smallest tile quality 4√3A/Σℓ² (equilateral 1; 0.35 ≈ a 13° corner)
 INEQ_WEIGHT = 100.0
 LAWSON_STEPS = 8
+FROM_BEST = False  # True: each Lawson step starts from the best design so far (6x11 heart: same best, 7.38 %)
 WEIGHT_RANGE = (1e-3, 1e3)  # squared Lawson weights relative to their mean
 MIRROR_TOL = 1e-3  # a target this close to mirror symmetric (of its size) gets the lattice's mirror
 
@@ -192,7 +193,7 @@ def design(standard: Pattern, target: Target, *, symmetry: bool = True, refine_s
             cands.append((float(h), xp * scale + shift))
             if best is None or h < best[0]:
                 best = (h, xp)
-        x = sol.x
+        x = best[1] if (best is not None and FROM_BEST) else sol.x
     xb = best[1] if best else xp
     out = _result(standard, target, rows, xb, shift, best is not None, axes, its, tuple(trace))
     return replace(out, candidates=tuple(sorted(cands, key=lambda c: c[0])))
