@@ -55,15 +55,23 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     shape = conf.parse_shape_tol(shape_tol)
     unit = standard_kagome(rows, cols, tile_size=1.0)
     tile = tgt.size / float(np.ptp(unit.nodes, axis=0).max())  # the standard spans the target
-    d = design(standard_kagome(rows, cols, tile_size=tile), tgt, symmetry=symmetry)
-    pattern, rejected = _first_closing(d, tgt)
+    std = standard_kagome(rows, cols, tile_size=tile)
+    d = design(std, tgt, symmetry=symmetry)
+    pattern, rejected = _first_closing(d)
+    convex = pattern is None  # every candidate overlaps: again with convex holes, which rule crossings out
+    if convex:
+        d = design(std, tgt, symmetry=symmetry, convex=True)
+        pattern, rejected = _first_closing(d)
+    if pattern is None:  # still none: the solver's best, whose failures verify names
+        pattern = with_contracted_states(d.pattern)
     measured = conf.deployed(pattern.nodes, pattern.topology, tgt)
     verdict = conf.judge(measured, shape, (rows, cols))
     rel = d.max_equality  # normalised units: already relative to the tile size
     report = {"status": "converged" if d.converged and rel <= tol else "unconverged",
               "max_equality_residual": rel, "tol": tol, "iterations": d.iterations,
               "symmetry": list(d.symmetry), "min_gap_deg": d.min_gap_deg, "min_tile_quality": d.min_quality,
-              "hausdorff_trace": list(d.hausdorff_trace), "candidates_rejected": rejected, "max_tip_distance_mm": d.max_tip_distance_mm,
+              "hausdorff_trace": list(d.hausdorff_trace), "candidates_rejected": rejected, "convex_holes": convex,
+              "max_tip_distance_mm": d.max_tip_distance_mm,
               "tile_size_mm": tile, "conformance": measured, "shape": verdict}
     pattern = replace(pattern, name=name or pattern.name,
                       design={**(pattern.design or {}), "report": report, "shape_tol": shape_tol})
@@ -74,15 +82,15 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     return KagomeOutcome(pattern, report, valid)
 
 
-def _first_closing(d, tgt) -> tuple[Pattern, int]:
+def _first_closing(d) -> tuple[Pattern | None, int]:
     """The design's nearest candidate whose closed states pass every check but the shape (a Lawson step can
     fold a row's end tile onto its neighbour in a closed state, which only contraction shows), and how many
-    nearer ones were rejected; the solver's best when none passes (verify then names what fails)."""
+    nearer ones were rejected; None when none passes."""
     for k, (_, nodes) in enumerate(d.candidates):
         pattern = with_contracted_states(replace(d.pattern, nodes=nodes))
         if not [c for c in verify_pattern(pattern).failed() if c.name != "target shape"]:
             return pattern, k
-    return with_contracted_states(d.pattern), len(d.candidates)
+    return None, len(d.candidates)
 
 
 def check_options(**given) -> None:

@@ -40,6 +40,7 @@ from .target_curve import Target
 from .target_families import outline_match, shape_match
 
 GAP_FLOOR = np.radians(10.0)  # smallest gap at a hinge (the standard's are 120°)
+CONVEX = np.radians(5.0)  # with convex=True a hole's corner is at most 175° (6x11 free heart: 4.35 -> 11.7 %)
 QUALITY_FLOOR = 0.35  # smallest tile quality 4√3A/Σℓ² (equilateral 1; 0.35 ≈ a 13° corner)
 INEQ_WEIGHT = 100.0
 LAWSON_STEPS = 8
@@ -136,7 +137,7 @@ def mirror_axes(standard: Pattern, target: Target) -> list[tuple[str, np.ndarray
     return out
 
 
-def fit_rows(standard: Pattern, target: Target, symmetry: bool = True):
+def fit_rows(standard: Pattern, target: Target, symmetry: bool = True, convex: bool = False):
     """``(rows, x0, axes)``: every row of the fit of ``standard`` to ``target`` (mm, centred on its
     bounding box), and the initial guess (normalised units)."""
     top = standard.topology
@@ -148,7 +149,7 @@ def fit_rows(standard: Pattern, target: Target, symmetry: bool = True):
     axes = mirror_axes(standard, target) if symmetry else []
     eq = K.families(standard, (1, 2)) + [KR.symmetry_family(m, a, nv) for a, m in axes]
     fit = [shape_match(order, sides, tgt, nv, "shape"), outline_match(order, tgt, nv)]
-    ineq = [KR.gap_family(standard, GAP_FLOOR), KR.quality_family(standard, QUALITY_FLOOR),
+    ineq = [KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None), KR.quality_family(standard, QUALITY_FLOOR),
             KR.fan_family(standard, GAP_FLOOR)]
     rows = KS.Rows(eq, fit, ineq, {}, INEQ_WEIGHT)
     return rows, x0, tuple(a for a, _ in axes)
@@ -167,18 +168,20 @@ def lawson(rows: KS.Rows, x: np.ndarray) -> dict:
 
 
 def design(standard: Pattern, target: Target, *, symmetry: bool = True, refine_steps: int = LAWSON_STEPS,
-           max_iter: int = 60) -> KagomeDesign:
+           max_iter: int = 60, convex: bool = False) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
     ``standard`` fixes the lattice and the starting tile size (its mm scale); ``target`` is in mm.
     ``symmetry`` imposes every mirror the lattice and the target share; ``refine_steps`` Lawson steps
     follow the first solve. The design returned is the converged one nearest the target (Hausdorff).
+    ``convex`` keeps every hole convex, which rules out tiles crossing a hole (deployed overlaps between
+    non-adjacent tiles) at a price in fit.
     """
     lo, hi = target.bbox
     shift = 0.5 * (lo + hi)
     centred = target.transformed(1.0, -shift)
     scale = standard.tile_size
-    rows, x, axes = fit_rows(standard, centred, symmetry)
+    rows, x, axes = fit_rows(standard, centred, symmetry, convex)
     best, trace, its, cands = None, [], 0, []
     for step in range(refine_steps + 1):
         if step:

@@ -58,9 +58,13 @@ def tip_sides(standard: Pattern, tips: np.ndarray) -> np.ndarray:
     return side.astype(np.int64)
 
 
-def gap_family(pattern: Pattern, floor: float) -> Family:
-    """Both gaps at every hinge at least ``floor`` (rad): rows ``min(gap - floor, 0)``."""
-    nv = pattern.topology.n_nodes
+def gap_family(pattern: Pattern, floor: float, convex: float | None = None) -> Family:
+    """Both gaps at every hinge at least ``floor`` (rad): rows ``min(gap - floor, 0)``; with ``convex``,
+    every gap that is a hole's corner also at most ``π - convex`` (convex holes: a tile cannot cross a
+    hole to overlap the tile opposite, which the gaps alone allow)."""
+    top = pattern.topology
+    nv = top.n_nodes
+    H = np.arange(top.n_hinges)
 
     def fn(x):
         rs, nodes, grads = [], [], []
@@ -71,6 +75,12 @@ def gap_family(pattern: Pattern, floor: float) -> Family:
             rs.append(np.where(act, th - floor, 0.0))
             nodes.append(nd)
             grads.append(g * act[:, None, None])
+            if convex is not None:
+                hole = top.gap_face[H, top.fold(s).fold_gap] >= 0
+                over = hole & (th > np.pi - convex)
+                rs.append(np.where(over, np.pi - convex - th, 0.0))
+                nodes.append(nd)
+                grads.append(-g * over[:, None, None])
         return np.concatenate(rs), (np.concatenate(nodes), np.concatenate(grads))
 
     return Family("hinge_gaps", "ineq", fn, 0, nv=nv)
