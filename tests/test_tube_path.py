@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from fabkiri.api.tube import design_tube_pattern
 from fabkiri.mechanics.deploy import deployment_path
-from fabkiri.mechanics.tube import tube_state
+from fabkiri.mechanics.tube import tube_along_path, tube_state
 from fabkiri.pattern.periodic import seam_map, seam_of
 
 
@@ -65,3 +65,20 @@ def test_deploy_says_when_a_designed_tubes_radius_overshoots(tmp_path, run_cli):
     assert code == 0, err
     line = next(x for x in err.splitlines() if "deployed -> closed state 2" in x)
     assert "not monotonic" in line and "peak 28.6" in line
+
+
+@pytest.mark.slow
+def test_a_tube_with_a_smaller_axial_change_and_a_radius_that_swells_and_shrinks_on_the_way():
+    """Fig. 5B's counterpart: `cylinder:113.137,100` has a smaller axial change than the 135 mm design
+    (x2.05 against x2.89) but its radius swells from 18.5 mm to 21.2 mm before shrinking to 18.0 mm on
+    the way from closed state 1 to the deployed state (measured 2.68 mm beyond the ends)."""
+    out = design_tube_pattern((6, 8), "cylinder:113.137,100")
+    pat = out.pattern
+    path = deployment_path(pat, steps=40)
+    prof = tube_along_path(pat, path.corners, path.t)
+    first = prof["radius_change"]["closed state 1 -> deployed"]
+    assert not first["monotonic"] and first["beyond_ends_mm"] > 2.0
+    assert 0.0 < first["t_at_peak"] < 0.5
+    assert max(prof["seam_translation_dev_rel"]) < 1e-10  # a cylinder in every frame
+    length = prof["length_change"]
+    assert length["closed state 1 -> deployed"]["end_mm"] / length["closed state 1 -> deployed"]["start_mm"] < 2.5
