@@ -46,7 +46,7 @@ def deploy_pattern(
     steps: int = 40,
     *,
     path: str = "auto",
-    driver: str = "rotations",
+    driver: str = "auto",
     plot: bool = False,
     gif: bool = False,
     color: str = "auto",
