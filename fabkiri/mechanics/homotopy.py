@@ -88,12 +88,27 @@ class Homotopy(PathDriver):
                 sols[i] = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats,
                                    zero_energy=zero)
                 prev = i
-        move = np.abs(np.diff(np.stack(sols), axis=0)).max(axis=1) / pattern.tile_size
-        k = int(np.argmax(move))
-        figures = {"continued_from_t": float(fine[mid]),
-                   "largest_substep_move_tile_sizes": float(move[k]),
-                   "t_at_largest_substep_move": float(fine[k + 1] if fine[k + 1] > 0.5 else fine[k])}
-        return sols, figures
+        return sols, _figures(pattern, fine, np.stack(sols), blend, mid)
+
+
+def _figures(pattern: Pattern, fine: np.ndarray, x: np.ndarray, blend: np.ndarray,
+             mid: int) -> dict:
+    """What tells a followed branch from a snap: the largest node move between two sub-steps
+    against the rigid blend's (tile sizes), and the most tiles turned over (mirrored: a spring
+    tile's edge lengths do not tell it from its mirror image) in any sub-step."""
+    size = pattern.tile_size
+    move = np.abs(np.diff(x, axis=0)).max(axis=1) / size
+    k = int(np.argmax(move))
+    corners = x.reshape(len(fine), -1, 2)[:, pattern.tiles]
+    mirrored = (geometry.signed_areas(corners) < 0).sum(axis=1)
+    return {
+        "continued_from_t": float(fine[mid]),
+        "largest_substep_move_tile_sizes": float(move[k]),
+        "t_at_largest_substep_move": float(fine[k + 1] if fine[k + 1] > 0.5 else fine[k]),
+        "rigid_blend_largest_substep_move_tile_sizes": float(
+            np.abs(np.diff(blend, axis=0)).max(initial=0.0) / size),
+        "mirrored_tiles_max": int(mirrored.max(initial=0)),
+    }
 
 
 HOMOTOPY = register_driver(Homotopy())
