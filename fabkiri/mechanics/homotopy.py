@@ -9,6 +9,13 @@ minimised over the nodes with these held. At λ = 0 and 1 the one zero-energy co
 those angles is the state itself (tiles joined at hinges are placed by their angles up to a
 translation), so E = 0 exactly there and the path has no special end segments.
 
+The minimised energy is the springs' plus an orientation term (:mod:`.orientation`: each tile's
+signed area held to its design, weight 1), zero at every state: without it triangles, whose edge
+springs do not tell a tile from its mirror image, turned over on designed patterns and the
+continuation ended in a mirrored branch 8-48 mm from the closed states. The energy reported
+along the path, E(t), is the springs' alone; the orientation term's largest value is a figure of
+the path's solver summary.
+
 The minimiser is continued outward from the deployed state on each half, so the deployed frame
 is exact and the closed ends are what the continuation reaches: a miss there is measured and
 reported by the path, never hidden. The predictor at each sub-step is the previous solution moved
@@ -29,6 +36,7 @@ from ..pattern.model import Pattern
 from .drivers import PathDriver, angle_drivers, node_centroids, register_driver
 from .elastic import MinimiseStats, minimise
 from .energy import Springs
+from .orientation import OrientedSprings, area_term
 from .path import piecewise, tile_angles
 
 
@@ -63,6 +71,7 @@ class Homotopy(PathDriver):
 
     name = "homotopy"
     help = "each tile's rigid motion interpolated between the states (any kind; kagome default)"
+    orientation_weight = 1.0  # of the area term against the springs (both relative strains²)
 
     def values(self, pattern, states, t):
         return homotopy_targets(pattern, states, t)
@@ -78,6 +87,7 @@ class Homotopy(PathDriver):
         largest node move between two sub-steps, in tile sizes, and where."""
         blend = rigid_blend(pattern, states, fine).reshape(len(fine), -1)
         zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
+        osp = OrientedSprings(sp, area_term(pattern, self.orientation_weight))
         mid = int(np.argmin(np.abs(fine - 0.5)))
         sols: list = [None] * len(fine)
         for order in (range(mid, -1, -1), range(mid, len(fine))):
@@ -85,10 +95,13 @@ class Homotopy(PathDriver):
             for i in order:
                 guess = blend[i] if prev is None else sols[prev] + (blend[i] - blend[prev])
                 drv = drivers[i]
-                sols[i] = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats,
+                sols[i] = minimise(osp, guess, drv.A, drv.b, step_tol=tol, stats=stats,
                                    zero_energy=zero)
                 prev = i
-        return sols, _figures(pattern, fine, np.stack(sols), blend, mid)
+        figures = _figures(pattern, fine, np.stack(sols), blend, mid)
+        figures["orientation_weight"] = osp.area.weight
+        figures["orientation_energy_max"] = max(osp.area.energy(x) for x in sols)
+        return sols, figures
 
 
 def _figures(pattern: Pattern, fine: np.ndarray, x: np.ndarray, blend: np.ndarray,
