@@ -5,7 +5,10 @@
 paper's Fig. 2C, whose SI procedure is unknown). At each ``t`` some *drivers*
 are prescribed between the three states and the spring energy of
 :mod:`.energy` is minimised over all node coordinates with the drivers held,
-warm-started from a linear extrapolation of the previous two steps. Drivers:
+warm-started from a linear extrapolation of the previous two steps. Drivers are
+strategy objects found by name in :mod:`.drivers` (``auto``: the default of the
+pattern's kind); ``rotations`` lives in :mod:`.mechanism`, ``homotopy`` (each
+tile's rigid motion interpolated, kagome's default) in :mod:`.homotopy`:
 
 * ``"rotations"`` (default): the rotation of every tile, measured as the Kabsch
   angle of its corners relative to its deployed shape, plus the centroid of the
