@@ -56,6 +56,7 @@ shift ``μ`` raised whenever a step fails to lower E. The constraints are linear
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import sparse
@@ -74,6 +75,9 @@ from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived
 )
 from .path import DeploymentPath, closed_states, finish_path, node_positions, path_parameter
 
+if TYPE_CHECKING:
+    from .orientation import OrientedSprings
+
 
 @dataclass
 class MinimiseStats:
@@ -84,7 +88,7 @@ class MinimiseStats:
 
 
 def minimise(
-    sp: Springs,
+    sp: Springs | OrientedSprings,
     x0: np.ndarray,
     A: sparse.csr_matrix,
     b: np.ndarray,
@@ -170,7 +174,7 @@ def _project(x: np.ndarray, A: sparse.csr_matrix, b: np.ndarray) -> None:
         x += A.T @ spsolve((A @ A.T).tocsc(), r)
 
 
-def _kkt_lu(sp: Springs, x: np.ndarray, mu: float, A: sparse.csr_matrix, At: sparse.csr_matrix, eye):
+def _kkt_lu(sp: Springs | OrientedSprings, x: np.ndarray, mu: float, A: sparse.csr_matrix, At: sparse.csr_matrix, eye):
     """Sparse LU of the KKT matrix ``[[H + μI, Aᵀ], [A, 0]]`` at ``x``, or None if it is exactly singular."""
     H = sp.hessian(x)
     if mu:

@@ -61,9 +61,9 @@ def rigid_blend(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray) 
     corners = geometry.rotate(shape[None], theta[..., None]) + c[:, :, None]
     flat = pattern.tiles.ravel()
     count = np.bincount(flat, minlength=len(pattern.nodes)).astype(float)
-    out = np.zeros((len(t), len(pattern.nodes), 2))
-    np.add.at(out, (slice(None), flat), corners.reshape(len(t), -1, 2))
-    return out / count[None, :, None]
+    out = np.zeros((len(pattern.nodes), len(t), 2))  # node first: one np.add.at over all frames
+    np.add.at(out, flat, corners.reshape(len(t), -1, 2).transpose(1, 0, 2))
+    return out.transpose(1, 0, 2) / count[None, :, None]
 
 
 class Homotopy(PathDriver):
