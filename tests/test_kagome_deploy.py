@@ -201,3 +201,17 @@ def test_orientation_term_makes_a_mirrored_triangle_cost_energy():
     mirrored = p.nodes * [-1.0, 1.0]  # same edge lengths, turned over
     assert sp.energy(mirrored.ravel()) <= 1e-28  # the springs cannot tell
     assert a.energy(mirrored.ravel()) == pytest.approx(4.0)  # area -A0: ((-A0 - A0)/A0)² = 4
+
+
+def test_homotopy_path_is_continuous_not_a_snap():
+    """Finer sub-steps shrink the largest node move between two of them (a snap would not) and
+    leave the frames where they were."""
+    from fabkiri.mechanics.elastic import elastic_path
+
+    p = _generic(4, 4)
+    coarse = elastic_path(p, 8, max_increment=0.03)
+    fine = elastic_path(p, 8, max_increment=0.01)
+    a = coarse.solver["largest_substep_move_tile_sizes"]
+    b = fine.solver["largest_substep_move_tile_sizes"]
+    assert b <= 0.5 * a
+    assert np.abs(coarse.nodes - fine.nodes).max() <= 1e-8 * p.tile_size
