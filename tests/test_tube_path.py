@@ -29,3 +29,39 @@ def test_designed_tube_stays_a_cylinder_but_its_radius_overshoots_on_the_path():
     assert radius[half:].max() > radius[-1] * 1.05  # overshoot before closed state 2
     assert np.all(np.diff(radius[:half + 1]) > 0)  # while from closed state 1 it only grows
 
+
+
+def test_deploy_reports_the_standard_tubes_radius_in_every_frame(tmp_path, run_cli):
+    """The standard tube deploys symmetrically: its radius grows monotonically from each closed state to
+    the deployed one, and `deploy` writes it frame by frame (tube.csv) and says so."""
+    from fabkiri.pattern.io import write_pattern
+    from fabkiri.pattern.periodic import standard_tube
+
+    src = tmp_path / "tube.json"
+    write_pattern(standard_tube(6, 8), src)
+    code, _, err = run_cli("deploy", src, "-o", tmp_path / "dep", "--no-frames")
+    assert code == 0, err
+    rows = (tmp_path / "dep" / "tube.csv").read_text().splitlines()
+    assert len(rows) == 42  # header + 41 frames
+    import json
+
+    radius = np.array(json.loads((tmp_path / "dep" / "deploy.json").read_text())["tube"]["radius_max_mm"])
+    assert np.allclose([float(r.split(",")[2]) for r in rows[1:]], radius, rtol=1e-8)  # csv: 9 digits
+    assert radius[20] == pytest.approx(radius[0] * np.sqrt(2), rel=1e-9)  # ψ 45° -> 90°: x√2
+    assert radius[-1] == pytest.approx(radius[0], rel=1e-9)
+    assert "radius, closed state 1 -> deployed: monotonic" in err
+    assert "radius, deployed -> closed state 2: monotonic" in err
+
+
+@pytest.mark.slow
+def test_deploy_says_when_a_designed_tubes_radius_overshoots(tmp_path, run_cli):
+    """The large-axial-change design's radius passes beyond its ends on the way to closed state 2, and
+    `deploy` reports where."""
+    from fabkiri.pattern.io import write_pattern
+
+    src = tmp_path / "a.json"
+    write_pattern(design_tube_pattern((6, 8), "cylinder:113.137,135").pattern, src)
+    code, _, err = run_cli("deploy", src, "-o", tmp_path / "dep", "--no-frames")
+    assert code == 0, err
+    line = next(x for x in err.splitlines() if "deployed -> closed state 2" in x)
+    assert "not monotonic" in line and "peak 28.6" in line

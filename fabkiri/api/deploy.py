@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from ..mechanics.collisions import Overlap
 from ..mechanics.deploy import DeploymentPath, deployment_path
+from ..mechanics.tube import tube_along_path
 from ..pattern.io import dumps
 from ..pattern.model import Pattern
 
@@ -56,10 +57,15 @@ def deploy_pattern(
     """Compute the deployment path of ``pattern`` and everything ``fabkiri deploy`` writes about it."""
     p = deployment_path(pattern, steps, path=path, driver=driver)
     summary = p.summary()
+    tube = tube_along_path(pattern, p.corners, p.t)
+    if tube is not None:  # a periodic pattern: its tube in every frame
+        summary["tube"] = tube
     files: dict[str, bytes | str] = {
         "energy.csv": energy_csv(p),
         "deploy.json": json.dumps(summary, indent=2, sort_keys=True) + "\n",
     }
+    if tube is not None:
+        files["tube.csv"] = tube_csv(tube)
     if plot:
         from ..render.deployment import energy_plot_png
 
@@ -85,6 +91,15 @@ def energy_csv(path: DeploymentPath) -> str:
             f"{path.t[f]:.10f},{path.energy[f]:.6e},{path.max_tile_energy[f]:.6e},{rot[f]:.12f},"
             f"{spread[f]:.3e},{path.hinge_gap[f]:.3e},{per_frame[f]}"
         )
+    return "\n".join(rows) + "\n"
+
+
+def tube_csv(tube: dict) -> str:
+    """One row per frame of a tube's path: t, radius at the narrow and wide end, length, seam figures."""
+    rows = ["t,radius_min_mm,radius_max_mm,length_mm,seam_rotation_rad,seam_translation_dev_rel"]
+    cols = ("radius_min_mm", "radius_max_mm", "length_mm", "seam_rotation_rad", "seam_translation_dev_rel")
+    for f, t in enumerate(tube["t"]):
+        rows.append(f"{t:.10f}," + ",".join(f"{tube[c][f]:.9g}" for c in cols))
     return "\n".join(rows) + "\n"
 
 

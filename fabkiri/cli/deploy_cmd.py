@@ -9,6 +9,7 @@ from ..api.deploy import deploy_pattern, overlap_depth
 from ..errors import CheckFailed
 from ..fileio import atomic_write_many
 from ..mechanics.drivers import AUTO, driver_names
+from ..mechanics.tube import path_lines
 from .pattern_cmds import load_any
 
 
@@ -42,6 +43,9 @@ def cmd_deploy(args: argparse.Namespace) -> int:
         f"{path.rotation_spread.max():.2e} rad",
         file=sys.stderr,
     )
+    if "tube" in summary:
+        for line in path_lines(summary["tube"]):
+            print(line, file=sys.stderr)
     for problem in out.problems:
         if "misses" in problem:
             print(f"warning: {problem} (try more --steps or the default driver)", file=sys.stderr)
