@@ -113,7 +113,8 @@ def _figures(pattern: Pattern, fine: np.ndarray, x: np.ndarray, blend: np.ndarra
     move = np.abs(np.diff(x, axis=0)).max(axis=1) / size
     k = int(np.argmax(move))
     corners = x.reshape(len(fine), -1, 2)[:, pattern.tiles]
-    mirrored = (geometry.signed_areas(corners) < 0).sum(axis=1)
+    designed = np.sign(geometry.signed_areas(pattern.corners()))
+    mirrored = (np.sign(geometry.signed_areas(corners)) != designed).sum(axis=1)
     return {
         "continued_from_t": float(fine[mid]),
         "largest_substep_move_tile_sizes": float(move[k]),

@@ -77,10 +77,11 @@ def area_term(pattern: Pattern, weight: float = 1.0) -> AreaTerm:
     """The orientation term of ``pattern`` with its deployed areas as rest values."""
     c = pattern.corners()
     rest = 0.5 * (c[..., 0] * np.roll(c, -1, 1)[..., 1] - c[..., 1] * np.roll(c, -1, 1)[..., 0]).sum(1)
-    if (rest <= 0).any():
-        t = int(np.flatnonzero(rest <= 0)[0])
-        raise PatternError(f"tile {t} has no positive area in the deployed state; it has no "
-                           f"orientation to keep")
+    flat = np.abs(rest) <= 1e-12 * pattern.tile_size**2  # a tile designed clockwise keeps its sign
+    if flat.any():
+        t = int(np.flatnonzero(flat)[0])
+        raise PatternError(f"tile {t} has no area in the deployed state; it has no orientation "
+                           f"to keep")
     return AreaTerm(pattern.tiles, rest, float(weight), len(pattern.nodes))
 
 
