@@ -83,8 +83,9 @@ class Homotopy(PathDriver):
 
     def solve(self, pattern: Pattern, sp: Springs, states, fine, drivers, plan, tol: float,
               stats: MinimiseStats):
-        """Continue outward from the deployed frame (t = ½) on each half; the figures: the
-        largest node move between two sub-steps, in tile sizes, and where."""
+        """Continue outward from the deployed frame (t = ½) on each half, minimising the springs
+        plus the orientation term; the figures are :func:`_figures` and the orientation term's
+        weight and largest value."""
         blend = rigid_blend(pattern, states, fine).reshape(len(fine), -1)
         zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
         osp = OrientedSprings(sp, area_term(pattern, self.orientation_weight))
