@@ -47,7 +47,7 @@ def deploy_pattern(
     steps: int = 40,
     *,
     path: str = "auto",
-    driver: str = "rotations",
+    driver: str = "auto",
     plot: bool = False,
     gif: bool = False,
     color: str = "auto",
@@ -140,15 +140,29 @@ def check_problems(path: DeploymentPath, tol: float = 1e-9) -> list[str]:
             out.append(f"the path misses the {name} by {d:.3g} mm")
     if path.kind == "rigid" and path.energy.max() > ZERO_ENERGY:
         out.append(f"the rigid path has energy {path.energy.max():.3g} > {ZERO_ENERGY:g}")
+    mirrored = path.solver.get("mirrored_tiles_max", 0)
+    if mirrored:
+        out.append(f"{mirrored} tiles turn over (into their mirror image) along the path")
     c = path.collisions
     if not c.collision_free():
         o = max(c.overlaps, key=lambda o: o.area)
         out.append(
             f"{len(c.overlaps)} tile overlaps in {len(c.frames)} frames, the largest {o.area:.3g} mm² "
             f"({overlap_depth(path, o):.3g} mm deep) between tiles {o.tile_a} and {o.tile_b} "
-            f"at t = {path.t[o.frame]:.3f}"
+            f"at t = {path.t[o.frame]:.3f}{_deployed_overlaps(path)}"
         )
     return out
+
+
+def _deployed_overlaps(path: DeploymentPath) -> str:
+    """A note when the deployed state itself overlaps: no path through it can be collision-free."""
+    f = path.mark_frames()["deployed"]
+    at = [o for o in path.collisions.overlaps if o.frame == f]
+    if not at:
+        return ""
+    worst = max(o.area for o in at)
+    return (f"; {len(at)} of them in the deployed state itself (largest {worst:.3g} mm²): the "
+            f"design overlaps before it moves")
 
 
 def overlap_depth(path: DeploymentPath, o: Overlap) -> float:
