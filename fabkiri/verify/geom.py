@@ -44,7 +44,7 @@ def tile_polygons(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def convex(corners: np.ndarray) -> np.ndarray:
     """Which CCW quads are strictly convex, ``(T,)``."""
     nxt = np.roll(corners, -1, axis=1) - corners
-    return (geometry.cross2(nxt, np.roll(nxt, -1, axis=1)) > 0).all(axis=1)
+    return np.asarray((geometry.cross2(nxt, np.roll(nxt, -1, axis=1)) > 0).all(axis=1))
 
 
 def sat_penetration(P: np.ndarray, Q: np.ndarray) -> np.ndarray:

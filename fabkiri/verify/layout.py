@@ -19,6 +19,7 @@ and the declared allowances (manifest.json) is trusted:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -360,7 +361,7 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
 def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
                      linework: dict[int, Linework], cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
                      sheet_piece: bool, in_place: bool, fitted: float | None, g: str,
-                     labelings: list[np.ndarray] = ()) -> None:
+                     labelings: Sequence[np.ndarray] = ()) -> None:
     """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
     A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
     hinges at different corners; its marks say which one was cut, so the best of them is reported."""
@@ -444,7 +445,7 @@ def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, 
 def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
     """Every sheet of the layout in the same format as ``path`` (just ``path`` for one sheet)."""
     fmt = path.suffix.lower().lstrip(".")
-    named = {k: v.get(fmt) for k, v in al.sheet_files.items() if v.get(fmt)}
+    named = {k: v[fmt] for k, v in al.sheet_files.items() if v.get(fmt)}
     if len(named) <= 1:
         sheet = next((k for k, v in named.items() if v == path.name), 1)
         return {sheet: path}

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 MM_PER_PX = 25.4 / 96.0
 SNAP_MM = 1e-4  # endpoints closer than this are one node of the linework
@@ -57,10 +58,10 @@ class Linework:
         return [self.subset([i for i in rest if self.colours[i] == c]) for c in colours]
 
 
-class Polylines(Sequence):
+class Polylines(Sequence[tuple[np.ndarray, bool]]):
     """``(points, closed)`` pairs kept flat (points ``(P, 2)``, counts, closed flags); items made on demand."""
 
-    def __init__(self, pts: np.ndarray, counts: np.ndarray, closed: np.ndarray):
+    def __init__(self, pts: npt.ArrayLike, counts: npt.ArrayLike, closed: npt.ArrayLike):
         self.pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         self.counts = np.asarray(counts, dtype=np.int64)
         self.closed = np.asarray(closed, dtype=bool)

@@ -86,7 +86,7 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
     size = pattern.tile_size
     if tol_mm is not None:
         return fabrication_tolerances(float(tol_mm), size)
-    optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals", "report"))
+    optimised = any(k in (pattern.design or {}) for k in ("solver", "solve", "residuals", "report"))
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
     return Tolerances(rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data")
 
@@ -297,10 +297,11 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     cause = ""
     if len(order) and blame:
         culprits = [blame.get(int(i[m]), blame.get(int(j[m]))) for m in order]
-        if all(c is not None for c in culprits):
-            cause = f"; all caused by self-intersecting tile(s) {sorted(set(culprits))}"
+        found = [c for c in culprits if c is not None]
+        if len(found) == len(culprits):
+            cause = f"; all caused by self-intersecting tile(s) {sorted(set(found))}"
         else:
-            cause = f"; {sum(c is not None for c in culprits)} of {len(order)} caused by self-intersecting tiles"
+            cause = f"; {len(found)} of {len(order)} caused by self-intersecting tiles"
     out.append(measured(f"{g}: no overlaps", _max(inter), tol.length, "mm",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, group=g,
                         detail=(f"overlapping pairs (penetration depth): {listed}{cause}" if len(order) else
@@ -326,7 +327,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.length, "mm",
                         worst=where, group=g,
                         detail=(f"{len(big)} enclosed gaps wider than the tolerance (largest {worst_gap[1]:.3g} mm²)"
-                                if big else "equivalent width 2|area|/perimeter of enclosed gaps"),
+                                if big and worst_gap else "equivalent width 2|area|/perimeter of enclosed gaps"),
                         id=ids["no-interior-gaps"]))
     # one outline: components after closing cracks narrower than the tolerance
     eps = max(tol.length, 1e-12 * tol.tile_size)
@@ -426,13 +427,14 @@ def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tol
                     detail=f"{len(omegas)} samples of ω on [0, 90°]")]
     is_convex = geom.convex(Y1)
     depth = np.zeros(len(omegas))
-    pairs = [None] * len(omegas)
+    pairs: list[tuple[int, int] | None] = [None] * len(omegas)  # the deepest pair per sample
     for s in range(len(omegas)):
         depth[s], pairs[s] = geom.max_overlap_depth(corners[s], is_convex)
     k = int(np.argmax(depth))
+    pk = pairs[k]
     out.append(measured("rigid path: no overlap", _max(depth), tol.length, "mm",
-                        worst=(f"tiles {pairs[k][0]}/{pairs[k][1]} at ω = {np.degrees(omegas[k]):.4g}°"
-                               if pairs[k] else None), group="rigid path",
+                        worst=(f"tiles {pk[0]}/{pk[1]} at ω = {np.degrees(omegas[k]):.4g}°"
+                               if pk else None), group="rigid path",
                         detail="largest penetration depth between any two tiles"))
     end = geometry.aligned_distance(corners[-1], Y2)
     out.append(measured("rigid path: ends in state 2", end, tol.length * np.sqrt(len(Y1)), "mm",
@@ -460,9 +462,9 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
                  meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": tol.tile_size,
                        "tier": tol.tier, "tolerance": tol.describe(), "tiles": pattern.n_tiles, "holes": pattern.topology.n_holes,
                        "rigid_claimed": claimed})
-    for c in topology_checks(pattern) + tile_checks(pattern, tol):
-        rep.add(c)
-    states = {}
+    for chk in topology_checks(pattern) + tile_checks(pattern, tol):
+        rep.add(chk)
+    states: dict[int, np.ndarray] = {}
     for s in STATES:
         c = contract(pattern, s)
         Y = pattern.contracted.get(s, c.corners)

@@ -44,7 +44,7 @@ def ligament_check(pattern: Pattern, material, cores: np.ndarray, have: np.ndarr
     touching: dict[int, set[int]] = {}
     for c, s in zip(ids[si], ci):
         touching.setdefault(int(s), set()).add(int(c))
-    by_pair = {}
+    by_pair: dict[tuple[int, int], list[int]] = {}
     for s, tiles in touching.items():
         for a in tiles:
             for b in tiles:
@@ -75,7 +75,7 @@ def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
     n = len(Q)  # the tile arity
     q, q1, q0 = Q[k], Q[(k + 1) % n], Q[(k - 1) % n]
     e1, e0 = q1 - q, q0 - q
-    l1, l0 = np.linalg.norm(e1), np.linalg.norm(e0)
+    l1, l0 = float(np.linalg.norm(e1)), float(np.linalg.norm(e0))
     if not len(segs) or l1 == 0 or l0 == 0:
         return False
     p, r = segs[:, 0], segs[:, 1]
@@ -86,7 +86,7 @@ def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
         return (np.abs(d) <= MARK_EDGE_MM) & (t > 0) & (t < le)
 
     spans = (near(p, e1, l1) & near(r, e0, l0)) | (near(r, e1, l1) & near(p, e0, l0))
-    sin = abs(geometry.cross2(e1, e0)) / (l1 * l0)  # an acute corner's mark is shorter
+    sin = float(abs(geometry.cross2(e1, e0))) / (l1 * l0)  # an acute corner's mark is shorter
     long = np.linalg.norm(r - p, axis=1) >= MARK_SPAN * min(l1, l0, 16.0) * max(sin, 0.2)
     return bool((spans & long).any())
 

@@ -259,8 +259,8 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM, n: int = 4) -> np.
         along = (np.abs(geometry.cross2(e, d)) <= 0.17 * elen * dl) & (geometry.dot2(e, d) > 0)
         near = np.abs(geometry.cross2(mid - a, d)) / dl <= 0.1 * dl
         cand = np.flatnonzero(along & near)
-        k = cand[np.argmax(elen[cand])] if len(cand) else None
-        lines.append((a, d) if k is None else (pts[k], e[k]))
+        longest = cand[np.argmax(elen[cand])] if len(cand) else None
+        lines.append((a, d) if longest is None else (pts[longest], e[longest]))
     out = []
     for i in range(n):
         (p1, d1), (p2, d2) = lines[i - 1], lines[i]

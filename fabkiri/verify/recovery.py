@@ -64,11 +64,11 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
     if len(pairs):
         from scipy import sparse
 
-        n = len(pts)
-        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        n_pts = len(pts)
+        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_pts, n_pts))
         _, label = csgraph.connected_components(g, directed=False)
         first = np.full(label.max() + 1, -1)
-        first[label[::-1]] = np.arange(n)[::-1]
+        first[label[::-1]] = np.arange(n_pts)[::-1]
         pts = pts[first[label]]
     segs = pts.reshape(-1, 2, 2)
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
@@ -149,10 +149,10 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         joined = join_pieces(lw)
         if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
             # ligament sheet), else in-place linework
-            rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
-            n_open = len(joined.closed) - len(rings.closed)
+            closed_lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
+            n_open = len(joined.closed) - len(closed_lw.closed)
             # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
-            hinge = "ligament" if n_open < len(rings.closed) and _nested(rings) else \
+            hinge = "ligament" if n_open < len(closed_lw.closed) and _nested(closed_lw) else \
                 "separate" if not n_open else "tape"
         if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
             lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
@@ -226,7 +226,7 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
     design tiles; with one candidate, that one."""
     if len(candidates) == 1:
         return candidates[0]
-    best, score = candidates[0], -1
+    best, score = candidates[0], None
     for lw in candidates:
         try:
             polys, _ = recover_polygons(lw, al, sheet, arity=D.shape[1])
@@ -236,6 +236,6 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
         _, res, _ = match_by_shape(D, quads, L)
         n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
         key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions
-        if score == -1 or key > score:
+        if score is None or key > score:
             best, score = lw, key
     return best

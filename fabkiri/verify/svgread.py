@@ -31,7 +31,7 @@ _NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 _SUBPATH = re.compile(r"(?=[Mm])")
 
 
-def read_svg_layers(data: bytes):
+def read_svg_layers(data: bytes) -> tuple[float, float, list[float], dict[str | None, Polylines]]:
     """``(width_mm, height_mm, viewbox, layers)``; layers from ``<g id=...>`` groups, y flipped back to y-up.
 
     A path with several subpaths (``M ... M ...``: the SVG writes each tile's strokes as one
@@ -43,7 +43,7 @@ def read_svg_layers(data: bytes):
     wmm = float(w[:-2]) if w.endswith("mm") else float("nan")
     hmm = float(h[:-2]) if h.endswith("mm") else float("nan")
     H = vb[3] if len(vb) == 4 else float("nan")
-    layers: dict[str, list] = {}
+    layers: dict[str | None, Polylines] = {}  # a group without an id is the layer None
     for g in root.iter(f"{SVG_NS}g"):
         name = g.get("id")
         nums: list[str] = []
