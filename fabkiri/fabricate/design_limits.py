@@ -72,7 +72,8 @@ def resolve(material: str | None, hinge: str | None, printer: str | None, style:
             min_feature: float | None, min_hole: float | None, target) -> tuple[FabricationLimits | None, dict]:
     """``design``'s ``--material/--hinge``, ``--printer/--style``, ``--min-feature`` and ``--min-hole`` as plain
     mm limits (None: no fabrication rows), and the intent stored in the design for ``cut``/``print``."""
-    parts, names, intent = [], [], {}
+    parts, names = [], []
+    intent: dict[str, str | float] = {}  # cut/print defaults: material, hinge, printer, style, size, scale
     if hinge and not material:
         raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
     if style and not printer:

@@ -65,8 +65,8 @@ def assign_faces(pattern: Pattern, states: dict[int, np.ndarray]) -> FaceAssignm
     """Two-colour the graph "hinges coincide in some closed state" by BFS depth."""
     H = pattern.topology.n_hinges
     eps = 1e-6 * pattern.tile_size
-    pairs = [coincident_pairs(hinge_points(pattern, c), eps) for c in states.values()]
-    pairs = np.unique(np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64), axis=0)
+    per_state = [coincident_pairs(hinge_points(pattern, c), eps) for c in states.values()]
+    pairs = np.unique(np.concatenate(per_state) if per_state else np.zeros((0, 2), np.int64), axis=0)
     face = np.zeros(H, dtype=np.int64)
     if len(pairs) and H:
         g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(H, H)).tocsr()
@@ -191,7 +191,7 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
             for i in range(0, len(hs) - 1, 2):
                 partner[hs[i]], partner[hs[i + 1]] = hs[i + 1], hs[i]
         elif len(hs) > 2:
-            used = set()
+            used: set[int] = set()  # hinge ends already paired
             for i in range(len(hs)):
                 if hs[i] in used:
                     continue
@@ -353,7 +353,7 @@ def ligament_design(pattern: Pattern, corners: np.ndarray, shrunk: np.ndarray, *
     cA, cB = top.hinge_corner.T
     apex = np.stack([shrunk[A, cA], shrunk[B, cB]], 1)
     lengths = np.linalg.norm(apex[:, 1] - apex[:, 0], axis=1)
-    warnings = []
+    warnings: list[str] = []
     if len(lengths) == 0:
         return LigamentDesign(0.0, turn_rad, lengths, lengths, apex, warnings)
     Lmin = float(lengths.min())
@@ -397,7 +397,8 @@ def kerf_outset(polys, offset: float):
 
 def rings_of(geom) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """(exteriors, interiors) of a (multi)polygon as open coordinate arrays, snapped to the grid."""
-    ext, inner = [], []
+    ext: list[np.ndarray] = []
+    inner: list[np.ndarray] = []
     for poly in shapely.get_parts(geom):
         if poly.is_empty:
             continue

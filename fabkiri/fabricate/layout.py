@@ -9,6 +9,7 @@ Also here: the 50 mm reference square and fitting text labels inside tiles.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -168,7 +169,7 @@ def nested(parts, spacing: float, sheet: tuple[float, float], margin: float) -> 
     return Placement(sheet=sheet_of, theta=theta, shift=shift, n_sheets=s + 1, layout="nested")
 
 
-def place_reference(content: list[np.ndarray | None], size: float, sheet: tuple[float, float], margin: float,
+def place_reference(content: Sequence[np.ndarray | None], size: float, sheet: tuple[float, float], margin: float,
                     gap: float) -> tuple[int, np.ndarray]:
     """Where the reference square goes: beside or above a sheet's content, else on a new sheet.
 

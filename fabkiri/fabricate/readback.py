@@ -152,9 +152,10 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
     off = man["kerf_offset_mm"]
     # recover the pieces the laser leaves
     if kind == "tape":
-        sq = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
+        ref_sq = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
         lines = [shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in cut
-                 if not (c and sq is not None and p.shape == sq.shape and np.allclose(p, sq, atol=1e-9))]
+                 if not (c and ref_sq is not None and p.shape == ref_sq.shape
+                         and np.allclose(p, ref_sq, atol=1e-9))]
         noded = shapely.union_all(lines) if lines else shapely.GeometryCollection()
         pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
         holes = np.array([])
@@ -181,7 +182,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
     if len(pieces) and len(expected):
         tree = shapely.STRtree(pieces)
         idx_e, idx_p = tree.query(shapely.centroid(expected), predicate="within")
-        best = {}
+        best: dict[int, float] = {}  # expected tile -> Hausdorff distance to its nearest piece
         for e, p in zip(idx_e, idx_p):
             d = shapely.hausdorff_distance(expected[e], pieces[p])
             best[e] = min(best.get(e, np.inf), d)
@@ -236,7 +237,7 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
         from ..verify.manifest import CutManifest
     except ImportError:
         return {"ok": False, "available": False, "detail": "fabkiri.verify is not installed"}
-    out = {"ok": True, "available": True, "files": {}}
+    out: dict[str, Any] = {"ok": True, "available": True, "files": {}}
     tol = result.manifest["tolerance_mm"]
     where = str(folder / "manifest.json")
     try:  # read and checked against its schema once, for every file

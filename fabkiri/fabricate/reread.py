@@ -9,6 +9,7 @@ declared millimetres. The polylines are compared and audited in :mod:`.readback`
 from __future__ import annotations
 
 import io
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,7 +48,7 @@ class DxfReadback:
     insunits: Any
     dxfversion: str
     audit_errors: list[str]
-    layers: dict[str, list]
+    layers: Mapping[str, Sequence[tuple[np.ndarray, bool]]]  # (points, closed) per layer, in file order
     others: list[str]
     bulk_entities: int = 0  # entities checked from their tags instead of being loaded by ezdxf
 

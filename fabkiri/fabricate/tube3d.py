@@ -112,7 +112,8 @@ def obj_bytes(mesh: trimesh.Trimesh) -> bytes:
 
 
 def stl_bytes(plates: list[trimesh.Trimesh]) -> bytes:
-    return trimesh.util.concatenate(plates).export(file_type="stl")
+    both = trimesh.util.concatenate(plates)  # a Trimesh; trimesh annotates it as a Geometry
+    return both.export(file_type="stl")  # type: ignore[call-arg]  # Geometry's export needs a file
 
 
 def plate_overlap(plates: list[trimesh.Trimesh]) -> tuple[float, tuple[int, int] | None]:
