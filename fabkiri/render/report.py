@@ -20,7 +20,7 @@ import html
 import io
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -117,7 +117,9 @@ def _fig_png(fig) -> bytes:
 def _tiles(ax, corners: np.ndarray, color: str = "#b8c7d9") -> None:
     from matplotlib.collections import PolyCollection
 
-    ax.add_collection(PolyCollection(corners, facecolors=color, edgecolors="#34495e", linewidths=0.4))
+    # matplotlib's stubs ask for a sequence of vertex arrays; a (T, k, 2) array is one (and its fast path)
+    ax.add_collection(PolyCollection(corners, facecolors=color,  # type: ignore[arg-type]
+                                     edgecolors="#34495e", linewidths=0.4))
     lo, hi = corners.reshape(-1, 2).min(0), corners.reshape(-1, 2).max(0)
     pad = 0.04 * float((hi - lo).max())
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -324,7 +326,7 @@ def plate_png(stl: Path) -> bytes:
     import trimesh
     from matplotlib.collections import PolyCollection
 
-    m = trimesh.load(stl, force="mesh")
+    m = cast(trimesh.Trimesh, trimesh.load(stl, force="mesh"))  # force="mesh": a Trimesh, annotated as a Geometry
     up = m.face_normals[:, 2] > 1e-6  # faces seen from above
     tri = m.triangles[up]
     z = tri[:, :, 2].mean(1)

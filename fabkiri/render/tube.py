@@ -10,11 +10,11 @@ import io
 
 import numpy as np
 
-from ..fabricate.tube3d import state_frame, surface_mesh
+from ..fabricate.tube3d import state_frame, surface_mesh, tube_seam
 from ..mechanics.deploy import DeploymentPath
 from ..mechanics.tube import TubeFrame, frame
 from ..pattern.model import Pattern
-from ..pattern.periodic import seam_map, seam_of, tube_tiles
+from ..pattern.periodic import seam_map, tube_tiles
 from .deployment import _gif_bytes, _pyplot
 
 
@@ -42,7 +42,7 @@ def _half_extent(meshes: list) -> float:
 
 def _even(pattern: Pattern) -> np.ndarray:
     """Tile colour (fold parity) of the tube's tiles, in tube order."""
-    return pattern.topology.even_tiles()[tube_tiles(pattern, seam_of(pattern))]
+    return pattern.topology.even_tiles()[tube_tiles(pattern, tube_seam(pattern))]
 
 
 def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
@@ -66,7 +66,7 @@ def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
 
 
 def _frame_of(corners: np.ndarray, pattern: Pattern) -> tuple[np.ndarray, TubeFrame, float]:
-    seam = seam_of(pattern)
+    seam = tube_seam(pattern)  # a flat sheet: one-line bad input, not an AttributeError on None
     m = seam_map(corners, seam)
     if seam.closed == "cone":  # a rigid cone tube: every frame's seam turns alike, each frame is a cone
         return corners[tube_tiles(pattern, seam)], frame(corners, seam, 1), m.rigid_dev
