@@ -164,7 +164,8 @@ def _layers_in_file_order(xy, canon, layer_of, n_canon, closed, items) -> dict[s
 
 def _entities_of(doc):
     """``(None, None, items, others)``: per modelspace entity ``(layer, (points, closed))`` or None."""
-    items, others = [], []
+    items: list[tuple[str, tuple[np.ndarray, bool]] | None] = []
+    others: list[str] = []
     for e in doc.modelspace():
         if e.dxftype() != "LWPOLYLINE":
             others.append(e.dxftype())
