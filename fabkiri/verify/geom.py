@@ -193,7 +193,7 @@ def _edge_matched(snapped: np.ndarray) -> bool:
     return True
 
 
-def tiles_union(corners: np.ndarray, eps: float, coverage: bool = True):
+def tiles_union(corners: np.ndarray, eps: float, coverage: bool = True) -> shapely.Geometry:
     """Union of tiles robust to rounding: corners within ``eps`` are snapped first.
 
     A conforming coverage (no overlaps — the caller says so with ``coverage`` —

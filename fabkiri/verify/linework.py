@@ -7,7 +7,7 @@ writer's read-back of large sheets.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,7 +41,7 @@ class Linework:
             self.layers.append(str(layer))
             self.colours.append(str(colour))
 
-    def subset(self, keep) -> Linework:
+    def subset(self, keep: Iterable[int]) -> Linework:
         keep = list(keep)
         return Linework(self.path, [self.polylines[i] for i in keep], [self.closed[i] for i in keep],
                         self.layer_found, [self.layers[i] for i in keep], [self.colours[i] for i in keep])
@@ -68,7 +68,7 @@ class Polylines(Sequence[tuple[np.ndarray, bool]]):
         self._items: list | None = None
 
     @classmethod
-    def of(cls, items) -> Polylines:
+    def of(cls, items: Sequence[tuple[np.ndarray, bool]]) -> Polylines:
         return cls(*flat_polylines(items))
 
     def _list(self) -> list:
@@ -87,7 +87,7 @@ class Polylines(Sequence[tuple[np.ndarray, bool]]):
         return iter(self._list())
 
 
-def flat_polylines(polylines) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def flat_polylines(polylines: Sequence[tuple[np.ndarray, bool]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(points (P, 2), counts, closed)`` of a list of ``(points, closed)``."""
     if isinstance(polylines, Polylines):
         return polylines.pts, polylines.counts, polylines.closed

@@ -15,13 +15,16 @@ against it:
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
 
 from ..pattern.model import Pattern
 from .report import Check, measured
+
+if TYPE_CHECKING:  # pattern_checks imports this module
+    from .pattern_checks import Tolerances
 
 DEGENERATE_ASPECT = 4.0  # an unasked aspect this many times the lattice's rows:cols is a collapsed strip
 
@@ -35,7 +38,7 @@ def outline_corners(Y: np.ndarray, eps: float) -> tuple[np.ndarray, Any]:
     return np.asarray(part.exterior.coords)[:-1], part
 
 
-def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol) -> list[Check]:
+def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol: Tolerances) -> list[Check]:
     pts, union = outline_corners(Y, max(tol.length, 1e-12 * tol.tile_size))
     rect = union.minimum_rotated_rectangle
     off = shapely.distance(shapely.points(pts), rect.exterior)
@@ -62,7 +65,7 @@ def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | No
     return out
 
 
-def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], tol) -> list[Check]:
+def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], tol: Tolerances) -> list[Check]:
     """Checks of every closed-state outline target the design recorded (none if it recorded none)."""
     d = pattern.design or {}
     asked = (d.get("options") or {}).get("contracted") or {}

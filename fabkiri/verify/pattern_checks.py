@@ -32,7 +32,7 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums, state_residuals
 from ..pattern.tessellation import tessellation
-from ..pattern.topology import STATES
+from ..pattern.topology import STATES, FoldRule
 from . import geom
 from .outlines import target_checks
 from .report import Check, Report, measured
@@ -253,7 +253,8 @@ def _blame(pattern: Pattern) -> dict[int, int]:
     return out
 
 
-def _folded_gaps(pattern, Y, fold, tol: Tolerances, g: str, state: int | str) -> Check:
+def _folded_gaps(pattern: Pattern, Y: np.ndarray, fold: FoldRule, tol: Tolerances, g: str,
+                 state: int | str) -> Check:
     top = pattern.topology
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
@@ -339,7 +340,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     return out
 
 
-def enclosed_gaps(union) -> list:
+def enclosed_gaps(union: shapely.Geometry) -> list[shapely.Polygon]:
     """The uncovered regions enclosed by a tile union, as polygons.
 
     A hole ring of the union may enclose islands of tiles (a crack of rounding

@@ -7,6 +7,8 @@ file without its manifest is checked the same way; each failure names the hinge.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import shapely
 from scipy.spatial import cKDTree
@@ -25,7 +27,7 @@ MARK_EXPECT_MARGIN_MM = 0.75  # ... with the writer's margin for a kerf up to 0.
 MARK_SPAN = 0.3  # a mark spans at least this fraction of the corner's shorter edge (at most 16 mm), times sin(angle)
 
 
-def ligament_check(pattern: Pattern, material, cores: np.ndarray, have: np.ndarray, cuts: list[np.ndarray],
+def ligament_check(pattern: Pattern, material: shapely.Geometry, cores: np.ndarray, have: np.ndarray, cuts: list[np.ndarray],
                    hinges: np.ndarray, g: str) -> Check:
     """Every hinge in ``hinges`` has a strip of material joining its two tiles' cores, and no cut
     line runs into that strip.
@@ -119,7 +121,7 @@ def tape_mark_chords(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, margin: f
     return seg
 
 
-def _segments_near(segs: dict[int, np.ndarray]):
+def _segments_near(segs: dict[int, np.ndarray]) -> Callable[[int, np.ndarray, int], np.ndarray]:
     """``near(sheet, Q, k)``: the sheet's segments whose first end is close enough to corner ``k`` of
     ``Q`` to span it (a KD-tree per sheet: every corner against every engraved segment, labels
     included, took 84 of 96 s for a 32x32 sheet)."""

@@ -76,7 +76,7 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
 
 
 
-def _node(segs: np.ndarray, eps: float = JOIN_MM):
+def _node(segs: np.ndarray, eps: float = JOIN_MM) -> shapely.Geometry:
     """Segments ``(n, 2, 2)`` noded: ends within ``eps`` of another line are put on it (T-junctions
     rounded off their edge), then every crossing and touch is a node. Returns the union."""
     lines = shapely.linestrings(segs)
@@ -91,7 +91,7 @@ def _node(segs: np.ndarray, eps: float = JOIN_MM):
     return shapely.unary_union(lines)
 
 
-def _noded(lw: Linework, eps: float = JOIN_MM):
+def _noded(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
     """The CUT linework as noded line parts (shapely), endpoints within ``eps`` merged."""
     segs = _snapped_segments(lw, eps)
     if len(segs) == 0:
@@ -180,7 +180,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     # join tolerance drops it (and leaves convex tiles exactly as they are)
     parts = _hairline_free(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
     # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
-    def cuts_tiles(parts) -> bool:
+    def cuts_tiles(parts: np.ndarray) -> bool:
         return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
 
     if strips is not None and cuts_tiles(parts):
@@ -201,7 +201,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     return parts, how + ", grown by the tile shrink"
 
 
-def _material(polys: np.ndarray, kerf_offset: float):
+def _material(polys: np.ndarray, kerf_offset: float) -> shapely.Geometry:
     """A ligament sheet's material: outer loops minus the loops inside them, less the kerf offset."""
     tree = shapely.STRtree(polys)
     inside = np.zeros(len(polys), dtype=bool)
@@ -213,7 +213,7 @@ def _material(polys: np.ndarray, kerf_offset: float):
     return material
 
 
-def sheet_material(lw: Linework, kerf_offset: float):
+def sheet_material(lw: Linework, kerf_offset: float) -> shapely.Geometry:
     """The material of a ligament sheet's CUT linework (its closed outlines)."""
     joined = join_pieces(lw)
     rings = [shapely.Polygon(p) for p, c in zip(joined.polylines, joined.closed) if c]

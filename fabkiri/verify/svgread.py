@@ -96,7 +96,7 @@ def read_cut_svg(p: Path, layer_name: str = "CUT") -> Linework:
     height = float(svg.height) * mm_per_px
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
 
-    def name(g) -> str:
+    def name(g: se.Group) -> str:
         for v in (g.values.get(INKSCAPE_LABEL), g.values.get("inkscape:label"), g.id):
             if str(v or "").upper() in NON_CUT_LAYERS | {"CUT"}:
                 return str(v).upper()
@@ -138,7 +138,7 @@ def read_cut_svg(p: Path, layer_name: str = "CUT") -> Linework:
     return lw
 
 
-def without_annotation_layers(p: Path, keep: str = "CUT"):
+def without_annotation_layers(p: Path, keep: str = "CUT") -> str | io.BytesIO:
     """The SVG with its NOTES/ENGRAVE/SCORE groups removed, when it has a CUT group; else the path.
 
     Only the CUT group is read when there is one, and svgelements would spend
@@ -152,7 +152,7 @@ def without_annotation_layers(p: Path, keep: str = "CUT"):
     except (ET.ParseError, OSError):
         return str(p)
 
-    def name(el) -> str:
+    def name(el: ET.Element) -> str:
         return str(el.get("id") or el.get(INKSCAPE_LABEL) or "").upper()
 
     groups = [el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == "g"]
