@@ -20,7 +20,7 @@ import html
 import io
 import json
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -28,6 +28,10 @@ from ..mechanics.info import describe
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
 from .deployment import _pyplot
+
+if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 SECTIONS = ("summary", "design", "states", "fabricability", "verification", "deployment", "cut", "print",
             "assembly", "bom", "tolerance")
@@ -107,14 +111,14 @@ def rows_table(rows: list[dict[str, Any]], limit: int = 60) -> str:
     return ("<table><tr>" + "".join(f"<th>{html.escape(k)}</th>" for k in keys) + f"</tr>{body}</table>{more}")
 
 
-def _fig_png(fig) -> bytes:
+def _fig_png(fig: Figure) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None}, bbox_inches="tight")
     _pyplot().close(fig)
     return buf.getvalue()
 
 
-def _tiles(ax, corners: np.ndarray, color: str = "#b8c7d9") -> None:
+def _tiles(ax: Axes, corners: np.ndarray, color: str = "#b8c7d9") -> None:
     from matplotlib.collections import PolyCollection
 
     # matplotlib's stubs ask for a sequence of vertex arrays; a (T, k, 2) array is one (and its fast path)
@@ -346,10 +350,11 @@ def plate_png(stl: Path) -> bytes:
     return _fig_png(fig)
 
 
-def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
+def _assembly_section(cut_dir: Path | None, cut_man: dict | None, print_dir: Path | None,
+                      print_man: dict | None) -> str:
     body = ""
     for d, man, what in ((cut_dir, cut_man, "cut"), (print_dir, print_man, "print")):
-        if man is None:
+        if d is None or man is None:  # (a manifest comes with its folder)
             continue
         a = man.get("assembly")
         if isinstance(a, dict) and a.get("steps"):
@@ -363,7 +368,7 @@ def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
     return body or _missing("not provided: pass --cut DIR and/or --print DIR")
 
 
-def _bom_section(cut_man, print_man) -> str:
+def _bom_section(cut_man: dict | None, print_man: dict | None) -> str:
     body = ""
     if cut_man is not None:
         bom = cut_man.get("bill_of_materials")

@@ -7,6 +7,7 @@ states) is rolled with the mean seam translation and says how far its seam is fr
 from __future__ import annotations
 
 import io
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,8 +18,11 @@ from ..pattern.model import Pattern
 from ..pattern.periodic import seam_map, tube_tiles
 from .deployment import _gif_bytes, _pyplot
 
+if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
+    from mpl_toolkits.mplot3d import Axes3D
 
-def _draw(ax, tiles: np.ndarray, f: TubeFrame, lim: float, title: str, even: np.ndarray) -> None:
+
+def _draw(ax: Axes3D, tiles: np.ndarray, f: TubeFrame, lim: float, title: str, even: np.ndarray) -> None:
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     mesh = surface_mesh(tiles, f, n=4)
