@@ -228,7 +228,7 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
     return out
 
 
-def _segments_of(geom) -> np.ndarray:
+def _segments_of(geom: shapely.Geometry) -> np.ndarray:
     """All 2-point segments of a (multi)linestring, ``(n, 2, 2)``."""
     coords, idx = shapely.get_coordinates(shapely.get_parts(geom), return_index=True)
     same = idx[1:] == idx[:-1]
@@ -388,14 +388,14 @@ def ligament_strips(apex: np.ndarray, width: float, embed: float) -> np.ndarray:
     return shapely.buffer(lines, 0.5 * width, cap_style="flat", join_style="mitre")
 
 
-def kerf_outset(polys, offset: float):
+def kerf_outset(polys: shapely.Geometry | np.ndarray, offset: float) -> shapely.Geometry | np.ndarray:
     """Toolpath outside a part by ``offset`` = kerf/2 (holes shrink), mitre joins."""
     if offset == 0:
         return polys
     return shapely.buffer(polys, offset, join_style="mitre", mitre_limit=MITRE_LIMIT)
 
 
-def rings_of(geom) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def rings_of(geom: shapely.Geometry) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """(exteriors, interiors) of a (multi)polygon as open coordinate arrays, snapped to the grid."""
     ext: list[np.ndarray] = []
     inner: list[np.ndarray] = []

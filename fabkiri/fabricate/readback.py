@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import tempfile
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,10 @@ from .cut import CutResult
 from .drawing import LAYERS
 from .gcpause import gc_paused
 from .hinges import MITRE_LIMIT as hg_MITRE
-from .reread import duplicate_segments, flat_polylines, read_dxf_checked, read_svg
+from .reread import Polylines, duplicate_segments, flat_polylines, read_dxf_checked, read_svg
+
+# one sheet's polylines per layer, as the DXF or the SVG read-back gives them
+SheetLayers = Mapping[str, Sequence[tuple[np.ndarray, bool]]] | Mapping[str | None, Polylines]
 
 AGREE_MM = 1e-6
 UNDO_MITRE = 1000.0  # undoing an outset at the acute notches where a strip meets a tile needs sharp mitres
@@ -85,6 +89,7 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
     kind = man["hinge"]
     ref = man["reference_square"]
     Q = result.tile_regions
+    assert Q is not None and result.tile_sheet is not None  # a cut records where each tile went
     for row in man["sheets"]:
         k = row["index"]
         dxf_layers = svg_layers = None
@@ -121,7 +126,7 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
     return rb
 
 
-def _linestrings(polylines) -> np.ndarray:
+def _linestrings(polylines: Sequence[tuple[np.ndarray, bool]]) -> np.ndarray:
     """One LineString per polyline (closed ones back to their first point), built at once."""
     pts, n, closed = flat_polylines(polylines)
     end = np.cumsum(n)
@@ -134,7 +139,8 @@ def _linestrings(polylines) -> np.ndarray:
     return shapely.linestrings(coords, indices=owner)
 
 
-def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
+def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: dict[str, Any], man: dict[str, Any],
+                     ref: dict[str, Any] | None, Q: np.ndarray, tile_sheet: np.ndarray) -> None:
     cut = layers.get("CUT", [])
     closed = [p for p, c in cut if c]
     polys = np.array([shapely.Polygon(p) for p in closed], dtype=object)
@@ -218,7 +224,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
 # ------------------------------------------------------------------ verifier and writing
 
 
-def _relative(value, prefix: str):
+def _relative(value: Any, prefix: str) -> Any:
     """The report with the scratch folder stripped from paths (the manifest must not depend on it)."""
     if isinstance(value, dict):
         return {k: _relative(v, prefix) for k, v in value.items()}

@@ -31,7 +31,7 @@ def tube_seam(pattern: Pattern) -> Seam:
     return seam
 
 
-def state_frame(pattern: Pattern, state, copies: int = 1) -> tuple[np.ndarray, TubeFrame]:
+def state_frame(pattern: Pattern, state: str | int, copies: int = 1) -> tuple[np.ndarray, TubeFrame]:
     """Per-tile corners of the tube's tiles (``copies`` periods side by side) and the frame to roll them."""
     if int(copies) != copies or copies < 1:
         raise InputError(f"--copies must be a whole number >= 1, got {copies}")

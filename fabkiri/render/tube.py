@@ -52,7 +52,7 @@ def _even(pattern: Pattern) -> np.ndarray:
 def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
     """Deployed and both closed states side by side, rolled onto their tubes, one scale."""
     plt = _pyplot()
-    states = ["deployed", *sorted(pattern.contracted)]
+    states: list[str | int] = ["deployed", *sorted(pattern.contracted)]
     rolled = [state_frame(pattern, s, copies) for s in states]
     lim = _half_extent([surface_mesh(t, f, n=2) for t, f in rolled])
     fig = plt.figure(figsize=(4.0 * len(states), 4.6), dpi=dpi)
