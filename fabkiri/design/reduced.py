@@ -171,27 +171,27 @@ class _Merit:
         X, c = self.fam.nodes(S, psi), self.fam.grid(S)
         t = self._tiles
         tc = tile_corners(c, t.quads)
-        rs, pend = [], []  # pend: (scale, stencil Jacobian, rows) of each node block, in row order
+        rs, pend = [], []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
         gmin = np.inf
         for f in self.fits:
             if not (hard and f.meta.get("soft")):
                 r, J = f.fn(X)
                 rs.append(r)
-                pend.append((1.0, J, None))
+                pend.append((1.0, lambda J=J: J, None))
         if not hard:
             for f in self.regs:
                 r, J = f.fn(X)
                 rs.append(self.w * r)
-                pend.append((self.w, J, None))
+                pend.append((self.w, lambda J=J: J, None))
         s = 1.0 if hard else self.sq
         for f in self.ineqs:
             r = f.residual(X)
             gmin = min(gmin, float(r.min(initial=np.inf)))
             v = r - self.margin[f.name] * (0.5 if hard else 1.0)
             act = np.flatnonzero(v < 0)
-            if len(act):  # rarely: the gradients only when asked
+            if len(act):  # rarely
                 rs.append(s * v[act])
-                pend.append((s, f, act))
+                pend.append((s, lambda f=f: f.fn(X)[1], act))  # the gradients only when asked
         g = tc.cross.reshape(-1)
         gmin = min(gmin, float(g.min(initial=np.inf)))
         v = g - t.margin * (0.5 if hard else 1.0)
@@ -206,8 +206,7 @@ class _Merit:
 
         def dense():
             """``(J, reg)``: the Jacobian of the rows before the regulariser's, and ``(tc, JᵀJ, Jᵀr)`` of those."""
-            Js = [sc * self._node_jacobian(f.fn(X)[1] if rows is not None else f, S, psi, rows)
-                  for sc, f, rows in pend]
+            Js = [sc * self._node_jacobian(stencil(), S, psi, rows) for sc, stencil, rows in pend]
             if len(flat):
                 Js.append(s * t.convexity_jacobian(tc, flat))
             J = np.zeros((sum(len(b) for b in Js), len(p)))
