@@ -180,13 +180,22 @@ class _OffsetOutline:
         self.w = np.sqrt(REG_WEIGHT)
         self.R0: dict = {}
         self.npar = 0
+        self._member = None
 
     def seeds(self, p):
         v = self.base + self.Nsp @ p[:self.k]
         return np.stack([v[:self.nf], v[self.nf:]], -1)
 
     def member(self, p, jac):
-        return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=jac)
+        if jac:
+            return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=True)
+        # the last one is kept: LM's step limiting (``nodes``) and its trial rows ask for the same member
+        key = np.asarray(p, dtype=float).tobytes()
+        if self._member is None or self._member[0] != key:
+            y = self.fam.state1(self.seeds(p), p[self.k:self.k + self.K])
+            y.flags.writeable = False  # shared by the callers
+            self._member = (key, y)
+        return self._member[1]
 
     def states_of(self, y):
         return {1: y, 2: self.fam.at(y, np.pi / 2)}
