@@ -40,7 +40,8 @@ class Target:
     name: str
     kind: str  # "spline" | "polyline"
     points: np.ndarray
-    corners: np.ndarray = field(default=None)  # type: ignore[assignment]
+    # None (the default): the default split, set in __post_init__; an array once constructed
+    corners: np.ndarray = field(default=None)  # type: ignore[arg-type]
     source: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
