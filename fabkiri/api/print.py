@@ -106,7 +106,7 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
     options = replace(options, state=state)
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
     printer = _printer(options.printer or design_intent(pattern, "printer"), style == "pinned", options)
-    pattern, scale = _scaled(pattern, style, printer, options.scale, state)
+    pattern, scale = _scaled(pattern, style, printer, options)
     for w in closes_gate(pattern, printer.tolerance_mm, force=options.force, action="print", tolerance="printer",
                          states=claimed_states(pattern, state)).warnings:  # as `cut`, printer tolerance
         say(f"warning: {w}")
@@ -139,10 +139,12 @@ def _printer(name: str | None, pinned: bool, o: PrintOptions):
     )
 
 
-def _scaled(pattern: Pattern, style: str, printer, given: float | str, state: int) -> tuple[Pattern, float]:
+def _scaled(pattern: Pattern, style: str, printer, o: PrintOptions) -> tuple[Pattern, float]:
     """The pattern at the print's scale, and the scale (``"auto"``: the smallest the plan checks accept)."""
+    given = o.scale
     if given == "auto":
-        need = fb.print_minimum(pattern, style, printer, state)
+        assert o.state is not None, "print_pattern resolves the state first"
+        need = fb.print_minimum(pattern, style, printer, o.state)
         if not need.possible or need.min_scale is None:
             raise CheckFailed(f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}")
         scale = need.min_scale
