@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from scipy import sparse
 
+from ..errors import SolveError
 from ..pattern import geometry
 from ..pattern.conformance import boundary_tip_order
 from ..pattern.lattice import standard_pattern
@@ -196,6 +197,13 @@ class _Problem:
         S, self.unfold = convex_member(fam, fam.node_vertex[self.st.tiles], grid.reshape(-1, 2))
         self.start_member = (S, psi)  # the start's seeds: the reduced solver need not fit them again
         return fam.nodes(S, psi)
+
+    @property
+    def target(self) -> Target:
+        """The deployed target; the routes that measure the deployed outline run only when there is one."""
+        if self.req.target is None:
+            raise SolveError("this design route needs a deployed target")
+        return self.req.target
 
     @property
     def rigid_family(self) -> RigidFamily:
