@@ -68,4 +68,4 @@ def target_from_dict(d: dict, name: str = "target") -> Target:
     except (TypeError, ValueError):
         raise InputError(f"{name}: stored target points must be numbers") from None
     return Target(str(d.get("name", name)), kind if kind in ("spline", "polyline") else "polyline", pts,
-                  corners=c, source=dict(d.get("source") or {}))  # type: ignore[arg-type]  # None: Target's default split
+                  corners=c, source=dict(d.get("source") or {}))
