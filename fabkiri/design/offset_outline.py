@@ -94,7 +94,8 @@ def _start_seeds(prob, fam: OffsetFamily, t0: np.ndarray):
     return sol - np.repeat(0.5 * (lo + hi), nf), Z0, rep1, g1  # vec S = (Sx, Sy)
 
 
-def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict, log):
+def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict,
+                 log) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
     """The linear rows ``E vec S = e`` of a square state-1 outline, or None for a square in state 2."""
     st = prob.st
     E, e = [], []

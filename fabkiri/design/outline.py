@@ -111,7 +111,7 @@ def _circle_residuals(maps: _Maps, st: Stencils, state: int):
     return np.stack([Zx[g.boundary], Zy[g.boundary]], 1)
 
 
-def _square_state_rows(prob, maps: _Maps, st: Stencils, states: list, kinds: dict):
+def _square_state_rows(prob, maps: _Maps, st: Stencils, states: list, kinds: dict) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """The square rows ``E vec S = e`` of every square target state (the side half-length in tile units)."""
     E, e = [], []
     for s in states:

@@ -20,6 +20,7 @@ on the result and falls back to the full solver when a check fails.
 from __future__ import annotations
 
 import copy
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -64,7 +65,7 @@ class _Merit:
     """
 
     def __init__(self, fam: RigidFamily, families: list[Family], margin: dict, reg_weight: float,
-                 rho: float = STAGES[0][0], scaling: str = "marquardt", grid_families: list[Family] = ()):
+                 rho: float = STAGES[0][0], scaling: str = "marquardt", grid_families: Sequence[Family] = ()):
         self.fam = fam
         self.nf = fam.n_seeds
         on_grid = {f.name for f in grid_families}
@@ -100,7 +101,7 @@ class _Merit:
         new.sq, new.scaling = float(np.sqrt(rho)), scaling
         return new
 
-    def unpack(self, p: np.ndarray):
+    def unpack(self, p: np.ndarray) -> tuple[np.ndarray, float]:
         nf = self.nf
         return np.stack([p[:nf], p[nf:2 * nf]], -1), float(p[-1])
 
@@ -228,7 +229,7 @@ class _Merit:
         D = self.fam.jacobian_at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
         return np.einsum("mkd,mkdp->mp", grads, D)
 
-    def _touched(self, Jx, p: np.ndarray):
+    def _touched(self, Jx, p: np.ndarray) -> tuple[sparse.csr_matrix, np.ndarray]:
         """``Jx`` on the columns of the nodes its rows touch and ``∂x/∂p`` at those nodes only: the node rows
         (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix is 540 MB at
         128x128."""
@@ -470,4 +471,5 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
             best = ((viol > 0, cost), X)
         if miss <= miss_tol and not viol > 0:
             break
+    assert best is not None, "SCALINGS is not empty"
     return best[1], "least-squares", iters
