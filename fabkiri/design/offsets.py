@@ -144,7 +144,7 @@ class OffsetFamily:
     def _blocks(self) -> tuple[_Columns, _Columns]:
         """``A(t)``'s dependent and seed columns as fixed sparsity patterns (built once)."""
         if getattr(self, "_cols", None) is None:
-            self._cols = tuple(_Columns.build(self, c) for c in (self.dep, self.seeds))
+            self._cols = (_Columns.build(self, self.dep), _Columns.build(self, self.seeds))
         return self._cols
 
     def _factor(self, t: np.ndarray):

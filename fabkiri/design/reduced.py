@@ -22,6 +22,7 @@ from __future__ import annotations
 import copy
 from collections.abc import Sequence
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from scipy import sparse
@@ -171,8 +172,10 @@ class _Merit:
         S, psi = self.unpack(p)
         X, c = self.fam.nodes(S, psi), self.fam.grid(S)
         t = self._tiles
+        assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
         tc = tile_corners(c, t.quads)
-        rs, pend = [], []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
+        rs: list[np.ndarray] = []
+        pend: list[tuple[float, Any, np.ndarray | None]] = []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
         gmin = np.inf
         for f in self.fits:
             if not (hard and f.meta.get("soft")):
@@ -346,7 +349,8 @@ class _Evaluation:
     def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, dense=None,
                  values: dict | None = None):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
-        self._r, self._J, self._reg, self._blocks = r, None, None, None
+        self._r, self._reg, self._blocks = r, None, None
+        self._J: np.ndarray | None = None
         self._dense = dense  # dense path: () -> (J, reg), called once, when a Jacobian is first asked for
         self._values = values  # block path: the inequality values gviol came from, reused by the rows
 
