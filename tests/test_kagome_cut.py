@@ -173,3 +173,13 @@ def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
     code, _, err = run_cli("cut", src, "--hinge", "ligament", "--material", "pp-0.5", "--scale", smaller,
                            "--formats", "dxf", "-o", tmp_path / "small")
     assert code == 1 and "read-back verification failed" in err and not (tmp_path / "small").exists()
+
+
+def test_a_ligament_sheet_with_no_cut_edge_along_a_recovered_part_is_refused_not_a_crash(tmp_path, run_cli):
+    """At 0.75x the 7x5's opened cores had no cut edge along any side, and the recovery raised
+    IndexError (exit 3); now the read-back refuses the files (exit 1) and nothing is written."""
+    src = tmp_path / "k75.json"
+    io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
+    code, _, err = run_cli("cut", src, "--hinge", "ligament", "--material", "pp-0.5", "--scale", "0.75",
+                           "--formats", "dxf", "-o", tmp_path / "out")
+    assert code == 1 and "read-back verification failed" in err and not (tmp_path / "out").exists()

@@ -88,14 +88,14 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
 
 
 READBACK_REFUSED = "read-back verification failed"
-AUTO_STEP = 1.02  # --scale auto steps up by 2 % while the read-back refuses the files ...
-AUTO_STEPS = 25  # ... at most this often (x1.64), then gives the first refusal
+AUTO_STEP = 1.05  # --scale auto steps up by 5 % while the read-back refuses the files ...
+AUTO_STEPS = 10  # ... at most this often (x1.63), then gives the first refusal
 
 
 def _read_back_scale(cut_at: Callable[[float], CutOutcome], refused: float, first: CheckFailed) -> CutOutcome:
     """``--scale auto`` when the read-back refuses the files at the size the sheet rules allow
     (``refused``; a kagome ligament sheet's small triangles among their strips): step the scale up by
-    2 % until it accepts them, then bisect between the last refusal and the first acceptance to
+    5 % until it accepts them, then bisect between the last refusal and the first acceptance to
     0.1 % (stated to 4 digits). The files returned are always ones the read-back accepted, at the
     smallest scale tried that it accepted; a warning says so. Raises ``first`` if none is found."""
     from ..fabricate import fabricability as fb
