@@ -61,9 +61,12 @@ class FaceAssignment:
         return [FACES[int(f)] for f in self.face]
 
 
-def assign_faces(pattern: Pattern, states: dict[int, np.ndarray]) -> FaceAssignment:
+def assign_faces(pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray | None = None
+                 ) -> FaceAssignment:
     """Two-colour the graph "hinges coincide in some closed state" by BFS depth; where that graph has
-    odd cycles (three kagome hinges at a point), with the fewest conflicts local flips reach."""
+    odd cycles (three kagome hinges at a point), with the fewest conflicts local flips reach, also
+    keeping the hinge pairs ``apart`` (printed strips too close for one face) on opposite faces
+    where the flips can (they weigh as a lone coincident pair; not counted as conflicts)."""
     H = pattern.topology.n_hinges
     eps = 1e-6 * pattern.tile_size
     per_state = [coincident_pairs(hinge_points(pattern, c), eps) for c in states.values()]
@@ -82,7 +85,7 @@ def assign_faces(pattern: Pattern, states: dict[int, np.ndarray]) -> FaceAssignm
                 face[node] = 1 - face[pred[node]]
     conflicts = int((face[pairs[:, 0]] == face[pairs[:, 1]]).sum()) if len(pairs) else 0
     if conflicts:  # an odd cycle: BFS depth need not give the fewest conflicts
-        face = _fewer_conflicts(face, per_state, H)
+        face = _fewer_conflicts(face, per_state + ([] if apart is None else [apart]), H)
         conflicts = int((face[pairs[:, 0]] == face[pairs[:, 1]]).sum())
     return FaceAssignment(face=face, pairs=pairs, conflicts=conflicts)
 

@@ -22,7 +22,7 @@ it into solids. Conventions:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
@@ -145,15 +145,17 @@ def _fewest_shared(k: int) -> int:
     return a * (a - 1) // 2 + b * (b - 1) // 2
 
 
-def face_rule(pattern: Pattern, states: dict[int, np.ndarray]) -> tuple[np.ndarray, int]:
+def face_rule(pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray | None = None
+              ) -> tuple[np.ndarray, int]:
     """Top (True) or bottom face per hinge, opposite for hinges that coincide in a closed state, and
     how many coincident pairs share a face.
 
     Where more than two hinges meet at a point (kagome: three, an odd cycle) two of them must
-    share a face; that fewest sharing is accepted, any more is refused."""
+    share a face; that fewest sharing is accepted, any more is refused. ``apart``: hinge pairs the
+    colouring should also keep on opposite faces where it is free to (see :func:`closed_plan`)."""
     from .hinges import assign_faces
 
-    faces = assign_faces(pattern, states)
+    faces = assign_faces(pattern, states, apart)
     if faces.conflicts:
         most = tessellation(pattern.kind).hole_arity // 2
         tol = COINCIDE_TOL_REL * pattern.tile_size
@@ -211,11 +213,41 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
         raise FabricationError(
             f"tile {bad} vanishes or splits when shrunk by half the printer gap ({d:g} mm)"
         )
-    return ClosedPlan(
+    plan = ClosedPlan(
         state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
         seam_dir=seam, seam_end=far, partner=partner, top=top, shrink_mm=d, other_state_closes=other_closes,
         shared_faces=shared,
     )
+    return _refaced(pattern, plan, states, printer) if shared else plan
+
+
+def _refaced(pattern: Pattern, plan: ClosedPlan, states: dict[int, np.ndarray], printer: Printer) -> ClosedPlan:
+    """Where two of three coincident hinges must share a face, which two is free: choose so that
+    strips closer than the radial clearance lie on opposite faces where the flips can (two strips
+    at two corners of a small triangle). The plan as it was if no strip comes that close, or the
+    strips cannot be drawn (``strip_outlines`` then refuses with the reason)."""
+    try:
+        outline = strip_outlines(plan, printer, check=False).outline
+    except FabricationError:
+        return plan
+    close = _close_strips(outline, np.arange(plan.n_hinges), printer.radial_clearance_mm)
+    clash = close[plan.top[close[:, 0]] == plan.top[close[:, 1]]]
+    if not len(clash):
+        return plan
+    try:
+        top, shared = face_rule(pattern, states, close)
+    except FabricationError:  # the flips traded a coincident pair for strips: keep the fewest sharing
+        return plan
+    return replace(plan, top=top, shared_faces=shared)
+
+
+def _close_strips(outline: np.ndarray, idx: np.ndarray, clearance: float) -> np.ndarray:
+    """Pairs ``(h, k)``, ``h < k``, of hinges in ``idx`` whose strips are closer than ``clearance``."""
+    if len(idx) < 2:
+        return np.zeros((0, 2), np.int64)
+    i, j = shapely.STRtree(outline[idx]).query(outline[idx], predicate="dwithin", distance=clearance - 1e-9)
+    sel = i < j
+    return np.stack([idx[i[sel]], idx[j[sel]]], 1).astype(np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -249,10 +281,11 @@ def _pair_regions(a: np.ndarray, b: np.ndarray, d: float, eps: float) -> np.ndar
     return pair
 
 
-def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
+def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> Strips:
     """Strip outlines for every hinge (see the module docstring), checked:
-    each strip crosses its seam, has a pad on both tiles, and keeps the radial
-    clearance from every other strip on the same face and from other tiles."""
+    each strip crosses its seam, has a pad on both tiles, and (unless ``check`` is False: the
+    outlines only, to choose faces by) keeps the radial clearance from every other strip on
+    the same face and from other tiles."""
     H = plan.n_hinges
     d = plan.shrink_mm
     w, reach = printer.strip_width_mm, printer.strip_reach_mm
@@ -299,7 +332,8 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
             f"({shapely.area(pads[h]).min():.2f} mm² < {min_pad:.2f} mm²); the tile corners are too narrow "
             "for the strip width"
         )
-    _check_strip_clearance(plan, outline, printer)
+    if check:
+        _check_strip_clearance(plan, outline, printer)
     # the pocket overshoots the tile edges (into the gap, never near another
     # tile) so no micrometre sliver of tile survives where strip and tile edges
     # meet. It is the band cut by the pair region grown by the overshoot, so its
@@ -321,14 +355,9 @@ def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Print
     tol = 1e-9
     A, B = plan.hinge_tiles.T
     for face in (True, False):
-        idx = np.flatnonzero(plan.top == face)
-        if len(idx) < 2:
-            continue
-        tree = shapely.STRtree(outline[idx])
-        i, j = tree.query(outline[idx], predicate="dwithin", distance=c - tol)
-        sel = i < j
-        if sel.any():
-            h, k = idx[i[sel][0]], idx[j[sel][0]]
+        close = _close_strips(outline, np.flatnonzero(plan.top == face), c)
+        if len(close):
+            h, k = close[0]
             dist = shapely.distance(outline[h], outline[k])
             raise FabricationError(
                 f"strips of hinges {h} and {k} on the {'top' if face else 'bottom'} face are "
