@@ -62,8 +62,8 @@ def test_standard_kagome_prints_verified_at_the_auto_scale(printed):
     # three hinges at a point: the manifest lists the other two
     trio = [h for h in man["hinges"] if isinstance(h["coincides_with"], list)]
     assert len(trio) == 9 and all(len(h["coincides_with"]) == 2 for h in trio)
-    assert notes == ["note: 6 pair(s) of coincident hinges share a face (a closed state joins three at a point); "
-                     "their strips keep the clearance as printed"]
+    assert notes == ["note: 6 pair(s) of coincident hinges share a face (more meet at a point than two faces "
+                     "separate); their strips keep the clearance as printed"]
 
 
 def test_the_verifier_rejects_printed_kagome_tiles_of_another_size(printed, k44):

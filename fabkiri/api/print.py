@@ -107,8 +107,8 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
         say(f"warning: {w}")
     job, plan = _build_job(pattern, style, options.state, printer, scale)
     if job.plan.shared_faces:  # three hinges at a point (kagome): two faces cannot keep them all apart
-        say(f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (a closed state joins "
-            "three at a point); their strips keep the clearance as printed")
+        say(f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
+            "than two faces separate); their strips keep the clearance as printed")
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
     tiles = None if realised.job.style == "strips" else mesh.check_printed_tiles(realised)

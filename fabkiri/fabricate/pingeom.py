@@ -37,6 +37,7 @@ def kind_refusal(pattern: Pattern) -> str:
                 f"joins {kind.hole_arity // 2} at a point; use --style strips or tiles-and-strips")
     return ""
 
+
 @dataclass(frozen=True)
 class PinLevels:
     """Z layout of the four ear levels of a pinned print (mm)."""

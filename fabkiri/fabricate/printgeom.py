@@ -55,7 +55,8 @@ def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_
 
 
 def closed_corners(pattern: Pattern, state: int) -> np.ndarray:
-    """Per-tile corners ``(T, n, 2)`` (``n`` the tile arity) of closed state ``state`` (stored, or computed and checked)."""
+    """Per-tile corners ``(T, n, 2)`` (``n`` the tile arity) of closed state ``state`` (stored, or
+    computed and checked)."""
     if state not in (1, 2):
         raise FabricationError(f"closed state must be 1 or 2, not {state!r}")
     if state in pattern.contracted:
