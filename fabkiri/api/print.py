@@ -23,7 +23,6 @@ from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import load_printer
 from ..pattern.model import Pattern
-from ..pattern.tessellation import DEFAULT_KIND
 from .cut import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
@@ -92,9 +91,6 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
                   source: str = "pattern.json", notify: Callable[[str], None] | None = None) -> PrintOutcome:
     """Build, check and serialise the print of ``pattern``; ``stem`` names the files, ``source`` is
     the pattern file named in the manifests; ``notify`` receives each warning or note as it arises."""
-    if pattern.kind != DEFAULT_KIND:
-        # the printed hinges (strips, pins) are quad-only; cut reads the tile arity (docs/kagome.md)
-        raise InputError(f"print makes quad patterns only, not {pattern.kind} patterns yet")
     messages: list[str] = []
 
     def say(text: str) -> None:
@@ -111,6 +107,9 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
                          states=claimed_states(pattern, state)).warnings:  # as `cut`, printer tolerance
         say(f"warning: {w}")
     job, plan = _build_job(pattern, style, state, printer, scale)
+    if job.plan.shared_faces:  # three hinges at a point (kagome): two faces cannot keep them all apart
+        say(f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
+            "than two faces separate); their strips keep the clearance as printed")
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
     tiles = None if realised.job.style == "strips" else mesh.check_printed_tiles(realised)

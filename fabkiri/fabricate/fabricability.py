@@ -359,6 +359,8 @@ def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: floa
     from ..pattern.residuals import hinge_sums
     from . import pingeom
 
+    if why := pingeom.kind_refusal(pattern):
+        return PrintMinimum(None, None, why)
     try:
         g = pingeom.pin_geometry(printer, pingeom.pin_levels(printer))
     except FabricationError as exc:

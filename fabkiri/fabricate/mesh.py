@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import FabricationError
 from ..pattern.model import Pattern
+from . import printgeom
 from .meshchecks import MeshReport, TileCheck, check_meshes, check_printed_tiles, read_back_files
 from .printers import Printer
 from .printjob import STYLES, PrintJob, Realised, print_style, scaled
@@ -154,7 +155,7 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
                            "load": m} for z, k, m in job.layer_changes],
         "beds": [[b.name for b in bed] for bed in job.beds],
         "hinges": [{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
-                    "coincides_with": int(plan.partner[h]) if plan.partner[h] >= 0 else None,
+                    "coincides_with": _coinciding(plan.partner, h),
                     "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
                    for h in range(plan.n_hinges)],
         "files": sorted(files),
@@ -171,3 +172,10 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
                      "geometry_mm": dict(job.pins.geometry.__dict__),
                      "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}}
     return json.dumps(d, indent=1, sort_keys=False) + "\n"
+
+
+def _coinciding(partner, h: int):
+    """The hinge at hinge ``h``'s point in the printed state (None if alone), or the list of them where
+    more than two meet (three at a kagome merge corner)."""
+    others = printgeom.coinciding(partner, h)
+    return (others[0] if len(others) == 1 else others) if others else None

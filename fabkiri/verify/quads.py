@@ -63,7 +63,8 @@ def _on_cut_edges(parts: np.ndarray, material: shapely.Geometry, arity: int = 4)
     order = np.lexsort((np.arange(len(pi))[ok], -elen[ok], which[ok], pi[ok]))
     idx = np.flatnonzero(ok)[order]
     key = pi[idx] * arity + which[idx]
-    first = np.r_[True, key[1:] != key[:-1]]
+    first = np.ones(len(key), bool)  # no pair at all leaves every part as it is
+    first[1:] = key[1:] != key[:-1]
     best = np.full((K, arity), -1)
     best.reshape(-1)[key[first]] = idx[first]
     full = (best >= 0).all(axis=1)

@@ -130,6 +130,8 @@ def pinned_scale_range(pattern: Pattern, state: int, printer: Printer, step: flo
 def pinned_advice(pattern: Pattern, state: int, printer: Printer, scale: float = 1.0) -> str:
     """Which ``--scale`` prints the pattern pinned on this printer (``scale``: the
     factor already applied to ``pattern``)."""
+    if pingeom.kind_refusal(pattern):
+        return "no scale changes that"
     try:
         rng = pinned_scale_range(pattern, state, printer)
     except FabricationError as exc:
