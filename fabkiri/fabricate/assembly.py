@@ -24,6 +24,7 @@ import numpy as np
 import shapely
 
 from ..pattern.model import Pattern
+from .hingekinds import HingeKind
 from .text import text_strokes_many, text_width
 
 MAP_MAX_PIECES = 3000  # above this the numbers are not legible on one picture; the manifest still lists them
@@ -53,20 +54,20 @@ def _corner_triangles(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: fl
     return np.stack([q, q + reach(q, q1) * (q1 - q), q + reach(q, q0) * (q0 - q)], 1)
 
 
-def tape_pieces(pattern: Pattern, Q: np.ndarray, sheet_of: np.ndarray, letters: list[str], kind: str,
+def tape_pieces(pattern: Pattern, Q: np.ndarray, sheet_of: np.ndarray, letters: list[str], kind: HingeKind,
                 frac: float, reach_mm: float) -> list[dict[str, Any]]:
     """One row per tape piece, numbered in join order (``Q``: placed tile corners on the sheets)."""
     top_ = pattern.topology
     A, B = top_.hinge_tiles.T
     cA, cB = top_.hinge_corner.T
-    if kind == "ligament" or top_.n_hinges == 0:
+    if kind.one_piece or top_.n_hinges == 0:
         return []
     face_top = np.array([f == "T" for f in letters])
     order = join_order(pattern, np.arange(top_.n_hinges), face_top)
     ta = _corner_triangles(Q, A, cA, frac, reach_mm)
     tb = _corner_triangles(Q, B, cB, frac, reach_mm)
     # tiles apart on the sheet (separate tiles, split sheets): the piece spans one corner pair, twice A's reach
-    apart = (sheet_of[A] != sheet_of[B]) | (kind == "separate")
+    apart = (sheet_of[A] != sheet_of[B]) | kind.cut_apart
     u = ta.mean(1) - tb.mean(1)
     u = u / np.maximum(np.linalg.norm(u, axis=1), 1e-12)[:, None]
     s = np.einsum("hkd,hd->hk", np.concatenate([ta, tb], 1), u)
@@ -79,7 +80,8 @@ def tape_pieces(pattern: Pattern, Q: np.ndarray, sheet_of: np.ndarray, letters: 
              "at_mm": where[h], "length_mm": length[h]} for n, h in enumerate(order.tolist(), 1)]
 
 
-def cut_bom(manifest: dict, pieces: list[dict], tile_area_mm2: float, n_hinges: int) -> dict[str, Any]:
+def cut_bom(manifest: dict, pieces: list[dict], tile_area_mm2: float, n_hinges: int,
+            kind: HingeKind) -> dict[str, Any]:
     sheets = manifest["sheets"]
     mat = manifest["material"]
     return {
@@ -90,25 +92,10 @@ def cut_bom(manifest: dict, pieces: list[dict], tile_area_mm2: float, n_hinges: 
         "tiles": len(manifest["tiles"]),
         "tape_pieces": len(pieces), "tape_length_mm": round(sum(p["length_mm"] for p in pieces), 3),
         "tape_top": sum(p["face"] == "T" for p in pieces), "tape_bottom": sum(p["face"] == "B" for p in pieces),
-        "ligaments": n_hinges if manifest["hinge"] == "ligament" else 0,
+        "ligaments": n_hinges if kind.one_piece else 0,
         "cut_length_mm": round(sum(s["cut_length_mm"] for s in sheets), 3),
         "cut_time_s": round(sum(s["cut_time_s"] for s in sheets), 1),
     }
-
-
-def assembly_steps(kind: str, n_top: int, n_bottom: int) -> list[str]:
-    if kind == "ligament":
-        return ["the sheet comes out as one piece: push out the tiles' holes and fold along the ligaments; "
-                "nothing to join"]
-    steps = [f"1. top face: lay the cut tiles as cut (engraved face up) and tape pieces 1-{n_top} in order, "
-             "each across its hinge corner from the face letter to the chord"]
-    if n_bottom:
-        steps.append(f"2. turn the whole piece over (left-right) and tape pieces {n_top + 1}-{n_top + n_bottom} "
-                     "on the bottom face the same way (the map's bottom panel is seen from above, through the sheet)")
-    if kind == "separate":
-        steps.insert(0, "0. place each tile by its ID next to its partners: a corner label '12T' joins this corner "
-                        "to tile 12 on the top face (B: bottom)")
-    return steps
 
 
 def _numbers(ax, pts: np.ndarray, texts: list[str], h: float, color: str) -> None:

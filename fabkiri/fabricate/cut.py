@@ -298,7 +298,7 @@ def _assembly(job: CutJob, files: dict[str, bytes]) -> list[dict]:
     from . import assembly as asm
 
     pattern, Q, sheet_of = job.pattern, job.Q, job.place.sheet
-    pieces = asm.tape_pieces(pattern, Q, sheet_of, job.faces.letters(), job.kind.name, MARK_CORNER_FRAC,
+    pieces = asm.tape_pieces(pattern, Q, sheet_of, job.faces.letters(), job.kind, MARK_CORNER_FRAC,
                              MARK_REACH_MM)
     if "png" in job.options.formats and 0 < len(pieces) <= asm.MAP_MAX_PIECES:
         by_sheet = [Q[sheet_of == s] for s in range(job.place.n_sheets)]

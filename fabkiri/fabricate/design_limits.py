@@ -11,17 +11,10 @@ import numpy as np
 
 from ..design.fabrication import FabricationLimits
 from ..errors import FabricationError, InputError
-from .fabricability import ligament_never, shrink_of
+from .hingekinds import hinge_kind
 from .materials import HINGE_KINDS, Material, load_material
 from .printers import Printer, load_printer
 
-# how far apart two hinges of one tile must be, per hinge kind (mm): a tape piece reaches about half a
-# web along each edge from its corner; a ligament strip is its width plus a web from the next one
-HINGE_ALLOWANCE = {
-    "tape": lambda m: m.min_web_mm,
-    "ligament": lambda m: m.ligament_width_mm + m.min_web_mm,
-    "separate": lambda m: 0.0,
-}
 PAD_MARGIN_DEG = 5.0  # above the corner angle at which a strip pad reaches the printer's minimum area
 
 
@@ -30,14 +23,12 @@ def material_limits(material: Material, kind: str | None = None) -> dict:
     kind = kind or material.hinge
     if kind not in HINGE_KINDS:
         raise FabricationError(f"hinge kind must be one of {', '.join(HINGE_KINDS)}, got {kind!r}")
-    if kind == "ligament" and ligament_never(material):
-        raise FabricationError(f"{material.name} cannot be cut as a ligament sheet: {ligament_never(material)}")
-    shrink = shrink_of(material, kind)
-    # a ligament strip's root reaches into the shrunk tile: the tile holds it and a web (cut itself asks a web;
-    # at a web alone the layout verifier's four-corner recovery failed on 0.46 mm pp tiles, 16x16 circle)
-    width = material.min_web_mm + (material.ligament_width_mm if kind == "ligament" else 0.0)
-    return {"min_width_mm": width, "shrink_mm": shrink, "min_edge_mm": material.min_web_mm if shrink else 0.0,
-            "hinge_spacing_mm": HINGE_ALLOWANCE[kind](material)}
+    hk = hinge_kind(kind)
+    if hk.never(material):
+        raise FabricationError(f"{material.name} cannot be cut as a {kind} sheet: {hk.never(material)}")
+    shrink = hk.shrink(material)
+    return {"min_width_mm": hk.min_width(material), "shrink_mm": shrink,
+            "min_edge_mm": material.min_web_mm if shrink else 0.0, "hinge_spacing_mm": hk.hinge_spacing(material)}
 
 
 def printer_limits(printer: Printer, style: str) -> dict:

@@ -21,6 +21,7 @@ import shapely.errors
 from ..errors import CheckFailed, FabricationError
 from ..pattern import fabricability as fab
 from ..pattern.model import Pattern
+from .hingekinds import hinge_kind
 from .materials import HINGE_KINDS, Material, available, load_material
 from .printers import Printer, available_printers, load_printer
 
@@ -49,7 +50,7 @@ def floor_sig(x: float, digits: int = DIGITS) -> float:
 
 def shrink_of(material: Material, kind: str) -> float:
     """How far ``cut`` shrinks every tile for this hinge kind (mm)."""
-    return 0.5 * material.gap_mm if kind == "ligament" else 0.0
+    return hinge_kind(kind).shrink(material)
 
 
 def closed_span(corners: np.ndarray) -> float:
@@ -87,10 +88,9 @@ def ligament_never(material: Material) -> str:
 
 def cut_minimum(corners: np.ndarray, material: Material, kind: str) -> CutMinimum:
     """Smallest scale of the closed state ``corners`` (pattern units) that ``cut`` accepts for ``kind``."""
-    if kind == "ligament":
-        why = ligament_never(material)
-        if why:
-            return CutMinimum(None, None, -1, why)
+    why = hinge_kind(kind).never(material)
+    if why:
+        return CutMinimum(None, None, -1, why)
     shrink = shrink_of(material, kind)
     s, t, limit = fab.min_scale(corners, material.min_web_mm, shrink, min_edge=material.min_web_mm if shrink else 0.0)
     if not np.isfinite(s):
@@ -102,17 +102,18 @@ def cut_minimum(corners: np.ndarray, material: Material, kind: str) -> CutMinimu
 def check_webs(regions: np.ndarray, material: Material, kind: str, corners: np.ndarray, scale: float) -> None:
     """``cut``'s web check: every tile that stays is at least the minimum web wide (thinnest width)."""
     w = fab.widths(regions)
-    if kind == "ligament":  # a shrunk tile's edge shorter than a web is a sliver corner: as thin as it
+    shrinks = hinge_kind(kind).shrinks
+    if shrinks:  # a shrunk tile's edge shorter than a web is a sliver corner: as thin as it
         w = np.minimum(w, fab.shrunk_edges(regions, 0.0).min(-1))
     bad = np.flatnonzero(w < material.min_web_mm - fab.WEB_SLACK_MM)
     if len(bad):
         t = int(bad[np.argmin(w[bad])])
-        what = f" once shrunk by gap/2 ({shrink_of(material, kind):g} mm)" if kind == "ligament" else ""
+        what = f" once shrunk by gap/2 ({shrink_of(material, kind):g} mm)" if shrinks else ""
         need = cut_minimum(corners / scale, material, kind)
         raise CheckFailed(
             f"tile {t} is {w[t]:.3g} mm wide at its thinnest{what} at scale {scale:.4g}, thinner than the minimum "
             f"web {material.min_web_mm:g} mm of {material.name} ({len(bad)} tile(s) too thin); " + need.advice()
-            + ("" if kind != "ligament" else "; or use a smaller --gap"))
+            + ("; or use a smaller --gap" if shrinks else ""))
 
 
 def lost_edge(corners: np.ndarray, material: Material, kind: str, scale: float, tile: int) -> CheckFailed:

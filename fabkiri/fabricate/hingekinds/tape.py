@@ -7,6 +7,7 @@ B's a chord where the tape ends.
 
 from __future__ import annotations
 
+import numpy as np
 import shapely
 
 from .. import hinges as hg
@@ -32,6 +33,15 @@ class Tape(HingeKind):
         for p in rings:
             sd.add("CUT", p, True)
         return []
+
+    def recover(self, sheet) -> tuple[np.ndarray, np.ndarray]:
+        # the faces of the noded linework, less the reference square
+        sq = sheet.square
+        lines = [shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in sheet.cut
+                 if not (c and sq is not None and p.shape == sq.shape and np.allclose(p, sq, atol=1e-9))]
+        noded = shapely.union_all(lines) if lines else shapely.GeometryCollection()
+        pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
+        return pieces, np.array([])
 
 
 TAPE = register(Tape())
