@@ -82,3 +82,30 @@ def test_every_closed_state_check_has_a_stable_id(square):
         ids = [c.id for c in checks]
         assert all(i.startswith(state_check_id(s, "")) and len(i) > len(f"state{s}.") for i in ids), ids
         assert len(set(ids)) == len(ids)
+
+
+def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
+    """The print front door asks the style (not its name) for its extra checks, whether its tiles
+    have their own thickness and whether --marks applies: a copy of strips with a failing check of
+    its own is refused with that check's words, after saying its notes."""
+    from dataclasses import replace
+
+    from fabkiri.fabricate import printjob
+    from fabkiri.fabricate.styles import strips as strips_style
+
+    monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
+
+    def build(pattern, state, pr):
+        return replace(strips_style.build(pattern, state, pr), style="fussy-strips")
+
+    def checks(pattern, r, rep):
+        return printjob.StyleChecks(problems=[f"fussy: {r.job.style} {r.job.plan.n_hinges} hinges"], notes=["note: fussy"])
+
+    printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances, checks=checks))
+    notes = []
+    with pytest.raises(CheckFailed, match=r"^fussy: fussy-strips 12 hinges; nothing written$"):
+        print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0), notify=notes.append)
+    assert notes == ["note: fussy"]
+    printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances))
+    with pytest.raises(InputError, match="--marks engraves strip pads"):  # laser_marks is strips' own
+        print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0, marks=True))

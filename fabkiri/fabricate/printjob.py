@@ -93,8 +93,13 @@ class PrintStyle:
     :class:`~.meshchecks.MeshReport`. ``tiles`` gives the solid of the printed
     tiles, the height of the section the tile check takes, and what that check
     masks out (``None``: the style prints no tiles). ``advise`` adds to a refusal
-    what would make the job print. With ``body_per_material`` each bed holds one
-    body per material (one STL each; their overlap is their intersection).
+    what would make the job print (then ``build`` names the scales itself). With
+    ``body_per_material`` each bed holds one body per material (one STL each; their
+    overlap is their intersection). ``checks`` are the style's own checks of a
+    realised job (pinned: the sweep along the deployment path; tiles-and-strips: the
+    layout verifier on the printed top faces). ``own_tile_thickness``: the tiles have
+    their own preset thickness, which ``--tile-thickness`` sets. ``laser_marks``: its
+    tiles may be laser-cut with the pads engraved (``print --marks``).
     """
 
     name: str
@@ -103,6 +108,19 @@ class PrintStyle:
     tiles: Callable[..., tuple[Any, float, Any]] | None = None
     advise: Callable[[Pattern, int, Printer, float], str] | None = None
     body_per_material: bool = False
+    checks: Callable[[Pattern, Realised, MeshReport], StyleChecks] | None = None
+    own_tile_thickness: bool = False
+    laser_marks: bool = False
+
+
+@dataclass
+class StyleChecks:
+    """What a print style's own checks found: ``problems`` refuse the print (one line each),
+    ``verifier`` is the layout verifier's report if one ran, ``notes`` are said to the user."""
+
+    problems: list[str] = field(default_factory=list)
+    verifier: Any = None
+    notes: list[str] = field(default_factory=list)
 
 
 # built-in styles, imported when first asked for (their modules call register_style())

@@ -125,4 +125,4 @@ def clearances(r: Realised, rep: MeshReport) -> None:
                                     f"under the part spacing {pr.part_spacing_mm:g} mm")
 
 
-STRIPS = register_style(PrintStyle("strips", build, clearances))
+STRIPS = register_style(PrintStyle("strips", build, clearances, laser_marks=True))
