@@ -689,3 +689,21 @@ def test_cut_manifest_round_trips_and_is_checked_on_read():
         CutManifest.from_dict({**r.manifest, "mitre_limit": 0.5}, "m")
     with pytest.raises(VerifyError, match=r"malformed manifest \(tiles/0: 'tile' is a required property"):
         CutManifest.from_dict({**r.manifest, "tiles": [{"sheet": 1}]}, "m")
+
+
+def test_a_sheet_format_is_one_registered_strategy(monkeypatch):
+    """A format registered from outside (as a new format's module would) is written per sheet by
+    ``cut_pattern`` when the options name it, beside the built-in ones and in the same order; an
+    unknown format is refused naming the known ones."""
+    from fabkiri.fabricate import sheetformats as sf
+
+    monkeypatch.setattr(sf._SHEET_FORMATS, "members", dict(sf._SHEET_FORMATS.members))
+    sf.register_sheet_format(sf.SheetFormat(
+        "txt", ".txt", True, lambda job, sheets: f"{sheets[0].count('CUT')} cuts\n".encode()))
+    p = std(6, 6, size=20.0)  # 120 x 120 mm closed: two sheets or more
+    r = cut(p, formats=("dxf", "txt"), sheet=(90.0, 80.0), reference_mm=0.0)
+    names = list(r.files)
+    assert len(r.sheets) > 1 and names == [f"p-sheet{sd.index}{x}" for sd in r.sheets for x in (".dxf", ".txt")]
+    assert all(r.files[f"p-sheet{sd.index}.txt"] == f"{sd.count('CUT')} cuts\n".encode() for sd in r.sheets)
+    with pytest.raises(InputError, match=r"unknown format 'pdf' \(known: dxf, svg, png, txt\)"):
+        cut(p, formats=("pdf",))
