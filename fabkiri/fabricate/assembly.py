@@ -235,15 +235,15 @@ def _long_side(poly) -> float:
 def add_to_print(manifest_text: str, pattern: Pattern, r, title: str) -> tuple[str, dict[str, bytes]]:
     """The print manifest with ``bill_of_materials`` (and, for hand-glued strips, ``assembly_pieces`` and
     ``assembly.png``) added; the other keys stay as they are."""
-    import json
+    from ..verify.printmanifest import PrintManifest
 
-    d = json.loads(manifest_text)
+    m = PrintManifest.from_json(manifest_text)
     pieces, shapes = print_pieces(pattern, r)
     files: dict[str, bytes] = {}
     if pieces:
         files["assembly.png"] = map_png([r.job.plan.corners], pieces, shapes, title,
                                         face_names=("top-face strips", "bottom-face strips, seen from above"))
-        d["files"] = sorted(set(d.get("files", [])) | set(files))
-    d["assembly_pieces"] = pieces
-    d["bill_of_materials"] = print_assembly(r)
-    return json.dumps(d, indent=1, sort_keys=False) + "\n", files
+        m.files = sorted(set(m.files) | set(files))
+    m.assembly_pieces = pieces
+    m.bill_of_materials = print_assembly(r)
+    return m.to_json(), files
