@@ -107,7 +107,7 @@ def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
         print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0), notify=notes.append)
     assert notes == ["note: fussy"]
     printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances))
-    with pytest.raises(InputError, match="--marks engraves strip pads"):  # laser_marks is strips' own
+    with pytest.raises(InputError, match="--marks engraves strip pads"):  # loose_strips is strips' own
         print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0, marks=True))
 
 

@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import CheckFailed
+from ..errors import CheckFailed, InputError
 from ..mechanics.contract import adopt_state_labels, contract
 from ..mechanics.info import DEFAULT_TOL
 from ..pattern.formats import format_of, pattern_format
@@ -21,6 +21,8 @@ from ..pattern.model import Pattern
 def load_pattern(path: str, scale: float = 1.0, *, fallback: str = "json") -> Pattern:
     """The pattern in ``path``: its format chosen by suffix (a folder: PyKirigami), else ``fallback``."""
     fmt = format_of(path, fallback)
+    if fmt.read is None:
+        raise InputError(f"{path}: fabkiri writes {fmt.name} files but cannot read them")
     pattern = fmt.read(Path(path), scale)
     return adopt_state_labels(pattern) if fmt.adopt_labels else pattern
 
@@ -50,6 +52,8 @@ def export_pattern(pattern: Pattern, fmt_name: str, state: str = "deployed", *, 
     fabrication gate (closed states are what gets fabricated); its warnings go to ``notify``.
     """
     fmt = pattern_format(fmt_name, writable=True)
+    if fmt.write is None:  # (pattern_format refused it already)
+        raise InputError(f"fabkiri cannot write {fmt.name} files")
     need = fmt.closed_states(state)
     if need:
         from ..fabricate.gate import (  # lazy: `design` imports the CLI's readers

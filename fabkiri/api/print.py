@@ -221,7 +221,7 @@ def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -
     from ..fabricate.materials import load_material
     from ..fabricate.readback import verify_result
 
-    if not print_style(job.style).laser_marks:
+    if not print_style(job.style).loose_strips:
         raise InputError("--marks engraves strip pads on laser-cut tiles: it needs --style strips")
     res, n = marked_cut(pattern, job.state, job.strips, job.plan.corners, load_material(material), stem, source)
     rb = verify_result(pattern, res)

@@ -29,6 +29,8 @@ from ..api.designers import design_by_kind, design_kinds
 from ..design import conformance as conf
 from ..design.initial import INITS
 from ..errors import InputError
+from ..fabricate.fabricability import PRINT_STYLES
+from ..fabricate.materials import HINGE_KINDS
 from ..fileio import check_output_file
 from .pattern_cmds import add_i_know, parse_tiles
 
@@ -128,11 +130,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--material", metavar="NAME|FILE.json",
                    help="laser material preset: every tile at least its minimum web wide at its thinnest (shrunk by "
                         "gap/2 for ligaments), hinges its allowance apart")
-    g.add_argument("--hinge", choices=["tape", "ligament", "separate"], help="hinge kind (default: the material's)")
+    g.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
     g.add_argument("--printer", metavar="NAME|FILE.json",
                    help="printer preset: tiles two nozzles wide once shrunk by gap/2, hinge corners wide enough for "
                         "a strip pad (or pivots far enough apart for pins)")
-    g.add_argument("--style", choices=["tiles-and-strips", "strips", "pinned"], help="print style (default "
+    g.add_argument("--style", choices=PRINT_STYLES, help="print style (default "
                    "tiles-and-strips)")
     g.add_argument("--min-feature", type=_size, metavar="MM", help="every tile at least this wide at its thinnest")
     g.add_argument("--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide")

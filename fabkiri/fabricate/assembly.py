@@ -25,6 +25,7 @@ import shapely
 
 from ..pattern.model import Pattern
 from .hingekinds import HingeKind
+from .printjob import print_style
 from .text import text_strokes_many, text_width
 
 MAP_MAX_PIECES = 3000  # above this the numbers are not legible on one picture; the manifest still lists them
@@ -194,10 +195,11 @@ def print_assembly(r) -> dict[str, Any]:
                     "mass_g": round(v / 1000 * DENSITY_G_CM3.get(m.upper(), 1.24), 2),
                     "density_g_cm3": DENSITY_G_CM3.get(m.upper(), 1.24)} for m, v in per.items()}
     n_top = int(plan.top.sum())
+    strips = print_style(job.style).strip_hinges
     out = {"style": job.style, "tiles": len(plan.tiles), "hinges": plan.n_hinges,
-           "strips": 0 if job.style == "pinned" else plan.n_hinges,
-           "strips_top": 0 if job.style == "pinned" else n_top,
-           "strips_bottom": 0 if job.style == "pinned" else plan.n_hinges - n_top,
+           "strips": plan.n_hinges if strips else 0,
+           "strips_top": n_top if strips else 0,
+           "strips_bottom": plan.n_hinges - n_top if strips else 0,
            "beds": len(job.beds), "bodies": bodies, "filament": filament,
            "filament_note": f"{FILAMENT_DIAMETER_MM} mm filament, typical densities; solid volumes (the "
                             "slicer's infill and supports change them)"}
@@ -208,7 +210,7 @@ def print_pieces(pattern: Pattern, r) -> tuple[list[dict], dict[int, np.ndarray]
     """Strips numbered in join order (strips style: glued by hand) with their outlines on the plan."""
     job = r.job
     plan = job.plan
-    if job.style != "strips" or job.strips is None:  # other styles print their hinges in place
+    if not print_style(job.style).loose_strips or job.strips is None:  # other styles print their hinges in place
         return [], {}
     H = plan.n_hinges
     order = join_order(pattern, np.arange(H), plan.top)

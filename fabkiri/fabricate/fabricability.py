@@ -24,6 +24,7 @@ from ..pattern.model import Pattern
 from .hingekinds import hinge_kind
 from .materials import HINGE_KINDS, Material, available, load_material
 from .printers import Printer, available_printers, load_printer
+from .printjob import print_style
 
 DIGITS = 4  # stated minima are rounded up to this many significant digits (so the stated value passes)
 BISECT_RTOL = 1e-3  # print minimum: the bracket is this tight before the upper end is stated
@@ -187,7 +188,7 @@ def _closes(pattern: Pattern) -> bool:
 
 def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer,
                corners: np.ndarray | None = None) -> float | None:
-    if style == "strips":
+    if print_style(style).tiles is None:  # no tiles printed (strips): the bed does not bound the pattern
         return None
     from .printgeom import closed_corners
 

@@ -108,7 +108,7 @@ def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
         if preview:
             files[f"{stem}{suffix}.png"] = preview_png(bed, r.manifolds[k - 1], job.printer,
                                                        f"{stem}{suffix} ({job.style})")
-        if job.style == "tiles-and-strips":
+        if print_style(job.style).body_per_material:
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
         else:  # disjoint bodies: their concatenation is still a closed 2-manifold
@@ -147,7 +147,7 @@ def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name
     m = PrintManifest(
         pattern=pattern_name, style=job.style, state=job.state, printer=job.printer.to_dict(),
         shift_mm=[round(float(v), 6) for v in job.shift],
-        layout=job.layout if job.style == "tiles-and-strips" else None,
+        layout=job.layout if print_style(job.style).has_layout else None,
         layer_changes=[{"print_z_mm": round(z, 6), "gcode": "M600" if k == "colour-change" else "M601",
                         "load": load} for z, k, load in job.layer_changes],
         beds=[[b.name for b in bed] for bed in job.beds],

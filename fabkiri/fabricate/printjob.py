@@ -98,8 +98,13 @@ class PrintStyle:
     overlap is their intersection). ``checks`` are the style's own checks of a
     realised job (pinned: the sweep along the deployment path; tiles-and-strips: the
     layout verifier on the printed top faces). ``own_tile_thickness``: the tiles have
-    their own preset thickness, which ``--tile-thickness`` sets. ``laser_marks``: its
-    tiles may be laser-cut with the pads engraved (``print --marks``).
+    their own preset thickness, which ``--tile-thickness`` sets. ``loose_strips``: the
+    strips are printed on their own and glued on by hand (assembly pieces and map; the
+    tiles may be laser-cut with the pads engraved, ``print --marks``). ``strip_hinges``:
+    the hinges are printed strips (the bill of materials counts them; pinned: pins).
+    ``has_layout``: the job's ``layout`` (recessed or stacked strips) is the style's and
+    goes in the manifest. ``limits(printer)``: what ``design --printer --style`` asks of
+    every tile for this style's hinges (mm, as :func:`~.design_limits.printer_limits`).
     """
 
     name: str
@@ -110,7 +115,10 @@ class PrintStyle:
     body_per_material: bool = False
     checks: Callable[[Pattern, Realised, MeshReport], StyleChecks] | None = None
     own_tile_thickness: bool = False
-    laser_marks: bool = False
+    loose_strips: bool = False
+    strip_hinges: bool = True
+    has_layout: bool = False
+    limits: Callable[[Printer], dict] | None = None
 
 
 @dataclass

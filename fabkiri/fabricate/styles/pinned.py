@@ -273,5 +273,12 @@ def pinned_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks
     return out
 
 
+def pin_limits(printer: Printer) -> dict:
+    """What pins ask of the tiles (``design --style pinned``): pivots far enough apart for two ears."""
+    hollow = printer.pin.ear_radius_mm + printer.radial_clearance_mm
+    return {"hinge_spacing_mm": 2.0 * hollow + 2.0 * printer.nozzle_mm}
+
+
 PINNED = register_style(PrintStyle("pinned", build, clearances, tiles=tiles, advise=pinned_advice,
-                                   checks=pinned_checks, own_tile_thickness=True))
+                                   checks=pinned_checks, own_tile_thickness=True, strip_hinges=False,
+                                   limits=pin_limits))

@@ -16,6 +16,7 @@ from shapely.geometry import Polygon
 from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import printgeom
+from ..design_limits import strip_limits
 from ..printers import Printer
 from ..printjob import PrintJob, PrintStyle, Realised, register_style
 from ..solid import Body, Prism
@@ -125,4 +126,4 @@ def clearances(r: Realised, rep: MeshReport) -> None:
                                     f"under the part spacing {pr.part_spacing_mm:g} mm")
 
 
-STRIPS = register_style(PrintStyle("strips", build, clearances, laser_marks=True))
+STRIPS = register_style(PrintStyle("strips", build, clearances, loose_strips=True, limits=strip_limits))

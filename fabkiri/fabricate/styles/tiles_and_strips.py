@@ -10,6 +10,7 @@ import shapely
 from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import printgeom
+from ..design_limits import strip_limits
 from ..printers import Printer
 from ..printjob import (
     PrintJob,
@@ -168,4 +169,5 @@ def _reassembly(check_id: str) -> bool:
 
 
 TILES_AND_STRIPS = register_style(PrintStyle("tiles-and-strips", build, clearances, tiles=tiles,
-                                             body_per_material=True, checks=layout_checks))
+                                             body_per_material=True, checks=layout_checks, has_layout=True,
+                                             limits=strip_limits))
