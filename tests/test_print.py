@@ -883,6 +883,13 @@ def test_what_a_print_style_decides_is_asked_of_the_style(printer, monkeypatch):
     assert fb._bed_scale(pat, "tiles-and-strips", 1, printer) > 0 and fb._bed_scale(pat, "no-tiles", 1, printer) is None
     r = mesh.realise_job(mesh.build_job(pat, "one-stl", 1, printer))
     assert [n for n in mesh.job_files(r, "sq", preview=False) if n.endswith(".stl")] == ["sq.stl"]
+    # --scale auto sizes a style by its plan rule: a strips copy with the pins' rule is sized as pinned
+    printjob.register_style(replace(strips_, name="pin-plan", plan=pinned_.plan))
+    printjob.register_style(replace(strips_, name="no-plan", plan=None))
+    assert fb.print_bound(pat, "pin-plan", printer) == fb.print_bound(pat, "pinned", printer)
+    assert fb.print_bound(pat, "strips", printer) != fb.print_bound(pat, "pinned", printer)
+    with pytest.raises(FabricationError, match="^the no-plan print style has no plan rule"):
+        fb.print_minimum(pat, "no-plan", printer)
 
 
 def test_every_hinge_keeps_its_bridge_where_a_bottom_strip_lies_under_a_top_strip(tmp_path, run_cli):

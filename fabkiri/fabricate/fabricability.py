@@ -12,7 +12,9 @@ scale is found by bisection on those very checks (:func:`print_minimum`), and th
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 import shapely
@@ -159,16 +161,13 @@ def scaled(pattern: Pattern, k: float) -> Pattern:
 
 def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> str:
     """Why the print plan of ``style`` is refused at this size ('' if accepted; the bed is not asked)."""
-    from . import pingeom, printgeom
+    from . import printgeom
 
     if not pattern.contracted and not _closes(pattern):
         return "the pattern does not close: nothing to hinge"
     try:
         plan = printgeom.closed_plan(pattern, state, printer)
-        if style == "pinned":
-            pingeom.pin_plan(pattern, plan, printer)
-        else:
-            printgeom.strip_outlines(plan, printer)
+        _rule(style).check(pattern, plan, printer)
     except FabricationError as exc:
         return str(exc)
     except shapely.errors.GEOSException as exc:  # seen once in a bisection (ellipse 16x16 rigid, prusa-mk4):
@@ -216,7 +215,8 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
     guess = print_bound(pattern, style, printer, state)
     if guess.min_scale is not None and MIN_GUESS < guess.min_scale < MAX_SCALE:  # bracket around the bound
         g = guess.min_scale
-        for k in ((g, g * (1 - GUESS_BRACKET)) if style != "pinned" else (g * (1 - 1e-9), g * (1 + GUESS_BRACKET))):
+        lower = _rule(style).bound_is_lower  # then bracket upwards from it
+        for k in ((g, g * (1 - GUESS_BRACKET)) if not lower else (g * (1 - 1e-9), g * (1 + GUESS_BRACKET))):
             if _plan_error(scaled(pattern, k), style, state, printer):
                 lo = k if lo is None else max(lo, k)
             else:
@@ -255,11 +255,16 @@ GUESS_BRACKET = 0.03  # the closed-form bound is within a few % of the plan chec
 
 def _plan_key(printer: Printer, style: str) -> tuple:
     """The preset fields the plan checks of ``style`` read (not the bed)."""
-    base = (printer.gap_mm, printer.radial_clearance_mm, printer.nozzle_mm)
-    if style == "pinned":
-        return base + (printer.pin.ear_radius_mm, printer.pin.pin_radius_mm, printer.pin.tile_thickness_mm,
-                       printer.axial_clearance_mm, printer.layer_mm, printer.tolerance_mm)
-    return base + (printer.strip_width_mm, printer.strip_reach_mm)
+    return (printer.gap_mm, printer.radial_clearance_mm, printer.nozzle_mm) + _rule(style).fields(printer)
+
+
+def _pin_fields(printer: Printer) -> tuple:
+    return (printer.pin.ear_radius_mm, printer.pin.pin_radius_mm, printer.pin.tile_thickness_mm,
+            printer.axial_clearance_mm, printer.layer_mm, printer.tolerance_mm)
+
+
+def _strip_fields(printer: Printer) -> tuple:
+    return (printer.strip_width_mm, printer.strip_reach_mm)
 
 
 def _closed(pattern: Pattern, state: int) -> np.ndarray | None:
@@ -295,8 +300,14 @@ def print_bound(pattern: Pattern, style: str, printer: Printer, state: int = 1,
     if len(pairs) and (face[pairs[:, 0]] == face[pairs[:, 1]]).any():
         return PrintMinimum(None, None, "hinges that coincide in a closed state cannot take opposite faces")
     s_shrink, t_shrink, _ = fab.min_scale(c, fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
-    if style == "pinned":
-        return _pin_bound(pattern, c, printer, s_shrink)
+    return _rule(style).bound(pattern, c, printer, s_shrink, state, face)
+
+
+def _strip_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float, state: int,
+                 face: np.ndarray) -> PrintMinimum:
+    """Strips: the tile shrink, same-face strip clearance and pad area scales (see :func:`print_bound`)."""
+    top_ = pattern.topology
+    d = 0.5 * printer.gap_mm
     ends = top_.fold(state).fold_corner_ends
     same = fab.same_face_pairs(top_.hinge_tiles, face, top_.n_tiles)
     clear = fab.strip_clearance_scales(c, top_.hinge_tiles, top_.hinge_corner, ends, same, d,
@@ -355,7 +366,8 @@ def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) 
     return float(hi.max())
 
 
-def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float) -> PrintMinimum:
+def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float, state: int = 1,
+               face: np.ndarray | None = None) -> PrintMinimum:
     """Pinned: the checks that need no geometry (ear levels, ring wall, rigid-deployable) and the pivot
     spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
     from ..pattern.residuals import hinge_sums
@@ -417,11 +429,12 @@ def summary(pattern: Pattern, prints=None) -> dict:
         p = load_printer(name)
         rows = pr.setdefault(p.name, {})
         for style in styles:
-            key = (style == "pinned", _plan_key(p, style))  # presets that differ only in the bed share a bound
+            # styles with one plan rule, and presets that differ only in the bed, share a bound
+            key = (_rule(style), _plan_key(p, style))
             if key not in memo:
-                memo[key] = print_bound(pattern, "tiles-and-strips" if style == "strips" else style, p, 1, c1)
+                memo[key] = print_bound(pattern, style, p, 1, c1)
             m = memo[key]
-            bed = None if style == "strips" else _bed_scale(pattern, style, 1, p, c1)
+            bed = _bed_scale(pattern, style, 1, p, c1)
             m = PrintMinimum(m.min_scale, None if bed is None else floor_sig(bed),
                              m.limit, m.exact)
             rows[style] = m.to_dict()
@@ -456,3 +469,41 @@ def summary_lines(s: dict) -> list[str]:
             cells.append(f"{pr}: " + ", ".join(part))
         lines.append("  print (--scale): " + "; ".join(cells))
     return lines
+
+
+@dataclass(frozen=True)
+class PlanRule:
+    """How ``--scale auto``, ``design`` and ``info`` size a print style (its ``PrintStyle.plan``):
+    ``check(pattern, plan, printer)`` raises :class:`FabricationError` where the plan is refused,
+    ``bound(pattern, corners, printer, s_shrink, state, face)`` is the smallest scale in closed form
+    (``bound_is_lower``: a lower bound, so the bisection brackets upwards from it) and ``fields(printer)``
+    the preset fields both read besides gap, radial clearance and nozzle."""
+
+    check: Callable[..., Any]
+    bound: Callable[..., PrintMinimum]
+    fields: Callable[[Printer], tuple]
+    bound_is_lower: bool = False
+
+
+def _strip_check(pattern: Pattern, plan, printer: Printer) -> None:
+    from . import printgeom
+
+    printgeom.strip_outlines(plan, printer)
+
+
+def _pin_check(pattern: Pattern, plan, printer: Printer) -> None:
+    from . import pingeom
+
+    pingeom.pin_plan(pattern, plan, printer)
+
+
+def _rule(style: str) -> PlanRule:
+    """The plan rule of ``style`` (``PrintStyle.plan``)."""
+    rule = print_style(style).plan
+    if rule is None:
+        raise FabricationError(f"the {style} print style has no plan rule: its smallest scale cannot be found")
+    return rule
+
+
+STRIP_PLAN = PlanRule(_strip_check, _strip_bound, _strip_fields)  # strips and tiles-and-strips
+PIN_PLAN = PlanRule(_pin_check, _pin_bound, _pin_fields, bound_is_lower=True)

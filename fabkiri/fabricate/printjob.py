@@ -21,6 +21,7 @@ from .solid import Body
 
 if TYPE_CHECKING:
     from ..pattern.model import Pattern
+    from .fabricability import PlanRule
     from .meshchecks import MeshReport
 
 
@@ -105,6 +106,8 @@ class PrintStyle:
     ``has_layout``: the job's ``layout`` (recessed or stacked strips) is the style's and
     goes in the manifest. ``limits(printer)``: what ``design --printer --style`` asks of
     every tile for this style's hinges (mm, as :func:`~.design_limits.printer_limits`).
+    ``plan``: how ``--scale auto``, ``design`` and ``info`` size it (:class:`~.fabricability.PlanRule`:
+    its plan check, closed-form bound and the preset fields they read).
     """
 
     name: str
@@ -119,6 +122,7 @@ class PrintStyle:
     strip_hinges: bool = True
     has_layout: bool = False
     limits: Callable[[Printer], dict] | None = None
+    plan: PlanRule | None = None
 
 
 @dataclass

@@ -17,6 +17,7 @@ import shapely
 from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import pingeom, printgeom
+from ..fabricability import PIN_PLAN
 from ..printers import Printer
 from ..printgeom import regular_polygon
 from ..printjob import (
@@ -281,4 +282,4 @@ def pin_limits(printer: Printer) -> dict:
 
 PINNED = register_style(PrintStyle("pinned", build, clearances, tiles=tiles, advise=pinned_advice,
                                    checks=pinned_checks, own_tile_thickness=True, strip_hinges=False,
-                                   limits=pin_limits))
+                                   limits=pin_limits, plan=PIN_PLAN))

@@ -11,6 +11,7 @@ from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import printgeom
 from ..design_limits import strip_limits
+from ..fabricability import STRIP_PLAN
 from ..printers import Printer
 from ..printjob import (
     PrintJob,
@@ -170,4 +171,4 @@ def _reassembly(check_id: str) -> bool:
 
 TILES_AND_STRIPS = register_style(PrintStyle("tiles-and-strips", build, clearances, tiles=tiles,
                                              body_per_material=True, checks=layout_checks, has_layout=True,
-                                             limits=strip_limits))
+                                             limits=strip_limits, plan=STRIP_PLAN))
