@@ -21,8 +21,8 @@ from .solid import Body
 
 if TYPE_CHECKING:
     from ..pattern.model import Pattern
-    from .fabricability import PlanRule
     from .meshchecks import MeshReport
+    from .planrules import PlanRule
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,7 +106,7 @@ class PrintStyle:
     ``has_layout``: the job's ``layout`` (recessed or stacked strips) is the style's and
     goes in the manifest. ``limits(printer)``: what ``design --printer --style`` asks of
     every tile for this style's hinges (mm, as :func:`~.design_limits.printer_limits`).
-    ``plan``: how ``--scale auto``, ``design`` and ``info`` size it (:class:`~.fabricability.PlanRule`:
+    ``plan``: how ``--scale auto``, ``design`` and ``info`` size it (:class:`~.planrules.PlanRule`:
     its plan check, closed-form bound and the preset fields they read).
     """
 

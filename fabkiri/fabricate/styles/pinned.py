@@ -17,7 +17,7 @@ import shapely
 from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import pingeom, printgeom
-from ..fabricability import PIN_PLAN
+from ..planrules import PIN_PLAN
 from ..printers import Printer
 from ..printgeom import regular_polygon
 from ..printjob import (

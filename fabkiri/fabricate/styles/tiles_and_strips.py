@@ -11,7 +11,7 @@ from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import printgeom
 from ..design_limits import strip_limits
-from ..fabricability import STRIP_PLAN
+from ..planrules import STRIP_PLAN
 from ..printers import Printer
 from ..printjob import (
     PrintJob,
