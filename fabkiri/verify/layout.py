@@ -344,7 +344,8 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
         why = "both tiles cut, hinge corners coincide on the sheet"
         if (cross & present).any():
             why += f" ({int((cross & present).sum())} hinges cross sheets)"
-    if _reads(al.hinge, "declared_hinges"):  # a hinge is there only where its feature is declared
+    how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
+    if how is not None and how.declared_hinges:  # a hinge is there only where its feature is declared
         listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
         h_idx = np.arange(len(A))
         split = np.isin(h_idx, list(al.cross_sheet)) & (found_on[A] != found_on[B])
@@ -368,6 +369,8 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
     from .physical import ligament_check, mark_status, tape_mark_check
 
     A, B = pattern.topology.hinge_tiles.T
+    how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
+    marks_kind = how is not None and how.tape_marks  # the kind's hinges carry tape marks
     if sheet_piece and have.any():
         shrink = al.tile_shrink if al.hinge != PLAIN else -(fitted or 0.0)
         kerf = al.kerf_offset if al.hinge != PLAIN else 0.0
@@ -385,7 +388,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
             if len(shapely.get_parts(material)) >= on.sum():
                 continue  # no piece joins two tiles: the ligaments are not in this file (e.g. printed top faces)
             rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
-    elif in_place and (al.hinge == PLAIN or _reads(al.hinge, "tape_marks")) and not sheet_piece and have.any():
+    elif in_place and (al.hinge == PLAIN or marks_kind) and not sheet_piece and have.any():
         marks = {}
         for sheet, f in files.items():
             m = read_cut_file(f, "ENGRAVE")
@@ -397,7 +400,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
         status = [mark_status(pattern, C, have, found_on, marks) for C in [cut_shapes, *labelings]]
         k = max(range(len(status)), key=lambda i: (status[i][1].sum(), -i))
         hs, marked, room = status[k]
-        if not len(hs) or not (_reads(al.hinge, "tape_marks") and al.labels) and marked.sum() < 0.5 * len(hs):
+        if not len(hs) or not (marks_kind and al.labels) and marked.sum() < 0.5 * len(hs):
             return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
         chk = tape_mark_check(hs, marked, room, g)
         if k:
@@ -458,9 +461,3 @@ def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
             raise VerifyError(f"{f}: sheet {k} listed in the manifest is missing")
         out[k] = f
     return out
-
-
-def _reads(hinge: str, what: str) -> bool:
-    """Whether the reading of ``hinge`` has the property ``what`` (no manifest, or an unread kind: no)."""
-    how = reading(hinge)
-    return how is not None and bool(getattr(how, what))
