@@ -11,6 +11,7 @@ the built-in table of :data:`_KINDS` (and, in :mod:`..materials`, the name in ``
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -65,7 +66,7 @@ class SheetCut:
 class SheetRead:
     """One written sheet as the read-back sees it, handed to :meth:`HingeKind.recover`."""
 
-    cut: list  # the CUT polylines as read, ``(points, closed)``
+    cut: Sequence[tuple[np.ndarray, bool]]  # the CUT polylines as read, ``(points, closed)``
     polys: np.ndarray  # a shapely polygon per closed CUT polyline
     is_ref: np.ndarray  # which closed polylines are the reference square
     square: np.ndarray | None  # the reference square's corners, if it is on this sheet
