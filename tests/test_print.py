@@ -864,6 +864,34 @@ def test_a_print_style_is_one_registered_strategy(printer, monkeypatch):
         mesh.check_printed_tiles(mesh.realise_job(job))
 
 
+def test_what_a_print_style_decides_is_asked_of_the_style(printer, monkeypatch):
+    """Design limits, the bed bound and the files per bed ask the style, never its name: a renamed
+    copy of a style behaves as the style, and a copy that changes one answer changes that one thing."""
+    from fabkiri.fabricate import design_limits, printjob
+    from fabkiri.fabricate import fabricability as fb
+
+    monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
+    strips_, pinned_ = printjob.print_style("strips"), printjob.print_style("pinned")
+    tas = printjob.print_style("tiles-and-strips")
+    printjob.register_style(replace(strips_, name="pin-limits", limits=pinned_.limits))
+    printjob.register_style(replace(tas, name="no-tiles", tiles=None))
+    printjob.register_style(replace(tas, name="one-stl", body_per_material=False,
+                                    build=lambda p, s, pr: replace(tas.build(p, s, pr), style="one-stl")))
+    assert design_limits.printer_limits(printer, "pin-limits") == design_limits.printer_limits(printer, "pinned")
+    assert design_limits.printer_limits(printer, "pin-limits") != design_limits.printer_limits(printer, "strips")
+    pat = with_contracted_states(standard_pattern(2, 2))
+    assert fb._bed_scale(pat, "tiles-and-strips", 1, printer) > 0 and fb._bed_scale(pat, "no-tiles", 1, printer) is None
+    r = mesh.realise_job(mesh.build_job(pat, "one-stl", 1, printer))
+    assert [n for n in mesh.job_files(r, "sq", preview=False) if n.endswith(".stl")] == ["sq.stl"]
+    # --scale auto sizes a style by its plan rule: a strips copy with the pins' rule is sized as pinned
+    printjob.register_style(replace(strips_, name="pin-plan", plan=pinned_.plan))
+    printjob.register_style(replace(strips_, name="no-plan", plan=None))
+    assert fb.print_bound(pat, "pin-plan", printer) == fb.print_bound(pat, "pinned", printer)
+    assert fb.print_bound(pat, "strips", printer) != fb.print_bound(pat, "pinned", printer)
+    with pytest.raises(FabricationError, match="^the no-plan print style has no plan rule"):
+        fb.print_minimum(pat, "no-plan", printer)
+
+
 def test_every_hinge_keeps_its_bridge_where_a_bottom_strip_lies_under_a_top_strip(tmp_path, run_cli):
     """Stacked tiles-and-strips: a bottom strip's share of the base sheet may lie, in plan, under the
     top strip of a neighbouring hinge. It is still that hinge's printed bridge. This 16x16 design for

@@ -12,7 +12,6 @@ tolerance is still returned (its best iterate, marked
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -30,10 +29,13 @@ from ..errors import InputError, SolveError
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
 from ..mechanics.contract import contract
-from ..pattern import geometry
 from ..pattern.fabricability import pal_bound
 from ..pattern.io import dumps
 from ..pattern.model import Pattern
+from ..pattern.tessellation import DEFAULT_KIND
+from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
+from .design_summary import summary_lines
+from .designers import register_designer
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
@@ -47,74 +49,6 @@ BIG_TILES = 32 * 32
 # a valid design whose least-squares fit misses by more than this fraction of the target size is retried
 # from the next guess and the closest valid fit kept (ellipse 16x16: rescaled 1.86 %, standard 0.08 %)
 RETRY_FIT_ABOVE = 5e-3
-
-
-def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
-    """``STATE:NAME|FILE``, ``STATE:rect`` or ``STATE:rect=RATIO``."""
-    m = re.fullmatch(r"\s*([12])\s*:\s*(.+?)\s*", text)
-    if not m:
-        raise InputError(f"--contracted-target expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}")
-    state, what = int(m.group(1)), m.group(2)
-    r = re.fullmatch(r"rect(?:=(.+))?", what)
-    if r:
-        ratio = None
-        if r.group(1) is not None:
-            try:
-                ratio = float(r.group(1))
-            except ValueError:
-                raise InputError(f"--contracted-target {text}: ratio {r.group(1)!r} is not a number") from None
-            if not (np.isfinite(ratio) and ratio > 0):
-                raise InputError(f"--contracted-target {text}: ratio must be positive")
-        return state, ("rect", ratio)
-    return state, load_target(what, size)
-
-
-def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
-    """Pairs of tiles that penetrate each other deeper than ``tol`` (mm).
-
-    The verifier's measure (:func:`fabkiri.verify.geom.overlap_depths`): the
-    separating-axis penetration depth for convex pairs, intersection area over
-    the mean edge otherwise. A length, so it compares with the closure
-    tolerance directly; an intersection area does not (a sliver along a shared
-    edge of a closed state grows with the edge length, and GEOS snapping adds
-    its own: a rigid 64x64 ellipse was rejected for 1.4e-9 mm² slivers whose
-    depth was 3.8e-10 tile sizes). A self-intersecting tile is the pair (t, t).
-    """
-    from ..verify.geom import overlap_depths
-
-    crossed = geometry.self_intersecting_tiles(corners)
-    valid = np.ones(len(corners), dtype=bool)
-    valid[crossed] = False
-    out = [(int(t), int(t)) for t in crossed]
-    i, j, depth = overlap_depths(corners)
-    bad = (depth > tol) & valid[i] & valid[j]
-    return out + list(zip(i[bad].tolist(), j[bad].tolist()))
-
-
-def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
-                       state: int) -> dict:
-    """Fit of the contracted state's outline (pattern-grid boundary) to its target, in mm.
-
-    The contracted tiles are rigidly aligned (proper Kabsch) to the closed grid
-    the solver fitted; the boundary grid vertices are then measured against the
-    target arcs.
-    """
-    from ..design.constraints import ClosedGrid, Stencils
-
-    st = Stencils.from_pattern(pattern)
-    g = ClosedGrid.build(st, state, 0)
-    V = g.n_vertices
-    pos = np.zeros((V, 2))
-    cnt = np.zeros(V)
-    np.add.at(pos, g.vertex.ravel(), corners.reshape(-1, 2))
-    np.add.at(cnt, g.vertex.ravel(), 1.0)
-    pos /= cnt[:, None]
-    theta, shift = geometry.kabsch(pos, grid_mm)
-    pos = geometry.rotate(pos, theta) + shift
-    d = target.signed_distance(pos[g.boundary], g.boundary_side)
-    return {"max_mm": float(np.abs(d).max()), "rms_mm": float(np.sqrt(np.mean(d * d))),
-            "max_rel_size": float(np.abs(d).max() / target.size), "points": int(len(d)),
-            "target": target.name}
 
 
 @dataclass
@@ -144,6 +78,7 @@ class PatternRequest:
     i_know: bool = False
     verbose: bool = False  # solver progress on stderr even for small solves
     quiet: bool = False  # no solver progress even for big solves (a sweep's workers)
+    kind: str = DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
 
 
 @dataclass
@@ -188,6 +123,10 @@ class DesignOutcome:
         atomic_write(output, dumps(self.pattern))
         if png is not None:
             png[0].write_bytes(png[1])
+
+    def summary(self, output) -> list[str]:
+        """The lines ``fabkiri design`` prints about the design written to ``output``."""
+        return summary_lines(output, self.report)
 
 
 def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None = None) -> DesignOutcome:
@@ -497,3 +436,6 @@ def _conformance(pattern: Pattern, result, contracted_states: dict, target: Targ
     for s, tgt in sorted(result.closed_targets.items()):
         measured[f"state_{s}"] = conf.closed(contracted_states[s], tgt)
     return measured, {k: conf.judge(c, shape_tol, tiles) for k, c in measured.items()}
+
+
+register_designer(DEFAULT_KIND, design_pattern)

@@ -36,14 +36,13 @@ from ..pattern.model import Pattern
 from .cut import CutResult
 from .drawing import LAYERS
 from .gcpause import gc_paused
-from .hinges import MITRE_LIMIT as hg_MITRE
+from .hingekinds import SheetRead, hinge_kind
 from .reread import Polylines, duplicate_segments, flat_polylines, read_dxf_checked, read_svg
 
 # one sheet's polylines per layer, as the DXF or the SVG read-back gives them
 SheetLayers = Mapping[str, Sequence[tuple[np.ndarray, bool]]] | Mapping[str | None, Polylines]
 
 AGREE_MM = 1e-6
-UNDO_MITRE = 1000.0  # undoing an outset at the acute notches where a strip meets a tile needs sharp mitres
 
 
 @dataclass
@@ -155,32 +154,9 @@ def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: 
                f"{int(is_ref.sum())} found, side {side:.6f} mm", side)
     on = np.flatnonzero(tile_sheet == k - 1)
     expected = shapely.polygons(Q[on])
-    off = man["kerf_offset_mm"]
-    # recover the pieces the laser leaves
-    if kind == "tape":
-        ref_sq = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
-        lines = [shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in cut
-                 if not (c and ref_sq is not None and p.shape == ref_sq.shape
-                         and np.allclose(p, ref_sq, atol=1e-9))]
-        noded = shapely.union_all(lines) if lines else shapely.GeometryCollection()
-        pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
-        holes = np.array([])
-    elif kind == "separate":
-        pieces = shapely.buffer(polys[~is_ref], -off, join_style="mitre", mitre_limit=hg_MITRE)
-        holes = np.array([])
-    else:
-        rings = polys[~is_ref]
-        # a ring inside another ring is a hole of that material piece
-        ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
-        inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
-        material = shapely.difference(shapely.union_all(rings[~inside]), shapely.union_all(rings[inside]))
-        material = shapely.buffer(material, -off, join_style="mitre", mitre_limit=UNDO_MITRE)
-        feats = [shapely.Polygon(f["polygon"]) for f in man["hinge_features"] if f["sheet"] == k]
-        cores = shapely.difference(material, shapely.union_all(feats)) if feats else material
-        pieces = shapely.get_parts(cores)
-        pieces = pieces[shapely.area(pieces) > 1e-6]
-        holes = np.array([shapely.Polygon(r) for g in shapely.get_parts(material) for r in g.interiors],
-                         dtype=object)
+    # recover the pieces the laser leaves (each hinge kind knows what its sheet holds)
+    square = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
+    pieces, holes = hinge_kind(kind).recover(SheetRead(cut, polys, is_ref, square, k, man))
     # every expected tile comes back (one piece each, same shape within the material tolerance)
     tol = man["tolerance_mm"]
     matched = 0

@@ -27,6 +27,7 @@ import numpy as np
 from ..mechanics.info import describe
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
+from ..verify.printmanifest import PrintManifest
 from .deployment import _pyplot
 
 if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
@@ -254,10 +255,11 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
     parts["deployment"] = _deploy_section(deploy)
     cut_dir, cut_man = _load_dir(cut)
     print_dir, print_man = _load_dir(printed)
+    pm = None if print_man is None else PrintManifest.from_dict(print_man, f"{printed}/manifest.json")
     parts["cut"] = _cut_section(cut_dir, cut_man)
-    parts["print"] = _print_section(print_dir, print_man)
+    parts["print"] = _print_section(print_dir, pm)
     parts["assembly"] = _assembly_section(cut_dir, cut_man, print_dir, print_man)
-    parts["bom"] = _bom_section(cut_man, print_man)
+    parts["bom"] = _bom_section(cut_man, pm)
     parts["tolerance"] = _tolerance_section(tolerance)
 
     titles = {"summary": "Summary", "design": "Design vs target", "states": "Closed states",
@@ -303,19 +305,17 @@ def _cut_section(d: Path | None, man: dict | None) -> str:
     return body
 
 
-def _print_section(d: Path | None, man: dict | None) -> str:
+def _print_section(d: Path | None, man: PrintManifest | None) -> str:
     if d is None or man is None:
         return _missing("not provided: run fabkiri print PATTERN -o DIR and pass --print DIR")
-    checks = man.get("checks") or {}
-    meshes = checks.get("meshes") or {}
-    body = table({"style": man.get("style"), "closed state": man.get("state"),
-                  "printer": (man.get("printer") or {}).get("name"), "beds": len(man.get("beds", [])),
-                  "meshes ok": meshes.get("ok"), "tiles check": (checks.get("tiles") or {}).get("ok"),
-                  "verifier": (checks.get("verifier") or {}).get("ok") if checks.get("verifier") else "n/a"})
-    previews = [n for n in man.get("files", []) if n.endswith(".png") and n != "assembly.png"]
+    mesh_check, verifier = man.check("meshes") or {}, man.check("verifier")
+    body = table({"style": man.style, "closed state": man.state, "printer": man.printer_name, "beds": len(man.beds),
+                  "meshes ok": mesh_check.get("ok"), "tiles check": (man.check("tiles") or {}).get("ok"),
+                  "verifier": verifier.get("ok") if verifier else "n/a"})
+    previews = [n for n in man.files if n.endswith(".png") and n != "assembly.png"]
     shown = _pictures(d, previews, "print preview")
     if not shown:  # no preview written by print: draw the plates from the meshes, seen from above
-        meshes = [n for n in man.get("files", []) if n.endswith(".stl") and (d / n).is_file()]
+        meshes = [n for n in man.files if n.endswith(".stl") and (d / n).is_file()]
         shown = '<div class="grid">' + "".join(
             _img(plate_png(d / n), ".png", n, f"plate seen from above, drawn from {n}") for n in meshes[:4]) + "</div>"
     return body + (shown if meshes_or(shown) else _missing("no print previews or meshes in the folder"))
@@ -368,13 +368,13 @@ def _assembly_section(cut_dir: Path | None, cut_man: dict | None, print_dir: Pat
     return body or _missing("not provided: pass --cut DIR and/or --print DIR")
 
 
-def _bom_section(cut_man: dict | None, print_man: dict | None) -> str:
+def _bom_section(cut_man: dict | None, print_man: PrintManifest | None) -> str:
     body = ""
     if cut_man is not None:
         bom = cut_man.get("bill_of_materials")
         body += "<h3>cut</h3>" + (table(bom) if bom else _missing("the cut manifest has no bill of materials"))
     if print_man is not None:
-        bom = print_man.get("bill_of_materials")
+        bom = print_man.bill_of_materials
         if bom:
             body += "<h3>print</h3>" + table({k: v for k, v in bom.items() if k not in ("bodies", "filament")})
             body += rows_table([{"material": m, **f} for m, f in bom["filament"].items()])

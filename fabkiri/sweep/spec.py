@@ -25,6 +25,8 @@ from pathlib import Path
 
 from .. import __version__, limits
 from ..errors import InputError
+from ..fabricate.fabricability import PRINT_STYLES
+from ..fabricate.materials import HINGE_KINDS
 
 ACTIONS = ("design", "cut", "print", "deploy")
 # axis -> the Python types a value may have (PatternRequest's fields, the cut/print choices, the seed)
@@ -37,7 +39,7 @@ PARAMS: dict[str, tuple[type, ...]] = {
 }
 CHOICES = {"symmetry": ("none", "x", "y"), "holes": ("rhombus", "parallelogram"), "fit": ("outline", "tips"),
            "solver": ("auto", "reduced", "full"), "init": ("standard", "rescaled", "conformal", "coarse"),
-           "hinge": ("tape", "ligament", "separate"), "style": ("tiles-and-strips", "strips", "pinned")}
+           "hinge": HINGE_KINDS, "style": PRINT_STYLES}  # the hinge kinds and print styles there are
 MAX_JOBS = 100_000
 
 

@@ -34,6 +34,7 @@ from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
+from .hingeread import PLAIN, reading
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
 from .pattern_checks import Tolerances, closed_state_checks, fabrication_tolerances, state_check_id
@@ -163,7 +164,7 @@ def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: 
             in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
         rep.meta["layout"] = "in-place" if in_place else "separate"
     fitted = None
-    if al.hinge == "plain" and (not in_place or sheet_piece) and sheets:
+    if al.hinge == PLAIN and (not in_place or sheet_piece) and sheets:
         # no manifest declares the kerf (or the gap): take the one offset the outlines share
         fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol,
                              lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
@@ -200,7 +201,7 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
 
     state = al.state
     sheets = rec.sheets
-    if in_place and al.hinge == "plain" and sheets:
+    if in_place and al.hinge == PLAIN and sheets:
         # no manifest declares the state: take the closed state the sheet matches
         R0 = next(iter(sheets.values()))
         fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
@@ -345,7 +346,8 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
         why = "both tiles cut, hinge corners coincide on the sheet"
         if (cross & present).any():
             why += f" ({int((cross & present).sum())} hinges cross sheets)"
-    if al.hinge == "ligament":
+    how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
+    if how is not None and how.declared_hinges:  # a hinge is there only where its feature is declared
         listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
         h_idx = np.arange(len(A))
         split = np.isin(h_idx, list(al.cross_sheet)) & (found_on[A] != found_on[B])
@@ -369,9 +371,11 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
     from .physical import ligament_check, mark_status, tape_mark_check
 
     A, B = pattern.topology.hinge_tiles.T
+    how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
+    marks_kind = how is not None and how.tape_marks  # the kind's hinges carry tape marks
     if sheet_piece and have.any():
-        shrink = al.tile_shrink if al.hinge != "plain" else -(fitted or 0.0)
-        kerf = al.kerf_offset if al.hinge != "plain" else 0.0
+        shrink = al.tile_shrink if al.hinge != PLAIN else -(fitted or 0.0)
+        kerf = al.kerf_offset if al.hinge != PLAIN else 0.0
         cores = np.full(len(cut_shapes), None, dtype=object)
         cores[have] = shapely.buffer(shapely.polygons(cut_shapes[have]), -shrink, join_style="mitre",
                                      mitre_limit=al.mitre_limit)
@@ -386,7 +390,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
             if len(shapely.get_parts(material)) >= on.sum():
                 continue  # no piece joins two tiles: the ligaments are not in this file (e.g. printed top faces)
             rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
-    elif in_place and al.hinge in ("tape", "plain") and not sheet_piece and have.any():
+    elif in_place and (al.hinge == PLAIN or marks_kind) and not sheet_piece and have.any():
         marks = {}
         for sheet, f in files.items():
             m = read_cut_file(f, "ENGRAVE")
@@ -398,7 +402,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
         status = [mark_status(pattern, C, have, found_on, marks) for C in [cut_shapes, *labelings]]
         k = max(range(len(status)), key=lambda i: (status[i][1].sum(), -i))
         hs, marked, room = status[k]
-        if not len(hs) or not (al.hinge == "tape" and al.labels) and marked.sum() < 0.5 * len(hs):
+        if not len(hs) or not (marks_kind and al.labels) and marked.sum() < 0.5 * len(hs):
             return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
         chk = tape_mark_check(hs, marked, room, g)
         if k:

@@ -13,6 +13,7 @@ from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
 from ..errors import VerifyError
+from .hingeread import PLAIN, HingeReading, reading, register_reading
 from .manifest import Allowances
 from .matching import match_by_shape
 from .quads import (
@@ -137,42 +138,66 @@ def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
 
 def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
                      frame_tiles: np.ndarray | None = None, arity: int = 4) -> tuple[np.ndarray, str]:
-    """Tile regions (shapely polygons) from one file's CUT linework, and the method used.
+    """Tile regions (shapely polygons) from one file's CUT linework, and the method used: the hinge
+    kind's reading (:mod:`.hingeread`) recovers them.
 
     ``frame_tiles``: the design tiles where the manifest puts them (its sheet frame), to find the
     declared ligaments on a sheet that was moved or turned since. ``arity``: corners per tile.
     """
     if not lw.polylines:  # e.g. a sheet that holds only the reference square
         return np.zeros(0, dtype=object), "nothing to recover"
-    hinge = al.hinge
-    if hinge != "tape":
+    joined = None
+    if al.hinge == PLAIN:  # no manifest: outlines that all close are separate tiles (or, nested, one
+        # ligament sheet), else in-place linework
         joined = join_pieces(lw)
-        if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
-            # ligament sheet), else in-place linework
-            closed_lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
-            n_open = len(joined.closed) - len(closed_lw.closed)
-            # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
-            hinge = "ligament" if n_open < len(closed_lw.closed) and _nested(closed_lw) else \
-                "separate" if not n_open else "tape"
-        if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
-            lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
-    if hinge == "tape":
-        segs = _snapped_segments(lw, JOIN_MM)
-        if len(segs) == 0:
-            return np.zeros(0, dtype=object), "polygonize"
-        noded = _node(segs)
-        faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
-        return faces, "polygonize of the noded linework"
+        rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
+        n_open = len(joined.closed) - len(rings.closed)
+        # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
+        guess = "ligament" if n_open < len(rings.closed) and _nested(rings) else "separate" if not n_open else "tape"
+        how = reading(guess)
+    else:
+        how = reading(al.hinge)
+    if how is None:
+        raise VerifyError(f"{lw.path}: no reading for hinge kind {al.hinge!r}")
+    if how.closed_only:  # stray open cuts are left out here and reported as cut ends in the material
+        joined = join_pieces(lw) if joined is None else joined
+        lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
+    return how.recover(lw, al, sheet, frame_tiles, arity)
+
+
+def _noded_faces(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
+                 ) -> tuple[np.ndarray, str]:
+    """Tape: the faces of the noded linework."""
+    segs = _snapped_segments(lw, JOIN_MM)
+    if len(segs) == 0:
+        return np.zeros(0, dtype=object), "polygonize"
+    noded = _node(segs)
+    faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+    return faces, "polygonize of the noded linework"
+
+
+def _closed_rings(lw: Linework, al: Allowances) -> np.ndarray:
+    """The closed CUT outlines as valid polygons; every outline must be closed."""
     rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
     if len(rings) != len(lw.polylines):
         raise VerifyError(f"{lw.path}: {len(lw.polylines) - len(rings)} open CUT polylines in a {al.hinge} "
                           f"layout, where every outline must be closed")
-    polys = shapely.make_valid(np.array(rings, dtype=object))
-    if hinge == "separate":
-        out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
-            else polys
-        return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
-    material = _material(polys, al.kerf_offset)
+    return shapely.make_valid(np.array(rings, dtype=object))
+
+
+def _outlines_less_kerf(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
+                        ) -> tuple[np.ndarray, str]:
+    """Separate tiles: every closed outline less the kerf offset."""
+    polys = _closed_rings(lw, al)
+    out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
+        else polys
+    return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
+
+
+def _material_less_ligaments(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None,
+                             arity: int) -> tuple[np.ndarray, str]:
+    """A ligament sheet: the material minus the hinge strips, grown by the tile shrink."""
+    material = _material(_closed_rings(lw, al), al.kerf_offset)
     feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
              if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
     strips = shapely.unary_union(feats) if feats else None
@@ -239,3 +264,9 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
         if score is None or key > score:
             best, score = lw, key
     return best
+
+
+# the built-in hinge kinds' readings (the verify half of fabricate/hingekinds/)
+register_reading(HingeReading("tape", _noded_faces, in_place=True, closed_only=False, tape_marks=True))
+register_reading(HingeReading("separate", _outlines_less_kerf, in_place=False))
+register_reading(HingeReading("ligament", _material_less_ligaments, in_place=True, declared_hinges=True))

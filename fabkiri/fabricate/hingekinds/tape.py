@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from ...pattern.model import Pattern
     from ..drawing import SheetDrawing
     from ..materials import Material
-    from . import SheetCut
+    from . import SheetCut, SheetRead
 
 
 class Tape(HingeKind):
@@ -42,6 +42,15 @@ class Tape(HingeKind):
         for p in rings:
             sd.add("CUT", p, True)
         return []
+
+    def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
+        # the faces of the noded linework, less the reference square
+        sq = sheet.square
+        lines = [shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in sheet.cut
+                 if not (c and sq is not None and p.shape == sq.shape and np.allclose(p, sq, atol=1e-9))]
+        noded = shapely.union_all(lines) if lines else shapely.GeometryCollection()
+        pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
+        return pieces, np.array([])
 
 
 TAPE = register(Tape())

@@ -17,9 +17,19 @@ import shapely
 from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import pingeom, printgeom
+from ..planrules import PIN_PLAN
 from ..printers import Printer
 from ..printgeom import regular_polygon
-from ..printjob import PrintJob, PrintStyle, Realised, centre_shift, fits, register_style, scaled
+from ..printjob import (
+    PrintJob,
+    PrintStyle,
+    Realised,
+    StyleChecks,
+    centre_shift,
+    fits,
+    register_style,
+    scaled,
+)
 from ..solid import Body, Prism, manifold_of, section_polys, translate_body
 
 if TYPE_CHECKING:
@@ -190,7 +200,6 @@ def tiles(r: Realised, mesh=None):
     return solid, z, mask
 
 
-PINNED = register_style(PrintStyle("pinned", build, clearances, tiles=tiles, advise=pinned_advice))
 
 
 
@@ -257,3 +266,25 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
             worst_dist = min(worst_dist, float(dist.min()))
     return SweepCheck(frames=len(path.t), levels_mm=[round(z, 4) for z in zs], max_overlap_mm2=worst_area,
                       min_distance_mm=worst_dist, worst=worst, ok=worst_area <= overlap_tol_mm2)
+
+
+def pinned_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks:
+    """The printed tiles moved along the rigid deployment path must not collide."""
+    sweep = sweep_pinned(pattern, r)
+    rep.sweep = sweep.to_dict()
+    out = StyleChecks()
+    if not sweep.ok:
+        out.problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
+                            f"({sweep.worst})")
+    return out
+
+
+def pin_limits(printer: Printer) -> dict:
+    """What pins ask of the tiles (``design --style pinned``): pivots far enough apart for two ears."""
+    hollow = printer.pin.ear_radius_mm + printer.radial_clearance_mm
+    return {"hinge_spacing_mm": 2.0 * hollow + 2.0 * printer.nozzle_mm}
+
+
+PINNED = register_style(PrintStyle("pinned", build, clearances, tiles=tiles, advise=pinned_advice,
+                                   checks=pinned_checks, own_tile_thickness=True, strip_hinges=False,
+                                   limits=pin_limits, plan=PIN_PLAN))
