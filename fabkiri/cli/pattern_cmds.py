@@ -125,7 +125,7 @@ def cmd_export(args: argparse.Namespace) -> int:
                          output=args.output, notify=lambda text: print(text, file=sys.stderr))
     if out.files is not None:
         atomic_write_many(args.output, out.files)
-    else:
+    elif out.text is not None:  # an export is one file or a folder
         atomic_write(args.output, out.text)
     print(out.said, file=sys.stderr)
     return 0
