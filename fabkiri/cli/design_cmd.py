@@ -30,6 +30,7 @@ from ..design.initial import INITS
 from ..errors import InputError
 from ..fabricate import fabricability
 from ..fileio import check_output_file
+from .argtypes import bounded
 from .pattern_cmds import add_i_know, parse_tiles
 
 
@@ -115,25 +116,9 @@ def _summary(path, report: dict, valid: bool) -> None:
                   file=sys.stderr)
 
 
-def _tol(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (0 < v < 1e-2):
-        raise argparse.ArgumentTypeError(f"tolerance must lie in (0, 1e-2), got {text!r}")
-    return v
-
-
-def _size(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a length in mm, got {text!r}") from None
-    if not (np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM):
-        raise argparse.ArgumentTypeError(f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, "
-                                         f"got {text!r}")
-    return v
+_tol = bounded(float, lambda v: 0 < v < 1e-2, "expected a number", "tolerance must lie in (0, 1e-2), got {text!r}")
+_size = bounded(float, lambda v: bool(np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM), "expected a length in mm",
+                f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -17,6 +17,7 @@ from ..pattern.io import import_obj, obj_text, read_pattern, write_pattern
 from ..pattern.model import Pattern
 from ..pattern.periodic import standard_tube
 from ..pattern.tessellation import kinds, tessellation
+from .argtypes import bounded
 
 
 def parse_tiles(text: str) -> tuple[int, int]:
@@ -57,24 +58,9 @@ def import_other(path: str, scale: float) -> Pattern | None:
     return None
 
 
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v > 0 or v != v or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive finite number, got {text!r}")
-    return v
-
-
-def _nonneg(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 <= v < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return v
+_positive = bounded(float, lambda v: 0 < v < float("inf"), "expected a number",
+                    "expected a positive finite number, got {text!r}")
+_nonneg = bounded(float, lambda v: 0 <= v < float("inf"), "expected a number", "expected a finite number >= 0, got {text!r}")
 
 
 def cmd_new(args: argparse.Namespace) -> int:

@@ -199,3 +199,27 @@ def _linear(linear: tuple[int, float], worst: list[float], pt: LMPoint) -> bool:
     k, gain = linear
     worst.append(float(np.abs(pt.r).max(initial=0.0)))
     return len(worst) > k and worst[-1] > gain * worst[-1 - k]
+
+
+def halving_gauss_newton(x: np.ndarray, state: tuple, step: Callable[[np.ndarray, tuple], np.ndarray],
+                         at: Callable[[np.ndarray], tuple], tol: float, max_iter: int, halvings: int):
+    """Undamped Gauss-Newton steps onto ``r = 0``, each halved until the residual norm drops.
+
+    ``at(x)`` gives the state at ``x`` (its residual first, then whatever ``step`` reuses); ``step(x, state)``
+    the full step (the tube solvers': the minimum-norm least-squares solution of ``J dx = −r``). Stops at
+    ``max|r| ≤ tol``, after ``max_iter`` steps, or where ``halvings`` halvings do not lower ``‖r‖``
+    (the caller reports the residual it stopped at). Returns ``(x, state, steps)``.
+    """
+    steps = 0
+    while np.abs(state[0]).max() > tol and steps < max_iter:
+        dx = step(x, state)
+        for _ in range(halvings):
+            new = at(x + dx)
+            if np.linalg.norm(new[0]) < np.linalg.norm(state[0]):
+                break
+            dx = 0.5 * dx
+        else:
+            break
+        x, state = x + dx, new
+        steps += 1
+    return x, state, steps

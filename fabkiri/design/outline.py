@@ -137,13 +137,11 @@ def solve_outline(prob, log, iters: dict):
     S0, _ = fam.fit(prob.X0[: prob.n], PSI_DEPLOYED)
     s0 = np.concatenate([S0[:, 0], S0[:, 1]])
     kinds = {s: outline_kind(req.contracted[s]) for s in states}
-    affine = square_affine(*_square_state_rows(prob, maps, st, states, kinds), 2 * maps.nf)
-    if affine is None:
-        log("outline: the square rows are inconsistent; leaving the design to the full solver")
+    space = outline_space(square_affine(*_square_state_rows(prob, maps, st, states, kinds), 2 * maps.nf), states,
+                          kinds, log, "outline: the square rows are inconsistent; leaving the design to the full solver")
+    if space is None:
         return None
-    base, Nsp = affine
-    circles = [s for s in states if kinds[s] == "circle"]
-    relative = not any(kinds[s] == "square" for s in states)
+    base, Nsp, circles, relative = space
     op = _CircleOutline(prob, maps, st, base, Nsp, circles, relative)
     p = op.start(Nsp.T @ (s0 - base))
     p = lm_stages(op.evaluate, op.ineq_viol, op.nodes, p, STAGES, "outline", iters, log)
@@ -306,3 +304,14 @@ def lm_stages(evaluate, ineq_viol, nodes, p, stages, name: str, iters: dict, log
         iters[f"{name}_rho_{rho:g}"] = it
         log(f"{name.replace('_', ' ')} rho={rho:g}: {it} iterations, violation {ineq_viol(nodes(p)):.2e}")
     return p
+
+
+def outline_space(affine, states: list, kinds: dict, log, inconsistent: str):
+    """``(base, N, circle states, relative)``: the square rows' solution space ``S = base + N u``, the states
+    fitted to a circle, and whether their fit is relative (no square fixes the scale); None, logging
+    ``inconsistent``, when the square rows have no solution (``affine`` None)."""
+    if affine is None:
+        log(inconsistent)
+        return None
+    base, Nsp = affine
+    return base, Nsp, [s for s in states if kinds[s] == "circle"], not any(kinds[s] == "square" for s in states)
