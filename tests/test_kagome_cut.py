@@ -161,6 +161,7 @@ def test_7x5_kagome_ligament_in_pp_fills_the_notches_the_kerf_closes(tmp_path, r
     assert checks["layout: every ligament present and unsevered"]["ok"]
 
 
+@pytest.mark.slow  # an open bug's marker (strict: the full suite says when it is fixed), not a quick-loop check
 @pytest.mark.xfail(strict=True, reason="open: --scale auto (fabricate/fabricability.cut_minimum) picks a size "
                    "at which the 7x5 kagome's ligament strips join tiles (16 pieces for 35 tiles)")
 def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
