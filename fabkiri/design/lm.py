@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import NamedTuple, Protocol
+from typing import Generic, NamedTuple, Protocol, TypeVar
 
 import numpy as np
 
@@ -124,14 +124,17 @@ ACCEPT: dict[str, Callable[[LMPoint, LMPoint, float, float, float], bool]] = {
     "gain": _gain, "max_row": _max_row, "decrease": _decrease}
 
 
-class LMResult(NamedTuple):
+P = TypeVar("P", bound=LMPoint)
+
+
+class LMResult(NamedTuple, Generic[P]):
     """The last accepted point and the iterations spent (not counting a final arrival check)."""
 
-    point: LMPoint
+    point: P
     iterations: int
 
 
-def _limited(pt: LMPoint, dx: np.ndarray, point_at: Callable[[np.ndarray], LMPoint]):
+def _limited(pt: P, dx: np.ndarray, point_at: Callable[[np.ndarray], P]) -> tuple[P, np.ndarray]:
     """Step limiting: halve ``dx`` until the trial point adds no inequality violation.
 
     Returns the last trial and the step after the last halving (which, when every trial failed,
@@ -144,16 +147,17 @@ def _limited(pt: LMPoint, dx: np.ndarray, point_at: Callable[[np.ndarray], LMPoi
     return trial, dx
 
 
-def levenberg_marquardt(start: LMPoint, point_at: Callable[[np.ndarray], LMPoint], damping: Damping,
-                        stopping: Stopping, accept: str = "gain", log: Callable[[str], None] | None = None,
-                        label: str = "") -> LMResult:
+def levenberg_marquardt(start: P, point_at: Callable[[np.ndarray], P], damping: Damping, stopping: Stopping,
+                        accept: str = "gain", log: Callable[[str], None] | None = None,
+                        label: str = "") -> LMResult[P]:
     """Minimise ½‖r‖² from ``start``; ``point_at(x)`` makes the point at ``x``.
 
     Every tenth accepted iteration is logged as ``label``, cost, damping, gain ratio and violation.
     """
     pt, cost = start, 0.5 * float(start.r @ start.r)
     mu, nu = damping.mu0, damping.raise_by
-    rule, stall, it, worst = ACCEPT[accept], 0, 0, []
+    rule, stall, it = ACCEPT[accept], 0, 0
+    worst: list[float] = []
     for it in range(1, stopping.max_iter + 1):
         if stopping.tol_inf is not None and np.abs(pt.r).max(initial=0.0) <= stopping.tol_inf:
             return LMResult(pt, it - 1)

@@ -246,7 +246,8 @@ class _OutlinePoint:
     checks; the start's from the nodes ``evaluate`` returns, as before the core)."""
 
     def __init__(self, op: tuple, rho: float, p: np.ndarray, rows: tuple | None = None):
-        self.op, self.rho, self.x, self._rows, self._normal = op, rho, p, rows, None
+        self.op, self.rho, self.x, self._rows = op, rho, p, rows
+        self._normal: np.ndarray | None = None
         evaluate, ineq_viol, nodes = op
         self.gviol = ineq_viol(rows[0] if rows is not None else nodes(p))
 

@@ -3,7 +3,7 @@ merit and the hard-fit projection."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Self
 
 import numpy as np
 
@@ -28,7 +28,7 @@ class _Member:
         self.gviol = self.ev.gviol
         self._lin: tuple | None = None
 
-    def moved(self, p: np.ndarray) -> _Member:
+    def moved(self, p: np.ndarray) -> Self:
         return type(self)(self.merit, p)
 
     @property
