@@ -118,7 +118,7 @@ def test_a_kagome_fitted_to_a_circle_closes_in_both_states_and_reports_its_confo
     from fabkiri.design.kagome_fit import design
     from fabkiri.mechanics.contract import with_contracted_states
 
-    std = standard_kagome(6, 10)
+    std = standard_kagome(4, 6)  # 6x10 as well (3.0 %, 11.7 % from the start), in 1.7x the time
     target = TG.circle().scaled_to(120.0)
     d = design(std, target)
     assert d.converged and d.max_equality <= 1e-10
@@ -127,7 +127,7 @@ def test_a_kagome_fitted_to_a_circle_closes_in_both_states_and_reports_its_confo
     failed = {c.name for c in rep.failed()}
     assert failed <= {"target shape"}, failed  # closed in both states, no overlaps, tiles simple
     conf = DC.deployed(p.nodes, p.topology, target)
-    # measured 3.0 % of the size; the standard rectangle scaled into the circle misses by far more
+    # measured 3.3 % of the size; the standard rectangle scaled into the circle misses by far more (11.7 %)
     assert conf["hausdorff_rel"] <= 0.05
     start = DC.deployed(std.nodes * (120.0 / np.ptp(std.nodes, 0).max()), std.topology, target)
     assert conf["hausdorff_rel"] < 0.5 * start["hausdorff_rel"]

@@ -163,13 +163,14 @@ def test_cli_keeps_the_closest_valid_fit():
 
 
 def test_auto_keeps_the_better_of_both_solvers():
-    """On a small least-squares case auto runs both solvers and keeps the lower objective."""
+    """On a small least-squares case auto runs both solvers and keeps the lower objective (4x4 star:
+    reduced 1.10 against full 5.32; the 6x6 heart, 1.12 against 2.52, took 1.5x the time)."""
     from fabkiri.design.solve import _objective, _Problem
 
-    target = T.load_target("heart", 80.0)
+    target = T.load_target("star", 80.0)
     out = {}
     for solver in ("reduced", "full", "auto"):
-        req = DesignRequest(6, 6, target, rigid=True, solver=solver)
+        req = DesignRequest(4, 4, target, rigid=True, solver=solver)
         res = design(req)
         assert res.converged, solver
         prob = _Problem(req)
