@@ -51,6 +51,9 @@ def test_refusals_raise_and_return_nothing(square):
         print_pattern(small, PrintOptions(style="strips"))
     with pytest.raises(InputError, match="--marks engraves strip pads .* needs --style strips"):
         print_pattern(square, PrintOptions(marks=True))
+    # a library caller's scale text other than "auto" is bad input in one line (it was a TypeError)
+    with pytest.raises(InputError, match=r"--scale must be a number \(mm printed per mm\) or auto, got '2'"):
+        print_pattern(square, PrintOptions(scale="2"))
 
 
 def test_a_pattern_closing_one_way_has_its_reassembly_checks_moot_by_id():

@@ -421,3 +421,25 @@ def test_auto_skips_the_second_opinion_within_the_shape_tolerance():
     assert met.converged and strict.converged
     assert not any(k.startswith("lm_rho") for k in met.report["iterations"])  # the full solver never ran
     assert any(k.startswith("lm_rho") for k in strict.report["iterations"])
+
+
+def test_dense_evaluation_forms_its_jacobian_only_when_asked(monkeypatch):
+    # LM asks a trial step for its rows only; the Jacobian and the regulariser's normal matrix (most of an
+    # evaluation) are formed once, on the first ask, and agree with a fresh evaluation's
+    prob, fam, dense, _ = _merits(6, 6, "ellipse", 1e4)
+    tiles = type(dense._tiles)
+    formed = []
+    normal = tiles.regularizer_normal
+    monkeypatch.setattr(tiles, "regularizer_normal", lambda self, *a: formed.append(1) or normal(self, *a))
+    S, _ = fam.fit(prob.X0, np.pi / 4)
+    p = np.concatenate([S[:, 0], S[:, 1], [np.pi / 4]])
+    ev = dense.evaluate(p)
+    assert len(ev.r) > 0 and ev.gviol >= 0.0
+    assert formed == []
+    H, g = ev.normal()
+    J = ev.jacobian()
+    ev.normal()
+    assert len(formed) == 1
+    again = dense.evaluate(p)
+    H2, g2 = again.normal()
+    assert np.array_equal(H, H2) and np.array_equal(g, g2) and np.array_equal(J, again.jacobian())

@@ -214,3 +214,19 @@ def test_a_raising_a_hanging_and_a_killed_job_are_recorded_or_retried(tmp_path, 
         assert res.ran == 6 and res.failed == 4
         again = sweep(spec, client, output=tmp_path / "out", runner=faulty_runner)
         assert again.ran == 0 and again.skipped == 6
+
+
+def test_the_summary_counts_a_row_without_a_status(tmp_path, run_cli):
+    """A recorded row without a status (written by another runner) is counted as "None" beside the
+    others: the summary's sort once compared None with a string and raised after every job had run."""
+    path = tmp_path / "s.toml"
+    path.write_text('[axes]\ntarget = ["circle"]\ntiles = ["4x4", "5x5"]\n')
+    spec = load_spec(path)
+    for job, status in zip(spec.jobs, ("ok", None), strict=True):
+        folder = tmp_path / "out" / "jobs" / job.id
+        folder.mkdir(parents=True)
+        row = {"id": job.id, "digest": job.digest, **({"status": status} if status else {})}
+        (folder / "row.json").write_text(json.dumps(row))
+    code, _, err = run_cli("sweep", path, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert "2 jobs (0 run now, 2 already done)" in err and ": 1 None, 1 ok" in err

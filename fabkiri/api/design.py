@@ -240,11 +240,11 @@ def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequ
                 f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
                 f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
                 f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
-    if request.holes is None:
-        request = replace(request, holes=preferred_holes(rows, cols, request.rigid, request.symmetry, target,
-                                                         contracted))
+    holes = request.holes if request.holes is not None else preferred_holes(rows, cols, request.rigid,
+                                                                            request.symmetry, target, contracted)
+    request = replace(request, holes=holes)  # without --init, _attempts sets each guess in req.init
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=request.rigid, symmetry=request.symmetry,
-                        holes=request.holes, contracted=contracted, init=request.init, tol=request.tol,
+                        holes=holes, contracted=contracted, init=request.init or DesignRequest.init, tol=request.tol,
                         solver=request.solver, outline=request.fit == "outline", fabrication=fab_limits,
                         fabrication_intent=intent, seed=request.seed, rigid_first=not request.init,
                         name=request.name or "")
@@ -277,7 +277,7 @@ def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None
               shape_tol: tuple, say: Callable[[str], None]) -> tuple[tuple, list[dict]]:
     """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
-    best, attempts = None, []
+    best, attempts = None, list[dict]()
     for init in inits:
         if init == VIA_RIGID_INIT and best is not None and best[3] and _shape_met(best[1]):
             break  # the rigid family is the last resort for a miss, not a second opinion
@@ -346,7 +346,7 @@ def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
             and not (best[3] and _shape_met(best[1]) and best[1]["checks"].get("fits_bed", True)))
 
 
-def _continuation(request: PatternRequest, req: DesignRequest, target: Target, shape_tol: tuple,
+def _continuation(request: PatternRequest, req: DesignRequest, target: Target | None, shape_tol: tuple,
                   attempts: list):
     """The design without fabrication rows, then the rows raised in steps (``CONTINUATION``) from it, each warm
     started from the last; a last step that does not converge is tried in the rigid family (where it may) from
@@ -357,16 +357,17 @@ def _continuation(request: PatternRequest, req: DesignRequest, target: Target, s
         return None
     X = last_ok = free.pattern.nodes
     spent = free.report.get("time_s_total", 0.0)  # wall s, as the attempts
-    if request.printer:  # the strip rows follow the closed state that fits the bed (2:1 ellipse: state 2)
-        state = design_limits.bed_state(free.pattern.contracted, request.printer)
-        req = replace(req, fabrication=replace(req.fabrication, print_state=state),
-                      fabrication_intent={**req.fabrication_intent, "state": state})
+    fab, printer = req.fabrication, request.printer
+    assert fab is not None, "_continuation_applies admits only fabrication-aware requests"
+    if printer:  # the strip rows follow the closed state that fits the bed (2:1 ellipse: state 2)
+        fab = replace(fab, print_state=design_limits.bed_state(free.pattern.contracted, printer))
+        req = replace(req, fabrication=fab, fabrication_intent={**req.fabrication_intent, "state": fab.print_state})
     # a non-rigid request below 32x32 steps in the rigid family when it may (a member meets every non-rigid
     # equality): with the full solver the steps from 7/8 of the limits on stalled against closed holes
     # (hundreds of non-overlap rows at zero; heart 16x16: equality 1e-5 to 6e-5, unconverged, 2.2-3.3 %)
     init = VIA_RIGID_INIT if via_rigid_applies(replace(req, init=VIA_RIGID_INIT)) else req.init
     for f in (1.0,) if req.rigid else CONTINUATION:
-        step = replace(req, fabrication=req.fabrication.scaled(f, CONTINUATION_MARGIN), start=X, init=init)
+        step = replace(req, fabrication=fab.scaled(f, CONTINUATION_MARGIN), start=X, init=init)
         result = design(step)
         spent += result.report["time_s"]
         X = result.pattern.nodes
@@ -382,9 +383,8 @@ def _continuation(request: PatternRequest, req: DesignRequest, target: Target, s
     trace: list[float] = []
     if not (outcome[3] and _shape_met(outcome[1])):  # the fit was least squares, the tolerance is a maximum;
         # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
-        bed = None if not request.printer else (  # keep only steps whose printed closed state fits the bed
-            lambda r: design_limits.fits_bed(contract(r.pattern, req.fabrication.print_state).corners,
-                                             request.printer))
+        bed = None if not printer else (  # keep only steps whose printed closed state fits the bed
+            lambda r: design_limits.fits_bed(contract(r.pattern, fab.print_state).corners, printer))
         refined, trace, secs = refine_minimax(replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
                                               outcome[0].nodes, accept=bed)
         spent += secs
@@ -491,7 +491,7 @@ def _conformance(pattern: Pattern, result, contracted_states: dict, target: Targ
     """Conformance of the deployed tips and of each closed-state outline with a target curve, and each
     judged against ``--shape-tol``."""
     measured = {}
-    tiles = (pattern.lattice["rows"], pattern.lattice["cols"])
+    tiles = (pattern.lattice["rows"], pattern.lattice["cols"]) if pattern.lattice else None
     if target is not None:
         measured["deployed"] = conf.deployed(pattern.nodes, pattern.topology, target)
     for s, tgt in sorted(result.closed_targets.items()):

@@ -9,6 +9,7 @@ overlaps, target shape) and judge the shape. The best iterate is always returned
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -56,7 +57,7 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     measured = conf.deployed(pattern.nodes, pattern.topology, tgt)
     verdict = conf.judge(measured, shape, (rows, cols))
     rel = d.max_equality  # normalised units: already relative to the tile size
-    report = {"status": "converged" if d.converged and rel <= tol else "unconverged",
+    report: dict[str, Any] = {"status": "converged" if d.converged and rel <= tol else "unconverged",
               "max_equality_residual": rel, "tol": tol, "iterations": d.iterations,
               "penalty_status": d.penalty_status, "max_tip_distance_mm": d.max_tip_distance_mm,
               "tile_size_mm": tile, "conformance": measured, "shape": verdict}
@@ -65,7 +66,7 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     rep = verify_pattern(pattern, shape_tol=shape_tol)
     report["verify_failed"] = [c.name for c in rep.failed()]
     valid = report["status"] == "converged" and not report["verify_failed"]
-    pattern = replace(pattern, design={**pattern.design, "report": report, "valid": valid})
+    pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
     return KagomeOutcome(pattern, report, valid)
 
 

@@ -102,14 +102,15 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
         if notify is not None:
             notify(text)
 
-    options = replace(options, state=int(options.state or design_intent(pattern, "state") or 1))
+    state = int(options.state or design_intent(pattern, "state") or 1)
+    options = replace(options, state=state)
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
     printer = _printer(options.printer or design_intent(pattern, "printer"), style == "pinned", options)
     pattern, scale = _scaled(pattern, style, printer, options)
     for w in closes_gate(pattern, printer.tolerance_mm, force=options.force, action="print", tolerance="printer",
-                         states=claimed_states(pattern, options.state)).warnings:  # as `cut`, printer tolerance
+                         states=claimed_states(pattern, state)).warnings:  # as `cut`, printer tolerance
         say(f"warning: {w}")
-    job, plan = _build_job(pattern, style, options.state, printer, scale)
+    job, plan = _build_job(pattern, style, state, printer, scale)
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
     tiles = None if realised.job.style == "strips" else mesh.check_printed_tiles(realised)
@@ -140,12 +141,17 @@ def _printer(name: str | None, pinned: bool, o: PrintOptions):
 
 def _scaled(pattern: Pattern, style: str, printer, o: PrintOptions) -> tuple[Pattern, float]:
     """The pattern at the print's scale, and the scale (``"auto"``: the smallest the plan checks accept)."""
-    scale = o.scale
-    if scale == "auto":
-        need = fb.print_minimum(pattern, style, printer, int(o.state))
-        if not need.possible:
+    given = o.scale
+    if given == "auto":
+        assert o.state is not None, "print_pattern resolves the state first"
+        need = fb.print_minimum(pattern, style, printer, o.state)
+        if not need.possible or need.min_scale is None:
             raise CheckFailed(f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}")
         scale = need.min_scale
+    elif isinstance(given, str):  # a library caller's text: one line, not a TypeError deep in check_scale
+        raise InputError(f"--scale must be a number (mm printed per mm) or auto, got {given!r}")
+    else:
+        scale = given
     limits.check_scale(pattern.nodes, pattern.tiles, scale, "--scale")
     if scale != 1.0:  # mm printed per mm of the pattern
         pattern = replace(pattern, nodes=pattern.nodes * scale,
@@ -219,14 +225,11 @@ def _files(pattern: Pattern, realised, report, tiles, verifier, o: PrintOptions,
     if bad:
         raise CheckFailed("written meshes are not closed 2-manifolds when read back: " + ", ".join(bad)
                           + "; nothing written")
-    files["manifest.json"] = mesh.manifest(realised, report, tiles, source, list(files) + ["manifest.json"],
-                                           verifier, read_back)
+    manifest = mesh.manifest(realised, report, tiles, source, list(files) + ["manifest.json"], verifier, read_back)
     from ..fabricate.assembly import add_to_print
 
-    files["manifest.json"], extra = add_to_print(files["manifest.json"], pattern, realised, stem)
-    files.update(extra)
-    files.update(laser)
-    return files
+    manifest, extra = add_to_print(manifest, pattern, realised, stem)
+    return {**files, "manifest.json": manifest, **extra, **laser}  # in this order, as the CLI writes them
 
 
 def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -> dict[str, bytes]:

@@ -78,6 +78,7 @@ def cmd_new(args: argparse.Namespace) -> int:
     if not info.closes_both:  # cannot happen for the standard lattice; never write a wrong file
         raise CheckFailed("; ".join(info.problems()))
     write_pattern(pattern, args.output)
+    assert pattern.lattice is not None  # every standard generator records its lattice (and angle)
     what = "tube " if args.tube else ("" if args.lattice == "quad" else f"{args.lattice} ")
     print(f"wrote {args.output}: standard {what}{rows}x{cols}, tile {args.tile_size:g} mm, "
           f"ψ = {pattern.lattice['angle_deg']:g}°, "

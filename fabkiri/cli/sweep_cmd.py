@@ -70,9 +70,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
-    counts = {}
-    for r in res.rows:
-        counts[r.get("status")] = counts.get(r.get("status"), 0) + 1
+    counts: dict[str, int] = {}
+    for r in res.rows:  # str: a row without a status is counted as "None", and sorts with the others
+        counts[str(r.get("status"))] = counts.get(str(r.get("status")), 0) + 1
     print(f"wrote {args.output}: {len(res.rows)} jobs ({res.ran} run now, {res.skipped} already done) in "
           f"{res.wall_s:.1f} s: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items()))
           + "; results.csv, index.html", file=sys.stderr)

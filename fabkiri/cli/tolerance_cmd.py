@@ -22,7 +22,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
                              scale=args.scale)
     d = res.to_dict()
     d["pattern"] = pattern.name
-    files = {"tolerance.json": json.dumps(d, indent=2) + "\n"}
+    files: dict[str, bytes | str] = {"tolerance.json": json.dumps(d, indent=2) + "\n"}
     if not args.no_plot:
         files["tolerance.png"] = tolerance_png(res, title=pattern.name)
     atomic_write_many(args.output, files)

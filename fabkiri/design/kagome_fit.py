@@ -105,7 +105,7 @@ def design(standard: Pattern, target: Target, *, max_nfev: int = 200) -> KagomeD
     x0 = initial_nodes(standard, target)
     tips = _tip_family(target, top.free_nodes, scale, nv)
 
-    pull = np.full((nv, 2), PULL)
+    pull: np.ndarray = np.full((nv, 2), PULL)
     pull[top.free_nodes] = TIP_PULL
     pull = pull.ravel()
     tl = top.tiles

@@ -102,7 +102,8 @@ def _start_seeds(prob, fam: OffsetFamily, t0: np.ndarray):
     return sol - np.repeat(0.5 * (lo + hi), nf), Z0, rep1, g1  # vec S = (Sx, Sy)
 
 
-def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict, log):
+def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict,
+                 log) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
     """The linear rows ``E vec S = e`` of a square state-1 outline, or None for a square in state 2."""
     st = prob.st
     E, e = [], []
@@ -183,13 +184,22 @@ class _OffsetOutline:
         self.w = np.sqrt(REG_WEIGHT)
         self.R0: dict = {}
         self.npar = 0
+        self._member = None
 
     def seeds(self, p):
         v = self.base + self.Nsp @ p[:self.k]
         return np.stack([v[:self.nf], v[self.nf:]], -1)
 
     def member(self, p, jac):
-        return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=jac)
+        if jac:
+            return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=True)
+        # the last one is kept: LM's step limiting (``nodes``) and its trial rows ask for the same member
+        key = np.asarray(p, dtype=float).tobytes()
+        if self._member is None or self._member[0] != key:
+            y = self.fam.state1(self.seeds(p), p[self.k:self.k + self.K])
+            y.flags.writeable = False  # shared by the callers
+            self._member = (key, y)
+        return self._member[1]
 
     def states_of(self, y):
         return {1: y, 2: self.fam.at(y, np.pi / 2)}

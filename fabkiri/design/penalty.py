@@ -182,5 +182,6 @@ def _solve_full(prob: _Problem, log, iters: dict):
             break
         log(f"projection stopped at {worst:.2e} > tol: " + ("restarting with stiff penalties" if not attempt
                                                              else "giving up"))
+    assert best is not None, "the stiff attempt always projects"
     _, X, mode = best
     return X, mode

@@ -167,13 +167,14 @@ def design_tube(req: TubeRequest) -> TubeResult:
     """Design the sheet of a reconfigurable tube (see the module docstring)."""
     req.validate()
     t0, c0 = time.perf_counter(), time.process_time()
-    x, steps = None, []
+    x, steps = None, list[dict]()
     for tgt in homotopy(req.target):
         prob = _TubeProblem(replace(req, target=tgt), start=x)
         x, figures = _stage(prob, req)
         steps.append(figures)
         if figures["equality_max"] > req.tol:  # a continuation step that did not converge ends the run
             break
+    assert x is not None, "the homotopy ends on the target itself, so it has a step"
     eq_max = steps[-1]["equality_max"]
     fams = {f.name: float(np.abs(f(x)[0]).max(initial=0.0)) for f in prob.eq}
     fit = prob.fit(x)[0] * prob.geo.scale
@@ -189,7 +190,7 @@ def design_tube(req: TubeRequest) -> TubeResult:
     }
     sheet = Pattern(nodes=x * geo.scale, tiles=prob.std.tiles,
                     name=req.name or f"tube {req.rows}x{req.cols} {req.target.kind}",
-                    lattice={**prob.std.lattice, "tile_size": geo.scale},
+                    lattice={**(prob.std.lattice or {}), "tile_size": geo.scale},
                     design={"kind": "tube", "tube_target": req.target.to_dict(), "rigid": report["rigid"],
                             "report": report})
     return TubeResult(pattern=with_seam(sheet, prob.seam), converged=converged, report=report)

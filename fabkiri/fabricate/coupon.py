@@ -118,7 +118,7 @@ def _hinge_piece(mat: Material, v: dict[str, float]) -> SheetDrawing:
     return res.sheets[0]
 
 
-def _bounds(sd: SheetDrawing, layers=("CUT",)) -> np.ndarray:
+def _bounds(sd: SheetDrawing, layers: tuple[str, ...] = ("CUT",)) -> np.ndarray:
     pts = np.concatenate([p for name in layers for p, _ in sd.layers[name]])
     return np.r_[pts.min(0), pts.max(0)]
 

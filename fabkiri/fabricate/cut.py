@@ -11,7 +11,7 @@ disk here; :mod:`fabkiri.fabricate.readback` verifies and writes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import shapely
@@ -49,8 +49,8 @@ class CutOptions:
     sheet: tuple[float, float] = (600.0, 400.0)
     margin: float = 5.0
     layout: str | None = None
-    scale: float | str | None = None  # "auto": the smallest the checks accept
-    width: float | str | None = None
+    scale: float | Literal["auto"] | None = None  # "auto": the smallest the checks accept
+    width: float | Literal["auto"] | None = None
     formats: tuple[str, ...] = FORMATS
     colors: str | None = None
     labels: bool = True
@@ -174,10 +174,11 @@ def _scale(raw: np.ndarray, options: CutOptions, kind: str) -> float:
                               f"{kind} hinges: {need.advice()}")
         return need.scale
     if options.width is not None:
+        width = float(options.width)  # "auto" was taken above
         span = float(raw[..., 0].max() - raw[..., 0].min())
-        if not options.width > 0:
+        if not width > 0:
             raise InputError(f"--width must be positive, got {options.width}")
-        return options.width / span
+        return width / span
     scale = 1.0 if options.scale is None else float(options.scale)
     if not (np.isfinite(scale) and scale > 0):
         raise InputError(f"--scale must be positive, got {options.scale}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..design.fabrication import FabricationLimits
+from ..design.target_curve import Target
 from ..errors import FabricationError, InputError
 from .fabricability import ligament_never, shrink_of
 from .materials import HINGE_KINDS, Material, load_material
@@ -69,10 +70,12 @@ def combine(*limits: dict) -> dict:
 
 
 def resolve(material: str | None, hinge: str | None, printer: str | None, style: str | None,
-            min_feature: float | None, min_hole: float | None, target) -> tuple[FabricationLimits | None, dict]:
+            min_feature: float | None, min_hole: float | None,
+            target: Target | None) -> tuple[FabricationLimits | None, dict]:
     """``design``'s ``--material/--hinge``, ``--printer/--style``, ``--min-feature`` and ``--min-hole`` as plain
     mm limits (None: no fabrication rows), and the intent stored in the design for ``cut``/``print``."""
-    parts, names, intent = [], [], {}
+    parts, names = [], []
+    intent: dict[str, str | float] = {}  # cut/print defaults: material, hinge, printer, style, size, scale
     if hinge and not material:
         raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
     if style and not printer:

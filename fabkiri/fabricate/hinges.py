@@ -65,8 +65,8 @@ def assign_faces(pattern: Pattern, states: dict[int, np.ndarray]) -> FaceAssignm
     """Two-colour the graph "hinges coincide in some closed state" by BFS depth."""
     H = pattern.topology.n_hinges
     eps = 1e-6 * pattern.tile_size
-    pairs = [coincident_pairs(hinge_points(pattern, c), eps) for c in states.values()]
-    pairs = np.unique(np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64), axis=0)
+    per_state = [coincident_pairs(hinge_points(pattern, c), eps) for c in states.values()]
+    pairs = np.unique(np.concatenate(per_state) if per_state else np.zeros((0, 2), np.int64), axis=0)
     face = np.zeros(H, dtype=np.int64)
     if len(pairs) and H:
         g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(H, H)).tocsr()
@@ -191,7 +191,7 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
             for i in range(0, len(hs) - 1, 2):
                 partner[hs[i]], partner[hs[i + 1]] = hs[i + 1], hs[i]
         elif len(hs) > 2:
-            used = set()
+            used: set[int] = set()  # hinge ends already paired
             for i in range(len(hs)):
                 if hs[i] in used:
                     continue
@@ -228,7 +228,7 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
     return out
 
 
-def _segments_of(geom) -> np.ndarray:
+def _segments_of(geom: shapely.Geometry) -> np.ndarray:
     """All 2-point segments of a (multi)linestring, ``(n, 2, 2)``."""
     coords, idx = shapely.get_coordinates(shapely.get_parts(geom), return_index=True)
     same = idx[1:] == idx[:-1]
@@ -353,7 +353,7 @@ def ligament_design(pattern: Pattern, corners: np.ndarray, shrunk: np.ndarray, *
     cA, cB = top.hinge_corner.T
     apex = np.stack([shrunk[A, cA], shrunk[B, cB]], 1)
     lengths = np.linalg.norm(apex[:, 1] - apex[:, 0], axis=1)
-    warnings = []
+    warnings: list[str] = []
     if len(lengths) == 0:
         return LigamentDesign(0.0, turn_rad, lengths, lengths, apex, warnings)
     Lmin = float(lengths.min())
@@ -388,16 +388,17 @@ def ligament_strips(apex: np.ndarray, width: float, embed: float) -> np.ndarray:
     return shapely.buffer(lines, 0.5 * width, cap_style="flat", join_style="mitre")
 
 
-def kerf_outset(polys, offset: float):
+def kerf_outset(polys: shapely.Geometry | np.ndarray, offset: float) -> shapely.Geometry | np.ndarray:
     """Toolpath outside a part by ``offset`` = kerf/2 (holes shrink), mitre joins."""
     if offset == 0:
         return polys
     return shapely.buffer(polys, offset, join_style="mitre", mitre_limit=MITRE_LIMIT)
 
 
-def rings_of(geom) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def rings_of(geom: shapely.Geometry) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """(exteriors, interiors) of a (multi)polygon as open coordinate arrays, snapped to the grid."""
-    ext, inner = [], []
+    ext: list[np.ndarray] = []
+    inner: list[np.ndarray] = []
     for poly in shapely.get_parts(geom):
         if poly.is_empty:
             continue

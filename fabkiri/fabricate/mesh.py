@@ -112,7 +112,8 @@ def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
         else:  # disjoint bodies: their concatenation is still a closed 2-manifold
-            files[f"{stem}{suffix}.stl"] = trimesh.util.concatenate(tms).export(file_type="stl")
+            both = trimesh.util.concatenate(tms)  # a Trimesh; trimesh annotates it as a Geometry
+            files[f"{stem}{suffix}.stl"] = both.export(file_type="stl")  # type: ignore[call-arg]  # Geometry's needs a file
     return files
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -292,7 +293,7 @@ def read_obj(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
 
 def import_obj(
     design: str | os.PathLike,
-    contracted: list[str | os.PathLike] | tuple = (),
+    contracted: Sequence[str | os.PathLike] = (),
     *,
     scale: float = 1.0,
     name: str | None = None,

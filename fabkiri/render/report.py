@@ -20,7 +20,7 @@ import html
 import io
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -28,6 +28,10 @@ from ..mechanics.info import describe
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
 from .deployment import _pyplot
+
+if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 SECTIONS = ("summary", "design", "states", "fabricability", "verification", "deployment", "cut", "print",
             "assembly", "bom", "tolerance")
@@ -107,17 +111,19 @@ def rows_table(rows: list[dict[str, Any]], limit: int = 60) -> str:
     return ("<table><tr>" + "".join(f"<th>{html.escape(k)}</th>" for k in keys) + f"</tr>{body}</table>{more}")
 
 
-def _fig_png(fig) -> bytes:
+def _fig_png(fig: Figure) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None}, bbox_inches="tight")
     _pyplot().close(fig)
     return buf.getvalue()
 
 
-def _tiles(ax, corners: np.ndarray, color: str = "#b8c7d9") -> None:
+def _tiles(ax: Axes, corners: np.ndarray, color: str = "#b8c7d9") -> None:
     from matplotlib.collections import PolyCollection
 
-    ax.add_collection(PolyCollection(corners, facecolors=color, edgecolors="#34495e", linewidths=0.4))
+    # matplotlib's stubs ask for a sequence of vertex arrays; a (T, k, 2) array is one (and its fast path)
+    ax.add_collection(PolyCollection(corners, facecolors=color,  # type: ignore[arg-type]
+                                     edgecolors="#34495e", linewidths=0.4))
     lo, hi = corners.reshape(-1, 2).min(0), corners.reshape(-1, 2).max(0)
     pad = 0.04 * float((hi - lo).max())
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -324,7 +330,7 @@ def plate_png(stl: Path) -> bytes:
     import trimesh
     from matplotlib.collections import PolyCollection
 
-    m = trimesh.load(stl, force="mesh")
+    m = cast(trimesh.Trimesh, trimesh.load(stl, force="mesh"))  # force="mesh": a Trimesh, annotated as a Geometry
     up = m.face_normals[:, 2] > 1e-6  # faces seen from above
     tri = m.triangles[up]
     z = tri[:, :, 2].mean(1)
@@ -344,10 +350,11 @@ def plate_png(stl: Path) -> bytes:
     return _fig_png(fig)
 
 
-def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
+def _assembly_section(cut_dir: Path | None, cut_man: dict | None, print_dir: Path | None,
+                      print_man: dict | None) -> str:
     body = ""
     for d, man, what in ((cut_dir, cut_man, "cut"), (print_dir, print_man, "print")):
-        if man is None:
+        if d is None or man is None:  # (a manifest comes with its folder)
             continue
         a = man.get("assembly")
         if isinstance(a, dict) and a.get("steps"):
@@ -361,7 +368,7 @@ def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
     return body or _missing("not provided: pass --cut DIR and/or --print DIR")
 
 
-def _bom_section(cut_man, print_man) -> str:
+def _bom_section(cut_man: dict | None, print_man: dict | None) -> str:
     body = ""
     if cut_man is not None:
         bom = cut_man.get("bill_of_materials")

@@ -135,7 +135,8 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
 def make_job(params: dict, actions: tuple[str, ...]) -> Job:
     files = {}
     for key in ("target", "contracted_target"):
-        for v in params.get(key) if isinstance(params.get(key), list) else [params.get(key)]:
+        value = params.get(key)
+        for v in value if isinstance(value, list) else [value]:
             p = Path(re.sub(r"^\s*[12]\s*:", "", v)) if isinstance(v, str) else None
             if p is not None and p.is_absolute() and p.is_file():
                 files[str(p)] = hashlib.sha256(p.read_bytes()).hexdigest()
@@ -193,7 +194,7 @@ def _check_targets(jobs: list[Job], where: str) -> None:
     """Every named target or target file loads (cheap, before any worker starts)."""
     from ..design.targets import load_target
 
-    for t in sorted({j.params.get("target") for j in jobs if j.params.get("target")}):
+    for t in sorted({t for j in jobs if (t := j.params.get("target"))}):
         try:
             load_target(t, None)
         except InputError as exc:

@@ -19,6 +19,7 @@ and the declared allowances (manifest.json) is trusted:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,7 +36,7 @@ from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
-from .pattern_checks import closed_state_checks, fabrication_tolerances, state_check_id
+from .pattern_checks import Tolerances, closed_state_checks, fabrication_tolerances, state_check_id
 from .quads import (
     MAX_FITTED_SHRINK_MM,
     UNDO_MITRE,
@@ -135,7 +136,8 @@ def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D:
     return rec
 
 
-def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float, tol: float):
+def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float,
+                         tol: float) -> tuple[np.ndarray, float | None, int]:
     """The tiles (corners in the design's arity), the reference square's side (None without one) and
     how many regions are neither. The square is looked for among the quads: the tiles themselves
     when they are quads, the regions that are not tiles otherwise."""
@@ -227,7 +229,7 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
 
 
 def _match_sheet_in_place(al: Allowances, m: _Matched, sheet: int, R: np.ndarray, Ystate: np.ndarray, T: int,
-                          tol: float, only_sheet: bool):
+                          tol: float, only_sheet: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One in-place sheet matched to its design tiles; a symmetric single sheet also records the other
     labelings that fit as well (``m.labelings``)."""
     design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
@@ -279,7 +281,7 @@ def _congruence_check(rep: Report, D: np.ndarray, cut_shapes: np.ndarray, have: 
                      + "largest corner offset from a proper rigid fit of the other corners, and edge-length change"))
 
 
-def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarray, tol, g: str,
+def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarray, tol: Tolerances, g: str,
                      n_sheets: int) -> None:
     """(b) in place: the sheet is the declared closed state."""
     rep.add(measured(f"{g}: (b) in place = closed state {m.state}",
@@ -300,7 +302,7 @@ def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarra
 
 
 def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray,
-                       rebuild: list[int], tol, g: str) -> None:
+                       rebuild: list[int], tol: Tolerances, g: str) -> None:
     """(c) the cut tiles reassembled by the hinge correspondence give the closed states in ``rebuild``."""
     for s in rebuild:
         name = f"{g}: (c) state {s} from cut tiles"
@@ -360,7 +362,7 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
 def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
                      linework: dict[int, Linework], cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
                      sheet_piece: bool, in_place: bool, fitted: float | None, g: str,
-                     labelings: list[np.ndarray] = ()) -> None:
+                     labelings: Sequence[np.ndarray] = ()) -> None:
     """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
     A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
     hinges at different corners; its marks say which one was cut, so the best of them is reported."""
@@ -444,7 +446,7 @@ def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, 
 def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
     """Every sheet of the layout in the same format as ``path`` (just ``path`` for one sheet)."""
     fmt = path.suffix.lower().lstrip(".")
-    named = {k: v.get(fmt) for k, v in al.sheet_files.items() if v.get(fmt)}
+    named = {k: v[fmt] for k, v in al.sheet_files.items() if v.get(fmt)}
     if len(named) <= 1:
         sheet = next((k for k, v in named.items() if v == path.name), 1)
         return {sheet: path}

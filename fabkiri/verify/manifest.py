@@ -173,7 +173,7 @@ class Allowances:
     reference: dict[int, np.ndarray]  # sheet -> 4 corners
     hinge_features: list[dict[str, Any]]
     tile_sheet: dict[int, int]
-    sheet_files: dict[int, str]
+    sheet_files: dict[int, dict[str, str]]  # sheet -> {"dxf": file, "svg": file}
     cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
     ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
     tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)

@@ -64,11 +64,11 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
     if len(pairs):
         from scipy import sparse
 
-        n = len(pts)
-        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        n_pts = len(pts)
+        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_pts, n_pts))
         _, label = csgraph.connected_components(g, directed=False)
         first = np.full(label.max() + 1, -1)
-        first[label[::-1]] = np.arange(n)[::-1]
+        first[label[::-1]] = np.arange(n_pts)[::-1]
         pts = pts[first[label]]
     segs = pts.reshape(-1, 2, 2)
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
@@ -76,7 +76,7 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
 
 
 
-def _node(segs: np.ndarray, eps: float = JOIN_MM):
+def _node(segs: np.ndarray, eps: float = JOIN_MM) -> shapely.Geometry:
     """Segments ``(n, 2, 2)`` noded: ends within ``eps`` of another line are put on it (T-junctions
     rounded off their edge), then every crossing and touch is a node. Returns the union."""
     lines = shapely.linestrings(segs)
@@ -91,7 +91,7 @@ def _node(segs: np.ndarray, eps: float = JOIN_MM):
     return shapely.unary_union(lines)
 
 
-def _noded(lw: Linework, eps: float = JOIN_MM):
+def _noded(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
     """The CUT linework as noded line parts (shapely), endpoints within ``eps`` merged."""
     segs = _snapped_segments(lw, eps)
     if len(segs) == 0:
@@ -149,10 +149,10 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
         joined = join_pieces(lw)
         if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
             # ligament sheet), else in-place linework
-            rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
-            n_open = len(joined.closed) - len(rings.closed)
+            closed_lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
+            n_open = len(joined.closed) - len(closed_lw.closed)
             # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
-            hinge = "ligament" if n_open < len(rings.closed) and _nested(rings) else \
+            hinge = "ligament" if n_open < len(closed_lw.closed) and _nested(closed_lw) else \
                 "separate" if not n_open else "tape"
         if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
             lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
@@ -180,7 +180,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     # join tolerance drops it (and leaves convex tiles exactly as they are)
     parts = _hairline_free(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
     # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
-    def cuts_tiles(parts) -> bool:
+    def cuts_tiles(parts: np.ndarray) -> bool:
         return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
 
     if strips is not None and cuts_tiles(parts):
@@ -201,7 +201,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     return parts, how + ", grown by the tile shrink"
 
 
-def _material(polys: np.ndarray, kerf_offset: float):
+def _material(polys: np.ndarray, kerf_offset: float) -> shapely.Geometry:
     """A ligament sheet's material: outer loops minus the loops inside them, less the kerf offset."""
     tree = shapely.STRtree(polys)
     inside = np.zeros(len(polys), dtype=bool)
@@ -213,7 +213,7 @@ def _material(polys: np.ndarray, kerf_offset: float):
     return material
 
 
-def sheet_material(lw: Linework, kerf_offset: float):
+def sheet_material(lw: Linework, kerf_offset: float) -> shapely.Geometry:
     """The material of a ligament sheet's CUT linework (its closed outlines)."""
     joined = join_pieces(lw)
     rings = [shapely.Polygon(p) for p, c in zip(joined.polylines, joined.closed) if c]
@@ -226,7 +226,7 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
     design tiles; with one candidate, that one."""
     if len(candidates) == 1:
         return candidates[0]
-    best, score = candidates[0], -1
+    best, score = candidates[0], None
     for lw in candidates:
         try:
             polys, _ = recover_polygons(lw, al, sheet, arity=D.shape[1])
@@ -236,6 +236,6 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
         _, res, _ = match_by_shape(D, quads, L)
         n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
         key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions
-        if score == -1 or key > score:
+        if score is None or key > score:
             best, score = lw, key
     return best

@@ -7,6 +7,8 @@ manifest, so the verifier can check each ligament's width and length.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 import shapely
 
@@ -18,6 +20,12 @@ from .. import hinges as hg
 from ..drawing import snap
 from . import Cutting, HingeKind, register
 
+if TYPE_CHECKING:
+    from ...pattern.model import Pattern
+    from ..drawing import SheetDrawing
+    from ..materials import Material
+    from . import SheetCut
+
 FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
 NOTCH_AREA_MM2 = 1e-6  # a notch the kerf toolpath fills counts from this area (float noise is far smaller)
 
@@ -25,7 +33,8 @@ NOTCH_AREA_MM2 = 1e-6  # a notch the kerf toolpath fills counts from this area (
 class Ligament(HingeKind):
     name = "ligament"
 
-    def prepare(self, pattern, corners, tile_polys, mat, *, state, scale, options) -> Cutting:
+    def prepare(self, pattern: Pattern, corners: np.ndarray, tile_polys: np.ndarray, mat: Material, *,
+                state: int, scale: float, options: Any) -> Cutting:
         shrink = mat.gap_mm / 2
         try:
             regions = hg.shrink_tiles(corners, shrink)
@@ -39,8 +48,9 @@ class Ligament(HingeKind):
         return Cutting(corners, regions, shapely.polygons(corners), label_margin=0.5, offset=mat.kerf_offset_mm,
                        shrink=shrink, ligament=lig, strips=strips, warnings=list(lig.warnings))
 
-    def draw(self, sd, sheet, cutting) -> list[dict]:
+    def draw(self, sd: SheetDrawing, sheet: SheetCut, cutting: Cutting) -> list[dict]:
         s, on, place = sheet.index, sheet.tiles, sheet.place
+        assert cutting.strips is not None  # prepare() always plans the strips
         A, B = sheet.hinge_tiles.T
         same = np.flatnonzero((sheet.sheet_of[A] == s) & (sheet.sheet_of[B] == s))
         shift = place.shift[on[0]]
@@ -56,7 +66,7 @@ class Ligament(HingeKind):
         return _spans(_left_by_laser(material, outline, cutting.offset), small, moved_strips, same, s)
 
 
-def _left_by_laser(material, outline, offset: float):
+def _left_by_laser(material: shapely.Geometry, outline: shapely.Geometry, offset: float) -> shapely.Geometry:
     """The material the laser leaves: ``material`` and the notches narrower than the kerf that its
     offset toolpath fills (a strip meeting a small tile's edge at a shallow angle leaves one), so the
     declared spans cover them. ``material`` itself where the toolpath fills nothing (any quad sheet)."""
@@ -70,7 +80,7 @@ def _left_by_laser(material, outline, offset: float):
                              grid_size=hg.GRID)
 
 
-def _spans(material, small: np.ndarray, moved_strips: np.ndarray, same: np.ndarray, s: int) -> list[dict]:
+def _spans(material: shapely.Geometry, small: np.ndarray, moved_strips: np.ndarray, same: np.ndarray, s: int) -> list[dict]:
     """The free spans: material not in any tile, from the same snapped geometry as
     the cut, one manifest entry per polygon of each hinge's span."""
     tiles_here = shapely.union_all(small, grid_size=hg.GRID)

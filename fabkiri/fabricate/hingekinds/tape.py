@@ -7,10 +7,19 @@ B's a chord where the tape ends.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
 import shapely
 
 from .. import hinges as hg
 from . import Cutting, HingeKind, register
+
+if TYPE_CHECKING:
+    from ...pattern.model import Pattern
+    from ..drawing import SheetDrawing
+    from ..materials import Material
+    from . import SheetCut
 
 
 class Tape(HingeKind):
@@ -18,14 +27,15 @@ class Tape(HingeKind):
     face_letter_corners = True
     tape_marks = True
 
-    def prepare(self, pattern, corners, tile_polys, mat, *, state, scale, options) -> Cutting:
+    def prepare(self, pattern: Pattern, corners: np.ndarray, tile_polys: np.ndarray, mat: Material, *,
+                state: int, scale: float, options: Any) -> Cutting:
         # corners a solver left apart by less than the tolerance are one node of the linework
         eps = 0.5 * mat.tolerance_mm
         corners = hg.snap_corners(corners, eps, hg.closure_pairs(pattern, state))
         corners = hg.snap_corners(hg.snap_to_edges(corners, eps), eps, hg.closure_pairs(pattern, state))
         return Cutting(corners, corners, shapely.polygons(corners), label_margin=0.5 + mat.kerf_mm / 2)
 
-    def draw(self, sd, sheet, cutting) -> list[dict]:
+    def draw(self, sd: SheetDrawing, sheet: SheetCut, cutting: Cutting) -> list[dict]:
         rings, lines = hg.tape_linework(sheet.corners[sheet.tiles])
         for p in lines:
             sd.add("CUT", p, False)

@@ -180,6 +180,7 @@ def tiles(r: Realised, mesh=None):
     import manifold3d as m3d
 
     job = r.job
+    assert job.pins is not None  # a pinned job always carries its pin plan
     lv = job.pins.levels
     z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
     mask = pingeom.clearance_mask(job.plan.hinge_xy + list(job.shift), job.pins.geometry)
@@ -217,6 +218,7 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
     job = r.job
     if job.style != "pinned":
         raise FabricationError("the deployment sweep is for pinned tiles")
+    assert job.pins is not None  # a pinned job always carries its pin plan
     lv = job.pins.levels
     zs = [0.5 * sum(lv.level(k)) for k in range(4)] + [lv.level(k)[1] + 0.5 * lv.axial for k in range(3)]
     back = -np.asarray(job.shift)
@@ -230,14 +232,15 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
     for f in range(len(path.t)):
         poses = [geometry.kabsch(src[t], path.corners[f, t]) for t in range(T)]
         for z in zs:
-            geoms, owner = [], []
+            parts: list = []  # every moved section piece, and the tile it belongs to
+            owners: list[int] = []
             for t in range(T):
                 th, tr = poses[t]
                 moved = shapely.transform(sections[z][t], lambda c, th=th, tr=tr: geometry.rotate(c, th) + tr)
-                geoms.extend(moved)
-                owner.extend([t] * len(moved))
-            geoms = np.array(geoms, dtype=object)
-            owner = np.asarray(owner)
+                parts.extend(moved)
+                owners.extend([t] * len(moved))
+            geoms = np.array(parts, dtype=object)
+            owner = np.asarray(owners)
             i, j = shapely.STRtree(geoms).query(geoms, predicate="dwithin", distance=1.0)
             sel = (i < j) & (owner[i] != owner[j])
             if not sel.any():

@@ -78,6 +78,7 @@ def build(pattern: Pattern, state: int, printer: Printer, layout: str | None = N
 def clearances(r: Realised, rep: MeshReport) -> None:
     """Tiles-and-strips style: clearances measured on sections of the mesh."""
     job, pr = r.job, r.job.printer
+    assert job.strips is not None  # a tiles-and-strips job always carries its strips
     # measured on the mesh: sections of both bodies at the bottom pocket, the
     # bare middle and the top pocket. Each section piece is attributed to
     # the tile or strip it belongs to; pieces of different tiles keep the
@@ -92,7 +93,7 @@ def clearances(r: Realised, rep: MeshReport) -> None:
     A, B = job.plan.hinge_tiles.T
     worst = np.inf
     lv = job.z_levels()
-    zs = (lv["bottom"], lv["tiles"], lv["top"])
+    zs: tuple[float, ...] = (lv["bottom"], lv["tiles"], lv["top"])
     if job.layout == "stacked":  # the base sheet joins tiles by design: it must be the planned sheet
         zs = zs[1:]
         planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
