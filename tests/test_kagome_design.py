@@ -40,7 +40,7 @@ def test_families_vanish_exactly_where_the_pattern_closes():
         assert np.allclose(rings, state_residuals(p, s, x + 0.01).rings)
 
 
-@pytest.mark.parametrize("rows, cols", [(4, 4), (7, 5)])
+@pytest.mark.parametrize("rows, cols", [(4, 4), pytest.param(7, 5, marks=pytest.mark.slow)])  # 4x4 in the quick loop
 def test_reconfigurable_family_loses_one_equation_per_hole(rows, cols):
     """Both states' edge pairs chain the six edges of a hole around a cycle: one of the six
     equalities follows from the others. Nothing else is dependent at these sizes, so the family
@@ -118,7 +118,7 @@ def test_a_kagome_fitted_to_a_circle_closes_in_both_states_and_reports_its_confo
     from fabkiri.design.kagome_fit import design
     from fabkiri.mechanics.contract import with_contracted_states
 
-    std = standard_kagome(6, 10)
+    std = standard_kagome(4, 6)  # 6x10 as well (3.0 %, 11.7 % from the start), in 1.7x the time
     target = TG.circle().scaled_to(120.0)
     d = design(std, target)
     assert d.converged and d.max_equality <= 1e-10
@@ -127,7 +127,7 @@ def test_a_kagome_fitted_to_a_circle_closes_in_both_states_and_reports_its_confo
     failed = {c.name for c in rep.failed()}
     assert failed <= {"target shape"}, failed  # closed in both states, no overlaps, tiles simple
     conf = DC.deployed(p.nodes, p.topology, target)
-    # measured 3.0 % of the size; the standard rectangle scaled into the circle misses by far more
+    # measured 3.3 % of the size; the standard rectangle scaled into the circle misses by far more (11.7 %)
     assert conf["hausdorff_rel"] <= 0.05
     start = DC.deployed(std.nodes * (120.0 / np.ptp(std.nodes, 0).max()), std.topology, target)
     assert conf["hausdorff_rel"] < 0.5 * start["hausdorff_rel"]
@@ -163,7 +163,7 @@ def test_rigid_family_jacobians_match_finite_differences(state):
         assert np.abs(J.toarray() - fd).max() <= 1e-7, fam.name
 
 
-@pytest.mark.parametrize("rows, cols", [(4, 4), (7, 5)])
+@pytest.mark.parametrize("rows, cols", [(4, 4), pytest.param(7, 5, marks=pytest.mark.slow)])  # 4x4 in the quick loop
 def test_a_four_dimensional_counter_rotating_rigid_subfamily_exists(rows, cols):
     """Up tiles +ω, down tiles -ω: every hole's up-tile edges sum to zero and each state's folded
     gaps are equal. The family has dimension 4 (modulo rigid motions) whatever the size; its

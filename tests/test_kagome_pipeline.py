@@ -104,8 +104,8 @@ def test_a_hole_with_unequal_edges_fails_verify_in_the_state_it_breaks(kept, tmp
 
 def test_design_kagome_heart_is_written_but_fails_naming_the_shape(tmp_path, run_cli):
     out = tmp_path / "h.json"
-    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x10", "--target", "heart",
-                           "--size", "120", "-o", out)
+    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "4x6", "--target", "heart",
+                           "--size", "120", "-o", out)  # 4x6 misses as 6x10 does (17 % against 11 %), in 2/3 the time
     # the heart is not matched (docs/kagome.md): the best iterate is written, closed in both
     # states, and the verdict names the shape
     assert code == 1 and "shape missed" in err and "FAIL target shape" in err, err

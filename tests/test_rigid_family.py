@@ -163,13 +163,14 @@ def test_cli_keeps_the_closest_valid_fit():
 
 
 def test_auto_keeps_the_better_of_both_solvers():
-    """On a small least-squares case auto runs both solvers and keeps the lower objective."""
+    """On a small least-squares case auto runs both solvers and keeps the lower objective (4x4 star:
+    reduced 1.10 against full 5.32; the 6x6 heart, 1.12 against 2.52, took 1.5x the time)."""
     from fabkiri.design.solve import _objective, _Problem
 
-    target = T.load_target("heart", 80.0)
+    target = T.load_target("star", 80.0)
     out = {}
     for solver in ("reduced", "full", "auto"):
-        req = DesignRequest(6, 6, target, rigid=True, solver=solver)
+        req = DesignRequest(4, 4, target, rigid=True, solver=solver)
         res = design(req)
         assert res.converged, solver
         prob = _Problem(req)
@@ -337,13 +338,16 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
     # and the reduced Jacobian of all rows agrees with finite differences of the stacked residuals
     Jr = m.reduced_jacobian(Jx, Jc, p)
     h = 1e-6
+    checked = 0
     for j in (0, fam.n_seeds + 3, len(p) - 1):
         e = np.zeros(len(p))
         e[j] = h
         rp = m.rows(m.state(p + e))[0]
         rm = m.rows(m.state(p - e))[0]
-        if len(rp) == len(r) == len(rm):
+        if len(rp) == len(r) == len(rm):  # the same active inequality rows on both sides
             assert np.abs((rp - rm) / (2 * h) - Jr[:, j]).max() <= 1e-5 * max(1.0, np.abs(Jr).max())
+            checked += 1
+    assert checked >= 2, checked  # the comparison was made (an active-set change skips at most one column)
 
 
 def _merits(rows, cols, target, rho):

@@ -43,13 +43,15 @@ def test_help_imports_no_numerics():
     assert not any(m.startswith("fabkiri.cli.") and m != "fabkiri.cli.main" for m in mods)
 
 
-def test_design_imports_only_what_it_uses(tmp_path):
-    # --no-preview: the preview PNG is drawn with matplotlib, which is the point of that option
-    mods = _modules_after(["design", "--tiles", "3x3", "--target", "circle", "--rigid", "--no-preview",
-                           "-o", str(tmp_path / "p.json")])
+def test_design_with_its_preview_imports_only_what_it_uses(tmp_path):
+    # one process for both checks (each is an interpreter start and a design): the preview PNG is drawn
+    # without matplotlib, so a design with its preview must import no more than one without
+    mods = _modules_after(["design", "--tiles", "3x3", "--target", "circle", "--rigid", "-o", str(tmp_path / "p.json")])
     assert (tmp_path / "p.json").exists()
+    png = (tmp_path / "p.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
     assert "fabkiri.design.solve" in mods
-    assert not {"scipy.interpolate", "scipy.optimize", "ezdxf", "trimesh", "matplotlib", "svgwrite"} & mods
+    assert not {"scipy.interpolate", "scipy.optimize", "ezdxf", "trimesh", "matplotlib", "svgwrite", "jsonschema"} & mods
     assert not {"fabkiri.cli.cut_cmd", "fabkiri.cli.print_cmd", "fabkiri.cli.deploy_cmd"} & mods
 
 

@@ -34,6 +34,8 @@ rigid = [true, false]
 shape_tol = "25%"
 init = "rescaled"
 """
+SWEEP_2 = SWEEP_12.replace('target = ["circle", "square", "outline.csv"]', 'target = ["circle"]').replace(
+    'tiles = ["4x4", "5x5"]', 'tiles = ["4x4"]')  # the same sweep cut to 2 jobs
 FIGURES = ("max_equality_residual", "hausdorff_mm", "one_minus_iou", "thinnest_tile_mm")
 
 
@@ -77,12 +79,34 @@ def test_twelve_jobs_on_a_two_worker_local_cluster(local_run):
     assert page.count("<tr class=") == 12 and page.count("<img") == 12
 
 
+@pytest.mark.slow  # the 12-job, 2-process cluster run; the fast loop checks the same on a small in-process sweep below
 def test_a_second_run_does_no_work(local_run):
     spec, res, folder = local_run
     out = folder / "out"
     stamps = {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()}
     again = sweep(spec, output=out, workers=2)
     assert again.ran == 0 and again.skipped == 12 and again.workers == 0  # no cluster was even started
+    assert {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()} == stamps
+    assert [r["id"] for r in again.rows] == [r["id"] for r in res.rows]
+
+
+def test_a_second_run_of_a_small_sweep_does_no_work(tmp_path):
+    """Two jobs on an in-process (threaded) dask client, then the same sweep again: nothing runs, no cluster
+    is started, no file is touched, the rows come back in the same order."""
+    from distributed import Client
+
+    path = tmp_path / "s.toml"
+    path.write_text(SWEEP_2)
+    spec = load_spec(path)
+    assert len(spec.jobs) == 2
+    out = tmp_path / "out"
+    with Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None) as client:
+        res = sweep(spec, client, output=out)
+    assert res.ran == 2 and res.skipped == 0 and [r["status"] for r in res.rows].count("error") == 0
+    stamps = {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()}
+    assert len(stamps) >= 6  # pattern.json, pattern.png, row.json per job
+    again = sweep(spec, output=out, workers=2)
+    assert again.ran == 0 and again.skipped == 2 and again.workers == 0  # no cluster was even started
     assert {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()} == stamps
     assert [r["id"] for r in again.rows] == [r["id"] for r in res.rows]
 

@@ -10,6 +10,7 @@ from ..errors import CheckFailed
 from ..fileio import atomic_write_many
 from ..mechanics.drivers import AUTO, driver_names
 from ..mechanics.tube import path_lines
+from .argtypes import bounded
 from .pattern_cmds import load_any
 
 
@@ -81,16 +82,7 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     return 0
 
 
-def _steps(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected a whole number of steps, got {text!r}"
-        ) from None
-    if v < 2 or v > 10000:
-        raise argparse.ArgumentTypeError(f"steps must lie in 2..10000, got {v}")
-    return v
+_steps = bounded(int, lambda v: 2 <= v <= 10000, "expected a whole number of steps", "steps must lie in 2..10000, got {v}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

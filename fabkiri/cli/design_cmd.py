@@ -32,6 +32,7 @@ from ..errors import InputError
 from ..fabricate.fabricability import PRINT_STYLES
 from ..fabricate.materials import HINGE_KINDS
 from ..fileio import check_output_file
+from .argtypes import bounded
 from .pattern_cmds import add_i_know, parse_tiles
 
 
@@ -65,25 +66,6 @@ def _jsonable(v):
     return j(v)
 
 
-def _tol(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (0 < v < 1e-2):
-        raise argparse.ArgumentTypeError(f"tolerance must lie in (0, 1e-2), got {text!r}")
-    return v
-
-
-def _size(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a length in mm, got {text!r}") from None
-    if not (np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM):
-        raise argparse.ArgumentTypeError(f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, "
-                                         f"got {text!r}")
-    return v
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -18,6 +18,7 @@ from ..pattern.io import write_pattern
 from ..pattern.model import Pattern
 from ..pattern.periodic import standard_tube
 from ..pattern.tessellation import kinds, tessellation
+from .argtypes import bounded
 
 
 def parse_tiles(text: str) -> tuple[int, int]:
@@ -36,24 +37,9 @@ def load_any(path: str) -> Pattern:
     return load_pattern(path)
 
 
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v > 0 or v != v or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive finite number, got {text!r}")
-    return v
-
-
-def _nonneg(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 <= v < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return v
+_positive = bounded(float, lambda v: 0 < v < float("inf"), "expected a number",
+                    "expected a positive finite number, got {text!r}")
+_nonneg = bounded(float, lambda v: 0 <= v < float("inf"), "expected a number", "expected a finite number >= 0, got {text!r}")
 
 
 def cmd_new(args: argparse.Namespace) -> int:

@@ -8,6 +8,7 @@ import sys
 import time
 
 from ..errors import InputError
+from .argtypes import bounded
 
 
 class Bar:
@@ -87,24 +88,8 @@ def _scheduler(text: str) -> str:
     return text
 
 
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 1 <= v <= 1024:
-        raise argparse.ArgumentTypeError(f"expected 1 to 1024, got {text!r}")
-    return v
-
-
-def _seconds(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
-    if not 0 < v < 1e7:
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return v
+_count = bounded(int, lambda v: 1 <= v <= 1024, "expected a whole number", "expected 1 to 1024, got {text!r}")
+_seconds = bounded(float, lambda v: 0 < v < 1e7, "expected seconds", "expected a positive number of seconds, got {text!r}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -20,7 +20,15 @@ import numpy as np
 
 from .closed_families import ClosedGrid
 from .offsets import OffsetFamily
-from .outline import PSI_DEPLOYED, REG_WEIGHT, _lm, active_rows, outline_kind, square_affine
+from .outline import (
+    PSI_DEPLOYED,
+    REG_WEIGHT,
+    active_rows,
+    lm_stages,
+    outline_kind,
+    outline_space,
+    square_affine,
+)
 
 # |t| above T_SOFT is penalised like any inequality inside its margin; T_HARD is never crossed (step
 # limiting). A hard wall alone at the soft bound left LM halving every step that touched it: 5x5 ended at
@@ -128,23 +136,18 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
     rows = _square_rows(prob, fam.n_seeds, Z0, rep1, g1, states, kinds, log)
     if rows is None:
         return None
-    affine = square_affine(*rows, 2 * fam.n_seeds)
-    if affine is None:
-        log("offset outline: the square rows are inconsistent")
+    space = outline_space(square_affine(*rows, 2 * fam.n_seeds), states, kinds, log,
+                          "offset outline: the square rows are inconsistent")
+    if space is None:
         return None
-    base, Nsp = affine
-    circles = [s for s in states if kinds[s] == "circle"]
-    relative = not any(kinds[s] == "square" for s in states)
+    base, Nsp, circles, relative = space
     op = _OffsetOutline(prob, fam, base, Nsp, circles, relative, rep1)
     # circle start from the start member's algebraic circle
     if t_start is not None:
         t0 = np.asarray(t_start, dtype=float)
     p = op.start(Nsp.T @ (s0 - base), t0)
     log(f"offset outline start: violation {op.viol(op.nodes(p)):.2e}")
-    for rho, stall_tol, cap in STAGES:
-        p, it = _lm(op.evaluate, op.viol, op.nodes, p, rho, cap, stall_tol)
-        iters[f"offset_outline_rho_{rho:g}"] = it
-        log(f"offset outline rho={rho:g}: {it} iterations, violation {op.viol(op.nodes(p)):.2e}")
+    p = lm_stages(op.evaluate, op.viol, op.nodes, p, STAGES, "offset_outline", iters, log)
     y = op.member(p, False)
     X = op.deployed(y)
     for s_, g in prob.grids.items():

@@ -29,6 +29,7 @@ from ..pattern.model import Pattern
 from ..pattern.periodic import check_tube_size, lattice_seam, with_seam
 from . import constraints as C
 from . import periodic as P
+from .lm import halving_gauss_newton
 from .objective import regularizer
 
 EQ_WEIGHT = 30.0  # equalities against the fit in the first stage (the second stage makes them exact)
@@ -130,19 +131,11 @@ class _TubeProblem:
 def _project(prob: _TubeProblem, x: np.ndarray, tol: float, max_iter: int = 30):
     """Gauss-Newton minimum-norm steps onto the equalities, halved until the residual norm drops;
     returns (x, max |r|, steps). It stops where no halving helps (the figures then say so)."""
-    r, J = prob.eq_residual(x)
-    steps = 0
-    while np.abs(r).max() > tol and steps < max_iter:
-        dx = lsqr(J, -r, atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0].reshape(-1, 2)
-        for _ in range(12):
-            r_new, J_new = prob.eq_residual(x + dx)
-            if np.linalg.norm(r_new) < np.linalg.norm(r):
-                break
-            dx = 0.5 * dx
-        else:
-            break
-        x, r, J = x + dx, r_new, J_new
-        steps += 1
+    def step(y, state):
+        r, J = state
+        return lsqr(J, -r, atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0].reshape(-1, 2)
+
+    x, (r, _), steps = halving_gauss_newton(x, prob.eq_residual(x), step, prob.eq_residual, tol, max_iter, 12)
     return x, float(np.abs(r).max()), steps
 
 
