@@ -66,6 +66,9 @@ def _jsonable(v):
     return j(v)
 
 
+_tol = bounded(float, lambda v: 0 < v < 1e-2, "expected a number", "tolerance must lie in (0, 1e-2), got {text!r}")
+_size = bounded(float, lambda v: bool(np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM), "expected a length in mm",
+                f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
