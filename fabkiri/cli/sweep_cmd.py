@@ -6,6 +6,7 @@ import argparse
 import re
 import sys
 import time
+from typing import TextIO
 
 from ..errors import InputError
 from .argtypes import bounded
@@ -14,7 +15,8 @@ from .argtypes import bounded
 class Bar:
     """done/failed/running and the ETA on one terminal line (one line per finished job when not a terminal)."""
 
-    def __init__(self, stream=sys.stderr):
+    def __init__(self, stream: TextIO | None = None):
+        stream = sys.stderr if stream is None else stream  # at call time: a default bound at import outlives it
         self.stream, self.tty, self.last = stream, stream.isatty(), None
 
     def __call__(self, c: dict) -> None:
