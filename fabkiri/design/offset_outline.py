@@ -184,7 +184,7 @@ class _OffsetOutline:
         self.w = np.sqrt(REG_WEIGHT)
         self.R0: dict = {}
         self.npar = 0
-        self._member = None
+        self._member: tuple[bytes, np.ndarray] | None = None
 
     def seeds(self, p):
         v = self.base + self.Nsp @ p[:self.k]

@@ -349,8 +349,9 @@ class _Evaluation:
     def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, dense=None,
                  values: dict | None = None):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
-        self._r, self._reg, self._blocks = r, None, None
+        self._r, self._blocks = r, None
         self._J: np.ndarray | None = None
+        self._reg: tuple[Any, Any, Any] | None = None  # the regulariser's (residual, normal matrix, gradient)
         self._dense = dense  # dense path: () -> (J, reg), called once, when a Jacobian is first asked for
         self._values = values  # block path: the inequality values gviol came from, reused by the rows
 
@@ -397,6 +398,7 @@ class _Evaluation:
         if self._reg is None:
             return self._J
         t = self.merit._tiles
+        assert t is not None, "a regulariser comes only with the tile-shape rows"
         Jr = self.merit.w * t.regularizer_jacobian(self._reg[0])
         return np.vstack([self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])])
 
