@@ -37,6 +37,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -157,15 +158,18 @@ def _fmt_design(r: dict) -> str:
 
 
 def section_startup(args) -> None:
-    print("\nstart-up: whole process, median of 5 (goals: --help < 0.25 s, 8x8 rigid design < 0.6 s)")
+    print("\nstart-up: whole process, median of 5 (goals: --help < 0.25 s, 8x8 rigid design < 0.6 s); "
+          "bytecode compiled once as installed ('source': every run compiles fabkiri, PYTHONDONTWRITEBYTECODE)")
     design8 = ["design", "--tiles", "8x8", "--target", "circle", "--rigid", "-o", "/tmp/bench-startup.json"]
-    cmds = [["--help"], design8, design8 + ["--no-preview"]]  # the preview PNG imports matplotlib
+    cmds = [["--help"], design8, design8 + ["--no-preview"]]  # --no-preview: no PNG drawn
     for label, code in _codes(args):
-        for argv in cmds:
-            r = speed.startup(code, argv)
-            shown = " ".join(a for a in argv if a not in ("-o", "/tmp/bench-startup.json"))
-            print(f"  {label:<8} fabkiri {shown:<58} median {r['median']:.3f} s (fastest "
-                  f"{r['fastest']:.3f}; CPU {r['cpu']:.3f} s; load {r['load']:.1f})", flush=True)
+        with tempfile.TemporaryDirectory(prefix="bench-pyc-") as pyc:
+            for argv in cmds:
+                shown = " ".join(a for a in argv if a not in ("-o", "/tmp/bench-startup.json"))
+                for how, r in (("bytecode", speed.startup(code, argv, bytecode=pyc)),
+                               ("source", speed.startup(code, argv))):
+                    print(f"  {label:<8} fabkiri {shown:<58} {how:<8} median {r['median']:.3f} s (fastest "
+                          f"{r['fastest']:.3f}; CPU {r['cpu']:.3f} s; load {r['load']:.1f})", flush=True)
 
 
 def section_full(args) -> None:

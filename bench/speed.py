@@ -51,12 +51,20 @@ def run_worker(code_dir: Path, worker: str, spec: dict, timeout: float) -> dict:
     return {**json.loads(lines[-1]), "load": l0, "process_s": time.perf_counter() - t0}
 
 
-def startup(code_dir: Path, argv: list[str], k: int = 5) -> dict:
+def startup(code_dir: Path, argv: list[str], k: int = 5, bytecode: str | None = None) -> dict:
     """Median wall time of ``python3 -m fabkiri.cli.main ARGV`` as a whole process, and its CPU time
-    (user + system, from ``getrusage`` of the children)."""
+    (user + system, from ``getrusage`` of the children).
+
+    ``bytecode``: a directory for compiled bytecode (``PYTHONPYCACHEPREFIX``, one unmeasured run first), as an
+    installed package has it; without it, under ``PYTHONDONTWRITEBYTECODE`` (set on the shared box), every
+    run compiles fabkiri's modules from source (about 0.1 CPU s of an 8x8 design)."""
     import resource
 
     env = {**os.environ, "PYTHONPATH": str(code_dir)}
+    if bytecode:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = bytecode
+        subprocess.run([sys.executable, "-m", "fabkiri.cli.main", *argv], cwd=code_dir, env=env, capture_output=True)
     times, cpus, l0 = [], [], load()
     for _ in range(k):
         r0 = resource.getrusage(resource.RUSAGE_CHILDREN)

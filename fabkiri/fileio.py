@@ -16,6 +16,7 @@ import contextvars
 import os
 import shutil
 import tempfile
+from collections.abc import Mapping
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -230,7 +231,7 @@ def check_output_folder(folder: str | os.PathLike) -> None:
     _root_folder(folder.parent if str(folder.parent) else Path("."))
 
 
-def atomic_write_many(folder: str | os.PathLike, files: dict[str, bytes | str]) -> list[Path]:
+def atomic_write_many(folder: str | os.PathLike, files: Mapping[str, bytes | str]) -> list[Path]:
     """Write several files into ``folder`` (created if missing) all-or-nothing.
 
     Every destination is checked before anything is written; everything is

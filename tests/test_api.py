@@ -51,3 +51,40 @@ def test_a_seed_starts_the_full_solver_elsewhere():
     assert a.valid and b.valid  # both converge to a reconfigurable design
     assert b.pattern.design["options"]["seed"] == 3 and "seed" not in a.pattern.design["options"]
     assert not np.allclose(a.pattern.nodes, b.pattern.nodes, atol=1e-6)  # from another start, another design
+
+
+def test_the_design_front_door_is_chosen_by_the_tessellation_kind(tmp_path, run_cli, monkeypatch):
+    """``design --lattice KIND`` and :func:`design_by_kind` hand the request to the front door registered
+    for the kind: a front door registered from outside (as a new kind's module would) is called with the
+    parsed request, and what it writes and says is what the CLI writes and prints; quad-only options
+    refused by the kagome door, an unknown kind named with the known ones."""
+    from dataclasses import dataclass
+    from pathlib import Path
+
+    from fabkiri.api import designers
+    from fabkiri.api.design import design_pattern
+    from fabkiri.api.kagome import design_kagome_pattern
+
+    assert designers.designer("quad") is design_pattern and designers.designer("kagome") is design_kagome_pattern
+    with pytest.raises(InputError, match="--holes is not available for kagome designs yet"):
+        designers.design_by_kind(PatternRequest(tiles=(2, 2), holes="parallelogram", kind="kagome"))
+    with pytest.raises(InputError, match=r"no design front door for 'hexagon' patterns; choose one of quad, kagome"):
+        designers.design_by_kind(PatternRequest(tiles=(2, 2), kind="hexagon"))
+
+    @dataclass
+    class Echo:
+        report: dict
+        exit_code: int = 1
+
+        def write(self, path, preview=True):
+            Path(path).write_text(f"preview {preview}")
+
+        def summary(self, path):
+            return [f"echoed {self.report['tiles']} to {Path(path).name}"]
+
+    monkeypatch.setattr(designers._DESIGNERS, "members", dict(designers._DESIGNERS.members))
+    designers.register_designer("echo", lambda request, notify=None: Echo({"tiles": list(request.tiles)}))
+    code, out, err = run_cli("design", "--lattice", "echo", "--tiles", "3x5", "--no-preview", "--json",
+                             "-o", tmp_path / "e.json")
+    assert code == 1 and "echoed [3, 5] to e.json" in err and json.loads(out) == {"tiles": [3, 5]}
+    assert (tmp_path / "e.json").read_text() == "preview False"

@@ -51,6 +51,9 @@ def test_refusals_raise_and_return_nothing(square):
         print_pattern(small, PrintOptions(style="strips"))
     with pytest.raises(InputError, match="--marks engraves strip pads .* needs --style strips"):
         print_pattern(square, PrintOptions(marks=True))
+    # a library caller's scale text other than "auto" is bad input in one line (it was a TypeError)
+    with pytest.raises(InputError, match=r"--scale must be a number \(mm printed per mm\) or auto, got '2'"):
+        print_pattern(square, PrintOptions(scale="2"))
 
 
 def test_a_pattern_closing_one_way_has_its_reassembly_checks_moot_by_id():
@@ -82,3 +85,54 @@ def test_every_closed_state_check_has_a_stable_id(square):
         ids = [c.id for c in checks]
         assert all(i.startswith(state_check_id(s, "")) and len(i) > len(f"state{s}.") for i in ids), ids
         assert len(set(ids)) == len(ids)
+
+
+def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
+    """The print front door asks the style (not its name) for its extra checks, whether its tiles
+    have their own thickness and whether --marks applies: a copy of strips with a failing check of
+    its own is refused with that check's words, after saying its notes."""
+    from dataclasses import replace
+
+    from fabkiri.fabricate import printjob
+    from fabkiri.fabricate.styles import strips as strips_style
+
+    monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
+
+    def build(pattern, state, pr):
+        return replace(strips_style.build(pattern, state, pr), style="fussy-strips")
+
+    def checks(pattern, r, rep):
+        return printjob.StyleChecks(problems=[f"fussy: {r.job.style} {r.job.plan.n_hinges} hinges"], notes=["note: fussy"])
+
+    printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances, checks=checks))
+    notes = []
+    with pytest.raises(CheckFailed, match=r"^fussy: fussy-strips 12 hinges; nothing written$"):
+        print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0), notify=notes.append)
+    assert notes == ["note: fussy"]
+    printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances))
+    with pytest.raises(InputError, match="--marks engraves strip pads"):  # loose_strips is strips' own
+        print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0, marks=True))
+
+
+def test_the_print_manifest_is_one_typed_object_checked_on_read(square, tmp_path):
+    """The manifest a print writes reads back as a PrintManifest and writes out the same bytes; the
+    report reads the same object; the schema refuses a manifest that breaks it, naming the field."""
+    from fabkiri.errors import VerifyError
+    from fabkiri.render.report import _bom_section, _print_section
+    from fabkiri.verify.printmanifest import PrintManifest
+
+    for style in ("strips", "pinned"):
+        out = print_pattern(square, PrintOptions(style=style, scale=3.0), stem="sq", source="sq.json")
+        text = out.files["manifest.json"]
+        m = PrintManifest.from_json(text)
+        assert m.to_json() == text and m.style == style and m.state == 1 and m.pattern == "sq.json"
+        assert (m.pins is not None) == (style == "pinned") and (m.placements is not None) == (style == "strips")
+        assert m.check("meshes")["ok"] and m.bill_of_materials["style"] == style and set(m.files) <= set(out.files)
+        html = _print_section(tmp_path, m) + _bom_section(None, m)
+        assert f"<td>{style}</td>" in html and f"<td>{m.printer_name}</td>" in html and "filament" in html
+    with pytest.raises(VerifyError, match=r"^m: malformed print manifest \(state: .*\)$"):
+        PrintManifest.from_dict({**json.loads(text), "state": 3}, "m")
+    with pytest.raises(VerifyError, match=r"^m: malformed print manifest \(top level: .*'style'.*\)$"):
+        PrintManifest.from_dict({"format": "fabkiri.print", "state": 1}, "m")
+    extra = PrintManifest.from_json(text.replace('"format"', '"note": "hand-made",\n "format"', 1))
+    assert extra.extra == {"note": "hand-made"} and list(extra.to_dict())[-1] == "note"

@@ -49,3 +49,42 @@ def test_usage_errors_are_one_line(run_cli, tmp_path):
         code, _, err = run_cli(*argv)
         assert code == 2 and err.count("\n") == 1, (argv, err)
     assert not (tmp_path / "x.json").exists()
+
+
+def test_a_pattern_format_is_one_registered_strategy(tmp_path, run_cli, monkeypatch, capsys):
+    """A format registered from outside (as a new format's module would) is read by its suffix,
+    written by ``export --format NAME`` (with the closed state it asks for contracted first) and
+    listed among the choices; an unknown name is refused in one line naming the known formats."""
+    import pytest
+    from fabkiri.api.patterns import export_pattern
+    from fabkiri.errors import InputError
+    from fabkiri.pattern import formats, io, standard_pattern
+
+    monkeypatch.setattr(formats._FORMATS, "members", dict(formats._FORMATS.members))
+    assert formats.format_names(writable=True) == ("obj", "fold", "pykirigami")
+    assert formats.format_of(tmp_path / "p.FOLD", "json").name == "fold"
+    assert formats.format_of(tmp_path / "p.txt", "obj").name == "obj"
+
+    def write(pattern, state, unit):  # closed state 2's tile centres, one per line
+        return "".join(f"{x!r} {y!r}\n" for x, y in pattern.contracted[2].mean(1).tolist())
+
+    def read(path, scale):
+        return io.read_pattern(path.with_suffix(".json"))
+
+    formats.register_format(formats.PatternFormat("centres", (".ctr",), read=read, write=write,
+                                                  closed_states=lambda state: (2,), adopt_labels=False,
+                                                  said=lambda p, s, out, u: f"wrote {out}: {p.n_tiles} centres"))
+    src = tmp_path / "p.json"
+    io.write_pattern(standard_pattern(2, 3), src)  # no closed states stored: export contracts state 2
+    code, _, err = run_cli("export", src, "--format", "centres", "-o", tmp_path / "p.ctr")
+    assert code == 0 and f"wrote {tmp_path / 'p.ctr'}: 6 centres" in err, err
+    assert len((tmp_path / "p.ctr").read_text().splitlines()) == 6
+    code, out, err = run_cli("info", tmp_path / "p.ctr")  # read by its suffix
+    assert code == 0 and "6" in out, err
+    with pytest.raises(InputError, match=r"^unknown pattern format 'stl'; known: obj, fold, pykirigami, centres$"):
+        export_pattern(standard_pattern(2, 2), "stl")
+    with pytest.raises(SystemExit) as exc:  # the parser's one line, exit 2
+        run_cli("export", src, "--format", "stl", "-o", tmp_path / "p.stl")
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and len(err.splitlines()) == 1 and not (tmp_path / "p.stl").exists()
+    assert "invalid choice: 'stl' (choose from 'obj', 'fold', 'pykirigami', 'centres', 'tube3d')" in err

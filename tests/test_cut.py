@@ -617,6 +617,55 @@ def test_a_hinge_kind_is_one_registered_strategy(monkeypatch):
         cut(p, hinge="glued")
 
 
+def test_what_a_hinge_kind_decides_is_asked_of_the_kind(monkeypatch):
+    """Sizing, design limits, tape pieces, assembly steps, the coupon and the read-back ask the kind,
+    never its name: a renamed copy of a kind behaves as the kind, and a kind that changes one answer
+    changes that one thing."""
+    from fabkiri.fabricate import assembly as asm
+    from fabkiri.fabricate import coupon, design_limits, hingekinds
+    from fabkiri.fabricate import fabricability as fb
+    from fabkiri.fabricate.hingekinds.ligament import Ligament
+    from fabkiri.fabricate.hingekinds.tape import Tape
+
+    monkeypatch.setattr(hingekinds._KINDS, "members", dict(hingekinds._KINDS.members))
+    for where in ("materials", "design_limits"):  # a new kind's name is listed there too
+        monkeypatch.setattr(f"fabkiri.fabricate.{where}.HINGE_KINDS", ("tape", "ligament", "separate", "living"))
+
+    class Living(Ligament):
+        name = "living"
+
+    class Apart(Tape):
+        name = "apart"
+        cut_apart = True
+
+        def assembly_steps(self, n_top, n_bottom):
+            return [f"{n_top} up, {n_bottom} down"]
+
+    hingekinds.register(Living())
+    hingekinds.register(Apart())
+    pp = load_material("pp-0.5")
+    p = with_contracted_states(std(3, 3))
+    closed = p.contracted[1]
+    assert fb.cut_minimum(closed, pp, "living") == fb.cut_minimum(closed, pp, "ligament")
+    assert fb.cut_minimum(closed, pp, "living") != fb.cut_minimum(closed, pp, "tape")
+    assert design_limits.material_limits(pp, "living") == design_limits.material_limits(pp, "ligament")
+    assert coupon.hinge_variants(pp.override(hinge="living"))[0] == "ligament_width_mm"
+    lig, liv = cut(p, "pp-0.5", hinge="ligament"), cut(p, "pp-0.5", hinge="living")
+    assert liv.manifest["assembly"] == lig.manifest["assembly"]  # one piece: nothing to join
+    rb = verify_result(p, liv, use_verifier=False)  # the read-back recovers the tiles as the kind says
+    assert rb.ok and any(c.name == "sheet 1 tiles recovered" for c in rb.checks)
+    tape, apart = cut(p, hinge="tape"), cut(p, hinge="apart")
+    n_top = sum(q["face"] == "T" for q in tape.manifest["assembly_pieces"])
+    assert apart.manifest["assembly"]["steps"] == [f"{n_top} up, {p.topology.n_hinges - n_top} down"]
+    # tiles laid out apart: a piece sits on tile A's corner, not between the two
+    Q = closed + 3.0 * np.arange(p.n_tiles)[:, None, None]
+    rows = [asm.tape_pieces(p, Q, np.zeros(p.n_tiles, int), ["T"] * p.topology.n_hinges, k, 0.3, 2.0)
+            for k in (Tape(), Apart())]
+    A = p.topology.hinge_tiles[:, 0]
+    assert all(np.allclose(r["at_mm"], Q[A[r["hinge"]], p.topology.hinge_corner[r["hinge"], 0]]) for r in rows[1])
+    assert not any(np.allclose(r["at_mm"], Q[A[r["hinge"]], p.topology.hinge_corner[r["hinge"], 0]]) for r in rows[0])
+
+
 def test_cut_manifest_round_trips_and_is_checked_on_read():
     """The manifest a cut writes reads back as a CutManifest and writes out the same
     keys in the same order; the shipped golden manifest too; the schema refuses a
@@ -640,3 +689,21 @@ def test_cut_manifest_round_trips_and_is_checked_on_read():
         CutManifest.from_dict({**r.manifest, "mitre_limit": 0.5}, "m")
     with pytest.raises(VerifyError, match=r"malformed manifest \(tiles/0: 'tile' is a required property"):
         CutManifest.from_dict({**r.manifest, "tiles": [{"sheet": 1}]}, "m")
+
+
+def test_a_sheet_format_is_one_registered_strategy(monkeypatch):
+    """A format registered from outside (as a new format's module would) is written per sheet by
+    ``cut_pattern`` when the options name it, beside the built-in ones and in the same order; an
+    unknown format is refused naming the known ones."""
+    from fabkiri.fabricate import sheetformats as sf
+
+    monkeypatch.setattr(sf._SHEET_FORMATS, "members", dict(sf._SHEET_FORMATS.members))
+    sf.register_sheet_format(sf.SheetFormat(
+        "txt", ".txt", True, lambda job, sheets: f"{sheets[0].count('CUT')} cuts\n".encode()))
+    p = std(6, 6, size=20.0)  # 120 x 120 mm closed: two sheets or more
+    r = cut(p, formats=("dxf", "txt"), sheet=(90.0, 80.0), reference_mm=0.0)
+    names = list(r.files)
+    assert len(r.sheets) > 1 and names == [f"p-sheet{sd.index}{x}" for sd in r.sheets for x in (".dxf", ".txt")]
+    assert all(r.files[f"p-sheet{sd.index}.txt"] == f"{sd.count('CUT')} cuts\n".encode() for sd in r.sheets)
+    with pytest.raises(InputError, match=r"unknown format 'pdf' \(known: dxf, svg, png, txt\)"):
+        cut(p, formats=("pdf",))

@@ -215,7 +215,7 @@ def test_width_rows_are_the_shared_definition():
         assert (rows <= w + 1e-12).all() and (rows >= w - F.SMOOTH).all()  # the smooth max: never above
 
 
-@pytest.mark.parametrize("rigid", [True, False])
+@pytest.mark.parametrize("rigid", [True, pytest.param(False, marks=pytest.mark.slow)])  # one in the quick loop
 def test_design_for_acrylic_cuts_with_no_flags(run_cli, tmp_path, rigid):
     """Without the rows the 8x8 circle at 100 mm has 1.45 mm tiles; with them every tile is ≥ 3 mm and
     `cut p.json` (acrylic-3 tape, from the stored intent) passes."""

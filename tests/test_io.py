@@ -122,6 +122,7 @@ def test_model_rejects_inconsistent_data():
         Pattern(nodes=p.nodes, tiles=p.tiles, contracted={1: np.zeros((3, 4, 2))})
 
 
+@pytest.mark.slow  # two interpreters; the quick loop runs the CLI as a real process in test_bad_input.py and test_startup.py
 def test_console_script_runs(tmp_path):
     out = tmp_path / "p.json"
     r = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", "new", "--tiles", "2x3", "-o", str(out)],

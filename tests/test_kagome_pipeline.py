@@ -132,13 +132,3 @@ def test_design_kagome_circle_meets_every_check(tmp_path, run_cli):
     assert code == 0 and "shape met" in err and "verify: pass" in err, err
     code, _, err = run_cli("verify", out, "--exact")
     assert code == 0, err
-
-
-@pytest.mark.parametrize("command", ["print"])  # cut takes kagome: tests/test_kagome_cut.py
-def test_print_refuses_kagome_patterns_and_write_nothing(command, tmp_path, run_cli):
-    src = tmp_path / "k.json"
-    io.write_pattern(with_contracted_states(standard_kagome(3, 4)), src)
-    out = tmp_path / "out"
-    code, _, err = run_cli(command, src, "-o", out)
-    assert code == 2 and f"{command} makes quad patterns only, not kagome patterns" in err
-    assert err.count("\n") == 1 and not out.exists()

@@ -80,3 +80,17 @@ def test_state_one_outline_does_not_depend_on_the_offsets():
     g = C.ClosedGrid.build(st, 1, 0)
     on_boundary = np.isin(rig.node_vertex, g.boundary)
     assert np.abs(Dt[on_boundary]).max() < 1e-12 and np.abs(Dt[~on_boundary]).max() > 1e-3
+
+
+@pytest.mark.parametrize("m, n, seed", [(5, 5, 0), (4, 7, 1)])
+def test_fixed_pattern_columns_equal_the_sliced_sum(m, n, seed):
+    # A(t)'s dependent and seed columns on their fixed patterns: the same stored entries as (A0 + At)[:, cols]
+    # (no stored zeros at t = 0, where the offset entries vanish), so the LU and the members are unchanged
+    _, _, fam, _, _ = _lattice(m, n)
+    dep, seeds = fam._blocks()
+    for t in (np.zeros(fam.n_holes), np.random.default_rng(seed).uniform(-0.9, 0.9, fam.n_holes)):
+        A = fam.matrix(t)
+        for block, cols in ((dep, fam.dep), (seeds, fam.seeds)):
+            want, got = A[:, cols].tocsc(), block.at(t)
+            assert np.array_equal(want.indptr, got.indptr) and np.array_equal(want.indices, got.indices)
+            assert np.array_equal(want.data, got.data)

@@ -163,13 +163,14 @@ def test_cli_keeps_the_closest_valid_fit():
 
 
 def test_auto_keeps_the_better_of_both_solvers():
-    """On a small least-squares case auto runs both solvers and keeps the lower objective."""
+    """On a small least-squares case auto runs both solvers and keeps the lower objective (4x4 star:
+    reduced 1.10 against full 5.32; the 6x6 heart, 1.12 against 2.52, took 1.5x the time)."""
     from fabkiri.design.solve import _objective, _Problem
 
-    target = T.load_target("heart", 80.0)
+    target = T.load_target("star", 80.0)
     out = {}
     for solver in ("reduced", "full", "auto"):
-        req = DesignRequest(6, 6, target, rigid=True, solver=solver)
+        req = DesignRequest(4, 4, target, rigid=True, solver=solver)
         res = design(req)
         assert res.converged, solver
         prob = _Problem(req)
@@ -337,13 +338,16 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
     # and the reduced Jacobian of all rows agrees with finite differences of the stacked residuals
     Jr = m.reduced_jacobian(Jx, Jc, p)
     h = 1e-6
+    checked = 0
     for j in (0, fam.n_seeds + 3, len(p) - 1):
         e = np.zeros(len(p))
         e[j] = h
         rp = m.rows(m.state(p + e))[0]
         rm = m.rows(m.state(p - e))[0]
-        if len(rp) == len(r) == len(rm):
+        if len(rp) == len(r) == len(rm):  # the same active inequality rows on both sides
             assert np.abs((rp - rm) / (2 * h) - Jr[:, j]).max() <= 1e-5 * max(1.0, np.abs(Jr).max())
+            checked += 1
+    assert checked >= 2, checked  # the comparison was made (an active-set change skips at most one column)
 
 
 def _merits(rows, cols, target, rho):
@@ -417,3 +421,25 @@ def test_auto_skips_the_second_opinion_within_the_shape_tolerance():
     assert met.converged and strict.converged
     assert not any(k.startswith("lm_rho") for k in met.report["iterations"])  # the full solver never ran
     assert any(k.startswith("lm_rho") for k in strict.report["iterations"])
+
+
+def test_dense_evaluation_forms_its_jacobian_only_when_asked(monkeypatch):
+    # LM asks a trial step for its rows only; the Jacobian and the regulariser's normal matrix (most of an
+    # evaluation) are formed once, on the first ask, and agree with a fresh evaluation's
+    prob, fam, dense, _ = _merits(6, 6, "ellipse", 1e4)
+    tiles = type(dense._tiles)
+    formed = []
+    normal = tiles.regularizer_normal
+    monkeypatch.setattr(tiles, "regularizer_normal", lambda self, *a: formed.append(1) or normal(self, *a))
+    S, _ = fam.fit(prob.X0, np.pi / 4)
+    p = np.concatenate([S[:, 0], S[:, 1], [np.pi / 4]])
+    ev = dense.evaluate(p)
+    assert len(ev.r) > 0 and ev.gviol >= 0.0
+    assert formed == []
+    H, g = ev.normal()
+    J = ev.jacobian()
+    ev.normal()
+    assert len(formed) == 1
+    again = dense.evaluate(p)
+    H2, g2 = again.normal()
+    assert np.array_equal(H, H2) and np.array_equal(g, g2) and np.array_equal(J, again.jacobian())

@@ -43,13 +43,15 @@ def test_help_imports_no_numerics():
     assert not any(m.startswith("fabkiri.cli.") and m != "fabkiri.cli.main" for m in mods)
 
 
-def test_design_imports_only_what_it_uses(tmp_path):
-    # --no-preview: the preview PNG is drawn with matplotlib, which is the point of that option
-    mods = _modules_after(["design", "--tiles", "3x3", "--target", "circle", "--rigid", "--no-preview",
-                           "-o", str(tmp_path / "p.json")])
+def test_design_with_its_preview_imports_only_what_it_uses(tmp_path):
+    # one process for both checks (each is an interpreter start and a design): the preview PNG is drawn
+    # without matplotlib, so a design with its preview must import no more than one without
+    mods = _modules_after(["design", "--tiles", "3x3", "--target", "circle", "--rigid", "-o", str(tmp_path / "p.json")])
     assert (tmp_path / "p.json").exists()
+    png = (tmp_path / "p.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
     assert "fabkiri.design.solve" in mods
-    assert not {"scipy.interpolate", "scipy.optimize", "ezdxf", "trimesh", "matplotlib", "svgwrite"} & mods
+    assert not {"scipy.interpolate", "scipy.optimize", "ezdxf", "trimesh", "matplotlib", "svgwrite", "jsonschema"} & mods
     assert not {"fabkiri.cli.cut_cmd", "fabkiri.cli.print_cmd", "fabkiri.cli.deploy_cmd"} & mods
 
 
@@ -84,3 +86,25 @@ def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
     at = RegularGridInterpolator((np.arange(m + 1.0), np.arange(n + 1.0)), grid, method="linear")
     yi, xi = np.meshgrid(np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1), indexing="ij")
     assert np.abs(resample_grid(grid, rows, cols) - at(np.stack([yi, xi], -1))).max() <= 1e-12
+
+
+def test_design_defers_unused_numpy_subpackages(tmp_path):
+    # scipy's array-API shim binds every numpy subpackage; numpy.f2py and numpy.testing stay unloaded (lazy)
+    # through a design and still work when used
+    code = ("import sys\nfrom fabkiri.cli.main import main\n"
+            f"main(['design', '--tiles', '3x3', '--target', 'circle', '--rigid', '--no-preview', '-o', "
+            f"{str(tmp_path / 'p.json')!r}])\n"
+            "lazy = [type(sys.modules[m]).__name__ for m in ('numpy.f2py', 'numpy.testing')]\n"
+            "print(lazy, 'charset_normalizer' in sys.modules, 'unittest' in sys.modules)\n"
+            "import numpy as np\nnp.testing.assert_allclose(np.ones(2), np.ones(2))\n"
+            "from numpy.testing import assert_array_equal\nassert_array_equal([1], [1])\n"
+            "print(type(sys.modules['numpy.testing']).__name__)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[0] == "['_LazyModule', '_LazyModule'] False False"
+    assert out[1] == "module"  # loaded for real on first use
+
+
+def test_defer_is_a_no_op_once_scipy_is_loaded():
+    import scipy  # noqa: F401  (this test process has it)
+
+    assert cli.defer_unused_numpy() == []

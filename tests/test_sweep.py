@@ -34,6 +34,8 @@ rigid = [true, false]
 shape_tol = "25%"
 init = "rescaled"
 """
+SWEEP_2 = SWEEP_12.replace('target = ["circle", "square", "outline.csv"]', 'target = ["circle"]').replace(
+    'tiles = ["4x4", "5x5"]', 'tiles = ["4x4"]')  # the same sweep cut to 2 jobs
 FIGURES = ("max_equality_residual", "hausdorff_mm", "one_minus_iou", "thinnest_tile_mm")
 
 
@@ -77,12 +79,34 @@ def test_twelve_jobs_on_a_two_worker_local_cluster(local_run):
     assert page.count("<tr class=") == 12 and page.count("<img") == 12
 
 
+@pytest.mark.slow  # the 12-job, 2-process cluster run; the fast loop checks the same on a small in-process sweep below
 def test_a_second_run_does_no_work(local_run):
     spec, res, folder = local_run
     out = folder / "out"
     stamps = {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()}
     again = sweep(spec, output=out, workers=2)
     assert again.ran == 0 and again.skipped == 12 and again.workers == 0  # no cluster was even started
+    assert {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()} == stamps
+    assert [r["id"] for r in again.rows] == [r["id"] for r in res.rows]
+
+
+def test_a_second_run_of_a_small_sweep_does_no_work(tmp_path):
+    """Two jobs on an in-process (threaded) dask client, then the same sweep again: nothing runs, no cluster
+    is started, no file is touched, the rows come back in the same order."""
+    from distributed import Client
+
+    path = tmp_path / "s.toml"
+    path.write_text(SWEEP_2)
+    spec = load_spec(path)
+    assert len(spec.jobs) == 2
+    out = tmp_path / "out"
+    with Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None) as client:
+        res = sweep(spec, client, output=out)
+    assert res.ran == 2 and res.skipped == 0 and [r["status"] for r in res.rows].count("error") == 0
+    stamps = {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()}
+    assert len(stamps) >= 6  # pattern.json, pattern.png, row.json per job
+    again = sweep(spec, output=out, workers=2)
+    assert again.ran == 0 and again.skipped == 2 and again.workers == 0  # no cluster was even started
     assert {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()} == stamps
     assert [r["id"] for r in again.rows] == [r["id"] for r in res.rows]
 
@@ -190,3 +214,19 @@ def test_a_raising_a_hanging_and_a_killed_job_are_recorded_or_retried(tmp_path, 
         assert res.ran == 6 and res.failed == 4
         again = sweep(spec, client, output=tmp_path / "out", runner=faulty_runner)
         assert again.ran == 0 and again.skipped == 6
+
+
+def test_the_summary_counts_a_row_without_a_status(tmp_path, run_cli):
+    """A recorded row without a status (written by another runner) is counted as "None" beside the
+    others: the summary's sort once compared None with a string and raised after every job had run."""
+    path = tmp_path / "s.toml"
+    path.write_text('[axes]\ntarget = ["circle"]\ntiles = ["4x4", "5x5"]\n')
+    spec = load_spec(path)
+    for job, status in zip(spec.jobs, ("ok", None), strict=True):
+        folder = tmp_path / "out" / "jobs" / job.id
+        folder.mkdir(parents=True)
+        row = {"id": job.id, "digest": job.digest, **({"status": status} if status else {})}
+        (folder / "row.json").write_text(json.dumps(row))
+    code, _, err = run_cli("sweep", path, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert "2 jobs (0 run now, 2 already done)" in err and ": 1 None, 1 ok" in err

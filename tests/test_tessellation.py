@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from dataclasses import replace
 
 import numpy as np
@@ -29,7 +27,7 @@ def test_quad_is_the_default_kind_and_owns_the_quad_rules():
     assert "quad" in kinds()
 
 
-def test_unknown_kind_is_a_one_line_error_naming_the_known_kinds(tmp_path):
+def test_unknown_kind_is_a_one_line_error_naming_the_known_kinds(tmp_path, run_cli):
     with pytest.raises(PatternError, match=r"unknown tessellation kind 'hexagons' \(known: .*quad"):
         tessellation("hexagons")
     p = standard_pattern(2, 2)
@@ -39,11 +37,9 @@ def test_unknown_kind_is_a_one_line_error_naming_the_known_kinds(tmp_path):
     data["kind"] = "hexagons"
     src = tmp_path / "p.json"
     src.write_text(json.dumps(data))
-    r = subprocess.run(
-        [sys.executable, "-m", "fabkiri.cli.main", "info", str(src)], capture_output=True, text=True
-    )
-    assert r.returncode == 2 and "unknown tessellation kind 'hexagons'" in r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1
+    code, _, err = run_cli("info", src)  # in-process: tests/test_bad_input.py runs the real process's exit path
+    assert code == 2 and "unknown tessellation kind 'hexagons'" in err
+    assert len(err.strip().splitlines()) == 1
 
 
 def test_quad_files_do_not_carry_a_kind_and_read_back_as_quad():

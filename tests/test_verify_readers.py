@@ -142,3 +142,36 @@ def test_one_dxf_codec_reads_what_it_writes(tmp_path):
     verts = "".join(f" 10\n{x}\n 20\n{y}\n" for x, y in pts)
     assert dxfcodec.split_prototype(proto + verts, "F0", pts) is None  # a lineweight tag: not canonical
     assert dxfcodec.split_prototype(proto.replace("370\n0\n", "") + verts, "F0", pts) is not None
+
+
+def test_the_verifier_reads_a_hinge_kind_through_its_registered_reading(monkeypatch):
+    """The verifier asks a kind's reading (not its name) how to recover tiles and which layout a
+    manifest without one means; a kind with no reading is refused with one line naming those known."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    import pytest
+    from fabkiri.errors import VerifyError
+    from fabkiri.verify import hingeread
+    from fabkiri.verify.linework import Linework
+    from fabkiri.verify.manifest import CutManifest, _allowances, _named_problems
+    from fabkiri.verify.recovery import recover_polygons
+
+    monkeypatch.setattr(hingeread._READINGS, "members", dict(hingeread._READINGS.members))
+    tape, calls = hingeread.reading("tape"), []
+
+    def recover(lw, al, sheet, frame_tiles, arity):
+        calls.append((al.hinge, len(lw.polylines)))
+        return tape.recover(lw, al, sheet, frame_tiles, arity)
+
+    hingeread.register_reading(replace(tape, name="scored", recover=recover))
+    lw = Linework(Path("s.dxf"))
+    for pts in ([[0, 0], [2, 0], [2, 1], [0, 1]], [[1, 0], [1, 1]]):  # a rectangle and a cut across it
+        lw.add(np.array(pts, float), len(pts) > 2)
+    polys, how = recover_polygons(lw, replace(_allowances({"hinge": "tape"}, "m"), hinge="scored"))
+    assert calls == [("scored", 2)] and how == "polygonize of the noded linework" and len(polys) == 2
+    assert CutManifest(hinge="scored").default_layout() == "in-place"  # (the schema's enum lists the names)
+    assert _allowances({"hinge": "separate"}, "m").layout == "exploded"
+    _named_problems({"hinge": "scored"}, "m")  # registered: accepted
+    with pytest.raises(VerifyError, match=r"^m: unknown hinge kind 'glued' \(tape, separate, ligament or scored\)$"):
+        _named_problems({"hinge": "glued"}, "m")

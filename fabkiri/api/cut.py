@@ -9,11 +9,12 @@ verification that must pass before anything may be written. A failed check raise
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, replace
 from typing import Any
 
 from .. import limits
+from ..errors import CheckFailed
 from ..fabricate.cut import CutOptions, CutResult, cut_pattern
 from ..fabricate.materials import Material, load_material, parse_setting
 from ..fabricate.readback import Readback, verified_files
@@ -63,10 +64,65 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
     if isinstance(options.width, float):
         limits.check_length(options.width, "--width")
     pattern, seam_files, seam_entry = tube_cut_inputs(pattern, options.state)  # a tube: its flat sheet
-    result = cut_pattern(pattern, options)
-    if seam_files:  # both ends of every seam hinge engraved, the note and the manifest entry added
-        mark_seam(result, seam_entry["hinges"], pattern, options.state, options)
-        result.files.update(seam_files)
-        result.manifest["seam"] = seam_entry
-    rb, files = verified_files(pattern, result, use_verifier=use_verifier, force=options.force)
-    return CutOutcome(result=result, readback=rb, files=files)
+
+    def cut_once(opts: CutOptions) -> CutResult:
+        result = cut_pattern(pattern, opts)
+        if seam_files:  # both ends of every seam hinge engraved, the note and the manifest entry added
+            mark_seam(result, seam_entry["hinges"], pattern, opts.state, opts)
+            result.files.update(seam_files)
+            result.manifest["seam"] = seam_entry
+        return result
+
+    def verified(result: CutResult) -> CutOutcome:
+        rb, files = verified_files(pattern, result, use_verifier=use_verifier, force=options.force)
+        return CutOutcome(result=result, readback=rb, files=files)
+
+    result = cut_once(options)
+    try:
+        return verified(result)
+    except CheckFailed as exc:
+        if "auto" not in (options.scale, options.width) or not str(exc).startswith(READBACK_REFUSED):
+            raise
+        return _read_back_scale(lambda k: verified(cut_once(replace(options, scale=k, width=None))),
+                                float(result.manifest["scale"]), exc)
+
+
+READBACK_REFUSED = "read-back verification failed"
+AUTO_STEP = 1.05  # --scale auto steps up by 5 % while the read-back refuses the files ...
+AUTO_STEPS = 10  # ... at most this often (x1.63), then gives the first refusal
+
+
+def _read_back_scale(cut_at: Callable[[float], CutOutcome], refused: float, first: CheckFailed) -> CutOutcome:
+    """``--scale auto`` when the read-back refuses the files at the size the sheet rules allow
+    (``refused``; a kagome ligament sheet's small triangles among their strips): step the scale up by
+    5 % until it accepts them, then bisect between the last refusal and the first acceptance to
+    0.1 % (stated to 4 digits). The files returned are always ones the read-back accepted, at the
+    smallest scale tried that it accepted; a warning says so. Raises ``first`` if none is found."""
+    from ..fabricate import fabricability as fb
+
+    def at(k: float) -> CutOutcome | None:
+        try:
+            return cut_at(k)
+        except CheckFailed as exc:
+            if not str(exc).startswith(READBACK_REFUSED):
+                raise
+            return None
+
+    lo = hi = refused
+    found = None
+    for _ in range(AUTO_STEPS):
+        hi = fb.ceil_sig(hi * AUTO_STEP)
+        if (found := at(hi)) is not None:
+            break
+        lo = hi
+    if found is None:
+        raise first
+    while hi - lo > fb.BISECT_RTOL * hi:
+        mid = fb.ceil_sig(0.5 * (lo + hi))
+        if mid >= hi:
+            break
+        got = at(mid)
+        lo, hi, found = (mid, hi, found) if got is None else (lo, mid, got)
+    found.result.warnings.append(f"--scale auto: the read-back refused the files at --scale {refused:g}; "
+                                 f"cut at {hi:g}, the smallest scale found (0.1 %) at which it accepts them")
+    return found

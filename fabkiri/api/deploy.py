@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from ..mechanics.collisions import Overlap
 from ..mechanics.deploy import DeploymentPath, deployment_path
+from ..mechanics.tube import tube_along_path
 from ..pattern.io import dumps
 from ..pattern.model import Pattern
 
@@ -46,7 +47,7 @@ def deploy_pattern(
     steps: int = 40,
     *,
     path: str = "auto",
-    driver: str = "rotations",
+    driver: str = "auto",
     plot: bool = False,
     gif: bool = False,
     color: str = "auto",
@@ -56,10 +57,15 @@ def deploy_pattern(
     """Compute the deployment path of ``pattern`` and everything ``fabkiri deploy`` writes about it."""
     p = deployment_path(pattern, steps, path=path, driver=driver)
     summary = p.summary()
+    tube = tube_along_path(pattern, p.corners, p.t)
+    if tube is not None:  # a periodic pattern: its tube in every frame
+        summary["tube"] = tube
     files: dict[str, bytes | str] = {
         "energy.csv": energy_csv(p),
         "deploy.json": json.dumps(summary, indent=2, sort_keys=True) + "\n",
     }
+    if tube is not None:
+        files["tube.csv"] = tube_csv(tube)
     if plot:
         from ..render.deployment import energy_plot_png
 
@@ -85,6 +91,15 @@ def energy_csv(path: DeploymentPath) -> str:
             f"{path.t[f]:.10f},{path.energy[f]:.6e},{path.max_tile_energy[f]:.6e},{rot[f]:.12f},"
             f"{spread[f]:.3e},{path.hinge_gap[f]:.3e},{per_frame[f]}"
         )
+    return "\n".join(rows) + "\n"
+
+
+def tube_csv(tube: dict) -> str:
+    """One row per frame of a tube's path: t, radius at the narrow and wide end, length, seam figures."""
+    rows = ["t,radius_min_mm,radius_max_mm,length_mm,seam_rotation_rad,seam_translation_dev_rel"]
+    cols = ("radius_min_mm", "radius_max_mm", "length_mm", "seam_rotation_rad", "seam_translation_dev_rel")
+    for f, t in enumerate(tube["t"]):
+        rows.append(f"{t:.10f}," + ",".join(f"{tube[c][f]:.9g}" for c in cols))
     return "\n".join(rows) + "\n"
 
 
@@ -125,15 +140,29 @@ def check_problems(path: DeploymentPath, tol: float = 1e-9) -> list[str]:
             out.append(f"the path misses the {name} by {d:.3g} mm")
     if path.kind == "rigid" and path.energy.max() > ZERO_ENERGY:
         out.append(f"the rigid path has energy {path.energy.max():.3g} > {ZERO_ENERGY:g}")
+    mirrored = path.solver.get("mirrored_tiles_max", 0)
+    if mirrored:
+        out.append(f"{mirrored} tiles turn over (into their mirror image) along the path")
     c = path.collisions
     if not c.collision_free():
         o = max(c.overlaps, key=lambda o: o.area)
         out.append(
             f"{len(c.overlaps)} tile overlaps in {len(c.frames)} frames, the largest {o.area:.3g} mm² "
             f"({overlap_depth(path, o):.3g} mm deep) between tiles {o.tile_a} and {o.tile_b} "
-            f"at t = {path.t[o.frame]:.3f}"
+            f"at t = {path.t[o.frame]:.3f}{_deployed_overlaps(path)}"
         )
     return out
+
+
+def _deployed_overlaps(path: DeploymentPath) -> str:
+    """A note when the deployed state itself overlaps: no path through it can be collision-free."""
+    f = path.mark_frames()["deployed"]
+    at = [o for o in path.collisions.overlaps if o.frame == f]
+    if not at:
+        return ""
+    worst = max(o.area for o in at)
+    return (f"; {len(at)} of them in the deployed state itself (largest {worst:.3g} mm²): the "
+            f"design overlaps before it moves")
 
 
 def overlap_depth(path: DeploymentPath, o: Overlap) -> float:

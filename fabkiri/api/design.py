@@ -12,7 +12,6 @@ tolerance is still returned (its best iterate, marked
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -30,10 +29,13 @@ from ..errors import InputError, SolveError
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
 from ..mechanics.contract import contract
-from ..pattern import geometry
 from ..pattern.fabricability import pal_bound
 from ..pattern.io import dumps
 from ..pattern.model import Pattern
+from ..pattern.tessellation import DEFAULT_KIND
+from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
+from .design_summary import summary_lines
+from .designers import register_designer
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
@@ -47,74 +49,6 @@ BIG_TILES = 32 * 32
 # a valid design whose least-squares fit misses by more than this fraction of the target size is retried
 # from the next guess and the closest valid fit kept (ellipse 16x16: rescaled 1.86 %, standard 0.08 %)
 RETRY_FIT_ABOVE = 5e-3
-
-
-def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
-    """``STATE:NAME|FILE``, ``STATE:rect`` or ``STATE:rect=RATIO``."""
-    m = re.fullmatch(r"\s*([12])\s*:\s*(.+?)\s*", text)
-    if not m:
-        raise InputError(f"--contracted-target expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}")
-    state, what = int(m.group(1)), m.group(2)
-    r = re.fullmatch(r"rect(?:=(.+))?", what)
-    if r:
-        ratio = None
-        if r.group(1) is not None:
-            try:
-                ratio = float(r.group(1))
-            except ValueError:
-                raise InputError(f"--contracted-target {text}: ratio {r.group(1)!r} is not a number") from None
-            if not (np.isfinite(ratio) and ratio > 0):
-                raise InputError(f"--contracted-target {text}: ratio must be positive")
-        return state, ("rect", ratio)
-    return state, load_target(what, size)
-
-
-def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
-    """Pairs of tiles that penetrate each other deeper than ``tol`` (mm).
-
-    The verifier's measure (:func:`fabkiri.verify.geom.overlap_depths`): the
-    separating-axis penetration depth for convex pairs, intersection area over
-    the mean edge otherwise. A length, so it compares with the closure
-    tolerance directly; an intersection area does not (a sliver along a shared
-    edge of a closed state grows with the edge length, and GEOS snapping adds
-    its own: a rigid 64x64 ellipse was rejected for 1.4e-9 mm² slivers whose
-    depth was 3.8e-10 tile sizes). A self-intersecting tile is the pair (t, t).
-    """
-    from ..verify.geom import overlap_depths
-
-    crossed = geometry.self_intersecting_tiles(corners)
-    valid = np.ones(len(corners), dtype=bool)
-    valid[crossed] = False
-    out = [(int(t), int(t)) for t in crossed]
-    i, j, depth = overlap_depths(corners)
-    bad = (depth > tol) & valid[i] & valid[j]
-    return out + list(zip(i[bad].tolist(), j[bad].tolist()))
-
-
-def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
-                       state: int) -> dict:
-    """Fit of the contracted state's outline (pattern-grid boundary) to its target, in mm.
-
-    The contracted tiles are rigidly aligned (proper Kabsch) to the closed grid
-    the solver fitted; the boundary grid vertices are then measured against the
-    target arcs.
-    """
-    from ..design.constraints import ClosedGrid, Stencils
-
-    st = Stencils.from_pattern(pattern)
-    g = ClosedGrid.build(st, state, 0)
-    V = g.n_vertices
-    pos = np.zeros((V, 2))
-    cnt = np.zeros(V)
-    np.add.at(pos, g.vertex.ravel(), corners.reshape(-1, 2))
-    np.add.at(cnt, g.vertex.ravel(), 1.0)
-    pos /= cnt[:, None]
-    theta, shift = geometry.kabsch(pos, grid_mm)
-    pos = geometry.rotate(pos, theta) + shift
-    d = target.signed_distance(pos[g.boundary], g.boundary_side)
-    return {"max_mm": float(np.abs(d).max()), "rms_mm": float(np.sqrt(np.mean(d * d))),
-            "max_rel_size": float(np.abs(d).max() / target.size), "points": int(len(d)),
-            "target": target.name}
 
 
 @dataclass
@@ -144,6 +78,7 @@ class PatternRequest:
     i_know: bool = False
     verbose: bool = False  # solver progress on stderr even for small solves
     quiet: bool = False  # no solver progress even for big solves (a sweep's workers)
+    kind: str = DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
 
 
 @dataclass
@@ -188,6 +123,10 @@ class DesignOutcome:
         atomic_write(output, dumps(self.pattern))
         if png is not None:
             png[0].write_bytes(png[1])
+
+    def summary(self, output) -> list[str]:
+        """The lines ``fabkiri design`` prints about the design written to ``output``."""
+        return summary_lines(output, self.report)
 
 
 def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None = None) -> DesignOutcome:
@@ -240,11 +179,11 @@ def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequ
                 f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
                 f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
                 f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
-    if request.holes is None:
-        request = replace(request, holes=preferred_holes(rows, cols, request.rigid, request.symmetry, target,
-                                                         contracted))
+    holes = request.holes if request.holes is not None else preferred_holes(rows, cols, request.rigid,
+                                                                            request.symmetry, target, contracted)
+    request = replace(request, holes=holes)  # without --init, _attempts sets each guess in req.init
     req = DesignRequest(rows=rows, cols=cols, target=target, rigid=request.rigid, symmetry=request.symmetry,
-                        holes=request.holes, contracted=contracted, init=request.init, tol=request.tol,
+                        holes=holes, contracted=contracted, init=request.init or DesignRequest.init, tol=request.tol,
                         solver=request.solver, outline=request.fit == "outline", fabrication=fab_limits,
                         fabrication_intent=intent, seed=request.seed, rigid_first=not request.init,
                         name=request.name or "")
@@ -277,7 +216,7 @@ def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None
               shape_tol: tuple, say: Callable[[str], None]) -> tuple[tuple, list[dict]]:
     """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
-    best, attempts = None, []
+    best, attempts = None, list[dict]()
     for init in inits:
         if init == VIA_RIGID_INIT and best is not None and best[3] and _shape_met(best[1]):
             break  # the rigid family is the last resort for a miss, not a second opinion
@@ -346,7 +285,7 @@ def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
             and not (best[3] and _shape_met(best[1]) and best[1]["checks"].get("fits_bed", True)))
 
 
-def _continuation(request: PatternRequest, req: DesignRequest, target: Target, shape_tol: tuple,
+def _continuation(request: PatternRequest, req: DesignRequest, target: Target | None, shape_tol: tuple,
                   attempts: list):
     """The design without fabrication rows, then the rows raised in steps (``CONTINUATION``) from it, each warm
     started from the last; a last step that does not converge is tried in the rigid family (where it may) from
@@ -357,16 +296,17 @@ def _continuation(request: PatternRequest, req: DesignRequest, target: Target, s
         return None
     X = last_ok = free.pattern.nodes
     spent = free.report.get("time_s_total", 0.0)  # wall s, as the attempts
-    if request.printer:  # the strip rows follow the closed state that fits the bed (2:1 ellipse: state 2)
-        state = design_limits.bed_state(free.pattern.contracted, request.printer)
-        req = replace(req, fabrication=replace(req.fabrication, print_state=state),
-                      fabrication_intent={**req.fabrication_intent, "state": state})
+    fab, printer = req.fabrication, request.printer
+    assert fab is not None, "_continuation_applies admits only fabrication-aware requests"
+    if printer:  # the strip rows follow the closed state that fits the bed (2:1 ellipse: state 2)
+        fab = replace(fab, print_state=design_limits.bed_state(free.pattern.contracted, printer))
+        req = replace(req, fabrication=fab, fabrication_intent={**req.fabrication_intent, "state": fab.print_state})
     # a non-rigid request below 32x32 steps in the rigid family when it may (a member meets every non-rigid
     # equality): with the full solver the steps from 7/8 of the limits on stalled against closed holes
     # (hundreds of non-overlap rows at zero; heart 16x16: equality 1e-5 to 6e-5, unconverged, 2.2-3.3 %)
     init = VIA_RIGID_INIT if via_rigid_applies(replace(req, init=VIA_RIGID_INIT)) else req.init
     for f in (1.0,) if req.rigid else CONTINUATION:
-        step = replace(req, fabrication=req.fabrication.scaled(f, CONTINUATION_MARGIN), start=X, init=init)
+        step = replace(req, fabrication=fab.scaled(f, CONTINUATION_MARGIN), start=X, init=init)
         result = design(step)
         spent += result.report["time_s"]
         X = result.pattern.nodes
@@ -382,9 +322,8 @@ def _continuation(request: PatternRequest, req: DesignRequest, target: Target, s
     trace: list[float] = []
     if not (outcome[3] and _shape_met(outcome[1])):  # the fit was least squares, the tolerance is a maximum;
         # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
-        bed = None if not request.printer else (  # keep only steps whose printed closed state fits the bed
-            lambda r: design_limits.fits_bed(contract(r.pattern, req.fabrication.print_state).corners,
-                                             request.printer))
+        bed = None if not printer else (  # keep only steps whose printed closed state fits the bed
+            lambda r: design_limits.fits_bed(contract(r.pattern, fab.print_state).corners, printer))
         refined, trace, secs = refine_minimax(replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
                                               outcome[0].nodes, accept=bed)
         spent += secs
@@ -491,9 +430,12 @@ def _conformance(pattern: Pattern, result, contracted_states: dict, target: Targ
     """Conformance of the deployed tips and of each closed-state outline with a target curve, and each
     judged against ``--shape-tol``."""
     measured = {}
-    tiles = (pattern.lattice["rows"], pattern.lattice["cols"])
+    tiles = (pattern.lattice["rows"], pattern.lattice["cols"]) if pattern.lattice else None
     if target is not None:
         measured["deployed"] = conf.deployed(pattern.nodes, pattern.topology, target)
     for s, tgt in sorted(result.closed_targets.items()):
         measured[f"state_{s}"] = conf.closed(contracted_states[s], tgt)
     return measured, {k: conf.judge(c, shape_tol, tiles) for k, c in measured.items()}
+
+
+register_designer(DEFAULT_KIND, design_pattern)

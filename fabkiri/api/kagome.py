@@ -8,7 +8,9 @@ overlaps, target shape) and judge the shape. The best iterate is always returned
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -22,6 +24,10 @@ from ..pattern.io import dumps
 from ..pattern.kagome import standard_kagome
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
+from .designers import register_designer
+
+if TYPE_CHECKING:
+    from .design import PatternRequest
 
 # options of the quad design that have no kagome counterpart yet
 UNSUPPORTED = ("rigid", "symmetry", "holes", "contracted_target", "material", "printer", "min_feature",
@@ -35,13 +41,23 @@ class KagomeOutcome:
     pattern: Pattern
     report: dict
     valid: bool
+    tiles: tuple[int, int] = (0, 0)  # rows, cols
 
     @property
     def exit_code(self) -> int:
         return 0 if self.valid else 1
 
-    def write(self, path) -> None:
+    def write(self, path, preview: bool = True) -> None:
+        """Write the pattern (atomically); a kagome design has no preview yet."""
         atomic_write(path, dumps(self.pattern))
+
+    def summary(self, path) -> list[str]:
+        """The line ``fabkiri design --lattice kagome`` prints about the design written to ``path``."""
+        r, (rows, cols) = self.report, self.tiles
+        return [f"wrote {path}: kagome {rows}x{cols} {r['status']}, max equality residual "
+                f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
+                f"the size (shape {r['shape']['status']}), verify: "
+                f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}"]
 
 
 def design_kagome(rows: int, cols: int, target: str, size: float | None = None, *, tol: float = 1e-10,
@@ -67,7 +83,7 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     measured = conf.deployed(pattern.nodes, pattern.topology, tgt)
     verdict = conf.judge(measured, shape, (rows, cols))
     rel = d.max_equality  # normalised units: already relative to the tile size
-    report = {"status": "converged" if d.converged and rel <= tol else "unconverged",
+    report: dict[str, Any] = {"status": "converged" if d.converged and rel <= tol else "unconverged",
               "max_equality_residual": rel, "tol": tol, "iterations": d.iterations,
               "symmetry": list(d.symmetry), "min_gap_deg": d.min_gap_deg, "min_tile_quality": d.min_quality,
               "hausdorff_trace": list(d.hausdorff_trace), "candidates_rejected": rejected, "convex_holes": convex,
@@ -78,8 +94,8 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     rep = verify_pattern(pattern, shape_tol=shape_tol)
     report["verify_failed"] = [c.name for c in rep.failed()]
     valid = report["status"] == "converged" and not report["verify_failed"]
-    pattern = replace(pattern, design={**pattern.design, "report": report, "valid": valid})
-    return KagomeOutcome(pattern, report, valid)
+    pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
+    return KagomeOutcome(pattern, report, valid, (rows, cols))
 
 
 def _first_closing(d) -> tuple[Pattern | None, int]:
@@ -98,3 +114,15 @@ def check_options(**given) -> None:
     for key in UNSUPPORTED:
         if given.get(key):
             raise InputError(f"--{key.replace('_', '-')} is not available for kagome designs yet")
+
+
+def design_kagome_pattern(request: PatternRequest, notify: Callable[[str], None] | None = None) -> KagomeOutcome:
+    """The kagome front door for a :class:`~.design.PatternRequest` (``fabkiri design --lattice kagome``):
+    refuses the quad-only options, then :func:`design_kagome` (the target defaults to a circle)."""
+    check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
+    rows, cols = request.tiles
+    return design_kagome(rows, cols, request.target or "circle", request.size, tol=request.tol,
+                         shape_tol=request.shape_tol, name=request.name)
+
+
+register_designer("kagome", design_kagome_pattern)

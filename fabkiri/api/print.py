@@ -22,8 +22,8 @@ from ..fabricate import fabricability as fb
 from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import load_printer
+from ..fabricate.printjob import print_style
 from ..pattern.model import Pattern
-from ..pattern.tessellation import DEFAULT_KIND
 from .cut import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
@@ -92,9 +92,6 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
                   source: str = "pattern.json", notify: Callable[[str], None] | None = None) -> PrintOutcome:
     """Build, check and serialise the print of ``pattern``; ``stem`` names the files, ``source`` is
     the pattern file named in the manifests; ``notify`` receives each warning or note as it arises."""
-    if pattern.kind != DEFAULT_KIND:
-        # the printed hinges (strips, pins) are quad-only; cut reads the tile arity (docs/kagome.md)
-        raise InputError(f"print makes quad patterns only, not {pattern.kind} patterns yet")
     messages: list[str] = []
 
     def say(text: str) -> None:
@@ -102,17 +99,22 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
         if notify is not None:
             notify(text)
 
-    options = replace(options, state=int(options.state or design_intent(pattern, "state") or 1))
+    state = int(options.state or design_intent(pattern, "state") or 1)
+    options = replace(options, state=state)
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
-    printer = _printer(options.printer or design_intent(pattern, "printer"), style == "pinned", options)
+    printer = _printer(options.printer or design_intent(pattern, "printer"), print_style(style).own_tile_thickness,
+                       options)
     pattern, scale = _scaled(pattern, style, printer, options)
     for w in closes_gate(pattern, printer.tolerance_mm, force=options.force, action="print", tolerance="printer",
-                         states=claimed_states(pattern, options.state)).warnings:  # as `cut`, printer tolerance
+                         states=claimed_states(pattern, state)).warnings:  # as `cut`, printer tolerance
         say(f"warning: {w}")
-    job, plan = _build_job(pattern, style, options.state, printer, scale)
+    job, plan = _build_job(pattern, style, state, printer, scale)
+    if job.plan.shared_faces:  # three hinges at a point (kagome): two faces cannot keep them all apart
+        say(f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
+            "than two faces separate); their strips keep the clearance as printed")
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
-    tiles = None if realised.job.style == "strips" else mesh.check_printed_tiles(realised)
+    tiles = None if print_style(realised.job.style).tiles is None else mesh.check_printed_tiles(realised)
     problems = list(report.problems)
     if tiles is not None and not tiles.ok:
         problems.append(
@@ -140,12 +142,17 @@ def _printer(name: str | None, pinned: bool, o: PrintOptions):
 
 def _scaled(pattern: Pattern, style: str, printer, o: PrintOptions) -> tuple[Pattern, float]:
     """The pattern at the print's scale, and the scale (``"auto"``: the smallest the plan checks accept)."""
-    scale = o.scale
-    if scale == "auto":
-        need = fb.print_minimum(pattern, style, printer, int(o.state))
-        if not need.possible:
+    given = o.scale
+    if given == "auto":
+        assert o.state is not None, "print_pattern resolves the state first"
+        need = fb.print_minimum(pattern, style, printer, o.state)
+        if not need.possible or need.min_scale is None:
             raise CheckFailed(f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}")
         scale = need.min_scale
+    elif isinstance(given, str):  # a library caller's text: one line, not a TypeError deep in check_scale
+        raise InputError(f"--scale must be a number (mm printed per mm) or auto, got {given!r}")
+    else:
+        scale = given
     limits.check_scale(pattern.nodes, pattern.tiles, scale, "--scale")
     if scale != 1.0:  # mm printed per mm of the pattern
         pattern = replace(pattern, nodes=pattern.nodes * scale,
@@ -159,7 +166,7 @@ def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float):
         job = mesh.build_job(pattern, style, int(state), printer, advise_scale=scale)
         plan = mesh.print_plan(job)  # refuses a print the printer cannot make
     except FabricationError as exc:  # say at which scale it would print, if any
-        if style == "pinned":  # build_job named the scales that print pinned on this bed
+        if print_style(style).advise is not None:  # build_job named the scales that print on this bed
             raise
         need = fb.print_minimum(pattern, style, printer, int(state))
         if need.min_scale is None or need.min_scale <= 1.0:
@@ -173,32 +180,16 @@ def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float):
 
 
 def _style_checks(pattern: Pattern, realised, report, problems: list[str], say: Callable[[str], None]):
-    """The checks one print style adds (pinned: the sweep along the deployment path; tiles-and-strips:
-    the layout verifier), appending to ``problems``; returns the verifier's report, if run."""
-    job = realised.job
-    verifier = None
-    if job.style == "pinned":  # the printed tiles moved along the rigid deployment path
-        sweep = mesh.sweep_pinned(pattern, realised)
-        report.sweep = sweep.to_dict()
-        if not sweep.ok:
-            problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
-                            f"({sweep.worst})")
-    if job.style == "tiles-and-strips":  # the layout verifier on the printed top faces
-        verifier = mesh.verify_printed_tiles(pattern, realised)
-        # (c) reassembles the other closed state: moot for a pattern that closes one way only
-        moot = [] if job.plan.other_state_closes else [c.name for c in verifier.failed() if _reassembly(c.id)]
-        if moot:
-            verifier.meta["not_applicable"] = moot
-            say(f"note: closed state {3 - job.state} does not close; the verifier's reassembly checks are moot")
-        problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
-                     for c in verifier.failed() if c.name not in moot]
-    return verifier
-
-
-def _reassembly(check_id: str) -> bool:
-    """Whether a layout-verifier check is one of (c), the cut tiles reassembled into a closed state
-    (ids ``GROUP.reassembled.stateS.WHAT``)."""
-    return ".reassembled.state" in check_id
+    """The checks the print style adds (``PrintStyle.checks``), appending to ``problems`` and saying
+    its notes; returns the layout verifier's report, if the style ran it."""
+    checks = print_style(realised.job.style).checks
+    if checks is None:
+        return None
+    found = checks(pattern, realised, report)
+    for note in found.notes:
+        say(note)
+    problems += found.problems
+    return found.verifier
 
 
 def _files(pattern: Pattern, realised, report, tiles, verifier, o: PrintOptions, stem: str,
@@ -219,14 +210,11 @@ def _files(pattern: Pattern, realised, report, tiles, verifier, o: PrintOptions,
     if bad:
         raise CheckFailed("written meshes are not closed 2-manifolds when read back: " + ", ".join(bad)
                           + "; nothing written")
-    files["manifest.json"] = mesh.manifest(realised, report, tiles, source, list(files) + ["manifest.json"],
-                                           verifier, read_back)
+    manifest = mesh.manifest(realised, report, tiles, source, list(files) + ["manifest.json"], verifier, read_back)
     from ..fabricate.assembly import add_to_print
 
-    files["manifest.json"], extra = add_to_print(files["manifest.json"], pattern, realised, stem)
-    files.update(extra)
-    files.update(laser)
-    return files
+    manifest, extra = add_to_print(manifest, pattern, realised, stem)
+    return {**files, "manifest.json": manifest, **extra, **laser}  # in this order, as the CLI writes them
 
 
 def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -> dict[str, bytes]:
@@ -235,7 +223,7 @@ def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -
     from ..fabricate.materials import load_material
     from ..fabricate.readback import verify_result
 
-    if job.style != "strips":
+    if not print_style(job.style).loose_strips:
         raise InputError("--marks engraves strip pads on laser-cut tiles: it needs --style strips")
     res, n = marked_cut(pattern, job.state, job.strips, job.plan.corners, load_material(material), stem, source)
     rb = verify_result(pattern, res)

@@ -75,17 +75,17 @@ def design_tube_pattern(tiles: tuple[int, int], spec: str, *, rigid: bool = Fals
             problems.append("a deployed cone between two cylindrical closed states: reconfigurable tubes are "
                             "locally rigid-deployable and keep the seam's rotation in every state (docs/tubes.md); "
                             "--closed cone lets the closed states be cones too")
-    closed = {}
+    states = {}  # `closed` names the closed states' shape
     for s in (1, 2):
         c = contract(pattern, s)
         if c.max_closure <= CLOSE_TOL * pattern.tile_size:
-            closed[s] = c.corners
+            states[s] = c.corners
         else:
             problems.append(f"state {s} does not close: loop closure {c.max_closure / pattern.tile_size:.3g} "
                             f"tile sizes at hole {c.worst_hole}")
-    pattern = pattern.with_contracted(closed)
+    pattern = pattern.with_contracted(states)
     verification = tube = None
-    if len(closed) == 2:
+    if len(states) == 2:
         verification = verify_pattern(pattern, rigid=res.report["rigid"])
         problems += [f"{c.name}: {c.value:.3g} {c.unit} (tol {c.tol:g})" for c in verification.failed()]
         tube = tube_report(pattern)
@@ -126,7 +126,7 @@ def tube_3d_files(pattern: Pattern, *, stem: str = "tube", copies: int = 1, thic
         label = "deployed" if s == "deployed" else f"closed{s}"
         plates = plate_meshes(tiles, f, thickness)
         worst, pair = plate_overlap(plates)
-        if worst > PLATE_OVERLAP:  # e.g. plates thicker than the tube is wide: nothing is written
+        if worst > PLATE_OVERLAP and pair is not None:  # e.g. plates thicker than the tube is wide: nothing is written
             raise CheckFailed(f"{label}: plates {pair[0]} and {pair[1]} overlap in 3D by {worst:.3g} of a plate's "
                               f"volume (tolerance {PLATE_OVERLAP:g}); try a thinner --thickness")
         files[f"{stem}_{label}.obj"] = obj_bytes(surface_mesh(tiles, f))

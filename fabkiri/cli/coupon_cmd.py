@@ -28,7 +28,7 @@ def cmd_coupon(args: argparse.Namespace) -> int:
         if bad:
             raise CheckFailed(f"coupon meshes failed their checks ({', '.join(bad)}); nothing written")
     doc = {"format": "fabkiri.coupon", "version": 1, "units": "mm", **c.info, "instructions": c.instructions}
-    files = dict(c.files)
+    files: dict[str, bytes | str] = dict(c.files)
     files["coupon.json"] = json.dumps(doc, indent=2) + "\n"
     atomic_write_many(args.output, files)
     what = (f"sheet {c.info['sheet_mm'][0]:g} x {c.info['sheet_mm'][1]:g} mm" if "sheet_mm" in c.info

@@ -13,6 +13,7 @@ from ..fabricate.cut import FORMATS, CutOptions
 from ..fabricate.drawing import COLORS
 from ..fabricate.layout import LAYOUTS
 from ..fabricate.materials import HINGE_KINDS, available
+from ..fabricate.sheetformats import sheet_format_names
 from ..fabricate.svg import STROKE_MM
 from ..fileio import atomic_write_many
 from .pattern_cmds import _nonneg, _positive, load_any
@@ -32,11 +33,12 @@ def _sheet(text: str) -> tuple[float, float]:
 
 
 def _formats(text: str) -> tuple[str, ...]:
+    known = sheet_format_names()
     out = tuple(f.strip().lower() for f in text.split(",") if f.strip())
-    bad = [f for f in out if f not in FORMATS]
+    bad = [f for f in out if f not in known]
     if bad or not out:
-        raise InputError(f"--formats takes a comma list of {', '.join(FORMATS)}, got {text!r}")
-    return tuple(f for f in FORMATS if f in out)
+        raise InputError(f"--formats takes a comma list of {', '.join(known)}, got {text!r}")
+    return tuple(f for f in known if f in out)
 
 
 def _scale_or_auto(text: str):

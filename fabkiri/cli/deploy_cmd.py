@@ -8,7 +8,9 @@ import sys
 from ..api.deploy import deploy_pattern, overlap_depth
 from ..errors import CheckFailed
 from ..fileio import atomic_write_many
-from ..mechanics.path import DRIVERS
+from ..mechanics.drivers import AUTO, driver_names
+from ..mechanics.tube import path_lines
+from .argtypes import bounded
 from .pattern_cmds import load_any
 
 
@@ -42,6 +44,9 @@ def cmd_deploy(args: argparse.Namespace) -> int:
         f"{path.rotation_spread.max():.2e} rad",
         file=sys.stderr,
     )
+    if "tube" in summary:
+        for line in path_lines(summary["tube"]):
+            print(line, file=sys.stderr)
     for problem in out.problems:
         if "misses" in problem:
             print(f"warning: {problem} (try more --steps or the default driver)", file=sys.stderr)
@@ -77,16 +82,7 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     return 0
 
 
-def _steps(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected a whole number of steps, got {text!r}"
-        ) from None
-    if v < 2 or v > 10000:
-        raise argparse.ArgumentTypeError(f"steps must lie in 2..10000, got {v}")
-    return v
+_steps = bounded(int, lambda v: 2 <= v <= 10000, "expected a whole number of steps", "steps must lie in 2..10000, got {v}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -110,10 +106,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--driver",
-        choices=DRIVERS,
-        default="rotations",
-        help="what the elastic path prescribes: every tile's rotation, following the design's "
-        "zero-energy mechanism until it must leave it (default), or the boundary tips moved linearly",
+        choices=(AUTO, *driver_names()),
+        default=AUTO,
+        help="what the elastic path prescribes (auto, the default: the pattern kind's driver, "
+        "rotations for quads, homotopy for kagome): rotations follows the quad design's "
+        "zero-energy mechanism until it must leave it, tips moves the boundary tips linearly, "
+        "homotopy interpolates every tile's rotation and centre between the states",
     )
     p.add_argument(
         "--plot", action="store_true", help="write energy.png, E(t) with the states marked"

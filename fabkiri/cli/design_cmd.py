@@ -17,7 +17,7 @@ import sys
 import numpy as np
 
 from .. import limits
-from ..api.design import (  # noqa: F401
+from ..api.design import (  # noqa: F401 (names tests and benches import from here)
     BIG_TILES,
     PatternRequest,
     _fit_miss,
@@ -25,11 +25,14 @@ from ..api.design import (  # noqa: F401
     design_pattern,
     overlapping_tiles,
 )
+from ..api.designers import design_by_kind, design_kinds
 from ..design import conformance as conf
 from ..design.initial import INITS
 from ..errors import InputError
-from ..fabricate import fabricability
+from ..fabricate.fabricability import PRINT_STYLES
+from ..fabricate.materials import HINGE_KINDS
 from ..fileio import check_output_file
+from .argtypes import bounded
 from .pattern_cmds import add_i_know, parse_tiles
 
 
@@ -42,37 +45,18 @@ def cmd_design(args: argparse.Namespace) -> int:
         raise InputError("--closed applies to --tube designs only")
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
-    if args.lattice == "kagome":
-        return _design_kagome(args, rows, cols)
     request = PatternRequest(
         tiles=(rows, cols), target=args.target, size=args.size, rigid=args.rigid, symmetry=args.symmetry,
         holes=args.holes, contracted_target=tuple(args.contracted_target or ()), init=args.init, solver=args.solver,
         fit=args.fit, tol=args.tol, shape_tol=args.shape_tol, material=args.material, hinge=args.hinge,
         printer=args.printer, style=args.style, min_feature=args.min_feature, min_hole=args.min_hole,
-        name=args.name, i_know=args.i_know, verbose=args.verbose)
-    out = design_pattern(request, notify=lambda text: print(text, file=sys.stderr))
+        name=args.name, i_know=args.i_know, verbose=args.verbose, kind=args.lattice)
+    out = design_by_kind(request, notify=lambda text: print(text, file=sys.stderr))
     out.write(args.output, preview=not args.no_preview)
     if args.json:
         print(json.dumps(_jsonable(out.report), indent=2, sort_keys=True))
-    _summary(args.output, out.report, out.valid)
-    return out.exit_code
-
-
-def _design_kagome(args: argparse.Namespace, rows: int, cols: int) -> int:
-    from ..api.kagome import check_options, design_kagome
-
-    check_options(**{k: getattr(args, k) for k in ("rigid", "symmetry", "holes", "contracted_target",
-                                                   "material", "printer", "min_feature", "min_hole")})
-    out = design_kagome(rows, cols, args.target or "circle", args.size, tol=args.tol,
-                        shape_tol=args.shape_tol, name=args.name)
-    out.write(args.output)
-    r = out.report
-    if args.json:
-        print(json.dumps(_jsonable(r), indent=2, sort_keys=True))
-    print(f"wrote {args.output}: kagome {rows}x{cols} {r['status']}, max equality residual "
-          f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of the "
-          f"size (shape {r['shape']['status']}), verify: "
-          f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}", file=sys.stderr)
+    for line in out.summary(args.output):
+        print(line, file=sys.stderr)
     return out.exit_code
 
 
@@ -82,64 +66,15 @@ def _jsonable(v):
     return j(v)
 
 
-def _summary(path, report: dict, valid: bool) -> None:
-    fit = report.get("fit", {})
-    parts = [f"wrote {path}: {report['status']}", f"max equality residual {report['max_equality_residual']:.2e}",
-             f"{report['iterations_total']} iterations", f"{report['time_s']:.2f} s"]
-    if "shape" in fit:
-        parts.append(f"fit ({report['shape_matching']}) max {fit['shape']['max_mm']:.3g} mm, "
-                     f"rms {fit['shape']['rms_mm']:.3g} mm")
-    for s, f in report.get("closed_outline_fit", {}).items():
-        parts.append(f"state {s} outline vs {f['target']}: max {f['max_mm']:.3g} mm, rms {f['rms_mm']:.3g} mm")
-    for k, c in (report.get("conformance") or {}).items():
-        j = report["shape"][k]
-        parts.append(f"shape {k.replace('_', ' ')}: {j['status']}, Hausdorff {c['hausdorff_mm']:.3g} mm "
-                     f"({100 * c['hausdorff_rel']:.2f} %, tol {100 * j['tol_rel']:.2g} %), "
-                     f"1-IoU {c['one_minus_iou']:.3g}, tip spacing min/mean {c['spacing_min_mm']:.3g}/"
-                     f"{c['spacing_mean_mm']:.3g} mm")
-    print("; ".join(parts), file=sys.stderr)
-    fr = report.get("fabrication")
-    if fr:
-        print("fabrication rows: " + ", ".join(
-            f"{k[len('fabrication_'):]} {fr['active'][k]}/{fr['rows'][k]} active (min slack {fr['min'][k]:.3g}"
-            f"{'' if 'angle' in k else ' mm'})"
-            for k in fr["rows"]), file=sys.stderr)
-    if report.get("fabricability"):
-        for line in fabricability.summary_lines(report["fabricability"]):
-            print(line, file=sys.stderr)
-    for p in report.get("problems", []):
-        print(f"fabkiri: design failed: {p}", file=sys.stderr)
-    for k, c in (report.get("conformance") or {}).items():
-        if report["shape"][k]["status"] == "missed":
-            print(f"fabkiri: design failed: {conf.describe_miss(k.replace('_', ' '), report['shape'][k], c)}",
-                  file=sys.stderr)
-
-
-def _tol(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (0 < v < 1e-2):
-        raise argparse.ArgumentTypeError(f"tolerance must lie in (0, 1e-2), got {text!r}")
-    return v
-
-
-def _size(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a length in mm, got {text!r}") from None
-    if not (np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM):
-        raise argparse.ArgumentTypeError(f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, "
-                                         f"got {text!r}")
-    return v
+_tol = bounded(float, lambda v: 0 < v < 1e-2, "expected a number", "tolerance must lie in (0, 1e-2), got {text!r}")
+_size = bounded(float, lambda v: bool(np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM), "expected a length in mm",
+                f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("design", help="inverse design: a reconfigurable quad kirigami fitted to a target shape")
     p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 16x16")
-    p.add_argument("--lattice", choices=["quad", "kagome"], default="quad",
+    p.add_argument("--lattice", choices=design_kinds(), default="quad",
                    help="quad (default) or kagome: the kagome prototype fits the deployed tips to the target "
                         "(docs/kagome.md)")
     p.add_argument("--target", metavar="NAME|FILE",
@@ -180,11 +115,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--material", metavar="NAME|FILE.json",
                    help="laser material preset: every tile at least its minimum web wide at its thinnest (shrunk by "
                         "gap/2 for ligaments), hinges its allowance apart")
-    g.add_argument("--hinge", choices=["tape", "ligament", "separate"], help="hinge kind (default: the material's)")
+    g.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
     g.add_argument("--printer", metavar="NAME|FILE.json",
                    help="printer preset: tiles two nozzles wide once shrunk by gap/2, hinge corners wide enough for "
                         "a strip pad (or pivots far enough apart for pins)")
-    g.add_argument("--style", choices=["tiles-and-strips", "strips", "pinned"], help="print style (default "
+    g.add_argument("--style", choices=PRINT_STYLES, help="print style (default "
                    "tiles-and-strips)")
     g.add_argument("--min-feature", type=_size, metavar="MM", help="every tile at least this wide at its thinnest")
     g.add_argument("--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide")

@@ -61,6 +61,35 @@ SUMMARIES = {
 }
 
 
+# numpy subpackages no command uses but scipy's array-API shim imports (``from numpy import *`` in
+# scipy._lib.array_api_compat.numpy): numpy.f2py alone pulls charset_normalizer, numpy.testing unittest; about
+# 0.05 CPU s of every command's start-up. They are bound lazily instead: loaded on first attribute access.
+DEFERRED = ("numpy.f2py", "numpy.testing")
+
+
+def defer_unused_numpy() -> list[str]:
+    """Bind the ``DEFERRED`` subpackages as lazy modules (``importlib.util.LazyLoader``) before numpy's users
+    load; a no-op once scipy is imported (a library caller's process). Returns the names it deferred."""
+    if "scipy" in sys.modules:
+        return []
+    import importlib.util
+
+    import numpy
+
+    done = []
+    for name in DEFERRED:
+        spec = importlib.util.find_spec(name) if name not in sys.modules else None
+        if spec is None or spec.loader is None:
+            continue
+        spec.loader = importlib.util.LazyLoader(spec.loader)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+        setattr(numpy, name.rsplit(".", 1)[1], module)  # as an import binds it (numpy's __getattr__ would recurse)
+        done.append(name)
+    return done
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # one line, exit 2, no usage dump
         print(f"{self.prog}: error: {message} (see '{self.prog} --help')", file=sys.stderr)
@@ -113,7 +142,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     with warnings.catch_warnings(), inputs_scope():
         if not os.environ.get("FABKIRI_DEBUG"):
             warnings.simplefilter("ignore")
-        parser = build_parser(_command(argv))
+        command = _command(argv)
+        if command in SUMMARIES:  # a command loads numpy; `fabkiri --help` does not
+            defer_unused_numpy()
+        parser = build_parser(command)
         args = parser.parse_args(argv)
         return _run(args)
 

@@ -6,17 +6,19 @@ import argparse
 import json
 import re
 import sys
-from pathlib import Path
 
 from .. import limits
+from ..api.patterns import export_pattern, import_pattern, load_pattern
 from ..errors import CheckFailed, InputError
-from ..fileio import atomic_write
-from ..mechanics.contract import adopt_state_labels, contract, with_contracted_states
+from ..fileio import atomic_write, atomic_write_many
+from ..mechanics.contract import with_contracted_states
 from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
-from ..pattern.io import import_obj, obj_text, read_pattern, write_pattern
+from ..pattern.formats import format_names
+from ..pattern.io import write_pattern
 from ..pattern.model import Pattern
 from ..pattern.periodic import standard_tube
 from ..pattern.tessellation import kinds, tessellation
+from .argtypes import bounded
 
 
 def parse_tiles(text: str) -> tuple[int, int]:
@@ -31,50 +33,13 @@ def parse_tiles(text: str) -> tuple[int, int]:
 
 
 def load_any(path: str) -> Pattern:
-    """A pattern from ``pattern.json`` or, by suffix, a design ``.obj``."""
-    if Path(path).suffix.lower() == ".obj":
-        return adopt_state_labels(import_obj(path))
-    return read_pattern(path)
+    """A pattern from ``pattern.json`` or, by suffix, any readable format (a design ``.obj``, ...)."""
+    return load_pattern(path)
 
 
-def import_other(path: str, scale: float) -> Pattern | None:
-    """A FOLD file (``.fold``) or a PyKirigami model folder; None for anything else."""
-    p = Path(path)
-    if p.suffix.lower() == ".fold":
-        from ..pattern.fold import loads_fold
-        from ..pattern.io import _read_text
-
-        pat = loads_fold(_read_text(p), str(p))
-        if scale != 1.0:
-            pat = Pattern(nodes=pat.nodes * scale, tiles=pat.tiles,
-                          contracted={k: v * scale for k, v in pat.contracted.items()}, name=pat.name,
-                          design=pat.design)
-        return adopt_state_labels(limits.check_pattern(pat, str(p)))
-    if p.is_dir():
-        from ..pattern.pykirigami import read_pykirigami
-
-        return adopt_state_labels(limits.check_pattern(read_pykirigami(p, unit_mm=scale), str(p)))
-    return None
-
-
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v > 0 or v != v or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive finite number, got {text!r}")
-    return v
-
-
-def _nonneg(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 <= v < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return v
+_positive = bounded(float, lambda v: 0 < v < float("inf"), "expected a number",
+                    "expected a positive finite number, got {text!r}")
+_nonneg = bounded(float, lambda v: 0 <= v < float("inf"), "expected a number", "expected a finite number >= 0, got {text!r}")
 
 
 def cmd_new(args: argparse.Namespace) -> int:
@@ -92,6 +57,7 @@ def cmd_new(args: argparse.Namespace) -> int:
     if not info.closes_both:  # cannot happen for the standard lattice; never write a wrong file
         raise CheckFailed("; ".join(info.problems()))
     write_pattern(pattern, args.output)
+    assert pattern.lattice is not None  # every standard generator records its lattice (and angle)
     what = "tube " if args.tube else ("" if args.lattice == "quad" else f"{args.lattice} ")
     print(f"wrote {args.output}: standard {what}{rows}x{cols}, tile {args.tile_size:g} mm, "
           f"ψ = {pattern.lattice['angle_deg']:g}°, "
@@ -100,9 +66,7 @@ def cmd_new(args: argparse.Namespace) -> int:
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    pattern = None if args.contracted else import_other(args.design, args.scale)
-    if pattern is None:
-        pattern = adopt_state_labels(import_obj(args.design, args.contracted or [], scale=args.scale))
+    pattern = import_pattern(args.design, args.contracted or [], scale=args.scale)
     info = describe(pattern)
     write_pattern(pattern, args.output)
     print(f"wrote {args.output}: {info.tiles} tiles, {info.holes} holes, "
@@ -138,59 +102,18 @@ def _fabricability(pattern: Pattern) -> dict:
     return fb.summary(pattern)
 
 
-def _with_state(pattern: Pattern, s: int) -> Pattern:
-    """The pattern with closed state ``s`` stored (contracted if missing; it must close)."""
-    if s in pattern.contracted:
-        return pattern
-    c = contract(pattern, s)
-    if c.max_closure > DEFAULT_TOL * pattern.tile_size:
-        raise CheckFailed(
-            f"state {s} does not close (loop closure {c.max_closure / pattern.tile_size:.3g} tile sizes "
-            f"at hole {c.worst_hole}); nothing exported"
-        )
-    return pattern.with_contracted({**pattern.contracted, s: c.corners})
-
-
 def cmd_export(args: argparse.Namespace) -> int:
-    if args.format == "tube3d":
+    if args.format == "tube3d":  # a tube's rolled states: not a pattern format (cli/tube_cmd.py)
         from .tube_cmd import cmd_export_tube3d
 
         return cmd_export_tube3d(args)
-    pattern = load_any(args.file)
-    state = args.state
-    fmt = args.format
-    if state != "deployed" or fmt != "obj":  # closed states are what gets fabricated: the fabrication gate
-        from ..fabricate.gate import (  # lazy: `design` imports this module
-            claimed_states,
-            closes_gate,
-        )
-
-        states = (1, 2) if fmt == "fold" else claimed_states(pattern, 1 if state == "deployed" else int(state))
-        for w in closes_gate(pattern, None, force=args.force, action="export", states=states).warnings:
-            print(f"warning: {w}", file=sys.stderr)
-    if fmt == "fold":  # every state, one frame each
-        from ..pattern.fold import fold_text
-
-        pattern = _with_state(_with_state(pattern, 1), 2)
-        atomic_write(args.output, fold_text(pattern))
-        print(f"wrote {args.output}: FOLD 1.2, frames deployed / closed 1 / closed 2, {pattern.n_tiles} faces",
-              file=sys.stderr)
-        return 0
-    if fmt == "pykirigami":  # start in a closed state, pulled to the deployed target
-        from ..fileio import atomic_write_many
-        from ..pattern.pykirigami import pykirigami_files
-
-        s = 1 if state == "deployed" else int(state)
-        pattern = _with_state(pattern, s)
-        unit = args.unit or pattern.tile_size
-        atomic_write_many(args.output, pykirigami_files(pattern, pattern.contracted[s], unit))
-        print(f"wrote {args.output}/vertices.txt (closed state {s}), target.txt (deployed), constraints.txt "
-              f"({pattern.topology.n_hinges} joints); 1 unit = {unit:.6g} mm", file=sys.stderr)
-        return 0
-    if state != "deployed":
-        pattern = _with_state(pattern, int(state))
-    atomic_write(args.output, obj_text(pattern, state))
-    print(f"wrote {args.output}: state {state}, {pattern.n_tiles} faces", file=sys.stderr)
+    out = export_pattern(load_any(args.file), args.format, args.state, unit=args.unit, force=args.force,
+                         output=args.output, notify=lambda text: print(text, file=sys.stderr))
+    if out.files is not None:
+        atomic_write_many(args.output, out.files)
+    elif out.text is not None:  # an export is one file or a folder
+        atomic_write(args.output, out.text)
+    print(out.said, file=sys.stderr)
     return 0
 
 
@@ -240,7 +163,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file")
     p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed",
                    help="obj: the state written; pykirigami: the closed start state (default 1)")
-    p.add_argument("--format", choices=["obj", "fold", "pykirigami", "tube3d"], default="obj",
+    p.add_argument("--format", choices=[*format_names(writable=True), "tube3d"], default="obj",
                    help="obj (default); fold: FOLD 1.2 JSON, frame 0 deployed, frames 1, 2 the closed states; "
                         "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator; "
                         "tube3d: a folder with every state of a tube rolled into 3D (OBJ, thin-plate STL, PNG, GIF)")

@@ -6,14 +6,17 @@ import argparse
 import re
 import sys
 import time
+from typing import TextIO
 
 from ..errors import InputError
+from .argtypes import bounded
 
 
 class Bar:
     """done/failed/running and the ETA on one terminal line (one line per finished job when not a terminal)."""
 
-    def __init__(self, stream=sys.stderr):
+    def __init__(self, stream: TextIO | None = None):
+        stream = sys.stderr if stream is None else stream  # at call time: a default bound at import outlives it
         self.stream, self.tty, self.last = stream, stream.isatty(), None
 
     def __call__(self, c: dict) -> None:
@@ -69,9 +72,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
-    counts = {}
-    for r in res.rows:
-        counts[r.get("status")] = counts.get(r.get("status"), 0) + 1
+    counts: dict[str, int] = {}
+    for r in res.rows:  # str: a row without a status is counted as "None", and sorts with the others
+        counts[str(r.get("status"))] = counts.get(str(r.get("status")), 0) + 1
     print(f"wrote {args.output}: {len(res.rows)} jobs ({res.ran} run now, {res.skipped} already done) in "
           f"{res.wall_s:.1f} s: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items()))
           + "; results.csv, index.html", file=sys.stderr)
@@ -87,24 +90,8 @@ def _scheduler(text: str) -> str:
     return text
 
 
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 1 <= v <= 1024:
-        raise argparse.ArgumentTypeError(f"expected 1 to 1024, got {text!r}")
-    return v
-
-
-def _seconds(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
-    if not 0 < v < 1e7:
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return v
+_count = bounded(int, lambda v: 1 <= v <= 1024, "expected a whole number", "expected 1 to 1024, got {text!r}")
+_seconds = bounded(float, lambda v: 0 < v < 1e7, "expected seconds", "expected a positive number of seconds, got {text!r}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

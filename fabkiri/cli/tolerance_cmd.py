@@ -7,17 +7,10 @@ import json
 import sys
 
 from ..fileio import atomic_write_many
+from .argtypes import bounded
 from .pattern_cmds import _nonneg, _positive, load_any
 
-
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 2 <= v <= 1_000_000:
-        raise argparse.ArgumentTypeError(f"samples must lie in 2..1000000, got {v}")
-    return v
+_count = bounded(int, lambda v: 2 <= v <= 1_000_000, "expected a whole number", "samples must lie in 2..1000000, got {v}")
 
 
 def cmd_tolerance(args: argparse.Namespace) -> int:
@@ -29,7 +22,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
                              scale=args.scale)
     d = res.to_dict()
     d["pattern"] = pattern.name
-    files = {"tolerance.json": json.dumps(d, indent=2) + "\n"}
+    files: dict[str, bytes | str] = {"tolerance.json": json.dumps(d, indent=2) + "\n"}
     if not args.no_plot:
         files["tolerance.png"] = tolerance_png(res, title=pattern.name)
     atomic_write_many(args.output, files)

@@ -15,6 +15,7 @@ from ..errors import InputError
 from ..mechanics.contract import adopt_state_labels
 from ..pattern.io import import_obj, read_pattern
 from ..pattern.model import Pattern
+from .argtypes import bounded
 
 DEFAULT_TOL_MM = 0.05  # the default material's (acrylic-3) tolerance
 
@@ -38,14 +39,7 @@ def load_for_verify(path: str) -> Pattern:
     return adopt_state_labels(import_obj(p, contracted))
 
 
-def _nonneg(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (v > 0 and v < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a positive finite number, got {text!r}")
-    return v
+_nonneg = bounded(float, lambda v: 0 < v < float("inf"), "expected a number", "expected a positive finite number, got {text!r}")
 
 
 def cmd_verify(args: argparse.Namespace) -> int:

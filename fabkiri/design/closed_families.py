@@ -105,8 +105,7 @@ class ClosedGrid:
         M, N = st.rows, st.cols
         phi = st.phi[state]
         vid = phi[..., 1] * (N + 1) + phi[..., 0]
-        gx, gy = np.meshgrid(np.arange(N + 1), np.arange(M + 1))
-        gx, gy = gx.ravel(), gy.ravel()
+        gx, gy = (g.ravel() for g in np.meshgrid(np.arange(N + 1), np.arange(M + 1)))
         # sides: bottom row (incl. BL corner) B, right column (incl. BR) R, top (incl. TR) T, left (incl. TL) L
         side = np.full(len(gx), -1)
         side[(gx == 0) & (gy > 0)] = 3

@@ -8,6 +8,7 @@ size, the larger side of its bounding box).
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 
@@ -32,11 +33,24 @@ def target_polygon(target: Target) -> np.ndarray:
 
 
 def deployed(nodes: np.ndarray, topology, target: Target) -> dict:
-    """Conformance of the deployed boundary tips (in boundary order) to ``target``."""
+    """Conformance of the deployed boundary tips (in boundary order) to ``target``.
+
+    The last answer is kept: the solver's second-opinion test and the design's report measure the same
+    nodes against the same target (an 8x8 design spent 25 ms, a tenth of its work, measuring twice)."""
+    nodes = np.asarray(nodes, float)
+    key = (nodes.shape, nodes.tobytes(), topology.tiles.tobytes(), target.kind, target.size,
+           np.asarray(target.points, float).tobytes())
+    last = _LAST_DEPLOYED.get("entry")
+    if last is not None and last[0] is target and last[1] == key:
+        return copy.deepcopy(last[2])
     order = pc.boundary_tip_order(topology.tiles, topology.hole_nodes, topology.hole_tiles, topology.free_nodes)
-    out = pc.measure(np.asarray(nodes, float)[order], target_polygon(target), target.size)
+    out = pc.measure(nodes[order], target_polygon(target), target.size)
     out["target"] = target.name
+    _LAST_DEPLOYED["entry"] = (target, key, copy.deepcopy(out))  # holds the target: its id is not reused
     return out
+
+
+_LAST_DEPLOYED: dict = {}
 
 
 def closed(corners: np.ndarray, target: Target) -> dict:

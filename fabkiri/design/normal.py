@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu
@@ -56,11 +58,11 @@ class _Normal:
     def __init__(self, perm: np.ndarray | None, max_cg: int = MAX_CG):
         self.perm = perm
         self.max_cg = max_cg
-        self.lu = None
+        self.lu: Callable[[np.ndarray], np.ndarray] | None = None  # the last factorisation's solve
         self.factorisations = 0
         self.cg_steps = 0
 
-    def _factor(self, A):
+    def _factor(self, A) -> Callable[[np.ndarray], np.ndarray]:
         self.factorisations += 1
         if self.perm is not None:
             p = self.perm

@@ -20,7 +20,15 @@ import numpy as np
 
 from .closed_families import ClosedGrid
 from .offsets import OffsetFamily
-from .outline import PSI_DEPLOYED, REG_WEIGHT, _lm, active_rows, outline_kind, square_affine
+from .outline import (
+    PSI_DEPLOYED,
+    REG_WEIGHT,
+    active_rows,
+    lm_stages,
+    outline_kind,
+    outline_space,
+    square_affine,
+)
 
 # |t| above T_SOFT is penalised like any inequality inside its margin; T_HARD is never crossed (step
 # limiting). A hard wall alone at the soft bound left LM halving every step that touched it: 5x5 ended at
@@ -94,7 +102,8 @@ def _start_seeds(prob, fam: OffsetFamily, t0: np.ndarray):
     return sol - np.repeat(0.5 * (lo + hi), nf), Z0, rep1, g1  # vec S = (Sx, Sy)
 
 
-def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict, log):
+def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict,
+                 log) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
     """The linear rows ``E vec S = e`` of a square state-1 outline, or None for a square in state 2."""
     st = prob.st
     E, e = [], []
@@ -127,23 +136,18 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
     rows = _square_rows(prob, fam.n_seeds, Z0, rep1, g1, states, kinds, log)
     if rows is None:
         return None
-    affine = square_affine(*rows, 2 * fam.n_seeds)
-    if affine is None:
-        log("offset outline: the square rows are inconsistent")
+    space = outline_space(square_affine(*rows, 2 * fam.n_seeds), states, kinds, log,
+                          "offset outline: the square rows are inconsistent")
+    if space is None:
         return None
-    base, Nsp = affine
-    circles = [s for s in states if kinds[s] == "circle"]
-    relative = not any(kinds[s] == "square" for s in states)
+    base, Nsp, circles, relative = space
     op = _OffsetOutline(prob, fam, base, Nsp, circles, relative, rep1)
     # circle start from the start member's algebraic circle
     if t_start is not None:
         t0 = np.asarray(t_start, dtype=float)
     p = op.start(Nsp.T @ (s0 - base), t0)
     log(f"offset outline start: violation {op.viol(op.nodes(p)):.2e}")
-    for rho, stall_tol, cap in STAGES:
-        p, it = _lm(op.evaluate, op.viol, op.nodes, p, rho, cap, stall_tol)
-        iters[f"offset_outline_rho_{rho:g}"] = it
-        log(f"offset outline rho={rho:g}: {it} iterations, violation {op.viol(op.nodes(p)):.2e}")
+    p = lm_stages(op.evaluate, op.viol, op.nodes, p, STAGES, "offset_outline", iters, log)
     y = op.member(p, False)
     X = op.deployed(y)
     for s_, g in prob.grids.items():
@@ -180,13 +184,22 @@ class _OffsetOutline:
         self.w = np.sqrt(REG_WEIGHT)
         self.R0: dict = {}
         self.npar = 0
+        self._member: tuple[bytes, np.ndarray] | None = None
 
     def seeds(self, p):
         v = self.base + self.Nsp @ p[:self.k]
         return np.stack([v[:self.nf], v[self.nf:]], -1)
 
     def member(self, p, jac):
-        return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=jac)
+        if jac:
+            return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=True)
+        # the last one is kept: LM's step limiting (``nodes``) and its trial rows ask for the same member
+        key = np.asarray(p, dtype=float).tobytes()
+        if self._member is None or self._member[0] != key:
+            y = self.fam.state1(self.seeds(p), p[self.k:self.k + self.K])
+            y.flags.writeable = False  # shared by the callers
+            self._member = (key, y)
+        return self._member[1]
 
     def states_of(self, y):
         return {1: y, 2: self.fam.at(y, np.pi / 2)}

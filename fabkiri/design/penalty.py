@@ -6,10 +6,13 @@ See ``solve.py``'s docstring for the method; ``_solve_full`` runs it on a
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy import sparse
 
 from . import constraints as C
+from .lm import Damping, Stopping, levenberg_marquardt
 from .problem import _ineq_values, _mean_edge, _Problem, exact_fits, family_residuals
 
 STALL = 1e-6  # a penalty stage ends after 3 accepted steps that each lower the merit by less than this
@@ -66,64 +69,64 @@ def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | N
     return np.concatenate(rs), sparse.vstack(Js).tocsr()
 
 
-def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None, tol_inf=0.0, stall_tol=STALL):
-    """Levenberg-Marquardt on the merit (or on the hard rows); returns X, iterations."""
-    shape = X.shape
-    x = X.reshape(-1).copy()
-    r, J = _stacked(prob, x.reshape(shape), rho, hard)
-    cost = 0.5 * float(r @ r)
-    gviol = max(0.0, -_ineq_values(prob, x.reshape(shape)).min(initial=0.0))
-    diag_mean = float((J.multiply(J)).sum() / max(len(x), 1))
-    mu = (1e-3 if hard is None else 1e-12) * max(diag_mean, 1e-30)
-    nu = 2.0
-    it = 0
-    stall = 0
-    worst: list[float] = []  # max |row| after each accepted Gauss-Newton step (hard rows)
-    for it in range(1, max_iter + 1):
-        if hard is not None and np.abs(r).max(initial=0.0) <= tol_inf:
-            return x.reshape(shape), it - 1
-        dx = prob.normal.solve(J, r, mu, rtol=LM_CG_RTOL if hard is None else 1e-13)
-        # step limiting: halve the step until it creates no new inequality violation
-        for _ in range(6):
-            xn = x + dx
-            gv = _ineq_values(prob, xn.reshape(shape))
-            gviol_n = max(0.0, -gv.min(initial=0.0))
-            if gviol_n <= gviol + 1e-15:
-                break
-            dx = 0.5 * dx
-        rn, Jn = _stacked(prob, xn.reshape(shape), rho, hard)
-        cn = 0.5 * float(rn @ rn)
+class _Point:
+    """An iterate of the full solver for the LM core (``lm.LMPoint``).
+
+    Its residual and sparse Jacobian (of the merit, or of the hard rows) are stacked on first use:
+    a step refused for a new inequality violation needs neither.
+    """
+
+    def __init__(self, prob: _Problem, x: np.ndarray, shape: tuple, rho: float, hard, rtol: float):
+        self.prob, self.x, self.shape, self.rho, self.hard, self.rtol = prob, x, shape, rho, hard, rtol
+        self.gviol = max(0.0, -_ineq_values(prob, x.reshape(shape)).min(initial=0.0))
+        self._rows: tuple | None = None
+
+    def moved(self, x: np.ndarray) -> _Point:
+        return _Point(self.prob, x, self.shape, self.rho, self.hard, self.rtol)
+
+    @property
+    def r(self) -> np.ndarray:
+        return self.rows[0]
+
+    @property
+    def rows(self) -> tuple:
+        if self._rows is None:
+            self._rows = _stacked(self.prob, self.x.reshape(self.shape), self.rho, self.hard)
+        return self._rows
+
+    def step(self, mu: float) -> np.ndarray:
+        r, J = self.rows
+        return self.prob.normal.solve(J, r, mu, rtol=self.rtol)
+
+    def predicted(self, dx: np.ndarray) -> float:
+        r, J = self.rows
         Jdx = J @ dx
-        pred = -(float(r @ Jdx) + 0.5 * float(Jdx @ Jdx))
-        ratio = (cost - cn) / pred if pred > 0 else -1.0
-        ok = np.isfinite(cn) and gviol_n <= gviol + 1e-15
-        if hard is not None:
-            ok = ok and np.abs(rn).max() < np.abs(r).max()
-        else:
-            ok = ok and ratio > 1e-4
-        if ok:
-            small = (cost - cn) <= stall_tol * max(cost, 1e-300) or np.abs(dx).max() <= 1e-13 * (1 + np.abs(x).max())
-            x, r, J, cost, gviol = xn, rn, Jn, cn, gviol_n
-            if hard is None:
-                mu *= max(1 / 3, 1 - (2 * ratio - 1) ** 3)
-            else:
-                mu = max(mu / 10, 1e-14 * diag_mean)
-            nu = 2.0
-            stall = stall + 1 if small else 0
-            if hard is not None:
-                worst.append(float(np.abs(r).max(initial=0.0)))
-                if len(worst) > HARD_STALL_STEPS and worst[-1] > HARD_STALL_GAIN * worst[-1 - HARD_STALL_STEPS]:
-                    break  # linear, not quadratic: the rows conflict (e.g. an inequality pinned at half margin)
-            if it % 10 == 0:
-                log(f"  rho={rho:g} it {it}: cost {cost:.3e} mu {mu:.1e} ratio {ratio:.2f} gviol {gviol:.1e}")
-            if stall >= 3:
-                break
-        else:
-            mu *= nu if hard is None else 10.0
-            nu *= 2
-            if mu > 1e20 * max(diag_mean, 1e-30):
-                break
-    return x.reshape(shape), it
+        return -(float(r @ Jdx) + 0.5 * float(Jdx @ Jdx))
+
+
+def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None, tol_inf=0.0, stall_tol=STALL):
+    """Levenberg-Marquardt on the merit (or on the hard rows) with the core ``lm``; returns X, iterations.
+
+    The penalty stages (``hard`` None) damp by the gain ratio from 1e-3 of the mean diagonal of JᵀJ and
+    solve inexactly (``LM_CG_RTOL``). The projection (``hard`` rows) starts almost undamped (1e-12),
+    damps tenfold down and up, solves to 1e-13, accepts a step that lowers the largest row (its
+    tolerance is a max norm), stops when that row is under ``tol_inf`` or converges only linearly.
+    Both stop after 3 steps that gain less than ``stall_tol`` or move x by less than 1e-13.
+    """
+    start = _Point(prob, X.reshape(-1).copy(), X.shape, rho, hard, LM_CG_RTOL if hard is None else 1e-13)
+    J = start.rows[1]
+    diag_mean = float((J.multiply(J)).sum() / max(len(start.x), 1))
+    scale = max(diag_mean, 1e-30)
+    stopping = Stopping(max_iter, stall_tol=stall_tol, xtol=1e-13)
+    if hard is None:
+        damping = Damping(1e-3 * scale, 1e20 * scale)
+    else:
+        damping = Damping(1e-12 * scale, 1e20 * scale, rule="tenfold", mu_min=1e-14 * diag_mean, raise_by=10.0,
+                          raise_growth=1.0)
+        stopping = replace(stopping, tol_inf=tol_inf, linear=(HARD_STALL_STEPS, HARD_STALL_GAIN))
+    pt, it = levenberg_marquardt(start, start.moved, damping, stopping, accept="gain" if hard is None else "max_row",
+                                 log=log, label=f"rho={rho:g}")
+    return pt.x.reshape(X.shape), it
 
 
 def _solve_full(prob: _Problem, log, iters: dict):
@@ -179,5 +182,6 @@ def _solve_full(prob: _Problem, log, iters: dict):
             break
         log(f"projection stopped at {worst:.2e} > tol: " + ("restarting with stiff penalties" if not attempt
                                                              else "giving up"))
+    assert best is not None, "the stiff attempt always projects"
     _, X, mode = best
     return X, mode

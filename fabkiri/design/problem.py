@@ -8,9 +8,12 @@ initial tile edge is 1).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy import sparse
 
+from ..errors import SolveError
 from ..pattern import geometry
 from ..pattern.conformance import boundary_tip_order
 from ..pattern.lattice import standard_pattern
@@ -41,9 +44,10 @@ class _Problem:
         self.st = st
         base = std.nodes.copy()
         self.n = len(base)
-        self.coarse = None
-        self.start_member = None  # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
-        self.unfold = None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
+        self.coarse: dict[str, Any] | None = None
+        # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
+        self.start_member: tuple[np.ndarray, float] | None = None
+        self.unfold: dict | None = None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
         self._rigid: RigidFamily | None = None
         X0, L0 = self._start(base, st)
         curves = {s: v for s, v in req.contracted.items() if isinstance(v, Target)}
@@ -57,7 +61,7 @@ class _Problem:
         self.X0 = self._closed_grids(X0)
         fam = self._families(base)
         self.families = fam
-        self._normal = None
+        self._normal: _Normal | None = None
         # a family may ask its own margin (``meta["margin"]``, tile units: the fabrication rows of a continuation step)
         self.margin = {f.name: f.meta.get("margin", CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN)
                        for f in fam if f.kind == "ineq"}
@@ -186,13 +190,20 @@ class _Problem:
         fam_c = RigidFamily.build(st_c, coarse.topology.spanning_tree(0))
         psi = RigidFamily.deployment_angle(x_mm, st_c)
         S_c, _ = fam_c.fit(x_mm, psi)
-        grid = resample_grid(fam_c.grid(S_c).reshape(coarse.lattice["rows"] + 1, coarse.lattice["cols"] + 1, 2),
+        grid = resample_grid(fam_c.grid(S_c).reshape(st_c.rows + 1, st_c.cols + 1, 2),
                              self.req.rows, self.req.cols)
         fam = self.rigid_family
         # the nearest fine member can fold cells the resampled grid does not: repaired (``unfold.py``)
         S, self.unfold = convex_member(fam, fam.node_vertex[self.st.tiles], grid.reshape(-1, 2))
         self.start_member = (S, psi)  # the start's seeds: the reduced solver need not fit them again
         return fam.nodes(S, psi)
+
+    @property
+    def target(self) -> Target:
+        """The deployed target; the routes that measure the deployed outline run only when there is one."""
+        if self.req.target is None:
+            raise SolveError("this design route needs a deployed target")
+        return self.req.target
 
     @property
     def rigid_family(self) -> RigidFamily:
@@ -210,6 +221,7 @@ class _Problem:
             _, J = f(self.X0)
             P = abs(J).T @ abs(J)
             S = P if S is None else S + P
+        assert S is not None, "every request has its edge-pair or opposite-side families"
         S = S.tocoo()
         node = sparse.csr_matrix((np.ones(S.nnz), (S.row // 2, S.col // 2)), shape=(self.nv, self.nv))
         o = nested_dissection(node, self.X0)

@@ -20,7 +20,9 @@ on the result and falls back to the full solver when a check fails.
 from __future__ import annotations
 
 import copy
+from collections.abc import Sequence
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from scipy import sparse
@@ -64,7 +66,7 @@ class _Merit:
     """
 
     def __init__(self, fam: RigidFamily, families: list[Family], margin: dict, reg_weight: float,
-                 rho: float = STAGES[0][0], scaling: str = "marquardt", grid_families: list[Family] = ()):
+                 rho: float = STAGES[0][0], scaling: str = "marquardt", grid_families: Sequence[Family] = ()):
         self.fam = fam
         self.nf = fam.n_seeds
         on_grid = {f.name for f in grid_families}
@@ -100,7 +102,7 @@ class _Merit:
         new.sq, new.scaling = float(np.sqrt(rho)), scaling
         return new
 
-    def unpack(self, p: np.ndarray):
+    def unpack(self, p: np.ndarray) -> tuple[np.ndarray, float]:
         nf = self.nf
         return np.stack([p[:nf], p[nf:2 * nf]], -1), float(p[-1])
 
@@ -164,55 +166,61 @@ class _Merit:
         return _Evaluation(self, p, Xc, self.ineq_violation(Xc, values), hard, values=values)
 
     def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
-        """The dense reduced Jacobian row block by row block: node rows through ``∂x/∂p`` at the nodes
-        they touch, tile-shape rows from ``_TileShapeRows``; inequality Jacobians only where active."""
+        """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
+        they touch, tile-shape rows from ``_TileShapeRows``, inequality rows only where active) on demand: LM
+        asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
         S, psi = self.unpack(p)
         X, c = self.fam.nodes(S, psi), self.fam.grid(S)
-        tc = tile_corners(c, self._tiles.quads)
-        rs, Js = [], []
+        t = self._tiles
+        assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
+        tc = tile_corners(c, t.quads)
+        rs: list[np.ndarray] = []
+        pend: list[tuple[float, Any, np.ndarray | None]] = []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
         gmin = np.inf
-
-        def node_rows(f, scale=1.0):
-            r, J = f.fn(X)
-            rs.append(scale * r)
-            Js.append(scale * self._node_jacobian(J, S, psi))
-
         for f in self.fits:
             if not (hard and f.meta.get("soft")):
-                node_rows(f)
+                r, J = f.fn(X)
+                rs.append(r)
+                pend.append((1.0, lambda J=J: J, None))
         if not hard:
             for f in self.regs:
-                node_rows(f, self.w)
+                r, J = f.fn(X)
+                rs.append(self.w * r)
+                pend.append((self.w, lambda J=J: J, None))
         s = 1.0 if hard else self.sq
         for f in self.ineqs:
             r = f.residual(X)
             gmin = min(gmin, float(r.min(initial=np.inf)))
             v = r - self.margin[f.name] * (0.5 if hard else 1.0)
             act = np.flatnonzero(v < 0)
-            if len(act):  # rarely: the gradients only now
+            if len(act):  # rarely
                 rs.append(s * v[act])
-                Js.append(s * self._node_jacobian(f.fn(X)[1], S, psi, act))
-        t = self._tiles
+                pend.append((s, lambda f=f: f.fn(X)[1], act))  # the gradients only when asked
         g = tc.cross.reshape(-1)
         gmin = min(gmin, float(g.min(initial=np.inf)))
         v = g - t.margin * (0.5 if hard else 1.0)
-        act = np.flatnonzero(v < 0)
-        if len(act):
-            rs.append(s * v[act])
-            Js.append(s * t.convexity_jacobian(tc, act))
-        P = len(p)
-        J = np.zeros((sum(len(r) for r in rs), P))
-        o = 0
-        for Jb in Js:
-            J[o:o + len(Jb), :Jb.shape[1]] = Jb  # grid blocks have no ψ column
-            o += len(Jb)
+        flat = np.flatnonzero(v < 0)
+        if len(flat):
+            rs.append(s * v[flat])
         r = np.concatenate(rs) if rs else np.zeros(0)
-        reg = None
-        if not hard:  # the regulariser rows come last; their normal-matrix block is formed now, from the buffer
+        rr = None
+        if not hard:  # the regulariser rows come last; their normal-matrix block is formed from the buffer
             rr = self.w * t.rows.residual(tc)
             r = np.concatenate([r, rr])
-            reg = (tc, *t.regularizer_normal(tc, rr, self.w))
-        return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, r, J, reg)
+
+        def dense():
+            """``(J, reg)``: the Jacobian of the rows before the regulariser's, and ``(tc, JᵀJ, Jᵀr)`` of those."""
+            Js = [sc * self._node_jacobian(stencil(), S, psi, rows) for sc, stencil, rows in pend]
+            if len(flat):
+                Js.append(s * t.convexity_jacobian(tc, flat))
+            J = np.zeros((sum(len(b) for b in Js), len(p)))
+            o = 0
+            for Jb in Js:
+                J[o:o + len(Jb), :Jb.shape[1]] = Jb  # grid blocks have no ψ column
+                o += len(Jb)
+            return J, None if rr is None else (tc, *t.regularizer_normal(tc, rr, self.w))
+
+        return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, r, dense=dense)
 
     def _node_jacobian(self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None) -> np.ndarray:
         """``∂r/∂p`` (dense) of node rows from their stencil Jacobian ``(nodes, grads)`` (what the fit and
@@ -224,7 +232,7 @@ class _Merit:
         D = self.fam.jacobian_at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
         return np.einsum("mkd,mkdp->mp", grads, D)
 
-    def _touched(self, Jx, p: np.ndarray):
+    def _touched(self, Jx, p: np.ndarray) -> tuple[sparse.csr_matrix, np.ndarray]:
         """``Jx`` on the columns of the nodes its rows touch and ``∂x/∂p`` at those nodes only: the node rows
         (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix is 540 MB at
         128x128."""
@@ -332,15 +340,19 @@ class _TileShapeRows:
 class _Evaluation:
     """The merit (or hard-fit) rows of one member ``p`` and, on demand, its normal matrix or Jacobian.
 
-    The dense path hands over all rows ``r``, the dense Jacobian ``J`` of the first ``len(J)`` of them
-    and, for the regulariser rows after those, ``reg = (tile corners, JᵀJ, Jᵀr)``; the block path
-    computes its sparse rows only when asked (a step refused for a new inequality violation needs none).
+    The dense path hands over all rows ``r`` and, formed on the first ask, the dense Jacobian ``J`` of the
+    first ``len(J)`` of them and, for the regulariser rows after those, ``reg = (tile corners, JᵀJ, Jᵀr)``;
+    the block path computes its sparse rows only when asked (a step refused for a new inequality violation
+    needs none).
     """
 
-    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, J=None, reg=None,
+    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, dense=None,
                  values: dict | None = None):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
-        self._r, self._J, self._reg, self._blocks = r, J, reg, None
+        self._r, self._blocks = r, None
+        self._J: np.ndarray | None = None
+        self._reg: tuple[Any, Any, Any] | None = None  # the regulariser's (residual, normal matrix, gradient)
+        self._dense = dense  # dense path: () -> (J, reg), called once, when a Jacobian is first asked for
         self._values = values  # block path: the inequality values gviol came from, reused by the rows
 
     @property
@@ -358,8 +370,13 @@ class _Evaluation:
             self._r = self._rows()[0]
         return self._r
 
+    def _form(self) -> None:
+        if self._dense is not None:
+            (self._J, self._reg), self._dense = self._dense(), None
+
     def normal(self):
         """Reduced Gauss-Newton matrix ``JᵀJ`` and gradient ``Jᵀr``."""
+        self._form()
         if self._J is None:
             r, Jx, Jc = self._rows()
             return self.merit.normal(r, Jx, Jc, self.p)
@@ -374,12 +391,14 @@ class _Evaluation:
 
     def jacobian(self) -> np.ndarray:
         """Dense ``∂r/∂p``."""
+        self._form()
         if self._J is None:
             r, Jx, Jc = self._rows()
             self._J = self.merit.reduced_jacobian(Jx, Jc, self.p)
         if self._reg is None:
             return self._J
         t = self.merit._tiles
+        assert t is not None, "a regulariser comes only with the tile-shape rows"
         Jr = self.merit.w * t.regularizer_jacobian(self._reg[0])
         return np.vstack([self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])])
 
@@ -458,4 +477,5 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
             best = ((viol > 0, cost), X)
         if miss <= miss_tol and not viol > 0:
             break
+    assert best is not None, "SCALINGS is not empty"
     return best[1], "least-squares", iters

@@ -19,6 +19,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..errors import InputError
 from .conformance import deployed
 from .solve import DesignRequest, DesignResult, _Problem, design
 
@@ -52,13 +53,16 @@ def refine_minimax(req: DesignRequest, start_mm: np.ndarray, steps: int = LAWSON
     the weights are then raised again from the last converged design) and the wall seconds of the steps.
     The start itself is not among the candidates: the caller compares with it. ``accept`` (optional) vetoes a
     converged step as a candidate (the caller's own check, e.g. a printer's bed); the steps go on from it."""
+    target = req.target
+    if target is None:  # the steps are judged by their Hausdorff distance to the deployed target
+        raise InputError("minimax refinement needs a deployed target (a closed-state target alone has none)")
     X = np.asarray(start_mm, float)
     weights = lawson_weights(req, X, None, gamma)
     best, trace, spent = None, [], 0.0
     for _ in range(steps):
         result = design(replace(req, start=X, fit_weights=weights, second_opinion=False))
         spent += result.report["time_s"]
-        h = deployed(result.pattern.nodes, result.pattern.topology, req.target)["hausdorff_rel"]
+        h = deployed(result.pattern.nodes, result.pattern.topology, target)["hausdorff_rel"]
         trace.append(h if result.converged else float("nan"))
         if result.converged:  # an unconverged step moves nothing but the weights
             if (best is None or h < best[0]) and (accept is None or accept(result)):

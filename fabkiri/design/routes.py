@@ -71,7 +71,7 @@ def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
     is skipped. With the outline fit it reached the same outline at 8x8 on circle, ellipse, superellipse,
     hexagon and heart (Hausdorff within 0.005 % of the size) for 4-6x the rigid family's time."""
     pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
-    h = deployed_conformance(pat.nodes, pat.topology, prob.req.target)["hausdorff_rel"]
+    h = deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
     if h <= above:
         log(f"rigid family outline within {h:.2%} of the target size (<= {above:.2%}): no second opinion")
     return h > above
@@ -115,7 +115,7 @@ def _solve_rigid_first(prob: _Problem, log, iters: dict):
         if not (res.converged and _acceptable(prob, X)):
             log(f"rigid family from {init}: fails a non-rigid family check ({_why_not(prob, X)})")
             continue
-        h = deployed_conformance(res.pattern.nodes, res.pattern.topology, prob.req.target)["hausdorff_rel"]
+        h = deployed_conformance(res.pattern.nodes, res.pattern.topology, prob.target)["hausdorff_rel"]
         log(f"rigid family from {init}: outline within {h:.2%} of the target size")
         if best is None or h < best[0]:
             best = (h, X, res.report["shape_matching"], res.report["solver"])

@@ -227,7 +227,7 @@ def _report(req: DesignRequest, prob: _Problem, X: np.ndarray, mode: str, solver
         "rigid_first": rigid_first,
     }
     fab_names = [f.name for f in prob.of("ineq") if f.name.startswith("fabrication_")]
-    if fab_names:  # the fabrication family: its rows, how many are active, the smallest (mm)
+    if fab_names and req.fabrication is not None:  # the fabrication family: its rows, how many are active, the smallest (mm)
         report["fabrication"] = {"limits": req.fabrication.to_dict(), "rows": {k: int(len(gvals[k])) for k in fab_names},
                                  "active": {k: active[k] for k in fab_names},
                                  # smallest row: mm for lengths, a sine for the hinge angles

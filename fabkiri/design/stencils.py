@@ -8,7 +8,9 @@ into CSR (see ``constraints.py`` for the conventions).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy import sparse
@@ -96,12 +98,12 @@ class Family:
     kind: str
     # callable x -> (r, J): J is a sparse matrix or, for the usual per-row stencil, a pair ``(nodes (m, k),
     # gradients (m, k, 2))`` that becomes CSR only when asked (residual-only calls skip it)
-    fn: object
+    fn: Callable[[np.ndarray], tuple[np.ndarray, Any]]
     dim: int = 2  # residual units: length**dim (2: squared-length forms, 1: lengths, 0: angles)
     meta: dict = field(default_factory=dict)
     nv: int = 0  # nodes in the node array (Jacobian columns / 2)
     # optional x -> r without the gradients (inequalities are checked far more often than they are active)
-    res: object = None
+    res: Callable[[np.ndarray], np.ndarray] | None = None
 
     def __call__(self, x: np.ndarray):
         """Residuals ``r`` and their Jacobian (CSR)."""

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -29,21 +29,30 @@ SIDES = ("B", "R", "T", "L")  # CCW order of the arcs; side index 0..3
 ARC_PAD = 0.1  # fraction of an arc's parameter range its feet may pass its ends by
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, init=False)
 class Target:
     """A closed CCW target curve in mm split into four arcs.
 
     ``points`` are the spline knots or polyline vertices (not repeated at the
-    end); ``corners`` the parameters of the BL, BR, TR, TL split points, CCW.
+    end); ``corners`` the parameters of the BL, BR, TR, TL split points, CCW
+    (given as None: the default split, :meth:`_default_corners`).
     """
 
     name: str
     kind: str  # "spline" | "polyline"
     points: np.ndarray
-    corners: np.ndarray = field(default=None)  # type: ignore[assignment]
-    source: dict = field(default_factory=dict)
+    corners: np.ndarray
+    source: dict
 
-    def __post_init__(self) -> None:
+    # written out (not the dataclass's) because ``corners`` may be given as None but is an array once made
+    def __init__(self, name: str, kind: str, points: np.ndarray, corners: np.ndarray | None = None,
+                 source: dict | None = None) -> None:
+        self.name, self.kind, self.points = name, kind, points
+        self.source = {} if source is None else source
+        self._build(corners)
+
+    def _build(self, corners: np.ndarray | None) -> None:
+        """Validate and orient the curve, parametrise it by arc length and set the four corners."""
         pts = np.asarray(self.points, dtype=float)
         if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 3:
             raise InputError(f"target {self.name!r}: needs at least 3 points [x, y]")
@@ -77,9 +86,7 @@ class Target:
         _check_simple(dense, self.name)
         self._dense = dense
         self._bbox = (dense.min(0), dense.max(0))  # the curve is fixed after construction
-        if self.corners is None:
-            self.corners = self._default_corners()
-        c = np.mod(np.asarray(self.corners, dtype=float), 1.0)
+        c = np.mod(np.asarray(self._default_corners() if corners is None else corners, dtype=float), 1.0)
         if c.shape != (4,):
             raise InputError(f"target {self.name!r}: needs exactly 4 corner parameters")
         # rotate so the sequence BL, BR, TR, TL is increasing from BL

@@ -120,7 +120,7 @@ def read_points_file(path: Path) -> Target:
         if isinstance(data, list):
             return from_points(data, "polyline", path.stem)
         return from_spec(data, path.stem)
-    rows = []
+    rows: list[list[float]] = []
     for lineno, line in enumerate(text.splitlines(), 1):
         line = line.split("#", 1)[0].strip()
         if not line:

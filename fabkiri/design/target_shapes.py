@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -70,7 +71,7 @@ def heart(n: int = 2048) -> Target:
     return Target("heart", "polyline", pts)
 
 
-SHAPES = {
+SHAPES: dict[str, Callable[..., Target]] = {
     "circle": circle,
     "ellipse": ellipse,
     "square": lambda **kw: rectangle(1.0),

@@ -26,6 +26,7 @@ from scipy.sparse.linalg import lsqr
 from ..pattern.periodic import Seam, seam_map
 from . import constraints as C
 from . import periodic as P
+from .lm import halving_gauss_newton
 
 RCOND = 1e-9  # singular values below this share of the largest count as zero
 
@@ -116,18 +117,11 @@ def project_free(st: C.Stencils, seam: Seam, x: np.ndarray, tol: float = 1e-12, 
     nv = st.n_nodes
     fams = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.rings(st, 1, nv), C.rings(st, 2, nv),
             P.closed_seam(seam, st, 1, nv), P.closed_seam(seam, st, 2, nv)]
-    r, beta = _free_residual(fams, seam, st, x)
-    steps = 0
-    while np.abs(r).max() > tol and steps < max_iter:
-        J = tube_jacobian(st, seam, x)
-        dx = lsqr(J, -r, atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0][:-3].reshape(-1, 2)
-        for _ in range(14):  # halve until the residual norm drops (β, τ are refitted to the new sheet)
-            r_new, beta_new = _free_residual(fams, seam, st, x + dx)
-            if np.linalg.norm(r_new) < np.linalg.norm(r):
-                break
-            dx = 0.5 * dx
-        else:
-            break
-        x, r, beta = x + dx, r_new, beta_new
-        steps += 1
+    def step(y, state):  # the minimum-norm step in the nodes (the seam map's last 3 unknowns are refitted)
+        J = tube_jacobian(st, seam, y)
+        return lsqr(J, -state[0], atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0][:-3].reshape(-1, 2)
+
+    # halved up to 14 times until the residual norm drops (β, τ are refitted to the new sheet)
+    x, (r, beta), steps = halving_gauss_newton(x, _free_residual(fams, seam, st, x), step,
+                                               lambda y: _free_residual(fams, seam, st, y), tol, max_iter, 14)
     return x, float(np.abs(r).max()), float(beta), steps

@@ -29,6 +29,7 @@ from ..pattern.model import Pattern
 from ..pattern.periodic import check_tube_size, lattice_seam, with_seam
 from . import constraints as C
 from . import periodic as P
+from .lm import halving_gauss_newton
 from .objective import regularizer
 
 EQ_WEIGHT = 30.0  # equalities against the fit in the first stage (the second stage makes them exact)
@@ -130,19 +131,11 @@ class _TubeProblem:
 def _project(prob: _TubeProblem, x: np.ndarray, tol: float, max_iter: int = 30):
     """Gauss-Newton minimum-norm steps onto the equalities, halved until the residual norm drops;
     returns (x, max |r|, steps). It stops where no halving helps (the figures then say so)."""
-    r, J = prob.eq_residual(x)
-    steps = 0
-    while np.abs(r).max() > tol and steps < max_iter:
-        dx = lsqr(J, -r, atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0].reshape(-1, 2)
-        for _ in range(12):
-            r_new, J_new = prob.eq_residual(x + dx)
-            if np.linalg.norm(r_new) < np.linalg.norm(r):
-                break
-            dx = 0.5 * dx
-        else:
-            break
-        x, r, J = x + dx, r_new, J_new
-        steps += 1
+    def step(y, state):
+        r, J = state
+        return lsqr(J, -r, atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0].reshape(-1, 2)
+
+    x, (r, _), steps = halving_gauss_newton(x, prob.eq_residual(x), step, prob.eq_residual, tol, max_iter, 12)
     return x, float(np.abs(r).max()), steps
 
 
@@ -174,13 +167,14 @@ def design_tube(req: TubeRequest) -> TubeResult:
     """Design the sheet of a reconfigurable tube (see the module docstring)."""
     req.validate()
     t0, c0 = time.perf_counter(), time.process_time()
-    x, steps = None, []
+    x, steps = None, list[dict]()
     for tgt in homotopy(req.target):
         prob = _TubeProblem(replace(req, target=tgt), start=x)
         x, figures = _stage(prob, req)
         steps.append(figures)
         if figures["equality_max"] > req.tol:  # a continuation step that did not converge ends the run
             break
+    assert x is not None, "the homotopy ends on the target itself, so it has a step"
     eq_max = steps[-1]["equality_max"]
     fams = {f.name: float(np.abs(f(x)[0]).max(initial=0.0)) for f in prob.eq}
     fit = prob.fit(x)[0] * prob.geo.scale
@@ -196,7 +190,7 @@ def design_tube(req: TubeRequest) -> TubeResult:
     }
     sheet = Pattern(nodes=x * geo.scale, tiles=prob.std.tiles,
                     name=req.name or f"tube {req.rows}x{req.cols} {req.target.kind}",
-                    lattice={**prob.std.lattice, "tile_size": geo.scale},
+                    lattice={**(prob.std.lattice or {}), "tile_size": geo.scale},
                     design={"kind": "tube", "tube_target": req.target.to_dict(), "rigid": report["rigid"],
                             "report": report})
     return TubeResult(pattern=with_seam(sheet, prob.seam), converged=converged, report=report)

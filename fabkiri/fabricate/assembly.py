@@ -24,6 +24,8 @@ import numpy as np
 import shapely
 
 from ..pattern.model import Pattern
+from .hingekinds import HingeKind
+from .printjob import print_style
 from .text import text_strokes_many, text_width
 
 MAP_MAX_PIECES = 3000  # above this the numbers are not legible on one picture; the manifest still lists them
@@ -53,20 +55,20 @@ def _corner_triangles(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, frac: fl
     return np.stack([q, q + reach(q, q1) * (q1 - q), q + reach(q, q0) * (q0 - q)], 1)
 
 
-def tape_pieces(pattern: Pattern, Q: np.ndarray, sheet_of: np.ndarray, letters: list[str], kind: str,
+def tape_pieces(pattern: Pattern, Q: np.ndarray, sheet_of: np.ndarray, letters: list[str], kind: HingeKind,
                 frac: float, reach_mm: float) -> list[dict[str, Any]]:
     """One row per tape piece, numbered in join order (``Q``: placed tile corners on the sheets)."""
     top_ = pattern.topology
     A, B = top_.hinge_tiles.T
     cA, cB = top_.hinge_corner.T
-    if kind == "ligament" or top_.n_hinges == 0:
+    if kind.one_piece or top_.n_hinges == 0:
         return []
     face_top = np.array([f == "T" for f in letters])
     order = join_order(pattern, np.arange(top_.n_hinges), face_top)
     ta = _corner_triangles(Q, A, cA, frac, reach_mm)
     tb = _corner_triangles(Q, B, cB, frac, reach_mm)
     # tiles apart on the sheet (separate tiles, split sheets): the piece spans one corner pair, twice A's reach
-    apart = (sheet_of[A] != sheet_of[B]) | (kind == "separate")
+    apart = (sheet_of[A] != sheet_of[B]) | kind.cut_apart
     u = ta.mean(1) - tb.mean(1)
     u = u / np.maximum(np.linalg.norm(u, axis=1), 1e-12)[:, None]
     s = np.einsum("hkd,hd->hk", np.concatenate([ta, tb], 1), u)
@@ -79,7 +81,8 @@ def tape_pieces(pattern: Pattern, Q: np.ndarray, sheet_of: np.ndarray, letters: 
              "at_mm": where[h], "length_mm": length[h]} for n, h in enumerate(order.tolist(), 1)]
 
 
-def cut_bom(manifest: dict, pieces: list[dict], tile_area_mm2: float, n_hinges: int) -> dict[str, Any]:
+def cut_bom(manifest: dict, pieces: list[dict], tile_area_mm2: float, n_hinges: int,
+            kind: HingeKind) -> dict[str, Any]:
     sheets = manifest["sheets"]
     mat = manifest["material"]
     return {
@@ -90,25 +93,10 @@ def cut_bom(manifest: dict, pieces: list[dict], tile_area_mm2: float, n_hinges: 
         "tiles": len(manifest["tiles"]),
         "tape_pieces": len(pieces), "tape_length_mm": round(sum(p["length_mm"] for p in pieces), 3),
         "tape_top": sum(p["face"] == "T" for p in pieces), "tape_bottom": sum(p["face"] == "B" for p in pieces),
-        "ligaments": n_hinges if manifest["hinge"] == "ligament" else 0,
+        "ligaments": n_hinges if kind.one_piece else 0,
         "cut_length_mm": round(sum(s["cut_length_mm"] for s in sheets), 3),
         "cut_time_s": round(sum(s["cut_time_s"] for s in sheets), 1),
     }
-
-
-def assembly_steps(kind: str, n_top: int, n_bottom: int) -> list[str]:
-    if kind == "ligament":
-        return ["the sheet comes out as one piece: push out the tiles' holes and fold along the ligaments; "
-                "nothing to join"]
-    steps = [f"1. top face: lay the cut tiles as cut (engraved face up) and tape pieces 1-{n_top} in order, "
-             "each across its hinge corner from the face letter to the chord"]
-    if n_bottom:
-        steps.append(f"2. turn the whole piece over (left-right) and tape pieces {n_top + 1}-{n_top + n_bottom} "
-                     "on the bottom face the same way (the map's bottom panel is seen from above, through the sheet)")
-    if kind == "separate":
-        steps.insert(0, "0. place each tile by its ID next to its partners: a corner label '12T' joins this corner "
-                        "to tile 12 on the top face (B: bottom)")
-    return steps
 
 
 def _numbers(ax, pts: np.ndarray, texts: list[str], h: float, color: str) -> None:
@@ -207,10 +195,11 @@ def print_assembly(r) -> dict[str, Any]:
                     "mass_g": round(v / 1000 * DENSITY_G_CM3.get(m.upper(), 1.24), 2),
                     "density_g_cm3": DENSITY_G_CM3.get(m.upper(), 1.24)} for m, v in per.items()}
     n_top = int(plan.top.sum())
+    strips = print_style(job.style).strip_hinges
     out = {"style": job.style, "tiles": len(plan.tiles), "hinges": plan.n_hinges,
-           "strips": 0 if job.style == "pinned" else plan.n_hinges,
-           "strips_top": 0 if job.style == "pinned" else n_top,
-           "strips_bottom": 0 if job.style == "pinned" else plan.n_hinges - n_top,
+           "strips": plan.n_hinges if strips else 0,
+           "strips_top": n_top if strips else 0,
+           "strips_bottom": plan.n_hinges - n_top if strips else 0,
            "beds": len(job.beds), "bodies": bodies, "filament": filament,
            "filament_note": f"{FILAMENT_DIAMETER_MM} mm filament, typical densities; solid volumes (the "
                             "slicer's infill and supports change them)"}
@@ -221,7 +210,7 @@ def print_pieces(pattern: Pattern, r) -> tuple[list[dict], dict[int, np.ndarray]
     """Strips numbered in join order (strips style: glued by hand) with their outlines on the plan."""
     job = r.job
     plan = job.plan
-    if job.style != "strips" or job.strips is None:  # other styles print their hinges in place
+    if not print_style(job.style).loose_strips or job.strips is None:  # other styles print their hinges in place
         return [], {}
     H = plan.n_hinges
     order = join_order(pattern, np.arange(H), plan.top)
@@ -248,15 +237,15 @@ def _long_side(poly) -> float:
 def add_to_print(manifest_text: str, pattern: Pattern, r, title: str) -> tuple[str, dict[str, bytes]]:
     """The print manifest with ``bill_of_materials`` (and, for hand-glued strips, ``assembly_pieces`` and
     ``assembly.png``) added; the other keys stay as they are."""
-    import json
+    from ..verify.printmanifest import PrintManifest
 
-    d = json.loads(manifest_text)
+    m = PrintManifest.from_json(manifest_text)
     pieces, shapes = print_pieces(pattern, r)
     files: dict[str, bytes] = {}
     if pieces:
         files["assembly.png"] = map_png([r.job.plan.corners], pieces, shapes, title,
                                         face_names=("top-face strips", "bottom-face strips, seen from above"))
-        d["files"] = sorted(set(d.get("files", [])) | set(files))
-    d["assembly_pieces"] = pieces
-    d["bill_of_materials"] = print_assembly(r)
-    return json.dumps(d, indent=1, sort_keys=False) + "\n", files
+        m.files = sorted(set(m.files) | set(files))
+    m.assembly_pieces = pieces
+    m.bill_of_materials = print_assembly(r)
+    return m.to_json(), files

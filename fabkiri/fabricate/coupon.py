@@ -33,6 +33,7 @@ from ..pattern.lattice import standard_pattern
 from .cut import CutOptions, cut_pattern
 from .drawing import SheetDrawing
 from .dxf import dxf_bytes
+from .hingekinds import hinge_kind
 from .materials import Material
 from .preview import png_bytes
 from .printers import Printer
@@ -95,30 +96,22 @@ def _slots(sd: SheetDrawing, mat: Material, x0: float, y0: float) -> float:
 
 
 def hinge_variants(mat: Material) -> tuple[str, str, list[dict[str, float]]]:
-    """The field the hinge pieces sweep, its engraved prefix, and the cut settings of each piece."""
-    if mat.hinge == "ligament":
-        base = mat.ligament_width_mm
-        ws = sorted({round(max(mat.min_web_mm, base * f), 3) for f in (0.6, 0.8, 1.0, 1.25, 1.5)})
-        return "ligament_width_mm", "W", [{"tile": 10.0, "ligament_width": w, "value": w} for w in ws]
-    if mat.hinge == "separate":
-        ks = sorted({round(max(0.01, mat.kerf_mm * f), 3) for f in (0.5, 0.75, 1.0, 1.25, 1.5)})
-        return "kerf_mm", "K", [{"tile": 10.0, "kerf": k, "value": k} for k in ks]
-    sizes = [s for s in (12.0, 9.0, 7.0, 5.0, 4.0) if s > 1.2 * mat.min_web_mm] or [12.0]
-    return "min_web_mm", "S", [{"tile": s, "value": s} for s in sizes]
+    """The field the hinge pieces sweep, its engraved prefix, and the cut settings of each piece
+    (the material's hinge kind decides)."""
+    return hinge_kind(mat.hinge).coupon_variants(mat)
 
 
 def _hinge_piece(mat: Material, v: dict[str, float]) -> SheetDrawing:
     """Two tiles joined by one hinge, cut in closed state 1 by ``cut_pattern``."""
     p = with_contracted_states(standard_pattern(1, 2, tile_size=v["tile"], name="hinge coupon"))
     m = mat.override(kerf_mm=v.get("kerf"))
-    layout = "exploded" if m.hinge == "separate" else None
     res = cut_pattern(p, CutOptions(material=m, reference_mm=0.0, sheet=(200.0, 200.0), margin=1.0,
-                                    ligament_width=v.get("ligament_width"), layout=layout, stem="coupon",
+                                    ligament_width=v.get("ligament_width"), stem="coupon",
                                     formats=("dxf",)))
     return res.sheets[0]
 
 
-def _bounds(sd: SheetDrawing, layers=("CUT",)) -> np.ndarray:
+def _bounds(sd: SheetDrawing, layers: tuple[str, ...] = ("CUT",)) -> np.ndarray:
     pts = np.concatenate([p for name in layers for p, _ in sd.layers[name]])
     return np.r_[pts.min(0), pts.max(0)]
 

@@ -11,7 +11,7 @@ disk here; :mod:`fabkiri.fabricate.readback` verifies and writes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import shapely
@@ -25,17 +25,16 @@ from . import fabricability as fb
 from . import hinges as hg
 from . import layout as lay
 from .drawing import COLORS, SheetDrawing, snap
-from .dxf import dxf_bytes
 from .gate import GateResult, closes_gate
 from .gcpause import gc_paused
 from .hingekinds import Cutting, HingeKind, SheetCut, hinge_kind
 from .labels import MIN_LABEL_MM, add_notes, engrave_labels
 from .materials import Material
-from .preview import png_bytes
-from .svg import STROKE_MM, svg_bytes
+from .sheetformats import sheet_format, sheet_format_names
+from .svg import STROKE_MM
 from .text import text_strokes
 
-FORMATS = ("dxf", "svg", "png")
+FORMATS = sheet_format_names()  # the built-in formats: what a cut writes by default
 PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
 
 
@@ -49,8 +48,8 @@ class CutOptions:
     sheet: tuple[float, float] = (600.0, 400.0)
     margin: float = 5.0
     layout: str | None = None
-    scale: float | str | None = None  # "auto": the smallest the checks accept
-    width: float | str | None = None
+    scale: float | Literal["auto"] | None = None  # "auto": the smallest the checks accept
+    width: float | Literal["auto"] | None = None
     formats: tuple[str, ...] = FORMATS
     colors: str | None = None
     labels: bool = True
@@ -135,8 +134,8 @@ def _resolve(options: CutOptions) -> tuple[HingeKind, str, str]:
     if options.scale is not None and options.width is not None:
         raise InputError("give --scale or --width, not both")
     for f in options.formats:
-        if f not in FORMATS:
-            raise InputError(f"unknown format {f!r} (known: {', '.join(FORMATS)})")
+        if sheet_format(f) is None:
+            raise InputError(f"unknown format {f!r} (known: {', '.join(sheet_format_names())})")
     if options.reference_mm < 0:
         raise InputError(f"reference square size must be >= 0, got {options.reference_mm}")
     return kind, layout, colors
@@ -174,10 +173,11 @@ def _scale(raw: np.ndarray, options: CutOptions, kind: str) -> float:
                               f"{kind} hinges: {need.advice()}")
         return need.scale
     if options.width is not None:
+        width = float(options.width)  # "auto" was taken above
         span = float(raw[..., 0].max() - raw[..., 0].min())
-        if not options.width > 0:
+        if not width > 0:
             raise InputError(f"--width must be positive, got {options.width}")
-        return options.width / span
+        return width / span
     scale = 1.0 if options.scale is None else float(options.scale)
     if not (np.isfinite(scale) and scale > 0):
         raise InputError(f"--scale must be positive, got {options.scale}")
@@ -246,18 +246,18 @@ def sheet_names(job: CutJob) -> list[str]:
 
 
 def _files(job: CutJob) -> dict[str, bytes]:
-    """DXF and SVG per sheet and the PNG preview of them all, as asked for."""
+    """Every file the options ask for: the per-sheet formats sheet by sheet (DXF and SVG), then those
+    of the whole cut (the PNG preview), in the registry's order (:mod:`.sheetformats`)."""
     opts = job.options
+    asked = [f for f in map(sheet_format, sheet_format_names()) if f is not None and f.name in opts.formats]
     files: dict[str, bytes] = {}
     for sd, name in zip(job.sheets, sheet_names(job)):
-        if "dxf" in opts.formats:
-            files[f"{name}.dxf"] = dxf_bytes(sd, job.colors)
-        if "svg" in opts.formats:
-            files[f"{name}.svg"] = svg_bytes(sd, job.colors, opts.stroke_mm)
-    if "png" in opts.formats:
-        shown = [h for h in (job.label_heights, job.corner_heights) if h is not None and (h > 0).any()]
-        smallest = min((float(h[h > 0].min()) for h in shown), default=None)
-        files[f"{opts.stem}.png"] = png_bytes(job.sheets, job.colors, label_mm=smallest)
+        for f in asked:
+            if f.per_sheet:
+                files[f"{name}{f.suffix}"] = f.write(job, [sd])
+    for f in asked:
+        if not f.per_sheet:
+            files[f"{opts.stem}{f.suffix}"] = f.write(job, job.sheets)
     return files
 
 
@@ -298,7 +298,7 @@ def _assembly(job: CutJob, files: dict[str, bytes]) -> list[dict]:
     from . import assembly as asm
 
     pattern, Q, sheet_of = job.pattern, job.Q, job.place.sheet
-    pieces = asm.tape_pieces(pattern, Q, sheet_of, job.faces.letters(), job.kind.name, MARK_CORNER_FRAC,
+    pieces = asm.tape_pieces(pattern, Q, sheet_of, job.faces.letters(), job.kind, MARK_CORNER_FRAC,
                              MARK_REACH_MM)
     if "png" in job.options.formats and 0 < len(pieces) <= asm.MAP_MAX_PIECES:
         by_sheet = [Q[sheet_of == s] for s in range(job.place.n_sheets)]

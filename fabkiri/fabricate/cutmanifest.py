@@ -104,7 +104,7 @@ def _assembly(job: CutJob, files: dict[str, bytes], pieces: list[dict]) -> dict[
     n_top = sum(p["face"] == "T" for p in pieces)
     return {"joins": "tape" if pieces else None, "order": "top face first, then the bottom; "
             "breadth-first spanning tree from tile 0, then the loop-closing joins",
-            "steps": asm.assembly_steps(job.kind.name, n_top, len(pieces) - n_top),
+            "steps": job.kind.assembly_steps(n_top, len(pieces) - n_top),
             "map": "assembly.png" if "assembly.png" in files else None,
             "map_note": None if len(pieces) <= asm.MAP_MAX_PIECES else
             f"no map: {len(pieces)} pieces are more than {asm.MAP_MAX_PIECES} legible numbers"}
@@ -134,5 +134,5 @@ def cut_manifest(job: CutJob, files: dict[str, bytes], pieces: list[dict]) -> di
     )
     out = m.to_dict()
     area = float(shapely.area(shapely.polygons(job.cutting.corners)).sum())
-    out["bill_of_materials"] = asm.cut_bom(out, pieces, area, job.pattern.topology.n_hinges)
+    out["bill_of_materials"] = asm.cut_bom(out, pieces, area, job.pattern.topology.n_hinges, job.kind)
     return out

@@ -10,18 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..design.fabrication import FabricationLimits
+from ..design.target_curve import Target
 from ..errors import FabricationError, InputError
-from .fabricability import ligament_never, shrink_of
+from .hingekinds import hinge_kind
 from .materials import HINGE_KINDS, Material, load_material
 from .printers import Printer, load_printer
+from .printjob import print_style
 
-# how far apart two hinges of one tile must be, per hinge kind (mm): a tape piece reaches about half a
-# web along each edge from its corner; a ligament strip is its width plus a web from the next one
-HINGE_ALLOWANCE = {
-    "tape": lambda m: m.min_web_mm,
-    "ligament": lambda m: m.ligament_width_mm + m.min_web_mm,
-    "separate": lambda m: 0.0,
-}
 PAD_MARGIN_DEG = 5.0  # above the corner angle at which a strip pad reaches the printer's minimum area
 
 
@@ -30,14 +25,12 @@ def material_limits(material: Material, kind: str | None = None) -> dict:
     kind = kind or material.hinge
     if kind not in HINGE_KINDS:
         raise FabricationError(f"hinge kind must be one of {', '.join(HINGE_KINDS)}, got {kind!r}")
-    if kind == "ligament" and ligament_never(material):
-        raise FabricationError(f"{material.name} cannot be cut as a ligament sheet: {ligament_never(material)}")
-    shrink = shrink_of(material, kind)
-    # a ligament strip's root reaches into the shrunk tile: the tile holds it and a web (cut itself asks a web;
-    # at a web alone the layout verifier's four-corner recovery failed on 0.46 mm pp tiles, 16x16 circle)
-    width = material.min_web_mm + (material.ligament_width_mm if kind == "ligament" else 0.0)
-    return {"min_width_mm": width, "shrink_mm": shrink, "min_edge_mm": material.min_web_mm if shrink else 0.0,
-            "hinge_spacing_mm": HINGE_ALLOWANCE[kind](material)}
+    hk = hinge_kind(kind)
+    if hk.never(material):
+        raise FabricationError(f"{material.name} cannot be cut as a {kind} sheet: {hk.never(material)}")
+    shrink = hk.shrink(material)
+    return {"min_width_mm": hk.min_width(material), "shrink_mm": shrink,
+            "min_edge_mm": material.min_web_mm if shrink else 0.0, "hinge_spacing_mm": hk.hinge_spacing(material)}
 
 
 def printer_limits(printer: Printer, style: str) -> dict:
@@ -45,17 +38,22 @@ def printer_limits(printer: Printer, style: str) -> dict:
     wide enough for a strip pad (strip styles) or pivots far enough apart for two ears (pinned)."""
     out = {"min_width_mm": 2.0 * printer.nozzle_mm, "shrink_mm": 0.5 * printer.gap_mm,
            "min_edge_mm": printer.nozzle_mm}
-    if style == "pinned":
-        hollow = printer.pin.ear_radius_mm + printer.radial_clearance_mm
-        out["hinge_spacing_mm"] = 2.0 * hollow + 2.0 * printer.nozzle_mm
-    else:  # a pad on an acute corner is about a triangle: ½ tan α w² against the printer's 0.25 w min(reach, w)
-        w, reach = printer.strip_width_mm, printer.strip_reach_mm
-        out["min_hinge_angle_deg"] = float(np.degrees(np.arctan(0.5 * min(reach, w) / w))) + PAD_MARGIN_DEG
-        # two strips on one face of a tile keep the radial clearance (their boxes, as print_bound); a thin
-        # tile is no obstacle by itself, the strip is clipped to it (the old 2·reach + clearance width row
-        # asked 8.3 mm of every tile on prusa-mk4 where print accepts the 8x8 circle from 1.6 mm tiles)
-        out.update(strip_clearance_mm=printer.radial_clearance_mm, strip_width_mm=w, strip_reach_mm=reach)
-        out["hinge_edge_mm"] = w + printer.gap_mm  # the strip runs w along the seam from the shrunk corner
+    hinges = print_style(style).limits
+    if hinges is not None:  # what the style's hinges ask of the tiles
+        out.update(hinges(printer))
+    return out
+
+
+def strip_limits(printer: Printer) -> dict:
+    """What a printed strip asks of the tiles it joins (the strip styles' ``PrintStyle.limits``)."""
+    # a pad on an acute corner is about a triangle: ½ tan α w² against the printer's 0.25 w min(reach, w)
+    w, reach = printer.strip_width_mm, printer.strip_reach_mm
+    out = {"min_hinge_angle_deg": float(np.degrees(np.arctan(0.5 * min(reach, w) / w))) + PAD_MARGIN_DEG}
+    # two strips on one face of a tile keep the radial clearance (their boxes, as print_bound); a thin
+    # tile is no obstacle by itself, the strip is clipped to it (the old 2·reach + clearance width row
+    # asked 8.3 mm of every tile on prusa-mk4 where print accepts the 8x8 circle from 1.6 mm tiles)
+    out.update(strip_clearance_mm=printer.radial_clearance_mm, strip_width_mm=w, strip_reach_mm=reach)
+    out["hinge_edge_mm"] = w + printer.gap_mm  # the strip runs w along the seam from the shrunk corner
     return out
 
 
@@ -69,10 +67,12 @@ def combine(*limits: dict) -> dict:
 
 
 def resolve(material: str | None, hinge: str | None, printer: str | None, style: str | None,
-            min_feature: float | None, min_hole: float | None, target) -> tuple[FabricationLimits | None, dict]:
+            min_feature: float | None, min_hole: float | None,
+            target: Target | None) -> tuple[FabricationLimits | None, dict]:
     """``design``'s ``--material/--hinge``, ``--printer/--style``, ``--min-feature`` and ``--min-hole`` as plain
     mm limits (None: no fabrication rows), and the intent stored in the design for ``cut``/``print``."""
-    parts, names, intent = [], [], {}
+    parts, names = [], []
+    intent: dict[str, str | float] = {}  # cut/print defaults: material, hinge, printer, style, size, scale
     if hinge and not material:
         raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
     if style and not printer:

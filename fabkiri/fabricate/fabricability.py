@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -21,8 +22,13 @@ import shapely.errors
 from ..errors import CheckFailed, FabricationError
 from ..pattern import fabricability as fab
 from ..pattern.model import Pattern
+from .hingekinds import hinge_kind
 from .materials import HINGE_KINDS, Material, available, load_material
 from .printers import Printer, available_printers, load_printer
+from .printjob import print_style
+
+if TYPE_CHECKING:
+    from .planrules import PlanRule
 
 DIGITS = 4  # stated minima are rounded up to this many significant digits (so the stated value passes)
 BISECT_RTOL = 1e-3  # print minimum: the bracket is this tight before the upper end is stated
@@ -49,7 +55,7 @@ def floor_sig(x: float, digits: int = DIGITS) -> float:
 
 def shrink_of(material: Material, kind: str) -> float:
     """How far ``cut`` shrinks every tile for this hinge kind (mm)."""
-    return 0.5 * material.gap_mm if kind == "ligament" else 0.0
+    return hinge_kind(kind).shrink(material)
 
 
 def closed_span(corners: np.ndarray) -> float:
@@ -87,10 +93,9 @@ def ligament_never(material: Material) -> str:
 
 def cut_minimum(corners: np.ndarray, material: Material, kind: str) -> CutMinimum:
     """Smallest scale of the closed state ``corners`` (pattern units) that ``cut`` accepts for ``kind``."""
-    if kind == "ligament":
-        why = ligament_never(material)
-        if why:
-            return CutMinimum(None, None, -1, why)
+    why = hinge_kind(kind).never(material)
+    if why:
+        return CutMinimum(None, None, -1, why)
     shrink = shrink_of(material, kind)
     s, t, limit = fab.min_scale(corners, material.min_web_mm, shrink, min_edge=material.min_web_mm if shrink else 0.0)
     if not np.isfinite(s):
@@ -102,17 +107,18 @@ def cut_minimum(corners: np.ndarray, material: Material, kind: str) -> CutMinimu
 def check_webs(regions: np.ndarray, material: Material, kind: str, corners: np.ndarray, scale: float) -> None:
     """``cut``'s web check: every tile that stays is at least the minimum web wide (thinnest width)."""
     w = fab.widths(regions)
-    if kind == "ligament":  # a shrunk tile's edge shorter than a web is a sliver corner: as thin as it
+    shrinks = hinge_kind(kind).shrinks
+    if shrinks:  # a shrunk tile's edge shorter than a web is a sliver corner: as thin as it
         w = np.minimum(w, fab.shrunk_edges(regions, 0.0).min(-1))
     bad = np.flatnonzero(w < material.min_web_mm - fab.WEB_SLACK_MM)
     if len(bad):
         t = int(bad[np.argmin(w[bad])])
-        what = f" once shrunk by gap/2 ({shrink_of(material, kind):g} mm)" if kind == "ligament" else ""
+        what = f" once shrunk by gap/2 ({shrink_of(material, kind):g} mm)" if shrinks else ""
         need = cut_minimum(corners / scale, material, kind)
         raise CheckFailed(
             f"tile {t} is {w[t]:.3g} mm wide at its thinnest{what} at scale {scale:.4g}, thinner than the minimum "
             f"web {material.min_web_mm:g} mm of {material.name} ({len(bad)} tile(s) too thin); " + need.advice()
-            + ("" if kind != "ligament" else "; or use a smaller --gap"))
+            + ("; or use a smaller --gap" if shrinks else ""))
 
 
 def lost_edge(corners: np.ndarray, material: Material, kind: str, scale: float, tile: int) -> CheckFailed:
@@ -157,16 +163,13 @@ def scaled(pattern: Pattern, k: float) -> Pattern:
 
 def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> str:
     """Why the print plan of ``style`` is refused at this size ('' if accepted; the bed is not asked)."""
-    from . import pingeom, printgeom
+    from . import printgeom
 
     if not pattern.contracted and not _closes(pattern):
         return "the pattern does not close: nothing to hinge"
     try:
         plan = printgeom.closed_plan(pattern, state, printer)
-        if style == "pinned":
-            pingeom.pin_plan(pattern, plan, printer)
-        else:
-            printgeom.strip_outlines(plan, printer)
+        _rule(style).check(pattern, plan, printer)
     except FabricationError as exc:
         return str(exc)
     except shapely.errors.GEOSException as exc:  # seen once in a bisection (ellipse 16x16 rigid, prusa-mk4):
@@ -186,7 +189,7 @@ def _closes(pattern: Pattern) -> bool:
 
 def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer,
                corners: np.ndarray | None = None) -> float | None:
-    if style == "strips":
+    if print_style(style).tiles is None:  # no tiles printed (strips): the bed does not bound the pattern
         return None
     from .printgeom import closed_corners
 
@@ -214,7 +217,8 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
     guess = print_bound(pattern, style, printer, state)
     if guess.min_scale is not None and MIN_GUESS < guess.min_scale < MAX_SCALE:  # bracket around the bound
         g = guess.min_scale
-        for k in ((g, g * (1 - GUESS_BRACKET)) if style != "pinned" else (g * (1 - 1e-9), g * (1 + GUESS_BRACKET))):
+        lower = _rule(style).bound_is_lower  # then bracket upwards from it
+        for k in ((g, g * (1 - GUESS_BRACKET)) if not lower else (g * (1 - 1e-9), g * (1 + GUESS_BRACKET))):
             if _plan_error(scaled(pattern, k), style, state, printer):
                 lo = k if lo is None else max(lo, k)
             else:
@@ -253,11 +257,7 @@ GUESS_BRACKET = 0.03  # the closed-form bound is within a few % of the plan chec
 
 def _plan_key(printer: Printer, style: str) -> tuple:
     """The preset fields the plan checks of ``style`` read (not the bed)."""
-    base = (printer.gap_mm, printer.radial_clearance_mm, printer.nozzle_mm)
-    if style == "pinned":
-        return base + (printer.pin.ear_radius_mm, printer.pin.pin_radius_mm, printer.pin.tile_thickness_mm,
-                       printer.axial_clearance_mm, printer.layer_mm, printer.tolerance_mm)
-    return base + (printer.strip_width_mm, printer.strip_reach_mm)
+    return (printer.gap_mm, printer.radial_clearance_mm, printer.nozzle_mm) + _rule(style).fields(printer)
 
 
 def _closed(pattern: Pattern, state: int) -> np.ndarray | None:
@@ -293,88 +293,7 @@ def print_bound(pattern: Pattern, style: str, printer: Printer, state: int = 1,
     if len(pairs) and (face[pairs[:, 0]] == face[pairs[:, 1]]).any():
         return PrintMinimum(None, None, "hinges that coincide in a closed state cannot take opposite faces")
     s_shrink, t_shrink, _ = fab.min_scale(c, fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
-    if style == "pinned":
-        return _pin_bound(pattern, c, printer, s_shrink)
-    ends = top_.fold(state).fold_corner_ends
-    same = fab.same_face_pairs(top_.hinge_tiles, face, top_.n_tiles)
-    clear = fab.strip_clearance_scales(c, top_.hinge_tiles, top_.hinge_corner, ends, same, d,
-                                       printer.strip_width_mm, printer.strip_reach_mm, printer.radial_clearance_mm)
-    s_clear = float(clear.max(initial=0.0))
-    s = max(s_shrink, s_clear)
-    try:
-        s_pad = _pad_scale(c, top_.hinge_tiles, top_.hinge_corner, ends, printer, max(s, MIN_GUESS))
-    except shapely.errors.GEOSException as exc:  # a self-intersecting tile (the shared bow-tie reference)
-        return PrintMinimum(None, None, f"the pad geometry failed in GEOS ({exc})")
-    if s_pad is None:
-        return PrintMinimum(None, None, "a strip pad is too small at any scale: a hinge corner is too sharp for "
-                                        "the strip width")
-    why = "strip pads" if s_pad > s else "strip clearance" if s_clear >= s_shrink else "tile shrink"
-    return PrintMinimum(ceil_sig(max(s, s_pad)), None, f"{why} (closed form)", exact=False)
-
-
-def _pad_areas(c, hinge_tiles, hinge_corner, ends, printer: Printer, scale: np.ndarray, which: np.ndarray):
-    """Area of both pads (band ∩ tile shrunk by gap/2) of hinges ``which`` at their ``scale``: ``(n, 2)``."""
-    d = 0.5 * printer.gap_mm
-    w, R = printer.strip_width_mm, printer.strip_reach_mm + d
-    cs = c[hinge_tiles[which]] * scale[:, None, None, None]  # (n, 2, 4, 2)
-    sub = np.arange(len(which))
-    tiles = cs.reshape(-1, 4, 2)
-    p, e, n, t0 = fab.strip_frames(tiles, np.stack([2 * sub, 2 * sub + 1], 1), hinge_corner[which], ends[which], d)
-    perp = n[:, 0]
-    band = np.stack([p + t0[:, None] * e - R * perp, p + (t0 + w)[:, None] * e - R * perp,
-                     p + (t0 + w)[:, None] * e + R * perp, p + t0[:, None] * e + R * perp], 1)
-    shrunk = fab.shrunk_quads(tiles, d)
-    band = np.repeat(band, 2, axis=0)
-    # a degenerate tile (a bow-tie, a zero-length seam) has no pad: it gets no polygon, area 0
-    ok = (fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM) & np.isfinite(band).all((1, 2)) \
-        & np.isfinite(shrunk).all((1, 2))
-    area = np.zeros(len(tiles))
-    inter = shapely.intersection(shapely.polygons(band[ok]), shapely.polygons(shrunk[ok]))
-    area[ok] = shapely.area(inter)
-    return area.reshape(-1, 2)
-
-
-def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) -> float | None:
-    """Smallest scale ≥ s0 at which every pad has the plan's area (bisection on the short pads only)."""
-    need = 0.25 * printer.strip_width_mm * min(printer.strip_reach_mm, printer.strip_width_mm)
-    H = len(hinge_tiles)
-    short = np.flatnonzero(_pad_areas(c, hinge_tiles, hinge_corner, ends, printer, np.full(H, s0),
-                                      np.arange(H)).min(1) < need)
-    if not len(short):
-        return s0
-    top = np.full(len(short), MAX_SCALE)
-    if (_pad_areas(c, hinge_tiles, hinge_corner, ends, printer, top, short).min(1) < need).any():
-        return None
-    lo, hi = np.full(len(short), s0), top
-    while (hi - lo > 1e-4 * hi).any():
-        mid = 0.5 * (lo + hi)
-        bad = _pad_areas(c, hinge_tiles, hinge_corner, ends, printer, mid, short).min(1) < need
-        lo, hi = np.where(bad, mid, lo), np.where(bad, hi, mid)
-    return float(hi.max())
-
-
-def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float) -> PrintMinimum:
-    """Pinned: the checks that need no geometry (ear levels, ring wall, rigid-deployable) and the pivot
-    spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
-    from ..pattern.residuals import hinge_sums
-    from . import pingeom
-
-    try:
-        g = pingeom.pin_geometry(printer, pingeom.pin_levels(printer))
-    except FabricationError as exc:
-        return PrintMinimum(None, None, str(exc))
-    if np.abs(hinge_sums(pattern)).max(initial=0.0) > 1e-6:
-        return PrintMinimum(None, None, "not rigid-deployable: pinned tiles would have to bend")
-    top_ = pattern.topology
-    A, B = top_.hinge_tiles.T
-    xy = 0.5 * (c[A, top_.hinge_corner[:, 0]] + c[B, top_.hinge_corner[:, 1]])
-    pts = np.unique(np.round(xy / (1e-6 * max(pattern.tile_size, 1e-12))), axis=0, return_index=True)[1]
-    piv = xy[np.sort(pts)]
-    s = s_shrink
-    if len(piv) > 1:
-        s = max(s, (2 * g.hollow + 2 * printer.nozzle_mm) / closest_pair(piv))
-    return PrintMinimum(ceil_sig(s), None, "pivot spacing (closed form, a lower bound: print also checks the "
-                                           "slivers beside the clearances)", exact=False)
+    return _rule(style).bound(pattern, c, printer, s_shrink, state, face)
 
 
 def closest_pair(points: np.ndarray) -> float:
@@ -415,11 +334,12 @@ def summary(pattern: Pattern, prints=None) -> dict:
         p = load_printer(name)
         rows = pr.setdefault(p.name, {})
         for style in styles:
-            key = (style == "pinned", _plan_key(p, style))  # presets that differ only in the bed share a bound
+            # styles with one plan rule, and presets that differ only in the bed, share a bound
+            key = (_rule(style), _plan_key(p, style))
             if key not in memo:
-                memo[key] = print_bound(pattern, "tiles-and-strips" if style == "strips" else style, p, 1, c1)
+                memo[key] = print_bound(pattern, style, p, 1, c1)
             m = memo[key]
-            bed = None if style == "strips" else _bed_scale(pattern, style, 1, p, c1)
+            bed = _bed_scale(pattern, style, 1, p, c1)
             m = PrintMinimum(m.min_scale, None if bed is None else floor_sig(bed),
                              m.limit, m.exact)
             rows[style] = m.to_dict()
@@ -454,3 +374,11 @@ def summary_lines(s: dict) -> list[str]:
             cells.append(f"{pr}: " + ", ".join(part))
         lines.append("  print (--scale): " + "; ".join(cells))
     return lines
+
+
+def _rule(style: str) -> PlanRule:  # (a style's module names its rule: planrules.py)
+    """The plan rule of ``style`` (``PrintStyle.plan``)."""
+    rule = print_style(style).plan
+    if rule is None:
+        raise FabricationError(f"the {style} print style has no plan rule: its smallest scale cannot be found")
+    return rule

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from ..errors import CheckFailed
 from ..pattern.model import Pattern
-from ..verify import Report, verify_pattern
+from ..verify import Check, Report, verify_pattern
 from ..verify.pattern_checks import state_check_id
 
 GATE_GROUPS = ("tiles", "state 1", "state 2")  # plus each state's edge pairs (fold edges of equal length)
@@ -23,7 +23,7 @@ GATE_GROUPS = ("tiles", "state 1", "state 2")  # plus each state's edge pairs (f
 VERBS = {"cut": ("cut", "cuts"), "print": ("printed", "prints"), "export": ("exported", "exports")}
 
 
-def check_text(c, scale: float) -> str:
+def check_text(c: Check, scale: float) -> str:
     """A failed verifier check, lengths in the file's millimetres."""
     k = scale if c.unit == "mm" else (scale * scale if c.unit == "mm²" else 1.0)
     if isinstance(c.value, (int, float)) and isinstance(c.tol, (int, float)):

@@ -13,16 +13,17 @@ from __future__ import annotations
 import functools
 import gc
 from collections.abc import Callable
-from typing import TypeVar
+from typing import ParamSpec, TypeVar
 
-F = TypeVar("F", bound=Callable)
+P = ParamSpec("P")
+R = TypeVar("R")
 
 
-def gc_paused(fn: F) -> F:
+def gc_paused(fn: Callable[P, R]) -> Callable[P, R]:
     """Run ``fn`` with the cyclic GC disabled (restored afterwards, also on errors; nesting is fine)."""
 
     @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
         was = gc.isenabled()
         gc.disable()
         try:
@@ -31,4 +32,4 @@ def gc_paused(fn: F) -> F:
             if was:
                 gc.enable()
 
-    return wrapper  # type: ignore[return-value]
+    return wrapper

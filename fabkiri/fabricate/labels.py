@@ -30,7 +30,7 @@ def _incentre(tri: np.ndarray) -> np.ndarray:
     return (w[:, :, None] * tri).sum(1) / np.maximum(w.sum(1), 1e-300)[:, None]
 
 
-def _add_labels(sheets, sheet_of_label: np.ndarray, tile_of_label: np.ndarray, pts: np.ndarray, counts: np.ndarray,
+def _add_labels(sheets: list[SheetDrawing], sheet_of_label: np.ndarray, tile_of_label: np.ndarray, pts: np.ndarray, counts: np.ndarray,
                 label: np.ndarray) -> None:
     """Open strokes (``pts`` split by ``counts``, stroke j of label ``label[j]``) onto their labels'
     sheets, in order, grouped by tile."""
@@ -108,11 +108,14 @@ def engrave_labels(sheets: list[SheetDrawing], Q: np.ndarray, sheet_of: np.ndarr
     return omitted, hid, hc_all
 
 
-def _corner_labels(A, B, cA, cB, letters, cross, kind: HingeKind):
+def _corner_labels(A: np.ndarray, B: np.ndarray, cA: np.ndarray, cB: np.ndarray, letters: list[str],
+                   cross: np.ndarray, kind: HingeKind) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Tiles, corners and texts of the corner labels: both corners of a hinge whose
     tiles lie on different sheets (or of every hinge, for kinds that ask), else the
     face letter on tile A's corner (for kinds that ask)."""
-    c_tiles, c_k, c_text = [], [], []
+    c_tiles: list[int] = []
+    c_k: list[int] = []
+    c_text: list[str] = []
     for h in range(len(A)):
         f = letters[h]
         if kind.both_corner_labels or cross[h]:

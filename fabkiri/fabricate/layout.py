@@ -9,6 +9,7 @@ Also here: the 50 mm reference square and fitting text labels inside tiles.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -101,7 +102,7 @@ def in_place(corners: np.ndarray, sheet: tuple[float, float], margin: float,
     return Placement(sheet=group, theta=np.zeros(T), shift=shifts[group], n_sheets=len(shifts), layout="in-place")
 
 
-def exploded(corners: np.ndarray, parts, spacing: float, sheet: tuple[float, float], margin: float) -> Placement:
+def exploded(corners: np.ndarray, parts: np.ndarray, spacing: float, sheet: tuple[float, float], margin: float) -> Placement:
     """Tile centroids spread from the pattern centre (factor ≥ 1.25) until parts are ``spacing`` apart."""
     T = len(corners)
     cent = shapely.get_coordinates(shapely.centroid(shapely.polygons(corners)))
@@ -123,13 +124,13 @@ def exploded(corners: np.ndarray, parts, spacing: float, sheet: tuple[float, flo
                      layout="exploded")
 
 
-def _translate(parts, moves: np.ndarray):
+def _translate(parts: np.ndarray, moves: np.ndarray) -> np.ndarray:
     """Copies of ``parts`` moved by one vector each."""
     _, idx = shapely.get_coordinates(parts, return_index=True)
     return shapely.transform(parts, lambda c: c + moves[idx])
 
 
-def nested(parts, spacing: float, sheet: tuple[float, float], margin: float) -> Placement:
+def nested(parts: np.ndarray, spacing: float, sheet: tuple[float, float], margin: float) -> Placement:
     """Shelf packing: each part turned so its minimum rotated rectangle is upright, tallest first."""
     T = len(parts)
     inner_w, inner_h = sheet[0] - 2 * margin, sheet[1] - 2 * margin
@@ -168,7 +169,7 @@ def nested(parts, spacing: float, sheet: tuple[float, float], margin: float) -> 
     return Placement(sheet=sheet_of, theta=theta, shift=shift, n_sheets=s + 1, layout="nested")
 
 
-def place_reference(content: list[np.ndarray | None], size: float, sheet: tuple[float, float], margin: float,
+def place_reference(content: Sequence[np.ndarray | None], size: float, sheet: tuple[float, float], margin: float,
                     gap: float) -> tuple[int, np.ndarray]:
     """Where the reference square goes: beside or above a sheet's content, else on a new sheet.
 

@@ -32,6 +32,7 @@ def marked_cut(pattern: Pattern, state: int, strips: Strips, corners: np.ndarray
                       colors=colors)
     res = cut_pattern(pattern, opts)
     Q = res.tile_regions  # placed tile corners on the sheets (tape: the tiles themselves)
+    assert Q is not None and res.tile_sheet is not None  # a cut records where each tile went
     margin = 0.5 + material.kerf_mm / 2 + 0.05  # the cut's own label margin, plus a hair
     A, B = pattern.topology.hinge_tiles.T
     n = 0

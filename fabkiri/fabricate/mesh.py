@@ -16,7 +16,6 @@ solids (:mod:`.solid`); :mod:`.meshchecks` and :mod:`.topfaces` check them;
 from __future__ import annotations
 
 import itertools
-import json
 from collections.abc import Iterable
 from dataclasses import replace
 
@@ -24,6 +23,8 @@ import numpy as np
 
 from ..errors import FabricationError
 from ..pattern.model import Pattern
+from ..verify.printmanifest import PrintManifest
+from . import printgeom
 from .meshchecks import MeshReport, TileCheck, check_meshes, check_printed_tiles, read_back_files
 from .printers import Printer
 from .printjob import STYLES, PrintJob, Realised, print_style, scaled
@@ -108,11 +109,12 @@ def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
         if preview:
             files[f"{stem}{suffix}.png"] = preview_png(bed, r.manifolds[k - 1], job.printer,
                                                        f"{stem}{suffix} ({job.style})")
-        if job.style == "tiles-and-strips":
+        if print_style(job.style).body_per_material:
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
         else:  # disjoint bodies: their concatenation is still a closed 2-manifold
-            files[f"{stem}{suffix}.stl"] = trimesh.util.concatenate(tms).export(file_type="stl")
+            both = trimesh.util.concatenate(tms)  # a Trimesh; trimesh annotates it as a Geometry
+            files[f"{stem}{suffix}.stl"] = both.export(file_type="stl")  # type: ignore[call-arg]  # Geometry's needs a file
     return files
 
 
@@ -141,32 +143,38 @@ def print_plan(job: PrintJob) -> str:
 
 def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name: str,
              files: Iterable[str], verifier=None, read_back: dict | None = None) -> str:
+    """The print's manifest (:class:`~fabkiri.verify.printmanifest.PrintManifest`) as written."""
     job = r.job
     plan = job.plan
-    d = {
-        "format": "fabkiri.print", "version": 1, "units": "mm",
-        "pattern": pattern_name, "style": job.style, "state": job.state,
-        "printer": job.printer.to_dict(),
-        "shift_mm": [round(float(v), 6) for v in job.shift],
-        "layout": job.layout if job.style == "tiles-and-strips" else None,
-        "layer_changes": [{"print_z_mm": round(z, 6), "gcode": "M600" if k == "colour-change" else "M601",
-                           "load": m} for z, k, m in job.layer_changes],
-        "beds": [[b.name for b in bed] for bed in job.beds],
-        "hinges": [{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
-                    "coincides_with": int(plan.partner[h]) if plan.partner[h] >= 0 else None,
-                    "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
-                   for h in range(plan.n_hinges)],
-        "files": sorted(files),
-        "checks": {"meshes": rep.to_dict(), "files": read_back, "tiles": tiles.to_dict() if tiles else None,
-                   "verifier": verifier.to_dict() if verifier is not None else None},
-    }
+    m = PrintManifest(
+        pattern=pattern_name, style=job.style, state=job.state, printer=job.printer.to_dict(),
+        shift_mm=[round(float(v), 6) for v in job.shift],
+        layout=job.layout if print_style(job.style).has_layout else None,
+        layer_changes=[{"print_z_mm": round(z, 6), "gcode": "M600" if k == "colour-change" else "M601",
+                        "load": load} for z, k, load in job.layer_changes],
+        beds=[[b.name for b in bed] for bed in job.beds],
+        hinges=[{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
+                 "coincides_with": _coinciding(plan.partner, h),
+                 "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
+                for h in range(plan.n_hinges)],
+        files=sorted(files),
+        checks={"meshes": rep.to_dict(), "files": read_back, "tiles": tiles.to_dict() if tiles else None,
+                "verifier": verifier.to_dict() if verifier is not None else None},
+    )
     if job.placements:
-        d["placements"] = job.placements
-        d["assembly"] = ("glue every strip with its engraved face up, as seen from above the pattern: top-face "
-                         "strips on the tiles, bottom-face strips under them with the engraved face against them")
-        d["unlabelled_hinges"] = job.unlabelled
+        m.placements = job.placements
+        m.assembly = ("glue every strip with its engraved face up, as seen from above the pattern: top-face "
+                      "strips on the tiles, bottom-face strips under them with the engraved face against them")
+        m.unlabelled_hinges = job.unlabelled
     if job.pins is not None:
-        d["pins"] = {"levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
-                     "geometry_mm": dict(job.pins.geometry.__dict__),
-                     "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}}
-    return json.dumps(d, indent=1, sort_keys=False) + "\n"
+        m.pins = {"levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
+                  "geometry_mm": dict(job.pins.geometry.__dict__),
+                  "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}}
+    return m.to_json()
+
+
+def _coinciding(partner, h: int):
+    """The hinge at hinge ``h``'s point in the printed state (None if alone), or the list of them where
+    more than two meet (three at a kagome merge corner)."""
+    others = printgeom.coinciding(partner, h)
+    return (others[0] if len(others) == 1 else others) if others else None

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 import shapely
@@ -171,7 +172,8 @@ def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
         if ext == "3mf":  # one object of several volumes (parts): each volume is a closed body
             geoms = [trimesh.Trimesh(v, f, process=True) for _, _, _, v, f in read_volumes(data)]
         else:
-            geoms = [trimesh.load(io.BytesIO(data), file_type=ext, process=True)]
+            # trimesh.load is annotated as any Geometry (a Scene for some formats); an STL loads as one Trimesh
+            geoms = [cast(trimesh.Trimesh, trimesh.load(io.BytesIO(data), file_type=ext, process=True))]
         bad_edges, watertight, m3d_ok, volume = 0, True, True, 0.0
         for g in geoms:
             bad_edges += edge_defects(g.vertices, g.faces)

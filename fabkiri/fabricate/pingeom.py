@@ -18,10 +18,25 @@ from shapely.geometry import MultiPolygon, Polygon
 
 from ..errors import FabricationError
 from ..pattern.model import Pattern
+from ..pattern.tessellation import tessellation
 from .printers import Printer
 from .printgeom import CIRCLE_SEGMENTS, ClosedPlan, grow_back, regular_polygon
 
 MASK_MARGIN_MM = 1e-3  # the tile check masks the pivot clearances with this margin
+PIN_STACK = 2  # hinges stacked coaxially at one pivot: four ear levels, two per hinge
+
+
+def kind_refusal(pattern: Pattern) -> str:
+    """Why no scale prints a pattern of this tessellation kind pinned ('' if its kind can be): the
+    sweep follows the rigid deployment path, which exists for a kind with a rigid family only,
+    and a pivot stacks two hinges, while a closed state may join ``hole_arity / 2`` at a point."""
+    kind = tessellation(pattern.kind)
+    if not kind.rigid_family:
+        return (f"pinned hinges refused: rigid pinned tiles need the rigid deployment path, which {pattern.kind} "
+                f"patterns do not have, and a pivot stacks {PIN_STACK} hinges while a {pattern.kind} closed state "
+                f"joins {kind.hole_arity // 2} at a point; use --style strips or tiles-and-strips")
+    return ""
+
 
 @dataclass(frozen=True)
 class PinLevels:
@@ -100,6 +115,8 @@ def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
     """Plan print-in-place pins, or refuse with the reason the geometry does not allow them."""
     from ..pattern.residuals import hinge_sums
 
+    if why := kind_refusal(pattern):
+        raise FabricationError(why)
     levels = pin_levels(printer)
     g = pin_geometry(printer, levels)
     hs = np.abs(hinge_sums(pattern))

@@ -10,7 +10,10 @@ it into solids. Conventions:
   come from :func:`fabkiri.fabricate.hinges.assign_faces`, shared with the
   laser-cut tape hinges: a two-colouring over *both* closed states (the lowest
   hinge of each group on top), so a printed piece also reconfigures into the
-  other state without two strips or pin stacks meeting;
+  other state without two strips or pin stacks meeting. A kind whose closed
+  state joins more hinges at a point (kagome: three, ``hole_arity / 2``) cannot
+  keep them all apart: the fewest pairs share a face, and their strips must
+  keep the radial clearance like any two on one face;
 * a **strip** (flexible hinge) of hinge ``h`` joining tiles A and B crosses the
   seam where A's and B's folded edges lie together: along the seam it spans
   ``strip_width`` from where the shrunk pair begins, across it reaches
@@ -19,7 +22,7 @@ it into solids. Conventions:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
@@ -29,6 +32,7 @@ from shapely.geometry import MultiPolygon, Polygon
 from ..errors import CheckFailed, FabricationError
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
+from ..pattern.tessellation import tessellation
 from .printers import Printer
 
 CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
@@ -51,7 +55,8 @@ def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_
 
 
 def closed_corners(pattern: Pattern, state: int) -> np.ndarray:
-    """Per-tile corners ``(T, 4, 2)`` of closed state ``state`` (stored, or computed and checked)."""
+    """Per-tile corners ``(T, n, 2)`` (``n`` the tile arity) of closed state ``state`` (stored, or
+    computed and checked)."""
     if state not in (1, 2):
         raise FabricationError(f"closed state must be 1 or 2, not {state!r}")
     if state in pattern.contracted:
@@ -78,16 +83,17 @@ class ClosedPlan:
     """The printed outline of every tile and the placement of every hinge."""
 
     state: int
-    corners: np.ndarray  # (T, 4, 2) closed-state corners, mm
+    corners: np.ndarray  # (T, n, 2) closed-state corners, mm
     tiles: np.ndarray  # (T,) shapely Polygons, shrunk by gap/2
     hinge_tiles: np.ndarray  # (H, 2)
     hinge_xy: np.ndarray  # (H, 2) hinge point in the closed state
     seam_dir: np.ndarray  # (H, 2) unit vector along the folded seam, away from the hinge
     seam_end: np.ndarray  # (H, 2) far end of the folded seam
-    partner: np.ndarray  # (H,) coincident hinge or -1
+    partner: np.ndarray  # (H,) lowest other coincident hinge or -1 (coinciding() lists all)
     top: np.ndarray  # (H,) True: the hinge's strip goes on the top face
     shrink_mm: float
     other_state_closes: bool = True  # False: a pattern that closes in the printed state only
+    shared_faces: int = 0  # coincident pairs on one face (two of three at a kagome merge corner)
 
     @property
     def n_hinges(self) -> int:
@@ -101,37 +107,82 @@ class ClosedPlan:
         return "top" if self.top[h] else "bottom"
 
 
-def coincident_pairs(points: np.ndarray, tol: float) -> np.ndarray:
-    """Partner index of every point (``-1`` if alone); raises if three coincide."""
+def coincident_pairs(points: np.ndarray, tol: float, most: int = 2) -> np.ndarray:
+    """Partner index of every point: the lowest other point within ``tol`` (``-1`` if alone);
+    raises if more than ``most`` coincide (a closed state joins at most ``hole_arity / 2``
+    hinges at a point: two for quads, three for kagome)."""
     partner = np.full(len(points), -1, dtype=np.int64)
     if len(points) < 2:
         return partner
     pairs = cKDTree(points).query_pairs(tol, output_type="ndarray")
     if len(pairs):
         counts = np.bincount(pairs.ravel(), minlength=len(points))
-        if counts.max() > 1:
+        if counts.max() > most - 1:
             bad = int(np.argmax(counts))
             raise FabricationError(
                 f"hinge {bad} coincides with {counts[bad]} other hinges in the closed state; "
-                "a quad kirigami node carries at most two"
+                f"a closed state of this kind joins at most {most} at a point"
             )
-        partner[pairs[:, 0]] = pairs[:, 1]
-        partner[pairs[:, 1]] = pairs[:, 0]
+        low = np.full(len(points), len(points), dtype=np.int64)
+        np.minimum.at(low, pairs[:, 0], pairs[:, 1])
+        np.minimum.at(low, pairs[:, 1], pairs[:, 0])
+        partner = np.where(low < len(points), low, -1)
     return partner
 
 
-def face_rule(pattern: Pattern, states: dict[int, np.ndarray]) -> np.ndarray:
-    """Top (True) or bottom face per hinge, opposite for hinges that coincide in any given state."""
+def coinciding(partner: np.ndarray, h: int) -> list[int]:
+    """The other hinges at hinge ``h``'s point (``partner`` as :func:`coincident_pairs` gives it:
+    every member of a group points at its lowest member, which points at the next lowest)."""
+    if partner[h] < 0:
+        return []
+    root = min(h, int(partner[h]))
+    return [int(k) for k in np.flatnonzero((np.minimum(np.arange(len(partner)), partner) == root)
+                                            & (partner >= 0)) if k != h]
+
+
+def _fewest_shared(k: int) -> int:
+    """Fewest pairs of ``k`` coincident hinges that two faces leave on one face (0 for a pair, 1 for three)."""
+    a, b = (k + 1) // 2, k // 2
+    return a * (a - 1) // 2 + b * (b - 1) // 2
+
+
+def face_rule(pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray | None = None
+              ) -> tuple[np.ndarray, int]:
+    """Top (True) or bottom face per hinge, opposite for hinges that coincide in a closed state, and
+    how many coincident pairs share a face.
+
+    Where more than two hinges meet at a point (kagome: three, an odd cycle) two of them must
+    share a face; that fewest sharing is accepted, any more is refused. ``apart``: hinge pairs the
+    colouring should also keep on opposite faces where it is free to (see :func:`closed_plan`)."""
     from .hinges import assign_faces
 
-    faces = assign_faces(pattern, states)
+    faces = assign_faces(pattern, states, apart)
     if faces.conflicts:
-        i, j = next((int(a), int(b)) for a, b in faces.pairs if faces.face[a] == faces.face[b])
-        raise FabricationError(
-            f"hinges {i} and {j} coincide in a closed state but cannot take opposite faces "
-            f"({faces.conflicts} conflicting pairs); no printed strip or pin layout exists"
-        )
-    return faces.face == 0
+        most = tessellation(pattern.kind).hole_arity // 2
+        tol = COINCIDE_TOL_REL * pattern.tile_size
+        groups = [(_group_sizes(coincident_pairs(_hinge_xy(pattern, c), tol, most))) for c in states.values()]
+        fewest = sum(_fewest_shared(int(k)) for g in groups for k in g)
+        if faces.conflicts > fewest:
+            i, j = next((int(a), int(b)) for a, b in faces.pairs if faces.face[a] == faces.face[b])
+            raise FabricationError(
+                f"hinges {i} and {j} coincide in a closed state but cannot take opposite faces "
+                f"({faces.conflicts} conflicting pairs); no printed strip or pin layout exists"
+            )
+    return faces.face == 0, faces.conflicts
+
+
+def _hinge_xy(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
+    """Every hinge's point in a placed state: the middle of its two tiles' corners there."""
+    top_ = pattern.topology
+    A, B = top_.hinge_tiles.T
+    cA, cB = top_.hinge_corner.T
+    return 0.5 * (corners[A, cA] + corners[B, cB])
+
+
+def _group_sizes(partner: np.ndarray) -> np.ndarray:
+    """Size of every group of coincident hinges (two or more), from :func:`coincident_pairs`."""
+    roots = np.minimum(np.arange(len(partner)), partner)[partner >= 0]
+    return np.bincount(roots)[np.unique(roots)]
 
 
 def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
@@ -141,18 +192,18 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
     top_ = pattern.topology
     fold = top_.fold(state)
     A, B = top_.hinge_tiles.T
-    cA, cB = top_.hinge_corner.T
-    hxy = 0.5 * (corners[A, cA] + corners[B, cB])
+    hxy = _hinge_xy(pattern, corners)
     far = 0.5 * (corners[A, fold.fold_corner_ends[:, 0]] + corners[B, fold.fold_corner_ends[:, 1]])
     seam = far - hxy
     seam /= np.linalg.norm(seam, axis=1, keepdims=True)
-    partner = coincident_pairs(hxy, COINCIDE_TOL_REL * pattern.tile_size)
+    partner = coincident_pairs(hxy, COINCIDE_TOL_REL * pattern.tile_size,
+                               tessellation(pattern.kind).hole_arity // 2)
     states = {state: corners}
     try:
         states[3 - state] = closed_corners(pattern, 3 - state)
     except CheckFailed:  # a pattern that closes one way only is still printable that way
         pass
-    top = face_rule(pattern, states)
+    top, shared = face_rule(pattern, states)
     other_closes = len(states) == 2
     d = 0.5 * printer.gap_mm
     polys = shapely.polygons(corners)
@@ -163,10 +214,41 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
         raise FabricationError(
             f"tile {bad} vanishes or splits when shrunk by half the printer gap ({d:g} mm)"
         )
-    return ClosedPlan(
+    plan = ClosedPlan(
         state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
         seam_dir=seam, seam_end=far, partner=partner, top=top, shrink_mm=d, other_state_closes=other_closes,
+        shared_faces=shared,
     )
+    return _refaced(pattern, plan, states, printer) if shared else plan
+
+
+def _refaced(pattern: Pattern, plan: ClosedPlan, states: dict[int, np.ndarray], printer: Printer) -> ClosedPlan:
+    """Where two of three coincident hinges must share a face, which two is free: choose so that
+    strips closer than the radial clearance lie on opposite faces where the flips can (two strips
+    at two corners of a small triangle). The plan as it was if no strip comes that close, or the
+    strips cannot be drawn (``strip_outlines`` then refuses with the reason)."""
+    try:
+        outline = strip_outlines(plan, printer, check=False).outline
+    except FabricationError:
+        return plan
+    close = _close_strips(outline, np.arange(plan.n_hinges), printer.radial_clearance_mm)
+    clash = close[plan.top[close[:, 0]] == plan.top[close[:, 1]]]
+    if not len(clash):
+        return plan
+    try:
+        top, shared = face_rule(pattern, states, close)
+    except FabricationError:  # the flips traded a coincident pair for strips: keep the fewest sharing
+        return plan
+    return replace(plan, top=top, shared_faces=shared)
+
+
+def _close_strips(outline: np.ndarray, idx: np.ndarray, clearance: float) -> np.ndarray:
+    """Pairs ``(h, k)``, ``h < k``, of hinges in ``idx`` whose strips are closer than ``clearance``."""
+    if len(idx) < 2:
+        return np.zeros((0, 2), np.int64)
+    i, j = shapely.STRtree(outline[idx]).query(outline[idx], predicate="dwithin", distance=clearance - 1e-9)
+    sel = i < j
+    return np.stack([idx[i[sel]], idx[j[sel]]], 1).astype(np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,10 +282,11 @@ def _pair_regions(a: np.ndarray, b: np.ndarray, d: float, eps: float) -> np.ndar
     return pair
 
 
-def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
+def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> Strips:
     """Strip outlines for every hinge (see the module docstring), checked:
-    each strip crosses its seam, has a pad on both tiles, and keeps the radial
-    clearance from every other strip on the same face and from other tiles."""
+    each strip crosses its seam, has a pad on both tiles, and (unless ``check`` is False: the
+    outlines only, to choose faces by) keeps the radial clearance from every other strip on
+    the same face and from other tiles."""
     H = plan.n_hinges
     d = plan.shrink_mm
     w, reach = printer.strip_width_mm, printer.strip_reach_mm
@@ -250,7 +333,8 @@ def strip_outlines(plan: ClosedPlan, printer: Printer) -> Strips:
             f"({shapely.area(pads[h]).min():.2f} mm² < {min_pad:.2f} mm²); the tile corners are too narrow "
             "for the strip width"
         )
-    _check_strip_clearance(plan, outline, printer)
+    if check:
+        _check_strip_clearance(plan, outline, printer)
     # the pocket overshoots the tile edges (into the gap, never near another
     # tile) so no micrometre sliver of tile survives where strip and tile edges
     # meet. It is the band cut by the pair region grown by the overshoot, so its
@@ -272,14 +356,9 @@ def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Print
     tol = 1e-9
     A, B = plan.hinge_tiles.T
     for face in (True, False):
-        idx = np.flatnonzero(plan.top == face)
-        if len(idx) < 2:
-            continue
-        tree = shapely.STRtree(outline[idx])
-        i, j = tree.query(outline[idx], predicate="dwithin", distance=c - tol)
-        sel = i < j
-        if sel.any():
-            h, k = idx[i[sel][0]], idx[j[sel][0]]
+        close = _close_strips(outline, np.flatnonzero(plan.top == face), c)
+        if len(close):
+            h, k = close[0]
             dist = shapely.distance(outline[h], outline[k])
             raise FabricationError(
                 f"strips of hinges {h} and {k} on the {'top' if face else 'bottom'} face are "

@@ -22,6 +22,7 @@ from .solid import Body
 if TYPE_CHECKING:
     from ..pattern.model import Pattern
     from .meshchecks import MeshReport
+    from .planrules import PlanRule
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,8 +94,20 @@ class PrintStyle:
     :class:`~.meshchecks.MeshReport`. ``tiles`` gives the solid of the printed
     tiles, the height of the section the tile check takes, and what that check
     masks out (``None``: the style prints no tiles). ``advise`` adds to a refusal
-    what would make the job print. With ``body_per_material`` each bed holds one
-    body per material (one STL each; their overlap is their intersection).
+    what would make the job print (then ``build`` names the scales itself). With
+    ``body_per_material`` each bed holds one body per material (one STL each; their
+    overlap is their intersection). ``checks`` are the style's own checks of a
+    realised job (pinned: the sweep along the deployment path; tiles-and-strips: the
+    layout verifier on the printed top faces). ``own_tile_thickness``: the tiles have
+    their own preset thickness, which ``--tile-thickness`` sets. ``loose_strips``: the
+    strips are printed on their own and glued on by hand (assembly pieces and map; the
+    tiles may be laser-cut with the pads engraved, ``print --marks``). ``strip_hinges``:
+    the hinges are printed strips (the bill of materials counts them; pinned: pins).
+    ``has_layout``: the job's ``layout`` (recessed or stacked strips) is the style's and
+    goes in the manifest. ``limits(printer)``: what ``design --printer --style`` asks of
+    every tile for this style's hinges (mm, as :func:`~.design_limits.printer_limits`).
+    ``plan``: how ``--scale auto``, ``design`` and ``info`` size it (:class:`~.planrules.PlanRule`:
+    its plan check, closed-form bound and the preset fields they read).
     """
 
     name: str
@@ -103,6 +116,23 @@ class PrintStyle:
     tiles: Callable[..., tuple[Any, float, Any]] | None = None
     advise: Callable[[Pattern, int, Printer, float], str] | None = None
     body_per_material: bool = False
+    checks: Callable[[Pattern, Realised, MeshReport], StyleChecks] | None = None
+    own_tile_thickness: bool = False
+    loose_strips: bool = False
+    strip_hinges: bool = True
+    has_layout: bool = False
+    limits: Callable[[Printer], dict] | None = None
+    plan: PlanRule | None = None
+
+
+@dataclass
+class StyleChecks:
+    """What a print style's own checks found: ``problems`` refuse the print (one line each),
+    ``verifier`` is the layout verifier's report if one ran, ``notes`` are said to the user."""
+
+    problems: list[str] = field(default_factory=list)
+    verifier: Any = None
+    notes: list[str] = field(default_factory=list)
 
 
 # built-in styles, imported when first asked for (their modules call register_style())

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import tempfile
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,11 +36,13 @@ from ..pattern.model import Pattern
 from .cut import CutResult
 from .drawing import LAYERS
 from .gcpause import gc_paused
-from .hinges import MITRE_LIMIT as hg_MITRE
-from .reread import duplicate_segments, flat_polylines, read_dxf_checked, read_svg
+from .hingekinds import SheetRead, hinge_kind
+from .reread import Polylines, duplicate_segments, flat_polylines, read_dxf_checked, read_svg
+
+# one sheet's polylines per layer, as the DXF or the SVG read-back gives them
+SheetLayers = Mapping[str, Sequence[tuple[np.ndarray, bool]]] | Mapping[str | None, Polylines]
 
 AGREE_MM = 1e-6
-UNDO_MITRE = 1000.0  # undoing an outset at the acute notches where a strip meets a tile needs sharp mitres
 
 
 @dataclass
@@ -85,6 +88,7 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
     kind = man["hinge"]
     ref = man["reference_square"]
     Q = result.tile_regions
+    assert Q is not None and result.tile_sheet is not None  # a cut records where each tile went
     for row in man["sheets"]:
         k = row["index"]
         dxf_layers = svg_layers = None
@@ -121,7 +125,7 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
     return rb
 
 
-def _linestrings(polylines) -> np.ndarray:
+def _linestrings(polylines: Sequence[tuple[np.ndarray, bool]]) -> np.ndarray:
     """One LineString per polyline (closed ones back to their first point), built at once."""
     pts, n, closed = flat_polylines(polylines)
     end = np.cumsum(n)
@@ -134,7 +138,8 @@ def _linestrings(polylines) -> np.ndarray:
     return shapely.linestrings(coords, indices=owner)
 
 
-def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
+def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: dict[str, Any], man: dict[str, Any],
+                     ref: dict[str, Any] | None, Q: np.ndarray, tile_sheet: np.ndarray) -> None:
     cut = layers.get("CUT", [])
     closed = [p for p, c in cut if c]
     polys = np.array([shapely.Polygon(p) for p in closed], dtype=object)
@@ -149,31 +154,9 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
                f"{int(is_ref.sum())} found, side {side:.6f} mm", side)
     on = np.flatnonzero(tile_sheet == k - 1)
     expected = shapely.polygons(Q[on])
-    off = man["kerf_offset_mm"]
-    # recover the pieces the laser leaves
-    if kind == "tape":
-        sq = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
-        lines = [shapely.LineString(np.vstack([p, p[:1]]) if c else p) for p, c in cut
-                 if not (c and sq is not None and p.shape == sq.shape and np.allclose(p, sq, atol=1e-9))]
-        noded = shapely.union_all(lines) if lines else shapely.GeometryCollection()
-        pieces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if lines else np.array([])
-        holes = np.array([])
-    elif kind == "separate":
-        pieces = shapely.buffer(polys[~is_ref], -off, join_style="mitre", mitre_limit=hg_MITRE)
-        holes = np.array([])
-    else:
-        rings = polys[~is_ref]
-        # a ring inside another ring is a hole of that material piece
-        ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
-        inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
-        material = shapely.difference(shapely.union_all(rings[~inside]), shapely.union_all(rings[inside]))
-        material = shapely.buffer(material, -off, join_style="mitre", mitre_limit=UNDO_MITRE)
-        feats = [shapely.Polygon(f["polygon"]) for f in man["hinge_features"] if f["sheet"] == k]
-        cores = shapely.difference(material, shapely.union_all(feats)) if feats else material
-        pieces = shapely.get_parts(cores)
-        pieces = pieces[shapely.area(pieces) > 1e-6]
-        holes = np.array([shapely.Polygon(r) for g in shapely.get_parts(material) for r in g.interiors],
-                         dtype=object)
+    # recover the pieces the laser leaves (each hinge kind knows what its sheet holds)
+    square = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
+    pieces, holes = hinge_kind(kind).recover(SheetRead(cut, polys, is_ref, square, k, man))
     # every expected tile comes back (one piece each, same shape within the material tolerance)
     tol = man["tolerance_mm"]
     matched = 0
@@ -181,7 +164,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
     if len(pieces) and len(expected):
         tree = shapely.STRtree(pieces)
         idx_e, idx_p = tree.query(shapely.centroid(expected), predicate="within")
-        best = {}
+        best: dict[int, float] = {}  # expected tile -> Hausdorff distance to its nearest piece
         for e, p in zip(idx_e, idx_p):
             d = shapely.hausdorff_distance(expected[e], pieces[p])
             best[e] = min(best.get(e, np.inf), d)
@@ -217,7 +200,7 @@ def _geometry_checks(rb, k, layers, kind, mat, man, ref, Q, tile_sheet) -> None:
 # ------------------------------------------------------------------ verifier and writing
 
 
-def _relative(value, prefix: str):
+def _relative(value: Any, prefix: str) -> Any:
     """The report with the scratch folder stripped from paths (the manifest must not depend on it)."""
     if isinstance(value, dict):
         return {k: _relative(v, prefix) for k, v in value.items()}
@@ -236,7 +219,7 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
         from ..verify.manifest import CutManifest
     except ImportError:
         return {"ok": False, "available": False, "detail": "fabkiri.verify is not installed"}
-    out = {"ok": True, "available": True, "files": {}}
+    out: dict[str, Any] = {"ok": True, "available": True, "files": {}}
     tol = result.manifest["tolerance_mm"]
     where = str(folder / "manifest.json")
     try:  # read and checked against its schema once, for every file

@@ -9,8 +9,9 @@ declared millimetres. The polylines are compared and audited in :mod:`.readback`
 from __future__ import annotations
 
 import io
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -19,17 +20,24 @@ from ..verify.linework import Polylines, flat_polylines
 from ..verify.svgread import read_svg_layers as read_svg
 from .drawing import LAYERS
 
+if TYPE_CHECKING:  # ezdxf is imported where a file is read
+    from ezdxf.audit import Auditor
+    from ezdxf.document import Drawing
+    from ezdxf.entities import LWPolyline
+
+Entity = tuple[str, tuple[np.ndarray, bool]]  # a modelspace LWPOLYLINE: (layer, (points, closed))
+
 __all__ = ["DxfReadback", "Polylines", "duplicate_segments", "flat_polylines", "read_dxf", "read_dxf_checked",
            "read_svg"]
 
 
-def read_dxf(data: bytes):
+def read_dxf(data: bytes) -> tuple[Drawing, Auditor, dict[str, list[tuple[np.ndarray, bool]]], list[str]]:
     """``(doc, auditor, layers)`` with ``layers[name] = [(points, closed), ...]``."""
     import ezdxf
 
     doc = ezdxf.read(io.StringIO(data.decode("ascii")))
     auditor = doc.audit()
-    layers: dict[str, list] = {}
+    layers: dict[str, list[tuple[np.ndarray, bool]]] = {}
     _, _, items, others = _entities_of(doc)
     for item in items:
         if item is not None:
@@ -47,12 +55,12 @@ class DxfReadback:
     insunits: Any
     dxfversion: str
     audit_errors: list[str]
-    layers: dict[str, list]
+    layers: Mapping[str, Sequence[tuple[np.ndarray, bool]]]  # (points, closed) per layer, in file order
     others: list[str]
     bulk_entities: int = 0  # entities checked from their tags instead of being loaded by ezdxf
 
 
-def _audit_strokes(doc, tags: Tags, canon: np.ndarray, layer_of: np.ndarray) -> list[str]:
+def _audit_strokes(doc: Drawing, tags: Tags, canon: np.ndarray, layer_of: np.ndarray) -> list[str]:
     """What ezdxf's audit would say of the canonical entities: handles unique and below
     ``$HANDSEED``, owned by the modelspace, on valid layers of the LAYER table."""
     from ezdxf.lldxf.validator import is_valid_layer_name
@@ -144,7 +152,8 @@ def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback
     return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon))
 
 
-def _layers_in_file_order(xy, canon, layer_of, n_canon, closed, items) -> dict[str, Polylines]:
+def _layers_in_file_order(xy: np.ndarray, canon: np.ndarray, layer_of: np.ndarray, n_canon: np.ndarray,
+                          closed: np.ndarray, items: list[tuple[int, Entity]]) -> dict[str, Polylines]:
     """Polylines per layer in the file's order: the canonical ones from their tags,
     merged by position with the ``items`` ``(entity, (layer, polyline))`` ezdxf read."""
     point_layer = np.repeat(layer_of, n_canon)
@@ -161,16 +170,18 @@ def _layers_in_file_order(xy, canon, layer_of, n_canon, closed, items) -> dict[s
     return layers
 
 
-def _entities_of(doc):
+def _entities_of(doc: Drawing) -> tuple[None, None, list[Entity | None], list[str]]:
     """``(None, None, items, others)``: per modelspace entity ``(layer, (points, closed))`` or None."""
-    items, others = [], []
+    items: list[Entity | None] = []
+    others: list[str] = []
     for e in doc.modelspace():
         if e.dxftype() != "LWPOLYLINE":
             others.append(e.dxftype())
             items.append(None)
             continue
-        pts = np.asarray([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
-        items.append((e.dxf.layer, (pts, bool(e.closed))))
+        lw = cast("LWPolyline", e)  # its dxftype says so
+        pts = np.asarray([(p[0], p[1]) for p in lw.get_points("xy")], dtype=float)
+        items.append((lw.dxf.layer, (pts, bool(lw.closed))))
     return None, None, items, others
 
 
@@ -180,7 +191,7 @@ def _full(data: bytes) -> DxfReadback:
                        [f"{e.code}: {e.message}" for e in aud.errors], layers, others)
 
 
-def _segments(polylines) -> np.ndarray:
+def _segments(polylines: Sequence[tuple[np.ndarray, bool]]) -> np.ndarray:
     """Every segment ``(S, 2, 2)`` of the polylines (closing segments included), polyline by polyline."""
     pts, n, closed = flat_polylines(polylines)
     if len(pts) == 0:
@@ -193,7 +204,7 @@ def _segments(polylines) -> np.ndarray:
     return np.stack([pts[keep], pts[nxt[keep]]], 1)
 
 
-def duplicate_segments(polylines, decimals: int = 6) -> int:
+def duplicate_segments(polylines: Sequence[tuple[np.ndarray, bool]], decimals: int = 6) -> int:
     """Segments that appear twice (either direction) — they would be cut twice."""
     s = np.round(_segments(polylines), decimals)
     if len(s) == 0:

@@ -9,6 +9,8 @@ engraved twice. Lower-case input is drawn in capitals.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 CELL_W = 0.6
@@ -144,7 +146,7 @@ def text_strokes_many(texts: list[str], heights: np.ndarray, centres: np.ndarray
     return pts, counts, lab_a
 
 
-def text_box(height: float, centre, text: str) -> tuple[float, float, float, float]:
+def text_box(height: float, centre: Sequence[float] | np.ndarray, text: str) -> tuple[float, float, float, float]:
     """(xmin, ymin, xmax, ymax) of the text's cells; every glyph stays inside."""
     w = height * text_width(text)
     return (centre[0] - w / 2, centre[1] - height / 2, centre[0] + w / 2, centre[1] + height / 2)

@@ -49,6 +49,7 @@ def printed_bridges(r: Realised) -> list[dict]:
     sections of the strips at the middle of their thickness, minus the tiles,
     each attributed to the hinge whose planned strip holds it."""
     job = r.job
+    assert job.strips is not None  # printed bridges are measured on strip jobs only
     tiles_m, hinges_m = r.manifolds[0]
     planned = shapely.transform(job.strips.outline, lambda c: c + np.asarray(job.shift))
     feats = []

@@ -18,18 +18,24 @@ import trimesh
 from ..errors import InputError
 from ..mechanics.tube import TubeFrame, frame
 from ..pattern.model import Pattern
-from ..pattern.periodic import seam_map, seam_of, tube_tiles
+from ..pattern.periodic import Seam, seam_map, seam_of, tube_tiles
 
 SUBDIV = 6  # points per tile edge: a rolled 10 mm tile on a 12 mm radius bends visibly
 
 
-def state_frame(pattern: Pattern, state, copies: int = 1) -> tuple[np.ndarray, TubeFrame]:
-    """Per-tile corners of the tube's tiles (``copies`` periods side by side) and the frame to roll them."""
-    if int(copies) != copies or copies < 1:
-        raise InputError(f"--copies must be a whole number >= 1, got {copies}")
+def tube_seam(pattern: Pattern) -> Seam:
+    """The tube's seam; a flat sheet (no seam) is bad input, said in one line."""
     seam = seam_of(pattern)
     if seam is None:
         raise InputError("the pattern has no seam: it is a flat sheet, not a tube (make one with --tube)")
+    return seam
+
+
+def state_frame(pattern: Pattern, state: str | int, copies: int = 1) -> tuple[np.ndarray, TubeFrame]:
+    """Per-tile corners of the tube's tiles (``copies`` periods side by side) and the frame to roll them."""
+    if int(copies) != copies or copies < 1:
+        raise InputError(f"--copies must be a whole number >= 1, got {copies}")
+    seam = tube_seam(pattern)
     Y = pattern.corners(state)
     f = frame(Y, seam, state)
     tiles = Y[tube_tiles(pattern, seam)]
@@ -112,7 +118,8 @@ def obj_bytes(mesh: trimesh.Trimesh) -> bytes:
 
 
 def stl_bytes(plates: list[trimesh.Trimesh]) -> bytes:
-    return trimesh.util.concatenate(plates).export(file_type="stl")
+    both = trimesh.util.concatenate(plates)  # a Trimesh; trimesh annotates it as a Geometry
+    return both.export(file_type="stl")  # type: ignore[call-arg]  # Geometry's export needs a file
 
 
 def plate_overlap(plates: list[trimesh.Trimesh]) -> tuple[float, tuple[int, int] | None]:

@@ -25,7 +25,7 @@ from ..pattern.model import Pattern
 from ..pattern.periodic import Seam, flat_sheet, seam_map, seam_of, tube_tiles
 from ..verify.pattern_checks import tolerances
 from ..verify.seam import seam_checks
-from .cut import PIERCE_S
+from .cut import PIERCE_S, CutOptions, CutResult
 from .text import text_strokes
 
 CORNER = ("BL", "BR", "TR", "TL")
@@ -91,7 +91,7 @@ def tube_cut_inputs(pattern: Pattern, state: int) -> tuple[Pattern, dict[str, by
     return sheet, {"seam.txt": note.encode()}, entry
 
 
-def _placed(result, tile: int, pts: np.ndarray, scale: float) -> tuple[int, np.ndarray]:
+def _placed(result: CutResult, tile: int, pts: np.ndarray, scale: float) -> tuple[int, np.ndarray]:
     """Sheet index (0-based) and sheet coordinates of pattern points on ``tile`` (manifest placement)."""
     row = result.manifest["tiles"][tile]
     return int(row["sheet"]) - 1, geometry.rotate(pts * scale, float(row["rotation_rad"])) + np.array(row["shift_mm"])
@@ -112,7 +112,7 @@ def _corner_mark(poly: np.ndarray, k: int, text: str) -> list[np.ndarray]:
     return strokes[:1] if tile.contains(shapely.LineString(strokes[0])) else []
 
 
-def mark_seam(result, hinges: list[dict], sheet: Pattern, state: int, options) -> None:
+def mark_seam(result: CutResult, hinges: list[dict], sheet: Pattern, state: int, options: CutOptions) -> None:
     """Engrave both ends of every seam hinge (``S1`` .. ``Sn``, a tick at the corner) on the cut sheets and
     rewrite the sheets' DXF, SVG and PNG bytes and the manifest's engrave figures."""
     from .dxf import dxf_bytes

@@ -16,23 +16,28 @@ from __future__ import annotations
 from ..errors import InputError
 from ..pattern.model import Pattern
 from .collisions import CollisionReport, Overlap, collisions
+from .drivers import AUTO, PathDriver, driver_names, path_driver, register_driver
 from .elastic import elastic_path, mechanism_split
-from .path import DRIVERS, MARKS, DeploymentPath, closed_states, is_rigid_deployable
+from .path import MARKS, DeploymentPath, closed_states, is_rigid_deployable
 from .rigid_path import place_rigid, rigid_angles, rigid_path
 
 __all__ = [
-    "DRIVERS",
+    "AUTO",
     "MARKS",
     "CollisionReport",
     "DeploymentPath",
     "Overlap",
+    "PathDriver",
     "closed_states",
     "collisions",
     "deployment_path",
+    "driver_names",
     "elastic_path",
     "is_rigid_deployable",
     "mechanism_split",
+    "path_driver",
     "place_rigid",
+    "register_driver",
     "rigid_angles",
     "rigid_path",
 ]
@@ -43,10 +48,11 @@ def deployment_path(
     steps: int = 40,
     *,
     path: str = "auto",
-    driver: str = "rotations",
+    driver: str = AUTO,
     collision_tol: float = 1e-9,
 ) -> DeploymentPath:
-    """``path="auto"``: the rigid path if the pattern is rigid-deployable, else the elastic one."""
+    """``path="auto"``: the rigid path if the pattern is rigid-deployable, else the elastic one,
+    driven by ``driver`` (``auto``: the default of the pattern's kind, see :mod:`.drivers`)."""
     if path not in ("auto", "rigid", "elastic"):
         raise InputError(f"path must be auto, rigid or elastic, not {path!r}")
     if path == "rigid" or (path == "auto" and is_rigid_deployable(pattern)):

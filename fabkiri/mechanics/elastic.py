@@ -5,7 +5,10 @@
 paper's Fig. 2C, whose SI procedure is unknown). At each ``t`` some *drivers*
 are prescribed between the three states and the spring energy of
 :mod:`.energy` is minimised over all node coordinates with the drivers held,
-warm-started from a linear extrapolation of the previous two steps. Drivers:
+warm-started from a linear extrapolation of the previous two steps. Drivers are
+strategy objects found by name in :mod:`.drivers` (``auto``: the default of the
+pattern's kind); ``rotations`` lives in :mod:`.mechanism`, ``homotopy`` (each
+tile's rigid motion interpolated, kagome's default) in :mod:`.homotopy`:
 
 * ``"rotations"`` (default): the rotation of every tile, measured as the Kabsch
   angle of its corners relative to its deployed shape, plus the centroid of the
@@ -53,199 +56,27 @@ shift ``μ`` raised whenever a step fails to lower E. The constraints are linear
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu, spsolve
 
-from ..errors import InputError
-from ..pattern import geometry
 from ..pattern.model import Pattern
+from .drivers import AUTO, Drivers, PathDriver, path_driver
 from .energy import Springs, springs
-from .path import (
-    DRIVERS,
-    DeploymentPath,
-    circmean,
-    closed_states,
-    finish_path,
-    node_positions,
-    path_parameter,
-    piecewise,
-    tile_angles,
+from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived here)
+    MechanismSplit,
+    barrier_frames,
+    gap_angles,
+    mechanism_split,
+    rotation_drivers,
+    rotation_targets,
 )
-from .rigid_path import place_rigid
+from .path import DeploymentPath, closed_states, finish_path, node_positions, path_parameter
 
-
-@dataclass(frozen=True, eq=False)
-class Drivers:
-    """Linear driver constraints ``A x = b`` at one ``t`` on the flat node coordinates."""
-
-    name: str
-    A: sparse.csr_matrix  # (m, 2n)
-    b: np.ndarray  # (m,)
-
-
-@dataclass(frozen=True)
-class MechanismSplit:
-    """A closed state's tile rotations relative to the deployed shape, split as
-    ``θ_T = γ + ε_T a + d_T``: a common rotation γ, the uniform checkerboard
-    amplitude ``a`` (the design's zero-energy mechanism) and a residual ``d_T``
-    (zero for rigid-deployable designs). ``closing`` is the fraction of ``a``
-    the mechanism can travel from the deployed state before its first gap (a
-    hole corner or a boundary notch) folds flat (1 for rigid-deployable designs)."""
-
-    gamma: float
-    amplitude: float
-    residual: np.ndarray  # (T,)
-    closing: float
-
-
-def gap_angles(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
-    """``(..., H, 2)`` the two gap angles at every hinge, in [0, 2π), from per-tile corners.
-
-    Gap 0 turns counter-clockwise from A's edge to ``prev_A`` onto B's edge to
-    ``next_B``; gap 1 from B's edge to ``prev_B`` onto A's edge to ``next_A``
-    (the topology's convention). Holes are interior gaps, notches exterior ones.
-    """
-    top = pattern.topology
-    A, B = top.hinge_tiles.T
-    cA, cB = top.hinge_corner.T
-    h = corners[..., A, cA, :]
-    hb = corners[..., B, cB, :]
-
-    def d(tile, corner, base):
-        return corners[..., tile, corner, :] - base
-
-    n = corners.shape[-2]  # corners per tile
-    g0 = geometry.signed_angle(d(A, (cA + n - 1) % n, h), d(B, (cB + 1) % n, hb))
-    g1 = geometry.signed_angle(d(B, (cB + n - 1) % n, hb), d(A, (cA + 1) % n, h))
-    return np.mod(np.stack([g0, g1], -1), geometry.TWO_PI)
-
-
-def mechanism_split(pattern: Pattern, states: dict[int, np.ndarray]) -> dict[int, MechanismSplit]:
-    """Split both closed states' rotations into mechanism and residual (see :class:`MechanismSplit`).
-
-    Every hole of a pattern that closes in both states is a parallelogram, so
-    turning the tiles by ``±α`` in a checkerboard from the deployed state keeps
-    every hole closed around its loop: a zero-energy mechanism in which every
-    gap angle (hole corners and boundary notches) changes by ``±2α``. It ends
-    when the first gap angle reaches 0 (beyond, two tiles would overlap).
-    """
-    top = pattern.topology
-    deployed = pattern.corners()
-    eps = np.where(top.tile_color == 0, 1.0, -1.0)
-    out = {}
-    for s in (1, 2):
-        th = tile_angles(deployed, states[s])
-        if (top.tile_color == 1).any():
-            m0, m1 = circmean(th[top.tile_color == 0]), circmean(th[top.tile_color == 1])
-            a = float(geometry.wrap_angle(m0 - m1)) / 2
-            gamma = float(m1) + a
-        else:
-            a, gamma = 0.0, float(circmean(th))
-        d = geometry.wrap_angle(th - gamma - eps * a)
-        closing = 1.0
-        if top.n_hinges and a != 0.0:
-            # gap angles (holes and boundary notches) are linear in α along the mechanism
-            lam = np.array([0.0, 1e-3])
-            ang = gap_angles(pattern, place_rigid(pattern, deployed, eps, lam * a))  # (2, H, 2)
-            slope = (ang[1] - ang[0]) / lam[1]
-            shrinking = slope < 0
-            if shrinking.any():
-                closing = float(min(1.0, (ang[0][shrinking] / -slope[shrinking]).min()))
-        out[s] = MechanismSplit(gamma=gamma, amplitude=a, residual=d, closing=closing)
-    return out
-
-
-def barrier_frames(split: dict[int, MechanismSplit], n: int) -> np.ndarray:
-    """Extra path parameters inside the elastic end segments, where the barriers are.
-
-    The segments are ``t ∈ [0, (1 - closing₁)/2]`` and ``[1 - (1 - closing₂)/2, 1]``;
-    they are often a few hundredths of the path, narrower than the regular steps.
-    """
-    out = []
-    for s, m in split.items():
-        width = 0.5 * (1.0 - m.closing)
-        if width <= 1e-9:
-            continue
-        inner = np.linspace(0.0, width, n + 1)[
-            1:
-        ]  # up to and including the segment's mechanism end
-        out.append(inner if s == 1 else 1.0 - inner)
-    return np.concatenate(out) if out else np.zeros(0)
-
-
-def rotation_targets(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray) -> np.ndarray:
-    """``(F, T)`` prescribed tile rotations (relative to the deployed shape) along the path.
-
-    On each half, with λ running from 0 (deployed) to 1 (closed state), the
-    common rotation and the checkerboard amplitude are interpolated linearly
-    (λγ + ε_T λa: the mechanism) and the residual enters as ``r(λ) d_T``, with
-    ``r = 0`` while the mechanism can still move freely (λ ≤ closing) and
-    rising linearly to 1 at the closed state.
-    """
-    t = np.atleast_1d(np.asarray(t, dtype=float))
-    split = mechanism_split(pattern, states)
-    eps = np.where(pattern.topology.tile_color == 0, 1.0, -1.0)
-    out = np.empty((len(t), pattern.n_tiles))
-    for k, tk in enumerate(t):
-        s = 1 if tk <= 0.5 else 2
-        lam = abs(1.0 - 2.0 * tk)
-        m = split[s]
-        if m.closing >= 1.0 - 1e-12:
-            r = lam
-        else:
-            r = float(np.clip((lam - m.closing) / (1.0 - m.closing), 0.0, 1.0))
-        out[k] = lam * (m.gamma + eps * m.amplitude) + r * m.residual
-    return out
-
-
-def rotation_drivers(
-    pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray
-) -> list[Drivers]:
-    """One driver set per ``t``: tile rotations (:func:`rotation_targets`) and the node centroid."""
-    tiles = pattern.tiles
-    T, n = len(tiles), len(pattern.nodes)
-    deployed = pattern.corners()
-    p = deployed - deployed.mean(axis=1, keepdims=True)  # (T, k, 2), k corners per tile
-    targets = rotation_targets(pattern, states, t)
-    x = {0: pattern.nodes, **{s: node_positions(pattern, states[s]) for s in (1, 2)}}
-    cen = {s: v.mean(axis=0) for s, v in x.items()}
-    rows = np.repeat(np.arange(T), 2 * tiles.shape[1])
-    cols = np.stack([2 * tiles, 2 * tiles + 1], -1).ravel()  # (T, k, 2) flattened
-    cent_rows = np.concatenate([np.full(n, T), np.full(n, T + 1)])
-    cent_cols = np.concatenate([2 * np.arange(n), 2 * np.arange(n) + 1])
-    out = []
-    for tk, theta in zip(np.atleast_1d(t), targets):
-        w = geometry.rotate(p, theta[:, None])  # cross(w, x) = w_x x_y - w_y x_x
-        vals = np.stack([-w[..., 1], w[..., 0]], -1).ravel()
-        A = sparse.csr_matrix(
-            (
-                np.concatenate([vals, np.full(2 * n, 1.0 / n)]),
-                (np.concatenate([rows, cent_rows]), np.concatenate([cols, cent_cols])),
-            ),
-            shape=(T + 2, 2 * n),
-        )
-        c = piecewise(tk, cen[1], cen[0], cen[2])
-        b = np.concatenate([np.zeros(T), c])
-        out.append(Drivers("rotations", A, b))
-    return out
-
-
-def tip_drivers(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray) -> list[Drivers]:
-    """One driver set per ``t``: the free boundary corners, linearly interpolated."""
-    free = pattern.topology.free_nodes
-    n = len(pattern.nodes)
-    if len(free) < 2:
-        raise InputError("the tips driver needs at least two free corners")
-    x = {0: pattern.nodes, **{s: node_positions(pattern, states[s]) for s in (1, 2)}}
-    dof = np.stack([2 * free, 2 * free + 1], -1).ravel()
-    A = sparse.csr_matrix((np.ones(len(dof)), (np.arange(len(dof)), dof)), shape=(len(dof), 2 * n))
-    out = []
-    for tk in np.atleast_1d(t):
-        b = piecewise(tk, x[1][free], x[0][free], x[2][free]).ravel()
-        out.append(Drivers("tips", A, b))
-    return out
+if TYPE_CHECKING:
+    from .orientation import OrientedSprings
 
 
 @dataclass
@@ -257,7 +88,7 @@ class MinimiseStats:
 
 
 def minimise(
-    sp: Springs,
+    sp: Springs | OrientedSprings,
     x0: np.ndarray,
     A: sparse.csr_matrix,
     b: np.ndarray,
@@ -343,7 +174,7 @@ def _project(x: np.ndarray, A: sparse.csr_matrix, b: np.ndarray) -> None:
         x += A.T @ spsolve((A @ A.T).tocsc(), r)
 
 
-def _kkt_lu(sp: Springs, x: np.ndarray, mu: float, A: sparse.csr_matrix, At: sparse.csr_matrix, eye):
+def _kkt_lu(sp: Springs | OrientedSprings, x: np.ndarray, mu: float, A: sparse.csr_matrix, At: sparse.csr_matrix, eye):
     """Sparse LU of the KKT matrix ``[[H + μI, Aᵀ], [A, 0]]`` at ``x``, or None if it is exactly singular."""
     H = sp.hessian(x)
     if mu:
@@ -355,56 +186,12 @@ def _kkt_lu(sp: Springs, x: np.ndarray, mu: float, A: sparse.csr_matrix, At: spa
         return None
 
 
-def _driver_increments(
-    pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, driver: str
-) -> np.ndarray:
-    """Largest driver change over each interval of ``t``: radians (rotations) or tile sizes (tips)."""
-    if driver == "rotations":
-        vals = rotation_targets(pattern, states, t)  # (F, T)
-    else:
-        free = pattern.topology.free_nodes
-        x = {
-            0: pattern.nodes[free],
-            **{s: node_positions(pattern, states[s])[free] for s in (1, 2)},
-        }
-        vals = piecewise(t, x[1], x[0], x[2]).reshape(len(t), -1) / pattern.tile_size
-    return np.abs(np.diff(vals, axis=0)).max(axis=1, initial=0.0)
-
-
-def _mechanism_guess(
-    pattern: Pattern, states: dict[int, np.ndarray], split: dict[int, MechanismSplit]
-):
-    """``t -> flat nodes`` of the zero-energy mechanism meeting the rotation drivers, or None
-    where the drivers have left it (inside the elastic end segments)."""
-    deployed = pattern.corners()
-    eps = np.where(pattern.topology.tile_color == 0, 1.0, -1.0)
-    cen = {
-        0: pattern.nodes.mean(0),
-        **{s: node_positions(pattern, states[s]).mean(0) for s in (1, 2)},
-    }
-
-    def guess(tk: float):
-        s = 1 if tk <= 0.5 else 2
-        lam = abs(1.0 - 2.0 * tk)
-        m = split[s]
-        if lam > m.closing:
-            return None
-        placed = geometry.rotate(
-            place_rigid(pattern, deployed, eps, np.array([lam * m.amplitude]))[0], lam * m.gamma
-        )
-        x = node_positions(pattern, placed)
-        return (x + (piecewise(tk, cen[1], cen[0], cen[2]) - x.mean(0))).ravel()
-
-    return guess
-
-
-def _fine_grid(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, driver: str,
+def _fine_grid(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, driver: PathDriver,
                max_increment: float) -> tuple[np.ndarray, np.ndarray]:
     """The internal sub-steps (no driver moves more than ``max_increment`` between two) and where
     the output frames ``t`` sit among them."""
-    n_sub = np.maximum(
-        1, np.ceil(_driver_increments(pattern, states, t, driver) / max_increment)
-    ).astype(int)
+    inc = np.abs(np.diff(driver.values(pattern, states, t), axis=0)).max(axis=1, initial=0.0)
+    n_sub = np.maximum(1, np.ceil(inc / max_increment)).astype(int)
     fine = np.concatenate(
         [np.linspace(a, b, k, endpoint=False) for a, b, k in zip(t[:-1], t[1:], n_sub)] + [t[-1:]]
     )
@@ -439,37 +226,33 @@ def elastic_path(
     pattern: Pattern,
     steps: int = 40,
     *,
-    driver: str = "rotations",
+    driver: str = AUTO,
     collision_tol: float = 1e-9,
     step_tol: float = 1e-11,
     max_increment: float = 0.03,
 ) -> DeploymentPath:
     """The driven quasi-static path (see the module docstring for the drivers).
 
-    Between two output frames the drivers advance in internal sub-steps of at
-    most ``max_increment`` (radians of tile rotation, or tile sizes of tip
-    motion), so a coarse ``steps`` does not make the continuation jump onto
-    another branch. ``step_tol`` (relative to the mean tile edge) ends each
-    Newton solve.
+    ``driver`` names a registered :class:`.drivers.PathDriver`; ``auto`` takes the default of
+    the pattern's kind. Between two output frames the drivers advance in internal sub-steps of at
+    most ``max_increment`` (radians of tile rotation, or tile sizes of tip motion), so a coarse
+    ``steps`` does not make the continuation jump onto another branch. ``step_tol`` (relative to
+    the mean tile edge) ends each Newton solve.
     """
-    if driver not in DRIVERS:
-        raise InputError(f"driver must be one of {', '.join(DRIVERS)}, not {driver!r}")
+    drv = path_driver(driver, pattern)
     states = closed_states(pattern)
-    t = path_parameter(steps)
-    segments = []
-    mechanism = None
-    if driver == "rotations":
-        split = mechanism_split(pattern, states)
-        t = np.union1d(t, barrier_frames(split, max(8, int(steps) // 4)))
-        w1, w2 = (0.5 * (1.0 - split[s].closing) for s in (1, 2))
-        segments = [seg for seg, w in (((0.0, w1), w1), ((1.0 - w2, 1.0), w2)) if w > 1e-9]
-        mechanism = _mechanism_guess(pattern, states, split)
-    fine, keep = _fine_grid(pattern, states, t, driver, max_increment)
+    plan = drv.plan(pattern, states, path_parameter(steps), steps)
+    t = plan.t
+    fine, keep = _fine_grid(pattern, states, t, drv, max_increment)
     sp = springs(pattern)
-    make = rotation_drivers if driver == "rotations" else tip_drivers
-    drivers = make(pattern, states, fine)
+    drivers = drv.constraints(pattern, states, fine)
     stats = MinimiseStats()
-    sols = _continue(pattern, sp, states, fine, drivers, mechanism, step_tol * pattern.tile_size, stats)
+    tol = step_tol * pattern.tile_size
+    figures: dict = {}
+    if drv.solve is None:
+        sols = _continue(pattern, sp, states, fine, drivers, plan.guess, tol, stats)
+    else:
+        sols, figures = drv.solve(pattern, sp, states, fine, drivers, plan, tol, stats)
     nodes = np.stack(sols)[keep].reshape(len(t), -1, 2)
     corners = nodes[:, pattern.tiles]
     solver = {
@@ -480,17 +263,7 @@ def elastic_path(
         "unconverged_steps": stats.max_iterations_hit,
         "step_tol_rel": step_tol,
         "max_increment": max_increment,
+        **figures,
     }
-    return finish_path(
-        pattern,
-        "elastic",
-        driver,
-        t,
-        nodes,
-        corners,
-        sp,
-        states,
-        collision_tol,
-        solver=solver,
-        segments=segments,
-    )
+    return finish_path(pattern, "elastic", drv.name, t, nodes, corners, sp, states, collision_tol,
+                       solver=solver, segments=plan.segments)

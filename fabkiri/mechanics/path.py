@@ -19,7 +19,6 @@ from ..pattern.tessellation import tessellation
 from .collisions import CollisionReport, collisions
 from .contract import contract_both
 
-DRIVERS = ("rotations", "tips")
 CLOSURE_TOL = 1e-9  # relative to the mean tile edge, as in `fabkiri info`
 RIGID_TOL_RAD = 1e-9  # hinge sums below this: rigid-deployable
 MARKS = {"closed state 1": 0.0, "deployed": 0.5, "closed state 2": 1.0}

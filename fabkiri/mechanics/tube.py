@@ -156,3 +156,64 @@ def tube_lines(rep: dict) -> list[str]:
         lines.append(f"  state {k} -> deployed: axial x{c['axial']:.4g}, radial x{c['radial_min']:.4g}"
                      + ("" if abs(c["radial_max"] - c["radial_min"]) < 1e-9 else f"..x{c['radial_max']:.4g}"))
     return lines
+
+
+def tube_along_path(pattern: Pattern, corners: np.ndarray, t: np.ndarray) -> dict | None:
+    """Each frame's tube along a deployment path, and how its radius changes in time (None if planar).
+
+    ``corners`` are the path's per-frame tile corners ``(F, T, k, 2)``, ``t`` its parameter (0 closed
+    state 1, ½ deployed, 1 closed state 2). Every frame is rolled as the deployed state is (a cylinder
+    unless the seam record makes the deployed state a cone). Fig. 5B's "nonuniform radial change
+    throughout the deployment and contraction process" is measured per half of the path: whether the
+    radius is monotonic there and by how much it passes beyond the range of that half's two ends.
+    """
+    seam = seam_of(pattern)
+    if seam is None:
+        return None
+    frames = [tube_state(pattern, seam, Y, "deployed") for Y in corners]
+    r_lo = np.array([f.radius_min_mm for f in frames])
+    r_hi = np.array([f.radius_max_mm for f in frames])
+    length = np.array([f.length_mm for f in frames])
+    half = int(np.argmin(np.abs(np.asarray(t) - 0.5)))
+    halves = {"closed state 1 -> deployed": slice(0, half + 1), "deployed -> closed state 2": slice(half, None)}
+    return {
+        "t": [float(x) for x in t],
+        "radius_min_mm": r_lo.tolist(),
+        "radius_max_mm": r_hi.tolist(),
+        "length_mm": length.tolist(),
+        "seam_rotation_rad": [f.seam_rotation_rad for f in frames],
+        "seam_translation_dev_rel": [f.seam_translation_dev_rel for f in frames],
+        "radius_change": {name: _change_in_time(r_hi[s], np.asarray(t)[s]) for name, s in halves.items()},
+        "length_change": {name: _change_in_time(length[s], np.asarray(t)[s]) for name, s in halves.items()},
+    }
+
+
+def _change_in_time(v: np.ndarray, t: np.ndarray) -> dict:
+    """Ends, extremes and monotonicity of one figure over one half of the path (mm)."""
+    lo, hi = min(v[0], v[-1]), max(v[0], v[-1])
+    step = np.diff(v)
+    tol = 1e-9 * max(1.0, float(np.abs(v).max()))
+    return {
+        "start_mm": float(v[0]), "end_mm": float(v[-1]),
+        "peak_mm": float(v.max()), "t_at_peak": float(t[int(np.argmax(v))]),
+        "low_mm": float(v.min()), "t_at_low": float(t[int(np.argmin(v))]),
+        "beyond_ends_mm": float(max(v.max() - hi, lo - v.min(), 0.0)),
+        "monotonic": bool(np.all(step >= -tol) or np.all(step <= tol)),
+    }
+
+
+def path_lines(prof: dict) -> list[str]:
+    """The tube along a path as text lines for ``deploy``."""
+    r, n = prof["radius_max_mm"], len(prof["t"])
+    mid = int(np.argmin(np.abs(np.asarray(prof["t"]) - 0.5)))
+    off = max(prof["seam_translation_dev_rel"])
+    lines = [f"tube along the path: radius {r[0]:.4g} -> {r[mid]:.4g} -> {r[n - 1]:.4g} mm, length "
+             f"{prof['length_mm'][0]:.4g} -> {prof['length_mm'][mid]:.4g} -> {prof['length_mm'][n - 1]:.4g} mm; "
+             f"seams off a translation by <= {off:.2e} tile sizes over {n} frames"]
+    for name, c in prof["radius_change"].items():
+        how = ("monotonic" if c["monotonic"] else
+               f"not monotonic: passes {c['beyond_ends_mm']:.3g} mm beyond its ends "
+               f"(peak {c['peak_mm']:.4g} mm at t = {c['t_at_peak']:.3f}, low {c['low_mm']:.4g} mm at "
+               f"t = {c['t_at_low']:.3f})")
+        lines.append(f"  radius, {name}: {how}")
+    return lines

@@ -12,12 +12,14 @@ vertices lie at one point; each keeps its own index. Coordinates in mm
 from __future__ import annotations
 
 import json
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .. import __version__
+from .. import __version__, limits
 from ..errors import PatternError
+from .formats import PatternFormat, register_format
 from .model import Pattern
 from .tessellation import kind_of_arity
 
@@ -142,3 +144,23 @@ def loads_fold(text: str, source: str = "fold") -> Pattern:
     from ..limits import loads_json  # depth, integer and float bounds, as pattern.json
 
     return pattern_from_fold(loads_json(text, source, PatternError), source)
+
+
+def _read_fold(path: Path, scale: float) -> Pattern:
+    """A ``.fold`` file, its coordinates times ``scale`` (mm per file unit)."""
+    from .io import _read_text
+
+    pat = loads_fold(_read_text(path), str(path))
+    if scale != 1.0:
+        pat = Pattern(nodes=pat.nodes * scale, tiles=pat.tiles,
+                      contracted={k: v * scale for k, v in pat.contracted.items()}, name=pat.name,
+                      design=pat.design)
+    return limits.check_pattern(pat, str(path))
+
+
+def _fold_said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:
+    return f"wrote {output}: FOLD 1.2, frames deployed / closed 1 / closed 2, {pattern.n_tiles} faces"
+
+
+register_format(PatternFormat("fold", (".fold",), read=_read_fold, write=lambda pattern, state, unit: fold_text(pattern),
+                              closed_states=lambda state: (1, 2), every_state=True, said=_fold_said))

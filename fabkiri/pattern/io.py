@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,7 @@ from ..fileio import atomic_write, read_input
 from ..schemas import load_schema, schema_problem
 from ..schemas import short as _short
 from . import geometry
+from .formats import PatternFormat, register_format
 from .model import Pattern
 from .tessellation import DEFAULT_KIND, Tessellation, kind_of_arity, tessellation
 
@@ -292,7 +294,7 @@ def read_obj(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
 
 def import_obj(
     design: str | os.PathLike,
-    contracted: list[str | os.PathLike] | tuple = (),
+    contracted: Sequence[str | os.PathLike] = (),
     *,
     scale: float = 1.0,
     name: str | None = None,
@@ -357,3 +359,23 @@ def obj_text(pattern: Pattern, state: str | int = "deployed", scale: float = 1.0
 
 def write_obj(pattern: Pattern, path: str | os.PathLike, state: str | int = "deployed") -> Path:
     return atomic_write(path, obj_text(pattern, state))
+
+
+def _read_json(path: Path, scale: float) -> Pattern:
+    if scale != 1.0:
+        raise PatternError(f"{path}: pattern.json is in mm already; --scale is for OBJ, FOLD and PyKirigami files")
+    return read_pattern(path)
+
+
+def _obj_states(state: str) -> tuple[int, ...]:
+    return () if state == "deployed" else (int(state),)
+
+
+def _obj_said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:
+    return f"wrote {output}: state {state}, {pattern.n_tiles} faces"
+
+
+register_format(PatternFormat("json", (".json",), read=_read_json, adopt_labels=False))
+register_format(PatternFormat("obj", (".obj",), read=lambda path, scale: import_obj(path, scale=scale),
+                              write=lambda pattern, state, unit: obj_text(pattern, state),
+                              closed_states=_obj_states, said=_obj_said))

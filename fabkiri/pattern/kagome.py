@@ -156,5 +156,6 @@ KAGOME = register(
         rigid_family=False,
         lattice_counts=kagome_counts,
         hinges_border_holes=False,
+        deploy_driver="homotopy",  # no checkerboard mechanism: interpolate each tile's motion
     )
 )

@@ -24,7 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import limits
 from ..errors import PatternError
+from .formats import PatternFormat, register_format
 from .io import _read_text
 from .model import Pattern
 from .tessellation import kind_of_arity
@@ -119,3 +121,22 @@ def read_pykirigami(folder: str | os.PathLike, unit_mm: float = 1.0) -> Pattern:
     return Pattern(nodes=nodes, tiles=tiles.reshape(T, n), contracted={1: start}, name=d.name,
                    kind=kind_of_arity(n) or "quad",
                    design={"source": {"pykirigami": d.name, "unit_mm": unit_mm}})
+
+
+def _start(state: str) -> int:
+    return 1 if state == "deployed" else int(state)  # a model starts closed, pulled to the deployed target
+
+
+def _write(pattern: Pattern, state: str, unit: float | None) -> dict[str, str]:
+    return pykirigami_files(pattern, pattern.contracted[_start(state)], unit or pattern.tile_size)
+
+
+def _said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:
+    return (f"wrote {output}/vertices.txt (closed state {_start(state)}), target.txt (deployed), constraints.txt "
+            f"({pattern.topology.n_hinges} joints); 1 unit = {unit or pattern.tile_size:.6g} mm")
+
+
+register_format(PatternFormat(
+    "pykirigami", directory=True,
+    read=lambda path, scale: limits.check_pattern(read_pykirigami(path, unit_mm=scale), str(path)),
+    write=_write, closed_states=lambda state: (_start(state),), said=_said))

@@ -59,6 +59,10 @@ class Tessellation:
     hinges_border_holes:
         Whether every hinge of a pattern of this kind must border a hole (true for quads; a kagome
         row may end in a tile hanging on one hinge outside every hole).
+    deploy_driver:
+        Name of the elastic deployment path's default driver for this kind (a driver registered in
+        ``fabkiri.mechanics.drivers``: ``rotations`` follows the quad checkerboard mechanism,
+        ``homotopy`` assumes no mechanism).
     """
 
     kind: str
@@ -71,6 +75,7 @@ class Tessellation:
     rigid_family: bool = False
     lattice_counts: Callable[[int, int], tuple[int, int, int]] | None = None
     hinges_border_holes: bool = True
+    deploy_driver: str = "rotations"
 
     @property
     def tile_noun(self) -> str:

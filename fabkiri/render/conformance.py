@@ -14,12 +14,16 @@ from __future__ import annotations
 
 import io
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..design.conformance import target_polygon
 from ..design.targets import target_from_dict
 from ..pattern.model import Pattern
+
+if TYPE_CHECKING:  # Pillow is imported where a picture is drawn
+    from PIL import ImageDraw, ImageFont
 
 SUPERSAMPLE = 2
 PANEL_PX = (560, 560)  # plot area per panel (final pixels)
@@ -32,7 +36,7 @@ COLOURS = {"tile": (209, 209, 209), "edge": (89, 89, 89), "target": (31, 119, 18
 WIDTHS = {"edge": 0.5, "target": 2.0, "tips": 1.2, "worst": 3.0}  # final pixels
 
 
-def _panels(pattern: Pattern, conformance: dict):
+def _panels(pattern: Pattern, conformance: dict) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
     """``(key, title, tiles (T, 4, 2), target polygon)`` per measured outline."""
     d = pattern.design or {}
     out = []
@@ -56,7 +60,8 @@ def _panels(pattern: Pattern, conformance: dict):
 class _Canvas:
     """One panel's mm -> pixel map (y up in mm, down in pixels) on the supersampled image."""
 
-    def __init__(self, draw, font, box: tuple[int, int, int, int], lo: np.ndarray, hi: np.ndarray):
+    def __init__(self, draw: ImageDraw.ImageDraw, font: ImageFont.FreeTypeFont | ImageFont.ImageFont,
+                 box: tuple[int, int, int, int], lo: np.ndarray, hi: np.ndarray):
         self.draw, self.font = draw, font
         x0, y0, x1, y1 = box
         span = np.maximum(hi - lo, 1e-9)

@@ -8,10 +8,16 @@ renders in a few seconds.
 from __future__ import annotations
 
 import io
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..mechanics.deploy import MARKS, DeploymentPath
+
+if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
+    from matplotlib.axes import Axes
+    from matplotlib.colors import Colormap, Normalize
 
 ZERO_ENERGY = 1e-12  # below this the path is reported as zero-energy
 
@@ -25,7 +31,7 @@ def _pyplot():
     return plt
 
 
-def _energy_axes(ax, path: DeploymentPath, lo: float, hi: float, marks: bool = True, anchor: float = 0.0) -> None:
+def _energy_axes(ax: Axes, path: DeploymentPath, lo: float, hi: float, marks: bool = True, anchor: float = 0.0) -> None:
     """E(t) on [lo, hi], plotted against ``t - anchor`` (a zoom next to t = 1 reads "t - 1", not "1e-9+1")."""
     sel = (path.t >= lo - 1e-12) & (path.t <= hi + 1e-12)
     t, e, emax = path.t[sel] - anchor, path.energy[sel], path.max_tile_energy[sel]
@@ -110,7 +116,7 @@ def _state_label(t: float, marks: dict[str, int], ts: np.ndarray, f: int) -> str
     return "closed state 1 → deployed" if t < ts[marks["deployed"]] else "deployed → closed state 2"
 
 
-def _scale_bar(ax, lo: np.ndarray, hi: np.ndarray, pad: float) -> None:
+def _scale_bar(ax: Axes, lo: np.ndarray, hi: np.ndarray, pad: float) -> None:
     """A round length in mm under the lower left of the drawing."""
     span = float(hi[0] - lo[0])
     L = next((v for v in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000) if v >= span / 5), 1000)
@@ -125,7 +131,8 @@ def _frame_indices(n: int, max_frames: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
 
 
-def _colouring(path: DeploymentPath, color: str, plt):
+def _colouring(path: DeploymentPath, color: str,
+               plt: ModuleType) -> tuple[np.ndarray, Normalize, Colormap, str, bool]:
     """The per-frame tile values and how they are coloured, for ``color``
     (``"energy"``, ``"rotation"`` or ``"auto"``): ``(values, norm, cmap,
     label, flat)``; ``flat`` when the energy is noise everywhere."""

@@ -20,14 +20,19 @@ import html
 import io
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from ..mechanics.info import describe
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
+from ..verify.printmanifest import PrintManifest
 from .deployment import _pyplot
+
+if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 SECTIONS = ("summary", "design", "states", "fabricability", "verification", "deployment", "cut", "print",
             "assembly", "bom", "tolerance")
@@ -107,17 +112,19 @@ def rows_table(rows: list[dict[str, Any]], limit: int = 60) -> str:
     return ("<table><tr>" + "".join(f"<th>{html.escape(k)}</th>" for k in keys) + f"</tr>{body}</table>{more}")
 
 
-def _fig_png(fig) -> bytes:
+def _fig_png(fig: Figure) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None}, bbox_inches="tight")
     _pyplot().close(fig)
     return buf.getvalue()
 
 
-def _tiles(ax, corners: np.ndarray, color: str = "#b8c7d9") -> None:
+def _tiles(ax: Axes, corners: np.ndarray, color: str = "#b8c7d9") -> None:
     from matplotlib.collections import PolyCollection
 
-    ax.add_collection(PolyCollection(corners, facecolors=color, edgecolors="#34495e", linewidths=0.4))
+    # matplotlib's stubs ask for a sequence of vertex arrays; a (T, k, 2) array is one (and its fast path)
+    ax.add_collection(PolyCollection(corners, facecolors=color,  # type: ignore[arg-type]
+                                     edgecolors="#34495e", linewidths=0.4))
     lo, hi = corners.reshape(-1, 2).min(0), corners.reshape(-1, 2).max(0)
     pad = 0.04 * float((hi - lo).max())
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -248,10 +255,11 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
     parts["deployment"] = _deploy_section(deploy)
     cut_dir, cut_man = _load_dir(cut)
     print_dir, print_man = _load_dir(printed)
+    pm = None if print_man is None else PrintManifest.from_dict(print_man, f"{printed}/manifest.json")
     parts["cut"] = _cut_section(cut_dir, cut_man)
-    parts["print"] = _print_section(print_dir, print_man)
+    parts["print"] = _print_section(print_dir, pm)
     parts["assembly"] = _assembly_section(cut_dir, cut_man, print_dir, print_man)
-    parts["bom"] = _bom_section(cut_man, print_man)
+    parts["bom"] = _bom_section(cut_man, pm)
     parts["tolerance"] = _tolerance_section(tolerance)
 
     titles = {"summary": "Summary", "design": "Design vs target", "states": "Closed states",
@@ -297,19 +305,17 @@ def _cut_section(d: Path | None, man: dict | None) -> str:
     return body
 
 
-def _print_section(d: Path | None, man: dict | None) -> str:
+def _print_section(d: Path | None, man: PrintManifest | None) -> str:
     if d is None or man is None:
         return _missing("not provided: run fabkiri print PATTERN -o DIR and pass --print DIR")
-    checks = man.get("checks") or {}
-    meshes = checks.get("meshes") or {}
-    body = table({"style": man.get("style"), "closed state": man.get("state"),
-                  "printer": (man.get("printer") or {}).get("name"), "beds": len(man.get("beds", [])),
-                  "meshes ok": meshes.get("ok"), "tiles check": (checks.get("tiles") or {}).get("ok"),
-                  "verifier": (checks.get("verifier") or {}).get("ok") if checks.get("verifier") else "n/a"})
-    previews = [n for n in man.get("files", []) if n.endswith(".png") and n != "assembly.png"]
+    mesh_check, verifier = man.check("meshes") or {}, man.check("verifier")
+    body = table({"style": man.style, "closed state": man.state, "printer": man.printer_name, "beds": len(man.beds),
+                  "meshes ok": mesh_check.get("ok"), "tiles check": (man.check("tiles") or {}).get("ok"),
+                  "verifier": verifier.get("ok") if verifier else "n/a"})
+    previews = [n for n in man.files if n.endswith(".png") and n != "assembly.png"]
     shown = _pictures(d, previews, "print preview")
     if not shown:  # no preview written by print: draw the plates from the meshes, seen from above
-        meshes = [n for n in man.get("files", []) if n.endswith(".stl") and (d / n).is_file()]
+        meshes = [n for n in man.files if n.endswith(".stl") and (d / n).is_file()]
         shown = '<div class="grid">' + "".join(
             _img(plate_png(d / n), ".png", n, f"plate seen from above, drawn from {n}") for n in meshes[:4]) + "</div>"
     return body + (shown if meshes_or(shown) else _missing("no print previews or meshes in the folder"))
@@ -324,7 +330,7 @@ def plate_png(stl: Path) -> bytes:
     import trimesh
     from matplotlib.collections import PolyCollection
 
-    m = trimesh.load(stl, force="mesh")
+    m = cast(trimesh.Trimesh, trimesh.load(stl, force="mesh"))  # force="mesh": a Trimesh, annotated as a Geometry
     up = m.face_normals[:, 2] > 1e-6  # faces seen from above
     tri = m.triangles[up]
     z = tri[:, :, 2].mean(1)
@@ -344,10 +350,11 @@ def plate_png(stl: Path) -> bytes:
     return _fig_png(fig)
 
 
-def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
+def _assembly_section(cut_dir: Path | None, cut_man: dict | None, print_dir: Path | None,
+                      print_man: dict | None) -> str:
     body = ""
     for d, man, what in ((cut_dir, cut_man, "cut"), (print_dir, print_man, "print")):
-        if man is None:
+        if d is None or man is None:  # (a manifest comes with its folder)
             continue
         a = man.get("assembly")
         if isinstance(a, dict) and a.get("steps"):
@@ -361,13 +368,13 @@ def _assembly_section(cut_dir, cut_man, print_dir, print_man) -> str:
     return body or _missing("not provided: pass --cut DIR and/or --print DIR")
 
 
-def _bom_section(cut_man, print_man) -> str:
+def _bom_section(cut_man: dict | None, print_man: PrintManifest | None) -> str:
     body = ""
     if cut_man is not None:
         bom = cut_man.get("bill_of_materials")
         body += "<h3>cut</h3>" + (table(bom) if bom else _missing("the cut manifest has no bill of materials"))
     if print_man is not None:
-        bom = print_man.get("bill_of_materials")
+        bom = print_man.bill_of_materials
         if bom:
             body += "<h3>print</h3>" + table({k: v for k, v in bom.items() if k not in ("bodies", "filament")})
             body += rows_table([{"material": m, **f} for m, f in bom["filament"].items()])

@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import io
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..mechanics.tolerance import ToleranceResult
 from .deployment import _pyplot
 
+if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
+    from matplotlib.axes import Axes
 
-def _hist(ax, series: dict[str, np.ndarray], xlabel: str, title: str) -> None:
+
+def _hist(ax: Axes, series: dict[str, np.ndarray], xlabel: str, title: str) -> None:
     for k, (name, v) in enumerate(series.items()):
         ax.hist(v, bins=40, histtype="step", lw=1.4, color=f"C{k}", label=name)
         ax.axvline(np.percentile(v, 95), color=f"C{k}", lw=0.8, ls="--")

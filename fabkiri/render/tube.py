@@ -7,18 +7,22 @@ states) is rolled with the mean seam translation and says how far its seam is fr
 from __future__ import annotations
 
 import io
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fabricate.tube3d import state_frame, surface_mesh
+from ..fabricate.tube3d import state_frame, surface_mesh, tube_seam
 from ..mechanics.deploy import DeploymentPath
 from ..mechanics.tube import TubeFrame, frame
 from ..pattern.model import Pattern
-from ..pattern.periodic import seam_map, seam_of, tube_tiles
+from ..pattern.periodic import seam_map, tube_tiles
 from .deployment import _gif_bytes, _pyplot
 
+if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
+    from mpl_toolkits.mplot3d import Axes3D
 
-def _draw(ax, tiles: np.ndarray, f: TubeFrame, lim: float, title: str, even: np.ndarray) -> None:
+
+def _draw(ax: Axes3D, tiles: np.ndarray, f: TubeFrame, lim: float, title: str, even: np.ndarray) -> None:
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     mesh = surface_mesh(tiles, f, n=4)
@@ -42,13 +46,13 @@ def _half_extent(meshes: list) -> float:
 
 def _even(pattern: Pattern) -> np.ndarray:
     """Tile colour (fold parity) of the tube's tiles, in tube order."""
-    return pattern.topology.even_tiles()[tube_tiles(pattern, seam_of(pattern))]
+    return pattern.topology.even_tiles()[tube_tiles(pattern, tube_seam(pattern))]
 
 
 def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
     """Deployed and both closed states side by side, rolled onto their tubes, one scale."""
     plt = _pyplot()
-    states = ["deployed", *sorted(pattern.contracted)]
+    states: list[str | int] = ["deployed", *sorted(pattern.contracted)]
     rolled = [state_frame(pattern, s, copies) for s in states]
     lim = _half_extent([surface_mesh(t, f, n=2) for t, f in rolled])
     fig = plt.figure(figsize=(4.0 * len(states), 4.6), dpi=dpi)
@@ -66,7 +70,7 @@ def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
 
 
 def _frame_of(corners: np.ndarray, pattern: Pattern) -> tuple[np.ndarray, TubeFrame, float]:
-    seam = seam_of(pattern)
+    seam = tube_seam(pattern)  # a flat sheet: one-line bad input, not an AttributeError on None
     m = seam_map(corners, seam)
     if seam.closed == "cone":  # a rigid cone tube: every frame's seam turns alike, each frame is a cone
         return corners[tube_tiles(pattern, seam)], frame(corners, seam, 1), m.rigid_dev

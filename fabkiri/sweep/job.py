@@ -145,7 +145,7 @@ def _print(pattern, params: dict, row: dict) -> dict[str, bytes]:
     return {f"print/{name}": data for name, data in mesh.job_files(realised, "pattern").items()}
 
 
-def _deploy(pattern, params: dict, row: dict) -> dict[str, bytes]:
+def _deploy(pattern, params: dict, row: dict) -> dict[str, str]:
     from ..mechanics.deploy import deployment_path
 
     path = deployment_path(pattern, int(params.get("deploy_steps", 20)))

@@ -94,6 +94,7 @@ def sweep(spec: SweepSpec, client=None, *, output: str | Path = "sweep-out", wor
             result.tables = write_tables(out, result.rows)
             if own:
                 client.close()
+            if cluster is not None:  # ours: started above
                 cluster.close()
     else:
         result.rows = [done[j.id] for j in spec.jobs]
@@ -135,7 +136,8 @@ def _publish(out: Path, job: Job, row: dict, files: dict[str, bytes]) -> dict:
     """Every file of the job, ``row.json`` last: the job counts as done only once all are in."""
     row = {**_base_row(job), **row}
     row["files"] = len(files)
-    all_files = {**files, ROW_FILE: json.dumps(row, indent=1, sort_keys=True, default=str) + "\n"}
+    text = json.dumps(row, indent=1, sort_keys=True, default=str) + "\n"
+    all_files: dict[str, bytes | str] = {**files, ROW_FILE: text}
     atomic_write_many(out / "jobs" / job.id, all_files)
     return row
 

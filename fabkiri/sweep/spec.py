@@ -25,6 +25,8 @@ from pathlib import Path
 
 from .. import __version__, limits
 from ..errors import InputError
+from ..fabricate.fabricability import PRINT_STYLES
+from ..fabricate.materials import HINGE_KINDS
 
 ACTIONS = ("design", "cut", "print", "deploy")
 # axis -> the Python types a value may have (PatternRequest's fields, the cut/print choices, the seed)
@@ -37,7 +39,7 @@ PARAMS: dict[str, tuple[type, ...]] = {
 }
 CHOICES = {"symmetry": ("none", "x", "y"), "holes": ("rhombus", "parallelogram"), "fit": ("outline", "tips"),
            "solver": ("auto", "reduced", "full"), "init": ("standard", "rescaled", "conformal", "coarse"),
-           "hinge": ("tape", "ligament", "separate"), "style": ("tiles-and-strips", "strips", "pinned")}
+           "hinge": HINGE_KINDS, "style": PRINT_STYLES}  # the hinge kinds and print styles there are
 MAX_JOBS = 100_000
 
 
@@ -135,7 +137,8 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
 def make_job(params: dict, actions: tuple[str, ...]) -> Job:
     files = {}
     for key in ("target", "contracted_target"):
-        for v in params.get(key) if isinstance(params.get(key), list) else [params.get(key)]:
+        value = params.get(key)
+        for v in value if isinstance(value, list) else [value]:
             p = Path(re.sub(r"^\s*[12]\s*:", "", v)) if isinstance(v, str) else None
             if p is not None and p.is_absolute() and p.is_file():
                 files[str(p)] = hashlib.sha256(p.read_bytes()).hexdigest()
@@ -193,7 +196,7 @@ def _check_targets(jobs: list[Job], where: str) -> None:
     """Every named target or target file loads (cheap, before any worker starts)."""
     from ..design.targets import load_target
 
-    for t in sorted({j.params.get("target") for j in jobs if j.params.get("target")}):
+    for t in sorted({t for j in jobs if (t := j.params.get("target"))}):
         try:
             load_target(t, None)
         except InputError as exc:

@@ -18,6 +18,7 @@ anything else.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,7 +36,7 @@ CANON_CODES = ("  0", "  5", "330", "100", "  8", "100", " 90", " 70")  # then "
 # ------------------------------------------------------------------ writing
 
 
-def split_prototype(text: str, handle: str, points) -> tuple[str, str] | None:
+def split_prototype(text: str, handle: str, points: Sequence[tuple[float, float]]) -> tuple[str, str] | None:
     """``(head, mid)`` of ezdxf's export ``text`` of an open LWPOLYLINE with ``handle`` and ``points``.
 
     A canonical entity is ``head + handle + mid + " 90\\n{n}\\n 70\\n{flags}\\n" + vertices``;
@@ -50,7 +51,7 @@ def split_prototype(text: str, handle: str, points) -> tuple[str, str] | None:
     return head + "  5\n", "\n" + mid
 
 
-def lwpolyline_tags(polylines, handles: list[str], head: str, mid: str) -> str:
+def lwpolyline_tags(polylines: Sequence[tuple[np.ndarray, bool]], handles: list[str], head: str, mid: str) -> str:
     """Every polyline as the prototype's tags (vertices formatted like ezdxf: ``%s`` of a float)."""
     if not polylines:
         return ""

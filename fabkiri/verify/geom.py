@@ -44,7 +44,7 @@ def tile_polygons(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def convex(corners: np.ndarray) -> np.ndarray:
     """Which CCW quads are strictly convex, ``(T,)``."""
     nxt = np.roll(corners, -1, axis=1) - corners
-    return (geometry.cross2(nxt, np.roll(nxt, -1, axis=1)) > 0).all(axis=1)
+    return np.asarray((geometry.cross2(nxt, np.roll(nxt, -1, axis=1)) > 0).all(axis=1))
 
 
 def sat_penetration(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -193,7 +193,7 @@ def _edge_matched(snapped: np.ndarray) -> bool:
     return True
 
 
-def tiles_union(corners: np.ndarray, eps: float, coverage: bool = True):
+def tiles_union(corners: np.ndarray, eps: float, coverage: bool = True) -> shapely.Geometry:
     """Union of tiles robust to rounding: corners within ``eps`` are snapped first.
 
     A conforming coverage (no overlaps — the caller says so with ``coverage`` —

@@ -19,6 +19,7 @@ and the declared allowances (manifest.json) is trusted:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,9 +34,10 @@ from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
+from .hingeread import PLAIN, reading
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
-from .pattern_checks import closed_state_checks, fabrication_tolerances, state_check_id
+from .pattern_checks import Tolerances, closed_state_checks, fabrication_tolerances, state_check_id
 from .quads import (
     MAX_FITTED_SHRINK_MM,
     UNDO_MITRE,
@@ -135,7 +137,8 @@ def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D:
     return rec
 
 
-def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float, tol: float):
+def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float,
+                         tol: float) -> tuple[np.ndarray, float | None, int]:
     """The tiles (corners in the design's arity), the reference square's side (None without one) and
     how many regions are neither. The square is looked for among the quads: the tiles themselves
     when they are quads, the regions that are not tiles otherwise."""
@@ -161,7 +164,7 @@ def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: 
             in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
         rep.meta["layout"] = "in-place" if in_place else "separate"
     fitted = None
-    if al.hinge == "plain" and (not in_place or sheet_piece) and sheets:
+    if al.hinge == PLAIN and (not in_place or sheet_piece) and sheets:
         # no manifest declares the kerf (or the gap): take the one offset the outlines share
         fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol,
                              lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
@@ -198,7 +201,7 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
 
     state = al.state
     sheets = rec.sheets
-    if in_place and al.hinge == "plain" and sheets:
+    if in_place and al.hinge == PLAIN and sheets:
         # no manifest declares the state: take the closed state the sheet matches
         R0 = next(iter(sheets.values()))
         fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
@@ -227,7 +230,7 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
 
 
 def _match_sheet_in_place(al: Allowances, m: _Matched, sheet: int, R: np.ndarray, Ystate: np.ndarray, T: int,
-                          tol: float, only_sheet: bool):
+                          tol: float, only_sheet: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One in-place sheet matched to its design tiles; a symmetric single sheet also records the other
     labelings that fit as well (``m.labelings``)."""
     design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
@@ -279,7 +282,7 @@ def _congruence_check(rep: Report, D: np.ndarray, cut_shapes: np.ndarray, have: 
                      + "largest corner offset from a proper rigid fit of the other corners, and edge-length change"))
 
 
-def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarray, tol, g: str,
+def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarray, tol: Tolerances, g: str,
                      n_sheets: int) -> None:
     """(b) in place: the sheet is the declared closed state."""
     rep.add(measured(f"{g}: (b) in place = closed state {m.state}",
@@ -300,7 +303,7 @@ def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarra
 
 
 def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray,
-                       rebuild: list[int], tol, g: str) -> None:
+                       rebuild: list[int], tol: Tolerances, g: str) -> None:
     """(c) the cut tiles reassembled by the hinge correspondence give the closed states in ``rebuild``."""
     for s in rebuild:
         name = f"{g}: (c) state {s} from cut tiles"
@@ -343,7 +346,8 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
         why = "both tiles cut, hinge corners coincide on the sheet"
         if (cross & present).any():
             why += f" ({int((cross & present).sum())} hinges cross sheets)"
-    if al.hinge == "ligament":
+    how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
+    if how is not None and how.declared_hinges:  # a hinge is there only where its feature is declared
         listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
         h_idx = np.arange(len(A))
         split = np.isin(h_idx, list(al.cross_sheet)) & (found_on[A] != found_on[B])
@@ -360,16 +364,18 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
 def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
                      linework: dict[int, Linework], cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
                      sheet_piece: bool, in_place: bool, fitted: float | None, g: str,
-                     labelings: list[np.ndarray] = ()) -> None:
+                     labelings: Sequence[np.ndarray] = ()) -> None:
     """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
     A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
     hinges at different corners; its marks say which one was cut, so the best of them is reported."""
     from .physical import ligament_check, mark_status, tape_mark_check
 
     A, B = pattern.topology.hinge_tiles.T
+    how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
+    marks_kind = how is not None and how.tape_marks  # the kind's hinges carry tape marks
     if sheet_piece and have.any():
-        shrink = al.tile_shrink if al.hinge != "plain" else -(fitted or 0.0)
-        kerf = al.kerf_offset if al.hinge != "plain" else 0.0
+        shrink = al.tile_shrink if al.hinge != PLAIN else -(fitted or 0.0)
+        kerf = al.kerf_offset if al.hinge != PLAIN else 0.0
         cores = np.full(len(cut_shapes), None, dtype=object)
         cores[have] = shapely.buffer(shapely.polygons(cut_shapes[have]), -shrink, join_style="mitre",
                                      mitre_limit=al.mitre_limit)
@@ -384,7 +390,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
             if len(shapely.get_parts(material)) >= on.sum():
                 continue  # no piece joins two tiles: the ligaments are not in this file (e.g. printed top faces)
             rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
-    elif in_place and al.hinge in ("tape", "plain") and not sheet_piece and have.any():
+    elif in_place and (al.hinge == PLAIN or marks_kind) and not sheet_piece and have.any():
         marks = {}
         for sheet, f in files.items():
             m = read_cut_file(f, "ENGRAVE")
@@ -396,7 +402,7 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
         status = [mark_status(pattern, C, have, found_on, marks) for C in [cut_shapes, *labelings]]
         k = max(range(len(status)), key=lambda i: (status[i][1].sum(), -i))
         hs, marked, room = status[k]
-        if not len(hs) or not (al.hinge == "tape" and al.labels) and marked.sum() < 0.5 * len(hs):
+        if not len(hs) or not (marks_kind and al.labels) and marked.sum() < 0.5 * len(hs):
             return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
         chk = tape_mark_check(hs, marked, room, g)
         if k:
@@ -444,7 +450,7 @@ def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, 
 def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
     """Every sheet of the layout in the same format as ``path`` (just ``path`` for one sheet)."""
     fmt = path.suffix.lower().lstrip(".")
-    named = {k: v.get(fmt) for k, v in al.sheet_files.items() if v.get(fmt)}
+    named = {k: v[fmt] for k, v in al.sheet_files.items() if v.get(fmt)}
     if len(named) <= 1:
         sheet = next((k for k, v in named.items() if v == path.name), 1)
         return {sheet: path}

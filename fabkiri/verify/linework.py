@@ -7,11 +7,12 @@ writer's read-back of large sheets.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 MM_PER_PX = 25.4 / 96.0
 SNAP_MM = 1e-4  # endpoints closer than this are one node of the linework
@@ -40,7 +41,7 @@ class Linework:
             self.layers.append(str(layer))
             self.colours.append(str(colour))
 
-    def subset(self, keep) -> Linework:
+    def subset(self, keep: Iterable[int]) -> Linework:
         keep = list(keep)
         return Linework(self.path, [self.polylines[i] for i in keep], [self.closed[i] for i in keep],
                         self.layer_found, [self.layers[i] for i in keep], [self.colours[i] for i in keep])
@@ -57,17 +58,17 @@ class Linework:
         return [self.subset([i for i in rest if self.colours[i] == c]) for c in colours]
 
 
-class Polylines(Sequence):
+class Polylines(Sequence[tuple[np.ndarray, bool]]):
     """``(points, closed)`` pairs kept flat (points ``(P, 2)``, counts, closed flags); items made on demand."""
 
-    def __init__(self, pts: np.ndarray, counts: np.ndarray, closed: np.ndarray):
+    def __init__(self, pts: npt.ArrayLike, counts: npt.ArrayLike, closed: npt.ArrayLike):
         self.pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         self.counts = np.asarray(counts, dtype=np.int64)
         self.closed = np.asarray(closed, dtype=bool)
         self._items: list | None = None
 
     @classmethod
-    def of(cls, items) -> Polylines:
+    def of(cls, items: Sequence[tuple[np.ndarray, bool]]) -> Polylines:
         return cls(*flat_polylines(items))
 
     def _list(self) -> list:
@@ -86,7 +87,7 @@ class Polylines(Sequence):
         return iter(self._list())
 
 
-def flat_polylines(polylines) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def flat_polylines(polylines: Sequence[tuple[np.ndarray, bool]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(points (P, 2), counts, closed)`` of a list of ``(points, closed)``."""
     if isinstance(polylines, Polylines):
         return polylines.pts, polylines.counts, polylines.closed

@@ -13,12 +13,12 @@ import numpy as np
 from ..errors import VerifyError
 from ..pattern.topology import STATES
 from ..schemas import load_schema, schema_problem
+from .hingeread import PLAIN, read_kinds, reading
 
 # ------------------------------------------------------------------ manifest
 
 MITRE_LIMIT = 10.0  # the mitre limit fabkiri's writer has always used (manifests that do not say)
 SCHEMA = "cut-manifest.schema.json"
-HINGE_KINDS = ("tape", "separate", "ligament")  # the kinds the verifier reads (recovery, physical checks)
 
 
 @dataclass
@@ -68,8 +68,10 @@ class CutManifest:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def default_layout(self) -> str:
-        """The layout a manifest without one means: tape and ligament sheets are cut in place."""
-        return "in-place" if self.hinge in ("tape", "ligament") else "exploded"
+        """The layout a manifest without one means: the kind's reading says (tape and ligament sheets
+        are cut in place)."""
+        how = reading(self.hinge)
+        return "in-place" if how is not None and how.in_place else "exploded"
 
     def to_dict(self) -> dict[str, Any]:
         """The manifest as written (shallow: the lists and dicts are the manifest's own)."""
@@ -107,8 +109,9 @@ def _named_problems(data: dict[str, Any], where: str) -> None:
     an unknown hinge kind, a state that is not 1 or 2, a scale that is not positive or
     a negative kerf offset or shrink."""
     hinge = str(data.get("hinge", "separate"))
-    if hinge not in HINGE_KINDS:
-        raise VerifyError(f"{where}: unknown hinge kind {hinge!r} (tape, separate or ligament)")
+    if reading(hinge) is None:
+        *some, last = read_kinds()
+        raise VerifyError(f"{where}: unknown hinge kind {hinge!r} ({', '.join(some)} or {last})")
     try:
         state = int(data.get("state", 1))
         scale, kerf, shrink = (float(data.get(k, d)) for k, d in
@@ -173,7 +176,7 @@ class Allowances:
     reference: dict[int, np.ndarray]  # sheet -> 4 corners
     hinge_features: list[dict[str, Any]]
     tile_sheet: dict[int, int]
-    sheet_files: dict[int, str]
+    sheet_files: dict[int, dict[str, str]]  # sheet -> {"dxf": file, "svg": file}
     cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
     ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
     tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)
@@ -183,7 +186,7 @@ class Allowances:
 
 def _allowances(manifest: CutManifest | dict[str, Any] | None, where: str) -> Allowances:
     if manifest is None:
-        return Allowances("plain", "auto", 1, 1.0, 0.0, 0.0, {}, [], {}, {})
+        return Allowances(PLAIN, "auto", 1, 1.0, 0.0, 0.0, {}, [], {}, {})
     m = manifest if isinstance(manifest, CutManifest) else CutManifest.from_dict(manifest, where)
     ref: dict[int, np.ndarray] = {}
     rs = m.reference_square

@@ -126,7 +126,7 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: l
     tree = cKDTree(cr)
     k_ar = R.shape[1]  # the tile arity
     R4 = np.stack([np.roll(R, -k, axis=1) for k in range(k_ar)])  # every corner shift, once
-    best = None
+    best: tuple[float, float, np.ndarray] | None = None  # (score, theta, t) of the best hypothesis
     hyps = []
     for d in cands:
         for s in range(k_ar):
@@ -140,6 +140,7 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: l
             hyps.append((score, theta, t))
             if best is None or score < best[0]:
                 best = (score, theta, t)
+    assert best is not None  # n > 0 tiles and at least one candidate: a hypothesis was scored
     _, theta, t = best
     assign, resid, shift, theta, t = _refit(Y, R, theta, t, tree)
     if alternatives is not None:

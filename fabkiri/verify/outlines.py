@@ -15,13 +15,16 @@ against it:
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
 
 from ..pattern.model import Pattern
 from .report import Check, measured
+
+if TYPE_CHECKING:  # pattern_checks imports this module
+    from .pattern_checks import Tolerances
 
 DEGENERATE_ASPECT = 4.0  # an unasked aspect this many times the lattice's rows:cols is a collapsed strip
 
@@ -35,7 +38,7 @@ def outline_corners(Y: np.ndarray, eps: float) -> tuple[np.ndarray, Any]:
     return np.asarray(part.exterior.coords)[:-1], part
 
 
-def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol) -> list[Check]:
+def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol: Tolerances) -> list[Check]:
     pts, union = outline_corners(Y, max(tol.length, 1e-12 * tol.tile_size))
     rect = union.minimum_rotated_rectangle
     off = shapely.distance(shapely.points(pts), rect.exterior)
@@ -62,7 +65,7 @@ def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | No
     return out
 
 
-def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], tol) -> list[Check]:
+def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], tol: Tolerances) -> list[Check]:
     """Checks of every closed-state outline target the design recorded (none if it recorded none)."""
     d = pattern.design or {}
     asked = (d.get("options") or {}).get("contracted") or {}
@@ -85,7 +88,7 @@ def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], t
     return out
 
 
-def target_checks(pattern: Pattern, states: dict | None = None, shape_tol: str | tuple = "2%") -> list[Check]:
+def target_checks(pattern: Pattern, states: dict[int, np.ndarray] | None = None, shape_tol: str | tuple = "2%") -> list[Check]:
     """The outline against every stored target curve, over the whole outline (Hausdorff distance of the
     boundary-tip polygon, or of each closed state's outline, to the target), checked against ``shape_tol``
     (a share of the target's size or a length, ``design --shape-tol``) — never against a figure the
@@ -95,12 +98,13 @@ def target_checks(pattern: Pattern, states: dict | None = None, shape_tol: str |
     from ..errors import InputError
 
     d = pattern.design or {}
+    closed_states: dict[int, np.ndarray] = states or {}
     tol = conf.parse_shape_tol(shape_tol) if isinstance(shape_tol, str) else shape_tol
-    jobs = []
+    jobs: list[tuple[str, str, int | None, dict]] = []  # (check name, group, state or None, target spec)
     if isinstance(d.get("target"), dict):
         jobs.append(("target shape", "deployed", None, d["target"]))
     for s, tgt in sorted((d.get("contracted_targets") or {}).items()):
-        if isinstance(tgt, dict) and states is not None and int(s) in states:
+        if isinstance(tgt, dict) and int(s) in closed_states:
             jobs.append((f"state {s}: outline shape", f"state {s}", int(s), tgt))
     out = []
     for name, _group, s, spec in jobs:
@@ -111,7 +115,7 @@ def target_checks(pattern: Pattern, states: dict | None = None, shape_tol: str |
                              detail=f"the stored target cannot be rebuilt: {exc}"))
             continue
         c = (conf.deployed(pattern.nodes, pattern.topology, target) if s is None
-             else conf.closed(states[s], target))
+             else conf.closed(closed_states[s], target))
         j = conf.judge(c, tol)
         x, y = c["worst"]["at"]
         out.append(measured(name, c["hausdorff_mm"], j["tol_mm"], "mm", group="design",

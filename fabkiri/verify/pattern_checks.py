@@ -32,7 +32,7 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums, state_residuals
 from ..pattern.tessellation import tessellation
-from ..pattern.topology import STATES
+from ..pattern.topology import STATES, FoldRule
 from . import geom
 from .outlines import target_checks
 from .report import Check, Report, measured
@@ -86,7 +86,7 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
     size = pattern.tile_size
     if tol_mm is not None:
         return fabrication_tolerances(float(tol_mm), size)
-    optimised = bool(pattern.design) and any(k in pattern.design for k in ("solver", "solve", "residuals", "report"))
+    optimised = any(k in (pattern.design or {}) for k in ("solver", "solve", "residuals", "report"))
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
     return Tolerances(rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data")
 
@@ -258,7 +258,8 @@ def _blame(pattern: Pattern) -> dict[int, int]:
     return out
 
 
-def _folded_gaps(pattern, Y, fold, tol: Tolerances, g: str, state: int | str) -> Check:
+def _folded_gaps(pattern: Pattern, Y: np.ndarray, fold: FoldRule, tol: Tolerances, g: str,
+                 state: int | str) -> Check:
     top = pattern.topology
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
@@ -302,10 +303,11 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     cause = ""
     if len(order) and blame:
         culprits = [blame.get(int(i[m]), blame.get(int(j[m]))) for m in order]
-        if all(c is not None for c in culprits):
-            cause = f"; all caused by self-intersecting tile(s) {sorted(set(culprits))}"
+        found = [c for c in culprits if c is not None]
+        if len(found) == len(culprits):
+            cause = f"; all caused by self-intersecting tile(s) {sorted(set(found))}"
         else:
-            cause = f"; {sum(c is not None for c in culprits)} of {len(order)} caused by self-intersecting tiles"
+            cause = f"; {len(found)} of {len(order)} caused by self-intersecting tiles"
     out.append(measured(f"{g}: no overlaps", _max(inter), tol.length, "mm",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, group=g,
                         detail=(f"overlapping pairs (penetration depth): {listed}{cause}" if len(order) else
@@ -331,7 +333,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     out.append(measured(f"{g}: no interior gaps", worst_gap[0] if worst_gap else 0.0, tol.length, "mm",
                         worst=where, group=g,
                         detail=(f"{len(big)} enclosed gaps wider than the tolerance (largest {worst_gap[1]:.3g} mm²)"
-                                if big else "equivalent width 2|area|/perimeter of enclosed gaps"),
+                                if big and worst_gap else "equivalent width 2|area|/perimeter of enclosed gaps"),
                         id=ids["no-interior-gaps"]))
     # one outline: components after closing cracks narrower than the tolerance
     eps = max(tol.length, 1e-12 * tol.tile_size)
@@ -343,7 +345,7 @@ def compactness_checks(Y: np.ndarray, tol: Tolerances, g: str,
     return out
 
 
-def enclosed_gaps(union) -> list:
+def enclosed_gaps(union: shapely.Geometry) -> list[shapely.Polygon]:
     """The uncovered regions enclosed by a tile union, as polygons.
 
     A hole ring of the union may enclose islands of tiles (a crack of rounding
@@ -431,13 +433,14 @@ def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tol
                     detail=f"{len(omegas)} samples of ω on [0, 90°]")]
     is_convex = geom.convex(Y1)
     depth = np.zeros(len(omegas))
-    pairs = [None] * len(omegas)
+    pairs: list[tuple[int, int] | None] = [None] * len(omegas)  # the deepest pair per sample
     for s in range(len(omegas)):
         depth[s], pairs[s] = geom.max_overlap_depth(corners[s], is_convex)
     k = int(np.argmax(depth))
+    pk = pairs[k]
     out.append(measured("rigid path: no overlap", _max(depth), tol.length, "mm",
-                        worst=(f"tiles {pairs[k][0]}/{pairs[k][1]} at ω = {np.degrees(omegas[k]):.4g}°"
-                               if pairs[k] else None), group="rigid path",
+                        worst=(f"tiles {pk[0]}/{pk[1]} at ω = {np.degrees(omegas[k]):.4g}°"
+                               if pk else None), group="rigid path",
                         detail="largest penetration depth between any two tiles"))
     end = geometry.aligned_distance(corners[-1], Y2)
     out.append(measured("rigid path: ends in state 2", end, tol.length * np.sqrt(len(Y1)), "mm",
@@ -465,9 +468,9 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
                  meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": tol.tile_size,
                        "tier": tol.tier, "tolerance": tol.describe(), "tiles": pattern.n_tiles, "holes": pattern.topology.n_holes,
                        "rigid_claimed": claimed})
-    for c in topology_checks(pattern) + tile_checks(pattern, tol):
-        rep.add(c)
-    states = {}
+    for chk in topology_checks(pattern) + tile_checks(pattern, tol):
+        rep.add(chk)
+    states: dict[int, np.ndarray] = {}
     for s in STATES:
         c = contract(pattern, s)
         Y = pattern.contracted.get(s, c.corners)

@@ -7,6 +7,8 @@ file without its manifest is checked the same way; each failure names the hinge.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import shapely
 from scipy.spatial import cKDTree
@@ -25,7 +27,7 @@ MARK_EXPECT_MARGIN_MM = 0.75  # ... with the writer's margin for a kerf up to 0.
 MARK_SPAN = 0.3  # a mark spans at least this fraction of the corner's shorter edge (at most 16 mm), times sin(angle)
 
 
-def ligament_check(pattern: Pattern, material, cores: np.ndarray, have: np.ndarray, cuts: list[np.ndarray],
+def ligament_check(pattern: Pattern, material: shapely.Geometry, cores: np.ndarray, have: np.ndarray, cuts: list[np.ndarray],
                    hinges: np.ndarray, g: str) -> Check:
     """Every hinge in ``hinges`` has a strip of material joining its two tiles' cores, and no cut
     line runs into that strip.
@@ -44,7 +46,7 @@ def ligament_check(pattern: Pattern, material, cores: np.ndarray, have: np.ndarr
     touching: dict[int, set[int]] = {}
     for c, s in zip(ids[si], ci):
         touching.setdefault(int(s), set()).add(int(c))
-    by_pair = {}
+    by_pair: dict[tuple[int, int], list[int]] = {}
     for s, tiles in touching.items():
         for a in tiles:
             for b in tiles:
@@ -75,7 +77,7 @@ def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
     n = len(Q)  # the tile arity
     q, q1, q0 = Q[k], Q[(k + 1) % n], Q[(k - 1) % n]
     e1, e0 = q1 - q, q0 - q
-    l1, l0 = np.linalg.norm(e1), np.linalg.norm(e0)
+    l1, l0 = float(np.linalg.norm(e1)), float(np.linalg.norm(e0))
     if not len(segs) or l1 == 0 or l0 == 0:
         return False
     p, r = segs[:, 0], segs[:, 1]
@@ -86,7 +88,7 @@ def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
         return (np.abs(d) <= MARK_EDGE_MM) & (t > 0) & (t < le)
 
     spans = (near(p, e1, l1) & near(r, e0, l0)) | (near(r, e1, l1) & near(p, e0, l0))
-    sin = abs(geometry.cross2(e1, e0)) / (l1 * l0)  # an acute corner's mark is shorter
+    sin = float(abs(geometry.cross2(e1, e0))) / (l1 * l0)  # an acute corner's mark is shorter
     long = np.linalg.norm(r - p, axis=1) >= MARK_SPAN * min(l1, l0, 16.0) * max(sin, 0.2)
     return bool((spans & long).any())
 
@@ -119,7 +121,7 @@ def tape_mark_chords(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, margin: f
     return seg
 
 
-def _segments_near(segs: dict[int, np.ndarray]):
+def _segments_near(segs: dict[int, np.ndarray]) -> Callable[[int, np.ndarray, int], np.ndarray]:
     """``near(sheet, Q, k)``: the sheet's segments whose first end is close enough to corner ``k`` of
     ``Q`` to span it (a KD-tree per sheet: every corner against every engraved segment, labels
     included, took 84 of 96 s for a 32x32 sheet)."""

@@ -17,7 +17,7 @@ from .readers import JOIN_MM, SNAP_MM, Linework
 EDGE_ON_MM = 0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core
 
 
-def _on_cut_edges(parts: np.ndarray, material, arity: int = 4) -> np.ndarray:
+def _on_cut_edges(parts: np.ndarray, material: shapely.Geometry, arity: int = 4) -> np.ndarray:
     """Opened tile cores as ``arity``-gons whose sides lie on the material's own cut edges.
 
     An opening leaves each tile's sides exact away from the ligament roots, but a root leaves a
@@ -63,7 +63,8 @@ def _on_cut_edges(parts: np.ndarray, material, arity: int = 4) -> np.ndarray:
     order = np.lexsort((np.arange(len(pi))[ok], -elen[ok], which[ok], pi[ok]))
     idx = np.flatnonzero(ok)[order]
     key = pi[idx] * arity + which[idx]
-    first = np.r_[True, key[1:] != key[:-1]]
+    first = np.ones(len(key), bool)  # no pair at all leaves every part as it is
+    first[1:] = key[1:] != key[:-1]
     best = np.full((K, arity), -1)
     best.reshape(-1)[key[first]] = idx[first]
     full = (best >= 0).all(axis=1)
@@ -83,14 +84,15 @@ def _on_cut_edges(parts: np.ndarray, material, arity: int = 4) -> np.ndarray:
     return out
 
 
-def _hairline_free(g) -> np.ndarray:
+def _hairline_free(g: shapely.Geometry) -> np.ndarray:
     """The parts of ``g`` after an opening at the join tolerance (drops 1 µm hairlines, keeps convex parts)."""
     g = g.buffer(-JOIN_MM, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(JOIN_MM, join_style="mitre",
                                                                              mitre_limit=UNDO_MITRE)
     return shapely.get_parts(g)
 
 
-def _declared_strips_moved(parts, strips, frame_tiles, al: Allowances):
+def _declared_strips_moved(parts: np.ndarray, strips: shapely.Geometry | None, frame_tiles: np.ndarray | None,
+                           al: Allowances) -> shapely.Geometry | None:
     """The declared ligaments moved with the sheet: the rigid motion that takes the manifest's tile
     placement onto the tiles an opening found, applied to the strips. None if it cannot be found."""
     if strips is None or frame_tiles is None or not len(parts):
@@ -114,11 +116,11 @@ def _nested(lw: Linework) -> bool:
     return bool((a != b).any())
 
 
-def _open_ligaments(material, width: float | None):
+def _open_ligaments(material: shapely.Geometry, width: float | None) -> np.ndarray:
     """The tile cores of a ligament sheet: an opening (mitre: convex tiles come back exactly) of
     radius above half the ligament width drops the strips: the smallest radius (x1.25 steps, from
     0.6 times the declared width, else from 10 µm) after which the piece count no longer grows."""
-    def opened(r):
+    def opened(r: float) -> np.ndarray:
         g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre",
                                                                                    mitre_limit=10.0)
         parts = shapely.get_parts(g)
@@ -188,7 +190,7 @@ def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float)
     return np.delete(quads, k, axis=0), float(e[k].mean())
 
 
-def _feature_geometry(poly: Any):
+def _feature_geometry(poly: Any) -> shapely.Polygon | shapely.MultiPolygon:
     """A hinge feature: one ring ``[[x, y], ...]`` or several ``[[[x, y], ...], ...]``."""
     try:
         arr = np.asarray(poly, dtype=float)
@@ -259,8 +261,8 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM, n: int = 4) -> np.
         along = (np.abs(geometry.cross2(e, d)) <= 0.17 * elen * dl) & (geometry.dot2(e, d) > 0)
         near = np.abs(geometry.cross2(mid - a, d)) / dl <= 0.1 * dl
         cand = np.flatnonzero(along & near)
-        k = cand[np.argmax(elen[cand])] if len(cand) else None
-        lines.append((a, d) if k is None else (pts[k], e[k]))
+        longest = cand[np.argmax(elen[cand])] if len(cand) else None
+        lines.append((a, d) if longest is None else (pts[longest], e[longest]))
     out = []
     for i in range(n):
         (p1, d1), (p2, d2) = lines[i - 1], lines[i]

@@ -13,6 +13,7 @@ from scipy.sparse import csgraph
 from scipy.spatial import cKDTree
 
 from ..errors import VerifyError
+from .hingeread import PLAIN, HingeReading, reading, register_reading
 from .manifest import Allowances
 from .matching import match_by_shape
 from .quads import (
@@ -64,11 +65,11 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
     if len(pairs):
         from scipy import sparse
 
-        n = len(pts)
-        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        n_pts = len(pts)
+        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_pts, n_pts))
         _, label = csgraph.connected_components(g, directed=False)
         first = np.full(label.max() + 1, -1)
-        first[label[::-1]] = np.arange(n)[::-1]
+        first[label[::-1]] = np.arange(n_pts)[::-1]
         pts = pts[first[label]]
     segs = pts.reshape(-1, 2, 2)
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
@@ -76,7 +77,7 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
 
 
 
-def _node(segs: np.ndarray, eps: float = JOIN_MM):
+def _node(segs: np.ndarray, eps: float = JOIN_MM) -> shapely.Geometry:
     """Segments ``(n, 2, 2)`` noded: ends within ``eps`` of another line are put on it (T-junctions
     rounded off their edge), then every crossing and touch is a node. Returns the union."""
     lines = shapely.linestrings(segs)
@@ -91,7 +92,7 @@ def _node(segs: np.ndarray, eps: float = JOIN_MM):
     return shapely.unary_union(lines)
 
 
-def _noded(lw: Linework, eps: float = JOIN_MM):
+def _noded(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
     """The CUT linework as noded line parts (shapely), endpoints within ``eps`` merged."""
     segs = _snapped_segments(lw, eps)
     if len(segs) == 0:
@@ -137,42 +138,66 @@ def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
 
 def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
                      frame_tiles: np.ndarray | None = None, arity: int = 4) -> tuple[np.ndarray, str]:
-    """Tile regions (shapely polygons) from one file's CUT linework, and the method used.
+    """Tile regions (shapely polygons) from one file's CUT linework, and the method used: the hinge
+    kind's reading (:mod:`.hingeread`) recovers them.
 
     ``frame_tiles``: the design tiles where the manifest puts them (its sheet frame), to find the
     declared ligaments on a sheet that was moved or turned since. ``arity``: corners per tile.
     """
     if not lw.polylines:  # e.g. a sheet that holds only the reference square
         return np.zeros(0, dtype=object), "nothing to recover"
-    hinge = al.hinge
-    if hinge != "tape":
+    joined = None
+    if al.hinge == PLAIN:  # no manifest: outlines that all close are separate tiles (or, nested, one
+        # ligament sheet), else in-place linework
         joined = join_pieces(lw)
-        if hinge == "plain":  # no manifest: outlines that all close are separate tiles (or, nested, one
-            # ligament sheet), else in-place linework
-            rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
-            n_open = len(joined.closed) - len(rings.closed)
-            # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
-            hinge = "ligament" if n_open < len(rings.closed) and _nested(rings) else \
-                "separate" if not n_open else "tape"
-        if hinge != "tape":  # stray open cuts are left out here and reported as cut ends in the material
-            lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
-    if hinge == "tape":
-        segs = _snapped_segments(lw, JOIN_MM)
-        if len(segs) == 0:
-            return np.zeros(0, dtype=object), "polygonize"
-        noded = _node(segs)
-        faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
-        return faces, "polygonize of the noded linework"
+        rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
+        n_open = len(joined.closed) - len(rings.closed)
+        # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
+        guess = "ligament" if n_open < len(rings.closed) and _nested(rings) else "separate" if not n_open else "tape"
+        how = reading(guess)
+    else:
+        how = reading(al.hinge)
+    if how is None:
+        raise VerifyError(f"{lw.path}: no reading for hinge kind {al.hinge!r}")
+    if how.closed_only:  # stray open cuts are left out here and reported as cut ends in the material
+        joined = join_pieces(lw) if joined is None else joined
+        lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
+    return how.recover(lw, al, sheet, frame_tiles, arity)
+
+
+def _noded_faces(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
+                 ) -> tuple[np.ndarray, str]:
+    """Tape: the faces of the noded linework."""
+    segs = _snapped_segments(lw, JOIN_MM)
+    if len(segs) == 0:
+        return np.zeros(0, dtype=object), "polygonize"
+    noded = _node(segs)
+    faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+    return faces, "polygonize of the noded linework"
+
+
+def _closed_rings(lw: Linework, al: Allowances) -> np.ndarray:
+    """The closed CUT outlines as valid polygons; every outline must be closed."""
     rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
     if len(rings) != len(lw.polylines):
         raise VerifyError(f"{lw.path}: {len(lw.polylines) - len(rings)} open CUT polylines in a {al.hinge} "
                           f"layout, where every outline must be closed")
-    polys = shapely.make_valid(np.array(rings, dtype=object))
-    if hinge == "separate":
-        out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
-            else polys
-        return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
-    material = _material(polys, al.kerf_offset)
+    return shapely.make_valid(np.array(rings, dtype=object))
+
+
+def _outlines_less_kerf(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
+                        ) -> tuple[np.ndarray, str]:
+    """Separate tiles: every closed outline less the kerf offset."""
+    polys = _closed_rings(lw, al)
+    out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
+        else polys
+    return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
+
+
+def _material_less_ligaments(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None,
+                             arity: int) -> tuple[np.ndarray, str]:
+    """A ligament sheet: the material minus the hinge strips, grown by the tile shrink."""
+    material = _material(_closed_rings(lw, al), al.kerf_offset)
     feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
              if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
     strips = shapely.unary_union(feats) if feats else None
@@ -180,7 +205,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     # join tolerance drops it (and leaves convex tiles exactly as they are)
     parts = _hairline_free(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
     # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
-    def cuts_tiles(parts) -> bool:
+    def cuts_tiles(parts: np.ndarray) -> bool:
         return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
 
     if strips is not None and cuts_tiles(parts):
@@ -201,7 +226,7 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     return parts, how + ", grown by the tile shrink"
 
 
-def _material(polys: np.ndarray, kerf_offset: float):
+def _material(polys: np.ndarray, kerf_offset: float) -> shapely.Geometry:
     """A ligament sheet's material: outer loops minus the loops inside them, less the kerf offset."""
     tree = shapely.STRtree(polys)
     inside = np.zeros(len(polys), dtype=bool)
@@ -213,7 +238,7 @@ def _material(polys: np.ndarray, kerf_offset: float):
     return material
 
 
-def sheet_material(lw: Linework, kerf_offset: float):
+def sheet_material(lw: Linework, kerf_offset: float) -> shapely.Geometry:
     """The material of a ligament sheet's CUT linework (its closed outlines)."""
     joined = join_pieces(lw)
     rings = [shapely.Polygon(p) for p, c in zip(joined.polylines, joined.closed) if c]
@@ -226,7 +251,7 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
     design tiles; with one candidate, that one."""
     if len(candidates) == 1:
         return candidates[0]
-    best, score = candidates[0], -1
+    best, score = candidates[0], None
     for lw in candidates:
         try:
             polys, _ = recover_polygons(lw, al, sheet, arity=D.shape[1])
@@ -236,6 +261,12 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
         _, res, _ = match_by_shape(D, quads, L)
         n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
         key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions
-        if score == -1 or key > score:
+        if score is None or key > score:
             best, score = lw, key
     return best
+
+
+# the built-in hinge kinds' readings (the verify half of fabricate/hingekinds/)
+register_reading(HingeReading("tape", _noded_faces, in_place=True, closed_only=False, tape_marks=True))
+register_reading(HingeReading("separate", _outlines_less_kerf, in_place=False))
+register_reading(HingeReading("ligament", _material_less_ligaments, in_place=True, declared_hinges=True))

@@ -11,6 +11,8 @@ For a pattern with a seam (:mod:`fabkiri.pattern.periodic`) the verifier measure
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..pattern.model import Pattern
@@ -18,8 +20,11 @@ from ..pattern.periodic import Seam, seam_map, seam_of, tube_tiles
 from . import geom
 from .report import Check, measured
 
+if TYPE_CHECKING:  # pattern_checks imports this module
+    from .pattern_checks import Tolerances
 
-def seam_checks(pattern: Pattern, states: dict, tol) -> list[Check]:
+
+def seam_checks(pattern: Pattern, states: dict[int, np.ndarray], tol: Tolerances) -> list[Check]:
     """Seam checks of the deployed state and every closed state in ``states`` (state -> (T, 4, 2)).
 
     ``tol`` is the verifier's :class:`~fabkiri.verify.pattern_checks.Tolerances`. A planar pattern
@@ -29,12 +34,13 @@ def seam_checks(pattern: Pattern, states: dict, tol) -> list[Check]:
     if seam is None:
         return []
     out = []
-    for s, Y in [("deployed", pattern.corners()), *sorted(states.items())]:
+    rows: list[tuple[int | str, np.ndarray]] = [("deployed", pattern.corners()), *sorted(states.items())]
+    for s, Y in rows:
         out += _state_checks(pattern, seam, s, Y, tol)
     return out
 
 
-def _state_checks(pattern: Pattern, seam: Seam, s, Y: np.ndarray, tol) -> list[Check]:
+def _state_checks(pattern: Pattern, seam: Seam, s: int | str, Y: np.ndarray, tol: Tolerances) -> list[Check]:
     g = "deployed" if s == "deployed" else f"state {s}"
     m = seam_map(Y, seam)
     size = tol.tile_size

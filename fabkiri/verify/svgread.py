@@ -31,7 +31,7 @@ _NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 _SUBPATH = re.compile(r"(?=[Mm])")
 
 
-def read_svg_layers(data: bytes):
+def read_svg_layers(data: bytes) -> tuple[float, float, list[float], dict[str | None, Polylines]]:
     """``(width_mm, height_mm, viewbox, layers)``; layers from ``<g id=...>`` groups, y flipped back to y-up.
 
     A path with several subpaths (``M ... M ...``: the SVG writes each tile's strokes as one
@@ -43,7 +43,7 @@ def read_svg_layers(data: bytes):
     wmm = float(w[:-2]) if w.endswith("mm") else float("nan")
     hmm = float(h[:-2]) if h.endswith("mm") else float("nan")
     H = vb[3] if len(vb) == 4 else float("nan")
-    layers: dict[str, list] = {}
+    layers: dict[str | None, Polylines] = {}  # a group without an id is the layer None
     for g in root.iter(f"{SVG_NS}g"):
         name = g.get("id")
         nums: list[str] = []
@@ -96,7 +96,7 @@ def read_cut_svg(p: Path, layer_name: str = "CUT") -> Linework:
     height = float(svg.height) * mm_per_px
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
 
-    def name(g) -> str:
+    def name(g: se.Group) -> str:
         for v in (g.values.get(INKSCAPE_LABEL), g.values.get("inkscape:label"), g.id):
             if str(v or "").upper() in NON_CUT_LAYERS | {"CUT"}:
                 return str(v).upper()
@@ -138,7 +138,7 @@ def read_cut_svg(p: Path, layer_name: str = "CUT") -> Linework:
     return lw
 
 
-def without_annotation_layers(p: Path, keep: str = "CUT"):
+def without_annotation_layers(p: Path, keep: str = "CUT") -> str | io.BytesIO:
     """The SVG with its NOTES/ENGRAVE/SCORE groups removed, when it has a CUT group; else the path.
 
     Only the CUT group is read when there is one, and svgelements would spend
@@ -152,7 +152,7 @@ def without_annotation_layers(p: Path, keep: str = "CUT"):
     except (ET.ParseError, OSError):
         return str(p)
 
-    def name(el) -> str:
+    def name(el: ET.Element) -> str:
         return str(el.get("id") or el.get(INKSCAPE_LABEL) or "").upper()
 
     groups = [el for el in root.iter() if el.tag.rsplit("}", 1)[-1] == "g"]

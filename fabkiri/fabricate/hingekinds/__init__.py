@@ -11,6 +11,7 @@ the built-in table of :data:`_KINDS` (and, in :mod:`..materials`, the name in ``
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -61,6 +62,18 @@ class SheetCut:
     regions: np.ndarray  # (T, 4, 2) every tile's label region as placed
 
 
+@dataclass(frozen=True)
+class SheetRead:
+    """One written sheet as the read-back sees it, handed to :meth:`HingeKind.recover`."""
+
+    cut: Sequence[tuple[np.ndarray, bool]]  # the CUT polylines as read, ``(points, closed)``
+    polys: np.ndarray  # a shapely polygon per closed CUT polyline
+    is_ref: np.ndarray  # which closed polylines are the reference square
+    square: np.ndarray | None  # the reference square's corners, if it is on this sheet
+    sheet: int  # 1-based
+    manifest: dict  # the cut's manifest (kerf offset, hinge features)
+
+
 class HingeKind:
     """The interface every hinge kind implements (see the module docstring)."""
 
@@ -69,6 +82,47 @@ class HingeKind:
     both_corner_labels = False  # every hinge's two corners carry the partner tile's ID and face letter
     face_letter_corners = False  # tile A's corner of each same-sheet hinge carries its face letter
     tape_marks = False  # tile B's corner of each same-sheet hinge carries a chord where the tape ends
+    shrinks = False  # every tile is shrunk by half the gap before it is cut (a sheet joined by ligaments)
+    one_piece = False  # the sheet comes out as one piece joined by itself: no tape, nothing to join
+    cut_apart = False  # every tile is cut on its own: a tape piece spans one corner pair, tiles are placed by ID
+
+    def shrink(self, material: Material) -> float:
+        """How far ``cut`` shrinks every tile (mm)."""
+        return 0.5 * material.gap_mm if self.shrinks else 0.0
+
+    def never(self, material: Material) -> str:
+        """Why this kind cannot be cut from ``material`` at any scale ('' if it can)."""
+        return ""
+
+    def min_width(self, material: Material) -> float:
+        """The thinnest tile ``design`` allows for this kind (mm): what stays of it holds a web."""
+        return material.min_web_mm
+
+    def hinge_spacing(self, material: Material) -> float:
+        """How far apart two hinges of one tile must be (mm): a tape piece reaches about half a web
+        along each edge from its corner."""
+        return material.min_web_mm
+
+    def coupon_variants(self, material: Material) -> tuple[str, str, list[dict[str, float]]]:
+        """The material field the coupon's hinge pieces sweep, its engraved prefix, and each piece's
+        settings (``tile`` size, the swept ``value``, and any ``cut`` option it overrides)."""
+        sizes = [s for s in (12.0, 9.0, 7.0, 5.0, 4.0) if s > 1.2 * material.min_web_mm] or [12.0]
+        return "min_web_mm", "S", [{"tile": s, "value": s} for s in sizes]
+
+    def assembly_steps(self, n_top: int, n_bottom: int) -> list[str]:
+        """The maker's steps, for ``n_top`` tape pieces on the top face and ``n_bottom`` below."""
+        steps = [f"1. top face: lay the cut tiles as cut (engraved face up) and tape pieces 1-{n_top} in order, "
+                 "each across its hinge corner from the face letter to the chord"]
+        if n_bottom:
+            steps.append(f"2. turn the whole piece over (left-right) and tape pieces {n_top + 1}-{n_top + n_bottom} "
+                         "on the bottom face the same way (the map's bottom panel is seen from above, through the "
+                         "sheet)")
+        return steps
+
+    def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
+        """The read-back's pieces the laser leaves on one written sheet, and the holes in them
+        (shapely polygons, mm)."""
+        raise NotImplementedError
 
     def check_layout(self, layout: str) -> None:
         """Refuse a layout this kind cannot be cut in, with one line saying what to use."""

@@ -7,6 +7,8 @@ manifest, so the verifier can check each ligament's width and length.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 import shapely
 
@@ -18,14 +20,59 @@ from .. import hinges as hg
 from ..drawing import snap
 from . import Cutting, HingeKind, register
 
+if TYPE_CHECKING:
+    from ...pattern.model import Pattern
+    from ..drawing import SheetDrawing
+    from ..materials import Material
+    from . import SheetCut, SheetRead
+
 FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
 NOTCH_AREA_MM2 = 1e-6  # a notch the kerf toolpath fills counts from this area (float noise is far smaller)
 
 
 class Ligament(HingeKind):
     name = "ligament"
+    shrinks = True
+    one_piece = True
 
-    def prepare(self, pattern, corners, tile_polys, mat, *, state, scale, options) -> Cutting:
+    def never(self, material: Material) -> str:
+        return fb.ligament_never(material)
+
+    def min_width(self, material: Material) -> float:
+        # a strip's root reaches into the shrunk tile: the tile holds it and a web (cut itself asks a web;
+        # at a web alone the layout verifier's four-corner recovery failed on 0.46 mm pp tiles, 16x16 circle)
+        return material.ligament_width_mm + material.min_web_mm
+
+    def hinge_spacing(self, material: Material) -> float:
+        return material.ligament_width_mm + material.min_web_mm  # a strip is its width plus a web from the next
+
+    def coupon_variants(self, material: Material) -> tuple[str, str, list[dict[str, float]]]:
+        base = material.ligament_width_mm
+        ws = sorted({round(max(material.min_web_mm, base * f), 3) for f in (0.6, 0.8, 1.0, 1.25, 1.5)})
+        return "ligament_width_mm", "W", [{"tile": 10.0, "ligament_width": w, "value": w} for w in ws]
+
+    def assembly_steps(self, n_top: int, n_bottom: int) -> list[str]:
+        return ["the sheet comes out as one piece: push out the tiles' holes and fold along the ligaments; "
+                "nothing to join"]
+
+    def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
+        # the material (a ring inside another ring is a hole of that piece) less the declared strips
+        rings = sheet.polys[~sheet.is_ref]
+        ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
+        inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
+        material = shapely.difference(shapely.union_all(rings[~inside]), shapely.union_all(rings[inside]))
+        material = shapely.buffer(material, -sheet.manifest["kerf_offset_mm"], join_style="mitre",
+                                  mitre_limit=UNDO_MITRE)
+        feats = [shapely.Polygon(f["polygon"]) for f in sheet.manifest["hinge_features"] if f["sheet"] == sheet.sheet]
+        cores = shapely.difference(material, shapely.union_all(feats)) if feats else material
+        pieces = shapely.get_parts(cores)
+        pieces = pieces[shapely.area(pieces) > 1e-6]
+        holes = np.array([shapely.Polygon(r) for g in shapely.get_parts(material) for r in g.interiors],
+                         dtype=object)
+        return pieces, holes
+
+    def prepare(self, pattern: Pattern, corners: np.ndarray, tile_polys: np.ndarray, mat: Material, *,
+                state: int, scale: float, options: Any) -> Cutting:
         shrink = mat.gap_mm / 2
         try:
             regions = hg.shrink_tiles(corners, shrink)
@@ -39,8 +86,9 @@ class Ligament(HingeKind):
         return Cutting(corners, regions, shapely.polygons(corners), label_margin=0.5, offset=mat.kerf_offset_mm,
                        shrink=shrink, ligament=lig, strips=strips, warnings=list(lig.warnings))
 
-    def draw(self, sd, sheet, cutting) -> list[dict]:
+    def draw(self, sd: SheetDrawing, sheet: SheetCut, cutting: Cutting) -> list[dict]:
         s, on, place = sheet.index, sheet.tiles, sheet.place
+        assert cutting.strips is not None  # prepare() always plans the strips
         A, B = sheet.hinge_tiles.T
         same = np.flatnonzero((sheet.sheet_of[A] == s) & (sheet.sheet_of[B] == s))
         shift = place.shift[on[0]]
@@ -56,7 +104,7 @@ class Ligament(HingeKind):
         return _spans(_left_by_laser(material, outline, cutting.offset), small, moved_strips, same, s)
 
 
-def _left_by_laser(material, outline, offset: float):
+def _left_by_laser(material: shapely.Geometry, outline: shapely.Geometry, offset: float) -> shapely.Geometry:
     """The material the laser leaves: ``material`` and the notches narrower than the kerf that its
     offset toolpath fills (a strip meeting a small tile's edge at a shallow angle leaves one), so the
     declared spans cover them. ``material`` itself where the toolpath fills nothing (any quad sheet)."""
@@ -70,7 +118,7 @@ def _left_by_laser(material, outline, offset: float):
                              grid_size=hg.GRID)
 
 
-def _spans(material, small: np.ndarray, moved_strips: np.ndarray, same: np.ndarray, s: int) -> list[dict]:
+def _spans(material: shapely.Geometry, small: np.ndarray, moved_strips: np.ndarray, same: np.ndarray, s: int) -> list[dict]:
     """The free spans: material not in any tile, from the same snapped geometry as
     the cut, one manifest entry per polygon of each hinge's span."""
     tiles_here = shapely.union_all(small, grid_size=hg.GRID)

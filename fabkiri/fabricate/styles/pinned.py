@@ -17,9 +17,19 @@ import shapely
 from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import pingeom, printgeom
+from ..planrules import PIN_PLAN
 from ..printers import Printer
 from ..printgeom import regular_polygon
-from ..printjob import PrintJob, PrintStyle, Realised, centre_shift, fits, register_style, scaled
+from ..printjob import (
+    PrintJob,
+    PrintStyle,
+    Realised,
+    StyleChecks,
+    centre_shift,
+    fits,
+    register_style,
+    scaled,
+)
 from ..solid import Body, Prism, manifold_of, section_polys, translate_body
 
 if TYPE_CHECKING:
@@ -130,6 +140,8 @@ def pinned_scale_range(pattern: Pattern, state: int, printer: Printer, step: flo
 def pinned_advice(pattern: Pattern, state: int, printer: Printer, scale: float = 1.0) -> str:
     """Which ``--scale`` prints the pattern pinned on this printer (``scale``: the
     factor already applied to ``pattern``)."""
+    if pingeom.kind_refusal(pattern):
+        return "no scale changes that"
     try:
         rng = pinned_scale_range(pattern, state, printer)
     except FabricationError as exc:
@@ -180,6 +192,7 @@ def tiles(r: Realised, mesh=None):
     import manifold3d as m3d
 
     job = r.job
+    assert job.pins is not None  # a pinned job always carries its pin plan
     lv = job.pins.levels
     z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
     mask = pingeom.clearance_mask(job.plan.hinge_xy + list(job.shift), job.pins.geometry)
@@ -187,7 +200,6 @@ def tiles(r: Realised, mesh=None):
     return solid, z, mask
 
 
-PINNED = register_style(PrintStyle("pinned", build, clearances, tiles=tiles, advise=pinned_advice))
 
 
 
@@ -217,6 +229,7 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
     job = r.job
     if job.style != "pinned":
         raise FabricationError("the deployment sweep is for pinned tiles")
+    assert job.pins is not None  # a pinned job always carries its pin plan
     lv = job.pins.levels
     zs = [0.5 * sum(lv.level(k)) for k in range(4)] + [lv.level(k)[1] + 0.5 * lv.axial for k in range(3)]
     back = -np.asarray(job.shift)
@@ -230,14 +243,15 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
     for f in range(len(path.t)):
         poses = [geometry.kabsch(src[t], path.corners[f, t]) for t in range(T)]
         for z in zs:
-            geoms, owner = [], []
+            parts: list = []  # every moved section piece, and the tile it belongs to
+            owners: list[int] = []
             for t in range(T):
                 th, tr = poses[t]
                 moved = shapely.transform(sections[z][t], lambda c, th=th, tr=tr: geometry.rotate(c, th) + tr)
-                geoms.extend(moved)
-                owner.extend([t] * len(moved))
-            geoms = np.array(geoms, dtype=object)
-            owner = np.asarray(owner)
+                parts.extend(moved)
+                owners.extend([t] * len(moved))
+            geoms = np.array(parts, dtype=object)
+            owner = np.asarray(owners)
             i, j = shapely.STRtree(geoms).query(geoms, predicate="dwithin", distance=1.0)
             sel = (i < j) & (owner[i] != owner[j])
             if not sel.any():
@@ -252,3 +266,25 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
             worst_dist = min(worst_dist, float(dist.min()))
     return SweepCheck(frames=len(path.t), levels_mm=[round(z, 4) for z in zs], max_overlap_mm2=worst_area,
                       min_distance_mm=worst_dist, worst=worst, ok=worst_area <= overlap_tol_mm2)
+
+
+def pinned_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks:
+    """The printed tiles moved along the rigid deployment path must not collide."""
+    sweep = sweep_pinned(pattern, r)
+    rep.sweep = sweep.to_dict()
+    out = StyleChecks()
+    if not sweep.ok:
+        out.problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
+                            f"({sweep.worst})")
+    return out
+
+
+def pin_limits(printer: Printer) -> dict:
+    """What pins ask of the tiles (``design --style pinned``): pivots far enough apart for two ears."""
+    hollow = printer.pin.ear_radius_mm + printer.radial_clearance_mm
+    return {"hinge_spacing_mm": 2.0 * hollow + 2.0 * printer.nozzle_mm}
+
+
+PINNED = register_style(PrintStyle("pinned", build, clearances, tiles=tiles, advise=pinned_advice,
+                                   checks=pinned_checks, own_tile_thickness=True, strip_hinges=False,
+                                   limits=pin_limits, plan=PIN_PLAN))

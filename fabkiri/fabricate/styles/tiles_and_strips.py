@@ -10,8 +10,18 @@ import shapely
 from ...errors import FabricationError
 from ...pattern.model import Pattern
 from .. import printgeom
+from ..design_limits import strip_limits
+from ..planrules import STRIP_PLAN
 from ..printers import Printer
-from ..printjob import PrintJob, PrintStyle, Realised, centre_shift, fits, register_style
+from ..printjob import (
+    PrintJob,
+    PrintStyle,
+    Realised,
+    StyleChecks,
+    centre_shift,
+    fits,
+    register_style,
+)
 from ..solid import Body, Prism, manifold_of, section_polys, translate_body
 
 if TYPE_CHECKING:
@@ -78,6 +88,7 @@ def build(pattern: Pattern, state: int, printer: Printer, layout: str | None = N
 def clearances(r: Realised, rep: MeshReport) -> None:
     """Tiles-and-strips style: clearances measured on sections of the mesh."""
     job, pr = r.job, r.job.printer
+    assert job.strips is not None  # a tiles-and-strips job always carries its strips
     # measured on the mesh: sections of both bodies at the bottom pocket, the
     # bare middle and the top pocket. Each section piece is attributed to
     # the tile or strip it belongs to; pieces of different tiles keep the
@@ -92,7 +103,7 @@ def clearances(r: Realised, rep: MeshReport) -> None:
     A, B = job.plan.hinge_tiles.T
     worst = np.inf
     lv = job.z_levels()
-    zs = (lv["bottom"], lv["tiles"], lv["top"])
+    zs: tuple[float, ...] = (lv["bottom"], lv["tiles"], lv["top"])
     if job.layout == "stacked":  # the base sheet joins tiles by design: it must be the planned sheet
         zs = zs[1:]
         planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
@@ -136,5 +147,29 @@ def tiles(r: Realised, mesh=None):
     return solid, r.job.z_levels()["tiles"], None
 
 
+def layout_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks:
+    """The layout verifier on the printed top faces; its reassembly into the other closed state is
+    moot (listed as not applicable, and said once) for a pattern that closes one way only."""
+    from ..topfaces import verify_printed_tiles  # lazy: the verifier's readers
+
+    verifier = verify_printed_tiles(pattern, r)
+    out = StyleChecks(verifier=verifier)
+    moot = [] if r.job.plan.other_state_closes else [c.name for c in verifier.failed() if _reassembly(c.id)]
+    if moot:
+        verifier.meta["not_applicable"] = moot
+        out.notes.append(f"note: closed state {3 - r.job.state} does not close; the verifier's reassembly checks "
+                         "are moot")
+    out.problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
+                     for c in verifier.failed() if c.name not in moot]
+    return out
+
+
+def _reassembly(check_id: str) -> bool:
+    """Whether a layout-verifier check is one of (c), the cut tiles reassembled into a closed state
+    (ids ``GROUP.reassembled.stateS.WHAT``)."""
+    return ".reassembled.state" in check_id
+
+
 TILES_AND_STRIPS = register_style(PrintStyle("tiles-and-strips", build, clearances, tiles=tiles,
-                                             body_per_material=True))
+                                             body_per_material=True, checks=layout_checks, has_layout=True,
+                                             limits=strip_limits, plan=STRIP_PLAN))

@@ -1,0 +1,85 @@
+"""Pattern files in and out: the front doors of ``import``, ``export`` and every command that reads
+a pattern. The formats are :mod:`fabkiri.pattern.formats` strategies chosen by suffix or by name;
+this module adds the policy around them: fold-parity labels for the closed states a file brings,
+contraction of the closed states an export needs (it must close), and the fabrication gate.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import CheckFailed, InputError
+from ..mechanics.contract import adopt_state_labels, contract
+from ..mechanics.info import DEFAULT_TOL
+from ..pattern.formats import format_of, pattern_format
+from ..pattern.io import import_obj
+from ..pattern.model import Pattern
+
+
+def load_pattern(path: str, scale: float = 1.0, *, fallback: str = "json") -> Pattern:
+    """The pattern in ``path``: its format chosen by suffix (a folder: PyKirigami), else ``fallback``."""
+    fmt = format_of(path, fallback)
+    if fmt.read is None:
+        raise InputError(f"{path}: fabkiri writes {fmt.name} files but cannot read them")
+    pattern = fmt.read(Path(path), scale)
+    return adopt_state_labels(pattern) if fmt.adopt_labels else pattern
+
+
+def import_pattern(path: str, contracted: list[str] | tuple = (), scale: float = 1.0) -> Pattern:
+    """``fabkiri import``: a design in any readable format (OBJ when the suffix says nothing), or an
+    OBJ design with its contracted OBJ files as closed states 1 and 2."""
+    if contracted:
+        return adopt_state_labels(import_obj(path, list(contracted), scale=scale))
+    return load_pattern(path, scale, fallback="obj")
+
+
+@dataclass(frozen=True)
+class Exported:
+    """An export: ``text`` for one file, or ``files`` by name for a folder, and the line to say."""
+
+    text: str | None
+    files: dict[str, str] | None
+    said: str
+
+
+def export_pattern(pattern: Pattern, fmt_name: str, state: str = "deployed", *, unit: float | None = None,
+                   force: bool = False, output: str = "", notify: Callable[[str], None] | None = None) -> Exported:
+    """``fabkiri export``: ``pattern`` in the format ``fmt_name`` (``state``: ``deployed``, ``1`` or ``2``).
+
+    A closed state the format needs is contracted when not stored (it must close), after the
+    fabrication gate (closed states are what gets fabricated); its warnings go to ``notify``.
+    """
+    fmt = pattern_format(fmt_name, writable=True)
+    if fmt.write is None:  # (pattern_format refused it already)
+        raise InputError(f"fabkiri cannot write {fmt.name} files")
+    need = fmt.closed_states(state)
+    if need:
+        from ..fabricate.gate import (  # lazy: `design` imports the CLI's readers
+            claimed_states,
+            closes_gate,
+        )
+
+        states = (1, 2) if fmt.every_state else claimed_states(pattern, need[0])
+        for w in closes_gate(pattern, None, force=force, action="export", states=states).warnings:
+            if notify is not None:
+                notify(f"warning: {w}")
+    for s in need:
+        pattern = _with_state(pattern, s)
+    out = fmt.write(pattern, state, unit)
+    said = fmt.said(pattern, state, output, unit) if fmt.said else f"wrote {output}"
+    return Exported(None, out, said) if isinstance(out, dict) else Exported(out, None, said)
+
+
+def _with_state(pattern: Pattern, s: int) -> Pattern:
+    """The pattern with closed state ``s`` stored (contracted if missing; it must close)."""
+    if s in pattern.contracted:
+        return pattern
+    c = contract(pattern, s)
+    if c.max_closure > DEFAULT_TOL * pattern.tile_size:
+        raise CheckFailed(
+            f"state {s} does not close (loop closure {c.max_closure / pattern.tile_size:.3g} tile sizes "
+            f"at hole {c.worst_hole}); nothing exported"
+        )
+    return pattern.with_contracted({**pattern.contracted, s: c.corners})

@@ -1,0 +1,27 @@
+"""Argument types shared by the commands: a number parsed and range-checked, one line on refusal."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+
+
+def bounded(cast: Callable[[str], float], ok: Callable[[float], bool], expected: str,
+            refused: str) -> Callable[[str], float]:
+    """An ``argparse`` type: ``cast(text)`` when ``ok`` accepts it.
+
+    Text ``cast`` cannot read is refused as "``expected``, got 'text'"; a value ``ok`` refuses with
+    ``refused``, a format string that may name the text (``{text!r}``) or the value (``{v}``).
+    argparse turns either into a one-line usage error (exit 2).
+    """
+
+    def parse(text: str):
+        try:
+            v = cast(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{expected}, got {text!r}") from None
+        if not ok(v):
+            raise argparse.ArgumentTypeError(refused.format(text=text, v=v))
+        return v
+
+    return parse
