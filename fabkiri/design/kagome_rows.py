@@ -43,7 +43,7 @@ def tip_sides(standard: Pattern, tips: np.ndarray) -> np.ndarray:
     left corner of a row's first tile is L, the right corner of its last tile R, any other tip is an
     apex of the bottom row (B) or of the top row (T)."""
     tiles = standard.topology.tiles
-    cols = int(standard.lattice["cols"])
+    cols = int((standard.lattice or {})["cols"])
     tile_of = np.full(standard.topology.n_nodes, -1)
     corner_of = np.full(standard.topology.n_nodes, -1)
     t, k = np.divmod(np.arange(tiles.size), 3)
@@ -181,7 +181,7 @@ def partial_fans(standard: Pattern) -> list[tuple[np.ndarray, np.ndarray]]:
     Found on the standard lattice's closed states (ψ = 0° and 120°), where the meeting corners coincide."""
     from ..pattern.kagome import OPEN_DEG, kagome_corners
 
-    lat = standard.lattice
+    lat = standard.lattice or {}
     rows, cols = int(lat["rows"]), int(lat["cols"])
     out = []
     for psi in (0.0, 2.0 * OPEN_DEG):

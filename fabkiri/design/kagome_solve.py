@@ -96,8 +96,8 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
         _, A = rows.equalities(x)
         d = _step(S, s, A, lam).reshape(x.shape)
         xn, ok, _ = pull_back(rows.eq, x + d)
-        sn = rows.soft(xn, jac=False) if ok else None
-        cn = 0.5 * sn @ sn if ok else np.inf
+        sn = rows.soft(xn, jac=False) if ok else np.full(1, np.inf)
+        cn = float(0.5 * sn @ sn)
         if np.isfinite(cn) and cn < cost:
             done = cost - cn <= tol * max(cost, 1e-300)
             x, cost = xn, cn
