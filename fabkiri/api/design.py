@@ -18,7 +18,7 @@ from pathlib import Path
 
 from .. import limits
 from ..design import conformance as conf
-from ..design.fabrication import smallest_size
+from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.offset_outline import preferred_holes
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
@@ -169,13 +169,7 @@ def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequ
     fab_limits, intent = design_limits.resolve(request.material, request.hinge, request.printer, request.style,
                                                request.min_feature, request.min_hole, target)
     if fab_limits is not None and target is not None:  # a request no design can meet: say so before solving
-        least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
-        if least is not None:
-            raise InputError(
-                f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
-                f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
-                f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
-                f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
+        _check_room(rows, cols, fab_limits, target)
     holes = request.holes if request.holes is not None else preferred_holes(rows, cols, request.rigid,
                                                                             request.symmetry, target, contracted)
     request = replace(request, holes=holes)  # without --init, _attempts sets each guess in req.init
@@ -193,6 +187,17 @@ def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequ
                                         and not request.symmetry and not contracted)  # the rigid family's figures
     limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
     return request, req, target, contracted
+
+
+def _check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Target) -> None:
+    """InputError when ``rows`` x ``cols`` tiles wide enough for ``fab_limits`` cannot fit inside the target."""
+    least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
+    if least is not None:
+        raise InputError(
+            f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
+            f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
+            f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
+            f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
 
 
 def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -> list[str]:
