@@ -126,6 +126,3 @@ def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tol
     out.append(measured("rigid path: ends in state 2", end, tol.length * np.sqrt(len(Y1)), "mm",
                         group="rigid path", detail="aligned distance of the ω = 90° frame to state 2"))
     return out
-
-
-# ----------------------------------------------------------------- entry point
