@@ -16,28 +16,25 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-import numpy as np
-
 from .. import limits
 from ..design import conformance as conf
-from ..design.fabrication import smallest_size
+from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.offset_outline import preferred_holes
-from ..design.refine import refine_minimax
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
 from ..errors import InputError, SolveError
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
-from ..mechanics.contract import contract
 from ..pattern.fabricability import pal_bound
 from ..pattern.io import dumps
 from ..pattern.model import Pattern
 from ..pattern.tessellation import DEFAULT_KIND
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
+from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation  # noqa: F401 (re-exported)
+from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_summary import summary_lines
 from .designers import register_designer
 
-CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
 # from 32x32 tiles a rigid design starts coarse to fine (the coarse closed-state grid resampled inside the
 # rigid family): from the standard pattern the rigid family's LM stalls against the inequalities (128x128
@@ -149,7 +146,7 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
     if _continuation_applies(req, best, contracted):
         say("fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
             "without the fabrication rows")
-        cont = _continuation(request, req, target, shape_tol, attempts)
+        cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
         if cont is not None and _rank(cont) < _rank(best):
             best = cont
     return _outcome(best, attempts, messages)
@@ -172,13 +169,7 @@ def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequ
     fab_limits, intent = design_limits.resolve(request.material, request.hinge, request.printer, request.style,
                                                request.min_feature, request.min_hole, target)
     if fab_limits is not None and target is not None:  # a request no design can meet: say so before solving
-        least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
-        if least is not None:
-            raise InputError(
-                f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
-                f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
-                f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
-                f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
+        _check_room(rows, cols, fab_limits, target)
     holes = request.holes if request.holes is not None else preferred_holes(rows, cols, request.rigid,
                                                                             request.symmetry, target, contracted)
     request = replace(request, holes=holes)  # without --init, _attempts sets each guess in req.init
@@ -196,6 +187,17 @@ def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequ
                                         and not request.symmetry and not contracted)  # the rigid family's figures
     limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
     return request, req, target, contracted
+
+
+def _check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Target) -> None:
+    """InputError when ``rows`` x ``cols`` tiles wide enough for ``fab_limits`` cannot fit inside the target."""
+    least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
+    if least is not None:
+        raise InputError(
+            f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
+            f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
+            f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
+            f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
 
 
 def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -> list[str]:
@@ -269,82 +271,12 @@ def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
     return value / target.size if unit == "mm" and target is not None else value
 
 
-# Continuation in the fabrication limits (issue 14): the rows held from the first step wall the fit in (16x16
-# heart at 200 mm, acrylic-3: 5-19 of 1024 width rows active, Hausdorff 16 % against 1.75 % without them).
-# From the design without them, the limits are raised in steps, each step warm-started from the last. A rigid
-# request takes one step (measured, heart: straight to the limits 2.88 %, in four steps 3.13 %).
-CONTINUATION = (0.25, 0.5, 0.75, 1.0)
-CONTINUATION_MARGIN = 0.02  # the rows' penalty margin in a step (tile edges; FabricationLimits.margin)
-
-
 def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
-    """A fabrication-aware deployed-target design below BIG_TILES that is invalid, misses the shape or (for a
+    """Whether to try the continuation in the fabrication limits (:mod:`.continuation`): a fabrication-aware deployed-target design below BIG_TILES that is invalid, misses the shape or (for a
     printer) does not fit the bed (8x8 ellipse at 200 mm for prusa-mk4: 116 x 261 mm; its continuation fits)."""
     return (req.fabrication is not None and req.target is not None and not contracted
             and req.rows * req.cols < BIG_TILES
             and not (best[3] and _shape_met(best[1]) and best[1]["checks"].get("fits_bed", True)))
-
-
-def _continuation(request: PatternRequest, req: DesignRequest, target: Target | None, shape_tol: tuple,
-                  attempts: list):
-    """The design without fabrication rows, then the rows raised in steps (``CONTINUATION``) from it, each warm
-    started from the last; a last step that does not converge is tried in the rigid family (where it may) from
-    the last converged step. Returns the ``_check`` outcome, or None when the design without the rows fails."""
-    free = design_pattern(replace(request, material=None, hinge=None, printer=None, style=None, min_feature=None,
-                                  min_hole=None, quiet=True))
-    if not free.valid:
-        return None
-    X = last_ok = free.pattern.nodes
-    spent = free.report.get("time_s_total", 0.0)  # wall s, as the attempts
-    fab, printer = req.fabrication, request.printer
-    assert fab is not None, "_continuation_applies admits only fabrication-aware requests"
-    if printer:  # the strip rows follow the closed state that fits the bed (2:1 ellipse: state 2)
-        fab = replace(fab, print_state=design_limits.bed_state(free.pattern.contracted, printer))
-        req = replace(req, fabrication=fab, fabrication_intent={**req.fabrication_intent, "state": fab.print_state})
-    # a non-rigid request below 32x32 steps in the rigid family when it may (a member meets every non-rigid
-    # equality): with the full solver the steps from 7/8 of the limits on stalled against closed holes
-    # (hundreds of non-overlap rows at zero; heart 16x16: equality 1e-5 to 6e-5, unconverged, 2.2-3.3 %)
-    init = VIA_RIGID_INIT if via_rigid_applies(replace(req, init=VIA_RIGID_INIT)) else req.init
-    for f in (1.0,) if req.rigid else CONTINUATION:
-        step = replace(req, fabrication=fab.scaled(f, CONTINUATION_MARGIN), start=X, init=init)
-        result = design(step)
-        spent += result.report["time_s"]
-        X = result.pattern.nodes
-        if result.converged:
-            last_ok = X
-    outcome = _check(result, {}, request, target, shape_tol)
-    how = "continuation"
-    if not outcome[3] and via_rigid_applies(replace(req, init=VIA_RIGID_INIT)):
-        rigid = _check(design(replace(step, init=VIA_RIGID_INIT, start=last_ok)), {}, request, target, shape_tol)
-        spent += rigid[1]["time_s"]
-        if _rank(rigid) < _rank(outcome):
-            outcome, how = rigid, "continuation, rigid family last"
-    trace: list[float] = []
-    if not (outcome[3] and _shape_met(outcome[1])):  # the fit was least squares, the tolerance is a maximum;
-        # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
-        bed = None if not printer else (  # keep only steps whose printed closed state fits the bed
-            lambda r: design_limits.fits_bed(contract(r.pattern, fab.print_state).corners, printer))
-        refined, trace, secs = refine_minimax(replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
-                                              outcome[0].nodes, accept=bed)
-        spent += secs
-        if refined is not None and _rank(cand := _check(refined, {}, request, target, shape_tol)) < _rank(outcome):
-            outcome, how = cand, how + ", minimax refinement"
-    outcome[1]["continuation"] = {"steps": list((1.0,) if req.rigid else CONTINUATION), "how": how,
-                                  "free_hausdorff_rel": _hausdorff(free.report), "margin": CONTINUATION_MARGIN,
-                                  "refinement_hausdorff_rel": trace}
-    attempts.append({"init": how, "status": outcome[1]["status"], "problems": outcome[2], "time_s": spent,
-                     "fit_max_rel_size": _fit_miss(outcome[1]), "hausdorff_max_rel": _hausdorff(outcome[1]),
-                     "shape": "met" if _shape_met(outcome[1]) else "missed"})
-    return outcome
-
-
-def _shape_met(report: dict) -> bool:
-    return all(j["status"] == "met" for j in (report.get("shape") or {}).values())
-
-
-def _hausdorff(report: dict) -> float:
-    """Worst Hausdorff distance of any outline relative to its target's size."""
-    return max((c["hausdorff_rel"] for c in (report.get("conformance") or {}).values()), default=0.0)
 
 
 def preview_path(output) -> Path:
@@ -360,82 +292,6 @@ def _preview(pattern: Pattern, report: dict, output) -> tuple[Path, bytes]:
     path = preview_path(output)
     report["preview"] = path.name
     return path, conformance_png(pattern, report.get("conformance") or {}, report.get("shape") or {})
-
-
-def _fit_miss(report: dict) -> float:
-    """Worst fit of the tips (deployed or closed-state outline) to any target relative to its size (the soft
-    outline rows never reach zero: ``_hausdorff`` judges the whole outline)."""
-    return max((float(f.get("max_rel_size", 0.0)) for f in (report.get("fit") or {}).values() if not f.get("soft")),
-               default=0.0)
-
-
-def _rank(outcome) -> tuple:
-    """Order of preference among attempts: valid first, then (for a printer) closed state 1 within its bed, then
-    fewer problems, then the shape tolerance met, then the smaller Hausdorff distance, then the closer fit of
-    the tips (the heart 8x8 for prusa-mk4: the refined design, 3.27 %, was 227 mm tall on the 210 mm bed)."""
-    return (not outcome[3], not outcome[1].get("checks", {}).get("fits_bed", True), len(outcome[2]),
-            not _shape_met(outcome[1]), _hausdorff(outcome[1]), _fit_miss(outcome[1]))
-
-
-def _check(result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple):
-    """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
-    pattern = result.pattern
-    report = dict(result.report)
-    size = pattern.tile_size
-    checks: dict[str, object] = {}
-    contracted_states = {}
-    problems = []
-    for s in (1, 2):
-        c = contract(pattern, s)
-        contracted_states[s] = c.corners
-        rel = c.max_closure / size
-        checks[f"closure_{s}_rel"] = rel
-        if not rel <= CLOSURE_TOL:
-            problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
-    for label, corners in [("deployed", pattern.corners()), *[(f"state {s}", contracted_states[s]) for s in (1, 2)]]:
-        ov = overlapping_tiles(corners, CLOSURE_TOL * size)
-        checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
-        if ov:
-            where = "the deployed state" if label == "deployed" else label
-            problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
-    if request.printer:  # in the state `print` makes: a design that does not fit the bed ranks below one that does
-        state = (((pattern.design or {}).get("options") or {}).get("fabrication") or {}).get("state", 1)
-        checks["fits_bed"] = design_limits.fits_bed(contracted_states[state], request.printer)
-    if request.rigid or request.holes == "parallelogram":
-        from ..pattern.residuals import hinge_sums
-
-        checks["hinge_sum_max_rad"] = float(np.abs(hinge_sums(pattern)).max())
-    closed_fit = {}
-    for s, spec in contracted.items():
-        if isinstance(spec, Target):
-            closed_fit[str(s)] = closed_outline_fit(pattern, contracted_states[s], result.closed_grids[s],
-                                                    result.closed_targets[s], s)
-    if closed_fit:
-        report["closed_outline_fit"] = closed_fit
-    report["conformance"], report["shape"] = _conformance(pattern, result, contracted_states, target,
-                                                              shape_tol)
-    report["checks"] = checks
-    valid = result.converged and not problems
-    if not result.converged:
-        problems.insert(0, f"solver did not reach the tolerance (max equality residual "
-                           f"{report['max_equality_residual']:.2e} > {request.tol:g})")
-    if problems:
-        report["status"] = "unconverged"
-        report["problems"] = problems
-    return pattern, report, problems, valid, contracted_states
-
-
-def _conformance(pattern: Pattern, result, contracted_states: dict, target: Target | None,
-                 shape_tol: tuple) -> tuple[dict, dict]:
-    """Conformance of the deployed tips and of each closed-state outline with a target curve, and each
-    judged against ``--shape-tol``."""
-    measured = {}
-    tiles = (pattern.lattice["rows"], pattern.lattice["cols"]) if pattern.lattice else None
-    if target is not None:
-        measured["deployed"] = conf.deployed(pattern.nodes, pattern.topology, target)
-    for s, tgt in sorted(result.closed_targets.items()):
-        measured[f"state_{s}"] = conf.closed(contracted_states[s], tgt)
-    return measured, {k: conf.judge(c, shape_tol, tiles) for k, c in measured.items()}
 
 
 register_designer(DEFAULT_KIND, design_pattern)

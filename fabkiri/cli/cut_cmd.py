@@ -83,6 +83,19 @@ def cmd_cut(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("cut", help="laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state")
     p.add_argument("file", help="pattern.json (or a design .obj)")
+    _add_sheet_args(p)
+    _add_material_args(p)
+    _add_tolerance_args(p)
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
+    _add_drawing_args(p)
+    p.add_argument("--force", action="store_true", help="cut even if the pattern does not close in both states")
+    p.add_argument("--no-verify", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("-o", "--output", metavar="DIR", help="output folder (default outputs/<pattern stem>)")
+    p.set_defaults(func=cmd_cut)
+
+
+def _add_sheet_args(p: argparse.ArgumentParser) -> None:
+    """Material, hinge, state, sheet, layout, size and output formats."""
     p.add_argument("--material", metavar="NAME",
                    help=f"preset ({', '.join(available())}) or a material .json (default: the one the design "
                         "was made for, else acrylic-3)")
@@ -99,6 +112,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="width of the cut (closed) pattern in mm (auto: the smallest the material accepts)")
     p.add_argument("--formats", default=",".join(FORMATS), metavar="LIST", help="dxf,svg,png (default all)")
     p.add_argument("--colors", choices=sorted(COLORS), help="colour preset (default: the material's)")
+
+
+def _add_material_args(p: argparse.ArgumentParser) -> None:
+    """Material fields given one by one (they override the preset's)."""
     p.add_argument("--kerf", type=float, metavar="MM", help="full kerf (Boxes.py's burn is half of it)")
     p.add_argument("--thickness", type=float, metavar="MM")
     p.add_argument("--min-web", type=float, metavar="MM")
@@ -106,13 +123,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--strain-limit", type=float, metavar="EPS")
     p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
     p.add_argument("--ligament-width", type=_positive, metavar="MM", help="force the ligament width")
+
+
+def _add_tolerance_args(p: argparse.ArgumentParser) -> None:
+    """The verification tolerance of the pattern and of the read-back."""
     p.add_argument("--tol-mm", "--tol", dest="tol", type=_positive, metavar="MM",
                    help="verification tolerance in mm for the pattern and the read-back (default: the material's); "
                         "angle residuals count as their displacement at the tile size")
     p.add_argument("--exact", action="store_true",
                    help="check the pattern at the relative tier for solver output (1e-9 of the tile edge, 1e-5 "
                         "for optimiser output) instead of --tol-mm; the read-back stays at --tol-mm")
-    p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
+
+
+def _add_drawing_args(p: argparse.ArgumentParser) -> None:
+    """What the sheets carry besides the cuts: labels, the reference square, notes, the SVG stroke."""
     p.add_argument("--label-height", type=_positive, metavar="MM", help="tile ID height (default: the material's)")
     p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")
     p.add_argument("--reference", type=_nonneg, default=50.0, metavar="MM",
@@ -123,7 +147,3 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stroke", type=_positive, default=STROKE_MM, metavar="MM",
                    help=f"SVG stroke width (default {STROKE_MM:g}: visible in viewers; the colour tells the laser "
                         "what to do; 0.01 for software that wants hairlines)")
-    p.add_argument("--force", action="store_true", help="cut even if the pattern does not close in both states")
-    p.add_argument("--no-verify", action="store_true", help=argparse.SUPPRESS)
-    p.add_argument("-o", "--output", metavar="DIR", help="output folder (default outputs/<pattern stem>)")
-    p.set_defaults(func=cmd_cut)

@@ -74,6 +74,22 @@ _size = bounded(float, lambda v: bool(np.isfinite(v) and 0 < v <= limits.MAX_LEN
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("design", help="inverse design: a reconfigurable quad kirigami fitted to a target shape")
     p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 16x16")
+    _add_target_args(p)
+    _add_solver_args(p)
+    _add_fabrication_args(p)
+    _add_tolerance_args(p)
+    p.add_argument("--no-preview", action="store_true",
+                   help="do not write the preview PNG (tiles over the targets) beside the pattern")
+    p.add_argument("--name", help="pattern name stored in the file")
+    p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
+    p.add_argument("-v", "--verbose", action="store_true", help="progress on stderr even for small solves")
+    add_i_know(p)
+    p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
+    p.set_defaults(func=cmd_design)
+
+
+def _add_target_args(p: argparse.ArgumentParser) -> None:
+    """The lattice and what it is fitted to: deployed target, tube, symmetry, hole shape, closed-state outlines."""
     p.add_argument("--lattice", choices=design_kinds(), default="quad",
                    help="quad (default) or kagome: the kagome prototype fits the deployed tips to the target "
                         "(docs/kagome.md)")
@@ -97,6 +113,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "designs up to 11x11 tiles")
     p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
                    help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
+
+
+def _add_solver_args(p: argparse.ArgumentParser) -> None:
+    """The initial guess and the solver."""
     p.add_argument("--init", choices=INITS,
                    help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
                         "(standard pattern at the target's area), then standard, until a design passes every check "
@@ -111,6 +131,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "--contracted-target outlines (square exact, circle of any size) and for non-rigid rhombus "
                         "designs from 32x32 tiles; reduced: the rigid family only; full: the sparse solver over "
                         "all nodes")
+
+
+def _add_fabrication_args(p: argparse.ArgumentParser) -> None:
+    """The fabrication group: inequality rows for a material, printer or minimum sizes."""
     g = p.add_argument_group("fabrication (inequality rows at the target's --size; stored for cut and print)")
     g.add_argument("--material", metavar="NAME|FILE.json",
                    help="laser material preset: every tile at least its minimum web wide at its thinnest (shrunk by "
@@ -123,6 +147,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "tiles-and-strips)")
     g.add_argument("--min-feature", type=_size, metavar="MM", help="every tile at least this wide at its thinnest")
     g.add_argument("--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide")
+
+
+def _add_tolerance_args(p: argparse.ArgumentParser) -> None:
+    """The equality tolerance, the shape tolerance and what is fitted."""
     p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
     p.add_argument("--shape-tol", default=conf.DEFAULT_SHAPE_TOL, metavar="TOL",
                    help="largest Hausdorff distance between each outline and its target: a percentage of the "
@@ -132,11 +160,3 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="outline (default): fit the whole tip polygon — tips on their arcs, chord midpoints and "
                         "samples of the target (its corners and cusps included) to the other curve; tips: only the "
                         "boundary tips on their arcs (tips may bunch and cut corners)")
-    p.add_argument("--no-preview", action="store_true",
-                   help="do not write the preview PNG (tiles over the targets) beside the pattern")
-    p.add_argument("--name", help="pattern name stored in the file")
-    p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
-    p.add_argument("-v", "--verbose", action="store_true", help="progress on stderr even for small solves")
-    add_i_know(p)
-    p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
-    p.set_defaults(func=cmd_design)

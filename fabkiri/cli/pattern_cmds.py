@@ -123,6 +123,14 @@ def add_i_know(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    _register_new(sub)
+    _register_import(sub)
+    _register_info(sub)
+    _register_export(sub)
+
+
+def _register_new(sub: argparse._SubParsersAction) -> None:
+    """``new``: a standard pattern."""
     p = sub.add_parser("new", help="write a standard pattern (rotating squares or kagome triangles) with both "
                                     "closed states")
     p.add_argument("--tiles", required=True, metavar="ROWSxCOLS",
@@ -141,6 +149,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_new)
 
+
+def _register_import(sub: argparse._SubParsersAction) -> None:
+    """``import``: an OBJ, FOLD or PyKirigami design into pattern.json."""
     p = sub.add_parser("import", help="import an OBJ design (and its contracted states), a .fold file or a "
                                        "PyKirigami model folder into pattern.json")
     p.add_argument("design", help="deployed design .obj, a .fold file or a PyKirigami folder")
@@ -149,6 +160,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_import)
 
+
+def _register_info(sub: argparse._SubParsersAction) -> None:
+    """``info``: counts, residuals and closure of a pattern."""
     p = sub.add_parser("info", help="counts, residuals and closure of a pattern (.json or .obj)")
     p.add_argument("file")
     p.add_argument("--json", action="store_true", help="machine-readable output")
@@ -159,6 +173,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"angle tolerance in radians (default {DEFAULT_TOL_RAD:g})")
     p.set_defaults(func=cmd_info)
 
+
+def _register_export(sub: argparse._SubParsersAction) -> None:
+    """``export``: a pattern to OBJ, FOLD, PyKirigami or tube3d."""
     p = sub.add_parser("export", help="write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder")
     p.add_argument("file")
     p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed",

@@ -304,6 +304,22 @@ def _families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, 
         e_min = max(limits.min_edge_mm, fab.EDGE_EPS_MM) / unit_mm
         out.append(_family("fabrication_shrunk_edges", tiles, lambda x: shrunk_edge_rows(x, tiles, d, e_min), nv,
                            dict(per_edge)))
+    out += _hinge_families(st, nv, limits, unit_mm, tiles)
+    if limits.strip_clearance_mm > 0:
+        out += _strip_family(st, nv, limits, unit_mm, tiles)
+    if limits.min_hole_mm > 0 and len(st.hole_nodes):
+        holes = _ccw(st.hole_nodes, base)
+        wh = limits.min_hole_mm / unit_mm
+        out.append(_family("fabrication_holes", holes, lambda x: width_rows(x, holes, wh, 0.0), nv,
+                           {"quad_of_row": np.repeat(np.arange(len(holes)), 4)}))
+    return out
+
+
+def _hinge_families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, tiles) -> list[Family]:
+    """Rows at the hinges: the angle of each hinge corner, two hinge corners of a tile apart, and a hinge
+    corner clear of the far end of its edges."""
+    T = len(tiles)
+    out: list[Family] = []
     ht, hk = st.hinge_tiles.ravel(), st.hinge_corner.ravel()
     if limits.min_hinge_angle_deg > 0:
         s_min = float(np.sin(np.radians(limits.min_hinge_angle_deg)))
@@ -325,13 +341,6 @@ def _families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, 
         s_e = limits.hinge_edge_mm / unit_mm
         out.append(_family("fabrication_hinge_edges", tiles,
                            lambda x: spacing_rows(x, tiles, te, e, (e + 1) % 4, s_e), nv, {"quad_of_row": te}))
-    if limits.strip_clearance_mm > 0:
-        out += _strip_family(st, nv, limits, unit_mm, tiles)
-    if limits.min_hole_mm > 0 and len(st.hole_nodes):
-        holes = _ccw(st.hole_nodes, base)
-        wh = limits.min_hole_mm / unit_mm
-        out.append(_family("fabrication_holes", holes, lambda x: width_rows(x, holes, wh, 0.0), nv,
-                           {"quad_of_row": np.repeat(np.arange(len(holes)), 4)}))
     return out
 
 

@@ -149,6 +149,18 @@ def laser_coupon(mat: Material, notes: bool = False) -> Coupon:
     colors = mat.colors
     files = {f"{stem}.dxf": dxf_bytes(sd, colors), f"{stem}.svg": svg_bytes(sd, colors),
              f"{stem}.png": png_bytes([sd], colors, px_per_mm=8.0)}
+    instructions = _laser_instructions(mat, field_name, prefix)
+    info = {"material": mat.name, "hinge": mat.hinge, "sheet_mm": [sd.width, sd.height],
+            "comb": {"pieces": COMB_PIECES, "pitch_mm": COMB_PITCH, "length_mm": COMB_PIECES * COMB_PITCH},
+            "slots": {"widths_mm": [round(mat.thickness_mm + d, 4) for d in SLOT_DELTAS],
+                      "deltas_mm": list(SLOT_DELTAS)},
+            "hinge_pieces": {"field": field_name, "values": [v["value"] for v in variants]},
+            "files": sorted(files)}
+    return Coupon(files=files, instructions=instructions, info=info)
+
+
+def _laser_instructions(mat: Material, field_name: str, prefix: str) -> list[dict]:
+    """How to measure each feature of the laser coupon and which material field it sets."""
     hinge_how = {
         "ligament_width_mm": "fold each piece through the full closing angle 20 times; the widest ligament that "
                              "neither cracks nor whitens",
@@ -156,7 +168,7 @@ def laser_coupon(mat: Material, notes: bool = False) -> Coupon:
         "min_web_mm": "tape each pair as the engraved face letter says and fold it closed 20 times; the smallest "
                       "tile size that cut cleanly and held: its width",
     }[field_name]
-    instructions = [
+    return [
         {"feature": "kerf comb (10 pieces, 10 mm pitch)",
          "measure": "push the ten pieces together end to end and measure the total length L in mm",
          "sets": "kerf_mm = (100 - L) / 10"},
@@ -167,13 +179,6 @@ def laser_coupon(mat: Material, notes: bool = False) -> Coupon:
         {"feature": f"{mat.hinge} hinge pieces ({prefix} = {field_name})",
          "measure": hinge_how, "sets": field_name},
     ]
-    info = {"material": mat.name, "hinge": mat.hinge, "sheet_mm": [sd.width, sd.height],
-            "comb": {"pieces": COMB_PIECES, "pitch_mm": COMB_PITCH, "length_mm": COMB_PIECES * COMB_PITCH},
-            "slots": {"widths_mm": [round(mat.thickness_mm + d, 4) for d in SLOT_DELTAS],
-                      "deltas_mm": list(SLOT_DELTAS)},
-            "hinge_pieces": {"field": field_name, "values": [v["value"] for v in variants]},
-            "files": sorted(files)}
-    return Coupon(files=files, instructions=instructions, info=info)
 
 
 # ------------------------------------------------------------------ printer

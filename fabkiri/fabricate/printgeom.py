@@ -287,7 +287,6 @@ def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> St
     each strip crosses its seam, has a pad on both tiles, and (unless ``check`` is False: the
     outlines only, to choose faces by) keeps the radial clearance from every other strip on
     the same face and from other tiles."""
-    H = plan.n_hinges
     d = plan.shrink_mm
     w, reach = printer.strip_width_mm, printer.strip_reach_mm
     eps = 1e-6 * max(1.0, float(np.abs(plan.corners).max()))
@@ -295,25 +294,9 @@ def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> St
     raw = shapely.polygons(plan.corners)
     # the pair region: A and B merged along their closed seam, shrunk like the tiles
     pair = _pair_regions(raw[A], raw[B], d, eps)
-    p, e, far_xy = plan.hinge_xy, plan.seam_dir, plan.seam_end
+    p, e = plan.hinge_xy, plan.seam_dir
     n = np.stack([-e[:, 1], e[:, 0]], -1)
-    # where the seam line enters the pair region (t0), measured along e from p
-    L = 4.0 * (w + reach + d) + 1.0
-    seam_lines = shapely.linestrings(np.stack([p, p + L * e], 1))
-    inside = shapely.intersection(seam_lines, pair)
-    t0 = np.full(H, np.nan)
-    for h in range(H):  # a few µs each; intersections are short segments
-        g = inside[h]
-        if not g.is_empty:
-            xy = shapely.get_coordinates(g)
-            t0[h] = float(((xy - p[h]) @ e[h]).min())
-    if np.isnan(t0).any():
-        bad = int(np.flatnonzero(np.isnan(t0))[0])
-        seam_len = float(np.linalg.norm(far_xy[bad] - p[bad]))
-        raise FabricationError(
-            f"hinge {bad}: tiles {A[bad]} and {B[bad]} meet along a seam of only {seam_len:.2f} mm in state "
-            f"{plan.state}, too short for a strip after the {plan.shrink_mm:g} mm shrink"
-        )
+    t0 = _seam_entry(plan, pair, w + reach + d)
     R = reach + d
     t1 = t0 + w
     band = np.stack([p + t0[:, None] * e - R * n, p + t1[:, None] * e - R * n,
@@ -335,20 +318,54 @@ def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> St
         )
     if check:
         _check_strip_clearance(plan, outline, printer)
+    over = min(POCKET_OVERSHOOT_MM, 0.25 * printer.gap_mm)
+    pocket = _pockets(pair, band_frame=(p, e, n), t=(t0, t1), R=R, over=over)
+    return Strips(outline=outline, pads=pads, top=plan.top.copy(), pocket=pocket)
+
+
+def _seam_entry(plan: ClosedPlan, pair: np.ndarray, span: float) -> np.ndarray:
+    """Per hinge, where its seam line enters the pair region (``t0``, mm along ``seam_dir`` from the hinge);
+    ``span``: strip width + reach + shrink, how far the line is followed. FabricationError if a seam misses."""
+    H = plan.n_hinges
+    A, B = plan.hinge_tiles.T
+    p, e, far_xy = plan.hinge_xy, plan.seam_dir, plan.seam_end
+    # where the seam line enters the pair region (t0), measured along e from p
+    L = 4.0 * span + 1.0
+    seam_lines = shapely.linestrings(np.stack([p, p + L * e], 1))
+    inside = shapely.intersection(seam_lines, pair)
+    t0 = np.full(H, np.nan)
+    for h in range(H):  # a few µs each; intersections are short segments
+        g = inside[h]
+        if not g.is_empty:
+            xy = shapely.get_coordinates(g)
+            t0[h] = float(((xy - p[h]) @ e[h]).min())
+    if np.isnan(t0).any():
+        bad = int(np.flatnonzero(np.isnan(t0))[0])
+        seam_len = float(np.linalg.norm(far_xy[bad] - p[bad]))
+        raise FabricationError(
+            f"hinge {bad}: tiles {A[bad]} and {B[bad]} meet along a seam of only {seam_len:.2f} mm in state "
+            f"{plan.state}, too short for a strip after the {plan.shrink_mm:g} mm shrink"
+        )
+    return t0
+
+
+def _pockets(pair: np.ndarray, band_frame: tuple, t: tuple, R: float, over: float) -> np.ndarray:
+    """The pockets the strips sit in: each strip's band (``t = (t0, t1)`` along the seam, ``R`` either side,
+    in the frame ``(p, e, n)``) overshooting the tile edges by ``over``."""
+    p, e, n = band_frame
+    t0, t1 = t
     # the pocket overshoots the tile edges (into the gap, never near another
     # tile) so no micrometre sliver of tile survives where strip and tile edges
     # meet. It is the band cut by the pair region grown by the overshoot, so its
     # outline runs clear of every tile edge: a pocket corner lying on a tile edge
     # (as band ∩ pair has) leaves manifold3d two vertices a nanometre apart,
     # which a float32 STL merges into edges shared by four faces.
-    over = min(POCKET_OVERSHOOT_MM, 0.25 * printer.gap_mm)
     grown = shapely.buffer(pair, over, join_style="mitre", mitre_limit=MITRE_LIMIT)
     # ... and begins the overshoot before the band, whose end may lie along a tile edge
     t0o = t0 - over
     pband = np.stack([p + t0o[:, None] * e - R * n, p + t1[:, None] * e - R * n,
                       p + t1[:, None] * e + R * n, p + t0o[:, None] * e + R * n], 1)
-    pocket = np.array([_largest(g) for g in shapely.intersection(shapely.polygons(pband), grown)], dtype=object)
-    return Strips(outline=outline, pads=pads, top=plan.top.copy(), pocket=pocket)
+    return np.array([_largest(g) for g in shapely.intersection(shapely.polygons(pband), grown)], dtype=object)
 
 
 def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Printer) -> None:

@@ -157,8 +157,13 @@ def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: 
     # recover the pieces the laser leaves (each hinge kind knows what its sheet holds)
     square = np.asarray(ref["corners"]) if ref and ref["sheet"] == k else None
     pieces, holes = hinge_kind(kind).recover(SheetRead(cut, polys, is_ref, square, k, man))
-    # every expected tile comes back (one piece each, same shape within the material tolerance)
-    tol = man["tolerance_mm"]
+    _tiles_recovered(rb, k, expected, pieces, man["tolerance_mm"])
+    _webs_and_holes(rb, k, pieces, holes, mat)
+    _labels_inside(rb, k, layers, expected)
+
+
+def _tiles_recovered(rb: Readback, k: int, expected: np.ndarray, pieces: np.ndarray, tol: float) -> None:
+    """Every expected tile comes back: one piece each, the same shape within ``tol`` (mm)."""
     matched = 0
     worst = 0.0
     if len(pieces) and len(expected):
@@ -172,7 +177,10 @@ def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: 
         worst = max(best.values(), default=np.inf)
     rb.add(f"sheet {k} tiles recovered", matched == len(expected) and len(pieces) == len(expected),
            f"{matched}/{len(expected)} tiles within {tol:g} mm, {len(pieces)} pieces, worst {worst:.2e} mm", worst)
-    # webs and holes
+
+
+def _webs_and_holes(rb: Readback, k: int, pieces: np.ndarray, holes: np.ndarray, mat: dict[str, Any]) -> None:
+    """The thinnest piece against the minimum web, every hole against the minimum hole."""
     # the thinnest width of every piece (pattern.fabricability, the definition cut's own check uses)
     thin = min((fab.polygon_width(shapely.get_coordinates(q)) for q in pieces), default=np.inf)
     rb.add(f"sheet {k} min web {mat['min_web_mm']:g} mm", thin >= mat["min_web_mm"] - fab.WEB_SLACK_MM,
@@ -186,7 +194,10 @@ def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: 
             d = 2 * shapely.maximum_inscribed_circle(holes[small[0]], 1e-3).length
             detail = f"{len(small)} of {len(holes)} holes too small, e.g. one fits only a {d:.3g} mm disc"
         rb.add(f"sheet {k} min hole {mat['min_hole_mm']:g} mm", len(small) == 0, detail, len(small))
-    # labels inside tiles
+
+
+def _labels_inside(rb: Readback, k: int, layers: SheetLayers, expected: np.ndarray) -> None:
+    """Every engraved stroke inside a tile."""
     eng = layers.get("ENGRAVE", [])
     if eng:
         strokes = _linestrings(eng)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import io
 from types import ModuleType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -17,7 +17,11 @@ from ..mechanics.deploy import MARKS, DeploymentPath
 
 if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
     from matplotlib.axes import Axes
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import PolyCollection
     from matplotlib.colors import Colormap, Normalize
+    from matplotlib.figure import Figure
+    from PIL import Image
 
 ZERO_ENERGY = 1e-12  # below this the path is reported as zero-energy
 
@@ -195,7 +199,6 @@ def deployment_gif(
     """
     plt = _pyplot()
     from matplotlib.collections import LineCollection, PolyCollection
-    from PIL import Image
 
     values, norm, cmap, label, flat = _colouring(path, color, plt)
     idx = _frame_indices(path.n_frames, max_frames)
@@ -215,14 +218,7 @@ def deployment_gif(
     tiles = PolyCollection(corners[0], cmap=cmap, norm=norm, edgecolors="k", linewidths=0.3)
     tiles.set_array(np.asarray(values[0], dtype=float))
     ax.add_collection(tiles)
-    if flat:
-        cax.axis("off")
-        cax.text(0.5, 0.5, f"tile energy below noise everywhere (max {path.tile_energy.max():.1e} <= "
-                           f"{ZERO_ENERGY:g}): no energy colours", ha="center", va="center", fontsize=10)
-    else:
-        cb = fig.colorbar(tiles, cax=cax, orientation="horizontal")
-        cb.set_label(label, fontsize=10)
-        cb.ax.tick_params(labelsize=9)
+    _colour_legend(fig, cax, tiles, path, label, flat)
     _scale_bar(ax, lo, hi, pad)
     lines = dots = None
     if trajectories:
@@ -233,17 +229,37 @@ def deployment_gif(
     state = ax.text(0.02, 0.98, "", transform=ax.transAxes, ha="left", va="top", fontsize=15, weight="bold")
     marks = path.mark_frames()
 
-    images = []
-    for f in idx:
-        tiles.set_verts(corners[f])
-        tiles.set_array(np.asarray(values[f], dtype=float))
-        if lines is not None and dots is not None:  # set exactly when trajectories are drawn
-            lines.set_segments(list(np.swapaxes(centres[: f + 1], 0, 1)) if f > 0 else [])
-            dots.set_offsets(centres[f])
-        head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
-        state.set_text(_state_label(path.t[f], marks, path.t, f))
-        fig.canvas.draw()
-        rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3]
-        images.append(Image.fromarray(np.ascontiguousarray(rgb)))
+    images = [_draw_frame(fig, path, f, values, (tiles, lines, dots, head, state), marks, title) for f in idx]
     plt.close(fig)
     return _gif_bytes(images, frame_ms)
+
+
+def _colour_legend(fig: Figure, cax: Axes, tiles: PolyCollection, path: DeploymentPath, label: str,
+                   flat: bool) -> None:
+    """The colour bar under the animation, or a note when the tile energy is noise everywhere."""
+    if flat:
+        cax.axis("off")
+        cax.text(0.5, 0.5, f"tile energy below noise everywhere (max {path.tile_energy.max():.1e} <= "
+                           f"{ZERO_ENERGY:g}): no energy colours", ha="center", va="center", fontsize=10)
+    else:
+        cb = fig.colorbar(tiles, cax=cax, orientation="horizontal")
+        cb.set_label(label, fontsize=10)
+        cb.ax.tick_params(labelsize=9)
+
+
+def _draw_frame(fig: Figure, path: DeploymentPath, f: int, values: np.ndarray, artists: tuple, marks: dict[str, int],
+                title: str) -> Image.Image:
+    """Frame ``f`` drawn into the figure's artists ``(tiles, lines, dots, head, state)``, as an image."""
+    from PIL import Image
+
+    tiles, lines, dots, head, state = artists
+    tiles.set_verts(path.corners[f])
+    tiles.set_array(np.asarray(values[f], dtype=float))
+    if lines is not None and dots is not None:  # set exactly when trajectories are drawn
+        lines.set_segments(list(np.swapaxes(path.centres[: f + 1], 0, 1)) if f > 0 else [])
+        dots.set_offsets(path.centres[f])
+    head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
+    state.set_text(_state_label(path.t[f], marks, path.t, f))
+    fig.canvas.draw()
+    rgb = np.asarray(cast("FigureCanvasAgg", fig.canvas).buffer_rgba())[..., :3]  # _pyplot draws with Agg
+    return Image.fromarray(np.ascontiguousarray(rgb))

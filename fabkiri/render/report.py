@@ -15,28 +15,35 @@ headless browser's ``--dump-dom`` shows whether the page ran clean.
 
 from __future__ import annotations
 
-import base64
 import html
-import io
-import json
-from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..mechanics.info import describe
+from ..mechanics.info import PatternInfo, describe
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
 from ..verify.printmanifest import PrintManifest
 from .deployment import _pyplot
+from .htmlparts import MIME, _fig_png, _fmt, _img, _missing, data_uri, rows_table, table  # noqa: F401 (re-exported)
+from .report_sections import (  # noqa: F401 (re-exported)
+    _assembly_section,
+    _bom_section,
+    _cut_section,
+    _deploy_section,
+    _load_dir,
+    _pictures,
+    _print_section,
+    _tolerance_section,
+    meshes_or,
+    plate_png,
+)
 
 if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
     from matplotlib.axes import Axes
-    from matplotlib.figure import Figure
 
 SECTIONS = ("summary", "design", "states", "fabricability", "verification", "deployment", "cut", "print",
             "assembly", "bom", "tolerance")
-MIME = {".png": "image/png", ".gif": "image/gif", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}
 
 CSS = """
 ul.steps{list-style:none;padding-left:0}
@@ -64,59 +71,6 @@ document.addEventListener('DOMContentLoaded',function(){
 var imgs=document.images,k;for(k=0;k<imgs.length;k++){if(imgs[k].complete&&imgs[k].naturalWidth===0){n++;}}
 document.body.setAttribute('data-loaded','1');show();});})();
 </script>"""
-
-
-def data_uri(data: bytes, suffix: str) -> str:
-    return f"data:{MIME[suffix]};base64,{base64.b64encode(data).decode('ascii')}"
-
-
-def _img(data: bytes, suffix: str, alt: str, caption: str = "") -> str:
-    cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
-    return f'<figure><img alt="{html.escape(alt)}" src="{data_uri(data, suffix)}">{cap}</figure>'
-
-
-def _missing(text: str) -> str:
-    return f'<p class="missing">{html.escape(text)}</p>'
-
-
-def _fmt(v: Any) -> str:
-    if v is None:
-        return "n/a"
-    if isinstance(v, bool):
-        return '<span class="ok">yes</span>' if v else '<span class="fail">no</span>'
-    if isinstance(v, float):
-        return f"{v:.6g}" if abs(v) >= 1e3 else f"{v:.4g}"
-    if isinstance(v, (list, tuple)) and len(v) <= 8 and all(not isinstance(x, (dict, list)) for x in v):
-        return ", ".join(_fmt(x) for x in v)
-    if isinstance(v, (list, tuple)) and len(v) <= 8 and all(isinstance(x, (list, tuple)) and len(x) <= 4 for x in v):
-        return "; ".join(" x ".join(_fmt(y) for y in x) for x in v)
-    if isinstance(v, dict) and len(v) <= 8 and all(not isinstance(x, (dict, list)) for x in v.values()):
-        return "<br>".join(f"{html.escape(str(k))}: {_fmt(x)}" for k, x in v.items())
-    if isinstance(v, (dict, list)):
-        return f"<pre>{html.escape(json.dumps(v, indent=1)[:3000])}</pre>"
-    return html.escape(str(v))
-
-
-def table(d: dict[str, Any], head: tuple[str, str] = ("", "")) -> str:
-    rows = "".join(f"<tr><th>{html.escape(str(k))}</th><td>{_fmt(v)}</td></tr>" for k, v in d.items())
-    h = f"<tr><th>{html.escape(head[0])}</th><th>{html.escape(head[1])}</th></tr>" if any(head) else ""
-    return f"<table>{h}{rows}</table>"
-
-
-def rows_table(rows: list[dict[str, Any]], limit: int = 60) -> str:
-    if not rows:
-        return ""
-    keys = list(rows[0])
-    body = "".join("<tr>" + "".join(f"<td>{_fmt(r.get(k))}</td>" for k in keys) + "</tr>" for r in rows[:limit])
-    more = f"<p>… {len(rows) - limit} more rows in the manifest</p>" if len(rows) > limit else ""
-    return ("<table><tr>" + "".join(f"<th>{html.escape(k)}</th>" for k in keys) + f"</tr>{body}</table>{more}")
-
-
-def _fig_png(fig: Figure) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", metadata={"Software": None}, bbox_inches="tight")
-    _pyplot().close(fig)
-    return buf.getvalue()
 
 
 def _tiles(ax: Axes, corners: np.ndarray, color: str = "#b8c7d9") -> None:
@@ -186,23 +140,6 @@ def _contracted_targets(design: dict) -> dict[int, np.ndarray]:
     return out
 
 
-def _load_dir(folder: str | None) -> tuple[Path | None, dict | None]:
-    if not folder:
-        return None, None
-    d = Path(folder)
-    man = d / "manifest.json"
-    return d, (json.loads(man.read_text("utf-8")) if man.is_file() else None)
-
-
-def _pictures(d: Path, names: list[str], caption: str) -> str:
-    out = []
-    for n in names:
-        p = d / n
-        if p.is_file() and p.suffix.lower() in MIME:
-            out.append(_img(p.read_bytes(), p.suffix.lower(), n, f"{caption}: {n}"))
-    return '<div class="grid">' + "".join(out) + "</div>" if out else ""
-
-
 def _section(sid: str, title: str, body: str) -> str:
     return f'<section id="{sid}"><h2>{html.escape(title)}</h2>{body}</section>'
 
@@ -215,43 +152,13 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
     report = design.get("report") or {}
     info = describe(pattern)
     parts: dict[str, str] = {}
-
-    parts["summary"] = table({
-        "pattern": pattern.name or source, "file": source, "tiles": info.tiles, "hinges": info.hinges,
-        "holes": info.holes, "deployed size (mm)": f"{info.width_mm:.2f} x {info.height_mm:.2f}",
-        "mean tile edge (mm)": info.tile_size_mm, "rigid-deployable": info.rigid_deployable,
-        "closes in both states": info.closes_both, "design status": report.get("status", "not recorded"),
-    })
-
-    body = _img(design_png(pattern), ".png", "design vs target")
-    fit = (report.get("fit") or {}).get("shape")
-    body += "<h3>fit to the target (solver)</h3>" + (table(fit) if fit else _missing("no fit recorded"))
-    conf = report.get("conformance")
-    body += "<h3>conformance</h3>" + (table(conf) if isinstance(conf, dict) and conf else
-                                       _missing("conformance: not computed (design.report.conformance absent)"))
-    parts["design"] = body
-
-    if states:
-        targets = _contracted_targets(design)
-        body = _img(states_png(pattern, states, targets), ".png", "closed states")
-        if not targets:
-            body += _missing("no outline targets stored for the closed states")
-        body += rows_table([{"closed state": s.state, "closes": s.closes, "loop closure (tile sizes)": s.max_closure_rel,
-                             "edge pairs (mm)": s.edge_pair_max_mm, "rings (rad)": s.ring_max_rad}
-                            for s in info.states])
-    else:
-        body = _missing("the pattern does not close in both states: " + "; ".join(info.problems()))
-    parts["states"] = body
-
+    parts["summary"] = _summary_part(pattern, source, info, report)
+    parts["design"] = _design_part(pattern, report)
+    parts["states"] = _states_part(pattern, states, info)
     fab = report.get("fabricability")
     parts["fabricability"] = (table(fab) if isinstance(fab, dict) and fab else
                               _missing("fabricability: not computed (design.report.fabricability absent)"))
-
-    ver = verify_pattern(pattern)
-    v = f'<p>verdict: <span class="{"ok" if ver.ok else "fail"}">{"PASS" if ver.ok else "FAIL"}</span> ' \
-        f'({len(ver.checks) - len(ver.failed())}/{len(ver.checks)} checks pass)</p>'
-    parts["verification"] = v + f"<pre>{html.escape(ver.to_text())}</pre>"
-
+    parts["verification"] = _verification_part(pattern)
     parts["deployment"] = _deploy_section(deploy)
     cut_dir, cut_man = _load_dir(cut)
     print_dir, print_man = _load_dir(printed)
@@ -261,14 +168,61 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
     parts["assembly"] = _assembly_section(cut_dir, cut_man, print_dir, print_man)
     parts["bom"] = _bom_section(cut_man, pm)
     parts["tolerance"] = _tolerance_section(tolerance)
+    return _page(pattern.name or source or "pattern", parts)
 
+
+def _summary_part(pattern: Pattern, source: str, info: PatternInfo, report: dict) -> str:
+    """Counts, size, rigid deployability, closure and the design's status."""
+    return table({
+        "pattern": pattern.name or source, "file": source, "tiles": info.tiles, "hinges": info.hinges,
+        "holes": info.holes, "deployed size (mm)": f"{info.width_mm:.2f} x {info.height_mm:.2f}",
+        "mean tile edge (mm)": info.tile_size_mm, "rigid-deployable": info.rigid_deployable,
+        "closes in both states": info.closes_both, "design status": report.get("status", "not recorded"),
+    })
+
+
+def _design_part(pattern: Pattern, report: dict) -> str:
+    """The design over its target, the solver's fit and the conformance figures when stored."""
+    body = _img(design_png(pattern), ".png", "design vs target")
+    fit = (report.get("fit") or {}).get("shape")
+    body += "<h3>fit to the target (solver)</h3>" + (table(fit) if fit else _missing("no fit recorded"))
+    conf = report.get("conformance")
+    body += "<h3>conformance</h3>" + (table(conf) if isinstance(conf, dict) and conf else
+                                       _missing("conformance: not computed (design.report.conformance absent)"))
+    return body
+
+
+def _states_part(pattern: Pattern, states: dict[int, np.ndarray] | None, info: PatternInfo) -> str:
+    """Both closed states over their outline targets, with closure and residual figures."""
+    if not states:
+        return _missing("the pattern does not close in both states: " + "; ".join(info.problems()))
+    targets = _contracted_targets(pattern.design or {})
+    body = _img(states_png(pattern, states, targets), ".png", "closed states")
+    if not targets:
+        body += _missing("no outline targets stored for the closed states")
+    body += rows_table([{"closed state": s.state, "closes": s.closes, "loop closure (tile sizes)": s.max_closure_rel,
+                         "edge pairs (mm)": s.edge_pair_max_mm, "rings (rad)": s.ring_max_rad}
+                        for s in info.states])
+    return body
+
+
+def _verification_part(pattern: Pattern) -> str:
+    """The verifier's verdict and its full text."""
+    ver = verify_pattern(pattern)
+    v = f'<p>verdict: <span class="{"ok" if ver.ok else "fail"}">{"PASS" if ver.ok else "FAIL"}</span> ' \
+        f'({len(ver.checks) - len(ver.failed())}/{len(ver.checks)} checks pass)</p>'
+    return v + f"<pre>{html.escape(ver.to_text())}</pre>"
+
+
+def _page(title: str, parts: dict[str, str]) -> str:
+    """The whole page: head (CSS, error hook), navigation and every section in ``SECTIONS`` order."""
     titles = {"summary": "Summary", "design": "Design vs target", "states": "Closed states",
               "fabricability": "Fabricability", "verification": "Verification", "deployment": "Deployment",
               "cut": "Cut sheets", "print": "Print plates", "assembly": "Assembly map", "bom": "Bill of materials",
               "tolerance": "Tolerance"}
     nav = "".join(f'<a href="#{s}">{titles[s]}</a>' for s in SECTIONS)
     sections = "".join(_section(s, titles[s], parts[s]) for s in SECTIONS)
-    name = html.escape(pattern.name or source or "pattern")
+    name = html.escape(title)
     return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>fabkiri report: {name}</title>'
             f'<meta name="viewport" content="width=device-width, initial-scale=1">'
             f"<style>{CSS}</style>{ERROR_HOOK}</head><body>"
@@ -276,125 +230,3 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
             f'<div id="console-errors" data-count="0"></div></body></html>\n')
 
 
-def _deploy_section(folder: str | None) -> str:
-    if not folder:
-        return _missing("not provided: run fabkiri deploy PATTERN --plot --gif -o DIR and pass --deploy DIR")
-    d = Path(folder)
-    body = _pictures(d, ["energy.png", "deploy.gif"], "deployment")
-    summary = d / "deploy.json"
-    if summary.is_file():
-        s = json.loads(summary.read_text("utf-8"))
-        keep = ("path", "driver", "frames", "energy_max", "t_at_energy_max", "energy_at_states", "collision_free",
-                "hinge_gap_max_mm", "state_mismatch_mm")
-        body += table({k: s[k] for k in keep if k in s})
-    return body or _missing(f"{d}: no energy.png, deploy.gif or deploy.json")
-
-
-def _cut_section(d: Path | None, man: dict | None) -> str:
-    if d is None or man is None:
-        return _missing("not provided: run fabkiri cut PATTERN -o DIR and pass --cut DIR")
-    sheets = [s["svg"] for s in man.get("sheets", []) if s.get("svg")]
-    previews = [n for n in man.get("files", []) if n.endswith(".png") and n != "assembly.png"]
-    v = man.get("verification") or {}
-    body = table({"material": man["material"]["name"], "hinge": man["hinge"], "layout": man["layout"],
-                  "closed state": man["state"], "scale": man["scale"], "kerf (mm)": man["kerf_mm"],
-                  "sheets": len(man.get("sheets", [])), "read-back verification": v.get("ok"),
-                  "layout verifier": (v.get("verifier") or {}).get("ok")})
-    body += _pictures(d, previews, "preview")
-    body += "<h3>sheets (SVG, as sent to the laser)</h3>" + _pictures(d, sheets, "sheet")
-    return body
-
-
-def _print_section(d: Path | None, man: PrintManifest | None) -> str:
-    if d is None or man is None:
-        return _missing("not provided: run fabkiri print PATTERN -o DIR and pass --print DIR")
-    mesh_check, verifier = man.check("meshes") or {}, man.check("verifier")
-    body = table({"style": man.style, "closed state": man.state, "printer": man.printer_name, "beds": len(man.beds),
-                  "meshes ok": mesh_check.get("ok"), "tiles check": (man.check("tiles") or {}).get("ok"),
-                  "verifier": verifier.get("ok") if verifier else "n/a"})
-    previews = [n for n in man.files if n.endswith(".png") and n != "assembly.png"]
-    shown = _pictures(d, previews, "print preview")
-    if not shown:  # no preview written by print: draw the plates from the meshes, seen from above
-        meshes = [n for n in man.files if n.endswith(".stl") and (d / n).is_file()]
-        shown = '<div class="grid">' + "".join(
-            _img(plate_png(d / n), ".png", n, f"plate seen from above, drawn from {n}") for n in meshes[:4]) + "</div>"
-    return body + (shown if meshes_or(shown) else _missing("no print previews or meshes in the folder"))
-
-
-def meshes_or(html_text: str) -> bool:
-    return "<img" in html_text
-
-
-def plate_png(stl: Path) -> bytes:
-    """A mesh seen from above: its triangles projected onto the bed, shaded by height."""
-    import trimesh
-    from matplotlib.collections import PolyCollection
-
-    m = cast(trimesh.Trimesh, trimesh.load(stl, force="mesh"))  # force="mesh": a Trimesh, annotated as a Geometry
-    up = m.face_normals[:, 2] > 1e-6  # faces seen from above
-    tri = m.triangles[up]
-    z = tri[:, :, 2].mean(1)
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
-    ax.add_collection(PolyCollection(tri[:, :, :2], array=z, cmap="viridis", edgecolors="none"))
-    lo, hi = m.bounds[0], m.bounds[1]
-    ax.set_xlim(lo[0] - 2, hi[0] + 2)
-    ax.set_ylim(lo[1] - 2, hi[1] + 2)
-    ax.set_aspect("equal")
-    ax.ticklabel_format(useOffset=False, style="plain")
-    ax.set_xlabel("bed x (mm)", fontsize=8)
-    ax.set_ylabel("bed y (mm)", fontsize=8)
-    ax.tick_params(labelsize=7)
-    ax.set_title(f"{stl.name}: {len(m.faces)} triangles, {m.bounds[1][0] - lo[0]:.0f} x {hi[1] - lo[1]:.0f} x "
-                 f"{hi[2] - lo[2]:.1f} mm", fontsize=9)
-    return _fig_png(fig)
-
-
-def _assembly_section(cut_dir: Path | None, cut_man: dict | None, print_dir: Path | None,
-                      print_man: dict | None) -> str:
-    body = ""
-    for d, man, what in ((cut_dir, cut_man, "cut"), (print_dir, print_man, "print")):
-        if d is None or man is None:  # (a manifest comes with its folder)
-            continue
-        a = man.get("assembly")
-        if isinstance(a, dict) and a.get("steps"):
-            steps = "".join(f"<li>{html.escape(s)}</li>" for s in a["steps"])  # the steps carry their own numbers
-            body += f"<h3>{what}</h3><ul class=\"steps\">{steps}</ul>"
-        elif isinstance(a, str):
-            body += f"<h3>{what}</h3><p>{html.escape(a)}</p>"
-        body += _pictures(d, ["assembly.png"], f"{what} assembly map")
-        if man.get("assembly_pieces"):
-            body += rows_table(man["assembly_pieces"])
-    return body or _missing("not provided: pass --cut DIR and/or --print DIR")
-
-
-def _bom_section(cut_man: dict | None, print_man: PrintManifest | None) -> str:
-    body = ""
-    if cut_man is not None:
-        bom = cut_man.get("bill_of_materials")
-        body += "<h3>cut</h3>" + (table(bom) if bom else _missing("the cut manifest has no bill of materials"))
-    if print_man is not None:
-        bom = print_man.bill_of_materials
-        if bom:
-            body += "<h3>print</h3>" + table({k: v for k, v in bom.items() if k not in ("bodies", "filament")})
-            body += rows_table([{"material": m, **f} for m, f in bom["filament"].items()])
-        else:
-            body += "<h3>print</h3>" + _missing("the print manifest has no bill of materials")
-    return body or _missing("not provided: pass --cut DIR and/or --print DIR")
-
-
-def _tolerance_section(folder: str | None) -> str:
-    if not folder:
-        return _missing("not provided: run fabkiri tolerance PATTERN -o DIR and pass --tolerance DIR")
-    d = Path(folder)
-    body = _pictures(d, ["tolerance.png"], "tolerance")
-    f = d / "tolerance.json"
-    if f.is_file():
-        t = json.loads(f.read_text("utf-8"))
-        rows = [{"measure": k, "state": s, **{q: v[q] for q in ("p50", "p95", "max")}}
-                for k in ("closure_gap_mm", "seam_gap_mm", "overlap_max_mm2") for s, v in t.get(k, {}).items()]
-        ol = t.get("deployed_outline_mm")
-        if ol:
-            rows.append({"measure": "deployed_outline_mm", "state": "deployed", **{q: ol[q] for q in ("p50", "p95", "max")}})
-        body += table(t.get("model", {})) + rows_table(rows) + rows_table(t.get("most_sensitive_tiles", []))
-    return body or _missing(f"{d}: no tolerance.png or tolerance.json")

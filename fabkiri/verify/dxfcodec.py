@@ -192,31 +192,43 @@ def read_layer_tags(p: Path, layer_name: str = "CUT") -> Linework | None:
         owners = np.unique(np.searchsorted(starts, tags_at, side="right") - 1)
         lw = Linework(p, layer_found=True)
         for o in owners[owners >= 0].tolist():
-            lines = data[bounds[o] + 1: bounds[o + 1]].decode("utf-8", "replace").split("\n")
-            tags = list(zip((c.strip() for c in lines[0::2]), lines[1::2]))
-            kind = tags[0][1].strip()
-            layer = next((v.strip().upper() for c, v in tags if c == "8"), "")
-            if layer != layer_name:
-                continue  # the layer was not this entity's layer tag
-            if kind == "LINE":
-                get = dict(tags)
-                lw.add(np.array([[float(get["10"]), float(get["20"])],
-                                 [float(get["11"]), float(get["21"])]]) * unit, False)
-                continue
-            if any(c in ("210", "220", "230") for c, _ in tags):
-                return None  # an extrusion direction (OCS): the full reader maps it to world coordinates
-            if kind != "LWPOLYLINE":
-                return None  # curves, old-style polylines, blocks: the full reader
-            if any(c == "42" and float(v) != 0.0 for c, v in tags):
-                return None  # an arc segment
-            xs = [float(v) for c, v in tags if c == "10"]
-            ys = [float(v) for c, v in tags if c == "20"]
-            if len(xs) != len(ys):
+            text = data[bounds[o] + 1: bounds[o + 1]].decode("utf-8", "replace")
+            if not _add_entity(lw, text, layer_name, unit):
                 return None
-            flags = next((int(v) for c, v in tags if c == "70"), 0)
-            lw.add(np.column_stack([xs, ys]).reshape(-1, 2) * unit, bool(flags & 1))
         return lw
     except VerifyError:
         raise
     except Exception:  # malformed tag stream: let the full reader name the problem
         return None
+
+
+def _add_entity(lw: Linework, text: str, layer_name: str, unit: float) -> bool:
+    """Add one entity's straight linework (its tag lines ``text``) to ``lw`` if it is on ``layer_name``.
+
+    False when the entity needs the full reader (an extrusion direction, a curve, an arc segment,
+    odd structure); an entity whose layer tag is not ``layer_name`` is skipped.
+    """
+    lines = text.split("\n")
+    tags = list(zip((c.strip() for c in lines[0::2]), lines[1::2]))
+    kind = tags[0][1].strip()
+    layer = next((v.strip().upper() for c, v in tags if c == "8"), "")
+    if layer != layer_name:
+        return True  # the layer was not this entity's layer tag
+    if kind == "LINE":
+        get = dict(tags)
+        lw.add(np.array([[float(get["10"]), float(get["20"])],
+                         [float(get["11"]), float(get["21"])]]) * unit, False)
+        return True
+    if any(c in ("210", "220", "230") for c, _ in tags):
+        return False  # an extrusion direction (OCS): the full reader maps it to world coordinates
+    if kind != "LWPOLYLINE":
+        return False  # curves, old-style polylines, blocks: the full reader
+    if any(c == "42" and float(v) != 0.0 for c, v in tags):
+        return False  # an arc segment
+    xs = [float(v) for c, v in tags if c == "10"]
+    ys = [float(v) for c, v in tags if c == "20"]
+    if len(xs) != len(ys):
+        return False
+    flags = next((int(v) for c, v in tags if c == "70"), 0)
+    lw.add(np.column_stack([xs, ys]).reshape(-1, 2) * unit, bool(flags & 1))
+    return True

@@ -20,35 +20,25 @@ and the declared allowances (manifest.json) is trusted:
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import shapely
 
-from ..errors import VerifyError
-from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .geom import leave_one_out_residual
 from .hingeread import PLAIN, reading
+from .layout_match import _match_tiles, _Matched
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
-from .matching import _mirror, _shift_fit, assembled, match_by_shape, match_in_place
+from .matching import _mirror, _shift_fit, assembled
 from .pattern_checks import Tolerances, closed_state_checks, fabrication_tolerances, state_check_id
-from .quads import (
-    MAX_FITTED_SHRINK_MM,
-    UNDO_MITRE,
-    _fit_offset,
-    _set_reference_aside,
-    quads_of,
-    tiles_of,
-)
 from .readers import Linework, read_cut_file
-from .recovery import _choose_cut, _drop_reference, dangling_ends, recover_polygons, sheet_material
+from .recovery import sheet_material
 from .report import Check, Report, measured
+from .sheetread import _layout_kind, _recover_sheets, _sheet_files
 
 # ------------------------------------------------------------------ entry point
 
@@ -96,158 +86,6 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: CutManife
     _physical_checks(rep, pattern, al, files, rec.linework, m.cut_shapes, have, m.found_on, sheet_piece, in_place,
                      fitted, g, m.labelings)
     return rep
-
-
-@dataclass
-class _Recovered:
-    """What each sheet's cut linework gave: its quads, linework, recovery methods and loose ends."""
-
-    sheets: dict[int, np.ndarray] = field(default_factory=dict)  # sheet -> recovered quads (n, 4, 2)
-    linework: dict[int, Linework] = field(default_factory=dict)
-    methods: set[str] = field(default_factory=set)
-    unusable: int = 0  # regions that are not quads
-    dangling: list[np.ndarray] = field(default_factory=list)
-    references: list[float] = field(default_factory=list)
-
-
-def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D: np.ndarray, L: float,
-                    tol: float, path: Path) -> _Recovered:
-    """Read every sheet, set its reference square aside and recover its tiles as quads."""
-    rec = _Recovered()
-    n_lines = 0
-    frame = _frame_tiles(pattern, al)
-    arity = tessellation(pattern.kind).arity  # corners per tile
-    for sheet, f in files.items():
-        lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol)
-        _drop_reference(lw, al.reference.get(sheet))
-        rec.linework[sheet] = lw
-        n_lines += len(lw.polylines)
-        on = [t for t in range(pattern.n_tiles) if al.tile_sheet.get(t, 1) == sheet]
-        polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None, arity)
-        rec.methods.add(method)
-        polys = polys[shapely.area(polys) > tol ** 2]  # double-cut hairlines are not tiles
-        quads, side, bad = _tiles_and_reference(polys, arity, D, L, tol)
-        if side is not None:
-            rec.references.append(side)
-        rec.unusable += bad
-        rec.sheets[sheet] = quads
-        rec.dangling.append(dangling_ends(lw))
-    if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
-        raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
-    return rec
-
-
-def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float,
-                         tol: float) -> tuple[np.ndarray, float | None, int]:
-    """The tiles (corners in the design's arity), the reference square's side (None without one) and
-    how many regions are neither. The square is looked for among the quads: the tiles themselves
-    when they are quads, the regions that are not tiles otherwise."""
-    tiles, ok = tiles_of(polys, arity)
-    if arity == 4:
-        tiles, side = _set_reference_aside(tiles, D, L, tol)
-        return tiles, side, int((~ok).sum())
-    squares, _ = quads_of(polys[~ok], 4)
-    _, side = _set_reference_aside(squares, D, L, tol)
-    return tiles, side, int((~ok).sum()) - (side is not None)
-
-
-def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: float,
-                 rep: Report) -> tuple[bool, bool, float | None]:
-    """In place or separate, a ligament sheet or not, and (plain files) the kerf offset fitted."""
-    in_place = al.layout == "in-place"
-    sheet_piece = any(m.startswith("material") for m in rec.methods)  # a ligament sheet: tiles in place, shrunk
-    sheets = rec.sheets
-    if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
-        allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, D.shape[1], 2))
-        if len(allq):
-            u = shapely.unary_union(shapely.make_valid(shapely.polygons(allq))).buffer(tol)
-            in_place = (len(shapely.get_parts(u)) == 1 and len(allq) > 1) or sheet_piece
-        rep.meta["layout"] = "in-place" if in_place else "separate"
-    fitted = None
-    if al.hinge == PLAIN and (not in_place or sheet_piece) and sheets:
-        # no manifest declares the kerf (or the gap): take the one offset the outlines share
-        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol,
-                             lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
-        if fitted:
-            for k, R in sheets.items():
-                sheets[k], bad = quads_of(shapely.buffer(shapely.polygons(R), -fitted, join_style="mitre",
-                                                         mitre_limit=UNDO_MITRE), R.shape[1])
-                rec.unusable += bad
-        rep.meta["kerf_offset_fitted_mm"] = fitted
-    return in_place, sheet_piece, fitted
-
-
-@dataclass
-class _Matched:
-    """Recovered tiles matched to design tiles."""
-
-    state: int  # the closed state the sheet is laid out in
-    assign: np.ndarray  # design tile -> global recovered index, -1 if not found
-    found_on: np.ndarray  # design tile -> sheet it was found on
-    cut_shapes: np.ndarray  # (T, 4, 2) each design tile's cut shape, corners in design order
-    resid_pos: np.ndarray  # in place: corner distance to the closed state
-    extra: int  # recovered regions matched to no design tile
-    labelings: list[np.ndarray]  # cut shapes under other, equally good labelings of a symmetric sheet
-
-
-def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bool, D: np.ndarray, L: float,
-                 tol: float, rep: Report) -> _Matched:
-    """Match every sheet's quads to the design tiles: by position in place, by shape when separate."""
-    T = pattern.n_tiles
-
-    def closed(s: int) -> np.ndarray:
-        Y = pattern.contracted.get(s)
-        return (contract(pattern, s).corners if Y is None else Y) * al.scale
-
-    state = al.state
-    sheets = rec.sheets
-    if in_place and al.hinge == PLAIN and sheets:
-        # no manifest declares the state: take the closed state the sheet matches
-        R0 = next(iter(sheets.values()))
-        fit = {s: np.nanmax(np.append(match_in_place(closed(s), R0)[1], np.nan)) for s in STATES}
-        state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
-        rep.meta["state"] = state
-    k = D.shape[1]  # the tile arity
-    m = _Matched(state, np.full(T, -1), np.full(T, -1), np.full((T, k, 2), np.nan), np.full(T, np.nan), 0, [])
-    Ystate = closed(state)
-    for sheet, R in sheets.items():
-        if in_place:
-            a, res, sh = _match_sheet_in_place(al, m, sheet, R, Ystate, T, tol, len(sheets) == 1)
-        else:
-            free = np.flatnonzero(m.assign < 0)
-            a, res, sh = match_by_shape(D[free], R, L)
-            a = np.where(a >= 0, free[np.maximum(a, 0)], -1)
-        taken = (a >= 0) & (m.assign[np.maximum(a, 0)] < 0)
-        m.extra += int(len(R) - taken.sum())
-        r = np.flatnonzero(taken)
-        d = a[r]
-        m.assign[d] = r
-        m.found_on[d] = sheet
-        m.cut_shapes[d] = R[r[:, None], (np.arange(k)[None, :] + sh[r][:, None]) % k]  # corner shift
-        if in_place:
-            m.resid_pos[d] = res[r]
-    return m
-
-
-def _match_sheet_in_place(al: Allowances, m: _Matched, sheet: int, R: np.ndarray, Ystate: np.ndarray, T: int,
-                          tol: float, only_sheet: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One in-place sheet matched to its design tiles; a symmetric single sheet also records the other
-    labelings that fit as well (``m.labelings``)."""
-    design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
-        else np.arange(T)
-    design_ids = design_ids[design_ids < T]
-    alts: list = []
-    a, res, sh, _, _ = match_in_place(Ystate[design_ids], R, alternatives=alts)
-    a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
-    if only_sheet:  # a symmetric sheet: the other labelings as good as this one
-        for aa, rr, ss in alts:
-            if (aa >= 0).sum() == T and np.max(rr[aa >= 0]) <= tol:
-                n = R.shape[1]  # the tile arity
-                C = np.full((T, n, 2), np.nan)
-                k = np.flatnonzero(aa >= 0)
-                C[design_ids[aa[k]]] = R[k[:, None], (np.arange(n)[None, :] + ss[k][:, None]) % n]
-                m.labelings.append(C)
-    return a, res, sh
 
 
 def _recovered_check(rep: Report, m: _Matched, unusable: int, g: str) -> None:
@@ -410,18 +248,6 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
         rep.add(chk)
 
 
-def _frame_tiles(pattern: Pattern, al: Allowances) -> np.ndarray | None:
-    """Design tiles where the manifest placed them: Rot(rotation) (scaled closed-state tile) + shift."""
-    if al.layout != "in-place" or len(al.tiles_placed) != pattern.n_tiles:
-        return None
-    Y = pattern.contracted.get(al.state)
-    Y = (contract(pattern, al.state).corners if Y is None else Y) * al.scale
-    out = np.empty_like(Y)
-    for t, (th, shift) in al.tiles_placed.items():
-        out[t] = geometry.rotate(Y[t], th) + shift
-    return out
-
-
 def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, g: str, tol: float) -> Check:
     """A cut that stops in the material: a slit short of its end leaves two tiles joined, a stray
     cut weakens a part. Names the tiles nearest the first such end."""
@@ -447,19 +273,3 @@ def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, 
                  group=g, worst=worst, detail=detail)
 
 
-def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
-    """Every sheet of the layout in the same format as ``path`` (just ``path`` for one sheet)."""
-    fmt = path.suffix.lower().lstrip(".")
-    named = {k: v[fmt] for k, v in al.sheet_files.items() if v.get(fmt)}
-    if len(named) <= 1:
-        sheet = next((k for k, v in named.items() if v == path.name), 1)
-        return {sheet: path}
-    if path.name not in named.values():
-        raise VerifyError(f"{path}: not one of the sheets listed in the manifest ({sorted(named.values())})")
-    out = {}
-    for k, name in sorted(named.items()):
-        f = path.parent / name
-        if not f.exists():
-            raise VerifyError(f"{f}: sheet {k} listed in the manifest is missing")
-        out[k] = f
-    return out

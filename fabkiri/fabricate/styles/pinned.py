@@ -41,61 +41,66 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     plan = printgeom.closed_plan(pattern, state, printer)
     pins = pingeom.pin_plan(pattern, plan, printer)
     fits(plan.bounds, printer, "the closed pattern")
-    lv, g = pins.levels, pins.geometry
-    T = lv.thickness
     A, B = plan.hinge_tiles.T
     H = plan.n_hinges
-    ph = pins.phase if pins.phase is not None else np.zeros(H)
-    # A tile's corner at a pivot is cleared through the full height: the pivot's
-    # own partner turns in one half, and the hinge that meets it in either
-    # closed state stacks its ears in the other half; at its own ear level the
-    # tile is left whole and the ear disc added. (Cutting the full height and
-    # adding back tile ∩ disc would meet the cut at points computed twice, a
-    # nanometre apart: edges shared by four faces once written as float32.)
     at_tile: dict[int, list[int]] = {t: [] for t in range(len(plan.tiles))}
     for h in range(H):
         at_tile[int(A[h])].append(h)
         at_tile[int(B[h])].append(h)
-    def tile_body(t: int, turn: float) -> Body:
-        X = plan.tiles[t]
-        ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
-        hs = at_tile[t]
-        poly = {h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn)) for h in hs}
-        for h in hs:
-            z0, z1 = lv.level(pins.level[h] + (0 if t == A[h] else 1))
-            if z0 > 0.0:  # (a cut merely touching a face would leave a zero-thickness seam)
-                ops.append(("sub", Prism((poly[h](g.hollow, True),), -1.0, z0)))
-            if z1 < T:
-                ops.append(("sub", Prism((poly[h](g.hollow, True),), z1, T + 1.0)))
-        for h in hs:
-            k = pins.level[h] + (0 if t == A[h] else 1)
-            z0, z1 = lv.level(k)
-            ops.append(("add", Prism((poly[h](g.ear, False),), z0, z1)))
-            p = tuple(plan.hinge_xy[h])
-            if t == A[h]:  # the pin: straight through its ear and the gap, flared through the ring
-                zr0, zr1 = lv.level(k + 1)
-                ops.append(("add", Prism((poly[h](g.pin_bottom, False),), z0, zr0)))
-                ops.append(("add", Prism((poly[h](g.pin_bottom, False),), zr0, zr1, g.pin_top / g.pin_bottom, p)))
-        for h in hs:
-            if t == B[h]:
-                z0, z1 = lv.level(pins.level[h] + 1)
-                p = tuple(plan.hinge_xy[h])
-                ops.append(("sub", Prism((poly[h](g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
-                                         g.hole_top / g.hole_bottom, p)))
-        return Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material)
-
     # the same tile with its pivot polygons turned: tried in turn when a turn
     # leaves a near-degenerate meeting that a float32 file cannot keep 2-manifold
     # (each tile's clearances are circumscribed and its ears inscribed, so
     # tiles need not share a turn)
     bodies = []
     for t in range(len(plan.tiles)):
-        first = tile_body(t, 0.0)
-        alts = tuple(tile_body(t, (j + 0.5) / pingeom.PHASES) for j in range(pingeom.PHASES))
+        first = _tile_body(plan, pins, printer, at_tile[t], t, 0.0)
+        alts = tuple(_tile_body(plan, pins, printer, at_tile[t], t, (j + 0.5) / pingeom.PHASES)
+                     for j in range(pingeom.PHASES))
         bodies.append(replace(first, variants=alts))
     dx, dy = centre_shift(plan.bounds, printer)
     beds = [[translate_body(b, dx, dy) for b in bodies]]
     return PrintJob("pinned", state, printer, plan, beds, (dx, dy), pins=pins)
+
+
+def _tile_body(plan: printgeom.ClosedPlan, pins: pingeom.PinPlan, printer: Printer, hs: list[int], t: int,
+               turn: float) -> Body:
+    """Tile ``t`` with the pivots of its hinges ``hs``: clearances cut, ears, pins and rings added; the pivot
+    polygons turned by ``turn`` of a step."""
+    lv, g = pins.levels, pins.geometry
+    T = lv.thickness
+    A, B = plan.hinge_tiles.T
+    ph = pins.phase if pins.phase is not None else np.zeros(plan.n_hinges)
+    X = plan.tiles[t]
+    ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
+    poly = {h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn)) for h in hs}
+    # A tile's corner at a pivot is cleared through the full height: the pivot's
+    # own partner turns in one half, and the hinge that meets it in either
+    # closed state stacks its ears in the other half; at its own ear level the
+    # tile is left whole and the ear disc added. (Cutting the full height and
+    # adding back tile ∩ disc would meet the cut at points computed twice, a
+    # nanometre apart: edges shared by four faces once written as float32.)
+    for h in hs:
+        z0, z1 = lv.level(pins.level[h] + (0 if t == A[h] else 1))
+        if z0 > 0.0:  # (a cut merely touching a face would leave a zero-thickness seam)
+            ops.append(("sub", Prism((poly[h](g.hollow, True),), -1.0, z0)))
+        if z1 < T:
+            ops.append(("sub", Prism((poly[h](g.hollow, True),), z1, T + 1.0)))
+    for h in hs:
+        k = pins.level[h] + (0 if t == A[h] else 1)
+        z0, z1 = lv.level(k)
+        ops.append(("add", Prism((poly[h](g.ear, False),), z0, z1)))
+        p = tuple(plan.hinge_xy[h])
+        if t == A[h]:  # the pin: straight through its ear and the gap, flared through the ring
+            zr0, zr1 = lv.level(k + 1)
+            ops.append(("add", Prism((poly[h](g.pin_bottom, False),), z0, zr0)))
+            ops.append(("add", Prism((poly[h](g.pin_bottom, False),), zr0, zr1, g.pin_top / g.pin_bottom, p)))
+    for h in hs:
+        if t == B[h]:
+            z0, z1 = lv.level(pins.level[h] + 1)
+            p = tuple(plan.hinge_xy[h])
+            ops.append(("sub", Prism((poly[h](g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
+                                     g.hole_top / g.hole_bottom, p)))
+    return Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material)
 
 
 def _pinned_plans(pattern: Pattern, state: int, printer: Printer) -> str | None:
