@@ -32,6 +32,7 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
+from . import geom
 from .closed_checks import closed_state_checks
 from .compactness import compactness_checks, enclosed_gaps, state_check_id
 from .outlines import target_checks
@@ -47,6 +48,7 @@ from .tolerances import (
     angle_check,
     fabrication_tolerances,
     tolerances,
+    largest,
     worst_at,
 )
 
@@ -78,7 +80,7 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
                         detail=f"clockwise or flat tiles: {np.flatnonzero(area <= 0).tolist()[:20]}"))
     i, j, depth = geom.overlap_depths(corners)  # hinged neighbours touch only at a corner: depth 0
     k = int(np.argmax(depth)) if len(depth) else None
-    out.append(measured("deployed: no overlaps", _max(depth), tol.length, "mm", group="tiles",
+    out.append(measured("deployed: no overlaps", largest(depth), tol.length, "mm", group="tiles",
                         worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, id="deployed.no-overlaps",
                         detail=f"{int((depth > tol.length).sum())} overlapping pairs in the deployed state"))
     edges = geometry.edge_lengths(corners)
