@@ -47,8 +47,8 @@ from .tolerances import (
     Tolerances,
     angle_check,
     fabrication_tolerances,
-    tolerances,
     largest,
+    tolerances,
     worst_at,
 )
 
