@@ -139,6 +139,8 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
         if notify is not None:
             notify(text)
 
+    if request.symmetry == "none":  # the CLI's explicit "free"; a quad design is free without a symmetry
+        request = replace(request, symmetry=None)
     request, req, target, contracted = _solver_request(request)
     shape_tol = conf.parse_shape_tol(request.shape_tol)
     req.second_opinion_above = _tol_rel(shape_tol, target)

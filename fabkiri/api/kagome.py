@@ -30,7 +30,7 @@ if TYPE_CHECKING:
     from .design import PatternRequest
 
 # options of the quad design that have no kagome counterpart yet
-UNSUPPORTED = ("rigid", "symmetry", "holes", "contracted_target", "material", "printer", "min_feature",
+UNSUPPORTED = ("rigid", "holes", "contracted_target", "material", "printer", "min_feature",
                "min_hole")
 
 
@@ -62,11 +62,12 @@ class KagomeOutcome:
 
 def design_kagome(rows: int, cols: int, target: str, size: float | None = None, *, tol: float = 1e-10,
                   shape_tol: str = conf.DEFAULT_SHAPE_TOL, name: str | None = None,
-                  symmetry: bool = True) -> KagomeOutcome:
+                  symmetry: bool | str = True) -> KagomeOutcome:
     """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm).
 
     ``symmetry`` imposes every mirror the lattice and the target share (vertical for C odd, horizontal
-    for R even; docs/kagome.md); False leaves the design free (about twice the fitting freedom)."""
+    for R even; docs/kagome.md); False leaves the design free (about twice the fitting freedom); ``"x"``
+    or ``"y"`` imposes that mirror alone (the lattice and the target must have it)."""
     tgt = load_target(target, size)
     shape = conf.parse_shape_tol(shape_tol)
     unit = standard_kagome(rows, cols, tile_size=1.0)
@@ -122,7 +123,11 @@ def design_kagome_pattern(request: PatternRequest, notify: Callable[[str], None]
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     rows, cols = request.tiles
     return design_kagome(rows, cols, request.target or "circle", request.size, tol=request.tol,
-                         shape_tol=request.shape_tol, name=request.name)
+                         shape_tol=request.shape_tol, name=request.name, symmetry=SYMMETRY[request.symmetry])
+
+
+# --symmetry: absent imposes every mirror the lattice and target share; none leaves the design free
+SYMMETRY: dict[str | None, bool | str] = {None: True, "none": False, "x": "x", "y": "y"}
 
 
 register_designer("kagome", design_kagome_pattern)

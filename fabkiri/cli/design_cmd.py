@@ -91,7 +91,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _add_target_args(p: argparse.ArgumentParser) -> None:
     """The lattice and what it is fitted to: deployed target, tube, symmetry, hole shape, closed-state outlines."""
     p.add_argument("--lattice", choices=design_kinds(), default="quad",
-                   help="quad (default) or kagome: the kagome prototype fits the deployed tips to the target "
+                   help="quad (default) or kagome: the kagome design fits the deployed tips to the target "
                         "(docs/kagome.md)")
     p.add_argument("--target", metavar="NAME|FILE",
                    help="deployed target: a name from templates/targets (circle, ellipse, heart, ...) or a "
@@ -105,8 +105,10 @@ def _add_target_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--closed", choices=["cylinder", "cone"], default=None,
                    help="with --tube cone:...: cone lets both closed states be cones too (a rigid tube whose seam "
                         "turns alike in every state); default cylinder, the closed states' pure-translation seam")
-    p.add_argument("--symmetry", choices=["x", "y"],
-                   help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x)")
+    p.add_argument("--symmetry", choices=["x", "y", "none"],
+                   help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x); none: free "
+                        "(the default for quads; a kagome design otherwise takes every mirror its lattice and "
+                        "target share)")
     p.add_argument("--holes", choices=["rhombus", "parallelogram"], default=None,
                    help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums); "
                         "default rhombus, but parallelogram for --rigid square/circle --contracted-target "

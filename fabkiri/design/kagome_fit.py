@@ -31,6 +31,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import spsolve
 
+from ..errors import InputError
 from ..pattern.model import Pattern
 from . import kagome as K
 from . import kagome_rows as KR
@@ -125,19 +126,28 @@ def side_split(target: Target, u_tip: np.ndarray, sides: np.ndarray) -> Target:
     return Target(target.name, target.kind, target.points, corners=np.array(corners), source=target.source)
 
 
-def mirror_axes(standard: Pattern, target: Target) -> list[tuple[str, np.ndarray]]:
-    """The mirrors both the lattice and the target (about its bounding-box centre) have."""
+def mirror_axes(standard: Pattern, target: Target, symmetry: bool | str = True) -> list[tuple[str, np.ndarray]]:
+    """The mirrors imposed: every one both the lattice and the target (about its bounding-box centre) have
+    (``True``), none (``False``), or the one named (``"x"``: y -> -y, ``"y"``: x -> -x), which both must
+    have (:class:`InputError` naming which does not)."""
+    if symmetry is False:
+        return []
     out = []
     lo, hi = target.bbox
     centred = target.transformed(1.0, -0.5 * (lo + hi))
-    for axis in ("y", "x"):
+    for axis in ("y", "x") if symmetry is True else (str(symmetry),):
         m = KR.mirror_map(standard, axis)
-        if m is not None and centred.mirror_error(axis) <= MIRROR_TOL:
+        fits = centred.mirror_error(axis) <= MIRROR_TOL
+        if m is not None and fits:
             out.append((axis, m))
+        elif symmetry is not True:
+            need = "an odd number of columns" if axis == "y" else "an even number of rows"
+            raise InputError(f"the kagome lattice has no mirror about the {axis} axis (it needs {need})" if m is None
+                             else f"target {target.name!r} is not symmetric about the {axis} axis")
     return out
 
 
-def fit_rows(standard: Pattern, target: Target, symmetry: bool = True, convex: bool = False):
+def fit_rows(standard: Pattern, target: Target, symmetry: bool | str = True, convex: bool = False):
     """``(rows, x0, axes)``: every row of the fit of ``standard`` to ``target`` (mm, centred on its
     bounding box), and the initial guess (normalised units)."""
     top = standard.topology
@@ -146,7 +156,7 @@ def fit_rows(standard: Pattern, target: Target, symmetry: bool = True, convex: b
     sides = KR.tip_sides(standard, order)
     x0, u_tip = initial_nodes(standard, target, order)
     tgt = side_split(target, u_tip, sides).transformed(1.0 / scale)
-    axes = mirror_axes(standard, target) if symmetry else []
+    axes = mirror_axes(standard, target, symmetry)
     eq = K.families(standard, (1, 2)) + [KR.symmetry_family(m, a, nv) for a, m in axes]
     fit = [shape_match(order, sides, tgt, nv, "shape"), outline_match(order, tgt, nv)]
     ineq = [KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None), KR.quality_family(standard, QUALITY_FLOOR),
@@ -167,7 +177,7 @@ def lawson(rows: KS.Rows, x: np.ndarray) -> dict:
     return out
 
 
-def design(standard: Pattern, target: Target, *, symmetry: bool = True, refine_steps: int = LAWSON_STEPS,
+def design(standard: Pattern, target: Target, *, symmetry: bool | str = True, refine_steps: int = LAWSON_STEPS,
            max_iter: int = 60, convex: bool = False) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
