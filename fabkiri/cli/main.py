@@ -62,9 +62,11 @@ SUMMARIES = {
 
 
 # numpy subpackages no command uses but scipy's array-API shim imports (``from numpy import *`` in
-# scipy._lib.array_api_compat.numpy): numpy.f2py alone pulls charset_normalizer, numpy.testing unittest; about
-# 0.05 CPU s of every command's start-up. They are bound lazily instead: loaded on first attribute access.
-DEFERRED = ("numpy.f2py", "numpy.testing")
+# scipy._lib.array_api_compat.numpy): numpy.f2py alone pulls charset_normalizer, numpy.testing unittest, and
+# numpy.polynomial is large; about 0.06 CPU s of every command's start-up. They are bound lazily instead: loaded
+# on first attribute access. (Not numpy.random, which scipy._lib._util uses as it loads, nor numpy.ma, which
+# every np.unique call asks.)
+DEFERRED = ("numpy.f2py", "numpy.testing", "numpy.polynomial")
 
 
 def defer_unused_numpy() -> list[str]:
@@ -88,6 +90,26 @@ def defer_unused_numpy() -> list[str]:
         setattr(numpy, name.rsplit(".", 1)[1], module)  # as an import binds it (numpy's __getattr__ would recurse)
         done.append(name)
     return done
+
+
+# commands whose work is vector-sized BLAS (``design()`` already holds BLAS to one thread, see
+# design/solve.single_thread_blas): OpenBLAS's thread pools (numpy's and scipy's) then only cost their start and
+# their spinning workers, about 0.08 CPU s of an 8x8 design's process and more wall time on a loaded box.
+SINGLE_THREAD_BLAS = ("design",)
+BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
+
+
+def single_thread_blas_process(command: str | None) -> bool:
+    """Start OpenBLAS with one thread (``OPENBLAS_NUM_THREADS=1``) for a command in ``SINGLE_THREAD_BLAS``.
+
+    Only before numpy loads (the pool size is read once, when the library loads) and only when the user set
+    none of ``BLAS_THREAD_VARS``; returns whether it set it. A no-op in a library caller's process."""
+    if command not in SINGLE_THREAD_BLAS or "numpy" in sys.modules:
+        return False
+    if any(v in os.environ for v in BLAS_THREAD_VARS):
+        return False
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    return True
 
 
 class _Parser(argparse.ArgumentParser):
@@ -144,6 +166,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.simplefilter("ignore")
         command = _command(argv)
         if command in SUMMARIES:  # a command loads numpy; `fabkiri --help` does not
+            single_thread_blas_process(command)
             defer_unused_numpy()
         parser = build_parser(command)
         args = parser.parse_args(argv)
