@@ -124,6 +124,8 @@ def test_rigid_8x8_design_loads_no_unused_scipy(tmp_path):
     assert "scipy.spatial._ckdtree" in mods  # the KD-tree was used
     assert not {"scipy.spatial", "scipy.special", "scipy.spatial.distance", "scipy.spatial.transform",
                 "scipy.optimize", "scipy.interpolate"} & set(mods)
+    # the ligament's cut bound needs no layout reader (verify.quads loads the DXF/SVG readers)
+    assert "fabkiri.fabricate.hingekinds.ligament" in mods and "fabkiri.verify.quads" not in mods
     assert first == "1 True"
 
 
