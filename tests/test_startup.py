@@ -3,6 +3,7 @@ module (timings live in bench/solve.py, not here)."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -89,18 +90,18 @@ def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
 
 
 def test_design_defers_unused_numpy_subpackages(tmp_path):
-    # scipy's array-API shim binds every numpy subpackage; numpy.f2py and numpy.testing stay unloaded (lazy)
+    # scipy's array-API shim binds every numpy subpackage; the DEFERRED ones stay unloaded (lazy)
     # through a design and still work when used
     code = ("import sys\nfrom fabkiri.cli.main import main\n"
             f"main(['design', '--tiles', '3x3', '--target', 'circle', '--rigid', '--no-preview', '-o', "
             f"{str(tmp_path / 'p.json')!r}])\n"
-            "lazy = [type(sys.modules[m]).__name__ for m in ('numpy.f2py', 'numpy.testing')]\n"
+            f"lazy = [type(sys.modules[m]).__name__ for m in {cli.DEFERRED!r}]\n"
             "print(lazy, 'charset_normalizer' in sys.modules, 'unittest' in sys.modules)\n"
             "import numpy as np\nnp.testing.assert_allclose(np.ones(2), np.ones(2))\n"
             "from numpy.testing import assert_array_equal\nassert_array_equal([1], [1])\n"
             "print(type(sys.modules['numpy.testing']).__name__)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
-    assert out[0] == "['_LazyModule', '_LazyModule'] False False"
+    assert out[0] == f"{['_LazyModule'] * len(cli.DEFERRED)} False False"
     assert out[1] == "module"  # loaded for real on first use
 
 
@@ -108,3 +109,49 @@ def test_defer_is_a_no_op_once_scipy_is_loaded():
     import scipy  # noqa: F401  (this test process has it)
 
     assert cli.defer_unused_numpy() == []
+
+
+def test_rigid_8x8_design_loads_no_unused_scipy(tmp_path):
+    # the rigid 8x8 circle of the start-up goal (issue #18), preview included: its KD-trees come from the
+    # compiled extension alone (fabkiri/kdtree.py), not through scipy.spatial, which loads scipy.special,
+    # scipy.spatial.distance and scipy.spatial.transform; OpenBLAS started with one thread; modules frozen
+    code = ("import gc, os, sys\nfrom fabkiri.cli.main import main\n"
+            f"main(['design', '--tiles', '8x8', '--target', 'circle', '--rigid', '-o', {str(tmp_path / 'p.json')!r}])\n"
+            "print(os.environ.get('OPENBLAS_NUM_THREADS'), gc.get_freeze_count() > 10000)\n"
+            "print('\\n'.join(sys.modules))")
+    env = {k: v for k, v in os.environ.items() if k not in cli.BLAS_THREAD_VARS}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    first, *mods = out.stdout.split("\n")
+    assert (tmp_path / "p.json").exists() and (tmp_path / "p.png").exists()
+    assert "scipy.spatial._ckdtree" in mods  # the KD-tree was used
+    assert not {"scipy.spatial", "scipy.special", "scipy.spatial.distance", "scipy.spatial.transform",
+                "scipy.optimize", "scipy.interpolate"} & set(mods)
+    # the ligament's cut bound needs no layout reader (verify.quads loads the DXF/SVG readers)
+    assert "fabkiri.fabricate.hingekinds.ligament" in mods and "fabkiri.verify.quads" not in mods
+    assert first == "1 True"
+
+
+def test_blas_threads_follow_the_user():
+    # a library caller's process (numpy loaded) and a user's own choice are left alone
+    assert "numpy" in sys.modules and not cli.single_thread_blas_process("design")
+    code = ("import os\nfrom fabkiri.cli.main import single_thread_blas_process as s\n"
+            "print(s('info'), s('design'), os.environ['OPENBLAS_NUM_THREADS'])")
+    env = {k: v for k, v in os.environ.items() if k not in cli.BLAS_THREAD_VARS}
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    assert run.stdout.split() == ["False", "True", "1"]
+    env["OMP_NUM_THREADS"] = "2"
+    code = code.replace("os.environ['OPENBLAS_NUM_THREADS']", "os.environ.get('OPENBLAS_NUM_THREADS')")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    assert run.stdout.split() == ["False", "False", "None"]
+
+
+def test_kdtree_is_scipys_class_before_and_after_scipy_spatial():
+    # loaded alone first, then `import scipy.spatial` reuses the same extension module: one class, one answer
+    code = ("import sys\nimport numpy as np\nfrom fabkiri.kdtree import KDTree\n"
+            "pts = np.random.default_rng(1).normal(size=(500, 2))\n"
+            "t = KDTree(pts)\nalone = 'scipy.spatial' in sys.modules\n"
+            "import scipy.spatial\n"
+            "d1, i1 = t.query(pts[:50] + 0.01, k=3)\nd2, i2 = scipy.spatial.cKDTree(pts).query(pts[:50] + 0.01, k=3)\n"
+            "print(alone, type(t) is scipy.spatial.cKDTree, (d1 == d2).all(), (i1 == i2).all())")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "True", "True", "True"]

@@ -15,6 +15,8 @@ what the modules register).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import gc
 import importlib
 import os
 import re
@@ -62,9 +64,11 @@ SUMMARIES = {
 
 
 # numpy subpackages no command uses but scipy's array-API shim imports (``from numpy import *`` in
-# scipy._lib.array_api_compat.numpy): numpy.f2py alone pulls charset_normalizer, numpy.testing unittest; about
-# 0.05 CPU s of every command's start-up. They are bound lazily instead: loaded on first attribute access.
-DEFERRED = ("numpy.f2py", "numpy.testing")
+# scipy._lib.array_api_compat.numpy): numpy.f2py alone pulls charset_normalizer, numpy.testing unittest, and
+# numpy.polynomial is large; about 0.06 CPU s of every command's start-up. They are bound lazily instead: loaded
+# on first attribute access. (Not numpy.random, which scipy._lib._util uses as it loads, nor numpy.ma, which
+# every np.unique call asks.)
+DEFERRED = ("numpy.f2py", "numpy.testing", "numpy.polynomial")
 
 
 def defer_unused_numpy() -> list[str]:
@@ -88,6 +92,45 @@ def defer_unused_numpy() -> list[str]:
         setattr(numpy, name.rsplit(".", 1)[1], module)  # as an import binds it (numpy's __getattr__ would recurse)
         done.append(name)
     return done
+
+
+# commands whose work is vector-sized BLAS (``design()`` already holds BLAS to one thread, see
+# design/solve.single_thread_blas): OpenBLAS's thread pools (numpy's and scipy's) then only cost their start and
+# their spinning workers, about 0.08 CPU s of an 8x8 design's process and more wall time on a loaded box.
+SINGLE_THREAD_BLAS = ("design",)
+BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
+
+
+def single_thread_blas_process(command: str | None) -> bool:
+    """Start OpenBLAS with one thread (``OPENBLAS_NUM_THREADS=1``) for a command in ``SINGLE_THREAD_BLAS``.
+
+    Only before numpy loads (the pool size is read once, when the library loads) and only when the user set
+    none of ``BLAS_THREAD_VARS``; returns whether it set it. A no-op in a library caller's process."""
+    if command not in SINGLE_THREAD_BLAS or "numpy" in sys.modules:
+        return False
+    if any(v in os.environ for v in BLAS_THREAD_VARS):
+        return False
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    return True
+
+
+@contextlib.contextmanager
+def modules_frozen(fresh: bool):
+    """Load a command's modules with the cyclic garbage collector off, then freeze what they made.
+
+    Loading numpy, scipy and the command's modules allocates a few hundred thousand long-lived objects, and
+    the collector walked them all again and again (about 0.03 CPU s of an 8x8 design's process, most of it
+    one full collection); frozen (``gc.freeze``), later collections skip them. Only in a ``fresh`` process
+    (numpy not yet loaded): a library caller's heap is left alone."""
+    if not fresh:
+        yield
+        return
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.freeze()
+        gc.enable()
 
 
 class _Parser(argparse.ArgumentParser):
@@ -143,9 +186,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not os.environ.get("FABKIRI_DEBUG"):
             warnings.simplefilter("ignore")
         command = _command(argv)
-        if command in SUMMARIES:  # a command loads numpy; `fabkiri --help` does not
-            defer_unused_numpy()
-        parser = build_parser(command)
+        fresh = command in SUMMARIES and "numpy" not in sys.modules
+        with modules_frozen(fresh):
+            if command in SUMMARIES:  # a command loads numpy; `fabkiri --help` does not
+                single_thread_blas_process(command)
+                defer_unused_numpy()
+            parser = build_parser(command)
         args = parser.parse_args(argv)
         return _run(args)
 

@@ -146,9 +146,9 @@ def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
     """
     S = np.array([1.0, -1.0]) if axis == "x" else np.array([-1.0, 1.0])
     mirrored = base * S
-    from scipy.spatial import cKDTree
+    from ..kdtree import KDTree
 
-    d, partner = cKDTree(base).query(mirrored)
+    d, partner = KDTree(base).query(mirrored)
     scale = np.linalg.norm(base[st.tiles[0, 1]] - base[st.tiles[0, 0]])
     if (d > 1e-6 * scale).any():
         raise InputError(f"symmetry {axis}: the lattice has no mirror image of itself about the {axis} axis")

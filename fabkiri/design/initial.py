@@ -100,7 +100,8 @@ def coarse_tile_map(base_coarse: np.ndarray, x_coarse: np.ndarray, tiles_coarse:
     tile takes the rotation and scale (a complex factor) of the nearest coarse tile of its checkerboard
     parity, so the alternating counter-rotation of the deployed pattern survives; shared nodes average."""
     from scipy.interpolate import LinearNDInterpolator
-    from scipy.spatial import cKDTree
+
+    from ..kdtree import KDTree
 
     lo_c, hi_c = base_coarse.min(0), base_coarse.max(0)
     lo_f, hi_f = base_fine.min(0), base_fine.max(0)
@@ -116,7 +117,7 @@ def coarse_tile_map(base_coarse: np.ndarray, x_coarse: np.ndarray, tiles_coarse:
     lin = LinearNDInterpolator(cc, qc)(cf)
     bad = ~np.isfinite(lin).all(1)
     if bad.any():  # outside the hull of coarse centres: extend by the nearest coarse tile's similarity
-        _, nn = cKDTree(cc).query(cf[bad])
+        _, nn = KDTree(cc).query(cf[bad])
         z = qc[nn] @ np.array([1, 1j]) + a[nn] * ((cf[bad] - cc[nn]) @ np.array([1, 1j]))
         lin[bad] = np.stack([z.real, z.imag], -1)
     par_c = np.add(*np.divmod(np.arange(len(tiles_coarse)), cols_coarse)) % 2
@@ -124,7 +125,7 @@ def coarse_tile_map(base_coarse: np.ndarray, x_coarse: np.ndarray, tiles_coarse:
     af = np.empty(len(tiles_fine), complex)
     for p in (0, 1):
         sc, sf = np.flatnonzero(par_c == p), np.flatnonzero(par_f == p)
-        _, idx = cKDTree(cc[sc]).query(cf[sf])
+        _, idx = KDTree(cc[sc]).query(cf[sf])
         af[sf] = a[sc[idx]]
     off = (Pf - cf[:, None]) @ np.array([1, 1j])
     wz = (lin @ np.array([1, 1j]))[:, None] + af[:, None] * off

@@ -19,9 +19,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..kdtree import KDTree
 from ..pattern.geometry import dot2
 from .spline import PeriodicCubic
 
@@ -191,7 +191,7 @@ class Target:
         """How far the curve is from symmetric about the x or y axis (relative to its size)."""
         d = self._dense
         m = d * (np.array([1.0, -1.0]) if axis == "x" else np.array([-1.0, 1.0]))
-        dist, _ = cKDTree(d).query(m)
+        dist, _ = KDTree(d).query(m)
         # dense polyline points are not mirror images of each other; compare with the spacing
         spacing = np.linalg.norm(np.diff(d, axis=0), axis=1).max()
         return float(max(0.0, dist.max() - spacing)) / self.size
@@ -222,8 +222,8 @@ class Target:
                 us = np.concatenate([uu[uu <= hi], [lo, hi]])
                 pts.append(np.column_stack([owner.point(us), np.full(len(us), s * lift)]))
                 params.append(us)
-            owner._arc_trees = (owner.corners.copy(), cKDTree(np.vstack(pts)), np.concatenate(params), lift,
-                                cKDTree(owner.point(seeds)), seeds)
+            owner._arc_trees = (owner.corners.copy(), KDTree(np.vstack(pts)), np.concatenate(params), lift,
+                                KDTree(owner.point(seeds)), seeds)
         _, tree, us, lift, whole, whole_u = owner._arc_trees
         return tree, us, lift, whole, whole_u, a, b
 

@@ -92,13 +92,13 @@ def nearest_chords(pts: np.ndarray, A: np.ndarray, B: np.ndarray):
     measured first, and a point is settled when its best distance is below the next midpoint's distance less
     the longest half chord (no other chord can come closer); the rest (rare) are measured against every chord.
     """
-    from scipy.spatial import cKDTree
+    from ..kdtree import KDTree
 
     E = len(A)
     k = min(NEAREST_CANDIDATES, E)
     mid = 0.5 * (A + B)
     half = 0.5 * float(np.sqrt(dot2(B - A, B - A)).max(initial=0.0))
-    dk, cand = cKDTree(mid).query(pts, k=k + 1 if k < E else k)
+    dk, cand = KDTree(mid).query(pts, k=k + 1 if k < E else k)
     bound = dk[:, k] - half if k < E else np.full(len(pts), np.inf)
     cand = np.sort(cand[:, :k], axis=1)  # argmin keeps the first minimum: the lowest index, as a full table
     t, foot, dist = _chord_feet(pts[:, None, :], A[cand], B[cand])

@@ -299,9 +299,9 @@ def print_bound(pattern: Pattern, style: str, printer: Printer, state: int = 1,
 def closest_pair(points: np.ndarray) -> float:
     """The smallest distance between two of ``points`` (distinct rows), by a KD-tree: O(n log n) where the
     pairwise matrix was O(n²) memory (1 GB of pivots at 64x64 tiles, 16 GB at 128x128)."""
-    from scipy.spatial import cKDTree
+    from ..kdtree import KDTree
 
-    d, _ = cKDTree(points).query(points, k=2)
+    d, _ = KDTree(points).query(points, k=2)
     return float(d[:, 1].min())
 
 

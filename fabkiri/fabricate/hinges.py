@@ -18,9 +18,9 @@ import numpy as np
 import shapely
 from scipy import sparse
 from scipy.sparse import csgraph
-from scipy.spatial import cKDTree
 
 from ..errors import FabricationError
+from ..kdtree import KDTree
 from ..pattern import fabricability as fab
 from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
@@ -40,7 +40,7 @@ def coincident_pairs(points: np.ndarray, eps: float) -> np.ndarray:
     """Index pairs ``(i, j)``, ``i < j``, of points closer than ``eps``."""
     if len(points) < 2:
         return np.zeros((0, 2), dtype=np.int64)
-    return cKDTree(points).query_pairs(eps, output_type="ndarray").astype(np.int64)
+    return KDTree(points).query_pairs(eps, output_type="ndarray").astype(np.int64)
 
 
 @dataclass(frozen=True)

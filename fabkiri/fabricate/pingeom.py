@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 from shapely.geometry import MultiPolygon, Polygon
 
 from ..errors import FabricationError
+from ..kdtree import KDTree
 from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
 from .printers import Printer
@@ -132,7 +132,7 @@ def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
     pivots = plan.hinge_xy[lone]
     wall = 2 * printer.nozzle_mm
     if len(pivots) > 1:
-        dist, _ = cKDTree(pivots).query(pivots, k=2)
+        dist, _ = KDTree(pivots).query(pivots, k=2)
         i = int(np.argmin(dist[:, 1]))
         if dist[i, 1] < 2 * g.hollow + wall:
             raise FabricationError(

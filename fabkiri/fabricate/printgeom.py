@@ -26,10 +26,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 from shapely.geometry import MultiPolygon, Polygon
 
 from ..errors import CheckFailed, FabricationError
+from ..kdtree import KDTree
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
@@ -114,7 +114,7 @@ def coincident_pairs(points: np.ndarray, tol: float, most: int = 2) -> np.ndarra
     partner = np.full(len(points), -1, dtype=np.int64)
     if len(points) < 2:
         return partner
-    pairs = cKDTree(points).query_pairs(tol, output_type="ndarray")
+    pairs = KDTree(points).query_pairs(tol, output_type="ndarray")
     if len(pairs):
         counts = np.bincount(pairs.ravel(), minlength=len(points))
         if counts.max() > most - 1:

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 
+from ..kdtree import KDTree
 from .geometry import kabsch
 
 SAMPLES_PER_SIZE = 4000  # sampling spacing h = size / this: Hausdorff exact to 1.25e-4 of the size
@@ -46,7 +46,7 @@ def densify(polygon: np.ndarray, h: float) -> np.ndarray:
     return p[idx] + f[:, None] * (q - p)[idx]
 
 
-def _to_curve(points: np.ndarray, curve_dense: np.ndarray, tree: cKDTree):
+def _to_curve(points: np.ndarray, curve_dense: np.ndarray, tree):
     """Distance of each point to the closed polyline through ``curve_dense`` and its foot point.
 
     The nearest dense vertex is found by the tree and the exact distance taken to the two segments beside
@@ -87,8 +87,8 @@ def measure(outline: np.ndarray, target: np.ndarray, size: float | None = None) 
     size = float(size_of(B) if size is None else size)
     h = size / SAMPLES_PER_SIZE
     Ad, Bd = densify(A, h), densify(B, h)
-    dA, fA = _to_curve(Ad, Bd, cKDTree(Bd))
-    dB, fB = _to_curve(Bd, Ad, cKDTree(Ad))
+    dA, fA = _to_curve(Ad, Bd, KDTree(Bd))
+    dB, fB = _to_curve(Bd, Ad, KDTree(Ad))
     wA = _arc_weights(Ad)
     wB = _arc_weights(Bd)
     if dA.max() >= dB.max():
@@ -201,7 +201,7 @@ def align_rigid(outline: np.ndarray, target: np.ndarray, iterations: int = 40, s
     B = np.asarray(target, float)
     h = size_of(B) / 1000
     Bd = densify(B, h)
-    tree = cKDTree(Bd)
+    tree = KDTree(Bd)
     Ad0 = densify(A, h)
     ca = _polygon(A).centroid
     cb = _polygon(B).centroid
@@ -234,7 +234,7 @@ def _fit(src: np.ndarray, dst: np.ndarray):
     return np.array([[c, -s], [s, c]]), t
 
 
-def _icp_step(src: np.ndarray, P: np.ndarray, Bd: np.ndarray, tree: cKDTree):
+def _icp_step(src: np.ndarray, P: np.ndarray, Bd: np.ndarray, tree):
     """One iterative-closest-point step onto the exact foot points on the target's segments."""
     _, foot = _to_curve(P, Bd, tree)
     R, t = _fit(src, foot)

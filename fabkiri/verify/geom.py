@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 
+from ..kdtree import KDTree
 from ..pattern import geometry
 
 
@@ -100,7 +100,7 @@ def overlap_depths(corners: np.ndarray, is_convex: np.ndarray | None = None
     centres = corners.mean(axis=1)
     d = corners - centres[:, None]
     radii = np.sqrt(_colmax(d[..., 0] ** 2 + d[..., 1] ** 2))
-    pairs = cKDTree(centres).query_pairs(2 * radii.max() * (1 + 1e-9), output_type="ndarray")
+    pairs = KDTree(centres).query_pairs(2 * radii.max() * (1 + 1e-9), output_type="ndarray")
     if len(pairs) == 0:
         return empty, empty, np.zeros(0)
     i, j = pairs.T
@@ -167,7 +167,7 @@ def snap_corners(corners: np.ndarray, eps: float) -> np.ndarray:
     from scipy.sparse import csgraph
 
     pts = corners.reshape(-1, 2)
-    pairs = cKDTree(pts).query_pairs(eps, output_type="ndarray")
+    pairs = KDTree(pts).query_pairs(eps, output_type="ndarray")
     if len(pairs) == 0:
         return corners.copy()
     n = len(pts)

@@ -7,8 +7,8 @@ mirrored tile is an error.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from ..kdtree import KDTree
 from ..pattern import geometry
 from ..pattern.model import Pattern
 
@@ -75,7 +75,7 @@ def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[
     reps = np.unique(label, return_index=True)[1]  # first member of every class
     members = {c: list(np.flatnonzero(label == c)[::-1]) for c in range(len(reps))}
     kk = min(k, len(reps))
-    _, cand = cKDTree(_descriptor(D[reps], L)).query(_descriptor(R, L), k=kk)
+    _, cand = KDTree(_descriptor(D[reps], L)).query(_descriptor(R, L), k=kk)
     cand = cand.reshape(n, kk)
     ri = np.repeat(np.arange(n), kk)
     ci = cand.ravel()
@@ -123,7 +123,7 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: l
     cap = geometry.mean_edge_length(Y)
     r0 = int(np.argmin(np.linalg.norm(cr - cr.mean(0), axis=1)))
     cands = np.argsort(np.linalg.norm(cy - cy.mean(0), axis=1))[:n_hyp]
-    tree = cKDTree(cr)
+    tree = KDTree(cr)
     k_ar = R.shape[1]  # the tile arity
     R4 = np.stack([np.roll(R, -k, axis=1) for k in range(k_ar)])  # every corner shift, once
     best: tuple[float, float, np.ndarray] | None = None  # (score, theta, t) of the best hypothesis

@@ -11,8 +11,8 @@ from collections.abc import Callable
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 
+from ..kdtree import KDTree
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from .report import Check
@@ -125,7 +125,7 @@ def _segments_near(segs: dict[int, np.ndarray]) -> Callable[[int, np.ndarray, in
     """``near(sheet, Q, k)``: the sheet's segments whose first end is close enough to corner ``k`` of
     ``Q`` to span it (a KD-tree per sheet: every corner against every engraved segment, labels
     included, took 84 of 96 s for a 32x32 sheet)."""
-    trees = {s: cKDTree(v[:, 0]) for s, v in segs.items() if len(v)}
+    trees = {s: KDTree(v[:, 0]) for s, v in segs.items() if len(v)}
     none = np.zeros((0, 2, 2))
 
     def near(sheet: int, Q: np.ndarray, k: int) -> np.ndarray:

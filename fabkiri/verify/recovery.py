@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import shapely
 from scipy.sparse import csgraph
-from scipy.spatial import cKDTree
 
 from ..errors import VerifyError
+from ..kdtree import KDTree
 from .hingeread import PLAIN, HingeReading, reading, register_reading
 from .manifest import Allowances
 from .matching import match_by_shape
@@ -61,7 +61,7 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
     use = (local < n[owner] - 1) | np.asarray(lw.closed)[owner]
     segs = np.stack([pts[use], pts[nxt[use]]], 1)
     pts = segs.reshape(-1, 2)
-    pairs = cKDTree(pts).query_pairs(eps, output_type="ndarray")
+    pairs = KDTree(pts).query_pairs(eps, output_type="ndarray")
     if len(pairs):
         from scipy import sparse
 

@@ -14,7 +14,6 @@ import shapely
 
 from ...errors import FabricationError
 from ...pattern import fabricability as fab
-from ...verify.quads import UNDO_MITRE
 from .. import fabricability as fb
 from .. import hinges as hg
 from ..drawing import snap
@@ -56,6 +55,9 @@ class Ligament(HingeKind):
                 "nothing to join"]
 
     def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
+        # the verifier's reader, imported here: a design's cut bounds load this module but not the reader
+        from ...verify.quads import UNDO_MITRE
+
         # the material (a ring inside another ring is a hole of that piece) less the declared strips
         rings = sheet.polys[~sheet.is_ref]
         ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
@@ -108,6 +110,8 @@ def _left_by_laser(material: shapely.Geometry, outline: shapely.Geometry, offset
     """The material the laser leaves: ``material`` and the notches narrower than the kerf that its
     offset toolpath fills (a strip meeting a small tile's edge at a shallow angle leaves one), so the
     declared spans cover them. ``material`` itself where the toolpath fills nothing (any quad sheet)."""
+    from ...verify.quads import UNDO_MITRE
+
     if not offset:
         return material
     back = shapely.buffer(outline, -offset, join_style="mitre", mitre_limit=UNDO_MITRE)
