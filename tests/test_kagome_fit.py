@@ -179,3 +179,29 @@ def test_convex_rows_bound_the_hole_corners_only():
     hole_gaps = sum(int((p.topology.gap_face[np.arange(p.topology.n_hinges), p.topology.fold(s).fold_gap] >= 0).sum())
                     for s in (1, 2))
     assert np.count_nonzero(r) == hole_gaps < 2 * p.topology.n_hinges
+
+
+def test_symmetry_is_every_shared_mirror_one_named_mirror_or_none():
+    """``design(symmetry=...)``: True takes every mirror the lattice and the target share, a named axis
+    that one alone (refused when the lattice or the target lacks it), False none."""
+    from fabkiri.design import targets as TG
+    from fabkiri.design.kagome_fit import mirror_axes
+    from fabkiri.errors import InputError
+
+    odd, even = standard_kagome(6, 11), standard_kagome(6, 10)  # a vertical mirror needs C odd
+    circle, heart = TG.circle().scaled_to(120.0), TG.heart().scaled_to(120.0)
+    assert [a for a, _ in mirror_axes(odd, circle)] == ["y", "x"]
+    assert [a for a, _ in mirror_axes(odd, circle, "y")] == ["y"]
+    assert [a for a, _ in mirror_axes(odd, heart)] == ["y"]  # a heart has no horizontal mirror
+    assert mirror_axes(odd, circle, False) == []
+    with pytest.raises(InputError, match="no mirror about the y axis"):
+        mirror_axes(even, circle, "y")
+    with pytest.raises(InputError, match="not symmetric about the x axis"):
+        mirror_axes(odd, heart, "x")
+
+
+def test_cli_kagome_symmetry_that_the_lattice_lacks_is_refused(tmp_path, run_cli):
+    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x10", "--target", "circle",
+                           "--symmetry", "y", "-o", tmp_path / "k.json")
+    assert code == 2 and "no mirror about the y axis" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "k.json").exists()
