@@ -34,8 +34,16 @@ from fabkiri.pattern.lattice import standard_pattern
 def run(pattern, material, hinge, labels):
     c0 = time.process_time()
     t0 = time.perf_counter()
-    r = cut_pattern(pattern, CutOptions(material=load_material(material), hinge=hinge, formats=("dxf", "svg"),
-                                        labels=labels, stem="bench"))
+    r = cut_pattern(
+        pattern,
+        CutOptions(
+            material=load_material(material),
+            hinge=hinge,
+            formats=("dxf", "svg"),
+            labels=labels,
+            stem="bench",
+        ),
+    )
     t1 = time.perf_counter()
     files = dict(r.files)
     files["manifest.json"] = r.manifest_bytes()
@@ -51,8 +59,16 @@ def run(pattern, material, hinge, labels):
     failed = [c.name for c in rb.failed()]
     for key, rep in ver.get("files", {}).items():
         failed += [f"verifier {key}: {c['name']}" for c in rep.get("checks", []) if not c["ok"]]
-    return {"cut": t1 - t0, "self": t2 - t1, "verify": t3 - t2, "total": t3 - t0, "cpu": cpu, "entities": n,
-            "sheets": len(r.sheets), "failed": failed}
+    return {
+        "cut": t1 - t0,
+        "self": t2 - t1,
+        "verify": t3 - t2,
+        "total": t3 - t0,
+        "cpu": cpu,
+        "entities": n,
+        "sheets": len(r.sheets),
+        "failed": failed,
+    }
 
 
 def floor(n: int) -> dict:
@@ -64,7 +80,9 @@ def floor(n: int) -> dict:
     doc = ezdxf.new("R2010", units=4)
     msp = doc.modelspace()
     for i in range(n):
-        msp.add_lwpolyline([(i, 0), (i + 1, 1), (i, 2), (i + 1, 3)], format="xy", dxfattribs={"layer": "CUT"})
+        msp.add_lwpolyline(
+            [(i, 0), (i + 1, 1), (i, 2), (i + 1, 3)], format="xy", dxfattribs={"layer": "CUT"}
+        )
     buf = io.StringIO()
     doc.write(buf)
     t1 = time.perf_counter()
@@ -87,21 +105,29 @@ def main() -> None:
     args = ap.parse_args()
     n = args.size
     pattern = with_contracted_states(standard_pattern(n, n))
-    print(f"{n}x{n} standard pattern, 10 mm tiles, {args.material}, {args.hinge} hinges, DXF + SVG (target < 3 s)")
+    print(
+        f"{n}x{n} standard pattern, 10 mm tiles, {args.material}, {args.hinge} hinges, DXF + SVG (target < 3 s)"
+    )
     print("load average before: " + " ".join(f"{x:.2f}" for x in os.getloadavg()))
-    print(f"{'labels':>7} {'sheets':>6} {'entities':>8} {'cut+write':>9} {'self-check':>10} {'verifier':>8} "
-          f"{'total':>7} {'slowest':>7} {'CPU':>6}  failed checks (best of {args.repeat})")
+    print(
+        f"{'labels':>7} {'sheets':>6} {'entities':>8} {'cut+write':>9} {'self-check':>10} {'verifier':>8} "
+        f"{'total':>7} {'slowest':>7} {'CPU':>6}  failed checks (best of {args.repeat})"
+    )
     rows = {}
     for labels in (False, True):
         runs = [run(pattern, args.material, args.hinge, labels) for _ in range(max(1, args.repeat))]
         m = rows[labels] = min(runs, key=lambda r: r["total"])
         failed = sorted({f for r in runs for f in r["failed"]})
-        print(f"{str(labels):>7} {m['sheets']:>6} {m['entities']:>8} {m['cut']:>8.2f}s {m['self']:>9.2f}s "
-              f"{m['verify']:>7.2f}s {m['total']:>6.2f}s {max(r['total'] for r in runs):>6.2f}s {m['cpu']:>5.2f}s  "
-              f"{', '.join(failed) or '-'}")
+        print(
+            f"{str(labels):>7} {m['sheets']:>6} {m['entities']:>8} {m['cut']:>8.2f}s {m['self']:>9.2f}s "
+            f"{m['verify']:>7.2f}s {m['total']:>6.2f}s {max(r['total'] for r in runs):>6.2f}s {m['cpu']:>5.2f}s  "
+            f"{', '.join(failed) or '-'}"
+        )
     base = floor(rows[True]["entities"])
-    print(f"baseline (same run): ezdxf writes {rows[True]['entities']} bare LWPOLYLINEs in {base['dxf_write']:.2f} s "
-          f"and reads them in {base['dxf_read']:.2f} s; svgwrite writes as many paths in {base['svg_write']:.2f} s")
+    print(
+        f"baseline (same run): ezdxf writes {rows[True]['entities']} bare LWPOLYLINEs in {base['dxf_write']:.2f} s "
+        f"and reads them in {base['dxf_read']:.2f} s; svgwrite writes as many paths in {base['svg_write']:.2f} s"
+    )
     print("load average after: " + " ".join(f"{x:.2f}" for x in os.getloadavg()))
 
 

@@ -30,12 +30,18 @@ CONFIGS = {
 
 def run(*args: str) -> tuple[int, str, float]:
     t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", *args], capture_output=True, text=True)
+    p = subprocess.run(
+        [sys.executable, "-m", "fabkiri.cli.main", *args], capture_output=True, text=True
+    )
     return p.returncode, p.stderr, time.perf_counter() - t0
 
 
 def last(err: str) -> str:
-    lines = [ln for ln in err.strip().splitlines() if ln.startswith("fabkiri:")] or err.strip().splitlines() or [""]
+    lines = (
+        [ln for ln in err.strip().splitlines() if ln.startswith("fabkiri:")]
+        or err.strip().splitlines()
+        or [""]
+    )
     return lines[-1][:170]
 
 
@@ -46,8 +52,12 @@ def slice_all(folder: Path) -> str:
         return "no prusa-slicer"
     files = sorted(folder.glob("*.3mf"))
     for f in files:
-        p = subprocess.run([exe, "--export-gcode", str(f), "-o", str(f.with_suffix(".gcode"))],
-                           capture_output=True, text=True, timeout=900)
+        p = subprocess.run(
+            [exe, "--export-gcode", str(f), "-o", str(f.with_suffix(".gcode"))],
+            capture_output=True,
+            text=True,
+            timeout=900,
+        )
         if p.returncode or not f.with_suffix(".gcode").exists():
             return f"slice FAIL {f.name}: {(p.stderr or p.stdout).strip().splitlines()[-1:]}"
     return f"sliced {len(files)}"
@@ -57,8 +67,18 @@ def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> tuple[str, P
     flags, after = CONFIGS[name]
     stem = stem_of(name, tgt, tiles, rigid)
     pj = out / f"{stem}.json"
-    code, err, t = run("design", "--tiles", tiles, "--target", tgt, *flags, *(["--rigid"] if rigid else []),
-                       "--no-preview", "-o", str(pj))
+    code, err, t = run(
+        "design",
+        "--tiles",
+        tiles,
+        "--target",
+        tgt,
+        *flags,
+        *(["--rigid"] if rigid else []),
+        "--no-preview",
+        "-o",
+        str(pj),
+    )
     line = f"{stem:44s} design {code}"
     if not pj.exists():
         return line + "  " + last(err), None
@@ -67,8 +87,10 @@ def one(out: Path, name: str, tgt: str, tiles: str, rigid: bool) -> tuple[str, P
     act = sum(fr.get("active", {}).values())
     conf = (rep.get("conformance") or {}).get("deployed") or {}
     thin = rep["fabricability"]["thinnest_tile_mm"]
-    line += (f" {rep['status']:11s} active {act:3d} thinnest {thin:6.3g} mm Hausdorff "
-             f"{100 * conf.get('hausdorff_rel', float('nan')):5.2f} %")
+    line += (
+        f" {rep['status']:11s} active {act:3d} thinnest {thin:6.3g} mm Hausdorff "
+        f"{100 * conf.get('hausdorff_rel', float('nan')):5.2f} %"
+    )
     cont = rep.get("continuation")
     if cont:
         line += f" [{cont['how']}]"
@@ -86,14 +108,18 @@ def stem_of(name: str, tgt: str, tiles: str, rigid: bool) -> str:
 def matrix(out: Path, sizes, configs, jobs: int, pick: list[str] | None = None) -> None:
     """Designs and cut/print on ``jobs`` workers; the slow slices of each printed folder in the background,
     one at a time, printed as they finish. ``pick``: only the cases whose stem is listed, in that order."""
-    cases = [(n, tg, ti, r) for n in configs for tg in TARGETS for ti in sizes for r in (False, True)]
+    cases = [
+        (n, tg, ti, r) for n in configs for tg in TARGETS for ti in sizes for r in (False, True)
+    ]
     if pick:
         by_stem = {stem_of(*c): c for c in cases}
         cases = [by_stem[s] for s in pick]
 
     def sliced(folder: Path) -> None:
         t = time.perf_counter()
-        print(f"{folder.name:44s} {slice_all(folder)}  ({time.perf_counter() - t:.0f} s)", flush=True)
+        print(
+            f"{folder.name:44s} {slice_all(folder)}  ({time.perf_counter() - t:.0f} s)", flush=True
+        )
 
     with ThreadPoolExecutor(1) as slicer, ThreadPoolExecutor(jobs) as ex:
         for line, folder in ex.map(lambda c: one(out, *c), cases):
@@ -107,8 +133,20 @@ def heart(out: Path) -> None:
     for rigid in ([], ["--rigid"]):
         for what, flags in (("without", []), ("acrylic-3", ["--material", "acrylic-3"])):
             pj = out / f"heart16-200-{what}{''.join(rigid)}.json"
-            code, err, t = run("design", "--tiles", "16x16", "--target", "heart", "--size", "200", *flags, *rigid,
-                               "--no-preview", "-o", str(pj))
+            code, err, t = run(
+                "design",
+                "--tiles",
+                "16x16",
+                "--target",
+                "heart",
+                "--size",
+                "200",
+                *flags,
+                *rigid,
+                "--no-preview",
+                "-o",
+                str(pj),
+            )
             name = f"heart 16x16 200 mm {what:9s}{' rigid' if rigid else ''}"
             if not pj.exists():
                 print(f"{name}: exit {code} {last(err)}")
@@ -116,9 +154,12 @@ def heart(out: Path) -> None:
             rep = json.loads(pj.read_text())["design"]["report"]
             conf = rep["conformance"]["deployed"]
             how = (rep.get("continuation") or {}).get("how", "")
-            print(f"{name}: exit {code} {rep['status']}, thinnest tile "
-                  f"{rep['fabricability']['thinnest_tile_mm']:.3g} mm, Hausdorff {conf['hausdorff_mm']:.3g} mm "
-                  f"({100 * conf['hausdorff_rel']:.2f} %) {how} ({t:.0f} s)", flush=True)
+            print(
+                f"{name}: exit {code} {rep['status']}, thinnest tile "
+                f"{rep['fabricability']['thinnest_tile_mm']:.3g} mm, Hausdorff {conf['hausdorff_mm']:.3g} mm "
+                f"({100 * conf['hausdorff_rel']:.2f} %) {how} ({t:.0f} s)",
+                flush=True,
+            )
 
 
 def frontier(out: Path, widths=(2.0, 3.0, 3.5, 4.0, 4.5, 5.0)) -> None:
@@ -135,25 +176,43 @@ def frontier(out: Path, widths=(2.0, 3.0, 3.5, 4.0, 4.5, 5.0)) -> None:
     from fabkiri.pattern import fabricability as fab
 
     tgt = load_target("heart", 200)
-    base = DesignRequest(rows=16, cols=16, target=tgt, rigid=True, init="rescaled", second_opinion=False)
+    base = DesignRequest(
+        rows=16, cols=16, target=tgt, rigid=True, init="rescaled", second_opinion=False
+    )
     free = design(base).pattern.nodes
     for w in widths:
         c0 = time.process_time()
-        req = replace(base, fabrication=FabricationLimits(min_width_mm=w, hinge_spacing_mm=w, margin=0.02))
+        req = replace(
+            base, fabrication=FabricationLimits(min_width_mm=w, hinge_spacing_mm=w, margin=0.02)
+        )
         one = design(replace(req, start=free))
         h0 = deployed(one.pattern.nodes, one.pattern.topology, tgt)["hausdorff_rel"]
         best, trace, _ = refine_minimax(req, one.pattern.nodes)
         kept = best if best is not None and min(trace) < h0 else one
-        print(f"w {w:4.1f} mm (w/size {w / 200:.4f}): one step H {100 * h0:.2f} %, refined H "
-              f"{100 * min([h0, *[t for t in trace if t == t]]):.2f} %, thinnest "
-              f"{fab.widths(kept.pattern.corners()).min():.2f} mm; 3 mm tiles at {600 / w:.0f} mm "
-              f"({time.process_time() - c0:.1f} CPU s)", flush=True)
+        print(
+            f"w {w:4.1f} mm (w/size {w / 200:.4f}): one step H {100 * h0:.2f} %, refined H "
+            f"{100 * min([h0, *[t for t in trace if t == t]]):.2f} %, thinnest "
+            f"{fab.widths(kept.pattern.corners()).min():.2f} mm; 3 mm tiles at {600 / w:.0f} mm "
+            f"({time.process_time() - c0:.1f} CPU s)",
+            flush=True,
+        )
 
 
 def impossible(out: Path) -> None:
     pj = out / "star64.json"
-    code, err, t = run("design", "--tiles", "64x64", "--target", "star", "--size", "50", "--material", "acrylic-3",
-                       "-o", str(pj))
+    code, err, t = run(
+        "design",
+        "--tiles",
+        "64x64",
+        "--target",
+        "star",
+        "--size",
+        "50",
+        "--material",
+        "acrylic-3",
+        "-o",
+        str(pj),
+    )
     print(f"64x64 star at 50 mm, acrylic-3: exit {code}, wrote {pj.exists()}: {err.strip()}")
 
 
@@ -173,21 +232,50 @@ def summary_cost() -> None:
         for pr in available_printers():
             fb.print_minimum(p, "tiles-and-strips", load_printer(pr))
         tb = time.process_time() - t
-        print(f"summary {name}: {ts:.3f} CPU s (all {len(available_printers())} printers x 3 styles, closed form); "
-              f"bisection, tiles-and-strips only: {tb:.2f} CPU s", flush=True)
+        print(
+            f"summary {name}: {ts:.3f} CPU s (all {len(available_printers())} printers x 3 styles, closed form); "
+            f"bisection, tiles-and-strips only: {tb:.2f} CPU s",
+            flush=True,
+        )
 
 
 README_DESIGNS = {  # the designs of README.md's "Designing" section
-    "circle 16x16 rigid 120 mm": ["--tiles", "16x16", "--target", "circle", "--size", "120", "--rigid"],
+    "circle 16x16 rigid 120 mm": [
+        "--tiles",
+        "16x16",
+        "--target",
+        "circle",
+        "--size",
+        "120",
+        "--rigid",
+    ],
     "heart 16x16": ["--tiles", "16x16", "--target", "heart"],
     "blob-points.csv 8x8": ["--tiles", "8x8", "--target", "templates/targets/blob-points.csv"],
-    "square/circle 9x9 rigid": ["--tiles", "9x9", "--rigid", "--contracted-target", "1:square",
-                                "--contracted-target", "2:circle"],
-    "ellipse 8x8 sym x parallelogram": ["--tiles", "8x8", "--target", "ellipse", "--symmetry", "x", "--holes",
-                                        "parallelogram"],
+    "square/circle 9x9 rigid": [
+        "--tiles",
+        "9x9",
+        "--rigid",
+        "--contracted-target",
+        "1:square",
+        "--contracted-target",
+        "2:circle",
+    ],
+    "ellipse 8x8 sym x parallelogram": [
+        "--tiles",
+        "8x8",
+        "--target",
+        "ellipse",
+        "--symmetry",
+        "x",
+        "--holes",
+        "parallelogram",
+    ],
 }
-TABLE_FOR = {"before": [], "acrylic-3": ["--material", "acrylic-3"],
-             "pp-0.5 ligament": ["--material", "pp-0.5", "--hinge", "ligament"]}
+TABLE_FOR = {
+    "before": [],
+    "acrylic-3": ["--material", "acrylic-3"],
+    "pp-0.5 ligament": ["--material", "pp-0.5", "--hinge", "ligament"],
+}
 
 
 def table(out: Path, pick: list[str] | None = None) -> None:
@@ -196,14 +284,20 @@ def table(out: Path, pick: list[str] | None = None) -> None:
     from fabkiri.fabricate.materials import available, load_material
 
     mats = available()
-    print("| design | made for | status | thinnest tile mm | " + " | ".join(f"{m} ({load_material(m).hinge}) mm"
-                                                                  for m in mats) + " |")
+    print(
+        "| design | made for | status | thinnest tile mm | "
+        + " | ".join(f"{m} ({load_material(m).hinge}) mm" for m in mats)
+        + " |"
+    )
     print("|" + "---|" * (4 + len(mats)))
     for name, args in README_DESIGNS.items():
         if pick and name not in pick:
             continue
         for what, flags in TABLE_FOR.items():
-            pj = out / f"table-{name.replace('/', '-').replace(' ', '_')}-{what.replace(' ', '_')}.json"
+            pj = (
+                out
+                / f"table-{name.replace('/', '-').replace(' ', '_')}-{what.replace(' ', '_')}.json"
+            )
             code, err, t = run("design", *args, *flags, "--no-preview", "-o", str(pj))
             if not pj.exists():
                 print(f"| {name} | {what} | exit {code}: {last(err)[:80]} |")
@@ -216,13 +310,19 @@ def table(out: Path, pick: list[str] | None = None) -> None:
                 cells.append("never" if c["min_width_mm"] is None else f"{c['min_width_mm']:.4g}")
             shape = (rep.get("conformance") or {}).get("deployed", {}).get("hausdorff_rel")
             extra = "" if shape is None else f", H {100 * shape:.2f} %"
-            print(f"| {name} | {what} | {rep['status']}{extra} ({t:.0f} s) | {fb['thinnest_tile_mm']:.3g} | "
-                  + " | ".join(cells) + " |", flush=True)
+            print(
+                f"| {name} | {what} | {rep['status']}{extra} ({t:.0f} s) | {fb['thinnest_tile_mm']:.3g} | "
+                + " | ".join(cells)
+                + " |",
+                flush=True,
+            )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--table", action="store_true", help="the README designs' table, before and after")
+    ap.add_argument(
+        "--table", action="store_true", help="the README designs' table, before and after"
+    )
     ap.add_argument("--quick", action="store_true", help="8x8 only")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="/tmp/fabkiri-bench-fabrication")
@@ -244,8 +344,13 @@ def main() -> None:
     if "frontier" in parts:
         frontier(out)
     if "matrix" in parts:
-        matrix(out, ("8x8",) if a.quick else ("8x8", "16x16"), a.configs.split(","), a.jobs,
-               [s for s in a.pick.split(",") if s])
+        matrix(
+            out,
+            ("8x8",) if a.quick else ("8x8", "16x16"),
+            a.configs.split(","),
+            a.jobs,
+            [s for s in a.pick.split(",") if s],
+        )
 
 
 if __name__ == "__main__":

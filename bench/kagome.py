@@ -23,8 +23,10 @@ from fabkiri.pattern.kagome import standard_kagome
 
 
 def table(sizes: list[tuple[int, int]]) -> None:
-    print("| R×C | tiles | hinges | holes | free | unknowns | contractible eqs / rank / dim "
-          "| reconfigurable eqs / rank / dim (standard; generic) | mobility | CPU s |")
+    print(
+        "| R×C | tiles | hinges | holes | free | unknowns | contractible eqs / rank / dim "
+        "| reconfigurable eqs / rank / dim (standard; generic) | mobility | CPU s |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for rows, cols in sizes:
         t0 = time.process_time()
@@ -33,10 +35,13 @@ def table(sizes: list[tuple[int, int]]) -> None:
         one, both = K.count(p, (1,)), K.count(p, (1, 2))
         x = K.nearby_solution(p, (1, 2), seed=3, step=0.003)
         gen = K.count(p, (1, 2), x)
-        print(f"| {rows}×{cols} | {top.n_tiles} | {top.n_hinges} | {top.n_holes} | "
-              f"{len(top.free_nodes)} | {one.unknowns} | {one.equations} / {one.rank} / {one.dimension} | "
-              f"{both.equations} / {both.rank} / {both.dimension}; {gen.rank} / {gen.dimension} | "
-              f"{K.linkage_mobility(p)} | {time.process_time() - t0:.1f} |", flush=True)
+        print(
+            f"| {rows}×{cols} | {top.n_tiles} | {top.n_hinges} | {top.n_holes} | "
+            f"{len(top.free_nodes)} | {one.unknowns} | {one.equations} / {one.rank} / {one.dimension} | "
+            f"{both.equations} / {both.rank} / {both.dimension}; {gen.rank} / {gen.dimension} | "
+            f"{K.linkage_mobility(p)} | {time.process_time() - t0:.1f} |",
+            flush=True,
+        )
 
 
 def _draw(ax, corners: np.ndarray, up: np.ndarray, title: str) -> None:

@@ -25,8 +25,15 @@ from fabkiri.mechanics.deploy import collisions, deployment_path
 from fabkiri.pattern.kagome import standard_kagome
 
 DESIGNS = [(9, 15, "circle", 180), (6, 10, "ellipse", 120), (6, 10, "heart", 120)]
-MORE = [(6, 10, "circle", 120), (5, 18, "ellipse", 198), (12, 20, "circle", 240),
-        (9, 15, "ellipse", 180), (8, 28, "ellipse", 300), (9, 15, "heart", 180), (12, 20, "heart", 240)]
+MORE = [
+    (6, 10, "circle", 120),
+    (5, 18, "ellipse", 198),
+    (12, 20, "circle", 240),
+    (9, 15, "ellipse", 180),
+    (8, 28, "ellipse", 300),
+    (9, 15, "heart", 180),
+    (12, 20, "heart", 240),
+]
 
 
 def generic(rows: int, cols: int, step: float):
@@ -50,10 +57,12 @@ def row(name: str, p, steps: int) -> str:
     s, sol = path.summary(), path.solver
     reach = max(path.state_mismatch.values()) / p.tile_size
     deployed = len(collisions(p.corners()[None], p.tile_size).overlaps)
-    return (f"| {name} | {p.n_tiles} | {reach:.1e} | {max(s['energy_at_states'].values()):.1e} | "
-            f"{s['energy_max']:.3g} | {sol['largest_substep_move_tile_sizes']:.3f} / "
-            f"{sol['rigid_blend_largest_substep_move_tile_sizes']:.3f} | {sol['mirrored_tiles_max']} | "
-            f"{s['overlaps']} ({deployed}) | {cpu:.1f} |")
+    return (
+        f"| {name} | {p.n_tiles} | {reach:.1e} | {max(s['energy_at_states'].values()):.1e} | "
+        f"{s['energy_max']:.3g} | {sol['largest_substep_move_tile_sizes']:.3f} / "
+        f"{sol['rigid_blend_largest_substep_move_tile_sizes']:.3f} | {sol['mirrored_tiles_max']} | "
+        f"{s['overlaps']} ({deployed}) | {cpu:.1f} |"
+    )
 
 
 def main() -> None:
@@ -62,8 +71,10 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=40)
     a = ap.parse_args()
     print(f"load average {os.getloadavg()[0]:.1f}")
-    print("| pattern | tiles | reach | E at the states | E_max | step / blend | turned over | "
-          "overlaps | CPU s |")
+    print(
+        "| pattern | tiles | reach | E at the states | E_max | step / blend | turned over | "
+        "overlaps | CPU s |"
+    )
     for name, p in patterns(a.all):
         print(row(name, p, a.steps), flush=True)
     print(f"load average {os.getloadavg()[0]:.1f}")

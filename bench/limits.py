@@ -31,15 +31,28 @@ peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 print(f"RESULT {rc} {cpu() - c0:.4f} {peak - base} {time.perf_counter() - t0:.4f}")
 """
 
-BASE = {"new": [], "design full": ["--target", "circle", "--solver", "full", "--init", "rescaled"],
-        "design rigid": ["--target", "circle", "--rigid"]}
+BASE = {
+    "new": [],
+    "design full": ["--target", "circle", "--solver", "full", "--init", "rescaled"],
+    "design rigid": ["--target", "circle", "--rigid"],
+}
 
 
 def run(kind: str, n: int, out: str) -> tuple[float, float]:
-    argv = (["new"] if kind == "new" else ["design"]) + ["--tiles", f"{n}x{n}", *BASE[kind], "--i-know",
-                                                            "-o", out]
-    r = subprocess.run([sys.executable, "-c", CHILD, *argv], capture_output=True, text=True,
-                       env={**os.environ, "FABKIRI_NO_LIMITS": "1"})
+    argv = (["new"] if kind == "new" else ["design"]) + [
+        "--tiles",
+        f"{n}x{n}",
+        *BASE[kind],
+        "--i-know",
+        "-o",
+        out,
+    ]
+    r = subprocess.run(
+        [sys.executable, "-c", CHILD, *argv],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "FABKIRI_NO_LIMITS": "1"},
+    )
     line = [l for l in r.stdout.splitlines() if l.startswith("RESULT")]
     if not line:
         raise SystemExit(f"{kind} {n}x{n} failed: {r.stderr[-400:]}")
@@ -49,9 +62,11 @@ def run(kind: str, n: int, out: str) -> tuple[float, float]:
 
 def main() -> None:
     quick = "--quick" in sys.argv
-    sizes = {"new": [64, 128, 256, 512] if not quick else [32, 64],
-             "design full": [16, 32] if not quick else [8, 16],  # 64x64: stopped after 458 CPU s
-             "design rigid": [32, 64, 128] if not quick else [16, 32]}
+    sizes = {
+        "new": [64, 128, 256, 512] if not quick else [32, 64],
+        "design full": [16, 32] if not quick else [8, 16],  # 64x64: stopped after 458 CPU s
+        "design rigid": [32, 64, 128] if not quick else [16, 32],
+    }
     print(f"load average {os.getloadavg()[0]:.2f}")
     fits = {}
     with tempfile.TemporaryDirectory() as d:
@@ -60,12 +75,18 @@ def main() -> None:
             for n in ns:
                 secs, mb, wall = run(kind, n, os.path.join(d, "p.json"))
                 rows.append((n * n, secs, mb))
-                print(f"{kind:13s} {n:4d}x{n:<4d} CPU {secs:8.2f} s (wall {wall:7.2f} s, load "
-                      f"{os.getloadavg()[0]:.1f})  peak {mb:8.1f} MB", flush=True)
+                print(
+                    f"{kind:13s} {n:4d}x{n:<4d} CPU {secs:8.2f} s (wall {wall:7.2f} s, load "
+                    f"{os.getloadavg()[0]:.1f})  peak {mb:8.1f} MB",
+                    flush=True,
+                )
             (n0, s0, m0), (n1, s1, m1) = rows[-2:]
             pt, pm = np.log(s1 / s0) / np.log(n1 / n0), np.log(m1 / m0) / np.log(n1 / n0)
             fits[kind] = [[n, round(s, 2), round(m, 1)] for n, s, m in rows]
-            print(f"{kind:13s} from {n1} tiles: time ~ tiles^{pt:.2f}, memory ~ tiles^{pm:.2f}", flush=True)
+            print(
+                f"{kind:13s} from {n1} tiles: time ~ tiles^{pt:.2f}, memory ~ tiles^{pm:.2f}",
+                flush=True,
+            )
     print("MEASURED =", json.dumps(fits))
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
 

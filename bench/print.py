@@ -49,14 +49,18 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--rows", type=int, default=32)
     ap.add_argument("--printer", default="prusa-xl-2t")
-    ap.add_argument("--step", action="store_true", help="also time the STEP export (needs build123d)")
+    ap.add_argument(
+        "--step", action="store_true", help="also time the STEP export (needs build123d)"
+    )
     args = ap.parse_args()
     n = args.rows
     printer = load_printer(args.printer)
     pattern = with_contracted_states(standard_pattern(n, n))
     print(f"{n}x{n} tiles ({pattern.topology.n_hinges} hinges), printer {printer.name}")
     t0, c0 = time.perf_counter(), time.process_time()
-    job, _ = stage("plan (shrink, faces, strips)", mesh.build_job, pattern, "tiles-and-strips", 1, printer)
+    job, _ = stage(
+        "plan (shrink, faces, strips)", mesh.build_job, pattern, "tiles-and-strips", 1, printer
+    )
     r, _ = stage("solids (manifold3d) + meshes", mesh.realise_job, job)
     rep, _ = stage("mesh checks (watertight, clearance)", mesh.check_meshes, r)
     tc, _ = stage("printed tiles vs closed state", mesh.check_printed_tiles, r)
@@ -68,18 +72,23 @@ def main() -> None:
     total, cpu = time.perf_counter() - t0, time.process_time() - c0
     ok = rep.ok and tc.ok and vr.ok and all(v["ok"] for v in rb.values())
     load = os.getloadavg()[0]  # the machine is shared: wall time counts the other jobs too
-    print(f"TOTAL pattern -> 3MF + STLs: {total:.2f} s wall (load average {load:.1f} on {os.cpu_count()} cores), "
-          f"{cpu:.2f} s CPU (target < 10 s: wall {'met' if total < 10 else 'MISSED'}, CPU {'met' if cpu < 10 else 'MISSED'}); "
-          f"checks {'pass' if ok else 'FAIL'}; 3MF {len(files['bench.3mf']) / 1e6:.1f} MB; "
-          f"triangles {sum(b['triangles'] for b in rep.bodies)}")
+    print(
+        f"TOTAL pattern -> 3MF + STLs: {total:.2f} s wall (load average {load:.1f} on {os.cpu_count()} cores), "
+        f"{cpu:.2f} s CPU (target < 10 s: wall {'met' if total < 10 else 'MISSED'}, CPU {'met' if cpu < 10 else 'MISSED'}); "
+        f"checks {'pass' if ok else 'FAIL'}; 3MF {len(files['bench.3mf']) / 1e6:.1f} MB; "
+        f"triangles {sum(b['triangles'] for b in rep.bodies)}"
+    )
     print("baseline (same run):")
     _, naive = stage("naive per-tile booleans (tiles only)", naive_tiles, job)
-    print(f"  batched tile solid build is part of 'solids' above; naive tiles alone took {naive:.2f} s")
+    print(
+        f"  batched tile solid build is part of 'solids' above; naive tiles alone took {naive:.2f} s"
+    )
     if args.step:
         from fabkiri.fabricate import cad
 
         t = time.perf_counter()
         import build123d  # noqa: F401
+
         print(f"  import build123d                   {time.perf_counter() - t:7.3f} s")
         data, _ = stage("STEP (build123d, all bodies)", cad.step_bytes, job.beds[0])
         print(f"  STEP size {len(data) / 1e6:.1f} MB")

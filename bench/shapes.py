@@ -67,17 +67,21 @@ def line(label: str, code: int, r: dict, wall: float, g: float | None) -> str:
     k = r["checks"]
     h = c["hausdorff_rel"]
     verdict = "" if g is None else (f"goal {100 * g:.0f} % " + ("met" if h <= g else "MISSED"))
-    return (f"{label:<36} exit {code}  {r['status']:<11} H {100 * h:6.2f} %  1-IoU {c['one_minus_iou']:.4f}  "
-            f"spacing {c['spacing_min_mm']:6.3f}/{c['spacing_mean_mm']:6.3f} mm  res {r['max_equality_residual']:.1e}"
-            f"  overlaps {k['overlaps_deployed']}/{k['overlaps_state_1']}/{k['overlaps_state_2']}  {wall:6.1f} s  "
-            f"{verdict}")
+    return (
+        f"{label:<36} exit {code}  {r['status']:<11} H {100 * h:6.2f} %  1-IoU {c['one_minus_iou']:.4f}  "
+        f"spacing {c['spacing_min_mm']:6.3f}/{c['spacing_mean_mm']:6.3f} mm  res {r['max_equality_residual']:.1e}"
+        f"  overlaps {k['overlaps_deployed']}/{k['overlaps_state_1']}/{k['overlaps_state_2']}  {wall:6.1f} s  "
+        f"{verdict}"
+    )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", default="16,32")
     ap.add_argument("--targets", default=",".join(TARGETS))
-    ap.add_argument("--fit", default="outline", help="comma-separated fits to run: outline (default), tips")
+    ap.add_argument(
+        "--fit", default="outline", help="comma-separated fits to run: outline (default), tips"
+    )
     ap.add_argument("--rigid", default="1,0", help="1: --rigid, 0: not (comma-separated)")
     ap.add_argument("--quick", action="store_true", help="skip non-rigid designs above 16x16 tiles")
     ap.add_argument("--out", default=None, help="keep the pattern files here")
@@ -95,8 +99,17 @@ def main() -> None:
             for name in args.targets.split(","):
                 for fit in args.fit.split(","):
                     label = f"{name}-{n}x{n}{'-rigid' if rigid else ''}{'' if fit == 'outline' else '-tips'}"
-                    argv = ["design", "--tiles", f"{n}x{n}", "--target", *TARGETS[name], "--fit", fit,
-                            "-o", str(out / f"{label}.json")] + (["--rigid"] if rigid else [])
+                    argv = [
+                        "design",
+                        "--tiles",
+                        f"{n}x{n}",
+                        "--target",
+                        *TARGETS[name],
+                        "--fit",
+                        fit,
+                        "-o",
+                        str(out / f"{label}.json"),
+                    ] + (["--rigid"] if rigid else [])
                     code, r, wall = run(argv)
                     print(line(label, code, r, wall, goal(name, n)), flush=True)
 

@@ -41,8 +41,14 @@ def run_worker(code_dir: Path, worker: str, spec: dict, timeout: float) -> dict:
     env = {**os.environ, "PYTHONPATH": str(code_dir)}
     t0, l0 = time.perf_counter(), load()
     try:
-        out = subprocess.run([sys.executable, str(HERE), worker, json.dumps(spec)], cwd=code_dir, env=env,
-                             capture_output=True, text=True, timeout=timeout)
+        out = subprocess.run(
+            [sys.executable, str(HERE), worker, json.dumps(spec)],
+            cwd=code_dir,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
     except subprocess.TimeoutExpired:
         return {"error": f"timed out after {timeout:.0f} s", "load": l0}
     lines = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
@@ -64,17 +70,31 @@ def startup(code_dir: Path, argv: list[str], k: int = 5, bytecode: str | None = 
     if bytecode:
         env.pop("PYTHONDONTWRITEBYTECODE", None)
         env["PYTHONPYCACHEPREFIX"] = bytecode
-        subprocess.run([sys.executable, "-m", "fabkiri.cli.main", *argv], cwd=code_dir, env=env, capture_output=True)
+        subprocess.run(
+            [sys.executable, "-m", "fabkiri.cli.main", *argv],
+            cwd=code_dir,
+            env=env,
+            capture_output=True,
+        )
     times, cpus, l0 = [], [], load()
     for _ in range(k):
         r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "fabkiri.cli.main", *argv], cwd=code_dir, env=env,
-                       capture_output=True)
+        subprocess.run(
+            [sys.executable, "-m", "fabkiri.cli.main", *argv],
+            cwd=code_dir,
+            env=env,
+            capture_output=True,
+        )
         times.append(time.perf_counter() - t0)
         r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpus.append(r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime)
-    return {"median": statistics.median(times), "fastest": min(times), "cpu": statistics.median(cpus), "load": l0}
+    return {
+        "median": statistics.median(times),
+        "fastest": min(times),
+        "cpu": statistics.median(cpus),
+        "load": l0,
+    }
 
 
 # ------------------------------------------------------------------ workers (run in the child process)
@@ -99,9 +119,16 @@ def worker_design(spec: dict) -> dict:
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     r = res.report
     fit = r["fit"]["shape"]
-    return {"wall": wall, "cpu": cpu, "status": r["status"], "eq": r["max_equality_residual"],
-            "fit_mm": fit["max_mm"], "mode": r["shape_matching"], "solver": r["solver"].split(" (")[0],
-            **outline_conformance(res.pattern, req.target)}
+    return {
+        "wall": wall,
+        "cpu": cpu,
+        "status": r["status"],
+        "eq": r["max_equality_residual"],
+        "fit_mm": fit["max_mm"],
+        "mode": r["shape_matching"],
+        "solver": r["solver"].split(" (")[0],
+        **outline_conformance(res.pattern, req.target),
+    }
 
 
 def closed_outline(pattern, state: int) -> np.ndarray:
@@ -124,8 +151,11 @@ def square_error(p: np.ndarray, n: int) -> float:
     c = p[[0, n, 2 * n, 3 * n]]
     sides = np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)
     a = sides.mean()
-    err = [np.abs(sides - a).max(), abs(np.linalg.norm(c[2] - c[0]) - np.sqrt(2) * a),
-           abs(np.linalg.norm(c[3] - c[1]) - np.sqrt(2) * a)]
+    err = [
+        np.abs(sides - a).max(),
+        abs(np.linalg.norm(c[2] - c[0]) - np.sqrt(2) * a),
+        abs(np.linalg.norm(c[3] - c[1]) - np.sqrt(2) * a),
+    ]
     for k in range(4):
         t = (c[(k + 1) % 4] - c[k]) / sides[k]
         q = p[np.arange(k * n, (k + 1) * n + 1) % (4 * n)] - c[k]
@@ -166,19 +196,40 @@ def worker_square_circle(spec: dict) -> dict:
         out = str(Path(tmp) / "p.json")
         c0 = time.process_time()
         with contextlib.redirect_stderr(io.StringIO()):
-            code = cli(["design", "--tiles", f"{n}x{n}", "--rigid", "--contracted-target", "1:square",
-                        "--contracted-target", "2:circle", "-o", out])
+            code = cli(
+                [
+                    "design",
+                    "--tiles",
+                    f"{n}x{n}",
+                    "--rigid",
+                    "--contracted-target",
+                    "1:square",
+                    "--contracted-target",
+                    "2:circle",
+                    "-o",
+                    out,
+                ]
+            )
         cpu = time.process_time() - c0
         pat = read_pattern(out)
     rep = pat.design["report"]
     checks = rep.get("checks", {})
-    return {"exit": code, "solve_s": rep["time_s"], "solve_cpu": rep.get("cpu_s", float("nan")), "cpu": cpu, "status": rep["status"],
-            "eq": rep["max_equality_residual"], "square_err": square_error(closed_outline(pat, 1), n),
-            "circle_rms": circle_rms(closed_outline(pat, 2)),
-            "overlaps": sum(int(v) for k, v in checks.items() if k.startswith("overlaps_")),
-            "hausdorff_2": rep.get("conformance", {}).get("state_2", {}).get("hausdorff_rel", float("nan")),
-            "holes": pat.design["options"]["holes"],
-            "solver": rep["solver"].split(" (")[0]}
+    return {
+        "exit": code,
+        "solve_s": rep["time_s"],
+        "solve_cpu": rep.get("cpu_s", float("nan")),
+        "cpu": cpu,
+        "status": rep["status"],
+        "eq": rep["max_equality_residual"],
+        "square_err": square_error(closed_outline(pat, 1), n),
+        "circle_rms": circle_rms(closed_outline(pat, 2)),
+        "overlaps": sum(int(v) for k, v in checks.items() if k.startswith("overlaps_")),
+        "hausdorff_2": rep.get("conformance", {})
+        .get("state_2", {})
+        .get("hausdorff_rel", float("nan")),
+        "holes": pat.design["options"]["holes"],
+        "solver": rep["solver"].split(" (")[0],
+    }
 
 
 WORKERS = {"design": worker_design, "square_circle": worker_square_circle}

@@ -37,8 +37,10 @@ def main() -> None:
             runs.append((time.perf_counter() - t0, time.process_time() - c0, r))
         wall, cpu, r = min(runs, key=lambda x: x[0])
         d = r.to_dict()
-        print(f"{name}: {args.n} samples, fastest {wall:.2f} s wall / {cpu:.2f} s CPU (slowest "
-              f"{max(x[0] for x in runs):.2f} s); closure gap p95 state 1 {d['closure_gap_mm']['closed state 1']['p95']:.3f} mm")
+        print(
+            f"{name}: {args.n} samples, fastest {wall:.2f} s wall / {cpu:.2f} s CPU (slowest "
+            f"{max(x[0] for x in runs):.2f} s); closure gap p95 state 1 {d['closure_gap_mm']['closed state 1']['p95']:.3f} mm"
+        )
         # baseline: exact overlays of the touching tile pairs, for a tenth of the samples
         c = closed_states(p)[1]
         seams = seam_edges(c, 1e-3 * p.tile_size)
@@ -47,10 +49,16 @@ def main() -> None:
         k = max(1, args.n // 10)
         t0 = time.perf_counter()
         for _ in range(k):
-            shapely.area(shapely.intersection(polys[pairs[:, 0]], polys[pairs[:, 1]], grid_size=1e-7 * p.tile_size))
+            shapely.area(
+                shapely.intersection(
+                    polys[pairs[:, 0]], polys[pairs[:, 1]], grid_size=1e-7 * p.tile_size
+                )
+            )
         dt = time.perf_counter() - t0
-        print(f"  baseline: snap-rounded shapely overlays of {len(pairs)} pairs x {k} samples {dt:.2f} s "
-              f"(x{args.n / k:.0f} for all samples: {dt * args.n / k:.1f} s)")
+        print(
+            f"  baseline: snap-rounded shapely overlays of {len(pairs)} pairs x {k} samples {dt:.2f} s "
+            f"(x{args.n / k:.0f} for all samples: {dt * args.n / k:.1f} s)"
+        )
     print(f"load after: {os.getloadavg()[0]:.2f}")
 
 

@@ -31,8 +31,16 @@ from fabkiri.verify import verify_layout  # noqa: E402
 
 import layout_mutations as lm  # noqa: E402
 
-PATTERNS = {"std6": None, "heart-8x8": "heart-8x8.json", "circle-8x8-rigid": "circle-8x8-rigid.json"}
-WIDTH = {"std6": 250.0, "heart-8x8": 500.0, "circle-8x8-rigid": 250.0}  # closed width every hinge kind can cut
+PATTERNS = {
+    "std6": None,
+    "heart-8x8": "heart-8x8.json",
+    "circle-8x8-rigid": "circle-8x8-rigid.json",
+}
+WIDTH = {
+    "std6": 250.0,
+    "heart-8x8": 500.0,
+    "circle-8x8-rigid": 250.0,
+}  # closed width every hinge kind can cut
 CUT_ARGS = ["--material", "pp-0.5", "--gap", "1", "--sheet", "700x700"]
 
 
@@ -46,7 +54,11 @@ def scaled(p, width: float):
     Y = p.contracted.get(1)
     Y = contract(p, 1).corners if Y is None else Y
     k = width / float(Y[..., 0].max() - Y[..., 0].min())
-    return replace(p, nodes=p.nodes * k, contracted={s: v * k for s, v in p.contracted.items()}, design={})
+    return replace(
+        p, nodes=p.nodes * k, contracted={s: v * k for s, v in p.contracted.items()}, design={}
+    )
+
+
 HINGES = ("tape", "separate", "ligament")
 
 
@@ -57,14 +69,30 @@ def make_bases(root: Path, names=PATTERNS) -> list:
     for name in names:
         src = PATTERNS[name]
         pj = root / f"{name}.json"
-        p = with_contracted_states(standard_pattern(6, 6, tile_size=10.0)) if src is None else \
-            with_contracted_states(read_pattern(ROOT / "templates" / "patterns" / src))
+        p = (
+            with_contracted_states(standard_pattern(6, 6, tile_size=10.0))
+            if src is None
+            else with_contracted_states(read_pattern(ROOT / "templates" / "patterns" / src))
+        )
         write_pattern(scaled(p, WIDTH[name]), pj)
         p = read_pattern(pj)
         for h in HINGES:
             args = list(CUT_ARGS)
             d = root / f"{name}-{h}"
-            code = cli(["cut", str(pj), "--hinge", h, *args, "--formats", "dxf,svg", "--no-verify", "-o", str(d)])
+            code = cli(
+                [
+                    "cut",
+                    str(pj),
+                    "--hinge",
+                    h,
+                    *args,
+                    "--formats",
+                    "dxf,svg",
+                    "--no-verify",
+                    "-o",
+                    str(d),
+                ]
+            )
             if code:
                 print(f"  (cannot cut {name} {h}: skipped)")
                 continue
@@ -90,10 +118,21 @@ def run(bases, kinds, root: Path, manifests=(True, False), seed: int = 0):
                 try:
                     rep = verify_layout(b.pattern, path, manifest=None)
                     ok, failed, named = rep.ok, [c.name for c in rep.failed()], names_culprit(rep)
-                except Exception as exc:  # a reader refusing the file counts as a rejection, named or not
+                except (
+                    Exception
+                ) as exc:  # a reader refusing the file counts as a rejection, named or not
                     ok, failed, named = False, [f"{type(exc).__name__}: {exc}"[:160]], False
-                rows.append({"base": f"{b.folder.name}.{b.fmt}", "kind": kind.name, "valid": kind.valid,
-                             "manifest": with_m, "accepted": ok, "failed": failed, "named": named})
+                rows.append(
+                    {
+                        "base": f"{b.folder.name}.{b.fmt}",
+                        "kind": kind.name,
+                        "valid": kind.valid,
+                        "manifest": with_m,
+                        "accepted": ok,
+                        "failed": failed,
+                        "named": named,
+                    }
+                )
     return rows
 
 
@@ -104,11 +143,15 @@ def report(rows) -> dict:
     missed = [r for r in broken if r["accepted"]]
     rejected = [r for r in broken if not r["accepted"]]
     unnamed = [r for r in rejected if not r["named"]]
-    print(f"valid variants: {len({r['kind'] for r in valid})} kinds, {len(valid)} files; "
-          f"false alarms {len(fa)} ({100 * len(fa) / max(1, len(valid)):.2f} %)")
-    print(f"breakages: {len({r['kind'] for r in broken})} kinds, {len(broken)} files; rejected {len(rejected)} "
-          f"({100 * len(rejected) / max(1, len(broken)):.2f} %), missed {len(missed)}; "
-          f"rejections not naming a tile or hinge: {len(unnamed)}")
+    print(
+        f"valid variants: {len({r['kind'] for r in valid})} kinds, {len(valid)} files; "
+        f"false alarms {len(fa)} ({100 * len(fa) / max(1, len(valid)):.2f} %)"
+    )
+    print(
+        f"breakages: {len({r['kind'] for r in broken})} kinds, {len(broken)} files; rejected {len(rejected)} "
+        f"({100 * len(rejected) / max(1, len(broken)):.2f} %), missed {len(missed)}; "
+        f"rejections not naming a tile or hinge: {len(unnamed)}"
+    )
     print("confusion (rows: truth, columns: verdict):")
     print(f"  {'':10s} {'accepted':>9s} {'rejected':>9s}")
     print(f"  {'valid':10s} {len(valid) - len(fa):9d} {len(fa):9d}")
@@ -119,29 +162,44 @@ def report(rows) -> dict:
         kinds[(r["valid"], r["kind"])].append(r)
     for (v, k), rs in sorted(kinds.items(), key=lambda kv: (not kv[0][0], kv[0][1])):
         if v:
-            print(f"  valid   {k:45s} {len(rs):4d} files, {sum(r['accepted'] for r in rs):4d} accepted")
+            print(
+                f"  valid   {k:45s} {len(rs):4d} files, {sum(r['accepted'] for r in rs):4d} accepted"
+            )
         else:
             rej = [r for r in rs if not r["accepted"]]
-            print(f"  broken  {k:45s} {len(rs):4d} files, {len(rej):4d} rejected, {sum(r['named'] for r in rej):4d} named")
+            print(
+                f"  broken  {k:45s} {len(rs):4d} files, {len(rej):4d} rejected, {sum(r['named'] for r in rej):4d} named"
+            )
     for r in unnamed:
-        print(f"  rejected without naming a tile or hinge: {r['kind']} {r['base']} manifest={r['manifest']}: "
-              f"{r['failed'][:3]}")
+        print(
+            f"  rejected without naming a tile or hinge: {r['kind']} {r['base']} manifest={r['manifest']}: "
+            f"{r['failed'][:3]}"
+        )
     for title, bad in (("false alarms", fa), ("missed breakages", missed)):
         by = defaultdict(list)
         for r in bad:
             by[r["kind"]].append(r)
         for k, rs in sorted(by.items(), key=lambda kv: -len(kv[1])):
             ex = rs[0]
-            print(f"  {title}: {k}: {len(rs)} (e.g. {ex['base']}, manifest={ex['manifest']}: {ex['failed'][:2]})")
-    return {"valid": len(valid), "false_alarms": len(fa), "broken": len(broken), "missed": len(missed),
-            "unnamed": len(unnamed)}
+            print(
+                f"  {title}: {k}: {len(rs)} (e.g. {ex['base']}, manifest={ex['manifest']}: {ex['failed'][:2]})"
+            )
+    return {
+        "valid": len(valid),
+        "false_alarms": len(fa),
+        "broken": len(broken),
+        "missed": len(missed),
+        "unnamed": len(unnamed),
+    }
 
 
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="one pattern (std6) only")
     ap.add_argument("--list", action="store_true", help="list the kinds and exit")
-    ap.add_argument("--keep", metavar="DIR", help="write the cases here instead of a temporary folder")
+    ap.add_argument(
+        "--keep", metavar="DIR", help="write the cases here instead of a temporary folder"
+    )
     args = ap.parse_args()
     if args.list:
         for k in lm.VALID + lm.BROKEN:
@@ -155,13 +213,21 @@ def main() -> int:
         t1 = time.perf_counter()
         rows = run(bases, lm.VALID + lm.BROKEN, root)
         t2 = time.perf_counter()
-    print(f"{len(bases)} base layouts (cut in {t1 - t0:.1f} s), {len(rows)} verify runs in {t2 - t1:.1f} s "
-          f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+    print(
+        f"{len(bases)} base layouts (cut in {t1 - t0:.1f} s), {len(rows)} verify runs in {t2 - t1:.1f} s "
+        f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
+    )
     s = report(rows)
-    goal = s["false_alarms"] == 0 and s["broken"] and (s["broken"] - s["missed"]) / s["broken"] >= 0.995 \
+    goal = (
+        s["false_alarms"] == 0
+        and s["broken"]
+        and (s["broken"] - s["missed"]) / s["broken"] >= 0.995
         and s["unnamed"] == 0
-    print(f"goal (0 false alarms, >= 99.5 % rejected, every rejection naming a tile or hinge): "
-          f"{'met' if goal else 'NOT met'}")
+    )
+    print(
+        f"goal (0 false alarms, >= 99.5 % rejected, every rejection naming a tile or hinge): "
+        f"{'met' if goal else 'NOT met'}"
+    )
     return 0 if goal else 1
 
 

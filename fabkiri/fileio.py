@@ -23,7 +23,9 @@ from pathlib import Path
 from .errors import InputError
 
 # the files read by the running command (set by :func:`inputs_scope`; None outside one: nothing recorded)
-_INPUTS: contextvars.ContextVar[tuple[Path, ...] | None] = contextvars.ContextVar("fabkiri_inputs", default=None)
+_INPUTS: contextvars.ContextVar[tuple[Path, ...] | None] = contextvars.ContextVar(
+    "fabkiri_inputs", default=None
+)
 
 
 def _umask() -> int:
@@ -82,11 +84,14 @@ def refuse_input(path: str | os.PathLike) -> None:
     src = input_named_by(path)
     if src is not None:
         same = "" if Path(src) == Path(path) else f" (the same file as the input {src})"
-        raise InputError(f"refusing to write {path}: it is an input of this command{same}; "
-                         f"choose another output")
+        raise InputError(
+            f"refusing to write {path}: it is an input of this command{same}; choose another output"
+        )
 
 
-def read_input(path: str | os.PathLike, *, max_bytes: int, what: str = "file", error=InputError) -> str:
+def read_input(
+    path: str | os.PathLike, *, max_bytes: int, what: str = "file", error=InputError
+) -> str:
     """A UTF-8 text input, size-bounded and recorded; one-line ``error`` on any problem."""
     p = Path(path)
     if not p.exists():
@@ -98,8 +103,10 @@ def read_input(path: str | os.PathLike, *, max_bytes: int, what: str = "file", e
     except OSError as exc:
         raise error(f"{p}: cannot be read ({exc.strerror})") from None
     if size > max_bytes:
-        raise error(f"{p}: {size / 2**20:.1f} MB is larger than the {max_bytes / 2**20:.0f} MB a {what} "
-                    f"may have")
+        raise error(
+            f"{p}: {size / 2**20:.1f} MB is larger than the {max_bytes / 2**20:.0f} MB a {what} "
+            f"may have"
+        )
     note_inputs(p)
     try:
         return p.read_text("utf-8")
@@ -149,7 +156,9 @@ def publish(files: dict[Path, bytes | str], root: str | os.PathLike) -> list[Pat
     for d in dests:
         _check_destination(d)
     try:
-        scratch = Path(tempfile.mkdtemp(prefix=".fabkiri-", suffix=".tmp", dir=root))  # 0700, never published
+        scratch = Path(
+            tempfile.mkdtemp(prefix=".fabkiri-", suffix=".tmp", dir=root)
+        )  # 0700, never published
     except OSError as exc:
         raise InputError(f"cannot write into {root}: {exc.strerror or exc}") from None
     try:

@@ -20,14 +20,24 @@ import numpy as np
 
 from .errors import InputError
 
-MAX_PATTERN_BYTES = 256 * 2**20  # pattern.json / OBJ / target files (a 128x128 pattern is about 9 MB)
+MAX_PATTERN_BYTES = (
+    256 * 2**20
+)  # pattern.json / OBJ / target files (a 128x128 pattern is about 9 MB)
 MAX_PRESET_BYTES = 2**20  # material and printer presets are a few hundred bytes
 MAX_JSON_DEPTH = 64  # pattern.json nests 6 deep (design reports a few more)
-MAX_INT = 2**53  # beyond it a JSON integer is no longer exact as a float (and overflows C long at 2**63)
-MAX_COORD_MM = 1e6  # a kilometre: larger coordinates are a unit mistake, and their squares overflow sooner
-MIN_EDGE_REL = 1e-9  # a tile edge shorter than this fraction of the pattern's extent is two coinciding corners
+MAX_INT = (
+    2**53
+)  # beyond it a JSON integer is no longer exact as a float (and overflows C long at 2**63)
+MAX_COORD_MM = (
+    1e6  # a kilometre: larger coordinates are a unit mistake, and their squares overflow sooner
+)
+MIN_EDGE_REL = (
+    1e-9  # a tile edge shorter than this fraction of the pattern's extent is two coinciding corners
+)
 MAX_LENGTH_MM = 1e5  # a length parameter (tile size, target size): 100 m
-MIN_LENGTH_MM = 1e-3  # ... and at least a micrometre: below it shapely's snapping and the tolerances break
+MIN_LENGTH_MM = (
+    1e-3  # ... and at least a micrometre: below it shapely's snapping and the tolerances break
+)
 
 # (tiles, CPU seconds, peak MB above the interpreter) per command, measured by bench/limits.py on this 2-core
 # box at load 7-20 (CPU time: wall time was 3-15x more). The 64x64 full design is a lower bound: that run was
@@ -37,7 +47,11 @@ MEASURED = {
     "design full": [[256, 1.8, 56.3], [1024, 7.9, 72.8], [4096, 458.0, 270.0]],
     "design rigid": [[4096, 6.7, 116.9], [16384, 46.4, 750.4]],
 }
-TESTED = {"new": 512 * 512, "design full": 32 * 32, "design rigid": 128 * 128}  # largest run to the end
+TESTED = {
+    "new": 512 * 512,
+    "design full": 32 * 32,
+    "design rigid": 128 * 128,
+}  # largest run to the end
 LOWER_BOUND = {"design full"}  # its largest row is a lower bound, so are its extrapolations
 
 
@@ -52,7 +66,11 @@ class Estimate:
     def text(self) -> str:
         mb, s = self.megabytes, self.seconds
         mem = f"{mb / 1024:.3g} GB" if mb >= 1024 else f"{mb:.0f} MB"
-        t = f"{s / 3600:.3g} hours" if s >= 3600 else (f"{s / 60:.3g} minutes" if s >= 60 else f"{s:.0f} s")
+        t = (
+            f"{s / 3600:.3g} hours"
+            if s >= 3600
+            else (f"{s / 60:.3g} minutes" if s >= 60 else f"{s:.0f} s")
+        )
         return f"{'at least' if self.lower_bound else 'about'} {mem} and {t}"
 
 
@@ -63,7 +81,9 @@ def estimate(kind: str, tiles: int) -> Estimate:
     r = max(tiles / n1, 1e-300)
     pt = math.log(s1 / s0) / math.log(n1 / n0)
     pm = math.log(m1 / m0) / math.log(n1 / n0)
-    return Estimate(tiles, s1 * r ** pt, m1 * r ** pm, TESTED[kind], kind in LOWER_BOUND and tiles >= n1)
+    return Estimate(
+        tiles, s1 * r**pt, m1 * r**pm, TESTED[kind], kind in LOWER_BOUND and tiles >= n1
+    )
 
 
 def available_mb() -> float:
@@ -86,11 +106,15 @@ def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
     est = estimate(kind, tiles)
     side = int(math.isqrt(est.tested_tiles))
     if est.megabytes > available_mb():
-        raise InputError(f"{rows}x{cols} tiles need {est.text()}; this machine has "
-                         f"{available_mb() / 1024:.3g} GB free ({side}x{side} is the largest tested)")
+        raise InputError(
+            f"{rows}x{cols} tiles need {est.text()}; this machine has "
+            f"{available_mb() / 1024:.3g} GB free ({side}x{side} is the largest tested)"
+        )
     if tiles > est.tested_tiles and not i_know:
-        raise InputError(f"{side}x{side} is the largest tested; {rows}x{cols} needs {est.text()} "
-                         f"— pass --i-know to try")
+        raise InputError(
+            f"{side}x{side} is the largest tested; {rows}x{cols} needs {est.text()} "
+            f"— pass --i-know to try"
+        )
 
 
 def check_file_size(path, limit: int | None = None) -> None:
@@ -98,13 +122,17 @@ def check_file_size(path, limit: int | None = None) -> None:
     limit = MAX_PATTERN_BYTES if limit is None else limit
     size = os.stat(path).st_size
     if size > limit:
-        raise InputError(f"{path}: {size / 2**20:.1f} MB is larger than the {limit / 2**20:.0f} MB an input may have")
+        raise InputError(
+            f"{path}: {size / 2**20:.1f} MB is larger than the {limit / 2**20:.0f} MB an input may have"
+        )
 
 
 def check_length(value: float, name: str) -> float:
     """A finite length in mm within [:data:`MIN_LENGTH_MM`, :data:`MAX_LENGTH_MM`]."""
     if not (math.isfinite(value) and MIN_LENGTH_MM <= value <= MAX_LENGTH_MM):
-        raise InputError(f"{name} must be a length in [{MIN_LENGTH_MM:g}, {MAX_LENGTH_MM:g}] mm, got {value:g}")
+        raise InputError(
+            f"{name} must be a length in [{MIN_LENGTH_MM:g}, {MAX_LENGTH_MM:g}] mm, got {value:g}"
+        )
     return value
 
 
@@ -116,9 +144,13 @@ def check_scale(nodes: np.ndarray, tiles: np.ndarray, k: float, name: str) -> fl
     extent = float(np.abs(q).max()) * k
     edge = float(np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2).min()) * k
     if not (math.isfinite(extent) and extent <= MAX_COORD_MM):
-        raise InputError(f"{name} {k:g} puts the pattern {extent:.3g} mm from the origin (at most {MAX_COORD_MM:g} mm)")
+        raise InputError(
+            f"{name} {k:g} puts the pattern {extent:.3g} mm from the origin (at most {MAX_COORD_MM:g} mm)"
+        )
     if not edge >= MIN_LENGTH_MM:
-        raise InputError(f"{name} {k:g} makes the shortest tile edge {edge:.3g} mm (at least {MIN_LENGTH_MM:g} mm)")
+        raise InputError(
+            f"{name} {k:g} makes the shortest tile edge {edge:.3g} mm (at least {MIN_LENGTH_MM:g} mm)"
+        )
     return k
 
 
@@ -164,7 +196,9 @@ def loads_json(text: str, source: str, error=InputError):
     try:
         return json.loads(text, parse_int=_int, parse_float=_float, parse_constant=_constant)
     except json.JSONDecodeError as exc:
-        raise error(f"{source}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
+        raise error(
+            f"{source}: malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"
+        ) from None
     except ValueError as exc:
         raise error(f"{source}: {exc}") from None
     except RecursionError:
@@ -174,11 +208,15 @@ def loads_json(text: str, source: str, error=InputError):
 # ------------------------------------------------------------- coordinates
 
 
-def coordinate_problem(nodes: np.ndarray, tiles: np.ndarray | None = None,
-                       corners: dict | None = None) -> str | None:
+def coordinate_problem(
+    nodes: np.ndarray, tiles: np.ndarray | None = None, corners: dict | None = None
+) -> str | None:
     """Why these coordinates cannot be a pattern (non-finite, absurd, coinciding corners), or None."""
     arrays = [("node", np.asarray(nodes, dtype=float))]
-    arrays += [(f"contracted state {k} tile", np.asarray(v, dtype=float)) for k, v in (corners or {}).items()]
+    arrays += [
+        (f"contracted state {k} tile", np.asarray(v, dtype=float))
+        for k, v in (corners or {}).items()
+    ]
     for what, a in arrays:
         if a.size == 0:
             continue
@@ -189,8 +227,10 @@ def coordinate_problem(nodes: np.ndarray, tiles: np.ndarray | None = None,
         far = np.abs(flat).max(1) > MAX_COORD_MM
         if far.any():
             i = int(np.flatnonzero(far)[0])
-            return (f"{what} {_index(a, far)} lies {float(np.abs(flat[i]).max()):.3g} mm from the origin "
-                    f"(at most {MAX_COORD_MM:g} mm)")
+            return (
+                f"{what} {_index(a, far)} lies {float(np.abs(flat[i]).max()):.3g} mm from the origin "
+                f"(at most {MAX_COORD_MM:g} mm)"
+            )
     if tiles is not None and len(tiles) and len(nodes):
         q = np.asarray(nodes, dtype=float)[np.asarray(tiles)]  # (T, 4, 2)
         extent = float(np.ptp(q.reshape(-1, 2), axis=0).max())

@@ -27,7 +27,9 @@ def _what(err) -> str:
     if v == "exclusiveMinimum" and val == 0:
         return f"must be positive, got {short(inst)}"
     if v in ("minimum", "maximum", "exclusiveMaximum", "exclusiveMinimum"):
-        sign = {"minimum": ">=", "maximum": "<=", "exclusiveMaximum": "<", "exclusiveMinimum": ">"}[v]
+        sign = {"minimum": ">=", "maximum": "<=", "exclusiveMaximum": "<", "exclusiveMinimum": ">"}[
+            v
+        ]
         return f"must be {sign} {val:g}, got {short(inst)}"
     if v == "type":
         return f"must be of type {val}, got {short(inst)}"

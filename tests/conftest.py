@@ -6,9 +6,14 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 # the shared folder sits beside the main checkout, or two levels up from a worktree
-REFERENCE = next((p / "shared" / "reference" / "additive-kirigami" for p in (REPO.parent, REPO.parents[1])
-                  if (p / "shared" / "reference" / "additive-kirigami").is_dir()),
-                 REPO.parent / "shared" / "reference" / "additive-kirigami")
+REFERENCE = next(
+    (
+        p / "shared" / "reference" / "additive-kirigami"
+        for p in (REPO.parent, REPO.parents[1])
+        if (p / "shared" / "reference" / "additive-kirigami").is_dir()
+    ),
+    REPO.parent / "shared" / "reference" / "additive-kirigami",
+)
 TEMPLATES = REPO / "templates"
 
 

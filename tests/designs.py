@@ -57,7 +57,9 @@ def _sparsity(pattern: Pattern, rigid: bool = False) -> sparse.csr_matrix:
         r0 += len(nodes)
         if top.n_holes:
             ring_tiles = fold.rings[..., 0]  # (K, 4)
-            ring_nodes = top.tiles[ring_tiles].reshape(len(ring_tiles), -1)  # every corner of the 4 tiles
+            ring_nodes = top.tiles[ring_tiles].reshape(
+                len(ring_tiles), -1
+            )  # every corner of the 4 tiles
             for k in range(ring_nodes.shape[1]):
                 rows.append(r0 + np.arange(len(ring_nodes)))
                 cols.append(ring_nodes[:, k])
@@ -69,8 +71,16 @@ def _sparsity(pattern: Pattern, rigid: bool = False) -> sparse.csr_matrix:
     return sparse.csr_matrix((np.ones(len(rr)), (rr, cc)), shape=(r0, 2 * len(pattern.nodes)))
 
 
-def reconfigurable_design(rows: int, cols: int, *, seed: int = 0, amplitude: float = 0.08,
-                          waves: float = 1.5, tile_size: float = 10.0, rigid: bool = False) -> Pattern:
+def reconfigurable_design(
+    rows: int,
+    cols: int,
+    *,
+    seed: int = 0,
+    amplitude: float = 0.08,
+    waves: float = 1.5,
+    tile_size: float = 10.0,
+    rigid: bool = False,
+) -> Pattern:
     """A reconfigurable, generically non-rigid pattern near the standard one.
 
     ``amplitude`` is the size of the smooth perturbation in tile sizes before
@@ -94,7 +104,20 @@ def reconfigurable_design(rows: int, cols: int, *, seed: int = 0, amplitude: flo
     def fun(flat):
         return _residuals(base, flat.reshape(-1, 2), rigid)
 
-    sol = least_squares(fun, x_start.ravel(), jac_sparsity=sparsity, method="trf", x_scale=tile_size,
-                        ftol=1e-15, xtol=1e-15, gtol=1e-15, max_nfev=200)
-    return Pattern(nodes=sol.x.reshape(-1, 2), tiles=base.tiles, name=f"{'rigid ' if rigid else ''}reconfigurable {rows}x{cols} seed {seed}",
-                   lattice=base.lattice)
+    sol = least_squares(
+        fun,
+        x_start.ravel(),
+        jac_sparsity=sparsity,
+        method="trf",
+        x_scale=tile_size,
+        ftol=1e-15,
+        xtol=1e-15,
+        gtol=1e-15,
+        max_nfev=200,
+    )
+    return Pattern(
+        nodes=sol.x.reshape(-1, 2),
+        tiles=base.tiles,
+        name=f"{'rigid ' if rigid else ''}reconfigurable {rows}x{cols} seed {seed}",
+        lattice=base.lattice,
+    )

@@ -64,8 +64,12 @@ def distinct_pattern(rows: int = 4, cols: int = 5, seed: int = 3, size: float = 
     # the tests cut it at scale 1 in every material: a thin member would fail them for the wrong reason
     thinnest = widths(nodes[base.tiles]).min()
     assert thinnest > 0.5 * size, f"fixture member has a {thinnest:.2f} mm tile"
-    p = Pattern(nodes=nodes, tiles=base.tiles, name=f"distinct {rows}x{cols} seed {seed}",
-                design={"rigid_deployable": True, "source": "test fixture"})
+    p = Pattern(
+        nodes=nodes,
+        tiles=base.tiles,
+        name=f"distinct {rows}x{cols} seed {seed}",
+        design={"rigid_deployable": True, "source": "test fixture"},
+    )
     return with_contracted_states(p)
 
 
@@ -91,15 +95,28 @@ def unique_edges(corners: np.ndarray, decimals: int = 6) -> np.ndarray:
     b = np.roll(corners, -1, axis=1).reshape(-1, 2)
     segs = np.stack([a, b], 1)
     key = np.round(segs, decimals)
-    flip = (key[:, 0, 0] > key[:, 1, 0]) | ((key[:, 0, 0] == key[:, 1, 0]) & (key[:, 0, 1] > key[:, 1, 1]))
+    flip = (key[:, 0, 0] > key[:, 1, 0]) | (
+        (key[:, 0, 0] == key[:, 1, 0]) & (key[:, 0, 1] > key[:, 1, 1])
+    )
     key[flip] = key[flip][:, ::-1]
     _, idx = np.unique(key.reshape(-1, 4), axis=0, return_index=True)
     return segs[np.sort(idx)]
 
 
-def write_layout(folder: Path, pattern: Pattern, corners: np.ndarray, *, hinge: str = "tape", fmt: str = "dxf",
-                 state: int = 1, kerf_offset: float = 0.0, order: np.ndarray | None = None,
-                 manifest: bool = True, reference: bool = True, layout: str | None = None) -> Path:
+def write_layout(
+    folder: Path,
+    pattern: Pattern,
+    corners: np.ndarray,
+    *,
+    hinge: str = "tape",
+    fmt: str = "dxf",
+    state: int = 1,
+    kerf_offset: float = 0.0,
+    order: np.ndarray | None = None,
+    manifest: bool = True,
+    reference: bool = True,
+    layout: str | None = None,
+) -> Path:
     """Write one sheet: ``corners`` (T', 4, 2) are the tiles as they sit on the sheet (mm).
 
     ``tape``: every edge once, as open 2-point polylines; ``separate``: closed
@@ -129,12 +146,19 @@ def write_layout(folder: Path, pattern: Pattern, corners: np.ndarray, *, hinge: 
             msp.add_lwpolyline(pts.tolist(), close=closed, dxfattribs={"layer": "CUT"})
         if reference:
             msp.add_lwpolyline(sq.tolist(), close=True, dxfattribs={"layer": "CUT"})
-        msp.add_lwpolyline([(0, 0), (width, 0), (width, height), (0, height)], close=True,
-                           dxfattribs={"layer": "NOTES"})
+        msp.add_lwpolyline(
+            [(0, 0), (width, 0), (width, height), (0, height)],
+            close=True,
+            dxfattribs={"layer": "NOTES"},
+        )
         doc.saveas(path)
     else:
-        dwg = svgwrite.Drawing(str(path), size=(f"{width}mm", f"{height}mm"), viewBox=f"0 0 {width} {height}",
-                               debug=False)
+        dwg = svgwrite.Drawing(
+            str(path),
+            size=(f"{width}mm", f"{height}mm"),
+            viewBox=f"0 0 {width} {height}",
+            debug=False,
+        )
 
         def flip(p):
             return [(float(x), float(height - y)) for x, y in p]
@@ -151,9 +175,17 @@ def write_layout(folder: Path, pattern: Pattern, corners: np.ndarray, *, hinge: 
         dwg.save()
     if manifest:
         data = {
-            "format": "fabkiri.cut", "version": 1, "units": "mm", "pattern": "pattern.json",
-            "hinge": hinge, "state": state, "layout": layout or ("in-place" if hinge == "tape" else "exploded"),
-            "scale": 1.0, "kerf_mm": 2 * kerf_offset, "kerf_offset_mm": kerf_offset, "tile_shrink_mm": 0.0,
+            "format": "fabkiri.cut",
+            "version": 1,
+            "units": "mm",
+            "pattern": "pattern.json",
+            "hinge": hinge,
+            "state": state,
+            "layout": layout or ("in-place" if hinge == "tape" else "exploded"),
+            "scale": 1.0,
+            "kerf_mm": 2 * kerf_offset,
+            "kerf_offset_mm": kerf_offset,
+            "tile_shrink_mm": 0.0,
             "hinge_features": [],
             "reference_square": {"sheet": 1, "corners": sq.tolist()} if reference else None,
             "sheets": [{"index": 1, "width_mm": width, "height_mm": height, fmt: path.name}],
@@ -163,12 +195,16 @@ def write_layout(folder: Path, pattern: Pattern, corners: np.ndarray, *, hinge: 
     return path
 
 
-def in_place_corners(pattern: Pattern, state: int = 1, theta: float = 0.0, shift=(0.0, 0.0)) -> np.ndarray:
+def in_place_corners(
+    pattern: Pattern, state: int = 1, theta: float = 0.0, shift=(0.0, 0.0)
+) -> np.ndarray:
     Y = pattern.contracted[state]
     return geometry.rotate(Y, theta) + np.asarray(shift)
 
 
-def exploded_corners(pattern: Pattern, rng: np.random.Generator, spacing: float = 1.6) -> np.ndarray:
+def exploded_corners(
+    pattern: Pattern, rng: np.random.Generator, spacing: float = 1.6
+) -> np.ndarray:
     """Deployed tile shapes, each turned at random, on a grid with clearance."""
     X = pattern.corners()
     c = X.mean(axis=1, keepdims=True)

@@ -34,7 +34,11 @@ class Sheet:
     height: float
 
     def copy(self) -> Sheet:
-        return Sheet({k: [(p.copy(), c) for p, c in v] for k, v in self.layers.items()}, self.width, self.height)
+        return Sheet(
+            {k: [(p.copy(), c) for p, c in v] for k, v in self.layers.items()},
+            self.width,
+            self.height,
+        )
 
     def map_points(self, fn, layers=None) -> Sheet:
         out = self.copy()
@@ -53,7 +57,9 @@ class Base:
     pattern: object
     manifest: dict
     sheet: Sheet
-    tiles: np.ndarray  # (T, 4, 2) design tiles where the manifest puts them (in place: the cut region)
+    tiles: (
+        np.ndarray
+    )  # (T, 4, 2) design tiles where the manifest puts them (in place: the cut region)
     extra: dict = field(default_factory=dict)
 
     @property
@@ -67,8 +73,11 @@ def load_base(folder: Path, fmt: str, pattern) -> Base:
     man = json.loads((folder / "manifest.json").read_text())
     row = man["sheets"][0]
     doc, _, layers, _ = read_dxf((folder / row["dxf"]).read_bytes())
-    sheet = Sheet({k: [(np.asarray(p, float), bool(c)) for p, c in v] for k, v in layers.items()},
-                  float(row["width_mm"]), float(row["height_mm"]))
+    sheet = Sheet(
+        {k: [(np.asarray(p, float), bool(c)) for p, c in v] for k, v in layers.items()},
+        float(row["width_mm"]),
+        float(row["height_mm"]),
+    )
     state = int(man["state"])
     Y = pattern.contracted.get(state)
     Y = contract(pattern, state).corners if Y is None else Y
@@ -136,8 +145,11 @@ def write_dxf(sheet: Sheet, path: Path, style: str = "lw") -> None:
                 from ezdxf.math import OCS
 
                 ocs = OCS((0, 0, -1))
-                pts_o = [tuple(v)[:2] for v in ocs.points_from_wcs([(x, y, 0) for x, y in q])] \
-                    if style == "ocs" else [tuple(p) for p in q]
+                pts_o = (
+                    [tuple(v)[:2] for v in ocs.points_from_wcs([(x, y, 0) for x, y in q])]
+                    if style == "ocs"
+                    else [tuple(p) for p in q]
+                )
                 e = target.add_lwpolyline(pts_o, close=closed, dxfattribs=attrs)
                 e.dxf.extrusion = (0, 0, -1)
             else:
@@ -152,7 +164,9 @@ def write_dxf(sheet: Sheet, path: Path, style: str = "lw") -> None:
 def _d(pts: np.ndarray, closed: bool, relative: bool = False) -> str:
     if relative:
         steps = np.diff(pts, axis=0)
-        s = f"m {pts[0, 0]:.12g},{pts[0, 1]:.12g} " + " ".join(f"l {dx:.12g},{dy:.12g}" for dx, dy in steps)
+        s = f"m {pts[0, 0]:.12g},{pts[0, 1]:.12g} " + " ".join(
+            f"l {dx:.12g},{dy:.12g}" for dx, dy in steps
+        )
     else:
         s = "M " + " L ".join(f"{x:.12g},{y:.12g}" for x, y in pts)
     return s + (" Z" if closed else "")
@@ -163,14 +177,25 @@ def write_svg(sheet: Sheet, path: Path, style: str = "groups") -> None:
     viewbox-scaled (breakage) | mirror (breakage) | inch-for-mm (breakage)."""
     W, H = sheet.width, sheet.height
     k = {"px": 96 / 25.4}.get(style, 1.0)  # user units per mm
-    size = {"cm": (f"{W / 10:.12g}cm", f"{H / 10:.12g}cm"), "inch": (f"{W / 25.4:.12g}in", f"{H / 25.4:.12g}in"),
-            "inch-for-mm": (f"{W:.12g}in", f"{H:.12g}in")}.get(style, (f"{W:.12g}mm", f"{H:.12g}mm"))
-    vb = f"0 0 {W * k:.12g} {H * k:.12g}" if style != "viewbox-scaled" else f"0 0 {W * 1.01:.12g} {H * 1.01:.12g}"
-    out = ['<?xml version="1.0" encoding="UTF-8"?>',
-           f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
-           f'width="{size[0]}" height="{size[1]}" viewBox="{vb}">']
-    outer = {"transform": f'<g transform="translate(41.5 -17.25) rotate(23 {W / 2} {H / 2})">',
-             "mirror": f'<g transform="translate({W} 0) scale(-1 1)">'}.get(style)
+    size = {
+        "cm": (f"{W / 10:.12g}cm", f"{H / 10:.12g}cm"),
+        "inch": (f"{W / 25.4:.12g}in", f"{H / 25.4:.12g}in"),
+        "inch-for-mm": (f"{W:.12g}in", f"{H:.12g}in"),
+    }.get(style, (f"{W:.12g}mm", f"{H:.12g}mm"))
+    vb = (
+        f"0 0 {W * k:.12g} {H * k:.12g}"
+        if style != "viewbox-scaled"
+        else f"0 0 {W * 1.01:.12g} {H * 1.01:.12g}"
+    )
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
+        f'width="{size[0]}" height="{size[1]}" viewBox="{vb}">',
+    ]
+    outer = {
+        "transform": f'<g transform="translate(41.5 -17.25) rotate(23 {W / 2} {H / 2})">',
+        "mirror": f'<g transform="translate({W} 0) scale(-1 1)">',
+    }.get(style)
     if outer:
         out.append(outer)
     n = 0
@@ -190,11 +215,15 @@ def write_svg(sheet: Sheet, path: Path, style: str = "groups") -> None:
             st = f' style="fill:none;stroke:{col};stroke-width:0.01"' if style == "colour" else ""
             if style == "polyline":
                 tag = "polygon" if closed else "polyline"
-                out.append(f'<{tag} points="' + " ".join(f"{x:.12g},{y:.12g}" for x, y in q) + f'"{st}/>')
+                out.append(
+                    f'<{tag} points="' + " ".join(f"{x:.12g},{y:.12g}" for x, y in q) + f'"{st}/>'
+                )
             elif style == "lines":
                 segs = list(zip(q, np.roll(q, -1, 0))) if closed else list(zip(q[:-1], q[1:]))
                 for a, b in segs:
-                    out.append(f'<line x1="{a[0]:.12g}" y1="{a[1]:.12g}" x2="{b[0]:.12g}" y2="{b[1]:.12g}"{st}/>')
+                    out.append(
+                        f'<line x1="{a[0]:.12g}" y1="{a[1]:.12g}" x2="{b[0]:.12g}" y2="{b[1]:.12g}"{st}/>'
+                    )
             else:
                 out.append(f'<path d="{_d(q, closed, style == "relative")}"{st}/>')
         if head:
@@ -237,7 +266,7 @@ def _explode(sheet: Sheet, layers=("CUT",)) -> Sheet:
         items = []
         for p, c in out.layers.get(k, []):
             q = np.vstack([p, p[:1]]) if c else p
-            items += [(q[i: i + 2], False) for i in range(len(q) - 1)]
+            items += [(q[i : i + 2], False) for i in range(len(q) - 1)]
         out.layers[k] = items
     return out
 
@@ -265,6 +294,7 @@ def _drop_layers(*names) -> Callable[[Sheet], Sheet]:
         for n in names:
             out.layers.pop(n, None)
         return out
+
     return f
 
 
@@ -308,6 +338,7 @@ def tile_scaled(f: float):
         t = _interior_tile(b, rng)
         c = b.tiles[t].mean(0)
         return move_vertices_of_tile(b, t, _about(c, lambda q: q * f)), f"tile {t}"
+
     return m
 
 
@@ -316,6 +347,7 @@ def tile_turned(deg: float):
         t = _interior_tile(b, rng)
         c = b.tiles[t].mean(0)
         return move_vertices_of_tile(b, t, _about(c, rigid(math.radians(deg), (0, 0)))), f"tile {t}"
+
     return m
 
 
@@ -323,7 +355,10 @@ def tile_moved(d: float):
     def m(b: Base, rng) -> tuple[Sheet, str]:
         t = _interior_tile(b, rng)
         a = rng.uniform(0, 2 * np.pi)
-        return move_vertices_of_tile(b, t, lambda q: q + d * np.array([math.cos(a), math.sin(a)])), f"tile {t}"
+        return move_vertices_of_tile(
+            b, t, lambda q: q + d * np.array([math.cos(a), math.sin(a)])
+        ), f"tile {t}"
+
     return m
 
 
@@ -337,7 +372,11 @@ def corner_moved(d: float):
         P = b.tiles[t, k]
         items = []
         # the cut lines around a tile corner: offset by the kerf (and, in a ligament sheet, the tile shrink)
-        r = 1e-3 if b.hinge == "tape" else 0.3 + b.manifest["kerf_offset_mm"] + b.manifest["tile_shrink_mm"]
+        r = (
+            1e-3
+            if b.hinge == "tape"
+            else 0.3 + b.manifest["kerf_offset_mm"] + b.manifest["tile_shrink_mm"]
+        )
         for p, c in out.layers["CUT"]:
             near = np.linalg.norm(p - P, axis=1) <= r
             if near.any():
@@ -346,6 +385,7 @@ def corner_moved(d: float):
             items.append((p, c))
         out.layers["CUT"] = items
         return out, f"tile {t}"
+
     return m
 
 
@@ -385,8 +425,10 @@ def tile_missing(b: Base, rng) -> tuple[Sheet, str]:
     if b.hinge == "separate":
         t = int(rng.integers(len(b.tiles)))
         c = b.tiles[t].mean(0)
-        k = next(i for i, (p, cl) in enumerate(cut) if cl and shapely.contains_xy(shapely.Polygon(p), *c))
-        out.layers["CUT"] = cut[:k] + cut[k + 1:]
+        k = next(
+            i for i, (p, cl) in enumerate(cut) if cl and shapely.contains_xy(shapely.Polygon(p), *c)
+        )
+        out.layers["CUT"] = cut[:k] + cut[k + 1 :]
         return out, f"tile {t}"
     return None, ""
 
@@ -401,8 +443,16 @@ def tiles_swapped(b: Base, rng) -> tuple[Sheet, str]:
     i, j = rng.choice(T, 2, replace=False)
     if _congruent(b.tiles[i], b.tiles[j]):
         return None, ""  # congruent tiles: the copy is the same part
-    ki = next(k for k, (p, cl) in enumerate(cut) if cl and shapely.contains_xy(shapely.Polygon(p), *b.tiles[i].mean(0)))
-    kj = next(k for k, (p, cl) in enumerate(cut) if cl and shapely.contains_xy(shapely.Polygon(p), *b.tiles[j].mean(0)))
+    ki = next(
+        k
+        for k, (p, cl) in enumerate(cut)
+        if cl and shapely.contains_xy(shapely.Polygon(p), *b.tiles[i].mean(0))
+    )
+    kj = next(
+        k
+        for k, (p, cl) in enumerate(cut)
+        if cl and shapely.contains_xy(shapely.Polygon(p), *b.tiles[j].mean(0))
+    )
     pj = cut[kj][0]
     cut[ki] = (pj - pj.mean(0) + cut[ki][0].mean(0), True)
     return out, f"tile {int(i)}"
@@ -428,7 +478,10 @@ def _slit(b: Base, rng) -> tuple[int, int]:
             continue
         for k in range(len(p) - 1):
             mid = 0.5 * (p[k] + p[k + 1])
-            if shapely.distance(shapely.Point(mid), outline) > 1.0 and np.linalg.norm(p[k + 1] - p[k]) > 0.5:
+            if (
+                shapely.distance(shapely.Point(mid), outline) > 1.0
+                and np.linalg.norm(p[k + 1] - p[k]) > 0.5
+            ):
                 cands.append((float(np.linalg.norm(mid - centre)), i, k))
     cands.sort()
     _, i, k = cands[int(rng.integers(0, max(1, len(cands) // 3)))]
@@ -445,8 +498,8 @@ def _cut_slit(b: Base, rng, end_of) -> Sheet:
     stop = end_of(a, e)
     if stop is not None:
         first = np.vstack([first, stop])
-    pieces = [q for q in (first, p[k + 1:]) if len(q) >= 2]
-    out.layers["CUT"][i: i + 1] = [(q, False) for q in pieces]
+    pieces = [q for q in (first, p[k + 1 :]) if len(q) >= 2]
+    out.layers["CUT"][i : i + 1] = [(q, False) for q in pieces]
     return out
 
 
@@ -455,6 +508,7 @@ def slit_shortened(d: float):
         if b.hinge != "tape":
             return None, ""
         return _cut_slit(b, rng, lambda a, e: e - d * (e - a) / np.linalg.norm(e - a)), "slit"
+
     return m
 
 
@@ -472,21 +526,29 @@ def slit_removed(b: Base, rng):
 
 def extra_cut(frac: float):
     """A straight cut across (frac=1) or into (frac<1) an interior tile."""
+
     def m(b: Base, rng):
         t = _interior_tile(b, rng)
         Q = b.tiles[t]
         if b.hinge == "separate":  # the outline on the sheet: find it by centroid
             c = Q.mean(0)
-            poly = next(shapely.Polygon(p) for p, cl in b.sheet.layers["CUT"]
-                        if cl and shapely.contains_xy(shapely.Polygon(p), *c))
+            poly = next(
+                shapely.Polygon(p)
+                for p, cl in b.sheet.layers["CUT"]
+                if cl and shapely.contains_xy(shapely.Polygon(p), *c)
+            )
             Q = np.asarray(poly.exterior.coords)[:4]
-            Q = np.asarray(shapely.Polygon(poly).minimum_rotated_rectangle.exterior.coords)[:4] if len(
-                poly.exterior.coords) != 5 else Q
+            Q = (
+                np.asarray(shapely.Polygon(poly).minimum_rotated_rectangle.exterior.coords)[:4]
+                if len(poly.exterior.coords) != 5
+                else Q
+            )
         a, bb = 0.5 * (Q[0] + Q[1]), 0.5 * (Q[2] + Q[3])
         end = a + frac * (bb - a) if frac < 1 else bb + 0.0 * (bb - a)
         out = b.sheet.copy()
         out.layers["CUT"].append((np.array([a, end]), False))
         return out, f"tile {t}"
+
     return m
 
 
@@ -502,15 +564,20 @@ def ligament_severed(every: bool):
             r = poly.minimum_rotated_rectangle
             c = np.asarray(r.exterior.coords)[:4]
             e = np.linalg.norm(np.roll(c, -1, 0) - c, axis=1)
-            k = int(np.argmax(e))  # cut across the strip: through the middle, along its short side, reaching out
+            k = int(
+                np.argmax(e)
+            )  # cut across the strip: through the middle, along its short side, reaching out
             a, bb = 0.5 * (c[k] + c[(k + 1) % 4]), 0.5 * (c[(k + 2) % 4] + c[(k + 3) % 4])
             mid = 0.5 * (a + bb)
             short = c[(k + 1) % 4] - c[k]
             short = np.asarray(c[(k + 2) % 4] - c[(k + 1) % 4])
             u = short / np.linalg.norm(short)
             w = float(e.min())
-            out.layers["CUT"].append((np.array([mid - u * (0.5 * w + 0.3), mid + u * (0.5 * w + 0.3)]), False))
+            out.layers["CUT"].append(
+                (np.array([mid - u * (0.5 * w + 0.3), mid + u * (0.5 * w + 0.3)]), False)
+            )
         return out, f"hinge {picks[0]['hinge']}"
+
     return m
 
 
@@ -522,8 +589,13 @@ def _mark_items(b: Base, h: int) -> list[int]:
     pos = np.asarray(row["position_b"], float)
     out = []
     for i, (p, c) in enumerate(b.sheet.layers.get("ENGRAVE", [])):
-        if len(p) == 2 and not c and np.linalg.norm(p[1] - p[0]) >= 2.5 \
-                and shapely.contains_xy(poly, p[:, 0], p[:, 1]).all() and np.linalg.norm(p - pos, axis=1).max() < 12:
+        if (
+            len(p) == 2
+            and not c
+            and np.linalg.norm(p[1] - p[0]) >= 2.5
+            and shapely.contains_xy(poly, p[:, 0], p[:, 1]).all()
+            and np.linalg.norm(p - pos, axis=1).max() < 12
+        ):
             out.append(i)
     return out
 
@@ -605,14 +677,18 @@ class Kind:
     style: str = ""  # writer style
     manifest: str = "keep"  # keep | kerf0 (undeclared kerf) | needs-manifest (only the manifest tells it broken)
     hinges: tuple = ("tape", "separate", "ligament")
-    chiral: bool = False  # a mirror of the whole sheet: a breakage only for a sheet without mirror symmetry
+    chiral: bool = (
+        False  # a mirror of the whole sheet: a breakage only for a sheet without mirror symmetry
+    )
 
 
 def then(change, after):
     """``change``, then the sheet-wide ``after`` (when ``change`` applies)."""
+
     def m(b, rng):
         sh, what = change(b, rng)
         return (None, "") if sh is None else (after(sh), what)
+
     return m
 
 
@@ -661,9 +737,18 @@ VALID = [
     Kind("rounded to 0.0001 mm", True, "any", _g(_round(4))),
     Kind("NOTES layer removed", True, "any", _g(_drop_layers("NOTES"))),
     Kind("ENGRAVE layer removed", True, "any", _g(_drop_layers("ENGRAVE"))),
-    Kind("split pieces, shuffled, turned 12°", True, "any",
-         lambda b, rng: (_shuffle(_split_closed(b.sheet.map_points(rigid(math.radians(12), (5, 5))))), "")),
-    Kind("LINEs of a turned sheet", True, "dxf", sheet(rigid(math.radians(57), (300, -100))), "lines"),
+    Kind(
+        "split pieces, shuffled, turned 12°",
+        True,
+        "any",
+        lambda b, rng: (
+            _shuffle(_split_closed(b.sheet.map_points(rigid(math.radians(12), (5, 5))))),
+            "",
+        ),
+    ),
+    Kind(
+        "LINEs of a turned sheet", True, "dxf", sheet(rigid(math.radians(57), (300, -100))), "lines"
+    ),
     Kind("rounded 0.001 mm, colour only", True, "svg", _g(_round(3)), "colour"),
     Kind("block of a rounded sheet", True, "dxf", _g(_round(3)), "block-moved"),
     Kind("OCS of a turned sheet", True, "dxf", sheet(rigid(math.radians(-20), (0, 200))), "ocs"),
@@ -684,7 +769,12 @@ BROKEN = [
     Kind("sheet scaled 1%", False, "any", sheet(lambda p: p * 1.01)),
     Kind("sheet scaled 0.995", False, "any", sheet(lambda p: p * 0.995)),
     Kind("sheet stretched 1% in x", False, "any", sheet(lambda p: p * np.array([1.01, 1.0]))),
-    Kind("sheet sheared 1%", False, "any", sheet(lambda p: p + np.column_stack([0.01 * p[:, 1], 0 * p[:, 0]]))),
+    Kind(
+        "sheet sheared 1%",
+        False,
+        "any",
+        sheet(lambda p: p + np.column_stack([0.01 * p[:, 1], 0 * p[:, 0]])),
+    ),
     Kind("sheet mirrored", False, "any", sheet_mirrored, chiral=True),
     Kind("mirrored through the OCS", False, "dxf", _keep, "ocs-mirror", chiral=True),
     Kind("inch-for-mm", False, "dxf", _keep, "inch-for-mm"),
@@ -701,25 +791,68 @@ BROKEN = [
     Kind("a ligament severed", False, "any", ligament_severed(False), hinges=("ligament",)),
     Kind("every ligament severed", False, "any", ligament_severed(True), hinges=("ligament",)),
     Kind("undeclared kerf", False, "any", _keep, manifest="kerf0", hinges=("separate", "ligament")),
-    Kind("sheet scaled 1%, turned 40°", False, "any",
-         sheet(lambda p: rigid(math.radians(40), (0, 0))(p) * 1.01)),
+    Kind(
+        "sheet scaled 1%, turned 40°",
+        False,
+        "any",
+        sheet(lambda p: rigid(math.radians(40), (0, 0))(p) * 1.01),
+    ),
     Kind("tile scaled 1% in LINEs", False, "dxf", tile_scaled(1.01), "lines"),
     Kind("tile mirrored, colour only", False, "svg", tile_mirrored, "colour"),
-    Kind("corner moved 0.1 mm, Inkscape layers", False, "svg", corner_moved(0.1), "labels", hinges=("tape", "separate")),
-    Kind("tile turned 1° in a block", False, "dxf", tile_turned(1.0), "block-moved", hinges=("tape", "ligament")),
-    Kind("slit shortened 10 µm, LINEs", False, "dxf", slit_shortened(0.01), "lines", hinges=("tape",)),
+    Kind(
+        "corner moved 0.1 mm, Inkscape layers",
+        False,
+        "svg",
+        corner_moved(0.1),
+        "labels",
+        hinges=("tape", "separate"),
+    ),
+    Kind(
+        "tile turned 1° in a block",
+        False,
+        "dxf",
+        tile_turned(1.0),
+        "block-moved",
+        hinges=("tape", "ligament"),
+    ),
+    Kind(
+        "slit shortened 10 µm, LINEs", False, "dxf", slit_shortened(0.01), "lines", hinges=("tape",)
+    ),
     Kind("extra cut, polyline elements", False, "svg", extra_cut(1.0), "polyline"),
     Kind("sheet mirrored, R2018", False, "dxf", sheet_mirrored, "r2018", chiral=True),
     Kind("tile scaled 1%, split pieces", False, "any", then(tile_scaled(1.01), _split_closed)),
-    Kind("corner moved 0.1 mm, rounded 0.001", False, "any", then(corner_moved(0.1), _round(3)), hinges=("tape", "separate")),
-    Kind("tile mirrored in a turned sheet", False, "any",
-         then(tile_mirrored, lambda s: s.map_points(rigid(math.radians(75), (0, 0))))),
-    Kind("a ligament severed, LINEs", False, "dxf", ligament_severed(False), "lines", hinges=("ligament",)),
+    Kind(
+        "corner moved 0.1 mm, rounded 0.001",
+        False,
+        "any",
+        then(corner_moved(0.1), _round(3)),
+        hinges=("tape", "separate"),
+    ),
+    Kind(
+        "tile mirrored in a turned sheet",
+        False,
+        "any",
+        then(tile_mirrored, lambda s: s.map_points(rigid(math.radians(75), (0, 0)))),
+    ),
+    Kind(
+        "a ligament severed, LINEs",
+        False,
+        "dxf",
+        ligament_severed(False),
+        "lines",
+        hinges=("ligament",),
+    ),
     Kind("a ligament cut halfway", False, "any", ligament_cut_into, hinges=("ligament",)),
     Kind("a tape mark missing", False, "any", tape_mark_missing, hinges=("tape",)),
     Kind("a tape mark moved off its corner", False, "any", tape_mark_moved, hinges=("tape",)),
-    Kind("every tape mark removed (labels kept)", False, "any", tape_marks_removed, manifest="needs-manifest",
-         hinges=("tape",)),
+    Kind(
+        "every tape mark removed (labels kept)",
+        False,
+        "any",
+        tape_marks_removed,
+        manifest="needs-manifest",
+        hinges=("tape",),
+    ),
 ]
 
 

@@ -18,14 +18,23 @@ def square():
 
 
 def test_cut_files_are_the_bytes_the_cli_writes(square, tmp_path, run_cli):
-    material, hinge = cut_material(square, None, None, changes={"kerf_mm": 0.1}, settings=["min_web_mm=2"])
-    assert material.name == "acrylic-3" and material.kerf_mm == 0.1 and material.min_web_mm == 2 and hinge is None
+    material, hinge = cut_material(
+        square, None, None, changes={"kerf_mm": 0.1}, settings=["min_web_mm=2"]
+    )
+    assert (
+        material.name == "acrylic-3"
+        and material.kerf_mm == 0.1
+        and material.min_web_mm == 2
+        and hinge is None
+    )
     out = cut_files(square, CutOptions(material=material, stem="sq", pattern_file="sq.json"))
     assert isinstance(out, CutOutcome) and out.readback.ok
     man = json.loads(out.files["manifest.json"])
     assert man["verification"]["ok"] and {"sq.dxf", "sq.svg", "manifest.json"} <= set(out.files)
     write_pattern(square, tmp_path / "sq.json")
-    code, _, err = run_cli("cut", tmp_path / "sq.json", "--kerf", "0.1", "--set", "min_web_mm=2", "-o", tmp_path / "o")
+    code, _, err = run_cli(
+        "cut", tmp_path / "sq.json", "--kerf", "0.1", "--set", "min_web_mm=2", "-o", tmp_path / "o"
+    )
     assert code == 0, err
     written = {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir()}
     assert written == out.files
@@ -34,11 +43,15 @@ def test_cut_files_are_the_bytes_the_cli_writes(square, tmp_path, run_cli):
 def test_the_design_intent_chooses_material_and_hinge_unless_a_material_is_named(square):
     from dataclasses import replace
 
-    made_for = replace(square, design={"options": {"fabrication": {"material": "pp-0.5", "hinge": "ligament"}}})
+    made_for = replace(
+        square, design={"options": {"fabrication": {"material": "pp-0.5", "hinge": "ligament"}}}
+    )
     assert design_intent(made_for, "hinge") == "ligament" and design_intent(square, "hinge") is None
     material, hinge = cut_material(made_for)
     assert material.name == "pp-0.5" and hinge == "ligament"
-    material, hinge = cut_material(made_for, "acrylic-3")  # a named material drops the design's hinge kind too
+    material, hinge = cut_material(
+        made_for, "acrylic-3"
+    )  # a named material drops the design's hinge kind too
     assert material.name == "acrylic-3" and hinge is None
     with pytest.raises(InputError, match="--set expects FIELD=VALUE"):
         cut_material(square, settings=["nope"])

@@ -18,19 +18,36 @@ def square():
 
 def test_print_pattern_returns_the_files_the_cli_writes(square, tmp_path, run_cli):
     notes = []
-    out = print_pattern(square, PrintOptions(state=2, printer="prusa-xl-2t"), stem="sq", source="sq.json",
-                        notify=notes.append)
+    out = print_pattern(
+        square,
+        PrintOptions(state=2, printer="prusa-xl-2t"),
+        stem="sq",
+        source="sq.json",
+        notify=notes.append,
+    )
     assert isinstance(out, PrintOutcome) and notes == out.messages == []
     assert set(out.files) == {"sq.3mf", "sq.png", "sq_tiles.stl", "sq_hinges.stl", "manifest.json"}
     assert out.job.style == "tiles-and-strips" and out.job.state == 2 and out.scale == 1.0
     assert out.mesh_report.ok and out.verifier is not None and out.verifier.ok
     assert "PLA on extruder 1, TPU on extruder 2" in out.plan and out.plan in out.describe()
     man = json.loads(out.files["manifest.json"])
-    assert man["checks"]["meshes"]["ok"] and man["checks"]["tiles"]["ok"] and man["pattern"] == "sq.json"
+    assert (
+        man["checks"]["meshes"]["ok"]
+        and man["checks"]["tiles"]["ok"]
+        and man["pattern"] == "sq.json"
+    )
     # the CLI writes exactly these bytes
     write_pattern(square, tmp_path / "sq.json")
-    code, _, err = run_cli("print", tmp_path / "sq.json", "--state", "2", "--printer", "prusa-xl-2t",
-                           "-o", tmp_path / "out")
+    code, _, err = run_cli(
+        "print",
+        tmp_path / "sq.json",
+        "--state",
+        "2",
+        "--printer",
+        "prusa-xl-2t",
+        "-o",
+        tmp_path / "out",
+    )
     assert code == 0, err
     assert out.describe() in err
     written = {p.name: p.read_bytes() for p in (tmp_path / "out").iterdir()}
@@ -47,12 +64,16 @@ def test_scale_auto_prints_at_the_smallest_accepted_scale(square):
 
 def test_refusals_raise_and_return_nothing(square):
     small = with_contracted_states(standard_pattern(3, 3, tile_size=3.0))
-    with pytest.raises(FabricationError, match=r"\(at --scale 1\); print at --scale ≥ [0-9.]+ \(or --scale auto\)"):
+    with pytest.raises(
+        FabricationError, match=r"\(at --scale 1\); print at --scale ≥ [0-9.]+ \(or --scale auto\)"
+    ):
         print_pattern(small, PrintOptions(style="strips"))
     with pytest.raises(InputError, match="--marks engraves strip pads .* needs --style strips"):
         print_pattern(square, PrintOptions(marks=True))
     # a library caller's scale text other than "auto" is bad input in one line (it was a TypeError)
-    with pytest.raises(InputError, match=r"--scale must be a number \(mm printed per mm\) or auto, got '2'"):
+    with pytest.raises(
+        InputError, match=r"--scale must be a number \(mm printed per mm\) or auto, got '2'"
+    ):
         print_pattern(square, PrintOptions(scale="2"))
 
 
@@ -63,12 +84,16 @@ def test_a_pattern_closing_one_way_has_its_reassembly_checks_moot_by_id():
 
     from tests.conftest import ref
 
-    pattern = load_any(ref("contractible_design"))  # a design .obj, read as `fabkiri print` reads it
+    pattern = load_any(
+        ref("contractible_design")
+    )  # a design .obj, read as `fabkiri print` reads it
     notes = []
     opts = dict(state=2, scale=10.0, strip_width=1.5, strip_reach=1.5, printer="prusa-xl-2t")
     out = print_pattern(pattern, PrintOptions(**opts), notify=notes.append)
     moot = out.verifier.meta["not_applicable"]
-    assert moot and notes == ["note: closed state 1 does not close; the verifier's reassembly checks are moot"]
+    assert moot and notes == [
+        "note: closed state 1 does not close; the verifier's reassembly checks are moot"
+    ]
     by_name = {c.name: c for c in out.verifier.checks}
     assert all(".reassembled.state1." in by_name[n].id and not by_name[n].ok for n in moot)
     assert all(c.ok for c in out.verifier.checks if c.name not in moot)
@@ -83,7 +108,9 @@ def test_every_closed_state_check_has_a_stable_id(square):
     for s in (1, 2):
         checks = closed_state_checks(square, square.corners(s), s, tolerances(square))
         ids = [c.id for c in checks]
-        assert all(i.startswith(state_check_id(s, "")) and len(i) > len(f"state{s}.") for i in ids), ids
+        assert all(
+            i.startswith(state_check_id(s, "")) and len(i) > len(f"state{s}.") for i in ids
+        ), ids
         assert len(set(ids)) == len(ids)
 
 
@@ -102,15 +129,21 @@ def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
         return replace(strips_style.build(pattern, state, pr), style="fussy-strips")
 
     def checks(pattern, r, rep):
-        return printjob.StyleChecks(problems=[f"fussy: {r.job.style} {r.job.plan.n_hinges} hinges"], notes=["note: fussy"])
+        return printjob.StyleChecks(
+            problems=[f"fussy: {r.job.style} {r.job.plan.n_hinges} hinges"], notes=["note: fussy"]
+        )
 
-    printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances, checks=checks))
+    printjob.register_style(
+        printjob.PrintStyle("fussy-strips", build, strips_style.clearances, checks=checks)
+    )
     notes = []
     with pytest.raises(CheckFailed, match=r"^fussy: fussy-strips 12 hinges; nothing written$"):
         print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0), notify=notes.append)
     assert notes == ["note: fussy"]
     printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances))
-    with pytest.raises(InputError, match="--marks engraves strip pads"):  # loose_strips is strips' own
+    with pytest.raises(
+        InputError, match="--marks engraves strip pads"
+    ):  # loose_strips is strips' own
         print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0, marks=True))
 
 
@@ -122,17 +155,31 @@ def test_the_print_manifest_is_one_typed_object_checked_on_read(square, tmp_path
     from fabkiri.verify.printmanifest import PrintManifest
 
     for style in ("strips", "pinned"):
-        out = print_pattern(square, PrintOptions(style=style, scale=3.0), stem="sq", source="sq.json")
+        out = print_pattern(
+            square, PrintOptions(style=style, scale=3.0), stem="sq", source="sq.json"
+        )
         text = out.files["manifest.json"]
         m = PrintManifest.from_json(text)
         assert m.to_json() == text and m.style == style and m.state == 1 and m.pattern == "sq.json"
-        assert (m.pins is not None) == (style == "pinned") and (m.placements is not None) == (style == "strips")
-        assert m.check("meshes")["ok"] and m.bill_of_materials["style"] == style and set(m.files) <= set(out.files)
+        assert (m.pins is not None) == (style == "pinned") and (m.placements is not None) == (
+            style == "strips"
+        )
+        assert (
+            m.check("meshes")["ok"]
+            and m.bill_of_materials["style"] == style
+            and set(m.files) <= set(out.files)
+        )
         html = _print_section(tmp_path, m) + _bom_section(None, m)
-        assert f"<td>{style}</td>" in html and f"<td>{m.printer_name}</td>" in html and "filament" in html
+        assert (
+            f"<td>{style}</td>" in html
+            and f"<td>{m.printer_name}</td>" in html
+            and "filament" in html
+        )
     with pytest.raises(VerifyError, match=r"^m: malformed print manifest \(state: .*\)$"):
         PrintManifest.from_dict({**json.loads(text), "state": 3}, "m")
-    with pytest.raises(VerifyError, match=r"^m: malformed print manifest \(top level: .*'style'.*\)$"):
+    with pytest.raises(
+        VerifyError, match=r"^m: malformed print manifest \(top level: .*'style'.*\)$"
+    ):
         PrintManifest.from_dict({"format": "fabkiri.print", "state": 1}, "m")
     extra = PrintManifest.from_json(text.replace('"format"', '"note": "hand-made",\n "format"', 1))
     assert extra.extra == {"note": "hand-made"} and list(extra.to_dict())[-1] == "note"

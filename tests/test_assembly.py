@@ -37,7 +37,9 @@ def test_cut_manifest_numbers_every_tape_piece_in_join_order(run_cli, tmp_path):
     bom = m["bill_of_materials"]
     assert bom["tape_pieces"] == len(pieces) == bom["tape_top"] + bom["tape_bottom"]
     assert bom["tape_length_mm"] == pytest.approx(sum(r["length_mm"] for r in pieces), abs=1e-3)
-    assert all(0 < r["length_mm"] <= 2 * 8.0 + 1e-9 for r in pieces)  # a corner each side, 8 mm reach at most
+    assert all(
+        0 < r["length_mm"] <= 2 * 8.0 + 1e-9 for r in pieces
+    )  # a corner each side, 8 mm reach at most
     assert bom["sheet_area_mm2"] == 600 * 400 and 0 < bom["parts_area_mm2"] < bom["sheet_area_mm2"]
     assert m["assembly"]["map"] == "assembly.png"
     im = Image.open(tmp_path / "assembly.png")
@@ -45,8 +47,16 @@ def test_cut_manifest_numbers_every_tape_piece_in_join_order(run_cli, tmp_path):
 
 
 def test_ligament_sheet_has_nothing_to_join(run_cli, tmp_path):
-    code, _, err = run_cli("cut", TEMPLATES / "patterns" / "circle-8x8.json", "--material", "pp-0.5", "--width",
-                           "300", "-o", tmp_path)
+    code, _, err = run_cli(
+        "cut",
+        TEMPLATES / "patterns" / "circle-8x8.json",
+        "--material",
+        "pp-0.5",
+        "--width",
+        "300",
+        "-o",
+        tmp_path,
+    )
     assert code == 0, err
     m = json.loads((tmp_path / "manifest.json").read_text())
     assert m["assembly_pieces"] == [] and m["bill_of_materials"]["ligaments"] == len(m["hinges"])
@@ -55,16 +65,26 @@ def test_ligament_sheet_has_nothing_to_join(run_cli, tmp_path):
 
 @pytest.mark.slow
 def test_print_manifest_has_strips_and_filament(run_cli, tmp_path):
-    code, _, err = run_cli("print", TEMPLATES / "patterns" / "circle-8x8-rigid.json", "--scale", "3", "--style",
-                           "strips", "-o", tmp_path)
+    code, _, err = run_cli(
+        "print",
+        TEMPLATES / "patterns" / "circle-8x8-rigid.json",
+        "--scale",
+        "3",
+        "--style",
+        "strips",
+        "-o",
+        tmp_path,
+    )
     assert code == 0, err
     m = json.loads((tmp_path / "manifest.json").read_text())
     bom = m["bill_of_materials"]
     assert bom["strips"] == len(m["hinges"]) == bom["strips_top"] + bom["strips_bottom"]
     total = sum(b["volume_mm3"] for b in bom["bodies"])
-    assert sum(f["volume_mm3"] for f in bom["filament"].values()) == pytest.approx(total, rel=1e-6, abs=0.01)
+    assert sum(f["volume_mm3"] for f in bom["filament"].values()) == pytest.approx(
+        total, rel=1e-6, abs=0.01
+    )
     for f in bom["filament"].values():
-        assert f["length_m"] == pytest.approx(f["volume_mm3"] / (np.pi * 0.875 ** 2) / 1000, rel=1e-3)
+        assert f["length_m"] == pytest.approx(f["volume_mm3"] / (np.pi * 0.875**2) / 1000, rel=1e-3)
     pieces = m["assembly_pieces"]
     assert sorted(r["hinge"] for r in pieces) == list(range(len(m["hinges"])))
     assert (tmp_path / "assembly.png").exists()

@@ -41,6 +41,7 @@ def _scale_nodes(k):
     def fn(d):
         d["nodes"] = [[x * k, y * k] for x, y in d["nodes"]]
         d.pop("contracted")
+
     return fn
 
 
@@ -73,10 +74,12 @@ FILES = {
     "unknown-key.json": _variant(lambda d: d.update(colour="red")),
     "deep.json": "[" * 100_000 + "]" * 100_000,
     "deep-design.json": GOOD[:-2] + ',\n  "x": ' + "[" * 100_000 + "]" * 100_000 + "\n}\n",
-    "bigint.json": _variant(lambda d: d["tiles"][0].__setitem__(0, 10 ** 30)),
+    "bigint.json": _variant(lambda d: d["tiles"][0].__setitem__(0, 10**30)),
     "bigint-node.json": GOOD.replace(json.dumps(GOOD_DICT["nodes"][0][0]), "1" + "0" * 400, 1),
     "e308.json": _variant(_scale_nodes(1e306)),
-    "one-point.json": _variant(lambda d: (d.update(nodes=[[1.0, 1.0]] * len(d["nodes"])), d.pop("contracted"))),
+    "one-point.json": _variant(
+        lambda d: (d.update(nodes=[[1.0, 1.0]] * len(d["nodes"])), d.pop("contracted"))
+    ),
     "pentagon.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\nf 1 2 3 4 5\n",
     "missing-vertex.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1// 2// 3// 5//\n",
     "big-index.obj": "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 99999999999999999999999\n",
@@ -93,7 +96,7 @@ FILES = {
     "material-as-printer.json": _preset("materials", "acrylic-3"),
     "neg-pin.json": _preset("printers", "prusa-mk4", pin={"ear_radius_mm": -1.0}),
     "no-nozzle.json": _preset("printers", "prusa-mk4", nozzle_mm=None),
-    "bad.toml": "[axes\ntarget = [\"circle\"\n",
+    "bad.toml": '[axes\ntarget = ["circle"\n',
     "unknown-axis.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\ncolour = ["red"]\n',
     "bad-tiles.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4by4"]\n',
     "missing-target.toml": '[axes]\ntarget = ["no-such-shape"]\ntiles = ["4x4"]\n',
@@ -105,19 +108,51 @@ CASES = {
     "import -o its input": (["import", "d_design.obj", "-o", "d_design.obj"], 2, "is an input", ()),
     "export -o its input": (["export", "good.json", "-o", "good.json"], 2, "is an input", ()),
     "export -o ./input": (["export", "good.json", "-o", "./good.json"], 2, "is an input", ()),
-    "export -o symlink": (["export", "good.json", "-o", "link.json"], 2, "same file as the input", ()),
-    "export -o hard link": (["export", "good.json", "-o", "hard.json"], 2, "same file as the input", ()),
-    "design -o its target": (["design", "--tiles", "4x4", "--target", "t.csv", "-o", "t.csv"], 2, "is an input", ()),
+    "export -o symlink": (
+        ["export", "good.json", "-o", "link.json"],
+        2,
+        "same file as the input",
+        (),
+    ),
+    "export -o hard link": (
+        ["export", "good.json", "-o", "hard.json"],
+        2,
+        "same file as the input",
+        (),
+    ),
+    "design -o its target": (
+        ["design", "--tiles", "4x4", "--target", "t.csv", "-o", "t.csv"],
+        2,
+        "is an input",
+        (),
+    ),
     "cut -o its input": (["cut", "good.json", "-o", "good.json"], 2, "is an input", ()),
     "new -o a folder": (["new", "--tiles", "2x2", "-o", "out"], 2, "is a folder", ("out",)),
     # half-written output: a folder where one of the files must go
-    "cut: last file is a folder": (["cut", "good.json", "-o", "D"], 2, "D/manifest.json is a folder",
-                                   ("D/manifest.json",)),
-    "cut: first file is a folder": (["cut", "good.json", "-o", "D"], 2, "D/good.dxf is a folder", ("D/good.dxf",)),
-    "print: manifest is a folder": (["print", "good.json", "-o", "P"], 2, "P/manifest.json is a folder",
-                                    ("P/manifest.json",)),
-    "deploy: deploy.json is a folder": (["deploy", "good.json", "-o", "E"], 2, "E/deploy.json is a folder",
-                                        ("E/deploy.json",)),
+    "cut: last file is a folder": (
+        ["cut", "good.json", "-o", "D"],
+        2,
+        "D/manifest.json is a folder",
+        ("D/manifest.json",),
+    ),
+    "cut: first file is a folder": (
+        ["cut", "good.json", "-o", "D"],
+        2,
+        "D/good.dxf is a folder",
+        ("D/good.dxf",),
+    ),
+    "print: manifest is a folder": (
+        ["print", "good.json", "-o", "P"],
+        2,
+        "P/manifest.json is a folder",
+        ("P/manifest.json",),
+    ),
+    "deploy: deploy.json is a folder": (
+        ["deploy", "good.json", "-o", "E"],
+        2,
+        "E/deploy.json is a folder",
+        ("E/deploy.json",),
+    ),
     "deploy: frames is a file": (["deploy", "good.json", "-o", "F"], 2, "is not a folder", ("F",)),
     # internal errors that are bad input
     "new 100000x100000": (["new", "--tiles", "100000x100000", "-o", "big.json"], 2, "GB", ()),
@@ -127,85 +162,264 @@ CASES = {
     "info int node": (["info", "bigint-node.json"], 2, "beyond", ()),
     "verify coordinates near 1e308": (["verify", "e308.json"], 2, "from the origin", ()),
     "print coordinates near 1e308": (["print", "e308.json", "-o", "o"], 2, "from the origin", ()),
-    "import coordinates near 1e308": (["import", "huge.obj", "-o", "o.json"], 2, "from the origin", ()),
+    "import coordinates near 1e308": (
+        ["import", "huge.obj", "-o", "o.json"],
+        2,
+        "from the origin",
+        (),
+    ),
     "deploy all nodes at one point": (["deploy", "one-point.json", "-o", "o"], 2, "one point", ()),
-    "export all nodes at one point": (["export", "one-point.json", "-o", "o.obj"], 2, "one point", ()),
-    "import .fold nested 100000 deep": (["import", "deep.fold", "-o", "o.json"], 2, "nested 100000 deep", ()),
+    "export all nodes at one point": (
+        ["export", "one-point.json", "-o", "o.obj"],
+        2,
+        "one point",
+        (),
+    ),
+    "import .fold nested 100000 deep": (
+        ["import", "deep.fold", "-o", "o.json"],
+        2,
+        "nested 100000 deep",
+        (),
+    ),
     "import .fold near 1e308": (["import", "huge.fold", "-o", "o.json"], 2, "from the origin", ()),
-    "import face index beyond C long": (["import", "big-index.obj", "-o", "o.json"], 2, "face index", ()),
+    "import face index beyond C long": (
+        ["import", "big-index.obj", "-o", "o.json"],
+        2,
+        "face index",
+        (),
+    ),
     # noise: numbers whose arithmetic overflows
-    "print --scale 1e300": (["print", "good.json", "--scale", "1e300", "-o", "o"], 2, "from the origin", ()),
+    "print --scale 1e300": (
+        ["print", "good.json", "--scale", "1e300", "-o", "o"],
+        2,
+        "from the origin",
+        (),
+    ),
     "cut --width 1e-300": (["cut", "good.json", "--width", "1e-300", "-o", "o"], 2, "--width", ()),
-    "new --tile-size 1e308": (["new", "--tiles", "3x3", "--tile-size", "1e308", "-o", "o.json"], 2, "--tile-size", ()),
-    "design 1e308 target": (["design", "--tiles", "4x4", "--target", "huge.csv", "-o", "o.json"], 2, "huge", ()),
+    "new --tile-size 1e308": (
+        ["new", "--tiles", "3x3", "--tile-size", "1e308", "-o", "o.json"],
+        2,
+        "--tile-size",
+        (),
+    ),
+    "design 1e308 target": (
+        ["design", "--tiles", "4x4", "--target", "huge.csv", "-o", "o.json"],
+        2,
+        "huge",
+        (),
+    ),
     # accepted when it should refuse
     "print shifted tile": (["print", "shifted.json", "-o", "o"], 1, "does not close", ()),
     "cut shifted tile": (["cut", "shifted.json", "-o", "o"], 1, "does not close", ()),
-    "export shifted closed state": (["export", "shifted.json", "--state", "2", "-o", "o.obj"], 1, "does not close", ()),
+    "export shifted closed state": (
+        ["export", "shifted.json", "--state", "2", "-o", "o.obj"],
+        1,
+        "does not close",
+        (),
+    ),
     "verify shifted tile": (["verify", "shifted.json"], 1, "verification failed", ()),
-    "material given a printer file": (["cut", "good.json", "--material", "printer-as-material.json", "-o", "o"], 2,
-                                      "not a fabkiri material", ()),
-    "material negative label": (["cut", "good.json", "--material", "neg-label.json", "-o", "o"], 2,
-                                 "label_height_mm: must be positive", ()),
-    "material missing field": (["cut", "good.json", "--material", "no-kerf.json", "-o", "o"], 2, "kerf_mm", ()),
-    "cut --label-height -3": (["cut", "good.json", "--label-height", "-3", "-o", "o"], 2, "--label-height", ()),
-    "printer given a material file": (["print", "good.json", "--printer", "material-as-printer.json", "-o", "o"], 2,
-                                      "not a fabkiri printer", ()),
-    "printer negative pin": (["print", "good.json", "--printer", "neg-pin.json", "-o", "o"], 2, "pin/ear_radius_mm", ()),
-    "printer missing field": (["print", "good.json", "--printer", "no-nozzle.json", "-o", "o"], 2, "nozzle_mm", ()),
+    "material given a printer file": (
+        ["cut", "good.json", "--material", "printer-as-material.json", "-o", "o"],
+        2,
+        "not a fabkiri material",
+        (),
+    ),
+    "material negative label": (
+        ["cut", "good.json", "--material", "neg-label.json", "-o", "o"],
+        2,
+        "label_height_mm: must be positive",
+        (),
+    ),
+    "material missing field": (
+        ["cut", "good.json", "--material", "no-kerf.json", "-o", "o"],
+        2,
+        "kerf_mm",
+        (),
+    ),
+    "cut --label-height -3": (
+        ["cut", "good.json", "--label-height", "-3", "-o", "o"],
+        2,
+        "--label-height",
+        (),
+    ),
+    "printer given a material file": (
+        ["print", "good.json", "--printer", "material-as-printer.json", "-o", "o"],
+        2,
+        "not a fabkiri printer",
+        (),
+    ),
+    "printer negative pin": (
+        ["print", "good.json", "--printer", "neg-pin.json", "-o", "o"],
+        2,
+        "pin/ear_radius_mm",
+        (),
+    ),
+    "printer missing field": (
+        ["print", "good.json", "--printer", "no-nozzle.json", "-o", "o"],
+        2,
+        "nozzle_mm",
+        (),
+    ),
     # no bound on work
-    "design -o a folder": (["design", "--tiles", "4x4", "--target", "circle", "-o", "out"], 2, "is a folder",
-                           ("out",)),
-    "design --size 1e308": (["design", "--tiles", "4x4", "--target", "circle", "--size", "1e308", "-o", "o.json"], 2,
-                            "--size", ()),
-    "design 300x300": (["design", "--tiles", "300x300", "--target", "circle", "-o", "o.json"], 2, "largest tested", ()),
+    "design -o a folder": (
+        ["design", "--tiles", "4x4", "--target", "circle", "-o", "out"],
+        2,
+        "is a folder",
+        ("out",),
+    ),
+    "design --size 1e308": (
+        ["design", "--tiles", "4x4", "--target", "circle", "--size", "1e308", "-o", "o.json"],
+        2,
+        "--size",
+        (),
+    ),
+    "design 300x300": (
+        ["design", "--tiles", "300x300", "--target", "circle", "-o", "o.json"],
+        2,
+        "largest tested",
+        (),
+    ),
     "new 600x600": (["new", "--tiles", "600x600", "-o", "o.json"], 2, "--i-know", ()),
     # the classes the older tests cover, over every command
     "info malformed": (["info", "malformed.json"], 2, "malformed JSON", ()),
     "verify empty": (["verify", "empty.json"], 2, "empty", ()),
     "cut wrong format": (["cut", "wrong-format.json", "-o", "o"], 2, "not a fabkiri pattern", ()),
-    "print wrong version": (["print", "wrong-version.json", "-o", "o"], 2, "unsupported pattern version", ()),
+    "print wrong version": (
+        ["print", "wrong-version.json", "-o", "o"],
+        2,
+        "unsupported pattern version",
+        (),
+    ),
     "deploy NaN": (["deploy", "nan.json", "-o", "o"], 2, "non-finite", ()),
     "export non-quad": (["export", "non-quad.json", "-o", "o.obj"], 2, "tiles/0", ()),
     "info missing node": (["info", "missing-node.json"], 2, "outside", ()),
     "verify unknown key": (["verify", "unknown-key.json"], 2, "colour", ()),
     "import pentagon": (["import", "pentagon.obj", "-o", "o.json"], 2, "quads", ()),
-    "import missing vertex": (["import", "missing-vertex.obj", "-o", "o.json"], 2, "references vertex 5", ()),
+    "import missing vertex": (
+        ["import", "missing-vertex.obj", "-o", "o.json"],
+        2,
+        "references vertex 5",
+        (),
+    ),
     "info missing file": (["info", "missing.json"], 2, "no such file", ()),
-    "new no such folder": (["new", "--tiles", "2x2", "-o", "nofolder/x.json"], 2, "does not exist", ()),
+    "new no such folder": (
+        ["new", "--tiles", "2x2", "-o", "nofolder/x.json"],
+        2,
+        "does not exist",
+        (),
+    ),
     "new --tiles banana": (["new", "--tiles", "banana", "-o", "o.json"], 2, "--tiles", ()),
-    "new --angle 120": (["new", "--tiles", "3x3", "--angle", "120", "-o", "o.json"], 2, "angle", ()),
-    "verify manifest nested 100000 deep": (["verify", "good.json", "--layout", "L/x.svg"], 2, "nested 100000 deep",
-                                           ("L",)),
+    "new --angle 120": (
+        ["new", "--tiles", "3x3", "--angle", "120", "-o", "o.json"],
+        2,
+        "angle",
+        (),
+    ),
+    "verify manifest nested 100000 deep": (
+        ["verify", "good.json", "--layout", "L/x.svg"],
+        2,
+        "nested 100000 deep",
+        ("L",),
+    ),
     "verify junk layout": (["verify", "good.json", "--layout", "junk.dxf"], 2, "junk.dxf", ()),
     "verify bad svg": (["verify", "good.json", "--layout", "bad.svg"], 2, "bad.svg", ()),
     "verify no layout": (["verify", "good.json", "--layout", "nope.dxf"], 2, "no such layout", ()),
-    "design unknown target": (["design", "--tiles", "8x8", "--target", "no-such", "-o", "o.json"], 2, "unknown target", ()),
+    "design unknown target": (
+        ["design", "--tiles", "8x8", "--target", "no-such", "-o", "o.json"],
+        2,
+        "unknown target",
+        (),
+    ),
     "design no target": (["design", "--tiles", "8x8", "-o", "o.json"], 2, "give --target", ()),
-    "cut kerf 3": (["cut", "good.json", "--kerf", "3", "-o", "o"], 2, "not smaller than the minimum web", ()),
-    "cut material kerf over web": (["cut", "good.json", "--material", "kerf-over-web.json", "-o", "o"], 2,
-                                   "not smaller than the minimum web", ()),
-    "cut unknown material": (["cut", "good.json", "--material", "nope", "-o", "o"], 2, "unknown material", ()),
-    "cut too thin": (["cut", "good.json", "--width", "3", "-o", "o"], 1, "thinner than the minimum web", ()),
+    "cut kerf 3": (
+        ["cut", "good.json", "--kerf", "3", "-o", "o"],
+        2,
+        "not smaller than the minimum web",
+        (),
+    ),
+    "cut material kerf over web": (
+        ["cut", "good.json", "--material", "kerf-over-web.json", "-o", "o"],
+        2,
+        "not smaller than the minimum web",
+        (),
+    ),
+    "cut unknown material": (
+        ["cut", "good.json", "--material", "nope", "-o", "o"],
+        2,
+        "unknown material",
+        (),
+    ),
+    "cut too thin": (
+        ["cut", "good.json", "--width", "3", "-o", "o"],
+        1,
+        "thinner than the minimum web",
+        (),
+    ),
     "cut output is a file": (["cut", "good.json", "-o", "t.csv"], 2, "not a folder", ()),
-    "print unknown printer": (["print", "good.json", "--printer", "nope", "-o", "o"], 2, "unknown printer", ()),
-    "print --marks without strips": (["print", "good.json", "--marks", "-o", "o"], 2, "--style strips", ()),
+    "print unknown printer": (
+        ["print", "good.json", "--printer", "nope", "-o", "o"],
+        2,
+        "unknown printer",
+        (),
+    ),
+    "print --marks without strips": (
+        ["print", "good.json", "--marks", "-o", "o"],
+        2,
+        "--style strips",
+        (),
+    ),
     "deploy --steps 1": (["deploy", "good.json", "--steps", "1", "-o", "o"], 2, "steps", ()),
     "deploy missing file": (["deploy", "missing.json", "-o", "o"], 2, "no such file", ()),
-    "export unknown state": (["export", "good.json", "--state", "3", "-o", "o.obj"], 2, "--state", ()),
+    "export unknown state": (
+        ["export", "good.json", "--state", "3", "-o", "o.obj"],
+        2,
+        "--state",
+        (),
+    ),
     "sweep bad TOML": (["sweep", "bad.toml", "-o", "S"], 2, "not valid TOML", ()),
-    "sweep unknown axis": (["sweep", "unknown-axis.toml", "-o", "S"], 2, "unknown axis 'colour'", ()),
+    "sweep unknown axis": (
+        ["sweep", "unknown-axis.toml", "-o", "S"],
+        2,
+        "unknown axis 'colour'",
+        (),
+    ),
     "sweep bad tiles": (["sweep", "bad-tiles.toml", "-o", "S"], 2, "ROWSxCOLS", ()),
     "sweep unknown target": (["sweep", "missing-target.toml", "-o", "S"], 2, "no-such-shape", ()),
     "sweep -o its input": (["sweep", "bad.toml", "-o", "bad.toml"], 2, "is an input", ()),
-    "sweep --workers 0": (["sweep", "unknown-axis.toml", "--workers", "0", "-o", "S"], 2, "1 to 1024", ()),
-    "sweep --scheduler http": (["sweep", "unknown-axis.toml", "--scheduler", "http://x", "-o", "S"], 2,
-                               "tcp://HOST:PORT", ()),
+    "sweep --workers 0": (
+        ["sweep", "unknown-axis.toml", "--workers", "0", "-o", "S"],
+        2,
+        "1 to 1024",
+        (),
+    ),
+    "sweep --scheduler http": (
+        ["sweep", "unknown-axis.toml", "--scheduler", "http://x", "-o", "S"],
+        2,
+        "tcp://HOST:PORT",
+        (),
+    ),
 }
 
-COMMANDS = {"new", "import", "design", "info", "verify", "cut", "print", "deploy", "export", "sweep"}
-SUBPROCESS = ["new 100000x100000", "new --tile-size 1e308", "verify coordinates near 1e308", "design 1e308 target",
-              "info nested 100000 deep", "export -o symlink"]
+COMMANDS = {
+    "new",
+    "import",
+    "design",
+    "info",
+    "verify",
+    "cut",
+    "print",
+    "deploy",
+    "export",
+    "sweep",
+}
+SUBPROCESS = [
+    "new 100000x100000",
+    "new --tile-size 1e308",
+    "verify coordinates near 1e308",
+    "design 1e308 target",
+    "info nested 100000 deep",
+    "export -o symlink",
+]
 
 
 def snapshot(root: Path) -> dict[str, str]:
@@ -251,7 +465,10 @@ def _check(code, err, before, root, case):
     assert code == want, (case, err)
     assert len(lines) == 1, (case, err)
     assert words in err, (case, err)
-    assert "Traceback" not in err and "Warning" not in err and "internal error" not in err, (case, err)
+    assert "Traceback" not in err and "Warning" not in err and "internal error" not in err, (
+        case,
+        err,
+    )
     assert snapshot(root) == before, f"{case}: files changed"
 
 
@@ -277,8 +494,13 @@ def test_bad_input_as_a_real_process(case, workspace):
     before = _prepare(workspace, folders)
     env = {**os.environ, "PYTHONPATH": str(REPO), "PYTHONWARNINGS": "default"}
     env.pop("FABKIRI_DEBUG", None)
-    r = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", *argv], capture_output=True, text=True,
-                       env=env, cwd=workspace)
+    r = subprocess.run(
+        [sys.executable, "-m", "fabkiri.cli.main", *argv],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=workspace,
+    )
     _check(r.returncode, r.stderr, before, workspace, case)
 
 
@@ -316,7 +538,13 @@ def test_a_good_write_replaces_old_files_and_leaves_no_scratch(tmp_path):
     (out / "a.txt").write_text("old a")
     (out / "keep.txt").write_text("keep")
     atomic_write_many(out, {"a.txt": "new a", "sub/b.txt": "b"})
-    assert snapshot(tmp_path).keys() == {"out", "out/a.txt", "out/keep.txt", "out/sub", "out/sub/b.txt"}
+    assert snapshot(tmp_path).keys() == {
+        "out",
+        "out/a.txt",
+        "out/keep.txt",
+        "out/sub",
+        "out/sub/b.txt",
+    }
     assert (out / "a.txt").read_text() == "new a" and (out / "keep.txt").read_text() == "keep"
 
 
@@ -341,10 +569,16 @@ def test_files_past_the_size_bound_are_refused_before_reading(workspace, run_cli
     from fabkiri import limits
 
     monkeypatch.setattr(limits, "MAX_PATTERN_BYTES", 200)
-    (workspace / "big.csv").write_text("".join(f"{np.cos(a):.6f},{np.sin(a):.6f}\n" for a in np.linspace(0, 6, 40)))
+    (workspace / "big.csv").write_text(
+        "".join(f"{np.cos(a):.6f},{np.sin(a):.6f}\n" for a in np.linspace(0, 6, 40))
+    )
     before = snapshot(workspace)
-    for argv in (["info", "good.json"], ["cut", "good.json", "-o", "o"], ["import", "d_design.obj", "-o", "o.json"],
-                 ["design", "--tiles", "4x4", "--target", "big.csv", "-o", "o.json"]):
+    for argv in (
+        ["info", "good.json"],
+        ["cut", "good.json", "-o", "o"],
+        ["import", "d_design.obj", "-o", "o.json"],
+        ["design", "--tiles", "4x4", "--target", "big.csv", "-o", "o.json"],
+    ):
         code, _, err = run_cli(*argv)
         assert code == 2 and "larger than" in err and len(err.strip().splitlines()) == 1, err
     assert snapshot(workspace) == before

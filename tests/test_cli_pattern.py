@@ -29,9 +29,17 @@ def test_new_info_export(tmp_path, run_cli):
 
 def test_import_reference_with_both_states(tmp_path, run_cli):
     out = tmp_path / "cr.json"
-    code, _, err = run_cli("import", ref("compact_reconfigurable_design"), "--contracted",
-                           ref("compact_reconfigurable_contracted1"), ref("compact_reconfigurable_contracted2"),
-                           "--scale", "10", "-o", out)
+    code, _, err = run_cli(
+        "import",
+        ref("compact_reconfigurable_design"),
+        "--contracted",
+        ref("compact_reconfigurable_contracted1"),
+        ref("compact_reconfigurable_contracted2"),
+        "--scale",
+        "10",
+        "-o",
+        out,
+    )
     assert code == 0, err
     code, text, _ = run_cli("info", out)
     assert code == 0 and "self-intersecting tiles: [2]" in text
@@ -41,11 +49,13 @@ def test_import_reference_with_both_states(tmp_path, run_cli):
 
 
 def test_usage_errors_are_one_line(run_cli, tmp_path):
-    for argv in (["new", "--tiles", "0x4", "-o", tmp_path / "x.json"],
-                 ["new", "--tiles", "banana", "-o", tmp_path / "x.json"],
-                 ["new", "--tiles", "3x3", "--angle", "120", "-o", tmp_path / "x.json"],
-                 ["info", tmp_path / "missing.json"],
-                 ["new", "--tiles", "3x3", "-o", tmp_path / "nofolder" / "x.json"]):
+    for argv in (
+        ["new", "--tiles", "0x4", "-o", tmp_path / "x.json"],
+        ["new", "--tiles", "banana", "-o", tmp_path / "x.json"],
+        ["new", "--tiles", "3x3", "--angle", "120", "-o", tmp_path / "x.json"],
+        ["info", tmp_path / "missing.json"],
+        ["new", "--tiles", "3x3", "-o", tmp_path / "nofolder" / "x.json"],
+    ):
         code, _, err = run_cli(*argv)
         assert code == 2 and err.count("\n") == 1, (argv, err)
     assert not (tmp_path / "x.json").exists()
@@ -71,20 +81,35 @@ def test_a_pattern_format_is_one_registered_strategy(tmp_path, run_cli, monkeypa
     def read(path, scale):
         return io.read_pattern(path.with_suffix(".json"))
 
-    formats.register_format(formats.PatternFormat("centres", (".ctr",), read=read, write=write,
-                                                  closed_states=lambda state: (2,), adopt_labels=False,
-                                                  said=lambda p, s, out, u: f"wrote {out}: {p.n_tiles} centres"))
+    formats.register_format(
+        formats.PatternFormat(
+            "centres",
+            (".ctr",),
+            read=read,
+            write=write,
+            closed_states=lambda state: (2,),
+            adopt_labels=False,
+            said=lambda p, s, out, u: f"wrote {out}: {p.n_tiles} centres",
+        )
+    )
     src = tmp_path / "p.json"
-    io.write_pattern(standard_pattern(2, 3), src)  # no closed states stored: export contracts state 2
+    io.write_pattern(
+        standard_pattern(2, 3), src
+    )  # no closed states stored: export contracts state 2
     code, _, err = run_cli("export", src, "--format", "centres", "-o", tmp_path / "p.ctr")
     assert code == 0 and f"wrote {tmp_path / 'p.ctr'}: 6 centres" in err, err
     assert len((tmp_path / "p.ctr").read_text().splitlines()) == 6
     code, out, err = run_cli("info", tmp_path / "p.ctr")  # read by its suffix
     assert code == 0 and "6" in out, err
-    with pytest.raises(InputError, match=r"^unknown pattern format 'stl'; known: obj, fold, pykirigami, centres$"):
+    with pytest.raises(
+        InputError, match=r"^unknown pattern format 'stl'; known: obj, fold, pykirigami, centres$"
+    ):
         export_pattern(standard_pattern(2, 2), "stl")
     with pytest.raises(SystemExit) as exc:  # the parser's one line, exit 2
         run_cli("export", src, "--format", "stl", "-o", tmp_path / "p.stl")
     err = capsys.readouterr().err
     assert exc.value.code == 2 and len(err.splitlines()) == 1 and not (tmp_path / "p.stl").exists()
-    assert "invalid choice: 'stl' (choose from 'obj', 'fold', 'pykirigami', 'centres', 'tube3d')" in err
+    assert (
+        "invalid choice: 'stl' (choose from 'obj', 'fold', 'pykirigami', 'centres', 'tube3d')"
+        in err
+    )

@@ -39,12 +39,20 @@ def test_layout_ok_and_mutated(run_cli, tmp_path):
     p = lf.distinct_pattern()
     pj = tmp_path / "p.json"
     write_pattern(p, pj)
-    good = lf.write_layout(tmp_path / "good", p, lf.in_place_corners(p, 1, 0.7), hinge="tape", fmt="dxf")
+    good = lf.write_layout(
+        tmp_path / "good", p, lf.in_place_corners(p, 1, 0.7), hinge="tape", fmt="dxf"
+    )
     code, out, err = run_cli("verify", pj, "--layout", good)
     assert code == 0, out + err
     assert "layout: (c) state 2 from cut tiles: loop closure" in out
-    bad = lf.write_layout(tmp_path / "bad", p, lf.scale_tile(lf.exploded_corners(p, np.random.default_rng(1)), 4, 1.01),
-                          hinge="separate", fmt="svg", kerf_offset=0.1)
+    bad = lf.write_layout(
+        tmp_path / "bad",
+        p,
+        lf.scale_tile(lf.exploded_corners(p, np.random.default_rng(1)), 4, 1.01),
+        hinge="separate",
+        fmt="svg",
+        kerf_offset=0.1,
+    )
     code, out, err = run_cli("verify", pj, "--layout", bad, "--json")
     assert code == 1
     d = json.loads(out)
@@ -81,8 +89,13 @@ def test_bad_input_exits_2(run_cli, tmp_path):
     svg.write_text("<svg")
     code, _, err = run_cli("verify", pj, "--layout", svg)
     assert code == 2 and "bad.svg" in err
-    lay = lf.write_layout(tmp_path / "m", lf.distinct_pattern(), lf.in_place_corners(lf.distinct_pattern()),
-                          hinge="tape", fmt="dxf")
+    lay = lf.write_layout(
+        tmp_path / "m",
+        lf.distinct_pattern(),
+        lf.in_place_corners(lf.distinct_pattern()),
+        hinge="tape",
+        fmt="dxf",
+    )
     (lay.parent / "manifest.json").write_text('{"hinge": "staples"}')
     code, _, err = run_cli("verify", pj, "--layout", lay)
     assert code == 2 and "unknown hinge kind" in err

@@ -17,8 +17,11 @@ def test_the_package_has_modules():
 
 
 def test_no_module_over_the_limit():
-    long = {str(p.relative_to(PACKAGE)): n for p in _modules()
-            if (n := p.read_text().count("\n")) >= MAX_MODULE_LINES}
+    long = {
+        str(p.relative_to(PACKAGE)): n
+        for p in _modules()
+        if (n := p.read_text().count("\n")) >= MAX_MODULE_LINES
+    }
     assert not long, f"modules of {MAX_MODULE_LINES} lines or more: {long}"
 
 

@@ -37,28 +37,47 @@ def test_laser_coupon_opens_at_its_size(run_cli, tmp_path, material):
     assert boxes[:, :2].min() >= 0 and (boxes[:, 2] <= W).all() and (boxes[:, 3] <= H).all()
     # the kerf comb: a closed 100 x 12 mm bar and 9 cross cuts 10 mm apart
     size = boxes[:, 2:] - boxes[:, :2]
-    bar = [i for i, (p, c) in enumerate(polys) if c and np.allclose(size[i], [100.0, 12.0], atol=1e-6)]
+    bar = [
+        i for i, (p, c) in enumerate(polys) if c and np.allclose(size[i], [100.0, 12.0], atol=1e-6)
+    ]
     assert len(bar) == 1
     x0, y0, _, y1 = boxes[bar[0]]
-    cross = sorted(p[0, 0] - x0 for p, c in polys if not c and len(p) == 2 and abs(p[0, 0] - p[1, 0]) < 1e-9
-                   and np.allclose(sorted(p[:, 1]), [y0, y1]))
+    cross = sorted(
+        p[0, 0] - x0
+        for p, c in polys
+        if not c
+        and len(p) == 2
+        and abs(p[0, 0] - p[1, 0]) < 1e-9
+        and np.allclose(sorted(p[:, 1]), [y0, y1])
+    )
     assert np.allclose(cross, np.arange(1, 10) * 10.0, atol=1e-6)
     # the slots: widths thickness + delta, read back from the slot plate's outline
     slots = doc["slots"]["widths_mm"]
     plate = max((p for p, c in polys if c and len(p) > 20), key=len)
     steps = np.abs(np.diff(plate[:, 0]))
     bottom = plate[:, 1].max() - 8.0  # slot floors, 8 mm below the plate's top edge
-    found = sorted({round(float(s), 6) for s, a, b in zip(steps, plate[:-1, 1], plate[1:, 1])
-                    if abs(a - bottom) < 1e-9 and abs(b - bottom) < 1e-9})
+    found = sorted(
+        {
+            round(float(s), 6)
+            for s, a, b in zip(steps, plate[:-1, 1], plate[1:, 1])
+            if abs(a - bottom) < 1e-9 and abs(b - bottom) < 1e-9
+        }
+    )
     assert found == sorted({round(w, 6) for w in slots})
     # the SVG says the same size in mm, and its CUT group spans the same box
     svg = svgelements.SVG.parse(str(tmp_path / f"coupon-{material}.svg"))
     assert svg.values["width"] == f"{W:g}mm" and svg.values["height"] == f"{H:g}mm"
-    cut = next(e for e in svg.elements() if isinstance(e, svgelements.Group) and e.values.get("id") == "CUT")
+    cut = next(
+        e
+        for e in svg.elements()
+        if isinstance(e, svgelements.Group) and e.values.get("id") == "CUT"
+    )
     bb = cut.bbox()
     px_per_mm = 96 / 25.4  # svgelements works in CSS px
     assert bb[2] / px_per_mm == pytest.approx(boxes[:, 2].max(), abs=1e-3)
-    assert (bb[2] - bb[0]) / px_per_mm == pytest.approx(boxes[:, 2].max() - boxes[:, 0].min(), abs=1e-3)
+    assert (bb[2] - bb[0]) / px_per_mm == pytest.approx(
+        boxes[:, 2].max() - boxes[:, 0].min(), abs=1e-3
+    )
 
 
 def test_laser_coupon_hinge_pieces_sweep_the_hinge_field(run_cli, tmp_path):

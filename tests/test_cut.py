@@ -91,14 +91,21 @@ def test_glyphs_stay_in_their_cell_and_never_retrace():
 
 
 @settings(max_examples=12, deadline=None)
-@given(rows=st.integers(1, 5), cols=st.integers(1, 5), angle=st.floats(5, 85), state=st.sampled_from([1, 2]))
+@given(
+    rows=st.integers(1, 5),
+    cols=st.integers(1, 5),
+    angle=st.floats(5, 85),
+    state=st.sampled_from([1, 2]),
+)
 def test_tape_linework_cuts_every_edge_once_and_gives_the_tiles_back(rows, cols, angle, state):
     p = std(rows, cols, angle)
     c = hg.snap_corners(p.contracted[state], 1e-4)
     rings, lines = hg.tape_linework(c)
     polylines = [(r, True) for r in rings] + [(ln, False) for ln in lines]
     assert duplicate_segments(polylines) == 0
-    ls = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings] + [shapely.LineString(ln) for ln in lines]
+    ls = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings] + [
+        shapely.LineString(ln) for ln in lines
+    ]
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.union_all(ls))))
     assert len(faces) == rows * cols
     tiles = shapely.polygons(c)
@@ -116,8 +123,15 @@ def test_tape_linework_cuts_every_edge_once_and_gives_the_tiles_back(rows, cols,
 def _bricks(theta: float, origin, noise: float, rng) -> np.ndarray:
     """Four tiles laid like bricks: two edges overlap along a line, each ending in a T-junction on
     the other (as the additive-kirigami random triple closes), turned, moved and jittered."""
-    C = np.array([[[0, 0], [10, 0], [10, 6], [0, 6]], [[10, 0], [15, 0], [15, 6], [10, 6]],
-                  [[0, -6], [5, -6], [5, 0], [0, 0]], [[5, -6], [15, -6], [15, 0], [5, 0]]], float)
+    C = np.array(
+        [
+            [[0, 0], [10, 0], [10, 6], [0, 6]],
+            [[10, 0], [15, 0], [15, 6], [10, 6]],
+            [[0, -6], [5, -6], [5, 0], [0, 0]],
+            [[5, -6], [15, -6], [15, 0], [5, 0]],
+        ],
+        float,
+    )
     R = np.array([[np.cos(theta), -np.sin(theta)], [np.sin(theta), np.cos(theta)]])
     return C @ R.T + np.asarray(origin) + rng.normal(0, noise, C.shape)
 
@@ -132,7 +146,9 @@ def test_tape_linework_of_overlapping_edges_with_t_junctions_encloses_no_sliver(
         theta, origin = rng.uniform(0, np.pi), rng.uniform(50, 150, 2)
         c = hg.snap_corners(hg.snap_to_edges(_bricks(theta, origin, 1e-7, rng), 0.025), 0.025)
         rings, lines = hg.tape_linework(c)
-        ls = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings] + [shapely.LineString(ln) for ln in lines]
+        ls = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings] + [
+            shapely.LineString(ln) for ln in lines
+        ]
         faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.union_all(ls))))
         assert len(faces) == 4, (theta, origin)
         assert duplicate_segments([(r, True) for r in rings] + [(ln, False) for ln in lines]) == 0
@@ -153,22 +169,30 @@ def test_ligament_strain_rule_and_warning():
     p = std(3, 3)
     c = p.contracted[1]
     small = hg.shrink_tiles(c, 2.0)
-    d = hg.ligament_design(p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.2)
+    d = hg.ligament_design(
+        p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.2
+    )
     assert d.lengths == pytest.approx(4.0)  # 90° corners: apex to apex is the gap
     assert d.strains == pytest.approx(d.width_mm * np.pi / (2 * 4.0))
     assert not d.warnings and d.strains.max() <= 0.2
-    stiff = hg.ligament_design(p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.05)
+    stiff = hg.ligament_design(
+        p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.05
+    )
     assert stiff.width_mm == 0.4 and "exceeds the material's limit" in stiff.warnings[0]
     with pytest.raises(FabricationError, match="between the two strips"):
-        hg.ligament_design(p, c, small, gap=4.0, width_max=3.5, min_web=3.5, kerf=0.1, strain_limit=0.9)
+        hg.ligament_design(
+            p, c, small, gap=4.0, width_max=3.5, min_web=3.5, kerf=0.1, strain_limit=0.9
+        )
 
 
 # ------------------------------------------------------------------ full pipeline, read back
 
 
-KINDS = {"tape": ["acrylic-3", "plywood-3", "pp-0.5", "card-0.3", "felt-2"],
-         "ligament": ["pp-0.5", "card-0.3", "felt-2"],
-         "separate": ["acrylic-3", "plywood-3", "pp-0.5", "card-0.3", "felt-2"]}
+KINDS = {
+    "tape": ["acrylic-3", "plywood-3", "pp-0.5", "card-0.3", "felt-2"],
+    "ligament": ["pp-0.5", "card-0.3", "felt-2"],
+    "separate": ["acrylic-3", "plywood-3", "pp-0.5", "card-0.3", "felt-2"],
+}
 CASES = [(k, m) for k, ms in KINDS.items() for m in ms]
 
 
@@ -182,9 +206,17 @@ def test_standard_pattern_every_kind_and_preset(kind, material):
     assert r.manifest["hinge"] == kind and r.manifest["material"]["name"] == material
 
 
-@pytest.mark.parametrize("kind,material", [("tape", "acrylic-3"), ("tape", "felt-2"), ("separate", "acrylic-3"),
-                                           ("separate", "pp-0.5"), ("ligament", "pp-0.5"),
-                                           ("ligament", "card-0.3")])
+@pytest.mark.parametrize(
+    "kind,material",
+    [
+        ("tape", "acrylic-3"),
+        ("tape", "felt-2"),
+        ("separate", "acrylic-3"),
+        ("separate", "pp-0.5"),
+        ("ligament", "pp-0.5"),
+        ("ligament", "card-0.3"),
+    ],
+)
 @pytest.mark.parametrize("pattern", ["circle-8x8", "circle-8x8-rigid"])
 def test_solver_designs_8x8(pattern, kind, material):
     p = read_pattern(PATTERNS / f"{pattern}.json")
@@ -192,8 +224,14 @@ def test_solver_designs_8x8(pattern, kind, material):
     assert_verified(p, r)
 
 
-@pytest.mark.parametrize("kind,material,extra", [("tape", "plywood-3", {}), ("separate", "plywood-3", {}),
-                                                 ("ligament", "card-0.3", {"gap_mm": 1.2})])
+@pytest.mark.parametrize(
+    "kind,material,extra",
+    [
+        ("tape", "plywood-3", {}),
+        ("separate", "plywood-3", {}),
+        ("ligament", "card-0.3", {"gap_mm": 1.2}),
+    ],
+)
 @pytest.mark.slow
 def test_solver_design_32x32(kind, material, extra):
     p = read_pattern(PATTERNS / "circle-32x32-rigid.json")
@@ -201,8 +239,18 @@ def test_solver_design_32x32(kind, material, extra):
     # its outer tiles are slim: 1100 mm wide keeps them above the material's minimum web
     # (separate tiles carry four partner labels each: left out here to keep the suite fast; the 8x8
     # cases check labels for every kind)
-    r = cut_pattern(p, CutOptions(material=mat, hinge=kind, width=1100.0, sheet=(1200.0, 1200.0),
-                                  formats=("dxf", "svg"), stem="c32", labels=kind != "separate"))
+    r = cut_pattern(
+        p,
+        CutOptions(
+            material=mat,
+            hinge=kind,
+            width=1100.0,
+            sheet=(1200.0, 1200.0),
+            formats=("dxf", "svg"),
+            stem="c32",
+            labels=kind != "separate",
+        ),
+    )
     assert r.manifest["scale"] > 10 and (kind == "separate" or len(r.sheets) == 1)
     assert_verified(p, r)
 
@@ -251,7 +299,14 @@ def test_split_onto_sheets_labels_cross_sheet_hinges_on_both_tiles():
 @pytest.mark.parametrize("layout", ["exploded", "nested"])
 def test_separate_layouts(layout):
     p = std(5, 5, size=20.0)
-    r = cut(p, "plywood-3", hinge="separate", layout=layout, sheet=(200.0, 150.0), formats=("dxf", "svg"))
+    r = cut(
+        p,
+        "plywood-3",
+        hinge="separate",
+        layout=layout,
+        sheet=(200.0, 150.0),
+        formats=("dxf", "svg"),
+    )
     assert_verified(p, r)
     parts = [shapely.Polygon(q) for s in r.sheets for q, c in s.layers["CUT"] if c]
     assert len(parts) == 25 + 1  # tiles and the reference square
@@ -307,14 +362,18 @@ def test_bulk_dxf_is_byte_identical_to_ezdxf_objects():
         for sd in r.sheets:
             assert sd.count("ENGRAVE") > 10
             assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
-            sd.add("ENGRAVE", np.array([[1.0, 1.0], [2.5, 1.0], [2.0, 1e-5]]), True)  # closed, tiny coordinate
+            sd.add(
+                "ENGRAVE", np.array([[1.0, 1.0], [2.5, 1.0], [2.0, 1e-5]]), True
+            )  # closed, tiny coordinate
             assert dxf_bytes(sd, bulk=True) == dxf_bytes(sd, bulk=False)
 
 
 def _same_layers(a, b):
     return a.keys() == b.keys() and all(
-        len(a[k]) == len(b[k]) and all(ca == cb and np.array_equal(pa, pb) for (pa, ca), (pb, cb) in zip(a[k], b[k]))
-        for k in a)
+        len(a[k]) == len(b[k])
+        and all(ca == cb and np.array_equal(pa, pb) for (pa, ca), (pb, cb) in zip(a[k], b[k]))
+        for k in a
+    )
 
 
 def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
@@ -329,15 +388,15 @@ def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
     text = data.decode("ascii")
     head = "  0\nLWPOLYLINE\n  5\n"
     i = text.index(head, text.index("ENTITIES")) + len(head)
-    h = text[i:text.index("\n", i)]
+    h = text[i : text.index("\n", i)]
     j = text.index("\n330\n", i) + 5
-    owner = text[j:text.index("\n", j)]
+    owner = text[j : text.index("\n", j)]
     k = text.index(head, i) + len(head)
-    h2 = text[k:text.index("\n", k)]
+    h2 = text[k : text.index("\n", k)]
     broken = {
-        "owner": text[:j] + "ABCDE" + text[j + len(owner):],
+        "owner": text[:j] + "ABCDE" + text[j + len(owner) :],
         "layer": text.replace("\n  8\nENGRAVE\n", "\n  8\nNOSUCH\n", 1),
-        "handle": text[:k] + h + text[k + len(h2):],
+        "handle": text[:k] + h + text[k + len(h2) :],
         "coordinate": text[:i] + text[i:].replace("\n 10\n", "\n 10\nnan", 1),
     }
     for what, t in broken.items():
@@ -360,7 +419,7 @@ def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tm
     f2.write_bytes(r.files["p.svg"].replace(b"</svg>", b'<use href="#CUT" x="0"/></svg>'))
     assert isinstance(L.without_annotation_layers(f2), str)
     b = L.read_cut_svg(f2)
-    assert len(a.polylines) > 0 and a.closed == b.closed[:len(a.closed)]
+    assert len(a.polylines) > 0 and a.closed == b.closed[: len(a.closed)]
     assert all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines))
 
 
@@ -374,15 +433,22 @@ def test_text_strokes_many_matches_text_strokes_label_by_label():
     centres = rng.uniform(-100, 500, (len(texts), 2))
     pts, counts, label = text_strokes_many(texts, heights, centres)
     got = np.split(pts, np.cumsum(counts)[:-1]) if len(counts) else []
-    want = [(k, s) for k, (t, h, c) in enumerate(zip(texts, heights, centres)) if h > 0
-            for s in text_strokes(t, float(h), c)]
+    want = [
+        (k, s)
+        for k, (t, h, c) in enumerate(zip(texts, heights, centres))
+        if h > 0
+        for s in text_strokes(t, float(h), c)
+    ]
     assert [k for k, _ in want] == label.tolist()
     assert all(np.array_equal(a, b) for a, (_, b) in zip(got, want))  # the same floats, bit for bit
     with pytest.raises(KeyError):
         text_strokes_many(["A\u00e9"], np.array([1.0]), np.zeros((1, 2)))
 
 
-@given(st.lists(st.tuples(st.integers(2, 6), st.booleans()), min_size=1, max_size=20), st.integers(0, 10**6))
+@given(
+    st.lists(st.tuples(st.integers(2, 6), st.booleans()), min_size=1, max_size=20),
+    st.integers(0, 10**6),
+)
 @settings(max_examples=30, deadline=None)
 def test_bulk_segments_and_linestrings_match_one_polyline_at_a_time(shape, seed):
     from fabkiri.fabricate.readback import _linestrings
@@ -390,8 +456,9 @@ def test_bulk_segments_and_linestrings_match_one_polyline_at_a_time(shape, seed)
 
     rng = np.random.default_rng(seed)
     pl = [(rng.normal(size=(n, 2)), c) for n, c in shape]
-    want = np.concatenate([np.stack([q[:-1], q[1:]], 1)
-                           for q in (np.vstack([p, p[:1]]) if c else p for p, c in pl)])
+    want = np.concatenate(
+        [np.stack([q[:-1], q[1:]], 1) for q in (np.vstack([p, p[:1]]) if c else p for p, c in pl)]
+    )
     assert np.array_equal(_segments(pl), want)
     lines = _linestrings(pl)
     assert len(lines) == len(pl)
@@ -404,7 +471,10 @@ def test_same_input_same_bytes_and_golden(tmp_path):
     a = cut(p, formats=("dxf", "svg", "png"))
     b = cut(p, formats=("dxf", "svg", "png"))
     assert a.files == b.files and a.manifest_bytes() == b.manifest_bytes()
-    files = {**{k: v for k, v in a.files.items() if not k.endswith(".png")}, "manifest.json": a.manifest_bytes()}
+    files = {
+        **{k: v for k, v in a.files.items() if not k.endswith(".png")},
+        "manifest.json": a.manifest_bytes(),
+    }
     if os.environ.get("FABKIRI_REGEN_GOLDEN"):
         GOLDEN.mkdir(exist_ok=True)
         for k, v in files.items():
@@ -415,7 +485,11 @@ def test_same_input_same_bytes_and_golden(tmp_path):
         if gold.read_bytes() != v:
             import difflib
 
-            diff = list(difflib.unified_diff(gold.read_text().splitlines(), v.decode().splitlines(), lineterm="", n=1))
+            diff = list(
+                difflib.unified_diff(
+                    gold.read_text().splitlines(), v.decode().splitlines(), lineterm="", n=1
+                )
+            )
             pytest.fail(f"{k} differs from its golden file:\n" + "\n".join(diff[:40]))
 
 
@@ -427,7 +501,13 @@ def test_cli_default_command(run_cli, tmp_path):
     code, stdout, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out)
     assert code == 0, err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["assembly.png", "manifest.json", "standard-8x8.dxf", "standard-8x8.png", "standard-8x8.svg"]
+    assert names == [
+        "assembly.png",
+        "manifest.json",
+        "standard-8x8.dxf",
+        "standard-8x8.png",
+        "standard-8x8.svg",
+    ]
     man = json.loads((out / "manifest.json").read_text())
     assert man["verification"]["ok"] and man["verification"]["verifier"]["ok"]
     assert man["hinge"] == "tape" and man["material"]["name"] == "acrylic-3"
@@ -474,14 +554,17 @@ def test_cli_refuses_a_pattern_that_does_not_close(run_cli, tmp_path):
     assert all(c["ok"] for c in man["verification"]["self_checks"])
 
 
-@pytest.mark.parametrize("args,code,words", [
-    (["--kerf", "3"], 2, "not smaller than the minimum web"),
-    (["--sheet", "12x12"], 2, "smaller than tile"),
-    (["--sheet", "axb"], 2, "--sheet"),
-    (["--material", "nope"], 2, "unknown material"),
-    (["--hinge", "ligament"], 2, "min web"),
-    (["--width", "20"], 1, "thinner than the minimum web"),
-])
+@pytest.mark.parametrize(
+    "args,code,words",
+    [
+        (["--kerf", "3"], 2, "not smaller than the minimum web"),
+        (["--sheet", "12x12"], 2, "smaller than tile"),
+        (["--sheet", "axb"], 2, "--sheet"),
+        (["--material", "nope"], 2, "unknown material"),
+        (["--hinge", "ligament"], 2, "min web"),
+        (["--width", "20"], 1, "thinner than the minimum web"),
+    ],
+)
 def test_cli_bad_input_one_line_nothing_written(run_cli, tmp_path, args, code, words):
     out = tmp_path / "out"
     got, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out, *args)
@@ -502,8 +585,22 @@ def test_cli_unwritable_output(run_cli, tmp_path):
 
 def test_cli_material_overrides_reach_the_manifest(run_cli, tmp_path):
     out = tmp_path / "o"
-    code, _, err = run_cli("cut", PATTERNS / "standard-8x8.json", "--material", "plywood-3", "--kerf", "0.25",
-                           "--set", "cut_speed_mm_s=40", "--colors", "ponoko", "--formats", "dxf,svg", "-o", out)
+    code, _, err = run_cli(
+        "cut",
+        PATTERNS / "standard-8x8.json",
+        "--material",
+        "plywood-3",
+        "--kerf",
+        "0.25",
+        "--set",
+        "cut_speed_mm_s=40",
+        "--colors",
+        "ponoko",
+        "--formats",
+        "dxf,svg",
+        "-o",
+        out,
+    )
     assert code == 0, err
     man = json.loads((out / "manifest.json").read_text())
     assert man["material"]["kerf_mm"] == 0.25 and man["material"]["cut_speed_mm_s"] == 40.0
@@ -515,8 +612,13 @@ def test_cli_failed_readback_writes_nothing(run_cli, tmp_path, monkeypatch):
     from fabkiri.fabricate import readback
 
     def broken(pattern, result, folder):
-        return {"ok": False, "available": True, "files": {"dxf": {"ok": False, "checks": [
-            {"name": "layout: tiles recovered", "ok": False}]}}}
+        return {
+            "ok": False,
+            "available": True,
+            "files": {
+                "dxf": {"ok": False, "checks": [{"name": "layout: tiles recovered", "ok": False}]}
+            },
+        }
 
     monkeypatch.setattr(readback, "run_verifier", broken)
     out = tmp_path / "out"
@@ -546,7 +648,9 @@ def test_png_preview_shows_every_sheet():
     smallest = min(t["label_height_mm"] for t in one.manifest["tiles"] if t["label_height_mm"] > 0)
     assert px_per_mm * smallest >= LABEL_PX - 0.5
     assert b.size[0] > b.size[1] and len(two.sheets) >= 2  # sheets side by side
-    assert len(np.unique(np.asarray(a.convert("RGB")).reshape(-1, 3), axis=0)) > 2  # drawn on the white page
+    assert (
+        len(np.unique(np.asarray(a.convert("RGB")).reshape(-1, 3), axis=0)) > 2
+    )  # drawn on the white page
 
 
 def test_cli_material_file_with_kerf_not_below_web(run_cli, tmp_path):
@@ -562,9 +666,21 @@ def test_cli_material_file_with_kerf_not_below_web(run_cli, tmp_path):
 
 
 @settings(max_examples=25, deadline=None)
-@given(rows=st.integers(1, 4), cols=st.integers(1, 4), angle=st.floats(15, 75), size=st.floats(15, 40),
-       state=st.sampled_from([1, 2]), case=st.sampled_from([("tape", "acrylic-3"), ("ligament", "pp-0.5"),
-                                                           ("separate", "plywood-3"), ("ligament", "felt-2")]))
+@given(
+    rows=st.integers(1, 4),
+    cols=st.integers(1, 4),
+    angle=st.floats(15, 75),
+    size=st.floats(15, 40),
+    state=st.sampled_from([1, 2]),
+    case=st.sampled_from(
+        [
+            ("tape", "acrylic-3"),
+            ("ligament", "pp-0.5"),
+            ("separate", "plywood-3"),
+            ("ligament", "felt-2"),
+        ]
+    ),
+)
 @pytest.mark.slow
 def test_any_standard_pattern_cuts_and_verifies(rows, cols, angle, size, state, case):
     kind, material = case
@@ -578,12 +694,24 @@ def test_tape_marks_asked_for_only_where_the_writer_draws_a_readable_one(run_cli
     # chord, which the mark check reads as too short for a mark; it used to ask for one anyway, so cut
     # refused its own file ("tape marks at every hinge")
     out = tmp_path / "h"
-    code, _, err = run_cli("cut", PATTERNS / "heart-16x16-rigid.json", "--material", "acrylic-3", "--scale", "auto",
-                           "-o", out)
+    code, _, err = run_cli(
+        "cut",
+        PATTERNS / "heart-16x16-rigid.json",
+        "--material",
+        "acrylic-3",
+        "--scale",
+        "auto",
+        "-o",
+        out,
+    )
     assert code == 0, err
     man = json.loads((out / "manifest.json").read_text())
-    marks = [c for f in man["verification"]["verifier"]["files"].values() for c in f["checks"]
-             if c["name"].endswith("tape marks at every hinge")]
+    marks = [
+        c
+        for f in man["verification"]["verifier"]["files"].values()
+        for c in f["checks"]
+        if c["name"].endswith("tape marks at every hinge")
+    ]
     assert marks and all(c["ok"] for c in marks) and "462 of 464" in marks[0]["detail"]
 
 
@@ -613,7 +741,9 @@ def test_a_hinge_kind_is_one_registered_strategy(monkeypatch):
     r = cut(p, hinge="scored", formats=("dxf",))
     assert r.manifest["hinge"] == "scored" and r.sheets[0].count("SCORE") == p.n_tiles
     assert r.sheets[0].count("CUT") == cut(p, hinge="tape", formats=("dxf",)).sheets[0].count("CUT")
-    with pytest.raises(InputError, match="hinge kind must be one of tape, ligament, separate, got 'glued'"):
+    with pytest.raises(
+        InputError, match="hinge kind must be one of tape, ligament, separate, got 'glued'"
+    ):
         cut(p, hinge="glued")
 
 
@@ -629,7 +759,9 @@ def test_what_a_hinge_kind_decides_is_asked_of_the_kind(monkeypatch):
 
     monkeypatch.setattr(hingekinds._KINDS, "members", dict(hingekinds._KINDS.members))
     for where in ("materials", "design_limits"):  # a new kind's name is listed there too
-        monkeypatch.setattr(f"fabkiri.fabricate.{where}.HINGE_KINDS", ("tape", "ligament", "separate", "living"))
+        monkeypatch.setattr(
+            f"fabkiri.fabricate.{where}.HINGE_KINDS", ("tape", "ligament", "separate", "living")
+        )
 
     class Living(Ligament):
         name = "living"
@@ -648,22 +780,36 @@ def test_what_a_hinge_kind_decides_is_asked_of_the_kind(monkeypatch):
     closed = p.contracted[1]
     assert fb.cut_minimum(closed, pp, "living") == fb.cut_minimum(closed, pp, "ligament")
     assert fb.cut_minimum(closed, pp, "living") != fb.cut_minimum(closed, pp, "tape")
-    assert design_limits.material_limits(pp, "living") == design_limits.material_limits(pp, "ligament")
+    assert design_limits.material_limits(pp, "living") == design_limits.material_limits(
+        pp, "ligament"
+    )
     assert coupon.hinge_variants(pp.override(hinge="living"))[0] == "ligament_width_mm"
     lig, liv = cut(p, "pp-0.5", hinge="ligament"), cut(p, "pp-0.5", hinge="living")
     assert liv.manifest["assembly"] == lig.manifest["assembly"]  # one piece: nothing to join
-    rb = verify_result(p, liv, use_verifier=False)  # the read-back recovers the tiles as the kind says
+    rb = verify_result(
+        p, liv, use_verifier=False
+    )  # the read-back recovers the tiles as the kind says
     assert rb.ok and any(c.name == "sheet 1 tiles recovered" for c in rb.checks)
     tape, apart = cut(p, hinge="tape"), cut(p, hinge="apart")
     n_top = sum(q["face"] == "T" for q in tape.manifest["assembly_pieces"])
-    assert apart.manifest["assembly"]["steps"] == [f"{n_top} up, {p.topology.n_hinges - n_top} down"]
+    assert apart.manifest["assembly"]["steps"] == [
+        f"{n_top} up, {p.topology.n_hinges - n_top} down"
+    ]
     # tiles laid out apart: a piece sits on tile A's corner, not between the two
     Q = closed + 3.0 * np.arange(p.n_tiles)[:, None, None]
-    rows = [asm.tape_pieces(p, Q, np.zeros(p.n_tiles, int), ["T"] * p.topology.n_hinges, k, 0.3, 2.0)
-            for k in (Tape(), Apart())]
+    rows = [
+        asm.tape_pieces(p, Q, np.zeros(p.n_tiles, int), ["T"] * p.topology.n_hinges, k, 0.3, 2.0)
+        for k in (Tape(), Apart())
+    ]
     A = p.topology.hinge_tiles[:, 0]
-    assert all(np.allclose(r["at_mm"], Q[A[r["hinge"]], p.topology.hinge_corner[r["hinge"], 0]]) for r in rows[1])
-    assert not any(np.allclose(r["at_mm"], Q[A[r["hinge"]], p.topology.hinge_corner[r["hinge"], 0]]) for r in rows[0])
+    assert all(
+        np.allclose(r["at_mm"], Q[A[r["hinge"]], p.topology.hinge_corner[r["hinge"], 0]])
+        for r in rows[1]
+    )
+    assert not any(
+        np.allclose(r["at_mm"], Q[A[r["hinge"]], p.topology.hinge_corner[r["hinge"], 0]])
+        for r in rows[0]
+    )
 
 
 def test_cut_manifest_round_trips_and_is_checked_on_read():
@@ -675,19 +821,31 @@ def test_cut_manifest_round_trips_and_is_checked_on_read():
 
     r = cut(std(3, 3), material="pp-0.5", hinge="ligament", formats=("dxf",))
     m = CutManifest.from_dict(json.loads(json.dumps(r.manifest)))
-    assert m.hinge == "ligament" and m.tile_shrink_mm == load_material("pp-0.5").gap_mm / 2 and m.mitre_limit == hg.MITRE_LIMIT
+    assert (
+        m.hinge == "ligament"
+        and m.tile_shrink_mm == load_material("pp-0.5").gap_mm / 2
+        and m.mitre_limit == hg.MITRE_LIMIT
+    )
     assert json.dumps(m.to_dict()) == json.dumps(r.manifest)  # same keys, same order, same values
     assert m.to_json().encode("utf-8") == r.manifest_bytes()  # and the same bytes as written
     golden = (Path(__file__).parent / "golden" / "std2x2-manifest.json").read_text("utf-8")
     g = CutManifest.from_json(golden)
     assert g.to_json() == golden and list(g.extra) == ["bill_of_materials"]
     assert _allowances({**r.manifest, "mitre_limit": 4.0}, "m").mitre_limit == 4.0
-    assert _allowances({"hinge": "tape"}, "m").layout == "in-place"  # the kind's usual layout when unsaid
-    with pytest.raises(VerifyError, match=r"^m: state must be 1 or 2, not 3$"):  # as the verifier always said
+    assert (
+        _allowances({"hinge": "tape"}, "m").layout == "in-place"
+    )  # the kind's usual layout when unsaid
+    with pytest.raises(
+        VerifyError, match=r"^m: state must be 1 or 2, not 3$"
+    ):  # as the verifier always said
         CutManifest.from_dict({**r.manifest, "state": 3}, "m")
-    with pytest.raises(VerifyError, match=r"^m: malformed manifest \(mitre_limit: must be >= 1, got 0.5\)$"):
+    with pytest.raises(
+        VerifyError, match=r"^m: malformed manifest \(mitre_limit: must be >= 1, got 0.5\)$"
+    ):
         CutManifest.from_dict({**r.manifest, "mitre_limit": 0.5}, "m")
-    with pytest.raises(VerifyError, match=r"malformed manifest \(tiles/0: 'tile' is a required property"):
+    with pytest.raises(
+        VerifyError, match=r"malformed manifest \(tiles/0: 'tile' is a required property"
+    ):
         CutManifest.from_dict({**r.manifest, "tiles": [{"sheet": 1}]}, "m")
 
 
@@ -698,12 +856,19 @@ def test_a_sheet_format_is_one_registered_strategy(monkeypatch):
     from fabkiri.fabricate import sheetformats as sf
 
     monkeypatch.setattr(sf._SHEET_FORMATS, "members", dict(sf._SHEET_FORMATS.members))
-    sf.register_sheet_format(sf.SheetFormat(
-        "txt", ".txt", True, lambda job, sheets: f"{sheets[0].count('CUT')} cuts\n".encode()))
+    sf.register_sheet_format(
+        sf.SheetFormat(
+            "txt", ".txt", True, lambda job, sheets: f"{sheets[0].count('CUT')} cuts\n".encode()
+        )
+    )
     p = std(6, 6, size=20.0)  # 120 x 120 mm closed: two sheets or more
     r = cut(p, formats=("dxf", "txt"), sheet=(90.0, 80.0), reference_mm=0.0)
     names = list(r.files)
-    assert len(r.sheets) > 1 and names == [f"p-sheet{sd.index}{x}" for sd in r.sheets for x in (".dxf", ".txt")]
-    assert all(r.files[f"p-sheet{sd.index}.txt"] == f"{sd.count('CUT')} cuts\n".encode() for sd in r.sheets)
+    assert len(r.sheets) > 1 and names == [
+        f"p-sheet{sd.index}{x}" for sd in r.sheets for x in (".dxf", ".txt")
+    ]
+    assert all(
+        r.files[f"p-sheet{sd.index}.txt"] == f"{sd.count('CUT')} cuts\n".encode() for sd in r.sheets
+    )
     with pytest.raises(InputError, match=r"unknown format 'pdf' \(known: dxf, svg, png, txt\)"):
         cut(p, formats=("pdf",))

@@ -26,16 +26,30 @@ def _families(rows=4, cols=6):
     g1 = C.ClosedGrid.build(st, 1, n)
     g2 = C.ClosedGrid.build(st, 2, n + g1.n_vertices)
     nv = n + g1.n_vertices + g2.n_vertices
-    fams = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.rings(st, 1, nv), C.rings(st, 2, nv),
-            C.hinge_sums(st, nv), C.hole_opposite_sides(st, nv), C.notch_pairs(st, 1, nv),
-            C.notch_pairs(st, 2, nv), C.non_overlap(st, nv), C.convexity(st, nv),
-            C.symmetry(st, std.nodes, "x", nv), C.symmetry(st, std.nodes, "y", nv),
-            C.rectangle_outline(st, 1, nv), C.rectangle_outline(st, 2, nv), C.outline_ratio(st, 2, 1.3, nv),
-            g1.congruence(st, nv), g2.congruence(st, nv), g1.orientation(st, nv),
-            C.shape_match(st.tip_nodes, st.tip_side, T.circle().transformed(4.0), nv),
-            C.shape_match(st.tip_nodes, st.tip_side, T.star().transformed(4.0), nv, "star"),
-            C.shape_match(g2.boundary, g2.boundary_side, T.heart().transformed(4.0), nv, "closed"),
-            regularizer(st, nv)]
+    fams = [
+        C.edge_pairs(st, 1, nv),
+        C.edge_pairs(st, 2, nv),
+        C.rings(st, 1, nv),
+        C.rings(st, 2, nv),
+        C.hinge_sums(st, nv),
+        C.hole_opposite_sides(st, nv),
+        C.notch_pairs(st, 1, nv),
+        C.notch_pairs(st, 2, nv),
+        C.non_overlap(st, nv),
+        C.convexity(st, nv),
+        C.symmetry(st, std.nodes, "x", nv),
+        C.symmetry(st, std.nodes, "y", nv),
+        C.rectangle_outline(st, 1, nv),
+        C.rectangle_outline(st, 2, nv),
+        C.outline_ratio(st, 2, 1.3, nv),
+        g1.congruence(st, nv),
+        g2.congruence(st, nv),
+        g1.orientation(st, nv),
+        C.shape_match(st.tip_nodes, st.tip_side, T.circle().transformed(4.0), nv),
+        C.shape_match(st.tip_nodes, st.tip_side, T.star().transformed(4.0), nv, "star"),
+        C.shape_match(g2.boundary, g2.boundary_side, T.heart().transformed(4.0), nv, "closed"),
+        regularizer(st, nv),
+    ]
     gx, gy = np.meshgrid(np.arange(cols + 1), np.arange(rows + 1))
     grid = np.stack([gx.ravel(), gy.ravel()], -1).astype(float)
     X = np.vstack([std.nodes, grid, grid])
@@ -58,7 +72,11 @@ def test_jacobians_match_finite_differences(seed):
             xp[c] += eps
             xm[c] -= eps
             fd = (f(xp.reshape(X.shape))[0] - f(xm.reshape(X.shape))[0]) / (2 * eps)
-            assert np.allclose(Jd[:, c], fd, atol=2e-6, rtol=1e-5), (f.name, c, np.abs(Jd[:, c] - fd).max())
+            assert np.allclose(Jd[:, c], fd, atol=2e-6, rtol=1e-5), (
+                f.name,
+                c,
+                np.abs(Jd[:, c] - fd).max(),
+            )
 
 
 @settings(max_examples=10, deadline=None)
@@ -83,10 +101,20 @@ def test_standard_pattern_satisfies_every_equality():
     st = C.Stencils.from_pattern(std)
     n = len(std.nodes)
     x = std.nodes
-    for f in [C.edge_pairs(st, 1, n), C.edge_pairs(st, 2, n), C.rings(st, 1, n), C.rings(st, 2, n),
-              C.hinge_sums(st, n), C.hole_opposite_sides(st, n), C.rectangle_outline(st, 1, n),
-              C.rectangle_outline(st, 2, n), C.outline_ratio(st, 1, cols / rows, n),
-              C.outline_ratio(st, 2, cols / rows, n), C.symmetry(st, x, "x", n), C.symmetry(st, x, "y", n)]:
+    for f in [
+        C.edge_pairs(st, 1, n),
+        C.edge_pairs(st, 2, n),
+        C.rings(st, 1, n),
+        C.rings(st, 2, n),
+        C.hinge_sums(st, n),
+        C.hole_opposite_sides(st, n),
+        C.rectangle_outline(st, 1, n),
+        C.rectangle_outline(st, 2, n),
+        C.outline_ratio(st, 1, cols / rows, n),
+        C.outline_ratio(st, 2, cols / rows, n),
+        C.symmetry(st, x, "x", n),
+        C.symmetry(st, x, "y", n),
+    ]:
         assert np.abs(f(x)[0]).max() < 1e-12, f.name
     assert C.outline_ratio(st, 1, 1.0, n)(x)[0][0] == pytest.approx(cols - rows)
     for f in [C.non_overlap(st, n), C.convexity(st, n)]:
@@ -109,8 +137,9 @@ def test_odd_symmetry_breaks_primal_dual():
 
 
 # ------------------------------------------------------------------ targets
-@pytest.mark.parametrize("name", ["circle", "ellipse", "square", "rectangle", "superellipse", "hexagon",
-                                  "heart", "star"])
+@pytest.mark.parametrize(
+    "name", ["circle", "ellipse", "square", "rectangle", "superellipse", "hexagon", "heart", "star"]
+)
 def test_named_targets_project_consistently(name):
     tgt = T.load_target(name, 80.0)
     assert tgt.size == pytest.approx(80.0, rel=1e-6)
@@ -161,8 +190,13 @@ def test_arc_feet_pass_the_split_points_smoothly():
 # the basin of the nearest tree seed, ~4e-6 farther than the true nearest point (superellipse, seed 11829:
 # about 1 draw in 1500); harmless for tips near their arc, a known limit of the seeded projection
 @settings(max_examples=25, deadline=None, derandomize=True)
-@given(name=hst.sampled_from(["circle", "ellipse", "superellipse", "hexagon", "star"]),
-       scale=hst.floats(0.05, 20.0), sx=hst.floats(-5, 5), sy=hst.floats(-5, 5), seed=hst.integers(0, 2**31 - 1))
+@given(
+    name=hst.sampled_from(["circle", "ellipse", "superellipse", "hexagon", "star"]),
+    scale=hst.floats(0.05, 20.0),
+    sx=hst.floats(-5, 5),
+    sy=hst.floats(-5, 5),
+    seed=hst.integers(0, 2**31 - 1),
+)
 def test_projection_finds_the_nearest_point_of_each_arc(name, scale, sx, sy, seed):
     """One lifted KD-tree for all four arcs, shared by a scaled and shifted copy, seeds each point's foot on
     its own arc: the foot is as near as the nearest of 20 000 samples of that (padded) arc."""
@@ -173,9 +207,13 @@ def test_projection_finds_the_nearest_point_of_each_arc(name, scale, sx, sy, see
     side = rng.integers(0, 4, 24)
     u = np.array([rng.uniform(*tgt.arc_range(s)) for s in side])
     t = tgt.tangent(u)
-    p = tgt.point(u) + rng.uniform(-0.1, 0.1, (len(u), 1)) * scale * np.stack([t[:, 1], -t[:, 0]], -1)
+    p = tgt.point(u) + rng.uniform(-0.1, 0.1, (len(u), 1)) * scale * np.stack(
+        [t[:, 1], -t[:, 0]], -1
+    )
     away = np.zeros(len(side), dtype=bool)
-    away[::3] = True  # a third sit on another arc than their own: a seed from the wrong arc would show there
+    away[::3] = (
+        True  # a third sit on another arc than their own: a seed from the wrong arc would show there
+    )
     side[away] = (side[away] + rng.integers(1, 4, away.sum())) % 4
     _, foot, d, _ = tgt.project(p, side)
     for s in range(4):
@@ -187,7 +225,9 @@ def test_projection_finds_the_nearest_point_of_each_arc(name, scale, sx, sy, see
                 brute = np.linalg.norm(p[sel, None, :] - samples[None], axis=2).min(1)
                 assert (np.abs(d[sel]) <= brute + 1e-9 * scale).all()
                 if a < lo:  # near its own arc the foot is the nearest point of the padded arc
-                    assert (np.abs(d[sel]) >= brute - 1e-4 * scale).all()  # the samples' spacing, squared
+                    assert (
+                        np.abs(d[sel]) >= brute - 1e-4 * scale
+                    ).all()  # the samples' spacing, squared
     assert np.allclose(np.linalg.norm(p - foot, axis=1), np.abs(d))
 
 
@@ -197,12 +237,17 @@ def test_user_targets(tmp_path):
     tgt = T.load_target(str(csv))
     assert tgt.kind == "polyline" and tgt.size == pytest.approx(40.0)
     js = tmp_path / "s.json"
-    js.write_text(json.dumps({"points": [[np.cos(t), np.sin(t)] for t in np.linspace(0, 6, 12)],
-                              "curve": "spline"}))
+    js.write_text(
+        json.dumps(
+            {"points": [[np.cos(t), np.sin(t)] for t in np.linspace(0, 6, 12)], "curve": "spline"}
+        )
+    )
     assert T.load_target(str(js), 50.0).kind == "spline"
     svg = tmp_path / "s.svg"
-    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 L 30 0 '
-                   'C 40 10 40 20 30 30 L 0 30 Z"/></svg>')
+    svg.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 L 30 0 '
+        'C 40 10 40 20 30 30 L 0 30 Z"/></svg>'
+    )
     s = T.load_target(str(svg))
     assert s.size == pytest.approx(37.5, rel=0.02)
     bad = tmp_path / "bow.csv"
@@ -210,7 +255,9 @@ def test_user_targets(tmp_path):
     with pytest.raises(InputError):
         T.load_target(str(bad))
     pentagram = tmp_path / "p.json"
-    pentagram.write_text(json.dumps([[np.cos(a), np.sin(a)] for a in np.pi / 2 + 4 * np.pi * np.arange(5) / 5]))
+    pentagram.write_text(
+        json.dumps([[np.cos(a), np.sin(a)] for a in np.pi / 2 + 4 * np.pi * np.arange(5) / 5])
+    )
     with pytest.raises(InputError, match="intersects itself"):
         T.load_target(str(pentagram))
     with pytest.raises(InputError, match="unknown target"):
@@ -230,8 +277,19 @@ def test_design_circle_rigid_api():
 
 def test_cli_design_circle_rigid(tmp_path, run_cli):
     out = tmp_path / "c.json"
-    code, stdout, err = run_cli("design", "--tiles", "8x8", "--target", "circle", "--size", "80", "--rigid",
-                                "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "8x8",
+        "--target",
+        "circle",
+        "--size",
+        "80",
+        "--rigid",
+        "--json",
+        "-o",
+        out,
+    )
     assert code == 0, err
     report = json.loads(stdout)
     assert report["status"] == "converged" and report["max_equality_residual"] <= 1e-10
@@ -248,8 +306,21 @@ def test_cli_design_circle_rigid(tmp_path, run_cli):
 def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
     out = tmp_path / "h.json"
     # 6x6 tiles follow a heart to a few % only (bench/shapes.py); this test is about the symmetry
-    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "heart", "--symmetry", "y", "--rigid",
-                                "--shape-tol", "10%", "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "heart",
+        "--symmetry",
+        "y",
+        "--rigid",
+        "--shape-tol",
+        "10%",
+        "--json",
+        "-o",
+        out,
+    )
     assert code == 0, err
     x = read_pattern(out).nodes
     # mirror image of the node set about the y axis is the node set
@@ -258,17 +329,42 @@ def test_cli_symmetric_heart_and_points_file(tmp_path, run_cli):
     d, _ = cKDTree(x).query(x * [-1, 1])
     assert d.max() < 1e-9
     out2 = tmp_path / "b.json"
-    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", TEMPLATES / "targets" / "blob-points.csv",
-                                "--shape-tol", "10%", "--json", "-o", out2)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        TEMPLATES / "targets" / "blob-points.csv",
+        "--shape-tol",
+        "10%",
+        "--json",
+        "-o",
+        out2,
+    )
     assert code == 0, err
     rep = json.loads(stdout)
-    assert rep["shape_matching"] in ("hard", "least-squares") and rep["shape"]["deployed"]["status"] == "met"
+    assert (
+        rep["shape_matching"] in ("hard", "least-squares")
+        and rep["shape"]["deployed"]["status"] == "met"
+    )
 
 
 def test_cli_parallelogram_holes(tmp_path, run_cli):
     out = tmp_path / "p.json"
-    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "ellipse", "--holes", "parallelogram",
-                                "--shape-tol", "10%", "--json", "-o", out)  # about the holes, not the 6x6 shape
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "ellipse",
+        "--holes",
+        "parallelogram",
+        "--shape-tol",
+        "10%",
+        "--json",
+        "-o",
+        out,
+    )  # about the holes, not the 6x6 shape
     assert code == 0, err
     rep = json.loads(stdout)
     assert rep["checks"]["closure_1_rel"] <= 1e-9 and rep["checks"]["hinge_sum_max_rad"] <= 1e-10
@@ -276,26 +372,47 @@ def test_cli_parallelogram_holes(tmp_path, run_cli):
 
 def test_cli_contracted_targets(tmp_path, run_cli):
     out = tmp_path / "sq.json"
-    code, stdout, err = run_cli("design", "--tiles", "5x5", "--rigid", "--contracted-target", "1:square",
-                                "--contracted-target", "2:circle", "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "5x5",
+        "--rigid",
+        "--contracted-target",
+        "1:square",
+        "--contracted-target",
+        "2:circle",
+        "--json",
+        "-o",
+        out,
+    )
     # parallelogram holes (the default here) meet the 2 % shape check at 5x5: the square exactly
     assert code == 0, err
     rep = json.loads(stdout)
     fits = rep["closed_outline_fit"]
-    assert set(fits) == {"1", "2"} and fits["1"]["target"] == "square" and fits["2"]["target"] == "circle"
+    assert (
+        set(fits) == {"1", "2"}
+        and fits["1"]["target"] == "square"
+        and fits["2"]["target"] == "circle"
+    )
     assert rep["max_equality_residual"] <= 1e-10 and fits["1"]["max_rel_size"] <= 1e-9
     assert fits["2"]["max_rel_size"] < 0.02 and rep["shape"]["state_2"]["status"] == "met"
 
 
-@pytest.mark.parametrize("argv, msg", [
-    (["--tiles", "0x4", "--target", "circle"], "at least"),
-    (["--tiles", "8x8", "--target", "no-such-target"], "unknown target"),
-    (["--tiles", "7x7", "--target", "circle", "--symmetry", "y"], "swaps the primal and dual"),
-    (["--tiles", "8x8", "--target", "heart", "--symmetry", "x"], "not symmetric"),
-    (["--tiles", "8x8"], "give --target"),
-    (["--tiles", "8x8", "--contracted-target", "3:circle"], "STATE"),
-    (["--tiles", "8x8", "--holes", "parallelogram", "--contracted-target", "2:circle"], "rhombus"),
-])
+@pytest.mark.parametrize(
+    "argv, msg",
+    [
+        (["--tiles", "0x4", "--target", "circle"], "at least"),
+        (["--tiles", "8x8", "--target", "no-such-target"], "unknown target"),
+        (["--tiles", "7x7", "--target", "circle", "--symmetry", "y"], "swaps the primal and dual"),
+        (["--tiles", "8x8", "--target", "heart", "--symmetry", "x"], "not symmetric"),
+        (["--tiles", "8x8"], "give --target"),
+        (["--tiles", "8x8", "--contracted-target", "3:circle"], "STATE"),
+        (
+            ["--tiles", "8x8", "--holes", "parallelogram", "--contracted-target", "2:circle"],
+            "rhombus",
+        ),
+    ],
+)
 def test_cli_rejects_bad_requests(tmp_path, run_cli, argv, msg):
     out = tmp_path / "x.json"
     code, _, err = run_cli("design", *argv, "-o", out)
@@ -305,7 +422,9 @@ def test_cli_rejects_bad_requests(tmp_path, run_cli, argv, msg):
 
 def test_cli_self_intersecting_target(tmp_path, run_cli):
     f = tmp_path / "pent.json"
-    f.write_text(json.dumps([[np.cos(a), np.sin(a)] for a in np.pi / 2 + 4 * np.pi * np.arange(5) / 5]))
+    f.write_text(
+        json.dumps([[np.cos(a), np.sin(a)] for a in np.pi / 2 + 4 * np.pi * np.arange(5) / 5])
+    )
     out = tmp_path / "x.json"
     code, _, err = run_cli("design", "--tiles", "8x8", "--target", f, "-o", out)
     assert code == 2 and "intersects itself" in err and not out.exists()
@@ -314,15 +433,23 @@ def test_cli_self_intersecting_target(tmp_path, run_cli):
 @pytest.mark.slow
 def test_cli_unreachable_tolerance_saves_unconverged(tmp_path, run_cli):
     out = tmp_path / "u.json"
-    code, _, err = run_cli("design", "--tiles", "4x4", "--target", "circle", "--tol", "1e-30", "-o", out)
+    code, _, err = run_cli(
+        "design", "--tiles", "4x4", "--target", "circle", "--tol", "1e-30", "-o", out
+    )
     assert code == 1 and "did not reach" in err
     p = read_pattern(out)
     assert p.design["report"]["status"] == "unconverged" and p.design["valid"] is False
 
 
 def test_committed_example_patterns_are_valid():
-    for name in ("circle-8x8.json", "circle-8x8-rigid.json", "circle-16x16-rigid.json", "heart-16x16-rigid.json",
-                 "square-circle-9x9-rigid.json", "circle-32x32-rigid.json"):
+    for name in (
+        "circle-8x8.json",
+        "circle-8x8-rigid.json",
+        "circle-16x16-rigid.json",
+        "heart-16x16-rigid.json",
+        "square-circle-9x9-rigid.json",
+        "circle-32x32-rigid.json",
+    ):
         p = read_pattern(TEMPLATES / "patterns" / name)
         assert p.design["valid"] is True and p.design["report"]["status"] == "converged"
         assert p.design["report"]["max_equality_residual"] <= 1e-10
@@ -332,10 +459,18 @@ def test_overlap_check_survives_near_degenerate_shared_edge():
     """Two closed-state tiles sharing an edge at x ≈ -4e-10: GEOS alone reports a full overlap."""
     from fabkiri.cli.design_cmd import overlapping_tiles
 
-    a = [[-3.9277336938425833e-10, 1.6579325376061398], [-4.133902109515475e-10, 5.922048704407096],
-         [-4.1397303240137155, 5.922048704418469], [-4.020767288704813, 1.4778850882464676]]
-    b = [[-4.133902109515475e-10, 5.922048704407096], [-3.9277336938425833e-10, 1.6579325376061402],
-         [4.02076728792443, 1.4778850882086814], [4.139730323186935, 5.922048704395724]]
+    a = [
+        [-3.9277336938425833e-10, 1.6579325376061398],
+        [-4.133902109515475e-10, 5.922048704407096],
+        [-4.1397303240137155, 5.922048704418469],
+        [-4.020767288704813, 1.4778850882464676],
+    ]
+    b = [
+        [-4.133902109515475e-10, 5.922048704407096],
+        [-3.9277336938425833e-10, 1.6579325376061402],
+        [4.02076728792443, 1.4778850882086814],
+        [4.139730323186935, 5.922048704395724],
+    ]
     assert overlapping_tiles(np.array([a, b]), 4e-9) == []
     # a real overlap is still found
     c = np.array(b) - [0.5, 0.0]
@@ -351,10 +486,18 @@ def test_overlap_check_is_a_depth_not_an_area():
     import shapely
     from fabkiri.cli.design_cmd import overlapping_tiles
 
-    a = [[-7.870798019350355, 34.4230784404786], [-7.223358822429531, 34.131578843332065],
-         [-7.313372669224364, 35.68108797819961], [-7.960596625750248, 36.03086343612596]]
-    b = [[-7.223358822559069, 34.131578843315644], [-6.607442768421662, 33.76419556215104],
-         [-6.6661487128369155, 35.33131252026108], [-7.313372669365404, 35.68108797818256]]
+    a = [
+        [-7.870798019350355, 34.4230784404786],
+        [-7.223358822429531, 34.131578843332065],
+        [-7.313372669224364, 35.68108797819961],
+        [-7.960596625750248, 36.03086343612596],
+    ]
+    b = [
+        [-7.223358822559069, 34.131578843315644],
+        [-6.607442768421662, 33.76419556215104],
+        [-6.6661487128369155, 35.33131252026108],
+        [-7.313372669365404, 35.68108797818256],
+    ]
     size = 0.9065759084017538
     sliver = shapely.intersection(shapely.Polygon(a), shapely.Polygon(b), grid_size=1e-9 * size)
     assert shapely.area(sliver) > 1e-9 * size * size  # what the area check rejected
@@ -367,8 +510,20 @@ def test_cli_rectangular_closed_state(tmp_path, run_cli):
     """`2:rect=1.5`: boundary angle sums π (π/2 at corners) and width/height 1.5 in closed state 2."""
     out = tmp_path / "r.json"
     # a rectangular closed state pulls the 6x6 deployed circle a few % off (the test is about the rectangle)
-    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "2:rect=1.5",
-                                "--shape-tol", "10%", "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "circle",
+        "--contracted-target",
+        "2:rect=1.5",
+        "--shape-tol",
+        "10%",
+        "--json",
+        "-o",
+        out,
+    )
     assert code == 0, err
     rep = json.loads(stdout)
     assert rep["residuals"]["rectangle_2"] <= 1e-10 and rep["residuals"]["ratio_2"] <= 1e-10
@@ -386,11 +541,26 @@ def test_cli_rectangular_closed_state(tmp_path, run_cli):
 
 def test_cli_svg_target_and_conformal_init(tmp_path, run_cli):
     svg = tmp_path / "blob.svg"
-    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><path d="M 50 5 C 80 5 95 30 95 50 C 95 75 75 95 '
-                   '50 95 C 25 95 5 75 5 50 C 5 25 20 5 50 5 Z"/></svg>')
+    svg.write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg"><path d="M 50 5 C 80 5 95 30 95 50 C 95 75 75 95 '
+        '50 95 C 25 95 5 75 5 50 C 5 25 20 5 50 5 Z"/></svg>'
+    )
     out = tmp_path / "s.json"
-    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", svg, "--size", "60", "--rigid",
-                                "--init", "conformal", "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        svg,
+        "--size",
+        "60",
+        "--rigid",
+        "--init",
+        "conformal",
+        "--json",
+        "-o",
+        out,
+    )
     assert code == 0, err
     rep = json.loads(stdout)
     assert rep["attempts"][0]["init"] == "conformal" and rep["max_equality_residual"] <= 1e-10
@@ -399,7 +569,9 @@ def test_cli_svg_target_and_conformal_init(tmp_path, run_cli):
 
 def test_conformal_guess_refuses_to_fold(tmp_path, run_cli):
     out = tmp_path / "h.json"
-    code, _, err = run_cli("design", "--tiles", "16x16", "--target", "heart", "--init", "conformal", "-o", out)
+    code, _, err = run_cli(
+        "design", "--tiles", "16x16", "--target", "heart", "--init", "conformal", "-o", out
+    )
     assert code == 2 and "folds" in err and not out.exists()
 
 
@@ -413,8 +585,21 @@ def test_overlap_check_reports_self_intersecting_tiles():
 def test_cli_design_coarse_init(tmp_path, run_cli):
     """--init coarse: an 8x8 solve mapped onto 16x16 starts the fine solve; same tolerances, both states close."""
     out = tmp_path / "c.json"
-    code, stdout, err = run_cli("design", "--tiles", "16x16", "--target", "circle", "--size", "80", "--rigid",
-                                "--init", "coarse", "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "16x16",
+        "--target",
+        "circle",
+        "--size",
+        "80",
+        "--rigid",
+        "--init",
+        "coarse",
+        "--json",
+        "-o",
+        out,
+    )
     assert code == 0, err
     report = json.loads(stdout)
     assert report["status"] == "converged" and report["max_equality_residual"] <= 1e-10

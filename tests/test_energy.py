@@ -85,11 +85,19 @@ def test_hessian_and_jacobian_match_finite_differences():
     assert np.abs(J - Jfd).max() <= 1e-7 * np.abs(J).max()
     # Gauss-Newton part is 2 JᵀJ and equals H at a zero-strain point
     x0 = p.nodes.ravel()
-    assert np.abs(sp.gauss_newton(x0).toarray() - sp.hessian(x0).toarray()).max() <= 1e-12 * np.abs(H).max()
+    assert (
+        np.abs(sp.gauss_newton(x0).toarray() - sp.hessian(x0).toarray()).max()
+        <= 1e-12 * np.abs(H).max()
+    )
 
 
 @settings(max_examples=25, deadline=None)
-@given(theta=st.floats(-np.pi, np.pi), dx=st.floats(-100, 100), dy=st.floats(-100, 100), seed=st.integers(0, 50))
+@given(
+    theta=st.floats(-np.pi, np.pi),
+    dx=st.floats(-100, 100),
+    dy=st.floats(-100, 100),
+    seed=st.integers(0, 50),
+)
 def test_energy_invariant_under_rigid_motions(theta, dx, dy, seed):
     p, x = _perturbed(seed)
     sp = springs(p)

@@ -12,12 +12,36 @@ from .conftest import TEMPLATES
 
 # every property name FOLD 1.2 defines (edemaine/fold doc/spec.md); anything else must carry a colon
 FOLD_SPEC_NAMES = {
-    "file_spec", "file_creator", "file_author", "file_title", "file_description", "file_classes", "file_frames",
-    "frame_title", "frame_description", "frame_author", "frame_classes", "frame_attributes", "frame_unit",
-    "frame_parent", "frame_inherit",
-    "vertices_coords", "vertices_vertices", "vertices_edges", "vertices_faces",
-    "edges_vertices", "edges_faces", "edges_assignment", "edges_foldAngle", "edges_length", "edges_edges",
-    "faces_vertices", "faces_edges", "faces_faces", "faceOrders", "edgeOrders",
+    "file_spec",
+    "file_creator",
+    "file_author",
+    "file_title",
+    "file_description",
+    "file_classes",
+    "file_frames",
+    "frame_title",
+    "frame_description",
+    "frame_author",
+    "frame_classes",
+    "frame_attributes",
+    "frame_unit",
+    "frame_parent",
+    "frame_inherit",
+    "vertices_coords",
+    "vertices_vertices",
+    "vertices_edges",
+    "vertices_faces",
+    "edges_vertices",
+    "edges_faces",
+    "edges_assignment",
+    "edges_foldAngle",
+    "edges_length",
+    "edges_edges",
+    "faces_vertices",
+    "faces_edges",
+    "faces_faces",
+    "faceOrders",
+    "edgeOrders",
 }
 FOLD_ASSIGNMENTS = {"B", "M", "V", "F", "U", "C", "J"}
 FOLD_FILE_ONLY = {k for k in FOLD_SPEC_NAMES if k.startswith("file_")}
@@ -33,7 +57,9 @@ def _names_ok(d: dict, top: bool) -> list[str]:
 @pytest.mark.parametrize("name", ["heart-16x16-rigid", "circle-8x8"])
 def test_fold_export_follows_the_spec(run_cli, tmp_path, name):
     out = tmp_path / "p.fold"
-    code, _, err = run_cli("export", TEMPLATES / "patterns" / f"{name}.json", "--format", "fold", "-o", out)
+    code, _, err = run_cli(
+        "export", TEMPLATES / "patterns" / f"{name}.json", "--format", "fold", "-o", out
+    )
     assert code == 0, err
     d = json.loads(out.read_text())
     assert _names_ok(d, True) == []
@@ -76,6 +102,7 @@ def test_fold_round_trip(run_cli, tmp_path):
 
 def _pykirigami_loader_checks(folder, max_distance=0.05):
     """What PyKirigami's utils/config.py checks when it loads a model (our reading of it)."""
+
     def tiles(name):
         rows = []
         for line in (folder / name).read_text().splitlines():
@@ -86,7 +113,10 @@ def _pykirigami_loader_checks(folder, max_distance=0.05):
 
     start, target = tiles("vertices.txt"), tiles("target.txt")
     assert len(start) == len(target)
-    cons = [list(map(int, line.split())) for line in (folder / "constraints.txt").read_text().splitlines()]
+    cons = [
+        list(map(int, line.split()))
+        for line in (folder / "constraints.txt").read_text().splitlines()
+    ]
     assert all(len(c) == 5 and c[4] in (1, 2, 3) for c in cons)
     keys = sorted(tuple(c) for c in cons)
     assert all(keys[i] != keys[i - 1] for i in range(1, len(keys))), "duplicate constraint"
@@ -94,7 +124,9 @@ def _pykirigami_loader_checks(folder, max_distance=0.05):
     for verts in (start, target):
         for f1, v1, f2, v2, _ in cons:
             assert 0 <= f1 < len(verts) and 0 <= f2 < len(verts), "face index out of bounds"
-            assert 0 <= v1 < len(verts[f1]) and 0 <= v2 < len(verts[f2]), "vertex index out of bounds"
+            assert 0 <= v1 < len(verts[f1]) and 0 <= v2 < len(verts[f2]), (
+                "vertex index out of bounds"
+            )
             worst = max(worst, float(np.linalg.norm(verts[f1][v1] - verts[f2][v2])))
     assert worst <= max_distance
     return len(start), len(cons), worst
@@ -110,7 +142,12 @@ def test_pykirigami_export_passes_its_loader_checks(run_cli, tmp_path, name):
     assert (n_tiles, n_cons) == (p.n_tiles, p.topology.n_hinges)
     assert worst < 1e-9  # hinge copies coincide in both files, far inside the loader's 0.05
     # unit tiles, as in its examples
-    t = np.array([list(map(float, line.split())) for line in (tmp_path / "m" / "target.txt").read_text().splitlines()])
+    t = np.array(
+        [
+            list(map(float, line.split()))
+            for line in (tmp_path / "m" / "target.txt").read_text().splitlines()
+        ]
+    )
     edge = np.linalg.norm(t[:, 3:5] - t[:, 0:2], axis=1)
     assert 0.3 < edge.mean() < 3
 

@@ -61,11 +61,19 @@ BAD_JSON = {
     "empty": ("", "empty"),
     "wrong format": (mutate(lambda d: d.update(format="other")), "not a fabkiri pattern"),
     "wrong version": (mutate(lambda d: d.update(version=7)), "unsupported pattern version 7"),
-    "nan": (mutate(lambda d: None).replace(json.dumps(good_dict()["nodes"][0][0]), "NaN", 1), "non-finite"),
-    "infinite": (mutate(lambda d: None).replace(json.dumps(good_dict()["nodes"][0][0]), "Infinity", 1),
-                 "non-finite"),
+    "nan": (
+        mutate(lambda d: None).replace(json.dumps(good_dict()["nodes"][0][0]), "NaN", 1),
+        "non-finite",
+    ),
+    "infinite": (
+        mutate(lambda d: None).replace(json.dumps(good_dict()["nodes"][0][0]), "Infinity", 1),
+        "non-finite",
+    ),
     "non-quad tile": (mutate(lambda d: d["tiles"][0].pop()), "tiles/0"),
-    "three tiles at a node": (mutate(lambda d: d["tiles"][5].__setitem__(0, d["tiles"][0][2])), "shared by 3 tiles"),
+    "three tiles at a node": (
+        mutate(lambda d: d["tiles"][5].__setitem__(0, d["tiles"][0][2])),
+        "shared by 3 tiles",
+    ),
     "missing node": (mutate(lambda d: d["tiles"][0].__setitem__(0, 999)), "outside"),
     "unknown key": (mutate(lambda d: d.update(colour="red")), "colour"),
 }
@@ -86,10 +94,19 @@ def test_bad_pattern_json_exit_2_one_line_nothing_written(case, tmp_path, run_cl
 
 
 BAD_OBJ = {
-    "missing vertex": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1// 2// 3// 5//\n", "references vertex 5"),
+    "missing vertex": (
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1// 2// 3// 5//\n",
+        "references vertex 5",
+    ),
     "empty": ("", "no vertices"),
-    "pentagon": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\nf 1 2 3 4 5\n", "tiles must be quads"),
-    "quads and triangles": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf 1 2 3\n", "all of one kind"),
+    "pentagon": (
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\nf 1 2 3 4 5\n",
+        "tiles must be quads",
+    ),
+    "quads and triangles": (
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf 1 2 3\n",
+        "all of one kind",
+    ),
     "garbage": ("v a b c\n", "not numbers"),
     "not planar": ("v 0 0 1\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", "planar"),
 }
@@ -107,8 +124,19 @@ def test_bad_obj_exit_2(case, tmp_path, run_cli):
 
 def test_contracted_obj_with_other_faces_is_rejected(tmp_path, run_cli):
     other = tmp_path / "c.obj"
-    other.write_text(ref("compact_reconfigurable_contracted1").read_text().replace("f 38// 7// 6// 10//", "f 7// 6// 10// 38//"))
-    code, _, err = run_cli("import", ref("compact_reconfigurable_design"), "--contracted", other, "-o", tmp_path / "p.json")
+    other.write_text(
+        ref("compact_reconfigurable_contracted1")
+        .read_text()
+        .replace("f 38// 7// 6// 10//", "f 7// 6// 10// 38//")
+    )
+    code, _, err = run_cli(
+        "import",
+        ref("compact_reconfigurable_design"),
+        "--contracted",
+        other,
+        "-o",
+        tmp_path / "p.json",
+    )
     assert code == 2 and "face list differs" in err
 
 
@@ -125,11 +153,17 @@ def test_model_rejects_inconsistent_data():
 @pytest.mark.slow  # two interpreters; the quick loop runs the CLI as a real process in test_bad_input.py and test_startup.py
 def test_console_script_runs(tmp_path):
     out = tmp_path / "p.json"
-    r = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", "new", "--tiles", "2x3", "-o", str(out)],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "fabkiri.cli.main", "new", "--tiles", "2x3", "-o", str(out)],
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode == 0, r.stderr
-    r = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", "info", str(out), "--check", "--json"],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "fabkiri.cli.main", "info", str(out), "--check", "--json"],
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode == 0 and json.loads(r.stdout)["closes_both"] is True
 
 
@@ -155,6 +189,8 @@ def test_unwritable_output_is_a_one_line_error(run_cli, tmp_path):
     ro = tmp_path / "ro"
     ro.mkdir()
     ro.chmod(0o500)
-    target = "/proc/fabkiri-test.json" if os.geteuid() == 0 else str(ro / "p.json")  # root ignores modes
+    target = (
+        "/proc/fabkiri-test.json" if os.geteuid() == 0 else str(ro / "p.json")
+    )  # root ignores modes
     code, _, err = run_cli("new", "--tiles", "2x2", "-o", target)
     assert code == 2 and err.count("\n") == 1 and "write" in err, err

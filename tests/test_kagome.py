@@ -49,7 +49,10 @@ def test_topology_is_a_honeycomb_of_up_and_down_triangles(rows, cols):
 def test_standard_kagome_closes_in_both_states(rows, cols):
     s = 10.0
     p = standard_kagome(rows, cols, tile_size=s, angle_deg=50.0)
-    closed = {1: kagome_corners(rows, cols, 0.0, s), 2: kagome_corners(rows, cols, np.radians(120), s)}
+    closed = {
+        1: kagome_corners(rows, cols, 0.0, s),
+        2: kagome_corners(rows, cols, np.radians(120), s),
+    }
     states = {}
     for state in (1, 2):
         c = contract(p, state)

@@ -31,8 +31,23 @@ def kagome_cuts(tmp_path_factory):
     out = {}
     for hinge, material in HINGES:
         d = root / hinge
-        assert main(["cut", str(src), "--hinge", hinge, "--material", material, "--formats", "dxf,svg",
-                     "-o", str(d)]) == 0
+        assert (
+            main(
+                [
+                    "cut",
+                    str(src),
+                    "--hinge",
+                    hinge,
+                    "--material",
+                    material,
+                    "--formats",
+                    "dxf,svg",
+                    "-o",
+                    str(d),
+                ]
+            )
+            == 0
+        )
         out[hinge] = d
     return src, out
 
@@ -65,21 +80,35 @@ def test_kagome_cut_files_hold_triangles_not_quads(kagome_cuts):
     """The separate outlines are 16 triangles and the reference square (read straight from the DXF)."""
     _, dirs = kagome_cuts
     doc = ezdxf.readfile(next(dirs["separate"].glob("*.dxf")))
-    rings = [np.array([p[:2] for p in e.get_points()]) for e in doc.modelspace()
-             if e.dxf.layer == "CUT" and e.dxftype() == "LWPOLYLINE"]
+    rings = [
+        np.array([p[:2] for p in e.get_points()])
+        for e in doc.modelspace()
+        if e.dxf.layer == "CUT" and e.dxftype() == "LWPOLYLINE"
+    ]
     sizes = sorted(len(r) for r in rings)
     assert tessellation("kagome").arity == 3 and sizes == [3] * 16 + [4]
     tris, bad = quads_of(np.array([shapely.Polygon(r) for r in rings], dtype=object), 3)
     assert (len(tris), bad) == (16, 1)  # the reference square is not a triangle
 
 
-@pytest.mark.parametrize("hinge,material", [("tape", "acrylic-3"), ("separate", "acrylic-3"),
-                                            ("ligament", "card-0.3")])
+@pytest.mark.parametrize(
+    "hinge,material", [("tape", "acrylic-3"), ("separate", "acrylic-3"), ("ligament", "card-0.3")]
+)
 def test_standard_7x5_kagome_cut_and_verified(tmp_path, run_cli, hinge, material):
     src = tmp_path / "k75.json"
     io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
-    code, _, err = run_cli("cut", src, "--hinge", hinge, "--material", material, "--formats", "dxf",
-                           "-o", tmp_path / "out")
+    code, _, err = run_cli(
+        "cut",
+        src,
+        "--hinge",
+        hinge,
+        "--material",
+        material,
+        "--formats",
+        "dxf",
+        "-o",
+        tmp_path / "out",
+    )
     assert code == 0 and "verifier passed" in err, err
     checks = _layout_report(run_cli, src, tmp_path / "out" / "k75.dxf")
     assert checks["layout: tiles recovered"]["value"] == 35
@@ -145,8 +174,18 @@ def test_7x5_kagome_ligament_in_pp_fills_the_notches_the_kerf_closes(tmp_path, r
     0.03 mm sliver and refuses the cut)."""
     src = tmp_path / "k75.json"
     io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
-    code, _, err = run_cli("cut", src, "--hinge", "ligament", "--material", "pp-0.5", "--formats", "dxf",
-                           "-o", tmp_path / "out")
+    code, _, err = run_cli(
+        "cut",
+        src,
+        "--hinge",
+        "ligament",
+        "--material",
+        "pp-0.5",
+        "--formats",
+        "dxf",
+        "-o",
+        tmp_path / "out",
+    )
     assert code == 0 and "verifier passed" in err, err
     checks = _layout_report(run_cli, src, tmp_path / "out" / "k75.dxf")
     assert checks["layout: tiles recovered"]["value"] == 35
@@ -159,8 +198,20 @@ def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
     35 tiles; --scale auto steps up until the read-back accepts the files and bisects to 0.1 %."""
     src = tmp_path / "k75.json"
     io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
-    code, _, err = run_cli("cut", src, "--hinge", "ligament", "--material", "pp-0.5", "--scale", "auto",
-                           "--formats", "dxf", "-o", tmp_path / "out")
+    code, _, err = run_cli(
+        "cut",
+        src,
+        "--hinge",
+        "ligament",
+        "--material",
+        "pp-0.5",
+        "--scale",
+        "auto",
+        "--formats",
+        "dxf",
+        "-o",
+        tmp_path / "out",
+    )
     assert code == 0 and "verifier passed" in err, err
     assert "the read-back refused the files at --scale 0.7391" in err
     man = json.loads((tmp_path / "out" / "manifest.json").read_text())
@@ -170,16 +221,44 @@ def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
     assert checks["layout: every ligament present and unsevered"]["ok"]
     # the size is the smallest accepted to 0.1 %: a cut 0.2 % smaller is refused by the read-back
     smaller = f"{man['scale'] * 0.998:.4f}"
-    code, _, err = run_cli("cut", src, "--hinge", "ligament", "--material", "pp-0.5", "--scale", smaller,
-                           "--formats", "dxf", "-o", tmp_path / "small")
-    assert code == 1 and "read-back verification failed" in err and not (tmp_path / "small").exists()
+    code, _, err = run_cli(
+        "cut",
+        src,
+        "--hinge",
+        "ligament",
+        "--material",
+        "pp-0.5",
+        "--scale",
+        smaller,
+        "--formats",
+        "dxf",
+        "-o",
+        tmp_path / "small",
+    )
+    assert (
+        code == 1 and "read-back verification failed" in err and not (tmp_path / "small").exists()
+    )
 
 
-def test_a_ligament_sheet_with_no_cut_edge_along_a_recovered_part_is_refused_not_a_crash(tmp_path, run_cli):
+def test_a_ligament_sheet_with_no_cut_edge_along_a_recovered_part_is_refused_not_a_crash(
+    tmp_path, run_cli
+):
     """At 0.75x the 7x5's opened cores had no cut edge along any side, and the recovery raised
     IndexError (exit 3); now the read-back refuses the files (exit 1) and nothing is written."""
     src = tmp_path / "k75.json"
     io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
-    code, _, err = run_cli("cut", src, "--hinge", "ligament", "--material", "pp-0.5", "--scale", "0.75",
-                           "--formats", "dxf", "-o", tmp_path / "out")
+    code, _, err = run_cli(
+        "cut",
+        src,
+        "--hinge",
+        "ligament",
+        "--material",
+        "pp-0.5",
+        "--scale",
+        "0.75",
+        "--formats",
+        "dxf",
+        "-o",
+        tmp_path / "out",
+    )
     assert code == 1 and "read-back verification failed" in err and not (tmp_path / "out").exists()

@@ -46,8 +46,19 @@ def test_deploy_command_writes_energy_plot_and_gif(tmp_path, run_cli):
     src = tmp_path / "k.json"
     io.write_pattern(with_contracted_states(standard_kagome(3, 4, angle_deg=45.0)), src)
     out = tmp_path / "dep"
-    code, _, err = run_cli("deploy", src, "--steps", "12", "--plot", "--gif", "--gif-frames", "7",
-                           "--no-frames", "-o", out)
+    code, _, err = run_cli(
+        "deploy",
+        src,
+        "--steps",
+        "12",
+        "--plot",
+        "--gif",
+        "--gif-frames",
+        "7",
+        "--no-frames",
+        "-o",
+        out,
+    )
     assert code == 0, err
     assert (out / "energy.png").stat().st_size > 1000 and (out / "deploy.gif").stat().st_size > 1000
     rows = np.loadtxt(out / "energy.csv", delimiter=",", skiprows=1, ndmin=2)
@@ -57,6 +68,7 @@ def test_deploy_command_writes_energy_plot_and_gif(tmp_path, run_cli):
 
 
 # --- the homotopy driver: designed (generic) kagome patterns -------------------------------------
+
 
 def _generic(rows, cols, seed=5, step=0.02):
     """A generic point of the reconfigurable kagome family near the standard (not rigid-deployable:
@@ -130,7 +142,10 @@ def test_generic_kagome_design_deploys_through_all_three_states(rows, cols):
     s = path.solver
     assert s["unconverged_steps"] == 0 and s["mirrored_tiles_max"] == 0
     # a followed branch: no sub-step moves a node much more than the rigid blend does
-    assert s["largest_substep_move_tile_sizes"] <= 3.0 * s["rigid_blend_largest_substep_move_tile_sizes"]
+    assert (
+        s["largest_substep_move_tile_sizes"]
+        <= 3.0 * s["rigid_blend_largest_substep_move_tile_sizes"]
+    )
     rot = deployment_path(p, 20, driver="rotations")
     assert path.energy.max() < 0.5 * rot.energy.max()
 
@@ -153,12 +168,24 @@ def test_designed_kagome_pattern_deploys_or_reports_the_miss(tmp_path, run_cli):
     states; overlaps (on main's fit the 6x10 heart's deployed state already overlaps itself: 87
     tile pairs) are reported with their figures and exit 1."""
     src = tmp_path / "heart.json"
-    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x10", "--target", "heart",
-                           "--size", "120", "-o", src)
+    code, _, err = run_cli(
+        "design",
+        "--lattice",
+        "kagome",
+        "--tiles",
+        "6x10",
+        "--target",
+        "heart",
+        "--size",
+        "120",
+        "-o",
+        src,
+    )
     assert src.exists(), err
     out = tmp_path / "dep"
-    code, _, err = run_cli("deploy", src, "--plot", "--gif", "--gif-frames", "9", "--no-frames",
-                           "-o", out)
+    code, _, err = run_cli(
+        "deploy", src, "--plot", "--gif", "--gif-frames", "9", "--no-frames", "-o", out
+    )
     assert (out / "energy.png").stat().st_size > 1000 and (out / "deploy.gif").stat().st_size > 1000
     s = json.loads((out / "deploy.json").read_text())
     rows = np.loadtxt(out / "energy.csv", delimiter=",", skiprows=1, ndmin=2)

@@ -25,7 +25,9 @@ def test_family_jacobians_match_finite_differences(state):
         for i in range(x.size):
             d = np.zeros(x.size)
             d[i] = h
-            fd[:, i] = (fam.residual(x + d.reshape(x.shape)) - fam.residual(x - d.reshape(x.shape))) / (2 * h)
+            fd[:, i] = (
+                fam.residual(x + d.reshape(x.shape)) - fam.residual(x - d.reshape(x.shape))
+            ) / (2 * h)
         assert np.abs(J.toarray() - fd).max() <= 1e-7, fam.name
 
 
@@ -40,7 +42,9 @@ def test_families_vanish_exactly_where_the_pattern_closes():
         assert np.allclose(rings, state_residuals(p, s, x + 0.01).rings)
 
 
-@pytest.mark.parametrize("rows, cols", [(4, 4), pytest.param(7, 5, marks=pytest.mark.slow)])  # 4x4 in the quick loop
+@pytest.mark.parametrize(
+    "rows, cols", [(4, 4), pytest.param(7, 5, marks=pytest.mark.slow)]
+)  # 4x4 in the quick loop
 def test_reconfigurable_family_loses_one_equation_per_hole(rows, cols):
     """Both states' edge pairs chain the six edges of a hole around a cycle: one of the six
     equalities follows from the others. Nothing else is dependent at these sizes, so the family
@@ -143,7 +147,9 @@ def test_rigid_family_jacobians_match_finite_differences(state):
         assert np.abs(J.toarray() - fd).max() <= 1e-7, fam.name
 
 
-@pytest.mark.parametrize("rows, cols", [(4, 4), pytest.param(7, 5, marks=pytest.mark.slow)])  # 4x4 in the quick loop
+@pytest.mark.parametrize(
+    "rows, cols", [(4, 4), pytest.param(7, 5, marks=pytest.mark.slow)]
+)  # 4x4 in the quick loop
 def test_a_four_dimensional_counter_rotating_rigid_subfamily_exists(rows, cols):
     """Up tiles +ω, down tiles -ω: every hole's up-tile edges sum to zero and each state's folded
     gaps are equal. The family has dimension 4 (modulo rigid motions) whatever the size; its

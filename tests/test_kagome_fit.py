@@ -24,9 +24,12 @@ def test_inequality_and_symmetry_jacobians_match_finite_differences():
     p = standard_kagome(4, 5, angle_deg=50.0)
     x = p.nodes / p.tile_size + 0.05 * np.random.default_rng(3).standard_normal(p.nodes.shape)
     # floors above the values at x, so every row is active and its gradient is checked
-    for fam in (KR.gap_family(p, np.radians(130.0), np.radians(100.0)), KR.quality_family(p, 1.01),
-                KR.fan_family(p, 2 * np.pi - np.radians(120.0)),
-                KR.symmetry_family(KR.mirror_map(standard_kagome(4, 5), "y"), "y", p.topology.n_nodes)):
+    for fam in (
+        KR.gap_family(p, np.radians(130.0), np.radians(100.0)),
+        KR.quality_family(p, 1.01),
+        KR.fan_family(p, 2 * np.pi - np.radians(120.0)),
+        KR.symmetry_family(KR.mirror_map(standard_kagome(4, 5), "y"), "y", p.topology.n_nodes),
+    ):
         r, err = _fd_check(fam, x)
         assert np.count_nonzero(r) > 0 and err <= 1e-7, fam.name
 
@@ -34,13 +37,19 @@ def test_inequality_and_symmetry_jacobians_match_finite_differences():
 def test_inequalities_are_inactive_on_the_standard_and_catch_a_folded_tile():
     p = standard_kagome(4, 5)
     x = p.nodes / p.tile_size
-    fams = (KR.gap_family(p, np.radians(10.0)), KR.quality_family(p, 0.35), KR.fan_family(p, np.radians(10.0)))
+    fams = (
+        KR.gap_family(p, np.radians(10.0)),
+        KR.quality_family(p, 0.35),
+        KR.fan_family(p, np.radians(10.0)),
+    )
     assert all(not f(x)[0].any() for f in fams)
     q, _ = KR.tile_quality(x, p.topology.tiles)
     assert np.allclose(q, 1.0)  # equilateral
     y = x.copy()
     t = p.topology.tiles[7]
-    y[t[2]] = y[t[0]] + y[t[1]] - y[t[2]]  # reflect a corner through the opposite edge: the tile folds over
+    y[t[2]] = (
+        y[t[0]] + y[t[1]] - y[t[2]]
+    )  # reflect a corner through the opposite edge: the tile folds over
     assert KR.tile_quality(y, p.topology.tiles)[0][7] < 0 and fams[1](y)[0][7] < 0
 
 
@@ -72,7 +81,9 @@ def test_mirrors_exist_where_the_lattice_allows_them(rows, cols, axes):
         f1 = top.fold(1)
         g1 = {(h, *sorted(e)) for h, e in zip(top.hinge_node.tolist(), f1.fold_ends.tolist())}
         image = {(int(m[h]), *sorted((int(m[a]), int(m[b])))) for h, a, b in g1}
-        assert (image != g1) == (axis == "y")  # the vertical mirror maps state 1's pairing onto state 2's
+        assert (image != g1) == (
+            axis == "y"
+        )  # the vertical mirror maps state 1's pairing onto state 2's
         sym = KR.symmetry_family(m, axis, top.n_nodes)
         assert np.abs(sym(p.nodes / p.tile_size)[0]).max() <= 1e-12
 
@@ -151,7 +162,9 @@ def test_a_free_heart_at_two_sizes_closes_without_overlaps(rows, cols, size, bou
 
     out = design_kagome(rows, cols, "heart", size, symmetry=False)
     r = out.report
-    assert r["status"] == "converged" and r["max_equality_residual"] <= 1e-10 and r["symmetry"] == []
+    assert (
+        r["status"] == "converged" and r["max_equality_residual"] <= 1e-10 and r["symmetry"] == []
+    )
     assert {c.name for c in verify_pattern(out.pattern, tol_mm=0.05).failed()} == {"target shape"}
     assert r["conformance"]["hausdorff_rel"] <= bound
 
@@ -176,8 +189,15 @@ def test_convex_rows_bound_the_hole_corners_only():
     assert not KR.gap_family(p, np.radians(10.0), np.radians(5.0))(x)[0].any()  # 120° corners
     # a bound below 120°: every hole corner's row is active, the exterior gaps' are not
     r, _ = KR.gap_family(p, np.radians(10.0), np.radians(70.0))(x)
-    hole_gaps = sum(int((p.topology.gap_face[np.arange(p.topology.n_hinges), p.topology.fold(s).fold_gap] >= 0).sum())
-                    for s in (1, 2))
+    hole_gaps = sum(
+        int(
+            (
+                p.topology.gap_face[np.arange(p.topology.n_hinges), p.topology.fold(s).fold_gap]
+                >= 0
+            ).sum()
+        )
+        for s in (1, 2)
+    )
     assert np.count_nonzero(r) == hole_gaps < 2 * p.topology.n_hinges
 
 
@@ -201,7 +221,18 @@ def test_symmetry_is_every_shared_mirror_one_named_mirror_or_none():
 
 
 def test_cli_kagome_symmetry_that_the_lattice_lacks_is_refused(tmp_path, run_cli):
-    code, _, err = run_cli("design", "--lattice", "kagome", "--tiles", "6x10", "--target", "circle",
-                           "--symmetry", "y", "-o", tmp_path / "k.json")
+    code, _, err = run_cli(
+        "design",
+        "--lattice",
+        "kagome",
+        "--tiles",
+        "6x10",
+        "--target",
+        "circle",
+        "--symmetry",
+        "y",
+        "-o",
+        tmp_path / "k.json",
+    )
     assert code == 2 and "no mirror about the y axis" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "k.json").exists()

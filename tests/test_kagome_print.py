@@ -31,13 +31,18 @@ def k44():
 def printed(k44):
     """The standard 4x4 kagome printed tiles-and-strips at the smallest scale the plan accepts."""
     notes: list[str] = []
-    return print_pattern(k44, PrintOptions(scale="auto"), stem="k44", source="k44.json", notify=notes.append), notes
+    return print_pattern(
+        k44, PrintOptions(scale="auto"), stem="k44", source="k44.json", notify=notes.append
+    ), notes
 
 
 def test_a_kagome_closed_state_joins_three_hinges_at_every_merge_corner_and_two_share_a_face(k44):
     plan = printgeom.closed_plan(k44, 1, load_printer("prusa-mk4"))
-    groups = {tuple(sorted([h, *printgeom.coinciding(plan.partner, h)])) for h in range(plan.n_hinges)
-              if plan.partner[h] >= 0}
+    groups = {
+        tuple(sorted([h, *printgeom.coinciding(plan.partner, h)]))
+        for h in range(plan.n_hinges)
+        if plan.partner[h] >= 0
+    }
     triples = [g for g in groups if len(g) == 3]
     assert len(triples) == k44.topology.n_holes  # one merge corner per hole
     for g in triples:
@@ -50,11 +55,15 @@ def test_a_kagome_closed_state_joins_three_hinges_at_every_merge_corner_and_two_
 def test_standard_kagome_prints_verified_at_the_auto_scale(printed):
     out, notes = printed
     assert out.job.style == "tiles-and-strips" and out.job.printer.name == "prusa-mk4"
-    assert 1.0 < out.scale < 1.1  # 10 mm triangles: the strips at two corners of a tile need a little room
+    assert (
+        1.0 < out.scale < 1.1
+    )  # 10 mm triangles: the strips at two corners of a tile need a little room
     assert out.mesh_report.ok and out.verifier is not None and out.verifier.ok
     man = json.loads(out.files["manifest.json"])
     assert man["checks"]["meshes"]["ok"] and man["checks"]["tiles"]["ok"]
-    assert all(v["ok"] and v["edges_not_shared_by_two_faces"] == 0 for v in man["checks"]["files"].values())
+    assert all(
+        v["ok"] and v["edges_not_shared_by_two_faces"] == 0 for v in man["checks"]["files"].values()
+    )
     assert out.verifier.get("layout: tiles recovered").value == 16
     assert out.verifier.get("layout: (d) every hinge present").value == 0
     # both closed states: the sheet is state 1 in place and the printed triangles reassemble state 2
@@ -62,16 +71,21 @@ def test_standard_kagome_prints_verified_at_the_auto_scale(printed):
     # three hinges at a point: the manifest lists the other two
     trio = [h for h in man["hinges"] if isinstance(h["coincides_with"], list)]
     assert len(trio) == 9 and all(len(h["coincides_with"]) == 2 for h in trio)
-    assert notes == ["note: 6 pair(s) of coincident hinges share a face (more meet at a point than two faces "
-                     "separate); their strips keep the clearance as printed"]
+    assert notes == [
+        "note: 6 pair(s) of coincident hinges share a face (more meet at a point than two faces "
+        "separate); their strips keep the clearance as printed"
+    ]
 
 
 def test_the_verifier_rejects_printed_kagome_tiles_of_another_size(printed, k44):
     out, _ = printed
     k = out.scale
-    assert mesh.verify_printed_tiles(with_contracted_states(standard_kagome(4, 4, tile_size=10.0 * k)),
-                                     out.realised).ok
-    bigger = with_contracted_states(standard_kagome(4, 4, tile_size=10.5 * k))  # 0.5 mm; tolerance 0.4
+    assert mesh.verify_printed_tiles(
+        with_contracted_states(standard_kagome(4, 4, tile_size=10.0 * k)), out.realised
+    ).ok
+    bigger = with_contracted_states(
+        standard_kagome(4, 4, tile_size=10.5 * k)
+    )  # 0.5 mm; tolerance 0.4
     assert not mesh.verify_printed_tiles(bigger, out.realised).ok
 
 
@@ -99,7 +113,10 @@ def test_pinned_kagome_is_refused_in_one_line(k44, tmp_path, run_cli):
     io.write_pattern(k44, src)
     code, _, err = run_cli("print", src, "--style", "pinned", "-o", tmp_path / "out")
     assert code == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
-    assert "rigid deployment path, which kagome patterns do not have" in err and "joins 3 at a point" in err
+    assert (
+        "rigid deployment path, which kagome patterns do not have" in err
+        and "joins 3 at a point" in err
+    )
     with pytest.raises(FabricationError, match="pivot stacks 2 hinges"):
         mesh.build_job(k44, "pinned", 1, load_printer("prusa-mk4"))
 
@@ -138,31 +155,65 @@ def test_a_designed_kagome_prints_verified():
 
 @pytest.mark.slow
 @pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="PrusaSlicer is not installed")
-@pytest.mark.parametrize("style, preset", [("tiles-and-strips", "prusa-mk4"), ("tiles-and-strips", "prusa-xl-2t"),
-                                           ("strips", "prusa-mk4")])
+@pytest.mark.parametrize(
+    "style, preset",
+    [
+        ("tiles-and-strips", "prusa-mk4"),
+        ("tiles-and-strips", "prusa-xl-2t"),
+        ("strips", "prusa-mk4"),
+    ],
+)
 def test_prusaslicer_slices_the_kagome_3mf_as_written(style, preset, tmp_path, run_cli):
     src = tmp_path / "k75.json"
     io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
-    code, _, err = run_cli("print", src, "--style", style, "--printer", preset, "--scale", "auto",
-                           "-o", tmp_path / "out")
+    code, _, err = run_cli(
+        "print",
+        src,
+        "--style",
+        style,
+        "--printer",
+        preset,
+        "--scale",
+        "auto",
+        "-o",
+        tmp_path / "out",
+    )
     assert code == 0, err
     pr = load_printer(preset)
     for f in sorted((tmp_path / "out").glob("*.3mf")):
         gcode = tmp_path / (f.stem + ".gcode")
-        proc = subprocess.run(["prusa-slicer", "--export-gcode", str(f), "-o", str(gcode)],
-                              capture_output=True, text=True, timeout=1800)
-        log = "\n".join(ln for ln in (proc.stdout + proc.stderr).splitlines()
-                        if "[trace]" not in ln and "[debug]" not in ln and "[info]" not in ln)
+        proc = subprocess.run(
+            ["prusa-slicer", "--export-gcode", str(f), "-o", str(gcode)],
+            capture_output=True,
+            text=True,
+            timeout=1800,
+        )
+        log = "\n".join(
+            ln
+            for ln in (proc.stdout + proc.stderr).splitlines()
+            if "[trace]" not in ln and "[debug]" not in ln and "[info]" not in ln
+        )
         assert proc.returncode == 0, log[-2000:]
-        assert not [w for w in ("empty layer", "outside", "could not fit", "not printable", "error")
-                    if w in log.lower()], log[-2000:]
+        assert not [
+            w
+            for w in ("empty layer", "outside", "could not fit", "not printable", "error")
+            if w in log.lower()
+        ], log[-2000:]
         text = gcode.read_text()
         assert f"; layer_height = {pr.layer_mm:g}" in text
         tools = {ln.strip() for ln in text.splitlines() if ln.strip() in ("T0", "T1")}
         if style == "tiles-and-strips" and pr.extruders == 2:
             assert tools == {"T0", "T1"}
-        elif style == "tiles-and-strips":  # one extruder: a colour change at the first layer of each material
-            heights = [float(z) for z in re.findall(r"^G1 Z([\d.]+)[^\n]*\n(?:[^\n]*\n){0,3}?M600", text,
-                                                    flags=re.M)]
-            assert heights == [pytest.approx(pr.strip_thickness_mm + pr.layer_mm),
-                               pytest.approx(pr.tile_thickness_mm + pr.layer_mm)], heights
+        elif (
+            style == "tiles-and-strips"
+        ):  # one extruder: a colour change at the first layer of each material
+            heights = [
+                float(z)
+                for z in re.findall(
+                    r"^G1 Z([\d.]+)[^\n]*\n(?:[^\n]*\n){0,3}?M600", text, flags=re.M
+                )
+            ]
+            assert heights == [
+                pytest.approx(pr.strip_thickness_mm + pr.layer_mm),
+                pytest.approx(pr.tile_thickness_mm + pr.layer_mm),
+            ], heights

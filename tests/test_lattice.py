@@ -31,13 +31,24 @@ def check_standard(rows: int, cols: int, angle: float = 45.0, size: float = 10.0
         assert r.edge_pairs.max(initial=0) <= 1e-12 * size
         assert np.abs(r.rings).max(initial=0) <= 1e-12
         # every tile congruent to its deployed copy: equal edges and angles
-        assert np.abs(geometry.edge_lengths(both[s].corners) - geometry.edge_lengths(deployed)).max() <= 1e-12 * size
-        ang = geometry.wrap_angle(geometry.corner_angles(both[s].corners) - geometry.corner_angles(deployed))
+        assert (
+            np.abs(geometry.edge_lengths(both[s].corners) - geometry.edge_lengths(deployed)).max()
+            <= 1e-12 * size
+        )
+        ang = geometry.wrap_angle(
+            geometry.corner_angles(both[s].corners) - geometry.corner_angles(deployed)
+        )
         assert np.abs(ang).max() <= 1e-12
     assert np.abs(hinge_sums(p)).max(initial=0) <= 1e-12
     # state 1 is the ψ=0 grid, state 2 the ψ=π/2 grid (up to one rigid motion)
-    assert geometry.aligned_distance(both[1].corners, quad_corners(rows, cols, 0.0, size)) <= 1e-9 * size
-    assert geometry.aligned_distance(both[2].corners, quad_corners(rows, cols, np.pi / 2, size)) <= 1e-9 * size
+    assert (
+        geometry.aligned_distance(both[1].corners, quad_corners(rows, cols, 0.0, size))
+        <= 1e-9 * size
+    )
+    assert (
+        geometry.aligned_distance(both[2].corners, quad_corners(rows, cols, np.pi / 2, size))
+        <= 1e-9 * size
+    )
     # state 2 = state 1 with every tile turned by ±90° in a checkerboard, after aligning the tile centres
     s1, s2 = both[1].corners, both[2].corners
     theta, t = geometry.kabsch(s2.mean(1), s1.mean(1))

@@ -28,7 +28,7 @@ def imported_layers(path):
 
 @pytest.mark.parametrize("layer", ORDER)
 def test_layer_imports_only_lower_layers(layer):
-    above = set(ORDER[ORDER.index(layer) + 1:])
+    above = set(ORDER[ORDER.index(layer) + 1 :])
     for path in sorted((REPO / "fabkiri" / layer).rglob("*.py")):
         bad = above & set(imported_layers(path))
         assert not bad, f"{path.relative_to(REPO)} imports {sorted(bad)}"

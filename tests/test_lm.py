@@ -67,9 +67,16 @@ def test_a_step_never_adds_inequality_violation():
 def test_tol_inf_stops_before_a_step_and_does_not_count_it():
     start = Dense(linear, [0.0, 0.0])
     stop = Stopping(50, max_stall=None, tol_inf=1e-10)
-    pt, it = levenberg_marquardt(start, start.moved, Damping(1e-12, 1e20, rule="tenfold", raise_by=10.0,
-                                                             raise_growth=1.0), stop, accept="max_row")
-    assert np.abs(pt.r).max() <= 1e-10 and 1 <= it <= 3  # Gauss-Newton on a linear problem: one or two steps
+    pt, it = levenberg_marquardt(
+        start,
+        start.moved,
+        Damping(1e-12, 1e20, rule="tenfold", raise_by=10.0, raise_growth=1.0),
+        stop,
+        accept="max_row",
+    )
+    assert (
+        np.abs(pt.r).max() <= 1e-10 and 1 <= it <= 3
+    )  # Gauss-Newton on a linear problem: one or two steps
     again, k = levenberg_marquardt(pt, pt.moved, Damping(1e-12, 1e20), stop)
     assert k == 0 and again is pt  # already there: no step taken
 
@@ -85,16 +92,23 @@ def test_max_stall_stops_a_loop_that_gains_little():
     heavy = Damping(1e4, 1e20, rule="tenfold", mu_min=1e4)
     pt, it = levenberg_marquardt(start, start.moved, heavy, Stopping(100, stall_tol=1e-2))
     assert it == 3 and 0.5 * float(pt.r @ pt.r) < 0.5 * float(start.r @ start.r)
-    pt2, it2 = levenberg_marquardt(start, start.moved, heavy, Stopping(100, stall_tol=1e-2, max_stall=None))
+    pt2, it2 = levenberg_marquardt(
+        start, start.moved, heavy, Stopping(100, stall_tol=1e-2, max_stall=None)
+    )
     assert it2 == 100 and float(pt2.r @ pt2.r) < float(pt.r @ pt.r)
     # the same damping, a stall tolerance under the gain: no stall
-    assert levenberg_marquardt(start, start.moved, heavy, Stopping(100, stall_tol=1e-6)).iterations == 100
+    assert (
+        levenberg_marquardt(start, start.moved, heavy, Stopping(100, stall_tol=1e-6)).iterations
+        == 100
+    )
 
 
 def test_a_singular_solve_raises_the_damping_and_spends_the_iteration():
     flag = [2]
     start = Dense(linear, [0.0, 0.0], singular_until=flag)
-    pt, it = levenberg_marquardt(start, start.moved, Damping(1e-3, 1e20), Stopping(3, max_stall=None))
+    pt, it = levenberg_marquardt(
+        start, start.moved, Damping(1e-3, 1e20), Stopping(3, max_stall=None)
+    )
     assert flag == [0] and it == 3  # two iterations lost to the singular solves, one step taken
     assert 0.5 * float(pt.r @ pt.r) < 0.5 * float(start.r @ start.r)
 
@@ -106,7 +120,9 @@ def test_mu_max_stops_when_no_step_lowers_the_merit():
 
     start = Flat(linear, [0.0, 0.0])
     pt, it = levenberg_marquardt(start, lambda x: Flat(linear, x), Damping(1.0, 1e3), Stopping(100))
-    assert pt is start and it == 4  # mu = 1 → 2 → 8 → 64 → 1024 > 1e3: the fourth refusal ends the loop
+    assert (
+        pt is start and it == 4
+    )  # mu = 1 → 2 → 8 → 64 → 1024 > 1e3: the fourth refusal ends the loop
 
 
 def test_linear_stop_ends_a_projection_that_stalls():
@@ -114,14 +130,20 @@ def test_linear_stop_ends_a_projection_that_stalls():
     once it has not fallen tenfold over 2 accepted steps."""
     start = Dense(inconsistent, [3.0, 3.0])
     heavy = Damping(1e4, 1e20, rule="tenfold", mu_min=1e4)
-    pt, it = levenberg_marquardt(start, start.moved, heavy, Stopping(50, max_stall=None, linear=(2, 0.1)),
-                                 accept="max_row")
+    pt, it = levenberg_marquardt(
+        start, start.moved, heavy, Stopping(50, max_stall=None, linear=(2, 0.1)), accept="max_row"
+    )
     assert it == 3 and np.abs(pt.r).max() < np.abs(start.r).max()
-    _, k = levenberg_marquardt(start, start.moved, heavy, Stopping(50, max_stall=None), accept="max_row")
+    _, k = levenberg_marquardt(
+        start, start.moved, heavy, Stopping(50, max_stall=None), accept="max_row"
+    )
     assert k == 50
-    fast = Damping(1e-12, 1e20, rule="tenfold", raise_by=10.0, raise_growth=1.0)  # Gauss-Newton: no linear stop
-    pt3, _ = levenberg_marquardt(start, start.moved, fast, Stopping(50, max_stall=None, linear=(2, 0.1)),
-                                 accept="max_row")
+    fast = Damping(
+        1e-12, 1e20, rule="tenfold", raise_by=10.0, raise_growth=1.0
+    )  # Gauss-Newton: no linear stop
+    pt3, _ = levenberg_marquardt(
+        start, start.moved, fast, Stopping(50, max_stall=None, linear=(2, 0.1)), accept="max_row"
+    )
     assert np.allclose(pt3.x, [0.0, 0.0], atol=1e-9)
 
 
@@ -133,5 +155,11 @@ def test_the_acceptance_rules_and_damping_rules_differ_as_documented():
     assert ACCEPT["decrease"](a, b, ca, cb, -1.0) and not ACCEPT["gain"](a, b, ca, cb, -1.0)
     assert ACCEPT["max_row"](a, b, ca, cb, -1.0) and not ACCEPT["max_row"](b, a, cb, ca, 1.0)
     d = Damping(1.0, 1e20, mu_min=0.5)
-    assert DAMPING_RULES["gain"](d, 1.0, 1.0) == pytest.approx(1 / 3) and DAMPING_RULES["gain"](d, 1.0, 0.5) == 1.0
-    assert DAMPING_RULES["tenfold"](d, 1.0, 1.0) == 0.5 and DAMPING_RULES["tenfold"](d, 100.0, 0.0) == 10.0
+    assert (
+        DAMPING_RULES["gain"](d, 1.0, 1.0) == pytest.approx(1 / 3)
+        and DAMPING_RULES["gain"](d, 1.0, 0.5) == 1.0
+    )
+    assert (
+        DAMPING_RULES["tenfold"](d, 1.0, 1.0) == 0.5
+        and DAMPING_RULES["tenfold"](d, 100.0, 0.0) == 10.0
+    )

@@ -38,8 +38,12 @@ def test_members_with_offsets_are_rigid_parallelogram_patterns_that_close(m, n, 
     for psi in (0.3, np.pi / 4, 1.2):
         X = fam.at(y, psi)
         assert signed_areas(X[std.tiles]).min() > 0
-        for f in (C.hole_opposite_sides(st, len(X)), C.notch_pairs(st, 1, len(X)), C.notch_pairs(st, 2, len(X)),
-                  C.hinge_sums(st, len(X))):
+        for f in (
+            C.hole_opposite_sides(st, len(X)),
+            C.notch_pairs(st, 1, len(X)),
+            C.notch_pairs(st, 2, len(X)),
+            C.hinge_sums(st, len(X)),
+        ):
             assert np.abs(f.residual(X)).max() < 1e-12, f.name
     X = fam.at(y, np.pi / 4)
     # not rhombi: the offsets are real
@@ -51,7 +55,9 @@ def test_members_with_offsets_are_rigid_parallelogram_patterns_that_close(m, n, 
     c2 = contract(pat, 2).corners
     x2 = fam.at(y, np.pi / 2)[std.tiles]
     d = c2.reshape(-1, 2) - c2.reshape(-1, 2).mean(0), x2.reshape(-1, 2) - x2.reshape(-1, 2).mean(0)
-    assert np.allclose(np.sort(np.linalg.norm(d[0], axis=1)), np.sort(np.linalg.norm(d[1], axis=1)), atol=1e-10)
+    assert np.allclose(
+        np.sort(np.linalg.norm(d[0], axis=1)), np.sort(np.linalg.norm(d[1], axis=1)), atol=1e-10
+    )
 
 
 def test_jacobians_match_finite_differences():
@@ -92,5 +98,7 @@ def test_fixed_pattern_columns_equal_the_sliced_sum(m, n, seed):
         A = fam.matrix(t)
         for block, cols in ((dep, fam.dep), (seeds, fam.seeds)):
             want, got = A[:, cols].tocsc(), block.at(t)
-            assert np.array_equal(want.indptr, got.indptr) and np.array_equal(want.indices, got.indices)
+            assert np.array_equal(want.indptr, got.indptr) and np.array_equal(
+                want.indices, got.indices
+            )
             assert np.array_equal(want.data, got.data)

@@ -21,8 +21,19 @@ import speed  # noqa: E402
 @pytest.mark.slow
 def test_square_to_circle_exact_square_and_least_squares_circle(run_cli, tmp_path, n):
     out = tmp_path / "p.json"
-    args = ("design", "--tiles", f"{n}x{n}", "--rigid", "--contracted-target", "1:square",
-            "--contracted-target", "2:circle", "--no-preview", "-o", out)
+    args = (
+        "design",
+        "--tiles",
+        f"{n}x{n}",
+        "--rigid",
+        "--contracted-target",
+        "1:square",
+        "--contracted-target",
+        "2:circle",
+        "--no-preview",
+        "-o",
+        out,
+    )
     if n == 5:
         # the rhombus family's best 5x5 circle is 2.3 % off (Hausdorff): the default 2 % shape check says so
         code, _, err = run_cli(*args, "--holes", "rhombus")
@@ -36,7 +47,9 @@ def test_square_to_circle_exact_square_and_least_squares_circle(run_cli, tmp_pat
     assert rep["solver"].startswith("closed-form rigid family with parallelogram holes")
     assert rep["conformance"]["state_2"]["hausdorff_rel"] < 0.02
     assert rep["max_equality_residual"] <= 1e-10
-    assert all(rep["checks"][k] == 0 for k in ("overlaps_deployed", "overlaps_state_1", "overlaps_state_2"))
+    assert all(
+        rep["checks"][k] == 0 for k in ("overlaps_deployed", "overlaps_state_1", "overlaps_state_2")
+    )
     # state 1: a square of the target's side (100 mm), to rounding
     p1 = speed.closed_outline(pat, 1)
     corners = p1[[0, n, 2 * n, 3 * n]]
@@ -57,14 +70,20 @@ def test_square_to_circle_exact_square_and_least_squares_circle(run_cli, tmp_pat
 def test_parallelogram_square_to_circle_meets_the_additive_kirigami_figures(n, goal):
     """Vertex circle RMS at or below the additive-kirigami demo's (5x5 1.8 %, 7x7 1.1 %), below 0.8 % from 9x9."""
     sq, ci = T.load_target("square"), T.load_target("circle")
-    res = design(DesignRequest(n, n, None, rigid=True, holes="parallelogram", contracted={1: sq, 2: ci}))
-    assert res.converged and res.report["solver"].startswith("closed-form rigid family with parallelogram")
+    res = design(
+        DesignRequest(n, n, None, rigid=True, holes="parallelogram", contracted={1: sq, 2: ci})
+    )
+    assert res.converged and res.report["solver"].startswith(
+        "closed-form rigid family with parallelogram"
+    )
     from fabkiri.mechanics.contract import contract
     from fabkiri.pattern.model import Pattern
 
     pat = res.pattern
     states = {s: contract(pat, s).corners for s in (1, 2)}
-    pat = Pattern(nodes=pat.nodes, tiles=pat.tiles, contracted=states, parity=0, lattice=pat.lattice)
+    pat = Pattern(
+        nodes=pat.nodes, tiles=pat.tiles, contracted=states, parity=0, lattice=pat.lattice
+    )
     assert speed.square_error(speed.closed_outline(pat, 1), n) <= 1e-9
     assert speed.circle_rms(speed.closed_outline(pat, 2)) <= goal
 
@@ -79,7 +98,9 @@ def test_parallelogram_outlines_above_the_offset_size_use_rhombus_holes():
     assert offset_outline.preferred_holes(9, 9, True, None, None, {1: sq, 2: ci}) == "parallelogram"
     assert offset_outline.preferred_holes(9, 9, False, None, None, {1: sq, 2: ci}) == "rhombus"
     assert offset_outline.preferred_holes(9, 9, True, None, ci, {}) == "rhombus"
-    assert offset_outline.preferred_holes(9, 9, True, None, None, {1: ci, 2: sq}) == "rhombus"  # square in 2
+    assert (
+        offset_outline.preferred_holes(9, 9, True, None, None, {1: ci, 2: sq}) == "rhombus"
+    )  # square in 2
 
 
 def test_applies_only_to_square_and_circle_rigid_outlines():
@@ -103,7 +124,9 @@ def test_non_rigid_from_32x32_is_answered_by_the_rigid_family():
     ell = T.load_target("ellipse")
     assert via_rigid_applies(DesignRequest(32, 32, ell))
     assert not via_rigid_applies(DesignRequest(16, 16, ell))
-    assert not via_rigid_applies(DesignRequest(32, 32, ell, rigid=True))  # the rigid family directly
+    assert not via_rigid_applies(
+        DesignRequest(32, 32, ell, rigid=True)
+    )  # the rigid family directly
     assert not via_rigid_applies(DesignRequest(32, 32, ell, symmetry="x"))
     assert not via_rigid_applies(DesignRequest(32, 32, ell, holes="parallelogram"))
     assert not via_rigid_applies(DesignRequest(32, 32, ell, solver="full"))

@@ -37,7 +37,12 @@ def polygon(rng, E, grid):
 
 
 @settings(max_examples=60, deadline=None)
-@given(E=hst.integers(3, 200), K=hst.integers(1, 300), grid=hst.booleans(), seed=hst.integers(0, 2**31 - 1))
+@given(
+    E=hst.integers(3, 200),
+    K=hst.integers(1, 300),
+    grid=hst.booleans(),
+    seed=hst.integers(0, 2**31 - 1),
+)
 def test_nearest_chords_and_inside_equal_the_full_tables(E, K, grid, seed):
     rng = np.random.default_rng(seed)
     A = polygon(rng, E, grid)

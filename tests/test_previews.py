@@ -24,8 +24,10 @@ def test_no_notes_leaves_out_frame_and_caption(run_cli, tmp_path):
         doc = ezdxf.readfile(tmp_path / k / "standard-8x8.dxf")
         notes[k] = len(doc.modelspace().query("*[layer=='NOTES']"))
         svg = (tmp_path / k / "standard-8x8.svg").read_text()
-        assert ('inkscape:label="NOTES" stroke="#00FF00" stroke-linejoin="round" stroke-width="0.1" />' in svg) \
-            == (k == "a")  # an empty NOTES group
+        assert (
+            'inkscape:label="NOTES" stroke="#00FF00" stroke-linejoin="round" stroke-width="0.1" />'
+            in svg
+        ) == (k == "a")  # an empty NOTES group
     assert notes["a"] == 0 and notes["b"] > 0
 
 
@@ -33,9 +35,19 @@ def test_no_notes_leaves_out_frame_and_caption(run_cli, tmp_path):
 def test_svg_renders_visible_in_inkscape(run_cli, tmp_path):
     code, _, _ = run_cli("cut", STD, "--formats", "svg", "-o", tmp_path)
     png = tmp_path / "r.png"
-    subprocess.run(["inkscape", str(tmp_path / "standard-8x8.svg"), "--export-type=png", f"--export-filename={png}",
-                    "--export-background=white", "--export-background-opacity=1"], check=True,
-                   capture_output=True, timeout=300)
+    subprocess.run(
+        [
+            "inkscape",
+            str(tmp_path / "standard-8x8.svg"),
+            "--export-type=png",
+            f"--export-filename={png}",
+            "--export-background=white",
+            "--export-background-opacity=1",
+        ],
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
     a = np.asarray(Image.open(png).convert("RGB")).astype(int)
     dark = a.min(axis=2) < 230
     assert dark.mean() > 1e-3  # lines drawn, not an all-white page

@@ -45,7 +45,10 @@ def _reload_volumes(data: bytes, file_type: str) -> dict[str, float]:
     if file_type == "3mf":  # one object, one volume per body
         from fabkiri.fabricate.threemf import read_volumes
 
-        return {n: float(trimesh.Trimesh(v, f, process=False).volume) for n, _, _, v, f in read_volumes(data)}
+        return {
+            n: float(trimesh.Trimesh(v, f, process=False).volume)
+            for n, _, _, v, f in read_volumes(data)
+        }
     loaded = trimesh.load(io.BytesIO(data), file_type=file_type, process=False)
     if isinstance(loaded, trimesh.Scene):
         return {name: float(g.volume) for name, g in loaded.geometry.items()}
@@ -53,6 +56,7 @@ def _reload_volumes(data: bytes, file_type: str) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------ presets
+
 
 def test_presets_load_and_validate(printer):
     names = available_printers()
@@ -75,7 +79,10 @@ def test_multi_material_preset_and_extruders():
     assert (xl2.extruder_of("PLA"), xl2.extruder_of("TPU")) == (1, 2)
     mk4 = load_printer("prusa-mk4")
     assert mk4.extruders == 1 and mk4.extruder_of("TPU") == 1  # one extruder, loaded for the job
-    assert all(load_printer(n).first_layer_mm > 0 and load_printer(n).min_feature_mm > 0 for n in available_printers())
+    assert all(
+        load_printer(n).first_layer_mm > 0 and load_printer(n).min_feature_mm > 0
+        for n in available_printers()
+    )
     with pytest.raises(FabricationError, match="one material per extruder"):
         xl2.with_overrides(materials=("PLA",))
     with pytest.raises(FabricationError, match="among the extruders' materials"):
@@ -97,22 +104,34 @@ def test_3mf_project_volumes_materials_and_settings():
     assert model.count("<object ") == 1 and model.count("<item ") == 1  # one object: the assembly
     assert '<base name="PLA"' in model and '<base name="TPU"' in model
     vols = threemf.read_volumes(data)
-    assert [(n, m, e) for n, m, e, _, _ in vols] == [("tiles_PLA", "PLA", 1), ("hinges_TPU", "TPU", 2)]
+    assert [(n, m, e) for n, m, e, _, _ in vols] == [
+        ("tiles_PLA", "PLA", 1),
+        ("hinges_TPU", "TPU", 2),
+    ]
     for (_, _, _, v, f), tm in zip(vols, r.meshes[0]):  # each volume is its body, watertight
         back = trimesh.Trimesh(v, f, process=True)
         assert back.is_watertight and solid.edge_defects(back.vertices, back.faces) == 0
         assert back.volume == pytest.approx(tm.volume, rel=1e-6)
     cfg = zf.read("Metadata/Slic3r_PE.config").decode()
-    for line in ("; layer_height = 0.2", "; first_layer_height = 0.2", "; nozzle_diameter = 0.4,0.4",
-                 "; filament_type = PLA;FLEX", "; bed_shape = 0x0,360x0,360x360,0x360", "; wipe_tower = 1"):
+    for line in (
+        "; layer_height = 0.2",
+        "; first_layer_height = 0.2",
+        "; nozzle_diameter = 0.4,0.4",
+        "; filament_type = PLA;FLEX",
+        "; bed_shape = 0x0,360x0,360x360,0x360",
+        "; wipe_tower = 1",
+    ):
         assert line in cfg
     # placed centred on the bed
     lo = np.min([v.min(0) for _, _, _, v, _ in vols], axis=0)
     hi = np.max([v.max(0) for _, _, _, v, _ in vols], axis=0)
-    assert np.allclose(0.5 * (lo + hi)[:2], [180.0, 180.0], atol=1e-6) and lo[2] == pytest.approx(0.0)
+    assert np.allclose(0.5 * (lo + hi)[:2], [180.0, 180.0], atol=1e-6) and lo[2] == pytest.approx(
+        0.0
+    )
     # the custom G-code table PrusaSlicer reads (M600 colour change / M601 pause at a height)
-    xml = threemf.custom_gcode_xml([threemf.LayerChange(0.8, "colour-change", "PLA"),
-                                    threemf.LayerChange(3.2, "pause", "TPU")])
+    xml = threemf.custom_gcode_xml(
+        [threemf.LayerChange(0.8, "colour-change", "PLA"), threemf.LayerChange(3.2, "pause", "TPU")]
+    )
     assert '<code print_z="0.8000" type="0"' in xml and 'gcode="M600"' in xml
     assert '<code print_z="3.2000" type="1"' in xml and 'gcode="M601"' in xml
     assert '<mode value="SingleExtruder"/>' in xml
@@ -121,7 +140,9 @@ def test_3mf_project_volumes_materials_and_settings():
 def test_preview_png_per_bed(tmp_path, printer):
     from PIL import Image
 
-    files = mesh.job_files(mesh.realise_job(mesh.build_job(standard_pattern(3, 3), "strips", 1, printer)), "p")
+    files = mesh.job_files(
+        mesh.realise_job(mesh.build_job(standard_pattern(3, 3), "strips", 1, printer)), "p"
+    )
     img = Image.open(io.BytesIO(files["p.png"]))
     assert img.size[0] > 1000 and img.size[1] > 500
     # the parts are drawn in the strip material's colour
@@ -134,9 +155,13 @@ def test_printer_preset_files(tmp_path):
     path = tmp_path / "mine.json"
     path.write_text(json.dumps({**good, "name": "mine", "gap_mm": 0.5}))
     assert load_printer(str(path)).gap_mm == 0.5
-    for bad, msg in [({k: v for k, v in good.items() if k != "nozzle_mm"}, "missing printer field"),
-                     ({**good, "bed_mm": "big"}, "bed_mm"), ({**good, "layer_mm": -0.2}, "positive"),
-                     ({**good, "colour": "red"}, "unknown printer field"), ({"name": "x"}, "not a fabkiri printer")]:
+    for bad, msg in [
+        ({k: v for k, v in good.items() if k != "nozzle_mm"}, "missing printer field"),
+        ({**good, "bed_mm": "big"}, "bed_mm"),
+        ({**good, "layer_mm": -0.2}, "positive"),
+        ({**good, "colour": "red"}, "unknown printer field"),
+        ({"name": "x"}, "not a fabkiri printer"),
+    ]:
         path.write_text(json.dumps(bad))
         with pytest.raises((InputError, FabricationError), match=msg):
             load_printer(str(path))
@@ -144,9 +169,14 @@ def test_printer_preset_files(tmp_path):
 
 # --------------------------------------------------------------- face rule
 
+
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(rows=st.integers(1, 6), cols=st.integers(1, 6), state=st.sampled_from([1, 2]),
-       angle=st.floats(10, 80))
+@given(
+    rows=st.integers(1, 6),
+    cols=st.integers(1, 6),
+    state=st.sampled_from([1, 2]),
+    angle=st.floats(10, 80),
+)
 def test_coincident_hinges_go_on_opposite_faces(rows, cols, state, angle, printer):
     if rows * cols < 2:
         return
@@ -182,7 +212,9 @@ def test_strips_cross_their_seam_and_join_only_their_tiles(printer):
     pads = shapely.area(s.pads)
     assert (pads > 0.5 * printer.strip_width_mm * printer.strip_reach_mm).all()
     # the strip covers a seam point just beside the hinge, inside the gap
-    probe = shapely.points(plan.hinge_xy + (plan.shrink_mm + 0.5 * printer.strip_width_mm) * plan.seam_dir)
+    probe = shapely.points(
+        plan.hinge_xy + (plan.shrink_mm + 0.5 * printer.strip_width_mm) * plan.seam_dir
+    )
     assert shapely.contains(s.outline, probe).all()
     # no strip comes near a third tile; same-face strips keep the radial clearance
     for h in range(plan.n_hinges):
@@ -201,12 +233,26 @@ def test_pair_region_of_nearly_meeting_corners_is_one_valid_polygon():
     mitre shrink of their union came back self-touching and the seam intersection raised a
     TopologyException (print exited 3). The pair region is valid, holeless and holds both tiles'
     shrunk outlines."""
-    a = shapely.Polygon([[-84.81509145992317, -28.434673553572484], [-83.37483533624076, -41.46938310873785],
-                         [-74.01560049138152, -40.56872899793756], [-76.30839451276796, -31.317374977642718]])
-    b = shapely.Polygon([[-76.30839451276793, -31.31737497764276], [-78.60118853415439, -22.066020957347916],
-                         [-90.13884306043629, -23.54181527412007], [-84.81509145992314, -28.434673553572548]])
+    a = shapely.Polygon(
+        [
+            [-84.81509145992317, -28.434673553572484],
+            [-83.37483533624076, -41.46938310873785],
+            [-74.01560049138152, -40.56872899793756],
+            [-76.30839451276796, -31.317374977642718],
+        ]
+    )
+    b = shapely.Polygon(
+        [
+            [-76.30839451276793, -31.31737497764276],
+            [-78.60118853415439, -22.066020957347916],
+            [-90.13884306043629, -23.54181527412007],
+            [-84.81509145992314, -28.434673553572548],
+        ]
+    )
     d, eps = 0.2, 9.837419638851498e-05
-    pair = printgeom._pair_regions(np.array([a], dtype=object), np.array([b], dtype=object), d, eps)[0]
+    pair = printgeom._pair_regions(
+        np.array([a], dtype=object), np.array([b], dtype=object), d, eps
+    )[0]
     assert pair.is_valid and pair.geom_type == "Polygon" and not pair.interiors
     for t in (a, b):
         shrunk = t.buffer(-d, join_style="mitre", mitre_limit=printgeom.MITRE_LIMIT)
@@ -223,10 +269,20 @@ def test_outline_vertices_a_float32_file_would_weld_are_snapped_before_writing(p
     snap-rounded to the bed's float32 grid, and comes out a closed 2-manifold as written, with the
     same volume to the grid's area."""
     x, d = 200.0, 3e-6
-    jog = shapely.Polygon([(x - 20, 100), (x, 100), (x, 105), (x + 0.3 * d, 105 + d), (x + 0.3 * d, 110),
-                           (x - 20, 110)])
+    jog = shapely.Polygon(
+        [
+            (x - 20, 100),
+            (x, 100),
+            (x, 105),
+            (x + 0.3 * d, 105 + d),
+            (x + 0.3 * d, 110),
+            (x - 20, 110),
+        ]
+    )
     body = solid.Body("hinges_TPU", "hinges", (("add", solid.Prism((jog,), 0.0, 0.6)),), "TPU")
-    assert solid.float32_defects(solid.to_trimesh(solid.realise(body))) > 0  # the defect this guards against
+    assert (
+        solid.float32_defects(solid.to_trimesh(solid.realise(body))) > 0
+    )  # the defect this guards against
     grid = solid.bed_grid(printer)
     assert np.float32(150.0 + grid) != np.float32(150.0) and grid <= 6.2e-5
     b, m, tm, snap = mesh._realise_clean(body, grid)
@@ -234,11 +290,17 @@ def test_outline_vertices_a_float32_file_would_weld_are_snapped_before_writing(p
     assert solid.edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces) == 0
     assert m.volume() == pytest.approx(0.6 * jog.area, abs=0.6 * grid * jog.length)
     # an outline a float32 file keeps as it is stays exact
-    plain = solid.Body("tiles_PLA", "tiles", (("add", solid.Prism((shapely.box(10, 10, 30, 20),), 0.0, 3.0)),), "PLA")
+    plain = solid.Body(
+        "tiles_PLA",
+        "tiles",
+        (("add", solid.Prism((shapely.box(10, 10, 30, 20),), 0.0, 3.0)),),
+        "PLA",
+    )
     assert mesh._realise_clean(plain, grid)[3] == 0.0
 
 
 # --------------------------------------------------------- tiles-and-strips
+
 
 @pytest.mark.parametrize("rows,cols,state", [(3, 3, 1), (2, 5, 2)])
 def test_tiles_and_strips_meshes(rows, cols, state, printer2):
@@ -257,15 +319,21 @@ def test_tiles_and_strips_meshes(rows, cols, state, printer2):
     T, ts = printer2.tile_thickness_mm, printer2.strip_thickness_mm
     assert hinges.volume() == pytest.approx(ts * shapely.area(r.job.strips.outline).sum(), rel=1e-9)
     assert tiles.volume() + hinges.volume() == pytest.approx(
-        T * shapely.area(r.job.plan.tiles).sum() + _bridge_volume(r), rel=1e-7)
+        T * shapely.area(r.job.plan.tiles).sum() + _bridge_volume(r), rel=1e-7
+    )
     # the printed tiles' outlines match the closed state within the printer's tolerance
     tc = mesh.check_printed_tiles(r)
     assert tc.ok and tc.tiles == rows * cols and tc.max_deviation_mm < 1e-5
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(rows=st.integers(1, 5), cols=st.integers(2, 5), state=st.sampled_from([1, 2]),
-       tile=st.floats(9.0, 20.0), angle=st.floats(5, 85))
+@given(
+    rows=st.integers(1, 5),
+    cols=st.integers(2, 5),
+    state=st.sampled_from([1, 2]),
+    tile=st.floats(9.0, 20.0),
+    angle=st.floats(5, 85),
+)
 def test_tiles_and_strips_invariants(rows, cols, state, tile, angle, printer2):
     pat = standard_pattern(rows, cols, tile_size=tile, angle_deg=angle)
     r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", state, printer2))
@@ -302,7 +370,9 @@ def _3mf_volumes_by_trimesh(data: bytes) -> list:
     cfg = ET.fromstring(zipfile.ZipFile(io.BytesIO(data)).read("Metadata/Slic3r_PE_model.config"))
     ranges = [(int(v.get("firstid")), int(v.get("lastid")) + 1) for v in cfg.iter("volume")]
     assert ranges[0][0] == 0 and ranges[-1][1] == len(whole.faces)
-    assert all(b == c for (_, b), (c, _) in zip(ranges, ranges[1:]))  # the volumes tile the triangles
+    assert all(
+        b == c for (_, b), (c, _) in zip(ranges, ranges[1:])
+    )  # the volumes tile the triangles
     return [trimesh.Trimesh(whole.vertices, whole.faces[a:b], process=True) for a, b in ranges]
 
 
@@ -313,7 +383,9 @@ def test_every_written_mesh_is_a_closed_2_manifold(style, preset):
     volume (trimesh's 3MF loader, cut by the model config) is watertight with
     every edge used by exactly two faces."""
     pat = with_contracted_states(standard_pattern(4, 4, tile_size=12.0))
-    files = mesh.job_files(mesh.realise_job(mesh.build_job(pat, style, 1, load_printer(preset))), "p", preview=False)
+    files = mesh.job_files(
+        mesh.realise_job(mesh.build_job(pat, style, 1, load_printer(preset))), "p", preview=False
+    )
     n = 0
     for name, data in sorted(files.items()):
         if name.endswith(".stl"):
@@ -337,15 +409,21 @@ def test_written_meshes_are_closed_2_manifolds(preset):
     from fabkiri.pattern.io import read_pattern
 
     pat = mesh.scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
-    files = mesh.job_files(mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, load_printer(preset))), "c",
-                           preview=False)
+    files = mesh.job_files(
+        mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, load_printer(preset))),
+        "c",
+        preview=False,
+    )
     for name in ("c_tiles.stl", "c_hinges.stl"):
         m = trimesh.load(io.BytesIO(files[name]), file_type="stl")
         _, counts = np.unique(np.sort(m.edges, axis=1), axis=0, return_counts=True)
         assert m.is_watertight and (counts == 2).all(), (name, np.bincount(counts))
     rb = mesh.read_back_files(files)
     assert set(rb) == {"c.3mf", "c_tiles.stl", "c_hinges.stl"}
-    assert all(v["ok"] and v["edges_not_shared_by_two_faces"] == 0 and v["manifold3d_ok"] for v in rb.values())
+    assert all(
+        v["ok"] and v["edges_not_shared_by_two_faces"] == 0 and v["manifold3d_ok"]
+        for v in rb.values()
+    )
 
 
 def test_stacked_tiles_and_strips_for_one_extruder(printer):
@@ -356,8 +434,10 @@ def test_stacked_tiles_and_strips_for_one_extruder(printer):
     job = mesh.build_job(pat, "tiles-and-strips", 1, printer)
     assert job.layout == "stacked" and printer.extruders == 1
     T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
-    assert job.layer_changes == [(pytest.approx(ts + printer.layer_mm), "colour-change", "PLA"),
-                                 (pytest.approx(T + printer.layer_mm), "colour-change", "TPU")]
+    assert job.layer_changes == [
+        (pytest.approx(ts + printer.layer_mm), "colour-change", "PLA"),
+        (pytest.approx(T + printer.layer_mm), "colour-change", "TPU"),
+    ]
     r = mesh.realise_job(job)
     rep = mesh.check_meshes(r)
     assert rep.ok, rep.problems
@@ -367,8 +447,9 @@ def test_stacked_tiles_and_strips_for_one_extruder(printer):
         assert has_t != has_h and has_t == (ts < z < T)
     # the base sheet is every tile plus the bottom strips; the top strips lie on the tiles
     bottom = shapely.union_all(list(job.plan.tiles) + list(job.strips.outline[~job.strips.top]))
-    assert hinges.volume() == pytest.approx(ts * (bottom.area + shapely.area(job.strips.outline[job.strips.top]).sum()),
-                                            rel=1e-6)
+    assert hinges.volume() == pytest.approx(
+        ts * (bottom.area + shapely.area(job.strips.outline[job.strips.top]).sum()), rel=1e-6
+    )
     assert tiles.volume() == pytest.approx((T - ts) * shapely.area(job.plan.tiles).sum(), rel=1e-7)
     assert mesh.check_printed_tiles(r).ok
     vr = mesh.verify_printed_tiles(pat, r)
@@ -398,8 +479,12 @@ def test_files_reload_with_the_same_volumes_and_names(printer2):
         assert got[name] == pytest.approx(v, rel=1e-6)
     # STL stores float32 coordinates: compare with the same mesh rounded to float32
     for kind, tm in zip(("tiles", "hinges"), r.meshes[0]):
-        f32 = trimesh.Trimesh(tm.vertices.astype(np.float32).astype(np.float64), tm.faces, process=False)
-        assert _reload_volumes(files[f"k_{kind}.stl"], "stl")[""] == pytest.approx(f32.volume, rel=1e-9)
+        f32 = trimesh.Trimesh(
+            tm.vertices.astype(np.float32).astype(np.float64), tm.faces, process=False
+        )
+        assert _reload_volumes(files[f"k_{kind}.stl"], "stl")[""] == pytest.approx(
+            f32.volume, rel=1e-9
+        )
         assert f32.volume == pytest.approx(tm.volume, rel=1e-5)
     # the tiles re-read from the STL still pass the closed-state check
     stl = trimesh.load(io.BytesIO(files["k_tiles.stl"]), file_type="stl")
@@ -415,9 +500,14 @@ def test_files_reload_with_the_same_volumes_and_names(printer2):
     bigger = standard_pattern(3, 4, tile_size=10.5)
     assert not mesh.verify_printed_tiles(bigger, r, tiles_mesh=stl).ok
     # reproducible bytes
-    again = mesh.job_files(mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer2)), "k")
+    again = mesh.job_files(
+        mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer2)), "k"
+    )
     assert again == files
-    assert all(i.date_time == (1980, 1, 1, 0, 0, 0) for i in zipfile.ZipFile(io.BytesIO(files["k.3mf"])).infolist())
+    assert all(
+        i.date_time == (1980, 1, 1, 0, 0, 0)
+        for i in zipfile.ZipFile(io.BytesIO(files["k.3mf"])).infolist()
+    )
 
 
 @pytest.mark.parametrize("shift,passes", [(0.3, True), (0.5, False)])
@@ -428,10 +518,19 @@ def test_tile_check_measures_the_deviation(shift, passes, printer2):
     r = mesh.realise_job(mesh.build_job(pat, "tiles-and-strips", 1, printer2))
     corners = r.job.plan.corners.copy()
     corners[4] += [shift, 0.0]
-    fake = mesh.Realised(job=mesh.PrintJob("tiles-and-strips", 1, printer2,
-                                           printgeom.ClosedPlan(**{**r.job.plan.__dict__, "corners": corners}),
-                                           r.job.beds, r.job.shift, r.job.strips), manifolds=r.manifolds,
-                         meshes=r.meshes)
+    fake = mesh.Realised(
+        job=mesh.PrintJob(
+            "tiles-and-strips",
+            1,
+            printer2,
+            printgeom.ClosedPlan(**{**r.job.plan.__dict__, "corners": corners}),
+            r.job.beds,
+            r.job.shift,
+            r.job.strips,
+        ),
+        manifolds=r.manifolds,
+        meshes=r.meshes,
+    )
     tc = mesh.check_printed_tiles(fake)
     assert tc.tolerance_mm == pytest.approx(0.4)
     assert tc.max_deviation_mm == pytest.approx(shift, abs=1e-6)
@@ -452,6 +551,7 @@ def test_pattern_larger_than_the_bed_is_refused(printer):
 
 # ------------------------------------------------------------------ strips
 
+
 def test_strip_parts_on_beds(printer):
     small_bed = printer.with_overrides(bed_mm=(40.0, 30.0, 50.0))
     pat = standard_pattern(4, 4)
@@ -469,8 +569,11 @@ def test_strip_parts_on_beds(printer):
         # minus its engraved hinge ID, two layers deep
         label = bed.ops[1][1].polygons[0] if len(bed.ops) > 1 else shapely.Polygon()
         assert h not in job.unlabelled and label.area > 1.0
-        assert m.volume() == pytest.approx(job.strips.outline[h].area * printer.strip_thickness_mm
-                                           - label.area * strips.ENGRAVE_LAYERS * printer.layer_mm, rel=1e-7)
+        assert m.volume() == pytest.approx(
+            job.strips.outline[h].area * printer.strip_thickness_mm
+            - label.area * strips.ENGRAVE_LAYERS * printer.layer_mm,
+            rel=1e-7,
+        )
         lo, hi = m.bounding_box()[:3], m.bounding_box()[3:]
         assert lo[2] == pytest.approx(0.0) and hi[2] == pytest.approx(printer.strip_thickness_mm)
     files = mesh.job_files(r, "s")
@@ -480,6 +583,7 @@ def test_strip_parts_on_beds(printer):
 
 
 # ------------------------------------------------------------------ pinned
+
 
 def test_pinned_hinges(printer):
     pat = standard_pattern(3, 3, tile_size=12.0)
@@ -500,7 +604,9 @@ def test_pinned_hinges(printer):
         k = job.pins.level[h] + 1
         z = 0.5 * sum(lv.level(k))
         p = shapely.Point(job.plan.hinge_xy[h] + job.shift)
-        sec_a = shapely.union_all([shapely.Polygon(x) for x in r.manifolds[0][a].slice(z).to_polygons()])
+        sec_a = shapely.union_all(
+            [shapely.Polygon(x) for x in r.manifolds[0][a].slice(z).to_polygons()]
+        )
         ring_b = r.manifolds[0][b].slice(z).to_polygons()
         assert sec_a.contains(p)
         assert len(ring_b) >= 2  # outline plus the pin hole
@@ -525,8 +631,11 @@ def test_pinned_refusal_names_the_scales_that_print():
     half = mesh.scaled(pat, 0.5)
     lo2, hi2 = mesh.pinned_scale_range(half, 1, pr)
     assert abs(0.5 * lo2 - lo) <= 0.01 and abs(0.5 * hi2 - hi) <= 0.01
-    with pytest.raises(FabricationError, match=rf"prints pinned on the 250 x 210 mm bed of prusa-mk4 from --scale "
-                                               rf"{0.5 * lo2:.2f} to {0.5 * hi2:.2f}"):
+    with pytest.raises(
+        FabricationError,
+        match=rf"prints pinned on the 250 x 210 mm bed of prusa-mk4 from --scale "
+        rf"{0.5 * lo2:.2f} to {0.5 * hi2:.2f}",
+    ):
         mesh.build_job(half, "pinned", 1, pr, advise_scale=0.5)
 
 
@@ -534,9 +643,13 @@ def test_pinned_refusals(printer):
     with pytest.raises(FabricationError, match="pivots .* apart"):
         mesh.build_job(standard_pattern(3, 3, tile_size=5.0), "pinned", 1, printer)
     with pytest.raises(FabricationError, match="four stacked ears"):
-        mesh.build_job(standard_pattern(2, 2), "pinned", 1, printer.with_overrides(pin_tile_thickness_mm=3.0))
+        mesh.build_job(
+            standard_pattern(2, 2), "pinned", 1, printer.with_overrides(pin_tile_thickness_mm=3.0)
+        )
     with pytest.raises(FabricationError, match="ring wall"):
-        mesh.build_job(standard_pattern(2, 2), "pinned", 1, printer.with_overrides(pin_ear_radius_mm=1.8))
+        mesh.build_job(
+            standard_pattern(2, 2), "pinned", 1, printer.with_overrides(pin_ear_radius_mm=1.8)
+        )
 
 
 def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
@@ -551,6 +664,7 @@ def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
 
 
 # -------------------------------------------------------------------- STEP
+
 
 @pytest.mark.slow
 def test_step_has_the_same_volume(tmp_path, printer2):
@@ -574,12 +688,14 @@ SLICER_TEMPLATES = {"standard-8x8": 1.0, "square-circle-9x9-rigid": 1.5, "circle
 # Every style on every preset. The default run slices a 4x4 pattern (about 2 min on a quiet machine);
 # FABKIRI_SLICER_MATRIX=full slices the three shipped templates above (36 slices, ~20 CPU min, 1 h wall
 # under load): too long for CI, run by hand (docs/print-files.md records the last run).
-SLICED = list(SLICER_TEMPLATES) if os.environ.get("FABKIRI_SLICER_MATRIX") == "full" else ["small-4x4"]
+SLICED = (
+    list(SLICER_TEMPLATES) if os.environ.get("FABKIRI_SLICER_MATRIX") == "full" else ["small-4x4"]
+)
 SLICER_WARNINGS = ("empty layer", "outside", "could not fit", "not printable", "error")
 
 
 def _gcode_xy_extent(text: str) -> tuple[float, float, float, float]:
-    body = text[text.index(";LAYER_CHANGE"):]  # the print itself, not the start/end moves
+    body = text[text.index(";LAYER_CHANGE") :]  # the print itself, not the start/end moves
     moves = re.findall(r"^G1 X(-?[\d.]+) Y(-?[\d.]+) E", body, flags=re.M)  # extrusions
     xs, ys = [float(x) for x, _ in moves], [float(y) for _, y in moves]
     return min(xs), min(ys), max(xs), max(ys)
@@ -599,34 +715,69 @@ def test_prusaslicer_slices_the_written_3mf_as_it_is(style, preset, template, tm
         write_pattern(with_contracted_states(standard_pattern(4, 4, tile_size=12.0)), src)
     else:
         src = REPO / "templates" / "patterns" / f"{template}.json"
-    code, _, err = run_cli("print", src, "--style", style, "--printer", preset, "--scale",
-                           str(SLICER_TEMPLATES.get(template, 1.0)), "-o", tmp_path / "out")
+    code, _, err = run_cli(
+        "print",
+        src,
+        "--style",
+        style,
+        "--printer",
+        preset,
+        "--scale",
+        str(SLICER_TEMPLATES.get(template, 1.0)),
+        "-o",
+        tmp_path / "out",
+    )
     pr = load_printer(preset)
     assert code == 0, err
     man = json.loads((tmp_path / "out" / "manifest.json").read_text())
-    assert all(v["ok"] and v["edges_not_shared_by_two_faces"] == 0 for v in man["checks"]["files"].values())
+    assert all(
+        v["ok"] and v["edges_not_shared_by_two_faces"] == 0 for v in man["checks"]["files"].values()
+    )
     for f in sorted((tmp_path / "out").glob("*.3mf")):
         out = tmp_path / (f.stem + ".gcode")
-        proc = subprocess.run(["prusa-slicer", "--export-gcode", str(f), "-o", str(out)],
-                              capture_output=True, text=True, timeout=1800)
-        log = "\n".join(ln for ln in (proc.stdout + proc.stderr).splitlines()
-                        if "[trace]" not in ln and "[debug]" not in ln and "[info]" not in ln)
+        proc = subprocess.run(
+            ["prusa-slicer", "--export-gcode", str(f), "-o", str(out)],
+            capture_output=True,
+            text=True,
+            timeout=1800,
+        )
+        log = "\n".join(
+            ln
+            for ln in (proc.stdout + proc.stderr).splitlines()
+            if "[trace]" not in ln and "[debug]" not in ln and "[info]" not in ln
+        )
         assert proc.returncode == 0, log[-2000:]
         bad = [w for w in SLICER_WARNINGS if w in log.lower()]
         assert not bad, log[-2000:]
         text = out.read_text()
-        assert f"; layer_height = {pr.layer_mm:g}" in text and f"; first_layer_height = {pr.first_layer_mm:g}" in text
+        assert (
+            f"; layer_height = {pr.layer_mm:g}" in text
+            and f"; first_layer_height = {pr.first_layer_mm:g}" in text
+        )
         x0, y0, x1, y1 = _gcode_xy_extent(text)
         assert x0 >= 0 and y0 >= 0 and x1 <= pr.bed_mm[0] and y1 <= pr.bed_mm[1]
-        used = [float(v) for v in text.split("; filament used [mm] = ")[1].split("\n")[0].split(",")]
+        used = [
+            float(v) for v in text.split("; filament used [mm] = ")[1].split("\n")[0].split(",")
+        ]
         tools = {ln.strip() for ln in text.splitlines() if ln.strip() in ("T0", "T1")}
-        if style == "tiles-and-strips" and pr.extruders == 2:  # two tools, both materials, tool changes
+        if (
+            style == "tiles-and-strips" and pr.extruders == 2
+        ):  # two tools, both materials, tool changes
             assert "; filament_type = PLA;FLEX" in text and tools == {"T0", "T1"}
             assert len(used) == 2 and min(used) > 0
-        elif style == "tiles-and-strips":  # one extruder: colour changes at the first layer of each material
+        elif (
+            style == "tiles-and-strips"
+        ):  # one extruder: colour changes at the first layer of each material
             T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
-            heights = [float(z) for z in re.findall(r"^G1 Z([\d.]+)[^\n]*\n(?:[^\n]*\n){0,3}?M600", text, flags=re.M)]
-            assert heights == [pytest.approx(ts + pr.layer_mm), pytest.approx(T + pr.layer_mm)], heights
+            heights = [
+                float(z)
+                for z in re.findall(
+                    r"^G1 Z([\d.]+)[^\n]*\n(?:[^\n]*\n){0,3}?M600", text, flags=re.M
+                )
+            ]
+            assert heights == [pytest.approx(ts + pr.layer_mm), pytest.approx(T + pr.layer_mm)], (
+                heights
+            )
             assert "\nM601" not in text and "T1" not in tools
         else:  # one material, on its own tool; no pause or colour change needed
             mat = pr.strip_material if style == "strips" else pr.tile_material
@@ -637,10 +788,13 @@ def test_prusaslicer_slices_the_written_3mf_as_it_is(style, preset, template, tm
 
 # -------------------------------------------------------------------- CLI
 
+
 def test_cli_print_writes_everything(tmp_path, run_cli):
     src = tmp_path / "sq.json"
     write_pattern(with_contracted_states(standard_pattern(3, 3)), src)
-    code, out, err = run_cli("print", src, "--state", "2", "--printer", "prusa-xl-2t", "-o", tmp_path / "out")
+    code, out, err = run_cli(
+        "print", src, "--state", "2", "--printer", "prusa-xl-2t", "-o", tmp_path / "out"
+    )
     assert code == 0, err
     assert "PLA on extruder 1, TPU on extruder 2" in err
     names = {p.name for p in (tmp_path / "out").iterdir()}
@@ -650,35 +804,65 @@ def test_cli_print_writes_everything(tmp_path, run_cli):
     assert man["checks"]["meshes"]["ok"] and man["checks"]["tiles"]["ok"]
     faces = {h["hinge"]: h["face"] for h in man["hinges"]}
     pairs = [h for h in man["hinges"] if h["coincides_with"] is not None]
-    assert pairs  # the 2x2 square has coinciding hinges in this state: the check below has something to check
+    assert (
+        pairs
+    )  # the 2x2 square has coinciding hinges in this state: the check below has something to check
     for h in pairs:
         assert faces[h["coincides_with"]] != h["face"]
     assert out == ""
 
     # a single-extruder printer: stacked, with the colour changes named
     code, _, err = run_cli("print", src, "-o", tmp_path / "one")
-    assert code == 0 and "one extruder: tiles-and-strips stacked" in err and "z = 0.80 mm (load PLA)" in err
-    assert {p.name for p in (tmp_path / "one").iterdir()} == {"sq.3mf", "sq.png", "sq_tiles.stl", "sq_hinges.stl",
-                                                              "manifest.json"}
+    assert (
+        code == 0
+        and "one extruder: tiles-and-strips stacked" in err
+        and "z = 0.80 mm (load PLA)" in err
+    )
+    assert {p.name for p in (tmp_path / "one").iterdir()} == {
+        "sq.3mf",
+        "sq.png",
+        "sq_tiles.stl",
+        "sq_hinges.stl",
+        "manifest.json",
+    }
     one = json.loads((tmp_path / "one" / "manifest.json").read_text())
-    assert one["layout"] == "stacked" and [c["print_z_mm"] for c in one["layer_changes"]] == [0.8, 3.2]
-    code, _, err = run_cli("print", src, "--style", "strips", "--strip-width", "9", "-o", tmp_path / "bad")
+    assert one["layout"] == "stacked" and [c["print_z_mm"] for c in one["layer_changes"]] == [
+        0.8,
+        3.2,
+    ]
+    code, _, err = run_cli(
+        "print", src, "--style", "strips", "--strip-width", "9", "-o", tmp_path / "bad"
+    )
     assert code == 2 and "strips of hinges" in err and not (tmp_path / "bad").exists()
     code, _, err = run_cli("print", src, "--printer", "nope", "-o", tmp_path / "bad")
     assert code == 2 and "unknown printer" in err
-    code, _, err = run_cli("print", src, "--style", "pinned", "--tile-thickness", "3", "-o", tmp_path / "bad")
-    assert code == 2 and "four stacked ears" in err and err.count("\n") == 1 and not (tmp_path / "bad").exists()
+    code, _, err = run_cli(
+        "print", src, "--style", "pinned", "--tile-thickness", "3", "-o", tmp_path / "bad"
+    )
+    assert (
+        code == 2
+        and "four stacked ears" in err
+        and err.count("\n") == 1
+        and not (tmp_path / "bad").exists()
+    )
 
 
 @pytest.mark.slow
 def test_cli_does_not_load_build123d_without_step(tmp_path):
     src = tmp_path / "sq.json"
     write_pattern(standard_pattern(2, 2), src)
-    code = ("import sys; from fabkiri.cli.main import main; "
-            f"rc = main(['print', {str(src)!r}, '-o', {str(tmp_path / 'o')!r}]); "
-            "assert rc == 0; assert 'build123d' not in sys.modules and 'OCP' not in sys.modules")
-    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True,
-                          env={**os.environ, "PYTHONPATH": str(REPO)})
+    code = (
+        "import sys; from fabkiri.cli.main import main; "
+        f"rc = main(['print', {str(src)!r}, '-o', {str(tmp_path / 'o')!r}]); "
+        "assert rc == 0; assert 'build123d' not in sys.modules and 'OCP' not in sys.modules"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(REPO)},
+    )
     assert proc.returncode == 0, proc.stderr
 
 
@@ -696,20 +880,28 @@ def test_cli_strips_with_pad_marks_on_the_laser_files(tmp_path, run_cli):
     import ezdxf
 
     doc = ezdxf.readfile(tmp_path / "out" / "laser" / "sq.dxf")
-    closed = [e for e in doc.modelspace().query("LWPOLYLINE") if e.dxf.layer == "ENGRAVE" and e.closed]
+    closed = [
+        e for e in doc.modelspace().query("LWPOLYLINE") if e.dxf.layer == "ENGRAVE" and e.closed
+    ]
     areas = sorted(shapely.Polygon([p[:2] for p in e.get_points()]).area for e in closed)
     assert len(areas) >= 2 * H
     job = mesh.build_job(pat, "strips", 1, load_printer())
     pad_area = float(np.median(shapely.area(job.strips.pads)))
     assert areas[-1] < pad_area  # kept inside the tile's engraving margin
-    code, _, err = run_cli("print", src, "--marks", "--printer", "prusa-xl-2t", "-o", tmp_path / "bad")
+    code, _, err = run_cli(
+        "print", src, "--marks", "--printer", "prusa-xl-2t", "-o", tmp_path / "bad"
+    )
     assert code == 2 and "--style strips" in err and not (tmp_path / "bad").exists()
 
 
 def _scaled(pattern, k):
     from dataclasses import replace
 
-    return replace(pattern, nodes=pattern.nodes * k, contracted={s: c * k for s, c in pattern.contracted.items()})
+    return replace(
+        pattern,
+        nodes=pattern.nodes * k,
+        contracted={s: c * k for s, c in pattern.contracted.items()},
+    )
 
 
 @pytest.mark.parametrize("state", [1, 2])
@@ -741,8 +933,11 @@ def test_solver_design_pinned_refused_where_corners_are_too_narrow(state):
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     pr = load_printer("prusa-xl")
-    with pytest.raises(FabricationError, match=r"tile (\d+) is too narrow beside the 3.3 mm clearance around the "
-                                               r"pivot of hinge (\d+).*nozzle.*tolerance 0.4 mm") as exc:
+    with pytest.raises(
+        FabricationError,
+        match=r"tile (\d+) is too narrow beside the 3.3 mm clearance around the "
+        r"pivot of hinge (\d+).*nozzle.*tolerance 0.4 mm",
+    ) as exc:
         mesh.build_job(pat, "pinned", state, pr)
     plan = printgeom.closed_plan(pat, state, pr)
     g = pingeom.pin_geometry(pr, pingeom.pin_levels(pr))
@@ -775,11 +970,23 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     tc = mesh.check_printed_tiles(r)
     assert tc.ok and tc.tiles == len(job.plan.tiles), tc
     sw = mesh.sweep_pinned(pat, r)
-    assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm * (1 - 1e-6)  # as check_meshes: section float noise
+    assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm * (
+        1 - 1e-6
+    )  # as check_meshes: section float noise
     # the CLI refuses the doubled design (exit 2, one line, nothing written)
     src = REPO / "templates" / "patterns" / "circle-8x8-rigid.json"
-    code, _, err = run_cli("print", src, "--style", "pinned", "--printer", "prusa-xl", "--scale", "2",
-                           "-o", tmp_path / "no")
+    code, _, err = run_cli(
+        "print",
+        src,
+        "--style",
+        "pinned",
+        "--printer",
+        "prusa-xl",
+        "--scale",
+        "2",
+        "-o",
+        tmp_path / "no",
+    )
     assert code == 2 and "too narrow beside" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "no").exists()
 
@@ -798,8 +1005,9 @@ def test_pinned_sweep_along_the_deployment(printer):
     job = r.job
     h = int(np.flatnonzero((job.plan.hinge_tiles == 0).any(1))[0])
     p = job.plan.hinge_xy[h] + job.shift
-    plug = m3d.Manifold.cylinder(job.pins.levels.thickness, job.pins.geometry.ear, job.pins.geometry.ear,
-                                 48).translate((p[0], p[1], 0.0))
+    plug = m3d.Manifold.cylinder(
+        job.pins.levels.thickness, job.pins.geometry.ear, job.pins.geometry.ear, 48
+    ).translate((p[0], p[1], 0.0))
     bad = mesh.Realised(job, [[r.manifolds[0][0] + plug] + r.manifolds[0][1:]], r.meshes)
     sw_bad = mesh.sweep_pinned(pat, bad)
     assert not sw_bad.ok and sw_bad.max_overlap_mm2 > 1.0 and "tiles 0/" in sw_bad.worst
@@ -824,10 +1032,26 @@ def test_pattern_closing_one_way_only_prints_that_way(tmp_path, run_cli):
     from tests.conftest import ref
 
     src = ref("contractible_design")
-    code, _, err = run_cli("print", src, "--state", "2", "--scale", "10", "--strip-width", "1.5",
-                           "--strip-reach", "1.5", "--printer", "prusa-xl-2t", "-o", tmp_path / "ok")
+    code, _, err = run_cli(
+        "print",
+        src,
+        "--state",
+        "2",
+        "--scale",
+        "10",
+        "--strip-width",
+        "1.5",
+        "--strip-reach",
+        "1.5",
+        "--printer",
+        "prusa-xl-2t",
+        "-o",
+        tmp_path / "ok",
+    )
     assert code == 0, err
-    assert "does not close" in err  # the reassembly into state 1 is reported as moot, not as a failure
+    assert (
+        "does not close" in err
+    )  # the reassembly into state 1 is reported as moot, not as a failure
     man = json.loads((tmp_path / "ok" / "manifest.json").read_text())
     assert man["checks"]["tiles"]["ok"] and man["checks"]["meshes"]["ok"]
     assert man["checks"]["verifier"]["meta"]["not_applicable"]
@@ -858,8 +1082,11 @@ def test_a_print_style_is_one_registered_strategy(printer, monkeypatch):
     rep = mesh.check_meshes(mesh.realise_job(job))
     assert job.style == "wide-strips" and measured == ["wide-strips"] and rep.ok, rep.problems
     assert rep.required_clearance_mm == printer.part_spacing_mm
-    with pytest.raises(FabricationError, match="unknown print style 'pleated'; choose one of strips, "
-                                               "tiles-and-strips, pinned, wide-strips"):
+    with pytest.raises(
+        FabricationError,
+        match="unknown print style 'pleated'; choose one of strips, "
+        "tiles-and-strips, pinned, wide-strips",
+    ):
         mesh.build_job(pat, "pleated", 1, printer)
     with pytest.raises(FabricationError, match="the wide-strips style prints no tiles"):
         mesh.check_printed_tiles(mesh.realise_job(job))
@@ -876,12 +1103,25 @@ def test_what_a_print_style_decides_is_asked_of_the_style(printer, monkeypatch):
     tas = printjob.print_style("tiles-and-strips")
     printjob.register_style(replace(strips_, name="pin-limits", limits=pinned_.limits))
     printjob.register_style(replace(tas, name="no-tiles", tiles=None))
-    printjob.register_style(replace(tas, name="one-stl", body_per_material=False,
-                                    build=lambda p, s, pr: replace(tas.build(p, s, pr), style="one-stl")))
-    assert design_limits.printer_limits(printer, "pin-limits") == design_limits.printer_limits(printer, "pinned")
-    assert design_limits.printer_limits(printer, "pin-limits") != design_limits.printer_limits(printer, "strips")
+    printjob.register_style(
+        replace(
+            tas,
+            name="one-stl",
+            body_per_material=False,
+            build=lambda p, s, pr: replace(tas.build(p, s, pr), style="one-stl"),
+        )
+    )
+    assert design_limits.printer_limits(printer, "pin-limits") == design_limits.printer_limits(
+        printer, "pinned"
+    )
+    assert design_limits.printer_limits(printer, "pin-limits") != design_limits.printer_limits(
+        printer, "strips"
+    )
     pat = with_contracted_states(standard_pattern(2, 2))
-    assert fb._bed_scale(pat, "tiles-and-strips", 1, printer) > 0 and fb._bed_scale(pat, "no-tiles", 1, printer) is None
+    assert (
+        fb._bed_scale(pat, "tiles-and-strips", 1, printer) > 0
+        and fb._bed_scale(pat, "no-tiles", 1, printer) is None
+    )
     r = mesh.realise_job(mesh.build_job(pat, "one-stl", 1, printer))
     assert [n for n in mesh.job_files(r, "sq", preview=False) if n.endswith(".stl")] == ["sq.stl"]
     # --scale auto sizes a style by its plan rule: a strips copy with the pins' rule is sized as pinned

@@ -19,7 +19,10 @@ def test_random_lattices_close_and_stay_congruent(rows, cols, angle, size):
     deployed = p.corners()
     for c in contract_both(p).values():
         assert c.max_closure <= 1e-12 * size * max(rows, cols)
-        assert np.abs(geometry.edge_lengths(c.corners) - geometry.edge_lengths(deployed)).max() <= 1e-12 * size * 10
+        assert (
+            np.abs(geometry.edge_lengths(c.corners) - geometry.edge_lengths(deployed)).max()
+            <= 1e-12 * size * 10
+        )
 
 
 @settings(max_examples=25, deadline=None)

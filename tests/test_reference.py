@@ -11,10 +11,12 @@ from .conftest import ref
 
 
 def compact_reconfigurable():
-    return adopt_state_labels(import_obj(
-        ref("compact_reconfigurable_design"),
-        [ref("compact_reconfigurable_contracted1"), ref("compact_reconfigurable_contracted2")],
-    ))
+    return adopt_state_labels(
+        import_obj(
+            ref("compact_reconfigurable_design"),
+            [ref("compact_reconfigurable_contracted1"), ref("compact_reconfigurable_contracted2")],
+        )
+    )
 
 
 def test_compact_reconfigurable_closed_states_match_reference():

@@ -40,7 +40,9 @@ def test_weighted_rows_are_the_rows_times_their_weights():
 
 def test_lawson_weights_grow_where_the_fit_misses():
     tgt = load_target("heart", 100)
-    free = design(DesignRequest(rows=4, cols=4, target=tgt, rigid=True, init="rescaled", second_opinion=False))
+    free = design(
+        DesignRequest(rows=4, cols=4, target=tgt, rigid=True, init="rescaled", second_opinion=False)
+    )
     req = DesignRequest(rows=4, cols=4, target=tgt, rigid=True, init="rescaled")
     W = lawson_weights(req, free.pattern.nodes, None, 1.0)
     prob = _Problem(replace(req, start=free.pattern.nodes))
@@ -70,10 +72,19 @@ def test_refinement_lowers_the_hausdorff_distance_and_keeps_the_rows():
     """8x8 heart at 100 mm, tiles at least 3 mm wide (rigid family, one step from the design without rows):
     the kept step has a smaller Hausdorff distance than the start, converged, every width row held."""
     tgt = load_target("heart", 100)
-    free = design(DesignRequest(rows=8, cols=8, target=tgt, rigid=True, init="rescaled", second_opinion=False))
+    free = design(
+        DesignRequest(rows=8, cols=8, target=tgt, rigid=True, init="rescaled", second_opinion=False)
+    )
     lim = F.FabricationLimits(min_width_mm=3.0, hinge_spacing_mm=3.0, margin=0.02)
-    req = DesignRequest(rows=8, cols=8, target=tgt, rigid=True, init="rescaled", fabrication=lim,
-                        second_opinion=False)
+    req = DesignRequest(
+        rows=8,
+        cols=8,
+        target=tgt,
+        rigid=True,
+        init="rescaled",
+        fabrication=lim,
+        second_opinion=False,
+    )
     start = design(replace(req, start=free.pattern.nodes))
     h0 = deployed(start.pattern.nodes, start.pattern.topology, tgt)["hausdorff_rel"]
     best, trace, secs = refine_minimax(req, start.pattern.nodes)

@@ -15,8 +15,16 @@ from .conftest import TEMPLATES
 
 PATTERN = TEMPLATES / "patterns" / "circle-8x8-rigid.json"
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 @pytest.fixture(scope="module")
@@ -25,12 +33,43 @@ def report(tmp_path_factory):
 
     d = tmp_path_factory.mktemp("report")
     assert main(["cut", str(PATTERN), "--width", "200", "-o", str(d / "cut")]) == 0
-    assert main(["deploy", str(PATTERN), "--steps", "8", "--plot", "--gif", "--gif-frames", "5", "--no-frames",
-                 "-o", str(d / "deploy")]) == 0
+    assert (
+        main(
+            [
+                "deploy",
+                str(PATTERN),
+                "--steps",
+                "8",
+                "--plot",
+                "--gif",
+                "--gif-frames",
+                "5",
+                "--no-frames",
+                "-o",
+                str(d / "deploy"),
+            ]
+        )
+        == 0
+    )
     assert main(["tolerance", str(PATTERN), "--n", "50", "-o", str(d / "tol")]) == 0
     out = d / "report.html"
-    assert main(["report", str(PATTERN), "--cut", str(d / "cut"), "--deploy", str(d / "deploy"),
-                 "--tolerance", str(d / "tol"), "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "report",
+                str(PATTERN),
+                "--cut",
+                str(d / "cut"),
+                "--deploy",
+                str(d / "deploy"),
+                "--tolerance",
+                str(d / "tol"),
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     return out
 
 
@@ -41,7 +80,9 @@ def test_every_section_is_there_and_self_contained(report):
     assert not re.search(r'(src|href)="(https?:)?//', page)  # nothing fetched from the network
     srcs = re.findall(r'<img[^>]* src="([^"]+)"', page)
     assert srcs and all(s.startswith("data:image/") for s in srcs)
-    assert "data:image/gif;base64," in page and "data:image/svg+xml;base64," in page  # animation, cut sheet
+    assert (
+        "data:image/gif;base64," in page and "data:image/svg+xml;base64," in page
+    )  # animation, cut sheet
     # what was not given says so
     assert "fabricability: not computed" in page and "not provided: run fabkiri print" in page
 
@@ -52,8 +93,12 @@ def test_missing_folder_is_bad_input(run_cli, tmp_path):
 
 
 def _chromium(args, tmp_path, timeout=180):
-    return subprocess.run([CHROMIUM, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}", *args],
-                          capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [CHROMIUM, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 def _dom(page, tmp_path):
@@ -61,7 +106,9 @@ def _dom(page, tmp_path):
     return r.stdout
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')")
+@pytest.mark.skipif(
+    CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')"
+)
 @pytest.mark.slow
 def test_chromium_loads_it_clean_and_draws_it(report, tmp_path):
     dom = _dom(report, tmp_path)
@@ -75,10 +122,14 @@ def test_chromium_loads_it_clean_and_draws_it(report, tmp_path):
     assert len(np.unique(a.reshape(-1, 3)[::7], axis=0)) > 200  # pictures, not just text
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')")
+@pytest.mark.skipif(
+    CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')"
+)
 def test_error_hook_counts_a_script_error(report, tmp_path):
     # the check can fail: the same page with a broken script reports it
     bad = tmp_path / "bad.html"
-    bad.write_text(report.read_text().replace("</body>", "<script>undefinedFunction();</script></body>"))
+    bad.write_text(
+        report.read_text().replace("</body>", "<script>undefinedFunction();</script></body>")
+    )
     m = re.search(r'id="console-errors" data-count="(\d+)"', _dom(bad, tmp_path))
     assert m and int(m.group(1)) >= 1

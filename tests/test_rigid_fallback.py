@@ -13,15 +13,39 @@ def test_a_non_rigid_request_with_the_rigid_guess_is_answered_by_the_rigid_famil
     assert via_rigid_applies(req) and not via_rigid_applies(DesignRequest(8, 8, req.target))
     res = design(req)
     assert res.converged and res.report["solver"].endswith("for a non-rigid request")
-    assert res.report["max_equality_residual"] <= 1e-10  # every non-rigid equality, checked on the member
-    assert res.pattern.design["options"]["rigid"] is False  # stored as the non-rigid request it answers
+    assert (
+        res.report["max_equality_residual"] <= 1e-10
+    )  # every non-rigid equality, checked on the member
+    assert (
+        res.pattern.design["options"]["rigid"] is False
+    )  # stored as the non-rigid request it answers
 
 
 def test_the_cli_tries_the_rigid_family_last_only_when_the_other_guesses_miss(tmp_path, run_cli):
-    code, out, _ = run_cli("design", "--tiles", "6x6", "--target", "circle", "--json", "--no-preview",
-                           "-o", tmp_path / "a.json")
+    code, out, _ = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "circle",
+        "--json",
+        "--no-preview",
+        "-o",
+        tmp_path / "a.json",
+    )
     assert code == 0 and VIA_RIGID_INIT not in [a["init"] for a in json.loads(out)["attempts"]]
     # a tolerance no 4x4 design meets: every guess is tried, the rigid family last
-    code, out, _ = run_cli("design", "--tiles", "4x4", "--target", "circle", "--shape-tol", "0.1%", "--json",
-                           "--no-preview", "-o", tmp_path / "b.json")
+    code, out, _ = run_cli(
+        "design",
+        "--tiles",
+        "4x4",
+        "--target",
+        "circle",
+        "--shape-tol",
+        "0.1%",
+        "--json",
+        "--no-preview",
+        "-o",
+        tmp_path / "b.json",
+    )
     assert code == 1 and [a["init"] for a in json.loads(out)["attempts"]][-1] == VIA_RIGID_INIT

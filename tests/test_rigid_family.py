@@ -56,8 +56,13 @@ def test_standard_pattern_is_a_member_at_every_angle(deg):
 
 
 @settings(max_examples=25, deadline=None)
-@given(rows=hst.integers(2, 7), cols=hst.integers(2, 7), psi=hst.floats(0.15, 1.4),
-       seed=hst.integers(0, 2 ** 16), amp=hst.floats(0.0, 0.08))
+@given(
+    rows=hst.integers(2, 7),
+    cols=hst.integers(2, 7),
+    psi=hst.floats(0.15, 1.4),
+    seed=hst.integers(0, 2**16),
+    amp=hst.floats(0.0, 0.08),
+)
 def test_every_member_is_rigid_and_reconfigurable(rows, cols, psi, seed, amp):
     """Perturbed seeds at any ψ: edge pairs of both states and hinge sums hold, and both states close."""
     std, st, fam = _family(rows, cols)
@@ -80,7 +85,7 @@ def test_jacobian_matches_finite_differences():
     p0 = np.concatenate([S[:, 0], S[:, 1], [0.6]])
 
     def x(p):
-        return fam.nodes(np.stack([p[:nf], p[nf:2 * nf]], -1), p[-1]).ravel()
+        return fam.nodes(np.stack([p[:nf], p[nf : 2 * nf]], -1), p[-1]).ravel()
 
     D = fam.jacobian(S, 0.6)
     eps = 1e-6
@@ -91,7 +96,11 @@ def test_jacobian_matches_finite_differences():
 # ------------------------------------------------------------------ solver paths
 def test_reduced_solver_circle_is_exact_and_rigid():
     # tips only (--fit tips): every tip can sit exactly on the circle
-    res = design(DesignRequest(8, 8, T.load_target("circle", 100.0), rigid=True, solver="reduced", outline=False))
+    res = design(
+        DesignRequest(
+            8, 8, T.load_target("circle", 100.0), rigid=True, solver="reduced", outline=False
+        )
+    )
     r = res.report
     assert res.converged and r["solver"].startswith("closed-form rigid family")
     assert r["shape_matching"] == "hard" and r["fit"]["shape"]["max_mm"] <= 1e-9
@@ -124,12 +133,15 @@ def test_auto_uses_full_solver_outside_the_family():
     assert res.converged and res.report["solver"].startswith("sparse Levenberg-Marquardt")
 
 
-@pytest.mark.parametrize("kw,msg", [
-    ({"rigid": False}, "--rigid"),
-    ({"rigid": True, "symmetry": "x"}, "--symmetry"),
-    ({"rigid": True, "holes": "parallelogram"}, "rhombus"),
-    ({"rigid": True, "solver": "magic"}, "--solver must be"),
-])
+@pytest.mark.parametrize(
+    "kw,msg",
+    [
+        ({"rigid": False}, "--rigid"),
+        ({"rigid": True, "symmetry": "x"}, "--symmetry"),
+        ({"rigid": True, "holes": "parallelogram"}, "rhombus"),
+        ({"rigid": True, "solver": "magic"}, "--solver must be"),
+    ],
+)
 def test_reduced_solver_refuses_what_it_cannot_cover(kw, msg):
     kw = {"solver": "reduced", **kw}
     with pytest.raises(InputError, match=msg):
@@ -138,12 +150,35 @@ def test_reduced_solver_refuses_what_it_cannot_cover(kw, msg):
 
 def test_cli_solver_flag(tmp_path, run_cli):
     out = tmp_path / "r.json"
-    code, stdout, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--rigid", "--solver", "reduced",
-                                "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "circle",
+        "--rigid",
+        "--solver",
+        "reduced",
+        "--json",
+        "-o",
+        out,
+    )
     assert code == 0, err
     assert '"solver": "closed-form rigid family' in stdout
-    code, _, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--symmetry", "x", "--rigid",
-                           "--solver", "reduced", "-o", tmp_path / "s.json")
+    code, _, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "circle",
+        "--symmetry",
+        "x",
+        "--rigid",
+        "--solver",
+        "reduced",
+        "-o",
+        tmp_path / "s.json",
+    )
     assert code == 2 and "--solver reduced needs" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "s.json").exists()
 
@@ -175,13 +210,17 @@ def test_auto_keeps_the_better_of_both_solvers():
         assert res.converged, solver
         prob = _Problem(req)
         out[solver] = (_objective(prob, res.pattern.nodes / prob.L0), res.report["solver"])
-    assert out["reduced"][0] != pytest.approx(out["full"][0], rel=1e-6)  # a case where the choice matters
+    assert out["reduced"][0] != pytest.approx(
+        out["full"][0], rel=1e-6
+    )  # a case where the choice matters
     assert out["auto"][0] == pytest.approx(min(out["reduced"][0], out["full"][0]), rel=1e-9)
 
 
 def test_cli_starts_big_rigid_designs_coarse_to_fine(tmp_path, run_cli):
     out = tmp_path / "c32.json"
-    code, stdout, err = run_cli("design", "--tiles", "32x32", "--target", "circle", "--rigid", "--json", "-o", out)
+    code, stdout, err = run_cli(
+        "design", "--tiles", "32x32", "--target", "circle", "--rigid", "--json", "-o", out
+    )
     assert code == 0, err
     report = json.loads(stdout)
     assert report["attempts"][0]["init"] == "coarse" and report["coarse"]["used"]
@@ -197,12 +236,18 @@ def test_doubled_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed
 
     rng = np.random.default_rng(seed)
     gx, gy = np.meshgrid(np.arange(cols + 1.0), np.arange(rows + 1.0))
-    grid = np.stack([gx, gy], -1) + rng.uniform(-0.2, 0.2, (rows + 1, cols + 1, 2))  # cells stay convex
+    grid = np.stack([gx, gy], -1) + rng.uniform(
+        -0.2, 0.2, (rows + 1, cols + 1, 2)
+    )  # cells stay convex
     fine = resample_grid(grid, 2 * rows, 2 * cols)
     assert fine.shape == (2 * rows + 1, 2 * cols + 1, 2)
     assert np.allclose(fine[::2, ::2], grid, rtol=0, atol=1e-12)
-    assert np.allclose(fine[1::2, 1::2], 0.25 * (grid[1:, 1:] + grid[1:, :-1] + grid[:-1, 1:] + grid[:-1, :-1]),
-                       rtol=0, atol=1e-12)  # cell centres: the mean of the four corners
+    assert np.allclose(
+        fine[1::2, 1::2],
+        0.25 * (grid[1:, 1:] + grid[1:, :-1] + grid[:-1, 1:] + grid[:-1, :-1]),
+        rtol=0,
+        atol=1e-12,
+    )  # cell centres: the mean of the four corners
 
     def cross(g):  # corner cross products of every cell, CCW (x right, y up)
         q = np.stack([g[:-1, :-1], g[:-1, 1:], g[1:, 1:], g[1:, :-1]], 2)
@@ -220,7 +265,9 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     from fabkiri.design.solve import _Problem
 
     tgt = T.load_target("ellipse", 100.0)
-    coarse = design(DesignRequest(8, 8, tgt, rigid=True, outline=False))  # the coarse level fits the tips only
+    coarse = design(
+        DesignRequest(8, 8, tgt, rigid=True, outline=False)
+    )  # the coarse level fits the tips only
     prob = _Problem(DesignRequest(16, 16, tgt, rigid=True, init="coarse"))
     assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid resampled")
     assert prob.coarse["folded_tiles"] == 0
@@ -234,7 +281,9 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
         return np.abs(tgt.project(p.X0[p.st.tip_nodes] * p.L0, p.st.tip_side)[2])
 
     near, far = tip_distances(prob), tip_distances(_Problem(DesignRequest(16, 16, tgt, rigid=True)))
-    assert near.max() < 0.75 * far.max() and np.sqrt(np.mean(near ** 2)) < 0.5 * np.sqrt(np.mean(far ** 2))
+    assert near.max() < 0.75 * far.max() and np.sqrt(np.mean(near**2)) < 0.5 * np.sqrt(
+        np.mean(far**2)
+    )
 
 
 def test_rigid_coarse_to_fine_start_for_odd_sizes():
@@ -275,18 +324,42 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
         return q, merit.state(q)[0], 1
 
     monkeypatch.setattr(R, "levenberg_marquardt", fake_lm)
-    judge = R._Merit(fam, prob.families, prob.margin, 1e-3,
-                     grid_families=R.grid_families(fam, prob.st, prob.families))
-    assert judge.ineq_violation(judge.state(folded)) > 0 and judge.ineq_violation(judge.state(p0)) == 0
-    X, mode, _ = R.solve_reduced(fam, prob.st, prob.X0, np.pi / 4, prob.families, prob.margin, 1e-3, 1e-12,
-                                 lambda Y: _mean_edge(prob, Y), lambda m: None, miss_tol=np.inf)
-    assert "levenberg" in calls  # miss_tol = inf would stop after the first start, but it was infeasible
+    judge = R._Merit(
+        fam,
+        prob.families,
+        prob.margin,
+        1e-3,
+        grid_families=R.grid_families(fam, prob.st, prob.families),
+    )
+    assert (
+        judge.ineq_violation(judge.state(folded)) > 0 and judge.ineq_violation(judge.state(p0)) == 0
+    )
+    X, mode, _ = R.solve_reduced(
+        fam,
+        prob.st,
+        prob.X0,
+        np.pi / 4,
+        prob.families,
+        prob.margin,
+        1e-3,
+        1e-12,
+        lambda Y: _mean_edge(prob, Y),
+        lambda m: None,
+        miss_tol=np.inf,
+    )
+    assert (
+        "levenberg" in calls
+    )  # miss_tol = inf would stop after the first start, but it was infeasible
     assert np.allclose(X, judge.state(p0)[0]) and mode == "least-squares"
 
 
 @settings(max_examples=20, deadline=None)
-@given(rows=hst.integers(2, 6), cols=hst.integers(2, 6), psi=hst.floats(0.1, 1.45),
-       seed=hst.integers(0, 2**31 - 1))
+@given(
+    rows=hst.integers(2, 6),
+    cols=hst.integers(2, 6),
+    psi=hst.floats(0.1, 1.45),
+    seed=hst.integers(0, 2**31 - 1),
+)
 def test_tile_shape_families_are_the_same_on_the_closed_grid(rows, cols, psi, seed):
     """Every tile of a member is a rigid copy of its closed-state-1 grid cell: the regulariser and the
     convexity rows evaluated on the grid equal those on the deployed nodes (what the reduced solver uses)."""
@@ -312,8 +385,16 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
 
     prob = _Problem(DesignRequest(10, 12, T.load_target("heart", 100.0), rigid=True))
     fam = prob.rigid_family
-    monkeypatch.setattr(R, "DENSE_JD", 0)  # force the block paths (no dense ∂c/∂p, block normal matrix)
-    m = R._Merit(fam, prob.families, prob.margin, 1e-3, grid_families=R.grid_families(fam, prob.st, prob.families))
+    monkeypatch.setattr(
+        R, "DENSE_JD", 0
+    )  # force the block paths (no dense ∂c/∂p, block normal matrix)
+    m = R._Merit(
+        fam,
+        prob.families,
+        prob.margin,
+        1e-3,
+        grid_families=R.grid_families(fam, prob.st, prob.families),
+    )
     assert m._C is None
     S, _ = fam.fit(prob.X0, np.pi / 4)
     # off the mirror-symmetric start: there a chord midpoint lies on the heart's axis, equidistant from both
@@ -324,17 +405,21 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
     G, nf = fam.Z.shape
     Cm = np.zeros((G, 2, 2 * nf + 1))  # ∂c/∂p formed densely, as the reference
     Cm[:, 0, :nf] = fam.Z
-    Cm[:, 1, nf:2 * nf] = fam.Z
+    Cm[:, 1, nf : 2 * nf] = fam.Z
     JC = Jc @ Cm.reshape(2 * G, -1)
     dense = JC.T @ JC
     assert np.abs(m._grid_to_p(Jc) - JC).max() <= 1e-12 * np.abs(JC).max()
-    blocks, g_blocks = m._grid_normal(Jc, r[Jx.shape[0]:])
-    assert np.abs(g_blocks - JC.T @ r[Jx.shape[0]:]).max() <= 1e-10 * max(1.0, np.abs(g_blocks).max())
+    blocks, g_blocks = m._grid_normal(Jc, r[Jx.shape[0] :])
+    assert np.abs(g_blocks - JC.T @ r[Jx.shape[0] :]).max() <= 1e-10 * max(
+        1.0, np.abs(g_blocks).max()
+    )
     assert np.abs(blocks - dense).max() <= 1e-12 * np.abs(dense).max()
     H, g = m.normal(r, Jx, Jc, p)
     D = fam.jacobian(*m.unpack(p))
     nx = Jx.shape[0]
-    assert np.abs(g - ((Jx @ D).T @ r[:nx] + JC.T @ r[nx:])).max() <= 1e-10 * max(1.0, np.abs(g).max())
+    assert np.abs(g - ((Jx @ D).T @ r[:nx] + JC.T @ r[nx:])).max() <= 1e-10 * max(
+        1.0, np.abs(g).max()
+    )
     # and the reduced Jacobian of all rows agrees with finite differences of the stacked residuals
     Jr = m.reduced_jacobian(Jx, Jc, p)
     h = 1e-6
@@ -347,7 +432,9 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
         if len(rp) == len(r) == len(rm):  # the same active inequality rows on both sides
             assert np.abs((rp - rm) / (2 * h) - Jr[:, j]).max() <= 1e-5 * max(1.0, np.abs(Jr).max())
             checked += 1
-    assert checked >= 2, checked  # the comparison was made (an active-set change skips at most one column)
+    assert checked >= 2, (
+        checked
+    )  # the comparison was made (an active-set change skips at most one column)
 
 
 def _merits(rows, cols, target, rho):
@@ -370,8 +457,12 @@ def _merits(rows, cols, target, rho):
 
 
 @settings(max_examples=15, deadline=None)
-@given(seed=hst.integers(0, 2**31 - 1), psi=hst.floats(0.05, 1.5), amp=hst.floats(0.0, 0.4),
-       hard=hst.booleans())
+@given(
+    seed=hst.integers(0, 2**31 - 1),
+    psi=hst.floats(0.05, 1.5),
+    amp=hst.floats(0.0, 0.4),
+    hard=hst.booleans(),
+)
 def test_dense_reduced_rows_equal_the_block_rows(seed, psi, amp, hard):
     """Tile-corner features with pair differences (and active-only inequality rows) give the same merit,
     normal matrix, gradient and Jacobian as the sparse blocks, inequalities active or not."""
@@ -419,7 +510,9 @@ def test_auto_skips_the_second_opinion_within_the_shape_tolerance():
     met = design(DesignRequest(8, 8, target, rigid=True, second_opinion_above=0.02))
     strict = design(DesignRequest(8, 8, target, rigid=True, second_opinion_above=1e-6))
     assert met.converged and strict.converged
-    assert not any(k.startswith("lm_rho") for k in met.report["iterations"])  # the full solver never ran
+    assert not any(
+        k.startswith("lm_rho") for k in met.report["iterations"]
+    )  # the full solver never ran
     assert any(k.startswith("lm_rho") for k in strict.report["iterations"])
 
 
@@ -430,7 +523,9 @@ def test_dense_evaluation_forms_its_jacobian_only_when_asked(monkeypatch):
     tiles = type(dense._tiles)
     formed = []
     normal = tiles.regularizer_normal
-    monkeypatch.setattr(tiles, "regularizer_normal", lambda self, *a: formed.append(1) or normal(self, *a))
+    monkeypatch.setattr(
+        tiles, "regularizer_normal", lambda self, *a: formed.append(1) or normal(self, *a)
+    )
     S, _ = fam.fit(prob.X0, np.pi / 4)
     p = np.concatenate([S[:, 0], S[:, 1], [np.pi / 4]])
     ev = dense.evaluate(p)

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.integers(2, 200), st.integers(0, 2 ** 32 - 1))
+@given(st.integers(2, 200), st.integers(0, 2**32 - 1))
 def test_closest_pair_equals_the_pairwise_minimum(n, seed):
     from fabkiri.fabricate.fabricability import closest_pair
 
@@ -27,7 +27,9 @@ def test_preview_is_deterministic_with_a_panel_per_outline(tmp_path):
     from fabkiri.render import conformance as rc
     from PIL import Image
 
-    out = design_pattern(PatternRequest(tiles=(3, 3), rigid=True, contracted_target=("1:square", "2:circle")))
+    out = design_pattern(
+        PatternRequest(tiles=(3, 3), rigid=True, contracted_target=("1:square", "2:circle"))
+    )
     conf, shape = out.report["conformance"], out.report["shape"]
     png = rc.conformance_png(out.pattern, conf, shape)
     assert png == rc.conformance_png(out.pattern, conf, shape)
@@ -46,8 +48,19 @@ def test_every_shipped_preset_passes_its_schema():
     from fabkiri.schemas import load_schema, schema_problem
 
     for folder, package, schema, names in (
-            (materials.MATERIALS_DIR, "fabkiri.fabricate", "material.schema.json", materials.available()),
-            (printers.PRINTERS_DIR, "fabkiri.fabricate", "printer.schema.json", printers.available_printers())):
+        (
+            materials.MATERIALS_DIR,
+            "fabkiri.fabricate",
+            "material.schema.json",
+            materials.available(),
+        ),
+        (
+            printers.PRINTERS_DIR,
+            "fabkiri.fabricate",
+            "printer.schema.json",
+            printers.available_printers(),
+        ),
+    ):
         assert names
         for name in names:
             data = json.loads((folder / f"{name}.json").read_text("utf-8"))
@@ -61,8 +74,10 @@ def test_a_preset_file_by_path_is_still_checked_against_the_schema(tmp_path):
     from fabkiri.errors import InputError
     from fabkiri.fabricate import materials, printers
 
-    for folder, name, load in ((materials.MATERIALS_DIR, materials.available()[0], materials.load_material),
-                               (printers.PRINTERS_DIR, printers.available_printers()[0], printers.load_printer)):
+    for folder, name, load in (
+        (materials.MATERIALS_DIR, materials.available()[0], materials.load_material),
+        (printers.PRINTERS_DIR, printers.available_printers()[0], printers.load_printer),
+    ):
         data = json.loads((folder / f"{name}.json").read_text("utf-8"))
         key = next(k for k, v in data.items() if isinstance(v, float) and v > 0)
         data[key] = -1.0
@@ -80,9 +95,18 @@ def test_rigid_first_applies_to_mid_size_non_rigid_rhombus_designs_only():
 
     req = DesignRequest(16, 16, T.load_target("heart", 100.0))
     assert rigid_first_applies(req)
-    for other in (dict(rows=8, cols=8), dict(rows=32, cols=32), dict(rigid=True), dict(symmetry="y"),
-                  dict(holes="parallelogram"), dict(solver="full"), dict(seed=1), dict(rigid_first=False),
-                  dict(start=np.zeros((2, 2))), dict(init="rigid")):
+    for other in (
+        dict(rows=8, cols=8),
+        dict(rows=32, cols=32),
+        dict(rigid=True),
+        dict(symmetry="y"),
+        dict(holes="parallelogram"),
+        dict(solver="full"),
+        dict(seed=1),
+        dict(rigid_first=False),
+        dict(start=np.zeros((2, 2))),
+        dict(init="rigid"),
+    ):
         assert not rigid_first_applies(replace(req, **other)), other
 
 
@@ -102,7 +126,9 @@ def test_a_mid_size_non_rigid_design_is_a_rigid_member_when_that_meets_the_shape
     assert set(r["residuals"]) >= {"rings_1", "rings_2", "edge_pairs_1", "edge_pairs_2"}
     assert np.abs(hinge_sums(out.pattern)).max() <= 1e-8  # it is rigid-deployable
     target = T.load_target("ellipse", 100.0)
-    assert deployed(out.pattern.nodes, out.pattern.topology, target)["hausdorff_rel"] <= 0.02  # --shape-tol 2 %
+    assert (
+        deployed(out.pattern.nodes, out.pattern.topology, target)["hausdorff_rel"] <= 0.02
+    )  # --shape-tol 2 %
     assert out.pattern.design["options"]["rigid"] is False
 
 
@@ -112,8 +138,12 @@ def test_the_full_solver_takes_over_when_no_rigid_member_meets_the_shape():
     from fabkiri.design.solve import DesignRequest, design
 
     res = design(DesignRequest(16, 16, T.load_target("ellipse", 100.0), second_opinion_above=1e-5))
-    assert not res.report["rigid_first"] and res.report["solver"].startswith("sparse Levenberg-Marquardt")
-    assert any(k.startswith("rigid_coarse_") for k in res.report["iterations"])  # it was tried first
+    assert not res.report["rigid_first"] and res.report["solver"].startswith(
+        "sparse Levenberg-Marquardt"
+    )
+    assert any(
+        k.startswith("rigid_coarse_") for k in res.report["iterations"]
+    )  # it was tried first
 
 
 def test_an_explicit_guess_skips_the_rigid_family_first(monkeypatch):

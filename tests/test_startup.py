@@ -31,10 +31,14 @@ def test_lazy_parser_has_every_command():
 
 
 def _modules_after(argv: list[str]) -> set[str]:
-    code = ("import sys\nfrom fabkiri.cli.main import main\n"
-            f"try:\n    main({argv!r})\nexcept SystemExit:\n    pass\n"
-            "print('\\n'.join(sys.modules))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    code = (
+        "import sys\nfrom fabkiri.cli.main import main\n"
+        f"try:\n    main({argv!r})\nexcept SystemExit:\n    pass\n"
+        "print('\\n'.join(sys.modules))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
     return set(out.split())
 
 
@@ -47,17 +51,39 @@ def test_help_imports_no_numerics():
 def test_design_with_its_preview_imports_only_what_it_uses(tmp_path):
     # one process for both checks (each is an interpreter start and a design): the preview PNG is drawn
     # without matplotlib, so a design with its preview must import no more than one without
-    mods = _modules_after(["design", "--tiles", "3x3", "--target", "circle", "--rigid", "-o", str(tmp_path / "p.json")])
+    mods = _modules_after(
+        [
+            "design",
+            "--tiles",
+            "3x3",
+            "--target",
+            "circle",
+            "--rigid",
+            "-o",
+            str(tmp_path / "p.json"),
+        ]
+    )
     assert (tmp_path / "p.json").exists()
     png = (tmp_path / "p.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     assert "fabkiri.design.solve" in mods
-    assert not {"scipy.interpolate", "scipy.optimize", "ezdxf", "trimesh", "matplotlib", "svgwrite", "jsonschema"} & mods
+    assert (
+        not {
+            "scipy.interpolate",
+            "scipy.optimize",
+            "ezdxf",
+            "trimesh",
+            "matplotlib",
+            "svgwrite",
+            "jsonschema",
+        }
+        & mods
+    )
     assert not {"fabkiri.cli.cut_cmd", "fabkiri.cli.print_cmd", "fabkiri.cli.deploy_cmd"} & mods
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.integers(3, 60), st.integers(0, 2 ** 32 - 1))
+@given(st.integers(3, 60), st.integers(0, 2**32 - 1))
 def test_periodic_spline_equals_scipy(k, seed):
     from fabkiri.design.spline import PeriodicCubic
     from scipy.interpolate import CubicSpline
@@ -78,29 +104,41 @@ def test_periodic_spline_equals_scipy(k, seed):
 
 
 @settings(max_examples=20, deadline=None)
-@given(st.integers(1, 9), st.integers(1, 9), st.integers(1, 20), st.integers(1, 20), st.integers(0, 2 ** 32 - 1))
+@given(
+    st.integers(1, 9),
+    st.integers(1, 9),
+    st.integers(1, 20),
+    st.integers(1, 20),
+    st.integers(0, 2**32 - 1),
+)
 def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
     from fabkiri.design.rigid import resample_grid
     from scipy.interpolate import RegularGridInterpolator
 
     grid = np.random.default_rng(seed).normal(size=(m + 1, n + 1, 2))
     at = RegularGridInterpolator((np.arange(m + 1.0), np.arange(n + 1.0)), grid, method="linear")
-    yi, xi = np.meshgrid(np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1), indexing="ij")
+    yi, xi = np.meshgrid(
+        np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1), indexing="ij"
+    )
     assert np.abs(resample_grid(grid, rows, cols) - at(np.stack([yi, xi], -1))).max() <= 1e-12
 
 
 def test_design_defers_unused_numpy_subpackages(tmp_path):
     # scipy's array-API shim binds every numpy subpackage; the DEFERRED ones stay unloaded (lazy)
     # through a design and still work when used
-    code = ("import sys\nfrom fabkiri.cli.main import main\n"
-            f"main(['design', '--tiles', '3x3', '--target', 'circle', '--rigid', '--no-preview', '-o', "
-            f"{str(tmp_path / 'p.json')!r}])\n"
-            f"lazy = [type(sys.modules[m]).__name__ for m in {cli.DEFERRED!r}]\n"
-            "print(lazy, 'charset_normalizer' in sys.modules, 'unittest' in sys.modules)\n"
-            "import numpy as np\nnp.testing.assert_allclose(np.ones(2), np.ones(2))\n"
-            "from numpy.testing import assert_array_equal\nassert_array_equal([1], [1])\n"
-            "print(type(sys.modules['numpy.testing']).__name__)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    code = (
+        "import sys\nfrom fabkiri.cli.main import main\n"
+        f"main(['design', '--tiles', '3x3', '--target', 'circle', '--rigid', '--no-preview', '-o', "
+        f"{str(tmp_path / 'p.json')!r}])\n"
+        f"lazy = [type(sys.modules[m]).__name__ for m in {cli.DEFERRED!r}]\n"
+        "print(lazy, 'charset_normalizer' in sys.modules, 'unittest' in sys.modules)\n"
+        "import numpy as np\nnp.testing.assert_allclose(np.ones(2), np.ones(2))\n"
+        "from numpy.testing import assert_array_equal\nassert_array_equal([1], [1])\n"
+        "print(type(sys.modules['numpy.testing']).__name__)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout.split("\n")
     assert out[0] == f"{['_LazyModule'] * len(cli.DEFERRED)} False False"
     assert out[1] == "module"  # loaded for real on first use
 
@@ -115,17 +153,27 @@ def test_rigid_8x8_design_loads_no_unused_scipy(tmp_path):
     # the rigid 8x8 circle of the start-up goal (issue #18), preview included: its KD-trees come from the
     # compiled extension alone (fabkiri/kdtree.py), not through scipy.spatial, which loads scipy.special,
     # scipy.spatial.distance and scipy.spatial.transform; OpenBLAS started with one thread; modules frozen
-    code = ("import gc, os, sys\nfrom fabkiri.cli.main import main\n"
-            f"main(['design', '--tiles', '8x8', '--target', 'circle', '--rigid', '-o', {str(tmp_path / 'p.json')!r}])\n"
-            "print(os.environ.get('OPENBLAS_NUM_THREADS'), gc.get_freeze_count() > 10000)\n"
-            "print('\\n'.join(sys.modules))")
+    code = (
+        "import gc, os, sys\nfrom fabkiri.cli.main import main\n"
+        f"main(['design', '--tiles', '8x8', '--target', 'circle', '--rigid', '-o', {str(tmp_path / 'p.json')!r}])\n"
+        "print(os.environ.get('OPENBLAS_NUM_THREADS'), gc.get_freeze_count() > 10000)\n"
+        "print('\\n'.join(sys.modules))"
+    )
     env = {k: v for k, v in os.environ.items() if k not in cli.BLAS_THREAD_VARS}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+    )
     first, *mods = out.stdout.split("\n")
     assert (tmp_path / "p.json").exists() and (tmp_path / "p.png").exists()
     assert "scipy.spatial._ckdtree" in mods  # the KD-tree was used
-    assert not {"scipy.spatial", "scipy.special", "scipy.spatial.distance", "scipy.spatial.transform",
-                "scipy.optimize", "scipy.interpolate"} & set(mods)
+    assert not {
+        "scipy.spatial",
+        "scipy.special",
+        "scipy.spatial.distance",
+        "scipy.spatial.transform",
+        "scipy.optimize",
+        "scipy.interpolate",
+    } & set(mods)
     # the ligament's cut bound needs no layout reader (verify.quads loads the DXF/SVG readers)
     assert "fabkiri.fabricate.hingekinds.ligament" in mods and "fabkiri.verify.quads" not in mods
     assert first == "1 True"
@@ -134,24 +182,36 @@ def test_rigid_8x8_design_loads_no_unused_scipy(tmp_path):
 def test_blas_threads_follow_the_user():
     # a library caller's process (numpy loaded) and a user's own choice are left alone
     assert "numpy" in sys.modules and not cli.single_thread_blas_process("design")
-    code = ("import os\nfrom fabkiri.cli.main import single_thread_blas_process as s\n"
-            "print(s('info'), s('design'), os.environ['OPENBLAS_NUM_THREADS'])")
+    code = (
+        "import os\nfrom fabkiri.cli.main import single_thread_blas_process as s\n"
+        "print(s('info'), s('design'), os.environ['OPENBLAS_NUM_THREADS'])"
+    )
     env = {k: v for k, v in os.environ.items() if k not in cli.BLAS_THREAD_VARS}
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+    )
     assert run.stdout.split() == ["False", "True", "1"]
     env["OMP_NUM_THREADS"] = "2"
-    code = code.replace("os.environ['OPENBLAS_NUM_THREADS']", "os.environ.get('OPENBLAS_NUM_THREADS')")
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    code = code.replace(
+        "os.environ['OPENBLAS_NUM_THREADS']", "os.environ.get('OPENBLAS_NUM_THREADS')"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+    )
     assert run.stdout.split() == ["False", "False", "None"]
 
 
 def test_kdtree_is_scipys_class_before_and_after_scipy_spatial():
     # loaded alone first, then `import scipy.spatial` reuses the same extension module: one class, one answer
-    code = ("import sys\nimport numpy as np\nfrom fabkiri.kdtree import KDTree\n"
-            "pts = np.random.default_rng(1).normal(size=(500, 2))\n"
-            "t = KDTree(pts)\nalone = 'scipy.spatial' in sys.modules\n"
-            "import scipy.spatial\n"
-            "d1, i1 = t.query(pts[:50] + 0.01, k=3)\nd2, i2 = scipy.spatial.cKDTree(pts).query(pts[:50] + 0.01, k=3)\n"
-            "print(alone, type(t) is scipy.spatial.cKDTree, (d1 == d2).all(), (i1 == i2).all())")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    code = (
+        "import sys\nimport numpy as np\nfrom fabkiri.kdtree import KDTree\n"
+        "pts = np.random.default_rng(1).normal(size=(500, 2))\n"
+        "t = KDTree(pts)\nalone = 'scipy.spatial' in sys.modules\n"
+        "import scipy.spatial\n"
+        "d1, i1 = t.query(pts[:50] + 0.01, k=3)\nd2, i2 = scipy.spatial.cKDTree(pts).query(pts[:50] + 0.01, k=3)\n"
+        "print(alone, type(t) is scipy.spatial.cKDTree, (d1 == d2).all(), (i1 == i2).all())"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout.split()
     assert out == ["False", "True", "True", "True"]

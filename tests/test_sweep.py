@@ -34,8 +34,9 @@ rigid = [true, false]
 shape_tol = "25%"
 init = "rescaled"
 """
-SWEEP_2 = SWEEP_12.replace('target = ["circle", "square", "outline.csv"]', 'target = ["circle"]').replace(
-    'tiles = ["4x4", "5x5"]', 'tiles = ["4x4"]')  # the same sweep cut to 2 jobs
+SWEEP_2 = SWEEP_12.replace(
+    'target = ["circle", "square", "outline.csv"]', 'target = ["circle"]'
+).replace('tiles = ["4x4", "5x5"]', 'tiles = ["4x4"]')  # the same sweep cut to 2 jobs
 FIGURES = ("max_equality_residual", "hausdorff_mm", "one_minus_iou", "thinnest_tile_mm")
 
 
@@ -65,13 +66,26 @@ def test_twelve_jobs_on_a_two_worker_local_cluster(local_run):
     for r in res.rows:
         job = out / "jobs" / r["id"]
         assert {"pattern.json", "pattern.png", "row.json"} <= {p.name for p in job.iterdir()}
-        assert json.loads((job / "pattern.json").read_text())["design"]["report"]["status"] in ("converged",
-                                                                                               "unconverged")
+        assert json.loads((job / "pattern.json").read_text())["design"]["report"]["status"] in (
+            "converged",
+            "unconverged",
+        )
     with open(out / "results.csv") as f:
         table = list(csv.DictReader(f))
     assert [t["id"] for t in table] == [j.id for j in spec.jobs]
-    assert {"p_target", "p_tiles", "p_rigid", "status", "hausdorff_mm", "one_minus_iou", "thinnest_tile_mm",
-            "min_cut_width_mm", "energy_barrier", "time_s", "worker"} <= set(table[0])
+    assert {
+        "p_target",
+        "p_tiles",
+        "p_rigid",
+        "status",
+        "hausdorff_mm",
+        "one_minus_iou",
+        "thinnest_tile_mm",
+        "min_cut_width_mm",
+        "energy_barrier",
+        "time_s",
+        "worker",
+    } <= set(table[0])
     import pyarrow.parquet as pq
 
     assert pq.read_table(out / "results.parquet").num_rows == 12
@@ -85,7 +99,9 @@ def test_a_second_run_does_no_work(local_run):
     out = folder / "out"
     stamps = {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()}
     again = sweep(spec, output=out, workers=2)
-    assert again.ran == 0 and again.skipped == 12 and again.workers == 0  # no cluster was even started
+    assert (
+        again.ran == 0 and again.skipped == 12 and again.workers == 0
+    )  # no cluster was even started
     assert {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()} == stamps
     assert [r["id"] for r in again.rows] == [r["id"] for r in res.rows]
 
@@ -100,13 +116,17 @@ def test_a_second_run_of_a_small_sweep_does_no_work(tmp_path):
     spec = load_spec(path)
     assert len(spec.jobs) == 2
     out = tmp_path / "out"
-    with Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None) as client:
+    with Client(
+        processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+    ) as client:
         res = sweep(spec, client, output=out)
     assert res.ran == 2 and res.skipped == 0 and [r["status"] for r in res.rows].count("error") == 0
     stamps = {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()}
     assert len(stamps) >= 6  # pattern.json, pattern.png, row.json per job
     again = sweep(spec, output=out, workers=2)
-    assert again.ran == 0 and again.skipped == 2 and again.workers == 0  # no cluster was even started
+    assert (
+        again.ran == 0 and again.skipped == 2 and again.workers == 0
+    )  # no cluster was even started
     assert {p: p.stat().st_mtime_ns for p in (out / "jobs").rglob("*") if p.is_file()} == stamps
     assert [r["id"] for r in again.rows] == [r["id"] for r in res.rows]
 
@@ -131,8 +151,13 @@ def _free_port() -> int:
 
 def _dask(*args, log: Path) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    return subprocess.Popen([sys.executable, "-m", "dask", *args], env=env,  # `dask scheduler`, `dask worker`
-                            stdout=log.open("w"), stderr=subprocess.STDOUT, start_new_session=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "dask", *args],
+        env=env,  # `dask scheduler`, `dask worker`
+        stdout=log.open("w"),
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
 
 
 @pytest.mark.slow  # ~20-30 s on the shared 2-core box: three more interpreters and the 12 designs again
@@ -140,20 +165,56 @@ def test_the_same_sweep_on_dask_scheduler_and_two_dask_workers(local_run, tmp_pa
     _, res, folder = local_run
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
-    procs = [_dask("scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard",
-                   log=tmp_path / "scheduler.log")]
+    procs = [
+        _dask(
+            "scheduler",
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--no-dashboard",
+            log=tmp_path / "scheduler.log",
+        )
+    ]
     try:
         for k in range(2):
-            procs.append(_dask("worker", address, "--host", "127.0.0.1", "--nthreads", "1", "--nworkers", "1",
-                               "--no-dashboard", "--name", f"w{k}", log=tmp_path / f"worker{k}.log"))
+            procs.append(
+                _dask(
+                    "worker",
+                    address,
+                    "--host",
+                    "127.0.0.1",
+                    "--nthreads",
+                    "1",
+                    "--nworkers",
+                    "1",
+                    "--no-dashboard",
+                    "--name",
+                    f"w{k}",
+                    log=tmp_path / f"worker{k}.log",
+                )
+            )
         from distributed import Client
 
         with Client(address, timeout=60) as c:
             c.wait_for_workers(2, timeout=120)
-        run = subprocess.run([sys.executable, "-m", "fabkiri.cli.main", "sweep", str(folder / "s.toml"),
-                              "--scheduler", address, "-o", str(tmp_path / "out")],
-                             capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(REPO)},
-                             timeout=600)
+        run = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "fabkiri.cli.main",
+                "sweep",
+                str(folder / "s.toml"),
+                "--scheduler",
+                address,
+                "-o",
+                str(tmp_path / "out"),
+            ],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "PYTHONPATH": str(REPO)},
+            timeout=600,
+        )
     finally:
         for p in reversed(procs):  # only the processes this test started, by their id
             os.killpg(p.pid, signal.SIGTERM)  # its own session: the worker nanny and its child
@@ -174,6 +235,7 @@ def test_the_same_sweep_on_dask_scheduler_and_two_dask_workers(local_run, tmp_pa
 
 
 # ---------------------------------------------------------------- faults (runs on the workers)
+
 
 def faulty_runner(job):
     """The real job, except at 4x4: seed 7 hangs (to time out), seed 9 kills its worker the first time."""
@@ -197,10 +259,23 @@ def test_a_raising_a_hanging_and_a_killed_job_are_recorded_or_retried(tmp_path, 
     marker = tmp_path / "killed-once"
     monkeypatch.setenv("FABKIRI_TEST_MARKER", str(marker))  # the worker processes inherit it
     # 300x300 is refused by the size limits inside the job (an InputError raised on the worker)
-    spec = spec_from_dict({"axes": {"target": ["circle"], "tiles": ["4x4", "300x300"], "seed": [1, 7, 9]},
-                           "fixed": {"rigid": True, "shape_tol": "25%"}})
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address="127.0.0.1:0", silence_logs=50) as cluster, Client(cluster) as client:
+    spec = spec_from_dict(
+        {
+            "axes": {"target": ["circle"], "tiles": ["4x4", "300x300"], "seed": [1, 7, 9]},
+            "fixed": {"rigid": True, "shape_tol": "25%"},
+        }
+    )
+    with (
+        LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address="127.0.0.1:0",
+            silence_logs=50,
+        ) as cluster,
+        Client(cluster) as client,
+    ):
         res = sweep(spec, client, output=tmp_path / "out", job_timeout=20, runner=faulty_runner)
         by = {(r["p_tiles"], r["p_seed"]): r for r in res.rows}
         assert by[("4x4", 7)]["status"] == "timeout" and "after 20 s" in by[("4x4", 7)]["error"]
@@ -210,7 +285,9 @@ def test_a_raising_a_hanging_and_a_killed_job_are_recorded_or_retried(tmp_path, 
         for seed in (1, 9):
             assert by[("4x4", seed)]["status"] == "ok"
         assert marker.exists()  # the seed-9 job did kill its worker once, and was run again
-        assert int(marker.read_text()) not in set(client.run(os.getpid).values())  # that process is gone
+        assert int(marker.read_text()) not in set(
+            client.run(os.getpid).values()
+        )  # that process is gone
         assert res.ran == 6 and res.failed == 4
         again = sweep(spec, client, output=tmp_path / "out", runner=faulty_runner)
         assert again.ran == 0 and again.skipped == 6

@@ -54,7 +54,9 @@ def test_seam_overlap_matches_exact_overlay():
     moved = c + rng.normal(0, 0.03, c.shape)
     over, _, _ = seam_misfit(moved[None], seams)
     polys = shapely.polygons(moved)
-    exact = shapely.area(shapely.intersection(polys[seams[:, 0]], polys[seams[:, 2]], grid_size=1e-9))
+    exact = shapely.area(
+        shapely.intersection(polys[seams[:, 0]], polys[seams[:, 2]], grid_size=1e-9)
+    )
     big = exact > 1e-3
     assert big.sum() > 20
     # first order in the errors: the sliver areas agree to a few per cent
@@ -63,12 +65,18 @@ def test_seam_overlap_matches_exact_overlay():
 
 @pytest.mark.slow
 def test_cli_writes_json_and_plot(run_cli, tmp_path):
-    code, _, err = run_cli("tolerance", CIRCLE, "--kerf-sd", "0.02", "--n", "200", "-o", tmp_path / "t")
+    code, _, err = run_cli(
+        "tolerance", CIRCLE, "--kerf-sd", "0.02", "--n", "200", "-o", tmp_path / "t"
+    )
     assert code == 0, err
     d = json.loads((tmp_path / "t" / "tolerance.json").read_text())
     assert d["model"]["samples"] == 200
     assert set(d["closure_gap_mm"]) == {"closed state 1", "deployed", "closed state 2"}
-    assert 0 < d["closure_gap_mm"]["closed state 1"]["p50"] < d["closure_gap_mm"]["closed state 1"]["p95"]
+    assert (
+        0
+        < d["closure_gap_mm"]["closed state 1"]["p50"]
+        < d["closure_gap_mm"]["closed state 1"]["p95"]
+    )
     assert len(d["most_sensitive_tiles"]) == 5
     assert (tmp_path / "t" / "tolerance.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "most sensitive tiles" in err

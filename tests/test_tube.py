@@ -85,14 +85,17 @@ def test_seam_round_trips_through_pattern_json(tube68, tmp_path):
     assert verify_pattern(back).ok
 
 
-@pytest.mark.parametrize("seam, message", [
-    ({"columns": 8}, "'columns' and 'pairs'"),
-    ({"columns": 8, "pairs": [[0, 999]]}, "names tile 999"),
-    ({"columns": 7, "pairs": [[0, 8]]}, "even count"),
-    ({"columns": 8, "pairs": [[0, 8], [0, 17]]}, "uses a tile twice"),
-    ({"columns": 8, "pairs": [[0, 8]], "deployed": "sphere"}, "cylinder or cone"),
-    ({"columns": 8, "pairs": [[0, 8]], "closed": "cone"}, "closed must be cylinder"),
-])
+@pytest.mark.parametrize(
+    "seam, message",
+    [
+        ({"columns": 8}, "'columns' and 'pairs'"),
+        ({"columns": 8, "pairs": [[0, 999]]}, "names tile 999"),
+        ({"columns": 7, "pairs": [[0, 8]]}, "even count"),
+        ({"columns": 8, "pairs": [[0, 8], [0, 17]]}, "uses a tile twice"),
+        ({"columns": 8, "pairs": [[0, 8]], "deployed": "sphere"}, "cylinder or cone"),
+        ({"columns": 8, "pairs": [[0, 8]], "closed": "cone"}, "closed must be cylinder"),
+    ],
+)
 def test_a_malformed_seam_record_is_one_line_bad_input(tube68, tmp_path, run_cli, seam, message):
     path = tmp_path / "bad.json"
     write_pattern(tube68, path)

@@ -21,15 +21,26 @@ SPEC = "cone:20,18,80"
 def test_closed_cone_seam_round_trips():
     seam = lattice_seam(4, 6, "cone", "cone")
     assert seam.to_dict()["closed"] == "cone"
-    assert "closed" not in lattice_seam(4, 6, "cone").to_dict()  # cylinder tubes' files are unchanged
+    assert (
+        "closed" not in lattice_seam(4, 6, "cone").to_dict()
+    )  # cylinder tubes' files are unchanged
     assert seam.state_kind("deployed") == seam.state_kind(1) == "cone"
 
 
 def test_closed_cone_bad_input(tmp_path, run_cli):
     out = tmp_path / "t.json"
-    code, _, err = run_cli("design", "--tube", "cylinder:100,60", "--closed", "cone", "--tiles", "6x8", "-o", out)
-    assert code == 2 and "needs a cone target" in err and len(err.strip().splitlines()) == 1 and not out.exists()
-    code, _, err = run_cli("design", "--target", "circle", "--closed", "cone", "--tiles", "6x8", "-o", out)
+    code, _, err = run_cli(
+        "design", "--tube", "cylinder:100,60", "--closed", "cone", "--tiles", "6x8", "-o", out
+    )
+    assert (
+        code == 2
+        and "needs a cone target" in err
+        and len(err.strip().splitlines()) == 1
+        and not out.exists()
+    )
+    code, _, err = run_cli(
+        "design", "--target", "circle", "--closed", "cone", "--tiles", "6x8", "-o", out
+    )
     assert code == 2 and "--tube designs only" in err and not out.exists()
 
 
@@ -56,12 +67,16 @@ def test_cone_in_every_state_converges_verifies_and_changes_non_uniformly(cone_t
     for k in ("deployed", "1", "2"):
         s = states[k]
         assert s["shape"] == "cone" and s["seam_dev_rel"] < 1e-9
-        assert s["seam_rotation_rad"] == pytest.approx(turn, abs=1e-9)  # every state turns alike (rigid)
+        assert s["seam_rotation_rad"] == pytest.approx(
+            turn, abs=1e-9
+        )  # every state turns alike (rigid)
         assert s["radius_max_mm"] > 1.05 * s["radius_min_mm"]  # the radius varies along the axis
     assert states["deployed"]["radius_min_mm"] == pytest.approx(18, rel=1e-3)
     assert states["deployed"]["radius_max_mm"] == pytest.approx(20, rel=1e-3)
     ch = out.tube["changes_from_closed"]["2"]
-    assert abs(ch["radial_min"] - ch["radial_max"]) > 0.1  # non-uniform radial change (measured 1.98 / 1.82)
+    assert (
+        abs(ch["radial_min"] - ch["radial_max"]) > 0.1
+    )  # non-uniform radial change (measured 1.98 / 1.82)
 
 
 @pytest.mark.slow
@@ -86,7 +101,9 @@ def test_cone_tube_cli_info_cut_and_3d(cone_tube, tmp_path, run_cli):
         obj = trimesh.load(tmp_path / "t3d" / f"c_closed{s}.obj", process=False)
         rad = np.hypot(obj.vertices[:, 0], obj.vertices[:, 1])
         info = json.loads(path.read_text())["design"]["tube"]["states"][str(s)]
-        k = abs(info["seam_rotation_rad"]) / (2 * np.pi)  # every vertex on the cone of that sector angle
+        k = abs(info["seam_rotation_rad"]) / (
+            2 * np.pi
+        )  # every vertex on the cone of that sector angle
         assert np.abs(rad / obj.vertices[:, 2] - k / np.sqrt(1 - k * k)).max() < 1e-9
         # distance from the apex is convex, so its largest value over the tiles is at a reported corner
         assert rad.max() == pytest.approx(info["radius_max_mm"], rel=1e-9)
@@ -98,13 +115,21 @@ def test_gif_label_gives_a_cones_end_radii():
     from fabkiri.render.tube import _radius_text
 
     alpha = 0.5  # sector angle: a point at distance ρ from the apex rolls to radius ρ α / 2π
-    f = TubeFrame(origin=np.zeros(2), u=np.array([0.0, -1.0]), v=np.array([1.0, 0.0]), period=0.0,
-                  apex=np.zeros(2), alpha=alpha)
+    f = TubeFrame(
+        origin=np.zeros(2),
+        u=np.array([0.0, -1.0]),
+        v=np.array([1.0, 0.0]),
+        period=0.0,
+        apex=np.zeros(2),
+        alpha=alpha,
+    )
     quad = np.array([[[0.0, -10.0], [1.0, -10.0], [1.0, -12.0], [0.0, -12.0]]])
     k = alpha / (2 * np.pi)
     lo, hi = 10.0 * k, np.hypot(1.0, 12.0) * k
     assert _radius_text(quad, f) == f"{lo:.3g}..{hi:.3g}"
-    cyl = TubeFrame(origin=np.zeros(2), u=np.array([1.0, 0.0]), v=np.array([0.0, 1.0]), period=20 * np.pi)
+    cyl = TubeFrame(
+        origin=np.zeros(2), u=np.array([1.0, 0.0]), v=np.array([0.0, 1.0]), period=20 * np.pi
+    )
     assert _radius_text(quad, cyl) == "10"
 
 

@@ -47,7 +47,9 @@ def test_cut_a_tube_writes_the_flat_sheet_and_the_seam_note(tmp_path, run_cli):
     assert code == 0
     marked = read_cut_file(out / "tube.dxf", "ENGRAVE").polylines
     plain = read_cut_file(tmp_path / "plain" / "flat.dxf", "ENGRAVE").polylines
-    assert len(marked) - len(plain) >= 12 * 2  # a tick and at least a letter at each of the 12 corners
+    assert (
+        len(marked) - len(plain) >= 12 * 2
+    )  # a tick and at least a letter at each of the 12 corners
     assert read_cut_file(out / "tube.dxf").polylines  # the CUT layer is still there
     man = json.loads((out / "manifest.json").read_text())
     assert man["seam"]["columns"] == 8 and len(man["seam"]["hinges"]) == 6
@@ -63,5 +65,9 @@ def test_cut_refuses_a_tube_whose_seam_does_not_close(tmp_path, run_cli):
     write_pattern(broken, src)
     out = tmp_path / "cut"
     code, _, err = run_cli("cut", src, "-o", out)
-    assert code == 1 and "does not close across its seam" in err and "seam closes by a pure translation" in err
+    assert (
+        code == 1
+        and "does not close across its seam" in err
+        and "seam closes by a pure translation" in err
+    )
     assert not out.exists()

@@ -28,7 +28,9 @@ def _fd(fam, x, h=1e-6):
     for i in range(flat.size):
         e = np.zeros_like(flat)
         e[i] = h
-        out[:, i] = (fam((flat + e).reshape(-1, 2))[0] - fam((flat - e).reshape(-1, 2))[0]) / (2 * h)
+        out[:, i] = (fam((flat + e).reshape(-1, 2))[0] - fam((flat - e).reshape(-1, 2))[0]) / (
+            2 * h
+        )
     return out
 
 
@@ -40,8 +42,12 @@ def test_periodic_jacobians_match_finite_differences(spec):
     n = len(std.nodes)
     x = std.nodes + 0.05 * np.random.default_rng(0).normal(size=std.nodes.shape)
     geo = P.unit_geometry(P.parse_tube_target(spec), 6 * np.sqrt(2.0))
-    for fam in [P.deployed_seam(seam, st, geo, n), P.closed_seam(seam, st, 1, n), P.closed_seam(seam, st, 2, n),
-                P.tube_fit(st, geo, n)]:
+    for fam in [
+        P.deployed_seam(seam, st, geo, n),
+        P.closed_seam(seam, st, 1, n),
+        P.closed_seam(seam, st, 2, n),
+        P.tube_fit(st, geo, n),
+    ]:
         r, J = fam(x)
         assert J.shape == (len(r), 2 * n)
         assert np.abs(J.toarray() - _fd(fam, x)).max() < 1e-7, fam.name
@@ -62,10 +68,16 @@ def test_closed_seam_residual_is_the_closed_rotation_of_the_copy():
         assert got == pytest.approx(want, abs=1e-12)
 
 
-@pytest.mark.parametrize("spec, message", [
-    ("sphere:1,2", "--tube expects"), ("cylinder:100", "needs 2 positive"), ("cone:10,20,30", "must exceed"),
-    ("cylinder:-1,5", "needs 2 positive"), ("cylinder:a,b", "must be numbers"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ("sphere:1,2", "--tube expects"),
+        ("cylinder:100", "needs 2 positive"),
+        ("cone:10,20,30", "must exceed"),
+        ("cylinder:-1,5", "needs 2 positive"),
+        ("cylinder:a,b", "must be numbers"),
+    ],
+)
 def test_bad_tube_targets_are_one_line_input_errors(spec, message):
     with pytest.raises(InputError, match=message):
         P.parse_tube_target(spec)
@@ -74,14 +86,21 @@ def test_bad_tube_targets_are_one_line_input_errors(spec, message):
 def test_cli_design_tube_bad_input(tmp_path, run_cli):
     out = tmp_path / "t.json"
     code, _, err = run_cli("design", "--tube", "cylinder:100", "--tiles", "6x8", "-o", out)
-    assert code == 2 and "needs 2 positive" in err and len(err.strip().splitlines()) == 1 and not out.exists()
+    assert (
+        code == 2
+        and "needs 2 positive" in err
+        and len(err.strip().splitlines()) == 1
+        and not out.exists()
+    )
     code, _, err = run_cli("design", "--tube", "cylinder:100,60", "--tiles", "6x7", "-o", out)
     assert code == 2 and "even number of columns" in err and not out.exists()
 
 
 def test_the_standard_tube_is_its_own_design():
     """The standard sheet's own circumference and length: the solver keeps it (residual <= 1e-10)."""
-    res = TS.design_tube(TS.TubeRequest(6, 8, P.parse_tube_target(f"cylinder:{80 * np.sqrt(2)},{60 * np.sqrt(2)}")))
+    res = TS.design_tube(
+        TS.TubeRequest(6, 8, P.parse_tube_target(f"cylinder:{80 * np.sqrt(2)},{60 * np.sqrt(2)}"))
+    )
     assert res.converged and res.report["equality_max"] <= 1e-10
     assert res.report["fit_max_mm"] <= 1e-6
     assert res.pattern.tile_size == pytest.approx(10.0, rel=1e-9)
@@ -90,9 +109,17 @@ def test_the_standard_tube_is_its_own_design():
 def _tube_null_rotation(closed_states: tuple[int, ...]) -> float:
     """Largest change of the deployed seam's rotation allowed, to first order, at the standard tube by
     reconfigurability plus a translation seam in ``closed_states`` (unit null vectors)."""
-    prob = TS._TubeProblem(TS.TubeRequest(4, 6, P.parse_tube_target(f"cylinder:{60 * np.sqrt(2)},{40 * np.sqrt(2)}")))
+    prob = TS._TubeProblem(
+        TS.TubeRequest(4, 6, P.parse_tube_target(f"cylinder:{60 * np.sqrt(2)},{40 * np.sqrt(2)}"))
+    )
     x = TS._project(prob, prob.X0, 1e-12)[0]
-    names = ["edge_pairs_1", "edge_pairs_2", "rings_1", "rings_2", *[f"seam_closed_{s}" for s in closed_states]]
+    names = [
+        "edge_pairs_1",
+        "edge_pairs_2",
+        "rings_1",
+        "rings_2",
+        *[f"seam_closed_{s}" for s in closed_states],
+    ]
     rows = np.vstack([f(x)[1].toarray() for f in prob.eq if f.name in names])
     pairs = prob.seam.node_pairs(prob.st.tiles)
     n2 = x.size
@@ -116,10 +143,18 @@ def test_a_cone_is_locked_when_both_closed_states_are_cylinders():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("spec, state, axial, radial", [
-    ("cylinder:113.137,135", "2", (2.5, 3.5), (0.5, 0.8)),  # large axial change
-    ("cylinder:113.137,60", "1", (0.6, 0.9), (2.2, 3.0)),  # large radial change, axial contraction
-])
+@pytest.mark.parametrize(
+    "spec, state, axial, radial",
+    [
+        ("cylinder:113.137,135", "2", (2.5, 3.5), (0.5, 0.8)),  # large axial change
+        (
+            "cylinder:113.137,60",
+            "1",
+            (0.6, 0.9),
+            (2.2, 3.0),
+        ),  # large radial change, axial contraction
+    ],
+)
 def test_designed_tubes_converge_verify_and_roll(spec, state, axial, radial, tmp_path):
     out = design_tube_pattern((6, 8), spec)
     assert out.valid, out.problems
@@ -131,8 +166,9 @@ def test_designed_tubes_converge_verify_and_roll(spec, state, axial, radial, tmp
     for s in ("1", "2"):
         assert out.tube["states"][s]["seam_translation_dev_rel"] <= 1e-9
     files = tube_3d_files(out.pattern, stem="t", gif=False)
-    assert set(files) == {f"t_{s}.{e}" for s in ("deployed", "closed1", "closed2") for e in ("obj", "stl")} | {
-        "t_states.png"}
+    assert set(files) == {
+        f"t_{s}.{e}" for s in ("deployed", "closed1", "closed2") for e in ("obj", "stl")
+    } | {"t_states.png"}
     from fabkiri.fabricate.tube3d import plate_overlap
 
     for s in (1, 2):  # both closed states non-overlapping in 3D, plate against plate
@@ -148,7 +184,9 @@ def test_designed_tubes_converge_verify_and_roll(spec, state, axial, radial, tmp
     assert len(stl.faces) == sum(len(p.faces) for p in plates)
     # closed state 1 rolled: every vertex of the inner faces on the cylinder of the reported radius
     rad = out.tube["states"]["1"]["radius_min_mm"]
-    obj = trimesh.load(trimesh.util.wrap_as_stream(files["t_closed1.obj"]), file_type="obj", process=False)
+    obj = trimesh.load(
+        trimesh.util.wrap_as_stream(files["t_closed1.obj"]), file_type="obj", process=False
+    )
     assert np.abs(np.hypot(obj.vertices[:, 0], obj.vertices[:, 1]) - rad).max() < 1e-9 * rad
 
 
@@ -184,7 +222,9 @@ def test_tubes_reached_from_perturbed_starts_are_rigid_deployable():
     """Finding behind the cone lock (docs/tubes.md): projecting perturbed sheets onto reconfigurability
     plus translation seams in both closed states lands on rigid-deployable tubes (hinge sums 0), whose
     same-colour tiles all turn by one angle, so the deployed seam turns exactly as the closed ones."""
-    prob = TS._TubeProblem(TS.TubeRequest(4, 6, P.parse_tube_target(f"cylinder:{60 * np.sqrt(2)},{40 * np.sqrt(2)}")))
+    prob = TS._TubeProblem(
+        TS.TubeRequest(4, 6, P.parse_tube_target(f"cylinder:{60 * np.sqrt(2)},{40 * np.sqrt(2)}"))
+    )
     hinge_sums = C.hinge_sums(prob.st, prob.st.n_nodes)
     for seed in (1, 2):
         start = prob.X0 + 0.02 * np.random.default_rng(seed).normal(size=prob.X0.shape)

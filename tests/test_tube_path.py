@@ -27,8 +27,7 @@ def test_designed_tube_stays_a_cylinder_but_its_radius_overshoots_on_the_path():
     half = len(radius) // 2
     assert radius[half] == pytest.approx(113.137 / (2 * np.pi), rel=1e-4)  # the deployed frame
     assert radius[half:].max() > radius[-1] * 1.05  # overshoot before closed state 2
-    assert np.all(np.diff(radius[:half + 1]) > 0)  # while from closed state 1 it only grows
-
+    assert np.all(np.diff(radius[: half + 1]) > 0)  # while from closed state 1 it only grows
 
 
 def test_deploy_reports_the_standard_tubes_radius_in_every_frame(tmp_path, run_cli):
@@ -45,8 +44,12 @@ def test_deploy_reports_the_standard_tubes_radius_in_every_frame(tmp_path, run_c
     assert len(rows) == 42  # header + 41 frames
     import json
 
-    radius = np.array(json.loads((tmp_path / "dep" / "deploy.json").read_text())["tube"]["radius_max_mm"])
-    assert np.allclose([float(r.split(",")[2]) for r in rows[1:]], radius, rtol=1e-8)  # csv: 9 digits
+    radius = np.array(
+        json.loads((tmp_path / "dep" / "deploy.json").read_text())["tube"]["radius_max_mm"]
+    )
+    assert np.allclose(
+        [float(r.split(",")[2]) for r in rows[1:]], radius, rtol=1e-8
+    )  # csv: 9 digits
     assert radius[20] == pytest.approx(radius[0] * np.sqrt(2), rel=1e-9)  # ψ 45° -> 90°: x√2
     assert radius[-1] == pytest.approx(radius[0], rel=1e-9)
     assert "radius, closed state 1 -> deployed: monotonic" in err
@@ -81,4 +84,8 @@ def test_a_tube_with_a_smaller_axial_change_and_a_radius_that_swells_and_shrinks
     assert 0.0 < first["t_at_peak"] < 0.5
     assert max(prof["seam_translation_dev_rel"]) < 1e-10  # a cylinder in every frame
     length = prof["length_change"]
-    assert length["closed state 1 -> deployed"]["end_mm"] / length["closed state 1 -> deployed"]["start_mm"] < 2.5
+    assert (
+        length["closed state 1 -> deployed"]["end_mm"]
+        / length["closed state 1 -> deployed"]["start_mm"]
+        < 2.5
+    )

@@ -13,7 +13,9 @@ from fabkiri.pattern.periodic import seam_map
 
 
 def _problem(rows, cols):
-    return TS._TubeProblem(TS.TubeRequest(rows, cols, P.parse_tube_target(f"cylinder:{cols * 10},{rows * 10}")))
+    return TS._TubeProblem(
+        TS.TubeRequest(rows, cols, P.parse_tube_target(f"cylinder:{cols * 10},{rows * 10}"))
+    )
 
 
 def test_free_seam_rows_match_finite_differences():
@@ -46,8 +48,15 @@ def _dims_at(rows, cols, seed=None):
     return TR.family_dimensions(prob.st, prob.seam, x)
 
 
-@pytest.mark.parametrize("rows, cols, seed", [(4, 6, None), (4, 6, 1), pytest.param(6, 8, None, marks=pytest.mark.slow),
-                                             pytest.param(6, 8, 2, marks=pytest.mark.slow)])
+@pytest.mark.parametrize(
+    "rows, cols, seed",
+    [
+        (4, 6, None),
+        (4, 6, 1),
+        pytest.param(6, 8, None, marks=pytest.mark.slow),
+        pytest.param(6, 8, 2, marks=pytest.mark.slow),
+    ],
+)
 def test_hinge_sums_do_not_cut_the_tube_family(rows, cols, seed):
     """Adding the rigidity rows leaves the tube family's rank unchanged (same tangent space), while the
     same rows cut the planar family (algorithm spec §2.3: 2(M+N)+5 against 2(M+N)+2) and the family with
@@ -90,11 +99,15 @@ def test_generic_tube_is_rigid_and_its_deployed_seam_does_not_turn():
     assert abs(seam_map(x[prob.st.tiles], prob.seam).rotation) < 1e-10
     beta = x.size  # the deployed seam's turn, in the Jacobian's columns
     for closed, turns in [((1,), True), ((1, 2), False)]:
-        null = scipy.linalg.null_space(TR.tube_jacobian(prob.st, prob.seam, x, closed).toarray(), rcond=1e-10)
+        null = scipy.linalg.null_space(
+            TR.tube_jacobian(prob.st, prob.seam, x, closed).toarray(), rcond=1e-10
+        )
         assert (np.abs(null[beta]).max() > 1e-3) == turns
 
 
-@pytest.mark.parametrize("spec, seed, amp", [("cone:18,9,56.6", 0, 0.0), ("cone:16,11,56.6", 2, 0.1)])
+@pytest.mark.parametrize(
+    "spec, seed, amp", [("cone:18,9,56.6", 0, 0.0), ("cone:16,11,56.6", 2, 0.1)]
+)
 def test_a_cone_sheet_projects_onto_a_rigid_cylinder_when_the_seam_is_free(spec, seed, amp):
     """Globally, not only near the standard tube: a sheet laid on a cone's unrolled sector (deployed seam
     turned by 0.5-1 rad), projected onto the tube family with the deployed seam map left free, lands on a
@@ -106,4 +119,6 @@ def test_a_cone_sheet_projects_onto_a_rigid_cylinder_when_the_seam_is_free(spec,
     assert eq_max <= 1e-12
     assert abs(beta) < 1e-10
     assert np.abs(C.hinge_sums(prob.st, prob.st.n_nodes)(x)[0]).max() < 1e-10
-    assert C.non_overlap(prob.st, prob.st.n_nodes)(x)[0].min() > 0.05  # a proper sheet, not collapsed
+    assert (
+        C.non_overlap(prob.st, prob.st.n_nodes)(x)[0].min() > 0.05
+    )  # a proper sheet, not collapsed

@@ -66,11 +66,15 @@ def test_a_folded_member_is_unfolded_to_the_margin(shift):
     after = _corner_crosses(fam.Z @ S, quads)
     assert info["ok"] and info["corners_below_margin"] >= 1
     q = grid[quads]
-    l2 = np.mean(0.5 * np.abs(_cross2(q[:, 2] - q[:, 0], q[:, 3] - q[:, 1])))  # the margin's unit, mean cell area
+    l2 = np.mean(
+        0.5 * np.abs(_cross2(q[:, 2] - q[:, 0], q[:, 3] - q[:, 1]))
+    )  # the margin's unit, mean cell area
     assert after.min() >= 0.5 * MARGIN * l2
     # the repair moves the grid less than the fold it undoes
     move = np.abs(fam.Z @ S - grid).max()
-    assert move == pytest.approx(info["move_rel"] * np.sqrt(l2), rel=1e-9) and move < np.hypot(*shift)
+    assert move == pytest.approx(info["move_rel"] * np.sqrt(l2), rel=1e-9) and move < np.hypot(
+        *shift
+    )
 
 
 @pytest.mark.slow
@@ -84,7 +88,9 @@ def test_the_leaf_svg_coarse_start_is_repaired_not_discarded():
     tgt = load_target(str(REPO / "bench" / "data" / "leaf.svg"), 100.0)
     prob = _Problem(DesignRequest(32, 32, tgt, rigid=True, init="coarse", outline=True))
     un = prob.coarse["unfold"]
-    assert un["folded_cells"] >= 1 and un["ok"]  # the nearest member folded: the case this repair is for
+    assert (
+        un["folded_cells"] >= 1 and un["ok"]
+    )  # the nearest member folded: the case this repair is for
     assert prob.coarse["used"] and prob.coarse["folded_tiles"] == 0
     assert geometry.signed_areas(prob.X0[prob.st.tiles]).min() > 0
     q = prob.rigid_family.grid(prob.start_member[0])[prob.rigid_family.node_vertex[prob.st.tiles]]

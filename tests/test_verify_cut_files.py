@@ -22,10 +22,29 @@ def cut_dirs(tmp_path_factory):
 
     root = tmp_path_factory.mktemp("cut")
     out = {}
-    for hinge, material in (("tape", "acrylic-3"), ("separate", "acrylic-3"), ("ligament", "pp-0.5")):
+    for hinge, material in (
+        ("tape", "acrylic-3"),
+        ("separate", "acrylic-3"),
+        ("ligament", "pp-0.5"),
+    ):
         d = root / hinge
-        code = main(["cut", str(PATTERN), "--material", material, "--hinge", hinge, "--width", "300",
-                     "--formats", "dxf,svg", "--no-verify", "-o", str(d)])
+        code = main(
+            [
+                "cut",
+                str(PATTERN),
+                "--material",
+                material,
+                "--hinge",
+                hinge,
+                "--width",
+                "300",
+                "--formats",
+                "dxf,svg",
+                "--no-verify",
+                "-o",
+                str(d),
+            ]
+        )
         assert code == 0
         out[hinge] = d
     return out
@@ -64,8 +83,14 @@ def test_edited_real_files_are_rejected(cut_dirs, pattern, tmp_path):
     ref = json.loads((src / "manifest.json").read_text())["reference_square"]["corners"]
 
     def tiles_only(cut):
-        return [e for e in cut if len(e) != 4 or not np.allclose(
-            np.sort(np.array(e.get_points("xy")), 0), np.sort(np.array(ref), 0), atol=1e-6)]
+        return [
+            e
+            for e in cut
+            if len(e) != 4
+            or not np.allclose(
+                np.sort(np.array(e.get_points("xy")), 0), np.sort(np.array(ref), 0), atol=1e-6
+            )
+        ]
 
     def scale_sheet(cut, doc):
         for e in cut:
@@ -86,10 +111,12 @@ def test_edited_real_files_are_rejected(cut_dirs, pattern, tmp_path):
         pts[0] += [0.1, 0.0]
         e.set_points([tuple(p) for p in pts], format="xy")
 
-    for name, edit, failing in (("scale", scale_sheet, "layout: (a) cut tiles congruent to design"),
-                                ("mirror", mirror_one, "layout: (a) cut tiles congruent to design"),
-                                ("drop", drop_one, "layout: tiles recovered"),
-                                ("corner", move_corner, "layout: (a) cut tiles congruent to design")):
+    for name, edit, failing in (
+        ("scale", scale_sheet, "layout: (a) cut tiles congruent to design"),
+        ("mirror", mirror_one, "layout: (a) cut tiles congruent to design"),
+        ("drop", drop_one, "layout: tiles recovered"),
+        ("corner", move_corner, "layout: (a) cut tiles congruent to design"),
+    ):
         path = _edit_dxf(src, tmp_path / name, edit)
         rep = verify_layout(pattern, path)
         assert not rep.ok and failing in {c.name for c in rep.failed()}, (name, rep.to_text())

@@ -12,12 +12,16 @@ from fabkiri.verify.pattern_checks import enclosed_gaps
 
 def test_a_crack_around_an_island_is_not_a_gap():
     """A ring of tiles with a rounding-width crack around an inner tile: the gap is the crack, not the ring."""
-    outer = shapely.Polygon([(0, 0), (30, 0), (30, 30), (0, 30)], [[(10, 10), (20, 10), (20, 20), (10, 20)]])
+    outer = shapely.Polygon(
+        [(0, 0), (30, 0), (30, 30), (0, 30)], [[(10, 10), (20, 10), (20, 20), (10, 20)]]
+    )
     island = shapely.Polygon([(10 + 1e-9, 10), (20, 10), (20, 20), (10, 20)])
     gaps = enclosed_gaps(shapely.union_all([outer, island]))
     assert sum(g.area for g in gaps) < 1e-7
     # a real hole is still a hole
-    gaps = enclosed_gaps(shapely.union_all([outer, shapely.Polygon([(12, 12), (18, 12), (18, 18), (12, 18)])]))
+    gaps = enclosed_gaps(
+        shapely.union_all([outer, shapely.Polygon([(12, 12), (18, 12), (18, 18), (12, 18)])])
+    )
     assert abs(sum(g.area for g in gaps) - 64.0) < 1e-9
 
 
@@ -26,7 +30,22 @@ def parallelogram(tmp_path_factory):
     from fabkiri.cli.main import main
 
     path = tmp_path_factory.mktemp("para") / "para.json"
-    assert main(["design", "--tiles", "6x6", "--holes", "parallelogram", "--target", "circle", "-o", str(path)]) == 0
+    assert (
+        main(
+            [
+                "design",
+                "--tiles",
+                "6x6",
+                "--holes",
+                "parallelogram",
+                "--target",
+                "circle",
+                "-o",
+                str(path),
+            ]
+        )
+        == 0
+    )
     return path
 
 
@@ -34,8 +53,12 @@ def test_parallelogram_design_verifies_and_cuts(parallelogram, tmp_path, run_cli
     p = read_pattern(parallelogram)
     rep = verify_pattern(p)
     assert rep.ok, rep.to_text()
-    assert "T-junctions" in rep.get("state 1: folded gaps closed").detail  # the design really is parallelogram
-    code, _, err = run_cli("cut", parallelogram, "--hinge", "separate", "--formats", "dxf,svg", "-o", tmp_path / "c")
+    assert (
+        "T-junctions" in rep.get("state 1: folded gaps closed").detail
+    )  # the design really is parallelogram
+    code, _, err = run_cli(
+        "cut", parallelogram, "--hinge", "separate", "--formats", "dxf,svg", "-o", tmp_path / "c"
+    )
     assert code == 0, err
     for f in ("para.dxf", "para.svg"):
         lay = verify_layout(p, tmp_path / "c" / f)
@@ -48,12 +71,17 @@ def test_deploy_exits_1_on_its_own_failed_check_and_sizes_the_overlaps(run_cli, 
     from .conftest import ref
 
     out = tmp_path / "ref"
-    code, _, err = run_cli("deploy", ref("compact_reconfigurable_design"), "--steps", "10", "--no-frames", "-o", out)
+    code, _, err = run_cli(
+        "deploy", ref("compact_reconfigurable_design"), "--steps", "10", "--no-frames", "-o", out
+    )
     assert code == 1  # without --check too
     assert (out / "energy.csv").exists()  # the figures are written first
     import re
 
-    m = re.search(r"collisions: (\d+) overlaps .* largest tiles \d+/\d+ ([0-9.e+-]+) mm² \(([0-9.e+-]+) mm deep\)", err)
+    m = re.search(
+        r"collisions: (\d+) overlaps .* largest tiles \d+/\d+ ([0-9.e+-]+) mm² \(([0-9.e+-]+) mm deep\)",
+        err,
+    )
     assert m, err
     assert float(m.group(2)) > 0 and float(m.group(3)) > 0
 
@@ -74,16 +102,34 @@ def test_closed_state_outline_targets_are_checked():
     d = copy.deepcopy(p.design)
     del d["contracted_targets"]["1"]
     d["options"]["contracted"]["1"] = {"rectangle": True, "ratio": 2.0}
-    rect = _outline_checks(verify_pattern(Pattern(nodes=p.nodes, tiles=p.tiles, lattice=p.lattice, design=d)))
-    assert not rect["state 1: outline aspect ratio"].ok and rect["state 1: outline aspect ratio"].value > 10
+    rect = _outline_checks(
+        verify_pattern(Pattern(nodes=p.nodes, tiles=p.tiles, lattice=p.lattice, design=d))
+    )
+    assert (
+        not rect["state 1: outline aspect ratio"].ok
+        and rect["state 1: outline aspect ratio"].value > 10
+    )
 
 
 @pytest.mark.slow
 def test_a_degenerate_contracted_rectangle_is_reported(tmp_path, run_cli):
     path = tmp_path / "rr.json"
-    code, _, err = run_cli("design", "--tiles", "6x6", "--target", "circle", "--contracted-target", "1:rect",
-                           "--contracted-target", "2:rect", "-o", path)
-    assert path.exists(), err  # (design itself exits 1 when the deployed circle is missed: written anyway)
+    code, _, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "circle",
+        "--contracted-target",
+        "1:rect",
+        "--contracted-target",
+        "2:rect",
+        "-o",
+        path,
+    )
+    assert path.exists(), (
+        err
+    )  # (design itself exits 1 when the deployed circle is missed: written anyway)
     code, out, _ = run_cli("verify", path)
     assert code == 1
     chk = verify_pattern(read_pattern(path)).get("state 1: outline not degenerate")
@@ -110,12 +156,19 @@ def test_one_tolerance_in_mm_angles_as_displacement(tmp_path, run_cli):
     base = lf.distinct_pattern()  # 20 mm tiles
     p = _near_closed(base, 3e-4)
     exact = verify_pattern(p)  # the relative tier: 1e-9 of the tile edge
-    assert not exact.get("state 2: tiles congruent (angles)").ok and exact.get(
-        "state 2: tiles congruent (angles)").unit == "rad"
+    assert (
+        not exact.get("state 2: tiles congruent (angles)").ok
+        and exact.get("state 2: tiles congruent (angles)").unit == "rad"
+    )
     mm = verify_pattern(p, tol_mm=0.05)
     assert mm.ok, mm.to_text()
     ang = mm.get("state 2: tiles congruent (angles)")
-    assert ang.unit == "mm" and 1e-5 < ang.value < 1e-3 and ang.tol == 0.05 and "displacement" in mm.meta["tolerance"]
+    assert (
+        ang.unit == "mm"
+        and 1e-5 < ang.value < 1e-3
+        and ang.tol == 0.05
+        and "displacement" in mm.meta["tolerance"]
+    )
     # a real error is still one at 0.05 mm, named by tile
     bad = verify_pattern(_near_closed(base, 0.2), tol_mm=0.05)
     for name in ("state 2: tiles congruent (lengths)", "state 2: tiles congruent (angles)"):
@@ -124,10 +177,17 @@ def test_one_tolerance_in_mm_angles_as_displacement(tmp_path, run_cli):
     pj = tmp_path / "near.json"
     write_pattern(p, pj)
     code, out, _ = run_cli("verify", pj)
-    assert code == 0 and "0.05 mm for lengths, and for angles as their displacement" in out.splitlines()[0]
+    assert (
+        code == 0
+        and "0.05 mm for lengths, and for angles as their displacement" in out.splitlines()[0]
+    )
     code, out, _ = run_cli("verify", pj, "--exact")
     assert code == 1 and "exact" in out.splitlines()[0]
-    code, _, err = run_cli("cut", pj, "--hinge", "separate", "--formats", "dxf", "-o", tmp_path / "c")
+    code, _, err = run_cli(
+        "cut", pj, "--hinge", "separate", "--formats", "dxf", "-o", tmp_path / "c"
+    )
     assert code == 0, err
-    code, _, err = run_cli("cut", pj, "--hinge", "separate", "--formats", "dxf", "--exact", "-o", tmp_path / "x")
+    code, _, err = run_cli(
+        "cut", pj, "--hinge", "separate", "--formats", "dxf", "--exact", "-o", tmp_path / "x"
+    )
     assert code == 1 and "tiles congruent" in err and not (tmp_path / "x").exists()

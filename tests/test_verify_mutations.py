@@ -94,15 +94,21 @@ def test_at_least_200_mutations_all_rejected(pattern, tmp_path):
 def test_mutations_name_the_right_failure(pattern, tmp_path):
     rng = np.random.default_rng(7)
     X = _base(pattern, "separate", rng)
-    rep = verify_layout(pattern, _write(tmp_path, "mir", pattern, lf.mirror_tile(X, 5), "separate", "dxf"))
+    rep = verify_layout(
+        pattern, _write(tmp_path, "mir", pattern, lf.mirror_tile(X, 5), "separate", "dxf")
+    )
     chk = rep.get("layout: (a) cut tiles congruent to design")
     assert not chk.ok and chk.worst == "tile 5" and "mirrored tiles [5]" in chk.detail
-    rep = verify_layout(pattern, _write(tmp_path, "drop", pattern, lf.drop_tile(X, 3), "separate", "dxf"))
+    rep = verify_layout(
+        pattern, _write(tmp_path, "drop", pattern, lf.drop_tile(X, 3), "separate", "dxf")
+    )
     chk = rep.get("layout: tiles recovered")
     assert not chk.ok and chk.value == pattern.n_tiles - 1 and chk.worst == "tile 3"
     assert not rep.get("layout: (d) every hinge present").ok
     Y = _base(pattern, "tape", rng)
-    rep = verify_layout(pattern, _write(tmp_path, "rot", pattern, lf.rotate_tile(Y, 11, 0.5), "tape", "svg"))
+    rep = verify_layout(
+        pattern, _write(tmp_path, "rot", pattern, lf.rotate_tile(Y, 11, 0.5), "tape", "svg")
+    )
     assert not rep.ok
     # failures are listed first in the text table
     lines = rep.to_text().splitlines()
@@ -113,7 +119,9 @@ def valid_variants(pattern, rng):
     out = []
     for n in range(56):
         hinge = ("tape", "separate")[n % 2]
-        C = _base(pattern, hinge, rng)  # random sheet rotation + translation / random exploded placement
+        C = _base(
+            pattern, hinge, rng
+        )  # random sheet rotation + translation / random exploded placement
         if rng.random() < 0.5:
             C = C + rng.uniform(-500, 500, 2)
         kerf = float(rng.choice([0.0, 0.05, 0.1, 0.15])) if hinge == "separate" else 0.0
@@ -147,17 +155,30 @@ def test_plain_files_from_other_tools(pattern, tmp_path):
     for fmt in FORMATS:
         for hinge in ("tape", "separate"):
             C = _base(pattern, hinge, rng)
-            path = _write(tmp_path, f"plain-{fmt}-{hinge}", pattern, C, hinge, fmt, kerf_offset=0.0,
-                          manifest=False, reference=False)
+            path = _write(
+                tmp_path,
+                f"plain-{fmt}-{hinge}",
+                pattern,
+                C,
+                hinge,
+                fmt,
+                kerf_offset=0.0,
+                manifest=False,
+                reference=False,
+            )
             rep = verify_layout(pattern, path)
             assert rep.ok, rep.to_text()
             assert rep.meta["layout"] == ("in-place" if hinge == "tape" else "separate")
             assert any("(b)" in n for n in rep.names()) == (hinge == "tape")
     # an in-place sheet of closed state 2 without a manifest: the state is found, not assumed
     C = lf.in_place_corners(pattern, 2, 1.0)
-    path = _write(tmp_path, "plain-state2", pattern, C, "tape", "dxf", manifest=False, reference=False)
+    path = _write(
+        tmp_path, "plain-state2", pattern, C, "tape", "dxf", manifest=False, reference=False
+    )
     rep = verify_layout(pattern, path)
-    assert rep.ok and rep.meta["state"] == 2 and "layout: (b) in place = closed state 2" in rep.names()
+    assert (
+        rep.ok and rep.meta["state"] == 2 and "layout: (b) in place = closed state 2" in rep.names()
+    )
 
 
 def test_kerf_must_be_declared(pattern, tmp_path):

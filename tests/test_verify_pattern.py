@@ -24,12 +24,20 @@ def _failed(rep: Report) -> set[str]:
 
 
 def test_compact_reconfigurable_only_the_bow_tie_fails():
-    p = adopt_state_labels(import_obj(
-        ref("compact_reconfigurable_design"),
-        [ref("compact_reconfigurable_contracted1"), ref("compact_reconfigurable_contracted2")]))
+    p = adopt_state_labels(
+        import_obj(
+            ref("compact_reconfigurable_design"),
+            [ref("compact_reconfigurable_contracted1"), ref("compact_reconfigurable_contracted2")],
+        )
+    )
     rep = verify_pattern(p)
-    assert _failed(rep) == {"tiles simple", "state 1: no overlaps", "state 2: no overlaps",
-                            "state 1: union area = sum of tile areas", "state 2: union area = sum of tile areas"}
+    assert _failed(rep) == {
+        "tiles simple",
+        "state 1: no overlaps",
+        "state 2: no overlaps",
+        "state 1: union area = sum of tile areas",
+        "state 2: union area = sum of tile areas",
+    }
     simple = rep.get("tiles simple")
     assert simple.value == 1 and simple.worst == "tile 2" and "720°" in simple.detail
     for s in (1, 2):
@@ -38,11 +46,22 @@ def test_compact_reconfigurable_only_the_bow_tie_fails():
         assert "all caused by self-intersecting tile(s) [2]" in ov.detail
         # the overlaps are slight (the file's tiles are otherwise exact)
         assert 1e-5 * p.tile_size < ov.value < 1e-3 * p.tile_size
-        for name in ("loop closure", "holes closed", "folded gaps closed", "no interior gaps",
-                     "one outline", "stored state matches computed", "tiles congruent (lengths)"):
+        for name in (
+            "loop closure",
+            "holes closed",
+            "folded gaps closed",
+            "no interior gaps",
+            "one outline",
+            "stored state matches computed",
+            "tiles congruent (lengths)",
+        ):
             assert rep.get(f"state {s}: {name}").ok, name
     # the ring that the bow-tie puts off by 2π is flagged, not failed
-    assert any("wrapped by 2π because of tiles [2]" in c.detail for c in rep.checks if c.name.endswith("rings"))
+    assert any(
+        "wrapped by 2π because of tiles [2]" in c.detail
+        for c in rep.checks
+        if c.name.endswith("rings")
+    )
     hs = rep.get("hinge sums")
     assert not hs.applies and hs.ok and 0.08 < hs.value < 0.09
 
@@ -96,7 +115,9 @@ def test_designed_distinct_pattern_passes():
     assert len(np.unique(np.round(np.sort(L, 1), 6), axis=0)) == p.n_tiles
 
 
-def two_size_squares(rows: int, cols: int, a: float = 10.0, b: float = 6.0, psi: float = np.radians(30)) -> Pattern:
+def two_size_squares(
+    rows: int, cols: int, a: float = 10.0, b: float = 6.0, psi: float = np.radians(30)
+) -> Pattern:
     """Rotating squares of two sizes: parallelogram holes (spec §2.9), rigid-deployable."""
     tiles, _ = quad_topology(rows, cols)
     T = rows * cols
@@ -118,7 +139,9 @@ def two_size_squares(rows: int, cols: int, a: float = 10.0, b: float = 6.0, psi:
     nodes = np.zeros((tiles.max() + 1, 2))
     nodes[tiles.ravel()] = Y.reshape(-1, 2)
     assert np.abs(nodes[tiles] - Y).max() < 1e-12
-    return Pattern(nodes=nodes, tiles=tiles, name="two-size squares", design={"rigid_deployable": True})
+    return Pattern(
+        nodes=nodes, tiles=tiles, name="two-size squares", design={"rigid_deployable": True}
+    )
 
 
 def test_parallelogram_holes_count_as_closed():
@@ -126,7 +149,9 @@ def test_parallelogram_holes_count_as_closed():
     rep = verify_pattern(p)
     assert rep.ok, rep.to_text()
     for s in (1, 2):
-        assert "T-junctions (parallelogram holes)" in rep.get(f"state {s}: folded gaps closed").detail
+        assert (
+            "T-junctions (parallelogram holes)" in rep.get(f"state {s}: folded gaps closed").detail
+        )
     assert "notch pairs differ" in rep.get("state 1: edge pairs").detail
 
 
@@ -170,11 +195,21 @@ def test_target_fit():
     centre = tips.mean(0)
     ang = np.arctan2(*(tips - centre).T[::-1])
     outline = tips[np.argsort(ang)]
-    good = Pattern(nodes=p.nodes, tiles=p.tiles, lattice=p.lattice,
-                   design={"rigid_deployable": True, "target": {"points": outline.tolist(), "tolerance_mm": 1e-6}})
+    good = Pattern(
+        nodes=p.nodes,
+        tiles=p.tiles,
+        lattice=p.lattice,
+        design={
+            "rigid_deployable": True,
+            "target": {"points": outline.tolist(), "tolerance_mm": 1e-6},
+        },
+    )
     assert verify_pattern(good).get("target shape").ok
-    far = Pattern(nodes=p.nodes, tiles=p.tiles,
-                  design={"target": {"points": (outline * 1.1).tolist(), "tolerance_mm": 1e-6}})
+    far = Pattern(
+        nodes=p.nodes,
+        tiles=p.tiles,
+        design={"target": {"points": (outline * 1.1).tolist(), "tolerance_mm": 1e-6}},
+    )
     chk = verify_pattern(far).get("target shape")
     assert not chk.ok and chk.value > 1.0 and "Hausdorff" in chk.detail
 
@@ -198,7 +233,7 @@ def test_report_serialises_and_lists_failures_first():
     lines = rep.to_text().splitlines()
     marks = [ln.split()[0] for ln in lines[2:] if ln and ln.split()[0] in ("FAIL", "ok", "info")]
     assert marks[: len(rep.failed())] == ["FAIL"] * len(rep.failed())
-    assert "FAIL" not in marks[len(rep.failed()):]
+    assert "FAIL" not in marks[len(rep.failed()) :]
     assert lines[-1].startswith("verdict: FAIL")
 
 
@@ -221,11 +256,15 @@ def test_target_shape_ignores_the_solver_claim():
 
     p = read_pattern(TEMPLATES / "patterns" / "circle-8x8-rigid.json")
     chk = verify_pattern(p).get("target shape")
-    assert chk.ok and 1e-3 < chk.value < 2.0  # a real, inexact outline within 2 % of the 100 mm size
+    assert (
+        chk.ok and 1e-3 < chk.value < 2.0
+    )  # a real, inexact outline within 2 % of the 100 mm size
     claims = json.loads(json.dumps(p.design))
     claims["report"]["fit"]["shape"]["max_mm"] = 1e-9  # a false claim changes nothing
     claims["target"]["tolerance_mm"] = 1e6
-    assert verify_pattern(dataclasses.replace(p, design=claims)).get("target shape").value == chk.value
+    assert (
+        verify_pattern(dataclasses.replace(p, design=claims)).get("target shape").value == chk.value
+    )
     assert not verify_pattern(p, shape_tol=(0.5 * chk.value, "mm")).get("target shape").ok
 
 
@@ -238,7 +277,14 @@ def test_closed_state_checks_carry_stable_ids():
 
     rep = verify_pattern(with_contracted_states(standard_pattern(3, 3)))
     for s in (1, 2):
-        for what in ("loop-closure", "congruent-lengths", "congruent-angles", "holes-closed", "edge-pairs", "rings"):
+        for what in (
+            "loop-closure",
+            "congruent-lengths",
+            "congruent-angles",
+            "holes-closed",
+            "edge-pairs",
+            "rings",
+        ):
             assert rep.by_id(f"state{s}.{what}").ok
         assert rep.by_id(f"state{s}.edge-pairs").name == f"state {s}: edge pairs"
     ids = [c.id for c in rep.checks if c.id]

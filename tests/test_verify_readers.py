@@ -17,14 +17,21 @@ from . import layout_fixtures as lf
 
 
 def _same(a: L.Linework, b: L.Linework) -> bool:
-    return (len(a.polylines) == len(b.polylines) and a.closed == b.closed
-            and all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines)))
+    return (
+        len(a.polylines) == len(b.polylines)
+        and a.closed == b.closed
+        and all(np.array_equal(x, y) for x, y in zip(a.polylines, b.polylines))
+    )
 
 
 def test_fast_dxf_reader_matches_ezdxf(tmp_path):
     p = lf.distinct_pattern()
     for hinge in ("tape", "separate"):
-        C = lf.in_place_corners(p, 1, 0.4) if hinge == "tape" else lf.exploded_corners(p, np.random.default_rng(3))
+        C = (
+            lf.in_place_corners(p, 1, 0.4)
+            if hinge == "tape"
+            else lf.exploded_corners(p, np.random.default_rng(3))
+        )
         path = lf.write_layout(tmp_path / hinge, p, C, hinge=hinge, fmt="dxf", kerf_offset=0.1)
         fast = dxfcodec.read_layer_tags(path)
         assert fast is not None and _same(fast, L._read_dxf_full(path))
@@ -34,7 +41,9 @@ def test_dxf_units_curves_and_plain_layers(tmp_path):
     doc = ezdxf.new("R2010", units=1)  # inches
     msp = doc.modelspace()
     msp.add_lwpolyline([(0, 0), (1, 0), (1, 1), (0, 1)], close=True, dxfattribs={"layer": "CUT"})
-    msp.add_lwpolyline([(2, 0), (3, 0, 0.5), (3, 1)], format="xyb", dxfattribs={"layer": "CUT"})  # an arc
+    msp.add_lwpolyline(
+        [(2, 0), (3, 0, 0.5), (3, 1)], format="xyb", dxfattribs={"layer": "CUT"}
+    )  # an arc
     msp.add_line((5, 5), (6, 6), dxfattribs={"layer": "ENGRAVE"})
     msp.add_line((0, 2), (1, 2), dxfattribs={"layer": "CUT"})
     path = tmp_path / "in.dxf"
@@ -47,7 +56,9 @@ def test_dxf_units_curves_and_plain_layers(tmp_path):
     assert len(lw.polylines[1]) > 3  # the arc was flattened
     # no CUT layer: every outline not on an annotation layer
     doc = ezdxf.new("R2010", units=4)
-    doc.modelspace().add_lwpolyline([(0, 0), (10, 0), (10, 10)], close=True, dxfattribs={"layer": "0"})
+    doc.modelspace().add_lwpolyline(
+        [(0, 0), (10, 0), (10, 10)], close=True, dxfattribs={"layer": "0"}
+    )
     doc.modelspace().add_lwpolyline([(0, 0), (1, 1)], dxfattribs={"layer": "NOTES"})
     doc.saveas(tmp_path / "plain.dxf")
     lw = L.read_cut_file(tmp_path / "plain.dxf")
@@ -74,26 +85,42 @@ def test_svg_mm_flip_and_transforms(tmp_path):
 def test_quads_of_drops_collinear_points_and_restores_bevelled_corners():
     sq = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
     with_tjunction = np.array([[0, 0], [5, 0], [10, 0], [10, 10], [0, 10]], float)
-    bevel = np.array([[0, 0], [9.6, 0], [10, 0.4], [10, 10], [0, 10]], float)  # one corner cut by 0.4 mm
+    bevel = np.array(
+        [[0, 0], [9.6, 0], [10, 0.4], [10, 10], [0, 10]], float
+    )  # one corner cut by 0.4 mm
     import shapely
 
-    q, bad = quads_of(np.array([shapely.Polygon(sq), shapely.Polygon(with_tjunction), shapely.Polygon(bevel)]))
+    q, bad = quads_of(
+        np.array([shapely.Polygon(sq), shapely.Polygon(with_tjunction), shapely.Polygon(bevel)])
+    )
     assert bad == 0 and len(q) == 3
     for quad in q:
-        assert geometry.aligned_distance(quad, sq) < 1e-9 or geometry.aligned_distance(np.roll(quad, 1, 0), sq) < 1e-9 \
+        assert (
+            geometry.aligned_distance(quad, sq) < 1e-9
+            or geometry.aligned_distance(np.roll(quad, 1, 0), sq) < 1e-9
             or min(geometry.aligned_distance(np.roll(quad, k, 0), sq) for k in range(4)) < 1e-9
+        )
 
 
 @settings(max_examples=12, deadline=None)
-@given(st.floats(0, 2 * np.pi), st.floats(-300, 300), st.floats(-300, 300), st.sampled_from(["dxf", "svg"]),
-       st.sampled_from(["tape", "separate"]))
+@given(
+    st.floats(0, 2 * np.pi),
+    st.floats(-300, 300),
+    st.floats(-300, 300),
+    st.sampled_from(["dxf", "svg"]),
+    st.sampled_from(["tape", "separate"]),
+)
 def test_rigid_motions_of_the_sheet_are_accepted(tmp_path_factory, theta, dx, dy, fmt, hinge):
     p = lf.distinct_pattern()
     if hinge == "tape":
         C = lf.in_place_corners(p, 1, theta, (dx, dy))
     else:
-        C = geometry.rotate(lf.exploded_corners(p, np.random.default_rng(0)), theta) + np.array([dx, dy])
-    path = lf.write_layout(tmp_path_factory.mktemp("h"), p, C, hinge=hinge, fmt=fmt, kerf_offset=0.08)
+        C = geometry.rotate(lf.exploded_corners(p, np.random.default_rng(0)), theta) + np.array(
+            [dx, dy]
+        )
+    path = lf.write_layout(
+        tmp_path_factory.mktemp("h"), p, C, hinge=hinge, fmt=fmt, kerf_offset=0.08
+    )
     rep = verify_layout(p, path)
     assert rep.ok, rep.to_text()
 
@@ -103,7 +130,9 @@ def test_fast_reader_lines_on_cut(tmp_path):
     msp = doc.modelspace()
     for a, b in (((0, 0), (10, 0)), ((10, 0), (10, 10)), ((10, 10), (0, 10)), ((0, 10), (0, 0))):
         msp.add_line(a, b, dxfattribs={"layer": "CUT"})
-    msp.add_text("0", dxfattribs={"layer": "ENGRAVE"})  # a value line "0" must not look like an entity start
+    msp.add_text(
+        "0", dxfattribs={"layer": "ENGRAVE"}
+    )  # a value line "0" must not look like an entity start
     path = tmp_path / "lines.dxf"
     doc.saveas(path)
     fast = dxfcodec.read_layer_tags(path)
@@ -129,8 +158,8 @@ def test_one_dxf_codec_reads_what_it_writes(tmp_path):
     canon = np.flatnonzero(~tags.bad)
     assert len(canon) == len(strokes) + 1 and set(tags.at(canon, 4).tolist()) == {"ENGRAVE", "CUT"}
     written = sd.layers["ENGRAVE"]
-    assert tags.nv[tags.good][:len(written)].tolist() == [len(p) for p, _ in written]
-    assert (tags.flags[tags.good][:len(written)] == "1").tolist() == [c for _, c in written]
+    assert tags.nv[tags.good][: len(written)].tolist() == [len(p) for p, _ in written]
+    assert (tags.flags[tags.good][: len(written)] == "1").tolist() == [c for _, c in written]
     path = tmp_path / "s.dxf"
     path.write_text(text)
     lw = dxfcodec.read_layer_tags(path, "ENGRAVE")
@@ -140,7 +169,9 @@ def test_one_dxf_codec_reads_what_it_writes(tmp_path):
     proto = "  0\nLWPOLYLINE\n  5\nF0\n330\n1F\n100\nAcDbEntity\n  8\nL\n370\n0\n100\nAcDbPolyline\n 90\n2\n 70\n0\n"
     pts = [(1.25, 2.5), (3.75, 4.5)]
     verts = "".join(f" 10\n{x}\n 20\n{y}\n" for x, y in pts)
-    assert dxfcodec.split_prototype(proto + verts, "F0", pts) is None  # a lineweight tag: not canonical
+    assert (
+        dxfcodec.split_prototype(proto + verts, "F0", pts) is None
+    )  # a lineweight tag: not canonical
     assert dxfcodec.split_prototype(proto.replace("370\n0\n", "") + verts, "F0", pts) is not None
 
 
@@ -166,12 +197,21 @@ def test_the_verifier_reads_a_hinge_kind_through_its_registered_reading(monkeypa
 
     hingeread.register_reading(replace(tape, name="scored", recover=recover))
     lw = Linework(Path("s.dxf"))
-    for pts in ([[0, 0], [2, 0], [2, 1], [0, 1]], [[1, 0], [1, 1]]):  # a rectangle and a cut across it
+    for pts in (
+        [[0, 0], [2, 0], [2, 1], [0, 1]],
+        [[1, 0], [1, 1]],
+    ):  # a rectangle and a cut across it
         lw.add(np.array(pts, float), len(pts) > 2)
     polys, how = recover_polygons(lw, replace(_allowances({"hinge": "tape"}, "m"), hinge="scored"))
-    assert calls == [("scored", 2)] and how == "polygonize of the noded linework" and len(polys) == 2
-    assert CutManifest(hinge="scored").default_layout() == "in-place"  # (the schema's enum lists the names)
+    assert (
+        calls == [("scored", 2)] and how == "polygonize of the noded linework" and len(polys) == 2
+    )
+    assert (
+        CutManifest(hinge="scored").default_layout() == "in-place"
+    )  # (the schema's enum lists the names)
     assert _allowances({"hinge": "separate"}, "m").layout == "exploded"
     _named_problems({"hinge": "scored"}, "m")  # registered: accepted
-    with pytest.raises(VerifyError, match=r"^m: unknown hinge kind 'glued' \(tape, separate, ligament or scored\)$"):
+    with pytest.raises(
+        VerifyError, match=r"^m: unknown hinge kind 'glued' \(tape, separate, ligament or scored\)$"
+    ):
         _named_problems({"hinge": "glued"}, "m")

@@ -15,14 +15,42 @@ from fabkiri.verify import verify_layout
 from . import layout_fixtures as lf
 from . import layout_mutations as lm
 
-VALID = ["re-save R2018", "LINE segments", "in a block, INSERT moved and turned 30°", "flipped OCS (extrusion -Z)",
-         "colour only, all on layer 0", "declared inches", "Inkscape layers (inkscape:label only)",
-         "colour only, no groups", "group transform (rigid)", "px user units", "turned 33°",
-         "every segment a separate piece", "rounded to 0.001 mm", "NOTES layer removed"]
-BROKEN = ["corner moved 0.1 mm", "tile scaled 1%", "tile turned 0.5°", "tile mirrored", "tile missing",
-          "sheet scaled 1%", "sheet mirrored", "mirrored through the OCS", "inch-for-mm", "viewBox 1% off",
-          "slit shortened 10 µm", "slit cut halfway", "extra cut halfway into a tile", "a ligament severed",
-          "undeclared kerf", "a ligament cut halfway", "a tape mark missing", "a tape mark moved off its corner"]
+VALID = [
+    "re-save R2018",
+    "LINE segments",
+    "in a block, INSERT moved and turned 30°",
+    "flipped OCS (extrusion -Z)",
+    "colour only, all on layer 0",
+    "declared inches",
+    "Inkscape layers (inkscape:label only)",
+    "colour only, no groups",
+    "group transform (rigid)",
+    "px user units",
+    "turned 33°",
+    "every segment a separate piece",
+    "rounded to 0.001 mm",
+    "NOTES layer removed",
+]
+BROKEN = [
+    "corner moved 0.1 mm",
+    "tile scaled 1%",
+    "tile turned 0.5°",
+    "tile mirrored",
+    "tile missing",
+    "sheet scaled 1%",
+    "sheet mirrored",
+    "mirrored through the OCS",
+    "inch-for-mm",
+    "viewBox 1% off",
+    "slit shortened 10 µm",
+    "slit cut halfway",
+    "extra cut halfway into a tile",
+    "a ligament severed",
+    "undeclared kerf",
+    "a ligament cut halfway",
+    "a tape mark missing",
+    "a tape mark moved off its corner",
+]
 KINDS = {k.name: k for k in lm.VALID + lm.BROKEN}
 
 
@@ -39,15 +67,35 @@ def bases(tmp_path_factory):
     out = {}
     for h in ("tape", "separate", "ligament"):
         d = root / h
-        assert main(["cut", str(pj), "--hinge", h, "--material", "pp-0.5", "--gap", "1.5", "--formats", "dxf,svg",
-                     "--no-verify", "-o", str(d)]) == 0
+        assert (
+            main(
+                [
+                    "cut",
+                    str(pj),
+                    "--hinge",
+                    h,
+                    "--material",
+                    "pp-0.5",
+                    "--gap",
+                    "1.5",
+                    "--formats",
+                    "dxf,svg",
+                    "--no-verify",
+                    "-o",
+                    str(d),
+                ]
+            )
+            == 0
+        )
         for fmt in ("dxf", "svg"):
             out[h, fmt] = lm.load_base(d, fmt, p)
     return out
 
 
 def _cases(names):
-    return [(n, h, m) for n in names for h in ("tape", "separate", "ligament") for m in (True, False)]
+    return [
+        (n, h, m) for n in names for h in ("tape", "separate", "ligament") for m in (True, False)
+    ]
 
 
 def _verify_case(bases, tmp_path, name, hinge, with_manifest):
@@ -85,7 +133,9 @@ def test_no_manifest_reference_square_and_frame_set_aside(bases, tmp_path):
         b = bases[h, "dxf"]
         path = lm.make_case(b, KINDS["colour only, all on layer 0"], tmp_path / h, False)
         rep = verify_layout(b.pattern, path)
-        assert rep.ok and rep.meta["reference_square_mm"] == [pytest.approx(50.0, abs=1e-6)], rep.to_text()
+        assert rep.ok and rep.meta["reference_square_mm"] == [pytest.approx(50.0, abs=1e-6)], (
+            rep.to_text()
+        )
 
 
 def test_ezdxf_r2018_round_trip(bases, tmp_path):
@@ -111,8 +161,12 @@ def test_inkscape_plain_svg_export(bases, tmp_path, hinge):
     b = bases[hinge, "svg"]
     src = b.folder / b.manifest["sheets"][0]["svg"]
     dst = tmp_path / src.name
-    run = subprocess.run(["inkscape", str(src), "--export-plain-svg", f"--export-filename={dst}"],
-                         capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        ["inkscape", str(src), "--export-plain-svg", f"--export-filename={dst}"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     if run.returncode != 0 or not dst.exists():
         pytest.skip(f"inkscape could not export here: {run.stderr[-200:]}")
     assert b"inkscape:label" not in dst.read_bytes()  # plain SVG: Inkscape's namespace is gone
@@ -148,15 +202,30 @@ def _named(bases, tmp_path, hinge, change, check, with_manifest, seed=0):
 @pytest.mark.parametrize("change", [lm.ligament_severed(False), lm.ligament_cut_into])
 def test_cut_ligament_names_its_hinge(bases, tmp_path, change, with_manifest):
     for seed in range(3):
-        _named(bases, tmp_path, "ligament", change, "layout: every ligament present and unsevered", with_manifest,
-               seed)
+        _named(
+            bases,
+            tmp_path,
+            "ligament",
+            change,
+            "layout: every ligament present and unsevered",
+            with_manifest,
+            seed,
+        )
 
 
 @pytest.mark.parametrize("with_manifest", [True, False])
 @pytest.mark.parametrize("change", [lm.tape_mark_missing, lm.tape_mark_moved])
 def test_missing_tape_mark_names_its_hinge(bases, tmp_path, change, with_manifest):
     for seed in range(3):
-        _named(bases, tmp_path, "tape", change, "layout: tape marks at every hinge", with_manifest, seed)
+        _named(
+            bases,
+            tmp_path,
+            "tape",
+            change,
+            "layout: tape marks at every hinge",
+            with_manifest,
+            seed,
+        )
 
 
 def test_every_mark_removed_needs_the_manifest_to_tell(bases, tmp_path):

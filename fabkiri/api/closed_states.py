@@ -19,7 +19,9 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
     """``STATE:NAME|FILE``, ``STATE:rect`` or ``STATE:rect=RATIO``."""
     m = re.fullmatch(r"\s*([12])\s*:\s*(.+?)\s*", text)
     if not m:
-        raise InputError(f"--contracted-target expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}")
+        raise InputError(
+            f"--contracted-target expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}"
+        )
     state, what = int(m.group(1)), m.group(2)
     r = re.fullmatch(r"rect(?:=(.+))?", what)
     if r:
@@ -28,7 +30,9 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
             try:
                 ratio = float(r.group(1))
             except ValueError:
-                raise InputError(f"--contracted-target {text}: ratio {r.group(1)!r} is not a number") from None
+                raise InputError(
+                    f"--contracted-target {text}: ratio {r.group(1)!r} is not a number"
+                ) from None
             if not (np.isfinite(ratio) and ratio > 0):
                 raise InputError(f"--contracted-target {text}: ratio must be positive")
         return state, ("rect", ratio)
@@ -57,8 +61,9 @@ def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
     return out + list(zip(i[bad].tolist(), j[bad].tolist()))
 
 
-def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target,
-                       state: int) -> dict:
+def closed_outline_fit(
+    pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarray, target: Target, state: int
+) -> dict:
     """Fit of the contracted state's outline (pattern-grid boundary) to its target, in mm.
 
     The contracted tiles are rigidly aligned (proper Kabsch) to the closed grid
@@ -78,6 +83,10 @@ def closed_outline_fit(pattern: Pattern, corners: np.ndarray, grid_mm: np.ndarra
     theta, shift = geometry.kabsch(pos, grid_mm)
     pos = geometry.rotate(pos, theta) + shift
     d = target.signed_distance(pos[g.boundary], g.boundary_side)
-    return {"max_mm": float(np.abs(d).max()), "rms_mm": float(np.sqrt(np.mean(d * d))),
-            "max_rel_size": float(np.abs(d).max() / target.size), "points": int(len(d)),
-            "target": target.name}
+    return {
+        "max_mm": float(np.abs(d).max()),
+        "rms_mm": float(np.sqrt(np.mean(d * d))),
+        "max_rel_size": float(np.abs(d).max() / target.size),
+        "points": int(len(d)),
+        "target": target.name,
+    }

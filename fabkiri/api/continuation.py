@@ -26,17 +26,35 @@ if TYPE_CHECKING:  # design.py imports this module
     from .design import DesignOutcome, PatternRequest
 
 CONTINUATION = (0.25, 0.5, 0.75, 1.0)
-CONTINUATION_MARGIN = 0.02  # the rows' penalty margin in a step (tile edges; FabricationLimits.margin)
+CONTINUATION_MARGIN = (
+    0.02  # the rows' penalty margin in a step (tile edges; FabricationLimits.margin)
+)
 
 
-def continuation(request: PatternRequest, req: DesignRequest, target: Target | None, shape_tol: tuple,
-                 attempts: list, redesign: Callable[[PatternRequest], DesignOutcome]):
+def continuation(
+    request: PatternRequest,
+    req: DesignRequest,
+    target: Target | None,
+    shape_tol: tuple,
+    attempts: list,
+    redesign: Callable[[PatternRequest], DesignOutcome],
+):
     """The design without fabrication rows (by ``redesign``, the front door), then the rows raised in steps
     (``CONTINUATION``) from it, each warm started from the last; a last step that does not converge is tried in
     the rigid family (where it may) from the last converged step. Returns the ``_check`` outcome, or None when
     the design without the rows fails."""
-    free = redesign(replace(request, material=None, hinge=None, printer=None, style=None, min_feature=None,
-                            min_hole=None, quiet=True))
+    free = redesign(
+        replace(
+            request,
+            material=None,
+            hinge=None,
+            printer=None,
+            style=None,
+            min_feature=None,
+            min_hole=None,
+            quiet=True,
+        )
+    )
     if not free.valid:
         return None
 
@@ -59,17 +77,37 @@ def continuation(request: PatternRequest, req: DesignRequest, target: Target | N
         if _rank(rigid) < _rank(outcome):
             outcome, how = rigid, "continuation, rigid family last"
     trace: list[float] = []
-    if not (outcome[3] and _shape_met(outcome[1])):  # the fit was least squares, the tolerance is a maximum;
+    if not (
+        outcome[3] and _shape_met(outcome[1])
+    ):  # the fit was least squares, the tolerance is a maximum;
         # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
-        outcome, how, trace, secs = _refine(replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
-                                            outcome, how, judge, request.printer, req.fabrication)
+        outcome, how, trace, secs = _refine(
+            replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
+            outcome,
+            how,
+            judge,
+            request.printer,
+            req.fabrication,
+        )
         spent += secs
-    outcome[1]["continuation"] = {"steps": list(steps), "how": how,
-                                  "free_hausdorff_rel": _hausdorff(free.report), "margin": CONTINUATION_MARGIN,
-                                  "refinement_hausdorff_rel": trace}
-    attempts.append({"init": how, "status": outcome[1]["status"], "problems": outcome[2], "time_s": spent,
-                     "fit_max_rel_size": _fit_miss(outcome[1]), "hausdorff_max_rel": _hausdorff(outcome[1]),
-                     "shape": "met" if _shape_met(outcome[1]) else "missed"})
+    outcome[1]["continuation"] = {
+        "steps": list(steps),
+        "how": how,
+        "free_hausdorff_rel": _hausdorff(free.report),
+        "margin": CONTINUATION_MARGIN,
+        "refinement_hausdorff_rel": trace,
+    }
+    attempts.append(
+        {
+            "init": how,
+            "status": outcome[1]["status"],
+            "problems": outcome[2],
+            "time_s": spent,
+            "fit_max_rel_size": _fit_miss(outcome[1]),
+            "hausdorff_max_rel": _hausdorff(outcome[1]),
+            "shape": "met" if _shape_met(outcome[1]) else "missed",
+        }
+    )
     return outcome
 
 
@@ -80,7 +118,11 @@ def _print_state(req: DesignRequest, printer: str | None, free: DesignOutcome) -
     if not printer:
         return req
     fab = replace(fab, print_state=design_limits.bed_state(free.pattern.contracted, printer))
-    return replace(req, fabrication=fab, fabrication_intent={**req.fabrication_intent, "state": fab.print_state})
+    return replace(
+        req,
+        fabrication=fab,
+        fabrication_intent={**req.fabrication_intent, "state": fab.print_state},
+    )
 
 
 def _raise_limits(req: DesignRequest, X: np.ndarray, init: str, steps: tuple, spent: float):
@@ -98,13 +140,25 @@ def _raise_limits(req: DesignRequest, X: np.ndarray, init: str, steps: tuple, sp
     return step, result, last_ok, spent
 
 
-def _refine(step: DesignRequest, outcome, how: str, judge, printer: str | None, fab: FabricationLimits | None):
+def _refine(
+    step: DesignRequest,
+    outcome,
+    how: str,
+    judge,
+    printer: str | None,
+    fab: FabricationLimits | None,
+):
     """Minimax refinement of the outcome's outline; for a printer only steps whose printed closed state (of the
     full limits ``fab``) fits the bed are kept. Returns ``(outcome, how, trace, wall s)``, the outcome kept
     when it ranks better."""
     assert fab is not None
-    bed = None if not printer else (
-        lambda r: design_limits.fits_bed(contract(r.pattern, fab.print_state).corners, printer))
+    bed = (
+        None
+        if not printer
+        else (
+            lambda r: design_limits.fits_bed(contract(r.pattern, fab.print_state).corners, printer)
+        )
+    )
     refined, trace, secs = refine_minimax(step, outcome[0].nodes, accept=bed)
     if refined is not None and _rank(cand := judge(refined)) < _rank(outcome):
         outcome, how = cand, how + ", minimax refinement"

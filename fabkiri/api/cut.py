@@ -30,8 +30,14 @@ def design_intent(pattern: Pattern, key: str):
     return fabrication.get(key)
 
 
-def cut_material(pattern: Pattern, name: str | None = None, hinge: str | None = None, *,
-                 changes: dict[str, Any] | None = None, settings: Iterable[str] = ()) -> tuple[Material, str | None]:
+def cut_material(
+    pattern: Pattern,
+    name: str | None = None,
+    hinge: str | None = None,
+    *,
+    changes: dict[str, Any] | None = None,
+    settings: Iterable[str] = (),
+) -> tuple[Material, str | None]:
     """The material and hinge kind to cut with: a named material (or, none named, the design's
     material and hinge kind, else acrylic-3), with ``changes`` (None values ignored) and then the
     ``FIELD=VALUE`` ``settings`` applied."""
@@ -59,15 +65,21 @@ class CutOutcome:
 
 def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = True) -> CutOutcome:
     """Cut ``pattern`` as ``options`` say (a tube: its flat sheet and seam), then read the files back."""
-    if isinstance(options.scale, float):  # numbers that would overflow the geometry: one line, up front
+    if isinstance(
+        options.scale, float
+    ):  # numbers that would overflow the geometry: one line, up front
         limits.check_scale(pattern.nodes, pattern.tiles, options.scale, "--scale")
     if isinstance(options.width, float):
         limits.check_length(options.width, "--width")
-    pattern, seam_files, seam_entry = tube_cut_inputs(pattern, options.state)  # a tube: its flat sheet
+    pattern, seam_files, seam_entry = tube_cut_inputs(
+        pattern, options.state
+    )  # a tube: its flat sheet
 
     def cut_once(opts: CutOptions) -> CutResult:
         result = cut_pattern(pattern, opts)
-        if seam_files:  # both ends of every seam hinge engraved, the note and the manifest entry added
+        if (
+            seam_files
+        ):  # both ends of every seam hinge engraved, the note and the manifest entry added
             mark_seam(result, seam_entry["hinges"], pattern, opts.state, opts)
             result.files.update(seam_files)
             result.manifest["seam"] = seam_entry
@@ -81,10 +93,15 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
     try:
         return verified(result)
     except CheckFailed as exc:
-        if "auto" not in (options.scale, options.width) or not str(exc).startswith(READBACK_REFUSED):
+        if "auto" not in (options.scale, options.width) or not str(exc).startswith(
+            READBACK_REFUSED
+        ):
             raise
-        return _read_back_scale(lambda k: verified(cut_once(replace(options, scale=k, width=None))),
-                                float(result.manifest["scale"]), exc)
+        return _read_back_scale(
+            lambda k: verified(cut_once(replace(options, scale=k, width=None))),
+            float(result.manifest["scale"]),
+            exc,
+        )
 
 
 READBACK_REFUSED = "read-back verification failed"
@@ -92,7 +109,9 @@ AUTO_STEP = 1.05  # --scale auto steps up by 5 % while the read-back refuses the
 AUTO_STEPS = 10  # ... at most this often (x1.63), then gives the first refusal
 
 
-def _read_back_scale(cut_at: Callable[[float], CutOutcome], refused: float, first: CheckFailed) -> CutOutcome:
+def _read_back_scale(
+    cut_at: Callable[[float], CutOutcome], refused: float, first: CheckFailed
+) -> CutOutcome:
     """``--scale auto`` when the read-back refuses the files at the size the sheet rules allow
     (``refused``; a kagome ligament sheet's small triangles among their strips): step the scale up by
     5 % until it accepts them, then bisect between the last refusal and the first acceptance to
@@ -123,6 +142,8 @@ def _read_back_scale(cut_at: Callable[[float], CutOutcome], refused: float, firs
             break
         got = at(mid)
         lo, hi, found = (mid, hi, found) if got is None else (lo, mid, got)
-    found.result.warnings.append(f"--scale auto: the read-back refused the files at --scale {refused:g}; "
-                                 f"cut at {hi:g}, the smallest scale found (0.1 %) at which it accepts them")
+    found.result.warnings.append(
+        f"--scale auto: the read-back refused the files at --scale {refused:g}; "
+        f"cut at {hi:g}, the smallest scale found (0.1 %) at which it accepts them"
+    )
     return found

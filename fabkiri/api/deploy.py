@@ -97,7 +97,13 @@ def energy_csv(path: DeploymentPath) -> str:
 def tube_csv(tube: dict) -> str:
     """One row per frame of a tube's path: t, radius at the narrow and wide end, length, seam figures."""
     rows = ["t,radius_min_mm,radius_max_mm,length_mm,seam_rotation_rad,seam_translation_dev_rel"]
-    cols = ("radius_min_mm", "radius_max_mm", "length_mm", "seam_rotation_rad", "seam_translation_dev_rel")
+    cols = (
+        "radius_min_mm",
+        "radius_max_mm",
+        "length_mm",
+        "seam_rotation_rad",
+        "seam_translation_dev_rel",
+    )
     for f, t in enumerate(tube["t"]):
         rows.append(f"{t:.10f}," + ",".join(f"{tube[c][f]:.9g}" for c in cols))
     return "\n".join(rows) + "\n"
@@ -161,8 +167,10 @@ def _deployed_overlaps(path: DeploymentPath) -> str:
     if not at:
         return ""
     worst = max(o.area for o in at)
-    return (f"; {len(at)} of them in the deployed state itself (largest {worst:.3g} mm²): the "
-            f"design overlaps before it moves")
+    return (
+        f"; {len(at)} of them in the deployed state itself (largest {worst:.3g} mm²): the "
+        f"design overlaps before it moves"
+    )
 
 
 def overlap_depth(path: DeploymentPath, o: Overlap) -> float:

@@ -57,7 +57,9 @@ class PatternRequest:
     size: float | None = None  # the target's larger dimension in mm (named targets default to 100)
     rigid: bool = False
     symmetry: str | None = None  # "x" or "y"
-    holes: str | None = None  # None: rhombus, but parallelogram where offset_outline.preferred_holes says
+    holes: str | None = (
+        None  # None: rhombus, but parallelogram where offset_outline.preferred_holes says
+    )
     contracted_target: tuple[str, ...] = ()  # "STATE:NAME|FILE", "STATE:rect" or "STATE:rect=RATIO"
     init: str | None = None  # None: the retry order of AUTO_INITS / BIG_RIGID_INITS
     solver: str = "auto"
@@ -75,7 +77,9 @@ class PatternRequest:
     i_know: bool = False
     verbose: bool = False  # solver progress on stderr even for small solves
     quiet: bool = False  # no solver progress even for big solves (a sweep's workers)
-    kind: str = DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
+    kind: str = (
+        DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
+    )
 
 
 @dataclass
@@ -126,7 +130,9 @@ class DesignOutcome:
         return summary_lines(output, self.report)
 
 
-def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None = None) -> DesignOutcome:
+def design_pattern(
+    request: PatternRequest, notify: Callable[[str], None] | None = None
+) -> DesignOutcome:
     """Design, contract, check and judge a pattern; ``notify`` receives each retry note as it arises.
 
     Raises :class:`InputError` for a request no design can meet and :class:`SolveError`
@@ -139,22 +145,28 @@ def design_pattern(request: PatternRequest, notify: Callable[[str], None] | None
         if notify is not None:
             notify(text)
 
-    if request.symmetry == "none":  # the CLI's explicit "free"; a quad design is free without a symmetry
+    if (
+        request.symmetry == "none"
+    ):  # the CLI's explicit "free"; a quad design is free without a symmetry
         request = replace(request, symmetry=None)
     request, req, target, contracted = _solver_request(request)
     shape_tol = conf.parse_shape_tol(request.shape_tol)
     req.second_opinion_above = _tol_rel(shape_tol, target)
     best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
     if _continuation_applies(req, best, contracted):
-        say("fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
-            "without the fabrication rows")
+        say(
+            "fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
+            "without the fabrication rows"
+        )
         cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
         if cont is not None and _rank(cont) < _rank(best):
             best = cont
     return _outcome(best, attempts, messages)
 
 
-def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequest, Target | None, dict]:
+def _solver_request(
+    request: PatternRequest,
+) -> tuple[PatternRequest, DesignRequest, Target | None, dict]:
     """``(request with its holes resolved, solver request, target, closed-state specs)``, or InputError."""
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
@@ -167,26 +179,62 @@ def _solver_request(request: PatternRequest) -> tuple[PatternRequest, DesignRequ
             raise InputError(f"--contracted-target given twice for state {s}")
         contracted[s] = spec
     if target is None and not contracted:
-        raise InputError("give --target, or --contracted-target STATE:NAME for a closed-state outline")
-    fab_limits, intent = design_limits.resolve(request.material, request.hinge, request.printer, request.style,
-                                               request.min_feature, request.min_hole, target)
-    if fab_limits is not None and target is not None:  # a request no design can meet: say so before solving
+        raise InputError(
+            "give --target, or --contracted-target STATE:NAME for a closed-state outline"
+        )
+    fab_limits, intent = design_limits.resolve(
+        request.material,
+        request.hinge,
+        request.printer,
+        request.style,
+        request.min_feature,
+        request.min_hole,
+        target,
+    )
+    if (
+        fab_limits is not None and target is not None
+    ):  # a request no design can meet: say so before solving
         _check_room(rows, cols, fab_limits, target)
-    holes = request.holes if request.holes is not None else preferred_holes(rows, cols, request.rigid,
-                                                                            request.symmetry, target, contracted)
+    holes = (
+        request.holes
+        if request.holes is not None
+        else preferred_holes(rows, cols, request.rigid, request.symmetry, target, contracted)
+    )
     request = replace(request, holes=holes)  # without --init, _attempts sets each guess in req.init
-    req = DesignRequest(rows=rows, cols=cols, target=target, rigid=request.rigid, symmetry=request.symmetry,
-                        holes=holes, contracted=contracted, init=request.init or DesignRequest.init, tol=request.tol,
-                        solver=request.solver, outline=request.fit == "outline", fabrication=fab_limits,
-                        fabrication_intent=intent, seed=request.seed, rigid_first=not request.init,
-                        name=request.name or "")
+    req = DesignRequest(
+        rows=rows,
+        cols=cols,
+        target=target,
+        rigid=request.rigid,
+        symmetry=request.symmetry,
+        holes=holes,
+        contracted=contracted,
+        init=request.init or DesignRequest.init,
+        tol=request.tol,
+        solver=request.solver,
+        outline=request.fit == "outline",
+        fabrication=fab_limits,
+        fabrication_intent=intent,
+        seed=request.seed,
+        rigid_first=not request.init,
+        name=request.name or "",
+    )
     if not req.name:
-        parts = [target.name if target else "", *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}"
-                                                 for s, v in contracted.items()]]
-        req.name = f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if request.rigid else ''}"
+        parts = [
+            target.name if target else "",
+            *[f"{s}:{v.name if isinstance(v, Target) else 'rect'}" for s, v in contracted.items()],
+        ]
+        req.name = (
+            f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if request.rigid else ''}"
+        )
     req.validate()
-    family = via_rigid_applies(req) or (request.rigid and request.solver != "full" and request.holes == "rhombus"
-                                        and not request.symmetry and not contracted)  # the rigid family's figures
+    family = via_rigid_applies(req) or (
+        request.rigid
+        and request.solver != "full"
+        and request.holes == "rhombus"
+        and not request.symmetry
+        and not contracted
+    )  # the rigid family's figures
     limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
     return request, req, target, contracted
 
@@ -199,7 +247,8 @@ def _check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Tar
             f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
             f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
             f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
-            f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}")
+            f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}"
+        )
 
 
 def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -> list[str]:
@@ -208,16 +257,26 @@ def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -
         return [request.init]
     if request.rigid and req.rows * req.cols >= BIG_TILES:
         return list(BIG_RIGID_INITS)
-    if target is None:  # closed-state targets only: every guess is the standard pattern, retries repeat it
+    if (
+        target is None
+    ):  # closed-state targets only: every guess is the standard pattern, retries repeat it
         return [AUTO_INITS[0]]
     if via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
         return ["coarse"]
     # last, when every guess misses: the rigid family (its members satisfy every non-rigid equality)
-    return list(AUTO_INITS) + [VIA_RIGID_INIT] * via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
+    return list(AUTO_INITS) + [VIA_RIGID_INIT] * via_rigid_applies(
+        replace(req, init=VIA_RIGID_INIT)
+    )
 
 
-def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None, contracted: dict,
-              shape_tol: tuple, say: Callable[[str], None]) -> tuple[tuple, list[dict]]:
+def _attempts(
+    request: PatternRequest,
+    req: DesignRequest,
+    target: Target | None,
+    contracted: dict,
+    shape_tol: tuple,
+    say: Callable[[str], None],
+) -> tuple[tuple, list[dict]]:
     """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
     best, attempts = None, list[dict]()
@@ -226,30 +285,47 @@ def _attempts(request: PatternRequest, req: DesignRequest, target: Target | None
             break  # the rigid family is the last resort for a miss, not a second opinion
         req.init = init
         try:
-            result = design(req, progress=(req.rows * req.cols >= 256 or request.verbose) and not request.quiet)
+            result = design(
+                req, progress=(req.rows * req.cols >= 256 or request.verbose) and not request.quiet
+            )
         except SolveError as exc:
             if len(inits) == 1:
                 raise
             say(f"fabkiri: no {init} initial guess ({exc}); trying the next one")
-            attempts.append({"init": init, "status": "skipped", "problems": [str(exc)], "time_s": 0.0})
+            attempts.append(
+                {"init": init, "status": "skipped", "problems": [str(exc)], "time_s": 0.0}
+            )
             continue
         req.rigid_first = False  # tried once: later guesses go to the full solver
         outcome = _check(result, contracted, request, target, shape_tol)
         miss, shape_met = _fit_miss(outcome[1]), _shape_met(outcome[1])
-        attempts.append({"init": init, "status": outcome[1]["status"], "problems": outcome[2],
-                         "time_s": outcome[1]["time_s"], "fit_max_rel_size": miss,
-                         "hausdorff_max_rel": _hausdorff(outcome[1]), "shape": "met" if shape_met else "missed"})
+        attempts.append(
+            {
+                "init": init,
+                "status": outcome[1]["status"],
+                "problems": outcome[2],
+                "time_s": outcome[1]["time_s"],
+                "fit_max_rel_size": miss,
+                "hausdorff_max_rel": _hausdorff(outcome[1]),
+                "shape": "met" if shape_met else "missed",
+            }
+        )
         best = outcome if best is None or _rank(outcome) < _rank(best) else best
         if outcome[3] and shape_met and (miss <= RETRY_FIT_ABOVE or outcome[1].get("rigid_first")):
             break  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
         if outcome[3] and init != inits[-1]:
-            why = (f"misses the target by {miss:.2%} of its size" if miss > RETRY_FIT_ABOVE else
-                   f"misses the shape tolerance (Hausdorff {_hausdorff(outcome[1]):.2%} of the size)")
+            why = (
+                f"misses the target by {miss:.2%} of its size"
+                if miss > RETRY_FIT_ABOVE
+                else f"misses the shape tolerance (Hausdorff {_hausdorff(outcome[1]):.2%} of the size)"
+            )
             say(f"fabkiri: design from the {init} guess {why}; trying the next guess too")
         elif len(inits) > 1 and init != inits[-1]:
             say(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying")
     if best is None:
-        raise SolveError("no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts))
+        raise SolveError(
+            "no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts)
+        )
     return best, attempts
 
 
@@ -258,13 +334,30 @@ def _outcome(best, attempts: list[dict], messages: list[str]) -> DesignOutcome:
     pattern, report, problems, valid, contracted_states = best
     report.update(attempts=attempts, time_s_total=float(sum(a["time_s"] for a in attempts)))
     shape_met = _shape_met(report)
-    meta = {**(pattern.design or {}), "report": report, "valid": bool(valid),
-            "shape": "met" if shape_met else "missed"}
-    pattern = Pattern(nodes=pattern.nodes, tiles=pattern.tiles, contracted=contracted_states, parity=0,
-                      name=pattern.name, lattice=pattern.lattice, design=meta)
+    meta = {
+        **(pattern.design or {}),
+        "report": report,
+        "valid": bool(valid),
+        "shape": "met" if shape_met else "missed",
+    }
+    pattern = Pattern(
+        nodes=pattern.nodes,
+        tiles=pattern.tiles,
+        contracted=contracted_states,
+        parity=0,
+        name=pattern.name,
+        lattice=pattern.lattice,
+        design=meta,
+    )
     report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
-    return DesignOutcome(pattern=pattern, report=report, valid=bool(valid), shape_met=shape_met,
-                         problems=list(problems), messages=messages)
+    return DesignOutcome(
+        pattern=pattern,
+        report=report,
+        valid=bool(valid),
+        shape_met=shape_met,
+        problems=list(problems),
+        messages=messages,
+    )
 
 
 def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
@@ -276,9 +369,13 @@ def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
 def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
     """Whether to try the continuation in the fabrication limits (:mod:`.continuation`): a fabrication-aware deployed-target design below BIG_TILES that is invalid, misses the shape or (for a
     printer) does not fit the bed (8x8 ellipse at 200 mm for prusa-mk4: 116 x 261 mm; its continuation fits)."""
-    return (req.fabrication is not None and req.target is not None and not contracted
-            and req.rows * req.cols < BIG_TILES
-            and not (best[3] and _shape_met(best[1]) and best[1]["checks"].get("fits_bed", True)))
+    return (
+        req.fabrication is not None
+        and req.target is not None
+        and not contracted
+        and req.rows * req.cols < BIG_TILES
+        and not (best[3] and _shape_met(best[1]) and best[1]["checks"].get("fits_bed", True))
+    )
 
 
 def preview_path(output) -> Path:
@@ -293,7 +390,9 @@ def _preview(pattern: Pattern, report: dict, output) -> tuple[Path, bytes]:
 
     path = preview_path(output)
     report["preview"] = path.name
-    return path, conformance_png(pattern, report.get("conformance") or {}, report.get("shape") or {})
+    return path, conformance_png(
+        pattern, report.get("conformance") or {}, report.get("shape") or {}
+    )
 
 
 register_designer(DEFAULT_KIND, design_pattern)

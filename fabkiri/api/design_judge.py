@@ -29,22 +29,36 @@ def _shape_met(report: dict) -> bool:
 
 def _hausdorff(report: dict) -> float:
     """Worst Hausdorff distance of any outline relative to its target's size."""
-    return max((c["hausdorff_rel"] for c in (report.get("conformance") or {}).values()), default=0.0)
+    return max(
+        (c["hausdorff_rel"] for c in (report.get("conformance") or {}).values()), default=0.0
+    )
 
 
 def _fit_miss(report: dict) -> float:
     """Worst fit of the tips (deployed or closed-state outline) to any target relative to its size (the soft
     outline rows never reach zero: ``_hausdorff`` judges the whole outline)."""
-    return max((float(f.get("max_rel_size", 0.0)) for f in (report.get("fit") or {}).values() if not f.get("soft")),
-               default=0.0)
+    return max(
+        (
+            float(f.get("max_rel_size", 0.0))
+            for f in (report.get("fit") or {}).values()
+            if not f.get("soft")
+        ),
+        default=0.0,
+    )
 
 
 def _rank(outcome) -> tuple:
     """Order of preference among attempts: valid first, then (for a printer) closed state 1 within its bed, then
     fewer problems, then the shape tolerance met, then the smaller Hausdorff distance, then the closer fit of
     the tips (the heart 8x8 for prusa-mk4: the refined design, 3.27 %, was 227 mm tall on the 210 mm bed)."""
-    return (not outcome[3], not outcome[1].get("checks", {}).get("fits_bed", True), len(outcome[2]),
-            not _shape_met(outcome[1]), _hausdorff(outcome[1]), _fit_miss(outcome[1]))
+    return (
+        not outcome[3],
+        not outcome[1].get("checks", {}).get("fits_bed", True),
+        len(outcome[2]),
+        not _shape_met(outcome[1]),
+        _hausdorff(outcome[1]),
+        _fit_miss(outcome[1]),
+    )
 
 
 def _check(result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple):
@@ -62,14 +76,21 @@ def _check(result, contracted, request: PatternRequest, target: Target | None, s
         checks[f"closure_{s}_rel"] = rel
         if not rel <= CLOSURE_TOL:
             problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
-    for label, corners in [("deployed", pattern.corners()), *[(f"state {s}", contracted_states[s]) for s in (1, 2)]]:
+    for label, corners in [
+        ("deployed", pattern.corners()),
+        *[(f"state {s}", contracted_states[s]) for s in (1, 2)],
+    ]:
         ov = overlapping_tiles(corners, CLOSURE_TOL * size)
         checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
         if ov:
             where = "the deployed state" if label == "deployed" else label
             problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
-    if request.printer:  # in the state `print` makes: a design that does not fit the bed ranks below one that does
-        state = (((pattern.design or {}).get("options") or {}).get("fabrication") or {}).get("state", 1)
+    if (
+        request.printer
+    ):  # in the state `print` makes: a design that does not fit the bed ranks below one that does
+        state = (((pattern.design or {}).get("options") or {}).get("fabrication") or {}).get(
+            "state", 1
+        )
         checks["fits_bed"] = design_limits.fits_bed(contracted_states[state], request.printer)
     if request.rigid or request.holes == "parallelogram":
         from ..pattern.residuals import hinge_sums
@@ -78,25 +99,31 @@ def _check(result, contracted, request: PatternRequest, target: Target | None, s
     closed_fit = {}
     for s, spec in contracted.items():
         if isinstance(spec, Target):
-            closed_fit[str(s)] = closed_outline_fit(pattern, contracted_states[s], result.closed_grids[s],
-                                                    result.closed_targets[s], s)
+            closed_fit[str(s)] = closed_outline_fit(
+                pattern, contracted_states[s], result.closed_grids[s], result.closed_targets[s], s
+            )
     if closed_fit:
         report["closed_outline_fit"] = closed_fit
-    report["conformance"], report["shape"] = _conformance(pattern, result, contracted_states, target,
-                                                              shape_tol)
+    report["conformance"], report["shape"] = _conformance(
+        pattern, result, contracted_states, target, shape_tol
+    )
     report["checks"] = checks
     valid = result.converged and not problems
     if not result.converged:
-        problems.insert(0, f"solver did not reach the tolerance (max equality residual "
-                           f"{report['max_equality_residual']:.2e} > {request.tol:g})")
+        problems.insert(
+            0,
+            f"solver did not reach the tolerance (max equality residual "
+            f"{report['max_equality_residual']:.2e} > {request.tol:g})",
+        )
     if problems:
         report["status"] = "unconverged"
         report["problems"] = problems
     return pattern, report, problems, valid, contracted_states
 
 
-def _conformance(pattern: Pattern, result, contracted_states: dict, target: Target | None,
-                 shape_tol: tuple) -> tuple[dict, dict]:
+def _conformance(
+    pattern: Pattern, result, contracted_states: dict, target: Target | None, shape_tol: tuple
+) -> tuple[dict, dict]:
     """Conformance of the deployed tips and of each closed-state outline with a target curve, and each
     judged against ``--shape-tol``."""
     measured = {}

@@ -12,31 +12,47 @@ def summary_lines(path, report: dict) -> list[str]:
     the fabrication rows and fabricability, then one ``fabkiri: design failed: ...`` line per problem."""
     out: list[str] = []
     fit = report.get("fit", {})
-    parts = [f"wrote {path}: {report['status']}", f"max equality residual {report['max_equality_residual']:.2e}",
-             f"{report['iterations_total']} iterations", f"{report['time_s']:.2f} s"]
+    parts = [
+        f"wrote {path}: {report['status']}",
+        f"max equality residual {report['max_equality_residual']:.2e}",
+        f"{report['iterations_total']} iterations",
+        f"{report['time_s']:.2f} s",
+    ]
     if "shape" in fit:
-        parts.append(f"fit ({report['shape_matching']}) max {fit['shape']['max_mm']:.3g} mm, "
-                     f"rms {fit['shape']['rms_mm']:.3g} mm")
+        parts.append(
+            f"fit ({report['shape_matching']}) max {fit['shape']['max_mm']:.3g} mm, "
+            f"rms {fit['shape']['rms_mm']:.3g} mm"
+        )
     for s, f in report.get("closed_outline_fit", {}).items():
-        parts.append(f"state {s} outline vs {f['target']}: max {f['max_mm']:.3g} mm, rms {f['rms_mm']:.3g} mm")
+        parts.append(
+            f"state {s} outline vs {f['target']}: max {f['max_mm']:.3g} mm, rms {f['rms_mm']:.3g} mm"
+        )
     for k, c in (report.get("conformance") or {}).items():
         j = report["shape"][k]
-        parts.append(f"shape {k.replace('_', ' ')}: {j['status']}, Hausdorff {c['hausdorff_mm']:.3g} mm "
-                     f"({100 * c['hausdorff_rel']:.2f} %, tol {100 * j['tol_rel']:.2g} %), "
-                     f"1-IoU {c['one_minus_iou']:.3g}, tip spacing min/mean {c['spacing_min_mm']:.3g}/"
-                     f"{c['spacing_mean_mm']:.3g} mm")
+        parts.append(
+            f"shape {k.replace('_', ' ')}: {j['status']}, Hausdorff {c['hausdorff_mm']:.3g} mm "
+            f"({100 * c['hausdorff_rel']:.2f} %, tol {100 * j['tol_rel']:.2g} %), "
+            f"1-IoU {c['one_minus_iou']:.3g}, tip spacing min/mean {c['spacing_min_mm']:.3g}/"
+            f"{c['spacing_mean_mm']:.3g} mm"
+        )
     out.append("; ".join(parts))
     fr = report.get("fabrication")
     if fr:
-        out.append("fabrication rows: " + ", ".join(
-            f"{k[len('fabrication_'):]} {fr['active'][k]}/{fr['rows'][k]} active (min slack {fr['min'][k]:.3g}"
-            f"{'' if 'angle' in k else ' mm'})"
-            for k in fr["rows"]))
+        out.append(
+            "fabrication rows: "
+            + ", ".join(
+                f"{k[len('fabrication_') :]} {fr['active'][k]}/{fr['rows'][k]} active (min slack {fr['min'][k]:.3g}"
+                f"{'' if 'angle' in k else ' mm'})"
+                for k in fr["rows"]
+            )
+        )
     if report.get("fabricability"):
         out += fabricability.summary_lines(report["fabricability"])
     for p in report.get("problems", []):
         out.append(f"fabkiri: design failed: {p}")
     for k, c in (report.get("conformance") or {}).items():
         if report["shape"][k]["status"] == "missed":
-            out.append(f"fabkiri: design failed: {conf.describe_miss(k.replace('_', ' '), report['shape'][k], c)}")
+            out.append(
+                f"fabkiri: design failed: {conf.describe_miss(k.replace('_', ' '), report['shape'][k], c)}"
+            )
     return out

@@ -20,10 +20,14 @@ from ..registry import Registry
 if TYPE_CHECKING:
     from .design import PatternRequest
 
-Designer = Callable[..., Any]  # (PatternRequest, notify=None) -> an outcome (see the module docstring)
+Designer = Callable[
+    ..., Any
+]  # (PatternRequest, notify=None) -> an outcome (see the module docstring)
 
 # built-in front doors, imported when first asked for (their modules call register_designer())
-_DESIGNERS: Registry[Designer] = Registry({"quad": "fabkiri.api.design", "kagome": "fabkiri.api.kagome"})
+_DESIGNERS: Registry[Designer] = Registry(
+    {"quad": "fabkiri.api.design", "kagome": "fabkiri.api.kagome"}
+)
 
 
 def register_designer(kind: str, front_door: Designer) -> Designer:
@@ -40,7 +44,9 @@ def designer(kind: str) -> Designer:
     """The design front door of ``kind``, or :class:`InputError` naming the kinds there are."""
     found = _DESIGNERS.find(kind)
     if found is None:
-        raise InputError(f"no design front door for {kind!r} patterns; choose one of {', '.join(design_kinds())}")
+        raise InputError(
+            f"no design front door for {kind!r} patterns; choose one of {', '.join(design_kinds())}"
+        )
     return found
 
 

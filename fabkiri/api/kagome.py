@@ -30,8 +30,15 @@ if TYPE_CHECKING:
     from .design import PatternRequest
 
 # options of the quad design that have no kagome counterpart yet
-UNSUPPORTED = ("rigid", "holes", "contracted_target", "material", "printer", "min_feature",
-               "min_hole")
+UNSUPPORTED = (
+    "rigid",
+    "holes",
+    "contracted_target",
+    "material",
+    "printer",
+    "min_feature",
+    "min_hole",
+)
 
 
 @dataclass(frozen=True)
@@ -54,15 +61,25 @@ class KagomeOutcome:
     def summary(self, path) -> list[str]:
         """The line ``fabkiri design --lattice kagome`` prints about the design written to ``path``."""
         r, (rows, cols) = self.report, self.tiles
-        return [f"wrote {path}: kagome {rows}x{cols} {r['status']}, max equality residual "
-                f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
-                f"the size (shape {r['shape']['status']}), verify: "
-                f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}"]
+        return [
+            f"wrote {path}: kagome {rows}x{cols} {r['status']}, max equality residual "
+            f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
+            f"the size (shape {r['shape']['status']}), verify: "
+            f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}"
+        ]
 
 
-def design_kagome(rows: int, cols: int, target: str, size: float | None = None, *, tol: float = 1e-10,
-                  shape_tol: str = conf.DEFAULT_SHAPE_TOL, name: str | None = None,
-                  symmetry: bool | str = True) -> KagomeOutcome:
+def design_kagome(
+    rows: int,
+    cols: int,
+    target: str,
+    size: float | None = None,
+    *,
+    tol: float = 1e-10,
+    shape_tol: str = conf.DEFAULT_SHAPE_TOL,
+    name: str | None = None,
+    symmetry: bool | str = True,
+) -> KagomeOutcome:
     """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm).
 
     ``symmetry`` imposes every mirror the lattice and the target share (vertical for C odd, horizontal
@@ -75,7 +92,9 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     std = standard_kagome(rows, cols, tile_size=tile)
     d = design(std, tgt, symmetry=symmetry)
     pattern, rejected = _first_closing(d)
-    convex = pattern is None  # every candidate overlaps: again with convex holes, which rule crossings out
+    convex = (
+        pattern is None
+    )  # every candidate overlaps: again with convex holes, which rule crossings out
     if convex:
         d = design(std, tgt, symmetry=symmetry, convex=True)
         pattern, rejected = _first_closing(d)
@@ -84,14 +103,27 @@ def design_kagome(rows: int, cols: int, target: str, size: float | None = None, 
     measured = conf.deployed(pattern.nodes, pattern.topology, tgt)
     verdict = conf.judge(measured, shape, (rows, cols))
     rel = d.max_equality  # normalised units: already relative to the tile size
-    report: dict[str, Any] = {"status": "converged" if d.converged and rel <= tol else "unconverged",
-              "max_equality_residual": rel, "tol": tol, "iterations": d.iterations,
-              "symmetry": list(d.symmetry), "min_gap_deg": d.min_gap_deg, "min_tile_quality": d.min_quality,
-              "hausdorff_trace": list(d.hausdorff_trace), "candidates_rejected": rejected, "convex_holes": convex,
-              "max_tip_distance_mm": d.max_tip_distance_mm,
-              "tile_size_mm": tile, "conformance": measured, "shape": verdict}
-    pattern = replace(pattern, name=name or pattern.name,
-                      design={**(pattern.design or {}), "report": report, "shape_tol": shape_tol})
+    report: dict[str, Any] = {
+        "status": "converged" if d.converged and rel <= tol else "unconverged",
+        "max_equality_residual": rel,
+        "tol": tol,
+        "iterations": d.iterations,
+        "symmetry": list(d.symmetry),
+        "min_gap_deg": d.min_gap_deg,
+        "min_tile_quality": d.min_quality,
+        "hausdorff_trace": list(d.hausdorff_trace),
+        "candidates_rejected": rejected,
+        "convex_holes": convex,
+        "max_tip_distance_mm": d.max_tip_distance_mm,
+        "tile_size_mm": tile,
+        "conformance": measured,
+        "shape": verdict,
+    }
+    pattern = replace(
+        pattern,
+        name=name or pattern.name,
+        design={**(pattern.design or {}), "report": report, "shape_tol": shape_tol},
+    )
     rep = verify_pattern(pattern, shape_tol=shape_tol)
     report["verify_failed"] = [c.name for c in rep.failed()]
     valid = report["status"] == "converged" and not report["verify_failed"]
@@ -117,13 +149,23 @@ def check_options(**given) -> None:
             raise InputError(f"--{key.replace('_', '-')} is not available for kagome designs yet")
 
 
-def design_kagome_pattern(request: PatternRequest, notify: Callable[[str], None] | None = None) -> KagomeOutcome:
+def design_kagome_pattern(
+    request: PatternRequest, notify: Callable[[str], None] | None = None
+) -> KagomeOutcome:
     """The kagome front door for a :class:`~.design.PatternRequest` (``fabkiri design --lattice kagome``):
     refuses the quad-only options, then :func:`design_kagome` (the target defaults to a circle)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     rows, cols = request.tiles
-    return design_kagome(rows, cols, request.target or "circle", request.size, tol=request.tol,
-                         shape_tol=request.shape_tol, name=request.name, symmetry=SYMMETRY[request.symmetry])
+    return design_kagome(
+        rows,
+        cols,
+        request.target or "circle",
+        request.size,
+        tol=request.tol,
+        shape_tol=request.shape_tol,
+        name=request.name,
+        symmetry=SYMMETRY[request.symmetry],
+    )
 
 
 # --symmetry: absent imposes every mirror the lattice and target share; none leaves the design free

@@ -44,8 +44,16 @@ class Exported:
     said: str
 
 
-def export_pattern(pattern: Pattern, fmt_name: str, state: str = "deployed", *, unit: float | None = None,
-                   force: bool = False, output: str = "", notify: Callable[[str], None] | None = None) -> Exported:
+def export_pattern(
+    pattern: Pattern,
+    fmt_name: str,
+    state: str = "deployed",
+    *,
+    unit: float | None = None,
+    force: bool = False,
+    output: str = "",
+    notify: Callable[[str], None] | None = None,
+) -> Exported:
     """``fabkiri export``: ``pattern`` in the format ``fmt_name`` (``state``: ``deployed``, ``1`` or ``2``).
 
     A closed state the format needs is contracted when not stored (it must close), after the

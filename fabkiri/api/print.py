@@ -81,15 +81,25 @@ class PrintOutcome:
         """One line: style, scale, state, printer, tiles, hinges (top/bottom faces), beds, clearance, plan."""
         job, report = self.job, self.mesh_report
         faces = int(job.plan.top.sum())
-        clearance = "n/a" if report.min_clearance_mm is None else f"{report.min_clearance_mm:.3f} mm"
-        return (f"{job.style} at --scale {self.scale:g}, closed state {job.state}, printer {self.printer.name}, "
-                f"{len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
-                f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance {clearance}, "
-                f"{self.plan}")
+        clearance = (
+            "n/a" if report.min_clearance_mm is None else f"{report.min_clearance_mm:.3f} mm"
+        )
+        return (
+            f"{job.style} at --scale {self.scale:g}, closed state {job.state}, printer {self.printer.name}, "
+            f"{len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
+            f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance {clearance}, "
+            f"{self.plan}"
+        )
 
 
-def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, stem: str = "pattern",
-                  source: str = "pattern.json", notify: Callable[[str], None] | None = None) -> PrintOutcome:
+def print_pattern(
+    pattern: Pattern,
+    options: PrintOptions = PrintOptions(),
+    *,
+    stem: str = "pattern",
+    source: str = "pattern.json",
+    notify: Callable[[str], None] | None = None,
+) -> PrintOutcome:
     """Build, check and serialise the print of ``pattern``; ``stem`` names the files, ``source`` is
     the pattern file named in the manifests; ``notify`` receives each warning or note as it arises."""
     messages: list[str] = []
@@ -102,19 +112,36 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
     state = int(options.state or design_intent(pattern, "state") or 1)
     options = replace(options, state=state)
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
-    printer = _printer(options.printer or design_intent(pattern, "printer"), print_style(style).own_tile_thickness,
-                       options)
+    printer = _printer(
+        options.printer or design_intent(pattern, "printer"),
+        print_style(style).own_tile_thickness,
+        options,
+    )
     pattern, scale = _scaled(pattern, style, printer, options)
-    for w in closes_gate(pattern, printer.tolerance_mm, force=options.force, action="print", tolerance="printer",
-                         states=claimed_states(pattern, state)).warnings:  # as `cut`, printer tolerance
+    for w in closes_gate(
+        pattern,
+        printer.tolerance_mm,
+        force=options.force,
+        action="print",
+        tolerance="printer",
+        states=claimed_states(pattern, state),
+    ).warnings:  # as `cut`, printer tolerance
         say(f"warning: {w}")
     job, plan = _build_job(pattern, style, state, printer, scale)
-    if job.plan.shared_faces:  # three hinges at a point (kagome): two faces cannot keep them all apart
-        say(f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
-            "than two faces separate); their strips keep the clearance as printed")
+    if (
+        job.plan.shared_faces
+    ):  # three hinges at a point (kagome): two faces cannot keep them all apart
+        say(
+            f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
+            "than two faces separate); their strips keep the clearance as printed"
+        )
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
-    tiles = None if print_style(realised.job.style).tiles is None else mesh.check_printed_tiles(realised)
+    tiles = (
+        None
+        if print_style(realised.job.style).tiles is None
+        else mesh.check_printed_tiles(realised)
+    )
     problems = list(report.problems)
     if tiles is not None and not tiles.ok:
         problems.append(
@@ -125,8 +152,16 @@ def print_pattern(pattern: Pattern, options: PrintOptions = PrintOptions(), *, s
     if problems:
         raise CheckFailed("; ".join(problems) + "; nothing written")
     files = _files(pattern, realised, report, tiles, verifier, options, stem, source)
-    return PrintOutcome(files=files, realised=realised, mesh_report=report, scale=scale, printer=printer,
-                        plan=plan, verifier=verifier, messages=messages)
+    return PrintOutcome(
+        files=files,
+        realised=realised,
+        mesh_report=report,
+        scale=scale,
+        printer=printer,
+        plan=plan,
+        verifier=verifier,
+        messages=messages,
+    )
 
 
 def _printer(name: str | None, pinned: bool, o: PrintOptions):
@@ -135,8 +170,11 @@ def _printer(name: str | None, pinned: bool, o: PrintOptions):
         tile_thickness_mm=None if pinned else o.tile_thickness,
         pin_tile_thickness_mm=o.tile_thickness if pinned else None,
         strip_thickness_mm=o.strip_thickness,
-        strip_width_mm=o.strip_width, strip_reach_mm=o.strip_reach, gap_mm=o.gap,
-        radial_clearance_mm=o.radial_clearance, axial_clearance_mm=o.axial_clearance,
+        strip_width_mm=o.strip_width,
+        strip_reach_mm=o.strip_reach,
+        gap_mm=o.gap,
+        radial_clearance_mm=o.radial_clearance,
+        axial_clearance_mm=o.axial_clearance,
     )
 
 
@@ -147,16 +185,23 @@ def _scaled(pattern: Pattern, style: str, printer, o: PrintOptions) -> tuple[Pat
         assert o.state is not None, "print_pattern resolves the state first"
         need = fb.print_minimum(pattern, style, printer, o.state)
         if not need.possible or need.min_scale is None:
-            raise CheckFailed(f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}")
+            raise CheckFailed(
+                f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}"
+            )
         scale = need.min_scale
-    elif isinstance(given, str):  # a library caller's text: one line, not a TypeError deep in check_scale
+    elif isinstance(
+        given, str
+    ):  # a library caller's text: one line, not a TypeError deep in check_scale
         raise InputError(f"--scale must be a number (mm printed per mm) or auto, got {given!r}")
     else:
         scale = given
     limits.check_scale(pattern.nodes, pattern.tiles, scale, "--scale")
     if scale != 1.0:  # mm printed per mm of the pattern
-        pattern = replace(pattern, nodes=pattern.nodes * scale,
-                          contracted={k: v * scale for k, v in pattern.contracted.items()})
+        pattern = replace(
+            pattern,
+            nodes=pattern.nodes * scale,
+            contracted={k: v * scale for k, v in pattern.contracted.items()},
+        )
     return pattern, scale
 
 
@@ -166,20 +211,31 @@ def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float):
         job = mesh.build_job(pattern, style, int(state), printer, advise_scale=scale)
         plan = mesh.print_plan(job)  # refuses a print the printer cannot make
     except FabricationError as exc:  # say at which scale it would print, if any
-        if print_style(style).advise is not None:  # build_job named the scales that print on this bed
+        if (
+            print_style(style).advise is not None
+        ):  # build_job named the scales that print on this bed
             raise
         need = fb.print_minimum(pattern, style, printer, int(state))
         if need.min_scale is None or need.min_scale <= 1.0:
             raise
         k = scale
-        at = need.advice(printer.name).replace(f"≥ {need.min_scale:g}", f"≥ {fb.ceil_sig(need.min_scale * k):g}")
-        at = at.replace(f"--scale {need.max_scale:g}", f"--scale {fb.floor_sig(need.max_scale * k):g}") \
-            if need.max_scale is not None else at
+        at = need.advice(printer.name).replace(
+            f"≥ {need.min_scale:g}", f"≥ {fb.ceil_sig(need.min_scale * k):g}"
+        )
+        at = (
+            at.replace(
+                f"--scale {need.max_scale:g}", f"--scale {fb.floor_sig(need.max_scale * k):g}"
+            )
+            if need.max_scale is not None
+            else at
+        )
         raise type(exc)(f"{exc} (at --scale {k:g}); {at}") from None
     return job, plan
 
 
-def _style_checks(pattern: Pattern, realised, report, problems: list[str], say: Callable[[str], None]):
+def _style_checks(
+    pattern: Pattern, realised, report, problems: list[str], say: Callable[[str], None]
+):
     """The checks the print style adds (``PrintStyle.checks``), appending to ``problems`` and saying
     its notes; returns the layout verifier's report, if the style ran it."""
     checks = print_style(realised.job.style).checks
@@ -192,8 +248,9 @@ def _style_checks(pattern: Pattern, realised, report, problems: list[str], say: 
     return found.verifier
 
 
-def _files(pattern: Pattern, realised, report, tiles, verifier, o: PrintOptions, stem: str,
-           source: str) -> dict[str, Any]:
+def _files(
+    pattern: Pattern, realised, report, tiles, verifier, o: PrintOptions, stem: str, source: str
+) -> dict[str, Any]:
     """Every file of the print: meshes (and 3MF), STEP, laser files, assembly map and the manifest,
     after the written meshes were read back as closed 2-manifolds."""
     job = realised.job
@@ -203,18 +260,33 @@ def _files(pattern: Pattern, realised, report, tiles, verifier, o: PrintOptions,
         from ..fabricate import cad  # lazy: OpenCascade is heavy
 
         for k, bed in enumerate(job.beds, 1):  # one STEP per bed, like the meshes
-            files[f"{stem}.step" if len(job.beds) == 1 else f"{stem}-bed{k}.step"] = cad.step_bytes(bed)
+            files[f"{stem}.step" if len(job.beds) == 1 else f"{stem}-bed{k}.step"] = cad.step_bytes(
+                bed
+            )
     read_back = mesh.read_back_files(files)  # watertight as written, not as held in memory
-    bad = [f"{n} ({v['edges_not_shared_by_two_faces']} edges not shared by two faces)"
-           for n, v in read_back.items() if not v["ok"]]
+    bad = [
+        f"{n} ({v['edges_not_shared_by_two_faces']} edges not shared by two faces)"
+        for n, v in read_back.items()
+        if not v["ok"]
+    ]
     if bad:
-        raise CheckFailed("written meshes are not closed 2-manifolds when read back: " + ", ".join(bad)
-                          + "; nothing written")
-    manifest = mesh.manifest(realised, report, tiles, source, list(files) + ["manifest.json"], verifier, read_back)
+        raise CheckFailed(
+            "written meshes are not closed 2-manifolds when read back: "
+            + ", ".join(bad)
+            + "; nothing written"
+        )
+    manifest = mesh.manifest(
+        realised, report, tiles, source, list(files) + ["manifest.json"], verifier, read_back
+    )
     from ..fabricate.assembly import add_to_print
 
     manifest, extra = add_to_print(manifest, pattern, realised, stem)
-    return {**files, "manifest.json": manifest, **extra, **laser}  # in this order, as the CLI writes them
+    return {
+        **files,
+        "manifest.json": manifest,
+        **extra,
+        **laser,
+    }  # in this order, as the CLI writes them
 
 
 def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -> dict[str, bytes]:
@@ -225,12 +297,17 @@ def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -
 
     if not print_style(job.style).loose_strips:
         raise InputError("--marks engraves strip pads on laser-cut tiles: it needs --style strips")
-    res, n = marked_cut(pattern, job.state, job.strips, job.plan.corners, load_material(material), stem, source)
+    res, n = marked_cut(
+        pattern, job.state, job.strips, job.plan.corners, load_material(material), stem, source
+    )
     rb = verify_result(pattern, res)
     res.manifest["verification"] = rb.to_dict()
     if not rb.ok:
-        raise CheckFailed("laser files with pad marks failed their read-back checks: "
-                          + "; ".join(f"{c.name} ({c.detail})" for c in rb.failed()[:4]) + "; nothing written")
+        raise CheckFailed(
+            "laser files with pad marks failed their read-back checks: "
+            + "; ".join(f"{c.name} ({c.detail})" for c in rb.failed()[:4])
+            + "; nothing written"
+        )
     out = {f"laser/{k}": v for k, v in res.files.items()}
     out["laser/manifest.json"] = res.manifest_bytes()
     return out

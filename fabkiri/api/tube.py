@@ -25,7 +25,9 @@ from ..verify.pattern_checks import verify_pattern
 from ..verify.report import Report
 
 CLOSE_TOL = 1e-9  # loop closure a closed state must meet to be stored, in tile sizes (as ``info``)
-PLATE_OVERLAP = 1e-9  # largest intersection of two rolled plates, share of a plate (touching: ~1e-15)
+PLATE_OVERLAP = (
+    1e-9  # largest intersection of two rolled plates, share of a plate (touching: ~1e-15)
+)
 
 
 @dataclass
@@ -48,9 +50,11 @@ class TubeOutcome:
 
     def summary(self) -> list[str]:
         r = self.result.report
-        lines = [f"{r['status']}: max equality residual {r['equality_max']:.2e} (tol {r['tol']:g}), "
-                 f"{r['continuation_steps']} continuation step(s), ends fitted to {r['fit_max_mm']:.3g} mm, "
-                 f"{r['cpu_s']:.2f} s CPU / {r['wall_s']:.2f} s wall"]
+        lines = [
+            f"{r['status']}: max equality residual {r['equality_max']:.2e} (tol {r['tol']:g}), "
+            f"{r['continuation_steps']} continuation step(s), ends fitted to {r['fit_max_mm']:.3g} mm, "
+            f"{r['cpu_s']:.2f} s CPU / {r['wall_s']:.2f} s wall"
+        ]
         if self.tube:
             lines += tube_lines(self.tube)
         lines += [f"problem: {p}" for p in self.problems]
@@ -60,34 +64,53 @@ class TubeOutcome:
         return dumps(self.pattern)
 
 
-def design_tube_pattern(tiles: tuple[int, int], spec: str, *, rigid: bool = False, tol: float = 1e-10,
-                        name: str = "", closed: str = "cylinder") -> TubeOutcome:
+def design_tube_pattern(
+    tiles: tuple[int, int],
+    spec: str,
+    *,
+    rigid: bool = False,
+    tol: float = 1e-10,
+    name: str = "",
+    closed: str = "cylinder",
+) -> TubeOutcome:
     """Design, contract, verify and report a tube of ``tiles = (rows, cols around)`` for target ``spec``
     (``cylinder:CIRC,LENGTH`` or ``cone:R_BOTTOM,R_TOP,LENGTH``, mm)."""
-    req = TubeRequest(tiles[0], tiles[1], parse_tube_target(spec), rigid=rigid, tol=tol, name=name, closed=closed)
+    req = TubeRequest(
+        tiles[0], tiles[1], parse_tube_target(spec), rigid=rigid, tol=tol, name=name, closed=closed
+    )
     res = design_tube(req)
     pattern = res.pattern
     problems: list[str] = []
     if not res.converged:
-        problems.append(f"the solver stopped at max equality residual {res.report['equality_max']:.3g} "
-                        f"(tol {tol:g}) after {res.report['continuation_steps']} continuation step(s)")
-        if req.target.kind == "cone" and closed == "cylinder":  # the measured lock, not a tuning problem (docs/tubes.md)
-            problems.append("a deployed cone between two cylindrical closed states: reconfigurable tubes are "
-                            "locally rigid-deployable and keep the seam's rotation in every state (docs/tubes.md); "
-                            "--closed cone lets the closed states be cones too")
+        problems.append(
+            f"the solver stopped at max equality residual {res.report['equality_max']:.3g} "
+            f"(tol {tol:g}) after {res.report['continuation_steps']} continuation step(s)"
+        )
+        if (
+            req.target.kind == "cone" and closed == "cylinder"
+        ):  # the measured lock, not a tuning problem (docs/tubes.md)
+            problems.append(
+                "a deployed cone between two cylindrical closed states: reconfigurable tubes are "
+                "locally rigid-deployable and keep the seam's rotation in every state (docs/tubes.md); "
+                "--closed cone lets the closed states be cones too"
+            )
     states = {}  # `closed` names the closed states' shape
     for s in (1, 2):
         c = contract(pattern, s)
         if c.max_closure <= CLOSE_TOL * pattern.tile_size:
             states[s] = c.corners
         else:
-            problems.append(f"state {s} does not close: loop closure {c.max_closure / pattern.tile_size:.3g} "
-                            f"tile sizes at hole {c.worst_hole}")
+            problems.append(
+                f"state {s} does not close: loop closure {c.max_closure / pattern.tile_size:.3g} "
+                f"tile sizes at hole {c.worst_hole}"
+            )
     pattern = pattern.with_contracted(states)
     verification = tube = None
     if len(states) == 2:
         verification = verify_pattern(pattern, rigid=res.report["rigid"])
-        problems += [f"{c.name}: {c.value:.3g} {c.unit} (tol {c.tol:g})" for c in verification.failed()]
+        problems += [
+            f"{c.name}: {c.value:.3g} {c.unit} (tol {c.tol:g})" for c in verification.failed()
+        ]
         tube = tube_report(pattern)
     valid = res.converged and not problems
     design = {**(pattern.design or {}), "valid": valid, "tube": tube}
@@ -95,8 +118,14 @@ def design_tube_pattern(tiles: tuple[int, int], spec: str, *, rigid: bool = Fals
     return TubeOutcome(pattern, res, verification, tube, problems)
 
 
-def tube_3d_files(pattern: Pattern, *, stem: str = "tube", copies: int = 1, thickness: float = 1.0,
-                  gif: bool = True) -> dict[str, bytes]:
+def tube_3d_files(
+    pattern: Pattern,
+    *,
+    stem: str = "tube",
+    copies: int = 1,
+    thickness: float = 1.0,
+    gif: bool = True,
+) -> dict[str, bytes]:
     """OBJ and thin-plate STL of every state rolled onto its tube, a PNG of them, and a 3D deployment GIF.
 
     The pattern must be a tube that closes in both states with pure-translation seams; otherwise
@@ -113,11 +142,15 @@ def tube_3d_files(pattern: Pattern, *, stem: str = "tube", copies: int = 1, thic
     from ..render.tube import deployment_gif_3d, states_png
 
     if seam_of(pattern) is None:
-        raise InputError("the pattern has no seam: it is a flat sheet, not a tube (make one with --tube)")
+        raise InputError(
+            "the pattern has no seam: it is a flat sheet, not a tube (make one with --tube)"
+        )
     rep = verify_pattern(pattern, rigid=False)
     seam_fail = [c for c in rep.failed() if "seam" in c.name or "loop closure" in c.name]
     if seam_fail:
-        raise CheckFailed("not a closed tube: " + "; ".join(f"{c.name} {c.value:.3g} {c.unit}" for c in seam_fail))
+        raise CheckFailed(
+            "not a closed tube: " + "; ".join(f"{c.name} {c.value:.3g} {c.unit}" for c in seam_fail)
+        )
     closed = {s: pattern.contracted.get(s, contract(pattern, s).corners) for s in (1, 2)}
     pattern = pattern.with_contracted(closed)
     files: dict[str, bytes] = {}
@@ -126,9 +159,13 @@ def tube_3d_files(pattern: Pattern, *, stem: str = "tube", copies: int = 1, thic
         label = "deployed" if s == "deployed" else f"closed{s}"
         plates = plate_meshes(tiles, f, thickness)
         worst, pair = plate_overlap(plates)
-        if worst > PLATE_OVERLAP and pair is not None:  # e.g. plates thicker than the tube is wide: nothing is written
-            raise CheckFailed(f"{label}: plates {pair[0]} and {pair[1]} overlap in 3D by {worst:.3g} of a plate's "
-                              f"volume (tolerance {PLATE_OVERLAP:g}); try a thinner --thickness")
+        if (
+            worst > PLATE_OVERLAP and pair is not None
+        ):  # e.g. plates thicker than the tube is wide: nothing is written
+            raise CheckFailed(
+                f"{label}: plates {pair[0]} and {pair[1]} overlap in 3D by {worst:.3g} of a plate's "
+                f"volume (tolerance {PLATE_OVERLAP:g}); try a thinner --thickness"
+            )
         files[f"{stem}_{label}.obj"] = obj_bytes(surface_mesh(tiles, f))
         files[f"{stem}_{label}.stl"] = stl_bytes(plates)
     files[f"{stem}_states.png"] = states_png(pattern, copies)

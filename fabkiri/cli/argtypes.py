@@ -6,8 +6,9 @@ import argparse
 from collections.abc import Callable
 
 
-def bounded(cast: Callable[[str], float], ok: Callable[[float], bool], expected: str,
-            refused: str) -> Callable[[str], float]:
+def bounded(
+    cast: Callable[[str], float], ok: Callable[[float], bool], expected: str, refused: str
+) -> Callable[[str], float]:
     """An ``argparse`` type: ``cast(text)`` when ``ok`` accepts it.
 
     Text ``cast`` cannot read is refused as "``expected``, got 'text'"; a value ``ok`` refuses with

@@ -52,98 +52,197 @@ def _scale_or_auto(text: str):
 
 def cmd_cut(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
-    material, hinge = cut_material(pattern, args.material, args.hinge, settings=args.set or [], changes=dict(
-        thickness_mm=args.thickness, kerf_mm=args.kerf, min_web_mm=args.min_web, min_hole_mm=args.min_hole,
-        strain_limit=args.strain_limit, gap_mm=args.gap, tolerance_mm=args.tol))
+    material, hinge = cut_material(
+        pattern,
+        args.material,
+        args.hinge,
+        settings=args.set or [],
+        changes=dict(
+            thickness_mm=args.thickness,
+            kerf_mm=args.kerf,
+            min_web_mm=args.min_web,
+            min_hole_mm=args.min_hole,
+            strain_limit=args.strain_limit,
+            gap_mm=args.gap,
+            tolerance_mm=args.tol,
+        ),
+    )
     stem = Path(args.file).stem
     out = Path(args.output) if args.output else Path("outputs") / stem
     options = CutOptions(
-        material=material, hinge=hinge, state=args.state, sheet=_sheet(args.sheet), margin=args.margin,
-        layout=args.layout, scale=args.scale, width=args.width, formats=_formats(args.formats),
-        colors=args.colors, labels=not args.no_labels, label_height=args.label_height,
-        reference_mm=args.reference, ligament_width=args.ligament_width, force=args.force, stem=stem,
-        pattern_file=Path(args.file).name, notes=not args.no_notes, stroke_mm=args.stroke, exact=args.exact)
+        material=material,
+        hinge=hinge,
+        state=args.state,
+        sheet=_sheet(args.sheet),
+        margin=args.margin,
+        layout=args.layout,
+        scale=args.scale,
+        width=args.width,
+        formats=_formats(args.formats),
+        colors=args.colors,
+        labels=not args.no_labels,
+        label_height=args.label_height,
+        reference_mm=args.reference,
+        ligament_width=args.ligament_width,
+        force=args.force,
+        stem=stem,
+        pattern_file=Path(args.file).name,
+        notes=not args.no_notes,
+        stroke_mm=args.stroke,
+        exact=args.exact,
+    )
     cut = cut_files(pattern, options, use_verifier=not args.no_verify)
     rb, result = cut.readback, cut.result
     written = atomic_write_many(out, cut.files)
     for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if not rb.ok:
-        print("warning: written with --force although the verifier failed (see manifest.json)", file=sys.stderr)
+        print(
+            "warning: written with --force although the verifier failed (see manifest.json)",
+            file=sys.stderr,
+        )
     man = result.manifest
     total = sum(s["cut_length_mm"] for s in man["sheets"])
     secs = sum(s["cut_time_s"] for s in man["sheets"])
-    print(f"wrote {len(written)} files to {out}: {len(man['sheets'])} sheet(s), {man['hinge']} hinges, "
-          f"{material.name}, cut {total / 1000:.2f} m (~{secs / 60:.1f} min); "
-          f"{len(rb.checks)} read-back checks passed"
-          + ("" if args.no_verify or not rb.ok else ", verifier passed"), file=sys.stderr)
+    print(
+        f"wrote {len(written)} files to {out}: {len(man['sheets'])} sheet(s), {man['hinge']} hinges, "
+        f"{material.name}, cut {total / 1000:.2f} m (~{secs / 60:.1f} min); "
+        f"{len(rb.checks)} read-back checks passed"
+        + ("" if args.no_verify or not rb.ok else ", verifier passed"),
+        file=sys.stderr,
+    )
     return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("cut", help="laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state")
+    p = sub.add_parser(
+        "cut", help="laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state"
+    )
     p.add_argument("file", help="pattern.json (or a design .obj)")
     _add_sheet_args(p)
     _add_material_args(p)
     _add_tolerance_args(p)
-    p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="override any material field")
+    p.add_argument(
+        "--set", action="append", metavar="FIELD=VALUE", help="override any material field"
+    )
     _add_drawing_args(p)
-    p.add_argument("--force", action="store_true", help="cut even if the pattern does not close in both states")
+    p.add_argument(
+        "--force", action="store_true", help="cut even if the pattern does not close in both states"
+    )
     p.add_argument("--no-verify", action="store_true", help=argparse.SUPPRESS)
-    p.add_argument("-o", "--output", metavar="DIR", help="output folder (default outputs/<pattern stem>)")
+    p.add_argument(
+        "-o", "--output", metavar="DIR", help="output folder (default outputs/<pattern stem>)"
+    )
     p.set_defaults(func=cmd_cut)
 
 
 def _add_sheet_args(p: argparse.ArgumentParser) -> None:
     """Material, hinge, state, sheet, layout, size and output formats."""
-    p.add_argument("--material", metavar="NAME",
-                   help=f"preset ({', '.join(available())}) or a material .json (default: the one the design "
-                        "was made for, else acrylic-3)")
+    p.add_argument(
+        "--material",
+        metavar="NAME",
+        help=f"preset ({', '.join(available())}) or a material .json (default: the one the design "
+        "was made for, else acrylic-3)",
+    )
     p.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
-    p.add_argument("--state", type=int, choices=[1, 2], default=1, help="closed state to cut (default 1)")
-    p.add_argument("--sheet", default="600x400", metavar="WxH", help="sheet size in mm (default 600x400)")
-    p.add_argument("--margin", type=_nonneg, default=5.0, metavar="MM", help="sheet margin (default 5)")
-    p.add_argument("--layout", choices=LAYOUTS,
-                   help="in-place (tape, ligament), exploded or nested (separate; default exploded)")
+    p.add_argument(
+        "--state", type=int, choices=[1, 2], default=1, help="closed state to cut (default 1)"
+    )
+    p.add_argument(
+        "--sheet", default="600x400", metavar="WxH", help="sheet size in mm (default 600x400)"
+    )
+    p.add_argument(
+        "--margin", type=_nonneg, default=5.0, metavar="MM", help="sheet margin (default 5)"
+    )
+    p.add_argument(
+        "--layout",
+        choices=LAYOUTS,
+        help="in-place (tape, ligament), exploded or nested (separate; default exploded)",
+    )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--scale", type=_scale_or_auto, metavar="K|auto",
-                   help="mm in the file per mm of the pattern (auto: the smallest the material accepts)")
-    g.add_argument("--width", type=_scale_or_auto, metavar="MM|auto",
-                   help="width of the cut (closed) pattern in mm (auto: the smallest the material accepts)")
-    p.add_argument("--formats", default=",".join(FORMATS), metavar="LIST", help="dxf,svg,png (default all)")
-    p.add_argument("--colors", choices=sorted(COLORS), help="colour preset (default: the material's)")
+    g.add_argument(
+        "--scale",
+        type=_scale_or_auto,
+        metavar="K|auto",
+        help="mm in the file per mm of the pattern (auto: the smallest the material accepts)",
+    )
+    g.add_argument(
+        "--width",
+        type=_scale_or_auto,
+        metavar="MM|auto",
+        help="width of the cut (closed) pattern in mm (auto: the smallest the material accepts)",
+    )
+    p.add_argument(
+        "--formats", default=",".join(FORMATS), metavar="LIST", help="dxf,svg,png (default all)"
+    )
+    p.add_argument(
+        "--colors", choices=sorted(COLORS), help="colour preset (default: the material's)"
+    )
 
 
 def _add_material_args(p: argparse.ArgumentParser) -> None:
     """Material fields given one by one (they override the preset's)."""
-    p.add_argument("--kerf", type=float, metavar="MM", help="full kerf (Boxes.py's burn is half of it)")
+    p.add_argument(
+        "--kerf", type=float, metavar="MM", help="full kerf (Boxes.py's burn is half of it)"
+    )
     p.add_argument("--thickness", type=float, metavar="MM")
     p.add_argument("--min-web", type=float, metavar="MM")
     p.add_argument("--min-hole", type=float, metavar="MM")
     p.add_argument("--strain-limit", type=float, metavar="EPS")
     p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
-    p.add_argument("--ligament-width", type=_positive, metavar="MM", help="force the ligament width")
+    p.add_argument(
+        "--ligament-width", type=_positive, metavar="MM", help="force the ligament width"
+    )
 
 
 def _add_tolerance_args(p: argparse.ArgumentParser) -> None:
     """The verification tolerance of the pattern and of the read-back."""
-    p.add_argument("--tol-mm", "--tol", dest="tol", type=_positive, metavar="MM",
-                   help="verification tolerance in mm for the pattern and the read-back (default: the material's); "
-                        "angle residuals count as their displacement at the tile size")
-    p.add_argument("--exact", action="store_true",
-                   help="check the pattern at the relative tier for solver output (1e-9 of the tile edge, 1e-5 "
-                        "for optimiser output) instead of --tol-mm; the read-back stays at --tol-mm")
+    p.add_argument(
+        "--tol-mm",
+        "--tol",
+        dest="tol",
+        type=_positive,
+        metavar="MM",
+        help="verification tolerance in mm for the pattern and the read-back (default: the material's); "
+        "angle residuals count as their displacement at the tile size",
+    )
+    p.add_argument(
+        "--exact",
+        action="store_true",
+        help="check the pattern at the relative tier for solver output (1e-9 of the tile edge, 1e-5 "
+        "for optimiser output) instead of --tol-mm; the read-back stays at --tol-mm",
+    )
 
 
 def _add_drawing_args(p: argparse.ArgumentParser) -> None:
     """What the sheets carry besides the cuts: labels, the reference square, notes, the SVG stroke."""
-    p.add_argument("--label-height", type=_positive, metavar="MM", help="tile ID height (default: the material's)")
-    p.add_argument("--no-labels", action="store_true", help="no tile IDs, face letters or tape marks")
-    p.add_argument("--reference", type=_nonneg, default=50.0, metavar="MM",
-                   help="side of the uncompensated reference square (0: none; default 50)")
-    p.add_argument("--no-notes", action="store_true",
-                   help="leave out the NOTES layer (sheet frame, caption, reference-square size) that some laser "
-                        "software would cut")
-    p.add_argument("--stroke", type=_positive, default=STROKE_MM, metavar="MM",
-                   help=f"SVG stroke width (default {STROKE_MM:g}: visible in viewers; the colour tells the laser "
-                        "what to do; 0.01 for software that wants hairlines)")
+    p.add_argument(
+        "--label-height",
+        type=_positive,
+        metavar="MM",
+        help="tile ID height (default: the material's)",
+    )
+    p.add_argument(
+        "--no-labels", action="store_true", help="no tile IDs, face letters or tape marks"
+    )
+    p.add_argument(
+        "--reference",
+        type=_nonneg,
+        default=50.0,
+        metavar="MM",
+        help="side of the uncompensated reference square (0: none; default 50)",
+    )
+    p.add_argument(
+        "--no-notes",
+        action="store_true",
+        help="leave out the NOTES layer (sheet frame, caption, reference-square size) that some laser "
+        "software would cut",
+    )
+    p.add_argument(
+        "--stroke",
+        type=_positive,
+        default=STROKE_MM,
+        metavar="MM",
+        help=f"SVG stroke width (default {STROKE_MM:g}: visible in viewers; the colour tells the laser "
+        "what to do; 0.01 for software that wants hairlines)",
+    )

@@ -82,7 +82,12 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     return 0
 
 
-_steps = bounded(int, lambda v: 2 <= v <= 10000, "expected a whole number of steps", "steps must lie in 2..10000, got {v}")
+_steps = bounded(
+    int,
+    lambda v: 2 <= v <= 10000,
+    "expected a whole number of steps",
+    "steps must lie in 2..10000, got {v}",
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -46,11 +46,29 @@ def cmd_design(args: argparse.Namespace) -> int:
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
     request = PatternRequest(
-        tiles=(rows, cols), target=args.target, size=args.size, rigid=args.rigid, symmetry=args.symmetry,
-        holes=args.holes, contracted_target=tuple(args.contracted_target or ()), init=args.init, solver=args.solver,
-        fit=args.fit, tol=args.tol, shape_tol=args.shape_tol, material=args.material, hinge=args.hinge,
-        printer=args.printer, style=args.style, min_feature=args.min_feature, min_hole=args.min_hole,
-        name=args.name, i_know=args.i_know, verbose=args.verbose, kind=args.lattice)
+        tiles=(rows, cols),
+        target=args.target,
+        size=args.size,
+        rigid=args.rigid,
+        symmetry=args.symmetry,
+        holes=args.holes,
+        contracted_target=tuple(args.contracted_target or ()),
+        init=args.init,
+        solver=args.solver,
+        fit=args.fit,
+        tol=args.tol,
+        shape_tol=args.shape_tol,
+        material=args.material,
+        hinge=args.hinge,
+        printer=args.printer,
+        style=args.style,
+        min_feature=args.min_feature,
+        min_hole=args.min_hole,
+        name=args.name,
+        i_know=args.i_know,
+        verbose=args.verbose,
+        kind=args.lattice,
+    )
     out = design_by_kind(request, notify=lambda text: print(text, file=sys.stderr))
     out.write(args.output, preview=not args.no_preview)
     if args.json:
@@ -66,23 +84,39 @@ def _jsonable(v):
     return j(v)
 
 
-_tol = bounded(float, lambda v: 0 < v < 1e-2, "expected a number", "tolerance must lie in (0, 1e-2), got {text!r}")
-_size = bounded(float, lambda v: bool(np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM), "expected a length in mm",
-                f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}")
+_tol = bounded(
+    float,
+    lambda v: 0 < v < 1e-2,
+    "expected a number",
+    "tolerance must lie in (0, 1e-2), got {text!r}",
+)
+_size = bounded(
+    float,
+    lambda v: bool(np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM),
+    "expected a length in mm",
+    f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}",
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("design", help="inverse design: a reconfigurable quad kirigami fitted to a target shape")
+    p = sub.add_parser(
+        "design", help="inverse design: a reconfigurable quad kirigami fitted to a target shape"
+    )
     p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 16x16")
     _add_target_args(p)
     _add_solver_args(p)
     _add_fabrication_args(p)
     _add_tolerance_args(p)
-    p.add_argument("--no-preview", action="store_true",
-                   help="do not write the preview PNG (tiles over the targets) beside the pattern")
+    p.add_argument(
+        "--no-preview",
+        action="store_true",
+        help="do not write the preview PNG (tiles over the targets) beside the pattern",
+    )
     p.add_argument("--name", help="pattern name stored in the file")
     p.add_argument("--json", action="store_true", help="print the solver report as JSON on stdout")
-    p.add_argument("-v", "--verbose", action="store_true", help="progress on stderr even for small solves")
+    p.add_argument(
+        "-v", "--verbose", action="store_true", help="progress on stderr even for small solves"
+    )
     add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_design)
@@ -90,75 +124,135 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _add_target_args(p: argparse.ArgumentParser) -> None:
     """The lattice and what it is fitted to: deployed target, tube, symmetry, hole shape, closed-state outlines."""
-    p.add_argument("--lattice", choices=design_kinds(), default="quad",
-                   help="quad (default) or kagome: the kagome design fits the deployed tips to the target "
-                        "(docs/kagome.md)")
-    p.add_argument("--target", metavar="NAME|FILE",
-                   help="deployed target: a name from templates/targets (circle, ellipse, heart, ...) or a "
-                        ".csv/.json points file or an .svg path")
-    p.add_argument("--size", type=_size, metavar="MM",
-                   help="target size: its larger dimension in mm (named targets default to 100)")
+    p.add_argument(
+        "--lattice",
+        choices=design_kinds(),
+        default="quad",
+        help="quad (default) or kagome: the kagome design fits the deployed tips to the target "
+        "(docs/kagome.md)",
+    )
+    p.add_argument(
+        "--target",
+        metavar="NAME|FILE",
+        help="deployed target: a name from templates/targets (circle, ellipse, heart, ...) or a "
+        ".csv/.json points file or an .svg path",
+    )
+    p.add_argument(
+        "--size",
+        type=_size,
+        metavar="MM",
+        help="target size: its larger dimension in mm (named targets default to 100)",
+    )
     p.add_argument("--rigid", action="store_true", help="rigid-deployable: hinge angle sums = π")
-    p.add_argument("--tube", metavar="cylinder:CIRC,LENGTH|cone:R_BOTTOM,R_TOP,LENGTH",
-                   help="a reconfigurable tube of COLS columns around: the unrolled deployed target in mm; both "
-                        "closed states roll into cylinders (docs/tubes.md)")
-    p.add_argument("--closed", choices=["cylinder", "cone"], default=None,
-                   help="with --tube cone:...: cone lets both closed states be cones too (a rigid tube whose seam "
-                        "turns alike in every state); default cylinder, the closed states' pure-translation seam")
-    p.add_argument("--symmetry", choices=["x", "y", "none"],
-                   help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x); none: free "
-                        "(the default for quads; a kagome design otherwise takes every mirror its lattice and "
-                        "target share)")
-    p.add_argument("--holes", choices=["rhombus", "parallelogram"], default=None,
-                   help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums); "
-                        "default rhombus, but parallelogram for --rigid square/circle --contracted-target "
-                        "designs up to 11x11 tiles")
-    p.add_argument("--contracted-target", action="append", metavar="STATE:NAME|FILE",
-                   help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)")
+    p.add_argument(
+        "--tube",
+        metavar="cylinder:CIRC,LENGTH|cone:R_BOTTOM,R_TOP,LENGTH",
+        help="a reconfigurable tube of COLS columns around: the unrolled deployed target in mm; both "
+        "closed states roll into cylinders (docs/tubes.md)",
+    )
+    p.add_argument(
+        "--closed",
+        choices=["cylinder", "cone"],
+        default=None,
+        help="with --tube cone:...: cone lets both closed states be cones too (a rigid tube whose seam "
+        "turns alike in every state); default cylinder, the closed states' pure-translation seam",
+    )
+    p.add_argument(
+        "--symmetry",
+        choices=["x", "y", "none"],
+        help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x); none: free "
+        "(the default for quads; a kagome design otherwise takes every mirror its lattice and "
+        "target share)",
+    )
+    p.add_argument(
+        "--holes",
+        choices=["rhombus", "parallelogram"],
+        default=None,
+        help="hole shape (parallelogram: one more degree of freedom per hole, implies hinge sums); "
+        "default rhombus, but parallelogram for --rigid square/circle --contracted-target "
+        "designs up to 11x11 tiles",
+    )
+    p.add_argument(
+        "--contracted-target",
+        action="append",
+        metavar="STATE:NAME|FILE",
+        help="outline of closed state 1 or 2: a target curve, 'rect' or 'rect=W/H' (repeatable)",
+    )
 
 
 def _add_solver_args(p: argparse.ArgumentParser) -> None:
     """The initial guess and the solver."""
-    p.add_argument("--init", choices=INITS,
-                   help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
-                        "(standard pattern at the target's area), then standard, until a design passes every check "
-                        "(--rigid from 32x32 tiles: coarse, then rescaled; non-rigid from 16x16 tiles: the rigid "
-                        "family first, kept when it meets --shape-tol); coarse solves at half resolution "
-                        "first and maps that design onto the tiles")
-    p.add_argument("--solver", choices=["auto", "reduced", "full"], default="auto",
-                   help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "
-                        "solve in the closed-form rigid family, and when that fit is least-squares also run the "
-                        "full solver (up to 16x16 tiles, or up to 32x32 when the fit misses by more than 0.25 %% "
-                        "of the target size) and keep the better; also the rigid family for --rigid square/circle "
-                        "--contracted-target outlines (square exact, circle of any size) and for non-rigid rhombus "
-                        "designs from 32x32 tiles; reduced: the rigid family only; full: the sparse solver over "
-                        "all nodes")
+    p.add_argument(
+        "--init",
+        choices=INITS,
+        help="initial guess; by default conformal (harmonic map onto the target), then rescaled "
+        "(standard pattern at the target's area), then standard, until a design passes every check "
+        "(--rigid from 32x32 tiles: coarse, then rescaled; non-rigid from 16x16 tiles: the rigid "
+        "family first, kept when it meets --shape-tol); coarse solves at half resolution "
+        "first and maps that design onto the tiles",
+    )
+    p.add_argument(
+        "--solver",
+        choices=["auto", "reduced", "full"],
+        default="auto",
+        help="auto (default): with --rigid and rhombus holes (no --symmetry or --contracted-target) "
+        "solve in the closed-form rigid family, and when that fit is least-squares also run the "
+        "full solver (up to 16x16 tiles, or up to 32x32 when the fit misses by more than 0.25 %% "
+        "of the target size) and keep the better; also the rigid family for --rigid square/circle "
+        "--contracted-target outlines (square exact, circle of any size) and for non-rigid rhombus "
+        "designs from 32x32 tiles; reduced: the rigid family only; full: the sparse solver over "
+        "all nodes",
+    )
 
 
 def _add_fabrication_args(p: argparse.ArgumentParser) -> None:
     """The fabrication group: inequality rows for a material, printer or minimum sizes."""
-    g = p.add_argument_group("fabrication (inequality rows at the target's --size; stored for cut and print)")
-    g.add_argument("--material", metavar="NAME|FILE.json",
-                   help="laser material preset: every tile at least its minimum web wide at its thinnest (shrunk by "
-                        "gap/2 for ligaments), hinges its allowance apart")
+    g = p.add_argument_group(
+        "fabrication (inequality rows at the target's --size; stored for cut and print)"
+    )
+    g.add_argument(
+        "--material",
+        metavar="NAME|FILE.json",
+        help="laser material preset: every tile at least its minimum web wide at its thinnest (shrunk by "
+        "gap/2 for ligaments), hinges its allowance apart",
+    )
     g.add_argument("--hinge", choices=HINGE_KINDS, help="hinge kind (default: the material's)")
-    g.add_argument("--printer", metavar="NAME|FILE.json",
-                   help="printer preset: tiles two nozzles wide once shrunk by gap/2, hinge corners wide enough for "
-                        "a strip pad (or pivots far enough apart for pins)")
-    g.add_argument("--style", choices=PRINT_STYLES, help="print style (default "
-                   "tiles-and-strips)")
-    g.add_argument("--min-feature", type=_size, metavar="MM", help="every tile at least this wide at its thinnest")
-    g.add_argument("--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide")
+    g.add_argument(
+        "--printer",
+        metavar="NAME|FILE.json",
+        help="printer preset: tiles two nozzles wide once shrunk by gap/2, hinge corners wide enough for "
+        "a strip pad (or pivots far enough apart for pins)",
+    )
+    g.add_argument("--style", choices=PRINT_STYLES, help="print style (default tiles-and-strips)")
+    g.add_argument(
+        "--min-feature",
+        type=_size,
+        metavar="MM",
+        help="every tile at least this wide at its thinnest",
+    )
+    g.add_argument(
+        "--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide"
+    )
 
 
 def _add_tolerance_args(p: argparse.ArgumentParser) -> None:
     """The equality tolerance, the shape tolerance and what is fitted."""
-    p.add_argument("--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size")
-    p.add_argument("--shape-tol", default=conf.DEFAULT_SHAPE_TOL, metavar="TOL",
-                   help="largest Hausdorff distance between each outline and its target: a percentage of the "
-                        "target size (larger side of its bounding box) like 2%% (default), or a length like "
-                        "0.5mm; a design that misses it is still written, marked shape: missed, and exits 1")
-    p.add_argument("--fit", choices=["outline", "tips"], default="outline",
-                   help="outline (default): fit the whole tip polygon — tips on their arcs, chord midpoints and "
-                        "samples of the target (its corners and cusps included) to the other curve; tips: only the "
-                        "boundary tips on their arcs (tips may bunch and cut corners)")
+    p.add_argument(
+        "--tol", type=_tol, default=1e-10, help="max equality residual relative to the tile size"
+    )
+    p.add_argument(
+        "--shape-tol",
+        default=conf.DEFAULT_SHAPE_TOL,
+        metavar="TOL",
+        help="largest Hausdorff distance between each outline and its target: a percentage of the "
+        "target size (larger side of its bounding box) like 2%% (default), or a length like "
+        "0.5mm; a design that misses it is still written, marked shape: missed, and exits 1",
+    )
+    p.add_argument(
+        "--fit",
+        choices=["outline", "tips"],
+        default="outline",
+        help="outline (default): fit the whole tip polygon — tips on their arcs, chord midpoints and "
+        "samples of the target (its corners and cusps included) to the other curve; tips: only the "
+        "boundary tips on their arcs (tips may bunch and cut corners)",
+    )

@@ -44,22 +44,60 @@ COMMANDS = [
 # command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
 # (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
 SUMMARIES = {
-    "new": ("fabkiri.cli.pattern_cmds", "write a standard pattern (rotating squares or kagome triangles) with both "
-                                        "closed states"),
-    "import": ("fabkiri.cli.pattern_cmds", "import an OBJ design (and its contracted states), a .fold file or a PyKirigami model folder "
-               "into pattern.json"),
-    "info": ("fabkiri.cli.pattern_cmds", "counts, residuals and closure of a pattern (.json or .obj)"),
-    "export": ("fabkiri.cli.pattern_cmds", "write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder"),
-    "cut": ("fabkiri.cli.cut_cmd", "laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state"),
-    "verify": ("fabkiri.cli.verify_cmd", "prove that a pattern (and its cut layout) closes into both compact states"),
-    "design": ("fabkiri.cli.design_cmd", "inverse design: a reconfigurable quad kirigami fitted to a target shape"),
-    "deploy": ("fabkiri.cli.deploy_cmd", "deployment path from closed state 1 to closed state 2: energy, plot, GIF"),
-    "print": ("fabkiri.cli.print_cmd", "3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)"),
-    "tolerance": ("fabkiri.cli.tolerance_cmd", "Monte-Carlo of cut and hinge errors: closure gaps, overlaps, outline"),
-    "coupon": ("fabkiri.cli.coupon_cmd", "calibration coupon: laser (--material) or print (--printer) test pieces"),
-    "report": ("fabkiri.cli.report_cmd", "one self-contained HTML page: design vs target, states, deployment, "
-               "cut and print files, assembly, bill of materials"),
-    "sweep": ("fabkiri.cli.sweep_cmd", "many designs from a sweep file (TOML axes) on a local or existing Dask cluster"),
+    "new": (
+        "fabkiri.cli.pattern_cmds",
+        "write a standard pattern (rotating squares or kagome triangles) with both closed states",
+    ),
+    "import": (
+        "fabkiri.cli.pattern_cmds",
+        "import an OBJ design (and its contracted states), a .fold file or a PyKirigami model folder "
+        "into pattern.json",
+    ),
+    "info": (
+        "fabkiri.cli.pattern_cmds",
+        "counts, residuals and closure of a pattern (.json or .obj)",
+    ),
+    "export": (
+        "fabkiri.cli.pattern_cmds",
+        "write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder",
+    ),
+    "cut": (
+        "fabkiri.cli.cut_cmd",
+        "laser-cut files (DXF, SVG, PNG, manifest) for a pattern's closed state",
+    ),
+    "verify": (
+        "fabkiri.cli.verify_cmd",
+        "prove that a pattern (and its cut layout) closes into both compact states",
+    ),
+    "design": (
+        "fabkiri.cli.design_cmd",
+        "inverse design: a reconfigurable quad kirigami fitted to a target shape",
+    ),
+    "deploy": (
+        "fabkiri.cli.deploy_cmd",
+        "deployment path from closed state 1 to closed state 2: energy, plot, GIF",
+    ),
+    "print": (
+        "fabkiri.cli.print_cmd",
+        "3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)",
+    ),
+    "tolerance": (
+        "fabkiri.cli.tolerance_cmd",
+        "Monte-Carlo of cut and hinge errors: closure gaps, overlaps, outline",
+    ),
+    "coupon": (
+        "fabkiri.cli.coupon_cmd",
+        "calibration coupon: laser (--material) or print (--printer) test pieces",
+    ),
+    "report": (
+        "fabkiri.cli.report_cmd",
+        "one self-contained HTML page: design vs target, states, deployment, "
+        "cut and print files, assembly, bill of materials",
+    ),
+    "sweep": (
+        "fabkiri.cli.sweep_cmd",
+        "many designs from a sweep file (TOML axes) on a local or existing Dask cluster",
+    ),
 }
 
 
@@ -89,7 +127,9 @@ def defer_unused_numpy() -> list[str]:
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
         spec.loader.exec_module(module)
-        setattr(numpy, name.rsplit(".", 1)[1], module)  # as an import binds it (numpy's __getattr__ would recurse)
+        setattr(
+            numpy, name.rsplit(".", 1)[1], module
+        )  # as an import binds it (numpy's __getattr__ would recurse)
         done.append(name)
     return done
 
@@ -149,7 +189,9 @@ def build_parser(command: str | None = "") -> argparse.ArgumentParser:
 
     ``command=""`` (the default) imports every module, ``None`` none of those in ``SUMMARIES``.
     """
-    parser = _Parser(prog="fabkiri", description="Compact reconfigurable kirigami: design, verify, fabricate.")
+    parser = _Parser(
+        prog="fabkiri", description="Compact reconfigurable kirigami: design, verify, fabricate."
+    )
     parser.add_argument("--version", action="version", version=f"fabkiri {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -211,22 +253,30 @@ def _run(args: argparse.Namespace) -> int:
     except FabkiriError as exc:
         print(f"fabkiri: error: {exc}", file=sys.stderr)
         return exc.exit_code
-    except BrokenPipeError:  # e.g. `fabkiri verify p.json | head`: the reader left, say nothing more
+    except (
+        BrokenPipeError
+    ):  # e.g. `fabkiri verify p.json | head`: the reader left, say nothing more
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 1
     except KeyboardInterrupt:
         print("fabkiri: interrupted; nothing was written", file=sys.stderr)
         return 130
-    except MemoryError:  # past the up-front estimates (fabkiri.limits): still one line, nothing written
-        print("fabkiri: error: out of memory; try fewer tiles or a smaller input; nothing written",
-              file=sys.stderr)
+    except (
+        MemoryError
+    ):  # past the up-front estimates (fabkiri.limits): still one line, nothing written
+        print(
+            "fabkiri: error: out of memory; try fewer tiles or a smaller input; nothing written",
+            file=sys.stderr,
+        )
         return 2
     except Exception as exc:  # a bug: still one line unless asked
         if os.environ.get("FABKIRI_DEBUG"):
             raise
-        print(f"fabkiri: internal error: {type(exc).__name__}: {exc} (FABKIRI_DEBUG=1 shows the traceback)",
-              file=sys.stderr)
+        print(
+            f"fabkiri: internal error: {type(exc).__name__}: {exc} (FABKIRI_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
         return 3
 
 

@@ -37,9 +37,18 @@ def load_any(path: str) -> Pattern:
     return load_pattern(path)
 
 
-_positive = bounded(float, lambda v: 0 < v < float("inf"), "expected a number",
-                    "expected a positive finite number, got {text!r}")
-_nonneg = bounded(float, lambda v: 0 <= v < float("inf"), "expected a number", "expected a finite number >= 0, got {text!r}")
+_positive = bounded(
+    float,
+    lambda v: 0 < v < float("inf"),
+    "expected a number",
+    "expected a positive finite number, got {text!r}",
+)
+_nonneg = bounded(
+    float,
+    lambda v: 0 <= v < float("inf"),
+    "expected a number",
+    "expected a finite number >= 0, got {text!r}",
+)
 
 
 def cmd_new(args: argparse.Namespace) -> int:
@@ -59,9 +68,12 @@ def cmd_new(args: argparse.Namespace) -> int:
     write_pattern(pattern, args.output)
     assert pattern.lattice is not None  # every standard generator records its lattice (and angle)
     what = "tube " if args.tube else ("" if args.lattice == "quad" else f"{args.lattice} ")
-    print(f"wrote {args.output}: standard {what}{rows}x{cols}, tile {args.tile_size:g} mm, "
-          f"ψ = {pattern.lattice['angle_deg']:g}°, "
-          f"{info.width_mm:.1f} x {info.height_mm:.1f} mm deployed", file=sys.stderr)
+    print(
+        f"wrote {args.output}: standard {what}{rows}x{cols}, tile {args.tile_size:g} mm, "
+        f"ψ = {pattern.lattice['angle_deg']:g}°, "
+        f"{info.width_mm:.1f} x {info.height_mm:.1f} mm deployed",
+        file=sys.stderr,
+    )
     return 0
 
 
@@ -69,8 +81,11 @@ def cmd_import(args: argparse.Namespace) -> int:
     pattern = import_pattern(args.design, args.contracted or [], scale=args.scale)
     info = describe(pattern)
     write_pattern(pattern, args.output)
-    print(f"wrote {args.output}: {info.tiles} tiles, {info.holes} holes, "
-          f"{len(pattern.contracted)} contracted state(s) stored", file=sys.stderr)
+    print(
+        f"wrote {args.output}: {info.tiles} tiles, {info.holes} holes, "
+        f"{len(pattern.contracted)} contracted state(s) stored",
+        file=sys.stderr,
+    )
     for problem in info.problems():
         print(f"note: {problem}", file=sys.stderr)
     return 0
@@ -107,8 +122,15 @@ def cmd_export(args: argparse.Namespace) -> int:
         from .tube_cmd import cmd_export_tube3d
 
         return cmd_export_tube3d(args)
-    out = export_pattern(load_any(args.file), args.format, args.state, unit=args.unit, force=args.force,
-                         output=args.output, notify=lambda text: print(text, file=sys.stderr))
+    out = export_pattern(
+        load_any(args.file),
+        args.format,
+        args.state,
+        unit=args.unit,
+        force=args.force,
+        output=args.output,
+        notify=lambda text: print(text, file=sys.stderr),
+    )
     if out.files is not None:
         atomic_write_many(args.output, out.files)
     elif out.text is not None:  # an export is one file or a folder
@@ -118,8 +140,11 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def add_i_know(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--i-know", action="store_true",
-                   help="try a lattice larger than the largest tested (the refusal says what it would need)")
+    p.add_argument(
+        "--i-know",
+        action="store_true",
+        help="try a lattice larger than the largest tested (the refusal says what it would need)",
+    )
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -131,20 +156,45 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _register_new(sub: argparse._SubParsersAction) -> None:
     """``new``: a standard pattern."""
-    p = sub.add_parser("new", help="write a standard pattern (rotating squares or kagome triangles) with both "
-                                    "closed states")
-    p.add_argument("--tiles", required=True, metavar="ROWSxCOLS",
-                   help="lattice size, e.g. 8x8 (kagome: ROWS rows of COLS triangles)")
-    p.add_argument("--lattice", choices=kinds(), default="quad",
-                   help="tessellation: quad (rotating squares, default) or kagome (rotating triangles)")
-    p.add_argument("--tile-size", type=_positive, default=10.0, metavar="MM", help="tile edge in mm (default 10)")
-    p.add_argument("--angle", type=float, default=None, metavar="DEG",
-                   help="deployment angle ψ in degrees: quad 0..90 (default 45: square holes), "
-                        "kagome 0..120 (default 60: hexagonal holes)")
+    p = sub.add_parser(
+        "new",
+        help="write a standard pattern (rotating squares or kagome triangles) with both "
+        "closed states",
+    )
+    p.add_argument(
+        "--tiles",
+        required=True,
+        metavar="ROWSxCOLS",
+        help="lattice size, e.g. 8x8 (kagome: ROWS rows of COLS triangles)",
+    )
+    p.add_argument(
+        "--lattice",
+        choices=kinds(),
+        default="quad",
+        help="tessellation: quad (rotating squares, default) or kagome (rotating triangles)",
+    )
+    p.add_argument(
+        "--tile-size",
+        type=_positive,
+        default=10.0,
+        metavar="MM",
+        help="tile edge in mm (default 10)",
+    )
+    p.add_argument(
+        "--angle",
+        type=float,
+        default=None,
+        metavar="DEG",
+        help="deployment angle ψ in degrees: quad 0..90 (default 45: square holes), "
+        "kagome 0..120 (default 60: hexagonal holes)",
+    )
     p.add_argument("--name", help="pattern name stored in the file")
-    p.add_argument("--tube", action="store_true",
-                   help="a periodic tube of COLS columns around (even): the sheet's last column is the seam "
-                        "copy of the first (docs/tubes.md)")
+    p.add_argument(
+        "--tube",
+        action="store_true",
+        help="a periodic tube of COLS columns around (even): the sheet's last column is the seam "
+        "copy of the first (docs/tubes.md)",
+    )
     add_i_know(p)
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_new)
@@ -152,11 +202,22 @@ def _register_new(sub: argparse._SubParsersAction) -> None:
 
 def _register_import(sub: argparse._SubParsersAction) -> None:
     """``import``: an OBJ, FOLD or PyKirigami design into pattern.json."""
-    p = sub.add_parser("import", help="import an OBJ design (and its contracted states), a .fold file or a "
-                                       "PyKirigami model folder into pattern.json")
+    p = sub.add_parser(
+        "import",
+        help="import an OBJ design (and its contracted states), a .fold file or a "
+        "PyKirigami model folder into pattern.json",
+    )
     p.add_argument("design", help="deployed design .obj, a .fold file or a PyKirigami folder")
-    p.add_argument("--contracted", nargs="+", metavar="OBJ", help="contracted state files: state 1 [state 2]")
-    p.add_argument("--scale", type=_positive, default=1.0, metavar="MM", help="millimetres per file unit (default 1)")
+    p.add_argument(
+        "--contracted", nargs="+", metavar="OBJ", help="contracted state files: state 1 [state 2]"
+    )
+    p.add_argument(
+        "--scale",
+        type=_positive,
+        default=1.0,
+        metavar="MM",
+        help="millimetres per file unit (default 1)",
+    )
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="pattern.json to write")
     p.set_defaults(func=cmd_import)
 
@@ -166,30 +227,72 @@ def _register_info(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("info", help="counts, residuals and closure of a pattern (.json or .obj)")
     p.add_argument("file")
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--check", action="store_true", help="exit 1 unless the pattern closes in both states")
-    p.add_argument("--tol", type=_positive, default=DEFAULT_TOL,
-                   help=f"closure tolerance relative to the mean tile edge (default {DEFAULT_TOL:g})")
-    p.add_argument("--tol-rad", type=_positive, default=DEFAULT_TOL_RAD,
-                   help=f"angle tolerance in radians (default {DEFAULT_TOL_RAD:g})")
+    p.add_argument(
+        "--check", action="store_true", help="exit 1 unless the pattern closes in both states"
+    )
+    p.add_argument(
+        "--tol",
+        type=_positive,
+        default=DEFAULT_TOL,
+        help=f"closure tolerance relative to the mean tile edge (default {DEFAULT_TOL:g})",
+    )
+    p.add_argument(
+        "--tol-rad",
+        type=_positive,
+        default=DEFAULT_TOL_RAD,
+        help=f"angle tolerance in radians (default {DEFAULT_TOL_RAD:g})",
+    )
     p.set_defaults(func=cmd_info)
 
 
 def _register_export(sub: argparse._SubParsersAction) -> None:
     """``export``: a pattern to OBJ, FOLD, PyKirigami or tube3d."""
-    p = sub.add_parser("export", help="write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder")
+    p = sub.add_parser(
+        "export",
+        help="write a pattern as OBJ (one state), FOLD (all states) or a PyKirigami folder",
+    )
     p.add_argument("file")
-    p.add_argument("--state", choices=["deployed", "1", "2"], default="deployed",
-                   help="obj: the state written; pykirigami: the closed start state (default 1)")
-    p.add_argument("--format", choices=[*format_names(writable=True), "tube3d"], default="obj",
-                   help="obj (default); fold: FOLD 1.2 JSON, frame 0 deployed, frames 1, 2 the closed states; "
-                        "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator; "
-                        "tube3d: a folder with every state of a tube rolled into 3D (OBJ, thin-plate STL, PNG, GIF)")
-    p.add_argument("--copies", type=int, default=1, metavar="K", help="tube3d: K copies around the circumference")
-    p.add_argument("--thickness", type=_positive, default=1.0, metavar="MM", help="tube3d: plate thickness")
+    p.add_argument(
+        "--state",
+        choices=["deployed", "1", "2"],
+        default="deployed",
+        help="obj: the state written; pykirigami: the closed start state (default 1)",
+    )
+    p.add_argument(
+        "--format",
+        choices=[*format_names(writable=True), "tube3d"],
+        default="obj",
+        help="obj (default); fold: FOLD 1.2 JSON, frame 0 deployed, frames 1, 2 the closed states; "
+        "pykirigami: a model folder (vertices.txt, target.txt, constraints.txt) for its simulator; "
+        "tube3d: a folder with every state of a tube rolled into 3D (OBJ, thin-plate STL, PNG, GIF)",
+    )
+    p.add_argument(
+        "--copies",
+        type=int,
+        default=1,
+        metavar="K",
+        help="tube3d: K copies around the circumference",
+    )
+    p.add_argument(
+        "--thickness", type=_positive, default=1.0, metavar="MM", help="tube3d: plate thickness"
+    )
     p.add_argument("--no-gif", action="store_true", help="tube3d: skip the 3D deployment GIF")
-    p.add_argument("--unit", type=_positive, metavar="MM",
-                   help="pykirigami: mm per file unit (default: the mean tile edge, so tiles are about 1 unit)")
-    p.add_argument("--force", action="store_true",
-                   help="export a closed state even if the pattern does not close in both states")
-    p.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.obj, OUT.fold or a folder (pykirigami)")
+    p.add_argument(
+        "--unit",
+        type=_positive,
+        metavar="MM",
+        help="pykirigami: mm per file unit (default: the mean tile edge, so tiles are about 1 unit)",
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="export a closed state even if the pattern does not close in both states",
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="OUT",
+        help="OUT.obj, OUT.fold or a folder (pykirigami)",
+    )
     p.set_defaults(func=cmd_export)

@@ -22,45 +22,99 @@ def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     pattern = load_any(args.file)
     options = PrintOptions(
-        style=args.style, state=int(args.state) if args.state else None, printer=args.printer, scale=args.scale,
-        tile_thickness=args.tile_thickness, strip_thickness=args.strip_thickness, strip_width=args.strip_width,
-        strip_reach=args.strip_reach, gap=args.gap, radial_clearance=args.radial_clearance,
-        axial_clearance=args.axial_clearance, step=args.step, marks=args.marks, material=args.material,
-        force=args.force)
-    out = print_pattern(pattern, options, stem=Path(args.file).stem, source=Path(args.file).name,
-                        notify=lambda text: print(text, file=sys.stderr))
+        style=args.style,
+        state=int(args.state) if args.state else None,
+        printer=args.printer,
+        scale=args.scale,
+        tile_thickness=args.tile_thickness,
+        strip_thickness=args.strip_thickness,
+        strip_width=args.strip_width,
+        strip_reach=args.strip_reach,
+        gap=args.gap,
+        radial_clearance=args.radial_clearance,
+        axial_clearance=args.axial_clearance,
+        step=args.step,
+        marks=args.marks,
+        material=args.material,
+        force=args.force,
+    )
+    out = print_pattern(
+        pattern,
+        options,
+        stem=Path(args.file).stem,
+        source=Path(args.file).name,
+        notify=lambda text: print(text, file=sys.stderr),
+    )
     atomic_write_many(args.output, out.files)
-    print(f"wrote {len(out.files)} files to {args.output}: {out.describe()}, {time.perf_counter() - t0:.1f} s",
-          file=sys.stderr)
+    print(
+        f"wrote {len(out.files)} files to {args.output}: {out.describe()}, {time.perf_counter() - t0:.1f} s",
+        file=sys.stderr,
+    )
     return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("print", help="3D-printable hinges/tiles of a closed state (STL, 3MF, STEP)")
     p.add_argument("file", help="pattern.json (or design .obj)")
-    p.add_argument("--style", choices=mesh.STYLES,
-                   help="strips: one flexible strip per hinge for laser-cut tiles; tiles-and-strips: rigid tiles "
-                        "joined by flexible strips (two materials: recessed with two extruders, stacked with colour "
-                        "changes on one; the default unless the design was made for another); pinned: "
-                        "print-in-place pin hinges")
-    p.add_argument("--state", choices=["1", "2"], default=None,
-                   help="closed state printed (default: the one the design was made for, else 1)")
-    p.add_argument("--printer", metavar="NAME|FILE.json",
-                   help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})")
-    p.add_argument("--scale", type=_scale_auto, default=1.0, metavar="K|auto",
-                   help="print the pattern K times its size (default 1; auto: the smallest the plan checks accept)")
-    p.add_argument("--step", action="store_true", help="also write STEP (needs the 'cad' extra: build123d)")
-    for flag, what in [("tile-thickness", "tile thickness"), ("strip-thickness", "strip thickness"),
-                       ("strip-width", "strip width along the seam"), ("strip-reach", "strip reach into each tile"),
-                       ("gap", "gap between printed tiles"), ("radial-clearance", "in-plane print clearance"),
-                       ("axial-clearance", "clearance between stacked parts")]:
-        p.add_argument(f"--{flag}", type=_positive, metavar="MM", help=f"override the preset's {what}")
-    p.add_argument("--marks", action="store_true",
-                   help="strips style: also write the laser files of the tiles (laser/, as 'fabkiri cut --hinge "
-                        "tape') with every pad outline engraved where its strip is glued")
-    p.add_argument("--material", default="acrylic-3", metavar="NAME|FILE.json",
-                   help="laser material for --marks (default acrylic-3)")
-    p.add_argument("--force", action="store_true",
-                   help="print even if the pattern does not close in both states (as 'fabkiri cut --force')")
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
+    p.add_argument(
+        "--style",
+        choices=mesh.STYLES,
+        help="strips: one flexible strip per hinge for laser-cut tiles; tiles-and-strips: rigid tiles "
+        "joined by flexible strips (two materials: recessed with two extruders, stacked with colour "
+        "changes on one; the default unless the design was made for another); pinned: "
+        "print-in-place pin hinges",
+    )
+    p.add_argument(
+        "--state",
+        choices=["1", "2"],
+        default=None,
+        help="closed state printed (default: the one the design was made for, else 1)",
+    )
+    p.add_argument(
+        "--printer",
+        metavar="NAME|FILE.json",
+        help=f"printer preset (default prusa-mk4; presets: {', '.join(available_printers())})",
+    )
+    p.add_argument(
+        "--scale",
+        type=_scale_auto,
+        default=1.0,
+        metavar="K|auto",
+        help="print the pattern K times its size (default 1; auto: the smallest the plan checks accept)",
+    )
+    p.add_argument(
+        "--step", action="store_true", help="also write STEP (needs the 'cad' extra: build123d)"
+    )
+    for flag, what in [
+        ("tile-thickness", "tile thickness"),
+        ("strip-thickness", "strip thickness"),
+        ("strip-width", "strip width along the seam"),
+        ("strip-reach", "strip reach into each tile"),
+        ("gap", "gap between printed tiles"),
+        ("radial-clearance", "in-plane print clearance"),
+        ("axial-clearance", "clearance between stacked parts"),
+    ]:
+        p.add_argument(
+            f"--{flag}", type=_positive, metavar="MM", help=f"override the preset's {what}"
+        )
+    p.add_argument(
+        "--marks",
+        action="store_true",
+        help="strips style: also write the laser files of the tiles (laser/, as 'fabkiri cut --hinge "
+        "tape') with every pad outline engraved where its strip is glued",
+    )
+    p.add_argument(
+        "--material",
+        default="acrylic-3",
+        metavar="NAME|FILE.json",
+        help="laser material for --marks (default acrylic-3)",
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="print even if the pattern does not close in both states (as 'fabkiri cut --force')",
+    )
+    p.add_argument(
+        "-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)"
+    )
     p.set_defaults(func=cmd_print)

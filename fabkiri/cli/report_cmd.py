@@ -15,8 +15,12 @@ def cmd_report(args: argparse.Namespace) -> int:
     from ..mechanics.contract import contract_both
     from ..render.report import SECTIONS, build_report
 
-    for flag, folder in (("--cut", args.cut), ("--print", args.print_dir), ("--deploy", args.deploy),
-                         ("--tolerance", args.tolerance)):
+    for flag, folder in (
+        ("--cut", args.cut),
+        ("--print", args.print_dir),
+        ("--deploy", args.deploy),
+        ("--tolerance", args.tolerance),
+    ):
         if folder and not Path(folder).is_dir():
             raise InputError(f"{flag} {folder}: no such folder")
     out = Path(args.output)
@@ -28,19 +32,40 @@ def cmd_report(args: argparse.Namespace) -> int:
     both = contract_both(pattern)
     closes = all(c.max_closure <= 1e-9 * pattern.tile_size for c in both.values())
     states = {s: pattern.contracted.get(s, c.corners) for s, c in both.items()} if closes else None
-    page = build_report(pattern, source=Path(args.file).name, cut=args.cut, printed=args.print_dir,
-                        deploy=args.deploy, tolerance=args.tolerance, states=states)
+    page = build_report(
+        pattern,
+        source=Path(args.file).name,
+        cut=args.cut,
+        printed=args.print_dir,
+        deploy=args.deploy,
+        tolerance=args.tolerance,
+        states=states,
+    )
     atomic_write(out, page)
-    given = [n for n, v in (("cut", args.cut), ("print", args.print_dir), ("deploy", args.deploy),
-                            ("tolerance", args.tolerance)) if v]
-    print(f"wrote {out}: {len(page) / 1e6:.2f} MB, {len(SECTIONS)} sections"
-          f"{' with ' + ', '.join(given) if given else ''}", file=sys.stderr)
+    given = [
+        n
+        for n, v in (
+            ("cut", args.cut),
+            ("print", args.print_dir),
+            ("deploy", args.deploy),
+            ("tolerance", args.tolerance),
+        )
+        if v
+    ]
+    print(
+        f"wrote {out}: {len(page) / 1e6:.2f} MB, {len(SECTIONS)} sections"
+        f"{' with ' + ', '.join(given) if given else ''}",
+        file=sys.stderr,
+    )
     return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("report", help="one self-contained HTML page: design vs target, states, deployment, "
-                                      "cut and print files, assembly, bill of materials")
+    p = sub.add_parser(
+        "report",
+        help="one self-contained HTML page: design vs target, states, deployment, "
+        "cut and print files, assembly, bill of materials",
+    )
     p.add_argument("file", help="pattern (.json or design .obj)")
     p.add_argument("--cut", metavar="DIR", help="a fabkiri cut output folder")
     p.add_argument("--print", dest="print_dir", metavar="DIR", help="a fabkiri print output folder")

@@ -20,8 +20,14 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
 
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)
-    out = design_tube_pattern((rows, cols), args.tube, rigid=args.rigid, tol=args.tol, name=args.name or "",
-                              closed=args.closed or "cylinder")
+    out = design_tube_pattern(
+        (rows, cols),
+        args.tube,
+        rigid=args.rigid,
+        tol=args.tol,
+        name=args.name or "",
+        closed=args.closed or "cylinder",
+    )
     atomic_write(args.output, out.text())
     print(f"wrote {args.output}: tube {rows}x{cols}", file=sys.stderr)
     print("\n".join(out.summary()))
@@ -35,8 +41,13 @@ def cmd_export_tube3d(args: argparse.Namespace) -> int:
 
     check_output_folder(args.output)
     pattern = load_any(args.file)
-    files = tube_3d_files(pattern, stem=Path(args.file).stem, copies=args.copies, thickness=args.thickness,
-                          gif=not args.no_gif)
+    files = tube_3d_files(
+        pattern,
+        stem=Path(args.file).stem,
+        copies=args.copies,
+        thickness=args.thickness,
+        gif=not args.no_gif,
+    )
     atomic_write_many(args.output, files)
     print(f"wrote {args.output}/: {', '.join(sorted(files))}", file=sys.stderr)
     return 0

@@ -39,7 +39,12 @@ def load_for_verify(path: str) -> Pattern:
     return adopt_state_labels(import_obj(p, contracted))
 
 
-_nonneg = bounded(float, lambda v: 0 < v < float("inf"), "expected a number", "expected a positive finite number, got {text!r}")
+_nonneg = bounded(
+    float,
+    lambda v: 0 < v < float("inf"),
+    "expected a number",
+    "expected a positive finite number, got {text!r}",
+)
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
@@ -51,8 +56,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
 
     tol_mm = DEFAULT_TOL_MM if args.tol_mm is None else args.tol_mm
     # --exact: the relative tier for solver output; otherwise one tolerance in mm (angles as displacement)
-    report = verify_pattern(pattern, tol_mm=None if args.exact else tol_mm, tol_rad=args.tol_rad,
-                            shape_tol=parse_shape_tol(args.shape_tol))
+    report = verify_pattern(
+        pattern,
+        tol_mm=None if args.exact else tol_mm,
+        tol_rad=args.tol_rad,
+        shape_tol=parse_shape_tol(args.shape_tol),
+    )
     if args.layout:
         if not Path(args.layout).exists():
             raise InputError(f"{args.layout}: no such layout file")
@@ -63,7 +72,9 @@ def cmd_verify(args: argparse.Namespace) -> int:
         report.kind = "pattern and layout"
         report.meta["layout"] = str(args.layout)
         report.meta["layout_tol_mm"] = tol_mm
-        report.meta["tolerance"] = f"pattern {report.meta['tolerance']}; layout {layout.meta['tolerance']}"
+        report.meta["tolerance"] = (
+            f"pattern {report.meta['tolerance']}; layout {layout.meta['tolerance']}"
+        )
     if args.json:
         print(report.to_json())
     else:
@@ -77,20 +88,44 @@ def cmd_verify(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("verify", help="prove that a pattern (and its cut layout) closes into both compact states")
-    p.add_argument("file", help="pattern.json or design .obj (X_design.obj takes X_contracted1/2.obj beside it)")
-    p.add_argument("--layout", metavar="CUT", help="cut file (.dxf or .svg) to check against the pattern")
+    p = sub.add_parser(
+        "verify", help="prove that a pattern (and its cut layout) closes into both compact states"
+    )
+    p.add_argument(
+        "file",
+        help="pattern.json or design .obj (X_design.obj takes X_contracted1/2.obj beside it)",
+    )
+    p.add_argument(
+        "--layout", metavar="CUT", help="cut file (.dxf or .svg) to check against the pattern"
+    )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--tol-mm", type=_nonneg, default=None, metavar="MM",
-                   help=f"fabrication tolerance in mm for the pattern and layout checks (default {DEFAULT_TOL_MM:g}, "
-                        "the default material's); angle residuals count as their displacement at the tile size")
-    g.add_argument("--exact", action="store_true",
-                   help="pattern checks at the relative tier for exported data and solver output (1e-9 of the mean "
-                        "tile edge, 1e-5 for optimiser output; angles in rad); layout checks keep --tol-mm")
-    p.add_argument("--tol-rad", type=_nonneg, default=1e-6, metavar="RAD",
-                   help="angle tolerance in radians with --exact (default 1e-6)")
-    p.add_argument("--shape-tol", default="2%", metavar="TOL",
-                   help="largest Hausdorff distance between an outline and its stored target: a percentage of "
-                        "the target size (default 2%%) or a length like 0.5mm")
+    g.add_argument(
+        "--tol-mm",
+        type=_nonneg,
+        default=None,
+        metavar="MM",
+        help=f"fabrication tolerance in mm for the pattern and layout checks (default {DEFAULT_TOL_MM:g}, "
+        "the default material's); angle residuals count as their displacement at the tile size",
+    )
+    g.add_argument(
+        "--exact",
+        action="store_true",
+        help="pattern checks at the relative tier for exported data and solver output (1e-9 of the mean "
+        "tile edge, 1e-5 for optimiser output; angles in rad); layout checks keep --tol-mm",
+    )
+    p.add_argument(
+        "--tol-rad",
+        type=_nonneg,
+        default=1e-6,
+        metavar="RAD",
+        help="angle tolerance in radians with --exact (default 1e-6)",
+    )
+    p.add_argument(
+        "--shape-tol",
+        default="2%",
+        metavar="TOL",
+        help="largest Hausdorff distance between an outline and its stored target: a percentage of "
+        "the target size (default 2%%) or a length like 0.5mm",
+    )
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=cmd_verify)

@@ -113,8 +113,14 @@ class ClosedGrid:
         side[(gx == N) & (gy < M)] = 1
         side[(gy == 0) & (gx < N)] = 0
         b = np.flatnonzero(side >= 0)
-        return cls(state=state, offset=offset, vertex=offset + vid, boundary=offset + b,
-                   boundary_side=side[b], n_vertices=(M + 1) * (N + 1))
+        return cls(
+            state=state,
+            offset=offset,
+            vertex=offset + vid,
+            boundary=offset + b,
+            boundary_side=side[b],
+            n_vertices=(M + 1) * (N + 1),
+        )
 
     def congruence(self, st: Stencils, nv: int) -> Family:
         tl = st.tiles

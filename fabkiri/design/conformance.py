@@ -22,7 +22,9 @@ DEFAULT_SHAPE_TOL = "2%"
 # a miss of more than this many mean tip spacings is a local minimum, not the lattice's resolution (measured:
 # resolution misses 0.1-0.4 spacings, the leaf SVG's bad basin 7, the heart's 32x32 local minimum 2)
 LOCAL_MINIMUM_SPACINGS = 1.0
-SPLINE_SAMPLES = 4096  # a spline target as a polygon: chord error ~1e-5 of the size for the named shapes
+SPLINE_SAMPLES = (
+    4096  # a spline target as a polygon: chord error ~1e-5 of the size for the named shapes
+)
 
 
 def target_polygon(target: Target) -> np.ndarray:
@@ -38,15 +40,27 @@ def deployed(nodes: np.ndarray, topology, target: Target) -> dict:
     The last answer is kept: the solver's second-opinion test and the design's report measure the same
     nodes against the same target (an 8x8 design spent 25 ms, a tenth of its work, measuring twice)."""
     nodes = np.asarray(nodes, float)
-    key = (nodes.shape, nodes.tobytes(), topology.tiles.tobytes(), target.kind, target.size,
-           np.asarray(target.points, float).tobytes())
+    key = (
+        nodes.shape,
+        nodes.tobytes(),
+        topology.tiles.tobytes(),
+        target.kind,
+        target.size,
+        np.asarray(target.points, float).tobytes(),
+    )
     last = _LAST_DEPLOYED.get("entry")
     if last is not None and last[0] is target and last[1] == key:
         return copy.deepcopy(last[2])
-    order = pc.boundary_tip_order(topology.tiles, topology.hole_nodes, topology.hole_tiles, topology.free_nodes)
+    order = pc.boundary_tip_order(
+        topology.tiles, topology.hole_nodes, topology.hole_tiles, topology.free_nodes
+    )
     out = pc.measure(nodes[order], target_polygon(target), target.size)
     out["target"] = target.name
-    _LAST_DEPLOYED["entry"] = (target, key, copy.deepcopy(out))  # holds the target: its id is not reused
+    _LAST_DEPLOYED["entry"] = (
+        target,
+        key,
+        copy.deepcopy(out),
+    )  # holds the target: its id is not reused
     return out
 
 
@@ -70,15 +84,19 @@ def parse_shape_tol(text: str) -> tuple[float, str]:
     """``2%``, ``0.02`` (a fraction) or ``0.5mm``: ``(value, "rel" | "mm")``; InputError otherwise."""
     m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:e[-+]?[0-9]+)?)\s*(%|mm)?\s*", str(text), re.I)
     if not m:
-        raise InputError(f"--shape-tol expects a percentage of the target size (2%) or a length (0.5mm), "
-                         f"got {text!r}")
+        raise InputError(
+            f"--shape-tol expects a percentage of the target size (2%) or a length (0.5mm), "
+            f"got {text!r}"
+        )
     v, unit = float(m.group(1)), (m.group(2) or "").lower()
     if unit == "%":
         v, unit = v / 100.0, "rel"
     elif unit == "":
         unit = "rel"
     if not (math.isfinite(v) and v > 0) or (unit == "rel" and v >= 1):
-        raise InputError(f"--shape-tol must be positive (and below 100 % of the size), got {text!r}")
+        raise InputError(
+            f"--shape-tol must be positive (and below 100 % of the size), got {text!r}"
+        )
     return v, unit
 
 
@@ -94,8 +112,14 @@ def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = No
     value, unit = tol
     tol_mm = value * conf["size_mm"] if unit == "rel" else value
     h = conf["hausdorff_mm"]
-    out = {"status": "met" if h <= tol_mm else "missed", "tol_mm": tol_mm, "tol_rel": tol_mm / conf["size_mm"],
-           "hausdorff_mm": h, "hausdorff_rel": conf["hausdorff_rel"], "by_mm": max(0.0, h - tol_mm)}
+    out = {
+        "status": "met" if h <= tol_mm else "missed",
+        "tol_mm": tol_mm,
+        "tol_rel": tol_mm / conf["size_mm"],
+        "hausdorff_mm": h,
+        "hausdorff_rel": conf["hausdorff_rel"],
+        "by_mm": max(0.0, h - tol_mm),
+    }
     spacing = conf.get("spacing_mean_mm")
     if out["status"] == "missed" and spacing and h > LOCAL_MINIMUM_SPACINGS * spacing:
         out["local_minimum"] = True
@@ -109,12 +133,16 @@ def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = No
 def describe_miss(label: str, j: dict, conf: dict) -> str:
     """One line for a missed shape tolerance."""
     x, y = conf["worst"]["at"]
-    line = (f"shape missed ({label}): Hausdorff {j['hausdorff_mm']:.3g} mm ({100 * j['hausdorff_rel']:.2f} % of "
-            f"the size) > tolerance {j['tol_mm']:.3g} mm ({100 * j['tol_rel']:.2f} %), by {j['by_mm']:.3g} mm, "
-            f"worst at ({x:.1f}, {y:.1f}) mm")
+    line = (
+        f"shape missed ({label}): Hausdorff {j['hausdorff_mm']:.3g} mm ({100 * j['hausdorff_rel']:.2f} % of "
+        f"the size) > tolerance {j['tol_mm']:.3g} mm ({100 * j['tol_rel']:.2f} %), by {j['by_mm']:.3g} mm, "
+        f"worst at ({x:.1f}, {y:.1f}) mm"
+    )
     if j.get("local_minimum"):
-        line += (f"; that is {j['spacings']:.1f} tip spacings, not a chord cut off: a local minimum, which more "
-                 f"tiles alone may not fix (try another --init)")
+        line += (
+            f"; that is {j['spacings']:.1f} tip spacings, not a chord cut off: a local minimum, which more "
+            f"tiles alone may not fix (try another --init)"
+        )
     elif "suggested_tiles" in j:
         r, c = j["suggested_tiles"]
         line += f"; about {r}x{c} tiles would reach it (estimate: Hausdorff ~ 1/tiles per side)"

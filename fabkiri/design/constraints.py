@@ -41,10 +41,36 @@ from .stencils import (
 from .target_families import inside_polygon, nearest_chords, outline_match, shape_match
 
 # the solver's one import point: the families defined here and those of the modules split from this one
-__all__ = ["TIP_SIDE", "TWO_PI", "ClosedGrid", "Family", "Stencils", "angle_sums", "convexity", "corner_angle",
-           "corner_convexity", "cross_term", "cross_value", "edge_pairs", "hinge_sums", "hole_opposite_sides",
-           "inside_polygon", "jac", "nearest_chords", "non_overlap", "notch_pairs", "outline_match", "outline_ratio",
-           "rectangle_outline", "regularizer_pairs", "rings", "shape_match", "sqlen_diff", "sqlen_value", "symmetry"]
+__all__ = [
+    "TIP_SIDE",
+    "TWO_PI",
+    "ClosedGrid",
+    "Family",
+    "Stencils",
+    "angle_sums",
+    "convexity",
+    "corner_angle",
+    "corner_convexity",
+    "cross_term",
+    "cross_value",
+    "edge_pairs",
+    "hinge_sums",
+    "hole_opposite_sides",
+    "inside_polygon",
+    "jac",
+    "nearest_chords",
+    "non_overlap",
+    "notch_pairs",
+    "outline_match",
+    "outline_ratio",
+    "rectangle_outline",
+    "regularizer_pairs",
+    "rings",
+    "shape_match",
+    "sqlen_diff",
+    "sqlen_value",
+    "symmetry",
+]
 
 
 # ------------------------------------------------------------- families
@@ -58,7 +84,9 @@ def edge_pairs(st: Stencils, state: int, nv: int, hinges: np.ndarray | None = No
         r, nodes, g = sqlen_diff(x, h, a, h, b)
         return r, (nodes, g)
 
-    return Family(f"edge_pairs_{state}", "eq", fn, 2, nv=nv, res=lambda x: sqlen_value(x, h, a, h, b))
+    return Family(
+        f"edge_pairs_{state}", "eq", fn, 2, nv=nv, res=lambda x: sqlen_value(x, h, a, h, b)
+    )
 
 
 def notch_pairs(st: Stencils, state: int, nv: int) -> Family:
@@ -85,8 +113,15 @@ def hole_opposite_sides(st: Stencils, nv: int) -> Family:
     return Family("hole_opposite_sides", "eq", fn, 2, nv=nv)
 
 
-def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, target: np.ndarray, nv: int,
-               kind: str = "eq") -> Family:
+def angle_sums(
+    name: str,
+    tiles: np.ndarray,
+    t: np.ndarray,
+    k: np.ndarray,
+    target: np.ndarray,
+    nv: int,
+    kind: str = "eq",
+) -> Family:
     """Σ_j θ_{t[i,j]}(k[i,j]) - target[i] (wrapped), ``t``/``k`` of shape ``(m, q)``."""
     m, q = t.shape
     tt, kk = t.ravel(), k.ravel()
@@ -107,11 +142,15 @@ def angle_sums(name: str, tiles: np.ndarray, t: np.ndarray, k: np.ndarray, targe
 
 def rings(st: Stencils, state: int, nv: int) -> Family:
     rg = st.folds[state].rings
-    return angle_sums(f"rings_{state}", st.tiles, rg[..., 0], rg[..., 1], np.full(len(rg), TWO_PI), nv)
+    return angle_sums(
+        f"rings_{state}", st.tiles, rg[..., 0], rg[..., 1], np.full(len(rg), TWO_PI), nv
+    )
 
 
 def hinge_sums(st: Stencils, nv: int) -> Family:
-    return angle_sums("hinge_sums", st.tiles, st.hinge_tiles, st.hinge_corner, np.full(st.n_hinges, np.pi), nv)
+    return angle_sums(
+        "hinge_sums", st.tiles, st.hinge_tiles, st.hinge_corner, np.full(st.n_hinges, np.pi), nv
+    )
 
 
 def non_overlap(st: Stencils, nv: int) -> Family:
@@ -151,7 +190,9 @@ def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
     d, partner = KDTree(base).query(mirrored)
     scale = np.linalg.norm(base[st.tiles[0, 1]] - base[st.tiles[0, 0]])
     if (d > 1e-6 * scale).any():
-        raise InputError(f"symmetry {axis}: the lattice has no mirror image of itself about the {axis} axis")
+        raise InputError(
+            f"symmetry {axis}: the lattice has no mirror image of itself about the {axis} axis"
+        )
     # the mirror must map tiles to tiles and keep the fold states (primal stays primal)
     for s in (1, 2):
         fold = st.folds[s]
@@ -161,7 +202,8 @@ def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
             which = "columns" if axis == "y" else "rows"
             raise InputError(
                 f"symmetry {axis} swaps the primal and dual closed states for an odd number of {which}; "
-                f"use an even number of {which}")
+                f"use an even number of {which}"
+            )
     idx = np.arange(len(base))
     pair = idx < partner
     on_axis = idx == partner
@@ -169,11 +211,25 @@ def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
     comp = 1 if axis == "x" else 0  # coordinate that must vanish on the axis
     rows_p = len(i)
     m = 2 * rows_p + int(on_axis.sum())
-    r_i = np.concatenate([np.arange(rows_p) * 2, np.arange(rows_p) * 2 + 1,
-                          np.arange(rows_p) * 2, np.arange(rows_p) * 2 + 1, 2 * rows_p + np.arange(on_axis.sum())])
+    r_i = np.concatenate(
+        [
+            np.arange(rows_p) * 2,
+            np.arange(rows_p) * 2 + 1,
+            np.arange(rows_p) * 2,
+            np.arange(rows_p) * 2 + 1,
+            2 * rows_p + np.arange(on_axis.sum()),
+        ]
+    )
     c_i = np.concatenate([2 * j, 2 * j + 1, 2 * i, 2 * i + 1, 2 * idx[on_axis] + comp])
-    vals = np.concatenate([np.ones(rows_p), np.ones(rows_p), -S[0] * np.ones(rows_p), -S[1] * np.ones(rows_p),
-                           np.ones(on_axis.sum())])
+    vals = np.concatenate(
+        [
+            np.ones(rows_p),
+            np.ones(rows_p),
+            -S[0] * np.ones(rows_p),
+            -S[1] * np.ones(rows_p),
+            np.ones(on_axis.sum()),
+        ]
+    )
     J = sparse.csr_matrix((vals, (r_i, c_i)), shape=(m, 2 * nv))
 
     def fn(x):

@@ -43,7 +43,9 @@ class FabricationLimits:
     shrink_mm: float = 0.0
     min_edge_mm: float = 0.0
     hinge_spacing_mm: float = 0.0
-    hinge_edge_mm: float = 0.0  # every edge with a hinge at an end at least this long (a strip's seam)
+    hinge_edge_mm: float = (
+        0.0  # every edge with a hinge at an end at least this long (a strip's seam)
+    )
     min_hinge_angle_deg: float = 0.0
     min_hole_mm: float = 0.0
     # printed strips (fabkiri.fabricate.printgeom): two strips on one face of a tile keep this clearance
@@ -64,8 +66,15 @@ class FabricationLimits:
 
     def scaled(self, fraction: float, margin: float = 0.0) -> FabricationLimits:
         """Every requirement times ``fraction`` (a step of the continuation in the limits)."""
-        return replace(self, margin=margin, **{f.name: getattr(self, f.name) * fraction for f in fields(self)
-                                               if f.name not in NOT_LIMITS})
+        return replace(
+            self,
+            margin=margin,
+            **{
+                f.name: getattr(self, f.name) * fraction
+                for f in fields(self)
+                if f.name not in NOT_LIMITS
+            },
+        )
 
     def required_width_mm(self) -> float:
         """Unshrunk width every tile needs at least (erosion by d takes at least 2d off a width)."""
@@ -85,7 +94,9 @@ class _D:
 
     @staticmethod
     def lift(o, like: _D) -> _D:
-        return o if isinstance(o, _D) else _D(np.broadcast_to(o, like.v.shape), np.zeros_like(like.g))
+        return (
+            o if isinstance(o, _D) else _D(np.broadcast_to(o, like.v.shape), np.zeros_like(like.g))
+        )
 
     def __add__(self, o):
         o = _D.lift(o, self)
@@ -112,7 +123,9 @@ class _D:
     def __truediv__(self, o):
         if not isinstance(o, _D):
             return self * (1.0 / o)
-        return _D(self.v / o.v, (self.g * o.v[:, None] - o.g * self.v[:, None]) / (o.v * o.v)[:, None])
+        return _D(
+            self.v / o.v, (self.g * o.v[:, None] - o.g * self.v[:, None]) / (o.v * o.v)[:, None]
+        )
 
     def sqrt(self):
         r = np.sqrt(self.v)
@@ -174,7 +187,9 @@ def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) ->
     return smooth_max(*far) - width
 
 
-SMOOTH = 0.02  # normalised (tile edges): the smooth max is at most this much below the max, never above
+SMOOTH = (
+    0.02  # normalised (tile edges): the smooth max is at most this much below the max, never above
+)
 
 
 def smooth_max(a: _D, b: _D, eps: float = SMOOTH) -> _D:
@@ -196,15 +211,18 @@ def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: 
     return ln + shrink * _dot(u, _sub(mb, ma)) - min_edge
 
 
-def hinge_angle_rows(x: np.ndarray, quads: np.ndarray, t: np.ndarray, k: np.ndarray, sin_min: float) -> _D:
+def hinge_angle_rows(
+    x: np.ndarray, quads: np.ndarray, t: np.ndarray, k: np.ndarray, sin_min: float
+) -> _D:
     """sin of the corner angle at hinge corners ``(t, k)`` minus ``sin_min``."""
     v, a, b = (_corners(x, quads, t, (k + s) % 4) for s in (0, 1, -1))
     A, B = _sub(a, v), _sub(b, v)
     return (A[0] * B[1] - A[1] * B[0]) / (_dot(A, A) * _dot(B, B)).sqrt() - sin_min
 
 
-def spacing_rows(x: np.ndarray, quads: np.ndarray, t: np.ndarray, i: np.ndarray, j: np.ndarray,
-                 spacing: float) -> _D:
+def spacing_rows(
+    x: np.ndarray, quads: np.ndarray, t: np.ndarray, i: np.ndarray, j: np.ndarray, spacing: float
+) -> _D:
     """Distance between corners ``i`` and ``j`` of quads ``t`` minus ``spacing``."""
     d = _sub(_corners(x, quads, t, i), _corners(x, quads, t, j))
     return _dot(d, d).sqrt() - spacing
@@ -236,8 +254,19 @@ def _strip_box(x, quads, t, c, end):
     return p, e, (-e[1] * sgn, e[0] * sgn)
 
 
-def strip_rows(x: np.ndarray, quads: np.ndarray, t: np.ndarray, ch: np.ndarray, eh: np.ndarray, ck: np.ndarray,
-               ek: np.ndarray, a0: float, along: float, across: float, clearance: float) -> _D:
+def strip_rows(
+    x: np.ndarray,
+    quads: np.ndarray,
+    t: np.ndarray,
+    ch: np.ndarray,
+    eh: np.ndarray,
+    ck: np.ndarray,
+    ek: np.ndarray,
+    a0: float,
+    along: float,
+    across: float,
+    clearance: float,
+) -> _D:
     """Separating-axis gap between the strip boxes of hinge corners ``ch`` and ``ck`` of quads ``t`` (seams
     towards corners ``eh``, ``ek``; box ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile)
     minus ``clearance``; soft min/max and the smooth max over the eight axis gaps are all on the safe side."""
@@ -273,14 +302,17 @@ def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Famil
 def _ccw(quads: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Quads reordered counter-clockwise in ``x`` (holes come either way round)."""
     p = x[quads]
-    area = 0.5 * (p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1]).sum(1)
+    area = 0.5 * (
+        p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1]
+    ).sum(1)
     out = quads.copy()
     out[area < 0] = out[area < 0][:, ::-1]
     return out
 
 
-def families(st: Stencils, nv: int, limits: FabricationLimits | None, unit_mm: float,
-             base: np.ndarray) -> list[Family]:
+def families(
+    st: Stencils, nv: int, limits: FabricationLimits | None, unit_mm: float, base: np.ndarray
+) -> list[Family]:
     """The fabrication rows of ``limits`` in normalised units (1 = ``unit_mm``); ``base`` orients holes."""
     if limits is None or not limits.active:
         return []
@@ -291,7 +323,9 @@ def families(st: Stencils, nv: int, limits: FabricationLimits | None, unit_mm: f
     return out
 
 
-def _families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, base: np.ndarray) -> list[Family]:
+def _families(
+    st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, base: np.ndarray
+) -> list[Family]:
     tiles = st.tiles
     T = len(tiles)
     out = []
@@ -299,23 +333,47 @@ def _families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, 
     per_edge = {"quad_of_row": np.repeat(np.arange(T), 4)}
     if limits.min_width_mm > 0:
         w = limits.min_width_mm / unit_mm
-        out.append(_family("fabrication_width", tiles, lambda x, w=w: width_rows(x, tiles, w, d), nv, dict(per_edge)))
+        out.append(
+            _family(
+                "fabrication_width",
+                tiles,
+                lambda x, w=w: width_rows(x, tiles, w, d),
+                nv,
+                dict(per_edge),
+            )
+        )
     if d > 0:
         e_min = max(limits.min_edge_mm, fab.EDGE_EPS_MM) / unit_mm
-        out.append(_family("fabrication_shrunk_edges", tiles, lambda x: shrunk_edge_rows(x, tiles, d, e_min), nv,
-                           dict(per_edge)))
+        out.append(
+            _family(
+                "fabrication_shrunk_edges",
+                tiles,
+                lambda x: shrunk_edge_rows(x, tiles, d, e_min),
+                nv,
+                dict(per_edge),
+            )
+        )
     out += _hinge_families(st, nv, limits, unit_mm, tiles)
     if limits.strip_clearance_mm > 0:
         out += _strip_family(st, nv, limits, unit_mm, tiles)
     if limits.min_hole_mm > 0 and len(st.hole_nodes):
         holes = _ccw(st.hole_nodes, base)
         wh = limits.min_hole_mm / unit_mm
-        out.append(_family("fabrication_holes", holes, lambda x: width_rows(x, holes, wh, 0.0), nv,
-                           {"quad_of_row": np.repeat(np.arange(len(holes)), 4)}))
+        out.append(
+            _family(
+                "fabrication_holes",
+                holes,
+                lambda x: width_rows(x, holes, wh, 0.0),
+                nv,
+                {"quad_of_row": np.repeat(np.arange(len(holes)), 4)},
+            )
+        )
     return out
 
 
-def _hinge_families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, tiles) -> list[Family]:
+def _hinge_families(
+    st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, tiles
+) -> list[Family]:
     """Rows at the hinges: the angle of each hinge corner, two hinge corners of a tile apart, and a hinge
     corner clear of the far end of its edges."""
     T = len(tiles)
@@ -323,50 +381,94 @@ def _hinge_families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: f
     ht, hk = st.hinge_tiles.ravel(), st.hinge_corner.ravel()
     if limits.min_hinge_angle_deg > 0:
         s_min = float(np.sin(np.radians(limits.min_hinge_angle_deg)))
-        out.append(_family("fabrication_hinge_angles", tiles, lambda x: hinge_angle_rows(x, tiles, ht, hk, s_min),
-                           nv, {"quad_of_row": ht}))
+        out.append(
+            _family(
+                "fabrication_hinge_angles",
+                tiles,
+                lambda x: hinge_angle_rows(x, tiles, ht, hk, s_min),
+                nv,
+                {"quad_of_row": ht},
+            )
+        )
     if limits.hinge_spacing_mm > 0:
         has = np.zeros((T, 4), dtype=bool)
         has[ht, hk] = True
         i, j = np.triu_indices(4, 1)
         t, p = np.nonzero(has[:, i] & has[:, j])
         s = limits.hinge_spacing_mm / unit_mm
-        out.append(_family("fabrication_hinge_spacing", tiles,
-                           lambda x: spacing_rows(x, tiles, t, i[p], j[p], s), nv, {"quad_of_row": t}))
+        out.append(
+            _family(
+                "fabrication_hinge_spacing",
+                tiles,
+                lambda x: spacing_rows(x, tiles, t, i[p], j[p], s),
+                nv,
+                {"quad_of_row": t},
+            )
+        )
     if limits.hinge_edge_mm > 0:
         has = np.zeros((T, 4), dtype=bool)
         has[ht, hk] = True
         k = np.arange(4)
         te, e = np.nonzero(has | has[:, (k + 1) % 4])
         s_e = limits.hinge_edge_mm / unit_mm
-        out.append(_family("fabrication_hinge_edges", tiles,
-                           lambda x: spacing_rows(x, tiles, te, e, (e + 1) % 4, s_e), nv, {"quad_of_row": te}))
+        out.append(
+            _family(
+                "fabrication_hinge_edges",
+                tiles,
+                lambda x: spacing_rows(x, tiles, te, e, (e + 1) % 4, s_e),
+                nv,
+                {"quad_of_row": te},
+            )
+        )
     return out
 
 
-def _strip_family(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, tiles) -> list[Family]:
+def _strip_family(
+    st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float, tiles
+) -> list[Family]:
     """Strip clearance rows for every two hinge corners of a tile whose strips share a face (in closed state
     ``limits.print_state``, the one ``print`` makes; faces from the fold rules, as ``print`` assigns them)."""
     T = len(tiles)
-    pairs = np.concatenate([fab.coincident_hinges(st.hinge_tiles, st.hinge_corner, st.folds[s].fold_corner_ends, T)
-                            for s in (1, 2)])
+    pairs = np.concatenate(
+        [
+            fab.coincident_hinges(st.hinge_tiles, st.hinge_corner, st.folds[s].fold_corner_ends, T)
+            for s in (1, 2)
+        ]
+    )
     face = fab.strip_faces(np.unique(pairs, axis=0), len(st.hinge_tiles))
     t, h, sh, k, sk = fab.same_face_pairs(st.hinge_tiles, face, T)
     if not len(t):
         return []
     ends = st.folds[limits.print_state].fold_corner_ends
     d = limits.shrink_mm
-    sin_min = float(np.sin(np.radians(limits.min_hinge_angle_deg))) if limits.min_hinge_angle_deg > 0 else 1.0
-    a0 = d / unit_mm  # the strip starts t0 = d / sin(sharper corner) along the seam: at least d, at most
-    along = (d / sin_min - d + limits.strip_width_mm) / unit_mm  # d / sin(min hinge angle), kept by the angle rows
+    sin_min = (
+        float(np.sin(np.radians(limits.min_hinge_angle_deg)))
+        if limits.min_hinge_angle_deg > 0
+        else 1.0
+    )
+    a0 = (
+        d / unit_mm
+    )  # the strip starts t0 = d / sin(sharper corner) along the seam: at least d, at most
+    along = (
+        d / sin_min - d + limits.strip_width_mm
+    ) / unit_mm  # d / sin(min hinge angle), kept by the angle rows
     across = (limits.strip_reach_mm + d) / unit_mm
     cl = limits.strip_clearance_mm / unit_mm
     args = (t, st.hinge_corner[h, sh], ends[h, sh], st.hinge_corner[k, sk], ends[k, sk])
-    return [_family("fabrication_strip_clearance", tiles,
-                    lambda x: strip_rows(x, tiles, *args, a0, along, across, cl), nv, {"quad_of_row": t})]
+    return [
+        _family(
+            "fabrication_strip_clearance",
+            tiles,
+            lambda x: strip_rows(x, tiles, *args, a0, along, across, cl),
+            nv,
+            {"quad_of_row": t},
+        )
+    ]
 
 
-def smallest_size(size_mm: float, area_mm2: float, n_tiles: int, limits: FabricationLimits) -> float | None:
+def smallest_size(
+    size_mm: float, area_mm2: float, n_tiles: int, limits: FabricationLimits
+) -> float | None:
     """The smallest target size (same shape) at which the tiles could be wide enough, or None when
     ``size_mm`` already could: ``n_tiles`` tiles each ``w`` wide cover at least ``n · w²/√3`` (Pál),
     and they lie inside the deployed outline, so its area must be at least that."""

@@ -35,7 +35,9 @@ def tip_polygon(x: np.ndarray, st: Stencils) -> np.ndarray:
     tips = st.tip_nodes
     side = st.tip_side
     p = x[tips]
-    key = np.select([side == 0, side == 1, side == 2, side == 3], [p[:, 0], p[:, 1], -p[:, 0], -p[:, 1]])
+    key = np.select(
+        [side == 0, side == 1, side == 2, side == 3], [p[:, 0], p[:, 1], -p[:, 0], -p[:, 1]]
+    )
     order = np.lexsort((key, side))
     return p[order]
 
@@ -94,8 +96,15 @@ def harmonic_map(base: np.ndarray, st: Stencils, target: Target) -> np.ndarray:
     return out
 
 
-def coarse_tile_map(base_coarse: np.ndarray, x_coarse: np.ndarray, tiles_coarse: np.ndarray, cols_coarse: int,
-                    base_fine: np.ndarray, tiles_fine: np.ndarray, cols_fine: int) -> np.ndarray:
+def coarse_tile_map(
+    base_coarse: np.ndarray,
+    x_coarse: np.ndarray,
+    tiles_coarse: np.ndarray,
+    cols_coarse: int,
+    base_fine: np.ndarray,
+    tiles_fine: np.ndarray,
+    cols_fine: int,
+) -> np.ndarray:
     """Coarse-to-fine by tiles: fine tile centres go through the piecewise-linear centre map; each fine
     tile takes the rotation and scale (a complex factor) of the nearest coarse tile of its checkerboard
     parity, so the alternating counter-rotation of the deployed pattern survives; shared nodes average."""
@@ -116,7 +125,9 @@ def coarse_tile_map(base_coarse: np.ndarray, x_coarse: np.ndarray, tiles_coarse:
     cf = Pf.mean(1)
     lin = LinearNDInterpolator(cc, qc)(cf)
     bad = ~np.isfinite(lin).all(1)
-    if bad.any():  # outside the hull of coarse centres: extend by the nearest coarse tile's similarity
+    if (
+        bad.any()
+    ):  # outside the hull of coarse centres: extend by the nearest coarse tile's similarity
         _, nn = KDTree(cc).query(cf[bad])
         z = qc[nn] @ np.array([1, 1j]) + a[nn] * ((cf[bad] - cc[nn]) @ np.array([1, 1j]))
         lin[bad] = np.stack([z.real, z.imag], -1)
@@ -136,7 +147,9 @@ def coarse_tile_map(base_coarse: np.ndarray, x_coarse: np.ndarray, tiles_coarse:
     return out / cnt[:, None]
 
 
-def initial_guess(base: np.ndarray, st: Stencils, target: Target | None, how: str) -> tuple[np.ndarray, float]:
+def initial_guess(
+    base: np.ndarray, st: Stencils, target: Target | None, how: str
+) -> tuple[np.ndarray, float]:
     """Initial node positions (normalised) and the tile size L0 (mm) of the normalisation.
 
     ``base`` is the standard deployed pattern with unit tiles centred on the
@@ -149,7 +162,9 @@ def initial_guess(base: np.ndarray, st: Stencils, target: Target | None, how: st
     lo, hi = target.bbox
     centre = 0.5 * (lo + hi)
     if how == "coarse":
-        raise SolveError("the coarse initial guess needs the solver (fabkiri.design.solve builds it)")
+        raise SolveError(
+            "the coarse initial guess needs the solver (fabkiri.design.solve builds it)"
+        )
     if how in ("standard", "rescaled"):
         L0 = scale_for(base, st, target, how)
         return base + centre / L0, L0
@@ -157,6 +172,8 @@ def initial_guess(base: np.ndarray, st: Stencils, target: Target | None, how: st
     x = harmonic_map(base, st, target.transformed(1.0 / L0))
     area = geometry.signed_areas(x[st.tiles])
     if (area <= 0).any():
-        raise SolveError(f"the harmonic map onto {target.name!r} folds {int((area <= 0).sum())} tiles "
-                         f"(a non-convex target); use --init rescaled or standard")
+        raise SolveError(
+            f"the harmonic map onto {target.name!r} folds {int((area <= 0).sum())} tiles "
+            f"(a non-convex target); use --init rescaled or standard"
+        )
     return x, L0

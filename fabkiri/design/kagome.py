@@ -38,16 +38,18 @@ def edge_pair_family(pattern: Pattern, state: int) -> Family:
         r, nodes, g = sqlen_diff(x, h, a, h, b)
         return r, (nodes, g)
 
-    return Family(f"edge_pairs_{state}", "eq", fn, 2, nv=top.n_nodes,
-                  res=lambda x: sqlen_value(x, h, a, h, b))
+    return Family(
+        f"edge_pairs_{state}", "eq", fn, 2, nv=top.n_nodes, res=lambda x: sqlen_value(x, h, a, h, b)
+    )
 
 
 def ring_family(pattern: Pattern, state: int) -> Family:
     """Σ of the six tile angles at a hole's three merge corners - 2π = 0, one row per hole."""
     top = pattern.topology
     rg = top.fold(state).rings
-    return angle_sums(f"rings_{state}", top.tiles, rg[..., 0], rg[..., 1],
-                      np.full(len(rg), TWO_PI), top.n_nodes)
+    return angle_sums(
+        f"rings_{state}", top.tiles, rg[..., 0], rg[..., 1], np.full(len(rg), TWO_PI), top.n_nodes
+    )
 
 
 def families(pattern: Pattern, states: tuple[int, ...] = (1, 2)) -> list[Family]:
@@ -99,18 +101,25 @@ def fold_gap_angles(pattern: Pattern, state: int, x: np.ndarray):
 def equal_gaps(pattern: Pattern, state: int) -> Family:
     """Every folded gap of ``state`` equal to hinge 0's (H - 1 rows): under the counter-rotation
     all gaps shrink at the same rate, so they must close together."""
+
     def fn(x):
         th, nodes, g = fold_gap_angles(pattern, state, x)
         r = th[1:] - th[0]
-        return r, (np.concatenate([nodes[1:], np.repeat(nodes[:1], len(r), 0)], 1),
-                   np.concatenate([g[1:], -np.repeat(g[:1], len(r), 0)], 1))
+        return r, (
+            np.concatenate([nodes[1:], np.repeat(nodes[:1], len(r), 0)], 1),
+            np.concatenate([g[1:], -np.repeat(g[:1], len(r), 0)], 1),
+        )
 
     return Family(f"equal_gaps_{state}", "eq", fn, 0, nv=pattern.topology.n_nodes)
 
 
 def rigid_families(pattern: Pattern) -> list[Family]:
     """Reconfigurability plus the counter-rotating rigid mechanism (docs/kagome.md)."""
-    return families(pattern) + [alternating_sums(pattern), equal_gaps(pattern, 1), equal_gaps(pattern, 2)]
+    return families(pattern) + [
+        alternating_sums(pattern),
+        equal_gaps(pattern, 1),
+        equal_gaps(pattern, 2),
+    ]
 
 
 def stacked(fams: list[Family], x: np.ndarray) -> tuple[np.ndarray, sparse.csr_matrix]:
@@ -147,8 +156,15 @@ def count(pattern: Pattern, states: tuple[int, ...], x: np.ndarray | None = None
     return FamilyCount(2 * len(x), len(r), numerical_rank(J), float(np.abs(r).max(initial=0.0)))
 
 
-def nearby_solution(pattern: Pattern, states: tuple[int, ...], seed: int = 0, step: float = 0.05,
-                    tol: float = 1e-13, max_iter: int = 50, fams: list[Family] | None = None) -> np.ndarray:
+def nearby_solution(
+    pattern: Pattern,
+    states: tuple[int, ...],
+    seed: int = 0,
+    step: float = 0.05,
+    tol: float = 1e-13,
+    max_iter: int = 50,
+    fams: list[Family] | None = None,
+) -> np.ndarray:
     """A generic (non-symmetric) point of the family near the standard pattern: the nodes moved
     at random by ``step`` tile edges, then projected back by minimum-norm Gauss-Newton steps.
     ``fams`` replaces the families of ``states`` (e.g. :func:`rigid_families`)."""
@@ -185,6 +201,7 @@ def linkage_mobility(pattern: Pattern, x: np.ndarray | None = None) -> int:
             cols += [3 * tile, 3 * tile + 1 + dim]
             vals += [sign * (-d[:, 1] if dim == 0 else d[:, 0]), np.full(H, sign)]
         del side
-    J = sparse.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                          shape=(2 * H, 3 * T))
+    J = sparse.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(2 * H, 3 * T)
+    )
     return 3 * T - numerical_rank(J) - 3

@@ -41,7 +41,9 @@ from .target_curve import Target
 from .target_families import outline_match, shape_match
 
 GAP_FLOOR = np.radians(10.0)  # smallest gap at a hinge (the standard's are 120°)
-CONVEX = np.radians(5.0)  # with convex=True a hole's corner is at most 175° (6x11 free heart: 4.35 -> 11.7 %)
+CONVEX = np.radians(
+    5.0
+)  # with convex=True a hole's corner is at most 175° (6x11 free heart: 4.35 -> 11.7 %)
 QUALITY_FLOOR = 0.35  # smallest tile quality 4√3A/Σℓ² (equilateral 1; 0.35 ≈ a 13° corner)
 INEQ_WEIGHT = 100.0
 LAWSON_STEPS = 8
@@ -59,10 +61,14 @@ class KagomeDesign:
     max_tip_distance_mm: float  # largest distance of a boundary tip from the target
     iterations: int
     converged: bool  # the projection onto the equalities reached |r| <= 1e-13
-    symmetry: tuple[str, ...] = ()  # mirror axes imposed ("y": the vertical centre line, "x": horizontal)
+    symmetry: tuple[
+        str, ...
+    ] = ()  # mirror axes imposed ("y": the vertical centre line, "x": horizontal)
     min_gap_deg: float = 0.0  # smallest gap at a hinge, deployed
     min_quality: float = 0.0  # smallest tile quality 4√3A/Σℓ²
-    hausdorff_trace: tuple[float, ...] = ()  # the first solve's and each Lawson step's (fractions of the size)
+    hausdorff_trace: tuple[
+        float, ...
+    ] = ()  # the first solve's and each Lawson step's (fractions of the size)
     # every converged, unfolded step as (Hausdorff fraction, deployed nodes in mm), nearest first: the
     # caller may check each (closed-state overlaps are a mechanics question) and keep the first that passes
     candidates: tuple[tuple[float, np.ndarray], ...] = ()
@@ -123,10 +129,14 @@ def side_split(target: Target, u_tip: np.ndarray, sides: np.ndarray) -> Target:
         i = np.flatnonzero((sides == a) & (np.roll(sides, -1) == b))[0]
         u0, u1 = u_tip[i], u_tip[(i + 1) % len(u_tip)]
         corners.append(np.mod(u0 + 0.5 * np.mod(u1 - u0, 1.0), 1.0))
-    return Target(target.name, target.kind, target.points, corners=np.array(corners), source=target.source)
+    return Target(
+        target.name, target.kind, target.points, corners=np.array(corners), source=target.source
+    )
 
 
-def mirror_axes(standard: Pattern, target: Target, symmetry: bool | str = True) -> list[tuple[str, np.ndarray]]:
+def mirror_axes(
+    standard: Pattern, target: Target, symmetry: bool | str = True
+) -> list[tuple[str, np.ndarray]]:
     """The mirrors imposed: every one both the lattice and the target (about its bounding-box centre) have
     (``True``), none (``False``), or the one named (``"x"``: y -> -y, ``"y"``: x -> -x), which both must
     have (:class:`InputError` naming which does not)."""
@@ -142,8 +152,11 @@ def mirror_axes(standard: Pattern, target: Target, symmetry: bool | str = True) 
             out.append((axis, m))
         elif symmetry is not True:
             need = "an odd number of columns" if axis == "y" else "an even number of rows"
-            raise InputError(f"the kagome lattice has no mirror about the {axis} axis (it needs {need})" if m is None
-                             else f"target {target.name!r} is not symmetric about the {axis} axis")
+            raise InputError(
+                f"the kagome lattice has no mirror about the {axis} axis (it needs {need})"
+                if m is None
+                else f"target {target.name!r} is not symmetric about the {axis} axis"
+            )
     return out
 
 
@@ -159,8 +172,11 @@ def fit_rows(standard: Pattern, target: Target, symmetry: bool | str = True, con
     axes = mirror_axes(standard, target, symmetry)
     eq = K.families(standard, (1, 2)) + [KR.symmetry_family(m, a, nv) for a, m in axes]
     fit = [shape_match(order, sides, tgt, nv, "shape"), outline_match(order, tgt, nv)]
-    ineq = [KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None), KR.quality_family(standard, QUALITY_FLOOR),
-            KR.fan_family(standard, GAP_FLOOR)]
+    ineq = [
+        KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None),
+        KR.quality_family(standard, QUALITY_FLOOR),
+        KR.fan_family(standard, GAP_FLOOR),
+    ]
     rows = KS.Rows(eq, fit, ineq, {}, INEQ_WEIGHT)
     return rows, x0, tuple(a for a, _ in axes)
 
@@ -177,8 +193,15 @@ def lawson(rows: KS.Rows, x: np.ndarray) -> dict:
     return out
 
 
-def design(standard: Pattern, target: Target, *, symmetry: bool | str = True, refine_steps: int = LAWSON_STEPS,
-           max_iter: int = 60, convex: bool = False) -> KagomeDesign:
+def design(
+    standard: Pattern,
+    target: Target,
+    *,
+    symmetry: bool | str = True,
+    refine_steps: int = LAWSON_STEPS,
+    max_iter: int = 60,
+    convex: bool = False,
+) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
     ``standard`` fixes the lattice and the starting tile size (its mm scale); ``target`` is in mm.
@@ -214,11 +237,16 @@ def design(standard: Pattern, target: Target, *, symmetry: bool | str = True, re
 
 def _no_fold(standard: Pattern, x: np.ndarray) -> bool:
     """Every deployed gap and tile quality positive (the inequalities' hard core)."""
-    return bool(_min_gap(standard, x) > 0 and KR.tile_quality(x, standard.topology.tiles)[0].min() > 0)
+    return bool(
+        _min_gap(standard, x) > 0 and KR.tile_quality(x, standard.topology.tiles)[0].min() > 0
+    )
 
 
 def _min_gap(standard: Pattern, x: np.ndarray) -> float:
-    g = [np.mod(K.fold_gap_angles(standard, s, x)[0] + KR.GAP_WRAP, 2 * np.pi) - KR.GAP_WRAP for s in (1, 2)]
+    g = [
+        np.mod(K.fold_gap_angles(standard, s, x)[0] + KR.GAP_WRAP, 2 * np.pi) - KR.GAP_WRAP
+        for s in (1, 2)
+    ]
     return float(np.concatenate(g).min())
 
 
@@ -228,9 +256,25 @@ def _result(standard, target, rows, x, shift, converged, axes, its, trace) -> Ka
     nodes = x * scale + shift
     order = KR.tip_order(standard)
     d = np.abs(target.signed_distance(nodes[order]))
-    pattern = replace(standard, nodes=nodes, contracted={}, name=f"kagome {target.name}",
-                      design={"target": target.to_dict(), "symmetry": list(axes),
-                              "solver": "kagome constrained LM + Lawson + projection"})
-    return KagomeDesign(pattern, float(np.abs(r).max()), float(d.max()), its, converged, axes,
-                        float(np.degrees(_min_gap(standard, x))),
-                        float(KR.tile_quality(x, standard.topology.tiles)[0].min()), trace)
+    pattern = replace(
+        standard,
+        nodes=nodes,
+        contracted={},
+        name=f"kagome {target.name}",
+        design={
+            "target": target.to_dict(),
+            "symmetry": list(axes),
+            "solver": "kagome constrained LM + Lawson + projection",
+        },
+    )
+    return KagomeDesign(
+        pattern,
+        float(np.abs(r).max()),
+        float(d.max()),
+        its,
+        converged,
+        axes,
+        float(np.degrees(_min_gap(standard, x))),
+        float(KR.tile_quality(x, standard.topology.tiles)[0].min()),
+        trace,
+    )

@@ -164,8 +164,10 @@ def symmetry_family(m: np.ndarray, axis: str, nv: int) -> Family:
     rows.append(2 * n_pair + np.arange(len(c)))
     cols.append(2 * c + k)
     vals.append(np.ones(len(c)))
-    J = sparse.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                          shape=(2 * n_pair + len(c), 2 * nv))
+    J = sparse.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(2 * n_pair + len(c), 2 * nv),
+    )
 
     def fn(x):
         return J @ x.ravel(), J
@@ -206,8 +208,9 @@ def fan_family(standard: Pattern, floor: float) -> Family:
     k = np.concatenate([f[1] for f in fans]) if fans else np.zeros(0, np.int64)
     fan = np.repeat(np.arange(len(fans)), [len(f[0]) for f in fans])
     width = max((len(f[0]) for f in fans), default=0)
-    slot = np.arange(len(t)) - np.repeat(np.cumsum([0] + [len(f[0]) for f in fans])[:-1],
-                                         [len(f[0]) for f in fans])
+    slot = np.arange(len(t)) - np.repeat(
+        np.cumsum([0] + [len(f[0]) for f in fans])[:-1], [len(f[0]) for f in fans]
+    )
 
     def fn(x):
         th, nodes, g = corner_angle(x, top.tiles, t, k)

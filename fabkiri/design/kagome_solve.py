@@ -117,8 +117,11 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
     """A point near the family from a start far from it: penalty least squares (the equalities weighted
     by ``LAND_WEIGHT`` beside the soft rows; scipy's trust-region reflective method), for the pull-back to
     finish. The pull-back alone diverges from the initial guess of a heart (|c| ~ 1 there)."""
-    rows = replace(rows, ineq_weight=min(rows.ineq_weight, LAND_INEQ_WEIGHT),
-                   ineq=[f for f in rows.ineq if f.meta.get("land", True)])
+    rows = replace(
+        rows,
+        ineq_weight=min(rows.ineq_weight, LAND_INEQ_WEIGHT),
+        ineq=[f for f in rows.ineq if f.meta.get("land", True)],
+    )
 
     def fun(v):
         x = v.reshape(x0.shape)
@@ -128,8 +131,17 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
         x = v.reshape(x0.shape)
         return sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
 
-    sol = least_squares(fun, x0.ravel(), jac=jac, method="trf", tr_solver="lsmr", max_nfev=max_nfev,
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    sol = least_squares(
+        fun,
+        x0.ravel(),
+        jac=jac,
+        method="trf",
+        tr_solver="lsmr",
+        max_nfev=max_nfev,
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+    )
     return sol.x.reshape(x0.shape)
 
 

@@ -29,7 +29,9 @@ from typing import Generic, NamedTuple, Protocol, TypeVar
 
 import numpy as np
 
-HALVINGS = 6  # a step that raises the inequality violation is halved at most this often, then refused
+HALVINGS = (
+    6  # a step that raises the inequality violation is halved at most this often, then refused
+)
 FEASIBLE_SLACK = 1e-15  # the violation a step may add (rounding)
 MIN_GAIN = 1e-4  # the "gain" rule accepts a step that achieves this share of its predicted decrease
 
@@ -80,7 +82,10 @@ def _tenfold(d: Damping, mu: float, ratio: float) -> float:
     return max(mu / 10, d.mu_min)
 
 
-DAMPING_RULES: dict[str, Callable[[Damping, float, float], float]] = {"gain": _nielsen, "tenfold": _tenfold}
+DAMPING_RULES: dict[str, Callable[[Damping, float, float], float]] = {
+    "gain": _nielsen,
+    "tenfold": _tenfold,
+}
 
 
 @dataclass(frozen=True)
@@ -121,7 +126,10 @@ def _decrease(pt: LMPoint, trial: LMPoint, cost: float, cn: float, ratio: float)
 # "max_row": lower the largest |row| (the full solver's projection, judged in the norm of its tolerance);
 # "decrease": lower ½‖r‖² at all (the rigid family's hard fit, a damped Gauss-Newton)
 ACCEPT: dict[str, Callable[[LMPoint, LMPoint, float, float, float], bool]] = {
-    "gain": _gain, "max_row": _max_row, "decrease": _decrease}
+    "gain": _gain,
+    "max_row": _max_row,
+    "decrease": _decrease,
+}
 
 
 P = TypeVar("P", bound=LMPoint)
@@ -147,9 +155,15 @@ def _limited(pt: P, dx: np.ndarray, point_at: Callable[[np.ndarray], P]) -> tupl
     return trial, dx
 
 
-def levenberg_marquardt(start: P, point_at: Callable[[np.ndarray], P], damping: Damping, stopping: Stopping,
-                        accept: str = "gain", log: Callable[[str], None] | None = None,
-                        label: str = "") -> LMResult[P]:
+def levenberg_marquardt(
+    start: P,
+    point_at: Callable[[np.ndarray], P],
+    damping: Damping,
+    stopping: Stopping,
+    accept: str = "gain",
+    log: Callable[[str], None] | None = None,
+    label: str = "",
+) -> LMResult[P]:
     """Minimise ½‖r‖² from ``start``; ``point_at(x)`` makes the point at ``x``.
 
     Every tenth accepted iteration is logged as ``label``, cost, damping, gain ratio and violation.
@@ -185,7 +199,9 @@ def levenberg_marquardt(start: P, point_at: Callable[[np.ndarray], P], damping: 
         if stopping.linear is not None and _linear(stopping.linear, worst, pt):
             break
         if log is not None and it % 10 == 0:
-            log(f"  {label} it {it}: cost {cost:.3e} mu {mu:.1e} ratio {ratio:.2f} gviol {pt.gviol:.1e}")
+            log(
+                f"  {label} it {it}: cost {cost:.3e} mu {mu:.1e} ratio {ratio:.2f} gviol {pt.gviol:.1e}"
+            )
         if stopping.max_stall is not None and stall >= stopping.max_stall:
             break
     return LMResult(pt, it)
@@ -205,8 +221,15 @@ def _linear(linear: tuple[int, float], worst: list[float], pt: LMPoint) -> bool:
     return len(worst) > k and worst[-1] > gain * worst[-1 - k]
 
 
-def halving_gauss_newton(x: np.ndarray, state: tuple, step: Callable[[np.ndarray, tuple], np.ndarray],
-                         at: Callable[[np.ndarray], tuple], tol: float, max_iter: int, halvings: int):
+def halving_gauss_newton(
+    x: np.ndarray,
+    state: tuple,
+    step: Callable[[np.ndarray, tuple], np.ndarray],
+    at: Callable[[np.ndarray], tuple],
+    tol: float,
+    max_iter: int,
+    halvings: int,
+):
     """Undamped Gauss-Newton steps onto ``r = 0``, each halved until the residual norm drops.
 
     ``at(x)`` gives the state at ``x`` (its residual first, then whatever ``step`` reuses); ``step(x, state)``

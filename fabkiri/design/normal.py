@@ -67,8 +67,12 @@ class _Normal:
         if self.perm is not None:
             p = self.perm
             try:
-                lu = splu(A[p][:, p].tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                          options={"SymmetricMode": True})
+                lu = splu(
+                    A[p][:, p].tocsc(),
+                    permc_spec="NATURAL",
+                    diag_pivot_thresh=0.0,
+                    options={"SymmetricMode": True},
+                )
                 inv = np.empty_like(p)
                 inv[p] = np.arange(len(p))
 
@@ -85,7 +89,9 @@ class _Normal:
         lu = splu(A.tocsc(), permc_spec="MMD_ATA", options={"SymmetricMode": True})
         return lu.solve
 
-    def solve(self, J: sparse.csr_matrix, r: np.ndarray, mu: float, rtol: float = 1e-10) -> np.ndarray:
+    def solve(
+        self, J: sparse.csr_matrix, r: np.ndarray, mu: float, rtol: float = 1e-10
+    ) -> np.ndarray:
         from scipy.sparse.linalg import LinearOperator, cg
 
         A = (J.T @ J).tocsr()

@@ -49,7 +49,9 @@ def tile_corners(x: np.ndarray, quads: np.ndarray) -> TileCorners:
     la2 = dot2(A, A)
     lb2 = la2[:, PREV]
     cr = cross2(A, B)
-    th = np.mod(np.arctan2(cr, dot2(A, B)), TWO_PI)  # geometry.signed_angle, keeping its cross product
+    th = np.mod(
+        np.arctan2(cr, dot2(A, B)), TWO_PI
+    )  # geometry.signed_angle, keeping its cross product
     ga = np.empty_like(A)
     ga[..., 0], ga[..., 1] = Ay / la2, -Ax / la2
     gb = np.empty_like(B)
@@ -121,5 +123,12 @@ def weighted(fam: Family, w: np.ndarray) -> Family:
             return w * r, (J[0], J[1] * w[:, None, None])
         return w * r, J.multiply(w[:, None]).tocsr()
 
-    return Family(fam.name, fam.kind, fn, fam.dim, meta={**fam.meta, "unweighted": fam}, nv=fam.nv,
-                  res=lambda x: w * fam.residual(x))
+    return Family(
+        fam.name,
+        fam.kind,
+        fn,
+        fam.dim,
+        meta={**fam.meta, "unweighted": fam},
+        nv=fam.nv,
+        res=lambda x: w * fam.residual(x),
+    )

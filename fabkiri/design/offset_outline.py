@@ -48,9 +48,15 @@ MID_WEIGHT = 1.0  # 5x5: vertex RMS 1.61 %, Hausdorff 1.06 %; at 0.5: 1.28 % but
 def covers(req) -> bool:
     """A rigid parallelogram-hole design of square/circle closed-state outlines only."""
     # a square only in state 1: there it is linear in the seeds (state 2's outline moves with the offsets)
-    return (req.rigid and req.holes == "parallelogram" and not req.symmetry and req.target is None
-            and bool(req.contracted) and all(outline_kind(v) for v in req.contracted.values())
-            and all(outline_kind(v) != "square" or s == 1 for s, v in req.contracted.items()))
+    return (
+        req.rigid
+        and req.holes == "parallelogram"
+        and not req.symmetry
+        and req.target is None
+        and bool(req.contracted)
+        and all(outline_kind(v) for v in req.contracted.values())
+        and all(outline_kind(v) != "square" or s == 1 for s, v in req.contracted.items())
+    )
 
 
 def applies(req) -> bool:
@@ -60,8 +66,15 @@ def applies(req) -> bool:
 
 def preferred_holes(rows: int, cols: int, rigid: bool, symmetry, target, contracted: dict) -> str:
     """The hole shape when the user gives none: parallelogram where this solver applies, else rhombus."""
-    r = SimpleNamespace(rows=rows, cols=cols, rigid=rigid, symmetry=symmetry, target=target, contracted=contracted,
-                        holes="parallelogram")  # the request's fields that ``applies`` reads
+    r = SimpleNamespace(
+        rows=rows,
+        cols=cols,
+        rigid=rigid,
+        symmetry=symmetry,
+        target=target,
+        contracted=contracted,
+        holes="parallelogram",
+    )  # the request's fields that ``applies`` reads
     return "parallelogram" if applies(r) else "rhombus"
 
 
@@ -102,24 +115,33 @@ def _start_seeds(prob, fam: OffsetFamily, t0: np.ndarray):
     return sol - np.repeat(0.5 * (lo + hi), nf), Z0, rep1, g1  # vec S = (Sx, Sy)
 
 
-def _square_rows(prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict,
-                 log) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
+def _square_rows(
+    prob, nf: int, Z0: np.ndarray, rep1: np.ndarray, g1, states: list, kinds: dict, log
+) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
     """The linear rows ``E vec S = e`` of a square state-1 outline, or None for a square in state 2."""
     st = prob.st
     E, e = [], []
     for s in states:
         if kinds[s] == "square":
             if s != 1:
-                log("offset outline: a square in state 2 is not linear in the seeds; rhombus holes take it")
+                log(
+                    "offset outline: a square in state 2 is not linear in the seeds; rhombus holes take it"
+                )
                 return None
             lo, hi = prob.curves_mm[s].bbox
             half = 0.5 * float((hi - lo).max()) / prob.L0
             gi, gj = np.divmod(np.arange(g1.n_vertices), st.cols + 1)
             zr = np.zeros_like(Z0)
-            for on, xy, val in [(gi == 0, 1, -half), (gi == st.rows, 1, half), (gj == 0, 0, -half),
-                                (gj == st.cols, 0, half)]:
+            for on, xy, val in [
+                (gi == 0, 1, -half),
+                (gi == st.rows, 1, half),
+                (gj == 0, 0, -half),
+                (gj == st.cols, 0, half),
+            ]:
                 Zs = Z0[rep1[on]]
-                E.append(np.hstack([Zs, zr[rep1[on]]]) if xy == 0 else np.hstack([zr[rep1[on]], Zs]))
+                E.append(
+                    np.hstack([Zs, zr[rep1[on]]]) if xy == 0 else np.hstack([zr[rep1[on]], Zs])
+                )
                 e.append(np.full(int(on.sum()), val))
     return E, e
 
@@ -136,8 +158,13 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
     rows = _square_rows(prob, fam.n_seeds, Z0, rep1, g1, states, kinds, log)
     if rows is None:
         return None
-    space = outline_space(square_affine(*rows, 2 * fam.n_seeds), states, kinds, log,
-                          "offset outline: the square rows are inconsistent")
+    space = outline_space(
+        square_affine(*rows, 2 * fam.n_seeds),
+        states,
+        kinds,
+        log,
+        "offset outline: the square rows are inconsistent",
+    )
     if space is None:
         return None
     base, Nsp, circles, relative = space
@@ -151,12 +178,14 @@ def solve_offset_outline(prob, log, iters: dict, t_start=None):
     y = op.member(p, False)
     X = op.deployed(y)
     for s_, g in prob.grids.items():
-        X[g.offset:g.offset + g.n_vertices] = closed_grid(fam, st, y, s_)
+        X[g.offset : g.offset + g.n_vertices] = closed_grid(fam, st, y, s_)
     # the stored circle is the outline's own: the geometric least-squares circle of its vertices (the
     # solver's circle also saw the edge midpoints)
     fitted = {s: _lsq_circle(op.states_of(y)[s][op.bnodes[s]]) for s in circles}
-    prob.offsets = p[op.k:op.k + op.K].copy()
-    log(f"offsets: |t| max {np.abs(prob.offsets).max():.3f}, mean {np.abs(prob.offsets).mean():.3f}")
+    prob.offsets = p[op.k : op.k + op.K].copy()
+    log(
+        f"offsets: |t| max {np.abs(prob.offsets).max():.3f}, mean {np.abs(prob.offsets).mean():.3f}"
+    )
     return X, "least-squares" if circles else "hard", fitted
 
 
@@ -164,8 +193,16 @@ class _OffsetOutline:
     """The least-squares problem in ``p = (u, t, (o, R) per circle)``: seeds ``S = base + N u`` (the square
     rows' solution space), offsets ``t``, and each circle's centre and radius."""
 
-    def __init__(self, prob, fam: OffsetFamily, base: np.ndarray, Nsp: np.ndarray, circles: list, relative: bool,
-                 rep1: np.ndarray):
+    def __init__(
+        self,
+        prob,
+        fam: OffsetFamily,
+        base: np.ndarray,
+        Nsp: np.ndarray,
+        circles: list,
+        relative: bool,
+        rep1: np.ndarray,
+    ):
         st = prob.st
         self.prob, self.fam, self.base, self.Nsp = prob, fam, base, Nsp
         self.nf, self.K, self.n, self.k = fam.n_seeds, fam.n_holes, prob.n, Nsp.shape[1]
@@ -187,16 +224,16 @@ class _OffsetOutline:
         self._member: tuple[bytes, np.ndarray] | None = None
 
     def seeds(self, p):
-        v = self.base + self.Nsp @ p[:self.k]
-        return np.stack([v[:self.nf], v[self.nf:]], -1)
+        v = self.base + self.Nsp @ p[: self.k]
+        return np.stack([v[: self.nf], v[self.nf :]], -1)
 
     def member(self, p, jac):
         if jac:
-            return self.fam.state1(self.seeds(p), p[self.k:self.k + self.K], jac=True)
+            return self.fam.state1(self.seeds(p), p[self.k : self.k + self.K], jac=True)
         # the last one is kept: LM's step limiting (``nodes``) and its trial rows ask for the same member
         key = np.asarray(p, dtype=float).tobytes()
         if self._member is None or self._member[0] != key:
-            y = self.fam.state1(self.seeds(p), p[self.k:self.k + self.K])
+            y = self.fam.state1(self.seeds(p), p[self.k : self.k + self.K])
             y.flags.writeable = False  # shared by the callers
             self._member = (key, y)
         return self._member[1]
@@ -206,12 +243,12 @@ class _OffsetOutline:
 
     def deployed(self, y):
         X = np.zeros((self.prob.nv, 2))
-        X[:self.n] = self.fam.at(y, PSI_DEPLOYED)
+        X[: self.n] = self.fam.at(y, PSI_DEPLOYED)
         return X
 
     def nodes(self, p):
         """What the step limiting checks: the deployed nodes and the offsets."""
-        return self.deployed(self.member(p, False)), p[self.k:self.k + self.K]
+        return self.deployed(self.member(p, False)), p[self.k : self.k + self.K]
 
     def viol(self, Xt):
         X, t = Xt
@@ -248,18 +285,20 @@ class _OffsetOutline:
         off = k + K
         for s in self.circles:
             q = (P @ st_pos[s][self.bnodes[s]]) / wts[:, None]
-            o, R = p[off:off + 2], p[off + 2]
+            o, R = p[off : off + 2], p[off + 2]
             d = q - o
             dist = np.sqrt((d * d).sum(1))
             a = wts * (self.R0[s] / R if self.relative else 1.0)
             rs.append(a * (dist - R))
             if jac:
                 unit = d / dist[:, None]
-                Dq = np.einsum("pb,bdk->pdk", P / wts[:, None], (D2 if s == 2 else D1)[self.bnodes[s]])
+                Dq = np.einsum(
+                    "pb,bdk->pdk", P / wts[:, None], (D2 if s == 2 else D1)[self.bnodes[s]]
+                )
                 J = np.zeros((len(q), npar))
-                J[:, :k + K] = a[:, None] * np.einsum("bd,bdk->bk", unit, Dq)
-                J[:, off:off + 2] = -a[:, None] * unit
-                J[:, off + 2] = -wts * self.R0[s] * dist / R ** 2 if self.relative else -wts
+                J[:, : k + K] = a[:, None] * np.einsum("bd,bdk->bk", unit, Dq)
+                J[:, off : off + 2] = -a[:, None] * unit
+                J[:, off + 2] = -wts * self.R0[s] * dist / R**2 if self.relative else -wts
                 Js.append(J)
             off += 3
 
@@ -275,19 +314,32 @@ class _OffsetOutline:
         Js: list = []
         D1, D2 = self.dmember(Z, Dt) if jac else (None, None)
         self._circle_rows(p, self.states_of(y), D1, D2, jac, rs, Js)
-        Dd = (np.cos(PSI_DEPLOYED) * D1 + np.sin(PSI_DEPLOYED) * D2).reshape(2 * len(y), -1) if jac else None
+        Dd = (
+            (np.cos(PSI_DEPLOYED) * D1 + np.sin(PSI_DEPLOYED) * D2).reshape(2 * len(y), -1)
+            if jac
+            else None
+        )
         pad = npar - k - K
         w = self.w
         for f in self.fams_reg:
             if jac:
                 r, Jx = f(X)
-                Js.append(np.hstack([w * (Jx[:, :2 * n] @ Dd), np.zeros((len(r), pad))]))
+                Js.append(np.hstack([w * (Jx[:, : 2 * n] @ Dd), np.zeros((len(r), pad))]))
             else:
                 r = f.residual(X)
             rs.append(w * r)
         sq = np.sqrt(rho)
-        active_rows(self.fams_ineq, self.margin, X, sq, jac and (lambda Jx: Jx[:, :2 * n] @ Dd), pad, rs, Js)
-        t = p[k:k + K]
+        active_rows(
+            self.fams_ineq,
+            self.margin,
+            X,
+            sq,
+            jac and (lambda Jx: Jx[:, : 2 * n] @ Dd),
+            pad,
+            rs,
+            Js,
+        )
+        t = p[k : k + K]
         v = np.r_[T_SOFT - t, T_SOFT + t]
         act = v < 0
         rs.append(sq * v[act])

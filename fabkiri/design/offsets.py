@@ -66,7 +66,9 @@ class OffsetFamily:
         hn = st.hole_nodes
         K = len(hn)
         folds = st.folds[1].hole_folds
-        j = np.where(folds[:, 0], 1, 0)  # first merge corner (0 or 1): the hole folds at the other pair
+        j = np.where(
+            folds[:, 0], 1, 0
+        )  # first merge corner (0 or 1): the hole folds at the other pair
         ar = np.arange(K)
         m0, f0, m1, f1 = hn[ar, j], hn[ar, (j + 1) % 4], hn[ar, (j + 2) % 4], hn[ar, (j + 3) % 4]
         rows, cols, vals = [], [], []
@@ -106,7 +108,9 @@ class OffsetFamily:
         add(ro, oa, -0.5)
         add(ro, ob, -0.5)
         m = r0 + len(h)
-        A0 = sparse.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, V))
+        A0 = sparse.csc_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, V)
+        )
         # seeds: one node at each seed vertex of the rhombus family (at t = 0 the two systems agree)
         rig = RigidFamily.build(st, tree)
         first = np.full(int(rig.node_vertex.max()) + 1, -1)
@@ -137,8 +141,10 @@ class OffsetFamily:
     # ---------------------------------------------------------------- maps
     def matrix(self, t: np.ndarray) -> sparse.csc_matrix:
         """``A(t)``."""
-        At = sparse.csc_matrix((np.r_[-t, t], (np.r_[self.off_row, self.off_row], np.r_[self.off_a, self.off_b])),
-                               shape=self.A0.shape)
+        At = sparse.csc_matrix(
+            (np.r_[-t, t], (np.r_[self.off_row, self.off_row], np.r_[self.off_a, self.off_b])),
+            shape=self.A0.shape,
+        )
         return (self.A0 + At).tocsc()
 
     def _blocks(self) -> tuple[_Columns, _Columns]:
@@ -200,7 +206,9 @@ class _Columns:
 
     pattern: sparse.csc_matrix  # the union of A0's entries and the offset entries in these columns
     base: np.ndarray  # A0's values on the pattern
-    pos_a: np.ndarray  # the pattern positions of the offset entries -t (hole k's fold corner f) in these columns
+    pos_a: (
+        np.ndarray
+    )  # the pattern positions of the offset entries -t (hole k's fold corner f) in these columns
     k_a: np.ndarray  # their holes
     pos_b: np.ndarray  # and of +t (fold corner f')
     k_b: np.ndarray
@@ -223,8 +231,10 @@ class _Columns:
         slot[keep] = np.searchsorted(keys, c[keep] * m + r[keep])
         base = np.zeros(P.nnz)
         base[slot[:n0][keep[:n0]]] = A0.data[keep[:n0]]
-        sa, sb = slot[n0:n0 + K], slot[n0 + K:]
-        return cls(P, base, sa[sa >= 0], np.flatnonzero(sa >= 0), sb[sb >= 0], np.flatnonzero(sb >= 0))
+        sa, sb = slot[n0 : n0 + K], slot[n0 + K :]
+        return cls(
+            P, base, sa[sa >= 0], np.flatnonzero(sa >= 0), sb[sb >= 0], np.flatnonzero(sb >= 0)
+        )
 
     def at(self, t: np.ndarray) -> sparse.csc_matrix:
         """``A(t)[:, cols]`` (CSC, sorted, no stored zeros: the entries of ``(A0 + At)[:, cols]``)."""

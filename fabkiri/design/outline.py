@@ -29,9 +29,13 @@ from .rigid import RigidFamily
 from .stencils import Stencils
 from .target_curve import Target
 
-PSI_DEPLOYED = np.pi / 4  # deployment angle of the written pattern (any member angle in (0, π/2) works)
+PSI_DEPLOYED = (
+    np.pi / 4
+)  # deployment angle of the written pattern (any member angle in (0, π/2) works)
 STAGES = ((1e2, 1e-9, 200), (1e4, 1e-12, 100))  # (penalty, stall tolerance, iteration cap)
-REG_WEIGHT = 1e-6  # the circle residuals are ~1e-2 of a tile: a regulariser at 1e-3 would outweigh them
+REG_WEIGHT = (
+    1e-6  # the circle residuals are ~1e-2 of a tile: a regulariser at 1e-3 would outweigh them
+)
 SQUARE_TOL = 1e-12  # relative residual of the square rows that counts as feasible
 
 
@@ -53,7 +57,7 @@ def square_affine(
 
 
 def outline_kind(spec) -> str | None:
-    """"square" or "circle" for closed-state targets this solver handles exactly, else None."""
+    """ "square" or "circle" for closed-state targets this solver handles exactly, else None."""
     if isinstance(spec, Target) and spec.name in ("square", "circle"):
         return spec.name
     return None
@@ -61,8 +65,14 @@ def outline_kind(spec) -> str | None:
 
 def applies(req) -> bool:
     """``req`` (a ``solve.DesignRequest``) is a rigid rhombus design of square/circle closed-state outlines only."""
-    return (req.rigid and req.holes == "rhombus" and not req.symmetry and req.target is None
-            and bool(req.contracted) and all(outline_kind(v) for v in req.contracted.values()))
+    return (
+        req.rigid
+        and req.holes == "rhombus"
+        and not req.symmetry
+        and req.target is None
+        and bool(req.contracted)
+        and all(outline_kind(v) for v in req.contracted.values())
+    )
 
 
 class _Maps:
@@ -75,11 +85,16 @@ class _Maps:
         nf = fam.n_seeds
         c, s = np.cos(PSI_DEPLOYED), np.sin(PSI_DEPLOYED)
         # node x = c Zn Sx − s Y Sy, y = c Zn Sy + s Y Sx (RigidFamily.nodes), rows interleaved x, y
-        blocks = [np.stack([np.hstack([c * fam.Zn, -s * fam.Y]), np.hstack([s * fam.Y, c * fam.Zn])], 1)]
+        blocks = [
+            np.stack([np.hstack([c * fam.Zn, -s * fam.Y]), np.hstack([s * fam.Y, c * fam.Zn])], 1)
+        ]
         self.grid = {}
         for state in states:
             if state == 1:
-                Zx, Zy = np.hstack([fam.Z, np.zeros_like(fam.Z)]), np.hstack([np.zeros_like(fam.Z), fam.Z])
+                Zx, Zy = (
+                    np.hstack([fam.Z, np.zeros_like(fam.Z)]),
+                    np.hstack([np.zeros_like(fam.Z), fam.Z]),
+                )
             else:  # closed state 2 = the member at ψ = π/2: x = −Y Sy, y = Y Sx at one node per grid vertex
                 vid = ClosedGrid.build(st, 2, 0).vertex.ravel()
                 rep = np.empty(G, dtype=np.int64)
@@ -98,8 +113,12 @@ def _square_rows(maps: _Maps, st: Stencils, state: int, half: float):
     gi, gj = np.divmod(np.arange((M + 1) * (N + 1)), N + 1)
     Zx, Zy = maps.grid[state]
     rows, rhs = [], []
-    for on_side, coord, value in [(gi == 0, Zy, -half), (gi == M, Zy, half), (gj == 0, Zx, -half),
-                                  (gj == N, Zx, half)]:
+    for on_side, coord, value in [
+        (gi == 0, Zy, -half),
+        (gi == M, Zy, half),
+        (gj == 0, Zx, -half),
+        (gj == N, Zx, half),
+    ]:
         rows.append(coord[on_side])
         rhs.append(np.full(int(on_side.sum()), value))
     return np.vstack(rows), np.concatenate(rhs)
@@ -112,7 +131,9 @@ def _circle_residuals(maps: _Maps, st: Stencils, state: int):
     return np.stack([Zx[g.boundary], Zy[g.boundary]], 1)
 
 
-def _square_state_rows(prob, maps: _Maps, st: Stencils, states: list, kinds: dict) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def _square_state_rows(
+    prob, maps: _Maps, st: Stencils, states: list, kinds: dict
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """The square rows ``E vec S = e`` of every square target state (the side half-length in tile units)."""
     E, e = [], []
     for s in states:
@@ -137,8 +158,13 @@ def solve_outline(prob, log, iters: dict):
     S0, _ = fam.fit(prob.X0[: prob.n], PSI_DEPLOYED)
     s0 = np.concatenate([S0[:, 0], S0[:, 1]])
     kinds = {s: outline_kind(req.contracted[s]) for s in states}
-    space = outline_space(square_affine(*_square_state_rows(prob, maps, st, states, kinds), 2 * maps.nf), states,
-                          kinds, log, "outline: the square rows are inconsistent; leaving the design to the full solver")
+    space = outline_space(
+        square_affine(*_square_state_rows(prob, maps, st, states, kinds), 2 * maps.nf),
+        states,
+        kinds,
+        log,
+        "outline: the square rows are inconsistent; leaving the design to the full solver",
+    )
     if space is None:
         return None
     base, Nsp, circles, relative = space
@@ -149,7 +175,7 @@ def solve_outline(prob, log, iters: dict):
     fitted = {}
     off = op.k
     for s in circles:
-        fitted[s] = (p[off:off + 2].copy(), float(p[off + 2]))
+        fitted[s] = (p[off : off + 2].copy(), float(p[off + 2]))
         off += 3
     return X, "least-squares" if circles else "hard", fitted
 
@@ -158,13 +184,23 @@ class _CircleOutline:
     """The least-squares problem in ``p = (u, (o, R) per circle)`` with seeds ``S = base + N u`` (the square
     rows' solution space): circle fit + w·E_reg + ρ|min(0, g − m)|², the deployed nodes linear in ``u``."""
 
-    def __init__(self, prob, maps: _Maps, st: Stencils, base: np.ndarray, Nsp: np.ndarray, circles: list,
-                 relative: bool):
+    def __init__(
+        self,
+        prob,
+        maps: _Maps,
+        st: Stencils,
+        base: np.ndarray,
+        Nsp: np.ndarray,
+        circles: list,
+        relative: bool,
+    ):
         self.k = Nsp.shape[1]
         self.AN = maps.A @ Nsp
         self.Ab = maps.A @ base
         self.circles, self.relative = circles, relative
-        self.Bc = {s: np.einsum("bdf,fk->bdk", _circle_residuals(maps, st, s), Nsp) for s in circles}
+        self.Bc = {
+            s: np.einsum("bdf,fk->bdk", _circle_residuals(maps, st, s), Nsp) for s in circles
+        }
         self.bc = {s: np.einsum("bdf,f->bd", _circle_residuals(maps, st, s), base) for s in circles}
         self.fams_reg = prob.of("reg")
         self.fams_ineq = prob.of("ineq")
@@ -184,17 +220,19 @@ class _CircleOutline:
         return np.concatenate(p0)
 
     def nodes(self, p):
-        return (self.Ab + self.AN @ p[:self.k]).reshape(-1, 2)
+        return (self.Ab + self.AN @ p[: self.k]).reshape(-1, 2)
 
     def ineq_viol(self, X):
-        return max(0.0, -min((float(f.residual(X).min(initial=0.0)) for f in self.fams_ineq), default=0.0))
+        return max(
+            0.0, -min((float(f.residual(X).min(initial=0.0)) for f in self.fams_ineq), default=0.0)
+        )
 
     def _circle_rows(self, p, jac, rs, Js):
         k, R0, relative = self.k, self.R0, self.relative
         off = k
         for s in self.circles:
             q = self.Bc[s] @ p[:k] + self.bc[s]
-            o, R = p[off:off + 2], p[off + 2]
+            o, R = p[off : off + 2], p[off + 2]
             d = q - o
             dist = np.sqrt((d * d).sum(1))
             # with a square fixing the scale: the geometric least-squares circle, |c - o| - R; without, the
@@ -205,8 +243,8 @@ class _CircleOutline:
                 unit = d / dist[:, None]
                 J = np.zeros((len(q), len(p)))
                 J[:, :k] = a * np.einsum("bd,bdk->bk", unit, self.Bc[s])
-                J[:, off:off + 2] = -a * unit
-                J[:, off + 2] = -R0[s] * dist / R ** 2 if relative else -1.0
+                J[:, off : off + 2] = -a * unit
+                J[:, off + 2] = -R0[s] * dist / R**2 if relative else -1.0
                 Js.append(J)
             off += 3
 
@@ -222,12 +260,23 @@ class _CircleOutline:
             rs.append(w * r)
             if jac:
                 Js.append(np.hstack([w * (Jx @ AN), np.zeros((len(r), len(p) - k))]))
-        active_rows(self.fams_ineq, self.margin, X, np.sqrt(rho), jac and (lambda Jx: Jx @ AN), len(p) - k, rs, Js)
+        active_rows(
+            self.fams_ineq,
+            self.margin,
+            X,
+            np.sqrt(rho),
+            jac and (lambda Jx: Jx @ AN),
+            len(p) - k,
+            rs,
+            Js,
+        )
         r = np.concatenate(rs)
         return X, r, (np.vstack(Js) if jac else None)
 
 
-def active_rows(fams_ineq, margin: dict, X: np.ndarray, sq: float, to_p, pad: int, rs: list, Js: list) -> None:
+def active_rows(
+    fams_ineq, margin: dict, X: np.ndarray, sq: float, to_p, pad: int, rs: list, Js: list
+) -> None:
     """Append ``sq·(g − m)`` of every inequality row inside its margin to ``rs`` and, unless ``to_p`` is
     False, its Jacobian in the unknowns to ``Js``: ``to_p`` maps the node Jacobian rows to the leading
     unknowns, ``pad`` zero columns follow for the rest."""
@@ -237,7 +286,9 @@ def active_rows(fams_ineq, margin: dict, X: np.ndarray, sq: float, to_p, pad: in
         rs.append(sq * v[act])
         if to_p and act.any():
             _, Jx = f(X)
-            Js.append(np.hstack([sq * to_p(Jx[np.flatnonzero(act)]), np.zeros((int(act.sum()), pad))]))
+            Js.append(
+                np.hstack([sq * to_p(Jx[np.flatnonzero(act)]), np.zeros((int(act.sum()), pad))])
+            )
 
 
 class _OutlinePoint:
@@ -302,8 +353,12 @@ def _lm(evaluate, ineq_viol, nodes, p, rho, max_iter, stall_tol):
     op = (evaluate, ineq_viol, nodes)
     start = _OutlinePoint(op, rho, p, rows=evaluate(p, rho))
     mu0 = 1e-3 * max(float(np.diag(start.JtJ).mean()), 1e-30)
-    pt, it = levenberg_marquardt(start, start.moved, Damping(mu0, 1e20, raise_by=4.0, raise_growth=1.0),
-                                 Stopping(max_iter, stall_tol))
+    pt, it = levenberg_marquardt(
+        start,
+        start.moved,
+        Damping(mu0, 1e20, raise_by=4.0, raise_growth=1.0),
+        Stopping(max_iter, stall_tol),
+    )
     return pt.x, it
 
 
@@ -313,7 +368,9 @@ def lm_stages(evaluate, ineq_viol, nodes, p, stages, name: str, iters: dict, log
     for rho, stall_tol, cap in stages:
         p, it = _lm(evaluate, ineq_viol, nodes, p, rho, cap, stall_tol)
         iters[f"{name}_rho_{rho:g}"] = it
-        log(f"{name.replace('_', ' ')} rho={rho:g}: {it} iterations, violation {ineq_viol(nodes(p)):.2e}")
+        log(
+            f"{name.replace('_', ' ')} rho={rho:g}: {it} iterations, violation {ineq_viol(nodes(p)):.2e}"
+        )
     return p
 
 
@@ -325,4 +382,9 @@ def outline_space(affine, states: list, kinds: dict, log, inconsistent: str):
         log(inconsistent)
         return None
     base, Nsp = affine
-    return base, Nsp, [s for s in states if kinds[s] == "circle"], not any(kinds[s] == "square" for s in states)
+    return (
+        base,
+        Nsp,
+        [s for s in states if kinds[s] == "circle"],
+        not any(kinds[s] == "square" for s in states),
+    )

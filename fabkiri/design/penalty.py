@@ -15,13 +15,20 @@ from . import constraints as C
 from .lm import Damping, Stopping, levenberg_marquardt
 from .problem import _ineq_values, _mean_edge, _Problem, exact_fits, family_residuals
 
-STALL = 1e-6  # a penalty stage ends after 3 accepted steps that each lower the merit by less than this
+STALL = (
+    1e-6  # a penalty stage ends after 3 accepted steps that each lower the merit by less than this
+)
 EARLY_STALL = 1e-3  # ... looser in the first stage: the next one refines from there
 # (penalty weight, stall tolerance, iteration cap) per stage; the projection then enforces c = 0 exactly,
 # moving x by O(|c|), so the last stage need not converge the penalty problem to high accuracy
 PENALTIES = ((1e2, EARLY_STALL, 200), (1e4, STALL, 40))
-STIFF_PENALTIES = ((1e4, 1e-4, 300), (1e6, STALL, 60))  # fallback when the first schedule gets stuck
-COARSE_PENALTIES = ((1e4, STALL, 40),)  # from a coarse-to-fine start: repair the constraints stiffly, then project
+STIFF_PENALTIES = (
+    (1e4, 1e-4, 300),
+    (1e6, STALL, 60),
+)  # fallback when the first schedule gets stuck
+COARSE_PENALTIES = (
+    (1e4, STALL, 40),
+)  # from a coarse-to-fine start: repair the constraints stiffly, then project
 RESTART_ABOVE = 1e-3  # max equality row after the first schedule that triggers the fallback
 # inexact LM: penalty-stage steps solve the normal equations to 1e-5 (the gain ratio judges the step that
 # was actually taken); the projection keeps 1e-13 so its Gauss-Newton steps stay quadratically convergent.
@@ -77,7 +84,14 @@ class _Point:
     """
 
     def __init__(self, prob: _Problem, x: np.ndarray, shape: tuple, rho: float, hard, rtol: float):
-        self.prob, self.x, self.shape, self.rho, self.hard, self.rtol = prob, x, shape, rho, hard, rtol
+        self.prob, self.x, self.shape, self.rho, self.hard, self.rtol = (
+            prob,
+            x,
+            shape,
+            rho,
+            hard,
+            rtol,
+        )
         self.gviol = max(0.0, -_ineq_values(prob, x.reshape(shape)).min(initial=0.0))
         self._rows: tuple | None = None
 
@@ -104,7 +118,16 @@ class _Point:
         return -(float(r @ Jdx) + 0.5 * float(Jdx @ Jdx))
 
 
-def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None, tol_inf=0.0, stall_tol=STALL):
+def _lm(
+    prob: _Problem,
+    X: np.ndarray,
+    rho: float,
+    max_iter: int,
+    log,
+    hard=None,
+    tol_inf=0.0,
+    stall_tol=STALL,
+):
     """Levenberg-Marquardt on the merit (or on the hard rows) with the core ``lm``; returns X, iterations.
 
     The penalty stages (``hard`` None) damp by the gain ratio from 1e-3 of the mean diagonal of JᵀJ and
@@ -113,7 +136,9 @@ def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None
     tolerance is a max norm), stops when that row is under ``tol_inf`` or converges only linearly.
     Both stop after 3 steps that gain less than ``stall_tol`` or move x by less than 1e-13.
     """
-    start = _Point(prob, X.reshape(-1).copy(), X.shape, rho, hard, LM_CG_RTOL if hard is None else 1e-13)
+    start = _Point(
+        prob, X.reshape(-1).copy(), X.shape, rho, hard, LM_CG_RTOL if hard is None else 1e-13
+    )
     J = start.rows[1]
     diag_mean = float((J.multiply(J)).sum() / max(len(start.x), 1))
     scale = max(diag_mean, 1e-30)
@@ -121,11 +146,24 @@ def _lm(prob: _Problem, X: np.ndarray, rho: float, max_iter: int, log, hard=None
     if hard is None:
         damping = Damping(1e-3 * scale, 1e20 * scale)
     else:
-        damping = Damping(1e-12 * scale, 1e20 * scale, rule="tenfold", mu_min=1e-14 * diag_mean, raise_by=10.0,
-                          raise_growth=1.0)
+        damping = Damping(
+            1e-12 * scale,
+            1e20 * scale,
+            rule="tenfold",
+            mu_min=1e-14 * diag_mean,
+            raise_by=10.0,
+            raise_growth=1.0,
+        )
         stopping = replace(stopping, tol_inf=tol_inf, linear=(HARD_STALL_STEPS, HARD_STALL_GAIN))
-    pt, it = levenberg_marquardt(start, start.moved, damping, stopping, accept="gain" if hard is None else "max_row",
-                                 log=log, label=f"rho={rho:g}")
+    pt, it = levenberg_marquardt(
+        start,
+        start.moved,
+        damping,
+        stopping,
+        accept="gain" if hard is None else "max_row",
+        log=log,
+        label=f"rho={rho:g}",
+    )
     return pt.x.reshape(X.shape), it
 
 
@@ -142,16 +180,25 @@ def _solve_full(prob: _Problem, log, iters: dict):
     def project(X):
         """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
         L = _mean_edge(prob, X)
-        tol_abs = lambda fams: min(req.tol * L ** f.dim for f in fams)  # noqa: E731
+        tol_abs = lambda fams: min(req.tol * L**f.dim for f in fams)  # noqa: E731
         fit_rel = max((float(np.abs(f.residual(X)).max()) / L for f in fits), default=0.0)
         if fits and fit_rel < 1e-2:
             # the least-squares fit is (nearly) exact: try to make it exact
-            Xh, kh = _lm(prob, X, 0.0, 50, log, hard=eqs + fits + prob.of("ineq"),
-                         tol_inf=0.1 * tol_abs(eqs + fits))
+            Xh, kh = _lm(
+                prob,
+                X,
+                0.0,
+                50,
+                log,
+                hard=eqs + fits + prob.of("ineq"),
+                tol_inf=0.1 * tol_abs(eqs + fits),
+            )
             if all(v <= req.tol for v in family_residuals(prob, Xh, _mean_edge(prob, Xh)).values()):
                 return Xh, "hard", kh
         Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
-        if max((float(np.abs(f.residual(Xp)).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(eqs):
+        if max((float(np.abs(f.residual(Xp)).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(
+            eqs
+        ):
             # the half margins may block the last steps: project on the equalities alone (steps that
             # would violate g >= 0 are still halved or refused)
             Xq, kq = _lm(prob, Xp, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
@@ -170,7 +217,9 @@ def _solve_full(prob: _Problem, log, iters: dict):
         if attempt == 0 and eq_max(X) > RESTART_ABOVE:
             # the fit dragged the pattern off the constraint manifold into a wall of inequalities:
             # start again keeping the constraints stiff from the first step
-            log(f"max equality row {eq_max(X):.2e} > {RESTART_ABOVE:g}: restarting with stiff penalties")
+            log(
+                f"max equality row {eq_max(X):.2e} > {RESTART_ABOVE:g}: restarting with stiff penalties"
+            )
             continue
         Xp, mode, kp = project(X)
         iters[f"projection{tag}"] = kp
@@ -180,8 +229,10 @@ def _solve_full(prob: _Problem, log, iters: dict):
             best = (worst, Xp, mode)
         if worst <= req.tol:
             break
-        log(f"projection stopped at {worst:.2e} > tol: " + ("restarting with stiff penalties" if not attempt
-                                                             else "giving up"))
+        log(
+            f"projection stopped at {worst:.2e} > tol: "
+            + ("restarting with stiff penalties" if not attempt else "giving up")
+        )
     assert best is not None, "the stiff attempt always projects"
     _, X, mode = best
     return X, mode

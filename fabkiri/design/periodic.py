@@ -57,20 +57,28 @@ class TubeTarget:
         return rho_bottom, rho_top, TWO_PI * self.r_bottom / rho_bottom
 
     def to_dict(self) -> dict:
-        return {"kind": self.kind, "r_bottom_mm": self.r_bottom, "r_top_mm": self.r_top,
-                "length_mm": self.length}
+        return {
+            "kind": self.kind,
+            "r_bottom_mm": self.r_bottom,
+            "r_top_mm": self.r_top,
+            "length_mm": self.length,
+        }
 
 
 def parse_tube_target(spec: str) -> TubeTarget:
     """``cylinder:CIRCUMFERENCE,LENGTH`` or ``cone:R_BOTTOM,R_TOP,LENGTH`` (mm) -> a target."""
     m = re.fullmatch(r"\s*(cylinder|cone)\s*:\s*([^,]+(?:,[^,]+)*)\s*", spec or "")
     if not m:
-        raise InputError(f"--tube expects cylinder:CIRC,LENGTH or cone:R_BOTTOM,R_TOP,LENGTH (mm), got {spec!r}")
+        raise InputError(
+            f"--tube expects cylinder:CIRC,LENGTH or cone:R_BOTTOM,R_TOP,LENGTH (mm), got {spec!r}"
+        )
     kind = m.group(1)
     try:
         vals = [float(v) for v in m.group(2).split(",")]
     except ValueError:
-        raise InputError(f"--tube {kind}: the sizes must be numbers in mm, got {m.group(2)!r}") from None
+        raise InputError(
+            f"--tube {kind}: the sizes must be numbers in mm, got {m.group(2)!r}"
+        ) from None
     need = 2 if kind == "cylinder" else 3
     if len(vals) != need or not all(np.isfinite(v) and v > 0 for v in vals):
         raise InputError(f"--tube {kind} needs {need} positive sizes in mm, got {m.group(2)!r}")
@@ -108,7 +116,9 @@ def unit_geometry(target: TubeTarget, period_units: float) -> UnitGeometry:
         return UnitGeometry("cylinder", scale, np.eye(2), np.array([period_units, 0.0]), -h, h)
     rho_b, rho_t, alpha = target.sector()
     rho_b, rho_t = rho_b / scale, rho_t / scale
-    apex = np.array([0.0, 0.5 * (rho_b + rho_t)])  # the sheet's middle row on the x axis, apex above
+    apex = np.array(
+        [0.0, 0.5 * (rho_b + rho_t)]
+    )  # the sheet's middle row on the x axis, apex above
     R = np.array([[np.cos(alpha), -np.sin(alpha)], [np.sin(alpha), np.cos(alpha)]])
     return UnitGeometry("cone", scale, R, apex - R @ apex, rho_b, rho_t, apex, alpha)
 
@@ -120,8 +130,14 @@ def deployed_seam(seam: Seam, st: Stencils, geo: UnitGeometry, nv: int) -> Famil
     m = len(pairs)
     rows = np.repeat(np.arange(2 * m), 3)
     # row 2i+d: +1 at copy coordinate d, -R[d, 0] and -R[d, 1] at the first node's x and y
-    cols = np.stack([2 * copy[:, None] + np.arange(2), np.repeat(2 * first[:, None], 2, 1),
-                     np.repeat(2 * first[:, None] + 1, 2, 1)], -1).reshape(-1)
+    cols = np.stack(
+        [
+            2 * copy[:, None] + np.arange(2),
+            np.repeat(2 * first[:, None], 2, 1),
+            np.repeat(2 * first[:, None] + 1, 2, 1),
+        ],
+        -1,
+    ).reshape(-1)
     vals = np.tile(np.stack([np.ones(2), -geo.R[:, 0], -geo.R[:, 1]], -1), (m, 1)).reshape(-1)
     J = sparse.csr_matrix((vals, (rows, cols)), shape=(2 * m, 2 * nv))
 

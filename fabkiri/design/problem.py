@@ -29,7 +29,9 @@ from .targets import Target
 from .unfold import convex_member
 
 CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay > ~1° from 0 and π
-GAP_MARGIN = 0.005  # gap angles at hinges: the penalty acts before the hard limit g >= 0 stops a step
+GAP_MARGIN = (
+    0.005  # gap angles at hinges: the penalty acts before the hard limit g >= 0 stops a step
+)
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 
 
@@ -47,7 +49,9 @@ class _Problem:
         self.coarse: dict[str, Any] | None = None
         # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
         self.start_member: tuple[np.ndarray, float] | None = None
-        self.unfold: dict | None = None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
+        self.unfold: dict | None = (
+            None  # fold repair of a coarse-to-fine rigid start (``unfold.convex_member``)
+        )
         self._rigid: RigidFamily | None = None
         X0, L0 = self._start(base, st)
         curves = {s: v for s, v in req.contracted.items() if isinstance(v, Target)}
@@ -56,15 +60,20 @@ class _Problem:
             L0 = float(np.sqrt(abs(first.area) / (req.rows * req.cols)))
         self.L0 = L0
         # a closed state has the area of its tiles: compare outlines by shape, at MN tiles of size L0
-        self.curves_mm = {s: c.transformed(float(np.sqrt(req.rows * req.cols * L0 * L0 / abs(c.area))))
-                          for s, c in curves.items()}
+        self.curves_mm = {
+            s: c.transformed(float(np.sqrt(req.rows * req.cols * L0 * L0 / abs(c.area))))
+            for s, c in curves.items()
+        }
         self.X0 = self._closed_grids(X0)
         fam = self._families(base)
         self.families = fam
         self._normal: _Normal | None = None
         # a family may ask its own margin (``meta["margin"]``, tile units: the fabrication rows of a continuation step)
-        self.margin = {f.name: f.meta.get("margin", CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN)
-                       for f in fam if f.kind == "ineq"}
+        self.margin = {
+            f.name: f.meta.get("margin", CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN)
+            for f in fam
+            if f.kind == "ineq"
+        }
 
     def _start(self, base: np.ndarray, st: C.Stencils) -> tuple[np.ndarray, float]:
         """Initial deployed nodes (tile units) and their tile size L0 (mm): a warm start, coarse or a guess."""
@@ -76,7 +85,9 @@ class _Problem:
             X0, L0 = self._coarse_guess(base, st)
         else:
             X0, L0 = initial_guess(base, st, req.target, req.init)
-        if req.seed is not None:  # a sweep's seeds axis: another start of the same guess (not the rigid family's)
+        if (
+            req.seed is not None
+        ):  # a sweep's seeds axis: another start of the same guess (not the rigid family's)
             X0 = X0 + np.random.default_rng(req.seed).normal(0.0, 0.02, X0.shape)
         return X0, L0
 
@@ -105,7 +116,11 @@ class _Problem:
         if req.holes == "rhombus":
             fam += [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv)]
         else:
-            fam += [C.hole_opposite_sides(st, nv), C.notch_pairs(st, 1, nv), C.notch_pairs(st, 2, nv)]
+            fam += [
+                C.hole_opposite_sides(st, nv),
+                C.notch_pairs(st, 1, nv),
+                C.notch_pairs(st, 2, nv),
+            ]
         if req.rigid or req.holes == "parallelogram":
             fam.append(C.hinge_sums(st, nv))
         else:
@@ -126,16 +141,28 @@ class _Problem:
             fam.append(C.shape_match(st.tip_nodes, st.tip_side, tgt, nv, "shape"))
             if req.outline:
                 top = self.std.topology
-                order = boundary_tip_order(top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes)
+                order = boundary_tip_order(
+                    top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes
+                )
                 fam.append(C.outline_match(order, tgt, nv))
         for s, g in self.grids.items():
-            fam.append(C.shape_match(g.boundary, g.boundary_side, self.curves_mm[s].transformed(1.0 / L0), nv,
-                                     f"closed_shape_{s}"))
+            fam.append(
+                C.shape_match(
+                    g.boundary,
+                    g.boundary_side,
+                    self.curves_mm[s].transformed(1.0 / L0),
+                    nv,
+                    f"closed_shape_{s}",
+                )
+            )
         fam.append(regularizer(st, nv))
         fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
         if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
-            fam = [weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f for f in fam]
+            fam = [
+                weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f
+                for f in fam
+            ]
         for g in self.grids.values() if req.holes == "rhombus" else ():
             fam.append(g.orientation(st, nv))
         return fam
@@ -146,14 +173,24 @@ class _Problem:
         rc, cc = req.rows // 2, req.cols // 2
         if req.target is None or min(rc, cc) < 4:
             return initial_guess(base, st, req.target, "rescaled")
-        sub = DesignRequest(rc, cc, req.target, rigid=req.rigid, symmetry=req.symmetry, holes=req.holes,
-                            contracted=dict(req.contracted),
-                            init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
-                            tol=req.tol, reg_weight=req.reg_weight, max_iter=req.max_iter,
-                            solver=req.coarse_solver or req.solver,
-                            # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
-                            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
-                            outline=False, fabrication=req.fabrication)
+        sub = DesignRequest(
+            rc,
+            cc,
+            req.target,
+            rigid=req.rigid,
+            symmetry=req.symmetry,
+            holes=req.holes,
+            contracted=dict(req.contracted),
+            init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
+            tol=req.tol,
+            reg_weight=req.reg_weight,
+            max_iter=req.max_iter,
+            solver=req.coarse_solver or req.solver,
+            # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
+            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
+            outline=False,
+            fabrication=req.fabrication,
+        )
         # the coarse level is a whole design (solve.py builds on this module)
         from .solve import _design
 
@@ -163,14 +200,22 @@ class _Problem:
             xmm = self._rigid_refinement(sc, res.pattern.nodes)
             how = "closed-state grid resampled in the rigid family"
         else:
-            xmm = coarse_tile_map(sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols)
+            xmm = coarse_tile_map(
+                sc.nodes, res.pattern.nodes, sc.tiles, cc, base, st.tiles, req.cols
+            )
             how = "deployed tiles mapped"
         c = xmm[st.tiles]
         area = geometry.signed_areas(c)
-        self.coarse = {"rows": rc, "cols": cc, "map": how, "status": res.report["status"],
-                       "time_s": res.report["time_s"],
-                       "iterations_total": res.report["iterations_total"],
-                       "factorisations": res.report["factorisations"], "folded_tiles": int((area <= 0).sum())}
+        self.coarse = {
+            "rows": rc,
+            "cols": cc,
+            "map": how,
+            "status": res.report["status"],
+            "time_s": res.report["time_s"],
+            "iterations_total": res.report["iterations_total"],
+            "factorisations": res.report["factorisations"],
+            "folded_tiles": int((area <= 0).sum()),
+        }
         if self.unfold is not None:
             self.coarse["unfold"] = self.unfold
         # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
@@ -190,12 +235,16 @@ class _Problem:
         fam_c = RigidFamily.build(st_c, coarse.topology.spanning_tree(0))
         psi = RigidFamily.deployment_angle(x_mm, st_c)
         S_c, _ = fam_c.fit(x_mm, psi)
-        grid = resample_grid(fam_c.grid(S_c).reshape(st_c.rows + 1, st_c.cols + 1, 2),
-                             self.req.rows, self.req.cols)
+        grid = resample_grid(
+            fam_c.grid(S_c).reshape(st_c.rows + 1, st_c.cols + 1, 2), self.req.rows, self.req.cols
+        )
         fam = self.rigid_family
         # the nearest fine member can fold cells the resampled grid does not: repaired (``unfold.py``)
         S, self.unfold = convex_member(fam, fam.node_vertex[self.st.tiles], grid.reshape(-1, 2))
-        self.start_member = (S, psi)  # the start's seeds: the reduced solver need not fit them again
+        self.start_member = (
+            S,
+            psi,
+        )  # the start's seeds: the reduced solver need not fit them again
         return fam.nodes(S, psi)
 
     @property
@@ -223,7 +272,9 @@ class _Problem:
             S = P if S is None else S + P
         assert S is not None, "every request has its edge-pair or opposite-side families"
         S = S.tocoo()
-        node = sparse.csr_matrix((np.ones(S.nnz), (S.row // 2, S.col // 2)), shape=(self.nv, self.nv))
+        node = sparse.csr_matrix(
+            (np.ones(S.nnz), (S.row // 2, S.col // 2)), shape=(self.nv, self.nv)
+        )
         o = nested_dissection(node, self.X0)
         return np.stack([2 * o, 2 * o + 1], 1).ravel()
 
@@ -256,13 +307,15 @@ def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
     for f in prob.families:
         if f.kind == "eq" or (f.kind == "fit" and not f.meta.get("soft")):
             r = f.residual(X)
-            out[f.name] = float(np.abs(r).max(initial=0.0)) / L ** f.dim
+            out[f.name] = float(np.abs(r).max(initial=0.0)) / L**f.dim
     return out
 
 
 def _objective(prob: _Problem, X: np.ndarray) -> float:
     """Σ fit² + w E_reg: what both solvers minimise over the feasible set."""
-    return sum(energy(f, X) for f in prob.of("fit")) + prob.req.reg_weight * sum(energy(f, X) for f in prob.of("reg"))
+    return sum(energy(f, X) for f in prob.of("fit")) + prob.req.reg_weight * sum(
+        energy(f, X) for f in prob.of("reg")
+    )
 
 
 def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
@@ -275,5 +328,8 @@ def _why_not(prob: _Problem, X: np.ndarray) -> str:
     """The worst equality family and the smallest inequality, for the log."""
     res = family_residuals(prob, X, _mean_edge(prob, X))
     eq = max(((res[f.name], f.name) for f in prob.of("eq")), default=(0.0, "none"))
-    g = min(((float(f.residual(X).min(initial=0.0)), f.name) for f in prob.of("ineq")), default=(0.0, "none"))
+    g = min(
+        ((float(f.residual(X).min(initial=0.0)), f.name) for f in prob.of("ineq")),
+        default=(0.0, "none"),
+    )
     return f"worst equality {eq[1]} {eq[0]:.1e}, smallest inequality {g[1]} {g[0]:.1e}"

@@ -10,7 +10,7 @@ with 2(M+N+2)+1 unknowns instead of 2V. It is solved by Levenberg-Marquardt
 with dense reduced normal matrices (see ``_Merit``: the tile-shape rows live on
 the closed-state-1 grid, the rest on the deployed nodes), with the same step
 limiting on the inequalities as the full solver. Small lattices form the dense
-reduced Jacobian directly (``_TileShapeRows``: per tile corner, then pair
+reduced Jacobian directly (``TileShapeRows``: per tile corner, then pair
 differences; inequality rows only where active), large ones by sparse blocks. When the fit
 comes out nearly exact, minimum-norm Gauss-Newton steps on the fit rows make
 it exact ("hard" shape matching). The caller (``solve.py``) checks every family
@@ -28,8 +28,9 @@ import numpy as np
 from scipy import sparse
 
 from .constraints import convexity
-from .objective import NEXT, PREV, RegularizerRows, TileCorners, regularizer, tile_corners
+from .objective import regularizer, tile_corners
 from .reduced_steps import hard_fit, levenberg_marquardt
+from .reduced_tiles import TileShapeRows
 from .rigid import RigidFamily
 from .stencils import Family, Stencils
 
@@ -65,8 +66,16 @@ class _Merit:
     costs about a third of ``Dᵀ JᵀJ D`` on the nodes (G ≈ V/2 grid vertices, no ψ column).
     """
 
-    def __init__(self, fam: RigidFamily, families: list[Family], margin: dict, reg_weight: float,
-                 rho: float = STAGES[0][0], scaling: str = "marquardt", grid_families: Sequence[Family] = ()):
+    def __init__(
+        self,
+        fam: RigidFamily,
+        families: list[Family],
+        margin: dict,
+        reg_weight: float,
+        rho: float = STAGES[0][0],
+        scaling: str = "marquardt",
+        grid_families: Sequence[Family] = (),
+    ):
         self.fam = fam
         self.nf = fam.n_seeds
         on_grid = {f.name for f in grid_families}
@@ -87,13 +96,13 @@ class _Merit:
             reg, conv = self.grid_regs[0], self.grid_ineqs[0]
             rows = reg.meta["rows"]
             if (2 * len(rows.first) + len(conv.meta["quads"]) * 4) * (2 * nf + 1) <= DENSE_JD:
-                self._tiles = _TileShapeRows(fam, conv.meta["quads"], rows, self.margin[conv.name])
+                self._tiles = TileShapeRows(fam, conv.meta["quads"], rows, self.margin[conv.name])
         # block path: ∂c/∂p, dense only while small (column slicing of Jc costs more there)
         self._C = None
         if self._tiles is None and 2 * G * (2 * nf + 1) <= DENSE_JD:
             C = np.zeros((G, 2, 2 * nf + 1))
             C[:, 0, :nf] = fam.Z
-            C[:, 1, nf:2 * nf] = fam.Z
+            C[:, 1, nf : 2 * nf] = fam.Z
             self._C = C.reshape(2 * G, 2 * nf + 1)
 
     def staged(self, rho: float, scaling: str) -> _Merit:
@@ -104,7 +113,7 @@ class _Merit:
 
     def unpack(self, p: np.ndarray) -> tuple[np.ndarray, float]:
         nf = self.nf
-        return np.stack([p[:nf], p[nf:2 * nf]], -1), float(p[-1])
+        return np.stack([p[:nf], p[nf : 2 * nf]], -1), float(p[-1])
 
     def state(self, p: np.ndarray):
         """``(X, c)``: deployed nodes and closed-state-1 grid of member ``p``."""
@@ -114,7 +123,10 @@ class _Merit:
     def ineq_values(self, Xc) -> dict:
         """Every inequality family's values ``g``, node families on ``X``, grid families on ``c``."""
         X, c = Xc
-        return {**{f.name: f.residual(X) for f in self.ineqs}, **{f.name: f.residual(c) for f in self.grid_ineqs}}
+        return {
+            **{f.name: f.residual(X) for f in self.ineqs},
+            **{f.name: f.residual(c) for f in self.grid_ineqs},
+        }
 
     def ineq_violation(self, Xc, values: dict | None = None) -> float:
         vals = (self.ineq_values(Xc) if values is None else values).values()
@@ -129,8 +141,10 @@ class _Merit:
         X, c = Xc
         values = self.ineq_values(Xc) if values is None else values
         blocks = []
-        for arr, fits, regs, ineqs in ((X, self.fits, self.regs, self.ineqs),
-                                       (c, [], self.grid_regs, self.grid_ineqs)):
+        for arr, fits, regs, ineqs in (
+            (X, self.fits, self.regs, self.ineqs),
+            (c, [], self.grid_regs, self.grid_ineqs),
+        ):
             rs, Js = [], []
             for f in fits:
                 if hard and f.meta.get("soft"):  # the exact fit leaves the soft outline rows out
@@ -152,8 +166,12 @@ class _Merit:
                     rs.append(s * v[act])
                     Js.append(s * f(arr)[1][act])
             n = 2 * len(arr)
-            blocks.append((np.concatenate(rs) if rs else np.zeros(0),
-                           sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n))))
+            blocks.append(
+                (
+                    np.concatenate(rs) if rs else np.zeros(0),
+                    sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n)),
+                )
+            )
         (rx, Jx), (rc, Jc) = blocks
         return np.concatenate([rx, rc]), Jx, Jc
 
@@ -167,7 +185,7 @@ class _Merit:
 
     def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
         """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
-        they touch, tile-shape rows from ``_TileShapeRows``, inequality rows only where active) on demand: LM
+        they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
         asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
         S, psi = self.unpack(p)
         X, c = self.fam.nodes(S, psi), self.fam.grid(S)
@@ -175,7 +193,9 @@ class _Merit:
         assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
         tc = tile_corners(c, t.quads)
         rs: list[np.ndarray] = []
-        pend: list[tuple[float, Any, np.ndarray | None]] = []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
+        pend: list[
+            tuple[float, Any, np.ndarray | None]
+        ] = []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
         gmin = np.inf
         for f in self.fits:
             if not (hard and f.meta.get("soft")):
@@ -204,7 +224,9 @@ class _Merit:
             rs.append(s * v[flat])
         r = np.concatenate(rs) if rs else np.zeros(0)
         rr = None
-        if not hard:  # the regulariser rows come last; their normal-matrix block is formed from the buffer
+        if (
+            not hard
+        ):  # the regulariser rows come last; their normal-matrix block is formed from the buffer
             rr = self.w * t.rows.residual(tc)
             r = np.concatenate([r, rr])
 
@@ -216,13 +238,15 @@ class _Merit:
             J = np.zeros((sum(len(b) for b in Js), len(p)))
             o = 0
             for Jb in Js:
-                J[o:o + len(Jb), :Jb.shape[1]] = Jb  # grid blocks have no ψ column
+                J[o : o + len(Jb), : Jb.shape[1]] = Jb  # grid blocks have no ψ column
                 o += len(Jb)
             return J, None if rr is None else (tc, *t.regularizer_normal(tc, rr, self.w))
 
         return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, r, dense=dense)
 
-    def _node_jacobian(self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None) -> np.ndarray:
+    def _node_jacobian(
+        self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None
+    ) -> np.ndarray:
         """``∂r/∂p`` (dense) of node rows from their stencil Jacobian ``(nodes, grads)`` (what the fit and
         inequality families return), through ``∂x/∂p`` at those nodes only."""
         nodes, grads = J
@@ -273,68 +297,10 @@ class _Merit:
         Ja, Jb = Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()
         H = np.zeros((P, P))
         H[:nf, :nf] = Z.T @ ((Ja.T @ Ja) @ Z)
-        H[nf:2 * nf, nf:2 * nf] = Z.T @ ((Jb.T @ Jb) @ Z)
-        H[:nf, nf:2 * nf] = Z.T @ ((Ja.T @ Jb) @ Z)
-        H[nf:2 * nf, :nf] = H[:nf, nf:2 * nf].T
+        H[nf : 2 * nf, nf : 2 * nf] = Z.T @ ((Jb.T @ Jb) @ Z)
+        H[:nf, nf : 2 * nf] = Z.T @ ((Ja.T @ Jb) @ Z)
+        H[nf : 2 * nf, :nf] = H[:nf, nf : 2 * nf].T
         return H, np.concatenate([Z.T @ (Ja.T @ rc), Z.T @ (Jb.T @ rc), [0.0]])
-
-
-class _TileShapeRows:
-    """The ``TILE_SHAPE`` rows on the closed-state-1 grid with their dense Jacobian in ``S``.
-
-    Every tile corner's edge ``A`` (to the next corner) and ``B`` (to the previous one) is linear in the
-    seeds, ``∂A/∂S = ZE`` and ``∂B/∂S = ZB`` per coordinate (constant ``(T, 4, nf)``), so each corner's
-    length, angle and cross product gets its gradient in ``S`` once, and a regulariser row is the
-    difference of two corners' (a tile sits in up to four pairs).
-    """
-
-    def __init__(self, fam: RigidFamily, quads: np.ndarray, rows: RegularizerRows, margin: float):
-        Z = fam.Z
-        self.quads = quads
-        self.ZE = Z[quads[:, NEXT]] - Z[quads]
-        self.ZB = Z[quads[:, PREV]] - Z[quads]
-        self.rows = rows
-        self.margin = margin
-        n = quads.size
-        m = len(rows.first)
-        # Δ: row i of each half is corner first[i] minus corner second[i] (lengths: 0..n-1, angles: n..2n-1)
-        i = np.arange(2 * m)
-        first = np.concatenate([rows.first, n + rows.first])
-        second = np.concatenate([rows.second, n + rows.second])
-        self.diff = sparse.csr_matrix((np.r_[np.ones(2 * m), -np.ones(2 * m)], (np.r_[i, i], np.r_[first, second])),
-                                      shape=(2 * m, 2 * n))
-        self.diff_t = self.diff.T.tocsr()
-        self.laplacian = (self.diff_t @ self.diff).tocsr()
-        # reused by every evaluation: fresh megabyte-size temporaries cost page faults (16x16: 1.6 ms a call)
-        self._F = np.empty((2, *self.ZE.shape[:2], 2, self.ZE.shape[2]))
-
-    def features(self, tc: TileCorners, out: np.ndarray | None = None) -> np.ndarray:
-        """``(2 n, 2 nf)``: ``∂ℓ/∂S`` of every tile corner, then ``∂θ/∂S`` (``n = 4 T``)."""
-        T, _, nf = self.ZE.shape
-        ZE, ZB = self.ZE, self.ZB
-        e = tc.A / tc.length[..., None]
-        F = np.empty((2, T, 4, 2, nf)) if out is None else out
-        np.multiply(e[..., None], ZE[:, :, None, :], out=F[0])
-        np.multiply(tc.ga[..., None], ZE[:, :, None, :], out=F[1])
-        F[1] += tc.gb[..., None] * ZB[:, :, None, :]
-        return F.reshape(8 * T, 2 * nf)
-
-    def regularizer_jacobian(self, tc: TileCorners) -> np.ndarray:
-        """``(2 m, 2 nf)``: length rows, then angle rows, as ``RegularizerRows.residual`` stacks them."""
-        return self.rows.weight * (self.diff @ self.features(tc))
-
-    def regularizer_normal(self, tc: TileCorners, r: np.ndarray, scale: float):
-        """``JᵀJ`` and ``Jᵀ r`` of the rows ``scale · regulariser`` without forming ``J = w Δ F``:
-        ``w² Fᵀ (ΔᵀΔ) F`` and ``w Fᵀ Δᵀ r`` (a tile corner sits in up to four rows)."""
-        F = self.features(tc, self._F)
-        w = scale * self.rows.weight
-        return w * w * (F.T @ (self.laplacian @ F)), w * (F.T @ (self.diff_t @ r))
-
-    def convexity_jacobian(self, tc: TileCorners, corners: np.ndarray) -> np.ndarray:
-        """``∂ cross(A, B) / ∂S`` at flat corners ``corners`` (index ``4 t + k``)."""
-        t, k = np.divmod(corners, 4)
-        A, B, ZE, ZB = tc.A[t, k], tc.B[t, k], self.ZE[t, k], self.ZB[t, k]
-        return np.hstack([B[:, 1, None] * ZE - A[:, 1, None] * ZB, A[:, 0, None] * ZB - B[:, 0, None] * ZE])
 
 
 class _Evaluation:
@@ -346,14 +312,29 @@ class _Evaluation:
     needs none).
     """
 
-    def __init__(self, merit: _Merit, p: np.ndarray, Xc, gviol: float, hard: bool, r=None, dense=None,
-                 values: dict | None = None):
+    def __init__(
+        self,
+        merit: _Merit,
+        p: np.ndarray,
+        Xc,
+        gviol: float,
+        hard: bool,
+        r=None,
+        dense=None,
+        values: dict | None = None,
+    ):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
         self._r, self._blocks = r, None
         self._J: np.ndarray | None = None
-        self._reg: tuple[Any, Any, Any] | None = None  # the regulariser's (residual, normal matrix, gradient)
-        self._dense = dense  # dense path: () -> (J, reg), called once, when a Jacobian is first asked for
-        self._values = values  # block path: the inequality values gviol came from, reused by the rows
+        self._reg: tuple[Any, Any, Any] | None = (
+            None  # the regulariser's (residual, normal matrix, gradient)
+        )
+        self._dense = (
+            dense  # dense path: () -> (J, reg), called once, when a Jacobian is first asked for
+        )
+        self._values = (
+            values  # block path: the inequality values gviol came from, reused by the rows
+        )
 
     @property
     def X(self) -> np.ndarray:
@@ -381,7 +362,7 @@ class _Evaluation:
             r, Jx, Jc = self._rows()
             return self.merit.normal(r, Jx, Jc, self.p)
         J = self._J
-        H, g = J.T @ J, J.T @ self._r[:len(J)]
+        H, g = J.T @ J, J.T @ self._r[: len(J)]
         if self._reg is not None:
             _, Hr, gr = self._reg
             k = len(gr)
@@ -400,12 +381,16 @@ class _Evaluation:
         t = self.merit._tiles
         assert t is not None, "a regulariser comes only with the tile-shape rows"
         Jr = self.merit.w * t.regularizer_jacobian(self._reg[0])
-        return np.vstack([self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])])
+        return np.vstack(
+            [self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])]
+        )
 
 
 def fit_miss(fits: list[Family], X: np.ndarray) -> float:
     """Largest |fit row| relative to its target's size (both in normalised units)."""
-    return max((float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0)
+    return max(
+        (float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0
+    )
 
 
 # below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: 8x8 0.14 ms
@@ -432,9 +417,21 @@ def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> lis
     return [build[f.name]() for f in families if f.name in TILE_SHAPE]
 
 
-def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, families: list[Family],
-                  margin: dict, reg_weight: float, fit_tol: float, mean_edge, log, max_iter: int = 200,
-                  miss_tol: float = 0.0, S0: np.ndarray | None = None):
+def solve_reduced(
+    fam: RigidFamily,
+    st: Stencils,
+    X0: np.ndarray,
+    psi0: float,
+    families: list[Family],
+    margin: dict,
+    reg_weight: float,
+    fit_tol: float,
+    mean_edge,
+    log,
+    max_iter: int = 200,
+    miss_tol: float = 0.0,
+    S0: np.ndarray | None = None,
+):
     """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
     start is already a member).
 
@@ -457,8 +454,10 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
                 cap = min(cap, POLISH_STEPS)
             p, X, k = levenberg_marquardt(merit, p, min(cap, max_iter), stall_tol, log)
             iters[f"reduced_{scaling}_rho_{rho:g}"] = k
-            fit_max = max((float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
-                          default=0.0)
+            fit_max = max(
+                (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
+                default=0.0,
+            )
             if merit.fits and fit_max < 1e-2 * mean_edge(X):
                 Xh, kh = hard_fit(merit, p, fit_tol)
                 iters[f"reduced_{scaling}_hard"] = kh
@@ -468,8 +467,10 @@ def solve_reduced(fam: RigidFamily, st: Stencils, X0: np.ndarray, psi0: float, f
         cost = float(ev.r @ ev.r)
         miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
         viol = ev.gviol
-        log(f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
-            + (f", an inequality violated by {viol:.2e}" if viol > 0 else ""))
+        log(
+            f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
+            + (f", an inequality violated by {viol:.2e}" if viol > 0 else "")
+        )
         # a result that violates an inequality (g < 0: a coarse-to-fine start can leave a reflex corner that
         # the fit holds against any penalty; rigid 32x32 ellipse) ranks below every feasible one, and the other
         # scaling is tried as well

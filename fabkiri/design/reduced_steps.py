@@ -87,8 +87,14 @@ def levenberg_marquardt(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: 
     stops the loop above 1e16; otherwise the penalty stages' rules (gain ratio, Nielsen's update).
     """
     start = _Member(merit, p)
-    pt, it = lm_core(start, start.moved, Damping(1e-3, 1e16), Stopping(max_iter, stall_tol, MAX_STALL),
-                     log=log, label=f"reduced rho={merit.sq ** 2:g}")
+    pt, it = lm_core(
+        start,
+        start.moved,
+        Damping(1e-3, 1e16),
+        Stopping(max_iter, stall_tol, MAX_STALL),
+        log=log,
+        label=f"reduced rho={merit.sq**2:g}",
+    )
     return pt.x, pt.ev.X, it
 
 
@@ -103,8 +109,19 @@ def hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
     """
     start = _HardMember(merit, p)
     scale = max(float((start.J * start.J).sum(0).mean()), 1e-300)
-    damping = Damping(1e-12 * scale, 1e4 * scale, rule="tenfold", mu_min=1e-14 * scale, raise_by=10.0,
-                      raise_growth=1.0)
-    pt, it = lm_core(start, start.moved, damping, Stopping(max_iter, max_stall=None, tol_inf=fit_tol),
-                     accept="decrease")
+    damping = Damping(
+        1e-12 * scale,
+        1e4 * scale,
+        rule="tenfold",
+        mu_min=1e-14 * scale,
+        raise_by=10.0,
+        raise_growth=1.0,
+    )
+    pt, it = lm_core(
+        start,
+        start.moved,
+        damping,
+        Stopping(max_iter, max_stall=None, tol_inf=fit_tol),
+        accept="decrease",
+    )
     return (pt.ev.X if np.abs(pt.r).max(initial=0.0) <= fit_tol else None), it

@@ -24,12 +24,15 @@ from .conformance import deployed
 from .solve import DesignRequest, DesignResult, _Problem, design
 
 LAWSON_STEPS = 10
-LAWSON_GAMMA = 1.0  # exponent of the miss in the update (Lawson's; 16x16 heart: 1.52 %, ½: 1.56 %, ¼: 1.73 %)
+LAWSON_GAMMA = (
+    1.0  # exponent of the miss in the update (Lawson's; 16x16 heart: 1.52 %, ½: 1.56 %, ¼: 1.73 %)
+)
 WEIGHT_RANGE = (1e-3, 1e3)  # squared weights relative to their mean
 
 
-def lawson_weights(req: DesignRequest, nodes_mm: np.ndarray, previous: dict | None,
-                   gamma: float = LAWSON_GAMMA) -> dict:
+def lawson_weights(
+    req: DesignRequest, nodes_mm: np.ndarray, previous: dict | None, gamma: float = LAWSON_GAMMA
+) -> dict:
     """Next row weights of every fit family: squared weights times (unweighted miss / mean miss)^gamma,
     normalised to mean 1 and clipped to ``WEIGHT_RANGE``."""
     prob = _Problem(replace(req, start=nodes_mm, fit_weights=None, fabrication=None))
@@ -43,9 +46,13 @@ def lawson_weights(req: DesignRequest, nodes_mm: np.ndarray, previous: dict | No
     return out
 
 
-def refine_minimax(req: DesignRequest, start_mm: np.ndarray, steps: int = LAWSON_STEPS,
-                   gamma: float = LAWSON_GAMMA, accept: Callable[[DesignResult], bool] | None = None
-                   ) -> tuple[DesignResult | None, list[float], float]:
+def refine_minimax(
+    req: DesignRequest,
+    start_mm: np.ndarray,
+    steps: int = LAWSON_STEPS,
+    gamma: float = LAWSON_GAMMA,
+    accept: Callable[[DesignResult], bool] | None = None,
+) -> tuple[DesignResult | None, list[float], float]:
     """Lawson steps from the design ``start_mm`` (deployed nodes, mm) under ``req``'s rows.
 
     Returns the converged step with the smallest Hausdorff distance to ``req.target`` (None when no step
@@ -55,7 +62,9 @@ def refine_minimax(req: DesignRequest, start_mm: np.ndarray, steps: int = LAWSON
     converged step as a candidate (the caller's own check, e.g. a printer's bed); the steps go on from it."""
     target = req.target
     if target is None:  # the steps are judged by their Hausdorff distance to the deployed target
-        raise InputError("minimax refinement needs a deployed target (a closed-state target alone has none)")
+        raise InputError(
+            "minimax refinement needs a deployed target (a closed-state target alone has none)"
+        )
     X = np.asarray(start_mm, float)
     weights = lawson_weights(req, X, None, gamma)
     best, trace, spent = None, [], 0.0

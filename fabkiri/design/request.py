@@ -46,34 +46,61 @@ class DesignRequest:
     holes: str = "rhombus"  # or "parallelogram"
     contracted: dict = field(default_factory=dict)  # state -> Target | ("rect", ratio or None)
     init: str = "rescaled"
-    solver: str = "auto"  # "reduced": closed-form rigid family only; "full": all nodes; "auto": see _design
+    solver: str = (
+        "auto"  # "reduced": closed-form rigid family only; "full": all nodes; "auto": see _design
+    )
     tol: float = 1e-10
     reg_weight: float = 1e-3
     max_iter: int = 300
     name: str = ""
-    outline: bool = True  # also fit the tip polygon's chords and the target's samples (``C.outline_match``)
-    fabrication: FabricationLimits | None = None  # mm limits at the target's size (design/fabrication.py)
-    fabrication_intent: dict = field(default_factory=dict)  # material/printer names: stored for cut and print
-    seed: int | None = None  # jitter the initial nodes (2 % of a tile edge) to explore other local minima
-    second_opinion: bool = True  # auto: also run the full solver when the rigid family's fit is least-squares
+    outline: bool = (
+        True  # also fit the tip polygon's chords and the target's samples (``C.outline_match``)
+    )
+    fabrication: FabricationLimits | None = (
+        None  # mm limits at the target's size (design/fabrication.py)
+    )
+    fabrication_intent: dict = field(
+        default_factory=dict
+    )  # material/printer names: stored for cut and print
+    seed: int | None = (
+        None  # jitter the initial nodes (2 % of a tile edge) to explore other local minima
+    )
+    second_opinion: bool = (
+        True  # auto: also run the full solver when the rigid family's fit is least-squares
+    )
     # ... up to 16x16 tiles only when its outline misses by more than this share of the target's size (the
     # CLI passes its --shape-tol): where the rigid design already meets the tolerance the full solver is skipped
     second_opinion_above: float = 0.02
-    start: np.ndarray | None = None  # deployed nodes (mm) to start from instead of ``init`` (a warm start)
-    rigid_first: bool = True  # a mid-size non-rigid design tries the rigid family first (VIA_RIGID_FIRST_TILES)
+    start: np.ndarray | None = (
+        None  # deployed nodes (mm) to start from instead of ``init`` (a warm start)
+    )
+    rigid_first: bool = (
+        True  # a mid-size non-rigid design tries the rigid family first (VIA_RIGID_FIRST_TILES)
+    )
     coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
-    fit_weights: dict | None = None  # fit family name -> row weights (``refine.py``: towards the minimax fit)
+    fit_weights: dict | None = (
+        None  # fit family name -> row weights (``refine.py``: towards the minimax fit)
+    )
 
     def validate(self) -> None:
-        if int(self.rows) != self.rows or int(self.cols) != self.cols or self.rows < 2 or self.cols < 2:
-            raise InputError(f"inverse design needs at least 2x2 tiles, got {self.rows}x{self.cols}")
+        if (
+            int(self.rows) != self.rows
+            or int(self.cols) != self.cols
+            or self.rows < 2
+            or self.cols < 2
+        ):
+            raise InputError(
+                f"inverse design needs at least 2x2 tiles, got {self.rows}x{self.cols}"
+            )
         if self.holes not in ("rhombus", "parallelogram"):
             raise InputError(f"--holes must be rhombus or parallelogram, not {self.holes!r}")
         if self.solver not in SOLVERS:
             raise InputError(f"--solver must be one of {', '.join(SOLVERS)}, not {self.solver!r}")
         if self.solver == "reduced" and not reduced_applies(self):
-            raise InputError("--solver reduced needs --rigid, rhombus holes, a --target, and no --symmetry or "
-                             "--contracted-target (the closed-form rigid family covers only that)")
+            raise InputError(
+                "--solver reduced needs --rigid, rhombus holes, a --target, and no --symmetry or "
+                "--contracted-target (the closed-form rigid family covers only that)"
+            )
         if self.symmetry not in (None, "x", "y"):
             raise InputError(f"--symmetry must be x or y, not {self.symmetry!r}")
         if not (np.isfinite(self.tol) and 0 < self.tol < 1e-2):
@@ -81,16 +108,27 @@ class DesignRequest:
         for s, spec in self.contracted.items():
             if s not in (1, 2):
                 raise InputError(f"closed states are 1 and 2, not {s}")
-            if isinstance(spec, Target) and self.holes == "parallelogram" and not offset_outline.covers(self):
-                raise InputError("a closed-state target curve needs rhombus holes (parallelogram holes leave "
-                                 "T-junctions, so the closed state is not a grid)")
+            if (
+                isinstance(spec, Target)
+                and self.holes == "parallelogram"
+                and not offset_outline.covers(self)
+            ):
+                raise InputError(
+                    "a closed-state target curve needs rhombus holes (parallelogram holes leave "
+                    "T-junctions, so the closed state is not a grid)"
+                )
         if self.target is None and not any(isinstance(v, Target) for v in self.contracted.values()):
             raise InputError("nothing to fit: give --target or a --contracted-target curve")
         if self.symmetry:
-            for tgt in [self.target, *[v for v in self.contracted.values() if isinstance(v, Target)]]:
+            for tgt in [
+                self.target,
+                *[v for v in self.contracted.values() if isinstance(v, Target)],
+            ]:
                 if tgt is not None and tgt.mirror_error(self.symmetry) > 1e-3:
-                    raise InputError(f"target {tgt.name!r} is not symmetric about the {self.symmetry} axis, "
-                                     f"so --symmetry {self.symmetry} contradicts it")
+                    raise InputError(
+                        f"target {tgt.name!r} is not symmetric about the {self.symmetry} axis, "
+                        f"so --symmetry {self.symmetry} contradicts it"
+                    )
 
 
 @dataclass
@@ -99,24 +137,47 @@ class DesignResult:
     report: dict
     converged: bool
     closed_grids: dict  # state -> (V, 2) closed-state pattern vertices in mm
-    closed_targets: dict  # state -> Target (mm) the closed grid was fitted to, scaled to the tiles' area
+    closed_targets: (
+        dict  # state -> Target (mm) the closed grid was fitted to, scaled to the tiles' area
+    )
 
 
 def reduced_applies(req: DesignRequest) -> bool:
     """The closed-form rigid family covers the request (see ``rigid.py``)."""
-    return (req.rigid and req.holes == "rhombus" and not req.symmetry and not req.contracted
-            and req.target is not None)
+    return (
+        req.rigid
+        and req.holes == "rhombus"
+        and not req.symmetry
+        and not req.contracted
+        and req.target is not None
+    )
 
 
 def via_rigid_applies(req: DesignRequest) -> bool:
     """A non-rigid request answered by the rigid family (``VIA_RIGID_TILES``)."""
-    return (req.solver == "auto" and not req.rigid and req.holes == "rhombus" and not req.symmetry
-            and not req.contracted and req.target is not None
-            and (req.rows * req.cols >= VIA_RIGID_TILES or req.init == VIA_RIGID_INIT))
+    return (
+        req.solver == "auto"
+        and not req.rigid
+        and req.holes == "rhombus"
+        and not req.symmetry
+        and not req.contracted
+        and req.target is not None
+        and (req.rows * req.cols >= VIA_RIGID_TILES or req.init == VIA_RIGID_INIT)
+    )
 
 
 def rigid_first_applies(req: DesignRequest) -> bool:
     """A non-rigid request that tries the rigid family before the full solver (``VIA_RIGID_FIRST_TILES``)."""
-    return (req.rigid_first and req.start is None and req.seed is None and not via_rigid_applies(req)
-            and req.solver == "auto" and not req.rigid and req.holes == "rhombus" and not req.symmetry
-            and not req.contracted and req.target is not None and req.rows * req.cols >= VIA_RIGID_FIRST_TILES)
+    return (
+        req.rigid_first
+        and req.start is None
+        and req.seed is None
+        and not via_rigid_applies(req)
+        and req.solver == "auto"
+        and not req.rigid
+        and req.holes == "rhombus"
+        and not req.symmetry
+        and not req.contracted
+        and req.target is not None
+        and req.rows * req.cols >= VIA_RIGID_FIRST_TILES
+    )

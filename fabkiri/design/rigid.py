@@ -80,8 +80,10 @@ class RigidFamily:
         # both merge corners of a hole give the same row: keep one
         mid = np.unique(np.stack([z, np.minimum(a, b), np.maximum(a, b)], 1), axis=0)
         m = len(mid)
-        Am = sparse.csr_matrix((np.r_[np.ones(m), np.full(2 * m, -0.5)],
-                                (np.tile(np.arange(m), 3), mid.T.ravel())), shape=(m, G))
+        Am = sparse.csr_matrix(
+            (np.r_[np.ones(m), np.full(2 * m, -0.5)], (np.tile(np.arange(m), 3), mid.T.ravel())),
+            shape=(m, G),
+        )
         gi, gj = np.divmod(np.arange(G), N + 1)
         boundary = (gi == 0) | (gi == M) | (gj == 0) | (gj == N)
         pinned = np.zeros(G, dtype=bool)
@@ -93,7 +95,9 @@ class RigidFamily:
         Am = Am.tocsc()
         try:
             lu = splu(Am[:, dep], permc_spec="COLAMD")
-        except RuntimeError as exc:  # pragma: no cover - the anchoring above is exact for quad lattices
+        except (
+            RuntimeError
+        ) as exc:  # pragma: no cover - the anchoring above is exact for quad lattices
             raise SolveError(f"rigid family: boundary anchoring is singular ({exc})") from None
         Z = np.zeros((G, len(seeds)))
         Z[seeds, np.arange(len(seeds))] = 1.0
@@ -102,7 +106,9 @@ class RigidFamily:
         T = len(tl)
         sigma = np.where(np.arange(T) // N % 2 == np.arange(T) % N % 2, 1.0, -1.0)  # (r + c) even
         hinge_vertex = node_vertex[st.hinge_node]
-        tau = np.zeros((T, len(seeds)))  # τ_T = J (tau[T] @ S); τ_root = 0 fixes the translation gauge
+        tau = np.zeros(
+            (T, len(seeds))
+        )  # τ_T = J (tau[T] @ S); τ_root = 0 fixes the translation gauge
         for lvl in tree.levels():
             child, parent = tree.children[lvl], tree.parents[lvl]
             tau[child] = tau[parent] - 2.0 * sigma[parent, None] * Z[hinge_vertex[tree.hinges[lvl]]]
@@ -154,9 +160,9 @@ class RigidFamily:
         n, nf = Zn.shape
         D = np.empty((n, 2, 2 * nf + 1))
         D[:, 0, :nf] = c * Zn
-        D[:, 0, nf:2 * nf] = -s * Y
+        D[:, 0, nf : 2 * nf] = -s * Y
         D[:, 1, :nf] = s * Y
-        D[:, 1, nf:2 * nf] = c * Zn
+        D[:, 1, nf : 2 * nf] = c * Zn
         a = Zn @ S
         b = Y @ S
         D[:, 0, -1] = -s * a[:, 0] - c * b[:, 1]

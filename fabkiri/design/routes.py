@@ -48,16 +48,30 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     fam = prob.rigid_family
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
     # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
-    psi0 = RigidFamily.deployment_angle(prob.X0, prob.st) if prob.coarse or req.start is not None else np.pi / 4
+    psi0 = (
+        RigidFamily.deployment_angle(prob.X0, prob.st)
+        if prob.coarse or req.start is not None
+        else np.pi / 4
+    )
     S0 = None
     if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
         S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
-    X, mode, its = solve_reduced(fam, prob.st, prob.X0, psi0, prob.families, prob.margin, req.reg_weight,
-                                 0.1 * req.tol * _mean_edge(prob, prob.X0), lambda Y: _mean_edge(prob, Y), log,
-                                 max_iter=req.max_iter,
-                                 # small patterns get the full solver's second opinion anyway
-                                 miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE,
-                                 S0=S0)
+    X, mode, its = solve_reduced(
+        fam,
+        prob.st,
+        prob.X0,
+        psi0,
+        prob.families,
+        prob.margin,
+        req.reg_weight,
+        0.1 * req.tol * _mean_edge(prob, prob.X0),
+        lambda Y: _mean_edge(prob, Y),
+        log,
+        max_iter=req.max_iter,
+        # small patterns get the full solver's second opinion anyway
+        miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE,
+        S0=S0,
+    )
     iters.update(its)
     if _acceptable(prob, X) or req.solver == "reduced":
         return X, mode
@@ -73,7 +87,9 @@ def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
     pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
     h = deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
     if h <= above:
-        log(f"rigid family outline within {h:.2%} of the target size (<= {above:.2%}): no second opinion")
+        log(
+            f"rigid family outline within {h:.2%} of the target size (<= {above:.2%}): no second opinion"
+        )
     return h > above
 
 
@@ -84,17 +100,29 @@ def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[
     solver = REDUCED_NAME
     miss = fit_miss(exact_fits(prob.of("fit")), out[0])
     if miss > FULL_ABOVE and req.rows * req.cols > FULL_MAX_TILES:
-        log(f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
-            f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)")
-    elif miss > FULL_ABOVE and req.rows * req.cols > FULL_ALWAYS_TILES or (
-            req.rows * req.cols <= FULL_ALWAYS_TILES and _outline_misses(prob, out[0], req.second_opinion_above,
-                                                                         log)):
-        log(f"rigid family fit is least-squares (misses by {miss:.2%} of the target size): "
-            f"trying the full solver too")
+        log(
+            f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
+            f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)"
+        )
+    elif (
+        miss > FULL_ABOVE
+        and req.rows * req.cols > FULL_ALWAYS_TILES
+        or (
+            req.rows * req.cols <= FULL_ALWAYS_TILES
+            and _outline_misses(prob, out[0], req.second_opinion_above, log)
+        )
+    ):
+        log(
+            f"rigid family fit is least-squares (misses by {miss:.2%} of the target size): "
+            f"trying the full solver too"
+        )
         full = _solve_full(prob, log, iters)
         f_red, f_full = _objective(prob, out[0]), _objective(prob, full[0])
         ok_full = _acceptable(prob, full[0])
-        log(f"objective: rigid family {f_red:.4e}, full {f_full:.4e}" + ("" if ok_full else " (unconverged)"))
+        log(
+            f"objective: rigid family {f_red:.4e}, full {f_full:.4e}"
+            + ("" if ok_full else " (unconverged)")
+        )
         if ok_full and f_full < f_red:
             out, solver = full, FULL_NAME
     return out, solver
@@ -108,14 +136,18 @@ def _solve_rigid_first(prob: _Problem, log, iters: dict):
 
     best = None
     for init in RIGID_FIRST_INITS:
-        sub = replace(prob.req, rigid=True, init=init, name="", solver="reduced", second_opinion=False)
+        sub = replace(
+            prob.req, rigid=True, init=init, name="", solver="reduced", second_opinion=False
+        )
         res = _design(sub, False)
         iters.update({f"rigid_{init}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
         if not (res.converged and _acceptable(prob, X)):
             log(f"rigid family from {init}: fails a non-rigid family check ({_why_not(prob, X)})")
             continue
-        h = deployed_conformance(res.pattern.nodes, res.pattern.topology, prob.target)["hausdorff_rel"]
+        h = deployed_conformance(res.pattern.nodes, res.pattern.topology, prob.target)[
+            "hausdorff_rel"
+        ]
         log(f"rigid family from {init}: outline within {h:.2%} of the target size")
         if best is None or h < best[0]:
             best = (h, X, res.report["shape_matching"], res.report["solver"])
@@ -136,9 +168,16 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict):
     # no full-solver second opinion on a big rigid problem at this level (its coarse levels keep theirs): at
     # 32x32 it took about 45 of the 52 CPU s of a heart and lost (the non-rigid full solver below still takes
     # over when the rigid design fails a non-rigid check); below that it is the CLI's last resort, kept whole
-    sub = replace(prob.req, rigid=True, init="coarse" if big else "rescaled", name="",
-                  second_opinion=prob.req.second_opinion and not big)
-    log("non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)")
+    sub = replace(
+        prob.req,
+        rigid=True,
+        init="coarse" if big else "rescaled",
+        name="",
+        second_opinion=prob.req.second_opinion and not big,
+    )
+    log(
+        "non-rigid design from the rigid family (a rigid member satisfies every non-rigid equality)"
+    )
     # a big design keeps the rigid auto rules on its coarse levels only: main's 32x32 heart went on to the full
     # solver on the rigid problem when its reduced design failed a family check, stopped at 5e-5, then the
     # non-rigid one at 6e-3 (14 % off, 66 CPU s). Next, the reduced solver alone down the coarse levels (1.37 %).
@@ -149,8 +188,10 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict):
         X = res.pattern.nodes / prob.L0
         if res.converged and _acceptable(prob, X):
             return X, res.report["shape_matching"], res.report["solver"]
-        log(f"the {'rigid-family' if tag == 'rigid' else 'reduced-only'} design fails a non-rigid family check "
-            f"({_why_not(prob, X)})")
+        log(
+            f"the {'rigid-family' if tag == 'rigid' else 'reduced-only'} design fails a non-rigid family check "
+            f"({_why_not(prob, X)})"
+        )
     log("the full solver takes over")
     return None
 
@@ -173,16 +214,32 @@ def _solve_outline(prob: _Problem, log, iters: dict, solver=None):
         corners = X[g.offset + np.array([0, N, (M + 1) * (N + 1) - 1, M * (N + 1)])] - centre
         unit = prob.req.contracted[s]
         lo, hi = unit.bbox
-        start = unit.points[0] - 0.5 * (lo + hi)  # a circle's parameter is its angle from the first point over 2π
-        u = np.mod((np.arctan2(corners[:, 1], corners[:, 0]) - np.arctan2(start[1], start[0])) / (2 * np.pi), 1.0)
-        pts = (unit.points - 0.5 * (lo + hi)) * (radius * prob.L0 / (0.5 * float((hi - lo).max()))) + centre * prob.L0
+        start = unit.points[0] - 0.5 * (
+            lo + hi
+        )  # a circle's parameter is its angle from the first point over 2π
+        u = np.mod(
+            (np.arctan2(corners[:, 1], corners[:, 0]) - np.arctan2(start[1], start[0]))
+            / (2 * np.pi),
+            1.0,
+        )
+        pts = (unit.points - 0.5 * (lo + hi)) * (
+            radius * prob.L0 / (0.5 * float((hi - lo).max()))
+        ) + centre * prob.L0
         mm = Target(unit.name, unit.kind, pts, corners=u, source=dict(unit.source))
         prob.curves_mm[s] = mm
-        prob.families = [C.shape_match(g.boundary, g.boundary_side, mm.transformed(1.0 / prob.L0), prob.nv,
-                                       f.name) if f.name == f"closed_shape_{s}" else f for f in prob.families]
+        prob.families = [
+            C.shape_match(
+                g.boundary, g.boundary_side, mm.transformed(1.0 / prob.L0), prob.nv, f.name
+            )
+            if f.name == f"closed_shape_{s}"
+            else f
+            for f in prob.families
+        ]
     if _acceptable(prob, X):
         return X, mode
-    log("the closed-state outline design fails a family check: falling back to the full solver "
-        f"({_why_not(prob, X)})")
+    log(
+        "the closed-state outline design fails a family check: falling back to the full solver "
+        f"({_why_not(prob, X)})"
+    )
     prob.curves_mm, prob.families = saved
     return None

@@ -108,7 +108,9 @@ class _Log:
 
     def __call__(self, msg: str) -> None:
         if self.progress:
-            print(f"[design {time.perf_counter() - self.t0:7.2f}s] {msg}", file=sys.stderr, flush=True)
+            print(
+                f"[design {time.perf_counter() - self.t0:7.2f}s] {msg}", file=sys.stderr, flush=True
+            )
 
 
 def design(req: DesignRequest, progress: bool = False) -> DesignResult:
@@ -122,13 +124,17 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
     log = _Log(progress)
     c0 = time.process_time()
     if offset_outline.covers(req) and not offset_outline.applies(req):
-        log(f"parallelogram holes above {offset_outline.OFFSET_MAX_TILES} tiles: rhombus holes (zero offsets)")
+        log(
+            f"parallelogram holes above {offset_outline.OFFSET_MAX_TILES} tiles: rhombus holes (zero offsets)"
+        )
         return _design(replace(req, holes="rhombus"), progress)
     t0 = time.perf_counter()
     # a non-rigid request answered by the rigid family needs no guess of its own (least of all a coarse solve)
     prob = _Problem(replace(req, init="rescaled") if via_rigid_applies(req) else req)
-    log(f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
-        + ", ".join(f.name for f in prob.families))
+    log(
+        f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
+        + ", ".join(f.name for f in prob.families)
+    )
     iters: dict = {}
     picked = _solve(req, prob, log, iters)
     if picked is None:  # no other solver takes parallelogram holes with closed-state curves
@@ -136,8 +142,10 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         return _design(replace(req, holes="rhombus"), progress)
     (X, mode), solver, rigid_first = picked
     report = _report(req, prob, X, mode, solver, rigid_first, iters, t0, c0)
-    log(f"{report['status']}: max equality residual {report['max_equality_residual']:.2e}, fit {mode}, "
-        f"{report['iterations_total']} iterations, {report['time_s']:.2f}s")
+    log(
+        f"{report['status']}: max equality residual {report['max_equality_residual']:.2e}, fit {mode}, "
+        f"{report['iterations_total']} iterations, {report['time_s']:.2f}s"
+    )
     return _result(req, prob, X, report)
 
 
@@ -153,11 +161,17 @@ def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
     solver = REDUCED_NAME
     if out is not None and req.solver == "auto" and req.second_opinion and out[1] != "hard":
         out, solver = _second_opinion(req, prob, out, log, iters)
-    rigid_first = False  # the answer is the rigid family's, tried first (the API stops its guesses there)
+    rigid_first = (
+        False  # the answer is the rigid family's, tried first (the API stops its guesses there)
+    )
     if out is None and rigid_first_applies(req):
         first = _solve_rigid_first(prob, log, iters)
         if first is not None:
-            out, solver, rigid_first = first[:2], f"{first[2]}, for a non-rigid request (rigid family first)", True
+            out, solver, rigid_first = (
+                first[:2],
+                f"{first[2]}, for a non-rigid request (rigid family first)",
+                True,
+            )
     if out is None and via_rigid_applies(req):
         via = _solve_via_rigid(prob, log, iters)
         if via is not None:
@@ -169,8 +183,10 @@ def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
         out = _solve_outline(prob, log, iters, offset_outline.solve_offset_outline)
         if out is None:
             return None
-        solver = ("closed-form rigid family with parallelogram holes (an offset per hole), closed-state "
-                  "outlines (exact square, size-free circle)")
+        solver = (
+            "closed-form rigid family with parallelogram holes (an offset per hole), closed-state "
+            "outlines (exact square, size-free circle)"
+        )
     if out is None:
         out = _solve_full(prob, log, iters)
         solver = FULL_NAME
@@ -184,14 +200,27 @@ def _fit_report(prob: _Problem, X: np.ndarray) -> dict:
     for f in prob.of("fit"):
         f = f.meta.get("unweighted", f)
         r = f.residual(X)
-        fit[f.name] = {"max_mm": float(np.abs(r).max()) * prob.L0, "rms_mm": float(np.sqrt(np.mean(r * r))) * prob.L0,
-                       "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,
-                       "points": int(len(r)), "soft": bool(f.meta.get("soft"))}
+        fit[f.name] = {
+            "max_mm": float(np.abs(r).max()) * prob.L0,
+            "rms_mm": float(np.sqrt(np.mean(r * r))) * prob.L0,
+            "max_rel_size": float(np.abs(r).max()) / f.meta["target"].size,
+            "points": int(len(r)),
+            "soft": bool(f.meta.get("soft")),
+        }
     return fit
 
 
-def _report(req: DesignRequest, prob: _Problem, X: np.ndarray, mode: str, solver: str, rigid_first: bool,
-            iters: dict, t0: float, c0: float) -> dict:
+def _report(
+    req: DesignRequest,
+    prob: _Problem,
+    X: np.ndarray,
+    mode: str,
+    solver: str,
+    rigid_first: bool,
+    iters: dict,
+    t0: float,
+    c0: float,
+) -> dict:
     """The design's report: status, residuals, iterations, times, fit, inequalities and fabrication rows."""
     eqs = prob.of("eq")
     L = _mean_edge(prob, X)
@@ -212,7 +241,8 @@ def _report(req: DesignRequest, prob: _Problem, X: np.ndarray, mode: str, solver
         "iterations": iters,
         "iterations_total": int(sum(iters.values())),
         "time_s": elapsed,
-        "cpu_s": time.process_time() - c0,  # on a loaded machine wall time says more about the neighbours
+        "cpu_s": time.process_time()
+        - c0,  # on a loaded machine wall time says more about the neighbours
         "unknowns": 2 * prob.nv,
         "equations": int(sum(len(f.residual(X)) for f in eqs)),
         "shape_matching": mode if prob.of("fit") else "none",
@@ -227,12 +257,18 @@ def _report(req: DesignRequest, prob: _Problem, X: np.ndarray, mode: str, solver
         "rigid_first": rigid_first,
     }
     fab_names = [f.name for f in prob.of("ineq") if f.name.startswith("fabrication_")]
-    if fab_names and req.fabrication is not None:  # the fabrication family: its rows, how many are active, the smallest (mm)
-        report["fabrication"] = {"limits": req.fabrication.to_dict(), "rows": {k: int(len(gvals[k])) for k in fab_names},
-                                 "active": {k: active[k] for k in fab_names},
-                                 # smallest row: mm for lengths, a sine for the hinge angles
-                                 "min": {k: float(gvals[k].min()) * (prob.L0 if "angle" not in k else 1.0)
-                                         for k in fab_names}}
+    if (
+        fab_names and req.fabrication is not None
+    ):  # the fabrication family: its rows, how many are active, the smallest (mm)
+        report["fabrication"] = {
+            "limits": req.fabrication.to_dict(),
+            "rows": {k: int(len(gvals[k])) for k in fab_names},
+            "active": {k: active[k] for k in fab_names},
+            # smallest row: mm for lengths, a sine for the hinge angles
+            "min": {
+                k: float(gvals[k].min()) * (prob.L0 if "angle" not in k else 1.0) for k in fab_names
+            },
+        }
     return report
 
 
@@ -240,20 +276,44 @@ def _result(req: DesignRequest, prob: _Problem, X: np.ndarray, report: dict) -> 
     """The deployed pattern in mm, its lattice, options (``req``'s, not ``prob.req``'s) and report, closed grids."""
     L0 = prob.L0
     Xmm = X * L0
-    lat = {"kind": "quad", "rows": req.rows, "cols": req.cols, "angle_deg": 45.0,
-           "tile_size": float(_mean_edge(prob, X) * L0)}
-    options = {"rigid": req.rigid, "symmetry": req.symmetry, "holes": req.holes, "init": req.init,
-               "tol": req.tol, "reg_weight": req.reg_weight, **({"seed": req.seed} if req.seed is not None else {}),
-               **({"fabrication": dict(req.fabrication_intent)} if req.fabrication_intent else {}),
-               "contracted": {str(s): (v.name if isinstance(v, Target) else
-                                       ({"rectangle": True, "ratio": v[1]})) for s, v in req.contracted.items()}}
+    lat = {
+        "kind": "quad",
+        "rows": req.rows,
+        "cols": req.cols,
+        "angle_deg": 45.0,
+        "tile_size": float(_mean_edge(prob, X) * L0),
+    }
+    options = {
+        "rigid": req.rigid,
+        "symmetry": req.symmetry,
+        "holes": req.holes,
+        "init": req.init,
+        "tol": req.tol,
+        "reg_weight": req.reg_weight,
+        **({"seed": req.seed} if req.seed is not None else {}),
+        **({"fabrication": dict(req.fabrication_intent)} if req.fabrication_intent else {}),
+        "contracted": {
+            str(s): (v.name if isinstance(v, Target) else ({"rectangle": True, "ratio": v[1]}))
+            for s, v in req.contracted.items()
+        },
+    }
     design_meta = {"options": options, "report": report}
     if req.target is not None:
         design_meta["target"] = req.target.to_dict()
     if req.contracted:
         design_meta["contracted_targets"] = {str(s): v.to_dict() for s, v in prob.curves_mm.items()}
-    pattern = Pattern(nodes=Xmm[: prob.n], tiles=prob.std.tiles, name=req.name or "design", lattice=lat,
-                      design=design_meta)
-    grids = {s: Xmm[g.offset: g.offset + g.n_vertices] for s, g in prob.grids.items()}
-    return DesignResult(pattern=pattern, report=report, converged=report["status"] == "converged",
-                        closed_grids=grids, closed_targets=prob.curves_mm)
+    pattern = Pattern(
+        nodes=Xmm[: prob.n],
+        tiles=prob.std.tiles,
+        name=req.name or "design",
+        lattice=lat,
+        design=design_meta,
+    )
+    grids = {s: Xmm[g.offset : g.offset + g.n_vertices] for s, g in prob.grids.items()}
+    return DesignResult(
+        pattern=pattern,
+        report=report,
+        converged=report["status"] == "converged",
+        closed_grids=grids,
+        closed_targets=prob.curves_mm,
+    )

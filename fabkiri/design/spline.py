@@ -36,13 +36,18 @@ class PeriodicCubic:
         dp = np.roll(delta, 1, axis=0)
         # knot i: h_i s_{i-1} + 2 (h_{i-1} + h_i) s_i + h_{i-1} s_{i+1} = 3 (h_i δ_{i-1} + h_{i-1} δ_i)
         i = np.arange(K)
-        A = sparse.csc_matrix((np.concatenate([h, 2 * (hp + h), hp]),
-                               (np.tile(i, 3), np.concatenate([(i - 1) % K, i, (i + 1) % K]))), shape=(K, K))
+        A = sparse.csc_matrix(
+            (
+                np.concatenate([h, 2 * (hp + h), hp]),
+                (np.tile(i, 3), np.concatenate([(i - 1) % K, i, (i + 1) % K])),
+            ),
+            shape=(K, K),
+        )
         rhs = 3 * (h[:, None] * dp + hp[:, None] * delta)
         s = np.asarray(spsolve(A, rhs)).reshape(K, -1)
         s1 = np.roll(s, -1, axis=0)
         hh = h[:, None]
-        c = np.stack([(s + s1 - 2 * delta) / hh ** 2, (3 * delta - 2 * s - s1) / hh, s, y[:-1]])
+        c = np.stack([(s + s1 - 2 * delta) / hh**2, (3 * delta - 2 * s - s1) / hh, s, y[:-1]])
         return cls(c, x)
 
     def __call__(self, u, nu: int = 0) -> np.ndarray:
@@ -73,5 +78,8 @@ class PeriodicCubic:
         a, b, d = c[0, i], c[1, i], c[2, i]
         a3t = 3 * a * t
         shape = (*u.shape, c.shape[2])
-        return ((((a * t + b) * t + d) * t + c[3, i]).reshape(shape), ((a3t + 2 * b) * t + d).reshape(shape),
-                (2 * a3t + 2 * b).reshape(shape))
+        return (
+            (((a * t + b) * t + d) * t + c[3, i]).reshape(shape),
+            ((a3t + 2 * b) * t + d).reshape(shape),
+            (2 * a3t + 2 * b).reshape(shape),
+        )

@@ -74,7 +74,9 @@ def cross_term(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray):
     return g, np.stack([h, a, b], -1), np.stack([-(ga + gb), ga, gb], 1)
 
 
-def sqlen_value(x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+def sqlen_value(
+    x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray
+) -> np.ndarray:
     """½(|x_q - x_p|² - |x_v - x_u|²)."""
     E = x[q] - x[p]
     F = x[v] - x[u]
@@ -87,7 +89,6 @@ def sqlen_diff(x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np
     F = x[v] - x[u]
     r = 0.5 * ((E * E).sum(1) - (F * F).sum(1))
     return r, np.stack([p, q, u, v], -1), np.stack([-E, E, F, -F], 1)
-
 
 
 @dataclass
@@ -143,7 +144,9 @@ class Stencils:
         lat = pattern.lattice or {}
         rows, cols = int(lat.get("rows", 0)), int(lat.get("cols", 0))
         if rows * cols != pattern.n_tiles or pattern.parity != 0:
-            raise SolveError("inverse design needs a standard quad lattice pattern (rows x cols, parity 0)")
+            raise SolveError(
+                "inverse design needs a standard quad lattice pattern (rows x cols, parity 0)"
+            )
         top = pattern.topology
         T = top.n_tiles
         r, c = np.divmod(np.arange(T), cols)
@@ -160,10 +163,23 @@ class Stencils:
         tips = top.free_nodes
         tt, tk = use_t[tips], use_k[tips]
         side = TIP_SIDE[par[tt], tk]
-        return cls(rows=rows, cols=cols, tiles=tiles, n_nodes=top.n_nodes, hinge_node=top.hinge_node,
-                   hinge_tiles=top.hinge_tiles, hinge_corner=top.hinge_corner,
-                   folds={s: top.fold(s) for s in (1, 2)}, hole_nodes=top.hole_nodes, gap_face=top.gap_face,
-                   tip_nodes=tips, tip_side=side, tip_tile=tt, tip_corner=tk, phi={1: P, 2: Q})
+        return cls(
+            rows=rows,
+            cols=cols,
+            tiles=tiles,
+            n_nodes=top.n_nodes,
+            hinge_node=top.hinge_node,
+            hinge_tiles=top.hinge_tiles,
+            hinge_corner=top.hinge_corner,
+            folds={s: top.fold(s) for s in (1, 2)},
+            hole_nodes=top.hole_nodes,
+            gap_face=top.gap_face,
+            tip_nodes=tips,
+            tip_side=side,
+            tip_tile=tt,
+            tip_corner=tk,
+            phi={1: P, 2: Q},
+        )
 
     @property
     def n_hinges(self) -> int:
@@ -183,8 +199,15 @@ def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0)
         g, nodes, gr = cross_term(x, v, a, b)
         return g - margin, (nodes, gr)
 
-    return Family(name, "ineq", fn, 2, meta={"quads": quads}, nv=nv,
-                  res=lambda x: cross_value(x, v, a, b) - margin)
+    return Family(
+        name,
+        "ineq",
+        fn,
+        2,
+        meta={"quads": quads},
+        nv=nv,
+        res=lambda x: cross_value(x, v, a, b) - margin,
+    )
 
 
 def regularizer_pairs(st: Stencils) -> np.ndarray:

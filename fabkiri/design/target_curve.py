@@ -45,8 +45,14 @@ class Target:
     source: dict
 
     # written out (not the dataclass's) because ``corners`` may be given as None but is an array once made
-    def __init__(self, name: str, kind: str, points: np.ndarray, corners: np.ndarray | None = None,
-                 source: dict | None = None) -> None:
+    def __init__(
+        self,
+        name: str,
+        kind: str,
+        points: np.ndarray,
+        corners: np.ndarray | None = None,
+        source: dict | None = None,
+    ) -> None:
         self.name, self.kind, self.points = name, kind, points
         self.source = {} if source is None else source
         self._build(corners)
@@ -66,7 +72,9 @@ class Target:
             pts, seg = pts[keep], seg[keep]
         if len(pts) < 3:
             raise InputError(f"target {self.name!r}: needs at least 3 distinct points")
-        area = 0.5 * float(np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1]))
+        area = 0.5 * float(
+            np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
+        )
         if abs(area) < 1e-12 * seg.sum() ** 2:
             raise InputError(f"target {self.name!r}: the curve encloses no area")
         if area < 0:
@@ -86,7 +94,9 @@ class Target:
         _check_simple(dense, self.name)
         self._dense = dense
         self._bbox = (dense.min(0), dense.max(0))  # the curve is fixed after construction
-        c = np.mod(np.asarray(self._default_corners() if corners is None else corners, dtype=float), 1.0)
+        c = np.mod(
+            np.asarray(self._default_corners() if corners is None else corners, dtype=float), 1.0
+        )
         if c.shape != (4,):
             raise InputError(f"target {self.name!r}: needs exactly 4 corner parameters")
         # rotate so the sequence BL, BR, TR, TL is increasing from BL
@@ -94,8 +104,14 @@ class Target:
         if not (np.diff(c) > 0).all():
             raise InputError(f"target {self.name!r}: corners BL, BR, TR, TL must be in CCW order")
         self.corners = c
-        self._arc_trees: tuple | None = None  # (corners, arc tree, arc params, lift, curve tree), on first use
-        self._frame = (self, 1.0, np.zeros(2))  # (owner, a, b): this curve is a · owner + b, owner has the trees
+        self._arc_trees: tuple | None = (
+            None  # (corners, arc tree, arc params, lift, curve tree), on first use
+        )
+        self._frame = (
+            self,
+            1.0,
+            np.zeros(2),
+        )  # (owner, a, b): this curve is a · owner + b, owner has the trees
 
     # ----------------------------------------------------------- evaluation
     def _sample_params(self, per_interval: int = 8) -> np.ndarray:
@@ -176,16 +192,27 @@ class Target:
         new._dense = self._dense * scale + shift
         new._bbox = (self._bbox[0] * scale + shift, self._bbox[1] * scale + shift)
         owner, a, b = self._frame
-        new._frame = (owner, a * scale, b * scale + shift)  # a similarity keeps nearest samples: share the trees
-        new._arc_trees = None  # used only if the copy's corners are changed and it builds trees of its own
+        new._frame = (
+            owner,
+            a * scale,
+            b * scale + shift,
+        )  # a similarity keeps nearest samples: share the trees
+        new._arc_trees = (
+            None  # used only if the copy's corners are changed and it builds trees of its own
+        )
         return new
 
     def scaled_to(self, size: float) -> Target:
         """Scaled about its bounding-box centre to ``size`` (larger dimension) and centred on the origin."""
         lo, hi = self.bbox
         s = size / float((hi - lo).max())
-        return Target(self.name, self.kind, (self.points - 0.5 * (lo + hi)) * s,
-                      corners=self.corners.copy(), source=dict(self.source))
+        return Target(
+            self.name,
+            self.kind,
+            (self.points - 0.5 * (lo + hi)) * s,
+            corners=self.corners.copy(),
+            source=dict(self.source),
+        )
 
     def mirror_error(self, axis: str) -> float:
         """How far the curve is from symmetric about the x or y axis (relative to its size)."""
@@ -209,7 +236,9 @@ class Target:
         """
         owner, a, b = self._frame
         if owner._arc_trees is None or not np.array_equal(owner._arc_trees[0], self.corners):
-            if not np.array_equal(owner.corners, self.corners):  # corners reassigned on a copy: own trees
+            if not np.array_equal(
+                owner.corners, self.corners
+            ):  # corners reassigned on a copy: own trees
                 self._frame = owner, a, b = self, 1.0, np.zeros(2)
             lift = 4.0 * max(owner.size, 1e-300)
             pts, params = [], []
@@ -222,8 +251,14 @@ class Target:
                 us = np.concatenate([uu[uu <= hi], [lo, hi]])
                 pts.append(np.column_stack([owner.point(us), np.full(len(us), s * lift)]))
                 params.append(us)
-            owner._arc_trees = (owner.corners.copy(), KDTree(np.vstack(pts)), np.concatenate(params), lift,
-                                KDTree(owner.point(seeds)), seeds)
+            owner._arc_trees = (
+                owner.corners.copy(),
+                KDTree(np.vstack(pts)),
+                np.concatenate(params),
+                lift,
+                KDTree(owner.point(seeds)),
+                seeds,
+            )
         _, tree, us, lift, whole, whole_u = owner._arc_trees
         return tree, us, lift, whole, whole_u, a, b
 
@@ -252,7 +287,9 @@ class Target:
             um = np.mod(u, 1.0)
             i = np.searchsorted(self._u, um)
             at_vertex = np.isclose(self._u[np.clip(i, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13)
-            at_vertex |= np.isclose(self._u[np.clip(i - 1, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13)
+            at_vertex |= np.isclose(
+                self._u[np.clip(i - 1, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13
+            )
             t = self.tangent(u)
             t_before = self.tangent(u - 1e-9)
             mean = t + t_before
@@ -328,9 +365,15 @@ class Target:
         return np.array(out)
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "kind": self.kind, "points": self.points.tolist(),
-                "corners": self.corners.tolist(), "source": self.source,
-                "size_mm": self.size, "area_mm2": self.area}
+        return {
+            "name": self.name,
+            "kind": self.kind,
+            "points": self.points.tolist(),
+            "corners": self.corners.tolist(),
+            "source": self.source,
+            "size_mm": self.size,
+            "area_mm2": self.area,
+        }
 
 
 class Projector:
@@ -391,4 +434,3 @@ def _check_simple(dense: np.ndarray, name: str) -> None:
     ring = shapely.LinearRing(dense)
     if not ring.is_simple:
         raise InputError(f"target {name!r}: the curve intersects itself")
-

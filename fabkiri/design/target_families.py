@@ -9,7 +9,9 @@ from .stencils import Family
 from .target_curve import Target
 
 
-def shape_match(nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, name: str = "shape") -> Family:
+def shape_match(
+    nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, name: str = "shape"
+) -> Family:
     """Signed distance of boundary tips to their arc of the target (normalised units)."""
 
     project = target.projector(sides)
@@ -18,7 +20,9 @@ def shape_match(nodes: np.ndarray, sides: np.ndarray, target: Target, nv: int, n
         _, _, d, g = project(x[nodes])
         return d, (nodes[:, None], g[:, None, :])
 
-    return Family(name, "fit", fn, 1, meta={"nodes": nodes, "sides": sides, "target": target}, nv=nv)
+    return Family(
+        name, "fit", fn, 1, meta={"nodes": nodes, "sides": sides, "target": target}, nv=nv
+    )
 
 
 # weights of the outline rows against the tip rows (weight 1): every chord midpoint, and target samples
@@ -28,8 +32,13 @@ OUTLINE_SAMPLES = 4
 SAMPLE_WEIGHT = 1.0
 
 
-def outline_match(order: np.ndarray, target: Target, nv: int, name: str = "shape_outline",
-                  samples: int = OUTLINE_SAMPLES) -> Family:
+def outline_match(
+    order: np.ndarray,
+    target: Target,
+    nv: int,
+    name: str = "shape_outline",
+    samples: int = OUTLINE_SAMPLES,
+) -> Family:
     """The whole tip polygon against the target, not just its vertices (``shape_match``): soft rows.
 
     * the midpoint of every chord between consecutive tips (``order``: tips in boundary order), signed
@@ -67,7 +76,9 @@ def outline_match(order: np.ndarray, target: Target, nv: int, name: str = "shape
         gb = -g * tj[:, None]
         r = np.concatenate([CHORD_WEIGHT * dm, ws * side * dj])
         nodes = np.concatenate([np.stack([a_idx, b_idx], -1), np.stack([a_idx[j], b_idx[j]], -1)])
-        grads = np.concatenate([CHORD_WEIGHT * 0.5 * np.stack([gm, gm], 1), ws * np.stack([ga, gb], 1)])
+        grads = np.concatenate(
+            [CHORD_WEIGHT * 0.5 * np.stack([gm, gm], 1), ws * np.stack([ga, gb], 1)]
+        )
         return r, (nodes, grads)
 
     return Family(name, "fit", fn, 1, meta={"nodes": order, "target": target, "soft": True}, nv=nv)
@@ -100,7 +111,9 @@ def nearest_chords(pts: np.ndarray, A: np.ndarray, B: np.ndarray):
     half = 0.5 * float(np.sqrt(dot2(B - A, B - A)).max(initial=0.0))
     dk, cand = KDTree(mid).query(pts, k=k + 1 if k < E else k)
     bound = dk[:, k] - half if k < E else np.full(len(pts), np.inf)
-    cand = np.sort(cand[:, :k], axis=1)  # argmin keeps the first minimum: the lowest index, as a full table
+    cand = np.sort(
+        cand[:, :k], axis=1
+    )  # argmin keeps the first minimum: the lowest index, as a full table
     t, foot, dist = _chord_feet(pts[:, None, :], A[cand], B[cand])
     best = np.argmin(dist, axis=1)
     rows = np.arange(len(pts))

@@ -20,11 +20,17 @@ def from_spec(spec: dict, name: str = "target") -> Target:
     Optional ``"corners"``: four split parameters in [0, 1) or four points [x, y]."""
     if not isinstance(spec, dict):
         raise InputError(f"{name}: a target description must be a JSON object")
-    args = {k: v for k, v in spec.items() if k not in ("shape", "name", "corners", "description", "size")}
+    args = {
+        k: v
+        for k, v in spec.items()
+        if k not in ("shape", "name", "corners", "description", "size")
+    }
     if "shape" in spec:
         shape = spec["shape"]
         if shape not in SHAPES:
-            raise InputError(f"{name}: unknown shape {shape!r} (known: {', '.join(sorted(SHAPES))})")
+            raise InputError(
+                f"{name}: unknown shape {shape!r} (known: {', '.join(sorted(SHAPES))})"
+            )
         try:
             tgt = SHAPES[shape](**args)
         except TypeError as exc:
@@ -48,7 +54,9 @@ def _with_corners(tgt: Target, corners, name: str) -> Target:
         u, _, _, _ = tgt.project(c)
         c = u
     elif c.shape != (4,):
-        raise InputError(f"{name}: 'corners' must be 4 parameters or 4 points [x, y] (BL, BR, TR, TL)")
+        raise InputError(
+            f"{name}: 'corners' must be 4 parameters or 4 points [x, y] (BL, BR, TR, TL)"
+        )
     return Target(tgt.name, tgt.kind, tgt.points, corners=c, source=tgt.source)
 
 
@@ -64,7 +72,9 @@ def from_points(points, curve: str = "polyline", name: str = "points") -> Target
     return Target(name, curve, pts)
 
 
-def from_svg_path(d: str, name: str = "svg", curve: str = "polyline", samples: int = 1024) -> Target:
+def from_svg_path(
+    d: str, name: str = "svg", curve: str = "polyline", samples: int = 1024
+) -> Target:
     """A target from an SVG path ``d`` string (first closed subpath), sampled densely."""
     try:
         from svgpathtools import parse_path

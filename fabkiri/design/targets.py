@@ -19,9 +19,30 @@ from .target_curve import ARC_PAD, SIDES, Projector, Target
 from .target_files import from_points, from_spec, from_svg_path, read_points_file, read_svg
 from .target_shapes import SHAPES, circle, ellipse, heart, polygon, rectangle, star, superellipse
 
-__all__ = ["ARC_PAD", "DEFAULT_SIZE", "SHAPES", "SIDES", "TEMPLATE_DIR", "Projector", "Target", "circle",
-           "ellipse", "from_points", "from_spec", "from_svg_path", "heart", "load_target", "named_targets",
-           "polygon", "read_points_file", "read_svg", "rectangle", "star", "superellipse", "target_from_dict"]
+__all__ = [
+    "ARC_PAD",
+    "DEFAULT_SIZE",
+    "SHAPES",
+    "SIDES",
+    "TEMPLATE_DIR",
+    "Projector",
+    "Target",
+    "circle",
+    "ellipse",
+    "from_points",
+    "from_spec",
+    "from_svg_path",
+    "heart",
+    "load_target",
+    "named_targets",
+    "polygon",
+    "read_points_file",
+    "read_svg",
+    "rectangle",
+    "star",
+    "superellipse",
+    "target_from_dict",
+]
 
 TEMPLATE_DIR = template_dir("targets")
 DEFAULT_SIZE = 100.0  # mm, larger bounding-box dimension of a named target
@@ -46,14 +67,18 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
     if p.suffix.lower() in (".csv", ".txt", ".json", ".svg") or p.exists():
         if not p.exists():
             raise InputError(f"target file {p} does not exist")
-        tgt = read_svg(p, curve or "polyline") if p.suffix.lower() == ".svg" else read_points_file(p)
+        tgt = (
+            read_svg(p, curve or "polyline") if p.suffix.lower() == ".svg" else read_points_file(p)
+        )
         if curve and curve != tgt.kind:
             tgt = Target(tgt.name, curve, tgt.points, source=tgt.source)
         if size:
             return tgt.scaled_to(size)
         lo, hi = tgt.bbox
         return tgt.transformed(shift=-0.5 * (lo + hi))
-    raise InputError(f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)")
+    raise InputError(
+        f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)"
+    )
 
 
 def target_from_dict(d: dict, name: str = "target") -> Target:
@@ -67,5 +92,10 @@ def target_from_dict(d: dict, name: str = "target") -> Target:
         c = None if corners is None else np.asarray(corners, dtype=float)
     except (TypeError, ValueError):
         raise InputError(f"{name}: stored target points must be numbers") from None
-    return Target(str(d.get("name", name)), kind if kind in ("spline", "polyline") else "polyline", pts,
-                  corners=c, source=dict(d.get("source") or {}))
+    return Target(
+        str(d.get("name", name)),
+        kind if kind in ("spline", "polyline") else "polyline",
+        pts,
+        corners=c,
+        source=dict(d.get("source") or {}),
+    )

@@ -46,10 +46,21 @@ def free_seam_rows(seam: Seam, st: C.Stencils, x: np.ndarray) -> sparse.csr_matr
     i = np.repeat(np.arange(2 * m), 6)
     d = np.tile(np.arange(2), m)
     p = np.repeat(pairs, 2, axis=0)
-    cols = np.stack([2 * p[:, 1] + d, 2 * p[:, 0], 2 * p[:, 0] + 1, np.full(2 * m, n2),
-                     np.full(2 * m, n2 + 1) + d, np.full(2 * m, n2 + 1) + (1 - d)], -1).ravel()
+    cols = np.stack(
+        [
+            2 * p[:, 1] + d,
+            2 * p[:, 0],
+            2 * p[:, 0] + 1,
+            np.full(2 * m, n2),
+            np.full(2 * m, n2 + 1) + d,
+            np.full(2 * m, n2 + 1) + (1 - d),
+        ],
+        -1,
+    ).ravel()
     dbeta = (a @ dR.T).ravel()
-    vals = np.stack([np.ones(2 * m), -R[d, 0], -R[d, 1], -dbeta, -np.ones(2 * m), np.zeros(2 * m)], -1).ravel()
+    vals = np.stack(
+        [np.ones(2 * m), -R[d, 0], -R[d, 1], -dbeta, -np.ones(2 * m), np.zeros(2 * m)], -1
+    ).ravel()
     return sparse.csr_matrix((vals, (i, cols)), shape=(2 * m, n2 + 3))
 
 
@@ -65,15 +76,23 @@ def _rank(J: sparse.spmatrix) -> tuple[int, float]:
     return r, gap
 
 
-def tube_jacobian(st: C.Stencils, seam: Seam, x: np.ndarray, closed: tuple[int, ...] = (1, 2),
-                  rigid: bool = False) -> sparse.csr_matrix:
+def tube_jacobian(
+    st: C.Stencils, seam: Seam, x: np.ndarray, closed: tuple[int, ...] = (1, 2), rigid: bool = False
+) -> sparse.csr_matrix:
     """Jacobian over ``(x, β, τ)`` of reconfigurability, the free deployed seam, translation seams in the
     ``closed`` states and, if ``rigid``, the hinge sums. Column ``x.size`` is the deployed seam's turn β."""
     nv = st.n_nodes
-    fams = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.rings(st, 1, nv), C.rings(st, 2, nv)]
+    fams = [
+        C.edge_pairs(st, 1, nv),
+        C.edge_pairs(st, 2, nv),
+        C.rings(st, 1, nv),
+        C.rings(st, 2, nv),
+    ]
     fams += [P.closed_seam(seam, st, s, nv) for s in closed]
     fams += [C.hinge_sums(st, nv)] if rigid else []
-    return sparse.vstack([_pad(sparse.vstack([f(x)[1] for f in fams]), 3), free_seam_rows(seam, st, x)]).tocsr()
+    return sparse.vstack(
+        [_pad(sparse.vstack([f(x)[1] for f in fams]), 3), free_seam_rows(seam, st, x)]
+    ).tocsr()
 
 
 def family_dimensions(st: C.Stencils, seam: Seam, x: np.ndarray) -> dict:
@@ -86,19 +105,33 @@ def family_dimensions(st: C.Stencils, seam: Seam, x: np.ndarray) -> dict:
     out = {}
     for rigid in (False, True):
         tag = "_rigid" if rigid else ""
-        planar = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.rings(st, 1, nv), C.rings(st, 2, nv)]
+        planar = [
+            C.edge_pairs(st, 1, nv),
+            C.edge_pairs(st, 2, nv),
+            C.rings(st, 1, nv),
+            C.rings(st, 2, nv),
+        ]
         planar += [C.hinge_sums(st, nv)] if rigid else []
-        Js = {"planar": sparse.vstack([f(x)[1] for f in planar]),
-              "tube_closed1": tube_jacobian(st, seam, x, (1,), rigid),
-              "tube": tube_jacobian(st, seam, x, (1, 2), rigid)}
+        Js = {
+            "planar": sparse.vstack([f(x)[1] for f in planar]),
+            "tube_closed1": tube_jacobian(st, seam, x, (1,), rigid),
+            "tube": tube_jacobian(st, seam, x, (1, 2), rigid),
+        }
         for name, J in Js.items():
             r, gap = _rank(J)
-            out[name + tag] = {"unknowns": J.shape[1], "equations": J.shape[0], "rank": r,
-                               "dimension": J.shape[1] - r, "gap": gap}
+            out[name + tag] = {
+                "unknowns": J.shape[1],
+                "equations": J.shape[0],
+                "rank": r,
+                "dimension": J.shape[1] - r,
+                "gap": gap,
+            }
     return out
 
 
-def _free_residual(fams: list, seam: Seam, st: C.Stencils, x: np.ndarray) -> tuple[np.ndarray, float]:
+def _free_residual(
+    fams: list, seam: Seam, st: C.Stencils, x: np.ndarray
+) -> tuple[np.ndarray, float]:
     """Equality residuals with the deployed seam map fitted (Kabsch) to the sheet, and its turn β."""
     m = seam_map(x[st.tiles], seam)
     pairs = seam.node_pairs(st.tiles)
@@ -115,13 +148,31 @@ def project_free(st: C.Stencils, seam: Seam, x: np.ndarray, tol: float = 1e-12, 
     both closed states can be. Returns ``(x, max |r|, deployed seam turn β in rad, steps)``.
     """
     nv = st.n_nodes
-    fams = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv), C.rings(st, 1, nv), C.rings(st, 2, nv),
-            P.closed_seam(seam, st, 1, nv), P.closed_seam(seam, st, 2, nv)]
-    def step(y, state):  # the minimum-norm step in the nodes (the seam map's last 3 unknowns are refitted)
+    fams = [
+        C.edge_pairs(st, 1, nv),
+        C.edge_pairs(st, 2, nv),
+        C.rings(st, 1, nv),
+        C.rings(st, 2, nv),
+        P.closed_seam(seam, st, 1, nv),
+        P.closed_seam(seam, st, 2, nv),
+    ]
+
+    def step(
+        y, state
+    ):  # the minimum-norm step in the nodes (the seam map's last 3 unknowns are refitted)
         J = tube_jacobian(st, seam, y)
-        return lsqr(J, -state[0], atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0][:-3].reshape(-1, 2)
+        return lsqr(J, -state[0], atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0][:-3].reshape(
+            -1, 2
+        )
 
     # halved up to 14 times until the residual norm drops (β, τ are refitted to the new sheet)
-    x, (r, beta), steps = halving_gauss_newton(x, _free_residual(fams, seam, st, x), step,
-                                               lambda y: _free_residual(fams, seam, st, y), tol, max_iter, 14)
+    x, (r, beta), steps = halving_gauss_newton(
+        x,
+        _free_residual(fams, seam, st, x),
+        step,
+        lambda y: _free_residual(fams, seam, st, y),
+        tol,
+        max_iter,
+        14,
+    )
     return x, float(np.abs(r).max()), float(beta), steps

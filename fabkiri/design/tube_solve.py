@@ -32,10 +32,14 @@ from . import periodic as P
 from .lm import halving_gauss_newton
 from .objective import regularizer
 
-EQ_WEIGHT = 30.0  # equalities against the fit in the first stage (the second stage makes them exact)
+EQ_WEIGHT = (
+    30.0  # equalities against the fit in the first stage (the second stage makes them exact)
+)
 GAP_MARGIN = 0.005  # as the planar solver: gap angles and tile corners kept off 0 and π
 CONVEX_MARGIN = 0.02
-CONE_STEP_RAD = 0.02  # continuation from the cylinder: the sector angle grows by at most this a step
+CONE_STEP_RAD = (
+    0.02  # continuation from the cylinder: the sector angle grows by at most this a step
+)
 
 
 @dataclass
@@ -59,14 +63,18 @@ class TubeRequest:
         if self.closed not in ("cylinder", "cone"):
             raise InputError(f"--closed must be cylinder or cone, got {self.closed!r}")
         if self.closed == "cone" and self.target.kind != "cone":
-            raise InputError("--closed cone needs a cone target (--tube cone:R_BOTTOM,R_TOP,LENGTH)")
+            raise InputError(
+                "--closed cone needs a cone target (--tube cone:R_BOTTOM,R_TOP,LENGTH)"
+            )
         if not (np.isfinite(self.tol) and 0 < self.tol < 1e-2):
             raise InputError(f"--tol must lie in (0, 1e-2), got {self.tol}")
 
 
 @dataclass
 class TubeResult:
-    pattern: Pattern  # the deployed sheet in mm, seam recorded (no closed states: the caller contracts)
+    pattern: (
+        Pattern  # the deployed sheet in mm, seam recorded (no closed states: the caller contracts)
+    )
     converged: bool
     report: dict = field(default_factory=dict)
 
@@ -79,8 +87,12 @@ class _TubeProblem:
         self.std = standard_pattern(req.rows, req.cols + 1, tile_size=1.0)
         self.st = st = C.Stencils.from_pattern(self.std)
         cone_closed = req.closed == "cone"
-        self.seam = lattice_seam(req.rows, req.cols, req.target.kind,
-                                 req.closed if req.target.kind == "cone" else "cylinder")
+        self.seam = lattice_seam(
+            req.rows,
+            req.cols,
+            req.target.kind,
+            req.closed if req.target.kind == "cone" else "cylinder",
+        )
         self.geo = geo = P.unit_geometry(req.target, req.cols * np.sqrt(2.0))
         nv = st.n_nodes
         fam = [C.edge_pairs(st, 1, nv), C.edge_pairs(st, 2, nv)]
@@ -131,11 +143,14 @@ class _TubeProblem:
 def _project(prob: _TubeProblem, x: np.ndarray, tol: float, max_iter: int = 30):
     """Gauss-Newton minimum-norm steps onto the equalities, halved until the residual norm drops;
     returns (x, max |r|, steps). It stops where no halving helps (the figures then say so)."""
+
     def step(y, state):
         r, J = state
         return lsqr(J, -r, atol=1e-15, btol=1e-15, iter_lim=20 * J.shape[1])[0].reshape(-1, 2)
 
-    x, (r, _), steps = halving_gauss_newton(x, prob.eq_residual(x), step, prob.eq_residual, tol, max_iter, 12)
+    x, (r, _), steps = halving_gauss_newton(
+        x, prob.eq_residual(x), step, prob.eq_residual, tol, max_iter, 12
+    )
     return x, float(np.abs(r).max()), steps
 
 
@@ -147,20 +162,35 @@ def homotopy(target: P.TubeTarget) -> list[P.TubeTarget]:
     n = int(np.ceil(target.sector()[2] / CONE_STEP_RAD))
     mid, half = 0.5 * (target.r_bottom + target.r_top), 0.5 * (target.r_bottom - target.r_top)
     cylinder = replace(target, kind="cylinder", r_bottom=mid, r_top=mid)
-    return [cylinder] + [replace(target, r_bottom=mid + lam * half, r_top=mid - lam * half)
-                         for lam in np.linspace(1.0 / n, 1.0, n)]
+    return [cylinder] + [
+        replace(target, r_bottom=mid + lam * half, r_top=mid - lam * half)
+        for lam in np.linspace(1.0 / n, 1.0, n)
+    ]
 
 
 def _stage(prob: _TubeProblem, req: TubeRequest) -> tuple[np.ndarray, dict]:
     """Both stages from ``prob.X0``: the penalised least squares, then the projection."""
-    sol = least_squares(lambda f: prob.stacked(f)[0], prob.X0.ravel(), jac=lambda f: prob.stacked(f)[1],
-                        method="trf", tr_solver="lsmr", x_scale=1.0, ftol=1e-12, xtol=1e-12, gtol=1e-12,
-                        max_nfev=req.max_iter)
+    sol = least_squares(
+        lambda f: prob.stacked(f)[0],
+        prob.X0.ravel(),
+        jac=lambda f: prob.stacked(f)[1],
+        method="trf",
+        tr_solver="lsmr",
+        x_scale=1.0,
+        ftol=1e-12,
+        xtol=1e-12,
+        gtol=1e-12,
+        max_nfev=req.max_iter,
+    )
     x1 = sol.x.reshape(-1, 2)
     stage1 = float(np.abs(prob.eq_residual(x1)[0]).max())
     x, eq_max, steps = _project(prob, x1, req.tol)
-    return x, {"equality_max": eq_max, "stage1_equality_max": stage1, "stage1_evaluations": int(sol.nfev),
-               "projection_steps": steps}
+    return x, {
+        "equality_max": eq_max,
+        "stage1_equality_max": stage1,
+        "stage1_evaluations": int(sol.nfev),
+        "projection_steps": steps,
+    }
 
 
 def design_tube(req: TubeRequest) -> TubeResult:
@@ -172,7 +202,9 @@ def design_tube(req: TubeRequest) -> TubeResult:
         prob = _TubeProblem(replace(req, target=tgt), start=x)
         x, figures = _stage(prob, req)
         steps.append(figures)
-        if figures["equality_max"] > req.tol:  # a continuation step that did not converge ends the run
+        if (
+            figures["equality_max"] > req.tol
+        ):  # a continuation step that did not converge ends the run
             break
     assert x is not None, "the homotopy ends on the target itself, so it has a step"
     eq_max = steps[-1]["equality_max"]
@@ -181,16 +213,31 @@ def design_tube(req: TubeRequest) -> TubeResult:
     converged = bool(eq_max <= req.tol and len(steps) == len(homotopy(req.target)))
     geo = prob.geo
     report = {
-        "status": "converged" if converged else "not converged", **steps[-1], "tol": req.tol,
-        "continuation_steps": len(steps), "families": fams,
-        "fit_max_mm": float(np.abs(fit).max()), "fit_rms_mm": float(np.sqrt(np.mean(fit ** 2))),
-        "ineq_min": {f.name: float(f(x)[0].min()) for f, _ in prob.ineq}, "scale_mm_per_unit": geo.scale,
-        "target": req.target.to_dict(), "rigid": req.rigid or req.closed == "cone", "closed": req.closed,
-        "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
+        "status": "converged" if converged else "not converged",
+        **steps[-1],
+        "tol": req.tol,
+        "continuation_steps": len(steps),
+        "families": fams,
+        "fit_max_mm": float(np.abs(fit).max()),
+        "fit_rms_mm": float(np.sqrt(np.mean(fit**2))),
+        "ineq_min": {f.name: float(f(x)[0].min()) for f, _ in prob.ineq},
+        "scale_mm_per_unit": geo.scale,
+        "target": req.target.to_dict(),
+        "rigid": req.rigid or req.closed == "cone",
+        "closed": req.closed,
+        "wall_s": time.perf_counter() - t0,
+        "cpu_s": time.process_time() - c0,
     }
-    sheet = Pattern(nodes=x * geo.scale, tiles=prob.std.tiles,
-                    name=req.name or f"tube {req.rows}x{req.cols} {req.target.kind}",
-                    lattice={**(prob.std.lattice or {}), "tile_size": geo.scale},
-                    design={"kind": "tube", "tube_target": req.target.to_dict(), "rigid": report["rigid"],
-                            "report": report})
+    sheet = Pattern(
+        nodes=x * geo.scale,
+        tiles=prob.std.tiles,
+        name=req.name or f"tube {req.rows}x{req.cols} {req.target.kind}",
+        lattice={**(prob.std.lattice or {}), "tile_size": geo.scale},
+        design={
+            "kind": "tube",
+            "tube_target": req.target.to_dict(),
+            "rigid": report["rigid"],
+            "report": report,
+        },
+    )
     return TubeResult(pattern=with_seam(sheet, prob.seam), converged=converged, report=report)

@@ -37,8 +37,12 @@ def convex_member(fam: RigidFamily, quads: np.ndarray, grid: np.ndarray) -> tupl
     S = fam.seeds_for_grid(grid)
     g0 = conv.residual(Z @ S)
     folded = int(_folded(Z @ S, quads).sum())
-    info = {"corners_below_margin": int((g0 < eps).sum()), "folded_cells": folded, "move_rel": 0.0,
-            "ok": not folded}
+    info = {
+        "corners_below_margin": int((g0 < eps).sum()),
+        "folded_cells": folded,
+        "move_rel": 0.0,
+        "ok": not folded,
+    }
     if not folded:
         # a start without folds is left as it is: thin or reflex corners are the solver's to fix, and
         # repairing them too moved the rigid 32x32 heart into a basin with 7 overlapping pairs in state 2

@@ -58,11 +58,15 @@ class CutOptions:
     ligament_width: float | None = None
     turn_deg: float = 180.0
     force: bool = False
-    exact: bool = False  # pattern checked at the relative tier for solver output instead of the material's mm
+    exact: bool = (
+        False  # pattern checked at the relative tier for solver output instead of the material's mm
+    )
     stem: str = "pattern"
     pattern_file: str = ""
     notes: bool = True  # the NOTES layer: sheet frame, caption, reference-square size (never cut)
-    stroke_mm: float = STROKE_MM  # SVG stroke width: what a viewer draws; the colour says cut/score/engrave
+    stroke_mm: float = (
+        STROKE_MM  # SVG stroke width: what a viewer draws; the colour says cut/score/engrave
+    )
 
 
 @dataclass
@@ -153,8 +157,10 @@ def _check_tiles(corners: np.ndarray, state: int) -> np.ndarray:
     polys = shapely.polygons(corners)
     bad = np.flatnonzero(~shapely.is_valid(polys))
     if len(bad):
-        raise FabricationError(f"tile {int(bad[0])} is self-intersecting (a bow-tie) in closed state {state}; "
-                               "it cannot be cut")
+        raise FabricationError(
+            f"tile {int(bad[0])} is self-intersecting (a bow-tie) in closed state {state}; "
+            "it cannot be cut"
+        )
     cw = np.flatnonzero(shapely.is_ccw(shapely.get_exterior_ring(polys)) == False)  # noqa: E712
     if len(cw):
         raise FabricationError(f"tile {int(cw[0])} is mirrored (clockwise) in closed state {state}")
@@ -166,11 +172,15 @@ def _scale(raw: np.ndarray, options: CutOptions, kind: str) -> float:
     """mm in the file per mm of the pattern: given, from ``--width``, or the smallest
     the material accepts (``auto``)."""
     mat = options.material
-    if options.scale == "auto" or options.width == "auto":  # the smallest size the checks below accept
+    if (
+        options.scale == "auto" or options.width == "auto"
+    ):  # the smallest size the checks below accept
         need = fb.cut_minimum(raw, mat, kind)
         if need.scale is None:
-            raise CheckFailed(f"--{'scale' if options.scale == 'auto' else 'width'} auto: {mat.name} with "
-                              f"{kind} hinges: {need.advice()}")
+            raise CheckFailed(
+                f"--{'scale' if options.scale == 'auto' else 'width'} auto: {mat.name} with "
+                f"{kind} hinges: {need.advice()}"
+            )
         return need.scale
     if options.width is not None:
         width = float(options.width)  # "auto" was taken above
@@ -188,12 +198,19 @@ def _scale(raw: np.ndarray, options: CutOptions, kind: str) -> float:
 _PLACERS = {
     "in-place": lambda corners, parts, spacing, sheet, margin: lay.in_place(corners, sheet, margin),
     "exploded": lay.exploded,
-    "nested": lambda corners, parts, spacing, sheet, margin: lay.nested(parts, spacing, sheet, margin),
+    "nested": lambda corners, parts, spacing, sheet, margin: lay.nested(
+        parts, spacing, sheet, margin
+    ),
 }
 
 
-def _reference(place: lay.Placement, parts: np.ndarray, options: CutOptions, sheet_wh: tuple[float, float],
-               spacing: float) -> tuple[int, tuple[int, np.ndarray] | None]:
+def _reference(
+    place: lay.Placement,
+    parts: np.ndarray,
+    options: CutOptions,
+    sheet_wh: tuple[float, float],
+    spacing: float,
+) -> tuple[int, tuple[int, np.ndarray] | None]:
     """The sheet count and where the uncompensated reference square goes (beside
     the parts' bounding boxes), or ``None`` without one."""
     tidx = np.arange(len(parts))
@@ -202,12 +219,24 @@ def _reference(place: lay.Placement, parts: np.ndarray, options: CutOptions, she
     part_bounds = shapely.bounds(parts)
     for s in range(n_sheets):
         sel = place.sheet == s
-        pts = place.apply(tidx[sel], np.stack([part_bounds[sel, :2], part_bounds[sel, 2:],
-                                               part_bounds[sel][:, [0, 3]], part_bounds[sel][:, [2, 1]]], 1))
+        pts = place.apply(
+            tidx[sel],
+            np.stack(
+                [
+                    part_bounds[sel, :2],
+                    part_bounds[sel, 2:],
+                    part_bounds[sel][:, [0, 3]],
+                    part_bounds[sel][:, [2, 1]],
+                ],
+                1,
+            ),
+        )
         boxes.append(np.concatenate([pts.reshape(-1, 2).min(0), pts.reshape(-1, 2).max(0)]))
     if not options.reference_mm > 0:
         return n_sheets, None
-    rs, ll = lay.place_reference(boxes, options.reference_mm, sheet_wh, options.margin, max(5.0, spacing))
+    rs, ll = lay.place_reference(
+        boxes, options.reference_mm, sheet_wh, options.margin, max(5.0, spacing)
+    )
     r = options.reference_mm
     return max(n_sheets, rs + 1), (rs, snap(ll + np.array([[0, 0], [r, 0], [r, r], [0, r]])))
 
@@ -233,23 +262,39 @@ def _labels(job: CutJob) -> None:
     """Tile IDs, corner labels and tape marks (ENGRAVE), counting what did not fit."""
     top = job.pattern.topology
     omitted, job.label_heights, job.corner_heights = engrave_labels(
-        job.sheets, job.Q, job.place.sheet, top.hinge_tiles, top.hinge_corner, job.faces.letters(), job.kind,
-        job.label_h, job.cutting.label_margin)
+        job.sheets,
+        job.Q,
+        job.place.sheet,
+        top.hinge_tiles,
+        top.hinge_corner,
+        job.faces.letters(),
+        job.kind,
+        job.label_h,
+        job.cutting.label_margin,
+    )
     if omitted:
-        job.warnings.append(f"{omitted} label(s) left out: no room for {MIN_LABEL_MM:g} mm text inside the tile")
+        job.warnings.append(
+            f"{omitted} label(s) left out: no room for {MIN_LABEL_MM:g} mm text inside the tile"
+        )
 
 
 def sheet_names(job: CutJob) -> list[str]:
     """File stem of each sheet (``stem-sheetN`` when there are several)."""
     multi = len(job.sheets) > 1
-    return [f"{job.options.stem}-sheet{sd.index}" if multi else job.options.stem for sd in job.sheets]
+    return [
+        f"{job.options.stem}-sheet{sd.index}" if multi else job.options.stem for sd in job.sheets
+    ]
 
 
 def _files(job: CutJob) -> dict[str, bytes]:
     """Every file the options ask for: the per-sheet formats sheet by sheet (DXF and SVG), then those
     of the whole cut (the PNG preview), in the registry's order (:mod:`.sheetformats`)."""
     opts = job.options
-    asked = [f for f in map(sheet_format, sheet_format_names()) if f is not None and f.name in opts.formats]
+    asked = [
+        f
+        for f in map(sheet_format, sheet_format_names())
+        if f is not None and f.name in opts.formats
+    ]
     files: dict[str, bytes] = {}
     for sd, name in zip(job.sheets, sheet_names(job)):
         for f in asked:
@@ -270,16 +315,25 @@ def _cut_job(pattern: Pattern, options: CutOptions) -> CutJob:
     raw = states[state]
     scale = _scale(raw, options, kind.name)
     # the verifier must find both closed states at the material's tolerance (in the file's mm)
-    gated = closes_gate(pattern, None if options.exact else mat.tolerance_mm, scale=scale, force=options.force,
-                        action="cut")
+    gated = closes_gate(
+        pattern,
+        None if options.exact else mat.tolerance_mm,
+        scale=scale,
+        force=options.force,
+        action="cut",
+    )
     warnings = list(gated.warnings)
     corners = raw * scale
     tile_polys = _check_tiles(corners, state)
     faces = hg.assign_faces(pattern, states)
     if faces.conflicts:
-        warnings.append(f"{faces.conflicts} pair(s) of coincident hinges share a tape face "
-                        "(an odd cycle of coincidences)")
-    cutting = kind.prepare(pattern, corners, tile_polys, mat, state=state, scale=scale, options=options)
+        warnings.append(
+            f"{faces.conflicts} pair(s) of coincident hinges share a tape face "
+            "(an odd cycle of coincidences)"
+        )
+    cutting = kind.prepare(
+        pattern, corners, tile_polys, mat, state=state, scale=scale, options=options
+    )
     warnings.extend(cutting.warnings)
     fb.check_webs(cutting.regions, mat, kind.name, cutting.corners, scale)
     sheet_wh = (float(options.sheet[0]), float(options.sheet[1]))
@@ -287,10 +341,28 @@ def _cut_job(pattern: Pattern, options: CutOptions) -> CutJob:
     place = _PLACERS[layout](cutting.corners, cutting.parts, spacing, sheet_wh, options.margin)
     tidx = np.arange(pattern.topology.n_tiles)
     n_sheets, ref = _reference(place, cutting.parts, options, sheet_wh, spacing)
-    sheets = [SheetDrawing(index=k + 1, width=sheet_wh[0], height=sheet_wh[1]) for k in range(n_sheets)]
-    return CutJob(pattern, options, kind, layout, colors, scale, gated, faces, cutting, place,
-                  place.apply(tidx, cutting.corners), place.apply(tidx, cutting.regions), sheets, ref, spacing,
-                  warnings, label_heights=np.zeros(len(tidx)))
+    sheets = [
+        SheetDrawing(index=k + 1, width=sheet_wh[0], height=sheet_wh[1]) for k in range(n_sheets)
+    ]
+    return CutJob(
+        pattern,
+        options,
+        kind,
+        layout,
+        colors,
+        scale,
+        gated,
+        faces,
+        cutting,
+        place,
+        place.apply(tidx, cutting.corners),
+        place.apply(tidx, cutting.regions),
+        sheets,
+        ref,
+        spacing,
+        warnings,
+        label_heights=np.zeros(len(tidx)),
+    )
 
 
 def _assembly(job: CutJob, files: dict[str, bytes]) -> list[dict]:
@@ -298,12 +370,17 @@ def _assembly(job: CutJob, files: dict[str, bytes]) -> list[dict]:
     from . import assembly as asm
 
     pattern, Q, sheet_of = job.pattern, job.Q, job.place.sheet
-    pieces = asm.tape_pieces(pattern, Q, sheet_of, job.faces.letters(), job.kind, MARK_CORNER_FRAC,
-                             MARK_REACH_MM)
+    pieces = asm.tape_pieces(
+        pattern, Q, sheet_of, job.faces.letters(), job.kind, MARK_CORNER_FRAC, MARK_REACH_MM
+    )
     if "png" in job.options.formats and 0 < len(pieces) <= asm.MAP_MAX_PIECES:
         by_sheet = [Q[sheet_of == s] for s in range(job.place.n_sheets)]
-        files["assembly.png"] = asm.map_png(by_sheet, pieces, asm.tape_shapes(pattern, Q, pieces, MARK_CORNER_FRAC,
-                                                                             MARK_REACH_MM), job.options.stem)
+        files["assembly.png"] = asm.map_png(
+            by_sheet,
+            pieces,
+            asm.tape_shapes(pattern, Q, pieces, MARK_CORNER_FRAC, MARK_REACH_MM),
+            job.options.stem,
+        )
     return pieces
 
 
@@ -318,10 +395,21 @@ def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
         _labels(job)
     if options.notes:
         mat, o = job.material, options
-        add_notes(job.sheets, lambda i, n: f"{o.stem} {i}/{n} {mat.name} {job.kind.name} state {o.state} "
-                  f"kerf {mat.kerf_mm:g}", options.margin)
+        add_notes(
+            job.sheets,
+            lambda i, n: (
+                f"{o.stem} {i}/{n} {mat.name} {job.kind.name} state {o.state} kerf {mat.kerf_mm:g}"
+            ),
+            options.margin,
+        )
     files = _files(job)
     pieces = _assembly(job, files)
     manifest = cut_manifest(job, files, pieces)
-    return CutResult(sheets=job.sheets, files=files, manifest=manifest, warnings=job.warnings, tile_regions=job.Q,
-                     tile_sheet=job.place.sheet)
+    return CutResult(
+        sheets=job.sheets,
+        files=files,
+        manifest=manifest,
+        warnings=job.warnings,
+        tile_regions=job.Q,
+        tile_sheet=job.place.sheet,
+    )

@@ -17,7 +17,9 @@ from .materials import HINGE_KINDS, Material, load_material
 from .printers import Printer, load_printer
 from .printjob import print_style
 
-PAD_MARGIN_DEG = 5.0  # above the corner angle at which a strip pad reaches the printer's minimum area
+PAD_MARGIN_DEG = (
+    5.0  # above the corner angle at which a strip pad reaches the printer's minimum area
+)
 
 
 def material_limits(material: Material, kind: str | None = None) -> dict:
@@ -27,17 +29,26 @@ def material_limits(material: Material, kind: str | None = None) -> dict:
         raise FabricationError(f"hinge kind must be one of {', '.join(HINGE_KINDS)}, got {kind!r}")
     hk = hinge_kind(kind)
     if hk.never(material):
-        raise FabricationError(f"{material.name} cannot be cut as a {kind} sheet: {hk.never(material)}")
+        raise FabricationError(
+            f"{material.name} cannot be cut as a {kind} sheet: {hk.never(material)}"
+        )
     shrink = hk.shrink(material)
-    return {"min_width_mm": hk.min_width(material), "shrink_mm": shrink,
-            "min_edge_mm": material.min_web_mm if shrink else 0.0, "hinge_spacing_mm": hk.hinge_spacing(material)}
+    return {
+        "min_width_mm": hk.min_width(material),
+        "shrink_mm": shrink,
+        "min_edge_mm": material.min_web_mm if shrink else 0.0,
+        "hinge_spacing_mm": hk.hinge_spacing(material),
+    }
 
 
 def printer_limits(printer: Printer, style: str) -> dict:
     """What ``print`` needs of every tile (mm): two perimeters wide once shrunk by gap/2, hinge corners
     wide enough for a strip pad (strip styles) or pivots far enough apart for two ears (pinned)."""
-    out = {"min_width_mm": 2.0 * printer.nozzle_mm, "shrink_mm": 0.5 * printer.gap_mm,
-           "min_edge_mm": printer.nozzle_mm}
+    out = {
+        "min_width_mm": 2.0 * printer.nozzle_mm,
+        "shrink_mm": 0.5 * printer.gap_mm,
+        "min_edge_mm": printer.nozzle_mm,
+    }
     hinges = print_style(style).limits
     if hinges is not None:  # what the style's hinges ask of the tiles
         out.update(hinges(printer))
@@ -48,12 +59,19 @@ def strip_limits(printer: Printer) -> dict:
     """What a printed strip asks of the tiles it joins (the strip styles' ``PrintStyle.limits``)."""
     # a pad on an acute corner is about a triangle: ½ tan α w² against the printer's 0.25 w min(reach, w)
     w, reach = printer.strip_width_mm, printer.strip_reach_mm
-    out = {"min_hinge_angle_deg": float(np.degrees(np.arctan(0.5 * min(reach, w) / w))) + PAD_MARGIN_DEG}
+    out = {
+        "min_hinge_angle_deg": float(np.degrees(np.arctan(0.5 * min(reach, w) / w)))
+        + PAD_MARGIN_DEG
+    }
     # two strips on one face of a tile keep the radial clearance (their boxes, as print_bound); a thin
     # tile is no obstacle by itself, the strip is clipped to it (the old 2·reach + clearance width row
     # asked 8.3 mm of every tile on prusa-mk4 where print accepts the 8x8 circle from 1.6 mm tiles)
-    out.update(strip_clearance_mm=printer.radial_clearance_mm, strip_width_mm=w, strip_reach_mm=reach)
-    out["hinge_edge_mm"] = w + printer.gap_mm  # the strip runs w along the seam from the shrunk corner
+    out.update(
+        strip_clearance_mm=printer.radial_clearance_mm, strip_width_mm=w, strip_reach_mm=reach
+    )
+    out["hinge_edge_mm"] = (
+        w + printer.gap_mm
+    )  # the strip runs w along the seam from the shrunk corner
     return out
 
 
@@ -66,13 +84,21 @@ def combine(*limits: dict) -> dict:
     return out
 
 
-def resolve(material: str | None, hinge: str | None, printer: str | None, style: str | None,
-            min_feature: float | None, min_hole: float | None,
-            target: Target | None) -> tuple[FabricationLimits | None, dict]:
+def resolve(
+    material: str | None,
+    hinge: str | None,
+    printer: str | None,
+    style: str | None,
+    min_feature: float | None,
+    min_hole: float | None,
+    target: Target | None,
+) -> tuple[FabricationLimits | None, dict]:
     """``design``'s ``--material/--hinge``, ``--printer/--style``, ``--min-feature`` and ``--min-hole`` as plain
     mm limits (None: no fabrication rows), and the intent stored in the design for ``cut``/``print``."""
     parts, names = [], []
-    intent: dict[str, str | float] = {}  # cut/print defaults: material, hinge, printer, style, size, scale
+    intent: dict[
+        str, str | float
+    ] = {}  # cut/print defaults: material, hinge, printer, style, size, scale
     if hinge and not material:
         raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
     if style and not printer:

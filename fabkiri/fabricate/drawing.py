@@ -11,14 +11,34 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-LAYERS = ("ENGRAVE", "SCORE", "CUT", "NOTES")  # also the cut order: engrave, score, cut; notes never cut
+LAYERS = (
+    "ENGRAVE",
+    "SCORE",
+    "CUT",
+    "NOTES",
+)  # also the cut order: engrave, score, cut; notes never cut
 DECIMALS = 6
 
 # layer -> (SVG stroke colour, DXF ACI colour)
 COLORS = {
-    "default": {"CUT": ("#FF0000", 1), "SCORE": ("#0000FF", 5), "ENGRAVE": ("#000000", 7), "NOTES": ("#00FF00", 3)},
-    "boxes": {"CUT": ("#000000", 7), "SCORE": ("#0000FF", 5), "ENGRAVE": ("#00FF00", 3), "NOTES": ("#FF0000", 1)},
-    "ponoko": {"CUT": ("#0000FF", 5), "SCORE": ("#FF0000", 1), "ENGRAVE": ("#000000", 7), "NOTES": ("#00FF00", 3)},
+    "default": {
+        "CUT": ("#FF0000", 1),
+        "SCORE": ("#0000FF", 5),
+        "ENGRAVE": ("#000000", 7),
+        "NOTES": ("#00FF00", 3),
+    },
+    "boxes": {
+        "CUT": ("#000000", 7),
+        "SCORE": ("#0000FF", 5),
+        "ENGRAVE": ("#00FF00", 3),
+        "NOTES": ("#FF0000", 1),
+    },
+    "ponoko": {
+        "CUT": ("#0000FF", 5),
+        "SCORE": ("#FF0000", 1),
+        "ENGRAVE": ("#000000", 7),
+        "NOTES": ("#00FF00", 3),
+    },
 }
 
 
@@ -37,7 +57,9 @@ class SheetDrawing:
     index: int  # 1-based
     width: float
     height: float
-    layers: dict[str, list[tuple[np.ndarray, bool]]] = field(default_factory=lambda: {k: [] for k in LAYERS})
+    layers: dict[str, list[tuple[np.ndarray, bool]]] = field(
+        default_factory=lambda: {k: [] for k in LAYERS}
+    )
     # per polyline, the tile whose label/mark it draws (-1: none); the SVG writes the consecutive
     # strokes of one tile as one <path>
     groups: dict[str, list[int]] = field(default_factory=lambda: {k: [] for k in LAYERS})
@@ -51,11 +73,17 @@ class SheetDrawing:
         self.layers[layer].append((pts, closed))
         self.groups[layer].append(int(group))
 
-    def add_many(self, layer: str, points: np.ndarray, counts: np.ndarray, groups: np.ndarray | None = None) -> None:
+    def add_many(
+        self, layer: str, points: np.ndarray, counts: np.ndarray, groups: np.ndarray | None = None
+    ) -> None:
         """Open polylines ``points[sum(counts[:j]):][:counts[j]]``, in order: :meth:`add` for each, at once."""
         pts = snap(points)
         g = np.full(len(counts), -1) if groups is None else np.asarray(groups)
-        keep = [(p, int(k)) for p, k in zip(np.split(pts, np.cumsum(counts)[:-1]), g.tolist()) if len(p) >= 2]
+        keep = [
+            (p, int(k))
+            for p, k in zip(np.split(pts, np.cumsum(counts)[:-1]), g.tolist())
+            if len(p) >= 2
+        ]
         self.layers[layer].extend((p, False) for p, _ in keep)
         self.groups[layer].extend(k for _, k in keep)
 

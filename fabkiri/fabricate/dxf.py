@@ -48,7 +48,9 @@ def _fixed_metadata():
 def _prototype(doc, msp, layer: str) -> tuple[str, str] | None:
     """``(head, mid)`` of ezdxf's own export of an open 2-point LWPOLYLINE on ``layer``
     (:func:`~fabkiri.verify.dxfcodec.split_prototype`); None when it is not canonical."""
-    e = LWPolyline.new(handle=_PROBE_HANDLE, owner=msp.layout_key, dxfattribs={"layer": layer}, doc=doc)
+    e = LWPolyline.new(
+        handle=_PROBE_HANDLE, owner=msp.layout_key, dxfattribs={"layer": layer}, doc=doc
+    )
     e.set_points(_PROBE_POINTS, format="xy")
     buf = io.StringIO()
     e.export_dxf(TagWriter(buf, dxfversion=doc.dxfversion))
@@ -71,7 +73,7 @@ def dxf_bytes(sheet: SheetDrawing, colors: str = "default", *, bulk: bool = True
         for i, name in enumerate(LAYERS):
             polylines = sheet.layers[name]
             # only a leading run of bulk layers: their entities must open the ENTITIES section
-            leading = all(n in BULK_LAYERS for n in LAYERS[:i + 1])
+            leading = all(n in BULK_LAYERS for n in LAYERS[: i + 1])
             proto = _prototype(doc, msp, name) if bulk and leading else None
             if proto is not None:
                 # the handles add_lwpolyline would have drawn, in the same order

@@ -30,7 +30,9 @@ from .printjob import print_style
 if TYPE_CHECKING:
     from .planrules import PlanRule
 
-DIGITS = 4  # stated minima are rounded up to this many significant digits (so the stated value passes)
+DIGITS = (
+    4  # stated minima are rounded up to this many significant digits (so the stated value passes)
+)
 BISECT_RTOL = 1e-3  # print minimum: the bracket is this tight before the upper end is stated
 MAX_SCALE = 1e3
 
@@ -79,15 +81,22 @@ class CutMinimum:
         return f"cut at --scale ≥ {self.scale:g}, --width ≥ {self.width_mm:g} mm (or --scale auto)"
 
     def to_dict(self) -> dict:
-        return {"min_scale": self.scale, "min_width_mm": self.width_mm, "tile": self.tile, "limit": self.limit}
+        return {
+            "min_scale": self.scale,
+            "min_width_mm": self.width_mm,
+            "tile": self.tile,
+            "limit": self.limit,
+        }
 
 
 def ligament_never(material: Material) -> str:
     """Why a ligament sheet of this material cannot be cut at any scale ('' if it can)."""
     spacing = material.gap_mm - max(material.min_web_mm, 0.0)
     if spacing < material.min_web_mm + material.kerf_mm - 1e-9:
-        return (f"gap {material.gap_mm:g} mm leaves less than min web + kerf between the two ligaments of a node "
-                f"at any scale")
+        return (
+            f"gap {material.gap_mm:g} mm leaves less than min web + kerf between the two ligaments of a node "
+            f"at any scale"
+        )
     return ""
 
 
@@ -97,14 +106,18 @@ def cut_minimum(corners: np.ndarray, material: Material, kind: str) -> CutMinimu
     if why:
         return CutMinimum(None, None, -1, why)
     shrink = shrink_of(material, kind)
-    s, t, limit = fab.min_scale(corners, material.min_web_mm, shrink, min_edge=material.min_web_mm if shrink else 0.0)
+    s, t, limit = fab.min_scale(
+        corners, material.min_web_mm, shrink, min_edge=material.min_web_mm if shrink else 0.0
+    )
     if not np.isfinite(s):
         return CutMinimum(None, None, t, "a tile is degenerate")
     scale = ceil_sig(s)
     return CutMinimum(scale, ceil_sig(scale * closed_span(corners)), t, limit, s)
 
 
-def check_webs(regions: np.ndarray, material: Material, kind: str, corners: np.ndarray, scale: float) -> None:
+def check_webs(
+    regions: np.ndarray, material: Material, kind: str, corners: np.ndarray, scale: float
+) -> None:
     """``cut``'s web check: every tile that stays is at least the minimum web wide (thinnest width)."""
     w = fab.widths(regions)
     shrinks = hinge_kind(kind).shrinks
@@ -117,15 +130,21 @@ def check_webs(regions: np.ndarray, material: Material, kind: str, corners: np.n
         need = cut_minimum(corners / scale, material, kind)
         raise CheckFailed(
             f"tile {t} is {w[t]:.3g} mm wide at its thinnest{what} at scale {scale:.4g}, thinner than the minimum "
-            f"web {material.min_web_mm:g} mm of {material.name} ({len(bad)} tile(s) too thin); " + need.advice()
-            + ("; or use a smaller --gap" if shrinks else ""))
+            f"web {material.min_web_mm:g} mm of {material.name} ({len(bad)} tile(s) too thin); "
+            + need.advice()
+            + ("; or use a smaller --gap" if shrinks else "")
+        )
 
 
-def lost_edge(corners: np.ndarray, material: Material, kind: str, scale: float, tile: int) -> CheckFailed:
+def lost_edge(
+    corners: np.ndarray, material: Material, kind: str, scale: float, tile: int
+) -> CheckFailed:
     """The refusal for a ligament tile that loses an edge when shrunk, with the scale that avoids it."""
     need = cut_minimum(corners / scale, material, kind)
-    return CheckFailed(f"tile {tile} loses an edge once shrunk by gap/2 ({shrink_of(material, kind):g} mm) at scale "
-                       f"{scale:.4g}; {need.advice()}; or use a smaller --gap")
+    return CheckFailed(
+        f"tile {tile} loses an edge once shrunk by gap/2 ({shrink_of(material, kind):g} mm) at scale "
+        f"{scale:.4g}; {need.advice()}; or use a smaller --gap"
+    )
 
 
 # ------------------------------------------------------------------ printing
@@ -136,29 +155,52 @@ class PrintMinimum:
     min_scale: float | None
     max_scale: float | None  # None: any (strips are packed part by part)
     limit: str = ""
-    exact: bool = True  # False: the closed form of print_bound (see its docstring for how it relates)
+    exact: bool = (
+        True  # False: the closed form of print_bound (see its docstring for how it relates)
+    )
 
     @property
     def possible(self) -> bool:
-        return self.min_scale is not None and (self.max_scale is None or self.min_scale <= self.max_scale)
+        return self.min_scale is not None and (
+            self.max_scale is None or self.min_scale <= self.max_scale
+        )
 
     def advice(self, printer: str) -> str:
         if self.min_scale is None:
             return f"no scale works ({self.limit})"
-        top = "" if self.max_scale is None else f"; the bed of {printer} takes up to --scale {self.max_scale:g}"
+        top = (
+            ""
+            if self.max_scale is None
+            else f"; the bed of {printer} takes up to --scale {self.max_scale:g}"
+        )
         if not self.possible:
             return f"it needs --scale ≥ {self.min_scale:g} but the bed of {printer} takes at most {self.max_scale:g}"
         return f"print at --scale ≥ {self.min_scale:g} (or --scale auto){top}"
 
     def to_dict(self, at: float = 1.0) -> dict:
-        ok = self.possible and self.min_scale is not None and self.min_scale <= at and (self.max_scale is None or at <= self.max_scale)
-        return {"min_scale": self.min_scale, "max_scale": self.max_scale, "fits_bed": self.possible,
-                "ok_at_scale_1": bool(ok), "limit": self.limit, "exact": self.exact}
+        ok = (
+            self.possible
+            and self.min_scale is not None
+            and self.min_scale <= at
+            and (self.max_scale is None or at <= self.max_scale)
+        )
+        return {
+            "min_scale": self.min_scale,
+            "max_scale": self.max_scale,
+            "fits_bed": self.possible,
+            "ok_at_scale_1": bool(ok),
+            "limit": self.limit,
+            "exact": self.exact,
+        }
 
 
 def scaled(pattern: Pattern, k: float) -> Pattern:
     """The pattern ``k`` times its size (nodes and stored closed states)."""
-    return replace(pattern, nodes=pattern.nodes * k, contracted={s: v * k for s, v in pattern.contracted.items()})
+    return replace(
+        pattern,
+        nodes=pattern.nodes * k,
+        contracted={s: v * k for s, v in pattern.contracted.items()},
+    )
 
 
 def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> str:
@@ -172,7 +214,9 @@ def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> s
         _rule(style).check(pattern, plan, printer)
     except FabricationError as exc:
         return str(exc)
-    except shapely.errors.GEOSException as exc:  # seen once in a bisection (ellipse 16x16 rigid, prusa-mk4):
+    except (
+        shapely.errors.GEOSException
+    ) as exc:  # seen once in a bisection (ellipse 16x16 rigid, prusa-mk4):
         return f"the plan geometry failed in GEOS ({exc})"  # refused there, never a crash of design or info
     return ""
 
@@ -187,9 +231,12 @@ def _closes(pattern: Pattern) -> bool:
     return True
 
 
-def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer,
-               corners: np.ndarray | None = None) -> float | None:
-    if print_style(style).tiles is None:  # no tiles printed (strips): the bed does not bound the pattern
+def _bed_scale(
+    pattern: Pattern, style: str, state: int, printer: Printer, corners: np.ndarray | None = None
+) -> float | None:
+    if (
+        print_style(style).tiles is None
+    ):  # no tiles printed (strips): the bed does not bound the pattern
         return None
     from .printgeom import closed_corners
 
@@ -202,8 +249,12 @@ def _bed_scale(pattern: Pattern, style: str, state: int, printer: Printer,
 
 def _never(pattern: Pattern, style: str, error: str) -> bool:
     """A refusal no scale changes (a non-rigid pattern for pins, a single tile, three hinges at a point)."""
-    return ("not rigid-deployable" in error or "nothing to hinge" in error or "coincides with" in error
-            or "cannot take opposite faces" in error)
+    return (
+        "not rigid-deployable" in error
+        or "nothing to hinge" in error
+        or "coincides with" in error
+        or "cannot take opposite faces" in error
+    )
 
 
 def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1) -> PrintMinimum:
@@ -215,10 +266,14 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
         return PrintMinimum(None, top, err)
     lo, hi = (None, 1.0) if not err else (1.0, None)
     guess = print_bound(pattern, style, printer, state)
-    if guess.min_scale is not None and MIN_GUESS < guess.min_scale < MAX_SCALE:  # bracket around the bound
+    if (
+        guess.min_scale is not None and MIN_GUESS < guess.min_scale < MAX_SCALE
+    ):  # bracket around the bound
         g = guess.min_scale
         lower = _rule(style).bound_is_lower  # then bracket upwards from it
-        for k in ((g, g * (1 - GUESS_BRACKET)) if not lower else (g * (1 - 1e-9), g * (1 + GUESS_BRACKET))):
+        for k in (
+            (g, g * (1 - GUESS_BRACKET)) if not lower else (g * (1 - 1e-9), g * (1 + GUESS_BRACKET))
+        ):
             if _plan_error(scaled(pattern, k), style, state, printer):
                 lo = k if lo is None else max(lo, k)
             else:
@@ -257,7 +312,9 @@ GUESS_BRACKET = 0.03  # the closed-form bound is within a few % of the plan chec
 
 def _plan_key(printer: Printer, style: str) -> tuple:
     """The preset fields the plan checks of ``style`` read (not the bed)."""
-    return (printer.gap_mm, printer.radial_clearance_mm, printer.nozzle_mm) + _rule(style).fields(printer)
+    return (printer.gap_mm, printer.radial_clearance_mm, printer.nozzle_mm) + _rule(style).fields(
+        printer
+    )
 
 
 def _closed(pattern: Pattern, state: int) -> np.ndarray | None:
@@ -269,8 +326,13 @@ def _closed(pattern: Pattern, state: int) -> np.ndarray | None:
         return None
 
 
-def print_bound(pattern: Pattern, style: str, printer: Printer, state: int = 1,
-                corners: np.ndarray | None = None) -> PrintMinimum:
+def print_bound(
+    pattern: Pattern,
+    style: str,
+    printer: Printer,
+    state: int = 1,
+    corners: np.ndarray | None = None,
+) -> PrintMinimum:
     """The smallest print scale in closed form, no plan geometry (``exact`` False).
 
     Strip styles: the largest of the scale at which every tile survives the gap/2 shrink
@@ -281,17 +343,22 @@ def print_bound(pattern: Pattern, style: str, printer: Printer, state: int = 1,
     bound (``print`` also checks the slivers beside the clearances)."""
     top_ = pattern.topology
     if top_.n_hinges == 0:
-        return PrintMinimum(None, None, "the pattern has a single tile and no hinges: there is nothing to hinge")
+        return PrintMinimum(
+            None, None, "the pattern has a single tile and no hinges: there is nothing to hinge"
+        )
     c = corners if corners is not None and state == 1 else _closed(pattern, state)
     if c is None:
         return PrintMinimum(None, None, "the pattern does not close: nothing to hinge")
     d = 0.5 * printer.gap_mm
     folds = [top_.fold(s).fold_corner_ends for s in (1, 2) if s == state or s in pattern.contracted]
-    pairs = np.concatenate([fab.coincident_hinges(top_.hinge_tiles, top_.hinge_corner, f, top_.n_tiles)
-                            for f in folds])
+    pairs = np.concatenate(
+        [fab.coincident_hinges(top_.hinge_tiles, top_.hinge_corner, f, top_.n_tiles) for f in folds]
+    )
     face = fab.strip_faces(np.unique(pairs, axis=0), top_.n_hinges)
     if len(pairs) and (face[pairs[:, 0]] == face[pairs[:, 1]]).any():
-        return PrintMinimum(None, None, "hinges that coincide in a closed state cannot take opposite faces")
+        return PrintMinimum(
+            None, None, "hinges that coincide in a closed state cannot take opposite faces"
+        )
     s_shrink, t_shrink, _ = fab.min_scale(c, fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
     return _rule(style).bound(pattern, c, printer, s_shrink, state, face)
 
@@ -318,9 +385,11 @@ def summary(pattern: Pattern, prints=None) -> dict:
 
     top = pattern.topology
     c1 = pattern.contracted[1] if 1 in pattern.contracted else contract(pattern, 1).corners
-    out = {"definition": "thinnest width = smallest altitude: min over a tile's edges of the largest distance of "
-                         "its corners from that edge's line (the tile's minimum width)",
-           **fab.measures(c1, top.hinge_tiles, top.hinge_corner)}
+    out = {
+        "definition": "thinnest width = smallest altitude: min over a tile's edges of the largest distance of "
+        "its corners from that edge's line (the tile's minimum width)",
+        **fab.measures(c1, top.hinge_tiles, top.hinge_corner),
+    }
     cut = {}
     for name in available():
         mat = load_material(name)
@@ -340,8 +409,7 @@ def summary(pattern: Pattern, prints=None) -> dict:
                 memo[key] = print_bound(pattern, style, p, 1, c1)
             m = memo[key]
             bed = _bed_scale(pattern, style, 1, p, c1)
-            m = PrintMinimum(m.min_scale, None if bed is None else floor_sig(bed),
-                             m.limit, m.exact)
+            m = PrintMinimum(m.min_scale, None if bed is None else floor_sig(bed), m.limit, m.exact)
             rows[style] = m.to_dict()
     out["print"] = pr
     return out
@@ -349,15 +417,20 @@ def summary(pattern: Pattern, prints=None) -> dict:
 
 def summary_lines(s: dict) -> list[str]:
     """The summary as a few text lines (design's stderr, ``info``)."""
-    lines = [f"fabricability: thinnest tile {s['thinnest_tile_mm']:.3g} mm (tile {s['thinnest_tile']}), shortest edge "
-             f"{s['shortest_edge_mm']:.3g} mm, closest hinge pair "
-             + ("n/a" if s["closest_hinge_pair_mm"] is None else f"{s['closest_hinge_pair_mm']:.3g} mm")]
+    lines = [
+        f"fabricability: thinnest tile {s['thinnest_tile_mm']:.3g} mm (tile {s['thinnest_tile']}), shortest edge "
+        f"{s['shortest_edge_mm']:.3g} mm, closest hinge pair "
+        + ("n/a" if s["closest_hinge_pair_mm"] is None else f"{s['closest_hinge_pair_mm']:.3g} mm")
+    ]
     cells = []
     for mat, kinds in s["cut"].items():
         part = []
         for kind, m in kinds.items():
-            part.append(f"{kind} never" if m["min_scale"] is None else
-                        f"{kind} ≥ {m['min_scale']:g}× ({m['min_width_mm']:g} mm)")
+            part.append(
+                f"{kind} never"
+                if m["min_scale"] is None
+                else f"{kind} ≥ {m['min_scale']:g}× ({m['min_width_mm']:g} mm)"
+            )
         cells.append(f"{mat}: " + ", ".join(part))
     lines.append("  cut (--scale, --width): " + "; ".join(cells))
     if s.get("print"):
@@ -370,7 +443,10 @@ def summary_lines(s: dict) -> list[str]:
                 else:
                     bed = "" if m["max_scale"] is None else f"..{m['max_scale']:g}"
                     low = "" if m.get("exact", True) or "lower bound" not in m["limit"] else " from"
-                    part.append(f"{style}{low} {m['min_scale']:g}{bed}×" + ("" if m["fits_bed"] else " (bed too small)"))
+                    part.append(
+                        f"{style}{low} {m['min_scale']:g}{bed}×"
+                        + ("" if m["fits_bed"] else " (bed too small)")
+                    )
             cells.append(f"{pr}: " + ", ".join(part))
         lines.append("  print (--scale): " + "; ".join(cells))
     return lines
@@ -380,5 +456,7 @@ def _rule(style: str) -> PlanRule:  # (a style's module names its rule: planrule
     """The plan rule of ``style`` (``PrintStyle.plan``)."""
     rule = print_style(style).plan
     if rule is None:
-        raise FabricationError(f"the {style} print style has no plan rule: its smallest scale cannot be found")
+        raise FabricationError(
+            f"the {style} print style has no plan rule: its smallest scale cannot be found"
+        )
     return rule

@@ -18,7 +18,11 @@ from ..pattern.model import Pattern
 from ..verify import Check, Report, verify_pattern
 from ..verify.pattern_checks import state_check_id
 
-GATE_GROUPS = ("tiles", "state 1", "state 2")  # plus each state's edge pairs (fold edges of equal length)
+GATE_GROUPS = (
+    "tiles",
+    "state 1",
+    "state 2",
+)  # plus each state's edge pairs (fold edges of equal length)
 # action -> (past participle, third person) for the message
 VERBS = {"cut": ("cut", "cuts"), "print": ("printed", "prints"), "export": ("exported", "exports")}
 
@@ -45,24 +49,45 @@ def claimed_states(pattern: Pattern, state: int) -> tuple[int, ...]:
     return (state, other) if other in pattern.contracted else (state,)
 
 
-def closes_gate(pattern: Pattern, tol_mm: float | None, *, scale: float = 1.0, force: bool = False,
-                action: str = "cut", tolerance: str = "material", states: tuple[int, ...] = (1, 2)) -> GateResult:
+def closes_gate(
+    pattern: Pattern,
+    tol_mm: float | None,
+    *,
+    scale: float = 1.0,
+    force: bool = False,
+    action: str = "cut",
+    tolerance: str = "material",
+    states: tuple[int, ...] = (1, 2),
+) -> GateResult:
     """Verify ``pattern`` at ``tol_mm`` (in the file's mm, the pattern drawn ``scale`` times its size;
     None: the verifier's own tolerance); raise :class:`CheckFailed` unless its tiles and ``states``
     close, or ``force``."""
     report = verify_pattern(pattern, tol_mm=None if tol_mm is None else tol_mm / scale)
     groups = ("tiles", *(f"state {s}" for s in states))
-    gate = [c for c in report.checks if c.applies and not c.ok
-            and (c.group in groups or c.id in {state_check_id(s, "edge-pairs") for s in states})]
+    gate = [
+        c
+        for c in report.checks
+        if c.applies
+        and not c.ok
+        and (c.group in groups or c.id in {state_check_id(s, "edge-pairs") for s in states})
+    ]
     out = GateResult(report, gate)
     if not gate:
         return out
-    msg = "; ".join(check_text(c, scale) for c in gate[:3]) + (f" (+{len(gate) - 3} more)" if len(gate) > 3 else "")
+    msg = "; ".join(check_text(c, scale) for c in gate[:3]) + (
+        f" (+{len(gate) - 3} more)" if len(gate) > 3 else ""
+    )
     done, does = VERBS[action]
     if not force:
-        at = f"at the {tolerance} tolerance {tol_mm:g} mm" if tol_mm is not None else "at the verifier's tolerance"
+        at = (
+            f"at the {tolerance} tolerance {tol_mm:g} mm"
+            if tol_mm is not None
+            else "at the verifier's tolerance"
+        )
         which = "in both states" if len(states) == 2 else f"in closed state {states[0]}"
-        raise CheckFailed(f"the pattern does not close {which} {at}: {msg}; nothing {done} "
-                          f"(--force {does} it anyway)")
+        raise CheckFailed(
+            f"the pattern does not close {which} {at}: {msg}; nothing {done} "
+            f"(--force {does} it anyway)"
+        )
     out.warnings.append(f"{done} with --force although the pattern does not close: {msg}")
     return out

@@ -61,8 +61,9 @@ class FaceAssignment:
         return [FACES[int(f)] for f in self.face]
 
 
-def assign_faces(pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray | None = None
-                 ) -> FaceAssignment:
+def assign_faces(
+    pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray | None = None
+) -> FaceAssignment:
     """Two-colour the graph "hinges coincide in some closed state" by BFS depth; where that graph has
     odd cycles (three kagome hinges at a point), with the fewest conflicts local flips reach, also
     keeping the hinge pairs ``apart`` (printed strips too close for one face) on opposite faces
@@ -70,17 +71,23 @@ def assign_faces(pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndar
     H = pattern.topology.n_hinges
     eps = 1e-6 * pattern.tile_size
     per_state = [coincident_pairs(hinge_points(pattern, c), eps) for c in states.values()]
-    pairs = np.unique(np.concatenate(per_state) if per_state else np.zeros((0, 2), np.int64), axis=0)
+    pairs = np.unique(
+        np.concatenate(per_state) if per_state else np.zeros((0, 2), np.int64), axis=0
+    )
     face = np.zeros(H, dtype=np.int64)
     if len(pairs) and H:
-        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(H, H)).tocsr()
+        g = sparse.coo_matrix(
+            (np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(H, H)
+        ).tocsr()
         n, comp = csgraph.connected_components(g, directed=False)
         for c in range(n):
             members = np.flatnonzero(comp == c)
             if len(members) < 2:
                 continue
             root = int(members.min())  # lowest hinge of the group gets the top face
-            order, pred = csgraph.breadth_first_order(g, root, directed=False, return_predecessors=True)
+            order, pred = csgraph.breadth_first_order(
+                g, root, directed=False, return_predecessors=True
+            )
             for node in order[1:]:
                 face[node] = 1 - face[pred[node]]
     conflicts = int((face[pairs[:, 0]] == face[pairs[:, 1]]).sum()) if len(pairs) else 0
@@ -102,13 +109,15 @@ def _fewer_conflicts(face: np.ndarray, per_state: list[np.ndarray], H: int) -> n
         rows += [pr[:, 0], pr[:, 1]]
         cols += [pr[:, 1], pr[:, 0]]
         weights += [w, w]
-    g = sparse.csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(H, H))
+    g = sparse.csr_matrix(
+        (np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(H, H)
+    )
     face = face.copy()
     changed = True
     while changed:
         changed = False
         for h in range(H):
-            nb, w = g.indices[g.indptr[h]:g.indptr[h + 1]], g.data[g.indptr[h]:g.indptr[h + 1]]
+            nb, w = g.indices[g.indptr[h] : g.indptr[h + 1]], g.data[g.indptr[h] : g.indptr[h + 1]]
             same = float(w[face[nb] == face[h]].sum())
             if 2 * same > float(w.sum()):
                 face[h] = 1 - face[h]
@@ -127,7 +136,12 @@ def closure_pairs(pattern: Pattern, state: int) -> np.ndarray:
     cA, cB = top.hinge_corner.T
     ends = top.fold(state).fold_corner_ends
     n = tessellation(pattern.kind).arity
-    return np.concatenate([np.stack([n * A + cA, n * B + cB], 1), np.stack([n * A + ends[:, 0], n * B + ends[:, 1]], 1)])
+    return np.concatenate(
+        [
+            np.stack([n * A + cA, n * B + cB], 1),
+            np.stack([n * A + ends[:, 0], n * B + ends[:, 1]], 1),
+        ]
+    )
 
 
 def snap_corners(corners: np.ndarray, eps: float, pairs: np.ndarray | None = None) -> np.ndarray:
@@ -180,7 +194,9 @@ def snap_to_edges(corners: np.ndarray, eps: float) -> np.ndarray:
     t = ((flat[pi] - a) * d).sum(1) / L2
     foot = a + t[:, None] * d
     off = np.linalg.norm(flat[pi] - foot, axis=1)
-    near_end = np.minimum(np.linalg.norm(flat[pi] - a, axis=1), np.linalg.norm(flat[pi] - b, axis=1)) < eps
+    near_end = (
+        np.minimum(np.linalg.norm(flat[pi] - a, axis=1), np.linalg.norm(flat[pi] - b, axis=1)) < eps
+    )
     move = (t > 0) & (t < 1) & (off > 0) & ~near_end
     order = np.lexsort((ei[move], pi[move]))
     done = set()
@@ -211,15 +227,19 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
     he_to = node[:, ::-1].ravel()
     d = xy[he_to] - xy[he_from]
     ang = np.arctan2(d[:, 1], d[:, 0])
-    partner = np.full(2 * S, -1, dtype=np.int64)  # half-edge arriving straight-through continues as partner
+    partner = np.full(
+        2 * S, -1, dtype=np.int64
+    )  # half-edge arriving straight-through continues as partner
     order = np.argsort(he_from, kind="stable")
     starts = np.searchsorted(he_from[order], np.arange(len(xy)))
     ends = np.append(starts[1:], len(order))
     for v in range(len(xy)):
-        hs = order[starts[v]:ends[v]]
+        hs = order[starts[v] : ends[v]]
         if len(hs) == 2:
             partner[hs[0]], partner[hs[1]] = hs[1], hs[0]
-        elif len(hs) > 2 and not straight_only:  # an outline touching itself: pair neighbours by angle
+        elif (
+            len(hs) > 2 and not straight_only
+        ):  # an outline touching itself: pair neighbours by angle
             hs = hs[np.argsort(ang[hs], kind="stable")]
             for i in range(0, len(hs) - 1, 2):
                 partner[hs[i]], partner[hs[i + 1]] = hs[i + 1], hs[i]
@@ -298,11 +318,14 @@ def _split_at_near_points(segs: np.ndarray, w: float) -> np.ndarray:
     snap-rounding left a grid step off the segment it should split), zero-length ones dropped."""
     segs = segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
     pts = np.unique(segs.reshape(-1, 2), axis=0)
-    si, pi = shapely.STRtree(shapely.linestrings(segs)).query(shapely.points(pts), predicate="dwithin",
-                                                              distance=w)[::-1]
+    si, pi = shapely.STRtree(shapely.linestrings(segs)).query(
+        shapely.points(pts), predicate="dwithin", distance=w
+    )[::-1]
     a, d = segs[si, 0], segs[si, 1] - segs[si, 0]
     t = np.einsum("ij,ij->i", pts[pi] - a, d) / np.einsum("ij,ij->i", d, d)
-    inner = (np.linalg.norm(pts[pi] - segs[si, 0], axis=1) > w) & (np.linalg.norm(pts[pi] - segs[si, 1], axis=1) > w)
+    inner = (np.linalg.norm(pts[pi] - segs[si, 0], axis=1) > w) & (
+        np.linalg.norm(pts[pi] - segs[si, 1], axis=1) > w
+    )
     si, pi, t = si[inner], pi[inner], t[inner]
     if not len(si):
         return segs
@@ -336,9 +359,13 @@ def tape_linework(corners: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarra
     rings = [p for p, closed in _chain(boundary, False) if closed]
     open_b = [p for p, closed in _chain(boundary, False) if not closed]
     if open_b:
-        raise FabricationError("the outline of the closed state is not a closed loop (tiles overlap or gap)")
+        raise FabricationError(
+            "the outline of the closed state is not a closed loop (tiles overlap or gap)"
+        )
     chains = _chain(interior, True)
-    inner = [p for p, closed in chains if not closed] + [np.vstack([p, p[:1]]) for p, closed in chains if closed]
+    inner = [p for p, closed in chains if not closed] + [
+        np.vstack([p, p[:1]]) for p, closed in chains if closed
+    ]
     return rings, inner
 
 
@@ -366,13 +393,25 @@ def shrink_tiles(corners: np.ndarray, shrink: float) -> np.ndarray:
     lost = np.flatnonzero((edges <= fab.EDGE_EPS_MM).any(-1))
     if len(lost):
         t = int(lost[0])
-        raise FabricationError(f"tile {t} is not a quad once shrunk by {shrink:g} mm; use a smaller gap")
+        raise FabricationError(
+            f"tile {t} is not a quad once shrunk by {shrink:g} mm; use a smaller gap"
+        )
     return fab.shrunk_quads(corners, shrink)
 
 
-def ligament_design(pattern: Pattern, corners: np.ndarray, shrunk: np.ndarray, *, gap: float, width_max: float,
-                    min_web: float, kerf: float, strain_limit: float, turn_rad: float = np.pi,
-                    width: float | None = None) -> LigamentDesign:
+def ligament_design(
+    pattern: Pattern,
+    corners: np.ndarray,
+    shrunk: np.ndarray,
+    *,
+    gap: float,
+    width_max: float,
+    min_web: float,
+    kerf: float,
+    strain_limit: float,
+    turn_rad: float = np.pi,
+    width: float | None = None,
+) -> LigamentDesign:
     """Size the strips by the strain rule of fabrication spec §3.1(f).
 
     The strip width is the widest that keeps ε = w·Δθ/(2L) within the strain
@@ -400,14 +439,16 @@ def ligament_design(pattern: Pattern, corners: np.ndarray, shrunk: np.ndarray, *
     if spacing < min_web + kerf - 1e-9:
         raise FabricationError(
             f"ligaments {w:.3g} mm wide leave {spacing:.3g} mm between the two strips of a node, less than "
-            f"min web + kerf = {min_web + kerf:.3g} mm; use a gap of at least {w + min_web + kerf:.3g} mm")
+            f"min web + kerf = {min_web + kerf:.3g} mm; use a gap of at least {w + min_web + kerf:.3g} mm"
+        )
     strains = w * turn_rad / (2.0 * lengths)
     worst = float(strains.max())
     if worst > strain_limit:
         h = int(np.argmax(strains))
         warnings.append(
             f"ligament strain {worst:.3g} at hinge {h} exceeds the material's limit {strain_limit:g} "
-            f"(w {w:.3g} mm, L {lengths[h]:.3g} mm, Δθ {np.degrees(turn_rad):.0f}°); use a larger gap")
+            f"(w {w:.3g} mm, L {lengths[h]:.3g} mm, Δθ {np.degrees(turn_rad):.0f}°); use a larger gap"
+        )
     return LigamentDesign(w, turn_rad, lengths, strains, apex, warnings)
 
 
@@ -421,7 +462,9 @@ def ligament_strips(apex: np.ndarray, width: float, embed: float) -> np.ndarray:
     return shapely.buffer(lines, 0.5 * width, cap_style="flat", join_style="mitre")
 
 
-def kerf_outset(polys: shapely.Geometry | np.ndarray, offset: float) -> shapely.Geometry | np.ndarray:
+def kerf_outset(
+    polys: shapely.Geometry | np.ndarray, offset: float
+) -> shapely.Geometry | np.ndarray:
     """Toolpath outside a part by ``offset`` = kerf/2 (holes shrink), mitre joins."""
     if offset == 0:
         return polys

@@ -30,8 +30,14 @@ def _incentre(tri: np.ndarray) -> np.ndarray:
     return (w[:, :, None] * tri).sum(1) / np.maximum(w.sum(1), 1e-300)[:, None]
 
 
-def _add_labels(sheets: list[SheetDrawing], sheet_of_label: np.ndarray, tile_of_label: np.ndarray, pts: np.ndarray, counts: np.ndarray,
-                label: np.ndarray) -> None:
+def _add_labels(
+    sheets: list[SheetDrawing],
+    sheet_of_label: np.ndarray,
+    tile_of_label: np.ndarray,
+    pts: np.ndarray,
+    counts: np.ndarray,
+    label: np.ndarray,
+) -> None:
     """Open strokes (``pts`` split by ``counts``, stroke j of label ``label[j]``) onto their labels'
     sheets, in order, grouped by tile."""
     if not len(counts):
@@ -52,8 +58,12 @@ def _fit_labels(Q, tiles, texts, anchors, region, hmax, margin):
         tile_polys = shapely.buffer(shapely.polygons(Q[tiles]), -margin + 1e-9, join_style="mitre")
         for _ in range(8):
             w = ratio * h
-            boxes = shapely.box(anchors[:, 0] - w / 2, anchors[:, 1] - h / 2, anchors[:, 0] + w / 2,
-                                anchors[:, 1] + h / 2)
+            boxes = shapely.box(
+                anchors[:, 0] - w / 2,
+                anchors[:, 1] - h / 2,
+                anchors[:, 0] + w / 2,
+                anchors[:, 1] + h / 2,
+            )
             bad = (h > 0) & ~shapely.covers(tile_polys, boxes)
             if not bad.any():
                 break
@@ -62,10 +72,17 @@ def _fit_labels(Q, tiles, texts, anchors, region, hmax, margin):
     return h
 
 
-
-def engrave_labels(sheets: list[SheetDrawing], Q: np.ndarray, sheet_of: np.ndarray, hinge_tiles: np.ndarray,
-                   hinge_corner: np.ndarray, letters: list[str], kind: HingeKind, label_h: float,
-                   label_margin: float) -> tuple[int, np.ndarray, np.ndarray | None]:
+def engrave_labels(
+    sheets: list[SheetDrawing],
+    Q: np.ndarray,
+    sheet_of: np.ndarray,
+    hinge_tiles: np.ndarray,
+    hinge_corner: np.ndarray,
+    letters: list[str],
+    kind: HingeKind,
+    label_h: float,
+    label_margin: float,
+) -> tuple[int, np.ndarray, np.ndarray | None]:
     """Engrave tile IDs, the corner labels the hinge kind asks for and its tape marks
     onto the sheets (``Q``: every tile's label region as placed). Returns how many
     labels were left out, the tile IDs' heights and the corner labels' heights."""
@@ -87,8 +104,14 @@ def engrave_labels(sheets: list[SheetDrawing], Q: np.ndarray, sheet_of: np.ndarr
         n = Q.shape[1]  # the tile arity
         q1, q0 = Q[ct, (ck + 1) % n], Q[ct, (ck - 1) % n]
         # corner labels fit the triangle the tape covers (its chord is the tape mark's)
-        tri = np.stack([q, q + tape_reach(q, q1)[:, None] * (q1 - q),
-                        q + tape_reach(q, q0)[:, None] * (q0 - q)], 1)
+        tri = np.stack(
+            [
+                q,
+                q + tape_reach(q, q1)[:, None] * (q1 - q),
+                q + tape_reach(q, q0)[:, None] * (q0 - q),
+            ],
+            1,
+        )
         anchor = _incentre(tri)
         hc = _fit_labels(Q, ct, c_text, anchor, tri, 0.6 * label_h, label_margin)
         hc_all = hc
@@ -101,15 +124,28 @@ def engrave_labels(sheets: list[SheetDrawing], Q: np.ndarray, sheet_of: np.ndarr
         mt, mk = B[same], cB[same]
         marks = tape_mark_chords(Q, mt, mk, label_margin)
         ok = np.isfinite(marks).all(axis=(1, 2))
-        _add_labels(sheets, sheet_of[mt[ok]], mt[ok], marks[ok].reshape(-1, 2), np.full(int(ok.sum()), 2),
-                    np.arange(int(ok.sum())))
+        _add_labels(
+            sheets,
+            sheet_of[mt[ok]],
+            mt[ok],
+            marks[ok].reshape(-1, 2),
+            np.full(int(ok.sum()), 2),
+            np.arange(int(ok.sum())),
+        )
     for sd in sheets:  # each tile's engraving together: one SVG path per tile, less head travel
         sd.sort_by_group("ENGRAVE")
     return omitted, hid, hc_all
 
 
-def _corner_labels(A: np.ndarray, B: np.ndarray, cA: np.ndarray, cB: np.ndarray, letters: list[str],
-                   cross: np.ndarray, kind: HingeKind) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def _corner_labels(
+    A: np.ndarray,
+    B: np.ndarray,
+    cA: np.ndarray,
+    cB: np.ndarray,
+    letters: list[str],
+    cross: np.ndarray,
+    kind: HingeKind,
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Tiles, corners and texts of the corner labels: both corners of a hinge whose
     tiles lie on different sheets (or of every hinge, for kinds that ask), else the
     face letter on tile A's corner (for kinds that ask)."""
@@ -129,12 +165,18 @@ def _corner_labels(A: np.ndarray, B: np.ndarray, cA: np.ndarray, cB: np.ndarray,
     return np.array(c_tiles, dtype=int), np.array(c_k, dtype=int), c_text
 
 
-def add_notes(sheets: list[SheetDrawing], caption: Callable[[int, int], str], margin: float) -> None:
+def add_notes(
+    sheets: list[SheetDrawing], caption: Callable[[int, int], str], margin: float
+) -> None:
     """The NOTES layer of every sheet: its frame and a caption in the bottom margin
     (never cut; left out where the margin is too thin for legible text).
     ``caption(index, count)`` is the caption of sheet ``index`` of ``count``."""
     for sd in sheets:
-        sd.add("NOTES", np.array([[0, 0], [sd.width, 0], [sd.width, sd.height], [0, sd.height]], float), True)
+        sd.add(
+            "NOTES",
+            np.array([[0, 0], [sd.width, 0], [sd.width, sd.height], [0, sd.height]], float),
+            True,
+        )
         cap = caption(sd.index, len(sheets))
         cap = "".join(ch if supported(ch) else "-" for ch in cap)
         ch_h = min(2.5, 0.5 * margin)

@@ -39,7 +39,9 @@ class Placement:
         return geometry.rotate(pts, th) + sh
 
 
-def _check_fits(bounds: np.ndarray, inner_w: float, inner_h: float, sheet: tuple[float, float]) -> None:
+def _check_fits(
+    bounds: np.ndarray, inner_w: float, inner_h: float, sheet: tuple[float, float]
+) -> None:
     w = bounds[:, 2] - bounds[:, 0]
     h = bounds[:, 3] - bounds[:, 1]
     bad = np.flatnonzero((w > inner_w + 1e-9) | (h > inner_h + 1e-9))
@@ -47,10 +49,13 @@ def _check_fits(bounds: np.ndarray, inner_w: float, inner_h: float, sheet: tuple
         t = int(bad[0])
         raise FabricationError(
             f"sheet {sheet[0]:g}x{sheet[1]:g} mm (inside the margin {inner_w:g}x{inner_h:g}) is smaller than "
-            f"tile {t} ({w[t]:.1f}x{h[t]:.1f} mm)")
+            f"tile {t} ({w[t]:.1f}x{h[t]:.1f} mm)"
+        )
 
 
-def split_to_sheets(bounds: np.ndarray, sheet: tuple[float, float], margin: float) -> tuple[np.ndarray, np.ndarray]:
+def split_to_sheets(
+    bounds: np.ndarray, sheet: tuple[float, float], margin: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Group parts (by their bounding boxes, in place) into sheet-sized groups of whole parts.
 
     Parts keep their relative positions inside a group. A part belongs to the
@@ -59,7 +64,9 @@ def split_to_sheets(bounds: np.ndarray, sheet: tuple[float, float], margin: floa
     """
     inner_w, inner_h = sheet[0] - 2 * margin, sheet[1] - 2 * margin
     if inner_w <= 0 or inner_h <= 0:
-        raise FabricationError(f"margin {margin:g} mm leaves nothing of a {sheet[0]:g}x{sheet[1]:g} mm sheet")
+        raise FabricationError(
+            f"margin {margin:g} mm leaves nothing of a {sheet[0]:g}x{sheet[1]:g} mm sheet"
+        )
     _check_fits(bounds, inner_w, inner_h, sheet)
     lo, hi = bounds[:, :2].min(0), bounds[:, 2:].max(0)
     if hi[0] - lo[0] <= inner_w + 1e-9 and hi[1] - lo[1] <= inner_h + 1e-9:
@@ -69,8 +76,10 @@ def split_to_sheets(bounds: np.ndarray, sheet: tuple[float, float], margin: floa
     reach_hi = (bounds[:, 2:] - centre).max(0)
     cell = np.array([inner_w, inner_h]) - reach_lo - reach_hi
     if (cell <= 0).any():
-        raise FabricationError(f"sheet {sheet[0]:g}x{sheet[1]:g} mm is too small to split the pattern into "
-                               "groups of whole tiles")
+        raise FabricationError(
+            f"sheet {sheet[0]:g}x{sheet[1]:g} mm is too small to split the pattern into "
+            "groups of whole tiles"
+        )
     # distribute the grid evenly over the pattern so no sheet is nearly empty
     span = np.maximum(hi - lo - reach_lo - reach_hi, 0.0)
     n = np.maximum(np.ceil(span / cell - 1e-9), 1).astype(int)
@@ -89,8 +98,9 @@ def split_to_sheets(bounds: np.ndarray, sheet: tuple[float, float], margin: floa
     return group.astype(np.int64), shifts
 
 
-def in_place(corners: np.ndarray, sheet: tuple[float, float], margin: float,
-             extra: np.ndarray | None = None) -> Placement:
+def in_place(
+    corners: np.ndarray, sheet: tuple[float, float], margin: float, extra: np.ndarray | None = None
+) -> Placement:
     """Tiles where they are in the closed state, translated per sheet.
 
     ``extra`` (T, 4) optionally widens each tile's box (a kerf outset)."""
@@ -99,10 +109,18 @@ def in_place(corners: np.ndarray, sheet: tuple[float, float], margin: float,
     if extra is not None:
         bounds = extra
     group, shifts = split_to_sheets(bounds, sheet, margin)
-    return Placement(sheet=group, theta=np.zeros(T), shift=shifts[group], n_sheets=len(shifts), layout="in-place")
+    return Placement(
+        sheet=group, theta=np.zeros(T), shift=shifts[group], n_sheets=len(shifts), layout="in-place"
+    )
 
 
-def exploded(corners: np.ndarray, parts: np.ndarray, spacing: float, sheet: tuple[float, float], margin: float) -> Placement:
+def exploded(
+    corners: np.ndarray,
+    parts: np.ndarray,
+    spacing: float,
+    sheet: tuple[float, float],
+    margin: float,
+) -> Placement:
     """Tile centroids spread from the pattern centre (factor ≥ 1.25) until parts are ``spacing`` apart."""
     T = len(corners)
     cent = shapely.get_coordinates(shapely.centroid(shapely.polygons(corners)))
@@ -120,8 +138,13 @@ def exploded(corners: np.ndarray, parts: np.ndarray, spacing: float, sheet: tupl
         raise FabricationError("could not spread the tiles apart for an exploded layout")
     bounds = shapely.bounds(moved)
     group, shifts = split_to_sheets(bounds, sheet, margin)
-    return Placement(sheet=group, theta=np.zeros(T), shift=moves + shifts[group], n_sheets=len(shifts),
-                     layout="exploded")
+    return Placement(
+        sheet=group,
+        theta=np.zeros(T),
+        shift=moves + shifts[group],
+        n_sheets=len(shifts),
+        layout="exploded",
+    )
 
 
 def _translate(parts: np.ndarray, moves: np.ndarray) -> np.ndarray:
@@ -130,7 +153,9 @@ def _translate(parts: np.ndarray, moves: np.ndarray) -> np.ndarray:
     return shapely.transform(parts, lambda c: c + moves[idx])
 
 
-def nested(parts: np.ndarray, spacing: float, sheet: tuple[float, float], margin: float) -> Placement:
+def nested(
+    parts: np.ndarray, spacing: float, sheet: tuple[float, float], margin: float
+) -> Placement:
     """Shelf packing: each part turned so its minimum rotated rectangle is upright, tallest first."""
     T = len(parts)
     inner_w, inner_h = sheet[0] - 2 * margin, sheet[1] - 2 * margin
@@ -169,8 +194,13 @@ def nested(parts: np.ndarray, spacing: float, sheet: tuple[float, float], margin
     return Placement(sheet=sheet_of, theta=theta, shift=shift, n_sheets=s + 1, layout="nested")
 
 
-def place_reference(content: Sequence[np.ndarray | None], size: float, sheet: tuple[float, float], margin: float,
-                    gap: float) -> tuple[int, np.ndarray]:
+def place_reference(
+    content: Sequence[np.ndarray | None],
+    size: float,
+    sheet: tuple[float, float],
+    margin: float,
+    gap: float,
+) -> tuple[int, np.ndarray]:
     """Where the reference square goes: beside or above a sheet's content, else on a new sheet.
 
     ``content`` holds each sheet's bounding box ``[xmin, ymin, xmax, ymax]``.
@@ -179,8 +209,10 @@ def place_reference(content: Sequence[np.ndarray | None], size: float, sheet: tu
     """
     W, H = sheet
     if size + 2 * margin > min(W, H):
-        raise FabricationError(f"the {size:g} mm reference square does not fit a {W:g}x{H:g} mm sheet "
-                               "(use --reference 0 to leave it out)")
+        raise FabricationError(
+            f"the {size:g} mm reference square does not fit a {W:g}x{H:g} mm sheet "
+            "(use --reference 0 to leave it out)"
+        )
     for k, box in enumerate(content):
         if box is None:
             return k, np.array([margin, margin])
@@ -193,8 +225,13 @@ def place_reference(content: Sequence[np.ndarray | None], size: float, sheet: tu
     return len(content), np.array([margin, margin])
 
 
-def fit_heights(anchor: np.ndarray, ratio: np.ndarray, hmax: np.ndarray, region: np.ndarray,
-                margin: np.ndarray | float) -> np.ndarray:
+def fit_heights(
+    anchor: np.ndarray,
+    ratio: np.ndarray,
+    hmax: np.ndarray,
+    region: np.ndarray,
+    margin: np.ndarray | float,
+) -> np.ndarray:
     """Largest text height ≤ ``hmax`` whose box (width = ratio·h) centred on ``anchor`` fits ``region``.
 
     ``region`` is ``(N, k, 2)`` convex CCW polygons; the box keeps ``margin``
@@ -205,19 +242,27 @@ def fit_heights(anchor: np.ndarray, ratio: np.ndarray, hmax: np.ndarray, region:
     e = np.roll(v, -1, axis=1) - v
     n = np.stack([-e[..., 1], e[..., 0]], -1)
     n = n / np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-300)
-    slack = geometry.dot2(n, anchor[:, None, :] - v) - np.broadcast_to(np.asarray(margin, float),
-                                                                      (len(v),))[:, None]
+    slack = (
+        geometry.dot2(n, anchor[:, None, :] - v)
+        - np.broadcast_to(np.asarray(margin, float), (len(v),))[:, None]
+    )
     h = np.asarray(hmax, dtype=float).copy()
     for sx in (-0.5, 0.5):
         for sy in (-0.5, 0.5):
             c = np.stack([sx * ratio, np.full_like(ratio, sy)], -1)  # (N, 2)
             nc = geometry.dot2(n, c[:, None, :])
-            lim = np.where(nc < 0, slack / np.where(nc < 0, -nc, 1.0), np.where(slack < 0, -1.0, np.inf))
+            lim = np.where(
+                nc < 0, slack / np.where(nc < 0, -nc, 1.0), np.where(slack < 0, -1.0, np.inf)
+            )
             h = np.minimum(h, lim.min(axis=1))
     return h
 
 
-def label_strokes(texts: list[str], heights: np.ndarray, anchors: np.ndarray) -> list[list[np.ndarray]]:
+def label_strokes(
+    texts: list[str], heights: np.ndarray, anchors: np.ndarray
+) -> list[list[np.ndarray]]:
     """Stroke polylines of every label (empty where the height is not positive)."""
-    return [stroke_text.text_strokes(t, float(h), a) if h > 0 else []
-            for t, h, a in zip(texts, heights, anchors)]
+    return [
+        stroke_text.text_strokes(t, float(h), a) if h > 0 else []
+        for t, h, a in zip(texts, heights, anchors)
+    ]

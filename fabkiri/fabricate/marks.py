@@ -24,12 +24,25 @@ from .printgeom import Strips
 from .svg import svg_bytes
 
 
-def marked_cut(pattern: Pattern, state: int, strips: Strips, corners: np.ndarray, material: Material,
-               stem: str, pattern_file: str) -> tuple[CutResult, int]:
+def marked_cut(
+    pattern: Pattern,
+    state: int,
+    strips: Strips,
+    corners: np.ndarray,
+    material: Material,
+    stem: str,
+    pattern_file: str,
+) -> tuple[CutResult, int]:
     """Tape-style cut files with pad outlines engraved; returns the result and the number of marks."""
     colors = material.colors
-    opts = CutOptions(material=material, hinge="tape", state=state, stem=stem, pattern_file=pattern_file,
-                      colors=colors)
+    opts = CutOptions(
+        material=material,
+        hinge="tape",
+        state=state,
+        stem=stem,
+        pattern_file=pattern_file,
+        colors=colors,
+    )
     res = cut_pattern(pattern, opts)
     Q = res.tile_regions  # placed tile corners on the sheets (tape: the tiles themselves)
     assert Q is not None and res.tile_sheet is not None  # a cut records where each tile went
@@ -41,12 +54,15 @@ def marked_cut(pattern: Pattern, state: int, strips: Strips, corners: np.ndarray
             theta, shift = geometry.kabsch(corners[t], Q[t])
             pad = strips.pads[h, side]
             moved = shapely.transform(pad, lambda c, th=theta, s=shift: geometry.rotate(c, th) + s)
-            inside = shapely.intersection(moved, shapely.buffer(shapely.Polygon(Q[t]), -margin,
-                                                                join_style="mitre"))
+            inside = shapely.intersection(
+                moved, shapely.buffer(shapely.Polygon(Q[t]), -margin, join_style="mitre")
+            )
             for g in shapely.get_parts(inside):
                 if g.is_empty or g.area <= 0 or g.geom_type != "Polygon":
                     continue
-                res.sheets[int(res.tile_sheet[t])].add("ENGRAVE", np.asarray(g.exterior.coords)[:-1], True)
+                res.sheets[int(res.tile_sheet[t])].add(
+                    "ENGRAVE", np.asarray(g.exterior.coords)[:-1], True
+                )
                 n += 1
     multi = len(res.sheets) > 1
     for sd in res.sheets:
@@ -57,7 +73,10 @@ def marked_cut(pattern: Pattern, state: int, strips: Strips, corners: np.ndarray
             res.files[f"{name}.svg"] = svg_bytes(sd, colors)
     if f"{stem}.png" in res.files:
         res.files[f"{stem}.png"] = png_bytes(res.sheets, colors)
-    res.manifest["pad_marks"] = {"layer": "ENGRAVE", "count": n, "margin_mm": margin,
-                                 "source": "fabkiri print --style strips --marks"}
+    res.manifest["pad_marks"] = {
+        "layer": "ENGRAVE",
+        "count": n,
+        "margin_mm": margin,
+        "source": "fabkiri print --style strips --marks",
+    }
     return res, n
-

@@ -60,22 +60,33 @@ class Material:
             v = getattr(self, f.name)
             if f.type in ("float", float):
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise FabricationError(f"material {self.name}: {f.name} must be a finite number, got {v!r}")
+                    raise FabricationError(
+                        f"material {self.name}: {f.name} must be a finite number, got {v!r}"
+                    )
                 object.__setattr__(self, f.name, float(v))
                 if v <= 0:
-                    raise FabricationError(f"material {self.name}: {f.name} must be positive, got {v:g}")
+                    raise FabricationError(
+                        f"material {self.name}: {f.name} must be positive, got {v:g}"
+                    )
         if self.hinge not in HINGE_KINDS:
-            raise FabricationError(f"material {self.name}: hinge must be one of {', '.join(HINGE_KINDS)}, "
-                                   f"got {self.hinge!r}")
+            raise FabricationError(
+                f"material {self.name}: hinge must be one of {', '.join(HINGE_KINDS)}, "
+                f"got {self.hinge!r}"
+            )
         if self.colors not in COLOR_PRESETS:
-            raise FabricationError(f"material {self.name}: colors must be one of {', '.join(COLOR_PRESETS)}, "
-                                   f"got {self.colors!r}")
+            raise FabricationError(
+                f"material {self.name}: colors must be one of {', '.join(COLOR_PRESETS)}, "
+                f"got {self.colors!r}"
+            )
         if self.kerf_mm >= self.min_web_mm:
             raise FabricationError(
                 f"material {self.name}: kerf {self.kerf_mm:g} mm is not smaller than the minimum web "
-                f"{self.min_web_mm:g} mm; the laser would burn every web away")
+                f"{self.min_web_mm:g} mm; the laser would burn every web away"
+            )
         if self.strain_limit >= 1:
-            raise FabricationError(f"material {self.name}: strain_limit is a fraction (< 1), got {self.strain_limit:g}")
+            raise FabricationError(
+                f"material {self.name}: strain_limit is a fraction (< 1), got {self.strain_limit:g}"
+            )
 
     @property
     def kerf_offset_mm(self) -> float:
@@ -90,7 +101,9 @@ class Material:
             if value is None:
                 continue
             if key not in known:
-                raise InputError(f"unknown material field {key!r} (known: {', '.join(sorted(known))})")
+                raise InputError(
+                    f"unknown material field {key!r} (known: {', '.join(sorted(known))})"
+                )
             clean[key] = value
         return replace(self, **clean)
 
@@ -114,14 +127,20 @@ def load_material(name_or_path: str) -> Material:
     if shipped:
         path = MATERIALS_DIR / f"{name_or_path}.json"
         if not path.exists():
-            raise InputError(f"unknown material {name_or_path!r} (presets: {', '.join(available())})")
+            raise InputError(
+                f"unknown material {name_or_path!r} (presets: {', '.join(available())})"
+            )
     text = read_input(path, max_bytes=MAX_PRESET_BYTES, what="material preset")
     data = loads_json(text, f"material file {path}")
     if not isinstance(data, dict) or data.get("format") != "fabkiri.material":
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
-        raise InputError(f"material file {path} is not a fabkiri material preset (format {got!r}, "
-                         f"expected 'fabkiri.material')")
-    problem = None if shipped else schema_problem(data, load_schema(__package__, "material.schema.json"))
+        raise InputError(
+            f"material file {path} is not a fabkiri material preset (format {got!r}, "
+            f"expected 'fabkiri.material')"
+        )
+    problem = (
+        None if shipped else schema_problem(data, load_schema(__package__, "material.schema.json"))
+    )
     if problem:
         raise InputError(f"material file {path}: {problem}")
     data = {k: v for k, v in data.items() if k not in ("format", "version")}
@@ -137,7 +156,9 @@ def parse_setting(text: str) -> tuple[str, Any]:
     key = key.replace("-", "_")
     known = {f.name: f for f in fields(Material)}
     if key not in known:
-        raise InputError(f"--set: unknown material field {key!r} (known: {', '.join(sorted(known))})")
+        raise InputError(
+            f"--set: unknown material field {key!r} (known: {', '.join(sorted(known))})"
+        )
     if known[key].type in ("float", float):
         try:
             return key, float(value)

@@ -32,13 +32,33 @@ from .solid import Body, Prism, bed_grid, float32_defects, realise, to_trimesh
 from .styles.pinned import pinned_scale_range, sweep_pinned
 from .topfaces import verify_printed_tiles
 
-__all__ = ["STYLES", "Body", "MeshReport", "Prism", "PrintJob", "Realised", "TileCheck", "build_job",
-           "check_meshes", "check_printed_tiles", "export_3mf", "job_files", "manifest", "pinned_scale_range",
-           "print_plan", "read_back_files", "realise_job", "scaled", "sweep_pinned", "verify_printed_tiles"]
+__all__ = [
+    "STYLES",
+    "Body",
+    "MeshReport",
+    "Prism",
+    "PrintJob",
+    "Realised",
+    "TileCheck",
+    "build_job",
+    "check_meshes",
+    "check_printed_tiles",
+    "export_3mf",
+    "job_files",
+    "manifest",
+    "pinned_scale_range",
+    "print_plan",
+    "read_back_files",
+    "realise_job",
+    "scaled",
+    "sweep_pinned",
+    "verify_printed_tiles",
+]
 
 
-def build_job(pattern: Pattern, style: str, state: int, printer: Printer, advise_scale: float | None = None
-              ) -> PrintJob:
+def build_job(
+    pattern: Pattern, style: str, state: int, printer: Printer, advise_scale: float | None = None
+) -> PrintJob:
     """The print job of a style; with ``advise_scale`` (the scale the pattern was
     given at) a refused job says, where the style can, what would print (pinned:
     the scales that print on this bed)."""
@@ -48,7 +68,9 @@ def build_job(pattern: Pattern, style: str, state: int, printer: Printer, advise
     except FabricationError as exc:
         if chosen.advise is None or advise_scale is None:
             raise
-        raise FabricationError(f"{exc}; {chosen.advise(pattern, state, printer, advise_scale)}") from None
+        raise FabricationError(
+            f"{exc}; {chosen.advise(pattern, state, printer, advise_scale)}"
+        ) from None
 
 
 def _realise_clean(body: Body, grid: float):
@@ -71,24 +93,34 @@ def realise_job(job: PrintJob) -> Realised:
     done = [[_realise_clean(b, grid) for b in bed] for bed in job.beds]
     beds = [[replace(b, variants=()) for b, *_ in bed] for bed in done]
     job = replace(job, beds=beds)
-    return Realised(job, [[d[1] for d in bed] for bed in done], [[d[2] for d in bed] for bed in done],
-                    [[d[3] for d in bed] for bed in done])
+    return Realised(
+        job,
+        [[d[1] for d in bed] for bed in done],
+        [[d[2] for d in bed] for bed in done],
+        [[d[3] for d in bed] for bed in done],
+    )
 
 
 # ----------------------------------------------------------------- writing
+
 
 def export_3mf(scene) -> bytes:
     """A trimesh scene as a plain 3MF, one object per geometry, reproducible bytes
     (:func:`.threemf.objects_3mf`; print jobs write projects with :func:`job_files`)."""
     from .threemf import objects_3mf
 
-    return objects_3mf({name: (np.asarray(g.vertices), np.asarray(g.faces)) for name, g in scene.geometry.items()})
+    return objects_3mf(
+        {name: (np.asarray(g.vertices), np.asarray(g.faces)) for name, g in scene.geometry.items()}
+    )
 
 
 def _parts(bed: list[Body], tms: list) -> list:
     from .threemf import Part
 
-    return [Part(b.name, b.material, np.asarray(tm.vertices), np.asarray(tm.faces)) for b, tm in zip(bed, tms)]
+    return [
+        Part(b.name, b.material, np.asarray(tm.vertices), np.asarray(tm.faces))
+        for b, tm in zip(bed, tms)
+    ]
 
 
 def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
@@ -105,10 +137,13 @@ def job_files(r: Realised, stem: str, preview: bool = True) -> dict[str, bytes]:
     for k, (bed, tms) in enumerate(zip(job.beds, r.meshes), 1):
         suffix = "" if len(job.beds) == 1 else f"-bed{k}"
         changes = [LayerChange(z, kind, m) for z, kind, m in job.layer_changes]
-        files[f"{stem}{suffix}.3mf"] = project_3mf(f"{stem}{suffix}", _parts(bed, tms), job.printer, changes)
+        files[f"{stem}{suffix}.3mf"] = project_3mf(
+            f"{stem}{suffix}", _parts(bed, tms), job.printer, changes
+        )
         if preview:
-            files[f"{stem}{suffix}.png"] = preview_png(bed, r.manifolds[k - 1], job.printer,
-                                                       f"{stem}{suffix} ({job.style})")
+            files[f"{stem}{suffix}.png"] = preview_png(
+                bed, r.manifolds[k - 1], job.printer, f"{stem}{suffix} ({job.style})"
+            )
         if print_style(job.style).body_per_material:
             for b, tm in zip(bed, tms):
                 files[f"{stem}_{b.kind}.stl"] = tm.export(file_type="stl")
@@ -126,13 +161,18 @@ def print_plan(job: PrintJob) -> str:
     if len(mats) == 1:
         return f"one material ({mats[0]}), extruder 1"
     if pr.extruders >= 2:
-        return ", ".join(f"{m} on extruder {pr.extruder_of(m)}" for m in mats) + " (tool changes in one print)"
+        return (
+            ", ".join(f"{m} on extruder {pr.extruder_of(m)}" for m in mats)
+            + " (tool changes in one print)"
+        )
     if job.layer_changes:
         T, ts = pr.tile_thickness_mm, pr.strip_thickness_mm
         swaps = " and ".join(f"z = {z:.2f} mm (load {m})" for z, _, m in job.layer_changes)
-        return (f"one extruder: {job.style} stacked ({pr.strip_material} base sheet 0-{ts:g} mm, {pr.tile_material} "
-                f"tiles {ts:g}-{T:g} mm, {pr.strip_material} top strips {T:g}-{T + ts:g} mm), colour changes (M600) "
-                f"in the 3MF at {swaps}")
+        return (
+            f"one extruder: {job.style} stacked ({pr.strip_material} base sheet 0-{ts:g} mm, {pr.tile_material} "
+            f"tiles {ts:g}-{T:g} mm, {pr.strip_material} top strips {T:g}-{T + ts:g} mm), colour changes (M600) "
+            f"in the 3MF at {swaps}"
+        )
     raise FabricationError(
         f"printer {pr.name} has one extruder and {job.style} puts {' and '.join(mats)} in the same layers (the "
         f"recessed strips share the tiles' bottom and top {pr.strip_thickness_mm:g} mm), which no pause or colour "
@@ -141,35 +181,65 @@ def print_plan(job: PrintJob) -> str:
     )
 
 
-def manifest(r: Realised, rep: MeshReport, tiles: TileCheck | None, pattern_name: str,
-             files: Iterable[str], verifier=None, read_back: dict | None = None) -> str:
+def manifest(
+    r: Realised,
+    rep: MeshReport,
+    tiles: TileCheck | None,
+    pattern_name: str,
+    files: Iterable[str],
+    verifier=None,
+    read_back: dict | None = None,
+) -> str:
     """The print's manifest (:class:`~fabkiri.verify.printmanifest.PrintManifest`) as written."""
     job = r.job
     plan = job.plan
     m = PrintManifest(
-        pattern=pattern_name, style=job.style, state=job.state, printer=job.printer.to_dict(),
+        pattern=pattern_name,
+        style=job.style,
+        state=job.state,
+        printer=job.printer.to_dict(),
         shift_mm=[round(float(v), 6) for v in job.shift],
         layout=job.layout if print_style(job.style).has_layout else None,
-        layer_changes=[{"print_z_mm": round(z, 6), "gcode": "M600" if k == "colour-change" else "M601",
-                        "load": load} for z, k, load in job.layer_changes],
+        layer_changes=[
+            {
+                "print_z_mm": round(z, 6),
+                "gcode": "M600" if k == "colour-change" else "M601",
+                "load": load,
+            }
+            for z, k, load in job.layer_changes
+        ],
         beds=[[b.name for b in bed] for bed in job.beds],
-        hinges=[{"hinge": h, "tiles": plan.hinge_tiles[h].tolist(), "face": plan.face(h),
-                 "coincides_with": _coinciding(plan.partner, h),
-                 "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)]}
-                for h in range(plan.n_hinges)],
+        hinges=[
+            {
+                "hinge": h,
+                "tiles": plan.hinge_tiles[h].tolist(),
+                "face": plan.face(h),
+                "coincides_with": _coinciding(plan.partner, h),
+                "xy": [round(float(v), 6) for v in plan.hinge_xy[h] + np.asarray(job.shift)],
+            }
+            for h in range(plan.n_hinges)
+        ],
         files=sorted(files),
-        checks={"meshes": rep.to_dict(), "files": read_back, "tiles": tiles.to_dict() if tiles else None,
-                "verifier": verifier.to_dict() if verifier is not None else None},
+        checks={
+            "meshes": rep.to_dict(),
+            "files": read_back,
+            "tiles": tiles.to_dict() if tiles else None,
+            "verifier": verifier.to_dict() if verifier is not None else None,
+        },
     )
     if job.placements:
         m.placements = job.placements
-        m.assembly = ("glue every strip with its engraved face up, as seen from above the pattern: top-face "
-                      "strips on the tiles, bottom-face strips under them with the engraved face against them")
+        m.assembly = (
+            "glue every strip with its engraved face up, as seen from above the pattern: top-face "
+            "strips on the tiles, bottom-face strips under them with the engraved face against them"
+        )
         m.unlabelled_hinges = job.unlabelled
     if job.pins is not None:
-        m.pins = {"levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
-                  "geometry_mm": dict(job.pins.geometry.__dict__),
-                  "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}}
+        m.pins = {
+            "levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
+            "geometry_mm": dict(job.pins.geometry.__dict__),
+            "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"},
+        }
     return m.to_json()
 
 

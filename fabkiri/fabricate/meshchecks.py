@@ -36,9 +36,15 @@ class MeshReport:
         return not self.problems
 
     def to_dict(self) -> dict:
-        return {"ok": self.ok, "bodies": self.bodies, "intersection_volume_mm3": self.intersection_volume_mm3,
-                "min_clearance_mm": self.min_clearance_mm, "required_clearance_mm": self.required_clearance_mm,
-                "problems": self.problems, "deployment_sweep": self.sweep}
+        return {
+            "ok": self.ok,
+            "bodies": self.bodies,
+            "intersection_volume_mm3": self.intersection_volume_mm3,
+            "min_clearance_mm": self.min_clearance_mm,
+            "required_clearance_mm": self.required_clearance_mm,
+            "problems": self.problems,
+            "deployment_sweep": self.sweep,
+        }
 
 
 def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
@@ -54,20 +60,34 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
         snaps = r.snaps[k - 1] if r.snaps else [0.0] * len(bed)
         for b, m, tm, snap in zip(bed, ms, tms, snaps):
             lo, hi = tm.bounds
-            info = {"bed": k, "name": b.name, "kind": b.kind, "watertight": bool(tm.is_watertight),
-                    "winding_consistent": bool(tm.is_winding_consistent), "volume_mm3": float(tm.volume),
-                    "manifold_volume_mm3": float(m.volume()), "triangles": int(len(tm.faces)),
-                    "bounds_mm": [lo.round(4).tolist(), hi.round(4).tolist()]}
+            info = {
+                "bed": k,
+                "name": b.name,
+                "kind": b.kind,
+                "watertight": bool(tm.is_watertight),
+                "winding_consistent": bool(tm.is_winding_consistent),
+                "volume_mm3": float(tm.volume),
+                "manifold_volume_mm3": float(m.volume()),
+                "triangles": int(len(tm.faces)),
+                "bounds_mm": [lo.round(4).tolist(), hi.round(4).tolist()],
+            }
             info["float32_edge_defects"] = float32_defects(tm)
             info["outlines_snapped_to_mm"] = snap  # 0: as designed; else the float32 grid it needed
             rep.bodies.append(info)
             if info["float32_edge_defects"]:
-                rep.problems.append(f"{b.name}: {info['float32_edge_defects']} edges not shared by exactly two faces "
-                                    "once written with float32 coordinates")
+                rep.problems.append(
+                    f"{b.name}: {info['float32_edge_defects']} edges not shared by exactly two faces "
+                    "once written with float32 coordinates"
+                )
             if not (info["watertight"] and info["winding_consistent"]):
                 rep.problems.append(f"{b.name}: mesh not watertight or not consistently wound")
-            if not tm.volume > 0 or abs(tm.volume - m.volume()) > vol_rtol * max(1.0, m.volume()) + 1e-6:
-                rep.problems.append(f"{b.name}: volume {tm.volume:.6g} mm³ disagrees with the solid")
+            if (
+                not tm.volume > 0
+                or abs(tm.volume - m.volume()) > vol_rtol * max(1.0, m.volume()) + 1e-6
+            ):
+                rep.problems.append(
+                    f"{b.name}: volume {tm.volume:.6g} mm³ disagrees with the solid"
+                )
             if (lo < -eps).any() or hi[0] > bx + eps or hi[1] > by + eps or hi[2] > bz + eps:
                 rep.problems.append(f"{b.name}: outside the {bx:g} x {by:g} x {bz:g} mm bed")
         # bodies printed together never share volume
@@ -76,7 +96,10 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
             if print_style(job.style).body_per_material:
                 inter = (ms[0] ^ ms[1]).volume()
             else:  # many small disjoint parts: their union loses no volume
-                inter = sum(m.volume() for m in ms) - m3d.Manifold.batch_boolean(ms, m3d.OpType.Add).volume()
+                inter = (
+                    sum(m.volume() for m in ms)
+                    - m3d.Manifold.batch_boolean(ms, m3d.OpType.Add).volume()
+                )
             rep.intersection_volume_mm3 = max(rep.intersection_volume_mm3, float(inter))
     if rep.intersection_volume_mm3 > 1e-6:
         rep.problems.append(f"bodies overlap by {rep.intersection_volume_mm3:.3g} mm³")
@@ -121,7 +144,9 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
     # MITRE_LIMIT x the shrink, so drop vertices that deviate less than SECTION_NOISE_MM
     parts = list(shapely.simplify(np.array(section_polys(man, z), dtype=object), SECTION_NOISE_MM))
     design = shapely.transform(shapely.polygons(plan.corners), lambda c: c + np.array([dx, dy]))
-    grown = list(printgeom.grow_back(np.array(parts, dtype=object), plan.shrink_mm)) if parts else []
+    grown = (
+        list(printgeom.grow_back(np.array(parts, dtype=object), plan.shrink_mm)) if parts else []
+    )
     if mask is not None:
         design = np.array([g.difference(mask) for g in design], dtype=object)
         grown = [g.difference(mask) for g in grown]
@@ -152,8 +177,14 @@ def check_printed_tiles(r: Realised, tiles_mesh=None) -> TileCheck:
             overlap = float(shapely.area(shapely.intersection(g[i[sel]], g[j[sel]])).max())
     tol = pr.tolerance_mm
     ok = bool(dev <= tol and overlap <= tol * tol)
-    return TileCheck(state=job.state, tolerance_mm=tol, max_deviation_mm=float(dev), max_overlap_mm2=overlap,
-                     tiles=len(matched), ok=ok)
+    return TileCheck(
+        state=job.state,
+        tolerance_mm=tol,
+        max_deviation_mm=float(dev),
+        max_overlap_mm2=overlap,
+        tiles=len(matched),
+        ok=ok,
+    )
 
 
 def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
@@ -173,7 +204,9 @@ def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
             geoms = [trimesh.Trimesh(v, f, process=True) for _, _, _, v, f in read_volumes(data)]
         else:
             # trimesh.load is annotated as any Geometry (a Scene for some formats); an STL loads as one Trimesh
-            geoms = [cast(trimesh.Trimesh, trimesh.load(io.BytesIO(data), file_type=ext, process=True))]
+            geoms = [
+                cast(trimesh.Trimesh, trimesh.load(io.BytesIO(data), file_type=ext, process=True))
+            ]
         bad_edges, watertight, m3d_ok, volume = 0, True, True, 0.0
         for g in geoms:
             bad_edges += edge_defects(g.vertices, g.faces)
@@ -181,7 +214,12 @@ def read_back_files(files: dict[str, bytes]) -> dict[str, dict]:
             man = manifold_of(g)
             m3d_ok &= man.status().name == "NoError" and not man.is_empty()
             volume += float(g.volume)
-        out[name] = {"meshes": len(geoms), "watertight": watertight, "edges_not_shared_by_two_faces": bad_edges,
-                     "manifold3d_ok": bool(m3d_ok), "volume_mm3": volume,
-                     "ok": bool(watertight and bad_edges == 0 and m3d_ok)}
+        out[name] = {
+            "meshes": len(geoms),
+            "watertight": watertight,
+            "edges_not_shared_by_two_faces": bad_edges,
+            "manifold3d_ok": bool(m3d_ok),
+            "volume_mm3": volume,
+            "ok": bool(watertight and bad_edges == 0 and m3d_ok),
+        }
     return out

@@ -32,9 +32,11 @@ def kind_refusal(pattern: Pattern) -> str:
     and a pivot stacks two hinges, while a closed state may join ``hole_arity / 2`` at a point."""
     kind = tessellation(pattern.kind)
     if not kind.rigid_family:
-        return (f"pinned hinges refused: rigid pinned tiles need the rigid deployment path, which {pattern.kind} "
-                f"patterns do not have, and a pivot stacks {PIN_STACK} hinges while a {pattern.kind} closed state "
-                f"joins {kind.hole_arity // 2} at a point; use --style strips or tiles-and-strips")
+        return (
+            f"pinned hinges refused: rigid pinned tiles need the rigid deployment path, which {pattern.kind} "
+            f"patterns do not have, and a pivot stacks {PIN_STACK} hinges while a {pattern.kind} closed state "
+            f"joins {kind.hole_arity // 2} at a point; use --style strips or tiles-and-strips"
+        )
     return ""
 
 
@@ -83,8 +85,14 @@ def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
     flare = 2.0 * c  # the ring's narrowest hole is smaller than the pin's widest point
     slope = flare / levels.ear
     ch = float(c * np.sqrt(1.0 + slope * slope))  # horizontal clearance giving c normal to the cone
-    g = PinGeometry(ear=r, hollow=r + c, pin_bottom=rp, pin_top=rp + flare, hole_bottom=rp + ch,
-                    hole_top=rp + flare + ch)
+    g = PinGeometry(
+        ear=r,
+        hollow=r + c,
+        pin_bottom=rp,
+        pin_top=rp + flare,
+        hole_bottom=rp + ch,
+        hole_top=rp + flare + ch,
+    )
     wall = r - g.hole_top
     if wall < 2 * printer.nozzle_mm - 1e-9:
         raise FabricationError(
@@ -92,7 +100,9 @@ def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
             f"{c:g} mm), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); raise pin.ear_radius_mm"
         )
     if rp < printer.nozzle_mm:
-        raise FabricationError(f"pin radius {rp:g} mm is under one nozzle width ({printer.nozzle_mm:g} mm)")
+        raise FabricationError(
+            f"pin radius {rp:g} mm is under one nozzle width ({printer.nozzle_mm:g} mm)"
+        )
     return g
 
 
@@ -169,8 +179,10 @@ def pivot_phases(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
     two vertices a nanometre apart, which merge in a float32 STL into edges
     shared by four faces; coincident hinges get the same turn (one pivot)."""
     n = CIRCLE_SEGMENTS
-    radii = np.array([g.ear, g.pin_bottom, g.pin_top]
-                     + [r / np.cos(np.pi / n) for r in (g.hollow, g.hole_bottom, g.hole_top)])
+    radii = np.array(
+        [g.ear, g.pin_bottom, g.pin_top]
+        + [r / np.cos(np.pi / n) for r in (g.hollow, g.hole_bottom, g.hole_top)]
+    )
     A, B = plan.hinge_tiles.T
     rings = shapely.get_exterior_ring(plan.tiles)
     cand = np.arange(PHASES) / PHASES
@@ -184,7 +196,9 @@ def pivot_phases(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
         tiles = {int(A[h]), int(B[h])} | ({int(A[pa]), int(B[pa])} if pa >= 0 else set())
         edges = shapely.union_all(rings[sorted(tiles)])
         c = plan.hinge_xy[h]
-        xy = c + radii[None, :, None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)[:, None]  # (P, R, n, 2)
+        xy = (
+            c + radii[None, :, None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)[:, None]
+        )  # (P, R, n, 2)
         d = shapely.distance(shapely.multipoints(xy.reshape(PHASES, -1, 2)), edges)
         phase[h] = cand[int(np.argmax(d))]
     return phase
@@ -192,7 +206,9 @@ def pivot_phases(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
 
 def clearance_discs(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
     """Per hinge, the disc cleared around its pivot (circumscribed polygon, as the solids)."""
-    return np.array([regular_polygon(p, g.hollow, circumscribed=True) for p in plan.hinge_xy], dtype=object)
+    return np.array(
+        [regular_polygon(p, g.hollow, circumscribed=True) for p in plan.hinge_xy], dtype=object
+    )
 
 
 def clearance_mask(points: np.ndarray, g: PinGeometry) -> Polygon | MultiPolygon:
@@ -208,7 +224,9 @@ def pinned_sections(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
     out = np.empty(len(plan.tiles), dtype=object)
     for t in range(len(plan.tiles)):
         hs = np.flatnonzero((A == t) | (B == t))
-        out[t] = plan.tiles[t].difference(shapely.union_all(discs[hs])) if len(hs) else plan.tiles[t]
+        out[t] = (
+            plan.tiles[t].difference(shapely.union_all(discs[hs])) if len(hs) else plan.tiles[t]
+        )
     return out
 
 
@@ -271,11 +289,15 @@ def clearance_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> Sli
         sliver_area[t] = float(shapely.area(cut).sum())
         biggest = int(np.argmax(shapely.area(cut)))
         near[t] = int(hs[int(np.argmin(dist[beside][biggest]))])
-        printable[t] = S[t].difference(shapely.buffer(shapely.union_all(cut), eps, join_style="mitre"))
+        printable[t] = S[t].difference(
+            shapely.buffer(shapely.union_all(cut), eps, join_style="mitre")
+        )
     mask = clearance_mask(plan.hinge_xy, g)
     design = shapely.difference(shapely.polygons(plan.corners), mask)
     built = _outline_deviation(shapely.difference(grow_back(S, plan.shrink_mm), mask), design)
-    core_dev = _outline_deviation(shapely.difference(grow_back(printable, plan.shrink_mm), mask), design)
+    core_dev = _outline_deviation(
+        shapely.difference(grow_back(printable, plan.shrink_mm), mask), design
+    )
     return SliverReport(as_built=built, printable=core_dev, slivers=sliver_area, near_hinge=near)
 
 
@@ -289,7 +311,13 @@ def _refuse_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> None:
     h = int(rep.near_hinge[t])
     if h < 0:  # no sliver found: name the tile's pivot nearest to its worst point
         hs = np.flatnonzero((plan.hinge_tiles == t).any(1))
-        h = int(hs[np.argmin(shapely.distance(shapely.points(plan.hinge_xy[hs]), plan.tiles[t].exterior))])
+        h = int(
+            hs[
+                np.argmin(
+                    shapely.distance(shapely.points(plan.hinge_xy[hs]), plan.tiles[t].exterior)
+                )
+            ]
+        )
     raise FabricationError(
         f"pinned hinges refused: tile {t} is too narrow beside the {g.hollow:g} mm clearance around the pivot of "
         f"hinge {h}: it keeps a sliver under one nozzle ({printer.nozzle_mm:g} mm) wide there, so its printed "

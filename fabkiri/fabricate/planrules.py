@@ -48,52 +48,88 @@ def _pin_check(pattern: Pattern, plan, printer: Printer) -> None:
 
 
 def _pin_fields(printer: Printer) -> tuple:
-    return (printer.pin.ear_radius_mm, printer.pin.pin_radius_mm, printer.pin.tile_thickness_mm,
-            printer.axial_clearance_mm, printer.layer_mm, printer.tolerance_mm)
+    return (
+        printer.pin.ear_radius_mm,
+        printer.pin.pin_radius_mm,
+        printer.pin.tile_thickness_mm,
+        printer.axial_clearance_mm,
+        printer.layer_mm,
+        printer.tolerance_mm,
+    )
 
 
 def _strip_fields(printer: Printer) -> tuple:
     return (printer.strip_width_mm, printer.strip_reach_mm)
 
 
-def _strip_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float, state: int,
-                 face: np.ndarray) -> PrintMinimum:
+def _strip_bound(
+    pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float, state: int, face: np.ndarray
+) -> PrintMinimum:
     """Strips: the tile shrink, same-face strip clearance and pad area scales (see :func:`print_bound`)."""
     top_ = pattern.topology
     d = 0.5 * printer.gap_mm
     ends = top_.fold(state).fold_corner_ends
     same = fab.same_face_pairs(top_.hinge_tiles, face, top_.n_tiles)
-    clear = fab.strip_clearance_scales(c, top_.hinge_tiles, top_.hinge_corner, ends, same, d,
-                                       printer.strip_width_mm, printer.strip_reach_mm, printer.radial_clearance_mm)
+    clear = fab.strip_clearance_scales(
+        c,
+        top_.hinge_tiles,
+        top_.hinge_corner,
+        ends,
+        same,
+        d,
+        printer.strip_width_mm,
+        printer.strip_reach_mm,
+        printer.radial_clearance_mm,
+    )
     s_clear = float(clear.max(initial=0.0))
     s = max(s_shrink, s_clear)
     try:
         s_pad = _pad_scale(c, top_.hinge_tiles, top_.hinge_corner, ends, printer, max(s, MIN_GUESS))
-    except shapely.errors.GEOSException as exc:  # a self-intersecting tile (the shared bow-tie reference)
+    except (
+        shapely.errors.GEOSException
+    ) as exc:  # a self-intersecting tile (the shared bow-tie reference)
         return PrintMinimum(None, None, f"the pad geometry failed in GEOS ({exc})")
     if s_pad is None:
-        return PrintMinimum(None, None, "a strip pad is too small at any scale: a hinge corner is too sharp for "
-                                        "the strip width")
+        return PrintMinimum(
+            None,
+            None,
+            "a strip pad is too small at any scale: a hinge corner is too sharp for "
+            "the strip width",
+        )
     why = "strip pads" if s_pad > s else "strip clearance" if s_clear >= s_shrink else "tile shrink"
     return PrintMinimum(ceil_sig(max(s, s_pad)), None, f"{why} (closed form)", exact=False)
 
 
-def _pad_areas(c, hinge_tiles, hinge_corner, ends, printer: Printer, scale: np.ndarray, which: np.ndarray):
+def _pad_areas(
+    c, hinge_tiles, hinge_corner, ends, printer: Printer, scale: np.ndarray, which: np.ndarray
+):
     """Area of both pads (band ∩ tile shrunk by gap/2) of hinges ``which`` at their ``scale``: ``(n, 2)``."""
     d = 0.5 * printer.gap_mm
     w, R = printer.strip_width_mm, printer.strip_reach_mm + d
     cs = c[hinge_tiles[which]] * scale[:, None, None, None]  # (n, 2, 4, 2)
     sub = np.arange(len(which))
     tiles = cs.reshape(-1, 4, 2)
-    p, e, n, t0 = fab.strip_frames(tiles, np.stack([2 * sub, 2 * sub + 1], 1), hinge_corner[which], ends[which], d)
+    p, e, n, t0 = fab.strip_frames(
+        tiles, np.stack([2 * sub, 2 * sub + 1], 1), hinge_corner[which], ends[which], d
+    )
     perp = n[:, 0]
-    band = np.stack([p + t0[:, None] * e - R * perp, p + (t0 + w)[:, None] * e - R * perp,
-                     p + (t0 + w)[:, None] * e + R * perp, p + t0[:, None] * e + R * perp], 1)
+    band = np.stack(
+        [
+            p + t0[:, None] * e - R * perp,
+            p + (t0 + w)[:, None] * e - R * perp,
+            p + (t0 + w)[:, None] * e + R * perp,
+            p + t0[:, None] * e + R * perp,
+        ],
+        1,
+    )
     shrunk = fab.shrunk_quads(tiles, d)
     band = np.repeat(band, 2, axis=0)
     # a degenerate tile (a bow-tie, a zero-length seam) has no pad: it gets no polygon, area 0
-    ok = (fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM) & np.isfinite(band).all((1, 2)) \
+    ok = (
+        (fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM)
+        & np.isfinite(band).all((1, 2))
         & np.isfinite(shrunk).all((1, 2))
+    )
     area = np.zeros(len(tiles))
     inter = shapely.intersection(shapely.polygons(band[ok]), shapely.polygons(shrunk[ok]))
     area[ok] = shapely.area(inter)
@@ -104,8 +140,10 @@ def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) 
     """Smallest scale ≥ s0 at which every pad has the plan's area (bisection on the short pads only)."""
     need = 0.25 * printer.strip_width_mm * min(printer.strip_reach_mm, printer.strip_width_mm)
     H = len(hinge_tiles)
-    short = np.flatnonzero(_pad_areas(c, hinge_tiles, hinge_corner, ends, printer, np.full(H, s0),
-                                      np.arange(H)).min(1) < need)
+    short = np.flatnonzero(
+        _pad_areas(c, hinge_tiles, hinge_corner, ends, printer, np.full(H, s0), np.arange(H)).min(1)
+        < need
+    )
     if not len(short):
         return s0
     top = np.full(len(short), MAX_SCALE)
@@ -119,8 +157,14 @@ def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) 
     return float(hi.max())
 
 
-def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: float, state: int = 1,
-               face: np.ndarray | None = None) -> PrintMinimum:
+def _pin_bound(
+    pattern: Pattern,
+    c: np.ndarray,
+    printer: Printer,
+    s_shrink: float,
+    state: int = 1,
+    face: np.ndarray | None = None,
+) -> PrintMinimum:
     """Pinned: the checks that need no geometry (ear levels, ring wall, rigid-deployable) and the pivot
     spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
     from ..pattern.residuals import hinge_sums
@@ -137,13 +181,20 @@ def _pin_bound(pattern: Pattern, c: np.ndarray, printer: Printer, s_shrink: floa
     top_ = pattern.topology
     A, B = top_.hinge_tiles.T
     xy = 0.5 * (c[A, top_.hinge_corner[:, 0]] + c[B, top_.hinge_corner[:, 1]])
-    pts = np.unique(np.round(xy / (1e-6 * max(pattern.tile_size, 1e-12))), axis=0, return_index=True)[1]
+    pts = np.unique(
+        np.round(xy / (1e-6 * max(pattern.tile_size, 1e-12))), axis=0, return_index=True
+    )[1]
     piv = xy[np.sort(pts)]
     s = s_shrink
     if len(piv) > 1:
         s = max(s, (2 * g.hollow + 2 * printer.nozzle_mm) / closest_pair(piv))
-    return PrintMinimum(ceil_sig(s), None, "pivot spacing (closed form, a lower bound: print also checks the "
-                                           "slivers beside the clearances)", exact=False)
+    return PrintMinimum(
+        ceil_sig(s),
+        None,
+        "pivot spacing (closed form, a lower bound: print also checks the "
+        "slivers beside the clearances)",
+        exact=False,
+    )
 
 
 STRIP_PLAN = PlanRule(_strip_check, _strip_bound, _strip_fields)  # strips and tiles-and-strips

@@ -38,8 +38,13 @@ def _bar_length(span_mm: float) -> float:
     return 1000.0
 
 
-def png_bytes(sheets: list[SheetDrawing], colors: str = "default", px_per_mm: float | None = None,
-              max_px: int = 4000, label_mm: float | None = None) -> bytes:
+def png_bytes(
+    sheets: list[SheetDrawing],
+    colors: str = "default",
+    px_per_mm: float | None = None,
+    max_px: int = 4000,
+    label_mm: float | None = None,
+) -> bytes:
     """The preview. ``px_per_mm`` fixed, or chosen so a ``label_mm`` label is LABEL_PX tall (at least 2)."""
     import matplotlib
 
@@ -52,7 +57,9 @@ def png_bytes(sheets: list[SheetDrawing], colors: str = "default", px_per_mm: fl
     bar_band = 14.0  # mm below the parts for the scale bar and sheet number
     total_w = sum(widths) + GAP_MM * (len(sheets) - 1)
     total_h = max(b[3] - b[1] for b in boxes) + bar_band
-    want = px_per_mm if px_per_mm is not None else max(2.0, LABEL_PX / label_mm if label_mm else 4.0)
+    want = (
+        px_per_mm if px_per_mm is not None else max(2.0, LABEL_PX / label_mm if label_mm else 4.0)
+    )
     scale = min(want, max_px / max(total_w, total_h))
     dpi = 100
     fig = Figure(figsize=(total_w * scale / dpi, total_h * scale / dpi), dpi=dpi)
@@ -69,14 +76,27 @@ def png_bytes(sheets: list[SheetDrawing], colors: str = "default", px_per_mm: fl
         for name in LAYERS:
             if name not in DRAWN:
                 continue
-            segs = [(np.vstack([p, p[:1]]) if closed else p) + shift for p, closed in s.layers[name]]
+            segs = [
+                (np.vstack([p, p[:1]]) if closed else p) + shift for p, closed in s.layers[name]
+            ]
             if segs:
-                ax.add_collection(LineCollection(segs, colors=COLORS[colors][name][0], linewidths=lw))
+                ax.add_collection(
+                    LineCollection(segs, colors=COLORS[colors][name][0], linewidths=lw)
+                )
         if len(sheets) > 1:
-            ax.text(x0 + w / 2, -bar_band * 0.55, f"sheet {s.index}", ha="center", va="center", fontsize=font)
+            ax.text(
+                x0 + w / 2,
+                -bar_band * 0.55,
+                f"sheet {s.index}",
+                ha="center",
+                va="center",
+                fontsize=font,
+            )
         x0 += w + GAP_MM
     L = _bar_length(total_w)
-    ax.plot([BORDER_MM, BORDER_MM + L], [-bar_band * 0.45] * 2, color="k", lw=2.5, solid_capstyle="butt")
+    ax.plot(
+        [BORDER_MM, BORDER_MM + L], [-bar_band * 0.45] * 2, color="k", lw=2.5, solid_capstyle="butt"
+    )
     for x in (BORDER_MM, BORDER_MM + L):
         ax.plot([x, x], [-bar_band * 0.65, -bar_band * 0.25], color="k", lw=1.2)
     ax.text(BORDER_MM + L + 2.0, -bar_band * 0.45, f"{L:g} mm", va="center", fontsize=font)

@@ -63,36 +63,66 @@ class Printer:
         try:
             bed = tuple(float(v) for v in self.bed_mm)
         except (TypeError, ValueError):
-            raise FabricationError(f"printer {self.name}: bed_mm must be [x, y, z] in mm, got {self.bed_mm!r}") from None
+            raise FabricationError(
+                f"printer {self.name}: bed_mm must be [x, y, z] in mm, got {self.bed_mm!r}"
+            ) from None
         if len(bed) != 3:
-            raise FabricationError(f"printer {self.name}: bed_mm must be [x, y, z], got {list(self.bed_mm)}")
+            raise FabricationError(
+                f"printer {self.name}: bed_mm must be [x, y, z], got {list(self.bed_mm)}"
+            )
         object.__setattr__(self, "bed_mm", bed)
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name.endswith("_mm") and f.name != "bed_mm" and not (isinstance(v, (int, float)) and v > 0):
-                raise FabricationError(f"printer {self.name}: {f.name} must be a positive length, got {v!r}")
+            if (
+                f.name.endswith("_mm")
+                and f.name != "bed_mm"
+                and not (isinstance(v, (int, float)) and v > 0)
+            ):
+                raise FabricationError(
+                    f"printer {self.name}: {f.name} must be a positive length, got {v!r}"
+                )
         if min(bed) <= 0:
-            raise FabricationError(f"printer {self.name}: bed size must be positive, got {list(bed)}")
+            raise FabricationError(
+                f"printer {self.name}: bed size must be positive, got {list(bed)}"
+            )
         for f in fields(PinSpec):
             v = getattr(self.pin, f.name)
             if not (isinstance(v, (int, float)) and v > 0):
-                raise FabricationError(f"printer {self.name}: pin.{f.name} must be a positive length, got {v!r}")
+                raise FabricationError(
+                    f"printer {self.name}: pin.{f.name} must be a positive length, got {v!r}"
+                )
         if not (isinstance(self.extruders, int) and 1 <= self.extruders <= 16):
-            raise FabricationError(f"printer {self.name}: extruders must be a whole number 1-16, got {self.extruders!r}")
+            raise FabricationError(
+                f"printer {self.name}: extruders must be a whole number 1-16, got {self.extruders!r}"
+            )
         mats = tuple(self.materials)
         object.__setattr__(self, "materials", mats)
-        if mats and (len(mats) != self.extruders or not all(isinstance(m, str) and m for m in mats)):
-            raise FabricationError(f"printer {self.name}: materials must name one material per extruder "
-                                   f"({self.extruders}), got {list(mats)}")
+        if mats and (
+            len(mats) != self.extruders or not all(isinstance(m, str) and m for m in mats)
+        ):
+            raise FabricationError(
+                f"printer {self.name}: materials must name one material per extruder "
+                f"({self.extruders}), got {list(mats)}"
+            )
         for m in {self.tile_material, self.strip_material}:
             if m not in MATERIALS:
-                raise FabricationError(f"printer {self.name}: unknown material {m!r}; known: {', '.join(MATERIALS)}")
-        if self.extruders > 1 and mats and not {self.tile_material, self.strip_material} <= set(mats):
-            raise FabricationError(f"printer {self.name}: tile and strip materials must be among the extruders' "
-                                   f"materials {list(mats)}")
+                raise FabricationError(
+                    f"printer {self.name}: unknown material {m!r}; known: {', '.join(MATERIALS)}"
+                )
+        if (
+            self.extruders > 1
+            and mats
+            and not {self.tile_material, self.strip_material} <= set(mats)
+        ):
+            raise FabricationError(
+                f"printer {self.name}: tile and strip materials must be among the extruders' "
+                f"materials {list(mats)}"
+            )
         if self.first_layer_mm > 2 * self.layer_mm or self.layer_mm > 0.8 * self.nozzle_mm:
-            raise FabricationError(f"printer {self.name}: layer {self.layer_mm} mm / first layer "
-                                   f"{self.first_layer_mm} mm do not suit a {self.nozzle_mm} mm nozzle")
+            raise FabricationError(
+                f"printer {self.name}: layer {self.layer_mm} mm / first layer "
+                f"{self.first_layer_mm} mm do not suit a {self.nozzle_mm} mm nozzle"
+            )
         if self.gap_mm < self.radial_clearance_mm:
             raise FabricationError(
                 f"printer {self.name}: the tile gap {self.gap_mm} mm is below the radial clearance "
@@ -167,7 +197,9 @@ def printer_from_dict(data: dict[str, Any], source: str = "preset", schema: bool
     check against it: jsonschema's import alone is 0.1 CPU s of every ``design``)."""
     if not isinstance(data, dict) or data.get("format") != "fabkiri.printer":
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
-        raise InputError(f"{source} is not a fabkiri printer preset (format {got!r}, expected 'fabkiri.printer')")
+        raise InputError(
+            f"{source} is not a fabkiri printer preset (format {got!r}, expected 'fabkiri.printer')"
+        )
     known = {f.name for f in fields(Printer)}
     body = {k: v for k, v in data.items() if k not in ("format", "version")}
     unknown = sorted(set(body) - known)
@@ -177,11 +209,15 @@ def printer_from_dict(data: dict[str, Any], source: str = "preset", schema: bool
     pin_known = {f.name for f in fields(PinSpec)}
     if not isinstance(pin, dict) or set(pin) - pin_known:
         raise InputError(f"{source}: pin must be an object with {', '.join(sorted(pin_known))}")
-    required = [f.name for f in fields(Printer) if f.default is MISSING and f.default_factory is MISSING]
+    required = [
+        f.name for f in fields(Printer) if f.default is MISSING and f.default_factory is MISSING
+    ]
     missing = [k for k in required if k not in body]
     if missing:
         raise InputError(f"{source}: missing printer field(s) {', '.join(missing)}")
-    problem = schema_problem(data, load_schema(__package__, "printer.schema.json")) if schema else None
+    problem = (
+        schema_problem(data, load_schema(__package__, "printer.schema.json")) if schema else None
+    )
     if problem:
         raise InputError(f"{source}: {problem}")
     try:
@@ -198,6 +234,10 @@ def load_printer(name_or_path: str | None = None) -> Printer:
     if shipped:
         path = PRINTERS_DIR / f"{name}.json"
         if not path.is_file():
-            raise InputError(f"unknown printer {name!r}; presets: {', '.join(available_printers())}")
+            raise InputError(
+                f"unknown printer {name!r}; presets: {', '.join(available_printers())}"
+            )
     text = read_input(path, max_bytes=MAX_PRESET_BYTES, what="printer preset")
-    return printer_from_dict(loads_json(text, f"printer preset {path}"), str(path), schema=not shipped)
+    return printer_from_dict(
+        loads_json(text, f"printer preset {path}"), str(path), schema=not shipped
+    )

@@ -39,12 +39,15 @@ CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
 COINCIDE_TOL_REL = 1e-6  # two hinge points closer than this (tile sizes) coincide
 CIRCLE_SEGMENTS = 48
 POCKET_OVERSHOOT_MM = 0.05
-MITRE_LIMIT = 10.0  # as the laser-cut layer and the verifier: sharp tips shrink and grow back exactly
+MITRE_LIMIT = (
+    10.0  # as the laser-cut layer and the verifier: sharp tips shrink and grow back exactly
+)
 NOISE_MM = 1e-5  # outline vertices closer than this to their neighbours' line are dropped
 
 
-def regular_polygon(centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS,
-                    phase: float = 0.0) -> Polygon:
+def regular_polygon(
+    centre, radius: float, circumscribed: bool, n: int = CIRCLE_SEGMENTS, phase: float = 0.0
+) -> Polygon:
     """An n-gon approximating a circle: vertices on it (inscribed, for solid
     material) or edges tangent to it (circumscribed, for clearances), so that
     polygon approximation never eats into a clearance; turned by ``phase``
@@ -136,8 +139,13 @@ def coinciding(partner: np.ndarray, h: int) -> list[int]:
     if partner[h] < 0:
         return []
     root = min(h, int(partner[h]))
-    return [int(k) for k in np.flatnonzero((np.minimum(np.arange(len(partner)), partner) == root)
-                                            & (partner >= 0)) if k != h]
+    return [
+        int(k)
+        for k in np.flatnonzero(
+            (np.minimum(np.arange(len(partner)), partner) == root) & (partner >= 0)
+        )
+        if k != h
+    ]
 
 
 def _fewest_shared(k: int) -> int:
@@ -146,8 +154,9 @@ def _fewest_shared(k: int) -> int:
     return a * (a - 1) // 2 + b * (b - 1) // 2
 
 
-def face_rule(pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray | None = None
-              ) -> tuple[np.ndarray, int]:
+def face_rule(
+    pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray | None = None
+) -> tuple[np.ndarray, int]:
     """Top (True) or bottom face per hinge, opposite for hinges that coincide in a closed state, and
     how many coincident pairs share a face.
 
@@ -160,7 +169,10 @@ def face_rule(pattern: Pattern, states: dict[int, np.ndarray], apart: np.ndarray
     if faces.conflicts:
         most = tessellation(pattern.kind).hole_arity // 2
         tol = COINCIDE_TOL_REL * pattern.tile_size
-        groups = [(_group_sizes(coincident_pairs(_hinge_xy(pattern, c), tol, most))) for c in states.values()]
+        groups = [
+            (_group_sizes(coincident_pairs(_hinge_xy(pattern, c), tol, most)))
+            for c in states.values()
+        ]
         fewest = sum(_fewest_shared(int(k)) for g in groups for k in g)
         if faces.conflicts > fewest:
             i, j = next((int(a), int(b)) for a, b in faces.pairs if faces.face[a] == faces.face[b])
@@ -187,7 +199,9 @@ def _group_sizes(partner: np.ndarray) -> np.ndarray:
 
 def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
     if pattern.topology.n_hinges == 0:
-        raise FabricationError("the pattern has a single tile and no hinges: there is nothing to hinge")
+        raise FabricationError(
+            "the pattern has a single tile and no hinges: there is nothing to hinge"
+        )
     corners = closed_corners(pattern, state)
     top_ = pattern.topology
     fold = top_.fold(state)
@@ -196,8 +210,9 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
     far = 0.5 * (corners[A, fold.fold_corner_ends[:, 0]] + corners[B, fold.fold_corner_ends[:, 1]])
     seam = far - hxy
     seam /= np.linalg.norm(seam, axis=1, keepdims=True)
-    partner = coincident_pairs(hxy, COINCIDE_TOL_REL * pattern.tile_size,
-                               tessellation(pattern.kind).hole_arity // 2)
+    partner = coincident_pairs(
+        hxy, COINCIDE_TOL_REL * pattern.tile_size, tessellation(pattern.kind).hole_arity // 2
+    )
     states = {state: corners}
     try:
         states[3 - state] = closed_corners(pattern, 3 - state)
@@ -215,14 +230,25 @@ def closed_plan(pattern: Pattern, state: int, printer: Printer) -> ClosedPlan:
             f"tile {bad} vanishes or splits when shrunk by half the printer gap ({d:g} mm)"
         )
     plan = ClosedPlan(
-        state=state, corners=corners, tiles=shrunk, hinge_tiles=top_.hinge_tiles.copy(), hinge_xy=hxy,
-        seam_dir=seam, seam_end=far, partner=partner, top=top, shrink_mm=d, other_state_closes=other_closes,
+        state=state,
+        corners=corners,
+        tiles=shrunk,
+        hinge_tiles=top_.hinge_tiles.copy(),
+        hinge_xy=hxy,
+        seam_dir=seam,
+        seam_end=far,
+        partner=partner,
+        top=top,
+        shrink_mm=d,
+        other_state_closes=other_closes,
         shared_faces=shared,
     )
     return _refaced(pattern, plan, states, printer) if shared else plan
 
 
-def _refaced(pattern: Pattern, plan: ClosedPlan, states: dict[int, np.ndarray], printer: Printer) -> ClosedPlan:
+def _refaced(
+    pattern: Pattern, plan: ClosedPlan, states: dict[int, np.ndarray], printer: Printer
+) -> ClosedPlan:
     """Where two of three coincident hinges must share a face, which two is free: choose so that
     strips closer than the radial clearance lie on opposite faces where the flips can (two strips
     at two corners of a small triangle). The plan as it was if no strip comes that close, or the
@@ -237,7 +263,9 @@ def _refaced(pattern: Pattern, plan: ClosedPlan, states: dict[int, np.ndarray], 
         return plan
     try:
         top, shared = face_rule(pattern, states, close)
-    except FabricationError:  # the flips traded a coincident pair for strips: keep the fewest sharing
+    except (
+        FabricationError
+    ):  # the flips traded a coincident pair for strips: keep the fewest sharing
         return plan
     return replace(plan, top=top, shared_faces=shared)
 
@@ -246,7 +274,9 @@ def _close_strips(outline: np.ndarray, idx: np.ndarray, clearance: float) -> np.
     """Pairs ``(h, k)``, ``h < k``, of hinges in ``idx`` whose strips are closer than ``clearance``."""
     if len(idx) < 2:
         return np.zeros((0, 2), np.int64)
-    i, j = shapely.STRtree(outline[idx]).query(outline[idx], predicate="dwithin", distance=clearance - 1e-9)
+    i, j = shapely.STRtree(outline[idx]).query(
+        outline[idx], predicate="dwithin", distance=clearance - 1e-9
+    )
     sel = i < j
     return np.stack([idx[i[sel]], idx[j[sel]]], 1).astype(np.int64)
 
@@ -272,13 +302,19 @@ def _pair_regions(a: np.ndarray, b: np.ndarray, d: float, eps: float) -> np.ndar
     has no hole by construction, keeps only its largest polygon's outline.
     """
     grow = dict(join_style="mitre", mitre_limit=MITRE_LIMIT)
-    union = shapely.simplify(shapely.union(shapely.buffer(a, eps, **grow), shapely.buffer(b, eps, **grow)), 2 * eps)
+    union = shapely.simplify(
+        shapely.union(shapely.buffer(a, eps, **grow), shapely.buffer(b, eps, **grow)), 2 * eps
+    )
     pair = shapely.buffer(union, -(d + eps), **grow)
     bad = np.flatnonzero(~shapely.is_valid(pair) | (shapely.get_num_interior_rings(pair) > 0))
     for k in bad:
         parts = shapely.get_parts(shapely.make_valid(pair[k]))
         parts = parts[shapely.get_type_id(parts) == 3]
-        pair[k] = shapely.Polygon(parts[np.argmax(shapely.area(parts))].exterior) if len(parts) else Polygon()
+        pair[k] = (
+            shapely.Polygon(parts[np.argmax(shapely.area(parts))].exterior)
+            if len(parts)
+            else Polygon()
+        )
     return pair
 
 
@@ -299,14 +335,26 @@ def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> St
     t0 = _seam_entry(plan, pair, w + reach + d)
     R = reach + d
     t1 = t0 + w
-    band = np.stack([p + t0[:, None] * e - R * n, p + t1[:, None] * e - R * n,
-                     p + t1[:, None] * e + R * n, p + t0[:, None] * e + R * n], 1)
+    band = np.stack(
+        [
+            p + t0[:, None] * e - R * n,
+            p + t1[:, None] * e - R * n,
+            p + t1[:, None] * e + R * n,
+            p + t0[:, None] * e + R * n,
+        ],
+        1,
+    )
     strips = shapely.intersection(shapely.polygons(band), pair)
     # the band's corners can land within micrometres of the pair's: drop such
     # near-duplicate vertices, which a float32 file would weld into degenerate faces
     outline = shapely.simplify(np.array([_largest(g) for g in strips], dtype=object), NOISE_MM)
-    pads = np.stack([shapely.intersection(outline, plan.tiles[A]),
-                     shapely.intersection(outline, plan.tiles[B])], -1)
+    pads = np.stack(
+        [
+            shapely.intersection(outline, plan.tiles[A]),
+            shapely.intersection(outline, plan.tiles[B]),
+        ],
+        -1,
+    )
     min_pad = 0.25 * w * min(reach, w)
     small = (shapely.area(pads) < min_pad).any(1)
     if small.any():
@@ -363,9 +411,18 @@ def _pockets(pair: np.ndarray, band_frame: tuple, t: tuple, R: float, over: floa
     grown = shapely.buffer(pair, over, join_style="mitre", mitre_limit=MITRE_LIMIT)
     # ... and begins the overshoot before the band, whose end may lie along a tile edge
     t0o = t0 - over
-    pband = np.stack([p + t0o[:, None] * e - R * n, p + t1[:, None] * e - R * n,
-                      p + t1[:, None] * e + R * n, p + t0o[:, None] * e + R * n], 1)
-    return np.array([_largest(g) for g in shapely.intersection(shapely.polygons(pband), grown)], dtype=object)
+    pband = np.stack(
+        [
+            p + t0o[:, None] * e - R * n,
+            p + t1[:, None] * e - R * n,
+            p + t1[:, None] * e + R * n,
+            p + t0o[:, None] * e + R * n,
+        ],
+        1,
+    )
+    return np.array(
+        [_largest(g) for g in shapely.intersection(shapely.polygons(pband), grown)], dtype=object
+    )
 
 
 def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Printer) -> None:
@@ -387,7 +444,9 @@ def _check_strip_clearance(plan: ClosedPlan, outline: np.ndarray, printer: Print
     foreign = (ti != A[hi]) & (ti != B[hi])
     if foreign.any():
         h, t = int(hi[foreign][0]), int(ti[foreign][0])
-        raise FabricationError(f"the strip of hinge {h} comes within {c:g} mm of tile {t}, which it does not join")
+        raise FabricationError(
+            f"the strip of hinge {h} comes within {c:g} mm of tile {t}, which it does not join"
+        )
 
 
 def grow_back(polys, shrink: float):

@@ -44,7 +44,9 @@ class PrintJob:
     placements: list[dict] = field(default_factory=list)  # strips style: where each part went
     unlabelled: list[int] = field(default_factory=list)  # strips too small for their engraved ID
     layout: str = "recessed"  # tiles-and-strips: "recessed" or "stacked" (see tiles_and_strips)
-    layer_changes: list = field(default_factory=list)  # (print_z, kind, material) filament swaps, one extruder
+    layer_changes: list = field(
+        default_factory=list
+    )  # (print_z, kind, material) filament swaps, one extruder
 
     def z_levels(self) -> dict[str, float]:
         """Heights (mm) of the sections the checks take: bottom strips, bare tile, top strips."""
@@ -73,7 +75,11 @@ def centre_shift(bounds, printer: Printer) -> tuple[float, float]:
 
 def scaled(pattern: Pattern, k: float) -> Pattern:
     """The pattern ``k`` times its size (nodes and stored closed states)."""
-    return replace(pattern, nodes=pattern.nodes * k, contracted={s: c * k for s, c in pattern.contracted.items()})
+    return replace(
+        pattern,
+        nodes=pattern.nodes * k,
+        contracted={s: c * k for s, c in pattern.contracted.items()},
+    )
 
 
 @dataclass(eq=False)
@@ -83,7 +89,10 @@ class Realised:
     job: PrintJob
     manifolds: list[list]
     meshes: list[list]
-    snaps: list[list[float]] = field(default_factory=list)  # grid (mm) a body's outlines were snapped to, 0: exact
+    snaps: list[list[float]] = field(
+        default_factory=list
+    )  # grid (mm) a body's outlines were snapped to, 0: exact
+
 
 @dataclass(frozen=True, eq=False)
 class PrintStyle:
@@ -136,10 +145,13 @@ class StyleChecks:
 
 
 # built-in styles, imported when first asked for (their modules call register_style())
-_STYLES: Registry[PrintStyle] = Registry({
-    "strips": "fabkiri.fabricate.styles.strips",
-    "tiles-and-strips": "fabkiri.fabricate.styles.tiles_and_strips",
-    "pinned": "fabkiri.fabricate.styles.pinned"})
+_STYLES: Registry[PrintStyle] = Registry(
+    {
+        "strips": "fabkiri.fabricate.styles.strips",
+        "tiles-and-strips": "fabkiri.fabricate.styles.tiles_and_strips",
+        "pinned": "fabkiri.fabricate.styles.pinned",
+    }
+)
 STYLES = tuple(_STYLES.builtin)
 
 

@@ -56,11 +56,15 @@ def preview_png(bed, manifolds, printer, title: str) -> bytes:
     bx, by, _ = printer.bed_mm
     fig, axes = plt.subplots(1, 2, figsize=(12, 6.2), dpi=110)
     for ax, view in zip(axes, ("top", "bottom")):
-        ax.add_patch(Rectangle((0, 0), bx, by, facecolor="#f4f4f4", edgecolor="black", linewidth=1.0))
+        ax.add_patch(
+            Rectangle((0, 0), bx, by, facecolor="#f4f4f4", edgecolor="black", linewidth=1.0)
+        )
         for _, mat, polys in _layers(bed, manifolds, view):
             colour = MATERIALS[mat].colour if mat in MATERIALS else "#808080"
             paths = [_path(p, bx if view == "bottom" else None) for p in polys]  # holes stay open
-            ax.add_collection(PathCollection(paths, facecolors=colour, edgecolors="#333333", linewidths=0.2))
+            ax.add_collection(
+                PathCollection(paths, facecolors=colour, edgecolors="#333333", linewidths=0.2)
+            )
         ax.set_xlim(-0.02 * bx, 1.02 * bx)
         ax.set_ylim(-0.02 * by, 1.02 * by)
         ax.set_aspect("equal")
@@ -69,8 +73,13 @@ def preview_png(bed, manifolds, printer, title: str) -> bytes:
         ax.set_title(f"{view} view")
         ax.grid(True, linewidth=0.3, alpha=0.5)
     mats = sorted({b.material for b in bed})
-    handles = [Patch(facecolor=MATERIALS[m].colour if m in MATERIALS else "#808080",
-                     label=f"{m} (extruder {printer.extruder_of(m)})") for m in mats]
+    handles = [
+        Patch(
+            facecolor=MATERIALS[m].colour if m in MATERIALS else "#808080",
+            label=f"{m} (extruder {printer.extruder_of(m)})",
+        )
+        for m in mats
+    ]
     fig.legend(handles=handles, loc="lower center", ncol=len(handles))
     fig.suptitle(f"{title}: printer {printer.name}, bed {bx:g} x {by:g} mm")
     out = io.BytesIO()

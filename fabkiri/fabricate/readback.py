@@ -60,7 +60,9 @@ class Readback:
 
     @property
     def ok(self) -> bool:
-        return all(c.ok for c in self.checks) and (self.verifier is None or bool(self.verifier.get("ok")))
+        return all(c.ok for c in self.checks) and (
+            self.verifier is None or bool(self.verifier.get("ok"))
+        )
 
     def failed(self) -> list[CheckResult]:
         return [c for c in self.checks if not c.ok]
@@ -69,11 +71,19 @@ class Readback:
         self.checks.append(CheckResult(name, bool(ok), detail, value))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"ok": self.ok,
-                "self_checks": [{"check": c.name, "ok": c.ok, "detail": c.detail,
-                                 **({"value": c.value} if c.value is not None else {})} for c in self.checks],
-                "verifier": self.verifier}
-
+        return {
+            "ok": self.ok,
+            "self_checks": [
+                {
+                    "check": c.name,
+                    "ok": c.ok,
+                    "detail": c.detail,
+                    **({"value": c.value} if c.value is not None else {}),
+                }
+                for c in self.checks
+            ],
+            "verifier": self.verifier,
+        }
 
 
 # ------------------------------------------------------------------ self checks
@@ -95,29 +105,57 @@ def self_checks(result: CutResult, files: dict[str, bytes], rb: Readback | None 
         if row["dxf"]:
             dx = read_dxf_checked(files[row["dxf"]])
             dxf_layers, others, errs = dx.layers, dx.others, dx.audit_errors
-            how = f" ({dx.bulk_entities} stroke entities checked from their tags)" if dx.bulk_entities else ""
-            rb.add(f"sheet {k} dxf audit", len(errs) == 0,
-                   f"{len(errs)} errors{how}" + (f": {errs[0]}" if errs else ""), len(errs))
-            rb.add(f"sheet {k} dxf units", dx.insunits == 4 and dx.dxfversion == "AC1024",
-                   f"$INSUNITS={dx.insunits}, {dx.dxfversion}")
-            rb.add(f"sheet {k} dxf entities", not others and set(dxf_layers) <= set(LAYERS),
-                   f"non-LWPOLYLINE: {sorted(set(others))}, layers {sorted(dxf_layers)}")
+            how = (
+                f" ({dx.bulk_entities} stroke entities checked from their tags)"
+                if dx.bulk_entities
+                else ""
+            )
+            rb.add(
+                f"sheet {k} dxf audit",
+                len(errs) == 0,
+                f"{len(errs)} errors{how}" + (f": {errs[0]}" if errs else ""),
+                len(errs),
+            )
+            rb.add(
+                f"sheet {k} dxf units",
+                dx.insunits == 4 and dx.dxfversion == "AC1024",
+                f"$INSUNITS={dx.insunits}, {dx.dxfversion}",
+            )
+            rb.add(
+                f"sheet {k} dxf entities",
+                not others and set(dxf_layers) <= set(LAYERS),
+                f"non-LWPOLYLINE: {sorted(set(others))}, layers {sorted(dxf_layers)}",
+            )
             dups = sum(duplicate_segments(v) for v in dxf_layers.values())
             rb.add(f"sheet {k} dxf duplicate segments", dups == 0, f"{dups} duplicates", dups)
         if row["svg"]:
             wmm, hmm, vb, svg_layers = read_svg(files[row["svg"]])
-            ok = len(vb) == 4 and vb[:2] == [0, 0] and wmm == vb[2] and hmm == vb[3] \
-                and wmm == row["width_mm"] and hmm == row["height_mm"]
+            ok = (
+                len(vb) == 4
+                and vb[:2] == [0, 0]
+                and wmm == vb[2]
+                and hmm == vb[3]
+                and wmm == row["width_mm"]
+                and hmm == row["height_mm"]
+            )
             rb.add(f"sheet {k} svg size", ok, f"{wmm}mm x {hmm}mm, viewBox {vb}")
         if dxf_layers is not None and svg_layers is not None:
             worst, same = 0.0, True
             for name in LAYERS:
-                (pa, na, ca), (pb, nb, cb) = flat_polylines(dxf_layers.get(name, [])), flat_polylines(svg_layers.get(name, []))
+                (pa, na, ca), (pb, nb, cb) = (
+                    flat_polylines(dxf_layers.get(name, [])),
+                    flat_polylines(svg_layers.get(name, [])),
+                )
                 if len(na) != len(nb) or not (np.array_equal(na, nb) and np.array_equal(ca, cb)):
                     same = False
                     continue
                 worst = max(worst, float(np.abs(pa - pb).max(initial=0.0)))
-            rb.add(f"sheet {k} dxf = svg", same and worst <= AGREE_MM, f"max difference {worst:.2e} mm", worst)
+            rb.add(
+                f"sheet {k} dxf = svg",
+                same and worst <= AGREE_MM,
+                f"max difference {worst:.2e} mm",
+                worst,
+            )
         layers = dxf_layers if dxf_layers is not None else svg_layers
         if layers is None:
             continue
@@ -138,20 +176,38 @@ def _linestrings(polylines: Sequence[tuple[np.ndarray, bool]]) -> np.ndarray:
     return shapely.linestrings(coords, indices=owner)
 
 
-def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: dict[str, Any], man: dict[str, Any],
-                     ref: dict[str, Any] | None, Q: np.ndarray, tile_sheet: np.ndarray) -> None:
+def _geometry_checks(
+    rb: Readback,
+    k: int,
+    layers: SheetLayers,
+    kind: str,
+    mat: dict[str, Any],
+    man: dict[str, Any],
+    ref: dict[str, Any] | None,
+    Q: np.ndarray,
+    tile_sheet: np.ndarray,
+) -> None:
     cut = layers.get("CUT", [])
     closed = [p for p, c in cut if c]
     polys = np.array([shapely.Polygon(p) for p in closed], dtype=object)
     invalid = int((~shapely.is_valid(polys)).sum()) if len(polys) else 0
-    rb.add(f"sheet {k} closed contours valid", invalid == 0, f"{invalid} invalid of {len(polys)}", invalid)
+    rb.add(
+        f"sheet {k} closed contours valid",
+        invalid == 0,
+        f"{invalid} invalid of {len(polys)}",
+        invalid,
+    )
     is_ref = np.zeros(len(closed), dtype=bool)
     if ref and ref["sheet"] == k:
         sq = np.asarray(ref["corners"])
         is_ref = np.array([p.shape == sq.shape and np.allclose(p, sq, atol=1e-9) for p in closed])
         side = float(np.linalg.norm(sq[1] - sq[0]))
-        rb.add(f"sheet {k} reference square", is_ref.sum() == 1 and abs(side - ref["size_mm"]) <= 1e-9,
-               f"{int(is_ref.sum())} found, side {side:.6f} mm", side)
+        rb.add(
+            f"sheet {k} reference square",
+            is_ref.sum() == 1 and abs(side - ref["size_mm"]) <= 1e-9,
+            f"{int(is_ref.sum())} found, side {side:.6f} mm",
+            side,
+        )
     on = np.flatnonzero(tile_sheet == k - 1)
     expected = shapely.polygons(Q[on])
     # recover the pieces the laser leaves (each hinge kind knows what its sheet holds)
@@ -162,7 +218,9 @@ def _geometry_checks(rb: Readback, k: int, layers: SheetLayers, kind: str, mat: 
     _labels_inside(rb, k, layers, expected)
 
 
-def _tiles_recovered(rb: Readback, k: int, expected: np.ndarray, pieces: np.ndarray, tol: float) -> None:
+def _tiles_recovered(
+    rb: Readback, k: int, expected: np.ndarray, pieces: np.ndarray, tol: float
+) -> None:
     """Every expected tile comes back: one piece each, the same shape within ``tol`` (mm)."""
     matched = 0
     worst = 0.0
@@ -175,16 +233,26 @@ def _tiles_recovered(rb: Readback, k: int, expected: np.ndarray, pieces: np.ndar
             best[e] = min(best.get(e, np.inf), d)
         matched = sum(1 for d in best.values() if d <= tol)
         worst = max(best.values(), default=np.inf)
-    rb.add(f"sheet {k} tiles recovered", matched == len(expected) and len(pieces) == len(expected),
-           f"{matched}/{len(expected)} tiles within {tol:g} mm, {len(pieces)} pieces, worst {worst:.2e} mm", worst)
+    rb.add(
+        f"sheet {k} tiles recovered",
+        matched == len(expected) and len(pieces) == len(expected),
+        f"{matched}/{len(expected)} tiles within {tol:g} mm, {len(pieces)} pieces, worst {worst:.2e} mm",
+        worst,
+    )
 
 
-def _webs_and_holes(rb: Readback, k: int, pieces: np.ndarray, holes: np.ndarray, mat: dict[str, Any]) -> None:
+def _webs_and_holes(
+    rb: Readback, k: int, pieces: np.ndarray, holes: np.ndarray, mat: dict[str, Any]
+) -> None:
     """The thinnest piece against the minimum web, every hole against the minimum hole."""
     # the thinnest width of every piece (pattern.fabricability, the definition cut's own check uses)
     thin = min((fab.polygon_width(shapely.get_coordinates(q)) for q in pieces), default=np.inf)
-    rb.add(f"sheet {k} min web {mat['min_web_mm']:g} mm", thin >= mat["min_web_mm"] - fab.WEB_SLACK_MM,
-           f"thinnest piece {thin:.4g} mm wide", thin)
+    rb.add(
+        f"sheet {k} min web {mat['min_web_mm']:g} mm",
+        thin >= mat["min_web_mm"] - fab.WEB_SLACK_MM,
+        f"thinnest piece {thin:.4g} mm wide",
+        thin,
+    )
     if len(holes):
         # a hole is cuttable when a disc of the minimum hole diameter fits inside it
         core = shapely.buffer(holes, -0.5 * mat["min_hole_mm"] * (1 - 1e-6))
@@ -204,8 +272,12 @@ def _labels_inside(rb: Readback, k: int, layers: SheetLayers, expected: np.ndarr
         region = shapely.STRtree(expected)
         ii, _ = region.query(strokes, predicate="within")
         outside = len(strokes) - len(np.unique(ii))
-        rb.add(f"sheet {k} labels inside tiles", outside == 0, f"{outside} of {len(strokes)} strokes outside",
-               outside)
+        rb.add(
+            f"sheet {k} labels inside tiles",
+            outside == 0,
+            f"{outside} of {len(strokes)} strokes outside",
+            outside,
+        )
 
 
 # ------------------------------------------------------------------ verifier and writing
@@ -234,8 +306,9 @@ def run_verifier(pattern: Pattern, result: CutResult, folder: Path) -> dict[str,
     tol = result.manifest["tolerance_mm"]
     where = str(folder / "manifest.json")
     try:  # read and checked against its schema once, for every file
-        manifest: CutManifest | FabkiriError = CutManifest.from_json((folder / "manifest.json").read_text("utf-8"),
-                                                                     where)
+        manifest: CutManifest | FabkiriError = CutManifest.from_json(
+            (folder / "manifest.json").read_text("utf-8"), where
+        )
     except FabkiriError as exc:
         manifest = exc
     for key in ("dxf", "svg"):  # the verifier reads every sheet of one format from the first
@@ -268,8 +341,9 @@ def verify_result(pattern: Pattern, result: CutResult, *, use_verifier: bool = T
     return rb
 
 
-def verified_files(pattern: Pattern, result: CutResult, *, use_verifier: bool = True,
-                   force: bool = False) -> tuple[Readback, dict[str, bytes]]:
+def verified_files(
+    pattern: Pattern, result: CutResult, *, use_verifier: bool = True, force: bool = False
+) -> tuple[Readback, dict[str, bytes]]:
     """Verify, then return every file to write (the manifest with the verification report).
 
     Raises :class:`CheckFailed` naming the failed checks. With ``force`` (a pattern cut although
@@ -287,14 +361,22 @@ def verified_files(pattern: Pattern, result: CutResult, *, use_verifier: bool = 
             for name, rep in v.get("files", {}).items():
                 if not rep.get("ok"):
                     failed.append(f"verifier on {name}: {rep.get('error') or _failed_names(rep)}")
-        raise CheckFailed("read-back verification failed, nothing written: " + "; ".join(failed[:6]))
+        raise CheckFailed(
+            "read-back verification failed, nothing written: " + "; ".join(failed[:6])
+        )
     files = dict(result.files)
     files["manifest.json"] = result.manifest_bytes()
     return rb, files
 
 
-def write_verified(pattern: Pattern, result: CutResult, folder: str | Path, *, use_verifier: bool = True,
-                   force: bool = False) -> tuple[Readback, list[Path]]:
+def write_verified(
+    pattern: Pattern,
+    result: CutResult,
+    folder: str | Path,
+    *,
+    use_verifier: bool = True,
+    force: bool = False,
+) -> tuple[Readback, list[Path]]:
     """:func:`verified_files`, then write them all-or-nothing (a failed check writes nothing)."""
     rb, files = verified_files(pattern, result, use_verifier=use_verifier, force=force)
     return rb, atomic_write_many(folder, files)

@@ -27,11 +27,20 @@ if TYPE_CHECKING:  # ezdxf is imported where a file is read
 
 Entity = tuple[str, tuple[np.ndarray, bool]]  # a modelspace LWPOLYLINE: (layer, (points, closed))
 
-__all__ = ["DxfReadback", "Polylines", "duplicate_segments", "flat_polylines", "read_dxf", "read_dxf_checked",
-           "read_svg"]
+__all__ = [
+    "DxfReadback",
+    "Polylines",
+    "duplicate_segments",
+    "flat_polylines",
+    "read_dxf",
+    "read_dxf_checked",
+    "read_svg",
+]
 
 
-def read_dxf(data: bytes) -> tuple[Drawing, Auditor, dict[str, list[tuple[np.ndarray, bool]]], list[str]]:
+def read_dxf(
+    data: bytes,
+) -> tuple[Drawing, Auditor, dict[str, list[tuple[np.ndarray, bool]]], list[str]]:
     """``(doc, auditor, layers)`` with ``layers[name] = [(points, closed), ...]``."""
     import ezdxf
 
@@ -45,7 +54,9 @@ def read_dxf(data: bytes) -> tuple[Drawing, Auditor, dict[str, list[tuple[np.nda
     return doc, auditor, layers, others
 
 
-FULL_AUDIT_MAX = 2000  # files with at most this many canonical stroke entities are loaded whole by ezdxf
+FULL_AUDIT_MAX = (
+    2000  # files with at most this many canonical stroke entities are loaded whole by ezdxf
+)
 
 
 @dataclass
@@ -55,7 +66,9 @@ class DxfReadback:
     insunits: Any
     dxfversion: str
     audit_errors: list[str]
-    layers: Mapping[str, Sequence[tuple[np.ndarray, bool]]]  # (points, closed) per layer, in file order
+    layers: Mapping[
+        str, Sequence[tuple[np.ndarray, bool]]
+    ]  # (points, closed) per layer, in file order
     others: list[str]
     bulk_entities: int = 0  # entities checked from their tags instead of being loaded by ezdxf
 
@@ -73,7 +86,9 @@ def _audit_strokes(doc: Drawing, tags: Tags, canon: np.ndarray, layer_of: np.nda
     except ValueError:
         hv, seed = np.zeros(len(canon), dtype=np.int64), -1
         errors.append("stroke entity with a handle that is not hexadecimal")
-    if len(np.unique(handles)) != len(handles) or any(h in doc.entitydb for h in set(handles.tolist())):
+    if len(np.unique(handles)) != len(handles) or any(
+        h in doc.entitydb for h in set(handles.tolist())
+    ):
         errors.append("stroke entities with duplicate handles")
     if (hv <= 0).any() or (hv >= seed).any():
         errors.append("stroke entity handle not below $HANDSEED")
@@ -134,7 +149,7 @@ def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback
     # ezdxf: everything but the canonical entities
     keep = np.flatnonzero(tags.bad)
     lines, starts, ends = tags.lines, tags.starts, tags.ends
-    rest = "".join("\n".join(lines[2 * starts[k]: 2 * ends[k]]) + "\n" for k in keep.tolist())
+    rest = "".join("\n".join(lines[2 * starts[k] : 2 * ends[k]]) + "\n" for k in keep.tolist())
     try:
         doc = ezdxf.read(io.StringIO(text[:lo] + rest + text[hi:]))
     except Exception as exc:  # an unreadable file is a failed check, not a crash
@@ -148,23 +163,38 @@ def read_dxf_checked(data: bytes, full_max: int = FULL_AUDIT_MAX) -> DxfReadback
     if len(rest_in_order) != len(keep):  # entities outside the modelspace: read it all with ezdxf
         return _full(data)
     items = [(int(k), item) for k, item in zip(keep.tolist(), rest_in_order) if item is not None]
-    layers = _layers_in_file_order(xy, canon, layer_of, tags.nv[tags.good], tags.flags[tags.good] == "1", items)
-    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon))
+    layers = _layers_in_file_order(
+        xy, canon, layer_of, tags.nv[tags.good], tags.flags[tags.good] == "1", items
+    )
+    return DxfReadback(
+        doc.header.get("$INSUNITS"), doc.dxfversion, errors, layers, others, len(canon)
+    )
 
 
-def _layers_in_file_order(xy: np.ndarray, canon: np.ndarray, layer_of: np.ndarray, n_canon: np.ndarray,
-                          closed: np.ndarray, items: list[tuple[int, Entity]]) -> dict[str, Polylines]:
+def _layers_in_file_order(
+    xy: np.ndarray,
+    canon: np.ndarray,
+    layer_of: np.ndarray,
+    n_canon: np.ndarray,
+    closed: np.ndarray,
+    items: list[tuple[int, Entity]],
+) -> dict[str, Polylines]:
     """Polylines per layer in the file's order: the canonical ones from their tags,
     merged by position with the ``items`` ``(entity, (layer, polyline))`` ezdxf read."""
     point_layer = np.repeat(layer_of, n_canon)
     names = set(layer_of.tolist())
     layers: dict[str, Polylines] = {}
-    for name in sorted(names | {item[0] for _, item in items}, key=lambda n: LAYERS.index(n) if n in LAYERS else 99):
+    for name in sorted(
+        names | {item[0] for _, item in items}, key=lambda n: LAYERS.index(n) if n in LAYERS else 99
+    ):
         sel = layer_of == name
         mine = Polylines(xy[point_layer == name], n_canon[sel], closed[sel])
         extra = [(k, item[1]) for k, item in items if item[0] == name]
         if extra:  # merge by position in the file
-            both = sorted([(int(k), pl) for k, pl in zip(canon[sel].tolist(), mine)] + extra, key=lambda kv: kv[0])
+            both = sorted(
+                [(int(k), pl) for k, pl in zip(canon[sel].tolist(), mine)] + extra,
+                key=lambda kv: kv[0],
+            )
             mine = Polylines.of([pl for _, pl in both])
         layers[name] = mine
     return layers
@@ -187,8 +217,13 @@ def _entities_of(doc: Drawing) -> tuple[None, None, list[Entity | None], list[st
 
 def _full(data: bytes) -> DxfReadback:
     doc, aud, layers, others = read_dxf(data)
-    return DxfReadback(doc.header.get("$INSUNITS"), doc.dxfversion,
-                       [f"{e.code}: {e.message}" for e in aud.errors], layers, others)
+    return DxfReadback(
+        doc.header.get("$INSUNITS"),
+        doc.dxfversion,
+        [f"{e.code}: {e.message}" for e in aud.errors],
+        layers,
+        others,
+    )
 
 
 def _segments(polylines: Sequence[tuple[np.ndarray, bool]]) -> np.ndarray:

@@ -42,7 +42,9 @@ class Body:
     kind: str  # "tile", "hinge", "tiles", "hinges"
     ops: tuple[tuple[str, Prism], ...]
     material: str = ""
-    variants: tuple[Body, ...] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
+    variants: tuple[
+        Body, ...
+    ] = ()  # the same part described otherwise, tried if this one's file is not 2-manifold
 
 
 def _rings(polys: Iterable[Polygon]) -> list[np.ndarray]:
@@ -74,13 +76,18 @@ def _manifold(prism: Prism, grid: float = 0.0):
     that leaves edges shared by four faces) and no edge is shorter than the grid."""
     import manifold3d as m3d
 
-    polys = prism.polygons if not grid else (shapely.set_precision(shapely.union_all(prism.polygons), grid),)
+    polys = (
+        prism.polygons
+        if not grid
+        else (shapely.set_precision(shapely.union_all(prism.polygons), grid),)
+    )
     cs = m3d.CrossSection(_rings(polys), fillrule=m3d.FillRule.Positive)
     h = prism.z1 - prism.z0
     if prism.scale_top != 1.0:
         cx, cy = prism.centre
-        return (m3d.Manifold.extrude(cs.translate((-cx, -cy)), h, scale_top=(prism.scale_top, prism.scale_top))
-                .translate((cx, cy, prism.z0)))
+        return m3d.Manifold.extrude(
+            cs.translate((-cx, -cy)), h, scale_top=(prism.scale_top, prism.scale_top)
+        ).translate((cx, cy, prism.z0))
     return m3d.Manifold.extrude(cs, h).translate((0.0, 0.0, prism.z0))
 
 
@@ -89,8 +96,12 @@ def realise(body: Body, grid: float = 0.0):
     import manifold3d as m3d
 
     acc = m3d.Manifold()
-    ops = [(op, prism) for op, prism in body.ops if any(not p.is_empty for p in prism.polygons)]  # e.g. no bottom strip
-    for op, run in itertools.groupby(ops, key=lambda o: o[0]):  # a run of adds (or subs) as one batched union
+    ops = [
+        (op, prism) for op, prism in body.ops if any(not p.is_empty for p in prism.polygons)
+    ]  # e.g. no bottom strip
+    for op, run in itertools.groupby(
+        ops, key=lambda o: o[0]
+    ):  # a run of adds (or subs) as one batched union
         ms = [_manifold(prism, grid) for _, prism in run]
         m = ms[0] if len(ms) == 1 else m3d.Manifold.batch_boolean(ms, m3d.OpType.Add)
         acc = acc + m if op == "add" else acc - m
@@ -101,14 +112,34 @@ def to_trimesh(manifold):
     import trimesh
 
     mesh = manifold.to_mesh64()
-    return trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3].astype(np.float64),
-                           np.asarray(mesh.tri_verts).astype(np.int64), process=False)
+    return trimesh.Trimesh(
+        np.asarray(mesh.vert_properties)[:, :3].astype(np.float64),
+        np.asarray(mesh.tri_verts).astype(np.int64),
+        process=False,
+    )
 
 
 def translate_body(body: Body, dx: float, dy: float) -> Body:
-    ops = tuple((op, Prism(tuple(shapely.affinity.translate(p, dx, dy) for p in pr.polygons), pr.z0, pr.z1,
-                           pr.scale_top, (pr.centre[0] + dx, pr.centre[1] + dy))) for op, pr in body.ops)
-    return Body(body.name, body.kind, ops, body.material, tuple(translate_body(v, dx, dy) for v in body.variants))
+    ops = tuple(
+        (
+            op,
+            Prism(
+                tuple(shapely.affinity.translate(p, dx, dy) for p in pr.polygons),
+                pr.z0,
+                pr.z1,
+                pr.scale_top,
+                (pr.centre[0] + dx, pr.centre[1] + dy),
+            ),
+        )
+        for op, pr in body.ops
+    )
+    return Body(
+        body.name,
+        body.kind,
+        ops,
+        body.material,
+        tuple(translate_body(v, dx, dy) for v in body.variants),
+    )
 
 
 def manifold_of(mesh):
@@ -116,15 +147,21 @@ def manifold_of(mesh):
     float32 coordinates and 32-bit indices a written file holds."""
     import manifold3d as m3d
 
-    return m3d.Manifold(m3d.Mesh(vert_properties=np.asarray(mesh.vertices, dtype=np.float32),
-                                 tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
+    return m3d.Manifold(
+        m3d.Mesh(
+            vert_properties=np.asarray(mesh.vertices, dtype=np.float32),
+            tri_verts=np.asarray(mesh.faces, dtype=np.uint32),
+        )
+    )
 
 
 def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> int:
     """Edges not used by exactly two faces, plus faces with a repeated vertex,
     once the vertices are welded by position, as any STL reader does."""
     v = np.ascontiguousarray(vertices)
-    _, weld = np.unique(v.view(np.dtype((np.void, 3 * v.dtype.itemsize))).ravel(), return_inverse=True)
+    _, weld = np.unique(
+        v.view(np.dtype((np.void, 3 * v.dtype.itemsize))).ravel(), return_inverse=True
+    )
     f = weld.reshape(-1)[np.asarray(faces)]
     degenerate = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
     e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1).astype(np.int64)
@@ -135,6 +172,7 @@ def edge_defects(vertices: np.ndarray, faces: np.ndarray) -> int:
 def float32_defects(tm) -> int:
     """:func:`edge_defects` of a mesh as a file stores it (float32 coordinates)."""
     return edge_defects(np.asarray(tm.vertices, dtype=np.float32), tm.faces)
+
 
 def section_polys(manifold, z: float) -> list[Polygon]:
     """The section of a solid at height ``z`` as disjoint polygons (holes kept)."""

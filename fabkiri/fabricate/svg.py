@@ -30,8 +30,12 @@ def path_data(points: np.ndarray, closed: bool, height: float) -> str:
 
 def _nums(values: np.ndarray) -> list[str]:
     """:func:`_num` of many values."""
-    return ["0" if t in ("-0", "") else t
-            for t in (f.rstrip("0").rstrip(".") for f in map(f"{{:.{DECIMALS}f}}".format, values.tolist()))]
+    return [
+        "0" if t in ("-0", "") else t
+        for t in (
+            f.rstrip("0").rstrip(".") for f in map(f"{{:.{DECIMALS}f}}".format, values.tolist())
+        )
+    ]
 
 
 def layer_paths(polylines, groups, height: float) -> list[str]:
@@ -47,7 +51,7 @@ def layer_paths(polylines, groups, height: float) -> list[str]:
     start = 0
     prev = None
     for (p, closed), g in zip(polylines, groups):
-        d = "M" + " L".join(xy[start:start + len(p)]) + (" Z" if closed else "")
+        d = "M" + " L".join(xy[start : start + len(p)]) + (" Z" if closed else "")
         start += len(p)
         if g >= 0 and g == prev:
             out[-1] += " " + d

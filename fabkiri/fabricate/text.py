@@ -25,12 +25,36 @@ _G: dict[str, list[list[tuple[float, float]]]] = {
     "5": [[(0.6, 1), (0, 1), (0, 0.55), (0.6, 0.55), (0.6, 0), (0, 0)]],
     "6": [[(0.6, 1), (0, 1), (0, 0), (0.6, 0), (0.6, 0.5), (0, 0.5)]],
     "7": [[(0, 1), (0.6, 1), (0.2, 0)]],
-    "8": [[(0.3, 0.5), (0.05, 0.75), (0.3, 1), (0.55, 0.75), (0.3, 0.5), (0.6, 0.25), (0.3, 0), (0, 0.25),
-           (0.3, 0.5)]],  # two stacked loops meeting in the middle: never a B (straight spine)
+    "8": [
+        [
+            (0.3, 0.5),
+            (0.05, 0.75),
+            (0.3, 1),
+            (0.55, 0.75),
+            (0.3, 0.5),
+            (0.6, 0.25),
+            (0.3, 0),
+            (0, 0.25),
+            (0.3, 0.5),
+        ]
+    ],  # two stacked loops meeting in the middle: never a B (straight spine)
     "9": [[(0.6, 0.5), (0, 0.5), (0, 1), (0.6, 1), (0.6, 0), (0, 0)]],
     "A": [[(0, 0), (0.3, 1), (0.6, 0)], [(0.1, 0.35), (0.5, 0.35)]],
-    "B": [[(0, 0.5), (0.5, 0.5), (0.6, 0.4), (0.6, 0.1), (0.5, 0), (0, 0), (0, 1), (0.45, 1), (0.55, 0.9),
-           (0.55, 0.6), (0.45, 0.5)]],
+    "B": [
+        [
+            (0, 0.5),
+            (0.5, 0.5),
+            (0.6, 0.4),
+            (0.6, 0.1),
+            (0.5, 0),
+            (0, 0),
+            (0, 1),
+            (0.45, 1),
+            (0.55, 0.9),
+            (0.55, 0.6),
+            (0.45, 0.5),
+        ]
+    ],
     "C": [[(0.6, 1), (0, 1), (0, 0), (0.6, 0)]],
     "D": [[(0, 0), (0, 1), (0.35, 1), (0.6, 0.7), (0.6, 0.3), (0.35, 0), (0, 0)]],
     "E": [[(0.6, 1), (0, 1), (0, 0), (0.6, 0)], [(0, 0.5), (0.45, 0.5)]],
@@ -47,8 +71,20 @@ _G: dict[str, list[list[tuple[float, float]]]] = {
     "P": [[(0, 0), (0, 1), (0.6, 1), (0.6, 0.5), (0, 0.5)]],
     "Q": [[(0, 0), (0.6, 0), (0.6, 1), (0, 1), (0, 0)], [(0.35, 0.3), (0.6, 0.05)]],
     "R": [[(0, 0), (0, 1), (0.6, 1), (0.6, 0.5), (0, 0.5), (0.6, 0)]],
-    "S": [[(0.6, 0.85), (0.45, 1), (0.15, 1), (0, 0.85), (0, 0.65), (0.6, 0.35), (0.6, 0.15), (0.45, 0), (0.15, 0),
-           (0, 0.15)]],  # rounded ends and a slanted spine: never a 5
+    "S": [
+        [
+            (0.6, 0.85),
+            (0.45, 1),
+            (0.15, 1),
+            (0, 0.85),
+            (0, 0.65),
+            (0.6, 0.35),
+            (0.6, 0.15),
+            (0.45, 0),
+            (0.15, 0),
+            (0, 0.15),
+        ]
+    ],  # rounded ends and a slanted spine: never a 5
     "T": [[(0, 1), (0.6, 1)], [(0.3, 1), (0.3, 0)]],
     "U": [[(0, 1), (0, 0), (0.6, 0), (0.6, 1)]],
     "V": [[(0, 1), (0.3, 0), (0.6, 1)]],
@@ -78,7 +114,9 @@ def text_width(text: str) -> float:
     return 0.0 if n == 0 else ADVANCE * (n - 1) + CELL_W
 
 
-def text_strokes(text: str, height: float, centre: tuple[float, float] | np.ndarray) -> list[np.ndarray]:
+def text_strokes(
+    text: str, height: float, centre: tuple[float, float] | np.ndarray
+) -> list[np.ndarray]:
     """Polylines of ``text`` at cap ``height`` mm, its box centred on ``centre``.
 
     Characters outside the glyph table raise ``KeyError`` naming the character.
@@ -107,8 +145,9 @@ _UNIT_START = np.concatenate([[0], np.cumsum(_UNIT_N)[:-1]])
 _UNIT_PTS = np.concatenate(_UNIT)
 
 
-def text_strokes_many(texts: list[str], heights: np.ndarray, centres: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def text_strokes_many(
+    texts: list[str], heights: np.ndarray, centres: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The strokes of many labels at once: ``(points (P, 2), counts (S,), label (S,))``.
 
     Stroke ``j`` is ``points[sum(counts[:j]):][:counts[j]]`` and belongs to
@@ -146,7 +185,9 @@ def text_strokes_many(texts: list[str], heights: np.ndarray, centres: np.ndarray
     return pts, counts, lab_a
 
 
-def text_box(height: float, centre: Sequence[float] | np.ndarray, text: str) -> tuple[float, float, float, float]:
+def text_box(
+    height: float, centre: Sequence[float] | np.ndarray, text: str
+) -> tuple[float, float, float, float]:
     """(xmin, ymin, xmax, ymax) of the text's cells; every glyph stays inside."""
     w = height * text_width(text)
     return (centre[0] - w / 2, centre[1] - height / 2, centre[0] + w / 2, centre[1] + height / 2)

@@ -70,46 +70,58 @@ def _rows(fmt: str, a: np.ndarray) -> str:
 
 def model_xml(object_name: str, parts: list[Part]) -> str:
     mats = sorted({p.material for p in parts}, key=lambda m: (m not in MATERIALS, m))
-    out = [f'<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xml:lang="en-US" '
-           f'xmlns="{CORE_NS}" xmlns:slic3rpe="{SLIC3R_NS}">\n',
-           ' <metadata name="slic3rpe:Version3mf">1</metadata>\n',
-           ' <metadata name="Application">fabkiri</metadata>\n <resources>\n  <basematerials id="1">\n']
+    out = [
+        f'<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xml:lang="en-US" '
+        f'xmlns="{CORE_NS}" xmlns:slic3rpe="{SLIC3R_NS}">\n',
+        ' <metadata name="slic3rpe:Version3mf">1</metadata>\n',
+        ' <metadata name="Application">fabkiri</metadata>\n <resources>\n  <basematerials id="1">\n',
+    ]
     for m in mats:
         colour = MATERIALS[m].colour if m in MATERIALS else "#808080"
         out.append(f'   <base name={quoteattr(m)} displaycolor="{colour}FF"/>\n')
-    out.append(f'  </basematerials>\n  <object id="2" type="model" name={quoteattr(object_name)} pid="1" pindex="0">\n'
-               '   <mesh>\n    <vertices>\n')
+    out.append(
+        f'  </basematerials>\n  <object id="2" type="model" name={quoteattr(object_name)} pid="1" pindex="0">\n'
+        "   <mesh>\n    <vertices>\n"
+    )
     offset = 0
     tris = []
     for p in parts:
-        v = np.round(np.asarray(p.vertices, dtype=np.float64), 6) + 0.0  # 1 nm; + 0.0 turns -0 into 0
+        v = (
+            np.round(np.asarray(p.vertices, dtype=np.float64), 6) + 0.0
+        )  # 1 nm; + 0.0 turns -0 into 0
         out.append(_rows('     <vertex x="%.6f" y="%.6f" z="%.6f"/>', v))
         k = mats.index(p.material)
         f = np.asarray(p.faces, dtype=np.int64) + offset
         tris.append(_rows(f'     <triangle v1="%d" v2="%d" v3="%d" pid="1" p1="{k}"/>', f))
         offset += len(v)
-    out.append('    </vertices>\n    <triangles>\n')
+    out.append("    </vertices>\n    <triangles>\n")
     out.extend(tris)
-    out.append('    </triangles>\n   </mesh>\n  </object>\n </resources>\n'
-               ' <build>\n  <item objectid="2" printable="1"/>\n </build>\n</model>\n')
+    out.append(
+        "    </triangles>\n   </mesh>\n  </object>\n </resources>\n"
+        ' <build>\n  <item objectid="2" printable="1"/>\n </build>\n</model>\n'
+    )
     return "".join(out)
 
 
 def model_config_xml(object_name: str, parts: list[Part], printer: Printer) -> str:
     """PrusaSlicer's per-volume metadata: name, part type, extruder."""
-    out = ['<?xml version="1.0" encoding="UTF-8"?>\n<config>\n <object id="2" instances_count="1">\n',
-           f'  <metadata type="object" key="name" value={quoteattr(object_name)}/>\n']
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>\n<config>\n <object id="2" instances_count="1">\n',
+        f'  <metadata type="object" key="name" value={quoteattr(object_name)}/>\n',
+    ]
     first = 0
     for p in parts:
         last = first + len(p.faces) - 1
-        out.append(f'  <volume firstid="{first}" lastid="{last}">\n'
-                   f'   <metadata type="volume" key="name" value={quoteattr(p.name)}/>\n'
-                   '   <metadata type="volume" key="volume_type" value="ModelPart"/>\n'
-                   f'   <metadata type="volume" key="extruder" value="{printer.extruder_of(p.material)}"/>\n'
-                   '   <mesh edges_fixed="0" degenerate_facets="0" facets_removed="0" facets_reversed="0" '
-                   'backwards_edges="0"/>\n  </volume>\n')
+        out.append(
+            f'  <volume firstid="{first}" lastid="{last}">\n'
+            f'   <metadata type="volume" key="name" value={quoteattr(p.name)}/>\n'
+            '   <metadata type="volume" key="volume_type" value="ModelPart"/>\n'
+            f'   <metadata type="volume" key="extruder" value="{printer.extruder_of(p.material)}"/>\n'
+            '   <mesh edges_fixed="0" degenerate_facets="0" facets_removed="0" facets_reversed="0" '
+            'backwards_edges="0"/>\n  </volume>\n'
+        )
         first = last + 1
-    out.append(' </object>\n</config>\n')
+    out.append(" </object>\n</config>\n")
     return "".join(out)
 
 
@@ -151,8 +163,14 @@ def project_config(printer: Printer, loaded: list[str]) -> dict[str, str]:
         "wipe_tower": "1" if n > 1 else "0",
     }
     if n > 1:  # the wipe tower in the bed's front-left corner, clear of the centred parts
-        cfg.update({"wipe_tower_x": "10", "wipe_tower_y": "10", "wipe_tower_width": "40",
-                    "wipe_tower_rotation_angle": "0"})
+        cfg.update(
+            {
+                "wipe_tower_x": "10",
+                "wipe_tower_y": "10",
+                "wipe_tower_width": "40",
+                "wipe_tower_rotation_angle": "0",
+            }
+        )
     return cfg
 
 
@@ -166,8 +184,10 @@ def custom_gcode_xml(changes: list[LayerChange]) -> str:
         t, code = CHANGE_TYPES[c.kind]
         colour = MATERIALS[c.material].colour if c.material in MATERIALS else "#808080"
         extra = f"load {c.material}"
-        out.append(f'<code print_z="{c.print_z:.4f}" type="{t}" extruder="1" color="{colour}" '
-                   f'extra={quoteattr(extra)} gcode="{code}"/>\n')
+        out.append(
+            f'<code print_z="{c.print_z:.4f}" type="{t}" extruder="1" color="{colour}" '
+            f'extra={quoteattr(extra)} gcode="{code}"/>\n'
+        )
     out.append('<mode value="SingleExtruder"/>\n</custom_gcodes_per_print_z>\n')
     return "".join(out)
 
@@ -186,23 +206,34 @@ def _zip(entries: dict[str, str]) -> bytes:
 def objects_3mf(meshes: dict[str, tuple[np.ndarray, np.ndarray]]) -> bytes:
     """A plain 3MF with one object (and build item) per named mesh (vertices, faces),
     for files that are not print projects (e.g. the calibration coupon)."""
-    out = [f'<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xml:lang="en-US" xmlns="{CORE_NS}">\n'
-           ' <resources>\n']
+    out = [
+        f'<?xml version="1.0" encoding="UTF-8"?>\n<model unit="millimeter" xml:lang="en-US" xmlns="{CORE_NS}">\n'
+        " <resources>\n"
+    ]
     for i, (name, (v, f)) in enumerate(meshes.items(), 1):
         v = np.round(np.asarray(v, dtype=np.float64), 6) + 0.0
-        out.append(f'  <object id="{i}" type="model" name={quoteattr(name)}>\n   <mesh>\n    <vertices>\n')
+        out.append(
+            f'  <object id="{i}" type="model" name={quoteattr(name)}>\n   <mesh>\n    <vertices>\n'
+        )
         out.append(_rows('     <vertex x="%.6f" y="%.6f" z="%.6f"/>', v))
-        out.append('    </vertices>\n    <triangles>\n')
+        out.append("    </vertices>\n    <triangles>\n")
         out.append(_rows('     <triangle v1="%d" v2="%d" v3="%d"/>', np.asarray(f, dtype=np.int64)))
-        out.append('    </triangles>\n   </mesh>\n  </object>\n')
-    out.append(' </resources>\n <build>\n')
+        out.append("    </triangles>\n   </mesh>\n  </object>\n")
+    out.append(" </resources>\n <build>\n")
     out.extend(f'  <item objectid="{i}"/>\n' for i in range(1, len(meshes) + 1))
-    out.append(' </build>\n</model>\n')
-    return _zip({"[Content_Types].xml": CONTENT_TYPES, "_rels/.rels": RELS, "3D/3dmodel.model": "".join(out)})
+    out.append(" </build>\n</model>\n")
+    return _zip(
+        {
+            "[Content_Types].xml": CONTENT_TYPES,
+            "_rels/.rels": RELS,
+            "3D/3dmodel.model": "".join(out),
+        }
+    )
 
 
-def project_3mf(object_name: str, parts: list[Part], printer: Printer,
-                changes: list[LayerChange] | None = None) -> bytes:
+def project_3mf(
+    object_name: str, parts: list[Part], printer: Printer, changes: list[LayerChange] | None = None
+) -> bytes:
     """The 3MF bytes of one bed: one object, one volume per part, project settings."""
     loaded = extruder_materials(printer, parts)
     entries = {
@@ -231,7 +262,10 @@ def read_volumes(data: bytes) -> list[tuple[str, str, int, np.ndarray, np.ndarra
         raise ValueError("a fabkiri 3MF project holds exactly one object")
     bases = re.findall(r'<base name="([^"]*)"', text)
     v = np.array(re.findall(r'<vertex x="([^"]+)" y="([^"]+)" z="([^"]+)"', text), dtype=float)
-    t = np.array(re.findall(r'<triangle v1="(\d+)" v2="(\d+)" v3="(\d+)" pid="1" p1="(\d+)"', text), dtype=np.int64)
+    t = np.array(
+        re.findall(r'<triangle v1="(\d+)" v2="(\d+)" v3="(\d+)" pid="1" p1="(\d+)"', text),
+        dtype=np.int64,
+    )
     if len(t) != text.count("<triangle "):
         raise ValueError("triangles without their basematerial")
     f, mat = t[:, :3], t[:, 3]
@@ -247,5 +281,13 @@ def read_volumes(data: bytes) -> list[tuple[str, str, int, np.ndarray, np.ndarra
         keep = np.unique(fv)
         remap = np.full(len(v), -1)
         remap[keep] = np.arange(len(keep))
-        out.append((meta.get("name", ""), bases[int(used[0])], int(meta.get("extruder", "1")), v[keep], remap[fv]))
+        out.append(
+            (
+                meta.get("name", ""),
+                bases[int(used[0])],
+                int(meta.get("extruder", "1")),
+                v[keep],
+                remap[fv],
+            )
+        )
     return out

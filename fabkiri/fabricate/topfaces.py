@@ -34,8 +34,12 @@ def top_face_dxf(r: Realised, tiles_mesh=None) -> bytes:
     doc.layers.add("CUT", color=1)
     msp = doc.modelspace()
     for ring in man.slice(job.z_levels()["tiles"]).to_polygons():
-        msp.add_lwpolyline(np.asarray(ring, dtype=float).tolist(), format="xy", close=True,
-                           dxfattribs={"layer": "CUT"})
+        msp.add_lwpolyline(
+            np.asarray(ring, dtype=float).tolist(),
+            format="xy",
+            close=True,
+            dxfattribs={"layer": "CUT"},
+        )
     out = io.StringIO()
     doc.write(out)
     return out.getvalue().encode("utf-8")
@@ -59,12 +63,16 @@ def printed_bridges(r: Realised) -> list[dict]:
     top = job.strips.top
     for z, face in ((lv["bottom"], np.flatnonzero(~top)), (lv["top"], np.flatnonzero(top))):
         parts = np.array(section_polys(hinges_m, z), dtype=object)
-        if job.layout == "stacked" and z == lv["bottom"]:  # a base sheet: each bottom strip's share of it
+        if (
+            job.layout == "stacked" and z == lv["bottom"]
+        ):  # a base sheet: each bottom strip's share of it
             mine = shapely.intersection(shapely.union_all(parts), planned[~top])
             parts = np.array([g for g in shapely.get_parts(mine) if g.area > 1e-4], dtype=object)
         # only the strips printed at this level own its sections: a bottom strip may lie under a top
         # strip of a neighbouring hinge in plan, and a point in both would leave its hinge unowned
-        pi, hi = shapely.STRtree(planned[face]).query(shapely.point_on_surface(parts), predicate="within")
+        pi, hi = shapely.STRtree(planned[face]).query(
+            shapely.point_on_surface(parts), predicate="within"
+        )
         hi = face[hi]
         owner = np.full(len(parts), -1)
         once = np.bincount(pi, minlength=len(parts)) == 1
@@ -81,11 +89,16 @@ def _bridge_features(parts, owner, tiles, qi, ti) -> list[dict]:
     order = np.argsort(qi, kind="stable")  # stable: each part's tiles in query order, as before
     firsts, starts = np.unique(qi[order], return_index=True)
     span = {int(q): (lo, hi) for q, lo, hi in zip(firsts, starts, np.append(starts[1:], len(qi)))}
-    cut = [shapely.union_all(tiles[ti[order[slice(*span[k])]]]) if k in span else None for k in keep.tolist()]
+    cut = [
+        shapely.union_all(tiles[ti[order[slice(*span[k])]]]) if k in span else None
+        for k in keep.tolist()
+    ]
     has = np.array([c is not None for c in cut], dtype=bool)
     bridges = parts[keep].copy()
     if has.any():
-        bridges[has] = shapely.difference(parts[keep][has], np.array([c for c in cut if c is not None]))
+        bridges[has] = shapely.difference(
+            parts[keep][has], np.array([c for c in cut if c is not None])
+        )
     live = ~shapely.is_empty(bridges)
     # drawn a hair inside the bridge, so the verifier's "material minus
     # ligaments" never leaves slivers along the tile edges it shares
@@ -95,8 +108,13 @@ def _bridge_features(parts, owner, tiles, qi, ti) -> list[dict]:
         for piece in shapely.get_parts(core):
             if piece.geom_type != "Polygon" or piece.area < 1e-4:
                 continue  # slivers where a strip edge meets a tile edge
-            feats.append({"hinge": int(owner[k]), "sheet": 1,
-                          "polygon": np.asarray(piece.exterior.coords)[:-1].tolist()})
+            feats.append(
+                {
+                    "hinge": int(owner[k]),
+                    "sheet": 1,
+                    "polygon": np.asarray(piece.exterior.coords)[:-1].tolist(),
+                }
+            )
     return feats
 
 
@@ -112,9 +130,16 @@ def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
 
     job = r.job
     data = top_face_dxf(r, tiles_mesh)
-    manifest = CutManifest(hinge="ligament", layout="in-place", state=job.state, scale=1.0, kerf_offset_mm=0.0,
-                           tile_shrink_mm=job.plan.shrink_mm, mitre_limit=printgeom.MITRE_LIMIT,
-                           hinge_features=printed_bridges(r))
+    manifest = CutManifest(
+        hinge="ligament",
+        layout="in-place",
+        state=job.state,
+        scale=1.0,
+        kerf_offset_mm=0.0,
+        tile_shrink_mm=job.plan.shrink_mm,
+        mitre_limit=printgeom.MITRE_LIMIT,
+        hinge_features=printed_bridges(r),
+    )
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "printed-top-faces.dxf"
         path.write_bytes(data)
@@ -122,5 +147,3 @@ def verify_printed_tiles(pattern: Pattern, r: Realised, tiles_mesh=None):
     rep.subject = "printed tile top faces"
     rep.meta["files"] = []
     return rep
-
-

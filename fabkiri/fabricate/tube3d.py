@@ -27,11 +27,15 @@ def tube_seam(pattern: Pattern) -> Seam:
     """The tube's seam; a flat sheet (no seam) is bad input, said in one line."""
     seam = seam_of(pattern)
     if seam is None:
-        raise InputError("the pattern has no seam: it is a flat sheet, not a tube (make one with --tube)")
+        raise InputError(
+            "the pattern has no seam: it is a flat sheet, not a tube (make one with --tube)"
+        )
     return seam
 
 
-def state_frame(pattern: Pattern, state: str | int, copies: int = 1) -> tuple[np.ndarray, TubeFrame]:
+def state_frame(
+    pattern: Pattern, state: str | int, copies: int = 1
+) -> tuple[np.ndarray, TubeFrame]:
     """Per-tile corners of the tube's tiles (``copies`` periods side by side) and the frame to roll them."""
     if int(copies) != copies or copies < 1:
         raise InputError(f"--copies must be a whole number >= 1, got {copies}")
@@ -42,7 +46,9 @@ def state_frame(pattern: Pattern, state: str | int, copies: int = 1) -> tuple[np
     if copies == 1:
         return tiles, f
     if f.apex is not None:
-        raise InputError("copies of a cone-shaped state are not a tube: use a state that is a cylinder")
+        raise InputError(
+            "copies of a cone-shaped state are not a tube: use a state that is a cylinder"
+        )
     t = seam_map(Y, seam).translation
     tiles = np.concatenate([tiles + j * t for j in range(copies)])
     return tiles, replace(f, period=f.period * copies)
@@ -53,15 +59,23 @@ def _tile_grid(quad: np.ndarray, n: int) -> np.ndarray:
     s = np.linspace(0.0, 1.0, n)
     u, v = np.meshgrid(s, s, indexing="xy")
     a, b, c, d = quad
-    return ((1 - u) * (1 - v))[..., None] * a + (u * (1 - v))[..., None] * b + (u * v)[..., None] * c + \
-        ((1 - u) * v)[..., None] * d
+    return (
+        ((1 - u) * (1 - v))[..., None] * a
+        + (u * (1 - v))[..., None] * b
+        + (u * v)[..., None] * c
+        + ((1 - u) * v)[..., None] * d
+    )
 
 
 def _grid_faces(n: int, base: int = 0) -> np.ndarray:
     i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
     a = base + i * n + j
-    return np.concatenate([np.stack([a, a + 1, a + n + 1], -1).reshape(-1, 3),
-                           np.stack([a, a + n + 1, a + n], -1).reshape(-1, 3)])
+    return np.concatenate(
+        [
+            np.stack([a, a + 1, a + n + 1], -1).reshape(-1, 3),
+            np.stack([a, a + n + 1, a + n], -1).reshape(-1, 3),
+        ]
+    )
 
 
 def surface_mesh(tiles: np.ndarray, f: TubeFrame, n: int = SUBDIV) -> trimesh.Trimesh:
@@ -81,25 +95,45 @@ def _outward(f: TubeFrame, pts3: np.ndarray) -> np.ndarray:
     else:  # a cone's normal tilts towards the apex end by the half angle
         k = abs(f.alpha) / (2 * np.pi)
         r = np.hypot(pts3[:, 0], pts3[:, 1])
-        nrm = np.stack([pts3[:, 0] / r * np.sqrt(1 - k * k), pts3[:, 1] / r * np.sqrt(1 - k * k),
-                        -np.full(len(r), k)], -1)
+        nrm = np.stack(
+            [
+                pts3[:, 0] / r * np.sqrt(1 - k * k),
+                pts3[:, 1] / r * np.sqrt(1 - k * k),
+                -np.full(len(r), k),
+            ],
+            -1,
+        )
     return nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
 
 
-def plate_meshes(tiles: np.ndarray, f: TubeFrame, thickness: float, n: int = SUBDIV) -> list[trimesh.Trimesh]:
+def plate_meshes(
+    tiles: np.ndarray, f: TubeFrame, thickness: float, n: int = SUBDIV
+) -> list[trimesh.Trimesh]:
     """One watertight plate per tile: inner face on the surface, outer face ``thickness`` outwards."""
     if not np.isfinite(thickness) or thickness <= 0:
         raise InputError(f"plate thickness must be a positive length in mm, got {thickness}")
     grid_faces = _grid_faces(n)
-    ring = np.concatenate([np.arange(n - 1), np.arange(n - 1, n * n - 1, n),
-                           np.arange(n * n - 1, n * n - n, -1), np.arange(n * n - n, 0, -n)])
+    ring = np.concatenate(
+        [
+            np.arange(n - 1),
+            np.arange(n - 1, n * n - 1, n),
+            np.arange(n * n - 1, n * n - n, -1),
+            np.arange(n * n - n, 0, -n),
+        ]
+    )
     # a wall quad is fanned about its centre: two neighbours sharing an edge then mesh their common wall
     # alike (a diagonal splits it one way for one tile and the other way for the other; on a cone, where
     # the quad is not planar, the plates would then interpenetrate by slivers of ~1e-5 of a plate)
     a, b = ring, np.roll(ring, -1)
     m = 2 * n * n + np.arange(len(ring))
-    walls = np.concatenate([np.stack([a, b, m], -1), np.stack([b, b + n * n, m], -1),
-                            np.stack([b + n * n, a + n * n, m], -1), np.stack([a + n * n, a, m], -1)])
+    walls = np.concatenate(
+        [
+            np.stack([a, b, m], -1),
+            np.stack([b, b + n * n, m], -1),
+            np.stack([b + n * n, a + n * n, m], -1),
+            np.stack([a + n * n, a, m], -1),
+        ]
+    )
     out = []
     for quad in tiles:
         inner = f.roll(_tile_grid(quad, n).reshape(-1, 2))
@@ -130,8 +164,15 @@ def plate_overlap(plates: list[trimesh.Trimesh]) -> tuple[float, tuple[int, int]
     import manifold3d as m3
 
     # double precision: float32 vertices turn the shared walls of a cone's neighbours into slivers (~1e-8)
-    bodies = [m3.Manifold(m3.Mesh64(vert_properties=np.asarray(p.vertices, np.float64),
-                                    tri_verts=np.asarray(p.faces, np.uint64))) for p in plates]
+    bodies = [
+        m3.Manifold(
+            m3.Mesh64(
+                vert_properties=np.asarray(p.vertices, np.float64),
+                tri_verts=np.asarray(p.faces, np.uint64),
+            )
+        )
+        for p in plates
+    ]
     lo = np.array([p.bounds[0] for p in plates])
     hi = np.array([p.bounds[1] for p in plates])
     vol = np.array([p.volume for p in plates])

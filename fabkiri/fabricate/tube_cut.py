@@ -43,8 +43,14 @@ def seam_hinges(pattern: Pattern, seam: Seam) -> list[dict]:
         if (a in first_of) == (b in first_of):
             continue  # within the sheet, or within the copy column
         tile, corner, copy, copy_corner = (a, ca, b, cb) if b in first_of else (b, cb, a, ca)
-        out.append({"tile": int(flat[tile]), "corner": CORNER[corner],
-                    "joins_tile": int(flat[first_of[copy]]), "joins_corner": CORNER[copy_corner]})
+        out.append(
+            {
+                "tile": int(flat[tile]),
+                "corner": CORNER[corner],
+                "joins_tile": int(flat[first_of[copy]]),
+                "joins_corner": CORNER[copy_corner],
+            }
+        )
     return out
 
 
@@ -54,19 +60,29 @@ def seam_note(pattern: Pattern, seam: Seam, state: int, hinges: list[dict]) -> s
     m = seam_map(Y, seam)
     if seam.closed == "cone":
         ts = tube_state(pattern, seam, Y, state)
-        roll = (f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
-                f"rotation of {m.rotation:.4f} rad about an apex, so it rolls into a cone of radius "
-                f"{ts.radius_min_mm:.3f} to {ts.radius_max_mm:.3f} mm, {ts.length_mm:.3f} mm long.")
+        roll = (
+            f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
+            f"rotation of {m.rotation:.4f} rad about an apex, so it rolls into a cone of radius "
+            f"{ts.radius_min_mm:.3f} to {ts.radius_max_mm:.3f} mm, {ts.length_mm:.3f} mm long."
+        )
     else:
-        roll = (f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
-                f"pure translation of {m.period:.3f} mm (rotation {m.rotation:.1e} rad), the circumference; the "
-                f"tube's radius is {m.period / (2 * np.pi):.3f} mm.")
-    lines = [f"Seam of {pattern.name or 'the tube'}: {len(hinges)} hinges join the sheet's right edge to its left "
-             f"edge after cutting.", roll,
-             "Join each pair with the sheet's hinge kind across the seam (tape over both corners, or a glued "
-             "tab for ligament hinges):"]
-    lines += [f"  S{i + 1}: tile {h['tile']} corner {h['corner']}  <->  tile {h['joins_tile']} corner "
-              f"{h['joins_corner']}" for i, h in enumerate(hinges)]
+        roll = (
+            f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
+            f"pure translation of {m.period:.3f} mm (rotation {m.rotation:.1e} rad), the circumference; the "
+            f"tube's radius is {m.period / (2 * np.pi):.3f} mm."
+        )
+    lines = [
+        f"Seam of {pattern.name or 'the tube'}: {len(hinges)} hinges join the sheet's right edge to its left "
+        f"edge after cutting.",
+        roll,
+        "Join each pair with the sheet's hinge kind across the seam (tape over both corners, or a glued "
+        "tab for ligament hinges):",
+    ]
+    lines += [
+        f"  S{i + 1}: tile {h['tile']} corner {h['corner']}  <->  tile {h['joins_tile']} corner "
+        f"{h['joins_corner']}"
+        for i, h in enumerate(hinges)
+    ]
     lines.append("Both corners of each pair are engraved with its label (S1, S2, ...) and a tick.")
     return "\n".join(lines) + "\n"
 
@@ -82,8 +98,10 @@ def tube_cut_inputs(pattern: Pattern, state: int) -> tuple[Pattern, dict[str, by
     closed = {s: pattern.contracted.get(s, contract(pattern, s).corners) for s in (1, 2)}
     bad = [c for c in seam_checks(pattern, closed, tolerances(pattern)) if not c.ok]
     if bad:
-        raise CheckFailed("the tube does not close across its seam, nothing cut: "
-                          + "; ".join(f"{c.name} {c.value:.3g} {c.unit} (tol {c.tol:.3g})" for c in bad))
+        raise CheckFailed(
+            "the tube does not close across its seam, nothing cut: "
+            + "; ".join(f"{c.name} {c.value:.3g} {c.unit} (tol {c.tol:.3g})" for c in bad)
+        )
     hinges = seam_hinges(pattern, seam)
     sheet = flat_sheet(pattern.with_contracted(closed), seam)
     note = seam_note(pattern.with_contracted(closed), seam, state, hinges)
@@ -94,7 +112,9 @@ def tube_cut_inputs(pattern: Pattern, state: int) -> tuple[Pattern, dict[str, by
 def _placed(result: CutResult, tile: int, pts: np.ndarray, scale: float) -> tuple[int, np.ndarray]:
     """Sheet index (0-based) and sheet coordinates of pattern points on ``tile`` (manifest placement)."""
     row = result.manifest["tiles"][tile]
-    return int(row["sheet"]) - 1, geometry.rotate(pts * scale, float(row["rotation_rad"])) + np.array(row["shift_mm"])
+    return int(row["sheet"]) - 1, geometry.rotate(
+        pts * scale, float(row["rotation_rad"])
+    ) + np.array(row["shift_mm"])
 
 
 def _corner_mark(poly: np.ndarray, k: int, text: str) -> list[np.ndarray]:
@@ -112,7 +132,9 @@ def _corner_mark(poly: np.ndarray, k: int, text: str) -> list[np.ndarray]:
     return strokes[:1] if tile.contains(shapely.LineString(strokes[0])) else []
 
 
-def mark_seam(result: CutResult, hinges: list[dict], sheet: Pattern, state: int, options: CutOptions) -> None:
+def mark_seam(
+    result: CutResult, hinges: list[dict], sheet: Pattern, state: int, options: CutOptions
+) -> None:
     """Engrave both ends of every seam hinge (``S1`` .. ``Sn``, a tick at the corner) on the cut sheets and
     rewrite the sheets' DXF, SVG and PNG bytes and the manifest's engrave figures."""
     from .dxf import dxf_bytes
@@ -137,7 +159,15 @@ def mark_seam(result: CutResult, hinges: list[dict], sheet: Pattern, state: int,
         dn, dl = sd.count("ENGRAVE") - n0, sd.length("ENGRAVE") - l0
         row["engrave_paths"] += dn
         row["engrave_length_mm"] = round(row["engrave_length_mm"] + dl, 3)
-        row["cut_time_s"] = round(row["cut_time_s"] + dl / mat.engrave_speed_mm_s + PIERCE_S * dn, 1)
-    if f"{options.stem}.png" in result.files:  # at the preview's resolution: its smallest label readable
-        heights = [r["label_height_mm"] for r in result.manifest["tiles"] if r.get("label_height_mm")]
-        result.files[f"{options.stem}.png"] = png_bytes(result.sheets, colors, label_mm=min(heights, default=None))
+        row["cut_time_s"] = round(
+            row["cut_time_s"] + dl / mat.engrave_speed_mm_s + PIERCE_S * dn, 1
+        )
+    if (
+        f"{options.stem}.png" in result.files
+    ):  # at the preview's resolution: its smallest label readable
+        heights = [
+            r["label_height_mm"] for r in result.manifest["tiles"] if r.get("label_height_mm")
+        ]
+        result.files[f"{options.stem}.png"] = png_bytes(
+            result.sheets, colors, label_mm=min(heights, default=None)
+        )

@@ -67,8 +67,9 @@ class PathDriver:
     help: ClassVar[str] = ""
     solve: Callable | None = None
 
-    def plan(self, pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray,
-             steps: int) -> Plan:
+    def plan(
+        self, pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, steps: int
+    ) -> Plan:
         """The output frames (``t`` unless the driver adds some) and a closed-form guess."""
         return Plan(t)
 
@@ -77,17 +78,20 @@ class PathDriver:
         change between two parameters sets the sub-steps."""
         raise NotImplementedError
 
-    def constraints(self, pattern: Pattern, states: dict[int, np.ndarray],
-                    t: np.ndarray) -> list[Drivers]:
+    def constraints(
+        self, pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray
+    ) -> list[Drivers]:
         """One :class:`Drivers` per ``t``."""
         raise NotImplementedError
 
 
-_DRIVERS: Registry[PathDriver] = Registry({
-    "rotations": "fabkiri.mechanics.mechanism",
-    "tips": "fabkiri.mechanics.drivers",
-    "homotopy": "fabkiri.mechanics.homotopy",
-})
+_DRIVERS: Registry[PathDriver] = Registry(
+    {
+        "rotations": "fabkiri.mechanics.mechanism",
+        "tips": "fabkiri.mechanics.drivers",
+        "homotopy": "fabkiri.mechanics.homotopy",
+    }
+)
 
 
 def register_driver(driver: PathDriver) -> PathDriver:
@@ -113,8 +117,9 @@ def path_driver(name: str, pattern: Pattern | None = None) -> PathDriver:
     return found
 
 
-def angle_drivers(pattern: Pattern, t: np.ndarray, targets: np.ndarray,
-                  centroids: np.ndarray) -> list[Drivers]:
+def angle_drivers(
+    pattern: Pattern, t: np.ndarray, targets: np.ndarray, centroids: np.ndarray
+) -> list[Drivers]:
     """One driver set per ``t``: the Kabsch angle of every tile relative to its deployed shape
     (``targets``, ``(F, T)``) and the centroid of the nodes (``centroids``, ``(F, 2)``).
 
@@ -161,7 +166,10 @@ class Tips(PathDriver):
 
     def _tips(self, pattern: Pattern, states: dict[int, np.ndarray]):
         free = pattern.topology.free_nodes
-        x = {0: pattern.nodes[free], **{s: node_positions(pattern, states[s])[free] for s in (1, 2)}}
+        x = {
+            0: pattern.nodes[free],
+            **{s: node_positions(pattern, states[s])[free] for s in (1, 2)},
+        }
         return free, x
 
     def values(self, pattern, states, t):
@@ -174,10 +182,12 @@ class Tips(PathDriver):
         if len(free) < 2:
             raise InputError("the tips driver needs at least two free corners")
         dof = np.stack([2 * free, 2 * free + 1], -1).ravel()
-        A = sparse.csr_matrix((np.ones(len(dof)), (np.arange(len(dof)), dof)),
-                              shape=(len(dof), 2 * n))
-        return [Drivers("tips", A, piecewise(tk, x[1], x[0], x[2]).ravel())
-                for tk in np.atleast_1d(t)]
+        A = sparse.csr_matrix(
+            (np.ones(len(dof)), (np.arange(len(dof)), dof)), shape=(len(dof), 2 * n)
+        )
+        return [
+            Drivers("tips", A, piecewise(tk, x[1], x[0], x[2]).ravel()) for tk in np.atleast_1d(t)
+        ]
 
 
 TIPS = register_driver(Tips())

@@ -174,7 +174,14 @@ def _project(x: np.ndarray, A: sparse.csr_matrix, b: np.ndarray) -> None:
         x += A.T @ spsolve((A @ A.T).tocsc(), r)
 
 
-def _kkt_lu(sp: Springs | OrientedSprings, x: np.ndarray, mu: float, A: sparse.csr_matrix, At: sparse.csr_matrix, eye):
+def _kkt_lu(
+    sp: Springs | OrientedSprings,
+    x: np.ndarray,
+    mu: float,
+    A: sparse.csr_matrix,
+    At: sparse.csr_matrix,
+    eye,
+):
     """Sparse LU of the KKT matrix ``[[H + μI, Aᵀ], [A, 0]]`` at ``x``, or None if it is exactly singular."""
     H = sp.hessian(x)
     if mu:
@@ -186,8 +193,13 @@ def _kkt_lu(sp: Springs | OrientedSprings, x: np.ndarray, mu: float, A: sparse.c
         return None
 
 
-def _fine_grid(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, driver: PathDriver,
-               max_increment: float) -> tuple[np.ndarray, np.ndarray]:
+def _fine_grid(
+    pattern: Pattern,
+    states: dict[int, np.ndarray],
+    t: np.ndarray,
+    driver: PathDriver,
+    max_increment: float,
+) -> tuple[np.ndarray, np.ndarray]:
     """The internal sub-steps (no driver moves more than ``max_increment`` between two) and where
     the output frames ``t`` sit among them."""
     inc = np.abs(np.diff(driver.values(pattern, states, t), axis=0)).max(axis=1, initial=0.0)
@@ -198,8 +210,16 @@ def _fine_grid(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, d
     return fine, np.concatenate([[0], np.cumsum(n_sub)])
 
 
-def _continue(pattern: Pattern, sp: Springs, states: dict[int, np.ndarray], fine: np.ndarray,
-              drivers: list[Drivers], mechanism, tol: float, stats: MinimiseStats) -> list[np.ndarray]:
+def _continue(
+    pattern: Pattern,
+    sp: Springs,
+    states: dict[int, np.ndarray],
+    fine: np.ndarray,
+    drivers: list[Drivers],
+    mechanism,
+    tol: float,
+    stats: MinimiseStats,
+) -> list[np.ndarray]:
     """The minimiser at every sub-step, each started from the best guess at hand: the mechanism's
     closed form where the drivers are on it, else closed state 1, the last solution or a secant."""
     x1 = node_positions(pattern, states[1]).ravel()
@@ -265,5 +285,16 @@ def elastic_path(
         "max_increment": max_increment,
         **figures,
     }
-    return finish_path(pattern, "elastic", drv.name, t, nodes, corners, sp, states, collision_tol,
-                       solver=solver, segments=plan.segments)
+    return finish_path(
+        pattern,
+        "elastic",
+        drv.name,
+        t,
+        nodes,
+        corners,
+        sp,
+        states,
+        collision_tol,
+        solver=solver,
+        segments=plan.segments,
+    )

@@ -78,11 +78,21 @@ class Homotopy(PathDriver):
 
     def constraints(self, pattern, states, t):
         t = np.atleast_1d(t)
-        return angle_drivers(pattern, t, homotopy_targets(pattern, states, t),
-                             node_centroids(pattern, states, t))
+        return angle_drivers(
+            pattern, t, homotopy_targets(pattern, states, t), node_centroids(pattern, states, t)
+        )
 
-    def solve(self, pattern: Pattern, sp: Springs, states, fine, drivers, plan, tol: float,
-              stats: MinimiseStats):
+    def solve(
+        self,
+        pattern: Pattern,
+        sp: Springs,
+        states,
+        fine,
+        drivers,
+        plan,
+        tol: float,
+        stats: MinimiseStats,
+    ):
         """Continue outward from the deployed frame (t = ½) on each half, minimising the springs
         plus the orientation term; the figures are :func:`_figures` and the orientation term's
         weight and largest value."""
@@ -96,8 +106,9 @@ class Homotopy(PathDriver):
             for i in order:
                 guess = blend[i] if prev is None else sols[prev] + (blend[i] - blend[prev])
                 drv = drivers[i]
-                sols[i] = minimise(osp, guess, drv.A, drv.b, step_tol=tol, stats=stats,
-                                   zero_energy=zero)
+                sols[i] = minimise(
+                    osp, guess, drv.A, drv.b, step_tol=tol, stats=stats, zero_energy=zero
+                )
                 prev = i
         figures = _figures(pattern, fine, np.stack(sols), blend, mid)
         figures["orientation_weight"] = osp.area.weight
@@ -105,8 +116,9 @@ class Homotopy(PathDriver):
         return sols, figures
 
 
-def _figures(pattern: Pattern, fine: np.ndarray, x: np.ndarray, blend: np.ndarray,
-             mid: int) -> dict:
+def _figures(
+    pattern: Pattern, fine: np.ndarray, x: np.ndarray, blend: np.ndarray, mid: int
+) -> dict:
     """What tells a followed branch from a snap: the largest node move between two sub-steps
     against the rigid blend's (tile sizes), and the most tiles turned over (mirrored: a spring
     tile's edge lengths do not tell it from its mirror image) in any sub-step."""
@@ -121,7 +133,8 @@ def _figures(pattern: Pattern, fine: np.ndarray, x: np.ndarray, blend: np.ndarra
         "largest_substep_move_tile_sizes": float(move[k]),
         "t_at_largest_substep_move": float(fine[k + 1] if fine[k + 1] > 0.5 else fine[k]),
         "rigid_blend_largest_substep_move_tile_sizes": float(
-            np.abs(np.diff(blend, axis=0)).max(initial=0.0) / size),
+            np.abs(np.diff(blend, axis=0)).max(initial=0.0) / size
+        ),
         "mirrored_tiles_max": int(mirrored.max(initial=0)),
     }
 

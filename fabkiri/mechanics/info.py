@@ -66,12 +66,14 @@ class PatternInfo:
         as a cone in every state), within the tolerance."""
         if not self.tube:
             return []
-        return [f"state {k}: the seam does not close by a "
-                f"{'rigid motion' if s['seam_kind'] == 'cone' else 'pure translation'} (off by "
-                f"{s['seam_dev_rel']:.3g} tile sizes, rotation {s['seam_rotation_rad']:.3g} rad, "
-                f"tolerance {self.tolerance_rel:g})"
-                for k, s in self.tube["states"].items()
-                if k != "deployed" and not s["seam_dev_rel"] <= self.tolerance_rel]
+        return [
+            f"state {k}: the seam does not close by a "
+            f"{'rigid motion' if s['seam_kind'] == 'cone' else 'pure translation'} (off by "
+            f"{s['seam_dev_rel']:.3g} tile sizes, rotation {s['seam_rotation_rad']:.3g} rad, "
+            f"tolerance {self.tolerance_rel:g})"
+            for k, s in self.tube["states"].items()
+            if k != "deployed" and not s["seam_dev_rel"] <= self.tolerance_rel
+        ]
 
     @property
     def closes_both(self) -> bool:

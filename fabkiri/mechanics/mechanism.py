@@ -169,8 +169,9 @@ def rotation_drivers(
 ) -> list[Drivers]:
     """One driver set per ``t``: tile rotations (:func:`rotation_targets`) and the node centroid."""
     t = np.atleast_1d(t)
-    return angle_drivers(pattern, t, rotation_targets(pattern, states, t),
-                         node_centroids(pattern, states, t))
+    return angle_drivers(
+        pattern, t, rotation_targets(pattern, states, t), node_centroids(pattern, states, t)
+    )
 
 
 class Rotations(PathDriver):

@@ -76,12 +76,15 @@ class AreaTerm:
 def area_term(pattern: Pattern, weight: float = 1.0) -> AreaTerm:
     """The orientation term of ``pattern`` with its deployed areas as rest values."""
     c = pattern.corners()
-    rest = 0.5 * (c[..., 0] * np.roll(c, -1, 1)[..., 1] - c[..., 1] * np.roll(c, -1, 1)[..., 0]).sum(1)
+    rest = 0.5 * (
+        c[..., 0] * np.roll(c, -1, 1)[..., 1] - c[..., 1] * np.roll(c, -1, 1)[..., 0]
+    ).sum(1)
     flat = np.abs(rest) <= 1e-12 * pattern.tile_size**2  # a tile designed clockwise keeps its sign
     if flat.any():
         t = int(np.flatnonzero(flat)[0])
-        raise PatternError(f"tile {t} has no area in the deployed state; it has no orientation "
-                           f"to keep")
+        raise PatternError(
+            f"tile {t} has no area in the deployed state; it has no orientation to keep"
+        )
     return AreaTerm(pattern.tiles, rest, float(weight), len(pattern.nodes))
 
 

@@ -247,7 +247,11 @@ def tolerance_analysis(
     A, B = top.hinge_tiles.T
     deployed = pattern.corners() * scale
     closed = closed_states(pattern)  # raises if a state does not close
-    states = {"closed state 1": closed[1] * scale, "deployed": deployed, "closed state 2": closed[2] * scale}
+    states = {
+        "closed state 1": closed[1] * scale,
+        "deployed": deployed,
+        "closed state 2": closed[2] * scale,
+    }
     rng = np.random.default_rng(seed)
     edge_off = rng.normal(0.0, kerf_sd, (n, T, 4))
     piv = rng.normal(0.0, hinge_sd, (n, len(A), 2, 2))  # per hinge, per side
@@ -302,8 +306,14 @@ def _check_inputs(kerf_sd: float, hinge_sd: float, n: int, scale: float) -> None
         raise InputError(f"--n must be a whole number of samples in 2..1000000, got {n}")
 
 
-def _assemble_state(top, deployed: np.ndarray, nominal_c: np.ndarray, d_corner: np.ndarray, piv: np.ndarray,
-                    assembly: _Assembly) -> tuple[np.ndarray, np.ndarray]:
+def _assemble_state(
+    top,
+    deployed: np.ndarray,
+    nominal_c: np.ndarray,
+    d_corner: np.ndarray,
+    piv: np.ndarray,
+    assembly: _Assembly,
+) -> tuple[np.ndarray, np.ndarray]:
     """Every sample's fabricated tiles assembled in one state: the hinge gaps (N, H) and the placed corners.
 
     Each tile keeps its design rotation in the state (its errors turn with it); the translations are
@@ -327,20 +337,26 @@ def _tile_gap_mean(g: np.ndarray, A: np.ndarray, B: np.ndarray, n: int, T: int) 
     return at.mean(axis=0)
 
 
-def _outline_error(pattern: Pattern, placed: np.ndarray, ref_nodes: np.ndarray, ring, scale: float,
-                   n: int) -> np.ndarray:
+def _outline_error(
+    pattern: Pattern, placed: np.ndarray, ref_nodes: np.ndarray, ring, scale: float, n: int
+) -> np.ndarray:
     """Deployed: each sample's largest distance of the aligned boundary points from the design outline
     (or, tiles not joined into one piece, from the design's own boundary points)."""
     nodes = _first_corner_nodes(pattern, placed)[:, ref_nodes]
     ref_xy = pattern.nodes[ref_nodes] * scale
     aligned = _align_many(nodes, ref_xy)
     if ring is not None:  # how far the outline moved: boundary points from the design outline
-        return shapely.distance(shapely.points(aligned.reshape(-1, 2)), ring).reshape(n, -1).max(axis=1)
+        return (
+            shapely.distance(shapely.points(aligned.reshape(-1, 2)), ring)
+            .reshape(n, -1)
+            .max(axis=1)
+        )
     return np.linalg.norm(aligned - ref_xy, axis=-1).max(axis=1)
 
 
-def _sensitivity(edge_off: np.ndarray, piv: np.ndarray, A: np.ndarray, B: np.ndarray,
-                 worst: np.ndarray) -> np.ndarray:
+def _sensitivity(
+    edge_off: np.ndarray, piv: np.ndarray, A: np.ndarray, B: np.ndarray, worst: np.ndarray
+) -> np.ndarray:
     """Per tile: the correlation of the size of its own errors (edges and pivots) with the worst gap."""
     err2 = (edge_off**2).sum(axis=2)
     np.add.at(err2.T, A, (piv[:, :, 0] ** 2).sum(-1).T)

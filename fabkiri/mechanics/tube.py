@@ -51,7 +51,9 @@ class TubeFrame:
         phi = np.arctan2(d @ self.v, d @ self.u)  # angle from the seam, in [0, alpha) on the sheet
         k = abs(self.alpha) / TWO_PI
         az = phi / k
-        return np.stack([rho * k * np.cos(az), rho * k * np.sin(az), rho * np.sqrt(1.0 - k * k)], -1)
+        return np.stack(
+            [rho * k * np.cos(az), rho * k * np.sin(az), rho * np.sqrt(1.0 - k * k)], -1
+        )
 
 
 @dataclass
@@ -66,7 +68,9 @@ class TubeState:
     seam_rotation_rad: float
     seam_translation_dev_rel: float  # largest corner distance from a pure translation, tile sizes
     seam_kind: str = "cylinder"  # what the seam record asks of this state's seam map
-    seam_dev_rel: float = 0.0  # distance from that kind: a translation (cylinder), a rigid motion (cone)
+    seam_dev_rel: float = (
+        0.0  # distance from that kind: a translation (cylinder), a rigid motion (cone)
+    )
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -82,7 +86,9 @@ def frame(corners: np.ndarray, seam: Seam, state) -> TubeFrame:
         apex = np.linalg.solve(np.eye(2) - np.array([[c, -s], [s, c]]), m.translation)
         d = first.reshape(-1, 2).mean(0) - apex
         u = d / np.linalg.norm(d)
-        v = np.array([-u[1], u[0]]) * np.sign(m.rotation)  # angles grow from the first column to its copy
+        v = np.array([-u[1], u[0]]) * np.sign(
+            m.rotation
+        )  # angles grow from the first column to its copy
         return TubeFrame(origin=apex, u=u, v=v, period=0.0, apex=apex, alpha=m.rotation)
     t = m.translation
     u = t / np.linalg.norm(t)
@@ -107,11 +113,18 @@ def tube_state(pattern: Pattern, seam: Seam, corners: np.ndarray, state) -> Tube
         rad = np.hypot(xyz[:, 0], xyz[:, 1])
         rmin, rmax = float(rad.min()), float(rad.max())
         shape = "cone"
-    return TubeState(state=str(state), shape=shape, radius_min_mm=float(rmin), radius_max_mm=float(rmax),
-                     length_mm=float(z.max() - z.min()), seam_rotation_rad=m.rotation,
-                     seam_translation_dev_rel=m.translation_dev / pattern.tile_size, seam_kind=seam.state_kind(state),
-                     seam_dev_rel=(m.rigid_dev if seam.state_kind(state) == "cone" else m.translation_dev)
-                     / pattern.tile_size)
+    return TubeState(
+        state=str(state),
+        shape=shape,
+        radius_min_mm=float(rmin),
+        radius_max_mm=float(rmax),
+        length_mm=float(z.max() - z.min()),
+        seam_rotation_rad=m.rotation,
+        seam_translation_dev_rel=m.translation_dev / pattern.tile_size,
+        seam_kind=seam.state_kind(state),
+        seam_dev_rel=(m.rigid_dev if seam.state_kind(state) == "cone" else m.translation_dev)
+        / pattern.tile_size,
+    )
 
 
 def tube_report(pattern: Pattern, closed: dict | None = None) -> dict | None:
@@ -127,34 +140,56 @@ def tube_report(pattern: Pattern, closed: dict | None = None) -> dict | None:
     closed = dict(closed or {})
     states = {"deployed": pattern.corners()}
     for s in (1, 2):
-        states[str(s)] = closed[s] if s in closed else pattern.contracted.get(s, contract(pattern, s).corners)
-    out = {k: tube_state(pattern, seam, Y, "deployed" if k == "deployed" else int(k)) for k, Y in states.items()}
+        states[str(s)] = (
+            closed[s] if s in closed else pattern.contracted.get(s, contract(pattern, s).corners)
+        )
+    out = {
+        k: tube_state(pattern, seam, Y, "deployed" if k == "deployed" else int(k))
+        for k, Y in states.items()
+    }
     dep = out["deployed"]
     changes = {}
     for k in ("1", "2"):
         c = out[k]
-        changes[k] = {"axial": dep.length_mm / c.length_mm,
-                      "radial_min": dep.radius_min_mm / c.radius_min_mm,
-                      "radial_max": dep.radius_max_mm / c.radius_max_mm}
-    return {"columns": seam.columns, "rows": len(seam.pairs), "deployed_seam": seam.deployed, "closed_seam": seam.closed,
-            "states": {k: v.to_dict() for k, v in out.items()}, "changes_from_closed": changes}
+        changes[k] = {
+            "axial": dep.length_mm / c.length_mm,
+            "radial_min": dep.radius_min_mm / c.radius_min_mm,
+            "radial_max": dep.radius_max_mm / c.radius_max_mm,
+        }
+    return {
+        "columns": seam.columns,
+        "rows": len(seam.pairs),
+        "deployed_seam": seam.deployed,
+        "closed_seam": seam.closed,
+        "states": {k: v.to_dict() for k, v in out.items()},
+        "changes_from_closed": changes,
+    }
 
 
 def tube_lines(rep: dict) -> list[str]:
     """The tube report as text lines for ``info`` and ``design``."""
-    lines = [f"tube         {rep['rows']} rows x {rep['columns']} columns around, deployed seam "
-             f"{rep['deployed_seam']} (sheet stores one seam copy column)"]
+    lines = [
+        f"tube         {rep['rows']} rows x {rep['columns']} columns around, deployed seam "
+        f"{rep['deployed_seam']} (sheet stores one seam copy column)"
+    ]
     for k, s in rep["states"].items():
         name = "deployed" if k == "deployed" else f"state {k}"
-        radius = (f"radius {s['radius_min_mm']:.4g} mm" if s["shape"] == "cylinder" else
-                  f"radius {s['radius_min_mm']:.4g}..{s['radius_max_mm']:.4g} mm")
-        lines.append(f"  {name:<9} {s['shape']:<8} {radius}, length {s['length_mm']:.4g} mm; seam rotation "
-                     f"{s['seam_rotation_rad']:.2e} rad, off a "
-                     f"{'rigid motion' if s['seam_kind'] == 'cone' else 'translation'} by {s['seam_dev_rel']:.2e} "
-                     f"tile sizes")
+        radius = (
+            f"radius {s['radius_min_mm']:.4g} mm"
+            if s["shape"] == "cylinder"
+            else f"radius {s['radius_min_mm']:.4g}..{s['radius_max_mm']:.4g} mm"
+        )
+        lines.append(
+            f"  {name:<9} {s['shape']:<8} {radius}, length {s['length_mm']:.4g} mm; seam rotation "
+            f"{s['seam_rotation_rad']:.2e} rad, off a "
+            f"{'rigid motion' if s['seam_kind'] == 'cone' else 'translation'} by {s['seam_dev_rel']:.2e} "
+            f"tile sizes"
+        )
     for k, c in rep["changes_from_closed"].items():
-        lines.append(f"  state {k} -> deployed: axial x{c['axial']:.4g}, radial x{c['radial_min']:.4g}"
-                     + ("" if abs(c["radial_max"] - c["radial_min"]) < 1e-9 else f"..x{c['radial_max']:.4g}"))
+        lines.append(
+            f"  state {k} -> deployed: axial x{c['axial']:.4g}, radial x{c['radial_min']:.4g}"
+            + ("" if abs(c["radial_max"] - c["radial_min"]) < 1e-9 else f"..x{c['radial_max']:.4g}")
+        )
     return lines
 
 
@@ -175,7 +210,10 @@ def tube_along_path(pattern: Pattern, corners: np.ndarray, t: np.ndarray) -> dic
     r_hi = np.array([f.radius_max_mm for f in frames])
     length = np.array([f.length_mm for f in frames])
     half = int(np.argmin(np.abs(np.asarray(t) - 0.5)))
-    halves = {"closed state 1 -> deployed": slice(0, half + 1), "deployed -> closed state 2": slice(half, None)}
+    halves = {
+        "closed state 1 -> deployed": slice(0, half + 1),
+        "deployed -> closed state 2": slice(half, None),
+    }
     return {
         "t": [float(x) for x in t],
         "radius_min_mm": r_lo.tolist(),
@@ -183,8 +221,12 @@ def tube_along_path(pattern: Pattern, corners: np.ndarray, t: np.ndarray) -> dic
         "length_mm": length.tolist(),
         "seam_rotation_rad": [f.seam_rotation_rad for f in frames],
         "seam_translation_dev_rel": [f.seam_translation_dev_rel for f in frames],
-        "radius_change": {name: _change_in_time(r_hi[s], np.asarray(t)[s]) for name, s in halves.items()},
-        "length_change": {name: _change_in_time(length[s], np.asarray(t)[s]) for name, s in halves.items()},
+        "radius_change": {
+            name: _change_in_time(r_hi[s], np.asarray(t)[s]) for name, s in halves.items()
+        },
+        "length_change": {
+            name: _change_in_time(length[s], np.asarray(t)[s]) for name, s in halves.items()
+        },
     }
 
 
@@ -194,9 +236,12 @@ def _change_in_time(v: np.ndarray, t: np.ndarray) -> dict:
     step = np.diff(v)
     tol = 1e-9 * max(1.0, float(np.abs(v).max()))
     return {
-        "start_mm": float(v[0]), "end_mm": float(v[-1]),
-        "peak_mm": float(v.max()), "t_at_peak": float(t[int(np.argmax(v))]),
-        "low_mm": float(v.min()), "t_at_low": float(t[int(np.argmin(v))]),
+        "start_mm": float(v[0]),
+        "end_mm": float(v[-1]),
+        "peak_mm": float(v.max()),
+        "t_at_peak": float(t[int(np.argmax(v))]),
+        "low_mm": float(v.min()),
+        "t_at_low": float(t[int(np.argmin(v))]),
         "beyond_ends_mm": float(max(v.max() - hi, lo - v.min(), 0.0)),
         "monotonic": bool(np.all(step >= -tol) or np.all(step <= tol)),
     }
@@ -207,13 +252,18 @@ def path_lines(prof: dict) -> list[str]:
     r, n = prof["radius_max_mm"], len(prof["t"])
     mid = int(np.argmin(np.abs(np.asarray(prof["t"]) - 0.5)))
     off = max(prof["seam_translation_dev_rel"])
-    lines = [f"tube along the path: radius {r[0]:.4g} -> {r[mid]:.4g} -> {r[n - 1]:.4g} mm, length "
-             f"{prof['length_mm'][0]:.4g} -> {prof['length_mm'][mid]:.4g} -> {prof['length_mm'][n - 1]:.4g} mm; "
-             f"seams off a translation by <= {off:.2e} tile sizes over {n} frames"]
+    lines = [
+        f"tube along the path: radius {r[0]:.4g} -> {r[mid]:.4g} -> {r[n - 1]:.4g} mm, length "
+        f"{prof['length_mm'][0]:.4g} -> {prof['length_mm'][mid]:.4g} -> {prof['length_mm'][n - 1]:.4g} mm; "
+        f"seams off a translation by <= {off:.2e} tile sizes over {n} frames"
+    ]
     for name, c in prof["radius_change"].items():
-        how = ("monotonic" if c["monotonic"] else
-               f"not monotonic: passes {c['beyond_ends_mm']:.3g} mm beyond its ends "
-               f"(peak {c['peak_mm']:.4g} mm at t = {c['t_at_peak']:.3f}, low {c['low_mm']:.4g} mm at "
-               f"t = {c['t_at_low']:.3f})")
+        how = (
+            "monotonic"
+            if c["monotonic"]
+            else f"not monotonic: passes {c['beyond_ends_mm']:.3g} mm beyond its ends "
+            f"(peak {c['peak_mm']:.4g} mm at t = {c['t_at_peak']:.3f}, low {c['low_mm']:.4g} mm at "
+            f"t = {c['t_at_low']:.3f})"
+        )
         lines.append(f"  radius, {name}: {how}")
     return lines

@@ -6,6 +6,15 @@ from .model import Pattern
 from .topology import FoldRule, Topology
 
 __all__ = [
-    "Pattern", "Topology", "FoldRule", "standard_pattern", "read_pattern", "write_pattern",
-    "loads", "dumps", "import_obj", "obj_text", "write_obj",
+    "Pattern",
+    "Topology",
+    "FoldRule",
+    "standard_pattern",
+    "read_pattern",
+    "write_pattern",
+    "loads",
+    "dumps",
+    "import_obj",
+    "obj_text",
+    "write_obj",
 ]

@@ -128,8 +128,9 @@ def _arc_weights(dense: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------ outlines of a pattern
 
 
-def boundary_tip_order(tiles: np.ndarray, hole_nodes: np.ndarray, hole_tiles: np.ndarray,
-                       free_nodes: np.ndarray) -> np.ndarray:
+def boundary_tip_order(
+    tiles: np.ndarray, hole_nodes: np.ndarray, hole_tiles: np.ndarray, free_nodes: np.ndarray
+) -> np.ndarray:
     """The free corners (boundary tips) in counter-clockwise boundary order.
 
     The outer boundary of a deployed pattern is every tile edge that is not a hole edge; with CCW tiles
@@ -183,7 +184,11 @@ def closed_outline(corners: np.ndarray, eps: float | None = None) -> np.ndarray:
     c = np.asarray(corners, float)
     ext = float((c.reshape(-1, 2).max(0) - c.reshape(-1, 2).min(0)).max())
     eps = 1e-7 * ext if eps is None else eps
-    u = shapely.union_all(shapely.polygons(c)).buffer(eps, join_style="mitre").buffer(-eps, join_style="mitre")
+    u = (
+        shapely.union_all(shapely.polygons(c))
+        .buffer(eps, join_style="mitre")
+        .buffer(-eps, join_style="mitre")
+    )
     if hasattr(u, "geoms"):
         u = max(u.geoms, key=lambda g: g.area)
     ring = shapely.Polygon(u.exterior).simplify(eps)

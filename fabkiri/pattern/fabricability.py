@@ -24,7 +24,9 @@ import numpy as np
 from .geometry import cross2, dot2
 
 EDGE_EPS_MM = 1e-6  # a shrunk edge shorter than this is gone
-WEB_SLACK_MM = 1e-5  # web checks forgive this much: cut files snap every coordinate to a 1e-6 mm grid
+WEB_SLACK_MM = (
+    1e-5  # web checks forgive this much: cut files snap every coordinate to a 1e-6 mm grid
+)
 
 
 def _frame(corners: np.ndarray):
@@ -45,7 +47,9 @@ def _mitres(n: np.ndarray) -> np.ndarray:
 
 def _distances(corners: np.ndarray, n: np.ndarray):
     """``h[t, e, j]``: distance of corner j from the line of edge e (positive inside)."""
-    rel = corners[..., None, :, :] - corners[..., :, None, :]  # (T, e, j, 2): corner j minus corner e
+    rel = (
+        corners[..., None, :, :] - corners[..., :, None, :]
+    )  # (T, e, j, 2): corner j minus corner e
     return dot2(rel, n[..., :, None, :])
 
 
@@ -84,7 +88,9 @@ def shrunk_quads(corners: np.ndarray, shrink: float) -> np.ndarray:
     return corners + shrink * _mitres(_frame(corners)[1])
 
 
-def min_scale(corners: np.ndarray, width: float, shrink: float = 0.0, min_edge: float = 0.0) -> tuple[float, int, str]:
+def min_scale(
+    corners: np.ndarray, width: float, shrink: float = 0.0, min_edge: float = 0.0
+) -> tuple[float, int, str]:
     """Smallest scale ``s`` at which every tile of ``s · corners``, shrunk by ``shrink`` (not scaled),
     is at least ``width`` wide and keeps four edges at least ``min_edge`` long (and > ``EDGE_EPS_MM``);
     ``(s, tile, reason)`` with the tile that sets it.
@@ -153,9 +159,14 @@ def measures(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndar
     L = np.linalg.norm(np.roll(corners, -1, axis=-2) - corners, axis=-1)
     hd, ht = hinge_corner_distances(corners, hinge_tiles, hinge_corner)
     t, e = divmod(int(np.argmin(L)), corners.shape[1])
-    return {"thinnest_tile_mm": float(w.min()), "thinnest_tile": int(np.argmin(w)),
-            "shortest_edge_mm": float(L.min()), "shortest_edge_tile": t,
-            "closest_hinge_pair_mm": hd if np.isfinite(hd) else None, "closest_hinge_pair_tile": ht}
+    return {
+        "thinnest_tile_mm": float(w.min()),
+        "thinnest_tile": int(np.argmin(w)),
+        "shortest_edge_mm": float(L.min()),
+        "shortest_edge_tile": t,
+        "closest_hinge_pair_mm": hd if np.isfinite(hd) else None,
+        "closest_hinge_pair_tile": ht,
+    }
 
 
 def pal_bound(n_tiles: int, width: float) -> float:
@@ -179,8 +190,9 @@ def cross_signs_ok(corners: np.ndarray) -> bool:
 # in mm, its anchor moves with the pattern), which gives the smallest scale in closed form.
 
 
-def hinge_of_corner(hinge_tiles: np.ndarray, hinge_corner: np.ndarray, n_tiles: int,
-                    arity: int = 4) -> np.ndarray:
+def hinge_of_corner(
+    hinge_tiles: np.ndarray, hinge_corner: np.ndarray, n_tiles: int, arity: int = 4
+) -> np.ndarray:
     """``(T, arity)`` hinge at each tile corner, -1 where there is none."""
     out = np.full((n_tiles, arity), -1, dtype=np.int64)
     H = len(hinge_tiles)
@@ -189,8 +201,9 @@ def hinge_of_corner(hinge_tiles: np.ndarray, hinge_corner: np.ndarray, n_tiles: 
     return out
 
 
-def coincident_hinges(hinge_tiles: np.ndarray, hinge_corner: np.ndarray, fold_ends: np.ndarray,
-                      n_tiles: int) -> np.ndarray:
+def coincident_hinges(
+    hinge_tiles: np.ndarray, hinge_corner: np.ndarray, fold_ends: np.ndarray, n_tiles: int
+) -> np.ndarray:
     """Hinge pairs that meet in a closed state by its fold rule (the far ends of a folded seam are one
     node, and each may carry a hinge): ``(P, 2)``, each pair once, lower index first."""
     hc = hinge_of_corner(hinge_tiles, hinge_corner, n_tiles)
@@ -253,8 +266,13 @@ def same_face_pairs(hinge_tiles: np.ndarray, face: np.ndarray, n_tiles: int):
     return tuple(arr.T)
 
 
-def strip_frames(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray, fold_ends: np.ndarray,
-                 shrink: float):
+def strip_frames(
+    corners: np.ndarray,
+    hinge_tiles: np.ndarray,
+    hinge_corner: np.ndarray,
+    fold_ends: np.ndarray,
+    shrink: float,
+):
     """Per hinge of a placed closed state: hinge point ``p`` (H, 2), seam direction ``e`` (H, 2), the
     normal into tile A and into tile B ``n`` (H, 2, 2), and ``t0`` (H,) where the seam enters the pair of
     tiles shrunk by ``shrink`` (mitre: ``shrink / sin`` of the sharper of the two corners at the hinge)."""
@@ -279,7 +297,9 @@ def strip_frames(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.
     return p, e, n, t0
 
 
-def _box_extent(axis: np.ndarray, e: np.ndarray, n: np.ndarray, a0: np.ndarray, a1: float, b1: float):
+def _box_extent(
+    axis: np.ndarray, e: np.ndarray, n: np.ndarray, a0: np.ndarray, a1: float, b1: float
+):
     """min and max over the box ``{a e + b n: a in [a0, a0 + a1], b in [0, b1]}`` of its dot with ``axis``."""
     ea, nb = dot2(e, axis), dot2(n, axis)
     lo = a0 * ea + a1 * np.minimum(ea, 0.0) + b1 * np.minimum(nb, 0.0)
@@ -287,9 +307,17 @@ def _box_extent(axis: np.ndarray, e: np.ndarray, n: np.ndarray, a0: np.ndarray, 
     return lo, hi
 
 
-def strip_clearance_scales(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray,
-                           fold_ends: np.ndarray, pairs: tuple, shrink: float, width: float, reach: float,
-                           clearance: float) -> np.ndarray:
+def strip_clearance_scales(
+    corners: np.ndarray,
+    hinge_tiles: np.ndarray,
+    hinge_corner: np.ndarray,
+    fold_ends: np.ndarray,
+    pairs: tuple,
+    shrink: float,
+    width: float,
+    reach: float,
+    clearance: float,
+) -> np.ndarray:
     """Per same-face pair (:func:`same_face_pairs`) the smallest scale from which their boxes on the shared
     tile are at least ``clearance`` apart along one of the four box axes (separating-axis gap, a lower
     bound on the distance): linear in the scale per axis, so exact for the boxes; 0 where no scale brings
@@ -300,16 +328,23 @@ def strip_clearance_scales(corners: np.ndarray, hinge_tiles: np.ndarray, hinge_c
     p, e, n, t0 = strip_frames(corners, hinge_tiles, hinge_corner, fold_ends, shrink)
     R = reach + shrink
     nh, nk = n[h, sh], n[k, sk]
-    upper = np.full(len(tile), np.inf)  # the boxes are closer than the clearance along every axis for s in
+    upper = np.full(
+        len(tile), np.inf
+    )  # the boxes are closer than the clearance along every axis for s in
     lower = np.full(len(tile), -np.inf)  # (lower, upper): each axis' gap is linear in s
     for axis in (e[h], nh, e[k], nk):
         lo_h, hi_h = _box_extent(axis, e[h], nh, t0[h], width, R)
         lo_k, hi_k = _box_extent(axis, e[k], nk, t0[k], width, R)
         dp = dot2(p[k] - p[h], axis)
-        for slope, off in ((dp, lo_k - hi_h), (-dp, lo_h - hi_k)):  # k beyond h along the axis, or before
+        for slope, off in (
+            (dp, lo_k - hi_h),
+            (-dp, lo_h - hi_k),
+        ):  # k beyond h along the axis, or before
             with np.errstate(divide="ignore", invalid="ignore"):
                 root = (clearance - off) / slope
             upper = np.where(slope > 0, np.minimum(upper, root), upper)
             lower = np.where(slope < 0, np.maximum(lower, root), lower)
-            lower = np.where((slope == 0) & (off >= clearance), np.inf, lower)  # this axis always separates
+            lower = np.where(
+                (slope == 0) & (off >= clearance), np.inf, lower
+            )  # this axis always separates
     return np.where(lower < upper, np.maximum(upper, 0.0), 0.0)

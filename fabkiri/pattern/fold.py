@@ -54,16 +54,18 @@ def fold_dict(pattern: Pattern) -> dict[str, Any]:
     }
     frames = []
     for s in sorted(pattern.contracted):
-        frames.append({
-            "frame_title": f"closed state {s}",
-            "frame_classes": ["fabkiri:contracted"],
-            "frame_attributes": ["2D", "selfTouching"],
-            "frame_unit": "mm",
-            "frame_parent": 0,
-            "frame_inherit": True,
-            STATE_KEY: s,
-            "vertices_coords": pattern.node_positions(s).tolist(),
-        })
+        frames.append(
+            {
+                "frame_title": f"closed state {s}",
+                "frame_classes": ["fabkiri:contracted"],
+                "frame_attributes": ["2D", "selfTouching"],
+                "frame_unit": "mm",
+                "frame_parent": 0,
+                "frame_inherit": True,
+                STATE_KEY: s,
+                "vertices_coords": pattern.node_positions(s).tolist(),
+            }
+        )
     if frames:
         out["file_frames"] = frames
     return out
@@ -74,7 +76,9 @@ def _value(v: Any, indent: str) -> str:
     if isinstance(v, list) and v and isinstance(v[0], list):
         return "[\n" + ",\n".join(f"{indent}  {json.dumps(r)}" for r in v) + f"\n{indent}]"
     if isinstance(v, list) and v and isinstance(v[0], dict):
-        return "[\n" + ",\n".join(f"{indent}  {_object(r, indent + '  ')}" for r in v) + f"\n{indent}]"
+        return (
+            "[\n" + ",\n".join(f"{indent}  {_object(r, indent + '  ')}" for r in v) + f"\n{indent}]"
+        )
     return json.dumps(v)
 
 
@@ -96,7 +100,9 @@ def _array(data: dict, key: str, source: str, width: int | None = None) -> np.nd
     except (TypeError, ValueError):
         raise PatternError(f"{source}: {key} is not a rectangular array of numbers") from None
     if a.ndim != 2 or (width is not None and a.shape[1] != width):
-        raise PatternError(f"{source}: {key} must have {width} entries per row, got shape {a.shape}")
+        raise PatternError(
+            f"{source}: {key} must have {width} entries per row, got shape {a.shape}"
+        )
     return a
 
 
@@ -119,10 +125,16 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
     faces = _array(data, "faces_vertices", source)
     kind = kind_of_arity(faces.shape[1])
     if kind is None:
-        raise PatternError(f"{source}: faces_vertices must have 4 entries per row (quads) or 3 "
-                           f"(kagome triangles), got shape {faces.shape}")
+        raise PatternError(
+            f"{source}: faces_vertices must have 4 entries per row (quads) or 3 "
+            f"(kagome triangles), got shape {faces.shape}"
+        )
     tiles = faces.astype(np.int64)
-    if not np.array_equal(tiles, faces) or tiles.min(initial=0) < 0 or tiles.max(initial=0) >= len(coords):
+    if (
+        not np.array_equal(tiles, faces)
+        or tiles.min(initial=0) < 0
+        or tiles.max(initial=0) >= len(coords)
+    ):
         raise PatternError(f"{source}: faces_vertices must be vertex indices 0..{len(coords) - 1}")
     contracted = {}
     for k, frame in enumerate(data.get("file_frames", []) or [], 1):
@@ -133,11 +145,18 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
             continue
         xy = _array(frame, "vertices_coords", f"{source} frame {k}")[:, :2]
         if len(xy) != len(coords):
-            raise PatternError(f"{source} frame {k}: {len(xy)} vertices, the key frame has {len(coords)}")
+            raise PatternError(
+                f"{source} frame {k}: {len(xy)} vertices, the key frame has {len(coords)}"
+            )
         contracted[int(state)] = xy[tiles]
-    return Pattern(nodes=coords, tiles=tiles, contracted=contracted, kind=kind,
-                   name=str(data.get("file_title", "")) or source,
-                   design={"source": {"fold": source, "file_creator": data.get("file_creator")}})
+    return Pattern(
+        nodes=coords,
+        tiles=tiles,
+        contracted=contracted,
+        kind=kind,
+        name=str(data.get("file_title", "")) or source,
+        design={"source": {"fold": source, "file_creator": data.get("file_creator")}},
+    )
 
 
 def loads_fold(text: str, source: str = "fold") -> Pattern:
@@ -152,15 +171,30 @@ def _read_fold(path: Path, scale: float) -> Pattern:
 
     pat = loads_fold(_read_text(path), str(path))
     if scale != 1.0:
-        pat = Pattern(nodes=pat.nodes * scale, tiles=pat.tiles,
-                      contracted={k: v * scale for k, v in pat.contracted.items()}, name=pat.name,
-                      design=pat.design)
+        pat = Pattern(
+            nodes=pat.nodes * scale,
+            tiles=pat.tiles,
+            contracted={k: v * scale for k, v in pat.contracted.items()},
+            name=pat.name,
+            design=pat.design,
+        )
     return limits.check_pattern(pat, str(path))
 
 
 def _fold_said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:
-    return f"wrote {output}: FOLD 1.2, frames deployed / closed 1 / closed 2, {pattern.n_tiles} faces"
+    return (
+        f"wrote {output}: FOLD 1.2, frames deployed / closed 1 / closed 2, {pattern.n_tiles} faces"
+    )
 
 
-register_format(PatternFormat("fold", (".fold",), read=_read_fold, write=lambda pattern, state, unit: fold_text(pattern),
-                              closed_states=lambda state: (1, 2), every_state=True, said=_fold_said))
+register_format(
+    PatternFormat(
+        "fold",
+        (".fold",),
+        read=_read_fold,
+        write=lambda pattern, state, unit: fold_text(pattern),
+        closed_states=lambda state: (1, 2),
+        every_state=True,
+        said=_fold_said,
+    )
+)

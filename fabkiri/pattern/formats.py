@@ -51,9 +51,14 @@ class PatternFormat:
 
 
 # built-in formats, imported when first asked for (their modules call register_format())
-_FORMATS: Registry[PatternFormat] = Registry({
-    "json": "fabkiri.pattern.io", "obj": "fabkiri.pattern.io", "fold": "fabkiri.pattern.fold",
-    "pykirigami": "fabkiri.pattern.pykirigami"})
+_FORMATS: Registry[PatternFormat] = Registry(
+    {
+        "json": "fabkiri.pattern.io",
+        "obj": "fabkiri.pattern.io",
+        "fold": "fabkiri.pattern.fold",
+        "pykirigami": "fabkiri.pattern.pykirigami",
+    }
+)
 
 
 def register_format(fmt: PatternFormat) -> PatternFormat:
@@ -74,7 +79,9 @@ def pattern_format(name: str, *, writable: bool = False) -> PatternFormat:
     """The format of this name, or :class:`InputError` naming the known ones."""
     found = _FORMATS.find(name)
     if found is None or (writable and found.write is None):
-        raise InputError(f"unknown pattern format {name!r}; known: {', '.join(format_names(writable=writable))}")
+        raise InputError(
+            f"unknown pattern format {name!r}; known: {', '.join(format_names(writable=writable))}"
+        )
     return found
 
 

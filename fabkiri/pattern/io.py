@@ -363,7 +363,9 @@ def write_obj(pattern: Pattern, path: str | os.PathLike, state: str | int = "dep
 
 def _read_json(path: Path, scale: float) -> Pattern:
     if scale != 1.0:
-        raise PatternError(f"{path}: pattern.json is in mm already; --scale is for OBJ, FOLD and PyKirigami files")
+        raise PatternError(
+            f"{path}: pattern.json is in mm already; --scale is for OBJ, FOLD and PyKirigami files"
+        )
     return read_pattern(path)
 
 
@@ -376,6 +378,13 @@ def _obj_said(pattern: Pattern, state: str, output: str, unit: float | None) -> 
 
 
 register_format(PatternFormat("json", (".json",), read=_read_json, adopt_labels=False))
-register_format(PatternFormat("obj", (".obj",), read=lambda path, scale: import_obj(path, scale=scale),
-                              write=lambda pattern, state, unit: obj_text(pattern, state),
-                              closed_states=_obj_states, said=_obj_said))
+register_format(
+    PatternFormat(
+        "obj",
+        (".obj",),
+        read=lambda path, scale: import_obj(path, scale=scale),
+        write=lambda pattern, state, unit: obj_text(pattern, state),
+        closed_states=_obj_states,
+        said=_obj_said,
+    )
+)

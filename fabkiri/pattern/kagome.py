@@ -111,8 +111,16 @@ def standard_kagome(
         )
     tiles, rep = kagome_topology(rows, cols)
     corners = kagome_corners(rows, cols, np.radians(angle_deg), tile_size)
-    return centred_standard("kagome", tiles, corners.reshape(-1, 2)[rep], rows, cols, angle_deg,
-                            tile_size, name or f"standard kagome {rows}x{cols}")
+    return centred_standard(
+        "kagome",
+        tiles,
+        corners.reshape(-1, 2)[rep],
+        rows,
+        cols,
+        angle_deg,
+        tile_size,
+        name or f"standard kagome {rows}x{cols}",
+    )
 
 
 def kagome_counts(rows: int, cols: int) -> tuple[int, int, int]:
@@ -140,8 +148,10 @@ def _check_size(rows: int, cols: int) -> None:
     if int(rows) != rows or int(cols) != cols or rows < 1 or cols < 1:
         raise InputError(f"a kagome lattice needs at least 1x1 tiles, got {rows}x{cols}")
     if rows > 2 and cols < 2:  # rows r and r+1 join at (r, c) with r + c even only
-        raise InputError(f"a kagome lattice of more than 2 rows needs 2 columns to be one piece, got "
-                         f"{rows}x{cols}")
+        raise InputError(
+            f"a kagome lattice of more than 2 rows needs 2 columns to be one piece, got "
+            f"{rows}x{cols}"
+        )
 
 
 KAGOME = register(

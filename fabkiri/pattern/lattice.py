@@ -84,12 +84,28 @@ def standard_pattern(
         raise InputError(f"deployment angle must lie in [0, 90] degrees, got {angle_deg}")
     tiles, rep = quad_topology(rows, cols)
     corners = quad_corners(rows, cols, np.radians(angle_deg), tile_size)
-    return centred_standard("quad", tiles, corners.reshape(-1, 2)[rep], rows, cols, angle_deg,
-                            tile_size, name or f"standard {rows}x{cols}")
+    return centred_standard(
+        "quad",
+        tiles,
+        corners.reshape(-1, 2)[rep],
+        rows,
+        cols,
+        angle_deg,
+        tile_size,
+        name or f"standard {rows}x{cols}",
+    )
 
 
-def centred_standard(kind: str, tiles: np.ndarray, nodes: np.ndarray, rows: int, cols: int,
-                     angle_deg: float, tile_size: float, name: str) -> Pattern:
+def centred_standard(
+    kind: str,
+    tiles: np.ndarray,
+    nodes: np.ndarray,
+    rows: int,
+    cols: int,
+    angle_deg: float,
+    tile_size: float,
+    name: str,
+) -> Pattern:
     """A kind's standard pattern from its nodes, centred on the origin (bounding-box centre), with
     the lattice record every standard pattern carries."""
     lo, hi = nodes.min(0), nodes.max(0)
@@ -97,8 +113,13 @@ def centred_standard(kind: str, tiles: np.ndarray, nodes: np.ndarray, rows: int,
         nodes=nodes - 0.5 * (lo + hi),
         tiles=tiles,
         name=name,
-        lattice={"kind": kind, "rows": rows, "cols": cols, "angle_deg": float(angle_deg),
-                 "tile_size": float(tile_size)},
+        lattice={
+            "kind": kind,
+            "rows": rows,
+            "cols": cols,
+            "angle_deg": float(angle_deg),
+            "tile_size": float(tile_size),
+        },
         kind=kind,
     )
 

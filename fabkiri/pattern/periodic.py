@@ -41,7 +41,9 @@ class Seam:
     pairs: np.ndarray
     columns: int
     deployed: str = "cylinder"
-    closed: str = "cylinder"  # "cone": the closed seams turn as the deployed one (a rigid cone tube)
+    closed: str = (
+        "cylinder"  # "cone": the closed seams turn as the deployed one (a rigid cone tube)
+    )
 
     @property
     def first(self) -> np.ndarray:
@@ -52,7 +54,11 @@ class Seam:
         return self.pairs[:, 1]
 
     def to_dict(self) -> dict:
-        out = {"columns": int(self.columns), "deployed": self.deployed, "pairs": self.pairs.tolist()}
+        out = {
+            "columns": int(self.columns),
+            "deployed": self.deployed,
+            "pairs": self.pairs.tolist(),
+        }
         return out if self.closed == "cylinder" else {**out, "closed": self.closed}
 
     def state_kind(self, state) -> str:
@@ -75,13 +81,19 @@ def seam_of(pattern: Pattern) -> Seam | None:
     try:
         pairs = np.array(rec["pairs"], dtype=np.int64)
     except (TypeError, ValueError):
-        raise PatternError("lattice.seam.pairs must be [first-column tile, copy tile] pairs") from None
+        raise PatternError(
+            "lattice.seam.pairs must be [first-column tile, copy tile] pairs"
+        ) from None
     if pairs.ndim != 2 or pairs.shape[1] != 2 or len(pairs) == 0:
-        raise PatternError(f"lattice.seam.pairs must be (rows, 2) tile pairs, got shape {pairs.shape}")
+        raise PatternError(
+            f"lattice.seam.pairs must be (rows, 2) tile pairs, got shape {pairs.shape}"
+        )
     bad = (pairs < 0) | (pairs >= pattern.n_tiles)
     if bad.any():
-        raise PatternError(f"lattice.seam.pairs names tile {int(pairs[bad][0])}, but the pattern has "
-                           f"{pattern.n_tiles} tiles")
+        raise PatternError(
+            f"lattice.seam.pairs names tile {int(pairs[bad][0])}, but the pattern has "
+            f"{pattern.n_tiles} tiles"
+        )
     if len(np.unique(pairs)) != pairs.size:
         raise PatternError("lattice.seam.pairs uses a tile twice")
     kind = rec.get("deployed", "cylinder")
@@ -89,7 +101,9 @@ def seam_of(pattern: Pattern) -> Seam | None:
         raise PatternError(f"lattice.seam.deployed must be {' or '.join(SEAM_KINDS)}, not {kind!r}")
     closed = rec.get("closed", "cylinder")
     if closed not in SEAM_KINDS or (closed == "cone" and kind != "cone"):
-        raise PatternError(f"lattice.seam.closed must be cylinder, or cone with a cone deployed seam, not {closed!r}")
+        raise PatternError(
+            f"lattice.seam.closed must be cylinder, or cone with a cone deployed seam, not {closed!r}"
+        )
     columns = rec["columns"]
     if not isinstance(columns, int) or columns < 2 or columns % 2:
         raise PatternError(f"lattice.seam.columns must be an even count >= 2, got {columns!r}")
@@ -113,9 +127,15 @@ def flat_sheet(pattern: Pattern, seam: Seam) -> Pattern:
     lattice = {k: v for k, v in (pattern.lattice or {}).items() if k != "seam"}
     if "cols" in lattice:
         lattice["cols"] = seam.columns
-    return Pattern(nodes=pattern.nodes[used], tiles=tiles.reshape(-1, pattern.tiles.shape[1]), contracted=closed,
-                   parity=pattern.parity, name=f"{pattern.name or 'tube'} (flat sheet)", lattice=lattice,
-                   kind=pattern.kind)
+    return Pattern(
+        nodes=pattern.nodes[used],
+        tiles=tiles.reshape(-1, pattern.tiles.shape[1]),
+        contracted=closed,
+        parity=pattern.parity,
+        name=f"{pattern.name or 'tube'} (flat sheet)",
+        lattice=lattice,
+        kind=pattern.kind,
+    )
 
 
 @dataclass(frozen=True)
@@ -150,22 +170,36 @@ def seam_map(corners: np.ndarray, seam: Seam) -> SeamMap:
     dev_r = np.linalg.norm(geometry.rotate(P, theta) + shift - Q, axis=1)
     n = corners.shape[1]
     worst = int(seam.copy[int(np.argmax(dev_t)) // n])
-    return SeamMap(rotation=float(theta), translation=shift,
-                   rigid_dev=float(dev_r.max()), translation_dev=float(dev_t.max()), worst_tile=worst)
+    return SeamMap(
+        rotation=float(theta),
+        translation=shift,
+        rigid_dev=float(dev_r.max()),
+        translation_dev=float(dev_t.max()),
+        worst_tile=worst,
+    )
 
 
-def lattice_seam(rows: int, cols: int, deployed: str = "cylinder", closed: str = "cylinder") -> Seam:
+def lattice_seam(
+    rows: int, cols: int, deployed: str = "cylinder", closed: str = "cylinder"
+) -> Seam:
     """The seam of a standard lattice of ``rows x (cols + 1)`` tiles: column 0 and its copy, column ``cols``."""
     r = np.arange(rows)
     width = cols + 1
-    return Seam(pairs=np.stack([r * width, r * width + cols], -1), columns=cols, deployed=deployed, closed=closed)
+    return Seam(
+        pairs=np.stack([r * width, r * width + cols], -1),
+        columns=cols,
+        deployed=deployed,
+        closed=closed,
+    )
 
 
 def check_tube_size(rows: int, cols: int) -> None:
     """A tube needs an even column count (so the copy column has the first column's parity) and 2 rows."""
     if cols < 2 or cols % 2:
-        raise InputError(f"a tube needs an even number of columns >= 2 (the seam copy column must have the "
-                         f"first column's colour), got {cols}")
+        raise InputError(
+            f"a tube needs an even number of columns >= 2 (the seam copy column must have the "
+            f"first column's colour), got {cols}"
+        )
     if rows < 2:
         raise InputError(f"a tube needs at least 2 rows, got {rows}")
 
@@ -179,13 +213,19 @@ def with_seam(pattern: Pattern, seam: Seam) -> Pattern:
     return out
 
 
-def standard_tube(rows: int, cols: int, *, tile_size: float = 10.0, angle_deg: float = 45.0,
-                  name: str = "") -> Pattern:
+def standard_tube(
+    rows: int, cols: int, *, tile_size: float = 10.0, angle_deg: float = 45.0, name: str = ""
+) -> Pattern:
     """The standard rotating-squares tube of ``rows x cols`` tiles (``cols`` even), as a planar sheet of
     ``cols + 1`` columns whose last column is the seam copy of the first."""
     from .lattice import standard_pattern
 
     check_tube_size(rows, cols)
-    sheet = standard_pattern(rows, cols + 1, tile_size=tile_size, angle_deg=angle_deg,
-                             name=name or f"standard tube {rows}x{cols}")
+    sheet = standard_pattern(
+        rows,
+        cols + 1,
+        tile_size=tile_size,
+        angle_deg=angle_deg,
+        name=name or f"standard tube {rows}x{cols}",
+    )
     return with_seam(sheet, lattice_seam(rows, cols))

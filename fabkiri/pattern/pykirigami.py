@@ -49,7 +49,9 @@ def constraint_rows(pattern: Pattern) -> np.ndarray:
     return np.stack([A, cA, B, cB, np.full(len(A), JOINT_BOTH_FACES)], 1).astype(np.int64)
 
 
-def pykirigami_files(pattern: Pattern, start: np.ndarray, unit_mm: float | None = None) -> dict[str, str]:
+def pykirigami_files(
+    pattern: Pattern, start: np.ndarray, unit_mm: float | None = None
+) -> dict[str, str]:
     """The three files: ``start`` (per-tile corners, e.g. closed state 1) and the deployed target."""
     unit = float(unit_mm or pattern.tile_size)
     rows = constraint_rows(pattern)
@@ -69,8 +71,10 @@ def _read_tiles(path: Path) -> np.ndarray:
             raise PatternError(f"{path}: line {k}: not numbers") from None
         n = len(vals) // 3
         if len(vals) % 3 or kind_of_arity(n) is None or (rows and len(vals) != len(rows[0])):
-            raise PatternError(f"{path}: line {k}: {len(vals)} values; fabkiri reads quads (12 values) "
-                               f"or kagome triangles (9), all of one kind")
+            raise PatternError(
+                f"{path}: line {k}: {len(vals)} values; fabkiri reads quads (12 values) "
+                f"or kagome triangles (9), all of one kind"
+            )
         rows.append(vals)
     if not rows:
         raise PatternError(f"{path}: no tiles")
@@ -117,14 +121,23 @@ def read_pykirigami(folder: str | os.PathLike, unit_mm: float = 1.0) -> Pattern:
     rank[np.argsort(first)] = np.arange(len(uniq))  # nodes numbered by first corner, tile by tile
     tiles = rank[inverse]
     nodes = np.zeros((len(uniq), 2))
-    nodes[tiles] = target.reshape(-1, 2)  # joined corners coincide in the target (the loader checks it)
-    return Pattern(nodes=nodes, tiles=tiles.reshape(T, n), contracted={1: start}, name=d.name,
-                   kind=kind_of_arity(n) or "quad",
-                   design={"source": {"pykirigami": d.name, "unit_mm": unit_mm}})
+    nodes[tiles] = target.reshape(
+        -1, 2
+    )  # joined corners coincide in the target (the loader checks it)
+    return Pattern(
+        nodes=nodes,
+        tiles=tiles.reshape(T, n),
+        contracted={1: start},
+        name=d.name,
+        kind=kind_of_arity(n) or "quad",
+        design={"source": {"pykirigami": d.name, "unit_mm": unit_mm}},
+    )
 
 
 def _start(state: str) -> int:
-    return 1 if state == "deployed" else int(state)  # a model starts closed, pulled to the deployed target
+    return (
+        1 if state == "deployed" else int(state)
+    )  # a model starts closed, pulled to the deployed target
 
 
 def _write(pattern: Pattern, state: str, unit: float | None) -> dict[str, str]:
@@ -132,11 +145,21 @@ def _write(pattern: Pattern, state: str, unit: float | None) -> dict[str, str]:
 
 
 def _said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:
-    return (f"wrote {output}/vertices.txt (closed state {_start(state)}), target.txt (deployed), constraints.txt "
-            f"({pattern.topology.n_hinges} joints); 1 unit = {unit or pattern.tile_size:.6g} mm")
+    return (
+        f"wrote {output}/vertices.txt (closed state {_start(state)}), target.txt (deployed), constraints.txt "
+        f"({pattern.topology.n_hinges} joints); 1 unit = {unit or pattern.tile_size:.6g} mm"
+    )
 
 
-register_format(PatternFormat(
-    "pykirigami", directory=True,
-    read=lambda path, scale: limits.check_pattern(read_pykirigami(path, unit_mm=scale), str(path)),
-    write=_write, closed_states=lambda state: (_start(state),), said=_said))
+register_format(
+    PatternFormat(
+        "pykirigami",
+        directory=True,
+        read=lambda path, scale: limits.check_pattern(
+            read_pykirigami(path, unit_mm=scale), str(path)
+        ),
+        write=_write,
+        closed_states=lambda state: (_start(state),),
+        said=_said,
+    )
+)

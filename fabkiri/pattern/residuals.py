@@ -25,7 +25,9 @@ class StateResiduals:
     wrapped_tiles: np.ndarray  # tiles whose angles needed wrapping in some ring
 
 
-def state_residuals(pattern: Pattern, state: int, nodes: np.ndarray | None = None) -> StateResiduals:
+def state_residuals(
+    pattern: Pattern, state: int, nodes: np.ndarray | None = None
+) -> StateResiduals:
     top = pattern.topology
     x = pattern.nodes if nodes is None else nodes
     fold = top.fold(state)
@@ -46,7 +48,9 @@ def state_residuals(pattern: Pattern, state: int, nodes: np.ndarray | None = Non
         wrapped = suspects[off]
     else:
         rings, wrapped = np.zeros(0), np.zeros(0, dtype=np.int64)
-    return StateResiduals(state=state, edge_pairs=np.abs(la - lb), rings=rings, wrapped_tiles=wrapped)
+    return StateResiduals(
+        state=state, edge_pairs=np.abs(la - lb), rings=rings, wrapped_tiles=wrapped
+    )
 
 
 def hinge_sums(pattern: Pattern, nodes: np.ndarray | None = None) -> np.ndarray:

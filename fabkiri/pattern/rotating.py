@@ -48,7 +48,9 @@ def alternating_fold_rule(top: Topology, state: int, *, what: str, fold_at: str)
             )
     # merge corners: the m/2 corners where this hole does not fold
     half = m // 2
-    merge = np.argsort(hole_folds, axis=1, kind="stable")[:, :half] if K else np.zeros((0, half), int)
+    merge = (
+        np.argsort(hole_folds, axis=1, kind="stable")[:, :half] if K else np.zeros((0, half), int)
+    )
     mh = np.take_along_axis(top.hole_hinges, merge, 1) if K else np.zeros((0, half), int)
     ring_tiles = top.hinge_tiles[mh].reshape(K, m)
     ring_corners = top.hinge_corner[mh].reshape(K, m)

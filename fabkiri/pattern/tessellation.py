@@ -91,7 +91,9 @@ class Tessellation:
 
 
 # built-in kinds, imported when first asked for (their modules call register())
-_KINDS: Registry[Tessellation] = Registry({"quad": "fabkiri.pattern.quad", "kagome": "fabkiri.pattern.kagome"})
+_KINDS: Registry[Tessellation] = Registry(
+    {"quad": "fabkiri.pattern.quad", "kagome": "fabkiri.pattern.kagome"}
+)
 
 
 def register(tessellation: Tessellation) -> Tessellation:

@@ -31,8 +31,15 @@ TITLE_PX = 44  # two title lines above each panel
 HEADER_PX = 26  # the pattern's name above the panels
 MARGIN_PX = 12
 FONT_PX = 12
-COLOURS = {"tile": (209, 209, 209), "edge": (89, 89, 89), "target": (31, 119, 180), "tips": (255, 127, 14),
-           "worst": (214, 39, 40), "text": (0, 0, 0), "legend": (120, 120, 120)}
+COLOURS = {
+    "tile": (209, 209, 209),
+    "edge": (89, 89, 89),
+    "target": (31, 119, 180),
+    "tips": (255, 127, 14),
+    "worst": (214, 39, 40),
+    "text": (0, 0, 0),
+    "legend": (120, 120, 120),
+}
 WIDTHS = {"edge": 0.5, "target": 2.0, "tips": 1.2, "worst": 3.0}  # final pixels
 
 
@@ -41,7 +48,14 @@ def _panels(pattern: Pattern, conformance: dict) -> list[tuple[str, str, np.ndar
     d = pattern.design or {}
     out = []
     if "deployed" in conformance and isinstance(d.get("target"), dict):
-        out.append(("deployed", "deployed", pattern.corners(), target_polygon(target_from_dict(d["target"]))))
+        out.append(
+            (
+                "deployed",
+                "deployed",
+                pattern.corners(),
+                target_polygon(target_from_dict(d["target"])),
+            )
+        )
     for key, c in conformance.items():
         if not key.startswith("state_"):
             continue
@@ -60,14 +74,24 @@ def _panels(pattern: Pattern, conformance: dict) -> list[tuple[str, str, np.ndar
 class _Canvas:
     """One panel's mm -> pixel map (y up in mm, down in pixels) on the supersampled image."""
 
-    def __init__(self, draw: ImageDraw.ImageDraw, font: ImageFont.FreeTypeFont | ImageFont.ImageFont,
-                 box: tuple[int, int, int, int], lo: np.ndarray, hi: np.ndarray):
+    def __init__(
+        self,
+        draw: ImageDraw.ImageDraw,
+        font: ImageFont.FreeTypeFont | ImageFont.ImageFont,
+        box: tuple[int, int, int, int],
+        lo: np.ndarray,
+        hi: np.ndarray,
+    ):
         self.draw, self.font = draw, font
         x0, y0, x1, y1 = box
         span = np.maximum(hi - lo, 1e-9)
         self.scale = min((x1 - x0) / span[0], (y1 - y0) / span[1])
-        self.origin = np.array([x0 + 0.5 * ((x1 - x0) - span[0] * self.scale),
-                                y1 - 0.5 * ((y1 - y0) - span[1] * self.scale)])
+        self.origin = np.array(
+            [
+                x0 + 0.5 * ((x1 - x0) - span[0] * self.scale),
+                y1 - 0.5 * ((y1 - y0) - span[1] * self.scale),
+            ]
+        )
         self.lo, self.box = lo, box
 
     def px(self, p: np.ndarray) -> np.ndarray:
@@ -76,7 +100,9 @@ class _Canvas:
 
     def line(self, pts: np.ndarray, colour: str, width: float) -> None:
         w = max(1, round(width * SUPERSAMPLE))
-        self.draw.line([tuple(p) for p in self.px(pts).tolist()], fill=COLOURS[colour], width=w, joint="curve")
+        self.draw.line(
+            [tuple(p) for p in self.px(pts).tolist()], fill=COLOURS[colour], width=w, joint="curve"
+        )
 
     def dots(self, pts: np.ndarray, colour: str, radius: float) -> None:
         r = radius * SUPERSAMPLE
@@ -85,14 +111,18 @@ class _Canvas:
 
     def ring(self, centre: np.ndarray, colour: str, radius: float, width: float) -> None:
         (x, y), r = self.px(centre[None])[0], radius * SUPERSAMPLE
-        self.draw.ellipse((x - r, y - r, x + r, y + r), outline=COLOURS[colour], width=round(width * SUPERSAMPLE))
+        self.draw.ellipse(
+            (x - r, y - r, x + r, y + r), outline=COLOURS[colour], width=round(width * SUPERSAMPLE)
+        )
 
 
 def _tiles(cv: _Canvas, tiles: np.ndarray) -> None:
     """Grey tiles with dark edges (one polygon each; a 128x128 pattern is 16k calls, ~0.1 s)."""
     w = max(1, round(WIDTHS["edge"] * SUPERSAMPLE))
     for quad in cv.px(tiles.reshape(-1, 2)).reshape(tiles.shape).tolist():
-        cv.draw.polygon([tuple(p) for p in quad], fill=COLOURS["tile"], outline=COLOURS["edge"], width=w)
+        cv.draw.polygon(
+            [tuple(p) for p in quad], fill=COLOURS["tile"], outline=COLOURS["edge"], width=w
+        )
 
 
 def _legend(cv: _Canvas, entries: list[tuple[str, str, str]]) -> None:
@@ -102,15 +132,27 @@ def _legend(cv: _Canvas, entries: list[tuple[str, str, str]]) -> None:
     width = max(cv.draw.textlength(label, font=cv.font) for _, _, label in entries) + 34 * s
     step = (FONT_PX + 5) * s
     x0 = x1 - width
-    cv.draw.rectangle((x0, y0, x1, y0 + step * len(entries) + 4 * s), fill=(255, 255, 255),
-                      outline=COLOURS["legend"], width=s)
+    cv.draw.rectangle(
+        (x0, y0, x1, y0 + step * len(entries) + 4 * s),
+        fill=(255, 255, 255),
+        outline=COLOURS["legend"],
+        width=s,
+    )
     for k, (kind, colour, label) in enumerate(entries):
         y = y0 + 2 * s + step * (k + 0.5)
         if kind == "line":
-            cv.draw.line([(x0 + 6 * s, y), (x0 + 26 * s, y)], fill=COLOURS[colour], width=round(WIDTHS[colour] * s))
+            cv.draw.line(
+                [(x0 + 6 * s, y), (x0 + 26 * s, y)],
+                fill=COLOURS[colour],
+                width=round(WIDTHS[colour] * s),
+            )
         else:
             r = 6 * s
-            cv.draw.ellipse((x0 + 16 * s - r, y - r, x0 + 16 * s + r, y + r), outline=COLOURS[colour], width=2 * s)
+            cv.draw.ellipse(
+                (x0 + 16 * s - r, y - r, x0 + 16 * s + r, y + r),
+                outline=COLOURS[colour],
+                width=2 * s,
+            )
         cv.draw.text((x0 + 30 * s, y), label, fill=COLOURS["text"], font=cv.font, anchor="lm")
 
 
@@ -122,14 +164,20 @@ def _scale_bar(cv: _Canvas) -> None:
     mm = max(m * k for m in (1, 2, 5) if m * k <= want)
     x0, y = cv.box[0] + 6 * s, cv.box[3] - 8 * s
     x1 = x0 + mm * cv.scale
-    cv.draw.rectangle((x0 - 4 * s, y - (FONT_PX + 10) * s, x1 + 4 * s, y + 6 * s), fill=(255, 255, 255))
+    cv.draw.rectangle(
+        (x0 - 4 * s, y - (FONT_PX + 10) * s, x1 + 4 * s, y + 6 * s), fill=(255, 255, 255)
+    )
     cv.draw.line([(x0, y), (x1, y)], fill=COLOURS["text"], width=2 * s)
     for x in (x0, x1):
         cv.draw.line([(x, y - 4 * s), (x, y + 4 * s)], fill=COLOURS["text"], width=s)
-    cv.draw.text((0.5 * (x0 + x1), y - 6 * s), f"{mm:g} mm", fill=COLOURS["text"], font=cv.font, anchor="md")
+    cv.draw.text(
+        (0.5 * (x0 + x1), y - 6 * s), f"{mm:g} mm", fill=COLOURS["text"], font=cv.font, anchor="md"
+    )
 
 
-def _panel(cv: _Canvas, pattern: Pattern, key: str, tiles: np.ndarray, poly: np.ndarray, c: dict) -> None:
+def _panel(
+    cv: _Canvas, pattern: Pattern, key: str, tiles: np.ndarray, poly: np.ndarray, c: dict
+) -> None:
     """Tiles, target, tip polygon (deployed), worst gap, legend and scale bar of one panel."""
     _tiles(cv, tiles)
     cv.line(np.vstack([poly, poly[:1]]), "target", WIDTHS["target"])
@@ -160,27 +208,46 @@ def conformance_png(pattern: Pattern, conformance: dict, shape: dict | None = No
     img = Image.new("RGB", (n * pw * s, (HEADER_PX + ph) * s), "white")
     draw = ImageDraw.Draw(img)
     font = ImageFont.load_default(FONT_PX * s)
-    draw.text((n * pw * s / 2, HEADER_PX * s / 2), pattern.name or "design", fill=COLOURS["text"],
-              font=ImageFont.load_default((FONT_PX + 1) * s), anchor="mm")
+    draw.text(
+        (n * pw * s / 2, HEADER_PX * s / 2),
+        pattern.name or "design",
+        fill=COLOURS["text"],
+        font=ImageFont.load_default((FONT_PX + 1) * s),
+        anchor="mm",
+    )
     for k, (key, title, tiles, poly) in enumerate(panels):
         c = conformance[key]
         j = shape.get(key) or {}
         verdict = f", {j['status']} (tol {j['tol_mm']:.3g} mm)" if j else ""
         left, top = k * pw * s, HEADER_PX * s
-        draw.multiline_text((left + pw * s / 2, top + TITLE_PX * s / 2),
-                            f"{title}: Hausdorff {c['hausdorff_mm']:.3g} mm ({100 * c['hausdorff_rel']:.2f} %)"
-                            f"{verdict}\n1-IoU {c['one_minus_iou']:.3g}, spacing min/mean "
-                            f"{c['spacing_min_mm']:.3g}/{c['spacing_mean_mm']:.3g} mm",
-                            fill=COLOURS["text"], font=font, anchor="mm", align="center")
+        draw.multiline_text(
+            (left + pw * s / 2, top + TITLE_PX * s / 2),
+            f"{title}: Hausdorff {c['hausdorff_mm']:.3g} mm ({100 * c['hausdorff_rel']:.2f} %)"
+            f"{verdict}\n1-IoU {c['one_minus_iou']:.3g}, spacing min/mean "
+            f"{c['spacing_min_mm']:.3g}/{c['spacing_mean_mm']:.3g} mm",
+            fill=COLOURS["text"],
+            font=font,
+            anchor="mm",
+            align="center",
+        )
         pts = np.vstack([tiles.reshape(-1, 2), poly])
         lo, hi = pts.min(0), pts.max(0)
         pad = 0.04 * float((hi - lo).max())
-        box = (left + MARGIN_PX * s, top + (TITLE_PX + MARGIN_PX) * s, left + (pw - MARGIN_PX) * s,
-               top + (ph - MARGIN_PX) * s)
+        box = (
+            left + MARGIN_PX * s,
+            top + (TITLE_PX + MARGIN_PX) * s,
+            left + (pw - MARGIN_PX) * s,
+            top + (ph - MARGIN_PX) * s,
+        )
         _panel(_Canvas(draw, font, box, lo - pad, hi + pad), pattern, key, tiles, poly, c)
     if not panels:
-        draw.text((pw * s / 2, (HEADER_PX + ph / 2) * s), "no target curve", fill=COLOURS["text"], font=font,
-                  anchor="mm")
+        draw.text(
+            (pw * s / 2, (HEADER_PX + ph / 2) * s),
+            "no target curve",
+            fill=COLOURS["text"],
+            font=font,
+            anchor="mm",
+        )
     buf = io.BytesIO()
     img.reduce(s).save(buf, format="PNG")
     return buf.getvalue()

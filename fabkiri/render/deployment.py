@@ -35,7 +35,9 @@ def _pyplot():
     return plt
 
 
-def _energy_axes(ax: Axes, path: DeploymentPath, lo: float, hi: float, marks: bool = True, anchor: float = 0.0) -> None:
+def _energy_axes(
+    ax: Axes, path: DeploymentPath, lo: float, hi: float, marks: bool = True, anchor: float = 0.0
+) -> None:
     """E(t) on [lo, hi], plotted against ``t - anchor`` (a zoom next to t = 1 reads "t - 1", not "1e-9+1")."""
     sel = (path.t >= lo - 1e-12) & (path.t <= hi + 1e-12)
     t, e, emax = path.t[sel] - anchor, path.energy[sel], path.max_tile_energy[sel]
@@ -84,12 +86,29 @@ def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> by
     _energy_axes(ax, path, 0.0, 1.0)
     top = float(max(path.energy.max(), path.max_tile_energy.max()))
     if top <= ZERO_ENERGY:
-        ax.text(0.25, 0.72, f"zero-energy path: max E = {top:.1e}", transform=ax.transAxes, ha="center",
-                fontsize=10, color="C2", bbox=dict(facecolor="white", edgecolor="none"))
+        ax.text(
+            0.25,
+            0.72,
+            f"zero-energy path: max E = {top:.1e}",
+            transform=ax.transAxes,
+            ha="center",
+            fontsize=10,
+            color="C2",
+            bbox=dict(facecolor="white", edgecolor="none"),
+        )
     for name, tm in MARKS.items():
         right = tm > 0.75  # keep the last label inside the axes
-        ax.text(tm - 0.008 if right else tm + 0.008, 0.5, name, transform=ax.get_xaxis_transform(),
-                ha="right" if right else "left", va="center", rotation=90, fontsize=8, color="0.3")
+        ax.text(
+            tm - 0.008 if right else tm + 0.008,
+            0.5,
+            name,
+            transform=ax.get_xaxis_transform(),
+            ha="right" if right else "left",
+            va="center",
+            rotation=90,
+            fontsize=8,
+            color="0.3",
+        )
     ax.set_xlabel("path parameter t")
     ax.set_ylabel("spring energy  Σ((l - l₀)/l₀)²")
     kind = "rigid path" if path.kind == "rigid" else f"elastic path, driver: {path.driver}"
@@ -113,7 +132,7 @@ def energy_plot_png(path: DeploymentPath, title: str = "", dpi: int = 110) -> by
 
 
 def _state_label(t: float, marks: dict[str, int], ts: np.ndarray, f: int) -> str:
-    """"closed state 1" / "deployed" / "closed state 2" on their frames, else where the motion goes."""
+    """ "closed state 1" / "deployed" / "closed state 2" on their frames, else where the motion goes."""
     for name, k in marks.items():
         if k == f:
             return name
@@ -135,8 +154,9 @@ def _frame_indices(n: int, max_frames: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
 
 
-def _colouring(path: DeploymentPath, color: str,
-               plt: ModuleType) -> tuple[np.ndarray, Normalize, Colormap, str, bool]:
+def _colouring(
+    path: DeploymentPath, color: str, plt: ModuleType
+) -> tuple[np.ndarray, Normalize, Colormap, str, bool]:
     """The per-frame tile values and how they are coloured, for ``color``
     (``"energy"``, ``"rotation"`` or ``"auto"``): ``(values, norm, cmap,
     label, flat)``; ``flat`` when the energy is noise everywhere."""
@@ -146,7 +166,9 @@ def _colouring(path: DeploymentPath, color: str,
         color = "rotation" if path.kind == "rigid" else "energy"
     if color not in ("energy", "rotation"):
         raise ValueError(f"color must be energy, rotation or auto, not {color!r}")
-    flat = color == "energy" and float(path.tile_energy.max()) <= ZERO_ENERGY  # noise: colours would mean nothing
+    flat = (
+        color == "energy" and float(path.tile_energy.max()) <= ZERO_ENERGY
+    )  # noise: colours would mean nothing
     if flat:
         values = np.zeros_like(path.tile_energy)
         norm = mcolors.Normalize(vmin=-1.0, vmax=1.0)
@@ -174,8 +196,16 @@ def _gif_bytes(images: list, frame_ms: int) -> bytes:
     palette = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
     frames = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
     buf = io.BytesIO()
-    frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], duration=frame_ms, loop=0,
-                   optimize=False, disposal=1)
+    frames[0].save(
+        buf,
+        format="GIF",
+        save_all=True,
+        append_images=frames[1:],
+        duration=frame_ms,
+        loop=0,
+        optimize=False,
+        disposal=1,
+    )
     return buf.getvalue()
 
 
@@ -226,29 +256,49 @@ def deployment_gif(
         ax.add_collection(lines)
         dots = ax.scatter(centres[0, :, 0], centres[0, :, 1], s=2, c="k", zorder=3)
     head = ax.set_title("", fontsize=12)
-    state = ax.text(0.02, 0.98, "", transform=ax.transAxes, ha="left", va="top", fontsize=15, weight="bold")
+    state = ax.text(
+        0.02, 0.98, "", transform=ax.transAxes, ha="left", va="top", fontsize=15, weight="bold"
+    )
     marks = path.mark_frames()
 
-    images = [_draw_frame(fig, path, f, values, (tiles, lines, dots, head, state), marks, title) for f in idx]
+    images = [
+        _draw_frame(fig, path, f, values, (tiles, lines, dots, head, state), marks, title)
+        for f in idx
+    ]
     plt.close(fig)
     return _gif_bytes(images, frame_ms)
 
 
-def _colour_legend(fig: Figure, cax: Axes, tiles: PolyCollection, path: DeploymentPath, label: str,
-                   flat: bool) -> None:
+def _colour_legend(
+    fig: Figure, cax: Axes, tiles: PolyCollection, path: DeploymentPath, label: str, flat: bool
+) -> None:
     """The colour bar under the animation, or a note when the tile energy is noise everywhere."""
     if flat:
         cax.axis("off")
-        cax.text(0.5, 0.5, f"tile energy below noise everywhere (max {path.tile_energy.max():.1e} <= "
-                           f"{ZERO_ENERGY:g}): no energy colours", ha="center", va="center", fontsize=10)
+        cax.text(
+            0.5,
+            0.5,
+            f"tile energy below noise everywhere (max {path.tile_energy.max():.1e} <= "
+            f"{ZERO_ENERGY:g}): no energy colours",
+            ha="center",
+            va="center",
+            fontsize=10,
+        )
     else:
         cb = fig.colorbar(tiles, cax=cax, orientation="horizontal")
         cb.set_label(label, fontsize=10)
         cb.ax.tick_params(labelsize=9)
 
 
-def _draw_frame(fig: Figure, path: DeploymentPath, f: int, values: np.ndarray, artists: tuple, marks: dict[str, int],
-                title: str) -> Image.Image:
+def _draw_frame(
+    fig: Figure,
+    path: DeploymentPath,
+    f: int,
+    values: np.ndarray,
+    artists: tuple,
+    marks: dict[str, int],
+    title: str,
+) -> Image.Image:
     """Frame ``f`` drawn into the figure's artists ``(tiles, lines, dots, head, state)``, as an image."""
     from PIL import Image
 
@@ -261,5 +311,7 @@ def _draw_frame(fig: Figure, path: DeploymentPath, f: int, values: np.ndarray, a
     head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
     state.set_text(_state_label(path.t[f], marks, path.t, f))
     fig.canvas.draw()
-    rgb = np.asarray(cast("FigureCanvasAgg", fig.canvas).buffer_rgba())[..., :3]  # _pyplot draws with Agg
+    rgb = np.asarray(cast("FigureCanvasAgg", fig.canvas).buffer_rgba())[
+        ..., :3
+    ]  # _pyplot draws with Agg
     return Image.fromarray(np.ascontiguousarray(rgb))

@@ -36,11 +36,23 @@ def _fmt(v: Any) -> str:
         return '<span class="ok">yes</span>' if v else '<span class="fail">no</span>'
     if isinstance(v, float):
         return f"{v:.6g}" if abs(v) >= 1e3 else f"{v:.4g}"
-    if isinstance(v, (list, tuple)) and len(v) <= 8 and all(not isinstance(x, (dict, list)) for x in v):
+    if (
+        isinstance(v, (list, tuple))
+        and len(v) <= 8
+        and all(not isinstance(x, (dict, list)) for x in v)
+    ):
         return ", ".join(_fmt(x) for x in v)
-    if isinstance(v, (list, tuple)) and len(v) <= 8 and all(isinstance(x, (list, tuple)) and len(x) <= 4 for x in v):
+    if (
+        isinstance(v, (list, tuple))
+        and len(v) <= 8
+        and all(isinstance(x, (list, tuple)) and len(x) <= 4 for x in v)
+    ):
         return "; ".join(" x ".join(_fmt(y) for y in x) for x in v)
-    if isinstance(v, dict) and len(v) <= 8 and all(not isinstance(x, (dict, list)) for x in v.values()):
+    if (
+        isinstance(v, dict)
+        and len(v) <= 8
+        and all(not isinstance(x, (dict, list)) for x in v.values())
+    ):
         return "<br>".join(f"{html.escape(str(k))}: {_fmt(x)}" for k, x in v.items())
     if isinstance(v, (dict, list)):
         return f"<pre>{html.escape(json.dumps(v, indent=1)[:3000])}</pre>"
@@ -48,8 +60,14 @@ def _fmt(v: Any) -> str:
 
 
 def table(d: dict[str, Any], head: tuple[str, str] = ("", "")) -> str:
-    rows = "".join(f"<tr><th>{html.escape(str(k))}</th><td>{_fmt(v)}</td></tr>" for k, v in d.items())
-    h = f"<tr><th>{html.escape(head[0])}</th><th>{html.escape(head[1])}</th></tr>" if any(head) else ""
+    rows = "".join(
+        f"<tr><th>{html.escape(str(k))}</th><td>{_fmt(v)}</td></tr>" for k, v in d.items()
+    )
+    h = (
+        f"<tr><th>{html.escape(head[0])}</th><th>{html.escape(head[1])}</th></tr>"
+        if any(head)
+        else ""
+    )
     return f"<table>{h}{rows}</table>"
 
 
@@ -57,9 +75,15 @@ def rows_table(rows: list[dict[str, Any]], limit: int = 60) -> str:
     if not rows:
         return ""
     keys = list(rows[0])
-    body = "".join("<tr>" + "".join(f"<td>{_fmt(r.get(k))}</td>" for k in keys) + "</tr>" for r in rows[:limit])
+    body = "".join(
+        "<tr>" + "".join(f"<td>{_fmt(r.get(k))}</td>" for k in keys) + "</tr>" for r in rows[:limit]
+    )
     more = f"<p>… {len(rows) - limit} more rows in the manifest</p>" if len(rows) > limit else ""
-    return ("<table><tr>" + "".join(f"<th>{html.escape(k)}</th>" for k in keys) + f"</tr>{body}</table>{more}")
+    return (
+        "<table><tr>"
+        + "".join(f"<th>{html.escape(k)}</th>" for k in keys)
+        + f"</tr>{body}</table>{more}"
+    )
 
 
 def _fig_png(fig: Figure) -> bytes:

@@ -42,8 +42,19 @@ from .report_sections import (  # noqa: F401 (re-exported)
 if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
     from matplotlib.axes import Axes
 
-SECTIONS = ("summary", "design", "states", "fabricability", "verification", "deployment", "cut", "print",
-            "assembly", "bom", "tolerance")
+SECTIONS = (
+    "summary",
+    "design",
+    "states",
+    "fabricability",
+    "verification",
+    "deployment",
+    "cut",
+    "print",
+    "assembly",
+    "bom",
+    "tolerance",
+)
 
 CSS = """
 ul.steps{list-style:none;padding-left:0}
@@ -77,8 +88,14 @@ def _tiles(ax: Axes, corners: np.ndarray, color: str = "#b8c7d9") -> None:
     from matplotlib.collections import PolyCollection
 
     # matplotlib's stubs ask for a sequence of vertex arrays; a (T, k, 2) array is one (and its fast path)
-    ax.add_collection(PolyCollection(corners, facecolors=color,  # type: ignore[arg-type]
-                                     edgecolors="#34495e", linewidths=0.4))
+    ax.add_collection(
+        PolyCollection(
+            corners,  # type: ignore[arg-type]
+            facecolors=color,
+            edgecolors="#34495e",
+            linewidths=0.4,
+        )
+    )
     lo, hi = corners.reshape(-1, 2).min(0), corners.reshape(-1, 2).max(0)
     pad = 0.04 * float((hi - lo).max())
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -97,7 +114,13 @@ def design_png(pattern: Pattern) -> bytes:
     pts = np.asarray(target.get("points") or [], dtype=float)
     if len(pts) >= 3:
         ring = np.vstack([pts, pts[:1]])
-        ax.plot(ring[:, 0], ring[:, 1], color="#d62728", lw=1.4, label=f"target: {target.get('name', '')}")
+        ax.plot(
+            ring[:, 0],
+            ring[:, 1],
+            color="#d62728",
+            lw=1.4,
+            label=f"target: {target.get('name', '')}",
+        )
         ax.legend(fontsize=8, loc="lower right")
         lo = np.minimum(pts.min(0), pattern.nodes.min(0))
         hi = np.maximum(pts.max(0), pattern.nodes.max(0))
@@ -109,7 +132,9 @@ def design_png(pattern: Pattern) -> bytes:
     return _fig_png(fig)
 
 
-def states_png(pattern: Pattern, states: dict[int, np.ndarray], targets: dict[int, np.ndarray]) -> bytes:
+def states_png(
+    pattern: Pattern, states: dict[int, np.ndarray], targets: dict[int, np.ndarray]
+) -> bytes:
     plt = _pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), dpi=110)
     for ax, s in zip(axes, (1, 2)):
@@ -144,9 +169,16 @@ def _section(sid: str, title: str, body: str) -> str:
     return f'<section id="{sid}"><h2>{html.escape(title)}</h2>{body}</section>'
 
 
-def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, printed: str | None = None,
-                 deploy: str | None = None, tolerance: str | None = None, states: dict[int, np.ndarray] | None = None
-                 ) -> str:
+def build_report(
+    pattern: Pattern,
+    *,
+    source: str = "",
+    cut: str | None = None,
+    printed: str | None = None,
+    deploy: str | None = None,
+    tolerance: str | None = None,
+    states: dict[int, np.ndarray] | None = None,
+) -> str:
     """The HTML page (see the module doc). ``states``: both closed states (corners) if the pattern closes."""
     design = pattern.design or {}
     report = design.get("report") or {}
@@ -156,13 +188,20 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
     parts["design"] = _design_part(pattern, report)
     parts["states"] = _states_part(pattern, states, info)
     fab = report.get("fabricability")
-    parts["fabricability"] = (table(fab) if isinstance(fab, dict) and fab else
-                              _missing("fabricability: not computed (design.report.fabricability absent)"))
+    parts["fabricability"] = (
+        table(fab)
+        if isinstance(fab, dict) and fab
+        else _missing("fabricability: not computed (design.report.fabricability absent)")
+    )
     parts["verification"] = _verification_part(pattern)
     parts["deployment"] = _deploy_section(deploy)
     cut_dir, cut_man = _load_dir(cut)
     print_dir, print_man = _load_dir(printed)
-    pm = None if print_man is None else PrintManifest.from_dict(print_man, f"{printed}/manifest.json")
+    pm = (
+        None
+        if print_man is None
+        else PrintManifest.from_dict(print_man, f"{printed}/manifest.json")
+    )
     parts["cut"] = _cut_section(cut_dir, cut_man)
     parts["print"] = _print_section(print_dir, pm)
     parts["assembly"] = _assembly_section(cut_dir, cut_man, print_dir, print_man)
@@ -173,22 +212,35 @@ def build_report(pattern: Pattern, *, source: str = "", cut: str | None = None, 
 
 def _summary_part(pattern: Pattern, source: str, info: PatternInfo, report: dict) -> str:
     """Counts, size, rigid deployability, closure and the design's status."""
-    return table({
-        "pattern": pattern.name or source, "file": source, "tiles": info.tiles, "hinges": info.hinges,
-        "holes": info.holes, "deployed size (mm)": f"{info.width_mm:.2f} x {info.height_mm:.2f}",
-        "mean tile edge (mm)": info.tile_size_mm, "rigid-deployable": info.rigid_deployable,
-        "closes in both states": info.closes_both, "design status": report.get("status", "not recorded"),
-    })
+    return table(
+        {
+            "pattern": pattern.name or source,
+            "file": source,
+            "tiles": info.tiles,
+            "hinges": info.hinges,
+            "holes": info.holes,
+            "deployed size (mm)": f"{info.width_mm:.2f} x {info.height_mm:.2f}",
+            "mean tile edge (mm)": info.tile_size_mm,
+            "rigid-deployable": info.rigid_deployable,
+            "closes in both states": info.closes_both,
+            "design status": report.get("status", "not recorded"),
+        }
+    )
 
 
 def _design_part(pattern: Pattern, report: dict) -> str:
     """The design over its target, the solver's fit and the conformance figures when stored."""
     body = _img(design_png(pattern), ".png", "design vs target")
     fit = (report.get("fit") or {}).get("shape")
-    body += "<h3>fit to the target (solver)</h3>" + (table(fit) if fit else _missing("no fit recorded"))
+    body += "<h3>fit to the target (solver)</h3>" + (
+        table(fit) if fit else _missing("no fit recorded")
+    )
     conf = report.get("conformance")
-    body += "<h3>conformance</h3>" + (table(conf) if isinstance(conf, dict) and conf else
-                                       _missing("conformance: not computed (design.report.conformance absent)"))
+    body += "<h3>conformance</h3>" + (
+        table(conf)
+        if isinstance(conf, dict) and conf
+        else _missing("conformance: not computed (design.report.conformance absent)")
+    )
     return body
 
 
@@ -200,33 +252,53 @@ def _states_part(pattern: Pattern, states: dict[int, np.ndarray] | None, info: P
     body = _img(states_png(pattern, states, targets), ".png", "closed states")
     if not targets:
         body += _missing("no outline targets stored for the closed states")
-    body += rows_table([{"closed state": s.state, "closes": s.closes, "loop closure (tile sizes)": s.max_closure_rel,
-                         "edge pairs (mm)": s.edge_pair_max_mm, "rings (rad)": s.ring_max_rad}
-                        for s in info.states])
+    body += rows_table(
+        [
+            {
+                "closed state": s.state,
+                "closes": s.closes,
+                "loop closure (tile sizes)": s.max_closure_rel,
+                "edge pairs (mm)": s.edge_pair_max_mm,
+                "rings (rad)": s.ring_max_rad,
+            }
+            for s in info.states
+        ]
+    )
     return body
 
 
 def _verification_part(pattern: Pattern) -> str:
     """The verifier's verdict and its full text."""
     ver = verify_pattern(pattern)
-    v = f'<p>verdict: <span class="{"ok" if ver.ok else "fail"}">{"PASS" if ver.ok else "FAIL"}</span> ' \
-        f'({len(ver.checks) - len(ver.failed())}/{len(ver.checks)} checks pass)</p>'
+    v = (
+        f'<p>verdict: <span class="{"ok" if ver.ok else "fail"}">{"PASS" if ver.ok else "FAIL"}</span> '
+        f"({len(ver.checks) - len(ver.failed())}/{len(ver.checks)} checks pass)</p>"
+    )
     return v + f"<pre>{html.escape(ver.to_text())}</pre>"
 
 
 def _page(title: str, parts: dict[str, str]) -> str:
     """The whole page: head (CSS, error hook), navigation and every section in ``SECTIONS`` order."""
-    titles = {"summary": "Summary", "design": "Design vs target", "states": "Closed states",
-              "fabricability": "Fabricability", "verification": "Verification", "deployment": "Deployment",
-              "cut": "Cut sheets", "print": "Print plates", "assembly": "Assembly map", "bom": "Bill of materials",
-              "tolerance": "Tolerance"}
+    titles = {
+        "summary": "Summary",
+        "design": "Design vs target",
+        "states": "Closed states",
+        "fabricability": "Fabricability",
+        "verification": "Verification",
+        "deployment": "Deployment",
+        "cut": "Cut sheets",
+        "print": "Print plates",
+        "assembly": "Assembly map",
+        "bom": "Bill of materials",
+        "tolerance": "Tolerance",
+    }
     nav = "".join(f'<a href="#{s}">{titles[s]}</a>' for s in SECTIONS)
     sections = "".join(_section(s, titles[s], parts[s]) for s in SECTIONS)
     name = html.escape(title)
-    return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>fabkiri report: {name}</title>'
-            f'<meta name="viewport" content="width=device-width, initial-scale=1">'
-            f"<style>{CSS}</style>{ERROR_HOOK}</head><body>"
-            f"<header><h1>fabkiri report: {name}</h1></header><nav>{nav}</nav>{sections}"
-            f'<div id="console-errors" data-count="0"></div></body></html>\n')
-
-
+    return (
+        f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>fabkiri report: {name}</title>'
+        f'<meta name="viewport" content="width=device-width, initial-scale=1">'
+        f"<style>{CSS}</style>{ERROR_HOOK}</head><body>"
+        f"<header><h1>fabkiri report: {name}</h1></header><nav>{nav}</nav>{sections}"
+        f'<div id="console-errors" data-count="0"></div></body></html>\n'
+    )

@@ -30,12 +30,32 @@ def tolerance_png(res: ToleranceResult, title: str = "", dpi: int = 110) -> byte
     """Four panels: closure gap, seam gap, largest overlap, deployed outline error (dashed: 95th percentile)."""
     plt = _pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(9, 6.4), dpi=dpi)
-    _hist(axes[0, 0], res.gap, "largest hinge gap (mm)", "closure gap: pivot copies apart after assembly")
-    _hist(axes[0, 1], res.seam_gap, "widest seam opening (mm)", "seam gap: edges meant to lie flush")
-    _hist(axes[1, 0], res.overlap_max, "largest overlap along a seam (mm²)", "overlap in the closed states")
-    _hist(axes[1, 1], {"deployed": res.outline}, "outline error (mm)", "deployed outline vs the design outline")
-    fig.suptitle(f"{title + ': ' if title else ''}{res.n} samples, kerf sd {res.kerf_sd_mm:g} mm, "
-                 f"hinge sd {res.hinge_sd_mm:g} mm, tile {res.tile_size_mm:.3g} mm (dashed: 95th percentile)", fontsize=10)
+    _hist(
+        axes[0, 0],
+        res.gap,
+        "largest hinge gap (mm)",
+        "closure gap: pivot copies apart after assembly",
+    )
+    _hist(
+        axes[0, 1], res.seam_gap, "widest seam opening (mm)", "seam gap: edges meant to lie flush"
+    )
+    _hist(
+        axes[1, 0],
+        res.overlap_max,
+        "largest overlap along a seam (mm²)",
+        "overlap in the closed states",
+    )
+    _hist(
+        axes[1, 1],
+        {"deployed": res.outline},
+        "outline error (mm)",
+        "deployed outline vs the design outline",
+    )
+    fig.suptitle(
+        f"{title + ': ' if title else ''}{res.n} samples, kerf sd {res.kerf_sd_mm:g} mm, "
+        f"hinge sd {res.hinge_sd_mm:g} mm, tile {res.tile_size_mm:.3g} mm (dashed: 95th percentile)",
+        fontsize=10,
+    )
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})

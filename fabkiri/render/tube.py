@@ -22,7 +22,9 @@ if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
     from mpl_toolkits.mplot3d import Axes3D
 
 
-def _draw(ax: Axes3D, tiles: np.ndarray, f: TubeFrame, lim: float, title: str, even: np.ndarray) -> None:
+def _draw(
+    ax: Axes3D, tiles: np.ndarray, f: TubeFrame, lim: float, title: str, even: np.ndarray
+) -> None:
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     mesh = surface_mesh(tiles, f, n=4)
@@ -60,8 +62,14 @@ def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
         ax = fig.add_subplot(1, len(states), i + 1, projection="3d")
         r = f.period / (2 * np.pi) if f.apex is None else None
         label = "deployed" if s == "deployed" else f"closed state {s}"
-        _draw(ax, tiles, f, lim, f"{label}" + (f", radius {r:.3g} mm" if r else ", cone"),
-              np.tile(_even(pattern), copies))
+        _draw(
+            ax,
+            tiles,
+            f,
+            lim,
+            f"{label}" + (f", radius {r:.3g} mm" if r else ", cone"),
+            np.tile(_even(pattern), copies),
+        )
     fig.suptitle(pattern.name or "tube", fontsize=10)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
@@ -72,12 +80,18 @@ def states_png(pattern: Pattern, copies: int = 1, dpi: int = 100) -> bytes:
 def _frame_of(corners: np.ndarray, pattern: Pattern) -> tuple[np.ndarray, TubeFrame, float]:
     seam = tube_seam(pattern)  # a flat sheet: one-line bad input, not an AttributeError on None
     m = seam_map(corners, seam)
-    if seam.closed == "cone":  # a rigid cone tube: every frame's seam turns alike, each frame is a cone
+    if (
+        seam.closed == "cone"
+    ):  # a rigid cone tube: every frame's seam turns alike, each frame is a cone
         return corners[tube_tiles(pattern, seam)], frame(corners, seam, 1), m.rigid_dev
     t = corners[seam.copy].reshape(-1, 2).mean(0) - corners[seam.first].reshape(-1, 2).mean(0)
     u = t / np.linalg.norm(t)
-    f = TubeFrame(origin=corners[seam.first][:, 0].mean(0), u=u, v=np.array([-u[1], u[0]]),
-                  period=float(np.linalg.norm(t)))
+    f = TubeFrame(
+        origin=corners[seam.first][:, 0].mean(0),
+        u=u,
+        v=np.array([-u[1], u[0]]),
+        period=float(np.linalg.norm(t)),
+    )
     return corners[tube_tiles(pattern, seam)], f, m.translation_dev
 
 
@@ -89,13 +103,16 @@ def _radius_text(tiles: np.ndarray, f: TubeFrame) -> str:
     return f"{rad.min():.3g}..{rad.max():.3g}"
 
 
-def deployment_gif_3d(pattern: Pattern, path: DeploymentPath, max_frames: int = 24, frame_ms: int = 120,
-                      dpi: int = 80) -> bytes:
+def deployment_gif_3d(
+    pattern: Pattern, path: DeploymentPath, max_frames: int = 24, frame_ms: int = 120, dpi: int = 80
+) -> bytes:
     """The deployment path, every frame rolled onto its tube (closed 1 -> deployed -> closed 2)."""
     from PIL import Image
 
     plt = _pyplot()
-    idx = np.unique(np.linspace(0, path.n_frames - 1, min(max_frames, path.n_frames)).round().astype(int))
+    idx = np.unique(
+        np.linspace(0, path.n_frames - 1, min(max_frames, path.n_frames)).round().astype(int)
+    )
     frames = [_frame_of(path.corners[k], pattern) for k in idx]
     lim = _half_extent([surface_mesh(t, f, n=2) for t, f, _ in frames])
     images = []
@@ -103,7 +120,14 @@ def deployment_gif_3d(pattern: Pattern, path: DeploymentPath, max_frames: int = 
         fig = plt.figure(figsize=(4.2, 4.4), dpi=dpi)
         ax = fig.add_subplot(projection="3d")
         note = "" if dev <= 1e-6 * path.tile_size else f", seam open {dev:.2g} mm"
-        _draw(ax, tiles, f, lim, f"t = {path.t[k]:+.2f}, radius {_radius_text(tiles, f)} mm{note}", _even(pattern))
+        _draw(
+            ax,
+            tiles,
+            f,
+            lim,
+            f"t = {path.t[k]:+.2f}, radius {_radius_text(tiles, f)} mm{note}",
+            _even(pattern),
+        )
         buf = io.BytesIO()
         fig.savefig(buf, format="png", metadata={"Software": None})
         plt.close(fig)

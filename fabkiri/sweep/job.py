@@ -17,8 +17,26 @@ from ..api.design import PatternRequest, design_pattern
 from ..errors import CheckFailed, FabkiriError
 from .spec import Job, parse_tiles
 
-REQUEST_KEYS = ("target", "size", "rigid", "symmetry", "holes", "contracted_target", "init", "solver", "fit", "tol",
-                "shape_tol", "material", "hinge", "printer", "style", "min_feature", "min_hole", "seed")
+REQUEST_KEYS = (
+    "target",
+    "size",
+    "rigid",
+    "symmetry",
+    "holes",
+    "contracted_target",
+    "init",
+    "solver",
+    "fit",
+    "tol",
+    "shape_tol",
+    "material",
+    "hinge",
+    "printer",
+    "style",
+    "min_feature",
+    "min_hole",
+    "seed",
+)
 DEFAULT_CUT_MATERIAL = "acrylic-3"
 DEFAULT_PRINTER = "prusa-mk4"
 
@@ -56,8 +74,11 @@ def run_job(job: Job) -> tuple[dict, dict[str, bytes]]:
     t0, c0 = time.perf_counter(), time.process_time()
     with threadpool_limits(1):  # one job per core: BLAS threads would only fight the other workers
         row, files = _run(job)
-    row.update(time_s=round(time.perf_counter() - t0, 4), cpu_s=round(time.process_time() - c0, 4),
-               worker=worker_name())
+    row.update(
+        time_s=round(time.perf_counter() - t0, 4),
+        cpu_s=round(time.process_time() - c0, 4),
+        worker=worker_name(),
+    )
     return row, files
 
 
@@ -74,9 +95,13 @@ def _run(job: Job) -> tuple[dict, dict[str, bytes]]:
             continue
         try:
             files.update(make(pattern, job.params, row))
-        except FabkiriError as exc:  # a refusal of this stage: the design and the other stages are kept
+        except (
+            FabkiriError
+        ) as exc:  # a refusal of this stage: the design and the other stages are kept
             row["status"] = f"{stage} failed" if row["status"] == "ok" else row["status"]
-            row["error"] = "; ".join(filter(None, [row.get("error"), f"{stage}: {describe_error(exc)}"]))
+            row["error"] = "; ".join(
+                filter(None, [row.get("error"), f"{stage}: {describe_error(exc)}"])
+            )
     return row, _encoded(files)
 
 
@@ -88,15 +113,23 @@ def design_figures(out, params: dict | None = None) -> dict:
     conf = r.get("conformance") or {}
     worst = max(conf.values(), key=lambda c: c["hausdorff_rel"], default=None)
     fab = r.get("fabricability") or {}
-    row = {"status": out.status, "max_equality_residual": r.get("max_equality_residual"),
-           "hausdorff_mm": worst and worst["hausdorff_mm"], "hausdorff_rel": worst and worst["hausdorff_rel"],
-           "one_minus_iou": worst and worst["one_minus_iou"], "shape": "met" if out.shape_met else "missed",
-           "thinnest_tile_mm": fab.get("thinnest_tile_mm"), "design_time_s": r.get("time_s_total"),
-           "problems": "; ".join(out.problems)}
+    row = {
+        "status": out.status,
+        "max_equality_residual": r.get("max_equality_residual"),
+        "hausdorff_mm": worst and worst["hausdorff_mm"],
+        "hausdorff_rel": worst and worst["hausdorff_rel"],
+        "one_minus_iou": worst and worst["one_minus_iou"],
+        "shape": "met" if out.shape_met else "missed",
+        "thinnest_tile_mm": fab.get("thinnest_tile_mm"),
+        "design_time_s": r.get("time_s_total"),
+        "problems": "; ".join(out.problems),
+    }
     name = params.get("cut_material") or params.get("material") or DEFAULT_CUT_MATERIAL
     cut = (fab.get("cut") or {}).get(name) or {}
     hinge = params.get("hinge") or ("tape" if "tape" in cut else next(iter(cut), None))
-    row["min_cut_width_mm"] = (cut.get(hinge) or {}).get("min_width_mm")  # the smallest `cut --width` allowed
+    row["min_cut_width_mm"] = (cut.get(hinge) or {}).get(
+        "min_width_mm"
+    )  # the smallest `cut --width` allowed
     row["cut_material"] = f"{name} {hinge}" if hinge else name
     return row
 
@@ -106,14 +139,25 @@ def _cut(pattern, params: dict, row: dict) -> dict[str, bytes]:
     from ..fabricate.materials import load_material
     from ..fabricate.readback import verify_result
 
-    material = load_material(params.get("cut_material") or params.get("material") or DEFAULT_CUT_MATERIAL)
-    result = cut_pattern(pattern, CutOptions(material=material, hinge=params.get("hinge"), stem="pattern",
-                                             pattern_file="pattern.json"))  # at the designed size, as `cut`
+    material = load_material(
+        params.get("cut_material") or params.get("material") or DEFAULT_CUT_MATERIAL
+    )
+    result = cut_pattern(
+        pattern,
+        CutOptions(
+            material=material,
+            hinge=params.get("hinge"),
+            stem="pattern",
+            pattern_file="pattern.json",
+        ),
+    )  # at the designed size, as `cut`
     rb = verify_result(pattern, result)
     result.manifest["verification"] = rb.to_dict()
     if not rb.ok:
-        raise CheckFailed("cut: read-back verification failed: "
-                          + "; ".join(f"{c.name} ({c.detail})" for c in rb.failed()[:4]))
+        raise CheckFailed(
+            "cut: read-back verification failed: "
+            + "; ".join(f"{c.name} ({c.detail})" for c in rb.failed()[:4])
+        )
     man = result.manifest
     row["cut_scale"] = man.get("scale")
     row["cut_sheets"] = len(man["sheets"])
@@ -134,7 +178,11 @@ def _print(pattern, params: dict, row: dict) -> dict[str, bytes]:
     if not need.possible:
         raise CheckFailed(f"print: {style} on {printer.name}: {need.advice(printer.name)}")
     k = max(1.0, float(need.min_scale or 1.0))  # the smallest scale the print checks accept
-    pattern = replace(pattern, nodes=pattern.nodes * k, contracted={s: v * k for s, v in pattern.contracted.items()})
+    pattern = replace(
+        pattern,
+        nodes=pattern.nodes * k,
+        contracted={s: v * k for s, v in pattern.contracted.items()},
+    )
     job = mesh.build_job(pattern, style, 1, printer, advise_scale=k)
     mesh.print_plan(job)  # refuses a print the printer cannot make
     realised = mesh.realise_job(job)
@@ -153,7 +201,10 @@ def _deploy(pattern, params: dict, row: dict) -> dict[str, str]:
     row["energy_barrier"] = summary["energy_max"]
     row["collision_free"] = summary["collision_free"]
     csv = "t,energy\n" + "".join(f"{t:.6g},{e:.6g}\n" for t, e in zip(path.t, path.energy))
-    return {"deploy/deploy.json": json.dumps(summary, indent=2, sort_keys=True) + "\n", "deploy/energy.csv": csv}
+    return {
+        "deploy/deploy.json": json.dumps(summary, indent=2, sort_keys=True) + "\n",
+        "deploy/energy.csv": csv,
+    }
 
 
 def _encoded(files: dict) -> dict[str, bytes]:
@@ -164,4 +215,3 @@ def describe_error(exc: BaseException) -> str:
     """One line: the exception's type and message (no traceback: it is in the worker's log)."""
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
-

@@ -9,10 +9,33 @@ from pathlib import Path
 
 from ..fileio import atomic_write_many
 
-FIRST = ["id", "status", "error", "max_equality_residual", "hausdorff_mm", "hausdorff_rel", "one_minus_iou",
-         "shape", "thinnest_tile_mm", "min_cut_width_mm", "energy_barrier", "time_s", "cpu_s", "worker"]
-SHOWN = ["status", "max_equality_residual", "hausdorff_rel", "one_minus_iou", "thinnest_tile_mm",
-         "min_cut_width_mm", "energy_barrier", "time_s", "worker"]
+FIRST = [
+    "id",
+    "status",
+    "error",
+    "max_equality_residual",
+    "hausdorff_mm",
+    "hausdorff_rel",
+    "one_minus_iou",
+    "shape",
+    "thinnest_tile_mm",
+    "min_cut_width_mm",
+    "energy_barrier",
+    "time_s",
+    "cpu_s",
+    "worker",
+]
+SHOWN = [
+    "status",
+    "max_equality_residual",
+    "hausdorff_rel",
+    "one_minus_iou",
+    "thinnest_tile_mm",
+    "min_cut_width_mm",
+    "energy_barrier",
+    "time_s",
+    "worker",
+]
 
 
 def columns(rows: list[dict]) -> list[str]:
@@ -21,7 +44,12 @@ def columns(rows: list[dict]) -> list[str]:
     for r in rows:
         seen += [k for k in r if k not in seen]
     params = [k for k in seen if k.startswith("p_")]
-    return ["id", *params, *[k for k in FIRST[1:]], *[k for k in seen if k not in params and k not in FIRST]]
+    return [
+        "id",
+        *params,
+        *[k for k in FIRST[1:]],
+        *[k for k in seen if k not in params and k not in FIRST],
+    ]
 
 
 def csv_text(rows: list[dict]) -> str:
@@ -67,18 +95,36 @@ def gallery_html(rows: list[dict], out: Path) -> str:
     body = []
     for r in rows:
         png = Path("jobs") / r["id"] / "pattern.png"
-        img = (f'<a href="jobs/{r["id"]}/"><img src="{png.as_posix()}" loading="lazy"></a>'
-               if (out / png).is_file() else "")
+        img = (
+            f'<a href="jobs/{r["id"]}/"><img src="{png.as_posix()}" loading="lazy"></a>'
+            if (out / png).is_file()
+            else ""
+        )
         err = f' title="{html.escape(str(r.get("error", "")))}"' if r.get("error") else ""
-        cells = [img, _cell(r["id"]), *[_cell(r.get(p)) for p in params], *[_cell(r.get(k)) for k in SHOWN]]
-        body.append(f'<tr class="{html.escape(str(r.get("status")))}"{err}>'
-                    + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
-    return PAGE.format(n=len(rows), ok=sum(r.get("status") == "ok" for r in rows),
-                       head="".join(f"<th>{html.escape(h)}</th>" for h in heads), body="\n".join(body))
+        cells = [
+            img,
+            _cell(r["id"]),
+            *[_cell(r.get(p)) for p in params],
+            *[_cell(r.get(k)) for k in SHOWN],
+        ]
+        body.append(
+            f'<tr class="{html.escape(str(r.get("status")))}"{err}>'
+            + "".join(f"<td>{c}</td>" for c in cells)
+            + "</tr>"
+        )
+    return PAGE.format(
+        n=len(rows),
+        ok=sum(r.get("status") == "ok" for r in rows),
+        head="".join(f"<th>{html.escape(h)}</th>" for h in heads),
+        body="\n".join(body),
+    )
 
 
 def write_tables(out: Path, rows: list[dict]) -> list[Path]:
-    files: dict[str, bytes | str] = {"results.csv": csv_text(rows), "index.html": gallery_html(rows, out)}
+    files: dict[str, bytes | str] = {
+        "results.csv": csv_text(rows),
+        "index.html": gallery_html(rows, out),
+    }
     pq = parquet_bytes(rows) if rows else None
     if pq is not None:
         files["results.parquet"] = pq

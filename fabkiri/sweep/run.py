@@ -53,9 +53,18 @@ class SweepResult:
         return pd.DataFrame(self.rows)
 
 
-def sweep(spec: SweepSpec, client=None, *, output: str | Path = "sweep-out", workers: int | None = None,
-          job_timeout: float | None = None, retry_failed: bool = False, progress: Callable | None = None,
-          runner: Callable[[Job], tuple[dict, dict]] = run_job, on_cluster: Callable | None = None) -> SweepResult:
+def sweep(
+    spec: SweepSpec,
+    client=None,
+    *,
+    output: str | Path = "sweep-out",
+    workers: int | None = None,
+    job_timeout: float | None = None,
+    retry_failed: bool = False,
+    progress: Callable | None = None,
+    runner: Callable[[Job], tuple[dict, dict]] = run_job,
+    on_cluster: Callable | None = None,
+) -> SweepResult:
     """Run every job of ``spec`` not yet done in ``output``; returns all rows.
 
     ``client``: a ``distributed.Client`` to use (left open); without one a
@@ -71,8 +80,12 @@ def sweep(spec: SweepSpec, client=None, *, output: str | Path = "sweep-out", wor
         raise InputError(f"--job-timeout must be positive, got {job_timeout}")
     (out / "jobs").mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    done = {j.id: row for j in spec.jobs if (row := read_row(out, j)) is not None
-            and (not retry_failed or row.get("status") not in ("error", "timeout"))}
+    done = {
+        j.id: row
+        for j in spec.jobs
+        if (row := read_row(out, j)) is not None
+        and (not retry_failed or row.get("status") not in ("error", "timeout"))
+    }
     todo = [j for j in spec.jobs if j.id not in done]
     result = SweepResult(rows=[], output=out, skipped=len(done))
     if todo:
@@ -108,8 +121,15 @@ def local_client(workers: int | None = None):
     from distributed import Client, LocalCluster
 
     n = workers or len(os.sched_getaffinity(0))
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address="127.0.0.1:0", silence_logs=40, preload=["fabkiri.sweep.quiet"])
+    cluster = LocalCluster(
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address="127.0.0.1:0",
+        silence_logs=40,
+        preload=["fabkiri.sweep.quiet"],
+    )
     return Client(cluster), cluster
 
 
@@ -124,8 +144,12 @@ def read_row(out: Path, job: Job) -> dict | None:
 
 
 def _base_row(job: Job) -> dict:
-    return {"id": job.id, **{f"p_{k}": _flat(v) for k, v in job.params.items()},
-            "actions": "+".join(job.actions), "digest": job.digest}
+    return {
+        "id": job.id,
+        **{f"p_{k}": _flat(v) for k, v in job.params.items()},
+        "actions": "+".join(job.actions),
+        "digest": job.digest,
+    }
 
 
 def _flat(v):
@@ -146,7 +170,13 @@ def _execute(client, todo: list[Job], out: Path, timeout: float | None, runner, 
     """Yield (job, row) as jobs end: at most one job per worker thread in flight."""
     pending = deque(todo)
     flight: dict = {}  # future -> (job, submitted at)
-    counts = {"total": len(todo), "done": 0, "failed": 0, "running": 0, "started": time.perf_counter()}
+    counts = {
+        "total": len(todo),
+        "done": 0,
+        "failed": 0,
+        "running": 0,
+        "started": time.perf_counter(),
+    }
     try:
         yield from _loop(client, pending, flight, counts, out, timeout, runner, progress)
     finally:  # interrupted: nothing left running on a cluster that outlives the sweep
@@ -161,7 +191,9 @@ def _loop(client, pending: deque, flight: dict, counts: dict, out: Path, timeout
         slots = max(1, sum(client.nthreads().values()))
         while pending and len(flight) < slots:
             job = pending.popleft()
-            fut = client.submit(runner, job, key=f"fabkiri-job-{job.id}-{time.monotonic_ns()}", pure=False)
+            fut = client.submit(
+                runner, job, key=f"fabkiri-job-{job.id}-{time.monotonic_ns()}", pure=False
+            )
             flight[fut] = (job, time.perf_counter())
         counts["running"] = len(flight)
         if progress:
@@ -181,8 +213,16 @@ def _loop(client, pending: deque, flight: dict, counts: dict, out: Path, timeout
                 if now - t_sub > timeout:
                     flight.pop(fut)
                     note = _stop(client, fut)
-                    row = _publish(out, job, {"status": "timeout", "error": f"no result after {timeout:g} s{note}",
-                                              "time_s": round(now - t_sub, 4)}, {})
+                    row = _publish(
+                        out,
+                        job,
+                        {
+                            "status": "timeout",
+                            "error": f"no result after {timeout:g} s{note}",
+                            "time_s": round(now - t_sub, 4),
+                        },
+                        {},
+                    )
                     counts["failed"] += 1
                     yield job, row
     counts["running"] = 0
@@ -200,7 +240,9 @@ def _finish(fut, job: Job, out: Path) -> dict:
         exc = lost
     name = type(exc).__name__
     error = describe_error(exc)
-    if name == "KilledWorker":  # the scheduler gave up after the job's workers died allowed-failures times
+    if (
+        name == "KilledWorker"
+    ):  # the scheduler gave up after the job's workers died allowed-failures times
         error = f"KilledWorker: its worker died each time it ran ({exc})"
     return _publish(out, job, {"status": "error", "error": error}, {})
 

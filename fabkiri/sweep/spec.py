@@ -31,15 +31,38 @@ from ..fabricate.materials import HINGE_KINDS
 ACTIONS = ("design", "cut", "print", "deploy")
 # axis -> the Python types a value may have (PatternRequest's fields, the cut/print choices, the seed)
 PARAMS: dict[str, tuple[type, ...]] = {
-    "target": (str,), "tiles": (str, int), "size": (int, float), "rigid": (bool,), "symmetry": (str,),
-    "holes": (str,), "contracted_target": (str, list), "init": (str,), "solver": (str,), "fit": (str,),
-    "tol": (float,), "shape_tol": (str,), "material": (str,), "hinge": (str,), "printer": (str,),
-    "style": (str,), "min_feature": (int, float), "min_hole": (int, float), "seed": (int,),
-    "cut_material": (str,), "print_printer": (str,), "deploy_steps": (int,),
+    "target": (str,),
+    "tiles": (str, int),
+    "size": (int, float),
+    "rigid": (bool,),
+    "symmetry": (str,),
+    "holes": (str,),
+    "contracted_target": (str, list),
+    "init": (str,),
+    "solver": (str,),
+    "fit": (str,),
+    "tol": (float,),
+    "shape_tol": (str,),
+    "material": (str,),
+    "hinge": (str,),
+    "printer": (str,),
+    "style": (str,),
+    "min_feature": (int, float),
+    "min_hole": (int, float),
+    "seed": (int,),
+    "cut_material": (str,),
+    "print_printer": (str,),
+    "deploy_steps": (int,),
 }
-CHOICES = {"symmetry": ("none", "x", "y"), "holes": ("rhombus", "parallelogram"), "fit": ("outline", "tips"),
-           "solver": ("auto", "reduced", "full"), "init": ("standard", "rescaled", "conformal", "coarse"),
-           "hinge": HINGE_KINDS, "style": PRINT_STYLES}  # the hinge kinds and print styles there are
+CHOICES = {
+    "symmetry": ("none", "x", "y"),
+    "holes": ("rhombus", "parallelogram"),
+    "fit": ("outline", "tips"),
+    "solver": ("auto", "reduced", "full"),
+    "init": ("standard", "rescaled", "conformal", "coarse"),
+    "hinge": HINGE_KINDS,
+    "style": PRINT_STYLES,
+}  # the hinge kinds and print styles there are
 MAX_JOBS = 100_000
 
 
@@ -88,15 +111,25 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
     where = source or "sweep"
     unknown = set(data) - {"sweep", "axes", "fixed"}
     if unknown:
-        raise InputError(f"{where}: unknown table [{sorted(unknown)[0]}] (tables: sweep, axes, fixed)")
+        raise InputError(
+            f"{where}: unknown table [{sorted(unknown)[0]}] (tables: sweep, axes, fixed)"
+        )
     head = _table(data, "sweep", where)
     bad = set(head) - {"actions", "name"}
     if bad:
-        raise InputError(f"{where}: unknown key {sorted(bad)[0]!r} in [sweep] (keys: actions, name)")
+        raise InputError(
+            f"{where}: unknown key {sorted(bad)[0]!r} in [sweep] (keys: actions, name)"
+        )
     actions = head.get("actions", ["design"])
     actions = [actions] if isinstance(actions, str) else actions
-    if not isinstance(actions, list) or not all(a in ACTIONS for a in actions) or "design" not in actions:
-        raise InputError(f"{where}: [sweep] actions must list 'design' and any of cut, print, deploy; got {actions!r}")
+    if (
+        not isinstance(actions, list)
+        or not all(a in ACTIONS for a in actions)
+        or "design" not in actions
+    ):
+        raise InputError(
+            f"{where}: [sweep] actions must list 'design' and any of cut, print, deploy; got {actions!r}"
+        )
     actions = tuple(a for a in ACTIONS if a in actions)
     axes, fixed = _table(data, "axes", where), _table(data, "fixed", where)
     for name, values in axes.items():
@@ -113,7 +146,9 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
         for v in values:
             _check_value(name, v, where)
     if "tiles" not in settings:
-        raise InputError(f"{where}: no tiles: give a 'tiles' axis (or fixed tiles) such as [\"6x6\"]")
+        raise InputError(
+            f"{where}: no tiles: give a 'tiles' axis (or fixed tiles) such as [\"6x6\"]"
+        )
     if "target" not in settings and "contracted_target" not in settings:
         raise InputError(f"{where}: no target: give a 'target' axis (or fixed target)")
     count = 1
@@ -131,7 +166,9 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
             seen.add(job.id)
             jobs.append(job)
     _check_targets(jobs, where)
-    return SweepSpec(jobs=jobs, actions=actions, source=source, axes={k: list(v) for k, v in axes.items()})
+    return SweepSpec(
+        jobs=jobs, actions=actions, source=source, axes={k: list(v) for k, v in axes.items()}
+    )
 
 
 def make_job(params: dict, actions: tuple[str, ...]) -> Job:
@@ -142,8 +179,10 @@ def make_job(params: dict, actions: tuple[str, ...]) -> Job:
             p = Path(re.sub(r"^\s*[12]\s*:", "", v)) if isinstance(v, str) else None
             if p is not None and p.is_absolute() and p.is_file():
                 files[str(p)] = hashlib.sha256(p.read_bytes()).hexdigest()
-    blob = json.dumps({"params": params, "actions": actions, "files": files, "fabkiri": __version__},
-                      sort_keys=True)
+    blob = json.dumps(
+        {"params": params, "actions": actions, "files": files, "fabkiri": __version__},
+        sort_keys=True,
+    )
     digest = hashlib.sha256(blob.encode()).hexdigest()
     return Job(id=f"{_slug(params)}-{digest[:10]}", params=params, actions=actions, digest=digest)
 
@@ -158,7 +197,9 @@ def _table(data: dict, name: str, where: str) -> dict:
 def _check_value(name: str, v, where: str) -> None:
     types = PARAMS[name]
     if not isinstance(v, types) or (isinstance(v, bool) and bool not in types):
-        raise InputError(f"{where}: {name} value {v!r} is not a {' or '.join(t.__name__ for t in types)}")
+        raise InputError(
+            f"{where}: {name} value {v!r} is not a {' or '.join(t.__name__ for t in types)}"
+        )
     if name in CHOICES and v not in CHOICES[name]:
         raise InputError(f"{where}: {name} value {v!r} is not one of {', '.join(CHOICES[name])}")
     if name == "tiles":
@@ -178,8 +219,11 @@ def _resolve(name: str, v, base: Path):
         out = []
         for item in items:
             m = re.fullmatch(r"\s*([12])\s*:\s*(.+?)\s*", str(item))
-            out.append(f"{m.group(1)}:{(base / m.group(2)).resolve()}" if m and (base / m.group(2)).is_file()
-                       else item)
+            out.append(
+                f"{m.group(1)}:{(base / m.group(2)).resolve()}"
+                if m and (base / m.group(2)).is_file()
+                else item
+            )
         return out
     return v
 

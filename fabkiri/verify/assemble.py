@@ -47,12 +47,14 @@ class Assembly:
         H = len(self.A)
         wa = self.local[self.A, self.eA] - self.local[self.A, self.cA]
         wb = self.local[self.B, self.eB] - self.local[self.B, self.cB]
-        self.ua = wa / np.maximum(np.linalg.norm(wa, axis=1), 1e-300)[:, None]  # unit folded edges, local
+        self.ua = (
+            wa / np.maximum(np.linalg.norm(wa, axis=1), 1e-300)[:, None]
+        )  # unit folded edges, local
         self.ub = wb / np.maximum(np.linalg.norm(wb, axis=1), 1e-300)[:, None]
         self.H = H
 
     def corners(self, x: np.ndarray) -> np.ndarray:
-        phi, t = x[: self.T], x[self.T:].reshape(2, self.T).T
+        phi, t = x[: self.T], x[self.T :].reshape(2, self.T).T
         return geometry.rotate(self.local, phi[:, None]) + t[:, None, :]
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
@@ -66,7 +68,7 @@ class Assembly:
 
     def jacobian(self, x: np.ndarray) -> sparse.csr_matrix:
         T, H = self.T, self.H
-        phi = x[: T]
+        phi = x[:T]
         Y = self.corners(x)
         A, B = self.A, self.B
         # d(corner)/d(phi) = perp(rotated local corner); d/d(tx, ty) = identity
@@ -107,8 +109,10 @@ class Assembly:
         put(r, ty[B], -ub[:, 0])
         put(r, tx[A], -ub[:, 1])
         put(r, ty[A], ub[:, 0])
-        J = sparse.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                              shape=(4 * H, 3 * T))
+        J = sparse.coo_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(4 * H, 3 * T),
+        )
         return J.tocsr()
 
     def x_of(self, Y: np.ndarray) -> np.ndarray:

@@ -33,15 +33,28 @@ def _hole_outline(pattern: Pattern, Y: np.ndarray) -> np.ndarray:
     return np.stack([p0, p1], axis=2).reshape(K, 2 * n0.shape[1], 2)
 
 
-
-def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances,
-                        closure: np.ndarray | None = None) -> list[Check]:
+def closed_state_checks(
+    pattern: Pattern,
+    Y: np.ndarray,
+    state: int | str,
+    tol: Tolerances,
+    closure: np.ndarray | None = None,
+) -> list[Check]:
     """Closedness and compactness of one closed state ``Y`` (T, n, 2)."""
     g = f"state {state}"
     out = []
     if closure is not None:
-        out.append(measured(f"{g}: loop closure", largest(closure), tol.length, "mm",
-                            worst=worst_at("hole", closure), group=g, id=state_check_id(state, "loop-closure")))
+        out.append(
+            measured(
+                f"{g}: loop closure",
+                largest(closure),
+                tol.length,
+                "mm",
+                worst=worst_at("hole", closure),
+                group=g,
+                id=state_check_id(state, "loop-closure"),
+            )
+        )
     out.extend(_congruence_checks(pattern, Y, state, tol, g))
     out.append(_holes_closed(pattern, Y, state, tol, g))
     # every folded gap (hole fold corner or boundary notch) closed
@@ -52,26 +65,49 @@ def closed_state_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: 
     return out
 
 
-def _congruence_checks(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances,
-                       g: str) -> list[Check]:
+def _congruence_checks(
+    pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances, g: str
+) -> list[Check]:
     """Tiles of ``Y`` congruent with the deployed tiles: edge lengths and rigid fit, then corner angles."""
     X = pattern.corners()
     dl = np.abs(geometry.edge_lengths(Y) - geometry.edge_lengths(X)).max(axis=1)
-    da = np.abs(geometry.wrap_angle(geometry.corner_angles(Y) - geometry.corner_angles(X))).max(axis=1)
+    da = np.abs(geometry.wrap_angle(geometry.corner_angles(Y) - geometry.corner_angles(X))).max(
+        axis=1
+    )
     _, fit = geom.tile_kabsch(X, Y)
-    mirrored = np.flatnonzero(np.sign(geometry.signed_areas(Y)) != np.sign(geometry.signed_areas(X)))
+    mirrored = np.flatnonzero(
+        np.sign(geometry.signed_areas(Y)) != np.sign(geometry.signed_areas(X))
+    )
     cong = np.maximum(dl, fit)
     cong[mirrored] = np.inf
-    return [measured(f"{g}: tiles congruent (lengths)", largest(cong), tol.length, "mm",
-                     worst=worst_at("tile", cong), group=g,
-                     detail=f"mirrored tiles {mirrored.tolist()}" if len(mirrored) else
-                     "per-corner edge-length change and per-tile rigid-fit residual",
-                     id=state_check_id(state, "congruent-lengths")),
-            angle_check(f"{g}: tiles congruent (angles)", da, geometry.edge_lengths(X).mean(axis=1), tol, "tile",
-                        group=g, id=state_check_id(state, "congruent-angles"))]
+    return [
+        measured(
+            f"{g}: tiles congruent (lengths)",
+            largest(cong),
+            tol.length,
+            "mm",
+            worst=worst_at("tile", cong),
+            group=g,
+            detail=f"mirrored tiles {mirrored.tolist()}"
+            if len(mirrored)
+            else "per-corner edge-length change and per-tile rigid-fit residual",
+            id=state_check_id(state, "congruent-lengths"),
+        ),
+        angle_check(
+            f"{g}: tiles congruent (angles)",
+            da,
+            geometry.edge_lengths(X).mean(axis=1),
+            tol,
+            "tile",
+            group=g,
+            id=state_check_id(state, "congruent-angles"),
+        ),
+    ]
 
 
-def _holes_closed(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances, g: str) -> Check:
+def _holes_closed(
+    pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolerances, g: str
+) -> Check:
     """Holes of zero area, measured as an equivalent width 2|A|/perimeter (mm)."""
     if pattern.topology.n_holes:
         outline = _hole_outline(pattern, Y)
@@ -80,10 +116,16 @@ def _holes_closed(pattern: Pattern, Y: np.ndarray, state: int | str, tol: Tolera
         hole_width = 2 * hole_area / np.maximum(perim, 1e-300)
     else:
         hole_area = hole_width = np.zeros(0)
-    return measured(f"{g}: holes closed", largest(hole_width), tol.length, "mm",
-                    worst=worst_at("hole", hole_width), group=g,
-                    detail=f"equivalent width 2|area|/perimeter; largest |area| {largest(hole_area):.3g} mm²",
-                    id=state_check_id(state, "holes-closed"))
+    return measured(
+        f"{g}: holes closed",
+        largest(hole_width),
+        tol.length,
+        "mm",
+        worst=worst_at("hole", hole_width),
+        group=g,
+        detail=f"equivalent width 2|area|/perimeter; largest |area| {largest(hole_area):.3g} mm²",
+        id=state_check_id(state, "holes-closed"),
+    )
 
 
 def _blame(pattern: Pattern) -> dict[int, int]:
@@ -98,8 +140,9 @@ def _blame(pattern: Pattern) -> dict[int, int]:
     return out
 
 
-def _folded_gaps(pattern: Pattern, Y: np.ndarray, fold: FoldRule, tol: Tolerances, g: str,
-                 state: int | str) -> Check:
+def _folded_gaps(
+    pattern: Pattern, Y: np.ndarray, fold: FoldRule, tol: Tolerances, g: str, state: int | str
+) -> Check:
     top = pattern.topology
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
@@ -116,7 +159,18 @@ def _folded_gaps(pattern: Pattern, Y: np.ndarray, fold: FoldRule, tol: Tolerance
     collinear = geom.point_segment_distance(short_end, long_h, long_end)
     gap = np.maximum(split, np.minimum(coincide, collinear))
     tjunction = int(((coincide > tol.length) & (collinear <= tol.length)).sum())
-    kind = (f"{tjunction} folded gaps close as T-junctions (parallelogram holes)" if tjunction
-            else "every folded gap closes with coincident endpoints (rhombus holes)")
-    return measured(f"{g}: folded gaps closed", largest(gap), tol.length, "mm", worst=worst_at("hinge", gap),
-                    group=g, detail=kind, id=state_check_id(state, "folded-gaps"))
+    kind = (
+        f"{tjunction} folded gaps close as T-junctions (parallelogram holes)"
+        if tjunction
+        else "every folded gap closes with coincident endpoints (rhombus holes)"
+    )
+    return measured(
+        f"{g}: folded gaps closed",
+        largest(gap),
+        tol.length,
+        "mm",
+        worst=worst_at("hinge", gap),
+        group=g,
+        detail=kind,
+        id=state_check_id(state, "folded-gaps"),
+    )

@@ -30,13 +30,24 @@ from .linework import Linework
 INSUNITS_MM = {0: 1.0, 1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 13: 1e-3, 14: 0.1}
 ENTITIES_HEAD = "  0\nSECTION\n  2\nENTITIES\n"
 ENTITIES_END = "  0\nENDSEC\n"
-CANON_CODES = ("  0", "  5", "330", "100", "  8", "100", " 90", " 70")  # then " 10"/" 20" per vertex
+CANON_CODES = (
+    "  0",
+    "  5",
+    "330",
+    "100",
+    "  8",
+    "100",
+    " 90",
+    " 70",
+)  # then " 10"/" 20" per vertex
 
 
 # ------------------------------------------------------------------ writing
 
 
-def split_prototype(text: str, handle: str, points: Sequence[tuple[float, float]]) -> tuple[str, str] | None:
+def split_prototype(
+    text: str, handle: str, points: Sequence[tuple[float, float]]
+) -> tuple[str, str] | None:
     """``(head, mid)`` of ezdxf's export ``text`` of an open LWPOLYLINE with ``handle`` and ``points``.
 
     A canonical entity is ``head + handle + mid + " 90\\n{n}\\n 70\\n{flags}\\n" + vertices``;
@@ -46,12 +57,14 @@ def split_prototype(text: str, handle: str, points: Sequence[tuple[float, float]
     mid, sep2, verts = rest.partition(f" 90\n{len(points)}\n 70\n0\n")
     if not sep or not sep2 or verts != "".join(f" 10\n{x}\n 20\n{y}\n" for x, y in points):
         return None
-    if tuple(text.split("\n")[0:2 * len(CANON_CODES):2]) != CANON_CODES:
+    if tuple(text.split("\n")[0 : 2 * len(CANON_CODES) : 2]) != CANON_CODES:
         return None  # the reader would not take these entities for canonical ones
     return head + "  5\n", "\n" + mid
 
 
-def lwpolyline_tags(polylines: Sequence[tuple[np.ndarray, bool]], handles: list[str], head: str, mid: str) -> str:
+def lwpolyline_tags(
+    polylines: Sequence[tuple[np.ndarray, bool]], handles: list[str], head: str, mid: str
+) -> str:
     """Every polyline as the prototype's tags (vertices formatted like ezdxf: ``%s`` of a float)."""
     if not polylines:
         return ""
@@ -128,13 +141,20 @@ def split_tags(lines: list[str]) -> Tags | None:
     expect[off < len(head)] = head[off[off < len(head)]]
     bad = np.bincount(eid, weights=(codes != expect), minlength=n_ent) > 0
     bad |= size < len(head) + 4  # at least two vertices
-    tags = Tags(lines, vals, starts, ends, eid, off, bad, np.zeros(0, bool), np.zeros(0, int), np.zeros(0))
+    tags = Tags(
+        lines, vals, starts, ends, eid, off, bad, np.zeros(0, bool), np.zeros(0, int), np.zeros(0)
+    )
     ok_idx = np.flatnonzero(~bad)
     kind, sub1, sub2 = tags.at(ok_idx, 0), tags.at(ok_idx, 3), tags.at(ok_idx, 5)
     count, tags.flags = tags.at(ok_idx, 6), tags.at(ok_idx, 7)
     tags.nv = (size[ok_idx] - len(head)) // 2
-    tags.good = (kind == "LWPOLYLINE") & (sub1 == "AcDbEntity") & (sub2 == "AcDbPolyline") \
-        & np.isin(tags.flags, ["0", "1"]) & (count == tags.nv.astype(str))
+    tags.good = (
+        (kind == "LWPOLYLINE")
+        & (sub1 == "AcDbEntity")
+        & (sub2 == "AcDbPolyline")
+        & np.isin(tags.flags, ["0", "1"])
+        & (count == tags.nv.astype(str))
+    )
     bad[ok_idx[~tags.good]] = True
     return tags
 
@@ -183,8 +203,11 @@ def read_layer_tags(p: Path, layer_name: str = "CUT") -> Linework | None:
             raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={insunits}")
         starts = starts[(starts >= lo) & (starts < hi)]
         bounds = np.append(starts, hi)
-        layer_re = _CUT_LAYER_RE if layer_name == "CUT" else \
-            re.compile(rb"\n[ \t]*8\n" + layer_name.encode() + rb"[ \t]*(?=\n)", re.IGNORECASE)
+        layer_re = (
+            _CUT_LAYER_RE
+            if layer_name == "CUT"
+            else re.compile(rb"\n[ \t]*8\n" + layer_name.encode() + rb"[ \t]*(?=\n)", re.IGNORECASE)
+        )
         tags_at = np.array([t.start() for t in layer_re.finditer(data, lo, hi)], dtype=np.int64)
         if len(tags_at) == 0:
             return None  # no CUT layer: a plain file, read it all with ezdxf
@@ -192,7 +215,7 @@ def read_layer_tags(p: Path, layer_name: str = "CUT") -> Linework | None:
         owners = np.unique(np.searchsorted(starts, tags_at, side="right") - 1)
         lw = Linework(p, layer_found=True)
         for o in owners[owners >= 0].tolist():
-            text = data[bounds[o] + 1: bounds[o + 1]].decode("utf-8", "replace")
+            text = data[bounds[o] + 1 : bounds[o + 1]].decode("utf-8", "replace")
             if not _add_entity(lw, text, layer_name, unit):
                 return None
         return lw
@@ -216,8 +239,11 @@ def _add_entity(lw: Linework, text: str, layer_name: str, unit: float) -> bool:
         return True  # the layer was not this entity's layer tag
     if kind == "LINE":
         get = dict(tags)
-        lw.add(np.array([[float(get["10"]), float(get["20"])],
-                         [float(get["11"]), float(get["21"])]]) * unit, False)
+        lw.add(
+            np.array([[float(get["10"]), float(get["20"])], [float(get["11"]), float(get["21"])]])
+            * unit,
+            False,
+        )
         return True
     if any(c in ("210", "220", "230") for c, _ in tags):
         return False  # an extrusion direction (OCS): the full reader maps it to world coordinates

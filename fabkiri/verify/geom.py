@@ -16,15 +16,18 @@ def tile_kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.
     residual after the fit ``(T,)``.
     """
     theta = geometry.kabsch_angles(source, target)
-    moved = geometry.rotate(source - source.mean(axis=1, keepdims=True), theta[:, None]) \
-        + target.mean(axis=1, keepdims=True)
+    moved = geometry.rotate(
+        source - source.mean(axis=1, keepdims=True), theta[:, None]
+    ) + target.mean(axis=1, keepdims=True)
     return theta, np.linalg.norm(moved - target, axis=-1).max(axis=1)
 
 
 def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     ab = b - a
     L2 = geometry.dot2(ab, ab)
-    t = np.clip(np.divide(geometry.dot2(p - a, ab), L2, out=np.zeros_like(L2), where=L2 > 0), 0.0, 1.0)
+    t = np.clip(
+        np.divide(geometry.dot2(p - a, ab), L2, out=np.zeros_like(L2), where=L2 > 0), 0.0, 1.0
+    )
     return np.linalg.norm(a + t[..., None] * ab - p, axis=-1)
 
 
@@ -84,8 +87,9 @@ def _colmin(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def overlap_depths(corners: np.ndarray, is_convex: np.ndarray | None = None
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def overlap_depths(
+    corners: np.ndarray, is_convex: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Candidate tile pairs ``i < j`` and how deep they overlap, as a length (mm).
 
     Candidates: tile centres closer than the sum of the two circumradii (k-d
@@ -132,7 +136,9 @@ def overlap_depths(corners: np.ndarray, is_convex: np.ndarray | None = None
     return i, j, depth
 
 
-def max_overlap_depth(corners: np.ndarray, is_convex: np.ndarray | None = None) -> tuple[float, tuple[int, int] | None]:
+def max_overlap_depth(
+    corners: np.ndarray, is_convex: np.ndarray | None = None
+) -> tuple[float, tuple[int, int] | None]:
     """Largest overlap between any two tiles (see :func:`overlap_depths`) and the pair."""
     i, j, depth = overlap_depths(corners, is_convex)
     if len(depth) == 0:
@@ -210,8 +216,13 @@ def tiles_union(corners: np.ndarray, eps: float, coverage: bool = True) -> shape
         except shapely.errors.GEOSException:  # not noded as a coverage (T-junctions)
             u = None
         # trust it only when it is what a gap-free, overlap-free coverage gives
-        if u is not None and u.is_valid and u.geom_type == "Polygon" and not len(u.interiors) \
-                and abs(u.area - shapely.area(polys).sum()) <= 1e-9 * u.area:
+        if (
+            u is not None
+            and u.is_valid
+            and u.geom_type == "Polygon"
+            and not len(u.interiors)
+            and abs(u.area - shapely.area(polys).sum()) <= 1e-9 * u.area
+        ):
             return u
     if not valid.all():
         polys = polys.copy()

@@ -46,9 +46,13 @@ class HingeReading:
 
 
 # built-in readings, registered by the recovery module when first asked for
-_READINGS: Registry[HingeReading] = Registry({
-    "tape": "fabkiri.verify.recovery", "separate": "fabkiri.verify.recovery",
-    "ligament": "fabkiri.verify.recovery"})
+_READINGS: Registry[HingeReading] = Registry(
+    {
+        "tape": "fabkiri.verify.recovery",
+        "separate": "fabkiri.verify.recovery",
+        "ligament": "fabkiri.verify.recovery",
+    }
+)
 
 
 def register_reading(r: HingeReading) -> HingeReading:

@@ -43,8 +43,13 @@ from .sheetread import _layout_kind, _recover_sheets, _sheet_files
 # ------------------------------------------------------------------ entry point
 
 
-def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: CutManifest | dict[str, Any] | None = None,
-                  tol_mm: float = 0.05, tol_rad: float = 1e-6) -> Report:
+def verify_layout(
+    pattern: Pattern,
+    layout_path: str | Path,
+    manifest: CutManifest | dict[str, Any] | None = None,
+    tol_mm: float = 0.05,
+    tol_rad: float = 1e-6,
+) -> Report:
     """Verify a cut layout (DXF or SVG) against ``pattern`` and both closed states.
 
     ``manifest`` None loads ``manifest.json`` beside the layout if present; a
@@ -55,16 +60,28 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: CutManife
     path = Path(layout_path)
     if manifest is None:
         manifest = load_manifest(path)
-    al = _allowances(manifest, str(path.parent / "manifest.json") if manifest is not None else str(path))
+    al = _allowances(
+        manifest, str(path.parent / "manifest.json") if manifest is not None else str(path)
+    )
     files = _sheet_files(path, al)
     # everything is compared on the sheet, in physical mm: the design is scaled
     # up (kerf and tolerance are physical lengths, not pattern lengths)
     L = pattern.tile_size * al.scale
     tol = fabrication_tolerances(float(tol_mm), L)
-    rep = Report(subject=str(path), kind="layout",
-                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": L, "tolerance": tol.describe(),
-                       "hinge": al.hinge,
-                       "layout": al.layout, "state": al.state, "files": [str(f) for f in files.values()]})
+    rep = Report(
+        subject=str(path),
+        kind="layout",
+        meta={
+            "tol_mm": tol.length,
+            "tol_rad": tol.angle,
+            "tile_size_mm": L,
+            "tolerance": tol.describe(),
+            "hinge": al.hinge,
+            "layout": al.layout,
+            "state": al.state,
+            "files": [str(f) for f in files.values()],
+        },
+    )
     g = "layout"
     D = pattern.corners() * al.scale  # design shapes (deployed = cut shapes), sheet mm
     rec = _recover_sheets(pattern, al, files, D, L, tol.length, path)
@@ -78,13 +95,28 @@ def verify_layout(pattern: Pattern, layout_path: str | Path, manifest: CutManife
     _congruence_check(rep, D, m.cut_shapes, have, tol.length, g)
     if in_place:
         _in_place_checks(rep, pattern, m, have, tol, g, len(rec.sheets))
-    _reassembly_checks(rep, pattern, m.cut_shapes, have, [3 - m.state] if in_place else list(STATES), tol, g)
+    _reassembly_checks(
+        rep, pattern, m.cut_shapes, have, [3 - m.state] if in_place else list(STATES), tol, g
+    )
     # every cut runs its full length: no cut ends inside the material
     ends = np.concatenate(rec.dangling) if rec.dangling else np.zeros((0, 2))
     rep.add(_dangling_check(ends, m.cut_shapes, have, g, tol.length))
     _hinge_check(rep, pattern, al, m, have, in_place, tol.length, g)
-    _physical_checks(rep, pattern, al, files, rec.linework, m.cut_shapes, have, m.found_on, sheet_piece, in_place,
-                     fitted, g, m.labelings)
+    _physical_checks(
+        rep,
+        pattern,
+        al,
+        files,
+        rec.linework,
+        m.cut_shapes,
+        have,
+        m.found_on,
+        sheet_piece,
+        in_place,
+        fitted,
+        g,
+        m.labelings,
+    )
     return rep
 
 
@@ -92,45 +124,84 @@ def _recovered_check(rep: Report, m: _Matched, unusable: int, g: str) -> None:
     T = len(m.assign)
     missing = np.flatnonzero(m.assign < 0)
     got = T - len(missing)
-    rep.add(Check(f"{g}: tiles recovered", ok=not len(missing) and not m.extra and not unusable,
-                  value=got, tol=T, unit="count", op="==", group=g,
-                  worst=f"tile {int(missing[0])}" if len(missing) else None,
-                  detail=(f"{got} of {T} design tiles found; missing {missing[:20].tolist()}; "
-                          f"{m.extra} unmatched cut regions; {unusable} regions that are not quads")))
+    rep.add(
+        Check(
+            f"{g}: tiles recovered",
+            ok=not len(missing) and not m.extra and not unusable,
+            value=got,
+            tol=T,
+            unit="count",
+            op="==",
+            group=g,
+            worst=f"tile {int(missing[0])}" if len(missing) else None,
+            detail=(
+                f"{got} of {T} design tiles found; missing {missing[:20].tolist()}; "
+                f"{m.extra} unmatched cut regions; {unusable} regions that are not quads"
+            ),
+        )
+    )
 
 
-def _congruence_check(rep: Report, D: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, tol: float,
-                      g: str) -> None:
+def _congruence_check(
+    rep: Report, D: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, tol: float, g: str
+) -> None:
     """(a) congruence of every cut tile with its design tile."""
     T = len(D)
     cong = np.full(T, np.nan)
     mirrored: list[int] = []
     if have.any():
         fit = leave_one_out_residual(D[have], cut_shapes[have])
-        dl = np.abs(geometry.edge_lengths(cut_shapes[have]) - geometry.edge_lengths(D[have])).max(axis=1)
+        dl = np.abs(geometry.edge_lengths(cut_shapes[have]) - geometry.edge_lengths(D[have])).max(
+            axis=1
+        )
         cong[have] = np.maximum(fit, dl)
         bad = np.flatnonzero(have)[cong[have] > tol]
         if len(bad):
             mres, _ = _shift_fit(D[bad], _mirror(cut_shapes[bad]))
             mirrored = bad[mres <= np.maximum(tol, 0.5 * cong[bad])].tolist()
     worst_cong = int(np.nanargmax(cong)) if have.any() else None
-    rep.add(measured(f"{g}: (a) cut tiles congruent to design", float(np.nanmax(cong)) if have.any() else np.nan,
-                     tol, "mm", worst=f"tile {worst_cong}" if worst_cong is not None else None, group=g,
-                     detail=(f"mirrored tiles {mirrored}; " if mirrored else "")
-                     + "largest corner offset from a proper rigid fit of the other corners, and edge-length change"))
+    rep.add(
+        measured(
+            f"{g}: (a) cut tiles congruent to design",
+            float(np.nanmax(cong)) if have.any() else np.nan,
+            tol,
+            "mm",
+            worst=f"tile {worst_cong}" if worst_cong is not None else None,
+            group=g,
+            detail=(f"mirrored tiles {mirrored}; " if mirrored else "")
+            + "largest corner offset from a proper rigid fit of the other corners, and edge-length change",
+        )
+    )
 
 
-def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarray, tol: Tolerances, g: str,
-                     n_sheets: int) -> None:
+def _in_place_checks(
+    rep: Report,
+    pattern: Pattern,
+    m: _Matched,
+    have: np.ndarray,
+    tol: Tolerances,
+    g: str,
+    n_sheets: int,
+) -> None:
     """(b) in place: the sheet is the declared closed state."""
-    rep.add(measured(f"{g}: (b) in place = closed state {m.state}",
-                     float(np.nanmax(m.resid_pos)) if have.any() else np.nan, tol.length, "mm",
-                     worst=f"tile {int(np.nanargmax(m.resid_pos))}" if have.any() else None, group=g,
-                     detail="corner distance to the design's closed state under one rigid motion per sheet"))
+    rep.add(
+        measured(
+            f"{g}: (b) in place = closed state {m.state}",
+            float(np.nanmax(m.resid_pos)) if have.any() else np.nan,
+            tol.length,
+            "mm",
+            worst=f"tile {int(np.nanargmax(m.resid_pos))}" if have.any() else None,
+            group=g,
+            detail="corner distance to the design's closed state under one rigid motion per sheet",
+        )
+    )
     if not have.all() or n_sheets != 1:
         return
     # every tile found: the sheet's state (congruence is (a); the in-place fit replaces loop closure)
-    skip = {state_check_id(m.state, k) for k in ("congruent-lengths", "congruent-angles", "loop-closure")}
+    skip = {
+        state_check_id(m.state, k)
+        for k in ("congruent-lengths", "congruent-angles", "loop-closure")
+    }
     for chk in closed_state_checks(pattern, m.cut_shapes, m.state, tol):
         if chk.id in skip:
             continue
@@ -140,21 +211,45 @@ def _in_place_checks(rep: Report, pattern: Pattern, m: _Matched, have: np.ndarra
         rep.add(chk)
 
 
-def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray,
-                       rebuild: list[int], tol: Tolerances, g: str) -> None:
+def _reassembly_checks(
+    rep: Report,
+    pattern: Pattern,
+    cut_shapes: np.ndarray,
+    have: np.ndarray,
+    rebuild: list[int],
+    tol: Tolerances,
+    g: str,
+) -> None:
     """(c) the cut tiles reassembled by the hinge correspondence give the closed states in ``rebuild``."""
     for s in rebuild:
         name = f"{g}: (c) state {s} from cut tiles"
         if not have.all():
-            rep.add(Check(f"{name}: loop closure", ok=False, value=None, tol=tol.length, unit="mm", group=g,
-                          detail="cannot reassemble: tiles are missing",
-                          id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}"))
+            rep.add(
+                Check(
+                    f"{name}: loop closure",
+                    ok=False,
+                    value=None,
+                    tol=tol.length,
+                    unit="mm",
+                    group=g,
+                    detail="cannot reassemble: tiles are missing",
+                    id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}",
+                )
+            )
             continue
         Y, split = assembled(pattern, cut_shapes, s)
-        rep.add(measured(f"{name}: loop closure", float(split.max(initial=0.0)), tol.length, "mm",
-                         worst=f"hinge {int(np.argmax(split))}" if len(split) else None, group=g,
-                         detail="hinge split of the least-squares assembly of the cut tiles",
-                         id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}"))
+        rep.add(
+            measured(
+                f"{name}: loop closure",
+                float(split.max(initial=0.0)),
+                tol.length,
+                "mm",
+                worst=f"hinge {int(np.argmax(split))}" if len(split) else None,
+                group=g,
+                detail="hinge split of the least-squares assembly of the cut tiles",
+                id=f"{g}.reassembled.{state_check_id(s, 'loop-closure')}",
+            )
+        )
         congruent = {state_check_id(s, k) for k in ("congruent-lengths", "congruent-angles")}
         for chk in closed_state_checks(pattern, Y, s, tol):
             if chk.id in congruent:  # the cut tiles' congruence is (a)
@@ -165,8 +260,16 @@ def _reassembly_checks(rep: Report, pattern: Pattern, cut_shapes: np.ndarray, ha
             rep.add(chk)
 
 
-def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, have: np.ndarray, in_place: bool,
-                 tol: float, g: str) -> None:
+def _hinge_check(
+    rep: Report,
+    pattern: Pattern,
+    al: Allowances,
+    m: _Matched,
+    have: np.ndarray,
+    in_place: bool,
+    tol: float,
+    g: str,
+) -> None:
     """(d) every hinge present: both tiles cut (in place: their hinge corners coincide; ligament: listed)."""
     top = pattern.topology
     A, B = top.hinge_tiles.T
@@ -177,7 +280,9 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
         cA, cB = top.hinge_corner.T
         ok = np.zeros(len(A), dtype=bool)
         sel = np.flatnonzero(present)
-        ok[sel] = np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol
+        ok[sel] = (
+            np.linalg.norm(cut_shapes[A[sel], cA[sel]] - cut_shapes[B[sel], cB[sel]], axis=1) <= tol
+        )
         cross = found_on[A] != found_on[B]  # split along cut lines onto two sheets
         ok |= cross
         present &= ok
@@ -185,7 +290,9 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
         if (cross & present).any():
             why += f" ({int((cross & present).sum())} hinges cross sheets)"
     how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
-    if how is not None and how.declared_hinges:  # a hinge is there only where its feature is declared
+    if (
+        how is not None and how.declared_hinges
+    ):  # a hinge is there only where its feature is declared
         listed = {int(f.get("hinge", -1)) for f in al.hinge_features if f.get("polygon")}
         h_idx = np.arange(len(A))
         split = np.isin(h_idx, list(al.cross_sheet)) & (found_on[A] != found_on[B])
@@ -194,15 +301,35 @@ def _hinge_check(rep: Report, pattern: Pattern, al: Allowances, m: _Matched, hav
         if split.any():
             why += f" or the hinge declared split across sheets ({int(split.sum())}, to be joined by hand)"
     absent = np.flatnonzero(~present)
-    rep.add(Check(f"{g}: (d) every hinge present", ok=not len(absent), value=int(len(absent)), tol=0,
-                  unit="count", group=g, worst=f"hinge {int(absent[0])}" if len(absent) else None,
-                  detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why))
+    rep.add(
+        Check(
+            f"{g}: (d) every hinge present",
+            ok=not len(absent),
+            value=int(len(absent)),
+            tol=0,
+            unit="count",
+            group=g,
+            worst=f"hinge {int(absent[0])}" if len(absent) else None,
+            detail=f"{len(absent)} of {len(A)} hinges missing ({why})" if len(absent) else why,
+        )
+    )
 
 
-def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[int, Path],
-                     linework: dict[int, Linework], cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
-                     sheet_piece: bool, in_place: bool, fitted: float | None, g: str,
-                     labelings: Sequence[np.ndarray] = ()) -> None:
+def _physical_checks(
+    rep: Report,
+    pattern: Pattern,
+    al: Allowances,
+    files: dict[int, Path],
+    linework: dict[int, Linework],
+    cut_shapes: np.ndarray,
+    have: np.ndarray,
+    found_on: np.ndarray,
+    sheet_piece: bool,
+    in_place: bool,
+    fitted: float | None,
+    g: str,
+    labelings: Sequence[np.ndarray] = (),
+) -> None:
     """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
     A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
     hinges at different corners; its marks say which one was cut, so the best of them is reported."""
@@ -215,11 +342,17 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
         shrink = al.tile_shrink if al.hinge != PLAIN else -(fitted or 0.0)
         kerf = al.kerf_offset if al.hinge != PLAIN else 0.0
         cores = np.full(len(cut_shapes), None, dtype=object)
-        cores[have] = shapely.buffer(shapely.polygons(cut_shapes[have]), -shrink, join_style="mitre",
-                                     mitre_limit=al.mitre_limit)
+        cores[have] = shapely.buffer(
+            shapely.polygons(cut_shapes[have]),
+            -shrink,
+            join_style="mitre",
+            mitre_limit=al.mitre_limit,
+        )
         for sheet, lw in linework.items():
             on = have & (found_on == sheet)
-            hinges = np.flatnonzero(on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet)))
+            hinges = np.flatnonzero(
+                on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet))
+            )
             if not len(hinges):
                 continue
             c = cores.copy()
@@ -244,11 +377,15 @@ def _physical_checks(rep: Report, pattern: Pattern, al: Allowances, files: dict[
             return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
         chk = tape_mark_check(hs, marked, room, g)
         if k:
-            chk.detail += " (the sheet is symmetric: hinges placed by the labeling its marks fit best)"
+            chk.detail += (
+                " (the sheet is symmetric: hinges placed by the labeling its marks fit best)"
+            )
         rep.add(chk)
 
 
-def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, g: str, tol: float) -> Check:
+def _dangling_check(
+    ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, g: str, tol: float
+) -> Check:
     """A cut that stops in the material: a slit short of its end leaves two tiles joined, a stray
     cut weakens a part. Names the tiles nearest the first such end."""
     worst, detail = None, "every cut line ends on another cut"
@@ -262,14 +399,22 @@ def _dangling_check(ends: np.ndarray, cut_shapes: np.ndarray, have: np.ndarray, 
             where = [int(t) for t, dd in zip(near, np.sort(d)[:2]) if dd <= max(10 * tol, 1.0)]
         if len(where) == 2:
             worst = f"tiles {where[0]}/{where[1]}"
-            detail = f"the slit between tiles {where[0]} and {where[1]} stops short: they stay joined"
+            detail = (
+                f"the slit between tiles {where[0]} and {where[1]} stops short: they stay joined"
+            )
         elif where:
             worst = f"tile {where[0]}"
             detail = f"a cut ends inside tile {where[0]}"
         else:
             detail = "a cut ends in the material"
         detail += f" ({len(ends)} cut ends in the material, first at ({ends[0, 0]:.4g}, {ends[0, 1]:.4g}) mm)"
-    return Check(f"{g}: cuts run their full length", ok=not len(ends), value=int(len(ends)), tol=0, unit="count",
-                 group=g, worst=worst, detail=detail)
-
-
+    return Check(
+        f"{g}: cuts run their full length",
+        ok=not len(ends),
+        value=int(len(ends)),
+        tol=0,
+        unit="count",
+        group=g,
+        worst=worst,
+        detail=detail,
+    )

@@ -27,11 +27,21 @@ class _Matched:
     cut_shapes: np.ndarray  # (T, 4, 2) each design tile's cut shape, corners in design order
     resid_pos: np.ndarray  # in place: corner distance to the closed state
     extra: int  # recovered regions matched to no design tile
-    labelings: list[np.ndarray]  # cut shapes under other, equally good labelings of a symmetric sheet
+    labelings: list[
+        np.ndarray
+    ]  # cut shapes under other, equally good labelings of a symmetric sheet
 
 
-def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bool, D: np.ndarray, L: float,
-                 tol: float, rep: Report) -> _Matched:
+def _match_tiles(
+    pattern: Pattern,
+    al: Allowances,
+    rec: _Recovered,
+    in_place: bool,
+    D: np.ndarray,
+    L: float,
+    tol: float,
+    rep: Report,
+) -> _Matched:
     """Match every sheet's quads to the design tiles: by position in place, by shape when separate."""
     T = pattern.n_tiles
 
@@ -48,7 +58,9 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
         state = min(STATES, key=lambda s: fit[s] if np.isfinite(fit[s]) else np.inf)
         rep.meta["state"] = state
     k = D.shape[1]  # the tile arity
-    m = _Matched(state, np.full(T, -1), np.full(T, -1), np.full((T, k, 2), np.nan), np.full(T, np.nan), 0, [])
+    m = _Matched(
+        state, np.full(T, -1), np.full(T, -1), np.full((T, k, 2), np.nan), np.full(T, np.nan), 0, []
+    )
     Ystate = closed(state)
     for sheet, R in sheets.items():
         if in_place:
@@ -63,18 +75,31 @@ def _match_tiles(pattern: Pattern, al: Allowances, rec: _Recovered, in_place: bo
         d = a[r]
         m.assign[d] = r
         m.found_on[d] = sheet
-        m.cut_shapes[d] = R[r[:, None], (np.arange(k)[None, :] + sh[r][:, None]) % k]  # corner shift
+        m.cut_shapes[d] = R[
+            r[:, None], (np.arange(k)[None, :] + sh[r][:, None]) % k
+        ]  # corner shift
         if in_place:
             m.resid_pos[d] = res[r]
     return m
 
 
-def _match_sheet_in_place(al: Allowances, m: _Matched, sheet: int, R: np.ndarray, Ystate: np.ndarray, T: int,
-                          tol: float, only_sheet: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _match_sheet_in_place(
+    al: Allowances,
+    m: _Matched,
+    sheet: int,
+    R: np.ndarray,
+    Ystate: np.ndarray,
+    T: int,
+    tol: float,
+    only_sheet: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One in-place sheet matched to its design tiles; a symmetric single sheet also records the other
     labelings that fit as well (``m.labelings``)."""
-    design_ids = np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet)) if al.tile_sheet \
+    design_ids = (
+        np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet))
+        if al.tile_sheet
         else np.arange(T)
+    )
     design_ids = design_ids[design_ids < T]
     alts: list = []
     a, res, sh, _, _ = match_in_place(Ystate[design_ids], R, alternatives=alts)

@@ -28,12 +28,18 @@ class Linework:
     polylines: list[np.ndarray] = field(default_factory=list)
     closed: list[bool] = field(default_factory=list)
     layer_found: bool = True  # a CUT layer/group existed
-    layers: list[str] = field(default_factory=list)  # per polyline: its layer or group name ("" if none)
+    layers: list[str] = field(
+        default_factory=list
+    )  # per polyline: its layer or group name ("" if none)
     colours: list[str] = field(default_factory=list)  # per polyline: its stroke colour ("" if none)
 
     def add(self, pts: np.ndarray, closed: bool, layer: str = "CUT", colour: str = "") -> None:
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-        if len(pts) >= 3 and abs(pts[0, 0] - pts[-1, 0]) <= 1e-9 and abs(pts[0, 1] - pts[-1, 1]) <= 1e-9:
+        if (
+            len(pts) >= 3
+            and abs(pts[0, 0] - pts[-1, 0]) <= 1e-9
+            and abs(pts[0, 1] - pts[-1, 1]) <= 1e-9
+        ):
             pts, closed = pts[:-1], True
         if len(pts) >= 2:
             self.polylines.append(pts)
@@ -43,8 +49,14 @@ class Linework:
 
     def subset(self, keep: Iterable[int]) -> Linework:
         keep = list(keep)
-        return Linework(self.path, [self.polylines[i] for i in keep], [self.closed[i] for i in keep],
-                        self.layer_found, [self.layers[i] for i in keep], [self.colours[i] for i in keep])
+        return Linework(
+            self.path,
+            [self.polylines[i] for i in keep],
+            [self.closed[i] for i in keep],
+            self.layer_found,
+            [self.layers[i] for i in keep],
+            [self.colours[i] for i in keep],
+        )
 
     def cut_classes(self) -> list[Linework]:
         """The candidate cut linework: the CUT layer if there is one, else every colour class outside the
@@ -87,11 +99,16 @@ class Polylines(Sequence[tuple[np.ndarray, bool]]):
         return iter(self._list())
 
 
-def flat_polylines(polylines: Sequence[tuple[np.ndarray, bool]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def flat_polylines(
+    polylines: Sequence[tuple[np.ndarray, bool]],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(points (P, 2), counts, closed)`` of a list of ``(points, closed)``."""
     if isinstance(polylines, Polylines):
         return polylines.pts, polylines.counts, polylines.closed
     if not polylines:
         return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
-    return (np.concatenate([np.asarray(p, dtype=float).reshape(-1, 2) for p, _ in polylines]),
-            np.array([len(p) for p, _ in polylines]), np.array([bool(c) for _, c in polylines]))
+    return (
+        np.concatenate([np.asarray(p, dtype=float).reshape(-1, 2) for p, _ in polylines]),
+        np.array([len(p) for p, _ in polylines]),
+        np.array([bool(c) for _, c in polylines]),
+    )

@@ -94,8 +94,10 @@ class CutManifest:
         if problem is not None:
             raise VerifyError(f"{where}: malformed manifest ({problem})")
         known = {f.name for f in fields(cls)} - {"extra"}
-        return cls(**{k: v for k, v in data.items() if k in known},
-                   extra={k: v for k, v in data.items() if k not in known})
+        return cls(
+            **{k: v for k, v in data.items() if k in known},
+            extra={k: v for k, v in data.items() if k not in known},
+        )
 
     @classmethod
     def from_json(cls, text: str, where: str = "manifest") -> CutManifest:
@@ -114,18 +116,30 @@ def _named_problems(data: dict[str, Any], where: str) -> None:
         raise VerifyError(f"{where}: unknown hinge kind {hinge!r} ({', '.join(some)} or {last})")
     try:
         state = int(data.get("state", 1))
-        scale, kerf, shrink = (float(data.get(k, d)) for k, d in
-                               (("scale", 1.0), ("kerf_offset_mm", 0.0), ("tile_shrink_mm", 0.0)))
+        scale, kerf, shrink = (
+            float(data.get(k, d))
+            for k, d in (("scale", 1.0), ("kerf_offset_mm", 0.0), ("tile_shrink_mm", 0.0))
+        )
     except (TypeError, ValueError):
         return  # not numbers: the schema names the field
     if state not in STATES:
         raise VerifyError(f"{where}: state must be 1 or 2, not {state}")
-    if not (scale > 0 and math.isfinite(scale)) or not (kerf >= 0 and math.isfinite(kerf)) \
-            or not (shrink >= 0 and math.isfinite(shrink)):
-        raise VerifyError(f"{where}: scale must be positive and kerf_offset_mm, tile_shrink_mm non-negative")
+    if (
+        not (scale > 0 and math.isfinite(scale))
+        or not (kerf >= 0 and math.isfinite(kerf))
+        or not (shrink >= 0 and math.isfinite(shrink))
+    ):
+        raise VerifyError(
+            f"{where}: scale must be positive and kerf_offset_mm, tile_shrink_mm non-negative"
+        )
 
 
-ROW_LISTS = ("tiles", "hinges", "hinge_features", "assembly_pieces")  # lists written one row per line
+ROW_LISTS = (
+    "tiles",
+    "hinges",
+    "hinge_features",
+    "assembly_pieces",
+)  # lists written one row per line
 
 
 def dumps_manifest(manifest: dict[str, Any]) -> str:
@@ -177,11 +191,17 @@ class Allowances:
     hinge_features: list[dict[str, Any]]
     tile_sheet: dict[int, int]
     sheet_files: dict[int, dict[str, str]]  # sheet -> {"dxf": file, "svg": file}
-    cross_sheet: set[int] = field(default_factory=set)  # hinges the writer declares split across sheets
+    cross_sheet: set[int] = field(
+        default_factory=set
+    )  # hinges the writer declares split across sheets
     ligament_width: float | None = None  # declared ligament width (mm), when the manifest has one
-    tiles_placed: dict[int, tuple[float, np.ndarray]] = field(default_factory=dict)  # tile -> (rotation, shift)
+    tiles_placed: dict[int, tuple[float, np.ndarray]] = field(
+        default_factory=dict
+    )  # tile -> (rotation, shift)
     labels: bool = False  # the manifest says the layout is labelled (fabkiri's tape marks come with the labels)
-    mitre_limit: float = MITRE_LIMIT  # the writer's mitre limit for its kerf offsets and shrunk tiles
+    mitre_limit: float = (
+        MITRE_LIMIT  # the writer's mitre limit for its kerf offsets and shrunk tiles
+    )
 
 
 def _allowances(manifest: CutManifest | dict[str, Any] | None, where: str) -> Allowances:
@@ -190,7 +210,7 @@ def _allowances(manifest: CutManifest | dict[str, Any] | None, where: str) -> Al
     m = manifest if isinstance(manifest, CutManifest) else CutManifest.from_dict(manifest, where)
     ref: dict[int, np.ndarray] = {}
     rs = m.reference_square
-    for item in ([rs] if isinstance(rs, dict) else (rs or [])):
+    for item in [rs] if isinstance(rs, dict) else (rs or []):
         ref[int(item.get("sheet", 1))] = np.asarray(item["corners"], dtype=float).reshape(-1, 2)
     tile_sheet = {int(t["tile"]): int(t.get("sheet", 1)) for t in m.tiles}
     sheet_files: dict[int, dict[str, str]] = {}
@@ -200,8 +220,25 @@ def _allowances(manifest: CutManifest | dict[str, Any] | None, where: str) -> Al
                 sheet_files.setdefault(int(sh["index"]), {})[key] = str(sh[key])
     cross = {int(h["hinge"]) for h in m.hinges if h.get("cross_sheet")}
     lig_w = float(m.ligament["width_mm"]) if m.ligament and m.ligament.get("width_mm") else None
-    placed = {int(t["tile"]): (float(t["rotation_rad"]), np.asarray(t["shift_mm"], dtype=float))
-              for t in m.tiles if "rotation_rad" in t and "shift_mm" in t}
-    return Allowances(m.hinge, m.layout or m.default_layout(), m.state, float(m.scale), float(m.kerf_offset_mm),
-                      float(m.tile_shrink_mm), ref, list(m.hinge_features), tile_sheet, sheet_files, cross, lig_w,
-                      placed, bool(m.parameters.get("labels", False)), mitre_limit=float(m.mitre_limit))
+    placed = {
+        int(t["tile"]): (float(t["rotation_rad"]), np.asarray(t["shift_mm"], dtype=float))
+        for t in m.tiles
+        if "rotation_rad" in t and "shift_mm" in t
+    }
+    return Allowances(
+        m.hinge,
+        m.layout or m.default_layout(),
+        m.state,
+        float(m.scale),
+        float(m.kerf_offset_mm),
+        float(m.tile_shrink_mm),
+        ref,
+        list(m.hinge_features),
+        tile_sheet,
+        sheet_files,
+        cross,
+        lig_w,
+        placed,
+        bool(m.parameters.get("labels", False)),
+        mitre_limit=float(m.mitre_limit),
+    )

@@ -56,7 +56,9 @@ def _shape_classes(D: np.ndarray, L: float) -> np.ndarray:
     return np.unique(key, axis=0, return_inverse=True)[1].ravel()
 
 
-def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def match_by_shape(
+    D: np.ndarray, R: np.ndarray, L: float, k: int = 8
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Assign recovered quads ``R`` to design quads ``D`` one-to-one by shape.
 
     Returns ``assign`` (len R, design index or -1), residual and corner shift.
@@ -104,8 +106,9 @@ def match_by_shape(D: np.ndarray, R: np.ndarray, L: float, k: int = 8) -> tuple[
     return assign, resid, shift
 
 
-def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: list | None = None
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+def match_in_place(
+    Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: list | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
     """Match recovered quads ``R`` to design closed-state tiles ``Y`` under ONE rigid motion.
 
     Hypotheses pair the recovered tile nearest the layout's centre with design
@@ -145,8 +148,9 @@ def match_in_place(Y: np.ndarray, R: np.ndarray, n_hyp: int = 6, alternatives: l
     assign, resid, shift, theta, t = _refit(Y, R, theta, t, tree)
     if alternatives is not None:
         for score, th, tt in hyps:
-            if score <= best[0] + 1e-3 and (abs(geometry.wrap_angle(th - theta)) > 1e-6 or
-                                            np.linalg.norm(tt - t) > 1e-3):
+            if score <= best[0] + 1e-3 and (
+                abs(geometry.wrap_angle(th - theta)) > 1e-6 or np.linalg.norm(tt - t) > 1e-3
+            ):
                 alternatives.append(_refit(Y, R, th, tt, tree)[:3])
     return assign, resid, shift, float(theta), t
 
@@ -178,8 +182,13 @@ def _assign_positions(Y, R, theta, t, tree):
     first[1:] = idx[order[1:]] != idx[order[:-1]]
     d = order[first]
     r = idx[d]
-    diff = np.stack([np.linalg.norm(np.roll(R[r], -s, axis=1) - moved[d], axis=-1).max(axis=1)
-                     for s in range(R.shape[1])], axis=1)
+    diff = np.stack(
+        [
+            np.linalg.norm(np.roll(R[r], -s, axis=1) - moved[d], axis=-1).max(axis=1)
+            for s in range(R.shape[1])
+        ],
+        axis=1,
+    )
     s = diff.argmin(axis=1)
     assign[r], resid[r], shift[r] = d, diff[np.arange(len(r)), s], s
     return assign, resid, shift

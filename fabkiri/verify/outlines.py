@@ -26,7 +26,9 @@ from .report import Check, measured
 if TYPE_CHECKING:  # pattern_checks imports this module
     from .pattern_checks import Tolerances
 
-DEGENERATE_ASPECT = 4.0  # an unasked aspect this many times the lattice's rows:cols is a collapsed strip
+DEGENERATE_ASPECT = (
+    4.0  # an unasked aspect this many times the lattice's rows:cols is a collapsed strip
+)
 
 
 def outline_corners(Y: np.ndarray, eps: float) -> tuple[np.ndarray, Any]:
@@ -38,7 +40,9 @@ def outline_corners(Y: np.ndarray, eps: float) -> tuple[np.ndarray, Any]:
     return np.asarray(part.exterior.coords)[:-1], part
 
 
-def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol: Tolerances) -> list[Check]:
+def _rectangle_checks(
+    pattern: Pattern, s: int, Y: np.ndarray, ratio: float | None, tol: Tolerances
+) -> list[Check]:
     pts, union = outline_corners(Y, max(tol.length, 1e-12 * tol.tile_size))
     rect = union.minimum_rotated_rectangle
     off = shapely.distance(shapely.points(pts), rect.exterior)
@@ -47,25 +51,51 @@ def _rectangle_checks(pattern: Pattern, s: int, Y: np.ndarray, ratio: float | No
     long, short = float(sides.max()), float(sides.min())
     aspect = long / max(short, 1e-300)
     g = f"state {s}"
-    out = [measured(f"{g}: outline is a rectangle", float(off.max(initial=0.0)), tol.length, "mm", group=g,
-                    detail=f"outline corners off the minimum rotated rectangle ({long:.4g} x {short:.4g} mm)")]
+    out = [
+        measured(
+            f"{g}: outline is a rectangle",
+            float(off.max(initial=0.0)),
+            tol.length,
+            "mm",
+            group=g,
+            detail=f"outline corners off the minimum rotated rectangle ({long:.4g} x {short:.4g} mm)",
+        )
+    ]
     if ratio is not None:
         want = max(float(ratio), 1.0 / float(ratio))
-        out.append(measured(f"{g}: outline aspect ratio", abs(long - want * short), tol.length, "mm", group=g,
-                            detail=f"{long:.4g} x {short:.4g} mm is {aspect:.4g}:1, asked {want:.4g}:1 "
-                                   f"(long side minus asked ratio times the short side)"))
+        out.append(
+            measured(
+                f"{g}: outline aspect ratio",
+                abs(long - want * short),
+                tol.length,
+                "mm",
+                group=g,
+                detail=f"{long:.4g} x {short:.4g} mm is {aspect:.4g}:1, asked {want:.4g}:1 "
+                f"(long side minus asked ratio times the short side)",
+            )
+        )
     else:
         lat = pattern.lattice or {}
         m, n = int(lat.get("rows") or 1), int(lat.get("cols") or 1)
         limit = DEGENERATE_ASPECT * max(m / n, n / m)
-        out.append(measured(f"{g}: outline not degenerate", aspect, limit, "ratio", group=g,
-                            detail=f"{long:.4g} x {short:.4g} mm is {aspect:.3g}:1 with no aspect asked; a "
-                                   f"{m}x{n} lattice closing to more than {limit:.3g}:1 is a collapsed strip "
-                                   f"(ask for one with rect=W/H)"))
+        out.append(
+            measured(
+                f"{g}: outline not degenerate",
+                aspect,
+                limit,
+                "ratio",
+                group=g,
+                detail=f"{long:.4g} x {short:.4g} mm is {aspect:.3g}:1 with no aspect asked; a "
+                f"{m}x{n} lattice closing to more than {limit:.3g}:1 is a collapsed strip "
+                f"(ask for one with rect=W/H)",
+            )
+        )
     return out
 
 
-def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], tol: Tolerances) -> list[Check]:
+def contracted_outline_checks(
+    pattern: Pattern, states: dict[int, np.ndarray], tol: Tolerances
+) -> list[Check]:
     """Checks of every closed-state outline target the design recorded (none if it recorded none)."""
     d = pattern.design or {}
     asked = (d.get("options") or {}).get("contracted") or {}
@@ -88,7 +118,9 @@ def contracted_outline_checks(pattern: Pattern, states: dict[int, np.ndarray], t
     return out
 
 
-def target_checks(pattern: Pattern, states: dict[int, np.ndarray] | None = None, shape_tol: str | tuple = "2%") -> list[Check]:
+def target_checks(
+    pattern: Pattern, states: dict[int, np.ndarray] | None = None, shape_tol: str | tuple = "2%"
+) -> list[Check]:
     """The outline against every stored target curve, over the whole outline (Hausdorff distance of the
     boundary-tip polygon, or of each closed state's outline, to the target), checked against ``shape_tol``
     (a share of the target's size or a length, ``design --shape-tol``) — never against a figure the
@@ -100,7 +132,9 @@ def target_checks(pattern: Pattern, states: dict[int, np.ndarray] | None = None,
     d = pattern.design or {}
     closed_states: dict[int, np.ndarray] = states or {}
     tol = conf.parse_shape_tol(shape_tol) if isinstance(shape_tol, str) else shape_tol
-    jobs: list[tuple[str, str, int | None, dict]] = []  # (check name, group, state or None, target spec)
+    jobs: list[
+        tuple[str, str, int | None, dict]
+    ] = []  # (check name, group, state or None, target spec)
     if isinstance(d.get("target"), dict):
         jobs.append(("target shape", "deployed", None, d["target"]))
     for s, tgt in sorted((d.get("contracted_targets") or {}).items()):
@@ -111,20 +145,42 @@ def target_checks(pattern: Pattern, states: dict[int, np.ndarray] | None = None,
         try:
             target = target_from_dict(spec, name)
         except InputError as exc:
-            out.append(Check(name, ok=False, value=float("nan"), tol=0.0, unit="mm", group="design",
-                             detail=f"the stored target cannot be rebuilt: {exc}"))
+            out.append(
+                Check(
+                    name,
+                    ok=False,
+                    value=float("nan"),
+                    tol=0.0,
+                    unit="mm",
+                    group="design",
+                    detail=f"the stored target cannot be rebuilt: {exc}",
+                )
+            )
             continue
-        c = (conf.deployed(pattern.nodes, pattern.topology, target) if s is None
-             else conf.closed(closed_states[s], target))
+        c = (
+            conf.deployed(pattern.nodes, pattern.topology, target)
+            if s is None
+            else conf.closed(closed_states[s], target)
+        )
         j = conf.judge(c, tol)
         x, y = c["worst"]["at"]
-        out.append(measured(name, c["hausdorff_mm"], j["tol_mm"], "mm", group="design",
-                            worst=f"({x:.1f}, {y:.1f}) mm on the {c['worst']['on']}",
-                            detail=(f"Hausdorff {100 * c['hausdorff_rel']:.3g} % of the target size "
-                                    f"{c['size_mm']:.4g} mm (tolerance {100 * j['tol_rel']:.3g} %); 1-IoU "
-                                    f"{c['one_minus_iou']:.3g}; mean distance {c['mean_outline_to_target_mm']:.3g} /"
-                                    f" {c['mean_target_to_outline_mm']:.3g} mm; spacing min/mean "
-                                    f"{c['spacing_min_mm']:.3g}/{c['spacing_mean_mm']:.3g} mm over {c['points']} "
-                                    f"{'boundary tips' if s is None else 'outline vertices'} vs the "
-                                    f"{target.kind} target {target.name!r}")))
+        out.append(
+            measured(
+                name,
+                c["hausdorff_mm"],
+                j["tol_mm"],
+                "mm",
+                group="design",
+                worst=f"({x:.1f}, {y:.1f}) mm on the {c['worst']['on']}",
+                detail=(
+                    f"Hausdorff {100 * c['hausdorff_rel']:.3g} % of the target size "
+                    f"{c['size_mm']:.4g} mm (tolerance {100 * j['tol_rel']:.3g} %); 1-IoU "
+                    f"{c['one_minus_iou']:.3g}; mean distance {c['mean_outline_to_target_mm']:.3g} /"
+                    f" {c['mean_target_to_outline_mm']:.3g} mm; spacing min/mean "
+                    f"{c['spacing_min_mm']:.3g}/{c['spacing_mean_mm']:.3g} mm over {c['points']} "
+                    f"{'boundary tips' if s is None else 'outline vertices'} vs the "
+                    f"{target.kind} target {target.name!r}"
+                ),
+            )
+        )
     return out

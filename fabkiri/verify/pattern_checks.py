@@ -53,9 +53,23 @@ from .tolerances import (
 )
 
 __all__ = [
-    "DEFAULT_PATH_STEPS", "TIER_EXPORTED", "TIER_OPTIMISED", "Tolerances", "angle_check", "closed_state_checks",
-    "compactness_checks", "enclosed_gaps", "fabrication_tolerances", "residual_checks", "rigid_claimed",
-    "rigid_path", "rigid_path_checks", "state_check_id", "tile_checks", "tolerances", "topology_checks",
+    "DEFAULT_PATH_STEPS",
+    "TIER_EXPORTED",
+    "TIER_OPTIMISED",
+    "Tolerances",
+    "angle_check",
+    "closed_state_checks",
+    "compactness_checks",
+    "enclosed_gaps",
+    "fabrication_tolerances",
+    "residual_checks",
+    "rigid_claimed",
+    "rigid_path",
+    "rigid_path_checks",
+    "state_check_id",
+    "tile_checks",
+    "tolerances",
+    "topology_checks",
     "verify_pattern",
 ]
 
@@ -70,25 +84,73 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
     out = []
     detail = ""
     if len(crossed):
-        sums = ", ".join(f"tile {t}: angle sum {np.degrees(angles[t].sum()):.0f}°" for t in crossed[:8])
+        sums = ", ".join(
+            f"tile {t}: angle sum {np.degrees(angles[t].sum()):.0f}°" for t in crossed[:8]
+        )
         detail = f"self-intersecting tiles {crossed.tolist()} ({sums})"
-    out.append(Check("tiles simple", ok=not len(crossed), value=int(len(crossed)), tol=0, unit="count",
-                     worst=f"tile {int(crossed[0])}" if len(crossed) else None, detail=detail, group="tiles"))
+    out.append(
+        Check(
+            "tiles simple",
+            ok=not len(crossed),
+            value=int(len(crossed)),
+            tol=0,
+            unit="count",
+            worst=f"tile {int(crossed[0])}" if len(crossed) else None,
+            detail=detail,
+            group="tiles",
+        )
+    )
     area = geometry.signed_areas(corners)
-    out.append(measured("tiles counter-clockwise", float(area.min()), 0.0, "mm²", op=">=",
-                        worst=worst_at("tile", -area), group="tiles",
-                        detail=f"clockwise or flat tiles: {np.flatnonzero(area <= 0).tolist()[:20]}"))
+    out.append(
+        measured(
+            "tiles counter-clockwise",
+            float(area.min()),
+            0.0,
+            "mm²",
+            op=">=",
+            worst=worst_at("tile", -area),
+            group="tiles",
+            detail=f"clockwise or flat tiles: {np.flatnonzero(area <= 0).tolist()[:20]}",
+        )
+    )
     i, j, depth = geom.overlap_depths(corners)  # hinged neighbours touch only at a corner: depth 0
     k = int(np.argmax(depth)) if len(depth) else None
-    out.append(measured("deployed: no overlaps", largest(depth), tol.length, "mm", group="tiles",
-                        worst=f"tiles {i[k]}/{j[k]}" if k is not None else None, id="deployed.no-overlaps",
-                        detail=f"{int((depth > tol.length).sum())} overlapping pairs in the deployed state"))
+    out.append(
+        measured(
+            "deployed: no overlaps",
+            largest(depth),
+            tol.length,
+            "mm",
+            group="tiles",
+            worst=f"tiles {i[k]}/{j[k]}" if k is not None else None,
+            id="deployed.no-overlaps",
+            detail=f"{int((depth > tol.length).sum())} overlapping pairs in the deployed state",
+        )
+    )
     edges = geometry.edge_lengths(corners)
-    out.append(measured("tiles min edge", float(edges.min()), MIN_EDGE_REL * tol.tile_size, "mm", op=">=",
-                        worst=worst_at("tile", -edges.min(axis=1)), group="tiles"))
+    out.append(
+        measured(
+            "tiles min edge",
+            float(edges.min()),
+            MIN_EDGE_REL * tol.tile_size,
+            "mm",
+            op=">=",
+            worst=worst_at("tile", -edges.min(axis=1)),
+            group="tiles",
+        )
+    )
     inner = np.minimum(angles, geometry.TWO_PI - angles)  # distance from a flat or folded corner
-    out.append(measured("tiles min angle", float(inner.min()), MIN_ANGLE_RAD, "rad", op=">=",
-                        worst=worst_at("tile", -inner.min(axis=1)), group="tiles"))
+    out.append(
+        measured(
+            "tiles min angle",
+            float(inner.min()),
+            MIN_ANGLE_RAD,
+            "rad",
+            op=">=",
+            worst=worst_at("tile", -inner.min(axis=1)),
+            group="tiles",
+        )
+    )
     return out
 
 
@@ -103,7 +165,9 @@ def topology_checks(pattern: Pattern) -> list[Check]:
     orphan = np.flatnonzero(holes_per_hinge == 0) if K else np.zeros(0, dtype=np.int64)
     bad = abs(K - expected)
     lat = pattern.lattice or {}
-    detail = f"{T} tiles, {H} hinges, {len(top.free_nodes)} free corners, {K} holes (cycles: {expected})"
+    detail = (
+        f"{T} tiles, {H} hinges, {len(top.free_nodes)} free corners, {K} holes (cycles: {expected})"
+    )
     counts = tess.lattice_counts
     if lat.get("rows") and lat.get("cols") and counts is not None:
         m, n = int(lat["rows"]), int(lat["cols"])
@@ -116,12 +180,29 @@ def topology_checks(pattern: Pattern) -> list[Check]:
         bad += len(orphan)
     if len(orphan):
         detail += f"; hinges bordering no hole: {orphan[:10].tolist()}"
-    return [Check("topology", ok=bad == 0, value=int(bad), tol=0, unit="count", group="tiles",
-                  worst=f"hinge {int(orphan[0])}" if len(orphan) else None, detail=detail)]
+    return [
+        Check(
+            "topology",
+            ok=bad == 0,
+            value=int(bad),
+            tol=0,
+            unit="count",
+            group="tiles",
+            worst=f"hinge {int(orphan[0])}" if len(orphan) else None,
+            detail=detail,
+        )
+    ]
 
-def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6, *,
-                   rigid: bool | None = None, path_steps: int = DEFAULT_PATH_STEPS,
-                   shape_tol: str | tuple = "2%") -> Report:
+
+def verify_pattern(
+    pattern: Pattern,
+    tol_mm: float | None = None,
+    tol_rad: float = 1e-6,
+    *,
+    rigid: bool | None = None,
+    path_steps: int = DEFAULT_PATH_STEPS,
+    shape_tol: str | tuple = "2%",
+) -> Report:
     """Verify that ``pattern`` closes into both compact states.
 
     ``tol_mm`` None uses the relative tier of spec §10 (1e-9 of the mean tile
@@ -132,10 +213,20 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
     """
     tol = tolerances(pattern, tol_mm, tol_rad)
     claimed = rigid_claimed(pattern) if rigid is None else bool(rigid)
-    rep = Report(subject=pattern.name or "(unnamed pattern)", kind="pattern",
-                 meta={"tol_mm": tol.length, "tol_rad": tol.angle, "tile_size_mm": tol.tile_size,
-                       "tier": tol.tier, "tolerance": tol.describe(), "tiles": pattern.n_tiles, "holes": pattern.topology.n_holes,
-                       "rigid_claimed": claimed})
+    rep = Report(
+        subject=pattern.name or "(unnamed pattern)",
+        kind="pattern",
+        meta={
+            "tol_mm": tol.length,
+            "tol_rad": tol.angle,
+            "tile_size_mm": tol.tile_size,
+            "tier": tol.tier,
+            "tolerance": tol.describe(),
+            "tiles": pattern.n_tiles,
+            "holes": pattern.topology.n_holes,
+            "rigid_claimed": claimed,
+        },
+    )
     for chk in topology_checks(pattern) + tile_checks(pattern, tol):
         rep.add(chk)
     states: dict[int, np.ndarray] = {}
@@ -147,8 +238,16 @@ def verify_pattern(pattern: Pattern, tol_mm: float | None = None, tol_rad: float
             rep.add(chk)
         if s in pattern.contracted:
             d = geometry.aligned_distance(c.corners, Y)
-            rep.add(measured(f"state {s}: stored state matches computed", d, tol.length * np.sqrt(pattern.n_tiles),
-                             "mm", group=f"state {s}", detail="after one proper rigid alignment"))
+            rep.add(
+                measured(
+                    f"state {s}: stored state matches computed",
+                    d,
+                    tol.length * np.sqrt(pattern.n_tiles),
+                    "mm",
+                    group=f"state {s}",
+                    detail="after one proper rigid alignment",
+                )
+            )
     for chk in residual_checks(pattern, tol, claimed):
         rep.add(chk)
     if claimed:

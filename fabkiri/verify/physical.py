@@ -23,12 +23,21 @@ MARK_CORNER_FRAC = 0.5  # a tape piece covers this fraction of each corner edge 
 MARK_REACH_MM = 8.0  # ... but no further than this along an edge
 MARK_FIT = 0.8  # the writer draws a mark when its margins take less than this share of the chord
 MARK_EXPECT = 0.6  # the verifier asks for one only below this share (recovered tiles are ~µm off the writer's)
-MARK_EXPECT_MARGIN_MM = 0.75  # ... with the writer's margin for a kerf up to 0.5 mm (0.5 + kerf / 2)
+MARK_EXPECT_MARGIN_MM = (
+    0.75  # ... with the writer's margin for a kerf up to 0.5 mm (0.5 + kerf / 2)
+)
 MARK_SPAN = 0.3  # a mark spans at least this fraction of the corner's shorter edge (at most 16 mm), times sin(angle)
 
 
-def ligament_check(pattern: Pattern, material: shapely.Geometry, cores: np.ndarray, have: np.ndarray, cuts: list[np.ndarray],
-                   hinges: np.ndarray, g: str) -> Check:
+def ligament_check(
+    pattern: Pattern,
+    material: shapely.Geometry,
+    cores: np.ndarray,
+    have: np.ndarray,
+    cuts: list[np.ndarray],
+    hinges: np.ndarray,
+    g: str,
+) -> Check:
     """Every hinge in ``hinges`` has a strip of material joining its two tiles' cores, and no cut
     line runs into that strip.
 
@@ -38,8 +47,14 @@ def ligament_check(pattern: Pattern, material: shapely.Geometry, cores: np.ndarr
     """
     A, B = pattern.topology.hinge_tiles.T
     ids = np.flatnonzero(have)
-    strips = shapely.get_parts(shapely.difference(material, shapely.unary_union(
-        shapely.buffer(cores[ids], TOUCH_MM / 2, join_style="mitre", mitre_limit=10.0))))
+    strips = shapely.get_parts(
+        shapely.difference(
+            material,
+            shapely.unary_union(
+                shapely.buffer(cores[ids], TOUCH_MM / 2, join_style="mitre", mitre_limit=10.0)
+            ),
+        )
+    )
     strips = strips[shapely.area(strips) > 0]
     tree = shapely.STRtree(strips)
     si, ci = tree.query(cores[ids], predicate="dwithin", distance=TOUCH_MM)  # (core, strip) pairs
@@ -52,7 +67,11 @@ def ligament_check(pattern: Pattern, material: shapely.Geometry, cores: np.ndarr
             for b in tiles:
                 if a < b:
                     by_pair.setdefault((a, b), []).append(s)
-    lines = shapely.multilinestrings([shapely.linestrings(c) for c in cuts if len(c) >= 2]) if cuts else None
+    lines = (
+        shapely.multilinestrings([shapely.linestrings(c) for c in cuts if len(c) >= 2])
+        if cuts
+        else None
+    )
     missing, severed = [], []
     for h in np.asarray(hinges, dtype=int).tolist():
         a, b = sorted((int(A[h]), int(B[h])))
@@ -65,10 +84,21 @@ def ligament_check(pattern: Pattern, material: shapely.Geometry, cores: np.ndarr
             severed.append(h)
     bad = missing + severed
     first = min(bad) if bad else None
-    detail = (f"{len(hinges) - len(bad)} of {len(hinges)} ligaments joined and uncut"
-              + (f"; missing {missing[:20]}" if missing else "") + (f"; cut into {severed[:20]}" if severed else ""))
-    return Check(f"{g}: every ligament present and unsevered", ok=not bad, value=len(bad), tol=0, unit="count",
-                 group=g, worst=f"hinge {first}" if first is not None else None, detail=detail)
+    detail = (
+        f"{len(hinges) - len(bad)} of {len(hinges)} ligaments joined and uncut"
+        + (f"; missing {missing[:20]}" if missing else "")
+        + (f"; cut into {severed[:20]}" if severed else "")
+    )
+    return Check(
+        f"{g}: every ligament present and unsevered",
+        ok=not bad,
+        value=len(bad),
+        tol=0,
+        unit="count",
+        group=g,
+        worst=f"hinge {first}" if first is not None else None,
+        detail=detail,
+    )
 
 
 def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
@@ -82,7 +112,9 @@ def _corner_marked(Q: np.ndarray, k: int, segs: np.ndarray) -> bool:
         return False
     p, r = segs[:, 0], segs[:, 1]
 
-    def near(x, e, le):  # within the band along edge e, on the tile's side, within the edge's length
+    def near(
+        x, e, le
+    ):  # within the band along edge e, on the tile's side, within the edge's length
         d = geometry.cross2(e, x - q) / le
         t = geometry.dot2(x - q, e) / le
         return (np.abs(d) <= MARK_EDGE_MM) & (t > 0) & (t < le)
@@ -98,8 +130,9 @@ def tape_reach(q: np.ndarray, q1: np.ndarray, frac: float = MARK_CORNER_FRAC) ->
     return np.minimum(frac, MARK_REACH_MM / np.maximum(np.linalg.norm(q1 - q, axis=1), 1e-300))
 
 
-def tape_mark_chords(Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, margin: float,
-                     fit: float = MARK_FIT) -> np.ndarray:
+def tape_mark_chords(
+    Q: np.ndarray, tiles: np.ndarray, ks: np.ndarray, margin: float, fit: float = MARK_FIT
+) -> np.ndarray:
     """The tape mark of corner ``ks`` of each tile in ``tiles``: the chord where the tape ends,
     ``margin`` inside both tile edges, ``(n, 2, 2)``; NaN where the margins take ``fit`` of the chord
     or more (no room). One rule for the writer (``fit=MARK_FIT``) and the check (``MARK_EXPECT``)."""
@@ -133,11 +166,17 @@ def _segments_near(segs: dict[int, np.ndarray]) -> Callable[[int, np.ndarray, in
             return none
         reach = geometry.edge_lengths(Q)[[k, (k - 1) % len(Q)]].max() + 2 * MARK_EDGE_MM
         return segs[sheet][trees[sheet].query_ball_point(Q[k], reach)]
+
     return near
 
 
-def mark_status(pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray, found_on: np.ndarray,
-                marks: dict[int, list[np.ndarray]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def mark_status(
+    pattern: Pattern,
+    cut_shapes: np.ndarray,
+    have: np.ndarray,
+    found_on: np.ndarray,
+    marks: dict[int, list[np.ndarray]],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For the tape hinges whose two tiles are on one sheet: their indices, whether each has a mark
     across its corner on one of its two tiles (an ENGRAVE chord where the tape ends), and whether its
     second tile's corner (where ``fabkiri cut`` draws it) has room for one: :func:`tape_mark_chords`,
@@ -147,23 +186,48 @@ def mark_status(pattern: Pattern, cut_shapes: np.ndarray, have: np.ndarray, foun
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
     hs = np.flatnonzero(have[A] & have[B] & (found_on[A] == found_on[B]))
-    near = _segments_near({s: np.array([q[i:i + 2] for q in v for i in range(len(q) - 1)]).reshape(-1, 2, 2)
-                           for s, v in marks.items()})
-    marked = np.array([_corner_marked(cut_shapes[B[h]], cB[h], near(int(found_on[B[h]]), cut_shapes[B[h]], cB[h]))
-                       or _corner_marked(cut_shapes[A[h]], cA[h], near(int(found_on[A[h]]), cut_shapes[A[h]], cA[h]))
-                       for h in hs], dtype=bool).reshape(-1)
+    near = _segments_near(
+        {
+            s: np.array([q[i : i + 2] for q in v for i in range(len(q) - 1)]).reshape(-1, 2, 2)
+            for s, v in marks.items()
+        }
+    )
+    marked = np.array(
+        [
+            _corner_marked(
+                cut_shapes[B[h]], cB[h], near(int(found_on[B[h]]), cut_shapes[B[h]], cB[h])
+            )
+            or _corner_marked(
+                cut_shapes[A[h]], cA[h], near(int(found_on[A[h]]), cut_shapes[A[h]], cA[h])
+            )
+            for h in hs
+        ],
+        dtype=bool,
+    ).reshape(-1)
     # room: the writer's chord, taken stricter, exists and is one this check recognises (a sharp corner's
     # short chord is drawn but reads as a letter stroke)
     chords = tape_mark_chords(cut_shapes, B[hs], cB[hs], MARK_EXPECT_MARGIN_MM, MARK_EXPECT)
-    room = np.array([np.isfinite(ch).all() and _corner_marked(cut_shapes[B[h]], cB[h], ch[None])
-                     for h, ch in zip(hs, chords)], dtype=bool).reshape(-1)
+    room = np.array(
+        [
+            np.isfinite(ch).all() and _corner_marked(cut_shapes[B[h]], cB[h], ch[None])
+            for h, ch in zip(hs, chords)
+        ],
+        dtype=bool,
+    ).reshape(-1)
     return hs, marked, room
 
 
 def tape_mark_check(hs: np.ndarray, marked: np.ndarray, room: np.ndarray, g: str) -> Check:
     """Every tape hinge with room for a mark has one (see :func:`mark_status`)."""
     lacking = hs[room & ~marked]
-    return Check(f"{g}: tape marks at every hinge", ok=not len(lacking), value=int(len(lacking)), tol=0,
-                 unit="count", group=g, worst=f"hinge {int(lacking[0])}" if len(lacking) else None,
-                 detail=f"{int(marked.sum())} of {len(hs)} hinges marked (ENGRAVE chord across the hinge corner)"
-                 + (f"; unmarked {lacking[:20].tolist()}" if len(lacking) else ""))
+    return Check(
+        f"{g}: tape marks at every hinge",
+        ok=not len(lacking),
+        value=int(len(lacking)),
+        tol=0,
+        unit="count",
+        group=g,
+        worst=f"hinge {int(lacking[0])}" if len(lacking) else None,
+        detail=f"{int(marked.sum())} of {len(hs)} hinges marked (ENGRAVE chord across the hinge corner)"
+        + (f"; unmarked {lacking[:20].tolist()}" if len(lacking) else ""),
+    )

@@ -15,7 +15,12 @@ from ..errors import VerifyError
 from ..schemas import load_schema, schema_problem
 
 SCHEMA = "print-manifest.schema.json"
-WHEN_GIVEN = ("placements", "assembly", "unlabelled_hinges", "pins")  # written only by the styles that have them
+WHEN_GIVEN = (
+    "placements",
+    "assembly",
+    "unlabelled_hinges",
+    "pins",
+)  # written only by the styles that have them
 
 
 @dataclass
@@ -61,7 +66,9 @@ class PrintManifest:
         out: dict[str, Any] = {}
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name == "extra" or (v is None and f.name in (*WHEN_GIVEN, "assembly_pieces", "bill_of_materials")):
+            if f.name == "extra" or (
+                v is None and f.name in (*WHEN_GIVEN, "assembly_pieces", "bill_of_materials")
+            ):
                 continue
             out[f.name] = v
         out.update(self.extra)
@@ -80,8 +87,10 @@ class PrintManifest:
         if problem is not None:
             raise VerifyError(f"{where}: malformed print manifest ({problem})")
         known = {f.name for f in fields(cls)} - {"extra"}
-        return cls(**{k: v for k, v in data.items() if k in known},
-                   extra={k: v for k, v in data.items() if k not in known})
+        return cls(
+            **{k: v for k, v in data.items() if k in known},
+            extra={k: v for k, v in data.items() if k not in known},
+        )
 
     @classmethod
     def from_json(cls, text: str, where: str = "print manifest") -> PrintManifest:

@@ -14,7 +14,9 @@ from .manifest import Allowances
 from .matching import match_by_shape, match_in_place
 from .readers import JOIN_MM, SNAP_MM, Linework
 
-EDGE_ON_MM = 0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core
+EDGE_ON_MM = (
+    0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core
+)
 
 
 def _on_cut_edges(parts: np.ndarray, material: shapely.Geometry, arity: int = 4) -> np.ndarray:
@@ -29,7 +31,9 @@ def _on_cut_edges(parts: np.ndarray, material: shapely.Geometry, arity: int = 4)
     """
     if not len(parts):
         return parts
-    xy, ring = shapely.get_coordinates(shapely.get_rings(shapely.get_parts(material)), return_index=True)
+    xy, ring = shapely.get_coordinates(
+        shapely.get_rings(shapely.get_parts(material)), return_index=True
+    )
     same = ring[1:] == ring[:-1]
     segs = np.stack([xy[:-1][same], xy[1:][same]], 1)
     segs = segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
@@ -54,7 +58,9 @@ def _on_cut_edges(parts: np.ndarray, material: shapely.Geometry, arity: int = 4)
     side = np.roll(q, -1, 1) - q
     slen = np.linalg.norm(side, axis=-1)
     m = segs[si].mean(axis=1)
-    dist = np.stack([point_segment_distance(m, q[:, i], q[:, (i + 1) % arity]) for i in range(arity)], 1)
+    dist = np.stack(
+        [point_segment_distance(m, q[:, i], q[:, (i + 1) % arity]) for i in range(arity)], 1
+    )
     along = np.abs(geometry.cross2(e[:, None, :], side)) <= 0.17 * elen[:, None] * slen
     dist = np.where(along & (dist <= 0.1 * slen), dist, np.inf)
     which = np.where(np.isfinite(dist).any(axis=1), dist.argmin(axis=1), -1)
@@ -86,25 +92,36 @@ def _on_cut_edges(parts: np.ndarray, material: shapely.Geometry, arity: int = 4)
 
 def _hairline_free(g: shapely.Geometry) -> np.ndarray:
     """The parts of ``g`` after an opening at the join tolerance (drops 1 µm hairlines, keeps convex parts)."""
-    g = g.buffer(-JOIN_MM, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(JOIN_MM, join_style="mitre",
-                                                                             mitre_limit=UNDO_MITRE)
+    g = g.buffer(-JOIN_MM, join_style="mitre", mitre_limit=UNDO_MITRE).buffer(
+        JOIN_MM, join_style="mitre", mitre_limit=UNDO_MITRE
+    )
     return shapely.get_parts(g)
 
 
-def _declared_strips_moved(parts: np.ndarray, strips: shapely.Geometry | None, frame_tiles: np.ndarray | None,
-                           al: Allowances) -> shapely.Geometry | None:
+def _declared_strips_moved(
+    parts: np.ndarray,
+    strips: shapely.Geometry | None,
+    frame_tiles: np.ndarray | None,
+    al: Allowances,
+) -> shapely.Geometry | None:
     """The declared ligaments moved with the sheet: the rigid motion that takes the manifest's tile
     placement onto the tiles an opening found, applied to the strips. None if it cannot be found."""
     if strips is None or frame_tiles is None or not len(parts):
         return None
-    grown = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0) if al.tile_shrink else parts
+    grown = (
+        shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
+        if al.tile_shrink
+        else parts
+    )
     quads, _ = quads_of(grown, frame_tiles.shape[1])
     a, res, _, theta, t = match_in_place(frame_tiles, quads)
     if (a >= 0).sum() < max(3, len(frame_tiles) // 2):
         return None
     from shapely import affinity
 
-    return affinity.translate(affinity.rotate(strips, theta, origin=(0, 0), use_radians=True), t[0], t[1])
+    return affinity.translate(
+        affinity.rotate(strips, theta, origin=(0, 0), use_radians=True), t[0], t[1]
+    )
 
 
 def _nested(lw: Linework) -> bool:
@@ -120,11 +137,14 @@ def _open_ligaments(material: shapely.Geometry, width: float | None) -> np.ndarr
     """The tile cores of a ligament sheet: an opening (mitre: convex tiles come back exactly) of
     radius above half the ligament width drops the strips: the smallest radius (x1.25 steps, from
     0.6 times the declared width, else from 10 µm) after which the piece count no longer grows."""
+
     def opened(r: float) -> np.ndarray:
-        g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(r, join_style="mitre",
-                                                                                   mitre_limit=10.0)
+        g = material.buffer(-r, join_style="mitre", mitre_limit=10.0).buffer(
+            r, join_style="mitre", mitre_limit=10.0
+        )
         parts = shapely.get_parts(g)
         return parts[shapely.area(parts) > 4 * r * r]
+
     r = 0.6 * width if width else 0.01  # a declared width is where the search starts
     best, first = opened(r), r
     while r < 5.0:
@@ -167,7 +187,9 @@ def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float, lo: float = 
     return k if 0.1 * tol < abs(k) and lo <= k <= MAX_FITTED_OFFSET_MM else 0.0
 
 
-def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float) -> tuple[np.ndarray, float | None]:
+def _set_reference_aside(
+    quads: np.ndarray, D: np.ndarray, L: float, tol: float
+) -> tuple[np.ndarray, float | None]:
     """Take out the reference square (a square that is no design tile, the largest such), by geometry.
 
     fabkiri cuts an uncompensated square beside the parts so the kerf can be measured; a file
@@ -176,7 +198,10 @@ def _set_reference_aside(quads: np.ndarray, D: np.ndarray, L: float, tol: float)
     if not len(quads):
         return quads, None
     e = geometry.edge_lengths(quads)
-    diag = np.linalg.norm(quads[:, 2] - quads[:, 0], axis=1), np.linalg.norm(quads[:, 3] - quads[:, 1], axis=1)
+    diag = (
+        np.linalg.norm(quads[:, 2] - quads[:, 0], axis=1),
+        np.linalg.norm(quads[:, 3] - quads[:, 1], axis=1),
+    )
     square = (e.max(axis=1) - e.min(axis=1) <= tol) & (np.abs(diag[0] - diag[1]) <= tol)
     if not square.any():
         return quads, None
@@ -201,7 +226,9 @@ def _feature_geometry(poly: Any) -> shapely.Polygon | shapely.MultiPolygon:
         raise VerifyError(f"malformed hinge feature polygon in the manifest ({exc})") from None
 
 
-MAX_SIMPLIFIED_AREA = 0.25  # dropping the extra vertices of a bevelled or notched tile changes its area less
+MAX_SIMPLIFIED_AREA = (
+    0.25  # dropping the extra vertices of a bevelled or notched tile changes its area less
+)
 
 
 def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM, n: int = 4) -> np.ndarray | None:
@@ -297,7 +324,6 @@ def tiles_of(polys: np.ndarray, arity: int = 4) -> tuple[np.ndarray, np.ndarray]
     four = np.zeros(len(polys), dtype=bool)
     out = []
     if len(rings):
-
         xy, ring = shapely.get_coordinates(rings, return_index=True)
         n = np.bincount(ring, minlength=len(rings))
         start = np.concatenate([[0], np.cumsum(n)[:-1]])

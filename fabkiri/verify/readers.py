@@ -17,8 +17,16 @@ from .dxfcodec import INSUNITS_MM, read_layer_tags
 from .linework import JOIN_MM, MM_PER_PX, NON_CUT_LAYERS, SNAP_MM, Linework
 from .svgread import read_cut_svg
 
-__all__ = ["CURVE_TYPES", "INSUNITS_MM", "JOIN_MM", "MM_PER_PX", "NON_CUT_LAYERS", "SNAP_MM", "Linework",
-           "read_cut_file"]
+__all__ = [
+    "CURVE_TYPES",
+    "INSUNITS_MM",
+    "JOIN_MM",
+    "MM_PER_PX",
+    "NON_CUT_LAYERS",
+    "SNAP_MM",
+    "Linework",
+    "read_cut_file",
+]
 
 # ------------------------------------------------------------------ reading
 
@@ -74,7 +82,9 @@ def _read_dxf_full(p: Path, layer_name: str = "CUT") -> Linework:
         layer = e.dxf.layer.upper()
         aci = e.dxf.get("color", 256)
         colour = str(layer_colour.get(layer, 7) if aci in (0, 256) else aci)
-        closed = bool(getattr(e, "closed", False) or getattr(e, "is_closed", False) or e.dxftype() == "CIRCLE")
+        closed = bool(
+            getattr(e, "closed", False) or getattr(e, "is_closed", False) or e.dxftype() == "CIRCLE"
+        )
         for sub in prim.path.sub_paths():
             pts = np.array([(v.x, v.y) for v in sub.flattening(flat)], dtype=float)
             lw.add(pts * unit, closed, layer, colour)
@@ -85,5 +95,3 @@ def _read_dxf_full(p: Path, layer_name: str = "CUT") -> Linework:
     else:  # a plain file from another tool: every outline not on an annotation layer
         lw = lw.subset(i for i, name in enumerate(lw.layers) if name not in NON_CUT_LAYERS)
     return lw
-
-

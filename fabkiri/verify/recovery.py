@@ -66,15 +66,15 @@ def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
         from scipy import sparse
 
         n_pts = len(pts)
-        g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_pts, n_pts))
+        g = sparse.coo_matrix(
+            (np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_pts, n_pts)
+        )
         _, label = csgraph.connected_components(g, directed=False)
         first = np.full(label.max() + 1, -1)
         first[label[::-1]] = np.arange(n_pts)[::-1]
         pts = pts[first[label]]
     segs = pts.reshape(-1, 2, 2)
     return segs[np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1) > 0]
-
-
 
 
 def _node(segs: np.ndarray, eps: float = JOIN_MM) -> shapely.Geometry:
@@ -87,7 +87,9 @@ def _node(segs: np.ndarray, eps: float = JOIN_MM) -> shapely.Geometry:
     li, ei = shapely.STRtree(ends).query(lines, predicate="dwithin", distance=eps)
     order = np.lexsort((ei, li))
     has, rank = np.unique(li[order], return_inverse=True)
-    near = shapely.multipoints(ends[ei[order]], indices=rank)  # one multipoint per line with ends near it
+    near = shapely.multipoints(
+        ends[ei[order]], indices=rank
+    )  # one multipoint per line with ends near it
     lines[has] = shapely.snap(lines[has], near, eps)
     return shapely.unary_union(lines)
 
@@ -124,8 +126,12 @@ def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
     parts = _noded(lw, eps)
     if len(parts) == 0:
         return np.zeros((0, 2))
-    ends = np.concatenate([shapely.get_coordinates(shapely.get_point(parts, 0)),
-                           shapely.get_coordinates(shapely.get_point(parts, -1))])
+    ends = np.concatenate(
+        [
+            shapely.get_coordinates(shapely.get_point(parts, 0)),
+            shapely.get_coordinates(shapely.get_point(parts, -1)),
+        ]
+    )
     owner = np.concatenate([np.arange(len(parts)), np.arange(len(parts))])
     tree = shapely.STRtree(parts)
     pi, gi = tree.query(shapely.points(ends), predicate="dwithin", distance=eps)
@@ -136,8 +142,13 @@ def dangling_ends(lw: Linework, eps: float = JOIN_MM) -> np.ndarray:
     return ends[~other & ~ring]
 
 
-def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
-                     frame_tiles: np.ndarray | None = None, arity: int = 4) -> tuple[np.ndarray, str]:
+def recover_polygons(
+    lw: Linework,
+    al: Allowances,
+    sheet: int = 1,
+    frame_tiles: np.ndarray | None = None,
+    arity: int = 4,
+) -> tuple[np.ndarray, str]:
     """Tile regions (shapely polygons) from one file's CUT linework, and the method used: the hinge
     kind's reading (:mod:`.hingeread`) recovers them.
 
@@ -147,26 +158,37 @@ def recover_polygons(lw: Linework, al: Allowances, sheet: int = 1,
     if not lw.polylines:  # e.g. a sheet that holds only the reference square
         return np.zeros(0, dtype=object), "nothing to recover"
     joined = None
-    if al.hinge == PLAIN:  # no manifest: outlines that all close are separate tiles (or, nested, one
+    if (
+        al.hinge == PLAIN
+    ):  # no manifest: outlines that all close are separate tiles (or, nested, one
         # ligament sheet), else in-place linework
         joined = join_pieces(lw)
         rings = joined.subset(i for i, c in enumerate(joined.closed) if c)
         n_open = len(joined.closed) - len(rings.closed)
         # a sheet piece with holes stays one even with a few stray cuts across it (they are checked later)
-        guess = "ligament" if n_open < len(rings.closed) and _nested(rings) else "separate" if not n_open else "tape"
+        guess = (
+            "ligament"
+            if n_open < len(rings.closed) and _nested(rings)
+            else "separate"
+            if not n_open
+            else "tape"
+        )
         how = reading(guess)
     else:
         how = reading(al.hinge)
     if how is None:
         raise VerifyError(f"{lw.path}: no reading for hinge kind {al.hinge!r}")
-    if how.closed_only:  # stray open cuts are left out here and reported as cut ends in the material
+    if (
+        how.closed_only
+    ):  # stray open cuts are left out here and reported as cut ends in the material
         joined = join_pieces(lw) if joined is None else joined
         lw = joined.subset(i for i, c in enumerate(joined.closed) if c)
     return how.recover(lw, al, sheet, frame_tiles, arity)
 
 
-def _noded_faces(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
-                 ) -> tuple[np.ndarray, str]:
+def _noded_faces(
+    lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
+) -> tuple[np.ndarray, str]:
     """Tape: the faces of the noded linework."""
     segs = _snapped_segments(lw, JOIN_MM)
     if len(segs) == 0:
@@ -180,30 +202,45 @@ def _closed_rings(lw: Linework, al: Allowances) -> np.ndarray:
     """The closed CUT outlines as valid polygons; every outline must be closed."""
     rings = [shapely.Polygon(p) for p, c in zip(lw.polylines, lw.closed) if c]
     if len(rings) != len(lw.polylines):
-        raise VerifyError(f"{lw.path}: {len(lw.polylines) - len(rings)} open CUT polylines in a {al.hinge} "
-                          f"layout, where every outline must be closed")
+        raise VerifyError(
+            f"{lw.path}: {len(lw.polylines) - len(rings)} open CUT polylines in a {al.hinge} "
+            f"layout, where every outline must be closed"
+        )
     return shapely.make_valid(np.array(rings, dtype=object))
 
 
-def _outlines_less_kerf(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
-                        ) -> tuple[np.ndarray, str]:
+def _outlines_less_kerf(
+    lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
+) -> tuple[np.ndarray, str]:
     """Separate tiles: every closed outline less the kerf offset."""
     polys = _closed_rings(lw, al)
-    out = shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0) if al.kerf_offset \
+    out = (
+        shapely.buffer(polys, -al.kerf_offset, join_style="mitre", mitre_limit=10.0)
+        if al.kerf_offset
         else polys
+    )
     return shapely.get_parts(out[~shapely.is_empty(out)]), "closed outlines minus the kerf offset"
 
 
-def _material_less_ligaments(lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None,
-                             arity: int) -> tuple[np.ndarray, str]:
+def _material_less_ligaments(
+    lw: Linework, al: Allowances, sheet: int, frame_tiles: np.ndarray | None, arity: int
+) -> tuple[np.ndarray, str]:
     """A ligament sheet: the material minus the hinge strips, grown by the tile shrink."""
     material = _material(_closed_rings(lw, al), al.kerf_offset)
-    feats = [_feature_geometry(f["polygon"]) for f in al.hinge_features
-             if f.get("polygon") and int(f.get("sheet", 1)) == sheet]
+    feats = [
+        _feature_geometry(f["polygon"])
+        for f in al.hinge_features
+        if f.get("polygon") and int(f.get("sheet", 1)) == sheet
+    ]
     strips = shapely.unary_union(feats) if feats else None
     # a file rounded to 1 µm may keep a hairline of material beside a declared strip: an opening at the
     # join tolerance drops it (and leaves convex tiles exactly as they are)
-    parts = _hairline_free(material.difference(strips)) if strips is not None else np.zeros(0, dtype=object)
+    parts = (
+        _hairline_free(material.difference(strips))
+        if strips is not None
+        else np.zeros(0, dtype=object)
+    )
+
     # the declared strips (in the manifest's sheet frame) cut the piece into tiles where the sheet was not moved
     def cuts_tiles(parts: np.ndarray) -> bool:
         return (shapely.area(parts) > 1.0).sum() >= max(2, len(feats) // 4)
@@ -220,7 +257,10 @@ def _material_less_ligaments(lw: Linework, al: Allowances, sheet: int, frame_til
         if moved is not None:
             again = _hairline_free(material.difference(moved))
             if cuts_tiles(again):
-                parts, how = _on_cut_edges(again, material, arity), "material minus the declared ligaments, moved with the sheet"
+                parts, how = (
+                    _on_cut_edges(again, material, arity),
+                    "material minus the declared ligaments, moved with the sheet",
+                )
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, how + ", grown by the tile shrink"
@@ -232,7 +272,9 @@ def _material(polys: np.ndarray, kerf_offset: float) -> shapely.Geometry:
     inside = np.zeros(len(polys), dtype=bool)
     a, b = tree.query(polys, predicate="contains_properly")
     inside[b[a != b]] = True
-    material = shapely.difference(shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside]))
+    material = shapely.difference(
+        shapely.unary_union(polys[~inside]), shapely.unary_union(polys[inside])
+    )
     if kerf_offset:
         material = material.buffer(-kerf_offset, join_style="mitre", mitre_limit=10.0)
     return material
@@ -245,8 +287,9 @@ def sheet_material(lw: Linework, kerf_offset: float) -> shapely.Geometry:
     return _material(shapely.make_valid(np.array(rings, dtype=object)), kerf_offset)
 
 
-def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.ndarray, L: float,
-                tol: float) -> Linework:
+def _choose_cut(
+    candidates: list[Linework], al: Allowances, sheet: int, D: np.ndarray, L: float, tol: float
+) -> Linework:
     """The candidate linework (a colour class of a file without a CUT layer) that forms the most
     design tiles; with one candidate, that one."""
     if len(candidates) == 1:
@@ -257,9 +300,11 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
             polys, _ = recover_polygons(lw, al, sheet, arity=D.shape[1])
         except VerifyError:
             continue
-        quads, bad = quads_of(polys[shapely.area(polys) > tol ** 2], D.shape[1])
+        quads, bad = quads_of(polys[shapely.area(polys) > tol**2], D.shape[1])
         _, res, _ = match_by_shape(D, quads, L)
-        n = int((res <= max(tol, 0.05 * L)).sum())  # near a tile's shape (kerf offsets not yet undone)
+        n = int(
+            (res <= max(tol, 0.05 * L)).sum()
+        )  # near a tile's shape (kerf offsets not yet undone)
         key = (n, -(len(quads) + bad - n))  # most tiles, then fewest other regions
         if score is None or key > score:
             best, score = lw, key
@@ -267,6 +312,10 @@ def _choose_cut(candidates: list[Linework], al: Allowances, sheet: int, D: np.nd
 
 
 # the built-in hinge kinds' readings (the verify half of fabricate/hingekinds/)
-register_reading(HingeReading("tape", _noded_faces, in_place=True, closed_only=False, tape_marks=True))
+register_reading(
+    HingeReading("tape", _noded_faces, in_place=True, closed_only=False, tape_marks=True)
+)
 register_reading(HingeReading("separate", _outlines_less_kerf, in_place=False))
-register_reading(HingeReading("ligament", _material_less_ligaments, in_place=True, declared_hinges=True))
+register_reading(
+    HingeReading("ligament", _material_less_ligaments, in_place=True, declared_hinges=True)
+)

@@ -53,14 +53,32 @@ class Check:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "name": self.name, "group": self.group, "ok": bool(self.ok), "value": _num(self.value),
-            "tol": _num(self.tol), "unit": self.unit, "op": self.op, "worst": self.worst,
-            "detail": self.detail, "applies": self.applies,
+            "name": self.name,
+            "group": self.group,
+            "ok": bool(self.ok),
+            "value": _num(self.value),
+            "tol": _num(self.tol),
+            "unit": self.unit,
+            "op": self.op,
+            "worst": self.worst,
+            "detail": self.detail,
+            "applies": self.applies,
         }
 
 
-def measured(name: str, value: float, tol: float, unit: str, *, worst: str | None = None, detail: str = "",
-             group: str = "", op: str = "<=", applies: bool = True, id: str = "") -> Check:
+def measured(
+    name: str,
+    value: float,
+    tol: float,
+    unit: str,
+    *,
+    worst: str | None = None,
+    detail: str = "",
+    group: str = "",
+    op: str = "<=",
+    applies: bool = True,
+    id: str = "",
+) -> Check:
     """A check whose verdict is the comparison of ``value`` with ``tol``.
 
     A NaN value (nothing could be measured) fails.
@@ -72,8 +90,19 @@ def measured(name: str, value: float, tol: float, unit: str, *, worst: str | Non
         ok = v <= tol
     else:
         ok = v >= tol
-    return Check(name=name, ok=bool(ok) or not applies, value=v, tol=tol, unit=unit, worst=worst,
-                 detail=detail, group=group, op=op, applies=applies, id=id)
+    return Check(
+        name=name,
+        ok=bool(ok) or not applies,
+        value=v,
+        tol=tol,
+        unit=unit,
+        worst=worst,
+        detail=detail,
+        group=group,
+        op=op,
+        applies=applies,
+        id=id,
+    )
 
 
 @dataclass
@@ -118,7 +147,9 @@ class Report:
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "subject": self.subject, "kind": self.kind, "ok": self.ok,
+            "subject": self.subject,
+            "kind": self.kind,
+            "ok": self.ok,
             "failed": [c.name for c in self.failed()],
             "meta": json.loads(json.dumps(self.meta, default=_num)),
             "checks": [c.to_dict() for c in self.checks],
@@ -134,7 +165,9 @@ class Report:
         for c in ordered:
             mark = "FAIL" if not c.ok else ("ok" if c.applies else "info")
             rel = c.op if c.applies else "(n/a)"
-            rows.append((mark, c.name, _fmt(c.value, c.unit), f"{rel} {_fmt(c.tol, c.unit)}", c.worst or ""))
+            rows.append(
+                (mark, c.name, _fmt(c.value, c.unit), f"{rel} {_fmt(c.tol, c.unit)}", c.worst or "")
+            )
         w = [max(len(r[i]) for r in rows) for i in range(4)]
         lines = [f"{self.kind} verification of {self.subject}"]
         for meta_key in ("tol_mm", "tol_rad", "tile_size_mm"):
@@ -143,20 +176,29 @@ class Report:
         if self.meta.get("tolerance"):
             lines[0] += f"  [{self.meta['tolerance']}]"
         for i, r in enumerate(rows):
-            lines.append(f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:>{w[2]}}  {r[3]:<{w[3]}}  {r[4]}".rstrip())
-            if i and ordered[i - 1].detail and (not ordered[i - 1].ok or not ordered[i - 1].applies):
+            lines.append(
+                f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:>{w[2]}}  {r[3]:<{w[3]}}  {r[4]}".rstrip()
+            )
+            if (
+                i
+                and ordered[i - 1].detail
+                and (not ordered[i - 1].ok or not ordered[i - 1].applies)
+            ):
                 lines.append(f"{'':<{w[0]}}    {ordered[i - 1].detail}")
         n_bad = len(self.failed())
-        lines.append(f"verdict: {'PASS' if self.ok else 'FAIL'} ({len(self.checks) - n_bad}/{len(self.checks)} "
-                     f"checks pass{'' if self.ok else ', ' + str(n_bad) + ' fail'})")
+        lines.append(
+            f"verdict: {'PASS' if self.ok else 'FAIL'} ({len(self.checks) - n_bad}/{len(self.checks)} "
+            f"checks pass{'' if self.ok else ', ' + str(n_bad) + ' fail'})"
+        )
         return "\n".join(lines)
 
 
 def _fmt(v: Any, unit: str) -> str:
     if v is None:
         return "—"
-    if isinstance(v, (bool, int)) or (isinstance(v, float) and v.is_integer() and abs(v) < 1e6
-                                        and unit in ("", "count")):
+    if isinstance(v, (bool, int)) or (
+        isinstance(v, float) and v.is_integer() and abs(v) < 1e6 and unit in ("", "count")
+    ):
         s = f"{int(v)}"
     else:
         v = float(v)

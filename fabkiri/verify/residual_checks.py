@@ -44,8 +44,12 @@ def _parallelograms(pattern: Pattern, tol: Tolerances) -> tuple[np.ndarray, bool
     if not quad_holes:
         return np.full(top.n_holes, np.inf), True
     hole_len = np.linalg.norm(x[np.roll(top.hole_nodes, -1, 1)] - x[top.hole_nodes], axis=-1)
-    para = np.maximum(np.abs(hole_len[:, 0] - hole_len[:, 2]), np.abs(hole_len[:, 1] - hole_len[:, 3]))
-    rhombus = bool((para <= tol.length).all()) and bool((np.abs(hole_len - hole_len[:, :1]) <= tol.length).all())
+    para = np.maximum(
+        np.abs(hole_len[:, 0] - hole_len[:, 2]), np.abs(hole_len[:, 1] - hole_len[:, 3])
+    )
+    rhombus = bool((para <= tol.length).all()) and bool(
+        (np.abs(hole_len - hole_len[:, :1]) <= tol.length).all()
+    )
     return para, rhombus
 
 
@@ -68,27 +72,61 @@ def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Ch
         if not rhombus and notch.any() and res[notch].max() > tol.length:
             # with parallelogram holes a notch may close as a T-junction on the
             # outline; whether it closes is the 'folded gaps closed' check
-            detail += (f"; notch pairs differ by up to {res[notch].max():.3g} mm (T-junctions on the outline, "
-                       f"not counted)")
+            detail += (
+                f"; notch pairs differ by up to {res[notch].max():.3g} mm (T-junctions on the outline, "
+                f"not counted)"
+            )
             res[notch] = 0.0
-        out.append(measured(f"{g}: edge pairs", largest(res), tol.length, "mm", worst=worst_at("hinge", res),
-                            group="design", detail=detail, id=state_check_id(s, "edge-pairs")))
+        out.append(
+            measured(
+                f"{g}: edge pairs",
+                largest(res),
+                tol.length,
+                "mm",
+                worst=worst_at("hinge", res),
+                group="design",
+                detail=detail,
+                id=state_check_id(s, "edge-pairs"),
+            )
+        )
         rings = np.abs(r.rings)
         wrapped = r.wrapped_tiles.tolist()
-        out.append(angle_check(f"{g}: rings", rings, tol.tile_size, tol, "hole", group="design",
-                               id=state_check_id(s, "rings"), detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else ""))
+        out.append(
+            angle_check(
+                f"{g}: rings",
+                rings,
+                tol.tile_size,
+                tol,
+                "hole",
+                group="design",
+                id=state_check_id(s, "rings"),
+                detail=f"wrapped by 2π because of tiles {wrapped}" if wrapped else "",
+            )
+        )
     if not claimed and not tessellation(pattern.kind).rigid_family:
         return out  # θA+θB = π is the quad rigid family's test; nothing to report for other kinds
     hs = np.abs(hinge_sums(pattern))
-    out.append(angle_check("hinge sums", hs, tol.tile_size, tol, "hinge", group="design", applies=claimed,
-                           detail="" if claimed else "rigid deployability not claimed; measured for information"))
+    out.append(
+        angle_check(
+            "hinge sums",
+            hs,
+            tol.tile_size,
+            tol,
+            "hinge",
+            group="design",
+            applies=claimed,
+            detail="" if claimed else "rigid deployability not claimed; measured for information",
+        )
+    )
     return out
 
 
 # ----------------------------------------------------------------- rigid path
 
 
-def rigid_path(pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def rigid_path(
+    pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Tile corners along the rigid path from state 1 (spec §7), and hinge mismatch per step.
 
     Tiles turn by ±ω (checkerboard, sign from the deployed state); translations
@@ -100,17 +138,32 @@ def rigid_path(pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray) -> tuple[np
     top = pattern.topology
     A, B = top.hinge_tiles.T
     cA, cB = top.hinge_corner.T
-    mismatch = np.linalg.norm(corners[:, A, cA] - corners[:, B, cB], axis=-1).max(axis=1, initial=0.0)
+    mismatch = np.linalg.norm(corners[:, A, cA] - corners[:, B, cB], axis=-1).max(
+        axis=1, initial=0.0
+    )
     return corners, mismatch
 
 
-def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tolerances,
-                      steps: int = DEFAULT_PATH_STEPS) -> list[Check]:
+def rigid_path_checks(
+    pattern: Pattern,
+    Y1: np.ndarray,
+    Y2: np.ndarray,
+    tol: Tolerances,
+    steps: int = DEFAULT_PATH_STEPS,
+) -> list[Check]:
     omegas = np.linspace(0.0, np.pi / 2, steps + 1)
     corners, mismatch = rigid_path(pattern, Y1, omegas)
-    out = [measured("rigid path: hinge closure", largest(mismatch), tol.length, "mm",
-                    worst=f"ω = {np.degrees(omegas[int(np.argmax(mismatch))]):.4g}°", group="rigid path",
-                    detail=f"{len(omegas)} samples of ω on [0, 90°]")]
+    out = [
+        measured(
+            "rigid path: hinge closure",
+            largest(mismatch),
+            tol.length,
+            "mm",
+            worst=f"ω = {np.degrees(omegas[int(np.argmax(mismatch))]):.4g}°",
+            group="rigid path",
+            detail=f"{len(omegas)} samples of ω on [0, 90°]",
+        )
+    ]
     is_convex = geom.convex(Y1)
     depth = np.zeros(len(omegas))
     pairs: list[tuple[int, int] | None] = [None] * len(omegas)  # the deepest pair per sample
@@ -118,11 +171,26 @@ def rigid_path_checks(pattern: Pattern, Y1: np.ndarray, Y2: np.ndarray, tol: Tol
         depth[s], pairs[s] = geom.max_overlap_depth(corners[s], is_convex)
     k = int(np.argmax(depth))
     pk = pairs[k]
-    out.append(measured("rigid path: no overlap", largest(depth), tol.length, "mm",
-                        worst=(f"tiles {pk[0]}/{pk[1]} at ω = {np.degrees(omegas[k]):.4g}°"
-                               if pk else None), group="rigid path",
-                        detail="largest penetration depth between any two tiles"))
+    out.append(
+        measured(
+            "rigid path: no overlap",
+            largest(depth),
+            tol.length,
+            "mm",
+            worst=(f"tiles {pk[0]}/{pk[1]} at ω = {np.degrees(omegas[k]):.4g}°" if pk else None),
+            group="rigid path",
+            detail="largest penetration depth between any two tiles",
+        )
+    )
     end = geometry.aligned_distance(corners[-1], Y2)
-    out.append(measured("rigid path: ends in state 2", end, tol.length * np.sqrt(len(Y1)), "mm",
-                        group="rigid path", detail="aligned distance of the ω = 90° frame to state 2"))
+    out.append(
+        measured(
+            "rigid path: ends in state 2",
+            end,
+            tol.length * np.sqrt(len(Y1)),
+            "mm",
+            group="rigid path",
+            detail="aligned distance of the ω = 90° frame to state 2",
+        )
+    )
     return out

@@ -34,27 +34,50 @@ def seam_checks(pattern: Pattern, states: dict[int, np.ndarray], tol: Tolerances
     if seam is None:
         return []
     out = []
-    rows: list[tuple[int | str, np.ndarray]] = [("deployed", pattern.corners()), *sorted(states.items())]
+    rows: list[tuple[int | str, np.ndarray]] = [
+        ("deployed", pattern.corners()),
+        *sorted(states.items()),
+    ]
     for s, Y in rows:
         out += _state_checks(pattern, seam, s, Y, tol)
     return out
 
 
-def _state_checks(pattern: Pattern, seam: Seam, s: int | str, Y: np.ndarray, tol: Tolerances) -> list[Check]:
+def _state_checks(
+    pattern: Pattern, seam: Seam, s: int | str, Y: np.ndarray, tol: Tolerances
+) -> list[Check]:
     g = "deployed" if s == "deployed" else f"state {s}"
     m = seam_map(Y, seam)
     size = tol.tile_size
-    figures = (f"rotation {m.rotation:.3g} rad, period {m.period:.6g} mm; first column tiles "
-               f"{seam.first.tolist()} -> copies {seam.copy.tolist()}")
+    figures = (
+        f"rotation {m.rotation:.3g} rad, period {m.period:.6g} mm; first column tiles "
+        f"{seam.first.tolist()} -> copies {seam.copy.tolist()}"
+    )
     if seam.state_kind(s) == "cone":
-        out = [measured(f"{g}: seam is a rigid motion (cone)", m.rigid_dev, tol.length, "mm",
-                        worst=f"tile {m.worst_tile}", group=g,
-                        detail=f"largest corner distance from the best rigid seam map ({figures})")]
+        out = [
+            measured(
+                f"{g}: seam is a rigid motion (cone)",
+                m.rigid_dev,
+                tol.length,
+                "mm",
+                worst=f"tile {m.worst_tile}",
+                group=g,
+                detail=f"largest corner distance from the best rigid seam map ({figures})",
+            )
+        ]
         return out  # a cone's sheet is periodic by a rotation: no translation overlap test
-    out = [measured(f"{g}: seam closes by a pure translation", m.translation_dev, tol.length, "mm",
-                    worst=f"tile {m.worst_tile}", group=g,
-                    detail=f"largest corner distance from the best translation, "
-                           f"{m.translation_dev / size:.3g} tile sizes ({figures})")]
+    out = [
+        measured(
+            f"{g}: seam closes by a pure translation",
+            m.translation_dev,
+            tol.length,
+            "mm",
+            worst=f"tile {m.worst_tile}",
+            group=g,
+            detail=f"largest corner distance from the best translation, "
+            f"{m.translation_dev / size:.3g} tile sizes ({figures})",
+        )
+    ]
     tube = Y[tube_tiles(pattern, seam)]
     t = Y[seam.copy].reshape(-1, 2).mean(0) - Y[seam.first].reshape(-1, 2).mean(0)
     i, j, depth = geom.overlap_depths(np.concatenate([tube, tube + t]))
@@ -62,8 +85,18 @@ def _state_checks(pattern: Pattern, seam: Seam, s: int | str, Y: np.ndarray, tol
     across = (i < n) != (j < n)  # pairs within one copy are the planar overlap check
     d = depth[across]
     k = int(np.argmax(d)) if len(d) else None
-    worst = None if k is None else f"tiles {int(i[across][k]) % n}/{int(j[across][k]) % n} (tube order)"
-    out.append(measured(f"{g}: no overlaps across the seam", float(d.max(initial=0.0)), tol.length, "mm",
-                        worst=worst, group=g,
-                        detail="penetration depth between the tube's tiles and their copies one period on"))
+    worst = (
+        None if k is None else f"tiles {int(i[across][k]) % n}/{int(j[across][k]) % n} (tube order)"
+    )
+    out.append(
+        measured(
+            f"{g}: no overlaps across the seam",
+            float(d.max(initial=0.0)),
+            tol.length,
+            "mm",
+            worst=worst,
+            group=g,
+            detail="penetration depth between the tube's tiles and their copies one period on",
+        )
+    )
     return out

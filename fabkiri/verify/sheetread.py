@@ -37,7 +37,9 @@ from .report import Report
 class _Recovered:
     """What each sheet's cut linework gave: its quads, linework, recovery methods and loose ends."""
 
-    sheets: dict[int, np.ndarray] = field(default_factory=dict)  # sheet -> recovered quads (n, 4, 2)
+    sheets: dict[int, np.ndarray] = field(
+        default_factory=dict
+    )  # sheet -> recovered quads (n, 4, 2)
     linework: dict[int, Linework] = field(default_factory=dict)
     methods: set[str] = field(default_factory=set)
     unusable: int = 0  # regions that are not quads
@@ -45,8 +47,15 @@ class _Recovered:
     references: list[float] = field(default_factory=list)
 
 
-def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D: np.ndarray, L: float,
-                    tol: float, path: Path) -> _Recovered:
+def _recover_sheets(
+    pattern: Pattern,
+    al: Allowances,
+    files: dict[int, Path],
+    D: np.ndarray,
+    L: float,
+    tol: float,
+    path: Path,
+) -> _Recovered:
     """Read every sheet, set its reference square aside and recover its tiles as quads."""
     rec = _Recovered()
     n_lines = 0
@@ -58,9 +67,11 @@ def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D:
         rec.linework[sheet] = lw
         n_lines += len(lw.polylines)
         on = [t for t in range(pattern.n_tiles) if al.tile_sheet.get(t, 1) == sheet]
-        polys, method = recover_polygons(lw, al, sheet, frame[on] if frame is not None else None, arity)
+        polys, method = recover_polygons(
+            lw, al, sheet, frame[on] if frame is not None else None, arity
+        )
         rec.methods.add(method)
-        polys = polys[shapely.area(polys) > tol ** 2]  # double-cut hairlines are not tiles
+        polys = polys[shapely.area(polys) > tol**2]  # double-cut hairlines are not tiles
         quads, side, bad = _tiles_and_reference(polys, arity, D, L, tol)
         if side is not None:
             rec.references.append(side)
@@ -68,12 +79,15 @@ def _recover_sheets(pattern: Pattern, al: Allowances, files: dict[int, Path], D:
         rec.sheets[sheet] = quads
         rec.dangling.append(dangling_ends(lw))
     if n_lines == 0:  # a sheet may hold only the reference square, the whole layout may not
-        raise VerifyError(f"{path}: no cut geometry (nothing on layer CUT besides the reference square)")
+        raise VerifyError(
+            f"{path}: no cut geometry (nothing on layer CUT besides the reference square)"
+        )
     return rec
 
 
-def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float,
-                         tol: float) -> tuple[np.ndarray, float | None, int]:
+def _tiles_and_reference(
+    polys: np.ndarray, arity: int, D: np.ndarray, L: float, tol: float
+) -> tuple[np.ndarray, float | None, int]:
     """The tiles (corners in the design's arity), the reference square's side (None without one) and
     how many regions are neither. The square is looked for among the quads: the tiles themselves
     when they are quads, the regions that are not tiles otherwise."""
@@ -86,11 +100,14 @@ def _tiles_and_reference(polys: np.ndarray, arity: int, D: np.ndarray, L: float,
     return tiles, side, int((~ok).sum()) - (side is not None)
 
 
-def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: float,
-                 rep: Report) -> tuple[bool, bool, float | None]:
+def _layout_kind(
+    rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: float, rep: Report
+) -> tuple[bool, bool, float | None]:
     """In place or separate, a ligament sheet or not, and (plain files) the kerf offset fitted."""
     in_place = al.layout == "in-place"
-    sheet_piece = any(m.startswith("material") for m in rec.methods)  # a ligament sheet: tiles in place, shrunk
+    sheet_piece = any(
+        m.startswith("material") for m in rec.methods
+    )  # a ligament sheet: tiles in place, shrunk
     sheets = rec.sheets
     if al.layout == "auto":  # plain file: in place if the outlines tile one connected region
         allq = np.concatenate(list(sheets.values())) if sheets else np.zeros((0, D.shape[1], 2))
@@ -101,12 +118,21 @@ def _layout_kind(rec: _Recovered, al: Allowances, D: np.ndarray, L: float, tol: 
     fitted = None
     if al.hinge == PLAIN and (not in_place or sheet_piece) and sheets:
         # no manifest declares the kerf (or the gap): take the one offset the outlines share
-        fitted = _fit_offset(np.concatenate(list(sheets.values())), D, L, tol,
-                             lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0)
+        fitted = _fit_offset(
+            np.concatenate(list(sheets.values())),
+            D,
+            L,
+            tol,
+            lo=-MAX_FITTED_SHRINK_MM if sheet_piece else 0.0,
+        )
         if fitted:
             for k, R in sheets.items():
-                sheets[k], bad = quads_of(shapely.buffer(shapely.polygons(R), -fitted, join_style="mitre",
-                                                         mitre_limit=UNDO_MITRE), R.shape[1])
+                sheets[k], bad = quads_of(
+                    shapely.buffer(
+                        shapely.polygons(R), -fitted, join_style="mitre", mitre_limit=UNDO_MITRE
+                    ),
+                    R.shape[1],
+                )
                 rec.unusable += bad
         rep.meta["kerf_offset_fitted_mm"] = fitted
     return in_place, sheet_piece, fitted
@@ -132,7 +158,9 @@ def _sheet_files(path: Path, al: Allowances) -> dict[int, Path]:
         sheet = next((k for k, v in named.items() if v == path.name), 1)
         return {sheet: path}
     if path.name not in named.values():
-        raise VerifyError(f"{path}: not one of the sheets listed in the manifest ({sorted(named.values())})")
+        raise VerifyError(
+            f"{path}: not one of the sheets listed in the manifest ({sorted(named.values())})"
+        )
     out = {}
     for k, name in sorted(named.items()):
         f = path.parent / name

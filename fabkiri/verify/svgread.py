@@ -72,8 +72,11 @@ def read_svg_layers(data: bytes) -> tuple[float, float, list[float], dict[str | 
         pl = Polylines(np.column_stack([xy[:, 0], H - xy[:, 1]]), np.asarray(counts) // 2, closed)
         if name in layers:  # two groups with one id: one layer
             old = layers[name]
-            pl = Polylines(np.concatenate([old.pts, pl.pts]), np.concatenate([old.counts, pl.counts]),
-                           np.concatenate([old.closed, pl.closed]))
+            pl = Polylines(
+                np.concatenate([old.pts, pl.pts]),
+                np.concatenate([old.counts, pl.counts]),
+                np.concatenate([old.closed, pl.closed]),
+            )
         layers[name] = pl
     return wmm, hmm, vb, layers
 
@@ -109,14 +112,25 @@ def read_cut_svg(p: Path, layer_name: str = "CUT") -> Linework:
                 if isinstance(e, se.Shape):
                     layer_of[id(e)] = name(g)
     cut_found = layer_name in layer_of.values()
-    shapes = [e for e in svg.elements() if isinstance(e, se.Shape)
-              and (layer_of.get(id(e)) == layer_name if cut_found or layer_name != "CUT"
-                   else layer_of.get(id(e), "") not in NON_CUT_LAYERS)]
+    shapes = [
+        e
+        for e in svg.elements()
+        if isinstance(e, se.Shape)
+        and (
+            layer_of.get(id(e)) == layer_name
+            if cut_found or layer_name != "CUT"
+            else layer_of.get(id(e), "") not in NON_CUT_LAYERS
+        )
+    ]
     lw = Linework(p, layer_found=cut_found)
     for shape in shapes:
         path_ = se.Path(shape)
         layer = layer_of.get(id(shape), "")
-        colour = str(shape.stroke.hex) if shape.stroke is not None and shape.stroke.value is not None else ""
+        colour = (
+            str(shape.stroke.hex)
+            if shape.stroke is not None and shape.stroke.value is not None
+            else ""
+        )
         pts: list[tuple[float, float]] = []
         for seg in path_.segments():
             if isinstance(seg, se.Move):
@@ -160,8 +174,12 @@ def without_annotation_layers(p: Path, keep: str = "CUT") -> str | io.BytesIO:
         return str(p)
     if any(el.tag.rsplit("}", 1)[-1] == "use" for el in root.iter()):
         return str(p)
-    drop = {id(g) for g in groups if name(g) in (NON_CUT_LAYERS | {"CUT"}) - {keep}
-            and not any(name(d) == keep for d in g.iter() if d.tag.rsplit("}", 1)[-1] == "g")}
+    drop = {
+        id(g)
+        for g in groups
+        if name(g) in (NON_CUT_LAYERS | {"CUT"}) - {keep}
+        and not any(name(d) == keep for d in g.iter() if d.tag.rsplit("}", 1)[-1] == "g")
+    }
     if not drop:
         return str(p)
     for parent in list(root.iter()):
@@ -170,7 +188,15 @@ def without_annotation_layers(p: Path, keep: str = "CUT") -> str | io.BytesIO:
     return io.BytesIO(ET.tostring(root))
 
 
-_UNIT_MM = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6, "px": MM_PER_PX, "": MM_PER_PX}
+_UNIT_MM = {
+    "mm": 1.0,
+    "cm": 10.0,
+    "in": 25.4,
+    "pt": 25.4 / 72,
+    "pc": 25.4 / 6,
+    "px": MM_PER_PX,
+    "": MM_PER_PX,
+}
 
 
 def _declared_mm(attr: Any, height_px: float) -> float:
@@ -184,7 +210,9 @@ def _declared_mm(attr: Any, height_px: float) -> float:
         return MM_PER_PX
 
 
-def _svg_mm(pts: list[tuple[float, float]], height_mm: float, mm_per_px: float = MM_PER_PX) -> np.ndarray:
+def _svg_mm(
+    pts: list[tuple[float, float]], height_mm: float, mm_per_px: float = MM_PER_PX
+) -> np.ndarray:
     a = np.asarray(pts, dtype=float) * mm_per_px
     a[:, 1] = height_mm - a[:, 1]
     return a

@@ -26,7 +26,9 @@ class Tolerances:
     angle: float  # rad
     tile_size: float  # mm (mean tile edge)
     tier: str
-    mm_angles: bool = False  # angle residuals compared as their displacement (rad x tile size) with ``length``
+    mm_angles: bool = (
+        False  # angle residuals compared as their displacement (rad x tile size) with ``length``
+    )
 
     @property
     def area(self) -> float:  # mm²: a length tolerance times the tile size
@@ -34,27 +36,61 @@ class Tolerances:
 
     def describe(self) -> str:
         if self.mm_angles:
-            return (f"{self.tier}: {self.length:.3g} mm for lengths, and for angles as their displacement at "
-                    f"the tile size")
+            return (
+                f"{self.tier}: {self.length:.3g} mm for lengths, and for angles as their displacement at "
+                f"the tile size"
+            )
         return f"exact ({self.tier}): {self.length:.3g} mm, {self.angle:.3g} rad"
 
 
-def fabrication_tolerances(tol_mm: float, tile_size: float, tier: str = "fabrication") -> Tolerances:
+def fabrication_tolerances(
+    tol_mm: float, tile_size: float, tier: str = "fabrication"
+) -> Tolerances:
     """One tolerance in mm: lengths compare with it, angles by the displacement they cause at ``tile_size``."""
-    return Tolerances(float(tol_mm), float(tol_mm) / float(tile_size), float(tile_size), tier, mm_angles=True)
+    return Tolerances(
+        float(tol_mm), float(tol_mm) / float(tile_size), float(tile_size), tier, mm_angles=True
+    )
 
 
-def angle_check(name: str, rad: np.ndarray, sizes: np.ndarray | float, tol: Tolerances, worst: str, *,
-                group: str, detail: str = "", applies: bool = True, id: str = "") -> Check:
+def angle_check(
+    name: str,
+    rad: np.ndarray,
+    sizes: np.ndarray | float,
+    tol: Tolerances,
+    worst: str,
+    *,
+    group: str,
+    detail: str = "",
+    applies: bool = True,
+    id: str = "",
+) -> Check:
     """An angle residual check: in rad (exact tier) or as mm of displacement at each item's tile size."""
     rad = np.asarray(rad, dtype=float)
     if not tol.mm_angles:
-        return measured(name, largest(rad), tol.angle, "rad", worst=worst_at(worst, rad), group=group, detail=detail,
-                        applies=applies, id=id)
+        return measured(
+            name,
+            largest(rad),
+            tol.angle,
+            "rad",
+            worst=worst_at(worst, rad),
+            group=group,
+            detail=detail,
+            applies=applies,
+            id=id,
+        )
     mm = rad * np.broadcast_to(np.asarray(sizes, dtype=float), rad.shape)
     note = f"angle residual x tile size (largest angle {largest(rad):.3g} rad)"
-    return measured(name, largest(mm), tol.length, "mm", worst=worst_at(worst, mm), group=group,
-                    detail=f"{detail}; {note}" if detail else note, applies=applies, id=id)
+    return measured(
+        name,
+        largest(mm),
+        tol.length,
+        "mm",
+        worst=worst_at(worst, mm),
+        group=group,
+        detail=f"{detail}; {note}" if detail else note,
+        applies=applies,
+        id=id,
+    )
 
 
 def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6) -> Tolerances:
@@ -64,7 +100,9 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
         return fabrication_tolerances(float(tol_mm), size)
     optimised = any(k in (pattern.design or {}) for k in ("solver", "solve", "residuals", "report"))
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
-    return Tolerances(rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data")
+    return Tolerances(
+        rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data"
+    )
 
 
 def worst_at(prefix: str, values: np.ndarray) -> str | None:

@@ -79,10 +79,16 @@ class HingeKind:
 
     name = ""
     default_layout = "in-place"
-    both_corner_labels = False  # every hinge's two corners carry the partner tile's ID and face letter
+    both_corner_labels = (
+        False  # every hinge's two corners carry the partner tile's ID and face letter
+    )
     face_letter_corners = False  # tile A's corner of each same-sheet hinge carries its face letter
-    tape_marks = False  # tile B's corner of each same-sheet hinge carries a chord where the tape ends
-    shrinks = False  # every tile is shrunk by half the gap before it is cut (a sheet joined by ligaments)
+    tape_marks = (
+        False  # tile B's corner of each same-sheet hinge carries a chord where the tape ends
+    )
+    shrinks = (
+        False  # every tile is shrunk by half the gap before it is cut (a sheet joined by ligaments)
+    )
     one_piece = False  # the sheet comes out as one piece joined by itself: no tape, nothing to join
     cut_apart = False  # every tile is cut on its own: a tape piece spans one corner pair, tiles are placed by ID
 
@@ -111,12 +117,16 @@ class HingeKind:
 
     def assembly_steps(self, n_top: int, n_bottom: int) -> list[str]:
         """The maker's steps, for ``n_top`` tape pieces on the top face and ``n_bottom`` below."""
-        steps = [f"1. top face: lay the cut tiles as cut (engraved face up) and tape pieces 1-{n_top} in order, "
-                 "each across its hinge corner from the face letter to the chord"]
+        steps = [
+            f"1. top face: lay the cut tiles as cut (engraved face up) and tape pieces 1-{n_top} in order, "
+            "each across its hinge corner from the face letter to the chord"
+        ]
         if n_bottom:
-            steps.append(f"2. turn the whole piece over (left-right) and tape pieces {n_top + 1}-{n_top + n_bottom} "
-                         "on the bottom face the same way (the map's bottom panel is seen from above, through the "
-                         "sheet)")
+            steps.append(
+                f"2. turn the whole piece over (left-right) and tape pieces {n_top + 1}-{n_top + n_bottom} "
+                "on the bottom face the same way (the map's bottom panel is seen from above, through the "
+                "sheet)"
+            )
         return steps
 
     def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
@@ -127,10 +137,21 @@ class HingeKind:
     def check_layout(self, layout: str) -> None:
         """Refuse a layout this kind cannot be cut in, with one line saying what to use."""
         if layout != "in-place":
-            raise InputError(f"{self.name} hinges are cut in place; --layout {layout} is for --hinge separate")
+            raise InputError(
+                f"{self.name} hinges are cut in place; --layout {layout} is for --hinge separate"
+            )
 
-    def prepare(self, pattern: Pattern, corners: np.ndarray, tile_polys: np.ndarray, mat: Material, *,
-                state: int, scale: float, options: Any) -> Cutting:
+    def prepare(
+        self,
+        pattern: Pattern,
+        corners: np.ndarray,
+        tile_polys: np.ndarray,
+        mat: Material,
+        *,
+        state: int,
+        scale: float,
+        options: Any,
+    ) -> Cutting:
         """The parts, label regions and offsets of the closed state ``corners`` (mm)."""
         raise NotImplementedError
 
@@ -141,9 +162,13 @@ class HingeKind:
 
 
 # built-in kinds, imported when first asked for (their modules call register())
-_KINDS: Registry[HingeKind] = Registry({
-    "tape": "fabkiri.fabricate.hingekinds.tape", "ligament": "fabkiri.fabricate.hingekinds.ligament",
-    "separate": "fabkiri.fabricate.hingekinds.separate"})
+_KINDS: Registry[HingeKind] = Registry(
+    {
+        "tape": "fabkiri.fabricate.hingekinds.tape",
+        "ligament": "fabkiri.fabricate.hingekinds.ligament",
+        "separate": "fabkiri.fabricate.hingekinds.separate",
+    }
+)
 
 
 def register(kind: HingeKind) -> HingeKind:

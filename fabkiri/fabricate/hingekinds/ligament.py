@@ -25,8 +25,12 @@ if TYPE_CHECKING:
     from ..materials import Material
     from . import SheetCut, SheetRead
 
-FEATURE_PAD_MM = 1e-4  # ligament spans listed in the manifest are this much wider than the free span
-NOTCH_AREA_MM2 = 1e-6  # a notch the kerf toolpath fills counts from this area (float noise is far smaller)
+FEATURE_PAD_MM = (
+    1e-4  # ligament spans listed in the manifest are this much wider than the free span
+)
+NOTCH_AREA_MM2 = (
+    1e-6  # a notch the kerf toolpath fills counts from this area (float noise is far smaller)
+)
 
 
 class Ligament(HingeKind):
@@ -43,16 +47,26 @@ class Ligament(HingeKind):
         return material.ligament_width_mm + material.min_web_mm
 
     def hinge_spacing(self, material: Material) -> float:
-        return material.ligament_width_mm + material.min_web_mm  # a strip is its width plus a web from the next
+        return (
+            material.ligament_width_mm + material.min_web_mm
+        )  # a strip is its width plus a web from the next
 
     def coupon_variants(self, material: Material) -> tuple[str, str, list[dict[str, float]]]:
         base = material.ligament_width_mm
-        ws = sorted({round(max(material.min_web_mm, base * f), 3) for f in (0.6, 0.8, 1.0, 1.25, 1.5)})
-        return "ligament_width_mm", "W", [{"tile": 10.0, "ligament_width": w, "value": w} for w in ws]
+        ws = sorted(
+            {round(max(material.min_web_mm, base * f), 3) for f in (0.6, 0.8, 1.0, 1.25, 1.5)}
+        )
+        return (
+            "ligament_width_mm",
+            "W",
+            [{"tile": 10.0, "ligament_width": w, "value": w} for w in ws],
+        )
 
     def assembly_steps(self, n_top: int, n_bottom: int) -> list[str]:
-        return ["the sheet comes out as one piece: push out the tiles' holes and fold along the ligaments; "
-                "nothing to join"]
+        return [
+            "the sheet comes out as one piece: push out the tiles' holes and fold along the ligaments; "
+            "nothing to join"
+        ]
 
     def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
         # the verifier's reader, imported here: a design's cut bounds load this module but not the reader
@@ -62,31 +76,67 @@ class Ligament(HingeKind):
         rings = sheet.polys[~sheet.is_ref]
         ii, jj = shapely.STRtree(rings).query(rings, predicate="within")
         inside = (np.bincount(ii[ii != jj], minlength=len(rings)) % 2) == 1
-        material = shapely.difference(shapely.union_all(rings[~inside]), shapely.union_all(rings[inside]))
-        material = shapely.buffer(material, -sheet.manifest["kerf_offset_mm"], join_style="mitre",
-                                  mitre_limit=UNDO_MITRE)
-        feats = [shapely.Polygon(f["polygon"]) for f in sheet.manifest["hinge_features"] if f["sheet"] == sheet.sheet]
+        material = shapely.difference(
+            shapely.union_all(rings[~inside]), shapely.union_all(rings[inside])
+        )
+        material = shapely.buffer(
+            material, -sheet.manifest["kerf_offset_mm"], join_style="mitre", mitre_limit=UNDO_MITRE
+        )
+        feats = [
+            shapely.Polygon(f["polygon"])
+            for f in sheet.manifest["hinge_features"]
+            if f["sheet"] == sheet.sheet
+        ]
         cores = shapely.difference(material, shapely.union_all(feats)) if feats else material
         pieces = shapely.get_parts(cores)
         pieces = pieces[shapely.area(pieces) > 1e-6]
-        holes = np.array([shapely.Polygon(r) for g in shapely.get_parts(material) for r in g.interiors],
-                         dtype=object)
+        holes = np.array(
+            [shapely.Polygon(r) for g in shapely.get_parts(material) for r in g.interiors],
+            dtype=object,
+        )
         return pieces, holes
 
-    def prepare(self, pattern: Pattern, corners: np.ndarray, tile_polys: np.ndarray, mat: Material, *,
-                state: int, scale: float, options: Any) -> Cutting:
+    def prepare(
+        self,
+        pattern: Pattern,
+        corners: np.ndarray,
+        tile_polys: np.ndarray,
+        mat: Material,
+        *,
+        state: int,
+        scale: float,
+        options: Any,
+    ) -> Cutting:
         shrink = mat.gap_mm / 2
         try:
             regions = hg.shrink_tiles(corners, shrink)
         except FabricationError as exc:
             lost = np.flatnonzero((fab.shrunk_edges(corners, shrink) <= fab.EDGE_EPS_MM).any(-1))
             raise fb.lost_edge(corners, mat, self.name, scale, int(lost[0])) from exc
-        lig = hg.ligament_design(pattern, corners, regions, gap=mat.gap_mm, width_max=mat.ligament_width_mm,
-                                 min_web=mat.min_web_mm, kerf=mat.kerf_mm, strain_limit=mat.strain_limit,
-                                 turn_rad=np.radians(options.turn_deg), width=options.ligament_width)
+        lig = hg.ligament_design(
+            pattern,
+            corners,
+            regions,
+            gap=mat.gap_mm,
+            width_max=mat.ligament_width_mm,
+            min_web=mat.min_web_mm,
+            kerf=mat.kerf_mm,
+            strain_limit=mat.strain_limit,
+            turn_rad=np.radians(options.turn_deg),
+            width=options.ligament_width,
+        )
         strips = hg.ligament_strips(lig.apex, lig.width_mm, embed=max(0.5, lig.width_mm))
-        return Cutting(corners, regions, shapely.polygons(corners), label_margin=0.5, offset=mat.kerf_offset_mm,
-                       shrink=shrink, ligament=lig, strips=strips, warnings=list(lig.warnings))
+        return Cutting(
+            corners,
+            regions,
+            shapely.polygons(corners),
+            label_margin=0.5,
+            offset=mat.kerf_offset_mm,
+            shrink=shrink,
+            ligament=lig,
+            strips=strips,
+            warnings=list(lig.warnings),
+        )
 
     def draw(self, sd: SheetDrawing, sheet: SheetCut, cutting: Cutting) -> list[dict]:
         s, on, place = sheet.index, sheet.tiles, sheet.place
@@ -103,10 +153,14 @@ class Ligament(HingeKind):
             sd.add("CUT", p, True)
         for p in ext:
             sd.add("CUT", p, True)
-        return _spans(_left_by_laser(material, outline, cutting.offset), small, moved_strips, same, s)
+        return _spans(
+            _left_by_laser(material, outline, cutting.offset), small, moved_strips, same, s
+        )
 
 
-def _left_by_laser(material: shapely.Geometry, outline: shapely.Geometry, offset: float) -> shapely.Geometry:
+def _left_by_laser(
+    material: shapely.Geometry, outline: shapely.Geometry, offset: float
+) -> shapely.Geometry:
     """The material the laser leaves: ``material`` and the notches narrower than the kerf that its
     offset toolpath fills (a strip meeting a small tile's edge at a shallow angle leaves one), so the
     declared spans cover them. ``material`` itself where the toolpath fills nothing (any quad sheet)."""
@@ -118,11 +172,19 @@ def _left_by_laser(material: shapely.Geometry, outline: shapely.Geometry, offset
     filled = shapely.get_parts(shapely.difference(back, material, grid_size=hg.GRID))
     if not (shapely.area(filled) > NOTCH_AREA_MM2).any():
         return material
-    return shapely.union_all(np.concatenate([[material], filled[shapely.area(filled) > NOTCH_AREA_MM2]]),
-                             grid_size=hg.GRID)
+    return shapely.union_all(
+        np.concatenate([[material], filled[shapely.area(filled) > NOTCH_AREA_MM2]]),
+        grid_size=hg.GRID,
+    )
 
 
-def _spans(material: shapely.Geometry, small: np.ndarray, moved_strips: np.ndarray, same: np.ndarray, s: int) -> list[dict]:
+def _spans(
+    material: shapely.Geometry,
+    small: np.ndarray,
+    moved_strips: np.ndarray,
+    same: np.ndarray,
+    s: int,
+) -> list[dict]:
     """The free spans: material not in any tile, from the same snapped geometry as
     the cut, one manifest entry per polygon of each hinge's span."""
     tiles_here = shapely.union_all(small, grid_size=hg.GRID)
@@ -134,8 +196,15 @@ def _spans(material: shapely.Geometry, small: np.ndarray, moved_strips: np.ndarr
     order = np.lexsort((part_i, strip_i))
     part_i, strip_i = part_i[order], strip_i[order]
     owners, first, counts = np.unique(strip_i, return_index=True, return_counts=True)
-    spans = np.array([free[part_i[f]] if c == 1 else shapely.union_all(free[part_i[f:f + c]], grid_size=hg.GRID)
-                      for f, c in zip(first, counts)], dtype=object)
+    spans = np.array(
+        [
+            free[part_i[f]]
+            if c == 1
+            else shapely.union_all(free[part_i[f : f + c]], grid_size=hg.GRID)
+            for f, c in zip(first, counts)
+        ],
+        dtype=object,
+    )
     # padded so rounding never leaves a hairline of material along the strip joining the
     # two tiles, then clipped by the tiles so no tile loses a corner
     spans = shapely.buffer(spans, FEATURE_PAD_MM, join_style="mitre")
@@ -151,8 +220,13 @@ def _spans(material: shapely.Geometry, small: np.ndarray, moved_strips: np.ndarr
     for j, geom in zip(owners, spans):
         for g in shapely.get_parts(geom):  # one entry per polygon (a span may come in parts)
             if g.geom_type == "Polygon" and not g.is_empty:
-                feats.append({"hinge": int(same[j]), "sheet": s + 1,
-                              "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist()})
+                feats.append(
+                    {
+                        "hinge": int(same[j]),
+                        "sheet": s + 1,
+                        "polygon": snap(np.asarray(g.exterior.coords)[:-1]).tolist(),
+                    }
+                )
     return feats
 
 

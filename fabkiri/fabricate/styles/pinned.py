@@ -54,16 +54,24 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     bodies = []
     for t in range(len(plan.tiles)):
         first = _tile_body(plan, pins, printer, at_tile[t], t, 0.0)
-        alts = tuple(_tile_body(plan, pins, printer, at_tile[t], t, (j + 0.5) / pingeom.PHASES)
-                     for j in range(pingeom.PHASES))
+        alts = tuple(
+            _tile_body(plan, pins, printer, at_tile[t], t, (j + 0.5) / pingeom.PHASES)
+            for j in range(pingeom.PHASES)
+        )
         bodies.append(replace(first, variants=alts))
     dx, dy = centre_shift(plan.bounds, printer)
     beds = [[translate_body(b, dx, dy) for b in bodies]]
     return PrintJob("pinned", state, printer, plan, beds, (dx, dy), pins=pins)
 
 
-def _tile_body(plan: printgeom.ClosedPlan, pins: pingeom.PinPlan, printer: Printer, hs: list[int], t: int,
-               turn: float) -> Body:
+def _tile_body(
+    plan: printgeom.ClosedPlan,
+    pins: pingeom.PinPlan,
+    printer: Printer,
+    hs: list[int],
+    t: int,
+    turn: float,
+) -> Body:
     """Tile ``t`` with the pivots of its hinges ``hs``: clearances cut, ears, pins and rings added; the pivot
     polygons turned by ``turn`` of a step."""
     lv, g = pins.levels, pins.geometry
@@ -72,7 +80,10 @@ def _tile_body(plan: printgeom.ClosedPlan, pins: pingeom.PinPlan, printer: Print
     ph = pins.phase if pins.phase is not None else np.zeros(plan.n_hinges)
     X = plan.tiles[t]
     ops: list[tuple[str, Prism]] = [("add", Prism((X,), 0.0, T))]
-    poly = {h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn)) for h in hs}
+    poly = {
+        h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn))
+        for h in hs
+    }
     # A tile's corner at a pivot is cleared through the full height: the pivot's
     # own partner turns in one half, and the hinge that meets it in either
     # closed state stacks its ears in the other half; at its own ear level the
@@ -93,13 +104,28 @@ def _tile_body(plan: printgeom.ClosedPlan, pins: pingeom.PinPlan, printer: Print
         if t == A[h]:  # the pin: straight through its ear and the gap, flared through the ring
             zr0, zr1 = lv.level(k + 1)
             ops.append(("add", Prism((poly[h](g.pin_bottom, False),), z0, zr0)))
-            ops.append(("add", Prism((poly[h](g.pin_bottom, False),), zr0, zr1, g.pin_top / g.pin_bottom, p)))
+            ops.append(
+                (
+                    "add",
+                    Prism((poly[h](g.pin_bottom, False),), zr0, zr1, g.pin_top / g.pin_bottom, p),
+                )
+            )
     for h in hs:
         if t == B[h]:
             z0, z1 = lv.level(pins.level[h] + 1)
             p = tuple(plan.hinge_xy[h])
-            ops.append(("sub", Prism((poly[h](g.hole_bottom, True),), z0 - 1e-3, z1 + 1e-3,
-                                     g.hole_top / g.hole_bottom, p)))
+            ops.append(
+                (
+                    "sub",
+                    Prism(
+                        (poly[h](g.hole_bottom, True),),
+                        z0 - 1e-3,
+                        z1 + 1e-3,
+                        g.hole_top / g.hole_bottom,
+                        p,
+                    ),
+                )
+            )
     return Body(f"tile-{t:04d}", "tile", tuple(ops), printer.tile_material)
 
 
@@ -114,8 +140,9 @@ def _pinned_plans(pattern: Pattern, state: int, printer: Printer) -> str | None:
     return None
 
 
-def pinned_scale_range(pattern: Pattern, state: int, printer: Printer, step: float = 0.01
-                       ) -> tuple[float, float] | None:
+def pinned_scale_range(
+    pattern: Pattern, state: int, printer: Printer, step: float = 0.01
+) -> tuple[float, float] | None:
     """The smallest scale factor (to ``step``) at which the pattern prints pinned on
     the printer's bed, and the largest that fits the bed; ``None`` if none does.
 
@@ -125,7 +152,9 @@ def pinned_scale_range(pattern: Pattern, state: int, printer: Printer, step: flo
     c = printgeom.closed_corners(pattern, state).reshape(-1, 2)
     (x0, y0), (x1, y1) = c.min(0), c.max(0)
     bx, by, _ = printer.bed_mm
-    kmax = np.floor(min(bx / (x1 - x0), by / (y1 - y0)) / step) * step  # the shrunk tiles fit inside
+    kmax = (
+        np.floor(min(bx / (x1 - x0), by / (y1 - y0)) / step) * step
+    )  # the shrunk tiles fit inside
     if _pinned_plans(scaled(pattern, kmax), state, printer) is not None:
         return None
     lo, hi = step, kmax  # lo: fails or below every feasible size
@@ -156,11 +185,15 @@ def pinned_advice(pattern: Pattern, state: int, printer: Printer, scale: float =
         c = printgeom.closed_corners(pattern, state).reshape(-1, 2)
         kmax = min(bx / np.ptp(c[:, 0]), by / np.ptp(c[:, 1]))
         why = _pinned_plans(scaled(pattern, np.floor(kmax * 100) / 100), state, printer)
-        return (f"no scale prints it pinned on the {bx:g} x {by:g} mm bed of {printer.name}: at the largest that "
-                f"fits ({scale * kmax:.2f}x) {why}")
+        return (
+            f"no scale prints it pinned on the {bx:g} x {by:g} mm bed of {printer.name}: at the largest that "
+            f"fits ({scale * kmax:.2f}x) {why}"
+        )
     lo, hi = rng
-    return (f"it prints pinned on the {bx:g} x {by:g} mm bed of {printer.name} from --scale {scale * lo:.2f} "
-            f"to {scale * hi:.2f}")
+    return (
+        f"it prints pinned on the {bx:g} x {by:g} mm bed of {printer.name} from --scale {scale * lo:.2f} "
+        f"to {scale * hi:.2f}"
+    )
 
 
 def clearances(r: Realised, rep: MeshReport) -> None:
@@ -177,7 +210,7 @@ def clearances(r: Realised, rep: MeshReport) -> None:
         if plan.partner[h] >= 0:
             group |= {int(A[plan.partner[h]]), int(B[plan.partner[h]])}
         g = sorted(group)
-        pairs |= {(a, b) for ai, a in enumerate(g) for b in g[ai + 1:]}
+        pairs |= {(a, b) for ai, a in enumerate(g) for b in g[ai + 1 :]}
     worst = np.inf
     for a, b in sorted(pairs):
         worst = min(worst, ms[a].min_gap(ms[b], 2 * pr.gap_mm + 1.0))
@@ -201,11 +234,12 @@ def tiles(r: Realised, mesh=None):
     lv = job.pins.levels
     z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
     mask = pingeom.clearance_mask(job.plan.hinge_xy + list(job.shift), job.pins.geometry)
-    solid = manifold_of(mesh) if mesh is not None else m3d.Manifold.batch_boolean(r.manifolds[0], m3d.OpType.Add)
+    solid = (
+        manifold_of(mesh)
+        if mesh is not None
+        else m3d.Manifold.batch_boolean(r.manifolds[0], m3d.OpType.Add)
+    )
     return solid, z, mask
-
-
-
 
 
 @dataclass
@@ -225,7 +259,9 @@ class SweepCheck:
         return dict(self.__dict__)
 
 
-def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2: float = 1e-6) -> SweepCheck:
+def sweep_pinned(
+    pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2: float = 1e-6
+) -> SweepCheck:
     """Collision sweep of the printed pinned tiles (sections of the solids at
     every ear level and axial gap) along :func:`fabkiri.mechanics.deploy.rigid_path`."""
     from ...mechanics.deploy import rigid_path
@@ -236,10 +272,14 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
         raise FabricationError("the deployment sweep is for pinned tiles")
     assert job.pins is not None  # a pinned job always carries its pin plan
     lv = job.pins.levels
-    zs = [0.5 * sum(lv.level(k)) for k in range(4)] + [lv.level(k)[1] + 0.5 * lv.axial for k in range(3)]
+    zs = [0.5 * sum(lv.level(k)) for k in range(4)] + [
+        lv.level(k)[1] + 0.5 * lv.axial for k in range(3)
+    ]
     back = -np.asarray(job.shift)
     T = len(job.plan.tiles)
-    sections = {z: [np.array(section_polys(m, z), dtype=object) for m in r.manifolds[0]] for z in zs}
+    sections = {
+        z: [np.array(section_polys(m, z), dtype=object) for m in r.manifolds[0]] for z in zs
+    }
     for z in zs:
         sections[z] = [shapely.transform(g, lambda c: c + back) for g in sections[z]]
     path = rigid_path(pattern, steps, tol_rad=1e-6)
@@ -252,7 +292,9 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
             owners: list[int] = []
             for t in range(T):
                 th, tr = poses[t]
-                moved = shapely.transform(sections[z][t], lambda c, th=th, tr=tr: geometry.rotate(c, th) + tr)
+                moved = shapely.transform(
+                    sections[z][t], lambda c, th=th, tr=tr: geometry.rotate(c, th) + tr
+                )
                 parts.extend(moved)
                 owners.extend([t] * len(moved))
             geoms = np.array(parts, dtype=object)
@@ -269,8 +311,14 @@ def sweep_pinned(pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2
                 worst_area = float(area[k])
                 worst = f"tiles {owner[i[k]]}/{owner[j[k]]} at z = {z:.2f} mm, t = {path.t[f]:.3f}"
             worst_dist = min(worst_dist, float(dist.min()))
-    return SweepCheck(frames=len(path.t), levels_mm=[round(z, 4) for z in zs], max_overlap_mm2=worst_area,
-                      min_distance_mm=worst_dist, worst=worst, ok=worst_area <= overlap_tol_mm2)
+    return SweepCheck(
+        frames=len(path.t),
+        levels_mm=[round(z, 4) for z in zs],
+        max_overlap_mm2=worst_area,
+        min_distance_mm=worst_dist,
+        worst=worst,
+        ok=worst_area <= overlap_tol_mm2,
+    )
 
 
 def pinned_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks:
@@ -279,8 +327,10 @@ def pinned_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks
     rep.sweep = sweep.to_dict()
     out = StyleChecks()
     if not sweep.ok:
-        out.problems.append(f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
-                            f"({sweep.worst})")
+        out.problems.append(
+            f"pinned tiles collide while reconfiguring: {sweep.max_overlap_mm2:.3g} mm² overlap "
+            f"({sweep.worst})"
+        )
     return out
 
 
@@ -290,6 +340,17 @@ def pin_limits(printer: Printer) -> dict:
     return {"hinge_spacing_mm": 2.0 * hollow + 2.0 * printer.nozzle_mm}
 
 
-PINNED = register_style(PrintStyle("pinned", build, clearances, tiles=tiles, advise=pinned_advice,
-                                   checks=pinned_checks, own_tile_thickness=True, strip_hinges=False,
-                                   limits=pin_limits, plan=PIN_PLAN))
+PINNED = register_style(
+    PrintStyle(
+        "pinned",
+        build,
+        clearances,
+        tiles=tiles,
+        advise=pinned_advice,
+        checks=pinned_checks,
+        own_tile_thickness=True,
+        strip_hinges=False,
+        limits=pin_limits,
+        plan=PIN_PLAN,
+    )
+)

@@ -44,8 +44,13 @@ def hinge_label(strip: Polygon, text: str, printer: Printer) -> Polygon | None:
     h = min(LABEL_MAX_MM, b[3] - b[1] - line, (b[2] - b[0] - line) / max(text_width(text), 1e-9))
     while h >= LABEL_MIN_MM:
         strokes = text_strokes(text, h, (c.x, c.y))
-        glyphs = shapely.union_all([shapely.LineString(p).buffer(0.5 * line, cap_style="round", quad_segs=4)
-                                    for p in strokes if len(p) >= 2])
+        glyphs = shapely.union_all(
+            [
+                shapely.LineString(p).buffer(0.5 * line, cap_style="round", quad_segs=4)
+                for p in strokes
+                if len(p) >= 2
+            ]
+        )
         if room.contains(glyphs):
             return glyphs if isinstance(glyphs, Polygon) else shapely.unary_union(glyphs)
         h *= 0.85
@@ -73,9 +78,11 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     bx, by, _ = printer.bed_mm
     depth = ENGRAVE_LAYERS * printer.layer_mm  # whole layers, so the slicer resolves the ID
     if ts - depth < printer.first_layer_mm - 1e-9:
-        raise FabricationError(f"a {ts:g} mm strip cannot hold an ID engraved {ENGRAVE_LAYERS} layers "
-                               f"({depth:g} mm) deep above a {printer.first_layer_mm:g} mm first layer; "
-                               "raise --strip-thickness")
+        raise FabricationError(
+            f"a {ts:g} mm strip cannot hold an ID engraved {ENGRAVE_LAYERS} layers "
+            f"({depth:g} mm) deep above a {printer.first_layer_mm:g} mm first layer; "
+            "raise --strip-thickness"
+        )
     beds: list[list[Body]] = [[]]
     placements = []
     x = y = row_h = gap
@@ -85,7 +92,9 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
         b = turned.bounds
         w, hgt = b[2] - b[0], b[3] - b[1]
         if w + 2 * gap > bx or hgt + 2 * gap > by:
-            raise FabricationError(f"the strip of hinge {h} ({w:.1f} x {hgt:.1f} mm) does not fit the bed")
+            raise FabricationError(
+                f"the strip of hinge {h} ({w:.1f} x {hgt:.1f} mm) does not fit the bed"
+            )
         if x + w + gap > bx:  # next shelf
             x, y, row_h = gap, y + row_h + gap, 0.0
         if y + hgt + gap > by:  # next bed
@@ -101,13 +110,28 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
         else:
             unlabelled.append(h)
         beds[-1].append(Body(name, "hinge", tuple(ops), printer.strip_material))
-        placements.append({"hinge": h, "bed": len(beds), "face": plan.face(h), "tiles": plan.hinge_tiles[h].tolist(),
-                           "rotation_deg": round(float(np.degrees(ang)), 6),
-                           "offset_mm": [round(x - b[0], 6), round(y - b[1], 6)]})
+        placements.append(
+            {
+                "hinge": h,
+                "bed": len(beds),
+                "face": plan.face(h),
+                "tiles": plan.hinge_tiles[h].tolist(),
+                "rotation_deg": round(float(np.degrees(ang)), 6),
+                "offset_mm": [round(x - b[0], 6), round(y - b[1], 6)],
+            }
+        )
         x += w + gap
         row_h = max(row_h, hgt)
-    return PrintJob("strips", state, printer, plan, beds, strips=strips, placements=placements,
-                    unlabelled=unlabelled)
+    return PrintJob(
+        "strips",
+        state,
+        printer,
+        plan,
+        beds,
+        strips=strips,
+        placements=placements,
+        unlabelled=unlabelled,
+    )
 
 
 def clearances(r: Realised, rep: MeshReport) -> None:
@@ -123,9 +147,12 @@ def clearances(r: Realised, rep: MeshReport) -> None:
             arr = np.array(polys, dtype=object)
             rep.min_clearance_mm = float(shapely.distance(arr[i[sel]], arr[j[sel]]).min())
             if rep.min_clearance_mm < pr.part_spacing_mm - 1e-6:
-                rep.problems.append(f"strip parts {rep.min_clearance_mm:.3f} mm apart on bed 1, "
-                                    f"under the part spacing {pr.part_spacing_mm:g} mm")
+                rep.problems.append(
+                    f"strip parts {rep.min_clearance_mm:.3f} mm apart on bed 1, "
+                    f"under the part spacing {pr.part_spacing_mm:g} mm"
+                )
 
 
-STRIPS = register_style(PrintStyle("strips", build, clearances, loose_strips=True, limits=strip_limits,
-                                   plan=STRIP_PLAN))
+STRIPS = register_style(
+    PrintStyle("strips", build, clearances, loose_strips=True, limits=strip_limits, plan=STRIP_PLAN)
+)

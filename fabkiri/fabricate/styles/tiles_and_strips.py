@@ -51,7 +51,9 @@ def build(pattern: Pattern, state: int, printer: Printer, layout: str | None = N
     """
     layout = layout or ("recessed" if printer.extruders >= 2 else "stacked")
     if layout not in LAYOUTS:
-        raise FabricationError(f"unknown tiles-and-strips layout {layout!r}; choose one of {', '.join(LAYOUTS)}")
+        raise FabricationError(
+            f"unknown tiles-and-strips layout {layout!r}; choose one of {', '.join(LAYOUTS)}"
+        )
     plan = printgeom.closed_plan(pattern, state, printer)
     strips = printgeom.strip_outlines(plan, printer)
     T, ts = printer.tile_thickness_mm, printer.strip_thickness_mm
@@ -60,29 +62,62 @@ def build(pattern: Pattern, state: int, printer: Printer, layout: str | None = N
     bot = tuple(strips.outline[~strips.top])
     changes: list[tuple[float, str, str]] = []
     if layout == "recessed":
-        tiles = Body(f"tiles_{printer.tile_material}", "tiles", (
-            ("add", Prism(tuple(plan.tiles), 0.0, T)),
-            ("sub", Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0)),  # +1: a clean cut through the face
-            ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
-        ), printer.tile_material)
-        hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
-            ("add", Prism(top, T - ts, T)),
-            ("add", Prism(bot, 0.0, ts)),
-        ), printer.strip_material)
+        tiles = Body(
+            f"tiles_{printer.tile_material}",
+            "tiles",
+            (
+                ("add", Prism(tuple(plan.tiles), 0.0, T)),
+                (
+                    "sub",
+                    Prism(tuple(strips.pocket[strips.top]), T - ts, T + 1.0),
+                ),  # +1: a clean cut through the face
+                ("sub", Prism(tuple(strips.pocket[~strips.top]), -1.0, ts)),
+            ),
+            printer.tile_material,
+        )
+        hinges = Body(
+            f"hinges_{printer.strip_material}",
+            "hinges",
+            (
+                ("add", Prism(top, T - ts, T)),
+                ("add", Prism(bot, 0.0, ts)),
+            ),
+            printer.strip_material,
+        )
     else:
         base = shapely.simplify(shapely.union_all(list(plan.tiles) + list(bot)), printgeom.NOISE_MM)
-        tiles = Body(f"tiles_{printer.tile_material}", "tiles", (("add", Prism(tuple(plan.tiles), ts, T)),),
-                     printer.tile_material)
-        hinges = Body(f"hinges_{printer.strip_material}", "hinges", (
-            ("add", Prism(tuple(shapely.get_parts(base)), 0.0, ts)),
-            ("add", Prism(top, T, T + ts)),
-        ), printer.strip_material)
-        changes = [(float(layer_top_above(ts, printer)), "colour-change", printer.tile_material),
-                   (float(layer_top_above(T, printer)), "colour-change", printer.strip_material)]
+        tiles = Body(
+            f"tiles_{printer.tile_material}",
+            "tiles",
+            (("add", Prism(tuple(plan.tiles), ts, T)),),
+            printer.tile_material,
+        )
+        hinges = Body(
+            f"hinges_{printer.strip_material}",
+            "hinges",
+            (
+                ("add", Prism(tuple(shapely.get_parts(base)), 0.0, ts)),
+                ("add", Prism(top, T, T + ts)),
+            ),
+            printer.strip_material,
+        )
+        changes = [
+            (float(layer_top_above(ts, printer)), "colour-change", printer.tile_material),
+            (float(layer_top_above(T, printer)), "colour-change", printer.strip_material),
+        ]
     dx, dy = centre_shift(plan.bounds, printer)
     beds = [[translate_body(tiles, dx, dy), translate_body(hinges, dx, dy)]]
-    return PrintJob("tiles-and-strips", state, printer, plan, beds, (dx, dy), strips=strips, layout=layout,
-                    layer_changes=changes)
+    return PrintJob(
+        "tiles-and-strips",
+        state,
+        printer,
+        plan,
+        beds,
+        (dx, dy),
+        strips=strips,
+        layout=layout,
+        layer_changes=changes,
+    )
 
 
 def clearances(r: Realised, rep: MeshReport) -> None:
@@ -104,7 +139,9 @@ def clearances(r: Realised, rep: MeshReport) -> None:
     worst = np.inf
     lv = job.z_levels()
     zs: tuple[float, ...] = (lv["bottom"], lv["tiles"], lv["top"])
-    if job.layout == "stacked":  # the base sheet joins tiles by design: it must be the planned sheet
+    if (
+        job.layout == "stacked"
+    ):  # the base sheet joins tiles by design: it must be the planned sheet
         zs = zs[1:]
         planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
         got = shapely.union_all(section_polys(hinges_m, lv["bottom"]))
@@ -123,7 +160,9 @@ def clearances(r: Realised, rep: MeshReport) -> None:
             qi, di = shapely.STRtree(design).query(pts[sel], predicate="dwithin", distance=1e-3)
             owner[sel[qi]] = di
         if (owner < 0).any():
-            rep.problems.append(f"a section piece at z = {z:g} mm belongs to no planned tile or strip")
+            rep.problems.append(
+                f"a section piece at z = {z:g} mm belongs to no planned tile or strip"
+            )
         i, j = shapely.STRtree(allp).query(allp, predicate="dwithin", distance=2 * pr.gap_mm)
         sel = (i < j) & ~((kind[i] == kind[j]) & (owner[i] == owner[j]))  # same body: no clearance
         i, j = i[sel], j[sel]
@@ -137,7 +176,9 @@ def clearances(r: Realised, rep: MeshReport) -> None:
             worst = min(worst, float(free.min()))
     rep.min_clearance_mm = None if worst == np.inf else worst
     if rep.min_clearance_mm is not None and rep.min_clearance_mm < req - 1e-6:
-        rep.problems.append(f"clearance {rep.min_clearance_mm:.3f} mm below the radial clearance {req:g} mm")
+        rep.problems.append(
+            f"clearance {rep.min_clearance_mm:.3f} mm below the radial clearance {req:g} mm"
+        )
 
 
 def tiles(r: Realised, mesh=None):
@@ -154,13 +195,22 @@ def layout_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks
 
     verifier = verify_printed_tiles(pattern, r)
     out = StyleChecks(verifier=verifier)
-    moot = [] if r.job.plan.other_state_closes else [c.name for c in verifier.failed() if _reassembly(c.id)]
+    moot = (
+        []
+        if r.job.plan.other_state_closes
+        else [c.name for c in verifier.failed() if _reassembly(c.id)]
+    )
     if moot:
         verifier.meta["not_applicable"] = moot
-        out.notes.append(f"note: closed state {3 - r.job.state} does not close; the verifier's reassembly checks "
-                         "are moot")
-    out.problems += [f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
-                     for c in verifier.failed() if c.name not in moot]
+        out.notes.append(
+            f"note: closed state {3 - r.job.state} does not close; the verifier's reassembly checks "
+            "are moot"
+        )
+    out.problems += [
+        f"verifier: {c.name} measured {c.value:.3g} {c.unit} (tolerance {c.tol:g})"
+        for c in verifier.failed()
+        if c.name not in moot
+    ]
     return out
 
 
@@ -170,6 +220,16 @@ def _reassembly(check_id: str) -> bool:
     return ".reassembled.state" in check_id
 
 
-TILES_AND_STRIPS = register_style(PrintStyle("tiles-and-strips", build, clearances, tiles=tiles,
-                                             body_per_material=True, checks=layout_checks, has_layout=True,
-                                             limits=strip_limits, plan=STRIP_PLAN))
+TILES_AND_STRIPS = register_style(
+    PrintStyle(
+        "tiles-and-strips",
+        build,
+        clearances,
+        tiles=tiles,
+        body_per_material=True,
+        checks=layout_checks,
+        has_layout=True,
+        limits=strip_limits,
+        plan=STRIP_PLAN,
+    )
+)
