@@ -192,6 +192,7 @@ def test_7x5_kagome_ligament_in_pp_fills_the_notches_the_kerf_closes(tmp_path, r
     assert checks["layout: every ligament present and unsevered"]["ok"]
 
 
+@pytest.mark.slow  # several cuts and read-backs; the 4x4 ligament cut above runs in the quick loop
 def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
     """The web and edge rules (fabricability.cut_minimum) allow 0.7391x, where the 7x5's triangles,
     shrunk by 2 mm, are 0.4 mm wide beside 0.5 mm ligaments and the read-back recovers 16 pieces for
@@ -240,6 +241,7 @@ def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
     )
 
 
+@pytest.mark.slow  # a 7x5 ligament cut and read-back; the quick loop cuts the 4x4
 def test_a_ligament_sheet_with_no_cut_edge_along_a_recovered_part_is_refused_not_a_crash(
     tmp_path, run_cli
 ):

@@ -1013,6 +1013,7 @@ def test_pinned_sweep_along_the_deployment(printer):
     assert not sw_bad.ok and sw_bad.max_overlap_mm2 > 1.0 and "tiles 0/" in sw_bad.worst
 
 
+@pytest.mark.slow  # a STEP per bed through build123d; the quick loop prints without STEP
 def test_cli_step_per_bed(tmp_path, run_cli):
     pytest.importorskip("build123d")
     from fabkiri.fabricate import cad
