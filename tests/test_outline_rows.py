@@ -3,7 +3,7 @@
 
 import numpy as np
 from fabkiri.design import constraints as C
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as hst
 
 
@@ -43,6 +43,8 @@ def polygon(rng, E, grid):
     grid=hst.booleans(),
     seed=hst.integers(0, 2**31 - 1),
 )
+# a point tied between two chords exactly at the settling bound, which rounding once called settled
+@example(E=147, K=69, grid=True, seed=368675)
 def test_nearest_chords_and_inside_equal_the_full_tables(E, K, grid, seed):
     rng = np.random.default_rng(seed)
     A = polygon(rng, E, grid)

@@ -110,7 +110,8 @@ def nearest_chords(pts: np.ndarray, A: np.ndarray, B: np.ndarray):
     mid = 0.5 * (A + B)
     half = 0.5 * float(np.sqrt(dot2(B - A, B - A)).max(initial=0.0))
     dk, cand = KDTree(mid).query(pts, k=k + 1 if k < E else k)
-    bound = dk[:, k] - half if k < E else np.full(len(pts), np.inf)
+    # settled only below the bound by more than its rounding: a tie at the bound goes to the full table
+    bound = dk[:, k] - half - 1e-12 * (dk[:, k] + half) if k < E else np.full(len(pts), np.inf)
     cand = np.sort(
         cand[:, :k], axis=1
     )  # argmin keeps the first minimum: the lowest index, as a full table
