@@ -33,18 +33,29 @@ def compactness_checks(
         w: "" if state is None else state_check_id(state, w)
         for w in ("no-overlaps", "union-area", "no-interior-gaps", "one-outline")
     }
-    i, j, inter = geom.overlap_depths(Y)
-    bad = np.flatnonzero(inter > tol.length)
-    order = bad[np.argsort(-inter[bad])]
-    k = int(np.argmax(inter)) if len(inter) else None
-    pair = f"tiles {i[k]}/{j[k]}" if k is not None else None
-    union = geom.tiles_union(Y, max(tol.length, 1e-12 * tol.tile_size), coverage=not len(bad))
+    depths, order, pair = _depths(Y, tol)
+    union = geom.tiles_union(Y, max(tol.length, 1e-12 * tol.tile_size), coverage=not len(order))
     return [
-        _overlap_check((i, j, inter), order, pair, blame, tol, g, ids["no-overlaps"]),
+        _overlap_check(depths, order, pair, blame, tol, g, ids["no-overlaps"]),
         _union_area_check(Y, union, tol, g, pair if len(order) else None, ids["union-area"]),
         _interior_gap_check(union, tol, g, ids["no-interior-gaps"]),
         _one_outline_check(union, tol, g, ids["one-outline"]),
     ]
+
+
+def overlap_check(Y: np.ndarray, tol: Tolerances, g: str, id: str = "") -> Check:
+    """``{g}: no overlaps`` alone, for a state that is not compact (the deployed one, whose holes are open)."""
+    depths, order, pair = _depths(Y, tol)
+    return _overlap_check(depths, order, pair, None, tol, g, id)
+
+
+def _depths(Y: np.ndarray, tol: Tolerances) -> tuple[tuple, np.ndarray, str | None]:
+    """Every candidate pair's overlap depth, the pairs over the tolerance (deepest first), the deepest pair."""
+    i, j, inter = geom.overlap_depths(Y)
+    bad = np.flatnonzero(inter > tol.length)
+    order = bad[np.argsort(-inter[bad])]
+    k = int(np.argmax(inter)) if len(inter) else None
+    return (i, j, inter), order, f"tiles {i[k]}/{j[k]}" if k is not None else None
 
 
 def _overlap_check(

@@ -32,9 +32,8 @@ from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
-from . import geom
 from .closed_checks import closed_state_checks
-from .compactness import compactness_checks, enclosed_gaps, state_check_id
+from .compactness import compactness_checks, enclosed_gaps, overlap_check, state_check_id
 from .outlines import target_checks
 from .report import Check, Report, measured
 from .residual_checks import residual_checks, rigid_claimed, rigid_path, rigid_path_checks
@@ -47,7 +46,6 @@ from .tolerances import (
     Tolerances,
     angle_check,
     fabrication_tolerances,
-    largest,
     tolerances,
     worst_at,
 )
@@ -113,20 +111,9 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
             detail=f"clockwise or flat tiles: {np.flatnonzero(area <= 0).tolist()[:20]}",
         )
     )
-    i, j, depth = geom.overlap_depths(corners)  # hinged neighbours touch only at a corner: depth 0
-    k = int(np.argmax(depth)) if len(depth) else None
     out.append(
-        measured(
-            "deployed: no overlaps",
-            largest(depth),
-            tol.length,
-            "mm",
-            group="tiles",
-            worst=f"tiles {i[k]}/{j[k]}" if k is not None else None,
-            id="deployed.no-overlaps",
-            detail=f"{int((depth > tol.length).sum())} overlapping pairs in the deployed state",
-        )
-    )
+        overlap_check(corners, tol, "deployed", id="deployed.no-overlaps")
+    )  # hinged tiles touch only
     edges = geometry.edge_lengths(corners)
     out.append(
         measured(
