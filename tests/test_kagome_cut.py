@@ -199,20 +199,7 @@ def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
     35 tiles; --scale auto steps up until the read-back accepts the files and bisects to 0.1 %."""
     src = tmp_path / "k75.json"
     io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
-    code, _, err = run_cli(
-        "cut",
-        src,
-        "--hinge",
-        "ligament",
-        "--material",
-        "pp-0.5",
-        "--scale",
-        "auto",
-        "--formats",
-        "dxf",
-        "-o",
-        tmp_path / "out",
-    )
+    code, _, err = _pp_ligament_dxf(run_cli, src, "auto", tmp_path / "out")
     assert code == 0 and "verifier passed" in err, err
     assert "the read-back refused the files at --scale 0.7391" in err
     man = json.loads((tmp_path / "out" / "manifest.json").read_text())
@@ -222,20 +209,7 @@ def test_7x5_kagome_ligament_at_the_auto_scale(tmp_path, run_cli):
     assert checks["layout: every ligament present and unsevered"]["ok"]
     # the size is the smallest accepted to 0.1 %: a cut 0.2 % smaller is refused by the read-back
     smaller = f"{man['scale'] * 0.998:.4f}"
-    code, _, err = run_cli(
-        "cut",
-        src,
-        "--hinge",
-        "ligament",
-        "--material",
-        "pp-0.5",
-        "--scale",
-        smaller,
-        "--formats",
-        "dxf",
-        "-o",
-        tmp_path / "small",
-    )
+    code, _, err = _pp_ligament_dxf(run_cli, src, smaller, tmp_path / "small")
     assert (
         code == 1 and "read-back verification failed" in err and not (tmp_path / "small").exists()
     )
@@ -249,7 +223,13 @@ def test_a_ligament_sheet_with_no_cut_edge_along_a_recovered_part_is_refused_not
     IndexError (exit 3); now the read-back refuses the files (exit 1) and nothing is written."""
     src = tmp_path / "k75.json"
     io.write_pattern(with_contracted_states(standard_kagome(7, 5, tile_size=10.0)), src)
-    code, _, err = run_cli(
+    code, _, err = _pp_ligament_dxf(run_cli, src, "0.75", tmp_path / "out")
+    assert code == 1 and "read-back verification failed" in err and not (tmp_path / "out").exists()
+
+
+def _pp_ligament_dxf(run_cli, src, scale, out):
+    """``cut SRC --hinge ligament --material pp-0.5 --scale SCALE --formats dxf -o OUT``."""
+    return run_cli(
         "cut",
         src,
         "--hinge",
@@ -257,10 +237,9 @@ def test_a_ligament_sheet_with_no_cut_edge_along_a_recovered_part_is_refused_not
         "--material",
         "pp-0.5",
         "--scale",
-        "0.75",
+        scale,
         "--formats",
         "dxf",
         "-o",
-        tmp_path / "out",
+        out,
     )
-    assert code == 1 and "read-back verification failed" in err and not (tmp_path / "out").exists()
