@@ -872,3 +872,24 @@ def test_a_sheet_format_is_one_registered_strategy(monkeypatch):
     )
     with pytest.raises(InputError, match=r"unknown format 'pdf' \(known: dxf, svg, png, txt\)"):
         cut(p, formats=("pdf",))
+
+
+def test_a_pattern_on_several_sheets_of_symmetric_blocks_passes_its_own_read_back(
+    tmp_path, run_cli
+):
+    """A standard 8x8 on 60 mm sheets: four sheets of 4x4 tiles, each symmetric on its own, and one sheet
+    with nothing but the reference square. Each block matches its design tiles in several equally good
+    ways; its tape marks say which one was cut (they once failed "tape marks at every hinge" here, as a
+    standard 64x64 at the default sheet did), and the tile-less sheet once crashed the matching."""
+    f = tmp_path / "p.json"
+    write_pattern(std(8, 8), f)
+    out = tmp_path / "cut"
+    code, out_text, err = run_cli("cut", f, "--sheet", "60x60", "-o", out)
+    assert code == 0, err
+    man = json.loads((out / "manifest.json").read_text())
+    assert len(man["sheets"]) == 5
+    reports = man["verification"]["verifier"]["files"]
+    assert set(reports) == {"dxf", "svg"}
+    for rep in reports.values():
+        marks = [c for c in rep["checks"] if c["name"].endswith("tape marks at every hinge")]
+        assert marks and all(c["ok"] for c in marks), marks

@@ -328,7 +328,7 @@ def _physical_checks(
     in_place: bool,
     fitted: float | None,
     g: str,
-    labelings: Sequence[np.ndarray] = (),
+    labelings: Sequence[tuple[int, np.ndarray]] = (),
 ) -> None:
     """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
     A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
@@ -369,18 +369,39 @@ def _physical_checks(
                 marks[sheet] = m.polylines
         if not marks:
             return  # no named engrave layer (a colour-only file): marks cannot be told from cuts
-        # the labeling whose hinges carry the most marks (a symmetric sheet has several)
-        status = [mark_status(pattern, C, have, found_on, marks) for C in [cut_shapes, *labelings]]
-        k = max(range(len(status)), key=lambda i: (status[i][1].sum(), -i))
-        hs, marked, room = status[k]
+        C, turned = _marked_labeling(pattern, cut_shapes, labelings, have, found_on, marks)
+        hs, marked, room = mark_status(pattern, C, have, found_on, marks)
         if not len(hs) or not (marks_kind and al.labels) and marked.sum() < 0.5 * len(hs):
             return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
         chk = tape_mark_check(hs, marked, room, g)
-        if k:
-            chk.detail += (
-                " (the sheet is symmetric: hinges placed by the labeling its marks fit best)"
-            )
+        if turned:
+            chk.detail += f" (sheet(s) {turned} symmetric: hinges placed by the labeling their marks fit best)"
         rep.add(chk)
+
+
+def _marked_labeling(
+    pattern: Pattern,
+    cut_shapes: np.ndarray,
+    labelings: Sequence[tuple[int, np.ndarray]],
+    have: np.ndarray,
+    found_on: np.ndarray,
+    marks: dict,
+) -> tuple[np.ndarray, list[int]]:
+    """The cut shapes with every symmetric sheet under the labeling whose hinges carry the most tape
+    marks (the first on a tie), and the sheets whose labeling changed. Sheets are chosen one by one, each
+    scored on its own hinges."""
+    from .physical import mark_status
+
+    C, turned = cut_shapes.copy(), []
+    for sheet in sorted({s for s, _ in labelings}):
+        on = have & (found_on == sheet)
+        options = [cut_shapes, *(L for s, L in labelings if s == sheet)]
+        counts = [int(mark_status(pattern, o, on, found_on, marks)[1].sum()) for o in options]
+        k = int(np.argmax(counts))
+        if k:
+            C[on] = options[k][on]
+            turned.append(sheet)
+    return C, turned
 
 
 def _dangling_check(

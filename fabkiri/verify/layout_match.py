@@ -27,9 +27,9 @@ class _Matched:
     cut_shapes: np.ndarray  # (T, 4, 2) each design tile's cut shape, corners in design order
     resid_pos: np.ndarray  # in place: corner distance to the closed state
     extra: int  # recovered regions matched to no design tile
-    labelings: list[
-        np.ndarray
-    ]  # cut shapes under other, equally good labelings of a symmetric sheet
+    # (sheet, cut shapes) under another, equally good labeling of a symmetric sheet: that sheet's tiles
+    # take the shapes, every other tile is NaN
+    labelings: list[tuple[int, np.ndarray]]
 
 
 def _match_tiles(
@@ -64,7 +64,7 @@ def _match_tiles(
     Ystate = closed(state)
     for sheet, R in sheets.items():
         if in_place:
-            a, res, sh = _match_sheet_in_place(al, m, sheet, R, Ystate, T, tol, len(sheets) == 1)
+            a, res, sh = _match_sheet_in_place(al, m, sheet, R, Ystate, T, tol)
         else:
             free = np.flatnonzero(m.assign < 0)
             a, res, sh = match_by_shape(D[free], R, L)
@@ -91,12 +91,12 @@ def _match_sheet_in_place(
     Ystate: np.ndarray,
     T: int,
     tol: float,
-    only_sheet: bool,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One in-place sheet matched to its design tiles; a symmetric single sheet also records the other
-    labelings that fit as well (``m.labelings``)."""
+    """One in-place sheet matched to its design tiles; a symmetric sheet also records the other
+    labelings that fit as well (``m.labelings``): each sheet of a large pattern may be symmetric on its
+    own, and only its tape marks say which way it was cut."""
     design_ids = (
-        np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet))
+        np.array(sorted(t for t, s in al.tile_sheet.items() if s == sheet), dtype=np.int64)
         if al.tile_sheet
         else np.arange(T)
     )
@@ -104,12 +104,11 @@ def _match_sheet_in_place(
     alts: list = []
     a, res, sh, _, _ = match_in_place(Ystate[design_ids], R, alternatives=alts)
     a = np.where(a >= 0, design_ids[np.maximum(a, 0)], -1)
-    if only_sheet:  # a symmetric sheet: the other labelings as good as this one
-        for aa, rr, ss in alts:
-            if (aa >= 0).sum() == T and np.max(rr[aa >= 0]) <= tol:
-                n = R.shape[1]  # the tile arity
-                C = np.full((T, n, 2), np.nan)
-                k = np.flatnonzero(aa >= 0)
-                C[design_ids[aa[k]]] = R[k[:, None], (np.arange(n)[None, :] + ss[k][:, None]) % n]
-                m.labelings.append(C)
+    for aa, rr, ss in alts:  # a symmetric sheet: the other labelings as good as this one
+        if (aa >= 0).sum() == len(design_ids) and np.max(rr[aa >= 0]) <= tol:
+            n = R.shape[1]  # the tile arity
+            C = np.full((T, n, 2), np.nan)
+            k = np.flatnonzero(aa >= 0)
+            C[design_ids[aa[k]]] = R[k[:, None], (np.arange(n)[None, :] + ss[k][:, None]) % n]
+            m.labelings.append((sheet, C))
     return a, res, sh
