@@ -12,13 +12,19 @@ zero, and the two tiles pass through each other near their hinge (the designed k
 This term penalises a gap ``g`` (the signed angle at the hinge, ``(-π, π]``) that falls below a
 clearance ``c``, a fraction ``κ`` of the rigid blend's gap at the same path parameter:
 
-    E_C(x) = w · Σ_gaps φ(g/c),    φ(u) = (1 - u)² for u < 1, else 0,
+    E_C(x) = w · Σ_gaps φ(g/c),    φ(u) = (1 - u)³ for u < 1, else 0,
 
 so it is zero at the three states (each gap there is its own rigid value, at least ``c``) and
 wherever a gap keeps at least ``κ`` of its rigid value; it only acts on gaps that are closing too
-early. Its gradient and Hessian are exact and sparse (three nodes per gap), checked against finite
-differences in the tests. The gap angle is ``θ(v - h) - θ(u - h)`` with ``h`` the hinge node and
-``u``, ``v`` the far corners of the two edges the gap lies between.
+early. Relative to ``c``, it grows stiffer as a folding gap's clearance shrinks towards its
+closed state, which is what keeps the last sub-steps from overshooting; cubic, so it is C² where
+it switches on (a quadratic's jump in curvature there left Newton steps unconverged). Its gradient
+and Hessian are exact and sparse (three nodes per gap), checked against finite differences in the
+tests. The gap angle is ``θ(v - h) - θ(u - h)`` with ``h`` the hinge node and ``u``, ``v`` the far
+corners of the two edges the gap lies between.
+
+Gaps folded flat in a closed state are left out there (:data:`FOLDED`): the homotopy's drivers pin
+every closed state exactly, and a clearance of zero would have no scale.
 """
 
 from __future__ import annotations

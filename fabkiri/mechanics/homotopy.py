@@ -12,9 +12,13 @@ translation), so E = 0 exactly there and the path has no special end segments.
 The minimised energy is the springs' plus an orientation term (:mod:`.orientation`: each tile's
 signed area held to its design, weight 1), zero at every state: without it triangles, whose edge
 springs do not tell a tile from its mirror image, turned over on designed patterns and the
-continuation ended in a mirrored branch 8-48 mm from the closed states. The energy reported
-along the path, E(t), is the springs' alone; the orientation term's largest value is a figure of
-the path's solver summary.
+continuation ended in a mirrored branch 8-48 mm from the closed states. It also carries a contact
+term (:mod:`.contact`: every gap at a hinge held above half its rigid value, weight 0.1), zero at
+every state: without it the relaxed springs let a gap that folds flat in a closed state overshoot
+through zero, and hinged tiles passed through each other (the designed ellipse 5x19 and hearts,
+up to 1.17 mm deep). The energy reported along the path, E(t), is the springs' alone; the two
+terms' largest values, and the narrowest gap against its rigid value, are figures of the path's
+solver summary.
 
 The minimiser is continued outward from the deployed state on each half, so the deployed frame
 is exact and the closed ends are what the continuation reaches: a miss there is measured and
