@@ -43,6 +43,8 @@ from .path import tile_angles
 
 OPEN = 0.5 * np.pi  # gaps whose rigid blend is wider than this cannot close in one sub-step
 FOLDED = 1e-6  # rad: a rigid gap this narrow is folded (a closed state; the drivers pin it)
+P_NODES = np.array([-1.0, 1.0, 0.0])  # p = u - h over (h, u, v)
+Q_NODES = np.array([-1.0, 0.0, 1.0])  # q = v - h
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,40 +110,46 @@ class GapTerm:
     weight: float
     kappa: float  # the clearance as a fraction of the rigid gap
 
-    def _parts(self, x: np.ndarray):
-        """Per watched gap: φ'(g)·w and φ''(g)·w in g, ∇g ``(m, 6)`` and ∇²g ``(m, 6, 6)`` over
-        the coordinates of (h, u, v)."""
+    def _short(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per watched gap its shortfall ``max(c - g, 0)``, and the edge vectors ``p = u - h``,
+        ``q = v - h`` it was measured from."""
         X = np.asarray(x, dtype=float).reshape(self.gaps.n_nodes, 2)
         g = self.gaps
         p = X[g.u[self.rows]] - X[g.h[self.rows]]
         q = X[g.v[self.rows]] - X[g.h[self.rows]]
-        ang = geometry.signed_angle(p, q)
-        c = self.clearance
-        short = np.maximum(c - ang, 0.0)  # φ = (short / c)³
+        return np.maximum(self.clearance - geometry.signed_angle(p, q), 0.0), p, q
+
+    def _active(self, x: np.ndarray, hessian: bool):
+        """The gaps below their clearance (the rest contribute nothing): their dof ``(a, 6)``,
+        ``dE/dg`` and ``d²E/dg²`` (φ = (short/c)³), ``∇g`` ``(a, 6)`` over (h, u, v) and, if asked,
+        ``∇²g`` ``(a, 6, 6)``."""
+        short, p, q = self._short(x)
+        on = np.flatnonzero(short > 0)
+        short, p, q, c = short[on], p[on], q[on], self.clearance[on]
         d1 = -3.0 * self.weight * short**2 / c**3
         d2 = 6.0 * self.weight * short / c**3
-        rp, rq = (p * p).sum(-1), (q * q).sum(-1)
-        dp = np.stack([p[:, 1], -p[:, 0]], -1) / rp[:, None]  # ∂g/∂u = -∂θ(p)/∂p
-        dq = np.stack([-q[:, 1], q[:, 0]], -1) / rq[:, None]  # ∂g/∂v = ∂θ(q)/∂q
+        dp = np.stack([p[:, 1], -p[:, 0]], -1) / (p * p).sum(-1)[:, None]  # ∂g/∂u = -∂θ(p)/∂p
+        dq = np.stack([-q[:, 1], q[:, 0]], -1) / (q * q).sum(-1)[:, None]  # ∂g/∂v = ∂θ(q)/∂q
         grad = np.concatenate([-(dp + dq), dp, dq], axis=1)  # (h, u, v)
-        hess = _sandwich(_theta_hessian(q), (-1, 0, 1)) - _sandwich(_theta_hessian(p), (-1, 1, 0))
-        return short, d1, d2, grad, hess
+        hess = None
+        if hessian:
+            hess = _sandwich(_theta_hessian(q), Q_NODES) - _sandwich(_theta_hessian(p), P_NODES)
+        return self._dof()[on], d1, d2, grad, hess
 
     def energy(self, x: np.ndarray) -> float:
-        short = self._parts(x)[0]
+        short = self._short(x)[0]
         return float(self.weight * ((short / self.clearance) ** 3).sum())
 
     def gradient(self, x: np.ndarray) -> np.ndarray:
-        _, d1, _, grad, _ = self._parts(x)
+        dof, d1, _, grad, _ = self._active(x, hessian=False)
         out = np.zeros(2 * self.gaps.n_nodes)
-        np.add.at(out, self._dof(), d1[:, None] * grad)
+        np.add.at(out, dof, d1[:, None] * grad)
         return out
 
     def hessian(self, x: np.ndarray) -> sparse.csr_matrix:
         """``φ'' ∇g ∇gᵀ + φ' ∇²g`` per gap, scattered onto its three nodes."""
-        _, d1, d2, grad, hess = self._parts(x)
+        dof, d1, d2, grad, hess = self._active(x, hessian=True)
         block = d2[:, None, None] * grad[:, :, None] * grad[:, None, :] + d1[:, None, None] * hess
-        dof = self._dof()
         rows = np.repeat(dof, 6, axis=1).ravel()
         cols = np.tile(dof, (1, 6)).ravel()
         n2 = 2 * self.gaps.n_nodes
@@ -161,10 +169,10 @@ def _theta_hessian(p: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([2 * x * y / r4, off], -1), np.stack([off, -2 * x * y / r4], -1)], -2)
 
 
-def _sandwich(M: np.ndarray, coef: tuple[int, int, int]) -> np.ndarray:
+def _sandwich(M: np.ndarray, coef: np.ndarray) -> np.ndarray:
     """``(m, 6, 6)`` ``Dᵀ M D`` for a vector ``D = Σ_k coef_k · node_k`` over the nodes (h, u, v)."""
-    c = np.asarray(coef, dtype=float)
-    return np.einsum("i,j,mab->miajb", c, c, M).reshape(len(M), 6, 6)
+    cc = np.outer(coef, coef)[None, :, None, :, None]  # (1, 3, 1, 3, 1)
+    return (cc * M[:, None, :, None, :]).reshape(len(M), 6, 6)
 
 
 def gap_term(gaps: Gaps, t: float, *, weight: float, kappa: float) -> GapTerm:
