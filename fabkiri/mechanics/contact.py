@@ -195,7 +195,7 @@ def contact_figures(terms: list[GapTerm], sols: list[np.ndarray]) -> dict:
             energy = max(energy, term.energy(x))
     return {
         "contact_weight": terms[0].weight,
-        "contact_clearance": terms[0].kappa,
+        "contact_clearance_of_rigid_gap": terms[0].kappa,
         "contact_energy_max": energy,
         "narrowest_gap_to_rigid": None if ratio == np.inf else ratio,
     }
