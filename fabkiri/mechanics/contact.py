@@ -41,7 +41,7 @@ from .mechanism import gap_angles
 from .orientation import OrientedSprings
 from .path import tile_angles
 
-OPEN = 0.5 * np.pi  # gaps whose rigid blend is wider than this cannot close in one sub-step
+OPEN = 0.5 * np.pi  # wider rigid gaps are far from closing (and from the ±π cut of atan2)
 FOLDED = 1e-6  # rad: a rigid gap this narrow is folded (a closed state; the drivers pin it)
 P_NODES = np.array([-1.0, 1.0, 0.0])  # p = u - h over (h, u, v)
 Q_NODES = np.array([-1.0, 0.0, 1.0])  # q = v - h
