@@ -76,6 +76,7 @@ from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived
 from .path import DeploymentPath, closed_states, finish_path, node_positions, path_parameter
 
 if TYPE_CHECKING:
+    from .contact import ContactSprings
     from .orientation import OrientedSprings
 
 
@@ -88,7 +89,7 @@ class MinimiseStats:
 
 
 def minimise(
-    sp: Springs | OrientedSprings,
+    sp: Springs | OrientedSprings | ContactSprings,
     x0: np.ndarray,
     A: sparse.csr_matrix,
     b: np.ndarray,
@@ -175,7 +176,7 @@ def _project(x: np.ndarray, A: sparse.csr_matrix, b: np.ndarray) -> None:
 
 
 def _kkt_lu(
-    sp: Springs | OrientedSprings,
+    sp: Springs | OrientedSprings | ContactSprings,
     x: np.ndarray,
     mu: float,
     A: sparse.csr_matrix,

@@ -12,9 +12,13 @@ translation), so E = 0 exactly there and the path has no special end segments.
 The minimised energy is the springs' plus an orientation term (:mod:`.orientation`: each tile's
 signed area held to its design, weight 1), zero at every state: without it triangles, whose edge
 springs do not tell a tile from its mirror image, turned over on designed patterns and the
-continuation ended in a mirrored branch 8-48 mm from the closed states. The energy reported
-along the path, E(t), is the springs' alone; the orientation term's largest value is a figure of
-the path's solver summary.
+continuation ended in a mirrored branch 8-48 mm from the closed states. It also carries a contact
+term (:mod:`.contact`: every gap at a hinge held above half its rigid value, weight 0.1), zero at
+every state: without it the relaxed springs let a gap that folds flat in a closed state overshoot
+through zero, and hinged tiles passed through each other (the designed ellipse 5x19 and hearts,
+up to 1.17 mm deep). The energy reported along the path, E(t), is the springs' alone; the two
+terms' largest values, and the narrowest gap against its rigid value, are figures of the path's
+solver summary.
 
 The minimiser is continued outward from the deployed state on each half, so the deployed frame
 is exact and the closed ends are what the continuation reaches: a miss there is measured and
@@ -33,6 +37,7 @@ import numpy as np
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
+from .contact import ContactSprings, contact_figures, gap_term, hinge_gaps
 from .drivers import PathDriver, angle_drivers, node_centroids, register_driver
 from .elastic import MinimiseStats, minimise
 from .energy import Springs
@@ -72,6 +77,9 @@ class Homotopy(PathDriver):
     name = "homotopy"
     help = "each tile's rigid motion interpolated between the states (any kind; kagome default)"
     orientation_weight = 1.0  # of the area term against the springs (both relative strains²)
+    contact_weight = 0.1  # of the gap term (relative shortfall³ of a gap below its clearance)
+    contact_kappa = 0.5  # clearance: this fraction of the rigid blend's gap
+    max_iter = 200  # Newton steps per sub-step: next to a closed state the contact term is stiff
 
     def values(self, pattern, states, t):
         return homotopy_targets(pattern, states, t)
@@ -99,20 +107,33 @@ class Homotopy(PathDriver):
         blend = rigid_blend(pattern, states, fine).reshape(len(fine), -1)
         zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
         osp = OrientedSprings(sp, area_term(pattern, self.orientation_weight))
+        gaps = hinge_gaps(pattern, states)
         mid = int(np.argmin(np.abs(fine - 0.5)))
         sols: list = [None] * len(fine)
+        terms: list = [None] * len(fine)
         for order in (range(mid, -1, -1), range(mid, len(fine))):
             prev = None
             for i in order:
                 guess = blend[i] if prev is None else sols[prev] + (blend[i] - blend[prev])
                 drv = drivers[i]
+                term = terms[i] = gap_term(
+                    gaps, float(fine[i]), weight=self.contact_weight, kappa=self.contact_kappa
+                )
                 sols[i] = minimise(
-                    osp, guess, drv.A, drv.b, step_tol=tol, stats=stats, zero_energy=zero
+                    ContactSprings(osp, term),
+                    guess,
+                    drv.A,
+                    drv.b,
+                    step_tol=tol,
+                    stats=stats,
+                    zero_energy=zero,
+                    max_iter=self.max_iter,
                 )
                 prev = i
         figures = _figures(pattern, fine, np.stack(sols), blend, mid)
         figures["orientation_weight"] = osp.area.weight
         figures["orientation_energy_max"] = max(osp.area.energy(x) for x in sols)
+        figures.update(contact_figures(terms, sols))
         return sols, figures
 
 
