@@ -105,7 +105,9 @@ def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
     if wall < 2 * printer.nozzle_mm - 1e-9:
         raise FabricationError(
             f"pinned hinges: the ear ring wall is {wall:.2f} mm (ear radius {r:g} mm, pin {rp:g} mm, clearance "
-            f"{c:g} mm), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); raise pin.ear_radius_mm"
+            f"{c:g} mm, ears {levels.ear:.2f} mm thick), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); "
+            "raise pin.ear_radius_mm, or the tile thickness (--tile-thickness: thicker ears flare the pin "
+            "less)"
         )
     if rp < printer.nozzle_mm:
         raise FabricationError(
