@@ -120,9 +120,10 @@ def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
 class PinPlan:
     """Where each pin joint sits and which ear levels it uses.
 
-    ``level[h]`` is 0 (ears at levels 0-1) for the bottom hinge of a node and 2
-    (levels 2-3) for the top one: the two coincident hinges stack coaxially.
-    Tile A of the hinge owns the lower ear and the pin, tile B the ring.
+    ``level[h]`` is ``2 · place`` (ears at levels ``2·place`` and ``2·place + 1``),
+    its place in the coaxial stack (:func:`pin_slots`; quads: 0 for the bottom-face
+    hinge of a node, 2 for the top-face one). Tile A of the hinge owns the lower
+    ear and the pin, tile B the ring.
     """
 
     levels: PinLevels
