@@ -131,6 +131,7 @@ class PinPlan:
     level: np.ndarray  # (H,)
     phase: np.ndarray | None = None  # (H,) turn of the pivot polygons (pivot_phases)
     foreign: tuple = ()  # per tile, (m, 2) corners cleared all through (foreign_corners)
+    foreign_phase: tuple = ()  # per tile, (m,) turn of those corners' clearance polygons
 
 
 def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
@@ -164,12 +165,14 @@ def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
     foreign = foreign_corners(pattern, plan)
     _refuse_slivers(plan, g, printer, foreign)
     slot = pin_slots(pattern, plan, stack)
+    phase = pivot_phases(plan, g)
     return PinPlan(
         levels=levels,
         geometry=g,
         level=2 * slot,
-        phase=pivot_phases(plan, g),
+        phase=phase,
         foreign=tuple(foreign),
+        foreign_phase=tuple(_foreign_phases(plan, g, foreign, phase)),
     )
 
 
@@ -318,8 +321,7 @@ def _most_saturated(nb: list[set[int]], col: np.ndarray) -> int:
     """The uncoloured vertex with the most distinct colours around it (then the most neighbours,
     then the lowest index)."""
     best, key = -1, (-1, -1, 0)
-    for v in np.flatnonzero(col < 0):
-        v = int(v)
+    for v in np.flatnonzero(col < 0).tolist():
         kv = (len({int(col[u]) for u in nb[v] if col[u] >= 0}), len(nb[v]), -v)
         if kv > key:
             best, key = v, kv
@@ -360,6 +362,33 @@ def pivot_phases(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
         d = shapely.distance(shapely.multipoints(xy.reshape(PHASES, -1, 2)), edges)
         phase[h] = cand[int(np.argmax(d))]
     return phase
+
+
+def _foreign_phases(
+    plan: ClosedPlan, g: PinGeometry, foreign: list[np.ndarray], phase: np.ndarray
+) -> list[np.ndarray]:
+    """Per foreign corner (:func:`foreign_corners`), the turn of its clearance polygon: the pivot's
+    where it lies on one in the printed state (one polygon family per point), else the turn that
+    keeps the polygon's vertices farthest from its own tile's edges (as :func:`pivot_phases`)."""
+    n = CIRCLE_SEGMENTS
+    cand = np.arange(PHASES) / PHASES
+    ang = 2 * np.pi * (np.arange(n)[None, :] + cand[:, None]) / n  # (P, n)
+    rings = shapely.get_exterior_ring(plan.tiles)
+    tree = KDTree(plan.hinge_xy)
+    tol = 1e-6 * max(1.0, float(np.abs(plan.corners).max()))
+    out = []
+    for t, pts in enumerate(foreign):
+        ph = np.zeros(len(pts))
+        for i, p in enumerate(pts):
+            d, h = tree.query(p)
+            if d <= tol:
+                ph[i] = phase[int(h)]
+                continue
+            r = g.hollow / np.cos(np.pi / n)
+            xy = p + r * np.stack([np.cos(ang), np.sin(ang)], -1)  # (P, n, 2)
+            ph[i] = cand[int(np.argmax(shapely.distance(shapely.multipoints(xy), rings[t])))]
+        out.append(ph)
+    return out
 
 
 def clearance_discs(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:

@@ -45,7 +45,7 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     fits(plan.bounds, printer, "the closed pattern")
     A, B = plan.hinge_tiles.T
     at_tile = [np.flatnonzero((A == t) | (B == t)).tolist() for t in range(len(plan.tiles))]
-    foreign = pins.foreign
+    foreign = list(zip(pins.foreign, pins.foreign_phase, strict=True))
     # the same tile with its pivot polygons turned: tried in turn when a turn
     # leaves a near-degenerate meeting that a float32 file cannot keep 2-manifold
     # (each tile's clearances are circumscribed and its ears inscribed, so
@@ -67,7 +67,7 @@ def _tile_body(
     plan: printgeom.ClosedPlan,
     pins: pingeom.PinPlan,
     printer: Printer,
-    pivots: tuple[list[int], np.ndarray],
+    pivots: tuple[list[int], tuple[np.ndarray, np.ndarray]],
     t: int,
     turn: float,
 ) -> Body:
@@ -85,8 +85,10 @@ def _tile_body(
         h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn))
         for h in hs
     }
-    for p in foreign:  # a free corner on a pivot in a closed state: cleared all through
-        ops.append(("sub", Prism((regular_polygon(p, g.hollow, True, phase=turn),), -1.0, T + 1.0)))
+    for p, fp in zip(*foreign, strict=True):  # a free corner on a pivot in a closed state
+        ops.append(
+            ("sub", Prism((regular_polygon(p, g.hollow, True, phase=fp + turn),), -1.0, T + 1.0))
+        )
     # A tile's corner at a pivot is cleared through the full height: the pivot's
     # own partner turns in one half, and the hinge that meets it in either
     # closed state stacks its ears in the other half; at its own ear level the
