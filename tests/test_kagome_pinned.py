@@ -105,6 +105,22 @@ def test_colouring_finds_three_colours_where_they_exist_and_none_for_k4():
     assert col is not None and all(col[u] != col[v] for v in range(5) for u in g[v])
 
 
+def test_colouring_finds_a_planted_three_colouring():
+    """Random graphs with a planted 3-colouring (edges only between different planted colours):
+    the DSATUR search with backtracking returns a proper colouring for every one."""
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        n = int(rng.integers(5, 40))
+        planted = rng.integers(0, 3, n)
+        nb: list[set[int]] = [set() for _ in range(n)]
+        for i, j in rng.integers(0, n, (int(2.2 * n), 2)):
+            if planted[i] != planted[j]:
+                nb[i].add(int(j))
+                nb[j].add(int(i))
+        col = pingeom._colour(nb, 3)
+        assert col is not None and all(col[u] != col[v] for v in range(n) for u in nb[v])
+
+
 def test_free_corners_on_a_pivot_in_either_state_are_cleared(k44, plan44):
     plan, pins = plan44
     top = k44.topology
