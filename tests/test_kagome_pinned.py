@@ -14,7 +14,7 @@ import subprocess
 import numpy as np
 import pytest
 from fabkiri.errors import FabricationError
-from fabkiri.fabricate import mesh, pingeom, printgeom
+from fabkiri.fabricate import mesh, pingeom, pinslots, printgeom
 from fabkiri.fabricate.printers import load_printer
 from fabkiri.fabricate.styles import pinned
 from fabkiri.mechanics.contract import with_contracted_states
@@ -95,13 +95,13 @@ def test_quad_pins_keep_the_strip_faces_as_their_places(mk4):
 
 def test_colouring_finds_three_colours_where_they_exist_and_none_for_k4():
     tri = [{1, 2}, {0, 2}, {0, 1}]
-    col = pingeom._colour(tri, 3)
+    col = pinslots._colour(tri, 3)
     assert col is not None and len(set(col.tolist())) == 3
     k4 = [{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}]
-    assert pingeom._colour(k4, 3) is None
+    assert pinslots._colour(k4, 3) is None
     # two triangles sharing an edge, and a tail: a proper 3-colouring
     g = [{1, 2}, {0, 2, 3}, {0, 1, 3}, {1, 2, 4}, {3}]
-    col = pingeom._colour(g, 3)
+    col = pinslots._colour(g, 3)
     assert col is not None and all(col[u] != col[v] for v in range(5) for u in g[v])
 
 
@@ -117,7 +117,7 @@ def test_colouring_finds_a_planted_three_colouring():
             if planted[i] != planted[j]:
                 nb[i].add(int(j))
                 nb[j].add(int(i))
-        col = pingeom._colour(nb, 3)
+        col = pinslots._colour(nb, 3)
         assert col is not None and all(col[u] != col[v] for v in range(n) for u in nb[v])
 
 

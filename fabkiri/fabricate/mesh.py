@@ -246,7 +246,7 @@ def manifest(
 def _pin_level_text(pins) -> dict:
     """Which ear levels each hinge's place in the coaxial stack uses (quads: bottom and top hinges)."""
     n = pins.levels.count // 2
-    if n == 2:  # the two places are the strip faces' (pingeom.pin_slots)
+    if n == 2:  # the two places are the strip faces' (pinslots.pin_slots)
         return {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}
     hinges = {
         f"place_{j}_hinges": [int(h) for h in np.flatnonzero(pins.level == 2 * j)] for j in range(n)
