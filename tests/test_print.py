@@ -642,7 +642,7 @@ def test_pinned_refusal_names_the_scales_that_print():
 def test_pinned_refusals(printer):
     with pytest.raises(FabricationError, match="pivots .* apart"):
         mesh.build_job(standard_pattern(3, 3, tile_size=5.0), "pinned", 1, printer)
-    with pytest.raises(FabricationError, match="four stacked ears"):
+    with pytest.raises(FabricationError, match="need 4 stacked ears"):
         mesh.build_job(
             standard_pattern(2, 2), "pinned", 1, printer.with_overrides(pin_tile_thickness_mm=3.0)
         )
@@ -841,7 +841,7 @@ def test_cli_print_writes_everything(tmp_path, run_cli):
     )
     assert (
         code == 2
-        and "four stacked ears" in err
+        and "need 4 stacked ears" in err
         and err.count("\n") == 1
         and not (tmp_path / "bad").exists()
     )

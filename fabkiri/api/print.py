@@ -129,8 +129,8 @@ def print_pattern(
         say(f"warning: {w}")
     job, plan = _build_job(pattern, style, state, printer, scale)
     if (
-        job.plan.shared_faces
-    ):  # three hinges at a point (kagome): two faces cannot keep them all apart
+        job.plan.shared_faces and print_style(style).strip_hinges
+    ):  # three strips at a point (kagome): two faces cannot keep them all apart (pins stack instead)
         say(
             f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
             "than two faces separate); their strips keep the clearance as printed"

@@ -236,11 +236,22 @@ def manifest(
         m.unlabelled_hinges = job.unlabelled
     if job.pins is not None:
         m.pins = {
-            "levels_mm": [list(job.pins.levels.level(k)) for k in range(4)],
+            "levels_mm": [list(job.pins.levels.level(k)) for k in range(job.pins.levels.count)],
             "geometry_mm": dict(job.pins.geometry.__dict__),
-            "level": {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"},
+            "level": _pin_level_text(job.pins),
         }
     return m.to_json()
+
+
+def _pin_level_text(pins) -> dict:
+    """Which ear levels each hinge's place in the coaxial stack uses (quads: bottom and top hinges)."""
+    n = pins.levels.count // 2
+    if n == 2:  # the two places are the strip faces' (pinslots.pin_slots)
+        return {"bottom_hinges": "ear levels 0-1", "top_hinges": "ear levels 2-3"}
+    hinges = {
+        f"place_{j}_hinges": [int(h) for h in np.flatnonzero(pins.level == 2 * j)] for j in range(n)
+    }
+    return {**{f"place_{j}": f"ear levels {2 * j}-{2 * j + 1}" for j in range(n)}, **hinges}
 
 
 def _coinciding(partner, h: int):

@@ -1,7 +1,9 @@
 """2D plan of print-in-place pinned hinges on a closed state (fabrication.md §3.4).
 
-The two coincident hinges of a node are stacked coaxially on four ear levels:
-tile A of a hinge owns the lower ear and the pin, tile B the ring. Here: the
+The hinges that coincide in a closed state are stacked coaxially, two ear
+levels per hinge: tile A of a hinge owns the lower ear and the pin, tile B the
+ring. A kind whose closed states join ``hole_arity / 2`` hinges at a point
+stacks that many (quads two, four ear levels; kagome three, six). Here: the
 levels and radii from the printer preset, where each pin sits and which levels
 it uses (or why the geometry refuses pins), the turn of each pivot's polygons,
 and the slivers a pivot clearance leaves beside a tile's outline.
@@ -19,51 +21,58 @@ from ..errors import FabricationError
 from ..kdtree import KDTree
 from ..pattern.model import Pattern
 from ..pattern.tessellation import tessellation
+from . import printgeom
+from .pinslots import pin_slots
 from .printers import Printer
 from .printgeom import CIRCLE_SEGMENTS, ClosedPlan, grow_back, regular_polygon
 
 MASK_MARGIN_MM = 1e-3  # the tile check masks the pivot clearances with this margin
-PIN_STACK = 2  # hinges stacked coaxially at one pivot: four ear levels, two per hinge
 
 
-def kind_refusal(pattern: Pattern) -> str:
-    """Why no scale prints a pattern of this tessellation kind pinned ('' if its kind can be): the
-    sweep follows the rigid deployment path, which exists for a kind with a rigid family only,
-    and a pivot stacks two hinges, while a closed state may join ``hole_arity / 2`` at a point."""
-    kind = tessellation(pattern.kind)
-    if not kind.rigid_family:
-        return (
-            f"pinned hinges refused: rigid pinned tiles need the rigid deployment path, which {pattern.kind} "
-            f"patterns do not have, and a pivot stacks {PIN_STACK} hinges while a {pattern.kind} closed state "
-            f"joins {kind.hole_arity // 2} at a point; use --style strips or tiles-and-strips"
-        )
-    return ""
+def pin_stack(pattern: Pattern) -> int:
+    """Hinges stacked coaxially at one pivot: as many as a closed state of the pattern's kind joins
+    at a point (``hole_arity / 2``: two for quads, three for kagome), two ear levels each."""
+    return max(2, tessellation(pattern.kind).hole_arity // 2)
 
 
 @dataclass(frozen=True)
 class PinLevels:
-    """Z layout of the four ear levels of a pinned print (mm)."""
+    """Z layout of the ear levels of a pinned print (mm): two per stacked hinge."""
 
     thickness: float
     ear: float
     axial: float
+    count: int = 4  # ear levels, 2 × the hinges stacked at a pivot
 
     def level(self, k: int) -> tuple[float, float]:
         z0 = k * (self.ear + self.axial)
         return z0, z0 + self.ear
 
+    def gaps(self) -> list[float]:
+        """The middle of every axial gap between two ear levels (mm)."""
+        return [self.level(k)[1] + 0.5 * self.axial for k in range(self.count - 1)]
 
-def pin_levels(printer: Printer) -> PinLevels:
+
+def pin_levels(printer: Printer, stack: int = 2) -> PinLevels:
+    """The ear levels of ``stack`` coaxial hinges in the preset's pinned tile thickness, or
+    :class:`FabricationError` if an ear would be under three layers."""
     T = printer.pin.tile_thickness_mm
     az = printer.axial_clearance_mm
-    ear = (T - 3 * az) / 4
+    n = 2 * stack
+    ear = (T - (n - 1) * az) / n
     if ear < 3 * printer.layer_mm - 1e-9:
         raise FabricationError(
-            f"pinned hinges need four stacked ears: a {T:g} mm tile leaves {ear:.2f} mm per ear after three "
-            f"{az:g} mm axial clearances, under three layers ({3 * printer.layer_mm:g} mm); "
-            "raise the preset's pin.tile_thickness_mm"
+            f"pinned hinges need {n} stacked ears ({stack} hinges at a pivot): a {T:g} mm tile leaves "
+            f"{ear:.2f} mm per ear after {n - 1} {az:g} mm axial clearances, under three layers "
+            f"({3 * printer.layer_mm:g} mm); raise the preset's pin.tile_thickness_mm (--tile-thickness "
+            f"{ceil_mm(n * 3 * printer.layer_mm + (n - 1) * az):g})"
         )
-    return PinLevels(thickness=T, ear=ear, axial=az)
+    return PinLevels(thickness=T, ear=ear, axial=az, count=n)
+
+
+def ceil_mm(v: float) -> float:
+    """``v`` rounded up to 0.1 mm (a thickness to suggest)."""
+    return float(np.ceil(v * 10 - 1e-9) / 10)
 
 
 @dataclass(frozen=True)
@@ -97,7 +106,9 @@ def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
     if wall < 2 * printer.nozzle_mm - 1e-9:
         raise FabricationError(
             f"pinned hinges: the ear ring wall is {wall:.2f} mm (ear radius {r:g} mm, pin {rp:g} mm, clearance "
-            f"{c:g} mm), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); raise pin.ear_radius_mm"
+            f"{c:g} mm, ears {levels.ear:.2f} mm thick), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); "
+            "raise pin.ear_radius_mm, or the tile thickness (--tile-thickness: thicker ears flare the pin "
+            "less)"
         )
     if rp < printer.nozzle_mm:
         raise FabricationError(
@@ -110,63 +121,140 @@ def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
 class PinPlan:
     """Where each pin joint sits and which ear levels it uses.
 
-    ``level[h]`` is 0 (ears at levels 0-1) for the bottom hinge of a node and 2
-    (levels 2-3) for the top one: the two coincident hinges stack coaxially.
-    Tile A of the hinge owns the lower ear and the pin, tile B the ring.
+    ``level[h]`` is ``2 · place`` (ears at levels ``2·place`` and ``2·place + 1``),
+    its place in the coaxial stack (:func:`pin_slots`; quads: 0 for the bottom-face
+    hinge of a node, 2 for the top-face one). Tile A of the hinge owns the lower
+    ear and the pin, tile B the ring.
     """
 
     levels: PinLevels
     geometry: PinGeometry
     level: np.ndarray  # (H,)
     phase: np.ndarray | None = None  # (H,) turn of the pivot polygons (pivot_phases)
+    foreign: tuple = ()  # per tile, (m, 2) corners cleared all through (foreign_corners)
+    foreign_phase: tuple = ()  # per tile, (m,) turn of those corners' clearance polygons
 
 
 def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
     """Plan print-in-place pins, or refuse with the reason the geometry does not allow them."""
     from ..pattern.residuals import hinge_sums
 
-    if why := kind_refusal(pattern):
-        raise FabricationError(why)
-    levels = pin_levels(printer)
+    stack = pin_stack(pattern)
+    levels = pin_levels(printer, stack)
     g = pin_geometry(printer, levels)
-    hs = np.abs(hinge_sums(pattern))
-    if hs.max(initial=0.0) > 1e-6:
-        h = int(np.argmax(hs))
-        raise FabricationError(
-            f"pinned hinges refused: the pattern is not rigid-deployable (hinge {h}: corner angles miss π by "
-            f"{np.degrees(hs[h]):.2f}°), so rigid pinned tiles would have to bend to reconfigure; "
-            "use --style strips or tiles-and-strips"
-        )
-    # one pivot per distinct point; the clearance discs of different pivots must not meet
-    lone = (plan.partner < 0) | (np.arange(plan.n_hinges) < plan.partner)
-    pivots = plan.hinge_xy[lone]
-    wall = 2 * printer.nozzle_mm
-    if len(pivots) > 1:
-        dist, _ = KDTree(pivots).query(pivots, k=2)
-        i = int(np.argmin(dist[:, 1]))
-        if dist[i, 1] < 2 * g.hollow + wall:
+    if tessellation(pattern.kind).rigid_family:  # the family in closed form: hinge sums π
+        hs = np.abs(hinge_sums(pattern))
+        if hs.max(initial=0.0) > 1e-6:
+            h = int(np.argmax(hs))
             raise FabricationError(
-                f"pinned hinges refused: pivots {dist[i, 1]:.2f} mm apart cannot hold two ears of radius "
-                f"{g.ear:g} mm with {printer.radial_clearance_mm:g} mm clearance and a {wall:g} mm wall; "
-                "scale the pattern up or reduce pin.ear_radius_mm"
+                f"pinned hinges refused: the pattern is not rigid-deployable (hinge {h}: corner angles miss "
+                f"π by {np.degrees(hs[h]):.2f}°), so rigid pinned tiles would have to bend to reconfigure; "
+                "use --style strips or tiles-and-strips"
             )
+    _refuse_close_pivots(plan, g, printer)
     # an ear may only sweep the tiles that meet at its pivot
-    A, B = plan.hinge_tiles.T
     discs = shapely.buffer(shapely.points(plan.hinge_xy), g.hollow, quad_segs=16)
-    tree = shapely.STRtree(plan.tiles)
-    hi, ti = tree.query(discs, predicate="intersects")
-    own = (ti == A[hi]) | (ti == B[hi])
-    pa = plan.partner[hi]
-    own |= (pa >= 0) & ((ti == A[np.maximum(pa, 0)]) | (ti == B[np.maximum(pa, 0)]))
+    hi, ti = shapely.STRtree(plan.tiles).query(discs, predicate="intersects")
+    at = pivot_tiles(plan)
+    own = np.array([int(t) in at[int(h)] for h, t in zip(hi, ti, strict=True)], dtype=bool)
     if not own.all():
         h, t = int(hi[~own][0]), int(ti[~own][0])
         raise FabricationError(
             f"pinned hinges refused: the ear of hinge {h} (radius {g.hollow:g} mm with clearance) reaches tile "
-            f"{t}, which does not meet at its pivot"
+            f"{t}, which does not meet at its pivot; scale the pattern up or reduce pin.ear_radius_mm"
         )
-    _refuse_slivers(plan, g, printer)
-    level = np.where(plan.top, 2, 0)
-    return PinPlan(levels=levels, geometry=g, level=level, phase=pivot_phases(plan, g))
+    foreign = foreign_corners(pattern, plan)
+    _refuse_slivers(plan, g, printer, foreign)
+    slot = pin_slots(pattern, plan, stack)
+    phase = pivot_phases(plan, g)
+    return PinPlan(
+        levels=levels,
+        geometry=g,
+        level=2 * slot,
+        phase=phase,
+        foreign=tuple(foreign),
+        foreign_phase=tuple(_foreign_phases(plan, g, foreign, phase)),
+    )
+
+
+def _refuse_close_pivots(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> None:
+    """One pivot per distinct point; the clearance discs of different pivots must not meet."""
+    lone = (plan.partner < 0) | (np.arange(plan.n_hinges) < plan.partner)
+    pivots = plan.hinge_xy[lone]
+    wall = 2 * printer.nozzle_mm
+    if len(pivots) < 2:
+        return
+    dist, idx = KDTree(pivots).query(pivots, k=2)
+    i = int(np.argmin(dist[:, 1]))
+    if dist[i, 1] < 2 * g.hollow + wall:
+        h, k = np.flatnonzero(lone)[[i, int(idx[i, 1])]]
+        raise FabricationError(
+            f"pinned hinges refused: the pivots of hinges {h} and {k} are {dist[i, 1]:.2f} mm apart and cannot "
+            f"hold two ears of radius {g.ear:g} mm with {printer.radial_clearance_mm:g} mm clearance and a "
+            f"{wall:g} mm wall; scale the pattern up or reduce pin.ear_radius_mm"
+        )
+
+
+def pivot_tiles(plan: ClosedPlan) -> list[set[int]]:
+    """Per hinge, the tiles that meet at its pivot in the printed state: its own two, those of the
+    hinges that coincide with it there, and any tile with a corner there that is not hinged at it
+    (a kagome closed state lays a foreign tile's corner on a fold hinge). The clearance disc cuts
+    them all."""
+    A, B = plan.hinge_tiles.T
+    T, n = plan.corners.shape[:2]
+    edge = float(np.linalg.norm(np.roll(plan.corners, -1, 1) - plan.corners, axis=-1).mean())
+    hits = KDTree(plan.corners.reshape(-1, 2)).query_ball_point(
+        plan.hinge_xy, printgeom.COINCIDE_TOL_REL * edge
+    )
+    out = []
+    for h in range(plan.n_hinges):
+        hs = [h, *printgeom.coinciding(plan.partner, h)]
+        at = {int(A[k]) for k in hs} | {int(B[k]) for k in hs}
+        out.append(at | {int(i) // n for i in hits[h]})
+    return out
+
+
+def foreign_corners(pattern: Pattern, plan: ClosedPlan) -> list[np.ndarray]:
+    """Per tile, the corners (printed-state points, ``(m, 2)``) it is cleared around through the full
+    height: its corners that are not hinged but lie on a hinge's pivot in either closed state (a
+    kagome closed state lays a free corner on a fold hinge). An ear sweeps there in one state or
+    the other, so the corner must keep out of every ear level."""
+    top = pattern.topology
+    T, n = plan.corners.shape[:2]
+    hinged = np.zeros((T, n), dtype=bool)
+    hinged[top.hinge_tiles[:, 0], top.hinge_corner[:, 0]] = True
+    hinged[top.hinge_tiles[:, 1], top.hinge_corner[:, 1]] = True
+    states = [plan.corners]
+    if plan.other_state_closes:
+        states.append(printgeom.closed_corners(pattern, 3 - plan.state))
+    on_pivot = np.zeros((T, n), dtype=bool)
+    tol = printgeom.COINCIDE_TOL_REL * pattern.tile_size
+    for c in states:
+        xy = 0.5 * (
+            c[top.hinge_tiles[:, 0], top.hinge_corner[:, 0]]
+            + c[top.hinge_tiles[:, 1], top.hinge_corner[:, 1]]
+        )
+        d, _ = KDTree(xy).query(c.reshape(-1, 2))
+        on_pivot |= (d <= tol).reshape(T, n)
+    free = on_pivot & ~hinged
+    return [plan.corners[t][free[t]] for t in range(T)]
+
+
+def _disc_table(
+    plan: ClosedPlan, g: PinGeometry, foreign: list[np.ndarray] | None
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Every clearance disc (the hinges' first, then the foreign corners') and, per tile, the indices
+    of those that cut it."""
+    discs = list(clearance_discs(plan, g))
+    A, B = plan.hinge_tiles.T
+    cut = []
+    for t in range(len(plan.tiles)):
+        own = np.flatnonzero((A == t) | (B == t))
+        pts = foreign[t] if foreign is not None else np.zeros((0, 2))
+        extra = np.arange(len(discs), len(discs) + len(pts))
+        discs += [regular_polygon(p, g.hollow, circumscribed=True) for p in pts]
+        cut.append(np.concatenate([own, extra]).astype(np.int64))
+    return np.array(discs, dtype=object), cut
 
 
 PHASES = 8  # candidate turns of a pivot's polygons, in 1/PHASES of a vertex step
@@ -188,12 +276,13 @@ def pivot_phases(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
     cand = np.arange(PHASES) / PHASES
     ang = 2 * np.pi * (np.arange(n)[None, :] + cand[:, None]) / n  # (P, n)
     phase = np.zeros(plan.n_hinges)
+    at = pivot_tiles(plan)
     for h in range(plan.n_hinges):
         pa = plan.partner[h]
         if 0 <= pa < h:
             phase[h] = phase[pa]
             continue
-        tiles = {int(A[h]), int(B[h])} | ({int(A[pa]), int(B[pa])} if pa >= 0 else set())
+        tiles = at[h]
         edges = shapely.union_all(rings[sorted(tiles)])
         c = plan.hinge_xy[h]
         xy = (
@@ -202,6 +291,33 @@ def pivot_phases(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
         d = shapely.distance(shapely.multipoints(xy.reshape(PHASES, -1, 2)), edges)
         phase[h] = cand[int(np.argmax(d))]
     return phase
+
+
+def _foreign_phases(
+    plan: ClosedPlan, g: PinGeometry, foreign: list[np.ndarray], phase: np.ndarray
+) -> list[np.ndarray]:
+    """Per foreign corner (:func:`foreign_corners`), the turn of its clearance polygon: the pivot's
+    where it lies on one in the printed state (one polygon family per point), else the turn that
+    keeps the polygon's vertices farthest from its own tile's edges (as :func:`pivot_phases`)."""
+    n = CIRCLE_SEGMENTS
+    cand = np.arange(PHASES) / PHASES
+    ang = 2 * np.pi * (np.arange(n)[None, :] + cand[:, None]) / n  # (P, n)
+    rings = shapely.get_exterior_ring(plan.tiles)
+    tree = KDTree(plan.hinge_xy)
+    tol = 1e-6 * max(1.0, float(np.abs(plan.corners).max()))
+    out = []
+    for t, pts in enumerate(foreign):
+        ph = np.zeros(len(pts))
+        for i, p in enumerate(pts):
+            d, h = tree.query(p)
+            if d <= tol:
+                ph[i] = phase[int(h)]
+                continue
+            r = g.hollow / np.cos(np.pi / n)
+            xy = p + r * np.stack([np.cos(ang), np.sin(ang)], -1)  # (P, n, 2)
+            ph[i] = cand[int(np.argmax(shapely.distance(shapely.multipoints(xy), rings[t])))]
+        out.append(ph)
+    return out
 
 
 def clearance_discs(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
@@ -216,14 +332,16 @@ def clearance_mask(points: np.ndarray, g: PinGeometry) -> Polygon | MultiPolygon
     return shapely.union_all([regular_polygon(p, g.hollow + MASK_MARGIN_MM, True) for p in points])
 
 
-def pinned_sections(plan: ClosedPlan, g: PinGeometry) -> np.ndarray:
+def pinned_sections(
+    plan: ClosedPlan, g: PinGeometry, foreign: list[np.ndarray] | None = None
+) -> np.ndarray:
     """Per tile, its section where it carries no ear of its own (the axial
-    gaps): the shrunk tile minus the clearance discs of all its pivots."""
-    discs = clearance_discs(plan, g)
-    A, B = plan.hinge_tiles.T
+    gaps): the shrunk tile minus the clearance discs of all its pivots and
+    foreign corners (:func:`foreign_corners`)."""
+    discs, cut = _disc_table(plan, g, foreign)
     out = np.empty(len(plan.tiles), dtype=object)
     for t in range(len(plan.tiles)):
-        hs = np.flatnonzero((A == t) | (B == t))
+        hs = cut[t]
         out[t] = (
             plan.tiles[t].difference(shapely.union_all(discs[hs])) if len(hs) else plan.tiles[t]
         )
@@ -254,24 +372,25 @@ class SliverReport:
         return np.maximum(self.as_built, self.printable)
 
 
-def clearance_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> SliverReport:
+def clearance_slivers(
+    plan: ClosedPlan, g: PinGeometry, printer: Printer, foreign: list[np.ndarray] | None = None
+) -> SliverReport:
     """Measure what the pivot clearances leave of every tile (see :class:`SliverReport`).
 
     A tile corner next to a pivot whose edge runs almost tangent to the
     clearance disc keeps a feather of material thinner than a nozzle: it
     cannot be printed, and the design corner there is not reproduced."""
-    S = pinned_sections(plan, g)
+    S = pinned_sections(plan, g, foreign)
     r = 0.5 * printer.nozzle_mm
     core = shapely.buffer(shapely.buffer(S, -r), r)  # where a nozzle fits (morphological opening)
     thin = shapely.difference(S, core)
-    discs = clearance_discs(plan, g)
-    A, B = plan.hinge_tiles.T
+    discs, cut_by = _disc_table(plan, g, foreign)
     eps = 1e-6 * max(1.0, float(np.abs(plan.corners).max()))
     printable = S.copy()
     sliver_area = np.zeros(len(S))
     near = np.full(len(S), -1, dtype=np.int64)
     for t in np.flatnonzero(~shapely.is_empty(thin)):
-        hs = np.flatnonzero((A == t) | (B == t))
+        hs = cut_by[t]
         if not len(hs):
             continue
         # only material within a nozzle of the clearance: the opening also trims the
@@ -288,11 +407,12 @@ def clearance_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> Sli
         cut = pieces[beside]
         sliver_area[t] = float(shapely.area(cut).sum())
         biggest = int(np.argmax(shapely.area(cut)))
-        near[t] = int(hs[int(np.argmin(dist[beside][biggest]))])
+        d = int(hs[int(np.argmin(dist[beside][biggest]))])
+        near[t] = d if d < plan.n_hinges else -1  # a foreign corner's disc: no hinge to name
         printable[t] = S[t].difference(
             shapely.buffer(shapely.union_all(cut), eps, join_style="mitre")
         )
-    mask = clearance_mask(plan.hinge_xy, g)
+    mask = clearance_mask(mask_points(plan, foreign), g)
     design = shapely.difference(shapely.polygons(plan.corners), mask)
     built = _outline_deviation(shapely.difference(grow_back(S, plan.shrink_mm), mask), design)
     core_dev = _outline_deviation(
@@ -301,8 +421,17 @@ def clearance_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> Sli
     return SliverReport(as_built=built, printable=core_dev, slivers=sliver_area, near_hinge=near)
 
 
-def _refuse_slivers(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> None:
-    rep = clearance_slivers(plan, g, printer)
+def mask_points(plan: ClosedPlan, foreign: list[np.ndarray] | None) -> np.ndarray:
+    """The centres of every clearance disc (pivots, then foreign corners), printed-state mm."""
+    if not foreign:
+        return plan.hinge_xy
+    return np.concatenate([plan.hinge_xy, *[f.reshape(-1, 2) for f in foreign]])
+
+
+def _refuse_slivers(
+    plan: ClosedPlan, g: PinGeometry, printer: Printer, foreign: list[np.ndarray]
+) -> None:
+    rep = clearance_slivers(plan, g, printer, foreign)
     dev = rep.deviation
     tol = printer.tolerance_mm
     if dev.max(initial=0.0) <= tol:

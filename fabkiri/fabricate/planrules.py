@@ -168,15 +168,17 @@ def _pin_bound(
     """Pinned: the checks that need no geometry (ear levels, ring wall, rigid-deployable) and the pivot
     spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
     from ..pattern.residuals import hinge_sums
+    from ..pattern.tessellation import tessellation
     from . import pingeom
 
-    if why := pingeom.kind_refusal(pattern):
-        return PrintMinimum(None, None, why)
     try:
-        g = pingeom.pin_geometry(printer, pingeom.pin_levels(printer))
+        g = pingeom.pin_geometry(printer, pingeom.pin_levels(printer, pingeom.pin_stack(pattern)))
     except FabricationError as exc:
         return PrintMinimum(None, None, str(exc))
-    if np.abs(hinge_sums(pattern)).max(initial=0.0) > 1e-6:
+    if (
+        tessellation(pattern.kind).rigid_family
+        and np.abs(hinge_sums(pattern)).max(initial=0.0) > 1e-6
+    ):
         return PrintMinimum(None, None, "not rigid-deployable: pinned tiles would have to bend")
     top_ = pattern.topology
     A, B = top_.hinge_tiles.T

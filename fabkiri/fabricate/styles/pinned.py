@@ -1,9 +1,11 @@
 """The ``pinned`` print style: print-in-place pin joints.
 
-The two coincident hinges of a node are stacked coaxially on four ear levels
-(see :mod:`..printgeom`). Besides the job: the scales at which a pattern prints
-pinned on a bed, and a collision sweep of the printed tiles along the rigid
-deployment path.
+The hinges that coincide at a point of the closed state are stacked coaxially,
+two ear levels each (see :mod:`..pingeom`: quads two hinges, kagome three).
+Besides the job: the scales at which a pattern prints pinned on a bed, and a
+collision sweep of the printed tiles along a rigid deployment path (the rigid
+path of the quad family, or the kind's deployment path where it keeps every
+tile rigid).
 """
 
 from __future__ import annotations
@@ -42,20 +44,17 @@ def build(pattern: Pattern, state: int, printer: Printer) -> PrintJob:
     pins = pingeom.pin_plan(pattern, plan, printer)
     fits(plan.bounds, printer, "the closed pattern")
     A, B = plan.hinge_tiles.T
-    H = plan.n_hinges
-    at_tile: dict[int, list[int]] = {t: [] for t in range(len(plan.tiles))}
-    for h in range(H):
-        at_tile[int(A[h])].append(h)
-        at_tile[int(B[h])].append(h)
+    at_tile = [np.flatnonzero((A == t) | (B == t)).tolist() for t in range(len(plan.tiles))]
+    foreign = list(zip(pins.foreign, pins.foreign_phase, strict=True))
     # the same tile with its pivot polygons turned: tried in turn when a turn
     # leaves a near-degenerate meeting that a float32 file cannot keep 2-manifold
     # (each tile's clearances are circumscribed and its ears inscribed, so
     # tiles need not share a turn)
     bodies = []
     for t in range(len(plan.tiles)):
-        first = _tile_body(plan, pins, printer, at_tile[t], t, 0.0)
+        first = _tile_body(plan, pins, printer, (at_tile[t], foreign[t]), t, 0.0)
         alts = tuple(
-            _tile_body(plan, pins, printer, at_tile[t], t, (j + 0.5) / pingeom.PHASES)
+            _tile_body(plan, pins, printer, (at_tile[t], foreign[t]), t, (j + 0.5) / pingeom.PHASES)
             for j in range(pingeom.PHASES)
         )
         bodies.append(replace(first, variants=alts))
@@ -68,12 +67,14 @@ def _tile_body(
     plan: printgeom.ClosedPlan,
     pins: pingeom.PinPlan,
     printer: Printer,
-    hs: list[int],
+    pivots: tuple[list[int], tuple[np.ndarray, np.ndarray]],
     t: int,
     turn: float,
 ) -> Body:
-    """Tile ``t`` with the pivots of its hinges ``hs``: clearances cut, ears, pins and rings added; the pivot
-    polygons turned by ``turn`` of a step."""
+    """Tile ``t`` with the pivots of its hinges (``pivots``: its own hinges, and its foreign corners,
+    :func:`~..pingeom.foreign_corners`): clearances cut, ears, pins and rings added; the pivot polygons
+    turned by ``turn`` of a step."""
+    hs, foreign = pivots
     lv, g = pins.levels, pins.geometry
     T = lv.thickness
     A, B = plan.hinge_tiles.T
@@ -84,6 +85,10 @@ def _tile_body(
         h: (lambda r, circ, h=h: regular_polygon(plan.hinge_xy[h], r, circ, phase=ph[h] + turn))
         for h in hs
     }
+    for p, fp in zip(*foreign, strict=True):  # a free corner on a pivot in a closed state
+        ops.append(
+            ("sub", Prism((regular_polygon(p, g.hollow, True, phase=fp + turn),), -1.0, T + 1.0))
+        )
     # A tile's corner at a pivot is cleared through the full height: the pivot's
     # own partner turns in one half, and the hinge that meets it in either
     # closed state stacks its ears in the other half; at its own ear level the
@@ -174,8 +179,6 @@ def pinned_scale_range(
 def pinned_advice(pattern: Pattern, state: int, printer: Printer, scale: float = 1.0) -> str:
     """Which ``--scale`` prints the pattern pinned on this printer (``scale``: the
     factor already applied to ``pattern``)."""
-    if pingeom.kind_refusal(pattern):
-        return "no scale changes that"
     try:
         rng = pinned_scale_range(pattern, state, printer)
     except FabricationError as exc:
@@ -204,11 +207,7 @@ def clearances(r: Realised, rep: MeshReport) -> None:
     rep.required_clearance_mm = req
     ms = r.manifolds[0]
     pairs = set()
-    A, B = plan.hinge_tiles.T
-    for h in range(plan.n_hinges):
-        group = {int(A[h]), int(B[h])}
-        if plan.partner[h] >= 0:
-            group |= {int(A[plan.partner[h]]), int(B[plan.partner[h]])}
+    for group in pingeom.pivot_tiles(plan):
         g = sorted(group)
         pairs |= {(a, b) for ai, a in enumerate(g) for b in g[ai + 1 :]}
     worst = np.inf
@@ -232,8 +231,10 @@ def tiles(r: Realised, mesh=None):
     job = r.job
     assert job.pins is not None  # a pinned job always carries its pin plan
     lv = job.pins.levels
-    z = 0.5 * (lv.level(1)[1] + lv.level(2)[0])  # the axial gap between the two hinge halves
-    mask = pingeom.clearance_mask(job.plan.hinge_xy + list(job.shift), job.pins.geometry)
+    z = lv.gaps()[1]  # the axial gap above the bottom hinges' ears: no pin crosses it
+    mask = pingeom.clearance_mask(
+        pingeom.mask_points(job.plan, list(job.pins.foreign)) + list(job.shift), job.pins.geometry
+    )
     solid = (
         manifold_of(mesh)
         if mesh is not None
@@ -259,12 +260,60 @@ class SweepCheck:
         return dict(self.__dict__)
 
 
+RIGID_MISFIT_REL = (
+    1e-6  # a path keeps the tiles rigid if rigid tiles meet at every hinge to this (tile sizes)
+)
+
+
+def rigid_tiles_path(pattern: Pattern, steps: int = 24):
+    """The deployment path the rigid pinned tiles follow: the quad family's rigid path (hinge sums
+    π), else the elastic path of the pattern's kind (its default driver), accepted only where it
+    keeps every tile rigid: each tile fitted rigidly (Kabsch) to every frame, its hinges' two
+    corners must meet to ``RIGID_MISFIT_REL`` tile sizes. Otherwise :class:`FabricationError`
+    with the worst hinge, its misfit and where on the path: pinned tiles would have to bend."""
+    from ...errors import CheckFailed
+    from ...mechanics.deploy import elastic_path, is_rigid_deployable, rigid_path
+
+    try:
+        if is_rigid_deployable(pattern, tol_rad=1e-6):
+            return rigid_path(pattern, steps, tol_rad=1e-6)
+        path = elastic_path(pattern, steps)
+    except CheckFailed as exc:
+        raise FabricationError(
+            f"pinned hinges refused: no deployment path to sweep ({exc})"
+        ) from None
+    misfit = hinge_misfit(pattern, path.corners)
+    f, h = np.unravel_index(int(np.argmax(misfit)), misfit.shape)
+    if misfit[f, h] > RIGID_MISFIT_REL * pattern.tile_size:
+        raise FabricationError(
+            f"pinned hinges refused: the pattern's deployment path ({path.driver} driver, max E = "
+            f"{path.energy.max():.3g}) bends its tiles, and rigid tiles would miss hinge {h} by "
+            f"{misfit[f, h]:.3g} mm at t = {path.t[f]:.3f}; no rigid path between the closed states is "
+            "known, so pinned tiles could not reconfigure; use --style strips or tiles-and-strips"
+        )
+    return path
+
+
+def hinge_misfit(pattern: Pattern, frames: np.ndarray) -> np.ndarray:
+    """Per frame and hinge, how far apart the hinge's two corners are when every tile is the design
+    tile placed rigidly (Kabsch) on that frame's tile (mm): zero on a path of rigid tiles."""
+    from ...pattern import geometry
+
+    design = pattern.corners()  # (T, n, 2)
+    top = pattern.topology
+    th = geometry.kabsch_angles(np.broadcast_to(design, frames.shape), frames)  # (F, T)
+    local = design - design.mean(axis=-2, keepdims=True)
+    placed = geometry.rotate(local[None], th[..., None]) + frames.mean(axis=-2, keepdims=True)
+    A, B = top.hinge_tiles.T
+    cA, cB = top.hinge_corner.T
+    return np.linalg.norm(placed[:, A, cA] - placed[:, B, cB], axis=-1)
+
+
 def sweep_pinned(
     pattern: Pattern, r: Realised, steps: int = 24, overlap_tol_mm2: float = 1e-6
 ) -> SweepCheck:
     """Collision sweep of the printed pinned tiles (sections of the solids at
-    every ear level and axial gap) along :func:`fabkiri.mechanics.deploy.rigid_path`."""
-    from ...mechanics.deploy import rigid_path
+    every ear level and axial gap) along :func:`rigid_tiles_path`."""
     from ...pattern import geometry
 
     job = r.job
@@ -272,9 +321,7 @@ def sweep_pinned(
         raise FabricationError("the deployment sweep is for pinned tiles")
     assert job.pins is not None  # a pinned job always carries its pin plan
     lv = job.pins.levels
-    zs = [0.5 * sum(lv.level(k)) for k in range(4)] + [
-        lv.level(k)[1] + 0.5 * lv.axial for k in range(3)
-    ]
+    zs = [0.5 * sum(lv.level(k)) for k in range(lv.count)] + lv.gaps()
     back = -np.asarray(job.shift)
     T = len(job.plan.tiles)
     sections = {
@@ -282,7 +329,7 @@ def sweep_pinned(
     }
     for z in zs:
         sections[z] = [shapely.transform(g, lambda c: c + back) for g in sections[z]]
-    path = rigid_path(pattern, steps, tol_rad=1e-6)
+    path = rigid_tiles_path(pattern, steps)
     src = job.plan.corners
     worst_area, worst_dist, worst = 0.0, np.inf, ""
     for f in range(len(path.t)):
