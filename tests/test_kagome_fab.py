@@ -65,7 +65,7 @@ def test_kagome_fabrication_jacobians_match_finite_differences(seed):
 def test_rows_are_zero_on_fat_triangles_and_negative_on_a_sliver():
     p = standard_kagome(4, 4, tile_size=1.0)  # every tile equilateral, edge 1
     lim = FabricationLimits(min_width_mm=0.5, min_hinge_angle_deg=30.0, hinge_edge_mm=0.5)
-    fams = {f.name: f for f in KF.families(p, lim, 1.0)}
+    fams = {f.name: f for f in KF.families(p, lim, 1.0, weight=1.0)}
     x = p.nodes.copy()
     for f in fams.values():
         assert np.array_equal(f.residual(x), np.zeros_like(f.residual(x))), f.name

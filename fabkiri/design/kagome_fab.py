@@ -39,6 +39,10 @@ from . import fabrication as F
 from .stencils import Family
 
 MARGIN = 0.01  # tile edges (about 0.1 mm at 11 mm tiles), or a sine: what the soft rows ask beyond a limit
+# times the fit's inequality weight: at 1 the 12x21 heart's rows stayed 1.5 mm short at every Lawson step
+# (the fit outweighs them), at 10 they are met to the margin
+WEIGHT = 10.0
+LAND = True  # the landing sees the rows
 SLACK_MM = (
     fab.WEB_SLACK_MM
 )  # a measured row this far below zero still meets (cut's own forgiveness)
@@ -167,9 +171,12 @@ def families(
     unit_mm: float,
     margin: float = MARGIN,
     faces: np.ndarray | None = None,
+    weight: float = WEIGHT,
+    land: bool = LAND,
 ) -> list[Family]:
-    """The rows of ``limits`` as soft one-sided families of the kagome fit: ``min(g - margin, 0)`` with
-    the gradient where a row is active (normalised units, 1 = ``unit_mm``)."""
+    """The rows of ``limits`` as soft one-sided families of the kagome fit: ``weight · min(g - margin, 0)``
+    with the gradient where a row is active (normalised units, 1 = ``unit_mm``); ``land``: whether the
+    landing on the family (``kagome_solve.land``) sees them too."""
     nv = pattern.topology.n_nodes
     out = []
     for r in rows(pattern, limits, unit_mm, faces):
@@ -178,13 +185,14 @@ def families(
         def fn(x, r=r, poly=poly):
             g = r.g(x)
             act = g.v < margin
-            grads = g.g.reshape(len(r.owner), poly.shape[1], 2) * act[:, None, None]
-            return np.where(act, g.v - margin, 0.0), (poly[r.owner], grads)
+            grads = weight * g.g.reshape(len(r.owner), poly.shape[1], 2) * act[:, None, None]
+            return weight * np.where(act, g.v - margin, 0.0), (poly[r.owner], grads)
 
         def res(x, r=r):
-            return np.minimum(r.g(x).v - margin, 0.0)
+            return weight * np.minimum(r.g(x).v - margin, 0.0)
 
-        out.append(Family(r.name, "ineq", fn, 1 if r.length else 0, nv=nv, res=res))
+        meta = {"land": land}
+        out.append(Family(r.name, "ineq", fn, 1 if r.length else 0, meta=meta, nv=nv, res=res))
     return out
 
 

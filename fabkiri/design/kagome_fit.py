@@ -212,6 +212,7 @@ def design(
     max_iter: int = 60,
     convex: bool = False,
     fab: Sequence[Family] = (),
+    start: np.ndarray | None = None,
 ) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
@@ -220,13 +221,16 @@ def design(
     follow the first solve. The design returned is the converged one nearest the target (Hausdorff).
     ``convex`` keeps every hole convex, which rules out tiles crossing a hole (deployed overlaps between
     non-adjacent tiles) at a price in fit. ``fab``: fabrication inequalities (normalised by
-    ``standard``'s tile size, :mod:`fabkiri.design.kagome_fab`).
+    ``standard``'s tile size, :mod:`fabkiri.design.kagome_fab`); ``start``: deployed nodes (mm) to start
+    from instead of the initial guess (a continuation from an earlier design).
     """
     lo, hi = target.bbox
     shift = 0.5 * (lo + hi)
     centred = target.transformed(1.0, -shift)
     scale = standard.tile_size
     rows, x, axes = fit_rows(standard, centred, symmetry, convex, fab)
+    if start is not None:
+        x = (np.asarray(start, float) - shift) / scale
     best, trace, its, cands = None, [], 0, []
     for step in range(refine_steps + 1):
         if step:
