@@ -141,3 +141,19 @@ def test_heart_for_acrylic_meets_the_web_and_cuts_at_scale_1(run_cli, tmp_path):
     code, _, err = run_cli("cut", out, "-o", tmp_path / "cut")
     assert code == 0 and "verifier passed" in err, err
     assert json.loads((tmp_path / "cut" / "manifest.json").read_text())["scale"] == 1.0
+
+
+def test_the_nearest_design_that_meets_the_limits_is_kept():
+    """``api/kagome._nearest``: of the routes tried with the rows, the one whose first closing candidate that
+    meets the limits is nearest the target; none meets them: the first route, with no pattern."""
+    from types import SimpleNamespace
+
+    from fabkiri.api.kagome import _nearest
+
+    std = standard_kagome(4, 4, tile_size=10.0)
+    far = SimpleNamespace(pattern=std, candidates=((0.2, std.nodes),))
+    near = SimpleNamespace(pattern=std, candidates=((0.1, std.nodes),))
+    name, d, pattern, k = _nearest({"continuation": far, "initial guess": near}, lambda p: True)
+    assert (name, d, k) == ("initial guess", near, 0) and sorted(pattern.contracted) == [1, 2]
+    name, d, pattern, k = _nearest({"continuation": far, "initial guess": near}, lambda p: False)
+    assert (name, d, pattern, k) == ("continuation", far, None, 1)
