@@ -4,6 +4,14 @@ Policy: build the standard R x C kagome at the target's size, design it onto the
 (:mod:`fabkiri.design.kagome_fit`), contract both closed states, verify the pattern (both states,
 overlaps, target shape) and judge the shape. The best iterate is always returned; ``valid`` and
 ``exit_code`` say whether it met the equality tolerance and every check.
+
+Fabrication (``--material/--hinge``, ``--printer/--style``, ``--min-feature``, ``--min-hole``): resolved
+into mm limits exactly as for quads (``fabricate/design_limits.resolve``), refused up front when the
+tiles cannot fit the target (Pál's bound, as quads), solved under the kagome rows of
+:mod:`fabkiri.design.kagome_fab`, and judged on those rows in mm: a candidate that misses a limit is
+passed over, and a design that meets none is reported with its figures and exit 1. The limits become the
+design's intent (``cut``/``print`` defaults), as for quads. Without these options, as for quads, no row
+is added and the design reports its fabricability (every material's smallest cut scale).
 """
 
 from __future__ import annotations
@@ -15,11 +23,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..design import conformance as conf
+from ..design import kagome_fab as KF
+from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.kagome_fit import design
 from ..design.targets import load_target
 from ..errors import InputError
+from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
 from ..mechanics.contract import with_contracted_states
+from ..pattern.fabricability import pal_bound
 from ..pattern.io import dumps
 from ..pattern.kagome import standard_kagome
 from ..pattern.model import Pattern
@@ -30,15 +42,7 @@ if TYPE_CHECKING:
     from .design import PatternRequest
 
 # options of the quad design that have no kagome counterpart yet
-UNSUPPORTED = (
-    "rigid",
-    "holes",
-    "contracted_target",
-    "material",
-    "printer",
-    "min_feature",
-    "min_hole",
-)
+UNSUPPORTED = ("rigid", "holes", "contracted_target")
 
 
 @dataclass(frozen=True)
@@ -59,14 +63,41 @@ class KagomeOutcome:
         atomic_write(path, dumps(self.pattern))
 
     def summary(self, path) -> list[str]:
-        """The line ``fabkiri design --lattice kagome`` prints about the design written to ``path``."""
+        """The lines ``fabkiri design --lattice kagome`` prints about the design written to ``path``: the
+        figures, then the fabrication limits and whether the design meets them (mm), then fabricability."""
         r, (rows, cols) = self.report, self.tiles
-        return [
+        out = [
             f"wrote {path}: kagome {rows}x{cols} {r['status']}, max equality residual "
             f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
             f"the size (shape {r['shape']['status']}), verify: "
             f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}"
         ]
+        fr = r.get("fabrication")
+        if fr and "met" in fr:
+            out.append(_fabrication_line(fr))
+        if r.get("fabricability"):
+            out += fabricability.summary_lines(r["fabricability"])
+        return out
+
+
+def _fabrication_line(fr: dict) -> str:
+    """One line: the limits' source, met or missed, the figures and each family's smallest slack."""
+    fams = ", ".join(
+        f"{k[len('fabrication_') :]} min {v['min']:.3g}{'' if 'angle' in k else ' mm'}"
+        + (f" ({v['violated']}/{v['rows']} below)" if v["violated"] else "")
+        for k, v in fr["families"].items()
+    )
+    return (
+        f"fabrication ({fr['limits']['source']}): {'met' if fr['met'] else 'MISSED'}; thinnest tile "
+        f"{fr['thinnest_tile_mm']:.3g} mm ({fr['thinnest_shrunk_tile_mm']:.3g} mm shrunk), smallest hinge "
+        f"angle {fr['smallest_hinge_angle_deg']:.3g}°; rows: {fams}"
+        + (
+            ""
+            if fr.get("without_limits_hausdorff_rel") is None
+            else f"; designed from the {fr['route']} (without the limits: Hausdorff "
+            f"{100 * fr['without_limits_hausdorff_rel']:.2f} %)"
+        )
+    )
 
 
 def design_kagome(
@@ -79,31 +110,112 @@ def design_kagome(
     shape_tol: str = conf.DEFAULT_SHAPE_TOL,
     name: str | None = None,
     symmetry: bool | str = True,
+    fabrication: FabricationLimits | None = None,
+    intent: dict | None = None,
 ) -> KagomeOutcome:
     """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm).
 
     ``symmetry`` imposes every mirror the lattice and the target share (vertical for C odd, horizontal
     for R even; docs/kagome.md); False leaves the design free (about twice the fitting freedom); ``"x"``
-    or ``"y"`` imposes that mirror alone (the lattice and the target must have it)."""
+    or ``"y"`` imposes that mirror alone (the lattice and the target must have it). ``fabrication``: mm
+    limits the design keeps (:mod:`fabkiri.design.kagome_fab`), ``intent`` what ``cut``/``print`` then
+    default to (``fabricate.design_limits.resolve`` gives both)."""
     tgt = load_target(target, size)
     shape = conf.parse_shape_tol(shape_tol)
+    if fabrication is not None:
+        _check_room(rows, cols, fabrication, tgt)
     unit = standard_kagome(rows, cols, tile_size=1.0)
     tile = tgt.size / float(np.ptp(unit.nodes, axis=0).max())  # the standard spans the target
     std = standard_kagome(rows, cols, tile_size=tile)
+    faces = _print_faces(std, fabrication)
+
+    def fab_of(weight: float) -> list:
+        return KF.families(std, fabrication, tile, faces=faces, weight=weight)
+
+    accept = _meets(fabrication, faces)
+    d, pattern, rejected, convex, free, route = _solve(std, tgt, symmetry, fab_of, accept)
+    report = _report(d, pattern, tgt, shape, (rows, cols), tol, tile, rejected, convex)
+    if fabrication is not None:
+        report["fabrication"] = KF.measure(pattern, fabrication, faces)
+        # the price of the limits: the design without them (None: it met them already)
+        report["fabrication"]["without_limits_hausdorff_rel"] = free
+        report["fabrication"]["route"] = route
+    # every material's smallest cut scale (the print rows of this summary assume quad faces: left out)
+    report["fabricability"] = fabricability.summary(pattern, prints=())
+    options = {"fabrication": dict(intent)} if intent else {}
+    pattern = replace(
+        pattern,
+        name=name or pattern.name,
+        design={
+            **(pattern.design or {}),
+            "report": report,
+            "shape_tol": shape_tol,
+            **({"options": options} if options else {}),
+        },
+    )
+    rep = verify_pattern(pattern, shape_tol=shape_tol)
+    report["verify_failed"] = [c.name for c in rep.failed()]
+    valid = report["status"] == "converged" and not report["verify_failed"]
+    valid = valid and bool(report.get("fabrication", {}).get("met", True))
+    pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
+    return KagomeOutcome(pattern, report, valid, (rows, cols))
+
+
+def _solve(std, tgt, symmetry, fab_of, accept):
+    """``(design, pattern, rejected, convex, free, route)``: the design without the fabrication rows; if
+    none of its candidates closes and meets the limits, two designs with the rows and the nearer that
+    meets them: a continuation from the free design's nearest closing candidate (``free``: its Hausdorff
+    fraction; rows weighted ``KF.WEIGHT``), as the quad designer continues from its design without them,
+    and one from the initial guess (rows weighted 1). Measured: 12x21 heart at 240 mm, acrylic-3: from the
+    initial guess every candidate folds, the continuation meets them at 9.49 %; 6x11 at 120 mm: 7.28 %
+    from the initial guess, 9.39 % by continuation. Then, if still no candidate closes, the same with
+    convex holes, which rule tile crossings out."""
     d = design(std, tgt, symmetry=symmetry)
-    pattern, rejected = _first_closing(d)
-    convex = (
-        pattern is None
-    )  # every candidate overlaps: again with convex holes, which rule crossings out
+    pattern, rejected = _first_closing(d, accept)
+    start, free, route = None, None, "without rows" if fab_of(1.0) else ""
+    if pattern is None and fab_of(1.0):
+        near, _ = _first_closing(d, _any)
+        start = (near or with_contracted_states(d.pattern)).nodes
+        free = conf.deployed(start, std.topology, tgt)["hausdorff_rel"]
+        tries = {
+            "continuation": design(std, tgt, symmetry=symmetry, fab=fab_of(KF.WEIGHT), start=start),
+            "initial guess": design(std, tgt, symmetry=symmetry, fab=fab_of(1.0)),
+        }
+        route, d, pattern, rejected = _nearest(tries, accept)
+    convex = pattern is None
     if convex:
-        d = design(std, tgt, symmetry=symmetry, convex=True)
-        pattern, rejected = _first_closing(d)
+        d = design(std, tgt, symmetry=symmetry, convex=True, fab=fab_of(KF.WEIGHT), start=start)
+        pattern, rejected = _first_closing(d, accept)
+    if pattern is None and fab_of(1.0):  # none meets the limits: the nearest that closes, reported
+        pattern, rejected = _first_closing(d, _any)
     if pattern is None:  # still none: the solver's best, whose failures verify names
         pattern = with_contracted_states(d.pattern)
+    return d, pattern, rejected, convex, free, route
+
+
+def _nearest(tries: dict, accept: Callable[[Pattern], bool]):
+    """``(name, design, pattern, rejected)`` of the design whose first accepted candidate is nearest the
+    target (the first design, with no pattern, when none has one)."""
+    best = None
+    for name, d in tries.items():
+        pattern, k = _first_closing(d, accept)
+        if pattern is not None and (best is None or d.candidates[k][0] < best[0]):
+            best = (d.candidates[k][0], name, d, pattern, k)
+    if best is None:
+        name, d = next(iter(tries.items()))
+        return name, d, None, len(d.candidates)
+    return best[1:]
+
+
+def _any(pattern: Pattern) -> bool:
+    return True
+
+
+def _report(d, pattern, tgt, shape, tiles, tol, tile, rejected, convex) -> dict[str, Any]:
+    """The design report: solve figures, conformance and the shape verdict."""
     measured = conf.deployed(pattern.nodes, pattern.topology, tgt)
-    verdict = conf.judge(measured, shape, (rows, cols))
     rel = d.max_equality  # normalised units: already relative to the tile size
-    report: dict[str, Any] = {
+    return {
         "status": "converged" if d.converged and rel <= tol else "unconverged",
         "max_equality_residual": rel,
         "tol": tol,
@@ -117,26 +229,51 @@ def design_kagome(
         "max_tip_distance_mm": d.max_tip_distance_mm,
         "tile_size_mm": tile,
         "conformance": measured,
-        "shape": verdict,
+        "shape": conf.judge(measured, shape, tiles),
     }
-    pattern = replace(
-        pattern,
-        name=name or pattern.name,
-        design={**(pattern.design or {}), "report": report, "shape_tol": shape_tol},
-    )
-    rep = verify_pattern(pattern, shape_tol=shape_tol)
-    report["verify_failed"] = [c.name for c in rep.failed()]
-    valid = report["status"] == "converged" and not report["verify_failed"]
-    pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
-    return KagomeOutcome(pattern, report, valid, (rows, cols))
 
 
-def _first_closing(d) -> tuple[Pattern | None, int]:
-    """The design's nearest candidate whose closed states pass every check but the shape (a Lawson step can
-    fold a row's end tile onto its neighbour in a closed state, which only contraction shows), and how many
-    nearer ones were rejected; None when none passes."""
+def _check_room(rows: int, cols: int, limits: FabricationLimits, target) -> None:
+    """InputError when R x C triangles wide enough for ``limits`` cannot fit inside the target (the
+    quad designer's refusal: Pál's bound is the equilateral triangle's area, so it is tight here)."""
+    n = rows * cols
+    least = smallest_size(target.size, abs(target.area), n, limits)
+    if least is not None:
+        w = limits.required_width_mm()
+        raise InputError(
+            f"{rows}x{cols} triangles each at least {w:.3g} mm wide ({limits.source}) cannot fit a "
+            f"{target.size:.4g} mm {target.name}: they cover at least {pal_bound(n, w):.4g} mm² (Pál) but "
+            f"the target has {abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}"
+        )
+
+
+def _print_faces(standard: Pattern, limits: FabricationLimits | None) -> np.ndarray | None:
+    """The face ``print`` gives each hinge before it looks at the strips (``assign_faces``: from the
+    closed states' coincident hinges, the same for every design of the lattice), for the strip rows."""
+    if limits is None or limits.strip_clearance_mm <= 0:
+        return None
+    from ..fabricate.hinges import assign_faces  # the print geometry, only when printing
+
+    std = with_contracted_states(standard)
+    return assign_faces(std, std.contracted).face
+
+
+def _meets(limits: FabricationLimits | None, faces) -> Callable[[Pattern], bool]:
+    """Whether a candidate (mm) meets ``limits`` on the rows themselves (always, without limits)."""
+    if limits is None:
+        return lambda p: True
+    return lambda p: bool(KF.measure(p, limits, faces)["met"])
+
+
+def _first_closing(d, accept: Callable[[Pattern], bool]) -> tuple[Pattern | None, int]:
+    """The design's nearest candidate that ``accept``s and whose closed states pass every check but the
+    shape (a Lawson step can fold a row's end tile onto its neighbour in a closed state, which only
+    contraction shows), and how many nearer ones were rejected; None when none passes."""
     for k, (_, nodes) in enumerate(d.candidates):
-        pattern = with_contracted_states(replace(d.pattern, nodes=nodes))
+        pattern = replace(d.pattern, nodes=nodes)
+        if not accept(pattern):
+            continue
+        pattern = with_contracted_states(pattern)
         if not [c for c in verify_pattern(pattern).failed() if c.name != "target shape"]:
             return pattern, k
     return None, len(d.candidates)
@@ -153,18 +290,31 @@ def design_kagome_pattern(
     request: PatternRequest, notify: Callable[[str], None] | None = None
 ) -> KagomeOutcome:
     """The kagome front door for a :class:`~.design.PatternRequest` (``fabkiri design --lattice kagome``):
-    refuses the quad-only options, then :func:`design_kagome` (the target defaults to a circle)."""
+    refuses the quad-only options, resolves the fabrication limits as the quad designer does, then
+    :func:`design_kagome` (the target defaults to a circle)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     rows, cols = request.tiles
+    target = request.target or "circle"
+    limits, intent = design_limits.resolve(
+        request.material,
+        request.hinge,
+        request.printer,
+        request.style,
+        request.min_feature,
+        request.min_hole,
+        load_target(target, request.size),
+    )
     return design_kagome(
         rows,
         cols,
-        request.target or "circle",
+        target,
         request.size,
         tol=request.tol,
         shape_tol=request.shape_tol,
         name=request.name,
         symmetry=SYMMETRY[request.symmetry],
+        fabrication=limits,
+        intent=intent,
     )
 
 

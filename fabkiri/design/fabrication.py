@@ -133,11 +133,12 @@ class _D:
 
 
 def _corners(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
-    """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`_D` seeded on its 8 coordinates."""
+    """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`_D` seeded on its 2n coordinates
+    (n = ``quads.shape[1]``: any polygon arity, the kagome's triangles and hexagonal holes too)."""
     m = len(rows)
     p = x[quads[rows, k]]
-    gx = np.zeros((m, 8))
-    gy = np.zeros((m, 8))
+    gx = np.zeros((m, 2 * quads.shape[1]))
+    gy = np.zeros((m, 2 * quads.shape[1]))
     gx[np.arange(m), 2 * k] = 1.0
     gy[np.arange(m), 2 * k + 1] = 1.0
     return _D(p[:, 0], gx), _D(p[:, 1], gy)
@@ -160,7 +161,8 @@ def _normal(a, b):
 
 def _mitre(x, quads, rows, j):
     """Mitre vector at corner j: the corner moves by d times it when the quad shrinks by d."""
-    prev, here, nxt = (_corners(x, quads, rows, (j + s) % 4) for s in (-1, 0, 1))
+    n = quads.shape[1]
+    prev, here, nxt = (_corners(x, quads, rows, (j + s) % n) for s in (-1, 0, 1))
     na, nb = _normal(prev, here), _normal(here, nxt)
     s = 1.0 + _dot(na, nb)
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
@@ -168,23 +170,28 @@ def _mitre(x, quads, rows, j):
 
 def _edges(x: np.ndarray, quads: np.ndarray):
     """Every quad's edge e (quad-major): row quads, e, and the edge's two ends."""
-    rows = np.repeat(np.arange(len(quads)), 4)
-    e = np.tile(np.arange(4), len(quads))
-    return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % 4)
+    n = quads.shape[1]
+    rows = np.repeat(np.arange(len(quads)), n)
+    e = np.tile(np.arange(n), len(quads))
+    return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % n)
 
 
 def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) -> _D:
-    """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major)."""
+    """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major); any arity:
+    a triangle has one far corner (the row is its altitude, exact), more are folded by smooth maxima."""
     rows, e, a, b = _edges(x, quads)
     n = _normal(a, b)
     far = []
-    for off in (2, 3):
-        j = (e + off) % 4
+    for off in range(2, quads.shape[1]):
+        j = (e + off) % quads.shape[1]
         g = _dot(n, _sub(_corners(x, quads, rows, j), a))
         if shrink:
             g = g + shrink * (_dot(n, _mitre(x, quads, rows, j)) - 1.0)
         far.append(g)
-    return smooth_max(*far) - width
+    top = far[0]
+    for g in far[1:]:
+        top = smooth_max(top, g)
+    return top - width
 
 
 SMOOTH = (
@@ -207,7 +214,7 @@ def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: 
     E = _sub(b, a)
     ln = _dot(E, E).sqrt()
     u = E[0] / ln, E[1] / ln
-    ma, mb = _mitre(x, quads, rows, e), _mitre(x, quads, rows, (e + 1) % 4)
+    ma, mb = _mitre(x, quads, rows, e), _mitre(x, quads, rows, (e + 1) % quads.shape[1])
     return ln + shrink * _dot(u, _sub(mb, ma)) - min_edge
 
 
@@ -215,7 +222,7 @@ def hinge_angle_rows(
     x: np.ndarray, quads: np.ndarray, t: np.ndarray, k: np.ndarray, sin_min: float
 ) -> _D:
     """sin of the corner angle at hinge corners ``(t, k)`` minus ``sin_min``."""
-    v, a, b = (_corners(x, quads, t, (k + s) % 4) for s in (0, 1, -1))
+    v, a, b = (_corners(x, quads, t, (k + s) % quads.shape[1]) for s in (0, 1, -1))
     A, B = _sub(a, v), _sub(b, v)
     return (A[0] * B[1] - A[1] * B[0]) / (_dot(A, A) * _dot(B, B)).sqrt() - sin_min
 
@@ -250,7 +257,7 @@ def _strip_box(x, quads, t, c, end):
     ev = _sub(q, p)
     ln = _dot(ev, ev).sqrt()
     e = ev[0] / ln, ev[1] / ln
-    sgn = np.where(end == (c + 1) % 4, 1.0, -1.0)
+    sgn = np.where(end == (c + 1) % quads.shape[1], 1.0, -1.0)
     return p, e, (-e[1] * sgn, e[0] * sgn)
 
 
@@ -294,7 +301,7 @@ def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Famil
 
     def fn(x):
         r = rows_of(x)
-        return r.v, (quads[owner], r.g.reshape(len(owner), 4, 2))
+        return r.v, (quads[owner], r.g.reshape(len(owner), quads.shape[1], 2))
 
     return Family(name, "ineq", fn, 1, meta=meta, nv=nv, res=lambda x: rows_of(x).v)
 
@@ -440,20 +447,7 @@ def _strip_family(
     if not len(t):
         return []
     ends = st.folds[limits.print_state].fold_corner_ends
-    d = limits.shrink_mm
-    sin_min = (
-        float(np.sin(np.radians(limits.min_hinge_angle_deg)))
-        if limits.min_hinge_angle_deg > 0
-        else 1.0
-    )
-    a0 = (
-        d / unit_mm
-    )  # the strip starts t0 = d / sin(sharper corner) along the seam: at least d, at most
-    along = (
-        d / sin_min - d + limits.strip_width_mm
-    ) / unit_mm  # d / sin(min hinge angle), kept by the angle rows
-    across = (limits.strip_reach_mm + d) / unit_mm
-    cl = limits.strip_clearance_mm / unit_mm
+    a0, along, across, cl = strip_box(limits, unit_mm)
     args = (t, st.hinge_corner[h, sh], ends[h, sh], st.hinge_corner[k, sk], ends[k, sk])
     return [
         _family(
@@ -464,6 +458,20 @@ def _strip_family(
             {"quad_of_row": t},
         )
     ]
+
+
+def strip_box(limits: FabricationLimits, unit_mm: float) -> tuple[float, float, float, float]:
+    """``(a0, along, across, clearance)`` of :func:`strip_rows` for ``limits`` in units of ``unit_mm``."""
+    d = limits.shrink_mm
+    sin_min = (
+        float(np.sin(np.radians(limits.min_hinge_angle_deg)))
+        if limits.min_hinge_angle_deg > 0
+        else 1.0
+    )
+    a0 = d / unit_mm  # the strip starts t0 = d / sin(sharper corner) along the seam: at least d, at
+    along = (d / sin_min - d + limits.strip_width_mm) / unit_mm  # most d / sin(min hinge angle)
+    across = (limits.strip_reach_mm + d) / unit_mm
+    return a0, along, across, limits.strip_clearance_mm / unit_mm
 
 
 def smallest_size(

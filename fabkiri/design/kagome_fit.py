@@ -25,6 +25,7 @@ midway between the last tip of one side and the first of the next.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -37,6 +38,7 @@ from . import kagome as K
 from . import kagome_rows as KR
 from . import kagome_solve as KS
 from .conformance import deployed
+from .stencils import Family
 from .target_curve import Target
 from .target_families import outline_match, shape_match
 
@@ -160,9 +162,16 @@ def mirror_axes(
     return out
 
 
-def fit_rows(standard: Pattern, target: Target, symmetry: bool | str = True, convex: bool = False):
+def fit_rows(
+    standard: Pattern,
+    target: Target,
+    symmetry: bool | str = True,
+    convex: bool = False,
+    fab: Sequence[Family] = (),
+):
     """``(rows, x0, axes)``: every row of the fit of ``standard`` to ``target`` (mm, centred on its
-    bounding box), and the initial guess (normalised units)."""
+    bounding box), and the initial guess (normalised units). ``fab``: fabrication inequalities in the
+    same normalised units (:func:`fabkiri.design.kagome_fab.families`), kept beside the others."""
     top = standard.topology
     nv, scale = top.n_nodes, standard.tile_size
     order = KR.tip_order(standard)
@@ -176,6 +185,7 @@ def fit_rows(standard: Pattern, target: Target, symmetry: bool | str = True, con
         KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None),
         KR.quality_family(standard, QUALITY_FLOOR),
         KR.fan_family(standard, GAP_FLOOR),
+        *fab,
     ]
     rows = KS.Rows(eq, fit, ineq, {}, INEQ_WEIGHT)
     return rows, x0, tuple(a for a, _ in axes)
@@ -201,6 +211,8 @@ def design(
     refine_steps: int = LAWSON_STEPS,
     max_iter: int = 60,
     convex: bool = False,
+    fab: Sequence[Family] = (),
+    start: np.ndarray | None = None,
 ) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
@@ -208,13 +220,17 @@ def design(
     ``symmetry`` imposes every mirror the lattice and the target share; ``refine_steps`` Lawson steps
     follow the first solve. The design returned is the converged one nearest the target (Hausdorff).
     ``convex`` keeps every hole convex, which rules out tiles crossing a hole (deployed overlaps between
-    non-adjacent tiles) at a price in fit.
+    non-adjacent tiles) at a price in fit. ``fab``: fabrication inequalities (normalised by
+    ``standard``'s tile size, :mod:`fabkiri.design.kagome_fab`); ``start``: deployed nodes (mm) to start
+    from instead of the initial guess (a continuation from an earlier design).
     """
     lo, hi = target.bbox
     shift = 0.5 * (lo + hi)
     centred = target.transformed(1.0, -shift)
     scale = standard.tile_size
-    rows, x, axes = fit_rows(standard, centred, symmetry, convex)
+    rows, x, axes = fit_rows(standard, centred, symmetry, convex, fab)
+    if start is not None:
+        x = (np.asarray(start, float) - shift) / scale
     best, trace, its, cands = None, [], 0, []
     for step in range(refine_steps + 1):
         if step:
