@@ -55,8 +55,9 @@ def shared_kagome_designs(monkeypatch):
     which ``fabkiri design --lattice kagome`` calls too, is replaced by a memo of the real one keyed by
     every argument (defaults filled in); each call gets its own deep copy, so no test sees another's
     edits. The design is deterministic (no random start), so a test sees what a fresh design gives.
-    Returns the memoised front door. Tests that use it share a worker under ``-n`` (see
-    ``pytest_collection_modifyitems``), so each design is made once per run.
+    Returns the memoised front door. The memo lives in one process: under pytest-xdist, tests that share
+    a design carry the same ``xdist_group`` mark (the README runs ``--dist loadgroup``), so they run on
+    one worker and the design is made once per run.
     """
     import copy
     import inspect
@@ -76,11 +77,3 @@ def shared_kagome_designs(monkeypatch):
 
     monkeypatch.setattr(kagome, "design_kagome", design_kagome)
     return design_kagome
-
-
-def pytest_collection_modifyitems(config, items):
-    """Under pytest-xdist's ``--dist loadgroup``, the tests that share kagome designs run on one worker
-    (the memo above lives in one process)."""
-    for item in items:
-        if "shared_kagome_designs" in getattr(item, "fixturenames", ()):
-            item.add_marker(pytest.mark.xdist_group("kagome-designs"))

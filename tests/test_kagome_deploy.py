@@ -163,6 +163,7 @@ def test_homotopy_driver_is_kind_agnostic_on_a_quad_design():
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("kagome-heart-6x10-120")  # shares its design (shared_kagome_designs)
 def test_designed_kagome_pattern_deploys_or_reports_the_miss(
     tmp_path, run_cli, shared_kagome_designs
 ):

@@ -128,6 +128,7 @@ def _mirror_error(p, axis):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("kagome-circle-6x11-120")  # shares its design (shared_kagome_designs)
 def test_a_circle_on_a_symmetric_lattice_meets_every_check(shared_kagome_designs):
     """6x11 has both mirrors, the circle too: imposed, and met to rounding. Measured 1.23 % of the size."""
     out, failed, h = _front_door(shared_kagome_designs, 6, 11, "circle", 120.0)
@@ -143,6 +144,7 @@ def test_an_ellipse_on_a_lattice_of_its_aspect_meets_every_check(shared_kagome_d
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("kagome-heart-6x11-120")  # shares its design (shared_kagome_designs)
 def test_a_heart_closes_in_both_states_without_overlaps_and_reports_its_conformance(
     shared_kagome_designs,
 ):
@@ -172,6 +174,7 @@ def test_a_free_heart_at_two_sizes_closes_without_overlaps(
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("kagome-heart-6x10-120")  # shares its design (shared_kagome_designs)
 def test_when_every_candidate_overlaps_the_front_door_designs_again_with_convex_holes(
     shared_kagome_designs,
 ):
