@@ -35,3 +35,45 @@ def run_cli(capsys):
         return code, out, err
 
     return run
+
+
+# kagome designs already made in this test session, by the front door's arguments
+_KAGOME_DESIGNS: dict[tuple, object] = {}
+
+
+def _key(value):
+    """A hashable stand-in for one argument of the design front door."""
+    return value if isinstance(value, (str, int, float, bool, type(None))) else repr(value)
+
+
+@pytest.fixture
+def shared_kagome_designs(monkeypatch):
+    """The kagome design front door, each set of arguments designed once per test session.
+
+    A kagome fit takes tens of seconds and several tests check the same design (the API tests and the
+    CLI tests of ``design --lattice kagome``). For the test's duration ``fabkiri.api.kagome.design_kagome``,
+    which ``fabkiri design --lattice kagome`` calls too, is replaced by a memo of the real one keyed by
+    every argument (defaults filled in); each call gets its own deep copy, so no test sees another's
+    edits. The design is deterministic (no random start), so a test sees what a fresh design gives.
+    Returns the memoised front door. The memo lives in one process: under pytest-xdist, tests that share
+    a design carry the same ``xdist_group`` mark (the README runs ``--dist loadgroup``), so they run on
+    one worker and the design is made once per run.
+    """
+    import copy
+    import inspect
+
+    from fabkiri.api import kagome
+
+    real = kagome.design_kagome
+    signature = inspect.signature(real)
+
+    def design_kagome(*args, **kwargs):
+        bound = signature.bind(*args, **kwargs)
+        bound.apply_defaults()
+        key = tuple((name, _key(v)) for name, v in bound.arguments.items())
+        if key not in _KAGOME_DESIGNS:
+            _KAGOME_DESIGNS[key] = real(*args, **kwargs)
+        return copy.deepcopy(_KAGOME_DESIGNS[key])
+
+    monkeypatch.setattr(kagome, "design_kagome", design_kagome)
+    return design_kagome

@@ -163,7 +163,10 @@ def test_homotopy_driver_is_kind_agnostic_on_a_quad_design():
 
 
 @pytest.mark.slow
-def test_designed_kagome_pattern_deploys_or_reports_the_miss(tmp_path, run_cli):
+@pytest.mark.xdist_group("kagome-heart-6x10-120")  # shares its design (shared_kagome_designs)
+def test_designed_kagome_pattern_deploys_or_reports_the_miss(
+    tmp_path, run_cli, shared_kagome_designs
+):
     """`design --lattice kagome` then `deploy`: E(t), plot and GIF; the path reaches the three
     states; overlaps (on main's fit the 6x10 heart's deployed state already overlaps itself: 87
     tile pairs) are reported with their figures and exit 1."""

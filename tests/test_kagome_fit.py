@@ -102,8 +102,7 @@ def test_the_symmetric_subfamily_dimension():
         assert 2 * len(x) - K.numerical_rank(Js) - 1 == dim
 
 
-def _front_door(rows, cols, target, size):
-    from fabkiri.api.kagome import design_kagome
+def _front_door(design_kagome, rows, cols, target, size):
     from fabkiri.design import conformance as DC
     from fabkiri.design.targets import load_target
     from fabkiri.verify import verify_pattern
@@ -129,38 +128,43 @@ def _mirror_error(p, axis):
 
 
 @pytest.mark.slow
-def test_a_circle_on_a_symmetric_lattice_meets_every_check():
+@pytest.mark.xdist_group("kagome-circle-6x11-120")  # shares its design (shared_kagome_designs)
+def test_a_circle_on_a_symmetric_lattice_meets_every_check(shared_kagome_designs):
     """6x11 has both mirrors, the circle too: imposed, and met to rounding. Measured 1.23 % of the size."""
-    out, failed, h = _front_door(6, 11, "circle", 120.0)
+    out, failed, h = _front_door(shared_kagome_designs, 6, 11, "circle", 120.0)
     assert not failed and h <= 0.02 and out.report["symmetry"] == ["y", "x"]
     assert max(_mirror_error(out.pattern, "y"), _mirror_error(out.pattern, "x")) <= 1e-9
 
 
 @pytest.mark.slow
-def test_an_ellipse_on_a_lattice_of_its_aspect_meets_every_check():
+def test_an_ellipse_on_a_lattice_of_its_aspect_meets_every_check(shared_kagome_designs):
     """5x19: measured 0.94 % of the size (vertical mirror only: R odd has no horizontal one)."""
-    out, failed, h = _front_door(5, 19, "ellipse", 198.0)
+    out, failed, h = _front_door(shared_kagome_designs, 5, 19, "ellipse", 198.0)
     assert not failed and h <= 0.015 and out.report["symmetry"] == ["y"]
 
 
 @pytest.mark.slow
-def test_a_heart_closes_in_both_states_without_overlaps_and_reports_its_conformance():
+@pytest.mark.xdist_group("kagome-heart-6x11-120")  # shares its design (shared_kagome_designs)
+def test_a_heart_closes_in_both_states_without_overlaps_and_reports_its_conformance(
+    shared_kagome_designs,
+):
     """6x11 heart at 120 mm, mirror symmetric: closed, no overlaps; the shape is missed (measured 7.4 % of
     the size, docs/kagome.md), and verify says so."""
-    out, failed, h = _front_door(6, 11, "heart", 120.0)
+    out, failed, h = _front_door(shared_kagome_designs, 6, 11, "heart", 120.0)
     assert failed == {"target shape"} and h <= 0.09
     assert out.report["symmetry"] == ["y"] and _mirror_error(out.pattern, "y") <= 1e-9
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("rows, cols, size, bound", [(6, 11, 120.0, 0.055), (12, 21, 240.0, 0.12)])
-def test_a_free_heart_at_two_sizes_closes_without_overlaps(rows, cols, size, bound):
+def test_a_free_heart_at_two_sizes_closes_without_overlaps(
+    rows, cols, size, bound, shared_kagome_designs
+):
     """Without the mirror (twice the freedom) the heart comes nearer: measured 4.35 % at 6x11 / 120 mm and
     9.84 % at 12x21 / 240 mm (docs/kagome.md). Closed in both states, no overlaps; the shape is missed."""
-    from fabkiri.api.kagome import design_kagome
     from fabkiri.verify import verify_pattern
 
-    out = design_kagome(rows, cols, "heart", size, symmetry=False)
+    out = shared_kagome_designs(rows, cols, "heart", size, symmetry=False)
     r = out.report
     assert (
         r["status"] == "converged" and r["max_equality_residual"] <= 1e-10 and r["symmetry"] == []
@@ -170,13 +174,15 @@ def test_a_free_heart_at_two_sizes_closes_without_overlaps(rows, cols, size, bou
 
 
 @pytest.mark.slow
-def test_when_every_candidate_overlaps_the_front_door_designs_again_with_convex_holes():
+@pytest.mark.xdist_group("kagome-heart-6x10-120")  # shares its design (shared_kagome_designs)
+def test_when_every_candidate_overlaps_the_front_door_designs_again_with_convex_holes(
+    shared_kagome_designs,
+):
     """6x10 heart at 120 mm: every candidate of the first design had tiles crossing a hole (deployed
     overlaps); the second, with every hole corner at most 175°, closes without overlaps (measured 13.3 %)."""
-    from fabkiri.api.kagome import design_kagome
     from fabkiri.verify import verify_pattern
 
-    out = design_kagome(6, 10, "heart", 120.0)
+    out = shared_kagome_designs(6, 10, "heart", 120.0)
     r = out.report
     assert r["convex_holes"] is True and r["max_equality_residual"] <= 1e-10
     assert {c.name for c in verify_pattern(out.pattern, tol_mm=0.05).failed()} == {"target shape"}

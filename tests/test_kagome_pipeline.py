@@ -116,7 +116,10 @@ def test_a_hole_with_unequal_edges_fails_verify_in_the_state_it_breaks(kept, tmp
 
 
 @pytest.mark.slow
-def test_design_kagome_heart_is_written_but_fails_naming_the_shape(tmp_path, run_cli):
+@pytest.mark.xdist_group("kagome-heart-6x11-120")  # shares its design (shared_kagome_designs)
+def test_design_kagome_heart_is_written_but_fails_naming_the_shape(
+    tmp_path, run_cli, shared_kagome_designs
+):
     out = tmp_path / "h.json"
     code, _, err = run_cli(
         "design",
@@ -149,7 +152,8 @@ def test_design_kagome_refuses_quad_only_options(tmp_path, run_cli):
 
 
 @pytest.mark.slow
-def test_design_kagome_circle_meets_every_check(tmp_path, run_cli):
+@pytest.mark.xdist_group("kagome-circle-6x11-120")  # shares its design (shared_kagome_designs)
+def test_design_kagome_circle_meets_every_check(tmp_path, run_cli, shared_kagome_designs):
     out = tmp_path / "c.json"
     # 6x11: both mirrors imposed (9x15 circle at 180 mm misses: 2.88 %, docs/kagome.md)
     code, _, err = run_cli(

@@ -137,10 +137,8 @@ def _moved(pattern, nodes):
 
 
 @pytest.mark.slow
-def test_a_designed_kagome_prints_verified():
-    from fabkiri.api.kagome import design_kagome
-
-    d = design_kagome(9, 15, "circle", 180.0)
+def test_a_designed_kagome_prints_verified(shared_kagome_designs):
+    d = shared_kagome_designs(9, 15, "circle", 180.0)
     # at its size: which two of three coincident hinges share a face is chosen so that strips too
     # close for one face lie on opposite faces (the first colouring put hinges 153 and 172 0.25 mm apart)
     out = print_pattern(d.pattern, PrintOptions())
