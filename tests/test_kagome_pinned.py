@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -20,6 +19,8 @@ from fabkiri.fabricate.styles import pinned
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import io
 from fabkiri.pattern.kagome import standard_kagome
+
+from .slicer import slice_3mf
 
 
 @pytest.fixture(scope="module")
@@ -200,18 +201,4 @@ def test_standard_kagome_prints_pinned_verified(size, state, tmp_path, run_cli):
     assert len(m["pins"]["levels_mm"]) == 6
     if shutil.which("prusa-slicer") is not None:
         for f in sorted(out.glob("*.3mf")):
-            proc = subprocess.run(
-                ["prusa-slicer", "--export-gcode", str(f), "-o", str(tmp_path / "k.gcode")],
-                capture_output=True,
-                text=True,
-                timeout=1800,
-            )
-            log = "\n".join(
-                ln
-                for ln in (proc.stdout + proc.stderr).splitlines()
-                if "[trace]" not in ln and "[debug]" not in ln and "[info]" not in ln
-            )
-            assert proc.returncode == 0, log[-2000:]
-            assert not [
-                w for w in ("empty layer", "outside", "not printable", "error") if w in log.lower()
-            ], log[-2000:]
+            slice_3mf(f, tmp_path / "k.gcode")

@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import re
 import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -20,6 +19,8 @@ from fabkiri.fabricate.printers import load_printer
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import io
 from fabkiri.pattern.kagome import standard_kagome
+
+from .slicer import slice_3mf
 
 
 @pytest.fixture(scope="module")
@@ -178,25 +179,7 @@ def test_prusaslicer_slices_the_kagome_3mf_as_written(style, preset, tmp_path, r
     assert code == 0, err
     pr = load_printer(preset)
     for f in sorted((tmp_path / "out").glob("*.3mf")):
-        gcode = tmp_path / (f.stem + ".gcode")
-        proc = subprocess.run(
-            ["prusa-slicer", "--export-gcode", str(f), "-o", str(gcode)],
-            capture_output=True,
-            text=True,
-            timeout=1800,
-        )
-        log = "\n".join(
-            ln
-            for ln in (proc.stdout + proc.stderr).splitlines()
-            if "[trace]" not in ln and "[debug]" not in ln and "[info]" not in ln
-        )
-        assert proc.returncode == 0, log[-2000:]
-        assert not [
-            w
-            for w in ("empty layer", "outside", "could not fit", "not printable", "error")
-            if w in log.lower()
-        ], log[-2000:]
-        text = gcode.read_text()
+        text = slice_3mf(f, tmp_path / (f.stem + ".gcode"))
         assert f"; layer_height = {pr.layer_mm:g}" in text
         tools = {ln.strip() for ln in text.splitlines() if ln.strip() in ("T0", "T1")}
         if style == "tiles-and-strips" and pr.extruders == 2:
