@@ -333,7 +333,7 @@ def _physical_checks(
     """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
     A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
     hinges at different corners; its marks say which one was cut, so the best of them is reported."""
-    from .physical import ligament_check, mark_status, tape_mark_check
+    from .physical import ligament_check, tape_mark_check
 
     A, B = pattern.topology.hinge_tiles.T
     how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
@@ -369,8 +369,9 @@ def _physical_checks(
                 marks[sheet] = m.polylines
         if not marks:
             return  # no named engrave layer (a colour-only file): marks cannot be told from cuts
-        C, turned = _marked_labeling(pattern, cut_shapes, labelings, have, found_on, marks)
-        hs, marked, room = mark_status(pattern, C, have, found_on, marks)
+        hs, marked, room, turned = _marked_labeling(
+            pattern, cut_shapes, labelings, have, found_on, marks
+        )
         if not len(hs) or not (marks_kind and al.labels) and marked.sum() < 0.5 * len(hs):
             return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
         chk = tape_mark_check(hs, marked, room, g)
@@ -386,22 +387,30 @@ def _marked_labeling(
     have: np.ndarray,
     found_on: np.ndarray,
     marks: dict,
-) -> tuple[np.ndarray, list[int]]:
-    """The cut shapes with every symmetric sheet under the labeling whose hinges carry the most tape
-    marks (the first on a tie), and the sheets whose labeling changed. Sheets are chosen one by one, each
-    scored on its own hinges."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[int]]:
+    """:func:`~.physical.mark_status` sheet by sheet, each sheet on its own hinges and marks: under the
+    matched labeling, or, where that leaves a hinge with room unmarked and the sheet is symmetric, under the
+    labeling whose hinges carry the most marks (the first on a tie). Also the sheets so relabelled."""
     from .physical import mark_status
 
-    C, turned = cut_shapes.copy(), []
-    for sheet in sorted({s for s, _ in labelings}):
+    parts, turned = [], []
+    for sheet in np.unique(found_on[have]).tolist():
         on = have & (found_on == sheet)
-        options = [cut_shapes, *(L for s, L in labelings if s == sheet)]
-        counts = [int(mark_status(pattern, o, on, found_on, marks)[1].sum()) for o in options]
-        k = int(np.argmax(counts))
-        if k:
-            C[on] = options[k][on]
-            turned.append(sheet)
-    return C, turned
+        mine = {sheet: marks[sheet]} if sheet in marks else {}
+        best = mark_status(pattern, cut_shapes, on, found_on, mine)
+        others = [L for s, L in labelings if s == sheet]
+        if others and (best[2] & ~best[1]).any():
+            tries = [best, *(mark_status(pattern, L, on, found_on, mine) for L in others)]
+            k = max(range(len(tries)), key=lambda i: (int(tries[i][1].sum()), -i))
+            best = tries[k]
+            if k:
+                turned.append(int(sheet))
+        parts.append(best)
+    if not parts:
+        return np.zeros(0, np.int64), np.zeros(0, bool), np.zeros(0, bool), turned
+    hs, marked, room = (np.concatenate(x) for x in zip(*parts))
+    order = np.argsort(hs, kind="stable")
+    return hs[order], marked[order], room[order], turned
 
 
 def _dangling_check(
