@@ -81,6 +81,19 @@ class PatternRequest:
         DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
     )
 
+    def fabrication_limits(self, target: Target | None) -> tuple[FabricationLimits | None, dict]:
+        """The mm limits of ``--material/--hinge/--printer/--style/--min-feature/--min-hole`` for
+        ``target`` and the intent ``cut``/``print`` default to (``fabricate.design_limits.resolve``)."""
+        return design_limits.resolve(
+            self.material,
+            self.hinge,
+            self.printer,
+            self.style,
+            self.min_feature,
+            self.min_hole,
+            target,
+        )
+
 
 @dataclass
 class DesignOutcome:
@@ -182,15 +195,7 @@ def _solver_request(
         raise InputError(
             "give --target, or --contracted-target STATE:NAME for a closed-state outline"
         )
-    fab_limits, intent = design_limits.resolve(
-        request.material,
-        request.hinge,
-        request.printer,
-        request.style,
-        request.min_feature,
-        request.min_hole,
-        target,
-    )
+    fab_limits, intent = request.fabrication_limits(target)
     if (
         fab_limits is not None and target is not None
     ):  # a request no design can meet: say so before solving

@@ -28,7 +28,7 @@ from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.kagome_fit import design
 from ..design.targets import load_target
 from ..errors import InputError
-from ..fabricate import design_limits, fabricability
+from ..fabricate import fabricability
 from ..fileio import atomic_write
 from ..mechanics.contract import with_contracted_states
 from ..pattern.fabricability import pal_bound
@@ -295,15 +295,7 @@ def design_kagome_pattern(
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     rows, cols = request.tiles
     target = request.target or "circle"
-    limits, intent = design_limits.resolve(
-        request.material,
-        request.hinge,
-        request.printer,
-        request.style,
-        request.min_feature,
-        request.min_hole,
-        load_target(target, request.size),
-    )
+    limits, intent = request.fabrication_limits(load_target(target, request.size))
     return design_kagome(
         rows,
         cols,
