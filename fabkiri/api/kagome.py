@@ -170,10 +170,11 @@ def _solve(std, tgt, symmetry, fab_of, accept):
     initial guess every candidate folds, the continuation meets them at 9.49 %; 6x11 at 120 mm: 7.28 %
     from the initial guess, 9.39 % by continuation. Then, if still no candidate closes, the same with
     convex holes, which rule tile crossings out."""
+    limited = bool(fab_of(1.0))  # some limit gives rows
     d = design(std, tgt, symmetry=symmetry)
     pattern, rejected = _first_closing(d, accept)
-    start, free, route = None, None, "without rows" if fab_of(1.0) else ""
-    if pattern is None and fab_of(1.0):
+    start, free, route = None, None, "without rows" if limited else ""
+    if pattern is None and limited:
         near, _ = _first_closing(d, _any)
         start = (near or with_contracted_states(d.pattern)).nodes
         free = conf.deployed(start, std.topology, tgt)["hausdorff_rel"]
@@ -186,7 +187,7 @@ def _solve(std, tgt, symmetry, fab_of, accept):
     if convex:
         d = design(std, tgt, symmetry=symmetry, convex=True, fab=fab_of(KF.WEIGHT), start=start)
         pattern, rejected = _first_closing(d, accept)
-    if pattern is None and fab_of(1.0):  # none meets the limits: the nearest that closes, reported
+    if pattern is None and limited:  # none meets the limits: the nearest that closes, reported
         pattern, rejected = _first_closing(d, _any)
     if pattern is None:  # still none: the solver's best, whose failures verify names
         pattern = with_contracted_states(d.pattern)
