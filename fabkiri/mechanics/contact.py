@@ -36,9 +36,7 @@ from scipy import sparse
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from .energy import Springs
 from .mechanism import gap_angles
-from .orientation import OrientedSprings
 from .path import tile_angles
 
 OPEN = 0.5 * np.pi  # wider rigid gaps are far from closing (and from the ±π cut of atan2)
@@ -199,29 +197,3 @@ def contact_figures(terms: list[GapTerm], sols: list[np.ndarray]) -> dict:
         "contact_energy_max": energy,
         "narrowest_gap_to_rigid": None if ratio == np.inf else ratio,
     }
-
-
-@dataclass(frozen=True, eq=False)
-class ContactSprings:
-    """A spring model (springs, or springs plus orientation) plus a :class:`GapTerm`, with the
-    interface the path's minimiser uses; E(t) along the path stays the springs' alone."""
-
-    base: Springs | OrientedSprings
-    contact: GapTerm
-
-    @property
-    def rest(self) -> np.ndarray:
-        return self.base.rest
-
-    @property
-    def n_springs(self) -> int:
-        return self.base.n_springs
-
-    def energy(self, x: np.ndarray) -> float:
-        return self.base.energy(x) + self.contact.energy(x)
-
-    def gradient(self, x: np.ndarray) -> np.ndarray:
-        return self.base.gradient(x) + self.contact.gradient(x)
-
-    def hessian(self, x: np.ndarray) -> sparse.csr_matrix:
-        return (self.base.hessian(x) + self.contact.hessian(x)).tocsr()

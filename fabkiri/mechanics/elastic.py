@@ -56,7 +56,6 @@ shift ``μ`` raised whenever a step fails to lower E. The constraints are linear
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import sparse
@@ -64,7 +63,7 @@ from scipy.sparse.linalg import splu, spsolve
 
 from ..pattern.model import Pattern
 from .drivers import AUTO, Drivers, PathDriver, path_driver
-from .energy import Springs, springs
+from .energy import Springs, WithTerm, springs
 from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived here)
     MechanismSplit,
     barrier_frames,
@@ -74,10 +73,6 @@ from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived
     rotation_targets,
 )
 from .path import DeploymentPath, closed_states, finish_path, node_positions, path_parameter
-
-if TYPE_CHECKING:
-    from .contact import ContactSprings
-    from .orientation import OrientedSprings
 
 
 @dataclass
@@ -89,7 +84,7 @@ class MinimiseStats:
 
 
 def minimise(
-    sp: Springs | OrientedSprings | ContactSprings,
+    sp: Springs | WithTerm,
     x0: np.ndarray,
     A: sparse.csr_matrix,
     b: np.ndarray,
@@ -176,7 +171,7 @@ def _project(x: np.ndarray, A: sparse.csr_matrix, b: np.ndarray) -> None:
 
 
 def _kkt_lu(
-    sp: Springs | OrientedSprings | ContactSprings,
+    sp: Springs | WithTerm,
     x: np.ndarray,
     mu: float,
     A: sparse.csr_matrix,

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Protocol
 
 import numpy as np
 from scipy import sparse
@@ -167,3 +168,40 @@ def corner_energy(sp: Springs, corners: np.ndarray) -> np.ndarray:
     rest = sp.rest.reshape(len(c), -1)
     r = (np.hypot(v[..., 0], v[..., 1]) - rest) / rest
     return (r * r).sum(axis=1)
+
+
+class Term(Protocol):
+    """An energy term added to the springs (orientation, contact): value, gradient, Hessian."""
+
+    def energy(self, x: np.ndarray) -> float: ...
+
+    def gradient(self, x: np.ndarray) -> np.ndarray: ...
+
+    def hessian(self, x: np.ndarray) -> sparse.spmatrix: ...
+
+
+@dataclass(frozen=True, eq=False)
+class WithTerm:
+    """Springs (or springs with terms) plus one more term, with the interface the path's minimiser uses
+    (``energy``, ``gradient``, ``hessian``, ``rest``, ``n_springs``); the energy reported along a path
+    stays the springs' own."""
+
+    base: Springs | WithTerm
+    term: Term
+
+    @property
+    def rest(self) -> np.ndarray:
+        return self.base.rest
+
+    @property
+    def n_springs(self) -> int:
+        return self.base.n_springs
+
+    def energy(self, x: np.ndarray) -> float:
+        return self.base.energy(x) + self.term.energy(x)
+
+    def gradient(self, x: np.ndarray) -> np.ndarray:
+        return self.base.gradient(x) + self.term.gradient(x)
+
+    def hessian(self, x: np.ndarray) -> sparse.csr_matrix:
+        return (self.base.hessian(x) + self.term.hessian(x)).tocsr()

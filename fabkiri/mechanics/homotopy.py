@@ -37,11 +37,11 @@ import numpy as np
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from .contact import ContactSprings, contact_figures, gap_term, hinge_gaps
+from .contact import contact_figures, gap_term, hinge_gaps
 from .drivers import PathDriver, angle_drivers, node_centroids, register_driver
 from .elastic import MinimiseStats, minimise
-from .energy import Springs
-from .orientation import OrientedSprings, area_term
+from .energy import Springs, WithTerm
+from .orientation import area_term
 from .path import piecewise, tile_angles
 
 
@@ -106,7 +106,8 @@ class Homotopy(PathDriver):
         weight and largest value."""
         blend = rigid_blend(pattern, states, fine).reshape(len(fine), -1)
         zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
-        osp = OrientedSprings(sp, area_term(pattern, self.orientation_weight))
+        area = area_term(pattern, self.orientation_weight)
+        osp = WithTerm(sp, area)
         gaps = hinge_gaps(pattern, states)
         mid = int(np.argmin(np.abs(fine - 0.5)))
         sols: list = [None] * len(fine)
@@ -120,7 +121,7 @@ class Homotopy(PathDriver):
                     gaps, float(fine[i]), weight=self.contact_weight, kappa=self.contact_kappa
                 )
                 sols[i] = minimise(
-                    ContactSprings(osp, term),
+                    WithTerm(osp, term),
                     guess,
                     drv.A,
                     drv.b,
@@ -131,8 +132,8 @@ class Homotopy(PathDriver):
                 )
                 prev = i
         figures = _figures(pattern, fine, np.stack(sols), blend, mid)
-        figures["orientation_weight"] = osp.area.weight
-        figures["orientation_energy_max"] = max(osp.area.energy(x) for x in sols)
+        figures["orientation_weight"] = area.weight
+        figures["orientation_energy_max"] = max(area.energy(x) for x in sols)
         figures.update(contact_figures(terms, sols))
         return sols, figures
 

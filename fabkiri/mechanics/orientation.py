@@ -22,7 +22,6 @@ from scipy import sparse
 
 from ..errors import PatternError
 from ..pattern.model import Pattern
-from .energy import Springs
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,30 +85,3 @@ def area_term(pattern: Pattern, weight: float = 1.0) -> AreaTerm:
             f"tile {t} has no area in the deployed state; it has no orientation to keep"
         )
     return AreaTerm(pattern.tiles, rest, float(weight), len(pattern.nodes))
-
-
-@dataclass(frozen=True, eq=False)
-class OrientedSprings:
-    """Springs plus the orientation term, with the interface the path's minimiser uses
-    (``energy``, ``gradient``, ``hessian``, ``rest``, ``n_springs``); the energy reported along a
-    path stays the springs' (``springs``)."""
-
-    springs: Springs
-    area: AreaTerm
-
-    @property
-    def rest(self) -> np.ndarray:
-        return self.springs.rest
-
-    @property
-    def n_springs(self) -> int:
-        return self.springs.n_springs
-
-    def energy(self, x: np.ndarray) -> float:
-        return self.springs.energy(x) + self.area.energy(x)
-
-    def gradient(self, x: np.ndarray) -> np.ndarray:
-        return self.springs.gradient(x) + self.area.gradient(x)
-
-    def hessian(self, x: np.ndarray) -> sparse.csr_matrix:
-        return (self.springs.hessian(x) + self.area.hessian(x)).tocsr()
