@@ -19,7 +19,7 @@ preset into them, this layer never sees a preset). At the design's size every ti
   (:func:`strip_rows`, the closed form of ``fabkiri.pattern.fabricability.strip_clearance_scales``).
 
 Rows are plain functions of a tile's (or hole's) four corners; their gradients are exact, carried
-forward through every operation (:class:`_D`, forward-mode differentiation over the 8 coordinates of
+forward through every operation (:class:`Dual`, forward-mode differentiation over the 8 coordinates of
 the four corners) and checked against finite differences in ``tests/test_fabrication.py``.
 """
 
@@ -84,8 +84,9 @@ class FabricationLimits:
         return asdict(self)
 
 
-class _D:
-    """A value per row with its gradient in the 8 coordinates of the row's four corners."""
+class Dual:
+    """A value per row with its gradient in the coordinates of the row's corners (forward-mode
+    differentiation; the kagome rows use it too)."""
 
     __slots__ = ("v", "g")
 
@@ -93,47 +94,49 @@ class _D:
         self.v, self.g = v, g
 
     @staticmethod
-    def lift(o, like: _D) -> _D:
+    def lift(o, like: Dual) -> Dual:
         return (
-            o if isinstance(o, _D) else _D(np.broadcast_to(o, like.v.shape), np.zeros_like(like.g))
+            o
+            if isinstance(o, Dual)
+            else Dual(np.broadcast_to(o, like.v.shape), np.zeros_like(like.g))
         )
 
     def __add__(self, o):
-        o = _D.lift(o, self)
-        return _D(self.v + o.v, self.g + o.g)
+        o = Dual.lift(o, self)
+        return Dual(self.v + o.v, self.g + o.g)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return _D(-self.v, -self.g)
+        return Dual(-self.v, -self.g)
 
     def __sub__(self, o):
-        return self + (-_D.lift(o, self))
+        return self + (-Dual.lift(o, self))
 
     def __rsub__(self, o):
-        return _D.lift(o, self) - self
+        return Dual.lift(o, self) - self
 
     def __mul__(self, o):
-        if not isinstance(o, _D):
-            return _D(self.v * o, self.g * np.asarray(o)[..., None] if np.ndim(o) else self.g * o)
-        return _D(self.v * o.v, self.g * o.v[:, None] + o.g * self.v[:, None])
+        if not isinstance(o, Dual):
+            return Dual(self.v * o, self.g * np.asarray(o)[..., None] if np.ndim(o) else self.g * o)
+        return Dual(self.v * o.v, self.g * o.v[:, None] + o.g * self.v[:, None])
 
     __rmul__ = __mul__
 
     def __truediv__(self, o):
-        if not isinstance(o, _D):
+        if not isinstance(o, Dual):
             return self * (1.0 / o)
-        return _D(
+        return Dual(
             self.v / o.v, (self.g * o.v[:, None] - o.g * self.v[:, None]) / (o.v * o.v)[:, None]
         )
 
     def sqrt(self):
         r = np.sqrt(self.v)
-        return _D(r, self.g / (2.0 * r)[:, None])
+        return Dual(r, self.g / (2.0 * r)[:, None])
 
 
 def _corners(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
-    """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`_D` seeded on its 2n coordinates
+    """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`Dual` seeded on its 2n coordinates
     (n = ``quads.shape[1]``: any polygon arity, the kagome's triangles and hexagonal holes too)."""
     m = len(rows)
     p = x[quads[rows, k]]
@@ -141,7 +144,7 @@ def _corners(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
     gy = np.zeros((m, 2 * quads.shape[1]))
     gx[np.arange(m), 2 * k] = 1.0
     gy[np.arange(m), 2 * k + 1] = 1.0
-    return _D(p[:, 0], gx), _D(p[:, 1], gy)
+    return Dual(p[:, 0], gx), Dual(p[:, 1], gy)
 
 
 def _sub(a, b):
@@ -176,7 +179,7 @@ def _edges(x: np.ndarray, quads: np.ndarray):
     return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % n)
 
 
-def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) -> _D:
+def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) -> Dual:
     """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major); any arity:
     a triangle has one far corner (the row is its altitude, exact), more are folded by smooth maxima."""
     rows, e, a, b = _edges(x, quads)
@@ -199,7 +202,7 @@ SMOOTH = (
 )
 
 
-def smooth_max(a: _D, b: _D, eps: float = SMOOTH) -> _D:
+def smooth_max(a: Dual, b: Dual, eps: float = SMOOTH) -> Dual:
     """``(a+b)/2 + sqrt(((a-b)/2)² + ε²) - ε``: smooth, in [max - ε, max], equal to it where a = b.
 
     The far corners of a near-parallelogram tile (most tiles of a rotating-squares pattern) are nearly
@@ -208,7 +211,7 @@ def smooth_max(a: _D, b: _D, eps: float = SMOOTH) -> _D:
     return (a + b) * 0.5 + (h * h + eps * eps).sqrt() - eps
 
 
-def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float) -> _D:
+def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float) -> Dual:
     """Signed length of every shrunk edge minus ``min_edge``."""
     rows, e, a, b = _edges(x, quads)
     E = _sub(b, a)
@@ -220,7 +223,7 @@ def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: 
 
 def hinge_angle_rows(
     x: np.ndarray, quads: np.ndarray, t: np.ndarray, k: np.ndarray, sin_min: float
-) -> _D:
+) -> Dual:
     """sin of the corner angle at hinge corners ``(t, k)`` minus ``sin_min``."""
     v, a, b = (_corners(x, quads, t, (k + s) % quads.shape[1]) for s in (0, 1, -1))
     A, B = _sub(a, v), _sub(b, v)
@@ -229,7 +232,7 @@ def hinge_angle_rows(
 
 def spacing_rows(
     x: np.ndarray, quads: np.ndarray, t: np.ndarray, i: np.ndarray, j: np.ndarray, spacing: float
-) -> _D:
+) -> Dual:
     """Distance between corners ``i`` and ``j`` of quads ``t`` minus ``spacing``."""
     d = _sub(_corners(x, quads, t, i), _corners(x, quads, t, j))
     return _dot(d, d).sqrt() - spacing
@@ -239,12 +242,12 @@ SOFT = 0.002  # normalised: the soft min/max of the strip rows are at most this 
 STRIP_SMOOTH = 0.002  # ... and their smooth max over the eight axis gaps
 
 
-def _soft_min0(v: _D) -> _D:
+def _soft_min0(v: Dual) -> Dual:
     """A smooth lower bound of ``min(v, 0)``."""
     return (v - (v * v + SOFT * SOFT).sqrt()) * 0.5
 
 
-def _soft_max0(v: _D) -> _D:
+def _soft_max0(v: Dual) -> Dual:
     """A smooth upper bound of ``max(v, 0)``."""
     return (v + (v * v + SOFT * SOFT).sqrt()) * 0.5
 
@@ -273,7 +276,7 @@ def strip_rows(
     along: float,
     across: float,
     clearance: float,
-) -> _D:
+) -> Dual:
     """Separating-axis gap between the strip boxes of hinge corners ``ch`` and ``ck`` of quads ``t`` (seams
     towards corners ``eh``, ``ek``; box ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile)
     minus ``clearance``; soft min/max and the smooth max over the eight axis gaps are all on the safe side."""
@@ -296,7 +299,7 @@ def strip_rows(
 
 
 def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
-    """An inequality family from ``rows_of(x) -> _D`` over the quads named by ``meta['quad_of_row']``."""
+    """An inequality family from ``rows_of(x) -> Dual`` over the quads named by ``meta['quad_of_row']``."""
     owner = meta["quad_of_row"]
 
     def fn(x):
@@ -306,8 +309,8 @@ def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Famil
     return Family(name, "ineq", fn, 1, meta=meta, nv=nv, res=lambda x: rows_of(x).v)
 
 
-def _ccw(quads: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Quads reordered counter-clockwise in ``x`` (holes come either way round)."""
+def ccw_polygons(quads: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Polygons (node indices) reordered counter-clockwise in ``x`` (holes come either way round)."""
     p = x[quads]
     area = 0.5 * (
         p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1]
@@ -364,7 +367,7 @@ def _families(
     if limits.strip_clearance_mm > 0:
         out += _strip_family(st, nv, limits, unit_mm, tiles)
     if limits.min_hole_mm > 0 and len(st.hole_nodes):
-        holes = _ccw(st.hole_nodes, base)
+        holes = ccw_polygons(st.hole_nodes, base)
         wh = limits.min_hole_mm / unit_mm
         out.append(
             _family(

@@ -50,11 +50,11 @@ SLACK_MM = (
 
 @dataclass(frozen=True)
 class Rows:
-    """One kind of fabrication row: ``g(x)`` (a :class:`~.fabrication._D` per row, >= 0 when met), the tile
+    """One kind of fabrication row: ``g(x)`` (a :class:`~.fabrication.Dual` per row, >= 0 when met), the tile
     each row belongs to, and whether it is a length (else a sine)."""
 
     name: str
-    g: Callable[[np.ndarray], F._D]
+    g: Callable[[np.ndarray], F.Dual]
     owner: np.ndarray
     length: bool = True
 
@@ -91,7 +91,7 @@ def rows(
     if limits.strip_clearance_mm > 0:
         out += _strip_rows(pattern, limits, unit_mm, faces)
     if limits.min_hole_mm > 0 and len(top.hole_nodes):
-        holes = F._ccw(top.hole_nodes, pattern.nodes)
+        holes = F.ccw_polygons(top.hole_nodes, pattern.nodes)
         wh = limits.min_hole_mm / unit_mm
         owner = np.repeat(np.arange(len(holes)), holes.shape[1])
         out.append(Rows("fabrication_holes", lambda x: F.width_rows(x, holes, wh, 0.0), owner))
