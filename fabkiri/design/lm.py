@@ -73,6 +73,12 @@ class Damping:
     def accepted(self, mu: float, ratio: float) -> float:
         return DAMPING_RULES[self.rule](self, mu, ratio)
 
+    @classmethod
+    def tenfold(cls, mu0: float, mu_max: float, mu_min: float) -> Damping:
+        """The projections' damping: down tenfold per accepted step to ``mu_min``, up tenfold per
+        refusal."""
+        return cls(mu0, mu_max, rule="tenfold", mu_min=mu_min, raise_by=10.0, raise_growth=1.0)
+
 
 def _nielsen(d: Damping, mu: float, ratio: float) -> float:
     return mu * max(1 / 3, 1 - (2 * ratio - 1) ** 3)

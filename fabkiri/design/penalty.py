@@ -146,14 +146,7 @@ def _lm(
     if hard is None:
         damping = Damping(1e-3 * scale, 1e20 * scale)
     else:
-        damping = Damping(
-            1e-12 * scale,
-            1e20 * scale,
-            rule="tenfold",
-            mu_min=1e-14 * diag_mean,
-            raise_by=10.0,
-            raise_growth=1.0,
-        )
+        damping = Damping.tenfold(1e-12 * scale, 1e20 * scale, 1e-14 * diag_mean)
         stopping = replace(stopping, tol_inf=tol_inf, linear=(HARD_STALL_STEPS, HARD_STALL_GAIN))
     pt, it = levenberg_marquardt(
         start,

@@ -109,14 +109,7 @@ def hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
     """
     start = _HardMember(merit, p)
     scale = max(float((start.J * start.J).sum(0).mean()), 1e-300)
-    damping = Damping(
-        1e-12 * scale,
-        1e4 * scale,
-        rule="tenfold",
-        mu_min=1e-14 * scale,
-        raise_by=10.0,
-        raise_growth=1.0,
-    )
+    damping = Damping.tenfold(1e-12 * scale, 1e4 * scale, 1e-14 * scale)
     pt, it = lm_core(
         start,
         start.moved,
