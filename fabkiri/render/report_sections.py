@@ -58,7 +58,6 @@ def _deploy_section(folder: str | None) -> str:
 def _cut_section(d: Path | None, man: dict | None) -> str:
     if d is None or man is None:
         return _missing("not provided: run fabkiri cut PATTERN -o DIR and pass --cut DIR")
-    sheets = [s["svg"] for s in man.get("sheets", []) if s.get("svg")]
     previews = [n for n in man.get("files", []) if n.endswith(".png") and n != "assembly.png"]
     v = man.get("verification") or {}
     body = table(
@@ -75,8 +74,30 @@ def _cut_section(d: Path | None, man: dict | None) -> str:
         }
     )
     body += _pictures(d, previews, "preview")
-    body += "<h3>sheets (SVG, as sent to the laser)</h3>" + _pictures(d, sheets, "sheet")
+    body += "<h3>sheets (SVG, as sent to the laser)</h3>" + "".join(
+        _sheet_picture(d, sh) for sh in man.get("sheets", []) if sh.get("svg")
+    )
     return body
+
+
+# the sheet as an image: its 0.1 mm hairlines would vanish at screen size, so a rule drawn in the copy
+# shown (never in the file) gives every line one screen pixel
+HAIRLINES = "<style>path,line,polyline,polygon,rect,circle{vector-effect:non-scaling-stroke;stroke-width:1.2px}</style>"
+
+
+def _sheet_picture(d: Path, sheet: dict) -> str:
+    p = d / sheet["svg"]
+    if not p.is_file():
+        return ""
+    text = p.read_text("utf-8")
+    end = text.find(">", text.find("<svg"))
+    shown = text[: end + 1] + HAIRLINES + text[end + 1 :] if end > 0 else text
+    caption = (
+        f"sheet {sheet.get('index', '')}: {sheet['svg']}, {sheet.get('width_mm', 0):g} x "
+        f"{sheet.get('height_mm', 0):g} mm, {sheet.get('tiles', '?')} tiles, cut "
+        f"{sheet.get('cut_length_mm', 0) / 1000:.2f} m (lines drawn 1 px wide here)"
+    )
+    return _img(shown.encode("utf-8"), ".svg", sheet["svg"], caption)
 
 
 def _print_section(d: Path | None, man: PrintManifest | None) -> str:
