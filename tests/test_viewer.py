@@ -80,8 +80,12 @@ def pages(tmp_path_factory):
         write_pattern(pattern, src)
         assert main(["view", str(src), "-o", str(d / f"{kind}.html")]) == 0
         out[kind] = (d / f"{kind}.html", pattern)
-    assert main(["report", str(out["quad"][0].with_suffix(".json")), "-o", str(d / "r.html")]) == 0
+    quad = str(out["quad"][0].with_suffix(".json"))
+    assert main(["cut", quad, "--width", "300", "-o", str(d / "cut")]) == 0
+    assert main(["report", quad, "--cut", str(d / "cut"), "-o", str(d / "r.html")]) == 0
     out["report"] = (d / "r.html", out["quad"][1])
+    assert main(["view", quad, "--cut", str(d / "cut"), "-o", str(d / "cut.html")]) == 0
+    out["cut"] = (d / "cut.html", out["quad"][1])
     return out
 
 
@@ -176,6 +180,41 @@ def test_hovering_a_tile_shows_its_number(pages, browser, kind):
         assert text.splitlines()[0] == f"tile {tile}", text
         assert "thinnest width" in text
     o.shot(f"{kind}-hover")
+    o.clean()
+
+
+@needs_browser
+@pytest.mark.parametrize("kind", ["cut", "report"])
+def test_hinges_name_their_tiles_and_assembly_piece(pages, browser, kind):
+    page, pattern = pages[kind]
+    pieces = json.loads((page.parent / "cut" / "manifest.json").read_text())["assembly_pieces"]
+    o = Opened(browser, page)
+    o.slide(0.5)
+    piece = pieces[len(pieces) // 2]
+    h = piece["hinge"]
+    a, b = (int(x) for x in pattern.topology.hinge_tiles[h])
+    o.page.hover(f'circle[data-hinge="{h}"]')
+    lines = o.page.inner_text("#fkv-tip").splitlines()
+    assert lines[0] == f"hinge {h}" and lines[1] == f"joins tiles {a} and {b}"
+    assert f"assembly piece {piece['piece']}" in lines[2]
+    # the tile's pieces too
+    o.page.hover(f'#fkv-tiles polygon[data-tile="{a}"]')
+    assert str(piece["piece"]) in o.page.inner_text("#fkv-tip")
+    o.clean()
+
+
+@needs_browser
+def test_cut_sheets_are_shown_at_true_scale(pages, browser):
+    o = Opened(browser, pages["cut"][0])
+    o.page.select_option("#fkv-view", "sheet")
+    img = o.page.locator("#fkv-sheet img")
+    assert img.count() == 1
+    w_mm = float(o.page.evaluate("document.querySelector('#fkv-sheet img').style.width")[:-2])
+    assert w_mm >= 300.0  # the sheet holds the 300 mm wide pattern
+    px = img.bounding_box()["width"]
+    assert px == pytest.approx(w_mm * 96 / 25.4, rel=1e-3)  # CSS millimetres: 96 px per inch
+    assert o.page.evaluate("document.querySelector('#fkv-sheet img').naturalWidth") > 0
+    o.shot("cut-sheet")
     o.clean()
 
 

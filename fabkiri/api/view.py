@@ -8,9 +8,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
+from ..errors import InputError
 from ..pattern.model import Pattern
-from ..render.viewer import viewer_data, viewer_page
+from ..render.viewer import cut_sheets, viewer_data, viewer_page
 from .deploy import DeployOutcome, deploy_pattern
 
 
@@ -26,14 +28,16 @@ class ViewOutcome:
         return self.deploy.problems
 
 
-def view_pattern(
-    pattern: Pattern, steps: int = 40, *, pieces: list[dict] | None = None
-) -> ViewOutcome:
-    """The viewer page of ``pattern`` along its deployment path of ``steps`` steps.
+def view_pattern(pattern: Pattern, steps: int = 40, *, cut: str | None = None) -> ViewOutcome:
+    """The viewer page of ``pattern`` along its deployment path of ``steps`` steps; ``cut``: a ``fabkiri
+    cut`` folder of this pattern (its assembly pieces on hover, its sheets at true scale).
 
     A pattern that does not close has no path: :class:`fabkiri.errors.CheckFailed`, as ``deploy``."""
+    if cut is not None and not (Path(cut) / "manifest.json").is_file():
+        raise InputError(f"--cut {cut}: not a fabkiri cut folder (no manifest.json)")
+    pieces, sheets = cut_sheets(cut)
     out = deploy_pattern(pattern, steps, frames=False)
-    data = viewer_data(pattern, out.path, pieces=pieces, problems=out.problems)
+    data = viewer_data(pattern, out.path, pieces=pieces, problems=out.problems, sheets=sheets)
     return ViewOutcome(page=viewer_page(data), deploy=out)
 
 

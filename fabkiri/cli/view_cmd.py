@@ -31,7 +31,7 @@ def cmd_view(args: argparse.Namespace) -> int:
         if Path(args.output).suffix.lower() not in (".html", ".htm"):
             raise InputError(f"-o {args.output}: the viewer is an .html file")
         check_output_file(args.output)
-    out = view_pattern(load_any(args.file), args.steps)
+    out = view_pattern(load_any(args.file), args.steps, cut=args.cut)
     d = out.deploy.path
     print(
         f"{d.kind} path, {d.n_frames} frames, {d.corners.shape[1]} tiles: "
@@ -71,6 +71,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=_port,
         metavar="N",
         help="serve the page on http://127.0.0.1:N/ (0: any free port)",
+    )
+    p.add_argument(
+        "--cut",
+        metavar="DIR",
+        help="a fabkiri cut folder of this pattern: its assembly pieces on hover, its sheets at true scale",
     )
     p.add_argument(
         "--steps", type=_steps, default=40, metavar="N", help="deployment path steps (default 40)"

@@ -39,7 +39,7 @@ from .report_sections import (  # noqa: F401 (re-exported)
     meshes_or,
     plate_png,
 )
-from .viewer import viewer_data, viewer_fragment
+from .viewer import cut_sheets, viewer_data, viewer_fragment
 
 VIEWER_STEPS = 40  # fabkiri deploy's default
 
@@ -213,9 +213,7 @@ def build_report(
         else PrintManifest.from_dict(print_man, f"{printed}/manifest.json")
     )
     parts["viewer"] = (
-        _viewer_part(
-            pattern, states is not None, (cut_man or print_man or {}).get("assembly_pieces")
-        )
+        _viewer_part(pattern, states is not None, cut, (print_man or {}).get("assembly_pieces"))
         if viewer
         else _missing("not drawn (viewer=False)")
     )
@@ -227,14 +225,18 @@ def build_report(
     return _page(pattern.name or source or "pattern", parts)
 
 
-def _viewer_part(pattern: Pattern, closes: bool, pieces: list[dict] | None) -> str:
-    """The interactive viewer along the deployment path ``fabkiri deploy`` computes (default steps)."""
+def _viewer_part(
+    pattern: Pattern, closes: bool, cut: str | None, print_pieces: list[dict] | None
+) -> str:
+    """The interactive viewer along the deployment path ``fabkiri deploy`` computes (default steps), with
+    the cut's pieces and sheets (else the print's pieces)."""
     if not closes:
         return _missing("no deployment path: the pattern does not close in both states")
     from ..mechanics.deploy import deployment_path
 
+    pieces, sheets = cut_sheets(cut)
     path = deployment_path(pattern, VIEWER_STEPS)
-    return viewer_fragment(viewer_data(pattern, path, pieces=pieces))
+    return viewer_fragment(viewer_data(pattern, path, pieces=pieces or print_pieces, sheets=sheets))
 
 
 def _summary_part(pattern: Pattern, source: str, info: PatternInfo, report: dict) -> str:

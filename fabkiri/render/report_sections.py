@@ -10,7 +10,7 @@ from typing import cast
 
 from ..verify.printmanifest import PrintManifest
 from .deployment import _pyplot
-from .htmlparts import MIME, _fig_png, _img, _missing, rows_table, table
+from .htmlparts import MIME, _fig_png, _img, _missing, rows_table, screen_svg, table
 
 
 def _load_dir(folder: str | None) -> tuple[Path | None, dict | None]:
@@ -80,18 +80,11 @@ def _cut_section(d: Path | None, man: dict | None) -> str:
     return body
 
 
-# the sheet as an image: its 0.1 mm hairlines would vanish at screen size, so a rule drawn in the copy
-# shown (never in the file) gives every line one screen pixel
-HAIRLINES = "<style>path,line,polyline,polygon,rect,circle{vector-effect:non-scaling-stroke;stroke-width:1.2px}</style>"
-
-
 def _sheet_picture(d: Path, sheet: dict) -> str:
     p = d / sheet["svg"]
     if not p.is_file():
         return ""
-    text = p.read_text("utf-8")
-    end = text.find(">", text.find("<svg"))
-    shown = text[: end + 1] + HAIRLINES + text[end + 1 :] if end > 0 else text
+    shown = screen_svg(p.read_text("utf-8"))
     caption = (
         f"sheet {sheet.get('index', '')}: {sheet['svg']}, {sheet.get('width_mm', 0):g} x "
         f"{sheet.get('height_mm', 0):g} mm, {sheet.get('tiles', '?')} tiles, cut "

@@ -48,10 +48,13 @@
   var viewSel = el("select", { id: "fkv-view", "aria-label": "view" }, bar);
   var views = [["flat", "view: flat sheet"]];
   if (D.tube) views.push(["3d", "view: tube in 3D (drag to turn)"]);
-  views.push(["sheet", "view: closed state 1 at true scale"]);
+  views.push(["sheet", D.sheets.length ? "view: cut sheets at true scale" : "view: closed state 1 at true scale"]);
   views.forEach(function (o) { el("option", { value: o[0] }, viewSel).textContent = o[1]; });
   var ovLabel = el("label", {}, bar);
   var ovBox = el("input", { id: "fkv-overlay", type: "checkbox", checked: "" }, ovLabel);
+  var hiLabel = el("label", {}, bar);
+  var hiBox = el("input", { id: "fkv-show-hinges", type: "checkbox", checked: "" }, hiLabel);
+  hiLabel.appendChild(document.createTextNode(" hinges"));
   ovLabel.appendChild(document.createTextNode(" target + worst fit"));
   if (!D.overlay) ovLabel.style.display = "none";
 
@@ -59,6 +62,7 @@
   var svg = el("svg", { "class": "fkv-main", xmlns: NS, preserveAspectRatio: "xMidYMid meet" }, stage, true);
   var flip = el("g", { transform: "scale(1,-1)" }, svg, true);
   var gTiles = el("g", { id: "fkv-tiles" }, flip, true);
+  var gHinges = el("g", { id: "fkv-hinges" }, flip, true);
   var gOver = el("g", { id: "fkv-overlay-g", "pointer-events": "none" }, flip, true);
   var g3d = el("g", { id: "fkv-3d" }, svg, true);
   var tip = el("div", { id: "fkv-tip", "class": "fkv-tip" }, stage);
@@ -147,12 +151,22 @@
                      stroke: "#d62728", "stroke-width": "2.5" }, gOver, true);
     }
   }
+  /* hinges: a dot at each hinge corner (of its first tile), hover for its number and piece */
+  var dots = D.hinges.map(function (h, k) {
+    return el("circle", { "class": "fkv-hinge", "data-hinge": String(k), r: String(D.tileSize * 0.07),
+                          fill: "#24313f", "fill-opacity": "0.55" }, gHinges, true);
+  });
   function drawFlat() {
     var c = D.corners[S.f];
     for (var i = 0; i < T; i++) {
       polys[i].setAttribute("points", pts(c[i]));
       polys[i].setAttribute("fill", colourOf(S.f, i));
     }
+    D.hinges.forEach(function (h, k) {
+      var p = c[h[0]][h[2]];
+      dots[k].setAttribute("cx", p[0].toFixed(4));
+      dots[k].setAttribute("cy", p[1].toFixed(4));
+    });
   }
 
   /* ---- tube in 3D: orthographic, painter's order, drag to turn ---- */
@@ -218,6 +232,7 @@
   /* ---- closed state 1 at true scale: 1 mm of the sheet is 1 CSS mm ---- */
   var sheetSvg = null;
   function buildSheet() {
+    if (D.sheets.length) return buildCutSheets();
     var c = D.corners[0], b = [Infinity, Infinity, -Infinity, -Infinity];
     c.forEach(function (q) { bbox(q, b); });
     var w = b[2] - b[0], h = b[3] - b[1], m = 0.06 * Math.max(w, h) + 6;
@@ -235,6 +250,20 @@
     tx.textContent = barLen + " mm";
     sheetSvg.style.display = "none";
   }
+  function buildCutSheets() {
+    sheetSvg = el("div", { id: "fkv-sheet" }, stage);
+    D.sheets.forEach(function (sh) {
+      var fig = el("figure", { style: "margin:8px" }, sheetSvg);
+      el("img", { src: sh.uri, alt: sh.name, "data-sheet": sh.name,
+                  style: "width:" + sh.width_mm + "mm;height:" + sh.height_mm + "mm;max-width:none;background:#fff" }, fig);
+      var bar = el("svg", { xmlns: NS, width: "125mm", height: "8mm", viewBox: "0 0 125 8" }, fig, true);
+      el("line", { x1: 0, y1: 3, x2: 100, y2: 3, stroke: "#000", "stroke-width": "0.6" }, bar, true);
+      el("text", { x: 101, y: 4.2, "font-size": "3.5" }, bar, true).textContent = "100 mm";
+      el("figcaption", {}, fig).textContent = sh.name + ": " + sh.width_mm + " x " + sh.height_mm +
+        " mm, as cut (kerf, hinge marks, labels)";
+    });
+    sheetSvg.style.display = "none";
+  }
   buildSheet();
 
   /* ---- hover: tile number, assembly pieces, fabrication figures ---- */
@@ -246,13 +275,18 @@
     lines.push("turn " + fmt(D.rotation[S.f][i] * 180 / Math.PI, 3) + "°");
     return lines.join("\n");
   }
+  function hingeText(k) {
+    var h = D.hinges[k], p = D.hingePieces[String(k)];
+    return "hinge " + k + "\njoins tiles " + h[0] + " and " + h[1] +
+      (p ? "\nassembly piece" + (p.length > 1 ? "s " : " ") + p.join(", ") : "");
+  }
   function hover(ev) {
     var t = ev.target, a = t.getAttribute && (t.getAttribute("data-tile") || t.getAttribute("data-tile3d") ||
                                                 t.getAttribute("data-sheet-tile"));
-    if (a === null || a === undefined || a === false) { tip.style.display = "none"; return; }
+    var hinge = t.getAttribute && t.getAttribute("data-hinge");
+    if ((a === null || a === undefined) && hinge === null) { tip.style.display = "none"; return; }
     var r = stage.getBoundingClientRect();
-    tip.textContent = tileText(Number(a));
-    tip.setAttribute("data-tile", a);
+    tip.textContent = hinge !== null ? hingeText(Number(hinge)) : tileText(Number(a));
     tip.style.left = (ev.clientX - r.left + stage.scrollLeft + 14) + "px";
     tip.style.top = (ev.clientY - r.top + stage.scrollTop + 14) + "px";
     tip.style.display = "block";
@@ -281,8 +315,10 @@
     root.setAttribute("data-view", S.view);
     root.setAttribute("data-colour", S.colour);
     note.textContent = (S.view === "sheet"
-      ? "closed state 1 (the state the sheet is cut in) at true scale: 1 mm on the sheet is 1 mm on a screen " +
-        "at its nominal 96 px per inch; tiles as placed, without kerf or hinge features (see the cut files). "
+      ? (D.sheets.length ? "the cut sheets as written (SVG: kerf-offset cuts, hinge marks, labels; lines " +
+          "drawn 1 px wide)" : "closed state 1 (the state the sheet is cut in), tiles as placed, without kerf " +
+          "or hinge features (pass a cut folder for the sheets as cut)") +
+        " at true scale: 1 mm is 1 mm on a screen at its nominal 96 px per inch. "
       : "frame " + S.f + " of " + (F - 1) + " of the " + D.path + " path" +
         (D.driver ? " (driver " + D.driver + ")" : "") + ", E = " + fmt(D.energy[S.f], 3) +
         "; the slider snaps to the computed frames. ") +
@@ -304,6 +340,7 @@
   colourSel.addEventListener("change", function () { S.colour = colourSel.value; drawLegend(); draw(); });
   viewSel.addEventListener("change", function () { S.view = viewSel.value; draw(); });
   ovBox.addEventListener("change", function () { S.overlay = ovBox.checked; draw(); });
+  hiBox.addEventListener("change", function () { gHinges.style.display = hiBox.checked ? "" : "none"; });
   function setPlaying(on) {
     S.playing = on;
     play.textContent = on ? "Pause" : "Play";

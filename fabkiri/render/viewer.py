@@ -24,6 +24,7 @@ import numpy as np
 from ..mechanics.deploy import DeploymentPath
 from ..pattern.fabricability import widths
 from ..pattern.model import Pattern
+from .htmlparts import data_uri, screen_svg
 
 SCRIPT = Path(__file__).with_name("viewer.js")
 DIGITS_MM = 4  # corners to 0.1 µm: far inside the 0.01 mm a reader can see
@@ -35,11 +36,14 @@ def viewer_data(
     *,
     pieces: list[dict] | None = None,
     problems: list[str] | None = None,
+    sheets: list[dict] | None = None,
 ) -> dict[str, Any]:
     """What the viewer draws: every frame's tile corners, per-tile energy and turn, and the overlays.
 
-    ``pieces``: a cut or print manifest's ``assembly_pieces`` (each names its ``tiles``), shown on hover.
+    ``pieces``: a cut or print manifest's ``assembly_pieces`` (each names its ``tiles`` and ``hinge``),
+    shown on hover; ``sheets``: a cut's sheets (:func:`cut_sheets`), drawn at true scale.
     """
+    top = pattern.topology
     corners = np.round(path.corners, DIGITS_MM)
     return {
         "name": pattern.name or "pattern",
@@ -54,6 +58,9 @@ def viewer_data(
         "marks": path.mark_frames(),
         "tileSize": float(path.tile_size),
         "tiles": _tile_facts(pattern, pieces),
+        "hinges": np.column_stack([top.hinge_tiles, top.hinge_corner]).tolist(),
+        "hingePieces": _hinge_pieces(pieces),
+        "sheets": list(sheets or []),
         "overlay": _overlay(pattern),
         "tube": _tube3d(pattern, path),
         "problems": list(problems or []),
@@ -74,6 +81,40 @@ def _tile_facts(pattern: Pattern, pieces: list[dict] | None) -> list[dict]:
             if isinstance(t, int) and 0 <= t < len(facts):
                 facts[t].setdefault("pieces", []).append(p.get("piece"))
     return facts
+
+
+def _hinge_pieces(pieces: list[dict] | None) -> dict[str, list]:
+    """Hinge number (as text: a JSON key) -> the assembly pieces that join it."""
+    out: dict[str, list] = {}
+    for p in pieces or []:
+        if isinstance(p.get("hinge"), int):
+            out.setdefault(str(p["hinge"]), []).append(p.get("piece"))
+    return out
+
+
+def cut_sheets(folder: str | Path | None) -> tuple[list[dict] | None, list[dict]]:
+    """A cut folder's assembly pieces and its sheets as the viewer shows them (SVG data URIs, mm sizes)."""
+    if not folder:
+        return None, []
+    d = Path(folder)
+    man_path = d / "manifest.json"
+    if not man_path.is_file():
+        return None, []
+    man = json.loads(man_path.read_text("utf-8"))
+    sheets = []
+    for sh in man.get("sheets") or []:
+        p = d / str(sh.get("svg", ""))
+        if sh.get("svg") and p.is_file():
+            uri = data_uri(screen_svg(p.read_text("utf-8")).encode("utf-8"), ".svg")
+            sheets.append(
+                {
+                    "name": sh["svg"],
+                    "uri": uri,
+                    "width_mm": sh["width_mm"],
+                    "height_mm": sh["height_mm"],
+                }
+            )
+    return man.get("assembly_pieces"), sheets
 
 
 def _ccw(corners: np.ndarray) -> np.ndarray:
