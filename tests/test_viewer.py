@@ -29,6 +29,8 @@ from fabkiri.render.viewer import SCRIPT, viewer_data, viewer_page
 
 from .conftest import TEMPLATES
 
+DATA = Path(__file__).parent / "data"
+
 CHROMIUM = next(
     (p for p in ("/usr/bin/chromium", shutil.which("chromium") or "") if p and Path(p).exists()),
     None,
@@ -59,11 +61,12 @@ def needs_browser(test):
 
 
 def _patterns() -> dict:
-    """A quad design (with its target), a kagome pattern and a quad tube, each with both closed states."""
-    kagome = tessellation("kagome").standard(5, 6, tile_size=10.0, name="kagome 5x6")
+    """A quad design (with its target), a kagome design and a quad tube."""
     return {
         "quad": read_pattern(TEMPLATES / "patterns" / "circle-8x8-rigid.json"),
-        "kagome": with_contracted_states(kagome),
+        "kagome": read_pattern(
+            DATA / "kagome-heart-6x11.json"
+        ),  # a kagome design (design --lattice kagome)
         "tube": with_contracted_states(standard_tube(4, 8, tile_size=10.0, name="tube 4x8")),
     }
 
