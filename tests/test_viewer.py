@@ -266,6 +266,12 @@ def test_play_advances_and_pause_stops(pages, browser):
     f = o.page.evaluate("fabkiriViewer.frame()")
     o.page.wait_for_timeout(300)
     assert o.page.evaluate("fabkiriViewer.frame()") == f
+    o.page.focus("#fkv-t")  # arrow keys step one computed frame
+    o.page.keyboard.press("ArrowRight")
+    assert o.page.evaluate("fabkiriViewer.frame()") == f + 1
+    o.page.keyboard.press("ArrowLeft")
+    o.page.keyboard.press("ArrowLeft")
+    assert o.page.evaluate("fabkiriViewer.frame()") == f - 1
     o.clean()
 
 

@@ -337,6 +337,10 @@
     setFrame(best);
   }
   slider.addEventListener("input", function () { setT(Number(slider.value)); });
+  slider.addEventListener("keydown", function (ev) { // arrows step one computed frame, not 0.001 in t
+    var d = { ArrowRight: 1, ArrowUp: 1, ArrowLeft: -1, ArrowDown: -1 }[ev.key];
+    if (d) { ev.preventDefault(); setFrame(S.f + d); }
+  });
   colourSel.addEventListener("change", function () { S.colour = colourSel.value; drawLegend(); draw(); });
   viewSel.addEventListener("change", function () { S.view = viewSel.value; draw(); });
   ovBox.addEventListener("change", function () { S.overlay = ovBox.checked; draw(); });
