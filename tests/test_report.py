@@ -84,7 +84,16 @@ def test_every_section_is_there_and_self_contained(report):
         "data:image/gif;base64," in page and "data:image/svg+xml;base64," in page
     )  # animation, cut sheet
     # what was not given says so
-    assert "fabricability: not computed" in page and "not provided: run fabkiri print" in page
+    assert "not provided: run fabkiri print" in page
+    # fabricability is computed as `fabkiri info` computes it (it used to say "not computed" here)
+    from fabkiri.fabricate.fabricability import summary
+    from fabkiri.pattern.io import read_pattern
+
+    fab = page.split('<section id="fabricability">')[1].split("</section>")[0]
+    s = summary(read_pattern(PATTERN))
+    assert f"{s['thinnest_tile_mm']:.3g} mm (tile {s['thinnest_tile']})" in fab
+    tape = s["cut"]["acrylic-3"]["tape"]
+    assert f"≥ {tape['min_scale']:g}× ({tape['min_width_mm']:g} mm)" in fab
 
 
 def test_missing_folder_is_bad_input(run_cli, tmp_path):

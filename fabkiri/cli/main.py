@@ -40,6 +40,7 @@ COMMANDS = [
     "fabkiri.cli.coupon_cmd",
     "fabkiri.cli.report_cmd",
     "fabkiri.cli.sweep_cmd",
+    "fabkiri.cli.view_cmd",
 ]
 # command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
 # (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
@@ -97,6 +98,10 @@ SUMMARIES = {
     "sweep": (
         "fabkiri.cli.sweep_cmd",
         "many designs from a sweep file (TOML axes) on a local or existing Dask cluster",
+    ),
+    "view": (
+        "fabkiri.cli.view_cmd",
+        "interactive deployment viewer (slider, play, colours, target): standalone HTML or served",
     ),
 }
 

@@ -25,6 +25,7 @@ import shapely
 
 from ..pattern.model import Pattern
 from .hingekinds import HingeKind
+from .map_labels import LabelLayout, place_labels
 from .printjob import print_style
 from .text import text_strokes_many, text_width
 
@@ -138,14 +139,56 @@ def cut_bom(
     }
 
 
-def _numbers(ax, pts: np.ndarray, texts: list[str], h: float, color: str) -> None:
+def _numbers(ax, texts: list[str], at: LabelLayout, color: str) -> None:
+    """The numbers where ``at`` placed them; a grey leader line to each one that had to move."""
     from matplotlib.collections import LineCollection
 
     if not texts:
         return
-    xy, counts, _ = text_strokes_many(texts, np.full(len(texts), h), pts)
+    lead = [np.array([a, c]) for a, c in zip(at.anchors[at.moved], at.centres[at.moved])]
+    if lead:
+        ax.add_collection(LineCollection(lead, colors="0.35", linewidths=0.5))
+        ax.plot(*at.anchors[at.moved].T, "o", ms=1.5, color="0.35")
+    xy, counts, _ = text_strokes_many(texts, at.heights, at.centres)
     segs = np.split(xy, np.cumsum(counts)[:-1])
     ax.add_collection(LineCollection(segs, colors=color, linewidths=0.9))
+
+
+def map_labels(
+    corners_by_sheet: list[np.ndarray],
+    pieces: list[dict],
+    shapes: dict[int, np.ndarray],
+    faces: tuple[str, ...] = ("T", "B"),
+) -> dict[str, tuple[list[str], LabelLayout]]:
+    """Per face drawn: the pieces' numbers and where they go on the map (mm, sheets side by side)."""
+    offs = _sheet_offsets(corners_by_sheet)
+    size = _piece_size(shapes)
+    out = {}
+    for face in faces:
+        mine = [p for p in pieces if p["face"] == face]
+        if not mine:
+            continue
+        cen = np.array([(shapes[p["piece"]] + offs[p["sheet"] - 1]).mean(0) for p in mine])
+        texts = [str(p["piece"]) for p in mine]
+        h = np.array([min(0.45 * size, 0.9 * size / max(text_width(t), 1e-9)) for t in texts])
+        out[face] = (texts, place_labels(cen, texts, float(np.median(h))))
+    return out
+
+
+def _sheet_offsets(corners_by_sheet: list[np.ndarray], gap: float = 20.0) -> list[np.ndarray]:
+    """Where each sheet goes on the map: side by side, ``gap`` mm apart, bottoms at y = 0."""
+    offs, x = [], 0.0
+    for c in corners_by_sheet:
+        a, b = c.reshape(-1, 2).min(0), c.reshape(-1, 2).max(0)
+        offs.append(np.array([x - a[0], -a[1]]))
+        x += b[0] - a[0] + gap
+    return offs
+
+
+def _piece_size(shapes: dict[int, np.ndarray]) -> float:
+    return (
+        float(np.median([np.linalg.norm(s[1] - s[0]) for s in shapes.values()])) if shapes else 5.0
+    )
 
 
 def map_png(
@@ -171,17 +214,13 @@ def map_png(
     gap = 20.0
     lo = [c.reshape(-1, 2).min(0) for c in corners_by_sheet]
     hi = [c.reshape(-1, 2).max(0) for c in corners_by_sheet]
-    offs, x = [], 0.0
-    for a, b in zip(lo, hi):
-        offs.append(np.array([x - a[0], -a[1]]))
-        x += b[0] - a[0] + gap
-    W = x - gap
+    offs = _sheet_offsets(corners_by_sheet, gap)
+    W = sum(b[0] - a[0] for a, b in zip(lo, hi)) + gap * (len(lo) - 1)
     H = max(b[1] - a[1] for a, b in zip(lo, hi))
     shown = [f for f in faces if any(p["face"] == f for p in pieces)] or [faces[0]]
     n = len(shown)
-    size = (
-        float(np.median([np.linalg.norm(s[1] - s[0]) for s in shapes.values()])) if shapes else 5.0
-    )
+    size = _piece_size(shapes)
+    labels = map_labels(corners_by_sheet, pieces, shapes, faces)
     px_mm = min(max(2.0, 60.0 / max(size, 1e-6)), max_px / max(W, n * H))
     fig = Figure(figsize=(W * px_mm / 100, (n * H + (n - 1) * gap) * px_mm / 100 + 0.8), dpi=100)
     for k, face in enumerate(shown):
@@ -204,10 +243,7 @@ def map_png(
             ax.add_collection(
                 PolyCollection(polys, facecolors=col, alpha=0.35, edgecolors=col, linewidths=0.6)
             )
-            cen = np.array([pl.mean(0) for pl in polys])
-            texts = [str(p["piece"]) for p in mine]
-            h = np.array([min(0.45 * size, 0.9 * size / max(text_width(t), 1e-9)) for t in texts])
-            _numbers(ax, cen, texts, float(np.median(h)), "k")
+            _numbers(ax, *labels[face], "k")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", facecolor="white", metadata={"Software": None})
     return buf.getvalue()

@@ -20,6 +20,20 @@ def data_uri(data: bytes, suffix: str) -> str:
     return f"data:{MIME[suffix]};base64,{base64.b64encode(data).decode('ascii')}"
 
 
+# a sheet shown on screen: its 0.1 mm hairlines would vanish at screen size, so a rule in the copy shown
+# (never in the file) gives every line a screen pixel
+HAIRLINES = (
+    "<style>path,line,polyline,polygon,rect,circle"
+    "{vector-effect:non-scaling-stroke;stroke-width:1.2px}</style>"
+)
+
+
+def screen_svg(text: str) -> str:
+    """``text`` (an SVG document) with ``HAIRLINES`` as its first element."""
+    end = text.find(">", text.find("<svg"))
+    return text[: end + 1] + HAIRLINES + text[end + 1 :] if end > 0 else text
+
+
 def _img(data: bytes, suffix: str, alt: str, caption: str = "") -> str:
     cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
     return f'<figure><img alt="{html.escape(alt)}" src="{data_uri(data, suffix)}">{cap}</figure>'

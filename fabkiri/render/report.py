@@ -26,6 +26,7 @@ from ..verify import verify_pattern
 from ..verify.printmanifest import PrintManifest
 from .deployment import _pyplot
 from .htmlparts import MIME, _fig_png, _fmt, _img, _missing, data_uri, rows_table, table  # noqa: F401 (re-exported)
+from .report_read import checks_table, conformance_part, fabricability_part, fabricability_summary
 from .report_sections import (  # noqa: F401 (re-exported)
     _assembly_section,
     _bom_section,
@@ -38,12 +39,16 @@ from .report_sections import (  # noqa: F401 (re-exported)
     meshes_or,
     plate_png,
 )
+from .viewer import cut_sheets, viewer_data, viewer_fragment
+
+VIEWER_STEPS = 40  # fabkiri deploy's default
 
 if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn
     from matplotlib.axes import Axes
 
 SECTIONS = (
     "summary",
+    "viewer",
     "design",
     "states",
     "fabricability",
@@ -70,6 +75,8 @@ th{background:#f0f3f7}img{max-width:100%;height:auto;border:1px solid #e4e8ee;ma
 .ok{color:#1b7a2f;font-weight:600}.fail{color:#b3261e;font-weight:600}
 pre{background:#f3f5f8;padding:8px;overflow-x:auto;font-size:12px}.grid{display:flex;flex-wrap:wrap;gap:14px}
 .grid figure{margin:0;flex:1 1 380px}figcaption{font-size:12px;color:#556}
+td.ok,td.fail{font-weight:500;white-space:nowrap}td.ok{background:#eef8f0}td.fail{background:#fdf0ef}
+p.note{font-size:13px;color:#445}
 """
 
 ERROR_HOOK = """<script>
@@ -178,8 +185,10 @@ def build_report(
     deploy: str | None = None,
     tolerance: str | None = None,
     states: dict[int, np.ndarray] | None = None,
+    viewer: bool = True,
 ) -> str:
-    """The HTML page (see the module doc). ``states``: both closed states (corners) if the pattern closes."""
+    """The HTML page (see the module doc). ``states``: both closed states (corners) if the pattern closes;
+    ``viewer``: embed the interactive deployment viewer (it computes the deployment path)."""
     design = pattern.design or {}
     report = design.get("report") or {}
     info = describe(pattern)
@@ -187,11 +196,12 @@ def build_report(
     parts["summary"] = _summary_part(pattern, source, info, report)
     parts["design"] = _design_part(pattern, report)
     parts["states"] = _states_part(pattern, states, info)
-    fab = report.get("fabricability")
-    parts["fabricability"] = (
-        table(fab)
-        if isinstance(fab, dict) and fab
-        else _missing("fabricability: not computed (design.report.fabricability absent)")
+    fab = fabricability_summary(pattern, info.closes_both, report.get("fabricability"))
+    parts["fabricability"] = fabricability_part(
+        fab,
+        "cut and print make quad patterns only"
+        if info.closes_both
+        else "the pattern does not close in both states",
     )
     parts["verification"] = _verification_part(pattern)
     parts["deployment"] = _deploy_section(deploy)
@@ -202,12 +212,31 @@ def build_report(
         if print_man is None
         else PrintManifest.from_dict(print_man, f"{printed}/manifest.json")
     )
+    parts["viewer"] = (
+        _viewer_part(pattern, states is not None, cut, (print_man or {}).get("assembly_pieces"))
+        if viewer
+        else _missing("not drawn (viewer=False)")
+    )
     parts["cut"] = _cut_section(cut_dir, cut_man)
     parts["print"] = _print_section(print_dir, pm)
     parts["assembly"] = _assembly_section(cut_dir, cut_man, print_dir, print_man)
     parts["bom"] = _bom_section(cut_man, pm)
     parts["tolerance"] = _tolerance_section(tolerance)
     return _page(pattern.name or source or "pattern", parts)
+
+
+def _viewer_part(
+    pattern: Pattern, closes: bool, cut: str | None, print_pieces: list[dict] | None
+) -> str:
+    """The interactive viewer along the deployment path ``fabkiri deploy`` computes (default steps), with
+    the cut's pieces and sheets (else the print's pieces)."""
+    if not closes:
+        return _missing("no deployment path: the pattern does not close in both states")
+    from ..mechanics.deploy import deployment_path
+
+    pieces, sheets = cut_sheets(cut)
+    path = deployment_path(pattern, VIEWER_STEPS)
+    return viewer_fragment(viewer_data(pattern, path, pieces=pieces or print_pieces, sheets=sheets))
 
 
 def _summary_part(pattern: Pattern, source: str, info: PatternInfo, report: dict) -> str:
@@ -235,12 +264,7 @@ def _design_part(pattern: Pattern, report: dict) -> str:
     body += "<h3>fit to the target (solver)</h3>" + (
         table(fit) if fit else _missing("no fit recorded")
     )
-    conf = report.get("conformance")
-    body += "<h3>conformance</h3>" + (
-        table(conf)
-        if isinstance(conf, dict) and conf
-        else _missing("conformance: not computed (design.report.conformance absent)")
-    )
+    body += "<h3>conformance</h3>" + conformance_part(pattern, report.get("conformance"))
     return body
 
 
@@ -274,13 +298,14 @@ def _verification_part(pattern: Pattern) -> str:
         f'<p>verdict: <span class="{"ok" if ver.ok else "fail"}">{"PASS" if ver.ok else "FAIL"}</span> '
         f"({len(ver.checks) - len(ver.failed())}/{len(ver.checks)} checks pass)</p>"
     )
-    return v + f"<pre>{html.escape(ver.to_text())}</pre>"
+    return v + checks_table(ver.checks)
 
 
 def _page(title: str, parts: dict[str, str]) -> str:
     """The whole page: head (CSS, error hook), navigation and every section in ``SECTIONS`` order."""
     titles = {
         "summary": "Summary",
+        "viewer": "Deployment viewer",
         "design": "Design vs target",
         "states": "Closed states",
         "fabricability": "Fabricability",

@@ -10,7 +10,7 @@ from typing import cast
 
 from ..verify.printmanifest import PrintManifest
 from .deployment import _pyplot
-from .htmlparts import MIME, _fig_png, _img, _missing, rows_table, table
+from .htmlparts import MIME, _fig_png, _img, _missing, rows_table, screen_svg, table
 
 
 def _load_dir(folder: str | None) -> tuple[Path | None, dict | None]:
@@ -58,7 +58,6 @@ def _deploy_section(folder: str | None) -> str:
 def _cut_section(d: Path | None, man: dict | None) -> str:
     if d is None or man is None:
         return _missing("not provided: run fabkiri cut PATTERN -o DIR and pass --cut DIR")
-    sheets = [s["svg"] for s in man.get("sheets", []) if s.get("svg")]
     previews = [n for n in man.get("files", []) if n.endswith(".png") and n != "assembly.png"]
     v = man.get("verification") or {}
     body = table(
@@ -75,8 +74,23 @@ def _cut_section(d: Path | None, man: dict | None) -> str:
         }
     )
     body += _pictures(d, previews, "preview")
-    body += "<h3>sheets (SVG, as sent to the laser)</h3>" + _pictures(d, sheets, "sheet")
+    body += "<h3>sheets (SVG, as sent to the laser)</h3>" + "".join(
+        _sheet_picture(d, sh) for sh in man.get("sheets", []) if sh.get("svg")
+    )
     return body
+
+
+def _sheet_picture(d: Path, sheet: dict) -> str:
+    p = d / sheet["svg"]
+    if not p.is_file():
+        return ""
+    shown = screen_svg(p.read_text("utf-8"))
+    caption = (
+        f"sheet {sheet.get('index', '')}: {sheet['svg']}, {sheet.get('width_mm', 0):g} x "
+        f"{sheet.get('height_mm', 0):g} mm, {sheet.get('tiles', '?')} tiles, cut "
+        f"{sheet.get('cut_length_mm', 0) / 1000:.2f} m (lines drawn 1 px wide here)"
+    )
+    return _img(shown.encode("utf-8"), ".svg", sheet["svg"], caption)
 
 
 def _print_section(d: Path | None, man: PrintManifest | None) -> str:

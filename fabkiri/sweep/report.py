@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import html
 import io
+import re
 from pathlib import Path
 
 from ..fileio import atomic_write_many
@@ -36,6 +37,37 @@ SHOWN = [
     "time_s",
     "worker",
 ]
+
+
+# row colour per status: a check or the shape missed (yellow), a later stage refused (orange), the job did
+# not finish (red); one class per status, ``status-<words joined by ->``, and a grey one for any other
+STATUS_COLOURS = {
+    "ok": "#eef8f0",
+    "unconverged": "#fff4c2",
+    "shape missed": "#fff4c2",
+    "cut failed": "#ffe0c0",
+    "print failed": "#ffe0c0",
+    "deploy failed": "#ffe0c0",
+    "error": "#fdd",
+    "timeout": "#fdd",
+}
+OTHER = "status-other"
+
+
+def status_class(status: object) -> str:
+    """The row's class: ``status-shape-missed`` for "shape missed"; ``status-other`` for a status
+    without a colour (a row written by another runner)."""
+    s = str(status)
+    return (
+        "status-" + re.sub(r"[^a-z0-9]+", "-", s.lower()).strip("-")
+        if s in STATUS_COLOURS
+        else OTHER
+    )
+
+
+def status_css() -> str:
+    rules = [f"tr.{status_class(s)} td {{ background: {c}; }}" for s, c in STATUS_COLOURS.items()]
+    return "\n".join([*rules, f"tr.{OTHER} td {{ background: #eceff3; }}"])
 
 
 def columns(rows: list[dict]) -> list[str]:
@@ -108,11 +140,14 @@ def gallery_html(rows: list[dict], out: Path) -> str:
             *[_cell(r.get(k)) for k in SHOWN],
         ]
         body.append(
-            f'<tr class="{html.escape(str(r.get("status")))}"{err}>'
+            f'<tr class="{status_class(r.get("status"))}" data-status="{_cell(r.get("status"))}"{err}>'
             + "".join(f"<td>{c}</td>" for c in cells)
             + "</tr>"
         )
+    statuses = sorted({str(r.get("status")) for r in rows})
     return PAGE.format(
+        css=status_css(),
+        options="".join(f'<option value="{_cell(s)}">{_cell(s)}</option>' for s in statuses),
         n=len(rows),
         ok=sum(r.get("status") == "ok" for r in rows),
         head="".join(f"<th>{html.escape(h)}</th>" for h in heads),
@@ -139,11 +174,14 @@ table {{ border-collapse: collapse; }}
 th {{ cursor: pointer; background: #eee; position: sticky; top: 0; }}
 th, td {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
 img {{ width: 120px; }}
-tr.error td, tr.timeout td {{ background: #fdd; }}
-tr.unconverged td, tr.shape\\ missed td {{ background: #ffd; }}
+{css}
+tr.hidden {{ display: none; }}
 </style></head><body>
 <h1>fabkiri sweep: {n} designs, {ok} ok</h1>
-<p>Click a column to sort; click a design for its files. Red: error or time-out; yellow: a check or the shape missed.</p>
+<p>Click a column to sort; click a design for its files. Red: error or time-out; orange: the cut, print or
+deploy stage refused; yellow: unconverged or the shape missed; green: ok.</p>
+<p><label>show <select id="status"><option value="">every status</option>{options}</select></label>
+<label>filter <input id="q" type="search" placeholder="text in a row"></label> <span id="shown"></span></p>
 <table id="t"><thead><tr>{head}</tr></thead><tbody>
 {body}
 </tbody></table>
@@ -156,5 +194,16 @@ document.querySelectorAll("#t th").forEach((th, i) => th.addEventListener("click
     return (typeof x === typeof y ? (x < y ? -1 : x > y ? 1 : 0) : (typeof x === "number" ? -1 : 1)) * dir; }});
   rows.forEach(r => tb.appendChild(r));
 }}));
+function filter() {{
+  const st = document.getElementById("status").value, q = document.getElementById("q").value.toLowerCase();
+  let n = 0;
+  document.querySelectorAll("#t tbody tr").forEach(r => {{
+    const show = (!st || r.dataset.status === st) && (!q || r.textContent.toLowerCase().includes(q));
+    r.classList.toggle("hidden", !show); n += show;
+  }});
+  document.getElementById("shown").textContent = n + " shown";
+}}
+document.getElementById("status").addEventListener("change", filter);
+document.getElementById("q").addEventListener("input", filter);
 </script></body></html>
 """
