@@ -358,8 +358,8 @@ def _physical_checks(
             c = cores.copy()
             c[~on] = None
             material = sheet_material(lw, kerf)
-            if len(shapely.get_parts(material)) >= on.sum():
-                continue  # no piece joins two tiles: the ligaments are not in this file (e.g. printed top faces)
+            if not al.ligaments_in_file and len(shapely.get_parts(material)) >= on.sum():
+                continue  # declared: the ligaments are not in this file (the printed top faces)
             rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
     elif in_place and (al.hinge == PLAIN or marks_kind) and not sheet_piece and have.any():
         marks = {}
