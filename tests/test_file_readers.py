@@ -12,7 +12,7 @@ from pathlib import Path
 import ezdxf
 import numpy as np
 import pytest
-from ezdxf import bbox
+from ezdxf import bbox, recover
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import standard_pattern, write_pattern
 from fabkiri.pattern.kagome import standard_kagome
@@ -48,14 +48,18 @@ def cut_dirs(std):
 
 
 @pytest.fixture(scope="module")
-def written_dxfs(std, cut_dirs):
-    """Every kind of DXF fabkiri writes: cut sheets (each hinge kind), the laser coupon, the strips'
-    laser files (print --marks)."""
+def written_dirs(std, cut_dirs):
+    """Folders of every kind of laser file fabkiri writes: cut sheets (each hinge kind), the laser
+    coupon, the strips' laser files (print --marks)."""
     root = std.parent
     _cli("coupon", "--material", "pp-0.5", "-o", root / "coupon")
     _cli("print", std, "--style", "strips", "--marks", "-o", root / "marks")
-    files = [f for d in cut_dirs.values() for f in d.glob("*.dxf")]
-    files += sorted((root / "coupon").rglob("*.dxf")) + sorted((root / "marks").rglob("*.dxf"))
+    return [*cut_dirs.values(), root / "coupon", root / "marks"]
+
+
+@pytest.fixture(scope="module")
+def written_dxfs(written_dirs):
+    files = [f for d in written_dirs for f in sorted(d.rglob("*.dxf"))]
     assert len(files) >= 5, files
     return files
 
@@ -91,7 +95,7 @@ def test_every_written_dxf_reads_in_ascii_and_binary(std, cut_dirs, written_dxfs
 
     pattern = read_pattern(std)
     for k, f in enumerate(written_dxfs):
-        doc, auditor = ezdxf.recover.readfile(f)
+        doc, auditor = recover.readfile(f)
         assert not auditor.has_errors, (f, [e.message for e in auditor.errors][:3])
         assert doc.header["$INSUNITS"] == 4
         dst = _binary_copy(f, tmp_path / str(k))
@@ -162,14 +166,15 @@ def test_librecad_dxf2pdf_prints_the_sheet(cut_dirs, tmp_path):
 
 @pytest.mark.slow  # one Inkscape run over every SVG (several seconds)
 @pytest.mark.skipif(shutil.which("inkscape") is None, reason="Inkscape is not installed")
-def test_every_written_svg_opens_in_inkscape_at_true_size(std, cut_dirs, tmp_path):
-    """Inkscape renders every SVG `cut` writes at 1 px per mm: the page is the sheet in mm, not blank."""
+def test_every_written_svg_opens_in_inkscape_at_true_size(written_dirs, tmp_path):
+    """Inkscape renders every SVG fabkiri writes (cut sheets, laser coupon, the strips' laser files) at
+    1 px per mm: the page is the sheet in mm, not blank."""
     import re
 
     from PIL import Image
 
-    svgs = sorted(f for d in cut_dirs.values() for f in d.glob("*.svg"))
-    assert svgs
+    svgs = sorted(f for d in written_dirs for f in d.rglob("*.svg"))
+    assert len(svgs) >= 5, svgs
     for k, f in enumerate(svgs):
         shutil.copy(f, tmp_path / f"{k}.svg")
     names = [str(tmp_path / f"{k}.svg") for k in range(len(svgs))]
