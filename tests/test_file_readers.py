@@ -49,12 +49,14 @@ def cut_dirs(std):
 
 @pytest.fixture(scope="module")
 def written_dirs(std, cut_dirs):
-    """Folders of every kind of laser file fabkiri writes: cut sheets (each hinge kind), the laser
-    coupon, the strips' laser files (print --marks)."""
+    """Folders of every kind of laser file fabkiri writes: cut sheets (each hinge kind), a tube's flat
+    sheet, the laser coupon, the strips' laser files (print --marks)."""
     root = std.parent
+    _cli("new", "--tiles", "4x6", "--tube", "-o", root / "tube.json")
+    _cli("cut", root / "tube.json", "--hinge", "tape", "--material", "pp-0.5", "-o", root / "tube")
     _cli("coupon", "--material", "pp-0.5", "-o", root / "coupon")
     _cli("print", std, "--style", "strips", "--marks", "-o", root / "marks")
-    return [*cut_dirs.values(), root / "coupon", root / "marks"]
+    return [*cut_dirs.values(), root / "tube", root / "coupon", root / "marks"]
 
 
 @pytest.fixture(scope="module")

@@ -290,6 +290,9 @@ def test_an_extra_copy_of_a_tile_is_found(std_bases, tmp_path, hinge, with_manif
     )
     chk = rep.get("layout: tiles recovered")
     assert not rep.ok and not chk.ok and "1 unmatched cut regions" in chk.detail, chk
+    assert chk.worst.startswith("tile "), (
+        chk
+    )  # named: the design tile the extra piece is shaped like
 
 
 def test_every_ligament_cut_away_is_rejected(std_bases, tmp_path):
