@@ -603,13 +603,24 @@ def tile_copied_beside(b: Base, rng):
 
 
 def ligaments_cut_away(b: Base, rng):
-    """Every ligament cut out of the sheet (its declared strip's outline cut): the tiles fall apart."""
+    """Every ligament cut away: each tile's core cut out on its own, in place (the line the writer draws
+    round a core: the tile shrunk by the tile shrink, grown by the kerf offset), the reference square
+    kept. Without the manifest they read as separate tiles, each smaller than its design tile."""
     if b.hinge != "ligament":
         return None, ""
+    man = b.manifest
+    grow = float(man.get("kerf_offset_mm", 0.0)) - float(man.get("tile_shrink_mm", 0.0))
+    cores = shapely.buffer(
+        shapely.polygons(b.tiles),
+        grow,
+        join_style="mitre",
+        mitre_limit=man.get("mitre_limit", 10.0),
+    )
     out = b.sheet.copy()
-    for f in b.manifest["hinge_features"]:
-        out.layers["CUT"].append((np.asarray(f["polygon"], float), True))
-    return out, f"hinge {b.manifest['hinge_features'][0]['hinge']}"
+    out.layers["CUT"] = [(np.asarray(c.exterior.coords)[:-1], True) for c in cores]
+    if man.get("reference_square"):
+        out.layers["CUT"].append((np.asarray(man["reference_square"]["corners"], float), True))
+    return out, f"hinge {man['hinge_features'][0]['hinge']}"
 
 
 def _mark_items(b: Base, h: int) -> list[int]:
@@ -826,7 +837,6 @@ BROKEN = [
         False,
         "any",
         ligaments_cut_away,
-        manifest="needs-manifest",  # without it, tiles cut apart in place are a plain in-place file
         hinges=("ligament",),
     ),
     Kind("a copy of a tile beside the parts", False, "any", tile_copied_beside),

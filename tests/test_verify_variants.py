@@ -296,7 +296,7 @@ def test_an_extra_copy_of_a_tile_is_found(std_bases, tmp_path, hinge, with_manif
 
 
 def test_every_ligament_cut_away_is_rejected(std_bases, tmp_path):
-    """Tiles cut apart in place are no ligament sheet: every declared ligament is missing."""
+    """Tiles cut apart in place are no ligament sheet: every ligament the manifest declares is missing."""
     b = std_bases["ligament"]
     rep = _verify_kind(b, KINDS["every ligament cut away"], tmp_path, True)
     chk = rep.get("layout: every ligament present and unsevered")
