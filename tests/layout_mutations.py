@@ -581,6 +581,48 @@ def ligament_severed(every: bool):
     return m
 
 
+def tile_copied_beside(b: Base, rng):
+    """An extra piece: a copy of a tile's outline (its own closed outline where it has one, else the
+    design tile) cut beside the sheet's other parts."""
+    t = _interior_tile(b, rng)
+    c = shapely.Point(b.tiles[t].mean(0))
+    area = shapely.Polygon(b.tiles[t]).area
+    own = [
+        p
+        for p, cl in b.sheet.layers["CUT"]
+        if cl
+        and len(p) >= 4
+        and shapely.Polygon(p).contains(c)
+        and shapely.Polygon(p).area < 2 * area
+    ]
+    q = own[0] if own else b.tiles[t]
+    x1 = _cut_points(b.sheet)[:, 0].max()
+    out = b.sheet.copy()
+    out.layers["CUT"].append((q + np.array([x1 + 20.0 - q[:, 0].min(), 0.0]), True))
+    return out, f"tile {t}"
+
+
+def ligaments_cut_away(b: Base, rng):
+    """Every ligament cut away: each tile's core cut out on its own, in place (the line the writer draws
+    round a core: the tile shrunk by the tile shrink, grown by the kerf offset), the reference square
+    kept. Without the manifest they read as separate tiles, each smaller than its design tile."""
+    if b.hinge != "ligament":
+        return None, ""
+    man = b.manifest
+    grow = float(man.get("kerf_offset_mm", 0.0)) - float(man.get("tile_shrink_mm", 0.0))
+    cores = shapely.buffer(
+        shapely.polygons(b.tiles),
+        grow,
+        join_style="mitre",
+        mitre_limit=man.get("mitre_limit", 10.0),
+    )
+    out = b.sheet.copy()
+    out.layers["CUT"] = [(np.asarray(c.exterior.coords)[:-1], True) for c in cores]
+    if man.get("reference_square"):
+        out.layers["CUT"].append((np.asarray(man["reference_square"]["corners"], float), True))
+    return out, f"hinge {man['hinge_features'][0]['hinge']}"
+
+
 def _mark_items(b: Base, h: int) -> list[int]:
     """ENGRAVE items of the tape mark at hinge ``h``: two-point strokes of 2.5 mm or more inside tile B
     within 12 mm of the hinge (fabkiri puts the face letter on tile A and this chord on tile B)."""
@@ -790,6 +832,14 @@ BROKEN = [
     Kind("extra cut 10% into a tile", False, "any", extra_cut(0.1)),
     Kind("a ligament severed", False, "any", ligament_severed(False), hinges=("ligament",)),
     Kind("every ligament severed", False, "any", ligament_severed(True), hinges=("ligament",)),
+    Kind(
+        "every ligament cut away",
+        False,
+        "any",
+        ligaments_cut_away,
+        hinges=("ligament",),
+    ),
+    Kind("a copy of a tile beside the parts", False, "any", tile_copied_beside),
     Kind("undeclared kerf", False, "any", _keep, manifest="kerf0", hinges=("separate", "ligament")),
     Kind(
         "sheet scaled 1%, turned 40°",

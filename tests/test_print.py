@@ -139,6 +139,28 @@ def test_3mf_project_volumes_materials_and_settings():
     assert '<mode value="SingleExtruder"/>' in xml
 
 
+@pytest.mark.parametrize("style", ["strips", "pinned"])
+@pytest.mark.parametrize("preset", ["prusa-mk4", "prusa-xl-2t"])
+def test_one_material_plan_names_the_extruder_its_3mf_uses(style, preset):
+    """The line `print` says of a one-material job names the extruder every volume of its 3MF is on
+    (strips on the two-tool printer: TPU, extruder 2)."""
+    from fabkiri.fabricate import threemf
+
+    pr = load_printer(preset)
+    pat = standard_pattern(2, 3, tile_size=12.0) if style == "pinned" else standard_pattern(3, 3)
+    r = mesh.realise_job(mesh.build_job(pat, style, 1, pr))
+    extruders = {
+        e
+        for name, data in mesh.job_files(r, "k", preview=False).items()
+        if name.endswith(".3mf")
+        for _, _, e, _, _ in threemf.read_volumes(data)
+    }
+    assert len(extruders) == 1
+    (k,) = extruders
+    plan = mesh.print_plan(r.job)
+    assert plan.startswith("one material (") and plan.endswith(f"extruder {k}"), (plan, k)
+
+
 def test_preview_png_per_bed(tmp_path, printer):
     from PIL import Image
 

@@ -14,6 +14,7 @@ from fabkiri.verify import verify_layout
 
 from . import layout_fixtures as lf
 from . import layout_mutations as lm
+from .conftest import TEMPLATES
 
 VALID = [
     "re-save R2018",
@@ -239,3 +240,110 @@ def test_every_mark_removed_needs_the_manifest_to_tell(bases, tmp_path):
     shutil.copy(b.folder / "manifest.json", tmp_path / "manifest.json")
     chk = verify_layout(b.pattern, path).get("layout: tape marks at every hinge")
     assert not chk.ok and chk.value == len(lm._marked_hinges(b))
+
+
+# ------------------------------------------------------------------ standard lattices: square tiles
+
+
+def _cut_bases(root, pattern, hinges=("tape", "separate", "ligament"), args=()):
+    """Real `fabkiri cut` DXF bases of ``pattern`` (scale 1), one per hinge kind."""
+    from fabkiri.cli.main import main
+
+    pj = root / "p.json"
+    write_pattern(pattern, pj)
+    p = read_pattern(pj)
+    out = {}
+    for h in hinges:
+        d = root / h
+        argv = ["cut", str(pj), "--hinge", h, "--material", "pp-0.5", "--gap", "1", *args]
+        assert main([*argv, "--formats", "dxf", "--no-verify", "-o", str(d)]) == 0
+        out[h] = lm.load_base(d, "dxf", p)
+    return out
+
+
+@pytest.fixture(scope="module")
+def std_bases(tmp_path_factory):
+    """A standard 3x3 lattice: every tile a square, like the reference square."""
+    p = with_contracted_states(standard_pattern(3, 3, tile_size=10.0))
+    return _cut_bases(tmp_path_factory.mktemp("std"), p)
+
+
+@pytest.fixture(scope="module")
+def std50_bases(tmp_path_factory):
+    """50 mm tiles: the tiles are the reference square's size."""
+    p = with_contracted_states(standard_pattern(2, 2, tile_size=50.0))
+    return _cut_bases(tmp_path_factory.mktemp("std50"), p, args=("--sheet", "800x800"))
+
+
+def _verify_kind(base, kind, tmp_path, with_manifest, seed=0):
+    path = lm.make_case(base, kind, tmp_path / f"c{int(with_manifest)}", with_manifest, seed)
+    assert path is not None
+    return verify_layout(base.pattern, path)
+
+
+@pytest.mark.parametrize("with_manifest", [True, False])
+@pytest.mark.parametrize("hinge", ["tape", "separate", "ligament"])
+def test_an_extra_copy_of_a_tile_is_found(std_bases, tmp_path, hinge, with_manifest):
+    """A copy of a square tile beside the parts is an extra piece, not a second reference square."""
+    rep = _verify_kind(
+        std_bases[hinge], KINDS["a copy of a tile beside the parts"], tmp_path, with_manifest
+    )
+    chk = rep.get("layout: tiles recovered")
+    assert not rep.ok and not chk.ok and "1 unmatched cut regions" in chk.detail, chk
+    assert chk.worst.startswith("tile "), (
+        chk
+    )  # named: the design tile the extra piece is shaped like
+
+
+def test_every_ligament_cut_away_is_rejected(std_bases, tmp_path):
+    """Tiles cut apart in place are no ligament sheet: every ligament the manifest declares is missing."""
+    b = std_bases["ligament"]
+    rep = _verify_kind(b, KINDS["every ligament cut away"], tmp_path, True)
+    chk = rep.get("layout: every ligament present and unsevered")
+    assert chk is not None and not chk.ok, rep.to_text()
+    assert chk.value == len(b.manifest["hinge_features"]) and chk.worst.startswith("hinge")
+
+
+MOVES = ["translated", "turned 33°", "turned 90°", "rounded to 0.001 mm"]
+
+
+@pytest.mark.parametrize("with_manifest", [True, False])
+@pytest.mark.parametrize("hinge", ["tape", "separate", "ligament"])
+def test_reference_sized_tiles_moved_or_turned_are_accepted(
+    std50_bases, tmp_path, hinge, with_manifest
+):
+    """50 mm tiles: the reference square is the one square beside the parts (uncompensated, apart),
+    not whichever square is left after matching by shape."""
+    for k, name in enumerate(MOVES):
+        rep = _verify_kind(std50_bases[hinge], KINDS[name], tmp_path / str(k), with_manifest)
+        assert rep.ok, (name, rep.to_text())
+        assert rep.meta.get("reference_square_mm", [50.0]) == [pytest.approx(50.0, abs=1e-2)]
+
+
+@pytest.mark.parametrize("name", ["turned 33°", "turned 90°", "translated"])
+def test_symmetric_ligament_sheet_moved_is_accepted(std_bases, tmp_path, name):
+    """A standard lattice fits a quarter-turned motion as well as the true one: the declared ligaments
+    are moved by the motion that puts them on the material."""
+    rep = _verify_kind(std_bases["ligament"], KINDS[name], tmp_path, True)
+    assert rep.ok, rep.to_text()
+    assert "moved with the sheet" in rep.meta["recovery"][0]
+
+
+@pytest.mark.slow  # a 64-tile heart at its smallest ligament scale (the quick loop: the 3x3 above)
+def test_ligament_sheet_with_a_thin_tile_moved_is_accepted(tmp_path):
+    """Tiles narrower than a ligament: an opening cuts them short, the declared strips moved with the
+    sheet do not."""
+    p = read_pattern(TEMPLATES / "patterns" / "heart-8x8.json")
+    b = _cut_bases(tmp_path, p, ("ligament",), ("--scale", "auto", "--sheet", "3000x3000"))
+    b = b["ligament"]
+    for k, name in enumerate(["turned 33°", "translated", "rounded to 0.001 mm"]):
+        rep = _verify_kind(b, KINDS[name], tmp_path / str(k), True)
+        assert rep.ok, (name, rep.to_text())
+    sh, _ = lm.tile_moved(0.2)(
+        b, np.random.default_rng(0)
+    )  # a breakage in a turned sheet still fails
+    path = tmp_path / "broken" / b.manifest["sheets"][0]["dxf"]
+    path.parent.mkdir()
+    lm.write_dxf(sh.map_points(lm.rigid(0.5, (30.0, -20.0))), path)
+    shutil.copy(b.folder / "manifest.json", path.parent / "manifest.json")
+    assert not verify_layout(b.pattern, path).ok

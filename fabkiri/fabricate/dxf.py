@@ -22,6 +22,7 @@ import io
 from contextlib import contextmanager
 
 import ezdxf
+import numpy as np
 from ezdxf import units
 from ezdxf.entities import LWPolyline
 from ezdxf.lldxf.tagwriter import TagWriter
@@ -30,6 +31,7 @@ from ..verify.dxfcodec import insert_entities, lwpolyline_tags, split_prototype
 from .drawing import COLORS, LAYERS, SheetDrawing
 
 DXF_VERSION = "R2010"
+NON_PLOTTING = ("NOTES",)  # annotation for the maker, never cut: the layer's plot flag is off
 BULK_LAYERS = ("ENGRAVE",)  # first in LAYERS: its entities open the ENTITIES section
 _PROBE_HANDLE = "FFFFF0"
 _PROBE_POINTS = [(1.25, 2.5), (3.75, 4.5)]
@@ -57,18 +59,38 @@ def _prototype(doc, msp, layer: str) -> tuple[str, str] | None:
     return split_prototype(buf.getvalue(), _PROBE_HANDLE, _PROBE_POINTS)
 
 
+def _set_extents(doc, msp, sheet: SheetDrawing) -> None:
+    """The header from the drawing: ``$EXTMIN``/``$EXTMAX`` its bounding box, ``$LIMMIN``/``$LIMMAX``
+    the sheet (grown to hold the drawing), ``$PSVPSCALE`` 1:1. ezdxf writes the modelspace layout's
+    own extents and limits over the header's on save, so they are set there too."""
+    pts = [p for polylines in sheet.layers.values() for p, _ in polylines if len(p)]
+    if pts:
+        xy = np.concatenate(pts)
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+    else:  # an empty sheet: its frame
+        lo, hi = np.zeros(2), np.array([sheet.width, sheet.height])
+    lo, hi = [float(v) for v in lo], [float(v) for v in hi]
+    # ezdxf copies the layout's extents only when neither is the zero vector: the header as well
+    msp.dxf.extmin = doc.header["$EXTMIN"] = (lo[0], lo[1], 0.0)
+    msp.dxf.extmax = doc.header["$EXTMAX"] = (hi[0], hi[1], 0.0)
+    msp.dxf.limmin = (min(0.0, lo[0]), min(0.0, lo[1]))
+    msp.dxf.limmax = (max(sheet.width, hi[0]), max(sheet.height, hi[1]))
+    doc.header["$PSVPSCALE"] = 1.0  # 0 ("scaled to fit") leaves LibreCAD's dxf2pdf page blank
+
+
 def dxf_bytes(sheet: SheetDrawing, colors: str = "default", *, bulk: bool = True) -> bytes:
     """The sheet as DXF text (ASCII, ``\\n`` line ends)."""
     with _fixed_metadata():
         doc = ezdxf.new(DXF_VERSION, units=units.MM)
         doc.header["$INSUNITS"] = 4  # millimetres; ezdxf's default would be 6 (metres)
-        doc.header["$EXTMIN"] = (0.0, 0.0, 0.0)
-        doc.header["$EXTMAX"] = (sheet.width, sheet.height, 0.0)
-        doc.header["$LIMMIN"] = (0.0, 0.0)
-        doc.header["$LIMMAX"] = (sheet.width, sheet.height)
-        for name in LAYERS:
-            doc.layers.add(name, color=COLORS[colors][name][1])
         msp = doc.modelspace()
+        _set_extents(doc, msp, sheet)
+        for name in LAYERS:
+            layer = doc.layers.add(name, color=COLORS[colors][name][1])
+            if name in NON_PLOTTING:
+                layer.dxf.plot = (
+                    0  # CAM and plot tools leave it out (the sheet frame is no toolpath)
+                )
         bulk_text = []
         for i, name in enumerate(LAYERS):
             polylines = sheet.layers[name]

@@ -158,8 +158,8 @@ def print_plan(job: PrintJob) -> str:
     :class:`FabricationError` when it cannot print there."""
     pr = job.printer
     mats = sorted({b.material for bed in job.beds for b in bed})
-    if len(mats) == 1:
-        return f"one material ({mats[0]}), extruder 1"
+    if len(mats) == 1:  # the extruder the 3MF's volumes name (threemf.model_config_xml)
+        return f"one material ({mats[0]}), extruder {pr.extruder_of(mats[0])}"
     if pr.extruders >= 2:
         return (
             ", ".join(f"{m} on extruder {pr.extruder_of(m)}" for m in mats)

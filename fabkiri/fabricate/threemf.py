@@ -98,7 +98,7 @@ def model_xml(object_name: str, parts: list[Part]) -> str:
     out.extend(tris)
     out.append(
         "    </triangles>\n   </mesh>\n  </object>\n </resources>\n"
-        ' <build>\n  <item objectid="2" printable="1"/>\n </build>\n</model>\n'
+        ' <build>\n  <item objectid="2"/>\n </build>\n</model>\n'
     )
     return "".join(out)
 

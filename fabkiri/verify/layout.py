@@ -33,7 +33,7 @@ from .geom import leave_one_out_residual
 from .hingeread import PLAIN, reading
 from .layout_match import _match_tiles, _Matched
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
-from .matching import _mirror, _shift_fit, assembled
+from .matching import _mirror, _shift_fit, assembled, match_by_shape
 from .pattern_checks import Tolerances, closed_state_checks, fabrication_tolerances, state_check_id
 from .readers import Linework, read_cut_file
 from .recovery import sheet_material
@@ -91,7 +91,7 @@ def verify_layout(
     in_place, sheet_piece, fitted = _layout_kind(rec, al, D, L, tol.length, rep)
     m = _match_tiles(pattern, al, rec, in_place, D, L, tol.length, rep)
     have = m.assign >= 0
-    _recovered_check(rep, m, rec.unusable, g)
+    _recovered_check(rep, m, rec.unusable, g, D, L)
     _congruence_check(rep, D, m.cut_shapes, have, tol.length, g)
     if in_place:
         _in_place_checks(rep, pattern, m, have, tol, g, len(rec.sheets))
@@ -120,10 +120,16 @@ def verify_layout(
     return rep
 
 
-def _recovered_check(rep: Report, m: _Matched, unusable: int, g: str) -> None:
+def _recovered_check(
+    rep: Report, m: _Matched, unusable: int, g: str, D: np.ndarray, L: float
+) -> None:
     T = len(m.assign)
     missing = np.flatnonzero(m.assign < 0)
     got = T - len(missing)
+    worst = f"tile {int(missing[0])}" if len(missing) else None
+    if worst is None and m.extra_shapes:  # an extra piece: the design tile it is shaped like
+        like = match_by_shape(D, np.asarray(m.extra_shapes), L)[0]
+        worst = f"tile {int(like[like >= 0][0])}" if (like >= 0).any() else None
     rep.add(
         Check(
             f"{g}: tiles recovered",
@@ -133,10 +139,12 @@ def _recovered_check(rep: Report, m: _Matched, unusable: int, g: str) -> None:
             unit="count",
             op="==",
             group=g,
-            worst=f"tile {int(missing[0])}" if len(missing) else None,
+            worst=worst,
             detail=(
                 f"{got} of {T} design tiles found; missing {missing[:20].tolist()}; "
-                f"{m.extra} unmatched cut regions; {unusable} regions that are not quads"
+                f"{m.extra} unmatched cut regions"
+                + (f" (one shaped like {worst})" if worst and not len(missing) else "")
+                + f"; {unusable} regions that are not quads"
             ),
         )
     )
@@ -358,8 +366,8 @@ def _physical_checks(
             c = cores.copy()
             c[~on] = None
             material = sheet_material(lw, kerf)
-            if len(shapely.get_parts(material)) >= on.sum():
-                continue  # no piece joins two tiles: the ligaments are not in this file (e.g. printed top faces)
+            if not al.ligaments_in_file and len(shapely.get_parts(material)) >= on.sum():
+                continue  # declared: the ligaments are not in this file (the printed top faces)
             rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
     elif in_place and (al.hinge == PLAIN or marks_kind) and not sheet_piece and have.any():
         marks = {}

@@ -3,7 +3,7 @@ when the tiles are separate (one per tile)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -30,6 +30,7 @@ class _Matched:
     # (sheet, cut shapes) under another, equally good labeling of a symmetric sheet: that sheet's tiles
     # take the shapes, every other tile is NaN
     labelings: list[tuple[int, np.ndarray]]
+    extra_shapes: list[np.ndarray] = field(default_factory=list)  # the unmatched regions' corners
 
 
 def _match_tiles(
@@ -71,6 +72,7 @@ def _match_tiles(
             a = np.where(a >= 0, free[np.maximum(a, 0)], -1)
         taken = (a >= 0) & (m.assign[np.maximum(a, 0)] < 0)
         m.extra += int(len(R) - taken.sum())
+        m.extra_shapes.extend(R[~taken])
         r = np.flatnonzero(taken)
         d = a[r]
         m.assign[d] = r

@@ -202,6 +202,9 @@ class Allowances:
     mitre_limit: float = (
         MITRE_LIMIT  # the writer's mitre limit for its kerf offsets and shrunk tiles
     )
+    # a ligament sheet's ligaments are cut in its files; False: the file holds the tiles only and the
+    # ligaments are the declared features (the printed tiles' top faces)
+    ligaments_in_file: bool = True
 
 
 def _allowances(manifest: CutManifest | dict[str, Any] | None, where: str) -> Allowances:
@@ -241,4 +244,5 @@ def _allowances(manifest: CutManifest | dict[str, Any] | None, where: str) -> Al
         placed,
         bool(m.parameters.get("labels", False)),
         mitre_limit=float(m.mitre_limit),
+        ligaments_in_file=bool(m.parameters.get("ligaments_in_file", True)),
     )

@@ -103,9 +103,14 @@ def _declared_strips_moved(
     strips: shapely.Geometry | None,
     frame_tiles: np.ndarray | None,
     al: Allowances,
+    material: shapely.Geometry | None = None,
 ) -> shapely.Geometry | None:
     """The declared ligaments moved with the sheet: the rigid motion that takes the manifest's tile
-    placement onto the tiles an opening found, applied to the strips. None if it cannot be found."""
+    placement onto the tiles an opening found, applied to the strips. None if it cannot be found.
+
+    A symmetric lattice's tiles fit several motions equally well (a quarter turn off); a ligament is
+    material, so of those the motion that puts the most of the strips on the ``material`` is taken, and
+    none where that leaves a tenth of the strips off it."""
     if strips is None or frame_tiles is None or not len(parts):
         return None
     grown = (
@@ -114,14 +119,43 @@ def _declared_strips_moved(
         else parts
     )
     quads, _ = quads_of(grown, frame_tiles.shape[1])
-    a, res, _, theta, t = match_in_place(frame_tiles, quads)
-    if (a >= 0).sum() < max(3, len(frame_tiles) // 2):
-        return None
+    alts: list = []
+    first = match_in_place(frame_tiles, quads, alternatives=alts)[:3]
+    best, cover = None, -1.0
+    for a, res, sh in [first, *alts]:
+        motion = _motion(frame_tiles, quads, a, res, sh)
+        if motion is None:
+            continue
+        moved = _moved(strips, *motion)
+        c = 1.0 if material is None else shapely.area(moved & material) / max(moved.area, 1e-300)
+        if c > cover:
+            best, cover = moved, c
+    return best if cover >= 0.9 else None
+
+
+def _moved(g: shapely.Geometry, theta: float, t: np.ndarray) -> shapely.Geometry:
     from shapely import affinity
 
     return affinity.translate(
-        affinity.rotate(strips, theta, origin=(0, 0), use_radians=True), t[0], t[1]
+        affinity.rotate(g, theta, origin=(0, 0), use_radians=True), t[0], t[1]
     )
+
+
+def _motion(
+    frame_tiles: np.ndarray, quads: np.ndarray, a: np.ndarray, res: np.ndarray, sh: np.ndarray
+) -> tuple[float, np.ndarray] | None:
+    """The rigid motion of a matching (``a``: recovered quad -> frame tile, ``res``, corner shift ``sh``),
+    fitted on the tiles the opening gave back whole: a tile narrower than a ligament comes back cut
+    short, and its corners would pull the motion off. None with too few tiles matched."""
+    ok = a >= 0
+    if ok.sum() < max(3, len(frame_tiles) // 2):
+        return None
+    good = np.flatnonzero(ok & (res <= max(2.0 * float(np.median(res[ok])), 1e-3)))
+    good = good if len(good) >= 3 else np.flatnonzero(ok)
+    k = quads.shape[1]
+    dst = quads[good[:, None], (np.arange(k)[None, :] + sh[good][:, None]) % k]
+    theta, t = geometry.kabsch(frame_tiles[a[good]], dst)
+    return float(theta), np.asarray(t)
 
 
 def _nested(lw: Linework) -> bool:
@@ -188,12 +222,21 @@ def _fit_offset(R: np.ndarray, D: np.ndarray, L: float, tol: float, lo: float = 
 
 
 def _set_reference_aside(
-    quads: np.ndarray, D: np.ndarray, L: float, tol: float
+    quads: np.ndarray,
+    D: np.ndarray,
+    L: float,
+    tol: float,
+    n_tiles: int | None = None,
 ) -> tuple[np.ndarray, float | None]:
-    """Take out the reference square (a square that is no design tile, the largest such), by geometry.
+    """Take out the reference square (a square that is no design tile), by geometry.
 
     fabkiri cuts an uncompensated square beside the parts so the kerf can be measured; a file
-    moved, turned or without its manifest still has it. Returns the other quads and its side.
+    moved, turned or without its manifest still has it. ``n_tiles``: the design tiles on the sheet
+    (default all). A square
+    congruent to a design tile is taken only when the sheet has more regions than tiles. Of several
+    candidates the odd one out is taken: the fewest squares of its side (kerf-offset tiles are all alike,
+    the uncompensated square is not), then the farthest from the other regions (tiles in place touch or
+    sit a gap apart, the square sits beside them), then the largest. Returns the other quads and its side.
     """
     if not len(quads):
         return quads, None
@@ -202,17 +245,41 @@ def _set_reference_aside(
         np.linalg.norm(quads[:, 2] - quads[:, 0], axis=1),
         np.linalg.norm(quads[:, 3] - quads[:, 1], axis=1),
     )
+    sides = e.mean(axis=1)
     square = (e.max(axis=1) - e.min(axis=1) <= tol) & (np.abs(diag[0] - diag[1]) <= tol)
-    if not square.any():
-        return quads, None
     cand = np.flatnonzero(square)
-    if D.shape[1] == 4:  # a square may be a design tile; other tiles never are
-        _, res, _ = match_by_shape(D, quads[square], L)
-        cand = cand[res > tol]
+    if D.shape[1] == 4 and len(cand):  # a square may be a design tile; other tiles never are
+        surplus = len(quads) > (len(D) if n_tiles is None else n_tiles)
+        if not surplus:
+            cand = cand[~_tile_like(D, quads[cand], L, tol)]
     if not len(cand):
         return quads, None
-    k = int(cand[np.argmax(e[cand].mean(axis=1))])
-    return np.delete(quads, k, axis=0), float(e[k].mean())
+    alike = (np.abs(sides[cand][:, None] - sides[square][None, :]) <= tol).sum(axis=1)
+    cand = cand[alike == alike.min()]
+    if len(cand) > 1:
+        polys = shapely.polygons(quads)
+        (src, _), dist = shapely.STRtree(polys).query_nearest(
+            polys[cand], exclusive=True, return_distance=True, all_matches=False
+        )
+        clear = np.zeros(len(cand))
+        clear[src] = np.round(dist / tol)
+        cand = cand[clear == clear.max()]
+    k = int(cand[np.argmax(sides[cand])])
+    return np.delete(quads, k, axis=0), float(sides[k])
+
+
+def _tile_like(D: np.ndarray, Q: np.ndarray, L: float, tol: float) -> np.ndarray:
+    """Whether each quad of ``Q`` is congruent (within ``tol``) to some design tile of ``D``: fitted to
+    the design's nearest shape classes (:func:`.matching.match_by_shape`'s keys), not one to one."""
+    from ..kdtree import KDTree
+    from .matching import _descriptor, _shape_classes, _shift_fit
+
+    reps = np.unique(_shape_classes(D, L), return_index=True)[1]
+    kk = min(8, len(reps))
+    _, near = KDTree(_descriptor(D[reps], L)).query(_descriptor(Q, L), k=kk)
+    near = np.asarray(near).reshape(len(Q), kk)
+    res, _ = _shift_fit(D[reps[near.ravel()]], np.repeat(Q, kk, axis=0))
+    return res.reshape(len(Q), kk).min(axis=1) <= tol
 
 
 def _feature_geometry(poly: Any) -> shapely.Polygon | shapely.MultiPolygon:

@@ -30,21 +30,42 @@ from .readers import JOIN_MM, SNAP_MM, Linework
 # ------------------------------------------------------------------ recovery
 
 
-def _drop_reference(lw: Linework, corners: np.ndarray | None) -> int:
-    """Remove the closed polyline whose corners are the reference square's."""
+def _drop_reference(lw: Linework, corners: np.ndarray | None, tol: float = 1e-3) -> int:
+    """Remove the closed polyline whose corners are the reference square's; where the sheet was moved
+    (none there), the one closed polyline that is a square of the declared side within ``tol`` (the
+    square is uncompensated: drawn at its side, unlike the kerf-offset or shrunk tiles). Several such
+    squares (tiles of the square's size) are left for :func:`.quads._set_reference_aside`."""
     if corners is None:
         return 0
-    keep_p, keep_c, dropped = [], [], 0
-    for pts, cl in zip(lw.polylines, lw.closed):
-        if cl and len(pts) == len(corners) and not dropped:
-            d = np.linalg.norm(pts[:, None] - corners[None], axis=-1).min(axis=1).max()
-            if d <= 1e-3:
-                dropped += 1
-                continue
-        keep_p.append(pts)
-        keep_c.append(cl)
-    lw.polylines, lw.closed = keep_p, keep_c
-    return dropped
+    at = [
+        i
+        for i, (pts, cl) in enumerate(zip(lw.polylines, lw.closed))
+        if cl
+        and len(pts) == len(corners)
+        and np.linalg.norm(pts[:, None] - corners[None], axis=-1).min(axis=1).max() <= 1e-3
+    ]
+    if not at:
+        side = float(np.linalg.norm(np.roll(corners, -1, 0) - corners, axis=1).mean())
+        at = [
+            i
+            for i, (pts, cl) in enumerate(zip(lw.polylines, lw.closed))
+            if cl and len(pts) == len(corners) and _is_square(pts, side, tol)
+        ]
+        if len(at) != 1:
+            return 0
+    keep = [i for i in range(len(lw.polylines)) if i != at[0]]
+    lw.polylines = [lw.polylines[i] for i in keep]
+    lw.closed = [lw.closed[i] for i in keep]
+    return 1
+
+
+def _is_square(pts: np.ndarray, side: float, tol: float) -> bool:
+    """Whether the four points ``pts`` are a square of ``side`` within ``tol``."""
+    if len(pts) != 4:
+        return False
+    e = np.linalg.norm(np.roll(pts, -1, 0) - pts, axis=1)
+    d = np.linalg.norm(pts[2:] - pts[:2], axis=1)
+    return bool(np.abs(e - side).max() <= tol and abs(d[0] - d[1]) <= tol)
 
 
 def _snapped_segments(lw: Linework, eps: float = SNAP_MM) -> np.ndarray:
@@ -251,9 +272,8 @@ def _material_less_ligaments(
     else:  # the ligaments are the strips an opening removes, wherever the sheet was moved
         parts = _on_cut_edges(_open_ligaments(material, al.ligament_width), material, arity)
         how = "material opened to drop the ligaments, corners on the cut edges"
-        # only when the opening left tiles joined: on a symmetric lattice the motion can be a quarter turn off
-        short = frame_tiles is not None and (shapely.area(parts) > 1.0).sum() < len(frame_tiles)
-        moved = _declared_strips_moved(parts, strips, frame_tiles, al) if short else None
+        # the declared strips moved with the sheet (a tile narrower than a ligament the opening cuts short)
+        moved = _declared_strips_moved(parts, strips, frame_tiles, al, material)
         if moved is not None:
             again = _hairline_free(material.difference(moved))
             if cuts_tiles(again):
@@ -261,6 +281,9 @@ def _material_less_ligaments(
                     _on_cut_edges(again, material, arity),
                     "material minus the declared ligaments, moved with the sheet",
                 )
+    # a file rounded to 1 µm leaves vertex pairs a fraction of a µm apart where it had one vertex: on a
+    # tile narrower than its ligaments' roots they decide which corners the growth makes, so drop them
+    parts = shapely.simplify(parts, JOIN_MM / 2, preserve_topology=True)
     if al.tile_shrink:
         parts = shapely.buffer(parts, al.tile_shrink, join_style="mitre", mitre_limit=10.0)
     return parts, how + ", grown by the tile shrink"

@@ -63,7 +63,8 @@ def _recover_sheets(
     arity = tessellation(pattern.kind).arity  # corners per tile
     for sheet, f in files.items():
         lw = _choose_cut(read_cut_file(f).cut_classes(), al, sheet, D, L, tol)
-        _drop_reference(lw, al.reference.get(sheet))
+        declared = al.reference.get(sheet)
+        dropped = _drop_reference(lw, declared, tol)
         rec.linework[sheet] = lw
         n_lines += len(lw.polylines)
         on = [t for t in range(pattern.n_tiles) if al.tile_sheet.get(t, 1) == sheet]
@@ -72,7 +73,8 @@ def _recover_sheets(
         )
         rec.methods.add(method)
         polys = polys[shapely.area(polys) > tol**2]  # double-cut hairlines are not tiles
-        quads, side, bad = _tiles_and_reference(polys, arity, D, L, tol)
+        search = _search_reference(al, declared, dropped)
+        quads, side, bad = _tiles_and_reference(polys, arity, D, L, tol, len(on), search)
         if side is not None:
             rec.references.append(side)
         rec.unusable += bad
@@ -85,15 +87,32 @@ def _recover_sheets(
     return rec
 
 
+def _search_reference(al: Allowances, declared: np.ndarray | None, dropped: int) -> bool:
+    """Whether the reference square is still to be set aside by geometry: a file without a manifest, or
+    a manifest's square not found (the sheet was moved and several squares have its side). Not when the
+    manifest's square was dropped or the manifest declares none on this sheet: a square left is a part,
+    never a second reference."""
+    return al.hinge == PLAIN or (declared is not None and not dropped)
+
+
 def _tiles_and_reference(
-    polys: np.ndarray, arity: int, D: np.ndarray, L: float, tol: float
+    polys: np.ndarray,
+    arity: int,
+    D: np.ndarray,
+    L: float,
+    tol: float,
+    n_tiles: int | None = None,
+    search: bool = True,
 ) -> tuple[np.ndarray, float | None, int]:
     """The tiles (corners in the design's arity), the reference square's side (None without one) and
     how many regions are neither. The square is looked for among the quads: the tiles themselves
-    when they are quads, the regions that are not tiles otherwise."""
+    when they are quads, the regions that are not tiles otherwise (not at all unless ``search``, see
+    :func:`_search_reference`; ``n_tiles``: the design tiles on the sheet)."""
     tiles, ok = tiles_of(polys, arity)
+    if not search:
+        return tiles, None, int((~ok).sum())
     if arity == 4:
-        tiles, side = _set_reference_aside(tiles, D, L, tol)
+        tiles, side = _set_reference_aside(tiles, D, L, tol, n_tiles)
         return tiles, side, int((~ok).sum())
     squares, _ = quads_of(polys[~ok], 4)
     _, side = _set_reference_aside(squares, D, L, tol)
