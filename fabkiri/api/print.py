@@ -23,7 +23,9 @@ from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import load_printer
 from ..fabricate.printjob import print_style
+from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
+from ..verify.printmanifest import PrintManifest
 from .cut import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
@@ -117,6 +119,7 @@ def print_pattern(
         print_style(style).own_tile_thickness,
         options,
     )
+    made_from = fingerprint(pattern)  # before scaling: the manifest names the input pattern
     pattern, scale = _scaled(pattern, style, printer, options)
     for w in closes_gate(
         pattern,
@@ -152,6 +155,9 @@ def print_pattern(
     if problems:
         raise CheckFailed("; ".join(problems) + "; nothing written")
     files = _files(pattern, realised, report, tiles, verifier, options, stem, source)
+    stamped = PrintManifest.from_json(files["manifest.json"])
+    stamped.extra[KEY] = made_from
+    files["manifest.json"] = stamped.to_json()
     return PrintOutcome(
         files=files,
         realised=realised,
