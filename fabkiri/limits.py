@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, TooLarge
 
 MAX_PATTERN_BYTES = (
     256 * 2**20
@@ -106,12 +106,12 @@ def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
     est = estimate(kind, tiles)
     side = int(math.isqrt(est.tested_tiles))
     if est.megabytes > available_mb():
-        raise InputError(
+        raise TooLarge(
             f"{rows}x{cols} tiles need {est.text()}; this machine has "
             f"{available_mb() / 1024:.3g} GB free ({side}x{side} is the largest tested)"
         )
     if tiles > est.tested_tiles and not i_know:
-        raise InputError(
+        raise TooLarge(
             f"{side}x{side} is the largest tested; {rows}x{cols} needs {est.text()} "
             f"— pass --i-know to try"
         )
@@ -120,7 +120,12 @@ def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
 def check_file_size(path, limit: int | None = None) -> None:
     """Refuse a file larger than ``limit`` bytes (default :data:`MAX_PATTERN_BYTES`) before it is read."""
     limit = MAX_PATTERN_BYTES if limit is None else limit
-    size = os.stat(path).st_size
+    try:
+        size = os.stat(path).st_size
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except OSError as exc:  # a symlink loop, a path through a file, no permission
+        raise InputError(f"{path}: cannot be read ({exc.strerror})") from None
     if size > limit:
         raise InputError(
             f"{path}: {size / 2**20:.1f} MB is larger than the {limit / 2**20:.0f} MB an input may have"

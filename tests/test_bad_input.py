@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -100,6 +101,8 @@ FILES = {
     "unknown-axis.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\ncolour = ["red"]\n',
     "bad-tiles.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4by4"]\n',
     "missing-target.toml": '[axes]\ntarget = ["no-such-shape"]\ntiles = ["4x4"]\n',
+    "big-job.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4", "300x300"]\n',
+    "circle.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\n',
 }
 
 # id: (argv, expected exit code, words in the message, folders made before the run)
@@ -385,6 +388,19 @@ CASES = {
     ),
     "sweep bad tiles": (["sweep", "bad-tiles.toml", "-o", "S"], 2, "ROWSxCOLS", ()),
     "sweep unknown target": (["sweep", "missing-target.toml", "-o", "S"], 2, "no-such-shape", ()),
+    "sweep a job past the size limit": (
+        ["sweep", "big-job.toml", "-o", "S"],
+        2,
+        "job circle-300x300-",
+        (),
+    ),
+    "sweep file a symlink loop": (["sweep", "loop.toml", "-o", "S"], 2, "symbolic links", ()),
+    "sweep -o another sweep's folder": (
+        ["sweep", "circle.toml", "--workers", "1", "-o", "Other"],
+        2,
+        "another sweep",
+        ("Other",),
+    ),
     "sweep -o its input": (["sweep", "bad.toml", "-o", "bad.toml"], 2, "is an input", ()),
     "sweep --workers 0": (
         ["sweep", "unknown-axis.toml", "--workers", "0", "-o", "S"],
@@ -443,6 +459,7 @@ def workspace(tmp_path, monkeypatch):
     for name, text in FILES.items():
         (tmp_path / name).write_text(text)
     (tmp_path / "link.json").symlink_to("good.json")
+    (tmp_path / "loop.toml").symlink_to("loop.toml")
     os.link(tmp_path / "good.json", tmp_path / "hard.json")
     monkeypatch.chdir(tmp_path)
     return tmp_path
@@ -453,6 +470,16 @@ def _prepare(root: Path, folders) -> dict[str, str]:
         (root / f).mkdir(parents=True)
     if "F" in folders:  # deploy writes frames/ inside: a file of that name blocks it
         (root / "F" / "frames").write_text("not a folder")
+    if "Other" in folders:  # another sweep's results: a job of a square target, and its table
+        row = {
+            "id": "square-4x4-0123456789",
+            "p_target": "square",
+            "p_tiles": "4x4",
+            "status": "ok",
+        }
+        (root / "Other" / "jobs" / row["id"]).mkdir(parents=True)
+        (root / "Other" / "jobs" / row["id"] / "row.json").write_text(json.dumps(row))
+        (root / "Other" / "results.csv").write_text("id,status\nsquare-4x4-0123456789,ok\n")
     if "L" in folders:  # a layout with a manifest beside it
         (root / "L" / "x.svg").write_text(FILES["bad.svg"])
         (root / "L" / "manifest.json").write_text(FILES["deep.json"])
@@ -582,3 +609,173 @@ def test_files_past_the_size_bound_are_refused_before_reading(workspace, run_cli
         code, _, err = run_cli(*argv)
         assert code == 2 and "larger than" in err and len(err.strip().splitlines()) == 1, err
     assert snapshot(workspace) == before
+
+
+# ------------------------------------------------- report: folders of another pattern or kind
+
+
+@pytest.fixture(scope="module")
+def made_folders(tmp_path_factory):
+    """good.json's cut, print, deploy and tolerance folders, and copies as older fabkiri wrote them
+    (no pattern fingerprint in their manifests), made once for the report cases."""
+    from fabkiri.cli.main import main
+
+    root = tmp_path_factory.mktemp("made")
+    (root / "good.json").write_text(GOOD)
+    for argv in (
+        ["cut", "good.json", "-o", "C"],
+        ["print", "good.json", "-o", "P"],
+        ["deploy", "good.json", "--steps", "4", "-o", "D"],
+        ["tolerance", "good.json", "--n", "20", "--no-plot", "-o", "T"],
+    ):
+        cwd = os.getcwd()
+        try:
+            os.chdir(root)
+            assert main(argv) == 0, argv
+        finally:
+            os.chdir(cwd)
+    for d, f in (("C", "manifest.json"), ("P", "manifest.json"), ("D", "deploy.json")):
+        old = root / f"old{d}"
+        shutil.copytree(root / d, old)
+        data = json.loads((old / f).read_text())
+        data.pop("pattern_fingerprint", None)
+        (old / f).write_text(json.dumps(data))
+    return root
+
+
+def _other_pattern() -> str:
+    return dumps(with_contracted_states(standard_pattern(2, 3, tile_size=20.0)))
+
+
+def _kagome_pattern() -> str:
+    from fabkiri.pattern.kagome import standard_kagome
+
+    return dumps(standard_kagome(2, 2))
+
+
+# id: (argv, words in the one-line refusal); every one exits 2 and writes nothing
+REPORT_CASES = {
+    "report --cut of another design": (["other.json", "--cut", "C"], "made from another pattern"),
+    "report --cut of an empty folder": (["good.json", "--cut", "E"], "an empty folder"),
+    "report --cut of a tolerance folder": (["good.json", "--cut", "T"], "a tolerance folder"),
+    "report --deploy of a cut folder": (["good.json", "--deploy", "C"], "not a deploy folder"),
+    "report --print of a cut folder": (["good.json", "--print", "C"], "not a print folder"),
+    "report quad cut for kagome": (["kagome.json", "--cut", "C"], "a quad cut for a kagome"),
+    "report corrupt cut manifest": (["good.json", "--cut", "Bad"], "malformed JSON"),
+    "report older cut of another design": (["other.json", "--cut", "oldC"], "another pattern"),
+    "report older print of another design": (["other.json", "--print", "oldP"], "another pattern"),
+    "report older deploy of another design": (["other.json", "--deploy", "oldD"], "frames"),
+}
+
+
+@pytest.fixture
+def report_workspace(workspace, made_folders):
+    for name in ("C", "P", "D", "T", "oldC", "oldP", "oldD"):
+        shutil.copytree(made_folders / name, workspace / name)
+    (workspace / "E").mkdir()
+    shutil.copytree(made_folders / "C", workspace / "Bad")
+    (workspace / "Bad" / "manifest.json").write_text('{"format": "fabkiri.cut", ')
+    (workspace / "other.json").write_text(_other_pattern())
+    (workspace / "kagome.json").write_text(_kagome_pattern())
+    return workspace
+
+
+@pytest.mark.parametrize("case", sorted(REPORT_CASES))
+def test_report_refuses_a_folder_of_another_pattern_or_kind(case, report_workspace, run_cli):
+    argv, words = REPORT_CASES[case]
+    before = snapshot(report_workspace)
+    code, _, err = run_cli("report", *argv, "-o", "r.html")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and words in err, (case, err)
+    assert argv[2] in err and "Traceback" not in err, err  # names the folder
+    assert snapshot(report_workspace) == before
+
+
+def test_report_reads_its_own_folders_and_older_ones(report_workspace, run_cli):
+    code, _, err = run_cli(
+        "report", "good.json", "--cut", "C", "--print", "P", "--deploy", "D", "--tolerance", "T",
+        "-o", "r.html",
+    )  # fmt: skip
+    assert code == 0, err
+    for d, f in (
+        ("C", "manifest.json"),
+        ("P", "manifest.json"),
+        ("D", "deploy.json"),
+        ("T", "tolerance.json"),
+    ):
+        assert (
+            len(json.loads((report_workspace / d / f).read_text())["pattern_fingerprint"]["sha256"])
+            == 64
+        )
+    code, _, err = run_cli(
+        "report",
+        "good.json",
+        "--cut",
+        "oldC",
+        "--print",
+        "oldP",
+        "--deploy",
+        "oldD",
+        "-o",
+        "o.html",
+    )
+    assert code == 0, err
+
+
+# ------------------------------------------------------------------------ sweep
+
+
+@pytest.mark.slow  # ~5 s: a one-worker local cluster
+def test_a_sweep_job_that_raises_prints_no_worker_traceback(tmp_path):
+    """A job refused on the worker (no 4x4 tiles 30 mm wide fit a 20 mm circle) is recorded as an
+    error with its one-line message; Dask's "Compute Failed" and traceback stay off the terminal."""
+    (tmp_path / "s.toml").write_text(
+        '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\n[fixed]\nsize = 20\nmin_feature = 30\n'
+    )
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    env.pop("FABKIRI_DEBUG", None)
+    r = subprocess.run(
+        [sys.executable, "-m", "fabkiri.cli.main", "sweep", "s.toml", "--workers", "1", "-o", "S"],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=300,
+    )
+    assert r.returncode == 1, r.stderr
+    assert "Traceback" not in r.stderr and "Compute Failed" not in r.stderr, r.stderr
+    (row,) = [json.loads(p.read_text()) for p in (tmp_path / "S" / "jobs").glob("*/row.json")]
+    assert row["status"] == "error" and row["error"].startswith("InputError: 4x4 tiles each")
+    assert "\n" not in row["error"] and f"{row['id']} error: InputError" in r.stderr
+
+
+def test_a_sweep_job_records_every_failure_and_the_summary_counts_it_once(monkeypatch):
+    """A job that missed its shape and then failed its cut and its print: all three are recorded,
+    its status is the first; the summary counts the job once among the failed and each failure."""
+    from types import SimpleNamespace
+
+    from fabkiri.errors import CheckFailed
+    from fabkiri.sweep import job as sweep_job
+    from fabkiri.sweep.run import summary
+    from fabkiri.sweep.spec import make_job
+
+    def refuse(stage):
+        def make(pattern, params, row):
+            raise CheckFailed(f"{stage} refused")
+
+        return make
+
+    designed = SimpleNamespace(files=lambda name: {}, pattern=None, valid=True)
+    monkeypatch.setattr(sweep_job, "design_pattern", lambda request: designed)
+    monkeypatch.setattr(sweep_job, "design_figures", lambda out, params: {"status": "shape missed"})
+    monkeypatch.setattr(sweep_job, "_cut", refuse("cut"))
+    monkeypatch.setattr(sweep_job, "_print", refuse("print"))
+    job = make_job({"target": "circle", "tiles": "4x4"}, ("design", "cut", "print"))
+    row, _ = sweep_job._run(job)
+    assert row["status"] == "shape missed"
+    assert row["failures"] == "shape missed; cut failed; print failed"
+    assert row["error"] == "cut: CheckFailed: cut refused; print: CheckFailed: print refused"
+    rows = [row, {"status": "ok"}, {"status": "error", "error": "InputError: x"}]
+    assert summary(rows) == (
+        "1 error, 1 ok, 1 shape missed "
+        "(2 failed: 1 cut failed, 1 error, 1 print failed, 1 shape missed)"
+    )

@@ -22,7 +22,7 @@ from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.offset_outline import preferred_holes
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
-from ..errors import InputError, SolveError
+from ..errors import FabkiriError, InputError, SolveError, TooLarge
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
 from ..pattern.fabricability import pal_bound
@@ -175,6 +175,17 @@ def design_pattern(
         if cont is not None and _rank(cont) < _rank(best):
             best = cont
     return _outcome(best, attempts, messages)
+
+
+def check_size(request: PatternRequest) -> None:
+    """The size bound :func:`design_pattern` applies to ``request``, without solving: raises
+    :class:`~fabkiri.errors.TooLarge` past it; other problems are left to the design itself."""
+    try:
+        _solver_request(request)
+    except TooLarge:
+        raise
+    except FabkiriError:
+        return
 
 
 def _solver_request(

@@ -23,7 +23,7 @@ from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import load_printer
 from ..fabricate.printjob import print_style
-from ..pattern.fingerprint import KEY, fingerprint
+from ..pattern.fingerprint import fingerprint
 from ..pattern.model import Pattern
 from ..verify.printmanifest import PrintManifest
 from .cut import design_intent
@@ -156,7 +156,7 @@ def print_pattern(
         raise CheckFailed("; ".join(problems) + "; nothing written")
     files = _files(pattern, realised, report, tiles, verifier, options, stem, source)
     stamped = PrintManifest.from_json(files["manifest.json"])
-    stamped.extra[KEY] = made_from
+    stamped.pattern_fingerprint = made_from
     files["manifest.json"] = stamped.to_json()
     return PrintOutcome(
         files=files,

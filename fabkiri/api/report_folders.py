@@ -85,7 +85,9 @@ def _read(path: Path, flag: str) -> dict[str, Any]:
     try:
         size = path.stat().st_size
         if size > limits.MAX_PATTERN_BYTES:
-            raise InputError(f"{flag} {path}: {size / 2**20:.0f} MB is larger than a manifest may be")
+            raise InputError(
+                f"{flag} {path}: {size / 2**20:.0f} MB is larger than a manifest may be"
+            )
         text = path.read_text("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{flag} {path}: cannot be read ({exc})") from None
@@ -200,4 +202,3 @@ GEOMETRY: dict[str, Callable[[Pattern, dict, Path, str], str | None]] = {
     "deploy": _deploy_geometry,
     "tolerance": _tolerance_geometry,
 }
-

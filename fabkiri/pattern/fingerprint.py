@@ -19,7 +19,11 @@ def pattern_sha256(pattern: Pattern) -> str:
     """SHA-256 of the tessellation, the tiles and the deployed nodes (mm, rounded to ``DIGITS``)."""
     nodes = np.round(np.asarray(pattern.nodes, dtype=float), DIGITS) + 0.0  # no -0.0
     text = json.dumps(
-        {"kind": pattern.kind, "tiles": np.asarray(pattern.tiles).tolist(), "nodes": nodes.tolist()},
+        {
+            "kind": pattern.kind,
+            "tiles": np.asarray(pattern.tiles).tolist(),
+            "nodes": nodes.tolist(),
+        },
         separators=(",", ":"),
     )
     return hashlib.sha256(text.encode()).hexdigest()
