@@ -21,10 +21,6 @@ class InputError(FabkiriError):
     """A parameter or a file given by the user is invalid."""
 
 
-class TooLarge(InputError):
-    """Work past the largest size measured or the free memory (:mod:`fabkiri.limits`)."""
-
-
 class SolveError(FabkiriError):
     """The inverse-design problem is ill-posed or impossible as stated."""
 

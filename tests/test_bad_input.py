@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import dumps, obj_text, standard_pattern
+from fabkiri.pattern.periodic import standard_tube
 
 from .conftest import REPO, TEMPLATES
 
@@ -103,6 +104,7 @@ FILES = {
     "missing-target.toml": '[axes]\ntarget = ["no-such-shape"]\ntiles = ["4x4"]\n',
     "big-job.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4", "300x300"]\n',
     "circle.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\n',
+    "tube.json": dumps(with_contracted_states(standard_tube(2, 4, tile_size=20.0))),
 }
 
 # id: (argv, expected exit code, words in the message, folders made before the run)
@@ -264,6 +266,37 @@ CASES = {
         (),
     ),
     # no bound on work
+    "design kagome 1x1": (
+        ["design", "--lattice", "kagome", "--tiles", "1x1", "--target", "circle", "-o", "o.json"],
+        2,
+        "at least 2x2",
+        (),
+    ),
+    "design kagome 300x300": (
+        ["design", "--lattice", "kagome", "--tiles", "300x300", "--target", "circle", "-o", "o"],
+        2,
+        "largest tested",
+        (),
+    ),
+    "design tube 300x300": (
+        ["design", "--tube", "cylinder:100,60", "--tiles", "300x300", "-o", "o.json"],
+        2,
+        "largest tested",
+        (),
+    ),
+    "design tube 1e308 mm": (
+        ["design", "--tube", "cylinder:1e308,1e308", "--tiles", "4x4", "-o", "o.json"],
+        2,
+        "--tube cylinder circumference",
+        (),
+    ),
+    "export tube3d 1e9 copies": (
+        ["export", "tube.json", "--format", "tube3d", "--copies", "1000000000", "-o", "T3"],
+        2,
+        "largest tested",
+        (),
+    ),
+    "export -o a looping link": (["export", "good.json", "-o", "self.obj"], 2, "loops", ()),
     "design -o a folder": (
         ["design", "--tiles", "4x4", "--target", "circle", "-o", "out"],
         2,
@@ -435,6 +468,7 @@ SUBPROCESS = [
     "design 1e308 target",
     "info nested 100000 deep",
     "export -o symlink",
+    "design kagome 1x1",
 ]
 
 
@@ -460,6 +494,7 @@ def workspace(tmp_path, monkeypatch):
         (tmp_path / name).write_text(text)
     (tmp_path / "link.json").symlink_to("good.json")
     (tmp_path / "loop.toml").symlink_to("loop.toml")
+    (tmp_path / "self.obj").symlink_to("self.obj")
     os.link(tmp_path / "good.json", tmp_path / "hard.json")
     monkeypatch.chdir(tmp_path)
     return tmp_path
@@ -779,3 +814,23 @@ def test_a_sweep_job_records_every_failure_and_the_summary_counts_it_once(monkey
         "1 error, 1 ok, 1 shape missed "
         "(2 failed: 1 cut failed, 1 error, 1 print failed, 1 shape missed)"
     )
+
+
+# ------------------------------------------------------------------ memory bounds
+
+
+@pytest.mark.parametrize("command", ["info", "verify"])
+def test_a_huge_valid_pattern_is_refused_before_it_is_parsed(command, tmp_path, run_cli):
+    """A valid 200 MB pattern.json (good.json padded with spaces, written in a blink): its parse alone
+    would take ~21x the file; refused from its size with the extrapolated cost, before any reading."""
+    path = tmp_path / "huge.json"
+    with path.open("w") as fh:
+        fh.write(GOOD)
+        block = " " * 2**20
+        for _ in range(200):
+            fh.write(block)
+    before = snapshot(tmp_path)
+    code, _, err = run_cli(command, path)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "200 MB pattern file needs about" in err and "GB" in err and "largest tested" in err, err
+    assert snapshot(tmp_path) == before

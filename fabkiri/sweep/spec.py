@@ -254,11 +254,10 @@ def check_sizes(jobs: list[Job], where: str) -> None:
     a sweep file with one job too large to run is refused whole, naming the job. (A spec built with
     :func:`spec_from_dict` leaves it to each job, which records the refusal as its error.)"""
     from ..api.design import check_size
-    from ..errors import TooLarge
     from .job import request_of
 
     for job in jobs:
         try:
             check_size(request_of(job.params))
-        except TooLarge as exc:
+        except InputError as exc:
             raise InputError(f"{where}: job {job.id}: {exc}") from None
