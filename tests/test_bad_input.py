@@ -834,3 +834,34 @@ def test_a_huge_valid_pattern_is_refused_before_it_is_parsed(command, tmp_path, 
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert "200 MB pattern file needs about" in err and "GB" in err and "largest tested" in err, err
     assert snapshot(tmp_path) == before
+
+
+# ------------------------------------------------------------------------ tube
+
+
+@pytest.mark.parametrize("labels", [[], ["--no-labels"]])
+def test_a_tube_cut_with_ligament_hinges_passes_its_read_back(labels, tmp_path, run_cli):
+    """The seam marks go inside the tiles as cut: a ligament sheet's tiles are inset from their
+    pattern outline, and the marks placed on the outline fell outside (39 of 40 strokes)."""
+    (tmp_path / "t.json").write_text(FILES["tube.json"])
+    code, _, err = run_cli(
+        "cut", tmp_path / "t.json", "--hinge", "ligament", "--material", "pp-0.5", *labels,
+        "-o", tmp_path / "C",
+    )  # fmt: skip
+    assert code == 0, err
+    man = json.loads((tmp_path / "C" / "manifest.json").read_text())
+    assert man["verification"]["ok"] and len(man["seam"]["hinges"]) == 2
+    assert man["sheets"][0]["engrave_paths"] >= 4 * (2 if labels else 3)  # a tick per seam corner
+
+
+def test_a_tube_print_holds_each_tile_once_and_names_the_seam(tmp_path, run_cli):
+    """A 2x4 tube's sheet stores 10 tiles (the seam copy column); its print holds the 8 real ones and
+    the seam note lists the corners to join, as `cut` does."""
+    (tmp_path / "t.json").write_text(FILES["tube.json"])
+    code, _, err = run_cli("print", tmp_path / "t.json", "-o", tmp_path / "P")
+    assert code == 0, err
+    man = json.loads((tmp_path / "P" / "manifest.json").read_text())
+    assert man["bill_of_materials"]["tiles"] == 8 and "8 tiles" in err
+    assert len(man["seam"]["hinges"]) == 2 and "seam.txt" in man["files"]
+    note = (tmp_path / "P" / "seam.txt").read_text()
+    assert "S1: tile 3 corner" in note and "printed in closed state 1" in note
