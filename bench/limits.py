@@ -69,8 +69,8 @@ def main() -> None:
         "new": [64, 128, 256, 512] if not quick else [32, 64],
         "design full": [16, 32] if not quick else [8, 16],  # 64x64: stopped after 458 CPU s
         "design rigid": [32, 64, 128] if not quick else [16, 32],
-        "design kagome": [4, 8, 12] if not quick else [4, 6],
-        "design tube": [8, 16, 24] if not quick else [6, 8],
+        "design kagome": [6, 8, 10] if not quick else [4, 6],
+        "design tube": [6, 8, 12] if not quick else [6, 8],
     }
     print(f"load average {os.getloadavg()[0]:.2f}")
     fits = {}

@@ -46,7 +46,11 @@ MEASURED = {
     "new": [[65536, 3.9, 190.3], [262144, 19.8, 802.7]],
     "design full": [[256, 1.8, 56.3], [1024, 7.9, 72.8], [4096, 458.0, 270.0]],
     "design rigid": [[4096, 6.7, 116.9], [16384, 46.4, 750.4]],
-    "design kagome": [[36, 12.5, 30.8], [64, 18.7, 31.7]],  # rows x cols, at load 14-16
+    "design kagome": [
+        [36, 12.5, 30.8],
+        [64, 18.7, 31.7],
+        [100, 29.2, 38.0],
+    ],  # rows x cols, load 14-20
     "design tube": [[64, 3.7, 24.0], [144, 9.3, 25.7]],  # rows x cols around, at load 12-14
     # per byte of pattern.json (``new`` patterns, 474 bytes a tile): `info`, its JSON parse the peak
     # (21x the file); and per tile copy (tiles x --copies) of `export --format tube3d` (a 4x6 tube).
@@ -58,7 +62,7 @@ TESTED = {
     "new": 512 * 512,
     "design full": 32 * 32,
     "design rigid": 128 * 128,
-    "design kagome": 8 * 8,
+    "design kagome": 10 * 10,
     "design tube": 12 * 12,
     "read pattern": 31172116,  # a 256x256 pattern
     "export tube3d": 24 * 128,

@@ -865,3 +865,57 @@ def test_a_tube_print_holds_each_tile_once_and_names_the_seam(tmp_path, run_cli)
     assert len(man["seam"]["hinges"]) == 2 and "seam.txt" in man["files"]
     note = (tmp_path / "P" / "seam.txt").read_text()
     assert "S1: tile 3 corner" in note and "printed in closed state 1" in note
+
+
+# ------------------------------------------- import of files that close to their precision
+
+
+def _obj_at_digits(text: str, digits: int) -> str:
+    """An OBJ with every coordinate printed to ``digits`` significant digits (another tool's file)."""
+    import re
+
+    return re.sub(r"-?\d+\.\d+(?:e-?\d+)?", lambda m: f"{float(m.group()):.{digits}g}", text)
+
+
+@pytest.mark.parametrize("moved", [0.0, 0.5], ids=["file precision", "open"])
+def test_an_imported_pattern_is_judged_at_the_precision_its_files_close_to(
+    moved, tmp_path, run_cli
+):
+    """Files printed to 8 digits close to ~1e-8 of a tile, not the exact tier's 1e-9: the import
+    records the optimiser tier they meet and `export --state 1` writes the state; a state-1 file with
+    one corner moved 0.5 mm is still refused (exit 1, nothing written)."""
+    p = with_contracted_states(standard_pattern(3, 3, tile_size=10.0))
+    design, state1 = obj_text(p, "deployed"), obj_text(p, 1)
+    if moved:
+        lines = state1.splitlines()
+        i = next(k for k, line in enumerate(lines) if line.startswith("v "))
+        x, y, z = map(float, lines[i].split()[1:])
+        lines[i] = f"v {x + moved!r} {y!r} {z!r}"
+        state1 = "\n".join(lines) + "\n"
+    (tmp_path / "d.obj").write_text(_obj_at_digits(design, 8))
+    (tmp_path / "c1.obj").write_text(_obj_at_digits(state1, 8))
+    code, _, err = run_cli(
+        "import", tmp_path / "d.obj", "--contracted", tmp_path / "c1.obj", "-o", tmp_path / "p.json"
+    )
+    assert code == 0, err
+    source = json.loads((tmp_path / "p.json").read_text())["design"]["source"]
+    code, _, err = run_cli("export", tmp_path / "p.json", "--state", "1", "-o", tmp_path / "o.obj")
+    if moved:  # the stored state 1 has a tile 0.5 mm off: open at any tier
+        assert code == 1 and "does not close" in err and not (tmp_path / "o.obj").exists(), err
+    else:
+        assert source["tier"] == "optimiser output" and 1e-9 < source["closes_to_rel"] <= 1e-5
+        assert code == 0 and (tmp_path / "o.obj").exists(), err
+
+
+def test_an_imported_pattern_that_does_not_close_is_still_refused(tmp_path, run_cli):
+    """The authors' contractible example closes in one state only: its state 2 (2.35 tile sizes
+    open) is refused whatever tier the import recorded."""
+    from .conftest import ref
+
+    code, _, err = run_cli(
+        "import", ref("contractible_design"), "--contracted", ref("contractible_contracted"),
+        "-o", tmp_path / "p.json",
+    )  # fmt: skip
+    assert code == 0, err
+    code, _, err = run_cli("export", tmp_path / "p.json", "--state", "2", "-o", tmp_path / "o.obj")
+    assert code == 1 and "does not close" in err and not (tmp_path / "o.obj").exists(), err
