@@ -52,8 +52,9 @@ def with_import_tier(pattern: Pattern) -> Pattern:
     ]
     worst = max(figures, default=0.0)
     design = dict(pattern.design or {})
+    source = design.get("source")
     design["source"] = {
-        **(design.get("source") or {}),
+        **(source if isinstance(source, dict) else {"name": source} if source else {}),
         "closes_to_rel": worst,
         "tier": tier_name(optimised=worst > TIER_EXPORTED),
     }
@@ -110,8 +111,9 @@ def _closure_tol(pattern: Pattern) -> float:
     tier for files recorded at import as closing to an optimiser's precision."""
     from ..verify.tolerances import TIER_OPTIMISED, tier_name
 
-    source = (pattern.design or {}).get("source") or {}
-    return TIER_OPTIMISED if source.get("tier") == tier_name(optimised=True) else DEFAULT_TOL
+    source = (pattern.design or {}).get("source")
+    optimised = isinstance(source, dict) and source.get("tier") == tier_name(optimised=True)
+    return TIER_OPTIMISED if optimised else DEFAULT_TOL
 
 
 def _with_state(pattern: Pattern, s: int) -> Pattern:

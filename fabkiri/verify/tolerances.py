@@ -99,8 +99,9 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
     if tol_mm is not None:
         return fabrication_tolerances(float(tol_mm), size)
     design = pattern.design or {}
+    source = design.get("source")
     optimised = any(k in design for k in ("solver", "solve", "residuals", "report")) or (
-        (design.get("source") or {}).get("tier") == tier_name(optimised=True)
+        isinstance(source, dict) and source.get("tier") == tier_name(optimised=True)
     )  # fabkiri's solver, or files that close to an optimiser's precision (recorded at import)
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
     return Tolerances(rel * size, float(tol_rad), size, tier_name(optimised))
