@@ -35,6 +35,8 @@ BASE = {
     "new": [],
     "design full": ["--target", "circle", "--solver", "full", "--init", "rescaled"],
     "design rigid": ["--target", "circle", "--rigid"],
+    "design kagome": ["--lattice", "kagome", "--target", "circle"],
+    "design tube": ["--tube", "cylinder:100,60"],
 }
 
 
@@ -62,15 +64,20 @@ def run(kind: str, n: int, out: str) -> tuple[float, float]:
 
 def main() -> None:
     quick = "--quick" in sys.argv
+    only = [a for a in sys.argv[1:] if not a.startswith("--")]  # e.g. "design kagome"
     sizes = {
         "new": [64, 128, 256, 512] if not quick else [32, 64],
         "design full": [16, 32] if not quick else [8, 16],  # 64x64: stopped after 458 CPU s
         "design rigid": [32, 64, 128] if not quick else [16, 32],
+        "design kagome": [6, 8, 10] if not quick else [4, 6],
+        "design tube": [6, 8, 12] if not quick else [6, 8],
     }
     print(f"load average {os.getloadavg()[0]:.2f}")
     fits = {}
     with tempfile.TemporaryDirectory() as d:
         for kind, ns in sizes.items():
+            if only and kind not in only:
+                continue
             rows = []
             for n in ns:
                 secs, mb, wall = run(kind, n, os.path.join(d, "p.json"))

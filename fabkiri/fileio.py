@@ -125,9 +125,25 @@ def _first_existing(path: Path) -> Path:
     return path
 
 
+def _refuse_link_loop(path: Path) -> None:
+    """A symbolic link that loops (to itself, or round several) names no file: refuse it rather than
+    replace the link."""
+    if path.is_symlink():
+        try:
+            path.resolve(strict=True)
+        except FileNotFoundError:
+            return  # a link to a missing file: the link is replaced, as always
+        except (OSError, RuntimeError):
+            raise InputError(
+                f"output {path} is a symbolic link that loops; nothing written"
+            ) from None
+
+
 def _check_destination(dest: Path) -> None:
-    """``dest`` can take a file: not a folder, not an input, every missing folder creatable."""
+    """``dest`` can take a file: not a folder, not an input, not a looping link, every missing folder
+    creatable."""
     refuse_input(dest)
+    _refuse_link_loop(dest)
     if dest.is_dir():
         raise InputError(f"output {dest} is a folder where a file must go; nothing written")
     base = _first_existing(dest.parent)
@@ -226,6 +242,7 @@ def check_output_file(path: str | os.PathLike) -> None:
     """Up-front check of a single-file output (before a long computation)."""
     path = Path(path)
     refuse_input(path)
+    _refuse_link_loop(path)
     if path.is_dir():
         raise InputError(f"output {path} is a folder, expected a file name")
     _root_folder(path.parent if str(path.parent) else Path("."))
@@ -235,6 +252,7 @@ def check_output_folder(folder: str | os.PathLike) -> None:
     """Up-front check of a folder output: a folder (or creatable as one), not an input."""
     folder = Path(folder)
     refuse_input(folder)
+    _refuse_link_loop(folder)
     if folder.exists() and not folder.is_dir():
         raise InputError(f"output {folder} exists and is not a folder")
     _root_folder(folder.parent if str(folder.parent) else Path("."))

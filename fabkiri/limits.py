@@ -46,11 +46,26 @@ MEASURED = {
     "new": [[65536, 3.9, 190.3], [262144, 19.8, 802.7]],
     "design full": [[256, 1.8, 56.3], [1024, 7.9, 72.8], [4096, 458.0, 270.0]],
     "design rigid": [[4096, 6.7, 116.9], [16384, 46.4, 750.4]],
+    "design kagome": [
+        [36, 12.5, 30.8],
+        [64, 18.7, 31.7],
+        [100, 29.2, 38.0],
+    ],  # rows x cols, load 14-20
+    "design tube": [[64, 3.7, 24.0], [144, 9.3, 25.7]],  # rows x cols around, at load 12-14
+    # per byte of pattern.json (``new`` patterns, 474 bytes a tile): `info`, its JSON parse the peak
+    # (21x the file); and per tile copy (tiles x --copies) of `export --format tube3d` (a 4x6 tube).
+    # Both from /usr/bin/time at load 12-23, MB less the 75 MB the command needs for a tiny input.
+    "read pattern": [[7759585, 3.9, 168.0], [31172116, 15.2, 717.0]],
+    "export tube3d": [[768, 5.7, 227.0], [3072, 20.6, 676.0]],
 }
 TESTED = {
     "new": 512 * 512,
     "design full": 32 * 32,
     "design rigid": 128 * 128,
+    "design kagome": 10 * 10,
+    "design tube": 12 * 12,
+    "read pattern": 31172116,  # a 256x256 pattern
+    "export tube3d": 24 * 128,
 }  # largest run to the end
 LOWER_BOUND = {"design full"}  # its largest row is a lower bound, so are its extrapolations
 
@@ -117,10 +132,44 @@ def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
         )
 
 
+def check_read_cost(path, what: str = "pattern file", error=InputError) -> None:
+    """Refuse, before it is parsed, a pattern file larger than the largest measured (or than the free
+    memory its parse would take), with the figures extrapolated from its size."""
+    if os.environ.get("FABKIRI_NO_LIMITS"):
+        return
+    try:
+        size = os.stat(path).st_size
+    except OSError:
+        return  # the reader names the problem
+    est = estimate("read pattern", size)
+    if size > est.tested_tiles or est.megabytes > available_mb():
+        raise error(
+            f"{path}: a {size / 2**20:.0f} MB {what} needs {est.text()} to read "
+            f"({est.tested_tiles / 2**20:.0f} MB, a 256x256 pattern, is the largest tested)"
+        )
+
+
+def check_copies(tiles: int, copies: int, name: str = "--copies") -> None:
+    """Refuse ``copies`` of ``tiles`` tiles past the largest measured (tube3d), before any is made."""
+    if os.environ.get("FABKIRI_NO_LIMITS"):
+        return
+    est = estimate("export tube3d", tiles * copies)
+    if tiles * copies > est.tested_tiles or est.megabytes > available_mb():
+        raise InputError(
+            f"{name} {copies}: {tiles} tiles x {copies} copies need {est.text()} "
+            f"({est.tested_tiles} tile copies is the largest tested)"
+        )
+
+
 def check_file_size(path, limit: int | None = None) -> None:
     """Refuse a file larger than ``limit`` bytes (default :data:`MAX_PATTERN_BYTES`) before it is read."""
     limit = MAX_PATTERN_BYTES if limit is None else limit
-    size = os.stat(path).st_size
+    try:
+        size = os.stat(path).st_size
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except OSError as exc:  # a symlink loop, a path through a file, no permission
+        raise InputError(f"{path}: cannot be read ({exc.strerror})") from None
     if size > limit:
         raise InputError(
             f"{path}: {size / 2**20:.1f} MB is larger than the {limit / 2**20:.0f} MB an input may have"

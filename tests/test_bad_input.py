@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +20,7 @@ import numpy as np
 import pytest
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import dumps, obj_text, standard_pattern
+from fabkiri.pattern.periodic import standard_tube
 
 from .conftest import REPO, TEMPLATES
 
@@ -100,6 +102,9 @@ FILES = {
     "unknown-axis.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\ncolour = ["red"]\n',
     "bad-tiles.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4by4"]\n',
     "missing-target.toml": '[axes]\ntarget = ["no-such-shape"]\ntiles = ["4x4"]\n',
+    "big-job.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4", "300x300"]\n',
+    "circle.toml": '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\n',
+    "tube.json": dumps(with_contracted_states(standard_tube(2, 4, tile_size=20.0))),
 }
 
 # id: (argv, expected exit code, words in the message, folders made before the run)
@@ -261,6 +266,37 @@ CASES = {
         (),
     ),
     # no bound on work
+    "design kagome 1x1": (
+        ["design", "--lattice", "kagome", "--tiles", "1x1", "--target", "circle", "-o", "o.json"],
+        2,
+        "at least 2x2",
+        (),
+    ),
+    "design kagome 300x300": (
+        ["design", "--lattice", "kagome", "--tiles", "300x300", "--target", "circle", "-o", "o"],
+        2,
+        "largest tested",
+        (),
+    ),
+    "design tube 300x300": (
+        ["design", "--tube", "cylinder:100,60", "--tiles", "300x300", "-o", "o.json"],
+        2,
+        "largest tested",
+        (),
+    ),
+    "design tube 1e308 mm": (
+        ["design", "--tube", "cylinder:1e308,1e308", "--tiles", "4x4", "-o", "o.json"],
+        2,
+        "--tube cylinder circumference",
+        (),
+    ),
+    "export tube3d 1e9 copies": (
+        ["export", "tube.json", "--format", "tube3d", "--copies", "1000000000", "-o", "T3"],
+        2,
+        "largest tested",
+        (),
+    ),
+    "export -o a looping link": (["export", "good.json", "-o", "self.obj"], 2, "loops", ()),
     "design -o a folder": (
         ["design", "--tiles", "4x4", "--target", "circle", "-o", "out"],
         2,
@@ -385,6 +421,19 @@ CASES = {
     ),
     "sweep bad tiles": (["sweep", "bad-tiles.toml", "-o", "S"], 2, "ROWSxCOLS", ()),
     "sweep unknown target": (["sweep", "missing-target.toml", "-o", "S"], 2, "no-such-shape", ()),
+    "sweep a job past the size limit": (
+        ["sweep", "big-job.toml", "-o", "S"],
+        2,
+        "job circle-300x300-",
+        (),
+    ),
+    "sweep file a symlink loop": (["sweep", "loop.toml", "-o", "S"], 2, "symbolic links", ()),
+    "sweep -o another sweep's folder": (
+        ["sweep", "circle.toml", "--workers", "1", "-o", "Other"],
+        2,
+        "another sweep",
+        ("Other",),
+    ),
     "sweep -o its input": (["sweep", "bad.toml", "-o", "bad.toml"], 2, "is an input", ()),
     "sweep --workers 0": (
         ["sweep", "unknown-axis.toml", "--workers", "0", "-o", "S"],
@@ -419,6 +468,7 @@ SUBPROCESS = [
     "design 1e308 target",
     "info nested 100000 deep",
     "export -o symlink",
+    "design kagome 1x1",
 ]
 
 
@@ -443,6 +493,8 @@ def workspace(tmp_path, monkeypatch):
     for name, text in FILES.items():
         (tmp_path / name).write_text(text)
     (tmp_path / "link.json").symlink_to("good.json")
+    (tmp_path / "loop.toml").symlink_to("loop.toml")
+    (tmp_path / "self.obj").symlink_to("self.obj")
     os.link(tmp_path / "good.json", tmp_path / "hard.json")
     monkeypatch.chdir(tmp_path)
     return tmp_path
@@ -453,6 +505,16 @@ def _prepare(root: Path, folders) -> dict[str, str]:
         (root / f).mkdir(parents=True)
     if "F" in folders:  # deploy writes frames/ inside: a file of that name blocks it
         (root / "F" / "frames").write_text("not a folder")
+    if "Other" in folders:  # another sweep's results: a job of a square target, and its table
+        row = {
+            "id": "square-4x4-0123456789",
+            "p_target": "square",
+            "p_tiles": "4x4",
+            "status": "ok",
+        }
+        (root / "Other" / "jobs" / row["id"]).mkdir(parents=True)
+        (root / "Other" / "jobs" / row["id"] / "row.json").write_text(json.dumps(row))
+        (root / "Other" / "results.csv").write_text("id,status\nsquare-4x4-0123456789,ok\n")
     if "L" in folders:  # a layout with a manifest beside it
         (root / "L" / "x.svg").write_text(FILES["bad.svg"])
         (root / "L" / "manifest.json").write_text(FILES["deep.json"])
@@ -582,3 +644,278 @@ def test_files_past_the_size_bound_are_refused_before_reading(workspace, run_cli
         code, _, err = run_cli(*argv)
         assert code == 2 and "larger than" in err and len(err.strip().splitlines()) == 1, err
     assert snapshot(workspace) == before
+
+
+# ------------------------------------------------- report: folders of another pattern or kind
+
+
+@pytest.fixture(scope="module")
+def made_folders(tmp_path_factory):
+    """good.json's cut, print, deploy and tolerance folders, and copies as older fabkiri wrote them
+    (no pattern fingerprint in their manifests), made once for the report cases."""
+    from fabkiri.cli.main import main
+
+    root = tmp_path_factory.mktemp("made")
+    (root / "good.json").write_text(GOOD)
+    for argv in (
+        ["cut", "good.json", "-o", "C"],
+        ["print", "good.json", "-o", "P"],
+        ["deploy", "good.json", "--steps", "4", "-o", "D"],
+        ["tolerance", "good.json", "--n", "20", "--no-plot", "-o", "T"],
+    ):
+        cwd = os.getcwd()
+        try:
+            os.chdir(root)
+            assert main(argv) == 0, argv
+        finally:
+            os.chdir(cwd)
+    for d, f in (("C", "manifest.json"), ("P", "manifest.json"), ("D", "deploy.json")):
+        old = root / f"old{d}"
+        shutil.copytree(root / d, old)
+        data = json.loads((old / f).read_text())
+        data.pop("pattern_fingerprint", None)
+        (old / f).write_text(json.dumps(data))
+    return root
+
+
+def _other_pattern() -> str:
+    return dumps(with_contracted_states(standard_pattern(2, 3, tile_size=20.0)))
+
+
+def _kagome_pattern() -> str:
+    from fabkiri.pattern.kagome import standard_kagome
+
+    return dumps(standard_kagome(2, 2))
+
+
+# id: (argv, words in the one-line refusal); every one exits 2 and writes nothing
+REPORT_CASES = {
+    "report --cut of another design": (["other.json", "--cut", "C"], "made from another pattern"),
+    "report --cut of an empty folder": (["good.json", "--cut", "E"], "an empty folder"),
+    "report --cut of a tolerance folder": (["good.json", "--cut", "T"], "a tolerance folder"),
+    "report --deploy of a cut folder": (["good.json", "--deploy", "C"], "not a deploy folder"),
+    "report --print of a cut folder": (["good.json", "--print", "C"], "not a print folder"),
+    "report quad cut for kagome": (["kagome.json", "--cut", "C"], "a quad cut for a kagome"),
+    "report corrupt cut manifest": (["good.json", "--cut", "Bad"], "malformed JSON"),
+    "report older cut of another design": (["other.json", "--cut", "oldC"], "another pattern"),
+    "report older print of another design": (["other.json", "--print", "oldP"], "another pattern"),
+    "report older deploy of another design": (["other.json", "--deploy", "oldD"], "frames"),
+}
+
+
+@pytest.fixture
+def report_workspace(workspace, made_folders):
+    for name in ("C", "P", "D", "T", "oldC", "oldP", "oldD"):
+        shutil.copytree(made_folders / name, workspace / name)
+    (workspace / "E").mkdir()
+    shutil.copytree(made_folders / "C", workspace / "Bad")
+    (workspace / "Bad" / "manifest.json").write_text('{"format": "fabkiri.cut", ')
+    (workspace / "other.json").write_text(_other_pattern())
+    (workspace / "kagome.json").write_text(_kagome_pattern())
+    return workspace
+
+
+@pytest.mark.parametrize("case", sorted(REPORT_CASES))
+def test_report_refuses_a_folder_of_another_pattern_or_kind(case, report_workspace, run_cli):
+    argv, words = REPORT_CASES[case]
+    before = snapshot(report_workspace)
+    code, _, err = run_cli("report", *argv, "-o", "r.html")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and words in err, (case, err)
+    assert argv[2] in err and "Traceback" not in err, err  # names the folder
+    assert snapshot(report_workspace) == before
+
+
+def test_report_reads_its_own_folders_and_older_ones(report_workspace, run_cli):
+    code, _, err = run_cli(
+        "report", "good.json", "--cut", "C", "--print", "P", "--deploy", "D", "--tolerance", "T",
+        "-o", "r.html",
+    )  # fmt: skip
+    assert code == 0, err
+    for d, f in (
+        ("C", "manifest.json"),
+        ("P", "manifest.json"),
+        ("D", "deploy.json"),
+        ("T", "tolerance.json"),
+    ):
+        assert (
+            len(json.loads((report_workspace / d / f).read_text())["pattern_fingerprint"]["sha256"])
+            == 64
+        )
+    code, _, err = run_cli(
+        "report",
+        "good.json",
+        "--cut",
+        "oldC",
+        "--print",
+        "oldP",
+        "--deploy",
+        "oldD",
+        "-o",
+        "o.html",
+    )
+    assert code == 0, err
+
+
+# ------------------------------------------------------------------------ sweep
+
+
+@pytest.mark.slow  # ~5 s: a one-worker local cluster
+def test_a_sweep_job_that_raises_prints_no_worker_traceback(tmp_path):
+    """A job refused on the worker (no 4x4 tiles 30 mm wide fit a 20 mm circle) is recorded as an
+    error with its one-line message; Dask's "Compute Failed" and traceback stay off the terminal."""
+    (tmp_path / "s.toml").write_text(
+        '[axes]\ntarget = ["circle"]\ntiles = ["4x4"]\n[fixed]\nsize = 20\nmin_feature = 30\n'
+    )
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    env.pop("FABKIRI_DEBUG", None)
+    r = subprocess.run(
+        [sys.executable, "-m", "fabkiri.cli.main", "sweep", "s.toml", "--workers", "1", "-o", "S"],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=300,
+    )
+    assert r.returncode == 1, r.stderr
+    assert "Traceback" not in r.stderr and "Compute Failed" not in r.stderr, r.stderr
+    (row,) = [json.loads(p.read_text()) for p in (tmp_path / "S" / "jobs").glob("*/row.json")]
+    assert row["status"] == "error" and row["error"].startswith("InputError: 4x4 tiles each")
+    assert "\n" not in row["error"] and f"{row['id']} error: InputError" in r.stderr
+
+
+def test_a_sweep_job_records_every_failure_and_the_summary_counts_it_once(monkeypatch):
+    """A job that missed its shape and then failed its cut and its print: all three are recorded,
+    its status is the first; the summary counts the job once among the failed and each failure."""
+    from types import SimpleNamespace
+
+    from fabkiri.errors import CheckFailed
+    from fabkiri.sweep import job as sweep_job
+    from fabkiri.sweep.run import summary
+    from fabkiri.sweep.spec import make_job
+
+    def refuse(stage):
+        def make(pattern, params, row):
+            raise CheckFailed(f"{stage} refused")
+
+        return make
+
+    designed = SimpleNamespace(files=lambda name: {}, pattern=None, valid=True)
+    monkeypatch.setattr(sweep_job, "design_pattern", lambda request: designed)
+    monkeypatch.setattr(sweep_job, "design_figures", lambda out, params: {"status": "shape missed"})
+    monkeypatch.setattr(sweep_job, "_cut", refuse("cut"))
+    monkeypatch.setattr(sweep_job, "_print", refuse("print"))
+    job = make_job({"target": "circle", "tiles": "4x4"}, ("design", "cut", "print"))
+    row, _ = sweep_job._run(job)
+    assert row["status"] == "shape missed"
+    assert row["failures"] == "shape missed; cut failed; print failed"
+    assert row["error"] == "cut: CheckFailed: cut refused; print: CheckFailed: print refused"
+    rows = [row, {"status": "ok"}, {"status": "error", "error": "InputError: x"}]
+    assert summary(rows) == (
+        "1 error, 1 ok, 1 shape missed "
+        "(2 failed: 1 cut failed, 1 error, 1 print failed, 1 shape missed)"
+    )
+
+
+# ------------------------------------------------------------------ memory bounds
+
+
+@pytest.mark.parametrize("command", ["info", "verify"])
+def test_a_huge_valid_pattern_is_refused_before_it_is_parsed(command, tmp_path, run_cli):
+    """A valid 200 MB pattern.json (good.json padded with spaces, written in a blink): its parse alone
+    would take ~21x the file; refused from its size with the extrapolated cost, before any reading."""
+    path = tmp_path / "huge.json"
+    with path.open("w") as fh:
+        fh.write(GOOD)
+        block = " " * 2**20
+        for _ in range(200):
+            fh.write(block)
+    before = snapshot(tmp_path)
+    code, _, err = run_cli(command, path)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "200 MB pattern file needs about" in err and "GB" in err and "largest tested" in err, err
+    assert snapshot(tmp_path) == before
+
+
+# ------------------------------------------------------------------------ tube
+
+
+@pytest.mark.parametrize("labels", [[], ["--no-labels"]])
+def test_a_tube_cut_with_ligament_hinges_passes_its_read_back(labels, tmp_path, run_cli):
+    """The seam marks go inside the tiles as cut: a ligament sheet's tiles are inset from their
+    pattern outline, and the marks placed on the outline fell outside (39 of 40 strokes)."""
+    (tmp_path / "t.json").write_text(FILES["tube.json"])
+    code, _, err = run_cli(
+        "cut", tmp_path / "t.json", "--hinge", "ligament", "--material", "pp-0.5", *labels,
+        "-o", tmp_path / "C",
+    )  # fmt: skip
+    assert code == 0, err
+    man = json.loads((tmp_path / "C" / "manifest.json").read_text())
+    assert man["verification"]["ok"] and len(man["seam"]["hinges"]) == 2
+    assert man["sheets"][0]["engrave_paths"] >= 4 * (2 if labels else 3)  # a tick per seam corner
+
+
+def test_a_tube_print_holds_each_tile_once_and_names_the_seam(tmp_path, run_cli):
+    """A 2x4 tube's sheet stores 10 tiles (the seam copy column); its print holds the 8 real ones and
+    the seam note lists the corners to join, as `cut` does."""
+    (tmp_path / "t.json").write_text(FILES["tube.json"])
+    code, _, err = run_cli("print", tmp_path / "t.json", "-o", tmp_path / "P")
+    assert code == 0, err
+    man = json.loads((tmp_path / "P" / "manifest.json").read_text())
+    assert man["bill_of_materials"]["tiles"] == 8 and "8 tiles" in err
+    assert len(man["seam"]["hinges"]) == 2 and "seam.txt" in man["files"]
+    note = (tmp_path / "P" / "seam.txt").read_text()
+    assert "S1: tile 3 corner" in note and "printed in closed state 1" in note
+
+
+# ------------------------------------------- import of files that close to their precision
+
+
+def _obj_at_digits(text: str, digits: int) -> str:
+    """An OBJ with every coordinate printed to ``digits`` significant digits (another tool's file)."""
+    import re
+
+    return re.sub(r"-?\d+\.\d+(?:e-?\d+)?", lambda m: f"{float(m.group()):.{digits}g}", text)
+
+
+@pytest.mark.parametrize("moved", [0.0, 0.5], ids=["file precision", "open"])
+def test_an_imported_pattern_is_judged_at_the_precision_its_files_close_to(
+    moved, tmp_path, run_cli
+):
+    """Files printed to 8 digits close to ~1e-8 of a tile, not the exact tier's 1e-9: the import
+    records the optimiser tier they meet and `export --state 1` writes the state; a state-1 file with
+    one corner moved 0.5 mm is still refused (exit 1, nothing written)."""
+    p = with_contracted_states(standard_pattern(3, 3, tile_size=10.0))
+    design, state1 = obj_text(p, "deployed"), obj_text(p, 1)
+    if moved:
+        lines = state1.splitlines()
+        i = next(k for k, line in enumerate(lines) if line.startswith("v "))
+        x, y, z = map(float, lines[i].split()[1:])
+        lines[i] = f"v {x + moved!r} {y!r} {z!r}"
+        state1 = "\n".join(lines) + "\n"
+    (tmp_path / "d.obj").write_text(_obj_at_digits(design, 8))
+    (tmp_path / "c1.obj").write_text(_obj_at_digits(state1, 8))
+    code, _, err = run_cli(
+        "import", tmp_path / "d.obj", "--contracted", tmp_path / "c1.obj", "-o", tmp_path / "p.json"
+    )
+    assert code == 0, err
+    source = json.loads((tmp_path / "p.json").read_text())["design"]["source"]
+    code, _, err = run_cli("export", tmp_path / "p.json", "--state", "1", "-o", tmp_path / "o.obj")
+    if moved:  # the stored state 1 has a tile 0.5 mm off: open at any tier
+        assert code == 1 and "does not close" in err and not (tmp_path / "o.obj").exists(), err
+    else:
+        assert source["tier"] == "optimiser output" and 1e-9 < source["closes_to_rel"] <= 1e-5
+        assert code == 0 and (tmp_path / "o.obj").exists(), err
+
+
+def test_an_imported_pattern_that_does_not_close_is_still_refused(tmp_path, run_cli):
+    """The authors' contractible example closes in one state only: its state 2 (2.35 tile sizes
+    open) is refused whatever tier the import recorded."""
+    from .conftest import ref
+
+    code, _, err = run_cli(
+        "import", ref("contractible_design"), "--contracted", ref("contractible_contracted"),
+        "-o", tmp_path / "p.json",
+    )  # fmt: skip
+    assert code == 0, err
+    code, _, err = run_cli("export", tmp_path / "p.json", "--state", "2", "-o", tmp_path / "o.obj")
+    assert code == 1 and "does not close" in err and not (tmp_path / "o.obj").exists(), err

@@ -19,6 +19,7 @@ from ..fabricate.cut import CutOptions, CutResult, cut_pattern
 from ..fabricate.materials import Material, load_material, parse_setting
 from ..fabricate.readback import Readback, verified_files
 from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
+from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
 
 DEFAULT_MATERIAL = "acrylic-3"
@@ -71,12 +72,14 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
         limits.check_scale(pattern.nodes, pattern.tiles, options.scale, "--scale")
     if isinstance(options.width, float):
         limits.check_length(options.width, "--width")
+    made_from = fingerprint(pattern)  # the input pattern's (a tube's, not its flat sheet's)
     pattern, seam_files, seam_entry = tube_cut_inputs(
         pattern, options.state
     )  # a tube: its flat sheet
 
     def cut_once(opts: CutOptions) -> CutResult:
         result = cut_pattern(pattern, opts)
+        result.manifest[KEY] = made_from
         if (
             seam_files
         ):  # both ends of every seam hinge engraved, the note and the manifest entry added

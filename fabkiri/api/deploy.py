@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from ..mechanics.collisions import Overlap
 from ..mechanics.deploy import DeploymentPath, deployment_path
 from ..mechanics.tube import tube_along_path
+from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.io import dumps
 from ..pattern.model import Pattern
 
@@ -57,6 +58,7 @@ def deploy_pattern(
     """Compute the deployment path of ``pattern`` and everything ``fabkiri deploy`` writes about it."""
     p = deployment_path(pattern, steps, path=path, driver=driver)
     summary = p.summary()
+    summary[KEY] = fingerprint(pattern)
     tube = tube_along_path(pattern, p.corners, p.t)
     if tube is not None:  # a periodic pattern: its tube in every frame
         summary["tube"] = tube

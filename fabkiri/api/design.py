@@ -22,7 +22,7 @@ from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.offset_outline import preferred_holes
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets import Target, load_target
-from ..errors import InputError, SolveError
+from ..errors import FabkiriError, InputError, SolveError
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
 from ..pattern.fabricability import pal_bound
@@ -177,10 +177,21 @@ def design_pattern(
     return _outcome(best, attempts, messages)
 
 
+def check_size(request: PatternRequest) -> None:
+    """The size bound :func:`design_pattern` applies to ``request``, without solving: raises
+    :class:`InputError` past it; other problems of the request are left to the design itself."""
+    try:
+        request, req, _, contracted = _solver_request(request, sized=False)
+    except FabkiriError:
+        return
+    _check_size(request, req, contracted)
+
+
 def _solver_request(
-    request: PatternRequest,
+    request: PatternRequest, sized: bool = True
 ) -> tuple[PatternRequest, DesignRequest, Target | None, dict]:
-    """``(request with its holes resolved, solver request, target, closed-state specs)``, or InputError."""
+    """``(request with its holes resolved, solver request, target, closed-state specs)``, or InputError
+    (with ``sized``, also past the size bound)."""
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
@@ -233,6 +244,13 @@ def _solver_request(
             f"{' '.join(p for p in parts if p)} {rows}x{cols}{' rigid' if request.rigid else ''}"
         )
     req.validate()
+    if sized:
+        _check_size(request, req, contracted)
+    return request, req, target, contracted
+
+
+def _check_size(request: PatternRequest, req: DesignRequest, contracted: dict) -> None:
+    """The tile count within what the solver that will run was measured at (:mod:`fabkiri.limits`)."""
     family = via_rigid_applies(req) or (
         request.rigid
         and request.solver != "full"
@@ -240,8 +258,9 @@ def _solver_request(
         and not request.symmetry
         and not contracted
     )  # the rigid family's figures
-    limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
-    return request, req, target, contracted
+    limits.check_tiles(
+        req.rows, req.cols, "design rigid" if family else "design full", request.i_know
+    )
 
 
 def _check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Target) -> None:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import limits as size_limits
 from ..design import conformance as conf
 from ..design import kagome_fab as KF
 from ..design.fabrication import FabricationLimits, smallest_size
@@ -120,6 +121,8 @@ def design_kagome(
     or ``"y"`` imposes that mirror alone (the lattice and the target must have it). ``fabrication``: mm
     limits the design keeps (:mod:`fabkiri.design.kagome_fab`), ``intent`` what ``cut``/``print`` then
     default to (``fabricate.design_limits.resolve`` gives both)."""
+    if rows < 2 or cols < 2:  # a single row or column has no outline side to fit each way
+        raise InputError(f"kagome inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     tgt = load_target(target, size)
     shape = conf.parse_shape_tol(shape_tol)
     if fabrication is not None:
@@ -295,6 +298,8 @@ def design_kagome_pattern(
     :func:`design_kagome` (the target defaults to a circle)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     rows, cols = request.tiles
+    if rows >= 2 and cols >= 2:  # (smaller: refused by design_kagome, in its own words)
+        size_limits.check_tiles(rows, cols, "design kagome", request.i_know)
     target = request.target or "circle"
     limits, intent = request.fabrication_limits(load_target(target, request.size))
     return design_kagome(

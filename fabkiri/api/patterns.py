@@ -7,7 +7,7 @@ contraction of the closed states an export needs (it must close), and the fabric
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import CheckFailed, InputError
@@ -31,8 +31,34 @@ def import_pattern(path: str, contracted: list[str] | tuple = (), scale: float =
     """``fabkiri import``: a design in any readable format (OBJ when the suffix says nothing), or an
     OBJ design with its contracted OBJ files as closed states 1 and 2."""
     if contracted:
-        return adopt_state_labels(import_obj(path, list(contracted), scale=scale))
-    return load_pattern(path, scale, fallback="obj")
+        return with_import_tier(adopt_state_labels(import_obj(path, list(contracted), scale=scale)))
+    return with_import_tier(load_pattern(path, scale, fallback="obj"))
+
+
+def with_import_tier(pattern: Pattern) -> Pattern:
+    """The imported pattern with the precision its files close to recorded in ``design.source``:
+    ``closes_to_rel``, the worst closure (and stored-state mismatch) in tile sizes of the closed
+    states that close within the optimiser tier, and ``tier``, the verifier's tier that meets it
+    (:mod:`fabkiri.verify.tolerances`). Others' optimised files close to their solver's precision
+    (1e-8, not 1e-9) and are judged at it; a state that does not close at all stays open."""
+    from ..mechanics.info import describe
+    from ..verify.tolerances import TIER_EXPORTED, TIER_OPTIMISED, tier_name
+
+    figures = [
+        f
+        for s in describe(pattern).states
+        for f in (s.max_closure_rel, s.supplied_match_rel)
+        if f is not None and f <= TIER_OPTIMISED
+    ]
+    worst = max(figures, default=0.0)
+    design = dict(pattern.design or {})
+    source = design.get("source")
+    design["source"] = {
+        **(source if isinstance(source, dict) else {"name": source} if source else {}),
+        "closes_to_rel": worst,
+        "tier": tier_name(optimised=worst > TIER_EXPORTED),
+    }
+    return replace(pattern, design=design)
 
 
 @dataclass(frozen=True)
@@ -80,12 +106,22 @@ def export_pattern(
     return Exported(None, out, said) if isinstance(out, dict) else Exported(out, None, said)
 
 
+def _closure_tol(pattern: Pattern) -> float:
+    """The closure a computed state must meet, in tile sizes: the info tolerance, or the optimiser
+    tier for files recorded at import as closing to an optimiser's precision."""
+    from ..verify.tolerances import TIER_OPTIMISED, tier_name
+
+    source = (pattern.design or {}).get("source")
+    optimised = isinstance(source, dict) and source.get("tier") == tier_name(optimised=True)
+    return TIER_OPTIMISED if optimised else DEFAULT_TOL
+
+
 def _with_state(pattern: Pattern, s: int) -> Pattern:
     """The pattern with closed state ``s`` stored (contracted if missing; it must close)."""
     if s in pattern.contracted:
         return pattern
     c = contract(pattern, s)
-    if c.max_closure > DEFAULT_TOL * pattern.tile_size:
+    if c.max_closure > _closure_tol(pattern) * pattern.tile_size:
         raise CheckFailed(
             f"state {s} does not close (loop closure {c.max_closure / pattern.tile_size:.3g} tile sizes "
             f"at hole {c.worst_hole}); nothing exported"

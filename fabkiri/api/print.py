@@ -23,7 +23,10 @@ from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.printers import load_printer
 from ..fabricate.printjob import print_style
+from ..fabricate.tube_cut import tube_cut_inputs
+from ..pattern.fingerprint import fingerprint
 from ..pattern.model import Pattern
+from ..verify.printmanifest import PrintManifest
 from .cut import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
@@ -117,6 +120,9 @@ def print_pattern(
         print_style(style).own_tile_thickness,
         options,
     )
+    made_from = fingerprint(pattern)  # before scaling: the manifest names the input pattern
+    # a tube: its flat sheet (every tile once, the seam copy column dropped) and its seam note
+    pattern, seam_files, seam_entry = tube_cut_inputs(pattern, state, "print")
     pattern, scale = _scaled(pattern, style, printer, options)
     for w in closes_gate(
         pattern,
@@ -152,6 +158,13 @@ def print_pattern(
     if problems:
         raise CheckFailed("; ".join(problems) + "; nothing written")
     files = _files(pattern, realised, report, tiles, verifier, options, stem, source)
+    stamped = PrintManifest.from_json(files["manifest.json"])
+    stamped.pattern_fingerprint = made_from
+    if seam_entry:  # the pairs of corners to join across the seam, as `cut` lists them
+        stamped.extra["seam"] = seam_entry
+        stamped.files = sorted(set(stamped.files) | set(seam_files))
+        files.update(seam_files)
+    files["manifest.json"] = stamped.to_json()
     return PrintOutcome(
         files=files,
         realised=realised,

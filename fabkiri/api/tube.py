@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from ..design.periodic import parse_tube_target
+from .. import limits
+from ..design.periodic import TWO_PI, TubeTarget, parse_tube_target
 from ..design.tube_solve import TubeRequest, TubeResult, design_tube
 from ..errors import CheckFailed, InputError
 from ..mechanics.contract import contract
@@ -72,12 +73,16 @@ def design_tube_pattern(
     tol: float = 1e-10,
     name: str = "",
     closed: str = "cylinder",
+    i_know: bool = False,
 ) -> TubeOutcome:
     """Design, contract, verify and report a tube of ``tiles = (rows, cols around)`` for target ``spec``
-    (``cylinder:CIRC,LENGTH`` or ``cone:R_BOTTOM,R_TOP,LENGTH``, mm)."""
-    req = TubeRequest(
-        tiles[0], tiles[1], parse_tube_target(spec), rigid=rigid, tol=tol, name=name, closed=closed
-    )
+    (``cylinder:CIRC,LENGTH`` or ``cone:R_BOTTOM,R_TOP,LENGTH``, mm). Refuses sizes past
+    :data:`~fabkiri.limits.MAX_LENGTH_MM` and tile counts past the largest measured (unless ``i_know``)."""
+    target = parse_tube_target(spec)
+    for label, mm in tube_sizes(target).items():
+        limits.check_length(mm, f"--tube {target.kind} {label}")
+    limits.check_tiles(tiles[0], tiles[1], "design tube", i_know)
+    req = TubeRequest(tiles[0], tiles[1], target, rigid=rigid, tol=tol, name=name, closed=closed)
     res = design_tube(req)
     pattern = res.pattern
     problems: list[str] = []
@@ -118,6 +123,14 @@ def design_tube_pattern(
     return TubeOutcome(pattern, res, verification, tube, problems)
 
 
+def tube_sizes(target: TubeTarget) -> dict[str, float]:
+    """The sizes the user gave (mm), by name: a cylinder's circumference and length, a cone's radii
+    and length."""
+    if target.kind == "cylinder":
+        return {"circumference": TWO_PI * target.r_bottom, "length": target.length}
+    return {"R_BOTTOM": target.r_bottom, "R_TOP": target.r_top, "length": target.length}
+
+
 def tube_3d_files(
     pattern: Pattern,
     *,
@@ -151,6 +164,7 @@ def tube_3d_files(
         raise CheckFailed(
             "not a closed tube: " + "; ".join(f"{c.name} {c.value:.3g} {c.unit}" for c in seam_fail)
         )
+    limits.check_copies(len(pattern.tiles), copies)  # (a whole number >= 1: state_frame says)
     closed = {s: pattern.contracted.get(s, contract(pattern, s).corners) for s in (1, 2)}
     pattern = pattern.with_contracted(closed)
     files: dict[str, bytes] = {}

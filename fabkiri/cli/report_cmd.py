@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..api.report_folders import check_report_folders
 from ..errors import InputError
 from ..fileio import atomic_write
 from .pattern_cmds import load_any
@@ -15,20 +16,21 @@ def cmd_report(args: argparse.Namespace) -> int:
     from ..mechanics.contract import contract_both
     from ..render.report import SECTIONS, build_report
 
-    for flag, folder in (
-        ("--cut", args.cut),
-        ("--print", args.print_dir),
-        ("--deploy", args.deploy),
-        ("--tolerance", args.tolerance),
-    ):
-        if folder and not Path(folder).is_dir():
-            raise InputError(f"{flag} {folder}: no such folder")
     out = Path(args.output)
     if out.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"-o {out}: the report is an .html file")
     if out.resolve() == Path(args.file).resolve():
         raise InputError(f"-o {out} would overwrite the input")
     pattern = load_any(args.file)
+    check_report_folders(
+        pattern,
+        {
+            "--cut": args.cut,
+            "--print": args.print_dir,
+            "--deploy": args.deploy,
+            "--tolerance": args.tolerance,
+        },
+    )
     both = contract_both(pattern)
     closes = all(c.max_closure <= 1e-9 * pattern.tile_size for c in both.values())
     states = {s: pattern.contracted.get(s, c.corners) for s, c in both.items()} if closes else None

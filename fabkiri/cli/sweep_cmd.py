@@ -55,7 +55,9 @@ def _client(address: str):
         raise InputError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 
 
-def _show_cluster(client) -> None:
+def _show_cluster(client, jobs: str) -> None:
+    """The jobs and the cluster, once the output folder was accepted and the cluster is up."""
+    print(f"fabkiri: {jobs}", file=sys.stderr)
     try:
         import bokeh  # noqa: F401  (the dashboard is served only with bokeh installed)
 
@@ -70,11 +72,11 @@ def _show_cluster(client) -> None:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ..sweep import load_spec, sweep
+    from ..sweep.run import summary
 
     spec = load_spec(args.file)
     client = _client(args.scheduler) if args.scheduler else None
     try:
-        print(f"fabkiri: {len(spec.jobs)} jobs ({'+'.join(spec.actions)})", file=sys.stderr)
         res = sweep(
             spec,
             client,
@@ -83,7 +85,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             job_timeout=args.job_timeout,
             retry_failed=args.retry_failed,
             progress=Bar(),
-            on_cluster=_show_cluster,
+            on_cluster=lambda c: _show_cluster(
+                c, f"{len(spec.jobs)} jobs ({'+'.join(spec.actions)})"
+            ),
         )
     except (
         KeyboardInterrupt
@@ -97,20 +101,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
-    counts: dict[str, int] = {}
-    for (
-        r
-    ) in res.rows:  # str: a row without a status is counted as "None", and sorts with the others
-        counts[str(r.get("status"))] = counts.get(str(r.get("status")), 0) + 1
     print(
         f"wrote {args.output}: {len(res.rows)} jobs ({res.ran} run now, {res.skipped} already done) in "
-        f"{res.wall_s:.1f} s: "
-        + ", ".join(f"{v} {k}" for k, v in sorted(counts.items()))
-        + "; results.csv, index.html",
+        f"{res.wall_s:.1f} s: {summary(res.rows)}; results.csv, index.html",
         file=sys.stderr,
     )
     for r in res.rows:
-        if r.get("status") in ("error", "timeout"):
+        if r.get("error"):  # every failure of every job, one line each
             print(f"fabkiri: job {r['id']} {r['status']}: {r.get('error')}", file=sys.stderr)
     return 1 if res.failed or any(r.get("status") in ("error", "timeout") for r in res.rows) else 0
 

@@ -7,6 +7,7 @@ import json
 import sys
 
 from ..fileio import atomic_write_many
+from ..pattern.fingerprint import KEY, fingerprint
 from .argtypes import bounded
 from .pattern_cmds import _nonneg, _positive, load_any
 
@@ -33,6 +34,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
     )
     d = res.to_dict()
     d["pattern"] = pattern.name
+    d[KEY] = fingerprint(pattern)
     files: dict[str, bytes | str] = {"tolerance.json": json.dumps(d, indent=2) + "\n"}
     if not args.no_plot:
         files["tolerance.png"] = tolerance_png(res, title=pattern.name)

@@ -27,6 +27,7 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
         tol=args.tol,
         name=args.name or "",
         closed=args.closed or "cylinder",
+        i_know=args.i_know,
     )
     atomic_write(args.output, out.text())
     print(f"wrote {args.output}: tube {rows}x{cols}", file=sys.stderr)

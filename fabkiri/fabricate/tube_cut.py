@@ -54,41 +54,62 @@ def seam_hinges(pattern: Pattern, seam: Seam) -> list[dict]:
     return out
 
 
-def seam_note(pattern: Pattern, seam: Seam, state: int, hinges: list[dict]) -> str:
-    """The assembly note: which corners to join across the seam, and the tube each state makes."""
+# how the seam's pairs are joined and found: on a cut sheet, and on printed tiles (which carry no marks)
+JOINS = {
+    "cut": (
+        "Join each pair with the sheet's hinge kind across the seam (tape over both corners, or a glued "
+        "tab for ligament hinges):",
+        "Both corners of each pair are engraved with its label (S1, S2, ...) and a tick.",
+    ),
+    "print": (
+        "Join each pair across the seam with a strip of the hinge material (or tape) over both corners:",
+        "Tiles are numbered row by row from the sheet's bottom-left tile (0) as printed; the first and "
+        "last column of the print are the seam's two sides.",
+    ),
+}
+
+
+def seam_note(
+    pattern: Pattern, seam: Seam, state: int, hinges: list[dict], made: str = "cut"
+) -> str:
+    """The assembly note: which corners to join across the seam, and the tube each state makes
+    (``made``: ``cut`` or ``print``, how the pairs are joined and found)."""
     Y = pattern.contracted.get(state, contract(pattern, state).corners)
     m = seam_map(Y, seam)
+    done = "cut" if made == "cut" else "printed"
     if seam.closed == "cone":
         ts = tube_state(pattern, seam, Y, state)
         roll = (
-            f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
+            f"Roll the sheet ({done} in closed state {state}) so its left and right edges meet: they close with a "
             f"rotation of {m.rotation:.4f} rad about an apex, so it rolls into a cone of radius "
             f"{ts.radius_min_mm:.3f} to {ts.radius_max_mm:.3f} mm, {ts.length_mm:.3f} mm long."
         )
     else:
         roll = (
-            f"Roll the sheet (cut in closed state {state}) so its left and right edges meet: they close with a "
+            f"Roll the sheet ({done} in closed state {state}) so its left and right edges meet: they close with a "
             f"pure translation of {m.period:.3f} mm (rotation {m.rotation:.1e} rad), the circumference; the "
             f"tube's radius is {m.period / (2 * np.pi):.3f} mm."
         )
     lines = [
         f"Seam of {pattern.name or 'the tube'}: {len(hinges)} hinges join the sheet's right edge to its left "
-        f"edge after cutting.",
+        f"edge after {'cutting' if made == 'cut' else 'printing'}.",
         roll,
-        "Join each pair with the sheet's hinge kind across the seam (tape over both corners, or a glued "
-        "tab for ligament hinges):",
+        JOINS[made][0],
     ]
     lines += [
         f"  S{i + 1}: tile {h['tile']} corner {h['corner']}  <->  tile {h['joins_tile']} corner "
         f"{h['joins_corner']}"
         for i, h in enumerate(hinges)
     ]
-    lines.append("Both corners of each pair are engraved with its label (S1, S2, ...) and a tick.")
+    lines.append(JOINS[made][1])
     return "\n".join(lines) + "\n"
 
 
-def tube_cut_inputs(pattern: Pattern, state: int) -> tuple[Pattern, dict[str, bytes], dict]:
+def tube_cut_inputs(
+    pattern: Pattern, state: int, made: str = "cut"
+) -> tuple[Pattern, dict[str, bytes], dict]:
     """For a tube: (its flat sheet, extra files, manifest entry); for a flat pattern: itself, nothing.
+    ``made``: ``cut`` or ``print`` (the note's words on joining the seam).
 
     Raises :class:`CheckFailed` when a closed state's seam is not a pure translation (nothing is cut).
     """
@@ -104,7 +125,7 @@ def tube_cut_inputs(pattern: Pattern, state: int) -> tuple[Pattern, dict[str, by
         )
     hinges = seam_hinges(pattern, seam)
     sheet = flat_sheet(pattern.with_contracted(closed), seam)
-    note = seam_note(pattern.with_contracted(closed), seam, state, hinges)
+    note = seam_note(pattern.with_contracted(closed), seam, state, hinges, made)
     entry = {"columns": seam.columns, "rows": len(seam.pairs), "hinges": hinges, "note": "seam.txt"}
     return sheet, {"seam.txt": note.encode()}, entry
 
@@ -115,6 +136,15 @@ def _placed(result: CutResult, tile: int, pts: np.ndarray, scale: float) -> tupl
     return int(row["sheet"]) - 1, geometry.rotate(
         pts * scale, float(row["rotation_rad"])
     ) + np.array(row["shift_mm"])
+
+
+def _region(result: CutResult, tile: int, pts: np.ndarray, scale: float) -> tuple[int, np.ndarray]:
+    """Sheet index (0-based) and the tile's region as cut, where its marks must lie: the cut's own
+    (a ligament sheet's tiles are inset from their pattern outline to leave the ligaments room), else
+    the pattern tile placed as the manifest says."""
+    if result.tile_regions is not None and result.tile_sheet is not None:
+        return int(result.tile_sheet[tile]), np.asarray(result.tile_regions[tile], dtype=float)
+    return _placed(result, tile, pts, scale)
 
 
 def _corner_mark(poly: np.ndarray, k: int, text: str) -> list[np.ndarray]:
@@ -146,7 +176,7 @@ def mark_seam(
     before = [(sd.count("ENGRAVE"), sd.length("ENGRAVE")) for sd in result.sheets]
     for i, h in enumerate(hinges):
         for tile, corner in ((h["tile"], h["corner"]), (h["joins_tile"], h["joins_corner"])):
-            s, poly = _placed(result, tile, Y[tile], scale)
+            s, poly = _region(result, tile, Y[tile], scale)
             for stroke in _corner_mark(poly, CORNER.index(corner), f"S{i + 1}"):
                 result.sheets[s].add("ENGRAVE", stroke, False, tile)
     colors = options.colors or options.material.colors

@@ -224,6 +224,7 @@ def write_pattern(pattern: Pattern, path: str | os.PathLike) -> Path:
 
 
 def _read_text(path: str | os.PathLike) -> str:
+    limits.check_read_cost(path, error=PatternError)  # its parse alone takes ~21x the file
     return read_input(
         path, max_bytes=limits.MAX_PATTERN_BYTES, what="pattern file", error=PatternError
     )

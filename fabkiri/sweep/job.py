@@ -90,6 +90,7 @@ def _run(job: Job) -> tuple[dict, dict[str, bytes]]:
     if not out.valid and set(job.actions) - {"design"}:
         row["notes"] = "not cut, printed or deployed: the design failed its checks"
         return row, _encoded(files)
+    failures = [] if row["status"] == "ok" else [row["status"]]
     for stage, make in (("cut", _cut), ("print", _print), ("deploy", _deploy)):
         if stage not in job.actions:
             continue
@@ -98,10 +99,12 @@ def _run(job: Job) -> tuple[dict, dict[str, bytes]]:
         except (
             FabkiriError
         ) as exc:  # a refusal of this stage: the design and the other stages are kept
+            failures.append(f"{stage} failed")
             row["status"] = f"{stage} failed" if row["status"] == "ok" else row["status"]
             row["error"] = "; ".join(
                 filter(None, [row.get("error"), f"{stage}: {describe_error(exc)}"])
             )
+    row["failures"] = "; ".join(failures)  # every one (the status names the first)
     return row, _encoded(files)
 
 

@@ -78,6 +78,7 @@ def sweep(
         raise InputError(f"--workers must be at least 1, got {workers}")
     if job_timeout is not None and not job_timeout > 0:
         raise InputError(f"--job-timeout must be positive, got {job_timeout}")
+    check_same_sweep(out, spec)
     (out / "jobs").mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     done = {
@@ -114,6 +115,69 @@ def sweep(
         result.tables = write_tables(out, result.rows)
     result.wall_s = time.perf_counter() - t0
     return result
+
+
+def _inputs(row: dict) -> str:
+    """A row's inputs (its parameters and actions), the same across fabkiri versions."""
+    return json.dumps(
+        {k: v for k, v in row.items() if k.startswith("p_") or k == "actions"},
+        sort_keys=True,
+        default=str,
+    )
+
+
+def check_same_sweep(out: Path, spec: SweepSpec) -> None:
+    """Refuse an output folder that holds another sweep's results: a job this sweep does not have
+    (its tables would be replaced without it). The same sweep, resumed or grown, is accepted."""
+    jobs = out / "jobs"
+    if not jobs.is_dir():
+        tables = [n for n in ("results.csv", "results.parquet") if (out / n).exists()]
+        if tables:
+            raise InputError(
+                f"-o {out}: holds {tables[0]} but no jobs/ (not this sweep's folder); "
+                "choose another folder"
+            )
+        return
+    ours = {_inputs(_base_row(j)) for j in spec.jobs}
+    ids = {j.id for j in spec.jobs}
+    foreign = []
+    for d in sorted(jobs.iterdir()):
+        try:
+            row = json.loads((d / ROW_FILE).read_text())
+        except (OSError, ValueError):
+            continue  # no finished job there
+        if isinstance(row, dict) and row.get("id") not in ids and _inputs(row) not in ours:
+            foreign.append(d.name)
+    if foreign:
+        raise InputError(
+            f"-o {out}: holds the results of another sweep ({len(foreign)} job(s) not in "
+            f"{spec.source or 'this sweep'}, e.g. {foreign[0]}); choose another folder"
+        )
+
+
+FAILED = ("error", "timeout")
+
+
+def summary(rows: list[dict]) -> str:
+    """Each job counted once by its status; then the failed jobs (counted once each) and their
+    failures by kind (a job that missed its shape and failed its cut counts in both kinds)."""
+    counts: dict[str, int] = {}
+    kinds: dict[str, int] = {}
+    failed = 0
+    for r in rows:  # str: a row without a status is counted as "None", and sorts with the others
+        status = str(r.get("status"))
+        counts[status] = counts.get(status, 0) + 1
+        if status in ("ok", "None"):
+            continue
+        failed += 1
+        for kind in str(r.get("failures") or status).split("; "):
+            kinds[kind] = kinds.get(kind, 0) + 1
+    text = ", ".join(f"{v} {k}" for k, v in sorted(counts.items()))
+    if failed:
+        text += (
+            f" ({failed} failed: " + ", ".join(f"{v} {k}" for k, v in sorted(kinds.items())) + ")"
+        )
+    return text
 
 
 def local_client(workers: int | None = None):

@@ -103,7 +103,9 @@ def load_spec(path: str | Path) -> SweepSpec:
         raise InputError(f"{path}: not valid TOML ({exc})") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read sweep file {path}: {exc}") from None
-    return spec_from_dict(data, base=path.parent, source=str(path))
+    spec = spec_from_dict(data, base=path.parent, source=str(path))
+    check_sizes(spec.jobs, str(path))
+    return spec
 
 
 def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> SweepSpec:
@@ -245,3 +247,17 @@ def _check_targets(jobs: list[Job], where: str) -> None:
             load_target(t, None)
         except InputError as exc:
             raise InputError(f"{where}: target {t!r}: {exc}") from None
+
+
+def check_sizes(jobs: list[Job], where: str) -> None:
+    """Every job within the design's size bound (:mod:`fabkiri.limits`), before any worker starts:
+    a sweep file with one job too large to run is refused whole, naming the job. (A spec built with
+    :func:`spec_from_dict` leaves it to each job, which records the refusal as its error.)"""
+    from ..api.design import check_size
+    from .job import request_of
+
+    for job in jobs:
+        try:
+            check_size(request_of(job.params))
+        except InputError as exc:
+            raise InputError(f"{where}: job {job.id}: {exc}") from None

@@ -21,6 +21,7 @@ WHEN_GIVEN = (
     "unlabelled_hinges",
     "pins",
 )  # written only by the styles that have them
+ADDED_LAST = ("assembly_pieces", "bill_of_materials", "pattern_fingerprint")  # None: not written
 
 
 @dataclass
@@ -51,6 +52,9 @@ class PrintManifest:
     pins: dict[str, Any] | None = None
     assembly_pieces: list[dict[str, Any]] | None = None
     bill_of_materials: dict[str, Any] | None = None
+    pattern_fingerprint: dict[str, Any] | None = (
+        None  # the pattern's hash and counts (report checks it)
+    )
     extra: dict[str, Any] = field(default_factory=dict)
 
     def check(self, name: str) -> dict[str, Any] | None:
@@ -66,9 +70,7 @@ class PrintManifest:
         out: dict[str, Any] = {}
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name == "extra" or (
-                v is None and f.name in (*WHEN_GIVEN, "assembly_pieces", "bill_of_materials")
-            ):
+            if f.name == "extra" or (v is None and f.name in (*WHEN_GIVEN, *ADDED_LAST)):
                 continue
             out[f.name] = v
         out.update(self.extra)

@@ -98,11 +98,18 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
     size = pattern.tile_size
     if tol_mm is not None:
         return fabrication_tolerances(float(tol_mm), size)
-    optimised = any(k in (pattern.design or {}) for k in ("solver", "solve", "residuals", "report"))
+    design = pattern.design or {}
+    source = design.get("source")
+    optimised = any(k in design for k in ("solver", "solve", "residuals", "report")) or (
+        isinstance(source, dict) and source.get("tier") == tier_name(optimised=True)
+    )  # fabkiri's solver, or files that close to an optimiser's precision (recorded at import)
     rel = TIER_OPTIMISED if optimised else TIER_EXPORTED
-    return Tolerances(
-        rel * size, float(tol_rad), size, "optimiser output" if optimised else "exported data"
-    )
+    return Tolerances(rel * size, float(tol_rad), size, tier_name(optimised))
+
+
+def tier_name(optimised: bool) -> str:
+    """The relative tier's name (spec §10): optimiser output (1e-5) or exported data (1e-9)."""
+    return "optimiser output" if optimised else "exported data"
 
 
 def worst_at(prefix: str, values: np.ndarray) -> str | None:
