@@ -14,12 +14,13 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from .. import limits
-from ..errors import CheckFailed
-from ..fabricate.cut import CutOptions, CutResult, cut_pattern
+from ..errors import CheckFailed, FabricationError
+from ..fabricate.cut import CutOptions, CutResult, closed_states, cut_pattern
 from ..fabricate.materials import Material, load_material, parse_setting
 from ..fabricate.readback import Readback, verified_files
 from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
 from ..pattern.model import Pattern
+from .advice import Ask, Refused, cut_alternatives, cut_refusal
 
 DEFAULT_MATERIAL = "acrylic-3"
 
@@ -63,8 +64,12 @@ class CutOutcome:
     files: dict[str, bytes]
 
 
-def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = True) -> CutOutcome:
-    """Cut ``pattern`` as ``options`` say (a tube: its flat sheet and seam), then read the files back."""
+def cut_files(
+    pattern: Pattern, options: CutOptions, *, use_verifier: bool = True, ask: Ask | None = None
+) -> CutOutcome:
+    """Cut ``pattern`` as ``options`` say (a tube: its flat sheet and seam), then read the files back.
+    A refusal of the web and edge rules raises :class:`~fabkiri.api.advice.Refused` naming the options
+    that pass (``ask``: how the command was given, so that each is a line that runs)."""
     if isinstance(
         options.scale, float
     ):  # numbers that would overflow the geometry: one line, up front
@@ -89,7 +94,7 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
         rb, files = verified_files(pattern, result, use_verifier=use_verifier, force=options.force)
         return CutOutcome(result=result, readback=rb, files=files)
 
-    result = cut_once(options)
+    result = _refusal_advice(lambda: cut_once(options), pattern, options, ask)
     try:
         return verified(result)
     except CheckFailed as exc:
@@ -102,6 +107,34 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
             float(result.manifest["scale"]),
             exc,
         )
+
+
+def _refusal_advice(
+    step: Callable[[], CutResult], pattern: Pattern, options: CutOptions, ask: Ask | None
+) -> CutResult:
+    """``step()``; when it fails and the web and edge rules refuse the material and hinge kind at the
+    scale asked for, the refusal is raised again as :class:`Refused` with the checked options (exit 1
+    whatever the flags: a ligament sheet that cannot be cut used to exit 2 at a given scale)."""
+    try:
+        return step()
+    except (CheckFailed, FabricationError) as exc:
+        corners = closed_states(pattern)[options.state]
+        scale = _asked_scale(options, corners)
+        kind = options.hinge or options.material.hinge
+        if isinstance(exc, Refused) or cut_refusal(corners, options.material, kind, scale) is None:
+            raise
+        raise Refused(
+            str(exc), cut_alternatives(pattern, options, scale, ask=ask or Ask())
+        ) from None
+
+
+def _asked_scale(options: CutOptions, corners) -> float | None:
+    """The scale asked for: ``--scale``, ``--width`` over the closed span, 1, or None for ``auto``."""
+    if "auto" in (options.scale, options.width):
+        return None
+    if isinstance(options.width, float):
+        return options.width / float(corners[..., 0].max() - corners[..., 0].min())
+    return 1.0 if options.scale is None else float(options.scale)
 
 
 READBACK_REFUSED = "read-back verification failed"
