@@ -212,7 +212,8 @@ def test_print_refusal_states_the_minimum(run_cli, tmp_path):
     f = PATTERNS / "circle-8x8-rigid.json"
     need = fb.print_minimum(read_pattern(f), "tiles-and-strips", load_printer("prusa-mk4"))
     code, _, err = run_cli("print", f, "--scale", 0.99 * need.min_scale, "-o", tmp_path / "p")
-    assert code == 2 and f"print at --scale ≥ {need.min_scale:g}" in err, err
+    # a refusal of the plan checks is a check that failed (exit 1), as with --scale auto (it was 2)
+    assert code == 1 and f"print at --scale ≥ {need.min_scale:g}" in err, err
     assert not (tmp_path / "p").exists()
 
 

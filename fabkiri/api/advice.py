@@ -13,6 +13,7 @@ check failed, whatever the flags) carrying the alternatives; the CLI prints them
 from __future__ import annotations
 
 import shlex
+from pathlib import Path
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
@@ -59,19 +60,22 @@ class Ask:
 
 
 class Refused(CheckFailed, FabricationError):
-    """A fabricability refusal (exit 1, a check failed) with the :class:`Alternative` s that pass."""
+    """A fabricability refusal (exit 1, a check failed, whatever the flags) carrying the
+    :class:`Alternative` s that pass; its text is the one-line reason, :meth:`option_lines` the options
+    (the CLI prints them on stdout, one runnable line each)."""
 
     def __init__(self, reason: str, options: list[Alternative]):
         super().__init__(reason)
         self.reason = reason
         self.alternatives = list(options)
 
-    def __str__(self) -> str:
+    def option_lines(self) -> list[str]:
+        """``# options ...`` and then one ``fabkiri ...    # detail`` line per option: each runs as it is."""
         if not self.alternatives:
-            return f"{self.reason}\n  options: none passes the same checks at this size"
-        lines = [f"{self.reason}", "  options (each passes the same checks):"]
-        lines += [f"    {a.command}    # {a.detail}" for a in self.alternatives]
-        return "\n".join(lines)
+            return ["# options: none passes the same checks"]
+        return ["# options (each passes the same checks; run one as it is):"] + [
+            f"{a.command}    # {a.detail}" for a in self.alternatives
+        ]
 
 
 def alternatives(
@@ -236,7 +240,7 @@ def print_alternatives(
             )
     styles = (style, *(s for s in fb.PRINT_STYLES if s != style))
     memo: dict = {}
-    for name in available_printers():
+    for name in sorted(available_printers(), key=lambda n: n != asked.name):  # the one asked first
         own = name == asked.name
         fits = []
         for s in styles:
@@ -340,20 +344,21 @@ def design_line(
         "--hinge" if "hinge" in process else "--style",
         process.get("hinge") or process["style"],
     ]
-    stem = ask.file.rsplit("/", 1)[-1].removesuffix(".json")
     tag = process.get("material") or process["printer"]
+    new = str(Path(ask.file).with_name(f"{Path(ask.file).stem}-{Path(tag).stem}.json"))
     command = _line(
         "fabkiri", "design", "--tiles", f"{rows}x{cols}", "--target", name, "--size", f"{size:g}",
         *(["--lattice", lattice["kind"]] if lattice.get("kind", "quad") != "quad" else []),
         *(["--rigid"] if opts.get("rigid") else []),
         *(["--symmetry", opts["symmetry"]] if opts.get("symmetry") else []),
-        *flags, "-o", f"{stem}-{tag}.json",
+        *flags, "-o", new,
     )  # fmt: skip
     return Alternative(
         "design",
         command,
-        f"a design made for {' '.join(process.values())} at --size {size:g} (then "
-        f"`fabkiri {'cut' if 'material' in process else 'print'} {stem}-{tag}.json`)",
+        f"a design made for {' '.join(process.values())} at --size {size:g}, which the room check "
+        f"does not rule out (a necessary condition; then "
+        f"`fabkiri {'cut' if 'material' in process else 'print'} {new}`)",
         DESIGN_GATE,
         {**process, "size": size},
     )

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import re
 import sys
 from pathlib import Path
 
-from ..api.advice import Ask
+from ..api.advice import Ask, Refused
 from ..api.cut import cut_files, cut_material
 from ..errors import InputError
 from ..fabricate.cut import FORMATS, CutOptions
@@ -76,6 +77,16 @@ MATERIAL_FLAGS = tuple(
 ) + (("set", "--set", None),)  # fmt: skip
 
 
+@contextlib.contextmanager
+def options_on_stdout():
+    """A refusal's checked options on stdout, one runnable line each (the error stays one line on stderr)."""
+    try:
+        yield
+    except Refused as exc:
+        print("\n".join(exc.option_lines()))
+        raise
+
+
 def kept_flags(args: argparse.Namespace, spec) -> tuple[str, ...]:
     """The command-line words of the options in ``spec`` that differ from their defaults."""
     out: list[str] = []
@@ -135,7 +146,8 @@ def cmd_cut(args: argparse.Namespace) -> int:
         flags=kept_flags(args, CUT_FLAGS),
         process_flags=kept_flags(args, MATERIAL_FLAGS),
     )
-    cut = cut_files(pattern, options, use_verifier=not args.no_verify, ask=ask)
+    with options_on_stdout():
+        cut = cut_files(pattern, options, use_verifier=not args.no_verify, ask=ask)
     rb, result = cut.readback, cut.result
     written = atomic_write_many(out, cut.files)
     for w in result.warnings:

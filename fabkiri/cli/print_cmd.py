@@ -12,7 +12,7 @@ from ..api.print import PrintOptions, print_pattern
 from ..fabricate import mesh
 from ..fabricate.printers import available_printers
 from ..fileio import atomic_write_many
-from .cut_cmd import kept_flags
+from .cut_cmd import kept_flags, options_on_stdout
 from .pattern_cmds import _positive, load_any
 
 
@@ -58,19 +58,20 @@ def cmd_print(args: argparse.Namespace) -> int:
         material=args.material,
         force=args.force,
     )
-    out = print_pattern(
-        pattern,
-        options,
-        stem=Path(args.file).stem,
-        source=Path(args.file).name,
-        notify=lambda text: print(text, file=sys.stderr),
-        ask=Ask(
-            file=args.file,
-            output=args.output,
-            flags=kept_flags(args, PRINT_FLAGS),
-            process_flags=kept_flags(args, PRINTER_FLAGS),
-        ),
-    )
+    with options_on_stdout():
+        out = print_pattern(
+            pattern,
+            options,
+            stem=Path(args.file).stem,
+            source=Path(args.file).name,
+            notify=lambda text: print(text, file=sys.stderr),
+            ask=Ask(
+                file=args.file,
+                output=args.output,
+                flags=kept_flags(args, PRINT_FLAGS),
+                process_flags=kept_flags(args, PRINTER_FLAGS),
+            ),
+        )
     atomic_write_many(args.output, out.files)
     print(
         f"wrote {len(out.files)} files to {args.output}: {out.describe()}, {time.perf_counter() - t0:.1f} s",
