@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 import re
 import shlex
+from pathlib import Path
 
 import pytest
-
 from fabkiri.api.advice import CUT_GATE, DESIGN_GATE, PRINT_GATE, Refused, alternatives
 from fabkiri.api.cut import cut_files
 from fabkiri.api.print import PrintOptions, print_pattern
@@ -20,7 +20,7 @@ from fabkiri.pattern.io import read_pattern
 from fabkiri.templates import template_dir
 
 PATTERNS = template_dir("patterns")
-DATA = __import__("pathlib").Path(__file__).parent / "data"
+DATA = Path(__file__).parent / "data"
 
 
 def _options(out: str, err: str) -> list[list[str]]:
@@ -175,3 +175,22 @@ def test_print_refusal_from_the_api_carries_the_options():
     lines = exc.value.option_lines()
     assert len(lines) == len(exc.value.alternatives) + 1
     assert all(ln.startswith("fabkiri ") for ln in lines[1:])
+
+
+# ---------------------------------------------------------------- the shipped templates (issue 32 must-show)
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(p.name for p in PATTERNS.glob("*.json")))
+def test_every_shipped_template_cuts_in_acrylic_and_prints_on_prusa_mk4(name):
+    """Every pattern in templates/patterns/ cuts with acrylic-3 and prints in tiles-and-strips on
+    prusa-mk4 at --scale auto, through the front doors (read-back and print checks included)."""
+    p = read_pattern(PATTERNS / name)
+    cut = cut_files(
+        p,
+        CutOptions(material=load_material("acrylic-3"), scale="auto", formats=("dxf",)),
+    )
+    assert cut.readback.ok and cut.files
+    out = print_pattern(
+        p, PrintOptions(style="tiles-and-strips", printer="prusa-mk4", scale="auto")
+    )
+    assert out.mesh_report.ok and out.verifier.ok and out.files
+    assert out.scale <= fb.print_minimum(p, "tiles-and-strips", load_printer("prusa-mk4")).max_scale

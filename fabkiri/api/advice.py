@@ -13,11 +13,11 @@ check failed, whatever the flags) carrying the alternatives; the CLI prints them
 from __future__ import annotations
 
 import shlex
-from pathlib import Path
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import CheckFailed, FabricationError, FabkiriError
+from ..errors import CheckFailed, FabkiriError, FabricationError
 from ..fabricate import fabricability as fb
 from ..fabricate.materials import HINGE_KINDS, Material, available, load_material
 from ..fabricate.printers import available_printers, load_printer
@@ -345,7 +345,8 @@ def design_line(
         process.get("hinge") or process["style"],
     ]
     tag = process.get("material") or process["printer"]
-    new = str(Path(ask.file).with_name(f"{Path(ask.file).stem}-{Path(tag).stem}.json"))
+    where = Path(ask.output).parent if ask.output else Path(ask.file).parent  # beside the output
+    new = str(where / f"{Path(ask.file).stem}-{Path(tag).stem}.json")
     command = _line(
         "fabkiri", "design", "--tiles", f"{rows}x{cols}", "--target", name, "--size", f"{size:g}",
         *(["--lattice", lattice["kind"]] if lattice.get("kind", "quad") != "quad" else []),

@@ -116,11 +116,7 @@ def print_pattern(
     state = int(options.state or design_intent(pattern, "state") or 1)
     options = replace(options, state=state)
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
-    printer = _printer(
-        options.printer or design_intent(pattern, "printer"),
-        print_style(style).own_tile_thickness,
-        options,
-    )
+    printer = printer_for(options.printer or design_intent(pattern, "printer"), style, options)
     base = pattern  # at scale 1: the refusal advice scales it itself
     pattern, scale = _refusal_advice(
         lambda: _scaled(pattern, style, printer, options), pattern, options, ask
