@@ -43,7 +43,7 @@ def _with_output(argv: list[str], out) -> list[str]:
 def test_every_cut_option_named_under_a_refusal_cuts(run_cli, tmp_path):
     """The 8x8 heart at 100 mm is too thin for acrylic-3: the refusal (exit 1) names acrylic-3 at its
     smallest scale and the materials that cut it at this size; each line, run, cuts (exit 0)."""
-    src = PATTERNS / "heart-8x8.json"
+    src = DATA / "heart-8x8.json"
     code, out, err = run_cli("cut", src, "--formats", "dxf", "-o", tmp_path / "no")
     assert code == 1 and not (tmp_path / "no").exists()
     runs = [a for a in _options(out, err) if a[0] == "cut"]
@@ -55,7 +55,7 @@ def test_every_cut_option_named_under_a_refusal_cuts(run_cli, tmp_path):
 
 
 def test_cut_alternatives_pass_the_rules_and_the_asked_one_does_not():
-    p = read_pattern(PATTERNS / "heart-8x8.json")
+    p = read_pattern(DATA / "heart-8x8.json")
     got = alternatives(p, "cut", 1.0)
     assert got and {a.checked for a in got} <= {CUT_GATE, DESIGN_GATE}
     c = p.contracted[1]
@@ -96,7 +96,7 @@ def test_a_ligament_refusal_exits_1_with_and_without_scale_auto(run_cli, tmp_pat
 def test_a_print_refusal_exits_1_with_and_without_scale_auto(run_cli, tmp_path):
     """The 8x8 heart at 100 mm: prusa-mk4 tiles-and-strips needs more scale than its bed takes. Without
     --scale auto this exited 2, with it 1: now 1 both ways."""
-    src = PATTERNS / "heart-8x8.json"
+    src = DATA / "heart-8x8.json"
     for extra in ((), ("--scale", "auto")):
         code, out, err = run_cli("print", src, *extra, "-o", tmp_path / "no")
         assert code == 1 and "the bed of prusa-mk4 takes at most" in err, err
@@ -106,16 +106,24 @@ def test_a_print_refusal_exits_1_with_and_without_scale_auto(run_cli, tmp_path):
 
 @pytest.mark.slow
 def test_every_print_option_named_under_a_refusal_prints(run_cli, tmp_path):
-    """The 8x8 circle at 5x does not fit the prusa-mk4 bed in tiles-and-strips: the refusal names the
-    largest scale that fits and every printer and style printing it at 5x; each line prints."""
-    src = PATTERNS / "circle-8x8.json"
-    code, out, err = run_cli("print", src, "--scale", "5", "-o", tmp_path / "no")
-    assert code == 1 and "does not fit the 250 x 210 mm bed" in err
+    """A 3x3 standard pattern of 3 mm tiles is too small to print on prusa-mk4: the refusal names its
+    smallest scale and every printer and style that prints it at this size (none: then at the smallest
+    scale each accepts); each line, run, prints (exit 0)."""
+    from fabkiri.mechanics import with_contracted_states
+    from fabkiri.pattern import io, standard_pattern
+
+    src = tmp_path / "small.json"
+    io.write_pattern(with_contracted_states(standard_pattern(3, 3, tile_size=3.0)), src)
+    code, out, err = run_cli("print", src, "-o", tmp_path / "no")
+    assert code == 1 and "print at --scale ≥" in err and not (tmp_path / "no").exists()
     runs = [a for a in _options(out, err) if a[0] == "print"]
-    assert any("3.181" in a for a in runs) and len(runs) >= 2
+    assert len(runs) >= 4 and {a[a.index("--printer") + 1] for a in runs} >= {
+        "prusa-mk4",
+        "prusa-xl",
+    }
     for k, argv in enumerate(runs):
-        code, _, out = run_cli(*_with_output(argv, tmp_path / f"ok{k}"))
-        assert code == 0, (argv, out)
+        code, _, got = run_cli(*_with_output(argv, tmp_path / f"ok{k}"))
+        assert code == 0, (argv, got)
 
 
 def test_print_alternatives_pass_the_plan_checks():
@@ -130,10 +138,11 @@ def test_print_alternatives_pass_the_plan_checks():
     assert fb.print_refusal(p, "tiles-and-strips", load_printer("prusa-mk4"), 1, 5.0) != ""
 
 
+@pytest.mark.slow
 def test_scale_auto_names_the_limit_at_the_scale_it_reached(run_cli, tmp_path):
     """A strip pad that no scale makes large enough (a 28.5° hinge corner: the pad of a fixed-size strip
     stays below 4 mm²) is reported at the largest scale tried, not with its scale-1 area (0.00 mm²)."""
-    src = DATA / "heart-16x16-rigid-v1.json"
+    src = DATA / "heart-16x16-rigid.json"
     pr = load_printer("prusa-mk4")
     need = fb.print_minimum(read_pattern(src), "tiles-and-strips", pr)
     assert need.min_scale is None and "at --scale 512:" in need.limit
@@ -167,7 +176,7 @@ def test_the_design_line_under_a_refusal_designs_a_pattern_that_cuts(run_cli, tm
 
 
 def test_print_refusal_from_the_api_carries_the_options():
-    p = read_pattern(PATTERNS / "heart-8x8.json")
+    p = read_pattern(DATA / "heart-8x8.json")
     with pytest.raises(Refused) as exc:
         print_pattern(p, PrintOptions())
     assert exc.value.exit_code == 1 and exc.value.alternatives
@@ -194,3 +203,23 @@ def test_every_shipped_template_cuts_in_acrylic_and_prints_on_prusa_mk4(name):
     )
     assert out.mesh_report.ok and out.verifier.ok and out.files
     assert out.scale <= fb.print_minimum(p, "tiles-and-strips", load_printer("prusa-mk4")).max_scale
+
+
+def test_cut_scale_auto_names_the_read_back_refusal_at_the_largest_scale_tried():
+    """When the read-back refuses every scale --scale auto steps through, the refusal quotes the last
+    one (it used to re-raise the refusal at the first scale)."""
+    from fabkiri.api import cut as api_cut
+    from fabkiri.errors import CheckFailed
+
+    def never(k: float):
+        raise CheckFailed(f"{api_cut.READBACK_REFUSED}: 16 pieces at --scale {k:g}")
+
+    first = CheckFailed(f"{api_cut.READBACK_REFUSED}: 16 pieces at --scale 0.5")
+    with pytest.raises(CheckFailed) as exc:
+        api_cut._read_back_scale(never, 0.5, first)
+    top = 0.5
+    for _ in range(api_cut.AUTO_STEPS):
+        top = fb.ceil_sig(top * api_cut.AUTO_STEP)
+    text = str(exc.value)
+    assert text.startswith(f"--scale auto: refused from --scale 0.5 up to {top:g}")
+    assert text.endswith(f"16 pieces at --scale {top:g}") and exc.value.exit_code == 1

@@ -149,8 +149,11 @@ def _read_back_scale(
     (``refused``; a kagome ligament sheet's small triangles among their strips): step the scale up by
     5 % until it accepts them, then bisect between the last refusal and the first acceptance to
     0.1 % (stated to 4 digits). The files returned are always ones the read-back accepted, at the
-    smallest scale tried that it accepted; a warning says so. Raises ``first`` if none is found."""
+    smallest scale tried that it accepted; a warning says so. If none is found, raises the refusal
+    at the largest scale tried."""
     from ..fabricate import fabricability as fb
+
+    last = [first]
 
     def at(k: float) -> CutOutcome | None:
         try:
@@ -158,6 +161,7 @@ def _read_back_scale(
         except CheckFailed as exc:
             if not str(exc).startswith(READBACK_REFUSED):
                 raise
+            last[0] = exc
             return None
 
     lo = hi = refused
@@ -167,8 +171,10 @@ def _read_back_scale(
         if (found := at(hi)) is not None:
             break
         lo = hi
-    if found is None:
-        raise first
+    if found is None:  # the binding limit at the largest scale tried, not at the first
+        raise CheckFailed(
+            f"--scale auto: refused from --scale {refused:g} up to {hi:g}; at --scale {hi:g}: {last[0]}"
+        )
     while hi - lo > fb.BISECT_RTOL * hi:
         mid = fb.ceil_sig(0.5 * (lo + hi))
         if mid >= hi:
