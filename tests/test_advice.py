@@ -68,6 +68,7 @@ def test_cut_alternatives_pass_the_rules_and_the_asked_one_does_not():
         elif a.what == "scale":
             assert ch["scale"] == fb.cut_minimum(c, load_material("acrylic-3"), "tape").scale
     assert [a.what for a in got][0] == "scale" and got[-1].what == "design"
+    assert [a.command for a in alternatives(p, "cut", size_mm=100.0)] == [a.command for a in got]
     assert "--tiles 8x8 --target heart --size 100 --material acrylic-3" in got[-1].command
 
 

@@ -57,6 +57,7 @@ class Ask:
     output: str | None = None
     flags: tuple[str, ...] = ()
     process_flags: tuple[str, ...] = ()
+    given: str | None = None  # the --material or --printer as typed (a preset name or a .json file)
 
 
 class Refused(CheckFailed, FabricationError):
@@ -83,9 +84,16 @@ def alternatives(
 ) -> list[Alternative]:
     """Every checked option for ``cut`` (``process="cut"``) or ``print`` of ``pattern`` at ``scale`` (mm
     per mm of the pattern; a design is made at scale 1 = its ``--size``; None: at any size, as
-    ``--scale auto``). Keywords: ``options`` (a :class:`~fabkiri.fabricate.cut.CutOptions` or
+    ``--scale auto``). Keywords: ``size_mm`` (instead of ``scale``: the size asked for, over the stored
+    design's ``--size``), ``options`` (a :class:`~fabkiri.fabricate.cut.CutOptions` or
     :class:`~fabkiri.api.print.PrintOptions`; default: the design's intent) and ``ask`` (:class:`Ask`).
-    Each :class:`Alternative` has passed the same gate as the refusal (its ``checked``)."""
+    Each :class:`Alternative` has passed the same gate as the refusal (its ``checked``): run its
+    ``command``, or apply its ``changes``, and it passes that gate."""
+    if kw.get("size_mm") is not None:
+        stored = ((pattern.design or {}).get("target") or {}).get("size_mm")
+        if not stored:
+            raise ValueError("size_mm needs a pattern with a stored design target size")
+        scale = float(kw["size_mm"]) / float(stored)
     if process == "cut":
         return cut_alternatives(pattern, kw.get("options"), scale, ask=kw.get("ask") or Ask())
     if process == "print":
@@ -141,6 +149,7 @@ def cut_alternatives(
 
     def cmd(name: str, k: str, at: float | None, own: bool) -> str:
         extra = ask.process_flags if own else ()
+        name = (ask.given or name) if own else name
         return _line(
             "fabkiri", "cut", ask.file, "--material", name, "--hinge", k,
             *_scale_words(at), *ask.flags, *extra, *_out(ask),
@@ -157,8 +166,9 @@ def cut_alternatives(
                 {"material": mat.name, "hinge": kind, "scale": need.scale},
             )
         )
-    for name in available():
-        preset = load_material(name)
+    for name in (mat.name, *(n for n in available() if n != mat.name)):  # the one asked first
+        own = name == mat.name
+        preset = mat if own else load_material(name)
         fits = []
         for k in HINGE_KINDS:
             if (name, k) == (mat.name, kind) or (
@@ -176,7 +186,7 @@ def cut_alternatives(
             out.append(
                 Alternative(
                     "material",
-                    cmd(name, k, scale, False),
+                    cmd(name, k, scale, own),
                     f"{name} {k} (from --scale {m.scale:g})"
                     + (f"; also --hinge {', '.join(also)}" if also else ""),
                     CUT_GATE,
@@ -184,7 +194,10 @@ def cut_alternatives(
                 )
             )
     line = design_line(
-        pattern, 1.0 if scale is None else scale, {"material": mat.name, "hinge": kind}, ask
+        pattern,
+        1.0 if scale is None else scale,
+        {"material": ask.given or mat.name, "hinge": kind},
+        ask,
     )
     if line is not None:
         out.append(line)
@@ -213,11 +226,13 @@ def print_alternatives(
     o = options or PrintOptions()
     state = int(o.state or design_intent(pattern, "state") or 1)
     style = o.style or design_intent(pattern, "style") or DEFAULT_STYLE
-    asked = printer_for(o.printer or design_intent(pattern, "printer"), style, o)
+    given = o.printer or design_intent(pattern, "printer")
+    asked = printer_for(given, style, o)
     out: list[Alternative] = []
 
     def cmd(printer: str, s: str, at: float | None, own: bool) -> str:
         extra = ask.process_flags if own else ()
+        printer = (ask.given or printer) if own else printer
         return _line(
             "fabkiri", "print", ask.file, "--printer", printer, "--style", s,
             *_scale_words(at), *ask.flags, *extra, *_out(ask),
@@ -240,13 +255,17 @@ def print_alternatives(
             )
     styles = (style, *(s for s in fb.PRINT_STYLES if s != style))
     memo: dict = {}
-    for name in sorted(available_printers(), key=lambda n: n != asked.name):  # the one asked first
+    names = (
+        asked.name,
+        *(n for n in available_printers() if n != asked.name),
+    )  # the one asked first
+    for name in names:
         own = name == asked.name
         fits = []
         for s in styles:
             if own and s == style:
                 continue
-            pr = printer_for(name, s, o) if own else load_printer(name).with_overrides()
+            pr = printer_for(given, s, o) if own else load_printer(name).with_overrides()
             if print_style(s).plan is None:
                 continue
             ok = _prints(pattern, s, pr, state, scale, memo)
@@ -274,7 +293,10 @@ def print_alternatives(
             if a.what == "printer"
         ]
     line = design_line(
-        pattern, 1.0 if scale is None else scale, {"printer": asked.name, "style": style}, ask
+        pattern,
+        1.0 if scale is None else scale,
+        {"printer": given or asked.name, "style": style},
+        ask,
     )
     if line is not None:
         out.append(line)

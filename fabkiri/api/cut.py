@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from .. import limits
-from ..errors import CheckFailed, FabricationError
+from ..errors import CheckFailed, FabkiriError, FabricationError
 from ..fabricate.cut import CutOptions, CutResult, closed_states, cut_pattern
 from ..fabricate.materials import Material, load_material, parse_setting
 from ..fabricate.readback import Readback, verified_files
@@ -118,10 +118,14 @@ def _refusal_advice(
     try:
         return step()
     except (CheckFailed, FabricationError) as exc:
-        corners = closed_states(pattern)[options.state]
-        scale = _asked_scale(options, corners)
-        kind = options.hinge or options.material.hinge
-        if isinstance(exc, Refused) or cut_refusal(corners, options.material, kind, scale) is None:
+        try:  # a pattern that does not close has no closed-form minimum: the refusal as it was
+            corners = closed_states(pattern)[options.state]
+            scale = _asked_scale(options, corners)
+            kind = options.hinge or options.material.hinge
+            why = cut_refusal(corners, options.material, kind, scale)
+        except FabkiriError:
+            why = None
+        if isinstance(exc, Refused) or why is None:
             raise
         raise Refused(
             str(exc), cut_alternatives(pattern, options, scale, ask=ask or Ask())

@@ -145,6 +145,7 @@ def cmd_cut(args: argparse.Namespace) -> int:
         output=args.output,
         flags=kept_flags(args, CUT_FLAGS),
         process_flags=kept_flags(args, MATERIAL_FLAGS),
+        given=args.material,
     )
     with options_on_stdout():
         cut = cut_files(pattern, options, use_verifier=not args.no_verify, ask=ask)

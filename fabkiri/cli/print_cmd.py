@@ -70,6 +70,7 @@ def cmd_print(args: argparse.Namespace) -> int:
                 output=args.output,
                 flags=kept_flags(args, PRINT_FLAGS),
                 process_flags=kept_flags(args, PRINTER_FLAGS),
+                given=args.printer,
             ),
         )
     atomic_write_many(args.output, out.files)
