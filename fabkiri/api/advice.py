@@ -231,28 +231,20 @@ def print_alternatives(
     out: list[Alternative] = []
 
     def cmd(printer: str, s: str, at: float | None, own: bool) -> str:
-        extra = ask.process_flags if own else ()
-        printer = (ask.given or printer) if own else printer
-        return _line(
-            "fabkiri", "print", ask.file, "--printer", printer, "--style", s,
-            *_scale_words(at), *ask.flags, *extra, *_out(ask),
-        )  # fmt: skip
+        return _print_cmd(ask, printer, s, at, own)
 
-    need = fb.print_minimum(pattern, style, asked, state) if scale is not None else None
-    if need is not None and need.possible and need.min_scale is not None and scale is not None:
-        top = need.max_scale
-        at = need.min_scale if scale < need.min_scale else top
-        if at is not None and at != scale:
-            out.append(
-                Alternative(
-                    "scale",
-                    cmd(asked.name, style, at, True),
-                    f"{asked.name} {style} prints from --scale {need.min_scale:g}"
-                    + ("" if top is None else f" to {top:g} (the bed)"),
-                    PRINT_GATE,
-                    {"printer": asked.name, "style": style, "scale": at},
-                )
+    found = _print_scale(pattern, style, asked, state, scale) if scale is not None else None
+    if found is not None:
+        at, text = found
+        out.append(
+            Alternative(
+                "scale",
+                cmd(asked.name, style, at, True),
+                text,
+                PRINT_GATE,
+                {"printer": asked.name, "style": style, "scale": at},
             )
+        )
     styles = (style, *(s for s in fb.PRINT_STYLES if s != style))
     memo: dict = {}
     names = (
@@ -301,6 +293,30 @@ def print_alternatives(
     if line is not None:
         out.append(line)
     return out
+
+
+def _print_cmd(ask: Ask, printer: str, style: str, at: float | None, own: bool) -> str:
+    """The ``fabkiri print`` line; ``own``: the printer asked for, with its overrides as typed."""
+    extra = ask.process_flags if own else ()
+    printer = (ask.given or printer) if own else printer
+    return _line(
+        "fabkiri", "print", ask.file, "--printer", printer, "--style", style,
+        *_scale_words(at), *ask.flags, *extra, *_out(ask),
+    )  # fmt: skip
+
+
+def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float):
+    """``(scale, text)``: the smallest scale the plan checks accept, or past the bed the largest the bed
+    takes, for the printer and style asked for; None when no scale prints it or ``scale`` already does."""
+    need = fb.print_minimum(pattern, style, printer, state)
+    if not need.possible or need.min_scale is None:
+        return None
+    top = need.max_scale
+    at = need.min_scale if scale < need.min_scale else top
+    if at is None or at == scale:
+        return None
+    bed = "" if top is None else f" to {top:g} (the bed)"
+    return at, f"{printer.name} {style} prints from --scale {need.min_scale:g}{bed}"
 
 
 def _prints(
