@@ -223,8 +223,12 @@ def summary_cost() -> None:
     from fabkiri.fabricate.printers import available_printers, load_printer
     from fabkiri.pattern.io import read_pattern
 
-    for name in ("circle-8x8-rigid", "heart-16x16-rigid", "circle-32x32-rigid"):
-        p = read_pattern(Path("templates/patterns") / f"{name}.json")
+    for name, src in (
+        ("circle-8x8-rigid", "templates/patterns"),
+        ("heart-16x16-rigid", "tests/data"),
+        ("circle-32x32-rigid", "tests/data"),
+    ):
+        p = read_pattern(Path(src) / f"{name}.json")
         t = time.process_time()
         fb.summary(p)
         ts = time.process_time() - t

@@ -33,7 +33,7 @@ import layout_mutations as lm  # noqa: E402
 
 PATTERNS = {
     "std6": None,
-    "heart-8x8": "heart-8x8.json",
+    "heart-8x8": "../../tests/data/heart-8x8.json",  # test data: it does not print on prusa-mk4
     "circle-8x8-rigid": "circle-8x8-rigid.json",
 }
 WIDTH = {

@@ -27,7 +27,13 @@ EXAMPLES = {
     ],
     "heart-120mm": [
         "cut",
-        *(P / "heart-16x16-rigid.json", "--material", "pp-0.5", "--hinge", "tape"),
+        *(
+            P.parents[1] / "tests" / "data" / "heart-16x16-rigid.json",
+            "--material",
+            "pp-0.5",
+            "--hinge",
+            "tape",
+        ),
         *("--width", "120"),
     ],
     "strips": [

@@ -314,7 +314,7 @@ def test_solver_heart_design_is_genuinely_reconfigurable():
     landscape has the paper's barriers next to both closed states and a zero-energy middle."""
     from fabkiri.pattern.residuals import hinge_sums
 
-    p = read_pattern(TEMPLATES / "patterns" / "heart-8x8.json")
+    p = read_pattern(REPO / "tests" / "data" / "heart-8x8.json")
     assert np.abs(hinge_sums(p)).max() > 1e-2
     path = deployment_path(p, steps=20)
     assert path.kind == "elastic"

@@ -47,6 +47,13 @@ FOLD_ASSIGNMENTS = {"B", "M", "V", "F", "U", "C", "J"}
 FOLD_FILE_ONLY = {k for k in FOLD_SPEC_NAMES if k.startswith("file_")}
 
 
+def _source(name: str):
+    """``data/NAME`` (tests/data) or ``patterns/NAME`` (templates/patterns), as a pattern file."""
+    where, stem = name.split("/")
+    root = TEMPLATES.parent / "tests" / "data" if where == "data" else TEMPLATES / "patterns"
+    return root / f"{stem}.json"
+
+
 def _names_ok(d: dict, top: bool) -> list[str]:
     bad = [k for k in d if k not in FOLD_SPEC_NAMES and ":" not in k]
     if not top:
@@ -54,12 +61,10 @@ def _names_ok(d: dict, top: bool) -> list[str]:
     return bad
 
 
-@pytest.mark.parametrize("name", ["heart-16x16-rigid", "circle-8x8"])
+@pytest.mark.parametrize("name", ["data/heart-16x16-rigid", "patterns/circle-8x8"])
 def test_fold_export_follows_the_spec(run_cli, tmp_path, name):
     out = tmp_path / "p.fold"
-    code, _, err = run_cli(
-        "export", TEMPLATES / "patterns" / f"{name}.json", "--format", "fold", "-o", out
-    )
+    code, _, err = run_cli("export", _source(name), "--format", "fold", "-o", out)
     assert code == 0, err
     d = json.loads(out.read_text())
     assert _names_ok(d, True) == []
@@ -88,7 +93,7 @@ def test_fold_export_follows_the_spec(run_cli, tmp_path, name):
 
 
 def test_fold_round_trip(run_cli, tmp_path):
-    src = TEMPLATES / "patterns" / "heart-16x16-rigid.json"
+    src = _source("data/heart-16x16-rigid")
     run_cli("export", src, "--format", "fold", "-o", tmp_path / "p.fold")
     code, _, err = run_cli("import", tmp_path / "p.fold", "-o", tmp_path / "back.json")
     assert code == 0, err
@@ -132,9 +137,9 @@ def _pykirigami_loader_checks(folder, max_distance=0.05):
     return len(start), len(cons), worst
 
 
-@pytest.mark.parametrize("name", ["heart-16x16-rigid", "circle-8x8"])
+@pytest.mark.parametrize("name", ["data/heart-16x16-rigid", "patterns/circle-8x8"])
 def test_pykirigami_export_passes_its_loader_checks(run_cli, tmp_path, name):
-    src = TEMPLATES / "patterns" / f"{name}.json"
+    src = _source(name)
     code, _, err = run_cli("export", src, "--format", "pykirigami", "-o", tmp_path / "m")
     assert code == 0, err
     p = read_pattern(src)

@@ -105,7 +105,7 @@ def test_kagome_at_scale_1_is_refused_naming_the_scale_that_prints(k44, tmp_path
     src = tmp_path / "k44.json"
     io.write_pattern(k44, src)
     code, _, err = run_cli("print", src, "-o", tmp_path / "out")
-    assert code == 2 and "on the top face are" in err and "print at --scale ≥ 1.03" in err
+    assert code == 1 and "on the top face are" in err and "print at --scale ≥ 1.03" in err
     assert len(err.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
 
 

@@ -333,7 +333,7 @@ def test_symmetric_ligament_sheet_moved_is_accepted(std_bases, tmp_path, name):
 def test_ligament_sheet_with_a_thin_tile_moved_is_accepted(tmp_path):
     """Tiles narrower than a ligament: an opening cuts them short, the declared strips moved with the
     sheet do not."""
-    p = read_pattern(TEMPLATES / "patterns" / "heart-8x8.json")
+    p = read_pattern(TEMPLATES.parent / "tests" / "data" / "heart-8x8.json")
     b = _cut_bases(tmp_path, p, ("ligament",), ("--scale", "auto", "--sheet", "3000x3000"))
     b = b["ligament"]
     for k, name in enumerate(["turned 33°", "translated", "rounded to 0.001 mm"]):

@@ -14,13 +14,14 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from .. import limits
-from ..errors import CheckFailed
-from ..fabricate.cut import CutOptions, CutResult, cut_pattern
+from ..errors import CheckFailed, FabkiriError, FabricationError
+from ..fabricate.cut import CutOptions, CutResult, closed_states, cut_pattern
 from ..fabricate.materials import Material, load_material, parse_setting
 from ..fabricate.readback import Readback, verified_files
 from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
 from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
+from .advice import Ask, Refused, cut_alternatives, cut_refusal
 
 DEFAULT_MATERIAL = "acrylic-3"
 
@@ -64,8 +65,12 @@ class CutOutcome:
     files: dict[str, bytes]
 
 
-def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = True) -> CutOutcome:
-    """Cut ``pattern`` as ``options`` say (a tube: its flat sheet and seam), then read the files back."""
+def cut_files(
+    pattern: Pattern, options: CutOptions, *, use_verifier: bool = True, ask: Ask | None = None
+) -> CutOutcome:
+    """Cut ``pattern`` as ``options`` say (a tube: its flat sheet and seam), then read the files back.
+    A refusal of the web and edge rules raises :class:`~fabkiri.api.advice.Refused` naming the options
+    that pass (``ask``: how the command was given, so that each is a line that runs)."""
     if isinstance(
         options.scale, float
     ):  # numbers that would overflow the geometry: one line, up front
@@ -92,7 +97,7 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
         rb, files = verified_files(pattern, result, use_verifier=use_verifier, force=options.force)
         return CutOutcome(result=result, readback=rb, files=files)
 
-    result = cut_once(options)
+    result = _refusal_advice(lambda: cut_once(options), pattern, options, ask)
     try:
         return verified(result)
     except CheckFailed as exc:
@@ -107,6 +112,38 @@ def cut_files(pattern: Pattern, options: CutOptions, *, use_verifier: bool = Tru
         )
 
 
+def _refusal_advice(
+    step: Callable[[], CutResult], pattern: Pattern, options: CutOptions, ask: Ask | None
+) -> CutResult:
+    """``step()``; when it fails and the web and edge rules refuse the material and hinge kind at the
+    scale asked for, the refusal is raised again as :class:`Refused` with the checked options (exit 1
+    whatever the flags: a ligament sheet that cannot be cut used to exit 2 at a given scale)."""
+    try:
+        return step()
+    except (CheckFailed, FabricationError) as exc:
+        try:  # a pattern that does not close has no closed-form minimum: the refusal as it was
+            corners = closed_states(pattern)[options.state]
+            scale = _asked_scale(options, corners)
+            kind = options.hinge or options.material.hinge
+            why = cut_refusal(corners, options.material, kind, scale)
+        except FabkiriError:
+            why = None
+        if isinstance(exc, Refused) or why is None:
+            raise
+        raise Refused(
+            str(exc), cut_alternatives(pattern, options, scale, ask=ask or Ask())
+        ) from None
+
+
+def _asked_scale(options: CutOptions, corners) -> float | None:
+    """The scale asked for: ``--scale``, ``--width`` over the closed span, 1, or None for ``auto``."""
+    if "auto" in (options.scale, options.width):
+        return None
+    if isinstance(options.width, float):
+        return options.width / float(corners[..., 0].max() - corners[..., 0].min())
+    return 1.0 if options.scale is None else float(options.scale)
+
+
 READBACK_REFUSED = "read-back verification failed"
 AUTO_STEP = 1.05  # --scale auto steps up by 5 % while the read-back refuses the files ...
 AUTO_STEPS = 10  # ... at most this often (x1.63), then gives the first refusal
@@ -119,8 +156,11 @@ def _read_back_scale(
     (``refused``; a kagome ligament sheet's small triangles among their strips): step the scale up by
     5 % until it accepts them, then bisect between the last refusal and the first acceptance to
     0.1 % (stated to 4 digits). The files returned are always ones the read-back accepted, at the
-    smallest scale tried that it accepted; a warning says so. Raises ``first`` if none is found."""
+    smallest scale tried that it accepted; a warning says so. If none is found, raises the refusal
+    at the largest scale tried."""
     from ..fabricate import fabricability as fb
+
+    last = [first]
 
     def at(k: float) -> CutOutcome | None:
         try:
@@ -128,6 +168,7 @@ def _read_back_scale(
         except CheckFailed as exc:
             if not str(exc).startswith(READBACK_REFUSED):
                 raise
+            last[0] = exc
             return None
 
     lo = hi = refused
@@ -137,8 +178,10 @@ def _read_back_scale(
         if (found := at(hi)) is not None:
             break
         lo = hi
-    if found is None:
-        raise first
+    if found is None:  # the binding limit at the largest scale tried, not at the first
+        raise CheckFailed(
+            f"--scale auto: refused from --scale {refused:g} up to {hi:g}; at --scale {hi:g}: {last[0]}"
+        )
     while hi - lo > fb.BISECT_RTOL * hi:
         mid = fb.ceil_sig(0.5 * (lo + hi))
         if mid >= hi:

@@ -27,6 +27,7 @@ from ..fabricate.tube_cut import tube_cut_inputs
 from ..pattern.fingerprint import fingerprint
 from ..pattern.model import Pattern
 from ..verify.printmanifest import PrintManifest
+from .advice import Ask, Refused, print_alternatives
 from .cut import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
@@ -102,9 +103,12 @@ def print_pattern(
     stem: str = "pattern",
     source: str = "pattern.json",
     notify: Callable[[str], None] | None = None,
+    ask: Ask | None = None,
 ) -> PrintOutcome:
     """Build, check and serialise the print of ``pattern``; ``stem`` names the files, ``source`` is
-    the pattern file named in the manifests; ``notify`` receives each warning or note as it arises."""
+    the pattern file named in the manifests; ``notify`` receives each warning or note as it arises.
+    A fabricability refusal (plan checks, bed) raises :class:`~fabkiri.api.advice.Refused` naming the
+    options that pass (``ask``: how the command was given, so that each is a line that runs)."""
     messages: list[str] = []
 
     def say(text: str) -> None:
@@ -115,15 +119,14 @@ def print_pattern(
     state = int(options.state or design_intent(pattern, "state") or 1)
     options = replace(options, state=state)
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
-    printer = _printer(
-        options.printer or design_intent(pattern, "printer"),
-        print_style(style).own_tile_thickness,
-        options,
-    )
+    printer = printer_for(options.printer or design_intent(pattern, "printer"), style, options)
     made_from = fingerprint(pattern)  # before scaling: the manifest names the input pattern
     # a tube: its flat sheet (every tile once, the seam copy column dropped) and its seam note
     pattern, seam_files, seam_entry = tube_cut_inputs(pattern, state, "print")
-    pattern, scale = _scaled(pattern, style, printer, options)
+    base = pattern  # at scale 1: the refusal advice scales it itself
+    pattern, scale = _refusal_advice(
+        lambda: _scaled(base, style, printer, options), base, options, ask
+    )
     for w in closes_gate(
         pattern,
         printer.tolerance_mm,
@@ -133,7 +136,12 @@ def print_pattern(
         states=claimed_states(pattern, state),
     ).warnings:  # as `cut`, printer tolerance
         say(f"warning: {w}")
-    job, plan = _build_job(pattern, style, state, printer, scale)
+    job, plan = _refusal_advice(
+        lambda: _build_job(pattern, style, state, printer, scale),
+        base,
+        replace(options, scale=scale),
+        ask,
+    )
     if (
         job.plan.shared_faces and print_style(style).strip_hinges
     ):  # three strips at a point (kagome): two faces cannot keep them all apart (pins stack instead)
@@ -175,6 +183,26 @@ def print_pattern(
         verifier=verifier,
         messages=messages,
     )
+
+
+def _refusal_advice(step: Callable[[], Any], pattern: Pattern, o: PrintOptions, ask: Ask | None):
+    """``step()``; a fabricability refusal (a FabricationError, or ``--scale auto`` finding no scale) is
+    raised again as :class:`Refused` with the checked options, exit 1 whatever the flags. ``pattern``
+    is the pattern at scale 1, ``o.scale`` the scale asked for."""
+    try:
+        return step()
+    except (FabricationError, CheckFailed) as exc:
+        if isinstance(exc, Refused) or (
+            isinstance(exc, CheckFailed) and not str(exc).startswith("--scale auto")
+        ):
+            raise
+        scale = None if o.scale == "auto" else float(o.scale)
+        raise Refused(str(exc), print_alternatives(pattern, o, scale, ask=ask or Ask())) from None
+
+
+def printer_for(name: str | None, style: str, o: PrintOptions):
+    """The printer ``print`` uses for ``style``: the preset with the options' overrides."""
+    return _printer(name, print_style(style).own_tile_thickness, o)
 
 
 def _printer(name: str | None, pinned: bool, o: PrintOptions):

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import re
 import sys
 from pathlib import Path
 
+from ..api.advice import Ask, Refused
 from ..api.cut import cut_files, cut_material
 from ..errors import InputError
 from ..fabricate.cut import FORMATS, CutOptions
@@ -50,6 +52,53 @@ def _scale_or_auto(text: str):
         raise argparse.ArgumentTypeError(f"expected a number or 'auto', got {text!r}") from None
 
 
+# (dest, flag, default) of the options every suggested line keeps, and of those kept only for the
+# material asked for (its field overrides)
+CUT_FLAGS = (
+    ("state", "--state", 1),
+    ("sheet", "--sheet", "600x400"),
+    ("margin", "--margin", 5.0),
+    ("layout", "--layout", None),
+    ("formats", "--formats", ",".join(FORMATS)),
+    ("colors", "--colors", None),
+    ("no_labels", "--no-labels", False),
+    ("label_height", "--label-height", None),
+    ("reference", "--reference", 50.0),
+    ("no_notes", "--no-notes", False),
+    ("stroke", "--stroke", STROKE_MM),
+    ("exact", "--exact", False),
+    ("force", "--force", False),
+)
+MATERIAL_FLAGS = tuple(
+    (dest, f"--{dest.replace('_', '-')}", None)
+    for dest in (
+        "thickness", "kerf", "min_web", "min_hole", "strain_limit", "gap", "tol", "ligament_width",
+    )
+) + (("set", "--set", None),)  # fmt: skip
+
+
+@contextlib.contextmanager
+def options_on_stdout():
+    """A refusal's checked options on stdout, one runnable line each (the error stays one line on stderr)."""
+    try:
+        yield
+    except Refused as exc:
+        print("\n".join(exc.option_lines()))
+        raise
+
+
+def kept_flags(args: argparse.Namespace, spec) -> tuple[str, ...]:
+    """The command-line words of the options in ``spec`` that differ from their defaults."""
+    out: list[str] = []
+    for dest, flag, default in spec:
+        v = getattr(args, dest, None)
+        if v is None or v is False or v == default:
+            continue
+        for x in v if isinstance(v, list) else [v]:
+            out += [flag] if x is True else [flag, f"{x:g}" if isinstance(x, float) else str(x)]
+    return tuple(out)
+
+
 def cmd_cut(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     material, hinge = cut_material(
@@ -91,7 +140,15 @@ def cmd_cut(args: argparse.Namespace) -> int:
         stroke_mm=args.stroke,
         exact=args.exact,
     )
-    cut = cut_files(pattern, options, use_verifier=not args.no_verify)
+    ask = Ask(
+        file=args.file,
+        output=args.output,
+        flags=kept_flags(args, CUT_FLAGS),
+        process_flags=kept_flags(args, MATERIAL_FLAGS),
+        given=args.material,
+    )
+    with options_on_stdout():
+        cut = cut_files(pattern, options, use_verifier=not args.no_verify, ask=ask)
     rb, result = cut.readback, cut.result
     written = atomic_write_many(out, cut.files)
     for w in result.warnings:

@@ -7,15 +7,35 @@ import sys
 import time
 from pathlib import Path
 
+from ..api.advice import Ask
 from ..api.print import PrintOptions, print_pattern
 from ..fabricate import mesh
 from ..fabricate.printers import available_printers
 from ..fileio import atomic_write_many
+from .cut_cmd import kept_flags, options_on_stdout
 from .pattern_cmds import _positive, load_any
 
 
 def _scale_auto(text: str):
     return "auto" if text.strip().lower() == "auto" else _positive(text)
+
+
+# (dest, flag, default) of the options every suggested line keeps, and of the printer field overrides,
+# kept only for the printer asked for
+PRINT_FLAGS = (
+    ("state", "--state", None),
+    ("step", "--step", False),
+    ("marks", "--marks", False),
+    ("material", "--material", "acrylic-3"),
+    ("force", "--force", False),
+)
+PRINTER_FLAGS = tuple(
+    (dest, f"--{dest.replace('_', '-')}", None)
+    for dest in (
+        "tile_thickness", "strip_thickness", "strip_width", "strip_reach", "gap",
+        "radial_clearance", "axial_clearance",
+    )
+)  # fmt: skip
 
 
 def cmd_print(args: argparse.Namespace) -> int:
@@ -38,13 +58,21 @@ def cmd_print(args: argparse.Namespace) -> int:
         material=args.material,
         force=args.force,
     )
-    out = print_pattern(
-        pattern,
-        options,
-        stem=Path(args.file).stem,
-        source=Path(args.file).name,
-        notify=lambda text: print(text, file=sys.stderr),
-    )
+    with options_on_stdout():
+        out = print_pattern(
+            pattern,
+            options,
+            stem=Path(args.file).stem,
+            source=Path(args.file).name,
+            notify=lambda text: print(text, file=sys.stderr),
+            ask=Ask(
+                file=args.file,
+                output=args.output,
+                flags=kept_flags(args, PRINT_FLAGS),
+                process_flags=kept_flags(args, PRINTER_FLAGS),
+                given=args.printer,
+            ),
+        )
     atomic_write_many(args.output, out.files)
     print(
         f"wrote {len(out.files)} files to {args.output}: {out.describe()}, {time.perf_counter() - t0:.1f} s",

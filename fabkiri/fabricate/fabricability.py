@@ -281,12 +281,16 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
         if lo is not None and hi is not None and lo >= hi:
             lo, hi = (None, 1.0) if not err else (1.0, None)  # not monotone there: the plain search
     k = hi if hi is not None else (lo or 1.0)
+    last = (1.0, err)  # the binding limit at the largest scale refused, not at scale 1
     while hi is None:  # bracket: double until accepted
         k *= 2.0
         if k > MAX_SCALE:
-            return PrintMinimum(None, top, f"refused up to scale {MAX_SCALE:g}: {err}")
+            return PrintMinimum(
+                None, top, f"refused up to scale {MAX_SCALE:g}; at --scale {last[0]:g}: {last[1]}"
+            )
         e = _plan_error(scaled(pattern, k), style, state, printer)
         (lo, hi) = (k, None) if e else (lo, k)
+        last = (k, e) if e else last
     k = hi
     while lo is None:  # ... or halve until refused
         k *= 0.5
@@ -304,6 +308,24 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
         else:
             hi = mid
     return PrintMinimum(ceil_sig(hi), None if top is None else floor_sig(top), "plan checks")
+
+
+def print_refusal(pattern: Pattern, style: str, printer: Printer, state: int, scale: float) -> str:
+    """Why ``print`` refuses ``pattern`` at ``scale`` on ``printer`` in ``style``: the plan checks, then the
+    bed ('' if both accept it). The gate the refusal advice (``api/advice.py``) checks each option with."""
+    at = scaled(pattern, scale)
+    err = _plan_error(at, style, state, printer)
+    if err:
+        return err
+    top = _bed_scale(at, style, state, printer)
+    if top is not None and top < 1.0:
+        return f"the closed pattern does not fit the bed of {printer.name}"
+    return ""
+
+
+def plan_family(printer: Printer, style: str) -> tuple:
+    """Printers and styles with equal keys share the plan checks (they may differ in the bed)."""
+    return (_rule(style), _plan_key(printer, style))
 
 
 MIN_GUESS = 1e-6

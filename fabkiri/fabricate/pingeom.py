@@ -148,8 +148,7 @@ def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
             h = int(np.argmax(hs))
             raise FabricationError(
                 f"pinned hinges refused: the pattern is not rigid-deployable (hinge {h}: corner angles miss "
-                f"π by {np.degrees(hs[h]):.2f}°), so rigid pinned tiles would have to bend to reconfigure; "
-                "use --style strips or tiles-and-strips"
+                f"π by {np.degrees(hs[h]):.2f}°), so rigid pinned tiles would have to bend to reconfigure"
             )
     _refuse_close_pivots(plan, g, printer)
     # an ear may only sweep the tiles that meet at its pivot

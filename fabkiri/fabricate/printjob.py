@@ -63,7 +63,7 @@ def fits(bounds, printer: Printer, what: str) -> None:
     if w > bx or h > by:
         raise FabricationError(
             f"{what} is {w:.1f} x {h:.1f} mm and does not fit the {bx:g} x {by:g} mm bed of printer "
-            f"{printer.name}; scale the pattern down, choose a larger printer or use --style strips"
+            f"{printer.name}"
         )
 
 

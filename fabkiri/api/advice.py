@@ -1,0 +1,424 @@
+"""What works when ``cut`` or ``print`` refuses a pattern at a size: :func:`alternatives`, checked.
+
+A refusal of a fabricability check names every option that passes the same gate at the size asked
+for: another material or hinge kind (``cut``'s web and edge rules in closed form,
+:func:`fabkiri.fabricate.fabricability.cut_minimum`), another printer or print style (``print``'s plan
+checks and the bed at that scale, :func:`~fabkiri.fabricate.fabricability.print_refusal`), the smallest
+scale of the process asked for, and the ``fabkiri design`` line that keeps the size when the design's
+own up-front room check (Pál's bound, :func:`fabkiri.design.fabrication.smallest_size`) does not rule
+it out. Nothing is suggested that was not checked. The front doors raise :class:`Refused` (exit 1: a
+check failed, whatever the flags) carrying the alternatives; the CLI prints them under the refusal.
+"""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import CheckFailed, FabkiriError, FabricationError
+from ..fabricate import fabricability as fb
+from ..fabricate.materials import HINGE_KINDS, Material, available, load_material
+from ..fabricate.printers import available_printers, load_printer
+from ..pattern.model import Pattern
+
+if TYPE_CHECKING:
+    from ..fabricate.cut import CutOptions
+    from .print import PrintOptions
+
+CUT_GATE = "cut's web and edge rules at this scale (closed form)"
+PRINT_GATE = "print's plan checks and bed at this scale"
+DESIGN_GATE = "design's up-front room check (Pál) at this size"
+
+
+@dataclass(frozen=True)
+class Alternative:
+    """One option that works: ``command`` is the exact ``fabkiri`` line, ``detail`` what it changes and
+    the figure that admits it, ``checked`` the gate it was run through (``CUT_GATE``, ``PRINT_GATE`` or
+    ``DESIGN_GATE``) and ``changes`` the options it sets (``material``, ``hinge``, ``printer``, ``style``,
+    ``scale``, ``size``), for callers that run it themselves (``fabkiri make``, notebooks)."""
+
+    what: str  # "scale", "material", "printer", "design"
+    command: str
+    detail: str
+    checked: str
+    changes: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Ask:
+    """How the refused command was given, so each suggestion is a line that runs: the pattern ``file``,
+    the ``output`` folder, ``flags`` kept in every suggestion (sheet, layout, state, ...) and
+    ``process_flags`` (material or printer field overrides) kept only where the material or printer
+    stays the one asked for (other presets are checked as shipped)."""
+
+    file: str = "pattern.json"
+    output: str | None = None
+    flags: tuple[str, ...] = ()
+    process_flags: tuple[str, ...] = ()
+    given: str | None = None  # the --material or --printer as typed (a preset name or a .json file)
+
+
+class Refused(CheckFailed, FabricationError):
+    """A fabricability refusal (exit 1, a check failed, whatever the flags) carrying the
+    :class:`Alternative` s that pass; its text is the one-line reason, :meth:`option_lines` the options
+    (the CLI prints them on stdout, one runnable line each)."""
+
+    def __init__(self, reason: str, options: list[Alternative]):
+        super().__init__(reason)
+        self.reason = reason
+        self.alternatives = list(options)
+
+    def option_lines(self) -> list[str]:
+        """``# options ...`` and then one ``fabkiri ...    # detail`` line per option: each runs as it is."""
+        if not self.alternatives:
+            return ["# options: none passes the same checks"]
+        return ["# options (each passes the same checks; run one as it is):"] + [
+            f"{a.command}    # {a.detail}" for a in self.alternatives
+        ]
+
+
+def alternatives(
+    pattern: Pattern, process: str, scale: float | None = 1.0, **kw: Any
+) -> list[Alternative]:
+    """Every checked option for ``cut`` (``process="cut"``) or ``print`` of ``pattern`` at ``scale`` (mm
+    per mm of the pattern; a design is made at scale 1 = its ``--size``; None: at any size, as
+    ``--scale auto``). Keywords: ``size_mm`` (instead of ``scale``: the size asked for, over the stored
+    design's ``--size``), ``options`` (a :class:`~fabkiri.fabricate.cut.CutOptions` or
+    :class:`~fabkiri.api.print.PrintOptions`; default: the design's intent) and ``ask`` (:class:`Ask`).
+    Each :class:`Alternative` has passed the same gate as the refusal (its ``checked``): run its
+    ``command``, or apply its ``changes``, and it passes that gate."""
+    if kw.get("size_mm") is not None:
+        stored = ((pattern.design or {}).get("target") or {}).get("size_mm")
+        if not stored:
+            raise ValueError("size_mm needs a pattern with a stored design target size")
+        scale = float(kw["size_mm"]) / float(stored)
+    if process == "cut":
+        return cut_alternatives(pattern, kw.get("options"), scale, ask=kw.get("ask") or Ask())
+    if process == "print":
+        return print_alternatives(pattern, kw.get("options"), scale, ask=kw.get("ask") or Ask())
+    raise ValueError(f"process must be 'cut' or 'print', got {process!r}")
+
+
+def _line(*words: Any) -> str:
+    return " ".join(shlex.quote(str(w)) for w in words if w is not None and w != "")
+
+
+def _out(ask: Ask) -> tuple[str, ...]:
+    return ("-o", ask.output) if ask.output else ()
+
+
+def _scale_words(scale: float | None) -> tuple[str, str]:
+    return ("--scale", "auto" if scale is None else f"{scale:g}")
+
+
+# ------------------------------------------------------------------ cut
+def cut_refusal(
+    corners, material: Material, kind: str, scale: float | None
+) -> fb.CutMinimum | None:
+    """The closed-form minimum when ``cut``'s rules refuse ``material``/``kind`` at ``scale`` (None: any
+    scale works nowhere), else None (the rules accept it)."""
+    need = fb.cut_minimum(corners, material, kind)
+    if need.scale is None:
+        return need
+    if scale is not None and need.exact is not None and scale < need.exact * (1 - 1e-9):
+        return need
+    return None
+
+
+def cut_alternatives(
+    pattern: Pattern, options: CutOptions | None, scale: float | None, *, ask: Ask = Ask()
+) -> list[Alternative]:
+    """The checked options for ``cut`` at ``scale``: the smallest scale of the material and hinge kind
+    asked for, every other preset material and hinge kind whose rules pass at ``scale``, the design
+    line that keeps the size."""
+    from ..fabricate.cut import CutOptions, closed_states
+    from ..fabricate.hingekinds import hinge_kind
+    from .cut import DEFAULT_MATERIAL, design_intent
+
+    if options is None:
+        options = CutOptions(
+            material=load_material(design_intent(pattern, "material") or DEFAULT_MATERIAL),
+            hinge=design_intent(pattern, "hinge"),
+        )
+    corners = closed_states(pattern)[options.state]
+    mat = options.material
+    kind = options.hinge or mat.hinge
+    out: list[Alternative] = []
+
+    def cmd(name: str, k: str, at: float | None, own: bool) -> str:
+        extra = ask.process_flags if own else ()
+        name = (ask.given or name) if own else name
+        return _line(
+            "fabkiri", "cut", ask.file, "--material", name, "--hinge", k,
+            *_scale_words(at), *ask.flags, *extra, *_out(ask),
+        )  # fmt: skip
+
+    need = fb.cut_minimum(corners, mat, kind)
+    if need.scale is not None and scale is not None and need.scale > scale:
+        out.append(
+            Alternative(
+                "scale",
+                cmd(mat.name, kind, need.scale, True),
+                f"{mat.name} {kind} at its smallest scale, --width {need.width_mm:g} mm",
+                CUT_GATE,
+                {"material": mat.name, "hinge": kind, "scale": need.scale},
+            )
+        )
+    for name in (mat.name, *(n for n in available() if n != mat.name)):  # the one asked first
+        own = name == mat.name
+        preset = mat if own else load_material(name)
+        fits = []
+        for k in HINGE_KINDS:
+            if (name, k) == (mat.name, kind) or (
+                options.layout and not _layout_ok(hinge_kind(k), options.layout)
+            ):
+                continue
+            m = fb.cut_minimum(corners, preset, k)
+            if m.scale is not None and (
+                scale is None or cut_refusal(corners, preset, k, scale) is None
+            ):
+                fits.append((k, m))
+        if fits:
+            k, m = next(((k, m) for k, m in fits if k == preset.hinge), fits[0])
+            also = [f for f, _ in fits if f != k]
+            out.append(
+                Alternative(
+                    "material",
+                    cmd(name, k, scale, own),
+                    f"{name} {k} (from --scale {m.scale:g})"
+                    + (f"; also --hinge {', '.join(also)}" if also else ""),
+                    CUT_GATE,
+                    {"material": name, "hinge": k, "scale": scale},
+                )
+            )
+    line = design_line(
+        pattern,
+        1.0 if scale is None else scale,
+        {"material": ask.given or mat.name, "hinge": kind},
+        ask,
+    )
+    if line is not None:
+        out.append(line)
+    return out
+
+
+def _layout_ok(kind, layout: str) -> bool:
+    try:
+        kind.check_layout(layout)
+    except FabkiriError:
+        return False
+    return True
+
+
+# ------------------------------------------------------------------ print
+def print_alternatives(
+    pattern: Pattern, options: PrintOptions | None, scale: float | None, *, ask: Ask = Ask()
+) -> list[Alternative]:
+    """The checked options for ``print`` at ``scale``: the smallest (or, past the bed, the largest) scale
+    of the printer and style asked for, every preset printer and style whose plan checks and bed pass at
+    ``scale`` (None: that print at some scale), the design line that keeps the size."""
+    from ..fabricate.printjob import print_style
+    from .cut import design_intent
+    from .print import DEFAULT_STYLE, PrintOptions, printer_for
+
+    o = options or PrintOptions()
+    state = int(o.state or design_intent(pattern, "state") or 1)
+    style = o.style or design_intent(pattern, "style") or DEFAULT_STYLE
+    given = o.printer or design_intent(pattern, "printer")
+    asked = printer_for(given, style, o)
+    out: list[Alternative] = []
+
+    def cmd(printer: str, s: str, at: float | None, own: bool) -> str:
+        return _print_cmd(ask, printer, s, at, own)
+
+    found = _print_scale(pattern, style, asked, state, scale) if scale is not None else None
+    if found is not None:
+        at, text = found
+        out.append(
+            Alternative(
+                "scale",
+                cmd(asked.name, style, at, True),
+                text,
+                PRINT_GATE,
+                {"printer": asked.name, "style": style, "scale": at},
+            )
+        )
+    styles = (style, *(s for s in fb.PRINT_STYLES if s != style))
+    memo: dict = {}
+    names = (
+        asked.name,
+        *(n for n in available_printers() if n != asked.name),
+    )  # the one asked first
+    for name in names:
+        own = name == asked.name
+        fits = []
+        for s in styles:
+            if own and s == style:
+                continue
+            pr = printer_for(given, s, o) if own else load_printer(name).with_overrides()
+            if print_style(s).plan is None:
+                continue
+            ok = _prints(pattern, s, pr, state, scale, memo)
+            if ok is not None:
+                fits.append((s, ok))
+        if fits:
+            s, from_ = fits[0]
+            also = [f for f, _ in fits[1:]]
+            out.append(
+                Alternative(
+                    "printer",
+                    cmd(name, s, scale, own),
+                    f"{name} {s}"
+                    + ("" if scale is not None else f" (from --scale {from_:g})")
+                    + (f"; also --style {', '.join(also)}" if also else ""),
+                    PRINT_GATE,
+                    {"printer": name, "style": s, "scale": scale},
+                )
+            )
+    if scale is not None and not any(a.what == "printer" for a in out):
+        # nothing prints at this size: the printers and styles that print at some size
+        out += [
+            replace(a, what="scale")
+            for a in print_alternatives(pattern, o, None, ask=ask)
+            if a.what == "printer"
+        ]
+    line = design_line(
+        pattern,
+        1.0 if scale is None else scale,
+        {"printer": given or asked.name, "style": style},
+        ask,
+    )
+    if line is not None:
+        out.append(line)
+    return out
+
+
+def _print_cmd(ask: Ask, printer: str, style: str, at: float | None, own: bool) -> str:
+    """The ``fabkiri print`` line; ``own``: the printer asked for, with its overrides as typed."""
+    extra = ask.process_flags if own else ()
+    printer = (ask.given or printer) if own else printer
+    return _line(
+        "fabkiri", "print", ask.file, "--printer", printer, "--style", style,
+        *_scale_words(at), *ask.flags, *extra, *_out(ask),
+    )  # fmt: skip
+
+
+def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float):
+    """``(scale, text)``: the smallest scale the plan checks accept, or past the bed the largest the bed
+    takes, for the printer and style asked for; None when no scale prints it or ``scale`` already does."""
+    need = fb.print_minimum(pattern, style, printer, state)
+    if not need.possible or need.min_scale is None:
+        return None
+    top = need.max_scale
+    at = need.min_scale if scale < need.min_scale else top
+    if at is None or at == scale:
+        return None
+    bed = "" if top is None else f" to {top:g} (the bed)"
+    return at, f"{printer.name} {style} prints from --scale {need.min_scale:g}{bed}"
+
+
+def _prints(
+    pattern: Pattern, style: str, printer, state: int, scale: float | None, memo: dict
+) -> float | None:
+    """``scale`` (or, None, the smallest that prints) when ``printer`` prints ``style`` there, else None."""
+    if scale is not None:
+        return scale if not fb.print_refusal(pattern, style, printer, state, scale) else None
+    # at any size: the closed form, checked at the scale it names (one plan evaluation, not a bisection)
+    key = fb.plan_family(printer, style)
+    if key not in memo:
+        bound = fb.print_bound(pattern, style, printer, state)
+        memo[key] = bound.min_scale
+    at = memo[key]
+    if at is None or fb.print_refusal(pattern, style, printer, state, at):
+        return None
+    return at
+
+
+# ------------------------------------------------------------------ design
+def design_line(
+    pattern: Pattern, scale: float | None, process: dict[str, str], ask: Ask
+) -> Alternative | None:
+    """The ``fabkiri design`` line that makes the pattern's design again, for ``process`` (``material``
+    and ``hinge``, or ``printer`` and ``style``), at the size asked for (the design's ``--size`` times
+    ``scale``); None when the pattern has no stored design target the CLI can name, the design was
+    already made for this process at this size, or the up-front room check rules the size out."""
+    from ..design.fabrication import smallest_size
+    from ..design.targets import named_targets, target_from_dict
+    from ..fabricate import design_limits
+
+    design = pattern.design or {}
+    target_d, lattice = design.get("target"), pattern.lattice or {}
+    if scale is None or not isinstance(target_d, dict) or "rows" not in lattice:
+        return None
+    name = str(target_d.get("name", ""))
+    if name not in named_targets() or "size_mm" not in target_d:
+        return None
+    size = float(f"{float(target_d['size_mm']) * scale:.4g}")
+    intent = (design.get("options") or {}).get("fabrication") or {}
+    if (
+        all(intent.get(k) == v for k, v in process.items())
+        and abs(float(intent.get("size_mm", -1)) - size) <= 1e-6 * size
+    ):
+        return None  # already this design: it would repeat what was tried
+    target = target_from_dict(target_d).scaled_to(size)
+    try:
+        limits, _ = design_limits.resolve(
+            process.get("material"), process.get("hinge"), process.get("printer"),
+            process.get("style"), None, None, target,
+        )  # fmt: skip
+    except FabkiriError:
+        return None
+    rows, cols = int(lattice["rows"]), int(lattice["cols"])
+    if limits is None or smallest_size(size, abs(target.area), rows * cols, limits) is not None:
+        return None
+    opts = design.get("options") or {}
+    flags = [
+        "--material" if "material" in process else "--printer",
+        process.get("material") or process["printer"],
+    ]
+    flags += [
+        "--hinge" if "hinge" in process else "--style",
+        process.get("hinge") or process["style"],
+    ]
+    tag = process.get("material") or process["printer"]
+    where = Path(ask.output).parent if ask.output else Path(ask.file).parent  # beside the output
+    new = str(where / f"{Path(ask.file).stem}-{Path(tag).stem}.json")
+    command = _line(
+        "fabkiri", "design", "--tiles", f"{rows}x{cols}", "--target", name, "--size", f"{size:g}",
+        *(["--lattice", lattice["kind"]] if lattice.get("kind", "quad") != "quad" else []),
+        *(["--rigid"] if opts.get("rigid") else []),
+        *(["--symmetry", opts["symmetry"]] if opts.get("symmetry") else []),
+        *flags, "-o", new,
+    )  # fmt: skip
+    return Alternative(
+        "design",
+        command,
+        f"a design made for {' '.join(process.values())} at --size {size:g}, which the room check "
+        f"does not rule out (a necessary condition; then "
+        f"`fabkiri {'cut' if 'material' in process else 'print'} {new}`)",
+        DESIGN_GATE,
+        {**process, "size": size},
+    )
+
+
+def refused(exc: FabkiriError, options: list[Alternative]) -> Refused:
+    """``exc`` as a :class:`Refused` carrying ``options`` (the refusal text kept as it was)."""
+    return Refused(str(exc), options)
+
+
+__all__ = [
+    "CUT_GATE",
+    "DESIGN_GATE",
+    "PRINT_GATE",
+    "Alternative",
+    "Ask",
+    "Refused",
+    "alternatives",
+    "cut_alternatives",
+    "cut_refusal",
+    "design_line",
+    "print_alternatives",
+    "refused",
+]
