@@ -32,6 +32,8 @@ from ..pattern.tessellation import DEFAULT_KIND
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation  # noqa: F401 (re-exported)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
+from .design_opening import check_floor
+from .design_opening import judge as judge_opening
 from .design_summary import summary_lines
 from .designers import register_designer
 
@@ -72,6 +74,7 @@ class PatternRequest:
     style: str | None = None
     min_feature: float | None = None
     min_hole: float | None = None
+    min_opening: float | None = None  # floor on the deployed hole fraction (design/opening_rows.py)
     name: str | None = None
     seed: int | None = None  # jitters the full solver's initial nodes (the rigid family ignores it)
     i_know: bool = False
@@ -196,6 +199,7 @@ def _solver_request(
             "give --target, or --contracted-target STATE:NAME for a closed-state outline"
         )
     fab_limits, intent = request.fabrication_limits(target)
+    check_floor(request.min_opening)
     if (
         fab_limits is not None and target is not None
     ):  # a request no design can meet: say so before solving
@@ -221,6 +225,7 @@ def _solver_request(
         fabrication=fab_limits,
         fabrication_intent=intent,
         seed=request.seed,
+        min_opening=request.min_opening,
         rigid_first=not request.init,
         name=request.name or "",
     )
@@ -355,6 +360,10 @@ def _outcome(best, attempts: list[dict], messages: list[str]) -> DesignOutcome:
         design=meta,
     )
     report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
+    floor = ((pattern.design or {}).get("options") or {}).get("min_opening")
+    too_closed = judge_opening(pattern, report, floor)  # the floor read back on the final design
+    problems, valid = [*problems, *too_closed], valid and not too_closed
+    report["problems"] = [*report.get("problems", []), *too_closed]
     return DesignOutcome(
         pattern=pattern,
         report=report,

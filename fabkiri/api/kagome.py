@@ -36,13 +36,15 @@ from ..pattern.io import dumps
 from ..pattern.kagome import standard_kagome
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
+from .design_opening import judge as judge_opening
+from .design_opening import summary_lines as opening_lines
 from .designers import register_designer
 
 if TYPE_CHECKING:
     from .design import PatternRequest
 
 # options of the quad design that have no kagome counterpart yet
-UNSUPPORTED = ("rigid", "holes", "contracted_target")
+UNSUPPORTED = ("rigid", "holes", "contracted_target", "min_opening")
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,7 @@ class KagomeOutcome:
         fr = r.get("fabrication")
         if fr and "met" in fr:
             out.append(_fabrication_line(fr))
+        out += opening_lines(r)
         if r.get("fabricability"):
             out += fabricability.summary_lines(r["fabricability"])
         return out
@@ -142,6 +145,7 @@ def design_kagome(
         report["fabrication"]["route"] = route
     # every material's smallest cut scale (the print rows of this summary assume quad faces: left out)
     report["fabricability"] = fabricability.summary(pattern, prints=())
+    judge_opening(pattern, report, None)  # the opening figures (no floor for kagome yet)
     options = {"fabrication": dict(intent)} if intent else {}
     pattern = replace(
         pattern,

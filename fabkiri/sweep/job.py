@@ -35,6 +35,7 @@ REQUEST_KEYS = (
     "style",
     "min_feature",
     "min_hole",
+    "min_opening",
     "seed",
 )
 DEFAULT_CUT_MATERIAL = "acrylic-3"
@@ -48,7 +49,7 @@ def request_of(params: dict) -> PatternRequest:
     if isinstance(kw.get("contracted_target"), (list, str)):
         ct = kw["contracted_target"]
         kw["contracted_target"] = tuple([ct] if isinstance(ct, str) else ct)
-    for k in ("size", "min_feature", "min_hole"):
+    for k in ("size", "min_feature", "min_hole", "min_opening"):
         if k in kw:
             kw[k] = float(kw[k])
     return PatternRequest(tiles=parse_tiles(params["tiles"]), quiet=True, **kw)
