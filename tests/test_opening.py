@@ -194,3 +194,13 @@ def test_info_reports_the_opening_in_text_and_json(run_cli):
     o = json.loads(out)["opening"]
     assert o["hole_fraction"] == pytest.approx(0.0512, abs=5e-4)
     assert set(o["turn_deg"]) == {"1", "2"}
+
+
+def test_the_report_shows_the_opening_and_warns_when_it_opens_little():
+    from fabkiri.pattern.io import read_pattern
+    from fabkiri.render.report import build_report
+
+    page = build_report(read_pattern(TEMPLATES / "patterns" / "heart-16x16-rigid.json"))
+    assert "<h3>opening</h3>" in page and "5.1 %" in page and "opens little" in page
+    wide = build_report(_standard(4, 4, 45.0))
+    assert "<h3>opening</h3>" in wide and "opens little" not in wide
