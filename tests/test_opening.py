@@ -19,6 +19,8 @@ from hypothesis import strategies as st
 
 from .conftest import TEMPLATES
 
+DATA = TEMPLATES.parent / "tests" / "data"
+
 
 def _standard(rows: int, cols: int, psi_deg: float, tile: float = 10.0) -> Pattern:
     return with_contracted_states(standard_pattern(rows, cols, tile_size=tile, angle_deg=psi_deg))
@@ -204,3 +206,64 @@ def test_the_report_shows_the_opening_and_warns_when_it_opens_little():
     assert "<h3>opening</h3>" in page and "5.1 %" in page and "opens little" in page
     wide = build_report(_standard(4, 4, 45.0))
     assert "<h3>opening</h3>" in wide and "opens little" not in wide
+
+
+# ------------------------------------------------------------------ hard outlines (issue 32, item 5)
+
+
+def _load(name: str):
+    from fabkiri.design.targets import load_target
+
+    return load_target(str(DATA / f"{name}.csv"), None)
+
+
+def test_the_l_and_the_crescent_have_one_deep_pocket_and_a_circle_none():
+    from fabkiri.design.pockets import pockets
+
+    (ell,) = pockets(_load("letter-l"))
+    assert ell.depth_mm == pytest.approx(25.0) and ell.area_mm2 == pytest.approx(35 * 75 / 2)
+    assert ell.deepest == pytest.approx((-5.0, -25.0))  # the inner corner (25, 25), centred
+    (hollow,) = pockets(_load("crescent"))
+    assert 25.0 < hollow.depth_mm < 35.0
+    assert pockets(load_target_named("circle")) == []
+
+
+def load_target_named(name: str):
+    from fabkiri.design.targets import load_target
+
+    return load_target(name, 100.0)
+
+
+def _missed(**extra) -> dict:
+    return {
+        "hausdorff_mm": 30.0,
+        "hausdorff_rel": 0.3,
+        "tol_mm": 2.0,
+        "tol_rel": 0.02,
+        "by_mm": 28.0,
+        "local_minimum": True,
+        "spacings": 6.0,
+        **extra,
+    }
+
+
+CONF = {"worst": {"at": [27.8, 7.8]}}
+
+
+def test_a_missed_shape_never_advises_a_guess_already_tried():
+    from fabkiri.design.conformance import describe_miss
+
+    some = describe_miss(
+        "deployed", _missed(tried_inits=["conformal", "rescaled", "standard"]), CONF
+    )
+    assert "try another --init" not in some
+    assert "not tried: --init coarse" in some
+    every = describe_miss(
+        "deployed", _missed(tried_inits=["conformal", "rescaled", "standard", "coarse"]), CONF
+    )
+    assert "not tried" not in every and "try another" not in every
+    assert "every initial guess was tried" in every
+    pocket = {"depth_mm": 25.0, "deepest": [-5.0, -25.0], "area_mm2": 1312.5}
+    why = describe_miss("deployed", _missed(tried_inits=["coarse"], pocket=pocket), CONF)
+    assert "pocket of the target 25 mm deep" in why and "(-5.0, -25.0)" in why
+    assert "not tried: --init standard, rescaled, conformal" in why

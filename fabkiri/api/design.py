@@ -32,10 +32,11 @@ from ..pattern.tessellation import DEFAULT_KIND
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation  # noqa: F401 (re-exported)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
-from .design_opening import check_floor
+from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_summary import summary_lines
 from .designers import register_designer
+from .shape_limits import annotate as annotate_misses
 
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
 # from 32x32 tiles a rigid design starts coarse to fine (the coarse closed-state grid resampled inside the
@@ -177,7 +178,15 @@ def design_pattern(
         cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
         if cont is not None and _rank(cont) < _rank(best):
             best = cont
-    return _outcome(best, attempts, messages)
+    best = (
+        refine_to_floor(req, best, _judge(contracted, request, target, shape_tol), attempts) or best
+    )
+    return _outcome(best, attempts, messages, target)
+
+
+def _judge(contracted: dict, request: PatternRequest, target: Target | None, shape_tol: tuple):
+    """``_check`` of a solver result against this request (a refinement's candidates)."""
+    return lambda result: _check(result, contracted, request, target, shape_tol)
 
 
 def _solver_request(
@@ -339,10 +348,13 @@ def _attempts(
     return best, attempts
 
 
-def _outcome(best, attempts: list[dict], messages: list[str]) -> DesignOutcome:
+def _outcome(
+    best, attempts: list[dict], messages: list[str], target: Target | None = None
+) -> DesignOutcome:
     """The judged outcome: the best design with its attempts, validity, shape verdict and fabricability."""
     pattern, report, problems, valid, contracted_states = best
     report.update(attempts=attempts, time_s_total=float(sum(a["time_s"] for a in attempts)))
+    annotate_misses(report, attempts, target)  # no advice already tried (shape_limits.py)
     shape_met = _shape_met(report)
     meta = {
         **(pattern.design or {}),

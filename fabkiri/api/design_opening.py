@@ -4,11 +4,17 @@ design opens little."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import replace
+
 import numpy as np
 
+from ..design.refine import refine_minimax
+from ..design.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
 from ..errors import InputError
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
+from .design_judge import _hausdorff, _rank, _shape_met
 
 # a floor the solver met (its row >= 0) reads back through the mm figures to about round-off
 FLOOR_SLACK = 1e-9
@@ -49,3 +55,31 @@ def summary_lines(report: dict) -> list[str]:
             warn + ("" if d.get("min_opening") else "; design --min-opening F sets a floor on it")
         )
     return out
+
+
+def refine_to_floor(req: DesignRequest, best: tuple, judge: Callable, attempts: list[dict]):
+    """The best design again, when a floor cost it the shape: Lawson's minimax refinement under the floor
+    (:func:`fabkiri.design.refine.refine_minimax`), in the rigid family where the request may be answered
+    by it (its steps are reduced solves). Returns the refined ``_check`` outcome when it ranks better than
+    ``best``, else None; the attempt is recorded either way. Measured: star at 150 mm, 16x16, --min-opening
+    0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps, 4.6 CPU s)."""
+    if not req.min_opening or req.target is None or not best[3] or _shape_met(best[1]):
+        return None
+    rigid = via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
+    step = replace(req, init=VIA_RIGID_INIT if rigid and not req.rigid else req.init)
+    refined, trace, secs = refine_minimax(step, best[0].nodes)
+    cand = judge(refined) if refined is not None else None
+    better = cand is not None and _rank(cand) < _rank(best)
+    attempts.append(
+        {
+            "init": "minimax refinement under --min-opening",
+            "status": cand[1]["status"] if cand else "unconverged",
+            "problems": cand[2] if cand else ["no refinement step converged"],
+            "time_s": secs,
+            "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
+            "shape": "met" if cand and _shape_met(cand[1]) else "missed",
+            "refinement_hausdorff_rel": trace,
+            "kept": better,
+        }
+    )
+    return cand if better else None

@@ -130,6 +130,27 @@ def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = No
     return out
 
 
+def _local_minimum_note(j: dict) -> str:
+    """Why (a pocket cut across) and what is left to try: never a guess the design already tried."""
+    from .initial import INITS
+
+    pocket = j.get("pocket")
+    note = (
+        f"; the outline cuts across a pocket of the target {pocket['depth_mm']:.3g} mm deep (deepest at "
+        f"({pocket['deepest'][0]:.1f}, {pocket['deepest'][1]:.1f}) mm): the lattice's sides did not follow "
+        f"it into the hollow"
+        if pocket
+        else ""
+    )
+    if "tried_inits" not in j:
+        return note + " (try another --init)"
+    tried = list(dict.fromkeys(j["tried_inits"]))
+    left = [i for i in INITS if i not in tried]
+    if left:
+        return note + f" (tried --init {', '.join(tried)}; not tried: --init {', '.join(left)})"
+    return note + f" (every initial guess was tried: {', '.join(tried)})"
+
+
 def describe_miss(label: str, j: dict, conf: dict) -> str:
     """One line for a missed shape tolerance."""
     x, y = conf["worst"]["at"]
@@ -141,7 +162,7 @@ def describe_miss(label: str, j: dict, conf: dict) -> str:
     if j.get("local_minimum"):
         line += (
             f"; that is {j['spacings']:.1f} tip spacings, not a chord cut off: a local minimum, which more "
-            f"tiles alone may not fix (try another --init)"
+            f"tiles alone may not fix" + _local_minimum_note(j)
         )
     elif "suggested_tiles" in j:
         r, c = j["suggested_tiles"]
