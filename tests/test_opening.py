@@ -265,5 +265,37 @@ def test_a_missed_shape_never_advises_a_guess_already_tried():
     assert "every initial guess was tried" in every
     pocket = {"depth_mm": 25.0, "deepest": [-5.0, -25.0], "area_mm2": 1312.5}
     why = describe_miss("deployed", _missed(tried_inits=["coarse"], pocket=pocket), CONF)
-    assert "pocket of the target 25 mm deep" in why and "(-5.0, -25.0)" in why
+    assert (
+        "pocket of the target 25 mm deep" in why
+        and "covering 100 %" in why
+        and "(-5.0, -25.0)" in why
+    )
     assert "not tried: --init standard, rescaled, conformal" in why
+
+
+@pytest.mark.slow  # a 16x16 rigid design and its refinement (~30 CPU s); the row's quick test is the 6x6 circle
+def test_a_star_at_150_mm_opens_30_percent_and_still_meets_its_shape():
+    from fabkiri.api.design import PatternRequest, design_pattern
+
+    out = design_pattern(
+        PatternRequest(tiles=(16, 16), target="star", size=150, rigid=True, min_opening=0.3)
+    )
+    o = out.report["opening"]
+    assert o["hole_fraction"] >= 0.3
+    assert out.report["conformance"]["deployed"]["hausdorff_rel"] <= 0.02
+    assert out.success and out.exit_code == 0
+    assert any(a["init"].startswith("minimax refinement") for a in out.report["attempts"])
+
+
+@pytest.mark.slow  # an 8x8 design from every initial guess (~10 CPU s); the wording's quick test is above
+def test_the_letter_l_miss_names_its_pocket_and_no_guess_already_tried(tmp_path, run_cli):
+    out = tmp_path / "l.json"
+    code, _, err = run_cli(
+        "design", "--tiles", "8x8", "--target", DATA / "letter-l.csv", "--no-preview", "-o", out
+    )
+    (line,) = [x for x in err.splitlines() if "shape missed" in x]
+    assert code == 1
+    assert "pocket of the target 25 mm deep" in line
+    assert "try another --init" not in line
+    tried = json.loads(out.read_text())["design"]["report"]["shape"]["deployed"]["tried_inits"]
+    assert tried and all(f"--init {i}" not in line.split("not tried")[-1] for i in tried)

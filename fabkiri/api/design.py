@@ -354,7 +354,7 @@ def _outcome(
     """The judged outcome: the best design with its attempts, validity, shape verdict and fabricability."""
     pattern, report, problems, valid, contracted_states = best
     report.update(attempts=attempts, time_s_total=float(sum(a["time_s"] for a in attempts)))
-    annotate_misses(report, attempts, target)  # no advice already tried (shape_limits.py)
+    annotate_misses(report, attempts, target, pattern)  # no advice already tried (shape_limits.py)
     shape_met = _shape_met(report)
     meta = {
         **(pattern.design or {}),

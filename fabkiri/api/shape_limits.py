@@ -2,30 +2,32 @@
 cut across a pocket of the target (a reflex corner, a hollow), that instead of a promise.
 
 :func:`annotate` adds to each missed ``report["shape"][k]`` the guesses tried (``tried_inits``) and, for the
-deployed outline, the pocket its worst point lies in (``pocket``, :mod:`fabkiri.design.pockets`);
+deployed outline, the pocket it covers most of (``pocket``, :mod:`fabkiri.design.pockets`);
 ``design.conformance.describe_miss`` words them.
 """
 
 from __future__ import annotations
 
-from ..design.pockets import pocket_at
+from ..design.pockets import pocket_covered
 from ..design.targets import Target
+from ..pattern.conformance import boundary_tip_order
+from ..pattern.model import Pattern
 
-# the worst point counts as the pocket's when it lies within this many mean tip spacings of it
-POCKET_REACH_SPACINGS = 1.0
 
-
-def annotate(report: dict, attempts: list[dict], target: Target | None) -> None:
-    """Add what was tried, and the pocket cut across, to every missed outline of ``report``."""
+def annotate(
+    report: dict, attempts: list[dict], target: Target | None, pattern: Pattern | None = None
+) -> None:
+    """Add what was tried, and the pocket of ``target`` that the deployed outline of ``pattern`` covers,
+    to every missed outline of ``report``."""
     tried = [a["init"] for a in attempts]
     for k, j in (report.get("shape") or {}).items():
         if j.get("status") != "missed":
             continue
         j["tried_inits"] = tried
-        c = (report.get("conformance") or {}).get(k) or {}
-        if k != "deployed" or target is None or "worst" not in c:
+        if k != "deployed" or target is None or pattern is None:
             continue
-        reach = POCKET_REACH_SPACINGS * float(c.get("spacing_mean_mm", 0.0))
-        pocket = pocket_at(target, c["worst"]["at"], reach)
-        if pocket is not None:
-            j["pocket"] = pocket.to_dict()
+        top = pattern.topology
+        tips = boundary_tip_order(top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes)
+        found = pocket_covered(target, pattern.nodes[tips])
+        if found is not None:
+            j["pocket"] = {**found[0].to_dict(), "covered": found[1]}

@@ -136,19 +136,25 @@ def _local_minimum_note(j: dict) -> str:
 
     pocket = j.get("pocket")
     note = (
-        f"; the outline cuts across a pocket of the target {pocket['depth_mm']:.3g} mm deep (deepest at "
-        f"({pocket['deepest'][0]:.1f}, {pocket['deepest'][1]:.1f}) mm): the lattice's sides did not follow "
-        f"it into the hollow"
+        f"; the outline runs across a pocket of the target {pocket['depth_mm']:.3g} mm deep (deepest at "
+        f"({pocket['deepest'][0]:.1f}, {pocket['deepest'][1]:.1f}) mm), covering "
+        f"{100 * pocket.get('covered', 1.0):.0f} % of it: the lattice's sides did not follow the outline "
+        f"into the hollow"
         if pocket
         else ""
     )
     if "tried_inits" not in j:
         return note + " (try another --init)"
     tried = list(dict.fromkeys(j["tried_inits"]))
+    guesses = [i for i in tried if i in INITS]
+    also = "".join(f", {i}" for i in tried if i not in INITS)  # the rigid family, a refinement
     left = [i for i in INITS if i not in tried]
     if left:
-        return note + f" (tried --init {', '.join(tried)}; not tried: --init {', '.join(left)})"
-    return note + f" (every initial guess was tried: {', '.join(tried)})"
+        return (
+            note
+            + f" (tried --init {', '.join(guesses)}{also}; not tried: --init {', '.join(left)})"
+        )
+    return note + f" (every initial guess was tried: {', '.join(guesses)}{also})"
 
 
 def describe_miss(label: str, j: dict, conf: dict) -> str:

@@ -2,7 +2,7 @@
 
 A pocket is a piece of the target's convex hull outside the target. The deployed outline of a quad lattice
 has to run into every pocket and out again along one of its four sides; a design that misses the shape
-with its worst point inside a pocket cut across it (an L's inner corner, a crescent's hollow), which no
+with its outline over most of a pocket cut across it (an L's inner corner, a crescent's hollow), which no
 initial guess of the solver avoided there (``fabkiri design`` says so instead of advice already tried).
 """
 
@@ -16,9 +16,9 @@ import shapely
 from .conformance import target_polygon
 from .targets import Target
 
-MIN_POCKET_AREA = (
-    0.01  # pockets smaller than this share of the hull (a star's notches count) are ignored
-)
+# pockets below this share of the hull are ignored (a star's notches are above it)
+MIN_POCKET_AREA = 0.01
+COVERED = 0.5  # an outline covering this share of a pocket ran across it
 
 
 @dataclass(frozen=True)
@@ -56,8 +56,14 @@ def pockets(target: Target) -> list[Pocket]:
     return sorted(out, key=lambda p: -p.depth_mm)
 
 
-def pocket_at(target: Target, point, reach_mm: float) -> Pocket | None:
-    """The pocket within ``reach_mm`` of ``point`` (the worst place of a missed shape), or None."""
-    p = shapely.Point(point)
-    near = [k for k in pockets(target) if k.polygon.distance(p) <= reach_mm]
-    return near[0] if near else None
+def pocket_covered(target: Target, outline: np.ndarray) -> tuple[Pocket, float] | None:
+    """The deepest pocket the closed ``outline`` polygon (the deployed tips, mm) covers at least
+    ``COVERED`` of, with that share: the outline ran across it instead of into it. None: no such pocket."""
+    poly = shapely.Polygon(np.asarray(outline, float))
+    if not poly.is_valid:
+        poly = shapely.make_valid(poly)
+    for k in pockets(target):
+        share = float(k.polygon.intersection(poly).area / k.polygon.area)
+        if share >= COVERED:
+            return k, share
+    return None
