@@ -147,14 +147,12 @@ def _local_minimum_note(j: dict) -> str:
         return note + " (try another --init)"
     tried = list(dict.fromkeys(j["tried_inits"]))
     guesses = [i for i in tried if i in INITS]
-    also = "".join(f", {i}" for i in tried if i not in INITS)  # the rigid family, a refinement
+    others = [i for i in tried if i not in INITS]  # the rigid family, a refinement
+    done = ", ".join([f"--init {', '.join(guesses)}"] * bool(guesses) + others)
     left = [i for i in INITS if i not in tried]
     if left:
-        return (
-            note
-            + f" (tried --init {', '.join(guesses)}{also}; not tried: --init {', '.join(left)})"
-        )
-    return note + f" (every initial guess was tried: {', '.join(guesses)}{also})"
+        return note + f" (tried {done}; not tried: --init {', '.join(left)})"
+    return note + f" (every initial guess was tried: {done})"
 
 
 def describe_miss(label: str, j: dict, conf: dict) -> str:
