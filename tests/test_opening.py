@@ -299,3 +299,12 @@ def test_the_letter_l_miss_names_its_pocket_and_no_guess_already_tried(tmp_path,
     assert "try another --init" not in line
     tried = json.loads(out.read_text())["design"]["report"]["shape"]["deployed"]["tried_inits"]
     assert tried and all(f"--init {i}" not in line.split("not tried")[-1] for i in tried)
+
+
+def test_a_sweep_passes_the_floor_by_name():
+    from fabkiri.sweep.job import request_of
+    from fabkiri.sweep.spec import PARAMS
+
+    req = request_of({"tiles": "4x4", "target": "circle", "min_opening": 1 / 4})
+    assert req.min_opening == 0.25 and isinstance(req.min_opening, float)
+    assert float in PARAMS["min_opening"]

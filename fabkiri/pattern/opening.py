@@ -116,12 +116,28 @@ def _turn_deg(closed: np.ndarray, deployed: np.ndarray) -> float:
 def _closed_area(corners: np.ndarray) -> float:
     """Area inside a closed state's outline: its tiles and any gap they enclose, pieces that meet only at
     corners summed. The union is taken on a grid of 1e-7 of the extent, which closes round-off cracks
-    (a buffer out and back in, as ``closed_outline`` closes them, came back empty on a 8x8 star)."""
+    (a buffer out and back in, as ``closed_outline`` closes them, came back empty on a 8x8 star); where
+    GEOS refuses the union (an imported pattern's closed state) without the grid, then the tiles' own area."""
     c = np.asarray(corners, float)
     pts = c.reshape(-1, 2)
     grid = 1e-7 * float((pts.max(0) - pts.min(0)).max())
-    u = shapely.union_all(shapely.polygons(c), grid_size=grid)
-    return float(sum(shapely.Polygon(g.exterior).area for g in getattr(u, "geoms", [u])))
+    polys = shapely.make_valid(shapely.polygons(c))
+    for size in (grid, 0.0):
+        try:
+            u = shapely.union_all(polys, grid_size=size or None)
+        except shapely.errors.GEOSException:
+            continue
+        area = float(sum(shapely.Polygon(g.exterior).area for g in _pieces(u)))
+        if area > 0:
+            return area
+    return float(np.abs(geometry.signed_areas(c)).sum())
+
+
+def _pieces(u) -> list:
+    """The polygons of a union (a polygon, or the polygons of a collection)."""
+    if u.geom_type == "Polygon":
+        return [u]
+    return [g for g in getattr(u, "geoms", []) if g.geom_type == "Polygon"]
 
 
 def opening(pattern: Pattern, closed: dict[int, np.ndarray] | None = None) -> Opening:

@@ -122,6 +122,7 @@ def design_figures(out, params: dict | None = None) -> dict:
         "one_minus_iou": worst and worst["one_minus_iou"],
         "shape": "met" if out.shape_met else "missed",
         "thinnest_tile_mm": fab.get("thinnest_tile_mm"),
+        "hole_fraction": (r.get("opening") or {}).get("hole_fraction"),  # how much it opens
         "design_time_s": r.get("time_s_total"),
         "problems": "; ".join(out.problems),
     }
