@@ -24,6 +24,7 @@ import numpy as np
 
 from ..design import conformance as conf
 from ..design import kagome_fab as KF
+from ..design import kagome_opening as KO
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.kagome_fit import design
 from ..design.targets import load_target
@@ -36,6 +37,7 @@ from ..pattern.io import dumps
 from ..pattern.kagome import standard_kagome
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
+from .design_opening import check_floor
 from .design_opening import judge as judge_opening
 from .design_opening import summary_lines as opening_lines
 from .designers import register_designer
@@ -44,7 +46,7 @@ if TYPE_CHECKING:
     from .design import PatternRequest
 
 # options of the quad design that have no kagome counterpart yet
-UNSUPPORTED = ("rigid", "holes", "contracted_target", "min_opening")
+UNSUPPORTED = ("rigid", "holes", "contracted_target")
 
 
 @dataclass(frozen=True)
@@ -77,7 +79,9 @@ class KagomeOutcome:
         fr = r.get("fabrication")
         if fr and "met" in fr:
             out.append(_fabrication_line(fr))
-        out += opening_lines(r)
+        out += opening_lines(r) + [
+            f"fabkiri: design failed: {p}" for p in r.get("opening_problems", [])
+        ]
         if r.get("fabricability"):
             out += fabricability.summary_lines(r["fabricability"])
         return out
@@ -115,6 +119,7 @@ def design_kagome(
     symmetry: bool | str = True,
     fabrication: FabricationLimits | None = None,
     intent: dict | None = None,
+    min_opening: float | None = None,
 ) -> KagomeOutcome:
     """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm).
 
@@ -133,9 +138,12 @@ def design_kagome(
     faces = _print_faces(std, fabrication)
 
     def fab_of(weight: float) -> list:
-        return KF.families(std, fabrication, tile, faces=faces, weight=weight)
+        return KF.families(std, fabrication, tile, faces=faces, weight=weight) + KO.families(
+            std, min_opening, weight
+        )
 
-    accept = _meets(fabrication, faces)
+    check_floor(min_opening)
+    accept = KO.accepting(_meets(fabrication, faces), min_opening)
     d, pattern, rejected, convex, free, route = _solve(std, tgt, symmetry, fab_of, accept)
     report = _report(d, pattern, tgt, shape, (rows, cols), tol, tile, rejected, convex)
     if fabrication is not None:
@@ -145,8 +153,10 @@ def design_kagome(
         report["fabrication"]["route"] = route
     # every material's smallest cut scale (the print rows of this summary assume quad faces: left out)
     report["fabricability"] = fabricability.summary(pattern, prints=())
-    judge_opening(pattern, report, None)  # the opening figures (no floor for kagome yet)
+    too_closed = judge_opening(pattern, report, min_opening)  # the opening figures, the floor met
+    report["opening_problems"] = too_closed
     options = {"fabrication": dict(intent)} if intent else {}
+    options.update({"min_opening": min_opening} if min_opening else {})
     pattern = replace(
         pattern,
         name=name or pattern.name,
@@ -160,7 +170,7 @@ def design_kagome(
     rep = verify_pattern(pattern, shape_tol=shape_tol)
     report["verify_failed"] = [c.name for c in rep.failed()]
     valid = report["status"] == "converged" and not report["verify_failed"]
-    valid = valid and bool(report.get("fabrication", {}).get("met", True))
+    valid = valid and bool(report.get("fabrication", {}).get("met", True)) and not too_closed
     pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
     return KagomeOutcome(pattern, report, valid, (rows, cols))
 
@@ -312,6 +322,7 @@ def design_kagome_pattern(
         symmetry=SYMMETRY[request.symmetry],
         fabrication=limits,
         intent=intent,
+        min_opening=request.min_opening,
     )
 
 
