@@ -178,9 +178,8 @@ def design_pattern(
         cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
         if cont is not None and _rank(cont) < _rank(best):
             best = cont
-    best = (
-        refine_to_floor(req, best, _judge(contracted, request, target, shape_tol), attempts) or best
-    )
+    judge = _judge(contracted, request, target, shape_tol)
+    best = refine_to_floor(req, best, judge, attempts, say) or best  # a floor that cost the shape
     return _outcome(best, attempts, messages, target)
 
 

@@ -57,7 +57,13 @@ def summary_lines(report: dict) -> list[str]:
     return out
 
 
-def refine_to_floor(req: DesignRequest, best: tuple, judge: Callable, attempts: list[dict]):
+def refine_to_floor(
+    req: DesignRequest,
+    best: tuple,
+    judge: Callable,
+    attempts: list[dict],
+    say: Callable[[str], None],
+):
     """The best design again, when a floor cost it the shape: Lawson's minimax refinement under the floor
     (:func:`fabkiri.design.refine.refine_minimax`), in the rigid family where the request may be answered
     by it (its steps are reduced solves). Returns the refined ``_check`` outcome when it ranks better than
@@ -65,6 +71,10 @@ def refine_to_floor(req: DesignRequest, best: tuple, judge: Callable, attempts: 
     0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps, 4.6 CPU s)."""
     if not req.min_opening or req.target is None or not best[3] or _shape_met(best[1]):
         return None
+    say(
+        f"fabkiri: with --min-opening {req.min_opening:g} the design misses the shape (Hausdorff "
+        f"{100 * _hausdorff(best[1]):.2f} % of the size); refining it under the floor (minimax steps)"
+    )
     rigid = via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
     step = replace(req, init=VIA_RIGID_INIT if rigid and not req.rigid else req.init)
     refined, trace, secs = refine_minimax(step, best[0].nodes)
