@@ -26,7 +26,6 @@ from ..verify import verify_pattern
 from ..verify.printmanifest import PrintManifest
 from .deployment import _pyplot
 from .htmlparts import MIME, _fig_png, _fmt, _img, _missing, data_uri, rows_table, table  # noqa: F401 (re-exported)
-from .report_opening import opening_part
 from .report_sections import (  # noqa: F401 (re-exported)
     _assembly_section,
     _bom_section,
@@ -186,9 +185,10 @@ def build_report(
     info = describe(pattern)
     parts: dict[str, str] = {}
     parts["summary"] = _summary_part(pattern, source, info, report)
-    parts["design"] = _design_part(pattern, report)
+    from .report_opening import opening_part  # how much it opens, its own module
+
+    parts["design"] = _design_part(pattern, report) + opening_part(info.opening)
     parts["states"] = _states_part(pattern, states, info)
-    parts["states"] += opening_part(info.opening)  # how much it opens (report_opening.py)
     fab = report.get("fabricability")
     parts["fabricability"] = (
         table(fab)
