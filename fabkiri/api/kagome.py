@@ -155,7 +155,7 @@ def design_kagome(
     report["fabricability"] = fabricability.summary(pattern, prints=())
     too_closed = judge_opening(pattern, report, min_opening)  # the opening figures, the floor met
     report["opening_problems"] = too_closed
-    options = {"fabrication": dict(intent)} if intent else {}
+    options: dict[str, object] = {"fabrication": dict(intent)} if intent else {}
     options.update({"min_opening": min_opening} if min_opening else {})
     pattern = replace(
         pattern,

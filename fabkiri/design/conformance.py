@@ -147,7 +147,8 @@ def _local_minimum_note(j: dict) -> str:
         return note + " (try another --init)"
     tried = list(dict.fromkeys(j["tried_inits"]))
     guesses = [i for i in tried if i in INITS]
-    others = [i for i in tried if i not in INITS]  # the rigid family, a refinement
+    # the rigid family (the front door's last guess), a refinement
+    others = ["the rigid family" if i == "rigid" else i for i in tried if i not in INITS]
     done = ", ".join([f"--init {', '.join(guesses)}"] * bool(guesses) + others)
     left = [i for i in INITS if i not in tried]
     if left:
