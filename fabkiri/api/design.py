@@ -32,8 +32,11 @@ from ..pattern.tessellation import DEFAULT_KIND
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation  # noqa: F401 (re-exported)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
+from .design_opening import check_floor, refine_to_floor
+from .design_opening import judge as judge_opening
 from .design_summary import summary_lines
 from .designers import register_designer
+from .shape_limits import annotate as annotate_misses
 
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
 # from 32x32 tiles a rigid design starts coarse to fine (the coarse closed-state grid resampled inside the
@@ -72,6 +75,7 @@ class PatternRequest:
     style: str | None = None
     min_feature: float | None = None
     min_hole: float | None = None
+    min_opening: float | None = None  # floor on the deployed hole fraction (design/opening_rows.py)
     name: str | None = None
     seed: int | None = None  # jitters the full solver's initial nodes (the rigid family ignores it)
     i_know: bool = False
@@ -174,7 +178,14 @@ def design_pattern(
         cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
         if cont is not None and _rank(cont) < _rank(best):
             best = cont
-    return _outcome(best, attempts, messages)
+    judge = _judge(contracted, request, target, shape_tol)
+    best = refine_to_floor(req, best, judge, attempts, say) or best  # a floor that cost the shape
+    return _outcome(best, attempts, messages, target)
+
+
+def _judge(contracted: dict, request: PatternRequest, target: Target | None, shape_tol: tuple):
+    """``_check`` of a solver result against this request (a refinement's candidates)."""
+    return lambda result: _check(result, contracted, request, target, shape_tol)
 
 
 def check_size(request: PatternRequest) -> None:
@@ -207,6 +218,7 @@ def _solver_request(
             "give --target, or --contracted-target STATE:NAME for a closed-state outline"
         )
     fab_limits, intent = request.fabrication_limits(target)
+    check_floor(request.min_opening)
     if (
         fab_limits is not None and target is not None
     ):  # a request no design can meet: say so before solving
@@ -232,6 +244,7 @@ def _solver_request(
         fabrication=fab_limits,
         fabrication_intent=intent,
         seed=request.seed,
+        min_opening=request.min_opening,
         rigid_first=not request.init,
         name=request.name or "",
     )
@@ -353,10 +366,13 @@ def _attempts(
     return best, attempts
 
 
-def _outcome(best, attempts: list[dict], messages: list[str]) -> DesignOutcome:
+def _outcome(
+    best, attempts: list[dict], messages: list[str], target: Target | None = None
+) -> DesignOutcome:
     """The judged outcome: the best design with its attempts, validity, shape verdict and fabricability."""
     pattern, report, problems, valid, contracted_states = best
     report.update(attempts=attempts, time_s_total=float(sum(a["time_s"] for a in attempts)))
+    annotate_misses(report, attempts, target, pattern)  # no advice already tried (shape_limits.py)
     shape_met = _shape_met(report)
     meta = {
         **(pattern.design or {}),
@@ -374,6 +390,10 @@ def _outcome(best, attempts: list[dict], messages: list[str]) -> DesignOutcome:
         design=meta,
     )
     report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
+    floor = ((pattern.design or {}).get("options") or {}).get("min_opening")
+    too_closed = judge_opening(pattern, report, floor)  # the floor read back on the final design
+    problems, valid = [*problems, *too_closed], valid and not too_closed
+    report["problems"] = [*report.get("problems", []), *too_closed]
     return DesignOutcome(
         pattern=pattern,
         report=report,

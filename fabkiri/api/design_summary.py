@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from ..design import conformance as conf
 from ..fabricate import fabricability
+from .design_opening import summary_lines as opening_lines
 
 
 def summary_lines(path, report: dict) -> list[str]:
@@ -36,6 +37,7 @@ def summary_lines(path, report: dict) -> list[str]:
             f"{c['spacing_mean_mm']:.3g} mm"
         )
     out.append("; ".join(parts))
+    out += opening_lines(report)
     fr = report.get("fabrication")
     if fr:
         out.append(

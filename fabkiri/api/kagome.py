@@ -25,6 +25,7 @@ import numpy as np
 from .. import limits as size_limits
 from ..design import conformance as conf
 from ..design import kagome_fab as KF
+from ..design import kagome_opening as KO
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.kagome_fit import design
 from ..design.targets import load_target
@@ -37,6 +38,9 @@ from ..pattern.io import dumps
 from ..pattern.kagome import standard_kagome
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
+from .design_opening import check_floor
+from .design_opening import judge as judge_opening
+from .design_opening import summary_lines as opening_lines
 from .designers import register_designer
 
 if TYPE_CHECKING:
@@ -76,6 +80,9 @@ class KagomeOutcome:
         fr = r.get("fabrication")
         if fr and "met" in fr:
             out.append(_fabrication_line(fr))
+        out += opening_lines(r) + [
+            f"fabkiri: design failed: {p}" for p in r.get("opening_problems", [])
+        ]
         if r.get("fabricability"):
             out += fabricability.summary_lines(r["fabricability"])
         return out
@@ -113,6 +120,7 @@ def design_kagome(
     symmetry: bool | str = True,
     fabrication: FabricationLimits | None = None,
     intent: dict | None = None,
+    min_opening: float | None = None,
 ) -> KagomeOutcome:
     """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm).
 
@@ -133,9 +141,12 @@ def design_kagome(
     faces = _print_faces(std, fabrication)
 
     def fab_of(weight: float) -> list:
-        return KF.families(std, fabrication, tile, faces=faces, weight=weight)
+        return KF.families(std, fabrication, tile, faces=faces, weight=weight) + KO.families(
+            std, min_opening, weight
+        )
 
-    accept = _meets(fabrication, faces)
+    check_floor(min_opening)
+    accept = KO.accepting(_meets(fabrication, faces), min_opening)
     d, pattern, rejected, convex, free, route = _solve(std, tgt, symmetry, fab_of, accept)
     report = _report(d, pattern, tgt, shape, (rows, cols), tol, tile, rejected, convex)
     if fabrication is not None:
@@ -145,7 +156,10 @@ def design_kagome(
         report["fabrication"]["route"] = route
     # every material's smallest cut scale (the print rows of this summary assume quad faces: left out)
     report["fabricability"] = fabricability.summary(pattern, prints=())
-    options = {"fabrication": dict(intent)} if intent else {}
+    too_closed = judge_opening(pattern, report, min_opening)  # the opening figures, the floor met
+    report["opening_problems"] = too_closed
+    options: dict[str, object] = {"fabrication": dict(intent)} if intent else {}
+    options.update({"min_opening": min_opening} if min_opening else {})
     pattern = replace(
         pattern,
         name=name or pattern.name,
@@ -159,7 +173,7 @@ def design_kagome(
     rep = verify_pattern(pattern, shape_tol=shape_tol)
     report["verify_failed"] = [c.name for c in rep.failed()]
     valid = report["status"] == "converged" and not report["verify_failed"]
-    valid = valid and bool(report.get("fabrication", {}).get("met", True))
+    valid = valid and bool(report.get("fabrication", {}).get("met", True)) and not too_closed
     pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
     return KagomeOutcome(pattern, report, valid, (rows, cols))
 
@@ -313,6 +327,7 @@ def design_kagome_pattern(
         symmetry=SYMMETRY[request.symmetry],
         fabrication=limits,
         intent=intent,
+        min_opening=request.min_opening,
     )
 
 

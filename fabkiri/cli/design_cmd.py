@@ -64,6 +64,7 @@ def cmd_design(args: argparse.Namespace) -> int:
         style=args.style,
         min_feature=args.min_feature,
         min_hole=args.min_hole,
+        min_opening=args.min_opening,
         name=args.name,
         i_know=args.i_know,
         verbose=args.verbose,
@@ -89,6 +90,12 @@ _tol = bounded(
     lambda v: 0 < v < 1e-2,
     "expected a number",
     "tolerance must lie in (0, 1e-2), got {text!r}",
+)
+_fraction = bounded(
+    float,
+    lambda v: bool(np.isfinite(v) and 0 < v < 1),
+    "expected a fraction",
+    "--min-opening must lie in (0, 1), got {text!r}",
 )
 _size = bounded(
     float,
@@ -232,6 +239,13 @@ def _add_fabrication_args(p: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide"
+    )
+    g.add_argument(
+        "--min-opening",
+        type=_fraction,
+        metavar="F",
+        help="the deployed holes at least this fraction of the deployed sheet's area (e.g. 0.3; "
+        "the 'opening' figure design and info report)",
     )
 
 

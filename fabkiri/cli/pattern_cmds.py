@@ -16,6 +16,7 @@ from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
 from ..pattern.formats import format_names
 from ..pattern.io import write_pattern
 from ..pattern.model import Pattern
+from ..pattern.opening import Opening
 from ..pattern.periodic import standard_tube
 from ..pattern.tessellation import kinds, tessellation
 from .argtypes import bounded
@@ -104,6 +105,9 @@ def cmd_info(args: argparse.Namespace) -> int:
             from ..fabricate.fabricability import summary_lines
 
             print("\n".join(summary_lines(fabric)))
+    warn = Opening.from_dict(info.opening).warning() if info.opening else None
+    if warn:
+        print(warn, file=sys.stderr)
     if args.check and (not info.closes_both or not info.supplied_ok):
         print(f"fabkiri: check failed: {'; '.join(info.problems())}", file=sys.stderr)
         return 1

@@ -130,6 +130,32 @@ def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = No
     return out
 
 
+def _local_minimum_note(j: dict) -> str:
+    """Why (a pocket cut across) and what is left to try: never a guess the design already tried."""
+    from .initial import INITS
+
+    pocket = j.get("pocket")
+    note = (
+        f"; the outline runs across a pocket of the target {pocket['depth_mm']:.3g} mm deep (deepest at "
+        f"({pocket['deepest'][0]:.1f}, {pocket['deepest'][1]:.1f}) mm), covering "
+        f"{100 * pocket.get('covered', 1.0):.0f} % of it: the lattice's sides did not follow the outline "
+        f"into the hollow"
+        if pocket
+        else ""
+    )
+    if "tried_inits" not in j:
+        return note + " (try another --init)"
+    tried = list(dict.fromkeys(j["tried_inits"]))
+    guesses = [i for i in tried if i in INITS]
+    # the rigid family (the front door's last guess), a refinement
+    others = ["the rigid family" if i == "rigid" else i for i in tried if i not in INITS]
+    done = ", ".join([f"--init {', '.join(guesses)}"] * bool(guesses) + others)
+    left = [i for i in INITS if i not in tried]
+    if left:
+        return note + f" (tried {done}; not tried: --init {', '.join(left)})"
+    return note + f" (every initial guess was tried: {done})"
+
+
 def describe_miss(label: str, j: dict, conf: dict) -> str:
     """One line for a missed shape tolerance."""
     x, y = conf["worst"]["at"]
@@ -141,7 +167,7 @@ def describe_miss(label: str, j: dict, conf: dict) -> str:
     if j.get("local_minimum"):
         line += (
             f"; that is {j['spacings']:.1f} tip spacings, not a chord cut off: a local minimum, which more "
-            f"tiles alone may not fix (try another --init)"
+            f"tiles alone may not fix" + _local_minimum_note(j)
         )
     elif "suggested_tiles" in j:
         r, c = j["suggested_tiles"]

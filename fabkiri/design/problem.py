@@ -23,6 +23,7 @@ from .fabrication import families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .normal import _Normal, nested_dissection
 from .objective import energy, regularizer, weighted
+from .opening_rows import opening_families
 from .request import DesignRequest, reduced_applies
 from .rigid import RigidFamily, resample_grid
 from .targets import Target
@@ -158,6 +159,7 @@ class _Problem:
         fam.append(regularizer(st, nv))
         fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
+        fam += opening_families(st, nv, req.min_opening, base)
         if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
             fam = [
                 weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f

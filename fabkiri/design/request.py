@@ -78,6 +78,7 @@ class DesignRequest:
         True  # a mid-size non-rigid design tries the rigid family first (VIA_RIGID_FIRST_TILES)
     )
     coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
+    min_opening: float | None = None  # floor on the deployed hole fraction (``opening_rows.py``)
     fit_weights: dict | None = (
         None  # fit family name -> row weights (``refine.py``: towards the minimax fit)
     )

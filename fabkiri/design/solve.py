@@ -291,6 +291,7 @@ def _result(req: DesignRequest, prob: _Problem, X: np.ndarray, report: dict) -> 
         "tol": req.tol,
         "reg_weight": req.reg_weight,
         **({"seed": req.seed} if req.seed is not None else {}),
+        **({"min_opening": req.min_opening} if req.min_opening else {}),
         **({"fabrication": dict(req.fabrication_intent)} if req.fabrication_intent else {}),
         "contracted": {
             str(s): (v.name if isinstance(v, Target) else ({"rectangle": True, "ratio": v[1]}))

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
+from ..pattern.opening import Opening, opening
 from ..pattern.residuals import hinge_sums, state_residuals
 from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
@@ -60,6 +61,7 @@ class PatternInfo:
         default_factory=dict
     )  # "deployed" / "state_S" -> design.conformance measure
     tube: dict | None = None  # a periodic pattern's tube per state (mechanics.tube.tube_report)
+    opening: dict = field(default_factory=dict)  # how much it opens (pattern.opening), to_dict form
 
     def seam_problems(self) -> list[str]:
         """A tube's closed states whose seam is not a pure translation (a rigid motion for a tube recorded
@@ -153,6 +155,10 @@ class PatternInfo:
                 f"{c['mean_target_to_outline_mm']:.3g} mm, spacing min/mean {c['spacing_min_mm']:.3g}/"
                 f"{c['spacing_mean_mm']:.3g} mm"
             )
+        if self.opening:
+            lines.append(
+                f"opening      {Opening.from_dict(self.opening).line()[len('opening: ') :]}"
+            )
         if self.tube:
             from .tube import tube_lines
 
@@ -214,6 +220,7 @@ def describe(
         info.states.append(st)
     info.conformance = _conformance(pattern)
     info.tube = tube_report(pattern, closed)
+    info.opening = opening(pattern, closed).to_dict()
     return info
 
 

@@ -194,7 +194,9 @@ def build_report(
     info = describe(pattern)
     parts: dict[str, str] = {}
     parts["summary"] = _summary_part(pattern, source, info, report)
-    parts["design"] = _design_part(pattern, report)
+    from .report_opening import opening_part  # how much it opens, its own module
+
+    parts["design"] = _design_part(pattern, report) + opening_part(info.opening)
     parts["states"] = _states_part(pattern, states, info)
     fab = fabricability_summary(pattern, info.closes_both, report.get("fabricability"))
     parts["fabricability"] = fabricability_part(

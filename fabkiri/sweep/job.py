@@ -35,6 +35,7 @@ REQUEST_KEYS = (
     "style",
     "min_feature",
     "min_hole",
+    "min_opening",
     "seed",
 )
 DEFAULT_CUT_MATERIAL = "acrylic-3"
@@ -48,7 +49,7 @@ def request_of(params: dict) -> PatternRequest:
     if isinstance(kw.get("contracted_target"), (list, str)):
         ct = kw["contracted_target"]
         kw["contracted_target"] = tuple([ct] if isinstance(ct, str) else ct)
-    for k in ("size", "min_feature", "min_hole"):
+    for k in ("size", "min_feature", "min_hole", "min_opening"):
         if k in kw:
             kw[k] = float(kw[k])
     return PatternRequest(tiles=parse_tiles(params["tiles"]), quiet=True, **kw)
@@ -124,6 +125,7 @@ def design_figures(out, params: dict | None = None) -> dict:
         "one_minus_iou": worst and worst["one_minus_iou"],
         "shape": "met" if out.shape_met else "missed",
         "thinnest_tile_mm": fab.get("thinnest_tile_mm"),
+        "hole_fraction": (r.get("opening") or {}).get("hole_fraction"),  # how much it opens
         "design_time_s": r.get("time_s_total"),
         "problems": "; ".join(out.problems),
     }

@@ -49,6 +49,7 @@ PARAMS: dict[str, tuple[type, ...]] = {
     "style": (str,),
     "min_feature": (int, float),
     "min_hole": (int, float),
+    "min_opening": (int, float),
     "seed": (int,),
     "cut_material": (str,),
     "print_printer": (str,),

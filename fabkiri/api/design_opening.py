@@ -1,0 +1,95 @@
+"""The design front doors' side of the opening figures (:mod:`fabkiri.pattern.opening`): the floor
+``--min-opening`` is checked, the figures go in the report, the summary says them and warns when a
+design opens little."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from ..design.refine import refine_minimax
+from ..design.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
+from ..errors import InputError
+from ..pattern.model import Pattern
+from ..pattern.opening import Opening, opening
+from .design_judge import _hausdorff, _rank, _shape_met
+
+# a floor the solver met (its row >= 0) reads back through the mm figures to about round-off
+FLOOR_SLACK = 1e-9
+
+
+def check_floor(floor: float | None) -> None:
+    """InputError unless ``floor`` is None or a hole fraction in (0, 1)."""
+    if floor is not None and not (np.isfinite(floor) and 0.0 < floor < 1.0):
+        raise InputError(
+            f"--min-opening is a deployed hole fraction in (0, 1) (e.g. 0.3), got {floor}"
+        )
+
+
+def judge(pattern: Pattern, report: dict, floor: float | None) -> list[str]:
+    """Put the opening figures in ``report["opening"]`` (with the floor asked) and return the problem of a
+    design that opens less than ``floor`` (the solver's row read back on the final pattern)."""
+    o = opening(pattern)
+    report["opening"] = {**o.to_dict(), **({"min_opening": floor} if floor else {})}
+    if floor and o.hole_fraction < floor - FLOOR_SLACK:
+        return [
+            f"opens {100 * o.hole_fraction:.2f} % (deployed hole fraction), below --min-opening "
+            f"{floor:g}"
+        ]
+    return []
+
+
+def summary_lines(report: dict) -> list[str]:
+    """The opening line and, for a design that opens little, the one-line warning (with the option that
+    asks for more when it was not given)."""
+    d = report.get("opening")
+    if not d:
+        return []
+    o = Opening.from_dict(d)
+    out = [o.line()]
+    warn = o.warning()
+    if warn:
+        out.append(
+            warn + ("" if d.get("min_opening") else "; design --min-opening F sets a floor on it")
+        )
+    return out
+
+
+def refine_to_floor(
+    req: DesignRequest,
+    best: tuple,
+    judge: Callable,
+    attempts: list[dict],
+    say: Callable[[str], None],
+):
+    """The best design again, when a floor cost it the shape: Lawson's minimax refinement under the floor
+    (:func:`fabkiri.design.refine.refine_minimax`), in the rigid family where the request may be answered
+    by it (its steps are reduced solves). Returns the refined ``_check`` outcome when it ranks better than
+    ``best``, else None; the attempt is recorded either way. Measured: star at 150 mm, 16x16, --min-opening
+    0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps, 4.6 CPU s)."""
+    if not req.min_opening or req.target is None or not best[3] or _shape_met(best[1]):
+        return None
+    say(
+        f"fabkiri: with --min-opening {req.min_opening:g} the design misses the shape (Hausdorff "
+        f"{100 * _hausdorff(best[1]):.2f} % of the size); refining it under the floor (minimax steps)"
+    )
+    rigid = via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
+    step = replace(req, init=VIA_RIGID_INIT if rigid and not req.rigid else req.init)
+    refined, trace, secs = refine_minimax(step, best[0].nodes)
+    cand = judge(refined) if refined is not None else None
+    better = cand is not None and _rank(cand) < _rank(best)
+    attempts.append(
+        {
+            "init": "minimax refinement under --min-opening",
+            "status": cand[1]["status"] if cand else "unconverged",
+            "problems": cand[2] if cand else ["no refinement step converged"],
+            "time_s": secs,
+            "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
+            "shape": "met" if cand and _shape_met(cand[1]) else "missed",
+            "refinement_hausdorff_rel": trace,
+            "kept": better,
+        }
+    )
+    return cand if better else None

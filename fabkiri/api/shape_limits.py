@@ -1,0 +1,33 @@
+"""What a missed shape's message may advise: never an initial guess already tried, and where the outline
+cut across a pocket of the target (a reflex corner, a hollow), that instead of a promise.
+
+:func:`annotate` adds to each missed ``report["shape"][k]`` the guesses tried (``tried_inits``) and, for the
+deployed outline, the pocket it covers most of (``pocket``, :mod:`fabkiri.design.pockets`);
+``design.conformance.describe_miss`` words them.
+"""
+
+from __future__ import annotations
+
+from ..design.pockets import pocket_covered
+from ..design.targets import Target
+from ..pattern.conformance import boundary_tip_order
+from ..pattern.model import Pattern
+
+
+def annotate(
+    report: dict, attempts: list[dict], target: Target | None, pattern: Pattern | None = None
+) -> None:
+    """Add what was tried, and the pocket of ``target`` that the deployed outline of ``pattern`` covers,
+    to every missed outline of ``report``."""
+    tried = [a["init"] for a in attempts]
+    for k, j in (report.get("shape") or {}).items():
+        if j.get("status") != "missed":
+            continue
+        j["tried_inits"] = tried
+        if k != "deployed" or target is None or pattern is None:
+            continue
+        top = pattern.topology
+        tips = boundary_tip_order(top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes)
+        found = pocket_covered(target, pattern.nodes[tips])
+        if found is not None:
+            j["pocket"] = {**found[0].to_dict(), "covered": found[1]}
