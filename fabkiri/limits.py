@@ -50,21 +50,22 @@ MEASURED = {
         [36, 12.5, 30.8],
         [64, 18.7, 31.7],
         [100, 29.2, 38.0],
+        [252, 84.3, 34.0],  # the 12x21 heart at 240 mm (docs/kagome.md), load 9-13
     ],  # rows x cols, load 14-20
     "design tube": [[64, 3.7, 24.0], [144, 9.3, 25.7]],  # rows x cols around, at load 12-14
     # per byte of pattern.json (``new`` patterns, 474 bytes a tile): `info`, its JSON parse the peak
     # (21x the file); and per tile copy (tiles x --copies) of `export --format tube3d` (a 4x6 tube).
     # Both from /usr/bin/time at load 12-23, MB less the 75 MB the command needs for a tiny input.
-    "read pattern": [[7759585, 3.9, 168.0], [31172116, 15.2, 717.0]],
+    "read pattern": [[7759585, 3.9, 168.0], [31172116, 15.2, 717.0], [126045395, 65.2, 2750.0]],
     "export tube3d": [[768, 5.7, 227.0], [3072, 20.6, 676.0]],
 }
 TESTED = {
     "new": 512 * 512,
     "design full": 32 * 32,
     "design rigid": 128 * 128,
-    "design kagome": 10 * 10,
+    "design kagome": 12 * 21,  # the largest lattice docs/kagome.md designs
     "design tube": 12 * 12,
-    "read pattern": 31172116,  # a 256x256 pattern
+    "read pattern": 126045395,  # a 512x512 pattern, as `new` writes it (2.9 GB peak)
     "export tube3d": 24 * 128,
 }  # largest run to the end
 LOWER_BOUND = {"design full"}  # its largest row is a lower bound, so are its extrapolations
@@ -145,7 +146,7 @@ def check_read_cost(path, what: str = "pattern file", error=InputError) -> None:
     if size > est.tested_tiles or est.megabytes > available_mb():
         raise error(
             f"{path}: a {size / 2**20:.0f} MB {what} needs {est.text()} to read "
-            f"({est.tested_tiles / 2**20:.0f} MB, a 256x256 pattern, is the largest tested)"
+            f"({est.tested_tiles / 2**20:.0f} MB, a 512x512 pattern, is the largest tested)"
         )
 
 
