@@ -40,6 +40,7 @@ COMMANDS = [
     "fabkiri.cli.coupon_cmd",
     "fabkiri.cli.report_cmd",
     "fabkiri.cli.sweep_cmd",
+    "fabkiri.cli.make_cmd",
 ]
 # command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
 # (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
@@ -97,6 +98,11 @@ SUMMARIES = {
     "sweep": (
         "fabkiri.cli.sweep_cmd",
         "many designs from a sweep file (TOML axes) on a local or existing Dask cluster",
+    ),
+    "make": (
+        "fabkiri.cli.make_cmd",
+        "from a target outline to cut or print files in one go: design for the process, "
+        "cut or print at the size, deploy, report",
     ),
 }
 
