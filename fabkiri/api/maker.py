@@ -27,6 +27,7 @@ from ..design.targets import load_target
 from ..errors import FabkiriError, InputError
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
+from .design import _check_room
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
 
@@ -112,21 +113,20 @@ def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, outpu
             f"--size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, got {size:g}"
         )
     if tiles is not None and (len(tiles) != 2 or min(tiles) < 2):
-        raise InputError(f"--tiles needs at least 2x2 tiles, got {tiles!r}")
+        raise InputError(f"--tiles needs at least 2x2 tiles, got {'x'.join(map(str, tiles))}")
     curve = load_target(str(target), size)
     fab, intent = design_limits.resolve(material, hinge, printer, style, None, None, curve)
     assert fab is not None  # a material or a printer was given
     process = "cut" if material else "print"
     fabrication = (
-        f"{Path(material).stem} {intent['hinge']}"
-        if material
-        else f"{Path(printer).stem} {intent['style']}"
-    )
+        fab.source
+    )  # "acrylic-3 tape", "prusa-mk4 tiles-and-strips": the preset's own name
     choice = (
         given_tiles(tuple(tiles), curve, fab)
         if tiles is not None
         else choose_tiles(curve, fab, fabrication)
     )
+    _check_room(*choice.tiles, fab, curve)  # the design's own refusal, before any step starts
     stem = Path(str(target)).stem if Path(str(target)).suffix else str(target)
     if output is not None:
         _check_output(Path(output), stem, process)

@@ -51,9 +51,9 @@ def tile_width_mm(target: Target, n_tiles: int) -> float:
 
 def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> TilesChoice:
     """The largest N x N of :data:`STANDARD_TILES` (at most :data:`MAX_AUTO`) whose estimated tile width
-    is at least :data:`COMFORT` times the process's thinnest feature; when none is, the largest count
-    the design's own feasibility check (``smallest_size``) lets through, or else 4x4 (the design
-    then refuses, naming the smallest size that could work)."""
+    is at least :data:`COMFORT` times the process's thinnest feature; when none is, the fewest (the
+    widest tiles), the design's own feasibility check (``smallest_size``) saying whether even they
+    could fit (if not, the design refuses, naming the smallest size that could work)."""
     feature = min_feature_mm(limits)
     counts = [n for n in STANDARD_TILES if n <= MAX_AUTO]
     size = f"{target.size:.4g} mm"
@@ -71,16 +71,15 @@ def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> Til
                 )
             )
             return TilesChoice((n, n), why, w, feature)
-    fits = [
-        n for n in counts if smallest_size(target.size, abs(target.area), n * n, limits) is None
-    ]
-    n = fits[0] if fits else counts[-1]
+    n = counts[-1]  # the widest tiles there are
     w = tile_width_mm(target, n * n)
+    least = smallest_size(target.size, abs(target.area), n * n, limits)  # the design's own check
     why = (
         f"no count keeps tiles {COMFORT:g}x the {feature:.3g} mm {process} needs at {size}; "
-        f"{n}x{n} (about {w:.3g} mm wide) is the most tiles that could fit"
-        if fits
-        else f"even {n}x{n} tiles cannot be {feature:.3g} mm wide inside {size}"
+        f"{n}x{n} keeps them widest (about {w:.3g} mm)"
+        if least is None
+        else f"even {n}x{n} tiles cannot be {feature:.3g} mm wide inside {size} (the smallest size "
+        f"that could work is --size {least:.4g})"
     )
     return TilesChoice((n, n), why, w, feature)
 
