@@ -339,7 +339,7 @@ def _report(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
             for name, data in result.files.items():
                 (folder / name).parent.mkdir(parents=True, exist_ok=True)
                 (folder / name).write_bytes(data.encode() if isinstance(data, str) else data)
-        made = {"cut": None, "print": None}
+        made: dict[str, str | None] = {"cut": None, "print": None}
         made[plan.process] = str(folder / plan.process)
         page = build_report(
             pattern,
