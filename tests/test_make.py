@@ -136,6 +136,14 @@ BAD = {
         ["circle", "--size", "5", "--material", "acrylic-3"],
         "smallest size that could work is --size",
     ),
+    "too many tiles": (
+        ["circle", "--size", "3000", "--material", "acrylic-3", "--tiles", "200x200"],
+        "is the largest tested",
+    ),
+    "bad shape tolerance": (
+        ["circle", "--size", "100", "--material", "acrylic-3", "--shape-tol", "close"],
+        "close",
+    ),
     "output is a file": (["circle", "--size", "100", "--material", "acrylic-3"], "not a folder"),
     "output is the target": (["t.csv", "--size", "100", "--material", "acrylic-3"], "input"),
 }

@@ -118,15 +118,17 @@ def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, outpu
     fab, intent = design_limits.resolve(material, hinge, printer, style, None, None, curve)
     assert fab is not None  # a material or a printer was given
     process = "cut" if material else "print"
-    fabrication = (
-        fab.source
-    )  # "acrylic-3 tape", "prusa-mk4 tiles-and-strips": the preset's own name
+    # the presets' own names and the hinge kind or style: "acrylic-3 tape", "prusa-mk4 tiles-and-strips"
+    fabrication = fab.source
     choice = (
         given_tiles(tuple(tiles), curve, fab)
         if tiles is not None
         else choose_tiles(curve, fab, fabrication)
     )
-    _check_room(*choice.tiles, fab, curve)  # the design's own refusal, before any step starts
+    # the design's own refusals, before any step starts: too many tiles, tiles too wide to fit, tolerance
+    limits.check_tiles(*choice.tiles, "design full", False)
+    _check_room(*choice.tiles, fab, curve)
+    conf.parse_shape_tol(shape_tol)
     stem = Path(str(target)).stem if Path(str(target)).suffix else str(target)
     if output is not None:
         _check_output(Path(output), stem, process)
