@@ -176,6 +176,8 @@ def run_cell(cell: Cell, out: Path, timeout: float) -> None:
                 str(folder / f"{stem}.json"),
                 "--layout",
                 str(made / f"{stem}.dxf"),
+                "--shape-tol",
+                f"{100 * SHAPE_TOL:g}%",
                 timeout=timeout,
             )
             cell.outside, cell.outside_note = code == 0, f"verify exit {code}"
