@@ -90,6 +90,7 @@ def fabkiri(repo: Path, *args: str, timeout: float) -> tuple[int, float, float, 
             capture_output=True,
             text=True,
             env=env,
+            cwd=repo,  # `python -m` puts the working folder first on sys.path: the repo's own package
             timeout=timeout,
         )
         code, err = p.returncode, p.stderr
@@ -258,13 +259,13 @@ def main() -> int:
     args = ap.parse_args()
     cells = [Cell(o, p) for o in sorted(DATA.iterdir()) for p in PROCESSES]
     cells = [c for c in cells if all(f in c.name for f in args.filter)][: args.cells]
-    out = args.out or Path(tempfile.mkdtemp(prefix="fabkiri-bench-make-"))
+    out = (args.out or Path(tempfile.mkdtemp(prefix="fabkiri-bench-make-"))).resolve()
     out.mkdir(parents=True, exist_ok=True)
     print(f"{len(cells)} cells into {out}; load average at start {os.getloadavg()}", flush=True)
     for c in cells:
         run_cell(c, out, args.timeout)
         if args.baseline:
-            run_baseline(c, args.baseline, out, args.timeout)
+            run_baseline(c, args.baseline.resolve(), out, args.timeout)
         print(table([c], bool(args.baseline))[1], flush=True)
     print()
     print("\n".join(table(cells, bool(args.baseline))))
