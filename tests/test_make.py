@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+from types import SimpleNamespace
 
 import fabkiri
 import pytest
@@ -58,7 +59,10 @@ def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
     from fabkiri.api import cut
 
     def refuse(pattern, options, **kw):
-        raise FabricationError("tiles are 1.2 mm wide at their thinnest; smallest --scale 2.5")
+        exc = FabricationError("tiles are 1.2 mm wide at their thinnest; smallest --scale 2.5")
+        # as the advice work's refusal carries them: checked options, each a command line
+        exc.alternatives = [SimpleNamespace(command="fabkiri cut o/circle.json --scale 2.5 -o o/c")]
+        raise exc
 
     monkeypatch.setattr(cut, "cut_files", refuse)
     lines = []
@@ -80,7 +84,10 @@ def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
     text = "\n".join(result.summary())
     assert "smallest --scale 2.5" in text and "stopped at cut (exit 2)" in text
     assert any(line.startswith("make: cut failed (exit 2)") for line in lines)
-    assert json.loads((tmp_path / "o" / "make.json").read_text())["failed_step"] == "cut"
+    assert "try: fabkiri cut o/circle.json --scale 2.5 -o o/c" in text
+    record = json.loads((tmp_path / "o" / "make.json").read_text())
+    assert record["failed_step"] == "cut"
+    assert record["alternatives"] == ["fabkiri cut o/circle.json --scale 2.5 -o o/c"]
 
 
 def _limits(material=None, printer=None) -> FabricationLimits:

@@ -200,10 +200,10 @@ def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) ->
 
 
 def refusal_alternatives(result: MakeResult, plan: _Plan, step: str, error: FabkiriError) -> list:
-    """The options that work when ``step`` (cut or print) refused: the seam of the ``advice`` front door
-    (``fabkiri.api.advice``: checked alternatives, each with a ``.command`` line the summary prints).
-    Until it is there, the refusal is shown as cut or print give it and this returns none."""
-    return []
+    """The options that work when ``step`` (cut or print) refused: the seam of the ``advice`` work, whose
+    refusal (``fabkiri.api.advice.Refused``) carries its checked alternatives, each with a ``.command``
+    line the summary prints. A refusal without them (before that work) is shown as cut or print give it."""
+    return list(getattr(error, "alternatives", None) or [])
 
 
 StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
@@ -256,12 +256,11 @@ def _design_line(status: str, report: dict) -> str:
     )
     fr = report.get("fabrication") or {}
     active = sum(fr.get("active", {}).values()) if fr else 0
-    opening = report.get("opening")
-    more = (
-        ", opening " + ", ".join(f"{k} {_num(v)}" for k, v in opening.items())
-        if isinstance(opening, dict)
-        else ""
-    )
+    opening = report.get("opening")  # the seam of the deployment-amount figures: shown as reported
+    numbers = {
+        k: v for k, v in (opening or {}).items() if isinstance(v, (int, float)) and k != "version"
+    }
+    more = ", opening " + ", ".join(f"{k} {_num(v)}" for k, v in numbers.items()) if numbers else ""
     said = "" if status == "ok" else f"{status}, "
     return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active{more}"
 
