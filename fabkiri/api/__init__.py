@@ -5,5 +5,7 @@ may use every lower layer; the CLI only parses arguments, calls it and prints.
 """
 
 from .design import DesignOutcome, PatternRequest, design_pattern
+from .maker import make
+from .maker_result import MakeResult
 
-__all__ = ["DesignOutcome", "PatternRequest", "design_pattern"]
+__all__ = ["DesignOutcome", "MakeResult", "PatternRequest", "design_pattern", "make"]

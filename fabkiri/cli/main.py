@@ -41,6 +41,7 @@ COMMANDS = [
     "fabkiri.cli.report_cmd",
     "fabkiri.cli.sweep_cmd",
     "fabkiri.cli.view_cmd",
+    "fabkiri.cli.make_cmd",
 ]
 # command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
 # (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
@@ -102,6 +103,11 @@ SUMMARIES = {
     "view": (
         "fabkiri.cli.view_cmd",
         "interactive deployment viewer (slider, play, colours, target): standalone HTML or served",
+    ),
+    "make": (
+        "fabkiri.cli.make_cmd",
+        "from a target outline to cut or print files in one go: design for the process, "
+        "cut or print at the size, deploy, report",
     ),
 }
 

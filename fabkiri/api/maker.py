@@ -1,0 +1,353 @@
+"""``make``: from a target outline to files a machine accepts, in one call.
+
+The steps are the other front doors in order: a fabrication-aware design for the named process
+(:func:`~.design.design_pattern` with the material or printer, as ``design --material/--printer``),
+then :func:`~.cut.cut_files` or :func:`~.print.print_pattern` at the designed size,
+:func:`~.deploy.deploy_pattern` (plot and GIF) and the HTML report. Bad input is refused before any
+work, with nothing written; after that each step's files are written as it finishes (each step
+all-or-nothing, through :mod:`fabkiri.fileio`), and the first step that fails stops the run,
+keeping what is done. Without ``tiles`` the count comes from :func:`.maker_tiles.choose_tiles`.
+"""
+
+from __future__ import annotations
+
+import resource
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import limits
+from ..design import conformance as conf
+from ..design.targets import load_target
+from ..errors import FabkiriError, InputError
+from ..fabricate import design_limits
+from ..fileio import atomic_write_many, check_output_folder, input_named_by
+from .design import _check_room
+from .maker_result import MANIFEST, MakeResult, Step
+from .maker_tiles import TilesChoice, choose_tiles, given_tiles
+
+Progress = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """A checked request: what to make, how, and where."""
+
+    target: str
+    size: float
+    material: str | None
+    hinge: str | None
+    printer: str | None
+    style: str | None
+    shape_tol: str
+    tiles: TilesChoice
+    process: str
+    fabrication: str
+    stem: str
+
+
+def make(
+    target: str,
+    size: float,
+    *,
+    material: str | None = None,
+    hinge: str | None = None,
+    printer: str | None = None,
+    style: str | None = None,
+    tiles: tuple[int, int] | None = None,
+    shape_tol: str = conf.DEFAULT_SHAPE_TOL,
+    output: str | Path | None = None,
+    progress: Progress | None = None,
+) -> MakeResult:
+    """Design ``target`` at ``size`` mm for a laser ``material`` (``hinge`` kind) or a ``printer``
+    (``style``), cut or print it at that size, deploy it and write the report.
+
+    With ``output`` every step's files are written into that folder as the step finishes; without
+    it they stay in :attr:`MakeResult.files` (``write(folder)`` writes them). Raises
+    :class:`InputError` for bad input before anything is done; a step that fails is recorded in
+    the result (``ok`` false, ``exit_code`` the step's), not raised."""
+    plan = _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output)
+    say = progress or (lambda text: None)
+    out = Path(output) if output is not None else None
+    result = MakeResult(
+        target=plan.target,
+        size=plan.size,
+        process=plan.process,
+        fabrication=plan.fabrication,
+        tiles=plan.tiles,
+        stem=plan.stem,
+        output=out,
+    )
+    say(
+        f"make: {plan.target} at {plan.size:g} mm, {plan.fabrication}, "
+        f"{plan.tiles.tiles[0]}x{plan.tiles.tiles[1]} tiles ({plan.tiles.reason})"
+    )
+    for name, run in (
+        ("design", _design),
+        (plan.process, _cut if plan.process == "cut" else _print),
+        ("deploy", _deploy),
+        ("report", _report),
+    ):
+        if not _run_step(result, plan, name, run, say):
+            break
+    if out is not None:
+        atomic_write_many(out, {MANIFEST: result.manifest_text()})
+    return result
+
+
+def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output) -> _Plan:
+    """Every check of the request that needs no design: one :class:`InputError` naming the problem."""
+    if (material is None) == (printer is None):
+        raise InputError("make needs exactly one of --material (laser cut) or --printer (3D print)")
+    try:
+        size = float(size)
+    except (TypeError, ValueError):
+        raise InputError(f"--size must be a length in mm, got {size!r}") from None
+    if not (np.isfinite(size) and 0 < size <= limits.MAX_LENGTH_MM):
+        raise InputError(
+            f"--size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, got {size:g}"
+        )
+    if tiles is not None and (len(tiles) != 2 or min(tiles) < 2):
+        raise InputError(f"--tiles needs at least 2x2 tiles, got {'x'.join(map(str, tiles))}")
+    curve = load_target(str(target), size)
+    fab, intent = design_limits.resolve(material, hinge, printer, style, None, None, curve)
+    assert fab is not None  # a material or a printer was given
+    process = "cut" if material else "print"
+    # the presets' own names and the hinge kind or style: "acrylic-3 tape", "prusa-mk4 tiles-and-strips"
+    fabrication = fab.source
+    choice = (
+        given_tiles(tuple(tiles), curve, fab)
+        if tiles is not None
+        else choose_tiles(curve, fab, fabrication)
+    )
+    # the design's own refusals, before any step starts: too many tiles, tiles too wide to fit, tolerance
+    limits.check_tiles(*choice.tiles, "design full", False)
+    _check_room(*choice.tiles, fab, curve)
+    conf.parse_shape_tol(shape_tol)
+    stem = Path(str(target)).stem if Path(str(target)).suffix else str(target)
+    if output is not None:
+        _check_output(Path(output), stem, process)
+    return _Plan(
+        target=str(target),
+        size=size,
+        material=material,
+        hinge=intent.get("hinge"),
+        printer=printer,
+        style=intent.get("style"),
+        shape_tol=shape_tol,
+        tiles=choice,
+        process=process,
+        fabrication=fabrication,
+        stem=stem,
+    )
+
+
+def _check_output(folder: Path, stem: str, process: str) -> None:
+    """The output folder can take every file ``make`` writes, none of them an input (the target)."""
+    check_output_folder(folder)
+    for name in (f"{stem}.json", f"{stem}.png", "report.html", MANIFEST, process, "deploy"):
+        dest = folder / name
+        if input_named_by(dest) is not None:
+            raise InputError(
+                f"refusing to write {dest}: it is an input of this command; choose another output"
+            )
+        if name in (process, "deploy") and dest.exists() and not dest.is_dir():
+            raise InputError(f"output {dest} exists and is not a folder")
+        if name not in (process, "deploy") and dest.is_dir():
+            raise InputError(f"output {dest} is a folder where a file must go; nothing written")
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) -> bool:
+    """Run one step, time it, keep and write its files; whether the run goes on."""
+    say(f"make: {name} ...")
+    wall, cpu = time.perf_counter(), _cpu()
+    try:
+        ok, code, figures, files, details = run(result, plan, say)
+    except FabkiriError as exc:
+        if name == "design":  # refused before any work: bad input, nothing written
+            raise
+        ok, code, figures, files, details = False, exc.exit_code, str(exc), {}, []
+        result.alternatives = refusal_alternatives(result, plan, name, exc)
+    step = Step(
+        name,
+        ok,
+        code,
+        time.perf_counter() - wall,
+        _cpu() - cpu,
+        figures,
+        sorted(files),
+        details,
+    )
+    result.steps.append(step)
+    result.files.update(files)
+    if files and result.output is not None:
+        atomic_write_many(result.output, files)
+    say(
+        f"make: {name} {'ok' if ok else f'failed (exit {code})'} in {step.wall_s:.1f} s "
+        f"(CPU {step.cpu_s:.1f} s): {figures}"
+    )
+    return ok
+
+
+def refusal_alternatives(result: MakeResult, plan: _Plan, step: str, error: FabkiriError) -> list:
+    """The options that work when ``step`` (cut or print) refused: the seam of the ``advice`` work, whose
+    refusal (``fabkiri.api.advice.Refused``) carries its checked alternatives, each with a ``.command``
+    line the summary prints. A refusal without them (before that work) is shown as cut or print give it."""
+    return list(getattr(error, "alternatives", None) or [])
+
+
+StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
+
+
+def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
+    from .design import PatternRequest, design_pattern
+
+    request = PatternRequest(
+        tiles=plan.tiles.tiles,
+        target=plan.target,
+        size=plan.size,
+        material=plan.material,
+        hinge=plan.hinge if plan.material else None,
+        printer=plan.printer,
+        style=plan.style if plan.printer else None,
+        shape_tol=plan.shape_tol,
+    )
+    outcome = design_pattern(request, notify=say)
+    name = f"{plan.stem}.json"
+    files = {str(Path(k).name): v for k, v in outcome.files(name).items()}
+    result.pattern = outcome.pattern
+    report = outcome.report
+    result.figures.update(_design_figures(report))
+    details = [line for line in outcome.summary(name) if line.startswith("fabkiri: design failed")]
+    return outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details
+
+
+def _design_figures(report: dict) -> dict[str, Any]:
+    """Hausdorff of the deployed outline (share of the size) and its tolerance; the deployment amount
+    (``report["opening"]``, from the ``opening`` work) when the design reports it."""
+    out: dict[str, Any] = {}
+    c = (report.get("conformance") or {}).get("deployed")
+    if c:
+        out["hausdorff_rel"] = float(c["hausdorff_rel"])
+        out["hausdorff_mm"] = float(c["hausdorff_mm"])
+        out["shape_tol_rel"] = float(report["shape"]["deployed"]["tol_rel"])
+    if isinstance(report.get("opening"), dict):  # the seam: shown as reported
+        out["opening"] = report["opening"]
+    return out
+
+
+def _design_line(status: str, report: dict) -> str:
+    c = (report.get("conformance") or {}).get("deployed")
+    shape = (
+        f", Hausdorff {100 * c['hausdorff_rel']:.2f} % of the size "
+        f"(tol {100 * report['shape']['deployed']['tol_rel']:.2g} %)"
+        if c
+        else ""
+    )
+    fr = report.get("fabrication") or {}
+    active = sum(fr.get("active", {}).values()) if fr else 0
+    opening = report.get("opening")  # the seam of the deployment-amount figures: shown as reported
+    numbers = {
+        k: v for k, v in (opening or {}).items() if isinstance(v, (int, float)) and k != "version"
+    }
+    more = ", opening " + ", ".join(f"{k} {_num(v)}" for k, v in numbers.items()) if numbers else ""
+    said = "" if status == "ok" else f"{status}, "
+    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active{more}"
+
+
+def _num(v) -> str:
+    return f"{v:.3g}" if isinstance(v, float) else str(v)
+
+
+def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
+    from ..fabricate.cut import CutOptions
+    from .cut import cut_files, cut_material
+
+    assert result.pattern is not None
+    material, hinge = cut_material(result.pattern, plan.material, plan.hinge)
+    options = CutOptions(
+        material=material, hinge=hinge, stem=plan.stem, pattern_file=f"{plan.stem}.json"
+    )
+    cut = cut_files(result.pattern, options)
+    for w in cut.result.warnings:
+        say(f"warning: {w}")
+    man = cut.result.manifest
+    length = sum(s["cut_length_mm"] for s in man["sheets"])
+    secs = sum(s["cut_time_s"] for s in man["sheets"])
+    figures = (
+        f"{len(man['sheets'])} sheet(s), {man['hinge']} hinges, {material.name} at scale "
+        f"{float(man['scale']):g}, cut {length / 1000:.2f} m (~{secs / 60:.1f} min), "
+        f"{len(cut.readback.checks)} read-back checks passed"
+        + (", verifier passed" if cut.readback.verifier is not None else "")
+    )
+    return True, 0, figures, {f"cut/{k}": v for k, v in cut.files.items()}, []
+
+
+def _print(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
+    from .print import PrintOptions, print_pattern
+
+    assert result.pattern is not None
+    out = print_pattern(
+        result.pattern,
+        PrintOptions(style=plan.style, printer=plan.printer, scale=1.0),
+        stem=plan.stem,
+        source=f"{plan.stem}.json",
+        notify=say,
+    )
+    return True, 0, out.describe(), {f"print/{k}": v for k, v in out.files.items()}, []
+
+
+def _deploy(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
+    from .deploy import deploy_pattern
+
+    assert result.pattern is not None
+    out = deploy_pattern(result.pattern, plot=True, gif=True, frames=False)
+    s = out.summary
+    figures = (
+        f"{s['path']} path, {s['frames']} frames, max E {s['energy_max']:.2e} at t = "
+        f"{s['t_at_energy_max']:.3f}, "
+        + ("collision-free" if s["collision_free"] else f"{s['overlaps']} overlaps")
+    )
+    return (
+        out.success,
+        0 if out.success else 1,
+        figures,
+        {f"deploy/{k}": v for k, v in out.files.items()},
+        list(out.problems),
+    )
+
+
+def _report(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
+    from ..render.report import build_report
+
+    assert result.pattern is not None
+    pattern = result.pattern
+    states = dict(pattern.contracted) if {1, 2} <= set(pattern.contracted) else None
+    with tempfile.TemporaryDirectory(prefix="fabkiri-make-") as tmp:
+        folder = result.output
+        if folder is None:  # the report reads the step folders: lay them out in a scratch folder
+            folder = Path(tmp)
+            for name, data in result.files.items():
+                (folder / name).parent.mkdir(parents=True, exist_ok=True)
+                (folder / name).write_bytes(data.encode() if isinstance(data, str) else data)
+        made: dict[str, str | None] = {"cut": None, "print": None}
+        made[plan.process] = str(folder / plan.process)
+        page = build_report(
+            pattern,
+            source=f"{plan.stem}.json",
+            cut=made["cut"],
+            printed=made["print"],
+            deploy=str(folder / "deploy"),
+            states=states,
+        )
+    return True, 0, f"{len(page) / 1e6:.2f} MB", {"report.html": page}, []

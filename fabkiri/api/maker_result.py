@@ -1,0 +1,156 @@
+"""What ``make`` returns: each step's outcome and the one summary the command prints at the end.
+
+A :class:`MakeResult` holds the steps in the order they ran (design, cut or print, deploy,
+report), the files each made (names relative to the output folder) and, when a step failed, which
+one, its exit code and figures, and the alternatives a refusal names (the ``advice`` front door's,
+once it is there). ``summary()`` is the text: what was made, at what size, what to do next, files.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..fileio import atomic_write_many
+from ..pattern.model import Pattern
+from .maker_tiles import TilesChoice
+
+MANIFEST = "make.json"  # the record of the run, written last (also when a step failed)
+
+
+@dataclass
+class Step:
+    """One step of ``make``: whether it passed, its exit code (0, 1 a failed check, 2 refused input),
+    its wall and CPU time (s), one line of figures and the files it made (relative to the folder)."""
+
+    name: str
+    ok: bool
+    exit_code: int
+    wall_s: float
+    cpu_s: float
+    figures: str
+    files: list[str] = field(default_factory=list)
+    details: list[str] = field(
+        default_factory=list
+    )  # the step's own lines (a failed design's misses)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "ok": self.ok,
+            "exit_code": self.exit_code,
+            "wall_s": round(self.wall_s, 3),
+            "cpu_s": round(self.cpu_s, 3),
+            "figures": self.figures,
+            "details": self.details,
+            "files": self.files,
+        }
+
+
+@dataclass
+class MakeResult:
+    """The run: the target at ``size`` mm made by ``process`` (``cut`` or ``print``) with ``fabrication``
+    (e.g. ``acrylic-3 tape``), on ``tiles``; the designed ``pattern`` (None if the design step did not
+    finish), the ``steps`` in order and every file made (``files``, relative to ``output``)."""
+
+    target: str
+    size: float
+    process: str
+    fabrication: str
+    tiles: TilesChoice
+    stem: str
+    output: Path | None = None
+    pattern: Pattern | None = None
+    steps: list[Step] = field(default_factory=list)
+    files: dict[str, bytes | str] = field(default_factory=dict)
+    alternatives: list[Any] = field(default_factory=list)  # a refusal's options, each with .command
+    figures: dict[str, Any] = field(default_factory=dict)  # design figures: Hausdorff, opening
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.steps) and all(s.ok for s in self.steps)
+
+    @property
+    def failed(self) -> Step | None:
+        return next((s for s in self.steps if not s.ok), None)
+
+    @property
+    def exit_code(self) -> int:
+        step = self.failed
+        return 0 if step is None else step.exit_code
+
+    def step(self, name: str) -> Step | None:
+        return next((s for s in self.steps if s.name == name), None)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The record written as ``make.json``."""
+        return {
+            "format": "fabkiri.make",
+            "version": 1,
+            "target": self.target,
+            "size_mm": self.size,
+            "process": self.process,
+            "fabrication": self.fabrication,
+            "tiles": list(self.tiles.tiles),
+            "tiles_reason": self.tiles.reason,
+            "ok": self.ok,
+            "exit_code": self.exit_code,
+            "failed_step": None if self.failed is None else self.failed.name,
+            "figures": self.figures,
+            "alternatives": [getattr(a, "command", str(a)) for a in self.alternatives],
+            "steps": [s.to_dict() for s in self.steps],
+        }
+
+    def manifest_text(self) -> str:
+        return json.dumps(self.to_dict(), indent=2, sort_keys=True) + "\n"
+
+    def write(self, folder) -> list[Path]:
+        """Write every file made and ``make.json`` into ``folder`` all-or-nothing (``make(output=None)``)."""
+        return atomic_write_many(folder, {**self.files, MANIFEST: self.manifest_text()})
+
+    def summary(self) -> list[str]:
+        """What was made, at what size and with how many tiles, each step's figures, what to do next
+        (or which step failed, with its figures and any alternatives), and the files."""
+        where = str(self.output) if self.output is not None else "."
+        t = self.tiles
+        out = [
+            f"make: {self.target} at {self.size:g} mm for {self.process} ({self.fabrication}), "
+            f"{t.tiles[0]}x{t.tiles[1]} tiles: {t.reason}"
+        ]
+        for s in self.steps:
+            out.append(
+                f"  {s.name}: {'ok' if s.ok else f'FAILED (exit {s.exit_code})'}, {s.figures} "
+                f"[{s.wall_s:.1f} s, CPU {s.cpu_s:.1f} s]"
+            )
+            out += [f"    {line}" for line in s.details]
+        failed = self.failed
+        if failed is None:
+            out.append("next: " + self._next(where))
+        else:
+            done = [s.name for s in self.steps if s.ok]
+            out.append(
+                f"make: stopped at {failed.name} (exit {failed.exit_code}); "
+                + (f"kept what {', '.join(done)} made" if done else "nothing made")
+            )
+            out += [f"  try: {getattr(a, 'command', a)}" for a in self.alternatives]
+        names = sorted({n.split("/")[0] + ("/" if "/" in n else "") for n in self.files})
+        if self.output is not None:
+            names.append(MANIFEST)
+        out.append(f"files in {where}: {', '.join(names) if names else 'none'}")
+        return out
+
+    def _next(self, where: str) -> str:
+        if self.process == "cut":
+            return (
+                f"cut {where}/cut/{self.stem}.dxf (or .svg) from {self.fabrication.split()[0]} at 100 % "
+                f"(the 50 mm reference square checks it), join the tiles as {where}/cut/assembly.png "
+                f"shows; {where}/report.html has everything"
+            )
+        three_mf = sorted(n for n in self.files if n.startswith("print/") and n.endswith(".3mf"))
+        first = three_mf[0] if three_mf else "print/"
+        return (
+            f"open {where}/{first} in PrusaSlicer and print "
+            f"({self.fabrication}); {where}/report.html has everything"
+        )

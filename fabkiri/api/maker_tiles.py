@@ -1,0 +1,90 @@
+"""How many tiles ``make`` designs with when ``--tiles`` is not given.
+
+The thinnest feature a process can make (a tile's width for the web, a strip's seam, two hinges
+apart) is fixed in mm, while a tile's width falls as the tile count grows: more tiles follow the
+outline better, fewer stay wide enough to cut or print. :func:`choose_tiles` takes the largest
+standard count whose estimated tile width at the target's size stays :data:`COMFORT` times above
+that feature, no more than :data:`MAX_AUTO` a side (the design time grows fast with the count),
+and says why in one sentence.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..design.fabrication import FabricationLimits, smallest_size
+from ..design.target_curve import Target
+
+STANDARD_TILES = (16, 12, 8, 6, 4)  # N x N, largest first
+# a fabrication-aware 16x16 design costs 70-200 CPU s (issue 32); 12x12 circle/star at 150 mm: 4-10 s
+MAX_AUTO = 12
+# the estimated tile width must be this many times the process's thinnest feature: tiles vary in size
+# across a design (thinner where the outline turns), so the mean width needs room above the minimum
+COMFORT = 2.0
+# a deployed rotating-squares pattern's tiles cover about this share of its outline (the rest is holes)
+TILE_COVER = 0.5
+
+
+@dataclass(frozen=True)
+class TilesChoice:
+    """The tiles ``make`` designs with and why: the estimated tile width, the feature it is measured against."""
+
+    tiles: tuple[int, int]
+    reason: str
+    tile_width_mm: float  # estimated mean tile width at the chosen count
+    feature_mm: float  # the process's thinnest feature (mm)
+    given: bool = False  # the user named the tiles
+
+
+def min_feature_mm(limits: FabricationLimits) -> float:
+    """The thinnest feature the process needs of a tile (mm): its width (with the shrink), the seam a
+    printed strip runs along, or the distance between two of its hinges."""
+    return float(max(limits.required_width_mm(), limits.hinge_edge_mm, limits.hinge_spacing_mm))
+
+
+def tile_width_mm(target: Target, n_tiles: int) -> float:
+    """Mean width of ``n_tiles`` square tiles covering :data:`TILE_COVER` of the target's area (mm)."""
+    return float(np.sqrt(TILE_COVER * abs(target.area) / n_tiles))
+
+
+def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> TilesChoice:
+    """The largest N x N of :data:`STANDARD_TILES` (at most :data:`MAX_AUTO`) whose estimated tile width
+    is at least :data:`COMFORT` times the process's thinnest feature; when none is, the fewest (the
+    widest tiles), the design's own feasibility check (``smallest_size``) saying whether even they
+    could fit (if not, the design refuses, naming the smallest size that could work)."""
+    feature = min_feature_mm(limits)
+    counts = [n for n in STANDARD_TILES if n <= MAX_AUTO]
+    size = f"{target.size:.4g} mm"
+    for n in counts:
+        w = tile_width_mm(target, n * n)
+        if w >= COMFORT * feature:
+            bigger = next((m for m in reversed(counts) if m > n), None)
+            why = (
+                f"the largest of {', '.join(f'{m}x{m}' for m in counts)} whose tiles (about {w:.3g} mm wide at "
+                f"{size}) stay at least {COMFORT:g}x the {feature:.3g} mm {process} needs"
+                + (
+                    f" ({bigger}x{bigger} would give {tile_width_mm(target, bigger * bigger):.3g} mm)"
+                    if bigger
+                    else f"; capped at {MAX_AUTO}x{MAX_AUTO} for design time"
+                )
+            )
+            return TilesChoice((n, n), why, w, feature)
+    n = counts[-1]  # the widest tiles there are
+    w = tile_width_mm(target, n * n)
+    least = smallest_size(target.size, abs(target.area), n * n, limits)  # the design's own check
+    why = (
+        f"no count keeps tiles {COMFORT:g}x the {feature:.3g} mm {process} needs at {size}; "
+        f"{n}x{n} keeps them widest (about {w:.3g} mm)"
+        if least is None
+        else f"even {n}x{n} tiles cannot be {feature:.3g} mm wide inside {size} (the smallest size "
+        f"that could work is --size {least:.4g})"
+    )
+    return TilesChoice((n, n), why, w, feature)
+
+
+def given_tiles(tiles: tuple[int, int], target: Target, limits: FabricationLimits) -> TilesChoice:
+    """The tiles the user named, with the same figures for the summary."""
+    w = tile_width_mm(target, tiles[0] * tiles[1])
+    return TilesChoice(tiles, "as given (--tiles)", w, min_feature_mm(limits), given=True)

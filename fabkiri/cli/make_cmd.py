@@ -1,0 +1,76 @@
+"""``fabkiri make``: design, cut or print, deploy and report in one go (:func:`fabkiri.api.maker.make`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from .. import limits
+from ..api.maker import make
+from ..design import conformance as conf
+from ..fabricate.fabricability import PRINT_STYLES
+from ..fabricate.materials import HINGE_KINDS
+from .argtypes import bounded
+from .pattern_cmds import parse_tiles
+
+
+def cmd_make(args: argparse.Namespace) -> int:
+    result = make(
+        args.target,
+        args.size,
+        material=args.material,
+        hinge=args.hinge,
+        printer=args.printer,
+        style=args.style,
+        tiles=parse_tiles(args.tiles) if args.tiles else None,
+        shape_tol=args.shape_tol,
+        output=args.output,
+        progress=lambda text: print(text, file=sys.stderr),
+    )
+    for line in result.summary():
+        print(line, file=sys.stderr)
+    return result.exit_code
+
+
+_size = bounded(
+    float,
+    lambda v: math.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM,
+    "expected a length in mm",
+    f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}",
+)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "make",
+        help="from a target outline to cut or print files in one go: design for the process, "
+        "cut or print at the size, deploy, report",
+    )
+    p.add_argument(
+        "target", help="a named target (circle, star, ...) or a .csv/.json points file or .svg path"
+    )
+    p.add_argument(
+        "--size", required=True, type=_size, metavar="MM", help="the target's larger dimension"
+    )
+    how = p.add_mutually_exclusive_group(required=True)
+    how.add_argument("--material", metavar="NAME|FILE.json", help="laser-cut from this material")
+    how.add_argument("--printer", metavar="NAME|FILE.json", help="3D print on this printer")
+    p.add_argument("--hinge", choices=HINGE_KINDS, help="with --material: the hinge kind")
+    p.add_argument("--style", choices=PRINT_STYLES, help="with --printer: the print style")
+    p.add_argument(
+        "--tiles",
+        metavar="ROWSxCOLS",
+        help="lattice size (default: the most tiles that stay comfortably wider than the process's "
+        "thinnest feature at --size; the summary says which and why)",
+    )
+    p.add_argument(
+        "--shape-tol",
+        default=conf.DEFAULT_SHAPE_TOL,
+        metavar="TOL",
+        help="largest Hausdorff distance to the target, as for design (default 2%%)",
+    )
+    p.add_argument(
+        "-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)"
+    )
+    p.set_defaults(func=cmd_make)

@@ -1,0 +1,174 @@
+"""``fabkiri make`` and ``fabkiri.make``: one run from a target outline to checked files, the tiles it
+chooses, what it keeps when a step fails, and bad input refused with nothing written."""
+
+from __future__ import annotations
+
+import json
+import os
+from types import SimpleNamespace
+
+import fabkiri
+import pytest
+from fabkiri.api import maker_tiles
+from fabkiri.design.fabrication import FabricationLimits
+from fabkiri.design.targets import load_target
+from fabkiri.errors import FabricationError
+from fabkiri.fabricate import design_limits
+
+from .test_bad_input import snapshot
+
+
+@pytest.mark.slow  # ~4 CPU s with the verifier; the quick loop runs the same steps in the test below
+def test_make_cuts_a_circle_end_to_end(tmp_path, run_cli):
+    # 60 mm circle with acrylic-3 tape: make chooses 6x6 (8x8 tiles would be 4.7 mm, under 2 x 3 mm)
+    out = tmp_path / "circle"
+    code, _, err = run_cli("make", "circle", "--size", "60", "--material", "acrylic-3", "-o", out)
+    assert code == 0, err
+    record = json.loads((out / "make.json").read_text())
+    assert record["ok"] and record["tiles"] == [6, 6] and record["process"] == "cut"
+    assert [s["name"] for s in record["steps"]] == ["design", "cut", "deploy", "report"]
+    assert record["figures"]["hausdorff_rel"] <= 0.02
+    for name in ("circle.json", "circle.png", "cut/circle.dxf", "cut/manifest.json"):
+        assert (out / name).is_file(), name
+    for name in ("deploy/energy.png", "deploy/deploy.gif", "report.html"):
+        assert (out / name).is_file(), name
+    assert "6x6 tiles" in err and "next: cut" in err and "stopped" not in err
+    # the files are what the independent verifier accepts
+    code, _, err = run_cli("verify", out / "circle.json", "--layout", out / "cut" / "circle.dxf")
+    assert code == 0, err
+
+
+def test_make_from_python_keeps_files_until_written(tmp_path):
+    result = fabkiri.make("circle", size=60, material="acrylic-3", hinge="separate", tiles=(6, 6))
+    assert isinstance(result, fabkiri.MakeResult)
+    assert result.ok and result.exit_code == 0 and result.output is None
+    assert result.tiles.tiles == (6, 6) and result.tiles.given
+    assert result.pattern is not None and len(result.pattern.tiles) == 36
+    assert {"circle.json", "cut/manifest.json", "report.html"} <= set(result.files)
+    assert json.loads(result.files["cut/manifest.json"])["hinge"] == "separate"
+    assert all(s.cpu_s >= 0 and s.wall_s > 0 for s in result.steps)
+    assert not any(tmp_path.iterdir())  # nothing written yet
+    result.write(tmp_path / "out")
+    assert json.loads((tmp_path / "out" / "make.json").read_text())["fabrication"] == (
+        "acrylic-3 separate"
+    )
+    assert "next: cut" in "\n".join(result.summary())
+
+
+def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
+    from fabkiri.api import cut
+
+    def refuse(pattern, options, **kw):
+        exc = FabricationError("tiles are 1.2 mm wide at their thinnest; smallest --scale 2.5")
+        # as the advice work's refusal carries them: checked options, each a command line
+        exc.alternatives = [SimpleNamespace(command="fabkiri cut o/circle.json --scale 2.5 -o o/c")]
+        raise exc
+
+    monkeypatch.setattr(cut, "cut_files", refuse)
+    lines = []
+    result = fabkiri.make(
+        "circle",
+        size=60,
+        material="acrylic-3",
+        tiles=(6, 6),
+        output=tmp_path / "o",
+        progress=lines.append,
+    )
+    assert not result.ok and result.exit_code == 2
+    assert [(s.name, s.ok) for s in result.steps] == [("design", True), ("cut", False)]
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == [
+        "circle.json",
+        "circle.png",
+        "make.json",
+    ]
+    text = "\n".join(result.summary())
+    assert "smallest --scale 2.5" in text and "stopped at cut (exit 2)" in text
+    assert any(line.startswith("make: cut failed (exit 2)") for line in lines)
+    assert "try: fabkiri cut o/circle.json --scale 2.5 -o o/c" in text
+    record = json.loads((tmp_path / "o" / "make.json").read_text())
+    assert record["failed_step"] == "cut"
+    assert record["alternatives"] == ["fabkiri cut o/circle.json --scale 2.5 -o o/c"]
+
+
+def _limits(material=None, printer=None) -> FabricationLimits:
+    fab, _ = design_limits.resolve(material, None, printer, None, None, None, None)
+    assert fab is not None
+    return fab
+
+
+def test_tiles_are_the_most_that_stay_comfortably_wide():
+    acrylic = _limits(material="acrylic-3")
+    feature = maker_tiles.min_feature_mm(acrylic)
+    assert feature == pytest.approx(3.0)  # the tape hinge's web
+    chosen = []
+    for size in (40, 60, 100, 150, 300):
+        t = load_target("circle", size)
+        c = maker_tiles.choose_tiles(t, acrylic, "acrylic-3 tape")
+        n = c.tiles[0]
+        assert c.tile_width_mm >= maker_tiles.COMFORT * feature
+        bigger = [m for m in maker_tiles.STANDARD_TILES if n < m <= maker_tiles.MAX_AUTO]
+        if bigger:  # the next count up would be too thin
+            w = maker_tiles.tile_width_mm(t, min(bigger) ** 2)
+            assert w < maker_tiles.COMFORT * feature
+        chosen.append(n)
+    assert chosen == sorted(chosen) and chosen[0] == 4 and chosen[-1] == maker_tiles.MAX_AUTO
+    # a printed strip's seam (4 mm strip + 0.4 mm gap) is the printer's thinnest feature
+    assert maker_tiles.min_feature_mm(_limits(printer="prusa-mk4")) == pytest.approx(4.4)
+
+
+def test_tiles_when_none_is_comfortable():
+    acrylic = _limits(material="acrylic-3")
+    c = maker_tiles.choose_tiles(load_target("circle", 25), acrylic, "acrylic-3 tape")
+    assert c.tiles == (4, 4) and "keeps them widest" in c.reason  # 3.9 mm: under 2 x 3 mm
+    c = maker_tiles.choose_tiles(load_target("circle", 5), acrylic, "acrylic-3 tape")
+    assert c.tiles == (4, 4) and "the smallest size that could work is --size" in c.reason
+
+
+# ------------------------------------------------------------------ bad input: one line, exit 2, nothing written
+
+BAD = {
+    "missing target": (["nothere.csv", "--size", "100", "--material", "acrylic-3"], "nothere.csv"),
+    "both processes": (
+        ["circle", "--size", "100", "--material", "acrylic-3", "--printer", "prusa-mk4"],
+        "not allowed with",
+    ),
+    "neither process": (["circle", "--size", "100"], "--material"),
+    "negative size": (["circle", "--size", "-5", "--material", "acrylic-3"], "positive"),
+    "unknown material": (["circle", "--size", "100", "--material", "unobtainium"], "unknown"),
+    "hinge with a printer": (
+        ["circle", "--size", "100", "--printer", "prusa-mk4", "--hinge", "tape"],
+        "--hinge needs --material",
+    ),
+    "too small for the material": (
+        ["circle", "--size", "5", "--material", "acrylic-3"],
+        "smallest size that could work is --size",
+    ),
+    "too many tiles": (
+        ["circle", "--size", "3000", "--material", "acrylic-3", "--tiles", "200x200"],
+        "is the largest tested",
+    ),
+    "bad shape tolerance": (
+        ["circle", "--size", "100", "--material", "acrylic-3", "--shape-tol", "close"],
+        "close",
+    ),
+    "output is a file": (["circle", "--size", "100", "--material", "acrylic-3"], "not a folder"),
+    "output is the target": (["t.csv", "--size", "100", "--material", "acrylic-3"], "input"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_input_writes_nothing(case, tmp_path, monkeypatch, run_cli, capsys):
+    argv, words = BAD[case]
+    (tmp_path / "t.csv").write_text("x,y\n0,0\n40,0\n40,30\n0,30\n")
+    (tmp_path / "file").write_text("not a folder")
+    monkeypatch.chdir(tmp_path)
+    out = {"output is a file": "file", "output is the target": "t.csv"}.get(case, "out")
+    before = snapshot(tmp_path)
+    try:
+        code, _, err = run_cli("make", *argv, "-o", out)
+    except SystemExit as exc:  # argparse's own usage errors
+        code, err = exc.code, capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and words in err, err
+    assert "Traceback" not in err and "internal error" not in err
+    assert snapshot(tmp_path) == before and not os.path.exists(tmp_path / "out")
