@@ -64,7 +64,9 @@ def _print_pads(pattern, state):
 def _row_pads(pattern, state):
     top = pattern.topology
     lim = MK4
-    args = PR.pad_args(top.tiles, top.hinge_tiles, top.hinge_corner, top.fold(state).fold_corner_ends)
+    args = PR.pad_args(
+        top.tiles, top.hinge_tiles, top.hinge_corner, top.fold(state).fold_corner_ends
+    )
     g = PR.pad_rows(pattern.nodes, *args, *PR.strip_pad(lim, 1.0))
     return (g.v * lim.strip_width_mm + lim.strip_pad_mm2).reshape(-1, 2)
 
@@ -102,7 +104,9 @@ def test_kagome_pad_rows_are_the_pads_print_measures(state):
     assert ref.max() < 15.0 and np.abs(mine - ref).max() < 1e-4
     # exact gradients on triangles too (a jittered kagome; a margin that makes every soft row active)
     x = k.nodes + 0.3 * np.random.default_rng(state).standard_normal(k.nodes.shape)
-    (fam,) = [f for f in KF.families(k, lim, 1.0, margin=100.0) if f.name == "fabrication_strip_pads"]
+    (fam,) = [
+        f for f in KF.families(k, lim, 1.0, margin=100.0) if f.name == "fabrication_strip_pads"
+    ]
     J = fam(x)[1].toarray()
     h = 1e-6
     for i in range(x.size):

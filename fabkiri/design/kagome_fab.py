@@ -99,7 +99,14 @@ def rows(
         args = PR.pad_args(tiles, top.hinge_tiles, top.hinge_corner, ends)
         pad = PR.strip_pad(limits, unit_mm)
         owner = np.arange(len(args[0]))
-        out.append(Rows("fabrication_strip_pads", lambda x: PR.pad_rows(x, *args, *pad), owner, polys=args[0]))
+        out.append(
+            Rows(
+                "fabrication_strip_pads",
+                lambda x: PR.pad_rows(x, *args, *pad),
+                owner,
+                polys=args[0],
+            )
+        )
     if limits.min_hole_mm > 0 and len(top.hole_nodes):
         holes = F.ccw_polygons(top.hole_nodes, pattern.nodes)
         wh = limits.min_hole_mm / unit_mm

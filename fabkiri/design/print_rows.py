@@ -148,13 +148,13 @@ def strip_pad(limits: F.FabricationLimits, unit_mm: float) -> tuple[float, float
     )
 
 
-def families(
-    st: Stencils, nv: int, limits: F.FabricationLimits, unit_mm: float
-) -> list[Family]:
+def families(st: Stencils, nv: int, limits: F.FabricationLimits, unit_mm: float) -> list[Family]:
     """The pad rows of a quad design (seams of closed state ``limits.print_state``, the one ``print`` makes)."""
     if limits.strip_pad_mm2 <= 0 or limits.strip_width_mm <= 0 or not len(st.hinge_tiles):
         return []
-    args = pad_args(st.tiles, st.hinge_tiles, st.hinge_corner, st.folds[limits.print_state].fold_corner_ends)
+    args = pad_args(
+        st.tiles, st.hinge_tiles, st.hinge_corner, st.folds[limits.print_state].fold_corner_ends
+    )
     box = strip_pad(limits, unit_mm)
     polys = args[0]
     return [
