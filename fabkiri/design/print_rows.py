@@ -131,7 +131,9 @@ def _shrunk(x, polys, rows, n, shrink) -> list:
     return out
 
 
-def pad_args(tiles, hinge_tiles, hinge_corner, fold_ends) -> tuple:
+def pad_args(
+    tiles: np.ndarray, hinge_tiles: np.ndarray, hinge_corner: np.ndarray, fold_ends: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(polys, corner, end, other_corner)`` of :func:`pad_rows` for every pad (hinge-major, A's then B's)."""
     polys = pad_polygons(tiles, hinge_tiles)
     return polys, hinge_corner.ravel(), fold_ends.ravel(), hinge_corner[:, ::-1].ravel()
