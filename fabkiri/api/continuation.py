@@ -16,8 +16,9 @@ import numpy as np
 
 from ..design.fabrication import FabricationLimits
 from ..design.refine import refine_minimax
-from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
+from ..design.solve import VIA_RIGID_INIT, DesignRequest, _Problem, design, via_rigid_applies
 from ..design.targets import Target
+from ..errors import SolveError
 from ..fabricate import design_limits
 from ..mechanics.contract import contract
 from .design_judge import _check, _fit_miss, _hausdorff, _rank, _shape_met
@@ -114,9 +115,10 @@ def continuation(
 def _free_design(
     request: PatternRequest, req: DesignRequest, redesign
 ) -> tuple[DesignOutcome | None, float]:
-    """The design without the rows: first in the rigid family alone where a non-rigid request may be answered
-    there (the steps are taken in it; 16x16 heart at 200 mm: the same design as the guesses in turn, 9.8 of
-    their 20 CPU s), then, when that misses the shape, by every guess in turn (the front door's order).
+    """The design without the rows, by the front door's guesses in turn; where the first of them (conformal)
+    cannot be built (a non-convex target) and a non-rigid request may be answered in the rigid family, that
+    family alone first (the steps are taken in it; 16x16 heart at 200 mm: the same design as the guesses in
+    turn, which ended there, in 9.8 of their 20 CPU s), the guesses only when it misses the shape.
     Returns the valid design (or None) and the wall seconds spent."""
     free = replace(
         request,
@@ -129,13 +131,25 @@ def _free_design(
         quiet=True,
     )
     spent = 0.0
-    if not request.init and not req.rigid and via_rigid_applies(replace(req, init=VIA_RIGID_INIT)):
+    if _rigid_first(request, req):
         first = redesign(replace(free, init=VIA_RIGID_INIT))
         spent = first.report.get("time_s_total", 0.0)
         if first.success:
             return first, spent
     out = redesign(free)
     return (out if out.valid else None), spent + out.report.get("time_s_total", 0.0)
+
+
+def _rigid_first(request: PatternRequest, req: DesignRequest) -> bool:
+    """Whether the design without the rows is asked of the rigid family first: no --init, non-rigid, the rigid
+    family may answer, and the conformal guess (the guesses' first) folds a tile."""
+    if request.init or req.rigid or not via_rigid_applies(replace(req, init=VIA_RIGID_INIT)):
+        return False
+    try:
+        _Problem(replace(req, init="conformal", fabrication=None, start=None))
+    except SolveError:
+        return True
+    return False
 
 
 def _print_state(req: DesignRequest, printer: str | None, free: DesignOutcome) -> DesignRequest:
