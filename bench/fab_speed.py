@@ -50,6 +50,7 @@ def run(root: Path, *args: str, timeout: float = 1800) -> tuple[int, float, floa
         p = subprocess.run(
             [sys.executable, "-m", "fabkiri.cli.main", *args],
             env=env,
+            cwd=root,  # `python -m` puts the working folder first on sys.path, before PYTHONPATH
             capture_output=True,
             text=True,
             timeout=timeout,
