@@ -125,7 +125,13 @@ def test_refinement_stops_after_its_patience():
     tgt = load_target("heart", 100)
     lim = F.FabricationLimits(min_width_mm=3.0, margin=0.02)
     req = DesignRequest(
-        rows=4, cols=4, target=tgt, rigid=True, init="rescaled", fabrication=lim, second_opinion=False
+        rows=4,
+        cols=4,
+        target=tgt,
+        rigid=True,
+        init="rescaled",
+        fabrication=lim,
+        second_opinion=False,
     )
     start = design(req)
     best, full, _ = refine_minimax(req, start.pattern.nodes, steps=8)
