@@ -116,3 +116,28 @@ def test_heart_16x16_at_200mm_for_acrylic_keeps_its_shape():
     assert out.success and out.report["fabricability"]["thinnest_tile_mm"] >= 3.0
     assert h <= 0.02 and h <= 1.1 * h_free
     assert "minimax refinement" in out.report["continuation"]["how"]
+
+
+@pytest.mark.slow
+def test_refinement_stops_after_its_patience():
+    """4x4 heart, 8 steps asked: with patience 1 the steps stop at the first that finds nothing better than the
+    best so far, and the kept design is the best of the steps taken."""
+    tgt = load_target("heart", 100)
+    lim = F.FabricationLimits(min_width_mm=3.0, margin=0.02)
+    req = DesignRequest(
+        rows=4,
+        cols=4,
+        target=tgt,
+        rigid=True,
+        init="rescaled",
+        fabrication=lim,
+        second_opinion=False,
+    )
+    start = design(req)
+    best, full, _ = refine_minimax(req, start.pattern.nodes, steps=8)
+    _, short, _ = refine_minimax(req, start.pattern.nodes, steps=8, patience=1)
+    assert short == full[: len(short)]  # the same steps, fewer of them
+    stop = next(
+        (i for i in range(1, len(full)) if not full[i] < np.nanmin(full[:i])), len(full) - 1
+    )
+    assert len(short) == stop + 1 < len(full)

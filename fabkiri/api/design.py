@@ -169,15 +169,25 @@ def design_pattern(
     request, req, target, contracted = _solver_request(request)
     shape_tol = conf.parse_shape_tol(request.shape_tol)
     req.second_opinion_above = _tol_rel(shape_tol, target)
+    first: list[dict] = []
+    cont, tried = None, _continuation_first(request, req, contracted)
+    if tried:  # the rows from the start wall the fit in
+        cont = continuation(request, req, target, shape_tol, first, design_pattern)
+        if cont is not None and _good(cont):
+            return _outcome(cont, first, messages, target)
+        say(
+            "fabkiri: the continuation in the fabrication limits misses; trying the initial guesses"
+        )
     best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
-    if _continuation_applies(req, best, contracted):
+    attempts = first + attempts
+    if not tried and _continuation_applies(req, best, contracted):
         say(
             "fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
             "without the fabrication rows"
         )
         cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
-        if cont is not None and _rank(cont) < _rank(best):
-            best = cont
+    if cont is not None and _rank(cont) < _rank(best):
+        best = cont
     judge = _judge(contracted, request, target, shape_tol)
     best = refine_to_floor(req, best, judge, attempts, say) or best  # a floor that cost the shape
     return _outcome(best, attempts, messages, target)
@@ -410,6 +420,20 @@ def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
     return value / target.size if unit == "mm" and target is not None else value
 
 
+def _good(outcome) -> bool:
+    """Valid, within the shape tolerance and (for a printer) within its bed."""
+    return bool(
+        outcome[3] and _shape_met(outcome[1]) and outcome[1]["checks"].get("fits_bed", True)
+    )
+
+
+def _continuation_first(request: PatternRequest, req: DesignRequest, contracted: dict) -> bool:
+    """Whether the continuation comes before the guesses: a fabrication-aware deployed-target design below
+    BIG_TILES with no --init (16x16 heart at 200 mm, acrylic-3: every guess with the rows walled in, 16 %, after
+    35 of its 70 CPU s; the continuation met the shape)."""
+    return not request.init and _continuation_applies(req, None, contracted)
+
+
 def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
     """Whether to try the continuation in the fabrication limits (:mod:`.continuation`): a fabrication-aware deployed-target design below BIG_TILES that is invalid, misses the shape or (for a
     printer) does not fit the bed (8x8 ellipse at 200 mm for prusa-mk4: 116 x 261 mm; its continuation fits)."""
@@ -418,7 +442,7 @@ def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
         and req.target is not None
         and not contracted
         and req.rows * req.cols < BIG_TILES
-        and not (best[3] and _shape_met(best[1]) and best[1]["checks"].get("fits_bed", True))
+        and not (best is not None and _good(best))
     )
 
 

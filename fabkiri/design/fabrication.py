@@ -52,6 +52,7 @@ class FabricationLimits:
     strip_clearance_mm: float = 0.0
     strip_width_mm: float = 0.0
     strip_reach_mm: float = 0.0
+    strip_pad_mm2: float = 0.0  # every strip's pad on each tile at least this large (print_rows.py)
     source: str = ""  # what the numbers came from (material/printer names), for the report
     # penalty margin of the rows in tile edges (0: the solver's own, 0.005). A continuation step asks 0.02:
     # with 0.005 the penalty stages left width rows at exactly zero and the projection stalled against them
@@ -366,6 +367,9 @@ def _families(
     out += _hinge_families(st, nv, limits, unit_mm, tiles)
     if limits.strip_clearance_mm > 0:
         out += _strip_family(st, nv, limits, unit_mm, tiles)
+    from . import print_rows  # lazy: it builds on this module's rows
+
+    out += print_rows.families(st, nv, limits, unit_mm)
     if limits.min_hole_mm > 0 and len(st.hole_nodes):
         holes = ccw_polygons(st.hole_nodes, base)
         wh = limits.min_hole_mm / unit_mm

@@ -17,6 +17,8 @@ tile's corners (:mod:`.fabrication`, any polygon arity), applied to the triangle
   (:func:`.fabrication.strip_rows`, seams in closed state ``print_state``). Every pair, not only those on
   one face: ``print`` chooses the faces of kagome hinges by flips around odd cycles
   (``fabricate/printgeom.py``), which the design cannot predict, and every pair is the safe superset;
+* **strip pads**: every strip's pad on each of its triangles at least ``strip_pad_mm2`` (:mod:`.print_rows`,
+  the area ``print`` clips);
 * **holes** (``--min-hole``): every deployed hexagonal hole at least ``min_hole_mm`` wide.
 
 The kagome fit's unknowns are normalised (1 = the standard tile edge, ``unit_mm`` millimetres), so every
@@ -36,6 +38,7 @@ import numpy as np
 from ..pattern import fabricability as fab
 from ..pattern.model import Pattern
 from . import fabrication as F
+from . import print_rows as PR
 from .stencils import Family
 
 MARGIN = 0.01  # tile edges (about 0.1 mm at 11 mm tiles), or a sine: what the soft rows ask beyond a limit
@@ -57,6 +60,7 @@ class Rows:
     g: Callable[[np.ndarray], F.Dual]
     owner: np.ndarray
     length: bool = True
+    polys: np.ndarray | None = None  # the nodes each row reads (None: its tile's, or hole's)
 
 
 def rows(
@@ -90,6 +94,19 @@ def rows(
     out += _hinge_rows(pattern, limits, unit_mm)
     if limits.strip_clearance_mm > 0:
         out += _strip_rows(pattern, limits, unit_mm, faces)
+    if limits.strip_pad_mm2 > 0 and limits.strip_width_mm > 0 and top.n_hinges:
+        ends = top.fold(limits.print_state).fold_corner_ends
+        args = PR.pad_args(tiles, top.hinge_tiles, top.hinge_corner, ends)
+        pad = PR.strip_pad(limits, unit_mm)
+        owner = np.arange(len(args[0]))
+        out.append(
+            Rows(
+                "fabrication_strip_pads",
+                lambda x: PR.pad_rows(x, *args, *pad),
+                owner,
+                polys=args[0],
+            )
+        )
     if limits.min_hole_mm > 0 and len(top.hole_nodes):
         holes = F.ccw_polygons(top.hole_nodes, pattern.nodes)
         wh = limits.min_hole_mm / unit_mm
@@ -162,6 +179,8 @@ def _strip_rows(
 def _polygons(pattern: Pattern, r: Rows) -> np.ndarray:
     """The node indices each row of ``r`` reads (its tile's, or its hole's)."""
     top = pattern.topology
+    if r.polys is not None:
+        return r.polys
     return top.hole_nodes if r.name == "fabrication_holes" else top.tiles
 
 

@@ -52,6 +52,7 @@ def refine_minimax(
     steps: int = LAWSON_STEPS,
     gamma: float = LAWSON_GAMMA,
     accept: Callable[[DesignResult], bool] | None = None,
+    patience: int | None = None,
 ) -> tuple[DesignResult | None, list[float], float]:
     """Lawson steps from the design ``start_mm`` (deployed nodes, mm) under ``req``'s rows.
 
@@ -59,7 +60,8 @@ def refine_minimax(
     converged) and the Hausdorff distance of every step (fractions of the target size, NaN: unconverged;
     the weights are then raised again from the last converged design) and the wall seconds of the steps.
     The start itself is not among the candidates: the caller compares with it. ``accept`` (optional) vetoes a
-    converged step as a candidate (the caller's own check, e.g. a printer's bed); the steps go on from it."""
+    converged step as a candidate (the caller's own check, e.g. a printer's bed); the steps go on from it.
+    ``patience`` (optional): stop after that many steps in a row that found no better candidate."""
     target = req.target
     if target is None:  # the steps are judged by their Hausdorff distance to the deployed target
         raise InputError(
@@ -67,7 +69,7 @@ def refine_minimax(
         )
     X = np.asarray(start_mm, float)
     weights = lawson_weights(req, X, None, gamma)
-    best, trace, spent = None, [], 0.0
+    best, trace, spent, since = None, [], 0.0, 0
     for _ in range(steps):
         result = design(replace(req, start=X, fit_weights=weights, second_opinion=False))
         spent += result.report["time_s"]
@@ -75,7 +77,10 @@ def refine_minimax(
         trace.append(h if result.converged else float("nan"))
         if result.converged:  # an unconverged step moves nothing but the weights
             if (best is None or h < best[0]) and (accept is None or accept(result)):
-                best = (h, result)
+                best, since = (h, result), -1
             X = result.pattern.nodes
+        since += 1
+        if patience is not None and since >= patience:
+            break
         weights = lawson_weights(req, X, weights, gamma)
     return (best[1] if best else None), trace, spent

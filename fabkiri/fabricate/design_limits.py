@@ -12,6 +12,7 @@ import numpy as np
 from ..design.fabrication import FabricationLimits
 from ..design.target_curve import Target
 from ..errors import FabricationError, InputError
+from . import printgeom
 from .hingekinds import hinge_kind
 from .materials import HINGE_KINDS, Material, load_material
 from .printers import Printer, load_printer
@@ -69,6 +70,7 @@ def strip_limits(printer: Printer) -> dict:
     out.update(
         strip_clearance_mm=printer.radial_clearance_mm, strip_width_mm=w, strip_reach_mm=reach
     )
+    out["strip_pad_mm2"] = printgeom.min_pad_mm2(printer)  # the pad area print's plan asks
     out["hinge_edge_mm"] = (
         w + printer.gap_mm
     )  # the strip runs w along the seam from the shrunk corner

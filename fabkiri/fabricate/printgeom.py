@@ -355,7 +355,7 @@ def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> St
         ],
         -1,
     )
-    min_pad = 0.25 * w * min(reach, w)
+    min_pad = min_pad_mm2(printer)
     small = (shapely.area(pads) < min_pad).any(1)
     if small.any():
         h = int(np.flatnonzero(small)[0])
@@ -369,6 +369,11 @@ def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> St
     over = min(POCKET_OVERSHOOT_MM, 0.25 * printer.gap_mm)
     pocket = _pockets(pair, band_frame=(p, e, n), t=(t0, t1), R=R, over=over)
     return Strips(outline=outline, pads=pads, top=plan.top.copy(), pocket=pocket)
+
+
+def min_pad_mm2(printer: Printer) -> float:
+    """The least area of a strip's pad on each of its tiles (``design --printer`` keeps it too)."""
+    return 0.25 * printer.strip_width_mm * min(printer.strip_reach_mm, printer.strip_width_mm)
 
 
 def _seam_entry(plan: ClosedPlan, pair: np.ndarray, span: float) -> np.ndarray:
