@@ -229,6 +229,10 @@ def _continue(
     """
     zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
     sols: list = [None] * len(fine)
+    # each closed state is the one zero-energy configuration its drivers allow: the outward
+    # continuation's end starts from it, so a branch that strays shows as a jump before it
+    ends = {0.0: node_positions(pattern, states[1]).ravel()}
+    ends[1.0] = node_positions(pattern, states[2]).ravel()
     if terms is None:
         orders, start = [range(len(fine))], node_positions(pattern, states[1]).ravel()
     else:
@@ -243,6 +247,8 @@ def _continue(
                 continue
             if exact is not None:  # on the mechanism the minimiser is known in closed form
                 guess = exact
+            elif terms is not None and float(fine[k]) in ends:
+                guess = ends[float(fine[k])]
             elif prev is None:
                 guess = start
             elif prev2 is None:
