@@ -67,7 +67,7 @@ def test_contact_term_on_the_rotation_targets_matches_finite_differences():
     short = term.clearance - gaps.angles(y)[term.rows]
     assert (short > 1e-3).sum() >= 4 and term.energy(y) > 0
     grad_err, hess_err = _fd_check(term, y)
-    assert grad_err <= 1e-6 and hess_err <= 1e-6
+    assert grad_err <= 1e-7 and hess_err <= 1e-7
 
 
 @pytest.mark.slow
