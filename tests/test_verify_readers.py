@@ -102,6 +102,26 @@ def test_quads_of_drops_collinear_points_and_restores_bevelled_corners():
         )
 
 
+def test_bevelled_sliver_keeps_its_corners_next_to_a_nearly_straight_one():
+    """Tile 240 of `design --tiles 16x16 --target star --size 150 --rigid` cut from pp-0.5 at
+    --scale auto (7.878x): a 9.5° corner bevelled on the sheet next to a corner turning 2.4°. The
+    long edge past that nearly straight corner was taken for the bevelled corner's side, which
+    moved the corner 8.7 mm and failed the cut's read-back ("cut tiles congruent to design")."""
+    import shapely
+
+    Q = np.array([[-328.84, 205.82], [-291.53, 211.17], [-255.05, 226.91], [-304.77, 213.44]])
+    pts = []
+    for k in range(4):
+        if k in (0, 2):  # the two sharp corners cut 0.7 mm back along both edges
+            for other in (Q[k - 1], Q[(k + 1) % 4]):
+                pts.append(Q[k] + 0.7 * (other - Q[k]) / np.linalg.norm(other - Q[k]))
+        else:
+            pts.append(Q[k])
+    q, bad = quads_of(np.array([shapely.Polygon(pts)]))
+    assert bad == 0 and len(q) == 1
+    assert np.linalg.norm(q[0][:, None] - Q[None], axis=-1).min(axis=1).max() <= 1e-9
+
+
 @settings(max_examples=12, deadline=None)
 @given(
     st.floats(0, 2 * np.pi),

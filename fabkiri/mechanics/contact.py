@@ -57,6 +57,14 @@ class Gaps:
     deployed: np.ndarray  # (G,) gap angles in [0, 2π)
     turn: dict[int, np.ndarray]  # state -> (G,) change of each gap with the homotopy's angles
     n_nodes: int
+    hinge_tiles: np.ndarray  # (H, 2) tiles A, B of every hinge
+
+    def turned(self, theta: np.ndarray) -> np.ndarray:
+        """``(G,)`` every gap of rigid tiles turned by ``theta`` ``(T,)`` from the deployed state
+        (gap 0 opens as B turns and closes as A turns; gap 1 the other way)."""
+        th = np.asarray(theta, dtype=float)
+        A, B = self.hinge_tiles.T
+        return self.deployed + np.stack([th[B] - th[A], th[A] - th[B]], -1).ravel()
 
     def angles(self, x: np.ndarray) -> np.ndarray:
         """``(G,)`` the gap angles of flat node coordinates ``x``, in (-π, π]."""
@@ -95,6 +103,7 @@ def hinge_gaps(pattern: Pattern, states: dict[int, np.ndarray]) -> Gaps:
         deployed=gap_angles(pattern, deployed).ravel(),
         turn=turn,
         n_nodes=len(pattern.nodes),
+        hinge_tiles=top.hinge_tiles,
     )
 
 
@@ -176,7 +185,13 @@ def _sandwich(M: np.ndarray, coef: np.ndarray) -> np.ndarray:
 def gap_term(gaps: Gaps, t: float, *, weight: float, kappa: float) -> GapTerm:
     """The contact term at path parameter ``t``: every gap whose rigid blend there is open but
     narrower than :data:`OPEN` is held above ``kappa`` times that blend."""
-    blend = gaps.rigid(t)
+    return blend_term(gaps, gaps.rigid(t), weight=weight, kappa=kappa)
+
+
+def blend_term(gaps: Gaps, blend: np.ndarray, *, weight: float, kappa: float) -> GapTerm:
+    """The contact term for the rigid gaps ``blend`` ``(G,)`` (a driver's tiles turned rigidly,
+    :meth:`Gaps.turned`): every gap open but narrower than :data:`OPEN` held above ``kappa`` of
+    its value there."""
     rows = np.flatnonzero((blend > FOLDED) & (blend < OPEN))
     return GapTerm(gaps, rows, kappa * blend[rows], float(weight), float(kappa))
 

@@ -66,6 +66,10 @@ class PathDriver:
     name: ClassVar[str] = ""
     help: ClassVar[str] = ""
     solve: Callable | None = None
+    # a driver whose values are tile angles from the deployed shape may hold the hinge gaps open:
+    # the default continuation then adds the contact term of :mod:`.contact` at this weight
+    contact_weight: ClassVar[float] = 0.0
+    contact_kappa: ClassVar[float] = 0.5  # its clearance, a fraction of the rigid tiles' gap
 
     def plan(
         self, pattern: Pattern, states: dict[int, np.ndarray], t: np.ndarray, steps: int

@@ -25,9 +25,12 @@ tile's rigid motion interpolated, kagome's default) in :mod:`.homotopy`:
   rotations are split into a common rotation, the checkerboard amplitude
   ``a`` and a residual ``d_T`` (:func:`mechanism_split`); the amplitude is
   interpolated linearly from the deployed state (λ = 0) to the closed state
-  (λ = 1), and the residual enters only after the mechanism's first gap has
-  folded flat (λ > ``closing``), linearly up to the closed state
-  (:func:`rotation_targets`). So E = 0 along the mechanism-like middle and
+  (λ = 1), and the residual enters only once the mechanism is near folding its
+  first gap flat (λ > ``leaves``, 0.9 ``closing``), linearly up to the closed
+  state (:func:`rotation_targets`), so every gap of the rigidly turned tiles
+  stays open until the closed state; the contact term of :mod:`.contact` holds
+  the sprung gaps above half of that, and the continuation then runs outward
+  from the deployed state on each half. So E = 0 along the mechanism-like middle and
   the tiles deform only in two end segments next to the closed states: the
   barriers of Fig. 2C. A rigid-deployable design has no residual and
   ``closing = 1``: the drivers are then its exact rigid path (E = 0).
@@ -62,6 +65,7 @@ from scipy import sparse
 from scipy.sparse.linalg import splu, spsolve
 
 from ..pattern.model import Pattern
+from .contact import GapTerm, blend_term, contact_figures, hinge_gaps
 from .drivers import AUTO, Drivers, PathDriver, path_driver
 from .energy import Springs, WithTerm, springs
 from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived here)
@@ -215,27 +219,62 @@ def _continue(
     mechanism,
     tol: float,
     stats: MinimiseStats,
+    terms: list[GapTerm] | None = None,
 ) -> list[np.ndarray]:
     """The minimiser at every sub-step, each started from the best guess at hand: the mechanism's
-    closed form where the drivers are on it, else closed state 1, the last solution or a secant."""
-    x1 = node_positions(pattern, states[1]).ravel()
+    closed form where the drivers are on it, else the state it starts from, the last solution or a
+    secant. Without ``terms`` it runs forward from closed state 1; with them (sub-step ``k``
+    minimises the springs plus ``terms[k]``) outward from the deployed frame on each half, as
+    a stiff contact term started from a closed state, its gaps folded flat, lands on another branch.
+    """
     zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
-    sols = []
-    prev = prev2 = None
-    for tk, drv in zip(fine, drivers):
-        exact = mechanism(tk) if mechanism is not None else None
-        if exact is not None:  # on the mechanism the minimiser is known in closed form
-            guess = exact
-        elif prev is None:
-            guess = x1
-        elif prev2 is None:
-            guess = prev
-        else:
-            guess = 2.0 * prev - prev2  # secant predictor
-        x = minimise(sp, guess, drv.A, drv.b, step_tol=tol, stats=stats, zero_energy=zero)
-        sols.append(x)
-        prev2, prev = prev, x
+    sols: list = [None] * len(fine)
+    # each closed state is the one zero-energy configuration its drivers allow: the outward
+    # continuation's end starts from it, so a branch that strays shows as a jump before it
+    ends = {0.0: node_positions(pattern, states[1]).ravel()}
+    ends[1.0] = node_positions(pattern, states[2]).ravel()
+    if terms is None:
+        orders, start = [range(len(fine))], node_positions(pattern, states[1]).ravel()
+    else:
+        mid = int(np.argmin(np.abs(fine - 0.5)))
+        orders, start = [range(mid, -1, -1), range(mid, len(fine))], pattern.nodes.ravel()
+    for order in orders:
+        prev = prev2 = None
+        for k in order:
+            exact = mechanism(fine[k]) if mechanism is not None else None
+            if sols[k] is not None:  # the deployed frame, shared by both halves
+                prev = sols[k]
+                continue
+            if exact is not None:  # on the mechanism the minimiser is known in closed form
+                guess = exact
+            elif terms is not None and float(fine[k]) in ends:
+                guess = ends[float(fine[k])]
+            elif prev is None:
+                guess = start
+            elif prev2 is None:
+                guess = prev
+            else:
+                guess = 2.0 * prev - prev2  # secant predictor
+            drv = drivers[k]
+            energy = sp if terms is None else WithTerm(sp, terms[k])
+            x = minimise(energy, guess, drv.A, drv.b, step_tol=tol, stats=stats, zero_energy=zero)
+            sols[k] = x
+            prev2, prev = prev, x
     return sols
+
+
+def _contact_terms(
+    pattern: Pattern, states: dict[int, np.ndarray], fine: np.ndarray, driver: PathDriver
+) -> list[GapTerm] | None:
+    """The contact term at every sub-step of a driver that asks for one (its values are the tile
+    angles, so the rigid gaps are those tiles turned by them), else None."""
+    if driver.contact_weight <= 0.0:
+        return None
+    gaps = hinge_gaps(pattern, states)
+    return [
+        blend_term(gaps, gaps.turned(th), weight=driver.contact_weight, kappa=driver.contact_kappa)
+        for th in driver.values(pattern, states, fine)
+    ]
 
 
 def elastic_path(
@@ -266,7 +305,10 @@ def elastic_path(
     tol = step_tol * pattern.tile_size
     figures: dict = {}
     if drv.solve is None:
-        sols = _continue(pattern, sp, states, fine, drivers, plan.guess, tol, stats)
+        terms = _contact_terms(pattern, states, fine, drv)
+        sols = _continue(pattern, sp, states, fine, drivers, plan.guess, tol, stats, terms)
+        if terms is not None:
+            figures = contact_figures(terms, sols)
     else:
         sols, figures = drv.solve(pattern, sp, states, fine, drivers, plan, tol, stats)
     nodes = np.stack(sols)[keep].reshape(len(t), -1, 2)

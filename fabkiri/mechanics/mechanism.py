@@ -7,6 +7,13 @@ mechanism in which each gap angle changes by ``±2α``. The driver prescribes ev
 each closed state entering only after the mechanism's first gap has folded flat
 (:func:`mechanism_split`, :func:`rotation_targets`), so E = 0 along the middle of the path and the
 barriers sit in two end segments next to the closed states (see :mod:`.elastic`).
+
+The residual enters a little before that gap folds (:data:`LEAD`): entering exactly there, the gap
+would stay folded flat (0 rad) all the way to the closed state, where it is flat again, and the
+relaxed springs would push it a few 1e-8 rad (a 16x16 star) or more through zero: hinged tiles
+overlapping along the whole segment. Leaving the mechanism earlier, every gap of the rigidly turned
+tiles stays open until the closed state, and the contact term of :mod:`.contact`
+(:attr:`Rotations.contact_weight`) holds the sprung gaps above a part of it.
 """
 
 from __future__ import annotations
@@ -20,6 +27,8 @@ from ..pattern.model import Pattern
 from .drivers import Drivers, PathDriver, Plan, angle_drivers, node_centroids, register_driver
 from .path import circmean, node_positions, piecewise, tile_angles
 from .rigid_path import place_rigid
+
+LEAD = 0.1  # the residual enters at (1 - LEAD) of the mechanism's travel to its first folded gap
 
 
 @dataclass(frozen=True)
@@ -35,6 +44,12 @@ class MechanismSplit:
     amplitude: float
     residual: np.ndarray  # (T,)
     closing: float
+
+    @property
+    def leaves(self) -> float:
+        """λ where the path leaves the mechanism (the residual starts entering): :data:`LEAD` of
+        the way before its first gap folds flat, 1 for a rigid-deployable design."""
+        return 1.0 if self.closing >= 1.0 - 1e-12 else (1.0 - LEAD) * self.closing
 
 
 def gap_angles(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
@@ -97,12 +112,12 @@ def mechanism_split(pattern: Pattern, states: dict[int, np.ndarray]) -> dict[int
 def barrier_frames(split: dict[int, MechanismSplit], n: int) -> np.ndarray:
     """Extra path parameters inside the elastic end segments, where the barriers are.
 
-    The segments are ``t ∈ [0, (1 - closing₁)/2]`` and ``[1 - (1 - closing₂)/2, 1]``;
+    The segments are ``t ∈ [0, (1 - leaves₁)/2]`` and ``[1 - (1 - leaves₂)/2, 1]``;
     they are often a few hundredths of the path, narrower than the regular steps.
     """
     out = []
     for s, m in split.items():
-        width = 0.5 * (1.0 - m.closing)
+        width = 0.5 * (1.0 - m.leaves)
         if width <= 1e-9:
             continue
         inner = np.linspace(0.0, width, n + 1)[
@@ -118,8 +133,8 @@ def rotation_targets(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndar
     On each half, with λ running from 0 (deployed) to 1 (closed state), the
     common rotation and the checkerboard amplitude are interpolated linearly
     (λγ + ε_T λa: the mechanism) and the residual enters as ``r(λ) d_T``, with
-    ``r = 0`` while the mechanism can still move freely (λ ≤ closing) and
-    rising linearly to 1 at the closed state.
+    ``r = 0`` while the mechanism can still move freely (λ ≤ leaves, a little before its
+    first gap folds) and rising linearly to 1 at the closed state.
     """
     t = np.atleast_1d(np.asarray(t, dtype=float))
     split = mechanism_split(pattern, states)
@@ -129,10 +144,10 @@ def rotation_targets(pattern: Pattern, states: dict[int, np.ndarray], t: np.ndar
         s = 1 if tk <= 0.5 else 2
         lam = abs(1.0 - 2.0 * tk)
         m = split[s]
-        if m.closing >= 1.0 - 1e-12:
+        if m.leaves >= 1.0:
             r = lam
         else:
-            r = float(np.clip((lam - m.closing) / (1.0 - m.closing), 0.0, 1.0))
+            r = float(np.clip((lam - m.leaves) / (1.0 - m.leaves), 0.0, 1.0))
         out[k] = lam * (m.gamma + eps * m.amplitude) + r * m.residual
     return out
 
@@ -153,7 +168,7 @@ def _mechanism_guess(
         s = 1 if tk <= 0.5 else 2
         lam = abs(1.0 - 2.0 * tk)
         m = split[s]
-        if lam > m.closing:
+        if lam > m.leaves:
             return None
         placed = geometry.rotate(
             place_rigid(pattern, deployed, eps, np.array([lam * m.amplitude]))[0], lam * m.gamma
@@ -180,11 +195,13 @@ class Rotations(PathDriver):
 
     name = "rotations"
     help = "every tile's rotation along the design's zero-energy checkerboard mechanism"
+    contact_weight = 0.1  # the homotopy's: relative shortfall³ of a gap below its clearance
+    contact_kappa = 0.5
 
     def plan(self, pattern, states, t, steps):
         split = mechanism_split(pattern, states)
         t = np.union1d(t, barrier_frames(split, max(8, int(steps) // 4)))
-        w1, w2 = (0.5 * (1.0 - split[s].closing) for s in (1, 2))
+        w1, w2 = (0.5 * (1.0 - split[s].leaves) for s in (1, 2))
         segments = [seg for seg, w in (((0.0, w1), w1), ((1.0 - w2, 1.0), w2)) if w > 1e-9]
         return Plan(t, segments, _mechanism_guess(pattern, states, split))
 

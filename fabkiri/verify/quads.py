@@ -354,7 +354,10 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM, n: int = 4) -> np.
         # parallel within 10° (quad corners are far sharper turns) and close to the side
         along = (np.abs(geometry.cross2(e, d)) <= 0.17 * elen * dl) & (geometry.dot2(e, d) > 0)
         near = np.abs(geometry.cross2(mid - a, d)) / dl <= 0.1 * dl
-        cand = np.flatnonzero(along & near)
+        # and lying along this side, not its neighbour past a corner that turns by only a few
+        # degrees (a sliver tile's): that line would move the far corner by millimetres
+        s = geometry.dot2(mid - a, d) / dl**2
+        cand = np.flatnonzero(along & near & (s > 0.0) & (s < 1.0))
         longest = cand[np.argmax(elen[cand])] if len(cand) else None
         lines.append((a, d) if longest is None else (pts[longest], e[longest]))
     out = []
