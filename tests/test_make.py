@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
+from pathlib import Path
 from types import SimpleNamespace
 
 import fabkiri
@@ -88,6 +90,58 @@ def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
     record = json.loads((tmp_path / "o" / "make.json").read_text())
     assert record["failed_step"] == "cut"
     assert record["alternatives"] == ["fabkiri cut o/circle.json --scale 2.5 -o o/c"]
+
+
+TEMPLATES = Path(__file__).resolve().parent.parent / "templates" / "patterns"
+
+
+def _designed_as(monkeypatch, template: str) -> None:
+    """make's design step replaced by a shipped pattern (designed without a material, so cut's real
+    web rules refuse it at its size and the real advice names what passes); every other step is real."""
+    from fabkiri.api import maker
+    from fabkiri.pattern.io import read_pattern
+
+    text = (TEMPLATES / template).read_text()
+
+    def design(result, plan, say):
+        result.pattern = read_pattern(TEMPLATES / template)
+        return True, 0, "the shipped pattern", {f"{plan.stem}.json": text}, []
+
+    monkeypatch.setattr(maker, "_design", design)
+
+
+def test_a_real_cut_refusal_prints_its_checked_options(tmp_path, monkeypatch, run_cli):
+    # circle-8x8 (100 mm) has tiles 1.32 mm wide: acrylic-3's 3 mm web refuses it at scale 1
+    _designed_as(monkeypatch, "circle-8x8.json")
+    out = tmp_path / "o"
+    args = ("make", "circle", "--size", "100", "--material", "acrylic-3", "--tiles", "8x8")
+    code, stdout, err = run_cli(*args, "-o", out)
+    assert code == 1, err  # a check failed, as cut's own refusal
+    assert "stopped at cut (exit 1)" in err and "thinner than the minimum web 3 mm" in err
+    assert "Traceback" not in err
+    options = [line.split("    # ")[0] for line in stdout.splitlines() if line.startswith("fabkiri ")]
+    assert stdout.startswith("# options") and len(options) >= 2
+    # each names this run's own files, so it runs as it is
+    assert all(f"{out / 'circle.json'}" in line for line in options if " cut " in line)
+    assert options[0].startswith(f"fabkiri cut {out / 'circle.json'} --material acrylic-3")
+    assert "--scale 2.278" in options[0]
+    record = json.loads((out / "make.json").read_text())
+    assert record["alternatives"] == options
+    assert not (out / "cut").exists()  # the refused step wrote nothing
+
+
+def test_the_first_option_of_a_refused_make_succeeds(tmp_path, monkeypatch, run_cli):
+    _designed_as(monkeypatch, "circle-8x8.json")
+    out = tmp_path / "o"
+    code, stdout, _ = run_cli(
+        "make", "circle", "--size", "100", "--material", "acrylic-3", "--tiles", "8x8", "-o", out
+    )
+    assert code == 1
+    first = next(line for line in stdout.splitlines() if line.startswith("fabkiri "))
+    argv = shlex.split(first.split("    # ")[0])[1:]
+    code, _, err = run_cli(*argv)
+    assert code == 0, err
+    assert (out / "cut" / "circle.dxf").is_file()
 
 
 def _limits(material=None, printer=None) -> FabricationLimits:

@@ -72,11 +72,16 @@ class Refused(CheckFailed, FabricationError):
 
     def option_lines(self) -> list[str]:
         """``# options ...`` and then one ``fabkiri ...    # detail`` line per option: each runs as it is."""
-        if not self.alternatives:
-            return ["# options: none passes the same checks"]
-        return ["# options (each passes the same checks; run one as it is):"] + [
-            f"{a.command}    # {a.detail}" for a in self.alternatives
-        ]
+        return option_lines(self.alternatives)
+
+
+def option_lines(options: list[Alternative]) -> list[str]:
+    """The lines a refusal prints on stdout: a ``#`` heading, then ``fabkiri ...    # detail`` each."""
+    if not options:
+        return ["# options: none passes the same checks"]
+    return ["# options (each passes the same checks; run one as it is):"] + [
+        f"{a.command}    # {a.detail}" for a in options
+    ]
 
 
 def alternatives(
@@ -419,6 +424,7 @@ __all__ = [
     "cut_alternatives",
     "cut_refusal",
     "design_line",
+    "option_lines",
     "print_alternatives",
     "refused",
 ]

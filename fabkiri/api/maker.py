@@ -202,7 +202,10 @@ def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) ->
 def refusal_alternatives(result: MakeResult, plan: _Plan, step: str, error: FabkiriError) -> list:
     """The options that work when ``step`` (cut or print) refused: the seam of the ``advice`` work, whose
     refusal (``fabkiri.api.advice.Refused``) carries its checked alternatives, each with a ``.command``
-    line the summary prints. A refusal without them (before that work) is shown as cut or print give it."""
+    line the summary prints (and the CLI on stdout). Other failures (a read-back) name none."""
+    from .advice import Refused
+
+    result.refused = isinstance(error, Refused)
     return list(getattr(error, "alternatives", None) or [])
 
 
@@ -269,6 +272,17 @@ def _num(v) -> str:
     return f"{v:.3g}" if isinstance(v, float) else str(v)
 
 
+def _ask(result: MakeResult, plan: _Plan):
+    """How a refusal's options name this run's files, so each is a line that runs as it is: the
+    pattern ``make`` wrote and its step folder (relative names when nothing is written)."""
+    from .advice import Ask
+
+    where = result.output
+    file = f"{plan.stem}.json" if where is None else str(where / f"{plan.stem}.json")
+    folder = plan.process if where is None else str(where / plan.process)
+    return Ask(file=file, output=folder, given=plan.material or plan.printer)
+
+
 def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     from ..fabricate.cut import CutOptions
     from .cut import cut_files, cut_material
@@ -278,7 +292,7 @@ def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     options = CutOptions(
         material=material, hinge=hinge, stem=plan.stem, pattern_file=f"{plan.stem}.json"
     )
-    cut = cut_files(result.pattern, options)
+    cut = cut_files(result.pattern, options, ask=_ask(result, plan))
     for w in cut.result.warnings:
         say(f"warning: {w}")
     man = cut.result.manifest
@@ -303,6 +317,7 @@ def _print(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         stem=plan.stem,
         source=f"{plan.stem}.json",
         notify=say,
+        ask=_ask(result, plan),
     )
     return True, 0, out.describe(), {f"print/{k}": v for k, v in out.files.items()}, []
 

@@ -66,6 +66,7 @@ class MakeResult:
     steps: list[Step] = field(default_factory=list)
     files: dict[str, bytes | str] = field(default_factory=dict)
     alternatives: list[Any] = field(default_factory=list)  # a refusal's options, each with .command
+    refused: bool = False  # the failed step was a fabricability refusal (advice.Refused)
     figures: dict[str, Any] = field(default_factory=dict)  # design figures: Hausdorff, opening
 
     @property
@@ -102,6 +103,12 @@ class MakeResult:
             "alternatives": [getattr(a, "command", str(a)) for a in self.alternatives],
             "steps": [s.to_dict() for s in self.steps],
         }
+
+    def option_lines(self) -> list[str]:
+        """A refusal's checked options as ``cut`` and ``print`` print them on stdout (none otherwise)."""
+        from .advice import option_lines
+
+        return option_lines(self.alternatives) if self.refused else []
 
     def manifest_text(self) -> str:
         return json.dumps(self.to_dict(), indent=2, sort_keys=True) + "\n"

@@ -30,6 +30,8 @@ def cmd_make(args: argparse.Namespace) -> int:
     )
     for line in result.summary():
         print(line, file=sys.stderr)
+    for line in result.option_lines():  # as cut and print give them: one runnable line each
+        print(line)
     return result.exit_code
 
 
