@@ -55,6 +55,44 @@ def test_make_from_python_keeps_files_until_written(tmp_path):
         "acrylic-3 separate"
     )
     assert "next: cut" in "\n".join(result.summary())
+    # how much it opens, from the design's report, under the design step
+    design = result.step("design")
+    assert design is not None and design.details[0].startswith("opening: holes ")
+    assert f"    {design.details[0]}" in result.summary()
+
+
+def test_min_opening_reaches_the_design(monkeypatch):
+    from fabkiri.api import design
+    from fabkiri.errors import InputError
+
+    asked = []
+
+    def design_pattern(request, notify=None):
+        asked.append(request)
+        raise InputError("stop here")
+
+    monkeypatch.setattr(design, "design_pattern", design_pattern)
+    with pytest.raises(InputError, match="stop here"):
+        fabkiri.make("star", size=150, material="acrylic-3", tiles=(8, 8), min_opening=0.3)
+    assert asked[0].min_opening == 0.3 and asked[0].material == "acrylic-3"
+
+
+def test_a_design_that_opens_little_is_warned_about():
+    from fabkiri.api.maker import _opening_lines
+    from fabkiri.pattern.io import read_pattern
+    from fabkiri.pattern.opening import opening
+
+    figures = opening(read_pattern(TEMPLATES / "circle-8x8.json")).to_dict()
+    lines = _opening_lines({"opening": figures})
+    assert lines == [opening(read_pattern(TEMPLATES / "circle-8x8.json")).line()]
+    little = {**figures, "hole_fraction": 0.05}
+    lines = _opening_lines({"opening": little})
+    assert lines[0].startswith("opening: holes 5.0 %")
+    assert "opens little" in lines[1] and lines[1].endswith(
+        "make --min-opening F sets a floor on it"
+    )
+    floored = _opening_lines({"opening": {**little, "min_opening": 0.03}})
+    assert "opens little" in floored[1] and "sets a floor" not in floored[1]
 
 
 def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
@@ -119,7 +157,9 @@ def test_a_real_cut_refusal_prints_its_checked_options(tmp_path, monkeypatch, ru
     assert code == 1, err  # a check failed, as cut's own refusal
     assert "stopped at cut (exit 1)" in err and "thinner than the minimum web 3 mm" in err
     assert "Traceback" not in err
-    options = [line.split("    # ")[0] for line in stdout.splitlines() if line.startswith("fabkiri ")]
+    options = [
+        line.split("    # ")[0] for line in stdout.splitlines() if line.startswith("fabkiri ")
+    ]
     assert stdout.startswith("# options") and len(options) >= 2
     # each names this run's own files, so it runs as it is
     assert all(f"{out / 'circle.json'}" in line for line in options if " cut " in line)
@@ -204,6 +244,10 @@ BAD = {
     "bad shape tolerance": (
         ["circle", "--size", "100", "--material", "acrylic-3", "--shape-tol", "close"],
         "close",
+    ),
+    "opening floor not a fraction": (
+        ["circle", "--size", "100", "--material", "acrylic-3", "--min-opening", "1.5"],
+        "--min-opening is a deployed hole fraction in (0, 1)",
     ),
     "output is a file": (["circle", "--size", "100", "--material", "acrylic-3"], "not a folder"),
     "output is the target": (["t.csv", "--size", "100", "--material", "acrylic-3"], "input"),

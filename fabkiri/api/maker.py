@@ -15,7 +15,7 @@ import resource
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +45,7 @@ class _Plan:
     printer: str | None
     style: str | None
     shape_tol: str
+    min_opening: float | None
     tiles: TilesChoice
     process: str
     fabrication: str
@@ -61,17 +62,20 @@ def make(
     style: str | None = None,
     tiles: tuple[int, int] | None = None,
     shape_tol: str = conf.DEFAULT_SHAPE_TOL,
+    min_opening: float | None = None,
     output: str | Path | None = None,
     progress: Progress | None = None,
 ) -> MakeResult:
     """Design ``target`` at ``size`` mm for a laser ``material`` (``hinge`` kind) or a ``printer``
-    (``style``), cut or print it at that size, deploy it and write the report.
+    (``style``), cut or print it at that size, deploy it and write the report. ``min_opening``: a
+    floor on the deployed hole fraction, passed to the design (``design --min-opening``).
 
     With ``output`` every step's files are written into that folder as the step finishes; without
     it they stay in :attr:`MakeResult.files` (``write(folder)`` writes them). Raises
     :class:`InputError` for bad input before anything is done; a step that fails is recorded in
     the result (``ok`` false, ``exit_code`` the step's), not raised."""
     plan = _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output)
+    plan = replace(plan, min_opening=_floor(min_opening))
     say = progress or (lambda text: None)
     out = Path(output) if output is not None else None
     result = MakeResult(
@@ -98,6 +102,20 @@ def make(
     if out is not None:
         atomic_write_many(out, {MANIFEST: result.manifest_text()})
     return result
+
+
+def _floor(min_opening) -> float | None:
+    """The ``--min-opening`` floor, checked as design checks it (a hole fraction in (0, 1))."""
+    from .design_opening import check_floor
+
+    if min_opening is None:
+        return None
+    try:
+        floor = float(min_opening)
+    except (TypeError, ValueError):
+        raise InputError(f"--min-opening must be a number, got {min_opening!r}") from None
+    check_floor(floor)
+    return floor
 
 
 def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output) -> _Plan:
@@ -140,6 +158,7 @@ def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, outpu
         printer=printer,
         style=intent.get("style"),
         shape_tol=shape_tol,
+        min_opening=None,
         tiles=choice,
         process=process,
         fabrication=fabrication,
@@ -224,6 +243,7 @@ def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         printer=plan.printer,
         style=plan.style if plan.printer else None,
         shape_tol=plan.shape_tol,
+        min_opening=plan.min_opening,
     )
     outcome = design_pattern(request, notify=say)
     name = f"{plan.stem}.json"
@@ -232,6 +252,7 @@ def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     report = outcome.report
     result.figures.update(_design_figures(report))
     details = [line for line in outcome.summary(name) if line.startswith("fabkiri: design failed")]
+    details = _opening_lines(report) + details
     return outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details
 
 
@@ -259,17 +280,22 @@ def _design_line(status: str, report: dict) -> str:
     )
     fr = report.get("fabrication") or {}
     active = sum(fr.get("active", {}).values()) if fr else 0
-    opening = report.get("opening")  # the seam of the deployment-amount figures: shown as reported
-    numbers = {
-        k: v for k, v in (opening or {}).items() if isinstance(v, (int, float)) and k != "version"
-    }
-    more = ", opening " + ", ".join(f"{k} {_num(v)}" for k, v in numbers.items()) if numbers else ""
     said = "" if status == "ok" else f"{status}, "
-    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active{more}"
+    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active"
 
 
-def _num(v) -> str:
-    return f"{v:.3g}" if isinstance(v, float) else str(v)
+def _opening_lines(report: dict) -> list[str]:
+    """How much the design opens (:meth:`Opening.line`) and, below 10 %, the warning."""
+    from ..pattern.opening import Opening
+
+    if not isinstance(report.get("opening"), dict):
+        return []
+    o = Opening.from_dict(report["opening"])
+    warn = o.warning()
+    if warn is None:
+        return [o.line()]
+    floored = report["opening"].get("min_opening")
+    return [o.line(), warn + ("" if floored else "; make --min-opening F sets a floor on it")]
 
 
 def _ask(result: MakeResult, plan: _Plan):
