@@ -184,6 +184,42 @@ def test_the_first_option_of_a_refused_make_succeeds(tmp_path, monkeypatch, run_
     assert (out / "cut" / "circle.dxf").is_file()
 
 
+def test_advice_offers_the_make_line_beside_the_design_line(run_cli):
+    from fabkiri.api.advice import Ask, alternatives
+    from fabkiri.pattern.io import read_pattern
+
+    ask = Ask(file="p/circle-8x8.json", output="p/cut")
+    options = alternatives(read_pattern(TEMPLATES / "circle-8x8.json"), "cut", ask=ask)
+    design = next(a for a in options if a.what == "design")
+    made = [a for a in options if a.what == "make"]
+    assert (
+        len(made) == 1 and made[0].checked == design.checked and made[0].changes == design.changes
+    )
+    assert made[0].command == (
+        "fabkiri make circle --size 100 --material acrylic-3 --hinge tape --tiles 8x8 "
+        "-o p/circle-8x8-acrylic-3"
+    )
+    # the same design: target, size, tiles and process as the design line's
+    for words in ("--tiles 8x8", "--target circle", "--size 100", "--material acrylic-3"):
+        assert words in design.command
+    # make cannot say --rigid: no make line for a rigid design (its design line stays)
+    rigid = alternatives(read_pattern(TEMPLATES / "circle-8x8-rigid.json"), "cut", ask=ask)
+    assert any(a.what == "design" for a in rigid) and not any(a.what == "make" for a in rigid)
+
+
+@pytest.mark.slow  # a whole make, 8x8 at 100 mm (~5 CPU s)
+def test_the_make_line_under_a_cut_refusal_makes_it(tmp_path, monkeypatch, run_cli):
+    src = tmp_path / "circle-8x8.json"
+    src.write_text((TEMPLATES / "circle-8x8.json").read_text())
+    code, out, _ = run_cli("cut", src, "--material", "acrylic-3", "-o", tmp_path / "no")
+    assert code == 1
+    line = next(x for x in out.splitlines() if x.startswith("fabkiri make "))
+    code, _, err = run_cli(*shlex.split(line.split("    # ")[0])[1:])
+    assert code == 0, err
+    record = json.loads((tmp_path / "circle-8x8-acrylic-3" / "make.json").read_text())
+    assert record["ok"] and record["size_mm"] == 100 and record["tiles"] == [8, 8]
+
+
 def _limits(material=None, printer=None) -> FabricationLimits:
     fab, _ = design_limits.resolve(material, None, printer, None, None, None, None)
     assert fab is not None
