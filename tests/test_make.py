@@ -220,6 +220,38 @@ def test_the_make_line_under_a_cut_refusal_makes_it(tmp_path, monkeypatch, run_c
     assert record["ok"] and record["size_mm"] == 100 and record["tiles"] == [8, 8]
 
 
+@pytest.mark.slow  # a whole make of a 6x6 circle (~9 s on a loaded machine)
+def test_a_failed_deploy_check_still_writes_the_report(tmp_path, monkeypatch):
+    # the real deploy, its outcome marked as one with collisions (a real collision case is not cheap)
+    from dataclasses import replace
+
+    from fabkiri.api import deploy
+
+    real = deploy.deploy_pattern
+
+    def colliding(pattern, **kw):
+        out = real(pattern, **kw)
+        return replace(out, problems=["2 tile overlaps at t = 0.4"])
+
+    monkeypatch.setattr(deploy, "deploy_pattern", colliding)
+    result = fabkiri.make(
+        "circle", size=60, material="acrylic-3", tiles=(6, 6), output=tmp_path / "o"
+    )
+    assert not result.ok and result.exit_code == 1 and result.failed.name == "deploy"
+    assert [(s.name, s.ok) for s in result.steps] == [
+        ("design", True),
+        ("cut", True),
+        ("deploy", False),
+        ("report", True),
+    ]
+    assert (tmp_path / "o" / "report.html").is_file() and (tmp_path / "o" / "deploy").is_dir()
+    text = "\n".join(result.summary())
+    assert "make: deploy failed (exit 1)" in text and "report.html documents the design" in text
+    assert "2 tile overlaps at t = 0.4" in text and "next:" not in text
+    record = json.loads((tmp_path / "o" / "make.json").read_text())
+    assert record["failed_step"] == "deploy" and record["exit_code"] == 1
+
+
 def _limits(material=None, printer=None) -> FabricationLimits:
     fab, _ = design_limits.resolve(material, None, printer, None, None, None, None)
     assert fab is not None

@@ -6,7 +6,7 @@ then :func:`~.cut.cut_files` or :func:`~.print.print_pattern` at the designed si
 :func:`~.deploy.deploy_pattern` (plot and GIF) and the HTML report. Bad input is refused before any
 work, with nothing written; after that each step's files are written as it finishes (each step
 all-or-nothing, through :mod:`fabkiri.fileio`), and the first step that fails stops the run,
-keeping what is done. Without ``tiles`` the count comes from :func:`.maker_tiles.choose_tiles`.
+keeping what is done, except a failed deploy check: the report is still written, and the run fails. Without ``tiles`` the count comes from :func:`.maker_tiles.choose_tiles`.
 """
 
 from __future__ import annotations
@@ -32,6 +32,9 @@ from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
 
 Progress = Callable[[str], None]
+# a failed deploy check (collisions) still gets its report: the report documents the design and is
+# what a maker reads to decide; the run still exits 1 naming the deploy failure
+GOES_ON = frozenset({"deploy"})
 
 
 @dataclass(frozen=True)
@@ -97,7 +100,7 @@ def make(
         ("deploy", _deploy),
         ("report", _report),
     ):
-        if not _run_step(result, plan, name, run, say):
+        if not _run_step(result, plan, name, run, say) and name not in GOES_ON:
             break
     if out is not None:
         atomic_write_many(out, {MANIFEST: result.manifest_text()})

@@ -135,6 +135,13 @@ class MakeResult:
         failed = self.failed
         if failed is None:
             out.append("next: " + self._next(where))
+        elif (
+            failed is not self.steps[-1]
+        ):  # a step that lets the run go on (deploy): it still failed
+            out.append(
+                f"make: {failed.name} failed (exit {failed.exit_code}): {failed.figures}; "
+                f"{where}/report.html documents the design; the run fails"
+            )
         else:
             done = [s.name for s in self.steps if s.ok]
             out.append(
