@@ -412,7 +412,8 @@ def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternati
     """The ``fabkiri make`` line equivalent to the ``design`` option (the same target, size, tiles and
     process, the same room check passed), when ``make`` can say all the design asks for: a quad
     lattice without ``--rigid`` or ``--symmetry``. Empty otherwise."""
-    opts = (pattern.design or {}).get("options") or {}
+    stored = pattern.design or {}
+    opts = stored.get("options") or {}
     lattice = pattern.lattice or {}
     if lattice.get("kind", "quad") != "quad" or opts.get("rigid") or opts.get("symmetry"):
         return []
@@ -427,7 +428,7 @@ def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternati
     where = Path(ask.output).parent if ask.output else Path(ask.file).parent
     folder = str(where / f"{Path(ask.file).stem}-{tag}")
     command = _line(
-        "fabkiri", "make", pattern.design["target"]["name"], "--size", f"{ch['size']:g}",
+        "fabkiri", "make", stored["target"]["name"], "--size", f"{ch['size']:g}",
         *process, "--tiles", f"{lattice['rows']}x{lattice['cols']}",
         *(["--min-opening", f"{floor:g}"] if floor else []), "-o", folder,
     )  # fmt: skip
