@@ -4,9 +4,9 @@ A refusal of a fabricability check names every option that passes the same gate 
 for: another material or hinge kind (``cut``'s web and edge rules in closed form,
 :func:`fabkiri.fabricate.fabricability.cut_minimum`), another printer or print style (``print``'s plan
 checks and the bed at that scale, :func:`~fabkiri.fabricate.fabricability.print_refusal`), the smallest
-scale of the process asked for, and the ``fabkiri design`` line that keeps the size when the design's
-own up-front room check (Pál's bound, :func:`fabkiri.design.fabrication.smallest_size`) does not rule
-it out. Nothing is suggested that was not checked. The front doors raise :class:`Refused` (exit 1: a
+scale of the process asked for, and the ``fabkiri design`` line (with the equivalent ``fabkiri make``
+line) that keeps the size when the design's own up-front room check (Pál's bound,
+:func:`fabkiri.design.fabrication.smallest_size`) does not rule it out. Nothing is suggested that was not checked. The front doors raise :class:`Refused` (exit 1: a
 check failed, whatever the flags) carrying the alternatives; the CLI prints them under the refusal.
 """
 
@@ -39,7 +39,7 @@ class Alternative:
     ``DESIGN_GATE``) and ``changes`` the options it sets (``material``, ``hinge``, ``printer``, ``style``,
     ``scale``, ``size``), for callers that run it themselves (``fabkiri make``, notebooks)."""
 
-    what: str  # "scale", "material", "printer", "design"
+    what: str  # "scale", "material", "printer", "design", "make"
     command: str
     detail: str
     checked: str
@@ -72,11 +72,16 @@ class Refused(CheckFailed, FabricationError):
 
     def option_lines(self) -> list[str]:
         """``# options ...`` and then one ``fabkiri ...    # detail`` line per option: each runs as it is."""
-        if not self.alternatives:
-            return ["# options: none passes the same checks"]
-        return ["# options (each passes the same checks; run one as it is):"] + [
-            f"{a.command}    # {a.detail}" for a in self.alternatives
-        ]
+        return option_lines(self.alternatives)
+
+
+def option_lines(options: list[Alternative]) -> list[str]:
+    """The lines a refusal prints on stdout: a ``#`` heading, then ``fabkiri ...    # detail`` each."""
+    if not options:
+        return ["# options: none passes the same checks"]
+    return ["# options (each passes the same checks; run one as it is):"] + [
+        f"{a.command}    # {a.detail}" for a in options
+    ]
 
 
 def alternatives(
@@ -200,7 +205,7 @@ def cut_alternatives(
         ask,
     )
     if line is not None:
-        out.append(line)
+        out += [*make_line(pattern, line, ask), line]  # the design line last, as before
     return out
 
 
@@ -291,7 +296,7 @@ def print_alternatives(
         ask,
     )
     if line is not None:
-        out.append(line)
+        out += [*make_line(pattern, line, ask), line]  # the design line last, as before
     return out
 
 
@@ -403,6 +408,35 @@ def design_line(
     )
 
 
+def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternative]:
+    """The ``fabkiri make`` line equivalent to the ``design`` option (the same target, size, tiles and
+    process, the same room check passed), when ``make`` can say all the design asks for: a quad
+    lattice without ``--rigid`` or ``--symmetry``. Empty otherwise."""
+    stored = pattern.design or {}
+    opts = stored.get("options") or {}
+    lattice = pattern.lattice or {}
+    if lattice.get("kind", "quad") != "quad" or opts.get("rigid") or opts.get("symmetry"):
+        return []
+    ch = design.changes
+    process = (
+        ["--material", ch["material"], "--hinge", ch["hinge"]]
+        if "material" in ch
+        else ["--printer", ch["printer"], "--style", ch["style"]]
+    )
+    floor = opts.get("min_opening")
+    tag = Path(str(ch.get("material") or ch["printer"])).stem
+    where = Path(ask.output).parent if ask.output else Path(ask.file).parent
+    folder = str(where / f"{Path(ask.file).stem}-{tag}")
+    command = _line(
+        "fabkiri", "make", stored["target"]["name"], "--size", f"{ch['size']:g}",
+        *process, "--tiles", f"{lattice['rows']}x{lattice['cols']}",
+        *(["--min-opening", f"{floor:g}"] if floor else []), "-o", folder,
+    )  # fmt: skip
+    what = "cuts" if "material" in ch else "prints"
+    detail = f"the same design in one go: designs, {what}, deploys and reports into {folder}"
+    return [Alternative("make", command, detail, DESIGN_GATE, dict(ch))]
+
+
 def refused(exc: FabkiriError, options: list[Alternative]) -> Refused:
     """``exc`` as a :class:`Refused` carrying ``options`` (the refusal text kept as it was)."""
     return Refused(str(exc), options)
@@ -419,6 +453,8 @@ __all__ = [
     "cut_alternatives",
     "cut_refusal",
     "design_line",
+    "make_line",
+    "option_lines",
     "print_alternatives",
     "refused",
 ]

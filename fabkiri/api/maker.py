@@ -6,7 +6,7 @@ then :func:`~.cut.cut_files` or :func:`~.print.print_pattern` at the designed si
 :func:`~.deploy.deploy_pattern` (plot and GIF) and the HTML report. Bad input is refused before any
 work, with nothing written; after that each step's files are written as it finishes (each step
 all-or-nothing, through :mod:`fabkiri.fileio`), and the first step that fails stops the run,
-keeping what is done. Without ``tiles`` the count comes from :func:`.maker_tiles.choose_tiles`.
+keeping what is done, except a failed deploy check: the report is still written, and the run fails. Without ``tiles`` the count comes from :func:`.maker_tiles.choose_tiles`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import resource
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +32,9 @@ from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
 
 Progress = Callable[[str], None]
+# a failed deploy check (collisions) still gets its report: the report documents the design and is
+# what a maker reads to decide; the run still exits 1 naming the deploy failure
+GOES_ON = frozenset({"deploy"})
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,7 @@ class _Plan:
     printer: str | None
     style: str | None
     shape_tol: str
+    min_opening: float | None
     tiles: TilesChoice
     process: str
     fabrication: str
@@ -61,17 +65,20 @@ def make(
     style: str | None = None,
     tiles: tuple[int, int] | None = None,
     shape_tol: str = conf.DEFAULT_SHAPE_TOL,
+    min_opening: float | None = None,
     output: str | Path | None = None,
     progress: Progress | None = None,
 ) -> MakeResult:
     """Design ``target`` at ``size`` mm for a laser ``material`` (``hinge`` kind) or a ``printer``
-    (``style``), cut or print it at that size, deploy it and write the report.
+    (``style``), cut or print it at that size, deploy it and write the report. ``min_opening``: a
+    floor on the deployed hole fraction, passed to the design (``design --min-opening``).
 
     With ``output`` every step's files are written into that folder as the step finishes; without
     it they stay in :attr:`MakeResult.files` (``write(folder)`` writes them). Raises
     :class:`InputError` for bad input before anything is done; a step that fails is recorded in
     the result (``ok`` false, ``exit_code`` the step's), not raised."""
     plan = _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output)
+    plan = replace(plan, min_opening=_floor(min_opening))
     say = progress or (lambda text: None)
     out = Path(output) if output is not None else None
     result = MakeResult(
@@ -93,11 +100,25 @@ def make(
         ("deploy", _deploy),
         ("report", _report),
     ):
-        if not _run_step(result, plan, name, run, say):
+        if not _run_step(result, plan, name, run, say) and name not in GOES_ON:
             break
     if out is not None:
         atomic_write_many(out, {MANIFEST: result.manifest_text()})
     return result
+
+
+def _floor(min_opening) -> float | None:
+    """The ``--min-opening`` floor, checked as design checks it (a hole fraction in (0, 1))."""
+    from .design_opening import check_floor
+
+    if min_opening is None:
+        return None
+    try:
+        floor = float(min_opening)
+    except (TypeError, ValueError):
+        raise InputError(f"--min-opening must be a number, got {min_opening!r}") from None
+    check_floor(floor)
+    return floor
 
 
 def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output) -> _Plan:
@@ -140,6 +161,7 @@ def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, outpu
         printer=printer,
         style=intent.get("style"),
         shape_tol=shape_tol,
+        min_opening=None,
         tiles=choice,
         process=process,
         fabrication=fabrication,
@@ -202,7 +224,10 @@ def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) ->
 def refusal_alternatives(result: MakeResult, plan: _Plan, step: str, error: FabkiriError) -> list:
     """The options that work when ``step`` (cut or print) refused: the seam of the ``advice`` work, whose
     refusal (``fabkiri.api.advice.Refused``) carries its checked alternatives, each with a ``.command``
-    line the summary prints. A refusal without them (before that work) is shown as cut or print give it."""
+    line the summary prints (and the CLI on stdout). Other failures (a read-back) name none."""
+    from .advice import Refused
+
+    result.refused = isinstance(error, Refused)
     return list(getattr(error, "alternatives", None) or [])
 
 
@@ -221,6 +246,7 @@ def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         printer=plan.printer,
         style=plan.style if plan.printer else None,
         shape_tol=plan.shape_tol,
+        min_opening=plan.min_opening,
     )
     outcome = design_pattern(request, notify=say)
     name = f"{plan.stem}.json"
@@ -229,6 +255,7 @@ def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     report = outcome.report
     result.figures.update(_design_figures(report))
     details = [line for line in outcome.summary(name) if line.startswith("fabkiri: design failed")]
+    details = _opening_lines(report) + details
     return outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details
 
 
@@ -256,17 +283,33 @@ def _design_line(status: str, report: dict) -> str:
     )
     fr = report.get("fabrication") or {}
     active = sum(fr.get("active", {}).values()) if fr else 0
-    opening = report.get("opening")  # the seam of the deployment-amount figures: shown as reported
-    numbers = {
-        k: v for k, v in (opening or {}).items() if isinstance(v, (int, float)) and k != "version"
-    }
-    more = ", opening " + ", ".join(f"{k} {_num(v)}" for k, v in numbers.items()) if numbers else ""
     said = "" if status == "ok" else f"{status}, "
-    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active{more}"
+    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active"
 
 
-def _num(v) -> str:
-    return f"{v:.3g}" if isinstance(v, float) else str(v)
+def _opening_lines(report: dict) -> list[str]:
+    """How much the design opens (:meth:`Opening.line`) and, below 10 %, the warning."""
+    from ..pattern.opening import Opening
+
+    if not isinstance(report.get("opening"), dict):
+        return []
+    o = Opening.from_dict(report["opening"])
+    warn = o.warning()
+    if warn is None:
+        return [o.line()]
+    floored = report["opening"].get("min_opening")
+    return [o.line(), warn + ("" if floored else "; make --min-opening F sets a floor on it")]
+
+
+def _ask(result: MakeResult, plan: _Plan):
+    """How a refusal's options name this run's files, so each is a line that runs as it is: the
+    pattern ``make`` wrote and its step folder (relative names when nothing is written)."""
+    from .advice import Ask
+
+    where = result.output
+    file = f"{plan.stem}.json" if where is None else str(where / f"{plan.stem}.json")
+    folder = plan.process if where is None else str(where / plan.process)
+    return Ask(file=file, output=folder, given=plan.material or plan.printer)
 
 
 def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
@@ -278,7 +321,7 @@ def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     options = CutOptions(
         material=material, hinge=hinge, stem=plan.stem, pattern_file=f"{plan.stem}.json"
     )
-    cut = cut_files(result.pattern, options)
+    cut = cut_files(result.pattern, options, ask=_ask(result, plan))
     for w in cut.result.warnings:
         say(f"warning: {w}")
     man = cut.result.manifest
@@ -303,6 +346,7 @@ def _print(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         stem=plan.stem,
         source=f"{plan.stem}.json",
         notify=say,
+        ask=_ask(result, plan),
     )
     return True, 0, out.describe(), {f"print/{k}": v for k, v in out.files.items()}, []
 

@@ -66,6 +66,7 @@ class MakeResult:
     steps: list[Step] = field(default_factory=list)
     files: dict[str, bytes | str] = field(default_factory=dict)
     alternatives: list[Any] = field(default_factory=list)  # a refusal's options, each with .command
+    refused: bool = False  # the failed step was a fabricability refusal (advice.Refused)
     figures: dict[str, Any] = field(default_factory=dict)  # design figures: Hausdorff, opening
 
     @property
@@ -103,6 +104,12 @@ class MakeResult:
             "steps": [s.to_dict() for s in self.steps],
         }
 
+    def option_lines(self) -> list[str]:
+        """A refusal's checked options as ``cut`` and ``print`` print them on stdout (none otherwise)."""
+        from .advice import option_lines
+
+        return option_lines(self.alternatives) if self.refused else []
+
     def manifest_text(self) -> str:
         return json.dumps(self.to_dict(), indent=2, sort_keys=True) + "\n"
 
@@ -128,6 +135,13 @@ class MakeResult:
         failed = self.failed
         if failed is None:
             out.append("next: " + self._next(where))
+        elif (
+            failed is not self.steps[-1]
+        ):  # a step that lets the run go on (deploy): it still failed
+            out.append(
+                f"make: {failed.name} failed (exit {failed.exit_code}): {failed.figures}; "
+                f"{where}/report.html documents the design; the run fails"
+            )
         else:
             done = [s.name for s in self.steps if s.ok]
             out.append(

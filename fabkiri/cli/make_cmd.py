@@ -25,11 +25,14 @@ def cmd_make(args: argparse.Namespace) -> int:
         style=args.style,
         tiles=parse_tiles(args.tiles) if args.tiles else None,
         shape_tol=args.shape_tol,
+        min_opening=args.min_opening,
         output=args.output,
         progress=lambda text: print(text, file=sys.stderr),
     )
     for line in result.summary():
         print(line, file=sys.stderr)
+    for line in result.option_lines():  # as cut and print give them: one runnable line each
+        print(line)
     return result.exit_code
 
 
@@ -69,6 +72,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=conf.DEFAULT_SHAPE_TOL,
         metavar="TOL",
         help="largest Hausdorff distance to the target, as for design (default 2%%)",
+    )
+    p.add_argument(
+        "--min-opening",
+        type=float,
+        metavar="F",
+        help="a floor on the deployed hole fraction (0 < F < 1), as for design: a design that opens "
+        "at least this much",
     )
     p.add_argument(
         "-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)"
