@@ -121,8 +121,7 @@ def print_pattern(
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
     printer = printer_for(options.printer or design_intent(pattern, "printer"), style, options)
     made_from = fingerprint(pattern)  # before scaling: the manifest names the input pattern
-    # a tube: its flat sheet (every tile once, the seam copy column dropped) and its seam note
-    pattern, seam_files, seam_entry = tube_cut_inputs(pattern, state, "print")
+    pattern, seam_files, seam_entry = tube_cut_inputs(pattern, state, "print")  # a tube: flat sheet
     base = pattern  # at scale 1: the refusal advice scales it itself
     pattern, scale = _refusal_advice(
         lambda: _scaled(base, style, printer, options), base, options, ask
@@ -151,11 +150,8 @@ def print_pattern(
         )
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
-    tiles = (
-        None
-        if print_style(realised.job.style).tiles is None
-        else mesh.check_printed_tiles(realised)
-    )
+    has_tiles = print_style(realised.job.style).tiles is not None
+    tiles = mesh.check_printed_tiles(realised) if has_tiles else None
     problems = list(report.problems)
     if tiles is not None and not tiles.ok:
         problems.append(
@@ -166,13 +162,7 @@ def print_pattern(
     if problems:
         raise CheckFailed("; ".join(problems) + "; nothing written")
     files = _files(pattern, realised, report, tiles, verifier, options, stem, source)
-    stamped = PrintManifest.from_json(files["manifest.json"])
-    stamped.pattern_fingerprint = made_from
-    if seam_entry:  # the pairs of corners to join across the seam, as `cut` lists them
-        stamped.extra["seam"] = seam_entry
-        stamped.files = sorted(set(stamped.files) | set(seam_files))
-        files.update(seam_files)
-    files["manifest.json"] = stamped.to_json()
+    _stamp(files, made_from, seam_entry, seam_files)
     return PrintOutcome(
         files=files,
         realised=realised,
@@ -183,6 +173,18 @@ def print_pattern(
         verifier=verifier,
         messages=messages,
     )
+
+
+def _stamp(files: dict, made_from: dict, seam_entry, seam_files: dict) -> None:
+    """Put the input pattern's fingerprint and, for a tube, its seam (the pairs of corners to join
+    across it, as `cut` lists them) into the print's manifest."""
+    stamped = PrintManifest.from_json(files["manifest.json"])
+    stamped.pattern_fingerprint = made_from
+    if seam_entry:
+        stamped.extra["seam"] = seam_entry
+        stamped.files = sorted(set(stamped.files) | set(seam_files))
+        files.update(seam_files)
+    files["manifest.json"] = stamped.to_json()
 
 
 def _refusal_advice(step: Callable[[], Any], pattern: Pattern, o: PrintOptions, ask: Ask | None):
