@@ -410,11 +410,22 @@ def solve_reduced(
     # the closed states' contact rows only where a result has tiles of a closed state overlapping: on every
     # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.07 % -> 3.55 %)
     touching = judge.with_contact(ClosedContact(fam, st))
-    gap = min(float(g.min(initial=np.inf)) for g in touching.contact_values(p).values())
-    if gap < 0.0:
-        log(f"closed-state tiles overlap (a corner {-gap:.2e} deep): again with the contact rows")
-        p, X, mode = _search(touching, p, "contact_", *search)
-    return X, mode, iters
+
+    def rank(p, X, mode) -> tuple:
+        """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit."""
+        ev = touching.evaluate(p)
+        gap = min(float(g.min(initial=np.inf)) for g in touching.contact_values(p).values())
+        return (judge.ineq_violation(judge.state(p)) > 0, gap < 0.0, float(ev.r @ ev.r)), X, mode
+
+    best = rank(p, X, mode)
+    # from the overlapping result first, then (if that ends violating an inequality) from the start, where the
+    # rows bar the overlap on every step; the original result stays if neither is better (the CLI reports it)
+    for tag, start, where in (("contact_", p, "that result"), ("contact_start_", p0, "the start")):
+        if not best[0][1]:
+            break
+        log(f"closed-state tiles overlap: again with the contact rows, from {where}")
+        best = min(best, rank(*_search(touching, start, tag, *search)), key=lambda b: b[0])
+    return best[1], best[2], iters
 
 
 def _search(
