@@ -237,9 +237,8 @@ def _solver_request(
         request.rigid
         and request.solver != "full"
         and request.holes == "rhombus"
-        and not request.symmetry
         and not contracted
-    )  # the rigid family's figures
+    )  # the rigid family's figures (a symmetric design solves over half its seeds: no dearer)
     limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
     return request, req, target, contracted
 

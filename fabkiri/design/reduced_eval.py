@@ -32,7 +32,8 @@ class _Evaluation:
         values: dict | None = None,
     ):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
-        self._r, self._blocks = r, None
+        self._r = r
+        self._blocks: tuple | None = None
         self._J: np.ndarray | None = None
         self._reg: tuple[Any, Any, Any] | None = (
             None  # the regulariser's (residual, normal matrix, gradient)
