@@ -234,10 +234,7 @@ def _solver_request(
         )
     req.validate()
     family = via_rigid_applies(req) or (
-        request.rigid
-        and request.solver != "full"
-        and request.holes == "rhombus"
-        and not contracted
+        request.rigid and request.solver != "full" and request.holes == "rhombus" and not contracted
     )  # the rigid family's figures (a symmetric design solves over half its seeds: no dearer)
     limits.check_tiles(rows, cols, "design rigid" if family else "design full", request.i_know)
     return request, req, target, contracted
