@@ -153,7 +153,7 @@ class _Merit:
         return {
             **{f.name: f.residual(X) for f in self.ineqs},
             **{f.name: f.residual(c) for f in self.grid_ineqs},
-            **({} if self.contact is None else self.contact.values((c, w))),
+            **(self.contact.values((c, w)) if self.contact and self.contact.barrier else {}),
         }
 
     def ineq_violation(self, Xc, values: dict | None = None) -> float:
@@ -251,7 +251,7 @@ class _Merit:
         flat = np.flatnonzero(v < 0)
         if len(flat):
             rs.append(s * v[flat])
-        if self.contact is not None:
+        if self.contact is not None and self.contact.barrier:
             gmin = min(
                 [gmin]
                 + [float(g.min(initial=np.inf)) for g in self.contact.values((c, w)).values()]
@@ -408,8 +408,11 @@ def solve_reduced(
     search = (iters, fit_tol, mean_edge, log, max_iter, miss_tol)
     p, X, mode = _search(judge, p0, "", *search)
     # the closed states' contact rows only where a result has tiles of a closed state overlapping: on every
-    # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.07 % -> 3.55 %)
+    # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.61 % -> 3.55 %)
     touching = judge.with_contact(ClosedContact(fam, st))
+    # from an overlapping point they are a penalty only: as a barrier, the step limit (on the largest violation
+    # of any row) let the tiles' convexity rows go as far negative as the overlap was deep (64x64 heart)
+    pushing = judge.with_contact(ClosedContact(fam, st, barrier=False))
 
     def rank(p, X, mode) -> tuple:
         """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit."""
@@ -420,11 +423,14 @@ def solve_reduced(
     best = rank(p, X, mode)
     # from the overlapping result first, then (if that ends violating an inequality) from the start, where the
     # rows bar the overlap on every step; the original result stays if neither is better (the CLI reports it)
-    for tag, start, where in (("contact_", p, "that result"), ("contact_start_", p0, "the start")):
+    for tag, merit, start, where in (
+        ("contact_", pushing, p, "that result (a penalty)"),
+        ("contact_start_", touching, p0, "the start (a barrier)"),
+    ):
         if not best[0][1]:
             break
         log(f"closed-state tiles overlap: again with the contact rows, from {where}")
-        best = min(best, rank(*_search(touching, start, tag, *search)), key=lambda b: b[0])
+        best = min(best, rank(*_search(merit, start, tag, *search)), key=lambda b: b[0])
     return best[1], best[2], iters
 
 

@@ -32,7 +32,9 @@ NAMES = ("closed_contact_1", "closed_contact_2")
 class ClosedContact:
     """The closed-state contact rows of one lattice's rigid family (module docstring)."""
 
-    def __init__(self, fam: RigidFamily, st: Stencils):
+    def __init__(self, fam: RigidFamily, st: Stencils, barrier: bool = True):
+        # barrier: the rows count as inequalities (no step may deepen a violation); else a penalty only
+        self.barrier = barrier
         M, N = st.rows, st.cols
         r, c = np.divmod(np.arange(M * N), N)
         self.ring = np.flatnonzero((r == 0) | (r == M - 1) | (c == 0) | (c == N - 1))
