@@ -161,8 +161,10 @@ def table(args, out: Path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--sizes", default="16,32")
-    ap.add_argument("--targets", default=",".join(TARGETS))
+    ap.add_argument(
+        "--sizes", default=None, help="comma-separated (16,32; --table: 16,32,48,64,96)"
+    )
+    ap.add_argument("--targets", default=None, help="comma-separated names (all; --table: its six)")
     ap.add_argument(
         "--fit", default="outline", help="comma-separated fits to run: outline (default), tips"
     )
@@ -180,11 +182,11 @@ def main() -> None:
     import os
 
     if args.table:
-        if args.targets == ",".join(TARGETS):
-            args.targets = ",".join(TABLE_TARGETS)
-        if args.sizes == "16,32":
-            args.sizes = TABLE_SIZES
+        args.targets = args.targets or ",".join(TABLE_TARGETS)
+        args.sizes = args.sizes or TABLE_SIZES
         return table(args, out)
+    args.targets = args.targets or ",".join(TARGETS)
+    args.sizes = args.sizes or "16,32"
 
     print(f"load average {os.getloadavg()[0]:.2f}", flush=True)
     for n in [int(s) for s in args.sizes.split(",")]:
