@@ -7,7 +7,7 @@ cusp), and the design failed the CLI's overlap check. In the rigid family both c
 in the seeds, with no ψ: state 1 is the grid ``c = Z S``, state 2 is ``J (Y S)`` (``rigid.py``; a quarter
 turn, which keeps every distance and orientation), so the rows are evaluated on ``Z S`` and ``Y S``.
 
-Rows: for every pair of tiles of the lattice's outer ring that are not lattice neighbours (Chebyshev
+Rows: for every pair of tiles of the lattice's outer ``RING`` rows and columns that are not lattice neighbours (Chebyshev
 distance ≥ 2) and whose centres lie within ``REACH`` mean edges in that state, each corner of one tile
 against the other (counter-clockwise, convex): ``g = max_e`` of the corner's outward distance from edge
 ``e``, ``g ≥ CONTACT_MARGIN`` (tile units). The pairs are found again at every evaluation (a KD-tree over
@@ -26,6 +26,9 @@ from .stencils import Stencils
 
 CONTACT_MARGIN = 0.01  # outward distance of a corner from a non-neighbouring tile, tile units
 REACH = 3.0  # tile pairs whose centres are closer than this many mean edges are checked
+# the rows and columns along the lattice's edge that are checked: the symmetric 64x64 heart's state-1 notch
+# overlapped between the top row and the one below it (91 pairs, first tiles (62, 19) and (63, 41))
+RING = 2
 NAMES = ("closed_contact_1", "closed_contact_2")
 
 
@@ -37,7 +40,8 @@ class ClosedContact:
         self.barrier = barrier
         M, N = st.rows, st.cols
         r, c = np.divmod(np.arange(M * N), N)
-        self.ring = np.flatnonzero((r == 0) | (r == M - 1) | (c == 0) | (c == N - 1))
+        d = RING
+        self.ring = np.flatnonzero((r < d) | (r >= M - d) | (c < d) | (c >= N - d))
         self.r, self.c = r[self.ring], c[self.ring]
         # (basis, tile corners as rows of the basis) per closed state
         self.blocks = ((fam.Z, fam.node_vertex[st.tiles]), (fam.Y, st.tiles))
