@@ -1,6 +1,8 @@
 """Shape conformance of `fabkiri design` across targets, lattice sizes and --rigid, in one run.
 
     PYTHONPATH=. python3 bench/shapes.py [--sizes 16,32] [--quick] [--fit outline,tips] [--targets a,b]
+    PYTHONPATH=. python3 bench/shapes.py --table [--sizes 16,32,48,64,96] [--targets heart,star]
+                                         [--modes rigid,free,sym] [--timeout 900]
 
 Every design runs through the CLI (`design ... --json --no-preview`, default initial-guess order, retries
 included), so the figures are what a user gets. Per line: Hausdorff distance of the boundary-tip polygon to
@@ -9,6 +11,13 @@ the target (% of the target size, the larger side of its bounding box), 1 - IoU,
 and whether it is met, time of all attempts. `--fit tips` runs the previous fit (boundary tips on their
 arcs only) in the same run for comparison. `--quick` skips non-rigid designs above 16x16 tiles (about a
 minute and a half each on this box).
+
+`--table` prints issue #37's table instead: heart, star, ellipse and three outlines of this bench
+(`bench/data/peanut.csv`: two lobes and a waist; `drop.csv`: a point with concave flanks; `bean.csv`: a dent,
+no mirror symmetry) × sizes × {rigid, non-rigid, symmetric (non-rigid, `--symmetry`) where the outline is}:
+per cell the exit code, the Hausdorff distance (% of the size) and the wall time, with the CPU time of the
+design process and the load average before and after each row (the box is shared). Each design runs in its
+own process under `nice` and `--timeout` seconds; `--targets`, `--sizes` and `--modes` pick a subset.
 """
 
 from __future__ import annotations
@@ -33,7 +42,23 @@ TARGETS = {
     "star": ["star"],
     "blob-csv": [str(ROOT / "templates" / "targets" / "blob-points.csv"), "--size", "100"],
     "leaf-svg": [str(ROOT / "bench" / "data" / "leaf.svg"), "--size", "100"],
+    **{
+        n: [str(ROOT / "bench" / "data" / f"{n}.csv"), "--size", "100"]
+        for n in ("peanut", "drop", "bean")
+    },
 }
+# --table: issue #37's targets, sizes and modes; the mirror each target has (the bean has none)
+TABLE_TARGETS = ("heart", "star", "ellipse-2:1", "peanut", "drop", "bean")
+TABLE_SIZES = "16,32,48,64,96"
+SYMMETRY = {
+    "heart": "y",
+    "star": "y",
+    "ellipse-2:1": "x",
+    "peanut": "x",
+    "drop": "y",
+    "circle": "x",
+}
+MODES = {"rigid": ["--rigid"], "free": [], "sym": None}
 CONVEX = {"circle", "ellipse-2:1", "superellipse", "hexagon"}
 
 
@@ -75,20 +100,93 @@ def line(label: str, code: int, r: dict, wall: float, g: float | None) -> str:
     )
 
 
+def run_process(argv: list[str], timeout: float) -> tuple[str, float, float, float | None]:
+    """One design in its own process under ``nice``: ``(exit code or "timeout", Hausdorff share or nan, wall s,
+    CPU s)``."""
+    import math
+    import resource
+    import subprocess
+    import sys
+
+    stub = "import sys; from fabkiri.cli.main import main; sys.exit(main(sys.argv[1:]))"
+    cmd = ["nice", sys.executable, "-c", stub, *argv, "--json", "--no-preview"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    try:
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return "timeout", math.nan, time.perf_counter() - t0, None
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    try:
+        h = json.loads(done.stdout)["conformance"]["deployed"]["hausdorff_rel"]
+    except (json.JSONDecodeError, KeyError, TypeError):
+        h = math.nan
+    return str(done.returncode), h, wall, cpu
+
+
+def table(args, out: Path) -> None:
+    """Issue #37's table (module docstring), one markdown row per target and size, printed as it goes."""
+    import os
+
+    modes = args.modes.split(",")
+    print("| target | tiles | " + " | ".join(modes) + " | load before/after |", flush=True)
+    print("|---|---|" + "---|" * len(modes) + "---|", flush=True)
+    for name in args.targets.split(","):
+        for n in [int(s) for s in args.sizes.split(",")]:
+            load0 = os.getloadavg()[0]
+            cells = []
+            for mode in modes:
+                extra = MODES[mode]
+                if extra is None:
+                    if name not in SYMMETRY:
+                        cells.append("(no mirror)")
+                        continue
+                    extra = ["--symmetry", SYMMETRY[name]]
+                label = f"{name}-{n}x{n}-{mode}"
+                argv = ["design", "--tiles", f"{n}x{n}", "--target", *TARGETS[name], *extra]
+                code, h, wall, cpu = run_process(
+                    argv + ["-o", str(out / f"{label}.json")], args.timeout
+                )
+                cpu_s = "" if cpu is None else f", {cpu:.0f} s CPU"
+                cells.append(f"exit {code}, {100 * h:.2f} %, {wall:.0f} s{cpu_s}")
+            print(
+                f"| {name} | {n}×{n} | "
+                + " | ".join(cells)
+                + f" | {load0:.1f} / {os.getloadavg()[0]:.1f} |",
+                flush=True,
+            )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--sizes", default="16,32")
-    ap.add_argument("--targets", default=",".join(TARGETS))
+    ap.add_argument(
+        "--sizes", default=None, help="comma-separated (16,32; --table: 16,32,48,64,96)"
+    )
+    ap.add_argument("--targets", default=None, help="comma-separated names (all; --table: its six)")
     ap.add_argument(
         "--fit", default="outline", help="comma-separated fits to run: outline (default), tips"
     )
     ap.add_argument("--rigid", default="1,0", help="1: --rigid, 0: not (comma-separated)")
     ap.add_argument("--quick", action="store_true", help="skip non-rigid designs above 16x16 tiles")
     ap.add_argument("--out", default=None, help="keep the pattern files here")
+    ap.add_argument("--table", action="store_true", help="issue #37's table (module docstring)")
+    ap.add_argument(
+        "--modes", default=",".join(MODES), help="--table: rigid, free, sym (comma-separated)"
+    )
+    ap.add_argument("--timeout", type=float, default=900.0, help="--table: seconds per design")
     args = ap.parse_args()
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="fabkiri-shapes-"))
     out.mkdir(parents=True, exist_ok=True)
     import os
+
+    if args.table:
+        args.targets = args.targets or ",".join(TABLE_TARGETS)
+        args.sizes = args.sizes or TABLE_SIZES
+        return table(args, out)
+    args.targets = args.targets or ",".join(TARGETS)
+    args.sizes = args.sizes or "16,32"
 
     print(f"load average {os.getloadavg()[0]:.2f}", flush=True)
     for n in [int(s) for s in args.sizes.split(",")]:

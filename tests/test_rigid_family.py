@@ -137,7 +137,8 @@ def test_auto_uses_full_solver_outside_the_family():
     "kw,msg",
     [
         ({"rigid": False}, "--rigid"),
-        ({"rigid": True, "symmetry": "x"}, "--symmetry"),
+        # (--symmetry is covered now: the mirrored seeds, design/reduced_mirror.py)
+        ({"rigid": True, "contracted": {1: ("rect", None)}}, "--contracted-target"),
         ({"rigid": True, "holes": "parallelogram"}, "rhombus"),
         ({"rigid": True, "solver": "magic"}, "--solver must be"),
     ],
@@ -171,8 +172,8 @@ def test_cli_solver_flag(tmp_path, run_cli):
         "6x6",
         "--target",
         "circle",
-        "--symmetry",
-        "x",
+        "--contracted-target",
+        "1:rect",
         "--rigid",
         "--solver",
         "reduced",
@@ -181,6 +182,24 @@ def test_cli_solver_flag(tmp_path, run_cli):
     )
     assert code == 2 and "--solver reduced needs" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "s.json").exists()
+    # a symmetric rigid design is a member over half the seeds (design/reduced_mirror.py)
+    code, stdout, err = run_cli(
+        "design",
+        "--tiles",
+        "6x6",
+        "--target",
+        "circle",
+        "--symmetry",
+        "x",
+        "--rigid",
+        "--solver",
+        "reduced",
+        "--json",
+        "-o",
+        tmp_path / "s.json",
+    )
+    assert code == 0, err
+    assert '"solver": "closed-form rigid family' in stdout
 
 
 def test_cli_keeps_the_closest_valid_fit():

@@ -275,12 +275,8 @@ def _solver_request(
 def _check_size(request: PatternRequest, req: DesignRequest, contracted: dict) -> None:
     """The tile count within what the solver that will run was measured at (:mod:`fabkiri.limits`)."""
     family = via_rigid_applies(req) or (
-        request.rigid
-        and request.solver != "full"
-        and request.holes == "rhombus"
-        and not request.symmetry
-        and not contracted
-    )  # the rigid family's figures
+        request.rigid and request.solver != "full" and request.holes == "rhombus" and not contracted
+    )  # the rigid family's figures (a symmetric design solves over half its seeds: no dearer)
     limits.check_tiles(
         req.rows, req.cols, "design rigid" if family else "design full", request.i_know
     )

@@ -24,6 +24,7 @@ from .initial import coarse_tile_map, initial_guess
 from .normal import _Normal, nested_dissection
 from .objective import energy, regularizer, weighted
 from .opening_rows import opening_families
+from .reduced_mirror import centred
 from .request import DesignRequest, reduced_applies
 from .rigid import RigidFamily, resample_grid
 from .targets import Target
@@ -173,6 +174,9 @@ class _Problem:
         """Coarse-to-fine start: solve at half resolution, map the result onto the standard pattern."""
         req = self.req
         rc, cc = req.rows // 2, req.cols // 2
+        # a mirror keeps the fold states only on an even count across its axis (``constraints.symmetry``)
+        rc += int(req.symmetry == "x" and rc % 2 == 1)
+        cc += int(req.symmetry == "y" and cc % 2 == 1)
         if req.target is None or min(rc, cc) < 4:
             return initial_guess(base, st, req.target, "rescaled")
         sub = DesignRequest(
@@ -261,6 +265,8 @@ class _Problem:
         """The closed-form rigid family of this lattice (``rigid.py``), built on first use."""
         if self._rigid is None:
             self._rigid = RigidFamily.build(self.st, self.std.topology.spanning_tree(0))
+            if self.req.symmetry:  # a translation gauge the mirror keeps (``reduced_mirror.py``)
+                self._rigid = centred(self._rigid)
         return self._rigid
 
     def _ordering(self) -> np.ndarray | None:

@@ -29,6 +29,9 @@ from scipy import sparse
 
 from .constraints import convexity
 from .objective import regularizer, tile_corners
+from .reduced_contact import ClosedContact
+from .reduced_eval import _Evaluation
+from .reduced_mirror import MirroredMerit, symmetric_member
 from .reduced_steps import hard_fit, levenberg_marquardt
 from .reduced_tiles import TileShapeRows
 from .rigid import RigidFamily
@@ -63,7 +66,8 @@ class _Merit:
     Rows come in two blocks: on the deployed nodes ``x(p)`` (fit, non-overlap; Jacobian ∂x/∂p = ``D``)
     and on the closed-state-1 grid ``c = Z S`` (the ``TILE_SHAPE`` families; ∂c/∂p = ``C``, constant).
     The grid block is the large one (the regulariser); its normal matrix, by coordinate blocks of ``Z``,
-    costs about a third of ``Dᵀ JᵀJ D`` on the nodes (G ≈ V/2 grid vertices, no ψ column).
+    costs about a third of ``Dᵀ JᵀJ D`` on the nodes (G ≈ V/2 grid vertices, no ψ column). With ``contact``
+    the closed states' contact rows follow (``reduced_contact.py``, on ``Z S`` and ``Y S``; dense, few active).
     """
 
     def __init__(
@@ -75,8 +79,10 @@ class _Merit:
         rho: float = STAGES[0][0],
         scaling: str = "marquardt",
         grid_families: Sequence[Family] = (),
+        contact: ClosedContact | None = None,
     ):
         self.fam = fam
+        self.contact = contact
         self.nf = fam.n_seeds
         on_grid = {f.name for f in grid_families}
         self.fits = [f for f in families if f.kind == "fit"]
@@ -111,21 +117,43 @@ class _Merit:
         new.sq, new.scaling = float(np.sqrt(rho)), scaling
         return new
 
+    def with_contact(self, contact: ClosedContact) -> _Merit:
+        """The same rows and the closed states' contact rows."""
+        new = copy.copy(self)
+        new.contact = contact
+        return new
+
+    def contact_values(self, p: np.ndarray) -> dict:
+        """The contact rows' values at member ``p`` (``with_contact`` merits only)."""
+        assert self.contact is not None, "contact_values needs the contact rows"
+        return self.contact.values(self.state(p)[1:])
+
     def unpack(self, p: np.ndarray) -> tuple[np.ndarray, float]:
         nf = self.nf
         return np.stack([p[:nf], p[nf : 2 * nf]], -1), float(p[-1])
 
     def state(self, p: np.ndarray):
-        """``(X, c)``: deployed nodes and closed-state-1 grid of member ``p``."""
+        """``(X, c, w)``: deployed nodes, closed-state-1 grid and (with contact rows) closed state 2 turned
+        back a quarter, ``Y S``, of member ``p``."""
         S, psi = self.unpack(p)
-        return self.fam.nodes(S, psi), self.fam.grid(S)
+        return self.fam.nodes(S, psi), self.fam.grid(S), self._state_2(S)
+
+    def _state_2(self, S: np.ndarray) -> np.ndarray | None:
+        return None if self.contact is None else self.fam.Y @ S
+
+    def contact_rows(self, Xc, hard: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The active contact rows and their dense ``∂r/∂p`` (none without contact rows)."""
+        if self.contact is None:
+            return np.zeros(0), np.zeros((0, 2 * self.nf + 1))
+        return self.contact.active(Xc[1:], 0.5 if hard else 1.0, 1.0 if hard else self.sq)
 
     def ineq_values(self, Xc) -> dict:
         """Every inequality family's values ``g``, node families on ``X``, grid families on ``c``."""
-        X, c = Xc
+        X, c, w = Xc
         return {
             **{f.name: f.residual(X) for f in self.ineqs},
             **{f.name: f.residual(c) for f in self.grid_ineqs},
+            **(self.contact.values((c, w)) if self.contact and self.contact.barrier else {}),
         }
 
     def ineq_violation(self, Xc, values: dict | None = None) -> float:
@@ -136,9 +164,10 @@ class _Merit:
         """Residuals and Jacobians of the merit (or of the hard-fit rows): ``(r, Jx, Jc)``.
 
         ``r`` stacks the node rows (``Jx``, CSR over the nodes) and then the grid rows (``Jc``, over the grid).
+        The contact rows are ``contact_rows``' (``_Evaluation`` appends them).
         ``values``: the inequality values of ``Xc`` when already known (``ineq_values``).
         """
-        X, c = Xc
+        X, c, _ = Xc
         values = self.ineq_values(Xc) if values is None else values
         blocks = []
         for arr, fits, regs, ineqs in (
@@ -188,7 +217,7 @@ class _Merit:
         they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
         asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
         S, psi = self.unpack(p)
-        X, c = self.fam.nodes(S, psi), self.fam.grid(S)
+        X, c, w = self.fam.nodes(S, psi), self.fam.grid(S), self._state_2(S)
         t = self._tiles
         assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
         tc = tile_corners(c, t.quads)
@@ -222,6 +251,13 @@ class _Merit:
         flat = np.flatnonzero(v < 0)
         if len(flat):
             rs.append(s * v[flat])
+        if self.contact is not None and self.contact.barrier:
+            gmin = min(
+                [gmin]
+                + [float(g.min(initial=np.inf)) for g in self.contact.values((c, w)).values()]
+            )
+        rk, Jk = self.contact_rows((X, c, w), hard)
+        rs.append(rk)
         r = np.concatenate(rs) if rs else np.zeros(0)
         rr = None
         if (
@@ -235,6 +271,7 @@ class _Merit:
             Js = [sc * self._node_jacobian(stencil(), S, psi, rows) for sc, stencil, rows in pend]
             if len(flat):
                 Js.append(s * t.convexity_jacobian(tc, flat))
+            Js.append(Jk)
             J = np.zeros((sum(len(b) for b in Js), len(p)))
             o = 0
             for Jb in Js:
@@ -242,7 +279,7 @@ class _Merit:
                 o += len(Jb)
             return J, None if rr is None else (tc, *t.regularizer_normal(tc, rr, self.w))
 
-        return _Evaluation(self, p, (X, c), max(0.0, -gmin), hard, r, dense=dense)
+        return _Evaluation(self, p, (X, c, w), max(0.0, -gmin), hard, r, dense=dense)
 
     def _node_jacobian(
         self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None
@@ -303,89 +340,6 @@ class _Merit:
         return H, np.concatenate([Z.T @ (Ja.T @ rc), Z.T @ (Jb.T @ rc), [0.0]])
 
 
-class _Evaluation:
-    """The merit (or hard-fit) rows of one member ``p`` and, on demand, its normal matrix or Jacobian.
-
-    The dense path hands over all rows ``r`` and, formed on the first ask, the dense Jacobian ``J`` of the
-    first ``len(J)`` of them and, for the regulariser rows after those, ``reg = (tile corners, JᵀJ, Jᵀr)``;
-    the block path computes its sparse rows only when asked (a step refused for a new inequality violation
-    needs none).
-    """
-
-    def __init__(
-        self,
-        merit: _Merit,
-        p: np.ndarray,
-        Xc,
-        gviol: float,
-        hard: bool,
-        r=None,
-        dense=None,
-        values: dict | None = None,
-    ):
-        self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
-        self._r, self._blocks = r, None
-        self._J: np.ndarray | None = None
-        self._reg: tuple[Any, Any, Any] | None = (
-            None  # the regulariser's (residual, normal matrix, gradient)
-        )
-        self._dense = (
-            dense  # dense path: () -> (J, reg), called once, when a Jacobian is first asked for
-        )
-        self._values = (
-            values  # block path: the inequality values gviol came from, reused by the rows
-        )
-
-    @property
-    def X(self) -> np.ndarray:
-        return self.Xc[0]
-
-    def _rows(self):
-        if self._blocks is None:
-            self._blocks = self.merit.rows(self.Xc, self.hard, self._values)
-        return self._blocks
-
-    @property
-    def r(self) -> np.ndarray:
-        if self._r is None:
-            self._r = self._rows()[0]
-        return self._r
-
-    def _form(self) -> None:
-        if self._dense is not None:
-            (self._J, self._reg), self._dense = self._dense(), None
-
-    def normal(self):
-        """Reduced Gauss-Newton matrix ``JᵀJ`` and gradient ``Jᵀr``."""
-        self._form()
-        if self._J is None:
-            r, Jx, Jc = self._rows()
-            return self.merit.normal(r, Jx, Jc, self.p)
-        J = self._J
-        H, g = J.T @ J, J.T @ self._r[: len(J)]
-        if self._reg is not None:
-            _, Hr, gr = self._reg
-            k = len(gr)
-            H[:k, :k] += Hr
-            g[:k] += gr
-        return H, g
-
-    def jacobian(self) -> np.ndarray:
-        """Dense ``∂r/∂p``."""
-        self._form()
-        if self._J is None:
-            r, Jx, Jc = self._rows()
-            self._J = self.merit.reduced_jacobian(Jx, Jc, self.p)
-        if self._reg is None:
-            return self._J
-        t = self.merit._tiles
-        assert t is not None, "a regulariser comes only with the tile-shape rows"
-        Jr = self.merit.w * t.regularizer_jacobian(self._reg[0])
-        return np.vstack(
-            [self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])]
-        )
-
-
 def fit_miss(fits: list[Family], X: np.ndarray) -> float:
     """Largest |fit row| relative to its target's size (both in normalised units)."""
     return max(
@@ -431,6 +385,7 @@ def solve_reduced(
     max_iter: int = 200,
     miss_tol: float = 0.0,
     S0: np.ndarray | None = None,
+    mirror: sparse.csr_matrix | None = None,
 ):
     """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
     start is already a member).
@@ -438,14 +393,52 @@ def solve_reduced(
     ``mean_edge(X)`` gives the length unit of the 1 % "nearly exact" threshold.
     Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
     driven to ``fit_tol`` (absolute, normalised units), else "least-squares".
+    ``mirror``: the symmetric members' map ``p = P q`` (``reduced_mirror.py``); the solve is then over ``q``.
     """
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes: 0.25 s at 64x64)
         S0, _ = fam.fit(X0, psi0)
     p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
+    if mirror is not None:
+        p0 = symmetric_member(mirror, p0)
     iters: dict = {}
-    best = None
     on_grid = grid_families(fam, st, families)
-    judge = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
+    judge: Any = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
+    if mirror is not None:
+        judge = MirroredMerit(judge, mirror)
+    search = (iters, fit_tol, mean_edge, log, max_iter, miss_tol)
+    p, X, mode = _search(judge, p0, "", *search)
+    # the closed states' contact rows only where a result has tiles of a closed state overlapping: on every
+    # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.61 % -> 3.55 %)
+    touching = judge.with_contact(ClosedContact(fam, st))
+    # from an overlapping point they are a penalty only: as a barrier, the step limit (on the largest violation
+    # of any row) let the tiles' convexity rows go as far negative as the overlap was deep (64x64 heart)
+    pushing = judge.with_contact(ClosedContact(fam, st, barrier=False))
+
+    def rank(p, X, mode) -> tuple:
+        """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit."""
+        ev = touching.evaluate(p)
+        gap = min(float(g.min(initial=np.inf)) for g in touching.contact_values(p).values())
+        return (judge.ineq_violation(judge.state(p)) > 0, gap < 0.0, float(ev.r @ ev.r)), X, mode
+
+    best = rank(p, X, mode)
+    # from the overlapping result first, then (if that ends violating an inequality) from the start, where the
+    # rows bar the overlap on every step; the original result stays if neither is better (the CLI reports it)
+    for tag, merit, start, where in (
+        ("contact_", pushing, p, "that result (a penalty)"),
+        ("contact_start_", touching, p0, "the start (a barrier)"),
+    ):
+        if not best[0][1]:
+            break
+        log(f"closed-state tiles overlap: again with the contact rows, from {where}")
+        best = min(best, rank(*_search(merit, start, tag, *search)), key=lambda b: b[0])
+    return best[1], best[2], iters
+
+
+def _search(
+    judge, p0, tag: str, iters: dict, fit_tol, mean_edge, log, max_iter: int, miss_tol: float
+):
+    """The stages from ``p0`` with each LM scaling in turn (``SCALINGS``): ``(p, X, mode)`` of the best."""
+    best = None
     for scaling in SCALINGS:
         p = p0
         for n, (rho, stall_tol, cap) in enumerate(STAGES):
@@ -453,16 +446,16 @@ def solve_reduced(
             if n and judge.ineq_violation(judge.state(p)) == 0.0:
                 cap = min(cap, POLISH_STEPS)
             p, X, k = levenberg_marquardt(merit, p, min(cap, max_iter), stall_tol, log)
-            iters[f"reduced_{scaling}_rho_{rho:g}"] = k
+            iters[f"reduced_{tag}{scaling}_rho_{rho:g}"] = k
             fit_max = max(
                 (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
                 default=0.0,
             )
             if merit.fits and fit_max < 1e-2 * mean_edge(X):
-                Xh, kh = hard_fit(merit, p, fit_tol)
-                iters[f"reduced_{scaling}_hard"] = kh
+                Xh, ph, kh = hard_fit(merit, p, fit_tol)
+                iters[f"reduced_{tag}{scaling}_hard"] = kh
                 if Xh is not None:  # an exact fit: nothing left to compare
-                    return Xh, "hard", iters
+                    return ph, Xh, "hard"
         ev = judge.evaluate(p)
         cost = float(ev.r @ ev.r)
         miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
@@ -475,8 +468,8 @@ def solve_reduced(
         # the fit holds against any penalty; rigid 32x32 ellipse) ranks below every feasible one, and the other
         # scaling is tried as well
         if best is None or (viol > 0, cost) < best[0]:
-            best = ((viol > 0, cost), X)
+            best = ((viol > 0, cost), p, X)
         if miss <= miss_tol and not viol > 0:
             break
     assert best is not None, "SCALINGS is not empty"
-    return best[1], "least-squares", iters
+    return best[1], best[2], "least-squares"

@@ -11,7 +11,8 @@ from .lm import Damping, Stopping
 from .lm import levenberg_marquardt as lm_core
 
 if TYPE_CHECKING:
-    from .reduced import _Evaluation, _Merit
+    from .reduced import _Merit
+    from .reduced_eval import _Evaluation
 
 MAX_STALL = 3  # a stage stops after this many accepted steps in a row that each gain less than its stall tolerance
 
@@ -99,13 +100,13 @@ def levenberg_marquardt(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: 
 
 
 def hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
-    """Damped Gauss-Newton on the fit rows (plus half-margin inequality rows): ``X, iterations``.
+    """Damped Gauss-Newton on the fit rows (plus half-margin inequality rows): ``X, p, iterations``.
 
     The fit rows are fewer than the unknowns, so with little damping a step is close to the
     minimum-norm one; the damping falls tenfold after every step that lowers the sum of squares
     (without a new inequality violation) and rises tenfold otherwise (the core's "tenfold" rule
     and "decrease" acceptance, with no stall test: the loop ends at ``fit_tol``).
-    ``X`` is None when the rows could not be brought under ``fit_tol``.
+    ``X`` is None when the rows could not be brought under ``fit_tol`` (``p``: the last member either way).
     """
     start = _HardMember(merit, p)
     scale = max(float((start.J * start.J).sum(0).mean()), 1e-300)
@@ -117,4 +118,4 @@ def hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
         Stopping(max_iter, max_stall=None, tol_inf=fit_tol),
         accept="decrease",
     )
-    return (pt.ev.X if np.abs(pt.r).max(initial=0.0) <= fit_tol else None), it
+    return (pt.ev.X if np.abs(pt.r).max(initial=0.0) <= fit_tol else None), pt.x, it

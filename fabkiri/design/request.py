@@ -18,7 +18,7 @@ from .fabrication import FabricationLimits
 from .targets import Target
 
 SOLVERS = ("auto", "reduced", "full")
-# from this many tiles a non-rigid rhombus design (no symmetry, no closed-state target) is solved as the rigid
+# from this many tiles a non-rigid rhombus design (no closed-state target) is solved as the rigid
 # one, coarse to fine: a rigid member satisfies every non-rigid equality, and there the full solver over all
 # nodes was slower and mostly worse (API, rescaled, 100 mm: 32x32 heart 90 s CPU, Hausdorff 7.1 % of the
 # target's diagonal; 32x32 ellipse 84 s CPU and unconverged, 11.8 %; rigid family: 9.5 s / 7.5 %, 3.9 s / 1.2 %)
@@ -99,7 +99,7 @@ class DesignRequest:
             raise InputError(f"--solver must be one of {', '.join(SOLVERS)}, not {self.solver!r}")
         if self.solver == "reduced" and not reduced_applies(self):
             raise InputError(
-                "--solver reduced needs --rigid, rhombus holes, a --target, and no --symmetry or "
+                "--solver reduced needs --rigid, rhombus holes, a --target, and no "
                 "--contracted-target (the closed-form rigid family covers only that)"
             )
         if self.symmetry not in (None, "x", "y"):
@@ -145,13 +145,7 @@ class DesignResult:
 
 def reduced_applies(req: DesignRequest) -> bool:
     """The closed-form rigid family covers the request (see ``rigid.py``)."""
-    return (
-        req.rigid
-        and req.holes == "rhombus"
-        and not req.symmetry
-        and not req.contracted
-        and req.target is not None
-    )
+    return req.rigid and req.holes == "rhombus" and not req.contracted and req.target is not None
 
 
 def via_rigid_applies(req: DesignRequest) -> bool:
@@ -160,7 +154,6 @@ def via_rigid_applies(req: DesignRequest) -> bool:
         req.solver == "auto"
         and not req.rigid
         and req.holes == "rhombus"
-        and not req.symmetry
         and not req.contracted
         and req.target is not None
         and (req.rows * req.cols >= VIA_RIGID_TILES or req.init == VIA_RIGID_INIT)
@@ -177,7 +170,6 @@ def rigid_first_applies(req: DesignRequest) -> bool:
         and req.solver == "auto"
         and not req.rigid
         and req.holes == "rhombus"
-        and not req.symmetry
         and not req.contracted
         and req.target is not None
         and req.rows * req.cols >= VIA_RIGID_FIRST_TILES

@@ -20,6 +20,7 @@ from .conformance import deployed as deployed_conformance
 from .penalty import _solve_full
 from .problem import _acceptable, _mean_edge, _objective, _Problem, _why_not, exact_fits
 from .reduced import fit_miss, solve_reduced
+from .reduced_mirror import mirror_map, seed_partners
 from .request import VIA_RIGID_TILES
 from .rigid import RigidFamily
 from .targets import Target
@@ -56,6 +57,10 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     S0 = None
     if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
         S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
+    mirror = None
+    if req.symmetry:  # half the seeds (``reduced_mirror.py``)
+        mirror = mirror_map(seed_partners(fam, req.rows, req.cols, req.symmetry), req.symmetry)
+        log(f"mirror symmetry {req.symmetry}: {mirror.shape[1]} reduced unknowns")
     X, mode, its = solve_reduced(
         fam,
         prob.st,
@@ -71,6 +76,7 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
         # small patterns get the full solver's second opinion anyway
         miss_tol=np.inf if req.rows * req.cols <= FULL_ALWAYS_TILES else FULL_ABOVE,
         S0=S0,
+        mirror=mirror,
     )
     iters.update(its)
     if _acceptable(prob, X) or req.solver == "reduced":

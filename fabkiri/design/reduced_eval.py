@@ -1,0 +1,99 @@
+"""One evaluation of the rigid-family solver's merit (``reduced._Merit``): its rows now, their normal
+matrix or Jacobian on demand."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .reduced import _Merit
+
+
+class _Evaluation:
+    """The merit (or hard-fit) rows of one member ``p`` and, on demand, its normal matrix or Jacobian.
+
+    The dense path hands over all rows ``r`` and, formed on the first ask, the dense Jacobian ``J`` of the
+    first ``len(J)`` of them and, for the regulariser rows after those, ``reg = (tile corners, JᵀJ, Jᵀr)``;
+    the block path computes its sparse rows only when asked (a step refused for a new inequality violation
+    needs none).
+    """
+
+    def __init__(
+        self,
+        merit: _Merit,
+        p: np.ndarray,
+        Xc,
+        gviol: float,
+        hard: bool,
+        r=None,
+        dense=None,
+        values: dict | None = None,
+    ):
+        self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
+        self._r = r
+        self._blocks: tuple | None = None
+        self._J: np.ndarray | None = None
+        self._reg: tuple[Any, Any, Any] | None = (
+            None  # the regulariser's (residual, normal matrix, gradient)
+        )
+        self._dense = (
+            dense  # dense path: () -> (J, reg), called once, when a Jacobian is first asked for
+        )
+        self._values = (
+            values  # block path: the inequality values gviol came from, reused by the rows
+        )
+
+    @property
+    def X(self) -> np.ndarray:
+        return self.Xc[0]
+
+    def _rows(self):
+        """``(r, Jx, Jc, Jk)``: the merit's rows with the contact rows (``Jk``, dense) after them."""
+        if self._blocks is None:
+            r, Jx, Jc = self.merit.rows(self.Xc, self.hard, self._values)
+            rk, Jk = self.merit.contact_rows(self.Xc, self.hard)
+            self._blocks = (np.concatenate([r, rk]), Jx, Jc, Jk)
+        return self._blocks
+
+    @property
+    def r(self) -> np.ndarray:
+        if self._r is None:
+            self._r = self._rows()[0]
+        return self._r
+
+    def _form(self) -> None:
+        if self._dense is not None:
+            (self._J, self._reg), self._dense = self._dense(), None
+
+    def normal(self):
+        """Reduced Gauss-Newton matrix ``JᵀJ`` and gradient ``Jᵀr``."""
+        self._form()
+        if self._J is None:
+            r, Jx, Jc, Jk = self._rows()
+            H, g = self.merit.normal(r[: len(r) - len(Jk)], Jx, Jc, self.p)
+            return H + Jk.T @ Jk, g + Jk.T @ r[len(r) - len(Jk) :]
+        J = self._J
+        H, g = J.T @ J, J.T @ self._r[: len(J)]
+        if self._reg is not None:
+            _, Hr, gr = self._reg
+            k = len(gr)
+            H[:k, :k] += Hr
+            g[:k] += gr
+        return H, g
+
+    def jacobian(self) -> np.ndarray:
+        """Dense ``∂r/∂p``."""
+        self._form()
+        if self._J is None:
+            _, Jx, Jc, Jk = self._rows()
+            self._J = np.vstack([self.merit.reduced_jacobian(Jx, Jc, self.p), Jk])
+        if self._reg is None:
+            return self._J
+        t = self.merit._tiles
+        assert t is not None, "a regulariser comes only with the tile-shape rows"
+        Jr = self.merit.w * t.regularizer_jacobian(self._reg[0])
+        return np.vstack(
+            [self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])]
+        )

@@ -1,0 +1,139 @@
+"""Mirror-symmetric members of the rigid family: the reduced solver over half the seeds.
+
+A ``--symmetry`` design asks ``x_m(v) = M x_v`` for every node ``v`` and its mirror image ``m(v)``
+(``M`` flips x for ``y``, y for ``x``). In the rigid family (``rigid.py``) the deployed nodes are linear
+in the seed points ``S`` for each ψ, and the family's linear rows (a hole's merge vertex is the midpoint
+of its fold vertices) map onto themselves under a mirror that keeps the fold states (an even number of
+columns for ``y``, rows for ``x``; ``constraints.symmetry`` refuses the rest). So a member is symmetric
+when its seeds are:
+
+    p = P q,   S[m(k)] = M S[k],  an on-axis seed's flipped coordinate 0,  ψ shared,
+
+with ``P`` a sparse ``(2 nf + 1, nq)`` matrix of ±1 (one column per seed pair and coordinate, disjoint
+supports), about half as many unknowns. The translation gauge must be symmetric too: ``rigid.py`` fixes
+it by tile 0 (τ_0 = 0), which the mirror moves, so the symmetric family fixes it by the nodes' mean
+(``centred``: ``Y`` minus its column means, a translation of every member, so still a member). Then the
+mean of the nodes is ``cos ψ · mean(Zn) S``, on the axis for mirrored seeds, and the member is its own
+mirror image exactly.
+
+The reduced solver runs unchanged on ``p = P q``: ``MirroredMerit`` wraps its merit, chaining every
+Jacobian through ``P`` (``J P``; the normal matrix ``Pᵀ H P``, the gradient ``Pᵀ g``). The caller still
+checks the full pattern's families, the symmetry rows among them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from scipy import sparse
+
+from ..errors import SolveError
+from ..kdtree import KDTree
+from .rigid import RigidFamily
+
+FLIPPED = {"x": 1, "y": 0}  # the coordinate the mirror negates: "x" is y -> -y, "y" is x -> -x
+
+
+def centred(fam: RigidFamily) -> RigidFamily:
+    """The same family with the translation gauge at the nodes' mean (symmetric under a mirror)."""
+    return replace(fam, Y=np.ascontiguousarray(fam.Y - fam.Y.mean(0)))
+
+
+def seed_partners(fam: RigidFamily, rows: int, cols: int, axis: str) -> np.ndarray:
+    """``(nf,)`` index of each seed's mirror image among the seeds; SolveError if the seeds do not map onto
+    themselves. The grid is the standard lattice's (vertex ``i (N+1) + j``), mirrored about its centre."""
+    gi, gj = np.divmod(np.arange((rows + 1) * (cols + 1)), cols + 1)
+    pts = np.stack([gj - cols / 2, gi - rows / 2], -1).astype(float)
+    mirrored = pts.copy()
+    mirrored[:, FLIPPED[axis]] *= -1.0
+    seeds = pts[fam.seeds]
+    d, k = KDTree(seeds).query(mirrored[fam.seeds])
+    if (d > 1e-9).any():
+        raise SolveError(f"rigid family: the seeds have no mirror image about the {axis} axis")
+    return np.asarray(k, dtype=np.int64)
+
+
+def mirror_map(partner: np.ndarray, axis: str) -> sparse.csr_matrix:
+    """``P`` with ``p = (S[:, 0], S[:, 1], ψ) = P q`` for the symmetric seeds (module docstring)."""
+    nf = len(partner)
+    k = np.arange(nf)
+    rep = k[k <= partner]  # one seed of each pair, and every on-axis seed
+    pair, on_axis = rep[partner[rep] != rep], rep[partner[rep] == rep]
+    r: list[np.ndarray] = []  # rows of P (entries of p), columns (entries of q), values
+    c: list[np.ndarray] = []
+    v: list[np.ndarray] = []
+    nq = 0
+    for d in (0, 1):
+        sign = -1.0 if d == FLIPPED[axis] else 1.0
+        col = nq + np.arange(len(pair))
+        r += [d * nf + pair, d * nf + partner[pair]]
+        c += [col, col]
+        v += [np.ones(len(pair)), np.full(len(pair), sign)]
+        nq += len(pair)
+        if sign > 0:  # the flipped coordinate of an on-axis seed is 0: no column
+            r.append(d * nf + on_axis)
+            c.append(nq + np.arange(len(on_axis)))
+            v.append(np.ones(len(on_axis)))
+            nq += len(on_axis)
+    r.append(np.array([2 * nf]))
+    c.append(np.array([nq]))
+    v.append(np.ones(1))
+    return sparse.csr_matrix(
+        (np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=(2 * nf + 1, nq + 1)
+    )
+
+
+def symmetric_member(P: sparse.csr_matrix, p: np.ndarray) -> np.ndarray:
+    """``q`` of the symmetric member nearest ``p`` (least squares: ``P`` has orthogonal columns)."""
+    return (P.T @ p) / np.asarray(P.multiply(P).sum(0)).ravel()
+
+
+class MirroredMerit:
+    """A reduced merit (``reduced._Merit``) over ``q``, with ``p = P q``; everything else is the merit's."""
+
+    def __init__(self, merit: Any, P: sparse.csr_matrix):
+        self.inner, self.P = merit, P
+
+    def __getattr__(self, name: str):  # fits, scaling, sq, ineq_violation ...
+        return getattr(self.inner, name)
+
+    def staged(self, rho: float, scaling: str) -> MirroredMerit:
+        return MirroredMerit(self.inner.staged(rho, scaling), self.P)
+
+    def state(self, q: np.ndarray):
+        return self.inner.state(self.P @ q)
+
+    def with_contact(self, contact) -> MirroredMerit:
+        return MirroredMerit(self.inner.with_contact(contact), self.P)
+
+    def contact_values(self, q: np.ndarray) -> dict:
+        return self.inner.contact_values(self.P @ q)
+
+    def evaluate(self, q: np.ndarray, hard: bool = False) -> _MirroredEvaluation:
+        return _MirroredEvaluation(self.inner.evaluate(self.P @ q, hard), self.P, q)
+
+
+class _MirroredEvaluation:
+    """One evaluation over ``p = P q`` seen from ``q``: the rows are the same, the Jacobian ``J P``."""
+
+    def __init__(self, ev: Any, P: sparse.csr_matrix, q: np.ndarray):
+        self.ev, self.P, self.p = ev, P, q
+        self.gviol, self.Xc = ev.gviol, ev.Xc
+
+    @property
+    def X(self) -> np.ndarray:
+        return self.ev.X
+
+    @property
+    def r(self) -> np.ndarray:
+        return self.ev.r
+
+    def normal(self):
+        H, g = self.ev.normal()
+        PtH = np.asarray(self.P.T @ H)
+        return np.asarray(self.P.T @ PtH.T), np.asarray(self.P.T @ g)
+
+    def jacobian(self) -> np.ndarray:
+        return np.asarray((self.P.T @ self.ev.jacobian().T).T)

@@ -1,0 +1,59 @@
+"""Closed-state contact rows of the rigid-family solver (design/reduced_contact.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+from fabkiri.design import constraints as C
+from fabkiri.design.reduced_contact import CONTACT_MARGIN, ClosedContact
+from fabkiri.design.rigid import RigidFamily
+from fabkiri.pattern import standard_pattern
+
+
+def _contact(rows, cols):
+    std = standard_pattern(rows, cols, tile_size=1.0)
+    st = C.Stencils.from_pattern(std)
+    fam = RigidFamily.build(st, std.topology.spanning_tree(0))
+    S, _ = fam.fit(std.nodes, np.pi / 4)
+    return fam, ClosedContact(fam, st), S
+
+
+def test_a_corner_inside_a_far_tile_is_a_violated_row():
+    """The standard closed states keep every far pair apart; a grid vertex moved into a tile three columns
+    away gives negative rows whose stencil holds that vertex (and only the ring's far pairs are rows)."""
+    fam, cc, S = _contact(8, 8)
+    for s, x in enumerate(cc.configs(S)):
+        g, nodes, _ = cc.measure(x, s + 1)
+        assert len(g) and g.min() > 0.5  # at least half a tile apart
+    c = cc.configs(S)[0]
+    cell = c[[0, 1, 9, 10]].mean(
+        0
+    )  # the centre of grid cell (0, 0): vertices (0,0), (0,1), (1,0), (1,1)
+    moved = c.copy()
+    moved[3] = cell  # grid vertex (row 0, column 3), a corner of tiles (0, 2) and (0, 3)
+    g, nodes, _ = cc.measure(moved, 1)
+    bad = np.flatnonzero(g < -CONTACT_MARGIN)
+    assert len(bad) and (nodes[bad, 0] == 3).any()
+
+
+def test_contact_rows_jacobian_matches_finite_differences():
+    """∂r/∂p of every row (all made active by a large margin) through Z (state 1) and Y (state 2)."""
+    fam, cc, S = _contact(6, 8)
+    S = S + 0.05 * np.random.default_rng(3).normal(size=S.shape)
+    nf = fam.n_seeds
+    p = np.r_[S[:, 0], S[:, 1], 0.6]
+
+    def rows(p):
+        S = np.stack([p[:nf], p[nf : 2 * nf]], -1)
+        return cc.active(cc.configs(S), 1e4, 2.0)
+
+    r, J = rows(p)
+    assert len(r) > 100 and J.shape == (len(r), 2 * nf + 1) and not J[:, -1].any()
+    h = 1e-6
+    fd = np.empty_like(J)
+    for i in range(len(p)):
+        e = np.zeros_like(p)
+        e[i] = h
+        rp, rm = rows(p + e)[0], rows(p - e)[0]
+        assert len(rp) == len(rm) == len(r)
+        fd[:, i] = (rp - rm) / (2 * h)
+    assert np.abs(J - fd).max() <= 1e-6 * max(1.0, np.abs(J).max())
