@@ -202,7 +202,9 @@ def test_the_report_shows_the_opening_and_warns_when_it_opens_little():
     from fabkiri.pattern.io import read_pattern
     from fabkiri.render.report import build_report
 
-    page = build_report(read_pattern(TEMPLATES.parent / "tests" / "data" / "heart-16x16-rigid.json"))
+    page = build_report(
+        read_pattern(TEMPLATES.parent / "tests" / "data" / "heart-16x16-rigid.json")
+    )
     assert "<h3>opening</h3>" in page and "5.1 %" in page and "opens little" in page
     wide = build_report(_standard(4, 4, 45.0))
     assert "<h3>opening</h3>" in wide and "opens little" not in wide
