@@ -153,7 +153,8 @@ def test_a_narrow_kagome_corner_is_refused_with_the_hinges_and_the_scale_that_pr
     src = tmp_path / "k7.json"
     io.write_pattern(standard_kagome(4, 4, tile_size=7.0), src)
     code, _, err = run_cli("print", src, "--style", "pinned", "-o", tmp_path / "out")
-    assert code == 2 and len(err.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
+    # a fabricability refusal: exit 1 whatever the flags (README), one line, nothing written
+    assert code == 1 and len(err.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
     assert "pivots of hinges" in err and "7.00 mm apart" in err
     lo = float(err.split("from --scale ")[1].split()[0])
     # the offered scale prints: its plan passes, one step below does not

@@ -982,7 +982,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     assert sw.ok and sw.min_distance_mm >= pr.radial_clearance_mm * (
         1 - 1e-6
     )  # as check_meshes: section float noise
-    # the CLI refuses the doubled design (exit 2, one line, nothing written)
+    # the CLI refuses the doubled design (a fabricability refusal: exit 1, one line, nothing written)
     src = REPO / "templates" / "patterns" / "circle-8x8-rigid.json"
     code, _, err = run_cli(
         "print",
@@ -996,7 +996,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
         "-o",
         tmp_path / "no",
     )
-    assert code == 2 and "too narrow beside" in err and len(err.strip().splitlines()) == 1
+    assert code == 1 and "too narrow beside" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "no").exists()
 
 
