@@ -1,8 +1,16 @@
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-import pytest
+# OpenBLAS picks its kernels by CPU (DYNAMIC_ARCH), and the kagome fit's path turns on the last bits of
+# its results: the 6x10 heart's convex-hole fallback (test_kagome_fit) fits to 13.3 % with the AVX2
+# (Haswell) kernels the figures were measured with and 18.6 % with AVX-512 ones, the same code and
+# wheels. The tests pin the kernel, before numpy loads, so a figure measured on one machine is checked
+# as measured on another; the fit's sensitivity itself is an open item of docs/kagome.md.
+os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
+
+import pytest  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 # the shared folder sits beside the main checkout, or two levels up from a worktree
