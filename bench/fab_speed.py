@@ -12,12 +12,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import shutil
-import subprocess
-import sys
-import time
 from pathlib import Path
+
+from child import run_cli
+from fabrication import slice_all
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = {
@@ -43,41 +42,9 @@ CASES = {
 
 def run(root: Path, *args: str, timeout: float = 1800) -> tuple[int, float, float, str]:
     """``fabkiri ARGS`` with ``root`` on PYTHONPATH: (exit code, CPU s of the child, wall s, last stderr line)."""
-    env = {**os.environ, "PYTHONPATH": str(root), "OMP_NUM_THREADS": "1"}
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t = time.perf_counter()
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "fabkiri.cli.main", *args],
-            env=env,
-            cwd=root,  # `python -m` puts the working folder first on sys.path, before PYTHONPATH
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-        )
-        code, err = p.returncode, p.stderr
-    except subprocess.TimeoutExpired:
-        code, err = -1, f"timeout after {timeout:g} s"
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    lines = [ln for ln in err.strip().splitlines() if not ln.startswith("[")] or [""]
-    return code, cpu, time.perf_counter() - t, lines[-1][:160]
-
-
-def slice_all(folder: Path) -> str:
-    """PrusaSlicer on every 3MF of a print folder: 'sliced N' or the first failure."""
-    exe = shutil.which("prusa-slicer")
-    if exe is None:
-        return "no prusa-slicer"
-    files = sorted(folder.glob("*.3mf"))
-    for f in files:
-        g = f.with_suffix(".gcode")
-        p = subprocess.run(
-            [exe, "--export-gcode", str(f), "-o", str(g)], capture_output=True, text=True
-        )
-        if p.returncode or not g.exists():
-            return f"slice FAIL {f.name}"
-    return f"sliced {len(files)}"
+    c = run_cli(root, *args, timeout=timeout)
+    lines = [ln for ln in c.stderr.strip().splitlines() if not ln.startswith("[")] or [""]
+    return c.code, c.cpu_s, c.wall_s, lines[-1][:160]
 
 
 def figures(pj: Path) -> str:

@@ -28,14 +28,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import shlex
 import subprocess
 import sys
 import tempfile
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from child import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "bench" / "data" / "make"
@@ -97,25 +97,8 @@ class Cell:
 def fabkiri(repo: Path, *args: str, timeout: float) -> tuple[int, float, float, str, str]:
     """Run the CLI of ``repo`` as its own process: exit code, CPU s (the child's), wall s, stderr,
     stdout."""
-    env = {**os.environ, "PYTHONPATH": str(repo), "OMP_NUM_THREADS": "1"}
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "fabkiri.cli.main", *args],
-            capture_output=True,
-            text=True,
-            env=env,
-            cwd=repo,  # `python -m` puts the working folder first on sys.path: the repo's own package
-            timeout=timeout,
-        )
-        code, err, out = p.returncode, p.stderr, p.stdout
-    except subprocess.TimeoutExpired:
-        code, err, out = -9, f"timed out after {timeout:g} s", ""
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return code, cpu, wall, err, out
+    c = run_cli(repo, *args, timeout=timeout)
+    return c.code, c.cpu_s, c.wall_s, c.stderr, c.stdout
 
 
 def slices(folder: Path) -> tuple[bool, str]:
