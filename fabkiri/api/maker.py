@@ -288,17 +288,10 @@ def _design_line(status: str, report: dict) -> str:
 
 
 def _opening_lines(report: dict) -> list[str]:
-    """How much the design opens (:meth:`Opening.line`) and, below 10 %, the warning."""
-    from ..pattern.opening import Opening
+    """How much the design opens and, below 10 %, the warning (as design says them, naming make's option)."""
+    from .design_opening import summary_lines
 
-    if not isinstance(report.get("opening"), dict):
-        return []
-    o = Opening.from_dict(report["opening"])
-    warn = o.warning()
-    if warn is None:
-        return [o.line()]
-    floored = report["opening"].get("min_opening")
-    return [o.line(), warn + ("" if floored else "; make --min-opening F sets a floor on it")]
+    return summary_lines(report, "make")
 
 
 def _ask(result: MakeResult, plan: _Plan):
