@@ -41,9 +41,9 @@ def judge(pattern: Pattern, report: dict, floor: float | None) -> list[str]:
     return []
 
 
-def summary_lines(report: dict) -> list[str]:
-    """The opening line and, for a design that opens little, the one-line warning (with the option that
-    asks for more when it was not given)."""
+def summary_lines(report: dict, command: str = "design") -> list[str]:
+    """The opening line and, for a design that opens little, the one-line warning (with ``command``'s
+    option that asks for more when it was not given)."""
     d = report.get("opening")
     if not d:
         return []
@@ -52,7 +52,8 @@ def summary_lines(report: dict) -> list[str]:
     warn = o.warning()
     if warn:
         out.append(
-            warn + ("" if d.get("min_opening") else "; design --min-opening F sets a floor on it")
+            warn
+            + ("" if d.get("min_opening") else f"; {command} --min-opening F sets a floor on it")
         )
     return out
 

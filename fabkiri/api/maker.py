@@ -15,7 +15,7 @@ import resource
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -77,8 +77,9 @@ def make(
     it they stay in :attr:`MakeResult.files` (``write(folder)`` writes them). Raises
     :class:`InputError` for bad input before anything is done; a step that fails is recorded in
     the result (``ok`` false, ``exit_code`` the step's), not raised."""
-    plan = _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output)
-    plan = replace(plan, min_opening=_floor(min_opening))
+    plan = _plan(
+        target, size, material, hinge, printer, style, tiles, shape_tol, min_opening, output
+    )
     say = progress or (lambda text: None)
     out = Path(output) if output is not None else None
     result = MakeResult(
@@ -121,7 +122,9 @@ def _floor(min_opening) -> float | None:
     return floor
 
 
-def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, output) -> _Plan:
+def _plan(
+    target, size, material, hinge, printer, style, tiles, shape_tol, min_opening, output
+) -> _Plan:
     """Every check of the request that needs no design: one :class:`InputError` naming the problem."""
     if (material is None) == (printer is None):
         raise InputError("make needs exactly one of --material (laser cut) or --printer (3D print)")
@@ -153,6 +156,7 @@ def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, outpu
     stem = Path(str(target)).stem if Path(str(target)).suffix else str(target)
     if output is not None:
         _check_output(Path(output), stem, process)
+    floor = _floor(min_opening)  # last, as before: the other refusals first
     return _Plan(
         target=str(target),
         size=size,
@@ -161,7 +165,7 @@ def _plan(target, size, material, hinge, printer, style, tiles, shape_tol, outpu
         printer=printer,
         style=intent.get("style"),
         shape_tol=shape_tol,
-        min_opening=None,
+        min_opening=floor,
         tiles=choice,
         process=process,
         fabrication=fabrication,
@@ -288,17 +292,10 @@ def _design_line(status: str, report: dict) -> str:
 
 
 def _opening_lines(report: dict) -> list[str]:
-    """How much the design opens (:meth:`Opening.line`) and, below 10 %, the warning."""
-    from ..pattern.opening import Opening
+    """How much the design opens and, below 10 %, the warning (as design says them, naming make's option)."""
+    from .design_opening import summary_lines
 
-    if not isinstance(report.get("opening"), dict):
-        return []
-    o = Opening.from_dict(report["opening"])
-    warn = o.warning()
-    if warn is None:
-        return [o.line()]
-    floored = report["opening"].get("min_opening")
-    return [o.line(), warn + ("" if floored else "; make --min-opening F sets a floor on it")]
+    return summary_lines(report, "make")
 
 
 def _ask(result: MakeResult, plan: _Plan):

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Callable
+
+from .. import limits
 
 
 def bounded(
@@ -26,3 +29,12 @@ def bounded(
         return v
 
     return parse
+
+
+length_mm = bounded(
+    float,
+    lambda v: math.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM,
+    "expected a length in mm",
+    f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}",
+)
+"""A length in mm: finite, positive, at most :data:`limits.MAX_LENGTH_MM` (``--size``, ``--min-feature``)."""

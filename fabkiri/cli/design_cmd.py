@@ -16,7 +16,6 @@ import sys
 
 import numpy as np
 
-from .. import limits
 from ..api.design import (  # noqa: F401 (names tests and benches import from here)
     BIG_TILES,
     PatternRequest,
@@ -32,7 +31,7 @@ from ..errors import InputError
 from ..fabricate.fabricability import PRINT_STYLES
 from ..fabricate.materials import HINGE_KINDS
 from ..fileio import check_output_file
-from .argtypes import bounded
+from .argtypes import bounded, length_mm
 from .pattern_cmds import add_i_know, parse_tiles
 
 
@@ -97,12 +96,6 @@ _fraction = bounded(
     "expected a fraction",
     "--min-opening must lie in (0, 1), got {text!r}",
 )
-_size = bounded(
-    float,
-    lambda v: bool(np.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM),
-    "expected a length in mm",
-    f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}",
-)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -146,7 +139,7 @@ def _add_target_args(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--size",
-        type=_size,
+        type=length_mm,
         metavar="MM",
         help="target size: its larger dimension in mm (named targets default to 100)",
     )
@@ -233,12 +226,12 @@ def _add_fabrication_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--style", choices=PRINT_STYLES, help="print style (default tiles-and-strips)")
     g.add_argument(
         "--min-feature",
-        type=_size,
+        type=length_mm,
         metavar="MM",
         help="every tile at least this wide at its thinnest",
     )
     g.add_argument(
-        "--min-hole", type=_size, metavar="MM", help="every deployed hole at least this wide"
+        "--min-hole", type=length_mm, metavar="MM", help="every deployed hole at least this wide"
     )
     g.add_argument(
         "--min-opening",

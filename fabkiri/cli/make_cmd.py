@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 
-from .. import limits
 from ..api.maker import make
 from ..design import conformance as conf
 from ..fabricate.fabricability import PRINT_STYLES
 from ..fabricate.materials import HINGE_KINDS
-from .argtypes import bounded
+from .argtypes import length_mm
 from .pattern_cmds import parse_tiles
 
 
@@ -36,14 +34,6 @@ def cmd_make(args: argparse.Namespace) -> int:
     return result.exit_code
 
 
-_size = bounded(
-    float,
-    lambda v: math.isfinite(v) and 0 < v <= limits.MAX_LENGTH_MM,
-    "expected a length in mm",
-    f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}",
-)
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "make",
@@ -54,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "target", help="a named target (circle, star, ...) or a .csv/.json points file or .svg path"
     )
     p.add_argument(
-        "--size", required=True, type=_size, metavar="MM", help="the target's larger dimension"
+        "--size", required=True, type=length_mm, metavar="MM", help="the target's larger dimension"
     )
     how = p.add_mutually_exclusive_group(required=True)
     how.add_argument("--material", metavar="NAME|FILE.json", help="laser-cut from this material")
