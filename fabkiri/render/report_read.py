@@ -62,32 +62,34 @@ def fabricability_part(summary: dict | None, why_not: str) -> str:
     return body
 
 
+def _td(m: dict, ok: bool, text: str) -> str:
+    """A ✔/✖ cell whose hover title is what limits it."""
+    limit = html.escape(str(m.get("limit", "")), quote=True)
+    return f'<td class="{"ok" if ok else "fail"}" title="{limit}">{OK if ok else NO} {text}</td>'
+
+
 def _cut_cell(m: dict | None) -> str:
     if not m:
         return "<td></td>"
-    limit = html.escape(str(m.get("limit", "")), quote=True)
-    if m.get("min_scale") is None:
-        return f'<td class="fail" title="{limit}">{NO} never</td>'
-    s = m["min_scale"]
+    s = m.get("min_scale")
+    if s is None:
+        return _td(m, False, "never")
     if s <= 1:
-        return f'<td class="ok" title="{limit}">{OK} from {s:g}×</td>'
-    return f'<td class="fail" title="{limit}">{NO} ≥ {s:g}× ({m["min_width_mm"]:g} mm)</td>'
+        return _td(m, True, f"from {s:g}×")
+    return _td(m, False, f"≥ {s:g}× ({m['min_width_mm']:g} mm)")
 
 
 def _print_cell(m: dict | None) -> str:
     if not m:
         return "<td></td>"
-    limit = html.escape(str(m.get("limit", "")), quote=True)
     if m.get("min_scale") is None:
-        return f'<td class="fail" title="{limit}">{NO} never</td>'
+        return _td(m, False, "never")
     low = "" if m.get("exact", True) else "from "
     bed = "" if m.get("max_scale") is None else f"..{m['max_scale']:g}"
     span = f"{low}{m['min_scale']:g}{bed}×"
     if not m.get("fits_bed", True):  # the smallest scale that prints is larger than the bed holds
         span = f"≥ {m['min_scale']:g}×, the bed holds ≤ {m['max_scale']:g}×"
-    if m.get("ok_at_scale_1"):
-        return f'<td class="ok" title="{limit}">{OK} {span}</td>'
-    return f'<td class="fail" title="{limit}">{NO} {span}</td>'
+    return _td(m, bool(m.get("ok_at_scale_1")), span)
 
 
 def _grid(head: list[str], rows: list[list[str]], raw: int = 0) -> str:

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..mechanics.deploy import DeploymentPath
 from ..pattern.fabricability import widths
+from ..pattern.geometry import signed_areas
 from ..pattern.model import Pattern
 from .htmlparts import data_uri, screen_svg
 
@@ -119,9 +120,7 @@ def cut_sheets(folder: str | Path | None) -> tuple[list[dict] | None, list[dict]
 
 def _ccw(corners: np.ndarray) -> np.ndarray:
     """Tiles turned counter-clockwise (the width measure reads a clockwise tile as width 0)."""
-    x, y = corners[..., 0], corners[..., 1]
-    area = (x * np.roll(y, -1, -1) - np.roll(x, -1, -1) * y).sum(-1)
-    return np.where((area < 0)[:, None, None], corners[:, ::-1], corners)
+    return np.where((signed_areas(corners) < 0)[:, None, None], corners[:, ::-1], corners)
 
 
 def _overlay(pattern: Pattern) -> dict | None:

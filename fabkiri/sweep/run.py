@@ -155,9 +155,6 @@ def check_same_sweep(out: Path, spec: SweepSpec) -> None:
         )
 
 
-FAILED = ("error", "timeout")
-
-
 def summary(rows: list[dict]) -> str:
     """Each job counted once by its status; then the failed jobs (counted once each) and their
     failures by kind (a job that missed its shape and failed its cut counts in both kinds)."""
