@@ -163,9 +163,10 @@ def _normal(a, b):
     return -e[1] / ln, e[0] / ln
 
 
-def _mitre(x, quads, rows, j):
-    """Mitre vector at corner j: the corner moves by d times it when the quad shrinks by d."""
-    n = quads.shape[1]
+def _mitre(x, quads, rows, j, n: int | None = None):
+    """Mitre vector at corner j: the corner moves by d times it when the quad shrinks by d.
+    ``n``: the polygon's arity when ``quads`` holds more nodes after it (default all of them)."""
+    n = quads.shape[1] if n is None else n
     prev, here, nxt = (_corners(x, quads, rows, (j + s) % n) for s in (-1, 0, 1))
     na, nb = _normal(prev, here), _normal(here, nxt)
     s = 1.0 + _dot(na, nb)

@@ -118,16 +118,15 @@ def pad_rows(
 
 def _shrunk(x, polys, rows, n, shrink) -> list:
     """The own tile (the first ``n`` nodes of ``polys``) shrunk by ``shrink``: corner k moves by ``shrink``
-    times its mitre vector ``(n_a + n_b) / (1 + n_a . n_b)`` (inward unit normals of its two edges)."""
-    c = [F._corners(x, polys, rows, np.full(len(rows), k)) for k in range(n)]
+    times its mitre vector (:func:`~.fabrication._mitre`)."""
+    ks = [np.full(len(rows), k) for k in range(n)]
+    c = [F._corners(x, polys, rows, k) for k in ks]
     if not shrink:
         return c
-    normals = [F._normal(c[k], c[(k + 1) % n]) for k in range(n)]  # edge k -> k+1
     out = []
-    for k in range(n):
-        na, nb = normals[k - 1], normals[k]
-        s = F._dot(na, nb) + 1.0
-        out.append((c[k][0] + (na[0] + nb[0]) / s * shrink, c[k][1] + (na[1] + nb[1]) / s * shrink))
+    for ck, k in zip(c, ks):
+        m = F._mitre(x, polys, rows, k, n)
+        out.append((ck[0] + m[0] * shrink, ck[1] + m[1] * shrink))
     return out
 
 

@@ -123,11 +123,6 @@ class _Merit:
         new.contact = contact
         return new
 
-    def contact_values(self, p: np.ndarray) -> dict:
-        """The contact rows' values at member ``p`` (``with_contact`` merits only)."""
-        assert self.contact is not None, "contact_values needs the contact rows"
-        return self.contact.values(self.state(p)[1:])
-
     def unpack(self, p: np.ndarray) -> tuple[np.ndarray, float]:
         nf = self.nf
         return np.stack([p[:nf], p[nf : 2 * nf]], -1), float(p[-1])
@@ -417,7 +412,7 @@ def solve_reduced(
     def rank(p, X, mode) -> tuple:
         """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit."""
         ev = touching.evaluate(p)
-        gap = min(float(g.min(initial=np.inf)) for g in touching.contact_values(p).values())
+        gap = min(float(g.min(initial=np.inf)) for g in touching.contact.values(ev.Xc[1:]).values())
         return (judge.ineq_violation(judge.state(p)) > 0, gap < 0.0, float(ev.r @ ev.r)), X, mode
 
     best = rank(p, X, mode)

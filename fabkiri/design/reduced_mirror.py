@@ -108,9 +108,6 @@ class MirroredMerit:
     def with_contact(self, contact) -> MirroredMerit:
         return MirroredMerit(self.inner.with_contact(contact), self.P)
 
-    def contact_values(self, q: np.ndarray) -> dict:
-        return self.inner.contact_values(self.P @ q)
-
     def evaluate(self, q: np.ndarray, hard: bool = False) -> _MirroredEvaluation:
         return _MirroredEvaluation(self.inner.evaluate(self.P @ q, hard), self.P, q)
 

@@ -62,9 +62,7 @@ class Gaps:
     def turned(self, theta: np.ndarray) -> np.ndarray:
         """``(G,)`` every gap of rigid tiles turned by ``theta`` ``(T,)`` from the deployed state
         (gap 0 opens as B turns and closes as A turns; gap 1 the other way)."""
-        th = np.asarray(theta, dtype=float)
-        A, B = self.hinge_tiles.T
-        return self.deployed + np.stack([th[B] - th[A], th[A] - th[B]], -1).ravel()
+        return self.deployed + _turn(self.hinge_tiles, np.asarray(theta, dtype=float))
 
     def angles(self, x: np.ndarray) -> np.ndarray:
         """``(G,)`` the gap angles of flat node coordinates ``x``, in (-π, π]."""
@@ -79,6 +77,13 @@ class Gaps:
         return self.deployed + lam * self.turn[s]
 
 
+def _turn(hinge_tiles: np.ndarray, th: np.ndarray) -> np.ndarray:
+    """``(G,)`` the change of every gap as the tiles turn by ``th`` ``(T,)``: gap 0 opens as B turns
+    and closes as A turns; gap 1 the other way."""
+    A, B = hinge_tiles.T
+    return np.stack([th[B] - th[A], th[A] - th[B]], -1).ravel()
+
+
 def hinge_gaps(pattern: Pattern, states: dict[int, np.ndarray]) -> Gaps:
     """The gaps of ``pattern`` (its hinges in topology order) and their values in the states."""
     top = pattern.topology
@@ -88,10 +93,7 @@ def hinge_gaps(pattern: Pattern, states: dict[int, np.ndarray]) -> Gaps:
     cA, cB = top.hinge_corner.T
     h = tiles[A, cA]
     deployed = pattern.corners()
-    turn = {}
-    for s in (1, 2):  # gap 0 opens as B turns and closes as A turns; gap 1 the other way
-        th = tile_angles(deployed, states[s])
-        turn[s] = np.stack([th[B] - th[A], th[A] - th[B]], -1).ravel()
+    turn = {s: _turn(top.hinge_tiles, tile_angles(deployed, states[s])) for s in (1, 2)}
     # the topology's convention (gap_angles): gap 0 from A's edge to prev_A onto B's edge to
     # next_B, gap 1 from B's edge to prev_B onto A's edge to next_A
     u = np.stack([tiles[A, (cA + n - 1) % n], tiles[B, (cB + n - 1) % n]], -1).ravel()

@@ -26,11 +26,15 @@ class _Matched:
     found_on: np.ndarray  # design tile -> sheet it was found on
     cut_shapes: np.ndarray  # (T, 4, 2) each design tile's cut shape, corners in design order
     resid_pos: np.ndarray  # in place: corner distance to the closed state
-    extra: int  # recovered regions matched to no design tile
     # (sheet, cut shapes) under another, equally good labeling of a symmetric sheet: that sheet's tiles
     # take the shapes, every other tile is NaN
     labelings: list[tuple[int, np.ndarray]]
     extra_shapes: list[np.ndarray] = field(default_factory=list)  # the unmatched regions' corners
+
+    @property
+    def extra(self) -> int:
+        """Recovered regions matched to no design tile."""
+        return len(self.extra_shapes)
 
 
 def _match_tiles(
@@ -60,7 +64,7 @@ def _match_tiles(
         rep.meta["state"] = state
     k = D.shape[1]  # the tile arity
     m = _Matched(
-        state, np.full(T, -1), np.full(T, -1), np.full((T, k, 2), np.nan), np.full(T, np.nan), 0, []
+        state, np.full(T, -1), np.full(T, -1), np.full((T, k, 2), np.nan), np.full(T, np.nan), []
     )
     Ystate = closed(state)
     for sheet, R in sheets.items():
@@ -71,7 +75,6 @@ def _match_tiles(
             a, res, sh = match_by_shape(D[free], R, L)
             a = np.where(a >= 0, free[np.maximum(a, 0)], -1)
         taken = (a >= 0) & (m.assign[np.maximum(a, 0)] < 0)
-        m.extra += int(len(R) - taken.sum())
         m.extra_shapes.extend(R[~taken])
         r = np.flatnonzero(taken)
         d = a[r]

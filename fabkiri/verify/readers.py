@@ -52,14 +52,6 @@ def _read_dxf(p: Path, layer: str = "CUT") -> Linework:
     return _read_dxf_full(p, layer)
 
 
-BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
-
-
-def _is_binary_dxf(p: Path) -> bool:
-    with p.open("rb") as fh:
-        return fh.read(len(BINARY_SENTINEL)) == BINARY_SENTINEL
-
-
 CURVE_TYPES = {"LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE"}
 
 
@@ -72,10 +64,11 @@ def _read_dxf_full(p: Path, layer_name: str = "CUT") -> Linework:
     """
     import ezdxf
     from ezdxf import disassemble, recover
+    from ezdxf.lldxf.validator import is_binary_dxf_file
 
     try:
         # ezdxf's recover reads ASCII DXF only; its plain reader takes binary DXF
-        doc = ezdxf.readfile(str(p)) if _is_binary_dxf(p) else recover.readfile(str(p))[0]
+        doc = ezdxf.readfile(str(p)) if is_binary_dxf_file(str(p)) else recover.readfile(str(p))[0]
     except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
         raise VerifyError(f"{p}: not a readable DXF file ({exc})") from None
     unit = INSUNITS_MM.get(int(doc.header.get("$INSUNITS", 0)))
