@@ -125,11 +125,14 @@ def cut_refusal(
     """The closed-form minimum when ``cut``'s rules refuse ``material``/``kind`` at ``scale`` (None: any
     scale works nowhere), else None (the rules accept it)."""
     need = fb.cut_minimum(corners, material, kind)
+    return need if _refuses(need, scale) else None
+
+
+def _refuses(need: fb.CutMinimum, scale: float | None) -> bool:
+    """Whether the rules with minimum ``need`` refuse ``scale`` (None: any scale; refused if none works)."""
     if need.scale is None:
-        return need
-    if scale is not None and need.exact is not None and scale < need.exact * (1 - 1e-9):
-        return need
-    return None
+        return True
+    return scale is not None and need.exact is not None and scale < need.exact * (1 - 1e-9)
 
 
 def cut_alternatives(
@@ -181,9 +184,7 @@ def cut_alternatives(
             ):
                 continue
             m = fb.cut_minimum(corners, preset, k)
-            if m.scale is not None and (
-                scale is None or cut_refusal(corners, preset, k, scale) is None
-            ):
+            if not _refuses(m, scale):
                 fits.append((k, m))
         if fits:
             k, m = next(((k, m) for k, m in fits if k == preset.hinge), fits[0])
@@ -437,11 +438,6 @@ def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternati
     return [Alternative("make", command, detail, DESIGN_GATE, dict(ch))]
 
 
-def refused(exc: FabkiriError, options: list[Alternative]) -> Refused:
-    """``exc`` as a :class:`Refused` carrying ``options`` (the refusal text kept as it was)."""
-    return Refused(str(exc), options)
-
-
 __all__ = [
     "CUT_GATE",
     "DESIGN_GATE",
@@ -456,5 +452,4 @@ __all__ = [
     "make_line",
     "option_lines",
     "print_alternatives",
-    "refused",
 ]
