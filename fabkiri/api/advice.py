@@ -118,6 +118,19 @@ def _scale_words(scale: float | None) -> tuple[str, str]:
     return ("--scale", "auto" if scale is None else f"{scale:g}")
 
 
+def _run_line(ask: Ask, words: tuple[str, str, str, str, str], at: float | None, own: bool) -> str:
+    """The ``fabkiri cut`` or ``print`` line of ``words`` (command, --material or --printer and its name,
+    --hinge or --style and its value) at scale ``at``; ``own``: the material or printer asked for,
+    named as typed and with its overrides."""
+    process, flag, name, kind_flag, kind = words
+    extra = ask.process_flags if own else ()
+    name = (ask.given or name) if own else name
+    return _line(
+        "fabkiri", process, ask.file, flag, name, kind_flag, kind,
+        *_scale_words(at), *ask.flags, *extra, *_out(ask),
+    )  # fmt: skip
+
+
 # ------------------------------------------------------------------ cut
 def cut_refusal(
     corners, material: Material, kind: str, scale: float | None
@@ -156,12 +169,7 @@ def cut_alternatives(
     out: list[Alternative] = []
 
     def cmd(name: str, k: str, at: float | None, own: bool) -> str:
-        extra = ask.process_flags if own else ()
-        name = (ask.given or name) if own else name
-        return _line(
-            "fabkiri", "cut", ask.file, "--material", name, "--hinge", k,
-            *_scale_words(at), *ask.flags, *extra, *_out(ask),
-        )  # fmt: skip
+        return _run_line(ask, ("cut", "--material", name, "--hinge", k), at, own)
 
     need = fb.cut_minimum(corners, mat, kind)
     if need.scale is not None and scale is not None and need.scale > scale:
@@ -237,7 +245,7 @@ def print_alternatives(
     out: list[Alternative] = []
 
     def cmd(printer: str, s: str, at: float | None, own: bool) -> str:
-        return _print_cmd(ask, printer, s, at, own)
+        return _run_line(ask, ("print", "--printer", printer, "--style", s), at, own)
 
     found = _print_scale(pattern, style, asked, state, scale) if scale is not None else None
     if found is not None:
@@ -299,16 +307,6 @@ def print_alternatives(
     if line is not None:
         out += [*make_line(pattern, line, ask), line]  # the design line last, as before
     return out
-
-
-def _print_cmd(ask: Ask, printer: str, style: str, at: float | None, own: bool) -> str:
-    """The ``fabkiri print`` line; ``own``: the printer asked for, with its overrides as typed."""
-    extra = ask.process_flags if own else ()
-    printer = (ask.given or printer) if own else printer
-    return _line(
-        "fabkiri", "print", ask.file, "--printer", printer, "--style", style,
-        *_scale_words(at), *ask.flags, *extra, *_out(ask),
-    )  # fmt: skip
 
 
 def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float):
