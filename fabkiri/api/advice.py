@@ -386,9 +386,7 @@ def design_line(
         "--hinge" if "hinge" in process else "--style",
         process.get("hinge") or process["style"],
     ]
-    tag = process.get("material") or process["printer"]
-    where = Path(ask.output).parent if ask.output else Path(ask.file).parent  # beside the output
-    new = str(where / f"{Path(ask.file).stem}-{Path(tag).stem}.json")
+    new = _beside(ask, process.get("material") or process["printer"], ".json")
     command = _line(
         "fabkiri", "design", "--tiles", f"{rows}x{cols}", "--target", name, "--size", f"{size:g}",
         *(["--lattice", lattice["kind"]] if lattice.get("kind", "quad") != "quad" else []),
@@ -407,6 +405,13 @@ def design_line(
     )
 
 
+def _beside(ask: Ask, tag: str, suffix: str = "") -> str:
+    """Where a suggested design or make writes: beside the output (else the pattern), named after the
+    pattern and ``tag`` (the material or printer, a preset name or a .json file)."""
+    where = Path(ask.output).parent if ask.output else Path(ask.file).parent
+    return str(where / f"{Path(ask.file).stem}-{Path(tag).stem}{suffix}")
+
+
 def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternative]:
     """The ``fabkiri make`` line equivalent to the ``design`` option (the same target, size, tiles and
     process, the same room check passed), when ``make`` can say all the design asks for: a quad
@@ -423,9 +428,7 @@ def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternati
         else ["--printer", ch["printer"], "--style", ch["style"]]
     )
     floor = opts.get("min_opening")
-    tag = Path(str(ch.get("material") or ch["printer"])).stem
-    where = Path(ask.output).parent if ask.output else Path(ask.file).parent
-    folder = str(where / f"{Path(ask.file).stem}-{tag}")
+    folder = _beside(ask, str(ch.get("material") or ch["printer"]))
     command = _line(
         "fabkiri", "make", stored["target"]["name"], "--size", f"{ch['size']:g}",
         *process, "--tiles", f"{lattice['rows']}x{lattice['cols']}",
