@@ -118,6 +118,19 @@ def _scale_words(scale: float | None) -> tuple[str, str]:
     return ("--scale", "auto" if scale is None else f"{scale:g}")
 
 
+def _run_line(ask: Ask, words: tuple[str, str, str, str, str], at: float | None, own: bool) -> str:
+    """The ``fabkiri cut`` or ``print`` line of ``words`` (command, --material or --printer and its name,
+    --hinge or --style and its value) at scale ``at``; ``own``: the material or printer asked for,
+    named as typed and with its overrides."""
+    process, flag, name, kind_flag, kind = words
+    extra = ask.process_flags if own else ()
+    name = (ask.given or name) if own else name
+    return _line(
+        "fabkiri", process, ask.file, flag, name, kind_flag, kind,
+        *_scale_words(at), *ask.flags, *extra, *_out(ask),
+    )  # fmt: skip
+
+
 # ------------------------------------------------------------------ cut
 def cut_refusal(
     corners, material: Material, kind: str, scale: float | None
@@ -125,11 +138,14 @@ def cut_refusal(
     """The closed-form minimum when ``cut``'s rules refuse ``material``/``kind`` at ``scale`` (None: any
     scale works nowhere), else None (the rules accept it)."""
     need = fb.cut_minimum(corners, material, kind)
+    return need if _refuses(need, scale) else None
+
+
+def _refuses(need: fb.CutMinimum, scale: float | None) -> bool:
+    """Whether the rules with minimum ``need`` refuse ``scale`` (None: any scale; refused if none works)."""
     if need.scale is None:
-        return need
-    if scale is not None and need.exact is not None and scale < need.exact * (1 - 1e-9):
-        return need
-    return None
+        return True
+    return scale is not None and need.exact is not None and scale < need.exact * (1 - 1e-9)
 
 
 def cut_alternatives(
@@ -153,12 +169,7 @@ def cut_alternatives(
     out: list[Alternative] = []
 
     def cmd(name: str, k: str, at: float | None, own: bool) -> str:
-        extra = ask.process_flags if own else ()
-        name = (ask.given or name) if own else name
-        return _line(
-            "fabkiri", "cut", ask.file, "--material", name, "--hinge", k,
-            *_scale_words(at), *ask.flags, *extra, *_out(ask),
-        )  # fmt: skip
+        return _run_line(ask, ("cut", "--material", name, "--hinge", k), at, own)
 
     need = fb.cut_minimum(corners, mat, kind)
     if need.scale is not None and scale is not None and need.scale > scale:
@@ -181,9 +192,7 @@ def cut_alternatives(
             ):
                 continue
             m = fb.cut_minimum(corners, preset, k)
-            if m.scale is not None and (
-                scale is None or cut_refusal(corners, preset, k, scale) is None
-            ):
+            if not _refuses(m, scale):
                 fits.append((k, m))
         if fits:
             k, m = next(((k, m) for k, m in fits if k == preset.hinge), fits[0])
@@ -236,7 +245,7 @@ def print_alternatives(
     out: list[Alternative] = []
 
     def cmd(printer: str, s: str, at: float | None, own: bool) -> str:
-        return _print_cmd(ask, printer, s, at, own)
+        return _run_line(ask, ("print", "--printer", printer, "--style", s), at, own)
 
     found = _print_scale(pattern, style, asked, state, scale) if scale is not None else None
     if found is not None:
@@ -298,16 +307,6 @@ def print_alternatives(
     if line is not None:
         out += [*make_line(pattern, line, ask), line]  # the design line last, as before
     return out
-
-
-def _print_cmd(ask: Ask, printer: str, style: str, at: float | None, own: bool) -> str:
-    """The ``fabkiri print`` line; ``own``: the printer asked for, with its overrides as typed."""
-    extra = ask.process_flags if own else ()
-    printer = (ask.given or printer) if own else printer
-    return _line(
-        "fabkiri", "print", ask.file, "--printer", printer, "--style", style,
-        *_scale_words(at), *ask.flags, *extra, *_out(ask),
-    )  # fmt: skip
 
 
 def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float):
@@ -387,9 +386,7 @@ def design_line(
         "--hinge" if "hinge" in process else "--style",
         process.get("hinge") or process["style"],
     ]
-    tag = process.get("material") or process["printer"]
-    where = Path(ask.output).parent if ask.output else Path(ask.file).parent  # beside the output
-    new = str(where / f"{Path(ask.file).stem}-{Path(tag).stem}.json")
+    new = _beside(ask, process.get("material") or process["printer"], ".json")
     command = _line(
         "fabkiri", "design", "--tiles", f"{rows}x{cols}", "--target", name, "--size", f"{size:g}",
         *(["--lattice", lattice["kind"]] if lattice.get("kind", "quad") != "quad" else []),
@@ -408,6 +405,13 @@ def design_line(
     )
 
 
+def _beside(ask: Ask, tag: str, suffix: str = "") -> str:
+    """Where a suggested design or make writes: beside the output (else the pattern), named after the
+    pattern and ``tag`` (the material or printer, a preset name or a .json file)."""
+    where = Path(ask.output).parent if ask.output else Path(ask.file).parent
+    return str(where / f"{Path(ask.file).stem}-{Path(tag).stem}{suffix}")
+
+
 def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternative]:
     """The ``fabkiri make`` line equivalent to the ``design`` option (the same target, size, tiles and
     process, the same room check passed), when ``make`` can say all the design asks for: a quad
@@ -424,9 +428,7 @@ def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternati
         else ["--printer", ch["printer"], "--style", ch["style"]]
     )
     floor = opts.get("min_opening")
-    tag = Path(str(ch.get("material") or ch["printer"])).stem
-    where = Path(ask.output).parent if ask.output else Path(ask.file).parent
-    folder = str(where / f"{Path(ask.file).stem}-{tag}")
+    folder = _beside(ask, str(ch.get("material") or ch["printer"]))
     command = _line(
         "fabkiri", "make", stored["target"]["name"], "--size", f"{ch['size']:g}",
         *process, "--tiles", f"{lattice['rows']}x{lattice['cols']}",
@@ -435,11 +437,6 @@ def make_line(pattern: Pattern, design: Alternative, ask: Ask) -> list[Alternati
     what = "cuts" if "material" in ch else "prints"
     detail = f"the same design in one go: designs, {what}, deploys and reports into {folder}"
     return [Alternative("make", command, detail, DESIGN_GATE, dict(ch))]
-
-
-def refused(exc: FabkiriError, options: list[Alternative]) -> Refused:
-    """``exc`` as a :class:`Refused` carrying ``options`` (the refusal text kept as it was)."""
-    return Refused(str(exc), options)
 
 
 __all__ = [
@@ -456,5 +453,4 @@ __all__ = [
     "make_line",
     "option_lines",
     "print_alternatives",
-    "refused",
 ]

@@ -120,6 +120,8 @@ def _refusal_advice(
     whatever the flags: a ligament sheet that cannot be cut used to exit 2 at a given scale)."""
     try:
         return step()
+    except Refused:  # already advised
+        raise
     except (CheckFailed, FabricationError) as exc:
         try:  # a pattern that does not close has no closed-form minimum: the refusal as it was
             corners = closed_states(pattern)[options.state]
@@ -128,7 +130,7 @@ def _refusal_advice(
             why = cut_refusal(corners, options.material, kind, scale)
         except FabkiriError:
             why = None
-        if isinstance(exc, Refused) or why is None:
+        if why is None:
             raise
         raise Refused(
             str(exc), cut_alternatives(pattern, options, scale, ask=ask or Ask())

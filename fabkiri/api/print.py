@@ -203,12 +203,9 @@ def _refusal_advice(step: Callable[[], Any], pattern: Pattern, o: PrintOptions, 
 
 
 def printer_for(name: str | None, style: str, o: PrintOptions):
-    """The printer ``print`` uses for ``style``: the preset with the options' overrides."""
-    return _printer(name, print_style(style).own_tile_thickness, o)
-
-
-def _printer(name: str | None, pinned: bool, o: PrintOptions):
-    """The printer preset with the options' overrides (pinned tiles have their own, thicker, preset thickness)."""
+    """The printer ``print`` uses for ``style``: the preset with the options' overrides (pinned tiles
+    have their own, thicker, preset thickness)."""
+    pinned = print_style(style).own_tile_thickness
     return load_printer(name).with_overrides(
         tile_thickness_mm=None if pinned else o.tile_thickness,
         pin_tile_thickness_mm=o.tile_thickness if pinned else None,

@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import re
 import sys
 from pathlib import Path
 
-from ..api.advice import Ask, Refused
 from ..api.cut import cut_files, cut_material
 from ..errors import InputError
 from ..fabricate.cut import FORMATS, CutOptions
@@ -18,6 +16,7 @@ from ..fabricate.materials import HINGE_KINDS, available
 from ..fabricate.sheetformats import sheet_format_names
 from ..fabricate.svg import STROKE_MM
 from ..fileio import atomic_write_many
+from .asked import asked, options_on_stdout
 from .pattern_cmds import _nonneg, _positive, load_any
 
 
@@ -77,28 +76,6 @@ MATERIAL_FLAGS = tuple(
 ) + (("set", "--set", None),)  # fmt: skip
 
 
-@contextlib.contextmanager
-def options_on_stdout():
-    """A refusal's checked options on stdout, one runnable line each (the error stays one line on stderr)."""
-    try:
-        yield
-    except Refused as exc:
-        print("\n".join(exc.option_lines()))
-        raise
-
-
-def kept_flags(args: argparse.Namespace, spec) -> tuple[str, ...]:
-    """The command-line words of the options in ``spec`` that differ from their defaults."""
-    out: list[str] = []
-    for dest, flag, default in spec:
-        v = getattr(args, dest, None)
-        if v is None or v is False or v == default:
-            continue
-        for x in v if isinstance(v, list) else [v]:
-            out += [flag] if x is True else [flag, f"{x:g}" if isinstance(x, float) else str(x)]
-    return tuple(out)
-
-
 def cmd_cut(args: argparse.Namespace) -> int:
     pattern = load_any(args.file)
     material, hinge = cut_material(
@@ -140,13 +117,7 @@ def cmd_cut(args: argparse.Namespace) -> int:
         stroke_mm=args.stroke,
         exact=args.exact,
     )
-    ask = Ask(
-        file=args.file,
-        output=args.output,
-        flags=kept_flags(args, CUT_FLAGS),
-        process_flags=kept_flags(args, MATERIAL_FLAGS),
-        given=args.material,
-    )
+    ask = asked(args, CUT_FLAGS, MATERIAL_FLAGS, args.material)
     with options_on_stdout():
         cut = cut_files(pattern, options, use_verifier=not args.no_verify, ask=ask)
     rb, result = cut.readback, cut.result

@@ -7,12 +7,11 @@ import sys
 import time
 from pathlib import Path
 
-from ..api.advice import Ask
 from ..api.print import PrintOptions, print_pattern
 from ..fabricate import mesh
 from ..fabricate.printers import available_printers
 from ..fileio import atomic_write_many
-from .cut_cmd import kept_flags, options_on_stdout
+from .asked import asked, options_on_stdout
 from .pattern_cmds import _positive, load_any
 
 
@@ -65,13 +64,7 @@ def cmd_print(args: argparse.Namespace) -> int:
             stem=Path(args.file).stem,
             source=Path(args.file).name,
             notify=lambda text: print(text, file=sys.stderr),
-            ask=Ask(
-                file=args.file,
-                output=args.output,
-                flags=kept_flags(args, PRINT_FLAGS),
-                process_flags=kept_flags(args, PRINTER_FLAGS),
-                given=args.printer,
-            ),
+            ask=asked(args, PRINT_FLAGS, PRINTER_FLAGS, args.printer),
         )
     atomic_write_many(args.output, out.files)
     print(
