@@ -64,7 +64,7 @@ def test_make_chooses_the_strip_for_the_l():
     acrylic = _limits(material="acrylic-3")
     c = maker_tiles.choose_tiles(load_target(ELL, 150), acrylic, "acrylic-3 tape")
     assert c.corners is not None and c.tiles[0] > 3 * c.tiles[1]
-    assert "reflex corner" in c.reason
+    assert "bends round the outline's pocket" in c.reason
     # tiles the user names keep the target's own corners
     given = maker_tiles.given_tiles((8, 8), load_target(ELL, 150), acrylic)
     assert given.tiles == (8, 8) and given.corners is None
