@@ -41,7 +41,7 @@ def test_the_fold_free_start_puts_a_tip_on_the_reflex_corner():
 
 def test_an_l_is_split_at_its_strips_ends_with_rows_along_it():
     ell = load_target(ELL, None)
-    split, tiles, d, d0 = cs.best_split(ell, maker_tiles.lattice_shapes(8, 8))
+    split, tiles, d, d0 = cs.best_split(ell, [(8, 8), *maker_tiles.lattice_shapes(64)])
     assert split.corner_points() == pytest.approx(np.array(STRIP_ENDS), abs=1e-6)
     assert tiles[0] > 3 * tiles[1] and tiles[0] * tiles[1] <= 64  # a strip about 4x as long as wide
     assert d < maker_tiles.RESPLIT_GAIN * d0

@@ -60,14 +60,12 @@ def tile_width_mm(target: Target, n_tiles: int) -> float:
     return float(np.sqrt(TILE_COVER * abs(target.area) / n_tiles))
 
 
-def lattice_shapes(rows: int, cols: int) -> list[tuple[int, int]]:
-    """``rows`` x ``cols`` first, then every R x C (both at least :data:`MIN_ACROSS`) of :data:`SHAPE_BUDGET` to all of its tiles:
-    no more tiles than chosen, so none narrower than the chosen count's estimate."""
-    n = rows * cols
-    out = [(rows, cols)]
+def lattice_shapes(n: int) -> list[tuple[int, int]]:
+    """Every R x C (both at least :data:`MIN_ACROSS`) of :data:`SHAPE_BUDGET` to all of ``n`` tiles."""
+    out = []
     for c in range(MIN_ACROSS, n // MIN_ACROSS + 1):
         r = n // c
-        if r >= MIN_ACROSS and r * c >= SHAPE_BUDGET * n and (r, c) not in out:
+        if r >= MIN_ACROSS and r * c >= SHAPE_BUDGET * n:
             out.append((r, c))
     return out
 
@@ -75,20 +73,26 @@ def lattice_shapes(rows: int, cols: int) -> list[tuple[int, int]]:
 def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
     """``choice`` with the lattice's corners and rows x columns of ``corner_split.best_split`` when the
     pattern's harmonic map onto the target's own split folds tiles (a reflex corner on a side: an L) and
-    the re-split's fold-free start is distorted less than :data:`RESPLIT_GAIN` times the own split's.
-    Not for tiles the user named (``--tiles``): those keep the target's corners (a JSON target's
-    ``"corners"`` sets them)."""
+    the re-split's fold-free start is distorted less than :data:`RESPLIT_GAIN` times the own split's: of
+    the chosen count's tiles, else of the next standard count's (a strip :data:`MIN_ACROSS` tiles
+    across needs about as many tiles as it is long in widths; the design's fabrication rows still hold
+    every tile's width). Not for tiles the user named (``--tiles``): those keep the target's corners (a
+    JSON target's ``"corners"`` sets them)."""
     rows, cols = choice.tiles
     if not default_folds(target, rows, cols):
         return choice
-    split, tiles, d, d0 = best_split(target, lattice_shapes(rows, cols))
-    if split is target or d > RESPLIT_GAIN * d0:
+    ups = [m * m for m in sorted(STANDARD_TILES) if m > rows and m <= MAX_AUTO][:1]
+    for n in [rows * cols, *ups]:
+        split, tiles, d, d0 = best_split(target, [(rows, cols), *lattice_shapes(n)])
+        if split is not target and d <= RESPLIT_GAIN * d0:
+            break
+    else:
         return choice
     pts = "; ".join(f"({x:.3g}, {y:.3g})" for x, y in split.corner_points())
     why = (
         f"{choice.reason}; the lattice's corners at {pts} mm and {tiles[0]}x{tiles[1]} tiles: its start "
         f"bends round the outline's pocket (distortion {d:.2f}, against {d0:.2f} on the "
-        f"outline's own split, where the start folds tiles)"
+        f"outline's own split at {rows}x{cols}, where the start folds tiles)"
     )
     c = tuple(float(v) for v in split.corners)
     return replace(choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]))
