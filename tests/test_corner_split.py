@@ -41,10 +41,10 @@ def test_the_fold_free_start_puts_a_tip_on_the_reflex_corner():
 
 def test_an_l_is_split_at_its_strips_ends_with_rows_along_it():
     ell = load_target(ELL, None)
-    split, tiles, d, d0 = cs.best_split(ell, [(8, 8), *maker_tiles.lattice_shapes(64)])
+    split, tiles, d, d0 = cs.best_split(ell, [(8, 8), *cs.lattice_shapes(64)])
     assert split.corner_points() == pytest.approx(np.array(STRIP_ENDS), abs=1e-6)
     assert tiles[0] > 3 * tiles[1] and tiles[0] * tiles[1] <= 64  # a strip about 4x as long as wide
-    assert d < maker_tiles.RESPLIT_GAIN * d0
+    assert d < cs.RESPLIT_GAIN * d0
     # the start from the re-split target is the fold-free one, placed on the outline
     base, st = _pattern(*tiles)
     x, L0 = initial_guess(base, st, split, "conformal")
@@ -81,3 +81,18 @@ def test_the_l_is_met_on_the_strip_split():
     shape = outcome.report["shape"]["deployed"]
     assert outcome.report["status"] == "converged"
     assert shape["hausdorff_rel"] <= 0.02, shape  # the default 2 %; on main's split: 21-33 %
+
+
+def test_a_missed_l_names_the_strip_make_would_use():
+    from fabkiri.design.conformance import describe_miss
+
+    from .test_opening import CONF, _missed
+
+    strip = {"tiles": [16, 4], "corners": STRIP_ENDS}
+    pocket = {"depth_mm": 25.0, "deepest": [-5.0, -25.0], "area_mm2": 1312.5, "strip": strip}
+    why = describe_miss("deployed", _missed(tried_inits=["conformal"], pocket=pocket), CONF)
+    assert "try it as a bent strip: 16x4 tiles" in why and "(30, -50); (30, -25)" in why
+    assert "--tiles 16x4" in why and len(why.splitlines()) == 1
+    # the strip is the one bent_strip finds for an 8x8 L (what annotate stores)
+    split, tiles, _, _ = cs.bent_strip(load_target(ELL, None), 8, 8)
+    assert tiles == (16, 4) and split.corner_points() == pytest.approx(np.array(STRIP_ENDS))

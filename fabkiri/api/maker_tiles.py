@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..design.corner_split import best_split, default_folds
+from ..design.corner_split import bent_strip
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.target_curve import Target
 
@@ -26,14 +26,6 @@ MAX_AUTO = 12
 COMFORT = 2.0
 # a deployed rotating-squares pattern's tiles cover about this share of its outline (the rest is holes)
 TILE_COVER = 0.5
-# an outline re-split (resplit) keeps at least this share of the chosen count's tiles
-SHAPE_BUDGET = 0.8
-# and is re-split only when its start's distortion falls below this share of the own split's: an L
-# measured 0.43-0.46 against 1.37-1.44, stars 0.55-0.68 against 0.82-0.97 (kept on their own split)
-RESPLIT_GAIN = 0.5
-# rows and columns of a re-split lattice: an L's strip 3 tiles across (card-0.3 at 120 mm, 12x3) fitted
-# (2.57 %) but overlapped 30 times while deploying; 4 across (16x4) deployed rigidly, collision-free
-MIN_ACROSS = 4
 
 
 @dataclass(frozen=True)
@@ -60,34 +52,15 @@ def tile_width_mm(target: Target, n_tiles: int) -> float:
     return float(np.sqrt(TILE_COVER * abs(target.area) / n_tiles))
 
 
-def lattice_shapes(n: int) -> list[tuple[int, int]]:
-    """Every R x C (both at least :data:`MIN_ACROSS`) of :data:`SHAPE_BUDGET` to all of ``n`` tiles."""
-    out = []
-    for c in range(MIN_ACROSS, n // MIN_ACROSS + 1):
-        r = n // c
-        if r >= MIN_ACROSS and r * c >= SHAPE_BUDGET * n:
-            out.append((r, c))
-    return out
-
-
 def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
-    """``choice`` with the lattice's corners and rows x columns of ``corner_split.best_split`` when the
-    pattern's harmonic map onto the target's own split folds tiles (a reflex corner on a side: an L) and
-    the re-split's fold-free start is distorted less than :data:`RESPLIT_GAIN` times the own split's: of
-    the chosen count's tiles, else of the next standard count's (a strip :data:`MIN_ACROSS` tiles
-    across needs about as many tiles as it is long in widths; the design's fabrication rows still hold
-    every tile's width). Not for tiles the user named (``--tiles``): those keep the target's corners (a
-    JSON target's ``"corners"`` sets them)."""
+    """``choice`` with the lattice's corners and rows x columns of ``corner_split.bent_strip`` (an L, a
+    crescent: an outline whose own split folds the start). Not for tiles the user named (``--tiles``):
+    those keep the target's corners (a JSON target's ``"corners"`` sets them)."""
     rows, cols = choice.tiles
-    if not default_folds(target, rows, cols):
+    strip = bent_strip(target, rows, cols)
+    if strip is None:
         return choice
-    ups = [m * m for m in sorted(STANDARD_TILES) if m > rows and m <= MAX_AUTO][:1]
-    for n in [rows * cols, *ups]:
-        split, tiles, d, d0 = best_split(target, [(rows, cols), *lattice_shapes(n)])
-        if split is not target and d <= RESPLIT_GAIN * d0:
-            break
-    else:
-        return choice
+    split, tiles, d, d0 = strip
     pts = "; ".join(f"({x:.3g}, {y:.3g})" for x, y in split.corner_points())
     why = (
         f"{choice.reason}; the lattice's corners at {pts} mm and {tiles[0]}x{tiles[1]} tiles: its start "

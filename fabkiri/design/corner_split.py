@@ -26,6 +26,16 @@ from .stencils import Stencils
 from .target_curve import Target
 
 MAX_CANDIDATES = 40  # vertex quadruples scored at most (an outline with many sharp corners: a star)
+# a re-split keeps at least this share of the tiles it is given
+SHAPE_BUDGET = 0.8
+# and is taken only when its start's distortion falls below this share of the own split's: an L
+# measured 0.43-0.48 against 1.37-1.44, a crescent 0.50-0.55 against 1.20-1.26, stars 0.55-0.68 against
+# 0.82-0.97 (kept on their own split)
+RESPLIT_GAIN = 0.5
+# rows and columns of a re-split lattice: an L's strip 3 tiles across (card-0.3 at 120 mm, 12x3) fitted
+# (2.57 %) but overlapped 30 times while deploying; 4 across (16x4) deployed rigidly, collision-free
+MIN_ACROSS = 4
+NEXT_COUNT = {4: 6, 6: 8, 8: 12}  # make's N x N counts to the next one up (at most its 12x12)
 
 
 def _stencils(rows: int, cols: int) -> tuple[np.ndarray, Stencils]:
@@ -86,3 +96,31 @@ def best_split(
             if d < best[2]:
                 best = (with_corners(target, c), rc, d)
     return (*best, first)
+
+
+def lattice_shapes(n: int) -> list[tuple[int, int]]:
+    """Every R x C (both at least :data:`MIN_ACROSS`) of :data:`SHAPE_BUDGET` to all of ``n`` tiles."""
+    out = []
+    for c in range(MIN_ACROSS, n // MIN_ACROSS + 1):
+        r = n // c
+        if r >= MIN_ACROSS and r * c >= SHAPE_BUDGET * n:
+            out.append((r, c))
+    return out
+
+
+def bent_strip(
+    target: Target, rows: int, cols: int
+) -> tuple[Target, tuple[int, int], float, float] | None:
+    """The re-split target, its ``(rows, cols)``, distortion and the own split's, when the pattern's
+    harmonic map onto ``target``'s own split folds tiles at ``rows`` x ``cols`` and a re-split's start is
+    distorted less than :data:`RESPLIT_GAIN` times the own split's: over the shapes of these tiles, else
+    of the next standard count's (a strip :data:`MIN_ACROSS` tiles across needs about as many tiles as
+    it is long in widths; the design's fabrication rows still hold every tile's width). None: keep it."""
+    if not default_folds(target, rows, cols):
+        return None
+    up = NEXT_COUNT.get(rows) if rows == cols else None
+    for n in [rows * cols] + ([up * up] if up else []):
+        split, tiles, d, d0 = best_split(target, [(rows, cols), *lattice_shapes(n)])
+        if split is not target and d <= RESPLIT_GAIN * d0:
+            return split, tiles, d, d0
+    return None
