@@ -96,3 +96,16 @@ def test_a_missed_l_names_the_strip_make_would_use():
     # the strip is the one bent_strip finds for an 8x8 L (what annotate stores)
     split, tiles, _, _ = cs.bent_strip(load_target(ELL, None), 8, 8)
     assert tiles == (16, 4) and split.corner_points() == pytest.approx(np.array(STRIP_ENDS))
+
+
+def test_a_target_on_its_own_split_keeps_the_pattern_s_map():
+    """The fold-free start is only for a re-split target: a star on its own split (its corner
+    parameters wrap past 1) still refuses the folding harmonic map, as before."""
+    from fabkiri.errors import SolveError
+
+    star = load_target("star", 100)
+    assert star.corners[-1] > 1.0  # stored unwrapped: 0.888, 1.112 against the default's 0.112
+    base, st = _pattern(8, 8)
+    assert cs.default_folds(star, 8, 8)
+    with pytest.raises(SolveError, match="folds"):
+        initial_guess(base, st, star, "conformal")
