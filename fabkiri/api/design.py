@@ -16,8 +16,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
+
 from .. import limits
 from ..design import conformance as conf
+from ..design.corner_split import with_corners
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.offset_outline import preferred_holes
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
@@ -76,6 +79,8 @@ class PatternRequest:
     min_feature: float | None = None
     min_hole: float | None = None
     min_opening: float | None = None  # floor on the deployed hole fraction (design/opening_rows.py)
+    # the target's split parameters BL, BR, TR, TL (None: its own; make's design/corner_split.py)
+    corners: tuple[float, float, float, float] | None = None
     name: str | None = None
     seed: int | None = None  # jitters the full solver's initial nodes (the rigid family ignores it)
     i_know: bool = False
@@ -217,6 +222,8 @@ def _solver_request(
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     target = load_target(request.target, request.size) if request.target else None
+    if target is not None and request.corners is not None:
+        target = with_corners(target, np.asarray(request.corners, float))
     contracted: dict[int, object] = {}
     for text in request.contracted_target or []:
         s, spec = parse_contracted(text, request.size)

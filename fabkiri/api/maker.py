@@ -251,6 +251,7 @@ def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         style=plan.style if plan.printer else None,
         shape_tol=plan.shape_tol,
         min_opening=plan.min_opening,
+        corners=plan.tiles.corners,
     )
     outcome = design_pattern(request, notify=say)
     name = f"{plan.stem}.json"

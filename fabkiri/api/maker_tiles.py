@@ -10,10 +10,11 @@ and says why in one sentence.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..design.corner_split import bent_strip
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.target_curve import Target
 
@@ -36,6 +37,8 @@ class TilesChoice:
     tile_width_mm: float  # estimated mean tile width at the chosen count
     feature_mm: float  # the process's thinnest feature (mm)
     given: bool = False  # the user named the tiles
+    # the target's split parameters BL, BR, TR, TL when make re-split it (None: the target's own)
+    corners: tuple[float, float, float, float] | None = None
 
 
 def min_feature_mm(limits: FabricationLimits) -> float:
@@ -47,6 +50,25 @@ def min_feature_mm(limits: FabricationLimits) -> float:
 def tile_width_mm(target: Target, n_tiles: int) -> float:
     """Mean width of ``n_tiles`` square tiles covering :data:`TILE_COVER` of the target's area (mm)."""
     return float(np.sqrt(TILE_COVER * abs(target.area) / n_tiles))
+
+
+def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
+    """``choice`` with the lattice's corners and rows x columns of ``corner_split.bent_strip`` (an L, a
+    crescent: an outline whose own split folds the start). Not for tiles the user named (``--tiles``):
+    those keep the target's corners (a JSON target's ``"corners"`` sets them)."""
+    rows, cols = choice.tiles
+    strip = bent_strip(target, rows, cols)
+    if strip is None:
+        return choice
+    split, tiles, d, d0 = strip
+    pts = "; ".join(f"({x:.3g}, {y:.3g})" for x, y in split.corner_points())
+    why = (
+        f"{choice.reason}; the lattice's corners at {pts} mm and {tiles[0]}x{tiles[1]} tiles: its start "
+        f"bends round the outline's pocket (distortion {d:.2f}, against {d0:.2f} on the "
+        f"outline's own split at {rows}x{cols}, where the start folds tiles)"
+    )
+    c = tuple(float(v) for v in split.corners)
+    return replace(choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]))
 
 
 def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> TilesChoice:
@@ -70,7 +92,7 @@ def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> Til
                     else f"; capped at {MAX_AUTO}x{MAX_AUTO} for design time"
                 )
             )
-            return TilesChoice((n, n), why, w, feature)
+            return resplit(target, TilesChoice((n, n), why, w, feature))
     n = counts[-1]  # the widest tiles there are
     w = tile_width_mm(target, n * n)
     least = smallest_size(target.size, abs(target.area), n * n, limits)  # the design's own check
@@ -81,7 +103,7 @@ def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> Til
         else f"even {n}x{n} tiles cannot be {feature:.3g} mm wide inside {size} (the smallest size "
         f"that could work is --size {least:.4g})"
     )
-    return TilesChoice((n, n), why, w, feature)
+    return resplit(target, TilesChoice((n, n), why, w, feature))
 
 
 def given_tiles(tiles: tuple[int, int], target: Target, limits: FabricationLimits) -> TilesChoice:

@@ -2,12 +2,14 @@
 cut across a pocket of the target (a reflex corner, a hollow), that instead of a promise.
 
 :func:`annotate` adds to each missed ``report["shape"][k]`` the guesses tried (``tried_inits``) and, for the
-deployed outline, the pocket it covers most of (``pocket``, :mod:`fabkiri.design.pockets`);
+deployed outline, the pocket it covers most of (``pocket``, :mod:`fabkiri.design.pockets`) and, where the
+outline is a bent strip, the tiles and corners ``make`` would re-split it with (``pocket["strip"]``);
 ``design.conformance.describe_miss`` words them.
 """
 
 from __future__ import annotations
 
+from ..design.corner_split import bent_strip
 from ..design.pockets import pocket_covered
 from ..design.targets import Target
 from ..pattern.conformance import boundary_tip_order
@@ -31,3 +33,11 @@ def annotate(
         found = pocket_covered(target, pattern.nodes[tips])
         if found is not None:
             j["pocket"] = {**found[0].to_dict(), "covered": found[1]}
+            lat = pattern.lattice or {}
+            rows, cols = int(lat.get("rows", 0)), int(lat.get("cols", 0))
+            strip = bent_strip(target, rows, cols) if min(rows, cols) >= 2 else None
+            if strip is not None:  # what make does with these tiles (design/corner_split.py)
+                j["pocket"]["strip"] = {
+                    "tiles": list(strip[1]),
+                    "corners": strip[0].corner_points().tolist(),
+                }

@@ -143,6 +143,15 @@ def _local_minimum_note(j: dict) -> str:
         if pocket
         else ""
     )
+    strip = (pocket or {}).get("strip")
+    if strip:  # corner_split.bent_strip: what make picks for this outline
+        r, c = strip["tiles"]
+        at = "; ".join(f"({x:.3g}, {y:.3g})" for x, y in strip["corners"])
+        note += (
+            f"; try it as a bent strip: {r}x{c} tiles with the lattice's corners at {at} mm (centred) "
+            f"(`fabkiri make` picks them; `design` takes them as --tiles {r}x{c} and a JSON target's "
+            f'"corners")'
+        )
     if "tried_inits" not in j:
         return note + " (try another --init)"
     tried = list(dict.fromkeys(j["tried_inits"]))
