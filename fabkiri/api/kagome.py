@@ -24,6 +24,7 @@ import numpy as np
 
 from .. import limits as size_limits
 from ..design import conformance as conf
+from ..design import kagome_aspect as KA
 from ..design import kagome_fab as KF
 from ..design import kagome_opening as KO
 from ..design.fabrication import FabricationLimits, smallest_size
@@ -311,12 +312,13 @@ def design_kagome_pattern(
     refuses the quad-only options, resolves the fabrication limits as the quad designer does, then
     :func:`design_kagome` (the target defaults to a circle)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
-    rows, cols = request.tiles
+    target = request.target or "circle"
+    tgt = load_target(target, request.size)
+    rows, cols, aspect = _lattice(request.tiles, tgt, notify)
     if rows >= 2 and cols >= 2:  # (smaller: refused by design_kagome, in its own words)
         size_limits.check_tiles(rows, cols, "design kagome", request.i_know)
-    target = request.target or "circle"
-    limits, intent = request.fabrication_limits(load_target(target, request.size))
-    return design_kagome(
+    limits, intent = request.fabrication_limits(tgt)
+    out = design_kagome(
         rows,
         cols,
         target,
@@ -329,6 +331,29 @@ def design_kagome_pattern(
         intent=intent,
         min_opening=request.min_opening,
     )
+    out.report["aspect"] = aspect
+    return out
+
+
+def _lattice(tiles, target, notify) -> tuple[int, int, dict]:
+    """``(rows, cols, aspect report)``: the lattice asked for, with a one-line warning through ``notify``
+    when its aspect does not suit the target's (and a lattice of about as many tiles does), or, when
+    none is asked for, the one whose aspect suits the target (``kagome_aspect.suggest``)."""
+    say = notify or (lambda text: None)
+    if tiles is None:
+        fit = KA.suggest(target)
+        say(
+            f"kagome {fit.tiles[0]}x{fit.tiles[1]} chosen from the outline: {fit.lattice:.2f} wide for 1 "
+            f"high, {target.name!r} {fit.target:.2f} (--tiles RxC to choose)"
+        )
+        warning, chosen = None, True
+    else:
+        fit = KA.aspect_fit(*tiles, target)
+        warning, chosen = KA.advice(*tiles, target), False
+        if warning:
+            say(warning)
+    report = {"lattice": fit.lattice, "target": fit.target, "miss": fit.miss, "chosen": chosen}
+    return (*fit.tiles, {**report, **({"warning": warning} if warning else {})})
 
 
 # --symmetry: absent imposes every mirror the lattice and target share; none leaves the design free
