@@ -99,7 +99,16 @@ FIT_CELLS = (
 def fit_row(outline: str, tiles: str, size: str, out: Path) -> str:
     """One table row: ``fabkiri design --lattice kagome`` on the cell, its exit code and figures."""
     target = EGG if outline == "egg" else outline
-    cmd = [sys.executable, "-m", "fabkiri", "design", "--lattice", "kagome", "--target", target]
+    cmd = [
+        sys.executable,
+        "-m",
+        "fabkiri.cli.main",
+        "design",
+        "--lattice",
+        "kagome",
+        "--target",
+        target,
+    ]
     cmd += ["--size", size, "-o", str(out)] + ([] if tiles == "auto" else ["--tiles", tiles])
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.monotonic()
