@@ -314,7 +314,7 @@ def design_kagome_pattern(
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     target = request.target or "circle"
     tgt = load_target(target, request.size)
-    rows, cols, aspect = _lattice(request.tiles, tgt, notify)
+    rows, cols, aspect = choose_lattice(request.tiles, tgt, notify)
     if rows >= 2 and cols >= 2:  # (smaller: refused by design_kagome, in its own words)
         size_limits.check_tiles(rows, cols, "design kagome", request.i_know)
     limits, intent = request.fabrication_limits(tgt)
@@ -335,7 +335,7 @@ def design_kagome_pattern(
     return out
 
 
-def _lattice(tiles, target, notify) -> tuple[int, int, dict]:
+def choose_lattice(tiles, target, notify) -> tuple[int, int, dict]:
     """``(rows, cols, aspect report)``: the lattice asked for, with a one-line warning through ``notify``
     when its aspect does not suit the target's (and a lattice of about as many tiles does), or, when
     none is asked for, the one whose aspect suits the target (``kagome_aspect.suggest``)."""
