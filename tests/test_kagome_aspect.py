@@ -48,19 +48,25 @@ def test_among_lattices_of_the_outline_aspect_the_one_sharing_its_mirrors_is_sug
     assert KA.suggest(circle, 66).tiles == (6, 11)
 
 
-def test_the_front_door_chooses_the_lattice_or_warns_through_notify():
+def test_the_front_door_chooses_the_lattice_or_notes_a_warning():
     from fabkiri.api.kagome import choose_lattice
 
-    heard: list[str] = []
     circle = TG.circle().scaled_to(120.0)
-    rows, cols, rep = choose_lattice(None, circle, heard.append)
+    rows, cols, rep = choose_lattice(None, circle)
     assert (rows, cols) == KA.suggest(circle).tiles and rep["chosen"] and rep["miss"] <= KA.NEAR
-    assert len(heard) == 1 and f"{rows}x{cols} chosen from the outline" in heard[0]
-    heard.clear()
-    assert choose_lattice((8, 8), circle, heard.append)[:2] == (8, 8)  # the user's lattice is kept
-    assert len(heard) == 1 and heard[0].startswith("warning:") and "6x11" in heard[0]
-    heard.clear()
-    assert choose_lattice((6, 11), circle, heard.append)[2].get("warning") is None and not heard
+    assert f"{rows}x{cols} chosen from the outline" in rep["note"]
+    rows, cols, rep = choose_lattice((8, 8), circle)  # the user's lattice is kept, with a warning
+    assert (rows, cols) == (8, 8) and not rep["chosen"]
+    assert rep["note"].startswith("warning:") and "6x11" in rep["note"]
+    assert choose_lattice((6, 11), circle)[2]["note"] is None
+
+
+def test_cli_a_refused_lattice_gets_no_aspect_advice(tmp_path, run_cli):
+    out = tmp_path / "k.json"
+    argv = ["design", "--lattice", "kagome", "--target", "circle", "-o", out, "--tiles"]
+    for tiles, why in (("1x1", "at least 2x2"), ("300x300", "largest tested")):
+        code, _, err = run_cli(*argv, tiles)
+        assert code == 2 and why in err and len(err.strip().splitlines()) == 1 and not out.exists()
 
 
 def test_cli_quad_design_without_tiles_is_refused_in_one_line(tmp_path, run_cli):

@@ -314,9 +314,11 @@ def design_kagome_pattern(
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     target = request.target or "circle"
     tgt = load_target(target, request.size)
-    rows, cols, aspect = choose_lattice(request.tiles, tgt, notify)
+    rows, cols, aspect = choose_lattice(request.tiles, tgt)
     if rows >= 2 and cols >= 2:  # (smaller: refused by design_kagome, in its own words)
         size_limits.check_tiles(rows, cols, "design kagome", request.i_know)
+        if notify is not None and aspect["note"]:  # a lattice refused above gets no advice
+            notify(aspect["note"])
     limits, intent = request.fabrication_limits(tgt)
     out = design_kagome(
         rows,
@@ -335,25 +337,23 @@ def design_kagome_pattern(
     return out
 
 
-def choose_lattice(tiles, target, notify) -> tuple[int, int, dict]:
-    """``(rows, cols, aspect report)``: the lattice asked for, with a one-line warning through ``notify``
-    when its aspect does not suit the target's (and a lattice of about as many tiles does), or, when
-    none is asked for, the one whose aspect suits the target (``kagome_aspect.suggest``)."""
-    say = notify or (lambda text: None)
+def choose_lattice(tiles, target) -> tuple[int, int, dict]:
+    """``(rows, cols, aspect report)``: the lattice asked for, or, when none is (``tiles`` None), the one
+    whose aspect suits the target (``kagome_aspect.suggest``). The report's ``note`` is the one line to tell
+    the user: the lattice chosen, or a warning when the asked one does not suit the target's aspect and a
+    lattice of about as many tiles does (None otherwise)."""
     if tiles is None:
         fit = KA.suggest(target)
-        say(
+        note: str | None = (
             f"kagome {fit.tiles[0]}x{fit.tiles[1]} chosen from the outline: {fit.lattice:.2f} wide for 1 "
             f"high, {target.name!r} {fit.target:.2f} (--tiles RxC to choose)"
         )
-        warning, chosen = None, True
     else:
         fit = KA.aspect_fit(*tiles, target)
-        warning, chosen = KA.advice(*tiles, target), False
-        if warning:
-            say(warning)
+        note = KA.advice(*tiles, target)
+    chosen = tiles is None
     report = {"lattice": fit.lattice, "target": fit.target, "miss": fit.miss, "chosen": chosen}
-    return (*fit.tiles, {**report, **({"warning": warning} if warning else {})})
+    return (*fit.tiles, {**report, "note": note})
 
 
 # --symmetry: absent imposes every mirror the lattice and target share; none leaves the design free
