@@ -21,13 +21,13 @@ def test_the_lattice_aspect_is_c_over_root3_r(rows, cols):
 def test_the_suggested_lattice_has_the_outline_aspect_and_about_the_tile_count(name, n):
     fit = KA.suggest(load_target(name, 120.0), n)
     rows, cols = fit.tiles
-    assert fit.miss <= 0.08 and rows >= 2 and cols >= 2
+    assert abs(np.log(fit.lattice / (KA.WIDER * fit.target))) <= 0.06 and rows >= 2 and cols >= 2
     assert abs(rows * cols - n) <= KA.COUNT_SLACK * n and rows * cols <= KA.MAX_TILES
 
 
 def test_the_egg_outline_gets_a_tall_lattice():
     fit = KA.suggest(load_target("tests/data/egg.csv", 120.0))
-    assert fit.target == pytest.approx(0.754, abs=1e-3) and fit.miss <= 0.03
+    assert fit.target == pytest.approx(0.754, abs=1e-3) and fit.miss <= 0.12
     assert fit.tiles[0] > fit.tiles[1] / np.sqrt(3.0)  # taller than a square lattice of its columns
 
 
@@ -37,15 +37,16 @@ def test_a_lattice_that_does_not_suit_the_outline_gets_one_line_naming_a_better_
     assert line is not None and "\n" not in line and "try --tiles 6x11" in line
     assert KA.aspect_fit(6, 11, circle).miss < KA.aspect_fit(8, 8, circle).miss
     assert KA.advice(6, 11, circle) is None and KA.advice(5, 19, ellipse) is None
-    assert "try --tiles 4x13" in (KA.advice(6, 11, ellipse) or "")
+    assert "try --tiles 4x15" in (KA.advice(6, 11, ellipse) or "")
+    assert "try --tiles 10x14" in (KA.advice(9, 15, load_target("tests/data/egg.csv", 180.0)) or "")
 
 
-def test_among_lattices_of_the_outline_aspect_the_one_sharing_its_mirrors_is_suggested():
-    """circle at 120 mm: 6x11 (both mirrors) measured 1.23 %, 6x10 (one) 2.84 % (docs/kagome.md)."""
-    circle, heart = TG.circle().scaled_to(120.0), TG.heart().scaled_to(120.0)
-    assert KA.shared_mirrors(6, 11, circle) == 2 and KA.shared_mirrors(6, 10, circle) == 1
-    assert KA.shared_mirrors(6, 11, heart) == 1 and KA.shared_mirrors(6, 10, heart) == 0
-    assert KA.suggest(circle, 66).tiles == (6, 11)
+def test_the_suggestion_is_a_little_wider_than_the_outline():
+    """Measured (docs/kagome.md): circle 6x11 (1.06 wide for 1 high) 1.23 %, 6x10 (0.96) 2.84 %; ellipse 2:1
+    4x15 (2.17) 1.55 %, 4x13 (1.88) 2.25 %."""
+    circle, ellipse = TG.circle().scaled_to(120.0), TG.ellipse().scaled_to(120.0)
+    assert KA.suggest(circle, 66).tiles == (6, 11) and KA.suggest(ellipse, 66).tiles == (4, 15)
+    assert KA.advice(6, 10, circle) is None  # 4 % narrower: within the tolerance, no warning
 
 
 def test_the_front_door_chooses_the_lattice_or_notes_a_warning():
@@ -53,7 +54,7 @@ def test_the_front_door_chooses_the_lattice_or_notes_a_warning():
 
     circle = TG.circle().scaled_to(120.0)
     rows, cols, rep = choose_lattice(None, circle)
-    assert (rows, cols) == KA.suggest(circle).tiles and rep["chosen"] and rep["miss"] <= KA.NEAR
+    assert (rows, cols) == KA.suggest(circle).tiles and rep["chosen"] and rep["miss"] <= 0.1
     assert f"{rows}x{cols} chosen from the outline" in rep["note"]
     rows, cols, rep = choose_lattice((8, 8), circle)  # the user's lattice is kept, with a warning
     assert (rows, cols) == (8, 8) and not rep["chosen"]

@@ -16,7 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..pattern.kagome import standard_kagome
-from .kagome_fit import MIRROR_TOL
 from .target_curve import Target
 
 DEFAULT_TILES = (
@@ -25,7 +24,10 @@ DEFAULT_TILES = (
 ASPECT_TOL = (
     0.15  # a lattice whose aspect is off the target's by more than this fraction gets a suggestion
 )
-NEAR = 0.08  # aspects this close count as suiting alike (a lattice's aspect moves by 1 / (√3 R) per column)
+# the lattice a little wider than the target fits better (measured at 120 mm; lattice / target aspect):
+# circle 6x11 (1.06) 1.23 %, 6x10 (0.96) 2.84 %, 9x15 (0.96, 180 mm) 2.83 %; ellipse 2:1 4x15 (1.08)
+# 1.55 %, 4x13 (0.94) 2.25 %, 5x19 (1.10, 198 mm) 0.94 %: the corner tiles shrink, the design rounds in
+WIDER = 1.08
 COUNT_SLACK = 0.25  # a suggestion keeps the tile count within this fraction of the asked one
 MAX_TILES = 12 * 21  # fabkiri.limits' largest kagome design
 
@@ -60,48 +62,36 @@ def aspect_fit(rows: int, cols: int, target: Target) -> AspectFit:
     return AspectFit((rows, cols), lattice_aspect(rows, cols), target_aspect(target))
 
 
-def shared_mirrors(rows: int, cols: int, target: Target) -> int:
-    """How many mirrors the lattice and the target share (the design imposes them: ``mirror_axes``). The
-    lattice has the vertical one for C odd and the horizontal one for R even (``kagome_rows.mirror_map``)."""
-    lo, hi = target.bbox
-    centred = target.transformed(1.0, -0.5 * (lo + hi))
-    has = {"y": cols % 2 == 1, "x": rows % 2 == 0}
-    return sum(has[a] and centred.mirror_error(a) <= MIRROR_TOL for a in has)
-
-
 def suggest(target: Target, n_tiles: int = DEFAULT_TILES) -> AspectFit:
     """The R x C (R, C >= 2, at most ``MAX_TILES`` tiles) with about ``n_tiles`` tiles whose aspect is
-    nearest the target's. Among those within ``NEAR`` of it, the one that shares more mirrors with the target
-    first (measured, circle at 120 mm: 6x11, both mirrors, 1.23 %; 6x10, one, 2.84 %), then the nearer
-    aspect, then the tile count nearest ``n_tiles``."""
-    want = target_aspect(target)
+    nearest ``WIDER`` times the target's; among equally near ones the tile count nearest ``n_tiles``."""
+    want = WIDER * target_aspect(target)
     n = min(max(int(n_tiles), 4), MAX_TILES)
     lo, hi = max(4, int(np.floor(n * (1 - COUNT_SLACK)))), int(np.ceil(n * (1 + COUNT_SLACK)))
     best: tuple | None = None
     for rows in range(2, n // 2 + 1):
-        # aspect C / (√3 R): the columns that bracket the target's, checked on the lattice itself
+        # aspect C / (√3 R): the columns that bracket the wanted one, checked on the lattice itself
         c0 = int(np.floor(want * np.sqrt(3.0) * rows))
         for cols in {max(c0, 2), max(c0 + 1, 2)}:
             if not lo <= rows * cols <= min(hi, MAX_TILES):
                 continue
-            miss = aspect_fit(rows, cols, target).miss
-            near = miss <= NEAR
-            mirrors = -shared_mirrors(rows, cols, target) if near else 0
-            key = (not near, mirrors, round(miss, 3), abs(rows * cols - n), rows, cols)
+            miss = abs(np.log(lattice_aspect(rows, cols) / want))
+            key = (round(miss, 3), abs(rows * cols - n), rows, cols)
             best = key if best is None or key < best else best
     if best is None:  # no lattice of about that count: the nearest aspect at any count
         return suggest(target, DEFAULT_TILES) if n != DEFAULT_TILES else aspect_fit(2, 2, target)
     return aspect_fit(best[-2], best[-1], target)
 
 
+def _off_wanted(fit: AspectFit) -> float:
+    return abs(float(np.log(fit.lattice / (WIDER * fit.target))))
+
+
 def advice(rows: int, cols: int, target: Target) -> str | None:
     """One line when R x C does not suit the target's aspect and a lattice of about as many tiles suits
     it better; None when it suits (within ``ASPECT_TOL``) or nothing suits better."""
-    given = aspect_fit(rows, cols, target)
-    if given.miss <= ASPECT_TOL:
-        return None
-    better = suggest(target, rows * cols)
-    if better.miss >= given.miss:
+    given, better = aspect_fit(rows, cols, target), suggest(target, rows * cols)
+    if given.miss <= ASPECT_TOL or _off_wanted(better) >= _off_wanted(given):
         return None
     r, c = better.tiles
     return (
