@@ -29,6 +29,7 @@ from ..design import kagome_fab as KF
 from ..design import kagome_opening as KO
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.kagome_fit import design
+from ..design.target_curve import Target
 from ..design.targets import load_target
 from ..errors import InputError
 from ..fabricate import fabricability
@@ -337,7 +338,7 @@ def design_kagome_pattern(
     return out
 
 
-def choose_lattice(tiles, target) -> tuple[int, int, dict]:
+def choose_lattice(tiles: tuple[int, int] | None, target: Target) -> tuple[int, int, dict]:
     """``(rows, cols, aspect report)``: the lattice asked for, or, when none is (``tiles`` None), the one
     whose aspect suits the target (``kagome_aspect.suggest``). The report's ``note`` is the one line to tell
     the user: the lattice chosen, or a warning when the asked one does not suit the target's aspect and a
@@ -349,11 +350,11 @@ def choose_lattice(tiles, target) -> tuple[int, int, dict]:
             f"high, {target.name!r} {fit.target:.2f} (--tiles RxC to choose)"
         )
     else:
-        fit = KA.aspect_fit(*tiles, target)
-        note = KA.advice(*tiles, target)
+        rows, cols = tiles
+        fit, note = KA.aspect_fit(rows, cols, target), KA.advice(rows, cols, target)
     chosen = tiles is None
     report = {"lattice": fit.lattice, "target": fit.target, "miss": fit.miss, "chosen": chosen}
-    return (*fit.tiles, {**report, "note": note})
+    return fit.tiles[0], fit.tiles[1], {**report, "note": note}
 
 
 # --symmetry: absent imposes every mirror the lattice and target share; none leaves the design free
