@@ -1,6 +1,12 @@
-"""Kagome counts table and pictures for docs/kagome.md (run on demand).
+"""Kagome counts table, fit table and pictures for docs/kagome.md (run on demand).
 
     PYTHONPATH=. python3 bench/kagome.py [--sizes 4x4,7x5,16x16] [--png docs/img/kagome-states.png]
+    PYTHONPATH=. python3 bench/kagome.py --fit [--cells circle:6x11:120,heart:auto:120,...]
+
+``--fit`` runs ``fabkiri design --lattice kagome`` per cell (outline, R x C or ``auto`` for the lattice
+chosen from the outline, size in mm) and prints one row each: the exit code, the Hausdorff distance (% of
+the size, read from the written design), the verify checks that failed, the aspect warning, CPU s of the
+command (its children's rusage) and the load average after it.
 
 Prints, per size, the counts of the standard R x C kagome (tiles, hinges, holes, free corners,
 nodes), the equations, Jacobian rank and local dimension of the contractible (state 1) and the
@@ -12,6 +18,11 @@ the standard 4x4 and of a generic reconfigurable 4x4 design.
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -76,11 +87,77 @@ def figure(path: Path) -> None:
     print(f"wrote {path} ({path.stat().st_size // 1024} kB)")
 
 
+EGG = str(Path(__file__).resolve().parent.parent / "tests" / "data" / "egg.csv")
+FIT_CELLS = (  # docs/kagome.md's table (the heart 6x11 free and 6x13 rows were run through the API)
+    "circle:auto:120,circle:6x10:120,circle:8x8:120,circle:9x15:180,circle:12x21:240,"
+    "ellipse:auto:120,ellipse:4x15:120,ellipse:4x13:120,ellipse:5x17:180,ellipse:6x11:120,"
+    "ellipse:5x19:198,ellipse:6x21:240,heart:auto:120,heart:6x11:120,"
+    "egg:auto:120,egg:7x9:120,egg:9x15:180"
+)
+
+
+def fit_row(outline: str, tiles: str, size: str, out: Path) -> str:
+    """One table row: ``fabkiri design --lattice kagome`` on the cell, its exit code and figures."""
+    target = EGG if outline == "egg" else outline
+    cmd = [
+        sys.executable,
+        "-m",
+        "fabkiri.cli.main",
+        "design",
+        "--lattice",
+        "kagome",
+        "--target",
+        target,
+    ]
+    cmd += ["--size", size, "-o", str(out)] + ([] if tiles == "auto" else ["--tiles", tiles])
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.monotonic()
+    run = subprocess.run(
+        cmd, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"}
+    )
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    warn = next((ln for ln in run.stderr.splitlines() if "wide for 1 high" in ln), "")
+    hd, failed, lattice = "–", "–", tiles
+    if out.exists():
+        d = json.loads(out.read_text())
+        rep = d["design"]["report"]
+        hd = f"{100 * rep['conformance']['hausdorff_rel']:.2f} %"
+        failed = ", ".join(rep["verify_failed"]) or "all pass"
+        lattice = f"{d['lattice']['rows']}x{d['lattice']['cols']}"
+        if rep.get("convex_holes"):
+            failed += " (convex holes)"
+        out.unlink()
+    else:
+        failed = (run.stderr.strip().splitlines() or ["no output"])[-1]
+    note = (
+        "chosen"
+        if tiles == "auto"
+        else ("warned: " + warn.split("try ")[-1].split(" (")[0] if warn else "")
+    )
+    return (
+        f"| {outline} | {lattice} {note} | {size} | {run.returncode} | {hd} | {failed} | "
+        f"{cpu:.1f} | {time.monotonic() - t0:.0f} | {os.getloadavg()[0]:.1f} |"
+    )
+
+
+def fit_table(cells: str, out: Path) -> None:
+    print("| outline | R×C | size mm | exit | Hausdorff | verify | CPU s | wall s | load |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for cell in cells.split(","):
+        print(fit_row(*cell.split(":"), out), flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="4x4,7x5,16x16")
     ap.add_argument("--png", type=Path, default=None)
+    ap.add_argument("--fit", action="store_true", help="the fit table (outline x R x C) instead")
+    ap.add_argument("--cells", default=FIT_CELLS, help="OUTLINE:RxC|auto:MM,...")
     args = ap.parse_args()
+    if args.fit:
+        fit_table(args.cells, Path(f"/tmp/kagome-fit-{os.getpid()}.json"))
+        return
     table([tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")])
     if args.png:
         figure(args.png)

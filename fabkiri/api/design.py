@@ -58,7 +58,7 @@ RETRY_FIT_ABOVE = 5e-3
 class PatternRequest:
     """Everything ``fabkiri design`` can be told (the same names as its options)."""
 
-    tiles: tuple[int, int]  # rows, cols
+    tiles: tuple[int, int] | None  # rows, cols (None: kagome chooses them from the outline)
     target: str | None = None  # a name from templates/targets or a .csv/.json/.svg file
     size: float | None = None  # the target's larger dimension in mm (named targets default to 100)
     rigid: bool = False
@@ -218,6 +218,10 @@ def _solver_request(
 ) -> tuple[PatternRequest, DesignRequest, Target | None, dict]:
     """``(request with its holes resolved, solver request, target, closed-state specs)``, or InputError
     (with ``sized``, also past the size bound)."""
+    if request.tiles is None:
+        raise InputError(
+            "quad designs need --tiles ROWSxCOLS (a kagome design chooses it from the outline)"
+        )
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")

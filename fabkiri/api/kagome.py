@@ -24,10 +24,12 @@ import numpy as np
 
 from .. import limits as size_limits
 from ..design import conformance as conf
+from ..design import kagome_aspect as KA
 from ..design import kagome_fab as KF
 from ..design import kagome_opening as KO
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.kagome_fit import design
+from ..design.target_curve import Target
 from ..design.targets import load_target
 from ..errors import InputError
 from ..fabricate import fabricability
@@ -311,12 +313,15 @@ def design_kagome_pattern(
     refuses the quad-only options, resolves the fabrication limits as the quad designer does, then
     :func:`design_kagome` (the target defaults to a circle)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
-    rows, cols = request.tiles
+    target = request.target or "circle"
+    tgt = load_target(target, request.size)
+    rows, cols, aspect = choose_lattice(request.tiles, tgt)
     if rows >= 2 and cols >= 2:  # (smaller: refused by design_kagome, in its own words)
         size_limits.check_tiles(rows, cols, "design kagome", request.i_know)
-    target = request.target or "circle"
-    limits, intent = request.fabrication_limits(load_target(target, request.size))
-    return design_kagome(
+        if notify is not None and aspect["note"]:  # a lattice refused above gets no advice
+            notify(aspect["note"])
+    limits, intent = request.fabrication_limits(tgt)
+    out = design_kagome(
         rows,
         cols,
         target,
@@ -329,6 +334,27 @@ def design_kagome_pattern(
         intent=intent,
         min_opening=request.min_opening,
     )
+    out.report["aspect"] = aspect
+    return out
+
+
+def choose_lattice(tiles: tuple[int, int] | None, target: Target) -> tuple[int, int, dict]:
+    """``(rows, cols, aspect report)``: the lattice asked for, or, when none is (``tiles`` None), the one
+    whose aspect suits the target (``kagome_aspect.suggest``). The report's ``note`` is the one line to tell
+    the user: the lattice chosen, or a warning when the asked one does not suit the target's aspect and a
+    lattice of about as many tiles does (None otherwise)."""
+    if tiles is None:
+        fit = KA.suggest(target)
+        note: str | None = (
+            f"kagome {fit.tiles[0]}x{fit.tiles[1]} chosen from the outline: {fit.lattice:.2f} wide for 1 "
+            f"high, {target.name!r} {fit.target:.2f} (--tiles RxC to choose)"
+        )
+    else:
+        rows, cols = tiles
+        fit, note = KA.aspect_fit(rows, cols, target), KA.advice(rows, cols, target)
+    chosen = tiles is None
+    report = {"lattice": fit.lattice, "target": fit.target, "miss": fit.miss, "chosen": chosen}
+    return fit.tiles[0], fit.tiles[1], {**report, "note": note}
 
 
 # --symmetry: absent imposes every mirror the lattice and target share; none leaves the design free

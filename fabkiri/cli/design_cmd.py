@@ -42,10 +42,10 @@ def cmd_design(args: argparse.Namespace) -> int:
         return cmd_design_tube(args)
     if args.closed:
         raise InputError("--closed applies to --tube designs only")
-    rows, cols = parse_tiles(args.tiles)
+    tiles = None if args.tiles is None else parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
     request = PatternRequest(
-        tiles=(rows, cols),
+        tiles=tiles,
         target=args.target,
         size=args.size,
         rigid=args.rigid,
@@ -102,7 +102,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "design", help="inverse design: a reconfigurable quad kirigami fitted to a target shape"
     )
-    p.add_argument("--tiles", required=True, metavar="ROWSxCOLS", help="lattice size, e.g. 16x16")
+    p.add_argument(
+        "--tiles",
+        metavar="ROWSxCOLS",
+        help="lattice size, e.g. 16x16 (required for quads; kagome: R rows of C triangles, by default "
+        "chosen so the lattice's aspect matches the target's)",
+    )
     _add_target_args(p)
     _add_solver_args(p)
     _add_fabrication_args(p)

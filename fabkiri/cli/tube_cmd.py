@@ -16,8 +16,11 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
     """``design --tube SPEC --tiles ROWSxCOLS``: write the tube's sheet; exit 1 unless it converged and
     verified (the best iterate is still written, marked ``design.valid = false``)."""
     from ..api.tube import design_tube_pattern
+    from ..errors import InputError
     from .pattern_cmds import parse_tiles
 
+    if args.tiles is None:
+        raise InputError("--tube designs need --tiles ROWSxCOLS")
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)
     out = design_tube_pattern(
