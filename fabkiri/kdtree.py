@@ -31,7 +31,7 @@ def _load_extension(name: str = _NAME):
     loader = (importlib.machinery.ExtensionFileLoader, importlib.machinery.EXTENSION_SUFFIXES)
     finder = importlib.machinery.FileFinder(os.path.join(scipy.__path__[0], "spatial"), loader)
     spec = finder.find_spec(name)
-    if spec is None:
+    if spec is None or spec.loader is None:
         raise ImportError(name)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # before running it, as the import system does
