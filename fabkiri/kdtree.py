@@ -7,6 +7,9 @@ Nearest-point queries (target projection, shape conformance, closest hinge pairs
 registers it under its own name, so a later ``import scipy.spatial`` reuses it (one class either way).
 Where that is not possible (``scipy.spatial`` already loaded, or another SciPy layout) it falls back to
 the public import. Same class, same code: results are SciPy's to the bit.
+
+:func:`ConvexHull` does the same for ``scipy.spatial._qhull`` (the thinnest width of a cut piece, read
+back from the written files, needs only the hull).
 """
 
 from __future__ import annotations
@@ -20,21 +23,22 @@ _NAME = "scipy.spatial._ckdtree"
 _tree_class = None
 
 
-def _load_extension():
-    """``scipy.spatial._ckdtree`` loaded from its file, its package's ``__init__`` not run."""
+def _load_extension(name: str = _NAME):
+    """``name`` (a compiled module of ``scipy.spatial``) loaded from its file, its package's
+    ``__init__`` not run."""
     import scipy
 
     loader = (importlib.machinery.ExtensionFileLoader, importlib.machinery.EXTENSION_SUFFIXES)
     finder = importlib.machinery.FileFinder(os.path.join(scipy.__path__[0], "spatial"), loader)
-    spec = finder.find_spec(_NAME)
-    if spec is None:
-        raise ImportError(_NAME)
+    spec = finder.find_spec(name)
+    if spec is None or spec.loader is None:
+        raise ImportError(name)
     module = importlib.util.module_from_spec(spec)
-    sys.modules[_NAME] = module  # before running it, as the import system does
+    sys.modules[name] = module  # before running it, as the import system does
     try:
         spec.loader.exec_module(module)
     except BaseException:
-        del sys.modules[_NAME]
+        del sys.modules[name]
         raise
     return module
 
@@ -57,3 +61,27 @@ def tree_class():
 def KDTree(points):  # noqa: N802  (stands for the class it builds)
     """``scipy.spatial.cKDTree(points)``."""
     return tree_class()(points)
+
+
+_HULL = "scipy.spatial._qhull"
+_hull_class = None
+
+
+def hull_class():
+    """The ``ConvexHull`` class, loaded on first call (as :func:`tree_class`)."""
+    global _hull_class
+    if _hull_class is None:
+        if _HULL in sys.modules or "scipy.spatial" in sys.modules:
+            from scipy.spatial import ConvexHull as cls
+        else:
+            try:
+                cls = _load_extension(_HULL).ConvexHull
+            except ImportError:
+                from scipy.spatial import ConvexHull as cls
+        _hull_class = cls
+    return _hull_class
+
+
+def ConvexHull(points):  # noqa: N802  (stands for the class it builds)
+    """``scipy.spatial.ConvexHull(points)``."""
+    return hull_class()(points)

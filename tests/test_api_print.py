@@ -183,3 +183,33 @@ def test_the_print_manifest_is_one_typed_object_checked_on_read(square, tmp_path
         PrintManifest.from_dict({"format": "fabkiri.print", "state": 1}, "m")
     extra = PrintManifest.from_json(text.replace('"format"', '"note": "hand-made",\n "format"', 1))
     assert extra.extra == {"note": "hand-made"} and list(extra.to_dict())[-1] == "note"
+
+
+def test_the_gate_measures_a_stored_target_at_the_patterns_own_size(monkeypatch):
+    # issue #36: at --scale 2 the gate verified the scaled pattern against the target stored at scale 1
+    # (a 48 mm miss, measured for nobody, ~1 CPU s); it now verifies the pattern at its own size with the
+    # printer's tolerance divided by the scale, as `cut` does
+    import fabkiri.api.print as api_print
+    from fabkiri.pattern import read_pattern
+    from fabkiri.templates import template_dir
+
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def gate(pattern, tol_mm, **kw):
+        seen["report"] = api_print.closes_gate.__wrapped__(pattern, tol_mm, **kw)
+        seen["scale"] = kw.get("scale", 1.0)
+        raise Stop  # the rest of the print is not under test
+
+    gate.__wrapped__ = api_print.closes_gate
+    monkeypatch.setattr(api_print, "closes_gate", gate)
+    pattern = read_pattern(template_dir("patterns") / "circle-8x8-rigid.json")
+    with pytest.raises(Stop):
+        print_pattern(pattern, PrintOptions(scale=2.0))
+    shape = next(c for c in seen["report"].report.checks if c.name == "target shape")
+    assert (
+        shape.ok and shape.value < 0.02 * 100
+    )  # within the 2 % shape tolerance of the 100 mm circle
+    assert seen["scale"] == 2.0

@@ -215,3 +215,33 @@ def test_kdtree_is_scipys_class_before_and_after_scipy_spatial():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout.split()
     assert out == ["False", "True", "True", "True"]
+
+
+def test_cut_loads_neither_the_solver_nor_scipy_spatial(tmp_path):
+    # issue #36: `fabkiri.api` and `fabkiri.design` load their names on first use, so a cut (which reads
+    # a stored target through design.conformance) does not import the design solver; the read-back's
+    # convex hull comes from the compiled qhull extension alone (fabkiri/kdtree.py)
+    from fabkiri.templates import template_dir
+
+    src = str(template_dir("patterns") / "standard-8x8.json")
+    mods = _modules_after(["cut", src, "-o", str(tmp_path / "c")])
+    assert (tmp_path / "c" / "manifest.json").exists()
+    assert "scipy.spatial._qhull" in mods  # the hull was used
+    assert (
+        not {"fabkiri.design.solve", "fabkiri.api.design", "scipy.spatial", "scipy.special"} & mods
+    )
+
+
+def test_convex_hull_is_scipys_class_before_and_after_scipy_spatial():
+    code = (
+        "import sys\nimport numpy as np\nfrom fabkiri.kdtree import ConvexHull\n"
+        "pts = np.random.default_rng(2).normal(size=(300, 2))\n"
+        "h = ConvexHull(pts)\nalone = 'scipy.spatial' in sys.modules\n"
+        "import scipy.spatial\n"
+        "print(alone, type(h) is scipy.spatial.ConvexHull, "
+        "(h.vertices == scipy.spatial.ConvexHull(pts).vertices).all())"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert out == ["False", "True", "True"]

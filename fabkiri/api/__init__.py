@@ -2,10 +2,35 @@
 
 This layer sits above ``render`` and below ``cli`` (and ``sweep``): a front door
 may use every lower layer; the CLI only parses arguments, calls it and prints.
+
+The names below load on first use: ``fabkiri cut`` and ``print`` import their own front door
+(``fabkiri.api.cut``, ``fabkiri.api.print``), not the design solver behind ``design_pattern``.
 """
 
-from .design import DesignOutcome, PatternRequest, design_pattern
-from .maker import make
-from .maker_result import MakeResult
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .design import DesignOutcome, PatternRequest, design_pattern
+    from .maker import make
+    from .maker_result import MakeResult
+
+_WHERE = {
+    "DesignOutcome": ".design",
+    "PatternRequest": ".design",
+    "design_pattern": ".design",
+    "make": ".maker",
+    "MakeResult": ".maker_result",
+}
 
 __all__ = ["DesignOutcome", "MakeResult", "PatternRequest", "design_pattern", "make"]
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _WHERE:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_WHERE[name], __name__), name)
+    globals()[name] = value
+    return value

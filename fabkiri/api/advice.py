@@ -328,14 +328,14 @@ def _prints(
 ) -> float | None:
     """``scale`` (or, None, the smallest that prints) when ``printer`` prints ``style`` there, else None."""
     if scale is not None:
-        return scale if not fb.print_refusal(pattern, style, printer, state, scale) else None
+        return scale if not fb.print_refusal(pattern, style, printer, state, scale, memo) else None
     # at any size: the closed form, checked at the scale it names (one plan evaluation, not a bisection)
     key = fb.plan_family(printer, style)
     if key not in memo:
         bound = fb.print_bound(pattern, style, printer, state)
         memo[key] = bound.min_scale
     at = memo[key]
-    if at is None or fb.print_refusal(pattern, style, printer, state, at):
+    if at is None or fb.print_refusal(pattern, style, printer, state, at, memo):
         return None
     return at
 

@@ -126,9 +126,12 @@ def print_pattern(
     pattern, scale = _refusal_advice(
         lambda: _scaled(base, style, printer, options), base, options, ask
     )
+    # the gate verifies the pattern at its own size, the printer's tolerance divided by the scale (as
+    # `cut`): its stored target is in that size's mm, so the outline's shape is measured where it fits
     for w in closes_gate(
-        pattern,
+        base,
         printer.tolerance_mm,
+        scale=scale,
         force=options.force,
         action="print",
         tolerance="printer",

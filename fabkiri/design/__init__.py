@@ -3,9 +3,35 @@
 ``design(DesignRequest(rows, cols, target, rigid=...))`` returns the deployed
 pattern and the solver report; contraction into the closed states is left to
 :mod:`fabkiri.mechanics` (this layer sits below it).
+
+The names below load on first use: a reader of one submodule (``cut`` and ``print`` measure a stored
+target with ``design.conformance``) does not load the solver.
 """
 
-from .solve import DesignRequest, DesignResult, design
-from .targets import Target, load_target, named_targets
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .solve import DesignRequest, DesignResult, design
+    from .targets import Target, load_target, named_targets
+
+_WHERE = {
+    "DesignRequest": ".solve",
+    "DesignResult": ".solve",
+    "design": ".solve",
+    "Target": ".targets",
+    "load_target": ".targets",
+    "named_targets": ".targets",
+}
 
 __all__ = ["DesignRequest", "DesignResult", "design", "Target", "load_target", "named_targets"]
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _WHERE:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_WHERE[name], __name__), name)
+    globals()[name] = value
+    return value

@@ -310,11 +310,26 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
     return PrintMinimum(ceil_sig(hi), None if top is None else floor_sig(top), "plan checks")
 
 
-def print_refusal(pattern: Pattern, style: str, printer: Printer, state: int, scale: float) -> str:
+def print_refusal(
+    pattern: Pattern,
+    style: str,
+    printer: Printer,
+    state: int,
+    scale: float,
+    memo: dict | None = None,
+) -> str:
     """Why ``print`` refuses ``pattern`` at ``scale`` on ``printer`` in ``style``: the plan checks, then the
-    bed ('' if both accept it). The gate the refusal advice (``api/advice.py``) checks each option with."""
+    bed ('' if both accept it). The gate the refusal advice (``api/advice.py``) checks each option with;
+    its ``memo`` shares the plan checks between presets of one :func:`plan_family` (a pinned plan of a
+    32x32 pattern is seconds of geometry, the same for every preset that differs only in the bed)."""
     at = scaled(pattern, scale)
-    err = _plan_error(at, style, state, printer)
+    key = ("plan", plan_family(printer, style), state, float(scale))
+    if memo is not None and key in memo:
+        err = memo[key]
+    else:
+        err = _plan_error(at, style, state, printer)
+        if memo is not None:
+            memo[key] = err
     if err:
         return err
     top = _bed_scale(at, style, state, printer)

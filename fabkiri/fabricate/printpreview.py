@@ -46,15 +46,14 @@ def _path(poly, mirror_x: float | None):
 
 
 def preview_png(bed, manifolds, printer, title: str) -> bytes:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # a bare Figure on the Agg canvas: pyplot (its figure manager and backend set-up) is not needed
     from matplotlib.collections import PathCollection
+    from matplotlib.figure import Figure
     from matplotlib.patches import Patch, Rectangle
 
     bx, by, _ = printer.bed_mm
-    fig, axes = plt.subplots(1, 2, figsize=(12, 6.2), dpi=110)
+    fig = Figure(figsize=(12, 6.2), dpi=110)
+    axes = fig.subplots(1, 2)
     for ax, view in zip(axes, ("top", "bottom")):
         ax.add_patch(
             Rectangle((0, 0), bx, by, facecolor="#f4f4f4", edgecolor="black", linewidth=1.0)
@@ -84,5 +83,4 @@ def preview_png(bed, manifolds, printer, title: str) -> bytes:
     fig.suptitle(f"{title}: printer {printer.name}, bed {bx:g} x {by:g} mm")
     out = io.BytesIO()
     fig.savefig(out, format="png", metadata={"Software": None})
-    plt.close(fig)
     return out.getvalue()

@@ -126,7 +126,7 @@ def min_scale(
 def polygon_width(points: np.ndarray) -> float:
     """Thinnest width of the convex hull of ``points`` ``(n, 2)``, any number of corners (the same
     definition as :func:`widths`: min over hull edges of the largest distance from that edge's line)."""
-    from scipy.spatial import ConvexHull
+    from ..kdtree import ConvexHull
 
     pts = np.unique(np.asarray(points, dtype=float), axis=0)
     if len(pts) < 3:

@@ -181,11 +181,16 @@ def _jsonable(value: Any) -> Any:
     return value
 
 
+# one encoder for every row: json.dumps with non-default separators builds a new one per call (a third
+# of writing a 128x128 design); the same class and options, so the same text
+_ROW = json.JSONEncoder(separators=(", ", ": "))
+
+
 def _rows(rows: list, indent: str) -> str:
     """A JSON array with one compact row per line (diff-friendly, deterministic)."""
     if not rows:
         return "[]"
-    inner = f",\n{indent}  ".join(json.dumps(r, separators=(", ", ": ")) for r in rows)
+    inner = f",\n{indent}  ".join(_ROW.encode(r) for r in rows)
     return f"[\n{indent}  {inner}\n{indent}]"
 
 
