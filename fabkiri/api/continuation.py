@@ -81,7 +81,7 @@ def continuation(
         if _rank(rigid) < _rank(outcome):
             outcome, how = rigid, "continuation, rigid family last"
     prints = _print_gate(req, request.printer)
-    if prints is not None and not (outcome[3] and _shape_met(outcome[1])):
+    if prints is not None and not (outcome[3] and _shape_met(outcome[1])) and _pads_bind(outcome):
         padless, spent = _without_pads(req, free.pattern.nodes, init, judge, prints, spent)
         if padless is not None and _rank(padless[0]) < _rank(outcome):
             outcome, step = padless
@@ -186,6 +186,12 @@ def _print_gate(req: DesignRequest, printer: str | None) -> Callable[[Pattern], 
         return None
     pr, style = load_printer(printer), str(req.fabrication_intent["style"])  # resolve sets it
     return lambda pattern: fb.print_refusal(pattern, style, pr, fab.print_state, 1.0)
+
+
+def _pads_bind(outcome) -> bool:
+    """Whether any strip pad row of the outcome is active (else the steps without them are not worth trying)."""
+    active = (outcome[1].get("fabrication") or {}).get("active") or {}
+    return active.get("fabrication_strip_pads", 0) > 0
 
 
 def _without_pads(req: DesignRequest, X: np.ndarray, init: str, judge, prints, spent: float):
