@@ -20,5 +20,7 @@ def test_star_150_for_prusa_mk4_meets_the_shape_and_prints_at_scale_1():
     assert out.success, out.problems
     assert _hausdorff(out.report) <= 0.02
     state = out.pattern.design["options"]["fabrication"]["state"]
-    refusal = fb.print_refusal(out.pattern, "tiles-and-strips", load_printer("prusa-mk4"), state, 1.0)
+    refusal = fb.print_refusal(
+        out.pattern, "tiles-and-strips", load_printer("prusa-mk4"), state, 1.0
+    )
     assert refusal == ""
