@@ -237,7 +237,8 @@ def _refine(
     ``(outcome, how, trace, wall s)``, the outcome kept when it ranks better."""
     assert fab is not None
 
-    def bed(r) -> bool:
+    def bed(r) -> bool:  # asked only with a printer
+        assert printer is not None
         if prints is not None and prints(r.pattern):
             return False
         return design_limits.fits_bed(contract(r.pattern, fab.print_state).corners, printer)
