@@ -81,7 +81,8 @@ def continuation(
         if _rank(rigid) < _rank(outcome):
             outcome, how = rigid, "continuation, rigid family last"
     prints = _print_gate(req, request.printer)
-    if prints is not None and not (outcome[3] and _shape_met(outcome[1])) and _pads_bind(outcome):
+    # only where the rows cost a shape the design without them met (8x8 heart, star6 6x6: it misses too)
+    if prints is not None and free.shape_met and not _good_fit(outcome) and _pads_bind(outcome):
         padless, spent = _without_pads(req, free.pattern.nodes, init, judge, prints, spent)
         if padless is not None and _rank(padless[0]) < _rank(outcome):
             outcome, step = padless
@@ -186,6 +187,10 @@ def _print_gate(req: DesignRequest, printer: str | None) -> Callable[[Pattern], 
         return None
     pr, style = load_printer(printer), str(req.fabrication_intent["style"])  # resolve sets it
     return lambda pattern: fb.print_refusal(pattern, style, pr, fab.print_state, 1.0)
+
+
+def _good_fit(outcome) -> bool:
+    return bool(outcome[3] and _shape_met(outcome[1]))
 
 
 def _pads_bind(outcome) -> bool:
