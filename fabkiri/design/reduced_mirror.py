@@ -23,7 +23,8 @@ checks the full pattern's families, the symmetry rows among them.
 
 from __future__ import annotations
 
-from dataclasses import replace
+import copy
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -85,28 +86,103 @@ def mirror_map(partner: np.ndarray, axis: str) -> sparse.csr_matrix:
     )
 
 
+@dataclass
+class Mirror:
+    """What the reduced solver needs of a mirror: the map ``p = P q`` and the closed states' axis rows."""
+
+    P: sparse.csr_matrix
+    axis_rows: AxisRows | None = None
+
+    @classmethod
+    def build(cls, fam: RigidFamily, base: np.ndarray, rows: int, cols: int, axis: str) -> Mirror:
+        """The mirror about ``axis`` of the (``centred``) family of ``rows`` x ``cols`` tiles whose standard
+        deployed pattern is ``base``."""
+        return cls(
+            mirror_map(seed_partners(fam, rows, cols, axis), axis), AxisRows(fam, base, axis)
+        )
+
+
 def symmetric_member(P: sparse.csr_matrix, p: np.ndarray) -> np.ndarray:
     """``q`` of the symmetric member nearest ``p`` (least squares: ``P`` has orthogonal columns)."""
     return (P.T @ p) / np.asarray(P.multiply(P).sum(0)).ravel()
 
 
-class MirroredMerit:
-    """A reduced merit (``reduced._Merit``) over ``q``, with ``p = P q``; everything else is the merit's."""
+AXIS_MARGIN = 0.01  # tile units: how far off the axis a closed state keeps each off-axis vertex
+AXIS_NAMES = ("closed_axis_1", "closed_axis_2")
 
-    def __init__(self, merit: Any, P: sparse.csr_matrix):
-        self.inner, self.P = merit, P
+
+class AxisRows:
+    """Each half of a symmetric member's closed states on its own side of the axis.
+
+    A member's closed states are mirror images of themselves (state 1, the grid ``Z S``, about the same
+    axis; state 2 turned back a quarter, ``Y S``, about the other), so a tile overlaps its mirror image
+    exactly when it crosses the axis: the symmetric 32x32 heart's notch closed over itself in state 1, the
+    top row's tiles 11 and 20 on each other. Rows ``g = side · (flipped coordinate) ≥ AXIS_MARGIN``, linear
+    in ``S``, one per vertex off the axis on the standard member (the mirrored closed-state contact: a tile
+    against its mirror image). The same interface as ``reduced_contact.ClosedContact`` (``barrier``,
+    ``values``, ``active``), and with it, when the contact rows join (``with_contact``).
+    """
+
+    barrier = True
+
+    def __init__(self, fam: RigidFamily, base: np.ndarray, axis: str, contact: Any = None):
+        self.nf, self.contact = fam.n_seeds, contact
+        S, _ = fam.fit(base, np.pi / 4)  # the standard pattern is a member (deployed at 45°)
+        self.rows = []  # per state: (vertices, coordinate, side, basis)
+        for B, d in ((fam.Z, FLIPPED[axis]), (fam.Y, 1 - FLIPPED[axis])):
+            w = (B @ S)[:, d]
+            off = np.flatnonzero(np.abs(w) > 0.25)  # the standard tiles' edge is 1: on the axis, 0
+            self.rows.append((off, d, np.sign(w[off]), B[off]))
+
+    def joined(self, contact: Any) -> AxisRows:
+        new = copy.copy(self)
+        new.contact = contact
+        return new
+
+    def values(self, xs) -> dict:
+        own = {n: side * x[v, d] for n, x, (v, d, side, _) in zip(AXIS_NAMES, xs, self.rows)}
+        if self.contact is not None and self.contact.barrier:
+            own.update(self.contact.values(xs))
+        return own
+
+    def active(self, xs, margin_scale: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+        rs, Js = [np.zeros(0)], [np.zeros((0, 2 * self.nf + 1))]
+        for x, (v, d, side, B) in zip(xs, self.rows):
+            g = side * x[v, d] - margin_scale * AXIS_MARGIN
+            act = np.flatnonzero(g < 0)
+            J = np.zeros((len(act), 2 * self.nf + 1))
+            J[:, d * self.nf : (d + 1) * self.nf] = side[act, None] * B[act]
+            rs.append(scale * g[act])
+            Js.append(scale * J)
+        if self.contact is not None:
+            r, J = self.contact.active(xs, margin_scale, scale)
+            rs.append(r)
+            Js.append(J)
+        return np.concatenate(rs), np.vstack(Js)
+
+
+class MirroredMerit:
+    """A reduced merit (``reduced._Merit``) over ``q``, with ``p = P q``, and the closed states' axis rows
+    (``AxisRows``); everything else is the merit's."""
+
+    def __init__(self, merit: Any, P: sparse.csr_matrix, axis: AxisRows | None = None):
+        self.P, self.axis = P, axis
+        self.inner = merit if axis is None or merit.contact is axis else merit.with_contact(axis)
 
     def __getattr__(self, name: str):  # fits, scaling, sq, ineq_violation ...
         return getattr(self.inner, name)
 
     def staged(self, rho: float, scaling: str) -> MirroredMerit:
-        return MirroredMerit(self.inner.staged(rho, scaling), self.P)
+        return MirroredMerit(self.inner.staged(rho, scaling), self.P, self.axis)
 
     def state(self, q: np.ndarray):
         return self.inner.state(self.P @ q)
 
     def with_contact(self, contact) -> MirroredMerit:
-        return MirroredMerit(self.inner.with_contact(contact), self.P)
+        if self.axis is None:
+            return MirroredMerit(self.inner.with_contact(contact), self.P)
+        axis = self.axis.joined(contact)
+        return MirroredMerit(self.inner.with_contact(axis), self.P, axis)
 
     def evaluate(self, q: np.ndarray, hard: bool = False) -> _MirroredEvaluation:
         return _MirroredEvaluation(self.inner.evaluate(self.P @ q, hard), self.P, q)
