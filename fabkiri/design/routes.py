@@ -103,7 +103,15 @@ def _reduced_from(prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: st
 
 def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
     """A symmetric design's second opinion: the reduced solver over half the seeds from each guess of
-    ``MIRRORED_STARTS`` it did not start from; the best ``(X, mode)`` (family checks, then the objective)."""
+    ``MIRRORED_STARTS`` it did not start from; the best ``(X, mode)`` (family checks, then the objective).
+    Where the full solver's would be (``_second_opinion``): up to ``FULL_ALWAYS_TILES`` always, up to
+    ``FULL_MAX_TILES`` when the fit misses by more than ``FULL_ABOVE`` (64x64 heart: its 32x32 level's two other
+    starts cost 11 of its 21 s and lost)."""
+    tiles = prob.req.rows * prob.req.cols
+    if tiles > FULL_MAX_TILES or (
+        tiles > FULL_ALWAYS_TILES and fit_miss(exact_fits(prob.of("fit")), out[0]) <= FULL_ABOVE
+    ):
+        return out
 
     def rank(X):
         return (not _acceptable(prob, X), _objective(prob, X))

@@ -76,7 +76,6 @@ from .request import (  # noqa: F401  (re-exported: callers import these from he
     via_rigid_applies,
 )
 from .routes import (
-    FULL_MAX_TILES,
     FULL_NAME,
     REDUCED_NAME,
     _mirrored_starts,
@@ -167,7 +166,7 @@ def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
     if out is not None and req.solver == "auto" and req.second_opinion and out[1] != "hard":
         if not req.symmetry:
             out, solver = _second_opinion(req, prob, out, log, iters)
-        elif req.rows * req.cols <= FULL_MAX_TILES:
+        else:
             out = _mirrored_starts(prob, out, log, iters)
     rigid_first = (
         False  # the answer is the rigid family's, tried first (the API stops its guesses there)
