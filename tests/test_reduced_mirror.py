@@ -127,7 +127,7 @@ def test_symmetric_heart_16x16_is_met_in_the_half_space(tmp_path, run_cli):
 def _crossing_member(fam, std, axis, rows, cols):
     """``(mirror, q, vertex)``: a symmetric member whose closed state 1 has a left (bottom) boundary seed moved
     half a tile across the axis (and its mirror image the other way), and that seed's grid vertex."""
-    mirror = Mirror.build(fam, std.nodes, rows, cols, axis)
+    mirror = Mirror.build(fam, rows, cols, axis)
     S, _ = fam.fit(std.nodes, np.pi / 4)
     d = 0 if axis == "y" else 1
     w = S[:, d]
@@ -145,7 +145,7 @@ def test_axis_rows_flag_a_tile_crossing_its_mirror_image(axis):
     symmetric member with one seed moved across it fails exactly that vertex's row in state 1 (its mirror image
     comes the other way: the two tiles overlap), and the vertices on the axis have no row."""
     std, st, fam, _ = _symmetric(8, 8, axis)
-    mirror = Mirror.build(fam, std.nodes, 8, 8, axis)
+    mirror = Mirror.build(fam, 8, 8, axis)
     rows = mirror.axis_rows
     S, _ = fam.fit(std.nodes, np.pi / 4)
     vals = rows.values((fam.Z @ S, fam.Y @ S))

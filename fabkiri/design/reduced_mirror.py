@@ -42,11 +42,16 @@ def centred(fam: RigidFamily) -> RigidFamily:
     return replace(fam, Y=np.ascontiguousarray(fam.Y - fam.Y.mean(0)))
 
 
+def standard_grid(rows: int, cols: int) -> np.ndarray:
+    """The standard pattern's closed-state-1 grid ``(G, 2)`` (unit cells, centred): ``Z`` of its seeds is it."""
+    gi, gj = np.divmod(np.arange((rows + 1) * (cols + 1)), cols + 1)
+    return np.stack([gj - cols / 2, gi - rows / 2], -1).astype(float)
+
+
 def seed_partners(fam: RigidFamily, rows: int, cols: int, axis: str) -> np.ndarray:
     """``(nf,)`` index of each seed's mirror image among the seeds; SolveError if the seeds do not map onto
     themselves. The grid is the standard lattice's (vertex ``i (N+1) + j``), mirrored about its centre."""
-    gi, gj = np.divmod(np.arange((rows + 1) * (cols + 1)), cols + 1)
-    pts = np.stack([gj - cols / 2, gi - rows / 2], -1).astype(float)
+    pts = standard_grid(rows, cols)
     mirrored = pts.copy()
     mirrored[:, FLIPPED[axis]] *= -1.0
     seeds = pts[fam.seeds]
@@ -94,12 +99,10 @@ class Mirror:
     axis_rows: AxisRows | None = None
 
     @classmethod
-    def build(cls, fam: RigidFamily, base: np.ndarray, rows: int, cols: int, axis: str) -> Mirror:
-        """The mirror about ``axis`` of the (``centred``) family of ``rows`` x ``cols`` tiles whose standard
-        deployed pattern is ``base``."""
-        return cls(
-            mirror_map(seed_partners(fam, rows, cols, axis), axis), AxisRows(fam, base, axis)
-        )
+    def build(cls, fam: RigidFamily, rows: int, cols: int, axis: str) -> Mirror:
+        """The mirror about ``axis`` of the (``centred``) family of ``rows`` x ``cols`` tiles."""
+        S = standard_grid(rows, cols)[fam.seeds]  # the standard pattern's seeds
+        return cls(mirror_map(seed_partners(fam, rows, cols, axis), axis), AxisRows(fam, S, axis))
 
 
 def symmetric_member(P: sparse.csr_matrix, p: np.ndarray) -> np.ndarray:
@@ -125,33 +128,37 @@ class AxisRows:
 
     barrier = True
 
-    def __init__(self, fam: RigidFamily, base: np.ndarray, axis: str, contact: Any = None):
+    def __init__(self, fam: RigidFamily, S: np.ndarray, axis: str, contact: Any = None):
+        """``S``: the seeds of a symmetric member with no tile across the axis (the standard pattern's)."""
         self.nf, self.contact = fam.n_seeds, contact
-        S, _ = fam.fit(base, np.pi / 4)  # the standard pattern is a member (deployed at 45°)
-        self.rows = []  # per state: (vertices, coordinate, side, basis)
+        # per state: (vertices, coordinate, side, basis of every vertex)
+        self.rows: list[tuple[np.ndarray, int, np.ndarray, np.ndarray]] = []
         for B, d in ((fam.Z, FLIPPED[axis]), (fam.Y, 1 - FLIPPED[axis])):
             w = (B @ S)[:, d]
             off = np.flatnonzero(np.abs(w) > 0.25)  # the standard tiles' edge is 1: on the axis, 0
-            self.rows.append((off, d, np.sign(w[off]), B[off]))
+            self.rows.append((off, d, np.sign(w[off]), B))
 
     def joined(self, contact: Any) -> AxisRows:
+        """The same rows with the closed-state contact rows (``reduced_contact.ClosedContact``) after them."""
         new = copy.copy(self)
         new.contact = contact
         return new
 
     def values(self, xs) -> dict:
+        """Every row's value per state on ``(Z S, Y S)`` (and the contact rows' when they count as barriers)."""
         own = {n: side * x[v, d] for n, x, (v, d, side, _) in zip(AXIS_NAMES, xs, self.rows)}
         if self.contact is not None and self.contact.barrier:
             own.update(self.contact.values(xs))
         return own
 
     def active(self, xs, margin_scale: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+        """Rows below ``margin_scale · AXIS_MARGIN``, times ``scale``: ``(r, ∂r/∂p)``; then the contact rows'."""
         rs, Js = [np.zeros(0)], [np.zeros((0, 2 * self.nf + 1))]
         for x, (v, d, side, B) in zip(xs, self.rows):
             g = side * x[v, d] - margin_scale * AXIS_MARGIN
             act = np.flatnonzero(g < 0)
             J = np.zeros((len(act), 2 * self.nf + 1))
-            J[:, d * self.nf : (d + 1) * self.nf] = side[act, None] * B[act]
+            J[:, d * self.nf : (d + 1) * self.nf] = side[act, None] * B[v[act]]
             rs.append(scale * g[act])
             Js.append(scale * J)
         if self.contact is not None:

@@ -77,7 +77,7 @@ def _reduced_from(prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: st
     req, fam = prob.req, prob.rigid_family
     mirror = None
     if req.symmetry:  # half the seeds (``reduced_mirror.py``)
-        mirror = Mirror.build(fam, prob.std.nodes, req.rows, req.cols, req.symmetry)
+        mirror = Mirror.build(fam, req.rows, req.cols, req.symmetry)
         log(f"mirror symmetry {req.symmetry}: {mirror.P.shape[1]} reduced unknowns")
     # small patterns get the full solver's second opinion anyway, a symmetric one its own (``_mirrored_starts``)
     small = req.rows * req.cols <= FULL_ALWAYS_TILES and not req.symmetry
