@@ -21,7 +21,7 @@ from .conformance import deployed as deployed_conformance
 from .initial import initial_guess
 from .penalty import _solve_full
 from .problem import _acceptable, _mean_edge, _objective, _Problem, _why_not, exact_fits
-from .reduced import fit_miss, solve_reduced
+from .reduced import SCALINGS, fit_miss, solve_reduced
 from .reduced_mirror import Mirror
 from .request import VIA_RIGID_TILES
 from .rigid import RigidFamily
@@ -55,32 +55,40 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     req = prob.req
     fam = prob.rigid_family
     log(f"rigid family: {2 * fam.n_seeds + 1} reduced unknowns ({fam.n_seeds} seed points and ψ)")
-    # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
-    psi0 = (
-        RigidFamily.deployment_angle(prob.X0, prob.st)
-        if prob.coarse or req.start is not None
-        else np.pi / 4
-    )
-    S0 = None
-    if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
-        S0, psi0 = prob.start_member[0] / prob.L0, prob.start_member[1]
-    X, mode = _reduced_from(prob, prob.X0, psi0, S0, log, iters, "")
+    X, mode = _reduced_from(prob, *_start(prob), log, iters, "")
     if _acceptable(prob, X) or req.solver == "reduced":
         return X, mode
     log("the rigid family's result fails a family check: falling back to the full solver")
     return None
 
 
-def _reduced_from(prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: str):
+def _start(prob: _Problem) -> tuple:
+    """``(X0, ψ0, S0)``: the reduced solver's start (seeds ``S0`` when the start is a member already)."""
+    # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
+    psi0 = (
+        RigidFamily.deployment_angle(prob.X0, prob.st)
+        if prob.coarse or prob.req.start is not None
+        else np.pi / 4
+    )
+    if prob.start_member is not None and prob.coarse and prob.coarse["used"]:
+        return prob.X0, prob.start_member[1], prob.start_member[0] / prob.L0
+    return prob.X0, psi0, None
+
+
+def _reduced_from(
+    prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: str, scalings=SCALINGS
+) -> tuple:
     """``(X, mode)`` of the reduced solver from ``X0`` (or seeds ``S0``) at ``psi0``: over half the seeds
-    with ``--symmetry`` (``reduced_mirror.py``). ``tag`` prefixes its iteration counts."""
+    with ``--symmetry`` (``reduced_mirror.py``). ``tag`` prefixes its iteration counts. The second of
+    ``scalings`` only where the first misses by more than ``FULL_ABOVE``, and on small patterns not at all
+    (they get the full solver's second opinion, ``_second_opinion``, or ``_mirrored_starts``) unless a tag
+    asks for it."""
     req, fam = prob.req, prob.rigid_family
     mirror = None
     if req.symmetry:  # half the seeds (``reduced_mirror.py``)
         mirror = Mirror.build(fam, req.rows, req.cols, req.symmetry)
         log(f"mirror symmetry {req.symmetry}: {mirror.P.shape[1]} reduced unknowns")
-    # small patterns get the full solver's second opinion anyway, a symmetric one its own (``_mirrored_starts``)
-    small = req.rows * req.cols <= FULL_ALWAYS_TILES and not req.symmetry
+    small = req.rows * req.cols <= FULL_ALWAYS_TILES and not tag
     X, mode, its = solve_reduced(
         fam,
         prob.st,
@@ -96,37 +104,45 @@ def _reduced_from(prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: st
         miss_tol=np.inf if small else FULL_ABOVE,
         S0=S0,
         mirror=mirror,
+        scalings=scalings,
     )
     iters.update({tag + k: v for k, v in its.items()})
     return X, mode
 
 
 def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
-    """A symmetric design's second opinion: the reduced solver over half the seeds from each guess of
-    ``MIRRORED_STARTS`` it did not start from; the best ``(X, mode)`` (family checks, then the objective).
-    Where the full solver's would be (``_second_opinion``): up to ``FULL_ALWAYS_TILES`` always, up to
-    ``FULL_MAX_TILES`` when the fit misses by more than ``FULL_ABOVE`` (64x64 heart: its 32x32 level's two other
-    starts cost 11 of its 21 s and lost)."""
-    tiles = prob.req.rows * prob.req.cols
-    if tiles > FULL_MAX_TILES or (
-        tiles > FULL_ALWAYS_TILES and fit_miss(exact_fits(prob.of("fit")), out[0]) <= FULL_ABOVE
-    ):
+    """A symmetric design's second opinion, where the full solver's would run (``_second_opinion``: up to
+    ``FULL_ALWAYS_TILES`` when the outline misses the shape tolerance, up to ``FULL_MAX_TILES`` when the fit
+    misses by more than ``FULL_ABOVE``): the reduced solver over half the seeds from its own start with the
+    other LM scaling and from each guess of ``MIRRORED_STARTS`` it did not start from, with both. The best
+    ``(X, mode)`` (family checks, then the objective)."""
+    req = prob.req
+    tiles = req.rows * req.cols
+    if tiles > FULL_MAX_TILES:
+        return out
+    if tiles > FULL_ALWAYS_TILES:
+        if fit_miss(exact_fits(prob.of("fit")), out[0]) <= FULL_ABOVE:
+            return out
+    elif not _outline_misses(prob, out[0], req.second_opinion_above, log):
         return out
 
     def rank(X):
         return (not _acceptable(prob, X), _objective(prob, X))
 
     best = (rank(out[0]), out)
+    starts = [("again_", *_start(prob), SCALINGS[1:])]
     for init in MIRRORED_STARTS:
-        if init == prob.req.init:
+        if init == req.init:
             continue
         try:
             X0, L = initial_guess(prob.std.nodes, prob.st, prob.target, init)
         except SolveError as exc:  # a harmonic map that folds tiles
             log(f"mirrored start {init}: {exc}")
             continue
-        X, mode = _reduced_from(prob, X0 * (L / prob.L0), np.pi / 4, None, log, iters, f"{init}_")
-        log(f"mirrored start {init}: objective {rank(X)[1]:.4e} (best so far {best[0][1]:.4e})")
+        starts.append((f"{init}_", X0 * (L / prob.L0), np.pi / 4, None, SCALINGS))
+    for tag, X0, psi0, S0, scalings in starts:
+        X, mode = _reduced_from(prob, X0, psi0, S0, log, iters, tag, scalings)
+        log(f"mirrored start {tag[:-1]}: objective {rank(X)[1]:.4e} (best so far {best[0][1]:.4e})")
         best = min(best, (rank(X), (X, mode)), key=lambda b: b[0])
     return best[1]
 
