@@ -62,7 +62,7 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     return None
 
 
-def _start(prob: _Problem) -> tuple:
+def _start(prob: _Problem) -> tuple[np.ndarray, float, np.ndarray | None]:
     """``(X0, ψ0, S0)``: the reduced solver's start (seeds ``S0`` when the start is a member already)."""
     # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
     psi0 = (
@@ -130,7 +130,9 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
         return (not _acceptable(prob, X), _objective(prob, X))
 
     best = (rank(out[0]), out)
-    starts = [("again_", *_start(prob), SCALINGS[1:])]
+    starts: list[tuple[str, np.ndarray, float, np.ndarray | None, tuple[str, ...]]] = [
+        ("again_", *_start(prob), SCALINGS[1:])
+    ]
     for init in MIRRORED_STARTS:
         if init == req.init:
             continue
