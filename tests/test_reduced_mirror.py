@@ -207,8 +207,8 @@ def test_symmetric_coarse_level_tries_the_other_guesses():
 @pytest.mark.slow
 def test_symmetric_heart_32x32_is_met_without_overlaps(tmp_path, run_cli):
     """``design --tiles 32x32 --target heart --symmetry y`` (non-rigid, coarse to fine in the half space) meets
-    the 2 % tolerance with no overlapping tiles in any state (main: missed at 2.07 %; with the coarse levels
-    repaired but no axis rows its notch closed over itself in state 1, 4 pairs, 2.80 %)."""
+    the 2 % tolerance with no overlapping tiles in any state, and ``verify`` passes (main: missed at 2.07 %;
+    with the coarse levels repaired but no axis rows its notch closed over itself in state 1, 4 pairs, 2.80 %)."""
     out = tmp_path / "h.json"
     code, _, err = run_cli(
         "design", "--tiles", "32x32", "--target", "heart", "--symmetry", "y", "--json", "-o", out
@@ -218,3 +218,6 @@ def test_symmetric_heart_32x32_is_met_without_overlaps(tmp_path, run_cli):
     assert rep["residuals"]["symmetry_y"] <= 1e-10
     assert rep["conformance"]["deployed"]["hausdorff_rel"] <= 0.02
     assert rep["checks"]["overlaps_state_1"] == rep["checks"]["overlaps_state_2"] == 0
+    # and both closed states compact to the verifier (at an axis margin of 0.01 tile the notch enclosed a gap)
+    code, _, err = run_cli("verify", out)
+    assert code == 0, err
