@@ -31,7 +31,7 @@ from .constraints import convexity
 from .objective import regularizer, tile_corners
 from .reduced_contact import ClosedContact
 from .reduced_eval import _Evaluation
-from .reduced_mirror import MirroredMerit, symmetric_member
+from .reduced_mirror import Mirror, MirroredMerit, symmetric_member
 from .reduced_steps import hard_fit, levenberg_marquardt
 from .reduced_tiles import TileShapeRows
 from .rigid import RigidFamily
@@ -380,7 +380,8 @@ def solve_reduced(
     max_iter: int = 200,
     miss_tol: float = 0.0,
     S0: np.ndarray | None = None,
-    mirror: sparse.csr_matrix | None = None,
+    mirror: Mirror | None = None,
+    scalings: tuple[str, ...] = SCALINGS,
 ):
     """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
     start is already a member).
@@ -388,19 +389,20 @@ def solve_reduced(
     ``mean_edge(X)`` gives the length unit of the 1 % "nearly exact" threshold.
     Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
     driven to ``fit_tol`` (absolute, normalised units), else "least-squares".
-    ``mirror``: the symmetric members' map ``p = P q`` (``reduced_mirror.py``); the solve is then over ``q``.
+    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``reduced_mirror.py``); the solve is then over
+    ``q``. ``scalings``: the LM scalings to start with (``SCALINGS``).
     """
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes: 0.25 s at 64x64)
         S0, _ = fam.fit(X0, psi0)
     p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
     if mirror is not None:
-        p0 = symmetric_member(mirror, p0)
+        p0 = symmetric_member(mirror.P, p0)
     iters: dict = {}
     on_grid = grid_families(fam, st, families)
     judge: Any = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
     if mirror is not None:
-        judge = MirroredMerit(judge, mirror)
-    search = (iters, fit_tol, mean_edge, log, max_iter, miss_tol)
+        judge = MirroredMerit(judge, mirror.P, mirror.axis_rows)
+    search = (iters, fit_tol, mean_edge, log, max_iter, miss_tol, scalings)
     p, X, mode = _search(judge, p0, "", *search)
     # the closed states' contact rows only where a result has tiles of a closed state overlapping: on every
     # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.61 % -> 3.55 %)
@@ -430,11 +432,20 @@ def solve_reduced(
 
 
 def _search(
-    judge, p0, tag: str, iters: dict, fit_tol, mean_edge, log, max_iter: int, miss_tol: float
+    judge,
+    p0,
+    tag: str,
+    iters: dict,
+    fit_tol,
+    mean_edge,
+    log,
+    max_iter: int,
+    miss_tol: float,
+    scalings: tuple[str, ...],
 ):
-    """The stages from ``p0`` with each LM scaling in turn (``SCALINGS``): ``(p, X, mode)`` of the best."""
+    """The stages from ``p0`` with each LM scaling in turn (``scalings``): ``(p, X, mode)`` of the best."""
     best = None
-    for scaling in SCALINGS:
+    for scaling in scalings:
         p = p0
         for n, (rho, stall_tol, cap) in enumerate(STAGES):
             merit = judge.staged(rho, scaling if n == 0 else "marquardt")
@@ -466,5 +477,5 @@ def _search(
             best = ((viol > 0, cost), p, X)
         if miss <= miss_tol and not viol > 0:
             break
-    assert best is not None, "SCALINGS is not empty"
+    assert best is not None, "scalings is not empty"
     return best[1], best[2], "least-squares"

@@ -23,7 +23,8 @@ checks the full pattern's families, the symmetry rows among them.
 
 from __future__ import annotations
 
-from dataclasses import replace
+import copy
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -41,11 +42,16 @@ def centred(fam: RigidFamily) -> RigidFamily:
     return replace(fam, Y=np.ascontiguousarray(fam.Y - fam.Y.mean(0)))
 
 
+def standard_grid(rows: int, cols: int) -> np.ndarray:
+    """The standard pattern's closed-state-1 grid ``(G, 2)`` (unit cells, centred): ``Z`` of its seeds is it."""
+    gi, gj = np.divmod(np.arange((rows + 1) * (cols + 1)), cols + 1)
+    return np.stack([gj - cols / 2, gi - rows / 2], -1).astype(float)
+
+
 def seed_partners(fam: RigidFamily, rows: int, cols: int, axis: str) -> np.ndarray:
     """``(nf,)`` index of each seed's mirror image among the seeds; SolveError if the seeds do not map onto
     themselves. The grid is the standard lattice's (vertex ``i (N+1) + j``), mirrored about its centre."""
-    gi, gj = np.divmod(np.arange((rows + 1) * (cols + 1)), cols + 1)
-    pts = np.stack([gj - cols / 2, gi - rows / 2], -1).astype(float)
+    pts = standard_grid(rows, cols)
     mirrored = pts.copy()
     mirrored[:, FLIPPED[axis]] *= -1.0
     seeds = pts[fam.seeds]
@@ -85,28 +91,108 @@ def mirror_map(partner: np.ndarray, axis: str) -> sparse.csr_matrix:
     )
 
 
+@dataclass
+class Mirror:
+    """What the reduced solver needs of a mirror: the map ``p = P q`` and the closed states' axis rows."""
+
+    P: sparse.csr_matrix
+    axis_rows: AxisRows | None = None
+
+    @classmethod
+    def build(cls, fam: RigidFamily, rows: int, cols: int, axis: str) -> Mirror:
+        """The mirror about ``axis`` of the (``centred``) family of ``rows`` x ``cols`` tiles."""
+        S = standard_grid(rows, cols)[fam.seeds]  # the standard pattern's seeds
+        return cls(mirror_map(seed_partners(fam, rows, cols, axis), axis), AxisRows(fam, S, axis))
+
+
 def symmetric_member(P: sparse.csr_matrix, p: np.ndarray) -> np.ndarray:
     """``q`` of the symmetric member nearest ``p`` (least squares: ``P`` has orthogonal columns)."""
     return (P.T @ p) / np.asarray(P.multiply(P).sum(0)).ravel()
 
 
-class MirroredMerit:
-    """A reduced merit (``reduced._Merit``) over ``q``, with ``p = P q``; everything else is the merit's."""
+# tile units: how far off the axis a closed state keeps each off-axis vertex. At 0.01 (the contact rows'
+# margin) the 32x32 heart's notch met itself across the axis 0.04 mm apart in state 1, inside the verifier's
+# 0.05 mm, and enclosed a 1.7 mm² gap (verify: "state 1: no interior gaps" failed); at 0.1 it stays open
+AXIS_MARGIN = 0.1
+AXIS_NAMES = ("closed_axis_1", "closed_axis_2")
 
-    def __init__(self, merit: Any, P: sparse.csr_matrix):
-        self.inner, self.P = merit, P
+
+class AxisRows:
+    """Each half of a symmetric member's closed states on its own side of the axis.
+
+    A member's closed states are mirror images of themselves (state 1, the grid ``Z S``, about the same
+    axis; state 2 turned back a quarter, ``Y S``, about the other), so a tile overlaps its mirror image
+    exactly when it crosses the axis: the symmetric 32x32 heart's notch closed over itself in state 1, the
+    top row's tiles 11 and 20 on each other. Rows ``g = side · (flipped coordinate) ≥ AXIS_MARGIN``, linear
+    in ``S``, one per vertex off the axis on the standard member (the mirrored closed-state contact: a tile
+    against its mirror image). The same interface as ``reduced_contact.ClosedContact`` (``barrier``,
+    ``values``, ``active``), and with it, when the contact rows join (``with_contact``).
+    """
+
+    barrier = True
+
+    def __init__(self, fam: RigidFamily, S: np.ndarray, axis: str, contact: Any = None):
+        """``S``: the seeds of a symmetric member with no tile across the axis (the standard pattern's)."""
+        self.nf, self.contact = fam.n_seeds, contact
+        # per state: (vertices, coordinate, side, basis of every vertex)
+        self.rows: list[tuple[np.ndarray, int, np.ndarray, np.ndarray]] = []
+        for B, d in ((fam.Z, FLIPPED[axis]), (fam.Y, 1 - FLIPPED[axis])):
+            w = (B @ S)[:, d]
+            off = np.flatnonzero(np.abs(w) > 0.25)  # the standard tiles' edge is 1: on the axis, 0
+            self.rows.append((off, d, np.sign(w[off]), B))
+
+    def joined(self, contact: Any) -> AxisRows:
+        """The same rows with the closed-state contact rows (``reduced_contact.ClosedContact``) after them."""
+        new = copy.copy(self)
+        new.contact = contact
+        return new
+
+    def values(self, xs) -> dict:
+        """Every row's value per state on ``(Z S, Y S)`` (and the contact rows' when they count as barriers)."""
+        own = {n: side * x[v, d] for n, x, (v, d, side, _) in zip(AXIS_NAMES, xs, self.rows)}
+        if self.contact is not None and self.contact.barrier:
+            own.update(self.contact.values(xs))
+        return own
+
+    def active(self, xs, margin_scale: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+        """Rows below ``margin_scale · AXIS_MARGIN``, times ``scale``: ``(r, ∂r/∂p)``; then the contact rows'."""
+        rs, Js = [np.zeros(0)], [np.zeros((0, 2 * self.nf + 1))]
+        for x, (v, d, side, B) in zip(xs, self.rows):
+            g = side * x[v, d] - margin_scale * AXIS_MARGIN
+            act = np.flatnonzero(g < 0)
+            J = np.zeros((len(act), 2 * self.nf + 1))
+            J[:, d * self.nf : (d + 1) * self.nf] = side[act, None] * B[v[act]]
+            rs.append(scale * g[act])
+            Js.append(scale * J)
+        if self.contact is not None:
+            r, J = self.contact.active(xs, margin_scale, scale)
+            rs.append(r)
+            Js.append(J)
+        return np.concatenate(rs), np.vstack(Js)
+
+
+class MirroredMerit:
+    """A reduced merit (``reduced._Merit``) over ``q``, with ``p = P q``, and the closed states' axis rows
+    (``AxisRows``); everything else is the merit's."""
+
+    def __init__(self, merit: Any, P: sparse.csr_matrix, axis: AxisRows | None = None):
+        self.P, self.axis = P, axis
+        self.inner = merit if axis is None or merit.contact is axis else merit.with_contact(axis)
 
     def __getattr__(self, name: str):  # fits, scaling, sq, ineq_violation ...
         return getattr(self.inner, name)
 
     def staged(self, rho: float, scaling: str) -> MirroredMerit:
-        return MirroredMerit(self.inner.staged(rho, scaling), self.P)
+        return MirroredMerit(self.inner.staged(rho, scaling), self.P, self.axis)
 
     def state(self, q: np.ndarray):
         return self.inner.state(self.P @ q)
 
     def with_contact(self, contact) -> MirroredMerit:
-        return MirroredMerit(self.inner.with_contact(contact), self.P)
+        if self.axis is None:
+            return MirroredMerit(self.inner.with_contact(contact), self.P)
+        axis = self.axis.joined(contact)
+        return MirroredMerit(self.inner.with_contact(axis), self.P, axis)
 
     def evaluate(self, q: np.ndarray, hard: bool = False) -> _MirroredEvaluation:
         return _MirroredEvaluation(self.inner.evaluate(self.P @ q, hard), self.P, q)

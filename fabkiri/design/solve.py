@@ -78,6 +78,7 @@ from .request import (  # noqa: F401  (re-exported: callers import these from he
 from .routes import (
     FULL_NAME,
     REDUCED_NAME,
+    _mirrored_starts,
     _second_opinion,
     _solve_outline,
     _solve_reduced,
@@ -160,10 +161,13 @@ def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
         out = _solve_reduced(prob, log, iters)
     solver = REDUCED_NAME
     # no full-solver second opinion for a symmetric design: over all nodes with the symmetry rows it is what
-    # took minutes (16x16 heart: 4 min 51 s, and missed); its 12x12 coarse level cost 48 of 56 s and lost
+    # took minutes (16x16 heart: 4 min 51 s, and missed); its 12x12 coarse level cost 48 of 56 s and lost.
+    # The reduced solver from the other guesses instead (``routes._mirrored_starts``).
     if out is not None and req.solver == "auto" and req.second_opinion and out[1] != "hard":
         if not req.symmetry:
             out, solver = _second_opinion(req, prob, out, log, iters)
+        else:
+            out = _mirrored_starts(prob, out, log, iters)
     rigid_first = (
         False  # the answer is the rigid family's, tried first (the API stops its guesses there)
     )
