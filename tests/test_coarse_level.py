@@ -1,0 +1,39 @@
+"""The coarse level of a coarse-to-fine start (``_Problem._coarse_level``): fitted with the tips on their
+arcs only, and again with the outline rows where that outline misses the shape tolerance (issue #37: the
+drop's tips-only levels sat at 40 % of its size, and its 64x64 design ended in a 22 % local minimum)."""
+
+from __future__ import annotations
+
+from fabkiri.design.conformance import deployed
+from fabkiri.design.problem import _Problem
+from fabkiri.design.request import DesignRequest
+from fabkiri.design.targets import load_target
+from fabkiri.pattern.model import Pattern
+
+from .conftest import REPO
+
+
+def _start_miss(prob: _Problem, target) -> float:
+    pat = Pattern(nodes=prob.X0[: prob.n] * prob.L0, tiles=prob.std.tiles)
+    return deployed(pat.nodes, pat.topology, target)["hausdorff_rel"]
+
+
+def test_a_coarse_level_that_misses_the_outline_is_refitted_with_the_outline_rows():
+    drop = load_target(str(REPO / "bench" / "data" / "drop.csv"), size=100.0)
+    prob = _Problem(DesignRequest(16, 16, drop, rigid=True, init="coarse"))
+    level = prob.coarse
+    assert level is not None and level["used"]
+    assert (
+        level["tips_only_hausdorff_rel"] > 0.2
+    )  # the tips-only 8x8 level: bunched tips (main: the start)
+    assert level["fit"] == "outline" and level["hausdorff_rel"] <= 0.02
+    # the fine start resampled from it (main: 40 % of the size)
+    assert _start_miss(prob, drop) < 0.1
+
+
+def test_a_coarse_level_within_the_tolerance_keeps_the_tips_only_fit():
+    circle = load_target("circle", size=100.0)
+    prob = _Problem(DesignRequest(16, 16, circle, rigid=True, init="coarse"))
+    level = prob.coarse
+    assert level is not None and level["used"] and level["fit"] == "tips"
+    assert level["hausdorff_rel"] <= 0.02 and "tips_only_hausdorff_rel" not in level
