@@ -7,6 +7,7 @@ from __future__ import annotations
 from fabkiri.design.conformance import deployed
 from fabkiri.design.problem import _Problem
 from fabkiri.design.request import DesignRequest
+from fabkiri.design.solve import design
 from fabkiri.design.targets import load_target
 from fabkiri.pattern.model import Pattern
 
@@ -20,7 +21,7 @@ def _start_miss(prob: _Problem, target) -> float:
 
 def test_a_coarse_level_that_misses_the_outline_is_refitted_with_the_outline_rows():
     drop = load_target(str(REPO / "bench" / "data" / "drop.csv"), size=100.0)
-    prob = _Problem(DesignRequest(16, 16, drop, rigid=True, init="coarse"))
+    prob = _Problem(DesignRequest(16, 16, drop, rigid=True, init="coarse", coarse_refit=True))
     level = prob.coarse
     assert level is not None and level["used"]
     assert (
@@ -37,3 +38,27 @@ def test_a_coarse_level_within_the_tolerance_keeps_the_tips_only_fit():
     level = prob.coarse
     assert level is not None and level["used"] and level["fit"] == "tips"
     assert level["hausdorff_rel"] <= 0.02 and "tips_only_hausdorff_rel" not in level
+
+
+def test_a_coarse_to_fine_design_that_misses_is_redone_from_refitted_levels_and_the_closer_kept():
+    drop = load_target(str(REPO / "bench" / "data" / "drop.csv"), size=100.0)
+    # at a 0.5 % tolerance the 16x16 design from the tips-only 8x8 level (0.92 %) misses
+    req = DesignRequest(
+        16, 16, drop, rigid=True, init="coarse", solver="reduced", second_opinion_above=0.005
+    )
+    res = design(req)
+    refit = res.report["coarse_refit"]
+    h = deployed(res.pattern.nodes, res.pattern.topology, drop)["hausdorff_rel"]
+    assert refit["tips_only_hausdorff_rel"] > 0.005
+    assert h == min(refit["tips_only_hausdorff_rel"], refit["refit_hausdorff_rel"])
+    assert refit["kept"] == ("refit" if h < refit["tips_only_hausdorff_rel"] else "tips_only")
+    # the kept design's own coarse level says how it was fitted
+    level = res.report["coarse"]
+    assert res.converged and level["used"]
+    assert level["fit"] == ("outline" if refit["kept"] == "refit" else "tips")
+
+
+def test_a_design_within_the_tolerance_is_not_redone():
+    circle = load_target("circle", size=100.0)
+    res = design(DesignRequest(16, 16, circle, rigid=True, init="coarse", solver="reduced"))
+    assert res.converged and "coarse_refit" not in res.report

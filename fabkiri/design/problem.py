@@ -194,6 +194,7 @@ class _Problem:
             reg_weight=req.reg_weight,
             max_iter=req.max_iter,
             solver=req.coarse_solver or req.solver,
+            coarse_refit=req.coarse_refit,
             # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
             # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
             outline=False,
@@ -232,11 +233,11 @@ class _Problem:
         return xmm / L0, L0
 
     def _coarse_level(self, sub: DesignRequest):
-        """The coarse level's design and how it was fitted: tips only first (its grid stays unfolded when
-        resampled), then, where that outline misses the target by more than the shape tolerance
-        (``second_opinion_above``), with the outline rows too, keeping the closer converged outline. The
-        tips-only fit lets tips bunch on their arcs: the drop's 32x32 level sat at a Hausdorff distance of 40 %
-        of its size (tips on their arcs to 0.47 %), and the 64x64 design it started ended at 22 %."""
+        """The coarse level's design and how it was fitted: tips only (its grid stays unfolded when resampled);
+        with ``coarse_refit``, where that outline misses the target by more than the shape tolerance
+        (``second_opinion_above``), again with the outline rows, keeping the closer converged outline. The
+        tips-only fit lets tips bunch on their arcs: the drop's 16x16 and 32x32 levels sat at a Hausdorff distance
+        of 40 % of its size (tips on their arcs to 0.47 %), and the 64x64 design they started ended at 22 %."""
         # the coarse level is a whole design (solve.py builds on this module)
         from .solve import _design
 
@@ -246,7 +247,7 @@ class _Problem:
         res = _design(sub, False)
         h = miss(res)
         level = {"fit": "tips", "hausdorff_rel": h}
-        if h <= self.req.second_opinion_above:
+        if not self.req.coarse_refit or h <= self.req.second_opinion_above:
             return res, level
         alt = _design(replace(sub, outline=True), False)
         h_alt = miss(alt)
