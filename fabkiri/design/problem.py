@@ -241,8 +241,11 @@ class _Problem:
         # the coarse level is a whole design (solve.py builds on this module)
         from .solve import _design
 
+        target = sub.target
+        assert target is not None, "a coarse level is built only for a deployed target"
+
         def miss(res) -> float:
-            return deployed(res.pattern.nodes, res.pattern.topology, sub.target)["hausdorff_rel"]
+            return deployed(res.pattern.nodes, res.pattern.topology, target)["hausdorff_rel"]
 
         res = _design(sub, False)
         h = miss(res)
