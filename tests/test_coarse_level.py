@@ -4,6 +4,7 @@ drop's tips-only levels sat at 40 % of its size, and its 64x64 design ended in a
 
 from __future__ import annotations
 
+import pytest
 from fabkiri.design.conformance import deployed
 from fabkiri.design.problem import _Problem
 from fabkiri.design.request import DesignRequest
@@ -62,3 +63,17 @@ def test_a_design_within_the_tolerance_is_not_redone():
     circle = load_target("circle", size=100.0)
     res = design(DesignRequest(16, 16, circle, rigid=True, init="coarse", solver="reduced"))
     assert res.converged and "coarse_refit" not in res.report
+
+
+@pytest.mark.slow
+def test_the_drop_at_32x32_meets_one_percent_from_refitted_coarse_levels():
+    """From the tips-only 16x16 level the rigid 32x32 drop ends at 1.78 % (main, whatever the tolerance); at a
+    1 % tolerance that miss redoes it from refitted levels (0.51 %, 9 CPU s with the reduced solver)."""
+    drop = load_target(str(REPO / "bench" / "data" / "drop.csv"), size=100.0)
+    req = DesignRequest(
+        32, 32, drop, rigid=True, init="coarse", solver="reduced", second_opinion_above=0.01
+    )
+    res = design(req)
+    h = deployed(res.pattern.nodes, res.pattern.topology, drop)["hausdorff_rel"]
+    assert res.converged and h <= 0.01
+    assert res.report["coarse_refit"]["tips_only_hausdorff_rel"] > 0.01
