@@ -78,6 +78,9 @@ class DesignRequest:
         True  # a mid-size non-rigid design tries the rigid family first (VIA_RIGID_FIRST_TILES)
     )
     coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
+    # --init coarse: refit a coarse level whose tips-only outline misses ``second_opinion_above`` with the outline
+    # rows (``_Problem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
+    coarse_refit: bool = False
     min_opening: float | None = None  # floor on the deployed hole fraction (``opening_rows.py``)
     fit_weights: dict | None = (
         None  # fit family name -> row weights (``refine.py``: towards the minimax fit)

@@ -50,6 +50,7 @@ except ImportError:  # pragma: no cover
 
 from ..pattern.model import Pattern
 from . import offset_outline, outline
+from .conformance import deployed as deployed_conformance
 from .objective import energy
 from .penalty import _solve_full
 from .problem import (  # noqa: F401  (re-exported: callers import these from here)
@@ -147,7 +148,40 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         f"{report['status']}: max equality residual {report['max_equality_residual']:.2e}, fit {mode}, "
         f"{report['iterations_total']} iterations, {report['time_s']:.2f}s"
     )
-    return _result(req, prob, X, report)
+    return _coarse_refit(req, prob, _result(req, prob, X, report), progress, log)
+
+
+def _coarse_refit(
+    req: DesignRequest, prob: _Problem, result: DesignResult, progress: bool, log
+) -> DesignResult:
+    """A coarse-to-fine design whose outline misses the shape tolerance (``second_opinion_above``) is designed
+    again with its coarse levels refitted where their tips-only outline misses it (``coarse_refit``); the
+    converged design with the closer outline is kept. Not every time: from a better coarse start the 32x32 heart
+    ended at 3.96 % instead of 1.61 %, while the drop's 64x64 design went from 22.16 % to 0.22 %."""
+    if req.coarse_refit or not req.outline or prob.coarse is None or req.target is None:
+        return result
+    h = deployed_conformance(result.pattern.nodes, result.pattern.topology, req.target)
+    if result.converged and h["hausdorff_rel"] <= req.second_opinion_above:
+        return result
+    log(
+        f"outline misses by {h['hausdorff_rel']:.2%} of the target size from the tips-only coarse levels: "
+        "again with the coarse levels that miss refitted with the outline rows"
+    )
+    alt = _design(replace(req, coarse_refit=True), progress)
+    h_alt = deployed_conformance(alt.pattern.nodes, alt.pattern.topology, req.target)
+    keep = (
+        alt
+        if (not alt.converged, h_alt["hausdorff_rel"]) < (not result.converged, h["hausdorff_rel"])
+        else result
+    )
+    keep.report["coarse_refit"] = {
+        "tips_only_hausdorff_rel": h["hausdorff_rel"],
+        "refit_hausdorff_rel": h_alt["hausdorff_rel"],
+        "kept": "refit" if keep is alt else "tips_only",
+    }
+    for k in ("time_s", "cpu_s"):  # both designs' time
+        keep.report[k] = result.report[k] + alt.report[k]
+    return keep
 
 
 def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
