@@ -28,8 +28,8 @@ from ..errors import FabkiriError, InputError
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from .design import _check_room
-from .maker_design import cpu_s as _cpu
 from .maker_design import _opening_lines, design_step  # noqa: F401 (_opening_lines re-exported)
+from .maker_design import cpu_s as _cpu
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
 
