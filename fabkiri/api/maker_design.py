@@ -87,9 +87,10 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
     tried = [first]
     for choice in retry_tiles(target, fab, plan.tiles)[:MAX_RETRIES]:
         r, c = choice.tiles
+        how = "to name it if it makes" if plan.tiles.given else "to use it if it meets the shape"
         say(
             f"make: the design at {_rc(plan.tiles)} missed the shape ({miss:.2f}x the tolerance); "
-            f"trying {r}x{c} tiles ({choice.reason}); about {first.cpu_s:.0f} CPU s more"
+            f"trying {r}x{c} tiles {how} ({choice.reason}); about {first.cpu_s:.0f} CPU s more"
         )
         try:
             attempt = _attempt(result, replace(plan, tiles=choice), say)
