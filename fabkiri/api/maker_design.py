@@ -4,7 +4,7 @@ The tile count ``make`` chose is a guess from the size and the process's thinnes
 (:mod:`.maker_tiles`); a design just outside the tolerance there often meets it with a neighbouring
 count. So after a shape miss within :data:`RETRY_WITHIN` times the tolerance, up to :data:`MAX_RETRIES`
 counts of :func:`.maker_tiles.retry_tiles` are designed in turn (each costs about what the first
-design did; the progress line says so). With tiles ``make`` chose, the first that meets the shape is
+design did, the progress line says so; none starts once they cost :data:`RETRY_BUDGET` times it). With tiles ``make`` chose, the first that meets the shape is
 the design (the summary says which count missed and why the next was tried). With ``--tiles`` given,
 the count is the user's: one that meets is only named, once its cut or print and deploy steps have
 run too, as a ``fabkiri make ... --tiles RxC`` line (a checked alternative, never a count already
@@ -34,7 +34,10 @@ StepFn = Callable[[MakeResult, Any, Progress], StepRun]
 # a miss up to this many times the tolerance is retried with other tile counts (star6 at 150 mm on
 # prusa-mk4: 3.85 % at 6x6 against 3 %); beyond it the outline's own limit is at work (letter L: 8-19 %)
 RETRY_WITHIN = 2.0
-MAX_RETRIES = 2  # each retry is a whole design: 5-60 CPU s at the counts make chooses (issue 32)
+MAX_RETRIES = 2  # each retry is a whole design: 5-75 CPU s at the counts make chooses (issue 32)
+# and no further retry once they cost this many times the first design (star6 on prusa-mk4 at 150 mm:
+# 6x6 35 CPU s, 7x7 74 s, 8x8 52 s, all three missed)
+RETRY_BUDGET = 2.0
 CHECKED = "make's design, {process} and deploy steps, run at these tiles"
 
 
@@ -87,6 +90,10 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
     tried = [first]
     for choice in retry_tiles(target, fab, plan.tiles)[:MAX_RETRIES]:
         r, c = choice.tiles
+        spent = sum(a.cpu_s for a in tried[1:])
+        if spent > RETRY_BUDGET * first.cpu_s:
+            say(f"make: not trying {r}x{c}: the retries cost {spent:.0f} CPU s already")
+            break
         how = "to name it if it makes" if plan.tiles.given else "to use it if it meets the shape"
         say(
             f"make: the design at {_rc(plan.tiles)} missed the shape ({miss:.2f}x the tolerance); "
