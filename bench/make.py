@@ -17,7 +17,9 @@ check accepts the files and the shape is within 3 %. A refusal is shown as its l
 ``make`` refuses (exit 1) naming checked options (on stdout, one ``fabkiri ...`` line each, as
 ``make.json`` "alternatives") the first is run as it is, and the cell reads "refused -> alternative
 ok" (it exits 0) or "refused -> alternative failed": the issue's "refuses in one line that names
-an alternative which then succeeds". ``--baseline DIR`` also times the ``design --material/--printer`` + ``cut``/``print``
+an alternative which then succeeds". A cell whose design ``make`` redid at other tile counts after
+a shape miss (``make.json`` "design_retries") reads "ok (at RxC after a miss)" when it then
+succeeded (make still exited 0 the first time), and its counts are listed under the table. ``--baseline DIR`` also times the ``design --material/--printer`` + ``cut``/``print``
 sequence of another checkout at the same tiles, in the same run (against make's own design and
 cut/print steps, "d+f CPU s", timed inside its process; the baseline's figure includes two
 interpreter starts).
@@ -69,6 +71,7 @@ class Cell:
     alternative_cpu_s: float = 0.0
     baseline: dict = field(default_factory=dict)
     steps_cpu_s: float = 0.0  # design + cut/print, in make's process (the baseline's two commands)
+    retried: list = field(default_factory=list)  # make's designs after a shape miss (make.json)
 
     @property
     def name(self) -> str:
@@ -88,7 +91,7 @@ class Cell:
     def outcome(self) -> str:
         """ok (first time), refused -> alternative ok/failed, or failed (no option named)."""
         if self.ok:
-            return "ok"
+            return "ok" + (f" (at {self.tiles} after a miss)" if self.retried else "")
         if self.alternative:
             return f"refused -> alternative {'ok' if self.alternative_code == 0 else 'failed'}"
         return "failed"
@@ -155,6 +158,7 @@ def run_cell(cell: Cell, out: Path, timeout: float) -> None:
     cell.tiles = "x".join(map(str, record["tiles"]))
     cell.hausdorff = record["figures"].get("hausdorff_rel")
     cell.failed_step = record["failed_step"]
+    cell.retried = record.get("design_retries") or []
     cell.steps_cpu_s = sum(
         st["cpu_s"] for st in record["steps"] if st["name"] in ("design", "cut", "print")
     )
@@ -289,6 +293,8 @@ def main() -> int:
             print(f"  {c.name}: {c.refusal[:300]}{alt}")
         elif c.outside is False:
             print(f"  {c.name}: {c.outside_note}")
+        if c.retried:
+            print(f"  {c.name}: tile counts designed: {'; '.join(c.retried)}")
     good = sum(c.ok for c in cells)
     led = sum(c.outcome == "refused -> alternative ok" for c in cells)
     print(

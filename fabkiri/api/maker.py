@@ -6,12 +6,12 @@ then :func:`~.cut.cut_files` or :func:`~.print.print_pattern` at the designed si
 :func:`~.deploy.deploy_pattern` (plot and GIF) and the HTML report. Bad input is refused before any
 work, with nothing written; after that each step's files are written as it finishes (each step
 all-or-nothing, through :mod:`fabkiri.fileio`), and the first step that fails stops the run,
-keeping what is done, except a failed deploy check: the report is still written, and the run fails. Without ``tiles`` the count comes from :func:`.maker_tiles.choose_tiles`.
+keeping what is done, except a failed deploy check: the report is still written, and the run fails. Without ``tiles`` the count comes from :func:`.maker_tiles.choose_tiles`; a design that
+misses the shape by a little is designed again at other counts (:mod:`.maker_design`).
 """
 
 from __future__ import annotations
 
-import resource
 import tempfile
 import time
 from collections.abc import Callable
@@ -28,6 +28,8 @@ from ..errors import FabkiriError, InputError
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from .design import _check_room
+from .maker_design import _opening_lines, design_step  # noqa: F401 (_opening_lines re-exported)
+from .maker_design import cpu_s as _cpu
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
 
@@ -188,11 +190,6 @@ def _check_output(folder: Path, stem: str, process: str) -> None:
             raise InputError(f"output {dest} is a folder where a file must go; nothing written")
 
 
-def _cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_SELF)
-    return r.ru_utime + r.ru_stime
-
-
 def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) -> bool:
     """Run one step, time it, keep and write its files; whether the run goes on."""
     say(f"make: {name} ...")
@@ -239,64 +236,10 @@ StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
 
 
 def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
-    from .design import PatternRequest, design_pattern
-
-    request = PatternRequest(
-        tiles=plan.tiles.tiles,
-        target=plan.target,
-        size=plan.size,
-        material=plan.material,
-        hinge=plan.hinge if plan.material else None,
-        printer=plan.printer,
-        style=plan.style if plan.printer else None,
-        shape_tol=plan.shape_tol,
-        min_opening=plan.min_opening,
-        corners=plan.tiles.corners,
-    )
-    outcome = design_pattern(request, notify=say)
-    name = f"{plan.stem}.json"
-    files = {str(Path(k).name): v for k, v in outcome.files(name).items()}
-    result.pattern = outcome.pattern
-    report = outcome.report
-    result.figures.update(_design_figures(report))
-    details = [line for line in outcome.summary(name) if line.startswith("fabkiri: design failed")]
-    details = _opening_lines(report) + details
-    return outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details
-
-
-def _design_figures(report: dict) -> dict[str, Any]:
-    """Hausdorff of the deployed outline (share of the size) and its tolerance; the deployment amount
-    (``report["opening"]``, from the ``opening`` work) when the design reports it."""
-    out: dict[str, Any] = {}
-    c = (report.get("conformance") or {}).get("deployed")
-    if c:
-        out["hausdorff_rel"] = float(c["hausdorff_rel"])
-        out["hausdorff_mm"] = float(c["hausdorff_mm"])
-        out["shape_tol_rel"] = float(report["shape"]["deployed"]["tol_rel"])
-    if isinstance(report.get("opening"), dict):  # the seam: shown as reported
-        out["opening"] = report["opening"]
-    return out
-
-
-def _design_line(status: str, report: dict) -> str:
-    c = (report.get("conformance") or {}).get("deployed")
-    shape = (
-        f", Hausdorff {100 * c['hausdorff_rel']:.2f} % of the size "
-        f"(tol {100 * report['shape']['deployed']['tol_rel']:.2g} %)"
-        if c
-        else ""
-    )
-    fr = report.get("fabrication") or {}
-    active = sum(fr.get("active", {}).values()) if fr else 0
-    said = "" if status == "ok" else f"{status}, "
-    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active"
-
-
-def _opening_lines(report: dict) -> list[str]:
-    """How much the design opens and, below 10 %, the warning (as design says them, naming make's option)."""
-    from .design_opening import summary_lines
-
-    return summary_lines(report, "make")
+    """The design at the plan's tiles, and after a near shape miss other counts (:mod:`.maker_design`);
+    an alternative count is named only once it also passes this run's cut or print and deploy."""
+    fabricate = _cut if plan.process == "cut" else _print
+    return design_step(result, plan, say, (fabricate, _deploy))
 
 
 def _ask(result: MakeResult, plan: _Plan):

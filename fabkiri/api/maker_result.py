@@ -68,6 +68,7 @@ class MakeResult:
     alternatives: list[Any] = field(default_factory=list)  # a refusal's options, each with .command
     refused: bool = False  # the failed step was a fabricability refusal (advice.Refused)
     figures: dict[str, Any] = field(default_factory=dict)  # design figures: Hausdorff, opening
+    retried: list[str] = field(default_factory=list)  # after a shape miss: each count designed
 
     @property
     def ok(self) -> bool:
@@ -101,14 +102,16 @@ class MakeResult:
             "failed_step": None if self.failed is None else self.failed.name,
             "figures": self.figures,
             "alternatives": [getattr(a, "command", str(a)) for a in self.alternatives],
+            "design_retries": self.retried,
             "steps": [s.to_dict() for s in self.steps],
         }
 
     def option_lines(self) -> list[str]:
-        """A refusal's checked options as ``cut`` and ``print`` print them on stdout (none otherwise)."""
+        """A refusal's checked options as ``cut`` and ``print`` print them on stdout, and a missed design's
+        (a tile count that was run through every step); none otherwise."""
         from .advice import option_lines
 
-        return option_lines(self.alternatives) if self.refused else []
+        return option_lines(self.alternatives) if self.refused or self.alternatives else []
 
     def manifest_text(self) -> str:
         return json.dumps(self.to_dict(), indent=2, sort_keys=True) + "\n"

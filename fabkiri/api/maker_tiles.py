@@ -26,6 +26,9 @@ MAX_AUTO = 12
 COMFORT = 2.0
 # a deployed rotating-squares pattern's tiles cover about this share of its outline (the rest is holes)
 TILE_COVER = 0.5
+# after a shape miss, a retry may have thinner tiles than the first choice: the design's fabrication rows
+# still hold every tile to the feature; the comfort only guessed which count is likely to fit
+RETRY_COMFORT = 1.5
 
 
 @dataclass(frozen=True)
@@ -110,3 +113,31 @@ def given_tiles(tiles: tuple[int, int], target: Target, limits: FabricationLimit
     """The tiles the user named, with the same figures for the summary."""
     w = tile_width_mm(target, tiles[0] * tiles[1])
     return TilesChoice(tiles, "as given (--tiles)", w, min_feature_mm(limits), given=True)
+
+
+def retry_tiles(target: Target, limits: FabricationLimits, first: TilesChoice) -> list[TilesChoice]:
+    """The tile counts worth a second design when ``first`` missed the shape, likeliest first: the
+    outline's aspect (rows over columns as its height over its width) at about ``first``'s count when
+    the outline is far from square, then one and two more tiles a side; each keeps its estimated
+    tile width :data:`RETRY_COMFORT` times the process's thinnest feature, and none repeats ``first``."""
+    feature = min_feature_mm(limits)
+    (lo, hi) = target.bbox
+    aspect = float((hi[1] - lo[1]) / (hi[0] - lo[0]))  # height over width: rows over columns
+    rows, cols = first.tiles
+    shapes: list[tuple[int, int]] = []
+    if not 0.8 <= aspect <= 1.25 and first.corners is None:  # a re-split strip has its own shape
+        r = max(2, round(np.sqrt(rows * cols * aspect)))  # at least first's count: fewer fit less
+        shapes.append((r, max(2, -(-rows * cols // r))))
+    shapes += [(rows + k, cols + k) for k in (1, 2)]
+    out: list[TilesChoice] = []
+    for shape in dict.fromkeys(shapes):  # in order, once each
+        w = tile_width_mm(target, shape[0] * shape[1])
+        if shape == first.tiles or w < RETRY_COMFORT * feature:
+            continue
+        how = "the outline's aspect" if shape[0] != shape[1] and rows == cols else "more tiles"
+        why = (
+            f"{how}: tiles about {w:.3g} mm wide, at least {RETRY_COMFORT:g}x the {feature:.3g} mm "
+            f"{limits.source} needs"
+        )
+        out.append(TilesChoice(shape, why, w, feature, corners=first.corners))
+    return out
