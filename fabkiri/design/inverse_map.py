@@ -17,7 +17,6 @@ import numpy as np
 import shapely
 from scipy import sparse
 from scipy.sparse.linalg import splu
-from scipy.spatial import Delaunay
 
 from ..kdtree import KDTree
 from .target_curve import Target
@@ -78,6 +77,8 @@ def _mesh(target: Target) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     inner = inner[keep]
     keep = shapely.distance(shapely.points(inner), poly.exterior) > 0.4 * h
     nodes = np.vstack([edge, inner[keep]])
+    from scipy.spatial import Delaunay  # here: scipy.spatial costs a plain design's start-up
+
     tri = Delaunay(nodes).simplices
     c = nodes[tri].mean(1)
     return nodes, tri[shapely.contains_xy(poly, c[:, 0], c[:, 1])], u
