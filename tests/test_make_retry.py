@@ -90,3 +90,26 @@ def test_a_far_miss_is_not_retried_and_names_nothing():
     assert result.tiles.tiles == (4, 4) and result.retried == [] and result.alternatives == []
     assert any("no other tile count tried" in d for d in result.failed.details)
     assert result.option_lines() == []
+
+
+@pytest.mark.slow  # the 4x4 design, the larger size's design, cut and deploy, then the named make (~12 CPU s)
+def test_a_miss_with_no_count_left_names_a_larger_size_that_then_makes_it(
+    tmp_path, run_cli, monkeypatch
+):
+    from fabkiri.api import maker_design
+
+    # no other count at this size: the larger size alone
+    monkeypatch.setattr(maker_design, "MAX_RETRIES", 0)
+    result = fabkiri.make("circle", size=60, material="card-0.3", output=tmp_path / "o")
+    assert not result.ok and result.failed is not None and result.failed.name == "design"
+    assert result.tiles.tiles == (4, 4)  # the miss stays the run's design
+    [option] = [ln for ln in result.option_lines() if ln.startswith("fabkiri ")]
+    words = shlex.split(option.split("    # ")[0])
+    size = float(words[words.index("--size") + 1])
+    assert size > 60 and "--tiles" not in words  # make chooses the tiles there, as it said
+    assert words[-2:] == ["-o", f"{tmp_path / 'o'}-{size:g}mm"]
+    assert any(f"at {size:g} mm:" in d and "met" in d for d in result.failed.details)
+    code, _, err = run_cli(*words[1:])
+    assert code == 0, err  # named because it was run: it makes
+    made = json.loads((tmp_path / f"o-{size:g}mm" / "make.json").read_text())
+    assert made["ok"] and made["tiles"][0] * made["tiles"][1] > 16

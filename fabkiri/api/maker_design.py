@@ -10,10 +10,16 @@ the count is the user's: one that meets is only named, once its cut or print and
 run too, as a ``fabkiri make ... --tiles RxC`` line (a checked alternative, never a count already
 tried). A farther miss (a reflex corner, a pocket) is not retried: neighbouring counts move the
 outline by about a tile, not by several tolerances; the step says so.
+
+When tiles ``make`` chose still miss (far, or after its retries), the smallest larger size of
+:data:`SIZE_STEPS` at which ``make`` would choose more tiles is made on a scratch result (design, cut or
+print, deploy; nothing written) and, when all pass, named as a ``fabkiri make ... --size S`` line: the
+six-point star for prusa-mk4 at 150 mm misses at 6x6 and 7x7, and is made at 190 mm with 8x8 tiles.
 """
 
 from __future__ import annotations
 
+import math
 import resource
 import shlex
 from collections.abc import Callable, Sequence
@@ -26,7 +32,7 @@ from ..design.targets import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
 from .maker_result import MakeResult
-from .maker_tiles import TilesChoice, retry_tiles
+from .maker_tiles import TilesChoice, choose_tiles, retry_tiles
 
 Progress = Callable[[str], None]
 StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
@@ -38,6 +44,8 @@ MAX_RETRIES = 2  # each retry is a whole design: 5-75 CPU s at the counts make c
 # and no further retry once they cost this many times the first design (star6 on prusa-mk4 at 150 mm:
 # 6x6 35 CPU s, 7x7 74 s, 8x8 52 s, all three missed)
 RETRY_BUDGET = 2.0
+# larger sizes (times the asked one) tried for a named alternative when tiles make chose miss the shape
+SIZE_STEPS = (1.25, 1.5, 2.0)
 CHECKED = "make's design, {process} and deploy steps, run at these tiles"
 
 
@@ -81,7 +89,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
             f"no other tile count tried: the miss is {miss:.1f}x the tolerance, more than the "
             f"{RETRY_WITHIN:g}x a neighbouring count is likely to close"
         )
-        return _with_details(first.run, [note])
+        return _with_details(first.run, [note, *_larger_size(result, plan, say, checks)])
     target = load_target(plan.target, plan.size)
     fab, _ = design_limits.resolve(
         plan.material, plan.hinge, plan.printer, plan.style, None, None, target
@@ -113,7 +121,55 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
         if named is not None:
             result.alternatives = [named]
             break
-    return _keep_best(result, tried)
+    run = _keep_best(result, tried)
+    if result.alternatives or plan.tiles.given:
+        return run
+    return _with_details(run, _larger_size(result, plan, say, checks))
+
+
+def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn]) -> list[str]:
+    """Tiles make chose missed the shape: the smallest of :data:`SIZE_STEPS` times the size (rounded up
+    to 10 mm) where make chooses more tiles is made on a scratch result, and named as a ``fabkiri make
+    ... --size S`` line when its design meets the shape and every step of ``checks`` passes."""
+    if plan.tiles.given:
+        return []
+    count = plan.tiles.tiles[0] * plan.tiles.tiles[1]
+    for k in SIZE_STEPS:
+        size = float(math.ceil(plan.size * k / 10.0) * 10)
+        target = load_target(plan.target, size)
+        fab, _ = design_limits.resolve(
+            plan.material, plan.hinge, plan.printer, plan.style, None, None, target
+        )
+        assert fab is not None  # make always names a process
+        choice = choose_tiles(target, fab, plan.fabrication)
+        if choice.tiles[0] * choice.tiles[1] > count:
+            break
+    else:
+        return [f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"]
+    bigger = replace(plan, size=size, tiles=choice)
+    say(f"make: trying {size:g} mm, where make chooses {_rc(choice)} tiles, to name it if it makes")
+    scratch = _scratch(bigger, choice, None)
+    attempt = _attempt(scratch, bigger, say)
+    named = attempt.run[0] and _checked_alternative(
+        bigger, attempt, checks, result.output, sized=True
+    )
+    if named:
+        result.alternatives = [named]
+        return [f"at {size:g} mm: {attempt.line()}, {plan.process} and deploy pass"]
+    return [f"at {size:g} mm ({_rc(choice)} tiles) it does not make either: {attempt.line()}"]
+
+
+def _scratch(plan, tiles: TilesChoice, pattern) -> MakeResult:
+    """A result that only runs steps (nothing written): an alternative's design and checks."""
+    return MakeResult(
+        target=plan.target,
+        size=plan.size,
+        process=plan.process,
+        fabrication=plan.fabrication,
+        tiles=tiles,
+        stem=plan.stem,
+        pattern=pattern,
+    )
 
 
 def cpu_s() -> float:
@@ -174,20 +230,15 @@ def _keep_best(result: MakeResult, tried: list[_Attempt]) -> StepRun:
     return _with_details(best.run, _tried_lines(tried))
 
 
-def _checked_alternative(plan, attempt: _Attempt, checks: Sequence[StepFn], output: Path | None):
-    """The ``fabkiri make ... --tiles RxC`` line of ``attempt`` when its design passes every step of
-    ``checks`` (run on a scratch result, nothing written); None when one fails."""
+def _checked_alternative(
+    plan, attempt: _Attempt, checks: Sequence[StepFn], output: Path | None, sized: bool = False
+):
+    """The ``fabkiri make ... --tiles RxC`` line of ``attempt`` (``sized``: ``--size S``, the tiles
+    make's choice there) when its design passes every step of ``checks`` (run on a scratch result,
+    nothing written); None when one fails."""
     from .advice import Alternative
 
-    scratch = MakeResult(
-        target=plan.target,
-        size=plan.size,
-        process=plan.process,
-        fabrication=plan.fabrication,
-        tiles=attempt.tiles,
-        stem=plan.stem,
-        pattern=attempt.pattern,
-    )
+    scratch = _scratch(plan, attempt.tiles, attempt.pattern)
     for step in checks:
         try:
             if not step(scratch, plan, lambda text: None)[0]:
@@ -195,24 +246,28 @@ def _checked_alternative(plan, attempt: _Attempt, checks: Sequence[StepFn], outp
         except FabkiriError:
             return None
     r, c = attempt.tiles.tiles
-    command = make_command(plan, attempt.tiles.tiles, output)
-    detail = f"{r}x{c} tiles meet the shape ({attempt.line()}) and {plan.process} and deploy pass"
-    return Alternative(
-        "make", command, detail, CHECKED.format(process=plan.process), {"tiles": (r, c)}
+    command = make_command(plan, None if sized else attempt.tiles.tiles, output)
+    at = f"at {plan.size:g} mm " if sized else ""
+    detail = (
+        f"{r}x{c} tiles {at}meet the shape ({attempt.line()}) and {plan.process} and deploy pass"
     )
+    changes: dict[str, Any] = {"size": plan.size} if sized else {"tiles": (r, c)}
+    return Alternative("make", command, detail, CHECKED.format(process=plan.process), changes)
 
 
-def make_command(plan, tiles: tuple[int, int], output: Path | None) -> str:
-    """The ``fabkiri make`` line of ``plan`` at ``tiles``, writing beside ``output`` (the run's)."""
-    r, c = tiles
+def make_command(plan, tiles: tuple[int, int] | None, output: Path | None) -> str:
+    """The ``fabkiri make`` line of ``plan`` at ``tiles`` (None: make's choice at the plan's size),
+    writing beside ``output`` (the run's)."""
     how = (
         ["--material", plan.material, "--hinge", plan.hinge]
         if plan.material
         else ["--printer", plan.printer, "--style", plan.style]
     )
-    out = f"{output}-{r}x{c}" if output is not None else f"{plan.stem}-{r}x{c}"
+    tail = f"{plan.size:g}mm" if tiles is None else "x".join(map(str, tiles))
+    out = f"{output}-{tail}" if output is not None else f"{plan.stem}-{tail}"
     words = ["fabkiri", "make", plan.target, "--size", f"{plan.size:g}", *how]
-    words += ["--tiles", f"{r}x{c}"]
+    if tiles is not None:
+        words += ["--tiles", "x".join(map(str, tiles))]
     if plan.shape_tol != conf.DEFAULT_SHAPE_TOL:
         words += ["--shape-tol", plan.shape_tol]
     if plan.min_opening is not None:
