@@ -43,6 +43,11 @@ FULL_MAX_TILES = 32 * 32
 # the rigid-first route (``request.VIA_RIGID_FIRST_TILES``): its starts, and the outline that ends the search
 RIGID_FIRST_INITS = ("coarse", "rescaled")
 RIGID_FIRST_GOOD = 5e-3
+# ... and up to this many tiles, where no reduced member meets the shape, the rigid design with the full
+# solver's second opinion next (the CLI's last guess, ``_solve_via_rigid``), before the full solver over all
+# nodes: the 16x16 heart (100 mm) went through the conformal, rescaled and standard full solves (missed,
+# missed, unconverged; ~11 CPU s) before the rigid design met it (1.77 %, ~8.6 CPU s)
+RIGID_FULL_FIRST_TILES = 16 * 16
 # a symmetric design gets no full-solver second opinion (over all nodes with the symmetry rows it took
 # minutes: 16x16 heart 4 min 51 s, and missed); instead the reduced solver over half the seeds from these
 # guesses too, a fraction of a second each at 8x8 (rigid heart, tips fit, misses by: rescaled 2.56 %,
@@ -224,14 +229,38 @@ def _solve_rigid_first(prob: _Problem, log, iters: dict):
         if h <= RIGID_FIRST_GOOD:
             break
     if best is None or best[0] > prob.req.second_opinion_above:
-        log("no rigid-family member within the shape tolerance: the full solver takes over")
-        return None
+        return _rigid_full_first(prob, log, iters)
     return best[1:]
 
 
-def _solve_via_rigid(prob: _Problem, log, iters: dict):
+def _rigid_full_first(prob: _Problem, log, iters: dict):
+    """Where no reduced member meets the shape, up to ``RIGID_FULL_FIRST_TILES``: the rigid design with the
+    full solver's second opinion (``_solve_via_rigid``, the CLI's last guess), before the full solver over all
+    nodes and its other guesses. ``(X, mode, solver)`` if within the shape tolerance, else None (and the CLI's
+    last guess designs it again: a miss here costs that rigid design twice, ~8 CPU s for a 16x16 heart)."""
+    if prob.req.rows * prob.req.cols > RIGID_FULL_FIRST_TILES:
+        log("no rigid-family member within the shape tolerance: the full solver takes over")
+        return None
+    log(
+        "no reduced rigid-family member within the shape tolerance: the rigid design, full solver too"
+    )
+    via = _solve_via_rigid(prob, log, iters, tag="via_")
+    if via is None:
+        return None
+    pat = Pattern(nodes=via[0][: prob.n] * prob.L0, tiles=prob.std.tiles)
+    h = deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
+    if h <= prob.req.second_opinion_above:
+        log(f"rigid design: outline within {h:.2%} of the target size")
+        return via
+    log(
+        f"rigid design: outline within {h:.2%} of the target size, outside it: the full solver takes over"
+    )
+    return None
+
+
+def _solve_via_rigid(prob: _Problem, log, iters: dict, tag: str = ""):
     """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
-    the non-rigid problem, else None."""
+    the non-rigid problem, else None. ``tag`` prefixes its iteration counts."""
     from .solve import _design  # a rigid design of the same target is a whole design
 
     big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
@@ -252,14 +281,14 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict):
     # solver on the rigid problem when its reduced design failed a family check, stopped at 5e-5, then the
     # non-rigid one at 6e-3 (14 % off, 66 CPU s). Next, the reduced solver alone down the coarse levels (1.37 %).
     first = replace(sub, solver="reduced", coarse_solver="auto") if big else sub
-    for tag, attempt in (("rigid", first), ("rigid_reduced", replace(sub, solver="reduced"))):
+    for name, attempt in (("rigid", first), ("rigid_reduced", replace(sub, solver="reduced"))):
         res = _design(attempt, False)
-        iters.update({f"{tag}_{k}": v for k, v in res.report["iterations"].items()})
+        iters.update({f"{tag}{name}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
         if res.converged and _acceptable(prob, X):
             return X, res.report["shape_matching"], res.report["solver"]
         log(
-            f"the {'rigid-family' if tag == 'rigid' else 'reduced-only'} design fails a non-rigid family check "
+            f"the {'rigid-family' if name == 'rigid' else 'reduced-only'} design fails a non-rigid family check "
             f"({_why_not(prob, X)})"
         )
     log("the full solver takes over")
