@@ -20,9 +20,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
-import sys
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -31,6 +28,8 @@ import numpy as np
 from fabkiri.design import kagome as K
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern.kagome import standard_kagome
+
+from child import run_cli
 
 
 def table(sizes: list[tuple[int, int]]) -> None:
@@ -87,7 +86,8 @@ def figure(path: Path) -> None:
     print(f"wrote {path} ({path.stat().st_size // 1024} kB)")
 
 
-EGG = str(Path(__file__).resolve().parent.parent / "tests" / "data" / "egg.csv")
+ROOT = Path(__file__).resolve().parents[1]
+EGG = str(ROOT / "tests" / "data" / "egg.csv")
 FIT_CELLS = (  # docs/kagome.md's table (the heart 6x11 free and 6x13 rows were run through the API)
     "circle:auto:120,circle:6x10:120,circle:8x8:120,circle:9x15:180,circle:12x21:240,"
     "ellipse:auto:120,ellipse:4x15:120,ellipse:4x13:120,ellipse:5x17:180,ellipse:6x11:120,"
@@ -99,24 +99,8 @@ FIT_CELLS = (  # docs/kagome.md's table (the heart 6x11 free and 6x13 rows were 
 def fit_row(outline: str, tiles: str, size: str, out: Path) -> str:
     """One table row: ``fabkiri design --lattice kagome`` on the cell, its exit code and figures."""
     target = EGG if outline == "egg" else outline
-    cmd = [
-        sys.executable,
-        "-m",
-        "fabkiri.cli.main",
-        "design",
-        "--lattice",
-        "kagome",
-        "--target",
-        target,
-    ]
-    cmd += ["--size", size, "-o", str(out)] + ([] if tiles == "auto" else ["--tiles", tiles])
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.monotonic()
-    run = subprocess.run(
-        cmd, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"}
-    )
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    args = ["design", "--lattice", "kagome", "--target", target, "--size", size, "-o", str(out)]
+    run = run_cli(ROOT, *args, *([] if tiles == "auto" else ["--tiles", tiles]), timeout=3600)
     warn = next((ln for ln in run.stderr.splitlines() if "wide for 1 high" in ln), "")
     hd, failed, lattice = "–", "–", tiles
     if out.exists():
@@ -136,8 +120,8 @@ def fit_row(outline: str, tiles: str, size: str, out: Path) -> str:
         else ("warned: " + warn.split("try ")[-1].split(" (")[0] if warn else "")
     )
     return (
-        f"| {outline} | {lattice} {note} | {size} | {run.returncode} | {hd} | {failed} | "
-        f"{cpu:.1f} | {time.monotonic() - t0:.0f} | {os.getloadavg()[0]:.1f} |"
+        f"| {outline} | {lattice} {note} | {size} | {run.code} | {hd} | {failed} | "
+        f"{run.cpu_s:.1f} | {run.wall_s:.0f} | {os.getloadavg()[0]:.1f} |"
     )
 
 

@@ -20,7 +20,7 @@ import os
 import sys
 
 _NAME = "scipy.spatial._ckdtree"
-_tree_class = None
+_classes: dict[str, type] = {}
 
 
 def _load_extension(name: str = _NAME):
@@ -43,19 +43,24 @@ def _load_extension(name: str = _NAME):
     return module
 
 
-def tree_class():
-    """The ``cKDTree`` class, loaded on first call."""
-    global _tree_class
-    if _tree_class is None:
-        if _NAME in sys.modules or "scipy.spatial" in sys.modules:
-            from scipy.spatial import cKDTree as cls
+def _scipy_class(module: str, name: str):
+    """``scipy.spatial.<name>``, from the compiled ``module`` alone while ``scipy.spatial`` is unloaded."""
+    cls = _classes.get(name)
+    if cls is None:
+        if module in sys.modules or "scipy.spatial" in sys.modules:
+            cls = getattr(importlib.import_module("scipy.spatial"), name)
         else:
             try:
-                cls = _load_extension().cKDTree
+                cls = getattr(_load_extension(module), name)
             except ImportError:
-                from scipy.spatial import cKDTree as cls
-        _tree_class = cls
-    return _tree_class
+                cls = getattr(importlib.import_module("scipy.spatial"), name)
+        _classes[name] = cls
+    return cls
+
+
+def tree_class():
+    """The ``cKDTree`` class, loaded on first call."""
+    return _scipy_class(_NAME, "cKDTree")
 
 
 def KDTree(points):  # noqa: N802  (stands for the class it builds)
@@ -63,23 +68,9 @@ def KDTree(points):  # noqa: N802  (stands for the class it builds)
     return tree_class()(points)
 
 
-_HULL = "scipy.spatial._qhull"
-_hull_class = None
-
-
 def hull_class():
     """The ``ConvexHull`` class, loaded on first call (as :func:`tree_class`)."""
-    global _hull_class
-    if _hull_class is None:
-        if _HULL in sys.modules or "scipy.spatial" in sys.modules:
-            from scipy.spatial import ConvexHull as cls
-        else:
-            try:
-                cls = _load_extension(_HULL).ConvexHull
-            except ImportError:
-                from scipy.spatial import ConvexHull as cls
-        _hull_class = cls
-    return _hull_class
+    return _scipy_class("scipy.spatial._qhull", "ConvexHull")
 
 
 def ConvexHull(points):  # noqa: N802  (stands for the class it builds)

@@ -36,10 +36,14 @@ def _modules_after(argv: list[str]) -> set[str]:
         f"try:\n    main({argv!r})\nexcept SystemExit:\n    pass\n"
         "print('\\n'.join(sys.modules))"
     )
-    out = subprocess.run(
+    return set(_printed(code))
+
+
+def _printed(code: str) -> list[str]:
+    """The words ``code`` prints, run in a fresh interpreter (nothing loaded by this test process)."""
+    return subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
-    ).stdout
-    return set(out.split())
+    ).stdout.split()
 
 
 def test_help_imports_no_numerics():
@@ -211,10 +215,7 @@ def test_kdtree_is_scipys_class_before_and_after_scipy_spatial():
         "d1, i1 = t.query(pts[:50] + 0.01, k=3)\nd2, i2 = scipy.spatial.cKDTree(pts).query(pts[:50] + 0.01, k=3)\n"
         "print(alone, type(t) is scipy.spatial.cKDTree, (d1 == d2).all(), (i1 == i2).all())"
     )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True
-    ).stdout.split()
-    assert out == ["False", "True", "True", "True"]
+    assert _printed(code) == ["False", "True", "True", "True"]
 
 
 def test_cut_loads_neither_the_solver_nor_scipy_spatial(tmp_path):
@@ -241,7 +242,4 @@ def test_convex_hull_is_scipys_class_before_and_after_scipy_spatial():
         "print(alone, type(h) is scipy.spatial.ConvexHull, "
         "(h.vertices == scipy.spatial.ConvexHull(pts).vertices).all())"
     )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True
-    ).stdout.split()
-    assert out == ["False", "True", "True"]
+    assert _printed(code) == ["False", "True", "True"]

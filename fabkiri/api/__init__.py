@@ -9,8 +9,9 @@ The names below load on first use: ``fabkiri cut`` and ``print`` import their ow
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from .design import DesignOutcome, PatternRequest, design_pattern
@@ -27,10 +28,4 @@ _WHERE = {
 
 __all__ = ["DesignOutcome", "MakeResult", "PatternRequest", "design_pattern", "make"]
 
-
-def __getattr__(name: str) -> Any:
-    if name not in _WHERE:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_WHERE[name], __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _WHERE)

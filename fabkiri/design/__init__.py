@@ -10,8 +10,9 @@ target with ``design.conformance``) does not load the solver.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from .solve import DesignRequest, DesignResult, design
@@ -28,10 +29,4 @@ _WHERE = {
 
 __all__ = ["DesignRequest", "DesignResult", "design", "Target", "load_target", "named_targets"]
 
-
-def __getattr__(name: str) -> Any:
-    if name not in _WHERE:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_WHERE[name], __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _WHERE)
