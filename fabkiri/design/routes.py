@@ -122,13 +122,9 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
     other LM scaling and from each guess of ``MIRRORED_STARTS`` it did not start from, with both. The best
     ``(X, mode)`` (family checks, then the objective)."""
     req = prob.req
-    tiles = req.rows * req.cols
-    if tiles > FULL_MAX_TILES:
-        return out
-    if tiles > FULL_ALWAYS_TILES:
-        if fit_miss(exact_fits(prob.of("fit")), out[0]) <= FULL_ABOVE:
-            return out
-    elif not _outline_misses(prob, out[0], req.second_opinion_above, log):
+    if not _second_opinion_due(
+        req, prob, out[0], lambda: fit_miss(exact_fits(prob.of("fit")), out[0]), log
+    ):
         return out
 
     def rank(X):
@@ -152,6 +148,18 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
         log(f"mirrored start {tag[:-1]}: objective {rank(X)[1]:.4e} (best so far {best[0][1]:.4e})")
         best = min(best, (rank(X), (X, mode)), key=lambda b: b[0])
     return best[1]
+
+
+def _second_opinion_due(req, prob: _Problem, X: np.ndarray, miss, log) -> bool:
+    """Whether a second opinion of ``X`` runs (the full solver's, or ``_mirrored_starts``): up to
+    ``FULL_ALWAYS_TILES`` when its outline misses the shape tolerance, up to ``FULL_MAX_TILES`` when its fit
+    misses by more than ``FULL_ABOVE`` (``miss()``, asked only there)."""
+    tiles = req.rows * req.cols
+    if tiles > FULL_MAX_TILES:
+        return False
+    if tiles > FULL_ALWAYS_TILES:
+        return miss() > FULL_ABOVE
+    return _outline_misses(prob, X, req.second_opinion_above, log)
 
 
 def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
@@ -179,14 +187,7 @@ def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[
             f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
             f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)"
         )
-    elif (
-        miss > FULL_ABOVE
-        and req.rows * req.cols > FULL_ALWAYS_TILES
-        or (
-            req.rows * req.cols <= FULL_ALWAYS_TILES
-            and _outline_misses(prob, out[0], req.second_opinion_above, log)
-        )
-    ):
+    elif _second_opinion_due(req, prob, out[0], lambda: miss, log):
         log(
             f"rigid family fit is least-squares (misses by {miss:.2%} of the target size): "
             f"trying the full solver too"
