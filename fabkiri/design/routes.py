@@ -167,13 +167,18 @@ def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
     ``--shape-tol`` judges) exceeds ``above`` of the target's size: below it the full solver's second opinion
     is skipped. With the outline fit it reached the same outline at 8x8 on circle, ellipse, superellipse,
     hexagon and heart (Hausdorff within 0.005 % of the size) for 4-6x the rigid family's time."""
-    pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
-    h = deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
+    h = _outline_rel(prob, X)
     if h <= above:
         log(
             f"rigid family outline within {h:.2%} of the target size (<= {above:.2%}): no second opinion"
         )
     return h > above
+
+
+def _outline_rel(prob: _Problem, X: np.ndarray) -> float:
+    """The deployed outline's Hausdorff distance to the target, a fraction of its size (tile units ``X``)."""
+    pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
+    return deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
 
 
 def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[tuple, str]:
@@ -248,8 +253,7 @@ def _rigid_full_first(prob: _Problem, log, iters: dict):
     via = _solve_via_rigid(prob, log, iters, tag="via_")
     if via is None:
         return None
-    pat = Pattern(nodes=via[0][: prob.n] * prob.L0, tiles=prob.std.tiles)
-    h = deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
+    h = _outline_rel(prob, via[0])
     if h <= prob.req.second_opinion_above:
         log(f"rigid design: outline within {h:.2%} of the target size")
         return via
