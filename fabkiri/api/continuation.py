@@ -88,9 +88,7 @@ def continuation(
             outcome, step = padless
             how, steps = "continuation without the pad rows, print's check", (1.0, *CONTINUATION)
     trace: list[float] = []
-    if not (
-        outcome[3] and _shape_met(outcome[1])
-    ):  # the fit was least squares, the tolerance is a maximum;
+    if not _good_fit(outcome):  # the fit was least squares, the tolerance is a maximum;
         # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
         outcome, how, trace, secs = _refine(
             replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),

@@ -122,13 +122,9 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
     other LM scaling and from each guess of ``MIRRORED_STARTS`` it did not start from, with both. The best
     ``(X, mode)`` (family checks, then the objective)."""
     req = prob.req
-    tiles = req.rows * req.cols
-    if tiles > FULL_MAX_TILES:
-        return out
-    if tiles > FULL_ALWAYS_TILES:
-        if fit_miss(exact_fits(prob.of("fit")), out[0]) <= FULL_ABOVE:
-            return out
-    elif not _outline_misses(prob, out[0], req.second_opinion_above, log):
+    if not _second_opinion_due(
+        req, prob, out[0], lambda: fit_miss(exact_fits(prob.of("fit")), out[0]), log
+    ):
         return out
 
     def rank(X):
@@ -154,18 +150,35 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
     return best[1]
 
 
+def _second_opinion_due(req, prob: _Problem, X: np.ndarray, miss, log) -> bool:
+    """Whether a second opinion of ``X`` runs (the full solver's, or ``_mirrored_starts``): up to
+    ``FULL_ALWAYS_TILES`` when its outline misses the shape tolerance, up to ``FULL_MAX_TILES`` when its fit
+    misses by more than ``FULL_ABOVE`` (``miss()``, asked only there)."""
+    tiles = req.rows * req.cols
+    if tiles > FULL_MAX_TILES:
+        return False
+    if tiles > FULL_ALWAYS_TILES:
+        return miss() > FULL_ABOVE
+    return _outline_misses(prob, X, req.second_opinion_above, log)
+
+
 def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
     """Whether the deployed outline's Hausdorff distance to the target (``design/conformance.py``, the measure
     ``--shape-tol`` judges) exceeds ``above`` of the target's size: below it the full solver's second opinion
     is skipped. With the outline fit it reached the same outline at 8x8 on circle, ellipse, superellipse,
     hexagon and heart (Hausdorff within 0.005 % of the size) for 4-6x the rigid family's time."""
-    pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
-    h = deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
+    h = _outline_rel(prob, X)
     if h <= above:
         log(
             f"rigid family outline within {h:.2%} of the target size (<= {above:.2%}): no second opinion"
         )
     return h > above
+
+
+def _outline_rel(prob: _Problem, X: np.ndarray) -> float:
+    """The deployed outline's Hausdorff distance to the target, a fraction of its size (tile units ``X``)."""
+    pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
+    return deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
 
 
 def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[tuple, str]:
@@ -179,14 +192,7 @@ def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[
             f"rigid family fit misses by {miss:.2%} of the target size; the full solver is not tried above "
             f"{FULL_MAX_TILES} tiles (--solver full forces it; --init coarse helps large lattices)"
         )
-    elif (
-        miss > FULL_ABOVE
-        and req.rows * req.cols > FULL_ALWAYS_TILES
-        or (
-            req.rows * req.cols <= FULL_ALWAYS_TILES
-            and _outline_misses(prob, out[0], req.second_opinion_above, log)
-        )
-    ):
+    elif _second_opinion_due(req, prob, out[0], lambda: miss, log):
         log(
             f"rigid family fit is least-squares (misses by {miss:.2%} of the target size): "
             f"trying the full solver too"
@@ -247,8 +253,7 @@ def _rigid_full_first(prob: _Problem, log, iters: dict):
     via = _solve_via_rigid(prob, log, iters, tag="via_")
     if via is None:
         return None
-    pat = Pattern(nodes=via[0][: prob.n] * prob.L0, tiles=prob.std.tiles)
-    h = deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
+    h = _outline_rel(prob, via[0])
     if h <= prob.req.second_opinion_above:
         log(f"rigid design: outline within {h:.2%} of the target size")
         return via
