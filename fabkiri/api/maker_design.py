@@ -90,11 +90,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
             f"{RETRY_WITHIN:g}x a neighbouring count is likely to close"
         )
         return _with_details(first.run, [note, *_larger_size(result, plan, say, checks)])
-    target = load_target(plan.target, plan.size)
-    fab, _ = design_limits.resolve(
-        plan.material, plan.hinge, plan.printer, plan.style, None, None, target
-    )
-    assert fab is not None  # make always names a process
+    target, fab = _target_and_limits(plan, plan.size)
     tried = [first]
     for choice in retry_tiles(target, fab, plan.tiles)[:MAX_RETRIES]:
         r, c = choice.tiles
@@ -136,11 +132,7 @@ def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepF
     count = plan.tiles.tiles[0] * plan.tiles.tiles[1]
     for k in SIZE_STEPS:
         size = float(math.ceil(plan.size * k / 10.0) * 10)
-        target = load_target(plan.target, size)
-        fab, _ = design_limits.resolve(
-            plan.material, plan.hinge, plan.printer, plan.style, None, None, target
-        )
-        assert fab is not None  # make always names a process
+        target, fab = _target_and_limits(plan, size)
         choice = choose_tiles(target, fab, plan.fabrication)
         if choice.tiles[0] * choice.tiles[1] > count:
             break
@@ -157,6 +149,16 @@ def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepF
         result.alternatives = [named]
         return [f"at {size:g} mm: {attempt.line()}, {plan.process} and deploy pass"]
     return [f"at {size:g} mm ({_rc(choice)} tiles) it does not make either: {attempt.line()}"]
+
+
+def _target_and_limits(plan, size: float):
+    """The plan's outline at ``size`` and its fabrication limits, as make's planning resolves them."""
+    target = load_target(plan.target, size)
+    fab, _ = design_limits.resolve(
+        plan.material, plan.hinge, plan.printer, plan.style, None, None, target
+    )
+    assert fab is not None  # make always names a process
+    return target, fab
 
 
 def _scratch(plan, tiles: TilesChoice, pattern) -> MakeResult:
