@@ -117,9 +117,8 @@ class TargetMesh:
         e = np.vstack([self.tri[:, [0, 1]], self.tri[:, [1, 2]], self.tri[:, [2, 0]]])
         e = np.unique(np.sort(e, 1), axis=0)
         n, nb = len(self.nodes), len(self.u)
-        W = sparse.coo_matrix((np.ones(2 * len(e)), (e.ravel(), e[:, ::-1].ravel())), (n, n))
-        W = W.tocsr()
-        W.data[:] = 1.0
+        # each edge once per direction (the edges are unique): no duplicates to sum
+        W = sparse.csr_matrix((np.ones(2 * len(e)), (e.ravel(), e[:, ::-1].ravel())), (n, n))
         L = (sparse.diags(np.asarray(W.sum(1)).ravel()) - W).tocsr()
         # nodes outside every kept triangle (Delaunay's across a pocket) are pinned where they are
         used = np.zeros(n, bool)
