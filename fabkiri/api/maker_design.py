@@ -140,7 +140,7 @@ def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepF
         return [f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"]
     bigger = replace(plan, size=size, tiles=choice)
     say(f"make: trying {size:g} mm, where make chooses {_rc(choice)} tiles, to name it if it makes")
-    scratch = _scratch(bigger, choice, None)
+    scratch = MakeResult.of_plan(bigger)
     attempt = _attempt(scratch, bigger, say)
     named = attempt.run[0] and _checked_alternative(
         bigger, attempt, checks, result.output, sized=True
@@ -159,19 +159,6 @@ def _target_and_limits(plan, size: float):
     )
     assert fab is not None  # make always names a process
     return target, fab
-
-
-def _scratch(plan, tiles: TilesChoice, pattern) -> MakeResult:
-    """A result that only runs steps (nothing written): an alternative's design and checks."""
-    return MakeResult(
-        target=plan.target,
-        size=plan.size,
-        process=plan.process,
-        fabrication=plan.fabrication,
-        tiles=tiles,
-        stem=plan.stem,
-        pattern=pattern,
-    )
 
 
 def cpu_s() -> float:
@@ -240,7 +227,7 @@ def _checked_alternative(
     nothing written); None when one fails."""
     from .advice import Alternative
 
-    scratch = _scratch(plan, attempt.tiles, attempt.pattern)
+    scratch = MakeResult.of_plan(plan, tiles=attempt.tiles, pattern=attempt.pattern)
     for step in checks:
         try:
             if not step(scratch, plan, lambda text: None)[0]:
