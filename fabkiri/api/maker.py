@@ -84,15 +84,7 @@ def make(
     )
     say = progress or (lambda text: None)
     out = Path(output) if output is not None else None
-    result = MakeResult(
-        target=plan.target,
-        size=plan.size,
-        process=plan.process,
-        fabrication=plan.fabrication,
-        tiles=plan.tiles,
-        stem=plan.stem,
-        output=out,
-    )
+    result = MakeResult.of_plan(plan, out)
     say(
         f"make: {plan.target} at {plan.size:g} mm, {plan.fabrication}, "
         f"{plan.tiles.tiles[0]}x{plan.tiles.tiles[1]} tiles ({plan.tiles.reason})"

@@ -90,11 +90,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
             f"{RETRY_WITHIN:g}x a neighbouring count is likely to close"
         )
         return _with_details(first.run, [note, *_larger_size(result, plan, say, checks)])
-    target = load_target(plan.target, plan.size)
-    fab, _ = design_limits.resolve(
-        plan.material, plan.hinge, plan.printer, plan.style, None, None, target
-    )
-    assert fab is not None  # make always names a process
+    target, fab = _target_and_limits(plan, plan.size)
     tried = [first]
     for choice in retry_tiles(target, fab, plan.tiles)[:MAX_RETRIES]:
         r, c = choice.tiles
@@ -136,11 +132,7 @@ def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepF
     count = plan.tiles.tiles[0] * plan.tiles.tiles[1]
     for k in SIZE_STEPS:
         size = float(math.ceil(plan.size * k / 10.0) * 10)
-        target = load_target(plan.target, size)
-        fab, _ = design_limits.resolve(
-            plan.material, plan.hinge, plan.printer, plan.style, None, None, target
-        )
-        assert fab is not None  # make always names a process
+        target, fab = _target_and_limits(plan, size)
         choice = choose_tiles(target, fab, plan.fabrication)
         if choice.tiles[0] * choice.tiles[1] > count:
             break
@@ -148,7 +140,7 @@ def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepF
         return [f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"]
     bigger = replace(plan, size=size, tiles=choice)
     say(f"make: trying {size:g} mm, where make chooses {_rc(choice)} tiles, to name it if it makes")
-    scratch = _scratch(bigger, choice, None)
+    scratch = MakeResult.of_plan(bigger)
     attempt = _attempt(scratch, bigger, say)
     named = attempt.run[0] and _checked_alternative(
         bigger, attempt, checks, result.output, sized=True
@@ -159,17 +151,14 @@ def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepF
     return [f"at {size:g} mm ({_rc(choice)} tiles) it does not make either: {attempt.line()}"]
 
 
-def _scratch(plan, tiles: TilesChoice, pattern) -> MakeResult:
-    """A result that only runs steps (nothing written): an alternative's design and checks."""
-    return MakeResult(
-        target=plan.target,
-        size=plan.size,
-        process=plan.process,
-        fabrication=plan.fabrication,
-        tiles=tiles,
-        stem=plan.stem,
-        pattern=pattern,
+def _target_and_limits(plan, size: float):
+    """The plan's outline at ``size`` and its fabrication limits, as make's planning resolves them."""
+    target = load_target(plan.target, size)
+    fab, _ = design_limits.resolve(
+        plan.material, plan.hinge, plan.printer, plan.style, None, None, target
     )
+    assert fab is not None  # make always names a process
+    return target, fab
 
 
 def cpu_s() -> float:
@@ -238,7 +227,7 @@ def _checked_alternative(
     nothing written); None when one fails."""
     from .advice import Alternative
 
-    scratch = _scratch(plan, attempt.tiles, attempt.pattern)
+    scratch = MakeResult.of_plan(plan, tiles=attempt.tiles, pattern=attempt.pattern)
     for step in checks:
         try:
             if not step(scratch, plan, lambda text: None)[0]:

@@ -70,6 +70,21 @@ class MakeResult:
     figures: dict[str, Any] = field(default_factory=dict)  # design figures: Hausdorff, opening
     retried: list[str] = field(default_factory=list)  # after a shape miss: each count designed
 
+    @classmethod
+    def of_plan(cls, plan, output: Path | None = None, tiles=None, pattern=None) -> MakeResult:
+        """A run of ``plan`` (at ``tiles``, else the plan's); without ``output`` nothing is written (an
+        alternative's design and checks)."""
+        return cls(
+            target=plan.target,
+            size=plan.size,
+            process=plan.process,
+            fabrication=plan.fabrication,
+            tiles=plan.tiles if tiles is None else tiles,
+            stem=plan.stem,
+            output=output,
+            pattern=pattern,
+        )
+
     @property
     def ok(self) -> bool:
         return bool(self.steps) and all(s.ok for s in self.steps)

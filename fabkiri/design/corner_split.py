@@ -21,7 +21,7 @@ import numpy as np
 from ..pattern import geometry
 from ..pattern.lattice import standard_pattern
 from .initial import harmonic_map, scale_for
-from .inverse_map import TargetMesh, sharp_params
+from .inverse_map import TargetMesh, sharp_params, with_corners
 from .stencils import Stencils
 from .target_curve import Target
 
@@ -75,10 +75,6 @@ def candidate_splits(target: Target) -> list[np.ndarray]:
     convex = u[(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) > 0]
     quads = [np.asarray(q) for q in combinations(np.sort(convex), 4)][:MAX_CANDIDATES]
     return [target.default_corner_split(), *quads]
-
-
-def with_corners(target: Target, corners: np.ndarray) -> Target:
-    return Target(target.name, target.kind, target.points, corners=corners, source=target.source)
 
 
 def best_split(

@@ -84,6 +84,11 @@ def _mesh(target: Target) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return nodes, tri[shapely.contains_xy(poly, c[:, 0], c[:, 1])], u
 
 
+def with_corners(target: Target, corners: np.ndarray) -> Target:
+    """``target`` split at other corners (parameters BL, BR, TR, TL)."""
+    return Target(target.name, target.kind, target.points, corners=corners, source=target.source)
+
+
 def _locate(img: np.ndarray, tri: np.ndarray, q: np.ndarray, k: int = 16):
     """Triangle and barycentric weights of each point ``q`` in the triangulated image ``img``: the
     containing triangle among the ``k`` nearest centroids, else the least outside one."""
@@ -112,9 +117,8 @@ class TargetMesh:
         e = np.vstack([self.tri[:, [0, 1]], self.tri[:, [1, 2]], self.tri[:, [2, 0]]])
         e = np.unique(np.sort(e, 1), axis=0)
         n, nb = len(self.nodes), len(self.u)
-        W = sparse.coo_matrix((np.ones(2 * len(e)), (e.ravel(), e[:, ::-1].ravel())), (n, n))
-        W = W.tocsr()
-        W.data[:] = 1.0
+        # each edge once per direction (the edges are unique): no duplicates to sum
+        W = sparse.csr_matrix((np.ones(2 * len(e)), (e.ravel(), e[:, ::-1].ravel())), (n, n))
         L = (sparse.diags(np.asarray(W.sum(1)).ravel()) - W).tocsr()
         # nodes outside every kept triangle (Delaunay's across a pocket) are pinned where they are
         used = np.zeros(n, bool)
@@ -127,7 +131,7 @@ class TargetMesh:
         self, base: np.ndarray, tip_nodes: np.ndarray, tip_side: np.ndarray, corners: np.ndarray
     ) -> np.ndarray:
         """Pattern ``base`` (its bounding box read as the square) on the target split at ``corners``."""
-        tgt = Target(self.target.name, self.target.kind, self.target.points, corners=corners)
+        tgt = with_corners(self.target, corners)
         lo, hi = base.min(0), base.max(0)
         q = (base - lo) / (hi - lo)
         tip_q = q[tip_nodes]
