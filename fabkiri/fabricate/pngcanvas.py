@@ -66,9 +66,7 @@ class Canvas:
         return max(1, round(points * DPI / 72 * self.s))
 
     def png(self) -> bytes:
-        from PIL import Image
-
-        img = self.img if self.s == 1 else self.img.resize(self.size, Image.Resampling.LANCZOS)
+        img = self.img if self.s == 1 else self.img.reduce(self.s)  # the mean of each s x s block
         buf = io.BytesIO()
         img.save(buf, format="PNG", dpi=(DPI, DPI))
         return buf.getvalue()
