@@ -424,11 +424,11 @@ class Projector:
         return u, foot, d, grad
 
     def _seed_gap(self) -> float:
-        """Two of the whole curve's largest seed spacings (in the parameter): seeds farther from a foot
-        than this may lie on another stretch of the curve."""
+        """``TIE_SEEDS`` of the whole curve's largest seed spacings (in the parameter): the nearest seeds of
+        one stretch lie within it of their foot, so a seed farther away lies on another stretch."""
         if self._gap is None:
             us = np.sort(np.mod(self.index[4], 1.0))
-            self._gap = 2.0 * float(np.diff(np.r_[us, us[0] + 1.0]).max())
+            self._gap = TIE_SEEDS * float(np.diff(np.r_[us, us[0] + 1.0]).max())
         return self._gap
 
     def _tie_broken(self, p, q, u, foot, d, grad):
@@ -445,7 +445,7 @@ class Projector:
         k = min(TIE_SEEDS, len(whole_u))
         # the nearest seeds, from either stretch
         seeds = whole_u[whole.query(q, k=k)[1]].reshape(len(p), k)
-        # only seeds on another stretch than the foot found (more than two seed spacings away, ahead of it)
+        # only seeds on another stretch than the foot found (``_seed_gap`` away), ahead of it
         ahead = np.mod(seeds - u[:, None], 1.0)
         at, col = np.nonzero((ahead < 0.5) & (ahead > self._seed_gap()))
         if not len(at):
