@@ -41,7 +41,8 @@ class Canvas:
     def __init__(self, width: float, height: float):
         from PIL import Image, ImageDraw
 
-        self.size = (max(1, round(width)), max(1, round(height)))
+        # truncated, as matplotlib's Agg canvas sized its pictures
+        self.size = (max(1, int(width)), max(1, int(height)))
         self.s = SUPERSAMPLE if self.size[0] * self.size[1] <= SUPERSAMPLE_MAX_PX else 1
         self.img: Image.Image = Image.new(
             "RGB", (self.size[0] * self.s, self.size[1] * self.s), "white"
