@@ -231,6 +231,11 @@ def test_cut_loads_neither_the_solver_nor_scipy_spatial(tmp_path):
     assert (
         not {"fabkiri.design.solve", "fabkiri.api.design", "scipy.spatial", "scipy.special"} & mods
     )
+    # the sheet preview and the assembly map are drawn with Pillow (fabricate/pngcanvas.py), not matplotlib
+    assert (tmp_path / "c" / "standard-8x8.png").exists() and (
+        tmp_path / "c" / "assembly.png"
+    ).exists()
+    assert "PIL.ImageDraw" in mods and not any(m.split(".")[0] == "matplotlib" for m in mods)
 
 
 def test_convex_hull_is_scipys_class_before_and_after_scipy_spatial():

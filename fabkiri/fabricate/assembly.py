@@ -17,7 +17,6 @@ data goes into the manifest under new keys (``assembly``,
 
 from __future__ import annotations
 
-import io
 from typing import Any
 
 import numpy as np
@@ -26,6 +25,7 @@ import shapely
 from ..pattern.model import Pattern
 from .hingekinds import HingeKind
 from .map_labels import LabelLayout, place_labels
+from .pngcanvas import DPI, Axes, Canvas, rgb
 from .printjob import print_style
 from .text import text_strokes_many, text_width
 
@@ -139,19 +139,16 @@ def cut_bom(
     }
 
 
-def _numbers(ax, texts: list[str], at: LabelLayout, color: str) -> None:
+def _numbers(ax: Axes, texts: list[str], at: LabelLayout) -> None:
     """The numbers where ``at`` placed them; a grey leader line to each one that had to move."""
-    from matplotlib.collections import LineCollection
-
     if not texts:
         return
     lead = [np.array([a, c]) for a, c in zip(at.anchors[at.moved], at.centres[at.moved])]
     if lead:
-        ax.add_collection(LineCollection(lead, colors="0.35", linewidths=0.5))
-        ax.plot(*at.anchors[at.moved].T, "o", ms=1.5, color="0.35")
+        ax.lines(lead, rgb("0.35"), 0.5)
+        ax.dots(at.anchors[at.moved], rgb("0.35"), 1.5)
     xy, counts, _ = text_strokes_many(texts, at.heights, at.centres)
-    segs = np.split(xy, np.cumsum(counts)[:-1])
-    ax.add_collection(LineCollection(segs, colors=color, linewidths=0.9))
+    ax.lines(np.split(xy, np.cumsum(counts)[:-1]), rgb("k"), 0.9)
 
 
 def map_labels(
@@ -205,12 +202,6 @@ def map_png(
     ``corners_by_sheet[s]``: (T_s, 4, 2) tiles on sheet s (drawn side by side); ``shapes[piece]``: its
     outline (n, 2) on its sheet; ``pieces`` rows need ``piece``, ``face``, ``sheet`` (1-based).
     """
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from matplotlib.collections import PolyCollection
-    from matplotlib.figure import Figure
-
     gap = 20.0
     lo = [c.reshape(-1, 2).min(0) for c in corners_by_sheet]
     hi = [c.reshape(-1, 2).max(0) for c in corners_by_sheet]
@@ -222,31 +213,24 @@ def map_png(
     size = _piece_size(shapes)
     labels = map_labels(corners_by_sheet, pieces, shapes, faces)
     px_mm = min(max(2.0, 60.0 / max(size, 1e-6)), max_px / max(W, n * H))
-    fig = Figure(figsize=(W * px_mm / 100, (n * H + (n - 1) * gap) * px_mm / 100 + 0.8), dpi=100)
+    # the figure's height as before: the panels plus 0.8 inch for the titles
+    cv = Canvas(W * px_mm, (n * H + (n - 1) * gap) * px_mm + 0.8 * DPI)
     for k, face in enumerate(shown):
-        ax = fig.add_axes((0, 1 - (k + 1) / n, 1, 1 / n - 0.25 / (n * H * px_mm / 100 + 0.8)))
-        ax.set_xlim(-2, W + 2)
-        ax.set_ylim(-2, H + 2)
-        ax.set_aspect("equal")
-        ax.axis("off")
-        ax.set_title(
-            f"{title}: {face_names[faces.index(face)]}", fontsize=max(11.0, 1.1 * W * px_mm / 100)
+        ax = cv.axes(
+            (0, 1 - (k + 1) / n, 1, 1 / n - 0.25 / (n * H * px_mm / DPI + 0.8)),
+            (-2, W + 2),
+            (-2, H + 2),
         )
+        ax.title(f"{title}: {face_names[faces.index(face)]}", max(11.0, 1.1 * W * px_mm / DPI))
         for s, c in enumerate(corners_by_sheet):
-            ax.add_collection(
-                PolyCollection(c + offs[s], facecolors="0.93", edgecolors="0.55", linewidths=0.4)
-            )
+            ax.polygons(c + offs[s], rgb("0.93"), rgb("0.55"), 0.4)
         mine = [p for p in pieces if p["face"] == face]
         col = "#1f77b4" if face == faces[0] else "#d62728"
         polys = [shapes[p["piece"]] + offs[p["sheet"] - 1] for p in mine]
         if polys:
-            ax.add_collection(
-                PolyCollection(polys, facecolors=col, alpha=0.35, edgecolors=col, linewidths=0.6)
-            )
-            _numbers(ax, *labels[face], "k")
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", facecolor="white", metadata={"Software": None})
-    return buf.getvalue()
+            ax.polygons(polys, rgb(col, 0.35), rgb(col, 0.35), 0.6)
+            _numbers(ax, *labels[face])
+    return cv.png()
 
 
 def tape_shapes(

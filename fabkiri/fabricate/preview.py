@@ -1,4 +1,4 @@
-"""PNG preview of the sheets with matplotlib (Agg, headless): each sheet cropped to its parts.
+"""PNG preview of the sheets (Pillow, ``pngcanvas.py``): each sheet cropped to its parts.
 
 A preview is for a person: each sheet is cropped to what is cut and engraved
 on it (plus a small border), sheets side by side, at a resolution where the
@@ -7,8 +7,6 @@ millimetre scale bar and the sheet number. The laser files are untouched.
 """
 
 from __future__ import annotations
-
-import io
 
 import numpy as np
 
@@ -46,11 +44,7 @@ def png_bytes(
     label_mm: float | None = None,
 ) -> bytes:
     """The preview. ``px_per_mm`` fixed, or chosen so a ``label_mm`` label is LABEL_PX tall (at least 2)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
+    from .pngcanvas import DPI, Canvas, rgb
 
     boxes = [content_box(s) for s in sheets]
     widths = [b[2] - b[0] for b in boxes]
@@ -61,16 +55,11 @@ def png_bytes(
         px_per_mm if px_per_mm is not None else max(2.0, LABEL_PX / label_mm if label_mm else 4.0)
     )
     scale = min(want, max_px / max(total_w, total_h))
-    dpi = 100
-    fig = Figure(figsize=(total_w * scale / dpi, total_h * scale / dpi), dpi=dpi)
-    ax = fig.add_axes((0, 0, 1, 1))
-    ax.set_xlim(0, total_w)
-    ax.set_ylim(-bar_band, total_h - bar_band)
-    ax.set_aspect("equal")
-    ax.axis("off")
-    lw = max(0.4, 0.12 * scale * 72 / dpi)  # about a 0.12 mm kerf, never thinner than 0.4 pt
+    cv = Canvas(total_w * scale, total_h * scale)
+    ax = cv.axes((0, 0, 1, 1), (0, total_w), (-bar_band, total_h - bar_band))
+    lw = max(0.4, 0.12 * scale * 72 / DPI)  # about a 0.12 mm kerf, never thinner than 0.4 pt
     x0 = 0.0
-    font = max(6.0, min(24.0, 4.0 * scale * 72 / dpi))
+    font = max(6.0, min(24.0, 4.0 * scale * 72 / DPI))
     for s, b, w in zip(sheets, boxes, widths):
         shift = np.array([x0 - b[0], -b[1]])
         for name in LAYERS:
@@ -79,27 +68,17 @@ def png_bytes(
             segs = [
                 (np.vstack([p, p[:1]]) if closed else p) + shift for p, closed in s.layers[name]
             ]
-            if segs:
-                ax.add_collection(
-                    LineCollection(segs, colors=COLORS[colors][name][0], linewidths=lw)
-                )
+            ax.lines(segs, rgb(COLORS[colors][name][0]), lw)
         if len(sheets) > 1:
-            ax.text(
-                x0 + w / 2,
-                -bar_band * 0.55,
-                f"sheet {s.index}",
-                ha="center",
-                va="center",
-                fontsize=font,
-            )
+            ax.text(x0 + w / 2, -bar_band * 0.55, f"sheet {s.index}", font)
         x0 += w + GAP_MM
     L = _bar_length(total_w)
-    ax.plot(
-        [BORDER_MM, BORDER_MM + L], [-bar_band * 0.45] * 2, color="k", lw=2.5, solid_capstyle="butt"
+    ax.lines(
+        [np.array([[BORDER_MM, -bar_band * 0.45], [BORDER_MM + L, -bar_band * 0.45]])],
+        rgb("k"),
+        2.5,
     )
     for x in (BORDER_MM, BORDER_MM + L):
-        ax.plot([x, x], [-bar_band * 0.65, -bar_band * 0.25], color="k", lw=1.2)
-    ax.text(BORDER_MM + L + 2.0, -bar_band * 0.45, f"{L:g} mm", va="center", fontsize=font)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, facecolor="white", metadata={"Software": None})
-    return buf.getvalue()
+        ax.lines([np.array([[x, -bar_band * 0.65], [x, -bar_band * 0.25]])], rgb("k"), 1.2)
+    ax.text(BORDER_MM + L + 2.0, -bar_band * 0.45, f"{L:g} mm", font, anchor="lm")
+    return cv.png()
