@@ -28,7 +28,7 @@ from .spline import PeriodicCubic
 SIDES = ("B", "R", "T", "L")  # CCW order of the arcs; side index 0..3
 ARC_PAD = 0.1  # fraction of an arc's parameter range its feet may pass its ends by
 # a point on the whole curve as far from two of its stretches as this (of the size, well above round-off)
-# gets the mean of both gradients (``Projector._tied``); the nearest seeds tried for a second stretch
+# takes the foot further along (``Projector._tie_broken``); the nearest seeds tried for a second stretch
 TIE_TOL = 1e-9
 TIE_SEEDS = 6
 
