@@ -103,3 +103,28 @@ def test_block_rows_come_without_jacobians_until_a_step_asks(monkeypatch):
     assert len(r) > Jx.shape[0] and Jx.shape[0] + Jc.shape[0] == len(r)
     H2, g2 = merit.normal(r_full, Jx, Jc, p)
     assert np.array_equal(H, H2) and np.array_equal(g, g2)
+
+
+def test_standard_rigid_family_is_built_once_per_lattice_and_equals_build():
+    from fabkiri.design.rigid import RigidFamily
+
+    def stencils(rows, cols):
+        std = standard_pattern(rows, cols, tile_size=1.0)
+        return std, C.Stencils.from_pattern(std)
+
+    std, st = stencils(4, 6)
+    built = []
+
+    def tree():
+        built.append(1)
+        return std.topology.spanning_tree(0)
+
+    a = RigidFamily.of_standard(st, tree)
+    assert RigidFamily.of_standard(st, tree) is a and built == [1]
+    ref = RigidFamily.build(st, std.topology.spanning_tree(0))
+    for name in ("node_vertex", "midpoint", "seeds", "Z", "Zn", "Y"):
+        assert np.array_equal(getattr(a, name), getattr(ref, name)), name
+    for rows, cols in ((3, 3), (5, 4)):  # two other lattices: the first one is dropped
+        s2, st2 = stencils(rows, cols)
+        RigidFamily.of_standard(st2, lambda s2=s2: s2.topology.spanning_tree(0))
+    assert RigidFamily.of_standard(st, tree) is not a and built == [1, 1]
