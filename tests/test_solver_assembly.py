@@ -128,3 +128,28 @@ def test_standard_rigid_family_is_built_once_per_lattice_and_equals_build():
         s2, st2 = stencils(rows, cols)
         RigidFamily.of_standard(st2, lambda s2=s2: s2.topology.spanning_tree(0))
     assert RigidFamily.of_standard(st, tree) is not a and built == [1, 1]
+
+
+def test_pattern_rows_are_written_one_encode_per_row_as_before():
+    from fabkiri.pattern import io
+
+    def per_row(arr, indent):
+        rows = arr.tolist()
+        if not rows:
+            return "[]"
+        inner = f",\n{indent}  ".join(io._ROW.encode(r) for r in rows)
+        return f"[\n{indent}  {inner}\n{indent}]"
+
+    rng = np.random.default_rng(5)
+    cases = [
+        rng.normal(size=(7, 2)) * 1e3,
+        rng.integers(0, 99, size=(5, 4)),
+        rng.normal(size=(3, 4, 2)),
+        np.array([[np.nan, -0.0], [np.inf, 1e-300]]),
+        np.zeros((0, 2)),
+        np.zeros((3, 0)),
+        np.zeros((2, 0, 2)),
+    ]
+    for arr in cases:
+        for indent in ("  ", "    "):
+            assert io._rows(arr, indent) == per_row(arr, indent), arr.shape
