@@ -131,7 +131,8 @@ class _Merit:
         """``(X, c, w)``: deployed nodes, closed-state-1 grid and (with contact rows) closed state 2 turned
         back a quarter, ``Y S``, of member ``p``."""
         S, psi = self.unpack(p)
-        return self.fam.nodes(S, psi), self.fam.grid(S), self._state_2(S)
+        c = self.fam.grid(S)
+        return self.fam.nodes(S, psi, c), c, self._state_2(S)
 
     def _state_2(self, S: np.ndarray) -> np.ndarray | None:
         return None if self.contact is None else self.fam.Y @ S
@@ -212,7 +213,8 @@ class _Merit:
         they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
         asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
         S, psi = self.unpack(p)
-        X, c, w = self.fam.nodes(S, psi), self.fam.grid(S), self._state_2(S)
+        c = self.fam.grid(S)
+        X, w = self.fam.nodes(S, psi, c), self._state_2(S)
         t = self._tiles
         assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
         tc = tile_corners(c, t.quads)

@@ -154,9 +154,10 @@ class RigidFamily:
         """Closed-state-1 pattern vertices ``(G, 2)``."""
         return self.Z @ S
 
-    def nodes(self, S: np.ndarray, psi: float) -> np.ndarray:
-        """Deployed nodes ``(V, 2)`` at deployment angle ``psi``."""
-        a = self.Zn @ S
+    def nodes(self, S: np.ndarray, psi: float, grid: np.ndarray | None = None) -> np.ndarray:
+        """Deployed nodes ``(V, 2)`` at deployment angle ``psi`` (``grid``: ``self.grid(S)`` when known)."""
+        # Zn S is the grid's rows: the product over the G grid vertices, not the V nodes (twice as many)
+        a = (self.grid(S) if grid is None else grid)[self.node_vertex]
         b = self.Y @ S
         c, s = np.cos(psi), np.sin(psi)
         return np.stack([c * a[:, 0] - s * b[:, 1], c * a[:, 1] + s * b[:, 0]], -1)
