@@ -91,6 +91,21 @@ ROWS = [
         5.0,
         11.5,
     ),
+    Row(  # no shipped 32x32 pattern prints in tiles-and-strips (print32 times that refusal): the one it advises
+        "print32strips",
+        (
+            "print",
+            "tests/data/circle-32x32-rigid.json",
+            "--style",
+            "strips",
+            "--scale",
+            "auto",
+        ),
+        "files",
+        None,
+        None,
+        default=False,
+    ),
     Row(
         "material",  # owned by the fabrication-aware work (helper fabaware); off unless --with-material
         (

@@ -94,16 +94,35 @@ def regularizer(st: Stencils, nv: int) -> Family:
     ang_nodes = np.stack([flat[i], nxt[i], prv[i], flat[j], nxt[j], prv[j]], -1)
     nodes = np.concatenate([len_nodes, ang_nodes])
 
+    m = len(i)
+
     def fn(x):
         tc = tile_corners(x, tl)
         e = (tc.A / tc.length[..., None]).reshape(-1, 2)
         ga, gb = tc.ga.reshape(-1, 2), tc.gb.reshape(-1, 2)
-        zero = np.zeros((len(i), 2))
-        g_len = np.stack([-e[i], e[i], e[j], -e[j], zero, zero], 1)
-        g_ang = np.stack([-(ga[i] + gb[i]), ga[i], gb[i], ga[j] + gb[j], -ga[j], -gb[j]], 1)
-        return rows.residual(tc), (nodes, w * np.concatenate([g_len, g_ang]))
+        g = np.empty((2 * m, 6, 2))  # length rows (4 nodes, two repeats at zero), then angle rows
+        ei, ej, gai, gbi, gaj, gbj = e[i], e[j], ga[i], gb[i], ga[j], gb[j]
+        np.negative(ei, out=g[:m, 0])
+        g[:m, 1], g[:m, 2] = ei, ej
+        np.negative(ej, out=g[:m, 3])
+        g[:m, 4:] = 0.0
+        np.negative(gai + gbi, out=g[m:, 0])
+        g[m:, 1], g[m:, 2] = gai, gbi
+        np.add(gaj, gbj, out=g[m:, 3])
+        np.negative(gaj, out=g[m:, 4])
+        np.negative(gbj, out=g[m:, 5])
+        g *= w
+        return rows.residual(tc), (nodes, g)
 
-    return Family("regularizer", "reg", fn, 0, meta={"rows": rows}, nv=nv)
+    return Family(
+        "regularizer",
+        "reg",
+        fn,
+        0,
+        meta={"rows": rows},
+        nv=nv,
+        res=lambda x: rows.residual(tile_corners(x, tl)),
+    )
 
 
 def energy(fam: Family, x: np.ndarray) -> float:

@@ -266,7 +266,7 @@ class _Problem:
         to 2ψ); the fine start is the fine member nearest the resampled grid, deployed to the same ψ.
         """
         st_c = C.Stencils.from_pattern(coarse)
-        fam_c = RigidFamily.build(st_c, coarse.topology.spanning_tree(0))
+        fam_c = RigidFamily.of_standard(st_c, lambda: coarse.topology.spanning_tree(0))
         psi = RigidFamily.deployment_angle(x_mm, st_c)
         S_c, _ = fam_c.fit(x_mm, psi)
         grid = resample_grid(
@@ -292,7 +292,9 @@ class _Problem:
     def rigid_family(self) -> RigidFamily:
         """The closed-form rigid family of this lattice (``rigid.py``), built on first use."""
         if self._rigid is None:
-            self._rigid = RigidFamily.build(self.st, self.std.topology.spanning_tree(0))
+            self._rigid = RigidFamily.of_standard(
+                self.st, lambda: self.std.topology.spanning_tree(0)
+            )
             if self.req.symmetry:  # a translation gauge the mirror keeps (``reduced_mirror.py``)
                 self._rigid = centred(self._rigid)
         return self._rigid

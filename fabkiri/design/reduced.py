@@ -131,7 +131,8 @@ class _Merit:
         """``(X, c, w)``: deployed nodes, closed-state-1 grid and (with contact rows) closed state 2 turned
         back a quarter, ``Y S``, of member ``p``."""
         S, psi = self.unpack(p)
-        return self.fam.nodes(S, psi), self.fam.grid(S), self._state_2(S)
+        c = self.fam.grid(S)
+        return self.fam.nodes(S, psi, c), c, self._state_2(S)
 
     def _state_2(self, S: np.ndarray) -> np.ndarray | None:
         return None if self.contact is None else self.fam.Y @ S
@@ -155,12 +156,13 @@ class _Merit:
         vals = (self.ineq_values(Xc) if values is None else values).values()
         return max(0.0, -min((float(v.min(initial=np.inf)) for v in vals), default=0.0))
 
-    def rows(self, Xc, hard: bool = False, values: dict | None = None):
+    def rows(self, Xc, hard: bool = False, values: dict | None = None, jacobians: bool = True):
         """Residuals and Jacobians of the merit (or of the hard-fit rows): ``(r, Jx, Jc)``.
 
         ``r`` stacks the node rows (``Jx``, CSR over the nodes) and then the grid rows (``Jc``, over the grid).
         The contact rows are ``contact_rows``' (``_Evaluation`` appends them).
-        ``values``: the inequality values of ``Xc`` when already known (``ineq_values``).
+        ``values``: the inequality values of ``Xc`` when already known (``ineq_values``). Without
+        ``jacobians`` only ``r`` (``Jx``, ``Jc`` None): a trial step needs no Jacobian unless it is accepted.
         """
         X, c, _ = Xc
         values = self.ineq_values(Xc) if values is None else values
@@ -173,14 +175,14 @@ class _Merit:
             for f in fits:
                 if hard and f.meta.get("soft"):  # the exact fit leaves the soft outline rows out
                     continue
-                r, J = f(arr)
+                r, J = f(arr) if jacobians else (f.residual(arr), None)
                 rs.append(r)
                 Js.append(J)
             if not hard:
                 for f in regs:
-                    r, J = f(arr)
+                    r, J = f(arr) if jacobians else (f.residual(arr), None)
                     rs.append(self.w * r)
-                    Js.append(self.w * J)
+                    Js.append(None if J is None else self.w * J)
             for f in ineqs:
                 m = self.margin[f.name] * (0.5 if hard else 1.0)
                 v = values[f.name] - m
@@ -188,14 +190,13 @@ class _Merit:
                 if len(act):  # the Jacobian only for active rows
                     s = 1.0 if hard else self.sq
                     rs.append(s * v[act])
-                    Js.append(s * f(arr)[1][act])
+                    Js.append(s * f.rows_jacobian(arr, act) if jacobians else None)
             n = 2 * len(arr)
-            blocks.append(
-                (
-                    np.concatenate(rs) if rs else np.zeros(0),
-                    sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n)),
-                )
-            )
+            r = np.concatenate(rs) if rs else np.zeros(0)
+            if not jacobians:
+                blocks.append((r, None))
+                continue
+            blocks.append((r, sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n))))
         (rx, Jx), (rc, Jc) = blocks
         return np.concatenate([rx, rc]), Jx, Jc
 
@@ -212,7 +213,8 @@ class _Merit:
         they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
         asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
         S, psi = self.unpack(p)
-        X, c, w = self.fam.nodes(S, psi), self.fam.grid(S), self._state_2(S)
+        c = self.fam.grid(S)
+        X, w = self.fam.nodes(S, psi, c), self._state_2(S)
         t = self._tiles
         assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
         tc = tile_corners(c, t.quads)

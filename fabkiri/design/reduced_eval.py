@@ -33,6 +33,7 @@ class _Evaluation:
     ):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
         self._r = r
+        self._k: tuple | None = None  # block path: the contact rows and their Jacobian
         self._blocks: tuple | None = None
         self._J: np.ndarray | None = None
         self._reg: tuple[Any, Any, Any] | None = (
@@ -52,15 +53,22 @@ class _Evaluation:
     def _rows(self):
         """``(r, Jx, Jc, Jk)``: the merit's rows with the contact rows (``Jk``, dense) after them."""
         if self._blocks is None:
-            r, Jx, Jc = self.merit.rows(self.Xc, self.hard, self._values)
-            rk, Jk = self.merit.contact_rows(self.Xc, self.hard)
-            self._blocks = (np.concatenate([r, rk]), Jx, Jc, Jk)
+            _, Jx, Jc = self.merit.rows(self.Xc, self.hard, self._values)
+            _, Jk = self._contact()
+            self._blocks = (self.r, Jx, Jc, Jk)
         return self._blocks
+
+    def _contact(self):
+        if self._k is None:
+            self._k = self.merit.contact_rows(self.Xc, self.hard)
+        return self._k
 
     @property
     def r(self) -> np.ndarray:
+        """The rows (block path: without their Jacobians, which only an accepted step needs)."""
         if self._r is None:
-            self._r = self._rows()[0]
+            r = self.merit.rows(self.Xc, self.hard, self._values, jacobians=False)[0]
+            self._r = np.concatenate([r, self._contact()[0]])
         return self._r
 
     def _form(self) -> None:

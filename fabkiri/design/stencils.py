@@ -28,15 +28,44 @@ TIP_SIDE = np.array([[3, 0, 1, 2], [0, 1, 2, 3]])
 
 def jac(m: int, nvar_nodes: int, nodes: np.ndarray, grads: np.ndarray) -> sparse.csr_matrix:
     """CSR Jacobian from per-row node indices ``(m, k)`` and gradients ``(m, k, 2)``."""
-    k = nodes.shape[1] if nodes.ndim == 2 else 0
-    # every row has exactly 2k entries: build the CSR arrays directly (skips the COO constructor's checks,
-    # the main cost at small sizes); nodes repeated in a row are summed in place
-    cols = (2 * nodes[:, :, None] + np.arange(2)[None, None, :]).reshape(-1)
-    vals = np.array(grads, dtype=float).reshape(-1)  # a copy: sum_duplicates reorders it in place
-    indptr = np.arange(0, 2 * k * m + 1, max(2 * k, 1)) if k else np.zeros(m + 1, dtype=np.intp)
-    J = sparse.csr_matrix((vals, cols, indptr), shape=(m, 2 * nvar_nodes))
-    J.sum_duplicates()
-    return J
+    return StencilPattern(m, nvar_nodes, nodes).matrix(grads)
+
+
+class StencilPattern:
+    """The CSR structure of a stencil Jacobian (rows of ``k`` nodes, ``2k`` entries before merging a node
+    repeated in a row), sorted and merged once: a family whose stencil nodes are fixed fills only the values
+    on every evaluation (``matrix``)."""
+
+    def __init__(self, m: int, nvar_nodes: int, nodes: np.ndarray):
+        k = nodes.shape[1] if nodes.ndim == 2 else 0
+        self.nodes, self.shape = nodes, (m, 2 * nvar_nodes)
+        cols = (2 * nodes[:, :, None] + np.arange(2)[None, None, :]).reshape(m, 2 * k)
+        # per row by column, stably: entries of one node in a row are summed in stencil order
+        self.order = np.argsort(cols, axis=1, kind="stable") + (2 * k * np.arange(m))[:, None]
+        self.order = self.order.reshape(-1)
+        c = cols.reshape(-1)[self.order]
+        first = np.ones(len(c), dtype=bool)
+        if k:
+            first.reshape(m, 2 * k)[:, 1:] = (
+                c.reshape(m, 2 * k)[:, 1:] != c.reshape(m, 2 * k)[:, :-1]
+            )
+        self.starts = np.flatnonzero(first)
+        self.merged = len(self.starts) < len(c)  # a node repeated in some row
+        self.indices = c[self.starts].astype(np.int32)
+        counts = first.reshape(m, -1).sum(1) if k else np.zeros(m, dtype=np.intp)
+        self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+
+    def matrix(self, grads: np.ndarray) -> sparse.csr_matrix:
+        """The Jacobian with gradients ``(m, k, 2)`` on this pattern (canonical CSR)."""
+        v = np.asarray(grads, dtype=float).reshape(-1)[self.order]
+        if self.merged and len(v):
+            v = np.add.reduceat(v, self.starts)
+        J = sparse.csr_matrix(
+            (v, self.indices.copy(), self.indptr.copy()), shape=self.shape, copy=False
+        )
+        J.has_sorted_indices = True
+        J.has_canonical_format = True
+        return J
 
 
 def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray):
@@ -106,12 +135,28 @@ class Family:
     # optional x -> r without the gradients (inequalities are checked far more often than they are active)
     res: Callable[[np.ndarray], np.ndarray] | None = None
 
+    # the CSR structure of the last stencil Jacobian, reused while its node array is the same object
+    _pattern: StencilPattern | None = field(default=None, repr=False, compare=False)
+
     def __call__(self, x: np.ndarray):
         """Residuals ``r`` and their Jacobian (CSR)."""
         r, J = self.fn(x)
         if isinstance(J, tuple):
-            J = jac(len(r), self.nv, *J)
+            J = self._csr(len(r), *J)
         return r, J
+
+    def _csr(self, m: int, nodes: np.ndarray, grads: np.ndarray) -> sparse.csr_matrix:
+        pat = self._pattern
+        if pat is None or pat.nodes is not nodes or pat.shape != (m, 2 * self.nv):
+            pat = self._pattern = StencilPattern(m, self.nv, nodes)
+        return pat.matrix(grads)
+
+    def rows_jacobian(self, x: np.ndarray, rows: np.ndarray) -> sparse.csr_matrix:
+        """The Jacobian's ``rows`` only (CSR): an inequality family's active rows."""
+        r, J = self.fn(x)
+        if isinstance(J, tuple):
+            return jac(len(rows), self.nv, J[0][rows], J[1][rows])
+        return J[rows]
 
     def residual(self, x: np.ndarray) -> np.ndarray:
         """Residuals only (no Jacobian assembly)."""

@@ -186,11 +186,20 @@ def _jsonable(value: Any) -> Any:
 _ROW = json.JSONEncoder(separators=(", ", ": "))
 
 
-def _rows(rows: list, indent: str) -> str:
+def _rows(arr: np.ndarray, indent: str) -> str:
     """A JSON array with one compact row per line (diff-friendly, deterministic)."""
-    if not rows:
+    if not len(arr):
         return "[]"
-    inner = f",\n{indent}  ".join(_ROW.encode(r) for r in rows)
+    sep = f",\n{indent}  "
+    if arr.ndim >= 2 and arr.size:
+        # one encode of the whole array, split between its rows (where ``k - 1`` brackets close and open: a
+        # row itself nests less deep): the same text as one encode per row, at half its cost
+        k = arr.ndim - 1
+        inner = _ROW.encode(arr.tolist())[1:-1].replace(
+            "]" * k + ", " + "[" * k, "]" * k + sep + "[" * k
+        )
+    else:
+        inner = sep.join(_ROW.encode(r) for r in arr.tolist())
     return f"[\n{indent}  {inner}\n{indent}]"
 
 
@@ -205,11 +214,11 @@ def dumps(pattern: Pattern) -> str:
     parts = [f'  "{k}": {json.dumps(v)}' for k, v in head.items()]
     if pattern.lattice:
         parts.append(f'  "lattice": {json.dumps(_jsonable(pattern.lattice), sort_keys=True)}')
-    parts.append(f'  "nodes": {_rows(pattern.nodes.tolist(), "  ")}')
-    parts.append(f'  "tiles": {_rows(pattern.tiles.tolist(), "  ")}')
+    parts.append(f'  "nodes": {_rows(pattern.nodes, "  ")}')
+    parts.append(f'  "tiles": {_rows(pattern.tiles, "  ")}')
     if pattern.contracted:
         states = [
-            f'    "{s}": {_rows(pattern.contracted[s].tolist(), "    ")}'
+            f'    "{s}": {_rows(np.asarray(pattern.contracted[s]), "    ")}'
             for s in sorted(pattern.contracted)
         ]
         parts.append('  "contracted": {\n' + ",\n".join(states) + "\n  }")
