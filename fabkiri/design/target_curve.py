@@ -31,6 +31,7 @@ ARC_PAD = 0.1  # fraction of an arc's parameter range its feet may pass its ends
 # takes the foot further along (``Projector._tie_broken``); the nearest seeds tried for a second stretch
 TIE_TOL = 1e-9
 TIE_SEEDS = 6
+_OFFSETS = np.array([-1, 0, 1])  # a polyline foot's neighbouring segments and periods
 
 
 @dataclass(eq=False, init=False)
@@ -290,12 +291,10 @@ class Target:
         else:
             um = np.mod(u, 1.0)
             i = np.searchsorted(self._u, um)
-            at_vertex = np.isclose(self._u[np.clip(i, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13)
-            at_vertex |= np.isclose(
-                self._u[np.clip(i - 1, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13
-            )
-            t = self.tangent(u)
-            t_before = self.tangent(u - 1e-9)
+            # within 1e-13 of a vertex (``np.isclose`` with no relative part, without its overhead)
+            at_vertex = np.abs(self._u[np.clip(i, 0, len(self._u) - 1)] - um) <= 1e-13
+            at_vertex |= np.abs(self._u[np.clip(i - 1, 0, len(self._u) - 1)] - um) <= 1e-13
+            t, t_before = self.tangent(np.concatenate([u, u - 1e-9])).reshape(2, len(u), 2)
             mean = t + t_before
             norm = np.linalg.norm(mean, axis=1, keepdims=True)
             t = np.where(at_vertex[:, None] & (norm > 1e-12), mean / np.maximum(norm, 1e-300), t)
@@ -328,25 +327,33 @@ class Target:
         return u, g, d1
 
     def _polyline_foot(self, p, u, lo, hi):
+        """``(u, foot)``: the nearest of the feet on the seed's segment and its two neighbours, each tried in
+        the arc's period and the ones either side, clamped to ``[lo, hi]`` (the first of near-equals).
+
+        The nine candidates are evaluated in one batch (one ``point`` call, not nine: the per-call cost
+        was most of a 16x16 design's projections); the arithmetic per candidate is the same.
+        """
         K = len(self.points)
         um = np.mod(u, 1.0)
         i0 = np.clip(np.searchsorted(self._u, um, side="right") - 1, 0, K - 1)
-        best_u, best_d = u.copy(), np.full(len(p), np.inf)
         base = u - um  # keep the period offset of the arc range
-        for off in (-1, 0, 1):
-            i = (i0 + off) % K
-            a, b = self.points[i], self.points[(i + 1) % K]
-            ab = b - a
-            w = np.clip(((p - a) * ab).sum(1) / (ab * ab).sum(1), 0.0, 1.0)
-            uu = self._u[i] + w * (self._u[i + 1] - self._u[i])
-            # bring into the arc's period and clamp to it
-            for shift in (-1.0, 0.0, 1.0):
-                cand = np.clip(uu + base + shift, lo, hi)
-                dd = np.linalg.norm(self.point(cand) - p, axis=1)
-                better = dd < best_d - 1e-15
-                best_u = np.where(better, cand, best_u)
-                best_d = np.where(better, dd, best_d)
-        return best_u
+        i = (i0 + _OFFSETS[:, None]) % K  # (3, N): the seed's segment and its neighbours
+        a, b = self.points[i], self.points[(i + 1) % K]
+        ab = b - a
+        w = np.clip(((p - a) * ab).sum(-1) / (ab * ab).sum(-1), 0.0, 1.0)
+        uu = self._u[i] + w * (self._u[i + 1] - self._u[i])
+        # bring into the arc's period and clamp to it: (3 segments, 3 shifts, N) in the order tried
+        cand = np.clip((uu + base)[:, None, :] + _OFFSETS[None, :, None], lo, hi).reshape(9, -1)
+        pts = self.point(cand.ravel()).reshape(9, len(p), 2)
+        dd = np.linalg.norm(pts - p, axis=-1)
+        best_u, best_d = u.copy(), np.full(len(p), np.inf)
+        best_k = np.zeros(len(p), dtype=np.int64)
+        for k in range(9):
+            better = dd[k] < best_d - 1e-15
+            best_u = np.where(better, cand[k], best_u)
+            best_d = np.where(better, dd[k], best_d)
+            best_k = np.where(better, k, best_k)
+        return best_u, pts[best_k, np.arange(len(p))]
 
     def default_corner_split(self) -> np.ndarray:
         return self._default_corners()
@@ -474,8 +481,7 @@ def _feet(tgt: Target, p: np.ndarray, u: np.ndarray, lo: np.ndarray, hi: np.ndar
         u, foot, d1 = tgt._newton_foot(p, u, lo, hi)
         n = np.stack([d1[:, 1], -d1[:, 0]], -1)
         return u, foot, n / np.sqrt(dot2(n, n))[:, None]
-    u = tgt._polyline_foot(p, u, lo, hi)
-    foot = tgt.point(u)
+    u, foot = tgt._polyline_foot(p, u, lo, hi)
     return u, foot, tgt._normal(u, foot)
 
 
