@@ -128,11 +128,15 @@ class Target:
         u = np.mod(np.asarray(u, dtype=float), 1.0)
         if self.kind == "spline":
             return self._spline(u)
-        i = np.clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
+        i = self._segment(u)
         a = self.points[i]
         b = self.points[(i + 1) % len(self.points)]
         w = ((u - self._u[i]) / (self._u[i + 1] - self._u[i]))[..., None]
         return a + w * (b - a)
+
+    def _segment(self, u: np.ndarray) -> np.ndarray:
+        """The polyline segment of each parameter ``u`` in [0, 1]."""
+        return _clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
 
     def tangent(self, u: np.ndarray) -> np.ndarray:
         """Unit tangent (CCW direction)."""
@@ -140,9 +144,9 @@ class Target:
         if self.kind == "spline":
             d = self._spline(u, 1)
         else:
-            i = np.clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
+            i = self._segment(u)
             d = self.points[(i + 1) % len(self.points)] - self.points[i]
-        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+        return d / _length(d)[..., None]
 
     def sample(self, n: int = 400) -> np.ndarray:
         return self.point(np.linspace(0.0, 1.0, n, endpoint=False))
@@ -292,11 +296,11 @@ class Target:
             um = np.mod(u, 1.0)
             i = np.searchsorted(self._u, um)
             # within 1e-13 of a vertex (``np.isclose`` with no relative part, without its overhead)
-            at_vertex = np.abs(self._u[np.clip(i, 0, len(self._u) - 1)] - um) <= 1e-13
-            at_vertex |= np.abs(self._u[np.clip(i - 1, 0, len(self._u) - 1)] - um) <= 1e-13
+            at_vertex = np.abs(self._u[_clip(i, 0, len(self._u) - 1)] - um) <= 1e-13
+            at_vertex |= np.abs(self._u[_clip(i - 1, 0, len(self._u) - 1)] - um) <= 1e-13
             t, t_before = self.tangent(np.concatenate([u, u - 1e-9])).reshape(2, len(u), 2)
             mean = t + t_before
-            norm = np.linalg.norm(mean, axis=1, keepdims=True)
+            norm = _length(mean)[:, None]
             t = np.where(at_vertex[:, None] & (norm > 1e-12), mean / np.maximum(norm, 1e-300), t)
         return np.stack([t[:, 1], -t[:, 0]], -1)
 
@@ -335,25 +339,25 @@ class Target:
         """
         K = len(self.points)
         um = np.mod(u, 1.0)
-        i0 = np.clip(np.searchsorted(self._u, um, side="right") - 1, 0, K - 1)
+        i0 = self._segment(um)
         base = u - um  # keep the period offset of the arc range
         i = (i0 + _OFFSETS[:, None]) % K  # (3, N): the seed's segment and its neighbours
         a, b = self.points[i], self.points[(i + 1) % K]
         ab = b - a
-        w = np.clip(((p - a) * ab).sum(-1) / (ab * ab).sum(-1), 0.0, 1.0)
+        w = _clip(((p - a) * ab).sum(-1) / (ab * ab).sum(-1), 0.0, 1.0)
         uu = self._u[i] + w * (self._u[i + 1] - self._u[i])
         # bring into the arc's period and clamp to it: (3 segments, 3 shifts, N) in the order tried
-        cand = np.clip((uu + base)[:, None, :] + _OFFSETS[None, :, None], lo, hi).reshape(9, -1)
+        cand = _clip((uu + base)[:, None, :] + _OFFSETS[None, :, None], lo, hi).reshape(9, -1)
         pts = self.point(cand.ravel()).reshape(9, len(p), 2)
-        dd = np.linalg.norm(pts - p, axis=-1)
-        best_u, best_d = u.copy(), np.full(len(p), np.inf)
-        best_k = np.zeros(len(p), dtype=np.int64)
+        dd = _length(pts - p)
+        best_d, best_k = np.full(len(p), np.inf), np.full(len(p), -1)
         for k in range(9):
             better = dd[k] < best_d - 1e-15
-            best_u = np.where(better, cand[k], best_u)
             best_d = np.where(better, dd[k], best_d)
-            best_k = np.where(better, k, best_k)
-        return best_u, pts[best_k, np.arange(len(p))]
+            best_k[better] = k
+        row, k = np.arange(len(p)), np.maximum(best_k, 0)
+        found = best_k >= 0  # no candidate only for a point not finite: its seed kept
+        return np.where(found, cand[k, row], u), pts[k, row]
 
     def default_corner_split(self) -> np.ndarray:
         return self._default_corners()
@@ -483,6 +487,16 @@ def _feet(tgt: Target, p: np.ndarray, u: np.ndarray, lo: np.ndarray, hi: np.ndar
         return u, foot, n / np.sqrt(dot2(n, n))[:, None]
     u, foot = tgt._polyline_foot(p, u, lo, hi)
     return u, foot, tgt._normal(u, foot)
+
+
+def _clip(x, lo, hi):
+    """``np.clip`` for finite ``x`` without its per-call overhead (most of a small projection's time)."""
+    return np.minimum(np.maximum(x, lo), hi)
+
+
+def _length(d: np.ndarray) -> np.ndarray:
+    """Length of each 2-vector of ``d`` (``np.linalg.norm`` over the last axis, without its overhead)."""
+    return np.sqrt(dot2(d, d))
 
 
 def _distance(p, foot, n, size: float):
