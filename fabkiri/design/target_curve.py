@@ -344,7 +344,7 @@ class Target:
         i = (i0 + _OFFSETS[:, None]) % K  # (3, N): the seed's segment and its neighbours
         a, b = self.points[i], self.points[(i + 1) % K]
         ab = b - a
-        w = _clip(((p - a) * ab).sum(-1) / (ab * ab).sum(-1), 0.0, 1.0)
+        w = _clip(dot2(p - a, ab) / dot2(ab, ab), 0.0, 1.0)
         uu = self._u[i] + w * (self._u[i + 1] - self._u[i])
         # bring into the arc's period and clamp to it: (3 segments, 3 shifts, N) in the order tried
         cand = _clip((uu + base)[:, None, :] + _OFFSETS[None, :, None], lo, hi).reshape(9, -1)
