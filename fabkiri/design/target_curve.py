@@ -24,13 +24,9 @@ from ..errors import InputError
 from ..kdtree import KDTree
 from ..pattern.geometry import dot2
 from .spline import PeriodicCubic
+from .target_projector import _OFFSETS, Projector, _clip, _length
 
 SIDES = ("B", "R", "T", "L")  # CCW order of the arcs; side index 0..3
-ARC_PAD = 0.1  # fraction of an arc's parameter range its feet may pass its ends by
-# a point on the whole curve as far from two of its stretches as this (of the size, well above round-off)
-# takes the foot further along (``Projector._tie_broken``); the nearest seeds tried for a second stretch
-TIE_TOL = 1e-9
-TIE_SEEDS = 6
 
 
 @dataclass(eq=False, init=False)
@@ -127,11 +123,15 @@ class Target:
         u = np.mod(np.asarray(u, dtype=float), 1.0)
         if self.kind == "spline":
             return self._spline(u)
-        i = np.clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
+        i = self._segment(u)
         a = self.points[i]
         b = self.points[(i + 1) % len(self.points)]
         w = ((u - self._u[i]) / (self._u[i + 1] - self._u[i]))[..., None]
         return a + w * (b - a)
+
+    def _segment(self, u: np.ndarray) -> np.ndarray:
+        """The polyline segment of each parameter ``u`` in [0, 1]."""
+        return _clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
 
     def tangent(self, u: np.ndarray) -> np.ndarray:
         """Unit tangent (CCW direction)."""
@@ -139,9 +139,9 @@ class Target:
         if self.kind == "spline":
             d = self._spline(u, 1)
         else:
-            i = np.clip(np.searchsorted(self._u, u, side="right") - 1, 0, len(self.points) - 1)
+            i = self._segment(u)
             d = self.points[(i + 1) % len(self.points)] - self.points[i]
-        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+        return d / _length(d)[..., None]
 
     def sample(self, n: int = 400) -> np.ndarray:
         return self.point(np.linspace(0.0, 1.0, n, endpoint=False))
@@ -290,14 +290,12 @@ class Target:
         else:
             um = np.mod(u, 1.0)
             i = np.searchsorted(self._u, um)
-            at_vertex = np.isclose(self._u[np.clip(i, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13)
-            at_vertex |= np.isclose(
-                self._u[np.clip(i - 1, 0, len(self._u) - 1)], um, rtol=0, atol=1e-13
-            )
-            t = self.tangent(u)
-            t_before = self.tangent(u - 1e-9)
+            # within 1e-13 of a vertex (``np.isclose`` with no relative part, without its overhead)
+            at_vertex = np.abs(self._u[_clip(i, 0, len(self._u) - 1)] - um) <= 1e-13
+            at_vertex |= np.abs(self._u[_clip(i - 1, 0, len(self._u) - 1)] - um) <= 1e-13
+            t, t_before = self.tangent(np.concatenate([u, u - 1e-9])).reshape(2, len(u), 2)
             mean = t + t_before
-            norm = np.linalg.norm(mean, axis=1, keepdims=True)
+            norm = _length(mean)[:, None]
             t = np.where(at_vertex[:, None] & (norm > 1e-12), mean / np.maximum(norm, 1e-300), t)
         return np.stack([t[:, 1], -t[:, 0]], -1)
 
@@ -328,25 +326,33 @@ class Target:
         return u, g, d1
 
     def _polyline_foot(self, p, u, lo, hi):
+        """``(u, foot)``: the nearest of the feet on the seed's segment and its two neighbours, each tried in
+        the arc's period and the ones either side, clamped to ``[lo, hi]`` (the first of near-equals).
+
+        The nine candidates are evaluated in one batch (one ``point`` call, not nine: the per-call cost
+        was most of a 16x16 design's projections); the arithmetic per candidate is the same.
+        """
         K = len(self.points)
         um = np.mod(u, 1.0)
-        i0 = np.clip(np.searchsorted(self._u, um, side="right") - 1, 0, K - 1)
-        best_u, best_d = u.copy(), np.full(len(p), np.inf)
+        i0 = self._segment(um)
         base = u - um  # keep the period offset of the arc range
-        for off in (-1, 0, 1):
-            i = (i0 + off) % K
-            a, b = self.points[i], self.points[(i + 1) % K]
-            ab = b - a
-            w = np.clip(((p - a) * ab).sum(1) / (ab * ab).sum(1), 0.0, 1.0)
-            uu = self._u[i] + w * (self._u[i + 1] - self._u[i])
-            # bring into the arc's period and clamp to it
-            for shift in (-1.0, 0.0, 1.0):
-                cand = np.clip(uu + base + shift, lo, hi)
-                dd = np.linalg.norm(self.point(cand) - p, axis=1)
-                better = dd < best_d - 1e-15
-                best_u = np.where(better, cand, best_u)
-                best_d = np.where(better, dd, best_d)
-        return best_u
+        i = (i0 + _OFFSETS[:, None]) % K  # (3, N): the seed's segment and its neighbours
+        a, b = self.points[i], self.points[(i + 1) % K]
+        ab = b - a
+        w = _clip(dot2(p - a, ab) / dot2(ab, ab), 0.0, 1.0)
+        uu = self._u[i] + w * (self._u[i + 1] - self._u[i])
+        # bring into the arc's period and clamp to it: (3 segments, 3 shifts, N) in the order tried
+        cand = _clip((uu + base)[:, None, :] + _OFFSETS[None, :, None], lo, hi).reshape(9, -1)
+        pts = self.point(cand.ravel()).reshape(9, len(p), 2)
+        dd = _length(pts - p)
+        best_d, best_k = np.full(len(p), np.inf), np.full(len(p), -1)
+        for k in range(9):
+            better = dd[k] < best_d - 1e-15
+            best_d = np.where(better, dd[k], best_d)
+            best_k[better] = k
+        row, k = np.arange(len(p)), np.maximum(best_k, 0)
+        found = best_k >= 0  # no candidate only for a point not finite: its seed kept
+        return np.where(found, cand[k, row], u), pts[k, row]
 
     def default_corner_split(self) -> np.ndarray:
         return self._default_corners()
@@ -378,115 +384,6 @@ class Target:
             "size_mm": self.size,
             "area_mm2": self.area,
         }
-
-
-class Projector:
-    """Projection of points on fixed arcs onto a target (see :meth:`Target.project`)."""
-
-    def __init__(self, target: Target, side: np.ndarray):
-        self.target = target
-        self.side = side
-        self.whole = side < 0
-        lo, hi = np.full(len(side), -np.inf), np.full(len(side), np.inf)
-        on = ~self.whole
-        s = side[on]
-        a = target.corners[s]
-        b = target.corners[(s + 1) % 4] + (s == 3)
-        # the foot may slide a little past the arc's ends: a tip at a split point is then measured
-        # to the curve itself, which is smooth there, not to a clamped end point (a cone in the
-        # distance, which turned Gauss-Newton's quadratic convergence into linear at corner tips)
-        pad = ARC_PAD * (b - a)
-        lo[on], hi[on] = a - pad, b + pad
-        self.lo, self.hi = lo, hi
-        self.any_whole, self.all_whole = bool(self.whole.any()), bool(self.whole.all())
-        # the trees for these corners, fetched once (not on every call of a constraint family)
-        self.index = target._arc_index()
-        self._gap: float | None = None
-
-    def __call__(self, p: np.ndarray):
-        """``(u, foot, d, n)`` as :meth:`Target.project` returns them."""
-        tgt = self.target
-        tree, us, lift, whole, whole_u, a, b = self.index
-        q = (p - b) / a
-        if self.all_whole:
-            u = whole_u[whole.query(q)[1]]
-        elif self.any_whole:
-            u = np.empty(len(p))
-            u[self.whole] = whole_u[whole.query(q[self.whole])[1]]
-            on = ~self.whole
-            u[on] = us[tree.query(np.column_stack([q[on], self.side[on] * lift]))[1]]
-        else:
-            u = us[tree.query(np.column_stack([q, self.side * lift]))[1]]
-        u, foot, n = _feet(tgt, p, u, self.lo, self.hi)
-        d, grad = _distance(p, foot, n, tgt.size)
-        if self.all_whole and len(p):
-            return self._tie_broken(p, q, u, foot, d, grad)
-        return u, foot, d, grad
-
-    def _seed_gap(self) -> float:
-        """``TIE_SEEDS`` of the whole curve's largest seed spacings (in the parameter): the nearest seeds of
-        one stretch lie within it of their foot, so a seed farther away lies on another stretch."""
-        if self._gap is None:
-            us = np.sort(np.mod(self.index[4], 1.0))
-            self._gap = TIE_SEEDS * float(np.diff(np.r_[us, us[0] + 1.0]).max())
-        return self._gap
-
-    def _tie_broken(self, p, q, u, foot, d, grad):
-        """``(u, foot, d, grad)`` with one rule where a point is as far (within ``TIE_TOL`` of the size) from two
-        stretches of the curve: the foot further along the curve (counter-clockwise, the shorter way round).
-
-        On the curve's medial axis the distance has two feet, and the nearest seed picked one by round-off: a
-        chord midpoint on the axis of the symmetric heart, above its cusp, went to the left or the right lobe
-        as the BLAS kernels rounded, and the 16x16 heart's fit to one of two minima (1.42 % or 4.65 % off).
-        The rule is a convention (the mean of both gradients, the symmetric subgradient, kept the symmetric
-        start symmetric and ended 14.5 % off; the foot of lower or higher parameter 4.64 % and 2.50 %)."""
-        tgt = self.target
-        whole, whole_u = self.index[3], self.index[4]
-        k = min(TIE_SEEDS, len(whole_u))
-        # the nearest seeds, from either stretch
-        seeds = whole_u[whole.query(q, k=k)[1]].reshape(len(p), k)
-        # only seeds on another stretch than the foot found (``_seed_gap`` away), ahead of it
-        ahead = np.mod(seeds - u[:, None], 1.0)
-        at, col = np.nonzero((ahead < 0.5) & (ahead > self._seed_gap()))
-        if not len(at):
-            return u, foot, d, grad
-        uk, fk, nk = _feet(tgt, p[at], seeds[at, col], self.lo[at], self.hi[at])
-        dk, gk = _distance(p[at], fk, nk, tgt.size)
-        tol = TIE_TOL * max(tgt.size, 1e-300)
-        apart = np.sqrt(dot2(fk - foot[at], fk - foot[at]))
-        ok = (np.abs(np.abs(dk) - np.abs(d[at])) <= tol) & (apart > 1e3 * tol)
-        ok &= np.mod(uk - u[at], 1.0) < 0.5  # its foot ahead too
-        if not ok.any():
-            return u, foot, d, grad
-        u, foot, d, grad = u.copy(), foot.copy(), d.copy(), grad.copy()
-        # one foot per point: the farthest such where several are
-        sel = np.flatnonzero(ok)
-        sel = sel[np.lexsort((-apart[sel], at[sel]))]
-        sel = sel[np.r_[True, at[sel][1:] != at[sel][:-1]]]
-        rows = at[sel]
-        u[rows], foot[rows], d[rows], grad[rows] = uk[sel], fk[sel], dk[sel], gk[sel]
-        return u, foot, d, grad
-
-
-def _feet(tgt: Target, p: np.ndarray, u: np.ndarray, lo: np.ndarray, hi: np.ndarray):
-    """``(u, foot, outward unit normal)`` of the points ``p`` from the seeds ``u``, each within ``[lo, hi]``."""
-    if tgt.kind == "spline":
-        u, foot, d1 = tgt._newton_foot(p, u, lo, hi)
-        n = np.stack([d1[:, 1], -d1[:, 0]], -1)
-        return u, foot, n / np.sqrt(dot2(n, n))[:, None]
-    u = tgt._polyline_foot(p, u, lo, hi)
-    foot = tgt.point(u)
-    return u, foot, tgt._normal(u, foot)
-
-
-def _distance(p, foot, n, size: float):
-    """Signed distance of ``p`` from its ``foot`` (outward normal ``n``: positive outside) and its gradient."""
-    diff = p - foot
-    dist = np.sqrt(dot2(diff, diff))
-    sgn = np.where(dot2(diff, n) >= 0, 1.0, -1.0)
-    safe = dist > 1e-13 * max(size, 1e-300)
-    grad = np.where(safe[:, None], (sgn / np.where(safe, dist, 1.0))[:, None] * diff, n)
-    return sgn * dist, grad
 
 
 def _check_simple(dense: np.ndarray, name: str) -> None:

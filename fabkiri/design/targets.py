@@ -15,8 +15,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..templates import template_dir
-from .target_curve import ARC_PAD, SIDES, Projector, Target
+from .target_curve import SIDES, Target
 from .target_files import from_points, from_spec, from_svg_path, read_points_file, read_svg
+from .target_projector import ARC_PAD, Projector
 from .target_shapes import SHAPES, circle, ellipse, heart, polygon, rectangle, star, superellipse
 
 __all__ = [
