@@ -207,6 +207,27 @@ def test_convex_rows_bound_the_hole_corners_only():
     assert np.count_nonzero(r) == hole_gaps < 2 * p.topology.n_hinges
 
 
+def test_a_hole_corner_gap_may_have_its_own_floor():
+    """``hole_floor``: the gaps that are a hole's corner are held above it, the outline's gaps above
+    ``floor`` (the outline's gaps keep the end tiles of two rows apart; docs/kagome.md, "What limits
+    the fit")."""
+    p = standard_kagome(4, 5)
+    x = p.nodes / p.tile_size  # every gap 120°
+    top = p.topology
+    hole = np.concatenate(
+        [top.gap_face[np.arange(top.n_hinges), top.fold(s).fold_gap] >= 0 for s in (1, 2)]
+    )
+    r, _ = KR.gap_family(p, np.radians(10.0), hole_floor=np.radians(130.0))(x)
+    assert np.allclose(r[hole], np.radians(-10.0)) and not r[~hole].any() and (~hole).any()
+    r, _ = KR.gap_family(p, np.radians(130.0), hole_floor=np.radians(10.0))(x)
+    assert np.allclose(r[~hole], np.radians(-10.0)) and not r[hole].any()
+    r, err = _fd_check(
+        KR.gap_family(p, np.radians(130.0), hole_floor=np.radians(125.0)),
+        x + 0.05 * np.random.default_rng(4).standard_normal(x.shape),
+    )
+    assert np.count_nonzero(r) > 0 and err <= 1e-7
+
+
 def test_symmetry_is_every_shared_mirror_one_named_mirror_or_none():
     """``design(symmetry=...)``: True takes every mirror the lattice and the target share, a named axis
     that one alone (refused when the lattice or the target lacks it), False none."""

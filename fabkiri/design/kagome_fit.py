@@ -43,6 +43,7 @@ from .target_curve import Target
 from .target_families import outline_match, shape_match
 
 GAP_FLOOR = np.radians(10.0)  # smallest gap at a hinge (the standard's are 120°)
+HOLE_GAP_FLOOR = GAP_FLOOR  # the same for a gap that is a hole's corner
 CONVEX = np.radians(
     5.0
 )  # with convex=True a hole's corner is at most 175° (6x11 free heart: 4.35 -> 11.7 %)
@@ -182,7 +183,7 @@ def fit_rows(
     eq = K.families(standard, (1, 2)) + [KR.symmetry_family(m, a, nv) for a, m in axes]
     fit = [shape_match(order, sides, tgt, nv, "shape"), outline_match(order, tgt, nv)]
     ineq = [
-        KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None),
+        KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None, HOLE_GAP_FLOOR),
         KR.quality_family(standard, QUALITY_FLOOR),
         KR.fan_family(standard, GAP_FLOOR),
         *fab,

@@ -58,21 +58,26 @@ def tip_sides(standard: Pattern, tips: np.ndarray) -> np.ndarray:
     return side.astype(np.int64)
 
 
-def gap_family(pattern: Pattern, floor: float, convex: float | None = None) -> Family:
-    """Both gaps at every hinge at least ``floor`` (rad): rows ``min(gap - floor, 0)``; with ``convex``,
-    every gap that is a hole's corner also at most ``π - convex`` (convex holes: a tile cannot cross a
-    hole to overlap the tile opposite, which the gaps alone allow)."""
+def gap_family(
+    pattern: Pattern, floor: float, convex: float | None = None, hole_floor: float | None = None
+) -> Family:
+    """Both gaps at every hinge at least ``floor`` (rad): rows ``min(gap - floor, 0)``; ``hole_floor``
+    (default ``floor``) instead for a gap that is a hole's corner; with ``convex``, every gap that is a
+    hole's corner also at most ``π - convex`` (convex holes: a tile cannot cross a hole to overlap the
+    tile opposite, which the gaps alone allow)."""
     top = pattern.topology
     nv = top.n_nodes
     H = np.arange(top.n_hinges)
+    lo = floor if hole_floor is None else hole_floor
+    floors = {s: np.where(top.gap_face[H, top.fold(s).fold_gap] >= 0, lo, floor) for s in (1, 2)}
 
     def fn(x):
         rs, nodes, grads = [], [], []
         for s in (1, 2):  # state s folds one of the hinge's two gaps: together they are both
             th, nd, g = fold_gap_angles(pattern, s, x)
             th = np.mod(th + GAP_WRAP, TWO_PI) - GAP_WRAP
-            act = th < floor
-            rs.append(np.where(act, th - floor, 0.0))
+            act = th < floors[s]
+            rs.append(np.where(act, th - floors[s], 0.0))
             nodes.append(nd)
             grads.append(g * act[:, None, None])
             if convex is not None:
