@@ -53,12 +53,11 @@ RIGID_FULL_FIRST_TILES = 16 * 16
 # guesses too, a fraction of a second each at 8x8 (rigid heart, tips fit, misses by: rescaled 2.56 %,
 # conformal 1.05 %, standard 0.20 % of the size)
 MIRRORED_STARTS = ("standard", "conformal", "rescaled")
-# ... and the start kept is the one closest by the measure that asked for them: up to FULL_ALWAYS_TILES the
-# outline (a coarse level's tips-only fit lowers its objective with tips bunched on their arcs: the drop's
-# 8x8 level kept a 34 % outline for the lowest objective, and its 32x32 design cost 9.2 CPU s for 0.84 %; kept
-# by outline, 7.1 %, and 5.1 s for 0.31 %), above it the objective. They stop once the best would ask for no
-# second opinion, standard first (the start kept most often: the peanut's 32x32 level of its 64x64 chain missed
-# by 0.66 %, and only standard met 0.25 %, after rescaled and conformal, 8 CPU s, both scalings each)
+# ... standard first (the start kept most often), until the best would ask for no second opinion: the peanut's
+# 32x32 level of its 64x64 chain missed by 0.66 %, and only standard met 0.25 %, after rescaled and conformal
+# with both scalings each (that level 12.5 -> 3.9 CPU s, the same start kept). Kept by the closest outline
+# instead of the objective up to 16x16 tiles: the symmetric 32x32 drop 0.84 -> 0.31 % (9.2 -> 5.1 CPU s), but
+# the 64x64 star 0.19 -> 0.45 % (10 -> 18 CPU s); not kept
 
 
 def _solve_reduced(prob: _Problem, log, iters: dict):
@@ -127,21 +126,15 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
     misses by more than ``FULL_ABOVE``): the reduced solver over half the seeds from its own start with the
     other LM scaling and from each guess of ``MIRRORED_STARTS`` it did not start from, with both, until the best
     would ask for no second opinion. The best
-    ``(X, mode)``: family checks, then the measure that asked for it (the outline up to ``FULL_ALWAYS_TILES``,
-    else the objective: see ``MIRRORED_STARTS``)."""
+    ``(X, mode)`` (family checks, then the objective)."""
     req = prob.req
     if not _second_opinion_due(
         req, prob, out[0], lambda: fit_miss(exact_fits(prob.of("fit")), out[0]), log
     ):
         return out
 
-    by_outline = req.rows * req.cols <= FULL_ALWAYS_TILES
-
     def rank(X):
-        return (
-            not _acceptable(prob, X),
-            _outline_rel(prob, X) if by_outline else _objective(prob, X),
-        )
+        return (not _acceptable(prob, X), _objective(prob, X))
 
     best = (rank(out[0]), out)
     starts: list[tuple[str, np.ndarray, float, np.ndarray | None, tuple[str, ...]]] = [
@@ -158,7 +151,7 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
         starts.append((f"{init}_", X0 * (L / prob.L0), np.pi / 4, None, SCALINGS))
     for tag, X0, psi0, S0, scalings in starts:
         X, mode = _reduced_from(prob, X0, psi0, S0, log, iters, tag, scalings)
-        log(f"mirrored start {tag[:-1]}: {rank(X)[1]:.4e} (best so far {best[0][1]:.4e})")
+        log(f"mirrored start {tag[:-1]}: objective {rank(X)[1]:.4e} (best so far {best[0][1]:.4e})")
         best = min(best, (rank(X), (X, mode)), key=lambda b: b[0])
         Xb = best[1][0]
         if not best[0][0] and not _second_opinion_due(
