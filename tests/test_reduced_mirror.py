@@ -221,3 +221,67 @@ def test_symmetric_heart_32x32_is_met_without_overlaps(tmp_path, run_cli):
     # and both closed states compact to the verifier (at an axis margin of 0.01 tile the notch enclosed a gap)
     code, _, err = run_cli("verify", out)
     assert code == 0, err
+
+
+@pytest.mark.parametrize("axis,dense", [("y", False), ("x", False), ("x", True)])
+def test_mirrored_normal_is_formed_over_half_the_seeds(axis, dense, monkeypatch):
+    """On the block path (large lattices, forced here at 12x12) the symmetric solver's normal matrix and
+    gradient are formed over q's columns (``reduced_mirror_normal``), never as JᵀJ over p's (main formed that
+    and then Pᵀ H P: a symmetric step cost an unsymmetric one); the same matrix as Pᵀ (JᵀJ) P to round-off,
+    the closed states' contact rows included. The dense path (small lattices) keeps Pᵀ (JᵀJ) P."""
+    req = DesignRequest(
+        12, 12, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
+    )
+    req.symmetry = axis
+    prob = _Problem(req)
+    fam = prob.rigid_family
+    mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)  # active contact and axis rows
+    base = _Merit(
+        fam,
+        prob.families,
+        prob.margin,
+        1e-3,
+        grid_families=grid_families(fam, prob.st, prob.families),
+    )
+    if not dense:
+        base._tiles = None  # the block path, as from about 40x40 tiles
+    merit = MirroredMerit(base, mirror.P, mirror.axis_rows).with_contact(
+        ClosedContact(fam, prob.st)
+    )
+    q = q + 0.01 * np.random.default_rng(2).normal(size=q.shape)
+    H_full, g_full = merit.evaluate(q).ev.normal()
+    P = mirror.P
+    want_H, want_g = P.T @ (P.T @ H_full).T, P.T @ g_full
+    if not dense:
+        monkeypatch.setattr(_Merit, "normal", lambda *a: pytest.fail("JᵀJ formed over p"))
+    ev = merit.evaluate(q)
+    assert len(merit.inner.contact_rows(ev.Xc, False)[0]) > 0
+    H, g = ev.normal()
+    assert H.shape == (P.shape[1], P.shape[1])
+    assert np.abs(H - want_H).max() <= 1e-12 * np.abs(want_H).max()
+    assert np.abs(g - want_g).max() <= 1e-12 * max(1.0, np.abs(want_g).max())
+
+
+@pytest.mark.parametrize("met_after", [1, 2, None])
+def test_mirrored_starts_stop_once_the_best_asks_for_no_second_opinion(met_after, monkeypatch):
+    """The other guesses run standard first and stop as soon as the best result would ask for no second
+    opinion (counted by the starts run: on main every guess ran with both scalings, the peanut's 32x32 level
+    10.7 CPU s where standard alone met the fit). The solves are stubbed: this is about the calls."""
+    from fabkiri.design import routes
+
+    heart = T.load_target("heart", 100.0)
+    prob = _Problem(DesignRequest(8, 8, heart, rigid=True, symmetry="y", outline=False))
+    ran: list[str] = []
+
+    def solve(prob, X0, psi0, S0, log, iters, tag, scalings=()):
+        ran.append(tag)
+        return X0, "least-squares"
+
+    def due(req, prob, X, miss, log):
+        return met_after is None or len(ran) < met_after
+
+    monkeypatch.setattr(routes, "_reduced_from", solve)
+    monkeypatch.setattr(routes, "_second_opinion_due", due)
+    routes._mirrored_starts(prob, (prob.X0, "least-squares"), lambda msg: None, {})
+    every = ["again_", "standard_", "conformal_"]  # rescaled is the request's own guess
+    assert ran == (every if met_after is None else every[:met_after])

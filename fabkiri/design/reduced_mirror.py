@@ -32,6 +32,7 @@ from scipy import sparse
 
 from ..errors import SolveError
 from ..kdtree import KDTree
+from .reduced_mirror_normal import HalfBlocks, half_normal
 from .rigid import RigidFamily
 
 FLIPPED = {"x": 1, "y": 0}  # the coordinate the mirror negates: "x" is y -> -y, "y" is x -> -x
@@ -175,34 +176,41 @@ class MirroredMerit:
     """A reduced merit (``reduced._Merit``) over ``q``, with ``p = P q``, and the closed states' axis rows
     (``AxisRows``); everything else is the merit's."""
 
-    def __init__(self, merit: Any, P: sparse.csr_matrix, axis: AxisRows | None = None):
+    def __init__(
+        self,
+        merit: Any,
+        P: sparse.csr_matrix,
+        axis: AxisRows | None = None,
+        halves: HalfBlocks | None = None,
+    ):
         self.P, self.axis = P, axis
         self.inner = merit if axis is None or merit.contact is axis else merit.with_contact(axis)
+        self.halves = HalfBlocks(P, merit.nf) if halves is None else halves
 
     def __getattr__(self, name: str):  # fits, scaling, sq, ineq_violation ...
         return getattr(self.inner, name)
 
     def staged(self, rho: float, scaling: str) -> MirroredMerit:
-        return MirroredMerit(self.inner.staged(rho, scaling), self.P, self.axis)
+        return MirroredMerit(self.inner.staged(rho, scaling), self.P, self.axis, self.halves)
 
     def state(self, q: np.ndarray):
         return self.inner.state(self.P @ q)
 
     def with_contact(self, contact) -> MirroredMerit:
         if self.axis is None:
-            return MirroredMerit(self.inner.with_contact(contact), self.P)
+            return MirroredMerit(self.inner.with_contact(contact), self.P, None, self.halves)
         axis = self.axis.joined(contact)
-        return MirroredMerit(self.inner.with_contact(axis), self.P, axis)
+        return MirroredMerit(self.inner.with_contact(axis), self.P, axis, self.halves)
 
     def evaluate(self, q: np.ndarray, hard: bool = False) -> _MirroredEvaluation:
-        return _MirroredEvaluation(self.inner.evaluate(self.P @ q, hard), self.P, q)
+        return _MirroredEvaluation(self.inner.evaluate(self.P @ q, hard), self, q)
 
 
 class _MirroredEvaluation:
     """One evaluation over ``p = P q`` seen from ``q``: the rows are the same, the Jacobian ``J P``."""
 
-    def __init__(self, ev: Any, P: sparse.csr_matrix, q: np.ndarray):
-        self.ev, self.P, self.p = ev, P, q
+    def __init__(self, ev: Any, merit: MirroredMerit, q: np.ndarray):
+        self.ev, self.P, self.p, self.halves = ev, merit.P, q, merit.halves
         self.gviol, self.Xc = ev.gviol, ev.Xc
 
     @property
@@ -214,9 +222,8 @@ class _MirroredEvaluation:
         return self.ev.r
 
     def normal(self):
-        H, g = self.ev.normal()
-        PtH = np.asarray(self.P.T @ H)
-        return np.asarray(self.P.T @ PtH.T), np.asarray(self.P.T @ g)
+        """``(J P)ᵀ (J P)`` and ``(J P)ᵀ r`` formed over q's columns (``half_normal``), never ``JᵀJ`` over p's."""
+        return half_normal(self.ev, self.P, self.halves)
 
     def jacobian(self) -> np.ndarray:
         return np.asarray((self.P.T @ self.ev.jacobian().T).T)
