@@ -24,7 +24,8 @@ from .constraints import Family, Stencils
 
 def where(cond: np.ndarray, a: F.Dual, b: F.Dual) -> F.Dual:
     """Row-wise choice between two :class:`~.fabrication.Dual` values."""
-    return F.Dual(np.where(cond, a.v, b.v), np.where(cond[:, None], a.g, b.g))
+    g = None if a.g is None else np.where(cond[:, None], a.g, b.g)
+    return F.Dual(np.where(cond, a.v, b.v), g)
 
 
 def _cross(a, b) -> F.Dual:
