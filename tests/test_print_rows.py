@@ -72,6 +72,25 @@ def test_residual_only_rows_carry_no_gradients_and_the_same_values():
     assert np.array_equal(plain.v, dual.v)
 
 
+def test_gradients_of_the_active_rows_only_are_the_full_jacobians_rows():
+    """The solvers ask an inequality's gradients only inside its margin: ``jacobian_where`` gives exactly the
+    full Jacobian's rows there and zero rows elsewhere, in the full Jacobian's sparsity."""
+    p = standard_pattern(3, 3, tile_size=1.0)
+    stc = Stencils.from_pattern(p)
+    x = p.nodes + 0.05 * np.random.default_rng(2).standard_normal(p.nodes.shape)
+    lim = F.FabricationLimits(**{**MK4.to_dict(), "min_hole_mm": 0.5, "hinge_spacing_mm": 1.0})
+    for f in F.families(stc, len(x), lim, 4.0, p.nodes):
+        r, J = f(x)
+        act = r < np.median(r)
+        assert 0 < act.sum() < len(r), f.name
+        Jw = f.jacobian_where(x, act)
+        assert np.array_equal(Jw.indptr, J.indptr) and np.array_equal(Jw.indices, J.indices), f.name
+        dense, full = Jw.toarray(), J.toarray()
+        assert np.array_equal(dense[act], full[act]) and not dense[~act].any(), f.name
+        nodes, grads = f.stencil_where(x, act)
+        assert not grads[~act].any() and np.abs(grads[act]).max() > 0, f.name
+
+
 def _print_pads(pattern, state):
     """The pad areas ``print`` measures ``(H, 2)``, or its refusal."""
     pr = load_printer("prusa-mk4")

@@ -48,7 +48,7 @@ class Dual:
             return Dual(self.v * o, self.g * np.asarray(o)[..., None] if np.ndim(o) else self.g * o)
         if self.g is None:
             return Dual(self.v * o.v, None)
-        return Dual(self.v * o.v, self.g * o.v[:, None] + o.g * self.v[:, None])
+        return Dual(self.v * o.v, self.g * o.v[..., None] + o.g * self.v[..., None])
 
     __rmul__ = __mul__
 
@@ -58,12 +58,28 @@ class Dual:
         if self.g is None:
             return Dual(self.v / o.v, None)
         return Dual(
-            self.v / o.v, (self.g * o.v[:, None] - o.g * self.v[:, None]) / (o.v * o.v)[:, None]
+            self.v / o.v,
+            (self.g * o.v[..., None] - o.g * self.v[..., None]) / (o.v * o.v)[..., None],
         )
 
     def sqrt(self):
         r = np.sqrt(self.v)
-        return Dual(r, None if self.g is None else self.g / (2.0 * r)[:, None])
+        return Dual(r, None if self.g is None else self.g / (2.0 * r)[..., None])
+
+    def take(self, k) -> Dual:
+        """Column ``k`` of a row-by-column value (an index or a slice; the gradient's last axis stays)."""
+        return Dual(self.v[:, k], None if self.g is None else self.g[:, k])
+
+
+def stack(ds: list[Dual]) -> Dual:
+    """Values of one shape side by side in a new column axis (the gradient's last axis stays last)."""
+    g = None if ds[0].g is None else np.stack([d.g for d in ds], 1)
+    return Dual(np.stack([d.v for d in ds], 1), g)
+
+
+def roll(d: Dual, shift: int) -> Dual:
+    """The columns of a row-by-column value rotated by ``shift`` (``np.roll`` along axis 1)."""
+    return Dual(np.roll(d.v, shift, 1), None if d.g is None else np.roll(d.g, shift, 1))
 
 
 class _Values(np.ndarray):

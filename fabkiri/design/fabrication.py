@@ -103,18 +103,24 @@ def _mitre(x, quads, rows, j, n: int | None = None):
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
 
 
-def _edges(x: np.ndarray, quads: np.ndarray):
-    """Every quad's edge e (quad-major): row quads, e, and the edge's two ends."""
+def _edges(x: np.ndarray, quads: np.ndarray, sel: np.ndarray | None = None):
+    """Every quad's edge e (quad-major; rows ``sel`` of them only, if given): row quads, e, and the edge's two
+    ends."""
     n = quads.shape[1]
     rows = np.repeat(np.arange(len(quads)), n)
     e = np.tile(np.arange(n), len(quads))
+    if sel is not None:
+        rows, e = rows[sel], e[sel]
     return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % n)
 
 
-def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) -> Dual:
-    """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major); any arity:
-    a triangle has one far corner (the row is its altitude, exact), more are folded by smooth maxima."""
-    rows, e, a, b = _edges(x, quads)
+def width_rows(
+    x: np.ndarray, quads: np.ndarray, width: float, shrink: float, sel: np.ndarray | None = None
+) -> Dual:
+    """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major; ``sel``: those
+    rows only); any arity: a triangle has one far corner (the row is its altitude, exact), more are folded by
+    smooth maxima."""
+    rows, e, a, b = _edges(x, quads, sel)
     n = _normal(a, b)
     far = []
     for off in range(2, quads.shape[1]):
@@ -143,9 +149,11 @@ def smooth_max(a: Dual, b: Dual, eps: float = SMOOTH) -> Dual:
     return (a + b) * 0.5 + (h * h + eps * eps).sqrt() - eps
 
 
-def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float) -> Dual:
-    """Signed length of every shrunk edge minus ``min_edge``."""
-    rows, e, a, b = _edges(x, quads)
+def shrunk_edge_rows(
+    x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float, sel: np.ndarray | None = None
+) -> Dual:
+    """Signed length of every shrunk edge (rows ``sel`` only, if given) minus ``min_edge``."""
+    rows, e, a, b = _edges(x, quads, sel)
     E = _sub(b, a)
     ln = _dot(E, E).sqrt()
     u = E[0] / ln, E[1] / ln
@@ -230,16 +238,38 @@ def strip_rows(
     return gaps[0] - clearance
 
 
+def _pick(args: tuple, sel: np.ndarray | None) -> tuple:
+    """Per-row index arrays, of rows ``sel`` only if given."""
+    return args if sel is None else tuple(a[sel] for a in args)
+
+
 def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
-    """An inequality family from ``rows_of(x) -> Dual`` over the quads named by ``meta['quad_of_row']``."""
+    """An inequality family from ``rows_of(x, sel) -> Dual`` (rows ``sel`` only, or all for None) over the quads
+    named by ``meta['quad_of_row']``. Its values are computed without gradients (``res``) and its gradients
+    only on the rows asked (``active``): the solvers need them only where a row is inside its margin."""
     owner = meta["quad_of_row"]
+    k = quads.shape[1]
 
     def fn(x):
-        r = rows_of(x)
-        return r.v, (quads[owner], r.g.reshape(len(owner), quads.shape[1], 2))
+        r = rows_of(x, None)
+        return r.v, (quads[owner], r.g.reshape(len(owner), k, 2))
+
+    def active(x, act):
+        grads = np.zeros((len(owner), k, 2))
+        sel = np.flatnonzero(act)
+        if len(sel):
+            grads[sel] = rows_of(x, sel).g.reshape(len(sel), k, 2)
+        return quads[owner], grads
 
     return Family(
-        name, "ineq", fn, 1, meta=meta, nv=nv, res=lambda x: np.asarray(rows_of(values_only(x)).v)
+        name,
+        "ineq",
+        fn,
+        1,
+        meta=meta,
+        nv=nv,
+        res=lambda x: np.asarray(rows_of(values_only(x), None).v),
+        active=active,
     )
 
 
@@ -281,7 +311,7 @@ def _families(
             _family(
                 "fabrication_width",
                 tiles,
-                lambda x, w=w: width_rows(x, tiles, w, d),
+                lambda x, sel, w=w: width_rows(x, tiles, w, d, sel),
                 nv,
                 dict(per_edge),
             )
@@ -292,7 +322,7 @@ def _families(
             _family(
                 "fabrication_shrunk_edges",
                 tiles,
-                lambda x: shrunk_edge_rows(x, tiles, d, e_min),
+                lambda x, sel: shrunk_edge_rows(x, tiles, d, e_min, sel),
                 nv,
                 dict(per_edge),
             )
@@ -310,7 +340,7 @@ def _families(
             _family(
                 "fabrication_holes",
                 holes,
-                lambda x: width_rows(x, holes, wh, 0.0),
+                lambda x, sel: width_rows(x, holes, wh, 0.0, sel),
                 nv,
                 {"quad_of_row": np.repeat(np.arange(len(holes)), 4)},
             )
@@ -332,7 +362,7 @@ def _hinge_families(
             _family(
                 "fabrication_hinge_angles",
                 tiles,
-                lambda x: hinge_angle_rows(x, tiles, ht, hk, s_min),
+                lambda x, sel: hinge_angle_rows(x, tiles, *_pick((ht, hk), sel), s_min),
                 nv,
                 {"quad_of_row": ht},
             )
@@ -347,7 +377,7 @@ def _hinge_families(
             _family(
                 "fabrication_hinge_spacing",
                 tiles,
-                lambda x: spacing_rows(x, tiles, t, i[p], j[p], s),
+                lambda x, sel: spacing_rows(x, tiles, *_pick((t, i[p], j[p]), sel), s),
                 nv,
                 {"quad_of_row": t},
             )
@@ -362,7 +392,7 @@ def _hinge_families(
             _family(
                 "fabrication_hinge_edges",
                 tiles,
-                lambda x: spacing_rows(x, tiles, te, e, (e + 1) % 4, s_e),
+                lambda x, sel: spacing_rows(x, tiles, *_pick((te, e, (e + 1) % 4), sel), s_e),
                 nv,
                 {"quad_of_row": te},
             )
@@ -393,7 +423,7 @@ def _strip_family(
         _family(
             "fabrication_strip_clearance",
             tiles,
-            lambda x: strip_rows(x, tiles, *args, a0, along, across, cl),
+            lambda x, sel: strip_rows(x, tiles, *_pick(args, sel), a0, along, across, cl),
             nv,
             {"quad_of_row": t},
         )

@@ -47,17 +47,25 @@ def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | N
     rs, Js = [], []
     if hard is not None:
         for f in hard:
-            r, J = f(X)
             if f.kind == "ineq":  # projection keeps inequalities with half their margin
-                act = r < 0.5 * prob.margin[f.name]
-                r = np.where(act, r - 0.5 * prob.margin[f.name], 0.0)
+                v, J = _ineq_rows(f, X, 0.5 * prob.margin[f.name])
+                act = v < 0
+                r = np.where(act, v, 0.0)
                 J = sparse.diags(act.astype(float)) @ J
+            else:
+                r, J = f(X)
             rs.append(r)
             Js.append(J)
         return np.concatenate(rs), sparse.vstack(Js).tocsr()
     sq = np.sqrt(rho)
     w = np.sqrt(prob.req.reg_weight)
     for f in prob.families:
+        if f.kind == "ineq":
+            v, J = _ineq_rows(f, X, prob.margin[f.name])
+            act = v < 0
+            rs.append(sq * np.where(act, v, 0.0))
+            Js.append(sparse.diags(sq * act.astype(float)) @ J)
+            continue
         r, J = f(X)
         if f.kind == "eq":
             rs.append(sq * r)
@@ -65,15 +73,20 @@ def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | N
         elif f.kind == "fit":
             rs.append(r)
             Js.append(J)
-        elif f.kind == "reg":
+        else:
             rs.append(w * r)
             Js.append(w * J)
-        else:
-            v = r - prob.margin[f.name]
-            act = v < 0
-            rs.append(sq * np.where(act, v, 0.0))
-            Js.append(sparse.diags(sq * act.astype(float)) @ J)
     return np.concatenate(rs), sparse.vstack(Js).tocsr()
+
+
+def _ineq_rows(f: C.Family, X: np.ndarray, margin: float):
+    """``(g - margin, J)`` of inequality family ``f``: ``J`` holds the rows below the margin at least (the
+    others are masked off by the caller), so a family that can (``Family.active``) computes only those."""
+    if f.active is None:
+        r, J = f(X)
+        return r - margin, J
+    v = f.residual(X) - margin
+    return v, f.jacobian_where(X, v < 0)
 
 
 class _Point:
