@@ -26,6 +26,7 @@ the four corners) and checked against finite differences in ``tests/test_fabrica
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
+from typing import TypeVar, cast
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from ..pattern import fabricability as fab
 from .constraints import Family, Stencils
 from .dual import Dual, _corners, _dot, _sub, values_only
 
+_Args = TypeVar("_Args", bound=tuple)
 NOT_LIMITS = ("source", "margin", "print_state")  # fields that are no requirement in mm
 
 
@@ -238,9 +240,9 @@ def strip_rows(
     return gaps[0] - clearance
 
 
-def _pick(args: tuple, sel: np.ndarray | None) -> tuple:
+def _pick(args: _Args, sel: np.ndarray | None) -> _Args:
     """Per-row index arrays, of rows ``sel`` only if given."""
-    return args if sel is None else tuple(a[sel] for a in args)
+    return args if sel is None else cast(_Args, tuple(a[sel] for a in args))
 
 
 def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
