@@ -54,6 +54,43 @@ def test_pad_rows_jacobian_matches_finite_differences(seed):
     assert len(r) == 2 * len(stc.hinge_tiles) and np.ptp(r) > 0.05
 
 
+def test_residual_only_rows_carry_no_gradients_and_the_same_values():
+    """A residual-only call (the solvers' check of every inequality at each trial step) evaluates each
+    fabrication family without its gradient arrays, to the same bits as the full evaluation."""
+    p = standard_pattern(3, 3, tile_size=1.0)
+    stc = Stencils.from_pattern(p)
+    x = p.nodes + 0.05 * np.random.default_rng(1).standard_normal(p.nodes.shape)
+    lim = F.FabricationLimits(**{**MK4.to_dict(), "min_hole_mm": 0.5})
+    fams = F.families(stc, len(x), lim, 4.0, p.nodes)
+    assert "fabrication_strip_pads" in {f.name for f in fams}
+    for f in fams:
+        assert np.array_equal(f.residual(x), f(x)[0]), f.name
+    args = PR.pad_args(stc.tiles, stc.hinge_tiles, stc.hinge_corner, stc.folds[1].fold_corner_ends)
+    plain = PR.pad_rows(F.values_only(x), *args, *PR.strip_pad(MK4, 4.0))
+    dual = PR.pad_rows(x, *args, *PR.strip_pad(MK4, 4.0))
+    assert plain.g is None and dual.g.shape == (len(dual.v), 16)
+    assert np.array_equal(plain.v, dual.v)
+
+
+def test_gradients_of_the_active_rows_only_are_the_full_jacobians_rows():
+    """The solvers ask an inequality's gradients only inside its margin: ``jacobian_where`` gives exactly the
+    full Jacobian's rows there and zero rows elsewhere, in the full Jacobian's sparsity."""
+    p = standard_pattern(3, 3, tile_size=1.0)
+    stc = Stencils.from_pattern(p)
+    x = p.nodes + 0.05 * np.random.default_rng(2).standard_normal(p.nodes.shape)
+    lim = F.FabricationLimits(**{**MK4.to_dict(), "min_hole_mm": 0.5, "hinge_spacing_mm": 1.0})
+    for f in F.families(stc, len(x), lim, 4.0, p.nodes):
+        r, J = f(x)
+        act = r < np.median(r)
+        assert 0 < act.sum() < len(r), f.name
+        Jw = f.jacobian_where(x, act)
+        assert np.array_equal(Jw.indptr, J.indptr) and np.array_equal(Jw.indices, J.indices), f.name
+        dense, full = Jw.toarray(), J.toarray()
+        assert np.array_equal(dense[act], full[act]) and not dense[~act].any(), f.name
+        nodes, grads = f.stencil_where(x, act)
+        assert not grads[~act].any() and np.abs(grads[act]).max() > 0, f.name
+
+
 def _print_pads(pattern, state):
     """The pad areas ``print`` measures ``(H, 2)``, or its refusal."""
     pr = load_printer("prusa-mk4")

@@ -26,12 +26,15 @@ the four corners) and checked against finite differences in ``tests/test_fabrica
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
+from typing import TypeVar, cast
 
 import numpy as np
 
 from ..pattern import fabricability as fab
 from .constraints import Family, Stencils
+from .dual import Dual, _corners, _dot, _sub, values_only
 
+_Args = TypeVar("_Args", bound=tuple)
 NOT_LIMITS = ("source", "margin", "print_state")  # fields that are no requirement in mm
 
 
@@ -85,77 +88,6 @@ class FabricationLimits:
         return asdict(self)
 
 
-class Dual:
-    """A value per row with its gradient in the coordinates of the row's corners (forward-mode
-    differentiation; the kagome rows use it too)."""
-
-    __slots__ = ("v", "g")
-
-    def __init__(self, v, g):
-        self.v, self.g = v, g
-
-    @staticmethod
-    def lift(o, like: Dual) -> Dual:
-        return (
-            o
-            if isinstance(o, Dual)
-            else Dual(np.broadcast_to(o, like.v.shape), np.zeros_like(like.g))
-        )
-
-    def __add__(self, o):
-        o = Dual.lift(o, self)
-        return Dual(self.v + o.v, self.g + o.g)
-
-    __radd__ = __add__
-
-    def __neg__(self):
-        return Dual(-self.v, -self.g)
-
-    def __sub__(self, o):
-        return self + (-Dual.lift(o, self))
-
-    def __rsub__(self, o):
-        return Dual.lift(o, self) - self
-
-    def __mul__(self, o):
-        if not isinstance(o, Dual):
-            return Dual(self.v * o, self.g * np.asarray(o)[..., None] if np.ndim(o) else self.g * o)
-        return Dual(self.v * o.v, self.g * o.v[:, None] + o.g * self.v[:, None])
-
-    __rmul__ = __mul__
-
-    def __truediv__(self, o):
-        if not isinstance(o, Dual):
-            return self * (1.0 / o)
-        return Dual(
-            self.v / o.v, (self.g * o.v[:, None] - o.g * self.v[:, None]) / (o.v * o.v)[:, None]
-        )
-
-    def sqrt(self):
-        r = np.sqrt(self.v)
-        return Dual(r, self.g / (2.0 * r)[:, None])
-
-
-def _corners(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
-    """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`Dual` seeded on its 2n coordinates
-    (n = ``quads.shape[1]``: any polygon arity, the kagome's triangles and hexagonal holes too)."""
-    m = len(rows)
-    p = x[quads[rows, k]]
-    gx = np.zeros((m, 2 * quads.shape[1]))
-    gy = np.zeros((m, 2 * quads.shape[1]))
-    gx[np.arange(m), 2 * k] = 1.0
-    gy[np.arange(m), 2 * k + 1] = 1.0
-    return Dual(p[:, 0], gx), Dual(p[:, 1], gy)
-
-
-def _sub(a, b):
-    return a[0] - b[0], a[1] - b[1]
-
-
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1]
-
-
 def _normal(a, b):
     """Inward unit normal of the CCW edge a -> b."""
     e = _sub(b, a)
@@ -173,18 +105,24 @@ def _mitre(x, quads, rows, j, n: int | None = None):
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
 
 
-def _edges(x: np.ndarray, quads: np.ndarray):
-    """Every quad's edge e (quad-major): row quads, e, and the edge's two ends."""
+def _edges(x: np.ndarray, quads: np.ndarray, sel: np.ndarray | None = None):
+    """Every quad's edge e (quad-major; rows ``sel`` of them only, if given): row quads, e, and the edge's two
+    ends."""
     n = quads.shape[1]
     rows = np.repeat(np.arange(len(quads)), n)
     e = np.tile(np.arange(n), len(quads))
+    if sel is not None:
+        rows, e = rows[sel], e[sel]
     return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % n)
 
 
-def width_rows(x: np.ndarray, quads: np.ndarray, width: float, shrink: float) -> Dual:
-    """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major); any arity:
-    a triangle has one far corner (the row is its altitude, exact), more are folded by smooth maxima."""
-    rows, e, a, b = _edges(x, quads)
+def width_rows(
+    x: np.ndarray, quads: np.ndarray, width: float, shrink: float, sel: np.ndarray | None = None
+) -> Dual:
+    """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major; ``sel``: those
+    rows only); any arity: a triangle has one far corner (the row is its altitude, exact), more are folded by
+    smooth maxima."""
+    rows, e, a, b = _edges(x, quads, sel)
     n = _normal(a, b)
     far = []
     for off in range(2, quads.shape[1]):
@@ -213,9 +151,11 @@ def smooth_max(a: Dual, b: Dual, eps: float = SMOOTH) -> Dual:
     return (a + b) * 0.5 + (h * h + eps * eps).sqrt() - eps
 
 
-def shrunk_edge_rows(x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float) -> Dual:
-    """Signed length of every shrunk edge minus ``min_edge``."""
-    rows, e, a, b = _edges(x, quads)
+def shrunk_edge_rows(
+    x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float, sel: np.ndarray | None = None
+) -> Dual:
+    """Signed length of every shrunk edge (rows ``sel`` only, if given) minus ``min_edge``."""
+    rows, e, a, b = _edges(x, quads, sel)
     E = _sub(b, a)
     ln = _dot(E, E).sqrt()
     u = E[0] / ln, E[1] / ln
@@ -300,15 +240,39 @@ def strip_rows(
     return gaps[0] - clearance
 
 
+def _pick(args: _Args, sel: np.ndarray | None) -> _Args:
+    """Per-row index arrays, of rows ``sel`` only if given."""
+    return args if sel is None else cast(_Args, tuple(a[sel] for a in args))
+
+
 def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
-    """An inequality family from ``rows_of(x) -> Dual`` over the quads named by ``meta['quad_of_row']``."""
+    """An inequality family from ``rows_of(x, sel) -> Dual`` (rows ``sel`` only, or all for None) over the quads
+    named by ``meta['quad_of_row']``. Its values are computed without gradients (``res``) and its gradients
+    only on the rows asked (``active``): the solvers need them only where a row is inside its margin."""
     owner = meta["quad_of_row"]
+    k = quads.shape[1]
 
     def fn(x):
-        r = rows_of(x)
-        return r.v, (quads[owner], r.g.reshape(len(owner), quads.shape[1], 2))
+        r = rows_of(x, None)
+        return r.v, (quads[owner], r.g.reshape(len(owner), k, 2))
 
-    return Family(name, "ineq", fn, 1, meta=meta, nv=nv, res=lambda x: rows_of(x).v)
+    def active(x, act):
+        grads = np.zeros((len(owner), k, 2))
+        sel = np.flatnonzero(act)
+        if len(sel):
+            grads[sel] = rows_of(x, sel).g.reshape(len(sel), k, 2)
+        return quads[owner], grads
+
+    return Family(
+        name,
+        "ineq",
+        fn,
+        1,
+        meta=meta,
+        nv=nv,
+        res=lambda x: np.asarray(rows_of(values_only(x), None).v),
+        active=active,
+    )
 
 
 def ccw_polygons(quads: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -349,7 +313,7 @@ def _families(
             _family(
                 "fabrication_width",
                 tiles,
-                lambda x, w=w: width_rows(x, tiles, w, d),
+                lambda x, sel, w=w: width_rows(x, tiles, w, d, sel),
                 nv,
                 dict(per_edge),
             )
@@ -360,7 +324,7 @@ def _families(
             _family(
                 "fabrication_shrunk_edges",
                 tiles,
-                lambda x: shrunk_edge_rows(x, tiles, d, e_min),
+                lambda x, sel: shrunk_edge_rows(x, tiles, d, e_min, sel),
                 nv,
                 dict(per_edge),
             )
@@ -378,7 +342,7 @@ def _families(
             _family(
                 "fabrication_holes",
                 holes,
-                lambda x: width_rows(x, holes, wh, 0.0),
+                lambda x, sel: width_rows(x, holes, wh, 0.0, sel),
                 nv,
                 {"quad_of_row": np.repeat(np.arange(len(holes)), 4)},
             )
@@ -400,7 +364,7 @@ def _hinge_families(
             _family(
                 "fabrication_hinge_angles",
                 tiles,
-                lambda x: hinge_angle_rows(x, tiles, ht, hk, s_min),
+                lambda x, sel: hinge_angle_rows(x, tiles, *_pick((ht, hk), sel), s_min),
                 nv,
                 {"quad_of_row": ht},
             )
@@ -415,7 +379,7 @@ def _hinge_families(
             _family(
                 "fabrication_hinge_spacing",
                 tiles,
-                lambda x: spacing_rows(x, tiles, t, i[p], j[p], s),
+                lambda x, sel: spacing_rows(x, tiles, *_pick((t, i[p], j[p]), sel), s),
                 nv,
                 {"quad_of_row": t},
             )
@@ -430,7 +394,7 @@ def _hinge_families(
             _family(
                 "fabrication_hinge_edges",
                 tiles,
-                lambda x: spacing_rows(x, tiles, te, e, (e + 1) % 4, s_e),
+                lambda x, sel: spacing_rows(x, tiles, *_pick((te, e, (e + 1) % 4), sel), s_e),
                 nv,
                 {"quad_of_row": te},
             )
@@ -461,7 +425,7 @@ def _strip_family(
         _family(
             "fabrication_strip_clearance",
             tiles,
-            lambda x: strip_rows(x, tiles, *args, a0, along, across, cl),
+            lambda x, sel: strip_rows(x, tiles, *_pick(args, sel), a0, along, across, cl),
             nv,
             {"quad_of_row": t},
         )

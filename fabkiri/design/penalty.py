@@ -40,6 +40,9 @@ LM_CG_RTOL = 1e-5
 # equalities-only pass converged in 6); it hands over to the next pass
 HARD_STALL_STEPS = 5
 HARD_STALL_GAIN = 0.1
+PROJECT_KEPT = (
+    5  # Gauss-Newton steps at most on a design kept instead of the stiff restart (``_projected``)
+)
 
 
 def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | None = None):
@@ -47,17 +50,25 @@ def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | N
     rs, Js = [], []
     if hard is not None:
         for f in hard:
-            r, J = f(X)
             if f.kind == "ineq":  # projection keeps inequalities with half their margin
-                act = r < 0.5 * prob.margin[f.name]
-                r = np.where(act, r - 0.5 * prob.margin[f.name], 0.0)
+                v, J = _ineq_rows(f, X, 0.5 * prob.margin[f.name])
+                act = v < 0
+                r = np.where(act, v, 0.0)
                 J = sparse.diags(act.astype(float)) @ J
+            else:
+                r, J = f(X)
             rs.append(r)
             Js.append(J)
         return np.concatenate(rs), sparse.vstack(Js).tocsr()
     sq = np.sqrt(rho)
     w = np.sqrt(prob.req.reg_weight)
     for f in prob.families:
+        if f.kind == "ineq":
+            v, J = _ineq_rows(f, X, prob.margin[f.name])
+            act = v < 0
+            rs.append(sq * np.where(act, v, 0.0))
+            Js.append(sparse.diags(sq * act.astype(float)) @ J)
+            continue
         r, J = f(X)
         if f.kind == "eq":
             rs.append(sq * r)
@@ -65,15 +76,20 @@ def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | N
         elif f.kind == "fit":
             rs.append(r)
             Js.append(J)
-        elif f.kind == "reg":
+        else:
             rs.append(w * r)
             Js.append(w * J)
-        else:
-            v = r - prob.margin[f.name]
-            act = v < 0
-            rs.append(sq * np.where(act, v, 0.0))
-            Js.append(sparse.diags(sq * act.astype(float)) @ J)
     return np.concatenate(rs), sparse.vstack(Js).tocsr()
+
+
+def _ineq_rows(f: C.Family, X: np.ndarray, margin: float):
+    """``(g - margin, J)`` of inequality family ``f``: ``J`` holds the rows below the margin at least (the
+    others are masked off by the caller), so a family that can (``Family.active``) computes only those."""
+    if f.active is None:
+        r, J = f(X)
+        return r - margin, J
+    v = f.residual(X) - margin
+    return v, f.jacobian_where(X, v < 0)
 
 
 class _Point:
@@ -160,8 +176,10 @@ def _lm(
     return pt.x.reshape(X.shape), it
 
 
-def _solve_full(prob: _Problem, log, iters: dict):
-    """Penalty LM stages then projection (module docstring); returns ``(X, mode)``."""
+def _solve_full(prob: _Problem, log, iters: dict, stalled=None):
+    """Penalty LM stages then projection (module docstring); returns ``(X, mode)``. ``stalled(X)``, if given,
+    is asked before the stiff restart with the first schedule's end ``X``: an ``(X, mode)`` it returns is the
+    answer instead (the restart is most of the time, ``routes._second_opinion``)."""
     req = prob.req
 
     def eq_max(Y):
@@ -210,9 +228,9 @@ def _solve_full(prob: _Problem, log, iters: dict):
         if attempt == 0 and eq_max(X) > RESTART_ABOVE:
             # the fit dragged the pattern off the constraint manifold into a wall of inequalities:
             # start again keeping the constraints stiff from the first step
-            log(
-                f"max equality row {eq_max(X):.2e} > {RESTART_ABOVE:g}: restarting with stiff penalties"
-            )
+            log(f"max equality row {eq_max(X):.2e} > {RESTART_ABOVE:g}: the first schedule stopped")
+            if (kept := _instead_of_restart(stalled, X, log)) is not None:
+                return _projected(prob, kept, log, iters)
             continue
         Xp, mode, kp = project(X)
         iters[f"projection{tag}"] = kp
@@ -222,10 +240,33 @@ def _solve_full(prob: _Problem, log, iters: dict):
             best = (worst, Xp, mode)
         if worst <= req.tol:
             break
-        log(
-            f"projection stopped at {worst:.2e} > tol: "
-            + ("restarting with stiff penalties" if not attempt else "giving up")
-        )
+        log(f"projection stopped at {worst:.2e} > tol" + ("" if not attempt else ": giving up"))
+        if not attempt and (kept := _instead_of_restart(stalled, X, log)) is not None:
+            return _projected(prob, kept, log, iters)
     assert best is not None, "the stiff attempt always projects"
     _, X, mode = best
     return X, mode
+
+
+def _projected(prob: _Problem, kept: tuple, log, iters: dict) -> tuple:
+    """``kept`` (``(X, mode)``, a valid rigid-family member, equalities at about 1e-13) after a few Gauss-Newton
+    steps on the equalities alone, where they lower its worst row and leave it valid (the schedules' own
+    projections end near 1e-14)."""
+    Xp, kp = _lm(prob, kept[0], 0.0, PROJECT_KEPT, log, hard=prob.of("eq"), tol_inf=0.0)
+    iters["projection_kept"] = kp
+
+    def worst(Y):
+        res = family_residuals(prob, Y, _mean_edge(prob, Y))
+        return max((res[f.name] for f in prob.of("eq")), default=0.0)
+
+    if worst(Xp) < worst(kept[0]) and _ineq_values(prob, Xp).min(initial=0.0) >= 0.0:
+        return Xp, kept[1]
+    return kept
+
+
+def _instead_of_restart(stalled, X: np.ndarray, log):
+    """``stalled(X)`` of the first schedule's end ``X`` where the caller gave one, else None: the restart."""
+    kept = None if stalled is None else stalled(X)
+    if kept is None:
+        log("restarting with stiff penalties")
+    return kept

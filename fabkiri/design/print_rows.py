@@ -20,48 +20,66 @@ import numpy as np
 
 from . import fabrication as F
 from .constraints import Family, Stencils
+from .dual import roll, stack
 
 
 def where(cond: np.ndarray, a: F.Dual, b: F.Dual) -> F.Dual:
     """Row-wise choice between two :class:`~.fabrication.Dual` values."""
-    return F.Dual(np.where(cond, a.v, b.v), np.where(cond[:, None], a.g, b.g))
+    g = None if a.g is None else np.where(cond[..., None], a.g, b.g)
+    return F.Dual(np.where(cond, a.v, b.v), g)
 
 
 def _cross(a, b) -> F.Dual:
     return a[0] * b[1] - a[1] * b[0]
 
 
-def _clipped_boundary(P: list, Q: list) -> F.Dual:
-    """Twice the signed area the edges of convex CCW polygon ``P`` contribute inside convex CCW ``Q``:
-    each edge clipped to ``Q`` (Cyrus-Beck), then ``cross(start, end)`` of what is left."""
-    like = P[0][0]
-    zero = F.Dual.lift(0.0, like)
-    total = zero
-    for i in range(len(P)):
-        a, b = P[i], P[(i + 1) % len(P)]
-        ab = F._sub(b, a)
-        lo, hi = zero, F.Dual.lift(1.0, like)
-        empty = np.zeros(like.v.shape, dtype=bool)
-        for j in range(len(Q)):
-            c, d = Q[j], Q[(j + 1) % len(Q)]
-            n = (c[1] - d[1], d[0] - c[0])  # inward (left) normal of the CCW edge c -> d
-            f0, f1 = F._dot(n, F._sub(a, c)), F._dot(n, F._sub(b, c))
-            out0, out1 = f0.v < 0, f1.v < 0
-            empty |= out0 & out1
-            den = f0 - f1
-            den = where(np.abs(den.v) > 0, den, F.Dual.lift(1.0, like))
-            lam = f0 / den
-            lo = where(out0 & ~out1 & (lam.v > lo.v), lam, lo)
-            hi = where(out1 & ~out0 & (lam.v < hi.v), lam, hi)
-        p = (a[0] + ab[0] * lo, a[1] + ab[1] * lo)
-        q = (a[0] + ab[0] * hi, a[1] + ab[1] * hi)
-        total = total + where(~empty & (hi.v > lo.v), _cross(p, q), zero)
+def _stacked(points: list) -> tuple[F.Dual, F.Dual]:
+    """A polygon given as a list of ``(x, y)`` Duals as one ``(x, y)`` pair with a column per corner."""
+    return stack([p[0] for p in points]), stack([p[1] for p in points])
+
+
+def _column(P: tuple, j: int) -> tuple[F.Dual, F.Dual]:
+    return P[0].take([j]), P[1].take([j])
+
+
+def _clipped_boundary(P: tuple, Q: tuple) -> F.Dual:
+    """Twice the signed area the edges of convex CCW polygon ``P`` contribute inside convex CCW ``Q`` (both a
+    column per corner): every edge of ``P`` at once clipped to each edge of ``Q`` in turn (Cyrus-Beck), then
+    ``cross(start, end)`` of what is left, summed over the edges in order."""
+    a = P
+    b = (roll(P[0], -1), roll(P[1], -1))
+    ab = F._sub(b, a)
+    zero = F.Dual.lift(0.0, P[0])
+    lo, hi = zero, F.Dual.lift(1.0, P[0])
+    empty = np.zeros(P[0].v.shape, dtype=bool)
+    nq = Q[0].v.shape[1]
+    for j in range(nq):
+        c, d = _column(Q, j), _column(Q, (j + 1) % nq)
+        n = (c[1] - d[1], d[0] - c[0])  # inward (left) normal of the CCW edge c -> d
+        f0, f1 = F._dot(n, F._sub(a, c)), F._dot(n, F._sub(b, c))
+        out0, out1 = f0.v < 0, f1.v < 0
+        empty |= out0 & out1
+        den = f0 - f1
+        den = where(np.abs(den.v) > 0, den, F.Dual.lift(1.0, den))
+        lam = f0 / den
+        lo = where(out0 & ~out1 & (lam.v > lo.v), lam, lo)
+        hi = where(out1 & ~out0 & (lam.v < hi.v), lam, hi)
+    p = (a[0] + ab[0] * lo, a[1] + ab[1] * lo)
+    q = (a[0] + ab[0] * hi, a[1] + ab[1] * hi)
+    terms = where(~empty & (hi.v > lo.v), _cross(p, q), zero)
+    total = F.Dual.lift(0.0, terms.take(0))
+    for i in range(terms.v.shape[1]):
+        total = total + terms.take(i)
     return total
+
+
+def _area(P: tuple, Q: tuple) -> F.Dual:
+    return (_clipped_boundary(P, Q) + _clipped_boundary(Q, P)) * 0.5
 
 
 def clipped_area(P: list, Q: list) -> F.Dual:
     """Area of the intersection of two convex counter-clockwise polygons (lists of ``(x, y)`` Duals)."""
-    return (_clipped_boundary(P, Q) + _clipped_boundary(Q, P)) * 0.5
+    return _area(_stacked(P), _stacked(Q))
 
 
 def _sine(x, polys, rows, k, n, base) -> F.Dual:
@@ -113,21 +131,21 @@ def pad_rows(
         (p[0] + e[0] * t - e[1] * r, p[1] + e[1] * t + e[0] * r)
         for t, r in ((t0, -R), (t1, -R), (t1, R), (t0, R))
     ]
-    return clipped_area(band, _shrunk(x, polys, rows, n, shrink)) / width - need / width
+    return _area(_stacked(band), _shrunk(x, polys, rows, n, shrink)) / width - need / width
 
 
-def _shrunk(x, polys, rows, n, shrink) -> list:
-    """The own tile (the first ``n`` nodes of ``polys``) shrunk by ``shrink``: corner k moves by ``shrink``
-    times its mitre vector (:func:`~.fabrication._mitre`)."""
-    ks = [np.full(len(rows), k) for k in range(n)]
-    c = [F._corners(x, polys, rows, k) for k in ks]
+def _shrunk(x, polys, rows, n, shrink) -> tuple[F.Dual, F.Dual]:
+    """The own tile (the first ``n`` nodes of ``polys``) shrunk by ``shrink``, a column per corner: corner k
+    moves by ``shrink`` times its mitre vector (as :func:`~.fabrication._mitre`, every corner at once)."""
+    c = _stacked([F._corners(x, polys, rows, np.full(len(rows), k)) for k in range(n)])
     if not shrink:
         return c
-    out = []
-    for ck, k in zip(c, ks):
-        m = F._mitre(x, polys, rows, k, n)
-        out.append((ck[0] + m[0] * shrink, ck[1] + m[1] * shrink))
-    return out
+    prev = (roll(c[0], 1), roll(c[1], 1))
+    nxt = (roll(c[0], -1), roll(c[1], -1))
+    na, nb = F._normal(prev, c), F._normal(c, nxt)
+    s = 1.0 + F._dot(na, nb)
+    m = (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
+    return c[0] + m[0] * shrink, c[1] + m[1] * shrink
 
 
 def pad_args(
@@ -162,7 +180,7 @@ def families(st: Stencils, nv: int, limits: F.FabricationLimits, unit_mm: float)
         F._family(
             "fabrication_strip_pads",
             polys,
-            lambda x: pad_rows(x, *args, *box),
+            lambda x, sel: pad_rows(x, *F._pick(args, sel), *box),
             nv,
             {"quad_of_row": np.arange(len(polys))},
         )

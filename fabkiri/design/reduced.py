@@ -241,7 +241,8 @@ class _Merit:
             act = np.flatnonzero(v < 0)
             if len(act):  # rarely
                 rs.append(s * v[act])
-                pend.append((s, lambda f=f: f.fn(X)[1], act))  # the gradients only when asked
+                # the gradients only when asked, and of the active rows only where the family can
+                pend.append((s, lambda f=f, m=v < 0: f.stencil_where(X, m), act))
         g = tc.cross.reshape(-1)
         gmin = min(gmin, float(g.min(initial=np.inf)))
         v = g - t.margin * (0.5 if hard else 1.0)

@@ -134,6 +134,9 @@ class Family:
     nv: int = 0  # nodes in the node array (Jacobian columns / 2)
     # optional x -> r without the gradients (inequalities are checked far more often than they are active)
     res: Callable[[np.ndarray], np.ndarray] | None = None
+    # optional (x, act) -> the per-row stencil ``(nodes, grads)`` with the gradients of rows outside the boolean
+    # mask ``act`` left zero (an inequality's gradient is asked only where it is inside its margin)
+    active: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
     # the CSR structure of the last stencil Jacobian, reused while its node array is the same object
     _pattern: StencilPattern | None = field(default=None, repr=False, compare=False)
@@ -161,6 +164,17 @@ class Family:
     def residual(self, x: np.ndarray) -> np.ndarray:
         """Residuals only (no Jacobian assembly)."""
         return self.fn(x)[0] if self.res is None else self.res(x)
+
+    def stencil_where(self, x: np.ndarray, act: np.ndarray):
+        """The Jacobian of a per-row stencil family as ``(nodes, grads)``, of the rows in the boolean mask ``act``
+        at least (all rows without ``active``; the others' gradients zero with it)."""
+        return self.fn(x)[1] if self.active is None else self.active(x, act)
+
+    def jacobian_where(self, x: np.ndarray, act: np.ndarray) -> sparse.csr_matrix:
+        """The Jacobian (CSR, every row's sparsity) of the rows in ``act`` at least, as :meth:`stencil_where`."""
+        if self.active is None:
+            return self(x)[1]
+        return jac(len(act), self.nv, *self.active(x, act))
 
 
 # ------------------------------------------------------------------ stencils
