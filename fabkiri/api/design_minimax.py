@@ -1,0 +1,109 @@
+"""Minimax finish of a large design (issue #37): its largest miss lowered after the least-squares fit.
+
+The solvers minimise the *sum of squares* of the fit rows; the shape tolerance judges the *largest* miss
+(Hausdorff). A larger lattice fits the sum better but can end with a larger largest miss at one feature, so
+the fit did not improve with the size: the 64x64 heart's tip polygon passed 1.85 mm above the cusp, where the
+48x48 one came within 0.37 mm. From this many tiles the front door's best valid design is refined by Lawson's
+steps (:func:`fabkiri.design.refine.refine_minimax`: each a warm-started design under the same equalities,
+inequalities and, where a closed state overlaps, the contact rows); a step is a candidate only when it passes
+the front door's whole check (converged, both closed states closing, no overlapping tiles in any state), and
+it replaces the design only with a smaller Hausdorff distance, measured on the final pattern as every design
+is. So the finish never makes a design worse; what it costs is recorded as an attempt.
+
+Lawson's steps only move a design within its basin. A design that misses by more than ``REFIT_ABOVE`` of the
+size is first designed again from coarse levels refitted with the outline rows (``coarse_refit``, which
+``solve._design`` runs on its own only past the shape tolerance) and the steps start from the better of both:
+the 32x32 drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the refitted ones.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+from ..design.refine import refine_minimax
+from ..design.solve import DesignRequest, design
+from .design_judge import _hausdorff, _rank, _shape_met
+
+# from this many tiles (the coarse-to-fine sizes; below it the full solver's second opinion and the guesses in
+# turn already weigh several fits, and a 16x16 design would pay several times its own time)
+MINIMAX_TILES = 32 * 32
+MINIMAX_STEPS = 6
+# stop after this many steps in a row without a better design (heart 32x32: 1.61 % -> 0.46 % in step 2 of 5)
+MINIMAX_PATIENCE = 2
+# above this share of the size the steps start from the better of the design and its coarse-refitted redesign
+REFIT_ABOVE = 0.01
+
+
+def applies(req: DesignRequest, contracted: dict, best) -> bool:
+    """A valid deployed-target design from ``MINIMAX_TILES`` tiles, without fabrication rows (the continuation
+    refines those) or a floor on the opening (``refine_to_floor`` does)."""
+    return (
+        best is not None
+        and bool(best[3])
+        and req.target is not None
+        and not contracted
+        and req.fabrication is None
+        and not req.min_opening
+        and req.rows * req.cols >= MINIMAX_TILES
+    )
+
+
+def minimax_finish(
+    req: DesignRequest,
+    best: tuple,
+    judge: Callable,
+    attempts: list[dict],
+    say: Callable[[str], None],
+):
+    """Lawson's steps from ``best`` (a ``_check`` outcome); the refined outcome when a step that passes every
+    check has a smaller Hausdorff distance (and ranks no worse), else None. The attempt is recorded either
+    way."""
+    start, secs = _refit(req, best, judge)
+    checked: dict[int, tuple] = {}
+
+    def valid(result) -> bool:
+        checked[id(result)] = judge(result)
+        return bool(checked[id(result)][3])
+
+    h0 = _hausdorff(best[1])
+    refined, trace, spent = refine_minimax(
+        replace(req, start=None),
+        start[0].nodes,
+        steps=MINIMAX_STEPS,
+        accept=valid,
+        patience=MINIMAX_PATIENCE,
+    )
+    cand = checked.get(id(refined)) if refined is not None else None
+    if start is not best and (cand is None or _rank(start) < _rank(cand)):
+        cand = start  # the refitted design itself, when no step beat it
+    better = cand is not None and _hausdorff(cand[1]) < h0 and _rank(cand) <= _rank(best)
+    attempts.append(
+        {
+            "init": "minimax refinement",
+            "status": cand[1]["status"] if cand else "unconverged",
+            "problems": cand[2] if cand else ["no refinement step passed every check"],
+            "time_s": secs + spent,
+            "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
+            "shape": "met" if cand and _shape_met(cand[1]) else "missed",
+            "refinement_hausdorff_rel": trace,
+            "refit_hausdorff_rel": _hausdorff(start[1]) if start is not best else None,
+            "kept": better,
+        }
+    )
+    if better:
+        assert cand is not None
+        say(
+            f"fabkiri: minimax refinement: Hausdorff {100 * h0:.2f} % -> {100 * _hausdorff(cand[1]):.2f} % "
+            f"of the size ({len(trace)} steps)"
+        )
+    return cand if better else None
+
+
+def _refit(req: DesignRequest, best: tuple, judge: Callable) -> tuple[tuple, float]:
+    """The start of the steps: ``best``, or its redesign from refitted coarse levels where ``best`` misses by
+    more than ``REFIT_ABOVE`` and the redesign ranks better; and the seconds the redesign took."""
+    if req.coarse_refit or _hausdorff(best[1]) <= REFIT_ABOVE:
+        return best, 0.0
+    alt = judge(design(replace(req, init="coarse", start=None, coarse_refit=True)))
+    return (alt if alt[3] and _rank(alt) < _rank(best) else best), float(alt[1]["time_s"])
