@@ -189,7 +189,7 @@ def design_pattern(
     attempts = first + attempts
     judge = _judge(contracted, request, target, shape_tol)
     if minimax_applies(req, contracted, best):  # the largest miss, after the least-squares fit
-        best = minimax_finish(req, best, judge, attempts, say) or best
+        best = minimax_finish(req, best, judge, attempts, say, shape_tol) or best
     if not tried and _continuation_applies(req, best, contracted):
         say(
             "fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "

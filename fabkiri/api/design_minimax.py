@@ -8,7 +8,7 @@ steps (:func:`fabkiri.design.refine.refine_minimax`: each a warm-started design 
 inequalities and, where a closed state overlaps, the contact rows); a step is a candidate only when it passes
 the front door's whole check (converged, both closed states closing, no overlapping tiles in any state), and
 it replaces the design only with a smaller Hausdorff distance, measured on the final pattern as every design
-is. So the finish never makes a design worse; what it costs is recorded as an attempt.
+is, and when ``verify`` fails none of its checks that the design passes. So the finish never makes a design worse; what it costs is recorded as an attempt.
 
 Lawson's steps only move a design within its basin. A design that misses by more than ``REFIT_ABOVE`` of the
 size is first designed again from coarse levels refitted with the outline rows (``coarse_refit``, which
@@ -23,6 +23,8 @@ from dataclasses import replace
 
 from ..design.refine import refine_minimax
 from ..design.solve import DesignRequest, design
+from ..pattern.model import Pattern
+from ..verify import verify_pattern
 from .design_judge import _hausdorff, _rank, _shape_met
 
 # from this many tiles (the coarse-to-fine sizes; below it the full solver's second opinion and the guesses in
@@ -55,6 +57,7 @@ def minimax_finish(
     judge: Callable,
     attempts: list[dict],
     say: Callable[[str], None],
+    shape_tol: tuple = (0.02, "rel"),
 ):
     """Lawson's steps from ``best`` (a ``_check`` outcome); the refined outcome when a step that passes every
     check has a smaller Hausdorff distance (and ranks no worse), else None. The attempt is recorded either
@@ -78,6 +81,7 @@ def minimax_finish(
     if start is not best and (cand is None or _rank(start) < _rank(cand)):
         cand = start  # the refitted design itself, when no step beat it
     better = cand is not None and _hausdorff(cand[1]) < h0 and _rank(cand) <= _rank(best)
+    better = better and _fails(cand, shape_tol) <= _fails(best, shape_tol)
     attempts.append(
         {
             "init": "minimax refinement",
@@ -107,3 +111,18 @@ def _refit(req: DesignRequest, best: tuple, judge: Callable) -> tuple[tuple, flo
         return best, 0.0
     alt = judge(design(replace(req, init="coarse", start=None, coarse_refit=True)))
     return (alt if alt[3] and _rank(alt) < _rank(best) else best), float(alt[1]["time_s"])
+
+
+def _fails(outcome: tuple, shape_tol: tuple) -> set[str]:
+    """The names of the ``verify`` checks the outcome's pattern (with its closed states) fails."""
+    pattern = outcome[0]
+    whole = Pattern(
+        nodes=pattern.nodes,
+        tiles=pattern.tiles,
+        contracted=outcome[4],
+        parity=0,
+        name=pattern.name,
+        lattice=pattern.lattice,
+        design=pattern.design,
+    )
+    return {c.name for c in verify_pattern(whole, shape_tol=shape_tol).failed()}
