@@ -96,6 +96,9 @@ def minimax_finish(
     )
     if better:
         assert cand is not None
+        if cand[1].get("coarse") is None:  # a warm-started step: its start came coarse to fine
+            cand[1]["coarse"] = best[1].get("coarse")
+        cand[1]["minimax"] = {"from_hausdorff_rel": h0, "steps_hausdorff_rel": trace}
         say(
             f"fabkiri: minimax refinement: Hausdorff {100 * h0:.2f} % -> {100 * _hausdorff(cand[1]):.2f} % "
             f"of the size ({len(trace)} steps)"
