@@ -79,8 +79,12 @@ def minimax_finish(
             for c in (refit, more):
                 if c is not None and (cand is None or _rank(c) < _rank(cand)):
                     cand = c
-    better = cand is not None and _hausdorff(cand[1]) < h0 and _rank(cand) <= _rank(best)
-    better = better and _fails(cand, shape_tol) <= _fails(best, shape_tol)
+    better = (
+        cand is not None
+        and _hausdorff(cand[1]) < h0
+        and _rank(cand) <= _rank(best)
+        and _fails(cand, shape_tol) <= _fails(best, shape_tol)
+    )
     attempts.append(
         {
             "init": "minimax refinement",
