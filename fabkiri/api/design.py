@@ -35,6 +35,8 @@ from ..pattern.tessellation import DEFAULT_KIND
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation  # noqa: F401 (re-exported)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
+from .design_minimax import applies as minimax_applies
+from .design_minimax import minimax_finish
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_summary import summary_lines
@@ -185,6 +187,9 @@ def design_pattern(
         )
     best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
     attempts = first + attempts
+    judge = _judge(contracted, request, target, shape_tol)
+    if minimax_applies(req, contracted, best):  # the largest miss, after the least-squares fit
+        best = minimax_finish(req, best, judge, attempts, say, shape_tol) or best
     if not tried and _continuation_applies(req, best, contracted):
         say(
             "fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
@@ -193,7 +198,6 @@ def design_pattern(
         cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
     if cont is not None and _rank(cont) < _rank(best):
         best = cont
-    judge = _judge(contracted, request, target, shape_tol)
     best = refine_to_floor(req, best, judge, attempts, say) or best  # a floor that cost the shape
     return _outcome(best, attempts, messages, target)
 
