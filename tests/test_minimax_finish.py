@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
-from fabkiri.api.design_minimax import MINIMAX_TILES, applies
+from fabkiri.api.design_minimax import FINISH_ABOVE, MINIMAX_TILES, applies
 from fabkiri.design import conformance as conf
 from fabkiri.design.fabrication import FabricationLimits
 from fabkiri.design.solve import DesignRequest
@@ -17,10 +17,14 @@ DROP = str(Path(__file__).resolve().parents[1] / "bench" / "data" / "drop.csv")
 
 def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
     tgt = load_target("heart", 100)
-    valid, invalid = (None, {}, [], True, {}), (None, {}, ["overlaps"], False, {})
+    missed_by = {"conformance": {"deployed": {"hausdorff_rel": 2 * FINISH_ABOVE}}}
+    valid, invalid = (None, missed_by, [], True, {}), (None, missed_by, ["overlaps"], False, {})
+    close = {"conformance": {"deployed": {"hausdorff_rel": FINISH_ABOVE / 2}}}
     big = DesignRequest(rows=32, cols=32, target=tgt)
     assert MINIMAX_TILES == 32 * 32 and applies(big, {}, valid)
     assert not applies(big, {}, invalid) and not applies(big, {}, None)
+    # already close: not worth 2-6 more designs
+    assert not applies(big, {}, (None, close, [], True, {}))
     assert not applies(DesignRequest(rows=16, cols=16, target=tgt), {}, valid)
     fab = DesignRequest(rows=32, cols=32, target=tgt, fabrication=FabricationLimits(min_width_mm=1))
     assert not applies(fab, {}, valid)  # the continuation refines those
