@@ -230,6 +230,24 @@ def test_the_l_and_the_crescent_have_one_deep_pocket_and_a_circle_none():
     assert pockets(load_target_named("circle")) == []
 
 
+def test_a_pocket_is_named_where_the_worst_miss_lies_on_its_side_though_little_of_it_is_covered():
+    import shapely
+    from fabkiri.design.conformance import target_polygon
+    from fabkiri.design.pockets import COVERED, pocket_covered, pockets
+
+    ell = _load("letter-l")
+    (pocket,) = pockets(ell)
+    own = shapely.Polygon(target_polygon(ell))  # covers none of its pocket; its hull all of it
+    outline, hull = (np.asarray(p.exterior.coords) for p in (own, own.convex_hull))
+    assert pocket_covered(ell, outline) is None
+    found = pocket_covered(ell, hull)
+    assert found is not None and found[1] >= COVERED
+    # the worst miss on the pocket's side (x = -5, the L's inner edge, centred), away from its ends
+    found = pocket_covered(ell, outline, (-5.0, -17.275))
+    assert found is not None and found[0] == pocket and found[1] < COVERED
+    assert pocket_covered(ell, outline, (-30.0, -50.0)) is None  # the L's far corner
+
+
 def load_target_named(name: str):
     from fabkiri.design.targets import load_target
 

@@ -30,7 +30,8 @@ def annotate(
             continue
         top = pattern.topology
         tips = boundary_tip_order(top.tiles, top.hole_nodes, top.hole_tiles, top.free_nodes)
-        found = pocket_covered(target, pattern.nodes[tips])
+        worst = ((report.get("conformance") or {}).get("deployed") or {}).get("worst") or {}
+        found = pocket_covered(target, pattern.nodes[tips], worst.get("at"))
         if found is not None:
             j["pocket"] = {**found[0].to_dict(), "covered": found[1]}
             lat = pattern.lattice or {}

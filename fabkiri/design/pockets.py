@@ -19,6 +19,7 @@ from .targets import Target
 # pockets below this share of the hull are ignored (a star's notches are above it)
 MIN_POCKET_AREA = 0.01
 COVERED = 0.5  # an outline covering this share of a pocket ran across it
+ON_POCKET = 1e-6  # of the hull's size: a point this near a pocket lies in it or on its sides
 
 
 @dataclass(frozen=True)
@@ -56,14 +57,21 @@ def pockets(target: Target) -> list[Pocket]:
     return sorted(out, key=lambda p: -p.depth_mm)
 
 
-def pocket_covered(target: Target, outline: np.ndarray) -> tuple[Pocket, float] | None:
+def pocket_covered(
+    target: Target, outline: np.ndarray, worst: tuple[float, float] | None = None
+) -> tuple[Pocket, float] | None:
     """The deepest pocket the closed ``outline`` polygon (the deployed tips, mm) covers at least
-    ``COVERED`` of, with that share: the outline ran across it instead of into it. None: no such pocket."""
+    ``COVERED`` of, or whose sides carry the miss's ``worst`` point (mm), with the share it covers: the
+    outline ran across it, or partly into it and out short of its sides. None: no such pocket."""
     poly = shapely.Polygon(np.asarray(outline, float))
     if not poly.is_valid:
         poly = shapely.make_valid(poly)
+    at = None if worst is None else shapely.Point(worst)
     for k in pockets(target):
         share = float(k.polygon.intersection(poly).area / k.polygon.area)
-        if share >= COVERED:
+        near = at is not None and k.polygon.distance(at) <= ON_POCKET * np.sqrt(
+            k.polygon.convex_hull.area
+        )
+        if share >= COVERED or near:
             return k, share
     return None
