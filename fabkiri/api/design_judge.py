@@ -61,6 +61,22 @@ def _rank(outcome) -> tuple:
     )
 
 
+def refinement_attempt(
+    init: str, cand, secs: float, trace: list, kept: bool, none_why: str
+) -> dict:
+    """The attempt record of a refinement (its best ``_check`` outcome ``cand``, or None with ``none_why``)."""
+    return {
+        "init": init,
+        "status": cand[1]["status"] if cand else "unconverged",
+        "problems": cand[2] if cand else [none_why],
+        "time_s": secs,
+        "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
+        "shape": "met" if cand and _shape_met(cand[1]) else "missed",
+        "refinement_hausdorff_rel": trace,
+        "kept": kept,
+    }
+
+
 def _check(result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple):
     """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
     pattern = result.pattern

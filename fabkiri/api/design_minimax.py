@@ -25,7 +25,7 @@ from ..design.refine import refine_minimax
 from ..design.solve import DesignRequest, design
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
-from .design_judge import _hausdorff, _rank, _shape_met
+from .design_judge import _hausdorff, _rank, refinement_attempt
 
 # from this many tiles (the coarse-to-fine sizes; below it the full solver's second opinion and the guesses in
 # turn already weigh several fits, and a 16x16 design would pay several times its own time)
@@ -91,17 +91,10 @@ def minimax_finish(
         and _fails(cand, shape_tol) <= _fails(best, shape_tol)
     )
     attempts.append(
-        {
-            "init": "minimax refinement",
-            "status": cand[1]["status"] if cand else "unconverged",
-            "problems": cand[2] if cand else ["no refinement step passed every check"],
-            "time_s": secs,
-            "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
-            "shape": "met" if cand and _shape_met(cand[1]) else "missed",
-            "refinement_hausdorff_rel": trace,
-            "refit_hausdorff_rel": _hausdorff(refit[1]) if refit else None,
-            "kept": better,
-        }
+        refinement_attempt(
+            "minimax refinement", cand, secs, trace, better, "no refinement step passed every check"
+        )
+        | {"refit_hausdorff_rel": _hausdorff(refit[1]) if refit else None}
     )
     if better:
         assert cand is not None

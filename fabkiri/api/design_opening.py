@@ -14,7 +14,7 @@ from ..design.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
 from ..errors import InputError
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
-from .design_judge import _hausdorff, _rank, _shape_met
+from .design_judge import _hausdorff, _rank, _shape_met, refinement_attempt
 
 # a floor the solver met (its row >= 0) reads back through the mm figures to about round-off
 FLOOR_SLACK = 1e-9
@@ -82,15 +82,13 @@ def refine_to_floor(
     cand = judge(refined) if refined is not None else None
     better = cand is not None and _rank(cand) < _rank(best)
     attempts.append(
-        {
-            "init": "minimax refinement under --min-opening",
-            "status": cand[1]["status"] if cand else "unconverged",
-            "problems": cand[2] if cand else ["no refinement step converged"],
-            "time_s": secs,
-            "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
-            "shape": "met" if cand and _shape_met(cand[1]) else "missed",
-            "refinement_hausdorff_rel": trace,
-            "kept": better,
-        }
+        refinement_attempt(
+            "minimax refinement under --min-opening",
+            cand,
+            secs,
+            trace,
+            better,
+            "no refinement step converged",
+        )
     )
     return cand if better else None
