@@ -64,6 +64,7 @@ def test_active_rows_jacobian_is_those_rows_of_the_full_one():
         rows = np.array([0, 3, 7, 11])
         full = f(X)[1].toarray()
         assert np.array_equal(f.rows_jacobian(X, rows).toarray(), full[rows])
+        assert np.array_equal(f.rows_jacobian(X, rows, len(f(X)[0])).toarray(), full[rows])
         # the residual-only path gives the rows of the Jacobian path
         assert np.array_equal(f.residual(X), f(X)[0])
 

@@ -190,7 +190,7 @@ class _Merit:
                 if len(act):  # the Jacobian only for active rows
                     s = 1.0 if hard else self.sq
                     rs.append(s * v[act])
-                    Js.append(s * f.rows_jacobian(arr, act) if jacobians else None)
+                    Js.append(s * f.rows_jacobian(arr, act, len(v)) if jacobians else None)
             n = 2 * len(arr)
             r = np.concatenate(rs) if rs else np.zeros(0)
             if not jacobians:

@@ -154,9 +154,17 @@ class Family:
             pat = self._pattern = StencilPattern(m, self.nv, nodes)
         return pat.matrix(grads)
 
-    def rows_jacobian(self, x: np.ndarray, rows: np.ndarray) -> sparse.csr_matrix:
-        """The Jacobian's ``rows`` only (CSR): an inequality family's active rows."""
-        r, J = self.fn(x)
+    def rows_jacobian(
+        self, x: np.ndarray, rows: np.ndarray, m: int | None = None
+    ) -> sparse.csr_matrix:
+        """The Jacobian's ``rows`` only (CSR): an inequality family's active rows. Given the family's row
+        count ``m``, a family with ``active`` computes those rows' gradients alone (:meth:`stencil_where`)."""
+        if self.active is not None and m is not None:
+            act = np.zeros(m, dtype=bool)
+            act[rows] = True
+            J = self.stencil_where(x, act)
+        else:
+            J = self.fn(x)[1]
         if isinstance(J, tuple):
             return jac(len(rows), self.nv, J[0][rows], J[1][rows])
         return J[rows]
