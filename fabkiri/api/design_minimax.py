@@ -23,7 +23,6 @@ from dataclasses import replace
 
 from ..design.refine import refine_minimax
 from ..design.solve import DesignRequest, design
-from ..pattern.model import Pattern
 from ..verify import verify_pattern
 from .design_judge import _hausdorff, _rank, refinement_attempt
 
@@ -132,14 +131,5 @@ def _steps(
 
 def _fails(outcome: tuple, shape_tol: tuple) -> set[str]:
     """The names of the ``verify`` checks the outcome's pattern (with its closed states) fails."""
-    pattern = outcome[0]
-    whole = Pattern(
-        nodes=pattern.nodes,
-        tiles=pattern.tiles,
-        contracted=outcome[4],
-        parity=0,
-        name=pattern.name,
-        lattice=pattern.lattice,
-        design=pattern.design,
-    )
+    whole = outcome[0].with_contracted(outcome[4]).with_parity(0)
     return {c.name for c in verify_pattern(whole, shape_tol=shape_tol).failed()}
