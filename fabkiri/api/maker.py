@@ -228,10 +228,9 @@ StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
 
 
 def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
-    """The design at the plan's tiles, and after a near shape miss other counts (:mod:`.maker_design`);
-    an alternative count is named only once it also passes this run's cut or print and deploy."""
-    fabricate = _cut if plan.process == "cut" else _print
-    return design_step(result, plan, say, (fabricate, _deploy))
+    """The design at the plan's tiles, and after a shape miss other counts and options
+    (:mod:`.maker_design`); an alternative is named only once it also passes its cut or print and deploy."""
+    return design_step(result, plan, say, {"cut": (_cut, _deploy), "print": (_print, _deploy)})
 
 
 def _ask(result: MakeResult, plan: _Plan):
