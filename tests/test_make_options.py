@@ -137,3 +137,28 @@ def test_a_refused_make_names_another_style_that_then_makes_it(tmp_path, run_cli
     made = json.loads((Path(folder) / "make.json").read_text())
     assert made["ok"] and made["fabrication"] == "prusa-mk4 tiles-and-strips"
     assert made["figures"]["hausdorff_rel"] <= made["figures"]["shape_tol_rel"]
+
+
+@pytest.mark.slow  # a 4x4 design, an option's design, cut and deploy, then the named make (~20 CPU s)
+def test_a_cut_refusal_naming_nothing_names_a_redesign_that_then_makes_it(
+    tmp_path, monkeypatch, run_cli
+):
+    from fabkiri.api import maker
+    from fabkiri.api.advice import Refused
+
+    def refuse(result, plan, say):  # the run's own cut refuses, naming nothing that passes
+        raise Refused("tiles too thin for this sheet at any scale (test)", [])
+
+    monkeypatch.setattr(maker, "_cut", refuse)  # the options' cut (maker.CHECKS) is the real one
+    out = tmp_path / "o"
+    args = ("make", "circle", "--size", "60", "--material", "acrylic-3", "--tiles", "4x4")
+    code, stdout, err = run_cli(*args, "--shape-tol", "3%", "-o", out)
+    assert code == 1, err  # a check failed, as cut's own refusal
+    assert "stopped at cut (exit 1)" in err and "the options ran 1 design(s)" in err
+    options = [ln.split("    # ")[0] for ln in stdout.splitlines() if ln.startswith("fabkiri ")]
+    assert len(options) == 1 and "--tiles 4x4" not in options[0]  # never the design refused
+    record = json.loads((out / "make.json").read_text())
+    assert record["alternatives"] == options and record["failed_step"] == "cut"
+    monkeypatch.undo()
+    code, _, err = run_cli(*shlex.split(options[0])[1:])
+    assert code == 0, err  # named because it was run: it makes

@@ -139,30 +139,46 @@ def _fallbacks(
     return _with_details(adopted or run, lines + more)
 
 
+def options_after_refusal(result: MakeResult, plan, say: Progress, checks: Checks) -> list[str]:
+    """The design met the shape but ``plan.process`` refused it, naming nothing that passes: the
+    options of :mod:`.maker_options` but this design, each run before it is named (none adopted)."""
+    step = result.step("design")
+    _, lines = _other_options(result, plan, say, checks, [], step.cpu_s if step else 1.0)
+    return lines
+
+
 def _other_options(
-    result: MakeResult, plan, say: Progress, checks: Checks, tried: list[_Attempt]
+    result: MakeResult,
+    plan,
+    say: Progress,
+    checks: Checks,
+    tried: list[_Attempt],
+    base_cpu: float | None = None,
 ) -> tuple[StepRun | None, list[str]]:
     """The options of :mod:`.maker_options`, likeliest first, run until one passes (named, or adopted:
-    a count of this process with tiles make chose), :data:`~.maker_options.MAX_RUNS` designs ran or
-    they cost :data:`~.maker_options.BUDGET` times the first design; the adopted run and the lines."""
+    a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
+    designs ran or they cost :data:`~.maker_options.BUDGET` times the first design (``base_cpu``
+    without ``tried``); the adopted run and the lines."""
     from . import maker_options as mo
 
-    first = tried[0]
-    every, done = mo.options(plan), mo.tried_of(plan, tried)
+    first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
+    own = result.tiles.tiles
+    every = [o for o in mo.options(plan) if tried or o.group or o.tiles.tiles != own]
+    done = mo.tried_of(plan, tried)
     runs: list[_Attempt] = []
     lines: list[str] = []
     while order := mo.ranked(every, done):
         spent = sum(a.cpu_s for a in runs)
-        if len(runs) >= mo.MAX_RUNS or spent > mo.BUDGET * first.cpu_s:
+        if len(runs) >= mo.MAX_RUNS or spent > mo.BUDGET * first_cpu:
             lines.append(f"{len(order)} more option(s) not tried ({mo.limit_text()})")
             break
         option = order[0]
         every.remove(option)
         other = mo.plan_of(plan, option)
-        adopt = option.group == 0 and not plan.tiles.given
+        adopt = option.group == 0 and not plan.tiles.given and bool(tried)
         say(
             f"make: trying {option.name} at {plan.size:g} mm ({mo.GROUPS[option.group]}), "
-            f"{'to use it' if adopt else 'to name it'} if it makes; about {first.cpu_s:.0f} CPU s more"
+            f"{'to use it' if adopt else 'to name it'} if it makes; about {first_cpu:.0f} CPU s more"
         )
         try:
             attempt = _attempt(MakeResult.of_plan(other), other, say)
@@ -183,7 +199,9 @@ def _other_options(
             break
         done += mo.tried_of(other, [attempt])  # what it missed by rules out options no looser
     if runs or lines:
-        lines.append(f"the options ran {len(runs)} design(s), CPU {sum(a.cpu_s for a in runs):.1f} s")
+        lines.append(
+            f"the options ran {len(runs)} design(s), CPU {sum(a.cpu_s for a in runs):.1f} s"
+        )
     return None, lines
 
 

@@ -103,11 +103,11 @@ def predicted_miss(option: Option, first: Tried) -> float:
 
 def ranked(options: Sequence[Option], tried: Sequence[Tried]) -> list[Option]:
     """The options worth a design, likeliest first (the rules of the module docstring); one per
-    preset and group (its most slack), so a refusal does not try near-identical designs in turn."""
-    first = tried[0]
+    preset and group (its most slack), so a refusal does not try near-identical designs in turn.
+    ``tried``: the misses, the run's own first (none: a design that met, refused by cut or print)."""
     keep = [o for o in options if not dominated(o, tried)]
-    if not first.rows_active:  # the count alone missed: only counts likely to close the miss
-        keep = [o for o in keep if predicted_miss(o, first) <= 1.0]
+    if tried and not tried[0].rows_active:  # the count alone missed: counts likely to close it
+        keep = [o for o in keep if predicted_miss(o, tried[0]) <= 1.0]
     keep.sort(key=lambda o: (o.group, -o.slack, o.n_tiles))
     seen: set[tuple[int, str | None, bool]] = set()
     out = []
