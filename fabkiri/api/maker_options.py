@@ -45,6 +45,8 @@ Progress = Callable[[str], None]
 COUNTS = tuple(sorted({*STANDARD_TILES, 10}))  # N x N counts an option may name with --tiles
 MAX_RUNS = 2  # designs run for options after the retries and the larger size (each 5-75 CPU s)
 BUDGET = 3.0  # no new option's design once they cost this many times the first design's CPU s
+# group, process, material, hinge, printer, style
+Setting = tuple[int, str, str | None, str | None, str | None, str | None]
 GROUPS = ("this process", "this preset", "this process, another preset", "the other process")
 
 
@@ -120,14 +122,14 @@ def ranked(options: Sequence[Option], tried: Sequence[Tried]) -> list[Option]:
     return out
 
 
-def _settings(plan) -> list[tuple[int, str, str | None, str | None, str | None, str | None]]:
+def _settings(plan) -> list[Setting]:
     """Every (group, process, material, hinge, printer, style) make could be asked for, the plan's
     own first: group 0 the plan's, 1 its preset's other styles or hinge kinds, 2 the process's other
     presets, 3 the other process."""
     own_cut = plan.process == "cut"
     cuts = [(m, h) for m in (plan.material, *available()) if m for h in HINGE_KINDS]
     prints = [(p, s) for p in (plan.printer, *available_printers()) if p for s in PRINT_STYLES]
-    out = []
+    out: list[Setting] = []
     for m, h in dict.fromkeys(cuts):
         group = (0 if h == plan.hinge else 1) if m == plan.material else (2 if own_cut else 3)
         out.append((group, "cut", m, h, None, None))
