@@ -47,7 +47,12 @@ MAX_RUNS = 2  # designs run for options after the retries and the larger size (e
 BUDGET = 3.0  # no new option's design once they cost this many times the first design's CPU s
 # group, process, material, hinge, printer, style
 Setting = tuple[int, str, str | None, str | None, str | None, str | None]
-GROUPS = ("this process", "this preset", "this process, another preset", "the other process")
+GROUPS = (
+    "this process, another tile count",
+    "this preset, another style or hinge kind",
+    "this process, another preset",
+    "the other process",
+)
 
 
 @dataclass(frozen=True)
