@@ -162,3 +162,21 @@ def test_a_cut_refusal_naming_nothing_names_a_redesign_that_then_makes_it(
     monkeypatch.undo()
     code, _, err = run_cli(*shlex.split(options[0])[1:])
     assert code == 0, err  # named because it was run: it makes
+
+
+@pytest.mark.slow  # the 4x4 and 6x6 designs, a cut, a deploy and a report (~10 CPU s)
+def test_a_count_of_the_same_process_that_meets_is_used(tmp_path, monkeypatch):
+    import fabkiri
+    from fabkiri.api import maker_design
+
+    # no retry nor larger size: the options alone (card-0.3 ligament, 4x4 misses 2 % at 60 mm)
+    monkeypatch.setattr(maker_design, "MAX_RETRIES", 0)
+    monkeypatch.setattr(maker_design, "SIZE_STEPS", (1.0,))  # the size itself: no more tiles
+    result = fabkiri.make("circle", size=60, material="card-0.3", output=tmp_path / "o")
+    assert result.ok and result.exit_code == 0, result.summary()
+    assert result.tiles.tiles != (4, 4) and not result.tiles.given
+    assert "4x4 missed the shape" in result.tiles.reason and result.alternatives == []
+    assert result.figures["hausdorff_rel"] <= result.figures["shape_tol_rel"]
+    assert len(result.pattern.tiles) == result.tiles.tiles[0] * result.tiles.tiles[1]
+    record = json.loads((tmp_path / "o" / "make.json").read_text())
+    assert record["tiles"] == list(result.tiles.tiles) and record["ok"]

@@ -167,7 +167,8 @@ def options(plan) -> list[Option]:
                 continue
             if smallest_size(target.size, abs(target.area), n, fab) is not None:
                 continue
-            choice = auto if is_auto else TilesChoice(tiles, "as given (--tiles)", w, feature, True)
+            why = f"tiles about {w:.3g} mm wide, {w / feature:.2g}x the {feature:.3g} mm {fab.source} needs"
+            choice = auto if is_auto else TilesChoice(tiles, why, w, feature)
             out.append(
                 Option(
                     process, material, hinge, printer, style, choice, is_auto, group, w / feature
