@@ -15,6 +15,10 @@ When tiles ``make`` chose still miss (far, or after its retries), the smallest l
 :data:`SIZE_STEPS` at which ``make`` would choose more tiles is made on a scratch result (design, cut or
 print, deploy; nothing written) and, when all pass, named as a ``fabkiri make ... --size S`` line: the
 six-point star for prusa-mk4 at 150 mm misses at 6x6 and 7x7, and is made at 190 mm with 8x8 tiles.
+When that does not make it either, the options of :mod:`.maker_options` (other counts, styles or hinge
+kinds, presets, the other process) are run the same way, likeliest first, and the first that makes it
+is named (the heart at 200 mm on prusa-mk4 misses 8.6 % at 8x8 and 17.7 % at 250 mm; pp-0.5 tape
+makes it at 200 mm); also when a cut or print refusal names nothing that passes.
 """
 
 from __future__ import annotations
