@@ -28,7 +28,11 @@ from ..errors import FabkiriError, InputError
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from .design import _check_room
-from .maker_design import _opening_lines, design_step  # noqa: F401 (_opening_lines re-exported)
+from .maker_design import (  # noqa: F401 (_opening_lines re-exported)
+    _opening_lines,
+    design_step,
+    options_after_refusal,
+)
 from .maker_design import cpu_s as _cpu
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
@@ -193,6 +197,8 @@ def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) ->
             raise
         ok, code, figures, files, details = False, exc.exit_code, str(exc), {}, []
         result.alternatives = refusal_alternatives(result, plan, name, exc)
+        if result.refused and not result.alternatives:  # nothing passes at this design: redesign
+            details = options_after_refusal(result, plan, say, CHECKS)
     step = Step(
         name,
         ok,
@@ -228,10 +234,9 @@ StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
 
 
 def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
-    """The design at the plan's tiles, and after a near shape miss other counts (:mod:`.maker_design`);
-    an alternative count is named only once it also passes this run's cut or print and deploy."""
-    fabricate = _cut if plan.process == "cut" else _print
-    return design_step(result, plan, say, (fabricate, _deploy))
+    """The design at the plan's tiles, and after a shape miss other counts and options
+    (:mod:`.maker_design`); an alternative is named only once it also passes its cut or print and deploy."""
+    return design_step(result, plan, say, CHECKS)
 
 
 def _ask(result: MakeResult, plan: _Plan):
@@ -328,3 +333,7 @@ def _report(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
             states=states,
         )
     return True, 0, f"{len(page) / 1e6:.2f} MB", {"report.html": page}, []
+
+
+# the steps an alternative of each process must pass before it is named (maker_design)
+CHECKS = {"cut": (_cut, _deploy), "print": (_print, _deploy)}

@@ -15,6 +15,10 @@ When tiles ``make`` chose still miss (far, or after its retries), the smallest l
 :data:`SIZE_STEPS` at which ``make`` would choose more tiles is made on a scratch result (design, cut or
 print, deploy; nothing written) and, when all pass, named as a ``fabkiri make ... --size S`` line: the
 six-point star for prusa-mk4 at 150 mm misses at 6x6 and 7x7, and is made at 190 mm with 8x8 tiles.
+When that does not make it either, the options of :mod:`.maker_options` (other counts, styles or hinge
+kinds, presets, the other process) are run the same way, likeliest first, and the first that makes it
+is named (the heart at 200 mm on prusa-mk4 misses 8.6 % at 8x8 and 17.7 % at 250 mm; pp-0.5 tape
+makes it at 200 mm); also when a cut or print refusal names nothing that passes.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from __future__ import annotations
 import math
 import resource
 import shlex
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -37,6 +41,7 @@ from .maker_tiles import TilesChoice, choose_tiles, retry_tiles
 Progress = Callable[[str], None]
 StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
 StepFn = Callable[[MakeResult, Any, Progress], StepRun]
+Checks = Mapping[str, Sequence[StepFn]]  # by process: the steps an alternative must pass
 # a miss up to this many times the tolerance is retried with other tile counts (star6 at 150 mm on
 # prusa-mk4: 3.85 % at 6x6 against 3 %); beyond it the outline's own limit is at work (letter L: 8-19 %)
 RETRY_WITHIN = 2.0
@@ -58,6 +63,7 @@ class _Attempt:
     pattern: Any
     figures: dict[str, Any]
     cpu_s: float
+    size: float = 0.0  # the size designed at (mm)
 
     @property
     def miss(self) -> float | None:
@@ -77,9 +83,9 @@ class _Attempt:
         return f"{r}x{c} {verdict} ({shape}, CPU {self.cpu_s:.1f} s)"
 
 
-def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn]) -> StepRun:
-    """Design at ``plan.tiles``; after a near shape miss, the retries of this module. ``checks`` are
-    the steps (cut or print, deploy) that an alternative must pass before it is named."""
+def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> StepRun:
+    """Design at ``plan.tiles``; after a shape miss, the retries and options of this module. ``checks``
+    are, by process, the steps (cut or print, deploy) an alternative must pass before it is named."""
     first = _attempt(result, plan, say)
     miss = first.miss
     if first.run[0] or miss is None or miss <= 1:
@@ -89,7 +95,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
             f"no other tile count tried: the miss is {miss:.1f}x the tolerance, more than the "
             f"{RETRY_WITHIN:g}x a neighbouring count is likely to close"
         )
-        return _with_details(first.run, [note, *_larger_size(result, plan, say, checks)])
+        return _fallbacks(result, plan, say, checks, [first], _with_details(first.run, [note]))
     target, fab = _target_and_limits(plan, plan.size)
     tried = [first]
     for choice in retry_tiles(target, fab, plan.tiles)[:MAX_RETRIES]:
@@ -113,17 +119,101 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn
             continue
         if not plan.tiles.given:
             return _adopt(result, attempt, tried)
-        named = _checked_alternative(plan, attempt, checks, result.output)
+        named = _checked_alternative(plan, attempt, checks[plan.process], result.output)
         if named is not None:
             result.alternatives = [named]
             break
     run = _keep_best(result, tried)
-    if result.alternatives or plan.tiles.given:
+    if result.alternatives:
         return run
-    return _with_details(run, _larger_size(result, plan, say, checks))
+    return _fallbacks(result, plan, say, checks, tried, run)
 
 
-def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepFn]) -> list[str]:
+def _fallbacks(
+    result: MakeResult, plan, say: Progress, checks: Checks, tried: list[_Attempt], run: StepRun
+) -> StepRun:
+    """Tiles, counts and retries missed: the larger size (tiles make chose), then the other options of
+    :mod:`.maker_options`, each run before it is named (a count of this process, with tiles make
+    chose, is adopted instead); ``run`` (the missed design's) with the lines saying what was tried."""
+    larger: list[_Attempt] = []
+    lines = _larger_size(result, plan, say, checks, larger)
+    if result.alternatives:
+        return _with_details(run, lines)
+    adopted, more = _other_options(result, plan, say, checks, tried + larger)
+    return _with_details(adopted or run, lines + more)
+
+
+def options_after_refusal(result: MakeResult, plan, say: Progress, checks: Checks) -> list[str]:
+    """The design met the shape but ``plan.process`` refused it, naming nothing that passes: the
+    options of :mod:`.maker_options` but this design, each run before it is named (none adopted)."""
+    step = result.step("design")
+    _, lines = _other_options(result, plan, say, checks, [], step.cpu_s if step else 1.0)
+    return lines
+
+
+def _other_options(
+    result: MakeResult,
+    plan,
+    say: Progress,
+    checks: Checks,
+    tried: list[_Attempt],
+    base_cpu: float | None = None,
+) -> tuple[StepRun | None, list[str]]:
+    """The options of :mod:`.maker_options`, likeliest first, run until one passes (named, or adopted:
+    a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
+    designs ran or they cost :data:`~.maker_options.BUDGET` times the first design (``base_cpu``
+    without ``tried``); the adopted run and the lines."""
+    from . import maker_options as mo
+
+    first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
+    own = result.tiles.tiles
+    every = [o for o in mo.options(plan) if tried or o.group or o.tiles.tiles != own]
+    done = mo.tried_of(plan, tried)
+    start = cpu_s()
+    runs: list[_Attempt] = []
+    lines: list[str] = []
+    while order := mo.ranked(every, done):
+        spent = sum(a.cpu_s for a in runs)
+        if len(runs) >= mo.MAX_RUNS or spent > mo.BUDGET * first_cpu:
+            lines.append(f"{len(order)} more option(s) not tried ({mo.limit_text()})")
+            break
+        option = order[0]
+        every.remove(option)
+        other = mo.plan_of(plan, option)
+        adopt = option.group == 0 and not plan.tiles.given and bool(tried)
+        say(
+            f"make: trying {option.name} at {plan.size:g} mm ({mo.GROUPS[option.group]}), "
+            f"{'to use it' if adopt else 'to name it'} if it makes; about {first_cpu:.0f} CPU s more"
+        )
+        try:
+            attempt = _attempt(MakeResult.of_plan(other), other, say)
+        except FabkiriError as exc:  # refused up front (room, tiles): not counted
+            lines.append(f"{option.name}: refused by the design ({exc})")
+            continue
+        runs.append(attempt)
+        if attempt.run[0] and adopt:
+            result.pattern, result.figures = attempt.pattern, attempt.figures
+            return _adopt(result, attempt, [*tried, attempt]), lines
+        named = attempt.run[0] and _checked_alternative(
+            other, attempt, checks[other.process], result.output, option.auto, mo.tag(plan, option)
+        )
+        verdict = f"{other.process} and deploy pass" if named else "does not make"
+        lines.append(f"{option.name}: {attempt.line()}, {verdict}")
+        if named:
+            result.alternatives = [named]
+            break
+        done += mo.tried_of(other, [attempt])  # what it missed by rules out options no looser
+    if runs or lines:
+        lines.append(
+            f"the options ran {len(runs)} design(s), CPU {sum(a.cpu_s for a in runs):.1f} s "
+            f"({cpu_s() - start:.1f} s with the checks of what was named)"
+        )
+    return None, lines
+
+
+def _larger_size(
+    result: MakeResult, plan, say: Progress, checks: Checks, ran: list[_Attempt] | None = None
+) -> list[str]:
     """Tiles make chose missed the shape: the smallest of :data:`SIZE_STEPS` times the size (rounded up
     to 10 mm) where make chooses more tiles is made on a scratch result, and named as a ``fabkiri make
     ... --size S`` line when its design meets the shape and every step of ``checks`` passes."""
@@ -142,8 +232,10 @@ def _larger_size(result: MakeResult, plan, say: Progress, checks: Sequence[StepF
     say(f"make: trying {size:g} mm, where make chooses {_rc(choice)} tiles, to name it if it makes")
     scratch = MakeResult.of_plan(bigger)
     attempt = _attempt(scratch, bigger, say)
+    if ran is not None:
+        ran.append(attempt)
     named = attempt.run[0] and _checked_alternative(
-        bigger, attempt, checks, result.output, sized=True
+        bigger, attempt, checks[plan.process], result.output, sized=True
     )
     if named:
         result.alternatives = [named]
@@ -170,7 +262,9 @@ def cpu_s() -> float:
 def _attempt(result: MakeResult, plan, say: Progress) -> _Attempt:
     start = cpu_s()
     run = _design(result, plan, say)
-    return _Attempt(plan.tiles, run, result.pattern, dict(result.figures), cpu_s() - start)
+    return _Attempt(
+        plan.tiles, run, result.pattern, dict(result.figures), cpu_s() - start, plan.size
+    )
 
 
 def _rc(tiles: TilesChoice) -> str:
@@ -220,7 +314,12 @@ def _keep_best(result: MakeResult, tried: list[_Attempt]) -> StepRun:
 
 
 def _checked_alternative(
-    plan, attempt: _Attempt, checks: Sequence[StepFn], output: Path | None, sized: bool = False
+    plan,
+    attempt: _Attempt,
+    checks: Sequence[StepFn],
+    output: Path | None,
+    sized: bool = False,
+    tag: str = "",
 ):
     """The ``fabkiri make ... --tiles RxC`` line of ``attempt`` (``sized``: ``--size S``, the tiles
     make's choice there) when its design passes every step of ``checks`` (run on a scratch result,
@@ -235,7 +334,7 @@ def _checked_alternative(
         except FabkiriError:
             return None
     r, c = attempt.tiles.tiles
-    command = make_command(plan, None if sized else attempt.tiles.tiles, output)
+    command = make_command(plan, None if sized else attempt.tiles.tiles, output, tag)
     at = f"at {plan.size:g} mm " if sized else ""
     detail = (
         f"{r}x{c} tiles {at}meet the shape ({attempt.line()}) and {plan.process} and deploy pass"
@@ -244,15 +343,16 @@ def _checked_alternative(
     return Alternative("make", command, detail, CHECKED.format(process=plan.process), changes)
 
 
-def make_command(plan, tiles: tuple[int, int] | None, output: Path | None) -> str:
+def make_command(plan, tiles: tuple[int, int] | None, output: Path | None, tag: str = "") -> str:
     """The ``fabkiri make`` line of ``plan`` at ``tiles`` (None: make's choice at the plan's size),
-    writing beside ``output`` (the run's)."""
+    writing beside ``output`` (the run's; ``tag``, the process when it differs, names the folder)."""
     how = (
         ["--material", plan.material, "--hinge", plan.hinge]
         if plan.material
         else ["--printer", plan.printer, "--style", plan.style]
     )
     tail = f"{plan.size:g}mm" if tiles is None else "x".join(map(str, tiles))
+    tail = f"{tag}-{tail}" if tag else tail
     out = f"{output}-{tail}" if output is not None else f"{plan.stem}-{tail}"
     words = ["fabkiri", "make", plan.target, "--size", f"{plan.size:g}", *how]
     if tiles is not None:
@@ -299,6 +399,8 @@ def _design_figures(report: dict) -> dict[str, Any]:
         out["hausdorff_rel"] = float(c["hausdorff_rel"])
         out["hausdorff_mm"] = float(c["hausdorff_mm"])
         out["shape_tol_rel"] = float(report["shape"]["deployed"]["tol_rel"])
+    fr = report.get("fabrication") or {}
+    out["rows_active"] = sum((fr.get("active") or {}).values()) if fr else 0
     if isinstance(report.get("opening"), dict):  # the seam: shown as reported
         out["opening"] = report["opening"]
     return out
