@@ -73,8 +73,26 @@ class Canvas:
         return buf.getvalue()
 
 
-class Axes:
-    """Data coordinates (mm, y up) mapped into a box of the canvas at one scale, centred."""
+class Frame:
+    """Data (mm, y up) to pixels (y down): ``lo``..``hi`` at one scale, centred in a box of the picture.
+
+    The box is given by its lower-left corner ``(x0, y1)`` in pixels and its size ``(bw, bh)``.
+    """
+
+    def __init__(self, x0: float, y1: float, bw: float, bh: float, lo, hi):
+        self.lo = np.asarray(lo, dtype=float)
+        self.span = span = np.maximum(np.asarray(hi, dtype=float) - self.lo, 1e-9)
+        self.scale = min(bw / span[0], bh / span[1])
+        self.pad = 0.5 * (np.array([bw, bh]) - span * self.scale)
+        self.origin = np.array([x0 + self.pad[0], y1 - self.pad[1]])
+
+    def px(self, pts) -> np.ndarray:
+        q = (np.asarray(pts, dtype=float) - self.lo) * self.scale
+        return self.origin + q * np.array([1.0, -1.0])
+
+
+class Axes(Frame):
+    """A frame in a box of the canvas given as fractions of the picture, with matplotlib-like drawing."""
 
     def __init__(self, cv: Canvas, box: tuple[float, float, float, float], xlim, ylim):
         self.cv = cv
@@ -82,17 +100,10 @@ class Axes:
         left, bottom, w, h = box
         x0, y1 = left * W, (1 - bottom) * H  # the box's lower-left corner in pixels (y down)
         bw, bh = w * W, h * H
-        span = np.array([xlim[1] - xlim[0], ylim[1] - ylim[0]], dtype=float)
-        self.scale = min(bw / span[0], bh / span[1])
-        pad = 0.5 * (np.array([bw, bh]) - span * self.scale)
-        self.origin = np.array([x0 + pad[0], y1 - pad[1]])
-        self.lo = np.array([xlim[0], ylim[0]], dtype=float)
+        super().__init__(x0, y1, bw, bh, (xlim[0], ylim[0]), (xlim[1], ylim[1]))
         # the drawn area's top edge and horizontal centre (pixels)
-        self.top, self.xmid = y1 - bh + pad[1], self.origin[0] + 0.5 * span[0] * self.scale
-
-    def px(self, pts) -> np.ndarray:
-        q = (np.asarray(pts, dtype=float) - self.lo) * self.scale
-        return self.origin + q * np.array([1.0, -1.0])
+        self.top = y1 - bh + self.pad[1]
+        self.xmid = self.origin[0] + 0.5 * self.span[0] * self.scale
 
     def lines(self, segs, colour: Colour, points: float) -> None:
         """Open polylines (each ``(n, 2)``)."""

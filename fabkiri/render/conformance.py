@@ -20,6 +20,7 @@ import numpy as np
 
 from ..design.conformance import target_polygon
 from ..design.targets import target_from_dict
+from ..fabricate.pngcanvas import Frame
 from ..pattern.model import Pattern
 
 if TYPE_CHECKING:  # Pillow is imported where a picture is drawn
@@ -71,8 +72,8 @@ def _panels(pattern: Pattern, conformance: dict) -> list[tuple[str, str, np.ndar
     return out
 
 
-class _Canvas:
-    """One panel's mm -> pixel map (y up in mm, down in pixels) on the supersampled image."""
+class _Canvas(Frame):
+    """One panel's frame on the supersampled image, with its pen and font."""
 
     def __init__(
         self,
@@ -82,21 +83,9 @@ class _Canvas:
         lo: np.ndarray,
         hi: np.ndarray,
     ):
-        self.draw, self.font = draw, font
+        self.draw, self.font, self.box = draw, font, box
         x0, y0, x1, y1 = box
-        span = np.maximum(hi - lo, 1e-9)
-        self.scale = min((x1 - x0) / span[0], (y1 - y0) / span[1])
-        self.origin = np.array(
-            [
-                x0 + 0.5 * ((x1 - x0) - span[0] * self.scale),
-                y1 - 0.5 * ((y1 - y0) - span[1] * self.scale),
-            ]
-        )
-        self.lo, self.box = lo, box
-
-    def px(self, p: np.ndarray) -> np.ndarray:
-        q = (np.asarray(p, float) - self.lo) * self.scale
-        return self.origin + q * np.array([1.0, -1.0])
+        super().__init__(x0, y1, x1 - x0, y1 - y0, lo, hi)
 
     def line(self, pts: np.ndarray, colour: str, width: float) -> None:
         w = max(1, round(width * SUPERSAMPLE))
