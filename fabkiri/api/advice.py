@@ -156,7 +156,8 @@ def cut_alternatives(
     line that keeps the size."""
     from ..fabricate.cut import CutOptions, closed_states
     from ..fabricate.hingekinds import hinge_kind
-    from .cut import DEFAULT_MATERIAL, design_intent
+    from .cut import DEFAULT_MATERIAL
+    from .intent import design_intent
 
     if options is None:
         options = CutOptions(
@@ -239,8 +240,7 @@ def print_alternatives(
     of the printer and style asked for, every preset printer and style whose plan checks and bed pass at
     ``scale`` (None: that print at some scale), the design line that keeps the size. ``memo``: the plan
     checks' answers for ``pattern`` known already (the refused print's, :func:`.print.minimum`)."""
-    from ..fabricate.printjob import print_style
-    from .cut import design_intent
+    from .intent import design_intent
     from .print import DEFAULT_STYLE, PrintOptions, printer_for
 
     o = options or PrintOptions()
@@ -273,16 +273,7 @@ def print_alternatives(
     )  # the one asked first
     for name in names:
         own = name == asked.name
-        fits = []
-        for s in styles:
-            if own and s == style:
-                continue
-            pr = printer_for(given, s, o) if own else load_printer(name).with_overrides()
-            if print_style(s).plan is None:
-                continue
-            ok = _prints(pattern, s, pr, state, scale, memo)
-            if ok is not None:
-                fits.append((s, ok))
+        fits = _fits(pattern, o, given, name, own, styles, state, scale, memo)
         if fits:
             s, from_ = fits[0]
             also = [f for f, _ in fits[1:]]
@@ -313,6 +304,24 @@ def print_alternatives(
     if line is not None:
         out += [*make_line(pattern, line, ask), line]  # the design line last, as before
     return out
+
+
+def _fits(pattern: Pattern, o, given, name: str, own: bool, styles, state: int, scale, memo: dict):
+    """``(style, scale)`` of every style in ``styles`` that printer ``name`` prints at ``scale`` (None: at
+    some scale); the printer asked for (``own``) with the command's overrides, past its style asked for
+    (``styles[0]``)."""
+    from ..fabricate.printjob import print_style
+    from .print import printer_for
+
+    fits = []
+    for s in styles[1:] if own else styles:
+        pr = printer_for(given, s, o) if own else load_printer(name).with_overrides()
+        if print_style(s).plan is None:
+            continue
+        ok = _prints(pattern, s, pr, state, scale, memo)
+        if ok is not None:
+            fits.append((s, ok))
+    return fits
 
 
 def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float, memo: dict):

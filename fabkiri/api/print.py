@@ -28,7 +28,7 @@ from ..pattern.fingerprint import fingerprint
 from ..pattern.model import Pattern
 from ..verify.printmanifest import PrintManifest
 from .advice import Ask, Refused, print_alternatives
-from .cut import design_intent
+from .intent import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
 
@@ -146,13 +146,7 @@ def print_pattern(
         ask,
         memo,
     )
-    if (
-        job.plan.shared_faces and print_style(style).strip_hinges
-    ):  # three strips at a point (kagome): two faces cannot keep them all apart (pins stack instead)
-        say(
-            f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
-            "than two faces separate); their strips keep the clearance as printed"
-        )
+    _shared_faces_note(job, style, say)
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
     has_tiles = print_style(realised.job.style).tiles is not None
@@ -178,6 +172,16 @@ def print_pattern(
         verifier=verifier,
         messages=messages,
     )
+
+
+def _shared_faces_note(job, style: str, say: Callable[[str], None]) -> None:
+    if (
+        job.plan.shared_faces and print_style(style).strip_hinges
+    ):  # three strips at a point (kagome): two faces cannot keep them all apart (pins stack instead)
+        say(
+            f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
+            "than two faces separate); their strips keep the clearance as printed"
+        )
 
 
 def _stamp(files: dict, made_from: dict, seam_entry, seam_files: dict) -> None:
