@@ -176,7 +176,9 @@ def run_once(code_dir: Path, pkg: Path, row: Row, timeout: float) -> dict:
         argv = [*row.argv, *(["-o", str(Path(tmp) / row.out)] if row.out else [])]
         t0 = time.perf_counter()
         proc = subprocess.Popen(
-            [sys.executable, "-m", "fabkiri.cli.main", *argv],
+            # -P: ``-m`` would put the checkout (cwd, for relative inputs) ahead of PYTHONPATH, and its
+            # uncompiled sources would shadow the compiled copy
+            [sys.executable, "-P", "-m", "fabkiri.cli.main", *argv],
             cwd=code_dir,
             env=env_for(pkg),
             stdout=subprocess.DEVNULL,

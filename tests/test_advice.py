@@ -187,6 +187,35 @@ def test_print_refusal_from_the_api_carries_the_options():
     assert all(ln.startswith("fabkiri ") for ln in lines[1:])
 
 
+def test_a_refused_print_asks_the_bed_first_and_bisects_once(monkeypatch):
+    """The refusal's advice asks the bed before the plan checks (a pinned 32x32 plan past the bed took
+    5 s of geometry), and the smallest scale of the printer and style asked for is bisected once, for
+    the refusal and its advice alike (issue 36: the 32x32 refusal did both twice)."""
+    p = read_pattern(DATA / "heart-8x8.json")
+    planned, minima = [], []
+    refusal, minimum = fb.print_refusal, fb.print_minimum
+
+    def spy_refusal(pattern, style, printer, state, scale, memo=None):
+        planned.append((style, printer, state, scale))
+        return refusal(pattern, style, printer, state, scale, memo)
+
+    def spy_minimum(*args, **kw):
+        minima.append(args[1:])
+        return minimum(*args, **kw)
+
+    monkeypatch.setattr(fb, "print_refusal", spy_refusal)
+    monkeypatch.setattr(fb, "print_minimum", spy_minimum)
+    with pytest.raises(Refused) as exc:
+        print_pattern(p, PrintOptions())
+    assert "the bed of prusa-mk4 takes at most" in exc.value.reason
+    assert any(a.changes.get("style") == "strips" for a in exc.value.alternatives)
+    assert len(minima) == 1, minima
+    assert planned  # the plan checks still decide every print the bed takes
+    for style, printer, state, scale in planned:
+        top = fb._bed_scale(fb.scaled(p, scale), style, state, printer)
+        assert top is None or top >= 1.0, (style, printer.name, scale)
+
+
 # ---------------------------------------------------------------- the shipped templates (issue 32 must-show)
 @pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(p.name for p in PATTERNS.glob("*.json")))

@@ -248,3 +248,17 @@ def test_convex_hull_is_scipys_class_before_and_after_scipy_spatial():
         "(h.vertices == scipy.spatial.ConvexHull(pts).vertices).all())"
     )
     assert _printed(code) == ["False", "True", "True"]
+
+
+def test_a_print_loads_neither_the_cutter_nor_its_svg_writer(tmp_path):
+    # issue #36: `print` read the design's intent and a tube's seam through `api.cut` and
+    # `fabricate.tube_cut`, which loaded the cutter, its read-back and svgwrite (~0.1 CPU s) for a planar
+    # pattern; a print that is refused (the 8x8 heart past prusa-mk4's bed) is decided without them
+    from pathlib import Path
+
+    src = str(Path(__file__).parent / "data" / "heart-8x8.json")
+    mods = _modules_after(["print", src, "-o", str(tmp_path / "p")])
+    assert "fabkiri.api.print" in mods and "fabkiri.api.advice" in mods  # refused, with its advice
+    assert not (tmp_path / "p").exists()
+    assert not {"fabkiri.api.cut", "fabkiri.fabricate.cut", "fabkiri.fabricate.readback"} & mods
+    assert not any(m.split(".")[0] in ("svgwrite", "ezdxf", "trimesh", "matplotlib") for m in mods)

@@ -156,7 +156,8 @@ def cut_alternatives(
     line that keeps the size."""
     from ..fabricate.cut import CutOptions, closed_states
     from ..fabricate.hingekinds import hinge_kind
-    from .cut import DEFAULT_MATERIAL, design_intent
+    from .cut import DEFAULT_MATERIAL
+    from .intent import design_intent
 
     if options is None:
         options = CutOptions(
@@ -228,13 +229,18 @@ def _layout_ok(kind, layout: str) -> bool:
 
 # ------------------------------------------------------------------ print
 def print_alternatives(
-    pattern: Pattern, options: PrintOptions | None, scale: float | None, *, ask: Ask = Ask()
+    pattern: Pattern,
+    options: PrintOptions | None,
+    scale: float | None,
+    *,
+    ask: Ask = Ask(),
+    memo: dict | None = None,
 ) -> list[Alternative]:
     """The checked options for ``print`` at ``scale``: the smallest (or, past the bed, the largest) scale
     of the printer and style asked for, every preset printer and style whose plan checks and bed pass at
-    ``scale`` (None: that print at some scale), the design line that keeps the size."""
-    from ..fabricate.printjob import print_style
-    from .cut import design_intent
+    ``scale`` (None: that print at some scale), the design line that keeps the size. ``memo``: the plan
+    checks' answers for ``pattern`` known already (the refused print's, :func:`.print.minimum`)."""
+    from .intent import design_intent
     from .print import DEFAULT_STYLE, PrintOptions, printer_for
 
     o = options or PrintOptions()
@@ -247,7 +253,8 @@ def print_alternatives(
     def cmd(printer: str, s: str, at: float | None, own: bool) -> str:
         return _run_line(ask, ("print", "--printer", printer, "--style", s), at, own)
 
-    found = _print_scale(pattern, style, asked, state, scale) if scale is not None else None
+    memo = {} if memo is None else memo
+    found = _print_scale(pattern, style, asked, state, scale, memo) if scale is not None else None
     if found is not None:
         at, text = found
         out.append(
@@ -260,23 +267,13 @@ def print_alternatives(
             )
         )
     styles = (style, *(s for s in fb.PRINT_STYLES if s != style))
-    memo: dict = {}
     names = (
         asked.name,
         *(n for n in available_printers() if n != asked.name),
     )  # the one asked first
     for name in names:
         own = name == asked.name
-        fits = []
-        for s in styles:
-            if own and s == style:
-                continue
-            pr = printer_for(given, s, o) if own else load_printer(name).with_overrides()
-            if print_style(s).plan is None:
-                continue
-            ok = _prints(pattern, s, pr, state, scale, memo)
-            if ok is not None:
-                fits.append((s, ok))
+        fits = _fits(pattern, o, given, name, own, styles, state, scale, memo)
         if fits:
             s, from_ = fits[0]
             also = [f for f, _ in fits[1:]]
@@ -295,7 +292,7 @@ def print_alternatives(
         # nothing prints at this size: the printers and styles that print at some size
         out += [
             replace(a, what="scale")
-            for a in print_alternatives(pattern, o, None, ask=ask)
+            for a in print_alternatives(pattern, o, None, ask=ask, memo=memo)
             if a.what == "printer"
         ]
     line = design_line(
@@ -309,10 +306,30 @@ def print_alternatives(
     return out
 
 
-def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float):
+def _fits(pattern: Pattern, o, given, name: str, own: bool, styles, state: int, scale, memo: dict):
+    """``(style, scale)`` of every style in ``styles`` that printer ``name`` prints at ``scale`` (None: at
+    some scale); the printer asked for (``own``) with the command's overrides, past its style asked for
+    (``styles[0]``)."""
+    from ..fabricate.printjob import print_style
+    from .print import printer_for
+
+    fits = []
+    for s in styles[1:] if own else styles:
+        pr = printer_for(given, s, o) if own else load_printer(name).with_overrides()
+        if print_style(s).plan is None:
+            continue
+        ok = _prints(pattern, s, pr, state, scale, memo)
+        if ok is not None:
+            fits.append((s, ok))
+    return fits
+
+
+def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float, memo: dict):
     """``(scale, text)``: the smallest scale the plan checks accept, or past the bed the largest the bed
     takes, for the printer and style asked for; None when no scale prints it or ``scale`` already does."""
-    need = fb.print_minimum(pattern, style, printer, state)
+    from .print import minimum
+
+    need = minimum(pattern, style, printer, state, memo)
     if not need.possible or need.min_scale is None:
         return None
     top = need.max_scale
@@ -328,16 +345,28 @@ def _prints(
 ) -> float | None:
     """``scale`` (or, None, the smallest that prints) when ``printer`` prints ``style`` there, else None."""
     if scale is not None:
-        return scale if not fb.print_refusal(pattern, style, printer, state, scale, memo) else None
+        return None if _refused(pattern, style, printer, state, scale, memo) else scale
     # at any size: the closed form, checked at the scale it names (one plan evaluation, not a bisection)
     key = fb.plan_family(printer, style)
     if key not in memo:
         bound = fb.print_bound(pattern, style, printer, state)
         memo[key] = bound.min_scale
     at = memo[key]
-    if at is None or fb.print_refusal(pattern, style, printer, state, at, memo):
+    if at is None or _refused(pattern, style, printer, state, at, memo):
         return None
     return at
+
+
+def _refused(pattern: Pattern, style: str, printer, state: int, scale: float, memo: dict) -> bool:
+    """Whether :func:`~fabkiri.fabricate.fabricability.print_refusal` refuses, the bed asked first: its
+    box of the closed corners needs no plan geometry (a pinned 32x32 plan past the bed: 5 s each)."""
+    try:
+        top = fb._bed_scale(fb.scaled(pattern, scale), style, state, printer)
+    except CheckFailed:  # it does not close: the plan checks say so
+        top = None
+    if top is not None and top < 1.0:
+        return True
+    return bool(fb.print_refusal(pattern, style, printer, state, scale, memo))
 
 
 # ------------------------------------------------------------------ design

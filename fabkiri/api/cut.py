@@ -22,14 +22,9 @@ from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
 from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
 from .advice import Ask, Refused, cut_alternatives, cut_refusal
+from .intent import design_intent
 
 DEFAULT_MATERIAL = "acrylic-3"
-
-
-def design_intent(pattern: Pattern, key: str):
-    """What the design was made for (``design.options.fabrication``): the defaults of ``cut``/``print``."""
-    fabrication = ((pattern.design or {}).get("options") or {}).get("fabrication") or {}
-    return fabrication.get(key)
 
 
 def cut_material(

@@ -28,7 +28,7 @@ from ..pattern.fingerprint import fingerprint
 from ..pattern.model import Pattern
 from ..verify.printmanifest import PrintManifest
 from .advice import Ask, Refused, print_alternatives
-from .cut import design_intent
+from .intent import design_intent
 
 DEFAULT_STYLE = "tiles-and-strips"
 
@@ -123,8 +123,9 @@ def print_pattern(
     made_from = fingerprint(pattern)  # before scaling: the manifest names the input pattern
     pattern, seam_files, seam_entry = tube_cut_inputs(pattern, state, "print")  # a tube: flat sheet
     base = pattern  # at scale 1: the refusal advice scales it itself
+    memo: dict = {}  # base's plan checks, shared with the refusal advice
     pattern, scale = _refusal_advice(
-        lambda: _scaled(base, style, printer, options), base, options, ask
+        lambda: _scaled(base, style, printer, options, memo), base, options, ask, memo
     )
     # the gate verifies the pattern at its own size, the printer's tolerance divided by the scale (as
     # `cut`): its stored target is in that size's mm, so the outline's shape is measured where it fits
@@ -139,18 +140,13 @@ def print_pattern(
     ).warnings:  # as `cut`, printer tolerance
         say(f"warning: {w}")
     job, plan = _refusal_advice(
-        lambda: _build_job(pattern, style, state, printer, scale),
+        lambda: _build_job(pattern, style, state, printer, scale, memo if pattern is base else {}),
         base,
         replace(options, scale=scale),
         ask,
+        memo,
     )
-    if (
-        job.plan.shared_faces and print_style(style).strip_hinges
-    ):  # three strips at a point (kagome): two faces cannot keep them all apart (pins stack instead)
-        say(
-            f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
-            "than two faces separate); their strips keep the clearance as printed"
-        )
+    _shared_faces_note(job, style, say)
     realised = mesh.realise_job(job)  # a pinned tile may be rebuilt with turned pivot polygons
     report = mesh.check_meshes(realised)
     has_tiles = print_style(realised.job.style).tiles is not None
@@ -178,6 +174,16 @@ def print_pattern(
     )
 
 
+def _shared_faces_note(job, style: str, say: Callable[[str], None]) -> None:
+    if (
+        job.plan.shared_faces and print_style(style).strip_hinges
+    ):  # three strips at a point (kagome): two faces cannot keep them all apart (pins stack instead)
+        say(
+            f"note: {job.plan.shared_faces} pair(s) of coincident hinges share a face (more meet at a point "
+            "than two faces separate); their strips keep the clearance as printed"
+        )
+
+
 def _stamp(files: dict, made_from: dict, seam_entry, seam_files: dict) -> None:
     """Put the input pattern's fingerprint and, for a tube, its seam (the pairs of corners to join
     across it, as `cut` lists them) into the print's manifest."""
@@ -190,10 +196,12 @@ def _stamp(files: dict, made_from: dict, seam_entry, seam_files: dict) -> None:
     files["manifest.json"] = stamped.to_json()
 
 
-def _refusal_advice(step: Callable[[], Any], pattern: Pattern, o: PrintOptions, ask: Ask | None):
+def _refusal_advice(
+    step: Callable[[], Any], pattern: Pattern, o: PrintOptions, ask: Ask | None, memo: dict
+):
     """``step()``; a fabricability refusal (a FabricationError, or ``--scale auto`` finding no scale) is
     raised again as :class:`Refused` with the checked options, exit 1 whatever the flags. ``pattern``
-    is the pattern at scale 1, ``o.scale`` the scale asked for."""
+    is the pattern at scale 1, ``o.scale`` the scale asked for, ``memo`` its plan checks' answers."""
     try:
         return step()
     except (FabricationError, CheckFailed) as exc:
@@ -202,7 +210,18 @@ def _refusal_advice(step: Callable[[], Any], pattern: Pattern, o: PrintOptions, 
         ):
             raise
         scale = None if o.scale == "auto" else float(o.scale)
-        raise Refused(str(exc), print_alternatives(pattern, o, scale, ask=ask or Ask())) from None
+        alternatives = print_alternatives(pattern, o, scale, ask=ask or Ask(), memo=memo)
+        raise Refused(str(exc), alternatives) from None
+
+
+def minimum(pattern: Pattern, style: str, printer, state: int, memo: dict):
+    """:func:`~fabkiri.fabricate.fabricability.print_minimum`, kept in ``memo`` (one pattern's answers):
+    a refused print and its advice both ask for the printer and style asked for (a bisection on the plan
+    checks, seconds at 32x32)."""
+    key = ("minimum", style, printer, int(state))
+    if key not in memo:
+        memo[key] = fb.print_minimum(pattern, style, printer, int(state))
+    return memo[key]
 
 
 def printer_for(name: str | None, style: str, o: PrintOptions):
@@ -221,12 +240,14 @@ def printer_for(name: str | None, style: str, o: PrintOptions):
     )
 
 
-def _scaled(pattern: Pattern, style: str, printer, o: PrintOptions) -> tuple[Pattern, float]:
+def _scaled(
+    pattern: Pattern, style: str, printer, o: PrintOptions, memo: dict
+) -> tuple[Pattern, float]:
     """The pattern at the print's scale, and the scale (``"auto"``: the smallest the plan checks accept)."""
     given = o.scale
     if given == "auto":
         assert o.state is not None, "print_pattern resolves the state first"
-        need = fb.print_minimum(pattern, style, printer, o.state)
+        need = minimum(pattern, style, printer, o.state, memo)
         if not need.possible or need.min_scale is None:
             raise CheckFailed(
                 f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}"
@@ -248,8 +269,9 @@ def _scaled(pattern: Pattern, style: str, printer, o: PrintOptions) -> tuple[Pat
     return pattern, scale
 
 
-def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float):
-    """The print job and its plan; a refusal says at which scale it would print, if any."""
+def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float, memo: dict):
+    """The print job and its plan; a refusal says at which scale it would print, if any (``memo``:
+    ``pattern``'s plan checks' answers)."""
     try:
         job = mesh.build_job(pattern, style, int(state), printer, advise_scale=scale)
         plan = mesh.print_plan(job)  # refuses a print the printer cannot make
@@ -258,7 +280,7 @@ def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float):
             print_style(style).advise is not None
         ):  # build_job named the scales that print on this bed
             raise
-        need = fb.print_minimum(pattern, style, printer, int(state))
+        need = minimum(pattern, style, printer, state, memo)
         if need.min_scale is None or need.min_scale <= 1.0:
             raise
         k = scale

@@ -14,6 +14,8 @@ verified by the usual pipeline; its tiles are the tube's tiles, so the read-back
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import shapely
 
@@ -25,8 +27,12 @@ from ..pattern.model import Pattern
 from ..pattern.periodic import Seam, flat_sheet, seam_map, seam_of, tube_tiles
 from ..verify.pattern_checks import tolerances
 from ..verify.seam import seam_checks
-from .cut import PIERCE_S, CutOptions, CutResult
 from .text import text_strokes
+
+if (
+    TYPE_CHECKING
+):  # the cutter is loaded where a tube is cut (print reads a planar pattern without it)
+    from .cut import CutOptions, CutResult
 
 CORNER = ("BL", "BR", "TR", "TL")
 
@@ -167,6 +173,7 @@ def mark_seam(
 ) -> None:
     """Engrave both ends of every seam hinge (``S1`` .. ``Sn``, a tick at the corner) on the cut sheets and
     rewrite the sheets' DXF, SVG and PNG bytes and the manifest's engrave figures."""
+    from .cut import PIERCE_S
     from .dxf import dxf_bytes
     from .preview import png_bytes
     from .svg import svg_bytes
