@@ -75,3 +75,33 @@ def test_a_designs_pad_areas_are_geoss(monkeypatch):
     theirs = planrules._pad_areas(*args)
     assert (theirs > 0).any()
     assert np.allclose(mine, theirs, rtol=1e-12, atol=1e-12)
+
+
+def _same_face_pairs_by_loop(hinge_tiles, face, n_tiles):
+    """The pairs as the summary listed them before (a loop per tile over its hinges)."""
+    H = len(hinge_tiles)
+    t, h, side = hinge_tiles.ravel(), np.repeat(np.arange(H), 2), np.tile([0, 1], H)
+    order = np.lexsort((h, t))
+    t, h, side = t[order], h[order], side[order]
+    out = []
+    for a, b in zip(
+        np.searchsorted(t, np.arange(n_tiles)), np.searchsorted(t, np.arange(n_tiles), "right")
+    ):
+        for i in range(a, b):
+            for j in range(i + 1, b):
+                if face[h[i]] == face[h[j]]:
+                    out.append((t[i], h[i], side[i], h[j], side[j]))
+    return tuple(np.asarray(out, dtype=np.int64).reshape(-1, 5).T)
+
+
+@pytest.mark.parametrize("name", ["heart-16x16-rigid.json", "kagome-heart-6x11.json"])
+def test_same_face_pairs_are_listed_as_the_loop_listed_them(name):
+    from fabkiri.pattern import fabricability as fab
+
+    top = read_pattern(DATA / name).topology
+    rng = np.random.default_rng(2)
+    for face in (np.zeros(top.n_hinges, np.int64), rng.integers(0, 2, top.n_hinges)):
+        got = fab.same_face_pairs(top.hinge_tiles, face, top.n_tiles)
+        want = _same_face_pairs_by_loop(top.hinge_tiles, face, top.n_tiles)
+        assert len(got) == 5 and all(np.array_equal(a, b) for a, b in zip(got, want))
+        assert len(got[0]) > 0
