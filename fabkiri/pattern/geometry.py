@@ -122,7 +122,7 @@ def strictly_convex(polys: np.ndarray) -> np.ndarray:
     a simple polygon with a non-zero area."""
     a = np.roll(polys, -1, 1) - polys
     turn = cross2(a, np.roll(a, -1, 1))
-    return (turn > 0).all(1) | (turn < 0).all(1)
+    return np.asarray((turn > 0).all(1) | (turn < 0).all(1))
 
 
 def clipped_areas(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
