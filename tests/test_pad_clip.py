@@ -48,6 +48,11 @@ def test_clipped_areas_of_shared_and_touching_edges(shift, scale, want):
     assert geometry.clipped_areas(other[None], SQUARE[None])[0] == pytest.approx(want, abs=1e-15)
 
 
+def test_no_pads_no_areas():
+    none = np.zeros((0, 4, 2))
+    assert geometry.clipped_areas(none, none).shape == (0,)
+
+
 def test_the_summary_clips_a_designs_pads_without_geos(monkeypatch):
     p = read_pattern(DATA / "circle-16x16-rigid.json")
     want = fabricability.summary(p)

@@ -133,6 +133,8 @@ def clipped_areas(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
     corner is an edge of length 0: it adds nothing to the clipping or to the area)."""
     orient = np.sign(signed_areas(clip))[:, None]
     P = np.asarray(subject, float)
+    if not len(P):
+        return np.zeros(0)
     live = np.ones(len(P), dtype=bool)
     k = clip.shape[1]
     for j in range(k):
