@@ -254,15 +254,15 @@ def same_face_pairs(hinge_tiles: np.ndarray, face: np.ndarray, n_tiles: int):
     side = np.tile([0, 1], H)
     order = np.lexsort((h, t))
     t, h, side = t[order], h[order], side[order]
-    start = np.searchsorted(t, np.arange(n_tiles))
-    end = np.searchsorted(t, np.arange(n_tiles), side="right")
-    out = []
-    for a, b in zip(start, end):
-        for i in range(a, b):
-            for j in range(i + 1, b):
-                if face[h[i]] == face[h[j]]:
-                    out.append((t[i], h[i], side[i], h[j], side[j]))
-    arr = np.asarray(out, dtype=np.int64).reshape(-1, 5)
+    # every two entries of one tile (i < j in the sorted order), by tile, then i, then j
+    most = int(np.bincount(t, minlength=1).max(initial=0)) if len(t) else 0
+    i = np.concatenate([np.arange(len(t) - d) for d in range(1, most)] or [np.zeros(0, np.int64)])
+    j = np.concatenate([np.arange(d, len(t)) for d in range(1, most)] or [np.zeros(0, np.int64)])
+    keep = (t[i] == t[j]) & (face[h[i]] == face[h[j]])
+    i, j = i[keep], j[keep]
+    order = np.lexsort((j, i))
+    i, j = i[order], j[order]
+    arr = np.stack([t[i], h[i], side[i], h[j], side[j]], 1).astype(np.int64).reshape(-1, 5)
     return tuple(arr.T)
 
 

@@ -115,3 +115,47 @@ def self_intersecting_tiles(corners: np.ndarray) -> np.ndarray:
         return np.zeros(0, dtype=int)
     polys = shapely.polygons(corners)
     return np.flatnonzero(~shapely.is_valid(polys))
+
+
+def strictly_convex(polys: np.ndarray) -> np.ndarray:
+    """Whether each polygon ``(n, k, 2)`` is strictly convex (every corner turns the same way, none flat):
+    a simple polygon with a non-zero area."""
+    a = np.roll(polys, -1, 1) - polys
+    turn = cross2(a, np.roll(a, -1, 1))
+    return np.asarray((turn > 0).all(1) | (turn < 0).all(1))
+
+
+def clipped_areas(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
+    """Area of ``subject[i] ∩ clip[i]`` (``(n, k, 2)`` each; ``clip`` strictly convex, ``subject`` simple):
+    Sutherland-Hodgman, the subject clipped by each edge of the clip polygon in turn, for every pair at once.
+
+    Each polygon is kept as a fixed number of corners, repeated at the end where it has fewer (a repeated
+    corner is an edge of length 0: it adds nothing to the clipping or to the area)."""
+    orient = np.sign(signed_areas(clip))[:, None]
+    P = np.asarray(subject, float)
+    if not len(P):
+        return np.zeros(0)
+    live = np.ones(len(P), dtype=bool)
+    k = clip.shape[1]
+    for j in range(k):
+        c, d = clip[:, j], clip[:, (j + 1) % k]
+        f = orient * cross2(
+            (d - c)[:, None], P - c[:, None]
+        )  # >= 0: on the inner side of edge c -> d
+        Q = np.roll(P, -1, 1)
+        fq = np.roll(f, -1, 1)
+        inside, crosses = f >= 0, (f >= 0) != (fq >= 0)
+        den = np.where(crosses, f - fq, 1.0)
+        cut = P + (Q - P) * (f / den)[..., None]
+        pts = np.stack([P, cut], 2).reshape(
+            len(P), -1, 2
+        )  # each corner, then where its edge crosses
+        keep = np.stack([inside, crosses], 2).reshape(len(P), -1)
+        count = keep.sum(1)
+        live &= count > 0
+        order = np.argsort(~keep, axis=1, kind="stable")[:, : max(int(count.max(initial=0)), 1)]
+        last = np.maximum(count - 1, 0)[:, None]
+        order = np.take_along_axis(order, np.minimum(np.arange(order.shape[1]), last), 1)
+        P = np.take_along_axis(pts, order[..., None], 1)
+    area = 0.5 * np.abs(cross2(P, np.roll(P, -1, 1)).sum(1))
+    return np.where(live, area, 0.0)

@@ -121,16 +121,59 @@ def _closed_area(corners: np.ndarray) -> float:
     c = np.asarray(corners, float)
     pts = c.reshape(-1, 2)
     grid = 1e-7 * float((pts.max(0) - pts.min(0)).max())
+    area = _coverage_area(c, grid)
+    if area is not None:
+        return area
     polys = shapely.make_valid(shapely.polygons(c))
     for size in (grid, 0.0):
         try:
             u = shapely.union_all(polys, grid_size=size or None)
         except shapely.errors.GEOSException:
             continue
-        area = float(sum(shapely.Polygon(g.exterior).area for g in _pieces(u)))
+        area = _outline_area(u)
         if area > 0:
             return area
     return float(np.abs(geometry.signed_areas(c)).sum())
+
+
+def _coverage_area(c: np.ndarray, grid: float) -> float | None:
+    """The outline's area by a coverage union of the quads ``c`` snapped to ``grid`` as GEOS snaps them, or
+    None: tiles other than quads, or snapped tiles that are not a coverage (they overlap, or a shared
+    edge's ends fell in different grid cells).
+
+    A quad pattern's closed state meets edge to edge, end to end (its edge pairs), so once the shared
+    corners round to the same grid point the tiles form a coverage and GEOS joins them along their shared
+    edges: 0.15 s at 128x128 tiles against 1.5 s for the general union, the same outline (its area within
+    a few ulps). Kagome triangles also touch where the general union's snap-rounding nodes a corner onto
+    an edge (1e-8 of the area apart on a 5x19 ellipse): they keep the general union."""
+    if c.ndim != 3 or c.shape[1] != 4 or not grid > 0 or not np.isfinite(c).all():
+        return None
+    polys = shapely.polygons(_snapped(c, grid))
+    try:
+        if not (shapely.is_valid(polys).all() and shapely.coverage_is_valid(polys)):
+            return None
+        area = _outline_area(shapely.coverage_union_all(polys))
+    except shapely.errors.GEOSException:
+        return None
+    return area if area > 0 else None
+
+
+def _snapped(c: np.ndarray, grid: float) -> np.ndarray:
+    """``c`` on GEOS's fixed precision model of ``grid`` (its scale snapped to an integer within 1e-5, each
+    ordinate rounded half up), as ``union_all(grid_size=grid)`` snaps its input."""
+    scale = 1.0 / grid
+    if abs(scale - round(scale)) < 1e-5:
+        scale = float(round(scale))
+    if scale < 1.0:  # a grid over 1 mm: GEOS divides by the (snapped) grid size instead
+        size = 1.0 / scale
+        size = float(round(size)) if abs(size - round(size)) < 1e-5 else size
+        return np.floor(c / size + 0.5) * size
+    return np.floor(c * scale + 0.5) / scale
+
+
+def _outline_area(u) -> float:
+    """The area inside the exterior rings of a union's polygons."""
+    return float(sum(shapely.Polygon(g.exterior).area for g in _pieces(u)))
 
 
 def _pieces(u) -> list:
