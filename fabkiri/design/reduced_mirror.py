@@ -32,6 +32,7 @@ from scipy import sparse
 
 from ..errors import SolveError
 from ..kdtree import KDTree
+from .reduced_mirror_dense import halved
 from .reduced_mirror_normal import HalfBlocks, half_normal
 from .rigid import RigidFamily
 
@@ -184,8 +185,9 @@ class MirroredMerit:
         halves: HalfBlocks | None = None,
     ):
         self.P, self.axis = P, axis
-        self.inner = merit if axis is None or merit.contact is axis else merit.with_contact(axis)
         self.halves = HalfBlocks(P, merit.nf) if halves is None else halves
+        merit = halved(merit, P, self.halves)  # the dense path over q's columns
+        self.inner = merit if axis is None or merit.contact is axis else merit.with_contact(axis)
 
     def __getattr__(self, name: str):  # fits, scaling, sq, ineq_violation ...
         return getattr(self.inner, name)
@@ -226,4 +228,5 @@ class _MirroredEvaluation:
         return half_normal(self.ev, self.P, self.halves)
 
     def jacobian(self) -> np.ndarray:
-        return np.asarray((self.P.T @ self.ev.jacobian().T).T)
+        J = self.ev.jacobian()
+        return J if self.ev.merit._half is not None else np.asarray((self.P.T @ J.T).T)

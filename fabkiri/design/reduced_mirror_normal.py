@@ -73,9 +73,9 @@ def half_normal(ev: Any, P: sparse.csr_matrix, halves: HalfBlocks):
     from .reduced import DENSE_JD, _normal  # reduced.py builds on reduced_mirror.py
 
     ev._form()
-    if (
-        ev._J is not None
-    ):  # the dense path (small lattices): JᵀJ over p costs well under a millisecond
+    if ev.merit._half is not None:  # the dense path formed over q (``reduced_mirror_dense``)
+        return ev.normal()
+    if ev._J is not None:  # a dense path over p
         H, g = ev.normal()
         return np.asarray(P.T @ np.asarray(P.T @ H).T), np.asarray(P.T @ g)
     r, Jx, Jc, Jk = ev._rows()
