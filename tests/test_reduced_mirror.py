@@ -329,3 +329,40 @@ def test_mirrored_dense_rows_are_the_full_rows_through_p(axis, hard, monkeypatch
     J = ev.jacobian()
     assert J.shape == want_J.shape == (len(want_r), P.shape[1])
     assert np.abs(J - want_J).max() <= 1e-12 * np.abs(want_J).max()
+
+
+@pytest.mark.parametrize("rows,cols,axis", [(8, 8, "y"), (12, 12, "x"), (6, 7, "x")])
+def test_regulariser_features_of_half_the_tiles(rows, cols, axis):
+    """The symmetric dense path evaluates the regulariser's corner features on one tile of each mirror pair
+    (``HalfTileRows``): at a generic symmetric member its rows' Jacobian, normal matrix and gradient are the
+    whole pattern's through P to 1e-12, from about half the tiles."""
+    from fabkiri.design.objective import tile_corners
+
+    target = T.load_target("heart" if axis == "y" else "ellipse", 100.0)
+    prob = _Problem(DesignRequest(rows, cols, target, rigid=True, symmetry=axis))
+    fam = prob.rigid_family
+    mirror = Mirror.build(fam, rows, cols, axis)
+    base = _Merit(
+        fam,
+        prob.families,
+        prob.margin,
+        1e-3,
+        grid_families=grid_families(fam, prob.st, prob.families),
+    )
+    half, full = MirroredMerit(base, mirror.P).inner._tiles, base._tiles
+    assert len(half.R) <= len(full.quads) // 2 + cols
+    rng = np.random.default_rng(rows)
+    S, _ = fam.fit(prob.X0, 0.7)
+    q = symmetric_member(mirror.P, np.r_[S[:, 0], S[:, 1], 0.7]) + 0.3 * rng.normal(
+        size=mirror.P.shape[1]
+    )
+    p = mirror.P @ q
+    tc = tile_corners(fam.grid(_seeds(fam, p)[0]), full.quads)
+    Pd = mirror.P[: 2 * fam.n_seeds, :-1].toarray()  # the seed rows of P on q's seed columns
+    r = rng.normal(size=full.diff.shape[0])
+    H0, g0 = full.regularizer_normal(tc, r, 0.7)
+    H, g = half.regularizer_normal(tc, r, 0.7)
+    want_J = full.regularizer_jacobian(tc) @ Pd
+    assert np.abs(half.regularizer_jacobian(tc) - want_J).max() <= 1e-12 * np.abs(want_J).max()
+    assert np.abs(H - Pd.T @ H0 @ Pd).max() <= 1e-12 * np.abs(H).max()
+    assert np.abs(g - Pd.T @ g0).max() <= 1e-12 * np.abs(g).max()
