@@ -17,7 +17,9 @@ mean of the nodes is ``cos ψ · mean(Zn) S``, on the axis for mirrored seeds, a
 mirror image exactly.
 
 The reduced solver runs unchanged on ``p = P q``: ``MirroredMerit`` wraps its merit, chaining every
-Jacobian through ``P`` (``J P``; the normal matrix ``Pᵀ H P``, the gradient ``Pᵀ g``). The caller still
+Jacobian through ``P`` (``J P``; the normal matrix ``Pᵀ H P``, the gradient ``Pᵀ g``), each formed over q's
+columns rather than p's: ``reduced_mirror_dense.py`` on the dense path (small lattices, the regulariser's
+corner features of half the tiles), ``reduced_mirror_normal.py`` on the block path. The caller still
 checks the full pattern's families, the symmetry rows among them.
 """
 
