@@ -149,7 +149,7 @@ def table(args, out: Path) -> None:
                 code, h, wall, cpu = run_process(
                     argv + ["-o", str(out / f"{label}.json")], args.timeout
                 )
-                cpu_s = "" if cpu is None else f", {cpu:.0f} s CPU"
+                cpu_s = "" if cpu is None else f", {cpu:.1f} s CPU"
                 cells.append(f"exit {code}, {100 * h:.2f} %, {wall:.0f} s{cpu_s}")
             print(
                 f"| {name} | {n}×{n} | "

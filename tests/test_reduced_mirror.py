@@ -18,6 +18,7 @@ from fabkiri.design.reduced_mirror import (
     seed_partners,
     symmetric_member,
 )
+from fabkiri.design.reduced_tiles import TileShapeRows
 from fabkiri.design.rigid import RigidFamily
 from fabkiri.design.solve import DesignRequest, design
 from fabkiri.pattern import read_pattern, standard_pattern
@@ -228,7 +229,9 @@ def test_mirrored_normal_is_formed_over_half_the_seeds(axis, dense, monkeypatch)
     """On the block path (large lattices, forced here at 12x12) the symmetric solver's normal matrix and
     gradient are formed over q's columns (``reduced_mirror_normal``), never as JᵀJ over p's (main formed that
     and then Pᵀ H P: a symmetric step cost an unsymmetric one); the same matrix as Pᵀ (JᵀJ) P to round-off,
-    the closed states' contact rows included. The dense path (small lattices) keeps Pᵀ (JᵀJ) P."""
+    the closed states' contact rows included. The dense path (small lattices) likewise: its node Jacobians,
+    convexity rows and regulariser features are formed over q (``reduced_mirror_dense``), never over p's
+    columns (main formed them there, and then Pᵀ (JᵀJ) P)."""
     req = DesignRequest(
         12, 12, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
     )
@@ -249,11 +252,15 @@ def test_mirrored_normal_is_formed_over_half_the_seeds(axis, dense, monkeypatch)
         ClosedContact(fam, prob.st)
     )
     q = q + 0.01 * np.random.default_rng(2).normal(size=q.shape)
-    H_full, g_full = merit.evaluate(q).ev.normal()
     P = mirror.P
+    # the unsymmetric merit's at p = P q, with the same axis and contact rows
+    H_full, g_full = base.with_contact(merit.inner.contact).evaluate(P @ q).normal()
     want_H, want_g = P.T @ (P.T @ H_full).T, P.T @ g_full
     if not dense:
         monkeypatch.setattr(_Merit, "normal", lambda *a: pytest.fail("JᵀJ formed over p"))
+    else:
+        for cls, name in ((TileShapeRows, "features"), (RigidFamily, "jacobian_at")):
+            monkeypatch.setattr(cls, name, lambda *a, n=name: pytest.fail(f"{n} over p"))
     ev = merit.evaluate(q)
     assert len(merit.inner.contact_rows(ev.Xc, False)[0]) > 0
     H, g = ev.normal()
@@ -285,3 +292,77 @@ def test_mirrored_starts_stop_once_the_best_asks_for_no_second_opinion(met_after
     routes._mirrored_starts(prob, (prob.X0, "least-squares"), lambda msg: None, {})
     every = ["again_", "standard_", "conformal_"]  # rescaled is the request's own guess
     assert ran == (every if met_after is None else every[:met_after])
+
+
+@pytest.mark.parametrize("axis,hard", [("y", False), ("x", True)])
+def test_mirrored_dense_rows_are_the_full_rows_through_p(axis, hard, monkeypatch):
+    """On the dense path the symmetric merit's rows (merit or hard fit, axis and contact rows active) are the
+    unsymmetric merit's at p = P q, and its Jacobian, formed over q's columns (``reduced_mirror_dense``), is
+    theirs times P to 1e-12 without ever forming a node Jacobian or regulariser feature over p (main did, then
+    multiplied by P)."""
+    req = DesignRequest(
+        12, 12, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
+    )
+    req.symmetry = axis
+    prob = _Problem(req)
+    fam = prob.rigid_family
+    mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)
+    base = _Merit(
+        fam,
+        prob.families,
+        prob.margin,
+        1e-3,
+        grid_families=grid_families(fam, prob.st, prob.families),
+    )
+    merit = MirroredMerit(base, mirror.P, mirror.axis_rows).with_contact(
+        ClosedContact(fam, prob.st)
+    )
+    q = q + 0.01 * np.random.default_rng(3).normal(size=q.shape)
+    P = mirror.P
+    full = base.with_contact(merit.inner.contact).evaluate(P @ q, hard)
+    want_r, want_J = full.r, np.asarray((P.T @ full.jacobian().T).T)
+    for cls, name in ((TileShapeRows, "features"), (RigidFamily, "jacobian_at")):
+        monkeypatch.setattr(cls, name, lambda *a, n=name: pytest.fail(f"{n} over p"))
+    ev = merit.evaluate(q, hard)
+    assert len(merit.inner.contact_rows(ev.Xc, hard)[0]) > 0
+    assert np.array_equal(ev.r, want_r)
+    J = ev.jacobian()
+    assert J.shape == want_J.shape == (len(want_r), P.shape[1])
+    assert np.abs(J - want_J).max() <= 1e-12 * np.abs(want_J).max()
+
+
+@pytest.mark.parametrize("rows,cols,axis", [(8, 8, "y"), (12, 12, "x"), (6, 7, "x")])
+def test_regulariser_features_of_half_the_tiles(rows, cols, axis):
+    """The symmetric dense path evaluates the regulariser's corner features on one tile of each mirror pair
+    (``HalfTileRows``): at a generic symmetric member its rows' Jacobian, normal matrix and gradient are the
+    whole pattern's through P to 1e-12, from about half the tiles."""
+    from fabkiri.design.objective import tile_corners
+
+    target = T.load_target("heart" if axis == "y" else "ellipse", 100.0)
+    prob = _Problem(DesignRequest(rows, cols, target, rigid=True, symmetry=axis))
+    fam = prob.rigid_family
+    mirror = Mirror.build(fam, rows, cols, axis)
+    base = _Merit(
+        fam,
+        prob.families,
+        prob.margin,
+        1e-3,
+        grid_families=grid_families(fam, prob.st, prob.families),
+    )
+    half, full = MirroredMerit(base, mirror.P).inner._tiles, base._tiles
+    assert len(half.R) <= len(full.quads) // 2 + cols
+    rng = np.random.default_rng(rows)
+    S, _ = fam.fit(prob.X0, 0.7)
+    q = symmetric_member(mirror.P, np.r_[S[:, 0], S[:, 1], 0.7]) + 0.3 * rng.normal(
+        size=mirror.P.shape[1]
+    )
+    p = mirror.P @ q
+    tc = tile_corners(fam.grid(_seeds(fam, p)[0]), full.quads)
+    Pd = mirror.P[: 2 * fam.n_seeds, :-1].toarray()  # the seed rows of P on q's seed columns
+    r = rng.normal(size=full.diff.shape[0])
+    H0, g0 = full.regularizer_normal(tc, r, 0.7)
+    H, g = half.regularizer_normal(tc, r, 0.7)
+    want_J = full.regularizer_jacobian(tc) @ Pd
+    assert np.abs(half.regularizer_jacobian(tc) - want_J).max() <= 1e-12 * np.abs(want_J).max()
+    assert np.abs(H - Pd.T @ H0 @ Pd).max() <= 1e-12 * np.abs(H).max()
+    assert np.abs(g - Pd.T @ g0).max() <= 1e-12 * np.abs(g).max()

@@ -97,6 +97,8 @@ class _Merit:
         G, nf = fam.Z.shape
         # the dense path needs the grid families to be exactly the regulariser and tile convexity
         self._tiles = None
+        # a symmetric solve's dense path: Jacobians over q's columns (``reduced_mirror_dense.halved``)
+        self._half: Any = None
         names = [f.name for f in self.grid_regs] + [f.name for f in self.grid_ineqs]
         if names == list(TILE_SHAPE):
             reg, conv = self.grid_regs[0], self.grid_ineqs[0]
@@ -269,8 +271,8 @@ class _Merit:
             Js = [sc * self._node_jacobian(stencil(), S, psi, rows) for sc, stencil, rows in pend]
             if len(flat):
                 Js.append(s * t.convexity_jacobian(tc, flat))
-            Js.append(Jk)
-            J = np.zeros((sum(len(b) for b in Js), len(p)))
+            Js.append(Jk if self._half is None else self._half.through(Jk))
+            J = np.zeros((sum(len(b) for b in Js), len(p) if self._half is None else self._half.nq))
             o = 0
             for Jb in Js:
                 J[o : o + len(Jb), : Jb.shape[1]] = Jb  # grid blocks have no ψ column
@@ -288,7 +290,8 @@ class _Merit:
         if rows is not None:
             nodes, grads = nodes[rows], grads[rows]
         m, k = nodes.shape
-        D = self.fam.jacobian_at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
+        at = (self.fam if self._half is None else self._half).jacobian_at
+        D = at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
         return np.einsum("mkd,mkdp->mp", grads, D)
 
     def _touched(self, Jx, p: np.ndarray) -> tuple[sparse.csr_matrix, np.ndarray]:

@@ -17,7 +17,9 @@ mean of the nodes is ``cos ψ · mean(Zn) S``, on the axis for mirrored seeds, a
 mirror image exactly.
 
 The reduced solver runs unchanged on ``p = P q``: ``MirroredMerit`` wraps its merit, chaining every
-Jacobian through ``P`` (``J P``; the normal matrix ``Pᵀ H P``, the gradient ``Pᵀ g``). The caller still
+Jacobian through ``P`` (``J P``; the normal matrix ``Pᵀ H P``, the gradient ``Pᵀ g``), each formed over q's
+columns rather than p's: ``reduced_mirror_dense.py`` on the dense path (small lattices, the regulariser's
+corner features of half the tiles), ``reduced_mirror_normal.py`` on the block path. The caller still
 checks the full pattern's families, the symmetry rows among them.
 """
 
@@ -32,6 +34,7 @@ from scipy import sparse
 
 from ..errors import SolveError
 from ..kdtree import KDTree
+from .reduced_mirror_dense import halved
 from .reduced_mirror_normal import HalfBlocks, half_normal
 from .rigid import RigidFamily
 
@@ -184,8 +187,9 @@ class MirroredMerit:
         halves: HalfBlocks | None = None,
     ):
         self.P, self.axis = P, axis
-        self.inner = merit if axis is None or merit.contact is axis else merit.with_contact(axis)
         self.halves = HalfBlocks(P, merit.nf) if halves is None else halves
+        merit = halved(merit, P, self.halves)  # the dense path over q's columns
+        self.inner = merit if axis is None or merit.contact is axis else merit.with_contact(axis)
 
     def __getattr__(self, name: str):  # fits, scaling, sq, ineq_violation ...
         return getattr(self.inner, name)
@@ -226,4 +230,5 @@ class _MirroredEvaluation:
         return half_normal(self.ev, self.P, self.halves)
 
     def jacobian(self) -> np.ndarray:
-        return np.asarray((self.P.T @ self.ev.jacobian().T).T)
+        J = self.ev.jacobian()
+        return J if self.ev.merit._half is not None else np.asarray((self.P.T @ J.T).T)
