@@ -1,7 +1,7 @@
 """Kagome counts table, fit table and pictures for docs/kagome.md (run on demand).
 
     PYTHONPATH=. python3 bench/kagome.py [--sizes 4x4,7x5,16x16] [--png docs/img/kagome-states.png]
-    PYTHONPATH=. python3 bench/kagome.py --fit [--cells circle:6x11:120,heart:auto:120,...]
+    PYTHONPATH=. python3 bench/kagome.py --fit [--cells circle:6x11:120,heart:6x11:120:none,...]
 
 ``--fit`` runs ``fabkiri design --lattice kagome`` per cell (outline, R x C or ``auto`` for the lattice
 chosen from the outline, size in mm) and prints one row each: the exit code, the Hausdorff distance (% of
@@ -96,10 +96,13 @@ FIT_CELLS = (  # docs/kagome.md's table (the heart 6x11 free and 6x13 rows were 
 )
 
 
-def fit_row(outline: str, tiles: str, size: str, out: Path) -> str:
-    """One table row: ``fabkiri design --lattice kagome`` on the cell, its exit code and figures."""
+def fit_row(outline: str, tiles: str, size: str, out: Path, symmetry: str = "") -> str:
+    """One table row: ``fabkiri design --lattice kagome`` on the cell, its exit code and figures
+    (``symmetry``: the ``--symmetry`` value, e.g. ``none``; absent: the mirrors the lattice and the
+    outline share)."""
     target = EGG if outline == "egg" else outline
     args = ["design", "--lattice", "kagome", "--target", target, "--size", size, "-o", str(out)]
+    args += ["--symmetry", symmetry] if symmetry else []
     run = run_cli(ROOT, *args, *([] if tiles == "auto" else ["--tiles", tiles]), timeout=3600)
     warn = next((ln for ln in run.stderr.splitlines() if "wide for 1 high" in ln), "")
     hd, failed, lattice = "–", "–", tiles
@@ -119,6 +122,7 @@ def fit_row(outline: str, tiles: str, size: str, out: Path) -> str:
         if tiles == "auto"
         else ("warned: " + warn.split("try ")[-1].split(" (")[0] if warn else "")
     )
+    note += f" --symmetry {symmetry}" if symmetry else ""
     return (
         f"| {outline} | {lattice} {note} | {size} | {run.code} | {hd} | {failed} | "
         f"{run.cpu_s:.1f} | {run.wall_s:.0f} | {os.getloadavg()[0]:.1f} |"
@@ -151,7 +155,8 @@ def fit_table(cells: str, out: Path) -> None:
     )
     print("|---|---|---|---|---|---|---|---|---|")
     for cell in cells.split(","):
-        print(fit_row(*cell.split(":"), out), flush=True)
+        outline, tiles, size, *sym = cell.split(":")
+        print(fit_row(outline, tiles, size, out, *sym), flush=True)
 
 
 def main() -> None:
@@ -159,7 +164,7 @@ def main() -> None:
     ap.add_argument("--sizes", default="4x4,7x5,16x16")
     ap.add_argument("--png", type=Path, default=None)
     ap.add_argument("--fit", action="store_true", help="the fit table (outline x R x C) instead")
-    ap.add_argument("--cells", default=FIT_CELLS, help="OUTLINE:RxC|auto:MM,...")
+    ap.add_argument("--cells", default=FIT_CELLS, help="OUTLINE:RxC|auto:MM[:SYMMETRY],...")
     args = ap.parse_args()
     if args.fit:
         fit_table(args.cells, Path(f"/tmp/kagome-fit-{os.getpid()}.json"))

@@ -35,6 +35,7 @@ from scipy.sparse.linalg import spsolve
 from ..errors import InputError
 from ..pattern.model import Pattern
 from . import kagome as K
+from . import kagome_pairs as KP
 from . import kagome_rows as KR
 from . import kagome_solve as KS
 from .conformance import deployed
@@ -47,6 +48,7 @@ HOLE_GAP_FLOOR = GAP_FLOOR  # the same for a gap that is a hole's corner
 CONVEX = np.radians(
     5.0
 )  # with convex=True a hole's corner is at most 175° (6x11 free heart: 4.35 -> 11.7 %)
+PAIR_MARGIN = 0.01  # with pairs=True: corners of tiles sharing no hinge this far outside each other (tile edges)
 QUALITY_FLOOR = 0.35  # smallest tile quality 4√3A/Σℓ² (equilateral 1; 0.35 ≈ a 13° corner)
 INEQ_WEIGHT = 100.0
 LAWSON_STEPS = 8
@@ -169,10 +171,12 @@ def fit_rows(
     symmetry: bool | str = True,
     convex: bool = False,
     fab: Sequence[Family] = (),
+    pairs: bool = False,
 ):
     """``(rows, x0, axes)``: every row of the fit of ``standard`` to ``target`` (mm, centred on its
     bounding box), and the initial guess (normalised units). ``fab``: fabrication inequalities in the
-    same normalised units (:func:`fabkiri.design.kagome_fab.families`), kept beside the others."""
+    same normalised units (:func:`fabkiri.design.kagome_fab.families`), kept beside the others;
+    ``pairs``: the non-overlap rows of tiles that share no hinge (:mod:`fabkiri.design.kagome_pairs`)."""
     top = standard.topology
     nv, scale = top.n_nodes, standard.tile_size
     order = KR.tip_order(standard)
@@ -186,6 +190,7 @@ def fit_rows(
         KR.gap_family(standard, GAP_FLOOR, CONVEX if convex else None, HOLE_GAP_FLOOR),
         KR.quality_family(standard, QUALITY_FLOOR),
         KR.fan_family(standard, GAP_FLOOR),
+        *([KP.pair_family(standard, PAIR_MARGIN)] if pairs else []),
         *fab,
     ]
     rows = KS.Rows(eq, fit, ineq, {}, INEQ_WEIGHT)
@@ -214,6 +219,7 @@ def design(
     convex: bool = False,
     fab: Sequence[Family] = (),
     start: np.ndarray | None = None,
+    pairs: bool = False,
 ) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
@@ -223,13 +229,14 @@ def design(
     ``convex`` keeps every hole convex, which rules out tiles crossing a hole (deployed overlaps between
     non-adjacent tiles) at a price in fit. ``fab``: fabrication inequalities (normalised by
     ``standard``'s tile size, :mod:`fabkiri.design.kagome_fab`); ``start``: deployed nodes (mm) to start
-    from instead of the initial guess (a continuation from an earlier design).
+    from instead of the initial guess (a continuation from an earlier design); ``pairs``: rows keeping
+    tiles that share no hinge apart (across a hole or a row-end notch, :mod:`fabkiri.design.kagome_pairs`).
     """
     lo, hi = target.bbox
     shift = 0.5 * (lo + hi)
     centred = target.transformed(1.0, -shift)
     scale = standard.tile_size
-    rows, x, axes = fit_rows(standard, centred, symmetry, convex, fab)
+    rows, x, axes = fit_rows(standard, centred, symmetry, convex, fab, pairs)
     if start is not None:
         x = (np.asarray(start, float) - shift) / scale
     best, trace, its, cands = None, [], 0, []
