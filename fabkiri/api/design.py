@@ -33,7 +33,7 @@ from ..pattern.io import dumps
 from ..pattern.model import Pattern
 from ..pattern.tessellation import DEFAULT_KIND
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
-from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation  # noqa: F401 (re-exported)
+from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation, limits_note  # noqa: F401 (re-exported)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
@@ -183,7 +183,8 @@ def design_pattern(
         if cont is not None and _good(cont):
             return _outcome(cont, first, messages, target)
         say(
-            "fabkiri: the continuation in the fabrication limits misses; trying the initial guesses"
+            f"fabkiri: the continuation in the fabrication limits misses{limits_note(cont) if cont else ''}; "
+            "trying the initial guesses"
         )
     best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
     attempts = first + attempts
