@@ -37,13 +37,19 @@ def test_shape_held_to_is_the_largest_fraction_that_met_the_tolerance(trace, hel
 
 def test_the_miss_note_names_the_fraction_and_the_full_limits_miss():
     trace = [[0.25, 0.007], [0.5, 0.005], [0.75, 0.067], [1.0, 0.19]]
-    report = {
-        "continuation": {"steps_hausdorff_rel": trace, "shape_held_to": shape_held_to(trace, TOL)}
+    cont = {
+        "steps_hausdorff_rel": trace,
+        "shape_held_to": shape_held_to([[0.0, 0.0017], *trace], TOL),
+        "free_hausdorff_rel": 0.0017,
     }
+    report = {"continuation": cont}
     note = limits_note((None, report))
-    assert "up to 50% of the limits" in note and "19.0%" in note
-    report["continuation"]["steps_hausdorff_rel"][-1][1] = None
+    assert "without them (0.2%) and up to 50% of them" in note and "19.0%" in note
+    cont["steps_hausdorff_rel"][-1][1] = None
     assert "unconverged" in limits_note((None, report))
+    cont["shape_held_to"] = shape_held_to([[0.0, 0.014], [0.25, 0.029], [1.0, 0.23]], TOL)
+    assert cont["shape_held_to"] == 0.0  # only the design without the rows met it
+    assert "without them (0.2%), at all" in limits_note((None, report))
     assert limits_note((None, {"continuation": {"shape_held_to": None}})) == ""
     assert limits_note((None, {})) == ""
 
