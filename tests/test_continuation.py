@@ -64,16 +64,18 @@ def _outcome(h: float, valid: bool = True):
 
 
 @pytest.mark.parametrize(
-    ("jump", "steps_h", "runs_steps", "kept"),
+    ("jump", "steps_h", "runs_steps", "kept", "tiles"),
     [
-        ((True, 0.01), 0.05, False, 0.01),  # the jump met the shape: no steps
-        ((False, 0.04), 0.03, True, 0.03),  # the jump stalled: the steps, as before
-        ((True, 0.19), 0.17, True, 0.17),  # converged but missed: the steps, the better kept
-        ((True, 0.19), 0.21, True, 0.19),  # ... the jump when it is better
+        ((True, 0.01), 0.05, False, 0.01, 16),  # the jump met the shape: no steps
+        ((False, 0.04), 0.03, True, 0.03, 16),  # the jump stalled: the steps, as before
+        ((False, 0.04), 0.03, True, 0.03, 8),
+        ((True, 0.19), 0.17, True, 0.17, 16),  # converged but missed: the steps, the better kept
+        ((True, 0.19), 0.21, True, 0.19, 16),  # ... the jump when it is better
+        ((True, 0.19), 0.17, False, 0.19, 8),  # ... from 16x16 only
     ],
 )
 def test_the_steps_follow_a_jump_that_stalls_or_misses(
-    monkeypatch, jump, steps_h, runs_steps, kept
+    monkeypatch, jump, steps_h, runs_steps, kept, tiles
 ):
     from types import SimpleNamespace
 
@@ -90,7 +92,7 @@ def test_the_steps_follow_a_jump_that_stalls_or_misses(
         return steps, SimpleNamespace(converged=converged, h=h), X, spent + 1.0
 
     monkeypatch.setattr(C, "_raise_limits", fake_raise)
-    req = SimpleNamespace(rigid=False)
+    req = SimpleNamespace(rigid=False, rows=tiles, cols=tiles)
     trace: list = []
     steps, step, _, outcome, spent = C._jump_or_steps(
         req, np.zeros((4, 2)), "rigid", lambda r: _outcome(r.h, r.converged), 0.0, trace

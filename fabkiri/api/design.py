@@ -33,7 +33,13 @@ from ..pattern.io import dumps
 from ..pattern.model import Pattern
 from ..pattern.tessellation import DEFAULT_KIND
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
-from .continuation import CONTINUATION, CONTINUATION_MARGIN, continuation, limits_note  # noqa: F401 (re-exported)
+from .continuation import (  # noqa: F401 (re-exported)
+    CONTINUATION,
+    CONTINUATION_MARGIN,
+    LIMITS_COST_TILES,
+    continuation,
+    limits_note,
+)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
@@ -54,9 +60,6 @@ BIG_TILES = 32 * 32
 # a valid design whose least-squares fit misses by more than this fraction of the target size is retried
 # from the next guess and the closest valid fit kept (ellipse 16x16: rescaled 1.86 %, standard 0.08 %)
 RETRY_FIT_ABOVE = 5e-3
-# from this many tiles a continuation whose trace says the limits cost the shape is not retried from the guesses
-# (measured at 16x16; below, an 8x8 heart for prusa-mk4 was kept from the standard guess: it fit the bed)
-LIMITS_COST_TILES = 16 * 16
 
 
 @dataclass
