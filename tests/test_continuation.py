@@ -101,3 +101,22 @@ def test_the_steps_follow_a_jump_that_stalls_or_misses(
     assert steps == ((1.0, *C.CONTINUATION) if runs_steps else (1.0,))
     assert outcome[1]["conformance"]["deployed"]["hausdorff_rel"] == kept
     assert spent == (2.0 if runs_steps else 1.0) and len(trace) == int(runs_steps)
+
+
+@pytest.mark.parametrize(
+    ("tiles", "held", "miss", "worth"),
+    [
+        (16, 0.5, 0.19, False),  # the limits cost the shape and the miss is far: no refinement
+        (16, 0.5, 0.03, True),  # within REFINE_WITHIN x the tolerance: refined
+        (16, None, 0.19, True),  # the steps do not say the limits cost it
+        (8, 0.5, 0.19, True),  # below 16x16, as before
+    ],
+)
+def test_the_refinement_is_skipped_only_far_past_a_limit(tiles, held, miss, worth):
+    from types import SimpleNamespace
+
+    from fabkiri.api.continuation import REFINE_WITHIN, _refine_worth
+
+    req = SimpleNamespace(rows=tiles, cols=tiles, second_opinion_above=TOL)
+    assert REFINE_WITHIN * TOL < 0.19
+    assert _refine_worth(req, held, miss) is worth
