@@ -459,6 +459,36 @@ def test_scaled_limits_scale_every_requirement_and_set_the_margin():
     assert all("margin" not in f.meta for f in F.families(st_, len(base), lim, 10.0, base))
 
 
+@pytest.mark.parametrize("fraction", [0.25, 0.5, 0.75])
+def test_a_continuation_step_is_the_full_limits_on_the_design_grown(fraction):
+    """A step ``f`` of the continuation asks of a design what the full limits ask of it grown by ``1/f``: every
+    length row alike, the strip pads (mm²) included (the hinge angle, no length, is ramped apart). ``scaled``
+    takes the pad area times ``f``: a quarter step asked 1 mm² of a 1 x 1.05 mm band, so the 16x16 heart for
+    prusa-mk4 had every pad row active and its step stalled."""
+    lim = F.FabricationLimits(
+        **design_limits.printer_limits(load_printer("prusa-mk4"), "tiles-and-strips")
+    )
+    assert lim.strip_pad_mm2 > 0 and lim.min_hinge_angle_deg > 0
+    assert lim.step(fraction).min_hinge_angle_deg == pytest.approx(
+        fraction * lim.min_hinge_angle_deg
+    )
+    lim = replace(lim, min_hinge_angle_deg=0.0)
+    step = lim.step(fraction, 0.02)
+    assert step.strip_pad_mm2 == pytest.approx(fraction**2 * lim.strip_pad_mm2)
+    assert step.strip_width_mm == pytest.approx(fraction * lim.strip_width_mm)
+    assert step.margin == 0.02 and step.print_state == lim.print_state
+    pat = standard_pattern(4, 4, tile_size=9.0)  # jittered: no band edge exactly on a tile edge
+    x = pat.nodes / 9.0 + np.random.default_rng(3).normal(0.0, 0.01, pat.nodes.shape)
+    st_ = Stencils.from_pattern(pat)
+    full = {f.name: f.residual(x) for f in F.families(st_, len(x), lim, 9.0 / fraction, x)}
+    stepped = {f.name: f.residual(x) for f in F.families(st_, len(x), step, 9.0, x)}
+    assert "fabrication_strip_pads" in full and full.keys() == stepped.keys()
+    for name, r in full.items():
+        np.testing.assert_allclose(stepped[name], r, atol=1e-12, err_msg=name)
+    linear = {f.name: f.residual(x) for f in F.families(st_, len(x), lim.scaled(fraction), 9.0, x)}
+    assert not np.allclose(linear["fabrication_strip_pads"], full["fabrication_strip_pads"])
+
+
 @pytest.mark.slow
 def test_continuation_is_tried_and_the_kept_design_keeps_the_rows():
     """The 8x8 heart at 150 mm for acrylic-3 misses the shape (it does without rows too): the continuation

@@ -24,3 +24,22 @@ def test_star_150_for_prusa_mk4_meets_the_shape_and_prints_at_scale_1():
         out.pattern, "tiles-and-strips", load_printer("prusa-mk4"), state, 1.0
     )
     assert refusal == ""
+
+
+@pytest.mark.slow  # ~60 CPU s, the continuation alone (main: it and then every guess, 112 CPU s)
+def test_16x16_heart_200_for_prusa_mk4_says_the_limits_cost_the_shape():
+    """At 16x16 a 200 mm heart's tiles are about 6.6 mm wide, and a tile holding its four strips on one face
+    needs about 8.7 mm (print's own minimum on the standard pattern): the design without the rows meets the
+    shape, the continuation's steps miss it more the more of the limits they take. The design says so, is not
+    retried from the guesses (which start at the full limits), and exits 1."""
+    out = design_pattern(
+        PatternRequest(tiles=(16, 16), target="heart", size=200.0, printer="prusa-mk4", quiet=True)
+    )
+    assert out.exit_code == 1 and out.valid and not out.shape_met
+    cont = out.report["continuation"]
+    tol = out.report["shape"]["deployed"]["tol_rel"]
+    assert cont["free_hausdorff_rel"] <= tol and cont["shape_held_to"] is not None
+    trace = cont["steps_hausdorff_rel"]
+    assert trace[-1][0] == 1.0 and (trace[-1][1] is None or trace[-1][1] > tol)
+    assert [a["init"] for a in out.report["attempts"]] == [cont["how"]]
+    assert any("the limits cost the shape" in m for m in out.messages), out.messages

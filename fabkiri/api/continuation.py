@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..design.conformance import deployed as deployed_conformance
 from ..design.fabrication import FabricationLimits
 from ..design.refine import refine_minimax
 from ..design.solve import VIA_RIGID_INIT, DesignRequest, _Problem, design, via_rigid_applies
@@ -37,6 +38,14 @@ JUMP = (1.0,)
 # the refinement stops after this many steps without a better design (16x16 heart, acrylic-3: its best in
 # step 2 of 10, the last 8 no better; star 150 mm prusa-mk4: 10 steps within 0.13 % of each other)
 PATIENCE = 3
+# from this many tiles the steps also follow a jump that converged but missed, and a continuation whose steps
+# say the limits cost the shape is not retried from the guesses (measured at 16x16; below, an 8x8 heart for
+# prusa-mk4 was kept from the standard guess, which fit the bed, and the 8x8 star6 for prusa-xl-2t paid 7.5 CPU s
+# for steps that kept the jump's 2.20 %)
+LIMITS_COST_TILES = 16 * 16
+# the refinement takes a miss at most this many times lower (Lawson's steps measured: 16x16 ellipse for
+# prusa-xl-2t 18.9 -> 16.8 %, 8x8 star6 2.34 -> 2.20 %, 16x16 heart for acrylic-3 1.57 -> 1.50 %)
+REFINE_WITHIN = 2.0
 CONTINUATION_MARGIN = (
     0.02  # the rows' penalty margin in a step (tile edges; FabricationLimits.margin)
 )
@@ -66,14 +75,10 @@ def continuation(
     # equality): with the full solver the steps from 7/8 of the limits on stalled against closed holes
     # (hundreds of non-overlap rows at zero; heart 16x16: equality 1e-5 to 6e-5, unconverged, 2.2-3.3 %)
     init = VIA_RIGID_INIT if via_rigid_applies(replace(req, init=VIA_RIGID_INIT)) else req.init
-    steps: tuple = (1.0,)
-    step, result, last_ok, spent = _raise_limits(req, free.pattern.nodes, init, JUMP, spent)
-    if not (req.rigid or result.converged):  # the jump stalled: the steps, as before it
-        steps = (1.0, *CONTINUATION)
-        step, result, last_ok, spent = _raise_limits(
-            req, free.pattern.nodes, init, CONTINUATION, spent
-        )
-    outcome = judge(result)
+    trace: list = []  # [fraction, Hausdorff] of the steps
+    steps, step, last_ok, outcome, spent = _jump_or_steps(
+        req, free.pattern.nodes, init, judge, spent, trace
+    )
     how = "continuation"
     if not outcome[3] and via_rigid_applies(replace(req, init=VIA_RIGID_INIT)):
         rigid = judge(design(replace(step, init=VIA_RIGID_INIT, start=last_ok)))
@@ -87,10 +92,15 @@ def continuation(
         if padless is not None and _rank(padless[0]) < _rank(outcome):
             outcome, step = padless
             how, steps = "continuation without the pad rows, print's check", (1.0, *CONTINUATION)
-    trace: list[float] = []
-    if not _good_fit(outcome):  # the fit was least squares, the tolerance is a maximum;
+    refinement: list[float] = []
+    held = shape_held_to(
+        [[0.0, _hausdorff(free.report) if free.shape_met else None], *trace],
+        req.second_opinion_above,  # the tolerance over the size
+    )
+    if not _good_fit(outcome) and _refine_worth(req, held, _hausdorff(outcome[1])):
+        # the fit was least squares, the tolerance is a maximum;
         # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
-        outcome, how, trace, secs = _refine(
+        outcome, how, refinement, secs = _refine(
             replace(step, init=VIA_RIGID_INIT if "rigid family" in how else init),
             outcome,
             how,
@@ -105,20 +115,55 @@ def continuation(
         "how": how,
         "free_hausdorff_rel": _hausdorff(free.report),
         "margin": CONTINUATION_MARGIN,
-        "refinement_hausdorff_rel": trace,
+        "refinement_hausdorff_rel": refinement,
+        "steps_hausdorff_rel": trace,
+        "shape_held_to": held,  # the design without the rows is fraction 0
     }
-    attempts.append(
-        {
-            "init": how,
-            "status": outcome[1]["status"],
-            "problems": outcome[2],
-            "time_s": spent,
-            "fit_max_rel_size": _fit_miss(outcome[1]),
-            "hausdorff_max_rel": _hausdorff(outcome[1]),
-            "shape": "met" if _shape_met(outcome[1]) else "missed",
-        }
-    )
+    attempts.append(_attempt(outcome, how, spent))
     return outcome
+
+
+def _jump_or_steps(req: DesignRequest, X: np.ndarray, init: str, judge, spent: float, trace: list):
+    """The jump to the full limits from the design without rows ``X``; the steps (``CONTINUATION``, their
+    Hausdorff in ``trace``) when it stalls, as before the jump, or when it converged but missed the shape: then
+    they say whether the limits cost it (16x16 ellipse at 200 mm, prusa-xl-2t: the jump converged at 18.9 %; in
+    the rigid family the steps met 0.5 % at half the limits and 19.0 % at all of them, about 1 CPU s each), and
+    the better of the two is kept. ``(steps, last step, last converged nodes, outcome, wall s)``."""
+    step, result, last_ok, spent = _raise_limits(req, X, init, JUMP, spent)
+    outcome = judge(result)
+    if (
+        req.rigid
+        or _good_fit(outcome)
+        or (result.converged and req.rows * req.cols < LIMITS_COST_TILES)
+    ):
+        return (1.0,), step, last_ok, outcome, spent
+    jumped = (step, last_ok, outcome) if result.converged else None
+    step, result, last_ok, spent = _raise_limits(req, X, init, CONTINUATION, spent, trace)
+    outcome = judge(result)
+    if jumped is not None and _rank(jumped[2]) <= _rank(outcome):
+        step, last_ok, outcome = jumped
+    return (1.0, *CONTINUATION), step, last_ok, outcome, spent
+
+
+def _refine_worth(req: DesignRequest, held: float | None, miss: float) -> bool:
+    """Whether the minimax refinement may bring a miss within the tolerance: not from 16x16 tiles when the
+    limits cost the shape (``held``) and the miss is over ``REFINE_WITHIN`` times the tolerance (the 16x16
+    ellipse at 200 mm, prusa-xl-2t: 10 steps, about 40 CPU s, from 18.9 % to 16.8 %)."""
+    far = miss > REFINE_WITHIN * req.second_opinion_above
+    return not (held is not None and far and req.rows * req.cols >= LIMITS_COST_TILES)
+
+
+def _attempt(outcome, how: str, spent: float) -> dict:
+    """The continuation's entry in the design's attempts."""
+    return {
+        "init": how,
+        "status": outcome[1]["status"],
+        "problems": outcome[2],
+        "time_s": spent,
+        "fit_max_rel_size": _fit_miss(outcome[1]),
+        "hausdorff_max_rel": _hausdorff(outcome[1]),
+        "shape": "met" if _shape_met(outcome[1]) else "missed",
+    }
 
 
 def _free_design(
@@ -209,13 +254,25 @@ def _without_pads(req: DesignRequest, X: np.ndarray, init: str, judge, prints, s
     return ((outcome, step) if not prints(outcome[0]) else None), spent
 
 
-def _raise_limits(req: DesignRequest, X: np.ndarray, init: str, steps: tuple, spent: float):
-    """Each step's design warm started from the last: ``(last step, its result, last converged nodes, wall s)``."""
+def _raise_limits(
+    req: DesignRequest,
+    X: np.ndarray,
+    init: str,
+    steps: tuple,
+    spent: float,
+    trace: list | None = None,
+):
+    """Each step's design warm started from the last: ``(last step, its result, last converged nodes, wall s)``;
+    ``trace`` (if given) gets ``[fraction, Hausdorff over the size, or None unconverged]`` per step."""
     fab = req.fabrication
     assert fab is not None
     last_ok = X
+    # the pad area times f² (``FabricationLimits.step``) from 16x16 only: below, the linear steps stay (the 12x12
+    # pick for prusa-xl-2t at 200 mm: with f² 1.36 %, and print refused its bodies, overlapping by 0.014 mm³)
+    alike = req.rows * req.cols >= LIMITS_COST_TILES
     for f in steps:
-        step = replace(req, fabrication=fab.scaled(f, CONTINUATION_MARGIN), start=X, init=init)
+        lim = fab.step(f, CONTINUATION_MARGIN) if alike else fab.scaled(f, CONTINUATION_MARGIN)
+        step = replace(req, fabrication=lim, start=X, init=init)
         if steps is JUMP:
             step = replace(step, second_opinion=False)
         result = design(step)
@@ -223,7 +280,36 @@ def _raise_limits(req: DesignRequest, X: np.ndarray, init: str, steps: tuple, sp
         X = result.pattern.nodes
         if result.converged:
             last_ok = X
+        if trace is not None and req.target is not None:
+            h = deployed_conformance(X, result.pattern.topology, req.target)["hausdorff_rel"]
+            trace.append([f, float(h) if result.converged else None])
     return step, result, last_ok, spent
+
+
+def limits_note(outcome) -> str:
+    """Why a continuation missed, when its steps say the limits cost the shape ('' otherwise)."""
+    cont = outcome[1].get("continuation") or {}
+    held = cont.get("shape_held_to")
+    if held is None:
+        return ""
+    last = cont["steps_hausdorff_rel"][-1][1]
+    at_full = f"{last:.1%}" if last is not None else "unconverged"
+    up_to = f" and up to {held:.0%} of them" if held > 0 else ""
+    return (
+        f" (the limits cost the shape: met without them ({cont['free_hausdorff_rel']:.1%}){up_to}, "
+        f"at all of them {at_full})"
+    )
+
+
+def shape_held_to(trace: list, tol_rel: float) -> float | None:
+    """The largest fraction of the limits whose converged step (``[fraction, Hausdorff or None]``; the design
+    without the rows as fraction 0) met ``tol_rel`` when the last step (the full limits) missed it: the limits,
+    not the start, cost the shape (16x16 ellipse at 200 mm for prusa-xl-2t in
+    the rigid family: 0.86 % at 0.6 of the limits, 3.0 % at 0.65, 19 % at the full limits). None otherwise."""
+    if not trace or (trace[-1][1] is not None and trace[-1][1] <= tol_rel):
+        return None
+    met = [f for f, h in trace[:-1] if h is not None and h <= tol_rel]
+    return max(met) if met else None
 
 
 def _refine(

@@ -36,6 +36,10 @@ from .dual import Dual, _corners, _dot, _sub, values_only
 
 _Args = TypeVar("_Args", bound=tuple)
 NOT_LIMITS = ("source", "margin", "print_state")  # fields that are no requirement in mm
+# fields in mm²: a continuation step scales them by the fraction squared, so a step's pad keeps the same share
+# of its strip's band (0.25 w min(reach, w)) as the full limits' (linearly, a quarter step asked 1 mm² of a
+# 1 x 1.05 mm band: every pad row of the 16x16 heart active and the step unconverged)
+AREAS = ("strip_pad_mm2",)
 
 
 @dataclass(frozen=True)
@@ -69,7 +73,7 @@ class FabricationLimits:
         return any(v > 0 for k, v in asdict(self).items() if k not in NOT_LIMITS)
 
     def scaled(self, fraction: float, margin: float = 0.0) -> FabricationLimits:
-        """Every requirement times ``fraction`` (a step of the continuation in the limits)."""
+        """Every requirement times ``fraction``."""
         return replace(
             self,
             margin=margin,
@@ -79,6 +83,12 @@ class FabricationLimits:
                 if f.name not in NOT_LIMITS
             },
         )
+
+    def step(self, fraction: float, margin: float = 0.0) -> FabricationLimits:
+        """A step of the continuation in the limits: every length times ``fraction`` and every area
+        (``AREAS``) times its square, the limits of the same process shrunk alike."""
+        out = self.scaled(fraction, margin)
+        return replace(out, **{k: getattr(self, k) * fraction**2 for k in AREAS})
 
     def required_width_mm(self) -> float:
         """Unshrunk width every tile needs at least (erosion by d takes at least 2d off a width)."""
