@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
-from fabkiri.api.design_minimax import FINISH_ABOVE, MINIMAX_TILES, applies
+from fabkiri.api.design_minimax import FINISH_ABOVE, MINIMAX_TILES, REFIT_ABOVE, applies, threshold
 from fabkiri.design import conformance as conf
 from fabkiri.design.fabrication import FabricationLimits
 from fabkiri.design.solve import DesignRequest
@@ -26,6 +26,12 @@ def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
     # already close: not worth 2-6 more designs
     assert not applies(big, {}, (None, close, [], True, {}))
     assert not applies(DesignRequest(rows=16, cols=16, target=tgt), {}, valid)
+    # the threshold follows the lattice's resolution: a miss a 32x32 design may keep is finished at 64x64
+    between = {"conformance": {"deployed": {"hausdorff_rel": 0.75 * FINISH_ABOVE}}}
+    assert not applies(big, {}, (None, between, [], True, {}))
+    assert applies(DesignRequest(rows=64, cols=64, target=tgt), {}, (None, between, [], True, {}))
+    assert threshold(REFIT_ABOVE, big) == REFIT_ABOVE
+    assert threshold(REFIT_ABOVE, DesignRequest(rows=48, cols=96, target=tgt)) == REFIT_ABOVE / 3
     fab = DesignRequest(rows=32, cols=32, target=tgt, fabrication=FabricationLimits(min_width_mm=1))
     assert not applies(fab, {}, valid)  # the continuation refines those
     assert not applies(DesignRequest(rows=32, cols=32, target=tgt, min_opening=0.2), {}, valid)

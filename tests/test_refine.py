@@ -10,7 +10,7 @@ from fabkiri.design import fabrication as F
 from fabkiri.design.conformance import deployed
 from fabkiri.design.constraints import Stencils
 from fabkiri.design.objective import weighted
-from fabkiri.design.refine import lawson_weights, refine_minimax
+from fabkiri.design.refine import _Steps, lawson_weights, refine_minimax
 from fabkiri.design.solve import DesignRequest, _Problem, design
 from fabkiri.design.targets import load_target
 from fabkiri.errors import InputError
@@ -65,6 +65,42 @@ def test_refinement_without_a_deployed_target_is_refused_before_any_step():
     req = DesignRequest(rows=4, cols=4, contracted={1: load_target("circle", 100)}, init="rescaled")
     with pytest.raises(InputError, match="needs a deployed target"):
         refine_minimax(req, standard_pattern(4, 4, tile_size=10.0).nodes, steps=1)
+
+
+def test_backtracking_steps_go_on_from_the_best_design_with_half_the_exponent():
+    """With ``backtrack``, a step no better than the best starts the next again from the best design (the start at
+    first) and its weights raised by half the exponent; a better step becomes the base. Without it, every converged
+    step is stepped from with the same exponent (Lawson's)."""
+    tgt = load_target("heart", 100)
+    req = DesignRequest(rows=4, cols=4, target=tgt, rigid=True, init="rescaled")
+    start = standard_pattern(4, 4, tile_size=10.0)
+    moved = start.nodes + np.random.default_rng(5).normal(0.0, 0.5, start.nodes.shape)
+
+    class Result:  # what ``_Steps`` reads of a design result
+        converged = True
+        pattern = replace(start, nodes=moved)
+
+    def same(a: dict, b: dict) -> bool:
+        return a.keys() == b.keys() and all(np.allclose(a[k], b[k]) for k in a)
+
+    walk = _Steps(req, start.nodes, 0.5, backtrack=True)
+    first = walk.weights
+    assert same(first, lawson_weights(req, start.nodes, None, 0.5))
+    walk.next(Result(), 0.1, better=False)  # worse: from the start again, exponent 1/4
+    assert walk.gamma == 0.25 and np.array_equal(walk.X, start.nodes)
+    assert same(walk.weights, lawson_weights(req, start.nodes, None, 0.25))
+    walk.next(
+        Result(), 0.05, better=True
+    )  # better: the new base, stepped from with the same exponent
+    assert (
+        walk.gamma == 0.25 and np.array_equal(walk.X, moved) and np.array_equal(walk.base[0], moved)
+    )
+    assert same(walk.base[1], lawson_weights(req, start.nodes, None, 0.25))
+    plain = _Steps(req, start.nodes, 0.5, backtrack=False)
+    plain.next(Result(), 0.1, better=False)
+    assert plain.gamma == 0.5 and np.array_equal(plain.X, moved)
+    assert same(plain.weights, lawson_weights(req, moved, first, 0.5))
+    assert plain.beats(1e9, Result())  # no bound without backtracking
 
 
 @pytest.mark.slow

@@ -53,6 +53,7 @@ def refine_minimax(
     gamma: float = LAWSON_GAMMA,
     accept: Callable[[DesignResult], bool] | None = None,
     patience: int | None = None,
+    backtrack: bool = False,
 ) -> tuple[DesignResult | None, list[float], float]:
     """Lawson steps from the design ``start_mm`` (deployed nodes, mm) under ``req``'s rows.
 
@@ -61,26 +62,70 @@ def refine_minimax(
     the weights are then raised again from the last converged design) and the wall seconds of the steps.
     The start itself is not among the candidates: the caller compares with it. ``accept`` (optional) vetoes a
     converged step as a candidate (the caller's own check, e.g. a printer's bed); the steps go on from it.
-    ``patience`` (optional): stop after that many steps in a row that found no better candidate."""
+    ``patience`` (optional): stop after that many steps in a row that found no better candidate.
+    ``backtrack``: a step that is no better (worse, vetoed or unconverged) is not stepped from: the next one
+    starts again from the best design so far (the start at first) and its weights, with half the exponent
+    (``_Steps``)."""
     target = req.target
     if target is None:  # the steps are judged by their Hausdorff distance to the deployed target
         raise InputError(
             "minimax refinement needs a deployed target (a closed-state target alone has none)"
         )
-    X = np.asarray(start_mm, float)
-    weights = lawson_weights(req, X, None, gamma)
+    walk = _Steps(req, np.asarray(start_mm, float), gamma, backtrack)
     best, trace, spent, since = None, [], 0.0, 0
     for _ in range(steps):
-        result = design(replace(req, start=X, fit_weights=weights, second_opinion=False))
+        result = design(replace(req, start=walk.X, fit_weights=walk.weights, second_opinion=False))
         spent += result.report["time_s"]
         h = deployed(result.pattern.nodes, result.pattern.topology, target)["hausdorff_rel"]
         trace.append(h if result.converged else float("nan"))
-        if result.converged:  # an unconverged step moves nothing but the weights
-            if (best is None or h < best[0]) and (accept is None or accept(result)):
-                best, since = (h, result), -1
-            X = result.pattern.nodes
+        better = (
+            result.converged
+            and (best is None or h < best[0])
+            and walk.beats(h, result)
+            and (accept is None or accept(result))
+        )
+        if better:
+            best, since = (h, result), -1
         since += 1
         if patience is not None and since >= patience:
             break
-        weights = lawson_weights(req, X, weights, gamma)
+        walk.next(result, h, better)
     return (best[1] if best else None), trace, spent
+
+
+class _Steps:
+    """Where the next Lawson step starts and with which weights.
+
+    Plain Lawson steps from every converged design. With ``backtrack`` the steps go on only from a better design:
+    after one that is not (its weights overshot: the worst point moved elsewhere, or a closed state now overlaps),
+    the next starts from the best design so far with its weights raised by half the last exponent, a line search
+    on the update (32x32 peanut, exponent 1/2: 0.41, 0.40, 0.47, 0.45, 0.58, 0.76 % plain)."""
+
+    def __init__(self, req: DesignRequest, start: np.ndarray, gamma: float, backtrack: bool):
+        self.req, self.gamma, self.backtrack = req, gamma, backtrack
+        self.X = start
+        self.weights = lawson_weights(req, start, None, gamma)
+        self.base = (start, None)  # the best design so far and the weights it was found with
+        self.h_start: float | None = None
+
+    def beats(self, h: float, result: DesignResult) -> bool:
+        """Backtracking: ``h`` is also below the start's own Hausdorff distance (the start is the first base)."""
+        if not self.backtrack:
+            return True
+        if self.h_start is None:
+            target = self.req.target
+            assert target is not None
+            self.h_start = deployed(self.base[0], result.pattern.topology, target)["hausdorff_rel"]
+        return h < self.h_start
+
+    def next(self, result: DesignResult, h: float, better: bool) -> None:
+        if better or not self.backtrack:
+            if better:
+                self.base = (result.pattern.nodes, self.weights)
+            if result.converged:  # an unconverged step moves nothing but the weights
+                self.X = result.pattern.nodes
+            self.weights = lawson_weights(self.req, self.X, self.weights, self.gamma)
+            return
+        self.gamma /= 2
+        self.X = self.base[0]
+        self.weights = lawson_weights(self.req, self.X, self.base[1], self.gamma)
