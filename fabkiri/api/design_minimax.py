@@ -14,6 +14,11 @@ Lawson's steps only move a design within its basin. Where they still leave more 
 size, the design is made again from coarse levels refitted with the outline rows (``coarse_refit``, which
 ``solve._design`` runs on its own only past the shape tolerance) and the steps run from that too: the 32x32
 drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the refitted ones.
+
+Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
+resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer. A step the
+front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
+the exponent (``backtrack`` in ``refine_minimax``).
 """
 
 from __future__ import annotations
