@@ -69,7 +69,7 @@ def test_the_48x48_heart_fits_no_worse_than_the_32x32_one():
 @pytest.mark.slow
 def test_the_32x32_drop_fits_no_worse_than_the_16x16_one():
     """bench/shapes.py's drop, non-rigid, CLI defaults: main ended at 0.92 % (16x16) and 1.78 % (32x32, its
-    tips-only coarse levels' basin, least squares); the finish's steps leave more than 1 %, so it redesigns
+    tips-only coarse levels' basin, least squares); the finish's steps leave more than REFIT_ABOVE, so it redesigns
     from refitted coarse levels and steps from there (0.40 %). Both pass every check; the reported figure is
     the pattern's own measure."""
     target = load_target(DROP, 100)
