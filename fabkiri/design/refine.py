@@ -109,7 +109,8 @@ class _Steps:
         self.req, self.gamma, self.backtrack = req, gamma, backtrack
         self.X = start
         self.weights = lawson_weights(req, start, None, gamma)
-        self.base = (start, None)  # the best step so far and the weights it was found with
+        # the best step so far and the weights it was found with
+        self.base: tuple[np.ndarray, dict | None] = (start, None)
 
     def next(self, result: DesignResult, better: bool, vetoed: bool) -> None:
         if self.backtrack and vetoed:
