@@ -44,8 +44,8 @@ MINIMAX_GAMMA = 0.5
 # a step no better than the best so far is not stepped from: back to the best with half the exponent (refine.py)
 MINIMAX_BACKTRACK = True
 # above this share of the size at 32x32 tiles the steps start from the better of the design and its
-# coarse-refitted redesign (the 32x32 peanut's steps left 0.40 %, the redesign 0.12 %; the 32x32 heart's 0.34 %
-# were not worth its cost)
+# coarse-refitted redesign (the 32x32 peanut's steps left 0.40 %, the finish 0.31 % with it; the 32x32
+# heart's 0.34 % were not worth its cost)
 REFIT_ABOVE = 0.0035
 # only a design that misses by more than this share of the size at 32x32 tiles is finished: the finish costs 2-6
 # designs, and below it the circle, ellipse and star already fit within a few tenths of a per cent at every size
@@ -96,7 +96,7 @@ def minimax_finish(
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it
     if not req.coarse_refit and left > threshold(REFIT_ABOVE, req):
         # its coarse levels refitted where they miss by more than the finish's own threshold (not only past the
-        # shape tolerance: the 32x32 peanut's steps left 0.40 %, its 16x16 level refitted led to 0.12 %)
+        # shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted 0.31 %)
         again = replace(req, init="coarse", start=None, coarse_refit=True)
         refit = judge(design(replace(again, coarse_refit_above=threshold(FINISH_ABOVE, req))))
         secs += float(refit[1]["time_s"])
