@@ -4,6 +4,8 @@ drop's tips-only levels sat at 40 % of its size, and its 64x64 design ended in a
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 from fabkiri.design.conformance import deployed
 from fabkiri.design.problem import _Problem
@@ -39,6 +41,17 @@ def test_a_coarse_level_within_the_tolerance_keeps_the_tips_only_fit():
     level = prob.coarse
     assert level is not None and level["used"] and level["fit"] == "tips"
     assert level["hausdorff_rel"] <= 0.02 and "tips_only_hausdorff_rel" not in level
+
+
+def test_a_coarse_level_is_refitted_past_a_threshold_of_the_callers():
+    """``coarse_refit_above`` (the minimax finish's own threshold) replaces the shape tolerance as the miss that
+    asks for the refit: the circle's 8x8 level, within the 2 % tolerance, is refitted past a smaller one."""
+    circle = load_target("circle", size=100.0)
+    ask = DesignRequest(16, 16, circle, rigid=True, init="coarse", coarse_refit=True)
+    assert "tips_only_hausdorff_rel" not in (_Problem(ask).coarse or {})
+    level = _Problem(replace(ask, coarse_refit_above=1e-6)).coarse
+    assert level is not None and level["tips_only_hausdorff_rel"] > 1e-6
+    assert level["hausdorff_rel"] <= level["tips_only_hausdorff_rel"] or level["fit"] == "tips"
 
 
 def test_a_coarse_to_fine_design_that_misses_is_redone_from_refitted_levels_and_the_closer_kept():

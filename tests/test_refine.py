@@ -10,7 +10,7 @@ from fabkiri.design import fabrication as F
 from fabkiri.design.conformance import deployed
 from fabkiri.design.constraints import Stencils
 from fabkiri.design.objective import weighted
-from fabkiri.design.refine import lawson_weights, refine_minimax
+from fabkiri.design.refine import _Steps, lawson_weights, refine_minimax
 from fabkiri.design.solve import DesignRequest, _Problem, design
 from fabkiri.design.targets import load_target
 from fabkiri.errors import InputError
@@ -65,6 +65,50 @@ def test_refinement_without_a_deployed_target_is_refused_before_any_step():
     req = DesignRequest(rows=4, cols=4, contracted={1: load_target("circle", 100)}, init="rescaled")
     with pytest.raises(InputError, match="needs a deployed target"):
         refine_minimax(req, standard_pattern(4, 4, tile_size=10.0).nodes, steps=1)
+
+
+def test_backtracking_steps_go_back_to_the_best_design_after_a_veto():
+    """With ``backtrack``, a step the caller vetoes sends the next back to the best step so far (the start at
+    first) with its weights raised by half the exponent; a worse step that is not vetoed is stepped from, as in
+    Lawson's steps, and a better one becomes the base. Without it, every converged step is stepped from."""
+    tgt = load_target("heart", 100)
+    req = DesignRequest(rows=4, cols=4, target=tgt, rigid=True, init="rescaled")
+    start = standard_pattern(4, 4, tile_size=10.0)
+    rng = np.random.default_rng(5)
+    one, two = (start.nodes + rng.normal(0.0, 0.5, start.nodes.shape) for _ in range(2))
+
+    class Result:  # what ``_Steps`` reads of a design result
+        converged = True
+
+        def __init__(self, nodes):
+            self.pattern = replace(start, nodes=nodes)
+
+    def same(a: dict, b: dict) -> bool:
+        return a.keys() == b.keys() and all(np.allclose(a[k], b[k]) for k in a)
+
+    walk = _Steps(req, start.nodes, 0.5, backtrack=True)
+    first = walk.weights
+    assert same(first, lawson_weights(req, start.nodes, None, 0.5))
+    walk.next(Result(one), better=False, vetoed=True)  # vetoed: from the start again, exponent 1/4
+    assert walk.gamma == 0.25 and np.array_equal(walk.X, start.nodes)
+    assert same(walk.weights, lawson_weights(req, start.nodes, None, 0.25))
+    quarter = walk.weights
+    walk.next(Result(one), better=True, vetoed=False)  # better: the new base, stepped from
+    assert walk.gamma == 0.25 and np.array_equal(walk.X, one) and np.array_equal(walk.base[0], one)
+    assert same(walk.base[1], quarter) and same(
+        walk.weights, lawson_weights(req, one, quarter, 0.25)
+    )
+    walk.next(
+        Result(two), better=False, vetoed=False
+    )  # worse but valid: stepped from, the base stays
+    assert np.array_equal(walk.X, two) and np.array_equal(walk.base[0], one)
+    walk.next(Result(two), better=False, vetoed=True)  # vetoed: back to the base with its weights
+    assert walk.gamma == 0.125 and np.array_equal(walk.X, one)
+    assert same(walk.weights, lawson_weights(req, one, quarter, 0.125))
+    plain = _Steps(req, start.nodes, 0.5, backtrack=False)
+    plain.next(Result(one), better=False, vetoed=True)
+    assert plain.gamma == 0.5 and np.array_equal(plain.X, one)
+    assert same(plain.weights, lawson_weights(req, one, first, 0.5))
 
 
 @pytest.mark.slow

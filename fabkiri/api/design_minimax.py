@@ -11,9 +11,15 @@ it replaces the design only with a smaller Hausdorff distance, measured on the f
 is, and when ``verify`` fails none of its checks that the design passes. So the finish never makes a design worse; what it costs is recorded as an attempt.
 
 Lawson's steps only move a design within its basin. Where they still leave more than ``REFIT_ABOVE`` of the
-size, the design is made again from coarse levels refitted with the outline rows (``coarse_refit``, which
-``solve._design`` runs on its own only past the shape tolerance) and the steps run from that too: the 32x32
+size, the design is made again from coarse levels refitted with the outline rows where they miss by more than
+the finish's threshold (``coarse_refit``, which ``solve._design`` runs on its own only past the shape tolerance)
+and the steps run from that too: the 32x32
 drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the refitted ones.
+
+Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
+resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer. A step the
+front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
+the exponent (``backtrack`` in ``refine_minimax``).
 """
 
 from __future__ import annotations
@@ -35,16 +41,30 @@ MINIMAX_PATIENCE = 2
 # the miss's exponent in the weights' update: steadier than Lawson's 1 here (from main's designs, best of 3-6
 # steps: heart 32x32 0.34 % against 0.46 %, peanut 32x32 0.40 % against 0.49 %)
 MINIMAX_GAMMA = 0.5
-# above this share of the size the steps start from the better of the design and its coarse-refitted redesign
-REFIT_ABOVE = 0.01
-# only a design that misses by more than this share of the size is finished: the finish costs 2-6 designs, and
-# below it the circle, ellipse and star already fit within a few tenths of a per cent at every size
-FINISH_ABOVE = 0.005
+# a step no better than the best so far is not stepped from: back to the best with half the exponent (refine.py)
+MINIMAX_BACKTRACK = True
+# above this share of the size at 32x32 tiles the steps start from the better of the design and its
+# coarse-refitted redesign (the 32x32 peanut's steps left 0.40 %, the finish 0.31 % with it; the 32x32
+# heart's 0.34 % were not worth its cost)
+REFIT_ABOVE = 0.0035
+# only a design that misses by more than this share of the size at 32x32 tiles is finished: the finish costs 2-6
+# designs, and below it the circle, ellipse and star already fit within a few tenths of a per cent at every size
+# (0.5 % left the 64x64 drop at 0.22 % above its finished 48x48 one, 0.20 %: 0.4 % is 0.2 % at 64x64)
+FINISH_ABOVE = 0.004
+# both thresholds follow the lattice's resolution, 1/n of the size for n tiles a side: a miss a 32x32 design may
+# keep is too large for a 64x64 one (the 48x48 heart kept 0.37 %, the 32x32 one 0.34 %; the 48x48 drop's steps
+# left 0.71 % in its tips-only basin, below the 1 % that asks for the refitted redesign, at 32x32 0.40 %)
+THRESHOLD_TILES = 32
+
+
+def threshold(share: float, req: DesignRequest) -> float:
+    """``share`` (of the size, at ``THRESHOLD_TILES`` tiles a side) for ``req``'s lattice."""
+    return share * THRESHOLD_TILES / max(req.rows, req.cols)
 
 
 def applies(req: DesignRequest, contracted: dict, best) -> bool:
-    """A valid deployed-target design from ``MINIMAX_TILES`` tiles that misses by more than ``FINISH_ABOVE``,
-    without fabrication rows (the continuation refines those) or a floor on the opening (``refine_to_floor``
+    """A valid deployed-target design from ``MINIMAX_TILES`` tiles that misses by more than ``FINISH_ABOVE``
+    (scaled to its lattice, ``threshold``), without fabrication rows (the continuation refines those) or a floor on the opening (``refine_to_floor``
     does)."""
     return (
         best is not None
@@ -54,7 +74,7 @@ def applies(req: DesignRequest, contracted: dict, best) -> bool:
         and req.fabrication is None
         and not req.min_opening
         and req.rows * req.cols >= MINIMAX_TILES
-        and _hausdorff(best[1]) > FINISH_ABOVE
+        and _hausdorff(best[1]) > threshold(FINISH_ABOVE, req)
     )
 
 
@@ -67,15 +87,18 @@ def minimax_finish(
     shape_tol: tuple = (0.02, "rel"),
 ):
     """Lawson's steps from ``best`` (a ``_check`` outcome), and from its coarse-refitted redesign where they
-    leave more than ``REFIT_ABOVE``; the refined outcome when one passes every check with a smaller Hausdorff
+    leave more than ``REFIT_ABOVE`` (scaled, ``threshold``); the refined outcome when one passes every check with a smaller Hausdorff
     distance (ranking no worse, failing no ``verify`` check ``best`` passes), else None. The attempt is
     recorded either way."""
     h0 = _hausdorff(best[1])
     cand, trace, secs = _steps(req, best, judge)
     refit, left = None, min(h0, _hausdorff(cand[1]) if cand else h0)
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it
-    if not req.coarse_refit and left > REFIT_ABOVE:
-        refit = judge(design(replace(req, init="coarse", start=None, coarse_refit=True)))
+    if not req.coarse_refit and left > threshold(REFIT_ABOVE, req):
+        # its coarse levels refitted where they miss by more than the finish's own threshold (not only past the
+        # shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted 0.31 %)
+        again = replace(req, init="coarse", start=None, coarse_refit=True)
+        refit = judge(design(replace(again, coarse_refit_above=threshold(FINISH_ABOVE, req))))
         secs += float(refit[1]["time_s"])
         if refit[3]:
             more, more_trace, more_secs = _steps(req, refit, judge)
@@ -125,6 +148,7 @@ def _steps(
         gamma=MINIMAX_GAMMA,
         accept=valid,
         patience=MINIMAX_PATIENCE,
+        backtrack=MINIMAX_BACKTRACK,
     )
     return (checked.get(id(refined)) if refined is not None else None), trace, secs
 

@@ -195,6 +195,7 @@ class _Problem:
             max_iter=req.max_iter,
             solver=req.coarse_solver or req.solver,
             coarse_refit=req.coarse_refit,
+            coarse_refit_above=req.coarse_refit_above,
             # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
             # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
             outline=False,
@@ -235,7 +236,7 @@ class _Problem:
     def _coarse_level(self, sub: DesignRequest):
         """The coarse level's design and how it was fitted: tips only (its grid stays unfolded when resampled);
         with ``coarse_refit``, where that outline misses the target by more than the shape tolerance
-        (``second_opinion_above``), again with the outline rows, keeping the closer converged outline. The
+        (``second_opinion_above``, or ``coarse_refit_above``), again with the outline rows, keeping the closer converged outline. The
         tips-only fit lets tips bunch on their arcs: the drop's 16x16 and 32x32 levels sat at a Hausdorff distance
         of 40 % of its size (tips on their arcs to 0.47 %), and the 64x64 design they started ended at 22 %."""
         # the coarse level is a whole design (solve.py builds on this module)
@@ -250,7 +251,10 @@ class _Problem:
         res = _design(sub, False)
         h = miss(res)
         level = {"fit": "tips", "hausdorff_rel": h}
-        if not self.req.coarse_refit or h <= self.req.second_opinion_above:
+        above = self.req.coarse_refit_above
+        if not self.req.coarse_refit or h <= (
+            self.req.second_opinion_above if above is None else above
+        ):
             return res, level
         alt = _design(replace(sub, outline=True), False)
         h_alt = miss(alt)

@@ -81,6 +81,9 @@ class DesignRequest:
     # --init coarse: refit a coarse level whose tips-only outline misses ``second_opinion_above`` with the outline
     # rows (``_Problem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
     coarse_refit: bool = False
+    # with ``coarse_refit``: refit the levels that miss by more than this share instead (None: the shape tolerance;
+    # the minimax finish asks its own, smaller, threshold)
+    coarse_refit_above: float | None = None
     min_opening: float | None = None  # floor on the deployed hole fraction (``opening_rows.py``)
     fit_weights: dict | None = (
         None  # fit family name -> row weights (``refine.py``: towards the minimax fit)
