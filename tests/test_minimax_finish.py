@@ -30,6 +30,12 @@ def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
     between = {"conformance": {"deployed": {"hausdorff_rel": 0.75 * FINISH_ABOVE}}}
     assert not applies(big, {}, (None, between, [], True, {}))
     assert applies(DesignRequest(rows=64, cols=64, target=tgt), {}, (None, between, [], True, {}))
+    # ... down to a floor: the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) are not finished
+    circles = {"conformance": {"deployed": {"hausdorff_rel": 0.0022}}}
+    for n in (64, 128):
+        assert not applies(
+            DesignRequest(rows=n, cols=n, target=tgt), {}, (None, circles, [], True, {})
+        )
     assert threshold(REFIT_ABOVE, big) == REFIT_ABOVE
     assert threshold(REFIT_ABOVE, DesignRequest(rows=48, cols=96, target=tgt)) == REFIT_ABOVE / 3
     fab = DesignRequest(rows=32, cols=32, target=tgt, fabrication=FabricationLimits(min_width_mm=1))

@@ -55,6 +55,9 @@ FINISH_ABOVE = 0.004
 # keep is too large for a 64x64 one (the 48x48 heart kept 0.37 %, the 32x32 one 0.34 %; the 48x48 drop's steps
 # left 0.71 % in its tips-only basin, below the 1 % that asks for the refitted redesign, at 32x32 0.40 %)
 THRESHOLD_TILES = 32
+# the finish's gate scales down to this share and no further: below it the finish's 2-6 designs bought at most
+# about 0.1 % of the size, and the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) would pay them (64x64: 4 -> 27 CPU s)
+FINISH_FLOOR = 0.0025
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -74,7 +77,7 @@ def applies(req: DesignRequest, contracted: dict, best) -> bool:
         and req.fabrication is None
         and not req.min_opening
         and req.rows * req.cols >= MINIMAX_TILES
-        and _hausdorff(best[1]) > threshold(FINISH_ABOVE, req)
+        and _hausdorff(best[1]) > max(threshold(FINISH_ABOVE, req), FINISH_FLOOR)
     )
 
 
