@@ -546,7 +546,7 @@ def test_print_state_defaults_to_the_designs_intent(monkeypatch):
         pass
 
     def build(
-        pattern, style, state, printer, scale
+        pattern, style, state, printer, scale, memo=None
     ):  # the state the job is asked for, before any meshing
         raise Built(state)
 
