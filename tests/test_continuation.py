@@ -72,6 +72,7 @@ def _outcome(h: float, valid: bool = True):
         ((True, 0.19), 0.17, True, 0.17, 16),  # converged but missed: the steps, the better kept
         ((True, 0.19), 0.21, True, 0.19, 16),  # ... the jump when it is better
         ((True, 0.19), 0.17, False, 0.19, 8),  # ... from 16x16 only
+        ((True, 0.03), 0.031, False, 0.03, 16),  # ... and a near miss is the refinement's
     ],
 )
 def test_the_steps_follow_a_jump_that_stalls_or_misses(
@@ -92,7 +93,7 @@ def test_the_steps_follow_a_jump_that_stalls_or_misses(
         return steps, SimpleNamespace(converged=converged, h=h), X, spent + 1.0
 
     monkeypatch.setattr(C, "_raise_limits", fake_raise)
-    req = SimpleNamespace(rigid=False, rows=tiles, cols=tiles)
+    req = SimpleNamespace(rigid=False, rows=tiles, cols=tiles, second_opinion_above=TOL)
     trace: list = []
     steps, step, _, outcome, spent = C._jump_or_steps(
         req, np.zeros((4, 2)), "rigid", lambda r: _outcome(r.h, r.converged), 0.0, trace
