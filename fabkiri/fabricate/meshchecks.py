@@ -47,6 +47,19 @@ class MeshReport:
         }
 
 
+OVERLAP_MM3 = 1e-6  # a piece of shared volume above this is an overlap
+
+
+def shared_volume(a, b) -> tuple[float, float]:
+    """The volume two manifolds share, in all and in its largest connected piece (mm³). Bodies that meet face
+    to face (a strip in its tile's pocket) share slivers of round-off that add up with the print's size: a 16x16
+    ellipse at 340 mm, 1.3e-6 mm³ in 606 pieces about 3e-10 mm thick; an overlap is judged piece by piece."""
+    x = a ^ b
+    if x.is_empty():
+        return 0.0, 0.0
+    return float(x.volume()), max(float(p.volume()) for p in x.decompose())
+
+
 def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
     """Watertight, consistently wound, positive volume, on the bed, no two bodies
     sharing volume, and clearances between bodies that may move apart."""
@@ -55,7 +68,7 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
     job, pr = r.job, r.job.printer
     rep = MeshReport()
     bx, by, bz = pr.bed_mm
-    eps = 1e-6
+    eps, worst = 1e-6, 0.0
     for k, (bed, ms, tms) in enumerate(zip(job.beds, r.manifolds, r.meshes), 1):
         snaps = r.snaps[k - 1] if r.snaps else [0.0] * len(bed)
         for b, m, tm, snap in zip(bed, ms, tms, snaps):
@@ -92,17 +105,17 @@ def check_meshes(r: Realised, vol_rtol: float = 1e-9) -> MeshReport:
                 rep.problems.append(f"{b.name}: outside the {bx:g} x {by:g} x {bz:g} mm bed")
         # bodies printed together never share volume
         if len(ms) > 1:
-            inter = 0.0
             if print_style(job.style).body_per_material:
-                inter = (ms[0] ^ ms[1]).volume()
+                inter, piece = shared_volume(ms[0], ms[1])
             else:  # many small disjoint parts: their union loses no volume
-                inter = (
+                inter = piece = (
                     sum(m.volume() for m in ms)
                     - m3d.Manifold.batch_boolean(ms, m3d.OpType.Add).volume()
                 )
             rep.intersection_volume_mm3 = max(rep.intersection_volume_mm3, float(inter))
-    if rep.intersection_volume_mm3 > 1e-6:
-        rep.problems.append(f"bodies overlap by {rep.intersection_volume_mm3:.3g} mm³")
+            worst = max(worst, float(piece))
+    if worst > OVERLAP_MM3:
+        rep.problems.append(f"bodies overlap by {worst:.3g} mm³")
     print_style(job.style).clearances(r, rep)
     return rep
 
