@@ -36,6 +36,17 @@ def _seeds(fam, p):
     return np.stack([p[:nf], p[nf : 2 * nf]], -1), float(p[-1])
 
 
+def _symmetric_problem(axis: str, n: int):
+    """The rigid n x n design problem, symmetric about ``axis`` (a heart about y, an ellipse about x), and its
+    rigid family."""
+    req = DesignRequest(
+        n, n, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
+    )
+    req.symmetry = axis
+    prob = _Problem(req)
+    return prob, prob.rigid_family
+
+
 @pytest.mark.parametrize(
     "rows,cols,axis", [(8, 8, "y"), (8, 8, "x"), (5, 6, "y"), (6, 7, "x"), (4, 10, "y")]
 )
@@ -76,12 +87,7 @@ def test_an_odd_lattice_has_no_mirrored_seeds():
 def test_mirrored_jacobian_matches_finite_differences(axis):
     """J P of the reduced merit (regulariser, fit, outline rows) against central differences in q, and the
     normal matrix and gradient against JᵀJ and Jᵀr."""
-    req = DesignRequest(
-        8, 8, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
-    )
-    req.symmetry = axis
-    prob = _Problem(req)
-    fam = prob.rigid_family
+    prob, fam = _symmetric_problem(axis, 8)
     P = mirror_map(seed_partners(fam, 8, 8, axis), axis)
     on_grid = grid_families(fam, prob.st, prob.families)
     merit = MirroredMerit(_Merit(fam, prob.families, prob.margin, 1e-3, grid_families=on_grid), P)
@@ -164,12 +170,7 @@ def test_axis_rows_flag_a_tile_crossing_its_mirror_image(axis):
 def test_axis_rows_jacobian_matches_finite_differences(axis):
     """At a member crossing the axis the merit's active axis rows (the closed-state contact rows joined, as
     after an overlap) are negative, and their Jacobian through ``P`` is central differences' in q."""
-    req = DesignRequest(
-        8, 8, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
-    )
-    req.symmetry = axis
-    prob = _Problem(req)
-    fam = prob.rigid_family
+    prob, fam = _symmetric_problem(axis, 8)
     mirror, q, _ = _crossing_member(fam, prob.std, axis, 8, 8)
     on_grid = grid_families(fam, prob.st, prob.families)
     base = _Merit(fam, prob.families, prob.margin, 1e-3, grid_families=on_grid)
@@ -232,12 +233,7 @@ def test_mirrored_normal_is_formed_over_half_the_seeds(axis, dense, monkeypatch)
     the closed states' contact rows included. The dense path (small lattices) likewise: its node Jacobians,
     convexity rows and regulariser features are formed over q (``reduced_mirror_dense``), never over p's
     columns (main formed them there, and then Pᵀ (JᵀJ) P)."""
-    req = DesignRequest(
-        12, 12, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
-    )
-    req.symmetry = axis
-    prob = _Problem(req)
-    fam = prob.rigid_family
+    prob, fam = _symmetric_problem(axis, 12)
     mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)  # active contact and axis rows
     base = _Merit(
         fam,
@@ -300,12 +296,7 @@ def test_mirrored_dense_rows_are_the_full_rows_through_p(axis, hard, monkeypatch
     unsymmetric merit's at p = P q, and its Jacobian, formed over q's columns (``reduced_mirror_dense``), is
     theirs times P to 1e-12 without ever forming a node Jacobian or regulariser feature over p (main did, then
     multiplied by P)."""
-    req = DesignRequest(
-        12, 12, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
-    )
-    req.symmetry = axis
-    prob = _Problem(req)
-    fam = prob.rigid_family
+    prob, fam = _symmetric_problem(axis, 12)
     mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)
     base = _Merit(
         fam,
