@@ -137,7 +137,7 @@ def _closed_area(corners: np.ndarray) -> float:
 
 
 def _coverage_area(c: np.ndarray, grid: float) -> float | None:
-    """The outline's area by a coverage union of the quads ``c`` snapped to ``grid`` as GEOS snaps them, or
+    """The outline's area by a coverage union of the quads ``c`` snapped to ``grid`` (GEOS's precision model), or
     None: tiles other than quads, or snapped tiles that are not a coverage (they overlap, or a shared
     edge's ends fell in different grid cells).
 
@@ -148,7 +148,8 @@ def _coverage_area(c: np.ndarray, grid: float) -> float | None:
     an edge (1e-8 of the area apart on a 5x19 ellipse): they keep the general union."""
     if c.ndim != 3 or c.shape[1] != 4 or not grid > 0 or not np.isfinite(c).all():
         return None
-    polys = shapely.polygons(_snapped(c, grid))
+    # pointwise: each corner rounded to the grid as union_all(grid_size=grid) rounds its input, nothing else
+    polys = shapely.set_precision(shapely.polygons(c), grid, mode="pointwise")
     try:
         if not (shapely.is_valid(polys).all() and shapely.coverage_is_valid(polys)):
             return None
@@ -156,19 +157,6 @@ def _coverage_area(c: np.ndarray, grid: float) -> float | None:
     except shapely.errors.GEOSException:
         return None
     return area if area > 0 else None
-
-
-def _snapped(c: np.ndarray, grid: float) -> np.ndarray:
-    """``c`` on GEOS's fixed precision model of ``grid`` (its scale snapped to an integer within 1e-5, each
-    ordinate rounded half up), as ``union_all(grid_size=grid)`` snaps its input."""
-    scale = 1.0 / grid
-    if abs(scale - round(scale)) < 1e-5:
-        scale = float(round(scale))
-    if scale < 1.0:  # a grid over 1 mm: GEOS divides by the (snapped) grid size instead
-        size = 1.0 / scale
-        size = float(round(size)) if abs(size - round(size)) < 1e-5 else size
-        return np.floor(c / size + 0.5) * size
-    return np.floor(c * scale + 0.5) / scale
 
 
 def _outline_area(u) -> float:
