@@ -35,6 +35,7 @@ from ..design import conformance as conf
 from ..design.targets import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
+from . import maker_options as mo
 from .maker_result import MakeResult
 from .maker_tiles import TilesChoice, choose_tiles, retry_tiles
 
@@ -163,8 +164,6 @@ def _other_options(
     a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
     designs ran or they cost :data:`~.maker_options.BUDGET` times the first design (``base_cpu``
     without ``tried``); the adopted run and the lines."""
-    from . import maker_options as mo
-
     first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
     own = result.tiles.tiles
     every = [o for o in mo.options(plan) if tried or o.group or o.tiles.tiles != own]
