@@ -47,6 +47,27 @@ def _symmetric_problem(axis: str, n: int):
     return prob, prob.rigid_family
 
 
+def _mirrored_merit(axis: str, seed: int, dense: bool = True):
+    """12x12: the unsymmetric merit, the symmetric one over it (closed-state contact on) and q, a member
+    crossing the axis moved off it at random (active contact and axis rows); ``dense=False`` forces the
+    block path, as from about 40x40 tiles."""
+    prob, fam = _symmetric_problem(axis, 12)
+    mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)
+    base = _Merit(
+        fam,
+        prob.families,
+        prob.margin,
+        1e-3,
+        grid_families=grid_families(fam, prob.st, prob.families),
+    )
+    if not dense:
+        base._tiles = None
+    merit = MirroredMerit(base, mirror.P, mirror.axis_rows).with_contact(
+        ClosedContact(fam, prob.st)
+    )
+    return base, merit, q + 0.01 * np.random.default_rng(seed).normal(size=q.shape)
+
+
 @pytest.mark.parametrize(
     "rows,cols,axis", [(8, 8, "y"), (8, 8, "x"), (5, 6, "y"), (6, 7, "x"), (4, 10, "y")]
 )
@@ -233,22 +254,8 @@ def test_mirrored_normal_is_formed_over_half_the_seeds(axis, dense, monkeypatch)
     the closed states' contact rows included. The dense path (small lattices) likewise: its node Jacobians,
     convexity rows and regulariser features are formed over q (``reduced_mirror_dense``), never over p's
     columns (main formed them there, and then Pᵀ (JᵀJ) P)."""
-    prob, fam = _symmetric_problem(axis, 12)
-    mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)  # active contact and axis rows
-    base = _Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=grid_families(fam, prob.st, prob.families),
-    )
-    if not dense:
-        base._tiles = None  # the block path, as from about 40x40 tiles
-    merit = MirroredMerit(base, mirror.P, mirror.axis_rows).with_contact(
-        ClosedContact(fam, prob.st)
-    )
-    q = q + 0.01 * np.random.default_rng(2).normal(size=q.shape)
-    P = mirror.P
+    base, merit, q = _mirrored_merit(axis, seed=2, dense=dense)  # active contact and axis rows
+    P = merit.P
     # the unsymmetric merit's at p = P q, with the same axis and contact rows
     H_full, g_full = base.with_contact(merit.inner.contact).evaluate(P @ q).normal()
     want_H, want_g = P.T @ (P.T @ H_full).T, P.T @ g_full
@@ -296,20 +303,8 @@ def test_mirrored_dense_rows_are_the_full_rows_through_p(axis, hard, monkeypatch
     unsymmetric merit's at p = P q, and its Jacobian, formed over q's columns (``reduced_mirror_dense``), is
     theirs times P to 1e-12 without ever forming a node Jacobian or regulariser feature over p (main did, then
     multiplied by P)."""
-    prob, fam = _symmetric_problem(axis, 12)
-    mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)
-    base = _Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=grid_families(fam, prob.st, prob.families),
-    )
-    merit = MirroredMerit(base, mirror.P, mirror.axis_rows).with_contact(
-        ClosedContact(fam, prob.st)
-    )
-    q = q + 0.01 * np.random.default_rng(3).normal(size=q.shape)
-    P = mirror.P
+    base, merit, q = _mirrored_merit(axis, seed=3)
+    P = merit.P
     full = base.with_contact(merit.inner.contact).evaluate(P @ q, hard)
     want_r, want_J = full.r, np.asarray((P.T @ full.jacobian().T).T)
     for cls, name in ((TileShapeRows, "features"), (RigidFamily, "jacobian_at")):
