@@ -78,20 +78,18 @@ def refine_minimax(
         spent += result.report["time_s"]
         h = deployed(result.pattern.nodes, result.pattern.topology, target)["hausdorff_rel"]
         trace.append(h if result.converged else float("nan"))
-        # with backtracking every converged step is judged (a veto sends the next one back), else only a better one
-        ok = result.converged and (not backtrack or accept is None or accept(result))
-        better = ok and (best is None or h < best[0])
-        if better and not backtrack and accept is not None:
-            better = accept(result)
+        closer = result.converged and (best is None or h < best[0])
+        # with backtracking every converged step is judged (a veto sends the next one back), else only a closer one
+        judged = result.converged and (backtrack or closer)
+        vetoed = judged and accept is not None and not accept(result)
+        better = closer and not vetoed
         if better:
             best, since = (h, result), -1
         # a vetoed step that came closer is not one without progress: the weights work, the next step backtracks
-        since += not (
-            backtrack and result.converged and not ok and best is not None and h < best[0]
-        )
+        since += not (backtrack and vetoed and closer and best is not None)
         if patience is not None and since >= patience:
             break
-        walk.next(result, better, vetoed=result.converged and not ok)
+        walk.next(result, better, vetoed)
     return (best[1] if best else None), trace, spent
 
 
