@@ -31,7 +31,7 @@ keeps only the shape fit, the regulariser and the inequalities.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
@@ -39,6 +39,7 @@ from scipy.sparse.linalg import splu
 
 from ..errors import SolveError
 from ..pattern.topology import SpanningTree
+from .rigid_core import GridCore, grid_core
 from .stencils import Stencils
 
 
@@ -52,10 +53,18 @@ class RigidFamily:
     Z: np.ndarray  # (G, nf) closed-state-1 grid = Z @ S
     Zn: np.ndarray  # (V, nf) Z at each node's grid vertex
     Y: np.ndarray  # (V, nf) tile-translation part minus σ Zn, per node
+    _core: GridCore | None = field(default=None, init=False, repr=False)
 
     @property
     def n_seeds(self) -> int:
         return len(self.seeds)
+
+    @property
+    def core(self) -> GridCore:
+        """``Z = E Z[core]`` with a sparse ``E`` (``rigid_core.py``), made on first use."""
+        if self._core is None:
+            self._core = grid_core(self.midpoint, self.Z)
+        return self._core
 
     @classmethod
     def build(cls, st: Stencils, tree: SpanningTree) -> RigidFamily:
