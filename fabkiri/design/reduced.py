@@ -327,7 +327,7 @@ class _Merit:
         above the dense threshold the matrix is assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}, a third of the
         work of the product through a dense C (and no 2G × P matrix in memory: 138 MB at 128x128), and
         through the family's sparse factor ``Z = E Z[core]`` (``rigid_core.py``): the dense products run
-        over the core's vertices (about G / 3) instead of the G grid vertices."""
+        over the core's vertices (about a quarter of them) instead of all G grid vertices."""
         nf = self.nf
         P = 2 * nf + 1
         if Jc.shape[0] * P <= DENSE_JD:

@@ -49,8 +49,8 @@ def grid_core(midpoint: np.ndarray, Z: np.ndarray, levels: int = LEVELS) -> Grid
     """The core of the grid basis ``Z`` (G × nf) whose rows ``midpoint`` ``(z, a, b)`` hold
     (``c_z = (c_a + c_b) / 2``, one row per dependent vertex ``z``).
 
-    Each level keeps a set of the rows' vertices ``z`` (greedily, shortest rows first, then by vertex) no two
-    of which meet in a kept row, eliminates them and substitutes them in the other rows. Falls back to the
+    Each level takes a set of the rows' vertices ``z`` (``_independent_rows``) no two of which meet in a
+    taken row, eliminates them and substitutes them in the other rows. Falls back to the
     whole grid (``E`` the identity) if the product does not give ``Z`` back."""
     G = Z.shape[0]
     m = len(midpoint)
@@ -80,9 +80,11 @@ def grid_core(midpoint: np.ndarray, Z: np.ndarray, levels: int = LEVELS) -> Grid
 
 def _independent_rows(A: sparse.csr_matrix, pivot: np.ndarray) -> np.ndarray:
     """Rows whose pivots can be eliminated together: no chosen pivot appears in another chosen row (and
-    none whose pivot's coefficient has cancelled)."""
+    none whose pivot's coefficient has cancelled). Greedily, shortest rows first, then by the pivot's
+    colour (``_colours``: on the lattice a row's ends are its pivot's neighbours, so one colour class of
+    pivots is independent; by vertex alone 5047 of the 128x128 grid's 16641 vertices stay, 4416 so)."""
     lengths = np.diff(A.indptr)
-    order = np.lexsort((pivot, lengths))
+    order = np.lexsort((pivot, _colours(A, pivot)[pivot], lengths))
     order = order[np.asarray(A[order, pivot[order]]).ravel() != 0.0]
     chosen, blocked, taken = [], set(), set()
     ind, ptr = A.indices, A.indptr
@@ -95,6 +97,20 @@ def _independent_rows(A: sparse.csr_matrix, pivot: np.ndarray) -> np.ndarray:
         taken.add(p)
         blocked.update(others)
     return np.array(chosen, dtype=np.int64)
+
+
+def _colours(A: sparse.csr_matrix, pivot: np.ndarray) -> np.ndarray:
+    """``(G,)`` parity of each vertex's distance from the first vertex of its component in the graph that
+    joins a row's pivot to its other vertices (a 2-colouring where that graph is bipartite)."""
+    from scipy.sparse import csgraph  # only the large lattices' block path needs it
+
+    G = A.shape[1]
+    coo = A.tocoo()
+    graph = sparse.csr_matrix((np.ones(coo.nnz), (pivot[coo.row], coo.col)), shape=(G, G))
+    _, label = csgraph.connected_components(graph, directed=False)
+    roots = np.unique(label, return_index=True)[1]
+    d = csgraph.dijkstra(graph, directed=False, indices=roots, unweighted=True, min_only=True)
+    return np.where(np.isfinite(d), d, 0).astype(np.int64) % 2
 
 
 def _eliminate(A: sparse.csr_matrix, pivot: np.ndarray, chosen: np.ndarray, G: int):
