@@ -108,3 +108,33 @@ def test_grid_block_gradient_matches_finite_differences(block_merit):
         fd = (half_sq(p + e) - half_sq(p - e)) / (2 * h)
         assert abs(fd - g[k]) <= 1e-5 * np.abs(g).max(), k
     assert g[-1] == 0.0  # the grid rows do not see ψ
+
+
+def test_large_lattice_maps_go_through_the_core_and_the_tiles():
+    """Above ``LARGE_GRID`` vertices ``grid`` is ``E (Z[core] S)`` and ``nodes`` takes ``Y S`` per tile: the
+    maps ``Z S`` and ``x(S, ψ)`` of the basis to round-off; a family with another ``Y`` (the mirror's
+    centred gauge) uses its own ``Y``."""
+    from fabkiri.design import rigid
+    from fabkiri.design.reduced_mirror import centred
+
+    fam = _family(48, 48)
+    assert len(fam.Z) > rigid.LARGE_GRID
+    S = np.random.default_rng(7).normal(size=(fam.n_seeds, 2)) * 10.0
+    psi = 0.4
+
+    def reference(f):
+        a, b = (f.Z @ S)[f.node_vertex], f.Y @ S
+        c, s = np.cos(psi), np.sin(psi)
+        return np.stack([c * a[:, 0] - s * b[:, 1], c * a[:, 1] + s * b[:, 0]], -1)
+
+    scale = np.abs(fam.Z @ S).max()
+    assert fam._core is None
+    assert np.abs(fam.grid(S) - fam.Z @ S).max() <= 1e-13 * scale
+    assert fam._core is not None  # the grid went through the core
+    assert np.abs(fam.nodes(S, psi) - reference(fam)).max() <= 1e-13 * scale
+    moved = centred(fam)
+    assert moved._tau is None
+    assert np.abs(moved.nodes(S, psi) - reference(moved)).max() <= 1e-13 * scale
+    small = _family(8, 8)  # small lattices keep the plain products, bit for bit
+    S8 = S[: small.n_seeds]
+    assert np.array_equal(small.grid(S8), small.Z @ S8) and small._core is None

@@ -335,12 +335,14 @@ class _Merit:
             return JC.T @ JC, JC.T @ rc
         core = self.fam.core
         Ja, Jb = Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()
+        # the transposes converted once each (a CSC @ CSR product converts its right factor every time)
+        AT, BT = Ja.T.tocsr(), Jb.T.tocsr()
         H = np.zeros((P, P))
-        H[:nf, :nf] = core.quadratic(Ja.T @ Ja)
-        H[nf : 2 * nf, nf : 2 * nf] = core.quadratic(Jb.T @ Jb)
-        H[:nf, nf : 2 * nf] = core.quadratic(Ja.T @ Jb)
+        H[:nf, :nf] = core.quadratic(AT @ Ja)
+        H[nf : 2 * nf, nf : 2 * nf] = core.quadratic(BT @ Jb)
+        H[:nf, nf : 2 * nf] = core.quadratic(AT @ Jb)
         H[nf : 2 * nf, :nf] = H[:nf, nf : 2 * nf].T
-        g = [core.ZcT @ (core.ET @ (J.T @ rc)) for J in (Ja, Jb)]
+        g = [core.ZcT @ (core.ET @ (JT @ rc)) for JT in (AT, BT)]
         return H, np.concatenate([*g, [0.0]])
 
 
