@@ -117,7 +117,7 @@ def test_large_lattice_maps_go_through_the_core_and_the_tiles():
     from fabkiri.design import rigid
     from fabkiri.design.reduced_mirror import centred
 
-    fam = _family(48, 48)
+    fam = _family(64, 64)
     assert len(fam.Z) > rigid.LARGE_GRID
     S = np.random.default_rng(7).normal(size=(fam.n_seeds, 2)) * 10.0
     psi = 0.4

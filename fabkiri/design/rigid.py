@@ -42,9 +42,10 @@ from ..pattern.topology import SpanningTree
 from .rigid_core import GridCore, grid_core
 from .stencils import Stencils
 
-# above this many grid vertices (48x48 tiles and up) ``grid`` and ``nodes`` take the cheaper products (the core's
+# above this many grid vertices (64x64 tiles and up) ``grid`` and ``nodes`` take the cheaper products (the core's
 # ``E (Z[core] S)``, the tiles' ``τ S``): the same maps to round-off; smaller lattices keep ``Z S`` and ``Y S``
-LARGE_GRID = 2000
+# (at 48x48 the two ways cost the same)
+LARGE_GRID = 4000
 
 
 @dataclass(eq=False)
@@ -58,7 +59,7 @@ class RigidFamily:
     Zn: np.ndarray  # (V, nf) Z at each node's grid vertex
     Y: np.ndarray  # (V, nf) tile-translation part minus σ Zn, per node
     _core: GridCore | None = field(default=None, init=False, repr=False)
-    # (Y, τ per tile, tile of each node, σ per tile) as ``build`` made them: ``Y @ S`` per tile while ``Y`` is
+    # (Y, τ per tile, tile of each node, σ per node (V, 1)) as ``build`` made them: ``Y @ S`` per tile while ``Y`` is
     # that array (a family made from this one with another ``Y``, e.g. ``reduced_mirror.centred``, has none)
     _tau: tuple | None = field(default=None, init=False, repr=False)
 
@@ -134,7 +135,7 @@ class RigidFamily:
         Zn = Z[node_vertex]
         Y = np.ascontiguousarray(tau[use_t] - sigma[use_t, None] * Zn)
         fam = cls(node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), Y)
-        fam._tau = (Y, tau, use_t, sigma)
+        fam._tau = (Y, tau, use_t, sigma[use_t, None])
         return fam
 
     @classmethod
@@ -189,7 +190,7 @@ class RigidFamily:
         if len(self.Z) <= LARGE_GRID or t is None or t[0] is not self.Y:
             return self.Y @ S
         _, tau, use_t, sigma = t
-        return (tau @ S)[use_t] - sigma[use_t, None] * a
+        return (tau @ S)[use_t] - sigma * a
 
     def jacobian(self, S: np.ndarray, psi: float) -> np.ndarray:
         """``∂vec(x)/∂p`` (dense, ``(2V, 2 nf + 1)``) for ``p = (S[:, 0], S[:, 1], ψ)``."""
