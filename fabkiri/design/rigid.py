@@ -31,7 +31,7 @@ keeps only the shape fit, the regulariser and the inequalities.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
@@ -39,7 +39,13 @@ from scipy.sparse.linalg import splu
 
 from ..errors import SolveError
 from ..pattern.topology import SpanningTree
+from .rigid_core import GridCore, grid_core
 from .stencils import Stencils
+
+# above this many grid vertices (64x64 tiles and up) ``grid`` and ``nodes`` take the cheaper products (the core's
+# ``E (Z[core] S)``, the tiles' ``τ S``): the same maps to round-off; smaller lattices keep ``Z S`` and ``Y S``
+# (at 48x48 the two ways cost the same)
+LARGE_GRID = 4000
 
 
 @dataclass(eq=False)
@@ -52,10 +58,21 @@ class RigidFamily:
     Z: np.ndarray  # (G, nf) closed-state-1 grid = Z @ S
     Zn: np.ndarray  # (V, nf) Z at each node's grid vertex
     Y: np.ndarray  # (V, nf) tile-translation part minus σ Zn, per node
+    _core: GridCore | None = field(default=None, init=False, repr=False)
+    # (Y, τ per tile, tile of each node, σ per node (V, 1)) as ``build`` made them: ``Y @ S`` per tile while ``Y`` is
+    # that array (a family made from this one with another ``Y``, e.g. ``reduced_mirror.centred``, has none)
+    _tau: tuple | None = field(default=None, init=False, repr=False)
 
     @property
     def n_seeds(self) -> int:
         return len(self.seeds)
+
+    @property
+    def core(self) -> GridCore:
+        """``Z = E Z[core]`` with a sparse ``E`` (``rigid_core.py``), made on first use."""
+        if self._core is None:
+            self._core = grid_core(self.midpoint, self.Z)
+        return self._core
 
     @classmethod
     def build(cls, st: Stencils, tree: SpanningTree) -> RigidFamily:
@@ -116,8 +133,10 @@ class RigidFamily:
         use_t = np.empty(st.n_nodes, dtype=np.int64)
         use_t[tl.ravel()] = np.repeat(np.arange(T), 4)
         Zn = Z[node_vertex]
-        Y = tau[use_t] - sigma[use_t, None] * Zn
-        return cls(node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), np.ascontiguousarray(Y))
+        Y = np.ascontiguousarray(tau[use_t] - sigma[use_t, None] * Zn)
+        fam = cls(node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), Y)
+        fam._tau = (Y, tau, use_t, sigma[use_t, None])
+        return fam
 
     @classmethod
     def of_standard(cls, st: Stencils, tree: Callable[[], SpanningTree]) -> RigidFamily:
@@ -152,15 +171,26 @@ class RigidFamily:
     # ---------------------------------------------------------------- maps
     def grid(self, S: np.ndarray) -> np.ndarray:
         """Closed-state-1 pattern vertices ``(G, 2)``."""
+        if len(self.Z) > LARGE_GRID:
+            core = self.core
+            return core.E @ (core.Zc @ S)
         return self.Z @ S
 
     def nodes(self, S: np.ndarray, psi: float, grid: np.ndarray | None = None) -> np.ndarray:
         """Deployed nodes ``(V, 2)`` at deployment angle ``psi`` (``grid``: ``self.grid(S)`` when known)."""
         # Zn S is the grid's rows: the product over the G grid vertices, not the V nodes (twice as many)
         a = (self.grid(S) if grid is None else grid)[self.node_vertex]
-        b = self.Y @ S
+        b = self._translations(S, a)
         c, s = np.cos(psi), np.sin(psi)
         return np.stack([c * a[:, 0] - s * b[:, 1], c * a[:, 1] + s * b[:, 0]], -1)
+
+    def _translations(self, S: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """``Y S`` given ``a = Zn S``; on a large lattice as ``(τ S)[tile] - σ a`` (T tile rows, not V nodes)."""
+        t = self._tau
+        if len(self.Z) <= LARGE_GRID or t is None or t[0] is not self.Y:
+            return self.Y @ S
+        _, tau, use_t, sigma = t
+        return (tau @ S)[use_t] - sigma * a
 
     def jacobian(self, S: np.ndarray, psi: float) -> np.ndarray:
         """``∂vec(x)/∂p`` (dense, ``(2V, 2 nf + 1)``) for ``p = (S[:, 0], S[:, 1], ψ)``."""
