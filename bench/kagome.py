@@ -4,7 +4,8 @@
     PYTHONPATH=. python3 bench/kagome.py --fit [--cells circle:6x11:120,heart:6x11:120:none,...]
 
 ``--fit`` runs ``fabkiri design --lattice kagome`` per cell (outline, R x C or ``auto`` for the lattice
-chosen from the outline, size in mm) and prints one row each: the exit code, the Hausdorff distance (% of
+chosen from the outline, either followed by ``+trim`` for ``--trim``: the lattice cut to the outline,
+size in mm) and prints one row each: the exit code, the Hausdorff distance (% of
 the size, read from the written design), the verify checks that failed, the aspect warning, CPU s of the
 command (its children's rusage) and the load average after it.
 
@@ -103,6 +104,8 @@ def fit_row(outline: str, tiles: str, size: str, out: Path, symmetry: str = "") 
     target = EGG if outline == "egg" else outline
     args = ["design", "--lattice", "kagome", "--target", target, "--size", size, "-o", str(out)]
     args += ["--symmetry", symmetry] if symmetry else []
+    tiles, trim = tiles.removesuffix("+trim"), tiles.endswith("+trim")  # RxC+trim: cut to the outline
+    args += ["--trim"] if trim else []
     run = run_cli(ROOT, *args, *([] if tiles == "auto" else ["--tiles", tiles]), timeout=3600)
     warn = next((ln for ln in run.stderr.splitlines() if "wide for 1 high" in ln), "")
     hd, failed, lattice = "–", "–", tiles
@@ -111,7 +114,9 @@ def fit_row(outline: str, tiles: str, size: str, out: Path, symmetry: str = "") 
         rep = d["design"]["report"]
         hd = f"{100 * rep['conformance']['hausdorff_rel']:.2f} % ({_shapely_hausdorff(out, target, size)})"
         failed = ", ".join(rep["verify_failed"]) or "all pass"
-        lattice = f"{d['lattice']['rows']}x{d['lattice']['cols']}"
+        lat = d["lattice"]
+        r, c = lat.get("trimmed_from", (lat.get("rows"), lat.get("cols")))
+        lattice = f"{r}x{c}" + (f" cut to {len(lat['keep'])}" if "keep" in lat else "")
         if rep.get("convex_holes"):
             failed += " (convex holes)"
         out.unlink()
