@@ -104,7 +104,10 @@ def fit_row(outline: str, tiles: str, size: str, out: Path, symmetry: str = "") 
     target = EGG if outline == "egg" else outline
     args = ["design", "--lattice", "kagome", "--target", target, "--size", size, "-o", str(out)]
     args += ["--symmetry", symmetry] if symmetry else []
-    tiles, trim = tiles.removesuffix("+trim"), tiles.endswith("+trim")  # RxC+trim: cut to the outline
+    tiles, trim = (
+        tiles.removesuffix("+trim"),
+        tiles.endswith("+trim"),
+    )  # RxC+trim: cut to the outline
     args += ["--trim"] if trim else []
     run = run_cli(ROOT, *args, *([] if tiles == "auto" else ["--tiles", tiles]), timeout=3600)
     warn = next((ln for ln in run.stderr.splitlines() if "wide for 1 high" in ln), "")

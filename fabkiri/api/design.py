@@ -242,7 +242,9 @@ def _solver_request(
             "quad designs need --tiles ROWSxCOLS (a kagome design chooses it from the outline)"
         )
     if request.trim:
-        raise InputError("--trim cuts kagome lattices to the outline; quad designs have no cut lattice")
+        raise InputError(
+            "--trim cuts kagome lattices to the outline; quad designs have no cut lattice"
+        )
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")

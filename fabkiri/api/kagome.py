@@ -387,8 +387,9 @@ def choose_lattice(
         if trim:
             fit = KA.aspect_fit(*KT.block_for(target, KA.DEFAULT_TILES), target)
         note: str | None = (
-            f"kagome {fit.tiles[0]}x{fit.tiles[1]} chosen from the outline: {fit.lattice:.2f} wide for 1 "
-            f"high, {target.name!r} {fit.target:.2f} (--tiles RxC to choose)"
+            f"kagome {fit.tiles[0]}x{fit.tiles[1]}{' (cut to the outline)' if trim else ''} chosen from "
+            f"the outline: {fit.lattice:.2f} wide for 1 high, {target.name!r} {fit.target:.2f} (--tiles "
+            "RxC to choose)"
         )
     else:
         rows, cols = tiles

@@ -67,7 +67,9 @@ def facing_sides(x: np.ndarray) -> np.ndarray:
     lo, hi = x.min(0), x.max(0)
     p = (x - 0.5 * (lo + hi)) / np.maximum(0.5 * (hi - lo), 1e-300)
     vertical = np.abs(p[:, 1]) >= np.abs(p[:, 0])
-    side = np.where(vertical, np.where(p[:, 1] < 0, SIDE_B, SIDE_T), np.where(p[:, 0] > 0, SIDE_R, SIDE_L))
+    side = np.where(
+        vertical, np.where(p[:, 1] < 0, SIDE_B, SIDE_T), np.where(p[:, 0] > 0, SIDE_R, SIDE_L)
+    )
     return side.astype(np.int64)
 
 
@@ -203,7 +205,9 @@ def partial_fans(standard: Pattern) -> list[tuple[np.ndarray, np.ndarray]]:
 
     lat = standard.lattice or {}
     rows, cols = (int(v) for v in lat.get("trimmed_from", (lat.get("rows"), lat.get("cols"))))
-    keep = np.asarray(lat.get("keep", np.arange(rows * cols)), dtype=np.int64)  # a cut lattice's tiles
+    keep = np.asarray(
+        lat.get("keep", np.arange(rows * cols)), dtype=np.int64
+    )  # a cut lattice's tiles
     out = []
     for psi in (0.0, 2.0 * OPEN_DEG):
         pts = kagome_corners(rows, cols, np.radians(psi))[keep].reshape(-1, 2)

@@ -17,7 +17,7 @@ from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import InputError
-from ..pattern.kagome import kagome_corners, kagome_topology, OPEN_DEG
+from ..pattern.kagome import OPEN_DEG, kagome_corners, kagome_topology
 from . import kagome_aspect as KA
 from .target_curve import Target
 
@@ -57,6 +57,8 @@ def _largest_piece(rows: int, cols: int, keep: np.ndarray) -> np.ndarray:
     tiles, _ = kagome_topology(rows, cols)
     sub = tiles[keep]
     t = np.repeat(np.arange(len(keep)), 3)
-    inc = sparse.csr_matrix((np.ones(sub.size), (t, sub.ravel())), shape=(len(keep), tiles.max() + 1))
+    inc = sparse.csr_matrix(
+        (np.ones(sub.size), (t, sub.ravel())), shape=(len(keep), tiles.max() + 1)
+    )
     _, label = connected_components(inc @ inc.T, directed=False)
     return keep[label == np.bincount(label).argmax()] if len(keep) else keep
