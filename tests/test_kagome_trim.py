@@ -91,3 +91,10 @@ def test_a_126_tile_circle_cut_to_the_outline_fits_within_1_5_percent():
     assert out.report["verify_failed"] == []
     assert out.report["conformance"]["hausdorff_rel"] <= 0.015
     assert out.valid
+
+
+def test_trim_on_a_quad_design_is_refused_in_one_line(tmp_path, run_cli):
+    out = tmp_path / "q.json"
+    code, _, err = run_cli("design", "--tiles", "4x4", "--target", "circle", "--trim", "-o", out)
+    assert code == 2 and "--trim cuts kagome lattices" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()

@@ -87,9 +87,19 @@ class KagomeOutcome:
         out += opening_lines(r) + [
             f"fabkiri: design failed: {p}" for p in r.get("opening_problems", [])
         ]
+        if r["shape"]["status"] == "missed" and not r.get("trimmed_tiles"):
+            out.append(TRIM_HINT)
         if r.get("fabricability"):
             out += fabricability.summary_lines(r["fabricability"])
         return out
+
+
+# a whole R x C block bends its corners onto a round or pointed outline, where the corner tiles reach the
+# gap and quality floors; cut to the outline it has no such corners (docs/kagome.md, "A lattice cut to")
+TRIM_HINT = (
+    "hint: the whole R x C block must bend its corners onto the outline; --trim cuts it to the outline "
+    "instead, which fits round and pointed outlines nearer"
+)
 
 
 def _fabrication_line(fr: dict) -> str:
