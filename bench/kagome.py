@@ -93,7 +93,10 @@ FIT_CELLS = (  # docs/kagome.md's table (the heart 6x11 free and 6x13 rows were 
     "circle:auto:120,circle:6x10:120,circle:8x8:120,circle:9x15:180,circle:12x21:240,"
     "ellipse:auto:120,ellipse:4x15:120,ellipse:4x13:120,ellipse:5x17:180,ellipse:6x11:120,"
     "ellipse:5x19:198,ellipse:6x21:240,heart:auto:120,heart:6x11:120,"
-    "egg:auto:120,egg:7x9:120,egg:9x15:180"
+    "egg:auto:120,egg:7x9:120,egg:9x15:180,"
+    # cut to the outline (--trim, docs/kagome.md "A lattice cut to the outline")
+    "circle:auto+trim:120,circle:10x17+trim:180,ellipse:auto+trim:120,ellipse:7x25+trim:240,"
+    "heart:auto+trim:120,heart:10x19+trim:180,egg:auto+trim:120"
 )
 
 

@@ -98,3 +98,30 @@ def test_trim_on_a_quad_design_is_refused_in_one_line(tmp_path, run_cli):
     code, _, err = run_cli("design", "--tiles", "4x4", "--target", "circle", "--trim", "-o", out)
     assert code == 2 and "--trim cuts kagome lattices" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "tiles, trim, cut", [(None, False, True), ((6, 11), False, False), ((6, 11), True, True)]
+)
+def test_the_front_door_cuts_a_lattice_chosen_from_the_outline_or_asked_to(
+    monkeypatch, tiles, trim, cut
+):
+    """Without --tiles the lattice chosen from the outline is cut to it; --tiles RxC is the whole block
+    unless --trim."""
+    from fabkiri.api import kagome as AK
+    from fabkiri.api.design import PatternRequest
+
+    seen = {}
+
+    def fake(rows, cols, target, size=None, **kw):
+        seen.update(rows=rows, cols=cols, trim=kw["trim"])
+        return AK.KagomeOutcome(None, {}, False, (rows, cols))  # type: ignore[arg-type]
+
+    monkeypatch.setattr(AK, "design_kagome", fake)
+    notes: list[str] = []
+    req = PatternRequest(tiles=tiles, target="circle", size=120.0, kind="kagome", trim=trim)
+    AK.design_kagome_pattern(req, notify=notes.append)
+    assert seen["trim"] is cut
+    if tiles is None:
+        assert (seen["rows"], seen["cols"]) == KT.block_for(load_target("circle", 120.0), 66)
+        assert "cut to the outline" in notes[0] and "chosen from the outline" in notes[0]
