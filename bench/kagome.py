@@ -4,7 +4,8 @@
     PYTHONPATH=. python3 bench/kagome.py --fit [--cells circle:6x11:120,heart:6x11:120:none,...]
 
 ``--fit`` runs ``fabkiri design --lattice kagome`` per cell (outline, R x C or ``auto`` for the lattice
-chosen from the outline, size in mm) and prints one row each: the exit code, the Hausdorff distance (% of
+chosen from the outline, either followed by ``+trim`` for ``--trim``: the lattice cut to the outline,
+size in mm) and prints one row each: the exit code, the Hausdorff distance (% of
 the size, read from the written design), the verify checks that failed, the aspect warning, CPU s of the
 command (its children's rusage) and the load average after it.
 
@@ -92,7 +93,10 @@ FIT_CELLS = (  # docs/kagome.md's table (the heart 6x11 free and 6x13 rows were 
     "circle:auto:120,circle:6x10:120,circle:8x8:120,circle:9x15:180,circle:12x21:240,"
     "ellipse:auto:120,ellipse:4x15:120,ellipse:4x13:120,ellipse:5x17:180,ellipse:6x11:120,"
     "ellipse:5x19:198,ellipse:6x21:240,heart:auto:120,heart:6x11:120,"
-    "egg:auto:120,egg:7x9:120,egg:9x15:180"
+    "egg:auto:120,egg:7x9:120,egg:9x15:180,"
+    # cut to the outline (--trim, docs/kagome.md "A lattice cut to the outline")
+    "circle:auto+trim:120,circle:10x17+trim:180,ellipse:auto+trim:120,ellipse:7x25+trim:240,"
+    "heart:auto+trim:120,heart:10x19+trim:180,egg:auto+trim:120"
 )
 
 
@@ -103,6 +107,11 @@ def fit_row(outline: str, tiles: str, size: str, out: Path, symmetry: str = "") 
     target = EGG if outline == "egg" else outline
     args = ["design", "--lattice", "kagome", "--target", target, "--size", size, "-o", str(out)]
     args += ["--symmetry", symmetry] if symmetry else []
+    tiles, trim = (
+        tiles.removesuffix("+trim"),
+        tiles.endswith("+trim"),
+    )  # RxC+trim: cut to the outline
+    args += ["--trim"] if trim else []
     run = run_cli(ROOT, *args, *([] if tiles == "auto" else ["--tiles", tiles]), timeout=3600)
     warn = next((ln for ln in run.stderr.splitlines() if "wide for 1 high" in ln), "")
     hd, failed, lattice = "–", "–", tiles
@@ -111,7 +120,9 @@ def fit_row(outline: str, tiles: str, size: str, out: Path, symmetry: str = "") 
         rep = d["design"]["report"]
         hd = f"{100 * rep['conformance']['hausdorff_rel']:.2f} % ({_shapely_hausdorff(out, target, size)})"
         failed = ", ".join(rep["verify_failed"]) or "all pass"
-        lattice = f"{d['lattice']['rows']}x{d['lattice']['cols']}"
+        lat = d["lattice"]
+        r, c = lat.get("trimmed_from", (lat.get("rows"), lat.get("cols")))
+        lattice = f"{r}x{c}" + (f" cut to {len(lat['keep'])}" if "keep" in lat else "")
         if rep.get("convex_holes"):
             failed += " (convex holes)"
         out.unlink()

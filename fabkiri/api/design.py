@@ -67,6 +67,7 @@ class PatternRequest:
     """Everything ``fabkiri design`` can be told (the same names as its options)."""
 
     tiles: tuple[int, int] | None  # rows, cols (None: kagome chooses them from the outline)
+    trim: bool = False  # kagome: the R x C block cut to the outline (design/kagome_trim.py)
     target: str | None = None  # a name from templates/targets or a .csv/.json/.svg file
     size: float | None = None  # the target's larger dimension in mm (named targets default to 100)
     rigid: bool = False
@@ -239,6 +240,10 @@ def _solver_request(
     if request.tiles is None:
         raise InputError(
             "quad designs need --tiles ROWSxCOLS (a kagome design chooses it from the outline)"
+        )
+    if request.trim:
+        raise InputError(
+            "--trim cuts kagome lattices to the outline; quad designs have no cut lattice"
         )
     rows, cols = request.tiles
     if rows < 2 or cols < 2:

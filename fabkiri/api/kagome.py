@@ -27,6 +27,7 @@ from ..design import conformance as conf
 from ..design import kagome_aspect as KA
 from ..design import kagome_fab as KF
 from ..design import kagome_opening as KO
+from ..design import kagome_trim as KT
 from ..design.fabrication import FabricationLimits, smallest_size
 from ..design.kagome_fit import design
 from ..design.target_curve import Target
@@ -37,7 +38,7 @@ from ..fileio import atomic_write
 from ..mechanics.contract import with_contracted_states
 from ..pattern.fabricability import pal_bound
 from ..pattern.io import dumps
-from ..pattern.kagome import standard_kagome
+from ..pattern.kagome import standard_kagome, trimmed_kagome
 from ..pattern.model import Pattern
 from ..verify import verify_pattern
 from .design_opening import check_floor
@@ -73,8 +74,9 @@ class KagomeOutcome:
         """The lines ``fabkiri design --lattice kagome`` prints about the design written to ``path``: the
         figures, then the fabrication limits and whether the design meets them (mm), then fabricability."""
         r, (rows, cols) = self.report, self.tiles
+        cut = f" cut to {r['trimmed_tiles']} tiles" if r.get("trimmed_tiles") else ""
         out = [
-            f"wrote {path}: kagome {rows}x{cols} {r['status']}, max equality residual "
+            f"wrote {path}: kagome {rows}x{cols}{cut} {r['status']}, max equality residual "
             f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
             f"the size (shape {r['shape']['status']}), verify: "
             f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}"
@@ -85,9 +87,19 @@ class KagomeOutcome:
         out += opening_lines(r) + [
             f"fabkiri: design failed: {p}" for p in r.get("opening_problems", [])
         ]
+        if r["shape"]["status"] == "missed" and not r.get("trimmed_tiles"):
+            out.append(TRIM_HINT)
         if r.get("fabricability"):
             out += fabricability.summary_lines(r["fabricability"])
         return out
+
+
+# a whole R x C block bends its corners onto a round or pointed outline, where the corner tiles reach the
+# gap and quality floors; cut to the outline it has no such corners (docs/kagome.md, "A lattice cut to")
+TRIM_HINT = (
+    "hint: the whole R x C block must bend its corners onto the outline; --trim cuts it to the outline "
+    "instead, which fits round and pointed outlines nearer"
+)
 
 
 def _fabrication_line(fr: dict) -> str:
@@ -123,6 +135,7 @@ def design_kagome(
     fabrication: FabricationLimits | None = None,
     intent: dict | None = None,
     min_opening: float | None = None,
+    trim: bool = False,
 ) -> KagomeOutcome:
     """Design a reconfigurable R x C kagome whose deployed outline follows ``target`` (mm).
 
@@ -130,16 +143,18 @@ def design_kagome(
     for R even; docs/kagome.md); False leaves the design free (about twice the fitting freedom); ``"x"``
     or ``"y"`` imposes that mirror alone (the lattice and the target must have it). ``fabrication``: mm
     limits the design keeps (:mod:`fabkiri.design.kagome_fab`), ``intent`` what ``cut``/``print`` then
-    default to (``fabricate.design_limits.resolve`` gives both)."""
+    default to (``fabricate.design_limits.resolve`` gives both). ``trim``: the R x C block cut to the
+    outline (:mod:`fabkiri.design.kagome_trim`) instead of the whole block."""
     if rows < 2 or cols < 2:  # a single row or column has no outline side to fit each way
         raise InputError(f"kagome inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     tgt = load_target(target, size)
     shape = conf.parse_shape_tol(shape_tol)
+    keep = KT.kept_tiles(rows, cols, tgt) if trim else None
     if fabrication is not None:
-        _check_room(rows, cols, fabrication, tgt)
-    unit = standard_kagome(rows, cols, tile_size=1.0)
-    tile = tgt.size / float(np.ptp(unit.nodes, axis=0).max())  # the standard spans the target
-    std = standard_kagome(rows, cols, tile_size=tile)
+        _check_room(rows, cols, fabrication, tgt, None if keep is None else len(keep))
+    std = _standard(rows, cols, keep, 1.0)
+    tile = tgt.size / float(np.ptp(std.nodes, axis=0).max())  # the standard spans the target
+    std = _standard(rows, cols, keep, tile)
     faces = _print_faces(std, fabrication)
 
     def fab_of(weight: float) -> list:
@@ -152,6 +167,7 @@ def design_kagome(
     d, pattern, rejected, convex, free, route, paired = _solve(std, tgt, symmetry, fab_of, accept)
     report = _report(d, pattern, tgt, shape, (rows, cols), tol, tile, rejected, convex)
     report["pair_rows"] = paired
+    report["trimmed_tiles"] = None if keep is None else len(keep)
     if fabrication is not None:
         report["fabrication"] = KF.measure(pattern, fabrication, faces)
         # the price of the limits: the design without them (None: it met them already)
@@ -272,10 +288,20 @@ def _report(d, pattern, tgt, shape, tiles, tol, tile, rejected, convex) -> dict[
     }
 
 
-def _check_room(rows: int, cols: int, limits: FabricationLimits, target) -> None:
-    """InputError when R x C triangles wide enough for ``limits`` cannot fit inside the target (the
-    quad designer's refusal: Pál's bound is the equilateral triangle's area, so it is tight here)."""
-    n = rows * cols
+def _standard(rows: int, cols: int, keep, tile: float) -> Pattern:
+    """The standard R x C kagome, or the tiles ``keep`` of it (a lattice cut to the outline)."""
+    if keep is None:
+        return standard_kagome(rows, cols, tile_size=tile)
+    return trimmed_kagome(rows, cols, keep, tile_size=tile)
+
+
+def _check_room(
+    rows: int, cols: int, limits: FabricationLimits, target, kept: int | None = None
+) -> None:
+    """InputError when R x C triangles (``kept`` of them when the lattice is cut to the outline) wide
+    enough for ``limits`` cannot fit inside the target (the quad designer's refusal: Pál's bound is the
+    equilateral triangle's area, so it is tight here)."""
+    n = rows * cols if kept is None else kept
     least = smallest_size(target.size, abs(target.area), n, limits)
     if least is not None:
         w = limits.required_width_mm()
@@ -330,11 +356,15 @@ def design_kagome_pattern(
 ) -> KagomeOutcome:
     """The kagome front door for a :class:`~.design.PatternRequest` (``fabkiri design --lattice kagome``):
     refuses the quad-only options, resolves the fabrication limits as the quad designer does, then
-    :func:`design_kagome` (the target defaults to a circle)."""
+    :func:`design_kagome` (the target defaults to a circle; without ``tiles`` the lattice is chosen from
+    the outline and cut to it, with ``tiles`` it is the whole block unless ``trim``)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     target = request.target or "circle"
     tgt = load_target(target, request.size)
-    rows, cols, aspect = choose_lattice(request.tiles, tgt)
+    # a lattice chosen from the outline is cut to it: cut, the circle, ellipse and heart fit nearer than
+    # the whole block at every count measured (docs/kagome.md, "A lattice cut to the outline")
+    trim = request.trim or request.tiles is None
+    rows, cols, aspect = choose_lattice(request.tiles, tgt, trim)
     if rows >= 2 and cols >= 2:  # (smaller: refused by design_kagome, in its own words)
         size_limits.check_tiles(rows, cols, "design kagome", request.i_know)
         if notify is not None and aspect["note"]:  # a lattice refused above gets no advice
@@ -352,21 +382,28 @@ def design_kagome_pattern(
         fabrication=limits,
         intent=intent,
         min_opening=request.min_opening,
+        trim=trim,
     )
     out.report["aspect"] = aspect
     return out
 
 
-def choose_lattice(tiles: tuple[int, int] | None, target: Target) -> tuple[int, int, dict]:
+def choose_lattice(
+    tiles: tuple[int, int] | None, target: Target, trim: bool = False
+) -> tuple[int, int, dict]:
     """``(rows, cols, aspect report)``: the lattice asked for, or, when none is (``tiles`` None), the one
-    whose aspect suits the target (``kagome_aspect.suggest``). The report's ``note`` is the one line to tell
-    the user: the lattice chosen, or a warning when the asked one does not suit the target's aspect and a
-    lattice of about as many tiles does (None otherwise)."""
+    whose aspect suits the target (``kagome_aspect.suggest``; with ``trim`` the block whose cut to the
+    outline keeps about as many tiles, ``kagome_trim.block_for``). The report's ``note`` is the one line
+    to tell the user: the lattice chosen, or a warning when the asked one does not suit the target's
+    aspect and a lattice of about as many tiles does (None otherwise)."""
     if tiles is None:
         fit = KA.suggest(target)
+        if trim:
+            fit = KA.aspect_fit(*KT.block_for(target, KA.DEFAULT_TILES), target)
         note: str | None = (
-            f"kagome {fit.tiles[0]}x{fit.tiles[1]} chosen from the outline: {fit.lattice:.2f} wide for 1 "
-            f"high, {target.name!r} {fit.target:.2f} (--tiles RxC to choose)"
+            f"kagome {fit.tiles[0]}x{fit.tiles[1]}{' (cut to the outline)' if trim else ''} chosen from "
+            f"the outline: {fit.lattice:.2f} wide for 1 high, {target.name!r} {fit.target:.2f} (--tiles "
+            "RxC to choose)"
         )
     else:
         rows, cols = tiles

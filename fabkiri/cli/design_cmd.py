@@ -68,6 +68,7 @@ def cmd_design(args: argparse.Namespace) -> int:
         i_know=args.i_know,
         verbose=args.verbose,
         kind=args.lattice,
+        trim=args.trim,
     )
     out = design_by_kind(request, notify=lambda text: print(text, file=sys.stderr))
     out.write(args.output, preview=not args.no_preview)
@@ -161,6 +162,12 @@ def _add_target_args(p: argparse.ArgumentParser) -> None:
         default=None,
         help="with --tube cone:...: cone lets both closed states be cones too (a rigid tube whose seam "
         "turns alike in every state); default cylinder, the closed states' pure-translation seam",
+    )
+    p.add_argument(
+        "--trim",
+        action="store_true",
+        help="kagome: cut the R x C lattice to the target (the tiles whose centres lie inside it) "
+        "instead of bending the whole block onto it (docs/kagome.md)",
     )
     p.add_argument(
         "--symmetry",

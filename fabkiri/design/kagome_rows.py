@@ -41,7 +41,10 @@ def tip_order(pattern: Pattern) -> np.ndarray:
 def tip_sides(standard: Pattern, tips: np.ndarray) -> np.ndarray:
     """Side (0 B, 1 R, 2 T, 3 L) of each tip of a standard kagome, from the lattice's indexing: the
     left corner of a row's first tile is L, the right corner of its last tile R, any other tip is an
-    apex of the bottom row (B) or of the top row (T)."""
+    apex of the bottom row (B) or of the top row (T). A lattice cut to an outline (``trimmed_from``) has
+    no such rows: its tips take the side of the box they face, from the centre (:func:`facing_sides`)."""
+    if "keep" in (standard.lattice or {}):
+        return facing_sides(standard.nodes[tips])
     tiles = standard.topology.tiles
     cols = int((standard.lattice or {})["cols"])
     tile_of = np.full(standard.topology.n_nodes, -1)
@@ -55,6 +58,18 @@ def tip_sides(standard: Pattern, tips: np.ndarray) -> np.ndarray:
     side = np.where(r == 0, SIDE_B, SIDE_T)
     side = np.where((c == 0) & (k == 0), SIDE_L, side)
     side = np.where((c == cols - 1) & (k == right_corner), SIDE_R, side)
+    return side.astype(np.int64)
+
+
+def facing_sides(x: np.ndarray) -> np.ndarray:
+    """Side (0 B, 1 R, 2 T, 3 L) of each point by the box side it faces from the box's centre: the
+    diagonals of the bounding box split the points into four runs, in order round a star-shaped outline."""
+    lo, hi = x.min(0), x.max(0)
+    p = (x - 0.5 * (lo + hi)) / np.maximum(0.5 * (hi - lo), 1e-300)
+    vertical = np.abs(p[:, 1]) >= np.abs(p[:, 0])
+    side = np.where(
+        vertical, np.where(p[:, 1] < 0, SIDE_B, SIDE_T), np.where(p[:, 0] > 0, SIDE_R, SIDE_L)
+    )
     return side.astype(np.int64)
 
 
@@ -189,10 +204,13 @@ def partial_fans(standard: Pattern) -> list[tuple[np.ndarray, np.ndarray]]:
     from ..pattern.kagome import OPEN_DEG, kagome_corners
 
     lat = standard.lattice or {}
-    rows, cols = int(lat["rows"]), int(lat["cols"])
+    rows, cols = (int(v) for v in lat.get("trimmed_from", (lat.get("rows"), lat.get("cols"))))
+    keep = np.asarray(
+        lat.get("keep", np.arange(rows * cols)), dtype=np.int64
+    )  # a cut lattice's tiles
     out = []
     for psi in (0.0, 2.0 * OPEN_DEG):
-        pts = kagome_corners(rows, cols, np.radians(psi)).reshape(-1, 2)
+        pts = kagome_corners(rows, cols, np.radians(psi))[keep].reshape(-1, 2)
         key = np.rint(pts * 1e6).astype(np.int64)
         _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
         inv = inv.ravel()

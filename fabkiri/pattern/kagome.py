@@ -123,6 +123,37 @@ def standard_kagome(
     )
 
 
+def trimmed_kagome(
+    rows: int, cols: int, keep: np.ndarray, *, tile_size: float = 10.0, name: str = ""
+) -> Pattern:
+    """The standard R x C kagome cut down to the tiles ``keep`` (indices ``r * cols + c``), deployed
+    (ψ = 60°) and centred: a lattice cut to an outline. Its lattice record names the block it was cut
+    from (``trimmed_from``) and the tiles kept, not ``rows``/``cols`` (whose counts it does not have).
+    The kept tiles must be one piece (:class:`~fabkiri.errors.PatternError` otherwise)."""
+    if not np.isfinite(tile_size) or tile_size <= 0:
+        raise InputError(f"tile size must be a positive length in mm, got {tile_size}")
+    keep = np.unique(np.asarray(keep, dtype=np.int64))
+    if len(keep) == 0 or keep[0] < 0 or keep[-1] >= rows * cols:
+        raise InputError(f"kept tiles must be among the {rows}x{cols} lattice's, got {len(keep)}")
+    tiles, rep = kagome_topology(rows, cols)
+    nodes = kagome_corners(rows, cols, np.radians(OPEN_DEG), tile_size).reshape(-1, 2)[rep]
+    used, inv = np.unique(tiles[keep], return_inverse=True)
+    x = nodes[used]
+    return Pattern(
+        nodes=x - 0.5 * (x.min(0) + x.max(0)),
+        tiles=inv.reshape(-1, 3),
+        name=name or f"kagome {rows}x{cols} trimmed to {len(keep)} tiles",
+        lattice={
+            "kind": "kagome",
+            "trimmed_from": [int(rows), int(cols)],
+            "keep": keep.tolist(),
+            "angle_deg": OPEN_DEG,
+            "tile_size": float(tile_size),
+        },
+        kind="kagome",
+    )
+
+
 def kagome_counts(rows: int, cols: int) -> tuple[int, int, int]:
     """Holes, free corners and hinges bordering no hole of the standard R x C kagome, counted on its
     brick-wall tile graph: between rows r and r+1 the up tiles (r, c), r + c even, join the row

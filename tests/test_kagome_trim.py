@@ -1,0 +1,127 @@
+"""A kagome lattice cut to the outline (``--trim``, design/kagome_trim.py): the cut, its rows, its fit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fabkiri.design import kagome_rows as KR
+from fabkiri.design import kagome_trim as KT
+from fabkiri.design.targets import load_target
+from fabkiri.errors import InputError
+from fabkiri.mechanics.contract import with_contracted_states
+from fabkiri.pattern.kagome import standard_kagome, trimmed_kagome
+from fabkiri.verify import verify_pattern
+
+
+def _cut(name: str, rows: int, cols: int, size: float = 120.0):
+    target = load_target(name, size)
+    keep = KT.kept_tiles(rows, cols, target)
+    return target, keep, trimmed_kagome(rows, cols, keep, tile_size=10.0)
+
+
+def test_the_cut_keeps_the_tiles_inside_the_outline_as_one_piece_that_closes():
+    target, keep, p = _cut("circle", 10, 17)
+    assert 100 < len(keep) < 170 * 0.9  # a circle fills π/4 of its box
+    assert p.topology.n_tiles == len(keep)
+    # the kept tiles' centres lie inside the circle scaled into the block
+    w, h = np.ptp(p.nodes, axis=0)
+    assert abs(w / h - 1.0) < 0.15
+    closed = with_contracted_states(p)
+    failed = [c.name for c in verify_pattern(closed).failed() if c.name != "target shape"]
+    assert failed == []  # topology (no R x C counts to match), closure, no overlaps
+
+
+def test_a_cut_lattice_names_its_block_and_tiles_not_rows_and_cols():
+    _, keep, p = _cut("heart", 7, 13)
+    assert p.lattice["trimmed_from"] == [7, 13]
+    assert p.lattice["keep"] == sorted(keep.tolist())
+    assert "rows" not in p.lattice and "cols" not in p.lattice
+    # the whole block cut to every tile is the standard lattice
+    full = trimmed_kagome(4, 5, np.arange(20), tile_size=10.0)
+    assert np.allclose(full.nodes, standard_kagome(4, 5, tile_size=10.0).nodes)
+
+
+def test_the_cut_keeps_the_largest_piece():
+    heart = load_target("heart", 120)
+    keep = KT.kept_tiles(10, 17, heart)
+    p = trimmed_kagome(10, 17, keep, tile_size=10.0)  # would raise PatternError on two pieces
+    assert p.topology.n_tiles == len(keep)
+
+
+def test_a_cut_lattices_tips_face_four_sides_in_order():
+    _, _, p = _cut("circle", 10, 17)
+    order = KR.tip_order(p)
+    sides = KR.tip_sides(p, order)
+    runs = sides[np.r_[True, sides[1:] != sides[:-1]]]
+    runs = runs[:-1] if runs[0] == runs[-1] and len(runs) > 1 else runs
+    assert sorted(runs.tolist()) == [0, 1, 2, 3]  # one run per side
+    k = int(np.flatnonzero(runs == 0)[0])
+    assert np.roll(runs, -k).tolist() == [0, 1, 2, 3]  # B, R, T, L counter-clockwise
+
+
+def test_a_cut_lattice_has_boundary_fans_of_its_own_tiles():
+    _, keep, p = _cut("circle", 10, 17)
+    fans = KR.partial_fans(p)
+    assert fans and all(len(t) < 6 for t, _ in fans)
+    assert max(int(t.max()) for t, _ in fans) < len(keep)
+
+
+def test_a_cut_that_keeps_no_tile_is_refused_in_one_line():
+    tiny = load_target("star", 120)
+    with pytest.raises(InputError, match="keeps"):
+        KT.kept_tiles(2, 2, tiny)
+
+
+def test_the_block_for_a_count_keeps_about_that_many_tiles():
+    for name in ("circle", "ellipse", "heart"):
+        target = load_target(name, 120)
+        rows, cols = KT.block_for(target, 130)
+        assert 90 <= len(KT.kept_tiles(rows, cols, target)) <= 170
+
+
+@pytest.mark.slow
+def test_a_126_tile_circle_cut_to_the_outline_fits_within_1_5_percent():
+    """The issue's goal at a size a maker uses: the 10x17 block bent whole onto a 180 mm circle misses
+    (its corners; a 9x15 2.83 %), cut to the circle it closes without overlaps within 1.5 %."""
+    from fabkiri.api.kagome import design_kagome
+
+    out = design_kagome(10, 17, "circle", 180.0, trim=True)
+    assert out.report["trimmed_tiles"] >= 120
+    assert out.report["status"] == "converged"
+    assert out.report["verify_failed"] == []
+    assert out.report["conformance"]["hausdorff_rel"] <= 0.015
+    assert out.valid
+
+
+def test_trim_on_a_quad_design_is_refused_in_one_line(tmp_path, run_cli):
+    out = tmp_path / "q.json"
+    code, _, err = run_cli("design", "--tiles", "4x4", "--target", "circle", "--trim", "-o", out)
+    assert code == 2 and "--trim cuts kagome lattices" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "tiles, trim, cut", [(None, False, True), ((6, 11), False, False), ((6, 11), True, True)]
+)
+def test_the_front_door_cuts_a_lattice_chosen_from_the_outline_or_asked_to(
+    monkeypatch, tiles, trim, cut
+):
+    """Without --tiles the lattice chosen from the outline is cut to it; --tiles RxC is the whole block
+    unless --trim."""
+    from fabkiri.api import kagome as AK
+    from fabkiri.api.design import PatternRequest
+
+    seen = {}
+
+    def fake(rows, cols, target, size=None, **kw):
+        seen.update(rows=rows, cols=cols, trim=kw["trim"])
+        return AK.KagomeOutcome(None, {}, False, (rows, cols))  # type: ignore[arg-type]
+
+    monkeypatch.setattr(AK, "design_kagome", fake)
+    notes: list[str] = []
+    req = PatternRequest(tiles=tiles, target="circle", size=120.0, kind="kagome", trim=trim)
+    AK.design_kagome_pattern(req, notify=notes.append)
+    assert seen["trim"] is cut
+    if tiles is None:
+        assert (seen["rows"], seen["cols"]) == KT.block_for(load_target("circle", 120.0), 66)
+        assert "cut to the outline" in notes[0] and "chosen from the outline" in notes[0]
