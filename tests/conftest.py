@@ -88,3 +88,39 @@ def shared_kagome_designs(monkeypatch):
 
     monkeypatch.setattr(kagome, "design_kagome", design_kagome)
     return design_kagome
+
+
+# quad designs already made in this test session, by their request
+_QUAD_DESIGNS: dict[str, object] = {}
+
+
+@pytest.fixture
+def shared_designs():
+    """The quad design front door, each request designed once per test session.
+
+    ``make`` tests run a make and then the line it named, which designs again what the first run's
+    option or retry designed (the same request). For the test's duration
+    ``fabkiri.api.design.design_pattern`` (which make's design step calls) is replaced by a memo of the
+    real one keyed by the request; each call gets its own deep copy and its ``notify`` hears the design's
+    notes in their order, as from a fresh design. The design is deterministic (no random start unless
+    the request names a seed, which is in the key). As ``shared_kagome_designs``, tests that share a
+    design carry one ``xdist_group`` mark."""
+    import copy
+
+    from fabkiri.api import design
+
+    real = design.design_pattern
+
+    def design_pattern(request, notify=None):
+        key = repr(request)
+        if key not in _QUAD_DESIGNS:
+            _QUAD_DESIGNS[key] = real(request)
+        out = copy.deepcopy(_QUAD_DESIGNS[key])
+        for text in out.messages if notify is not None else ():
+            notify(text)
+        return out
+
+    patch = pytest.MonkeyPatch()  # its own: a test's monkeypatch.undo() leaves the memo in place
+    patch.setattr(design, "design_pattern", design_pattern)
+    yield design_pattern
+    patch.undo()
