@@ -78,6 +78,9 @@ def shared_kagome_designs(monkeypatch):
     def design_kagome(*args, **kwargs):
         bound = signature.bind(*args, **kwargs)
         bound.apply_defaults()
+        # the CLI passes intent {} where the API tests leave it None; design_kagome reads only its
+        # truth (no intent either way), so both are one design
+        bound.arguments["intent"] = bound.arguments["intent"] or None
         key = tuple((name, _key(v)) for name, v in bound.arguments.items())
         if key not in _KAGOME_DESIGNS:
             _KAGOME_DESIGNS[key] = real(*args, **kwargs)
@@ -85,3 +88,58 @@ def shared_kagome_designs(monkeypatch):
 
     monkeypatch.setattr(kagome, "design_kagome", design_kagome)
     return design_kagome
+
+
+# quad designs already made in this test session, by their request
+_QUAD_DESIGNS: dict[str, object] = {}
+
+
+@pytest.fixture
+def shared_designs():
+    """The quad design front door, each request designed once per test session.
+
+    ``make`` tests run a make and then the line it named, which designs again what the first run's
+    option or retry designed (the same request). For the test's duration
+    ``fabkiri.api.design.design_pattern`` (which make's design step calls) is replaced by a memo of the
+    real one keyed by the request; each call gets its own deep copy and its ``notify`` hears the design's
+    notes in their order, as from a fresh design. The design is deterministic (no random start unless
+    the request names a seed, which is in the key). As ``shared_kagome_designs``, tests that share a
+    design carry one ``xdist_group`` mark."""
+    import copy
+
+    from fabkiri.api import design
+
+    real = design.design_pattern
+
+    def design_pattern(request, notify=None):
+        key = repr(request)
+        if key not in _QUAD_DESIGNS:
+            _QUAD_DESIGNS[key] = real(request)
+        out = copy.deepcopy(_QUAD_DESIGNS[key])
+        for text in out.messages if notify is not None else ():
+            notify(text)
+        return out
+
+    patch = pytest.MonkeyPatch()  # its own: a test's monkeypatch.undo() leaves the memo in place
+    patch.setattr(design, "design_pattern", design_pattern)
+    yield design_pattern
+    patch.undo()
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config, items):
+    """Keep ``--dist loadgroup``'s groups with a pytest whose node ids ignore ``item._nodeid``.
+
+    pytest-xdist (3.8) groups a test by appending ``@group`` to ``item._nodeid`` on the workers; from
+    pytest 9.2 the node id is read from ``item._id``, so the suffix is lost and every group's tests are
+    dealt out one by one (a shared design is then made on both workers). Where xdist's suffix did not
+    take, it is set here the same way through ``_id``."""
+    if not config.getoption("loadgroup", False):
+        return
+    for item in items:
+        names = sorted({str(m.args[0] if m.args else m.kwargs.get("name", "default"))
+                        for m in item.iter_markers("xdist_group")})  # fmt: skip
+        if names and "@" not in item.nodeid and hasattr(item, "_id"):
+            from _pytest.nodeid import coerce_node_id
+
+            item._id = coerce_node_id(f"{item.nodeid}@{'_'.join(names)}")

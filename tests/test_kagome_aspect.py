@@ -77,7 +77,10 @@ def test_cli_quad_design_without_tiles_is_refused_in_one_line(tmp_path, run_cli)
 
 
 @pytest.mark.slow
-def test_the_suggested_lattice_fits_better_than_the_one_that_does_not_suit(tmp_path, run_cli):
+@pytest.mark.xdist_group("kagome-circle-6x11-120")  # shares its design (shared_kagome_designs)
+def test_the_suggested_lattice_fits_better_than_the_one_that_does_not_suit(
+    tmp_path, run_cli, shared_kagome_designs
+):
     """The issue's case: 8x8 kagome circle (measured 6.1 %) warned, and the suggested 6x11 nearer."""
     import json
 

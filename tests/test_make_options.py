@@ -115,7 +115,8 @@ def test_the_named_line_keeps_the_options_and_names_its_own_folder():
 
 
 @pytest.mark.slow  # the 4x4 pinned and 4x4 tiles-and-strips designs, a print, a deploy, then the named make (~17 CPU s)
-def test_a_refused_make_names_another_style_that_then_makes_it(tmp_path, run_cli):
+@pytest.mark.xdist_group("make-circle-60mm")  # shares its designs (shared_designs)
+def test_a_refused_make_names_another_style_that_then_makes_it(tmp_path, run_cli, shared_designs):
     # a 60 mm circle for prusa-mk4 pinned: only 4x4 tiles keep the pins' 7.4 mm, and they miss 2 %;
     # no other count nor a larger size (up to 2x) gives make more tiles: main names nothing
     out = tmp_path / "o"
@@ -140,8 +141,9 @@ def test_a_refused_make_names_another_style_that_then_makes_it(tmp_path, run_cli
 
 
 @pytest.mark.slow  # a 4x4 design, an option's design, cut and deploy, then the named make (~20 CPU s)
+@pytest.mark.xdist_group("make-circle-60mm")  # shares its designs (shared_designs)
 def test_a_cut_refusal_naming_nothing_names_a_redesign_that_then_makes_it(
-    tmp_path, monkeypatch, run_cli
+    tmp_path, monkeypatch, run_cli, shared_designs
 ):
     from fabkiri.api import maker
     from fabkiri.api.advice import Refused
@@ -165,7 +167,8 @@ def test_a_cut_refusal_naming_nothing_names_a_redesign_that_then_makes_it(
 
 
 @pytest.mark.slow  # the 4x4 and 6x6 designs, a cut, a deploy and a report (~10 CPU s)
-def test_a_count_of_the_same_process_that_meets_is_used(tmp_path, monkeypatch):
+@pytest.mark.xdist_group("make-circle-60mm")  # shares its designs (shared_designs)
+def test_a_count_of_the_same_process_that_meets_is_used(tmp_path, monkeypatch, shared_designs):
     import fabkiri
     from fabkiri.api import maker_design
 

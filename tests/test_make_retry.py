@@ -50,7 +50,8 @@ def test_retry_counts_follow_the_aspect_and_keep_the_feature():
 
 
 @pytest.mark.slow  # two 60 mm circle designs, a cut, a deploy and a report (~7 CPU s)
-def test_a_near_miss_is_designed_again_with_more_tiles(tmp_path):
+@pytest.mark.xdist_group("make-circle-60mm")  # shares its designs (shared_designs)
+def test_a_near_miss_is_designed_again_with_more_tiles(tmp_path, shared_designs):
     result = fabkiri.make("circle", size=60, material="card-0.3", output=tmp_path / "o")
     assert result.ok and result.exit_code == 0, result.summary()
     assert result.tiles.tiles == (5, 5) and not result.tiles.given
@@ -66,7 +67,8 @@ def test_a_near_miss_is_designed_again_with_more_tiles(tmp_path):
 
 
 @pytest.mark.slow  # the 4x4 and 5x5 designs, the 5x5 cut and deploy twice (~10 CPU s)
-def test_given_tiles_that_miss_name_a_count_that_then_makes_it(tmp_path, run_cli):
+@pytest.mark.xdist_group("make-circle-60mm")  # shares its designs (shared_designs)
+def test_given_tiles_that_miss_name_a_count_that_then_makes_it(tmp_path, run_cli, shared_designs):
     out = tmp_path / "o"
     args = ("make", "circle", "--size", "60", "--material", "card-0.3", "--tiles", "4x4")
     code, stdout, err = run_cli(*args, "-o", out)
@@ -98,8 +100,9 @@ def test_a_far_miss_is_not_retried_and_names_nothing(monkeypatch):
 
 
 @pytest.mark.slow  # the 4x4 design, the larger size's design, cut and deploy, then the named make (~12 CPU s)
+@pytest.mark.xdist_group("make-circle-60mm")  # shares its designs (shared_designs)
 def test_a_miss_with_no_count_left_names_a_larger_size_that_then_makes_it(
-    tmp_path, run_cli, monkeypatch
+    tmp_path, run_cli, monkeypatch, shared_designs
 ):
     from fabkiri.api import maker_design
 

@@ -56,6 +56,7 @@ def local_run(tmp_path_factory):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("sweep-local-run")  # one worker makes local_run once
 def test_twelve_jobs_on_a_two_worker_local_cluster(local_run):
     spec, res, folder = local_run
     out = folder / "out"
@@ -94,6 +95,7 @@ def test_twelve_jobs_on_a_two_worker_local_cluster(local_run):
 
 
 @pytest.mark.slow  # the 12-job, 2-process cluster run; the fast loop checks the same on a small in-process sweep below
+@pytest.mark.xdist_group("sweep-local-run")  # one worker makes local_run once
 def test_a_second_run_does_no_work(local_run):
     spec, res, folder = local_run
     out = folder / "out"
@@ -161,6 +163,7 @@ def _dask(*args, log: Path) -> subprocess.Popen:
 
 
 @pytest.mark.slow  # ~20-30 s on the shared 2-core box: three more interpreters and the 12 designs again
+@pytest.mark.xdist_group("sweep-local-run")  # one worker makes local_run once
 def test_the_same_sweep_on_dask_scheduler_and_two_dask_workers(local_run, tmp_path):
     _, res, folder = local_run
     port = _free_port()
