@@ -124,22 +124,3 @@ def shared_designs():
     patch.setattr(design, "design_pattern", design_pattern)
     yield design_pattern
     patch.undo()
-
-
-@pytest.hookimpl(trylast=True)
-def pytest_collection_modifyitems(config, items):
-    """Keep ``--dist loadgroup``'s groups with a pytest whose node ids ignore ``item._nodeid``.
-
-    pytest-xdist (3.8) groups a test by appending ``@group`` to ``item._nodeid`` on the workers; from
-    pytest 9.2 the node id is read from ``item._id``, so the suffix is lost and every group's tests are
-    dealt out one by one (a shared design is then made on both workers). Where xdist's suffix did not
-    take, it is set here the same way through ``_id``."""
-    if not config.getoption("loadgroup", False):
-        return
-    for item in items:
-        names = sorted({str(m.args[0] if m.args else m.kwargs.get("name", "default"))
-                        for m in item.iter_markers("xdist_group")})  # fmt: skip
-        if names and "@" not in item.nodeid and hasattr(item, "_id"):
-            from _pytest.nodeid import coerce_node_id
-
-            item._id = coerce_node_id(f"{item.nodeid}@{'_'.join(names)}")
