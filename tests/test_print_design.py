@@ -26,12 +26,34 @@ def test_star_150_for_prusa_mk4_meets_the_shape_and_prints_at_scale_1():
     assert refusal == ""
 
 
-@pytest.mark.slow  # ~60 CPU s, the continuation alone (main: it and then every guess, 112 CPU s)
 def test_16x16_heart_200_for_prusa_mk4_says_the_limits_cost_the_shape():
     """At 16x16 a 200 mm heart's tiles are about 6.6 mm wide, and a tile holding its four strips on one face
-    needs about 8.7 mm (print's own minimum on the standard pattern): the design without the rows meets the
-    shape, the continuation's steps miss it more the more of the limits they take. The design says so, is not
-    retried from the guesses (which start at the full limits), and exits 1."""
+    needs about 8.7 mm (print's own minimum on the standard pattern): the design now says so before solving
+    (exit 1, as the miss it would be), with the figures, the count and the size at which the tiles are that
+    wide (``api/print_tiles.py``); it took a minute of continuation to find out."""
+    from fabkiri.errors import CheckFailed
+
+    req = PatternRequest(
+        tiles=(16, 16), target="heart", size=200.0, printer="prusa-mk4", quiet=True
+    )
+    with pytest.raises(CheckFailed) as exc:
+        design_pattern(req)
+    why = str(exc.value)
+    assert exc.value.exit_code == 1
+    assert "16x16 tiles of a 200 mm heart would be about 6.57 mm wide" in why
+    assert "narrower than the 8.7 mm tile prusa-mk4 tiles-and-strips needs" in why
+    assert "up to 12x12 tiles are that wide, and 16x16 from --size 270" in why
+
+
+@pytest.mark.slow  # ~60 CPU s, the continuation alone (main: it and then every guess, 112 CPU s)
+def test_16x16_heart_200_continuation_says_the_limits_cost_the_shape(monkeypatch):
+    """The same design with the up-front refusal switched off, as the continuation still meets such limits
+    (a cut at 16x16, tiles just wide enough): the design without the rows meets the shape, the
+    continuation's steps miss it more the more of the limits they take. The design says so, is not retried
+    from the guesses (which start at the full limits), and exits 1."""
+    from fabkiri.api import design as api_design
+
+    monkeypatch.setattr(api_design, "check_tiles", lambda *a: None)
     out = design_pattern(
         PatternRequest(tiles=(16, 16), target="heart", size=200.0, printer="prusa-mk4", quiet=True)
     )

@@ -47,6 +47,7 @@ from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_summary import summary_lines
 from .designers import register_designer
+from .print_tiles import check_tiles
 from .shape_limits import annotate as annotate_misses
 
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
@@ -267,6 +268,7 @@ def _solver_request(
         fab_limits is not None and target is not None
     ):  # a request no design can meet: say so before solving
         _check_room(rows, cols, fab_limits, target)
+        check_tiles(rows, cols, target, request.printer, intent.get("style"))  # too narrow to print
     holes = (
         request.holes
         if request.holes is not None

@@ -34,8 +34,10 @@ from .maker_design import (  # noqa: F401 (_opening_lines re-exported)
     options_after_refusal,
 )
 from .maker_design import cpu_s as _cpu
+from .maker_early import narrow_of, refuse_narrow
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
+from .print_tiles import least_tile_mm
 
 Progress = Callable[[str], None]
 # a failed deploy check (collisions) still gets its report: the report documents the design and is
@@ -59,6 +61,7 @@ class _Plan:
     process: str
     fabrication: str
     stem: str
+    least_tile_mm: float = 0.0  # a print style's own minimum tile (print_tiles); 0 for a cut
 
 
 def make(
@@ -142,10 +145,11 @@ def _plan(
     process = "cut" if material else "print"
     # the presets' own names and the hinge kind or style: "acrylic-3 tape", "prusa-mk4 tiles-and-strips"
     fabrication = fab.source
+    least = least_tile_mm(printer, str(intent["style"])) if printer else 0.0
     choice = (
         given_tiles(tuple(tiles), curve, fab)
         if tiles is not None
-        else choose_tiles(curve, fab, fabrication)
+        else choose_tiles(curve, fab, fabrication, least)
     )
     # the design's own refusals, before any step starts: too many tiles, tiles too wide to fit, tolerance
     limits.check_tiles(*choice.tiles, "design full", False)
@@ -168,6 +172,7 @@ def _plan(
         process=process,
         fabrication=fabrication,
         stem=stem,
+        least_tile_mm=least,
     )
 
 
@@ -235,7 +240,11 @@ StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
 
 def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     """The design at the plan's tiles, and after a shape miss other counts and options
-    (:mod:`.maker_design`); an alternative is named only once it also passes its cut or print and deploy."""
+    (:mod:`.maker_design`); an alternative is named only once it also passes its cut or print and deploy.
+    Tiles too narrow for the print style are refused before any design (:mod:`.maker_early`)."""
+    narrow = narrow_of(plan)
+    if narrow is not None:
+        return refuse_narrow(result, plan, say, CHECKS, narrow)
     return design_step(result, plan, say, CHECKS)
 
 

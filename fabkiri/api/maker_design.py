@@ -99,7 +99,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
         return _fallbacks(result, plan, say, checks, [first], _with_details(first.run, [note]))
     target, fab = _target_and_limits(plan, plan.size)
     tried = [first]
-    for choice in retry_tiles(target, fab, plan.tiles)[:MAX_RETRIES]:
+    for choice in retry_tiles(target, fab, plan.tiles, plan.least_tile_mm)[:MAX_RETRIES]:
         r, c = choice.tiles
         spent = sum(a.cpu_s for a in tried[1:])
         if spent > RETRY_BUDGET * first.cpu_s:
@@ -159,11 +159,12 @@ def _other_options(
     checks: Checks,
     tried: list[_Attempt],
     base_cpu: float | None = None,
+    max_runs: int = mo.MAX_RUNS,
 ) -> tuple[StepRun | None, list[str]]:
     """The options of :mod:`.maker_options`, likeliest first, run until one passes (named, or adopted:
     a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
-    designs ran or they cost :data:`~.maker_options.BUDGET` times the first design (``base_cpu``
-    without ``tried``); the adopted run and the lines."""
+    designs (``max_runs``) ran or they cost :data:`~.maker_options.BUDGET` times the first design
+    (``base_cpu`` without ``tried``); the adopted run and the lines."""
     first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
     own = result.tiles.tiles
     every = [o for o in mo.options(plan) if tried or o.group or o.tiles.tiles != own]
@@ -173,7 +174,7 @@ def _other_options(
     lines: list[str] = []
     while order := mo.ranked(every, done):
         spent = sum(a.cpu_s for a in runs)
-        if len(runs) >= mo.MAX_RUNS or spent > mo.BUDGET * first_cpu:
+        if len(runs) >= max_runs or spent > mo.BUDGET * first_cpu:
             lines.append(f"{len(order)} more option(s) not tried ({mo.limit_text()})")
             break
         option = order[0]
@@ -222,7 +223,7 @@ def _larger_size(
     for k in SIZE_STEPS:
         size = float(math.ceil(plan.size * k / 10.0) * 10)
         target, fab = _target_and_limits(plan, size)
-        choice = choose_tiles(target, fab, plan.fabrication)
+        choice = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
         if choice.tiles[0] * choice.tiles[1] > count:
             break
     else:
@@ -334,7 +335,7 @@ def _checked_alternative(
             return None
     r, c = attempt.tiles.tiles
     command = make_command(plan, None if sized else attempt.tiles.tiles, output, tag)
-    at = f"at {plan.size:g} mm " if sized else ""
+    at = f"at {plan.size:g} mm " if sized or tag.endswith("mm") else ""
     detail = (
         f"{r}x{c} tiles {at}meet the shape ({attempt.line()}) and {plan.process} and deploy pass"
     )

@@ -40,6 +40,7 @@ from .maker_tiles import (
     min_feature_mm,
     tile_width_mm,
 )
+from .print_tiles import least_tile_mm
 
 Progress = Callable[[str], None]
 COUNTS = tuple(sorted({*STANDARD_TILES, 10}))  # N x N counts an option may name with --tiles
@@ -157,14 +158,15 @@ def options(plan) -> list[Option]:
             continue
         assert fab is not None
         feature = min_feature_mm(fab)
-        auto = choose_tiles(target, fab, fab.source)
+        least = least_tile_mm(printer, str(style)) if printer else 0.0
+        auto = choose_tiles(target, fab, fab.source, least)
         counts = [auto.tiles] + [(n, n) for n in COUNTS if n * n > auto.tiles[0] * auto.tiles[1]]
         for tiles in dict.fromkeys(counts):
             n = tiles[0] * tiles[1]
             w = tile_width_mm(target, n)
             is_auto = tiles == auto.tiles
-            if not is_auto and w < RETRY_COMFORT * feature:
-                continue
+            if (not is_auto and w < RETRY_COMFORT * feature) or w < least:
+                continue  # a count make would refuse up front (print_tiles) is no option either
             if smallest_size(target.size, abs(target.area), n, fab) is not None:
                 continue
             why = f"tiles about {w:.3g} mm wide, {w / feature:.2g}x the {feature:.3g} mm {fab.source} needs"
@@ -199,6 +201,7 @@ def tried_of(plan, attempts: Sequence[Any]) -> list[Tried]:
 
 def plan_of(plan, option: Option):
     """The make plan of ``option`` (the same target, size, tolerance and floor)."""
+    least = least_tile_mm(option.printer, str(option.style)) if option.printer else 0.0
     return replace(
         plan,
         process=option.process,
@@ -207,6 +210,7 @@ def plan_of(plan, option: Option):
         printer=option.printer,
         style=option.style,
         tiles=option.tiles,
+        least_tile_mm=least,
         fabrication=f"{option.material} {option.hinge}"
         if option.process == "cut"
         else f"{option.printer} {option.style}",

@@ -66,7 +66,9 @@ class MakeResult:
     steps: list[Step] = field(default_factory=list)
     files: dict[str, bytes | str] = field(default_factory=dict)
     alternatives: list[Any] = field(default_factory=list)  # a refusal's options, each with .command
-    refused: bool = False  # the failed step was a fabricability refusal (advice.Refused)
+    refused: bool = (
+        False  # the failed step was a fabricability refusal (advice.Refused, maker_early)
+    )
     figures: dict[str, Any] = field(default_factory=dict)  # design figures: Hausdorff, opening
     retried: list[str] = field(default_factory=list)  # after a shape miss: each count designed
 

@@ -74,21 +74,30 @@ def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
     return replace(choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]))
 
 
-def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> TilesChoice:
+def choose_tiles(
+    target: Target, limits: FabricationLimits, process: str, least_mm: float = 0.0
+) -> TilesChoice:
     """The largest N x N of :data:`STANDARD_TILES` (at most :data:`MAX_AUTO`) whose estimated tile width
-    is at least :data:`COMFORT` times the process's thinnest feature; when none is, the fewest (the
+    is at least :data:`COMFORT` times the process's thinnest feature and at least ``least_mm`` (a print
+    style's own minimum tile, :func:`.print_tiles.least_tile_mm`); when none is, the fewest (the
     widest tiles), the design's own feasibility check (``smallest_size``) saying whether even they
-    could fit (if not, the design refuses, naming the smallest size that could work)."""
+    could fit (if not, the design refuses, naming the smallest size that could work), and make's
+    up-front check whether they are as wide as ``least_mm``."""
     feature = min_feature_mm(limits)
     counts = [n for n in STANDARD_TILES if n <= MAX_AUTO]
     size = f"{target.size:.4g} mm"
+    floor = (
+        f"{COMFORT:g}x the {feature:.3g} mm {process} needs"
+        if COMFORT * feature >= least_mm
+        else f"the {least_mm:.3g} mm tile {process} needs (print's own minimum)"
+    )
     for n in counts:
         w = tile_width_mm(target, n * n)
-        if w >= COMFORT * feature:
+        if w >= COMFORT * feature and w >= least_mm:
             bigger = next((m for m in reversed(counts) if m > n), None)
             why = (
                 f"the largest of {', '.join(f'{m}x{m}' for m in counts)} whose tiles (about {w:.3g} mm wide at "
-                f"{size}) stay at least {COMFORT:g}x the {feature:.3g} mm {process} needs"
+                f"{size}) stay at least {floor}"
                 + (
                     f" ({bigger}x{bigger} would give {tile_width_mm(target, bigger * bigger):.3g} mm)"
                     if bigger
@@ -100,7 +109,7 @@ def choose_tiles(target: Target, limits: FabricationLimits, process: str) -> Til
     w = tile_width_mm(target, n * n)
     least = smallest_size(target.size, abs(target.area), n * n, limits)  # the design's own check
     why = (
-        f"no count keeps tiles {COMFORT:g}x the {feature:.3g} mm {process} needs at {size}; "
+        f"no count keeps tiles at least {floor} at {size}; "
         f"{n}x{n} keeps them widest (about {w:.3g} mm)"
         if least is None
         else f"even {n}x{n} tiles cannot be {feature:.3g} mm wide inside {size} (the smallest size "
@@ -115,11 +124,15 @@ def given_tiles(tiles: tuple[int, int], target: Target, limits: FabricationLimit
     return TilesChoice(tiles, "as given (--tiles)", w, min_feature_mm(limits), given=True)
 
 
-def retry_tiles(target: Target, limits: FabricationLimits, first: TilesChoice) -> list[TilesChoice]:
+def retry_tiles(
+    target: Target, limits: FabricationLimits, first: TilesChoice, least_mm: float = 0.0
+) -> list[TilesChoice]:
     """The tile counts worth a second design when ``first`` missed the shape, likeliest first: the
     outline's aspect (rows over columns as its height over its width) at about ``first``'s count when
     the outline is far from square, then one and two more tiles a side; each keeps its estimated
-    tile width :data:`RETRY_COMFORT` times the process's thinnest feature, and none repeats ``first``."""
+    tile width :data:`RETRY_COMFORT` times the process's thinnest feature and at least ``least_mm`` (a
+    print style's own minimum tile: narrower, make refuses the count up front), and none repeats
+    ``first``."""
     feature = min_feature_mm(limits)
     (lo, hi) = target.bbox
     aspect = float((hi[1] - lo[1]) / (hi[0] - lo[0]))  # height over width: rows over columns
@@ -132,7 +145,7 @@ def retry_tiles(target: Target, limits: FabricationLimits, first: TilesChoice) -
     out: list[TilesChoice] = []
     for shape in dict.fromkeys(shapes):  # in order, once each
         w = tile_width_mm(target, shape[0] * shape[1])
-        if shape == first.tiles or w < RETRY_COMFORT * feature:
+        if shape == first.tiles or w < RETRY_COMFORT * feature or w < least_mm:
             continue
         how = "the outline's aspect" if shape[0] != shape[1] and rows == cols else "more tiles"
         why = (

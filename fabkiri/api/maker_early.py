@@ -1,0 +1,117 @@
+"""``make``'s refusal before any design: tiles too narrow for the print style, and the option that works.
+
+A print-aware design whose tiles are narrower than the print style's own minimum tile
+(:mod:`.print_tiles`) cannot hold its strips (or pins) apart; at 16x16 the continuation took about a
+minute to find that out (heart at 200 mm on prusa-mk4: 57 CPU s, "the limits cost the shape"). ``make``
+now refuses such a request before designing it (exit 1, as a design that misses), and names what works,
+run before it is named (design, print and deploy on a scratch result, nothing written), cheapest and
+likeliest first, at most :data:`~.maker_options.MAX_RUNS` designs in all:
+
+1. this printer and style at this size, on the count ``make`` would choose there (the most room for
+   the strips: likeliest to meet, and the fewest tiles, the cheapest design);
+2. the tiles asked for at the size from which they are wide enough (``--tiles`` given; without it,
+   ``make``'s own choice at that size);
+3. the other options of :mod:`.maker_options` (counts, styles, presets, the other process), as after a
+   missed design.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ..design.targets import load_target
+from ..errors import FabkiriError
+from . import maker_options as mo
+from .maker_design import (
+    Checks,
+    Progress,
+    StepRun,
+    _Attempt,
+    _attempt,
+    _checked_alternative,
+    _other_options,
+    _target_and_limits,
+    cpu_s,
+)
+from .maker_result import MakeResult
+from .maker_tiles import choose_tiles, given_tiles
+from .print_tiles import NarrowTiles, narrow_tiles
+
+
+def narrow_of(plan) -> NarrowTiles | None:
+    """The plan's tiles when they are too narrow for its print style (None: wide enough, or a cut)."""
+    if plan.process != "print" or plan.least_tile_mm <= 0:
+        return None
+    if plan.tiles.corners is not None and not plan.tiles.given:
+        # make's own re-split strip (corner_split): its count was checked before the split; the letter L at
+        # 150 mm on prusa-mk4 becomes 16x4 (8.59 mm by the estimate) and prints (bench/make.py)
+        return None
+    target = load_target(plan.target, plan.size)
+    return narrow_tiles(target, plan.tiles.tiles, plan.printer, plan.style, plan.fabrication)
+
+
+def refuse_narrow(
+    result: MakeResult, plan, say: Progress, checks: Checks, narrow: NarrowTiles
+) -> StepRun:
+    """The design step refused before any design (exit 1), naming the first option that makes it."""
+    reason = narrow.reason()
+    say(f"make: {reason}")
+    result.refused = (
+        True  # as a cut or print refusal: its options on stdout, one runnable line each
+    )
+    start = cpu_s()
+    tried: list[_Attempt] = []
+    lines: list[str] = []
+    for label, other, sized in _candidates(plan, narrow):
+        if len(tried) >= mo.MAX_RUNS:
+            break
+        say(f"make: trying {label}, to name it if it makes")
+        try:
+            attempt = _attempt(MakeResult.of_plan(other), other, say)
+        except FabkiriError as exc:  # refused up front (room): not counted
+            lines.append(f"{label}: refused by the design ({exc})")
+            continue
+        tried.append(attempt)
+        named = attempt.run[0] and _checked_alternative(
+            other, attempt, checks[plan.process], result.output, sized, _tag(plan, other, sized)
+        )
+        lines.append(
+            f"{label}: {attempt.line()}, " + ("print and deploy pass" if named else "does not make")
+        )
+        if named:
+            result.alternatives = [named]
+            break
+    left = mo.MAX_RUNS - len(tried)
+    if not result.alternatives and left > 0:
+        first = tried[0].cpu_s if tried else None
+        _, more = _other_options(result, plan, say, checks, tried, first, max_runs=left)
+        lines += more
+    lines.append(f"the options cost CPU {cpu_s() - start:.1f} s (no design at the tiles asked)")
+    return False, 1, f"refused before any design: {reason}", {}, lines
+
+
+def _candidates(plan, narrow: NarrowTiles):
+    """``(label, plan, sized)`` of the first two options of the module docstring, where they apply."""
+    target, fab = _target_and_limits(plan, plan.size)
+    auto = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
+    if (
+        auto.tiles != plan.tiles.tiles
+        and narrow_tiles(target, auto.tiles, plan.printer, plan.style) is None
+    ):
+        label = f"{'x'.join(map(str, auto.tiles))} tiles at {plan.size:g} mm (make's choice there)"
+        yield label, replace(plan, tiles=auto), False
+    size = narrow.size_for
+    bigger, fab = _target_and_limits(plan, size)
+    if plan.tiles.given:
+        tiles = given_tiles(plan.tiles.tiles, bigger, fab)
+        label = f"{'x'.join(map(str, tiles.tiles))} tiles at {size:g} mm"
+        yield label, replace(plan, size=size, tiles=tiles), False
+    else:
+        tiles = choose_tiles(bigger, fab, plan.fabrication, plan.least_tile_mm)
+        label = f"{size:g} mm, where make chooses {'x'.join(map(str, tiles.tiles))} tiles"
+        yield label, replace(plan, size=size, tiles=tiles), True
+
+
+def _tag(plan, other, sized: bool) -> str:
+    """The named line's output folder beside the run's: the size when the tiles stay (``--size S --tiles``)."""
+    return f"{other.size:g}mm" if other.size != plan.size and not sized else ""
