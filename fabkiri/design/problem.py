@@ -248,6 +248,10 @@ class _Problem:
         def miss(res) -> float:
             return deployed(res.pattern.nodes, res.pattern.topology, target)["hausdorff_rel"]
 
+        if sub.symmetry:  # a mirrored level: the outline rows first (``SYMMETRIC_OUTLINE``)
+            alt = _design(replace(sub, outline=True), False)
+            if alt.converged:
+                return alt, {"fit": "outline", "hausdorff_rel": miss(alt)}
         res = _design(sub, False)
         h = miss(res)
         level = {"fit": "tips", "hausdorff_rel": h}
