@@ -160,6 +160,9 @@ def _coarse_refit(
     ended at 3.96 % instead of 1.61 %, while the drop's 64x64 design went from 22.16 % to 0.22 %."""
     if req.coarse_refit or not req.outline or prob.coarse is None or req.target is None:
         return result
+    # a mirrored level has the outline rows already (``_Problem._coarse_level``): it would be the same design
+    if prob.coarse.get("fit") == "outline":
+        return result
     h = deployed_conformance(result.pattern.nodes, result.pattern.topology, req.target)
     if result.converged and h["hausdorff_rel"] <= req.second_opinion_above:
         return result
