@@ -94,3 +94,36 @@ def test_the_32x32_drop_fits_no_worse_than_the_16x16_one():
     finish = [a for a in out.report["attempts"] if a["init"] == "minimax refinement"]
     assert len(finish) == 1 and finish[0]["kept"]
     assert h[32] <= h[16]
+
+
+def _outcome(h: float, problems: list, valid: bool, **checks):
+    report = {"conformance": {"deployed": {"hausdorff_rel": h}}, "checks": checks, "time_s": 1.0}
+    report["status"] = "converged" if valid else "unconverged"
+    return (None, report, problems, valid, {})
+
+
+def test_a_design_that_fails_on_overlaps_alone_is_redesigned_and_a_valid_redesign_kept(monkeypatch):
+    """The 64x64 drop's design overlapped in state 1 (0.61 %) and nothing came after it: the finish ran on valid
+    designs only. A design failing on overlapping tiles alone now gets the refitted redesign (no steps from it),
+    and a valid redesign replaces it whatever its Hausdorff distance; an unconverged one does not qualify."""
+    from fabkiri.api import design_minimax as dm
+
+    tgt = load_target("heart", 100)
+    big = DesignRequest(rows=64, cols=64, target=tgt)
+    overlapping = _outcome(
+        0.006, ["2 overlapping tile pairs in state 1"], False, overlaps_state_1=2
+    )
+    assert dm.overlapping_only(overlapping) and applies(big, {}, overlapping)
+    unconverged = _outcome(
+        0.006, ["solver did not reach", "2 overlapping"], False, overlaps_state_1=2
+    )
+    assert not dm.overlapping_only(unconverged) and not applies(big, {}, unconverged)
+    redesign = _outcome(0.009, [], True, overlaps_state_1=0)
+    asked: list = []
+    monkeypatch.setattr(dm, "design", lambda r: asked.append(r) or "result")
+    monkeypatch.setattr(dm, "_steps", lambda req, start, judge: (None, [], 0.0))
+    monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
+    attempts: list = []
+    got = dm.minimax_finish(big, overlapping, lambda r: redesign, attempts, lambda t: None)
+    assert got is redesign and attempts[-1]["kept"]
+    assert len(asked) == 1 and asked[0].coarse_refit and asked[0].init == "coarse"

@@ -57,3 +57,21 @@ def test_contact_rows_jacobian_matches_finite_differences():
         assert len(rp) == len(rm) == len(r)
         fd[:, i] = (rp - rm) / (2 * h)
     assert np.abs(J - fd).max() <= 1e-6 * max(1.0, np.abs(J).max())
+
+
+def test_a_large_tile_over_a_tile_far_from_its_centre_is_a_violated_row():
+    """A tile stretched many edges long (the 64x64 drop's state-1 corner tile) lies over a ring tile whose
+    centre is far from its own: the pair is a row, and a violated one (a reach between centres alone missed it:
+    the design's closed state overlapped and the solver's contact rows saw nothing)."""
+    fam, cc, S = _contact(8, 12)
+    c = cc.configs(S)[0]
+    # grid vertex (0, 0), the outer corner of tile (0, 0), dragged along the bottom row into grid cell (0, 8)
+    moved = c.copy()
+    moved[0] = c[[8, 9, 21, 22]].mean(0)
+    q = moved[cc.blocks[0][1][cc.ring]]
+    cen, edge = q.mean(1), float(np.median(np.linalg.norm(q[:, 1] - q[:, 0], axis=1)))
+    far_centre = np.linalg.norm(cen[0] - cen[int(np.flatnonzero((cc.r == 0) & (cc.c == 8))[0])])
+    assert far_centre > 3 * edge  # beyond REACH edges between centres
+    g, nodes, _ = cc.measure(moved, 1)
+    bad = np.flatnonzero(g < -CONTACT_MARGIN)
+    assert len(bad) and (nodes[bad, 0] == 0).any()

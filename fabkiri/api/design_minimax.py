@@ -67,18 +67,28 @@ def threshold(share: float, req: DesignRequest) -> float:
 
 def applies(req: DesignRequest, contracted: dict, best) -> bool:
     """A valid deployed-target design from ``MINIMAX_TILES`` tiles that misses by more than ``FINISH_ABOVE``
-    (scaled to its lattice, ``threshold``), without fabrication rows (the continuation refines those) or a floor on the opening (``refine_to_floor``
+    (scaled to its lattice, ``threshold``), or one that fails on overlapping tiles alone (``overlapping_only``),
+    without fabrication rows (the continuation refines those) or a floor on the opening (``refine_to_floor``
     does)."""
     return (
         best is not None
-        and bool(best[3])
+        and (bool(best[3]) or overlapping_only(best))
         and req.target is not None
         and not contracted
         and req.fabrication is None
         and not req.min_opening
         and req.rows * req.cols >= MINIMAX_TILES
-        and _hausdorff(best[1]) > max(threshold(FINISH_ABOVE, req), FINISH_FLOOR)
+        and (not best[3] or _hausdorff(best[1]) > max(threshold(FINISH_ABOVE, req), FINISH_FLOOR))
     )
+
+
+def overlapping_only(outcome: tuple) -> bool:
+    """Whether a ``_check`` outcome fails on overlapping tiles alone (converged, both closed states closing):
+    the refitted redesign may find a valid design in another basin (the 64x64 drop's tips-only design
+    overlapped in state 1 where the solver's contact rows had not seen the pair)."""
+    checks = outcome[1].get("checks") or {}
+    overlaps = sum(1 for k, v in checks.items() if k.startswith("overlaps_") and v)
+    return not outcome[3] and overlaps > 0 and len(outcome[2]) == overlaps
 
 
 def minimax_finish(
@@ -91,11 +101,12 @@ def minimax_finish(
 ):
     """Lawson's steps from ``best`` (a ``_check`` outcome), and from its coarse-refitted redesign where they
     leave more than ``REFIT_ABOVE`` (scaled, ``threshold``); the refined outcome when one passes every check with a smaller Hausdorff
-    distance (ranking no worse, failing no ``verify`` check ``best`` passes), else None. The attempt is
-    recorded either way."""
-    h0 = _hausdorff(best[1])
-    cand, trace, secs = _steps(req, best, judge)
-    refit, left = None, min(h0, _hausdorff(cand[1]) if cand else h0)
+    distance (ranking no worse, failing no ``verify`` check ``best`` passes), else None. From an overlapping
+    ``best`` only the refitted redesign and its steps, kept when valid. The attempt is recorded either way."""
+    h0, valid = _hausdorff(best[1]), bool(best[3])
+    # no steps from an overlapping design (``overlapping_only``): the refitted redesign, and the steps from that
+    cand, trace, secs = _steps(req, best, judge) if valid else (None, [], 0.0)
+    refit, left = None, min(h0, _hausdorff(cand[1]) if cand else h0) if valid else float("inf")
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it (not
     # for a symmetric design: its levels have the outline rows already, ``_Problem._coarse_level``, the same design)
     if not req.coarse_refit and not req.symmetry and left > threshold(REFIT_ABOVE, req):
@@ -110,9 +121,11 @@ def minimax_finish(
             for c in (refit, more):
                 if c is not None and (cand is None or _rank(c) < _rank(cand)):
                     cand = c
-    better = (
-        cand is not None
-        and _hausdorff(cand[1]) < h0
+    # a valid design replaces an overlapping one; a valid one only with a smaller Hausdorff distance
+    better = cand is not None and (
+        _rank(cand) < _rank(best)
+        if not valid
+        else _hausdorff(cand[1]) < h0
         and _rank(cand) <= _rank(best)
         and _fails(cand, shape_tol) <= _fails(best, shape_tol)
     )

@@ -8,7 +8,8 @@ in the seeds, with no ψ: state 1 is the grid ``c = Z S``, state 2 is ``J (Y S)`
 turn, which keeps every distance and orientation), so the rows are evaluated on ``Z S`` and ``Y S``.
 
 Rows: for every pair of tiles of the lattice's outer ``RING`` rows and columns that are not lattice neighbours (Chebyshev
-distance ≥ 2) and whose centres lie within ``REACH`` mean edges in that state, each corner of one tile
+distance ≥ 2) and whose circumscribed circles come within ``REACH`` median edges in that state (``_near_pairs``: a
+large tile reaches as far as its own size), each corner of one tile
 against the other (counter-clockwise, convex): ``g = max_e`` of the corner's outward distance from edge
 ``e``, ``g ≥ CONTACT_MARGIN`` (tile units). The pairs are found again at every evaluation (a KD-tree over
 the ring's centres); a pair enters far from contact, so the penalty stays continuous. Only the rows below
@@ -25,7 +26,7 @@ from .rigid import RigidFamily
 from .stencils import Stencils
 
 CONTACT_MARGIN = 0.01  # outward distance of a corner from a non-neighbouring tile, tile units
-REACH = 3.0  # tile pairs whose centres are closer than this many mean edges are checked
+REACH = 3.0  # tile pairs whose circumscribed circles come closer than this many median edges are checked
 # the rows and columns along the lattice's edge that are checked: the symmetric 64x64 heart's state-1 notch
 # overlapped between the top row and the one below it (91 pairs, first tiles (62, 19) and (63, 41))
 RING = 2
@@ -56,11 +57,7 @@ class ClosedContact:
         """``(g, nodes (m, 3), grads (m, 3, 2))`` of state ``state`` (1 or 2) on its configuration ``x``."""
         tiles = self.blocks[state - 1][1][self.ring]
         q = x[tiles]  # (R, 4, 2)
-        cen = q.mean(1)
-        edge = float(np.median(np.linalg.norm(q[:, 1] - q[:, 0], axis=1)))
-        pairs = np.asarray(
-            sorted(KDTree(cen).query_pairs(REACH * max(edge, 1e-12))), dtype=np.int64
-        ).reshape(-1, 2)
+        pairs = _near_pairs(q)
         far = np.maximum(
             np.abs(self.r[pairs[:, 0]] - self.r[pairs[:, 1]]),
             np.abs(self.c[pairs[:, 0]] - self.c[pairs[:, 1]]),
@@ -113,3 +110,23 @@ class ClosedContact:
             rs.append(scale * (g[act] - margin_scale * CONTACT_MARGIN))
             Js.append(scale * J)
         return np.concatenate(rs), np.vstack(Js)
+
+
+def _near_pairs(q: np.ndarray) -> np.ndarray:
+    """Pairs ``(i, j)``, i < j, of tiles ``q`` (R, 4, 2) whose circumscribed circles (about the corners' mean)
+    come within ``REACH`` median edges of each other. A tile's own size counts: a tile many edges long meets
+    tiles whose centres are far from its own (the 64x64 drop's state-1 corner tile, 17.6 median edges long,
+    lay over a top-row tile 13.6 median edges from its centre, a pair a reach between centres never saw)."""
+    cen = q.mean(1)
+    rad = np.linalg.norm(q - cen[:, None], axis=-1).max(1)
+    edge = float(np.median(np.linalg.norm(q[:, 1] - q[:, 0], axis=1)))
+    gap = REACH * max(edge, 1e-12)
+    # a pair is found from its larger tile's ball: |ci - cj| <= ri + rj + gap <= 2 max(ri, rj) + gap
+    hits = KDTree(cen).query_ball_point(cen, 2 * rad + gap)
+    i = np.repeat(np.arange(len(q)), [len(h) for h in hits])
+    j = np.concatenate([np.asarray(h, dtype=np.int64) for h in hits] + [np.zeros(0, np.int64)])
+    lo, hi = np.minimum(i, j), np.maximum(i, j)
+    code = np.unique(lo[lo < hi] * len(q) + hi[lo < hi])
+    a, b = np.divmod(code, len(q))
+    near = np.linalg.norm(cen[a] - cen[b], axis=1) <= rad[a] + rad[b] + gap
+    return np.stack([a[near], b[near]], 1).astype(np.int64)
