@@ -198,6 +198,37 @@ def blend_term(gaps: Gaps, blend: np.ndarray, *, weight: float, kappa: float) ->
     return GapTerm(gaps, rows, kappa * blend[rows], float(weight), float(kappa))
 
 
+def corner_gaps(pattern: Pattern) -> Gaps:
+    """Every tile's corners as node triples (corner ``h``, the next corner ``u``, the previous
+    ``v``): the angle turning ``u - h`` onto ``v - h`` is the interior angle of a CCW tile, the
+    same in every state (a rigid motion keeps it), negative or above π once the tile is no longer
+    convex (a dart or a bow-tie)."""
+    tiles = pattern.tiles
+    deployed = pattern.corners()
+    h = tiles.ravel()
+    u = np.roll(tiles, -1, axis=1).ravel()
+    v = np.roll(tiles, 1, axis=1).ravel()
+    angle = geometry.signed_angle(
+        np.roll(deployed, -1, axis=1) - deployed, np.roll(deployed, 1, axis=1) - deployed
+    ).ravel()
+    none = np.zeros_like(angle)
+    return Gaps(h, u, v, angle, {1: none, 2: none}, len(pattern.nodes), np.zeros((0, 2), int))
+
+
+def corner_term(pattern: Pattern, *, weight: float, kappa: float) -> GapTerm:
+    """The tiles kept convex: every interior angle held above ``kappa`` of its design, with the
+    contact term's penalty. Two convex tiles hinged at a corner overlap only if a gap there is
+    negative (each lies in the wedge of its two edges at the hinge), so with this term the gap
+    term alone keeps hinged tiles apart; a spring tile, whose six springs strain freely, could
+    otherwise fold into a bow-tie across its neighbour (thin tiles next to a boundary do). A tile
+    designed non-convex is not watched."""
+    corners = corner_gaps(pattern)
+    k = pattern.tiles.shape[1]
+    convex = (corners.deployed.reshape(-1, k) > FOLDED).all(axis=1)  # a designed dart is left be
+    rows = np.flatnonzero(np.repeat(convex, k))
+    return GapTerm(corners, rows, kappa * corners.deployed[rows], float(weight), float(kappa))
+
+
 def contact_figures(terms: list[GapTerm], sols: list[np.ndarray]) -> dict:
     """The contact term's weight and clearance, its largest value along the path, and the
     narrowest watched gap against its rigid value (below 1: the tiles distort it; 0 or less: they
