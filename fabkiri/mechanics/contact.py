@@ -40,6 +40,7 @@ from .mechanism import gap_angles
 from .path import tile_angles
 
 OPEN = 0.5 * np.pi  # wider rigid gaps are far from closing (and from the ±π cut of atan2)
+CORNER_OPEN = 0.75 * np.pi  # wider corners of a tile are not watched (see corner_term)
 FOLDED = 1e-6  # rad: a rigid gap this narrow is folded (a closed state; the drivers pin it)
 P_NODES = np.array([-1.0, 1.0, 0.0])  # p = u - h over (h, u, v)
 Q_NODES = np.array([-1.0, 0.0, 1.0])  # q = v - h
@@ -225,7 +226,8 @@ def corner_term(pattern: Pattern, *, weight: float, kappa: float) -> GapTerm:
     corners = corner_gaps(pattern)
     k = pattern.tiles.shape[1]
     convex = (corners.deployed.reshape(-1, k) > FOLDED).all(axis=1)  # a designed dart is left be
-    rows = np.flatnonzero(np.repeat(convex, k))
+    # an obtuse corner is far from folding, and near the ±π cut of atan2 its angle would wrap
+    rows = np.flatnonzero(np.repeat(convex, k) & (corners.deployed < CORNER_OPEN))
     return GapTerm(corners, rows, kappa * corners.deployed[rows], float(weight), float(kappa))
 
 

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from .contact import contact_figures, gap_term, hinge_gaps
+from .contact import contact_figures, corner_term, gap_term, hinge_gaps
 from .drivers import PathDriver, angle_drivers, node_centroids, register_driver
 from .elastic import MinimiseStats, minimise
 from .energy import Springs, WithTerm
@@ -108,6 +108,10 @@ class Homotopy(PathDriver):
         zero = 1e-24 * sp.n_springs  # rms relative strain 1e-12: rounding level
         area = area_term(pattern, self.orientation_weight)
         osp = WithTerm(sp, area)
+        if self.convex_weight > 0.0:
+            osp = WithTerm(
+                osp, corner_term(pattern, weight=self.convex_weight, kappa=self.convex_kappa)
+            )
         gaps = hinge_gaps(pattern, states)
         mid = int(np.argmin(np.abs(fine - 0.5)))
         sols: list = [None] * len(fine)
