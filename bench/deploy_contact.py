@@ -84,7 +84,7 @@ def _cli(code: Path, argv: list[str]) -> tuple[int, str, float]:
         os.environ, PYTHONPATH=os.pathsep.join([str(code), os.environ.get("PYTHONPATH", "")])
     )
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cmd = ["nice", sys.executable, "-m", "fabkiri.cli.main", *argv]
+    cmd = ["nice", sys.executable, "-P", "-m", "fabkiri.cli.main", *argv]  # -P: not the cwd first
     done = subprocess.run(cmd, capture_output=True, text=True, env=env)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
