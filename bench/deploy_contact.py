@@ -107,7 +107,13 @@ def _deploy_cell(code: Path, pattern: Path, out: Path) -> tuple[str, str]:
 
 def table(a) -> None:
     """Issue #37's deploy table (module docstring), one markdown row per design, as it goes."""
-    from bench.shapes import TABLE_TARGETS, TARGETS
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("shapes", Path(__file__).with_name("shapes.py"))
+    assert spec is not None and spec.loader is not None
+    shapes = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(shapes)  # bench/shapes.py: the table's targets
+    TABLE_TARGETS, TARGETS = shapes.TABLE_TARGETS, shapes.TARGETS
 
     here = Path(__file__).resolve().parents[1]
     a.work.mkdir(parents=True, exist_ok=True)
