@@ -58,6 +58,9 @@ def deploy_pattern(
     """Compute the deployment path of ``pattern`` and everything ``fabkiri deploy`` writes about it."""
     p = deployment_path(pattern, steps, path=path, driver=driver)
     summary = p.summary()
+    summary["overlap_max_depth_mm"] = max(
+        (overlap_depth(p, o) for o in p.collisions.overlaps), default=0.0
+    )
     summary[KEY] = fingerprint(pattern)
     tube = tube_along_path(pattern, p.corners, p.t)
     if tube is not None:  # a periodic pattern: its tube in every frame
@@ -148,6 +151,15 @@ def check_problems(path: DeploymentPath, tol: float = 1e-9) -> list[str]:
             out.append(f"the path misses the {name} by {d:.3g} mm")
     if path.kind == "rigid" and path.energy.max() > ZERO_ENERGY:
         out.append(f"the rigid path has energy {path.energy.max():.3g} > {ZERO_ENERGY:g}")
+    unconverged = path.solver.get("unconverged_steps", 0)
+    if unconverged:
+        out.append(f"{unconverged} of the path's {path.solver['solves']} solves did not converge")
+    if path.collisions.self_intersecting:
+        bowties = path.collisions.self_intersecting
+        out.append(
+            f"{len(bowties)} tiles cross themselves (bow-ties) along the path: {bowties[:8]}"
+            f"{' ...' if len(bowties) > 8 else ''}"
+        )
     mirrored = path.solver.get("mirrored_tiles_max", 0)
     if mirrored:
         out.append(f"{mirrored} tiles turn over (into their mirror image) along the path")
@@ -157,9 +169,25 @@ def check_problems(path: DeploymentPath, tol: float = 1e-9) -> list[str]:
         out.append(
             f"{len(c.overlaps)} tile overlaps in {len(c.frames)} frames, the largest {o.area:.3g} mm² "
             f"({overlap_depth(path, o):.3g} mm deep) between tiles {o.tile_a} and {o.tile_b} "
-            f"at t = {path.t[o.frame]:.3f}{_deployed_overlaps(path)}"
+            f"at t = {path.t[o.frame]:.3f}{_deployed_overlaps(path)}{_tried(path)}"
         )
     return out
+
+
+def _tried(path: DeploymentPath) -> str:
+    """A note when more than one driver was tried and none found a clean path."""
+    tried = path.solver.get("drivers_tried")
+    if not tried or len(tried) < 2:
+        return ""
+    each = ", ".join(
+        f"{name} {f['overlaps']} overlaps, {f['self_intersecting_tiles']} bow-tie tiles, "
+        f"E up to {f['energy_max']:.3g}"
+        for name, f in tried.items()
+    )
+    return (
+        f"; no driver found a collision-free path ({each}): the tiles must strain this far to "
+        f"pass between the states, and a real sheet may not deploy without contact"
+    )
 
 
 def _deployed_overlaps(path: DeploymentPath) -> str:

@@ -40,6 +40,7 @@ from .mechanism import gap_angles
 from .path import tile_angles
 
 OPEN = 0.5 * np.pi  # wider rigid gaps are far from closing (and from the ±π cut of atan2)
+CORNER_OPEN = 0.75 * np.pi  # wider corners of a tile are not watched (see corner_term)
 FOLDED = 1e-6  # rad: a rigid gap this narrow is folded (a closed state; the drivers pin it)
 P_NODES = np.array([-1.0, 1.0, 0.0])  # p = u - h over (h, u, v)
 Q_NODES = np.array([-1.0, 0.0, 1.0])  # q = v - h
@@ -196,6 +197,38 @@ def blend_term(gaps: Gaps, blend: np.ndarray, *, weight: float, kappa: float) ->
     its value there."""
     rows = np.flatnonzero((blend > FOLDED) & (blend < OPEN))
     return GapTerm(gaps, rows, kappa * blend[rows], float(weight), float(kappa))
+
+
+def corner_gaps(pattern: Pattern) -> Gaps:
+    """Every tile's corners as node triples (corner ``h``, the next corner ``u``, the previous
+    ``v``): the angle turning ``u - h`` onto ``v - h`` is the interior angle of a CCW tile, the
+    same in every state (a rigid motion keeps it), negative or above π once the tile is no longer
+    convex (a dart or a bow-tie)."""
+    tiles = pattern.tiles
+    deployed = pattern.corners()
+    h = tiles.ravel()
+    u = np.roll(tiles, -1, axis=1).ravel()
+    v = np.roll(tiles, 1, axis=1).ravel()
+    angle = geometry.signed_angle(
+        np.roll(deployed, -1, axis=1) - deployed, np.roll(deployed, 1, axis=1) - deployed
+    ).ravel()
+    none = np.zeros_like(angle)
+    return Gaps(h, u, v, angle, {1: none, 2: none}, len(pattern.nodes), np.zeros((0, 2), int))
+
+
+def corner_term(pattern: Pattern, *, weight: float, kappa: float) -> GapTerm:
+    """The tiles kept convex: every interior angle held above ``kappa`` of its design, with the
+    contact term's penalty. Two convex tiles hinged at a corner overlap only if a gap there is
+    negative (each lies in the wedge of its two edges at the hinge), so with this term the gap
+    term alone keeps hinged tiles apart; a spring tile, whose six springs strain freely, could
+    otherwise fold into a bow-tie across its neighbour (thin tiles next to a boundary do). A tile
+    designed non-convex is not watched."""
+    corners = corner_gaps(pattern)
+    k = pattern.tiles.shape[1]
+    convex = (corners.deployed.reshape(-1, k) > FOLDED).all(axis=1)  # a designed dart is left be
+    # an obtuse corner is far from folding, and near the ±π cut of atan2 its angle would wrap
+    rows = np.flatnonzero(np.repeat(convex, k) & (corners.deployed < CORNER_OPEN))
+    return GapTerm(corners, rows, kappa * corners.deployed[rows], float(weight), float(kappa))
 
 
 def contact_figures(terms: list[GapTerm], sols: list[np.ndarray]) -> dict:

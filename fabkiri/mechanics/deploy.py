@@ -42,6 +42,9 @@ __all__ = [
     "rigid_path",
 ]
 
+# drivers tried, in order, when a kind's default driver (``driver="auto"``) finds no clean path
+FALLBACKS: dict[str, tuple[str, ...]] = {"rotations": ("homotopy",)}
+
 
 def deployment_path(
     pattern: Pattern,
@@ -52,9 +55,42 @@ def deployment_path(
     collision_tol: float = 1e-9,
 ) -> DeploymentPath:
     """``path="auto"``: the rigid path if the pattern is rigid-deployable, else the elastic one,
-    driven by ``driver`` (``auto``: the default of the pattern's kind, see :mod:`.drivers`)."""
+    driven by ``driver`` (``auto``: the default of the pattern's kind, see :mod:`.drivers`).
+
+    With ``driver="auto"``, when the kind's default driver finds no clean path (tiles overlap or
+    cross themselves somewhere) and it has fallbacks (:data:`FALLBACKS`: after ``rotations``,
+    ``homotopy``, whose tiles need not follow the checkerboard mechanism), each is tried and the first clean path is kept;
+    if none is clean, the default's path is returned with what every driver found in its
+    ``solver["drivers_tried"]``, so the report says no driver found a collision-free path."""
     if path not in ("auto", "rigid", "elastic"):
         raise InputError(f"path must be auto, rigid or elastic, not {path!r}")
     if path == "rigid" or (path == "auto" and is_rigid_deployable(pattern)):
         return rigid_path(pattern, steps, collision_tol=collision_tol)
-    return elastic_path(pattern, steps, driver=driver, collision_tol=collision_tol)
+    first = elastic_path(pattern, steps, driver=driver, collision_tol=collision_tol)
+    if driver != AUTO or _clean(first):
+        return first
+    tried = {first.driver: _figures(first)}
+    for name in FALLBACKS.get(str(first.driver), ()):
+        other = elastic_path(pattern, steps, driver=name, collision_tol=collision_tol)
+        tried[name] = _figures(other)
+        if _clean(other):
+            other.solver["drivers_tried"] = tried
+            return other
+    first.solver["drivers_tried"] = tried
+    return first
+
+
+def _clean(p: DeploymentPath) -> bool:
+    c = p.collisions
+    return c.collision_free() and not c.self_intersecting
+
+
+def _figures(p: DeploymentPath) -> dict:
+    """What a driver's path found: its overlaps, the deepest area, bow-tie tiles, largest E."""
+    c = p.collisions
+    return {
+        "overlaps": len(c.overlaps),
+        "overlap_max_area_mm2": c.max_area,
+        "self_intersecting_tiles": len(c.self_intersecting),
+        "energy_max": float(p.energy.max()),
+    }
