@@ -159,12 +159,13 @@ def _other_options(
     checks: Checks,
     tried: list[_Attempt],
     base_cpu: float | None = None,
-    max_runs: int = mo.MAX_RUNS,
+    max_runs: int | None = None,
 ) -> tuple[StepRun | None, list[str]]:
     """The options of :mod:`.maker_options`, likeliest first, run until one passes (named, or adopted:
     a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
-    designs (``max_runs``) ran or they cost :data:`~.maker_options.BUDGET` times the first design
-    (``base_cpu`` without ``tried``); the adopted run and the lines."""
+    designs (``max_runs``, read when called) ran or they cost :data:`~.maker_options.BUDGET` times the first
+    design (``base_cpu`` without ``tried``); the adopted run and the lines."""
+    max_runs = mo.MAX_RUNS if max_runs is None else max_runs
     first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
     own = result.tiles.tiles
     every = [o for o in mo.options(plan) if tried or o.group or o.tiles.tiles != own]
