@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import json
 import shlex
+from pathlib import Path
 
 import pytest
 from fabkiri.api import maker, maker_design
 from fabkiri.api import maker_options as mo
 from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.maker_early import narrow_of
-from fabkiri.api.maker_tiles import choose_tiles, tile_width_mm
+from fabkiri.api.maker_tiles import choose_tiles, resplit, tile_width_mm
 from fabkiri.api.print_tiles import least_tile_mm, narrow_tiles
 from fabkiri.design.targets import load_target
 from fabkiri.errors import CheckFailed
@@ -126,3 +127,29 @@ def test_the_line_an_early_refusal_names_was_run_and_makes_it(tmp_path, run_cli)
     assert record["alternatives"] == options and record["failed_step"] == "design"
     code, _, err = run_cli(*shlex.split(options[0])[1:])
     assert code == 0, err  # named because it was run: it makes
+
+
+def test_a_lattice_bent_onto_corners_is_not_judged_by_the_square_tile_estimate(monkeypatch):
+    """make's re-split L (16x4 on its own corners) estimates 8.59 mm square tiles, under prusa-mk4's 8.7 mm,
+    yet prints (bench/make.py): the design door leaves such a lattice to the solver and print."""
+    from fabkiri.api import design as api_design
+
+    class Reached(Exception):
+        pass
+
+    def solver(*args, **kwargs):
+        raise Reached
+
+    monkeypatch.setattr(api_design, "design", solver)
+    letter = str(Path(__file__).resolve().parents[1] / "bench" / "data" / "make" / "letter-l.csv")
+    target = load_target(letter, 150)
+    fab, _ = design_limits.resolve(None, None, "prusa-mk4", "tiles-and-strips", None, None, target)
+    least = least_tile_mm("prusa-mk4", "tiles-and-strips")
+    choice = resplit(target, choose_tiles(target, fab, fab.source, least))
+    assert choice.corners is not None and choice.tiles == (16, 4)
+    assert narrow_tiles(target, choice.tiles, "prusa-mk4", "tiles-and-strips") is not None
+    kw = dict(target=letter, size=150.0, printer="prusa-mk4", quiet=True, tiles=choice.tiles)
+    with pytest.raises(Reached):  # left to the solver
+        design_pattern(PatternRequest(corners=choice.corners, **kw))
+    with pytest.raises(CheckFailed):  # the same count on the plain lattice is refused
+        design_pattern(PatternRequest(**kw))

@@ -268,7 +268,8 @@ def _solver_request(
         fab_limits is not None and target is not None
     ):  # a request no design can meet: say so before solving
         _check_room(rows, cols, fab_limits, target)
-        check_tiles(rows, cols, target, request.printer, intent.get("style"))  # too narrow to print
+        if request.corners is None:  # too narrow to print (not estimated for a lattice on corners)
+            check_tiles(rows, cols, target, request.printer, intent.get("style"))
     holes = (
         request.holes
         if request.holes is not None
