@@ -23,6 +23,8 @@ from fabkiri.design.rigid import RigidFamily
 from fabkiri.design.solve import DesignRequest, design
 from fabkiri.pattern import read_pattern, standard_pattern
 
+from .rigid_merit import rigid_merit
+
 
 def _symmetric(rows, cols, axis):
     std = standard_pattern(rows, cols, tile_size=1.0)
@@ -53,13 +55,7 @@ def _mirrored_merit(axis: str, seed: int, dense: bool = True):
     block path, as from about 40x40 tiles."""
     prob, fam = _symmetric_problem(axis, 12)
     mirror, q, _ = _crossing_member(fam, prob.std, axis, 12, 12)
-    base = _Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=grid_families(fam, prob.st, prob.families),
-    )
+    base = rigid_merit(prob)
     if not dense:
         base._tiles = None
     merit = MirroredMerit(base, mirror.P, mirror.axis_rows).with_contact(
@@ -328,13 +324,7 @@ def test_regulariser_features_of_half_the_tiles(rows, cols, axis):
     prob = _Problem(DesignRequest(rows, cols, target, rigid=True, symmetry=axis))
     fam = prob.rigid_family
     mirror = Mirror.build(fam, rows, cols, axis)
-    base = _Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=grid_families(fam, prob.st, prob.families),
-    )
+    base = rigid_merit(prob)
     half, full = MirroredMerit(base, mirror.P).inner._tiles, base._tiles
     assert len(half.R) <= len(full.quads) // 2 + cols
     rng = np.random.default_rng(rows)

@@ -13,6 +13,8 @@ from fabkiri.design.rigid_core import GridCore, grid_core
 from fabkiri.design.solve import DesignRequest, _Problem
 from fabkiri.pattern import standard_pattern
 
+from .rigid_merit import rigid_merit
+
 
 def _family(rows, cols):
     std = standard_pattern(rows, cols, tile_size=1.0)
@@ -50,13 +52,7 @@ def block_merit(monkeypatch):
     monkeypatch.setattr(R, "DENSE_JD", 0)
     prob = _Problem(DesignRequest(8, 8, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family
-    merit = R._Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=R.grid_families(fam, prob.st, prob.families),
-    )
+    merit = rigid_merit(prob)
     assert merit._tiles is None and merit._C is None
     S, _ = fam.fit(prob.X0, np.pi / 4)
     S = S + 0.2 * np.random.default_rng(3).normal(size=S.shape)

@@ -16,6 +16,8 @@ from fabkiri.pattern import Pattern, standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as hst
 
+from .rigid_merit import rigid_merit
+
 
 def _family(rows, cols):
     std = standard_pattern(rows, cols, tile_size=1.0)
@@ -343,13 +345,7 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
         return q, merit.state(q)[0], 1
 
     monkeypatch.setattr(R, "levenberg_marquardt", fake_lm)
-    judge = R._Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=R.grid_families(fam, prob.st, prob.families),
-    )
+    judge = rigid_merit(prob)
     assert (
         judge.ineq_violation(judge.state(folded)) > 0 and judge.ineq_violation(judge.state(p0)) == 0
     )
@@ -407,13 +403,7 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
     monkeypatch.setattr(
         R, "DENSE_JD", 0
     )  # force the block paths (no dense ∂c/∂p, block normal matrix)
-    m = R._Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=R.grid_families(fam, prob.st, prob.families),
-    )
+    m = rigid_merit(prob)
     assert m._C is None
     S, _ = fam.fit(prob.X0, np.pi / 4)
     # off the mirror-symmetric start: there a chord midpoint lies on the heart's axis, equidistant from both

@@ -11,6 +11,8 @@ from fabkiri.design.stencils import Family, jac
 from fabkiri.pattern import standard_pattern
 from scipy import sparse
 
+from .rigid_merit import rigid_merit
+
 
 def _coo(m, nv, nodes, grads):
     """The reference: every stencil entry summed by scipy's COO conversion."""
@@ -78,13 +80,7 @@ def test_block_rows_come_without_jacobians_until_a_step_asks(monkeypatch):
     prob = _Problem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family
     monkeypatch.setattr(R, "DENSE_JD", 0)
-    merit = R._Merit(
-        fam,
-        prob.families,
-        prob.margin,
-        1e-3,
-        grid_families=R.grid_families(fam, prob.st, prob.families),
-    )
+    merit = rigid_merit(prob)
     assert merit._tiles is None
     S, _ = fam.fit(prob.X0, np.pi / 4)
     S = S + 0.2 * np.random.default_rng(3).normal(size=S.shape)  # some inequality rows active
