@@ -70,7 +70,7 @@ class PathDriver:
     # the default continuation then adds the contact term of :mod:`.contact` at this weight
     contact_weight: ClassVar[float] = 0.0
     contact_kappa: ClassVar[float] = 0.5  # its clearance, a fraction of the rigid tiles' gap
-    # and may keep every tile convex (:func:`.contact.corner_term`) at this weight
+    # a driver's own ``solve`` may keep every tile convex (:func:`.contact.corner_term`) at this weight
     convex_weight: ClassVar[float] = 0.0
     convex_kappa: ClassVar[float] = 0.5  # its clearance, a fraction of each designed corner angle
 

@@ -65,7 +65,7 @@ from scipy import sparse
 from scipy.sparse.linalg import splu, spsolve
 
 from ..pattern.model import Pattern
-from .contact import GapTerm, blend_term, contact_figures, corner_term, hinge_gaps
+from .contact import GapTerm, blend_term, contact_figures, hinge_gaps
 from .drivers import AUTO, Drivers, PathDriver, path_driver
 from .energy import Springs, WithTerm, springs
 from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived here)
@@ -212,7 +212,7 @@ def _fine_grid(
 
 def _continue(
     pattern: Pattern,
-    sp: Springs | WithTerm,
+    sp: Springs,
     states: dict[int, np.ndarray],
     fine: np.ndarray,
     drivers: list[Drivers],
@@ -306,11 +306,7 @@ def elastic_path(
     figures: dict = {}
     if drv.solve is None:
         terms = _contact_terms(pattern, states, fine, drv)
-        base: Springs | WithTerm = sp
-        if drv.convex_weight > 0.0:
-            convex = corner_term(pattern, weight=drv.convex_weight, kappa=drv.convex_kappa)
-            base = WithTerm(sp, convex)
-        sols = _continue(pattern, base, states, fine, drivers, plan.guess, tol, stats, terms)
+        sols = _continue(pattern, sp, states, fine, drivers, plan.guess, tol, stats, terms)
         if terms is not None:
             figures = contact_figures(terms, sols)
     else:
