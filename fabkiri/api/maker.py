@@ -61,7 +61,11 @@ class _Plan:
     process: str
     fabrication: str
     stem: str
-    least_tile_mm: float = 0.0  # a print style's own minimum tile (print_tiles); 0 for a cut
+
+    @property
+    def least_tile_mm(self) -> float:
+        """The print style's own minimum tile (:func:`.print_tiles.least_tile_mm`, memoised); 0 for a cut."""
+        return least_tile_mm(self.printer, str(self.style)) if self.printer else 0.0
 
 
 def make(
@@ -172,7 +176,6 @@ def _plan(
         process=process,
         fabrication=fabrication,
         stem=stem,
-        least_tile_mm=least,
     )
 
 

@@ -201,7 +201,6 @@ def tried_of(plan, attempts: Sequence[Any]) -> list[Tried]:
 
 def plan_of(plan, option: Option):
     """The make plan of ``option`` (the same target, size, tolerance and floor)."""
-    least = least_tile_mm(option.printer, str(option.style)) if option.printer else 0.0
     return replace(
         plan,
         process=option.process,
@@ -210,7 +209,6 @@ def plan_of(plan, option: Option):
         printer=option.printer,
         style=option.style,
         tiles=option.tiles,
-        least_tile_mm=least,
         fabrication=f"{option.material} {option.hinge}"
         if option.process == "cut"
         else f"{option.printer} {option.style}",
