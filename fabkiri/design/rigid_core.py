@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse import csgraph
 
 # two levels: the third makes the rows of ``Eᵀ K E`` about twice as long for a quarter fewer vertices, and
 # the sparse product ``(Eᵀ K E) Z[core]`` then costs more than the dense one saves (128x128 grid block)
@@ -102,8 +103,6 @@ def _independent_rows(A: sparse.csr_matrix, pivot: np.ndarray) -> np.ndarray:
 def _colours(A: sparse.csr_matrix, pivot: np.ndarray) -> np.ndarray:
     """``(G,)`` parity of each vertex's distance from the first vertex of its component in the graph that
     joins a row's pivot to its other vertices (a 2-colouring where that graph is bipartite)."""
-    from scipy.sparse import csgraph  # only the large lattices' block path needs it
-
     G = A.shape[1]
     coo = A.tocoo()
     graph = sparse.csr_matrix((np.ones(coo.nnz), (pivot[coo.row], coo.col)), shape=(G, G))
