@@ -24,11 +24,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from fabkiri.fabricate import readback as R
-from fabkiri.fabricate.cut import CutOptions, cut_pattern
-from fabkiri.fabricate.materials import load_material
+from fabkiri.fabricate.cut import readback as R
+from fabkiri.fabricate.cut.materials import load_material
+from fabkiri.fabricate.cut.sheets import CutOptions, cut_pattern
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 
 def run(pattern, material, hinge, labels):

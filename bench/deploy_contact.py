@@ -37,9 +37,9 @@ from pathlib import Path
 
 from fabkiri.api.deploy import overlap_depth
 from fabkiri.api.patterns import load_pattern
-from fabkiri.mechanics import mechanism
 from fabkiri.mechanics.contact import blend_term, contact_figures, hinge_gaps
 from fabkiri.mechanics.deploy import closed_states, deployment_path
+from fabkiri.mechanics.drivers import rotations as mechanism
 
 FIXTURES = [
     Path(__file__).parents[1] / "tests" / "data" / f"{n}-16x16-nonrigid.json"

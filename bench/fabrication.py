@@ -168,12 +168,12 @@ def frontier(out: Path, widths=(2.0, 3.0, 3.5, 4.0, 4.5, 5.0)) -> None:
     meet the same figure at 200 * 3 / w mm."""
     from dataclasses import replace
 
-    from fabkiri.design.conformance import deployed
-    from fabkiri.design.fabrication import FabricationLimits
-    from fabkiri.design.refine import refine_minimax
-    from fabkiri.design.solve import DesignRequest, design
-    from fabkiri.design.targets import load_target
-    from fabkiri.pattern import fabricability as fab
+    from fabkiri.design.core.conformance import deployed
+    from fabkiri.design.core.refine import refine_minimax
+    from fabkiri.design.quad.fabrication import FabricationLimits
+    from fabkiri.design.quad.solve import DesignRequest, design
+    from fabkiri.design.targets.lookup import load_target
+    from fabkiri.pattern import thinness as fab
 
     tgt = load_target("heart", 200)
     base = DesignRequest(
@@ -219,9 +219,9 @@ def impossible(out: Path) -> None:
 def summary_cost() -> None:
     """CPU s of the summary (every material, every printer preset and style, closed form) against the
     bisection on the plan checks for the same presets (what one printer's minimum cost before)."""
+    from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.fabricate import fabricability as fb
-    from fabkiri.fabricate.printers import available_printers, load_printer
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.fabricate.print.printers import available_printers, load_printer
 
     for name, src in (
         ("circle-8x8-rigid", "templates/patterns"),
@@ -285,7 +285,7 @@ TABLE_FOR = {
 def table(out: Path, pick: list[str] | None = None) -> None:
     """Markdown rows: per README design and what it was made for, thinnest tile and the smallest cut width
     per material (its default hinge kind); ``pick``: only these designs (README_DESIGNS names)."""
-    from fabkiri.fabricate.materials import available, load_material
+    from fabkiri.fabricate.cut.materials import available, load_material
 
     mats = available()
     print(

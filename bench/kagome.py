@@ -26,9 +26,9 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from fabkiri.design import kagome as K
+from fabkiri.design.kagome import constraints as K
 from fabkiri.mechanics.contract import contract
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 from child import run_cli
 
@@ -145,9 +145,9 @@ def _shapely_hausdorff(path: Path, target: str, size: str) -> str:
     shapely's, between the deployed tip outline (read back from the file) and the target (4000 samples), both
     densified to 0.1 % of the size."""
     import shapely
-    from fabkiri.design.targets import load_target
+    from fabkiri.design.targets.lookup import load_target
+    from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.pattern.conformance import boundary_tip_order
-    from fabkiri.pattern.io import read_pattern
 
     p = read_pattern(path)
     top = p.topology

@@ -22,7 +22,7 @@ from pathlib import Path
 from fabkiri.api.deploy import overlap_depth
 from fabkiri.api.patterns import load_pattern
 from fabkiri.mechanics.deploy import deployment_path
-from fabkiri.mechanics.homotopy import Homotopy
+from fabkiri.mechanics.drivers.homotopy import Homotopy
 
 FIXTURES = [
     Path(__file__).parents[1] / "tests" / "data" / f"kagome-{n}.json"

@@ -19,10 +19,10 @@ import os
 import time
 from dataclasses import replace
 
-import fabkiri.design.kagome as K
+import fabkiri.design.kagome.constraints as K
 from fabkiri.api.kagome import design_kagome
 from fabkiri.mechanics.deploy import collisions, deployment_path
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 DESIGNS = [(9, 15, "circle", 180), (6, 10, "ellipse", 120), (6, 10, "heart", 120)]
 MORE = [

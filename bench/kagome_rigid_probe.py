@@ -20,9 +20,9 @@ import argparse
 import time
 
 import numpy as np
+from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.mechanics.path import closed_states
 from fabkiri.pattern import geometry
-from fabkiri.pattern.io import read_pattern
 from scipy import sparse
 from scipy.sparse.linalg import splu
 

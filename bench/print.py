@@ -13,10 +13,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from fabkiri.fabricate import mesh, solid
-from fabkiri.fabricate.printers import load_printer
+from fabkiri.fabricate.print import mesh, solid
+from fabkiri.fabricate.print.printers import load_printer
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 
 def stage(label, fn, *a):
@@ -84,7 +84,7 @@ def main() -> None:
         f"  batched tile solid build is part of 'solids' above; naive tiles alone took {naive:.2f} s"
     )
     if args.step:
-        from fabkiri.fabricate import cad
+        from fabkiri.fabricate.print import step as cad
 
         t = time.perf_counter()
         import build123d  # noqa: F401

@@ -2,7 +2,7 @@
 
 Prints, in one run, time / iterations / residual / fit for n = 4, 8, 16, 32, 64
 (128 with --big) with fabkiri's default solver (``auto``: the closed-form rigid
-family, design/rigid.py), the full sparse solver on the same problem (``full``
+family, design/quad/rigid/family.py), the full sparse solver on the same problem (``full``
 lines, skip with --no-full), and the same problem at n = 4
 and 8 with scipy's dense SLSQP (exact Jacobians, the same families, shape
 matching as the objective) as the baseline, with the speed ratio: once with the
@@ -43,8 +43,14 @@ from pathlib import Path
 
 import numpy as np
 from fabkiri.cli.design_cmd import BIG_TILES
-from fabkiri.design import targets as T
-from fabkiri.design.solve import DesignRequest, _ineq_values, _Problem, design, single_thread_blas
+from fabkiri.design.quad.solve import (
+    DesignRequest,
+    _ineq_values,
+    _Problem,
+    design,
+    single_thread_blas,
+)
+from fabkiri.design.targets import lookup as T
 from scipy.optimize import minimize
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -5,7 +5,7 @@ the same worker measures this checkout and a baseline checkout (``--baseline DIR
 worker prints one JSON object. Workers:
 
 - ``design``: one ``design()`` call through the API; wall and CPU seconds, status, residual, tip fit, and
-  the shape conformance ``design`` reports (``design/conformance.py``: Hausdorff distance in % of the
+  the shape conformance ``design`` reports (``design/core/conformance.py``: Hausdorff distance in % of the
   target's size, 1 − IoU);
 - ``square_circle``: ``fabkiri design --tiles NxN --rigid --contracted-target 1:square
   --contracted-target 2:circle`` in-process; state 1's distance from a square (relative to its side:
@@ -99,18 +99,18 @@ def startup(code_dir: Path, argv: list[str], k: int = 5, bytecode: str | None = 
 
 # ------------------------------------------------------------------ workers (run in the child process)
 def outline_conformance(pattern, target) -> dict:
-    """The shape-conformance measure ``design`` reports and ``--shape-tol`` judges (``design/conformance.py``):
+    """The shape-conformance measure ``design`` reports and ``--shape-tol`` judges (``design/core/conformance.py``):
     the boundary tips in outline order against the target polygon, Hausdorff distance in % of the target's
     size (the larger side of its bounding box), and 1 - IoU."""
-    from fabkiri.design.conformance import deployed
+    from fabkiri.design.core.conformance import deployed
 
     c = deployed(pattern.nodes, pattern.topology, target)
     return {"hausdorff_pct": 100 * c["hausdorff_rel"], "one_minus_iou": c["one_minus_iou"]}
 
 
 def worker_design(spec: dict) -> dict:
-    from fabkiri.design import targets as T
-    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.design.quad.solve import DesignRequest, design
+    from fabkiri.design.targets import lookup as T
 
     n = spec["n"]
     req = DesignRequest(n, n, T.load_target(spec["target"], 100.0), **spec.get("options", {}))
@@ -133,7 +133,7 @@ def worker_design(spec: dict) -> dict:
 
 def closed_outline(pattern, state: int) -> np.ndarray:
     """Boundary vertices of a closed state's grid, CCW, from the contracted tiles."""
-    from fabkiri.design.constraints import ClosedGrid, Stencils
+    from fabkiri.design.quad.constraints import ClosedGrid, Stencils
 
     st = Stencils.from_pattern(pattern)
     g = ClosedGrid.build(st, state, 0)
@@ -189,7 +189,7 @@ def worker_square_circle(spec: dict) -> dict:
     import tempfile
 
     from fabkiri.cli.main import main as cli
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     n = spec["n"]
     with tempfile.TemporaryDirectory() as tmp:

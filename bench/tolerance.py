@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 import shapely
+from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.mechanics.deploy import closed_states
 from fabkiri.mechanics.tolerance import seam_edges, tolerance_analysis
-from fabkiri.pattern.io import read_pattern
 from fabkiri.templates import template_dir
 
 

@@ -46,14 +46,14 @@ def main() -> int:
         writer = args.writer
         if writer == "auto":
             try:
-                import fabkiri.fabricate.cut  # noqa: F401
+                import fabkiri.fabricate.cut.sheets  # noqa: F401
 
                 writer = "cut"
             except ImportError:
                 writer = "fixture"
         if writer == "cut":
             from fabkiri.cli.main import main as cli
-            from fabkiri.pattern import write_pattern
+            from fabkiri.exchange.patternfile import write_pattern
 
             pj = Path(tmp) / "p64.json"
             write_pattern(p, pj)

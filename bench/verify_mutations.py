@@ -25,8 +25,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
+from fabkiri.exchange.patternfile import read_pattern, write_pattern  # noqa: E402
 from fabkiri.mechanics.contract import with_contracted_states  # noqa: E402
-from fabkiri.pattern import read_pattern, standard_pattern, write_pattern  # noqa: E402
+from fabkiri.pattern import standard_pattern  # noqa: E402
 from fabkiri.verify import verify_layout  # noqa: E402
 
 import layout_mutations as lm  # noqa: E402

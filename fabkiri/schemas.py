@@ -11,7 +11,7 @@ from typing import Any
 
 @cache
 def load_schema(package: str, name: str) -> dict[str, Any]:
-    """The schema ``name`` shipped in ``package`` (e.g. ``fabkiri.pattern``, ``pattern.schema.json``)."""
+    """The schema ``name`` shipped in ``package`` (e.g. ``fabkiri.exchange``, ``pattern.schema.json``)."""
     return json.loads(resources.files(package).joinpath(name).read_text("utf-8"))
 
 

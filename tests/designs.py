@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 from fabkiri.pattern import geometry
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from fabkiri.pattern.model import Pattern
 from scipy import sparse
 from scipy.optimize import least_squares

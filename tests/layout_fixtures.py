@@ -17,8 +17,8 @@ import shapely
 import svgwrite
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import Pattern, geometry, standard_pattern
-from fabkiri.pattern.fabricability import widths
 from fabkiri.pattern.residuals import hinge_sums
+from fabkiri.pattern.thinness import widths
 
 
 def _residuals(pattern: Pattern, x: np.ndarray) -> np.ndarray:

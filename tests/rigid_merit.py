@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from fabkiri.design import reduced as R
+from fabkiri.design.quad.rigid import reduced as R
 
 
 def rigid_merit(prob, reg_weight: float = 1e-3) -> R._Merit:

@@ -7,9 +7,10 @@ import json
 import pytest
 from fabkiri.api.cut import CutOutcome, cut_files, cut_material, design_intent
 from fabkiri.errors import CheckFailed, InputError
-from fabkiri.fabricate.cut import CutOptions
+from fabkiri.exchange.patternfile import write_pattern
+from fabkiri.fabricate.cut.sheets import CutOptions
 from fabkiri.mechanics import with_contracted_states
-from fabkiri.pattern import standard_pattern, write_pattern
+from fabkiri.pattern import standard_pattern
 
 
 @pytest.fixture(scope="module")

@@ -7,8 +7,9 @@ import json
 import pytest
 from fabkiri.api.print import PrintOptions, PrintOutcome, print_pattern
 from fabkiri.errors import CheckFailed, FabricationError, InputError
+from fabkiri.exchange.patternfile import write_pattern
 from fabkiri.mechanics import with_contracted_states
-from fabkiri.pattern import standard_pattern, write_pattern
+from fabkiri.pattern import standard_pattern
 
 
 @pytest.fixture(scope="module")
@@ -120,8 +121,8 @@ def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
     its own is refused with that check's words, after saying its notes."""
     from dataclasses import replace
 
-    from fabkiri.fabricate import printjob
-    from fabkiri.fabricate.styles import strips as strips_style
+    from fabkiri.fabricate.print import job as printjob
+    from fabkiri.fabricate.print.styles import strips as strips_style
 
     monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
 
@@ -190,7 +191,7 @@ def test_the_gate_measures_a_stored_target_at_the_patterns_own_size(monkeypatch)
     # (a 48 mm miss, measured for nobody, ~1 CPU s); it now verifies the pattern at its own size with the
     # printer's tolerance divided by the scale, as `cut` does
     import fabkiri.api.print as api_print
-    from fabkiri.pattern import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.templates import template_dir
 
     seen = {}

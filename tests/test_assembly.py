@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.pattern.io import read_pattern
+from fabkiri.exchange.patternfile import read_pattern
 from PIL import Image
 
 from .conftest import TEMPLATES

@@ -18,9 +18,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fabkiri.exchange.patternfile import dumps, obj_text
 from fabkiri.mechanics import with_contracted_states
-from fabkiri.pattern import dumps, obj_text, standard_pattern
-from fabkiri.pattern.periodic import standard_tube
+from fabkiri.pattern import standard_pattern
+from fabkiri.pattern.kinds.periodic.sheet import standard_tube
 
 from .conftest import REPO, TEMPLATES
 
@@ -48,7 +49,7 @@ def _scale_nodes(k):
 
 
 def _huge_fold() -> str:
-    from fabkiri.pattern.fold import fold_text
+    from fabkiri.exchange.fold import fold_text
 
     d = json.loads(fold_text(PATTERN_2x2))
     d["vertices_coords"] = [[x * 1e306, y * 1e306] for x, y in d["vertices_coords"]]
@@ -612,8 +613,8 @@ def test_a_good_write_replaces_old_files_and_leaves_no_scratch(tmp_path):
 
 def test_library_writers_refuse_an_input_of_the_running_command(tmp_path):
     from fabkiri.errors import InputError
+    from fabkiri.exchange.patternfile import read_pattern, write_pattern
     from fabkiri.fileio import inputs_scope
-    from fabkiri.pattern import read_pattern, write_pattern
 
     src = tmp_path / "p.json"
     src.write_text(GOOD)
@@ -683,7 +684,7 @@ def _other_pattern() -> str:
 
 
 def _kagome_pattern() -> str:
-    from fabkiri.pattern.kagome import standard_kagome
+    from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
     return dumps(standard_kagome(2, 2))
 

@@ -8,8 +8,9 @@ import json
 
 import numpy as np
 import pytest
+from fabkiri.exchange.patternfile import read_pattern, write_pattern
 from fabkiri.mechanics import with_contracted_states
-from fabkiri.pattern import read_pattern, standard_pattern, write_pattern
+from fabkiri.pattern import standard_pattern
 from PIL import Image
 
 from .designs import reconfigurable_design
@@ -116,8 +117,8 @@ def test_deploy_bad_input_writes_nothing(run_cli, tmp_path):
 
 def test_deploy_front_door_gives_the_commands_verdict_without_the_cli():
     from fabkiri.api.deploy import deploy_pattern
+    from fabkiri.exchange.patternfile import import_obj
     from fabkiri.mechanics import adopt_state_labels
-    from fabkiri.pattern import import_obj
 
     good = deploy_pattern(with_contracted_states(standard_pattern(3, 3)), 8, frames=True)
     assert good.success and good.path.kind == "rigid" and good.n_frame_files == good.path.n_frames

@@ -5,8 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from fabkiri.pattern import read_pattern
-from fabkiri.pattern.io import read_obj
+from fabkiri.exchange.patternfile import read_obj, read_pattern
 
 from .conftest import ref
 
@@ -68,7 +67,9 @@ def test_a_pattern_format_is_one_registered_strategy(tmp_path, run_cli, monkeypa
     import pytest
     from fabkiri.api.patterns import export_pattern
     from fabkiri.errors import InputError
-    from fabkiri.pattern import formats, io, standard_pattern
+    from fabkiri.exchange import pattern_formats as formats
+    from fabkiri.exchange import patternfile as io
+    from fabkiri.pattern import standard_pattern
 
     monkeypatch.setattr(formats._FORMATS, "members", dict(formats._FORMATS.members))
     assert formats.format_names(writable=True) == ("obj", "fold", "pykirigami")

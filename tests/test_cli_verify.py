@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.pattern import write_pattern
+from fabkiri.exchange.patternfile import write_pattern
 
 from . import layout_fixtures as lf
 from .conftest import TEMPLATES, ref

@@ -6,11 +6,11 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.design.conformance import judge, parse_shape_tol
+from fabkiri.design.core.conformance import judge, parse_shape_tol
 from fabkiri.errors import InputError
+from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.pattern import conformance as pc
-from fabkiri.pattern.io import read_pattern
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -205,7 +205,7 @@ def test_verify_catches_a_moved_or_swapped_target(tmp_path, run_cli):
         d["target"]["points"] = (np.asarray(d["target"]["points"]) + [3.0, 0.0]).tolist()
 
     def swapped(d):
-        from fabkiri.design.targets import load_target
+        from fabkiri.design.targets.lookup import load_target
 
         d["target"] = load_target("hexagon").to_dict()
 
@@ -215,7 +215,7 @@ def test_verify_catches_a_moved_or_swapped_target(tmp_path, run_cli):
 
     # the closed-state targets likewise
     def swapped_closed(d):
-        from fabkiri.design.targets import load_target
+        from fabkiri.design.targets.lookup import load_target
 
         d["contracted_targets"]["2"] = load_target("square", 112.8).to_dict()
 
@@ -237,7 +237,7 @@ def test_info_reports_conformance(run_cli):
 
 
 def test_a_miss_of_many_tip_spacings_is_called_a_local_minimum_and_promises_no_tile_count():
-    from fabkiri.design.conformance import describe_miss
+    from fabkiri.design.core.conformance import describe_miss
 
     resolution = {
         "hausdorff_mm": 3.0,

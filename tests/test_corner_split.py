@@ -1,5 +1,5 @@
-"""An L re-split as a bent strip (``design/corner_split.py``) and its fold-free start
-(``design/inverse_map.py``): the lattice's corners at the strip's ends, a tip on the reflex corner, no
+"""An L re-split as a bent strip (``design/quad/corner_split.py``) and its fold-free start
+(``design/quad/inverse_map.py``): the lattice's corners at the strip's ends, a tip on the reflex corner, no
 folded tile, and the fit within the shape tolerance; outlines the default split takes keep it."""
 
 from __future__ import annotations
@@ -7,13 +7,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from fabkiri.api import maker_tiles
-from fabkiri.design import corner_split as cs
-from fabkiri.design.initial import initial_guess
-from fabkiri.design.inverse_map import inverse_harmonic_map
-from fabkiri.design.stencils import Stencils
-from fabkiri.design.targets import load_target
+from fabkiri.design.core.stencils import Stencils
+from fabkiri.design.quad import corner_split as cs
+from fabkiri.design.quad.initial import initial_guess
+from fabkiri.design.quad.inverse_map import inverse_harmonic_map
+from fabkiri.design.targets.lookup import load_target
 from fabkiri.pattern import geometry
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 from .test_make import _limits
 from .test_opening import DATA
@@ -84,7 +84,7 @@ def test_the_l_is_met_on_the_strip_split():
 
 
 def test_a_missed_l_names_the_strip_make_would_use():
-    from fabkiri.design.conformance import describe_miss
+    from fabkiri.design.core.conformance import describe_miss
 
     from .test_opening import CONF, _missed
 

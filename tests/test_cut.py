@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 import shapely
 from fabkiri.errors import CheckFailed, FabricationError, InputError
-from fabkiri.fabricate import hinges as hg
-from fabkiri.fabricate.cut import CutOptions, cut_pattern
-from fabkiri.fabricate.materials import available, load_material
-from fabkiri.fabricate.readback import verify_result
-from fabkiri.fabricate.reread import duplicate_segments, read_dxf, read_svg
-from fabkiri.fabricate.text import GLYPHS, text_strokes, text_width
+from fabkiri.exchange.patternfile import read_pattern, write_pattern
+from fabkiri.exchange.reread import duplicate_segments, read_dxf, read_svg
+from fabkiri.fabricate.cut import hinges as hg
+from fabkiri.fabricate.cut.materials import available, load_material
+from fabkiri.fabricate.cut.readback import verify_result
+from fabkiri.fabricate.cut.sheets import CutOptions, cut_pattern
+from fabkiri.fabricate.cut.text import GLYPHS, text_strokes, text_width
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.io import read_pattern, write_pattern
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -355,7 +355,7 @@ def test_dxf_and_svg_structure_and_agreement():
 
 def test_bulk_dxf_is_byte_identical_to_ezdxf_objects():
     # the bulk ENGRAVE writer must give exactly what add_lwpolyline per stroke gives
-    from fabkiri.fabricate.dxf import dxf_bytes
+    from fabkiri.exchange.dxf import dxf_bytes
 
     for kind in ("tape", "separate"):
         r = cut(std(3, 4), hinge=kind)
@@ -377,7 +377,7 @@ def _same_layers(a, b):
 
 
 def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
-    from fabkiri.fabricate.reread import read_dxf_checked
+    from fabkiri.exchange.reread import read_dxf_checked
 
     data = cut(std(4, 4)).files["p.dxf"]
     full, fast = read_dxf_checked(data, full_max=10**9), read_dxf_checked(data, full_max=0)
@@ -408,7 +408,7 @@ def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
 
 
 def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tmp_path):
-    import fabkiri.verify.svgread as L
+    import fabkiri.exchange.svgread as L
 
     r = cut(std(3, 3))
     f = tmp_path / "p.svg"
@@ -424,7 +424,7 @@ def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tm
 
 
 def test_text_strokes_many_matches_text_strokes_label_by_label():
-    from fabkiri.fabricate.text import text_strokes_many
+    from fabkiri.fabricate.cut.text import text_strokes_many
 
     rng = np.random.default_rng(3)
     chars = sorted(GLYPHS)
@@ -451,8 +451,8 @@ def test_text_strokes_many_matches_text_strokes_label_by_label():
 )
 @settings(max_examples=30, deadline=None)
 def test_bulk_segments_and_linestrings_match_one_polyline_at_a_time(shape, seed):
-    from fabkiri.fabricate.readback import _linestrings
-    from fabkiri.fabricate.reread import _segments
+    from fabkiri.exchange.reread import _segments
+    from fabkiri.fabricate.cut.readback import _linestrings
 
     rng = np.random.default_rng(seed)
     pl = [(rng.normal(size=(n, 2)), c) for n, c in shape]
@@ -609,7 +609,7 @@ def test_cli_material_overrides_reach_the_manifest(run_cli, tmp_path):
 
 
 def test_cli_failed_readback_writes_nothing(run_cli, tmp_path, monkeypatch):
-    from fabkiri.fabricate import readback
+    from fabkiri.fabricate.cut import readback
 
     def broken(pattern, result, folder):
         return {
@@ -640,7 +640,7 @@ def test_png_preview_shows_every_sheet():
     b = Image.open(BytesIO(two.files["p.png"]))
     assert a.format == b.format == "PNG"
     # cropped to the parts (not the 600 x 400 mm sheet), at a scale where the smallest label is legible
-    from fabkiri.fabricate.preview import LABEL_PX, content_box
+    from fabkiri.fabricate.cut.preview import LABEL_PX, content_box
 
     box = content_box(one.sheets[0])
     px_per_mm = a.size[0] / (box[2] - box[0])
@@ -722,8 +722,8 @@ def test_a_hinge_kind_is_one_registered_strategy(monkeypatch):
     """A kind registered from outside (as a new kind's module would) is chosen by
     name: its linework is what the sheet gets and the manifest names it; an
     unknown name is refused with one line."""
-    from fabkiri.fabricate import hingekinds
-    from fabkiri.fabricate.hingekinds.tape import Tape
+    from fabkiri.fabricate.cut import hingekinds
+    from fabkiri.fabricate.cut.hingekinds.tape import Tape
 
     monkeypatch.setattr(hingekinds._KINDS, "members", dict(hingekinds._KINDS.members))
 
@@ -752,13 +752,14 @@ def test_what_a_hinge_kind_decides_is_asked_of_the_kind(monkeypatch):
     never its name: a renamed copy of a kind behaves as the kind, and a kind that changes one answer
     changes that one thing."""
     from fabkiri.fabricate import assembly as asm
-    from fabkiri.fabricate import coupon, design_limits, hingekinds
+    from fabkiri.fabricate import coupon, design_limits
     from fabkiri.fabricate import fabricability as fb
-    from fabkiri.fabricate.hingekinds.ligament import Ligament
-    from fabkiri.fabricate.hingekinds.tape import Tape
+    from fabkiri.fabricate.cut import hingekinds
+    from fabkiri.fabricate.cut.hingekinds.ligament import Ligament
+    from fabkiri.fabricate.cut.hingekinds.tape import Tape
 
     monkeypatch.setattr(hingekinds._KINDS, "members", dict(hingekinds._KINDS.members))
-    for where in ("materials", "design_limits"):  # a new kind's name is listed there too
+    for where in ("cut.materials", "design_limits"):  # a new kind's name is listed there too
         monkeypatch.setattr(
             f"fabkiri.fabricate.{where}.HINGE_KINDS", ("tape", "ligament", "separate", "living")
         )
@@ -853,7 +854,7 @@ def test_a_sheet_format_is_one_registered_strategy(monkeypatch):
     """A format registered from outside (as a new format's module would) is written per sheet by
     ``cut_pattern`` when the options name it, beside the built-in ones and in the same order; an
     unknown format is refused naming the known ones."""
-    from fabkiri.fabricate import sheetformats as sf
+    from fabkiri.fabricate.cut import formats as sf
 
     monkeypatch.setattr(sf._SHEET_FORMATS, "members", dict(sf._SHEET_FORMATS.members))
     sf.register_sheet_format(

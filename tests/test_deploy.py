@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from fabkiri.errors import CheckFailed, InputError
+from fabkiri.exchange.patternfile import import_obj, read_pattern
 from fabkiri.mechanics import adopt_state_labels, contract
 from fabkiri.mechanics.deploy import (
     closed_states,
@@ -17,7 +18,7 @@ from fabkiri.mechanics.deploy import (
 )
 from fabkiri.mechanics.elastic import gap_angles
 from fabkiri.mechanics.path import path_parameter, tile_angles
-from fabkiri.pattern import geometry, import_obj, read_pattern, standard_pattern
+from fabkiri.pattern import geometry, standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fabkiri.api.deploy import check_problems
+from fabkiri.exchange import patternfile as io
 from fabkiri.mechanics.contact import corner_gaps, corner_term
 from fabkiri.mechanics.deploy import deployment_path
-from fabkiri.pattern import io
 
 from .designs import reconfigurable_design
 from .test_deploy import compact_reconfigurable

@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fabkiri.exchange import patternfile as io
 from fabkiri.mechanics.contact import blend_term, hinge_gaps
 from fabkiri.mechanics.deploy import closed_states, deployment_path, mechanism_split
-from fabkiri.mechanics.mechanism import barrier_frames, gap_angles, rotation_targets
+from fabkiri.mechanics.drivers.rotations import barrier_frames, gap_angles, rotation_targets
 from fabkiri.mechanics.path import node_positions, path_parameter
-from fabkiri.pattern import io
 
 from .designs import reconfigurable_design
 from .test_kagome_contact import _fd_check

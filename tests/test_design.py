@@ -6,12 +6,13 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.design import constraints as C
-from fabkiri.design import targets as T
-from fabkiri.design.objective import regularizer
-from fabkiri.design.solve import DesignRequest, design
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.objective import regularizer
+from fabkiri.design.quad.solve import DesignRequest, design
+from fabkiri.design.targets import lookup as T
 from fabkiri.errors import InputError
-from fabkiri.pattern import read_pattern, standard_pattern
+from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.pattern import standard_pattern
 from fabkiri.pattern.residuals import hinge_sums
 from hypothesis import given, settings
 from hypothesis import strategies as hst

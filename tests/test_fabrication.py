@@ -9,15 +9,15 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import shapely
-from fabkiri.design import fabrication as F
-from fabkiri.design.constraints import Stencils
+from fabkiri.design.quad import fabrication as F
+from fabkiri.design.quad.constraints import Stencils
+from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.fabricate import design_limits
 from fabkiri.fabricate import fabricability as fb
-from fabkiri.fabricate.materials import load_material
-from fabkiri.fabricate.printers import load_printer
-from fabkiri.pattern import fabricability as fab
-from fabkiri.pattern.io import read_pattern
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.fabricate.cut.materials import load_material
+from fabkiri.fabricate.print.printers import load_printer
+from fabkiri.pattern import thinness as fab
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -366,7 +366,7 @@ def _strip_case(name: str):
 
 @pytest.mark.parametrize("name", STRIP_CASES)
 def test_strip_faces_from_the_fold_rules_are_prints_faces(name):
-    from fabkiri.fabricate.hinges import assign_faces
+    from fabkiri.fabricate.cut.hinges import assign_faces
 
     p = read_pattern(_strip_case(name))
     top = p.topology
@@ -400,7 +400,7 @@ def test_print_bound_is_accepted_and_close_to_the_minimum(name, printer):
 
 
 def test_summary_covers_every_printer_and_style():
-    from fabkiri.fabricate.printers import available_printers
+    from fabkiri.fabricate.print.printers import available_printers
 
     s = fb.summary(read_pattern(PATTERNS / "circle-8x8-rigid.json"))
     assert set(s["print"]) == set(available_printers())

@@ -13,11 +13,12 @@ import ezdxf
 import numpy as np
 import pytest
 from ezdxf import bbox, recover
+from fabkiri.exchange.patternfile import write_pattern
+from fabkiri.exchange.readers import read_cut_file
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern import standard_pattern, write_pattern
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern import standard_pattern
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 from fabkiri.verify import verify_layout
-from fabkiri.verify.readers import read_cut_file
 
 HINGES = ("tape", "separate", "ligament")
 
@@ -79,7 +80,7 @@ def _binary_copy(src: Path, dst_dir: Path) -> Path:
 
 def test_binary_dxf_re_save_is_read_and_verified(std, cut_dirs, tmp_path):
     """A binary re-save of a cut sheet reads as the ASCII file does, and passes the verifier."""
-    from fabkiri.pattern import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     pattern = read_pattern(std)
     src = next(cut_dirs["tape"].glob("*.dxf"))
@@ -93,7 +94,7 @@ def test_binary_dxf_re_save_is_read_and_verified(std, cut_dirs, tmp_path):
 
 @pytest.mark.slow  # every DXF kind; the quick loop re-saves and verifies one cut sheet above
 def test_every_written_dxf_reads_in_ascii_and_binary(std, cut_dirs, written_dxfs, tmp_path):
-    from fabkiri.pattern import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     pattern = read_pattern(std)
     for k, f in enumerate(written_dxfs):
@@ -215,8 +216,8 @@ def lib3mf_problems(data: bytes) -> list[str]:
 def test_3mf_writers_pass_the_strict_reader():
     """The project 3MF (one object, volumes, slicer metadata) and the plain one (objects) hold only
     core-spec attributes in the core namespace: lib3mf's strict reader has nothing to say."""
-    from fabkiri.fabricate.printers import load_printer
-    from fabkiri.fabricate.threemf import LayerChange, Part, objects_3mf, project_3mf
+    from fabkiri.fabricate.print.printers import load_printer
+    from fabkiri.fabricate.print.threemf import LayerChange, Part, objects_3mf, project_3mf
 
     v = np.array([[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 10]], float)
     f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
@@ -232,7 +233,7 @@ def test_3mf_writers_pass_the_strict_reader():
 def test_every_written_3mf_passes_the_strict_reader(std, tmp_path):
     """Every 3MF `print` and `coupon` write: quad tiles-and-strips (one and two extruders), strips,
     pinned, kagome tiles-and-strips and the printer coupon."""
-    from fabkiri.pattern import io
+    from fabkiri.exchange import patternfile as io
 
     pinned = tmp_path / "sq23.json"
     write_pattern(with_contracted_states(standard_pattern(2, 3, tile_size=12.0)), pinned)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from fabkiri.fabricate.text import GLYPHS, text_strokes
+from fabkiri.fabricate.cut.text import GLYPHS, text_strokes
 from PIL import Image, ImageDraw
 from scipy import ndimage
 

@@ -9,9 +9,9 @@ import sys
 import numpy as np
 import pytest
 from fabkiri.errors import PatternError
+from fabkiri.exchange.patternfile import dumps, loads, obj_text, parse_obj, read_pattern, schema
 from fabkiri.mechanics import with_contracted_states
-from fabkiri.pattern import Pattern, dumps, loads, obj_text, read_pattern, standard_pattern
-from fabkiri.pattern.io import parse_obj, schema
+from fabkiri.pattern import Pattern, standard_pattern
 
 from .conftest import TEMPLATES, ref
 

@@ -8,9 +8,9 @@ import shapely
 from fabkiri.errors import InputError, PatternError
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern import geometry
-from fabkiri.pattern.kagome import kagome_corners, standard_kagome
+from fabkiri.pattern.kinds.kagome.lattice import kagome_corners, standard_kagome
+from fabkiri.pattern.kinds.tessellation import kinds, tessellation
 from fabkiri.pattern.model import Pattern
-from fabkiri.pattern.tessellation import kinds, tessellation
 from fabkiri.pattern.topology import derive_topology
 from fabkiri.verify.geom import overlap_depths
 

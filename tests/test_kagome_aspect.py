@@ -1,4 +1,4 @@
-"""The kagome lattice's aspect against the outline's (design/kagome_aspect.py): R x C chosen from the
+"""The kagome lattice's aspect against the outline's (design/kagome/aspect.py): R x C chosen from the
 target when ``--tiles`` is absent, and a one-line warning with a better R x C when the given one does not
 suit (docs/kagome.md, "Which R x C")."""
 
@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design import kagome_aspect as KA
-from fabkiri.design import targets as TG
-from fabkiri.design.targets import load_target
+from fabkiri.design.kagome import aspect as KA
+from fabkiri.design.targets import lookup as TG
+from fabkiri.design.targets.lookup import load_target
 
 
 @pytest.mark.parametrize("rows, cols", [(2, 2), (4, 5), (6, 11), (8, 8), (5, 19)])

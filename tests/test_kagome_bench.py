@@ -28,9 +28,9 @@ def _bench():
     [("kagome-heart-6x11.json", "heart", "120"), ("kagome-ellipse-5x19.json", "ellipse", "198")],
 )
 def test_the_fit_table_measures_the_hausdorff_distance_apart_from_the_report(name, target, size):
-    from fabkiri.design import conformance as conf
-    from fabkiri.design.targets import load_target
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.design.core import conformance as conf
+    from fabkiri.design.targets.lookup import load_target
+    from fabkiri.exchange.patternfile import read_pattern
 
     path = ROOT / "tests" / "data" / name
     p = read_pattern(path)

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fabkiri.exchange import patternfile as io
 from fabkiri.mechanics.contact import GapTerm, gap_term, hinge_gaps
-from fabkiri.mechanics.mechanism import gap_angles
+from fabkiri.mechanics.drivers.rotations import gap_angles
 from fabkiri.mechanics.path import closed_states, node_positions
-from fabkiri.pattern import io
-from fabkiri.pattern.kagome import standard_kagome
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 DATA = Path(__file__).parent / "data"
 
@@ -106,7 +106,7 @@ def test_gap_term_is_zero_at_the_states_and_pushes_a_closing_gap_open():
 
 def _deploy(p, weight=None):
     from fabkiri.mechanics.deploy import deployment_path
-    from fabkiri.mechanics.homotopy import Homotopy
+    from fabkiri.mechanics.drivers.homotopy import Homotopy
 
     if weight is None:
         return deployment_path(p, 40)

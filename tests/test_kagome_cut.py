@@ -10,10 +10,10 @@ import ezdxf
 import numpy as np
 import pytest
 import shapely
+from fabkiri.exchange import patternfile as io
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern import io
-from fabkiri.pattern.kagome import standard_kagome
-from fabkiri.pattern.tessellation import tessellation
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
+from fabkiri.pattern.kinds.tessellation import tessellation
 from fabkiri.verify import verify_layout
 from fabkiri.verify.quads import quads_of
 

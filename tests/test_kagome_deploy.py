@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 from fabkiri.errors import CheckFailed
+from fabkiri.exchange import patternfile as io
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.mechanics.deploy import deployment_path
 from fabkiri.mechanics.energy import springs
-from fabkiri.pattern import io
 from fabkiri.pattern.geometry import wrap_angle
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 
 def test_triangles_carry_their_three_edges_as_springs():
@@ -75,7 +75,7 @@ def _generic(rows, cols, seed=5, step=0.02):
     no checkerboard mechanism reaches its closed states)."""
     from dataclasses import replace
 
-    import fabkiri.design.kagome as K
+    import fabkiri.design.kagome.constraints as K
 
     p = standard_kagome(rows, cols, angle_deg=45.0)
     x = K.nearby_solution(p, (1, 2), seed=seed, step=step)
@@ -83,8 +83,8 @@ def _generic(rows, cols, seed=5, step=0.02):
 
 
 def test_the_kind_chooses_the_homotopy_driver_through_the_registry():
-    from fabkiri.mechanics.drivers import path_driver
-    from fabkiri.pattern.tessellation import tessellation
+    from fabkiri.mechanics.drivers.registry import path_driver
+    from fabkiri.pattern.kinds.tessellation import tessellation
 
     p = standard_kagome(2, 3)
     assert tessellation("kagome").deploy_driver == "homotopy"
@@ -98,9 +98,9 @@ def test_a_third_kind_plugs_in_its_driver_by_name():
     follows it, with no change to the path code."""
     from dataclasses import replace
 
-    from fabkiri.mechanics.drivers import _DRIVERS, register_driver
-    from fabkiri.mechanics.homotopy import Homotopy
-    from fabkiri.pattern.tessellation import _KINDS, register, tessellation
+    from fabkiri.mechanics.drivers.homotopy import Homotopy
+    from fabkiri.mechanics.drivers.registry import _DRIVERS, register_driver
+    from fabkiri.pattern.kinds.tessellation import _KINDS, register, tessellation
 
     class Counting(Homotopy):
         name = "counting-test"
@@ -209,7 +209,7 @@ def test_designed_kagome_pattern_deploys_or_reports_the_miss(
 
 def test_orientation_term_derivatives_match_finite_differences():
     from fabkiri.mechanics.orientation import area_term
-    from fabkiri.pattern.lattice import standard_pattern
+    from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
     for p in (standard_kagome(3, 4), standard_pattern(2, 3)):
         a = area_term(p)

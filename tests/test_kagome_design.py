@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from fabkiri.design import kagome as K
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.design.kagome import constraints as K
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 from fabkiri.pattern.residuals import state_residuals
 from fabkiri.verify import verify_pattern
 
@@ -114,11 +114,11 @@ def test_reconfigurable_rank_beyond_six_columns(rows, cols):
 
 
 def test_the_fit_moves_along_the_family_and_lands_on_it():
-    """One solve of the kagome fit (design/kagome_fit.py) without refinement: the equalities hold to
+    """One solve of the kagome fit (design/kagome/fit.py) without refinement: the equalities hold to
     rounding after the pull-back, and the tips come nearer the target than the start's."""
-    from fabkiri.design import kagome_fit as KF
-    from fabkiri.design import kagome_solve as KS
-    from fabkiri.design import targets as TG
+    from fabkiri.design.kagome import fit as KF
+    from fabkiri.design.kagome import solve as KS
+    from fabkiri.design.targets import lookup as TG
 
     std = standard_kagome(4, 5, tile_size=12.0)
     target = TG.circle().scaled_to(60.0)

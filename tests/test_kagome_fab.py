@@ -1,4 +1,4 @@
-"""Fabrication-aware kagome design: the rows of design/kagome_fab.py and ``design --lattice kagome
+"""Fabrication-aware kagome design: the rows of design/kagome/fabrication.py and ``design --lattice kagome
 --material/--printer`` (docs/kagome.md, "Designing for a material or a printer")."""
 
 from __future__ import annotations
@@ -7,10 +7,10 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.design import kagome_fab as KF
-from fabkiri.design.fabrication import FabricationLimits
-from fabkiri.pattern import fabricability as fab
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.design.kagome import fabrication as KF
+from fabkiri.design.quad.fabrication import FabricationLimits
+from fabkiri.pattern import thinness as fab
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 # every row kind at once, in tile edges (the rows are built at unit_mm = 1)
 LIMITS = FabricationLimits(

@@ -1,13 +1,13 @@
-"""Kagome inverse design (design/kagome_fit.py): the rows beyond closure, the lattice's mirrors, and fits
+"""Kagome inverse design (design/kagome/fit.py): the rows beyond closure, the lattice's mirrors, and fits
 that close in both states without overlaps (docs/kagome.md, "Design")."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design import kagome as K
-from fabkiri.design import kagome_rows as KR
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.design.kagome import constraints as K
+from fabkiri.design.kagome import rows as KR
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 
 def _fd_check(fam, x, h=1e-6):
@@ -103,8 +103,8 @@ def test_the_symmetric_subfamily_dimension():
 
 
 def _front_door(design_kagome, rows, cols, target, size):
-    from fabkiri.design import conformance as DC
-    from fabkiri.design.targets import load_target
+    from fabkiri.design.core import conformance as DC
+    from fabkiri.design.targets.lookup import load_target
     from fabkiri.verify import verify_pattern
 
     out = design_kagome(rows, cols, target, size)
@@ -231,8 +231,8 @@ def test_a_hole_corner_gap_may_have_its_own_floor():
 def test_symmetry_is_every_shared_mirror_one_named_mirror_or_none():
     """``design(symmetry=...)``: True takes every mirror the lattice and the target share, a named axis
     that one alone (refused when the lattice or the target lacks it), False none."""
-    from fabkiri.design import targets as TG
-    from fabkiri.design.kagome_fit import mirror_axes
+    from fabkiri.design.kagome.fit import mirror_axes
+    from fabkiri.design.targets import lookup as TG
     from fabkiri.errors import InputError
 
     odd, even = standard_kagome(6, 11), standard_kagome(6, 10)  # a vertical mirror needs C odd

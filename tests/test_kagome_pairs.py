@@ -1,4 +1,4 @@
-"""Non-overlap rows of kagome tiles that share no hinge (design/kagome_pairs.py; docs/kagome.md,
+"""Non-overlap rows of kagome tiles that share no hinge (design/kagome/pairs.py; docs/kagome.md,
 "What limits the fit")."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fabkiri.design import kagome_pairs as KP
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.design.kagome import pairs as KP
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 
 def _fd_error(fam, x, h=1e-6):

@@ -13,12 +13,13 @@ import shutil
 import numpy as np
 import pytest
 from fabkiri.errors import FabricationError
-from fabkiri.fabricate import mesh, pingeom, pinslots, printgeom
-from fabkiri.fabricate.printers import load_printer
-from fabkiri.fabricate.styles import pinned
+from fabkiri.exchange import patternfile as io
+from fabkiri.fabricate.print import geometry as printgeom
+from fabkiri.fabricate.print import mesh, pingeom, pinslots
+from fabkiri.fabricate.print.printers import load_printer
+from fabkiri.fabricate.print.styles import pinned
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern import io
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 from .slicer import slice_3mf
 
@@ -61,7 +62,7 @@ def test_thin_kagome_tiles_are_refused_naming_the_thickness_that_stacks_six_ears
 
 
 def test_hinges_that_meet_in_either_closed_state_take_different_places(k44, plan44):
-    from fabkiri.fabricate.hinges import coincident_pairs, hinge_points
+    from fabkiri.fabricate.cut.hinges import coincident_pairs, hinge_points
 
     plan, pins = plan44
     place = pins.level // 2

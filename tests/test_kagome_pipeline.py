@@ -7,10 +7,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from fabkiri.exchange import patternfile as io
+from fabkiri.exchange.fold import fold_text, loads_fold
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern import io
-from fabkiri.pattern.fold import fold_text, loads_fold
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 from fabkiri.pattern.residuals import state_residuals
 from fabkiri.verify import verify_pattern
 from scipy.optimize import least_squares

@@ -14,11 +14,12 @@ import shutil
 import numpy as np
 import pytest
 from fabkiri.api.print import PrintOptions, print_pattern
-from fabkiri.fabricate import mesh, printgeom
-from fabkiri.fabricate.printers import load_printer
+from fabkiri.exchange import patternfile as io
+from fabkiri.fabricate.print import geometry as printgeom
+from fabkiri.fabricate.print import mesh
+from fabkiri.fabricate.print.printers import load_printer
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern import io
-from fabkiri.pattern.kagome import standard_kagome
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
 from .slicer import slice_3mf
 

@@ -1,15 +1,15 @@
-"""A kagome lattice cut to the outline (``--trim``, design/kagome_trim.py): the cut, its rows, its fit."""
+"""A kagome lattice cut to the outline (``--trim``, design/kagome/trim.py): the cut, its rows, its fit."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design import kagome_rows as KR
-from fabkiri.design import kagome_trim as KT
-from fabkiri.design.targets import load_target
+from fabkiri.design.kagome import rows as KR
+from fabkiri.design.kagome import trim as KT
+from fabkiri.design.targets.lookup import load_target
 from fabkiri.errors import InputError
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.kagome import standard_kagome, trimmed_kagome
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome, trimmed_kagome
 from fabkiri.verify import verify_pattern
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from fabkiri.mechanics import contract_both
 from fabkiri.pattern import geometry, standard_pattern
-from fabkiri.pattern.lattice import quad_corners
+from fabkiri.pattern.kinds.quad.lattice import quad_corners
 from fabkiri.pattern.residuals import hinge_sums, state_residuals
 
 

@@ -8,17 +8,31 @@ import pytest
 
 from .conftest import REPO
 
-ORDER = ["pattern", "design", "mechanics", "verify", "fabricate", "render", "api", "sweep", "cli"]
+ORDER = [
+    "pattern",
+    "exchange",
+    "design",
+    "mechanics",
+    "verify",
+    "fabricate",
+    "render",
+    "api",
+    "sweep",
+    "cli",
+]
 
 
 def imported_layers(path):
     tree = ast.parse(path.read_text())
+    package = path.relative_to(REPO).parent.parts  # ("fabkiri", layer, ...)
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
-            mod = node.module or ""
-            if node.level >= 2:  # from ..x import y
-                yield mod.split(".")[0]
-            elif mod.startswith("fabkiri."):
+            if node.level:  # from ..x import y: resolve against the file's own package
+                base = package[: len(package) - node.level + 1]
+                mod = ".".join([*base, *filter(None, [node.module])])
+            else:
+                mod = node.module or ""
+            if mod.startswith("fabkiri."):
                 yield mod.split(".")[1]
         elif isinstance(node, ast.Import):
             for alias in node.names:

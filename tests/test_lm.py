@@ -1,10 +1,10 @@
-"""The one Levenberg-Marquardt core (fabkiri/design/lm.py) on small problems with known answers."""
+"""The one Levenberg-Marquardt core (fabkiri/design/core/lm.py) on small problems with known answers."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design.lm import ACCEPT, DAMPING_RULES, Damping, Stopping, levenberg_marquardt
+from fabkiri.design.core.lm import ACCEPT, DAMPING_RULES, Damping, Stopping, levenberg_marquardt
 
 
 class Dense:

@@ -14,12 +14,12 @@ from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.maker_early import narrow_of
 from fabkiri.api.maker_tiles import choose_tiles, resplit, tile_width_mm
 from fabkiri.api.print_tiles import least_tile_mm, narrow_tiles
-from fabkiri.design.targets import load_target
+from fabkiri.design.targets.lookup import load_target
 from fabkiri.errors import CheckFailed
 from fabkiri.fabricate import design_limits
 from fabkiri.fabricate import fabricability as fb
-from fabkiri.fabricate.printers import load_printer
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.fabricate.print.printers import load_printer
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 
 @pytest.mark.parametrize("printer", ["prusa-mk4", "prusa-xl-2t", "bambu-x1-petg"])

@@ -12,7 +12,7 @@ import shlex
 import fabkiri
 import pytest
 from fabkiri.api import maker_tiles
-from fabkiri.design.targets import load_target
+from fabkiri.design.targets.lookup import load_target
 from fabkiri.fabricate import design_limits
 
 

@@ -7,10 +7,10 @@ from pathlib import Path
 import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.design_minimax import FINISH_ABOVE, MINIMAX_TILES, REFIT_ABOVE, applies, threshold
-from fabkiri.design import conformance as conf
-from fabkiri.design.fabrication import FabricationLimits
-from fabkiri.design.solve import DesignRequest
-from fabkiri.design.targets import load_target
+from fabkiri.design.core import conformance as conf
+from fabkiri.design.quad.fabrication import FabricationLimits
+from fabkiri.design.quad.solve import DesignRequest
+from fabkiri.design.targets.lookup import load_target
 
 DROP = str(Path(__file__).resolve().parents[1] / "bench" / "data" / "drop.csv")
 

@@ -1,15 +1,15 @@
-"""The rigid-deployable family with parallelogram holes (design/offsets.py): an offset per hole."""
+"""The rigid-deployable family with parallelogram holes (design/quad/rigid/offsets.py): an offset per hole."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design import constraints as C
-from fabkiri.design.offsets import OffsetFamily
-from fabkiri.design.rigid import RigidFamily
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.rigid.family import RigidFamily
+from fabkiri.design.quad.rigid.offsets import OffsetFamily
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern.geometry import signed_areas
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from fabkiri.pattern.model import Pattern
 
 

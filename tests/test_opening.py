@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pytest
 from fabkiri.cli.main import main
-from fabkiri.design.opening_rows import opening_families, opening_row
-from fabkiri.design.stencils import Stencils
+from fabkiri.design.core.stencils import Stencils
+from fabkiri.design.quad.opening_rows import opening_families, opening_row
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import geometry
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from fabkiri.pattern.model import Pattern
 from fabkiri.pattern.opening import OPENS_LITTLE, Opening, opening
 from hypothesis import given, settings
@@ -117,7 +117,7 @@ def test_the_row_is_nonnegative_exactly_when_the_reported_fraction_meets_the_flo
     std = standard_pattern(5, 5, tile_size=1.0, angle_deg=psi)
     stc = Stencils.from_pattern(std)
     holes = stc.hole_nodes
-    from fabkiri.design.fabrication import ccw_polygons
+    from fabkiri.design.quad.fabrication import ccw_polygons
 
     ccw = ccw_polygons(holes, standard_pattern(5, 5, tile_size=1.0).nodes)
     f = opening(std).hole_fraction
@@ -199,7 +199,7 @@ def test_info_reports_the_opening_in_text_and_json(run_cli):
 
 
 def test_the_report_shows_the_opening_and_warns_when_it_opens_little():
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.render.report import build_report
 
     page = build_report(
@@ -214,13 +214,13 @@ def test_the_report_shows_the_opening_and_warns_when_it_opens_little():
 
 
 def _load(name: str):
-    from fabkiri.design.targets import load_target
+    from fabkiri.design.targets.lookup import load_target
 
     return load_target(str(DATA / f"{name}.csv"), None)
 
 
 def test_the_l_and_the_crescent_have_one_deep_pocket_and_a_circle_none():
-    from fabkiri.design.pockets import pockets
+    from fabkiri.design.targets.pockets import pockets
 
     (ell,) = pockets(_load("letter-l"))
     assert ell.depth_mm == pytest.approx(25.0) and ell.area_mm2 == pytest.approx(35 * 75 / 2)
@@ -232,8 +232,8 @@ def test_the_l_and_the_crescent_have_one_deep_pocket_and_a_circle_none():
 
 def test_a_pocket_is_named_where_the_worst_miss_lies_on_its_side_though_little_of_it_is_covered():
     import shapely
-    from fabkiri.design.conformance import target_polygon
-    from fabkiri.design.pockets import COVERED, pocket_covered, pockets
+    from fabkiri.design.core.conformance import target_polygon
+    from fabkiri.design.targets.pockets import COVERED, pocket_covered, pockets
 
     ell = _load("letter-l")
     (pocket,) = pockets(ell)
@@ -249,7 +249,7 @@ def test_a_pocket_is_named_where_the_worst_miss_lies_on_its_side_though_little_o
 
 
 def load_target_named(name: str):
-    from fabkiri.design.targets import load_target
+    from fabkiri.design.targets.lookup import load_target
 
     return load_target(name, 100.0)
 
@@ -271,7 +271,7 @@ CONF = {"worst": {"at": [27.8, 7.8]}}
 
 
 def test_a_missed_shape_never_advises_a_guess_already_tried():
-    from fabkiri.design.conformance import describe_miss
+    from fabkiri.design.core.conformance import describe_miss
 
     some = describe_miss(
         "deployed", _missed(tried_inits=["conformal", "rescaled", "standard"]), CONF
@@ -331,8 +331,8 @@ def test_a_sweep_passes_the_floor_by_name():
 
 
 def test_the_kagome_floor_is_soft_and_one_sided():
-    from fabkiri.design import kagome_opening as KO
-    from fabkiri.pattern.kagome import standard_kagome
+    from fabkiri.design.kagome import opening as KO
+    from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
     std = standard_kagome(3, 5, tile_size=1.0)
     f = opening(std, closed={}).hole_fraction

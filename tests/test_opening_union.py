@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.pattern import opening as op
-from fabkiri.pattern.io import read_pattern
 
 DATA = Path(__file__).parent / "data"
 
@@ -71,7 +71,7 @@ def test_overlapping_or_gapped_quads_keep_the_general_union():
 
 def test_triangles_keep_the_general_union(monkeypatch):
     p = read_pattern(DATA / "kagome-heart-6x11.json")
-    from fabkiri.fabricate.printgeom import closed_corners
+    from fabkiri.fabricate.print.geometry import closed_corners
 
     c = np.asarray(closed_corners(p, 1), float)
     assert op._coverage_area(c, 1e-7 * float(np.ptp(c.reshape(-1, 2), 0).max())) is None

@@ -1,4 +1,4 @@
-"""Closed-state outlines in the rigid family (design/outline.py): exact square, size-free circle."""
+"""Closed-state outlines in the rigid family (design/quad/rigid/outline.py): exact square, size-free circle."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fabkiri.design import outline
-from fabkiri.design import targets as T
-from fabkiri.design.solve import DesignRequest, design
-from fabkiri.pattern.io import read_pattern
+from fabkiri.design.quad.rigid import outline
+from fabkiri.design.quad.solve import DesignRequest, design
+from fabkiri.design.targets import lookup as T
+from fabkiri.exchange.patternfile import read_pattern
 
 # the bench's measures of a closed state's outline, so the test checks what the bench reports
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
@@ -89,7 +89,7 @@ def test_parallelogram_square_to_circle_meets_the_additive_kirigami_figures(n, g
 
 
 def test_parallelogram_outlines_above_the_offset_size_use_rhombus_holes():
-    from fabkiri.design import offset_outline
+    from fabkiri.design.quad.rigid import offset_outline
 
     sq, ci = T.load_target("square"), T.load_target("circle")
     big = DesignRequest(13, 13, None, rigid=True, holes="parallelogram", contracted={1: sq, 2: ci})
@@ -119,7 +119,7 @@ def test_inconsistent_squares_fall_back_to_the_full_solver():
 
 
 def test_non_rigid_from_32x32_is_answered_by_the_rigid_family():
-    from fabkiri.design.solve import via_rigid_applies
+    from fabkiri.design.quad.solve import via_rigid_applies
 
     ell = T.load_target("ellipse")
     assert via_rigid_applies(DesignRequest(32, 32, ell))
@@ -127,7 +127,7 @@ def test_non_rigid_from_32x32_is_answered_by_the_rigid_family():
     assert not via_rigid_applies(
         DesignRequest(32, 32, ell, rigid=True)
     )  # the rigid family directly
-    # a symmetric one too since issue #37: the rigid family over half its seeds (design/reduced_mirror.py)
+    # a symmetric one too since issue #37: the rigid family over half its seeds (design/quad/rigid/mirror.py)
     assert via_rigid_applies(DesignRequest(32, 32, ell, symmetry="x"))
     assert not via_rigid_applies(DesignRequest(32, 32, ell, holes="parallelogram"))
     assert not via_rigid_applies(DesignRequest(32, 32, ell, solver="full"))

@@ -2,7 +2,7 @@
 ``constraints.inside_polygon``) equal the brute-force K x E tables they replace, ties included."""
 
 import numpy as np
-from fabkiri.design import constraints as C
+from fabkiri.design.quad import constraints as C
 from hypothesis import example, given, settings
 from hypothesis import strategies as hst
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.fabricate import fabricability, planrules
 from fabkiri.pattern import geometry
-from fabkiri.pattern.io import read_pattern
 
 DATA = Path(__file__).parent / "data"
 SQUARE = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
@@ -101,7 +101,7 @@ def _same_face_pairs_by_loop(hinge_tiles, face, n_tiles):
 
 @pytest.mark.parametrize("name", ["heart-16x16-rigid.json", "kagome-heart-6x11.json"])
 def test_same_face_pairs_are_listed_as_the_loop_listed_them(name):
-    from fabkiri.pattern import fabricability as fab
+    from fabkiri.pattern import thinness as fab
 
     top = read_pattern(DATA / name).topology
     rng = np.random.default_rng(2)

@@ -56,8 +56,8 @@ def test_svg_renders_visible_in_inkscape(run_cli, tmp_path):
 
 
 def _path(name, **kw):
+    from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.mechanics.deploy import deployment_path
-    from fabkiri.pattern.io import read_pattern
 
     shipped = TEMPLATES / "patterns" / f"{name}.json"  # else kept as test data (tests/data)
     src = shipped if shipped.exists() else TEMPLATES.parent / "tests" / "data" / f"{name}.json"

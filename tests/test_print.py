@@ -18,12 +18,13 @@ import pytest
 import shapely
 import trimesh
 from fabkiri.errors import FabricationError, InputError
-from fabkiri.fabricate import mesh, pingeom, printgeom, solid
-from fabkiri.fabricate.printers import Printer, available_printers, load_printer
-from fabkiri.fabricate.styles import pinned, strips
+from fabkiri.exchange.patternfile import write_pattern
+from fabkiri.fabricate.print import geometry as printgeom
+from fabkiri.fabricate.print import mesh, pingeom, solid
+from fabkiri.fabricate.print.printers import Printer, available_printers, load_printer
+from fabkiri.fabricate.print.styles import pinned, strips
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.io import write_pattern
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -45,7 +46,7 @@ def printer2() -> Printer:
 
 def _reload_volumes(data: bytes, file_type: str) -> dict[str, float]:
     if file_type == "3mf":  # one object, one volume per body
-        from fabkiri.fabricate.threemf import read_volumes
+        from fabkiri.fabricate.print.threemf import read_volumes
 
         return {
             n: float(trimesh.Trimesh(v, f, process=False).volume)
@@ -96,7 +97,7 @@ def test_multi_material_preset_and_extruders():
 
 
 def test_3mf_project_volumes_materials_and_settings():
-    from fabkiri.fabricate import threemf
+    from fabkiri.fabricate.print import threemf
 
     pr = load_printer("prusa-xl-2t")
     r = mesh.realise_job(mesh.build_job(standard_pattern(3, 3), "tiles-and-strips", 1, pr))
@@ -144,7 +145,7 @@ def test_3mf_project_volumes_materials_and_settings():
 def test_one_material_plan_names_the_extruder_its_3mf_uses(style, preset):
     """The line `print` says of a one-material job names the extruder every volume of its 3MF is on
     (strips on the two-tool printer: TPU, extruder 2)."""
-    from fabkiri.fabricate import threemf
+    from fabkiri.fabricate.print import threemf
 
     pr = load_printer(preset)
     pat = standard_pattern(2, 3, tile_size=12.0) if style == "pinned" else standard_pattern(3, 3)
@@ -430,7 +431,7 @@ def test_written_meshes_are_closed_2_manifolds(preset):
     """The issue's case (the solver's circle at 2x, whose tiles STL had 87-114
     edges shared by four or six triangles): every STL and every 3MF volume, re-read
     by trimesh with its vertices welded, uses every edge exactly twice."""
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     pat = mesh.scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     files = mesh.job_files(
@@ -641,7 +642,7 @@ def test_pinned_refusal_names_the_scales_that_print():
     """The scale range offered for a refused pinned print is measured: one step
     below its start the plan is refused, at its start it plans, at its end it fits
     the bed and one step beyond it does not."""
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     pat = read_pattern(REPO / "templates" / "patterns" / "square-circle-9x9-rigid.json")
     pr = load_printer("prusa-mk4")
@@ -677,8 +678,8 @@ def test_pinned_refusals(printer):
 
 
 def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
+    from fabkiri.exchange.patternfile import import_obj
     from fabkiri.mechanics.contract import adopt_state_labels
-    from fabkiri.pattern.io import import_obj
 
     from tests.conftest import ref
 
@@ -693,7 +694,7 @@ def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
 @pytest.mark.slow
 def test_step_has_the_same_volume(tmp_path, printer2):
     pytest.importorskip("build123d")
-    from fabkiri.fabricate import cad
+    from fabkiri.fabricate.print import step as cad
 
     pat = standard_pattern(2, 2)
     job = mesh.build_job(pat, "tiles-and-strips", 1, printer2)
@@ -916,7 +917,7 @@ def _scaled(pattern, k):
 @pytest.mark.parametrize("state", [1, 2])
 def test_solver_design_prints_and_passes_the_verifier(state):
     """The solver's rigid circle design (irregular tiles), doubled in size."""
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     pr = load_printer("prusa-xl")
@@ -938,7 +939,7 @@ def test_solver_design_pinned_refused_where_corners_are_too_narrow(state):
     clearance: what is left there is a sliver under one nozzle wide, and the
     tile outline cannot be printed within the printer's tolerance. Refused up
     front, naming the tile and hinge, rather than built and failing the tile check."""
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     pr = load_printer("prusa-xl")
@@ -966,7 +967,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     """At 2.3x the same design's narrow corners keep a nozzle of material beside
     every clearance: it builds, and the printed tiles pass every check (this
     scale also exercises the tile check's robustness to float noise in mesh sections)."""
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.3)
     pr = load_printer("prusa-xl")
@@ -1025,7 +1026,7 @@ def test_pinned_sweep_along_the_deployment(printer):
 @pytest.mark.slow  # a STEP per bed through build123d; the quick loop prints without STEP
 def test_cli_step_per_bed(tmp_path, run_cli):
     pytest.importorskip("build123d")
-    from fabkiri.fabricate import cad
+    from fabkiri.fabricate.print import step as cad
 
     src = tmp_path / "sq.json"
     write_pattern(standard_pattern(2, 2), src)
@@ -1073,8 +1074,8 @@ def test_a_print_style_is_one_registered_strategy(printer, monkeypatch):
     """A style registered from outside (as a new style module would) is chosen by
     name: build_job builds with it, check_meshes measures with its clearance check,
     and an unknown name is refused naming the styles there are."""
-    from fabkiri.fabricate import printjob
-    from fabkiri.fabricate.styles import strips as strips_style
+    from fabkiri.fabricate.print import job as printjob
+    from fabkiri.fabricate.print.styles import strips as strips_style
 
     monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
     measured = []
@@ -1105,8 +1106,9 @@ def test_a_print_style_is_one_registered_strategy(printer, monkeypatch):
 def test_what_a_print_style_decides_is_asked_of_the_style(printer, monkeypatch):
     """Design limits, the bed bound and the files per bed ask the style, never its name: a renamed
     copy of a style behaves as the style, and a copy that changes one answer changes that one thing."""
-    from fabkiri.fabricate import design_limits, printjob
+    from fabkiri.fabricate import design_limits
     from fabkiri.fabricate import fabricability as fb
+    from fabkiri.fabricate.print import job as printjob
 
     monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
     strips_, pinned_ = printjob.print_style("strips"), printjob.print_style("pinned")
@@ -1147,8 +1149,8 @@ def test_every_hinge_keeps_its_bridge_where_a_bottom_strip_lies_under_a_top_stri
     """Stacked tiles-and-strips: a bottom strip's share of the base sheet may lie, in plan, under the
     top strip of a neighbouring hinge. It is still that hinge's printed bridge. This 16x16 design for
     prusa-mk4 (blob outline, 200 mm) was refused because the verifier found hinge 183 without a bridge."""
-    from fabkiri.fabricate.topfaces import printed_bridges
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.fabricate.print.topfaces import printed_bridges
 
     src = Path(__file__).parent / "data" / "blob-16x16-prusa-mk4.json"
     pattern = read_pattern(src)

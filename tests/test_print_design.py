@@ -6,7 +6,7 @@ import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.design_judge import _hausdorff
 from fabkiri.fabricate import fabricability as fb
-from fabkiri.fabricate.printers import load_printer
+from fabkiri.fabricate.print.printers import load_printer
 
 
 @pytest.mark.slow  # ~6 CPU s (main: 40 CPU s and a miss)

@@ -1,18 +1,19 @@
-"""The printed strips' pad rows (fabkiri/design/print_rows.py): exact gradients, and the area ``print`` measures."""
+"""The printed strips' pad rows (fabkiri/design/quad/print_rows.py): exact gradients, and the area ``print`` measures."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import shapely
-from fabkiri.design import fabrication as F
-from fabkiri.design import print_rows as PR
-from fabkiri.design.constraints import Stencils
-from fabkiri.fabricate import design_limits, printgeom
+from fabkiri.design.quad import fabrication as F
+from fabkiri.design.quad import print_rows as PR
+from fabkiri.design.quad.constraints import Stencils
+from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.fabricate import design_limits
 from fabkiri.fabricate import fabricability as fb
-from fabkiri.fabricate.printers import load_printer
-from fabkiri.pattern.io import read_pattern
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.fabricate.print import geometry as printgeom
+from fabkiri.fabricate.print.printers import load_printer
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 from .conftest import TEMPLATES
 
@@ -131,9 +132,9 @@ def test_pad_rows_are_the_pads_print_measures(state, k):
 def test_kagome_pad_rows_are_the_pads_print_measures(state):
     """The standard 4x4 kagome at 1.1 times 10 mm triangles (pads clipped by every triangle): the kagome rows
     (kagome_fab) carry the pads, and their areas are print's."""
-    from fabkiri.design import kagome_fab as KF
+    from fabkiri.design.kagome import fabrication as KF
     from fabkiri.mechanics.contract import with_contracted_states
-    from fabkiri.pattern.kagome import standard_kagome
+    from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
     k = with_contracted_states(standard_kagome(4, 4, tile_size=11.0))
     ref = _print_pads(k, state)

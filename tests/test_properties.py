@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+from fabkiri.exchange.patternfile import dumps, loads
 from fabkiri.mechanics import contract_both, with_contracted_states
-from fabkiri.pattern import Pattern, dumps, geometry, loads, standard_pattern
+from fabkiri.pattern import Pattern, geometry, standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 

@@ -1,11 +1,11 @@
-"""Closed-state contact rows of the rigid-family solver (design/reduced_contact.py)."""
+"""Closed-state contact rows of the rigid-family solver (design/quad/rigid/contact.py)."""
 
 from __future__ import annotations
 
 import numpy as np
-from fabkiri.design import constraints as C
-from fabkiri.design.reduced_contact import CONTACT_MARGIN, ClosedContact
-from fabkiri.design.rigid import RigidFamily
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.rigid.contact import CONTACT_MARGIN, ClosedContact
+from fabkiri.design.quad.rigid.family import RigidFamily
 from fabkiri.pattern import standard_pattern
 
 

@@ -1,15 +1,14 @@
-"""Mirror-symmetric rigid-family members over half the seeds (design/reduced_mirror.py)."""
+"""Mirror-symmetric rigid-family members over half the seeds (design/quad/rigid/mirror.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design import constraints as C
-from fabkiri.design import targets as T
-from fabkiri.design.problem import _Problem
-from fabkiri.design.reduced import _Merit, grid_families
-from fabkiri.design.reduced_contact import ClosedContact
-from fabkiri.design.reduced_mirror import (
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.problem import _Problem
+from fabkiri.design.quad.rigid.contact import ClosedContact
+from fabkiri.design.quad.rigid.family import RigidFamily
+from fabkiri.design.quad.rigid.mirror import (
     AXIS_MARGIN,
     Mirror,
     MirroredMerit,
@@ -18,10 +17,12 @@ from fabkiri.design.reduced_mirror import (
     seed_partners,
     symmetric_member,
 )
-from fabkiri.design.reduced_tiles import TileShapeRows
-from fabkiri.design.rigid import RigidFamily
-from fabkiri.design.solve import DesignRequest, design
-from fabkiri.pattern import read_pattern, standard_pattern
+from fabkiri.design.quad.rigid.reduced import _Merit, grid_families
+from fabkiri.design.quad.rigid.tiles import TileShapeRows
+from fabkiri.design.quad.solve import DesignRequest, design
+from fabkiri.design.targets import lookup as T
+from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.pattern import standard_pattern
 
 from .rigid_merit import rigid_merit
 
@@ -273,7 +274,7 @@ def test_mirrored_starts_stop_once_the_best_asks_for_no_second_opinion(met_after
     """The other guesses run standard first and stop as soon as the best result would ask for no second
     opinion (counted by the starts run: on main every guess ran with both scalings, the peanut's 32x32 level
     10.7 CPU s where standard alone met the fit). The solves are stubbed: this is about the calls."""
-    from fabkiri.design import routes
+    from fabkiri.design.quad import routes
 
     heart = T.load_target("heart", 100.0)
     prob = _Problem(DesignRequest(8, 8, heart, rigid=True, symmetry="y", outline=False))
@@ -318,7 +319,7 @@ def test_regulariser_features_of_half_the_tiles(rows, cols, axis):
     """The symmetric dense path evaluates the regulariser's corner features on one tile of each mirror pair
     (``HalfTileRows``): at a generic symmetric member its rows' Jacobian, normal matrix and gradient are the
     whole pattern's through P to 1e-12, from about half the tiles."""
-    from fabkiri.design.objective import tile_corners
+    from fabkiri.design.quad.objective import tile_corners
 
     target = T.load_target("heart" if axis == "y" else "ellipse", 100.0)
     prob = _Problem(DesignRequest(rows, cols, target, rigid=True, symmetry=axis))

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+from fabkiri.exchange.patternfile import import_obj
 from fabkiri.mechanics import adopt_state_labels, contract_both, describe
-from fabkiri.pattern import geometry, import_obj
+from fabkiri.pattern import geometry
 from fabkiri.pattern.residuals import state_residuals
 
 from .conftest import ref

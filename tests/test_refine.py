@@ -1,4 +1,4 @@
-"""Minimax refinement (design/refine.py): weighted fit rows and Lawson's steps."""
+"""Minimax refinement (design/core/refine.py): weighted fit rows and Lawson's steps."""
 
 from __future__ import annotations
 
@@ -6,16 +6,16 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from fabkiri.design import fabrication as F
-from fabkiri.design.conformance import deployed
-from fabkiri.design.constraints import Stencils
-from fabkiri.design.objective import weighted
-from fabkiri.design.refine import _Steps, lawson_weights, refine_minimax
-from fabkiri.design.solve import DesignRequest, _Problem, design
-from fabkiri.design.targets import load_target
+from fabkiri.design.core.conformance import deployed
+from fabkiri.design.core.refine import _Steps, lawson_weights, refine_minimax
+from fabkiri.design.quad import fabrication as F
+from fabkiri.design.quad.constraints import Stencils
+from fabkiri.design.quad.objective import weighted
+from fabkiri.design.quad.solve import DesignRequest, _Problem, design
+from fabkiri.design.targets.lookup import load_target
 from fabkiri.errors import InputError
-from fabkiri.pattern import fabricability as fab
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern import thinness as fab
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 
 def test_weighted_rows_are_the_rows_times_their_weights():

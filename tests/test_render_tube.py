@@ -3,7 +3,7 @@
 import pytest
 from fabkiri.errors import InputError
 from fabkiri.mechanics.deploy import deployment_path
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from fabkiri.render.tube import deployment_gif_3d
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from fabkiri.fabricate.fabricability import summary
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.tessellation import tessellation
+from fabkiri.pattern.kinds.tessellation import tessellation
 from fabkiri.render.report import build_report
 
 

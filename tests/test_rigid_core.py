@@ -1,16 +1,16 @@
-"""The rigid family's grid basis through its sparse factor ``Z = E Z[core]`` (design/rigid_core.py) and the
+"""The rigid family's grid basis through its sparse factor ``Z = E Z[core]`` (design/quad/rigid/core.py) and the
 grid block of the reduced normal matrix formed through it (``reduced._Merit._grid_normal``)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design import constraints as C
-from fabkiri.design import reduced as R
-from fabkiri.design import targets as T
-from fabkiri.design.rigid import RigidFamily
-from fabkiri.design.rigid_core import GridCore, grid_core
-from fabkiri.design.solve import DesignRequest, _Problem
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.rigid import reduced as R
+from fabkiri.design.quad.rigid.core import GridCore, grid_core
+from fabkiri.design.quad.rigid.family import RigidFamily
+from fabkiri.design.quad.solve import DesignRequest, _Problem
+from fabkiri.design.targets import lookup as T
 from fabkiri.pattern import standard_pattern
 
 from .rigid_merit import rigid_merit
@@ -110,8 +110,8 @@ def test_large_lattice_maps_go_through_the_core_and_the_tiles():
     """Above ``LARGE_GRID`` vertices ``grid`` is ``E (Z[core] S)`` and ``nodes`` takes ``Y S`` per tile: the
     maps ``Z S`` and ``x(S, ψ)`` of the basis to round-off; a family with another ``Y`` (the mirror's
     centred gauge) uses its own ``Y``."""
-    from fabkiri.design import rigid
-    from fabkiri.design.reduced_mirror import centred
+    from fabkiri.design.quad.rigid import family as rigid
+    from fabkiri.design.quad.rigid.mirror import centred
 
     fam = _family(64, 64)
     assert len(fam.Z) > rigid.LARGE_GRID

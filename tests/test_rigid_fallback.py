@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from fabkiri.design import targets as T
-from fabkiri.design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
+from fabkiri.design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
+from fabkiri.design.targets import lookup as T
 
 
 def test_a_non_rigid_request_with_the_rigid_guess_is_answered_by_the_rigid_family():

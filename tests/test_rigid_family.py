@@ -1,4 +1,4 @@
-"""The closed-form rigid-deployable family (design/rigid.py) and the reduced solver on it."""
+"""The closed-form rigid-deployable family (design/quad/rigid/family.py) and the reduced solver on it."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.design import constraints as C
-from fabkiri.design import targets as T
-from fabkiri.design.rigid import RigidFamily
-from fabkiri.design.solve import DesignRequest, design
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.rigid.family import RigidFamily
+from fabkiri.design.quad.solve import DesignRequest, design
+from fabkiri.design.targets import lookup as T
 from fabkiri.errors import InputError
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern import Pattern, standard_pattern
@@ -113,7 +113,7 @@ def test_reduced_solver_circle_is_exact_and_rigid():
 def test_outline_rows_bring_the_whole_outline_closer():
     """The default fit (tips, chord midpoints, target samples) halves the circle's Hausdorff distance that
     tips exactly on the curve leave (the chords' sagitta), keeping the family's identities."""
-    from fabkiri.design.conformance import deployed
+    from fabkiri.design.core.conformance import deployed
 
     tgt = T.load_target("circle", 100.0)
     h = {}
@@ -139,7 +139,7 @@ def test_auto_uses_full_solver_outside_the_family():
     "kw,msg",
     [
         ({"rigid": False}, "--rigid"),
-        # (--symmetry is covered now: the mirrored seeds, design/reduced_mirror.py)
+        # (--symmetry is covered now: the mirrored seeds, design/quad/rigid/mirror.py)
         ({"rigid": True, "contracted": {1: ("rect", None)}}, "--contracted-target"),
         ({"rigid": True, "holes": "parallelogram"}, "rhombus"),
         ({"rigid": True, "solver": "magic"}, "--solver must be"),
@@ -184,7 +184,7 @@ def test_cli_solver_flag(tmp_path, run_cli):
     )
     assert code == 2 and "--solver reduced needs" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "s.json").exists()
-    # a symmetric rigid design is a member over half the seeds (design/reduced_mirror.py)
+    # a symmetric rigid design is a member over half the seeds (design/quad/rigid/mirror.py)
     code, stdout, err = run_cli(
         "design",
         "--tiles",
@@ -221,7 +221,7 @@ def test_cli_keeps_the_closest_valid_fit():
 def test_auto_keeps_the_better_of_both_solvers():
     """On a small least-squares case auto runs both solvers and keeps the lower objective (4x4 star:
     reduced 1.10 against full 5.32; the 6x6 heart, 1.12 against 2.52, took 1.5x the time)."""
-    from fabkiri.design.solve import _objective, _Problem
+    from fabkiri.design.quad.solve import _objective, _Problem
 
     target = T.load_target("star", 80.0)
     out = {}
@@ -253,7 +253,7 @@ def test_cli_starts_big_rigid_designs_coarse_to_fine(tmp_path, run_cli):
 @given(rows=hst.integers(1, 6), cols=hst.integers(1, 6), seed=hst.integers(0, 2**31 - 1))
 def test_doubled_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed):
     """Resampled to twice the cells, each convex cell splits into four convex cells, coarse vertices unchanged."""
-    from fabkiri.design.rigid import resample_grid
+    from fabkiri.design.quad.rigid.family import resample_grid
 
     rng = np.random.default_rng(seed)
     gx, gy = np.meshgrid(np.arange(cols + 1.0), np.arange(rows + 1.0))
@@ -283,7 +283,7 @@ def test_doubled_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed
 def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     """--init coarse for a rigid design: the fine start is a member of the fine family, deployed to the coarse
     design's ψ, and nearer the target than the rescaled start."""
-    from fabkiri.design.solve import _Problem
+    from fabkiri.design.quad.solve import _Problem
 
     tgt = T.load_target("ellipse", 100.0)
     coarse = design(
@@ -309,7 +309,7 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
 
 def test_rigid_coarse_to_fine_start_for_odd_sizes():
     """9x11 tiles from a 4x5 design: the grid is resampled, not doubled; the start is still a member."""
-    from fabkiri.design.solve import _Problem
+    from fabkiri.design.quad.solve import _Problem
 
     prob = _Problem(DesignRequest(9, 11, T.load_target("circle", 80.0), rigid=True, init="coarse"))
     assert (prob.coarse["rows"], prob.coarse["cols"]) == (4, 5)
@@ -329,8 +329,8 @@ def test_deployment_angle_is_not_clipped_near_the_closed_states():
 
 def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypatch):
     """A start that leaves an inequality violated (g < 0) loses to a feasible result, whatever the merit."""
-    from fabkiri.design import reduced as R
-    from fabkiri.design.solve import _mean_edge, _Problem
+    from fabkiri.design.quad.rigid import reduced as R
+    from fabkiri.design.quad.solve import _mean_edge, _Problem
 
     prob = _Problem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family
@@ -378,8 +378,8 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
 def test_tile_shape_families_are_the_same_on_the_closed_grid(rows, cols, psi, seed):
     """Every tile of a member is a rigid copy of its closed-state-1 grid cell: the regulariser and the
     convexity rows evaluated on the grid equal those on the deployed nodes (what the reduced solver uses)."""
-    from fabkiri.design.objective import regularizer
-    from fabkiri.design.reduced import TILE_SHAPE, grid_families
+    from fabkiri.design.quad.objective import regularizer
+    from fabkiri.design.quad.rigid.reduced import TILE_SHAPE, grid_families
 
     std, st, fam = _family(rows, cols)
     S0, _ = fam.fit(std.nodes, np.pi / 4)
@@ -395,8 +395,8 @@ def test_tile_shape_families_are_the_same_on_the_closed_grid(rows, cols, psi, se
 
 
 def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
-    from fabkiri.design import reduced as R
-    from fabkiri.design.solve import _Problem
+    from fabkiri.design.quad.rigid import reduced as R
+    from fabkiri.design.quad.solve import _Problem
 
     prob = _Problem(DesignRequest(10, 12, T.load_target("heart", 100.0), rigid=True))
     fam = prob.rigid_family
@@ -448,8 +448,8 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
 
 def _merits(rows, cols, target, rho):
     """The same reduced merit twice: the dense path (small lattices) and the sparse block path."""
-    from fabkiri.design import reduced as R
-    from fabkiri.design.solve import _Problem
+    from fabkiri.design.quad.rigid import reduced as R
+    from fabkiri.design.quad.solve import _Problem
 
     prob = _Problem(DesignRequest(rows, cols, T.load_target(target, 100.0), rigid=True))
     fam = prob.rigid_family

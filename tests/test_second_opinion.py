@@ -4,11 +4,11 @@ stiff restart (``penalty._solve_full(stalled=...)``, ``routes._polish``)."""
 from __future__ import annotations
 
 import numpy as np
-from fabkiri.design import penalty as P
-from fabkiri.design import routes as R
-from fabkiri.design import targets as T
-from fabkiri.design.problem import _acceptable, _objective, _Problem
-from fabkiri.design.request import DesignRequest
+from fabkiri.design.core.request import DesignRequest
+from fabkiri.design.quad import penalty as P
+from fabkiri.design.quad import routes as R
+from fabkiri.design.quad.problem import _acceptable, _objective, _Problem
+from fabkiri.design.targets import lookup as T
 
 
 def _problem() -> _Problem:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import manifold3d as m3d
 import pytest
-from fabkiri.fabricate.meshchecks import OVERLAP_MM3, shared_volume
+from fabkiri.fabricate.print.checks import OVERLAP_MM3, shared_volume
 
 
 def _box(x0: float, x1: float) -> m3d.Manifold:

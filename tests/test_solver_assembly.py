@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
-from fabkiri.design import constraints as C
-from fabkiri.design import targets as T
-from fabkiri.design.objective import regularizer
-from fabkiri.design.solve import DesignRequest
-from fabkiri.design.stencils import Family, jac
+from fabkiri.design.core.stencils import Family, jac
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.objective import regularizer
+from fabkiri.design.quad.solve import DesignRequest
+from fabkiri.design.targets import lookup as T
 from fabkiri.pattern import standard_pattern
 from scipy import sparse
 
@@ -74,8 +74,8 @@ def test_active_rows_jacobian_is_those_rows_of_the_full_one():
 def test_block_rows_come_without_jacobians_until_a_step_asks(monkeypatch):
     """A trial step of the block path (large lattices) reads only its rows; the Jacobians are assembled when
     its normal matrix is asked for, and the rows are those of the Jacobian path."""
-    from fabkiri.design import reduced as R
-    from fabkiri.design.solve import _Problem
+    from fabkiri.design.quad.rigid import reduced as R
+    from fabkiri.design.quad.solve import _Problem
 
     prob = _Problem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family
@@ -103,7 +103,7 @@ def test_block_rows_come_without_jacobians_until_a_step_asks(monkeypatch):
 
 
 def test_standard_rigid_family_is_built_once_per_lattice_and_equals_build():
-    from fabkiri.design.rigid import RigidFamily
+    from fabkiri.design.quad.rigid.family import RigidFamily
 
     def stencils(rows, cols):
         std = standard_pattern(rows, cols, tile_size=1.0)
@@ -128,7 +128,7 @@ def test_standard_rigid_family_is_built_once_per_lattice_and_equals_build():
 
 
 def test_pattern_rows_are_written_one_encode_per_row_as_before():
-    from fabkiri.pattern import io
+    from fabkiri.exchange import patternfile as io
 
     def per_row(arr, indent):
         rows = arr.tolist()

@@ -44,19 +44,20 @@ def test_every_shipped_preset_passes_its_schema():
     # load_material / load_printer skip the JSON Schema for shipped presets by name: this is their check
     import json
 
-    from fabkiri.fabricate import materials, printers
+    from fabkiri.fabricate.cut import materials
+    from fabkiri.fabricate.print import printers
     from fabkiri.schemas import load_schema, schema_problem
 
     for folder, package, schema, names in (
         (
             materials.MATERIALS_DIR,
-            "fabkiri.fabricate",
+            "fabkiri.fabricate.cut",
             "material.schema.json",
             materials.available(),
         ),
         (
             printers.PRINTERS_DIR,
-            "fabkiri.fabricate",
+            "fabkiri.fabricate.print",
             "printer.schema.json",
             printers.available_printers(),
         ),
@@ -72,7 +73,8 @@ def test_a_preset_file_by_path_is_still_checked_against_the_schema(tmp_path):
 
     import pytest
     from fabkiri.errors import InputError
-    from fabkiri.fabricate import materials, printers
+    from fabkiri.fabricate.cut import materials
+    from fabkiri.fabricate.print import printers
 
     for folder, name, load in (
         (materials.MATERIALS_DIR, materials.available()[0], materials.load_material),
@@ -90,12 +92,12 @@ def test_a_preset_file_by_path_is_still_checked_against_the_schema(tmp_path):
 def test_rigid_first_applies_to_mid_size_non_rigid_rhombus_designs_only():
     from dataclasses import replace
 
-    from fabkiri.design import targets as T
-    from fabkiri.design.solve import DesignRequest, rigid_first_applies
+    from fabkiri.design.quad.solve import DesignRequest, rigid_first_applies
+    from fabkiri.design.targets import lookup as T
 
     req = DesignRequest(16, 16, T.load_target("heart", 100.0))
     assert rigid_first_applies(req)
-    # a symmetric design too since issue #37: the rigid family over half its seeds (design/reduced_mirror.py)
+    # a symmetric design too since issue #37: the rigid family over half its seeds (design/quad/rigid/mirror.py)
     assert rigid_first_applies(replace(req, symmetry="y"))
     for other in (
         dict(rows=8, cols=8),
@@ -115,8 +117,8 @@ def test_a_mid_size_non_rigid_design_is_a_rigid_member_when_that_meets_the_shape
     """Through the front door (one 16x16 design for the solver's and the API's checks): the rigid member
     meets the shape, so the API stops at its first guess."""
     from fabkiri.api.design import PatternRequest, design_pattern
-    from fabkiri.design import targets as T
-    from fabkiri.design.conformance import deployed
+    from fabkiri.design.core.conformance import deployed
+    from fabkiri.design.targets import lookup as T
     from fabkiri.pattern.residuals import hinge_sums
 
     out = design_pattern(PatternRequest(tiles=(16, 16), target="ellipse"))
@@ -135,8 +137,8 @@ def test_a_mid_size_non_rigid_design_is_a_rigid_member_when_that_meets_the_shape
 
 @pytest.mark.slow
 def test_the_full_solver_takes_over_when_no_rigid_member_meets_the_shape():
-    from fabkiri.design import targets as T
-    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.design.quad.solve import DesignRequest, design
+    from fabkiri.design.targets import lookup as T
 
     res = design(DesignRequest(16, 16, T.load_target("ellipse", 100.0), second_opinion_above=1e-5))
     assert not res.report["rigid_first"] and res.report["solver"].startswith(
@@ -157,10 +159,10 @@ def test_a_16x16_heart_no_reduced_member_meets_is_the_rigid_design_before_the_fu
     Whether the reduced member from rescaled meets turns on round-off (1.42 % with the Haswell BLAS kernels
     the tests pin, 4.65 % with this box's default ones; then the rigid design's full solver meets, 1.77 %): the
     test keeps the member from coarse only (4.61 % with both), so the rigid design runs on either."""
-    from fabkiri.design import routes
-    from fabkiri.design import targets as T
-    from fabkiri.design.conformance import deployed
-    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.design.core.conformance import deployed
+    from fabkiri.design.quad import routes
+    from fabkiri.design.quad.solve import DesignRequest, design
+    from fabkiri.design.targets import lookup as T
 
     monkeypatch.setattr(routes, "RIGID_FIRST_INITS", ("coarse",))
     req = DesignRequest(16, 16, T.load_target("heart", 100.0))
@@ -175,7 +177,7 @@ def test_a_16x16_heart_no_reduced_member_meets_is_the_rigid_design_before_the_fu
 def test_the_rigid_design_comes_before_the_full_solver_only_up_to_16x16(monkeypatch):
     from types import SimpleNamespace
 
-    from fabkiri.design import routes
+    from fabkiri.design.quad import routes
 
     tried = []
     monkeypatch.setattr(routes, "_solve_via_rigid", lambda *a, **kw: tried.append(a) or None)
@@ -207,9 +209,9 @@ def test_an_explicit_guess_skips_the_rigid_family_first(monkeypatch):
 @pytest.mark.slow
 def test_a_32x32_non_rigid_heart_falls_back_to_the_reduced_chain_not_the_full_solver():
     # main: the rigid auto rules ended unconverged in the full solver (rigid, then non-rigid): 14 % off
-    from fabkiri.design import targets as T
-    from fabkiri.design.conformance import deployed
-    from fabkiri.design.solve import DesignRequest, design
+    from fabkiri.design.core.conformance import deployed
+    from fabkiri.design.quad.solve import DesignRequest, design
+    from fabkiri.design.targets import lookup as T
 
     req = DesignRequest(32, 32, T.load_target("heart", 100.0))
     res = design(req)

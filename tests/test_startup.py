@@ -70,7 +70,7 @@ def test_design_with_its_preview_imports_only_what_it_uses(tmp_path):
     assert (tmp_path / "p.json").exists()
     png = (tmp_path / "p.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
-    assert "fabkiri.design.solve" in mods
+    assert "fabkiri.design.quad.solve" in mods
     assert (
         not {
             "scipy.interpolate",
@@ -89,7 +89,7 @@ def test_design_with_its_preview_imports_only_what_it_uses(tmp_path):
 @settings(max_examples=30, deadline=None)
 @given(st.integers(3, 60), st.integers(0, 2**32 - 1))
 def test_periodic_spline_equals_scipy(k, seed):
-    from fabkiri.design.spline import PeriodicCubic
+    from fabkiri.design.core.spline import PeriodicCubic
     from scipy.interpolate import CubicSpline
 
     rng = np.random.default_rng(seed)
@@ -116,7 +116,7 @@ def test_periodic_spline_equals_scipy(k, seed):
     st.integers(0, 2**32 - 1),
 )
 def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
-    from fabkiri.design.rigid import resample_grid
+    from fabkiri.design.quad.rigid.family import resample_grid
     from scipy.interpolate import RegularGridInterpolator
 
     grid = np.random.default_rng(seed).normal(size=(m + 1, n + 1, 2))
@@ -179,7 +179,9 @@ def test_rigid_8x8_design_loads_no_unused_scipy(tmp_path):
         "scipy.interpolate",
     } & set(mods)
     # the ligament's cut bound needs no layout reader (verify.quads loads the DXF/SVG readers)
-    assert "fabkiri.fabricate.hingekinds.ligament" in mods and "fabkiri.verify.quads" not in mods
+    assert (
+        "fabkiri.fabricate.cut.hingekinds.ligament" in mods and "fabkiri.verify.quads" not in mods
+    )
     assert first == "1 True"
 
 
@@ -229,7 +231,8 @@ def test_cut_loads_neither_the_solver_nor_scipy_spatial(tmp_path):
     assert (tmp_path / "c" / "manifest.json").exists()
     assert "scipy.spatial._qhull" in mods  # the hull was used
     assert (
-        not {"fabkiri.design.solve", "fabkiri.api.design", "scipy.spatial", "scipy.special"} & mods
+        not {"fabkiri.design.quad.solve", "fabkiri.api.design", "scipy.spatial", "scipy.special"}
+        & mods
     )
     # the sheet preview and the assembly map are drawn with Pillow (fabricate/pngcanvas.py), not matplotlib
     assert (tmp_path / "c" / "standard-8x8.png").exists() and (
@@ -260,5 +263,8 @@ def test_a_print_loads_neither_the_cutter_nor_its_svg_writer(tmp_path):
     mods = _modules_after(["print", src, "-o", str(tmp_path / "p")])
     assert "fabkiri.api.print" in mods and "fabkiri.api.advice" in mods  # refused, with its advice
     assert not (tmp_path / "p").exists()
-    assert not {"fabkiri.api.cut", "fabkiri.fabricate.cut", "fabkiri.fabricate.readback"} & mods
+    assert (
+        not {"fabkiri.api.cut", "fabkiri.fabricate.cut.sheets", "fabkiri.fabricate.cut.readback"}
+        & mods
+    )
     assert not any(m.split(".")[0] in ("svgwrite", "ezdxf", "trimesh", "matplotlib") for m in mods)

@@ -5,11 +5,11 @@ landed at 2.0 % and sent its fine levels off a better start)."""
 
 from __future__ import annotations
 
-from fabkiri.design.conformance import deployed
-from fabkiri.design.problem import _Problem
-from fabkiri.design.request import DesignRequest
-from fabkiri.design.solve import design
-from fabkiri.design.targets import load_target
+from fabkiri.design.core.conformance import deployed
+from fabkiri.design.core.request import DesignRequest
+from fabkiri.design.quad.problem import _Problem
+from fabkiri.design.quad.solve import design
+from fabkiri.design.targets.lookup import load_target
 from fabkiri.pattern.model import Pattern
 
 from .conftest import REPO

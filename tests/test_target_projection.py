@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
-from fabkiri.design.targets import load_target
+from fabkiri.design.targets.lookup import load_target
 
 
 def _nearest_on_segments(pts: np.ndarray, p: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 import pytest
-from fabkiri.design.targets import load_target
+from fabkiri.design.targets.lookup import load_target
 
 from .conftest import REPO
 

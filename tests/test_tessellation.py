@@ -8,13 +8,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from fabkiri.errors import PatternError
+from fabkiri.exchange import patternfile as io
 from fabkiri.mechanics.contract import contract
-from fabkiri.pattern import io
-from fabkiri.pattern import tessellation as tess_module
-from fabkiri.pattern.lattice import standard_pattern
+from fabkiri.pattern.kinds import tessellation as tess_module
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
+from fabkiri.pattern.kinds.quad.rules import quad_fold_rule
+from fabkiri.pattern.kinds.tessellation import Tessellation, kinds, register, tessellation
 from fabkiri.pattern.model import Pattern
-from fabkiri.pattern.quad import quad_fold_rule
-from fabkiri.pattern.tessellation import Tessellation, kinds, register, tessellation
 from fabkiri.pattern.topology import derive_topology
 
 

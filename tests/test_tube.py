@@ -7,11 +7,17 @@ import json
 import numpy as np
 import pytest
 from fabkiri.errors import PatternError
+from fabkiri.exchange.patternfile import read_pattern, write_pattern
 from fabkiri.mechanics.contract import contract, with_contracted_states
 from fabkiri.mechanics.info import describe
 from fabkiri.mechanics.tube import tube_report
-from fabkiri.pattern.io import read_pattern, write_pattern
-from fabkiri.pattern.periodic import lattice_seam, seam_map, seam_of, standard_tube, with_seam
+from fabkiri.pattern.kinds.periodic.sheet import (
+    lattice_seam,
+    seam_map,
+    seam_of,
+    standard_tube,
+    with_seam,
+)
 from fabkiri.verify.pattern_checks import verify_pattern
 
 from tests.designs import reconfigurable_design

@@ -11,9 +11,9 @@ import json
 import numpy as np
 import pytest
 import trimesh
-from fabkiri.fabricate.tube3d import plate_meshes, plate_overlap, state_frame
-from fabkiri.pattern.io import read_pattern
-from fabkiri.pattern.periodic import lattice_seam, seam_of
+from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.fabricate.tube.rolled import plate_meshes, plate_overlap, state_frame
+from fabkiri.pattern.kinds.periodic.sheet import lattice_seam, seam_of
 
 SPEC = "cone:20,18,80"
 

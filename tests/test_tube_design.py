@@ -7,17 +7,17 @@ import pytest
 import scipy.linalg
 import trimesh
 from fabkiri.api.tube import design_tube_pattern, tube_3d_files
-from fabkiri.design import constraints as C
-from fabkiri.design import periodic as P
-from fabkiri.design import tube_solve as TS
-from fabkiri.design.constraints import Stencils
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.constraints import Stencils
+from fabkiri.design.tube import periodic as P
+from fabkiri.design.tube import solve as TS
 from fabkiri.errors import InputError
-from fabkiri.fabricate.tube3d import plate_meshes, state_frame
+from fabkiri.fabricate.tube.rolled import plate_meshes, state_frame
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern import geometry
 from fabkiri.pattern.geometry import signed_angle
-from fabkiri.pattern.lattice import standard_pattern
-from fabkiri.pattern.periodic import lattice_seam
+from fabkiri.pattern.kinds.periodic.sheet import lattice_seam
+from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 from tests.designs import reconfigurable_design
 
@@ -169,7 +169,7 @@ def test_designed_tubes_converge_verify_and_roll(spec, state, axial, radial, tmp
     assert set(files) == {
         f"t_{s}.{e}" for s in ("deployed", "closed1", "closed2") for e in ("obj", "stl")
     } | {"t_states.png"}
-    from fabkiri.fabricate.tube3d import plate_overlap
+    from fabkiri.fabricate.tube.rolled import plate_overlap
 
     for s in (1, 2):  # both closed states non-overlapping in 3D, plate against plate
         assert plate_overlap(plate_meshes(*state_frame(out.pattern, s), 1.0))[0] < 1e-9
@@ -191,9 +191,9 @@ def test_designed_tubes_converge_verify_and_roll(spec, state, axial, radial, tmp
 
 
 def test_k_copies_make_a_tube_k_periods_round():
-    from fabkiri.fabricate.tube3d import surface_mesh
+    from fabkiri.fabricate.tube.rolled import surface_mesh
     from fabkiri.mechanics.contract import with_contracted_states
-    from fabkiri.pattern.periodic import standard_tube
+    from fabkiri.pattern.kinds.periodic.sheet import standard_tube
 
     tube = with_contracted_states(standard_tube(6, 8))
     one, f1 = state_frame(tube, 1)
@@ -208,7 +208,7 @@ def test_k_copies_make_a_tube_k_periods_round():
 @pytest.mark.slow
 def test_standard_tube_3d_files_with_deployment_gif():
     from fabkiri.mechanics.contract import with_contracted_states
-    from fabkiri.pattern.periodic import standard_tube
+    from fabkiri.pattern.kinds.periodic.sheet import standard_tube
     from PIL import Image
 
     files = tube_3d_files(with_contracted_states(standard_tube(6, 8)), stem="s")
@@ -237,9 +237,9 @@ def test_tubes_reached_from_perturbed_starts_are_rigid_deployable():
 def test_plate_overlap_finds_tiles_rolled_onto_too_small_a_tube():
     from dataclasses import replace
 
-    from fabkiri.fabricate.tube3d import plate_overlap
+    from fabkiri.fabricate.tube.rolled import plate_overlap
     from fabkiri.mechanics.contract import with_contracted_states
-    from fabkiri.pattern.periodic import standard_tube
+    from fabkiri.pattern.kinds.periodic.sheet import standard_tube
 
     tube = with_contracted_states(standard_tube(4, 6))
     tiles, frame = state_frame(tube, 1)

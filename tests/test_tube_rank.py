@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
-from fabkiri.design import constraints as C
-from fabkiri.design import periodic as P
-from fabkiri.design import tube_rank as TR
-from fabkiri.design import tube_solve as TS
-from fabkiri.pattern.periodic import seam_map
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.tube import periodic as P
+from fabkiri.design.tube import rank as TR
+from fabkiri.design.tube import solve as TS
+from fabkiri.pattern.kinds.periodic.sheet import seam_map
 
 
 def _problem(rows, cols):

@@ -1,12 +1,12 @@
-"""Fold repair of a coarse-to-fine rigid start (``fabkiri.design.unfold``)."""
+"""Fold repair of a coarse-to-fine rigid start (``fabkiri.design.quad.rigid.unfold``)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from fabkiri.design import constraints as C
-from fabkiri.design.rigid import RigidFamily
-from fabkiri.design.unfold import MARGIN, convex_member
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.rigid.family import RigidFamily
+from fabkiri.design.quad.rigid.unfold import MARGIN, convex_member
 from fabkiri.pattern import standard_pattern
 
 from .conftest import REPO
@@ -81,8 +81,8 @@ def test_a_folded_member_is_unfolded_to_the_margin(shift):
 def test_the_leaf_svg_coarse_start_is_repaired_not_discarded():
     """The leaf outline at 32x32 rigid: the nearest member of the resampled 16x16 design folded 3 cells and
     the start was thrown away (13.26 % Hausdorff from rescaled); repaired, it is used, convex with margin."""
-    from fabkiri.design.solve import DesignRequest, _Problem
-    from fabkiri.design.targets import load_target
+    from fabkiri.design.quad.solve import DesignRequest, _Problem
+    from fabkiri.design.targets.lookup import load_target
     from fabkiri.pattern import geometry
 
     tgt = load_target(str(REPO / "bench" / "data" / "leaf.svg"), 100.0)

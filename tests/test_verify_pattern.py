@@ -6,9 +6,10 @@ import json
 
 import numpy as np
 import pytest
+from fabkiri.exchange.patternfile import import_obj
 from fabkiri.mechanics import adopt_state_labels, with_contracted_states
-from fabkiri.pattern import Pattern, geometry, import_obj, standard_pattern
-from fabkiri.pattern.lattice import DX, DY, quad_topology
+from fabkiri.pattern import Pattern, geometry, standard_pattern
+from fabkiri.pattern.kinds.quad.lattice import DX, DY, quad_topology
 from fabkiri.verify import Report, rigid_claimed, tolerances, verify_pattern
 from fabkiri.verify.pattern_checks import rigid_path
 from hypothesis import given, settings
@@ -249,7 +250,7 @@ def test_target_shape_ignores_the_solver_claim():
     import dataclasses
     import json
 
-    from fabkiri.pattern.io import read_pattern
+    from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.verify import verify_pattern
 
     from .conftest import TEMPLATES
@@ -272,7 +273,7 @@ def test_closed_state_checks_carry_stable_ids():
     """Code selects checks by id, not by display name: every closed-state check
     of both states has its id, and the gate's edge-pair checks are found by it."""
     from fabkiri.mechanics.contract import with_contracted_states
-    from fabkiri.pattern.lattice import standard_pattern
+    from fabkiri.pattern.kinds.quad.lattice import standard_pattern
     from fabkiri.verify import verify_pattern
 
     rep = verify_pattern(with_contracted_states(standard_pattern(3, 3)))

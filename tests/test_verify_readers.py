@@ -6,9 +6,10 @@ from __future__ import annotations
 import ezdxf
 import numpy as np
 import svgwrite
+from fabkiri.exchange import dxfcodec
+from fabkiri.exchange import readers as L
 from fabkiri.pattern import geometry
-from fabkiri.verify import dxfcodec, verify_layout
-from fabkiri.verify import readers as L
+from fabkiri.verify import verify_layout
 from fabkiri.verify.quads import quads_of
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -163,8 +164,8 @@ def test_one_dxf_codec_reads_what_it_writes(tmp_path):
     """The writer's bulk entities are exactly the canonical form the tag readers take: every ENGRAVE
     stroke split from the ENTITIES section is canonical, with its points and closed flag, and the
     verifier's layer scan returns the same polylines; a prototype export of another shape is refused."""
-    from fabkiri.fabricate.drawing import SheetDrawing
-    from fabkiri.fabricate.dxf import dxf_bytes
+    from fabkiri.exchange.drawing import SheetDrawing
+    from fabkiri.exchange.dxf import dxf_bytes
 
     rng = np.random.default_rng(3)
     sd = SheetDrawing(1, 200.0, 100.0)
@@ -203,8 +204,8 @@ def test_the_verifier_reads_a_hinge_kind_through_its_registered_reading(monkeypa
 
     import pytest
     from fabkiri.errors import VerifyError
+    from fabkiri.exchange.linework import Linework
     from fabkiri.verify import hingeread
-    from fabkiri.verify.linework import Linework
     from fabkiri.verify.manifest import CutManifest, _allowances, _named_problems
     from fabkiri.verify.recovery import recover_polygons
 

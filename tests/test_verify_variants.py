@@ -8,8 +8,9 @@ import subprocess
 
 import numpy as np
 import pytest
+from fabkiri.exchange.patternfile import read_pattern, write_pattern
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern import read_pattern, standard_pattern, write_pattern
+from fabkiri.pattern import standard_pattern
 from fabkiri.verify import verify_layout
 
 from . import layout_fixtures as lf

@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fabkiri.api.deploy import deploy_pattern
+from fabkiri.exchange.patternfile import read_pattern, write_pattern
 from fabkiri.mechanics.contract import with_contracted_states
-from fabkiri.pattern.io import read_pattern, write_pattern
-from fabkiri.pattern.periodic import seam_of, standard_tube, tube_tiles
-from fabkiri.pattern.tessellation import tessellation
+from fabkiri.pattern.kinds.periodic.sheet import seam_of, standard_tube, tube_tiles
+from fabkiri.pattern.kinds.tessellation import tessellation
 from fabkiri.render.viewer import SCRIPT, viewer_data, viewer_page
 
 from .conftest import TEMPLATES

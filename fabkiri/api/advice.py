@@ -6,7 +6,7 @@ for: another material or hinge kind (``cut``'s web and edge rules in closed form
 checks and the bed at that scale, :func:`~fabkiri.fabricate.fabricability.print_refusal`), the smallest
 scale of the process asked for, and the ``fabkiri design`` line (with the equivalent ``fabkiri make``
 line) that keeps the size when the design's own up-front room check (Pál's bound,
-:func:`fabkiri.design.fabrication.smallest_size`) does not rule it out. Nothing is suggested that was not checked. The front doors raise :class:`Refused` (exit 1: a
+:func:`fabkiri.design.quad.fabrication.smallest_size`) does not rule it out. Nothing is suggested that was not checked. The front doors raise :class:`Refused` (exit 1: a
 check failed, whatever the flags) carrying the alternatives; the CLI prints them under the refusal.
 """
 
@@ -19,12 +19,12 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import CheckFailed, FabkiriError, FabricationError
 from ..fabricate import fabricability as fb
-from ..fabricate.materials import HINGE_KINDS, Material, available, load_material
-from ..fabricate.printers import available_printers, load_printer
+from ..fabricate.cut.materials import HINGE_KINDS, Material, available, load_material
+from ..fabricate.print.printers import available_printers, load_printer
 from ..pattern.model import Pattern
 
 if TYPE_CHECKING:
-    from ..fabricate.cut import CutOptions
+    from ..fabricate.cut.sheets import CutOptions
     from .print import PrintOptions
 
 CUT_GATE = "cut's web and edge rules at this scale (closed form)"
@@ -90,7 +90,7 @@ def alternatives(
     """Every checked option for ``cut`` (``process="cut"``) or ``print`` of ``pattern`` at ``scale`` (mm
     per mm of the pattern; a design is made at scale 1 = its ``--size``; None: at any size, as
     ``--scale auto``). Keywords: ``size_mm`` (instead of ``scale``: the size asked for, over the stored
-    design's ``--size``), ``options`` (a :class:`~fabkiri.fabricate.cut.CutOptions` or
+    design's ``--size``), ``options`` (a :class:`~fabkiri.fabricate.cut.sheets.CutOptions` or
     :class:`~fabkiri.api.print.PrintOptions`; default: the design's intent) and ``ask`` (:class:`Ask`).
     Each :class:`Alternative` has passed the same gate as the refusal (its ``checked``): run its
     ``command``, or apply its ``changes``, and it passes that gate."""
@@ -154,8 +154,8 @@ def cut_alternatives(
     """The checked options for ``cut`` at ``scale``: the smallest scale of the material and hinge kind
     asked for, every other preset material and hinge kind whose rules pass at ``scale``, the design
     line that keeps the size."""
-    from ..fabricate.cut import CutOptions, closed_states
-    from ..fabricate.hingekinds import hinge_kind
+    from ..fabricate.cut.hingekinds import hinge_kind
+    from ..fabricate.cut.sheets import CutOptions, closed_states
     from .cut import DEFAULT_MATERIAL
     from .intent import design_intent
 
@@ -310,7 +310,7 @@ def _fits(pattern: Pattern, o, given, name: str, own: bool, styles, state: int, 
     """``(style, scale)`` of every style in ``styles`` that printer ``name`` prints at ``scale`` (None: at
     some scale); the printer asked for (``own``) with the command's overrides, past its style asked for
     (``styles[0]``)."""
-    from ..fabricate.printjob import print_style
+    from ..fabricate.print.job import print_style
     from .print import printer_for
 
     fits = []
@@ -377,8 +377,8 @@ def design_line(
     and ``hinge``, or ``printer`` and ``style``), at the size asked for (the design's ``--size`` times
     ``scale``); None when the pattern has no stored design target the CLI can name, the design was
     already made for this process at this size, or the up-front room check rules the size out."""
-    from ..design.fabrication import smallest_size
-    from ..design.targets import named_targets, target_from_dict
+    from ..design.quad.fabrication import smallest_size
+    from ..design.targets.lookup import named_targets, target_from_dict
     from ..fabricate import design_limits
 
     design = pattern.design or {}

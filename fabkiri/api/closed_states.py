@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 
-from ..design.targets import Target, load_target
+from ..design.targets.lookup import Target, load_target
 from ..errors import InputError
 from ..pattern import geometry
 from ..pattern.model import Pattern
@@ -70,7 +70,7 @@ def closed_outline_fit(
     the solver fitted; the boundary grid vertices are then measured against the
     target arcs.
     """
-    from ..design.constraints import ClosedGrid, Stencils
+    from ..design.quad.constraints import ClosedGrid, Stencils
 
     st = Stencils.from_pattern(pattern)
     g = ClosedGrid.build(st, state, 0)

@@ -14,15 +14,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..design.conformance import deployed as deployed_conformance
-from ..design.fabrication import FabricationLimits
-from ..design.refine import refine_minimax
-from ..design.solve import VIA_RIGID_INIT, DesignRequest, _Problem, design, via_rigid_applies
-from ..design.targets import Target
+from ..design.core.conformance import deployed as deployed_conformance
+from ..design.core.refine import refine_minimax
+from ..design.quad.fabrication import FabricationLimits
+from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, _Problem, design, via_rigid_applies
+from ..design.targets.lookup import Target
 from ..errors import SolveError
 from ..fabricate import design_limits
 from ..fabricate import fabricability as fb
-from ..fabricate.printers import load_printer
+from ..fabricate.print.printers import load_printer
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
 from .design_judge import _check, _fit_miss, _hausdorff, _rank, _shape_met

@@ -1,6 +1,6 @@
 """``cut_files``: a pattern's laser-cut files, verified by reading them back, as :class:`CutOutcome`.
 
-The sheets are made by :func:`fabkiri.fabricate.cut.cut_pattern`; this front door holds the policy
+The sheets are made by :func:`fabkiri.fabricate.cut.sheets.cut_pattern`; this front door holds the policy
 ``fabkiri cut`` applies around it: the material and hinge kind the design was made for, the bounds
 on ``scale`` and ``width``, a tube's flat sheet with its seam marks and note, and the read-back
 verification that must pass before anything may be written. A failed check raises
@@ -15,10 +15,10 @@ from typing import Any
 
 from .. import limits
 from ..errors import CheckFailed, FabkiriError, FabricationError
-from ..fabricate.cut import CutOptions, CutResult, closed_states, cut_pattern
-from ..fabricate.materials import Material, load_material, parse_setting
-from ..fabricate.readback import Readback, verified_files
-from ..fabricate.tube_cut import mark_seam, tube_cut_inputs
+from ..fabricate.cut.materials import Material, load_material, parse_setting
+from ..fabricate.cut.readback import Readback, verified_files
+from ..fabricate.cut.sheets import CutOptions, CutResult, closed_states, cut_pattern
+from ..fabricate.tube.sheet import mark_seam, tube_cut_inputs
 from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
 from .advice import Ask, Refused, cut_alternatives, cut_refusal

@@ -11,11 +11,11 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 
+from ..exchange.patternfile import dumps
 from ..mechanics.collisions import Overlap
 from ..mechanics.deploy import DeploymentPath, deployment_path
 from ..mechanics.tube import tube_along_path
 from ..pattern.fingerprint import KEY, fingerprint
-from ..pattern.io import dumps
 from ..pattern.model import Pattern
 
 ZERO_ENERGY = 1e-12  # the rigid path's energy must be zero to rounding

@@ -19,19 +19,19 @@ from pathlib import Path
 import numpy as np
 
 from .. import limits
-from ..design import conformance as conf
-from ..design.corner_split import with_corners
-from ..design.fabrication import FabricationLimits, smallest_size
-from ..design.offset_outline import preferred_holes
-from ..design.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
-from ..design.targets import Target, load_target
+from ..design.core import conformance as conf
+from ..design.quad.corner_split import with_corners
+from ..design.quad.fabrication import FabricationLimits, smallest_size
+from ..design.quad.rigid.offset_outline import preferred_holes
+from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
+from ..design.targets.lookup import Target, load_target
 from ..errors import FabkiriError, InputError, SolveError
+from ..exchange.patternfile import dumps
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
-from ..pattern.fabricability import pal_bound
-from ..pattern.io import dumps
+from ..pattern.kinds.tessellation import DEFAULT_KIND
 from ..pattern.model import Pattern
-from ..pattern.tessellation import DEFAULT_KIND
+from ..pattern.thinness import pal_bound
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .continuation import (  # noqa: F401 (re-exported)
     CONTINUATION,
@@ -68,7 +68,7 @@ class PatternRequest:
     """Everything ``fabkiri design`` can be told (the same names as its options)."""
 
     tiles: tuple[int, int] | None  # rows, cols (None: kagome chooses them from the outline)
-    trim: bool = False  # kagome: the R x C block cut to the outline (design/kagome_trim.py)
+    trim: bool = False  # kagome: the R x C block cut to the outline (design/kagome/trim.py)
     target: str | None = None  # a name from templates/targets or a .csv/.json/.svg file
     size: float | None = None  # the target's larger dimension in mm (named targets default to 100)
     rigid: bool = False
@@ -88,8 +88,8 @@ class PatternRequest:
     style: str | None = None
     min_feature: float | None = None
     min_hole: float | None = None
-    min_opening: float | None = None  # floor on the deployed hole fraction (design/opening_rows.py)
-    # the target's split parameters BL, BR, TR, TL (None: its own; make's design/corner_split.py)
+    min_opening: float | None = None  # floor on the deployed hole fraction (opening_rows)
+    # the target's split parameters BL, BR, TR, TL (None: its own; make's design/quad/corner_split.py)
     corners: tuple[float, float, float, float] | None = None
     name: str | None = None
     seed: int | None = None  # jitters the full solver's initial nodes (the rigid family ignores it)

@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..design import conformance as conf
-from ..design.targets import Target
+from ..design.core import conformance as conf
+from ..design.targets.lookup import Target
 from ..fabricate import design_limits
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern

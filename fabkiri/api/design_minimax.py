@@ -4,7 +4,7 @@ The solvers minimise the *sum of squares* of the fit rows; the shape tolerance j
 (Hausdorff). A larger lattice fits the sum better but can end with a larger largest miss at one feature, so
 the fit did not improve with the size: the 64x64 heart's tip polygon passed 1.85 mm above the cusp, where the
 48x48 one came within 0.37 mm. From this many tiles the front door's best valid design is refined by Lawson's
-steps (:func:`fabkiri.design.refine.refine_minimax`: each a warm-started design under the same equalities,
+steps (:func:`fabkiri.design.core.refine.refine_minimax`: each a warm-started design under the same equalities,
 inequalities and, where a closed state overlaps, the contact rows); a step is a candidate only when it passes
 the front door's whole check (converged, both closed states closing, no overlapping tiles in any state), and
 it replaces the design only with a smaller Hausdorff distance, measured on the final pattern as every design
@@ -27,8 +27,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
-from ..design.refine import refine_minimax
-from ..design.solve import DesignRequest, design
+from ..design.core.refine import refine_minimax
+from ..design.quad.solve import DesignRequest, design
 from ..verify import verify_pattern
 from .design_judge import _hausdorff, _rank, refinement_attempt
 

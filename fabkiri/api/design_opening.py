@@ -9,8 +9,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..design.refine import refine_minimax
-from ..design.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
+from ..design.core.refine import refine_minimax
+from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
 from ..errors import InputError
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
@@ -66,7 +66,7 @@ def refine_to_floor(
     say: Callable[[str], None],
 ):
     """The best design again, when a floor cost it the shape: Lawson's minimax refinement under the floor
-    (:func:`fabkiri.design.refine.refine_minimax`), in the rigid family where the request may be answered
+    (:func:`fabkiri.design.core.refine.refine_minimax`), in the rigid family where the request may be answered
     by it (its steps are reduced solves). Returns the refined ``_check`` outcome when it ranks better than
     ``best``, else None; the attempt is recorded either way. Measured: star at 150 mm, 16x16, --min-opening
     0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps, 4.6 CPU s)."""

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from ..design import conformance as conf
+from ..design.core import conformance as conf
 from ..fabricate import fabricability
 from .design_opening import summary_lines as opening_lines
 

@@ -1,14 +1,14 @@
 """``design_kagome``: the front door of kagome inverse design (``fabkiri design --lattice kagome``).
 
 Policy: build the standard R x C kagome at the target's size, design it onto the target
-(:mod:`fabkiri.design.kagome_fit`), contract both closed states, verify the pattern (both states,
+(:mod:`fabkiri.design.kagome.fit`), contract both closed states, verify the pattern (both states,
 overlaps, target shape) and judge the shape. The best iterate is always returned; ``valid`` and
 ``exit_code`` say whether it met the equality tolerance and every check.
 
 Fabrication (``--material/--hinge``, ``--printer/--style``, ``--min-feature``, ``--min-hole``): resolved
 into mm limits exactly as for quads (``fabricate/design_limits.resolve``), refused up front when the
 tiles cannot fit the target (Pál's bound, as quads), solved under the kagome rows of
-:mod:`fabkiri.design.kagome_fab`, and judged on those rows in mm: a candidate that misses a limit is
+:mod:`fabkiri.design.kagome.fabrication`, and judged on those rows in mm: a candidate that misses a limit is
 passed over, and a design that meets none is reported with its figures and exit 1. The limits become the
 design's intent (``cut``/``print`` defaults), as for quads. Without these options, as for quads, no row
 is added and the design reports its fabricability (every material's smallest cut scale).
@@ -23,23 +23,23 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import limits as size_limits
-from ..design import conformance as conf
-from ..design import kagome_aspect as KA
-from ..design import kagome_fab as KF
-from ..design import kagome_opening as KO
-from ..design import kagome_trim as KT
-from ..design.fabrication import FabricationLimits, smallest_size
-from ..design.kagome_fit import design
-from ..design.target_curve import Target
-from ..design.targets import load_target
+from ..design.core import conformance as conf
+from ..design.kagome import aspect as KA
+from ..design.kagome import fabrication as KF
+from ..design.kagome import opening as KO
+from ..design.kagome import trim as KT
+from ..design.kagome.fit import design
+from ..design.quad.fabrication import FabricationLimits, smallest_size
+from ..design.targets.curve import Target
+from ..design.targets.lookup import load_target
 from ..errors import InputError
+from ..exchange.patternfile import dumps
 from ..fabricate import fabricability
 from ..fileio import atomic_write
 from ..mechanics.contract import with_contracted_states
-from ..pattern.fabricability import pal_bound
-from ..pattern.io import dumps
-from ..pattern.kagome import standard_kagome, trimmed_kagome
+from ..pattern.kinds.kagome.lattice import standard_kagome, trimmed_kagome
 from ..pattern.model import Pattern
+from ..pattern.thinness import pal_bound
 from ..verify import verify_pattern
 from .design_opening import check_floor
 from .design_opening import judge as judge_opening
@@ -142,9 +142,9 @@ def design_kagome(
     ``symmetry`` imposes every mirror the lattice and the target share (vertical for C odd, horizontal
     for R even; docs/kagome.md); False leaves the design free (about twice the fitting freedom); ``"x"``
     or ``"y"`` imposes that mirror alone (the lattice and the target must have it). ``fabrication``: mm
-    limits the design keeps (:mod:`fabkiri.design.kagome_fab`), ``intent`` what ``cut``/``print`` then
+    limits the design keeps (:mod:`fabkiri.design.kagome.fabrication`), ``intent`` what ``cut``/``print`` then
     default to (``fabricate.design_limits.resolve`` gives both). ``trim``: the R x C block cut to the
-    outline (:mod:`fabkiri.design.kagome_trim`) instead of the whole block."""
+    outline (:mod:`fabkiri.design.kagome.trim`) instead of the whole block."""
     if rows < 2 or cols < 2:  # a single row or column has no outline side to fit each way
         raise InputError(f"kagome inverse design needs at least 2x2 tiles, got {rows}x{cols}")
     tgt = load_target(target, size)
@@ -317,7 +317,7 @@ def _print_faces(standard: Pattern, limits: FabricationLimits | None) -> np.ndar
     closed states' coincident hinges, the same for every design of the lattice), for the strip rows."""
     if limits is None or limits.strip_clearance_mm <= 0:
         return None
-    from ..fabricate.hinges import assign_faces  # the print geometry, only when printing
+    from ..fabricate.cut.hinges import assign_faces  # the print geometry, only when printing
 
     std = with_contracted_states(standard)
     return assign_faces(std, std.contracted).face

@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 
 from .. import limits
-from ..design import conformance as conf
-from ..design.targets import load_target
+from ..design.core import conformance as conf
+from ..design.targets.lookup import load_target
 from ..errors import FabkiriError, InputError
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
@@ -263,7 +263,7 @@ def _ask(result: MakeResult, plan: _Plan):
 
 
 def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
-    from ..fabricate.cut import CutOptions
+    from ..fabricate.cut.sheets import CutOptions
     from .cut import cut_files, cut_material
 
     assert result.pattern is not None

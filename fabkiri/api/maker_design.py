@@ -31,8 +31,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from ..design import conformance as conf
-from ..design.targets import load_target
+from ..design.core import conformance as conf
+from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
 from . import maker_options as mo

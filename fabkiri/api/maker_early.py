@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from ..design.targets import load_target
+from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from . import maker_options as mo
 from .maker_design import (

@@ -25,13 +25,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
-from ..design.fabrication import smallest_size
-from ..design.targets import load_target
+from ..design.quad.fabrication import smallest_size
+from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
+from ..fabricate.cut.materials import HINGE_KINDS, available
 from ..fabricate.fabricability import PRINT_STYLES
-from ..fabricate.materials import HINGE_KINDS, available
-from ..fabricate.printers import available_printers
+from ..fabricate.print.printers import available_printers
 from .maker_tiles import (
     RETRY_COMFORT,
     STANDARD_TILES,

@@ -14,9 +14,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..design.corner_split import bent_strip
-from ..design.fabrication import FabricationLimits, smallest_size
-from ..design.target_curve import Target
+from ..design.quad.corner_split import bent_strip
+from ..design.quad.fabrication import FabricationLimits, smallest_size
+from ..design.targets.curve import Target
 
 STANDARD_TILES = (16, 12, 8, 6, 4)  # N x N, largest first
 # a fabrication-aware 16x16 design costs 70-200 CPU s (issue 32); 12x12 circle/star at 150 mm: 4-10 s

@@ -1,6 +1,6 @@
 """``print_pattern``: a pattern's 3D-print files, verified, as :class:`PrintOutcome`.
 
-The bodies, meshes and files are made in :mod:`fabkiri.fabricate.mesh`; this front door holds
+The bodies, meshes and files are made in :mod:`fabkiri.fabricate.print.mesh`; this front door holds
 the policy ``fabkiri print`` applies around them: the defaults the design was made for, the
 printer's overrides, ``scale="auto"``, the fabrication gate at the printer's tolerance, the
 refusal that names the scale at which a design would print, the mesh and printed-tile checks,
@@ -19,11 +19,11 @@ from typing import Any
 from .. import limits
 from ..errors import CheckFailed, FabricationError, InputError
 from ..fabricate import fabricability as fb
-from ..fabricate import mesh
 from ..fabricate.gate import claimed_states, closes_gate
-from ..fabricate.printers import load_printer
-from ..fabricate.printjob import print_style
-from ..fabricate.tube_cut import tube_cut_inputs
+from ..fabricate.print import mesh
+from ..fabricate.print.job import print_style
+from ..fabricate.print.printers import load_printer
+from ..fabricate.tube.sheet import tube_cut_inputs
 from ..pattern.fingerprint import fingerprint
 from ..pattern.model import Pattern
 from ..verify.printmanifest import PrintManifest
@@ -322,7 +322,7 @@ def _files(
     laser = _laser_files(pattern, job, o.material, stem, source) if o.marks else {}
     files = mesh.job_files(realised, stem)
     if o.step:
-        from ..fabricate import cad  # lazy: OpenCascade is heavy
+        from ..fabricate.print import step as cad  # lazy: OpenCascade is heavy
 
         for k, bed in enumerate(job.beds, 1):  # one STEP per bed, like the meshes
             files[f"{stem}.step" if len(job.beds) == 1 else f"{stem}-bed{k}.step"] = cad.step_bytes(
@@ -356,9 +356,9 @@ def _files(
 
 def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -> dict[str, bytes]:
     """Laser files of the tiles with the pads engraved (``laser/``), verified like ``fabkiri cut``."""
-    from ..fabricate.marks import marked_cut
-    from ..fabricate.materials import load_material
-    from ..fabricate.readback import verify_result
+    from ..fabricate.cut.materials import load_material
+    from ..fabricate.cut.readback import verify_result
+    from ..fabricate.print.marks import marked_cut
 
     if not print_style(job.style).loose_strips:
         raise InputError("--marks engraves strip pads on laser-cut tiles: it needs --style strips")

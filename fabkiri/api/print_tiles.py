@@ -21,11 +21,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..design.targets import Target
+from ..design.targets.lookup import Target
 from ..errors import CheckFailed
 from ..fabricate import fabricability as fb
-from ..fabricate.printers import load_printer
-from ..pattern.lattice import standard_pattern
+from ..fabricate.print.printers import load_printer
+from ..pattern.kinds.quad.lattice import standard_pattern
 from .maker_tiles import tile_width_mm
 
 # the standard pattern the bound is taken on: 4x4 has corner, edge and inner tiles (every count from

@@ -153,7 +153,7 @@ def _hinges_and_tiles(
 
 
 def _cut_geometry(pattern: Pattern, data: dict, d: Path, flag: str) -> str | None:
-    from ..fabricate.tube_cut import tube_cut_inputs
+    from ..fabricate.tube.sheet import tube_cut_inputs
 
     try:  # a tube is cut as its flat sheet
         flat = tube_cut_inputs(pattern, int(data.get("state", 1)))[0]

@@ -2,16 +2,16 @@
 cut across a pocket of the target (a reflex corner, a hollow), that instead of a promise.
 
 :func:`annotate` adds to each missed ``report["shape"][k]`` the guesses tried (``tried_inits``) and, for the
-deployed outline, the pocket it covers most of (``pocket``, :mod:`fabkiri.design.pockets`) and, where the
+deployed outline, the pocket it covers most of (``pocket``, :mod:`fabkiri.design.targets.pockets`) and, where the
 outline is a bent strip, the tiles and corners ``make`` would re-split it with (``pocket["strip"]``);
 ``design.conformance.describe_miss`` words them.
 """
 
 from __future__ import annotations
 
-from ..design.corner_split import bent_strip
-from ..design.pockets import pocket_covered
-from ..design.targets import Target
+from ..design.quad.corner_split import bent_strip
+from ..design.targets.lookup import Target
+from ..design.targets.pockets import pocket_covered
 from ..pattern.conformance import boundary_tip_order
 from ..pattern.model import Pattern
 
@@ -37,7 +37,7 @@ def annotate(
             lat = pattern.lattice or {}
             rows, cols = int(lat.get("rows", 0)), int(lat.get("cols", 0))
             strip = bent_strip(target, rows, cols) if min(rows, cols) >= 2 else None
-            if strip is not None:  # what make does with these tiles (design/corner_split.py)
+            if strip is not None:  # what make does with these tiles (design/quad/corner_split.py)
                 j["pocket"]["strip"] = {
                     "tiles": list(strip[1]),
                     "corners": strip[0].corner_points().tolist(),

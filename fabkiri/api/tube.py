@@ -1,6 +1,6 @@
 """Front doors for tubes: design a tube's sheet, and write its states in 3D.
 
-:func:`design_tube_pattern` solves (:mod:`fabkiri.design.tube_solve`), contracts both closed states,
+:func:`design_tube_pattern` solves (:mod:`fabkiri.design.tube.solve`), contracts both closed states,
 verifies the sheet (planar checks and seam checks) and reports each state's tube. A design whose
 equalities stop above the tolerance, or that fails a check, is still returned (and written) with
 ``design.valid = false``, its figures, and exit code 1.
@@ -14,14 +14,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from .. import limits
-from ..design.periodic import TWO_PI, TubeTarget, parse_tube_target
-from ..design.tube_solve import TubeRequest, TubeResult, design_tube
+from ..design.tube.periodic import TWO_PI, TubeTarget, parse_tube_target
+from ..design.tube.solve import TubeRequest, TubeResult, design_tube
 from ..errors import CheckFailed, InputError
+from ..exchange.patternfile import dumps
 from ..mechanics.contract import contract
 from ..mechanics.tube import tube_lines, tube_report
-from ..pattern.io import dumps
+from ..pattern.kinds.periodic.sheet import seam_of
 from ..pattern.model import Pattern
-from ..pattern.periodic import seam_of
 from ..verify.pattern_checks import verify_pattern
 from ..verify.report import Report
 
@@ -144,7 +144,7 @@ def tube_3d_files(
     The pattern must be a tube that closes in both states with pure-translation seams; otherwise
     :class:`CheckFailed` names what fails and nothing is produced.
     """
-    from ..fabricate.tube3d import (
+    from ..fabricate.tube.rolled import (
         obj_bytes,
         plate_meshes,
         plate_overlap,

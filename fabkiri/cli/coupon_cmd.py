@@ -16,11 +16,11 @@ def cmd_coupon(args: argparse.Namespace) -> int:
     if (args.material is None) == (args.printer is None):
         raise InputError("give --material NAME (laser coupon) or --printer NAME (print coupon)")
     if args.material is not None:
-        from ..fabricate.materials import load_material
+        from ..fabricate.cut.materials import load_material
 
         c = coupon.laser_coupon(load_material(args.material), notes=args.notes)
     else:
-        from ..fabricate.printers import load_printer
+        from ..fabricate.print.printers import load_printer
 
         c = coupon.printer_coupon(load_printer(args.printer))
         bad = [

@@ -9,12 +9,12 @@ from pathlib import Path
 
 from ..api.cut import cut_files, cut_material
 from ..errors import InputError
-from ..fabricate.cut import FORMATS, CutOptions
-from ..fabricate.drawing import COLORS
-from ..fabricate.layout import LAYOUTS
-from ..fabricate.materials import HINGE_KINDS, available
-from ..fabricate.sheetformats import sheet_format_names
-from ..fabricate.svg import STROKE_MM
+from ..exchange.drawing import COLORS
+from ..exchange.svg import STROKE_MM
+from ..fabricate.cut.formats import sheet_format_names
+from ..fabricate.cut.layout import LAYOUTS
+from ..fabricate.cut.materials import HINGE_KINDS, available
+from ..fabricate.cut.sheets import FORMATS, CutOptions
 from ..fileio import atomic_write_many
 from .asked import asked, options_on_stdout
 from .pattern_cmds import _nonneg, _positive, load_any

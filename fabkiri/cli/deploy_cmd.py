@@ -8,7 +8,7 @@ import sys
 from ..api.deploy import deploy_pattern, overlap_depth
 from ..errors import CheckFailed
 from ..fileio import atomic_write_many
-from ..mechanics.drivers import AUTO, driver_names
+from ..mechanics.drivers.registry import AUTO, driver_names
 from ..mechanics.tube import path_lines
 from .argtypes import bounded
 from .pattern_cmds import load_any

@@ -25,11 +25,11 @@ from ..api.design import (  # noqa: F401 (names tests and benches import from he
     overlapping_tiles,
 )
 from ..api.designers import design_by_kind, design_kinds
-from ..design import conformance as conf
-from ..design.initial import INITS
+from ..design.core import conformance as conf
+from ..design.quad.initial import INITS
 from ..errors import InputError
+from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
-from ..fabricate.materials import HINGE_KINDS
 from ..fileio import check_output_file
 from .argtypes import bounded, length_mm
 from .pattern_cmds import add_i_know, parse_tiles
@@ -80,7 +80,7 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 
 def _jsonable(v):
-    from ..pattern.io import _jsonable as j
+    from ..exchange.patternfile import _jsonable as j
 
     return j(v)
 

@@ -6,9 +6,9 @@ import argparse
 import sys
 
 from ..api.maker import make
-from ..design import conformance as conf
+from ..design.core import conformance as conf
+from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
-from ..fabricate.materials import HINGE_KINDS
 from .argtypes import length_mm
 from .pattern_cmds import parse_tiles
 

@@ -10,15 +10,15 @@ import sys
 from .. import limits
 from ..api.patterns import export_pattern, import_pattern, load_pattern
 from ..errors import CheckFailed, InputError
+from ..exchange.pattern_formats import format_names
+from ..exchange.patternfile import write_pattern
 from ..fileio import atomic_write, atomic_write_many
 from ..mechanics.contract import with_contracted_states
 from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe
-from ..pattern.formats import format_names
-from ..pattern.io import write_pattern
+from ..pattern.kinds.periodic.sheet import standard_tube
+from ..pattern.kinds.tessellation import kinds, tessellation
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening
-from ..pattern.periodic import standard_tube
-from ..pattern.tessellation import kinds, tessellation
 from .argtypes import bounded
 
 

@@ -8,8 +8,8 @@ import time
 from pathlib import Path
 
 from ..api.print import PrintOptions, print_pattern
-from ..fabricate import mesh
-from ..fabricate.printers import available_printers
+from ..fabricate.print import mesh
+from ..fabricate.print.printers import available_printers
 from ..fileio import atomic_write_many
 from .asked import asked, options_on_stdout
 from .pattern_cmds import _positive, load_any

@@ -12,8 +12,8 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
+from ..exchange.patternfile import import_obj, read_pattern
 from ..mechanics.contract import adopt_state_labels
-from ..pattern.io import import_obj, read_pattern
 from ..pattern.model import Pattern
 from .argtypes import bounded
 
@@ -48,11 +48,11 @@ _nonneg = bounded(
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    from ..pattern.periodic import flat_sheet, seam_of
+    from ..pattern.kinds.periodic.sheet import flat_sheet, seam_of
     from ..verify import verify_layout, verify_pattern
 
     pattern = load_for_verify(args.file)
-    from ..design.conformance import parse_shape_tol
+    from ..design.core.conformance import parse_shape_tol
 
     tol_mm = DEFAULT_TOL_MM if args.tol_mm is None else args.tol_mm
     # --exact: the relative tier for solver output; otherwise one tolerance in mm (angles as displacement)

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 from .._lazy import lazy_getattr
 
 if TYPE_CHECKING:
-    from .solve import DesignRequest, DesignResult, design
-    from .targets import Target, load_target, named_targets
+    from .quad.solve import DesignRequest, DesignResult, design
+    from .targets.lookup import Target, load_target, named_targets
 
 _WHERE = {
     "DesignRequest": ".solve",

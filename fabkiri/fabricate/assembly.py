@@ -23,11 +23,11 @@ import numpy as np
 import shapely
 
 from ..pattern.model import Pattern
-from .hingekinds import HingeKind
+from .cut.hingekinds import HingeKind
+from .cut.text import text_strokes_many, text_width
 from .map_labels import LabelLayout, place_labels
 from .pngcanvas import DPI, Axes, Canvas, rgb
-from .printjob import print_style
-from .text import text_strokes_many, text_width
+from .print.job import print_style
 
 MAP_MAX_PIECES = (
     3000  # above this the numbers are not legible on one picture; the manifest still lists them

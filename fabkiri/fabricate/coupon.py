@@ -28,17 +28,17 @@ from typing import Any
 
 import numpy as np
 
+from ..exchange.drawing import SheetDrawing
+from ..exchange.dxf import dxf_bytes
+from ..exchange.svg import svg_bytes
 from ..mechanics.contract import with_contracted_states
-from ..pattern.lattice import standard_pattern
-from .cut import CutOptions, cut_pattern
-from .drawing import SheetDrawing
-from .dxf import dxf_bytes
-from .hingekinds import hinge_kind
-from .materials import Material
-from .preview import png_bytes
-from .printers import Printer
-from .svg import svg_bytes
-from .text import text_strokes, text_width
+from ..pattern.kinds.quad.lattice import standard_pattern
+from .cut.hingekinds import hinge_kind
+from .cut.materials import Material
+from .cut.preview import png_bytes
+from .cut.sheets import CutOptions, cut_pattern
+from .cut.text import text_strokes, text_width
+from .print.printers import Printer
 
 MARGIN = 5.0
 ROW_GAP = 6.0
@@ -302,8 +302,8 @@ def printer_coupon(pr: Printer) -> Coupon:
     """The printer coupon (see the module doc), centred on the bed."""
     import trimesh
 
-    from .mesh import export_3mf
-    from .solid import to_trimesh
+    from .print.mesh import export_3mf
+    from .print.solid import to_trimesh
 
     bodies = printer_bodies(pr)
     widths = bodies.pop("widths")

@@ -9,14 +9,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..design.fabrication import FabricationLimits
-from ..design.target_curve import Target
+from ..design.quad.fabrication import FabricationLimits
+from ..design.targets.curve import Target
 from ..errors import FabricationError, InputError
-from . import printgeom
-from .hingekinds import hinge_kind
-from .materials import HINGE_KINDS, Material, load_material
-from .printers import Printer, load_printer
-from .printjob import print_style
+from .cut.hingekinds import hinge_kind
+from .cut.materials import HINGE_KINDS, Material, load_material
+from .print import geometry as printgeom
+from .print.job import print_style
+from .print.printers import Printer, load_printer
 
 PAD_MARGIN_DEG = (
     5.0  # above the corner angle at which a strip pad reaches the printer's minimum area

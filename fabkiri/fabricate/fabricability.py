@@ -2,7 +2,7 @@
 ``--scale auto``, and the fabricability summary ``design`` and ``info`` show.
 
 Cutting: every tile that stays (shrunk by gap/2 for a ligament sheet) must be at least the material's
-minimum web wide, in the thinnest-width sense of :mod:`fabkiri.pattern.fabricability` (the check
+minimum web wide, in the thinnest-width sense of :mod:`fabkiri.pattern.thinness` (the check
 ``cut`` runs), and a shrunk tile must keep its four edges; both are linear in the scale, so the
 smallest scale is exact (:func:`cut_minimum`). Printing: the printer's plan checks (tile shrink,
 strip seams, pads and clearances, pins) are shapely geometry, monotone in the scale, so the smallest
@@ -20,12 +20,12 @@ import shapely
 import shapely.errors
 
 from ..errors import CheckFailed, FabricationError
-from ..pattern import fabricability as fab
+from ..pattern import thinness as fab
 from ..pattern.model import Pattern
-from .hingekinds import hinge_kind
-from .materials import HINGE_KINDS, Material, available, load_material
-from .printers import Printer, available_printers, load_printer
-from .printjob import print_style
+from .cut.hingekinds import hinge_kind
+from .cut.materials import HINGE_KINDS, Material, available, load_material
+from .print.job import print_style
+from .print.printers import Printer, available_printers, load_printer
 
 if TYPE_CHECKING:
     from .planrules import PlanRule
@@ -205,7 +205,7 @@ def scaled(pattern: Pattern, k: float) -> Pattern:
 
 def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> str:
     """Why the print plan of ``style`` is refused at this size ('' if accepted; the bed is not asked)."""
-    from . import printgeom
+    from .print import geometry as printgeom
 
     if not pattern.contracted and not _closes(pattern):
         return "the pattern does not close: nothing to hinge"
@@ -222,7 +222,7 @@ def _plan_error(pattern: Pattern, style: str, state: int, printer: Printer) -> s
 
 
 def _closes(pattern: Pattern) -> bool:
-    from .printgeom import closed_corners
+    from .print.geometry import closed_corners
 
     try:
         closed_corners(pattern, 1)
@@ -238,7 +238,7 @@ def _bed_scale(
         print_style(style).tiles is None
     ):  # no tiles printed (strips): the bed does not bound the pattern
         return None
-    from .printgeom import closed_corners
+    from .print.geometry import closed_corners
 
     c = corners if corners is not None else closed_corners(pattern, state)
     w = np.ptp(c[..., 0])
@@ -355,7 +355,7 @@ def _plan_key(printer: Printer, style: str) -> tuple:
 
 
 def _closed(pattern: Pattern, state: int) -> np.ndarray | None:
-    from .printgeom import closed_corners
+    from .print.geometry import closed_corners
 
     try:
         return closed_corners(pattern, state)
@@ -373,8 +373,8 @@ def print_bound(
     """The smallest print scale in closed form, no plan geometry (``exact`` False).
 
     Strip styles: the largest of the scale at which every tile survives the gap/2 shrink
-    (:func:`fabkiri.pattern.fabricability.min_scale`), at which same-face strips keep the radial
-    clearance (:func:`fabkiri.pattern.fabricability.strip_clearance_scales`, their boxes: a bound, so
+    (:func:`fabkiri.pattern.thinness.min_scale`), at which same-face strips keep the radial
+    clearance (:func:`fabkiri.pattern.thinness.strip_clearance_scales`, their boxes: a bound, so
     ``print`` accepts it) and at which every strip pad has its area (a vectorised bisection on the pads,
     band ∩ shrunk tile, only for pads short at the other two). Pinned: the pivot spacing only, a lower
     bound (``print`` also checks the slivers beside the clearances)."""

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .text import text_strokes_many, text_width
+from .cut.text import text_strokes_many, text_width
 
 SHRINK = (1.0, 0.8, 0.65)  # heights tried in place before a label moves (at the last one)
 MARGIN = (

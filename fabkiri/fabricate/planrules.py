@@ -15,11 +15,11 @@ import shapely
 import shapely.errors
 
 from ..errors import FabricationError
-from ..pattern import fabricability as fab
 from ..pattern import geometry
+from ..pattern import thinness as fab
 from ..pattern.model import Pattern
 from .fabricability import MAX_SCALE, MIN_GUESS, PrintMinimum, ceil_sig, closest_pair
-from .printers import Printer
+from .print.printers import Printer
 
 
 @dataclass(frozen=True)
@@ -37,13 +37,13 @@ class PlanRule:
 
 
 def _strip_check(pattern: Pattern, plan, printer: Printer) -> None:
-    from . import printgeom
+    from .print import geometry as printgeom
 
     printgeom.strip_outlines(plan, printer)
 
 
 def _pin_check(pattern: Pattern, plan, printer: Printer) -> None:
-    from . import pingeom
+    from .print import pingeom
 
     pingeom.pin_plan(pattern, plan, printer)
 
@@ -173,9 +173,9 @@ def _pin_bound(
 ) -> PrintMinimum:
     """Pinned: the checks that need no geometry (ear levels, ring wall, rigid-deployable) and the pivot
     spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
+    from ..pattern.kinds.tessellation import tessellation
     from ..pattern.residuals import hinge_sums
-    from ..pattern.tessellation import tessellation
-    from . import pingeom
+    from .print import pingeom
 
     try:
         g = pingeom.pin_geometry(printer, pingeom.pin_levels(printer, pingeom.pin_stack(pattern)))

@@ -36,7 +36,7 @@ from scipy import sparse
 
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from .mechanism import gap_angles
+from .drivers.rotations import gap_angles
 from .path import tile_angles
 
 OPEN = 0.5 * np.pi  # wider rigid gaps are far from closing (and from the ±π cut of atan2)

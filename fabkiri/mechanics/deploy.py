@@ -16,7 +16,7 @@ from __future__ import annotations
 from ..errors import InputError
 from ..pattern.model import Pattern
 from .collisions import CollisionReport, Overlap, collisions
-from .drivers import AUTO, PathDriver, driver_names, path_driver, register_driver
+from .drivers.registry import AUTO, PathDriver, driver_names, path_driver, register_driver
 from .elastic import elastic_path, mechanism_split
 from .path import MARKS, DeploymentPath, closed_states, is_rigid_deployable
 from .rigid_path import place_rigid, rigid_angles, rigid_path

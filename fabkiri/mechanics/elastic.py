@@ -66,9 +66,8 @@ from scipy.sparse.linalg import splu, spsolve
 
 from ..pattern.model import Pattern
 from .contact import GapTerm, blend_term, contact_figures, hinge_gaps
-from .drivers import AUTO, Drivers, PathDriver, path_driver
-from .energy import Springs, WithTerm, springs
-from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived here)
+from .drivers.registry import AUTO, Drivers, PathDriver, path_driver
+from .drivers.rotations import (  # noqa: F401  (re-exported: the rotations driver lived here)
     MechanismSplit,
     barrier_frames,
     gap_angles,
@@ -76,6 +75,7 @@ from .mechanism import (  # noqa: F401  (re-exported: the rotations driver lived
     rotation_drivers,
     rotation_targets,
 )
+from .energy import Springs, WithTerm, springs
 from .path import DeploymentPath, closed_states, finish_path, node_positions, path_parameter
 
 

@@ -12,10 +12,10 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..pattern import geometry
+from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
 from ..pattern.residuals import hinge_sums, state_residuals
-from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .contract import contract
 from .tube import tube_report
@@ -225,10 +225,10 @@ def describe(
 
 
 def _conformance(pattern: Pattern) -> dict:
-    """Shape conformance of the outline to every stored target curve (see ``fabkiri.design.conformance``);
+    """Shape conformance of the outline to every stored target curve (see ``fabkiri.design.core.conformance``);
     targets that cannot be rebuilt are left out (``verify`` reports them)."""
-    from ..design import conformance as conf
-    from ..design.targets import target_from_dict
+    from ..design.core import conformance as conf
+    from ..design.targets.lookup import target_from_dict
     from ..errors import InputError
 
     d = pattern.design or {}

@@ -13,9 +13,9 @@ import numpy as np
 
 from ..errors import CheckFailed, InputError
 from ..pattern import geometry
+from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums
-from ..pattern.tessellation import tessellation
 from .collisions import CollisionReport, collisions
 from .contract import contract_both
 

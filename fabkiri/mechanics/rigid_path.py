@@ -17,9 +17,9 @@ import numpy as np
 
 from ..errors import CheckFailed
 from ..pattern import geometry
+from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums
-from ..pattern.tessellation import tessellation
 from .energy import springs
 from .path import (
     RIGID_TOL_RAD,

@@ -17,8 +17,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..pattern.kinds.periodic.sheet import Seam, seam_map, seam_of, tube_tiles
 from ..pattern.model import Pattern
-from ..pattern.periodic import Seam, seam_map, seam_of, tube_tiles
 from .contract import contract
 
 TWO_PI = 2.0 * np.pi

@@ -1,20 +1,10 @@
-"""The pattern model, the standard lattice and pattern file I/O."""
+"""The pattern model, the tessellation kinds and their standard lattices.
 
-from .io import dumps, import_obj, loads, obj_text, read_pattern, write_obj, write_pattern
-from .lattice import standard_pattern
+Pattern files are read and written by :mod:`fabkiri.exchange` (``read_pattern``, ``write_pattern``).
+"""
+
+from .kinds.quad.lattice import standard_pattern
 from .model import Pattern
 from .topology import FoldRule, Topology
 
-__all__ = [
-    "Pattern",
-    "Topology",
-    "FoldRule",
-    "standard_pattern",
-    "read_pattern",
-    "write_pattern",
-    "loads",
-    "dumps",
-    "import_obj",
-    "obj_text",
-    "write_obj",
-]
+__all__ = ["Pattern", "Topology", "FoldRule", "standard_pattern"]

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import PatternError
 from . import geometry
-from .tessellation import DEFAULT_KIND, tessellation
+from .kinds.tessellation import DEFAULT_KIND, tessellation
 from .topology import Topology, derive_topology
 
 
@@ -55,7 +55,7 @@ class Pattern:
         Free-form metadata: a name, the lattice it came from (kind, rows, cols,
         angle, tile size) and how it was designed (target, options, solver report).
     kind:
-        The tessellation (:mod:`fabkiri.pattern.tessellation`): tile and hole arity, closed
+        The tessellation (:mod:`fabkiri.pattern.kinds.tessellation`): tile and hole arity, closed
         states, fold rules.
     """
 

@@ -11,7 +11,7 @@ Vocabulary (algorithm spec §1-§2):
 * a **hole** is a bounded face of the cut: tile edges of distinct tiles meeting at hinges, as many
   as the tessellation's ``hole_arity`` (four in a quad pattern);
 * a closed **state** folds exactly one gap at every hinge; which one is the tessellation's fold rule
-  (:mod:`fabkiri.pattern.tessellation`; the quad rule is in :mod:`fabkiri.pattern.quad`). The tile adjacency
+  (:mod:`fabkiri.pattern.kinds.tessellation`; the quad rule is in :mod:`fabkiri.pattern.kinds.quad.rules`). The tile adjacency
   graph of a quad tessellation is bipartite; in state 1 every hinge folds the
   gap on the ``prev`` side of its *even* tile, in state 2 the other gap. With the
   lattice's corner order (BL, BR, TR, TL) this is the primal pattern (ψ = 0) for
@@ -32,7 +32,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from ..errors import PatternError
-from .tessellation import DEFAULT_KIND, Tessellation, tessellation
+from .kinds.tessellation import DEFAULT_KIND, Tessellation, tessellation
 
 STATES = (1, 2)
 

@@ -1,7 +1,7 @@
 """Design preview: the tiles over their targets, the Hausdorff distance drawn where it is worst.
 
 One panel for the deployed state over ``--target`` and one per closed state with an outline target
-(the closed tiles placed on the target as :mod:`fabkiri.design.conformance` measured them). Deterministic
+(the closed tiles placed on the target as :mod:`fabkiri.design.core.conformance` measured them). Deterministic
 PNG bytes (no timestamps in the metadata).
 
 Drawn with Pillow, not matplotlib: ``fabkiri design`` writes this picture by default, and importing
@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..design.conformance import target_polygon
-from ..design.targets import target_from_dict
+from ..design.core.conformance import target_polygon
+from ..design.targets.lookup import target_from_dict
 from ..fabricate.pngcanvas import Frame
 from ..pattern.model import Pattern
 

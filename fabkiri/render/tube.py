@@ -11,11 +11,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fabricate.tube3d import state_frame, surface_mesh, tube_seam
+from ..fabricate.tube.rolled import state_frame, surface_mesh, tube_seam
 from ..mechanics.deploy import DeploymentPath
 from ..mechanics.tube import TubeFrame, frame
+from ..pattern.kinds.periodic.sheet import seam_map, tube_tiles
 from ..pattern.model import Pattern
-from ..pattern.periodic import seam_map, tube_tiles
 from .deployment import _gif_bytes, _pyplot
 
 if TYPE_CHECKING:  # matplotlib is imported where a picture is drawn

@@ -22,9 +22,9 @@ from typing import Any
 import numpy as np
 
 from ..mechanics.deploy import DeploymentPath
-from ..pattern.fabricability import widths
 from ..pattern.geometry import signed_areas
 from ..pattern.model import Pattern
+from ..pattern.thinness import widths
 from .htmlparts import data_uri, screen_svg
 
 SCRIPT = Path(__file__).with_name("viewer.js")
@@ -128,8 +128,8 @@ def _overlay(pattern: Pattern) -> dict | None:
     target = (pattern.design or {}).get("target")
     if not isinstance(target, dict):
         return None
-    from ..design import conformance
-    from ..design.targets import target_from_dict
+    from ..design.core import conformance
+    from ..design.targets.lookup import target_from_dict
 
     try:
         tgt = target_from_dict(target)
@@ -153,7 +153,7 @@ def _finite_or_none(v: Any) -> float | None:
 
 def _tube3d(pattern: Pattern, path: DeploymentPath) -> dict | None:
     """A tube's frames rolled onto its cylinder (or cone): ``(F, T', k, 3)`` mm, T' the tube's tiles."""
-    from ..pattern.periodic import seam_of, tube_tiles
+    from ..pattern.kinds.periodic.sheet import seam_of, tube_tiles
 
     seam = seam_of(pattern)
     if seam is None:

@@ -140,9 +140,9 @@ def design_figures(out, params: dict | None = None) -> dict:
 
 
 def _cut(pattern, params: dict, row: dict) -> dict[str, bytes]:
-    from ..fabricate.cut import CutOptions, cut_pattern
-    from ..fabricate.materials import load_material
-    from ..fabricate.readback import verify_result
+    from ..fabricate.cut.materials import load_material
+    from ..fabricate.cut.readback import verify_result
+    from ..fabricate.cut.sheets import CutOptions, cut_pattern
 
     material = load_material(
         params.get("cut_material") or params.get("material") or DEFAULT_CUT_MATERIAL
@@ -174,8 +174,8 @@ def _cut(pattern, params: dict, row: dict) -> dict[str, bytes]:
 
 def _print(pattern, params: dict, row: dict) -> dict[str, bytes]:
     from ..fabricate import fabricability as fb
-    from ..fabricate import mesh
-    from ..fabricate.printers import load_printer
+    from ..fabricate.print import mesh
+    from ..fabricate.print.printers import load_printer
 
     printer = load_printer(params.get("print_printer") or params.get("printer") or DEFAULT_PRINTER)
     style = params.get("style") or "tiles-and-strips"

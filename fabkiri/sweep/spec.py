@@ -25,8 +25,8 @@ from pathlib import Path
 
 from .. import __version__, limits
 from ..errors import InputError
+from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
-from ..fabricate.materials import HINGE_KINDS
 
 ACTIONS = ("design", "cut", "print", "deploy")
 # axis -> the Python types a value may have (PatternRequest's fields, the cut/print choices, the seed)
@@ -241,7 +241,7 @@ def _slug(params: dict) -> str:
 
 def _check_targets(jobs: list[Job], where: str) -> None:
     """Every named target or target file loads (cheap, before any worker starts)."""
-    from ..design.targets import load_target
+    from ..design.targets.lookup import load_target
 
     for t in sorted({t for j in jobs if (t := j.params.get("target"))}):
         try:

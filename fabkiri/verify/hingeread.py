@@ -1,6 +1,6 @@
 """How the verifier reads a sheet of each cut hinge kind: the verify layer's half of a hinge kind.
 
-A hinge kind is written by its strategy in :mod:`fabkiri.fabricate.hingekinds`; the verifier sits
+A hinge kind is written by its strategy in :mod:`fabkiri.fabricate.cut.hingekinds`; the verifier sits
 below fabricate (it must read any file with nothing but the file and its manifest), so what it needs
 to know of a kind is a :class:`HingeReading` registered here by name: how to recover the tiles from
 one sheet's CUT linework, whether the kind is cut in place, and which physical checks apply. The
@@ -20,8 +20,8 @@ from ..registry import Registry
 if TYPE_CHECKING:
     import numpy as np
 
+    from ..exchange.readers import Linework
     from .manifest import Allowances
-    from .readers import Linework
 
 PLAIN = "plain"  # no manifest: the reading is chosen from the linework itself
 

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from ..exchange.readers import Linework, read_cut_file
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
@@ -35,7 +36,6 @@ from .layout_match import _match_tiles, _Matched
 from .manifest import Allowances, CutManifest, _allowances, load_manifest
 from .matching import _mirror, _shift_fit, assembled, match_by_shape
 from .pattern_checks import Tolerances, closed_state_checks, fabrication_tolerances, state_check_id
-from .readers import Linework, read_cut_file
 from .recovery import sheet_material
 from .report import Check, Report, measured
 from .sheetread import _layout_kind, _recover_sheets, _sheet_files

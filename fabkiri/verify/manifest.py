@@ -24,7 +24,7 @@ SCHEMA = "cut-manifest.schema.json"
 @dataclass
 class CutManifest:
     """``manifest.json`` beside fabkiri's cut files: the one definition the writer
-    fills (:mod:`fabkiri.fabricate.cutmanifest`) and the verifier reads.
+    fills (:mod:`fabkiri.fabricate.cut.manifest`) and the verifier reads.
 
     Fields are in the order written. The defaults are what a manifest that leaves a
     field out means (older fabkiri, a hand-made manifest, the printed tiles' top

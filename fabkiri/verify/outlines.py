@@ -125,8 +125,8 @@ def target_checks(
     boundary-tip polygon, or of each closed state's outline, to the target), checked against ``shape_tol``
     (a share of the target's size or a length, ``design --shape-tol``) — never against a figure the
     design claims about itself."""
-    from ..design import conformance as conf
-    from ..design.targets import target_from_dict
+    from ..design.core import conformance as conf
+    from ..design.targets.lookup import target_from_dict
     from ..errors import InputError
 
     d = pattern.design or {}

@@ -29,8 +29,8 @@ import shapely
 
 from ..mechanics.contract import contract
 from ..pattern import geometry
+from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
-from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from .closed_checks import closed_state_checks
 from .compactness import compactness_checks, enclosed_gaps, overlap_check, state_check_id

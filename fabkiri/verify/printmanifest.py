@@ -1,6 +1,6 @@
 """``manifest.json`` beside fabkiri's print files, as one typed object: :class:`PrintManifest`.
 
-Written by the print front door (:func:`fabkiri.fabricate.mesh.manifest`, then
+Written by the print front door (:func:`fabkiri.fabricate.print.mesh.manifest`, then
 :func:`fabkiri.fabricate.assembly.add_to_print` adds the bill of materials) and read back by the
 report, with its JSON Schema (``print-manifest.schema.json`` beside this module) checked on read.
 """

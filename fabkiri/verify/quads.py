@@ -8,11 +8,11 @@ import numpy as np
 import shapely
 
 from ..errors import VerifyError
+from ..exchange.readers import JOIN_MM, SNAP_MM, Linework
 from ..pattern import geometry
 from .geom import point_segment_distance
 from .manifest import Allowances
 from .matching import match_by_shape, match_in_place
-from .readers import JOIN_MM, SNAP_MM, Linework
 
 EDGE_ON_MM = (
     0.02  # a cut edge bounds an opened tile core when its midpoint is this close to the core

@@ -6,9 +6,9 @@ import numpy as np
 
 from ..mechanics.deploy import place_rigid, rigid_angles
 from ..pattern import geometry
+from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
 from ..pattern.residuals import hinge_sums, state_residuals
-from ..pattern.tessellation import tessellation
 from ..pattern.topology import STATES
 from . import geom
 from .compactness import state_check_id

@@ -1,6 +1,6 @@
 """Seam checks of a periodic (tube) pattern: the sheet rolls into a tube in every state.
 
-For a pattern with a seam (:mod:`fabkiri.pattern.periodic`) the verifier measures, per state:
+For a pattern with a seam (:mod:`fabkiri.pattern.kinds.periodic.sheet`) the verifier measures, per state:
 
 * the seam map, first column -> seam copy: a pure translation in each closed state (so the closed
   sheet rolls into a cylinder), a translation (cylinder) or a rigid motion (cone) when deployed;
@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..pattern.kinds.periodic.sheet import Seam, seam_map, seam_of, tube_tiles
 from ..pattern.model import Pattern
-from ..pattern.periodic import Seam, seam_map, seam_of, tube_tiles
 from . import geom
 from .report import Check, measured
 

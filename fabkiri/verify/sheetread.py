@@ -14,10 +14,11 @@ import numpy as np
 import shapely
 
 from ..errors import VerifyError
+from ..exchange.readers import Linework, read_cut_file
 from ..mechanics.contract import contract
 from ..pattern import geometry
+from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
-from ..pattern.tessellation import tessellation
 from .hingeread import PLAIN
 from .manifest import Allowances
 from .quads import (
@@ -28,7 +29,6 @@ from .quads import (
     quads_of,
     tiles_of,
 )
-from .readers import Linework, read_cut_file
 from .recovery import _choose_cut, _drop_reference, dangling_ends, recover_polygons
 from .report import Report
 

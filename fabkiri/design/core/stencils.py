@@ -1,0 +1,286 @@
+"""Building blocks of every constraint family: sparse Jacobians, corner stencils, ``Family`` and ``Stencils``.
+
+``Stencils`` holds the index tables of a standard quad lattice (hinges, holes,
+boundary tips, closed-state grid coordinates); the stencil helpers return
+residuals with per-row node indices and gradients that :func:`jac` assembles
+into CSR (see ``constraints.py`` for the conventions).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import sparse
+
+from ...errors import SolveError
+from ...pattern.geometry import cross2
+from ...pattern.kinds.quad.lattice import DX, DY
+from ...pattern.model import Pattern
+
+TWO_PI = 2.0 * np.pi
+
+# side (0 B, 1 R, 2 T, 3 L) of a free corner by tile parity and corner (spec §2.6)
+TIP_SIDE = np.array([[3, 0, 1, 2], [0, 1, 2, 3]])
+
+
+def jac(m: int, nvar_nodes: int, nodes: np.ndarray, grads: np.ndarray) -> sparse.csr_matrix:
+    """CSR Jacobian from per-row node indices ``(m, k)`` and gradients ``(m, k, 2)``."""
+    return StencilPattern(m, nvar_nodes, nodes).matrix(grads)
+
+
+class StencilPattern:
+    """The CSR structure of a stencil Jacobian (rows of ``k`` nodes, ``2k`` entries before merging a node
+    repeated in a row), sorted and merged once: a family whose stencil nodes are fixed fills only the values
+    on every evaluation (``matrix``)."""
+
+    def __init__(self, m: int, nvar_nodes: int, nodes: np.ndarray):
+        k = nodes.shape[1] if nodes.ndim == 2 else 0
+        self.nodes, self.shape = nodes, (m, 2 * nvar_nodes)
+        cols = (2 * nodes[:, :, None] + np.arange(2)[None, None, :]).reshape(m, 2 * k)
+        # per row by column, stably: entries of one node in a row are summed in stencil order
+        self.order = np.argsort(cols, axis=1, kind="stable") + (2 * k * np.arange(m))[:, None]
+        self.order = self.order.reshape(-1)
+        c = cols.reshape(-1)[self.order]
+        first = np.ones(len(c), dtype=bool)
+        if k:
+            first.reshape(m, 2 * k)[:, 1:] = (
+                c.reshape(m, 2 * k)[:, 1:] != c.reshape(m, 2 * k)[:, :-1]
+            )
+        self.starts = np.flatnonzero(first)
+        self.merged = len(self.starts) < len(c)  # a node repeated in some row
+        self.indices = c[self.starts].astype(np.int32)
+        counts = first.reshape(m, -1).sum(1) if k else np.zeros(m, dtype=np.intp)
+        self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+
+    def matrix(self, grads: np.ndarray) -> sparse.csr_matrix:
+        """The Jacobian with gradients ``(m, k, 2)`` on this pattern (canonical CSR)."""
+        v = np.asarray(grads, dtype=float).reshape(-1)[self.order]
+        if self.merged and len(v):
+            v = np.add.reduceat(v, self.starts)
+        J = sparse.csr_matrix(
+            (v, self.indices.copy(), self.indptr.copy()), shape=self.shape, copy=False
+        )
+        J.has_sorted_indices = True
+        J.has_canonical_format = True
+        return J
+
+
+def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray):
+    """Interior angle of CCW tiles ``t`` at corner ``k`` and its gradient.
+
+    Returns ``θ (m,)``, nodes ``(m, 3)`` = (corner, next, prev) and gradients
+    ``(m, 3, 2)``; θ turns the edge to ``next`` onto the edge to ``prev``.
+    """
+    n = tiles.shape[1]  # corners per tile
+    v = tiles[t, k]
+    a = tiles[t, (k + 1) % n]
+    b = tiles[t, (k + n - 1) % n]
+    A = x[a] - x[v]
+    B = x[b] - x[v]
+    cr = A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
+    dt = A[:, 0] * B[:, 0] + A[:, 1] * B[:, 1]
+    th = np.mod(np.arctan2(cr, dt), TWO_PI)
+    ga = np.stack([A[:, 1], -A[:, 0]], -1) / (A * A).sum(1, keepdims=True)
+    gb = np.stack([-B[:, 1], B[:, 0]], -1) / (B * B).sum(1, keepdims=True)
+    return th, np.stack([v, a, b], -1), np.stack([-(ga + gb), ga, gb], 1)
+
+
+def cross_value(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """g = cross(x_a - x_h, x_b - x_h) (``cross_term`` without the gradient)."""
+    return cross2(x[a] - x[h], x[b] - x[h])
+
+
+def cross_term(x: np.ndarray, h: np.ndarray, a: np.ndarray, b: np.ndarray):
+    """g = cross(x_a - x_h, x_b - x_h) with its gradient (nodes h, a, b)."""
+    A = x[a] - x[h]
+    B = x[b] - x[h]
+    g = A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
+    ga = np.stack([B[:, 1], -B[:, 0]], -1)
+    gb = np.stack([-A[:, 1], A[:, 0]], -1)
+    return g, np.stack([h, a, b], -1), np.stack([-(ga + gb), ga, gb], 1)
+
+
+def sqlen_value(
+    x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray
+) -> np.ndarray:
+    """½(|x_q - x_p|² - |x_v - x_u|²)."""
+    E = x[q] - x[p]
+    F = x[v] - x[u]
+    return 0.5 * ((E * E).sum(1) - (F * F).sum(1))
+
+
+def sqlen_diff(x: np.ndarray, p: np.ndarray, q: np.ndarray, u: np.ndarray, v: np.ndarray):
+    """½(|x_q - x_p|² - |x_v - x_u|²) with its gradient (nodes p, q, u, v)."""
+    E = x[q] - x[p]
+    F = x[v] - x[u]
+    r = 0.5 * ((E * E).sum(1) - (F * F).sum(1))
+    return r, np.stack([p, q, u, v], -1), np.stack([-E, E, F, -F], 1)
+
+
+@dataclass
+class Family:
+    """One constraint family: ``kind`` is 'eq', 'ineq', 'fit' or 'reg'."""
+
+    name: str
+    kind: str
+    # callable x -> (r, J): J is a sparse matrix or, for the usual per-row stencil, a pair ``(nodes (m, k),
+    # gradients (m, k, 2))`` that becomes CSR only when asked (residual-only calls skip it)
+    fn: Callable[[np.ndarray], tuple[np.ndarray, Any]]
+    dim: int = 2  # residual units: length**dim (2: squared-length forms, 1: lengths, 0: angles)
+    meta: dict = field(default_factory=dict)
+    nv: int = 0  # nodes in the node array (Jacobian columns / 2)
+    # optional x -> r without the gradients (inequalities are checked far more often than they are active)
+    res: Callable[[np.ndarray], np.ndarray] | None = None
+    # optional (x, act) -> the per-row stencil ``(nodes, grads)`` with the gradients of rows outside the boolean
+    # mask ``act`` left zero (an inequality's gradient is asked only where it is inside its margin)
+    active: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
+
+    # the CSR structure of the last stencil Jacobian, reused while its node array is the same object
+    _pattern: StencilPattern | None = field(default=None, repr=False, compare=False)
+
+    def __call__(self, x: np.ndarray):
+        """Residuals ``r`` and their Jacobian (CSR)."""
+        r, J = self.fn(x)
+        if isinstance(J, tuple):
+            J = self._csr(len(r), *J)
+        return r, J
+
+    def _csr(self, m: int, nodes: np.ndarray, grads: np.ndarray) -> sparse.csr_matrix:
+        pat = self._pattern
+        if pat is None or pat.nodes is not nodes or pat.shape != (m, 2 * self.nv):
+            pat = self._pattern = StencilPattern(m, self.nv, nodes)
+        return pat.matrix(grads)
+
+    def rows_jacobian(
+        self, x: np.ndarray, rows: np.ndarray, m: int | None = None
+    ) -> sparse.csr_matrix:
+        """The Jacobian's ``rows`` only (CSR): an inequality family's active rows. Given the family's row
+        count ``m``, a family with ``active`` computes those rows' gradients alone (:meth:`stencil_where`)."""
+        if self.active is not None and m is not None:
+            act = np.zeros(m, dtype=bool)
+            act[rows] = True
+            J = self.stencil_where(x, act)
+        else:
+            J = self.fn(x)[1]
+        if isinstance(J, tuple):
+            return jac(len(rows), self.nv, J[0][rows], J[1][rows])
+        return J[rows]
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        """Residuals only (no Jacobian assembly)."""
+        return self.fn(x)[0] if self.res is None else self.res(x)
+
+    def stencil_where(self, x: np.ndarray, act: np.ndarray):
+        """The Jacobian of a per-row stencil family as ``(nodes, grads)``, of the rows in the boolean mask ``act``
+        at least (all rows without ``active``; the others' gradients zero with it)."""
+        return self.fn(x)[1] if self.active is None else self.active(x, act)
+
+    def jacobian_where(self, x: np.ndarray, act: np.ndarray) -> sparse.csr_matrix:
+        """The Jacobian (CSR, every row's sparsity) of the rows in ``act`` at least, as :meth:`stencil_where`."""
+        if self.active is None:
+            return self(x)[1]
+        return jac(len(act), self.nv, *self.active(x, act))
+
+
+# ------------------------------------------------------------------ stencils
+@dataclass(eq=False)
+class Stencils:
+    """Index arrays of a standard quad lattice pattern, used by every family."""
+
+    rows: int
+    cols: int
+    tiles: np.ndarray
+    n_nodes: int
+    hinge_node: np.ndarray
+    hinge_tiles: np.ndarray
+    hinge_corner: np.ndarray
+    folds: dict  # state -> FoldRule
+    hole_nodes: np.ndarray
+    gap_face: np.ndarray
+    tip_nodes: np.ndarray
+    tip_side: np.ndarray
+    tip_tile: np.ndarray
+    tip_corner: np.ndarray
+    phi: dict  # state -> (T, 4, 2) integer pattern-grid coordinates of every tile corner
+
+    @classmethod
+    def from_pattern(cls, pattern: Pattern) -> Stencils:
+        lat = pattern.lattice or {}
+        rows, cols = int(lat.get("rows", 0)), int(lat.get("cols", 0))
+        if rows * cols != pattern.n_tiles or pattern.parity != 0:
+            raise SolveError(
+                "inverse design needs a standard quad lattice pattern (rows x cols, parity 0)"
+            )
+        top = pattern.topology
+        T = top.n_tiles
+        r, c = np.divmod(np.arange(T), cols)
+        par = (r + c) % 2
+        k = np.arange(4)
+        P = np.stack([c[:, None] + DX[None, :], r[:, None] + DY[None, :]], -1).astype(np.int64)
+        kq = (k[None, :] - 1 + 2 * par[:, None]) % 4
+        Q = np.stack([c[:, None] + DX[kq], r[:, None] + DY[kq]], -1).astype(np.int64)
+        tiles = top.tiles
+        use_t = np.full(top.n_nodes, -1)
+        use_k = np.full(top.n_nodes, -1)
+        use_t[tiles.ravel()] = np.repeat(np.arange(T), 4)
+        use_k[tiles.ravel()] = np.tile(k, T)
+        tips = top.free_nodes
+        tt, tk = use_t[tips], use_k[tips]
+        side = TIP_SIDE[par[tt], tk]
+        return cls(
+            rows=rows,
+            cols=cols,
+            tiles=tiles,
+            n_nodes=top.n_nodes,
+            hinge_node=top.hinge_node,
+            hinge_tiles=top.hinge_tiles,
+            hinge_corner=top.hinge_corner,
+            folds={s: top.fold(s) for s in (1, 2)},
+            hole_nodes=top.hole_nodes,
+            gap_face=top.gap_face,
+            tip_nodes=tips,
+            tip_side=side,
+            tip_tile=tt,
+            tip_corner=tk,
+            phi={1: P, 2: Q},
+        )
+
+    @property
+    def n_hinges(self) -> int:
+        return len(self.hinge_node)
+
+
+# ------------------------------------------------------------- families
+
+
+def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0) -> Family:
+    """cross(next - v, prev - v) - margin >= 0 at every corner of CCW ``quads`` (node indices)."""
+    v = quads.ravel()
+    a = np.roll(quads, -1, 1).ravel()
+    b = np.roll(quads, 1, 1).ravel()
+
+    def fn(x):
+        g, nodes, gr = cross_term(x, v, a, b)
+        return g - margin, (nodes, gr)
+
+    return Family(
+        name,
+        "ineq",
+        fn,
+        2,
+        meta={"quads": quads},
+        nv=nv,
+        res=lambda x: cross_value(x, v, a, b) - margin,
+    )
+
+
+def regularizer_pairs(st: Stencils) -> np.ndarray:
+    """Tile pairs (r,c)-(r,c+2) and (r,c)-(r+2,c): same face in adjacent unit cells (spec §3)."""
+    M, N = st.rows, st.cols
+    idx = np.arange(M * N).reshape(M, N)
+    h = np.stack([idx[:, :-2].ravel(), idx[:, 2:].ravel()], -1)
+    v = np.stack([idx[:-2, :].ravel(), idx[2:, :].ravel()], -1)
+    return np.concatenate([h, v]).astype(np.int64)

@@ -1,0 +1,1 @@
+"""Inverse design of kagome (rotating-triangles) kirigami."""

@@ -1,0 +1,1 @@
+"""Inverse design of quad (rotating-squares) kirigami: the full solver and its routes."""

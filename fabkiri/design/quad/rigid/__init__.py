@@ -1,0 +1,1 @@
+"""The rigid-deployable quad family in reduced coordinates and its solver."""

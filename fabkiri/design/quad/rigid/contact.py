@@ -1,0 +1,132 @@
+"""Tiles of a closed state kept apart: inequality rows of the rigid-family solver (``reduced.py``).
+
+The solver's own inequalities are local (hinge gaps, convex tiles), so nothing stopped two boundary tiles
+far apart in the lattice from meeting in a closed state: from 48x48 tiles on, the heart's notch closed
+over itself in state 2 (48x48: 10 overlapping pairs, 64x64: 45, all in the top row either side of the
+cusp), and the design failed the CLI's overlap check. In the rigid family both closed states are linear
+in the seeds, with no ψ: state 1 is the grid ``c = Z S``, state 2 is ``J (Y S)`` (``rigid.py``; a quarter
+turn, which keeps every distance and orientation), so the rows are evaluated on ``Z S`` and ``Y S``.
+
+Rows: for every pair of tiles of the lattice's outer ``RING`` rows and columns that are not lattice neighbours (Chebyshev
+distance ≥ 2) and whose circumscribed circles come within ``REACH`` median edges in that state (``_near_pairs``: a
+large tile reaches as far as its own size), each corner of one tile
+against the other (counter-clockwise, convex): ``g = max_e`` of the corner's outward distance from edge
+``e``, ``g ≥ CONTACT_MARGIN`` (tile units). The pairs are found again at every evaluation (a KD-tree over
+the ring's centres); a pair enters far from contact, so the penalty stays continuous. Only the rows below
+their margin get a Jacobian, ``∂g/∂p`` through ``Z`` or ``Y`` (the stencil's three nodes: the corner and
+the edge's ends). The CLI's exact check (penetration depth) still judges the result.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ....kdtree import KDTree
+from ...core.stencils import Stencils
+from .family import RigidFamily
+
+CONTACT_MARGIN = 0.01  # outward distance of a corner from a non-neighbouring tile, tile units
+REACH = 3.0  # tile pairs whose circumscribed circles come closer than this many median edges are checked
+# the rows and columns along the lattice's edge that are checked: the symmetric 64x64 heart's state-1 notch
+# overlapped between the top row and the one below it (91 pairs, first tiles (62, 19) and (63, 41))
+RING = 2
+NAMES = ("closed_contact_1", "closed_contact_2")
+
+
+class ClosedContact:
+    """The closed-state contact rows of one lattice's rigid family (module docstring)."""
+
+    def __init__(self, fam: RigidFamily, st: Stencils, barrier: bool = True):
+        # barrier: the rows count as inequalities (no step may deepen a violation); else a penalty only
+        self.barrier = barrier
+        M, N = st.rows, st.cols
+        r, c = np.divmod(np.arange(M * N), N)
+        d = RING
+        self.ring = np.flatnonzero((r < d) | (r >= M - d) | (c < d) | (c >= N - d))
+        self.r, self.c = r[self.ring], c[self.ring]
+        # (basis, tile corners as rows of the basis) per closed state
+        self.blocks = ((fam.Z, fam.node_vertex[st.tiles]), (fam.Y, st.tiles))
+        self.nf = fam.n_seeds
+        self._last: tuple | None = None
+
+    def configs(self, S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closed state 1 (``Z S``) and closed state 2 turned back a quarter (``Y S``)."""
+        return self.blocks[0][0] @ S, self.blocks[1][0] @ S
+
+    def measure(self, x: np.ndarray, state: int):
+        """``(g, nodes (m, 3), grads (m, 3, 2))`` of state ``state`` (1 or 2) on its configuration ``x``."""
+        tiles = self.blocks[state - 1][1][self.ring]
+        q = x[tiles]  # (R, 4, 2)
+        pairs = _near_pairs(q)
+        far = np.maximum(
+            np.abs(self.r[pairs[:, 0]] - self.r[pairs[:, 1]]),
+            np.abs(self.c[pairs[:, 0]] - self.c[pairs[:, 1]]),
+        )
+        pairs = pairs[far >= 2]
+        # every corner of one tile against the other tile, both ways
+        a = np.concatenate([pairs[:, 0], pairs[:, 1]]).repeat(4)  # the corner's tile
+        b = np.concatenate([pairs[:, 1], pairs[:, 0]]).repeat(4)  # the tile it must stay out of
+        k = np.tile(np.arange(4), 2 * len(pairs))
+        v_node = tiles[a, k]
+        ends = tiles[b]  # (m, 4)
+        v = x[v_node][:, None, :]  # (m, 1, 2)
+        p0, p1 = x[ends], x[np.roll(ends, -1, 1)]  # each edge's ends (m, 4, 2)
+        e, w = p1 - p0, v - p0
+        length = np.maximum(np.linalg.norm(e, axis=-1), 1e-300)
+        cross = e[..., 0] * w[..., 1] - e[..., 1] * w[..., 0]
+        out = -cross / length  # outward distance from each edge (counter-clockwise tiles)
+        j = np.argmax(out, axis=1)
+        row = np.arange(len(a))
+        g = out[row, j]
+        e, w, length, cross = e[row, j], w[row, j], length[row, j], cross[row, j]
+        dv = np.stack([e[:, 1], -e[:, 0]], -1) / length[:, None]
+        de = -np.stack([w[:, 1], -w[:, 0]], -1) / length[:, None] + (cross / length**3)[:, None] * e
+        nodes = np.stack([v_node, ends[row, j], np.roll(ends, -1, 1)[row, j]], 1)
+        grads = np.stack([dv, -dv - de, de], 1)
+        return g, nodes, grads
+
+    def _measured(self, xs) -> list:
+        """``measure`` of both states, kept for the same arrays (the merit asks for the values, then the rows)."""
+        if self._last is None or any(a is not b for a, b in zip(self._last[0], xs)):
+            self._last = (tuple(xs), [self.measure(x, s + 1) for s, x in enumerate(xs)])
+        return self._last[1]
+
+    def values(self, xs) -> dict:
+        """Every contact row's value per state, on ``configs``' arrays."""
+        return {NAMES[s]: m[0] for s, m in enumerate(self._measured(xs))}
+
+    def active(self, xs, margin_scale: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+        """Rows below ``margin_scale · CONTACT_MARGIN``, times ``scale``: ``(r, ∂r/∂p)`` (dense, P columns)."""
+        rs, Js = [np.zeros(0)], [np.zeros((0, 2 * self.nf + 1))]
+        for s, (g, nodes, grads) in enumerate(self._measured(xs)):
+            act = np.flatnonzero(g < margin_scale * CONTACT_MARGIN)
+            if not len(act):
+                continue
+            B = self.blocks[s][0]
+            n, gr = nodes[act], grads[act]
+            J = np.zeros((len(act), 2 * self.nf + 1))
+            J[:, : self.nf] = np.einsum("mk,mkf->mf", gr[..., 0], B[n])
+            J[:, self.nf : 2 * self.nf] = np.einsum("mk,mkf->mf", gr[..., 1], B[n])
+            rs.append(scale * (g[act] - margin_scale * CONTACT_MARGIN))
+            Js.append(scale * J)
+        return np.concatenate(rs), np.vstack(Js)
+
+
+def _near_pairs(q: np.ndarray) -> np.ndarray:
+    """Pairs ``(i, j)``, i < j, of tiles ``q`` (R, 4, 2) whose circumscribed circles (about the corners' mean)
+    come within ``REACH`` median edges of each other. A tile's own size counts: a tile many edges long meets
+    tiles whose centres are far from its own (the 64x64 drop's state-1 corner tile, 17.6 median edges long,
+    lay over a top-row tile 13.6 median edges from its centre, a pair a reach between centres never saw)."""
+    cen = q.mean(1)
+    rad = np.linalg.norm(q - cen[:, None], axis=-1).max(1)
+    edge = float(np.median(np.linalg.norm(q[:, 1] - q[:, 0], axis=1)))
+    gap = REACH * max(edge, 1e-12)
+    # a pair is found from its larger tile's ball: |ci - cj| <= ri + rj + gap <= 2 max(ri, rj) + gap
+    hits = KDTree(cen).query_ball_point(cen, 2 * rad + gap)
+    i = np.repeat(np.arange(len(q)), [len(h) for h in hits])
+    j = np.concatenate([np.asarray(h, dtype=np.int64) for h in hits] + [np.zeros(0, np.int64)])
+    lo, hi = np.minimum(i, j), np.maximum(i, j)
+    code = np.unique(lo[lo < hi] * len(q) + hi[lo < hi])
+    a, b = np.divmod(code, len(q))
+    near = np.linalg.norm(cen[a] - cen[b], axis=1) <= rad[a] + rad[b] + gap
+    return np.stack([a[near], b[near]], 1).astype(np.int64)

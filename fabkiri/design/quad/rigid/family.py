@@ -1,0 +1,252 @@
+"""The rigid-deployable reconfigurable family in closed form (reduced coordinates).
+
+With rhombus holes and hinge sums π (spec §2.5) every tile turns rigidly by
+``-σ_T ψ`` (σ = ±1 in a checkerboard) between closed state 1 (ψ = 0) and
+closed state 2 (ψ = π/2). Write the pattern vertices of closed state 1 as
+``c`` (an (M+1)×(N+1) grid of points). Tile ``T``'s corner ``k`` then sits at
+
+    x(T, k; ψ) = Rot(-σ_T ψ) c[P(T, k)] + sin ψ · τ_T,
+
+and the two tiles of a hinge at grid vertex ``g`` agree iff their translations
+differ by ``τ_B - τ_A = -2 σ_A J c_g`` (``J``: quarter turn). Integrated around
+a hole this holds iff the hole's merge vertex is the midpoint of its two fold
+vertices in closed state 1 (its slit is straight and split in half); the same
+midpoint rule at every boundary hinge whose notch is open in state 1 makes the
+notch close in state 2. So the family is
+
+    {x(ψ, c) : A c = 0},   A = one midpoint row per hole and per open notch,
+
+a linear space of dimension M+N+2 per coordinate (spec §2.3: 2(M+N)+2 with ψ,
+modulo rigid motions). Every member satisfies the edge pairs of both states
+and the hinge sums exactly, for every ψ.
+
+The basis is anchored on the boundary: the 4 grid corners and every boundary
+vertex not pinned by an open-notch midpoint row are free (``seeds``); the
+interior follows from one sparse LU solve. In these coordinates the deployed
+nodes are ``x = cos ψ · Zn S + sin ψ · J (Y S)`` with ``S`` the seed points
+``(nf, 2)`` and ``Zn``, ``Y`` dense ``(V, nf)`` matrices, so the design problem
+keeps only the shape fit, the regulariser and the inequalities.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse.linalg import splu
+
+from ....errors import SolveError
+from ....pattern.topology import SpanningTree
+from ...core.stencils import Stencils
+from .core import GridCore, grid_core
+
+# above this many grid vertices (64x64 tiles and up) ``grid`` and ``nodes`` take the cheaper products (the core's
+# ``E (Z[core] S)``, the tiles' ``τ S``): the same maps to round-off; smaller lattices keep ``Z S`` and ``Y S``
+# (at 48x48 the two ways cost the same)
+LARGE_GRID = 4000
+
+
+@dataclass(eq=False)
+class RigidFamily:
+    """Closed-form rigid-deployable reconfigurable patterns of one lattice."""
+
+    node_vertex: np.ndarray  # (V,) closed-state-1 grid vertex of every deployed node
+    midpoint: np.ndarray  # (m, 3) grid vertices (z, a, b): c_z = (c_a + c_b) / 2
+    seeds: np.ndarray  # (nf,) free grid vertices
+    Z: np.ndarray  # (G, nf) closed-state-1 grid = Z @ S
+    Zn: np.ndarray  # (V, nf) Z at each node's grid vertex
+    Y: np.ndarray  # (V, nf) tile-translation part minus σ Zn, per node
+    _core: GridCore | None = field(default=None, init=False, repr=False)
+    # (Y, τ per tile, tile of each node, σ per node (V, 1)) as ``build`` made them: ``Y @ S`` per tile while ``Y`` is
+    # that array (a family made from this one with another ``Y``, e.g. ``reduced_mirror.centred``, has none)
+    _tau: tuple | None = field(default=None, init=False, repr=False)
+
+    @property
+    def n_seeds(self) -> int:
+        return len(self.seeds)
+
+    @property
+    def core(self) -> GridCore:
+        """``Z = E Z[core]`` with a sparse ``E`` (``rigid_core.py``), made on first use."""
+        if self._core is None:
+            self._core = grid_core(self.midpoint, self.Z)
+        return self._core
+
+    @classmethod
+    def build(cls, st: Stencils, tree: SpanningTree) -> RigidFamily:
+        """``tree``: a spanning tree of the tile graph (``Topology.spanning_tree``)."""
+        M, N = st.rows, st.cols
+        tl = st.tiles
+        G = (M + 1) * (N + 1)
+        vid = st.phi[1][..., 1] * (N + 1) + st.phi[1][..., 0]  # (T, 4) grid vertex of each corner
+        node_vertex = np.empty(st.n_nodes, dtype=np.int64)
+        node_vertex[tl.ravel()] = vid.ravel()
+        # the gap that stays open in state 1 at each hinge: its two edges are straight and equal there
+        A, B = st.hinge_tiles.T
+        cA, cB = st.hinge_corner.T
+        fold = st.folds[1]
+        nA = tl[A, (cA + 1) % 4]
+        pA = tl[A, (cA + 3) % 4]
+        nB = tl[B, (cB + 1) % 4]
+        pB = tl[B, (cB + 3) % 4]
+        openA = np.where(nA == fold.fold_ends[:, 0], pA, nA)
+        openB = np.where(nB == fold.fold_ends[:, 1], pB, nB)
+        z = node_vertex[st.hinge_node]
+        a, b = node_vertex[openA], node_vertex[openB]
+        # both merge corners of a hole give the same row: keep one
+        mid = np.unique(np.stack([z, np.minimum(a, b), np.maximum(a, b)], 1), axis=0)
+        m = len(mid)
+        Am = sparse.csr_matrix(
+            (np.r_[np.ones(m), np.full(2 * m, -0.5)], (np.tile(np.arange(m), 3), mid.T.ravel())),
+            shape=(m, G),
+        )
+        gi, gj = np.divmod(np.arange(G), N + 1)
+        boundary = (gi == 0) | (gi == M) | (gj == 0) | (gj == N)
+        pinned = np.zeros(G, dtype=bool)
+        pinned[mid[:, 0]] = True
+        seeds = np.flatnonzero(boundary & ~pinned)
+        dep = np.setdiff1d(np.arange(G), seeds)
+        if len(dep) != m:
+            raise SolveError(f"rigid family: {m} midpoint rows for {len(dep)} dependent vertices")
+        Am = Am.tocsc()
+        try:
+            lu = splu(Am[:, dep], permc_spec="COLAMD")
+        except (
+            RuntimeError
+        ) as exc:  # pragma: no cover - the anchoring above is exact for quad lattices
+            raise SolveError(f"rigid family: boundary anchoring is singular ({exc})") from None
+        Z = np.zeros((G, len(seeds)))
+        Z[seeds, np.arange(len(seeds))] = 1.0
+        Z[dep] = -lu.solve(Am[:, seeds].toarray())
+        # tile translations τ (per unit sin ψ), integrated along a spanning tree from tile 0 (τ_0 = 0)
+        T = len(tl)
+        sigma = np.where(np.arange(T) // N % 2 == np.arange(T) % N % 2, 1.0, -1.0)  # (r + c) even
+        hinge_vertex = node_vertex[st.hinge_node]
+        tau = np.zeros(
+            (T, len(seeds))
+        )  # τ_T = J (tau[T] @ S); τ_root = 0 fixes the translation gauge
+        for lvl in tree.levels():
+            child, parent = tree.children[lvl], tree.parents[lvl]
+            tau[child] = tau[parent] - 2.0 * sigma[parent, None] * Z[hinge_vertex[tree.hinges[lvl]]]
+        use_t = np.empty(st.n_nodes, dtype=np.int64)
+        use_t[tl.ravel()] = np.repeat(np.arange(T), 4)
+        Zn = Z[node_vertex]
+        Y = np.ascontiguousarray(tau[use_t] - sigma[use_t, None] * Zn)
+        fam = cls(node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), Y)
+        fam._tau = (Y, tau, use_t, sigma[use_t, None])
+        return fam
+
+    @classmethod
+    def of_standard(cls, st: Stencils, tree: Callable[[], SpanningTree]) -> RigidFamily:
+        """``build`` for the standard ``st.rows`` x ``st.cols`` lattice, kept for the last two lattices: a
+        coarse-to-fine design needs each level's family twice (its own solve, then the next level's start;
+        building it is 0.7 s at 128x128). ``tree``: makes the spanning tree on a miss."""
+        key = (st.rows, st.cols)
+        fam = _STANDARD.pop(key, None) or cls.build(st, tree())
+        _STANDARD[key] = fam
+        while len(_STANDARD) > 2:
+            del _STANDARD[next(iter(_STANDARD))]
+        return fam
+
+    @staticmethod
+    def deployment_angle(X: np.ndarray, st: Stencils) -> float:
+        """ψ of a pattern near the family: half the median hole angle at the state-1 fold corners.
+
+        (Every hole of a member is a rhombus with angle 2ψ there; spec §2.5.)
+        """
+        hn = st.hole_nodes
+        if not len(hn):
+            return float(np.pi / 4)
+        folds = st.folds[1].hole_folds
+        v = X[hn]
+        a = np.roll(v, -1, 1) - v
+        b = np.roll(v, 1, 1) - v
+        ang = np.arctan2(a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0], (a * b).sum(-1))
+        ang = np.abs(ang[folds])
+        # members exist up to the closed states themselves (a rigid 16x16 ellipse opens to 1.533)
+        return float(np.clip(0.5 * np.median(ang), 1e-3, np.pi / 2 - 1e-3))
+
+    # ---------------------------------------------------------------- maps
+    def grid(self, S: np.ndarray) -> np.ndarray:
+        """Closed-state-1 pattern vertices ``(G, 2)``."""
+        if len(self.Z) > LARGE_GRID:
+            core = self.core
+            return core.E @ (core.Zc @ S)
+        return self.Z @ S
+
+    def nodes(self, S: np.ndarray, psi: float, grid: np.ndarray | None = None) -> np.ndarray:
+        """Deployed nodes ``(V, 2)`` at deployment angle ``psi`` (``grid``: ``self.grid(S)`` when known)."""
+        # Zn S is the grid's rows: the product over the G grid vertices, not the V nodes (twice as many)
+        a = (self.grid(S) if grid is None else grid)[self.node_vertex]
+        b = self._translations(S, a)
+        c, s = np.cos(psi), np.sin(psi)
+        return np.stack([c * a[:, 0] - s * b[:, 1], c * a[:, 1] + s * b[:, 0]], -1)
+
+    def _translations(self, S: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """``Y S`` given ``a = Zn S``; on a large lattice as ``(τ S)[tile] - σ a`` (T tile rows, not V nodes)."""
+        t = self._tau
+        if len(self.Z) <= LARGE_GRID or t is None or t[0] is not self.Y:
+            return self.Y @ S
+        _, tau, use_t, sigma = t
+        return (tau @ S)[use_t] - sigma * a
+
+    def jacobian(self, S: np.ndarray, psi: float) -> np.ndarray:
+        """``∂vec(x)/∂p`` (dense, ``(2V, 2 nf + 1)``) for ``p = (S[:, 0], S[:, 1], ψ)``."""
+        return self.jacobian_at(S, psi).reshape(2 * len(self.Zn), -1)
+
+    def jacobian_at(self, S: np.ndarray, psi: float, nodes: np.ndarray | None = None) -> np.ndarray:
+        """``∂x[nodes]/∂p`` as ``(n, 2, 2 nf + 1)``: coordinate ``d`` of node ``i`` in ``[i, d]`` (all nodes
+        when ``nodes`` is None)."""
+        Zn, Y = (self.Zn, self.Y) if nodes is None else (self.Zn[nodes], self.Y[nodes])
+        c, s = np.cos(psi), np.sin(psi)
+        n, nf = Zn.shape
+        D = np.empty((n, 2, 2 * nf + 1))
+        D[:, 0, :nf] = c * Zn
+        D[:, 0, nf : 2 * nf] = -s * Y
+        D[:, 1, :nf] = s * Y
+        D[:, 1, nf : 2 * nf] = c * Zn
+        a = Zn @ S
+        b = Y @ S
+        D[:, 0, -1] = -s * a[:, 0] - c * b[:, 1]
+        D[:, 1, -1] = -s * a[:, 1] + c * b[:, 0]
+        return D
+
+    def seeds_for_grid(self, grid: np.ndarray) -> np.ndarray:
+        """Seeds ``S`` whose closed-state-1 grid is closest to ``grid`` ``(G, 2)`` (least squares)."""
+        S, *_ = np.linalg.lstsq(self.Z, grid, rcond=None)
+        return S
+
+    def fit(self, X: np.ndarray, psi: float) -> tuple[np.ndarray, float]:
+        """Seeds ``S`` whose pattern at ``psi`` is closest to ``X`` (least squares), and the rms gap."""
+        c, s = np.cos(psi), np.sin(psi)
+        V, nf = self.Zn.shape
+        # x = c Zn Sx - s Y Sy ; y = c Zn Sy + s Y Sx
+        K = np.block([[c * self.Zn, -s * self.Y], [s * self.Y, c * self.Zn]])
+        rhs = np.concatenate([X[:, 0], X[:, 1]])
+        sol, *_ = np.linalg.lstsq(K, rhs, rcond=None)
+        S = np.stack([sol[:nf], sol[nf:]], -1)
+        gap = float(np.sqrt(np.mean((self.nodes(S, psi) - X) ** 2)))
+        return S, gap
+
+
+_STANDARD: dict[tuple[int, int], RigidFamily] = {}  # ``of_standard``'s, the newest last
+
+
+def resample_grid(grid: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    """The closed-state grid ``(m+1, n+1, 2)`` resampled to ``(rows+1, cols+1, 2)`` vertices, bilinear per cell.
+
+    A coarse-to-fine start inside the rigid family. Doubling splits every cell in four, and the four
+    quads of a convex cell are convex, so that refined grid folds no cell (a map of the deployed tiles
+    can fold tiles); other ratios sample the same piecewise-bilinear map. (numpy, not scipy's
+    ``RegularGridInterpolator``: importing ``scipy.interpolate`` cost more than the resampling.)
+    """
+    m, n = grid.shape[0] - 1, grid.shape[1] - 1
+    yi, xi = np.linspace(0.0, m, rows + 1), np.linspace(0.0, n, cols + 1)
+    i = np.minimum(np.floor(yi).astype(np.int64), m - 1)
+    j = np.minimum(np.floor(xi).astype(np.int64), n - 1)
+    a, b = (yi - i)[:, None, None], (xi - j)[None, :, None]
+    g00, g01 = grid[i][:, j], grid[i][:, j + 1]
+    g10, g11 = grid[i + 1][:, j], grid[i + 1][:, j + 1]
+    return (1 - a) * ((1 - b) * g00 + b * g01) + a * ((1 - b) * g10 + b * g11)

@@ -1,0 +1,492 @@
+"""Inverse design inside the closed-form rigid-deployable family (``rigid.py``).
+
+For ``--rigid`` with rhombus holes every equality family (edge pairs of both
+closed states, hinge sums) holds identically on the family ``x(S, ψ)``, so the
+problem left is small and unconstrained but for the inequalities:
+
+    min_p  |s(x)|² + w E_reg(x) + ρ |min(0, g(x) - m)|²,   x = x(p), p = (S, ψ),
+
+with 2(M+N+2)+1 unknowns instead of 2V. It is solved by Levenberg-Marquardt
+with dense reduced normal matrices (see ``_Merit``: the tile-shape rows live on
+the closed-state-1 grid, the rest on the deployed nodes), with the same step
+limiting on the inequalities as the full solver. Small lattices form the dense
+reduced Jacobian directly (``TileShapeRows``: per tile corner, then pair
+differences; inequality rows only where active), large ones by sparse blocks. When the fit
+comes out nearly exact, minimum-norm Gauss-Newton steps on the fit rows make
+it exact ("hard" shape matching). The caller (``solve.py``) checks every family
+on the result and falls back to the full solver when a check fails.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from scipy import sparse
+
+from ...core.stencils import Family, Stencils
+from ..constraints import convexity
+from ..objective import regularizer, tile_corners
+from .contact import ClosedContact
+from .family import RigidFamily
+from .merit import _Evaluation
+from .mirror import Mirror, MirroredMerit, symmetric_member
+from .steps import hard_fit, levenberg_marquardt
+from .tiles import TileShapeRows
+
+# (penalty weight, stall tolerance, iteration cap) per stage, softest first as in the full solver: a stiff
+# inequality wall from the start leaves LM crawling along it (16x16 rigid circle: 300 iterations to a
+# 1.3 mm fit at 1e4 alone, 74 to an exact fit from 1e2). Near an exact fit the tiny regulariser is
+# minimised along the curved fit manifold, where LM crawls too: a stage stops after 3 steps in a row that
+# each gain less than its stall tolerance, and the hard-fit projection finishes.
+STAGES = ((1e2, 1e-3, 200), (1e4, 1e-6, 40))
+# The first stage can run from two starts that differ only in LM's damping: Marquardt (diag JᵀJ) and
+# Levenberg (identity) scaling reach different local minima, and neither is always better (rigid 16x16:
+# heart 13.3 mm vs 0.43 mm, circle exact vs 0.04 mm). The second runs only when the first misses the
+# target by more than ``miss_tol`` of its size; the better merit is kept.
+SCALINGS = ("marquardt", "levenberg")
+# the stiffer stage is there to remove inequality violations: when the first stage ends with none (g >= 0,
+# rows inside their margin allowed) its steps crawl along the fit manifold lowering the regulariser a little,
+# so it gets this many (64x64 rigid circle: 40 steps -> 10, CPU 7.4 -> 3.9 s, fit 0.2005 -> 0.1962 mm,
+# regulariser +1.6 %)
+POLISH_STEPS = 10
+
+
+# families that see only tile shapes: on a member every tile is a rigid copy of its closed-state-1 grid cell,
+# so they are evaluated on the grid c = Z S (G vertices, no ψ) instead of the V deployed nodes
+TILE_SHAPE = ("regularizer", "convexity")
+
+
+class _Merit:
+    """Stacked residuals of the reduced problem and their Jacobians.
+
+    Rows come in two blocks: on the deployed nodes ``x(p)`` (fit, non-overlap; Jacobian ∂x/∂p = ``D``)
+    and on the closed-state-1 grid ``c = Z S`` (the ``TILE_SHAPE`` families; ∂c/∂p = ``C``, constant).
+    The grid block is the large one (the regulariser); its normal matrix, by coordinate blocks of ``Z``,
+    costs about a third of ``Dᵀ JᵀJ D`` on the nodes (G ≈ V/2 grid vertices, no ψ column). With ``contact``
+    the closed states' contact rows follow (``reduced_contact.py``, on ``Z S`` and ``Y S``; dense, few active).
+    """
+
+    def __init__(
+        self,
+        fam: RigidFamily,
+        families: list[Family],
+        margin: dict,
+        reg_weight: float,
+        rho: float = STAGES[0][0],
+        scaling: str = "marquardt",
+        grid_families: Sequence[Family] = (),
+        contact: ClosedContact | None = None,
+    ):
+        self.fam = fam
+        self.contact = contact
+        self.nf = fam.n_seeds
+        on_grid = {f.name for f in grid_families}
+        self.fits = [f for f in families if f.kind == "fit"]
+        self.regs = [f for f in families if f.kind == "reg" and f.name not in on_grid]
+        self.ineqs = [f for f in families if f.kind == "ineq" and f.name not in on_grid]
+        self.grid_regs = [f for f in grid_families if f.kind == "reg"]
+        self.grid_ineqs = [f for f in grid_families if f.kind == "ineq"]
+        self.margin = margin
+        self.w = float(np.sqrt(reg_weight))
+        self.sq = float(np.sqrt(rho))
+        self.scaling = scaling
+        G, nf = fam.Z.shape
+        # the dense path needs the grid families to be exactly the regulariser and tile convexity
+        self._tiles = None
+        # a symmetric solve's dense path: Jacobians over q's columns (``reduced_mirror_dense.halved``)
+        self._half: Any = None
+        names = [f.name for f in self.grid_regs] + [f.name for f in self.grid_ineqs]
+        if names == list(TILE_SHAPE):
+            reg, conv = self.grid_regs[0], self.grid_ineqs[0]
+            rows = reg.meta["rows"]
+            if (2 * len(rows.first) + len(conv.meta["quads"]) * 4) * (2 * nf + 1) <= DENSE_JD:
+                self._tiles = TileShapeRows(fam, conv.meta["quads"], rows, self.margin[conv.name])
+        # block path: ∂c/∂p, dense only while small (column slicing of Jc costs more there)
+        self._C = None
+        if self._tiles is None and 2 * G * (2 * nf + 1) <= DENSE_JD:
+            C = np.zeros((G, 2, 2 * nf + 1))
+            C[:, 0, :nf] = fam.Z
+            C[:, 1, nf : 2 * nf] = fam.Z
+            self._C = C.reshape(2 * G, 2 * nf + 1)
+
+    def staged(self, rho: float, scaling: str) -> _Merit:
+        """The same rows with another penalty weight and LM scaling (sharing every precomputed array)."""
+        new = copy.copy(self)
+        new.sq, new.scaling = float(np.sqrt(rho)), scaling
+        return new
+
+    def with_contact(self, contact: ClosedContact) -> _Merit:
+        """The same rows and the closed states' contact rows."""
+        new = copy.copy(self)
+        new.contact = contact
+        return new
+
+    def unpack(self, p: np.ndarray) -> tuple[np.ndarray, float]:
+        nf = self.nf
+        return np.stack([p[:nf], p[nf : 2 * nf]], -1), float(p[-1])
+
+    def state(self, p: np.ndarray):
+        """``(X, c, w)``: deployed nodes, closed-state-1 grid and (with contact rows) closed state 2 turned
+        back a quarter, ``Y S``, of member ``p``."""
+        S, psi = self.unpack(p)
+        c = self.fam.grid(S)
+        return self.fam.nodes(S, psi, c), c, self._state_2(S)
+
+    def _state_2(self, S: np.ndarray) -> np.ndarray | None:
+        return None if self.contact is None else self.fam.Y @ S
+
+    def contact_rows(self, Xc, hard: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The active contact rows and their dense ``∂r/∂p`` (none without contact rows)."""
+        if self.contact is None:
+            return np.zeros(0), np.zeros((0, 2 * self.nf + 1))
+        return self.contact.active(Xc[1:], 0.5 if hard else 1.0, 1.0 if hard else self.sq)
+
+    def ineq_values(self, Xc) -> dict:
+        """Every inequality family's values ``g``, node families on ``X``, grid families on ``c``."""
+        X, c, w = Xc
+        return {
+            **{f.name: f.residual(X) for f in self.ineqs},
+            **{f.name: f.residual(c) for f in self.grid_ineqs},
+            **(self.contact.values((c, w)) if self.contact and self.contact.barrier else {}),
+        }
+
+    def ineq_violation(self, Xc, values: dict | None = None) -> float:
+        vals = (self.ineq_values(Xc) if values is None else values).values()
+        return max(0.0, -min((float(v.min(initial=np.inf)) for v in vals), default=0.0))
+
+    def rows(self, Xc, hard: bool = False, values: dict | None = None, jacobians: bool = True):
+        """Residuals and Jacobians of the merit (or of the hard-fit rows): ``(r, Jx, Jc)``.
+
+        ``r`` stacks the node rows (``Jx``, CSR over the nodes) and then the grid rows (``Jc``, over the grid).
+        The contact rows are ``contact_rows``' (``_Evaluation`` appends them).
+        ``values``: the inequality values of ``Xc`` when already known (``ineq_values``). Without
+        ``jacobians`` only ``r`` (``Jx``, ``Jc`` None): a trial step needs no Jacobian unless it is accepted.
+        """
+        X, c, _ = Xc
+        values = self.ineq_values(Xc) if values is None else values
+        blocks = []
+        for arr, fits, regs, ineqs in (
+            (X, self.fits, self.regs, self.ineqs),
+            (c, [], self.grid_regs, self.grid_ineqs),
+        ):
+            rs, Js = [], []
+            for f in fits:
+                if hard and f.meta.get("soft"):  # the exact fit leaves the soft outline rows out
+                    continue
+                r, J = f(arr) if jacobians else (f.residual(arr), None)
+                rs.append(r)
+                Js.append(J)
+            if not hard:
+                for f in regs:
+                    r, J = f(arr) if jacobians else (f.residual(arr), None)
+                    rs.append(self.w * r)
+                    Js.append(None if J is None else self.w * J)
+            for f in ineqs:
+                m = self.margin[f.name] * (0.5 if hard else 1.0)
+                v = values[f.name] - m
+                act = np.flatnonzero(v < 0)
+                if len(act):  # the Jacobian only for active rows
+                    s = 1.0 if hard else self.sq
+                    rs.append(s * v[act])
+                    Js.append(s * f.rows_jacobian(arr, act, len(v)) if jacobians else None)
+            n = 2 * len(arr)
+            r = np.concatenate(rs) if rs else np.zeros(0)
+            if not jacobians:
+                blocks.append((r, None))
+                continue
+            blocks.append((r, sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n))))
+        (rx, Jx), (rc, Jc) = blocks
+        return np.concatenate([rx, rc]), Jx, Jc
+
+    def evaluate(self, p: np.ndarray, hard: bool = False) -> _Evaluation:
+        """Member ``p``: its nodes, grid, inequality violation and (merit or hard-fit) rows."""
+        if self._tiles is not None:
+            return self._evaluate_dense(p, hard)
+        Xc = self.state(p)
+        values = self.ineq_values(Xc)
+        return _Evaluation(self, p, Xc, self.ineq_violation(Xc, values), hard, values=values)
+
+    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
+        """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
+        they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
+        asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
+        S, psi = self.unpack(p)
+        c = self.fam.grid(S)
+        X, w = self.fam.nodes(S, psi, c), self._state_2(S)
+        t = self._tiles
+        assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
+        tc = tile_corners(c, t.quads)
+        rs: list[np.ndarray] = []
+        pend: list[
+            tuple[float, Any, np.ndarray | None]
+        ] = []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
+        gmin = np.inf
+        for f in self.fits:
+            if not (hard and f.meta.get("soft")):
+                r, J = f.fn(X)
+                rs.append(r)
+                pend.append((1.0, lambda J=J: J, None))
+        if not hard:
+            for f in self.regs:
+                r, J = f.fn(X)
+                rs.append(self.w * r)
+                pend.append((self.w, lambda J=J: J, None))
+        s = 1.0 if hard else self.sq
+        for f in self.ineqs:
+            r = f.residual(X)
+            gmin = min(gmin, float(r.min(initial=np.inf)))
+            v = r - self.margin[f.name] * (0.5 if hard else 1.0)
+            act = np.flatnonzero(v < 0)
+            if len(act):  # rarely
+                rs.append(s * v[act])
+                # the gradients only when asked, and of the active rows only where the family can
+                pend.append((s, lambda f=f, m=v < 0: f.stencil_where(X, m), act))
+        g = tc.cross.reshape(-1)
+        gmin = min(gmin, float(g.min(initial=np.inf)))
+        v = g - t.margin * (0.5 if hard else 1.0)
+        flat = np.flatnonzero(v < 0)
+        if len(flat):
+            rs.append(s * v[flat])
+        if self.contact is not None and self.contact.barrier:
+            gmin = min(
+                [gmin]
+                + [float(g.min(initial=np.inf)) for g in self.contact.values((c, w)).values()]
+            )
+        rk, Jk = self.contact_rows((X, c, w), hard)
+        rs.append(rk)
+        r = np.concatenate(rs) if rs else np.zeros(0)
+        rr = None
+        if (
+            not hard
+        ):  # the regulariser rows come last; their normal-matrix block is formed from the buffer
+            rr = self.w * t.rows.residual(tc)
+            r = np.concatenate([r, rr])
+
+        def dense():
+            """``(J, reg)``: the Jacobian of the rows before the regulariser's, and ``(tc, JᵀJ, Jᵀr)`` of those."""
+            Js = [sc * self._node_jacobian(stencil(), S, psi, rows) for sc, stencil, rows in pend]
+            if len(flat):
+                Js.append(s * t.convexity_jacobian(tc, flat))
+            Js.append(Jk if self._half is None else self._half.through(Jk))
+            J = np.zeros((sum(len(b) for b in Js), len(p) if self._half is None else self._half.nq))
+            o = 0
+            for Jb in Js:
+                J[o : o + len(Jb), : Jb.shape[1]] = Jb  # grid blocks have no ψ column
+                o += len(Jb)
+            return J, None if rr is None else (tc, *t.regularizer_normal(tc, rr, self.w))
+
+        return _Evaluation(self, p, (X, c, w), max(0.0, -gmin), hard, r, dense=dense)
+
+    def _node_jacobian(
+        self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``∂r/∂p`` (dense) of node rows from their stencil Jacobian ``(nodes, grads)`` (what the fit and
+        inequality families return), through ``∂x/∂p`` at those nodes only."""
+        nodes, grads = J
+        if rows is not None:
+            nodes, grads = nodes[rows], grads[rows]
+        m, k = nodes.shape
+        at = (self.fam if self._half is None else self._half).jacobian_at
+        D = at(S, psi, nodes.reshape(-1)).reshape(m, k, 2, -1)
+        return np.einsum("mkd,mkdp->mp", grads, D)
+
+    def _touched(self, Jx, p: np.ndarray) -> tuple[sparse.csr_matrix, np.ndarray]:
+        """``Jx`` on the columns of the nodes its rows touch and ``∂x/∂p`` at those nodes only: the node rows
+        (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix is 540 MB at
+        128x128."""
+        nodes = np.unique(Jx.indices // 2)
+        cols = np.stack([2 * nodes, 2 * nodes + 1], 1).reshape(-1)
+        D = self.fam.jacobian_at(*self.unpack(p), nodes).reshape(2 * len(nodes), -1)
+        return Jx[:, cols], D
+
+    def reduced_jacobian(self, Jx, Jc, p: np.ndarray) -> np.ndarray:
+        """Dense ∂r/∂p of the stacked rows."""
+        Js, D = self._touched(Jx, p)
+        return np.vstack([Js @ D, self._grid_to_p(Jc)])
+
+    def normal(self, r: np.ndarray, Jx, Jc, p: np.ndarray):
+        """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
+        nx = Jx.shape[0]
+        Hx, gx = _normal(*self._touched(Jx, p), r[:nx])
+        Hc, gc = self._grid_normal(Jc, r[nx:])
+        return Hx + Hc, gx + gc
+
+    def _grid_to_p(self, Jc) -> np.ndarray:
+        """``Jc C`` (dense): the grid rows' Jacobian with respect to ``p``."""
+        if self._C is not None:
+            return Jc @ self._C
+        Z = self.fam.Z
+        return np.hstack([Jc[:, 0::2] @ Z, Jc[:, 1::2] @ Z, np.zeros((Jc.shape[0], 1))])
+
+    def _grid_normal(self, Jc, rc: np.ndarray):
+        """``Cᵀ JcᵀJc C`` and ``Cᵀ Jcᵀ rc``. C = ∂c/∂p is block-diagonal (Z for x, Z for y, nothing for ψ):
+        above the dense threshold the matrix is assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}, a third of the
+        work of the product through a dense C (and no 2G × P matrix in memory: 138 MB at 128x128), and
+        through the family's sparse factor ``Z = E Z[core]`` (``rigid_core.py``): the dense products run
+        over the core's vertices (about a quarter of them) instead of all G grid vertices."""
+        nf = self.nf
+        P = 2 * nf + 1
+        if Jc.shape[0] * P <= DENSE_JD:
+            JC = self._grid_to_p(Jc)
+            return JC.T @ JC, JC.T @ rc
+        core = self.fam.core
+        Ja, Jb = Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()
+        # the transposes converted once each (a CSC @ CSR product converts its right factor every time)
+        AT, BT = Ja.T.tocsr(), Jb.T.tocsr()
+        H = np.zeros((P, P))
+        H[:nf, :nf] = core.quadratic(AT @ Ja)
+        H[nf : 2 * nf, nf : 2 * nf] = core.quadratic(BT @ Jb)
+        H[:nf, nf : 2 * nf] = core.quadratic(AT @ Jb)
+        H[nf : 2 * nf, :nf] = H[:nf, nf : 2 * nf].T
+        g = [core.ZcT @ (core.ET @ (JT @ rc)) for JT in (AT, BT)]
+        return H, np.concatenate([*g, [0.0]])
+
+
+def fit_miss(fits: list[Family], X: np.ndarray) -> float:
+    """Largest |fit row| relative to its target's size (both in normalised units)."""
+    return max(
+        (float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0
+    )
+
+
+# below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: 8x8 0.14 ms
+# vs 0.55 ms through the sparse JᵀJ, 32x32 15 vs 24 ms; 64x64, 1.7e7 entries, 181 vs 150 ms)
+DENSE_JD = 4e6
+
+
+def _normal(J: sparse.csr_matrix, D: np.ndarray, r: np.ndarray):
+    """Reduced Gauss-Newton matrix ``Dᵀ JᵀJ D`` and gradient ``Dᵀ Jᵀ r``."""
+    if J.shape[0] * D.shape[1] <= DENSE_JD:
+        JD = J @ D
+        return JD.T @ JD, JD.T @ r
+    H = (J.T @ J).tocsr()
+    return D.T @ (H @ D), D.T @ (J.T @ r)
+
+
+def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
+    """The ``TILE_SHAPE`` families among ``families``, rebuilt on the closed-state-1 grid of ``fam``."""
+    G = fam.Z.shape[0]
+    # only ``tiles``, ``rows`` and ``cols`` are read by these families; the hinge and fold fields still index
+    # deployed nodes and are not used on the grid
+    grid = replace(st, tiles=fam.node_vertex[st.tiles], n_nodes=G)
+    build = {"regularizer": lambda: regularizer(grid, G), "convexity": lambda: convexity(grid, G)}
+    return [build[f.name]() for f in families if f.name in TILE_SHAPE]
+
+
+def solve_reduced(
+    fam: RigidFamily,
+    st: Stencils,
+    X0: np.ndarray,
+    psi0: float,
+    families: list[Family],
+    margin: dict,
+    reg_weight: float,
+    fit_tol: float,
+    mean_edge,
+    log,
+    max_iter: int = 200,
+    miss_tol: float = 0.0,
+    S0: np.ndarray | None = None,
+    mirror: Mirror | None = None,
+    scalings: tuple[str, ...] = SCALINGS,
+):
+    """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
+    start is already a member).
+
+    ``mean_edge(X)`` gives the length unit of the 1 % "nearly exact" threshold.
+    Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
+    driven to ``fit_tol`` (absolute, normalised units), else "least-squares".
+    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``reduced_mirror.py``); the solve is then over
+    ``q``. ``scalings``: the LM scalings to start with (``SCALINGS``).
+    """
+    if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes: 0.25 s at 64x64)
+        S0, _ = fam.fit(X0, psi0)
+    p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
+    if mirror is not None:
+        p0 = symmetric_member(mirror.P, p0)
+    iters: dict = {}
+    on_grid = grid_families(fam, st, families)
+    judge: Any = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
+    if mirror is not None:
+        judge = MirroredMerit(judge, mirror.P, mirror.axis_rows)
+    search = (iters, fit_tol, mean_edge, log, max_iter, miss_tol, scalings)
+    p, X, mode = _search(judge, p0, "", *search)
+    # the closed states' contact rows only where a result has tiles of a closed state overlapping: on every
+    # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.61 % -> 3.55 %)
+    touching = judge.with_contact(ClosedContact(fam, st))
+    # from an overlapping point they are a penalty only: as a barrier, the step limit (on the largest violation
+    # of any row) let the tiles' convexity rows go as far negative as the overlap was deep (64x64 heart)
+    pushing = judge.with_contact(ClosedContact(fam, st, barrier=False))
+
+    def rank(p, X, mode) -> tuple:
+        """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit."""
+        ev = touching.evaluate(p)
+        gap = min(float(g.min(initial=np.inf)) for g in touching.contact.values(ev.Xc[1:]).values())
+        return (judge.ineq_violation(judge.state(p)) > 0, gap < 0.0, float(ev.r @ ev.r)), X, mode
+
+    best = rank(p, X, mode)
+    # from the overlapping result first, then (if that ends violating an inequality) from the start, where the
+    # rows bar the overlap on every step; the original result stays if neither is better (the CLI reports it)
+    for tag, merit, start, where in (
+        ("contact_", pushing, p, "that result (a penalty)"),
+        ("contact_start_", touching, p0, "the start (a barrier)"),
+    ):
+        if not best[0][1]:
+            break
+        log(f"closed-state tiles overlap: again with the contact rows, from {where}")
+        best = min(best, rank(*_search(merit, start, tag, *search)), key=lambda b: b[0])
+    return best[1], best[2], iters
+
+
+def _search(
+    judge,
+    p0,
+    tag: str,
+    iters: dict,
+    fit_tol,
+    mean_edge,
+    log,
+    max_iter: int,
+    miss_tol: float,
+    scalings: tuple[str, ...],
+):
+    """The stages from ``p0`` with each LM scaling in turn (``scalings``): ``(p, X, mode)`` of the best."""
+    best = None
+    for scaling in scalings:
+        p = p0
+        for n, (rho, stall_tol, cap) in enumerate(STAGES):
+            merit = judge.staged(rho, scaling if n == 0 else "marquardt")
+            if n and judge.ineq_violation(judge.state(p)) == 0.0:
+                cap = min(cap, POLISH_STEPS)
+            p, X, k = levenberg_marquardt(merit, p, min(cap, max_iter), stall_tol, log)
+            iters[f"reduced_{tag}{scaling}_rho_{rho:g}"] = k
+            fit_max = max(
+                (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
+                default=0.0,
+            )
+            if merit.fits and fit_max < 1e-2 * mean_edge(X):
+                Xh, ph, kh = hard_fit(merit, p, fit_tol)
+                iters[f"reduced_{tag}{scaling}_hard"] = kh
+                if Xh is not None:  # an exact fit: nothing left to compare
+                    return ph, Xh, "hard"
+        ev = judge.evaluate(p)
+        cost = float(ev.r @ ev.r)
+        miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
+        viol = ev.gviol
+        log(
+            f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
+            + (f", an inequality violated by {viol:.2e}" if viol > 0 else "")
+        )
+        # a result that violates an inequality (g < 0: a coarse-to-fine start can leave a reflex corner that
+        # the fit holds against any penalty; rigid 32x32 ellipse) ranks below every feasible one, and the other
+        # scaling is tried as well
+        if best is None or (viol > 0, cost) < best[0]:
+            best = ((viol > 0, cost), p, X)
+        if miss <= miss_tol and not viol > 0:
+            break
+    assert best is not None, "scalings is not empty"
+    return best[1], best[2], "least-squares"

@@ -1,0 +1,148 @@
+"""Target readers: a JSON target description, a points list, CSV and SVG files."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import InputError
+from .curve import Target
+from .shapes import SHAPES
+
+
+def from_spec(spec: dict, name: str = "target") -> Target:
+    """A target from a JSON description: ``{"shape": "ellipse", "aspect": 2}``,
+    ``{"points": [[x, y], ...], "curve": "spline" | "polyline"}`` or ``{"svg_path": "M ..."}``.
+    Optional ``"corners"``: four split parameters in [0, 1) or four points [x, y]."""
+    if not isinstance(spec, dict):
+        raise InputError(f"{name}: a target description must be a JSON object")
+    args = {
+        k: v
+        for k, v in spec.items()
+        if k not in ("shape", "name", "corners", "description", "size")
+    }
+    if "shape" in spec:
+        shape = spec["shape"]
+        if shape not in SHAPES:
+            raise InputError(
+                f"{name}: unknown shape {shape!r} (known: {', '.join(sorted(SHAPES))})"
+            )
+        try:
+            tgt = SHAPES[shape](**args)
+        except TypeError as exc:
+            raise InputError(f"{name}: bad parameters for shape {shape!r} ({exc})") from None
+    elif "points" in spec:
+        tgt = from_points(spec["points"], spec.get("curve", "polyline"), name)
+    elif "svg_path" in spec:
+        tgt = from_svg_path(spec["svg_path"], name, spec.get("curve", "polyline"))
+    else:
+        raise InputError(f"{name}: a target needs 'shape', 'points' or 'svg_path'")
+    tgt.name = spec.get("name", tgt.name if "shape" in spec else name)
+    if "corners" in spec:
+        tgt = _with_corners(tgt, spec["corners"], name)
+    tgt.source = {k: v for k, v in spec.items() if k != "points"}
+    return tgt
+
+
+def _with_corners(tgt: Target, corners, name: str) -> Target:
+    c = np.asarray(corners, dtype=float)
+    if c.shape == (4, 2):
+        u, _, _, _ = tgt.project(c)
+        c = u
+    elif c.shape != (4,):
+        raise InputError(
+            f"{name}: 'corners' must be 4 parameters or 4 points [x, y] (BL, BR, TR, TL)"
+        )
+    return Target(tgt.name, tgt.kind, tgt.points, corners=c, source=tgt.source)
+
+
+def from_points(points, curve: str = "polyline", name: str = "points") -> Target:
+    try:
+        pts = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: points must be a list of [x, y] numbers") from None
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise InputError(f"{name}: points must be pairs [x, y], got shape {pts.shape}")
+    if curve not in ("polyline", "spline"):
+        raise InputError(f"{name}: curve must be 'polyline' or 'spline', not {curve!r}")
+    return Target(name, curve, pts)
+
+
+def from_svg_path(
+    d: str, name: str = "svg", curve: str = "polyline", samples: int = 1024
+) -> Target:
+    """A target from an SVG path ``d`` string (first closed subpath), sampled densely."""
+    try:
+        from svgpathtools import parse_path
+    except ImportError as exc:  # pragma: no cover - declared dependency
+        raise InputError(f"{name}: SVG paths need the svgpathtools package ({exc})") from None
+    try:
+        path = parse_path(d)
+    except Exception as exc:  # svgpathtools raises bare errors on bad syntax
+        raise InputError(f"{name}: cannot parse the SVG path ({exc})") from None
+    subs = path.continuous_subpaths() if len(path) else []
+    if not subs:
+        raise InputError(f"{name}: the SVG path is empty")
+    sub = subs[0]
+    lengths = np.array([seg.length() for seg in sub])
+    pts = []
+    for seg, length in zip(sub, lengths):
+        if type(seg).__name__ == "Line":
+            pts.append(seg.start)
+            continue
+        k = max(2, int(round(samples * length / lengths.sum())))
+        pts.extend(seg.point(t) for t in np.linspace(0, 1, k, endpoint=False))
+    z = np.array(pts, dtype=complex)
+    xy = np.stack([z.real, -z.imag], -1)  # SVG's y axis points down
+    return Target(name, curve, xy)
+
+
+def read_svg(path: Path, curve: str = "polyline") -> Target:
+    from lxml import etree
+
+    try:
+        tree = etree.parse(str(path))
+    except (OSError, etree.XMLSyntaxError) as exc:
+        raise InputError(f"{path}: not a readable SVG file ({exc})") from None
+    paths = tree.getroot().iter("{http://www.w3.org/2000/svg}path", "path")
+    for el in paths:
+        d = el.get("d")
+        if d:
+            return from_svg_path(d, path.stem, curve)
+    raise InputError(f"{path}: the SVG has no <path d=...> element")
+
+
+def read_points_file(path: Path) -> Target:
+    """CSV (``x,y`` per line, optional header) or JSON (list of points or a target description)."""
+    try:
+        text = path.read_text("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot be read ({exc})") from None
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{path}: malformed JSON at line {exc.lineno}: {exc.msg}") from None
+        if isinstance(data, list):
+            return from_points(data, "polyline", path.stem)
+        return from_spec(data, path.stem)
+    rows: list[list[float]] = []
+    for lineno, line in enumerate(text.splitlines(), 1):
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        parts = [p for p in re.split(r"[,;\s]+", line) if p]
+        try:
+            vals = [float(p) for p in parts[:2]]
+        except ValueError:
+            if not rows:
+                continue  # a header line
+            raise InputError(f"{path}: line {lineno}: {line!r} is not 'x,y'") from None
+        if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
+            raise InputError(f"{path}: line {lineno}: expected two finite numbers x,y")
+        rows.append(vals)
+    return from_points(rows, "polyline", path.stem)

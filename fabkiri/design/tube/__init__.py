@@ -1,0 +1,1 @@
+"""Inverse design of tubes: periodic sheets whose closed states roll into cylinders."""

@@ -1,0 +1,200 @@
+"""FOLD 1.2 (https://github.com/edemaine/fold, doc/spec.md) export and import.
+
+A kirigami pattern is a FOLD mesh whose faces (tiles) share vertices (hinges)
+but no edges: every tile edge borders a cut or the outside, so every edge is a
+border edge ``"B"``. The key frame (frame 0) is the deployed state; frames 1
+and 2 (``file_frames[0]`` and ``[1]``) are closed states 1 and 2, inheriting the
+mesh and overriding ``vertices_coords`` only. In a closed state several
+vertices lie at one point; each keeps its own index. Coordinates in mm
+(``frame_unit``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import __version__, limits
+from ..errors import PatternError
+from ..pattern.kinds.tessellation import kind_of_arity
+from ..pattern.model import Pattern
+from .pattern_formats import PatternFormat, register_format
+
+FILE_SPEC = 1.2
+STATE_KEY = "fabkiri:state"  # custom frame property (a colon marks it as ours, per the spec)
+
+
+def _edges(tiles: np.ndarray) -> np.ndarray:
+    """``(nT, 2)`` tile edges in tile order, each CCW along its tile."""
+    return np.stack([tiles, np.roll(tiles, -1, axis=1)], -1).reshape(-1, 2)
+
+
+def fold_dict(pattern: Pattern) -> dict[str, Any]:
+    """The FOLD object of a pattern with its stored closed states as frames."""
+    tiles = pattern.tiles
+    edges = _edges(tiles)
+    out: dict[str, Any] = {
+        "file_spec": FILE_SPEC,
+        "file_creator": f"fabkiri {__version__}",
+        "file_title": pattern.name or "fabkiri pattern",
+        "file_classes": ["singleModel"],
+        "frame_title": "deployed",
+        "frame_classes": ["creasePattern"],
+        "frame_attributes": ["2D", "noCuts"],
+        "frame_unit": "mm",
+        STATE_KEY: "deployed",
+        "vertices_coords": pattern.nodes.tolist(),
+        "edges_vertices": edges.tolist(),
+        "edges_assignment": ["B"] * len(edges),
+        "edges_faces": [[int(f)] for f in np.repeat(np.arange(len(tiles)), tiles.shape[1])],
+        "faces_vertices": tiles.tolist(),
+    }
+    frames = []
+    for s in sorted(pattern.contracted):
+        frames.append(
+            {
+                "frame_title": f"closed state {s}",
+                "frame_classes": ["fabkiri:contracted"],
+                "frame_attributes": ["2D", "selfTouching"],
+                "frame_unit": "mm",
+                "frame_parent": 0,
+                "frame_inherit": True,
+                STATE_KEY: s,
+                "vertices_coords": pattern.node_positions(s).tolist(),
+            }
+        )
+    if frames:
+        out["file_frames"] = frames
+    return out
+
+
+def _value(v: Any, indent: str) -> str:
+    """JSON of one property: a list of rows one row per line, anything else compact."""
+    if isinstance(v, list) and v and isinstance(v[0], list):
+        return "[\n" + ",\n".join(f"{indent}  {json.dumps(r)}" for r in v) + f"\n{indent}]"
+    if isinstance(v, list) and v and isinstance(v[0], dict):
+        return (
+            "[\n" + ",\n".join(f"{indent}  {_object(r, indent + '  ')}" for r in v) + f"\n{indent}]"
+        )
+    return json.dumps(v)
+
+
+def _object(d: dict, indent: str = "") -> str:
+    body = ",\n".join(f"{indent} {json.dumps(k)}: {_value(v, indent + ' ')}" for k, v in d.items())
+    return "{\n" + body + f"\n{indent}}}"
+
+
+def fold_text(pattern: Pattern) -> str:
+    """FOLD JSON text, one row of each long array per line (deterministic bytes)."""
+    return _object(fold_dict(pattern)) + "\n"
+
+
+def _array(data: dict, key: str, source: str, width: int | None = None) -> np.ndarray:
+    if key not in data:
+        raise PatternError(f"{source}: no {key} (a fabkiri pattern needs vertices and faces)")
+    try:
+        a = np.asarray(data[key], dtype=float)
+    except (TypeError, ValueError):
+        raise PatternError(f"{source}: {key} is not a rectangular array of numbers") from None
+    if a.ndim != 2 or (width is not None and a.shape[1] != width):
+        raise PatternError(
+            f"{source}: {key} must have {width} entries per row, got shape {a.shape}"
+        )
+    return a
+
+
+def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
+    """A pattern from a FOLD object: key frame deployed, frames tagged with a closed state stored.
+
+    Frames without our state tag are read as closed states 1, 2 in order when
+    they are 2D and inherit the mesh. The faces' arity names the kind (quads, kagome triangles);
+    z must be 0.
+    """
+    if not isinstance(data, dict):
+        raise PatternError(f"{source}: expected a FOLD JSON object")
+    coords = _array(data, "vertices_coords", source)
+    if coords.shape[1] == 3:
+        if np.abs(coords[:, 2]).max(initial=0.0) > 0:
+            raise PatternError(f"{source}: vertices have z != 0; patterns are planar")
+        coords = coords[:, :2]
+    elif coords.shape[1] != 2:
+        raise PatternError(f"{source}: vertices_coords must be [x, y] or [x, y, z]")
+    faces = _array(data, "faces_vertices", source)
+    kind = kind_of_arity(faces.shape[1])
+    if kind is None:
+        raise PatternError(
+            f"{source}: faces_vertices must have 4 entries per row (quads) or 3 "
+            f"(kagome triangles), got shape {faces.shape}"
+        )
+    tiles = faces.astype(np.int64)
+    if (
+        not np.array_equal(tiles, faces)
+        or tiles.min(initial=0) < 0
+        or tiles.max(initial=0) >= len(coords)
+    ):
+        raise PatternError(f"{source}: faces_vertices must be vertex indices 0..{len(coords) - 1}")
+    contracted = {}
+    for k, frame in enumerate(data.get("file_frames", []) or [], 1):
+        if not isinstance(frame, dict) or "vertices_coords" not in frame:
+            continue
+        state = frame.get(STATE_KEY, k)
+        if state not in (1, 2) or state in contracted:
+            continue
+        xy = _array(frame, "vertices_coords", f"{source} frame {k}")[:, :2]
+        if len(xy) != len(coords):
+            raise PatternError(
+                f"{source} frame {k}: {len(xy)} vertices, the key frame has {len(coords)}"
+            )
+        contracted[int(state)] = xy[tiles]
+    return Pattern(
+        nodes=coords,
+        tiles=tiles,
+        contracted=contracted,
+        kind=kind,
+        name=str(data.get("file_title", "")) or source,
+        design={"source": {"fold": source, "file_creator": data.get("file_creator")}},
+    )
+
+
+def loads_fold(text: str, source: str = "fold") -> Pattern:
+    from ..limits import loads_json  # depth, integer and float bounds, as pattern.json
+
+    return pattern_from_fold(loads_json(text, source, PatternError), source)
+
+
+def _read_fold(path: Path, scale: float) -> Pattern:
+    """A ``.fold`` file, its coordinates times ``scale`` (mm per file unit)."""
+    from .patternfile import _read_text
+
+    pat = loads_fold(_read_text(path), str(path))
+    if scale != 1.0:
+        pat = Pattern(
+            nodes=pat.nodes * scale,
+            tiles=pat.tiles,
+            contracted={k: v * scale for k, v in pat.contracted.items()},
+            name=pat.name,
+            design=pat.design,
+        )
+    return limits.check_pattern(pat, str(path))
+
+
+def _fold_said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:
+    return (
+        f"wrote {output}: FOLD 1.2, frames deployed / closed 1 / closed 2, {pattern.n_tiles} faces"
+    )
+
+
+register_format(
+    PatternFormat(
+        "fold",
+        (".fold",),
+        read=_read_fold,
+        write=lambda pattern, state, unit: fold_text(pattern),
+        closed_states=lambda state: (1, 2),
+        every_state=True,
+        said=_fold_said,
+    )
+)

@@ -1,0 +1,405 @@
+"""Reading and writing patterns: ``pattern.json`` and Wavefront OBJ (spec §9).
+
+``pattern.json`` is validated against the JSON Schema shipped beside this
+module, then against the model's own consistency rules. OBJ files are the
+design/contracted triples written by other kirigami tools: ``v x y z`` and
+``f a// b// c// d//`` lines, 1-based, identical face lists across a set.
+Every reader raises :class:`~fabkiri.errors.PatternError` with a one-line
+message naming the file and the problem.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import limits
+from ..errors import PatternError
+from ..fileio import atomic_write, read_input
+from ..pattern import geometry
+from ..pattern.kinds.tessellation import DEFAULT_KIND, Tessellation, kind_of_arity, tessellation
+from ..pattern.model import Pattern
+from ..schemas import load_schema, schema_problem
+from ..schemas import short as _short
+from .pattern_formats import PatternFormat, register_format
+
+# OBJ faces of the kinds other than quads, for the one-line error
+_OTHER_TILES = " or kagome triangles"
+
+FORMAT = "fabkiri.pattern"
+VERSION = 1
+
+
+# ---------------------------------------------------------------- pattern.json
+
+
+def schema() -> dict[str, Any]:
+    """The JSON Schema of pattern.json version 1."""
+    return load_schema(__package__, "pattern.schema.json")
+
+
+def _schema_error(data: Any) -> str | None:
+    return schema_problem(data, schema())
+
+
+_BULK = ("nodes", "tiles")
+
+
+def _skeleton(data: dict) -> dict:
+    """The document with its bulk arrays cut to a few rows.
+
+    jsonschema walks every number (about 1 s for a 64x64 pattern); the schema
+    checks the structure on a few rows and :func:`_array_error` checks every
+    row with a fast scan.
+    """
+    out = dict(data)
+    for key in _BULK:
+        if isinstance(out.get(key), list):
+            out[key] = out[key][:4]
+    if isinstance(out.get("contracted"), dict):
+        out["contracted"] = {
+            k: (v[:4] if isinstance(v, list) else v) for k, v in out["contracted"].items()
+        }
+    return out
+
+
+def _is_num(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _array_error(data: dict, tess: Tessellation) -> str | None:
+    """Row-by-row shape and type check of the bulk arrays (what the schema says; the kind's tile arity)."""
+    n = tess.arity
+    for i, row in enumerate(data["nodes"]):
+        if not (isinstance(row, list) and len(row) == 2 and _is_num(row[0]) and _is_num(row[1])):
+            return f"nodes/{i}: {_short(row)} is not an [x, y] pair of numbers"
+    for i, row in enumerate(data["tiles"]):
+        if not (
+            isinstance(row, list)
+            and len(row) == n
+            and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in row)
+        ):
+            return f"tiles/{i}: {_short(row)} is not a {tess.tile_noun} of {n} node indices"
+    for key, rows in data.get("contracted", {}).items():
+        for i, tile in enumerate(rows):
+            if not (
+                isinstance(tile, list)
+                and len(tile) == n
+                and all(
+                    isinstance(c, list) and len(c) == 2 and _is_num(c[0]) and _is_num(c[1])
+                    for c in tile
+                )
+            ):
+                return f"contracted/{key}/{i}: {_short(tile)} is not {n} corners [x, y]"
+    return None
+
+
+def pattern_from_dict(data: Any, source: str = "pattern") -> Pattern:
+    """Build a :class:`Pattern` from parsed ``pattern.json`` content."""
+    if not isinstance(data, dict):
+        raise PatternError(f"{source}: expected a JSON object, got {type(data).__name__}")
+    if data.get("format") != FORMAT:
+        raise PatternError(
+            f"{source}: not a fabkiri pattern (format is {_short(data.get('format'))}, "
+            f"expected {FORMAT!r})"
+        )
+    if data.get("version") != VERSION:
+        raise PatternError(
+            f"{source}: unsupported pattern version {_short(data.get('version'))} "
+            f"(this fabkiri reads version {VERSION})"
+        )
+    problem = _schema_error(_skeleton(data))
+    if problem:
+        raise PatternError(f"{source}: {problem}")
+    try:
+        tess = tessellation(str(data.get("kind", DEFAULT_KIND)))
+    except PatternError as exc:
+        raise PatternError(f"{source}: {exc}") from None
+    problem = _array_error(data, tess)
+    if problem:
+        raise PatternError(f"{source}: {problem}")
+    nodes = np.asarray(data["nodes"], dtype=float)
+    tiles = np.asarray(data["tiles"], dtype=np.int64)
+    contracted = {int(k): np.asarray(v, dtype=float) for k, v in data.get("contracted", {}).items()}
+    if tiles.size and int(tiles.max()) >= len(nodes):
+        t = int(np.flatnonzero((tiles >= len(nodes)).any(1))[0])
+        raise PatternError(
+            f"{source}: tile {t} references node {int(tiles[t].max())}, outside the "
+            f"{len(nodes)} nodes"
+        )
+    problem = limits.coordinate_problem(nodes, tiles, contracted)
+    if problem:
+        raise PatternError(f"{source}: {problem}")
+    try:
+        return Pattern(
+            nodes=nodes,
+            tiles=tiles,
+            contracted=contracted,
+            parity=int(data.get("parity", 0)),
+            name=str(data.get("name", "")),
+            lattice=data.get("lattice"),
+            design=data.get("design"),
+            kind=tess.kind,
+        )
+    except PatternError as exc:
+        raise PatternError(f"{source}: {exc}") from None
+
+
+def loads(text: str, source: str = "pattern") -> Pattern:
+    if not text.strip():
+        raise PatternError(f"{source}: the file is empty")
+    data = limits.loads_json(text, source, PatternError)
+    return pattern_from_dict(data, source)
+
+
+def read_pattern(path: str | os.PathLike) -> Pattern:
+    """Read ``pattern.json`` (validated); raises :class:`PatternError`."""
+    text = _read_text(path)
+    return loads(text, str(path))
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        v = float(value)
+        return v if math.isfinite(v) else None  # JSON has no NaN; None says "not measured"
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+# one encoder for every row: json.dumps with non-default separators builds a new one per call (a third
+# of writing a 128x128 design); the same class and options, so the same text
+_ROW = json.JSONEncoder(separators=(", ", ": "))
+
+
+def _rows(arr: np.ndarray, indent: str) -> str:
+    """A JSON array with one compact row per line (diff-friendly, deterministic)."""
+    if not len(arr):
+        return "[]"
+    sep = f",\n{indent}  "
+    if arr.ndim >= 2 and arr.size:
+        # one encode of the whole array, split between its rows (where ``k - 1`` brackets close and open: a
+        # row itself nests less deep): the same text as one encode per row, at half its cost
+        k = arr.ndim - 1
+        inner = _ROW.encode(arr.tolist())[1:-1].replace(
+            "]" * k + ", " + "[" * k, "]" * k + sep + "[" * k
+        )
+    else:
+        inner = sep.join(_ROW.encode(r) for r in arr.tolist())
+    return f"[\n{indent}  {inner}\n{indent}]"
+
+
+def dumps(pattern: Pattern) -> str:
+    """``pattern.json`` text: deterministic bytes for the same pattern."""
+    head: dict[str, Any] = {"format": FORMAT, "version": VERSION, "units": "mm"}
+    if pattern.name:
+        head["name"] = pattern.name
+    if pattern.kind != DEFAULT_KIND:  # absent means quad: files from before kinds read the same
+        head["kind"] = pattern.kind
+    head["parity"] = pattern.parity
+    parts = [f'  "{k}": {json.dumps(v)}' for k, v in head.items()]
+    if pattern.lattice:
+        parts.append(f'  "lattice": {json.dumps(_jsonable(pattern.lattice), sort_keys=True)}')
+    parts.append(f'  "nodes": {_rows(pattern.nodes, "  ")}')
+    parts.append(f'  "tiles": {_rows(pattern.tiles, "  ")}')
+    if pattern.contracted:
+        states = [
+            f'    "{s}": {_rows(np.asarray(pattern.contracted[s]), "    ")}'
+            for s in sorted(pattern.contracted)
+        ]
+        parts.append('  "contracted": {\n' + ",\n".join(states) + "\n  }")
+    if pattern.design:
+        design = json.dumps(_jsonable(pattern.design), indent=2, sort_keys=True).replace(
+            "\n", "\n  "
+        )
+        parts.append(f'  "design": {design}')
+    return "{\n" + ",\n".join(parts) + "\n}\n"
+
+
+def write_pattern(pattern: Pattern, path: str | os.PathLike) -> Path:
+    return atomic_write(path, dumps(pattern))
+
+
+# ------------------------------------------------------------------------ OBJ
+
+
+def _read_text(path: str | os.PathLike) -> str:
+    limits.check_read_cost(path, error=PatternError)  # its parse alone takes ~21x the file
+    return read_input(
+        path, max_bytes=limits.MAX_PATTERN_BYTES, what="pattern file", error=PatternError
+    )
+
+
+def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
+    """Vertices ``(n, 2)`` and 0-based faces ``(T, n)`` of an OBJ text: quads, or the tiles of
+    another kind (kagome triangles), all faces of one kind."""
+    verts: list[tuple[float, float]] = []
+    faces: list[list[int]] = []
+    for lineno, raw in enumerate(text.splitlines(), 1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        tag, *rest = line.split()
+        if tag == "v":
+            try:
+                vals = [float(t) for t in rest[:3]]
+            except ValueError:
+                raise PatternError(
+                    f"{source}: line {lineno}: vertex coordinates are not numbers"
+                ) from None
+            if len(vals) < 2:
+                raise PatternError(f"{source}: line {lineno}: a vertex needs at least x and y")
+            if not all(math.isfinite(v) for v in vals):
+                raise PatternError(f"{source}: line {lineno}: non-finite vertex coordinate")
+            if len(vals) == 3 and vals[2] != 0.0:
+                raise PatternError(
+                    f"{source}: line {lineno}: vertex has z = {vals[2]}; patterns are planar (z = 0)"
+                )
+            verts.append((vals[0], vals[1]))
+        elif tag == "f":
+            idx = []
+            for tok in rest:
+                try:
+                    idx.append(int(tok.split("/", 1)[0]))
+                except ValueError:
+                    raise PatternError(
+                        f"{source}: line {lineno}: face index {tok!r} is not an integer"
+                    ) from None
+            if kind_of_arity(len(idx)) is None or (faces and len(idx) != len(faces[0])):
+                raise PatternError(
+                    f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads"
+                    f"{_OTHER_TILES} and all of one kind"
+                )
+            if any(abs(i) > limits.MAX_INT for i in idx):
+                raise PatternError(f"{source}: line {lineno}: face index beyond ±2**53")
+            faces.append(idx)
+        # other records (vn, vt, o, g, s, usemtl, ...) carry nothing a pattern needs
+    if not verts:
+        raise PatternError(f"{source}: no vertices (empty or not an OBJ file)")
+    if not faces:
+        raise PatternError(f"{source}: no faces")
+    f = np.asarray(faces, dtype=np.int64)
+    bad = (f < 1) | (f > len(verts))
+    if bad.any():
+        i = int(np.flatnonzero(bad.any(1))[0])
+        raise PatternError(
+            f"{source}: face {i} references vertex {int(f[i][bad[i]][0])}, "
+            f"but the file has vertices 1..{len(verts)}"
+        )
+    return np.asarray(verts, dtype=float), f - 1
+
+
+def read_obj(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    return parse_obj(_read_text(path), str(path))
+
+
+def import_obj(
+    design: str | os.PathLike,
+    contracted: Sequence[str | os.PathLike] = (),
+    *,
+    scale: float = 1.0,
+    name: str | None = None,
+) -> Pattern:
+    """A pattern from an OBJ design file and optionally its contracted files.
+
+    ``scale`` is millimetres per OBJ unit. Tiles listed clockwise overall are
+    reversed. The contracted files are stored as states 1 and 2 in the given
+    order; :func:`fabkiri.mechanics.contract.adopt_state_labels` then picks the
+    fold parity that makes the computed states agree with those labels.
+    """
+    if not math.isfinite(scale) or scale <= 0:
+        raise PatternError(f"scale must be a positive number of mm per OBJ unit, got {scale}")
+    if len(contracted) > 2:
+        raise PatternError(f"at most two contracted files (states 1 and 2), got {len(contracted)}")
+    verts, faces = read_obj(design)
+    flip = geometry.signed_areas(verts[faces]).sum() < 0
+    if flip:
+        faces = faces[:, ::-1]
+    states: dict[int, np.ndarray] = {}
+    for i, path in enumerate(contracted, 1):
+        cv, cf = read_obj(path)
+        if flip:
+            cf = cf[:, ::-1]
+        if cf.shape != faces.shape or not np.array_equal(cf, faces):
+            raise PatternError(f"{path}: its face list differs from the design's ({design})")
+        if len(cv) != len(verts):
+            raise PatternError(f"{path}: has {len(cv)} vertices, the design has {len(verts)}")
+        states[i] = cv[faces] * scale
+    problem = limits.coordinate_problem(verts * scale, faces, states)
+    if problem:
+        raise PatternError(f"{design}: {problem}")
+    return Pattern(
+        nodes=verts * scale,
+        tiles=faces,
+        kind=kind_of_arity(faces.shape[1]) or DEFAULT_KIND,
+        contracted=states,
+        name=name if name is not None else Path(design).stem,
+        design={
+            "source": {
+                "design": Path(design).name,
+                "contracted": [Path(p).name for p in contracted],
+                "scale_mm_per_unit": scale,
+                "reversed_tiles": bool(flip),
+            }
+        },
+    )
+
+
+def obj_text(pattern: Pattern, state: str | int = "deployed", scale: float = 1.0) -> str:
+    """OBJ of one state with the pattern's node indexing and face list.
+
+    Closed states repeat coordinates for nodes that coincide there. ``scale``
+    divides the mm coordinates (1 writes millimetres).
+    """
+    xy = pattern.node_positions(state) / scale
+    lines = [f"# {len(xy)} vertices, {pattern.n_tiles} faces"]
+    lines += [f"v {x!r} {y!r} 0.0" for x, y in xy.tolist()]
+    lines += ["f " + " ".join(f"{i + 1}//" for i in tile) for tile in pattern.tiles.tolist()]
+    return "\n".join(lines) + "\n"
+
+
+def write_obj(pattern: Pattern, path: str | os.PathLike, state: str | int = "deployed") -> Path:
+    return atomic_write(path, obj_text(pattern, state))
+
+
+def _read_json(path: Path, scale: float) -> Pattern:
+    if scale != 1.0:
+        raise PatternError(
+            f"{path}: pattern.json is in mm already; --scale is for OBJ, FOLD and PyKirigami files"
+        )
+    return read_pattern(path)
+
+
+def _obj_states(state: str) -> tuple[int, ...]:
+    return () if state == "deployed" else (int(state),)
+
+
+def _obj_said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:
+    return f"wrote {output}: state {state}, {pattern.n_tiles} faces"
+
+
+register_format(PatternFormat("json", (".json",), read=_read_json, adopt_labels=False))
+register_format(
+    PatternFormat(
+        "obj",
+        (".obj",),
+        read=lambda path, scale: import_obj(path, scale=scale),
+        write=lambda pattern, state, unit: obj_text(pattern, state),
+        closed_states=_obj_states,
+        said=_obj_said,
+    )
+)

@@ -1,0 +1,1 @@
+"""Laser cutting: a closed state to cut sheets, hinges, labels, layouts and their checked files."""

@@ -1,0 +1,1 @@
+"""What the elastic deployment path prescribes at every t: one module per driver and their registry."""

@@ -1,0 +1,1 @@
+"""The kagome (rotating-triangles) tessellation."""

@@ -1,0 +1,1 @@
+"""Periodic quad sheets: the flat pattern a tube is rolled from."""

@@ -1,0 +1,1 @@
+"""The quad (rotating-squares) tessellation."""
