@@ -19,12 +19,12 @@ if TYPE_CHECKING:
     from .targets.lookup import Target, load_target, named_targets
 
 _WHERE = {
-    "DesignRequest": ".solve",
-    "DesignResult": ".solve",
-    "design": ".solve",
-    "Target": ".targets",
-    "load_target": ".targets",
-    "named_targets": ".targets",
+    "DesignRequest": ".quad.solve",
+    "DesignResult": ".quad.solve",
+    "design": ".quad.solve",
+    "Target": ".targets.lookup",
+    "load_target": ".targets.lookup",
+    "named_targets": ".targets.lookup",
 }
 
 __all__ = ["DesignRequest", "DesignResult", "design", "Target", "load_target", "named_targets"]
