@@ -1,4 +1,4 @@
-"""Reading and writing patterns: ``pattern.json`` and Wavefront OBJ (spec §9).
+"""Reading and writing patterns: ``pattern.json`` and Wavefront OBJ (docs/algorithm.md#obj-files).
 
 ``pattern.json`` is validated against the JSON Schema shipped beside this
 module, then against the model's own consistency rules. OBJ files are the

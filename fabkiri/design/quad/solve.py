@@ -9,7 +9,7 @@ projection onto the equality manifold.
 
 Why this design (see ``docs/design-solver.md``): the reconfigurable constraint
 set has dependent and redundant rows at every feasible point (rank deficit of
-about one row per hole, spec §2.3), which breaks LICQ-based NLP solvers
+about one row per hole, docs/algorithm.md#reconfigurability), which breaks LICQ-based NLP solvers
 (IPOPT refuses it, SLSQP fails). Least-squares methods do not need independent
 rows. The solver therefore
 

@@ -1,4 +1,4 @@
-"""Material presets for laser cutting (fabrication spec §6.3).
+"""Material presets for laser cutting (docs/fabrication.md#materials).
 
 Presets live as JSON files in ``templates/materials/`` (one per material);
 :func:`load_material` reads one by name or path and :func:`Material.override`

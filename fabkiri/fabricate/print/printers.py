@@ -4,7 +4,7 @@ A preset fixes what the slicer and the machine impose: nozzle and layer
 height, the clearances that keep print-in-place parts apart (radial: in the
 plane, axial: between stacked layers), the gap between tiles, and the sizes of
 the printed parts. Every field can be overridden from the CLI. Values are
-starting points (fabrication.md §3.4); print a clearance coupon to calibrate.
+starting points (docs/fabrication.md#print-clearances); print a clearance coupon to calibrate.
 """
 
 from __future__ import annotations

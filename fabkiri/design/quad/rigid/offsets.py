@@ -1,4 +1,6 @@
-"""The rigid-deployable family with parallelogram holes (spec §2.9): one offset per hole.
+"""The rigid-deployable family with parallelogram holes: one offset per hole.
+
+Parallelogram holes: docs/algorithm.md#parallelogram-holes.
 
 Every tile turns rigidly by ``-σ_T ψ`` (σ = ±1 in a checkerboard) from closed state 1 (ψ = 0) to closed
 state 2 (ψ = π/2), as in the rhombus family (``rigid.py``), but the holes are parallelograms. Write ``y`` for
