@@ -194,7 +194,7 @@ def available_printers() -> list[str]:
 
 def printer_from_dict(data: dict[str, Any], source: str = "preset", schema: bool = True) -> Printer:
     """A printer from preset JSON; ``schema=False`` skips the JSON Schema check (shipped presets, which the tests
-    check against it: jsonschema's import alone is 0.1 CPU s of every ``design``)."""
+    check against it: jsonschema's import alone is a real share of every ``design``)."""
     if not isinstance(data, dict) or data.get("format") != "fabkiri.printer":
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise InputError(

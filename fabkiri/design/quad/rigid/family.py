@@ -142,7 +142,7 @@ class RigidFamily:
     def of_standard(cls, st: Stencils, tree: Callable[[], SpanningTree]) -> RigidFamily:
         """``build`` for the standard ``st.rows`` x ``st.cols`` lattice, kept for the last two lattices: a
         coarse-to-fine design needs each level's family twice (its own solve, then the next level's start;
-        building it is 0.7 s at 128x128). ``tree``: makes the spanning tree on a miss."""
+        building it is costly at 128x128). ``tree``: makes the spanning tree on a miss."""
         key = (st.rows, st.cols)
         fam = _STANDARD.pop(key, None) or cls.build(st, tree())
         _STANDARD[key] = fam

@@ -2,7 +2,7 @@
 
 On the dense path the merit forms the reduced Jacobian of its node and convexity rows and the regulariser's
 normal matrix ``w² Fᵀ (ΔᵀΔ) F`` over p's ``2 nf + 1`` columns, and the symmetric solver then took ``Pᵀ H P``:
-a symmetric 32x32 step cost what a free one costs (drop, 27 against 30 ms). Here every product that meets
+a symmetric 32x32 step cost about what a free one costs (drop). Here every product that meets
 p's columns goes through ``P`` first, from bases formed once per solve: the tile corners' edges ``ZE B_d``,
 ``ZB B_d`` (``reduced_tiles.TileShapeRows``) and the nodes' ``Zn B_d``, ``Y B_d`` (``rigid.jacobian_at``),
 ``B_d`` the rows of ``P`` of seed coordinate d on the columns of q it reaches (``HalfBlocks``). The

@@ -50,7 +50,7 @@ STAGES = ((1e2, 1e-3, 200), (1e4, 1e-6, 40))
 SCALINGS = ("marquardt", "levenberg")
 # the stiffer stage is there to remove inequality violations: when the first stage ends with none (g >= 0,
 # rows inside their margin allowed) its steps crawl along the fit manifold lowering the regulariser a little,
-# so it gets this many (64x64 rigid circle: 40 steps -> 10, CPU 7.4 -> 3.9 s, fit 0.2005 -> 0.1962 mm,
+# so it gets this many (64x64 rigid circle: 40 steps -> 10, about half the time, fit 0.2005 -> 0.1962 mm,
 # regulariser +1.6 %)
 POLISH_STEPS = 10
 
@@ -296,8 +296,8 @@ class _Merit:
 
     def _touched(self, Jx, p: np.ndarray) -> tuple[sparse.csr_matrix, np.ndarray]:
         """``Jx`` on the columns of the nodes its rows touch and ``∂x/∂p`` at those nodes only: the node rows
-        (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix is 540 MB at
-        128x128."""
+        (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix would not fit
+        in memory at 128x128."""
         nodes = np.unique(Jx.indices // 2)
         cols = np.stack([2 * nodes, 2 * nodes + 1], 1).reshape(-1)
         D = self.fam.jacobian_at(*self.unpack(p), nodes).reshape(2 * len(nodes), -1)
@@ -325,7 +325,7 @@ class _Merit:
     def _grid_normal(self, Jc, rc: np.ndarray):
         """``Cᵀ JcᵀJc C`` and ``Cᵀ Jcᵀ rc``. C = ∂c/∂p is block-diagonal (Z for x, Z for y, nothing for ψ):
         above the dense threshold the matrix is assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}, a third of the
-        work of the product through a dense C (and no 2G × P matrix in memory: 138 MB at 128x128), and
+        work of the product through a dense C (and no 2G × P matrix in memory), and
         through the family's sparse factor ``Z = E Z[core]`` (``rigid_core.py``): the dense products run
         over the core's vertices (about a quarter of them) instead of all G grid vertices."""
         nf = self.nf
@@ -353,8 +353,8 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
     )
 
 
-# below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: 8x8 0.14 ms
-# vs 0.55 ms through the sparse JᵀJ, 32x32 15 vs 24 ms; 64x64, 1.7e7 entries, 181 vs 150 ms)
+# below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: faster than
+# the sparse JᵀJ up to 32x32, slower at 64x64 with 1.7e7 entries)
 DENSE_JD = 4e6
 
 
@@ -403,7 +403,7 @@ def solve_reduced(
     ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``reduced_mirror.py``); the solve is then over
     ``q``. ``scalings``: the LM scalings to start with (``SCALINGS``).
     """
-    if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes: 0.25 s at 64x64)
+    if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes)
         S0, _ = fam.fit(X0, psi0)
     p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
     if mirror is not None:
