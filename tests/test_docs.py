@@ -143,6 +143,7 @@ def test_comments_carry_no_timings():
     bad = [
         f"{p.relative_to(REPO)}:{i}: {text.strip()}"
         for p in _py_files("fabkiri")
+        if TIMING.search(p.read_text())  # only files with a figure anywhere are tokenised
         for i, text in _comments_and_docstrings(p)
         if TIMING.search(text)
     ]
