@@ -6,7 +6,8 @@ Fast: reads text only. Four rules:
   between the Markdown pages, resolves to a file and to a heading (GitHub's anchor of it) or an ``<a id>``;
 - comments and docstrings in ``fabkiri/`` carry no benchmark timings or memory figures (they go stale:
   the figures live in docs/speed.md#figures-from-code-comments and in the benches' output);
-- every path docs/architecture.md names exists.
+- every path docs/architecture.md names exists, and every ``name.py`` a comment or docstring in
+  ``fabkiri/`` names is a file of the repository (module names go stale when files move).
 """
 
 from __future__ import annotations
@@ -203,3 +204,19 @@ def test_ci_runs_the_readme_test_command():
     ci = " ".join((REPO / ".ci" / "run").read_text().replace("\\\n", " ").split())
     pip, pytest = test.split(" && ")
     assert pip in ci and pytest in ci and ci.index(pip) < ci.index(pytest)
+
+
+def test_comments_name_files_that_exist():
+    """``reduced_mirror.py`` in a docstring after the file became ``rigid/mirror.py`` points nowhere: every
+    ``name.py`` (or ``folder/name.py``) in a comment or docstring of ``fabkiri/`` ends some file's path."""
+    known = ["/" + p.relative_to(REPO).as_posix() for p in _py_files(*PY_DIRS)] + [f"/{THIS.name}"]
+    named = re.compile(r"(?<![\w/.])([a-z_][\w/]*\.py)\b")  # lower case: "Boxes.py" is a project
+    bad = [
+        f"{p.relative_to(REPO)}:{i}: {name}"
+        for p in _py_files("fabkiri")
+        if named.search(p.read_text())  # only files that name one are tokenised
+        for i, text in _comments_and_docstrings(p)
+        for name in named.findall(text)
+        if not any(k.endswith("/" + name) for k in known)
+    ]
+    assert not bad, "no such file (moved?):\n" + "\n".join(bad)

@@ -150,7 +150,7 @@ class DesignResult:
 
 
 def reduced_applies(req: DesignRequest) -> bool:
-    """The closed-form rigid family covers the request (see ``rigid.py``)."""
+    """The closed-form rigid family covers the request (see ``quad/rigid/family.py``)."""
     return req.rigid and req.holes == "rhombus" and not req.contracted and req.target is not None
 
 

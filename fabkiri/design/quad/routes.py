@@ -90,13 +90,13 @@ def _reduced_from(
     prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: str, scalings=SCALINGS
 ) -> tuple:
     """``(X, mode)`` of the reduced solver from ``X0`` (or seeds ``S0``) at ``psi0``: over half the seeds
-    with ``--symmetry`` (``reduced_mirror.py``). ``tag`` prefixes its iteration counts. The second of
+    with ``--symmetry`` (``rigid/mirror.py``). ``tag`` prefixes its iteration counts. The second of
     ``scalings`` only where the first misses by more than ``FULL_ABOVE``, and on small patterns not at all
     (they get the full solver's second opinion, ``_second_opinion``, or ``_mirrored_starts``) unless a tag
     asks for it."""
     req, fam = prob.req, prob.rigid_family
     mirror = None
-    if req.symmetry:  # half the seeds (``reduced_mirror.py``)
+    if req.symmetry:  # half the seeds (``rigid/mirror.py``)
         mirror = Mirror.build(fam, req.rows, req.cols, req.symmetry)
         log(f"mirror symmetry {req.symmetry}: {mirror.P.shape[1]} reduced unknowns")
     small = req.rows * req.cols <= FULL_ALWAYS_TILES and not tag

@@ -1,7 +1,7 @@
 """The inverse-design solvers.
 
 ``--rigid`` designs with rhombus holes (no symmetry, no closed-state targets)
-are solved in the closed-form rigid family (``rigid.py``, ``reduced.py``);
+are solved in the closed-form rigid family (``rigid/family.py``, ``rigid/reduced.py``);
 ``_design`` tries the routes (``routes.py``) in order and says when the full
 solver is asked as well. The full solver (``penalty.py``):
 sparse Levenberg-Marquardt with penalty continuation and a final Gauss-Newton

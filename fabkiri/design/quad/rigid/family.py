@@ -60,7 +60,7 @@ class RigidFamily:
     Y: np.ndarray  # (V, nf) tile-translation part minus σ Zn, per node
     _core: GridCore | None = field(default=None, init=False, repr=False)
     # (Y, τ per tile, tile of each node, σ per node (V, 1)) as ``build`` made them: ``Y @ S`` per tile while ``Y`` is
-    # that array (a family made from this one with another ``Y``, e.g. ``reduced_mirror.centred``, has none)
+    # that array (a family made from this one with another ``Y``, e.g. ``mirror.centred``, has none)
     _tau: tuple | None = field(default=None, init=False, repr=False)
 
     @property
@@ -69,7 +69,7 @@ class RigidFamily:
 
     @property
     def core(self) -> GridCore:
-        """``Z = E Z[core]`` with a sparse ``E`` (``rigid_core.py``), made on first use."""
+        """``Z = E Z[core]`` with a sparse ``E`` (``core.py``), made on first use."""
         if self._core is None:
             self._core = grid_core(self.midpoint, self.Z)
         return self._core

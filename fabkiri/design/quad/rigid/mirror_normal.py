@@ -1,4 +1,4 @@
-"""The symmetric reduced solver's normal matrix formed over half the seeds (``reduced_mirror.py``).
+"""The symmetric reduced solver's normal matrix formed over half the seeds (``mirror.py``).
 
 A symmetric member is ``p = P q`` with about half as many unknowns, but forming the whole ``H = JᵀJ``
 over ``p`` and then ``Pᵀ H P`` costs what the unsymmetric solve costs per step: the symmetric 96x96 ellipse
@@ -67,14 +67,14 @@ def _through(P: sparse.csr_matrix, J: np.ndarray) -> np.ndarray:
 
 
 def half_normal(ev: Any, P: sparse.csr_matrix, halves: HalfBlocks):
-    """``(J P)ᵀ (J P)`` and ``(J P)ᵀ r`` of a reduced evaluation (``reduced_eval._Evaluation``) at ``p = P q``:
+    """``(J P)ᵀ (J P)`` and ``(J P)ᵀ r`` of a reduced evaluation (``merit._Evaluation``) at ``p = P q``:
     on the block path (large lattices) its node rows through ``D P``, its grid rows by ``HalfBlocks`` and the
     closed states' contact rows through ``P``; on the dense path ``Pᵀ (JᵀJ) P`` (a 32x32 J has 133 columns:
     as cheap either way)."""
-    from .reduced import DENSE_JD, _normal  # reduced.py builds on reduced_mirror.py
+    from .reduced import DENSE_JD, _normal  # reduced.py builds on mirror.py
 
     ev._form()
-    if ev.merit._half is not None:  # the dense path formed over q (``reduced_mirror_dense``)
+    if ev.merit._half is not None:  # the dense path formed over q (``mirror_dense``)
         return ev.normal()
     if ev._J is not None:  # a dense path over p
         H, g = ev.normal()

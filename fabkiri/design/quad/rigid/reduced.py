@@ -1,4 +1,4 @@
-"""Inverse design inside the closed-form rigid-deployable family (``rigid.py``).
+"""Inverse design inside the closed-form rigid-deployable family (``family.py``).
 
 For ``--rigid`` with rhombus holes every equality family (edge pairs of both
 closed states, hinge sums) holds identically on the family ``x(S, ψ)``, so the
@@ -67,7 +67,7 @@ class _Merit:
     and on the closed-state-1 grid ``c = Z S`` (the ``TILE_SHAPE`` families; ∂c/∂p = ``C``, constant).
     The grid block is the large one (the regulariser); its normal matrix, by coordinate blocks of ``Z``,
     costs about a third of ``Dᵀ JᵀJ D`` on the nodes (G ≈ V/2 grid vertices, no ψ column). With ``contact``
-    the closed states' contact rows follow (``reduced_contact.py``, on ``Z S`` and ``Y S``; dense, few active).
+    the closed states' contact rows follow (``contact.py``, on ``Z S`` and ``Y S``; dense, few active).
     """
 
     def __init__(
@@ -97,7 +97,7 @@ class _Merit:
         G, nf = fam.Z.shape
         # the dense path needs the grid families to be exactly the regulariser and tile convexity
         self._tiles = None
-        # a symmetric solve's dense path: Jacobians over q's columns (``reduced_mirror_dense.halved``)
+        # a symmetric solve's dense path: Jacobians over q's columns (``mirror_dense.halved``)
         self._half: Any = None
         names = [f.name for f in self.grid_regs] + [f.name for f in self.grid_ineqs]
         if names == list(TILE_SHAPE):
@@ -326,7 +326,7 @@ class _Merit:
         """``Cᵀ JcᵀJc C`` and ``Cᵀ Jcᵀ rc``. C = ∂c/∂p is block-diagonal (Z for x, Z for y, nothing for ψ):
         above the dense threshold the matrix is assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}, a third of the
         work of the product through a dense C (and no 2G × P matrix in memory), and
-        through the family's sparse factor ``Z = E Z[core]`` (``rigid_core.py``): the dense products run
+        through the family's sparse factor ``Z = E Z[core]`` (``core.py``): the dense products run
         over the core's vertices (about a quarter of them) instead of all G grid vertices."""
         nf = self.nf
         P = 2 * nf + 1
@@ -400,7 +400,7 @@ def solve_reduced(
     ``mean_edge(X)`` gives the length unit of the 1 % "nearly exact" threshold.
     Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
     driven to ``fit_tol`` (absolute, normalised units), else "least-squares".
-    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``reduced_mirror.py``); the solve is then over
+    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is then over
     ``q``. ``scalings``: the LM scalings to start with (``SCALINGS``).
     """
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes)
