@@ -22,7 +22,7 @@ from .errors import InputError
 
 MAX_PATTERN_BYTES = (
     256 * 2**20
-)  # pattern.json / OBJ / target files (a 128x128 pattern is about 9 MB)
+)  # pattern.json / OBJ / target files (a 128x128 pattern is a few megabytes)
 MAX_PRESET_BYTES = 2**20  # material and printer presets are a few hundred bytes
 MAX_JSON_DEPTH = 64  # pattern.json nests 6 deep (design reports a few more)
 MAX_INT = (
@@ -41,7 +41,7 @@ MIN_LENGTH_MM = (
 
 # (tiles, CPU seconds, peak MB above the interpreter) per command, measured by bench/limits.py on this 2-core
 # box at load 7-20 (CPU time: wall time was 3-15x more). The 64x64 full design is a lower bound: that run was
-# stopped unfinished after 458 CPU s (57 min wall) at 392 MB resident (LM still at rho=1e4, iteration 180).
+# stopped unfinished (LM still at rho=1e4, iteration 180).
 MEASURED = {
     "new": [[65536, 3.9, 190.3], [262144, 19.8, 802.7]],
     "design full": [[256, 1.8, 56.3], [1024, 7.9, 72.8], [4096, 458.0, 270.0]],
@@ -55,7 +55,7 @@ MEASURED = {
     "design tube": [[64, 3.7, 24.0], [144, 9.3, 25.7]],  # rows x cols around, at load 12-14
     # per byte of pattern.json (``new`` patterns, 474 bytes a tile): `info`, its JSON parse the peak
     # (21x the file); and per tile copy (tiles x --copies) of `export --format tube3d` (a 4x6 tube).
-    # Both from /usr/bin/time at load 12-23, MB less the 75 MB the command needs for a tiny input.
+    # Both from /usr/bin/time at load 12-23, MB less what the command needs for a tiny input.
     "read pattern": [[7759585, 3.9, 168.0], [31172116, 15.2, 717.0], [126045395, 65.2, 2750.0]],
     "export tube3d": [[768, 5.7, 227.0], [3072, 20.6, 676.0]],
 }
@@ -65,7 +65,7 @@ TESTED = {
     "design rigid": 128 * 128,
     "design kagome": 12 * 21,  # the largest lattice docs/kagome.md designs
     "design tube": 12 * 12,
-    "read pattern": 126045395,  # a 512x512 pattern, as `new` writes it (2.9 GB peak)
+    "read pattern": 126045395,  # a 512x512 pattern, as `new` writes it
     "export tube3d": 24 * 128,
 }  # largest run to the end
 LOWER_BOUND = {"design full"}  # its largest row is a lower bound, so are its extrapolations

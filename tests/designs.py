@@ -2,7 +2,7 @@
 
 :func:`reconfigurable_design` perturbs the standard pattern by a smooth random
 field and projects it back (sparse least squares) onto the reconfigurability
-constraints of both closed states (spec §2.2-§2.3: edge pairs and angle rings).
+constraints of both closed states (docs/algorithm.md#edge-pairs-and-rings).
 The result closes in both states but, generically, is not rigid-deployable:
 the kind of design the elastic deployment path is for. It is a test fixture,
 not the inverse-design solver.
@@ -22,7 +22,7 @@ def _residuals(pattern: Pattern, x: np.ndarray, rigid: bool = False) -> np.ndarr
     top = pattern.topology
     angles = geometry.corner_angles(x[top.tiles])
     out = []
-    if rigid:  # hinge sums θA + θB = π (spec §2.5)
+    if rigid:  # hinge sums θA + θB = π (docs/algorithm.md#rigid-deployability)
         A, B = top.hinge_tiles.T
         cA, cB = top.hinge_corner.T
         out.append(geometry.wrap_angle(angles[A, cA] + angles[B, cB] - np.pi) * pattern.tile_size)
@@ -85,7 +85,7 @@ def reconfigurable_design(
 
     ``amplitude`` is the size of the smooth perturbation in tile sizes before
     the projection, ``waves`` roughly its number of waves across the pattern.
-    ``rigid`` adds the hinge sums (spec §2.5): the result is then a
+    ``rigid`` adds the hinge sums (docs/algorithm.md#rigid-deployability): the result is then a
     reconfigurable, rigid-deployable design other than the standard one.
     """
     base = standard_pattern(rows, cols, tile_size=tile_size)

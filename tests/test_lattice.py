@@ -67,7 +67,8 @@ def test_standard_patterns_close_in_both_states(rows, cols):
 
 
 def test_fold_rule_matches_spec_for_lattice_holes():
-    # spec §1.4: hole (i, j) with i+j even folds at W and E in state 1, else at S and N
+    # hole (i, j) with i+j even folds at W and E in state 1, else at S and N
+    # (docs/algorithm.md#holes-and-fold-rules)
     rows, cols = 4, 5
     p = standard_pattern(rows, cols)
     top = p.topology

@@ -73,3 +73,18 @@ def test_every_package_the_tests_import_is_declared():
         ):  # dask[distributed]
             missing[m] = sorted(names)
     assert not missing, f"declare in pyproject.toml (the test extra): {missing}"
+
+
+def test_one_version_source(capsys):
+    """The version lives in ``fabkiri/__init__.py`` only: pyproject reads it, ``--version`` prints it."""
+    import fabkiri
+    import pytest
+    from fabkiri.cli.main import main
+
+    pyproject = tomllib.loads((REPO / "pyproject.toml").read_text())
+    assert "version" not in pyproject["project"]
+    assert "version" in pyproject["project"]["dynamic"]
+    assert pyproject["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "fabkiri.__version__"}
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out.strip() == f"fabkiri {fabkiri.__version__}"

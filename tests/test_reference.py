@@ -1,4 +1,4 @@
-"""Reference patterns from the additive-kirigami repository (spec §9)."""
+"""Reference patterns from the additive-kirigami repository (docs/algorithm.md#obj-files)."""
 
 from __future__ import annotations
 

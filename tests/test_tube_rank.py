@@ -59,8 +59,8 @@ def _dims_at(rows, cols, seed=None):
 )
 def test_hinge_sums_do_not_cut_the_tube_family(rows, cols, seed):
     """Adding the rigidity rows leaves the tube family's rank unchanged (same tangent space), while the
-    same rows cut the planar family (algorithm spec §2.3: 2(M+N)+5 against 2(M+N)+2) and the family with
-    only closed state 1 a cylinder (its extra direction turns the deployed seam: a cone)."""
+    same rows cut the planar family (2(M+N)+5 against 2(M+N)+2: docs/algorithm.md#reconfigurability)
+    and the family with only closed state 1 a cylinder (its extra direction turns the deployed seam: a cone)."""
     d = _dims_at(rows, cols, seed)
     for fam in d.values():
         assert fam["gap"] > 1e6  # a clear numerical rank

@@ -119,7 +119,9 @@ def test_designed_distinct_pattern_passes():
 def two_size_squares(
     rows: int, cols: int, a: float = 10.0, b: float = 6.0, psi: float = np.radians(30)
 ) -> Pattern:
-    """Rotating squares of two sizes: parallelogram holes (spec §2.9), rigid-deployable."""
+    """Rotating squares of two sizes: parallelogram holes, rigid-deployable.
+
+    (docs/algorithm.md#parallelogram-holes)"""
     tiles, _ = quad_topology(rows, cols)
     T = rows * cols
     r, c = np.divmod(np.arange(T), cols)

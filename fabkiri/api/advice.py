@@ -359,7 +359,7 @@ def _prints(
 
 def _refused(pattern: Pattern, style: str, printer, state: int, scale: float, memo: dict) -> bool:
     """Whether :func:`~fabkiri.fabricate.fabricability.print_refusal` refuses, the bed asked first: its
-    box of the closed corners needs no plan geometry (a pinned 32x32 plan past the bed: 5 s each)."""
+    box of the closed corners needs no plan geometry (a pinned plan past the bed is slow to build)."""
     try:
         top = fb._bed_scale(fb.scaled(pattern, scale), style, state, printer)
     except CheckFailed:  # it does not close: the plan checks say so

@@ -32,16 +32,16 @@ if TYPE_CHECKING:  # design.py imports this module
 
 CONTINUATION = (0.25, 0.5, 0.75, 1.0)
 # first the full limits in one jump from the design without them, with no second opinion of the full solver
-# (16x16 heart at 200 mm, acrylic-3: converged in 0.4 CPU s, and refined to 1.50 % against the steps' 22 CPU s
-# and 1.57 %); the steps only when the jump does not converge
+# (measured on a fabrication-aware heart: faster and no worse than the steps, see
+# docs/speed.md#figures-from-code-comments); the steps only when the jump does not converge
 JUMP = (1.0,)
 # the refinement stops after this many steps without a better design (16x16 heart, acrylic-3: its best in
 # step 2 of 10, the last 8 no better; star 150 mm prusa-mk4: 10 steps within 0.13 % of each other)
 PATIENCE = 3
 # from this many tiles the steps also follow a jump that converged but missed, and a continuation whose steps
 # say the limits cost the shape is not retried from the guesses (measured at 16x16; below, an 8x8 heart for
-# prusa-mk4 was kept from the standard guess, which fit the bed, and the 8x8 star6 for prusa-xl-2t paid 7.5 CPU s
-# for steps that kept the jump's 2.20 %)
+# prusa-mk4 was kept from the standard guess, which fit the bed, and the 8x8 star6 for prusa-xl-2t paid for
+# steps that kept the jump's 2.20 %)
 LIMITS_COST_TILES = 16 * 16
 # the refinement takes a miss at most this many times lower (Lawson's steps measured: 16x16 ellipse for
 # prusa-xl-2t 18.9 -> 16.8 %, 8x8 star6 2.34 -> 2.20 %, 16x16 heart for acrylic-3 1.57 -> 1.50 %)
@@ -128,7 +128,7 @@ def _jump_or_steps(req: DesignRequest, X: np.ndarray, init: str, judge, spent: f
     Hausdorff in ``trace``) when it stalls, as before the jump, or when it converged but missed the shape far
     (``_far``): then
     they say whether the limits cost it (16x16 ellipse at 200 mm, prusa-xl-2t: the jump converged at 18.9 %; in
-    the rigid family the steps met 0.5 % at half the limits and 19.0 % at all of them, about 1 CPU s each), and
+    the rigid family the steps met 0.5 % at half the limits and 19.0 % at all of them, cheaply), and
     the better of the two is kept. ``(steps, last step, last converged nodes, outcome, wall s)``."""
     step, result, last_ok, spent = _raise_limits(req, X, init, JUMP, spent)
     outcome = judge(result)
@@ -150,14 +150,14 @@ def _jump_or_steps(req: DesignRequest, X: np.ndarray, init: str, judge, spent: f
 
 def _far(req: DesignRequest, outcome) -> bool:
     """A miss over ``REFINE_WITHIN`` times the tolerance: a nearer one is the refinement's (16x16 heart for
-    acrylic-3: the jump missed at 3.0 %, the steps at 3.1 % in 12 CPU s, the refinement of the jump met 1.5 %)."""
+    acrylic-3: the jump missed at 3.0 %, the slower steps at 3.1 %, the refinement of the jump met 1.5 %)."""
     return _hausdorff(outcome[1]) > REFINE_WITHIN * req.second_opinion_above
 
 
 def _refine_worth(req: DesignRequest, held: float | None, miss: float) -> bool:
     """Whether the minimax refinement may bring a miss within the tolerance: not from 16x16 tiles when the
     limits cost the shape (``held``) and the miss is over ``REFINE_WITHIN`` times the tolerance (the 16x16
-    ellipse at 200 mm, prusa-xl-2t: 10 steps, about 40 CPU s, from 18.9 % to 16.8 %)."""
+    ellipse at 200 mm, prusa-xl-2t: 10 costly steps from 18.9 % to 16.8 %)."""
     far = miss > REFINE_WITHIN * req.second_opinion_above
     return not (held is not None and far and req.rows * req.cols >= LIMITS_COST_TILES)
 
@@ -181,7 +181,7 @@ def _free_design(
     """The design without the rows, by the front door's guesses in turn; where the first of them (conformal)
     cannot be built (a non-convex target) and a non-rigid request may be answered in the rigid family, that
     family alone first (the steps are taken in it; 16x16 heart at 200 mm: the same design as the guesses in
-    turn, which ended there, in 9.8 of their 20 CPU s), the guesses only when it misses the shape.
+    turn, which ended there, in about half their time), the guesses only when it misses the shape.
     Returns the valid design (or None) and the wall seconds spent."""
     free = replace(
         request,

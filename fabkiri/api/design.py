@@ -53,8 +53,8 @@ from .shape_limits import annotate as annotate_misses
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
 # from 32x32 tiles a rigid design starts coarse to fine (the coarse closed-state grid resampled inside the
 # rigid family): from the standard pattern the rigid family's LM stalls against the inequalities (128x128
-# circle: 11 % of the size off, coarse 0.23 %; 64x64 heart 21.6 mm in 204 s, coarse 0.098 mm in 12 s; 64x64
-# ellipse 7.3 mm, coarse 0.019 mm in 30 s). Below 32x32 it was mixed (16x16: heart better, ellipse, star,
+# circle: 11 % of the size off, coarse 0.23 %; 64x64 heart 21.6 mm, coarse 0.098 mm and much faster; 64x64
+# ellipse 7.3 mm, coarse 0.019 mm). Below 32x32 it was mixed (16x16: heart better, ellipse, star,
 # rectangle and a points file worse), so the usual order stays there.
 BIG_RIGID_INITS = ("coarse", "rescaled")
 BIG_TILES = 32 * 32
@@ -193,7 +193,7 @@ def design_pattern(
         note = limits_note(cont) if cont and req.rows * req.cols >= LIMITS_COST_TILES else ""
         # where the limits cost the shape, the guesses (the full limits from the start) fare no better: 16x16
         # heart at 200 mm, prusa-mk4: continuation 22.1 %, then rescaled 22.7 %, standard 40.2 %, rigid 22.7 %,
-        # all unconverged, in 168 of its 389 wall s (load about 10)
+        # all unconverged, in about 40 % of the design's time
         best = cont if note else None
         say(
             f"fabkiri: the continuation in the fabrication limits misses{note}; "
@@ -463,7 +463,7 @@ def _good(outcome) -> bool:
 def _continuation_first(request: PatternRequest, req: DesignRequest, contracted: dict) -> bool:
     """Whether the continuation comes before the guesses: a fabrication-aware deployed-target design below
     BIG_TILES with no --init (16x16 heart at 200 mm, acrylic-3: every guess with the rows walled in, 16 %, after
-    35 of its 70 CPU s; the continuation met the shape)."""
+    half the design's time; the continuation met the shape)."""
     return not request.init and _continuation_applies(req, None, contracted)
 
 

@@ -56,7 +56,7 @@ FINISH_ABOVE = 0.004
 # left 0.71 % in its tips-only basin, below the 1 % that asks for the refitted redesign, at 32x32 0.40 %)
 THRESHOLD_TILES = 32
 # the finish's gate scales down to this share and no further: below it the finish's 2-6 designs bought at most
-# about 0.1 % of the size, and the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) would pay them (64x64: 4 -> 27 CPU s)
+# about 0.1 % of the size, and the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) would pay them dearly
 FINISH_FLOOR = 0.0025
 
 

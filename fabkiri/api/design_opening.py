@@ -69,7 +69,7 @@ def refine_to_floor(
     (:func:`fabkiri.design.core.refine.refine_minimax`), in the rigid family where the request may be answered
     by it (its steps are reduced solves). Returns the refined ``_check`` outcome when it ranks better than
     ``best``, else None; the attempt is recorded either way. Measured: star at 150 mm, 16x16, --min-opening
-    0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps, 4.6 CPU s)."""
+    0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps)."""
     if not req.min_opening or req.target is None or not best[3] or _shape_met(best[1]):
         return None
     say(

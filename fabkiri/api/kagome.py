@@ -392,8 +392,8 @@ def choose_lattice(
     tiles: tuple[int, int] | None, target: Target, trim: bool = False
 ) -> tuple[int, int, dict]:
     """``(rows, cols, aspect report)``: the lattice asked for, or, when none is (``tiles`` None), the one
-    whose aspect suits the target (``kagome_aspect.suggest``; with ``trim`` the block whose cut to the
-    outline keeps about as many tiles, ``kagome_trim.block_for``). The report's ``note`` is the one line
+    whose aspect suits the target (``design.kagome.aspect.suggest``; with ``trim`` the block whose cut to the
+    outline keeps about as many tiles, ``design.kagome.trim.block_for``). The report's ``note`` is the one line
     to tell the user: the lattice chosen, or a warning when the asked one does not suit the target's
     aspect and a lattice of about as many tiles does (None otherwise)."""
     if tiles is None:

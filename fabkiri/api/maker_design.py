@@ -46,9 +46,9 @@ Checks = Mapping[str, Sequence[StepFn]]  # by process: the steps an alternative 
 # a miss up to this many times the tolerance is retried with other tile counts (star6 at 150 mm on
 # prusa-mk4: 3.85 % at 6x6 against 3 %); beyond it the outline's own limit is at work (letter L: 8-19 %)
 RETRY_WITHIN = 2.0
-MAX_RETRIES = 2  # each retry is a whole design: 5-75 CPU s at the counts make chooses (issue 32)
+MAX_RETRIES = 2  # each retry is a whole design at the counts make chooses (issue 32)
 # and no further retry once they cost this many times the first design (star6 on prusa-mk4 at 150 mm:
-# 6x6 35 CPU s, 7x7 74 s, 8x8 52 s, all three missed)
+# the 7x7 retry cost twice the 6x6 design, and all three counts missed)
 RETRY_BUDGET = 2.0
 # larger sizes (times the asked one) tried for a named alternative when tiles make chose miss the shape
 SIZE_STEPS = (1.25, 1.5, 2.0)

@@ -1,8 +1,8 @@
 """``make``'s refusal before any design: tiles too narrow for the print style, and the option that works.
 
 A print-aware design whose tiles are narrower than the print style's own minimum tile
-(:mod:`.print_tiles`) cannot hold its strips (or pins) apart; at 16x16 the continuation took about a
-minute to find that out (heart at 200 mm on prusa-mk4: 57 CPU s, "the limits cost the shape"). ``make``
+(:mod:`.print_tiles`) cannot hold its strips (or pins) apart; at 16x16 the continuation took a whole
+design to find that out (heart at 200 mm on prusa-mk4: "the limits cost the shape"). ``make``
 now refuses such a request before designing it (exit 1, as a design that misses), and names what works,
 run before it is named (design, print and deploy on a scratch result, nothing written), cheapest and
 likeliest first, at most :data:`~.maker_options.MAX_RUNS` designs in all:

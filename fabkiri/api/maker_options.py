@@ -44,7 +44,7 @@ from .print_tiles import least_tile_mm
 
 Progress = Callable[[str], None]
 COUNTS = tuple(sorted({*STANDARD_TILES, 10}))  # N x N counts an option may name with --tiles
-MAX_RUNS = 2  # designs run for options after the retries and the larger size (each 5-75 CPU s)
+MAX_RUNS = 2  # designs run for options after the retries and the larger size (each a whole design)
 BUDGET = 3.0  # no new option's design once they cost this many times the first design's CPU s
 # group, process, material, hinge, printer, style
 Setting = tuple[int, str, str | None, str | None, str | None, str | None]

@@ -19,7 +19,7 @@ from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.targets.curve import Target
 
 STANDARD_TILES = (16, 12, 8, 6, 4)  # N x N, largest first
-# a fabrication-aware 16x16 design costs 70-200 CPU s (issue 32); 12x12 circle/star at 150 mm: 4-10 s
+# a fabrication-aware 16x16 design costs many times a 12x12 one (issue 32)
 MAX_AUTO = 12
 # the estimated tile width must be this many times the process's thinnest feature: tiles vary in size
 # across a design (thinner where the outline turns), so the mean width needs room above the minimum

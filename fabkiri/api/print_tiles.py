@@ -2,8 +2,8 @@
 
 In the strip styles a tile carries a strip at each of its hinge corners, and two strips on one face keep
 the radial clearance; with pins, two pivots keep two ears apart. Below some tile width no design can
-meet that, and a print-aware design at such a count paid a minute of continuation before it said so
-(16x16 heart at 200 mm on prusa-mk4: 57 CPU s and "the limits cost the shape").
+meet that, and a print-aware design at such a count paid a whole continuation before it said so
+(16x16 heart at 200 mm on prusa-mk4: "the limits cost the shape").
 
 :func:`least_tile_mm` is print's own minimum tile for a preset and style: its closed-form bound
 (:func:`fabkiri.fabricate.fabricability.print_bound`, the one ``--scale auto`` starts from) on the

@@ -44,7 +44,7 @@ COMMANDS = [
     "fabkiri.cli.make_cmd",
 ]
 # command -> (module, help): what `fabkiri --help` and the dispatch need without importing the modules
-# (importing all of them pulls in scipy, shapely, ezdxf, trimesh: ~1 s of start-up on this box)
+# (importing all of them pulls in scipy, shapely, ezdxf, trimesh: most of a command's start-up)
 SUMMARIES = {
     "new": (
         "fabkiri.cli.pattern_cmds",
@@ -114,7 +114,7 @@ SUMMARIES = {
 
 # numpy subpackages no command uses but scipy's array-API shim imports (``from numpy import *`` in
 # scipy._lib.array_api_compat.numpy): numpy.f2py alone pulls charset_normalizer, numpy.testing unittest, and
-# numpy.polynomial is large; about 0.06 CPU s of every command's start-up. They are bound lazily instead: loaded
+# numpy.polynomial is large; a share of every command's start-up. They are bound lazily instead: loaded
 # on first attribute access. (Not numpy.random, which scipy._lib._util uses as it loads, nor numpy.ma, which
 # every np.unique call asks.)
 DEFERRED = ("numpy.f2py", "numpy.testing", "numpy.polynomial")
@@ -147,7 +147,7 @@ def defer_unused_numpy() -> list[str]:
 
 # commands whose work is vector-sized BLAS (``design()`` already holds BLAS to one thread, see
 # design/solve.single_thread_blas): OpenBLAS's thread pools (numpy's and scipy's) then only cost their start and
-# their spinning workers, about 0.08 CPU s of an 8x8 design's process and more wall time on a loaded box.
+# their spinning workers, a measurable share of a small design's process and more wall time on a loaded box.
 SINGLE_THREAD_BLAS = ("design",)
 BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
 
@@ -170,7 +170,7 @@ def modules_frozen(fresh: bool):
     """Load a command's modules with the cyclic garbage collector off, then freeze what they made.
 
     Loading numpy, scipy and the command's modules allocates a few hundred thousand long-lived objects, and
-    the collector walked them all again and again (about 0.03 CPU s of an 8x8 design's process, most of it
+    the collector walked them all again and again (measurable in a small design's process, most of it
     one full collection); frozen (``gc.freeze``), later collections skip them. Only in a ``fresh`` process
     (numpy not yet loaded): a library caller's heap is left alone."""
     if not fresh:

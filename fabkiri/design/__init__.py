@@ -1,4 +1,6 @@
-"""Inverse design of reconfigurable quad kirigami (algorithm spec §2-§5).
+"""Inverse design of reconfigurable quad kirigami.
+
+The method: docs/algorithm.md#constraints through docs/algorithm.md#solver.
 
 ``design(DesignRequest(rows, cols, target, rigid=...))`` returns the deployed
 pattern and the solver report; contraction into the closed states is left to

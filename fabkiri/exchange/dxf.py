@@ -5,7 +5,7 @@ the creation/update dates and GUIDs it would otherwise draw from the clock and
 the random generator; entity handles are sequential.
 
 Bulk strokes: a 64x64 sheet engraves tens of thousands of label strokes, and
-ezdxf spends ~80 µs building and exporting each LWPOLYLINE object. The
+ezdxf is slow building and exporting each LWPOLYLINE object. The
 ``ENGRAVE`` layer is therefore written in bulk: ezdxf exports one prototype
 LWPOLYLINE of the document, and every stroke is that prototype's tag text with
 its own handle (the tag codec :mod:`fabkiri.exchange.dxfcodec`; reserved from the document's handle generator, so

@@ -1,7 +1,7 @@
 """The DXF tag codec: fabkiri's canonical LWPOLYLINE entity, written and read as raw tags.
 
 A DXF is a flat list of (group code, value) line pairs. ezdxf writes and fully reads every file,
-but building an ezdxf object per entity costs ~80 µs, and a large sheet engraves tens of thousands
+but building an ezdxf object per entity is slow, and a large sheet engraves tens of thousands
 of label strokes. So the strokes are written, and read back, as text in one canonical form:
 
     0 LWPOLYLINE / 5 handle / 330 owner / 100 AcDbEntity / 8 layer / 100 AcDbPolyline /

@@ -1,4 +1,4 @@
-"""Reading and writing patterns: ``pattern.json`` and Wavefront OBJ (spec §9).
+"""Reading and writing patterns: ``pattern.json`` and Wavefront OBJ (docs/algorithm.md#obj-files).
 
 ``pattern.json`` is validated against the JSON Schema shipped beside this
 module, then against the model's own consistency rules. OBJ files are the
@@ -54,7 +54,7 @@ _BULK = ("nodes", "tiles")
 def _skeleton(data: dict) -> dict:
     """The document with its bulk arrays cut to a few rows.
 
-    jsonschema walks every number (about 1 s for a 64x64 pattern); the schema
+    jsonschema walks every number (slow for a large pattern); the schema
     checks the structure on a few rows and :func:`_array_error` checks every
     row with a fast scan.
     """

@@ -402,7 +402,7 @@ def print_bound(
 
 def closest_pair(points: np.ndarray) -> float:
     """The smallest distance between two of ``points`` (distinct rows), by a KD-tree: O(n log n) where the
-    pairwise matrix was O(n²) memory (1 GB of pivots at 64x64 tiles, 16 GB at 128x128)."""
+    pairwise matrix was O(n²) memory (too much for large patterns)."""
     from ..kdtree import KDTree
 
     d, _ = KDTree(points).query(points, k=2)

@@ -134,8 +134,8 @@ def _pad_areas(
     area = np.zeros(len(tiles))
     b, t = band[ok], shrunk[ok]
     if geometry.strictly_convex(b).all() and geometry.strictly_convex(t).all():
-        # convex pads (a design's tiles are convex): clipped in numpy, for every pad at once (GEOS took
-        # 0.6 s a call at 128x128); a concave or bow-tie tile keeps GEOS, and its refusal
+        # convex pads (a design's tiles are convex): clipped in numpy, for every pad at once (GEOS was
+        # slow at 128x128); a concave or bow-tie tile keeps GEOS, and its refusal
         area[ok] = geometry.clipped_areas(t, b)
     else:
         area[ok] = shapely.area(shapely.intersection(shapely.polygons(b), shapely.polygons(t)))

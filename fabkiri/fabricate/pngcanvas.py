@@ -1,7 +1,7 @@
 """The cut pictures' canvas (sheet preview, assembly map), drawn with Pillow.
 
 Not matplotlib: ``cut`` writes both pictures by default, and importing matplotlib and laying out its figure
-cost about 0.6 CPU s of an 8x8 cut, half its process. The figures keep matplotlib's geometry: a figure of
+cost half of a small cut's process. The figures keep matplotlib's geometry: a figure of
 so many pixels, axes boxes as fractions of it, data limits shown at one scale in x and y (centred in the
 box, as ``set_aspect("equal")`` does), line widths and font sizes in points at ``DPI``. Drawn at
 ``SUPERSAMPLE`` times the size and reduced, so edges come out anti-aliased (1x above ``SUPERSAMPLE_MAX_PX``).

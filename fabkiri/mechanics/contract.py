@@ -1,4 +1,6 @@
-"""The two closed states of a pattern by breadth-first rigid placement (spec §6).
+"""The two closed states of a pattern by breadth-first rigid placement.
+
+The method: docs/algorithm.md#contraction.
 
 Every tile is moved by a proper rigid motion ``Y = Rot(φ_T) x + t_T``. Going from
 a placed tile A to its neighbour B through hinge h, B turns about h until the

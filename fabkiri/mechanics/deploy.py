@@ -1,4 +1,6 @@
-"""Deployment paths from closed state 1 through the deployed state to closed state 2 (spec §7).
+"""Deployment paths from closed state 1 through the deployed state to closed state 2.
+
+The method: docs/algorithm.md#deployment.
 
 The path parameter ``t`` runs over [0, 1]: ``t = 0`` is closed state 1, ``t = ½``
 the deployed (design) state and ``t = 1`` closed state 2. The three states are

@@ -1,4 +1,6 @@
-"""The elastic deployment path of a reconfigurable design that is not rigid-deployable (spec §7).
+"""The elastic deployment path of a reconfigurable design that is not rigid-deployable.
+
+The method: docs/algorithm.md#elastic-path.
 
 
 **Elastic path** (every other reconfigurable design; a reconstruction [R] of the

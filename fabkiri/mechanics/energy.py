@@ -1,4 +1,4 @@
-"""Spring model of a kirigami pattern (algorithm spec §7, [P] Eq. 6).
+"""Spring model of a kirigami pattern (docs/algorithm.md#spring-energy).
 
 Every quad carries six springs: its four edges and its two diagonals (a kagome triangle its
 three edges: enough to keep any tile rigid). Their

@@ -20,7 +20,7 @@ from ..pattern.topology import STATES
 from .contract import contract
 from .tube import tube_report
 
-DEFAULT_TOL = 1e-9  # relative to the mean tile edge (spec §10, analytic tier)
+DEFAULT_TOL = 1e-9  # of the mean tile edge (exported tier: docs/algorithm.md#tolerance-tiers)
 DEFAULT_TOL_RAD = 1e-9
 
 

@@ -1,4 +1,4 @@
-"""The rigid deployment path of a rigid-deployable design (spec §7).
+"""The rigid deployment path of a rigid-deployable design (docs/algorithm.md#rigid-path).
 
 **Rigid path** (rigid-deployable designs, every hinge sum θ_A + θ_B = π). Every
 tile turns rigidly from state 1 by ``ε_T ω``, ``ε_T = ±1`` a checkerboard over

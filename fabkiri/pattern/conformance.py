@@ -136,7 +136,7 @@ def boundary_tip_order(
     The outer boundary of a deployed pattern is every tile edge that is not a hole edge; with CCW tiles
     it is one cycle traversed in the tiles' own edge direction, so following it from a tip visits every
     tip in order. The last few answers are kept: a design asks for the same topology's order in its
-    solve, its report and its preview (a Python walk, ~0.3 s each at 128x128 tiles).
+    solve, its report and its preview (a Python walk, slow at 128x128 tiles).
     """
     arrays = [np.asarray(x) for x in (tiles, hole_nodes, hole_tiles, free_nodes)]
     key = tuple((x.shape, x.dtype.str, x.tobytes()) for x in arrays)

@@ -1,4 +1,4 @@
-"""Constraint residuals of a deployed pattern, evaluated (spec §2.2-§2.5).
+"""Constraint residuals of a deployed pattern, evaluated (docs/algorithm.md#constraints).
 
 These are the quantities the inverse design drives to zero, measured here for
 reporting: edge pairs and angle rings per closed state, hinge sums for rigid

@@ -219,7 +219,7 @@ def strip_faces(pairs: np.ndarray, n_hinges: int) -> np.ndarray:
     top (the two-colouring ``fabkiri.fabricate.cut.hinges.assign_faces`` makes from the placed states).
 
     The last few answers are kept: a design's fabricability summary asks the same for every printer preset
-    (a breadth-first pass in Python, 4 of 16 ms of an 8x8 summary each)."""
+    (a breadth-first pass in Python, a quarter of an 8x8 summary each)."""
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     return _strip_faces(pairs.tobytes(), int(n_hinges)).copy()
 

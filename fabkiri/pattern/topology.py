@@ -1,6 +1,6 @@
 """Topology of a kirigami pattern, derived once from its tiles.
 
-Vocabulary (algorithm spec §1-§2):
+Vocabulary (docs/algorithm.md#lattice):
 
 * a **hinge** is a node shared by exactly two tiles ``A < B``;
 * a **free corner** is a node used by one tile (it lies on the outer boundary);

@@ -5,7 +5,7 @@ One panel for the deployed state over ``--target`` and one per closed state with
 PNG bytes (no timestamps in the metadata).
 
 Drawn with Pillow, not matplotlib: ``fabkiri design`` writes this picture by default, and importing
-matplotlib and laying out its axes cost about 0.6 CPU s, three times an 8x8 design's solve. The picture is
+matplotlib and laying out its axes cost three times an 8x8 design's solve. The picture is
 drawn at ``SUPERSAMPLE`` times its size and reduced, so edges come out anti-aliased; a scale bar stands in
 for the axes.
 """
@@ -106,7 +106,7 @@ class _Canvas(Frame):
 
 
 def _tiles(cv: _Canvas, tiles: np.ndarray) -> None:
-    """Grey tiles with dark edges (one polygon each; a 128x128 pattern is 16k calls, ~0.1 s)."""
+    """Grey tiles with dark edges (one polygon each; a 128x128 pattern is 16k calls)."""
     w = max(1, round(WIDTHS["edge"] * SUPERSAMPLE))
     for quad in cv.px(tiles.reshape(-1, 2)).reshape(tiles.shape).tolist():
         cv.draw.polygon(

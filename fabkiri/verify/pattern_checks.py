@@ -1,4 +1,6 @@
-"""Geometric proof that a pattern closes into both compact states (spec §6, §10).
+"""Geometric proof that a pattern closes into both compact states.
+
+The method: docs/algorithm.md#contraction and docs/algorithm.md#verifier-checks.
 
 :func:`verify_pattern` measures, with named tolerances:
 
@@ -142,7 +144,7 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
 
 
 def topology_checks(pattern: Pattern) -> list[Check]:
-    """Counts of spec §10.2: one hole per independent cycle of the tile graph,
+    """Counts (topology in docs/algorithm.md#verifier-checks): one hole per independent cycle of the tile graph,
     every hinge a corner of one or two holes (or as many hole-less hinges as the kind's lattice has)."""
     top = pattern.topology
     tess = tessellation(pattern.kind)
@@ -192,8 +194,8 @@ def verify_pattern(
 ) -> Report:
     """Verify that ``pattern`` closes into both compact states.
 
-    ``tol_mm`` None uses the relative tier of spec §10 (1e-9 of the mean tile
-    edge for exported data, 1e-5 for optimiser output). ``rigid`` overrides
+    ``tol_mm`` None uses the relative tier (docs/algorithm.md#tolerance-tiers: 1e-9 of the mean
+    tile edge for exported data, 1e-5 for optimiser output). ``rigid`` overrides
     whether rigid deployability is claimed (default: :func:`rigid_claimed`);
     when claimed, the rigid path is sampled at ``path_steps`` + 1 angles. ``shape_tol``: the largest
     Hausdorff distance of an outline to its stored target (:func:`target_checks`).

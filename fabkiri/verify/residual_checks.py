@@ -35,8 +35,8 @@ def rigid_claimed(pattern: Pattern) -> bool:
 def _parallelograms(pattern: Pattern, tol: Tolerances) -> tuple[np.ndarray, bool]:
     """Per hole, how far it is from a parallelogram (mm), and whether every hole is a rhombus.
 
-    Parallelogram holes (spec §2.9) are a quad fact; other kinds' holes get ``inf`` (their fold
-    pairs must be equal).
+    Parallelogram holes are a quad fact (docs/algorithm.md#parallelogram-holes); other kinds' holes
+    get ``inf`` (their fold pairs must be equal).
     """
     top = pattern.topology
     x = pattern.nodes
@@ -62,7 +62,8 @@ def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Ch
         g = f"state {s}"
         r = state_residuals(pattern, s)
         fold = top.fold(s)
-        # a hole's fold pair may differ when the hole is a parallelogram (spec §2.9)
+        # a hole's fold pair may differ when the hole is a parallelogram
+        # (docs/algorithm.md#parallelogram-holes)
         res = r.edge_pairs.copy()
         gap_face = top.gap_face[np.arange(top.n_hinges), fold.fold_gap]
         in_hole = gap_face >= 0
@@ -127,7 +128,9 @@ def residual_checks(pattern: Pattern, tol: Tolerances, claimed: bool) -> list[Ch
 def rigid_path(
     pattern: Pattern, Y1: np.ndarray, omegas: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Tile corners along the rigid path from state 1 (spec §7), and hinge mismatch per step.
+    """Tile corners along the rigid path from state 1, and hinge mismatch per step.
+
+    The path: docs/algorithm.md#rigid-path.
 
     Tiles turn by ±ω (checkerboard, sign from the deployed state); translations
     are placed breadth-first so each tree hinge's two copies coincide; the

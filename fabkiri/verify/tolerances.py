@@ -1,4 +1,6 @@
-"""The verifier's tolerances: the relative tiers of spec §10 or one fabrication tolerance in mm.
+"""The verifier's tolerances: the relative tiers or one fabrication tolerance in mm.
+
+The tiers: docs/algorithm.md#tolerance-tiers.
 
 Every pattern check compares a measured figure with a :class:`Tolerances`; angle residuals go through
 :func:`angle_check`, in rad (exact tiers) or as the displacement they cause at the tile size.
@@ -13,7 +15,7 @@ import numpy as np
 from ..pattern.model import Pattern
 from .report import Check, measured
 
-TIER_EXPORTED = 1e-9  # analytic or exported data, relative to the mean tile edge (spec §10)
+TIER_EXPORTED = 1e-9  # analytic or exported data, relative to the mean tile edge (the tiers above)
 TIER_OPTIMISED = 1e-5  # optimiser output
 MIN_EDGE_REL = 1e-3
 MIN_ANGLE_RAD = 1e-3
@@ -94,7 +96,7 @@ def angle_check(
 
 
 def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1e-6) -> Tolerances:
-    """Resolve the tolerances: explicit mm (angles as displacement at the tile size), or the relative tier of spec §10."""
+    """Resolve the tolerances: explicit mm (angles as displacement at the tile size), or a relative tier."""
     size = pattern.tile_size
     if tol_mm is not None:
         return fabrication_tolerances(float(tol_mm), size)
@@ -108,7 +110,7 @@ def tolerances(pattern: Pattern, tol_mm: float | None = None, tol_rad: float = 1
 
 
 def tier_name(optimised: bool) -> str:
-    """The relative tier's name (spec §10): optimiser output (1e-5) or exported data (1e-9)."""
+    """The relative tier's name: optimiser output (1e-5) or exported data (1e-9)."""
     return "optimiser output" if optimised else "exported data"
 
 

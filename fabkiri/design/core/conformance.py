@@ -38,7 +38,7 @@ def deployed(nodes: np.ndarray, topology, target: Target) -> dict:
     """Conformance of the deployed boundary tips (in boundary order) to ``target``.
 
     The last answer is kept: the solver's second-opinion test and the design's report measure the same
-    nodes against the same target (an 8x8 design spent 25 ms, a tenth of its work, measuring twice)."""
+    nodes against the same target (an 8x8 design spent a tenth of its work measuring twice)."""
     nodes = np.asarray(nodes, float)
     key = (
         nodes.shape,

@@ -6,7 +6,7 @@ second as parameters:
 
 - the full solver (``penalty.py``) steps over all node coordinates with the sparse normal
   equations (``normal._Normal``, SuperLU + CG);
-- the rigid-family solver (``reduced_steps.py``) steps over the family's closed-form coordinates
+- the rigid-family solver (``quad/rigid/steps.py``) steps over the family's closed-form coordinates
   with the dense reduced normal matrix;
 - the closed-state outline solvers (``outline.py``, ``offset_outline.py``) step over the square
   rows' solution space, dense as well.

@@ -8,7 +8,7 @@ cusp. Lawson's algorithm turns a least-squares solver into a minimax one: after 
 squared weight is multiplied by its own unweighted miss, so the rows that miss most count more in the next
 solve. Each step is warm-started from the last converged design; the best design by Hausdorff distance is
 kept (the iteration is not monotone: a weight that grows too much moves the worst point elsewhere).
-Measured on that heart (rigid family, acrylic-3): 3.00 % -> 1.52 % in 10 steps, 10 CPU s (a p-norm
+Measured on that heart (rigid family, acrylic-3): 3.00 % -> 1.52 % in 10 steps (a p-norm
 reweighting without memory, p = 4 to 12, oscillated: 2.1-4.5 %).
 """
 

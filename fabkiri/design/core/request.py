@@ -20,17 +20,17 @@ from ..targets.lookup import Target
 SOLVERS = ("auto", "reduced", "full")
 # from this many tiles a non-rigid rhombus design (no closed-state target) is solved as the rigid
 # one, coarse to fine: a rigid member satisfies every non-rigid equality, and there the full solver over all
-# nodes was slower and mostly worse (API, rescaled, 100 mm: 32x32 heart 90 s CPU, Hausdorff 7.1 % of the
-# target's diagonal; 32x32 ellipse 84 s CPU and unconverged, 11.8 %; rigid family: 9.5 s / 7.5 %, 3.9 s / 1.2 %)
+# nodes was slower and mostly worse (API, rescaled, 100 mm: 32x32 heart Hausdorff 7.1 % of the target's
+# diagonal; 32x32 ellipse unconverged, 11.8 %; rigid family: 7.5 %, 1.2 %, in a tenth of the time)
 VIA_RIGID_TILES = 32 * 32
 # below that, the CLI's last guess for a non-rigid design that missed: answered by the rigid family as well
 # (leaf SVG 16x16: conformal unconverged, rescaled overlapping, standard 22.6 % off; the rigid family 1 %)
 VIA_RIGID_INIT = "rigid"
 # from this many tiles (below VIA_RIGID_TILES) a non-rigid rhombus design tries the rigid family first, from
 # each of RIGID_FIRST_INITS, reduced only, and keeps the member with the closest outline if it is within the
-# shape tolerance; otherwise the full solver runs as before. Measured (design(), 16x16, 100 mm, CPU s under
-# load 9): heart full 4.6 s, Hausdorff 8.3 % -> rigid family 0.8 s, 1.4 %; ellipse 2:1 full 7.6 s, 0.77 % ->
-# rigid family from coarse 1.6 s, 0.18 %. A member meeting RIGID_FIRST_GOOD ends the search early.
+# shape tolerance; otherwise the full solver runs as before. Measured (design(), 16x16, 100 mm): heart
+# full Hausdorff 8.3 % -> rigid family 1.4 %; ellipse 2:1 full 0.77 % -> rigid family from coarse 0.18 %,
+# each faster too. A member meeting RIGID_FIRST_GOOD ends the search early.
 VIA_RIGID_FIRST_TILES = 16 * 16
 
 
@@ -150,7 +150,7 @@ class DesignResult:
 
 
 def reduced_applies(req: DesignRequest) -> bool:
-    """The closed-form rigid family covers the request (see ``rigid.py``)."""
+    """The closed-form rigid family covers the request (see ``quad/rigid/family.py``)."""
     return req.rigid and req.holes == "rhombus" and not req.contracted and req.target is not None
 
 

@@ -22,7 +22,8 @@ from ...pattern.model import Pattern
 
 TWO_PI = 2.0 * np.pi
 
-# side (0 B, 1 R, 2 T, 3 L) of a free corner by tile parity and corner (spec §2.6)
+# side (0 B, 1 R, 2 T, 3 L) of a free corner by tile parity and corner
+# (docs/algorithm.md#shape-matching)
 TIP_SIDE = np.array([[3, 0, 1, 2], [0, 1, 2, 3]])
 
 
@@ -278,7 +279,9 @@ def corner_convexity(name: str, quads: np.ndarray, nv: int, margin: float = 0.0)
 
 
 def regularizer_pairs(st: Stencils) -> np.ndarray:
-    """Tile pairs (r,c)-(r,c+2) and (r,c)-(r+2,c): same face in adjacent unit cells (spec §3)."""
+    """Tile pairs (r,c)-(r,c+2) and (r,c)-(r+2,c): same face in adjacent unit cells.
+
+    (docs/algorithm.md#objective)"""
     M, N = st.rows, st.cols
     idx = np.arange(M * N).reshape(M, N)
     h = np.stack([idx[:, :-2].ravel(), idx[:, 2:].ravel()], -1)

@@ -195,7 +195,7 @@ def families(
 ) -> list[Family]:
     """The rows of ``limits`` as soft one-sided families of the kagome fit: ``weight · min(g - margin, 0)``
     with the gradient where a row is active (normalised units, 1 = ``unit_mm``); ``land``: whether the
-    landing on the family (``kagome_solve.land``) sees them too."""
+    landing on the family (``solve.land``) sees them too."""
     nv = pattern.topology.n_nodes
     out = []
     for r in rows(pattern, limits, unit_mm, faces):

@@ -7,7 +7,7 @@ array holds the deployed nodes first and, when a closed-state outline is
 controlled by a target curve, the pattern vertices of that closed state after
 them (see :class:`ClosedGrid`).
 
-Families (algorithm spec §2): edge pairs and angle rings of each closed state
+Families (docs/algorithm.md#constraints): edge pairs and angle rings of each closed state
 (contractibility in state 1, reconfigurability in state 2), hinge sums
 (rigid deployability), opposite-side equalities and notch pairs (parallelogram
 holes, §2.9), boundary-tip shape matching, non-overlap at every hinge and tile
@@ -154,7 +154,7 @@ def hinge_sums(st: Stencils, nv: int) -> Family:
 
 
 def non_overlap(st: Stencils, nv: int) -> Family:
-    """Both gap angles at every hinge in [0, π]: g1, g2 >= 0 (spec §2.7)."""
+    """Both gap angles at every hinge in [0, π]: g1, g2 >= 0 (docs/algorithm.md#non-overlap)."""
     tl = st.tiles
     A, B = st.hinge_tiles.T
     cA, cB = st.hinge_corner.T

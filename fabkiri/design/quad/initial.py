@@ -1,4 +1,4 @@
-"""Initial guesses (algorithm spec §4), in normalised units (standard tile edge 1).
+"""Initial guesses (docs/algorithm.md#initial-guesses), in normalised units (standard tile edge 1).
 
 * ``standard``: the standard deployed pattern (ψ = π/4) scaled so its bounding
   box spans the target's larger dimension; it satisfies every equality exactly.

@@ -1,4 +1,4 @@
-"""The smooth-shape-change regulariser (algorithm spec §3) as least-squares residuals.
+"""The smooth-shape-change regulariser (docs/algorithm.md#objective) as least-squares residuals.
 
     E_reg(x) = (1/|Π|) Σ_{(T,U)∈Π} Σ_k [(ℓ_T,k - ℓ_U,k)² + (θ_T,k - θ_U,k)²]
 

@@ -302,12 +302,12 @@ class _Problem:
 
     @property
     def rigid_family(self) -> RigidFamily:
-        """The closed-form rigid family of this lattice (``rigid.py``), built on first use."""
+        """The closed-form rigid family of this lattice (``rigid/family.py``), built on first use."""
         if self._rigid is None:
             self._rigid = RigidFamily.of_standard(
                 self.st, lambda: self.std.topology.spanning_tree(0)
             )
-            if self.req.symmetry:  # a translation gauge the mirror keeps (``reduced_mirror.py``)
+            if self.req.symmetry:  # a translation gauge the mirror keeps (``rigid/mirror.py``)
                 self._rigid = centred(self._rigid)
         return self._rigid
 

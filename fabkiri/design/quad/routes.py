@@ -35,11 +35,11 @@ POLISHED = ", its first schedule's end taken to the rigid family (reduced Levenb
 # when it misses the target by more than FULL_ABOVE of its size; the lower objective wins. The family's LM
 # often stops in a worse local minimum on non-convex or elongated targets (rigid 100 mm, 16x16 rectangle
 # 0.088 vs 0.022 mm, 8x8 heart 0.42 vs 0.15 mm), while on the rigid circle both reach the same fit (32x32
-# 0.16 vs 0.14 mm, 64x64 0.22 vs 0.21 mm) and the full solver would only cost time (3.9 s and 63 s).
+# 0.16 vs 0.14 mm, 64x64 0.22 vs 0.21 mm) and the full solver would only cost time.
 FULL_ALWAYS_TILES = 16 * 16
 FULL_ABOVE = 2.5e-3
-# ... but not above this many tiles: at 64x64 the full solver takes 1-8 minutes and did not find the better
-# design on hard targets (rigid heart from rescaled: 21.6 mm either way; ellipse: 7.4 mm after 7.8 min)
+# ... but not above this many tiles: at 64x64 the full solver is very slow and did not find the better
+# design on hard targets (rigid heart from rescaled: 21.6 mm either way; ellipse: 7.4 mm)
 FULL_MAX_TILES = 32 * 32
 # the rigid-first route (``request.VIA_RIGID_FIRST_TILES``): its starts, and the outline that ends the search
 RIGID_FIRST_INITS = ("coarse", "rescaled")
@@ -47,18 +47,18 @@ RIGID_FIRST_GOOD = 5e-3
 # ... and up to this many tiles, where no reduced member meets the shape, the rigid design with the full
 # solver's second opinion next (the CLI's last guess, ``_solve_via_rigid``), before the full solver over all
 # nodes: the 16x16 heart (100 mm) went through the conformal, rescaled and standard full solves (missed,
-# missed, unconverged; ~11 CPU s) before the rigid design met it (1.77 %, ~8.6 CPU s)
+# missed, unconverged) before the rigid design met it (1.77 %)
 RIGID_FULL_FIRST_TILES = 16 * 16
 # a symmetric design gets no full-solver second opinion (over all nodes with the symmetry rows it took
-# minutes: 16x16 heart 4 min 51 s, and missed); instead the reduced solver over half the seeds from these
-# guesses too, a fraction of a second each at 8x8 (rigid heart, tips fit, misses by: rescaled 2.56 %,
+# minutes on a 16x16 heart, and missed); instead the reduced solver over half the seeds from these
+# guesses too, cheap each (8x8 rigid heart, tips fit, misses by: rescaled 2.56 %,
 # conformal 1.05 %, standard 0.20 % of the size)
 MIRRORED_STARTS = ("standard", "conformal", "rescaled")
 # ... standard first (the start kept most often), until the best would ask for no second opinion: the peanut's
 # 32x32 level of its 64x64 chain missed by 0.66 %, and only standard met 0.25 %, after rescaled and conformal
-# with both scalings each (that level 12.5 -> 3.9 CPU s, the same start kept). Kept by the closest outline
-# instead of the objective up to 16x16 tiles: the symmetric 32x32 drop 0.84 -> 0.31 % (9.2 -> 5.1 CPU s), but
-# the 64x64 star 0.19 -> 0.45 % (10 -> 18 CPU s); not kept
+# with both scalings each (standard first cut that level's time by two thirds, the same start kept). Kept by
+# the closest outline instead of the objective up to 16x16 tiles: the symmetric 32x32 drop 0.84 -> 0.31 %, but
+# the 64x64 star 0.19 -> 0.45 %; not kept
 
 
 def _solve_reduced(prob: _Problem, log, iters: dict):
@@ -90,13 +90,13 @@ def _reduced_from(
     prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: str, scalings=SCALINGS
 ) -> tuple:
     """``(X, mode)`` of the reduced solver from ``X0`` (or seeds ``S0``) at ``psi0``: over half the seeds
-    with ``--symmetry`` (``reduced_mirror.py``). ``tag`` prefixes its iteration counts. The second of
+    with ``--symmetry`` (``rigid/mirror.py``). ``tag`` prefixes its iteration counts. The second of
     ``scalings`` only where the first misses by more than ``FULL_ABOVE``, and on small patterns not at all
     (they get the full solver's second opinion, ``_second_opinion``, or ``_mirrored_starts``) unless a tag
     asks for it."""
     req, fam = prob.req, prob.rigid_family
     mirror = None
-    if req.symmetry:  # half the seeds (``reduced_mirror.py``)
+    if req.symmetry:  # half the seeds (``rigid/mirror.py``)
         mirror = Mirror.build(fam, req.rows, req.cols, req.symmetry)
         log(f"mirror symmetry {req.symmetry}: {mirror.P.shape[1]} reduced unknowns")
     small = req.rows * req.cols <= FULL_ALWAYS_TILES and not tag
@@ -226,7 +226,7 @@ def _polish(prob: _Problem, X: np.ndarray, log, iters: dict, polished: list):
     """Where the full solver's first schedule ends off the constraints (its projection stopped short), the rigid
     family's member closest to that end (reduced solver, warm from it), instead of the stiff restart, when it
     is valid and fits at least as well as the end itself (``(X, mode)``, else None). 16x16 heart at 200 mm:
-    objective 1.152 against the end's 1.224 and the restart's 1.432, in 0.2 of the restart's 7 CPU s."""
+    objective 1.152 against the end's 1.224 and the restart's 1.432, in a fraction of the restart's time."""
     psi = RigidFamily.deployment_angle(X, prob.st)
     Y, mode = _reduced_from(prob, X, psi, None, log, iters, "polish_", SCALINGS[:1])
     f_end, f_member = _objective(prob, X), _objective(prob, Y)
@@ -276,7 +276,7 @@ def _rigid_full_first(prob: _Problem, log, iters: dict):
     """Where no reduced member meets the shape, up to ``RIGID_FULL_FIRST_TILES``: the rigid design with the
     full solver's second opinion (``_solve_via_rigid``, the CLI's last guess), before the full solver over all
     nodes and its other guesses. ``(X, mode, solver)`` if within the shape tolerance, else None (and the CLI's
-    last guess designs it again: a miss here costs that rigid design twice, ~8 CPU s for a 16x16 heart)."""
+    last guess designs it again: a miss here costs that rigid design twice)."""
     if prob.req.rows * prob.req.cols > RIGID_FULL_FIRST_TILES:
         log("no rigid-family member within the shape tolerance: the full solver takes over")
         return None
@@ -303,7 +303,7 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict, tag: str = ""):
 
     big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
     # no full-solver second opinion on a big rigid problem at this level (its coarse levels keep theirs): at
-    # 32x32 it took about 45 of the 52 CPU s of a heart and lost (the non-rigid full solver below still takes
+    # 32x32 it took most of a heart's design and lost (the non-rigid full solver below still takes
     # over when the rigid design fails a non-rigid check); below that it is the CLI's last resort, kept whole
     sub = replace(
         prob.req,
@@ -317,7 +317,7 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict, tag: str = ""):
     )
     # a big design keeps the rigid auto rules on its coarse levels only: main's 32x32 heart went on to the full
     # solver on the rigid problem when its reduced design failed a family check, stopped at 5e-5, then the
-    # non-rigid one at 6e-3 (14 % off, 66 CPU s). Next, the reduced solver alone down the coarse levels (1.37 %).
+    # non-rigid one at 6e-3 (14 % off). Next, the reduced solver alone down the coarse levels (1.37 %).
     first = replace(sub, solver="reduced", coarse_solver="auto") if big else sub
     for name, attempt in (("rigid", first), ("rigid_reduced", replace(sub, solver="reduced"))):
         res = _design(attempt, False)

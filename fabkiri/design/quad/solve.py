@@ -1,7 +1,7 @@
 """The inverse-design solvers.
 
 ``--rigid`` designs with rhombus holes (no symmetry, no closed-state targets)
-are solved in the closed-form rigid family (``rigid.py``, ``reduced.py``);
+are solved in the closed-form rigid family (``rigid/family.py``, ``rigid/reduced.py``);
 ``_design`` tries the routes (``routes.py``) in order and says when the full
 solver is asked as well. The full solver (``penalty.py``):
 sparse Levenberg-Marquardt with penalty continuation and a final Gauss-Newton
@@ -9,7 +9,7 @@ projection onto the equality manifold.
 
 Why this design (see ``docs/design-solver.md``): the reconfigurable constraint
 set has dependent and redundant rows at every feasible point (rank deficit of
-about one row per hole, spec §2.3), which breaks LICQ-based NLP solvers
+about one row per hole, docs/algorithm.md#reconfigurability), which breaks LICQ-based NLP solvers
 (IPOPT refuses it, SLSQP fails). Least-squares methods do not need independent
 rows. The solver therefore
 
@@ -43,7 +43,7 @@ from dataclasses import replace
 import numpy as np
 
 try:  # single-threaded BLAS: the solver's vector operations are too small to gain from threads, and on a
-    # loaded machine OpenBLAS threads contend (measured: a 16k-vector dot took 1.7 ms instead of 7 µs)
+    # loaded machine OpenBLAS threads contend (measured: a 16k-vector dot took hundreds of times longer)
     from threadpoolctl import ThreadpoolController
 except ImportError:  # pragma: no cover
     ThreadpoolController = None
@@ -88,7 +88,7 @@ from .routes import (
     _solve_via_rigid,
 )
 
-_BLAS = None  # one controller per process: finding the loaded BLAS libraries costs ~1.3 ms a call
+_BLAS = None  # one controller per process: finding the loaded BLAS libraries is slow
 
 
 def single_thread_blas():
@@ -198,7 +198,7 @@ def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
         out = _solve_reduced(prob, log, iters)
     solver = REDUCED_NAME
     # no full-solver second opinion for a symmetric design: over all nodes with the symmetry rows it is what
-    # took minutes (16x16 heart: 4 min 51 s, and missed); its 12x12 coarse level cost 48 of 56 s and lost.
+    # took minutes (16x16 heart, and missed); its 12x12 coarse level cost most of that and lost.
     # The reduced solver from the other guesses instead (``routes._mirrored_starts``).
     if out is not None and req.solver == "auto" and req.second_opinion and out[1] != "hard":
         if not req.symmetry:

@@ -1,12 +1,12 @@
 """The target curve: a closed curve in mm with projection, signed distance and the
-four-arc split used for boundary matching (algorithm spec §2.6).
+four-arc split used for boundary matching (docs/algorithm.md#shape-matching).
 
 A :class:`Target` is a closed counter-clockwise curve, either a periodic cubic
 spline (smooth shapes, user splines) or a polyline (polygons, stars, user
 polylines). The parameter ``u`` runs over ``[0, 1)`` proportionally to chord
 length. Four split parameters cut the curve into the arcs B, R, T, L (in CCW
 order, from the BL corner to the BR corner, and so on); each boundary tip of a
-pattern is matched to the arc of its side (spec §2.6 table).
+pattern is matched to the arc of its side (the table in docs/algorithm.md#shape-matching).
 
 Signed distance is positive outside, negative inside; its gradient with the
 foot point held fixed is the unit outward direction (envelope theorem).

@@ -1,9 +1,9 @@
 """Target shapes by name or file, scaled and centred: the front door of the target modules.
 
-A :class:`Target` (``target_curve.py``) is a closed counter-clockwise curve in mm
+A :class:`Target` (``curve.py``) is a closed counter-clockwise curve in mm
 with projection, signed distance and the four-arc split used for boundary
-matching (algorithm spec §2.6); ``target_shapes.py`` holds the built-in shapes
-and ``target_files.py`` the CSV, JSON and SVG readers. This module loads a
+matching (docs/algorithm.md#shape-matching); ``shapes.py`` holds the built-in shapes
+and ``files.py`` the CSV, JSON and SVG readers. This module loads a
 target by template name or file and re-exports the names callers use.
 """
 

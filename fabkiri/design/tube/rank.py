@@ -6,12 +6,13 @@ tangent space. Two families of the ``rows x (cols + 1)`` seam-copy sheet (docs/t
 * **tube**: edge pairs and rings of both closed states, the deployed seam as a *free* rigid map
   ``x_copy = R(β) x_first + τ`` (3 extra unknowns: β, τ), and a pure translation seam in both closed
   states (:func:`fabkiri.design.tube.periodic.closed_seam`);
-* **rigid tube**: the same plus the hinge sums (algorithm spec §2.5).
+* **rigid tube**: the same plus the hinge sums (docs/algorithm.md#rigid-deployability).
 
 Hinge sums imply the rings, so the rigid family lies inside the tube family; if adding them does not
 raise the rank, both have the same tangent space and, where the rigid family is a manifold of that
 dimension, the tubes near ``x`` *are* rigid-deployable. The planar sheet (no seam rows) is measured the
-same way as a control: there the hinge sums do cut dimensions (algorithm spec §2.3 table).
+same way as a control: there the hinge sums do cut dimensions (the table in
+docs/algorithm.md#reconfigurability).
 
 Dimensions are raw null-space dimensions: they include the 4 similarities of the plane (translations,
 rotation, scale), which every family here keeps.

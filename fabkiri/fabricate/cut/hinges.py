@@ -1,4 +1,4 @@
-"""Hinge kinds: from a closed state to cut geometry (fabrication spec §3).
+"""Hinge kinds: from a closed state to cut geometry (docs/fabrication.md#hinge-kinds).
 
 * ``tape`` — tiles cut in place; every shared cut line is cut once
   (:func:`tape_linework`); tape joins the tiles, one hinge of every coincident
@@ -412,7 +412,7 @@ def ligament_design(
     turn_rad: float = np.pi,
     width: float | None = None,
 ) -> LigamentDesign:
-    """Size the strips by the strain rule of fabrication spec §3.1(f).
+    """Size the strips by the strain rule (docs/fabrication.md#strain-rule).
 
     The strip width is the widest that keeps ε = w·Δθ/(2L) within the strain
     limit at the shortest strip, capped by ``width_max`` and never below the

@@ -1,4 +1,4 @@
-"""Material presets for laser cutting (fabrication spec §6.3).
+"""Material presets for laser cutting (docs/fabrication.md#materials).
 
 Presets live as JSON files in ``templates/materials/`` (one per material);
 :func:`load_material` reads one by name or path and :func:`Material.override`
@@ -120,7 +120,7 @@ def load_material(name_or_path: str) -> Material:
     """A preset by name (``acrylic-3``) or a material JSON file by path.
 
     A file by path is checked against the material schema; a shipped preset by name is not (the tests check
-    every shipped preset against it): jsonschema's import alone is 0.1 CPU s of every ``design``, whose
+    every shipped preset against it): jsonschema's import alone is a real share of every ``design``, whose
     fabricability summary reads every preset."""
     path = Path(name_or_path)
     shipped = path.suffix.lower() != ".json"

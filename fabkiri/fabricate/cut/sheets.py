@@ -1,6 +1,6 @@
 """``cut_pattern``: a pattern's closed state -> laser-cut sheets, all in memory.
 
-Steps (fabrication spec §6.2): pick the closed state, scale it, check it is
+Steps (docs/fabrication.md#cut-pipeline): pick the closed state, scale it, check it is
 cuttable (closes, simple tiles, no overlaps), assign tape faces, apply the
 hinge kind (a strategy object, :mod:`.hingekinds`), lay the parts out on
 sheets, add labels and the reference square (:mod:`.labels`), and render

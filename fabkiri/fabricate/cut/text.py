@@ -1,7 +1,7 @@
 """A small single-stroke font: text as open polylines for the laser.
 
-Lasers score single lines fast and need no font on the laser PC (fabrication
-spec §2.5). Glyphs are drawn in a cell 0.6 wide and 1 tall (cap height), with
+Lasers score single lines fast and need no font on the laser PC
+(docs/fabrication.md#labels). Glyphs are drawn in a cell 0.6 wide and 1 tall (cap height), with
 as few strokes as possible — most digits are one stroke — because every stroke
 is one entity in the DXF. No stroke retraces another, so no segment is
 engraved twice. Lower-case input is drawn in capitals.

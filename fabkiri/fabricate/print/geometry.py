@@ -1,4 +1,6 @@
-"""2D plan of 3D-printed hinges on a closed state (fabrication.md §3.1, §3.4).
+"""2D plan of 3D-printed hinges on a closed state.
+
+The rules: docs/fabrication.md#hinge-geometry and docs/fabrication.md#print-styles.
 
 Everything here is planar (shapely/GEOS); :mod:`fabkiri.fabricate.print.mesh` turns
 it into solids. Conventions:

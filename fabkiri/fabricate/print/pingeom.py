@@ -1,4 +1,4 @@
-"""2D plan of print-in-place pinned hinges on a closed state (fabrication.md §3.4).
+"""2D plan of print-in-place pinned hinges on a closed state (docs/fabrication.md#print-styles).
 
 The hinges that coincide in a closed state are stacked coaxially, two ear
 levels per hinge: tile A of a hinge owns the lower ear and the pin, tile B the

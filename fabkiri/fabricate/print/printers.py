@@ -4,7 +4,7 @@ A preset fixes what the slicer and the machine impose: nozzle and layer
 height, the clearances that keep print-in-place parts apart (radial: in the
 plane, axial: between stacked layers), the gap between tiles, and the sizes of
 the printed parts. Every field can be overridden from the CLI. Values are
-starting points (fabrication.md §3.4); print a clearance coupon to calibrate.
+starting points (docs/fabrication.md#print-clearances); print a clearance coupon to calibrate.
 """
 
 from __future__ import annotations
@@ -194,7 +194,7 @@ def available_printers() -> list[str]:
 
 def printer_from_dict(data: dict[str, Any], source: str = "preset", schema: bool = True) -> Printer:
     """A printer from preset JSON; ``schema=False`` skips the JSON Schema check (shipped presets, which the tests
-    check against it: jsonschema's import alone is 0.1 CPU s of every ``design``)."""
+    check against it: jsonschema's import alone is a real share of every ``design``)."""
     if not isinstance(data, dict) or data.get("format") != "fabkiri.printer":
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise InputError(

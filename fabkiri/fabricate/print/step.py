@@ -25,7 +25,7 @@ _STAMP = re.compile(rb"(FILE_NAME\s*\(\s*'[^']*'\s*,\s*)'[^']*'")
 
 def _b3d():
     try:
-        import build123d  # noqa: F401  (heavy: ~2-3 s)
+        import build123d  # noqa: F401  (a heavy import)
     except ImportError:
         raise FabricationError(
             "--step needs build123d: pip install 'fabkiri[cad]' (or pip install build123d)"

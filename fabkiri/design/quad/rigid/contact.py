@@ -4,7 +4,7 @@ The solver's own inequalities are local (hinge gaps, convex tiles), so nothing s
 far apart in the lattice from meeting in a closed state: from 48x48 tiles on, the heart's notch closed
 over itself in state 2 (48x48: 10 overlapping pairs, 64x64: 45, all in the top row either side of the
 cusp), and the design failed the CLI's overlap check. In the rigid family both closed states are linear
-in the seeds, with no ψ: state 1 is the grid ``c = Z S``, state 2 is ``J (Y S)`` (``rigid.py``; a quarter
+in the seeds, with no ψ: state 1 is the grid ``c = Z S``, state 2 is ``J (Y S)`` (``family.py``; a quarter
 turn, which keeps every distance and orientation), so the rows are evaluated on ``Z S`` and ``Y S``.
 
 Rows: for every pair of tiles of the lattice's outer ``RING`` rows and columns that are not lattice neighbours (Chebyshev

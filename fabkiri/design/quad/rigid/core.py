@@ -1,4 +1,4 @@
-"""A sparse factor of the rigid family's grid basis: ``Z = E Z[core]`` (``rigid.py``).
+"""A sparse factor of the rigid family's grid basis: ``Z = E Z[core]`` (``family.py``).
 
 The closed-state-1 grid ``c = Z S`` of a member satisfies one midpoint row per dependent vertex,
 ``c_z = (c_a + c_b) / 2``. ``Z`` is dense (every interior vertex depends on every boundary seed), but a

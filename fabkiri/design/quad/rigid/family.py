@@ -1,7 +1,7 @@
 """The rigid-deployable reconfigurable family in closed form (reduced coordinates).
 
-With rhombus holes and hinge sums π (spec §2.5) every tile turns rigidly by
-``-σ_T ψ`` (σ = ±1 in a checkerboard) between closed state 1 (ψ = 0) and
+With rhombus holes and hinge sums π (docs/algorithm.md#rigid-deployability) every tile turns
+rigidly by ``-σ_T ψ`` (σ = ±1 in a checkerboard) between closed state 1 (ψ = 0) and
 closed state 2 (ψ = π/2). Write the pattern vertices of closed state 1 as
 ``c`` (an (M+1)×(N+1) grid of points). Tile ``T``'s corner ``k`` then sits at
 
@@ -16,8 +16,8 @@ notch close in state 2. So the family is
 
     {x(ψ, c) : A c = 0},   A = one midpoint row per hole and per open notch,
 
-a linear space of dimension M+N+2 per coordinate (spec §2.3: 2(M+N)+2 with ψ,
-modulo rigid motions). Every member satisfies the edge pairs of both states
+a linear space of dimension M+N+2 per coordinate (2(M+N)+2 with ψ, modulo rigid motions:
+docs/algorithm.md#reconfigurability). Every member satisfies the edge pairs of both states
 and the hinge sums exactly, for every ψ.
 
 The basis is anchored on the boundary: the 4 grid corners and every boundary
@@ -60,7 +60,7 @@ class RigidFamily:
     Y: np.ndarray  # (V, nf) tile-translation part minus σ Zn, per node
     _core: GridCore | None = field(default=None, init=False, repr=False)
     # (Y, τ per tile, tile of each node, σ per node (V, 1)) as ``build`` made them: ``Y @ S`` per tile while ``Y`` is
-    # that array (a family made from this one with another ``Y``, e.g. ``reduced_mirror.centred``, has none)
+    # that array (a family made from this one with another ``Y``, e.g. ``mirror.centred``, has none)
     _tau: tuple | None = field(default=None, init=False, repr=False)
 
     @property
@@ -69,7 +69,7 @@ class RigidFamily:
 
     @property
     def core(self) -> GridCore:
-        """``Z = E Z[core]`` with a sparse ``E`` (``rigid_core.py``), made on first use."""
+        """``Z = E Z[core]`` with a sparse ``E`` (``core.py``), made on first use."""
         if self._core is None:
             self._core = grid_core(self.midpoint, self.Z)
         return self._core
@@ -142,7 +142,7 @@ class RigidFamily:
     def of_standard(cls, st: Stencils, tree: Callable[[], SpanningTree]) -> RigidFamily:
         """``build`` for the standard ``st.rows`` x ``st.cols`` lattice, kept for the last two lattices: a
         coarse-to-fine design needs each level's family twice (its own solve, then the next level's start;
-        building it is 0.7 s at 128x128). ``tree``: makes the spanning tree on a miss."""
+        building it is costly at 128x128). ``tree``: makes the spanning tree on a miss."""
         key = (st.rows, st.cols)
         fam = _STANDARD.pop(key, None) or cls.build(st, tree())
         _STANDARD[key] = fam
@@ -154,7 +154,8 @@ class RigidFamily:
     def deployment_angle(X: np.ndarray, st: Stencils) -> float:
         """ψ of a pattern near the family: half the median hole angle at the state-1 fold corners.
 
-        (Every hole of a member is a rhombus with angle 2ψ there; spec §2.5.)
+        (Every hole of a member is a rhombus with angle 2ψ there:
+        docs/algorithm.md#rigid-deployability.)
         """
         hn = st.hole_nodes
         if not len(hn):

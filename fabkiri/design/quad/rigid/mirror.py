@@ -1,7 +1,7 @@
 """Mirror-symmetric members of the rigid family: the reduced solver over half the seeds.
 
 A ``--symmetry`` design asks ``x_m(v) = M x_v`` for every node ``v`` and its mirror image ``m(v)``
-(``M`` flips x for ``y``, y for ``x``). In the rigid family (``rigid.py``) the deployed nodes are linear
+(``M`` flips x for ``y``, y for ``x``). In the rigid family (``family.py``) the deployed nodes are linear
 in the seed points ``S`` for each ψ, and the family's linear rows (a hole's merge vertex is the midpoint
 of its fold vertices) map onto themselves under a mirror that keeps the fold states (an even number of
 columns for ``y``, rows for ``x``; ``constraints.symmetry`` refuses the rest). So a member is symmetric
@@ -10,7 +10,7 @@ when its seeds are:
     p = P q,   S[m(k)] = M S[k],  an on-axis seed's flipped coordinate 0,  ψ shared,
 
 with ``P`` a sparse ``(2 nf + 1, nq)`` matrix of ±1 (one column per seed pair and coordinate, disjoint
-supports), about half as many unknowns. The translation gauge must be symmetric too: ``rigid.py`` fixes
+supports), about half as many unknowns. The translation gauge must be symmetric too: ``family.py`` fixes
 it by tile 0 (τ_0 = 0), which the mirror moves, so the symmetric family fixes it by the nodes' mean
 (``centred``: ``Y`` minus its column means, a translation of every member, so still a member). Then the
 mean of the nodes is ``cos ψ · mean(Zn) S``, on the axis for mirrored seeds, and the member is its own
@@ -18,8 +18,8 @@ mirror image exactly.
 
 The reduced solver runs unchanged on ``p = P q``: ``MirroredMerit`` wraps its merit, chaining every
 Jacobian through ``P`` (``J P``; the normal matrix ``Pᵀ H P``, the gradient ``Pᵀ g``), each formed over q's
-columns rather than p's: ``reduced_mirror_dense.py`` on the dense path (small lattices, the regulariser's
-corner features of half the tiles), ``reduced_mirror_normal.py`` on the block path. The caller still
+columns rather than p's: ``mirror_dense.py`` on the dense path (small lattices, the regulariser's
+corner features of half the tiles), ``mirror_normal.py`` on the block path. The caller still
 checks the full pattern's families, the symmetry rows among them.
 """
 
@@ -129,7 +129,7 @@ class AxisRows:
     exactly when it crosses the axis: the symmetric 32x32 heart's notch closed over itself in state 1, the
     top row's tiles 11 and 20 on each other. Rows ``g = side · (flipped coordinate) ≥ AXIS_MARGIN``, linear
     in ``S``, one per vertex off the axis on the standard member (the mirrored closed-state contact: a tile
-    against its mirror image). The same interface as ``reduced_contact.ClosedContact`` (``barrier``,
+    against its mirror image). The same interface as ``contact.ClosedContact`` (``barrier``,
     ``values``, ``active``), and with it, when the contact rows join (``with_contact``).
     """
 
@@ -146,7 +146,7 @@ class AxisRows:
             self.rows.append((off, d, np.sign(w[off]), B))
 
     def joined(self, contact: Any) -> AxisRows:
-        """The same rows with the closed-state contact rows (``reduced_contact.ClosedContact``) after them."""
+        """The same rows with the closed-state contact rows (``contact.ClosedContact``) after them."""
         new = copy.copy(self)
         new.contact = contact
         return new

@@ -1,10 +1,10 @@
-"""The symmetric reduced solver's dense path (small lattices) formed over q's columns (``reduced_mirror.py``).
+"""The symmetric reduced solver's dense path (small lattices) formed over q's columns (``mirror.py``).
 
 On the dense path the merit forms the reduced Jacobian of its node and convexity rows and the regulariser's
 normal matrix ``w² Fᵀ (ΔᵀΔ) F`` over p's ``2 nf + 1`` columns, and the symmetric solver then took ``Pᵀ H P``:
-a symmetric 32x32 step cost what a free one costs (drop, 27 against 30 ms). Here every product that meets
+a symmetric 32x32 step cost about what a free one costs (drop). Here every product that meets
 p's columns goes through ``P`` first, from bases formed once per solve: the tile corners' edges ``ZE B_d``,
-``ZB B_d`` (``reduced_tiles.TileShapeRows``) and the nodes' ``Zn B_d``, ``Y B_d`` (``rigid.jacobian_at``),
+``ZB B_d`` (``tiles.TileShapeRows``) and the nodes' ``Zn B_d``, ``Y B_d`` (``family.jacobian_at``),
 ``B_d`` the rows of ``P`` of seed coordinate d on the columns of q it reaches (``HalfBlocks``). The
 regulariser's features then have about half the columns and its normal matrix a quarter of the products.
 The same rows and the same matrix to round-off (tests); the rows themselves are still evaluated over the
@@ -155,7 +155,7 @@ def _span(cols: np.ndarray) -> slice | np.ndarray:
 
 def halved(merit: Any, P: sparse.csr_matrix, halves: HalfBlocks) -> Any:
     """A dense-path merit (``reduced._Merit`` with ``_tiles``) whose Jacobian and normal matrix are over q;
-    any other merit unchanged (the block path has ``reduced_mirror_normal.half_normal``)."""
+    any other merit unchanged (the block path has ``mirror_normal.half_normal``)."""
     if merit._tiles is None or merit._half is not None:
         return merit
     new = copy.copy(merit)

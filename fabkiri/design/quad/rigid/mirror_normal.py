@@ -1,8 +1,8 @@
-"""The symmetric reduced solver's normal matrix formed over half the seeds (``reduced_mirror.py``).
+"""The symmetric reduced solver's normal matrix formed over half the seeds (``mirror.py``).
 
 A symmetric member is ``p = P q`` with about half as many unknowns, but forming the whole ``H = JᵀJ``
 over ``p`` and then ``Pᵀ H P`` costs what the unsymmetric solve costs per step: the symmetric 96x96 ellipse
-spent 19 of its 46 solve seconds there (the grid block ``Zᵀ (JcᵀJc) Z`` alone 17 s). Every product that
+spent about 40 % of its solve there (most of it in the grid block ``Zᵀ (JcᵀJc) Z``). Every product that
 meets ``p``'s columns goes through ``P`` first here: ``J P`` (dense path), ``D P`` at the nodes, and on
 the grid ``Z B_x`` and ``Z B_y`` (``B_d``: the rows of ``P`` of seed coordinate d, on the about nf/2 columns
 of q they reach, against nf columns of p), so the dense products shrink about fourfold. The same matrix to
@@ -44,7 +44,7 @@ class HalfBlocks:
         Zb = self.ZB(Z)
         Jd = [Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()]
         H, g = np.zeros((self.nq, self.nq)), np.zeros(self.nq)
-        # the unsymmetric merit's choice (by p's width): by q's, the 48x48 grid's went dense, 35 ms against 17
+        # the unsymmetric merit's choice (by p's width): by q's, the 48x48 grid's went dense, and slower
         if Jc.shape[0] * self.np <= dense_jd:
             A = [Jd[d] @ Zb[d] for d in (0, 1)]
             for a in (0, 1):
@@ -67,14 +67,14 @@ def _through(P: sparse.csr_matrix, J: np.ndarray) -> np.ndarray:
 
 
 def half_normal(ev: Any, P: sparse.csr_matrix, halves: HalfBlocks):
-    """``(J P)ᵀ (J P)`` and ``(J P)ᵀ r`` of a reduced evaluation (``reduced_eval._Evaluation``) at ``p = P q``:
+    """``(J P)ᵀ (J P)`` and ``(J P)ᵀ r`` of a reduced evaluation (``merit._Evaluation``) at ``p = P q``:
     on the block path (large lattices) its node rows through ``D P``, its grid rows by ``HalfBlocks`` and the
     closed states' contact rows through ``P``; on the dense path ``Pᵀ (JᵀJ) P`` (a 32x32 J has 133 columns:
-    0.4 ms either way)."""
-    from .reduced import DENSE_JD, _normal  # reduced.py builds on reduced_mirror.py
+    as cheap either way)."""
+    from .reduced import DENSE_JD, _normal  # reduced.py builds on mirror.py
 
     ev._form()
-    if ev.merit._half is not None:  # the dense path formed over q (``reduced_mirror_dense``)
+    if ev.merit._half is not None:  # the dense path formed over q (``mirror_dense``)
         return ev.normal()
     if ev._J is not None:  # a dense path over p
         H, g = ev.normal()

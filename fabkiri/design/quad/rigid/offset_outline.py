@@ -35,10 +35,10 @@ from .outline import (
 # 3.3 % circle RMS with offsets stuck on it
 T_SOFT, T_HARD = 0.9, 0.98
 # (penalty, stall tolerance, iteration cap). The first stage's cap trades time for fit (square->circle,
-# vertices only, quiet machine: 7x7 at 60/120/200 iterations 0.18/0.33/0.51 CPU s for 0.96/0.78/0.59 %)
+# vertices only, 7x7 at 60/120/200 iterations: 0.96/0.78/0.59 %, the time growing with the cap)
 STAGES = ((1e2, 1e-5, 120), (1e4, 1e-6, 10))
-# Above this many tiles the rhombus members take it: an iteration costs 45 ms at 17x17 and the offsets
-# gain little there (square->circle 17x17: 0.239 % after 1.4 CPU s against the rhombus family's 0.25 %;
+# Above this many tiles the rhombus members take it: an iteration grows costly and the offsets
+# gain little there (square->circle 17x17: 0.239 % against the rhombus family's 0.25 %;
 # 13x13: 0.41 % against 0.43 %), while at 9x9 they take 0.95 % to 0.53 % and at 5x5 3.7 % to 0.23 %.
 OFFSET_MAX_TILES = 11 * 11
 MID_WEIGHT = 1.0  # 5x5: vertex RMS 1.61 %, Hausdorff 1.06 %; at 0.5: 1.28 % but Hausdorff 2.03 % (the outline's

@@ -1,7 +1,9 @@
-"""The rigid-deployable family with parallelogram holes (spec §2.9): one offset per hole.
+"""The rigid-deployable family with parallelogram holes: one offset per hole.
+
+Parallelogram holes: docs/algorithm.md#parallelogram-holes.
 
 Every tile turns rigidly by ``-σ_T ψ`` (σ = ±1 in a checkerboard) from closed state 1 (ψ = 0) to closed
-state 2 (ψ = π/2), as in the rhombus family (``rigid.py``), but the holes are parallelograms. Write ``y`` for
+state 2 (ψ = π/2), as in the rhombus family (``family.py``), but the holes are parallelograms. Write ``y`` for
 the deployed nodes' positions in state 1. Tile ``T``'s copy of node ``v`` sits at
 
     x(T, v; ψ) = Rot(-σ_T ψ) y_v + sin ψ · τ_T,

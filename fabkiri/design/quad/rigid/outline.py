@@ -1,7 +1,7 @@
 """Closed-state outline design inside the rigid family: the paper's "circling the square".
 
 For ``--rigid`` with rhombus holes, no deployed target and closed-state targets that are each a square or
-a circle, both closed states are linear in the rigid family's seeds ``S`` (``rigid.py``): closed state 1 is
+a circle, both closed states are linear in the rigid family's seeds ``S`` (``family.py``): closed state 1 is
 the grid ``c₁ = Z S``, closed state 2 the member at ψ = π/2, ``c₂ = J Y S`` at one node per grid vertex.
 So every equality family holds by construction, and
 

@@ -1,4 +1,4 @@
-"""Inverse design inside the closed-form rigid-deployable family (``rigid.py``).
+"""Inverse design inside the closed-form rigid-deployable family (``family.py``).
 
 For ``--rigid`` with rhombus holes every equality family (edge pairs of both
 closed states, hinge sums) holds identically on the family ``x(S, ψ)``, so the
@@ -50,7 +50,7 @@ STAGES = ((1e2, 1e-3, 200), (1e4, 1e-6, 40))
 SCALINGS = ("marquardt", "levenberg")
 # the stiffer stage is there to remove inequality violations: when the first stage ends with none (g >= 0,
 # rows inside their margin allowed) its steps crawl along the fit manifold lowering the regulariser a little,
-# so it gets this many (64x64 rigid circle: 40 steps -> 10, CPU 7.4 -> 3.9 s, fit 0.2005 -> 0.1962 mm,
+# so it gets this many (64x64 rigid circle: 40 steps -> 10, about half the time, fit 0.2005 -> 0.1962 mm,
 # regulariser +1.6 %)
 POLISH_STEPS = 10
 
@@ -67,7 +67,7 @@ class _Merit:
     and on the closed-state-1 grid ``c = Z S`` (the ``TILE_SHAPE`` families; ∂c/∂p = ``C``, constant).
     The grid block is the large one (the regulariser); its normal matrix, by coordinate blocks of ``Z``,
     costs about a third of ``Dᵀ JᵀJ D`` on the nodes (G ≈ V/2 grid vertices, no ψ column). With ``contact``
-    the closed states' contact rows follow (``reduced_contact.py``, on ``Z S`` and ``Y S``; dense, few active).
+    the closed states' contact rows follow (``contact.py``, on ``Z S`` and ``Y S``; dense, few active).
     """
 
     def __init__(
@@ -97,7 +97,7 @@ class _Merit:
         G, nf = fam.Z.shape
         # the dense path needs the grid families to be exactly the regulariser and tile convexity
         self._tiles = None
-        # a symmetric solve's dense path: Jacobians over q's columns (``reduced_mirror_dense.halved``)
+        # a symmetric solve's dense path: Jacobians over q's columns (``mirror_dense.halved``)
         self._half: Any = None
         names = [f.name for f in self.grid_regs] + [f.name for f in self.grid_ineqs]
         if names == list(TILE_SHAPE):
@@ -296,8 +296,8 @@ class _Merit:
 
     def _touched(self, Jx, p: np.ndarray) -> tuple[sparse.csr_matrix, np.ndarray]:
         """``Jx`` on the columns of the nodes its rows touch and ``∂x/∂p`` at those nodes only: the node rows
-        (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix is 540 MB at
-        128x128."""
+        (fit, active inequalities) see a few boundary nodes, and the full ``(2V, P)`` matrix would not fit
+        in memory at 128x128."""
         nodes = np.unique(Jx.indices // 2)
         cols = np.stack([2 * nodes, 2 * nodes + 1], 1).reshape(-1)
         D = self.fam.jacobian_at(*self.unpack(p), nodes).reshape(2 * len(nodes), -1)
@@ -325,8 +325,8 @@ class _Merit:
     def _grid_normal(self, Jc, rc: np.ndarray):
         """``Cᵀ JcᵀJc C`` and ``Cᵀ Jcᵀ rc``. C = ∂c/∂p is block-diagonal (Z for x, Z for y, nothing for ψ):
         above the dense threshold the matrix is assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}, a third of the
-        work of the product through a dense C (and no 2G × P matrix in memory: 138 MB at 128x128), and
-        through the family's sparse factor ``Z = E Z[core]`` (``rigid_core.py``): the dense products run
+        work of the product through a dense C (and no 2G × P matrix in memory), and
+        through the family's sparse factor ``Z = E Z[core]`` (``core.py``): the dense products run
         over the core's vertices (about a quarter of them) instead of all G grid vertices."""
         nf = self.nf
         P = 2 * nf + 1
@@ -353,8 +353,8 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
     )
 
 
-# below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: 8x8 0.14 ms
-# vs 0.55 ms through the sparse JᵀJ, 32x32 15 vs 24 ms; 64x64, 1.7e7 entries, 181 vs 150 ms)
+# below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: faster than
+# the sparse JᵀJ up to 32x32, slower at 64x64 with 1.7e7 entries)
 DENSE_JD = 4e6
 
 
@@ -400,10 +400,10 @@ def solve_reduced(
     ``mean_edge(X)`` gives the length unit of the 1 % "nearly exact" threshold.
     Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
     driven to ``fit_tol`` (absolute, normalised units), else "least-squares".
-    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``reduced_mirror.py``); the solve is then over
+    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is then over
     ``q``. ``scalings``: the LM scalings to start with (``SCALINGS``).
     """
-    if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes: 0.25 s at 64x64)
+    if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes)
         S0, _ = fam.fit(X0, psi0)
     p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
     if mirror is not None:

@@ -41,7 +41,7 @@ class TileShapeRows:
         )
         self.diff_t = self.diff.T.tocsr()
         self.laplacian = (self.diff_t @ self.diff).tocsr()
-        # reused by every evaluation: fresh megabyte-size temporaries cost page faults (16x16: 1.6 ms a call)
+        # reused by every evaluation: fresh megabyte-size temporaries cost page faults
         self._F = np.empty((2, *self.ZE.shape[:2], 2, self.ZE.shape[2]))
 
     def features(self, tc: TileCorners, out: np.ndarray | None = None) -> np.ndarray:

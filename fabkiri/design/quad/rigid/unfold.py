@@ -1,4 +1,4 @@
-"""Fold repair of a coarse-to-fine start in the rigid family (``rigid.py``).
+"""Fold repair of a coarse-to-fine start in the rigid family (``family.py``).
 
 A coarse rigid design's closed-state-1 grid, resampled to the fine lattice, is not a member of the fine
 family: its nearest member (least squares over all grid vertices) can fold a few cells, and a member's

@@ -1,4 +1,4 @@
-"""The standard rotating-squares quad lattice (algorithm spec §1).
+"""The standard rotating-squares quad lattice (docs/algorithm.md#lattice).
 
 Tile ``(r, c)`` (row from the bottom, column from the left) is tile index
 ``r * cols + c``; its corners are BL, BR, TR, TL (counter-clockwise). At

@@ -1,8 +1,9 @@
 """The quad (rotating-squares) tessellation: its fold rules and its registry entry.
 
 The topology module finds hinges, gaps and holes for any tile arity; what is quad about a quad
-kirigami is here: the fold rule of the two closed states (spec §2, the primal and dual edge
-correspondences) and the standard lattice of :mod:`fabkiri.pattern.kinds.quad.lattice`.
+kirigami is here: the fold rule of the two closed states (the primal and dual edge
+correspondences, docs/algorithm.md#holes-and-fold-rules) and the standard lattice of
+:mod:`fabkiri.pattern.kinds.quad.lattice`.
 """
 
 from __future__ import annotations
