@@ -18,6 +18,7 @@ import shapely
 from shapely.geometry.polygon import orient
 
 from ...errors import FabricationError
+from ...exchange.file_formats import SolidFormat, register_format
 from .solid import Body, Prism
 
 _STAMP = re.compile(rb"(FILE_NAME\s*\(\s*'[^']*'\s*,\s*)'[^']*'")
@@ -111,3 +112,7 @@ def step_volume(path: str | os.PathLike) -> float:
     b3d = _b3d()
     shape = b3d.import_step(str(path))
     return float(sum(s.volume for s in shape.solids()))
+
+
+# written only (build123d, the optional extra ``cad``); :func:`step_volume` reads a volume back
+register_format(SolidFormat("step", (".step", ".stp"), write=step_bytes))

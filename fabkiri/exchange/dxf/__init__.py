@@ -1,0 +1,32 @@
+"""DXF, the cut files' drawing format: written (:mod:`.writer`, ezdxf) and read (:mod:`.reader`),
+both through the one tag codec of fabkiri's canonical LWPOLYLINE entity (:mod:`.tags`).
+
+Registered as the drawing format ``dxf`` (:mod:`fabkiri.exchange.file_formats`). ezdxf is loaded
+with the writer or with a file the tags cannot take, not with this package.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..file_formats import DrawingFormat, register_format
+
+if TYPE_CHECKING:
+    from ..drawing import SheetDrawing
+    from ..linework import Linework
+
+
+def _write(sheet: SheetDrawing, colors: str = "default") -> bytes:
+    from .writer import dxf_bytes  # ezdxf: loaded with the first DXF written
+
+    return dxf_bytes(sheet, colors)
+
+
+def _read(path: Path, layer: str = "CUT") -> Linework:
+    from .reader import read_cut_dxf
+
+    return read_cut_dxf(path, layer)
+
+
+register_format(DrawingFormat("dxf", (".dxf",), write=_write, read=_read))
