@@ -119,9 +119,14 @@ class SolidFormat:
 
 AnyFormat = PatternFormat | DrawingFormat | SolidFormat
 
-_REGISTRIES: dict[str, Registry] = {
-    family: Registry({n: m for n, (f, m) in BUILTIN.items() if f == family}) for family in FAMILIES
-}
+_REGISTRIES: dict[str, Registry] = {family: Registry({}) for family in FAMILIES}
+
+
+def _registry(family: str) -> Registry:
+    """The family's registry, its built-in members as :data:`BUILTIN` lists them now."""
+    reg = _REGISTRIES[family]
+    reg.builtin = {n: m for n, (f, m) in BUILTIN.items() if f == family}
+    return reg
 
 
 def register_format(fmt: AnyFormat) -> AnyFormat:
@@ -130,19 +135,19 @@ def register_format(fmt: AnyFormat) -> AnyFormat:
 
 
 def _all(family: str) -> list:
-    found = map(_REGISTRIES[family].find, _REGISTRIES[family].names())
-    return [f for f in found if f is not None]
+    reg = _registry(family)
+    return [f for f in map(reg.find, reg.names()) if f is not None]
 
 
 def known_formats() -> dict[str, str]:
     """Every format's name and family (nothing imported), the built-in ones first."""
-    return {n: family for family, reg in _REGISTRIES.items() for n in reg.names()}
+    return {n: family for family in FAMILIES for n in _registry(family).names()}
 
 
 def file_format(name: str) -> AnyFormat:
     """The format of this name in any family, or :class:`InputError` naming the known ones."""
     family = known_formats().get(name)
-    found = _REGISTRIES[family].find(name) if family else None
+    found = _registry(family).find(name) if family else None
     if found is None:
         raise InputError(f"unknown file format {name!r}; known: {', '.join(known_formats())}")
     return found
@@ -158,7 +163,7 @@ def format_names(*, writable: bool = False) -> tuple[str, ...]:
 
 def pattern_format(name: str, *, writable: bool = False) -> PatternFormat:
     """The pattern format of this name, or :class:`InputError` naming the known ones."""
-    found = _REGISTRIES["pattern"].find(name)
+    found = _registry("pattern").find(name)
     if found is None or (writable and found.write is None):
         raise InputError(
             f"unknown pattern format {name!r}; known: {', '.join(format_names(writable=writable))}"
@@ -181,20 +186,19 @@ def format_of(path: str | Path, fallback: str) -> PatternFormat:
 
 def drawing_format(name: str) -> DrawingFormat:
     """The drawing format of this name, or :class:`InputError` naming the known ones."""
-    found = _REGISTRIES["drawing"].find(name)
+    found = _registry("drawing").find(name)
     if found is None:
-        known = ", ".join(_REGISTRIES["drawing"].names())
+        known = ", ".join(_registry("drawing").names())
         raise InputError(f"unknown drawing format {name!r}; known: {known}")
     return found
 
 
 def solid_format(name: str) -> SolidFormat:
     """The solid format of this name, or :class:`InputError` naming the known ones."""
-    found = _REGISTRIES["solid"].find(name)
+    found = _registry("solid").find(name)
     if found is None:
-        raise InputError(
-            f"unknown solid format {name!r}; known: {', '.join(_REGISTRIES['solid'].names())}"
-        )
+        known = ", ".join(_registry("solid").names())
+        raise InputError(f"unknown solid format {name!r}; known: {known}")
     return found
 
 
