@@ -7,14 +7,13 @@ with the writer or with a file the tags cannot take, not with this package.
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..file_formats import DrawingFormat, register_format
+from .reader import read_cut_dxf
 
 if TYPE_CHECKING:
     from ..drawing import SheetDrawing
-    from ..linework import Linework
 
 
 def _write(sheet: SheetDrawing, colors: str = "default") -> bytes:
@@ -23,10 +22,4 @@ def _write(sheet: SheetDrawing, colors: str = "default") -> bytes:
     return dxf_bytes(sheet, colors)
 
 
-def _read(path: Path, layer: str = "CUT") -> Linework:
-    from .reader import read_cut_dxf
-
-    return read_cut_dxf(path, layer)
-
-
-register_format(DrawingFormat("dxf", (".dxf",), write=_write, read=_read))
+register_format(DrawingFormat("dxf", (".dxf",), write=_write, read=read_cut_dxf))

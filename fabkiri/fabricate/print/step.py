@@ -3,7 +3,8 @@
 The solids are built from the same :class:`~fabkiri.fabricate.print.solid.Body`
 descriptions as the meshes, so STEP and STL/3MF describe the same geometry
 (circles are the same regular polygons). build123d (OpenCascade) is imported
-lazily: ``fabkiri print`` without ``--step`` never loads it.
+lazily: ``fabkiri print`` without ``--step`` never loads it. Registered as the solid format
+``step`` (:mod:`fabkiri.exchange.file_formats`), written only.
 """
 
 from __future__ import annotations

@@ -12,7 +12,9 @@ settings the geometry depends on (bed, nozzle, layer heights, one filament per
 extruder), so slicing the file as it is gives the intended print.
 
 Bytes are deterministic: fixed zip dates, no UUIDs, vertices written with
-coordinates rounded to 1 nm.
+coordinates rounded to 1 nm. Registered as the solid format ``3mf``
+(:mod:`fabkiri.exchange.file_formats`): plain 3MFs written by :func:`objects_3mf`, projects and
+plain files read back by :func:`read_meshes`.
 """
 
 from __future__ import annotations
