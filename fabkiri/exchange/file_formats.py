@@ -140,7 +140,7 @@ def _all(family: str) -> list:
 
 
 def known_formats() -> dict[str, str]:
-    """Every format's name and family (nothing imported), the built-in ones first."""
+    """Every format's name and family (nothing imported): family by family, built-in ones first."""
     return {n: family for family in FAMILIES for n in _registry(family).names()}
 
 
