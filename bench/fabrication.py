@@ -219,7 +219,7 @@ def impossible(out: Path) -> None:
 def summary_cost() -> None:
     """CPU s of the summary (every material, every printer preset and style, closed form) against the
     bisection on the plan checks for the same presets (what one printer's minimum cost before)."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.fabricate import fabricability as fb
     from fabkiri.fabricate.print.printers import available_printers, load_printer
 

@@ -146,7 +146,7 @@ def _shapely_hausdorff(path: Path, target: str, size: str) -> str:
     densified to 0.1 % of the size."""
     import shapely
     from fabkiri.design.targets.lookup import load_target
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.pattern.conformance import boundary_tip_order
 
     p = read_pattern(path)

@@ -20,7 +20,7 @@ import argparse
 import time
 
 import numpy as np
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.mechanics.path import closed_states
 from fabkiri.pattern import geometry
 from scipy import sparse

@@ -189,7 +189,7 @@ def worker_square_circle(spec: dict) -> dict:
     import tempfile
 
     from fabkiri.cli.main import main as cli
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     n = spec["n"]
     with tempfile.TemporaryDirectory() as tmp:

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 import shapely
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.mechanics.deploy import closed_states
 from fabkiri.mechanics.tolerance import seam_edges, tolerance_analysis
 from fabkiri.templates import template_dir

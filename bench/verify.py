@@ -53,7 +53,7 @@ def main() -> int:
                 writer = "fixture"
         if writer == "cut":
             from fabkiri.cli.main import main as cli
-            from fabkiri.exchange.patternfile import write_pattern
+            from fabkiri.exchange.pattern_json import write_pattern
 
             pj = Path(tmp) / "p64.json"
             write_pattern(p, pj)

@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from fabkiri.exchange.patternfile import read_pattern, write_pattern  # noqa: E402
+from fabkiri.exchange.pattern_json import read_pattern, write_pattern  # noqa: E402
 from fabkiri.mechanics.contract import with_contracted_states  # noqa: E402
 from fabkiri.pattern import standard_pattern  # noqa: E402
 from fabkiri.verify import verify_layout  # noqa: E402

@@ -68,7 +68,7 @@ class Base:
 
 
 def load_base(folder: Path, fmt: str, pattern) -> Base:
-    from fabkiri.exchange.reread import read_dxf
+    from fabkiri.exchange.dxf.reader import read_dxf
 
     man = json.loads((folder / "manifest.json").read_text())
     row = man["sheets"][0]

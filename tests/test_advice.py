@@ -12,7 +12,7 @@ import pytest
 from fabkiri.api.advice import CUT_GATE, DESIGN_GATE, PRINT_GATE, Refused, alternatives
 from fabkiri.api.cut import cut_files
 from fabkiri.api.print import PrintOptions, print_pattern
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.fabricate import fabricability as fb
 from fabkiri.fabricate.cut.materials import load_material
 from fabkiri.fabricate.cut.sheets import CutOptions
@@ -110,7 +110,7 @@ def test_every_print_option_named_under_a_refusal_prints(run_cli, tmp_path):
     """A 3x3 standard pattern of 3 mm tiles is too small to print on prusa-mk4: the refusal names its
     smallest scale and every printer and style that prints it at this size (none: then at the smallest
     scale each accepts); each line, run, prints (exit 0)."""
-    from fabkiri.exchange import patternfile as io
+    from fabkiri.exchange import pattern_json as io
     from fabkiri.mechanics import with_contracted_states
     from fabkiri.pattern import standard_pattern
 

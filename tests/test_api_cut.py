@@ -7,7 +7,7 @@ import json
 import pytest
 from fabkiri.api.cut import CutOutcome, cut_files, cut_material, design_intent
 from fabkiri.errors import CheckFailed, InputError
-from fabkiri.exchange.patternfile import write_pattern
+from fabkiri.exchange.pattern_json import write_pattern
 from fabkiri.fabricate.cut.sheets import CutOptions
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern

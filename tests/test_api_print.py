@@ -7,7 +7,7 @@ import json
 import pytest
 from fabkiri.api.print import PrintOptions, PrintOutcome, print_pattern
 from fabkiri.errors import CheckFailed, FabricationError, InputError
-from fabkiri.exchange.patternfile import write_pattern
+from fabkiri.exchange.pattern_json import write_pattern
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern
 
@@ -191,7 +191,7 @@ def test_the_gate_measures_a_stored_target_at_the_patterns_own_size(monkeypatch)
     # (a 48 mm miss, measured for nobody, ~1 CPU s); it now verifies the pattern at its own size with the
     # printer's tolerance divided by the scale, as `cut` does
     import fabkiri.api.print as api_print
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.templates import template_dir
 
     seen = {}

@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import dumps, obj_text
+from fabkiri.exchange.obj import obj_text
+from fabkiri.exchange.pattern_json import dumps
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern
 from fabkiri.pattern.kinds.periodic.sheet import standard_tube
@@ -613,7 +614,7 @@ def test_a_good_write_replaces_old_files_and_leaves_no_scratch(tmp_path):
 
 def test_library_writers_refuse_an_input_of_the_running_command(tmp_path):
     from fabkiri.errors import InputError
-    from fabkiri.exchange.patternfile import read_pattern, write_pattern
+    from fabkiri.exchange.pattern_json import read_pattern, write_pattern
     from fabkiri.fileio import inputs_scope
 
     src = tmp_path / "p.json"

@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import read_pattern, write_pattern
+from fabkiri.exchange.pattern_json import read_pattern, write_pattern
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern
 from PIL import Image
@@ -117,7 +117,7 @@ def test_deploy_bad_input_writes_nothing(run_cli, tmp_path):
 
 def test_deploy_front_door_gives_the_commands_verdict_without_the_cli():
     from fabkiri.api.deploy import deploy_pattern
-    from fabkiri.exchange.patternfile import import_obj
+    from fabkiri.exchange.obj import import_obj
     from fabkiri.mechanics import adopt_state_labels
 
     good = deploy_pattern(with_contracted_states(standard_pattern(3, 3)), 8, frames=True)

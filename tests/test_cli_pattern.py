@@ -5,7 +5,8 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from fabkiri.exchange.patternfile import read_obj, read_pattern
+from fabkiri.exchange.obj import read_obj
+from fabkiri.exchange.pattern_json import read_pattern
 
 from .conftest import ref
 
@@ -67,11 +68,13 @@ def test_a_pattern_format_is_one_registered_strategy(tmp_path, run_cli, monkeypa
     import pytest
     from fabkiri.api.patterns import export_pattern
     from fabkiri.errors import InputError
-    from fabkiri.exchange import pattern_formats as formats
-    from fabkiri.exchange import patternfile as io
+    from fabkiri.exchange import file_formats as formats
+    from fabkiri.exchange import pattern_json as io
     from fabkiri.pattern import standard_pattern
 
-    monkeypatch.setattr(formats._FORMATS, "members", dict(formats._FORMATS.members))
+    monkeypatch.setattr(
+        formats._REGISTRIES["pattern"], "members", dict(formats._REGISTRIES["pattern"].members)
+    )
     assert formats.format_names(writable=True) == ("obj", "fold", "pykirigami")
     assert formats.format_of(tmp_path / "p.FOLD", "json").name == "fold"
     assert formats.format_of(tmp_path / "p.txt", "obj").name == "obj"

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import write_pattern
+from fabkiri.exchange.pattern_json import write_pattern
 
 from . import layout_fixtures as lf
 from .conftest import TEMPLATES, ref

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from fabkiri.design.core.conformance import judge, parse_shape_tol
 from fabkiri.errors import InputError
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.pattern import conformance as pc
 from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import given, settings

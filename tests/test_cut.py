@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 import shapely
 from fabkiri.errors import CheckFailed, FabricationError, InputError
-from fabkiri.exchange.patternfile import read_pattern, write_pattern
-from fabkiri.exchange.reread import duplicate_segments, read_dxf, read_svg
+from fabkiri.exchange.dxf.reader import read_dxf
+from fabkiri.exchange.linework import duplicate_segments
+from fabkiri.exchange.pattern_json import read_pattern, write_pattern
+from fabkiri.exchange.svg import read_svg_layers as read_svg
 from fabkiri.fabricate.cut import hinges as hg
 from fabkiri.fabricate.cut.materials import available, load_material
 from fabkiri.fabricate.cut.readback import verify_result
@@ -355,7 +357,7 @@ def test_dxf_and_svg_structure_and_agreement():
 
 def test_bulk_dxf_is_byte_identical_to_ezdxf_objects():
     # the bulk ENGRAVE writer must give exactly what add_lwpolyline per stroke gives
-    from fabkiri.exchange.dxf import dxf_bytes
+    from fabkiri.exchange.dxf.writer import dxf_bytes
 
     for kind in ("tape", "separate"):
         r = cut(std(3, 4), hinge=kind)
@@ -377,7 +379,7 @@ def _same_layers(a, b):
 
 
 def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
-    from fabkiri.exchange.reread import read_dxf_checked
+    from fabkiri.exchange.dxf.reader import read_dxf_checked
 
     data = cut(std(4, 4)).files["p.dxf"]
     full, fast = read_dxf_checked(data, full_max=10**9), read_dxf_checked(data, full_max=0)
@@ -408,7 +410,7 @@ def test_tag_reader_matches_ezdxf_and_catches_broken_strokes():
 
 
 def test_verifier_svg_reader_skips_annotation_groups_without_changing_the_cut(tmp_path):
-    import fabkiri.exchange.svgread as L
+    import fabkiri.exchange.svg as L
 
     r = cut(std(3, 3))
     f = tmp_path / "p.svg"
@@ -451,7 +453,7 @@ def test_text_strokes_many_matches_text_strokes_label_by_label():
 )
 @settings(max_examples=30, deadline=None)
 def test_bulk_segments_and_linestrings_match_one_polyline_at_a_time(shape, seed):
-    from fabkiri.exchange.reread import _segments
+    from fabkiri.exchange.linework import _segments
     from fabkiri.fabricate.cut.readback import _linestrings
 
     rng = np.random.default_rng(seed)

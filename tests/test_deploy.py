@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from fabkiri.errors import CheckFailed, InputError
-from fabkiri.exchange.patternfile import import_obj, read_pattern
+from fabkiri.exchange.obj import import_obj
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.mechanics import adopt_state_labels, contract
 from fabkiri.mechanics.deploy import (
     closed_states,

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fabkiri.api.deploy import check_problems
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.mechanics.contact import corner_gaps, corner_term
 from fabkiri.mechanics.deploy import deployment_path
 

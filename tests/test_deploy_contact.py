@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.mechanics.contact import blend_term, hinge_gaps
 from fabkiri.mechanics.deploy import closed_states, deployment_path, mechanism_split
 from fabkiri.mechanics.drivers.rotations import barrier_frames, gap_angles, rotation_targets

@@ -11,7 +11,7 @@ from fabkiri.design.quad.objective import regularizer
 from fabkiri.design.quad.solve import DesignRequest, design
 from fabkiri.design.targets import lookup as T
 from fabkiri.errors import InputError
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.pattern import standard_pattern
 from fabkiri.pattern.residuals import hinge_sums
 from hypothesis import given, settings

@@ -11,7 +11,7 @@ import pytest
 import shapely
 from fabkiri.design.quad import fabrication as F
 from fabkiri.design.quad.constraints import Stencils
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.fabricate import design_limits
 from fabkiri.fabricate import fabricability as fb
 from fabkiri.fabricate.cut.materials import load_material

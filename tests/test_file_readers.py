@@ -13,8 +13,8 @@ import ezdxf
 import numpy as np
 import pytest
 from ezdxf import bbox, recover
-from fabkiri.exchange.patternfile import write_pattern
-from fabkiri.exchange.readers import read_cut_file
+from fabkiri.exchange.file_formats import read_cut_file
+from fabkiri.exchange.pattern_json import write_pattern
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import standard_pattern
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
@@ -80,7 +80,7 @@ def _binary_copy(src: Path, dst_dir: Path) -> Path:
 
 def test_binary_dxf_re_save_is_read_and_verified(std, cut_dirs, tmp_path):
     """A binary re-save of a cut sheet reads as the ASCII file does, and passes the verifier."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     pattern = read_pattern(std)
     src = next(cut_dirs["tape"].glob("*.dxf"))
@@ -94,7 +94,7 @@ def test_binary_dxf_re_save_is_read_and_verified(std, cut_dirs, tmp_path):
 
 @pytest.mark.slow  # every DXF kind; the quick loop re-saves and verifies one cut sheet above
 def test_every_written_dxf_reads_in_ascii_and_binary(std, cut_dirs, written_dxfs, tmp_path):
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     pattern = read_pattern(std)
     for k, f in enumerate(written_dxfs):
@@ -233,7 +233,7 @@ def test_3mf_writers_pass_the_strict_reader():
 def test_every_written_3mf_passes_the_strict_reader(std, tmp_path):
     """Every 3MF `print` and `coupon` write: quad tiles-and-strips (one and two extruders), strips,
     pinned, kagome tiles-and-strips and the printer coupon."""
-    from fabkiri.exchange import patternfile as io
+    from fabkiri.exchange import pattern_json as io
 
     pinned = tmp_path / "sq23.json"
     write_pattern(with_contracted_states(standard_pattern(2, 3, tile_size=12.0)), pinned)

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 
 from .conftest import TEMPLATES
 

@@ -9,7 +9,8 @@ import sys
 import numpy as np
 import pytest
 from fabkiri.errors import PatternError
-from fabkiri.exchange.patternfile import dumps, loads, obj_text, parse_obj, read_pattern, schema
+from fabkiri.exchange.obj import obj_text, parse_obj
+from fabkiri.exchange.pattern_json import dumps, loads, read_pattern, schema
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import Pattern, standard_pattern
 

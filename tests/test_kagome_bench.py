@@ -30,7 +30,7 @@ def _bench():
 def test_the_fit_table_measures_the_hausdorff_distance_apart_from_the_report(name, target, size):
     from fabkiri.design.core import conformance as conf
     from fabkiri.design.targets.lookup import load_target
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     path = ROOT / "tests" / "data" / name
     p = read_pattern(path)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.mechanics.contact import GapTerm, gap_term, hinge_gaps
 from fabkiri.mechanics.drivers.rotations import gap_angles
 from fabkiri.mechanics.path import closed_states, node_positions

@@ -10,7 +10,7 @@ import ezdxf
 import numpy as np
 import pytest
 import shapely
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 from fabkiri.pattern.kinds.tessellation import tessellation

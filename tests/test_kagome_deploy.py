@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 from fabkiri.errors import CheckFailed
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.mechanics.deploy import deployment_path
 from fabkiri.mechanics.energy import springs

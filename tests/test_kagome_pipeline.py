@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.exchange.fold import fold_text, loads_fold
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome

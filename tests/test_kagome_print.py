@@ -14,7 +14,7 @@ import shutil
 import numpy as np
 import pytest
 from fabkiri.api.print import PrintOptions, print_pattern
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.fabricate.print import geometry as printgeom
 from fabkiri.fabricate.print import mesh
 from fabkiri.fabricate.print.printers import load_printer

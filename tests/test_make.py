@@ -79,7 +79,7 @@ def test_min_opening_reaches_the_design(monkeypatch):
 
 def test_a_design_that_opens_little_is_warned_about():
     from fabkiri.api.maker import _opening_lines
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.pattern.opening import opening
 
     figures = opening(read_pattern(TEMPLATES / "circle-8x8.json")).to_dict()
@@ -137,7 +137,7 @@ def _designed_as(monkeypatch, template: str) -> None:
     """make's design step replaced by a shipped pattern (designed without a material, so cut's real
     web rules refuse it at its size and the real advice names what passes); every other step is real."""
     from fabkiri.api import maker
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     text = (TEMPLATES / template).read_text()
 
@@ -186,7 +186,7 @@ def test_the_first_option_of_a_refused_make_succeeds(tmp_path, monkeypatch, run_
 
 def test_advice_offers_the_make_line_beside_the_design_line(run_cli):
     from fabkiri.api.advice import Ask, alternatives
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     ask = Ask(file="p/circle-8x8.json", output="p/cut")
     options = alternatives(read_pattern(TEMPLATES / "circle-8x8.json"), "cut", ask=ask)

@@ -199,7 +199,7 @@ def test_info_reports_the_opening_in_text_and_json(run_cli):
 
 
 def test_the_report_shows_the_opening_and_warns_when_it_opens_little():
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.render.report import build_report
 
     page = build_report(

@@ -10,7 +10,7 @@ import pytest
 from fabkiri.design.quad.rigid import outline
 from fabkiri.design.quad.solve import DesignRequest, design
 from fabkiri.design.targets import lookup as T
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 
 # the bench's measures of a closed state's outline, so the test checks what the bench reports
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))

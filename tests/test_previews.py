@@ -56,7 +56,7 @@ def test_svg_renders_visible_in_inkscape(run_cli, tmp_path):
 
 
 def _path(name, **kw):
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.mechanics.deploy import deployment_path
 
     shipped = TEMPLATES / "patterns" / f"{name}.json"  # else kept as test data (tests/data)

@@ -18,7 +18,7 @@ import pytest
 import shapely
 import trimesh
 from fabkiri.errors import FabricationError, InputError
-from fabkiri.exchange.patternfile import write_pattern
+from fabkiri.exchange.pattern_json import write_pattern
 from fabkiri.fabricate.print import geometry as printgeom
 from fabkiri.fabricate.print import mesh, pingeom, solid
 from fabkiri.fabricate.print.printers import Printer, available_printers, load_printer
@@ -431,7 +431,7 @@ def test_written_meshes_are_closed_2_manifolds(preset):
     """The issue's case (the solver's circle at 2x, whose tiles STL had 87-114
     edges shared by four or six triangles): every STL and every 3MF volume, re-read
     by trimesh with its vertices welded, uses every edge exactly twice."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     pat = mesh.scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     files = mesh.job_files(
@@ -642,7 +642,7 @@ def test_pinned_refusal_names_the_scales_that_print():
     """The scale range offered for a refused pinned print is measured: one step
     below its start the plan is refused, at its start it plans, at its end it fits
     the bed and one step beyond it does not."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     pat = read_pattern(REPO / "templates" / "patterns" / "square-circle-9x9-rigid.json")
     pr = load_printer("prusa-mk4")
@@ -678,7 +678,7 @@ def test_pinned_refusals(printer):
 
 
 def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
-    from fabkiri.exchange.patternfile import import_obj
+    from fabkiri.exchange.obj import import_obj
     from fabkiri.mechanics.contract import adopt_state_labels
 
     from tests.conftest import ref
@@ -917,7 +917,7 @@ def _scaled(pattern, k):
 @pytest.mark.parametrize("state", [1, 2])
 def test_solver_design_prints_and_passes_the_verifier(state):
     """The solver's rigid circle design (irregular tiles), doubled in size."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     pr = load_printer("prusa-xl")
@@ -939,7 +939,7 @@ def test_solver_design_pinned_refused_where_corners_are_too_narrow(state):
     clearance: what is left there is a sliver under one nozzle wide, and the
     tile outline cannot be printed within the printer's tolerance. Refused up
     front, naming the tile and hinge, rather than built and failing the tile check."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.0)
     pr = load_printer("prusa-xl")
@@ -967,7 +967,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     """At 2.3x the same design's narrow corners keep a nozzle of material beside
     every clearance: it builds, and the printed tiles pass every check (this
     scale also exercises the tile check's robustness to float noise in mesh sections)."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
 
     pat = _scaled(read_pattern(REPO / "templates" / "patterns" / "circle-8x8-rigid.json"), 2.3)
     pr = load_printer("prusa-xl")
@@ -1149,7 +1149,7 @@ def test_every_hinge_keeps_its_bridge_where_a_bottom_strip_lies_under_a_top_stri
     """Stacked tiles-and-strips: a bottom strip's share of the base sheet may lie, in plan, under the
     top strip of a neighbouring hinge. It is still that hinge's printed bridge. This 16x16 design for
     prusa-mk4 (blob outline, 200 mm) was refused because the verifier found hinge 183 without a bridge."""
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.fabricate.print.topfaces import printed_bridges
 
     src = Path(__file__).parent / "data" / "blob-16x16-prusa-mk4.json"

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from fabkiri.exchange.patternfile import dumps, loads
+from fabkiri.exchange.pattern_json import dumps, loads
 from fabkiri.mechanics import contract_both, with_contracted_states
 from fabkiri.pattern import Pattern, geometry, standard_pattern
 from hypothesis import given, settings

@@ -21,7 +21,7 @@ from fabkiri.design.quad.rigid.reduced import _Merit, grid_families
 from fabkiri.design.quad.rigid.tiles import TileShapeRows
 from fabkiri.design.quad.solve import DesignRequest, design
 from fabkiri.design.targets import lookup as T
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.pattern import standard_pattern
 
 from .rigid_merit import rigid_merit

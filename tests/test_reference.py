@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from fabkiri.exchange.patternfile import import_obj
+from fabkiri.exchange.obj import import_obj
 from fabkiri.mechanics import adopt_state_labels, contract_both, describe
 from fabkiri.pattern import geometry
 from fabkiri.pattern.residuals import state_residuals

@@ -86,7 +86,7 @@ def test_every_section_is_there_and_self_contained(report):
     # what was not given says so
     assert "not provided: run fabkiri print" in page
     # fabricability is computed as `fabkiri info` computes it (it used to say "not computed" here)
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.fabricate.fabricability import summary
 
     fab = page.split('<section id="fabricability">')[1].split("</section>")[0]

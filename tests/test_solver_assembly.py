@@ -128,7 +128,7 @@ def test_standard_rigid_family_is_built_once_per_lattice_and_equals_build():
 
 
 def test_pattern_rows_are_written_one_encode_per_row_as_before():
-    from fabkiri.exchange import patternfile as io
+    from fabkiri.exchange import pattern_json as io
 
     def per_row(arr, indent):
         rows = arr.tolist()

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from fabkiri.errors import PatternError
-from fabkiri.exchange import patternfile as io
+from fabkiri.exchange import pattern_json as io
 from fabkiri.mechanics.contract import contract
 from fabkiri.pattern.kinds import tessellation as tess_module
 from fabkiri.pattern.kinds.quad.lattice import standard_pattern

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 import shapely
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.mechanics.deploy import closed_states
 from fabkiri.mechanics.tolerance import corner_shift, seam_edges, seam_misfit, tolerance_analysis
 

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 from fabkiri.errors import PatternError
-from fabkiri.exchange.patternfile import read_pattern, write_pattern
+from fabkiri.exchange.pattern_json import read_pattern, write_pattern
 from fabkiri.mechanics.contract import contract, with_contracted_states
 from fabkiri.mechanics.info import describe
 from fabkiri.mechanics.tube import tube_report

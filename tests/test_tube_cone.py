@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 import trimesh
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.fabricate.tube.rolled import plate_meshes, plate_overlap, state_frame
 from fabkiri.pattern.kinds.periodic.sheet import lattice_seam, seam_of
 

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import read_pattern, write_pattern
+from fabkiri.exchange.pattern_json import read_pattern, write_pattern
 from fabkiri.fabricate.tube.sheet import seam_hinges
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.kinds.periodic.sheet import (
@@ -45,7 +45,7 @@ def test_cut_a_tube_writes_the_flat_sheet_and_the_seam_note(tmp_path, run_cli):
     note = (out / "seam.txt").read_text()
     assert note.count("<->") == 6 and "circumference" in note and "S6:" in note
     # both ends of every seam hinge engraved: S1..S6 twice each beside the tile labels
-    from fabkiri.exchange.readers import read_cut_file
+    from fabkiri.exchange.file_formats import read_cut_file
 
     flat = tmp_path / "flat.json"  # the same sheet as a plain pattern: no seam, no marks
     write_pattern(flat_sheet(read_pattern(src), seam_of(read_pattern(src))), flat)

@@ -33,7 +33,7 @@ def test_designed_tube_stays_a_cylinder_but_its_radius_overshoots_on_the_path():
 def test_deploy_reports_the_standard_tubes_radius_in_every_frame(tmp_path, run_cli):
     """The standard tube deploys symmetrically: its radius grows monotonically from each closed state to
     the deployed one, and `deploy` writes it frame by frame (tube.csv) and says so."""
-    from fabkiri.exchange.patternfile import write_pattern
+    from fabkiri.exchange.pattern_json import write_pattern
     from fabkiri.pattern.kinds.periodic.sheet import standard_tube
 
     src = tmp_path / "tube.json"
@@ -60,7 +60,7 @@ def test_deploy_reports_the_standard_tubes_radius_in_every_frame(tmp_path, run_c
 def test_deploy_says_when_a_designed_tubes_radius_overshoots(tmp_path, run_cli):
     """The large-axial-change design's radius passes beyond its ends on the way to closed state 2, and
     `deploy` reports where."""
-    from fabkiri.exchange.patternfile import write_pattern
+    from fabkiri.exchange.pattern_json import write_pattern
 
     src = tmp_path / "a.json"
     write_pattern(design_tube_pattern((6, 8), "cylinder:113.137,135").pattern, src)

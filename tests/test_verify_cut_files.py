@@ -8,7 +8,7 @@ import shutil
 import ezdxf
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.verify import verify_layout
 
 from .conftest import TEMPLATES

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
-from fabkiri.exchange.patternfile import read_pattern
+from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.verify import verify_layout, verify_pattern
 from fabkiri.verify.pattern_checks import enclosed_gaps
 
@@ -149,7 +149,7 @@ def _near_closed(pattern, d_mm: float, tile: int = 7):
 
 
 def test_one_tolerance_in_mm_angles_as_displacement(tmp_path, run_cli):
-    from fabkiri.exchange.patternfile import write_pattern
+    from fabkiri.exchange.pattern_json import write_pattern
 
     from . import layout_fixtures as lf
 

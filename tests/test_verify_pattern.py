@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import import_obj
+from fabkiri.exchange.obj import import_obj
 from fabkiri.mechanics import adopt_state_labels, with_contracted_states
 from fabkiri.pattern import Pattern, geometry, standard_pattern
 from fabkiri.pattern.kinds.quad.lattice import DX, DY, quad_topology
@@ -252,7 +252,7 @@ def test_target_shape_ignores_the_solver_claim():
     import dataclasses
     import json
 
-    from fabkiri.exchange.patternfile import read_pattern
+    from fabkiri.exchange.pattern_json import read_pattern
     from fabkiri.verify import verify_pattern
 
     from .conftest import TEMPLATES

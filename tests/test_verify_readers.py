@@ -6,8 +6,10 @@ from __future__ import annotations
 import ezdxf
 import numpy as np
 import svgwrite
-from fabkiri.exchange import dxfcodec
-from fabkiri.exchange import readers as L
+from fabkiri.exchange import file_formats as L
+from fabkiri.exchange.dxf import reader as dxfreader
+from fabkiri.exchange.dxf import tags as dxfcodec
+from fabkiri.exchange.linework import Linework
 from fabkiri.pattern import geometry
 from fabkiri.verify import verify_layout
 from fabkiri.verify.quads import quads_of
@@ -17,7 +19,7 @@ from hypothesis import strategies as st
 from . import layout_fixtures as lf
 
 
-def _same(a: L.Linework, b: L.Linework) -> bool:
+def _same(a: Linework, b: Linework) -> bool:
     return (
         len(a.polylines) == len(b.polylines)
         and a.closed == b.closed
@@ -35,7 +37,7 @@ def test_fast_dxf_reader_matches_ezdxf(tmp_path):
         )
         path = lf.write_layout(tmp_path / hinge, p, C, hinge=hinge, fmt="dxf", kerf_offset=0.1)
         fast = dxfcodec.read_layer_tags(path)
-        assert fast is not None and _same(fast, L._read_dxf_full(path))
+        assert fast is not None and _same(fast, dxfreader._read_dxf_full(path))
 
 
 def test_dxf_units_curves_and_plain_layers(tmp_path):
@@ -157,7 +159,11 @@ def test_fast_reader_lines_on_cut(tmp_path):
     path = tmp_path / "lines.dxf"
     doc.saveas(path)
     fast = dxfcodec.read_layer_tags(path)
-    assert fast is not None and len(fast.polylines) == 4 and _same(fast, L._read_dxf_full(path))
+    assert (
+        fast is not None
+        and len(fast.polylines) == 4
+        and _same(fast, dxfreader._read_dxf_full(path))
+    )
 
 
 def test_one_dxf_codec_reads_what_it_writes(tmp_path):
@@ -165,7 +171,7 @@ def test_one_dxf_codec_reads_what_it_writes(tmp_path):
     stroke split from the ENTITIES section is canonical, with its points and closed flag, and the
     verifier's layer scan returns the same polylines; a prototype export of another shape is refused."""
     from fabkiri.exchange.drawing import SheetDrawing
-    from fabkiri.exchange.dxf import dxf_bytes
+    from fabkiri.exchange.dxf.writer import dxf_bytes
 
     rng = np.random.default_rng(3)
     sd = SheetDrawing(1, 200.0, 100.0)

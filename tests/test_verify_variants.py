@@ -8,7 +8,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from fabkiri.exchange.patternfile import read_pattern, write_pattern
+from fabkiri.exchange.pattern_json import read_pattern, write_pattern
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import standard_pattern
 from fabkiri.verify import verify_layout

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fabkiri.api.deploy import deploy_pattern
-from fabkiri.exchange.patternfile import read_pattern, write_pattern
+from fabkiri.exchange.pattern_json import read_pattern, write_pattern
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.kinds.periodic.sheet import seam_of, standard_tube, tube_tiles
 from fabkiri.pattern.kinds.tessellation import tessellation

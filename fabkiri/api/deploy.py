@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 
-from ..exchange.patternfile import dumps
+from ..exchange.pattern_json import dumps
 from ..mechanics.collisions import Overlap
 from ..mechanics.deploy import DeploymentPath, deployment_path
 from ..mechanics.tube import tube_along_path

@@ -26,7 +26,7 @@ from ..design.quad.rigid.offset_outline import preferred_holes
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets.lookup import Target, load_target
 from ..errors import FabkiriError, InputError, SolveError
-from ..exchange.patternfile import dumps
+from ..exchange.pattern_json import dumps
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
 from ..pattern.kinds.tessellation import DEFAULT_KIND

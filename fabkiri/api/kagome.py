@@ -33,7 +33,7 @@ from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.targets.curve import Target
 from ..design.targets.lookup import load_target
 from ..errors import InputError
-from ..exchange.patternfile import dumps
+from ..exchange.pattern_json import dumps
 from ..fabricate import fabricability
 from ..fileio import atomic_write
 from ..mechanics.contract import with_contracted_states

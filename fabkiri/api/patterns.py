@@ -1,5 +1,5 @@
 """Pattern files in and out: the front doors of ``import``, ``export`` and every command that reads
-a pattern. The formats are :mod:`fabkiri.exchange.pattern_formats` strategies chosen by suffix or by name;
+a pattern. The formats are :mod:`fabkiri.exchange.file_formats` strategies chosen by suffix or by name;
 this module adds the policy around them: fold-parity labels for the closed states a file brings,
 contraction of the closed states an export needs (it must close), and the fabrication gate.
 """
@@ -11,8 +11,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import CheckFailed, InputError
-from ..exchange.pattern_formats import format_of, pattern_format
-from ..exchange.patternfile import import_obj
+from ..exchange.file_formats import format_of, pattern_format
+from ..exchange.obj import import_obj
 from ..mechanics.contract import adopt_state_labels, contract
 from ..mechanics.info import DEFAULT_TOL
 from ..pattern.model import Pattern

@@ -17,7 +17,7 @@ from .. import limits
 from ..design.tube.periodic import TWO_PI, TubeTarget, parse_tube_target
 from ..design.tube.solve import TubeRequest, TubeResult, design_tube
 from ..errors import CheckFailed, InputError
-from ..exchange.patternfile import dumps
+from ..exchange.pattern_json import dumps
 from ..mechanics.contract import contract
 from ..mechanics.tube import tube_lines, tube_report
 from ..pattern.kinds.periodic.sheet import seam_of

@@ -80,7 +80,7 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 
 def _jsonable(v):
-    from ..exchange.patternfile import _jsonable as j
+    from ..exchange.pattern_json import _jsonable as j
 
     return j(v)
 

@@ -10,8 +10,8 @@ import sys
 from .. import limits
 from ..api.patterns import export_pattern, import_pattern, load_pattern
 from ..errors import CheckFailed, InputError
-from ..exchange.pattern_formats import format_names
-from ..exchange.patternfile import write_pattern
+from ..exchange.file_formats import format_names
+from ..exchange.pattern_json import write_pattern
 from ..fileio import atomic_write, atomic_write_many
 from ..mechanics.contract import with_contracted_states
 from ..mechanics.info import DEFAULT_TOL, DEFAULT_TOL_RAD, describe

@@ -12,7 +12,8 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
-from ..exchange.patternfile import import_obj, read_pattern
+from ..exchange.obj import import_obj
+from ..exchange.pattern_json import read_pattern
 from ..mechanics.contract import adopt_state_labels
 from ..pattern.model import Pattern
 from .argtypes import bounded

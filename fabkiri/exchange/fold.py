@@ -21,7 +21,7 @@ from .. import __version__, limits
 from ..errors import PatternError
 from ..pattern.kinds.tessellation import kind_of_arity
 from ..pattern.model import Pattern
-from .pattern_formats import PatternFormat, register_format
+from .file_formats import PatternFormat, register_format
 
 FILE_SPEC = 1.2
 STATE_KEY = "fabkiri:state"  # custom frame property (a colon marks it as ours, per the spec)
@@ -167,7 +167,7 @@ def loads_fold(text: str, source: str = "fold") -> Pattern:
 
 def _read_fold(path: Path, scale: float) -> Pattern:
     """A ``.fold`` file, its coordinates times ``scale`` (mm per file unit)."""
-    from .patternfile import _read_text
+    from .pattern_json import _read_text
 
     pat = loads_fold(_read_text(path), str(path))
     if scale != 1.0:

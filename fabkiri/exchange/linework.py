@@ -112,3 +112,29 @@ def flat_polylines(
         np.array([len(p) for p, _ in polylines]),
         np.array([bool(c) for _, c in polylines]),
     )
+
+
+def _segments(polylines: Sequence[tuple[np.ndarray, bool]]) -> np.ndarray:
+    """Every segment ``(S, 2, 2)`` of the polylines (closing segments included), polyline by polyline."""
+    pts, n, closed = flat_polylines(polylines)
+    if len(pts) == 0:
+        return np.zeros((0, 2, 2))
+    end = np.cumsum(n)
+    first = end - n
+    nxt = np.arange(1, len(pts) + 1)
+    nxt[end - 1] = np.where(closed, first, -1)  # the last point goes back to the first, or nowhere
+    keep = nxt >= 0
+    return np.stack([pts[keep], pts[nxt[keep]]], 1)
+
+
+def duplicate_segments(polylines: Sequence[tuple[np.ndarray, bool]], decimals: int = 6) -> int:
+    """Segments that appear twice (either direction) — they would be cut twice."""
+    s = np.round(_segments(polylines), decimals)
+    if len(s) == 0:
+        return 0
+    a, b = s[:, 0], s[:, 1]
+    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
+    lo = np.where(swap[:, None], b, a)
+    hi = np.where(swap[:, None], a, b)
+    key = np.concatenate([lo, hi], 1)
+    return int(len(key) - len(np.unique(key, axis=0)))

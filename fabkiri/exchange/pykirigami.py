@@ -28,8 +28,8 @@ from .. import limits
 from ..errors import PatternError
 from ..pattern.kinds.tessellation import kind_of_arity
 from ..pattern.model import Pattern
-from .pattern_formats import PatternFormat, register_format
-from .patternfile import _read_text
+from .file_formats import PatternFormat, register_format
+from .pattern_json import _read_text
 
 FILES = ("vertices.txt", "constraints.txt", "target.txt")
 JOINT_BOTH_FACES = 3

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..exchange.drawing import SheetDrawing
-from ..exchange.dxf import dxf_bytes
+from ..exchange.dxf.writer import dxf_bytes
 from ..exchange.svg import svg_bytes
 from ..mechanics.contract import with_contracted_states
 from ..pattern.kinds.quad.lattice import standard_pattern

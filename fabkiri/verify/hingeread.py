@@ -20,7 +20,7 @@ from ..registry import Registry
 if TYPE_CHECKING:
     import numpy as np
 
-    from ..exchange.readers import Linework
+    from ..exchange.linework import Linework
     from .manifest import Allowances
 
 PLAIN = "plain"  # no manifest: the reading is chosen from the linework itself

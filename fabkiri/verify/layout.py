@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 import shapely
 
-from ..exchange.readers import Linework, read_cut_file
+from ..exchange.file_formats import read_cut_file
+from ..exchange.linework import Linework
 from ..pattern import geometry
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES

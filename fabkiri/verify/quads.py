@@ -8,7 +8,7 @@ import numpy as np
 import shapely
 
 from ..errors import VerifyError
-from ..exchange.readers import JOIN_MM, SNAP_MM, Linework
+from ..exchange.linework import JOIN_MM, SNAP_MM, Linework
 from ..pattern import geometry
 from .geom import point_segment_distance
 from .manifest import Allowances

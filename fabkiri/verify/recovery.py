@@ -12,7 +12,7 @@ import shapely
 from scipy.sparse import csgraph
 
 from ..errors import VerifyError
-from ..exchange.readers import JOIN_MM, SNAP_MM, Linework
+from ..exchange.linework import JOIN_MM, SNAP_MM, Linework
 from ..kdtree import KDTree
 from .hingeread import PLAIN, HingeReading, reading, register_reading
 from .manifest import Allowances

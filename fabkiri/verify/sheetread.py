@@ -14,7 +14,8 @@ import numpy as np
 import shapely
 
 from ..errors import VerifyError
-from ..exchange.readers import Linework, read_cut_file
+from ..exchange.file_formats import read_cut_file
+from ..exchange.linework import Linework
 from ..mechanics.contract import contract
 from ..pattern import geometry
 from ..pattern.kinds.tessellation import tessellation

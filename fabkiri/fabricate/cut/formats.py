@@ -34,7 +34,7 @@ class SheetFormat:
 
 
 def _dxf(job: CutJob, sheets: list[SheetDrawing]) -> bytes:
-    from ...exchange.dxf import dxf_bytes
+    from ...exchange.dxf.writer import dxf_bytes
 
     return dxf_bytes(sheets[0], job.colors)
 

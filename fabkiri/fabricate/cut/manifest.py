@@ -14,7 +14,7 @@ import shapely
 
 from ... import __version__
 from ...exchange.drawing import snap
-from ...exchange.dxf import DXF_VERSION
+from ...exchange.dxf.writer import DXF_VERSION
 from ...verify.manifest import CutManifest
 from .. import assembly as asm
 from ..gate import GATE_GROUPS

@@ -31,13 +31,9 @@ import shapely
 
 from ...errors import CheckFailed, FabkiriError
 from ...exchange.drawing import LAYERS
-from ...exchange.reread import (
-    Polylines,
-    duplicate_segments,
-    flat_polylines,
-    read_dxf_checked,
-    read_svg,
-)
+from ...exchange.dxf.reader import read_dxf_checked
+from ...exchange.linework import Polylines, duplicate_segments, flat_polylines
+from ...exchange.svg import read_svg_layers as read_svg
 from ...fileio import atomic_write_many
 from ...pattern import thinness as fab
 from ...pattern.model import Pattern

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from ...exchange.dxf import dxf_bytes
+from ...exchange.dxf.writer import dxf_bytes
 from ...exchange.svg import svg_bytes
 from ...pattern import geometry
 from ...pattern.model import Pattern

@@ -3,7 +3,8 @@
 The solids are built from the same :class:`~fabkiri.fabricate.print.solid.Body`
 descriptions as the meshes, so STEP and STL/3MF describe the same geometry
 (circles are the same regular polygons). build123d (OpenCascade) is imported
-lazily: ``fabkiri print`` without ``--step`` never loads it.
+lazily: ``fabkiri print`` without ``--step`` never loads it. Registered as the solid format
+``step`` (:mod:`fabkiri.exchange.file_formats`), written only.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import shapely
 from shapely.geometry.polygon import orient
 
 from ...errors import FabricationError
+from ...exchange.file_formats import SolidFormat, register_format
 from .solid import Body, Prism
 
 _STAMP = re.compile(rb"(FILE_NAME\s*\(\s*'[^']*'\s*,\s*)'[^']*'")
@@ -111,3 +113,7 @@ def step_volume(path: str | os.PathLike) -> float:
     b3d = _b3d()
     shape = b3d.import_step(str(path))
     return float(sum(s.volume for s in shape.solids()))
+
+
+# written only (build123d, the optional extra ``cad``); :func:`step_volume` reads a volume back
+register_format(SolidFormat("step", (".step", ".stp"), write=step_bytes))

@@ -12,7 +12,9 @@ settings the geometry depends on (bed, nozzle, layer heights, one filament per
 extruder), so slicing the file as it is gives the intended print.
 
 Bytes are deterministic: fixed zip dates, no UUIDs, vertices written with
-coordinates rounded to 1 nm.
+coordinates rounded to 1 nm. Registered as the solid format ``3mf``
+(:mod:`fabkiri.exchange.file_formats`): plain 3MFs written by :func:`objects_3mf`, projects and
+plain files read back by :func:`read_meshes`.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from ...exchange.file_formats import Mesh, SolidFormat, register_format
 from .printers import MATERIALS, Printer
 
 CONTENT_TYPES = """<?xml version="1.0" encoding="UTF-8"?>
@@ -291,3 +294,31 @@ def read_volumes(data: bytes) -> list[tuple[str, str, int, np.ndarray, np.ndarra
             )
         )
     return out
+
+
+def read_meshes(data: bytes) -> list[Mesh]:
+    """The named meshes of a 3MF as fabkiri writes it: a project's volumes (:func:`read_volumes`),
+    or the objects of a plain 3MF (:func:`objects_3mf`)."""
+    import re
+
+    zf = zipfile.ZipFile(io.BytesIO(data))
+    if "Metadata/Slic3r_PE_model.config" in zf.namelist():
+        return [(name, v, f) for name, _, _, v, f in read_volumes(data)]
+    text = zf.read("3D/3dmodel.model").decode("utf-8")
+    out: list[Mesh] = []
+    for name, body in re.findall(
+        r'<object id="\d+" type="model" name="([^"]*)">(.*?)</object>', text, re.S
+    ):
+        v = re.findall(r'<vertex x="([^"]+)" y="([^"]+)" z="([^"]+)"', body)
+        f = re.findall(r'<triangle v1="(\d+)" v2="(\d+)" v3="(\d+)"', body)
+        out.append(
+            (
+                name,
+                np.array(v, dtype=float).reshape(-1, 3),
+                np.array(f, dtype=np.int64).reshape(-1, 3),
+            )
+        )
+    return out
+
+
+register_format(SolidFormat("3mf", (".3mf",), write=objects_3mf, read=read_meshes))

@@ -173,7 +173,7 @@ def mark_seam(
 ) -> None:
     """Engrave both ends of every seam hinge (``S1`` .. ``Sn``, a tick at the corner) on the cut sheets and
     rewrite the sheets' DXF, SVG and PNG bytes and the manifest's engrave figures."""
-    from ...exchange.dxf import dxf_bytes
+    from ...exchange.dxf.writer import dxf_bytes
     from ...exchange.svg import svg_bytes
     from ..cut.preview import png_bytes
     from ..cut.sheets import PIERCE_S

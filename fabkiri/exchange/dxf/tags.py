@@ -7,12 +7,12 @@ of label strokes. So the strokes are written, and read back, as text in one cano
     0 LWPOLYLINE / 5 handle / 330 owner / 100 AcDbEntity / 8 layer / 100 AcDbPolyline /
     90 vertex count / 70 flags (0 or 1) / then 10 x, 20 y per vertex
 
-(:data:`CANON_CODES`). The writer (:mod:`fabkiri.exchange.dxf`) takes the text of that form from
+(:data:`CANON_CODES`). The writer (:mod:`.writer`) takes the text of that form from
 ezdxf's own export of a prototype (:func:`split_prototype`, :func:`lwpolyline_tags`); the writer's
-read-back (:mod:`fabkiri.exchange.reread`) splits an ENTITIES section into tags and picks out
-the canonical entities (:func:`split_tags`); the verifier (:mod:`.readers`) reads the entities of
-one layer of any ASCII DXF from their tags (:func:`read_layer_tags`), ezdxf taking over for
-anything else.
+read-back (:func:`.reader.read_dxf_checked`) splits an ENTITIES section into tags and picks out
+the canonical entities (:func:`split_tags`); the reader of any DXF
+(:func:`.reader.read_cut_dxf`) reads the entities of one layer of any ASCII DXF from their tags
+(:func:`read_layer_tags`), ezdxf taking over for anything else.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import VerifyError
-from .linework import Linework
+from ...errors import VerifyError
+from ..linework import Linework
 
 INSUNITS_MM = {0: 1.0, 1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 13: 1e-3, 14: 0.1}
 ENTITIES_HEAD = "  0\nSECTION\n  2\nENTITIES\n"

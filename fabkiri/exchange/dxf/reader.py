@@ -1,9 +1,10 @@
-"""Reading the written DXF and SVG bytes back into polylines, for the writer's own checks.
+"""Reading DXF files: the linework of one layer of any DXF, and fabkiri's own DXF for its checks.
 
-:func:`read_dxf_checked` re-reads a DXF fast from its tags when it is fabkiri's canonical layout
-(large files, through the tag codec :mod:`fabkiri.exchange.dxfcodec`) and with ezdxf's loader and
-auditor otherwise; :func:`read_svg` (:mod:`fabkiri.exchange.svgread`) reads the SVG's paths in its
-declared millimetres. The polylines are compared and audited in :mod:`.readback`.
+:func:`read_cut_dxf` reads the CUT layer (or another named one) of any DXF a laser tool writes,
+in millimetres: a fast scan of that layer's tags (:func:`.tags.read_layer_tags`) and ezdxf's full
+reader (blocks exploded, curves flattened, any units) for everything else. :func:`read_dxf_checked`
+re-reads a DXF fabkiri wrote, for the writer's own checks: fast from its tags when it is the
+canonical layout (large files) and with ezdxf's loader and auditor otherwise.
 """
 
 from __future__ import annotations
@@ -11,14 +12,15 @@ from __future__ import annotations
 import io
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from .drawing import LAYERS
-from .dxfcodec import CANON_CODES, Tags, entities_span, split_tags
-from .linework import Polylines, flat_polylines
-from .svgread import read_svg_layers as read_svg
+from ...errors import VerifyError
+from ..drawing import LAYERS
+from ..linework import NON_CUT_LAYERS, Linework, Polylines
+from .tags import CANON_CODES, INSUNITS_MM, Tags, entities_span, read_layer_tags, split_tags
 
 if TYPE_CHECKING:  # ezdxf is imported where a file is read
     from ezdxf.audit import Auditor
@@ -26,16 +28,6 @@ if TYPE_CHECKING:  # ezdxf is imported where a file is read
     from ezdxf.entities import LWPolyline
 
 Entity = tuple[str, tuple[np.ndarray, bool]]  # a modelspace LWPOLYLINE: (layer, (points, closed))
-
-__all__ = [
-    "DxfReadback",
-    "Polylines",
-    "duplicate_segments",
-    "flat_polylines",
-    "read_dxf",
-    "read_dxf_checked",
-    "read_svg",
-]
 
 
 def read_dxf(
@@ -226,27 +218,59 @@ def _full(data: bytes) -> DxfReadback:
     )
 
 
-def _segments(polylines: Sequence[tuple[np.ndarray, bool]]) -> np.ndarray:
-    """Every segment ``(S, 2, 2)`` of the polylines (closing segments included), polyline by polyline."""
-    pts, n, closed = flat_polylines(polylines)
-    if len(pts) == 0:
-        return np.zeros((0, 2, 2))
-    end = np.cumsum(n)
-    first = end - n
-    nxt = np.arange(1, len(pts) + 1)
-    nxt[end - 1] = np.where(closed, first, -1)  # the last point goes back to the first, or nowhere
-    keep = nxt >= 0
-    return np.stack([pts[keep], pts[nxt[keep]]], 1)
+# ------------------------------------------------------------------ any DXF's linework
 
 
-def duplicate_segments(polylines: Sequence[tuple[np.ndarray, bool]], decimals: int = 6) -> int:
-    """Segments that appear twice (either direction) — they would be cut twice."""
-    s = np.round(_segments(polylines), decimals)
-    if len(s) == 0:
-        return 0
-    a, b = s[:, 0], s[:, 1]
-    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
-    lo = np.where(swap[:, None], b, a)
-    hi = np.where(swap[:, None], a, b)
-    key = np.concatenate([lo, hi], 1)
-    return int(len(key) - len(np.unique(key, axis=0)))
+def read_cut_dxf(p: Path, layer: str = "CUT") -> Linework:
+    """The linework of ``layer`` of a DXF in mm (the tags' fast scan, else ezdxf's full reader)."""
+    fast = read_layer_tags(p, layer)
+    if fast is not None:
+        return fast
+    return _read_dxf_full(p, layer)
+
+
+CURVE_TYPES = {"LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "SPLINE", "ELLIPSE"}
+
+
+def _read_dxf_full(p: Path, layer_name: str = "CUT") -> Linework:
+    """Every curve of the modelspace in world coordinates, blocks exploded, with its layer and colour.
+
+    ezdxf does the work: ``recover`` reads damaged files, ``disassemble.recursive_decompose``
+    expands INSERTs (any depth, with their transforms), ``to_primitives`` gives each entity's path
+    in WCS (its OCS applied, curves flattened to 1 µm).
+    """
+    import ezdxf
+    from ezdxf import disassemble, recover
+    from ezdxf.lldxf.validator import is_binary_dxf_file
+
+    try:
+        # ezdxf's recover reads ASCII DXF only; its plain reader takes binary DXF
+        doc = ezdxf.readfile(str(p)) if is_binary_dxf_file(str(p)) else recover.readfile(str(p))[0]
+    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as exc:
+        raise VerifyError(f"{p}: not a readable DXF file ({exc})") from None
+    unit = INSUNITS_MM.get(int(doc.header.get("$INSUNITS", 0)))
+    if unit is None:
+        raise VerifyError(f"{p}: unsupported drawing units $INSUNITS={doc.header.get('$INSUNITS')}")
+    lw = Linework(p, layer_found=False)
+    layer_colour = {layer.dxf.name.upper(): layer.color for layer in doc.layers}
+    flat = 0.001 / unit
+    for prim in disassemble.to_primitives(disassemble.recursive_decompose(doc.modelspace()), flat):
+        e = prim.entity
+        if e is None or e.dxftype() not in CURVE_TYPES or prim.path is None:
+            continue
+        layer = e.dxf.layer.upper()
+        aci = e.dxf.get("color", 256)
+        colour = str(layer_colour.get(layer, 7) if aci in (0, 256) else aci)
+        closed = bool(
+            getattr(e, "closed", False) or getattr(e, "is_closed", False) or e.dxftype() == "CIRCLE"
+        )
+        for sub in prim.path.sub_paths():
+            pts = np.array([(v.x, v.y) for v in sub.flattening(flat)], dtype=float)
+            lw.add(pts * unit, closed, layer, colour)
+    if layer_name != "CUT" or any(name == "CUT" for name in lw.layers):
+        found = any(name == layer_name for name in lw.layers)
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name == layer_name)
+        lw.layer_found = found
+    else:  # a plain file from another tool: every outline not on an annotation layer
+        lw = lw.subset(i for i, name in enumerate(lw.layers) if name not in NON_CUT_LAYERS)
+    return lw

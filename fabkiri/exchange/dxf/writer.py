@@ -1,4 +1,4 @@
-"""DXF writer (ezdxf): R2010, millimetres, one layer per purpose, LWPOLYLINEs only.
+"""The DXF writer (ezdxf): R2010, millimetres, one layer per purpose, LWPOLYLINEs only.
 
 Byte-reproducible: ezdxf's ``write_fixed_meta_data_for_testing`` option fixes
 the creation/update dates and GUIDs it would otherwise draw from the clock and
@@ -8,7 +8,7 @@ Bulk strokes: a 64x64 sheet engraves tens of thousands of label strokes, and
 ezdxf is slow building and exporting each LWPOLYLINE object. The
 ``ENGRAVE`` layer is therefore written in bulk: ezdxf exports one prototype
 LWPOLYLINE of the document, and every stroke is that prototype's tag text with
-its own handle (the tag codec :mod:`fabkiri.exchange.dxfcodec`; reserved from the document's handle generator, so
+its own handle (the tag codec :mod:`.tags`; reserved from the document's handle generator, so
 ``$HANDSEED`` and every later handle are what ezdxf would give), vertex count,
 flags and vertices (formatted as ezdxf does: ``%s`` of a float). The result is
 byte-identical to adding each stroke with ``add_lwpolyline`` (tested);
@@ -27,8 +27,8 @@ from ezdxf import units
 from ezdxf.entities import LWPolyline
 from ezdxf.lldxf.tagwriter import TagWriter
 
-from .drawing import COLORS, LAYERS, SheetDrawing
-from .dxfcodec import insert_entities, lwpolyline_tags, split_prototype
+from ..drawing import COLORS, LAYERS, SheetDrawing
+from .tags import insert_entities, lwpolyline_tags, split_prototype
 
 DXF_VERSION = "R2010"
 NON_PLOTTING = ("NOTES",)  # annotation for the maker, never cut: the layer's plot flag is off
@@ -49,7 +49,7 @@ def _fixed_metadata():
 
 def _prototype(doc, msp, layer: str) -> tuple[str, str] | None:
     """``(head, mid)`` of ezdxf's own export of an open 2-point LWPOLYLINE on ``layer``
-    (:func:`~fabkiri.exchange.dxfcodec.split_prototype`); None when it is not canonical."""
+    (:func:`~.tags.split_prototype`); None when it is not canonical."""
     e = LWPolyline.new(
         handle=_PROBE_HANDLE, owner=msp.layout_key, dxfattribs={"layer": layer}, doc=doc
     )
