@@ -44,9 +44,9 @@ from pathlib import Path
 import numpy as np
 from fabkiri.cli.design_cmd import BIG_TILES
 from fabkiri.design.quad.solve import (
+    DesignProblem,
     DesignRequest,
     _ineq_values,
-    _Problem,
     design,
     single_thread_blas,
 )
@@ -67,7 +67,7 @@ def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
     set at the initial guess (pivoted QR), which is what SLSQP needs.
     """
     req = DesignRequest(n, n, T.load_target("circle", 100.0), rigid=True, init=init)
-    prob = _Problem(req)
+    prob = DesignProblem(req)
     shape = prob.X0.shape
     eqs, fits, ineqs = prob.of("eq"), prob.of("fit"), prob.of("ineq")
     reg = prob.of("reg")[0]

@@ -26,7 +26,7 @@ def test_clipped_area_of_two_squares():
     x = np.array([[0, 0], [2, 0], [2, 2], [0, 2], [1, 1], [3, 1], [3, 3], [1, 3]], float)
     polys = np.arange(8)[None]
     rows = np.arange(1)
-    P = [F._corners(x, polys, rows, np.array([k])) for k in range(8)]
+    P = [F.dual_corner(x, polys, rows, np.array([k])) for k in range(8)]
     assert PR.clipped_area(P[:4], P[4:]).v == pytest.approx([1.0])
     assert PR.clipped_area(P[4:], P[:4]).v == pytest.approx([1.0])
     far = [(a[0] + 5.0, a[1]) for a in P[4:]]

@@ -14,7 +14,7 @@ The rule, as this test reads it:
   itself a module (``fabkiri/_lazy.py``), by that module's subpackage.
 - Checked uses: ``from M import _x``; a private part of an imported module's path (``from .._lazy
   import f``, ``import fabkiri._lazy``); and ``m._x`` where ``m`` is a name an import bound to a fabkiri
-  module (``from ..fabricate import fabricability as fb`` then ``fb._bed_scale``), relative imports
+  module (``from ..fabricate import fabricability as fb`` then ``fb._never``), relative imports
   resolved against the importing file, function-local imports included.
 - A module of ``fabkiri`` fails when it uses a private name owned by another subpackage. Private
   attributes of objects (``self._x``, ``target._u``) are their class's business, not this test's.
@@ -26,6 +26,7 @@ a name the importer should not need is replaced by the public function that answ
 from __future__ import annotations
 
 import ast
+import functools
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -84,9 +85,34 @@ def path_uses(module: str) -> Iterator[tuple[str, str]]:
 
 
 def name_owner(module: str, name: str) -> str:
-    """The owner of ``name`` looked up in ``module``: the submodule's subpackage if it is one."""
+    """The owner of ``name`` looked up in ``module``: the submodule's subpackage if it is one, else that of
+    the module that defines it (a re-export, ``from .dual import _corners``, is followed to its source)."""
     sub = f"{module}.{name}"
-    return subpackage(sub if module_file(sub) is not None else module)
+    if module_file(sub) is not None:
+        return subpackage(sub)
+    seen = set()
+    while (module, name) not in seen and (path := module_file(module)) is not None:
+        seen.add((module, name))
+        source = reexported(path, name)
+        if source is None:
+            break
+        module, name = source
+    return subpackage(module)
+
+
+@functools.cache
+def top_level_imports(path: Path) -> dict[str, tuple[str, str]]:
+    """The names a module's top level binds by import-from: local name -> (module, name there)."""
+    bound = {}
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.ImportFrom) and ours(module := absolute(path, node)):
+            for alias in node.names:
+                bound[alias.asname or alias.name] = (module, alias.name)
+    return bound
+
+
+def reexported(path: Path, name: str) -> tuple[str, str] | None:
+    return top_level_imports(path).get(name)
 
 
 def private_uses(path: Path, source: str | None = None) -> Iterator[tuple[int, str, str]]:
@@ -134,13 +160,15 @@ def dotted(node: ast.expr) -> str | None:
 
 
 def violations(root: Path) -> list[str]:
-    found = []
+    found = {}  # one line per file and name: its first use
     for path in sorted(root.rglob("*.py")):
         home = subpackage(module_name(path)) if path.is_relative_to(REPO / "fabkiri") else None
-        for line, name, owner in private_uses(path):
+        for line, name, owner in sorted(private_uses(path)):
             if owner != home:
-                found.append(f"{path.relative_to(REPO)}:{line} uses {name} (owned by {owner})")
-    return found
+                found.setdefault(
+                    (path, name), f"{path.relative_to(REPO)}:{line} uses {name} (owned by {owner})"
+                )
+    return list(found.values())
 
 
 def test_no_private_name_crosses_a_subpackage():
@@ -158,10 +186,10 @@ def test_the_rule_reads_the_tree():
     assert subpackage("fabkiri.api.maker") == "fabkiri.api"
     assert subpackage("fabkiri.errors") == "fabkiri"
     assert name_owner("fabkiri.design.quad", "solve") == "fabkiri.design.quad"
-    code = "from ..fabricate import fabricability as fb\nx = fb._bed_scale\nfrom .design import _rank\n"
+    code = "from ..fabricate import fabricability as fb\nx = fb._never\nfrom .design import _rank\n"
     uses = list(private_uses(REPO / "fabkiri" / "api" / "probe.py", code))
     assert [(line, name) for line, name, _ in uses] == [
         (3, "fabkiri.api.design._rank"),
-        (2, "fabkiri.fabricate.fabricability._bed_scale"),
+        (2, "fabkiri.fabricate.fabricability._never"),
     ]
     assert [owner for *_, owner in uses] == ["fabkiri.api", "fabkiri.fabricate"]

@@ -361,7 +361,7 @@ def _refused(pattern: Pattern, style: str, printer, state: int, scale: float, me
     """Whether :func:`~fabkiri.fabricate.fabricability.print_refusal` refuses, the bed asked first: its
     box of the closed corners needs no plan geometry (a pinned 32x32 plan past the bed: 5 s each)."""
     try:
-        top = fb._bed_scale(fb.scaled(pattern, scale), style, state, printer)
+        top = fb.bed_scale(fb.scaled(pattern, scale), style, state, printer)
     except CheckFailed:  # it does not close: the plan checks say so
         top = None
     if top is not None and top < 1.0:

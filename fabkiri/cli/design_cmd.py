@@ -19,8 +19,6 @@ import numpy as np
 from ..api.design import (  # noqa: F401 (names tests and benches import from here)
     BIG_TILES,
     PatternRequest,
-    _fit_miss,
-    _rank,
     design_pattern,
     overlapping_tiles,
 )
@@ -80,9 +78,9 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 
 def _jsonable(v):
-    from ..exchange.patternfile import _jsonable as j
+    from ..exchange.patternfile import jsonable
 
-    return j(v)
+    return jsonable(v)
 
 
 _tol = bounded(

@@ -79,7 +79,7 @@ class DesignRequest:
     )
     coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
     # --init coarse: refit a coarse level whose tips-only outline misses ``second_opinion_above`` with the outline
-    # rows (``_Problem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
+    # rows (``DesignProblem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
     coarse_refit: bool = False
     # with ``coarse_refit``: refit the levels that miss by more than this share instead (None: the shape tolerance;
     # the minimax finish asks its own, smaller, threshold)

@@ -31,7 +31,7 @@ from typing import TypeVar, cast
 import numpy as np
 
 from ...pattern import thinness as fab
-from ..core.dual import Dual, _corners, _dot, _sub, values_only
+from ..core.dual import Dual, dual_corner, values_only, vec_dot, vec_sub
 from .constraints import Family, Stencils
 
 _Args = TypeVar("_Args", bound=tuple)
@@ -100,8 +100,8 @@ class FabricationLimits:
 
 def _normal(a, b):
     """Inward unit normal of the CCW edge a -> b."""
-    e = _sub(b, a)
-    ln = _dot(e, e).sqrt()
+    e = vec_sub(b, a)
+    ln = vec_dot(e, e).sqrt()
     return -e[1] / ln, e[0] / ln
 
 
@@ -109,9 +109,9 @@ def _mitre(x, quads, rows, j, n: int | None = None):
     """Mitre vector at corner j: the corner moves by d times it when the quad shrinks by d.
     ``n``: the polygon's arity when ``quads`` holds more nodes after it (default all of them)."""
     n = quads.shape[1] if n is None else n
-    prev, here, nxt = (_corners(x, quads, rows, (j + s) % n) for s in (-1, 0, 1))
+    prev, here, nxt = (dual_corner(x, quads, rows, (j + s) % n) for s in (-1, 0, 1))
     na, nb = _normal(prev, here), _normal(here, nxt)
-    s = 1.0 + _dot(na, nb)
+    s = 1.0 + vec_dot(na, nb)
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
 
 
@@ -123,7 +123,7 @@ def _edges(x: np.ndarray, quads: np.ndarray, sel: np.ndarray | None = None):
     e = np.tile(np.arange(n), len(quads))
     if sel is not None:
         rows, e = rows[sel], e[sel]
-    return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % n)
+    return rows, e, dual_corner(x, quads, rows, e), dual_corner(x, quads, rows, (e + 1) % n)
 
 
 def width_rows(
@@ -137,9 +137,9 @@ def width_rows(
     far = []
     for off in range(2, quads.shape[1]):
         j = (e + off) % quads.shape[1]
-        g = _dot(n, _sub(_corners(x, quads, rows, j), a))
+        g = vec_dot(n, vec_sub(dual_corner(x, quads, rows, j), a))
         if shrink:
-            g = g + shrink * (_dot(n, _mitre(x, quads, rows, j)) - 1.0)
+            g = g + shrink * (vec_dot(n, _mitre(x, quads, rows, j)) - 1.0)
         far.append(g)
     top = far[0]
     for g in far[1:]:
@@ -166,28 +166,28 @@ def shrunk_edge_rows(
 ) -> Dual:
     """Signed length of every shrunk edge (rows ``sel`` only, if given) minus ``min_edge``."""
     rows, e, a, b = _edges(x, quads, sel)
-    E = _sub(b, a)
-    ln = _dot(E, E).sqrt()
+    E = vec_sub(b, a)
+    ln = vec_dot(E, E).sqrt()
     u = E[0] / ln, E[1] / ln
     ma, mb = _mitre(x, quads, rows, e), _mitre(x, quads, rows, (e + 1) % quads.shape[1])
-    return ln + shrink * _dot(u, _sub(mb, ma)) - min_edge
+    return ln + shrink * vec_dot(u, vec_sub(mb, ma)) - min_edge
 
 
 def hinge_angle_rows(
     x: np.ndarray, quads: np.ndarray, t: np.ndarray, k: np.ndarray, sin_min: float
 ) -> Dual:
     """sin of the corner angle at hinge corners ``(t, k)`` minus ``sin_min``."""
-    v, a, b = (_corners(x, quads, t, (k + s) % quads.shape[1]) for s in (0, 1, -1))
-    A, B = _sub(a, v), _sub(b, v)
-    return (A[0] * B[1] - A[1] * B[0]) / (_dot(A, A) * _dot(B, B)).sqrt() - sin_min
+    v, a, b = (dual_corner(x, quads, t, (k + s) % quads.shape[1]) for s in (0, 1, -1))
+    A, B = vec_sub(a, v), vec_sub(b, v)
+    return (A[0] * B[1] - A[1] * B[0]) / (vec_dot(A, A) * vec_dot(B, B)).sqrt() - sin_min
 
 
 def spacing_rows(
     x: np.ndarray, quads: np.ndarray, t: np.ndarray, i: np.ndarray, j: np.ndarray, spacing: float
 ) -> Dual:
     """Distance between corners ``i`` and ``j`` of quads ``t`` minus ``spacing``."""
-    d = _sub(_corners(x, quads, t, i), _corners(x, quads, t, j))
-    return _dot(d, d).sqrt() - spacing
+    d = vec_sub(dual_corner(x, quads, t, i), dual_corner(x, quads, t, j))
+    return vec_dot(d, d).sqrt() - spacing
 
 
 SOFT = 0.002  # normalised: the soft min/max of the strip rows are at most this far on the safe side
@@ -207,10 +207,10 @@ def _soft_max0(v: Dual) -> Dual:
 def _strip_box(x, quads, t, c, end):
     """Hinge corner ``c`` of quads ``t``, the unit direction of its seam (to corner ``end``) and the inward
     normal of that edge (tiles counter-clockwise)."""
-    p = _corners(x, quads, t, c)
-    q = _corners(x, quads, t, end)
-    ev = _sub(q, p)
-    ln = _dot(ev, ev).sqrt()
+    p = dual_corner(x, quads, t, c)
+    q = dual_corner(x, quads, t, end)
+    ev = vec_sub(q, p)
+    ln = vec_dot(ev, ev).sqrt()
     e = ev[0] / ln, ev[1] / ln
     sgn = np.where(end == (c + 1) % quads.shape[1], 1.0, -1.0)
     return p, e, (-e[1] * sgn, e[0] * sgn)
@@ -236,13 +236,13 @@ def strip_rows(
     pk, e_k, n_k = _strip_box(x, quads, t, ck, ek)
 
     def extent(e, n, u, lower):
-        eu, nu = _dot(e, u), _dot(n, u)
+        eu, nu = vec_dot(e, u), vec_dot(n, u)
         soft = _soft_min0 if lower else _soft_max0
         return eu * a0 + soft(eu) * along + soft(nu) * across
 
     gaps = []
     for u in (e_h, n_h, e_k, n_k):
-        dp = _dot(_sub(pk, ph), u)
+        dp = vec_dot(vec_sub(pk, ph), u)
         gaps.append(dp + extent(e_k, n_k, u, True) - extent(e_h, n_h, u, False))
         gaps.append(-dp + extent(e_h, n_h, u, True) - extent(e_k, n_k, u, False))
     while len(gaps) > 1:  # a balanced tree of smooth maxima: at most 3 · STRIP_SMOOTH below the max

@@ -48,7 +48,7 @@ def _clipped_boundary(P: tuple, Q: tuple) -> F.Dual:
     ``cross(start, end)`` of what is left, summed over the edges in order."""
     a = P
     b = (roll(P[0], -1), roll(P[1], -1))
-    ab = F._sub(b, a)
+    ab = F.vec_sub(b, a)
     zero = F.Dual.lift(0.0, P[0])
     lo, hi = zero, F.Dual.lift(1.0, P[0])
     empty = np.zeros(P[0].v.shape, dtype=bool)
@@ -56,7 +56,7 @@ def _clipped_boundary(P: tuple, Q: tuple) -> F.Dual:
     for j in range(nq):
         c, d = _column(Q, j), _column(Q, (j + 1) % nq)
         n = (c[1] - d[1], d[0] - c[0])  # inward (left) normal of the CCW edge c -> d
-        f0, f1 = F._dot(n, F._sub(a, c)), F._dot(n, F._sub(b, c))
+        f0, f1 = F.vec_dot(n, F.vec_sub(a, c)), F.vec_dot(n, F.vec_sub(b, c))
         out0, out1 = f0.v < 0, f1.v < 0
         empty |= out0 & out1
         den = f0 - f1
@@ -85,11 +85,11 @@ def clipped_area(P: list, Q: list) -> F.Dual:
 def _sine(x, polys, rows, k, n, base) -> F.Dual:
     """sin of corner ``k`` (per row) of the ``n``-gon at nodes ``base..base+n`` of ``polys``' rows, 1 where it
     is obtuse (the seam line is then ``shrink`` from that tile's edge once ``t >= shrink``)."""
-    v = F._corners(x, polys, rows, base + k)
-    a = F._sub(F._corners(x, polys, rows, base + (k + 1) % n), v)
-    b = F._sub(F._corners(x, polys, rows, base + (k - 1) % n), v)
-    s = _cross(a, b) / (F._dot(a, a) * F._dot(b, b)).sqrt()
-    return where(F._dot(a, b).v < 0, F.Dual.lift(1.0, s), s)
+    v = F.dual_corner(x, polys, rows, base + k)
+    a = F.vec_sub(F.dual_corner(x, polys, rows, base + (k + 1) % n), v)
+    b = F.vec_sub(F.dual_corner(x, polys, rows, base + (k - 1) % n), v)
+    s = _cross(a, b) / (F.vec_dot(a, a) * F.vec_dot(b, b)).sqrt()
+    return where(F.vec_dot(a, b).v < 0, F.Dual.lift(1.0, s), s)
 
 
 def pad_polygons(tiles: np.ndarray, hinge_tiles: np.ndarray) -> np.ndarray:
@@ -116,9 +116,9 @@ def pad_rows(
     clipped by the own tile shrunk by ``shrink`` (mitre); ``t0`` from both tiles' hinge corners."""
     n = polys.shape[1] // 2
     rows = np.arange(len(polys))
-    p = F._corners(x, polys, rows, corner)
-    ev = F._sub(F._corners(x, polys, rows, end), p)
-    ln = F._dot(ev, ev).sqrt()
+    p = F.dual_corner(x, polys, rows, corner)
+    ev = F.vec_sub(F.dual_corner(x, polys, rows, end), p)
+    ln = F.vec_dot(ev, ev).sqrt()
     e = (ev[0] / ln, ev[1] / ln)
     s_own = _sine(x, polys, rows, corner, n, 0)
     s_other = _sine(x, polys, rows, other_corner, n, n)
@@ -137,13 +137,13 @@ def pad_rows(
 def _shrunk(x, polys, rows, n, shrink) -> tuple[F.Dual, F.Dual]:
     """The own tile (the first ``n`` nodes of ``polys``) shrunk by ``shrink``, a column per corner: corner k
     moves by ``shrink`` times its mitre vector (as :func:`~.fabrication._mitre`, every corner at once)."""
-    c = _stacked([F._corners(x, polys, rows, np.full(len(rows), k)) for k in range(n)])
+    c = _stacked([F.dual_corner(x, polys, rows, np.full(len(rows), k)) for k in range(n)])
     if not shrink:
         return c
     prev = (roll(c[0], 1), roll(c[1], 1))
     nxt = (roll(c[0], -1), roll(c[1], -1))
     na, nb = F._normal(prev, c), F._normal(c, nxt)
-    s = 1.0 + F._dot(na, nb)
+    s = 1.0 + F.vec_dot(na, nb)
     m = (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
     return c[0] + m[0] * shrink, c[1] + m[1] * shrink
 

@@ -1,6 +1,6 @@
 """The full inverse-design problem: families over one node array (deployed nodes, then closed grids).
 
-``_Problem`` builds the start (a guess, a warm start or coarse to fine) and
+``DesignProblem`` builds the start (a guess, a warm start or coarse to fine) and
 the equality, fit, regulariser and inequality families of a ``DesignRequest``;
 the helpers below measure a node array against them (tile units: the
 initial tile edge is 1).
@@ -20,7 +20,7 @@ from ...pattern.conformance import boundary_tip_order
 from ...pattern.kinds.quad.lattice import standard_pattern
 from ...pattern.model import Pattern
 from ..core.conformance import deployed
-from ..core.normal import _Normal, nested_dissection
+from ..core.normal import NormalEquations, nested_dissection
 from ..core.request import DesignRequest, reduced_applies
 from ..targets.lookup import Target
 from . import constraints as C
@@ -39,7 +39,7 @@ GAP_MARGIN = (
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 
 
-class _Problem:
+class DesignProblem:
     """Families over one node array (deployed nodes, then closed grids)."""
 
     def __init__(self, req: DesignRequest):
@@ -71,7 +71,7 @@ class _Problem:
         self.X0 = self._closed_grids(X0)
         fam = self._families(base)
         self.families = fam
-        self._normal: _Normal | None = None
+        self._normal: NormalEquations | None = None
         # a family may ask its own margin (``meta["margin"]``, tile units: the fabrication rows of a continuation step)
         self.margin = {
             f.name: f.meta.get("margin", CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN)
@@ -329,21 +329,21 @@ class _Problem:
         return np.stack([2 * o, 2 * o + 1], 1).ravel()
 
     @property
-    def normal(self) -> _Normal:
+    def normal(self) -> NormalEquations:
         """Normal-equation solver of the full problem, built on first use (its ordering costs a Jacobian)."""
         if self._normal is None:
-            self._normal = _Normal(self._ordering())
+            self._normal = NormalEquations(self._ordering())
         return self._normal
 
     def of(self, kind: str) -> list[C.Family]:
         return [f for f in self.families if f.kind == kind]
 
 
-def _ineq_values(prob: _Problem, X: np.ndarray) -> np.ndarray:
+def _ineq_values(prob: DesignProblem, X: np.ndarray) -> np.ndarray:
     return np.concatenate([f.residual(X) for f in prob.of("ineq")])
 
 
-def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
+def _mean_edge(prob: DesignProblem, X: np.ndarray) -> float:
     return geometry.mean_edge_length(X[prob.st.tiles])
 
 
@@ -352,7 +352,7 @@ def exact_fits(fits: list[C.Family]) -> list[C.Family]:
     return [f for f in fits if not f.meta.get("soft")]
 
 
-def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
+def family_residuals(prob: DesignProblem, X: np.ndarray, L: float) -> dict:
     out = {}
     for f in prob.families:
         if f.kind == "eq" or (f.kind == "fit" and not f.meta.get("soft")):
@@ -361,20 +361,20 @@ def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
     return out
 
 
-def _objective(prob: _Problem, X: np.ndarray) -> float:
+def _objective(prob: DesignProblem, X: np.ndarray) -> float:
     """Σ fit² + w E_reg: what both solvers minimise over the feasible set."""
     return sum(energy(f, X) for f in prob.of("fit")) + prob.req.reg_weight * sum(
         energy(f, X) for f in prob.of("reg")
     )
 
 
-def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
+def _acceptable(prob: DesignProblem, X: np.ndarray) -> bool:
     res = family_residuals(prob, X, _mean_edge(prob, X))
     worst = max((res[f.name] for f in prob.of("eq")), default=0.0)
     return worst <= prob.req.tol and float(_ineq_values(prob, X).min(initial=0.0)) >= 0.0
 
 
-def _why_not(prob: _Problem, X: np.ndarray) -> str:
+def _why_not(prob: DesignProblem, X: np.ndarray) -> str:
     """The worst equality family and the smallest inequality, for the log."""
     res = family_residuals(prob, X, _mean_edge(prob, X))
     eq = max(((res[f.name], f.name) for f in prob.of("eq")), default=(0.0, "none"))
