@@ -44,10 +44,10 @@ from pathlib import Path
 import numpy as np
 from fabkiri.cli.design_cmd import BIG_TILES
 from fabkiri.design.quad.solve import (
-    DesignProblem,
     DesignRequest,
     _ineq_values,
     design,
+    design_problem,
     single_thread_blas,
 )
 from fabkiri.design.targets import lookup as T
@@ -67,7 +67,7 @@ def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
     set at the initial guess (pivoted QR), which is what SLSQP needs.
     """
     req = DesignRequest(n, n, T.load_target("circle", 100.0), rigid=True, init=init)
-    prob = DesignProblem(req)
+    prob = design_problem(req)
     shape = prob.X0.shape
     eqs, fits, ineqs = prob.of("eq"), prob.of("fit"), prob.of("ineq")
     reg = prob.of("reg")[0]

@@ -283,13 +283,13 @@ def test_doubled_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed
 def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     """--init coarse for a rigid design: the fine start is a member of the fine family, deployed to the coarse
     design's ψ, and nearer the target than the rescaled start."""
-    from fabkiri.design.quad.solve import DesignProblem
+    from fabkiri.design.quad.solve import design_problem
 
     tgt = T.load_target("ellipse", 100.0)
     coarse = design(
         DesignRequest(8, 8, tgt, rigid=True, outline=False)
     )  # the coarse level fits the tips only
-    prob = DesignProblem(DesignRequest(16, 16, tgt, rigid=True, init="coarse"))
+    prob = design_problem(DesignRequest(16, 16, tgt, rigid=True, init="coarse"))
     assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid resampled")
     assert prob.coarse["folded_tiles"] == 0
     fam, st = prob.rigid_family, prob.st
@@ -303,7 +303,7 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
 
     near, far = (
         tip_distances(prob),
-        tip_distances(DesignProblem(DesignRequest(16, 16, tgt, rigid=True))),
+        tip_distances(design_problem(DesignRequest(16, 16, tgt, rigid=True))),
     )
     assert near.max() < 0.75 * far.max() and np.sqrt(np.mean(near**2)) < 0.5 * np.sqrt(
         np.mean(far**2)

@@ -8,6 +8,7 @@ initial tile edge is 1).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -21,7 +22,7 @@ from ...pattern.kinds.quad.lattice import standard_pattern
 from ...pattern.model import Pattern
 from ..core.conformance import deployed
 from ..core.normal import NormalEquations, nested_dissection
-from ..core.request import DesignRequest, reduced_applies
+from ..core.request import DesignRequest, DesignResult, reduced_applies
 from ..targets.lookup import Target
 from . import constraints as C
 from .fabrication import families as fabrication_families
@@ -38,12 +39,18 @@ GAP_MARGIN = (
 )
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 
+# the designer of a whole request (``solve._design``, with its progress flag): a coarse level and a rigid route
+# are whole designs of their own, so the module above hands its designer down instead of being imported here
+WholeDesign = Callable[[DesignRequest, bool], DesignResult]
+
 
 class DesignProblem:
-    """Families over one node array (deployed nodes, then closed grids)."""
+    """Families over one node array (deployed nodes, then closed grids). ``whole_design`` designs the
+    coarse level of a coarse-to-fine start and the rigid routes (:func:`.solve.design_problem` gives it)."""
 
-    def __init__(self, req: DesignRequest):
+    def __init__(self, req: DesignRequest, whole_design: WholeDesign | None = None):
         self.req = req
+        self.whole_design = whole_design
         std = standard_pattern(req.rows, req.cols, tile_size=1.0)
         self.std = std
         st = C.Stencils.from_pattern(std)
@@ -233,6 +240,14 @@ class DesignProblem:
         L0 = geometry.mean_edge_length(c)
         return xmm / L0, L0
 
+    def design_whole(self, req: DesignRequest) -> DesignResult:
+        """A whole design of ``req`` (a coarse level, a rigid route) by this problem's ``whole_design``."""
+        if self.whole_design is None:
+            raise ValueError(
+                "a whole design needs the designer: build the problem with solve.design_problem"
+            )
+        return self.whole_design(req, False)
+
     def _coarse_level(self, sub: DesignRequest):
         """The coarse level's design and how it was fitted: tips only (its grid stays unfolded when resampled);
         with ``coarse_refit``, where that outline misses the target by more than the shape tolerance
@@ -240,9 +255,6 @@ class DesignProblem:
         tips-only fit lets tips bunch on their arcs: the drop's 16x16 and 32x32 levels sat at a Hausdorff distance
         of 40 % of its size (tips on their arcs to 0.47 %), and the 64x64 design they started ended at 22 %.
         A symmetric level is fitted with the outline rows first, tips only where that does not converge."""
-        # the coarse level is a whole design (solve.py builds on this module)
-        from .solve import _design
-
         target = sub.target
         assert target is not None, "a coarse level is built only for a deployed target"
 
@@ -253,10 +265,10 @@ class DesignProblem:
         # than the free level's (the 96x96 ellipse's 12x12 level at 6.5 % of the size after the mirrored starts,
         # 0.20 % with the rows; the drop's 8x8 level 32.5 %, 2.0 %), and those starts cost more than this one fit
         if sub.symmetry:
-            alt = _design(replace(sub, outline=True), False)
+            alt = self.design_whole(replace(sub, outline=True))
             if alt.converged:
                 return alt, {"fit": "outline", "hausdorff_rel": miss(alt)}
-        res = _design(sub, False)
+        res = self.design_whole(sub)
         h = miss(res)
         level = {"fit": "tips", "hausdorff_rel": h}
         above = self.req.coarse_refit_above
@@ -264,7 +276,7 @@ class DesignProblem:
             self.req.second_opinion_above if above is None else above
         ):
             return res, level
-        alt = _design(replace(sub, outline=True), False)
+        alt = self.design_whole(replace(sub, outline=True))
         h_alt = miss(alt)
         level["tips_only_hausdorff_rel"] = h
         if alt.converged and (h_alt < h or not res.converged):

@@ -246,14 +246,12 @@ def _solve_rigid_first(prob: DesignProblem, log, iters: dict):
     """The rigid family's closest member to the target (reduced solver only, from each of ``RIGID_FIRST_INITS``)
     that passes every family of the non-rigid problem: ``(X, mode, solver)`` if its outline is within the shape
     tolerance (``second_opinion_above``), else None and the full solver takes over."""
-    from .solve import _design  # a rigid design of the same target is a whole design
-
     best = None
     for init in RIGID_FIRST_INITS:
         sub = replace(
             prob.req, rigid=True, init=init, name="", solver="reduced", second_opinion=False
         )
-        res = _design(sub, False)
+        res = prob.design_whole(sub)  # a rigid design of the same target is a whole design
         iters.update({f"rigid_{init}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
         if not (res.converged and _acceptable(prob, X)):
@@ -299,8 +297,6 @@ def _rigid_full_first(prob: DesignProblem, log, iters: dict):
 def _solve_via_rigid(prob: DesignProblem, log, iters: dict, tag: str = ""):
     """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
     the non-rigid problem, else None. ``tag`` prefixes its iteration counts."""
-    from .solve import _design  # a rigid design of the same target is a whole design
-
     big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
     # no full-solver second opinion on a big rigid problem at this level (its coarse levels keep theirs): at
     # 32x32 it took about 45 of the 52 CPU s of a heart and lost (the non-rigid full solver below still takes
@@ -320,7 +316,7 @@ def _solve_via_rigid(prob: DesignProblem, log, iters: dict, tag: str = ""):
     # non-rigid one at 6e-3 (14 % off, 66 CPU s). Next, the reduced solver alone down the coarse levels (1.37 %).
     first = replace(sub, solver="reduced", coarse_solver="auto") if big else sub
     for name, attempt in (("rigid", first), ("rigid_reduced", replace(sub, solver="reduced"))):
-        res = _design(attempt, False)
+        res = prob.design_whole(attempt)  # a rigid design of the same target is a whole design
         iters.update({f"{tag}{name}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
         if res.converged and _acceptable(prob, X):

@@ -122,6 +122,11 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
         return _design(req, progress)
 
 
+def design_problem(req: DesignRequest) -> DesignProblem:
+    """The full problem of ``req`` with this module's designer for its coarse levels and rigid routes."""
+    return DesignProblem(req, _design)
+
+
 def _design(req: DesignRequest, progress: bool) -> DesignResult:
     log = _Log(progress)
     c0 = time.process_time()
@@ -132,7 +137,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         return _design(replace(req, holes="rhombus"), progress)
     t0 = time.perf_counter()
     # a non-rigid request answered by the rigid family needs no guess of its own (least of all a coarse solve)
-    prob = DesignProblem(replace(req, init="rescaled") if via_rigid_applies(req) else req)
+    prob = DesignProblem(replace(req, init="rescaled") if via_rigid_applies(req) else req, _design)
     log(
         f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
         + ", ".join(f.name for f in prob.families)
