@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
+from fabkiri.design.core.dual import values_only
 from fabkiri.design.quad import fabrication as F
 from fabkiri.design.quad import print_rows as PR
 from fabkiri.design.quad.constraints import Stencils
@@ -67,7 +68,7 @@ def test_residual_only_rows_carry_no_gradients_and_the_same_values():
     for f in fams:
         assert np.array_equal(f.residual(x), f(x)[0]), f.name
     args = PR.pad_args(stc.tiles, stc.hinge_tiles, stc.hinge_corner, stc.folds[1].fold_corner_ends)
-    plain = PR.pad_rows(F.values_only(x), *args, *PR.strip_pad(MK4, 4.0))
+    plain = PR.pad_rows(values_only(x), *args, *PR.strip_pad(MK4, 4.0))
     dual = PR.pad_rows(x, *args, *PR.strip_pad(MK4, 4.0))
     assert plain.g is None and dual.g.shape == (len(dual.v), 16)
     assert np.array_equal(plain.v, dual.v)

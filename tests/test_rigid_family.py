@@ -312,9 +312,9 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
 
 def test_rigid_coarse_to_fine_start_for_odd_sizes():
     """9x11 tiles from a 4x5 design: the grid is resampled, not doubled; the start is still a member."""
-    from fabkiri.design.quad.solve import DesignProblem
+    from fabkiri.design.quad.solve import design_problem
 
-    prob = DesignProblem(
+    prob = design_problem(
         DesignRequest(9, 11, T.load_target("circle", 80.0), rigid=True, init="coarse")
     )
     assert (prob.coarse["rows"], prob.coarse["cols"]) == (4, 5)

@@ -116,3 +116,10 @@ def vec_sub(a, b):
 def vec_dot(a, b):
     """The dot product of two 2-vectors of :class:`Dual` (or of arrays)."""
     return a[0] * b[0] + a[1] * b[1]
+
+
+def inward_normal(a, b):
+    """Inward unit normal of the CCW edge a -> b."""
+    e = vec_sub(b, a)
+    ln = vec_dot(e, e).sqrt()
+    return -e[1] / ln, e[0] / ln

@@ -26,15 +26,15 @@ the four corners) and checked against finite differences in ``tests/test_fabrica
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
-from typing import TypeVar, cast
 
 import numpy as np
 
 from ...pattern import thinness as fab
-from ..core.dual import Dual, dual_corner, values_only, vec_dot, vec_sub
+from ..core.dual import Dual, dual_corner, inward_normal, vec_dot, vec_sub
+from . import print_rows
 from .constraints import Family, Stencils
+from .row_family import ineq_family, pick
 
-_Args = TypeVar("_Args", bound=tuple)
 NOT_LIMITS = ("source", "margin", "print_state")  # fields that are no requirement in mm
 # fields in mm²: a continuation step scales them by the fraction squared, so a step's pad keeps the same share
 # of its strip's band (0.25 w min(reach, w)) as the full limits' (linearly, a quarter step asked 1 mm² of a
@@ -98,19 +98,12 @@ class FabricationLimits:
         return asdict(self)
 
 
-def _normal(a, b):
-    """Inward unit normal of the CCW edge a -> b."""
-    e = vec_sub(b, a)
-    ln = vec_dot(e, e).sqrt()
-    return -e[1] / ln, e[0] / ln
-
-
 def _mitre(x, quads, rows, j, n: int | None = None):
     """Mitre vector at corner j: the corner moves by d times it when the quad shrinks by d.
     ``n``: the polygon's arity when ``quads`` holds more nodes after it (default all of them)."""
     n = quads.shape[1] if n is None else n
     prev, here, nxt = (dual_corner(x, quads, rows, (j + s) % n) for s in (-1, 0, 1))
-    na, nb = _normal(prev, here), _normal(here, nxt)
+    na, nb = inward_normal(prev, here), inward_normal(here, nxt)
     s = 1.0 + vec_dot(na, nb)
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
 
@@ -133,7 +126,7 @@ def width_rows(
     rows only); any arity: a triangle has one far corner (the row is its altitude, exact), more are folded by
     smooth maxima."""
     rows, e, a, b = _edges(x, quads, sel)
-    n = _normal(a, b)
+    n = inward_normal(a, b)
     far = []
     for off in range(2, quads.shape[1]):
         j = (e + off) % quads.shape[1]
@@ -250,41 +243,6 @@ def strip_rows(
     return gaps[0] - clearance
 
 
-def _pick(args: _Args, sel: np.ndarray | None) -> _Args:
-    """Per-row index arrays, of rows ``sel`` only if given."""
-    return args if sel is None else cast(_Args, tuple(a[sel] for a in args))
-
-
-def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
-    """An inequality family from ``rows_of(x, sel) -> Dual`` (rows ``sel`` only, or all for None) over the quads
-    named by ``meta['quad_of_row']``. Its values are computed without gradients (``res``) and its gradients
-    only on the rows asked (``active``): the solvers need them only where a row is inside its margin."""
-    owner = meta["quad_of_row"]
-    k = quads.shape[1]
-
-    def fn(x):
-        r = rows_of(x, None)
-        return r.v, (quads[owner], r.g.reshape(len(owner), k, 2))
-
-    def active(x, act):
-        grads = np.zeros((len(owner), k, 2))
-        sel = np.flatnonzero(act)
-        if len(sel):
-            grads[sel] = rows_of(x, sel).g.reshape(len(sel), k, 2)
-        return quads[owner], grads
-
-    return Family(
-        name,
-        "ineq",
-        fn,
-        1,
-        meta=meta,
-        nv=nv,
-        res=lambda x: np.asarray(rows_of(values_only(x), None).v),
-        active=active,
-    )
-
-
 def ccw_polygons(quads: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Polygons (node indices) reordered counter-clockwise in ``x`` (holes come either way round)."""
     p = x[quads]
@@ -320,7 +278,7 @@ def _families(
     if limits.min_width_mm > 0:
         w = limits.min_width_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_width",
                 tiles,
                 lambda x, sel, w=w: width_rows(x, tiles, w, d, sel),
@@ -331,7 +289,7 @@ def _families(
     if d > 0:
         e_min = max(limits.min_edge_mm, fab.EDGE_EPS_MM) / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_shrunk_edges",
                 tiles,
                 lambda x, sel: shrunk_edge_rows(x, tiles, d, e_min, sel),
@@ -342,14 +300,12 @@ def _families(
     out += _hinge_families(st, nv, limits, unit_mm, tiles)
     if limits.strip_clearance_mm > 0:
         out += _strip_family(st, nv, limits, unit_mm, tiles)
-    from . import print_rows  # lazy: it builds on this module's rows
-
     out += print_rows.families(st, nv, limits, unit_mm)
     if limits.min_hole_mm > 0 and len(st.hole_nodes):
         holes = ccw_polygons(st.hole_nodes, base)
         wh = limits.min_hole_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_holes",
                 holes,
                 lambda x, sel: width_rows(x, holes, wh, 0.0, sel),
@@ -371,10 +327,10 @@ def _hinge_families(
     if limits.min_hinge_angle_deg > 0:
         s_min = float(np.sin(np.radians(limits.min_hinge_angle_deg)))
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_hinge_angles",
                 tiles,
-                lambda x, sel: hinge_angle_rows(x, tiles, *_pick((ht, hk), sel), s_min),
+                lambda x, sel: hinge_angle_rows(x, tiles, *pick((ht, hk), sel), s_min),
                 nv,
                 {"quad_of_row": ht},
             )
@@ -386,10 +342,10 @@ def _hinge_families(
         t, p = np.nonzero(has[:, i] & has[:, j])
         s = limits.hinge_spacing_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_hinge_spacing",
                 tiles,
-                lambda x, sel: spacing_rows(x, tiles, *_pick((t, i[p], j[p]), sel), s),
+                lambda x, sel: spacing_rows(x, tiles, *pick((t, i[p], j[p]), sel), s),
                 nv,
                 {"quad_of_row": t},
             )
@@ -401,10 +357,10 @@ def _hinge_families(
         te, e = np.nonzero(has | has[:, (k + 1) % 4])
         s_e = limits.hinge_edge_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_hinge_edges",
                 tiles,
-                lambda x, sel: spacing_rows(x, tiles, *_pick((te, e, (e + 1) % 4), sel), s_e),
+                lambda x, sel: spacing_rows(x, tiles, *pick((te, e, (e + 1) % 4), sel), s_e),
                 nv,
                 {"quad_of_row": te},
             )
@@ -432,10 +388,10 @@ def _strip_family(
     a0, along, across, cl = strip_box(limits, unit_mm)
     args = (t, st.hinge_corner[h, sh], ends[h, sh], st.hinge_corner[k, sk], ends[k, sk])
     return [
-        _family(
+        ineq_family(
             "fabrication_strip_clearance",
             tiles,
-            lambda x, sel: strip_rows(x, tiles, *_pick(args, sel), a0, along, across, cl),
+            lambda x, sel: strip_rows(x, tiles, *pick(args, sel), a0, along, across, cl),
             nv,
             {"quad_of_row": t},
         )
