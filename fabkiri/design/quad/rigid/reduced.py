@@ -32,7 +32,7 @@ from ..constraints import convexity
 from ..objective import regularizer, tile_corners
 from .contact import ClosedContact
 from .family import RigidFamily
-from .merit import _Evaluation
+from .merit import _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
 from .steps import hard_fit, levenberg_marquardt
 from .tiles import TileShapeRows
@@ -308,10 +308,14 @@ class _Merit:
         Js, D = self._touched(Jx, p)
         return np.vstack([Js @ D, self._grid_to_p(Jc)])
 
+    def dense_jd(self) -> float:
+        """``DENSE_JD`` as it is now (``mirror_normal.half_normal`` forms its blocks by it too)."""
+        return DENSE_JD
+
     def normal(self, r: np.ndarray, Jx, Jc, p: np.ndarray):
         """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
         nx = Jx.shape[0]
-        Hx, gx = _normal(*self._touched(Jx, p), r[:nx])
+        Hx, gx = reduced_normal(*self._touched(Jx, p), r[:nx], DENSE_JD)
         Hc, gc = self._grid_normal(Jc, r[nx:])
         return Hx + Hc, gx + gc
 
@@ -356,15 +360,6 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
 # below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: 8x8 0.14 ms
 # vs 0.55 ms through the sparse JᵀJ, 32x32 15 vs 24 ms; 64x64, 1.7e7 entries, 181 vs 150 ms)
 DENSE_JD = 4e6
-
-
-def _normal(J: sparse.csr_matrix, D: np.ndarray, r: np.ndarray):
-    """Reduced Gauss-Newton matrix ``Dᵀ JᵀJ D`` and gradient ``Dᵀ Jᵀ r``."""
-    if J.shape[0] * D.shape[1] <= DENSE_JD:
-        JD = J @ D
-        return JD.T @ JD, JD.T @ r
-    H = (J.T @ J).tocsr()
-    return D.T @ (H @ D), D.T @ (J.T @ r)
 
 
 def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
