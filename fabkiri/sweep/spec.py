@@ -22,11 +22,15 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .. import __version__, limits
 from ..errors import InputError
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
+
+if TYPE_CHECKING:
+    from ..api.design import PatternRequest
 
 ACTIONS = ("design", "cut", "print", "deploy")
 # axis -> the Python types a value may have (PatternRequest's fields, the cut/print choices, the seed)
@@ -255,10 +259,48 @@ def check_sizes(jobs: list[Job], where: str) -> None:
     a sweep file with one job too large to run is refused whole, naming the job. (A spec built with
     :func:`spec_from_dict` leaves it to each job, which records the refusal as its error.)"""
     from ..api.design import check_size
-    from .job import request_of
 
     for job in jobs:
         try:
             check_size(request_of(job.params))
         except InputError as exc:
             raise InputError(f"{where}: job {job.id}: {exc}") from None
+
+
+REQUEST_KEYS = (
+    "target",
+    "size",
+    "rigid",
+    "symmetry",
+    "holes",
+    "contracted_target",
+    "init",
+    "solver",
+    "fit",
+    "tol",
+    "shape_tol",
+    "material",
+    "hinge",
+    "printer",
+    "style",
+    "min_feature",
+    "min_hole",
+    "min_opening",
+    "seed",
+)
+
+
+def request_of(params: dict) -> PatternRequest:
+    """The design request of a job's parameters (``tiles`` and the :data:`REQUEST_KEYS` it names)."""
+    from ..api.design import PatternRequest  # the design front door: loaded when a request is made
+
+    kw = {k: params[k] for k in REQUEST_KEYS if k in params}
+    if kw.get("symmetry") == "none":
+        kw["symmetry"] = None
+    if isinstance(kw.get("contracted_target"), (list, str)):
+        ct = kw["contracted_target"]
+        kw["contracted_target"] = tuple([ct] if isinstance(ct, str) else ct)
+    for k in ("size", "min_feature", "min_hole", "min_opening"):
+        if k in kw:
+            kw[k] = float(kw[k])
+    return PatternRequest(tiles=parse_tiles(params["tiles"]), quiet=True, **kw)
