@@ -31,13 +31,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from .conftest import REPO
-
-
-def module_name(path: Path) -> str:
-    parts = list(path.relative_to(REPO).with_suffix("").parts)
-    if parts[-1] == "__init__":
-        parts.pop()
-    return ".".join(parts)
+from .importgraph import absolute, module_file, module_name, ours
 
 
 def subpackage(module: str) -> str:
@@ -49,31 +43,8 @@ def subpackage(module: str) -> str:
     return ".".join(folder[:3])
 
 
-def module_file(module: str) -> Path | None:
-    base = REPO.joinpath(*module.split("."))
-    for path in (base / "__init__.py", base.with_suffix(".py")):
-        if path.is_file():
-            return path
-    return None
-
-
 def private(name: str) -> bool:
     return name.startswith("_") and not name.startswith("__")
-
-
-def absolute(path: Path, node: ast.ImportFrom) -> str:
-    """The module an import-from names, relative levels resolved against ``path``."""
-    if not node.level:
-        return node.module or ""
-    package = module_name(path).split(".")
-    if path.name != "__init__.py":
-        package.pop()
-    base = package[: len(package) - node.level + 1]
-    return ".".join([*base, *filter(None, [node.module])])
-
-
-def ours(module: str) -> bool:
-    return module == "fabkiri" or module.startswith("fabkiri.")
 
 
 def path_uses(module: str) -> Iterator[tuple[str, str]]:
@@ -93,7 +64,7 @@ def name_owner(module: str, name: str) -> str:
     seen = set()
     while (module, name) not in seen and (path := module_file(module)) is not None:
         seen.add((module, name))
-        source = reexported(path, name)
+        source = top_level_imports(path).get(name)
         if source is None:
             break
         module, name = source
@@ -111,8 +82,44 @@ def top_level_imports(path: Path) -> dict[str, tuple[str, str]]:
     return bound
 
 
-def reexported(path: Path, name: str) -> tuple[str, str] | None:
-    return top_level_imports(path).get(name)
+def import_uses(node: ast.Import, modules: dict[str, str]) -> Iterator[tuple[int, str, str]]:
+    """The private parts of ``import fabkiri.a._b``; binds the module's local name in ``modules``."""
+    for alias in node.names:
+        if ours(alias.name):
+            for part, owner in path_uses(alias.name):
+                yield node.lineno, f"{alias.name} ({part})", owner
+            local = alias.asname or alias.name.split(".")[0]
+            modules[local] = alias.name if alias.asname else local
+
+
+def import_from_uses(
+    path: Path, node: ast.ImportFrom, modules: dict[str, str]
+) -> Iterator[tuple[int, str, str]]:
+    """The private module path and names of ``from M import ...``; binds the submodules it imports."""
+    module = absolute(path, node)
+    if not ours(module):
+        return
+    for part, owner in path_uses(module):
+        yield node.lineno, f"{module} ({part})", owner
+    for alias in node.names:
+        if private(alias.name):
+            yield node.lineno, f"{module}.{alias.name}", name_owner(module, alias.name)
+        if module_file(f"{module}.{alias.name}") is not None:
+            modules[alias.asname or alias.name] = f"{module}.{alias.name}"
+
+
+def attribute_uses(tree: ast.AST, modules: dict[str, str]) -> Iterator[tuple[int, str, str]]:
+    """``m._x`` (and ``m.sub._x``) where ``m`` is a local name bound to a fabkiri module."""
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Attribute) and private(node.attr)):
+            continue
+        chain = dotted(node.value)
+        if chain is None or chain.split(".")[0] not in modules:
+            continue
+        head, *rest = chain.split(".")
+        module = ".".join([modules[head], *rest])
+        if module_file(module) is not None:
+            yield node.lineno, f"{module}.{node.attr}", name_owner(module, node.attr)
 
 
 def private_uses(path: Path, source: str | None = None) -> Iterator[tuple[int, str, str]]:
@@ -121,32 +128,10 @@ def private_uses(path: Path, source: str | None = None) -> Iterator[tuple[int, s
     modules: dict[str, str] = {}  # a local name -> the fabkiri module an import bound to it
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            for alias in node.names:
-                if ours(alias.name):
-                    for part, owner in path_uses(alias.name):
-                        yield node.lineno, f"{alias.name} ({part})", owner
-                    local = alias.asname or alias.name.split(".")[0]
-                    modules[local] = alias.name if alias.asname else local
+            yield from import_uses(node, modules)
         elif isinstance(node, ast.ImportFrom):
-            module = absolute(path, node)
-            if not ours(module):
-                continue
-            for part, owner in path_uses(module):
-                yield node.lineno, f"{module} ({part})", owner
-            for alias in node.names:
-                if private(alias.name):
-                    yield node.lineno, f"{module}.{alias.name}", name_owner(module, alias.name)
-                if module_file(f"{module}.{alias.name}") is not None:
-                    modules[alias.asname or alias.name] = f"{module}.{alias.name}"
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Attribute) and private(node.attr):
-            chain = dotted(node.value)
-            if chain is None or chain.split(".")[0] not in modules:
-                continue
-            head, *rest = chain.split(".")
-            module = ".".join([modules[head], *rest])
-            if module_file(module) is not None:
-                yield node.lineno, f"{module}.{node.attr}", name_owner(module, node.attr)
+            yield from import_from_uses(path, node, modules)
+    yield from attribute_uses(tree, modules)
 
 
 def dotted(node: ast.expr) -> str | None:
