@@ -122,6 +122,31 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
             f"{where}: unknown table [{sorted(unknown)[0]}] (tables: sweep, axes, fixed)"
         )
     head = _table(data, "sweep", where)
+    actions = _actions(head, where)
+    axes = _table(data, "axes", where)
+    settings = _settings(data, where)
+    count = 1
+    for values in settings.values():
+        count *= len(values)
+    if count > MAX_JOBS:
+        raise InputError(f"{where}: {count} jobs is more than the {MAX_JOBS} a sweep may hold")
+    base = Path(base)
+    names = list(settings)
+    jobs, seen = [], set()
+    for combo in itertools.product(*(settings[n] for n in names)):
+        params = {n: _resolve(n, v, base) for n, v in zip(names, combo)}
+        job = make_job(params, actions)
+        if job.id not in seen:  # the same inputs twice (e.g. a repeated value) are one job
+            seen.add(job.id)
+            jobs.append(job)
+    _check_targets(jobs, where)
+    return SweepSpec(
+        jobs=jobs, actions=actions, source=source, axes={k: list(v) for k, v in axes.items()}
+    )
+
+
+def _actions(head: dict, where: str) -> tuple[str, ...]:
+    """The ``[sweep]`` table's actions, in the order they run."""
     bad = set(head) - {"actions", "name"}
     if bad:
         raise InputError(
@@ -137,7 +162,11 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
         raise InputError(
             f"{where}: [sweep] actions must list 'design' and any of cut, print, deploy; got {actions!r}"
         )
-    actions = tuple(a for a in ACTIONS if a in actions)
+    return tuple(a for a in ACTIONS if a in actions)
+
+
+def _settings(data: dict, where: str) -> dict[str, list]:
+    """Each parameter's values: an axis's list, a fixed key's one value; checked, tiles and target given."""
     axes, fixed = _table(data, "axes", where), _table(data, "fixed", where)
     for name, values in axes.items():
         if not isinstance(values, list) or not values:
@@ -158,24 +187,7 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
         )
     if "target" not in settings and "contracted_target" not in settings:
         raise InputError(f"{where}: no target: give a 'target' axis (or fixed target)")
-    count = 1
-    for values in settings.values():
-        count *= len(values)
-    if count > MAX_JOBS:
-        raise InputError(f"{where}: {count} jobs is more than the {MAX_JOBS} a sweep may hold")
-    base = Path(base)
-    names = list(settings)
-    jobs, seen = [], set()
-    for combo in itertools.product(*(settings[n] for n in names)):
-        params = {n: _resolve(n, v, base) for n, v in zip(names, combo)}
-        job = make_job(params, actions)
-        if job.id not in seen:  # the same inputs twice (e.g. a repeated value) are one job
-            seen.add(job.id)
-            jobs.append(job)
-    _check_targets(jobs, where)
-    return SweepSpec(
-        jobs=jobs, actions=actions, source=source, axes={k: list(v) for k, v in axes.items()}
-    )
+    return settings
 
 
 def make_job(params: dict, actions: tuple[str, ...]) -> Job:
