@@ -190,34 +190,6 @@ def _solve_full(prob: DesignProblem, log, iters: dict, stalled=None):
     eqs = prob.of("eq")
     fits = exact_fits(prob.of("fit"))
 
-    def project(X):
-        """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
-        L = _mean_edge(prob, X)
-        tol_abs = lambda fams: min(req.tol * L**f.dim for f in fams)  # noqa: E731
-        fit_rel = max((float(np.abs(f.residual(X)).max()) / L for f in fits), default=0.0)
-        if fits and fit_rel < 1e-2:
-            # the least-squares fit is (nearly) exact: try to make it exact
-            Xh, kh = _lm(
-                prob,
-                X,
-                0.0,
-                50,
-                log,
-                hard=eqs + fits + prob.of("ineq"),
-                tol_inf=0.1 * tol_abs(eqs + fits),
-            )
-            if all(v <= req.tol for v in family_residuals(prob, Xh, _mean_edge(prob, Xh)).values()):
-                return Xh, "hard", kh
-        Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
-        if max((float(np.abs(f.residual(Xp)).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(
-            eqs
-        ):
-            # the half margins may block the last steps: project on the equalities alone (steps that
-            # would violate g >= 0 are still halved or refused)
-            Xq, kq = _lm(prob, Xp, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
-            return Xq, "least-squares", kp + kq
-        return Xp, "least-squares", kp
-
     first = COARSE_PENALTIES if prob.coarse is not None and prob.coarse["used"] else PENALTIES
     best = None
     for attempt, schedule in enumerate((first, STIFF_PENALTIES)):
@@ -234,7 +206,7 @@ def _solve_full(prob: DesignProblem, log, iters: dict, stalled=None):
             if (kept := _instead_of_restart(stalled, X, log)) is not None:
                 return _projected(prob, kept, log, iters)
             continue
-        Xp, mode, kp = project(X)
+        Xp, mode, kp = _project(prob, X, log, eqs, fits)
         iters[f"projection{tag}"] = kp
         res = family_residuals(prob, Xp, _mean_edge(prob, Xp))
         worst = max((res[f.name] for f in eqs), default=0.0)
@@ -248,6 +220,34 @@ def _solve_full(prob: DesignProblem, log, iters: dict, stalled=None):
     assert best is not None, "the stiff attempt always projects"
     _, X, mode = best
     return X, mode
+
+
+def _project(prob: DesignProblem, X: np.ndarray, log, eqs: list, fits: list):
+    """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
+    req = prob.req
+    L = _mean_edge(prob, X)
+    tol_abs = lambda fams: min(req.tol * L**f.dim for f in fams)  # noqa: E731
+    fit_rel = max((float(np.abs(f.residual(X)).max()) / L for f in fits), default=0.0)
+    if fits and fit_rel < 1e-2:
+        # the least-squares fit is (nearly) exact: try to make it exact
+        Xh, kh = _lm(
+            prob,
+            X,
+            0.0,
+            50,
+            log,
+            hard=eqs + fits + prob.of("ineq"),
+            tol_inf=0.1 * tol_abs(eqs + fits),
+        )
+        if all(v <= req.tol for v in family_residuals(prob, Xh, _mean_edge(prob, Xh)).values()):
+            return Xh, "hard", kh
+    Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
+    if max((float(np.abs(f.residual(Xp)).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(eqs):
+        # the half margins may block the last steps: project on the equalities alone (steps that
+        # would violate g >= 0 are still halved or refused)
+        Xq, kq = _lm(prob, Xp, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
+        return Xq, "least-squares", kp + kq
+    return Xp, "least-squares", kp
 
 
 def _projected(prob: DesignProblem, kept: tuple, log, iters: dict) -> tuple:
