@@ -138,6 +138,25 @@ class DesignProblem:
             fam += [C.rings(st, 1, nv), C.rings(st, 2, nv)]
         if req.symmetry:
             fam.append(C.symmetry(st, base, req.symmetry, nv))
+        fam += self._closed_state_families()
+        fam += self._fit_families()
+        fam.append(regularizer(st, nv))
+        fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
+        fam += fabrication_families(st, nv, req.fabrication, L0, base)
+        fam += opening_families(st, nv, req.min_opening, base)
+        if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
+            fam = [
+                weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f
+                for f in fam
+            ]
+        for g in self.grids.values() if req.holes == "rhombus" else ():
+            fam.append(g.orientation(st, nv))
+        return fam
+
+    def _closed_state_families(self) -> list[C.Family]:
+        """Each closed state's own rows: congruent to its grid, or a rectangle of the given ratio."""
+        req, st, nv = self.req, self.st, self.nv
+        fam: list[C.Family] = []
         for s, spec in sorted(req.contracted.items()):
             if isinstance(spec, Target):
                 # with parallelogram holes only the grid's boundary is a closed state's (T-junctions inside)
@@ -147,6 +166,12 @@ class DesignProblem:
                 fam.append(C.rectangle_outline(st, s, nv))
                 if spec[1] is not None:
                     fam.append(C.outline_ratio(st, s, float(spec[1]), nv))
+        return fam
+
+    def _fit_families(self) -> list[C.Family]:
+        """The fits of the tips (and the outline) to the deployed target and of each closed grid to its curve."""
+        req, st, nv, L0 = self.req, self.st, self.nv, self.L0
+        fam: list[C.Family] = []
         if req.target is not None:
             tgt = req.target.transformed(1.0 / L0)
             fam.append(C.shape_match(st.tip_nodes, st.tip_side, tgt, nv, "shape"))
@@ -166,17 +191,6 @@ class DesignProblem:
                     f"closed_shape_{s}",
                 )
             )
-        fam.append(regularizer(st, nv))
-        fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
-        fam += fabrication_families(st, nv, req.fabrication, L0, base)
-        fam += opening_families(st, nv, req.min_opening, base)
-        if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
-            fam = [
-                weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f
-                for f in fam
-            ]
-        for g in self.grids.values() if req.holes == "rhombus" else ():
-            fam.append(g.orientation(st, nv))
         return fam
 
     def _coarse_guess(self, base: np.ndarray, st: C.Stencils) -> tuple[np.ndarray, float]:
