@@ -210,16 +210,9 @@ class _Merit:
         values = self.ineq_values(Xc)
         return _Evaluation(self, p, Xc, self.ineq_violation(Xc, values), hard, values=values)
 
-    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
-        """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
-        they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
-        asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
-        S, psi = self.unpack(p)
-        c = self.fam.grid(S)
-        X, w = self.fam.nodes(S, psi, c), self._state_2(S)
-        t = self._tiles
-        assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
-        tc = tile_corners(c, t.quads)
+    def _node_rows(self, X: np.ndarray, hard: bool, s: float) -> tuple[list, list, float]:
+        """The node blocks of the dense path: ``(rows, pend, smallest inequality)``; ``pend`` holds each block's
+        ``(scale, () -> stencil Jacobian, rows or None)`` in row order, the gradients formed only when asked."""
         rs: list[np.ndarray] = []
         pend: list[
             tuple[float, Any, np.ndarray | None]
@@ -235,7 +228,6 @@ class _Merit:
                 r, J = f.fn(X)
                 rs.append(self.w * r)
                 pend.append((self.w, lambda J=J: J, None))
-        s = 1.0 if hard else self.sq
         for f in self.ineqs:
             r = f.residual(X)
             gmin = min(gmin, float(r.min(initial=np.inf)))
@@ -245,6 +237,20 @@ class _Merit:
                 rs.append(s * v[act])
                 # the gradients only when asked, and of the active rows only where the family can
                 pend.append((s, lambda f=f, m=v < 0: f.stencil_where(X, m), act))
+        return rs, pend, gmin
+
+    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
+        """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
+        they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
+        asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
+        S, psi = self.unpack(p)
+        c = self.fam.grid(S)
+        X, w = self.fam.nodes(S, psi, c), self._state_2(S)
+        t = self._tiles
+        assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
+        tc = tile_corners(c, t.quads)
+        s = 1.0 if hard else self.sq
+        rs, pend, gmin = self._node_rows(X, hard, s)
         g = tc.cross.reshape(-1)
         gmin = min(gmin, float(g.min(initial=np.inf)))
         v = g - t.margin * (0.5 if hard else 1.0)
