@@ -297,10 +297,7 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
     while lo is None:  # ... or halve until refused
         k *= 0.5
         e = _plan_error(scaled(pattern, k), style, state, printer)
-        if e:
-            lo = k
-        else:
-            hi = k
+        lo, hi = (k, hi) if e else (lo, k)
         if k < 1e-6:
             lo = 0.0
     while hi - lo > BISECT_RTOL * hi:
