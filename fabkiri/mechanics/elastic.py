@@ -152,8 +152,7 @@ def minimise(
                 return x
             if fresh:
                 mu = 0.0 if mu < 1e-6 * scale else 0.1 * mu
-            if step > chord_limit or mu:
-                lu = None
+            lu = None if step > chord_limit or mu else lu  # chord steps only near convergence
             fresh, last_step = False, step
         elif fresh:
             stats.rejected += 1
