@@ -25,7 +25,7 @@ from .problem import DesignProblem, _acceptable, _mean_edge, _objective, _why_no
 from .rigid import outline
 from .rigid.family import RigidFamily
 from .rigid.mirror import Mirror
-from .rigid.reduced import SCALINGS, fit_miss, solve_reduced
+from .rigid.reduced import SCALINGS, ReducedSearch, fit_miss, solve_reduced
 
 REDUCED_NAME = "closed-form rigid family (reduced Levenberg-Marquardt)"
 FULL_NAME = "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU"
@@ -108,14 +108,16 @@ def _reduced_from(
         prob.families,
         prob.margin,
         req.reg_weight,
-        0.1 * req.tol * _mean_edge(prob, prob.X0),
-        lambda Y: _mean_edge(prob, Y),
-        log,
-        max_iter=req.max_iter,
-        miss_tol=np.inf if small else FULL_ABOVE,
+        ReducedSearch(
+            0.1 * req.tol * _mean_edge(prob, prob.X0),
+            lambda Y: _mean_edge(prob, Y),
+            log,
+            max_iter=req.max_iter,
+            miss_tol=np.inf if small else FULL_ABOVE,
+            scalings=scalings,
+        ),
         S0=S0,
         mirror=mirror,
-        scalings=scalings,
     )
     iters.update({tag + k: v for k, v in its.items()})
     return X, mode

@@ -20,8 +20,8 @@ on the result and falls back to the full solver when a check fails.
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
-from dataclasses import replace
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -378,6 +378,20 @@ def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> lis
     return [build[f.name]() for f in families if f.name in TILE_SHAPE]
 
 
+@dataclass(frozen=True)
+class ReducedSearch:
+    """How :func:`solve_reduced` searches: ``fit_tol`` of a hard fit (absolute), ``mean_edge(X)`` the unit of
+    its 1 % "nearly exact" threshold, the log, the LM iteration cap, the fit miss that ends the scalings
+    early and the LM scalings to start with."""
+
+    fit_tol: float
+    mean_edge: Callable[[np.ndarray], float]
+    log: Callable[[str], None]
+    max_iter: int = 200
+    miss_tol: float = 0.0
+    scalings: tuple[str, ...] = SCALINGS
+
+
 def solve_reduced(
     fam: RigidFamily,
     st: Stencils,
@@ -386,23 +400,17 @@ def solve_reduced(
     families: list[Family],
     margin: dict,
     reg_weight: float,
-    fit_tol: float,
-    mean_edge,
-    log,
-    max_iter: int = 200,
-    miss_tol: float = 0.0,
+    how: ReducedSearch,
     S0: np.ndarray | None = None,
     mirror: Mirror | None = None,
-    scalings: tuple[str, ...] = SCALINGS,
 ):
     """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
     start is already a member).
 
-    ``mean_edge(X)`` gives the length unit of the 1 % "nearly exact" threshold.
     Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
-    driven to ``fit_tol`` (absolute, normalised units), else "least-squares".
+    driven to ``how.fit_tol`` (absolute, normalised units), else "least-squares".
     ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``reduced_mirror.py``); the solve is then over
-    ``q``. ``scalings``: the LM scalings to start with (``SCALINGS``).
+    ``q``.
     """
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes: 0.25 s at 64x64)
         S0, _ = fam.fit(X0, psi0)
@@ -414,8 +422,7 @@ def solve_reduced(
     judge: Any = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
     if mirror is not None:
         judge = MirroredMerit(judge, mirror.P, mirror.axis_rows)
-    search = (iters, fit_tol, mean_edge, log, max_iter, miss_tol, scalings)
-    p, X, mode = _search(judge, p0, "", *search)
+    p, X, mode = _search(judge, p0, "", iters, how)
     # the closed states' contact rows only where a result has tiles of a closed state overlapping: on every
     # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.61 % -> 3.55 %)
     touching = judge.with_contact(ClosedContact(fam, st))
@@ -438,39 +445,28 @@ def solve_reduced(
     ):
         if not best[0][1]:
             break
-        log(f"closed-state tiles overlap: again with the contact rows, from {where}")
-        best = min(best, rank(*_search(merit, start, tag, *search)), key=lambda b: b[0])
+        how.log(f"closed-state tiles overlap: again with the contact rows, from {where}")
+        best = min(best, rank(*_search(merit, start, tag, iters, how)), key=lambda b: b[0])
     return best[1], best[2], iters
 
 
-def _search(
-    judge,
-    p0,
-    tag: str,
-    iters: dict,
-    fit_tol,
-    mean_edge,
-    log,
-    max_iter: int,
-    miss_tol: float,
-    scalings: tuple[str, ...],
-):
-    """The stages from ``p0`` with each LM scaling in turn (``scalings``): ``(p, X, mode)`` of the best."""
+def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):
+    """The stages from ``p0`` with each LM scaling in turn (``how.scalings``): ``(p, X, mode)`` of the best."""
     best = None
-    for scaling in scalings:
+    for scaling in how.scalings:
         p = p0
         for n, (rho, stall_tol, cap) in enumerate(STAGES):
             merit = judge.staged(rho, scaling if n == 0 else "marquardt")
             if n and judge.ineq_violation(judge.state(p)) == 0.0:
                 cap = min(cap, POLISH_STEPS)
-            p, X, k = levenberg_marquardt(merit, p, min(cap, max_iter), stall_tol, log)
+            p, X, k = levenberg_marquardt(merit, p, min(cap, how.max_iter), stall_tol, how.log)
             iters[f"reduced_{tag}{scaling}_rho_{rho:g}"] = k
             fit_max = max(
                 (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
                 default=0.0,
             )
-            if merit.fits and fit_max < 1e-2 * mean_edge(X):
-                Xh, ph, kh = hard_fit(merit, p, fit_tol)
+            if merit.fits and fit_max < 1e-2 * how.mean_edge(X):
+                Xh, ph, kh = hard_fit(merit, p, how.fit_tol)
                 iters[f"reduced_{tag}{scaling}_hard"] = kh
                 if Xh is not None:  # an exact fit: nothing left to compare
                     return ph, Xh, "hard"
@@ -478,7 +474,7 @@ def _search(
         cost = float(ev.r @ ev.r)
         miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
         viol = ev.gviol
-        log(
+        how.log(
             f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
             + (f", an inequality violated by {viol:.2e}" if viol > 0 else "")
         )
@@ -487,7 +483,7 @@ def _search(
         # scaling is tried as well
         if best is None or (viol > 0, cost) < best[0]:
             best = ((viol > 0, cost), p, X)
-        if miss <= miss_tol and not viol > 0:
+        if miss <= how.miss_tol and not viol > 0:
             break
     assert best is not None, "scalings is not empty"
     return best[1], best[2], "least-squares"
