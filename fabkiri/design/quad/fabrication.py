@@ -217,14 +217,13 @@ def strip_rows(
     eh: np.ndarray,
     ck: np.ndarray,
     ek: np.ndarray,
-    a0: float,
-    along: float,
-    across: float,
-    clearance: float,
+    box: tuple[float, float, float, float],
 ) -> Dual:
     """Separating-axis gap between the strip boxes of hinge corners ``ch`` and ``ck`` of quads ``t`` (seams
-    towards corners ``eh``, ``ek``; box ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile)
-    minus ``clearance``; soft min/max and the smooth max over the eight axis gaps are all on the safe side."""
+    towards corners ``eh``, ``ek``; ``box = (a0, along, across, clearance)``, :func:`strip_box`: the box
+    ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile) minus ``clearance``; soft min/max and
+    the smooth max over the eight axis gaps are all on the safe side."""
+    a0, along, across, clearance = box
     ph, e_h, n_h = _strip_box(x, quads, t, ch, eh)
     pk, e_k, n_k = _strip_box(x, quads, t, ck, ek)
 
@@ -391,7 +390,7 @@ def _strip_family(
         ineq_family(
             "fabrication_strip_clearance",
             tiles,
-            lambda x, sel: strip_rows(x, tiles, *pick(args, sel), a0, along, across, cl),
+            lambda x, sel: strip_rows(x, tiles, *pick(args, sel), (a0, along, across, cl)),
             nv,
             {"quad_of_row": t},
         )
