@@ -76,7 +76,14 @@ from .drivers.rotations import (  # noqa: F401  (re-exported: the rotations driv
     rotation_targets,
 )
 from .energy import Springs, WithTerm, springs
-from .path import DeploymentPath, closed_states, finish_path, node_positions, path_parameter
+from .path import (
+    DeploymentPath,
+    Frames,
+    closed_states,
+    finish_path,
+    node_positions,
+    path_parameter,
+)
 
 
 @dataclass
@@ -322,16 +329,5 @@ def elastic_path(
         "max_increment": max_increment,
         **figures,
     }
-    return finish_path(
-        pattern,
-        "elastic",
-        drv.name,
-        t,
-        nodes,
-        corners,
-        sp,
-        states,
-        collision_tol,
-        solver=solver,
-        segments=plan.segments,
-    )
+    frames = Frames("elastic", drv.name, t, nodes, corners, solver=solver, segments=plan.segments)
+    return finish_path(pattern, frames, sp, states, collision_tol)
