@@ -361,8 +361,9 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
         np.pi / 4,
         prob.families,
         prob.margin,
-        1e-3,
-        R.ReducedSearch(1e-12, lambda Y: _mean_edge(prob, Y), lambda m: None, miss_tol=np.inf),
+        R.ReducedSearch(
+            1e-3, 1e-12, lambda Y: _mean_edge(prob, Y), lambda m: None, miss_tol=np.inf
+        ),
     )
     assert (
         "levenberg" in calls

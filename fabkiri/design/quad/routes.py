@@ -107,8 +107,8 @@ def _reduced_from(
         psi0,
         prob.families,
         prob.margin,
-        req.reg_weight,
         ReducedSearch(
+            req.reg_weight,
             0.1 * req.tol * _mean_edge(prob, prob.X0),
             lambda Y: _mean_edge(prob, Y),
             log,

@@ -380,10 +380,11 @@ def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> lis
 
 @dataclass(frozen=True)
 class ReducedSearch:
-    """How :func:`solve_reduced` searches: ``fit_tol`` of a hard fit (absolute), ``mean_edge(X)`` the unit of
-    its 1 % "nearly exact" threshold, the log, the LM iteration cap, the fit miss that ends the scalings
-    early and the LM scalings to start with."""
+    """How :func:`solve_reduced` weighs and searches: the regulariser's weight in the merit, ``fit_tol`` of a
+    hard fit (absolute), ``mean_edge(X)`` the unit of its 1 % "nearly exact" threshold, the log, the LM
+    iteration cap, the fit miss that ends the scalings early and the LM scalings to start with."""
 
+    reg_weight: float
     fit_tol: float
     mean_edge: Callable[[np.ndarray], float]
     log: Callable[[str], None]
@@ -399,7 +400,6 @@ def solve_reduced(
     psi0: float,
     families: list[Family],
     margin: dict,
-    reg_weight: float,
     how: ReducedSearch,
     S0: np.ndarray | None = None,
     mirror: Mirror | None = None,
@@ -419,7 +419,7 @@ def solve_reduced(
         p0 = symmetric_member(mirror.P, p0)
     iters: dict = {}
     on_grid = grid_families(fam, st, families)
-    judge: Any = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
+    judge: Any = _Merit(fam, families, margin, how.reg_weight, STAGES[-1][0], grid_families=on_grid)
     if mirror is not None:
         judge = MirroredMerit(judge, mirror.P, mirror.axis_rows)
     p, X, mode = _search(judge, p0, "", iters, how)
