@@ -414,7 +414,6 @@ def shrink_tiles(corners: np.ndarray, shrink: float) -> np.ndarray:
 
 def ligament_design(
     pattern: Pattern,
-    corners: np.ndarray,
     shrunk: np.ndarray,
     *,
     gap: float,
