@@ -46,8 +46,8 @@ from fabkiri.cli.design_cmd import BIG_TILES
 from fabkiri.design.quad.solve import (
     DesignRequest,
     _ineq_values,
-    _Problem,
     design,
+    design_problem,
     single_thread_blas,
 )
 from fabkiri.design.targets import lookup as T
@@ -67,7 +67,7 @@ def slsqp(n: int, independent: bool, init: str, max_iter: int = 500):
     set at the initial guess (pivoted QR), which is what SLSQP needs.
     """
     req = DesignRequest(n, n, T.load_target("circle", 100.0), rigid=True, init=init)
-    prob = _Problem(req)
+    prob = design_problem(req)
     shape = prob.X0.shape
     eqs, fits, ineqs = prob.of("eq"), prob.of("fit"), prob.of("ineq")
     reg = prob.of("reg")[0]

@@ -241,6 +241,18 @@ def line(name: str, who: str, s: dict, ld: float) -> str:
     )
 
 
+def _note(row, this: dict, base: dict | None) -> str:
+    """The line under a row: its command, the ratio to the baseline, the issue's figure and goal."""
+    note = f"  {' '.join(row.argv)}"
+    if base and "error" not in base and "error" not in this:
+        note += f" | ratio base/this: wall {base['wall'] / this['wall']:.2f}x, cpu {base['cpu'] / this['cpu']:.2f}x"
+    if row.goal_s is not None:
+        note += f" | issue: {row.issue_s} s -> goal < {row.goal_s} s (quiet machine)"
+    elif row.issue_s is not None:
+        note += f" | issue: {row.issue_s} s, keep"
+    return note
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -296,15 +308,7 @@ def main(argv: list[str] | None = None) -> int:
         sums = {w: summary(r) for w, r in runs.items()}
         for w, _ in who:
             print(line(row.name, w, sums[w], ld))
-        this, base = sums["this"], sums.get("base")
-        note = f"  {' '.join(row.argv)}"
-        if base and "error" not in base and "error" not in this:
-            note += f" | ratio base/this: wall {base['wall'] / this['wall']:.2f}x, cpu {base['cpu'] / this['cpu']:.2f}x"
-        if row.goal_s is not None:
-            note += f" | issue: {row.issue_s} s -> goal < {row.goal_s} s (quiet machine)"
-        elif row.issue_s is not None:
-            note += f" | issue: {row.issue_s} s, keep"
-        print(note)
+        print(_note(row, sums["this"], sums.get("base")))
         for w, _ in who:
             if sums[w].get("err"):
                 print(f"  {w} exit {sums[w]['exit']}: {sums[w]['err']}")

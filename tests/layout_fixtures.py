@@ -103,7 +103,7 @@ def unique_edges(corners: np.ndarray, decimals: int = 6) -> np.ndarray:
     return segs[np.sort(idx)]
 
 
-def write_layout(
+def write_layout(  # noqa: PLR0913 (a fixture taking the cut's options: hinge, layout, state, kerf)
     folder: Path,
     pattern: Pattern,
     corners: np.ndarray,

@@ -6,7 +6,7 @@ from fabkiri.design.quad.rigid import reduced as R
 
 
 def rigid_merit(prob, reg_weight: float = 1e-3) -> R._Merit:
-    """``reduced._Merit`` of ``prob`` (a ``solve._Problem`` with a rigid family), its grid families on."""
+    """``reduced._Merit`` of ``prob`` (a ``solve.DesignProblem`` with a rigid family), its grid families on."""
     fam = prob.rigid_family
     return R._Merit(
         fam,

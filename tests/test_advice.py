@@ -213,7 +213,7 @@ def test_a_refused_print_asks_the_bed_first_and_bisects_once(monkeypatch):
     assert len(minima) == 1, minima
     assert planned  # the plan checks still decide every print the bed takes
     for style, printer, state, scale in planned:
-        top = fb._bed_scale(fb.scaled(p, scale), style, state, printer)
+        top = fb.bed_scale(fb.scaled(p, scale), style, state, printer)
         assert top is None or top >= 1.0, (style, printer.name, scale)
 
 

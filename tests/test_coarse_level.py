@@ -1,4 +1,4 @@
-"""The coarse level of a coarse-to-fine start (``_Problem._coarse_level``): fitted with the tips on their
+"""The coarse level of a coarse-to-fine start (``DesignProblem._coarse_level``): fitted with the tips on their
 arcs only, and again with the outline rows where that outline misses the shape tolerance (issue #37: the
 drop's tips-only levels sat at 40 % of its size, and its 64x64 design ended in a 22 % local minimum)."""
 
@@ -9,22 +9,22 @@ from dataclasses import replace
 import pytest
 from fabkiri.design.core.conformance import deployed
 from fabkiri.design.core.request import DesignRequest
-from fabkiri.design.quad.problem import _Problem
-from fabkiri.design.quad.solve import design
+from fabkiri.design.quad.problem import DesignProblem
+from fabkiri.design.quad.solve import design, design_problem
 from fabkiri.design.targets.lookup import load_target
 from fabkiri.pattern.model import Pattern
 
 from .conftest import REPO
 
 
-def _start_miss(prob: _Problem, target) -> float:
+def _start_miss(prob: DesignProblem, target) -> float:
     pat = Pattern(nodes=prob.X0[: prob.n] * prob.L0, tiles=prob.std.tiles)
     return deployed(pat.nodes, pat.topology, target)["hausdorff_rel"]
 
 
 def test_a_coarse_level_that_misses_the_outline_is_refitted_with_the_outline_rows():
     drop = load_target(str(REPO / "bench" / "data" / "drop.csv"), size=100.0)
-    prob = _Problem(DesignRequest(16, 16, drop, rigid=True, init="coarse", coarse_refit=True))
+    prob = design_problem(DesignRequest(16, 16, drop, rigid=True, init="coarse", coarse_refit=True))
     level = prob.coarse
     assert level is not None and level["used"]
     assert (
@@ -37,7 +37,7 @@ def test_a_coarse_level_that_misses_the_outline_is_refitted_with_the_outline_row
 
 def test_a_coarse_level_within_the_tolerance_keeps_the_tips_only_fit():
     circle = load_target("circle", size=100.0)
-    prob = _Problem(DesignRequest(16, 16, circle, rigid=True, init="coarse"))
+    prob = design_problem(DesignRequest(16, 16, circle, rigid=True, init="coarse"))
     level = prob.coarse
     assert level is not None and level["used"] and level["fit"] == "tips"
     assert level["hausdorff_rel"] <= 0.02 and "tips_only_hausdorff_rel" not in level
@@ -48,8 +48,8 @@ def test_a_coarse_level_is_refitted_past_a_threshold_of_the_callers():
     asks for the refit: the circle's 8x8 level, within the 2 % tolerance, is refitted past a smaller one."""
     circle = load_target("circle", size=100.0)
     ask = DesignRequest(16, 16, circle, rigid=True, init="coarse", coarse_refit=True)
-    assert "tips_only_hausdorff_rel" not in (_Problem(ask).coarse or {})
-    level = _Problem(replace(ask, coarse_refit_above=1e-6)).coarse
+    assert "tips_only_hausdorff_rel" not in (design_problem(ask).coarse or {})
+    level = design_problem(replace(ask, coarse_refit_above=1e-6)).coarse
     assert level is not None and level["tips_only_hausdorff_rel"] > 1e-6
     assert level["hausdorff_rel"] <= level["tips_only_hausdorff_rel"] or level["fit"] == "tips"
 

@@ -172,18 +172,18 @@ def test_ligament_strain_rule_and_warning():
     c = p.contracted[1]
     small = hg.shrink_tiles(c, 2.0)
     d = hg.ligament_design(
-        p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.2
+        p, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.2
     )
     assert d.lengths == pytest.approx(4.0)  # 90° corners: apex to apex is the gap
     assert d.strains == pytest.approx(d.width_mm * np.pi / (2 * 4.0))
     assert not d.warnings and d.strains.max() <= 0.2
     stiff = hg.ligament_design(
-        p, c, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.05
+        p, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.05
     )
     assert stiff.width_mm == 0.4 and "exceeds the material's limit" in stiff.warnings[0]
     with pytest.raises(FabricationError, match="between the two strips"):
         hg.ligament_design(
-            p, c, small, gap=4.0, width_max=3.5, min_web=3.5, kerf=0.1, strain_limit=0.9
+            p, small, gap=4.0, width_max=3.5, min_web=3.5, kerf=0.1, strain_limit=0.9
         )
 
 

@@ -1131,8 +1131,8 @@ def test_what_a_print_style_decides_is_asked_of_the_style(printer, monkeypatch):
     )
     pat = with_contracted_states(standard_pattern(2, 2))
     assert (
-        fb._bed_scale(pat, "tiles-and-strips", 1, printer) > 0
-        and fb._bed_scale(pat, "no-tiles", 1, printer) is None
+        fb.bed_scale(pat, "tiles-and-strips", 1, printer) > 0
+        and fb.bed_scale(pat, "no-tiles", 1, printer) is None
     )
     r = mesh.realise_job(mesh.build_job(pat, "one-stl", 1, printer))
     assert [n for n in mesh.job_files(r, "sq", preview=False) if n.endswith(".stl")] == ["sq.stl"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
+from fabkiri.design.core.dual import values_only
 from fabkiri.design.quad import fabrication as F
 from fabkiri.design.quad import print_rows as PR
 from fabkiri.design.quad.constraints import Stencils
@@ -26,7 +27,7 @@ def test_clipped_area_of_two_squares():
     x = np.array([[0, 0], [2, 0], [2, 2], [0, 2], [1, 1], [3, 1], [3, 3], [1, 3]], float)
     polys = np.arange(8)[None]
     rows = np.arange(1)
-    P = [F._corners(x, polys, rows, np.array([k])) for k in range(8)]
+    P = [F.dual_corner(x, polys, rows, np.array([k])) for k in range(8)]
     assert PR.clipped_area(P[:4], P[4:]).v == pytest.approx([1.0])
     assert PR.clipped_area(P[4:], P[:4]).v == pytest.approx([1.0])
     far = [(a[0] + 5.0, a[1]) for a in P[4:]]
@@ -67,7 +68,7 @@ def test_residual_only_rows_carry_no_gradients_and_the_same_values():
     for f in fams:
         assert np.array_equal(f.residual(x), f(x)[0]), f.name
     args = PR.pad_args(stc.tiles, stc.hinge_tiles, stc.hinge_corner, stc.folds[1].fold_corner_ends)
-    plain = PR.pad_rows(F.values_only(x), *args, *PR.strip_pad(MK4, 4.0))
+    plain = PR.pad_rows(values_only(x), *args, *PR.strip_pad(MK4, 4.0))
     dual = PR.pad_rows(x, *args, *PR.strip_pad(MK4, 4.0))
     assert plain.g is None and dual.g.shape == (len(dual.v), 16)
     assert np.array_equal(plain.v, dual.v)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from fabkiri.design.quad import constraints as C
-from fabkiri.design.quad.problem import _Problem
+from fabkiri.design.quad.problem import DesignProblem
 from fabkiri.design.quad.rigid.contact import ClosedContact
 from fabkiri.design.quad.rigid.family import RigidFamily
 from fabkiri.design.quad.rigid.mirror import (
@@ -46,7 +46,7 @@ def _symmetric_problem(axis: str, n: int):
         n, n, T.load_target("heart" if axis == "y" else "ellipse", 100.0), rigid=True
     )
     req.symmetry = axis
-    prob = _Problem(req)
+    prob = DesignProblem(req)
     return prob, prob.rigid_family
 
 
@@ -277,7 +277,7 @@ def test_mirrored_starts_stop_once_the_best_asks_for_no_second_opinion(met_after
     from fabkiri.design.quad import routes
 
     heart = T.load_target("heart", 100.0)
-    prob = _Problem(DesignRequest(8, 8, heart, rigid=True, symmetry="y", outline=False))
+    prob = DesignProblem(DesignRequest(8, 8, heart, rigid=True, symmetry="y", outline=False))
     ran: list[str] = []
 
     def solve(prob, X0, psi0, S0, log, iters, tag, scalings=()):
@@ -322,7 +322,7 @@ def test_regulariser_features_of_half_the_tiles(rows, cols, axis):
     from fabkiri.design.quad.objective import tile_corners
 
     target = T.load_target("heart" if axis == "y" else "ellipse", 100.0)
-    prob = _Problem(DesignRequest(rows, cols, target, rigid=True, symmetry=axis))
+    prob = DesignProblem(DesignRequest(rows, cols, target, rigid=True, symmetry=axis))
     fam = prob.rigid_family
     mirror = Mirror.build(fam, rows, cols, axis)
     base = rigid_merit(prob)

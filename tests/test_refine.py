@@ -11,7 +11,7 @@ from fabkiri.design.core.refine import _Steps, lawson_weights, refine_minimax
 from fabkiri.design.quad import fabrication as F
 from fabkiri.design.quad.constraints import Stencils
 from fabkiri.design.quad.objective import weighted
-from fabkiri.design.quad.solve import DesignRequest, _Problem, design
+from fabkiri.design.quad.solve import DesignProblem, DesignRequest, design
 from fabkiri.design.targets.lookup import load_target
 from fabkiri.errors import InputError
 from fabkiri.pattern import thinness as fab
@@ -45,7 +45,7 @@ def test_lawson_weights_grow_where_the_fit_misses():
     )
     req = DesignRequest(rows=4, cols=4, target=tgt, rigid=True, init="rescaled")
     W = lawson_weights(req, free.pattern.nodes, None, 1.0)
-    prob = _Problem(replace(req, start=free.pattern.nodes))
+    prob = DesignProblem(replace(req, start=free.pattern.nodes))
     spread = 0
     for f in prob.of("fit"):
         miss = np.abs(f.residual(prob.X0))
@@ -137,7 +137,7 @@ def test_refinement_lowers_the_hausdorff_distance_and_keeps_the_rows():
     assert h == pytest.approx(np.nanmin(trace)) and h < h0
     assert fab.widths(best.pattern.corners()).min() >= 3.0
     # the report measures the real (unweighted) distances of the tips to their arcs
-    prob = _Problem(replace(req, start=best.pattern.nodes))
+    prob = DesignProblem(replace(req, start=best.pattern.nodes))
     shape = next(f for f in prob.of("fit") if f.name == "shape")
     real = float(np.abs(shape.residual(prob.X0)).max()) * prob.L0
     assert best.report["fit"]["shape"]["max_mm"] == pytest.approx(real, rel=1e-9)

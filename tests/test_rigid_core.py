@@ -9,7 +9,7 @@ from fabkiri.design.quad import constraints as C
 from fabkiri.design.quad.rigid import reduced as R
 from fabkiri.design.quad.rigid.core import GridCore, grid_core
 from fabkiri.design.quad.rigid.family import RigidFamily
-from fabkiri.design.quad.solve import DesignRequest, _Problem
+from fabkiri.design.quad.solve import DesignProblem, DesignRequest
 from fabkiri.design.targets import lookup as T
 from fabkiri.pattern import standard_pattern
 
@@ -50,7 +50,7 @@ def block_merit(monkeypatch):
     """A 8x8 rigid merit on the block path (the grid block formed by coordinate blocks, not through a dense
     ``C``) at a member with some inequality rows active."""
     monkeypatch.setattr(R, "DENSE_JD", 0)
-    prob = _Problem(DesignRequest(8, 8, T.load_target("ellipse", 100.0), rigid=True))
+    prob = DesignProblem(DesignRequest(8, 8, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family
     merit = rigid_merit(prob)
     assert merit._tiles is None and merit._C is None

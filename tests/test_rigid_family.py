@@ -206,7 +206,7 @@ def test_cli_solver_flag(tmp_path, run_cli):
 
 def test_cli_keeps_the_closest_valid_fit():
     """Among valid attempts the closer fit wins; an invalid one never beats a valid one."""
-    from fabkiri.cli.design_cmd import _fit_miss, _rank
+    from fabkiri.api.design_judge import _fit_miss, _rank
 
     def outcome(valid, problems, miss):
         return (None, {"fit": {"shape": {"max_rel_size": miss}}}, problems, valid, None)
@@ -221,7 +221,7 @@ def test_cli_keeps_the_closest_valid_fit():
 def test_auto_keeps_the_better_of_both_solvers():
     """On a small least-squares case auto runs both solvers and keeps the lower objective (4x4 star:
     reduced 1.10 against full 5.32; the 6x6 heart, 1.12 against 2.52, took 1.5x the time)."""
-    from fabkiri.design.quad.solve import _objective, _Problem
+    from fabkiri.design.quad.solve import DesignProblem, _objective
 
     target = T.load_target("star", 80.0)
     out = {}
@@ -229,7 +229,7 @@ def test_auto_keeps_the_better_of_both_solvers():
         req = DesignRequest(4, 4, target, rigid=True, solver=solver)
         res = design(req)
         assert res.converged, solver
-        prob = _Problem(req)
+        prob = DesignProblem(req)
         out[solver] = (_objective(prob, res.pattern.nodes / prob.L0), res.report["solver"])
     assert out["reduced"][0] != pytest.approx(
         out["full"][0], rel=1e-6
@@ -283,13 +283,13 @@ def test_doubled_grid_keeps_the_coarse_vertices_and_never_folds(rows, cols, seed
 def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     """--init coarse for a rigid design: the fine start is a member of the fine family, deployed to the coarse
     design's ψ, and nearer the target than the rescaled start."""
-    from fabkiri.design.quad.solve import _Problem
+    from fabkiri.design.quad.solve import design_problem
 
     tgt = T.load_target("ellipse", 100.0)
     coarse = design(
         DesignRequest(8, 8, tgt, rigid=True, outline=False)
     )  # the coarse level fits the tips only
-    prob = _Problem(DesignRequest(16, 16, tgt, rigid=True, init="coarse"))
+    prob = design_problem(DesignRequest(16, 16, tgt, rigid=True, init="coarse"))
     assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid resampled")
     assert prob.coarse["folded_tiles"] == 0
     fam, st = prob.rigid_family, prob.st
@@ -301,7 +301,10 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     def tip_distances(p):
         return np.abs(tgt.project(p.X0[p.st.tip_nodes] * p.L0, p.st.tip_side)[2])
 
-    near, far = tip_distances(prob), tip_distances(_Problem(DesignRequest(16, 16, tgt, rigid=True)))
+    near, far = (
+        tip_distances(prob),
+        tip_distances(design_problem(DesignRequest(16, 16, tgt, rigid=True))),
+    )
     assert near.max() < 0.75 * far.max() and np.sqrt(np.mean(near**2)) < 0.5 * np.sqrt(
         np.mean(far**2)
     )
@@ -309,9 +312,11 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
 
 def test_rigid_coarse_to_fine_start_for_odd_sizes():
     """9x11 tiles from a 4x5 design: the grid is resampled, not doubled; the start is still a member."""
-    from fabkiri.design.quad.solve import _Problem
+    from fabkiri.design.quad.solve import design_problem
 
-    prob = _Problem(DesignRequest(9, 11, T.load_target("circle", 80.0), rigid=True, init="coarse"))
+    prob = design_problem(
+        DesignRequest(9, 11, T.load_target("circle", 80.0), rigid=True, init="coarse")
+    )
     assert (prob.coarse["rows"], prob.coarse["cols"]) == (4, 5)
     assert prob.coarse["used"] and prob.coarse["map"].startswith("closed-state grid resampled")
     psi = RigidFamily.deployment_angle(prob.X0, prob.st)
@@ -330,9 +335,9 @@ def test_deployment_angle_is_not_clipped_near_the_closed_states():
 def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypatch):
     """A start that leaves an inequality violated (g < 0) loses to a feasible result, whatever the merit."""
     from fabkiri.design.quad.rigid import reduced as R
-    from fabkiri.design.quad.solve import _mean_edge, _Problem
+    from fabkiri.design.quad.solve import DesignProblem, _mean_edge
 
-    prob = _Problem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
+    prob = DesignProblem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family
     p0 = np.concatenate([*fam.fit(prob.X0, np.pi / 4)[0].T, [np.pi / 4]])
     folded = p0.copy()
@@ -356,11 +361,9 @@ def test_reduced_solver_ranks_an_infeasible_result_below_a_feasible_one(monkeypa
         np.pi / 4,
         prob.families,
         prob.margin,
-        1e-3,
-        1e-12,
-        lambda Y: _mean_edge(prob, Y),
-        lambda m: None,
-        miss_tol=np.inf,
+        R.ReducedSearch(
+            1e-3, 1e-12, lambda Y: _mean_edge(prob, Y), lambda m: None, miss_tol=np.inf
+        ),
     )
     assert (
         "levenberg" in calls
@@ -396,9 +399,9 @@ def test_tile_shape_families_are_the_same_on_the_closed_grid(rows, cols, psi, se
 
 def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
     from fabkiri.design.quad.rigid import reduced as R
-    from fabkiri.design.quad.solve import _Problem
+    from fabkiri.design.quad.solve import DesignProblem
 
-    prob = _Problem(DesignRequest(10, 12, T.load_target("heart", 100.0), rigid=True))
+    prob = DesignProblem(DesignRequest(10, 12, T.load_target("heart", 100.0), rigid=True))
     fam = prob.rigid_family
     monkeypatch.setattr(
         R, "DENSE_JD", 0
@@ -449,9 +452,9 @@ def test_grid_normal_matrix_by_blocks_equals_the_dense_product(monkeypatch):
 def _merits(rows, cols, target, rho):
     """The same reduced merit twice: the dense path (small lattices) and the sparse block path."""
     from fabkiri.design.quad.rigid import reduced as R
-    from fabkiri.design.quad.solve import _Problem
+    from fabkiri.design.quad.solve import DesignProblem
 
-    prob = _Problem(DesignRequest(rows, cols, T.load_target(target, 100.0), rigid=True))
+    prob = DesignProblem(DesignRequest(rows, cols, T.load_target(target, 100.0), rigid=True))
     fam = prob.rigid_family
     on_grid = R.grid_families(fam, prob.st, prob.families)
     dense = R._Merit(fam, prob.families, prob.margin, 1e-3, rho, grid_families=on_grid)

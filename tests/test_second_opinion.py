@@ -7,12 +7,12 @@ import numpy as np
 from fabkiri.design.core.request import DesignRequest
 from fabkiri.design.quad import penalty as P
 from fabkiri.design.quad import routes as R
-from fabkiri.design.quad.problem import _acceptable, _objective, _Problem
+from fabkiri.design.quad.problem import DesignProblem, _acceptable, _objective
 from fabkiri.design.targets import lookup as T
 
 
-def _problem() -> _Problem:
-    return _Problem(DesignRequest(6, 6, T.load_target("heart", 100.0), rigid=True))
+def _problem() -> DesignProblem:
+    return DesignProblem(DesignRequest(6, 6, T.load_target("heart", 100.0), rigid=True))
 
 
 def test_a_first_schedule_that_stops_short_is_offered_before_the_restart(monkeypatch):

@@ -75,9 +75,9 @@ def test_block_rows_come_without_jacobians_until_a_step_asks(monkeypatch):
     """A trial step of the block path (large lattices) reads only its rows; the Jacobians are assembled when
     its normal matrix is asked for, and the rows are those of the Jacobian path."""
     from fabkiri.design.quad.rigid import reduced as R
-    from fabkiri.design.quad.solve import _Problem
+    from fabkiri.design.quad.solve import DesignProblem
 
-    prob = _Problem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
+    prob = DesignProblem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
     fam = prob.rigid_family
     monkeypatch.setattr(R, "DENSE_JD", 0)
     merit = rigid_merit(prob)

@@ -81,12 +81,12 @@ def test_a_folded_member_is_unfolded_to_the_margin(shift):
 def test_the_leaf_svg_coarse_start_is_repaired_not_discarded():
     """The leaf outline at 32x32 rigid: the nearest member of the resampled 16x16 design folded 3 cells and
     the start was thrown away (13.26 % Hausdorff from rescaled); repaired, it is used, convex with margin."""
-    from fabkiri.design.quad.solve import DesignRequest, _Problem
+    from fabkiri.design.quad.solve import DesignRequest, design_problem
     from fabkiri.design.targets.lookup import load_target
     from fabkiri.pattern import geometry
 
     tgt = load_target(str(REPO / "bench" / "data" / "leaf.svg"), 100.0)
-    prob = _Problem(DesignRequest(32, 32, tgt, rigid=True, init="coarse", outline=True))
+    prob = design_problem(DesignRequest(32, 32, tgt, rigid=True, init="coarse", outline=True))
     un = prob.coarse["unfold"]
     assert (
         un["folded_cells"] >= 1 and un["ok"]

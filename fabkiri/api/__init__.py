@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import lazy_getattr
+from ..lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from .design import DesignOutcome, PatternRequest, design_pattern

@@ -19,13 +19,19 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import CheckFailed, FabkiriError, FabricationError
 from ..fabricate import fabricability as fb
-from ..fabricate.cut.materials import HINGE_KINDS, Material, available, load_material
+from ..fabricate.cut.materials import (
+    DEFAULT_MATERIAL,
+    HINGE_KINDS,
+    Material,
+    available,
+    load_material,
+)
 from ..fabricate.print.printers import available_printers, load_printer
 from ..pattern.model import Pattern
+from .print_options import DEFAULT_STYLE, PrintOptions, minimum, printer_for
 
 if TYPE_CHECKING:
     from ..fabricate.cut.sheets import CutOptions
-    from .print import PrintOptions
 
 CUT_GATE = "cut's web and edge rules at this scale (closed form)"
 PRINT_GATE = "print's plan checks and bed at this scale"
@@ -156,7 +162,6 @@ def cut_alternatives(
     line that keeps the size."""
     from ..fabricate.cut.hingekinds import hinge_kind
     from ..fabricate.cut.sheets import CutOptions, closed_states
-    from .cut import DEFAULT_MATERIAL
     from .intent import design_intent
 
     if options is None:
@@ -239,9 +244,8 @@ def print_alternatives(
     """The checked options for ``print`` at ``scale``: the smallest (or, past the bed, the largest) scale
     of the printer and style asked for, every preset printer and style whose plan checks and bed pass at
     ``scale`` (None: that print at some scale), the design line that keeps the size. ``memo``: the plan
-    checks' answers for ``pattern`` known already (the refused print's, :func:`.print.minimum`)."""
+    checks' answers for ``pattern`` known already (the refused print's, :func:`.print_options.minimum`)."""
     from .intent import design_intent
-    from .print import DEFAULT_STYLE, PrintOptions, printer_for
 
     o = options or PrintOptions()
     state = int(o.state or design_intent(pattern, "state") or 1)
@@ -311,7 +315,6 @@ def _fits(pattern: Pattern, o, given, name: str, own: bool, styles, state: int, 
     some scale); the printer asked for (``own``) with the command's overrides, past its style asked for
     (``styles[0]``)."""
     from ..fabricate.print.job import print_style
-    from .print import printer_for
 
     fits = []
     for s in styles[1:] if own else styles:
@@ -327,8 +330,6 @@ def _fits(pattern: Pattern, o, given, name: str, own: bool, styles, state: int, 
 def _print_scale(pattern: Pattern, style: str, printer, state: int, scale: float, memo: dict):
     """``(scale, text)``: the smallest scale the plan checks accept, or past the bed the largest the bed
     takes, for the printer and style asked for; None when no scale prints it or ``scale`` already does."""
-    from .print import minimum
-
     need = minimum(pattern, style, printer, state, memo)
     if not need.possible or need.min_scale is None:
         return None
@@ -361,7 +362,7 @@ def _refused(pattern: Pattern, style: str, printer, state: int, scale: float, me
     """Whether :func:`~fabkiri.fabricate.fabricability.print_refusal` refuses, the bed asked first: its
     box of the closed corners needs no plan geometry (a pinned plan past the bed is slow to build)."""
     try:
-        top = fb._bed_scale(fb.scaled(pattern, scale), style, state, printer)
+        top = fb.bed_scale(fb.scaled(pattern, scale), style, state, printer)
     except CheckFailed:  # it does not close: the plan checks say so
         top = None
     if top is not None and top < 1.0:

@@ -17,7 +17,13 @@ import numpy as np
 from ..design.core.conformance import deployed as deployed_conformance
 from ..design.core.refine import refine_minimax
 from ..design.quad.fabrication import FabricationLimits
-from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, _Problem, design, via_rigid_applies
+from ..design.quad.solve import (
+    VIA_RIGID_INIT,
+    DesignRequest,
+    design,
+    design_problem,
+    via_rigid_applies,
+)
 from ..design.targets.lookup import Target
 from ..errors import SolveError
 from ..fabricate import design_limits
@@ -209,7 +215,7 @@ def _rigid_first(request: PatternRequest, req: DesignRequest) -> bool:
     if request.init or req.rigid or not via_rigid_applies(replace(req, init=VIA_RIGID_INIT)):
         return False
     try:
-        _Problem(replace(req, init="conformal", fabrication=None, start=None))
+        design_problem(replace(req, init="conformal", fabrication=None, start=None))
     except SolveError:
         return True
     return False

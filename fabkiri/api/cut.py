@@ -15,7 +15,7 @@ from typing import Any
 
 from .. import limits
 from ..errors import CheckFailed, FabkiriError, FabricationError
-from ..fabricate.cut.materials import Material, load_material, parse_setting
+from ..fabricate.cut.materials import DEFAULT_MATERIAL, Material, load_material, parse_setting
 from ..fabricate.cut.readback import Readback, verified_files
 from ..fabricate.cut.sheets import CutOptions, CutResult, closed_states, cut_pattern
 from ..fabricate.tube.sheet import mark_seam, tube_cut_inputs
@@ -23,8 +23,6 @@ from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
 from .advice import Ask, Refused, cut_alternatives, cut_refusal
 from .intent import design_intent
-
-DEFAULT_MATERIAL = "acrylic-3"
 
 
 def cut_material(

@@ -108,7 +108,7 @@ def minimax_finish(
     cand, trace, secs = _steps(req, best, judge) if valid else (None, [], 0.0)
     refit, left = None, min(h0, _hausdorff(cand[1]) if cand else h0) if valid else float("inf")
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it (not
-    # for a symmetric design: its levels have the outline rows already, ``_Problem._coarse_level``, the same design)
+    # for a symmetric design: its levels have the outline rows already, ``DesignProblem._coarse_level``, the same design)
     if not req.coarse_refit and not req.symmetry and left > threshold(REFIT_ABOVE, req):
         # its coarse levels refitted where they miss by more than the finish's own threshold (not only past the
         # shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted 0.31 %)

@@ -122,7 +122,7 @@ def _fabrication_line(fr: dict) -> str:
     )
 
 
-def design_kagome(
+def design_kagome(  # noqa: PLR0913 (the options of `fabkiri design --lattice kagome`)
     rows: int,
     cols: int,
     target: str,

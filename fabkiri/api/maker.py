@@ -68,7 +68,7 @@ class _Plan:
         return least_tile_mm(self.printer, str(self.style)) if self.printer else 0.0
 
 
-def make(
+def make(  # noqa: PLR0913 (the options of `fabkiri make`)
     target: str,
     size: float,
     *,
@@ -127,7 +127,7 @@ def _floor(min_opening) -> float | None:
     return floor
 
 
-def _plan(
+def _plan(  # noqa: PLR0913 (make()'s options, checked before any design)
     target, size, material, hinge, printer, style, tiles, shape_tol, min_opening, output
 ) -> _Plan:
     """Every check of the request that needs no design: one :class:`InputError` naming the problem."""

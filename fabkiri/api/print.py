@@ -22,41 +22,13 @@ from ..fabricate import fabricability as fb
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.print import mesh
 from ..fabricate.print.job import print_style
-from ..fabricate.print.printers import load_printer
 from ..fabricate.tube.sheet import tube_cut_inputs
 from ..pattern.fingerprint import fingerprint
 from ..pattern.model import Pattern
 from ..verify.printmanifest import PrintManifest
 from .advice import Ask, Refused, print_alternatives
 from .intent import design_intent
-
-DEFAULT_STYLE = "tiles-and-strips"
-
-
-@dataclass(frozen=True)
-class PrintOptions:
-    """What to print and how; ``None`` keeps the design's intent or the printer preset's value.
-
-    ``scale`` is mm printed per mm of the pattern, or ``"auto"``: the smallest scale the plan
-    checks accept. Thicknesses, widths, gaps and clearances (mm) override the printer preset;
-    ``tile_thickness`` is the pinned tiles' thickness for ``style="pinned"``.
-    """
-
-    style: str | None = None
-    state: int | None = None  # None: the state the design was made to print (its intent), else 1
-    printer: str | None = None
-    scale: float | str = 1.0
-    tile_thickness: float | None = None
-    strip_thickness: float | None = None
-    strip_width: float | None = None
-    strip_reach: float | None = None
-    gap: float | None = None
-    radial_clearance: float | None = None
-    axial_clearance: float | None = None
-    step: bool = False
-    marks: bool = False
-    material: str = "acrylic-3"
-    force: bool = False
+from .print_options import DEFAULT_STYLE, PrintOptions, minimum, printer_for
 
 
 @dataclass(frozen=True, eq=False)
@@ -212,32 +184,6 @@ def _refusal_advice(
         scale = None if o.scale == "auto" else float(o.scale)
         alternatives = print_alternatives(pattern, o, scale, ask=ask or Ask(), memo=memo)
         raise Refused(str(exc), alternatives) from None
-
-
-def minimum(pattern: Pattern, style: str, printer, state: int, memo: dict):
-    """:func:`~fabkiri.fabricate.fabricability.print_minimum`, kept in ``memo`` (one pattern's answers):
-    a refused print and its advice both ask for the printer and style asked for (a bisection on the plan
-    checks, seconds at 32x32)."""
-    key = ("minimum", style, printer, int(state))
-    if key not in memo:
-        memo[key] = fb.print_minimum(pattern, style, printer, int(state))
-    return memo[key]
-
-
-def printer_for(name: str | None, style: str, o: PrintOptions):
-    """The printer ``print`` uses for ``style``: the preset with the options' overrides (pinned tiles
-    have their own, thicker, preset thickness)."""
-    pinned = print_style(style).own_tile_thickness
-    return load_printer(name).with_overrides(
-        tile_thickness_mm=None if pinned else o.tile_thickness,
-        pin_tile_thickness_mm=o.tile_thickness if pinned else None,
-        strip_thickness_mm=o.strip_thickness,
-        strip_width_mm=o.strip_width,
-        strip_reach_mm=o.strip_reach,
-        gap_mm=o.gap,
-        radial_clearance_mm=o.radial_clearance,
-        axial_clearance_mm=o.axial_clearance,
-    )
 
 
 def _scaled(

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from collections.abc import Callable
 
 from .. import limits
+from ..errors import InputError
 
 
 def bounded(
@@ -38,3 +40,14 @@ length_mm = bounded(
     f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}",
 )
 """A length in mm: finite, positive, at most :data:`limits.MAX_LENGTH_MM` (``--size``, ``--min-feature``)."""
+
+
+def parse_tiles(text: str) -> tuple[int, int]:
+    """``ROWSxCOLS`` -> (rows, cols), both >= 1."""
+    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
+    if not m:
+        raise InputError(f"--tiles expects ROWSxCOLS such as 8x8, got {text!r}")
+    rows, cols = int(m.group(1)), int(m.group(2))
+    if rows < 1 or cols < 1:
+        raise InputError(f"--tiles needs at least one row and one column, got {rows}x{cols}")
+    return rows, cols

@@ -19,8 +19,6 @@ import numpy as np
 from ..api.design import (  # noqa: F401 (names tests and benches import from here)
     BIG_TILES,
     PatternRequest,
-    _fit_miss,
-    _rank,
     design_pattern,
     overlapping_tiles,
 )
@@ -31,8 +29,8 @@ from ..errors import InputError
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
 from ..fileio import check_output_file
-from .argtypes import bounded, length_mm
-from .pattern_cmds import add_i_know, parse_tiles
+from .argtypes import bounded, length_mm, parse_tiles
+from .pattern_cmds import add_i_know
 
 
 def cmd_design(args: argparse.Namespace) -> int:
@@ -80,9 +78,9 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 
 def _jsonable(v):
-    from ..exchange.pattern_json import _jsonable as j
+    from ..exchange.pattern_json import jsonable
 
-    return j(v)
+    return jsonable(v)
 
 
 _tol = bounded(

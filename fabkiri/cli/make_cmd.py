@@ -9,8 +9,7 @@ from ..api.maker import make
 from ..design.core import conformance as conf
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
-from .argtypes import length_mm
-from .pattern_cmds import parse_tiles
+from .argtypes import length_mm, parse_tiles
 
 
 def cmd_make(args: argparse.Namespace) -> int:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import re
 import sys
 
 from .. import limits
@@ -19,18 +18,8 @@ from ..pattern.kinds.periodic.sheet import standard_tube
 from ..pattern.kinds.tessellation import kinds, tessellation
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening
-from .argtypes import bounded
-
-
-def parse_tiles(text: str) -> tuple[int, int]:
-    """``ROWSxCOLS`` -> (rows, cols), both >= 1."""
-    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
-    if not m:
-        raise InputError(f"--tiles expects ROWSxCOLS such as 8x8, got {text!r}")
-    rows, cols = int(m.group(1)), int(m.group(2))
-    if rows < 1 or cols < 1:
-        raise InputError(f"--tiles needs at least one row and one column, got {rows}x{cols}")
-    return rows, cols
+from .argtypes import bounded, parse_tiles
+from .tube_cmd import cmd_export_tube3d
 
 
 def load_any(path: str) -> Pattern:
@@ -123,8 +112,6 @@ def _fabricability(pattern: Pattern) -> dict:
 
 def cmd_export(args: argparse.Namespace) -> int:
     if args.format == "tube3d":  # a tube's rolled states: not a pattern format (cli/tube_cmd.py)
-        from .tube_cmd import cmd_export_tube3d
-
         return cmd_export_tube3d(args)
     out = export_pattern(
         load_any(args.file),

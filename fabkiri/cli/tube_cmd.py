@@ -9,7 +9,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..api.patterns import load_pattern
 from ..fileio import atomic_write, atomic_write_many, check_output_file, check_output_folder
+from .argtypes import parse_tiles
 
 
 def cmd_design_tube(args: argparse.Namespace) -> int:
@@ -17,7 +19,6 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
     verified (the best iterate is still written, marked ``design.valid = false``)."""
     from ..api.tube import design_tube_pattern
     from ..errors import InputError
-    from .pattern_cmds import parse_tiles
 
     if args.tiles is None:
         raise InputError("--tube designs need --tiles ROWSxCOLS")
@@ -41,10 +42,9 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
 def cmd_export_tube3d(args: argparse.Namespace) -> int:
     """``export FILE --format tube3d -o DIR``: every state rolled onto its tube (OBJ, STL, PNG, GIF)."""
     from ..api.tube import tube_3d_files
-    from .pattern_cmds import load_any
 
     check_output_folder(args.output)
-    pattern = load_any(args.file)
+    pattern = load_pattern(args.file)
     files = tube_3d_files(
         pattern,
         stem=Path(args.file).stem,

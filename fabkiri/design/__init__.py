@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import lazy_getattr
+from ..lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from .quad.solve import DesignRequest, DesignResult, design

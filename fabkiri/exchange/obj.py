@@ -40,38 +40,9 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
             continue
         tag, *rest = line.split()
         if tag == "v":
-            try:
-                vals = [float(t) for t in rest[:3]]
-            except ValueError:
-                raise PatternError(
-                    f"{source}: line {lineno}: vertex coordinates are not numbers"
-                ) from None
-            if len(vals) < 2:
-                raise PatternError(f"{source}: line {lineno}: a vertex needs at least x and y")
-            if not all(math.isfinite(v) for v in vals):
-                raise PatternError(f"{source}: line {lineno}: non-finite vertex coordinate")
-            if len(vals) == 3 and vals[2] != 0.0:
-                raise PatternError(
-                    f"{source}: line {lineno}: vertex has z = {vals[2]}; patterns are planar (z = 0)"
-                )
-            verts.append((vals[0], vals[1]))
+            verts.append(_obj_vertex(rest, f"{source}: line {lineno}"))
         elif tag == "f":
-            idx = []
-            for tok in rest:
-                try:
-                    idx.append(int(tok.split("/", 1)[0]))
-                except ValueError:
-                    raise PatternError(
-                        f"{source}: line {lineno}: face index {tok!r} is not an integer"
-                    ) from None
-            if kind_of_arity(len(idx)) is None or (faces and len(idx) != len(faces[0])):
-                raise PatternError(
-                    f"{source}: line {lineno}: face has {len(idx)} vertices; tiles must be quads"
-                    f"{_OTHER_TILES} and all of one kind"
-                )
-            if any(abs(i) > limits.MAX_INT for i in idx):
-                raise PatternError(f"{source}: line {lineno}: face index beyond ±2**53")
-            faces.append(idx)
+            faces.append(_obj_face(rest, f"{source}: line {lineno}", faces[0] if faces else None))
         # other records (vn, vt, o, g, s, usemtl, ...) carry nothing a pattern needs
     if not verts:
         raise PatternError(f"{source}: no vertices (empty or not an OBJ file)")
@@ -86,6 +57,39 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
             f"but the file has vertices 1..{len(verts)}"
         )
     return np.asarray(verts, dtype=float), f - 1
+
+
+def _obj_vertex(rest: list[str], where: str) -> tuple[float, float]:
+    """``x, y`` of an OBJ ``v`` record (a z must be 0: patterns are planar)."""
+    try:
+        vals = [float(t) for t in rest[:3]]
+    except ValueError:
+        raise PatternError(f"{where}: vertex coordinates are not numbers") from None
+    if len(vals) < 2:
+        raise PatternError(f"{where}: a vertex needs at least x and y")
+    if not all(math.isfinite(v) for v in vals):
+        raise PatternError(f"{where}: non-finite vertex coordinate")
+    if len(vals) == 3 and vals[2] != 0.0:
+        raise PatternError(f"{where}: vertex has z = {vals[2]}; patterns are planar (z = 0)")
+    return vals[0], vals[1]
+
+
+def _obj_face(rest: list[str], where: str, first: list[int] | None) -> list[int]:
+    """The 1-based vertex indices of an OBJ ``f`` record, of the same arity as the ``first`` face."""
+    idx = []
+    for tok in rest:
+        try:
+            idx.append(int(tok.split("/", 1)[0]))
+        except ValueError:
+            raise PatternError(f"{where}: face index {tok!r} is not an integer") from None
+    if kind_of_arity(len(idx)) is None or (first is not None and len(idx) != len(first)):
+        raise PatternError(
+            f"{where}: face has {len(idx)} vertices; tiles must be quads"
+            f"{_OTHER_TILES} and all of one kind"
+        )
+    if any(abs(i) > limits.MAX_INT for i in idx):
+        raise PatternError(f"{where}: face index beyond ±2**53")
+    return idx
 
 
 def read_obj(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:

@@ -159,13 +159,14 @@ def read_pattern(path: str | os.PathLike) -> Pattern:
     return loads(text, str(path))
 
 
-def _jsonable(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy arrays, scalars and tuples made plain JSON values (non-finite floats None)."""
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
+        return jsonable(value.tolist())
     if isinstance(value, (np.integer,)):
         return int(value)
     if isinstance(value, (np.floating, float)):
@@ -208,7 +209,7 @@ def dumps(pattern: Pattern) -> str:
     head["parity"] = pattern.parity
     parts = [f'  "{k}": {json.dumps(v)}' for k, v in head.items()]
     if pattern.lattice:
-        parts.append(f'  "lattice": {json.dumps(_jsonable(pattern.lattice), sort_keys=True)}')
+        parts.append(f'  "lattice": {json.dumps(jsonable(pattern.lattice), sort_keys=True)}')
     parts.append(f'  "nodes": {_rows(pattern.nodes, "  ")}')
     parts.append(f'  "tiles": {_rows(pattern.tiles, "  ")}')
     if pattern.contracted:
@@ -218,7 +219,7 @@ def dumps(pattern: Pattern) -> str:
         ]
         parts.append('  "contracted": {\n' + ",\n".join(states) + "\n  }")
     if pattern.design:
-        design = json.dumps(_jsonable(pattern.design), indent=2, sort_keys=True).replace(
+        design = json.dumps(jsonable(pattern.design), indent=2, sort_keys=True).replace(
             "\n", "\n  "
         )
         parts.append(f'  "design": {design}')

@@ -177,19 +177,7 @@ def read_cut_svg(p: Path, layer_name: str = "CUT") -> Linework:
     mm_per_px = _declared_mm(svg.values.get("height"), float(svg.height))
     height = float(svg.height) * mm_per_px
     groups = list(svg.elements(lambda e: isinstance(e, se.Group)))
-
-    def name(g: se.Group) -> str:
-        for v in (g.values.get(INKSCAPE_LABEL), g.values.get("inkscape:label"), g.id):
-            if str(v or "").upper() in NON_CUT_LAYERS | {"CUT"}:
-                return str(v).upper()
-        return ""
-
-    layer_of: dict[int, str] = {}
-    for g in groups:  # document order: an inner named group overrides its parent
-        if name(g):
-            for e in g.select():
-                if isinstance(e, se.Shape):
-                    layer_of[id(e)] = name(g)
+    layer_of = _layers_of(groups)
     cut_found = layer_name in layer_of.values()
     shapes = [
         e
@@ -203,32 +191,57 @@ def read_cut_svg(p: Path, layer_name: str = "CUT") -> Linework:
     ]
     lw = Linework(p, layer_found=cut_found)
     for shape in shapes:
-        path_ = se.Path(shape)
-        layer = layer_of.get(id(shape), "")
-        colour = (
-            str(shape.stroke.hex)
-            if shape.stroke is not None and shape.stroke.value is not None
-            else ""
+        _add_shape(
+            lw, shape, layer_of.get(id(shape), ""), lambda pts: _svg_mm(pts, height, mm_per_px)
         )
-        pts: list[tuple[float, float]] = []
-        for seg in path_.segments():
-            if isinstance(seg, se.Move):
-                if len(pts) >= 2:
-                    lw.add(_svg_mm(pts, height, mm_per_px), False, layer, colour)
-                pts = [(seg.end.x, seg.end.y)]
-            elif isinstance(seg, se.Close):
-                if len(pts) >= 3:
-                    lw.add(_svg_mm(pts, height, mm_per_px), True, layer, colour)
-                pts = []
-            elif isinstance(seg, se.Line):
-                pts.append((seg.end.x, seg.end.y))
-            else:  # curves: sample finely (tile outlines are straight; be tolerant)
-                for t in np.linspace(0, 1, 17)[1:]:
-                    q = seg.point(t)
-                    pts.append((q.x, q.y))
-        if len(pts) >= 2:
-            lw.add(_svg_mm(pts, height, mm_per_px), False, layer, colour)
     return lw
+
+
+def _layers_of(groups: list) -> dict[int, str]:
+    """The layer (CUT, NOTES, ...) of each shape by ``id``, from the named groups around it."""
+    import svgelements as se
+
+    def name(g: se.Group) -> str:
+        for v in (g.values.get(INKSCAPE_LABEL), g.values.get("inkscape:label"), g.id):
+            if str(v or "").upper() in NON_CUT_LAYERS | {"CUT"}:
+                return str(v).upper()
+        return ""
+
+    layer_of: dict[int, str] = {}
+    for g in groups:  # document order: an inner named group overrides its parent
+        if name(g):
+            for e in g.select():
+                if isinstance(e, se.Shape):
+                    layer_of[id(e)] = name(g)
+    return layer_of
+
+
+def _add_shape(lw: Linework, shape, layer: str, to_mm) -> None:
+    """Each subpath of ``shape`` as a polyline of ``lw`` (closed where it closes), in mm by ``to_mm``."""
+    import svgelements as se
+
+    path_ = se.Path(shape)
+    colour = (
+        str(shape.stroke.hex) if shape.stroke is not None and shape.stroke.value is not None else ""
+    )
+    pts: list[tuple[float, float]] = []
+    for seg in path_.segments():
+        if isinstance(seg, se.Move):
+            if len(pts) >= 2:
+                lw.add(to_mm(pts), False, layer, colour)
+            pts = [(seg.end.x, seg.end.y)]
+        elif isinstance(seg, se.Close):
+            if len(pts) >= 3:
+                lw.add(to_mm(pts), True, layer, colour)
+            pts = []
+        elif isinstance(seg, se.Line):
+            pts.append((seg.end.x, seg.end.y))
+        else:  # curves: sample finely (tile outlines are straight; be tolerant)
+            for t in np.linspace(0, 1, 17)[1:]:
+                q = seg.point(t)
+                pts.append((q.x, q.y))
+    if len(pts) >= 2:
+        lw.add(to_mm(pts), False, layer, colour)
 
 
 def without_annotation_layers(p: Path, keep: str = "CUT") -> str | io.BytesIO:

@@ -231,9 +231,11 @@ def _closes(pattern: Pattern) -> bool:
     return True
 
 
-def _bed_scale(
+def bed_scale(
     pattern: Pattern, style: str, state: int, printer: Printer, corners: np.ndarray | None = None
 ) -> float | None:
+    """The largest scale at which closed state ``state`` (``corners`` if given) fits the printer's bed,
+    or None when the style prints no tiles or the state has no extent."""
     if (
         print_style(style).tiles is None
     ):  # no tiles printed (strips): the bed does not bound the pattern
@@ -260,7 +262,7 @@ def _never(pattern: Pattern, style: str, error: str) -> bool:
 def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1) -> PrintMinimum:
     """Smallest scale at which the print plan checks pass (bisection on them to 0.1 %, started from the
     closed-form :func:`print_bound`), and the bed's largest."""
-    top = _bed_scale(pattern, style, state, printer)
+    top = bed_scale(pattern, style, state, printer)
     err = _plan_error(pattern, style, state, printer)
     if err and _never(pattern, style, err):
         return PrintMinimum(None, top, err)
@@ -295,10 +297,7 @@ def print_minimum(pattern: Pattern, style: str, printer: Printer, state: int = 1
     while lo is None:  # ... or halve until refused
         k *= 0.5
         e = _plan_error(scaled(pattern, k), style, state, printer)
-        if e:
-            lo = k
-        else:
-            hi = k
+        lo, hi = (k, hi) if e else (lo, k)
         if k < 1e-6:
             lo = 0.0
     while hi - lo > BISECT_RTOL * hi:
@@ -332,7 +331,7 @@ def print_refusal(
             memo[key] = err
     if err:
         return err
-    top = _bed_scale(at, style, state, printer)
+    top = bed_scale(at, style, state, printer)
     if top is not None and top < 1.0:
         return f"the closed pattern does not fit the bed of {printer.name}"
     return ""
@@ -445,7 +444,7 @@ def summary(pattern: Pattern, prints=None) -> dict:
             if key not in memo:
                 memo[key] = print_bound(pattern, style, p, 1, c1)
             m = memo[key]
-            bed = _bed_scale(pattern, style, 1, p, c1)
+            bed = bed_scale(pattern, style, 1, p, c1)
             m = PrintMinimum(m.min_scale, None if bed is None else floor_sig(bed), m.limit, m.exact)
             rows[style] = m.to_dict()
     out["print"] = pr

@@ -78,7 +78,14 @@ from .drivers.rotations import (  # noqa: F401  (re-exported: the rotations driv
     rotation_targets,
 )
 from .energy import Springs, WithTerm, springs
-from .path import DeploymentPath, closed_states, finish_path, node_positions, path_parameter
+from .path import (
+    DeploymentPath,
+    Frames,
+    closed_states,
+    finish_path,
+    node_positions,
+    path_parameter,
+)
 
 
 @dataclass
@@ -154,8 +161,7 @@ def minimise(
                 return x
             if fresh:
                 mu = 0.0 if mu < 1e-6 * scale else 0.1 * mu
-            if step > chord_limit or mu:
-                lu = None
+            lu = None if step > chord_limit or mu else lu  # chord steps only near convergence
             fresh, last_step = False, step
         elif fresh:
             stats.rejected += 1
@@ -325,16 +331,5 @@ def elastic_path(
         "max_increment": max_increment,
         **figures,
     }
-    return finish_path(
-        pattern,
-        "elastic",
-        drv.name,
-        t,
-        nodes,
-        corners,
-        sp,
-        states,
-        collision_tol,
-        solver=solver,
-        segments=plan.segments,
-    )
+    frames = Frames("elastic", drv.name, t, nodes, corners, solver=solver, segments=plan.segments)
+    return finish_path(pattern, frames, sp, states, collision_tol)

@@ -211,20 +211,24 @@ def _hinge_gap(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
     return np.hypot(d[..., 0], d[..., 1]).max(axis=1)
 
 
-def finish_path(
-    pattern,
-    kind,
-    driver,
-    t,
-    nodes,
-    corners,
-    sp,
-    states,
-    collision_tol,
-    omega_dep=None,
-    solver=None,
-    segments=None,
-):
+@dataclass(frozen=True, eq=False)
+class Frames:
+    """A sampled path before it is measured: how it was made (``kind``, the elastic ``driver``, the rigid
+    path's deployed ω, the solver's figures, the elastic segments) and ``t``, nodes, corners per frame."""
+
+    kind: str
+    driver: str | None
+    t: np.ndarray
+    nodes: np.ndarray
+    corners: np.ndarray
+    omega_deployed: float | None = None
+    solver: dict | None = None
+    segments: list | None = None
+
+
+def finish_path(pattern, frames: Frames, sp, states, collision_tol) -> DeploymentPath:
+    """The :class:`DeploymentPath` of ``frames``: energies, rotations, hinge gaps, mismatches, collisions."""
+    t, nodes, corners = frames.t, frames.nodes, frames.corners
     top = pattern.topology
     tile_energy = sp.tile_energies(nodes)
     rho = tile_angles(states[1][None], corners)
@@ -236,8 +240,8 @@ def finish_path(
     }
     mismatch = {k: geometry.aligned_distance(corners[marks[k]], targets[k]) for k in MARKS}
     return DeploymentPath(
-        kind=kind,
-        driver=driver,
+        kind=frames.kind,
+        driver=frames.driver,
         t=t,
         nodes=nodes,
         corners=corners,
@@ -248,7 +252,7 @@ def finish_path(
         state_mismatch=mismatch,
         collisions=collisions(corners, pattern.tile_size, collision_tol),
         tile_size=pattern.tile_size,
-        omega_deployed=omega_dep,
-        solver=solver or {},
-        elastic_segments=segments or [],
+        omega_deployed=frames.omega_deployed,
+        solver=frames.solver or {},
+        elastic_segments=frames.segments or [],
     )

@@ -24,6 +24,7 @@ from .energy import springs
 from .path import (
     RIGID_TOL_RAD,
     DeploymentPath,
+    Frames,
     align,
     circmean,
     closed_states,
@@ -107,15 +108,5 @@ def rigid_path(
     deployed = pattern.corners()
     corners = np.stack([align(c, deployed) for c in placed])
     nodes = node_positions(pattern, corners)
-    return finish_path(
-        pattern,
-        "rigid",
-        None,
-        t,
-        nodes,
-        corners,
-        springs(pattern),
-        states,
-        collision_tol,
-        omega_dep=omega_d,
-    )
+    frames = Frames("rigid", None, t, nodes, corners, omega_deployed=omega_d)
+    return finish_path(pattern, frames, springs(pattern), states, collision_tol)

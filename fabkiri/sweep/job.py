@@ -13,46 +13,12 @@ import socket
 import time
 from dataclasses import replace
 
-from ..api.design import PatternRequest, design_pattern
+from ..api.design import design_pattern
 from ..errors import CheckFailed, FabkiriError
-from .spec import Job, parse_tiles
+from .spec import Job, request_of
 
-REQUEST_KEYS = (
-    "target",
-    "size",
-    "rigid",
-    "symmetry",
-    "holes",
-    "contracted_target",
-    "init",
-    "solver",
-    "fit",
-    "tol",
-    "shape_tol",
-    "material",
-    "hinge",
-    "printer",
-    "style",
-    "min_feature",
-    "min_hole",
-    "min_opening",
-    "seed",
-)
 DEFAULT_CUT_MATERIAL = "acrylic-3"
 DEFAULT_PRINTER = "prusa-mk4"
-
-
-def request_of(params: dict) -> PatternRequest:
-    kw = {k: params[k] for k in REQUEST_KEYS if k in params}
-    if kw.get("symmetry") == "none":
-        kw["symmetry"] = None
-    if isinstance(kw.get("contracted_target"), (list, str)):
-        ct = kw["contracted_target"]
-        kw["contracted_target"] = tuple([ct] if isinstance(ct, str) else ct)
-    for k in ("size", "min_feature", "min_hole", "min_opening"):
-        if k in kw:
-            kw[k] = float(kw[k])
-    return PatternRequest(tiles=parse_tiles(params["tiles"]), quiet=True, **kw)
 
 
 def worker_name() -> str:

@@ -22,11 +22,15 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .. import __version__, limits
 from ..errors import InputError
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
+
+if TYPE_CHECKING:
+    from ..api.design import PatternRequest
 
 ACTIONS = ("design", "cut", "print", "deploy")
 # axis -> the Python types a value may have (PatternRequest's fields, the cut/print choices, the seed)
@@ -118,6 +122,31 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
             f"{where}: unknown table [{sorted(unknown)[0]}] (tables: sweep, axes, fixed)"
         )
     head = _table(data, "sweep", where)
+    actions = _actions(head, where)
+    axes = _table(data, "axes", where)
+    settings = _settings(data, where)
+    count = 1
+    for values in settings.values():
+        count *= len(values)
+    if count > MAX_JOBS:
+        raise InputError(f"{where}: {count} jobs is more than the {MAX_JOBS} a sweep may hold")
+    base = Path(base)
+    names = list(settings)
+    jobs, seen = [], set()
+    for combo in itertools.product(*(settings[n] for n in names)):
+        params = {n: _resolve(n, v, base) for n, v in zip(names, combo)}
+        job = make_job(params, actions)
+        if job.id not in seen:  # the same inputs twice (e.g. a repeated value) are one job
+            seen.add(job.id)
+            jobs.append(job)
+    _check_targets(jobs, where)
+    return SweepSpec(
+        jobs=jobs, actions=actions, source=source, axes={k: list(v) for k, v in axes.items()}
+    )
+
+
+def _actions(head: dict, where: str) -> tuple[str, ...]:
+    """The ``[sweep]`` table's actions, in the order they run."""
     bad = set(head) - {"actions", "name"}
     if bad:
         raise InputError(
@@ -133,7 +162,11 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
         raise InputError(
             f"{where}: [sweep] actions must list 'design' and any of cut, print, deploy; got {actions!r}"
         )
-    actions = tuple(a for a in ACTIONS if a in actions)
+    return tuple(a for a in ACTIONS if a in actions)
+
+
+def _settings(data: dict, where: str) -> dict[str, list]:
+    """Each parameter's values: an axis's list, a fixed key's one value; checked, tiles and target given."""
     axes, fixed = _table(data, "axes", where), _table(data, "fixed", where)
     for name, values in axes.items():
         if not isinstance(values, list) or not values:
@@ -154,24 +187,7 @@ def spec_from_dict(data: dict, base: str | Path = ".", source: str = "") -> Swee
         )
     if "target" not in settings and "contracted_target" not in settings:
         raise InputError(f"{where}: no target: give a 'target' axis (or fixed target)")
-    count = 1
-    for values in settings.values():
-        count *= len(values)
-    if count > MAX_JOBS:
-        raise InputError(f"{where}: {count} jobs is more than the {MAX_JOBS} a sweep may hold")
-    base = Path(base)
-    names = list(settings)
-    jobs, seen = [], set()
-    for combo in itertools.product(*(settings[n] for n in names)):
-        params = {n: _resolve(n, v, base) for n, v in zip(names, combo)}
-        job = make_job(params, actions)
-        if job.id not in seen:  # the same inputs twice (e.g. a repeated value) are one job
-            seen.add(job.id)
-            jobs.append(job)
-    _check_targets(jobs, where)
-    return SweepSpec(
-        jobs=jobs, actions=actions, source=source, axes={k: list(v) for k, v in axes.items()}
-    )
+    return settings
 
 
 def make_job(params: dict, actions: tuple[str, ...]) -> Job:
@@ -255,10 +271,48 @@ def check_sizes(jobs: list[Job], where: str) -> None:
     a sweep file with one job too large to run is refused whole, naming the job. (A spec built with
     :func:`spec_from_dict` leaves it to each job, which records the refusal as its error.)"""
     from ..api.design import check_size
-    from .job import request_of
 
     for job in jobs:
         try:
             check_size(request_of(job.params))
         except InputError as exc:
             raise InputError(f"{where}: job {job.id}: {exc}") from None
+
+
+REQUEST_KEYS = (
+    "target",
+    "size",
+    "rigid",
+    "symmetry",
+    "holes",
+    "contracted_target",
+    "init",
+    "solver",
+    "fit",
+    "tol",
+    "shape_tol",
+    "material",
+    "hinge",
+    "printer",
+    "style",
+    "min_feature",
+    "min_hole",
+    "min_opening",
+    "seed",
+)
+
+
+def request_of(params: dict) -> PatternRequest:
+    """The design request of a job's parameters (``tiles`` and the :data:`REQUEST_KEYS` it names)."""
+    from ..api.design import PatternRequest  # the design front door: loaded when a request is made
+
+    kw = {k: params[k] for k in REQUEST_KEYS if k in params}
+    if kw.get("symmetry") == "none":
+        kw["symmetry"] = None
+    if isinstance(kw.get("contracted_target"), (list, str)):
+        ct = kw["contracted_target"]
+        kw["contracted_target"] = tuple([ct] if isinstance(ct, str) else ct)
+    for k in ("size", "min_feature", "min_hole", "min_opening"):
+        if k in kw:
+            kw[k] = float(kw[k])
+    return PatternRequest(tiles=parse_tiles(params["tiles"]), quiet=True, **kw)

@@ -103,21 +103,10 @@ def verify_layout(
     ends = np.concatenate(rec.dangling) if rec.dangling else np.zeros((0, 2))
     rep.add(_dangling_check(ends, m.cut_shapes, have, g, tol.length))
     _hinge_check(rep, pattern, al, m, have, in_place, tol.length, g)
-    _physical_checks(
-        rep,
-        pattern,
-        al,
-        files,
-        rec.linework,
-        m.cut_shapes,
-        have,
-        m.found_on,
-        sheet_piece,
-        in_place,
-        fitted,
-        g,
-        m.labelings,
-    )
+    if sheet_piece and have.any():
+        _ligament_checks(rep, pattern, al, rec.linework, m, have, fitted, g)
+    elif in_place and have.any():
+        _tape_mark_checks(rep, pattern, al, files, m, have, g)
     return rep
 
 
@@ -324,69 +313,78 @@ def _hinge_check(
     )
 
 
-def _physical_checks(
+def _ligament_checks(
+    rep: Report,
+    pattern: Pattern,
+    al: Allowances,
+    linework: dict[int, Linework],
+    m: _Matched,
+    have: np.ndarray,
+    fitted: float | None,
+    g: str,
+) -> None:
+    """Ligaments present and uncut, sheet by sheet (a ligament sheet)."""
+    from .physical import ligament_check
+
+    A, B = pattern.topology.hinge_tiles.T
+    shrink = al.tile_shrink if al.hinge != PLAIN else -(fitted or 0.0)
+    kerf = al.kerf_offset if al.hinge != PLAIN else 0.0
+    cores = np.full(len(m.cut_shapes), None, dtype=object)
+    cores[have] = shapely.buffer(
+        shapely.polygons(m.cut_shapes[have]),
+        -shrink,
+        join_style="mitre",
+        mitre_limit=al.mitre_limit,
+    )
+    for sheet, lw in linework.items():
+        on = have & (m.found_on == sheet)
+        hinges = np.flatnonzero(on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet)))
+        if not len(hinges):
+            continue
+        c = cores.copy()
+        c[~on] = None
+        material = sheet_material(lw, kerf)
+        if not al.ligaments_in_file and len(shapely.get_parts(material)) >= on.sum():
+            continue  # declared: the ligaments are not in this file (the printed top faces)
+        rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
+
+
+def _tape_mark_checks(
     rep: Report,
     pattern: Pattern,
     al: Allowances,
     files: dict[int, Path],
-    linework: dict[int, Linework],
-    cut_shapes: np.ndarray,
+    m: _Matched,
     have: np.ndarray,
-    found_on: np.ndarray,
-    sheet_piece: bool,
-    in_place: bool,
-    fitted: float | None,
     g: str,
-    labelings: Sequence[tuple[int, np.ndarray]] = (),
 ) -> None:
-    """Ligaments present and uncut (a ligament sheet); tape marks at the hinges (an in-place tape layout).
-    A symmetric sheet matches the design in several equally good ways (``labelings``), which put the
-    hinges at different corners; its marks say which one was cut, so the best of them is reported."""
-    from .physical import ligament_check, tape_mark_check
+    """Tape marks at the hinges (an in-place tape layout). A symmetric sheet matches the design in several
+    equally good ways (``m.labelings``), which put the hinges at different corners; its marks say which
+    one was cut, so the best of them is reported."""
+    from .physical import tape_mark_check
 
-    A, B = pattern.topology.hinge_tiles.T
     how = reading(al.hinge)  # None: no manifest, or a kind the verifier cannot read
     marks_kind = how is not None and how.tape_marks  # the kind's hinges carry tape marks
-    if sheet_piece and have.any():
-        shrink = al.tile_shrink if al.hinge != PLAIN else -(fitted or 0.0)
-        kerf = al.kerf_offset if al.hinge != PLAIN else 0.0
-        cores = np.full(len(cut_shapes), None, dtype=object)
-        cores[have] = shapely.buffer(
-            shapely.polygons(cut_shapes[have]),
-            -shrink,
-            join_style="mitre",
-            mitre_limit=al.mitre_limit,
+    if not (al.hinge == PLAIN or marks_kind):
+        return
+    marks = {}
+    for sheet, f in files.items():
+        read = read_cut_file(f, "ENGRAVE")
+        if read.layer_found:
+            marks[sheet] = read.polylines
+    if not marks:
+        return  # no named engrave layer (a colour-only file): marks cannot be told from cuts
+    hs, marked, room, turned = _marked_labeling(
+        pattern, m.cut_shapes, m.labelings, have, m.found_on, marks
+    )
+    if not len(hs) or not (marks_kind and al.labels) and marked.sum() < 0.5 * len(hs):
+        return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
+    chk = tape_mark_check(hs, marked, room, g)
+    if turned:
+        chk.detail += (
+            f" (sheet(s) {turned} symmetric: hinges placed by the labeling their marks fit best)"
         )
-        for sheet, lw in linework.items():
-            on = have & (found_on == sheet)
-            hinges = np.flatnonzero(
-                on[A] & on[B] & ~np.isin(np.arange(len(A)), list(al.cross_sheet))
-            )
-            if not len(hinges):
-                continue
-            c = cores.copy()
-            c[~on] = None
-            material = sheet_material(lw, kerf)
-            if not al.ligaments_in_file and len(shapely.get_parts(material)) >= on.sum():
-                continue  # declared: the ligaments are not in this file (the printed top faces)
-            rep.add(ligament_check(pattern, material, c, on, list(lw.polylines), hinges, g))
-    elif in_place and (al.hinge == PLAIN or marks_kind) and not sheet_piece and have.any():
-        marks = {}
-        for sheet, f in files.items():
-            m = read_cut_file(f, "ENGRAVE")
-            if m.layer_found:
-                marks[sheet] = m.polylines
-        if not marks:
-            return  # no named engrave layer (a colour-only file): marks cannot be told from cuts
-        hs, marked, room, turned = _marked_labeling(
-            pattern, cut_shapes, labelings, have, found_on, marks
-        )
-        if not len(hs) or not (marks_kind and al.labels) and marked.sum() < 0.5 * len(hs):
-            return  # no tape hinges on one sheet, or a layout without tape marks (the manifest does not say)
-        chk = tape_mark_check(hs, marked, room, g)
-        if turned:
-            chk.detail += f" (sheet(s) {turned} symmetric: hinges placed by the labeling their marks fit best)"
-        rep.add(chk)
+    rep.add(chk)
 
 
 def _marked_labeling(

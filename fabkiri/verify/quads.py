@@ -298,6 +298,23 @@ MAX_SIMPLIFIED_AREA = (
 )
 
 
+def _drop_collinear(pts: np.ndarray, eps: float) -> np.ndarray:
+    """``pts`` without the vertices within ``eps`` of the line through their neighbours (collinear,
+    T-junctions, noding points) or of the previous vertex (duplicates), one at a time, down to three."""
+    changed = True
+    while changed and len(pts) > 3:
+        changed = False
+        prv, nxt = np.roll(pts, 1, 0), np.roll(pts, -1, 0)
+        d = point_segment_distance(pts, prv, nxt)
+        dup = np.linalg.norm(pts - prv, axis=1) <= eps
+        bad = (d <= eps) | dup
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            pts = np.delete(pts, k, axis=0)
+            changed = True
+    return pts
+
+
 def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM, n: int = 4) -> np.ndarray | None:
     """The ``n`` corners (CCW; ``n`` the tile arity, four for quads) of a recovered tile region, or None.
 
@@ -311,18 +328,7 @@ def quad_corners(poly: shapely.Polygon, eps: float = SNAP_MM, n: int = 4) -> np.
     pts = np.asarray(poly.exterior.coords)[:-1]
     if shapely.LinearRing(pts).is_ccw is False:
         pts = pts[::-1]
-
-    changed = True
-    while changed and len(pts) > 3:
-        changed = False
-        prv, nxt = np.roll(pts, 1, 0), np.roll(pts, -1, 0)
-        d = point_segment_distance(pts, prv, nxt)
-        dup = np.linalg.norm(pts - prv, axis=1) <= eps
-        bad = (d <= eps) | dup
-        if bad.any():
-            k = int(np.flatnonzero(bad)[0])
-            pts = np.delete(pts, k, axis=0)
-            changed = True
+    pts = _drop_collinear(pts, eps)
     if len(pts) == n:
         return pts
     if len(pts) < n:

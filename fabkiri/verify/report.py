@@ -66,7 +66,7 @@ class Check:
         }
 
 
-def measured(
+def measured(  # noqa: PLR0913 (the fields of a Check, by keyword)
     name: str,
     value: float,
     tol: float,

@@ -87,13 +87,13 @@ class _Values(np.ndarray):
 
 
 def values_only(x: np.ndarray) -> np.ndarray:
-    """``x`` marked so that :func:`_corners` seeds no gradients: a row function evaluated on it returns
+    """``x`` marked so that :func:`dual_corner` seeds no gradients: a row function evaluated on it returns
     :class:`Dual` values with ``g`` None (a residual-only call: the solvers check inequalities at every trial
     step and need their gradients only where one is active)."""
     return np.asarray(x).view(_Values)
 
 
-def _corners(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
+def dual_corner(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
     """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`Dual` seeded on its 2n coordinates
     (n = ``quads.shape[1]``: any polygon arity, the kagome's triangles and hexagonal holes too); values only
     on :func:`values_only` coordinates."""
@@ -108,9 +108,18 @@ def _corners(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
     return Dual(p[:, 0], gx), Dual(p[:, 1], gy)
 
 
-def _sub(a, b):
+def vec_sub(a, b):
+    """``a - b`` for 2-vectors of :class:`Dual` (or of arrays)."""
     return a[0] - b[0], a[1] - b[1]
 
 
-def _dot(a, b):
+def vec_dot(a, b):
+    """The dot product of two 2-vectors of :class:`Dual` (or of arrays)."""
     return a[0] * b[0] + a[1] * b[1]
+
+
+def inward_normal(a, b):
+    """Inward unit normal of the CCW edge a -> b."""
+    e = vec_sub(b, a)
+    ln = vec_dot(e, e).sqrt()
+    return -e[1] / ln, e[0] / ln

@@ -5,7 +5,7 @@ them is the linear algebra and the policy, so the core takes the first as a call
 second as parameters:
 
 - the full solver (``penalty.py``) steps over all node coordinates with the sparse normal
-  equations (``normal._Normal``, SuperLU + CG);
+  equations (``normal.NormalEquations``, SuperLU + CG);
 - the rigid-family solver (``quad/rigid/steps.py``) steps over the family's closed-form coordinates
   with the dense reduced normal matrix;
 - the closed-state outline solvers (``outline.py``, ``offset_outline.py``) step over the square

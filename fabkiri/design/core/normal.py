@@ -45,7 +45,7 @@ def nested_dissection(adj: sparse.csr_matrix, pos: np.ndarray, leaf: int = 48) -
     return np.concatenate(out)
 
 
-class _Normal:
+class NormalEquations:
     """Solves (JᵀJ + μI) dx = -Jᵀr for successive LM steps.
 
     A sparse LU (SuperLU, fixed nested-dissection order) of one step's matrix

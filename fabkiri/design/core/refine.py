@@ -20,7 +20,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...errors import InputError
-from ..quad.solve import DesignRequest, DesignResult, _Problem, design
+from ..quad.solve import DesignRequest, DesignResult, design, design_problem
 from .conformance import deployed
 
 LAWSON_STEPS = 10
@@ -35,7 +35,7 @@ def lawson_weights(
 ) -> dict:
     """Next row weights of every fit family: squared weights times (unweighted miss / mean miss)^gamma,
     normalised to mean 1 and clipped to ``WEIGHT_RANGE``."""
-    prob = _Problem(replace(req, start=nodes_mm, fit_weights=None, fabrication=None))
+    prob = design_problem(replace(req, start=nodes_mm, fit_weights=None, fabrication=None))
     X = prob.X0
     out = {}
     for f in prob.of("fit"):

@@ -79,7 +79,7 @@ class DesignRequest:
     )
     coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
     # --init coarse: refit a coarse level whose tips-only outline misses ``second_opinion_above`` with the outline
-    # rows (``_Problem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
+    # rows (``DesignProblem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
     coarse_refit: bool = False
     # with ``coarse_refit``: refit the levels that miss by more than this share instead (None: the shape tolerance;
     # the minimax finish asks its own, smaller, threshold)
@@ -112,6 +112,10 @@ class DesignRequest:
             raise InputError(f"--symmetry must be x or y, not {self.symmetry!r}")
         if not (np.isfinite(self.tol) and 0 < self.tol < 1e-2):
             raise InputError(f"--tol must lie in (0, 1e-2), got {self.tol}")
+        self._check_targets()
+
+    def _check_targets(self) -> None:
+        """The closed states named, something to fit, and each target symmetric where ``symmetry`` says."""
         for s, spec in self.contracted.items():
             if s not in (1, 2):
                 raise InputError(f"closed states are 1 and 2, not {s}")

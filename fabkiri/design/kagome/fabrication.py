@@ -173,7 +173,7 @@ def _strip_rows(
     hc = top.hinge_corner
     args = (t, hc[h, sh], ends[h, sh], hc[k, sk], ends[k, sk])
     box = F.strip_box(limits, unit_mm)
-    return [Rows("fabrication_strip_clearance", lambda x: F.strip_rows(x, tiles, *args, *box), t)]
+    return [Rows("fabrication_strip_clearance", lambda x: F.strip_rows(x, tiles, *args, box), t)]
 
 
 def _polygons(pattern: Pattern, r: Rows) -> np.ndarray:

@@ -26,15 +26,15 @@ the four corners) and checked against finite differences in ``tests/test_fabrica
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
-from typing import TypeVar, cast
 
 import numpy as np
 
 from ...pattern import thinness as fab
-from ..core.dual import Dual, _corners, _dot, _sub, values_only
+from ..core.dual import Dual, dual_corner, inward_normal, vec_dot, vec_sub
+from . import print_rows
 from .constraints import Family, Stencils
+from .row_family import ineq_family, pick
 
-_Args = TypeVar("_Args", bound=tuple)
 NOT_LIMITS = ("source", "margin", "print_state")  # fields that are no requirement in mm
 # fields in mm²: a continuation step scales them by the fraction squared, so a step's pad keeps the same share
 # of its strip's band (0.25 w min(reach, w)) as the full limits' (linearly, a quarter step asked 1 mm² of a
@@ -98,20 +98,13 @@ class FabricationLimits:
         return asdict(self)
 
 
-def _normal(a, b):
-    """Inward unit normal of the CCW edge a -> b."""
-    e = _sub(b, a)
-    ln = _dot(e, e).sqrt()
-    return -e[1] / ln, e[0] / ln
-
-
 def _mitre(x, quads, rows, j, n: int | None = None):
     """Mitre vector at corner j: the corner moves by d times it when the quad shrinks by d.
     ``n``: the polygon's arity when ``quads`` holds more nodes after it (default all of them)."""
     n = quads.shape[1] if n is None else n
-    prev, here, nxt = (_corners(x, quads, rows, (j + s) % n) for s in (-1, 0, 1))
-    na, nb = _normal(prev, here), _normal(here, nxt)
-    s = 1.0 + _dot(na, nb)
+    prev, here, nxt = (dual_corner(x, quads, rows, (j + s) % n) for s in (-1, 0, 1))
+    na, nb = inward_normal(prev, here), inward_normal(here, nxt)
+    s = 1.0 + vec_dot(na, nb)
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
 
 
@@ -123,7 +116,7 @@ def _edges(x: np.ndarray, quads: np.ndarray, sel: np.ndarray | None = None):
     e = np.tile(np.arange(n), len(quads))
     if sel is not None:
         rows, e = rows[sel], e[sel]
-    return rows, e, _corners(x, quads, rows, e), _corners(x, quads, rows, (e + 1) % n)
+    return rows, e, dual_corner(x, quads, rows, e), dual_corner(x, quads, rows, (e + 1) % n)
 
 
 def width_rows(
@@ -133,13 +126,13 @@ def width_rows(
     rows only); any arity: a triangle has one far corner (the row is its altitude, exact), more are folded by
     smooth maxima."""
     rows, e, a, b = _edges(x, quads, sel)
-    n = _normal(a, b)
+    n = inward_normal(a, b)
     far = []
     for off in range(2, quads.shape[1]):
         j = (e + off) % quads.shape[1]
-        g = _dot(n, _sub(_corners(x, quads, rows, j), a))
+        g = vec_dot(n, vec_sub(dual_corner(x, quads, rows, j), a))
         if shrink:
-            g = g + shrink * (_dot(n, _mitre(x, quads, rows, j)) - 1.0)
+            g = g + shrink * (vec_dot(n, _mitre(x, quads, rows, j)) - 1.0)
         far.append(g)
     top = far[0]
     for g in far[1:]:
@@ -166,28 +159,28 @@ def shrunk_edge_rows(
 ) -> Dual:
     """Signed length of every shrunk edge (rows ``sel`` only, if given) minus ``min_edge``."""
     rows, e, a, b = _edges(x, quads, sel)
-    E = _sub(b, a)
-    ln = _dot(E, E).sqrt()
+    E = vec_sub(b, a)
+    ln = vec_dot(E, E).sqrt()
     u = E[0] / ln, E[1] / ln
     ma, mb = _mitre(x, quads, rows, e), _mitre(x, quads, rows, (e + 1) % quads.shape[1])
-    return ln + shrink * _dot(u, _sub(mb, ma)) - min_edge
+    return ln + shrink * vec_dot(u, vec_sub(mb, ma)) - min_edge
 
 
 def hinge_angle_rows(
     x: np.ndarray, quads: np.ndarray, t: np.ndarray, k: np.ndarray, sin_min: float
 ) -> Dual:
     """sin of the corner angle at hinge corners ``(t, k)`` minus ``sin_min``."""
-    v, a, b = (_corners(x, quads, t, (k + s) % quads.shape[1]) for s in (0, 1, -1))
-    A, B = _sub(a, v), _sub(b, v)
-    return (A[0] * B[1] - A[1] * B[0]) / (_dot(A, A) * _dot(B, B)).sqrt() - sin_min
+    v, a, b = (dual_corner(x, quads, t, (k + s) % quads.shape[1]) for s in (0, 1, -1))
+    A, B = vec_sub(a, v), vec_sub(b, v)
+    return (A[0] * B[1] - A[1] * B[0]) / (vec_dot(A, A) * vec_dot(B, B)).sqrt() - sin_min
 
 
 def spacing_rows(
     x: np.ndarray, quads: np.ndarray, t: np.ndarray, i: np.ndarray, j: np.ndarray, spacing: float
 ) -> Dual:
     """Distance between corners ``i`` and ``j`` of quads ``t`` minus ``spacing``."""
-    d = _sub(_corners(x, quads, t, i), _corners(x, quads, t, j))
-    return _dot(d, d).sqrt() - spacing
+    d = vec_sub(dual_corner(x, quads, t, i), dual_corner(x, quads, t, j))
+    return vec_dot(d, d).sqrt() - spacing
 
 
 SOFT = 0.002  # normalised: the soft min/max of the strip rows are at most this far on the safe side
@@ -207,10 +200,10 @@ def _soft_max0(v: Dual) -> Dual:
 def _strip_box(x, quads, t, c, end):
     """Hinge corner ``c`` of quads ``t``, the unit direction of its seam (to corner ``end``) and the inward
     normal of that edge (tiles counter-clockwise)."""
-    p = _corners(x, quads, t, c)
-    q = _corners(x, quads, t, end)
-    ev = _sub(q, p)
-    ln = _dot(ev, ev).sqrt()
+    p = dual_corner(x, quads, t, c)
+    q = dual_corner(x, quads, t, end)
+    ev = vec_sub(q, p)
+    ln = vec_dot(ev, ev).sqrt()
     e = ev[0] / ln, ev[1] / ln
     sgn = np.where(end == (c + 1) % quads.shape[1], 1.0, -1.0)
     return p, e, (-e[1] * sgn, e[0] * sgn)
@@ -224,65 +217,29 @@ def strip_rows(
     eh: np.ndarray,
     ck: np.ndarray,
     ek: np.ndarray,
-    a0: float,
-    along: float,
-    across: float,
-    clearance: float,
+    box: tuple[float, float, float, float],
 ) -> Dual:
     """Separating-axis gap between the strip boxes of hinge corners ``ch`` and ``ck`` of quads ``t`` (seams
-    towards corners ``eh``, ``ek``; box ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile)
-    minus ``clearance``; soft min/max and the smooth max over the eight axis gaps are all on the safe side."""
+    towards corners ``eh``, ``ek``; ``box = (a0, along, across, clearance)``, :func:`strip_box`: the box
+    ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile) minus ``clearance``; soft min/max and
+    the smooth max over the eight axis gaps are all on the safe side."""
+    a0, along, across, clearance = box
     ph, e_h, n_h = _strip_box(x, quads, t, ch, eh)
     pk, e_k, n_k = _strip_box(x, quads, t, ck, ek)
 
     def extent(e, n, u, lower):
-        eu, nu = _dot(e, u), _dot(n, u)
+        eu, nu = vec_dot(e, u), vec_dot(n, u)
         soft = _soft_min0 if lower else _soft_max0
         return eu * a0 + soft(eu) * along + soft(nu) * across
 
     gaps = []
     for u in (e_h, n_h, e_k, n_k):
-        dp = _dot(_sub(pk, ph), u)
+        dp = vec_dot(vec_sub(pk, ph), u)
         gaps.append(dp + extent(e_k, n_k, u, True) - extent(e_h, n_h, u, False))
         gaps.append(-dp + extent(e_h, n_h, u, True) - extent(e_k, n_k, u, False))
     while len(gaps) > 1:  # a balanced tree of smooth maxima: at most 3 · STRIP_SMOOTH below the max
         gaps = [smooth_max(a, b, STRIP_SMOOTH) for a, b in zip(gaps[::2], gaps[1::2])]
     return gaps[0] - clearance
-
-
-def _pick(args: _Args, sel: np.ndarray | None) -> _Args:
-    """Per-row index arrays, of rows ``sel`` only if given."""
-    return args if sel is None else cast(_Args, tuple(a[sel] for a in args))
-
-
-def _family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> Family:
-    """An inequality family from ``rows_of(x, sel) -> Dual`` (rows ``sel`` only, or all for None) over the quads
-    named by ``meta['quad_of_row']``. Its values are computed without gradients (``res``) and its gradients
-    only on the rows asked (``active``): the solvers need them only where a row is inside its margin."""
-    owner = meta["quad_of_row"]
-    k = quads.shape[1]
-
-    def fn(x):
-        r = rows_of(x, None)
-        return r.v, (quads[owner], r.g.reshape(len(owner), k, 2))
-
-    def active(x, act):
-        grads = np.zeros((len(owner), k, 2))
-        sel = np.flatnonzero(act)
-        if len(sel):
-            grads[sel] = rows_of(x, sel).g.reshape(len(sel), k, 2)
-        return quads[owner], grads
-
-    return Family(
-        name,
-        "ineq",
-        fn,
-        1,
-        meta=meta,
-        nv=nv,
-        res=lambda x: np.asarray(rows_of(values_only(x), None).v),
-        active=active,
-    )
 
 
 def ccw_polygons(quads: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -320,7 +277,7 @@ def _families(
     if limits.min_width_mm > 0:
         w = limits.min_width_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_width",
                 tiles,
                 lambda x, sel, w=w: width_rows(x, tiles, w, d, sel),
@@ -331,7 +288,7 @@ def _families(
     if d > 0:
         e_min = max(limits.min_edge_mm, fab.EDGE_EPS_MM) / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_shrunk_edges",
                 tiles,
                 lambda x, sel: shrunk_edge_rows(x, tiles, d, e_min, sel),
@@ -342,14 +299,12 @@ def _families(
     out += _hinge_families(st, nv, limits, unit_mm, tiles)
     if limits.strip_clearance_mm > 0:
         out += _strip_family(st, nv, limits, unit_mm, tiles)
-    from . import print_rows  # lazy: it builds on this module's rows
-
     out += print_rows.families(st, nv, limits, unit_mm)
     if limits.min_hole_mm > 0 and len(st.hole_nodes):
         holes = ccw_polygons(st.hole_nodes, base)
         wh = limits.min_hole_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_holes",
                 holes,
                 lambda x, sel: width_rows(x, holes, wh, 0.0, sel),
@@ -371,10 +326,10 @@ def _hinge_families(
     if limits.min_hinge_angle_deg > 0:
         s_min = float(np.sin(np.radians(limits.min_hinge_angle_deg)))
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_hinge_angles",
                 tiles,
-                lambda x, sel: hinge_angle_rows(x, tiles, *_pick((ht, hk), sel), s_min),
+                lambda x, sel: hinge_angle_rows(x, tiles, *pick((ht, hk), sel), s_min),
                 nv,
                 {"quad_of_row": ht},
             )
@@ -386,10 +341,10 @@ def _hinge_families(
         t, p = np.nonzero(has[:, i] & has[:, j])
         s = limits.hinge_spacing_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_hinge_spacing",
                 tiles,
-                lambda x, sel: spacing_rows(x, tiles, *_pick((t, i[p], j[p]), sel), s),
+                lambda x, sel: spacing_rows(x, tiles, *pick((t, i[p], j[p]), sel), s),
                 nv,
                 {"quad_of_row": t},
             )
@@ -401,10 +356,10 @@ def _hinge_families(
         te, e = np.nonzero(has | has[:, (k + 1) % 4])
         s_e = limits.hinge_edge_mm / unit_mm
         out.append(
-            _family(
+            ineq_family(
                 "fabrication_hinge_edges",
                 tiles,
-                lambda x, sel: spacing_rows(x, tiles, *_pick((te, e, (e + 1) % 4), sel), s_e),
+                lambda x, sel: spacing_rows(x, tiles, *pick((te, e, (e + 1) % 4), sel), s_e),
                 nv,
                 {"quad_of_row": te},
             )
@@ -432,10 +387,10 @@ def _strip_family(
     a0, along, across, cl = strip_box(limits, unit_mm)
     args = (t, st.hinge_corner[h, sh], ends[h, sh], st.hinge_corner[k, sk], ends[k, sk])
     return [
-        _family(
+        ineq_family(
             "fabrication_strip_clearance",
             tiles,
-            lambda x, sel: strip_rows(x, tiles, *_pick(args, sel), a0, along, across, cl),
+            lambda x, sel: strip_rows(x, tiles, *pick(args, sel), (a0, along, across, cl)),
             nv,
             {"quad_of_row": t},
         )

@@ -1,7 +1,7 @@
 """The full solver's loops: penalty Levenberg-Marquardt stages, then Gauss-Newton projection.
 
 See ``solve.py``'s docstring for the method; ``_solve_full`` runs it on a
-``problem._Problem`` and returns ``(X, mode)``.
+``problem.DesignProblem`` and returns ``(X, mode)``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from scipy import sparse
 
 from ..core.lm import Damping, Stopping, levenberg_marquardt
 from . import constraints as C
-from .problem import _ineq_values, _mean_edge, _Problem, exact_fits, family_residuals
+from .problem import DesignProblem, _ineq_values, _mean_edge, exact_fits, family_residuals
 
 STALL = (
     1e-6  # a penalty stage ends after 3 accepted steps that each lower the merit by less than this
@@ -45,7 +45,7 @@ PROJECT_KEPT = (
 )
 
 
-def _stacked(prob: _Problem, X: np.ndarray, rho: float, hard: list[C.Family] | None = None):
+def _stacked(prob: DesignProblem, X: np.ndarray, rho: float, hard: list[C.Family] | None = None):
     """Residual vector and Jacobian of the phase-1 merit (or of ``hard`` rows only)."""
     rs, Js = [], []
     if hard is not None:
@@ -99,7 +99,9 @@ class _Point:
     a step refused for a new inequality violation needs neither.
     """
 
-    def __init__(self, prob: _Problem, x: np.ndarray, shape: tuple, rho: float, hard, rtol: float):
+    def __init__(
+        self, prob: DesignProblem, x: np.ndarray, shape: tuple, rho: float, hard, rtol: float
+    ):
         self.prob, self.x, self.shape, self.rho, self.hard, self.rtol = (
             prob,
             x,
@@ -135,7 +137,7 @@ class _Point:
 
 
 def _lm(
-    prob: _Problem,
+    prob: DesignProblem,
     X: np.ndarray,
     rho: float,
     max_iter: int,
@@ -176,7 +178,7 @@ def _lm(
     return pt.x.reshape(X.shape), it
 
 
-def _solve_full(prob: _Problem, log, iters: dict, stalled=None):
+def _solve_full(prob: DesignProblem, log, iters: dict, stalled=None):
     """Penalty LM stages then projection (module docstring); returns ``(X, mode)``. ``stalled(X)``, if given,
     is asked before the stiff restart with the first schedule's end ``X``: an ``(X, mode)`` it returns is the
     answer instead (the restart is most of the time, ``routes._second_opinion``)."""
@@ -187,34 +189,6 @@ def _solve_full(prob: _Problem, log, iters: dict, stalled=None):
 
     eqs = prob.of("eq")
     fits = exact_fits(prob.of("fit"))
-
-    def project(X):
-        """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
-        L = _mean_edge(prob, X)
-        tol_abs = lambda fams: min(req.tol * L**f.dim for f in fams)  # noqa: E731
-        fit_rel = max((float(np.abs(f.residual(X)).max()) / L for f in fits), default=0.0)
-        if fits and fit_rel < 1e-2:
-            # the least-squares fit is (nearly) exact: try to make it exact
-            Xh, kh = _lm(
-                prob,
-                X,
-                0.0,
-                50,
-                log,
-                hard=eqs + fits + prob.of("ineq"),
-                tol_inf=0.1 * tol_abs(eqs + fits),
-            )
-            if all(v <= req.tol for v in family_residuals(prob, Xh, _mean_edge(prob, Xh)).values()):
-                return Xh, "hard", kh
-        Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
-        if max((float(np.abs(f.residual(Xp)).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(
-            eqs
-        ):
-            # the half margins may block the last steps: project on the equalities alone (steps that
-            # would violate g >= 0 are still halved or refused)
-            Xq, kq = _lm(prob, Xp, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
-            return Xq, "least-squares", kp + kq
-        return Xp, "least-squares", kp
 
     first = COARSE_PENALTIES if prob.coarse is not None and prob.coarse["used"] else PENALTIES
     best = None
@@ -232,7 +206,7 @@ def _solve_full(prob: _Problem, log, iters: dict, stalled=None):
             if (kept := _instead_of_restart(stalled, X, log)) is not None:
                 return _projected(prob, kept, log, iters)
             continue
-        Xp, mode, kp = project(X)
+        Xp, mode, kp = _project(prob, X, log, eqs, fits)
         iters[f"projection{tag}"] = kp
         res = family_residuals(prob, Xp, _mean_edge(prob, Xp))
         worst = max((res[f.name] for f in eqs), default=0.0)
@@ -248,7 +222,35 @@ def _solve_full(prob: _Problem, log, iters: dict, stalled=None):
     return X, mode
 
 
-def _projected(prob: _Problem, kept: tuple, log, iters: dict) -> tuple:
+def _project(prob: DesignProblem, X: np.ndarray, log, eqs: list, fits: list):
+    """Projection onto c = 0 (and s = 0 when the fit is nearly exact); returns X, mode, iterations."""
+    req = prob.req
+    L = _mean_edge(prob, X)
+    tol_abs = lambda fams: min(req.tol * L**f.dim for f in fams)  # noqa: E731
+    fit_rel = max((float(np.abs(f.residual(X)).max()) / L for f in fits), default=0.0)
+    if fits and fit_rel < 1e-2:
+        # the least-squares fit is (nearly) exact: try to make it exact
+        Xh, kh = _lm(
+            prob,
+            X,
+            0.0,
+            50,
+            log,
+            hard=eqs + fits + prob.of("ineq"),
+            tol_inf=0.1 * tol_abs(eqs + fits),
+        )
+        if all(v <= req.tol for v in family_residuals(prob, Xh, _mean_edge(prob, Xh)).values()):
+            return Xh, "hard", kh
+    Xp, kp = _lm(prob, X, 0.0, 50, log, hard=eqs + prob.of("ineq"), tol_inf=0.1 * tol_abs(eqs))
+    if max((float(np.abs(f.residual(Xp)).max()) for f in eqs), default=0.0) > 0.1 * tol_abs(eqs):
+        # the half margins may block the last steps: project on the equalities alone (steps that
+        # would violate g >= 0 are still halved or refused)
+        Xq, kq = _lm(prob, Xp, 0.0, 50, log, hard=eqs, tol_inf=0.1 * tol_abs(eqs))
+        return Xq, "least-squares", kp + kq
+    return Xp, "least-squares", kp
+
+
+def _projected(prob: DesignProblem, kept: tuple, log, iters: dict) -> tuple:
     """``kept`` (``(X, mode)``, a valid rigid-family member, equalities at about 1e-13) after a few Gauss-Newton
     steps on the equalities alone, where they lower its worst row and leave it valid (the schedules' own
     projections end near 1e-14)."""

@@ -10,86 +10,91 @@ along its seam edge (the fold rule's edge of the printed closed state). ``t0`` i
 the two tiles shrunk by ``d``: ``d / sin`` of the sharper of the two hinge corners (``d`` where both are
 obtuse). :func:`pad_rows` is that area, exactly (the clipped polygon's boundary integral, Cyrus-Beck clipping
 of each edge), divided by ``w`` (a mean pad depth, a length like every other row), minus the plan's.
-Gradients are carried forward (:class:`~.fabrication.Dual`) and checked against finite differences and the
+Gradients are carried forward (:class:`~..core.dual.Dual`) and checked against finite differences and the
 area ``print`` measures in ``tests/test_print_rows.py``.
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from ..core.dual import roll, stack
-from . import fabrication as F
+from ..core.dual import Dual, dual_corner, inward_normal, roll, stack, vec_dot, vec_sub
 from .constraints import Family, Stencils
+from .row_family import ineq_family, pick
+
+if TYPE_CHECKING:  # fabrication.py builds on this module's rows
+    from .fabrication import FabricationLimits
 
 
-def where(cond: np.ndarray, a: F.Dual, b: F.Dual) -> F.Dual:
-    """Row-wise choice between two :class:`~.fabrication.Dual` values."""
+def where(cond: np.ndarray, a: Dual, b: Dual) -> Dual:
+    """Row-wise choice between two :class:`~..core.dual.Dual` values."""
     g = None if a.g is None else np.where(cond[..., None], a.g, b.g)
-    return F.Dual(np.where(cond, a.v, b.v), g)
+    return Dual(np.where(cond, a.v, b.v), g)
 
 
-def _cross(a, b) -> F.Dual:
+def _cross(a, b) -> Dual:
     return a[0] * b[1] - a[1] * b[0]
 
 
-def _stacked(points: list) -> tuple[F.Dual, F.Dual]:
+def _stacked(points: list) -> tuple[Dual, Dual]:
     """A polygon given as a list of ``(x, y)`` Duals as one ``(x, y)`` pair with a column per corner."""
     return stack([p[0] for p in points]), stack([p[1] for p in points])
 
 
-def _column(P: tuple, j: int) -> tuple[F.Dual, F.Dual]:
+def _column(P: tuple, j: int) -> tuple[Dual, Dual]:
     return P[0].take([j]), P[1].take([j])
 
 
-def _clipped_boundary(P: tuple, Q: tuple) -> F.Dual:
+def _clipped_boundary(P: tuple, Q: tuple) -> Dual:
     """Twice the signed area the edges of convex CCW polygon ``P`` contribute inside convex CCW ``Q`` (both a
     column per corner): every edge of ``P`` at once clipped to each edge of ``Q`` in turn (Cyrus-Beck), then
     ``cross(start, end)`` of what is left, summed over the edges in order."""
     a = P
     b = (roll(P[0], -1), roll(P[1], -1))
-    ab = F._sub(b, a)
-    zero = F.Dual.lift(0.0, P[0])
-    lo, hi = zero, F.Dual.lift(1.0, P[0])
+    ab = vec_sub(b, a)
+    zero = Dual.lift(0.0, P[0])
+    lo, hi = zero, Dual.lift(1.0, P[0])
     empty = np.zeros(P[0].v.shape, dtype=bool)
     nq = Q[0].v.shape[1]
     for j in range(nq):
         c, d = _column(Q, j), _column(Q, (j + 1) % nq)
         n = (c[1] - d[1], d[0] - c[0])  # inward (left) normal of the CCW edge c -> d
-        f0, f1 = F._dot(n, F._sub(a, c)), F._dot(n, F._sub(b, c))
+        f0, f1 = vec_dot(n, vec_sub(a, c)), vec_dot(n, vec_sub(b, c))
         out0, out1 = f0.v < 0, f1.v < 0
         empty |= out0 & out1
         den = f0 - f1
-        den = where(np.abs(den.v) > 0, den, F.Dual.lift(1.0, den))
+        den = where(np.abs(den.v) > 0, den, Dual.lift(1.0, den))
         lam = f0 / den
         lo = where(out0 & ~out1 & (lam.v > lo.v), lam, lo)
         hi = where(out1 & ~out0 & (lam.v < hi.v), lam, hi)
     p = (a[0] + ab[0] * lo, a[1] + ab[1] * lo)
     q = (a[0] + ab[0] * hi, a[1] + ab[1] * hi)
     terms = where(~empty & (hi.v > lo.v), _cross(p, q), zero)
-    total = F.Dual.lift(0.0, terms.take(0))
+    total = Dual.lift(0.0, terms.take(0))
     for i in range(terms.v.shape[1]):
         total = total + terms.take(i)
     return total
 
 
-def _area(P: tuple, Q: tuple) -> F.Dual:
+def _area(P: tuple, Q: tuple) -> Dual:
     return (_clipped_boundary(P, Q) + _clipped_boundary(Q, P)) * 0.5
 
 
-def clipped_area(P: list, Q: list) -> F.Dual:
+def clipped_area(P: list, Q: list) -> Dual:
     """Area of the intersection of two convex counter-clockwise polygons (lists of ``(x, y)`` Duals)."""
     return _area(_stacked(P), _stacked(Q))
 
 
-def _sine(x, polys, rows, k, n, base) -> F.Dual:
+def _sine(x, polys, rows, k, n, base) -> Dual:
     """sin of corner ``k`` (per row) of the ``n``-gon at nodes ``base..base+n`` of ``polys``' rows, 1 where it
     is obtuse (the seam line is then ``shrink`` from that tile's edge once ``t >= shrink``)."""
-    v = F._corners(x, polys, rows, base + k)
-    a = F._sub(F._corners(x, polys, rows, base + (k + 1) % n), v)
-    b = F._sub(F._corners(x, polys, rows, base + (k - 1) % n), v)
-    s = _cross(a, b) / (F._dot(a, a) * F._dot(b, b)).sqrt()
-    return where(F._dot(a, b).v < 0, F.Dual.lift(1.0, s), s)
+    v = dual_corner(x, polys, rows, base + k)
+    a = vec_sub(dual_corner(x, polys, rows, base + (k + 1) % n), v)
+    b = vec_sub(dual_corner(x, polys, rows, base + (k - 1) % n), v)
+    s = _cross(a, b) / (vec_dot(a, a) * vec_dot(b, b)).sqrt()
+    return where(vec_dot(a, b).v < 0, Dual.lift(1.0, s), s)
 
 
 def pad_polygons(tiles: np.ndarray, hinge_tiles: np.ndarray) -> np.ndarray:
@@ -110,20 +115,20 @@ def pad_rows(
     width: float,
     reach: float,
     need: float,
-) -> F.Dual:
+) -> Dual:
     """Pad area over ``width`` minus ``need`` over ``width`` for every pad of :func:`pad_polygons`: the band
     ``[t0, t0 + width]`` along the seam (own ``corner`` to ``end``), ``reach + shrink`` either side of it,
     clipped by the own tile shrunk by ``shrink`` (mitre); ``t0`` from both tiles' hinge corners."""
     n = polys.shape[1] // 2
     rows = np.arange(len(polys))
-    p = F._corners(x, polys, rows, corner)
-    ev = F._sub(F._corners(x, polys, rows, end), p)
-    ln = F._dot(ev, ev).sqrt()
+    p = dual_corner(x, polys, rows, corner)
+    ev = vec_sub(dual_corner(x, polys, rows, end), p)
+    ln = vec_dot(ev, ev).sqrt()
     e = (ev[0] / ln, ev[1] / ln)
     s_own = _sine(x, polys, rows, corner, n, 0)
     s_other = _sine(x, polys, rows, other_corner, n, n)
     sharper = where(s_own.v < s_other.v, s_own, s_other)
-    t0 = F.Dual.lift(shrink, sharper) / sharper
+    t0 = Dual.lift(shrink, sharper) / sharper
     t1 = t0 + width
     R = reach + shrink
     # t e + r (-e_y, e_x) from the hinge corner: (t0, -R), (t1, -R), (t1, R), (t0, R) run counter-clockwise
@@ -134,16 +139,16 @@ def pad_rows(
     return _area(_stacked(band), _shrunk(x, polys, rows, n, shrink)) / width - need / width
 
 
-def _shrunk(x, polys, rows, n, shrink) -> tuple[F.Dual, F.Dual]:
+def _shrunk(x, polys, rows, n, shrink) -> tuple[Dual, Dual]:
     """The own tile (the first ``n`` nodes of ``polys``) shrunk by ``shrink``, a column per corner: corner k
     moves by ``shrink`` times its mitre vector (as :func:`~.fabrication._mitre`, every corner at once)."""
-    c = _stacked([F._corners(x, polys, rows, np.full(len(rows), k)) for k in range(n)])
+    c = _stacked([dual_corner(x, polys, rows, np.full(len(rows), k)) for k in range(n)])
     if not shrink:
         return c
     prev = (roll(c[0], 1), roll(c[1], 1))
     nxt = (roll(c[0], -1), roll(c[1], -1))
-    na, nb = F._normal(prev, c), F._normal(c, nxt)
-    s = 1.0 + F._dot(na, nb)
+    na, nb = inward_normal(prev, c), inward_normal(c, nxt)
+    s = 1.0 + vec_dot(na, nb)
     m = (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
     return c[0] + m[0] * shrink, c[1] + m[1] * shrink
 
@@ -156,7 +161,7 @@ def pad_args(
     return polys, hinge_corner.ravel(), fold_ends.ravel(), hinge_corner[:, ::-1].ravel()
 
 
-def strip_pad(limits: F.FabricationLimits, unit_mm: float) -> tuple[float, float, float, float]:
+def strip_pad(limits: FabricationLimits, unit_mm: float) -> tuple[float, float, float, float]:
     """``(shrink, width, reach, need)`` of :func:`pad_rows` for ``limits`` in units of ``unit_mm``."""
     u = unit_mm
     return (
@@ -167,7 +172,7 @@ def strip_pad(limits: F.FabricationLimits, unit_mm: float) -> tuple[float, float
     )
 
 
-def families(st: Stencils, nv: int, limits: F.FabricationLimits, unit_mm: float) -> list[Family]:
+def families(st: Stencils, nv: int, limits: FabricationLimits, unit_mm: float) -> list[Family]:
     """The pad rows of a quad design (seams of closed state ``limits.print_state``, the one ``print`` makes)."""
     if limits.strip_pad_mm2 <= 0 or limits.strip_width_mm <= 0 or not len(st.hinge_tiles):
         return []
@@ -177,10 +182,10 @@ def families(st: Stencils, nv: int, limits: F.FabricationLimits, unit_mm: float)
     box = strip_pad(limits, unit_mm)
     polys = args[0]
     return [
-        F._family(
+        ineq_family(
             "fabrication_strip_pads",
             polys,
-            lambda x, sel: pad_rows(x, *F._pick(args, sel), *box),
+            lambda x, sel: pad_rows(x, *pick(args, sel), *box),
             nv,
             {"quad_of_row": np.arange(len(polys))},
         )

@@ -1,6 +1,6 @@
 """The full inverse-design problem: families over one node array (deployed nodes, then closed grids).
 
-``_Problem`` builds the start (a guess, a warm start or coarse to fine) and
+``DesignProblem`` builds the start (a guess, a warm start or coarse to fine) and
 the equality, fit, regulariser and inequality families of a ``DesignRequest``;
 the helpers below measure a node array against them (tile units: the
 initial tile edge is 1).
@@ -8,6 +8,7 @@ initial tile edge is 1).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -20,8 +21,8 @@ from ...pattern.conformance import boundary_tip_order
 from ...pattern.kinds.quad.lattice import standard_pattern
 from ...pattern.model import Pattern
 from ..core.conformance import deployed
-from ..core.normal import _Normal, nested_dissection
-from ..core.request import DesignRequest, reduced_applies
+from ..core.normal import NormalEquations, nested_dissection
+from ..core.request import DesignRequest, DesignResult, reduced_applies
 from ..targets.lookup import Target
 from . import constraints as C
 from .fabrication import families as fabrication_families
@@ -38,12 +39,18 @@ GAP_MARGIN = (
 )
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 
+# the designer of a whole request (``solve._design``, with its progress flag): a coarse level and a rigid route
+# are whole designs of their own, so the module above hands its designer down instead of being imported here
+WholeDesign = Callable[[DesignRequest, bool], DesignResult]
 
-class _Problem:
-    """Families over one node array (deployed nodes, then closed grids)."""
 
-    def __init__(self, req: DesignRequest):
+class DesignProblem:
+    """Families over one node array (deployed nodes, then closed grids). ``whole_design`` designs the
+    coarse level of a coarse-to-fine start and the rigid routes (:func:`.solve.design_problem` gives it)."""
+
+    def __init__(self, req: DesignRequest, whole_design: WholeDesign | None = None):
         self.req = req
+        self.whole_design = whole_design
         std = standard_pattern(req.rows, req.cols, tile_size=1.0)
         self.std = std
         st = C.Stencils.from_pattern(std)
@@ -71,7 +78,7 @@ class _Problem:
         self.X0 = self._closed_grids(X0)
         fam = self._families(base)
         self.families = fam
-        self._normal: _Normal | None = None
+        self._normal: NormalEquations | None = None
         # a family may ask its own margin (``meta["margin"]``, tile units: the fabrication rows of a continuation step)
         self.margin = {
             f.name: f.meta.get("margin", CONVEX_MARGIN if "convexity" in f.name else GAP_MARGIN)
@@ -131,6 +138,25 @@ class _Problem:
             fam += [C.rings(st, 1, nv), C.rings(st, 2, nv)]
         if req.symmetry:
             fam.append(C.symmetry(st, base, req.symmetry, nv))
+        fam += self._closed_state_families()
+        fam += self._fit_families()
+        fam.append(regularizer(st, nv))
+        fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
+        fam += fabrication_families(st, nv, req.fabrication, L0, base)
+        fam += opening_families(st, nv, req.min_opening, base)
+        if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
+            fam = [
+                weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f
+                for f in fam
+            ]
+        for g in self.grids.values() if req.holes == "rhombus" else ():
+            fam.append(g.orientation(st, nv))
+        return fam
+
+    def _closed_state_families(self) -> list[C.Family]:
+        """Each closed state's own rows: congruent to its grid, or a rectangle of the given ratio."""
+        req, st, nv = self.req, self.st, self.nv
+        fam: list[C.Family] = []
         for s, spec in sorted(req.contracted.items()):
             if isinstance(spec, Target):
                 # with parallelogram holes only the grid's boundary is a closed state's (T-junctions inside)
@@ -140,6 +166,12 @@ class _Problem:
                 fam.append(C.rectangle_outline(st, s, nv))
                 if spec[1] is not None:
                     fam.append(C.outline_ratio(st, s, float(spec[1]), nv))
+        return fam
+
+    def _fit_families(self) -> list[C.Family]:
+        """The fits of the tips (and the outline) to the deployed target and of each closed grid to its curve."""
+        req, st, nv, L0 = self.req, self.st, self.nv, self.L0
+        fam: list[C.Family] = []
         if req.target is not None:
             tgt = req.target.transformed(1.0 / L0)
             fam.append(C.shape_match(st.tip_nodes, st.tip_side, tgt, nv, "shape"))
@@ -159,17 +191,6 @@ class _Problem:
                     f"closed_shape_{s}",
                 )
             )
-        fam.append(regularizer(st, nv))
-        fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
-        fam += fabrication_families(st, nv, req.fabrication, L0, base)
-        fam += opening_families(st, nv, req.min_opening, base)
-        if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
-            fam = [
-                weighted(f, req.fit_weights[f.name]) if f.name in req.fit_weights else f
-                for f in fam
-            ]
-        for g in self.grids.values() if req.holes == "rhombus" else ():
-            fam.append(g.orientation(st, nv))
         return fam
 
     def _coarse_guess(self, base: np.ndarray, st: C.Stencils) -> tuple[np.ndarray, float]:
@@ -233,6 +254,14 @@ class _Problem:
         L0 = geometry.mean_edge_length(c)
         return xmm / L0, L0
 
+    def design_whole(self, req: DesignRequest) -> DesignResult:
+        """A whole design of ``req`` (a coarse level, a rigid route) by this problem's ``whole_design``."""
+        if self.whole_design is None:
+            raise ValueError(
+                "a whole design needs the designer: build the problem with solve.design_problem"
+            )
+        return self.whole_design(req, False)
+
     def _coarse_level(self, sub: DesignRequest):
         """The coarse level's design and how it was fitted: tips only (its grid stays unfolded when resampled);
         with ``coarse_refit``, where that outline misses the target by more than the shape tolerance
@@ -240,9 +269,6 @@ class _Problem:
         tips-only fit lets tips bunch on their arcs: the drop's 16x16 and 32x32 levels sat at a Hausdorff distance
         of 40 % of its size (tips on their arcs to 0.47 %), and the 64x64 design they started ended at 22 %.
         A symmetric level is fitted with the outline rows first, tips only where that does not converge."""
-        # the coarse level is a whole design (solve.py builds on this module)
-        from .solve import _design
-
         target = sub.target
         assert target is not None, "a coarse level is built only for a deployed target"
 
@@ -253,10 +279,10 @@ class _Problem:
         # than the free level's (the 96x96 ellipse's 12x12 level at 6.5 % of the size after the mirrored starts,
         # 0.20 % with the rows; the drop's 8x8 level 32.5 %, 2.0 %), and those starts cost more than this one fit
         if sub.symmetry:
-            alt = _design(replace(sub, outline=True), False)
+            alt = self.design_whole(replace(sub, outline=True))
             if alt.converged:
                 return alt, {"fit": "outline", "hausdorff_rel": miss(alt)}
-        res = _design(sub, False)
+        res = self.design_whole(sub)
         h = miss(res)
         level = {"fit": "tips", "hausdorff_rel": h}
         above = self.req.coarse_refit_above
@@ -264,7 +290,7 @@ class _Problem:
             self.req.second_opinion_above if above is None else above
         ):
             return res, level
-        alt = _design(replace(sub, outline=True), False)
+        alt = self.design_whole(replace(sub, outline=True))
         h_alt = miss(alt)
         level["tips_only_hausdorff_rel"] = h
         if alt.converged and (h_alt < h or not res.converged):
@@ -329,21 +355,21 @@ class _Problem:
         return np.stack([2 * o, 2 * o + 1], 1).ravel()
 
     @property
-    def normal(self) -> _Normal:
+    def normal(self) -> NormalEquations:
         """Normal-equation solver of the full problem, built on first use (its ordering costs a Jacobian)."""
         if self._normal is None:
-            self._normal = _Normal(self._ordering())
+            self._normal = NormalEquations(self._ordering())
         return self._normal
 
     def of(self, kind: str) -> list[C.Family]:
         return [f for f in self.families if f.kind == kind]
 
 
-def _ineq_values(prob: _Problem, X: np.ndarray) -> np.ndarray:
+def _ineq_values(prob: DesignProblem, X: np.ndarray) -> np.ndarray:
     return np.concatenate([f.residual(X) for f in prob.of("ineq")])
 
 
-def _mean_edge(prob: _Problem, X: np.ndarray) -> float:
+def _mean_edge(prob: DesignProblem, X: np.ndarray) -> float:
     return geometry.mean_edge_length(X[prob.st.tiles])
 
 
@@ -352,7 +378,7 @@ def exact_fits(fits: list[C.Family]) -> list[C.Family]:
     return [f for f in fits if not f.meta.get("soft")]
 
 
-def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
+def family_residuals(prob: DesignProblem, X: np.ndarray, L: float) -> dict:
     out = {}
     for f in prob.families:
         if f.kind == "eq" or (f.kind == "fit" and not f.meta.get("soft")):
@@ -361,20 +387,20 @@ def family_residuals(prob: _Problem, X: np.ndarray, L: float) -> dict:
     return out
 
 
-def _objective(prob: _Problem, X: np.ndarray) -> float:
+def _objective(prob: DesignProblem, X: np.ndarray) -> float:
     """Σ fit² + w E_reg: what both solvers minimise over the feasible set."""
     return sum(energy(f, X) for f in prob.of("fit")) + prob.req.reg_weight * sum(
         energy(f, X) for f in prob.of("reg")
     )
 
 
-def _acceptable(prob: _Problem, X: np.ndarray) -> bool:
+def _acceptable(prob: DesignProblem, X: np.ndarray) -> bool:
     res = family_residuals(prob, X, _mean_edge(prob, X))
     worst = max((res[f.name] for f in prob.of("eq")), default=0.0)
     return worst <= prob.req.tol and float(_ineq_values(prob, X).min(initial=0.0)) >= 0.0
 
 
-def _why_not(prob: _Problem, X: np.ndarray) -> str:
+def _why_not(prob: DesignProblem, X: np.ndarray) -> str:
     """The worst equality family and the smallest inequality, for the log."""
     res = family_residuals(prob, X, _mean_edge(prob, X))
     eq = max(((res[f.name], f.name) for f in prob.of("eq")), default=(0.0, "none"))

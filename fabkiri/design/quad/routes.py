@@ -21,11 +21,11 @@ from ..targets.lookup import Target
 from . import constraints as C
 from .initial import initial_guess
 from .penalty import _solve_full
-from .problem import _acceptable, _mean_edge, _objective, _Problem, _why_not, exact_fits
+from .problem import DesignProblem, _acceptable, _mean_edge, _objective, _why_not, exact_fits
 from .rigid import outline
 from .rigid.family import RigidFamily
 from .rigid.mirror import Mirror
-from .rigid.reduced import SCALINGS, fit_miss, solve_reduced
+from .rigid.reduced import SCALINGS, ReducedSearch, fit_miss, solve_reduced
 
 REDUCED_NAME = "closed-form rigid family (reduced Levenberg-Marquardt)"
 FULL_NAME = "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU"
@@ -61,7 +61,7 @@ MIRRORED_STARTS = ("standard", "conformal", "rescaled")
 # the 64x64 star 0.19 -> 0.45 %; not kept
 
 
-def _solve_reduced(prob: _Problem, log, iters: dict):
+def _solve_reduced(prob: DesignProblem, log, iters: dict):
     """Solve in the rigid family; ``(X, mode)`` if every family checks out, else None."""
     req = prob.req
     fam = prob.rigid_family
@@ -73,7 +73,7 @@ def _solve_reduced(prob: _Problem, log, iters: dict):
     return None
 
 
-def _start(prob: _Problem) -> tuple[np.ndarray, float, np.ndarray | None]:
+def _start(prob: DesignProblem) -> tuple[np.ndarray, float, np.ndarray | None]:
     """``(X0, ψ0, S0)``: the reduced solver's start (seeds ``S0`` when the start is a member already)."""
     # the standard starts sit at ψ = π/4; a coarse-to-fine or warm start at whatever it opened to
     psi0 = (
@@ -87,7 +87,7 @@ def _start(prob: _Problem) -> tuple[np.ndarray, float, np.ndarray | None]:
 
 
 def _reduced_from(
-    prob: _Problem, X0, psi0: float, S0, log, iters: dict, tag: str, scalings=SCALINGS
+    prob: DesignProblem, X0, psi0: float, S0, log, iters: dict, tag: str, scalings=SCALINGS
 ) -> tuple:
     """``(X, mode)`` of the reduced solver from ``X0`` (or seeds ``S0``) at ``psi0``: over half the seeds
     with ``--symmetry`` (``rigid/mirror.py``). ``tag`` prefixes its iteration counts. The second of
@@ -107,21 +107,23 @@ def _reduced_from(
         psi0,
         prob.families,
         prob.margin,
-        req.reg_weight,
-        0.1 * req.tol * _mean_edge(prob, prob.X0),
-        lambda Y: _mean_edge(prob, Y),
-        log,
-        max_iter=req.max_iter,
-        miss_tol=np.inf if small else FULL_ABOVE,
+        ReducedSearch(
+            req.reg_weight,
+            0.1 * req.tol * _mean_edge(prob, prob.X0),
+            lambda Y: _mean_edge(prob, Y),
+            log,
+            max_iter=req.max_iter,
+            miss_tol=np.inf if small else FULL_ABOVE,
+            scalings=scalings,
+        ),
         S0=S0,
         mirror=mirror,
-        scalings=scalings,
     )
     iters.update({tag + k: v for k, v in its.items()})
     return X, mode
 
 
-def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
+def _mirrored_starts(prob: DesignProblem, out: tuple, log, iters: dict) -> tuple:
     """A symmetric design's second opinion, where the full solver's would run (``_second_opinion``: up to
     ``FULL_ALWAYS_TILES`` when the outline misses the shape tolerance, up to ``FULL_MAX_TILES`` when the fit
     misses by more than ``FULL_ABOVE``): the reduced solver over half the seeds from its own start with the
@@ -162,7 +164,7 @@ def _mirrored_starts(prob: _Problem, out: tuple, log, iters: dict) -> tuple:
     return best[1]
 
 
-def _second_opinion_due(req, prob: _Problem, X: np.ndarray, miss, log) -> bool:
+def _second_opinion_due(req, prob: DesignProblem, X: np.ndarray, miss, log) -> bool:
     """Whether a second opinion of ``X`` runs (the full solver's, or ``_mirrored_starts``): up to
     ``FULL_ALWAYS_TILES`` when its outline misses the shape tolerance, up to ``FULL_MAX_TILES`` when its fit
     misses by more than ``FULL_ABOVE`` (``miss()``, asked only there)."""
@@ -174,7 +176,7 @@ def _second_opinion_due(req, prob: _Problem, X: np.ndarray, miss, log) -> bool:
     return _outline_misses(prob, X, req.second_opinion_above, log)
 
 
-def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
+def _outline_misses(prob: DesignProblem, X: np.ndarray, above: float, log) -> bool:
     """Whether the deployed outline's Hausdorff distance to the target (``design/core/conformance.py``, the measure
     ``--shape-tol`` judges) exceeds ``above`` of the target's size: below it the full solver's second opinion
     is skipped. With the outline fit it reached the same outline at 8x8 on circle, ellipse, superellipse,
@@ -187,13 +189,13 @@ def _outline_misses(prob: _Problem, X: np.ndarray, above: float, log) -> bool:
     return h > above
 
 
-def _outline_rel(prob: _Problem, X: np.ndarray) -> float:
+def _outline_rel(prob: DesignProblem, X: np.ndarray) -> float:
     """The deployed outline's Hausdorff distance to the target, a fraction of its size (tile units ``X``)."""
     pat = Pattern(nodes=X[: prob.n] * prob.L0, tiles=prob.std.tiles)
     return deployed_conformance(pat.nodes, pat.topology, prob.target)["hausdorff_rel"]
 
 
-def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[tuple, str]:
+def _second_opinion(req, prob: DesignProblem, out: tuple, log, iters: dict) -> tuple[tuple, str]:
     """The full solver as well, where the rigid family's least-squares fit may be a worse local minimum
     (``FULL_ALWAYS_TILES``, ``FULL_ABOVE``, ``FULL_MAX_TILES``); ``(out, solver name)``, the lower objective.
     ``req`` is the caller's request (``_design``'s), which ``prob.req`` may not be."""
@@ -222,7 +224,7 @@ def _second_opinion(req, prob: _Problem, out: tuple, log, iters: dict) -> tuple[
     return out, solver
 
 
-def _polish(prob: _Problem, X: np.ndarray, log, iters: dict, polished: list):
+def _polish(prob: DesignProblem, X: np.ndarray, log, iters: dict, polished: list):
     """Where the full solver's first schedule ends off the constraints (its projection stopped short), the rigid
     family's member closest to that end (reduced solver, warm from it), instead of the stiff restart, when it
     is valid and fits at least as well as the end itself (``(X, mode)``, else None). 16x16 heart at 200 mm:
@@ -242,18 +244,16 @@ def _polish(prob: _Problem, X: np.ndarray, log, iters: dict, polished: list):
     return Y, mode
 
 
-def _solve_rigid_first(prob: _Problem, log, iters: dict):
+def _solve_rigid_first(prob: DesignProblem, log, iters: dict):
     """The rigid family's closest member to the target (reduced solver only, from each of ``RIGID_FIRST_INITS``)
     that passes every family of the non-rigid problem: ``(X, mode, solver)`` if its outline is within the shape
     tolerance (``second_opinion_above``), else None and the full solver takes over."""
-    from .solve import _design  # a rigid design of the same target is a whole design
-
     best = None
     for init in RIGID_FIRST_INITS:
         sub = replace(
             prob.req, rigid=True, init=init, name="", solver="reduced", second_opinion=False
         )
-        res = _design(sub, False)
+        res = prob.design_whole(sub)  # a rigid design of the same target is a whole design
         iters.update({f"rigid_{init}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
         if not (res.converged and _acceptable(prob, X)):
@@ -272,7 +272,7 @@ def _solve_rigid_first(prob: _Problem, log, iters: dict):
     return best[1:]
 
 
-def _rigid_full_first(prob: _Problem, log, iters: dict):
+def _rigid_full_first(prob: DesignProblem, log, iters: dict):
     """Where no reduced member meets the shape, up to ``RIGID_FULL_FIRST_TILES``: the rigid design with the
     full solver's second opinion (``_solve_via_rigid``, the CLI's last guess), before the full solver over all
     nodes and its other guesses. ``(X, mode, solver)`` if within the shape tolerance, else None (and the CLI's
@@ -296,11 +296,9 @@ def _rigid_full_first(prob: _Problem, log, iters: dict):
     return None
 
 
-def _solve_via_rigid(prob: _Problem, log, iters: dict, tag: str = ""):
+def _solve_via_rigid(prob: DesignProblem, log, iters: dict, tag: str = ""):
     """The same target as a rigid design (coarse to fine); ``(X, mode, solver)`` if it passes every family of
     the non-rigid problem, else None. ``tag`` prefixes its iteration counts."""
-    from .solve import _design  # a rigid design of the same target is a whole design
-
     big = prob.req.rows * prob.req.cols >= VIA_RIGID_TILES
     # no full-solver second opinion on a big rigid problem at this level (its coarse levels keep theirs): at
     # 32x32 it took most of a heart's design and lost (the non-rigid full solver below still takes
@@ -320,7 +318,7 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict, tag: str = ""):
     # non-rigid one at 6e-3 (14 % off). Next, the reduced solver alone down the coarse levels (1.37 %).
     first = replace(sub, solver="reduced", coarse_solver="auto") if big else sub
     for name, attempt in (("rigid", first), ("rigid_reduced", replace(sub, solver="reduced"))):
-        res = _design(attempt, False)
+        res = prob.design_whole(attempt)  # a rigid design of the same target is a whole design
         iters.update({f"{tag}{name}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
         if res.converged and _acceptable(prob, X):
@@ -333,7 +331,7 @@ def _solve_via_rigid(prob: _Problem, log, iters: dict, tag: str = ""):
     return None
 
 
-def _solve_outline(prob: _Problem, log, iters: dict, solver=None):
+def _solve_outline(prob: DesignProblem, log, iters: dict, solver=None):
     """Square/circle closed-state outlines in the rigid family (``outline.py``); ``(X, mode)`` or None.
 
     A circle target is size-free: its state's target becomes the fitted circle (centre and radius), so the

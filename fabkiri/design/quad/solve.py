@@ -67,11 +67,11 @@ from .penalty import _solve_full
 from .problem import (  # noqa: F401  (re-exported: callers import these from here)
     CONVEX_MARGIN,
     GAP_MARGIN,
+    DesignProblem,
     _acceptable,
     _ineq_values,
     _mean_edge,
     _objective,
-    _Problem,
     _why_not,
     exact_fits,
     family_residuals,
@@ -122,6 +122,11 @@ def design(req: DesignRequest, progress: bool = False) -> DesignResult:
         return _design(req, progress)
 
 
+def design_problem(req: DesignRequest) -> DesignProblem:
+    """The full problem of ``req`` with this module's designer for its coarse levels and rigid routes."""
+    return DesignProblem(req, _design)
+
+
 def _design(req: DesignRequest, progress: bool) -> DesignResult:
     log = _Log(progress)
     c0 = time.process_time()
@@ -132,7 +137,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
         return _design(replace(req, holes="rhombus"), progress)
     t0 = time.perf_counter()
     # a non-rigid request answered by the rigid family needs no guess of its own (least of all a coarse solve)
-    prob = _Problem(replace(req, init="rescaled") if via_rigid_applies(req) else req)
+    prob = DesignProblem(replace(req, init="rescaled") if via_rigid_applies(req) else req, _design)
     log(
         f"{req.rows}x{req.cols} tiles, {2 * prob.nv} unknowns, families: "
         + ", ".join(f.name for f in prob.families)
@@ -152,7 +157,7 @@ def _design(req: DesignRequest, progress: bool) -> DesignResult:
 
 
 def _coarse_refit(
-    req: DesignRequest, prob: _Problem, result: DesignResult, progress: bool, log
+    req: DesignRequest, prob: DesignProblem, result: DesignResult, progress: bool, log
 ) -> DesignResult:
     """A coarse-to-fine design whose outline misses the shape tolerance (``second_opinion_above``) is designed
     again with its coarse levels refitted where their tips-only outline misses it (``coarse_refit``); the
@@ -160,7 +165,7 @@ def _coarse_refit(
     ended at 3.96 % instead of 1.61 %, while the drop's 64x64 design went from 22.16 % to 0.22 %."""
     if req.coarse_refit or not req.outline or prob.coarse is None or req.target is None:
         return result
-    # a mirrored level has the outline rows already (``_Problem._coarse_level``): it would be the same design
+    # a mirrored level has the outline rows already (``DesignProblem._coarse_level``): it would be the same design
     if prob.coarse.get("fit") == "outline":
         return result
     h = deployed_conformance(result.pattern.nodes, result.pattern.topology, req.target)
@@ -187,7 +192,7 @@ def _coarse_refit(
     return keep
 
 
-def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
+def _solve(req: DesignRequest, prob: DesignProblem, log, iters: dict):
     """The routes in order, until one answers: ``((X, mode), solver name, rigid_first)``.
 
     ``req`` is the caller's request, not ``prob.req`` (a via-rigid problem is built from rescaled). None when
@@ -237,7 +242,7 @@ def _solve(req: DesignRequest, prob: _Problem, log, iters: dict):
     return out, solver, rigid_first
 
 
-def _fit_report(prob: _Problem, X: np.ndarray) -> dict:
+def _fit_report(prob: DesignProblem, X: np.ndarray) -> dict:
     """Per fit family: max and rms distance (mm), max over the target's size, points, soft (unweighted rows)."""
     fit = {}
     # the families now: a size-free circle replaces its state's fit family with the fitted circle
@@ -256,7 +261,7 @@ def _fit_report(prob: _Problem, X: np.ndarray) -> dict:
 
 def _report(
     req: DesignRequest,
-    prob: _Problem,
+    prob: DesignProblem,
     X: np.ndarray,
     mode: str,
     solver: str,
@@ -316,7 +321,7 @@ def _report(
     return report
 
 
-def _result(req: DesignRequest, prob: _Problem, X: np.ndarray, report: dict) -> DesignResult:
+def _result(req: DesignRequest, prob: DesignProblem, X: np.ndarray, report: dict) -> DesignResult:
     """The deployed pattern in mm, its lattice, options (``req``'s, not ``prob.req``'s) and report, closed grids."""
     L0 = prob.L0
     Xmm = X * L0

@@ -227,35 +227,7 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
     he_to = node[:, ::-1].ravel()
     d = xy[he_to] - xy[he_from]
     ang = np.arctan2(d[:, 1], d[:, 0])
-    partner = np.full(
-        2 * S, -1, dtype=np.int64
-    )  # half-edge arriving straight-through continues as partner
-    order = np.argsort(he_from, kind="stable")
-    starts = np.searchsorted(he_from[order], np.arange(len(xy)))
-    ends = np.append(starts[1:], len(order))
-    for v in range(len(xy)):
-        hs = order[starts[v] : ends[v]]
-        if len(hs) == 2:
-            partner[hs[0]], partner[hs[1]] = hs[1], hs[0]
-        elif (
-            len(hs) > 2 and not straight_only
-        ):  # an outline touching itself: pair neighbours by angle
-            hs = hs[np.argsort(ang[hs], kind="stable")]
-            for i in range(0, len(hs) - 1, 2):
-                partner[hs[i]], partner[hs[i + 1]] = hs[i + 1], hs[i]
-        elif len(hs) > 2:
-            used: set[int] = set()  # hinge ends already paired
-            for i in range(len(hs)):
-                if hs[i] in used:
-                    continue
-                for j in range(i + 1, len(hs)):
-                    if hs[j] in used:
-                        continue
-                    diff = abs(((ang[hs[i]] - ang[hs[j]]) % (2 * np.pi)) - np.pi)
-                    if diff < 1e-7:
-                        partner[hs[i]], partner[hs[j]] = hs[j], hs[i]
-                        used.update((hs[i], hs[j]))
-                        break
+    partner = _partners(he_from, ang, len(xy), straight_only)
     seen = np.zeros(S, dtype=bool)
     out = []
 
@@ -279,6 +251,47 @@ def _chain(segments: np.ndarray, straight_only: bool) -> list[tuple[np.ndarray, 
             closed = nodes[0] == nodes[-1]
             out.append((xy[nodes[:-1]] if closed else xy[nodes], closed))
     return out
+
+
+def _partners(
+    he_from: np.ndarray, ang: np.ndarray, n_nodes: int, straight_only: bool
+) -> np.ndarray:
+    """For each half-edge, the half-edge a chain arriving along it continues by (-1: the chain ends there)."""
+    partner = np.full(
+        len(he_from), -1, dtype=np.int64
+    )  # half-edge arriving straight-through continues as partner
+    order = np.argsort(he_from, kind="stable")
+    starts = np.searchsorted(he_from[order], np.arange(n_nodes))
+    ends = np.append(starts[1:], len(order))
+    for v in range(n_nodes):
+        hs = order[starts[v] : ends[v]]
+        if len(hs) == 2:
+            partner[hs[0]], partner[hs[1]] = hs[1], hs[0]
+        elif (
+            len(hs) > 2 and not straight_only
+        ):  # an outline touching itself: pair neighbours by angle
+            hs = hs[np.argsort(ang[hs], kind="stable")]
+            for i in range(0, len(hs) - 1, 2):
+                partner[hs[i]], partner[hs[i + 1]] = hs[i + 1], hs[i]
+        elif len(hs) > 2:
+            _pair_straight(hs, ang, partner)
+    return partner
+
+
+def _pair_straight(hs: np.ndarray, ang: np.ndarray, partner: np.ndarray) -> None:
+    """Pair the half-edges ``hs`` leaving one node that continue each other straight on (a grid crossing)."""
+    used: set[int] = set()  # hinge ends already paired
+    for i in range(len(hs)):
+        if hs[i] in used:
+            continue
+        for j in range(i + 1, len(hs)):
+            if hs[j] in used:
+                continue
+            diff = abs(((ang[hs[i]] - ang[hs[j]]) % (2 * np.pi)) - np.pi)
+            if diff < 1e-7:
+                partner[hs[i]], partner[hs[j]] = hs[j], hs[i]
+                used.update((hs[i], hs[j]))
+                break
 
 
 def _segments_of(geom: shapely.Geometry) -> np.ndarray:
@@ -401,7 +414,6 @@ def shrink_tiles(corners: np.ndarray, shrink: float) -> np.ndarray:
 
 def ligament_design(
     pattern: Pattern,
-    corners: np.ndarray,
     shrunk: np.ndarray,
     *,
     gap: float,

@@ -7,19 +7,29 @@ verifier that reads it back) from a finished :class:`~.cut.CutJob`.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
 
 from ... import __version__
 from ...exchange.drawing import snap
-from ...exchange.dxf.writer import DXF_VERSION
 from ...verify.manifest import CutManifest
-from .. import assembly as asm
 from ..gate import GATE_GROUPS
 from . import hinges as hg
-from .sheets import PIERCE_S, CutJob, sheet_names
+
+if TYPE_CHECKING:  # sheets.py builds the job and imports this module
+    from .sheets import CutJob
+
+PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
+
+
+def sheet_names(job: CutJob) -> list[str]:
+    """File stem of each sheet (``stem-sheetN`` when there are several)."""
+    multi = len(job.sheets) > 1
+    return [
+        f"{job.options.stem}-sheet{sd.index}" if multi else job.options.stem for sd in job.sheets
+    ]
 
 
 def _sheet_rows(job: CutJob) -> list[dict[str, Any]]:
@@ -97,6 +107,9 @@ def _tile_rows(job: CutJob) -> list[dict[str, Any]]:
 
 
 def _parameters(job: CutJob) -> dict[str, Any]:
+    # ezdxf and the assembly map's drawing load with a cut's manifest, not with sheets.py (its options)
+    from ...exchange.dxf.writer import DXF_VERSION
+
     o, lig = job.options, job.cutting.ligament
     return {
         "sheet_mm": [float(o.sheet[0]), float(o.sheet[1])],
@@ -133,6 +146,8 @@ def _ligament(job: CutJob) -> dict[str, Any] | None:
 
 
 def _assembly(job: CutJob, files: dict[str, bytes], pieces: list[dict]) -> dict[str, Any]:
+    from .. import assembly as asm
+
     n_top = sum(p["face"] == "T" for p in pieces)
     return {
         "joins": "tape" if pieces else None,
@@ -188,6 +203,8 @@ def cut_manifest(job: CutJob, files: dict[str, bytes], pieces: list[dict]) -> di
         assembly=_assembly(job, files, pieces),
         assembly_pieces=pieces,
     )
+    from .. import assembly as asm
+
     out = m.to_dict()
     area = float(shapely.area(shapely.polygons(job.cutting.corners)).sum())
     out["bill_of_materials"] = asm.cut_bom(

@@ -20,6 +20,9 @@ from ...schemas import load_schema, schema_problem
 from ...templates import template_dir
 
 HINGE_KINDS = ("tape", "ligament", "separate")
+DEFAULT_MATERIAL = (
+    "acrylic-3"  # what a cut is made of when neither the caller nor the design names one
+)
 COLOR_PRESETS = ("default", "boxes", "ponoko")
 MATERIALS_DIR = template_dir("materials")
 

@@ -4,7 +4,7 @@ Steps (docs/fabrication.md#cut-pipeline): pick the closed state, scale it, check
 cuttable (closes, simple tiles, no overlaps), assign tape faces, apply the
 hinge kind (a strategy object, :mod:`.hingekinds`), lay the parts out on
 sheets, add labels and the reference square (:mod:`.labels`), and render
-DXF/SVG/PNG bytes plus the manifest (:mod:`.cutmanifest`). Nothing touches the
+DXF/SVG/PNG bytes plus the manifest (:mod:`.manifest`). Nothing touches the
 disk here; :mod:`fabkiri.fabricate.cut.readback` verifies and writes.
 """
 
@@ -31,11 +31,11 @@ from . import layout as lay
 from .formats import sheet_format, sheet_format_names
 from .hingekinds import Cutting, HingeKind, SheetCut, hinge_kind
 from .labels import MIN_LABEL_MM, add_notes, engrave_labels
+from .manifest import cut_manifest, sheet_names
 from .materials import Material
 from .text import text_strokes
 
 FORMATS = sheet_format_names()  # the built-in formats: what a cut writes by default
-PIERCE_S = 0.2  # time model: per path, for the head to travel and pierce
 
 
 @dataclass
@@ -278,14 +278,6 @@ def _labels(job: CutJob) -> None:
         )
 
 
-def sheet_names(job: CutJob) -> list[str]:
-    """File stem of each sheet (``stem-sheetN`` when there are several)."""
-    multi = len(job.sheets) > 1
-    return [
-        f"{job.options.stem}-sheet{sd.index}" if multi else job.options.stem for sd in job.sheets
-    ]
-
-
 def _files(job: CutJob) -> dict[str, bytes]:
     """Every file the options ask for: the per-sheet formats sheet by sheet (DXF and SVG), then those
     of the whole cut (the PNG preview), in the registry's order (:mod:`.sheetformats`)."""
@@ -387,8 +379,6 @@ def _assembly(job: CutJob, files: dict[str, bytes]) -> list[dict]:
 @gc_paused
 def cut_pattern(pattern: Pattern, options: CutOptions) -> CutResult:
     """Build every sheet, file and the manifest for ``pattern`` in memory."""
-    from .manifest import cut_manifest
-
     job = _cut_job(pattern, options)
     _draw(job)
     if options.labels:

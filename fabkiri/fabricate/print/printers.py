@@ -60,6 +60,13 @@ class Printer:
     min_feature_mm: float = 0.8  # narrowest wall the slicer prints solid (two perimeters)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "bed_mm", self._bed())
+        self._check_lengths()
+        self._check_materials()
+        self._check_layers()
+
+    def _bed(self) -> tuple[float, ...]:
+        """``bed_mm`` as three floats (one line naming the printer otherwise)."""
         try:
             bed = tuple(float(v) for v in self.bed_mm)
         except (TypeError, ValueError):
@@ -70,7 +77,11 @@ class Printer:
             raise FabricationError(
                 f"printer {self.name}: bed_mm must be [x, y, z], got {list(self.bed_mm)}"
             )
-        object.__setattr__(self, "bed_mm", bed)
+        return bed
+
+    def _check_lengths(self) -> None:
+        """Every ``*_mm`` field, the bed and the pin's sizes positive."""
+        bed = self.bed_mm
         for f in fields(self):
             v = getattr(self, f.name)
             if (
@@ -91,6 +102,9 @@ class Printer:
                 raise FabricationError(
                     f"printer {self.name}: pin.{f.name} must be a positive length, got {v!r}"
                 )
+
+    def _check_materials(self) -> None:
+        """The extruders, what each is loaded with, and the tile and strip materials among them."""
         if not (isinstance(self.extruders, int) and 1 <= self.extruders <= 16):
             raise FabricationError(
                 f"printer {self.name}: extruders must be a whole number 1-16, got {self.extruders!r}"
@@ -118,6 +132,9 @@ class Printer:
                 f"printer {self.name}: tile and strip materials must be among the extruders' "
                 f"materials {list(mats)}"
             )
+
+    def _check_layers(self) -> None:
+        """The layers suit the nozzle; the gap, the strips and the tiles suit the layers and each other."""
         if self.first_layer_mm > 2 * self.layer_mm or self.layer_mm > 0.8 * self.nozzle_mm:
             raise FabricationError(
                 f"printer {self.name}: layer {self.layer_mm} mm / first layer "

@@ -175,8 +175,8 @@ def mark_seam(
     rewrite the sheets' DXF, SVG and PNG bytes and the manifest's engrave figures."""
     from ...exchange.dxf.writer import dxf_bytes
     from ...exchange.svg import svg_bytes
+    from ..cut.manifest import PIERCE_S
     from ..cut.preview import png_bytes
-    from ..cut.sheets import PIERCE_S
 
     Y = sheet.contracted[state]
     scale = float(result.manifest["scale"])

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from scipy import sparse
 
 if TYPE_CHECKING:
     from .reduced import _Merit
@@ -105,3 +106,13 @@ class _Evaluation:
         return np.vstack(
             [self._J, np.hstack([Jr, np.zeros((len(Jr), self._J.shape[1] - Jr.shape[1]))])]
         )
+
+
+def reduced_normal(J: sparse.csr_matrix, D: np.ndarray, r: np.ndarray, dense_jd: float):
+    """Reduced Gauss-Newton matrix ``Dᵀ JᵀJ D`` and gradient ``Dᵀ Jᵀ r``: through a dense ``J D`` when it has
+    at most ``dense_jd`` entries, else through the sparse ``JᵀJ``."""
+    if J.shape[0] * D.shape[1] <= dense_jd:
+        JD = J @ D
+        return JD.T @ JD, JD.T @ r
+    H = (J.T @ J).tocsr()
+    return D.T @ (H @ D), D.T @ (J.T @ r)

@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 from scipy import sparse
 
+from .merit import reduced_normal
+
 
 class HalfBlocks:
     """``P`` by seed coordinate: the columns of q that coordinate d reaches and ``P``'s dense block there
@@ -71,8 +73,6 @@ def half_normal(ev: Any, P: sparse.csr_matrix, halves: HalfBlocks):
     on the block path (large lattices) its node rows through ``D P``, its grid rows by ``HalfBlocks`` and the
     closed states' contact rows through ``P``; on the dense path ``Pᵀ (JᵀJ) P`` (a 32x32 J has 133 columns:
     as cheap either way)."""
-    from .reduced import DENSE_JD, _normal  # reduced.py builds on mirror.py
-
     ev._form()
     if ev.merit._half is not None:  # the dense path formed over q (``mirror_dense``)
         return ev.normal()
@@ -82,7 +82,7 @@ def half_normal(ev: Any, P: sparse.csr_matrix, halves: HalfBlocks):
     r, Jx, Jc, Jk = ev._rows()
     merit, nx, nk = ev.merit, Jx.shape[0], len(Jk)
     Js, D = merit._touched(Jx, ev.p)
-    Hx, gx = _normal(Js, _through(P, D), r[:nx])
-    Hc, gc = halves.grid_normal(merit.fam.Z, Jc, r[nx : len(r) - nk], DENSE_JD)
+    Hx, gx = reduced_normal(Js, _through(P, D), r[:nx], merit.dense_jd())
+    Hc, gc = halves.grid_normal(merit.fam.Z, Jc, r[nx : len(r) - nk], merit.dense_jd())
     JkP = _through(P, Jk)
     return Hx + Hc + JkP.T @ JkP, gx + gc + JkP.T @ r[len(r) - nk :]

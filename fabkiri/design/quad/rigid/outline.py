@@ -77,7 +77,7 @@ def applies(req) -> bool:
 
 class _Maps:
     """Dense linear maps from ``vec S = (Sx, Sy)`` to the node array ``[deployed nodes; grids of the
-    target states]`` that the families of ``solve._Problem`` evaluate."""
+    target states]`` that the families of ``solve.DesignProblem`` evaluate."""
 
     def __init__(self, fam: RigidFamily, st: Stencils, states: list[int]):
         M, N = st.rows, st.cols

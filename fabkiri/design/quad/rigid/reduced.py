@@ -20,8 +20,8 @@ on the result and falls back to the full solver when a check fails.
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
-from dataclasses import replace
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -32,7 +32,7 @@ from ..constraints import convexity
 from ..objective import regularizer, tile_corners
 from .contact import ClosedContact
 from .family import RigidFamily
-from .merit import _Evaluation
+from .merit import _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
 from .steps import hard_fit, levenberg_marquardt
 from .tiles import TileShapeRows
@@ -210,16 +210,9 @@ class _Merit:
         values = self.ineq_values(Xc)
         return _Evaluation(self, p, Xc, self.ineq_violation(Xc, values), hard, values=values)
 
-    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
-        """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
-        they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
-        asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
-        S, psi = self.unpack(p)
-        c = self.fam.grid(S)
-        X, w = self.fam.nodes(S, psi, c), self._state_2(S)
-        t = self._tiles
-        assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
-        tc = tile_corners(c, t.quads)
+    def _node_rows(self, X: np.ndarray, hard: bool, s: float) -> tuple[list, list, float]:
+        """The node blocks of the dense path: ``(rows, pend, smallest inequality)``; ``pend`` holds each block's
+        ``(scale, () -> stencil Jacobian, rows or None)`` in row order, the gradients formed only when asked."""
         rs: list[np.ndarray] = []
         pend: list[
             tuple[float, Any, np.ndarray | None]
@@ -235,7 +228,6 @@ class _Merit:
                 r, J = f.fn(X)
                 rs.append(self.w * r)
                 pend.append((self.w, lambda J=J: J, None))
-        s = 1.0 if hard else self.sq
         for f in self.ineqs:
             r = f.residual(X)
             gmin = min(gmin, float(r.min(initial=np.inf)))
@@ -245,6 +237,20 @@ class _Merit:
                 rs.append(s * v[act])
                 # the gradients only when asked, and of the active rows only where the family can
                 pend.append((s, lambda f=f, m=v < 0: f.stencil_where(X, m), act))
+        return rs, pend, gmin
+
+    def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
+        """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
+        they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
+        asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
+        S, psi = self.unpack(p)
+        c = self.fam.grid(S)
+        X, w = self.fam.nodes(S, psi, c), self._state_2(S)
+        t = self._tiles
+        assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
+        tc = tile_corners(c, t.quads)
+        s = 1.0 if hard else self.sq
+        rs, pend, gmin = self._node_rows(X, hard, s)
         g = tc.cross.reshape(-1)
         gmin = min(gmin, float(g.min(initial=np.inf)))
         v = g - t.margin * (0.5 if hard else 1.0)
@@ -308,10 +314,14 @@ class _Merit:
         Js, D = self._touched(Jx, p)
         return np.vstack([Js @ D, self._grid_to_p(Jc)])
 
+    def dense_jd(self) -> float:
+        """``DENSE_JD`` as it is now (``mirror_normal.half_normal`` forms its blocks by it too)."""
+        return DENSE_JD
+
     def normal(self, r: np.ndarray, Jx, Jc, p: np.ndarray):
         """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
         nx = Jx.shape[0]
-        Hx, gx = _normal(*self._touched(Jx, p), r[:nx])
+        Hx, gx = reduced_normal(*self._touched(Jx, p), r[:nx], DENSE_JD)
         Hc, gc = self._grid_normal(Jc, r[nx:])
         return Hx + Hc, gx + gc
 
@@ -358,15 +368,6 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
 DENSE_JD = 4e6
 
 
-def _normal(J: sparse.csr_matrix, D: np.ndarray, r: np.ndarray):
-    """Reduced Gauss-Newton matrix ``Dᵀ JᵀJ D`` and gradient ``Dᵀ Jᵀ r``."""
-    if J.shape[0] * D.shape[1] <= DENSE_JD:
-        JD = J @ D
-        return JD.T @ JD, JD.T @ r
-    H = (J.T @ J).tocsr()
-    return D.T @ (H @ D), D.T @ (J.T @ r)
-
-
 def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
     """The ``TILE_SHAPE`` families among ``families``, rebuilt on the closed-state-1 grid of ``fam``."""
     G = fam.Z.shape[0]
@@ -377,6 +378,21 @@ def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> lis
     return [build[f.name]() for f in families if f.name in TILE_SHAPE]
 
 
+@dataclass(frozen=True)
+class ReducedSearch:
+    """How :func:`solve_reduced` weighs and searches: the regulariser's weight in the merit, ``fit_tol`` of a
+    hard fit (absolute), ``mean_edge(X)`` the unit of its 1 % "nearly exact" threshold, the log, the LM
+    iteration cap, the fit miss that ends the scalings early and the LM scalings to start with."""
+
+    reg_weight: float
+    fit_tol: float
+    mean_edge: Callable[[np.ndarray], float]
+    log: Callable[[str], None]
+    max_iter: int = 200
+    miss_tol: float = 0.0
+    scalings: tuple[str, ...] = SCALINGS
+
+
 def solve_reduced(
     fam: RigidFamily,
     st: Stencils,
@@ -384,24 +400,17 @@ def solve_reduced(
     psi0: float,
     families: list[Family],
     margin: dict,
-    reg_weight: float,
-    fit_tol: float,
-    mean_edge,
-    log,
-    max_iter: int = 200,
-    miss_tol: float = 0.0,
+    how: ReducedSearch,
     S0: np.ndarray | None = None,
     mirror: Mirror | None = None,
-    scalings: tuple[str, ...] = SCALINGS,
 ):
     """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
     start is already a member).
 
-    ``mean_edge(X)`` gives the length unit of the 1 % "nearly exact" threshold.
     Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
-    driven to ``fit_tol`` (absolute, normalised units), else "least-squares".
+    driven to ``how.fit_tol`` (absolute, normalised units), else "least-squares".
     ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is then over
-    ``q``. ``scalings``: the LM scalings to start with (``SCALINGS``).
+    ``q``.
     """
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes)
         S0, _ = fam.fit(X0, psi0)
@@ -410,11 +419,10 @@ def solve_reduced(
         p0 = symmetric_member(mirror.P, p0)
     iters: dict = {}
     on_grid = grid_families(fam, st, families)
-    judge: Any = _Merit(fam, families, margin, reg_weight, STAGES[-1][0], grid_families=on_grid)
+    judge: Any = _Merit(fam, families, margin, how.reg_weight, STAGES[-1][0], grid_families=on_grid)
     if mirror is not None:
         judge = MirroredMerit(judge, mirror.P, mirror.axis_rows)
-    search = (iters, fit_tol, mean_edge, log, max_iter, miss_tol, scalings)
-    p, X, mode = _search(judge, p0, "", *search)
+    p, X, mode = _search(judge, p0, "", iters, how)
     # the closed states' contact rows only where a result has tiles of a closed state overlapping: on every
     # step they would bar the transient overlaps the fit passes through (32x32 heart: 1.61 % -> 3.55 %)
     touching = judge.with_contact(ClosedContact(fam, st))
@@ -437,39 +445,28 @@ def solve_reduced(
     ):
         if not best[0][1]:
             break
-        log(f"closed-state tiles overlap: again with the contact rows, from {where}")
-        best = min(best, rank(*_search(merit, start, tag, *search)), key=lambda b: b[0])
+        how.log(f"closed-state tiles overlap: again with the contact rows, from {where}")
+        best = min(best, rank(*_search(merit, start, tag, iters, how)), key=lambda b: b[0])
     return best[1], best[2], iters
 
 
-def _search(
-    judge,
-    p0,
-    tag: str,
-    iters: dict,
-    fit_tol,
-    mean_edge,
-    log,
-    max_iter: int,
-    miss_tol: float,
-    scalings: tuple[str, ...],
-):
-    """The stages from ``p0`` with each LM scaling in turn (``scalings``): ``(p, X, mode)`` of the best."""
+def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):
+    """The stages from ``p0`` with each LM scaling in turn (``how.scalings``): ``(p, X, mode)`` of the best."""
     best = None
-    for scaling in scalings:
+    for scaling in how.scalings:
         p = p0
         for n, (rho, stall_tol, cap) in enumerate(STAGES):
             merit = judge.staged(rho, scaling if n == 0 else "marquardt")
             if n and judge.ineq_violation(judge.state(p)) == 0.0:
                 cap = min(cap, POLISH_STEPS)
-            p, X, k = levenberg_marquardt(merit, p, min(cap, max_iter), stall_tol, log)
+            p, X, k = levenberg_marquardt(merit, p, min(cap, how.max_iter), stall_tol, how.log)
             iters[f"reduced_{tag}{scaling}_rho_{rho:g}"] = k
             fit_max = max(
                 (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
                 default=0.0,
             )
-            if merit.fits and fit_max < 1e-2 * mean_edge(X):
-                Xh, ph, kh = hard_fit(merit, p, fit_tol)
+            if merit.fits and fit_max < 1e-2 * how.mean_edge(X):
+                Xh, ph, kh = hard_fit(merit, p, how.fit_tol)
                 iters[f"reduced_{tag}{scaling}_hard"] = kh
                 if Xh is not None:  # an exact fit: nothing left to compare
                     return ph, Xh, "hard"
@@ -477,7 +474,7 @@ def _search(
         cost = float(ev.r @ ev.r)
         miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
         viol = ev.gviol
-        log(
+        how.log(
             f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"
             + (f", an inequality violated by {viol:.2e}" if viol > 0 else "")
         )
@@ -486,7 +483,7 @@ def _search(
         # scaling is tried as well
         if best is None or (viol > 0, cost) < best[0]:
             best = ((viol > 0, cost), p, X)
-        if miss <= miss_tol and not viol > 0:
+        if miss <= how.miss_tol and not viol > 0:
             break
     assert best is not None, "scalings is not empty"
     return best[1], best[2], "least-squares"

@@ -115,7 +115,6 @@ class Ligament(HingeKind):
             raise fb.lost_edge(corners, mat, self.name, scale, int(lost[0])) from exc
         lig = hg.ligament_design(
             pattern,
-            corners,
             regions,
             gap=mat.gap_mm,
             width_max=mat.ligament_width_mm,
