@@ -32,6 +32,7 @@ from ..fileio import atomic_write
 from ..pattern.kinds.tessellation import DEFAULT_KIND
 from ..pattern.model import Pattern
 from ..pattern.thinness import pal_bound
+from ..pattern.tilecount import tile_count
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .continuation import (  # noqa: F401 (re-exported)
     CONTINUATION,
@@ -99,6 +100,10 @@ class PatternRequest:
     kind: str = (
         DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
     )
+
+    def __post_init__(self) -> None:
+        if self.tiles is not None:  # "8x8" is taken too, as the CLI's --tiles
+            self.tiles = tile_count(self.tiles)
 
     def fabrication_limits(self, target: Target | None) -> tuple[FabricationLimits | None, dict]:
         """The mm limits of ``--material/--hinge/--printer/--style/--min-feature/--min-hole`` for
