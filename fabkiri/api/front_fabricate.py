@@ -188,14 +188,14 @@ def make(
     ``tiles`` (``"8x8"`` or a pair; None: chosen for the process); ``progress`` hears each step
     (``design``, ``cut`` or ``print``, ``deploy``, ``report``) with the share of the steps done."""
     say = progress or _quiet
-    done = [0]
+    done, stage = [0], ["make"]
 
-    def heard(text: str) -> None:
+    def heard(text: str) -> None:  # make's lines: "make: STEP ..." starts a step, "ok"/"failed" ends it
         m = re.match(r"make: (\w+) (\.\.\.|ok|failed)", text)
-        if m and m.group(2) != "...":
-            done[0] += 1
-        stage = m.group(1) if m else "make"
-        say(stage, min(done[0] / len(MAKE_STEPS), 1.0), text)
+        if m:
+            stage[0] = m.group(1)
+            done[0] += m.group(2) != "..."
+        say(stage[0], min(done[0] / len(MAKE_STEPS), 1.0), text)
 
     extra = _options(
         "make", options, ("material", "hinge", "printer", "style", "shape_tol", "min_opening")
