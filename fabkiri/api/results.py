@@ -76,6 +76,9 @@ class _Result:
     def write(self, folder: Folder) -> list[Path]:
         """Write ``files`` into ``folder`` (created if missing) all-or-nothing; refuses to replace
         the file the pattern was loaded from. Returns the paths written."""
+        Path(folder).parent.mkdir(
+            parents=True, exist_ok=True
+        )  # the folder itself comes with its files
         with inputs_scope():
             note_inputs(*self.inputs)
             return atomic_write_many(folder, self._written())
