@@ -32,7 +32,6 @@ from ..fileio import atomic_write
 from ..pattern.kinds.tessellation import DEFAULT_KIND
 from ..pattern.model import Pattern
 from ..pattern.thinness import pal_bound
-from ..pattern.tilecount import tile_count
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .continuation import (  # noqa: F401 (re-exported)
     CONTINUATION,
@@ -47,7 +46,7 @@ from .design_minimax import minimax_finish
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_summary import summary_lines
-from .designers import register_designer
+from .designers import TakesTiles, register_designer
 from .print_tiles import check_tiles
 from .shape_limits import annotate as annotate_misses
 
@@ -65,7 +64,7 @@ RETRY_FIT_ABOVE = 5e-3
 
 
 @dataclass
-class PatternRequest:
+class PatternRequest(TakesTiles):  # tiles: "8x8" is taken too, as the CLI's --tiles
     """Everything ``fabkiri design`` can be told (the same names as its options)."""
 
     tiles: tuple[int, int] | None  # rows, cols (None: kagome chooses them from the outline)
@@ -100,10 +99,6 @@ class PatternRequest:
     kind: str = (
         DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
     )
-
-    def __post_init__(self) -> None:
-        if self.tiles is not None:  # "8x8" is taken too, as the CLI's --tiles
-            self.tiles = tile_count(self.tiles)
 
     def fabrication_limits(self, target: Target | None) -> tuple[FabricationLimits | None, dict]:
         """The mm limits of ``--material/--hinge/--printer/--style/--min-feature/--min-hole`` for

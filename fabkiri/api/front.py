@@ -39,6 +39,7 @@ from .results import (
     DeployResult,
     DesignResult,
     VerifyResult,
+    inputs_of,
     remember_source,
     source_of,
     stem_of,
@@ -56,11 +57,6 @@ def _quiet(stage: str, fraction: float | None, message: str) -> None:
 
 def _pattern(pattern: PatternLike) -> Pattern:
     return pattern if isinstance(pattern, Pattern) else load(pattern)
-
-
-def _inputs(pattern: Pattern) -> tuple[Path, ...]:
-    src = source_of(pattern)
-    return () if src is None else (src,)
 
 
 def _options(what: str, given: dict[str, Any], allowed: Iterable[str]) -> dict[str, Any]:
@@ -184,7 +180,7 @@ def contract(pattern: PatternLike) -> ContractResult:
     if src is not None:  # the contracted pattern is named and guarded as the one it came from
         remember_source(closed, src)
     return ContractResult(
-        pattern=closed, info=describe(closed), stem=stem_of(closed), inputs=_inputs(closed)
+        pattern=closed, info=describe(closed), stem=stem_of(closed), inputs=inputs_of(closed)
     )
 
 
@@ -214,7 +210,7 @@ def deploy(
         problems=list(out.problems),
         stem=stem_of(pattern),
         outcome=out,
-        inputs=_inputs(pattern),
+        inputs=inputs_of(pattern),
     )
 
 
@@ -252,5 +248,5 @@ def verify(
             f"pattern {report.meta['tolerance']}; layout {cut.meta['tolerance']}"
         )
     return VerifyResult(
-        pattern=pattern, report=report, stem=stem_of(pattern), inputs=_inputs(pattern)
+        pattern=pattern, report=report, stem=stem_of(pattern), inputs=inputs_of(pattern)
     )

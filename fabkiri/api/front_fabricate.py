@@ -15,12 +15,12 @@ from ..fabricate.cut.sheets import CutOptions
 from ..pattern.model import Pattern
 from ..pattern.tilecount import tile_count
 from .cut import cut_files, cut_material
-from .front import PatternLike, Progress, Tiles, _inputs, _options, _pattern, _quiet
+from .front import PatternLike, Progress, Tiles, _options, _pattern, _quiet
 from .maker import make as _make
 from .maker_result import MakeResult
 from .print import PrintOptions
 from .print import print_pattern as _print_pattern
-from .results import CutResult, PrintResult, source_of, stem_of
+from .results import CutResult, PrintResult, inputs_of, source_of, stem_of
 
 MAKE_STEPS = (
     "design",
@@ -109,7 +109,7 @@ def cut(
         warnings=list(out.result.warnings),
         readback_ok=bool(out.readback.ok),
         outcome=out,
-        inputs=_inputs(pattern),
+        inputs=inputs_of(pattern),
     )
 
 
@@ -170,7 +170,7 @@ def print_pattern(
         stem=stem,
         messages=list(out.messages),
         outcome=out,
-        inputs=_inputs(pattern),
+        inputs=inputs_of(pattern),
     )
 
 
@@ -190,7 +190,9 @@ def make(
     say = progress or _quiet
     done, stage = [0], ["make"]
 
-    def heard(text: str) -> None:  # make's lines: "make: STEP ..." starts a step, "ok"/"failed" ends it
+    def heard(
+        text: str,
+    ) -> None:  # make's lines: "make: STEP ..." starts a step, "ok"/"failed" ends it
         m = re.match(r"make: (\w+) (\.\.\.|ok|failed)", text)
         if m:
             stage[0] = m.group(1)

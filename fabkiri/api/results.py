@@ -90,7 +90,8 @@ class _Result:
         return None
 
 
-def _inputs(pattern: Pattern) -> tuple[Path, ...]:
+def inputs_of(pattern: Pattern) -> tuple[Path, ...]:
+    """The files a result made from ``pattern`` must not write over: the one it was loaded from."""
     src = source_of(pattern)
     return () if src is None else (src,)
 

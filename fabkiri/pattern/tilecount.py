@@ -38,3 +38,14 @@ def tile_count(value: Any, what: str = "tiles") -> tuple[int, int]:
 def _whole(v: Any) -> bool:
     """A whole number that is not a bool (``True`` is an int in Python, not a tile count)."""
     return isinstance(v, Integral) and not isinstance(v, bool)
+
+
+class TakesTiles:
+    """A request dataclass whose ``tiles`` may also be given as ``"RxC"`` text or a list: read into
+    ``(rows, cols)`` as the request is made (None stays None: the kind chooses)."""
+
+    tiles: Any
+
+    def __post_init__(self) -> None:
+        if self.tiles is not None:
+            self.tiles = tile_count(self.tiles)
