@@ -154,3 +154,26 @@ def test_deploy_shows_the_path(tmp_path):
     result = fabkiri.deploy(fabkiri.standard("3x3"), steps=8, frames=False)
     _check_result(result, tmp_path, ["energy.csv", "deploy.json"])
     assert "rigid path, 9 frames" in result.summary()
+
+
+def test_api_names_every_front_door():
+    import fabkiri.api as api
+
+    assert {"cut_files", "print_pattern", "deploy_pattern", "load_pattern", "make"} <= set(
+        api.__all__
+    )
+    for name in api.__all__:
+        assert getattr(api, name).__name__ == name
+
+
+@pytest.mark.slow
+def test_make_reports_each_step_with_its_share():
+    heard = []
+    result = fabkiri.make(
+        "circle", 120, material="acrylic-3", tiles="6x6", progress=lambda *a: heard.append(a)
+    )
+    assert result.ok and result.tiles.tiles == (6, 6)
+    assert [s for s, f, _ in heard if f == 1.0] == ["report"]
+    ends = [(s, f) for s, f, text in heard if text.startswith(f"make: {s} ok")]
+    assert ends == [("design", 0.25), ("cut", 0.5), ("deploy", 0.75), ("report", 1.0)]
+    assert "array(" not in repr(result) and result._repr_png_().startswith(PNG)
