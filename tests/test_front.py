@@ -95,6 +95,10 @@ def _check_result(result, folder, names):
 def test_load_save_and_results_named_after_the_file(square, tmp_path):
     fabkiri.save(square, tmp_path / "sq.json")
     fabkiri.save(square, tmp_path / "sq.fold")
+    fabkiri.save(square, tmp_path / "sq-model", file_format="pykirigami")
+    with pytest.raises(InputError, match="file_format"):
+        fabkiri.save(square, tmp_path / "sq.xyz")
+    assert not (tmp_path / "sq.xyz").exists() and (tmp_path / "sq-model").is_dir()
     loaded, folded = fabkiri.load(tmp_path / "sq.json"), fabkiri.load(tmp_path / "sq.fold")
     assert np.allclose(loaded.nodes, square.nodes) and len(folded.tiles) == 16
     closed = fabkiri.contract(loaded)

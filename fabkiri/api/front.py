@@ -22,7 +22,7 @@ from typing import Any
 
 from .. import limits
 from ..errors import InputError
-from ..exchange.pattern_formats import format_of
+from ..exchange.pattern_formats import format_names, pattern_format
 from ..exchange.patternfile import write_pattern
 from ..fileio import atomic_write, atomic_write_many
 from ..mechanics.contract import with_contracted_states
@@ -108,22 +108,36 @@ def save(
     pattern: Pattern,
     path: str | os.PathLike,
     *,
+    file_format: str | None = None,
     state: str = "deployed",
     unit: float | None = None,
     force: bool = False,
 ) -> Path:
-    """Write ``pattern`` to ``path`` (atomically) in the format its suffix names: ``pattern.json`` as
-    ``fabkiri new`` writes it, any other as ``fabkiri export`` does (``state``: ``deployed``, ``1``
-    or ``2``; a closed state the format needs is contracted and must close). Returns the path."""
-    fmt = format_of(str(path), "json")
-    if fmt.name == "json":
+    """Write ``pattern`` to ``path`` (atomically) in ``file_format`` or the format its suffix names:
+    ``pattern.json`` as ``fabkiri new`` writes it, any other as ``fabkiri export`` does (``state``:
+    ``deployed``, ``1`` or ``2``; a closed state the format needs is contracted and must close).
+    Returns the path."""
+    name = file_format or _format_named_by(Path(path))
+    if name == "json":
         return write_pattern(pattern, path)
-    out = export_pattern(pattern, fmt.name, state, unit=unit, force=force, output=str(path))
+    out = export_pattern(pattern, name, state, unit=unit, force=force, output=str(path))
     if out.files is not None:
         atomic_write_many(path, out.files)
     elif out.text is not None:
         atomic_write(path, out.text)
     return Path(path)
+
+
+def _format_named_by(path: Path) -> str:
+    """The pattern format whose suffix ``path`` has, or one sentence naming those it can write."""
+    writable = ("json", *format_names(writable=True))
+    for name in format_names():
+        if path.suffix and path.suffix.lower() in pattern_format(name).suffixes:
+            return name
+    raise InputError(
+        f"{path}: no pattern format is named by the suffix {path.suffix or '(none)'!r}; "
+        f"give file_format= one of {', '.join(writable)}"
+    )
 
 
 def design(
