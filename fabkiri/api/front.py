@@ -21,15 +21,18 @@ from pathlib import Path
 from typing import Any
 
 from .. import limits
+from ..design.core.conformance import parse_shape_tol
 from ..errors import InputError
 from ..exchange.pattern_formats import format_names, pattern_format
 from ..exchange.patternfile import write_pattern
 from ..fileio import atomic_write, atomic_write_many
 from ..mechanics.contract import with_contracted_states
 from ..mechanics.info import describe
-from ..pattern.kinds.tessellation import DEFAULT_KIND, tessellation
+from ..pattern.kinds.periodic.sheet import flat_sheet, seam_of
+from ..pattern.kinds.tessellation import DEFAULT_KIND, kinds, tessellation
 from ..pattern.model import Pattern
 from ..pattern.tilecount import tile_count
+from ..verify import verify_layout, verify_pattern
 from .deploy import deploy_pattern
 from .design import PatternRequest
 from .designers import design_by_kind
@@ -83,17 +86,11 @@ def standard(
     rows, cols = tile_count(tiles)
     limits.check_tiles(rows, cols, "new")
     limits.check_length(tile_size, "tile_size")
-    if kind not in _kinds():
-        raise InputError(f"no {kind!r} tessellation; choose one of {', '.join(_kinds())}")
+    if kind not in kinds():
+        raise InputError(f"no {kind!r} tessellation; choose one of {', '.join(kinds())}")
     angle = {} if angle_deg is None else {"angle_deg": angle_deg}
     made = tessellation(kind).standard(rows, cols, tile_size=tile_size, name=name, **angle)
     return with_contracted_states(made)
-
-
-def _kinds() -> tuple[str, ...]:
-    from ..pattern.kinds.tessellation import kinds
-
-    return kinds()
 
 
 def load(path: str | os.PathLike) -> Pattern:
@@ -239,10 +236,6 @@ def verify(
     """``fabkiri verify``: that ``pattern`` closes into both closed states (``tol_mm`` None: the
     relative tier for solver output, as ``--exact``) and, with ``layout``, that a cut file (.dxf or
     .svg) matches it."""
-    from ..design.core.conformance import parse_shape_tol
-    from ..pattern.kinds.periodic.sheet import flat_sheet, seam_of
-    from ..verify import verify_layout, verify_pattern
-
     pattern = _pattern(pattern)
     report = verify_pattern(
         pattern, tol_mm=tol_mm, tol_rad=tol_rad, shape_tol=parse_shape_tol(shape_tol)
