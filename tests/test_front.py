@@ -181,3 +181,7 @@ def test_make_reports_each_step_with_its_share():
     ends = [(s, f) for s, f, text in heard if text.startswith(f"make: {s} ok")]
     assert ends == [("design", 0.25), ("cut", 0.5), ("deploy", 0.75), ("report", 1.0)]
     assert "array(" not in repr(result) and result._repr_png_().startswith(PNG)
+    plain: list[str] = []  # a one-argument callback hears make's lines as they are
+    again = fabkiri.make("circle", 120, material="acrylic-3", tiles="6x6", progress=plain.append)
+    assert again.ok and plain[0] == heard[0][2] and len(plain) == len(heard)
+    assert [t.split(" in ")[0] for t in plain] == [t.split(" in ")[0] for _, _, t in heard]

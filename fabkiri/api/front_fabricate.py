@@ -3,8 +3,9 @@
 
 from __future__ import annotations
 
+import inspect
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -180,25 +181,15 @@ def make(
     *,
     tiles: Tiles | None = None,
     output: str | Path | None = None,
-    progress: Progress | None = None,
+    progress: Progress | Callable[[str], None] | None = None,
     **options: Any,
 ) -> MakeResult:
     """From a target outline at ``size`` mm to files a machine accepts in one call
     (:func:`fabkiri.api.maker.make`): with ``material=`` it is cut, with ``printer=`` printed.
-    ``tiles`` (``"8x8"`` or a pair; None: chosen for the process); ``progress`` hears each step
-    (``design``, ``cut`` or ``print``, ``deploy``, ``report``) with the share of the steps done."""
-    say = progress or _quiet
-    done, stage = [0], ["make"]
-
-    def heard(
-        text: str,
-    ) -> None:  # make's lines: "make: STEP ..." starts a step, "ok"/"failed" ends it
-        m = re.match(r"make: (\w+) (\.\.\.|ok|failed)", text)
-        if m:
-            stage[0] = m.group(1)
-            done[0] += m.group(2) != "..."
-        say(stage[0], min(done[0] / len(MAKE_STEPS), 1.0), text)
-
+    ``tiles`` (``"8x8"`` or a pair; None: chosen for the process). ``progress(stage, fraction,
+    message)`` hears each of make's lines with its step (``design``, ``cut`` or ``print``,
+    ``deploy``, ``report``) and the share of the steps done; a one-argument callback hears the
+    lines alone, as ``fabkiri.api.maker.make`` gives them."""
     extra = _options(
         "make", options, ("material", "hinge", "printer", "style", "shape_tol", "min_opening")
     )
@@ -207,6 +198,32 @@ def make(
         size,
         tiles=None if tiles is None else tile_count(tiles),
         output=output,
-        progress=heard,
+        progress=_lines_to(progress) if progress is not None else None,
         **extra,
     )
+
+
+def _lines_to(progress: Callable[..., None]) -> Callable[[str], None]:
+    """make's lines for ``progress``: as they are to a one-argument callback, else with the step and
+    its share. make's lines are "make: STEP ..." as a step starts and "make: STEP ok|failed" as it ends."""
+    if not _takes_three(progress):
+        return progress
+    done, stage = [0], ["make"]
+
+    def heard(text: str) -> None:
+        m = re.match(r"make: (\w+) (\.\.\.|ok|failed)", text)
+        if m:
+            stage[0] = m.group(1)
+            done[0] += m.group(2) != "..."
+        progress(stage[0], min(done[0] / len(MAKE_STEPS), 1.0), text)
+
+    return heard
+
+
+def _takes_three(callback: Callable[..., None]) -> bool:
+    """Whether ``callback`` can be called with three arguments (stage, fraction, message)."""
+    try:
+        inspect.signature(callback).bind(None, None, None)
+    except (TypeError, ValueError):  # fewer parameters, or a builtin without a signature
+        return False
+    return True
