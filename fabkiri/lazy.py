@@ -6,6 +6,7 @@ from __future__ import annotations
 import importlib
 import sys
 from collections.abc import Callable
+from types import ModuleType
 from typing import Any
 
 
@@ -20,3 +21,29 @@ def lazy_getattr(package: str, where: dict[str, str]) -> Callable[[str], Any]:
         return value
 
     return __getattr__
+
+
+class CallablePackage(ModuleType):
+    """A subpackage whose name is also a top-level door (``fabkiri.design``, ``fabkiri.verify``):
+    calling the package calls the door, and its submodules stay where they are."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        module, name = self.__dict__["__door__"]
+        return getattr(importlib.import_module(module), name)(*args, **kwargs)
+
+
+def make_callable(package: ModuleType, module: str, name: str) -> None:
+    """Let ``package`` be called as the function ``name`` of ``module`` (imported on the first call)."""
+    package.__dict__["__door__"] = (module, name)
+    package.__class__ = CallablePackage
+
+
+class DoorPackage(ModuleType):
+    """The top package: a subpackage named in ``__doors__`` becomes callable as it is imported (the
+    import system sets it as an attribute here), whoever imports it first."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        door = self.__dict__.get("__doors__", {}).get(name)
+        if door is not None and isinstance(value, ModuleType):
+            make_callable(value, *door)
+        super().__setattr__(name, value)

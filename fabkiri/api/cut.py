@@ -57,6 +57,9 @@ class CutOutcome:
     readback: Readback
     files: dict[str, bytes]
 
+    def __repr__(self) -> str:  # the files are bytes: named, not printed
+        return f"CutOutcome({self.result!r}, read-back {'ok' if self.readback.ok else 'failed'})"
+
 
 def cut_files(
     pattern: Pattern, options: CutOptions, *, use_verifier: bool = True, ask: Ask | None = None

@@ -38,6 +38,12 @@ class DeployOutcome:
     def success(self) -> bool:
         return not self.problems
 
+    def __repr__(self) -> str:  # the path holds arrays per frame: summed up, not printed
+        return (
+            f"DeployOutcome({self.path.kind} path, {self.path.n_frames} frames, "
+            f"{len(self.files)} files, problems {self.problems})"
+        )
+
     @property
     def n_frame_files(self) -> int:
         return sum(1 for k in self.files if k.startswith("frames/"))

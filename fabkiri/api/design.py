@@ -46,7 +46,7 @@ from .design_minimax import minimax_finish
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_summary import summary_lines
-from .designers import register_designer
+from .designers import TakesTiles, register_designer
 from .print_tiles import check_tiles
 from .shape_limits import annotate as annotate_misses
 
@@ -64,7 +64,7 @@ RETRY_FIT_ABOVE = 5e-3
 
 
 @dataclass
-class PatternRequest:
+class PatternRequest(TakesTiles):  # tiles: "8x8" is taken too, as the CLI's --tiles
     """Everything ``fabkiri design`` can be told (the same names as its options)."""
 
     tiles: tuple[int, int] | None  # rows, cols (None: kagome chooses them from the outline)

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
+from ..pattern.tilecount import TakesTiles  # noqa: F401 (the requests' base, for api/design.py)
 from ..registry import Registry
 
 if TYPE_CHECKING:

@@ -27,6 +27,7 @@ from ..design.targets.lookup import load_target
 from ..errors import FabkiriError, InputError
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
+from ..pattern.tilecount import tile_count
 from .design import _check_room
 from .maker_design import (  # noqa: F401 (_opening_lines re-exported)
     _opening_lines,
@@ -76,7 +77,7 @@ def make(  # noqa: PLR0913 (the options of `fabkiri make`)
     hinge: str | None = None,
     printer: str | None = None,
     style: str | None = None,
-    tiles: tuple[int, int] | None = None,
+    tiles: tuple[int, int] | str | None = None,
     shape_tol: str = conf.DEFAULT_SHAPE_TOL,
     min_opening: float | None = None,
     output: str | Path | None = None,
@@ -141,6 +142,7 @@ def _plan(  # noqa: PLR0913 (make()'s options, checked before any design)
         raise InputError(
             f"--size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, got {size:g}"
         )
+    tiles = None if tiles is None else tile_count(tiles)  # "8x8" or (8, 8)
     if tiles is not None and (len(tiles) != 2 or min(tiles) < 2):
         raise InputError(f"--tiles needs at least 2x2 tiles, got {'x'.join(map(str, tiles))}")
     curve = load_target(str(target), size)

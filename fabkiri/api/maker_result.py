@@ -91,6 +91,16 @@ class MakeResult:
     def ok(self) -> bool:
         return bool(self.steps) and all(s.ok for s in self.steps)
 
+    def __repr__(self) -> str:  # the files are bytes: the summary's first line instead
+        return f"<MakeResult: {self.summary()[0]}; {'ok' if self.ok else 'FAILED'}>"
+
+    def _repr_png_(self) -> bytes | None:
+        """The design preview (``STEM.png``) in a notebook, else the pattern's picture."""
+        png = self.files.get(f"{self.stem}.png")
+        if isinstance(png, bytes):
+            return png
+        return None if self.pattern is None else self.pattern._repr_png_()
+
     @property
     def failed(self) -> Step | None:
         return next((s for s in self.steps if not s.ok), None)

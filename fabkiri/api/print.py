@@ -53,6 +53,9 @@ class PrintOutcome:
     def job(self):
         return self.realised.job
 
+    def __repr__(self) -> str:  # the files are bytes and meshes: named, not printed
+        return f"PrintOutcome(scale {self.scale:g}, files {sorted(self.files)})"
+
     def describe(self) -> str:
         """One line: style, scale, state, printer, tiles, hinges (top/bottom faces), beds, clearance, plan."""
         job, report = self.job, self.mesh_report

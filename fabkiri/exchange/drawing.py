@@ -87,6 +87,12 @@ class SheetDrawing:
         self.layers[layer].extend((p, False) for p, _ in keep)
         self.groups[layer].extend(k for _, k in keep)
 
+    def __repr__(self) -> str:  # the polylines are arrays: counted, not printed
+        drawn = ", ".join(f"{k} {len(v)}" for k, v in self.layers.items() if v)
+        return (
+            f"SheetDrawing({self.index}, {self.width:g} x {self.height:g} mm: {drawn or 'empty'})"
+        )
+
     def sort_by_group(self, layer: str) -> None:
         """Order the layer's polylines by group (stable): each tile's strokes together, tiles in order."""
         order = np.argsort(np.asarray(self.groups[layer], dtype=np.int64), kind="stable").tolist()

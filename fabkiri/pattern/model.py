@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import PatternError
 from . import geometry
 from .kinds.tessellation import DEFAULT_KIND, tessellation
+from .picture import pattern_png
 from .topology import Topology, derive_topology
 
 
@@ -147,6 +148,10 @@ class Pattern:
 
     def with_parity(self, parity: int) -> Pattern:
         return replace(self, parity=parity)
+
+    def _repr_png_(self) -> bytes:
+        """The picture a notebook shows: the deployed state and each stored closed state."""
+        return pattern_png(self)
 
     def __repr__(self) -> str:
         t = self.topology

@@ -80,6 +80,9 @@ class CutResult:
     tile_regions: np.ndarray | None = None  # (T, 4, 2) label regions in sheet coordinates
     tile_sheet: np.ndarray | None = None
 
+    def __repr__(self) -> str:  # sheets and regions are arrays, files are bytes: named, not printed
+        return f"CutResult({len(self.sheets)} sheet(s), files {sorted(self.files)}, {len(self.warnings)} warning(s))"
+
     def manifest_bytes(self) -> bytes:
         """The manifest as written (:func:`fabkiri.verify.manifest.dumps_manifest`)."""
         return dumps_manifest(self.manifest).encode("utf-8")
