@@ -23,7 +23,7 @@ __version__ = "0.1.0"
 
 import sys as _sys
 
-from ._lazy import DoorPackage as _DoorPackage
+from .lazy import DoorPackage as _DoorPackage
 
 # loaded on first use (PEP 562), so `import fabkiri` stays cheap: the doors need numpy and more
 _FRONT, _FAB, _RESULTS = "fabkiri.api.front", "fabkiri.api.front_fabricate", "fabkiri.api.results"

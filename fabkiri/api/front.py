@@ -23,8 +23,8 @@ from typing import Any
 from .. import limits
 from ..design.core.conformance import parse_shape_tol
 from ..errors import InputError
-from ..exchange.pattern_formats import format_names, pattern_format
-from ..exchange.patternfile import write_pattern
+from ..exchange.file_formats import format_names, pattern_format
+from ..exchange.pattern_json import write_pattern
 from ..fileio import atomic_write, atomic_write_many
 from ..mechanics.contract import with_contracted_states
 from ..mechanics.info import describe

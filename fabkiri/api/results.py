@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exchange.patternfile import dumps
+from ..exchange.pattern_json import dumps
 from ..fileio import atomic_write_many, inputs_scope, note_inputs
 from ..mechanics.info import PatternInfo
 from ..pattern.model import Pattern
