@@ -40,7 +40,15 @@ from .continuation import (  # noqa: F401 (re-exported)
     continuation,
     limits_note,
 )
-from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
+from .design_judge import (  # noqa: F401 (re-exported)
+    CLOSURE_TOL,
+    DesignAttempt,
+    _check,
+    _fit_miss,
+    _hausdorff,
+    _rank,
+    _shape_met,
+)
 from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
 from .design_opening import check_floor, refine_to_floor
@@ -356,12 +364,12 @@ def _attempts(
     contracted: dict,
     shape_tol: tuple,
     say: Callable[[str], None],
-) -> tuple[tuple, list[dict]]:
+) -> tuple[DesignAttempt, list[dict]]:
     """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
     best, attempts = None, list[dict]()
     for init in inits:
-        if init == VIA_RIGID_INIT and best is not None and best[3] and _shape_met(best[1]):
+        if init == VIA_RIGID_INIT and best is not None and best.valid and _shape_met(best.report):
             break  # the rigid family is the last resort for a miss, not a second opinion
         req.init = init
         try:
@@ -378,30 +386,34 @@ def _attempts(
             continue
         req.rigid_first = False  # tried once: later guesses go to the full solver
         outcome = _check(result, contracted, request, target, shape_tol)
-        miss, shape_met = _fit_miss(outcome[1]), _shape_met(outcome[1])
+        miss, shape_met = _fit_miss(outcome.report), _shape_met(outcome.report)
         attempts.append(
             {
                 "init": init,
-                "status": outcome[1]["status"],
-                "problems": outcome[2],
-                "time_s": outcome[1]["time_s"],
+                "status": outcome.report["status"],
+                "problems": outcome.problems,
+                "time_s": outcome.report["time_s"],
                 "fit_max_rel_size": miss,
-                "hausdorff_max_rel": _hausdorff(outcome[1]),
+                "hausdorff_max_rel": _hausdorff(outcome.report),
                 "shape": "met" if shape_met else "missed",
             }
         )
         best = outcome if best is None or _rank(outcome) < _rank(best) else best
-        if outcome[3] and shape_met and (miss <= RETRY_FIT_ABOVE or outcome[1].get("rigid_first")):
+        if (
+            outcome.valid
+            and shape_met
+            and (miss <= RETRY_FIT_ABOVE or outcome.report.get("rigid_first"))
+        ):
             break  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
-        if outcome[3] and init != inits[-1]:
+        if outcome.valid and init != inits[-1]:
             why = (
                 f"misses the target by {miss:.2%} of its size"
                 if miss > RETRY_FIT_ABOVE
-                else f"misses the shape tolerance (Hausdorff {_hausdorff(outcome[1]):.2%} of the size)"
+                else f"misses the shape tolerance (Hausdorff {_hausdorff(outcome.report):.2%} of the size)"
             )
             say(f"fabkiri: design from the {init} guess {why}; trying the next guess too")
         elif len(inits) > 1 and init != inits[-1]:
-            say(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying")
+            say(f"fabkiri: design from the {init} guess failed ({outcome.problems[0]}); retrying")
     if best is None:
         raise SolveError(
             "no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts)
@@ -410,10 +422,10 @@ def _attempts(
 
 
 def _outcome(
-    best, attempts: list[dict], messages: list[str], target: Target | None = None
+    best: DesignAttempt, attempts: list[dict], messages: list[str], target: Target | None = None
 ) -> DesignOutcome:
     """The judged outcome: the best design with its attempts, validity, shape verdict and fabricability."""
-    pattern, report, problems, valid, contracted_states = best
+    pattern, report, problems, valid = best.pattern, best.report, best.problems, best.valid
     report.update(attempts=attempts, time_s_total=float(sum(a["time_s"] for a in attempts)))
     annotate_misses(report, attempts, target, pattern)  # no advice already tried (shape_limits.py)
     shape_met = _shape_met(report)
@@ -426,7 +438,7 @@ def _outcome(
     pattern = Pattern(
         nodes=pattern.nodes,
         tiles=pattern.tiles,
-        contracted=contracted_states,
+        contracted=best.states,
         parity=0,
         name=pattern.name,
         lattice=pattern.lattice,
@@ -453,10 +465,12 @@ def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
     return value / target.size if unit == "mm" and target is not None else value
 
 
-def _good(outcome) -> bool:
+def _good(outcome: DesignAttempt) -> bool:
     """Valid, within the shape tolerance and (for a printer) within its bed."""
     return bool(
-        outcome[3] and _shape_met(outcome[1]) and outcome[1]["checks"].get("fits_bed", True)
+        outcome.valid
+        and _shape_met(outcome.report)
+        and outcome.report["checks"].get("fits_bed", True)
     )
 
 

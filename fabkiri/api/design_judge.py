@@ -1,12 +1,12 @@
 """How the design front door judges an attempt: contract, check, measure the shape, and rank.
 
-:func:`_check` turns a solver result into ``(pattern, report, problems, valid, states)``; :func:`_rank`
-orders such outcomes, best first.
+:func:`_check` turns a solver result into a :class:`DesignAttempt`; :func:`_rank` orders attempts, best
+first.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -21,6 +21,16 @@ if TYPE_CHECKING:  # design.py imports this module
     from .design import PatternRequest
 
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
+
+
+class DesignAttempt(NamedTuple):
+    """One judged design: the solver's pattern with its report, what failed, and both closed states."""
+
+    pattern: Pattern
+    report: dict  # the solver's report with the front door's checks, conformance and shape verdicts
+    problems: list[str]  # why it is not valid (empty when valid)
+    valid: bool  # converged, both closed states close, no overlapping tiles
+    states: dict  # the closed states' tile corners by state (1, 2)
 
 
 def _shape_met(report: dict) -> bool:
@@ -47,17 +57,17 @@ def _fit_miss(report: dict) -> float:
     )
 
 
-def _rank(outcome) -> tuple:
+def _rank(outcome: DesignAttempt) -> tuple:
     """Order of preference among attempts: valid first, then (for a printer) closed state 1 within its bed, then
     fewer problems, then the shape tolerance met, then the smaller Hausdorff distance, then the closer fit of
     the tips (the heart 8x8 for prusa-mk4: the refined design, 3.27 %, was 227 mm tall on the 210 mm bed)."""
     return (
-        not outcome[3],
-        not outcome[1].get("checks", {}).get("fits_bed", True),
-        len(outcome[2]),
-        not _shape_met(outcome[1]),
-        _hausdorff(outcome[1]),
-        _fit_miss(outcome[1]),
+        not outcome.valid,
+        not outcome.report.get("checks", {}).get("fits_bed", True),
+        len(outcome.problems),
+        not _shape_met(outcome.report),
+        _hausdorff(outcome.report),
+        _fit_miss(outcome.report),
     )
 
 
@@ -67,18 +77,20 @@ def refinement_attempt(
     """The attempt record of a refinement (its best ``_check`` outcome ``cand``, or None with ``none_why``)."""
     return {
         "init": init,
-        "status": cand[1]["status"] if cand else "unconverged",
-        "problems": cand[2] if cand else [none_why],
+        "status": cand.report["status"] if cand else "unconverged",
+        "problems": cand.problems if cand else [none_why],
         "time_s": secs,
-        "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
-        "shape": "met" if cand and _shape_met(cand[1]) else "missed",
+        "hausdorff_max_rel": _hausdorff(cand.report) if cand else float("nan"),
+        "shape": "met" if cand and _shape_met(cand.report) else "missed",
         "refinement_hausdorff_rel": trace,
         "kept": kept,
     }
 
 
-def _check(result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple):
-    """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
+def _check(
+    result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple
+) -> DesignAttempt:
+    """Contract, check closure, overlaps and outlines: the judged :class:`DesignAttempt`."""
     pattern = result.pattern
     report = dict(result.report)
     size = pattern.tile_size
@@ -134,7 +146,7 @@ def _check(result, contracted, request: PatternRequest, target: Target | None, s
     if problems:
         report["status"] = "unconverged"
         report["problems"] = problems
-    return pattern, report, problems, valid, contracted_states
+    return DesignAttempt(pattern, report, problems, valid, contracted_states)
 
 
 def _conformance(

@@ -14,7 +14,7 @@ from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
 from ..errors import InputError
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
-from .design_judge import _hausdorff, _rank, _shape_met, refinement_attempt
+from .design_judge import DesignAttempt, _hausdorff, _rank, _shape_met, refinement_attempt
 
 # a floor the solver met (its row >= 0) reads back through the mm figures to about round-off
 FLOOR_SLACK = 1e-9
@@ -60,7 +60,7 @@ def summary_lines(report: dict, command: str = "design") -> list[str]:
 
 def refine_to_floor(
     req: DesignRequest,
-    best: tuple,
+    best: DesignAttempt,
     judge: Callable,
     attempts: list[dict],
     say: Callable[[str], None],
@@ -70,15 +70,15 @@ def refine_to_floor(
     by it (its steps are reduced solves). Returns the refined ``_check`` outcome when it ranks better than
     ``best``, else None; the attempt is recorded either way. Measured: star at 150 mm, 16x16, --min-opening
     0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps, 4.6 CPU s)."""
-    if not req.min_opening or req.target is None or not best[3] or _shape_met(best[1]):
+    if not req.min_opening or req.target is None or not best.valid or _shape_met(best.report):
         return None
     say(
         f"fabkiri: with --min-opening {req.min_opening:g} the design misses the shape (Hausdorff "
-        f"{100 * _hausdorff(best[1]):.2f} % of the size); refining it under the floor (minimax steps)"
+        f"{100 * _hausdorff(best.report):.2f} % of the size); refining it under the floor (minimax steps)"
     )
     rigid = via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
     step = replace(req, init=VIA_RIGID_INIT if rigid and not req.rigid else req.init)
-    refined, trace, secs = refine_minimax(step, best[0].nodes)
+    refined, trace, secs = refine_minimax(step, best.pattern.nodes)
     cand = judge(refined) if refined is not None else None
     better = cand is not None and _rank(cand) < _rank(best)
     attempts.append(

@@ -17,7 +17,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -29,6 +28,7 @@ from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from .design import _check_room
 from .maker_design import (  # noqa: F401 (_opening_lines re-exported)
+    StepRun,
     _opening_lines,
     design_step,
     options_after_refusal,
@@ -238,9 +238,6 @@ def refusal_alternatives(result: MakeResult, plan: _Plan, step: str, error: Fabk
     return list(getattr(error, "alternatives", None) or [])
 
 
-StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
-
-
 def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     """The design at the plan's tiles, and after a shape miss other counts and options
     (:mod:`.maker_design`); an alternative is named only once it also passes its cut or print and deploy.
@@ -283,7 +280,7 @@ def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         f"{len(cut.readback.checks)} read-back checks passed"
         + (", verifier passed" if cut.readback.verifier is not None else "")
     )
-    return True, 0, figures, {f"cut/{k}": v for k, v in cut.files.items()}, []
+    return StepRun(True, 0, figures, {f"cut/{k}": v for k, v in cut.files.items()}, [])
 
 
 def _print(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
@@ -298,7 +295,7 @@ def _print(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         notify=say,
         ask=_ask(result, plan),
     )
-    return True, 0, out.describe(), {f"print/{k}": v for k, v in out.files.items()}, []
+    return StepRun(True, 0, out.describe(), {f"print/{k}": v for k, v in out.files.items()}, [])
 
 
 def _deploy(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
@@ -312,7 +309,7 @@ def _deploy(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         f"{s['t_at_energy_max']:.3f}, "
         + ("collision-free" if s["collision_free"] else f"{s['overlaps']} overlaps")
     )
-    return (
+    return StepRun(
         out.success,
         0 if out.success else 1,
         figures,
@@ -344,7 +341,7 @@ def _report(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
             deploy=str(folder / "deploy"),
             states=states,
         )
-    return True, 0, f"{len(page) / 1e6:.2f} MB", {"report.html": page}, []
+    return StepRun(True, 0, f"{len(page) / 1e6:.2f} MB", {"report.html": page}, [])
 
 
 # the steps an alternative of each process must pass before it is named (maker_design)
