@@ -165,9 +165,14 @@ class DesignOutcome:
         if png is not None:
             png[0].write_bytes(png[1])
 
-    def summary(self, output) -> list[str]:
-        """The lines ``fabkiri design`` prints about the design written to ``output``."""
-        return summary_lines(output, self.report)
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solver ended at (the same name on every design outcome)."""
+        return float(self.report["max_equality_residual"])
+
+    def summary(self, path=None) -> list[str]:
+        """The lines ``fabkiri design`` prints about the design written to ``path`` (None: not written)."""
+        return summary_lines(path, self.report)
 
 
 def design_pattern(

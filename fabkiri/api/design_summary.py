@@ -9,12 +9,12 @@ from .design_opening import summary_lines as opening_lines
 
 
 def summary_lines(path, report: dict) -> list[str]:
-    """What ``fabkiri design`` says on stderr about a quad design written to ``path``: the figures,
+    """What ``fabkiri design`` says on stderr about a quad design written to ``path`` (None: not written): the figures,
     the fabrication rows and fabricability, then one ``fabkiri: design failed: ...`` line per problem."""
     out: list[str] = []
     fit = report.get("fit", {})
     parts = [
-        f"wrote {path}: {report['status']}",
+        f"{wrote(path)}: {report['status']}",
         f"max equality residual {report['max_equality_residual']:.2e}",
         f"{report['iterations_total']} iterations",
         f"{report['time_s']:.2f} s",
@@ -58,3 +58,8 @@ def summary_lines(path, report: dict) -> list[str]:
                 f"fabkiri: design failed: {conf.describe_miss(k.replace('_', ' '), report['shape'][k], c)}"
             )
     return out
+
+
+def wrote(path) -> str:
+    """How a summary's first line names the design: the file it was written to, if any."""
+    return f"wrote {path}" if path is not None else "designed"

@@ -44,6 +44,7 @@ from ..verify import verify_pattern
 from .design_opening import check_floor
 from .design_opening import judge as judge_opening
 from .design_opening import summary_lines as opening_lines
+from .design_summary import wrote
 from .designers import register_designer
 
 if TYPE_CHECKING:
@@ -70,14 +71,19 @@ class KagomeOutcome:
         """Write the pattern (atomically); a kagome design has no preview yet."""
         atomic_write(path, dumps(self.pattern))
 
-    def summary(self, path) -> list[str]:
-        """The lines ``fabkiri design --lattice kagome`` prints about the design written to ``path``: the
-        figures, then the fabrication limits and whether the design meets them (mm), then fabricability."""
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solver ended at (the same name on every design outcome)."""
+        return float(self.report["max_equality_residual"])
+
+    def summary(self, path=None) -> list[str]:
+        """The lines ``fabkiri design --lattice kagome`` prints about the design written to ``path`` (None:
+        not written): the figures, then the fabrication limits and whether the design meets them (mm), then fabricability."""
         r, (rows, cols) = self.report, self.tiles
         cut = f" cut to {r['trimmed_tiles']} tiles" if r.get("trimmed_tiles") else ""
         out = [
-            f"wrote {path}: kagome {rows}x{cols}{cut} {r['status']}, max equality residual "
-            f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
+            f"{wrote(path)}: kagome {rows}x{cols}{cut} {r['status']}, max equality residual "
+            f"{self.max_equality_residual:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
             f"the size (shape {r['shape']['status']}), verify: "
             f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}"
         ]

@@ -137,10 +137,11 @@ class MakeResult:
         """Write every file made and ``make.json`` into ``folder`` all-or-nothing (``make(output=None)``)."""
         return atomic_write_many(folder, {**self.files, MANIFEST: self.manifest_text()})
 
-    def summary(self) -> list[str]:
+    def summary(self, path=None) -> list[str]:
         """What was made, at what size and with how many tiles, each step's figures, what to do next
-        (or which step failed, with its figures and any alternatives), and the files."""
-        where = str(self.output) if self.output is not None else "."
+        (or which step failed, with its figures and any alternatives), and the files, in the folder ``path``
+        (None: the run's output folder, if any)."""
+        where = str(path if path is not None else self.output if self.output is not None else ".")
         t = self.tiles
         out = [
             f"make: {self.target} at {self.size:g} mm for {self.process} ({self.fabrication}), "

@@ -148,6 +148,11 @@ class DesignResult:
         dict  # state -> Target (mm) the closed grid was fitted to, scaled to the tiles' area
     )
 
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solve ended at (the same name as the tube's result)."""
+        return float(self.report["max_equality_residual"])
+
 
 def reduced_applies(req: DesignRequest) -> bool:
     """The closed-form rigid family covers the request (see ``rigid.py``)."""
