@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
-from fabkiri.api.design_judge import DesignAttempt as Attempt
 from fabkiri.api.design_minimax import FINISH_ABOVE, MINIMAX_TILES, REFIT_ABOVE, applies, threshold
+from fabkiri.api.design_report import DesignAttempt as Attempt
 from fabkiri.design.core import conformance as conf
 from fabkiri.design.quad.fabrication import FabricationLimits
 from fabkiri.design.quad.solve import DesignRequest

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -40,20 +41,13 @@ from .continuation import (  # noqa: F401 (re-exported)
     continuation,
     limits_note,
 )
-from .design_judge import (  # noqa: F401 (re-exported)
-    CLOSURE_TOL,
-    DesignAttempt,
-    _check,
-    _fit_miss,
-    _hausdorff,
-    _rank,
-    _shape_met,
-)
+from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
-from .design_summary import summary_lines
+from .design_report import DesignAttempt, DesignReport
+from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .designers import register_designer
 from .print_tiles import check_tiles
 from .shape_limits import annotate as annotate_misses
@@ -131,7 +125,7 @@ class DesignOutcome:
     """
 
     pattern: Pattern
-    report: dict
+    report: DesignReport  # pattern.json's ``design.report`` (design-report.schema.json)
     valid: bool  # converged, closes, no overlaps
     shape_met: bool  # every outline within the shape tolerance
     problems: list[str] = field(default_factory=list)
@@ -456,7 +450,7 @@ def _outcome(
     report["problems"] = [*report.get("problems", []), *too_closed]
     return DesignOutcome(
         pattern=pattern,
-        report=report,
+        report=cast(DesignReport, report),
         valid=bool(valid),
         shape_met=shape_met,
         problems=list(problems),
@@ -472,11 +466,8 @@ def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
 
 def _good(outcome: DesignAttempt) -> bool:
     """Valid, within the shape tolerance and (for a printer) within its bed."""
-    return bool(
-        outcome.valid
-        and _shape_met(outcome.report)
-        and outcome.report["checks"].get("fits_bed", True)
-    )
+    r = outcome.report
+    return bool(outcome.valid and _shape_met(r) and r["checks"].get("fits_bed", True))
 
 
 def _continuation_first(request: PatternRequest, req: DesignRequest, contracted: dict) -> bool:
@@ -495,23 +486,6 @@ def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
         and not contracted
         and req.rows * req.cols < BIG_TILES
         and not (best is not None and _good(best))
-    )
-
-
-def preview_path(output) -> Path:
-    """Where the design preview goes: ``NAME.png`` beside ``NAME.json``."""
-    p = Path(output)
-    return p.with_name((p.stem if p.suffix.lower() == ".json" else p.name) + ".png")
-
-
-def _preview(pattern: Pattern, report: dict, output) -> tuple[Path, bytes]:
-    """The preview's path and bytes (rendered before anything is written); its name goes in the report."""
-    from ..render.conformance import conformance_png
-
-    path = preview_path(output)
-    report["preview"] = path.name
-    return path, conformance_png(
-        pattern, report.get("conformance") or {}, report.get("shape") or {}
     )
 
 

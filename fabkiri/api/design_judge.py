@@ -6,7 +6,8 @@ first.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -16,6 +17,7 @@ from ..fabricate import design_limits
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
 from .closed_states import closed_outline_fit, overlapping_tiles
+from .design_report import DesignAttempt
 
 if TYPE_CHECKING:  # design.py imports this module
     from .design import PatternRequest
@@ -23,28 +25,18 @@ if TYPE_CHECKING:  # design.py imports this module
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 
 
-class DesignAttempt(NamedTuple):
-    """One judged design: the solver's pattern with its report, what failed, and both closed states."""
-
-    pattern: Pattern
-    report: dict  # the solver's report with the front door's checks, conformance and shape verdicts
-    problems: list[str]  # why it is not valid (empty when valid)
-    valid: bool  # converged, both closed states close, no overlapping tiles
-    states: dict  # the closed states' tile corners by state (1, 2)
-
-
-def _shape_met(report: dict) -> bool:
+def _shape_met(report: Mapping[str, Any]) -> bool:
     return all(j["status"] == "met" for j in (report.get("shape") or {}).values())
 
 
-def _hausdorff(report: dict) -> float:
+def _hausdorff(report: Mapping[str, Any]) -> float:
     """Worst Hausdorff distance of any outline relative to its target's size."""
     return max(
         (c["hausdorff_rel"] for c in (report.get("conformance") or {}).values()), default=0.0
     )
 
 
-def _fit_miss(report: dict) -> float:
+def _fit_miss(report: Mapping[str, Any]) -> float:
     """Worst fit of the tips (deployed or closed-state outline) to any target relative to its size (the soft
     outline rows never reach zero: ``_hausdorff`` judges the whole outline)."""
     return max(

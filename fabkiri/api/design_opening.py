@@ -4,8 +4,9 @@ design opens little."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,7 @@ def judge(pattern: Pattern, report: dict, floor: float | None) -> list[str]:
     return []
 
 
-def summary_lines(report: dict, command: str = "design") -> list[str]:
+def summary_lines(report: Mapping[str, Any], command: str = "design") -> list[str]:
     """The opening line and, for a design that opens little, the one-line warning (with ``command``'s
     option that asks for more when it was not given)."""
     d = report.get("opening")

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -44,6 +44,7 @@ from ..verify import verify_pattern
 from .design_opening import check_floor
 from .design_opening import judge as judge_opening
 from .design_opening import summary_lines as opening_lines
+from .design_report import KagomeReport
 from .design_summary import wrote
 from .designers import register_designer
 
@@ -59,7 +60,9 @@ class KagomeOutcome:
     """A kagome design, its report and its verdict."""
 
     pattern: Pattern
-    report: dict
+    report: (
+        KagomeReport  # written into pattern.json as ``design.report`` (design-report.schema.json)
+    )
     valid: bool
     tiles: tuple[int, int] = (0, 0)  # rows, cols
 
@@ -200,7 +203,7 @@ def design_kagome(
     valid = report["status"] == "converged" and not report["verify_failed"]
     valid = valid and bool(report.get("fabrication", {}).get("met", True)) and not too_closed
     pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
-    return KagomeOutcome(pattern, report, valid, (rows, cols))
+    return KagomeOutcome(pattern, cast(KagomeReport, report), valid, (rows, cols))
 
 
 def _solve(std, tgt, symmetry, fab_of, accept):

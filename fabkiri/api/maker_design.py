@@ -36,6 +36,7 @@ from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
 from . import maker_options as mo
+from .design_report import DesignReport
 from .maker_result import MakeResult
 from .maker_tiles import TilesChoice, choose_tiles, retry_tiles
 
@@ -404,7 +405,7 @@ def _design(result: MakeResult, plan, say: Progress) -> StepRun:
     )
 
 
-def _design_figures(report: dict) -> dict[str, Any]:
+def _design_figures(report: DesignReport) -> dict[str, Any]:
     """Hausdorff of the deployed outline (share of the size) and its tolerance; the deployment amount
     (``report["opening"]``, from the ``opening`` work) when the design reports it."""
     out: dict[str, Any] = {}
@@ -420,7 +421,7 @@ def _design_figures(report: dict) -> dict[str, Any]:
     return out
 
 
-def _design_line(status: str, report: dict) -> str:
+def _design_line(status: str, report: DesignReport) -> str:
     c = (report.get("conformance") or {}).get("deployed")
     shape = (
         f", Hausdorff {100 * c['hausdorff_rel']:.2f} % of the size "
@@ -434,7 +435,7 @@ def _design_line(status: str, report: dict) -> str:
     return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active"
 
 
-def _opening_lines(report: dict) -> list[str]:
+def _opening_lines(report: Mapping[str, Any]) -> list[str]:
     """How much the design opens and, below 10 %, the warning (as design says them, naming make's option)."""
     from .design_opening import summary_lines
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 import copy
 import math
 import re
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -130,7 +132,7 @@ def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = No
     return out
 
 
-def _local_minimum_note(j: dict) -> str:
+def _local_minimum_note(j: Mapping[str, Any]) -> str:
     """Why (a pocket cut across) and what is left to try: never a guess the design already tried."""
     from ..quad.initial import INITS
 
@@ -165,7 +167,7 @@ def _local_minimum_note(j: dict) -> str:
     return note + f" (every initial guess was tried: {done})"
 
 
-def describe_miss(label: str, j: dict, conf: dict) -> str:
+def describe_miss(label: str, j: Mapping[str, Any], conf: Mapping[str, Any]) -> str:
     """One line for a missed shape tolerance."""
     x, y = conf["worst"]["at"]
     line = (
