@@ -114,3 +114,32 @@ def test_the_kagome_design_report_validates(tmp_path, run_cli, shared_kagome_des
     assert report_problem(written) is None and "verify_failed" in written
     del written["tol"]
     assert report_problem(written) == "top level: 'tol' is a required property"
+
+
+def test_a_refusal_speaks_in_parameters_and_the_cli_in_flags(run_cli, tmp_path):
+    """A library caller reads ``size=24.54`` and gets the value as a number; the CLI prints the same
+    message with ``--size 24.54``, as it always did."""
+    import pickle
+
+    from fabkiri.errors import InputError
+
+    request = PatternRequest(tiles=(8, 8), target="heart", size=20, material="acrylic-3")
+    with pytest.raises(InputError) as caught:
+        design_pattern(request)
+    exc = caught.value
+    assert str(exc).endswith("the smallest size that could work is size=24.54")
+    assert exc.cli_message() == str(exc).replace("size=24.54", "--size 24.54")
+    assert exc.params["size"] == pytest.approx(24.54, abs=0.005)
+    assert pickle.loads(pickle.dumps(exc)).cli_message() == exc.cli_message()  # a sweep's worker
+    args = ("--tiles", "8x8", "--target", "heart", "--size", "20", "--material", "acrylic-3")
+    code, _, err = run_cli("design", *args, "-o", tmp_path / "x.json")
+    assert code == 2 and err == f"fabkiri: error: {exc.cli_message()}\n"
+    with pytest.raises(InputError) as caught:
+        design_pattern(PatternRequest(tiles=None, target="circle", solver="reduced"))
+    assert str(caught.value).startswith("quad designs need tiles=(rows, cols)")
+    assert caught.value.cli_message().startswith("quad designs need --tiles ROWSxCOLS")
+    with pytest.raises(InputError) as caught:
+        design_pattern(PatternRequest(tiles=(4, 4), target="circle", solver="reduced"))
+    assert str(caught.value).startswith("solver='reduced' needs rigid=True,")
+    assert caught.value.cli_message().startswith("--solver reduced needs --rigid,")
+    assert caught.value.params == {"solver": "reduced", "rigid": True}

@@ -26,7 +26,7 @@ from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.quad.rigid.offset_outline import preferred_holes
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets.lookup import Target, load_target
-from ..errors import FabkiriError, InputError, SolveError
+from ..errors import FabkiriError, InputError, Param, SolveError
 from ..exchange.patternfile import dumps
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
@@ -247,11 +247,14 @@ def _solver_request(
     (with ``sized``, also past the size bound)."""
     if request.tiles is None:
         raise InputError(
-            "quad designs need --tiles ROWSxCOLS (a kagome design chooses it from the outline)"
+            "quad designs need ",
+            Param("tiles", shown="(rows, cols)", cli_value="ROWSxCOLS"),
+            " (a kagome design chooses it from the outline)",
         )
     if request.trim:
         raise InputError(
-            "--trim cuts kagome lattices to the outline; quad designs have no cut lattice"
+            Param("trim", True),
+            " cuts kagome lattices to the outline; quad designs have no cut lattice",
         )
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
@@ -263,11 +266,15 @@ def _solver_request(
     for text in request.contracted_target or []:
         s, spec = parse_contracted(text, request.size)
         if s in contracted:
-            raise InputError(f"--contracted-target given twice for state {s}")
+            raise InputError(Param("contracted_target"), f" given twice for state {s}")
         contracted[s] = spec
     if target is None and not contracted:
         raise InputError(
-            "give --target, or --contracted-target STATE:NAME for a closed-state outline"
+            "give ",
+            Param("target"),
+            ", or ",
+            Param("contracted_target", shown='"STATE:NAME"', cli_value="STATE:NAME"),
+            " for a closed-state outline",
         )
     fab_limits, intent = request.fabrication_limits(target)
     check_floor(request.min_opening)
@@ -334,7 +341,8 @@ def _check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Tar
             f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
             f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
             f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
-            f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}"
+            f"{abs(target.area):.4g} mm²; the smallest size that could work is ",
+            Param("size", least, ".4g"),
         )
 
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..design.core.refine import refine_minimax
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
-from ..errors import InputError
+from ..errors import InputError, Param
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
 from .design_judge import DesignAttempt, _hausdorff, _rank, _shape_met, refinement_attempt
@@ -25,7 +25,7 @@ def check_floor(floor: float | None) -> None:
     """InputError unless ``floor`` is None or a hole fraction in (0, 1)."""
     if floor is not None and not (np.isfinite(floor) and 0.0 < floor < 1.0):
         raise InputError(
-            f"--min-opening is a deployed hole fraction in (0, 1) (e.g. 0.3), got {floor}"
+            Param("min_opening"), f" is a deployed hole fraction in (0, 1) (e.g. 0.3), got {floor}"
         )
 
 

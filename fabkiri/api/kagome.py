@@ -32,7 +32,7 @@ from ..design.kagome.fit import design
 from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.targets.curve import Target
 from ..design.targets.lookup import load_target
-from ..errors import InputError
+from ..errors import InputError, Param
 from ..exchange.patternfile import dumps
 from ..fabricate import fabricability
 from ..fileio import atomic_write
@@ -317,7 +317,8 @@ def _check_room(
         raise InputError(
             f"{rows}x{cols} triangles each at least {w:.3g} mm wide ({limits.source}) cannot fit a "
             f"{target.size:.4g} mm {target.name}: they cover at least {pal_bound(n, w):.4g} mm² (Pál) but "
-            f"the target has {abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}"
+            f"the target has {abs(target.area):.4g} mm²; the smallest size that could work is ",
+            Param("size", least, ".4g"),
         )
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from .. import limits
 from ..design.core import conformance as conf
 from ..design.targets.lookup import load_target
-from ..errors import FabkiriError, InputError
+from ..errors import FabkiriError, InputError, Param
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from .design import _check_room
@@ -122,7 +122,7 @@ def _floor(min_opening) -> float | None:
     try:
         floor = float(min_opening)
     except (TypeError, ValueError):
-        raise InputError(f"--min-opening must be a number, got {min_opening!r}") from None
+        raise InputError(Param("min_opening"), f" must be a number, got {min_opening!r}") from None
     check_floor(floor)
     return floor
 
@@ -132,17 +132,26 @@ def _plan(
 ) -> _Plan:
     """Every check of the request that needs no design: one :class:`InputError` naming the problem."""
     if (material is None) == (printer is None):
-        raise InputError("make needs exactly one of --material (laser cut) or --printer (3D print)")
+        raise InputError(
+            "make needs exactly one of ",
+            Param("material"),
+            " (laser cut) or ",
+            Param("printer"),
+            " (3D print)",
+        )
     try:
         size = float(size)
     except (TypeError, ValueError):
-        raise InputError(f"--size must be a length in mm, got {size!r}") from None
+        raise InputError(Param("size"), f" must be a length in mm, got {size!r}") from None
     if not (np.isfinite(size) and 0 < size <= limits.MAX_LENGTH_MM):
         raise InputError(
-            f"--size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, got {size:g}"
+            Param("size"),
+            f" must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, got {size:g}",
         )
     if tiles is not None and (len(tiles) != 2 or min(tiles) < 2):
-        raise InputError(f"--tiles needs at least 2x2 tiles, got {'x'.join(map(str, tiles))}")
+        raise InputError(
+            Param("tiles"), f" needs at least 2x2 tiles, got {'x'.join(map(str, tiles))}"
+        )
     curve = load_target(str(target), size)
     fab, intent = design_limits.resolve(material, hinge, printer, style, None, None, curve)
     assert fab is not None  # a material or a printer was given
@@ -203,7 +212,8 @@ def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) ->
     except FabkiriError as exc:
         if name == "design":  # refused before any work: bad input, nothing written
             raise
-        ok, code, figures, files, details = False, exc.exit_code, str(exc), {}, []
+        # make's record names make's own command lines (its alternatives), so its flags too
+        ok, code, figures, files, details = False, exc.exit_code, exc.cli_message(), {}, []
         result.alternatives = refusal_alternatives(result, plan, name, exc)
         if result.refused and not result.alternatives:  # nothing passes at this design: redesign
             details = options_after_refusal(result, plan, say, CHECKS)

@@ -126,7 +126,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
         try:
             attempt = _attempt(result, replace(plan, tiles=choice), say)
         except FabkiriError as exc:  # a count the design refuses up front: the next one
-            say(f"make: {r}x{c} tiles refused by the design ({exc}); not counted")
+            say(f"make: {r}x{c} tiles refused by the design ({exc.cli_message()}); not counted")
             continue
         tried.append(attempt)
         if not attempt.run.ok:
@@ -202,7 +202,7 @@ def _other_options(
         try:
             attempt = _attempt(MakeResult.of_plan(other), other, say)
         except FabkiriError as exc:  # refused up front (room, tiles): not counted
-            lines.append(f"{option.name}: refused by the design ({exc})")
+            lines.append(f"{option.name}: refused by the design ({exc.cli_message()})")
             continue
         runs.append(attempt)
         if attempt.run.ok and adopt:

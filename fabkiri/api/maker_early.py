@@ -69,7 +69,7 @@ def refuse_narrow(
         try:
             attempt = _attempt(MakeResult.of_plan(other), other, say)
         except FabkiriError as exc:  # refused up front (room): not counted
-            lines.append(f"{label}: refused by the design ({exc})")
+            lines.append(f"{label}: refused by the design ({exc.cli_message()})")
             continue
         tried.append(attempt)
         named = attempt.run.ok and _checked_alternative(
