@@ -138,11 +138,11 @@ def test_auto_uses_full_solver_outside_the_family():
 @pytest.mark.parametrize(
     "kw,msg",
     [
-        ({"rigid": False}, "--rigid"),
+        ({"rigid": False}, "rigid=True"),  # the library's words (the CLI's: --rigid)
         # (--symmetry is covered now: the mirrored seeds, design/quad/rigid/mirror.py)
-        ({"rigid": True, "contracted": {1: ("rect", None)}}, "--contracted-target"),
+        ({"rigid": True, "contracted": {1: ("rect", None)}}, "no contracted_target"),
         ({"rigid": True, "holes": "parallelogram"}, "rhombus"),
-        ({"rigid": True, "solver": "magic"}, "--solver must be"),
+        ({"rigid": True, "solver": "magic"}, "^solver must be"),
     ],
 )
 def test_reduced_solver_refuses_what_it_cannot_cover(kw, msg):
