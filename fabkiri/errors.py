@@ -15,7 +15,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-NAMED = object()  # a Param's value when the message names the parameter alone
+
+class _Named:
+    """The value of a :class:`Param` that names the parameter alone (one object, also once unpickled)."""
+
+    def __repr__(self) -> str:
+        return "NAMED"
+
+    def __reduce__(self) -> str:
+        return "NAMED"
+
+
+NAMED = _Named()
 
 
 @dataclass(frozen=True)

@@ -143,3 +143,7 @@ def test_a_refusal_speaks_in_parameters_and_the_cli_in_flags(run_cli, tmp_path):
     assert str(caught.value).startswith("solver='reduced' needs rigid=True,")
     assert caught.value.cli_message().startswith("--solver reduced needs --rigid,")
     assert caught.value.params == {"solver": "reduced", "rigid": True}
+    named = pickle.loads(
+        pickle.dumps(caught.value)
+    )  # a parameter named alone survives pickling too
+    assert str(named) == str(caught.value) and named.cli_message() == caught.value.cli_message()
