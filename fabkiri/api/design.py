@@ -246,10 +246,9 @@ def _solver_request(
     """``(request with its holes resolved, solver request, target, closed-state specs)``, or InputError
     (with ``sized``, also past the size bound)."""
     if request.tiles is None:
+        tiles = Param("tiles", shown="(rows, cols)", cli_value="ROWSxCOLS")
         raise InputError(
-            "quad designs need ",
-            Param("tiles", shown="(rows, cols)", cli_value="ROWSxCOLS"),
-            " (a kagome design chooses it from the outline)",
+            "quad designs need ", tiles, " (a kagome design chooses it from the outline)"
         )
     if request.trim:
         raise InputError(
@@ -269,13 +268,8 @@ def _solver_request(
             raise InputError(Param("contracted_target"), f" given twice for state {s}")
         contracted[s] = spec
     if target is None and not contracted:
-        raise InputError(
-            "give ",
-            Param("target"),
-            ", or ",
-            Param("contracted_target", shown='"STATE:NAME"', cli_value="STATE:NAME"),
-            " for a closed-state outline",
-        )
+        outline = Param("contracted_target", shown='"STATE:NAME"', cli_value="STATE:NAME")
+        raise InputError("give ", Param("target"), ", or ", outline, " for a closed-state outline")
     fab_limits, intent = request.fabrication_limits(target)
     check_floor(request.min_opening)
     if (
