@@ -206,10 +206,11 @@ def test_cli_solver_flag(tmp_path, run_cli):
 
 def test_cli_keeps_the_closest_valid_fit():
     """Among valid attempts the closer fit wins; an invalid one never beats a valid one."""
+    from fabkiri.api.design_report import DesignAttempt
     from fabkiri.cli.design_cmd import _fit_miss, _rank
 
     def outcome(valid, problems, miss):
-        return (None, {"fit": {"shape": {"max_rel_size": miss}}}, problems, valid, None)
+        return DesignAttempt(None, {"fit": {"shape": {"max_rel_size": miss}}}, problems, valid, {})
 
     loose, tight = outcome(True, [], 0.0186), outcome(True, [], 0.0008)
     broken = outcome(False, ["1 overlapping tile pairs"], 0.0)
