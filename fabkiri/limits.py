@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, Param
 
 MAX_PATTERN_BYTES = (
     256 * 2**20
@@ -128,8 +128,9 @@ def check_tiles(rows: int, cols: int, kind: str, i_know: bool = False) -> None:
         )
     if tiles > est.tested_tiles and not i_know:
         raise InputError(
-            f"{side}x{side} is the largest tested; {rows}x{cols} needs {est.text()} "
-            f"— pass --i-know to try"
+            f"{side}x{side} is the largest tested; {rows}x{cols} needs {est.text()} — pass ",
+            Param("i_know", True),
+            " to try",
         )
 
 

@@ -54,7 +54,7 @@ def test_the_design_intent_chooses_material_and_hinge_unless_a_material_is_named
         made_for, "acrylic-3"
     )  # a named material drops the design's hinge kind too
     assert material.name == "acrylic-3" and hinge is None
-    with pytest.raises(InputError, match="--set expects FIELD=VALUE"):
+    with pytest.raises(InputError, match="settings expects FIELD=VALUE"):  # the library's words
         cut_material(square, settings=["nope"])
 
 

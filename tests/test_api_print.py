@@ -69,11 +69,11 @@ def test_refusals_raise_and_return_nothing(square):
         FabricationError, match=r"\(at --scale 1\); print at --scale ≥ [0-9.]+ \(or --scale auto\)"
     ):
         print_pattern(small, PrintOptions(style="strips"))
-    with pytest.raises(InputError, match="--marks engraves strip pads .* needs --style strips"):
+    with pytest.raises(InputError, match="marks=True engraves strip pads .* needs style='strips'"):
         print_pattern(square, PrintOptions(marks=True))
     # a library caller's scale text other than "auto" is bad input in one line (it was a TypeError)
     with pytest.raises(
-        InputError, match=r"--scale must be a number \(mm printed per mm\) or auto, got '2'"
+        InputError, match=r"^scale must be a number \(mm printed per mm\) or auto, got '2'"
     ):
         print_pattern(square, PrintOptions(scale="2"))
 
@@ -143,7 +143,7 @@ def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
     assert notes == ["note: fussy"]
     printjob.register_style(printjob.PrintStyle("fussy-strips", build, strips_style.clearances))
     with pytest.raises(
-        InputError, match="--marks engraves strip pads"
+        InputError, match="marks=True engraves strip pads"
     ):  # loose_strips is strips' own
         print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0, marks=True))
 

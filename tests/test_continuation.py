@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 from fabkiri.api.continuation import limits_note, shape_held_to
+from fabkiri.api.design_report import DesignAttempt
 
 TOL = 0.02
 
@@ -43,15 +44,15 @@ def test_the_miss_note_names_the_fraction_and_the_full_limits_miss():
         "free_hausdorff_rel": 0.0017,
     }
     report = {"continuation": cont}
-    note = limits_note((None, report))
+    note = limits_note(_judged(report))
     assert "without them (0.2%) and up to 50% of them" in note and "19.0%" in note
     cont["steps_hausdorff_rel"][-1][1] = None
-    assert "unconverged" in limits_note((None, report))
+    assert "unconverged" in limits_note(_judged(report))
     cont["shape_held_to"] = shape_held_to([[0.0, 0.014], [0.25, 0.029], [1.0, 0.23]], TOL)
     assert cont["shape_held_to"] == 0.0  # only the design without the rows met it
-    assert "without them (0.2%), at all" in limits_note((None, report))
-    assert limits_note((None, {"continuation": {"shape_held_to": None}})) == ""
-    assert limits_note((None, {})) == ""
+    assert "without them (0.2%), at all" in limits_note(_judged(report))
+    assert limits_note(_judged({"continuation": {"shape_held_to": None}})) == ""
+    assert limits_note(_judged({})) == ""
 
 
 def _outcome(h: float, valid: bool = True):
@@ -60,7 +61,12 @@ def _outcome(h: float, valid: bool = True):
         "conformance": {"deployed": {"hausdorff_rel": h}},
         "shape": {"deployed": {"status": "met" if h <= TOL else "missed"}},
     }
-    return (None, report, [], valid, None)
+    return DesignAttempt(None, report, [], valid, {})
+
+
+def _judged(report: dict) -> DesignAttempt:
+    """A valid attempt with ``report`` (what ``limits_note`` reads)."""
+    return DesignAttempt(None, report, [], True, {})
 
 
 @pytest.mark.parametrize(

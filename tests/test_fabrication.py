@@ -514,6 +514,7 @@ def test_a_design_for_a_printer_that_fits_its_bed_ranks_first():
     """prusa-mk4's bed is 250 x 210 mm: a 240 x 200 mm closed state fits, 200 x 227 mm does not (the refined 8x8
     heart); a valid design that fits ranks above one with a better shape that does not."""
     from fabkiri.api.design import _rank
+    from fabkiri.api.design_report import DesignAttempt
 
     box = lambda w, h: np.array([[[0, 0], [w, 0], [w, h], [0, h]]], float)  # noqa: E731
     assert design_limits.fits_bed(box(240, 200), "prusa-mk4")
@@ -526,7 +527,7 @@ def test_a_design_for_a_printer_that_fits_its_bed_ranks_first():
             "conformance": {"deployed": {"hausdorff_rel": h}},
             "shape": {"deployed": {"status": "missed"}},
         }
-        return (None, rep, [], True, {})
+        return DesignAttempt(None, rep, [], True, {})
 
     assert _rank(outcome(True, 0.06)) < _rank(outcome(False, 0.03))
     assert _rank(outcome(True, 0.03)) < _rank(outcome(True, 0.06))

@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.design_minimax import FINISH_ABOVE, MINIMAX_TILES, REFIT_ABOVE, applies, threshold
+from fabkiri.api.design_report import DesignAttempt as Attempt
 from fabkiri.design.core import conformance as conf
 from fabkiri.design.quad.fabrication import FabricationLimits
 from fabkiri.design.quad.solve import DesignRequest
@@ -18,23 +19,28 @@ DROP = str(Path(__file__).resolve().parents[1] / "bench" / "data" / "drop.csv")
 def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
     tgt = load_target("heart", 100)
     missed_by = {"conformance": {"deployed": {"hausdorff_rel": 2 * FINISH_ABOVE}}}
-    valid, invalid = (None, missed_by, [], True, {}), (None, missed_by, ["overlaps"], False, {})
+    valid, invalid = (
+        Attempt(None, missed_by, [], True, {}),
+        Attempt(None, missed_by, ["overlaps"], False, {}),
+    )
     close = {"conformance": {"deployed": {"hausdorff_rel": FINISH_ABOVE / 2}}}
     big = DesignRequest(rows=32, cols=32, target=tgt)
     assert MINIMAX_TILES == 32 * 32 and applies(big, {}, valid)
     assert not applies(big, {}, invalid) and not applies(big, {}, None)
     # already close: not worth 2-6 more designs
-    assert not applies(big, {}, (None, close, [], True, {}))
+    assert not applies(big, {}, Attempt(None, close, [], True, {}))
     assert not applies(DesignRequest(rows=16, cols=16, target=tgt), {}, valid)
     # the threshold follows the lattice's resolution: a miss a 32x32 design may keep is finished at 64x64
     between = {"conformance": {"deployed": {"hausdorff_rel": 0.75 * FINISH_ABOVE}}}
-    assert not applies(big, {}, (None, between, [], True, {}))
-    assert applies(DesignRequest(rows=64, cols=64, target=tgt), {}, (None, between, [], True, {}))
+    assert not applies(big, {}, Attempt(None, between, [], True, {}))
+    assert applies(
+        DesignRequest(rows=64, cols=64, target=tgt), {}, Attempt(None, between, [], True, {})
+    )
     # ... down to a floor: the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) are not finished
     circles = {"conformance": {"deployed": {"hausdorff_rel": 0.0022}}}
     for n in (64, 128):
         assert not applies(
-            DesignRequest(rows=n, cols=n, target=tgt), {}, (None, circles, [], True, {})
+            DesignRequest(rows=n, cols=n, target=tgt), {}, Attempt(None, circles, [], True, {})
         )
     assert threshold(REFIT_ABOVE, big) == REFIT_ABOVE
     assert threshold(REFIT_ABOVE, DesignRequest(rows=48, cols=96, target=tgt)) == REFIT_ABOVE / 3
@@ -99,7 +105,7 @@ def test_the_32x32_drop_fits_no_worse_than_the_16x16_one():
 def _outcome(h: float, problems: list, valid: bool, **checks):
     report = {"conformance": {"deployed": {"hausdorff_rel": h}}, "checks": checks, "time_s": 1.0}
     report["status"] = "converged" if valid else "unconverged"
-    return (None, report, problems, valid, {})
+    return Attempt(None, report, problems, valid, {})
 
 
 def test_a_design_that_fails_on_overlaps_alone_is_redesigned_and_a_valid_redesign_kept(monkeypatch):

@@ -138,11 +138,11 @@ def test_auto_uses_full_solver_outside_the_family():
 @pytest.mark.parametrize(
     "kw,msg",
     [
-        ({"rigid": False}, "--rigid"),
+        ({"rigid": False}, "rigid=True"),  # the library's words (the CLI's: --rigid)
         # (--symmetry is covered now: the mirrored seeds, design/quad/rigid/mirror.py)
-        ({"rigid": True, "contracted": {1: ("rect", None)}}, "--contracted-target"),
+        ({"rigid": True, "contracted": {1: ("rect", None)}}, "no contracted_target"),
         ({"rigid": True, "holes": "parallelogram"}, "rhombus"),
-        ({"rigid": True, "solver": "magic"}, "--solver must be"),
+        ({"rigid": True, "solver": "magic"}, "^solver must be"),
     ],
 )
 def test_reduced_solver_refuses_what_it_cannot_cover(kw, msg):
@@ -207,9 +207,10 @@ def test_cli_solver_flag(tmp_path, run_cli):
 def test_cli_keeps_the_closest_valid_fit():
     """Among valid attempts the closer fit wins; an invalid one never beats a valid one."""
     from fabkiri.api.design_judge import _fit_miss, _rank
+    from fabkiri.api.design_report import DesignAttempt
 
     def outcome(valid, problems, miss):
-        return (None, {"fit": {"shape": {"max_rel_size": miss}}}, problems, valid, None)
+        return DesignAttempt(None, {"fit": {"shape": {"max_rel_size": miss}}}, problems, valid, {})
 
     loose, tight = outcome(True, [], 0.0186), outcome(True, [], 0.0008)
     broken = outcome(False, ["1 overlapping tile pairs"], 0.0)

@@ -10,7 +10,7 @@ import re
 import numpy as np
 
 from ..design.targets.lookup import Target, load_target
-from ..errors import InputError
+from ..errors import InputError, Param
 from ..pattern import geometry
 from ..pattern.model import Pattern
 
@@ -20,7 +20,8 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
     m = re.fullmatch(r"\s*([12])\s*:\s*(.+?)\s*", text)
     if not m:
         raise InputError(
-            f"--contracted-target expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}"
+            Param("contracted_target"),
+            f" expects STATE:NAME|FILE with STATE 1 or 2, got {text!r}",
         )
     state, what = int(m.group(1)), m.group(2)
     r = re.fullmatch(r"rect(?:=(.+))?", what)
@@ -31,10 +32,14 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
                 ratio = float(r.group(1))
             except ValueError:
                 raise InputError(
-                    f"--contracted-target {text}: ratio {r.group(1)!r} is not a number"
+                    Param("contracted_target", text),
+                    f": ratio {r.group(1)!r} is not a number",
                 ) from None
             if not (np.isfinite(ratio) and ratio > 0):
-                raise InputError(f"--contracted-target {text}: ratio must be positive")
+                raise InputError(
+                    Param("contracted_target", text),
+                    ": ratio must be positive",
+                )
         return state, ("rect", ratio)
     return state, load_target(what, size)
 

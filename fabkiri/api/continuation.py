@@ -31,7 +31,7 @@ from ..fabricate import fabricability as fb
 from ..fabricate.print.printers import load_printer
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
-from .design_judge import _check, _fit_miss, _hausdorff, _rank, _shape_met
+from .design_judge import DesignAttempt, _check, _fit_miss, _hausdorff, _rank, _shape_met
 
 if TYPE_CHECKING:  # design.py imports this module
     from .design import DesignOutcome, PatternRequest
@@ -86,9 +86,9 @@ def continuation(
         req, free.pattern.nodes, init, judge, spent, trace
     )
     how = "continuation"
-    if not outcome[3] and via_rigid_applies(replace(req, init=VIA_RIGID_INIT)):
+    if not outcome.valid and via_rigid_applies(replace(req, init=VIA_RIGID_INIT)):
         rigid = judge(design(replace(step, init=VIA_RIGID_INIT, start=last_ok)))
-        spent += rigid[1]["time_s"]
+        spent += rigid.report["time_s"]
         if _rank(rigid) < _rank(outcome):
             outcome, how = rigid, "continuation, rigid family last"
     prints = _print_gate(req, request.printer)
@@ -103,7 +103,7 @@ def continuation(
         [[0.0, _hausdorff(free.report) if free.shape_met else None], *trace],
         req.second_opinion_above,  # the tolerance over the size
     )
-    if not _good_fit(outcome) and _refine_worth(req, held, _hausdorff(outcome[1])):
+    if not _good_fit(outcome) and _refine_worth(req, held, _hausdorff(outcome.report)):
         # the fit was least squares, the tolerance is a maximum;
         # from an unconverged continuation too (only converged steps are kept: 16x16 heart, prusa-mk4, 2.53 %)
         outcome, how, refinement, secs = _refine(
@@ -116,7 +116,7 @@ def continuation(
             prints if "print's check" in how else None,
         )
         spent += secs
-    outcome[1]["continuation"] = {
+    outcome.report["continuation"] = {
         "steps": list(steps),
         "how": how,
         "free_hausdorff_rel": _hausdorff(free.report),
@@ -154,10 +154,10 @@ def _jump_or_steps(req: DesignRequest, X: np.ndarray, init: str, judge, spent: f
     return (1.0, *CONTINUATION), step, last_ok, outcome, spent
 
 
-def _far(req: DesignRequest, outcome) -> bool:
+def _far(req: DesignRequest, outcome: DesignAttempt) -> bool:
     """A miss over ``REFINE_WITHIN`` times the tolerance: a nearer one is the refinement's (16x16 heart for
     acrylic-3: the jump missed at 3.0 %, the slower steps at 3.1 %, the refinement of the jump met 1.5 %)."""
-    return _hausdorff(outcome[1]) > REFINE_WITHIN * req.second_opinion_above
+    return _hausdorff(outcome.report) > REFINE_WITHIN * req.second_opinion_above
 
 
 def _refine_worth(req: DesignRequest, held: float | None, miss: float) -> bool:
@@ -168,16 +168,16 @@ def _refine_worth(req: DesignRequest, held: float | None, miss: float) -> bool:
     return not (held is not None and far and req.rows * req.cols >= LIMITS_COST_TILES)
 
 
-def _attempt(outcome, how: str, spent: float) -> dict:
+def _attempt(outcome: DesignAttempt, how: str, spent: float) -> dict:
     """The continuation's entry in the design's attempts."""
     return {
         "init": how,
-        "status": outcome[1]["status"],
-        "problems": outcome[2],
+        "status": outcome.report["status"],
+        "problems": outcome.problems,
         "time_s": spent,
-        "fit_max_rel_size": _fit_miss(outcome[1]),
-        "hausdorff_max_rel": _hausdorff(outcome[1]),
-        "shape": "met" if _shape_met(outcome[1]) else "missed",
+        "fit_max_rel_size": _fit_miss(outcome.report),
+        "hausdorff_max_rel": _hausdorff(outcome.report),
+        "shape": "met" if _shape_met(outcome.report) else "missed",
     }
 
 
@@ -247,13 +247,13 @@ def _print_gate(req: DesignRequest, printer: str | None) -> Callable[[Pattern], 
     return lambda pattern: fb.print_refusal(pattern, style, pr, fab.print_state, 1.0)
 
 
-def _good_fit(outcome) -> bool:
-    return bool(outcome[3] and _shape_met(outcome[1]))
+def _good_fit(outcome: DesignAttempt) -> bool:
+    return bool(outcome.valid and _shape_met(outcome.report))
 
 
-def _pads_bind(outcome) -> bool:
+def _pads_bind(outcome: DesignAttempt) -> bool:
     """Whether any strip pad row of the outcome is active (else the steps without them are not worth trying)."""
-    active = (outcome[1].get("fabrication") or {}).get("active") or {}
+    active = (outcome.report.get("fabrication") or {}).get("active") or {}
     return active.get("fabrication_strip_pads", 0) > 0
 
 
@@ -266,7 +266,7 @@ def _without_pads(req: DesignRequest, X: np.ndarray, init: str, judge, prints, s
     padless = replace(req, fabrication=replace(fab, strip_pad_mm2=0.0))
     step, result, _, spent = _raise_limits(padless, X, init, CONTINUATION, spent)
     outcome = judge(result)
-    return ((outcome, step) if not prints(outcome[0]) else None), spent
+    return ((outcome, step) if not prints(outcome.pattern) else None), spent
 
 
 def _raise_limits(
@@ -301,9 +301,9 @@ def _raise_limits(
     return step, result, last_ok, spent
 
 
-def limits_note(outcome) -> str:
+def limits_note(outcome: DesignAttempt) -> str:
     """Why a continuation missed, when its steps say the limits cost the shape ('' otherwise)."""
-    cont = outcome[1].get("continuation") or {}
+    cont = outcome.report.get("continuation") or {}
     held = cont.get("shape_held_to")
     if held is None:
         return ""
@@ -348,7 +348,7 @@ def _refine(
         return design_limits.fits_bed(contract(r.pattern, fab.print_state).corners, printer)
 
     refined, trace, secs = refine_minimax(
-        step, outcome[0].nodes, accept=bed if printer else None, patience=PATIENCE
+        step, outcome.pattern.nodes, accept=bed if printer else None, patience=PATIENCE
     )
     if refined is not None and _rank(cand := judge(refined)) < _rank(outcome):
         outcome, how = cand, how + ", minimax refinement"

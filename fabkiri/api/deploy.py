@@ -14,9 +14,12 @@ from dataclasses import dataclass, field
 from ..exchange.pattern_json import dumps
 from ..mechanics.collisions import Overlap
 from ..mechanics.deploy import DeploymentPath, deployment_path
+from ..mechanics.path import DeployReport
 from ..mechanics.tube import tube_along_path
 from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
+
+SCHEMA = "deploy.schema.json"  # beside this module: what deploy.json holds (DeployReport)
 
 ZERO_ENERGY = 1e-12  # the rigid path's energy must be zero to rounding
 
@@ -30,7 +33,7 @@ class DeployOutcome:
     """
 
     path: DeploymentPath
-    summary: dict
+    summary: DeployReport  # written as deploy.json (deploy.schema.json beside this module)
     files: dict[str, bytes | str]
     problems: list[str] = field(default_factory=list)
 

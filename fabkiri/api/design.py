@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.quad.rigid.offset_outline import preferred_holes
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets.lookup import Target, load_target
-from ..errors import FabkiriError, InputError, SolveError
+from ..errors import FabkiriError, InputError, Param, SolveError
 from ..exchange.pattern_json import dumps
 from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
@@ -45,7 +46,8 @@ from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
-from .design_summary import summary_lines
+from .design_report import DesignAttempt, DesignReport
+from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .designers import TakesTiles, register_designer
 from .print_tiles import check_tiles
 from .shape_limits import annotate as annotate_misses
@@ -123,7 +125,7 @@ class DesignOutcome:
     """
 
     pattern: Pattern
-    report: dict
+    report: DesignReport  # pattern.json's ``design.report`` (design-report.schema.json)
     valid: bool  # converged, closes, no overlaps
     shape_met: bool  # every outline within the shape tolerance
     problems: list[str] = field(default_factory=list)
@@ -157,9 +159,14 @@ class DesignOutcome:
         if png is not None:
             png[0].write_bytes(png[1])
 
-    def summary(self, output) -> list[str]:
-        """The lines ``fabkiri design`` prints about the design written to ``output``."""
-        return summary_lines(output, self.report)
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solver ended at (the same name on every design outcome)."""
+        return float(self.report["max_equality_residual"])
+
+    def summary(self, path=None) -> list[str]:
+        """The lines ``fabkiri design`` prints about the design written to ``path`` (None: not written)."""
+        return summary_lines(path, self.report)
 
 
 def design_pattern(
@@ -239,12 +246,14 @@ def _solver_request(
     """``(request with its holes resolved, solver request, target, closed-state specs)``, or InputError
     (with ``sized``, also past the size bound)."""
     if request.tiles is None:
+        tiles = Param("tiles", shown="(rows, cols)", cli_value="ROWSxCOLS")
         raise InputError(
-            "quad designs need --tiles ROWSxCOLS (a kagome design chooses it from the outline)"
+            "quad designs need ", tiles, " (a kagome design chooses it from the outline)"
         )
     if request.trim:
         raise InputError(
-            "--trim cuts kagome lattices to the outline; quad designs have no cut lattice"
+            Param("trim", True),
+            " cuts kagome lattices to the outline; quad designs have no cut lattice",
         )
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
@@ -256,12 +265,11 @@ def _solver_request(
     for text in request.contracted_target or []:
         s, spec = parse_contracted(text, request.size)
         if s in contracted:
-            raise InputError(f"--contracted-target given twice for state {s}")
+            raise InputError(Param("contracted_target"), f" given twice for state {s}")
         contracted[s] = spec
     if target is None and not contracted:
-        raise InputError(
-            "give --target, or --contracted-target STATE:NAME for a closed-state outline"
-        )
+        outline = Param("contracted_target", shown='"STATE:NAME"', cli_value="STATE:NAME")
+        raise InputError("give ", Param("target"), ", or ", outline, " for a closed-state outline")
     fab_limits, intent = request.fabrication_limits(target)
     check_floor(request.min_opening)
     if (
@@ -327,7 +335,8 @@ def _check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Tar
             f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
             f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
             f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
-            f"{abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}"
+            f"{abs(target.area):.4g} mm²; the smallest size that could work is ",
+            Param("size", least, ".4g"),
         )
 
 
@@ -356,12 +365,12 @@ def _attempts(
     contracted: dict,
     shape_tol: tuple,
     say: Callable[[str], None],
-) -> tuple[tuple, list[dict]]:
+) -> tuple[DesignAttempt, list[dict]]:
     """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
     best, attempts = None, list[dict]()
     for init in inits:
-        if init == VIA_RIGID_INIT and best is not None and best[3] and _shape_met(best[1]):
+        if init == VIA_RIGID_INIT and best is not None and best.valid and _shape_met(best.report):
             break  # the rigid family is the last resort for a miss, not a second opinion
         req.init = init
         try:
@@ -378,30 +387,34 @@ def _attempts(
             continue
         req.rigid_first = False  # tried once: later guesses go to the full solver
         outcome = _check(result, contracted, request, target, shape_tol)
-        miss, shape_met = _fit_miss(outcome[1]), _shape_met(outcome[1])
+        miss, shape_met = _fit_miss(outcome.report), _shape_met(outcome.report)
         attempts.append(
             {
                 "init": init,
-                "status": outcome[1]["status"],
-                "problems": outcome[2],
-                "time_s": outcome[1]["time_s"],
+                "status": outcome.report["status"],
+                "problems": outcome.problems,
+                "time_s": outcome.report["time_s"],
                 "fit_max_rel_size": miss,
-                "hausdorff_max_rel": _hausdorff(outcome[1]),
+                "hausdorff_max_rel": _hausdorff(outcome.report),
                 "shape": "met" if shape_met else "missed",
             }
         )
         best = outcome if best is None or _rank(outcome) < _rank(best) else best
-        if outcome[3] and shape_met and (miss <= RETRY_FIT_ABOVE or outcome[1].get("rigid_first")):
+        if (
+            outcome.valid
+            and shape_met
+            and (miss <= RETRY_FIT_ABOVE or outcome.report.get("rigid_first"))
+        ):
             break  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
-        if outcome[3] and init != inits[-1]:
+        if outcome.valid and init != inits[-1]:
             why = (
                 f"misses the target by {miss:.2%} of its size"
                 if miss > RETRY_FIT_ABOVE
-                else f"misses the shape tolerance (Hausdorff {_hausdorff(outcome[1]):.2%} of the size)"
+                else f"misses the shape tolerance (Hausdorff {_hausdorff(outcome.report):.2%} of the size)"
             )
             say(f"fabkiri: design from the {init} guess {why}; trying the next guess too")
         elif len(inits) > 1 and init != inits[-1]:
-            say(f"fabkiri: design from the {init} guess failed ({outcome[2][0]}); retrying")
+            say(f"fabkiri: design from the {init} guess failed ({outcome.problems[0]}); retrying")
     if best is None:
         raise SolveError(
             "no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts)
@@ -410,10 +423,10 @@ def _attempts(
 
 
 def _outcome(
-    best, attempts: list[dict], messages: list[str], target: Target | None = None
+    best: DesignAttempt, attempts: list[dict], messages: list[str], target: Target | None = None
 ) -> DesignOutcome:
     """The judged outcome: the best design with its attempts, validity, shape verdict and fabricability."""
-    pattern, report, problems, valid, contracted_states = best
+    pattern, report, problems, valid = best.pattern, best.report, best.problems, best.valid
     report.update(attempts=attempts, time_s_total=float(sum(a["time_s"] for a in attempts)))
     annotate_misses(report, attempts, target, pattern)  # no advice already tried (shape_limits.py)
     shape_met = _shape_met(report)
@@ -426,7 +439,7 @@ def _outcome(
     pattern = Pattern(
         nodes=pattern.nodes,
         tiles=pattern.tiles,
-        contracted=contracted_states,
+        contracted=best.states,
         parity=0,
         name=pattern.name,
         lattice=pattern.lattice,
@@ -439,7 +452,7 @@ def _outcome(
     report["problems"] = [*report.get("problems", []), *too_closed]
     return DesignOutcome(
         pattern=pattern,
-        report=report,
+        report=cast(DesignReport, report),
         valid=bool(valid),
         shape_met=shape_met,
         problems=list(problems),
@@ -453,11 +466,10 @@ def _tol_rel(shape_tol: tuple, target: Target | None) -> float:
     return value / target.size if unit == "mm" and target is not None else value
 
 
-def _good(outcome) -> bool:
+def _good(outcome: DesignAttempt) -> bool:
     """Valid, within the shape tolerance and (for a printer) within its bed."""
-    return bool(
-        outcome[3] and _shape_met(outcome[1]) and outcome[1]["checks"].get("fits_bed", True)
-    )
+    r = outcome.report
+    return bool(outcome.valid and _shape_met(r) and r["checks"].get("fits_bed", True))
 
 
 def _continuation_first(request: PatternRequest, req: DesignRequest, contracted: dict) -> bool:
@@ -476,23 +488,6 @@ def _continuation_applies(req: DesignRequest, best, contracted: dict) -> bool:
         and not contracted
         and req.rows * req.cols < BIG_TILES
         and not (best is not None and _good(best))
-    )
-
-
-def preview_path(output) -> Path:
-    """Where the design preview goes: ``NAME.png`` beside ``NAME.json``."""
-    p = Path(output)
-    return p.with_name((p.stem if p.suffix.lower() == ".json" else p.name) + ".png")
-
-
-def _preview(pattern: Pattern, report: dict, output) -> tuple[Path, bytes]:
-    """The preview's path and bytes (rendered before anything is written); its name goes in the report."""
-    from ..render.conformance import conformance_png
-
-    path = preview_path(output)
-    report["preview"] = path.name
-    return path, conformance_png(
-        pattern, report.get("conformance") or {}, report.get("shape") or {}
     )
 
 

@@ -1,12 +1,13 @@
 """How the design front door judges an attempt: contract, check, measure the shape, and rank.
 
-:func:`_check` turns a solver result into ``(pattern, report, problems, valid, states)``; :func:`_rank`
-orders such outcomes, best first.
+:func:`_check` turns a solver result into a :class:`DesignAttempt`; :func:`_rank` orders attempts, best
+first.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -16,6 +17,7 @@ from ..fabricate import design_limits
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
 from .closed_states import closed_outline_fit, overlapping_tiles
+from .design_report import DesignAttempt
 
 if TYPE_CHECKING:  # design.py imports this module
     from .design import PatternRequest
@@ -23,18 +25,18 @@ if TYPE_CHECKING:  # design.py imports this module
 CLOSURE_TOL = 1e-9  # loop closure relative to the mean tile edge
 
 
-def _shape_met(report: dict) -> bool:
+def _shape_met(report: Mapping[str, Any]) -> bool:
     return all(j["status"] == "met" for j in (report.get("shape") or {}).values())
 
 
-def _hausdorff(report: dict) -> float:
+def _hausdorff(report: Mapping[str, Any]) -> float:
     """Worst Hausdorff distance of any outline relative to its target's size."""
     return max(
         (c["hausdorff_rel"] for c in (report.get("conformance") or {}).values()), default=0.0
     )
 
 
-def _fit_miss(report: dict) -> float:
+def _fit_miss(report: Mapping[str, Any]) -> float:
     """Worst fit of the tips (deployed or closed-state outline) to any target relative to its size (the soft
     outline rows never reach zero: ``_hausdorff`` judges the whole outline)."""
     return max(
@@ -47,17 +49,17 @@ def _fit_miss(report: dict) -> float:
     )
 
 
-def _rank(outcome) -> tuple:
+def _rank(outcome: DesignAttempt) -> tuple:
     """Order of preference among attempts: valid first, then (for a printer) closed state 1 within its bed, then
     fewer problems, then the shape tolerance met, then the smaller Hausdorff distance, then the closer fit of
     the tips (the heart 8x8 for prusa-mk4: the refined design, 3.27 %, was 227 mm tall on the 210 mm bed)."""
     return (
-        not outcome[3],
-        not outcome[1].get("checks", {}).get("fits_bed", True),
-        len(outcome[2]),
-        not _shape_met(outcome[1]),
-        _hausdorff(outcome[1]),
-        _fit_miss(outcome[1]),
+        not outcome.valid,
+        not outcome.report.get("checks", {}).get("fits_bed", True),
+        len(outcome.problems),
+        not _shape_met(outcome.report),
+        _hausdorff(outcome.report),
+        _fit_miss(outcome.report),
     )
 
 
@@ -67,18 +69,20 @@ def refinement_attempt(
     """The attempt record of a refinement (its best ``_check`` outcome ``cand``, or None with ``none_why``)."""
     return {
         "init": init,
-        "status": cand[1]["status"] if cand else "unconverged",
-        "problems": cand[2] if cand else [none_why],
+        "status": cand.report["status"] if cand else "unconverged",
+        "problems": cand.problems if cand else [none_why],
         "time_s": secs,
-        "hausdorff_max_rel": _hausdorff(cand[1]) if cand else float("nan"),
-        "shape": "met" if cand and _shape_met(cand[1]) else "missed",
+        "hausdorff_max_rel": _hausdorff(cand.report) if cand else float("nan"),
+        "shape": "met" if cand and _shape_met(cand.report) else "missed",
         "refinement_hausdorff_rel": trace,
         "kept": kept,
     }
 
 
-def _check(result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple):
-    """Contract, check closure, overlaps and outlines; returns (pattern, report, problems, valid, states)."""
+def _check(
+    result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple
+) -> DesignAttempt:
+    """Contract, check closure, overlaps and outlines: the judged :class:`DesignAttempt`."""
     pattern = result.pattern
     report = dict(result.report)
     size = pattern.tile_size
@@ -134,7 +138,7 @@ def _check(result, contracted, request: PatternRequest, target: Target | None, s
     if problems:
         report["status"] = "unconverged"
         report["problems"] = problems
-    return pattern, report, problems, valid, contracted_states
+    return DesignAttempt(pattern, report, problems, valid, contracted_states)
 
 
 def _conformance(

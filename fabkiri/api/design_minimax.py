@@ -30,7 +30,7 @@ from dataclasses import replace
 from ..design.core.refine import refine_minimax
 from ..design.quad.solve import DesignRequest, design
 from ..verify import verify_pattern
-from .design_judge import _hausdorff, _rank, refinement_attempt
+from .design_judge import DesignAttempt, _hausdorff, _rank, refinement_attempt
 
 # from this many tiles (the coarse-to-fine sizes; below it the full solver's second opinion and the guesses in
 # turn already weigh several fits, and a 16x16 design would pay several times its own time)
@@ -72,28 +72,31 @@ def applies(req: DesignRequest, contracted: dict, best) -> bool:
     does)."""
     return (
         best is not None
-        and (bool(best[3]) or overlapping_only(best))
+        and (bool(best.valid) or overlapping_only(best))
         and req.target is not None
         and not contracted
         and req.fabrication is None
         and not req.min_opening
         and req.rows * req.cols >= MINIMAX_TILES
-        and (not best[3] or _hausdorff(best[1]) > max(threshold(FINISH_ABOVE, req), FINISH_FLOOR))
+        and (
+            not best.valid
+            or _hausdorff(best.report) > max(threshold(FINISH_ABOVE, req), FINISH_FLOOR)
+        )
     )
 
 
-def overlapping_only(outcome: tuple) -> bool:
+def overlapping_only(outcome: DesignAttempt) -> bool:
     """Whether a ``_check`` outcome fails on overlapping tiles alone (converged, both closed states closing):
     the refitted redesign may find a valid design in another basin (the 64x64 drop's tips-only design
     overlapped in state 1 where the solver's contact rows had not seen the pair)."""
-    checks = outcome[1].get("checks") or {}
+    checks = outcome.report.get("checks") or {}
     overlaps = sum(1 for k, v in checks.items() if k.startswith("overlaps_") and v)
-    return not outcome[3] and overlaps > 0 and len(outcome[2]) == overlaps
+    return not outcome.valid and overlaps > 0 and len(outcome.problems) == overlaps
 
 
 def minimax_finish(
     req: DesignRequest,
-    best: tuple,
+    best: DesignAttempt,
     judge: Callable,
     attempts: list[dict],
     say: Callable[[str], None],
@@ -103,10 +106,10 @@ def minimax_finish(
     leave more than ``REFIT_ABOVE`` (scaled, ``threshold``); the refined outcome when one passes every check with a smaller Hausdorff
     distance (ranking no worse, failing no ``verify`` check ``best`` passes), else None. From an overlapping
     ``best`` only the refitted redesign and its steps, kept when valid. The attempt is recorded either way."""
-    h0, valid = _hausdorff(best[1]), bool(best[3])
+    h0, valid = _hausdorff(best.report), bool(best.valid)
     # no steps from an overlapping design (``overlapping_only``): the refitted redesign, and the steps from that
     cand, trace, secs = _steps(req, best, judge) if valid else (None, [], 0.0)
-    refit, left = None, min(h0, _hausdorff(cand[1]) if cand else h0) if valid else float("inf")
+    refit, left = None, min(h0, _hausdorff(cand.report) if cand else h0) if valid else float("inf")
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it (not
     # for a symmetric design: its levels have the outline rows already, ``DesignProblem._coarse_level``, the same design)
     if not req.coarse_refit and not req.symmetry and left > threshold(REFIT_ABOVE, req):
@@ -114,8 +117,8 @@ def minimax_finish(
         # shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted 0.31 %)
         again = replace(req, init="coarse", start=None, coarse_refit=True)
         refit = judge(design(replace(again, coarse_refit_above=threshold(FINISH_ABOVE, req))))
-        secs += float(refit[1]["time_s"])
-        if refit[3]:
+        secs += float(refit.report["time_s"])
+        if refit.valid:
             more, more_trace, more_secs = _steps(req, refit, judge)
             trace, secs = trace + more_trace, secs + more_secs
             for c in (refit, more):
@@ -125,7 +128,7 @@ def minimax_finish(
     better = cand is not None and (
         _rank(cand) < _rank(best)
         if not valid
-        else _hausdorff(cand[1]) < h0
+        else _hausdorff(cand.report) < h0
         and _rank(cand) <= _rank(best)
         and _fails(cand, shape_tol) <= _fails(best, shape_tol)
     )
@@ -133,34 +136,34 @@ def minimax_finish(
         refinement_attempt(
             "minimax refinement", cand, secs, trace, better, "no refinement step passed every check"
         )
-        | {"refit_hausdorff_rel": _hausdorff(refit[1]) if refit else None}
+        | {"refit_hausdorff_rel": _hausdorff(refit.report) if refit else None}
     )
     if better:
         assert cand is not None
-        if cand[1].get("coarse") is None:  # a warm-started step: its start came coarse to fine
-            cand[1]["coarse"] = best[1].get("coarse")
-        cand[1]["minimax"] = {"from_hausdorff_rel": h0, "steps_hausdorff_rel": trace}
+        if cand.report.get("coarse") is None:  # a warm-started step: its start came coarse to fine
+            cand.report["coarse"] = best.report.get("coarse")
+        cand.report["minimax"] = {"from_hausdorff_rel": h0, "steps_hausdorff_rel": trace}
         say(
-            f"fabkiri: minimax refinement: Hausdorff {100 * h0:.2f} % -> {100 * _hausdorff(cand[1]):.2f} % "
+            f"fabkiri: minimax refinement: Hausdorff {100 * h0:.2f} % -> {100 * _hausdorff(cand.report):.2f} % "
             f"of the size ({len(trace)} steps)"
         )
     return cand if better else None
 
 
 def _steps(
-    req: DesignRequest, start: tuple, judge: Callable
-) -> tuple[tuple | None, list[float], float]:
+    req: DesignRequest, start: DesignAttempt, judge: Callable
+) -> tuple[DesignAttempt | None, list[float], float]:
     """Lawson's steps from the outcome ``start``: the best step's ``_check`` outcome that passes every check
     (None if none does), the Hausdorff distance of every step and their seconds."""
-    checked: dict[int, tuple] = {}
+    checked: dict[int, DesignAttempt] = {}
 
     def valid(result) -> bool:
         checked[id(result)] = judge(result)
-        return bool(checked[id(result)][3])
+        return bool(checked[id(result)].valid)
 
     refined, trace, secs = refine_minimax(
         replace(req, start=None),
-        start[0].nodes,
+        start.pattern.nodes,
         steps=MINIMAX_STEPS,
         gamma=MINIMAX_GAMMA,
         accept=valid,
@@ -170,7 +173,7 @@ def _steps(
     return (checked.get(id(refined)) if refined is not None else None), trace, secs
 
 
-def _fails(outcome: tuple, shape_tol: tuple) -> set[str]:
+def _fails(outcome: DesignAttempt, shape_tol: tuple) -> set[str]:
     """The names of the ``verify`` checks the outcome's pattern (with its closed states) fails."""
-    whole = outcome[0].with_contracted(outcome[4]).with_parity(0)
+    whole = outcome.pattern.with_contracted(outcome.states).with_parity(0)
     return {c.name for c in verify_pattern(whole, shape_tol=shape_tol).failed()}

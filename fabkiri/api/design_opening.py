@@ -4,17 +4,18 @@ design opens little."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
 from ..design.core.refine import refine_minimax
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, via_rigid_applies
-from ..errors import InputError
+from ..errors import InputError, Param
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
-from .design_judge import _hausdorff, _rank, _shape_met, refinement_attempt
+from .design_judge import DesignAttempt, _hausdorff, _rank, _shape_met, refinement_attempt
 
 # a floor the solver met (its row >= 0) reads back through the mm figures to about round-off
 FLOOR_SLACK = 1e-9
@@ -24,7 +25,7 @@ def check_floor(floor: float | None) -> None:
     """InputError unless ``floor`` is None or a hole fraction in (0, 1)."""
     if floor is not None and not (np.isfinite(floor) and 0.0 < floor < 1.0):
         raise InputError(
-            f"--min-opening is a deployed hole fraction in (0, 1) (e.g. 0.3), got {floor}"
+            Param("min_opening"), f" is a deployed hole fraction in (0, 1) (e.g. 0.3), got {floor}"
         )
 
 
@@ -41,7 +42,7 @@ def judge(pattern: Pattern, report: dict, floor: float | None) -> list[str]:
     return []
 
 
-def summary_lines(report: dict, command: str = "design") -> list[str]:
+def summary_lines(report: Mapping[str, Any], command: str = "design") -> list[str]:
     """The opening line and, for a design that opens little, the one-line warning (with ``command``'s
     option that asks for more when it was not given)."""
     d = report.get("opening")
@@ -60,7 +61,7 @@ def summary_lines(report: dict, command: str = "design") -> list[str]:
 
 def refine_to_floor(
     req: DesignRequest,
-    best: tuple,
+    best: DesignAttempt,
     judge: Callable,
     attempts: list[dict],
     say: Callable[[str], None],
@@ -70,15 +71,15 @@ def refine_to_floor(
     by it (its steps are reduced solves). Returns the refined ``_check`` outcome when it ranks better than
     ``best``, else None; the attempt is recorded either way. Measured: star at 150 mm, 16x16, --min-opening
     0.3: 3.09 % -> 1.87 % of the size (rigid family, 10 steps)."""
-    if not req.min_opening or req.target is None or not best[3] or _shape_met(best[1]):
+    if not req.min_opening or req.target is None or not best.valid or _shape_met(best.report):
         return None
     say(
         f"fabkiri: with --min-opening {req.min_opening:g} the design misses the shape (Hausdorff "
-        f"{100 * _hausdorff(best[1]):.2f} % of the size); refining it under the floor (minimax steps)"
+        f"{100 * _hausdorff(best.report):.2f} % of the size); refining it under the floor (minimax steps)"
     )
     rigid = via_rigid_applies(replace(req, init=VIA_RIGID_INIT))
     step = replace(req, init=VIA_RIGID_INIT if rigid and not req.rigid else req.init)
-    refined, trace, secs = refine_minimax(step, best[0].nodes)
+    refined, trace, secs = refine_minimax(step, best.pattern.nodes)
     cand = judge(refined) if refined is not None else None
     better = cand is not None and _rank(cand) < _rank(best)
     attempts.append(

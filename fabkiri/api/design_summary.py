@@ -1,20 +1,24 @@
 """What ``fabkiri design`` says about a quad design: the summary lines behind
-:meth:`fabkiri.api.design.DesignOutcome.summary`."""
+:meth:`fabkiri.api.design.DesignOutcome.summary`, and the preview picture beside the pattern."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from ..design.core import conformance as conf
 from ..fabricate import fabricability
+from ..pattern.model import Pattern
 from .design_opening import summary_lines as opening_lines
+from .design_report import DesignReport
 
 
-def summary_lines(path, report: dict) -> list[str]:
-    """What ``fabkiri design`` says on stderr about a quad design written to ``path``: the figures,
+def summary_lines(path, report: DesignReport) -> list[str]:
+    """What ``fabkiri design`` says on stderr about a quad design written to ``path`` (None: not written): the figures,
     the fabrication rows and fabricability, then one ``fabkiri: design failed: ...`` line per problem."""
     out: list[str] = []
     fit = report.get("fit", {})
     parts = [
-        f"wrote {path}: {report['status']}",
+        f"{wrote(path)}: {report['status']}",
         f"max equality residual {report['max_equality_residual']:.2e}",
         f"{report['iterations_total']} iterations",
         f"{report['time_s']:.2f} s",
@@ -58,3 +62,25 @@ def summary_lines(path, report: dict) -> list[str]:
                 f"fabkiri: design failed: {conf.describe_miss(k.replace('_', ' '), report['shape'][k], c)}"
             )
     return out
+
+
+def wrote(path) -> str:
+    """How a summary's first line names the design: the file it was written to, if any."""
+    return f"wrote {path}" if path is not None else "designed"
+
+
+def preview_path(output) -> Path:
+    """Where the design preview goes: ``NAME.png`` beside ``NAME.json``."""
+    p = Path(output)
+    return p.with_name((p.stem if p.suffix.lower() == ".json" else p.name) + ".png")
+
+
+def _preview(pattern: Pattern, report: DesignReport, output) -> tuple[Path, bytes]:
+    """The preview's path and bytes (rendered before anything is written); its name goes in the report."""
+    from ..render.conformance import conformance_png
+
+    path = preview_path(output)
+    report["preview"] = path.name
+    return path, conformance_png(
+        pattern, report.get("conformance") or {}, report.get("shape") or {}
+    )

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -32,7 +32,7 @@ from ..design.kagome.fit import design
 from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.targets.curve import Target
 from ..design.targets.lookup import load_target
-from ..errors import InputError
+from ..errors import InputError, Param
 from ..exchange.pattern_json import dumps
 from ..fabricate import fabricability
 from ..fileio import atomic_write
@@ -44,6 +44,8 @@ from ..verify import verify_pattern
 from .design_opening import check_floor
 from .design_opening import judge as judge_opening
 from .design_opening import summary_lines as opening_lines
+from .design_report import KagomeReport
+from .design_summary import wrote
 from .designers import register_designer
 
 if TYPE_CHECKING:
@@ -58,7 +60,9 @@ class KagomeOutcome:
     """A kagome design, its report and its verdict."""
 
     pattern: Pattern
-    report: dict
+    report: (
+        KagomeReport  # written into pattern.json as ``design.report`` (design-report.schema.json)
+    )
     valid: bool
     tiles: tuple[int, int] = (0, 0)  # rows, cols
 
@@ -70,14 +74,19 @@ class KagomeOutcome:
         """Write the pattern (atomically); a kagome design has no preview yet."""
         atomic_write(path, dumps(self.pattern))
 
-    def summary(self, path) -> list[str]:
-        """The lines ``fabkiri design --lattice kagome`` prints about the design written to ``path``: the
-        figures, then the fabrication limits and whether the design meets them (mm), then fabricability."""
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solver ended at (the same name on every design outcome)."""
+        return float(self.report["max_equality_residual"])
+
+    def summary(self, path=None) -> list[str]:
+        """The lines ``fabkiri design --lattice kagome`` prints about the design written to ``path`` (None:
+        not written): the figures, then the fabrication limits and whether the design meets them (mm), then fabricability."""
         r, (rows, cols) = self.report, self.tiles
         cut = f" cut to {r['trimmed_tiles']} tiles" if r.get("trimmed_tiles") else ""
         out = [
-            f"wrote {path}: kagome {rows}x{cols}{cut} {r['status']}, max equality residual "
-            f"{r['max_equality_residual']:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
+            f"{wrote(path)}: kagome {rows}x{cols}{cut} {r['status']}, max equality residual "
+            f"{self.max_equality_residual:.2e}, Hausdorff {100 * r['conformance']['hausdorff_rel']:.2f} % of "
             f"the size (shape {r['shape']['status']}), verify: "
             f"{'pass' if not r['verify_failed'] else 'FAIL ' + ', '.join(r['verify_failed'])}"
         ]
@@ -194,7 +203,7 @@ def design_kagome(  # noqa: PLR0913 (the options of `fabkiri design --lattice ka
     valid = report["status"] == "converged" and not report["verify_failed"]
     valid = valid and bool(report.get("fabrication", {}).get("met", True)) and not too_closed
     pattern = replace(pattern, design={**(pattern.design or {}), "report": report, "valid": valid})
-    return KagomeOutcome(pattern, report, valid, (rows, cols))
+    return KagomeOutcome(pattern, cast(KagomeReport, report), valid, (rows, cols))
 
 
 def _solve(std, tgt, symmetry, fab_of, accept):
@@ -308,7 +317,8 @@ def _check_room(
         raise InputError(
             f"{rows}x{cols} triangles each at least {w:.3g} mm wide ({limits.source}) cannot fit a "
             f"{target.size:.4g} mm {target.name}: they cover at least {pal_bound(n, w):.4g} mm² (Pál) but "
-            f"the target has {abs(target.area):.4g} mm²; the smallest size that could work is --size {least:.4g}"
+            f"the target has {abs(target.area):.4g} mm²; the smallest size that could work is ",
+            Param("size", least, ".4g"),
         )
 
 

@@ -17,19 +17,19 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from .. import limits
 from ..design.core import conformance as conf
 from ..design.targets.lookup import load_target
-from ..errors import FabkiriError, InputError
+from ..errors import FabkiriError, InputError, Param
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from ..pattern.tilecount import tile_count
 from .design import _check_room
 from .maker_design import (  # noqa: F401 (_opening_lines re-exported)
+    StepRun,
     _opening_lines,
     design_step,
     options_after_refusal,
@@ -123,7 +123,7 @@ def _floor(min_opening) -> float | None:
     try:
         floor = float(min_opening)
     except (TypeError, ValueError):
-        raise InputError(f"--min-opening must be a number, got {min_opening!r}") from None
+        raise InputError(Param("min_opening"), f" must be a number, got {min_opening!r}") from None
     check_floor(floor)
     return floor
 
@@ -133,18 +133,27 @@ def _plan(  # noqa: PLR0913 (make()'s options, checked before any design)
 ) -> _Plan:
     """Every check of the request that needs no design: one :class:`InputError` naming the problem."""
     if (material is None) == (printer is None):
-        raise InputError("make needs exactly one of --material (laser cut) or --printer (3D print)")
+        raise InputError(
+            "make needs exactly one of ",
+            Param("material"),
+            " (laser cut) or ",
+            Param("printer"),
+            " (3D print)",
+        )
     try:
         size = float(size)
     except (TypeError, ValueError):
-        raise InputError(f"--size must be a length in mm, got {size!r}") from None
+        raise InputError(Param("size"), f" must be a length in mm, got {size!r}") from None
     if not (np.isfinite(size) and 0 < size <= limits.MAX_LENGTH_MM):
         raise InputError(
-            f"--size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, got {size:g}"
+            Param("size"),
+            f" must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, got {size:g}",
         )
     tiles = None if tiles is None else tile_count(tiles)  # "8x8" or (8, 8)
     if tiles is not None and (len(tiles) != 2 or min(tiles) < 2):
-        raise InputError(f"--tiles needs at least 2x2 tiles, got {'x'.join(map(str, tiles))}")
+        raise InputError(
+            Param("tiles"), f" needs at least 2x2 tiles, got {'x'.join(map(str, tiles))}"
+        )
     curve = load_target(str(target), size)
     fab, intent = design_limits.resolve(material, hinge, printer, style, None, None, curve)
     assert fab is not None  # a material or a printer was given
@@ -205,7 +214,8 @@ def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) ->
     except FabkiriError as exc:
         if name == "design":  # refused before any work: bad input, nothing written
             raise
-        ok, code, figures, files, details = False, exc.exit_code, str(exc), {}, []
+        # make's record names make's own command lines (its alternatives), so its flags too
+        ok, code, figures, files, details = False, exc.exit_code, exc.cli_message(), {}, []
         result.alternatives = refusal_alternatives(result, plan, name, exc)
         if result.refused and not result.alternatives:  # nothing passes at this design: redesign
             details = options_after_refusal(result, plan, say, CHECKS)
@@ -238,9 +248,6 @@ def refusal_alternatives(result: MakeResult, plan: _Plan, step: str, error: Fabk
 
     result.refused = isinstance(error, Refused)
     return list(getattr(error, "alternatives", None) or [])
-
-
-StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
 
 
 def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
@@ -285,7 +292,7 @@ def _cut(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         f"{len(cut.readback.checks)} read-back checks passed"
         + (", verifier passed" if cut.readback.verifier is not None else "")
     )
-    return True, 0, figures, {f"cut/{k}": v for k, v in cut.files.items()}, []
+    return StepRun(True, 0, figures, {f"cut/{k}": v for k, v in cut.files.items()}, [])
 
 
 def _print(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
@@ -300,7 +307,7 @@ def _print(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         notify=say,
         ask=_ask(result, plan),
     )
-    return True, 0, out.describe(), {f"print/{k}": v for k, v in out.files.items()}, []
+    return StepRun(True, 0, out.describe(), {f"print/{k}": v for k, v in out.files.items()}, [])
 
 
 def _deploy(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
@@ -314,7 +321,7 @@ def _deploy(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
         f"{s['t_at_energy_max']:.3f}, "
         + ("collision-free" if s["collision_free"] else f"{s['overlaps']} overlaps")
     )
-    return (
+    return StepRun(
         out.success,
         0 if out.success else 1,
         figures,
@@ -346,7 +353,7 @@ def _report(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
             deploy=str(folder / "deploy"),
             states=states,
         )
-    return True, 0, f"{len(page) / 1e6:.2f} MB", {"report.html": page}, []
+    return StepRun(True, 0, f"{len(page) / 1e6:.2f} MB", {"report.html": page}, [])
 
 
 # the steps an alternative of each process must pass before it is named (maker_design)

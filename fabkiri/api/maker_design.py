@@ -29,18 +29,31 @@ import shlex
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from ..design.core import conformance as conf
 from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
 from . import maker_options as mo
+from .design_report import DesignReport
 from .maker_result import MakeResult
 from .maker_tiles import TilesChoice, choose_tiles, retry_tiles
 
 Progress = Callable[[str], None]
-StepRun = tuple[bool, int, str, dict[str, Any], list[str]]
+
+
+class StepRun(NamedTuple):
+    """What one step of ``make`` did: whether it passed, its exit code, its one-line figures, its files
+    (by name in the run's folder) and the lines it adds below them."""
+
+    ok: bool
+    exit_code: int
+    figures: str
+    files: dict[str, Any]
+    details: list[str]
+
+
 StepFn = Callable[[MakeResult, Any, Progress], StepRun]
 Checks = Mapping[str, Sequence[StepFn]]  # by process: the steps an alternative must pass
 # a miss up to this many times the tolerance is retried with other tile counts (star6 at 150 mm on
@@ -80,7 +93,7 @@ class _Attempt:
         shape = (
             f"Hausdorff {100 * f['hausdorff_rel']:.2f} %" if "hausdorff_rel" in f else "no shape"
         )
-        verdict = "met" if self.run[0] else "missed"
+        verdict = "met" if self.run.ok else "missed"
         return f"{r}x{c} {verdict} ({shape}, CPU {self.cpu_s:.1f} s)"
 
 
@@ -89,7 +102,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
     are, by process, the steps (cut or print, deploy) an alternative must pass before it is named."""
     first = _attempt(result, plan, say)
     miss = first.miss
-    if first.run[0] or miss is None or miss <= 1:
+    if first.run.ok or miss is None or miss <= 1:
         return first.run  # met, or failed for another reason than the shape
     if miss > RETRY_WITHIN:
         note = (
@@ -113,10 +126,10 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
         try:
             attempt = _attempt(result, replace(plan, tiles=choice), say)
         except FabkiriError as exc:  # a count the design refuses up front: the next one
-            say(f"make: {r}x{c} tiles refused by the design ({exc}); not counted")
+            say(f"make: {r}x{c} tiles refused by the design ({exc.cli_message()}); not counted")
             continue
         tried.append(attempt)
-        if not attempt.run[0]:
+        if not attempt.run.ok:
             continue
         if not plan.tiles.given:
             return _adopt(result, attempt, tried)
@@ -189,13 +202,13 @@ def _other_options(
         try:
             attempt = _attempt(MakeResult.of_plan(other), other, say)
         except FabkiriError as exc:  # refused up front (room, tiles): not counted
-            lines.append(f"{option.name}: refused by the design ({exc})")
+            lines.append(f"{option.name}: refused by the design ({exc.cli_message()})")
             continue
         runs.append(attempt)
-        if attempt.run[0] and adopt:
+        if attempt.run.ok and adopt:
             result.pattern, result.figures = attempt.pattern, attempt.figures
             return _adopt(result, attempt, [*tried, attempt]), lines
-        named = attempt.run[0] and _checked_alternative(
+        named = attempt.run.ok and _checked_alternative(
             other, attempt, checks[other.process], result.output, option.auto, mo.tag(plan, option)
         )
         verdict = f"{other.process} and deploy pass" if named else "does not make"
@@ -235,7 +248,7 @@ def _larger_size(
     attempt = _attempt(scratch, bigger, say)
     if ran is not None:
         ran.append(attempt)
-    named = attempt.run[0] and _checked_alternative(
+    named = attempt.run.ok and _checked_alternative(
         bigger, attempt, checks[plan.process], result.output, sized=True
     )
     if named:
@@ -273,8 +286,7 @@ def _rc(tiles: TilesChoice) -> str:
 
 
 def _with_details(run: StepRun, lines: list[str]) -> StepRun:
-    ok, code, figures, files, details = run
-    return ok, code, figures, files, [*details, *lines]
+    return run._replace(details=[*run.details, *lines])
 
 
 def _tried_lines(tried: list[_Attempt]) -> list[str]:
@@ -330,7 +342,7 @@ def _checked_alternative(
     scratch = MakeResult.of_plan(plan, tiles=attempt.tiles, pattern=attempt.pattern)
     for step in checks:
         try:
-            if not step(scratch, plan, lambda text: None)[0]:
+            if not step(scratch, plan, lambda text: None).ok:
                 return None
         except FabkiriError:
             return None
@@ -388,10 +400,12 @@ def _design(result: MakeResult, plan, say: Progress) -> StepRun:
     result.figures = _design_figures(report)
     details = [line for line in outcome.summary(name) if line.startswith("fabkiri: design failed")]
     details = _opening_lines(report) + details
-    return outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details
+    return StepRun(
+        outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details
+    )
 
 
-def _design_figures(report: dict) -> dict[str, Any]:
+def _design_figures(report: DesignReport) -> dict[str, Any]:
     """Hausdorff of the deployed outline (share of the size) and its tolerance; the deployment amount
     (``report["opening"]``, from the ``opening`` work) when the design reports it."""
     out: dict[str, Any] = {}
@@ -407,7 +421,7 @@ def _design_figures(report: dict) -> dict[str, Any]:
     return out
 
 
-def _design_line(status: str, report: dict) -> str:
+def _design_line(status: str, report: DesignReport) -> str:
     c = (report.get("conformance") or {}).get("deployed")
     shape = (
         f", Hausdorff {100 * c['hausdorff_rel']:.2f} % of the size "
@@ -421,7 +435,7 @@ def _design_line(status: str, report: dict) -> str:
     return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active"
 
 
-def _opening_lines(report: dict) -> list[str]:
+def _opening_lines(report: Mapping[str, Any]) -> list[str]:
     """How much the design opens and, below 10 %, the warning (as design says them, naming make's option)."""
     from .design_opening import summary_lines
 

@@ -69,10 +69,10 @@ def refuse_narrow(
         try:
             attempt = _attempt(MakeResult.of_plan(other), other, say)
         except FabkiriError as exc:  # refused up front (room): not counted
-            lines.append(f"{label}: refused by the design ({exc})")
+            lines.append(f"{label}: refused by the design ({exc.cli_message()})")
             continue
         tried.append(attempt)
-        named = attempt.run[0] and _checked_alternative(
+        named = attempt.run.ok and _checked_alternative(
             other, attempt, checks[plan.process], result.output, sized, _tag(plan, other, sized)
         )
         lines.append(
@@ -87,7 +87,7 @@ def refuse_narrow(
         _, more = _other_options(result, plan, say, checks, tried, first, max_runs=left)
         lines += more
     lines.append(f"the options cost CPU {cpu_s() - start:.1f} s (no design at the tiles asked)")
-    return False, 1, f"refused before any design: {reason}", {}, lines
+    return StepRun(False, 1, f"refused before any design: {reason}", {}, lines)
 
 
 def _candidates(plan, narrow: NarrowTiles):

@@ -11,13 +11,47 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 from ..fileio import atomic_write_many
 from ..pattern.model import Pattern
 from .maker_tiles import TilesChoice
 
 MANIFEST = "make.json"  # the record of the run, written last (also when a step failed)
+SCHEMA = "make.schema.json"  # beside this module: what ``make.json`` holds
+
+
+class StepRecord(TypedDict):
+    """One step as ``make.json`` records it (:meth:`Step.to_dict`)."""
+
+    name: str
+    ok: bool
+    exit_code: int
+    wall_s: float
+    cpu_s: float
+    figures: str
+    details: list[str]
+    files: list[str]
+
+
+class MakeRecord(TypedDict):
+    """``make.json`` (:meth:`MakeResult.to_dict`)."""
+
+    format: str  # "fabkiri.make"
+    version: int
+    target: str
+    size_mm: float
+    process: str  # "cut" or "print"
+    fabrication: str
+    tiles: list[int]  # rows, cols
+    tiles_reason: str
+    ok: bool
+    exit_code: int
+    failed_step: str | None
+    figures: dict[str, Any]
+    alternatives: list[str]  # each a command line that makes it
+    design_retries: list[str]
+    steps: list[StepRecord]
 
 
 @dataclass
@@ -36,7 +70,7 @@ class Step:
         default_factory=list
     )  # the step's own lines (a failed design's misses)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> StepRecord:
         return {
             "name": self.name,
             "ok": self.ok,
@@ -113,7 +147,7 @@ class MakeResult:
     def step(self, name: str) -> Step | None:
         return next((s for s in self.steps if s.name == name), None)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> MakeRecord:
         """The record written as ``make.json``."""
         return {
             "format": "fabkiri.make",
@@ -147,10 +181,11 @@ class MakeResult:
         """Write every file made and ``make.json`` into ``folder`` all-or-nothing (``make(output=None)``)."""
         return atomic_write_many(folder, {**self.files, MANIFEST: self.manifest_text()})
 
-    def summary(self) -> list[str]:
+    def summary(self, path=None) -> list[str]:
         """What was made, at what size and with how many tiles, each step's figures, what to do next
-        (or which step failed, with its figures and any alternatives), and the files."""
-        where = str(self.output) if self.output is not None else "."
+        (or which step failed, with its figures and any alternatives), and the files, in the folder ``path``
+        (None: the run's output folder, if any)."""
+        where = str(path if path is not None else self.output if self.output is not None else ".")
         t = self.tiles
         out = [
             f"make: {self.target} at {self.size:g} mm for {self.process} ({self.fabrication}), "

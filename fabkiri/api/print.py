@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from .. import limits
-from ..errors import CheckFailed, FabricationError, InputError
+from ..errors import CheckFailed, FabricationError, InputError, Param
 from ..fabricate import fabricability as fb
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.print import mesh
@@ -205,7 +205,9 @@ def _scaled(
     elif isinstance(
         given, str
     ):  # a library caller's text: one line, not a TypeError deep in check_scale
-        raise InputError(f"--scale must be a number (mm printed per mm) or auto, got {given!r}")
+        raise InputError(
+            Param("scale"), f" must be a number (mm printed per mm) or auto, got {given!r}"
+        )
     else:
         scale = given
     limits.check_scale(pattern.nodes, pattern.tiles, scale, "--scale")
@@ -310,7 +312,11 @@ def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -
     from ..fabricate.print.marks import marked_cut
 
     if not print_style(job.style).loose_strips:
-        raise InputError("--marks engraves strip pads on laser-cut tiles: it needs --style strips")
+        raise InputError(
+            Param("marks", True),
+            " engraves strip pads on laser-cut tiles: it needs ",
+            Param("style", "strips"),
+        )
     res, n = marked_cut(
         pattern, job.state, job.strips, job.plan.corners, load_material(material), stem, source
     )

@@ -49,10 +49,17 @@ class TubeOutcome:
     def exit_code(self) -> int:
         return 0 if self.valid else 1
 
-    def summary(self) -> list[str]:
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solver ended at (the tube report's ``equality_max``)."""
+        return self.result.max_equality_residual
+
+    def summary(self, path=None) -> list[str]:
+        """The figures, the tube and the problems; with ``path``, the first line names the file written."""
         r = self.result.report
         lines = [
-            f"{r['status']}: max equality residual {r['equality_max']:.2e} (tol {r['tol']:g}), "
+            ("" if path is None else f"wrote {path}: ")
+            + f"{r['status']}: max equality residual {self.max_equality_residual:.2e} (tol {r['tol']:g}), "
             f"{r['continuation_steps']} continuation step(s), ends fitted to {r['fit_max_mm']:.3g} mm, "
             f"{r['cpu_s']:.2f} s CPU / {r['wall_s']:.2f} s wall"
         ]
@@ -88,7 +95,7 @@ def design_tube_pattern(
     problems: list[str] = []
     if not res.converged:
         problems.append(
-            f"the solver stopped at max equality residual {res.report['equality_max']:.3g} "
+            f"the solver stopped at max equality residual {res.max_equality_residual:.3g} "
             f"(tol {tol:g}) after {res.report['continuation_steps']} continuation step(s)"
         )
         if (

@@ -262,7 +262,7 @@ def _run(args: argparse.Namespace) -> int:
         code = args.func(args)
         return int(code or 0)
     except FabkiriError as exc:
-        print(f"fabkiri: error: {exc}", file=sys.stderr)
+        print(f"fabkiri: error: {exc.cli_message()}", file=sys.stderr)
         return exc.exit_code
     except (
         BrokenPipeError

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..design.quad.fabrication import FabricationLimits
 from ..design.targets.curve import Target
-from ..errors import FabricationError, InputError
+from ..errors import FabricationError, InputError, Param
 from .cut.hingekinds import hinge_kind
 from .cut.materials import HINGE_KINDS, Material, load_material
 from .print import geometry as printgeom
@@ -102,9 +102,11 @@ def resolve(
         str, str | float
     ] = {}  # cut/print defaults: material, hinge, printer, style, size, scale
     if hinge and not material:
-        raise InputError("--hinge needs --material (the hinge kind of a laser-cut sheet)")
+        raise InputError(
+            Param("hinge"), " needs ", Param("material"), " (the hinge kind of a laser-cut sheet)"
+        )
     if style and not printer:
-        raise InputError("--style needs --printer")
+        raise InputError(Param("style"), " needs ", Param("printer"))
     if material:
         mat = load_material(material)
         kind = hinge or mat.hinge

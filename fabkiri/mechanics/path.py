@@ -7,7 +7,7 @@ the deployed (design) state and ``t = 1`` closed state 2 (:data:`MARKS`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NotRequired, TypedDict
 
 import numpy as np
 
@@ -22,6 +22,38 @@ from .contract import contract_both
 CLOSURE_TOL = 1e-9  # relative to the mean tile edge, as in `fabkiri info`
 RIGID_TOL_RAD = 1e-9  # hinge sums below this: rigid-deployable
 MARKS = {"closed state 1": 0.0, "deployed": 0.5, "closed state 2": 1.0}
+
+
+class DeployReport(TypedDict):
+    """``deploy.json``: a path's figures (:meth:`DeploymentPath.summary`) and what ``fabkiri.api.deploy``
+    adds (the deepest overlap, the pattern's fingerprint, a tube's radius along the path); the JSON Schema
+    ``fabkiri/api/deploy.schema.json`` states the same."""
+
+    path: str  # "rigid" or "elastic"
+    driver: str | None  # the elastic driver, None for the rigid path
+    frames: int
+    tile_size_mm: float
+    energy_max: float
+    t_at_energy_max: float
+    energy_at_states: dict[str, float]  # by MARKS name
+    state_mismatch_mm: dict[str, float]  # by MARKS name
+    hinge_gap_max_mm: float
+    rotation_spread_max_rad: float
+    rotation_end_rad: float
+    self_intersecting_tiles: list[int]
+    overlaps: int
+    overlap_max_area_mm2: float
+    overlap_pairs: list[list[int]]
+    overlap_frames: list[int]
+    collision_free: bool
+    collision_free_apart_from_self_intersecting_tiles: bool
+    omega_deployed_rad: NotRequired[float]  # the rigid path
+    solver: NotRequired[dict[str, Any]]  # an elastic driver's figures
+    elastic_segments_t: NotRequired[list[list[float]]]
+    energy_outside_segments_max: NotRequired[float]
+    overlap_max_depth_mm: NotRequired[float]  # added by the deploy front door
+    pattern_fingerprint: NotRequired[dict[str, Any]]  # added by the deploy front door
+    tube: NotRequired[dict[str, Any]]  # a periodic pattern's tube along the path
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,10 +117,10 @@ class DeploymentPath:
     def mark_frames(self) -> dict[str, int]:
         return {name: int(np.argmin(np.abs(self.t - t))) for name, t in MARKS.items()}
 
-    def summary(self) -> dict:
+    def summary(self) -> DeployReport:
         marks = self.mark_frames()
         e = self.energy
-        out: dict[str, Any] = {
+        out: DeployReport = {
             "path": self.kind,
             "driver": self.driver,
             "frames": self.n_frames,

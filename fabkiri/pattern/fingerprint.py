@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
 from .model import Pattern
 
-KEY = "pattern_fingerprint"  # the manifest key that holds it
+KEY: Final = "pattern_fingerprint"  # the manifest key that holds it (a literal: a TypedDict key)
 DIGITS = 6  # nodes rounded to 1 nm: a re-saved pattern keeps its fingerprint
 
 

@@ -183,6 +183,8 @@ def _encoded(files: dict) -> dict[str, bytes]:
 
 
 def describe_error(exc: BaseException) -> str:
-    """One line: the exception's type and message (no traceback: it is in the worker's log)."""
-    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    """One line: the exception's type and message (no traceback: it is in the worker's log), a fabkiri
+    error's as the command line says it (the results are the ``sweep`` command's)."""
+    said = exc.cli_message() if isinstance(exc, FabkiriError) else str(exc)
+    text = said.strip().splitlines()[0] if said.strip() else ""
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

@@ -263,7 +263,7 @@ def _check_targets(jobs: list[Job], where: str) -> None:
         try:
             load_target(t, None)
         except InputError as exc:
-            raise InputError(f"{where}: target {t!r}: {exc}") from None
+            raise InputError(f"{where}: target {t!r}: ", exc) from None
 
 
 def check_sizes(jobs: list[Job], where: str) -> None:
@@ -276,7 +276,7 @@ def check_sizes(jobs: list[Job], where: str) -> None:
         try:
             check_size(request_of(job.params))
         except InputError as exc:
-            raise InputError(f"{where}: job {job.id}: {exc}") from None
+            raise InputError(f"{where}: job {job.id}: ", exc) from None
 
 
 REQUEST_KEYS = (

@@ -11,7 +11,9 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypedDict
+
+SCHEMA = "verify-report.schema.json"  # beside this module: what :meth:`Report.to_dict` writes
 
 
 def _num(v: Any) -> Any:
@@ -24,6 +26,32 @@ def _num(v: Any) -> Any:
         return v
     v = float(v)
     return v if math.isfinite(v) else None
+
+
+class CheckRecord(TypedDict):
+    """One check as written (:meth:`Check.to_dict`)."""
+
+    name: str
+    group: str
+    ok: bool
+    value: float | int | None  # None: not measured
+    tol: float | int | None
+    unit: str
+    op: str  # "<=", ">=" or "=="
+    worst: str | None
+    detail: str
+    applies: bool
+
+
+class ReportRecord(TypedDict):
+    """A verification report as written (:meth:`Report.to_dict`, ``fabkiri verify --json``)."""
+
+    subject: str
+    kind: str
+    ok: bool
+    failed: list[str]  # the names of the failing checks
+    meta: dict[str, Any]
+    checks: list[CheckRecord]
 
 
 @dataclass
@@ -51,7 +79,7 @@ class Check:
     applies: bool = True
     id: str = ""
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> CheckRecord:
         return {
             "name": self.name,
             "group": self.group,
@@ -145,7 +173,7 @@ class Report:
     def names(self) -> list[str]:
         return [c.name for c in self.checks]
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> ReportRecord:
         return {
             "subject": self.subject,
             "kind": self.kind,

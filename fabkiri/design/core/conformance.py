@@ -11,10 +11,12 @@ from __future__ import annotations
 import copy
 import math
 import re
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
-from ...errors import InputError
+from ...errors import InputError, Param
 from ...pattern import conformance as pc
 from ..targets.curve import Target
 
@@ -85,8 +87,8 @@ def parse_shape_tol(text: str) -> tuple[float, str]:
     m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:e[-+]?[0-9]+)?)\s*(%|mm)?\s*", str(text), re.I)
     if not m:
         raise InputError(
-            f"--shape-tol expects a percentage of the target size (2%) or a length (0.5mm), "
-            f"got {text!r}"
+            Param("shape_tol"),
+            f" expects a percentage of the target size (2%) or a length (0.5mm), got {text!r}",
         )
     v, unit = float(m.group(1)), (m.group(2) or "").lower()
     if unit == "%":
@@ -95,7 +97,7 @@ def parse_shape_tol(text: str) -> tuple[float, str]:
         unit = "rel"
     if not (math.isfinite(v) and v > 0) or (unit == "rel" and v >= 1):
         raise InputError(
-            f"--shape-tol must be positive (and below 100 % of the size), got {text!r}"
+            Param("shape_tol"), f" must be positive (and below 100 % of the size), got {text!r}"
         )
     return v, unit
 
@@ -130,7 +132,7 @@ def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = No
     return out
 
 
-def _local_minimum_note(j: dict) -> str:
+def _local_minimum_note(j: Mapping[str, Any]) -> str:
     """Why (a pocket cut across) and what is left to try: never a guess the design already tried."""
     from ..quad.initial import INITS
 
@@ -165,7 +167,7 @@ def _local_minimum_note(j: dict) -> str:
     return note + f" (every initial guess was tried: {done})"
 
 
-def describe_miss(label: str, j: dict, conf: dict) -> str:
+def describe_miss(label: str, j: Mapping[str, Any], conf: Mapping[str, Any]) -> str:
     """One line for a missed shape tolerance."""
     x, y = conf["worst"]["at"]
     line = (

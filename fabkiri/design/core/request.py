@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import InputError
+from ...errors import InputError, Param
 from ...pattern.model import Pattern
 from ..quad.fabrication import FabricationLimits
 from ..quad.rigid import offset_outline
@@ -100,18 +100,28 @@ class DesignRequest:
                 f"inverse design needs at least 2x2 tiles, got {self.rows}x{self.cols}"
             )
         if self.holes not in ("rhombus", "parallelogram"):
-            raise InputError(f"--holes must be rhombus or parallelogram, not {self.holes!r}")
+            raise InputError(
+                Param("holes"), f" must be rhombus or parallelogram, not {self.holes!r}"
+            )
         if self.solver not in SOLVERS:
-            raise InputError(f"--solver must be one of {', '.join(SOLVERS)}, not {self.solver!r}")
+            raise InputError(
+                Param("solver"), f" must be one of {', '.join(SOLVERS)}, not {self.solver!r}"
+            )
         if self.solver == "reduced" and not reduced_applies(self):
             raise InputError(
-                "--solver reduced needs --rigid, rhombus holes, a --target, and no "
-                "--contracted-target (the closed-form rigid family covers only that)"
+                Param("solver", "reduced"),
+                " needs ",
+                Param("rigid", True),
+                ", rhombus holes, a ",
+                Param("target"),
+                ", and no ",
+                Param("contracted_target"),
+                " (the closed-form rigid family covers only that)",
             )
         if self.symmetry not in (None, "x", "y"):
-            raise InputError(f"--symmetry must be x or y, not {self.symmetry!r}")
+            raise InputError(Param("symmetry"), f" must be x or y, not {self.symmetry!r}")
         if not (np.isfinite(self.tol) and 0 < self.tol < 1e-2):
-            raise InputError(f"--tol must lie in (0, 1e-2), got {self.tol}")
+            raise InputError(Param("tol"), f" must lie in (0, 1e-2), got {self.tol}")
         self._check_targets()
 
     def _check_targets(self) -> None:
@@ -129,7 +139,13 @@ class DesignRequest:
                     "T-junctions, so the closed state is not a grid)"
                 )
         if self.target is None and not any(isinstance(v, Target) for v in self.contracted.values()):
-            raise InputError("nothing to fit: give --target or a --contracted-target curve")
+            raise InputError(
+                "nothing to fit: give ",
+                Param("target"),
+                " or a ",
+                Param("contracted_target"),
+                " curve",
+            )
         if self.symmetry:
             for tgt in [
                 self.target,
@@ -137,8 +153,9 @@ class DesignRequest:
             ]:
                 if tgt is not None and tgt.mirror_error(self.symmetry) > 1e-3:
                     raise InputError(
-                        f"target {tgt.name!r} is not symmetric about the {self.symmetry} axis, "
-                        f"so --symmetry {self.symmetry} contradicts it"
+                        f"target {tgt.name!r} is not symmetric about the {self.symmetry} axis, so ",
+                        Param("symmetry", self.symmetry),
+                        " contradicts it",
                     )
 
 
@@ -151,6 +168,11 @@ class DesignResult:
     closed_targets: (
         dict  # state -> Target (mm) the closed grid was fitted to, scaled to the tiles' area
     )
+
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solve ended at (the same name as the tube's result)."""
+        return float(self.report["max_equality_residual"])
 
 
 def reduced_applies(req: DesignRequest) -> bool:

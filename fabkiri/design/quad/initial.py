@@ -22,7 +22,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import spsolve
 
-from ...errors import InputError, SolveError
+from ...errors import InputError, Param, SolveError
 from ...pattern import geometry
 from ..core.stencils import Stencils
 from ..targets.curve import Target
@@ -157,7 +157,7 @@ def initial_guess(
     origin. Without a deployed target the standard pattern is returned as is.
     """
     if how not in INITS:
-        raise InputError(f"--init must be one of {', '.join(INITS)}, not {how!r}")
+        raise InputError(Param("init"), f" must be one of {', '.join(INITS)}, not {how!r}")
     if target is None:
         return base.copy(), 1.0
     lo, hi = target.bbox

@@ -78,6 +78,11 @@ class TubeResult:
     converged: bool
     report: dict = field(default_factory=dict)
 
+    @property
+    def max_equality_residual(self) -> float:
+        """The largest equality residual the solve ended at (the report's ``equality_max``)."""
+        return float(self.report["equality_max"])
+
 
 class _TubeProblem:
     """The families of one request over the sheet's deployed nodes."""

@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
-from ...errors import FabricationError, InputError
+from ...errors import FabricationError, InputError, Param
 from ...fileio import read_input
 from ...limits import MAX_PRESET_BYTES, loads_json
 from ...schemas import load_schema, schema_problem
@@ -151,20 +151,23 @@ def load_material(name_or_path: str) -> Material:
     return Material(**data)
 
 
+SETTINGS = Param("settings", flag="--set")  # ``cut_material(settings=[...])``, the CLI's --set
+
+
 def parse_setting(text: str) -> tuple[str, Any]:
     """``FIELD=VALUE`` from ``--set``: numbers become floats, the rest stays text."""
     if "=" not in text:
-        raise InputError(f"--set expects FIELD=VALUE, got {text!r}")
+        raise InputError(SETTINGS, f" expects FIELD=VALUE, got {text!r}")
     key, value = (s.strip() for s in text.split("=", 1))
     key = key.replace("-", "_")
     known = {f.name: f for f in fields(Material)}
     if key not in known:
         raise InputError(
-            f"--set: unknown material field {key!r} (known: {', '.join(sorted(known))})"
+            SETTINGS, f": unknown material field {key!r} (known: {', '.join(sorted(known))})"
         )
     if known[key].type in ("float", float):
         try:
             return key, float(value)
         except ValueError:
-            raise InputError(f"--set {key}: expected a number, got {value!r}") from None
+            raise InputError(SETTINGS, f" {key}: expected a number, got {value!r}") from None
     return key, value

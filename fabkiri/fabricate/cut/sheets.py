@@ -16,7 +16,7 @@ from typing import Any, Literal
 import numpy as np
 import shapely
 
-from ...errors import CheckFailed, FabricationError, InputError
+from ...errors import CheckFailed, FabricationError, InputError, Param
 from ...exchange.drawing import COLORS, SheetDrawing, snap
 from ...exchange.svg import STROKE_MM
 from ...mechanics.contract import contract
@@ -132,14 +132,14 @@ def _resolve(options: CutOptions) -> tuple[HingeKind, str, str]:
     if colors not in COLORS:
         raise InputError(f"colour preset must be one of {', '.join(COLORS)}, got {colors!r}")
     if options.state not in (1, 2):
-        raise InputError(f"--state must be 1 or 2, got {options.state}")
+        raise InputError(Param("state"), f" must be 1 or 2, got {options.state}")
     W, H = options.sheet
     if not (np.isfinite(W) and np.isfinite(H) and W > 0 and H > 0):
         raise InputError(f"sheet size must be positive, got {W}x{H}")
     if not (np.isfinite(options.margin) and options.margin >= 0):
         raise InputError(f"margin must be >= 0 mm, got {options.margin}")
     if options.scale is not None and options.width is not None:
-        raise InputError("give --scale or --width, not both")
+        raise InputError("give ", Param("scale"), " or ", Param("width"), ", not both")
     for f in options.formats:
         if sheet_format(f) is None:
             raise InputError(f"unknown format {f!r} (known: {', '.join(sheet_format_names())})")
@@ -189,11 +189,11 @@ def _scale(raw: np.ndarray, options: CutOptions, kind: str) -> float:
         width = float(options.width)  # "auto" was taken above
         span = float(raw[..., 0].max() - raw[..., 0].min())
         if not width > 0:
-            raise InputError(f"--width must be positive, got {options.width}")
+            raise InputError(Param("width"), f" must be positive, got {options.width}")
         return width / span
     scale = 1.0 if options.scale is None else float(options.scale)
     if not (np.isfinite(scale) and scale > 0):
-        raise InputError(f"--scale must be positive, got {options.scale}")
+        raise InputError(Param("scale"), f" must be positive, got {options.scale}")
     return scale
 
 

@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 import trimesh
 
-from ...errors import InputError
+from ...errors import InputError, Param
 from ...mechanics.tube import TubeFrame, frame
 from ...pattern.kinds.periodic.sheet import Seam, seam_map, seam_of, tube_tiles
 from ...pattern.model import Pattern
@@ -38,7 +38,7 @@ def state_frame(
 ) -> tuple[np.ndarray, TubeFrame]:
     """Per-tile corners of the tube's tiles (``copies`` periods side by side) and the frame to roll them."""
     if int(copies) != copies or copies < 1:
-        raise InputError(f"--copies must be a whole number >= 1, got {copies}")
+        raise InputError(Param("copies"), f" must be a whole number >= 1, got {copies}")
     seam = tube_seam(pattern)
     Y = pattern.corners(state)
     f = frame(Y, seam, state)
