@@ -185,3 +185,10 @@ def test_make_reports_each_step_with_its_share():
     again = fabkiri.make("circle", 120, material="acrylic-3", tiles="6x6", progress=plain.append)
     assert again.ok and plain[0] == heard[0][2] and len(plain) == len(heard)
     assert [t.split(" in ")[0] for t in plain] == [t.split(" in ")[0] for _, _, t in heard]
+
+
+@pytest.mark.parametrize("size", [-3.0, 0.0, float("nan")])
+def test_design_refuses_a_size_that_is_not_a_length(size):
+    """The CLI checks --size; a library caller is refused by the target itself, before any design."""
+    with pytest.raises(InputError, match="size must be a length"):
+        fabkiri.design("circle", tiles="8x8", size=size)

@@ -22,6 +22,7 @@ import numpy as np
 from ..exchange.pattern_json import dumps
 from ..fileio import atomic_write_many, inputs_scope, note_inputs
 from ..mechanics.info import PatternInfo
+from ..mechanics.path import DeployReport
 from ..pattern.model import Pattern
 from ..pattern.picture import pattern_png, tiles_png
 from ..verify.report import Report
@@ -276,7 +277,7 @@ class DeployResult(_Result):
     """The deployment path (``outcome.path``), its ``figures`` (``deploy.json``), the files and the
     ``problems`` that make ``fabkiri deploy`` exit 1 (none: ``ok``)."""
 
-    figures: dict[str, Any]
+    figures: DeployReport
     problems: list[str]
     stem: str
     outcome: DeployOutcome

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ... import limits
 from ...errors import InputError
 from ...templates import template_dir
 from .curve import SIDES, Target
@@ -58,8 +59,11 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
     (``.csv``, ``.json``, ``.svg``), scaled so its larger dimension is ``size`` mm.
 
     Named targets default to 100 mm; files keep their own mm coordinates
-    unless ``size`` is given. Every target is centred on the origin.
+    unless ``size`` is given. Every target is centred on the origin. A ``size`` that is not a length
+    (negative, zero, not finite) is refused: the CLI checks ``--size``, a library caller gets it here.
     """
+    if size is not None:
+        limits.check_length(size, "size")
     p = Path(ref)
     named = TEMPLATE_DIR / f"{ref}.json"
     if named.exists() and not p.exists():
