@@ -20,7 +20,7 @@ from fabkiri.fabricate.print.printers import load_printer
 from fabkiri.templates import template_dir
 
 PATTERNS = template_dir("patterns")
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def _options(out: str, err: str) -> list[list[str]]:

@@ -17,7 +17,7 @@ from fabkiri.design.targets.lookup import load_target
 from fabkiri.errors import FabricationError
 from fabkiri.fabricate import design_limits
 
-from .test_bad_input import snapshot
+from ..e2e.test_bad_input import snapshot
 
 
 @pytest.mark.slow  # ~4 CPU s with the verifier; the quick loop runs the same steps in the test below
@@ -130,7 +130,7 @@ def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
     assert record["alternatives"] == ["fabkiri cut o/circle.json --scale 2.5 -o o/c"]
 
 
-TEMPLATES = Path(__file__).resolve().parent.parent / "templates" / "patterns"
+TEMPLATES = Path(__file__).resolve().parents[2] / "templates" / "patterns"
 
 
 def _designed_as(monkeypatch, template: str) -> None:

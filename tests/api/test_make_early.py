@@ -141,7 +141,7 @@ def test_a_lattice_bent_onto_corners_is_not_judged_by_the_square_tile_estimate(m
         raise Reached
 
     monkeypatch.setattr(api_design, "design", solver)
-    letter = str(Path(__file__).resolve().parents[1] / "bench" / "data" / "make" / "letter-l.csv")
+    letter = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "make" / "letter-l.csv")
     target = load_target(letter, 150)
     fab, _ = design_limits.resolve(None, None, "prusa-mk4", "tiles-and-strips", None, None, target)
     least = least_tile_mm("prusa-mk4", "tiles-and-strips")

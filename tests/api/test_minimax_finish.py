@@ -12,7 +12,7 @@ from fabkiri.design.quad.fabrication import FabricationLimits
 from fabkiri.design.quad.solve import DesignRequest
 from fabkiri.design.targets.lookup import load_target
 
-DROP = str(Path(__file__).resolve().parents[1] / "bench" / "data" / "drop.csv")
+DROP = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "drop.csv")
 
 
 def test_the_finish_applies_to_large_valid_deployed_target_designs_only():

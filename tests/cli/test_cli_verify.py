@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from fabkiri.exchange.patternfile import write_pattern
 
-from . import layout_fixtures as lf
-from .conftest import TEMPLATES, ref
+from .. import layout_fixtures as lf
+from ..conftest import TEMPLATES, ref
 
 
 def test_valid_pattern_exits_0(run_cli):

@@ -259,7 +259,7 @@ def test_a_print_loads_neither_the_cutter_nor_its_svg_writer(tmp_path):
     # pattern; a print that is refused (the 8x8 heart past prusa-mk4's bed) is decided without them
     from pathlib import Path
 
-    src = str(Path(__file__).parent / "data" / "heart-8x8.json")
+    src = str(Path(__file__).parents[1] / "data" / "heart-8x8.json")
     mods = _modules_after(["print", src, "-o", str(tmp_path / "p")])
     assert "fabkiri.api.print" in mods and "fabkiri.api.advice" in mods  # refused, with its advice
     assert not (tmp_path / "p").exists()

@@ -14,7 +14,7 @@ from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 
 def circle(r=50.0, n=4096, phase=0.0):

@@ -15,7 +15,7 @@ from fabkiri.design.targets.lookup import load_target
 from fabkiri.pattern import geometry
 from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
-from .test_make import _limits
+from ..api.test_make import _limits
 from .test_opening import DATA
 
 ELL = str(DATA / "letter-l.csv")  # 60 x 100 mm, reflex corner at (25, 25): centred (-5, -25)

@@ -17,7 +17,7 @@ from fabkiri.pattern.residuals import hinge_sums
 from hypothesis import given, settings
 from hypothesis import strategies as hst
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 
 def _families(rows=4, cols=6):

@@ -21,7 +21,7 @@ from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 PATTERNS = TEMPLATES / "patterns"
 DATA = (

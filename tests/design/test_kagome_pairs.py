@@ -62,7 +62,7 @@ def test_the_egg_7x9_closes_with_the_pair_rows_instead_of_convex_holes(shared_ka
     (4.67 %): measured 3.54 % (docs/kagome.md, "Rows for tiles that share no hinge")."""
     from fabkiri.verify import verify_pattern
 
-    egg = str(Path(__file__).parent / "data" / "egg.csv")
+    egg = str(Path(__file__).parents[1] / "data" / "egg.csv")
     out = shared_kagome_designs(7, 9, egg, 120.0)
     r = out.report
     assert r["status"] == "converged" and r["max_equality_residual"] <= 1e-10

@@ -17,7 +17,7 @@ from fabkiri.pattern.opening import OPENS_LITTLE, Opening, opening
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 DATA = TEMPLATES.parent / "tests" / "data"
 

@@ -13,7 +13,7 @@ from fabkiri.design.targets import lookup as T
 from fabkiri.exchange.patternfile import read_pattern
 
 # the bench's measures of a closed state's outline, so the test checks what the bench reports
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 import speed  # noqa: E402
 
 

@@ -15,7 +15,7 @@ from fabkiri.fabricate.print import geometry as printgeom
 from fabkiri.fabricate.print.printers import load_printer
 from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 MK4 = F.FabricationLimits(
     **design_limits.printer_limits(load_printer("prusa-mk4"), "tiles-and-strips")

@@ -24,7 +24,7 @@ from fabkiri.design.targets import lookup as T
 from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.pattern import standard_pattern
 
-from .rigid_merit import rigid_merit
+from ..rigid_merit import rigid_merit
 
 
 def _symmetric(rows, cols, axis):

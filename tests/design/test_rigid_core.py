@@ -13,7 +13,7 @@ from fabkiri.design.quad.solve import DesignRequest, _Problem
 from fabkiri.design.targets import lookup as T
 from fabkiri.pattern import standard_pattern
 
-from .rigid_merit import rigid_merit
+from ..rigid_merit import rigid_merit
 
 
 def _family(rows, cols):

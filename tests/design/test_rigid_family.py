@@ -16,7 +16,7 @@ from fabkiri.pattern import Pattern, standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as hst
 
-from .rigid_merit import rigid_merit
+from ..rigid_merit import rigid_merit
 
 
 def _family(rows, cols):

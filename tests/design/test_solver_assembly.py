@@ -11,7 +11,7 @@ from fabkiri.design.targets import lookup as T
 from fabkiri.pattern import standard_pattern
 from scipy import sparse
 
-from .rigid_merit import rigid_merit
+from ..rigid_merit import rigid_merit
 
 
 def _coo(m, nv, nodes, grads):

@@ -12,7 +12,7 @@ from fabkiri.design.quad.solve import design
 from fabkiri.design.targets.lookup import load_target
 from fabkiri.pattern.model import Pattern
 
-from .conftest import REPO
+from ..conftest import REPO
 
 
 def _start_miss(prob: _Problem, target) -> float:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from fabkiri.design.targets.lookup import load_target
 
-from .conftest import REPO
+from ..conftest import REPO
 
 
 @pytest.mark.parametrize("y", [30.0, 26.0])

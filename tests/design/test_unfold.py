@@ -9,7 +9,7 @@ from fabkiri.design.quad.rigid.family import RigidFamily
 from fabkiri.design.quad.rigid.unfold import MARGIN, convex_member
 from fabkiri.pattern import standard_pattern
 
-from .conftest import REPO
+from ..conftest import REPO
 
 
 def _family(n):

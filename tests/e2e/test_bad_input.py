@@ -23,7 +23,7 @@ from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern
 from fabkiri.pattern.kinds.periodic.sheet import standard_tube
 
-from .conftest import REPO, TEMPLATES
+from ..conftest import REPO, TEMPLATES
 
 PATTERN_2x2 = with_contracted_states(standard_pattern(2, 2, tile_size=20.0))
 GOOD = dumps(PATTERN_2x2)
@@ -911,7 +911,7 @@ def test_an_imported_pattern_is_judged_at_the_precision_its_files_close_to(
 def test_an_imported_pattern_that_does_not_close_is_still_refused(tmp_path, run_cli):
     """The authors' contractible example closes in one state only: its state 2 (2.35 tile sizes
     open) is refused whatever tier the import recorded."""
-    from .conftest import ref
+    from ..conftest import ref
 
     code, _, err = run_cli(
         "import", ref("contractible_design"), "--contracted", ref("contractible_contracted"),

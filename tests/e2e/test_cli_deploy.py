@@ -13,8 +13,8 @@ from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern
 from PIL import Image
 
-from .designs import reconfigurable_design
-from .test_deploy import ref
+from ..designs import reconfigurable_design
+from ..mechanics.test_deploy import ref
 
 
 def _read_csv(path):

@@ -7,7 +7,7 @@ import json
 import numpy as np
 from fabkiri.exchange.patternfile import read_obj, read_pattern
 
-from .conftest import ref
+from ..conftest import ref
 
 
 def test_new_info_export(tmp_path, run_cli):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from fabkiri.exchange.patternfile import read_pattern
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 # every property name FOLD 1.2 defines (edemaine/fold doc/spec.md); anything else must carry a colon
 FOLD_SPEC_NAMES = {

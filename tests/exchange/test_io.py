@@ -13,7 +13,7 @@ from fabkiri.exchange.patternfile import dumps, loads, obj_text, parse_obj, read
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import Pattern, standard_pattern
 
-from .conftest import TEMPLATES, ref
+from ..conftest import TEMPLATES, ref
 
 
 def good_dict() -> dict:

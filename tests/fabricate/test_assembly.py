@@ -9,7 +9,7 @@ import pytest
 from fabkiri.exchange.patternfile import read_pattern
 from PIL import Image
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 STD = TEMPLATES / "patterns" / "standard-8x8.json"
 

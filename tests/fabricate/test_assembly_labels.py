@@ -12,7 +12,7 @@ import pytest
 from fabkiri.fabricate import assembly as asm
 from fabkiri.fabricate.map_labels import overlapping_pairs, place_labels, stroke_boxes
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 P = TEMPLATES / "patterns"
 # the README's cut and print examples (but pp-0.5's ligament sheet: one piece, no map), and the report

@@ -22,10 +22,10 @@ from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 PATTERNS = REPO / "templates" / "patterns"
-GOLDEN = Path(__file__).parent / "golden"
-DATA = Path(__file__).parent / "data"
+GOLDEN = Path(__file__).parents[1] / "golden"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def std(rows=4, cols=4, angle=45.0, size=10.0):
@@ -829,7 +829,7 @@ def test_cut_manifest_round_trips_and_is_checked_on_read():
     )
     assert json.dumps(m.to_dict()) == json.dumps(r.manifest)  # same keys, same order, same values
     assert m.to_json().encode("utf-8") == r.manifest_bytes()  # and the same bytes as written
-    golden = (Path(__file__).parent / "golden" / "std2x2-manifest.json").read_text("utf-8")
+    golden = (Path(__file__).parents[1] / "golden" / "std2x2-manifest.json").read_text("utf-8")
     g = CutManifest.from_json(golden)
     assert g.to_json() == golden and list(g.extra) == ["bill_of_materials"]
     assert _allowances({**r.manifest, "mitre_limit": 4.0}, "m").mitre_limit == 4.0

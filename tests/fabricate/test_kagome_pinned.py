@@ -21,7 +21,7 @@ from fabkiri.fabricate.print.styles import pinned
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
-from .slicer import slice_3mf
+from ..slicer import slice_3mf
 
 
 @pytest.fixture(scope="module")
@@ -175,7 +175,7 @@ def test_the_rigid_path_of_the_standard_lattice_keeps_its_tiles_rigid_and_a_bent
 
 
 def test_a_generic_kagome_design_is_refused_pinned_because_its_path_bends_the_tiles():
-    from tests.test_kagome_deploy import _generic
+    from tests.mechanics.test_kagome_deploy import _generic
 
     g = with_contracted_states(_generic(4, 4))
     with pytest.raises(FabricationError, match=r"bends its tiles.*would miss hinge \d+ by"):

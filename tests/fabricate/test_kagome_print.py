@@ -21,7 +21,7 @@ from fabkiri.fabricate.print.printers import load_printer
 from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
-from .slicer import slice_3mf
+from ..slicer import slice_3mf
 
 
 @pytest.fixture(scope="module")
@@ -113,7 +113,7 @@ def test_kagome_at_scale_1_is_refused_naming_the_scale_that_prints(k44, tmp_path
 def test_pinned_generic_kagome_is_refused_in_one_line(tmp_path, run_cli):
     """The standard lattice prints pinned (tests/test_kagome_pinned.py); a generic design of the
     reconfigurable family has no known path of rigid tiles between its closed states."""
-    from tests.test_kagome_deploy import _generic
+    from tests.mechanics.test_kagome_deploy import _generic
 
     src = tmp_path / "g44.json"
     io.write_pattern(with_contracted_states(_generic(4, 4)), src)

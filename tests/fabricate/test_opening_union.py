@@ -11,7 +11,7 @@ import shapely
 from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.pattern import opening as op
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def _general(c: np.ndarray) -> float:

@@ -11,7 +11,7 @@ from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.fabricate import fabricability, planrules
 from fabkiri.pattern import geometry
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 SQUARE = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
 
 

@@ -28,9 +28,9 @@ from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from .slicer import slice_3mf
+from ..slicer import slice_3mf
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
@@ -1152,7 +1152,7 @@ def test_every_hinge_keeps_its_bridge_where_a_bottom_strip_lies_under_a_top_stri
     from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.fabricate.print.topfaces import printed_bridges
 
-    src = Path(__file__).parent / "data" / "blob-16x16-prusa-mk4.json"
+    src = Path(__file__).parents[1] / "data" / "blob-16x16-prusa-mk4.json"
     pattern = read_pattern(src)
     job = mesh.build_job(pattern, "tiles-and-strips", 1, load_printer("prusa-mk4"))
     owned = {f["hinge"] for f in printed_bridges(mesh.realise_job(job))}
@@ -1161,7 +1161,7 @@ def test_every_hinge_keeps_its_bridge_where_a_bottom_strip_lies_under_a_top_stri
 
 @pytest.mark.slow  # the whole print of the 16x16 design; the fast loop checks its bridges above
 def test_the_16x16_blob_that_lost_a_bridge_prints(tmp_path, run_cli):
-    src = Path(__file__).parent / "data" / "blob-16x16-prusa-mk4.json"
+    src = Path(__file__).parents[1] / "data" / "blob-16x16-prusa-mk4.json"
     code, out, err = run_cli("print", src, "-o", tmp_path / "out")
     assert code == 0, err
     assert "480 hinges" in out + err

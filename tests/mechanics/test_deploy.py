@@ -22,8 +22,8 @@ from fabkiri.pattern import geometry, standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from .conftest import REPO, TEMPLATES
-from .designs import reconfigurable_design
+from ..conftest import REPO, TEMPLATES
+from ..designs import reconfigurable_design
 
 
 def ref(name: str):

@@ -14,11 +14,11 @@ from fabkiri.exchange import patternfile as io
 from fabkiri.mechanics.contact import corner_gaps, corner_term
 from fabkiri.mechanics.deploy import deployment_path
 
-from .designs import reconfigurable_design
+from ..designs import reconfigurable_design
 from .test_deploy import compact_reconfigurable
 from .test_kagome_contact import _fd_check
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def _design():

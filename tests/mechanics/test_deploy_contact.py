@@ -20,10 +20,10 @@ from fabkiri.mechanics.deploy import closed_states, deployment_path, mechanism_s
 from fabkiri.mechanics.drivers.rotations import barrier_frames, gap_angles, rotation_targets
 from fabkiri.mechanics.path import node_positions, path_parameter
 
-from .designs import reconfigurable_design
+from ..designs import reconfigurable_design
 from .test_kagome_contact import _fd_check
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def _design():

@@ -11,7 +11,7 @@ from fabkiri.pattern import Pattern, geometry, standard_pattern
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from .designs import reconfigurable_design
+from ..designs import reconfigurable_design
 
 
 def _perturbed(seed=0, scale=0.05):

@@ -19,7 +19,7 @@ from fabkiri.mechanics.path import closed_states, node_positions
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 
 def _fixture(name):

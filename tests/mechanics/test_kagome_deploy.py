@@ -151,7 +151,7 @@ def test_generic_kagome_design_deploys_through_all_three_states(rows, cols):
 
 
 def test_homotopy_driver_is_kind_agnostic_on_a_quad_design():
-    from .designs import reconfigurable_design
+    from ..designs import reconfigurable_design
 
     p = reconfigurable_design(5, 5, seed=1, amplitude=0.2)
     path = deployment_path(p, 12, driver="homotopy")

@@ -11,7 +11,7 @@ from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.mechanics.deploy import closed_states
 from fabkiri.mechanics.tolerance import corner_shift, seam_edges, seam_misfit, tolerance_analysis
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 CIRCLE = TEMPLATES / "patterns" / "circle-8x8.json"
 

@@ -8,7 +8,7 @@ from fabkiri.mechanics import adopt_state_labels, contract_both, describe
 from fabkiri.pattern import geometry
 from fabkiri.pattern.residuals import state_residuals
 
-from .conftest import ref
+from ..conftest import ref
 
 
 def compact_reconfigurable():

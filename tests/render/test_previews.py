@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 STD = TEMPLATES / "patterns" / "standard-8x8.json"
 

@@ -11,7 +11,7 @@ import pytest
 from fabkiri.render.report import SECTIONS
 from PIL import Image
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 PATTERN = TEMPLATES / "patterns" / "circle-8x8-rigid.json"
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")

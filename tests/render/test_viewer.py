@@ -27,9 +27,9 @@ from fabkiri.pattern.kinds.periodic.sheet import seam_of, standard_tube, tube_ti
 from fabkiri.pattern.kinds.tessellation import tessellation
 from fabkiri.render.viewer import SCRIPT, viewer_data, viewer_page
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 
 CHROMIUM = next(
     (p for p in ("/usr/bin/chromium", shutil.which("chromium") or "") if p and Path(p).exists()),
@@ -326,7 +326,7 @@ def test_view_refuses_bad_requests(run_cli, tmp_path):
 @pytest.mark.slow
 def test_view_serves_the_page_on_localhost(tmp_path):
     src = TEMPLATES / "patterns" / "standard-8x8.json"
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
     proc = subprocess.Popen(
         [sys.executable, "-m", "fabkiri.cli.main", "view", str(src), "--port", "0", "--steps", "8"],
         stderr=subprocess.PIPE,

@@ -20,7 +20,7 @@ pytest.importorskip("distributed")
 from fabkiri.sweep import load_spec, spec_from_dict, sweep  # noqa: E402
 from fabkiri.sweep.job import run_job  # noqa: E402
 
-from .conftest import REPO  # noqa: E402
+from ..conftest import REPO  # noqa: E402
 
 # 12 tiny jobs: 3 targets x 2 sizes x rigid or not; a loose shape tolerance so each is one solve
 SWEEP_12 = """

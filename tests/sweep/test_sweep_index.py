@@ -12,7 +12,7 @@ import re
 import pytest
 from fabkiri.sweep.report import STATUS_COLOURS, gallery_html, status_class
 
-from .test_viewer import CHROMIUM, FLAGS, sync_playwright
+from ..render.test_viewer import CHROMIUM, FLAGS, sync_playwright
 
 STATUSES = [
     *STATUS_COLOURS,

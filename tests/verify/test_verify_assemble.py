@@ -10,7 +10,7 @@ from fabkiri.pattern import geometry, standard_pattern
 from fabkiri.verify.assemble import Assembly
 from fabkiri.verify.matching import assembled, place_from_shapes
 
-from . import layout_fixtures as lf
+from .. import layout_fixtures as lf
 
 
 def test_jacobian_matches_finite_differences():

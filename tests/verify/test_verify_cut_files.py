@@ -11,7 +11,7 @@ import pytest
 from fabkiri.exchange.patternfile import read_pattern
 from fabkiri.verify import verify_layout
 
-from .conftest import TEMPLATES
+from ..conftest import TEMPLATES
 
 PATTERN = TEMPLATES / "patterns" / "circle-8x8.json"
 

@@ -68,7 +68,7 @@ def test_parallelogram_design_verifies_and_cuts(parallelogram, tmp_path, run_cli
 
 
 def test_deploy_exits_1_on_its_own_failed_check_and_sizes_the_overlaps(run_cli, tmp_path):
-    from .conftest import ref
+    from ..conftest import ref
 
     out = tmp_path / "ref"
     code, _, err = run_cli(
@@ -93,7 +93,7 @@ def _outline_checks(rep):
 def test_closed_state_outline_targets_are_checked():
     from fabkiri.pattern import Pattern
 
-    from .conftest import TEMPLATES
+    from ..conftest import TEMPLATES
 
     p = read_pattern(TEMPLATES / "patterns" / "square-circle-9x9-rigid.json")
     import copy
@@ -151,7 +151,7 @@ def _near_closed(pattern, d_mm: float, tile: int = 7):
 def test_one_tolerance_in_mm_angles_as_displacement(tmp_path, run_cli):
     from fabkiri.exchange.patternfile import write_pattern
 
-    from . import layout_fixtures as lf
+    from .. import layout_fixtures as lf
 
     base = lf.distinct_pattern()  # 20 mm tiles
     p = _near_closed(base, 3e-4)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from fabkiri.verify import verify_layout
 
-from . import layout_fixtures as lf
+from .. import layout_fixtures as lf
 
 KERF = 0.1
 FORMATS = ("dxf", "svg")

@@ -16,8 +16,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.sparse.csgraph import breadth_first_order
 
-from . import layout_fixtures as lf
-from .conftest import ref
+from .. import layout_fixtures as lf
+from ..conftest import ref
 
 
 def _failed(rep: Report) -> set[str]:
@@ -253,7 +253,7 @@ def test_target_shape_ignores_the_solver_claim():
     from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.verify import verify_pattern
 
-    from .conftest import TEMPLATES
+    from ..conftest import TEMPLATES
 
     p = read_pattern(TEMPLATES / "patterns" / "circle-8x8-rigid.json")
     chk = verify_pattern(p).get("target shape")

@@ -14,7 +14,7 @@ from fabkiri.verify.quads import quads_of
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from . import layout_fixtures as lf
+from .. import layout_fixtures as lf
 
 
 def _same(a: L.Linework, b: L.Linework) -> bool:

@@ -13,9 +13,9 @@ from fabkiri.mechanics.contract import with_contracted_states
 from fabkiri.pattern import standard_pattern
 from fabkiri.verify import verify_layout
 
-from . import layout_fixtures as lf
-from . import layout_mutations as lm
-from .conftest import TEMPLATES
+from .. import layout_fixtures as lf
+from .. import layout_mutations as lm
+from ..conftest import TEMPLATES
 
 VALID = [
     "re-save R2018",
