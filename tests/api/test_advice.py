@@ -94,6 +94,7 @@ def test_a_ligament_refusal_exits_1_with_and_without_scale_auto(run_cli, tmp_pat
     assert exc.value.exit_code == 1 and all(a.checked == CUT_GATE for a in exc.value.alternatives)
 
 
+@pytest.mark.slow
 def test_a_print_refusal_exits_1_with_and_without_scale_auto(run_cli, tmp_path):
     """The 8x8 heart at 100 mm: prusa-mk4 tiles-and-strips needs more scale than its bed takes. Without
     --scale auto this exited 2, with it 1: now 1 both ways."""

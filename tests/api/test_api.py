@@ -9,6 +9,7 @@ from fabkiri.api import DesignOutcome, PatternRequest, design_pattern
 from fabkiri.errors import InputError
 
 
+@pytest.mark.slow
 def test_design_pattern_returns_the_judged_design(tmp_path, run_cli):
     notes = []
     out = design_pattern(
@@ -46,6 +47,7 @@ def test_design_pattern_returns_the_judged_design(tmp_path, run_cli):
     assert cli["nodes"] == json.loads(files[tmp_path / "p.json"])["nodes"]
 
 
+@pytest.mark.slow
 def test_a_missed_shape_is_returned_not_raised():
     out = design_pattern(
         PatternRequest(tiles=(4, 4), target="heart", rigid=True, init="rescaled", shape_tol="0.1%")
@@ -66,6 +68,7 @@ def test_bad_requests_raise_input_errors(kw, words):
         design_pattern(PatternRequest(**kw))
 
 
+@pytest.mark.slow
 def test_a_seed_starts_the_full_solver_elsewhere():
     import numpy as np
 

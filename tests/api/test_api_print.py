@@ -17,6 +17,7 @@ def square():
     return with_contracted_states(standard_pattern(3, 3))
 
 
+@pytest.mark.slow
 def test_print_pattern_returns_the_files_the_cli_writes(square, tmp_path, run_cli):
     notes = []
     out = print_pattern(
@@ -148,6 +149,7 @@ def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
         print_pattern(square, PrintOptions(style="fussy-strips", scale=2.0, marks=True))
 
 
+@pytest.mark.slow
 def test_the_print_manifest_is_one_typed_object_checked_on_read(square, tmp_path):
     """The manifest a print writes reads back as a PrintManifest and writes out the same bytes; the
     report reads the same object; the schema refuses a manifest that breaks it, naming the field."""

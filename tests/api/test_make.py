@@ -40,6 +40,7 @@ def test_make_cuts_a_circle_end_to_end(tmp_path, run_cli):
     assert code == 0, err
 
 
+@pytest.mark.slow
 def test_make_from_python_keeps_files_until_written(tmp_path):
     result = fabkiri.make("circle", size=60, material="acrylic-3", hinge="separate", tiles=(6, 6))
     assert isinstance(result, fabkiri.MakeResult)

@@ -22,6 +22,7 @@ from fabkiri.fabricate.print.printers import load_printer
 from fabkiri.pattern.kinds.quad.lattice import standard_pattern
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("printer", ["prusa-mk4", "prusa-xl-2t", "bambu-x1-petg"])
 @pytest.mark.parametrize("style", fb.PRINT_STYLES)
 def test_the_least_tile_is_prints_own_bound_on_every_standard_count(printer, style):
@@ -92,6 +93,7 @@ def test_design_for_a_printer_refuses_narrow_tiles_before_solving(monkeypatch):
     assert "6.57 mm wide" in str(exc.value) and "8.7 mm tile" in str(exc.value)
 
 
+@pytest.mark.slow
 def test_make_chooses_tiles_wide_enough_for_the_style():
     star = load_target("star", 150)
     for printer, style in (("prusa-mk4", "tiles-and-strips"), ("prusa-mk4", "pinned")):
@@ -129,6 +131,7 @@ def test_the_line_an_early_refusal_names_was_run_and_makes_it(tmp_path, run_cli)
     assert code == 0, err  # named because it was run: it makes
 
 
+@pytest.mark.slow
 def test_a_lattice_bent_onto_corners_is_not_judged_by_the_square_tile_estimate(monkeypatch):
     """make's re-split L (16x4 on its own corners) estimates 8.59 mm square tiles, under prusa-mk4's 8.7 mm,
     yet prints (bench/make.py): the design door leaves such a lattice to the solver and print."""

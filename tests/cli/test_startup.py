@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 from fabkiri.cli import main as cli
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -52,6 +53,7 @@ def test_help_imports_no_numerics():
     assert not any(m.startswith("fabkiri.cli.") and m != "fabkiri.cli.main" for m in mods)
 
 
+@pytest.mark.slow
 def test_design_with_its_preview_imports_only_what_it_uses(tmp_path):
     # one process for both checks (each is an interpreter start and a design): the preview PNG is drawn
     # without matplotlib, so a design with its preview must import no more than one without
@@ -127,6 +129,7 @@ def test_grid_resampling_equals_scipy(m, n, rows, cols, seed):
     assert np.abs(resample_grid(grid, rows, cols) - at(np.stack([yi, xi], -1))).max() <= 1e-12
 
 
+@pytest.mark.slow
 def test_design_defers_unused_numpy_subpackages(tmp_path):
     # scipy's array-API shim binds every numpy subpackage; the DEFERRED ones stay unloaded (lazy)
     # through a design and still work when used

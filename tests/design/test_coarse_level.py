@@ -22,6 +22,7 @@ def _start_miss(prob: _Problem, target) -> float:
     return deployed(pat.nodes, pat.topology, target)["hausdorff_rel"]
 
 
+@pytest.mark.slow
 def test_a_coarse_level_that_misses_the_outline_is_refitted_with_the_outline_rows():
     drop = load_target(str(REPO / "bench" / "data" / "drop.csv"), size=100.0)
     prob = _Problem(DesignRequest(16, 16, drop, rigid=True, init="coarse", coarse_refit=True))
@@ -43,6 +44,7 @@ def test_a_coarse_level_within_the_tolerance_keeps_the_tips_only_fit():
     assert level["hausdorff_rel"] <= 0.02 and "tips_only_hausdorff_rel" not in level
 
 
+@pytest.mark.slow
 def test_a_coarse_level_is_refitted_past_a_threshold_of_the_callers():
     """``coarse_refit_above`` (the minimax finish's own threshold) replaces the shape tolerance as the miss that
     asks for the refit: the circle's 8x8 level, within the 2 % tolerance, is refitted past a smaller one."""
@@ -54,6 +56,7 @@ def test_a_coarse_level_is_refitted_past_a_threshold_of_the_callers():
     assert level["hausdorff_rel"] <= level["tips_only_hausdorff_rel"] or level["fit"] == "tips"
 
 
+@pytest.mark.slow
 def test_a_coarse_to_fine_design_that_misses_is_redone_from_refitted_levels_and_the_closer_kept():
     drop = load_target(str(REPO / "bench" / "data" / "drop.csv"), size=100.0)
     # at a 0.5 % tolerance the 16x16 design from the tips-only 8x8 level (0.92 %) misses

@@ -130,6 +130,7 @@ def test_shape_tol_parsing_and_judgement():
     assert judge(conf, (3.5, "mm"))["status"] == "met"
 
 
+@pytest.mark.slow
 def test_design_shape_tol_missed_is_written_and_exits_1(tmp_path, run_cli):
     out = tmp_path / "c.json"
     code, _, err = run_cli(
@@ -196,6 +197,7 @@ def _mutated(tmp_path, name, fn):
     return out
 
 
+@pytest.mark.slow
 def test_verify_catches_a_moved_or_swapped_target(tmp_path, run_cli):
     name = "circle-8x8-rigid.json"
     code, out, _ = run_cli("verify", TEMPLATES / "patterns" / name)
@@ -225,6 +227,7 @@ def test_verify_catches_a_moved_or_swapped_target(tmp_path, run_cli):
     assert code == 1 and "state 2: outline shape" in err
 
 
+@pytest.mark.slow
 def test_info_reports_conformance(run_cli):
     code, out, _ = run_cli("info", TEMPLATES / "patterns" / "circle-8x8-rigid.json")
     assert code == 0 and "shape        deployed vs circle: Hausdorff" in out
@@ -259,6 +262,7 @@ def test_a_miss_of_many_tip_spacings_is_called_a_local_minimum_and_promises_no_t
     assert "local minimum" in line and "tiles would reach" not in line and "\n" not in line
 
 
+@pytest.mark.slow
 def test_the_suggested_tile_count_reaches_the_tolerance(tmp_path, run_cli):
     """The honest part of the suggestion: design again at the suggested lattice and it meets the tolerance."""
     code, out, _ = run_cli(

@@ -52,7 +52,7 @@ def test_an_l_is_split_at_its_strips_ends_with_rows_along_it():
     assert np.abs(split.signed_distance(x[st.tip_nodes] * L0)).max() < 1e-6 * split.size
 
 
-@pytest.mark.parametrize("name", ["star", "heart", "circle"])
+@pytest.mark.parametrize("name", [pytest.param("star", marks=pytest.mark.slow), "heart", "circle"])
 def test_outlines_the_default_split_takes_keep_it(name):
     acrylic = _limits(material="acrylic-3")
     t = load_target(name, 150)

@@ -190,6 +190,7 @@ def test_arc_feet_pass_the_split_points_smoothly():
 # derandomized: a point almost equidistant from two parts of its own arc, far from it, can get the foot in
 # the basin of the nearest tree seed, ~4e-6 farther than the true nearest point (superellipse, seed 11829:
 # about 1 draw in 1500); harmless for tips near their arc, a known limit of the seeded projection
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, derandomize=True)
 @given(
     name=hst.sampled_from(["circle", "ellipse", "superellipse", "hexagon", "star"]),
@@ -371,6 +372,7 @@ def test_cli_parallelogram_holes(tmp_path, run_cli):
     assert rep["checks"]["closure_1_rel"] <= 1e-9 and rep["checks"]["hinge_sum_max_rad"] <= 1e-10
 
 
+@pytest.mark.slow
 def test_cli_contracted_targets(tmp_path, run_cli):
     out = tmp_path / "sq.json"
     code, stdout, err = run_cli(
@@ -510,6 +512,7 @@ def test_overlap_check_is_a_depth_not_an_area():
     assert overlapping_tiles(np.array([a, shifted]), 1e-9 * size) == [(0, 1)]
 
 
+@pytest.mark.slow
 def test_cli_rectangular_closed_state(tmp_path, run_cli):
     """`2:rect=1.5`: boundary angle sums π (π/2 at corners) and width/height 1.5 in closed state 2."""
     out = tmp_path / "r.json"

@@ -124,6 +124,7 @@ CUT_CASES = [  # every check of cut that a scale can fix
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,material,kind,limit", CUT_CASES)
 def test_cut_at_the_stated_minimum_passes_and_below_fails(
     run_cli, tmp_path, name, material, kind, limit
@@ -167,6 +168,7 @@ def test_cut_at_the_stated_minimum_passes_and_below_fails(
     assert code == 1 and "--width ≥" in err
 
 
+@pytest.mark.slow
 def test_cut_auto_picks_the_minimum(run_cli, tmp_path):
     f = DATA / "heart-8x8.json"
     need = fb.cut_minimum(read_pattern(f).contracted[1], load_material("acrylic-3"), "tape")
@@ -220,6 +222,7 @@ def test_print_minimum_is_exact_for_the_plan_checks():
     assert need.max_scale is not None and need.max_scale >= need.min_scale
 
 
+@pytest.mark.slow
 def test_print_refusal_states_the_minimum(run_cli, tmp_path):
     f = PATTERNS / "circle-8x8-rigid.json"
     need = fb.print_minimum(read_pattern(f), "tiles-and-strips", load_printer("prusa-mk4"))
@@ -287,6 +290,7 @@ def test_width_rows_are_the_shared_definition():
         ).all()  # the smooth max: never above
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "rigid", [True, pytest.param(False, marks=pytest.mark.slow)]
 )  # one in the quick loop

@@ -156,6 +156,7 @@ def test_design_reports_the_opening_and_meets_the_floor(tmp_path, run_cli):
     assert code == 0
 
 
+@pytest.mark.slow
 def test_design_warns_when_it_opens_little_and_names_the_floor(tmp_path, run_cli):
     out = tmp_path / "s.json"
     _, _, err = run_cli("design", "--tiles", "8x8", "--target", "star", "--no-preview", "-o", out)
@@ -198,6 +199,7 @@ def test_info_reports_the_opening_in_text_and_json(run_cli):
     assert set(o["turn_deg"]) == {"1", "2"}
 
 
+@pytest.mark.slow
 def test_the_report_shows_the_opening_and_warns_when_it_opens_little():
     from fabkiri.exchange.patternfile import read_pattern
     from fabkiri.render.report import build_report

@@ -106,6 +106,7 @@ def test_grid_block_gradient_matches_finite_differences(block_merit):
     assert g[-1] == 0.0  # the grid rows do not see ψ
 
 
+@pytest.mark.slow
 def test_large_lattice_maps_go_through_the_core_and_the_tiles():
     """Above ``LARGE_GRID`` vertices ``grid`` is ``E (Z[core] S)`` and ``nodes`` takes ``Y S`` per tile: the
     maps ``Z S`` and ``x(S, ψ)`` of the basis to round-off; a family with another ``Y`` (the mirror's

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from fabkiri.design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from fabkiri.design.targets import lookup as T
 
@@ -21,6 +22,7 @@ def test_a_non_rigid_request_with_the_rigid_guess_is_answered_by_the_rigid_famil
     )  # stored as the non-rigid request it answers
 
 
+@pytest.mark.slow
 def test_the_cli_tries_the_rigid_family_last_only_when_the_other_guesses_miss(tmp_path, run_cli):
     code, out, _ = run_cli(
         "design",

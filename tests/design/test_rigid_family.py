@@ -218,6 +218,7 @@ def test_cli_keeps_the_closest_valid_fit():
     assert min([broken, loose], key=_rank) is loose
 
 
+@pytest.mark.slow
 def test_auto_keeps_the_better_of_both_solvers():
     """On a small least-squares case auto runs both solvers and keeps the lower objective (4x4 star:
     reduced 1.10 against full 5.32; the 6x6 heart, 1.12 against 2.52, took 1.5x the time)."""
@@ -307,6 +308,7 @@ def test_rigid_coarse_to_fine_start_is_the_coarse_design_refined():
     )
 
 
+@pytest.mark.slow
 def test_rigid_coarse_to_fine_start_for_odd_sizes():
     """9x11 tiles from a 4x5 design: the grid is resampled, not doubled; the start is still a member."""
     from fabkiri.design.quad.solve import _Problem

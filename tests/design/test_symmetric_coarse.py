@@ -5,6 +5,7 @@ landed at 2.0 % and sent its fine levels off a better start)."""
 
 from __future__ import annotations
 
+import pytest
 from fabkiri.design.core.conformance import deployed
 from fabkiri.design.core.request import DesignRequest
 from fabkiri.design.quad.problem import _Problem
@@ -20,6 +21,7 @@ def _start_miss(prob: _Problem, target) -> float:
     return deployed(pat.nodes, pat.topology, target)["hausdorff_rel"]
 
 
+@pytest.mark.slow
 def test_a_symmetric_coarse_level_is_fitted_with_the_outline_rows():
     """The 24x24 ellipse's 12x12 level (symmetric about x): main's tips-only level missed by 6.5 % of the size
     (11.9 % from rescaled alone), with the outline rows it lands within 0.5 %, and so does the fine start."""

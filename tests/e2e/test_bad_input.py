@@ -551,6 +551,7 @@ def test_bad_input_loses_nothing(case, workspace, run_cli, capsys):
     _check(code, err, before, workspace, case)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", SUBPROCESS)
 def test_bad_input_as_a_real_process(case, workspace):
     argv, _, _, folders = CASES[case]
@@ -726,6 +727,7 @@ def test_report_refuses_a_folder_of_another_pattern_or_kind(case, report_workspa
     assert snapshot(report_workspace) == before
 
 
+@pytest.mark.slow
 def test_report_reads_its_own_folders_and_older_ones(report_workspace, run_cli):
     code, _, err = run_cli(
         "report", "good.json", "--cut", "C", "--print", "P", "--deploy", "D", "--tolerance", "T",
@@ -820,6 +822,7 @@ def test_a_sweep_job_records_every_failure_and_the_summary_counts_it_once(monkey
 # ------------------------------------------------------------------ memory bounds
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["info", "verify"])
 def test_a_huge_valid_pattern_is_refused_before_it_is_parsed(command, tmp_path, run_cli):
     """A valid 200 MB pattern.json (good.json padded with spaces, written in a blink): its parse alone

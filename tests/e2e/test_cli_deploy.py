@@ -21,6 +21,7 @@ def _read_csv(path):
     return list(csv.DictReader(io.StringIO(path.read_text())))
 
 
+@pytest.mark.slow
 def test_deploy_standard_writes_everything(run_cli, tmp_path):
     src = tmp_path / "std.json"
     write_pattern(with_contracted_states(standard_pattern(4, 4, tile_size=5.0)), src)
@@ -76,6 +77,7 @@ def test_deploy_is_deterministic(run_cli, tmp_path):
         assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
 
 
+@pytest.mark.slow
 def test_deploy_reference_check_fails_on_its_overlaps(run_cli, tmp_path):
     design = ref("compact_reconfigurable_design")
     out = tmp_path / "ref"
@@ -115,6 +117,7 @@ def test_deploy_bad_input_writes_nothing(run_cli, tmp_path):
     assert code == 1 and "does not close" in err and not out.exists()
 
 
+@pytest.mark.slow
 def test_deploy_front_door_gives_the_commands_verdict_without_the_cli():
     from fabkiri.api.deploy import deploy_pattern
     from fabkiri.exchange.patternfile import import_obj

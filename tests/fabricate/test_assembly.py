@@ -46,6 +46,7 @@ def test_cut_manifest_numbers_every_tape_piece_in_join_order(run_cli, tmp_path):
     assert im.size[0] >= 600
 
 
+@pytest.mark.slow
 def test_ligament_sheet_has_nothing_to_join(run_cli, tmp_path):
     code, _, err = run_cli(
         "cut",

@@ -136,6 +136,7 @@ def _bricks(theta: float, origin, noise: float, rng) -> np.ndarray:
     return C @ R.T + np.asarray(origin) + rng.normal(0, noise, C.shape)
 
 
+@pytest.mark.slow
 def test_tape_linework_of_overlapping_edges_with_t_junctions_encloses_no_sliver():
     """Corners 1e-7 mm off the edge they meet (a published pattern's closure) used to round to
     neighbouring grid points after noding: the shared edge was cut twice 1e-6 mm apart and
@@ -496,6 +497,7 @@ def test_same_input_same_bytes_and_golden(tmp_path):
 # ------------------------------------------------------------------ CLI
 
 
+@pytest.mark.slow
 def test_cli_default_command(run_cli, tmp_path):
     out = tmp_path / "standard-8x8"
     code, stdout, err = run_cli("cut", PATTERNS / "standard-8x8.json", "-o", out)
@@ -573,6 +575,7 @@ def test_cli_bad_input_one_line_nothing_written(run_cli, tmp_path, args, code, w
     _no_output(out)
 
 
+@pytest.mark.slow
 def test_cli_unwritable_output(run_cli, tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")
@@ -628,6 +631,7 @@ def test_cli_failed_readback_writes_nothing(run_cli, tmp_path, monkeypatch):
     _no_output(out)
 
 
+@pytest.mark.slow
 def test_png_preview_shows_every_sheet():
     from io import BytesIO
 
@@ -689,6 +693,7 @@ def test_any_standard_pattern_cuts_and_verifies(rows, cols, angle, size, state, 
     assert_verified(p, r)
 
 
+@pytest.mark.slow
 def test_tape_marks_asked_for_only_where_the_writer_draws_a_readable_one(run_cli, tmp_path):
     # heart-16x16-rigid at its smallest acrylic-3 scale: tile 9's 18.7° corner at hinge 16 gets a 1.4 mm
     # chord, which the mark check reads as too short for a mark; it used to ask for one anyway, so cut
@@ -875,6 +880,7 @@ def test_a_sheet_format_is_one_registered_strategy(monkeypatch):
         cut(p, formats=("pdf",))
 
 
+@pytest.mark.slow
 def test_a_pattern_on_several_sheets_of_symmetric_blocks_passes_its_own_read_back(
     tmp_path, run_cli
 ):

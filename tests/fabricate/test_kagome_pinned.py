@@ -148,6 +148,7 @@ def test_free_corners_on_a_pivot_in_either_state_are_cleared(k44, plan44):
                 assert hinged.any() or cleared, (s, t, k)
 
 
+@pytest.mark.slow
 def test_a_narrow_kagome_corner_is_refused_with_the_hinges_and_the_scale_that_prints(
     tmp_path, run_cli
 ):

@@ -54,6 +54,7 @@ def test_a_kagome_closed_state_joins_three_hinges_at_every_merge_corner_and_two_
     assert plan.shared_faces == 2 * k44.topology.n_holes
 
 
+@pytest.mark.slow
 def test_standard_kagome_prints_verified_at_the_auto_scale(printed):
     out, notes = printed
     assert out.job.style == "tiles-and-strips" and out.job.printer.name == "prusa-mk4"
@@ -91,6 +92,7 @@ def test_the_verifier_rejects_printed_kagome_tiles_of_another_size(printed, k44)
     assert not mesh.verify_printed_tiles(bigger, out.realised).ok
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("size", [(4, 4), (7, 5)])
 @pytest.mark.parametrize("style", ["tiles-and-strips", "strips"])
 def test_kagome_prints_in_every_strip_style(size, style):
@@ -110,6 +112,7 @@ def test_kagome_at_scale_1_is_refused_naming_the_scale_that_prints(k44, tmp_path
     assert len(err.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_pinned_generic_kagome_is_refused_in_one_line(tmp_path, run_cli):
     """The standard lattice prints pinned (tests/test_kagome_pinned.py); a generic design of the
     reconfigurable family has no known path of rigid tiles between its closed states."""

@@ -401,6 +401,7 @@ def _3mf_volumes_by_trimesh(data: bytes) -> list:
     return [trimesh.Trimesh(whole.vertices, whole.faces[a:b], process=True) for a, b in ranges]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["prusa-mk4", "prusa-xl-2t"])
 @pytest.mark.parametrize("style", mesh.STYLES)
 def test_every_written_mesh_is_a_closed_2_manifold(style, preset):
@@ -1001,6 +1002,7 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     assert not (tmp_path / "no").exists()
 
 
+@pytest.mark.slow
 def test_pinned_sweep_along_the_deployment(printer):
     """The pinned tiles reconfigure from one closed state to the other without
     touching; a tile whose corner was not cleared collides in the sweep."""

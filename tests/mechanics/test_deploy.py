@@ -127,6 +127,7 @@ def _assert_reconfigurable_landscape(path, L):
     assert e[(t > 0) & (t < b1)].max() > 1e3 * ZERO and e[(t > a2) & (t < 1)].max() > 1e3 * ZERO
 
 
+@pytest.mark.slow
 def test_reference_compact_reconfigurable_elastic_landscape():
     p = compact_reconfigurable()
     path = deployment_path(p, steps=40)  # auto: not rigid-deployable -> elastic
@@ -310,6 +311,7 @@ def test_rigid_path_of_any_standard_pattern(rows, cols, angle, size):
     assert all(split[s].closing == pytest.approx(1.0, abs=1e-9) for s in (1, 2))
 
 
+@pytest.mark.slow
 def test_solver_heart_design_is_genuinely_reconfigurable():
     """`fabkiri design --tiles 8x8 --target heart` (no --rigid): hinge sums far from π, so the
     landscape has the paper's barriers next to both closed states and a zero-energy middle."""

@@ -65,6 +65,7 @@ def test_corner_term_matches_finite_differences():
     assert grad_err <= 1e-6 and hess_err <= 1e-6
 
 
+@pytest.mark.slow
 def test_no_clean_driver_is_reported_with_what_each_found():
     """The reference compact design has a bow-tie tile in its own deployed state: no driver can
     find a clean path, so both are tried and the report names their figures (exit 1)."""

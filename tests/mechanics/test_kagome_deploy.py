@@ -42,6 +42,7 @@ def test_standard_kagome_deploys_along_a_zero_energy_path_to_both_states():
         deployment_path(p, 20, path="rigid")
 
 
+@pytest.mark.slow
 def test_deploy_command_writes_energy_plot_and_gif(tmp_path, run_cli):
     src = tmp_path / "k.json"
     io.write_pattern(with_contracted_states(standard_kagome(3, 4, angle_deg=45.0)), src)
@@ -122,6 +123,7 @@ def test_a_third_kind_plugs_in_its_driver_by_name():
         _DRIVERS.members.pop("counting-test", None)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rows, cols", [(4, 4), (7, 5)])
 def test_generic_kagome_design_deploys_through_all_three_states(rows, cols):
     """Measured (4x4 / 7x5, 20 steps): end frames within 5e-14 mm of the states, E there <= 2e-28,
@@ -233,6 +235,7 @@ def test_orientation_term_makes_a_mirrored_triangle_cost_energy():
     assert a.energy(mirrored.ravel()) == pytest.approx(4.0)  # area -A0: ((-A0 - A0)/A0)² = 4
 
 
+@pytest.mark.slow
 def test_homotopy_path_is_continuous_not_a_snap():
     """Finer sub-steps shrink the largest node move between two of them (a snap would not) and
     leave the frames where they were."""

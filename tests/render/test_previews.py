@@ -15,6 +15,7 @@ from ..conftest import TEMPLATES
 STD = TEMPLATES / "patterns" / "standard-8x8.json"
 
 
+@pytest.mark.slow
 def test_no_notes_leaves_out_frame_and_caption(run_cli, tmp_path):
     code, _, err = run_cli("cut", STD, "--no-notes", "-o", tmp_path / "a")
     assert code == 0 and "verifier passed" in err
@@ -31,6 +32,7 @@ def test_no_notes_leaves_out_frame_and_caption(run_cli, tmp_path):
     assert notes["a"] == 0 and notes["b"] > 0
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("inkscape") is None, reason="inkscape is not installed")
 def test_svg_renders_visible_in_inkscape(run_cli, tmp_path):
     code, _, _ = run_cli("cut", STD, "--formats", "svg", "-o", tmp_path)

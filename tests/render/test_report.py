@@ -73,6 +73,7 @@ def report(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_every_section_is_there_and_self_contained(report):
     page = report.read_text()
     for s in SECTIONS:
@@ -131,6 +132,7 @@ def test_chromium_loads_it_clean_and_draws_it(report, tmp_path):
     assert len(np.unique(a.reshape(-1, 3)[::7], axis=0)) > 200  # pictures, not just text
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(
     CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')"
 )
