@@ -212,6 +212,7 @@ def test_axis_rows_jacobian_matches_finite_differences(axis):
     assert np.abs(J - fd).max() <= 1e-6 * max(1.0, np.abs(J).max())
 
 
+@pytest.mark.slow
 def test_symmetric_coarse_level_tries_the_other_guesses():
     """A symmetric design gets no full-solver second opinion (minutes over all nodes); the reduced solver over
     half the seeds from the other guesses stands in. The 8x8 rigid heart of a coarse-to-fine chain (tips-only

@@ -238,6 +238,7 @@ def test_auto_keeps_the_better_of_both_solvers():
     assert out["auto"][0] == pytest.approx(min(out["reduced"][0], out["full"][0]), rel=1e-9)
 
 
+@pytest.mark.slow
 def test_cli_starts_big_rigid_designs_coarse_to_fine(tmp_path, run_cli):
     out = tmp_path / "c32.json"
     code, stdout, err = run_cli(

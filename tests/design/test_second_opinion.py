@@ -4,6 +4,7 @@ stiff restart (``penalty._solve_full(stalled=...)``, ``routes._polish``)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from fabkiri.design.core.request import DesignRequest
 from fabkiri.design.quad import penalty as P
 from fabkiri.design.quad import routes as R
@@ -15,6 +16,7 @@ def _problem() -> _Problem:
     return _Problem(DesignRequest(6, 6, T.load_target("heart", 100.0), rigid=True))
 
 
+@pytest.mark.slow
 def test_a_first_schedule_that_stops_short_is_offered_before_the_restart(monkeypatch):
     """One penalty iteration leaves the equalities far off: the end is offered to ``stalled``, whose valid
     answer is kept (after the equalities' Gauss-Newton steps) and no stiff restart runs; a None answer

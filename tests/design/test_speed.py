@@ -20,6 +20,7 @@ def test_closest_pair_equals_the_pairwise_minimum(n, seed):
     assert abs(closest_pair(p) - dd.min()) <= 1e-13 * dd.min()
 
 
+@pytest.mark.slow
 def test_preview_is_deterministic_with_a_panel_per_outline(tmp_path):
     import io
 
@@ -113,6 +114,7 @@ def test_rigid_first_applies_to_mid_size_non_rigid_rhombus_designs_only():
         assert not rigid_first_applies(replace(req, **other)), other
 
 
+@pytest.mark.slow
 def test_a_mid_size_non_rigid_design_is_a_rigid_member_when_that_meets_the_shape():
     """Through the front door (one 16x16 design for the solver's and the API's checks): the rigid member
     meets the shape, so the API stops at its first guess."""

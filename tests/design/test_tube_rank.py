@@ -48,6 +48,7 @@ def _dims_at(rows, cols, seed=None):
     return TR.family_dimensions(prob.st, prob.seam, x)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "rows, cols, seed",
     [
@@ -105,6 +106,7 @@ def test_generic_tube_is_rigid_and_its_deployed_seam_does_not_turn():
         assert (np.abs(null[beta]).max() > 1e-3) == turns
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "spec, seed, amp", [("cone:18,9,56.6", 0, 0.0), ("cone:16,11,56.6", 2, 0.1)]
 )

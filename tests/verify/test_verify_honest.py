@@ -49,6 +49,7 @@ def parallelogram(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_parallelogram_design_verifies_and_cuts(parallelogram, tmp_path, run_cli):
     p = read_pattern(parallelogram)
     rep = verify_pattern(p)
@@ -67,6 +68,7 @@ def test_parallelogram_design_verifies_and_cuts(parallelogram, tmp_path, run_cli
             assert lay.get(f"layout: (c) state {s} from cut tiles: no interior gaps").value < 1e-3
 
 
+@pytest.mark.slow
 def test_deploy_exits_1_on_its_own_failed_check_and_sizes_the_overlaps(run_cli, tmp_path):
     from ..conftest import ref
 
