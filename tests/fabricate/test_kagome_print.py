@@ -114,7 +114,7 @@ def test_kagome_at_scale_1_is_refused_naming_the_scale_that_prints(k44, tmp_path
 
 @pytest.mark.slow
 def test_pinned_generic_kagome_is_refused_in_one_line(tmp_path, run_cli):
-    """The standard lattice prints pinned (tests/test_kagome_pinned.py); a generic design of the
+    """The standard lattice prints pinned (tests/fabricate/test_kagome_pinned.py); a generic design of the
     reconfigurable family has no known path of rigid tiles between its closed states."""
     from tests.mechanics.test_kagome_deploy import _generic
 

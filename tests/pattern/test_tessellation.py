@@ -39,7 +39,7 @@ def test_unknown_kind_is_a_one_line_error_naming_the_known_kinds(tmp_path, run_c
     src.write_text(json.dumps(data))
     code, _, err = run_cli(
         "info", src
-    )  # in-process: tests/test_bad_input.py runs the real process's exit path
+    )  # in-process: tests/e2e/test_bad_input.py runs the real process's exit path
     assert code == 2 and "unknown tessellation kind 'hexagons'" in err
     assert len(err.strip().splitlines()) == 1
 
