@@ -58,6 +58,7 @@ def test_print_pattern_returns_the_files_the_cli_writes(square, tmp_path, run_cl
         assert written[name] == (data.encode() if isinstance(data, str) else data), name
 
 
+@pytest.mark.slow
 def test_scale_auto_prints_at_the_smallest_accepted_scale(square):
     out = print_pattern(square, PrintOptions(style="strips", scale="auto"))
     assert 0 < out.scale < 1.0 and f"--scale {out.scale:g}" in out.describe()

@@ -171,6 +171,7 @@ def test_a_real_cut_refusal_prints_its_checked_options(tmp_path, monkeypatch, ru
     assert not (out / "cut").exists()  # the refused step wrote nothing
 
 
+@pytest.mark.slow
 def test_the_first_option_of_a_refused_make_succeeds(tmp_path, monkeypatch, run_cli):
     _designed_as(monkeypatch, "circle-8x8.json")
     out = tmp_path / "o"

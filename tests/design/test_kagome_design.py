@@ -113,7 +113,6 @@ def test_reconfigurable_rank_beyond_six_columns(rows, cols):
     assert c.dimension == 2 * len(top.free_nodes) - top.n_holes - 3 + _extra_dependent(rows, cols)
 
 
-@pytest.mark.slow
 def test_the_fit_moves_along_the_family_and_lands_on_it():
     """One solve of the kagome fit (design/kagome/fit.py) without refinement: the equalities hold to
     rounding after the pull-back, and the tips come nearer the target than the start's."""

@@ -151,6 +151,7 @@ def test_reduced_solver_refuses_what_it_cannot_cover(kw, msg):
         DesignRequest(6, 6, T.load_target("circle", 80.0), **kw).validate()
 
 
+@pytest.mark.slow
 def test_cli_solver_flag(tmp_path, run_cli):
     out = tmp_path / "r.json"
     code, stdout, err = run_cli(

@@ -134,6 +134,7 @@ def _tube_null_rotation(closed_states: tuple[int, ...]) -> float:
     return float(np.abs(scipy.linalg.null_space(A, rcond=1e-10)[n2]).max())
 
 
+@pytest.mark.slow
 def test_a_cone_is_locked_when_both_closed_states_are_cylinders():
     """Finding (docs/tubes.md): with one closed state a cylinder the deployed seam may turn (a cone);
     with both, its rotation is fixed to first order, so a cone-to-two-cylinders tube has no smooth way

@@ -799,6 +799,7 @@ def test_prusaslicer_slices_the_written_3mf_as_it_is(style, preset, template, tm
 # -------------------------------------------------------------------- CLI
 
 
+@pytest.mark.slow
 def test_cli_print_writes_everything(tmp_path, run_cli):
     src = tmp_path / "sq.json"
     write_pattern(with_contracted_states(standard_pattern(3, 3)), src)

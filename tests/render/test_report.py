@@ -73,7 +73,6 @@ def report(tmp_path_factory):
     return out
 
 
-@pytest.mark.slow
 def test_every_section_is_there_and_self_contained(report):
     page = report.read_text()
     for s in SECTIONS:

@@ -78,6 +78,7 @@ def _edit_dxf(src, dst, edit):
     return path
 
 
+@pytest.mark.slow
 def test_edited_real_files_are_rejected(cut_dirs, pattern, tmp_path):
     src = cut_dirs["separate"]
     ref = json.loads((src / "manifest.json").read_text())["reference_square"]["corners"]
