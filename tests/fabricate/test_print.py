@@ -1003,7 +1003,6 @@ def test_solver_design_pinned_prints_when_large_enough(tmp_path, run_cli):
     assert not (tmp_path / "no").exists()
 
 
-@pytest.mark.slow
 def test_pinned_sweep_along_the_deployment(printer):
     """The pinned tiles reconfigure from one closed state to the other without
     touching; a tile whose corner was not cleared collides in the sweep."""
