@@ -578,6 +578,7 @@ def test_pattern_larger_than_the_bed_is_refused(printer):
 # ------------------------------------------------------------------ strips
 
 
+@pytest.mark.slow
 def test_strip_parts_on_beds(printer):
     small_bed = printer.with_overrides(bed_mm=(40.0, 30.0, 50.0))
     pat = standard_pattern(4, 4)
@@ -611,6 +612,7 @@ def test_strip_parts_on_beds(printer):
 # ------------------------------------------------------------------ pinned
 
 
+@pytest.mark.slow
 def test_pinned_hinges(printer):
     pat = standard_pattern(3, 3, tile_size=12.0)
     r = mesh.realise_job(mesh.build_job(pat, "pinned", 1, printer))
