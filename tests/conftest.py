@@ -124,3 +124,19 @@ def shared_designs():
     patch.setattr(design, "design_pattern", design_pattern)
     yield design_pattern
     patch.undo()
+
+
+def pytest_collection_modifyitems(config, items):
+    """Modules with slow tests first, and a module's slow tests first in it (stable otherwise): under
+    xdist a worker takes the next test when it has finished one, so the long ones start early and the
+    many short ones even out the workers' ends, where a long test dealt last leaves one worker running
+    alone. A module's tests stay together, so its module fixtures are made once per worker as before."""
+
+    def slow(item):
+        return item.get_closest_marker("slow") is not None
+
+    has_slow = {item.module for item in items if slow(item)}
+    first = {}
+    for i, item in enumerate(items):
+        first.setdefault(item.module, i)
+    items.sort(key=lambda item: (item.module not in has_slow, first[item.module], not slow(item)))

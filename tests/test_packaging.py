@@ -48,7 +48,7 @@ def test_every_package_the_tests_import_is_declared():
 
     dists = packages_distributions()
     modules = set(INDIRECT)
-    for f in [*(REPO / "tests").glob("*.py"), *(REPO / "bench").glob("*.py")]:
+    for f in [*(REPO / "tests").rglob("*.py"), *(REPO / "bench").glob("*.py")]:
         for node in ast.walk(ast.parse(f.read_text(), str(f))):
             if isinstance(node, ast.Import):
                 modules |= {a.name.split(".")[0] for a in node.names}

@@ -1,0 +1,135 @@
+"""Minimax finish of large designs (api/design_minimax.py, issue #37): a larger lattice fits no worse."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from fabkiri.api.design import PatternRequest, design_pattern
+from fabkiri.api.design_minimax import FINISH_ABOVE, MINIMAX_TILES, REFIT_ABOVE, applies, threshold
+from fabkiri.api.design_report import DesignAttempt as Attempt
+from fabkiri.design.core import conformance as conf
+from fabkiri.design.quad.fabrication import FabricationLimits
+from fabkiri.design.quad.solve import DesignRequest
+from fabkiri.design.targets.lookup import load_target
+
+DROP = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "drop.csv")
+
+
+def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
+    tgt = load_target("heart", 100)
+    missed_by = {"conformance": {"deployed": {"hausdorff_rel": 2 * FINISH_ABOVE}}}
+    valid, invalid = (
+        Attempt(None, missed_by, [], True, {}),
+        Attempt(None, missed_by, ["overlaps"], False, {}),
+    )
+    close = {"conformance": {"deployed": {"hausdorff_rel": FINISH_ABOVE / 2}}}
+    big = DesignRequest(rows=32, cols=32, target=tgt)
+    assert MINIMAX_TILES == 32 * 32 and applies(big, {}, valid)
+    assert not applies(big, {}, invalid) and not applies(big, {}, None)
+    # already close: not worth 2-6 more designs
+    assert not applies(big, {}, Attempt(None, close, [], True, {}))
+    assert not applies(DesignRequest(rows=16, cols=16, target=tgt), {}, valid)
+    # the threshold follows the lattice's resolution: a miss a 32x32 design may keep is finished at 64x64
+    between = {"conformance": {"deployed": {"hausdorff_rel": 0.75 * FINISH_ABOVE}}}
+    assert not applies(big, {}, Attempt(None, between, [], True, {}))
+    assert applies(
+        DesignRequest(rows=64, cols=64, target=tgt), {}, Attempt(None, between, [], True, {})
+    )
+    # ... down to a floor: the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) are not finished
+    circles = {"conformance": {"deployed": {"hausdorff_rel": 0.0022}}}
+    for n in (64, 128):
+        assert not applies(
+            DesignRequest(rows=n, cols=n, target=tgt), {}, Attempt(None, circles, [], True, {})
+        )
+    assert threshold(REFIT_ABOVE, big) == REFIT_ABOVE
+    assert threshold(REFIT_ABOVE, DesignRequest(rows=48, cols=96, target=tgt)) == REFIT_ABOVE / 3
+    fab = DesignRequest(rows=32, cols=32, target=tgt, fabrication=FabricationLimits(min_width_mm=1))
+    assert not applies(fab, {}, valid)  # the continuation refines those
+    assert not applies(DesignRequest(rows=32, cols=32, target=tgt, min_opening=0.2), {}, valid)
+    circle = load_target("circle", 100)
+    assert not applies(DesignRequest(rows=32, cols=32, contracted={1: circle}), {1: circle}, valid)
+
+
+def _designed(target: str, n: int):
+    """The CLI-default non-rigid design at 100 mm: its Hausdorff share, measured again, and its report."""
+    out = design_pattern(PatternRequest(tiles=(n, n), target=target, size=100))
+    assert out.success, out.problems
+    h = conf.deployed(out.pattern.nodes, out.pattern.topology, load_target(target, 100))
+    assert h["hausdorff_rel"] == pytest.approx(
+        out.report["conformance"]["deployed"]["hausdorff_rel"]
+    )
+    checks = out.report["checks"]
+    assert (
+        checks["overlaps_deployed"] == checks["overlaps_state_1"] == checks["overlaps_state_2"] == 0
+    )
+    return h["hausdorff_rel"], out.report
+
+
+@pytest.mark.slow
+def test_the_48x48_heart_fits_no_worse_than_the_32x32_one():
+    """bench/shapes.py's heart, non-rigid, CLI defaults (about a minute of CPU): main kept the 48x48 design's
+    0.37 % (below its fixed 0.5 % gate) above the 32x32 one's finished 0.34 %; the gate now follows the lattice
+    (0.27 % at 48x48), so the 48x48 heart is finished too (0.17 %)."""
+    h32, _ = _designed("heart", 32)
+    h48, report = _designed("heart", 48)
+    assert h48 <= h32
+    finish = [a for a in report["attempts"] if a["init"] == "minimax refinement"]
+    assert len(finish) == 1 and finish[0]["kept"]
+
+
+@pytest.mark.slow
+def test_the_32x32_drop_fits_no_worse_than_the_16x16_one():
+    """bench/shapes.py's drop, non-rigid, CLI defaults: main ended at 0.92 % (16x16) and 1.78 % (32x32, its
+    tips-only coarse levels' basin, least squares); the finish's steps leave more than REFIT_ABOVE, so it redesigns
+    from refitted coarse levels and steps from there (0.40 %). Both pass every check; the reported figure is
+    the pattern's own measure."""
+    target = load_target(DROP, 100)
+    h = {}
+    for n in (16, 32):
+        out = design_pattern(PatternRequest(tiles=(n, n), target=DROP, size=100))
+        assert out.success, out.problems
+        nodes, top = out.pattern.nodes, out.pattern.topology
+        h[n] = conf.deployed(nodes, top, target)["hausdorff_rel"]
+        assert h[n] == pytest.approx(out.report["conformance"]["deployed"]["hausdorff_rel"])
+        assert (
+            out.report["checks"]["overlaps_state_1"]
+            == out.report["checks"]["overlaps_state_2"]
+            == 0
+        )
+    finish = [a for a in out.report["attempts"] if a["init"] == "minimax refinement"]
+    assert len(finish) == 1 and finish[0]["kept"]
+    assert h[32] <= h[16]
+
+
+def _outcome(h: float, problems: list, valid: bool, **checks):
+    report = {"conformance": {"deployed": {"hausdorff_rel": h}}, "checks": checks, "time_s": 1.0}
+    report["status"] = "converged" if valid else "unconverged"
+    return Attempt(None, report, problems, valid, {})
+
+
+def test_a_design_that_fails_on_overlaps_alone_is_redesigned_and_a_valid_redesign_kept(monkeypatch):
+    """The 64x64 drop's design overlapped in state 1 (0.61 %) and nothing came after it: the finish ran on valid
+    designs only. A design failing on overlapping tiles alone now gets the refitted redesign (no steps from it),
+    and a valid redesign replaces it whatever its Hausdorff distance; an unconverged one does not qualify."""
+    from fabkiri.api import design_minimax as dm
+
+    tgt = load_target("heart", 100)
+    big = DesignRequest(rows=64, cols=64, target=tgt)
+    overlapping = _outcome(
+        0.006, ["2 overlapping tile pairs in state 1"], False, overlaps_state_1=2
+    )
+    assert dm.overlapping_only(overlapping) and applies(big, {}, overlapping)
+    unconverged = _outcome(
+        0.006, ["solver did not reach", "2 overlapping"], False, overlaps_state_1=2
+    )
+    assert not dm.overlapping_only(unconverged) and not applies(big, {}, unconverged)
+    redesign = _outcome(0.009, [], True, overlaps_state_1=0)
+    asked: list = []
+    monkeypatch.setattr(dm, "design", lambda r: asked.append(r) or "result")
+    monkeypatch.setattr(dm, "_steps", lambda req, start, judge: (None, [], 0.0))
+    monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
+    attempts: list = []
+    got = dm.minimax_finish(big, overlapping, lambda r: redesign, attempts, lambda t: None)
+    assert got is redesign and attempts[-1]["kept"]
+    assert len(asked) == 1 and asked[0].coarse_refit and asked[0].init == "coarse"

@@ -1,0 +1,152 @@
+"""The solver core's assembly: stencil Jacobians on a fixed CSR pattern, rows without Jacobians."""
+
+from __future__ import annotations
+
+import numpy as np
+from fabkiri.design.core.stencils import Family, jac
+from fabkiri.design.quad import constraints as C
+from fabkiri.design.quad.objective import regularizer
+from fabkiri.design.quad.solve import DesignRequest
+from fabkiri.design.targets import lookup as T
+from fabkiri.pattern import standard_pattern
+from scipy import sparse
+
+from ..rigid_merit import rigid_merit
+
+
+def _coo(m, nv, nodes, grads):
+    """The reference: every stencil entry summed by scipy's COO conversion."""
+    k = nodes.shape[1]
+    rows = np.repeat(np.arange(m), 2 * k)
+    cols = (2 * nodes[:, :, None] + np.arange(2)).reshape(-1)
+    return sparse.coo_matrix((grads.reshape(-1), (rows, cols)), shape=(m, 2 * nv)).toarray()
+
+
+def test_stencil_jacobian_sums_repeated_nodes_like_the_coo_matrix():
+    rng = np.random.default_rng(0)
+    m, k, nv = 50, 5, 12
+    nodes = rng.integers(0, nv, size=(m, k))  # repeats within a row are common
+    grads = rng.normal(size=(m, k, 2))
+    J = jac(m, nv, nodes, grads)
+    assert J.has_canonical_format and J.shape == (m, 2 * nv)
+    assert np.abs(J.toarray() - _coo(m, nv, nodes, grads)).max() <= 1e-14
+    # one entry per distinct node coordinate of a row, sorted
+    for i in range(m):
+        cols = J.indices[J.indptr[i] : J.indptr[i + 1]]
+        assert np.array_equal(cols, np.unique(2 * nodes[i, :, None] + np.arange(2)))
+
+
+def test_a_family_reuses_its_pattern_only_for_the_same_stencil():
+    rng = np.random.default_rng(1)
+    m, k, nv = 30, 4, 9
+    fixed = rng.integers(0, nv, size=(m, k))
+    g = {"grads": rng.normal(size=(m, k, 2)), "nodes": fixed}
+
+    def fn(x):
+        return np.zeros(m), (g["nodes"], g["grads"])
+
+    fam = Family("rows", "reg", fn, nv=nv)
+    fam(np.zeros((nv, 2)))
+    pattern = fam._pattern
+    g["grads"] = rng.normal(size=(m, k, 2))  # new values on the same stencil: the pattern is kept
+    _, J = fam(np.zeros((nv, 2)))
+    assert fam._pattern is pattern
+    assert np.abs(J.toarray() - _coo(m, nv, fixed, g["grads"])).max() <= 1e-14
+    g["nodes"] = rng.integers(0, nv, size=(m, k))  # another stencil: a new pattern
+    _, J = fam(np.zeros((nv, 2)))
+    assert fam._pattern is not pattern
+    assert np.abs(J.toarray() - _coo(m, nv, g["nodes"], g["grads"])).max() <= 1e-14
+
+
+def test_active_rows_jacobian_is_those_rows_of_the_full_one():
+    std = standard_pattern(4, 5, tile_size=1.0)
+    st = C.Stencils.from_pattern(std)
+    X = std.nodes + 0.1 * np.random.default_rng(2).normal(size=std.nodes.shape)
+    for f in (C.convexity(st, st.n_nodes), regularizer(st, st.n_nodes)):
+        rows = np.array([0, 3, 7, 11])
+        full = f(X)[1].toarray()
+        assert np.array_equal(f.rows_jacobian(X, rows).toarray(), full[rows])
+        assert np.array_equal(f.rows_jacobian(X, rows, len(f(X)[0])).toarray(), full[rows])
+        # the residual-only path gives the rows of the Jacobian path
+        assert np.array_equal(f.residual(X), f(X)[0])
+
+
+def test_block_rows_come_without_jacobians_until_a_step_asks(monkeypatch):
+    """A trial step of the block path (large lattices) reads only its rows; the Jacobians are assembled when
+    its normal matrix is asked for, and the rows are those of the Jacobian path."""
+    from fabkiri.design.quad.rigid import reduced as R
+    from fabkiri.design.quad.solve import DesignProblem
+
+    prob = DesignProblem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
+    fam = prob.rigid_family
+    monkeypatch.setattr(R, "DENSE_JD", 0)
+    merit = rigid_merit(prob)
+    assert merit._tiles is None
+    S, _ = fam.fit(prob.X0, np.pi / 4)
+    S = S + 0.2 * np.random.default_rng(3).normal(size=S.shape)  # some inequality rows active
+    p = np.concatenate([S[:, 0], S[:, 1], [0.3]])
+    calls = []
+    call = Family.__call__
+    monkeypatch.setattr(
+        Family, "__call__", lambda self, x: calls.append(self.name) or call(self, x)
+    )
+    ev = merit.evaluate(p)
+    r = ev.r
+    assert calls == []
+    H, g = ev.normal()
+    assert calls
+    r_full, Jx, Jc = merit.rows(merit.state(p))
+    assert np.array_equal(r, r_full)
+    assert len(r) > Jx.shape[0] and Jx.shape[0] + Jc.shape[0] == len(r)
+    H2, g2 = merit.normal(r_full, Jx, Jc, p)
+    assert np.array_equal(H, H2) and np.array_equal(g, g2)
+
+
+def test_standard_rigid_family_is_built_once_per_lattice_and_equals_build():
+    from fabkiri.design.quad.rigid.family import RigidFamily
+
+    def stencils(rows, cols):
+        std = standard_pattern(rows, cols, tile_size=1.0)
+        return std, C.Stencils.from_pattern(std)
+
+    std, st = stencils(4, 6)
+    built = []
+
+    def tree():
+        built.append(1)
+        return std.topology.spanning_tree(0)
+
+    a = RigidFamily.of_standard(st, tree)
+    assert RigidFamily.of_standard(st, tree) is a and built == [1]
+    ref = RigidFamily.build(st, std.topology.spanning_tree(0))
+    for name in ("node_vertex", "midpoint", "seeds", "Z", "Zn", "Y"):
+        assert np.array_equal(getattr(a, name), getattr(ref, name)), name
+    for rows, cols in ((3, 3), (5, 4)):  # two other lattices: the first one is dropped
+        s2, st2 = stencils(rows, cols)
+        RigidFamily.of_standard(st2, lambda s2=s2: s2.topology.spanning_tree(0))
+    assert RigidFamily.of_standard(st, tree) is not a and built == [1, 1]
+
+
+def test_pattern_rows_are_written_one_encode_per_row_as_before():
+    from fabkiri.exchange import pattern_json as io
+
+    def per_row(arr, indent):
+        rows = arr.tolist()
+        if not rows:
+            return "[]"
+        inner = f",\n{indent}  ".join(io._ROW.encode(r) for r in rows)
+        return f"[\n{indent}  {inner}\n{indent}]"
+
+    rng = np.random.default_rng(5)
+    cases = [
+        rng.normal(size=(7, 2)) * 1e3,
+        rng.integers(0, 99, size=(5, 4)),
+        rng.normal(size=(3, 4, 2)),
+        np.array([[np.nan, -0.0], [np.inf, 1e-300]]),
+        np.zeros((0, 2)),
+        np.zeros((3, 0)),
+        np.zeros((2, 0, 2)),
+    ]
+    for arr in cases:
+        for indent in ("  ", "    "):
+            assert io._rows(arr, indent) == per_row(arr, indent), arr.shape
