@@ -15,7 +15,7 @@ row: the design's exit code and path kind, and per checkout deploy's exit code, 
 pairs × frames) and the deepest (mm), and the CPU seconds of the deploy process; the load average
 before and after the row.
 
-Without arguments it deploys the two fixtures of tests/test_deploy_contact.py (designed non-rigid
+Without arguments it deploys the two fixtures of tests/mechanics/test_deploy_contact.py (designed non-rigid
 star and ellipse, 16x16). "main" is the path with the residual entering where the first gap folds
 (LEAD 0) and no contact term, which is main's path exactly (forward continuation, springs only);
 "branch" the defaults. Columns: overlaps (tile pairs × frames) and the deepest (mm), E_max (the

@@ -4,7 +4,7 @@ without it (docs/kagome.md, "Contact: hinged tiles must not pass through each ot
 Run from the checkout root:  PYTHONPATH=$PWD python3 bench/kagome_contact.py [PATTERN.json ...]
 [--steps 40]
 
-Without arguments it deploys the two fixtures of tests/test_kagome_contact.py (the designed
+Without arguments it deploys the two fixtures of tests/mechanics/test_kagome_contact.py (the designed
 ellipse 5x19 and heart 6x11). Each pattern is deployed twice in the same run: springs and
 orientation only (contact weight 0, the baseline) and with the contact term (the default).
 Columns: overlaps (tile pairs × frames) and the deepest (mm), E_max, the narrowest watched gap

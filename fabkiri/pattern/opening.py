@@ -14,7 +14,7 @@ looks like a closed one). Three figures say how much it opens, on plain geometry
 
 For the standard rotating-squares pattern of M x N tiles of edge a at deployment angle ψ every hole is a
 rhombus of angle 2ψ, so the hole fraction is (M-1)(N-1) sin 2ψ / (MN + (M-1)(N-1) sin 2ψ) and the tiles
-turn by ψ from state 1 and by 90° - ψ from state 2 (``tests/test_opening.py``).
+turn by ψ from state 1 and by 90° - ψ from state 2 (``tests/design/test_opening.py``).
 """
 
 from __future__ import annotations

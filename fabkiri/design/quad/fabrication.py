@@ -20,7 +20,7 @@ preset into them, this layer never sees a preset). At the design's size every ti
 
 Rows are plain functions of a tile's (or hole's) four corners; their gradients are exact, carried
 forward through every operation (:class:`Dual`, forward-mode differentiation over the 8 coordinates of
-the four corners) and checked against finite differences in ``tests/test_fabrication.py``.
+the four corners) and checked against finite differences in ``tests/design/test_fabrication.py``.
 """
 
 from __future__ import annotations

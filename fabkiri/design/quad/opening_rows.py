@@ -9,7 +9,7 @@ the deployed sheet. With both sums positive, ``fraction >= F`` is the same as th
 shoelace sum, so the gradient is exact and sparse: ∂A/∂x_i = ½ (y_{i+1} - y_{i-1}), ∂A/∂y_i = ½ (x_{i-1}
 - x_{i+1}) over the polygon's corners in counter-clockwise order (holes ordered as they wind in the
 standard pattern, so a hole turned inside out counts negative). Checked against finite differences in
-``tests/test_opening.py``.
+``tests/design/test_opening.py``.
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ the two tiles shrunk by ``d``: ``d / sin`` of the sharper of the two hinge corne
 obtuse). :func:`pad_rows` is that area, exactly (the clipped polygon's boundary integral, Cyrus-Beck clipping
 of each edge), divided by ``w`` (a mean pad depth, a length like every other row), minus the plan's.
 Gradients are carried forward (:class:`~..core.dual.Dual`) and checked against finite differences and the
-area ``print`` measures in ``tests/test_print_rows.py``.
+area ``print`` measures in ``tests/design/test_print_rows.py``.
 """
 
 from __future__ import annotations

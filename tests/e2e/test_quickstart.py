@@ -11,7 +11,7 @@ import zipfile
 import ezdxf
 import pytest
 
-from .conftest import REPO
+from ..conftest import REPO
 
 SCRIPT = REPO / "examples" / "quickstart.py"
 
