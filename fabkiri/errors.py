@@ -12,8 +12,12 @@ suggestions as ``{name: value}``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from collections import namedtuple
+
+# every command imports this module: no dataclasses or typing at run time (fabkiri --help stays cheap)
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from typing import Any
 
 
 class _Named:
@@ -29,21 +33,23 @@ class _Named:
 NAMED = _Named()
 
 
-@dataclass(frozen=True)
-class Param:
-    """A parameter named in a message, with the value it suggests (if any).
+class Param(
+    namedtuple("Param", "name value fmt shown flag cli_value", defaults=(NAMED, "", None, "", None))
+):
+    """A parameter named in a message, with the value it suggests (if any): an immutable record.
 
     ``value`` (a suggestion) is shown formatted by ``fmt``, a string quoted for a library caller;
     ``True`` is a switch (``--rigid`` on the command line). ``shown`` is the form of a value that is
     not a suggestion (``(rows, cols)``), ``flag`` the CLI's option where it is not ``--`` and the name
     with dashes, and ``cli_value`` the CLI's spelling of the value where it differs (``ROWSxCOLS``)."""
 
+    __slots__ = ()
     name: str
-    value: Any = NAMED
-    fmt: str = ""
-    shown: str | None = None
-    flag: str = ""
-    cli_value: str | None = None
+    value: Any
+    fmt: str
+    shown: str | None
+    flag: str
+    cli_value: str | None
 
     def words(self, cli: bool = False) -> str:
         """``name=value`` (or ``name``) for a library caller; ``--flag value`` for the command line."""

@@ -7,7 +7,11 @@ import importlib
 import sys
 from collections.abc import Callable
 from types import ModuleType
-from typing import Any
+
+# imported by `import fabkiri`: typing stays out of the start-up (mypy reads the block below)
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from typing import Any
 
 
 def lazy_getattr(package: str, where: dict[str, str]) -> Callable[[str], Any]:
