@@ -184,22 +184,23 @@ def format_of(path: str | Path, fallback: str) -> PatternFormat:
 # ---------------------------------------------------------------- drawings and solids
 
 
+def _member(family: str, name: str):
+    """The ``family`` format of this name, or :class:`InputError` naming the known ones."""
+    found = _registry(family).find(name)
+    if found is None:
+        known = ", ".join(_registry(family).names())
+        raise InputError(f"unknown {family} format {name!r}; known: {known}")
+    return found
+
+
 def drawing_format(name: str) -> DrawingFormat:
     """The drawing format of this name, or :class:`InputError` naming the known ones."""
-    found = _registry("drawing").find(name)
-    if found is None:
-        known = ", ".join(_registry("drawing").names())
-        raise InputError(f"unknown drawing format {name!r}; known: {known}")
-    return found
+    return _member("drawing", name)
 
 
 def solid_format(name: str) -> SolidFormat:
     """The solid format of this name, or :class:`InputError` naming the known ones."""
-    found = _registry("solid").find(name)
-    if found is None:
-        known = ", ".join(_registry("solid").names())
-        raise InputError(f"unknown solid format {name!r}; known: {known}")
-    return found
+    return _member("solid", name)
 
 
 def read_cut_file(path: str | Path, layer: str = "CUT") -> Linework:
