@@ -47,17 +47,20 @@ class ProgressLine:
 
 
 def on_terminal(
-    stream: TextIO, progress_line: ProgressLine
+    stream: TextIO, progress_line: ProgressLine, in_place: bool = True
 ) -> Callable[[str, float | None, str], None]:
     """A ``progress`` callback for a terminal: each message on its own line as before, under
-    them one status line rewritten in place. Call it with stage ``""`` at the end to clear it."""
+    them one status line rewritten in place. Call it with stage ``""`` at the end to clear it.
+    ``in_place`` false: the status is a whole line of its own after each message, for a stream
+    others also write to (a status line left standing would run into their text)."""
 
     def show(stage: str, fraction: float | None, message: str) -> None:
-        stream.write("\r\033[K")  # clear the old status line before the message takes its place
+        if in_place:
+            stream.write("\r\033[K")  # clear the old status line before the message takes its place
         if message:
             stream.write(message + "\n")
         if stage:
-            stream.write(progress_line.line(stage, fraction))
+            stream.write(progress_line.line(stage, fraction) + ("" if in_place else "\n"))
         stream.flush()
 
     return show
