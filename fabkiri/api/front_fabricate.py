@@ -21,6 +21,7 @@ from .maker import make as _make
 from .maker_result import MakeResult
 from .print import PrintOptions
 from .print import print_pattern as _print_pattern
+from .progress import with_steps
 from .results import CutResult, PrintResult, inputs_of, source_of, stem_of
 
 MAKE_STEPS = (
@@ -208,16 +209,7 @@ def _lines_to(progress: Callable[..., None]) -> Callable[[str], None]:
     its share. make's lines are "make: STEP ..." as a step starts and "make: STEP ok|failed" as it ends."""
     if not _takes_three(progress):
         return progress
-    done, stage = [0], ["make"]
-
-    def heard(text: str) -> None:
-        m = re.match(r"make: (\w+) (\.\.\.|ok|failed)", text)
-        if m:
-            stage[0] = m.group(1)
-            done[0] += m.group(2) != "..."
-        progress(stage[0], min(done[0] / len(MAKE_STEPS), 1.0), text)
-
-    return heard
+    return with_steps(progress, len(MAKE_STEPS))
 
 
 def _takes_three(callback: Callable[..., None]) -> bool:

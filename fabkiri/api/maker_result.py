@@ -15,6 +15,7 @@ from typing import Any, TypedDict
 
 from ..fileio import atomic_write_many
 from ..pattern.model import Pattern
+from .display import result_html
 from .maker_tiles import TilesChoice
 
 MANIFEST = "make.json"  # the record of the run, written last (also when a step failed)
@@ -134,6 +135,10 @@ class MakeResult:
         if isinstance(png, bytes):
             return png
         return None if self.pattern is None else self.pattern._repr_png_()
+
+    def _repr_html_(self) -> str:
+        status = "ok" if self.ok else "FAILED"
+        return result_html("MakeResult", f"{self.summary()[0]}; {status}", self._repr_png_())
 
     @property
     def failed(self) -> Step | None:

@@ -28,6 +28,7 @@ from ..pattern.picture import pattern_png, tiles_png
 from ..verify.report import Report
 from .cut import CutOutcome
 from .deploy import DeployOutcome
+from .display import result_html
 from .print import PrintOutcome
 
 Folder = str | os.PathLike
@@ -89,6 +90,9 @@ class _Result:
 
     def _repr_png_(self) -> bytes | None:
         return None
+
+    def _repr_html_(self) -> str:
+        return result_html(type(self).__name__, self.summary(), self._repr_png_())
 
 
 def inputs_of(pattern: Pattern) -> tuple[Path, ...]:

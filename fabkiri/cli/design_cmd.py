@@ -23,6 +23,7 @@ from ..api.design import (  # noqa: F401 (names tests and benches import from he
     overlapping_tiles,
 )
 from ..api.designers import design_by_kind, design_kinds
+from ..api.progress import ProgressLine, on_terminal
 from ..design.core import conformance as conf
 from ..design.quad.initial import INITS
 from ..errors import InputError
@@ -68,13 +69,26 @@ def cmd_design(args: argparse.Namespace) -> int:
         kind=args.lattice,
         trim=args.trim,
     )
-    out = design_by_kind(request, notify=lambda text: print(text, file=sys.stderr))
+    notify, done = _notes()
+    out = design_by_kind(request, notify=notify)
+    done()
     out.write(args.output, preview=not args.no_preview)
     if args.json:
         print(json.dumps(_jsonable(out.report), indent=2, sort_keys=True))
     for line in out.summary(args.output):
         print(line, file=sys.stderr)
     return out.exit_code
+
+
+def _notes():
+    """design's notes on stderr as they are; on a terminal each with the time so far after it, and
+    the total at the end. No ETA: the retries, the minimax finish and the continuation are decided
+    as the design goes, so no share of the work is known; and the status is a line of its own
+    because the solver's log also writes to stderr."""
+    if not sys.stderr.isatty():
+        return (lambda text: print(text, file=sys.stderr)), (lambda: None)
+    show = on_terminal(sys.stderr, ProgressLine("design"), in_place=False)
+    return (lambda text: show("designing", None, text)), (lambda: show("done", None, ""))
 
 
 def _jsonable(v):

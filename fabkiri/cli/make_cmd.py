@@ -5,14 +5,26 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..api.front_fabricate import MAKE_STEPS
 from ..api.maker import make
+from ..api.progress import ProgressLine, on_terminal, with_steps
 from ..design.core import conformance as conf
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
 from .argtypes import length_mm, parse_tiles
 
 
+def _progress():
+    """make's lines on stderr as they are; on a terminal with a status line (step, elapsed, ETA)
+    under them, so piped output stays the same bytes. Returns the callback and how to end it."""
+    if not sys.stderr.isatty():
+        return (lambda text: print(text, file=sys.stderr)), (lambda: None)
+    show = on_terminal(sys.stderr, ProgressLine("make", len(MAKE_STEPS)))
+    return with_steps(show, len(MAKE_STEPS)), (lambda: show("", None, ""))
+
+
 def cmd_make(args: argparse.Namespace) -> int:
+    progress, done = _progress()
     result = make(
         args.target,
         args.size,
@@ -24,8 +36,9 @@ def cmd_make(args: argparse.Namespace) -> int:
         shape_tol=args.shape_tol,
         min_opening=args.min_opening,
         output=args.output,
-        progress=lambda text: print(text, file=sys.stderr),
+        progress=progress,
     )
+    done()
     for line in result.summary():
         print(line, file=sys.stderr)
     for line in result.option_lines():  # as cut and print give them: one runnable line each
