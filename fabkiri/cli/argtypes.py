@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
-import re
 from collections.abc import Callable
 
 from .. import limits
-from ..errors import InputError
+from ..pattern.tilecount import tile_count
 
 
 def bounded(
@@ -43,11 +42,5 @@ length_mm = bounded(
 
 
 def parse_tiles(text: str) -> tuple[int, int]:
-    """``ROWSxCOLS`` -> (rows, cols), both >= 1."""
-    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", text)
-    if not m:
-        raise InputError(f"--tiles expects ROWSxCOLS such as 8x8, got {text!r}")
-    rows, cols = int(m.group(1)), int(m.group(2))
-    if rows < 1 or cols < 1:
-        raise InputError(f"--tiles needs at least one row and one column, got {rows}x{cols}")
-    return rows, cols
+    """``ROWSxCOLS`` -> (rows, cols), both >= 1 (the library's :func:`~fabkiri.pattern.tilecount.tile_count`)."""
+    return tile_count(text, "--tiles")

@@ -28,6 +28,7 @@ from .. import __version__, limits
 from ..errors import InputError
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
+from ..pattern.tilecount import tile_count
 
 if TYPE_CHECKING:
     from ..api.design import PatternRequest
@@ -90,12 +91,10 @@ class SweepSpec:
 
 
 def parse_tiles(value) -> tuple[int, int]:
+    """A job's ``tiles``: ``"RxC"``, a pair, or one number for a square lattice."""
     if isinstance(value, int) and not isinstance(value, bool):
-        return value, value
-    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", str(value))
-    if not m:
-        raise InputError(f"tiles expects ROWSxCOLS such as 6x6 (or one number), got {value!r}")
-    return int(m.group(1)), int(m.group(2))
+        value = (value, value)
+    return tile_count(value)
 
 
 def load_spec(path: str | Path) -> SweepSpec:
