@@ -9,12 +9,14 @@ verification that must pass before anything may be written. A failed check raise
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from typing import Any
 
 from .. import limits
-from ..errors import CheckFailed, FabkiriError, FabricationError
+from ..errors import CheckFailed, FabkiriError, FabricationError, InputError, Param
 from ..fabricate.cut.materials import DEFAULT_MATERIAL, Material, load_material, parse_setting
 from ..fabricate.cut.readback import Readback, verified_files
 from ..fabricate.cut.sheets import CutOptions, CutResult, closed_states, cut_pattern
@@ -23,6 +25,23 @@ from ..pattern.fingerprint import KEY, fingerprint
 from ..pattern.model import Pattern
 from .advice import Ask, Refused, cut_alternatives, cut_refusal
 from .intent import design_intent
+
+_SHEET = re.compile(r"\s*([0-9.]+)\s*[xX×]\s*([0-9.]+)\s*")
+
+
+def parse_sheet(value: str | tuple[float, float]) -> tuple[float, float]:
+    """A sheet's width and height in mm from ``"600x400"`` or a pair, both positive and finite;
+    else :class:`InputError` naming ``sheet`` (``--sheet`` on the command line)."""
+    m = _SHEET.fullmatch(value) if isinstance(value, str) else None
+    try:
+        w, h = (float(m.group(1)), float(m.group(2))) if m else map(float, value)
+    except (TypeError, ValueError):
+        raise InputError(
+            Param("sheet"), f" expects WxH in mm such as 600x400, got {value!r}"
+        ) from None
+    if not (0 < w < math.inf and 0 < h < math.inf):
+        raise InputError(Param("sheet"), f" needs a positive width and height, got {value!r}")
+    return w, h
 
 
 def cut_material(

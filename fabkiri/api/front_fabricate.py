@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import inspect
-import re
 from collections.abc import Callable, Iterable
 from dataclasses import fields
 from pathlib import Path
@@ -15,7 +14,7 @@ from ..fabricate.cut.materials import Material, parse_setting
 from ..fabricate.cut.sheets import CutOptions
 from ..pattern.model import Pattern
 from ..pattern.tilecount import tile_count
-from .cut import cut_files, cut_material
+from .cut import cut_files, cut_material, parse_sheet
 from .front import PatternLike, Progress, Tiles, _options, _pattern, _quiet
 from .maker import make as _make
 from .maker_result import MakeResult
@@ -30,21 +29,6 @@ MAKE_STEPS = (
     "deploy",
     "report",
 )  # make's steps in order (process: cut or print)
-
-
-_SHEET = re.compile(r"\s*([0-9.]+)\s*[xX×]\s*([0-9.]+)\s*")
-
-
-def _sheet(value: str | tuple[float, float]) -> tuple[float, float]:
-    """``"600x400"`` or ``(600, 400)``: a sheet's width and height in mm, both positive."""
-    m = _SHEET.fullmatch(value) if isinstance(value, str) else None
-    try:
-        w, h = (float(m.group(1)), float(m.group(2))) if m else map(float, value)
-    except (TypeError, ValueError):
-        w = h = float("nan")
-    if not (0 < w < float("inf") and 0 < h < float("inf")):
-        raise InputError(f"sheet expects 'WxH' in mm such as '600x400' or a pair, got {value!r}")
-    return w, h
 
 
 def _material(
@@ -89,7 +73,7 @@ def cut(
         material=mat,
         hinge=kind,
         state=state,
-        sheet=_sheet(sheet),
+        sheet=parse_sheet(sheet),
         scale=_number_or_auto(scale, "scale"),
         width=_number_or_auto(width, "width"),
         stem=stem,

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
-from ..api.cut import cut_files, cut_material
+from ..api.cut import cut_files, cut_material, parse_sheet
 from ..errors import InputError
 from ..exchange.drawing import COLORS
 from ..exchange.svg import STROKE_MM
@@ -18,19 +17,6 @@ from ..fabricate.cut.sheets import FORMATS, CutOptions
 from ..fileio import atomic_write_many
 from .asked import asked, options_on_stdout
 from .pattern_cmds import _nonneg, _positive, load_any
-
-
-def _sheet(text: str) -> tuple[float, float]:
-    m = re.fullmatch(r"\s*([0-9.]+)\s*[xX×]\s*([0-9.]+)\s*", text)
-    if not m:
-        raise InputError(f"--sheet expects WxH in mm such as 600x400, got {text!r}")
-    try:
-        w, h = float(m.group(1)), float(m.group(2))
-    except ValueError:
-        raise InputError(f"--sheet expects WxH in mm such as 600x400, got {text!r}") from None
-    if w <= 0 or h <= 0:
-        raise InputError(f"--sheet needs a positive width and height, got {text!r}")
-    return w, h
 
 
 def _formats(text: str) -> tuple[str, ...]:
@@ -99,7 +85,7 @@ def cmd_cut(args: argparse.Namespace) -> int:
         material=material,
         hinge=hinge,
         state=args.state,
-        sheet=_sheet(args.sheet),
+        sheet=parse_sheet(args.sheet),
         margin=args.margin,
         layout=args.layout,
         scale=args.scale,
