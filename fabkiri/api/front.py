@@ -21,18 +21,15 @@ from pathlib import Path
 from typing import Any
 
 from .. import limits
-from ..design.core.conformance import parse_shape_tol
 from ..errors import InputError
 from ..exchange.file_formats import format_names, pattern_format
 from ..exchange.pattern_json import write_pattern
 from ..fileio import atomic_write, atomic_write_many
 from ..mechanics.contract import with_contracted_states
 from ..mechanics.info import describe
-from ..pattern.kinds.periodic.sheet import flat_sheet, seam_of
 from ..pattern.kinds.tessellation import DEFAULT_KIND, kinds, tessellation
 from ..pattern.model import Pattern
 from ..pattern.tilecount import tile_count
-from ..verify import verify_layout, verify_pattern
 from .deploy import deploy_pattern
 from .design import PatternRequest
 from .designers import design_by_kind
@@ -47,11 +44,11 @@ from .results import (
     source_of,
     stem_of,
 )
+from .verification import DEFAULT_TOL_MM, verify_files
 
 Progress = Callable[[str, float | None, str], None]  # (stage, fraction done or None, message)
 PatternLike = Pattern | str | os.PathLike
 Tiles = str | tuple[int, int] | list[int]
-VERIFY_TOL_MM = 0.05  # as `fabkiri verify`: the default material's (acrylic-3) tolerance
 
 
 def _quiet(stage: str, fraction: float | None, message: str) -> None:
@@ -229,7 +226,7 @@ def verify(
     pattern: PatternLike,
     *,
     layout: str | os.PathLike | None = None,
-    tol_mm: float | None = VERIFY_TOL_MM,
+    tol_mm: float | None = DEFAULT_TOL_MM,
     tol_rad: float = 1e-6,
     shape_tol: str = "2%",
 ) -> VerifyResult:
@@ -237,23 +234,14 @@ def verify(
     relative tier for solver output, as ``--exact``) and, with ``layout``, that a cut file (.dxf or
     .svg) matches it."""
     pattern = _pattern(pattern)
-    report = verify_pattern(
-        pattern, tol_mm=tol_mm, tol_rad=tol_rad, shape_tol=parse_shape_tol(shape_tol)
+    report = verify_files(
+        pattern,
+        layout,
+        tol_mm=DEFAULT_TOL_MM if tol_mm is None else tol_mm,
+        exact=tol_mm is None,
+        tol_rad=tol_rad,
+        shape_tol=shape_tol,
     )
-    if layout is not None:
-        if not Path(layout).exists():
-            raise InputError(f"{layout}: no such layout file")
-        seam = seam_of(pattern)  # a tube is cut as its flat sheet
-        sheet = pattern if seam is None else flat_sheet(pattern, seam)
-        at = VERIFY_TOL_MM if tol_mm is None else tol_mm
-        cut = verify_layout(sheet, str(layout), tol_mm=at, tol_rad=tol_rad)
-        report.extend(cut)
-        report.kind = "pattern and layout"
-        report.meta["layout"] = str(layout)
-        report.meta["layout_tol_mm"] = at
-        report.meta["tolerance"] = (
-            f"pattern {report.meta['tolerance']}; layout {cut.meta['tolerance']}"
-        )
     return VerifyResult(
         pattern=pattern, report=report, stem=stem_of(pattern), inputs=inputs_of(pattern)
     )

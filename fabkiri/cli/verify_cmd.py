@@ -11,14 +11,12 @@ import re
 import sys
 from pathlib import Path
 
-from ..errors import InputError
+from ..api.verification import DEFAULT_TOL_MM, verify_files
 from ..exchange.obj import import_obj
 from ..exchange.pattern_json import read_pattern
 from ..mechanics.contract import adopt_state_labels
 from ..pattern.model import Pattern
 from .argtypes import bounded
-
-DEFAULT_TOL_MM = 0.05  # the default material's (acrylic-3) tolerance
 
 
 def load_for_verify(path: str) -> Pattern:
@@ -49,33 +47,16 @@ _nonneg = bounded(
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    from ..pattern.kinds.periodic.sheet import flat_sheet, seam_of
-    from ..verify import verify_layout, verify_pattern
-
     pattern = load_for_verify(args.file)
-    from ..design.core.conformance import parse_shape_tol
-
     tol_mm = DEFAULT_TOL_MM if args.tol_mm is None else args.tol_mm
-    # --exact: the relative tier for solver output; otherwise one tolerance in mm (angles as displacement)
-    report = verify_pattern(
+    report = verify_files(
         pattern,
-        tol_mm=None if args.exact else tol_mm,
+        args.layout,
+        tol_mm=tol_mm,
+        exact=args.exact,
         tol_rad=args.tol_rad,
-        shape_tol=parse_shape_tol(args.shape_tol),
+        shape_tol=args.shape_tol,
     )
-    if args.layout:
-        if not Path(args.layout).exists():
-            raise InputError(f"{args.layout}: no such layout file")
-        seam = seam_of(pattern)  # a tube is cut as its flat sheet (docs/tubes.md)
-        cut = pattern if seam is None else flat_sheet(pattern, seam)
-        layout = verify_layout(cut, args.layout, tol_mm=tol_mm, tol_rad=args.tol_rad)
-        report.extend(layout)
-        report.kind = "pattern and layout"
-        report.meta["layout"] = str(args.layout)
-        report.meta["layout_tol_mm"] = tol_mm
-        report.meta["tolerance"] = (
-            f"pattern {report.meta['tolerance']}; layout {layout.meta['tolerance']}"
-        )
     if args.json:
         print(report.to_json())
     else:
