@@ -16,19 +16,13 @@ from ..pattern.model import Pattern
 from ..pattern.tilecount import tile_count
 from .cut import cut_files, cut_material, parse_sheet
 from .front import PatternLike, Progress, Tiles, _options, _pattern, _quiet
+from .maker import MAKE_STEPS
 from .maker import make as _make
 from .maker_result import MakeResult
 from .print import PrintOptions
 from .print import print_pattern as _print_pattern
 from .progress import with_steps
 from .results import CutResult, PrintResult, inputs_of, source_of, stem_of
-
-MAKE_STEPS = (
-    "design",
-    "process",
-    "deploy",
-    "report",
-)  # make's steps in order (process: cut or print)
 
 
 def _material(

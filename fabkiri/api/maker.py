@@ -44,6 +44,7 @@ Progress = Callable[[str], None]
 # a failed deploy check (collisions) still gets its report: the report documents the design and is
 # what a maker reads to decide; the run still exits 1 naming the deploy failure
 GOES_ON = frozenset({"deploy"})
+MAKE_STEPS = ("design", "process", "deploy", "report")  # in order; "process" is cut or print
 
 
 @dataclass(frozen=True)
@@ -101,12 +102,9 @@ def make(  # noqa: PLR0913 (the options of `fabkiri make`)
         f"make: {plan.target} at {plan.size:g} mm, {plan.fabrication}, "
         f"{plan.tiles.tiles[0]}x{plan.tiles.tiles[1]} tiles ({plan.tiles.reason})"
     )
-    for name, run in (
-        ("design", _design),
-        (plan.process, _cut if plan.process == "cut" else _print),
-        ("deploy", _deploy),
-        ("report", _report),
-    ):
+    runs = {"design": _design, "cut": _cut, "print": _print, "deploy": _deploy, "report": _report}
+    for name in (plan.process if step == "process" else step for step in MAKE_STEPS):
+        run = runs[name]
         if not _run_step(result, plan, name, run, say) and name not in GOES_ON:
             break
     if out is not None:

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..api.front_fabricate import MAKE_STEPS
-from ..api.maker import make
+from ..api.maker import MAKE_STEPS, make
 from ..api.progress import ProgressLine, on_terminal, with_steps
 from ..design.core import conformance as conf
 from ..fabricate.cut.materials import HINGE_KINDS
