@@ -7,9 +7,8 @@ returns one result type (:mod:`fabkiri.api.results`). They are thin: the work an
 the front doors the commands call (:func:`~.design.design_pattern`, :func:`~.cut.cut_files`,
 :func:`~.print.print_pattern`, :func:`~.deploy.deploy_pattern`, :func:`~.maker.make`), so a
 result's files are the bytes the command writes. Bad input raises
-:class:`~fabkiri.errors.InputError`; a failed check of cut or print raises
-:class:`~fabkiri.errors.CheckFailed`; a design or deployment that misses is returned with ``ok``
-false. ``progress(stage, fraction or None, message)`` hears how a long call goes.
+:class:`~fabkiri.errors.InputError`; a design, deployment, cut or print that a check refuses
+is returned with ``ok`` false (a cut's or print's with the checked options that pass). ``progress(stage, fraction or None, message)`` hears how a long call goes.
 """
 
 from __future__ import annotations

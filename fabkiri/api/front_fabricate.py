@@ -9,7 +9,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ..errors import CheckFailed, InputError
 from ..fabricate.cut.materials import Material, parse_setting
 from ..fabricate.cut.sheets import CutOptions
 from ..pattern.model import Pattern
@@ -54,7 +54,9 @@ def cut(
     verified by reading them back, as ``fabkiri cut`` makes them. ``scale`` or ``width`` (mm) may be
     ``"auto"``; ``settings`` are ``FIELD=VALUE`` material overrides; ``options`` the other
     :class:`~fabkiri.fabricate.cut.sheets.CutOptions` fields (``layout``, ``formats``, ``margin``, ...).
-    A refused cut raises :class:`~fabkiri.errors.CheckFailed` naming what would pass."""
+    A cut a check refuses (too thin for the material, a read-back that fails) is returned with ``ok``
+    false, the ``problems`` and the checked ``alternatives`` (``advice``); bad input (an unknown
+    material, an unreadable file) raises :class:`~fabkiri.errors.InputError`."""
     pattern = _pattern(pattern)
     say = progress or _quiet
     mat, kind = _material(pattern, material, hinge, settings)
@@ -75,7 +77,19 @@ def cut(
         **extra,
     )
     say("cut", 0.0, f"cutting {stem} from {mat.name}")
-    out = cut_files(pattern, opts)
+    try:
+        out = cut_files(pattern, opts)
+    except CheckFailed as exc:  # refused (the command's exit 1): a result that says why
+        say("cut", 1.0, f"refused: {exc}")
+        return CutResult(
+            files={},
+            manifest={},
+            material=mat.name,
+            stem=stem,
+            inputs=inputs_of(pattern),
+            error=exc,
+            alternatives=list(getattr(exc, "alternatives", [])),
+        )
     say(
         "cut",
         1.0,
@@ -119,8 +133,10 @@ def print_pattern(
     """3D-print files of ``pattern`` for ``printer`` (a preset's name or a printer .json; None: the one
     the design was made for, else the default) in ``style`` (``tiles-and-strips``, ``strips``,
     ``pinned``), at ``scale`` (or ``"auto"``), verified, as ``fabkiri print`` makes them. ``options``
-    are the other :class:`~.print.PrintOptions` fields (``step``, ``marks``, ``gap``, ...). A refused
-    print raises :class:`~fabkiri.errors.CheckFailed` naming what would pass."""
+    are the other :class:`~.print.PrintOptions` fields (``step``, ``marks``, ``gap``, ...). A print a
+    check refuses (past the bed, strips too narrow, a mesh check) is returned with ``ok`` false, the
+    ``problems`` and the checked ``alternatives`` (``advice``); bad input raises
+    :class:`~fabkiri.errors.InputError`."""
     pattern = _pattern(pattern)
     say = progress or _quiet
     fixed = {"printer", "style", "scale", "state"}
@@ -134,13 +150,33 @@ def print_pattern(
     )
     stem, src = stem_of(pattern), source_of(pattern)
     say("print", 0.0, f"printing {stem}")
-    out = _print_pattern(
-        pattern,
-        opts,
-        stem=stem,
-        source=f"{stem}.json" if src is None else src.name,
-        notify=lambda text: say("print", None, text),
-    )
+    messages: list[str] = []
+
+    def heard(text: str) -> None:
+        messages.append(text)
+        say("print", None, text)
+
+    try:
+        out = _print_pattern(
+            pattern,
+            opts,
+            stem=stem,
+            source=f"{stem}.json" if src is None else src.name,
+            notify=heard,
+        )
+    except CheckFailed as exc:  # refused (the command's exit 1): a result that says why
+        say("print", 1.0, f"refused: {exc}")
+        return PrintResult(
+            files={},
+            scale=opts.scale if isinstance(opts.scale, float) else float("nan"),
+            printer=printer or "",
+            description="",
+            stem=stem,
+            messages=messages,
+            inputs=inputs_of(pattern),
+            error=exc,
+            alternatives=list(getattr(exc, "alternatives", [])),
+        )
     say("print", 1.0, out.describe())
     return PrintResult(
         files=dict(out.files),
