@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import inspect
 from collections.abc import Callable, Iterable
 from dataclasses import fields
 from pathlib import Path
@@ -16,12 +15,10 @@ from ..pattern.model import Pattern
 from ..pattern.tilecount import tile_count
 from .cut import cut_files, cut_material, parse_sheet
 from .front import PatternLike, Progress, Tiles, _options, _pattern, _quiet
-from .maker import MAKE_STEPS
 from .maker import make as _make
 from .maker_result import MakeResult
 from .print import PrintOptions
 from .print import print_pattern as _print_pattern
-from .progress import with_steps
 from .results import CutResult, PrintResult, inputs_of, source_of, stem_of
 
 
@@ -204,7 +201,7 @@ def make(
     ``tiles`` (``"8x8"`` or a pair; None: chosen for the process). ``progress(stage, fraction,
     message)`` hears each of make's lines with its step (``design``, ``cut`` or ``print``,
     ``deploy``, ``report``) and the share of the steps done; a one-argument callback hears the
-    lines alone, as ``fabkiri.api.maker.make`` gives them."""
+    lines alone."""
     extra = _options(
         "make", options, ("material", "hinge", "printer", "style", "shape_tol", "min_opening")
     )
@@ -213,23 +210,6 @@ def make(
         size,
         tiles=None if tiles is None else tile_count(tiles),
         output=output,
-        progress=_lines_to(progress) if progress is not None else None,
+        progress=progress,
         **extra,
     )
-
-
-def _lines_to(progress: Callable[..., None]) -> Callable[[str], None]:
-    """make's lines for ``progress``: as they are to a one-argument callback, else with the step and
-    its share. make's lines are "make: STEP ..." as a step starts and "make: STEP ok|failed" as it ends."""
-    if not _takes_three(progress):
-        return progress
-    return with_steps(progress, len(MAKE_STEPS))
-
-
-def _takes_three(callback: Callable[..., None]) -> bool:
-    """Whether ``callback`` can be called with three arguments (stage, fraction, message)."""
-    try:
-        inspect.signature(callback).bind(None, None, None)
-    except (TypeError, ValueError):  # fewer parameters, or a builtin without a signature
-        return False
-    return True

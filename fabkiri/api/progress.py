@@ -8,7 +8,7 @@ of the work is done; without a fraction the line shows the stage and the time so
 
 from __future__ import annotations
 
-import re
+import inspect
 import time
 from collections.abc import Callable
 from typing import TextIO
@@ -66,19 +66,21 @@ def on_terminal(
     return show
 
 
-def with_steps(
-    progress: Callable[[str, float | None, str], None], steps: int
-) -> Callable[[str], None]:
-    """make's one-argument lines for a three-argument ``progress``, with the step and the share of
-    ``steps`` done. make's lines are "make: STEP ..." as a step starts and "make: STEP ok|failed"
-    as it ends."""
-    done, stage = [0], ["make"]
+def three_args(
+    progress: Callable[..., None],
+) -> Callable[[str, float | None, str], None]:
+    """``progress`` as a ``(stage, fraction, message)`` callback: as it is when it takes three
+    arguments, else (a one-argument callback such as ``list.append`` or ``print``) hearing the
+    messages alone."""
+    if _takes_three(progress):
+        return progress
+    return lambda stage, fraction, message: progress(message)
 
-    def heard(text: str) -> None:
-        m = re.match(r"make: (\w+) (\.\.\.|ok|failed)", text)
-        if m:
-            stage[0] = m.group(1)
-            done[0] += m.group(2) != "..."
-        progress(stage[0], min(done[0] / steps, 1.0), text)
 
-    return heard
+def _takes_three(callback: Callable[..., None]) -> bool:
+    """Whether ``callback`` can be called with three arguments (stage, fraction, message)."""
+    try:
+        inspect.signature(callback).bind(None, None, None)
+    except (TypeError, ValueError):  # fewer parameters, or a builtin without a signature
+        return False
+    return True

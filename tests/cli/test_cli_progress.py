@@ -6,15 +6,17 @@ import io
 import sys
 
 import pytest
+from fabkiri.api.progress import three_args
 from fabkiri.cli import make_cmd
 
-LINES = [
-    "make: circle at 60 mm, acrylic-3 living, 6x6 tiles (given)",
-    "make: design ...",
-    "make: design ok in 1.0 s",
-    "make: cut ...",
-    "make: cut ok in 0.5 s",
+STEPS = [  # (stage, share of the steps done, line) as make reports them
+    ("make", 0.0, "make: circle at 60 mm, acrylic-3 living, 6x6 tiles (given)"),
+    ("design", 0.0, "make: design ..."),
+    ("design", 0.25, "make: design ok in 1.0 s"),
+    ("cut", 0.25, "make: cut ..."),
+    ("cut", 0.5, "make: cut ok in 0.5 s"),
 ]
+LINES = [line for _, _, line in STEPS]
 
 
 class _Made:
@@ -32,8 +34,9 @@ def quick_make(monkeypatch):
     """make's lines without a minute of making."""
 
     def fake(*args, progress, **kwargs):
-        for line in LINES:
-            progress(line)
+        told = three_args(progress)
+        for stage, fraction, line in STEPS:
+            told(stage, fraction, line)
         return _Made()
 
     monkeypatch.setattr(make_cmd, "make", fake)
