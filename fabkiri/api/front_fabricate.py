@@ -174,12 +174,12 @@ def print_pattern(
             error=exc,
             alternatives=list(getattr(exc, "alternatives", [])),
         )
-    say("print", 1.0, out.describe())
+    say("print", 1.0, out.describe(cli=False))
     return PrintResult(
         files=dict(out.files),
         scale=float(out.scale),
         printer=str(out.printer.name),
-        description=out.describe(),
+        description=out.describe(cli=False),
         stem=stem,
         messages=list(out.messages),
         outcome=out,
