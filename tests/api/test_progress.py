@@ -49,6 +49,19 @@ def test_progress_line_without_steps_and_at_time_zero():
     assert clock_text(3725) == "1:02:05" and clock_text(-1) == "0:00"
 
 
+def test_per_stage_eta_is_timed_from_the_stage_start():
+    clock = FakeClock()
+    line = ProgressLine("design", clock=clock, per_stage=True)
+    clock.now += 60  # a minute of guesses before the continuation starts
+    assert line.line("continuation", 0.0) == "design: continuation 0 %  1:00 elapsed"
+    clock.now += 10
+    assert line.line("continuation", 0.25) == (
+        "design: continuation 25 %  1:10 elapsed, ~0:30 left"
+    )  # the stage's 10 s for a quarter, not the design's 70 s
+    clock.now += 20
+    assert line.line("minimax", 0.5) == "design: minimax 50 %  1:30 elapsed, ~0:00 left"
+
+
 def test_terminal_status_line_sits_under_the_messages():
     stream, clock = io.StringIO(), FakeClock()
     show = on_terminal(stream, ProgressLine("make", steps=4, clock=clock))

@@ -8,6 +8,7 @@ import sys
 import pytest
 from fabkiri.api.progress import three_args
 from fabkiri.cli import make_cmd
+from fabkiri.design.core import stages
 
 STEPS = [  # (stage, share of the steps done, line) as make reports them
     ("make", 0.0, "make: circle at 60 mm, acrylic-3 living, 6x6 tiles (given)"),
@@ -90,6 +91,8 @@ def quick_design(monkeypatch):
 
     def fake(request, notify):
         notify(NOTE)
+        for k in range(3):  # a stage whose steps are known reports each
+            stages.step("continuation", k, 2)
         return _Designed()
 
     monkeypatch.setattr(design_cmd, "design_by_kind", fake)
@@ -108,5 +111,9 @@ def test_design_on_a_terminal_says_the_time_so_far(quick_design, tmp_path, monke
     assert main(["design", "--tiles", "4x4", "-o", str(tmp_path / "p.json")]) == 0
     lines = screen.getvalue().splitlines()
     assert lines[0] == NOTE and lines[-1] == f"wrote {tmp_path / 'p.json'}"
-    assert lines[1] == "design: designing  0:00 elapsed" and lines[2].startswith("design: done  ")
-    assert "left" not in screen.getvalue()  # no share of the work is known, so no ETA
+    assert lines[1] == "design: designing  0:00 elapsed"
+    assert lines[2].startswith("design: continuation 50 %  0:00 elapsed, ~")
+    assert lines[3].startswith("design: continuation 100 %  ") and lines[4].startswith(
+        "design: done"
+    )
+    assert len(lines) == 6  # the stage's start is not a line: only steps done say how long is left
