@@ -51,25 +51,6 @@ class Alternative:
     checked: str
     changes: dict[str, Any] = field(default_factory=dict)
 
-    def words(self) -> str:
-        """The option in a library caller's words: the call and the keywords it changes, e.g.
-        ``cut with material='card-0.3', hinge='tape', scale=0.1`` (``scale='auto'``: at any size)."""
-        if self.what in ("design", "make"):
-            call = "design again" if self.what == "design" else "make"
-        else:
-            call = "cut" if "material" in self.changes else "print_pattern"
-        keywords = ", ".join(f"{k}={_value_words(k, v)}" for k, v in self.changes.items())
-        return f"{call} with {keywords}"
-
-
-def _value_words(name: str, value: Any) -> str:
-    """A keyword's value as a Python caller types it (numbers as ``%g``, numpy's too)."""
-    if name == "scale" and value is None:
-        return "'auto'"
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return f"{float(value):g}"
-    return repr(value)
-
 
 @dataclass(frozen=True)
 class Ask:

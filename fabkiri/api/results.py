@@ -225,8 +225,10 @@ class _Refusable(_Result):
 
     @property
     def advice(self) -> list[str]:
-        """Each checked option that passes, as the call and the keywords it changes."""
-        return [a.words() for a in self.alternatives]
+        """Each checked option that passes in a library caller's words: the call and the keywords it
+        changes, e.g. ``cut with material='card-0.3', hinge='tape', scale=0.1`` (``scale='auto'``: at
+        any size). Its ``command`` is the same option as a ``fabkiri`` command line."""
+        return [_option_words(a) for a in self.alternatives]
 
     def _refusal(self, process: str) -> str:
         assert self.error is not None
@@ -240,6 +242,21 @@ class _Refusable(_Result):
         if self.error is not None:
             raise self.error
         return super().write(folder)
+
+
+def _option_words(option: Alternative) -> str:
+    call = {"design": "design again", "make": "make"}.get(option.what) or (
+        "cut" if "material" in option.changes else "print_pattern"
+    )
+    return f"{call} with " + ", ".join(f"{k}={_value(k, v)}" for k, v in option.changes.items())
+
+
+def _value(name: str, value: Any) -> str:
+    """A keyword's value as a Python caller types it (numbers as ``%g``, numpy's too)."""
+    if name == "scale" and value is None:
+        return "'auto'"
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    return f"{float(value):g}" if number else repr(value)
 
 
 @dataclass(repr=False, eq=False)
