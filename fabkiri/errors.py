@@ -78,6 +78,11 @@ def _render(parts: tuple, cli: bool) -> str:
     )
 
 
+def cli_text(parts: tuple) -> str:
+    """Message ``parts`` (strings and :class:`Param` s) in the command line's words."""
+    return _render(parts, cli=True)
+
+
 class FabkiriError(Exception):
     """Base of every error fabkiri raises on purpose.
 

@@ -178,31 +178,38 @@ def check_file_size(path, limit: int | None = None) -> None:
         )
 
 
-def check_length(value: float, name: str) -> float:
+def check_length(value: float, name: str | Param) -> float:
     """A finite length in mm within [:data:`MIN_LENGTH_MM`, :data:`MAX_LENGTH_MM`]."""
     if not (math.isfinite(value) and MIN_LENGTH_MM <= value <= MAX_LENGTH_MM):
-        raise InputError(
-            f"{name} must be a length in [{MIN_LENGTH_MM:g}, {MAX_LENGTH_MM:g}] mm, got {value:g}"
+        raise _named(
+            name, f" must be a length in [{MIN_LENGTH_MM:g}, {MAX_LENGTH_MM:g}] mm, got {value:g}"
         )
     return value
 
 
-def check_scale(nodes: np.ndarray, tiles: np.ndarray, k: float, name: str) -> float:
+def check_scale(nodes: np.ndarray, tiles: np.ndarray, k: float, name: str | Param) -> float:
     """A scale factor that keeps the pattern within the coordinate bound and its tile edges a micrometre."""
     if not (math.isfinite(k) and k > 0):
-        raise InputError(f"{name} must be a positive number, got {k:g}")
+        raise _named(name, f" must be a positive number, got {k:g}")
     q = np.asarray(nodes, dtype=float)[np.asarray(tiles)]
     extent = float(np.abs(q).max()) * k
     edge = float(np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2).min()) * k
     if not (math.isfinite(extent) and extent <= MAX_COORD_MM):
-        raise InputError(
-            f"{name} {k:g} puts the pattern {extent:.3g} mm from the origin (at most {MAX_COORD_MM:g} mm)"
+        raise _named(
+            name,
+            f" {k:g} puts the pattern {extent:.3g} mm from the origin (at most {MAX_COORD_MM:g} mm)",
         )
     if not edge >= MIN_LENGTH_MM:
-        raise InputError(
-            f"{name} {k:g} makes the shortest tile edge {edge:.3g} mm (at least {MIN_LENGTH_MM:g} mm)"
+        raise _named(
+            name,
+            f" {k:g} makes the shortest tile edge {edge:.3g} mm (at least {MIN_LENGTH_MM:g} mm)",
         )
     return k
+
+
+def _named(name: str | Param, text: str) -> InputError:
+    """The error ``name`` + ``text``: a :class:`Param` worded for a library caller or the command line."""
+    return InputError(name, text) if isinstance(name, Param) else InputError(f"{name}{text}")
 
 
 # -------------------------------------------------------------------- JSON

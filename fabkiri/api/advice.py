@@ -71,9 +71,9 @@ class Refused(CheckFailed, FabricationError):
     :class:`Alternative` s that pass; its text is the one-line reason, :meth:`option_lines` the options
     (the CLI prints them on stdout, one runnable line each)."""
 
-    def __init__(self, reason: str, options: list[Alternative]):
-        super().__init__(reason)
-        self.reason = reason
+    def __init__(self, reason: str | FabkiriError, options: list[Alternative]):
+        super().__init__(reason)  # a refusal's own error: its Params worded as it words them
+        self.reason = str(reason)
         self.alternatives = list(options)
 
     def option_lines(self) -> list[str]:

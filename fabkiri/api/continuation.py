@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..design.core import stages
 from ..design.core.conformance import deployed as deployed_conformance
 from ..design.core.refine import refine_minimax
 from ..design.quad.fabrication import FabricationLimits
@@ -285,7 +286,8 @@ def _raise_limits(
     # the pad area times f² (``FabricationLimits.step``) from 16x16 only: below, the linear steps stay (the 12x12
     # pick for prusa-xl-2t at 200 mm: with f² 1.36 %, and print refused its bodies, overlapping by 0.014 mm³)
     alike = req.rows * req.cols >= LIMITS_COST_TILES
-    for f in steps:
+    for k, f in enumerate(steps):
+        stages.step("continuation", k, len(steps))
         lim = fab.step(f, CONTINUATION_MARGIN) if alike else fab.scaled(f, CONTINUATION_MARGIN)
         step = replace(req, fabrication=lim, start=X, init=init)
         if steps is JUMP:
@@ -298,6 +300,7 @@ def _raise_limits(
         if trace is not None and req.target is not None:
             h = deployed_conformance(X, result.pattern.topology, req.target)["hausdorff_rel"]
             trace.append([f, float(h) if result.converged else None])
+    stages.step("continuation", len(steps), len(steps))
     return step, result, last_ok, spent
 
 

@@ -89,9 +89,9 @@ def cut_files(
     if isinstance(
         options.scale, float
     ):  # numbers that would overflow the geometry: one line, up front
-        limits.check_scale(pattern.nodes, pattern.tiles, options.scale, "--scale")
+        limits.check_scale(pattern.nodes, pattern.tiles, options.scale, Param("scale"))
     if isinstance(options.width, float):
-        limits.check_length(options.width, "--width")
+        limits.check_length(options.width, Param("width"))
     made_from = fingerprint(pattern)  # the input pattern's (a tube's, not its flat sheet's)
     pattern, seam_files, seam_entry = tube_cut_inputs(
         pattern, options.state
@@ -147,9 +147,7 @@ def _refusal_advice(
             why = None
         if why is None:
             raise
-        raise Refused(
-            str(exc), cut_alternatives(pattern, options, scale, ask=ask or Ask())
-        ) from None
+        raise Refused(exc, cut_alternatives(pattern, options, scale, ask=ask or Ask())) from None
 
 
 def _asked_scale(options: CutOptions, corners) -> float | None:
@@ -197,8 +195,9 @@ def _read_back_scale(
         lo = hi
     if found is None:  # the binding limit at the largest scale tried, not at the first
         raise CheckFailed(
-            f"--scale auto: refused from --scale {refused:g} up to {hi:g}; at --scale {hi:g}: {last[0]}"
-        )
+            Param("scale", "auto"), ": refused from ", Param("scale", refused, "g"),
+            f" up to {hi:g}; at ", Param("scale", hi, "g"), ": ", last[0],
+        )  # fmt: skip
     while hi - lo > fb.BISECT_RTOL * hi:
         mid = fb.ceil_sig(0.5 * (lo + hi))
         if mid >= hi:

@@ -7,9 +7,8 @@ returns one result type (:mod:`fabkiri.api.results`). They are thin: the work an
 the front doors the commands call (:func:`~.design.design_pattern`, :func:`~.cut.cut_files`,
 :func:`~.print.print_pattern`, :func:`~.deploy.deploy_pattern`, :func:`~.maker.make`), so a
 result's files are the bytes the command writes. Bad input raises
-:class:`~fabkiri.errors.InputError`; a failed check of cut or print raises
-:class:`~fabkiri.errors.CheckFailed`; a design or deployment that misses is returned with ``ok``
-false. ``progress(stage, fraction or None, message)`` hears how a long call goes.
+:class:`~fabkiri.errors.InputError`; a design, deployment, cut or print that a check refuses
+is returned with ``ok`` false (a cut's or print's with the checked options that pass). ``progress(stage, fraction or None, message)`` hears how a long call goes.
 """
 
 from __future__ import annotations
@@ -21,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import limits
+from ..design.core.stages import listening
 from ..errors import InputError
 from ..exchange.file_formats import format_names, pattern_format
 from ..exchange.pattern_json import write_pattern
@@ -150,7 +150,9 @@ def design(
     or a .csv/.json/.svg file) at ``size`` mm, as ``fabkiri design`` does; with ``material`` or
     ``printer`` the design is fabrication-aware. ``options`` are the other
     :class:`~.design.PatternRequest` fields (``symmetry``, ``hinge``, ``style``, ``shape_tol``,
-    ``min_opening``, ``contracted_target``, ``name``, ``seed``, ...)."""
+    ``min_opening``, ``contracted_target``, ``name``, ``seed``, ...). ``progress`` hears the start
+    and end (stage ``design``), each retry note (fraction None) and, in the stages whose steps are
+    known, the share of the stage done (stage ``continuation`` or ``minimax``)."""
     say = progress or _quiet
     names = {f.name for f in fields(PatternRequest)} - {"target", "tiles", "size", "rigid", "kind"}
     extra = _options("design", options, names - {"material", "printer"})
@@ -168,7 +170,10 @@ def design(
     )
     what = f"{target or 'closed-state targets'} {'x'.join(map(str, request.tiles or ()))}"
     say("design", 0.0, f"designing {what.strip()}")
-    outcome = design_by_kind(request, notify=lambda text: say("design", None, text))
+    with listening(
+        None if progress is None else lambda stage, f: say(stage, f, f"{stage} {f:.0%}")
+    ):
+        outcome = design_by_kind(request, notify=lambda text: say("design", None, text))
     say("design", 1.0, f"design {outcome.report.get('status', '')}".strip())
     return DesignResult(
         pattern=outcome.pattern,

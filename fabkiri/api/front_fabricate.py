@@ -3,25 +3,22 @@
 
 from __future__ import annotations
 
-import inspect
 from collections.abc import Callable, Iterable
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ..errors import CheckFailed, InputError
 from ..fabricate.cut.materials import Material, parse_setting
 from ..fabricate.cut.sheets import CutOptions
 from ..pattern.model import Pattern
 from ..pattern.tilecount import tile_count
 from .cut import cut_files, cut_material, parse_sheet
 from .front import PatternLike, Progress, Tiles, _options, _pattern, _quiet
-from .maker import MAKE_STEPS
 from .maker import make as _make
 from .maker_result import MakeResult
 from .print import PrintOptions
 from .print import print_pattern as _print_pattern
-from .progress import with_steps
 from .results import CutResult, PrintResult, inputs_of, source_of, stem_of
 
 
@@ -54,7 +51,9 @@ def cut(
     verified by reading them back, as ``fabkiri cut`` makes them. ``scale`` or ``width`` (mm) may be
     ``"auto"``; ``settings`` are ``FIELD=VALUE`` material overrides; ``options`` the other
     :class:`~fabkiri.fabricate.cut.sheets.CutOptions` fields (``layout``, ``formats``, ``margin``, ...).
-    A refused cut raises :class:`~fabkiri.errors.CheckFailed` naming what would pass."""
+    A cut a check refuses (too thin for the material, a read-back that fails) is returned with ``ok``
+    false, the ``problems`` and the checked ``alternatives`` (``advice``); bad input (an unknown
+    material, an unreadable file) raises :class:`~fabkiri.errors.InputError`."""
     pattern = _pattern(pattern)
     say = progress or _quiet
     mat, kind = _material(pattern, material, hinge, settings)
@@ -75,7 +74,19 @@ def cut(
         **extra,
     )
     say("cut", 0.0, f"cutting {stem} from {mat.name}")
-    out = cut_files(pattern, opts)
+    try:
+        out = cut_files(pattern, opts)
+    except CheckFailed as exc:  # refused (the command's exit 1): a result that says why
+        say("cut", 1.0, f"refused: {exc}")
+        return CutResult(
+            files={},
+            manifest={},
+            material=mat.name,
+            stem=stem,
+            inputs=inputs_of(pattern),
+            error=exc,
+            alternatives=list(getattr(exc, "alternatives", [])),
+        )
     say(
         "cut",
         1.0,
@@ -119,8 +130,10 @@ def print_pattern(
     """3D-print files of ``pattern`` for ``printer`` (a preset's name or a printer .json; None: the one
     the design was made for, else the default) in ``style`` (``tiles-and-strips``, ``strips``,
     ``pinned``), at ``scale`` (or ``"auto"``), verified, as ``fabkiri print`` makes them. ``options``
-    are the other :class:`~.print.PrintOptions` fields (``step``, ``marks``, ``gap``, ...). A refused
-    print raises :class:`~fabkiri.errors.CheckFailed` naming what would pass."""
+    are the other :class:`~.print.PrintOptions` fields (``step``, ``marks``, ``gap``, ...). A print a
+    check refuses (past the bed, strips too narrow, a mesh check) is returned with ``ok`` false, the
+    ``problems`` and the checked ``alternatives`` (``advice``); bad input raises
+    :class:`~fabkiri.errors.InputError`."""
     pattern = _pattern(pattern)
     say = progress or _quiet
     fixed = {"printer", "style", "scale", "state"}
@@ -134,19 +147,39 @@ def print_pattern(
     )
     stem, src = stem_of(pattern), source_of(pattern)
     say("print", 0.0, f"printing {stem}")
-    out = _print_pattern(
-        pattern,
-        opts,
-        stem=stem,
-        source=f"{stem}.json" if src is None else src.name,
-        notify=lambda text: say("print", None, text),
-    )
-    say("print", 1.0, out.describe())
+    messages: list[str] = []
+
+    def heard(text: str) -> None:
+        messages.append(text)
+        say("print", None, text)
+
+    try:
+        out = _print_pattern(
+            pattern,
+            opts,
+            stem=stem,
+            source=f"{stem}.json" if src is None else src.name,
+            notify=heard,
+        )
+    except CheckFailed as exc:  # refused (the command's exit 1): a result that says why
+        say("print", 1.0, f"refused: {exc}")
+        return PrintResult(
+            files={},
+            scale=opts.scale if isinstance(opts.scale, float) else float("nan"),
+            printer=printer or "",
+            description="",
+            stem=stem,
+            messages=messages,
+            inputs=inputs_of(pattern),
+            error=exc,
+            alternatives=list(getattr(exc, "alternatives", [])),
+        )
+    say("print", 1.0, out.describe(cli=False))
     return PrintResult(
         files=dict(out.files),
         scale=float(out.scale),
         printer=str(out.printer.name),
-        description=out.describe(),
+        description=out.describe(cli=False),
         stem=stem,
         messages=list(out.messages),
         outcome=out,
@@ -168,7 +201,7 @@ def make(
     ``tiles`` (``"8x8"`` or a pair; None: chosen for the process). ``progress(stage, fraction,
     message)`` hears each of make's lines with its step (``design``, ``cut`` or ``print``,
     ``deploy``, ``report``) and the share of the steps done; a one-argument callback hears the
-    lines alone, as ``fabkiri.api.maker.make`` gives them."""
+    lines alone."""
     extra = _options(
         "make", options, ("material", "hinge", "printer", "style", "shape_tol", "min_opening")
     )
@@ -177,23 +210,6 @@ def make(
         size,
         tiles=None if tiles is None else tile_count(tiles),
         output=output,
-        progress=_lines_to(progress) if progress is not None else None,
+        progress=progress,
         **extra,
     )
-
-
-def _lines_to(progress: Callable[..., None]) -> Callable[[str], None]:
-    """make's lines for ``progress``: as they are to a one-argument callback, else with the step and
-    its share. make's lines are "make: STEP ..." as a step starts and "make: STEP ok|failed" as it ends."""
-    if not _takes_three(progress):
-        return progress
-    return with_steps(progress, len(MAKE_STEPS))
-
-
-def _takes_three(callback: Callable[..., None]) -> bool:
-    """Whether ``callback`` can be called with three arguments (stage, fraction, message)."""
-    try:
-        inspect.signature(callback).bind(None, None, None)
-    except (TypeError, ValueError):  # fewer parameters, or a builtin without a signature
-        return False
-    return True

@@ -39,8 +39,10 @@ from .maker_early import narrow_of, refuse_narrow
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
 from .print_tiles import least_tile_mm
+from .progress import three_args
 
-Progress = Callable[[str], None]
+Progress = Callable[[str], None]  # a step's lines
+Told = Callable[[str, float | None, str], None]  # (stage, fraction of the steps done, line)
 # a failed deploy check (collisions) still gets its report: the report documents the design and is
 # what a maker reads to decide; the run still exits 1 naming the deploy failure
 GOES_ON = frozenset({"deploy"})
@@ -82,7 +84,7 @@ def make(  # noqa: PLR0913 (the options of `fabkiri make`)
     shape_tol: str = conf.DEFAULT_SHAPE_TOL,
     min_opening: float | None = None,
     output: str | Path | None = None,
-    progress: Progress | None = None,
+    progress: Told | Progress | None = None,
 ) -> MakeResult:
     """Design ``target`` at ``size`` mm for a laser ``material`` (``hinge`` kind) or a ``printer``
     (``style``), cut or print it at that size, deploy it and write the report. ``min_opening``: a
@@ -91,11 +93,14 @@ def make(  # noqa: PLR0913 (the options of `fabkiri make`)
     With ``output`` every step's files are written into that folder as the step finishes; without
     it they stay in :attr:`MakeResult.files` (``write(folder)`` writes them). Raises
     :class:`InputError` for bad input before anything is done; a step that fails is recorded in
-    the result (``ok`` false, ``exit_code`` the step's), not raised."""
+    the result (``ok`` false, ``exit_code`` the step's), not raised.
+
+    ``progress(stage, fraction, line)`` hears each line with the step it belongs to (``make`` before
+    the first) and the share of :data:`MAKE_STEPS` done; a one-argument callback hears the lines."""
     plan = _plan(
         target, size, material, hinge, printer, style, tiles, shape_tol, min_opening, output
     )
-    say = progress or (lambda text: None)
+    say = _Steps(progress)
     out = Path(output) if output is not None else None
     result = MakeResult.of_plan(plan, out)
     say(
@@ -110,6 +115,19 @@ def make(  # noqa: PLR0913 (the options of `fabkiri make`)
     if out is not None:
         atomic_write_many(out, {MANIFEST: result.manifest_text()})
     return result
+
+
+class _Steps:
+    """make's lines for ``progress``, each with the step it belongs to and the share of the steps
+    done: the loop over :data:`MAKE_STEPS` says when a step starts and ends."""
+
+    def __init__(self, progress: Told | Progress | None) -> None:
+        self.progress = None if progress is None else three_args(progress)
+        self.stage, self.done = "make", 0
+
+    def __call__(self, text: str) -> None:
+        if self.progress is not None:
+            self.progress(self.stage, min(self.done / len(MAKE_STEPS), 1.0), text)
 
 
 def _floor(min_opening) -> float | None:
@@ -203,8 +221,9 @@ def _check_output(folder: Path, stem: str, process: str) -> None:
             raise InputError(f"output {dest} is a folder where a file must go; nothing written")
 
 
-def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) -> bool:
+def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: _Steps) -> bool:
     """Run one step, time it, keep and write its files; whether the run goes on."""
+    say.stage = name
     say(f"make: {name} ...")
     wall, cpu = time.perf_counter(), _cpu()
     try:
@@ -231,6 +250,7 @@ def _run_step(result: MakeResult, plan: _Plan, name: str, run, say: Progress) ->
     result.files.update(files)
     if files and result.output is not None:
         atomic_write_many(result.output, files)
+    say.done += 1
     say(
         f"make: {name} {'ok' if ok else f'failed (exit {code})'} in {step.wall_s:.1f} s "
         f"(CPU {step.cpu_s:.1f} s): {figures}"

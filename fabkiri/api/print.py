@@ -18,7 +18,6 @@ from typing import Any
 
 from .. import limits
 from ..errors import CheckFailed, FabricationError, InputError, Param
-from ..fabricate import fabricability as fb
 from ..fabricate.gate import claimed_states, closes_gate
 from ..fabricate.print import mesh
 from ..fabricate.print.job import print_style
@@ -29,6 +28,8 @@ from ..verify.printmanifest import PrintManifest
 from .advice import Ask, Refused, print_alternatives
 from .intent import design_intent
 from .print_options import DEFAULT_STYLE, PrintOptions, minimum, printer_for
+
+AUTO = Param("scale", "auto")  # first part of the refusal of --scale auto (no scale prints it)
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,15 +57,17 @@ class PrintOutcome:
     def __repr__(self) -> str:  # the files are bytes and meshes: named, not printed
         return f"PrintOutcome(scale {self.scale:g}, files {sorted(self.files)})"
 
-    def describe(self) -> str:
-        """One line: style, scale, state, printer, tiles, hinges (top/bottom faces), beds, clearance, plan."""
+    def describe(self, cli: bool = True) -> str:
+        """One line: style, scale, state, printer, tiles, hinges (top/bottom faces), beds, clearance, plan;
+        the scale as the command line names it (``--scale 2``) or, ``cli`` false, as Python does."""
         job, report = self.job, self.mesh_report
         faces = int(job.plan.top.sum())
         clearance = (
             "n/a" if report.min_clearance_mm is None else f"{report.min_clearance_mm:.3f} mm"
         )
         return (
-            f"{job.style} at --scale {self.scale:g}, closed state {job.state}, printer {self.printer.name}, "
+            f"{job.style} at {Param('scale', self.scale, 'g').words(cli)}, closed state {job.state}, "
+            f"printer {self.printer.name}, "
             f"{len(job.plan.tiles)} tiles, {job.plan.n_hinges} hinges ({faces} top, "
             f"{job.plan.n_hinges - faces} bottom), {len(job.beds)} bed(s), min clearance {clearance}, "
             f"{self.plan}"
@@ -180,13 +183,11 @@ def _refusal_advice(
     try:
         return step()
     except (FabricationError, CheckFailed) as exc:
-        if isinstance(exc, Refused) or (
-            isinstance(exc, CheckFailed) and not str(exc).startswith("--scale auto")
-        ):
+        if isinstance(exc, Refused) or (isinstance(exc, CheckFailed) and exc.parts[:1] != (AUTO,)):
             raise
         scale = None if o.scale == "auto" else float(o.scale)
         alternatives = print_alternatives(pattern, o, scale, ask=ask or Ask(), memo=memo)
-        raise Refused(str(exc), alternatives) from None
+        raise Refused(exc, alternatives) from None
 
 
 def _scaled(
@@ -199,7 +200,7 @@ def _scaled(
         need = minimum(pattern, style, printer, o.state, memo)
         if not need.possible or need.min_scale is None:
             raise CheckFailed(
-                f"--scale auto: {style} on {printer.name}: {need.advice(printer.name)}"
+                AUTO, f": {style} on {printer.name}: ", *need.advice_parts(printer.name)
             )
         scale = need.min_scale
     elif isinstance(
@@ -210,7 +211,7 @@ def _scaled(
         )
     else:
         scale = given
-    limits.check_scale(pattern.nodes, pattern.tiles, scale, "--scale")
+    limits.check_scale(pattern.nodes, pattern.tiles, scale, Param("scale"))
     if scale != 1.0:  # mm printed per mm of the pattern
         pattern = replace(
             pattern,
@@ -234,18 +235,9 @@ def _build_job(pattern: Pattern, style: str, state: int, printer, scale: float, 
         need = minimum(pattern, style, printer, state, memo)
         if need.min_scale is None or need.min_scale <= 1.0:
             raise
-        k = scale
-        at = need.advice(printer.name).replace(
-            f"≥ {need.min_scale:g}", f"≥ {fb.ceil_sig(need.min_scale * k):g}"
-        )
-        at = (
-            at.replace(
-                f"--scale {need.max_scale:g}", f"--scale {fb.floor_sig(need.max_scale * k):g}"
-            )
-            if need.max_scale is not None
-            else at
-        )
-        raise type(exc)(f"{exc} (at --scale {k:g}); {at}") from None
+        # the scales it names are of this pattern, which is at `scale` already
+        at = need.advice_parts(printer.name, scale)
+        raise type(exc)(exc, " (at ", Param("scale", scale, "g"), "); ", *at) from None
     return job, plan
 
 

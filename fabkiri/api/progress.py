@@ -8,7 +8,7 @@ of the work is done; without a fraction the line shows the stage and the time so
 
 from __future__ import annotations
 
-import re
+import inspect
 import time
 from collections.abc import Callable
 from typing import TextIO
@@ -26,14 +26,23 @@ def clock_text(seconds: float) -> str:
 
 class ProgressLine:
     """Formats a report of ``what`` (e.g. ``"make"``) with the time since this was made by
-    ``clock`` (``time.monotonic`` unless a test gives another); ``steps`` > 0 adds "[done/steps]"."""
+    ``clock`` (``time.monotonic`` unless a test gives another); ``steps`` > 0 adds "[done/steps]".
+    ``per_stage``: the fraction is of the stage alone (a design's continuation, its minimax steps),
+    so the ETA is the stage's, timed from its first report (or its last report of 0)."""
 
-    def __init__(self, what: str, steps: int = 0, clock: Clock = time.monotonic) -> None:
-        self.what, self.steps, self.clock = what, steps, clock
+    def __init__(
+        self, what: str, steps: int = 0, clock: Clock = time.monotonic, per_stage: bool = False
+    ) -> None:
+        self.what, self.steps, self.clock, self.per_stage = what, steps, clock, per_stage
         self.start = clock()
+        self.stage: tuple[str, float] = ("", self.start)  # the stage and when it started
 
     def line(self, stage: str, fraction: float | None) -> str:
-        elapsed = self.clock() - self.start
+        now = self.clock()
+        elapsed = now - self.start
+        if stage != self.stage[0] or fraction == 0:
+            self.stage = (stage, now)
+        spent = now - self.stage[1] if self.per_stage else elapsed
         text = f"{self.what}: {stage}"
         if fraction is None:
             return f"{text}  {clock_text(elapsed)} elapsed"
@@ -42,7 +51,7 @@ class ProgressLine:
             text += f"  [{round(fraction * self.steps)}/{self.steps}]"
         text += f" {fraction * 100:.0f} %  {clock_text(elapsed)} elapsed"
         if fraction > 0:  # nothing done yet: no rate to guess the rest from
-            text += f", ~{clock_text(elapsed / fraction * (1 - fraction))} left"
+            text += f", ~{clock_text(spent / fraction * (1 - fraction))} left"
         return text
 
 
@@ -66,19 +75,21 @@ def on_terminal(
     return show
 
 
-def with_steps(
-    progress: Callable[[str, float | None, str], None], steps: int
-) -> Callable[[str], None]:
-    """make's one-argument lines for a three-argument ``progress``, with the step and the share of
-    ``steps`` done. make's lines are "make: STEP ..." as a step starts and "make: STEP ok|failed"
-    as it ends."""
-    done, stage = [0], ["make"]
+def three_args(
+    progress: Callable[..., None],
+) -> Callable[[str, float | None, str], None]:
+    """``progress`` as a ``(stage, fraction, message)`` callback: as it is when it takes three
+    arguments, else (a one-argument callback such as ``list.append`` or ``print``) hearing the
+    messages alone."""
+    if _takes_three(progress):
+        return progress
+    return lambda stage, fraction, message: progress(message)
 
-    def heard(text: str) -> None:
-        m = re.match(r"make: (\w+) (\.\.\.|ok|failed)", text)
-        if m:
-            stage[0] = m.group(1)
-            done[0] += m.group(2) != "..."
-        progress(stage[0], min(done[0] / steps, 1.0), text)
 
-    return heard
+def _takes_three(callback: Callable[..., None]) -> bool:
+    """Whether ``callback`` can be called with three arguments (stage, fraction, message)."""
+    try:
+        inspect.signature(callback).bind(None, None, None)
+    except (TypeError, ValueError):  # fewer parameters, or a builtin without a signature
+        return False
+    return True

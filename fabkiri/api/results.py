@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import CheckFailed
 from ..exchange.pattern_json import dumps
 from ..fileio import atomic_write_many, inputs_scope, note_inputs
 from ..mechanics.info import PatternInfo
@@ -26,6 +27,7 @@ from ..mechanics.path import DeployReport
 from ..pattern.model import Pattern
 from ..pattern.picture import pattern_png, tiles_png
 from ..verify.report import Report
+from .advice import Alternative
 from .cut import CutOutcome
 from .deploy import DeployOutcome
 from .display import result_html
@@ -207,11 +209,62 @@ class VerifyResult(_Result):
         return pattern_png(self.pattern)
 
 
+class _Refusable(_Result):
+    """A cut or print that a check may refuse (the command's exit 1): then ``error`` is the
+    :class:`~fabkiri.errors.CheckFailed` that says why, ``alternatives`` the checked options that pass
+    (:class:`~fabkiri.api.advice.Alternative`), and there are no files."""
+
+    error: CheckFailed | None
+    alternatives: list[Alternative]
+    stem: str
+
+    @property
+    def problems(self) -> list[str]:
+        """Why it was refused, in the library's words (empty when it was not)."""
+        return [] if self.error is None else [str(self.error)]
+
+    @property
+    def advice(self) -> list[str]:
+        """Each checked option that passes in a library caller's words: the call and the keywords it
+        changes, e.g. ``cut with material='card-0.3', hinge='tape', scale=0.1`` (``scale='auto'``: at
+        any size). Its ``command`` is the same option as a ``fabkiri`` command line."""
+        return [_option_words(a) for a in self.alternatives]
+
+    def _refusal(self, process: str) -> str:
+        assert self.error is not None
+        options = self.advice
+        more = f" (+{len(options) - 3} more)" if len(options) > 3 else ""
+        told = f"; options: {'; '.join(options[:3])}{more}" if options else "; no option passes"
+        return f"{process} {self.stem}: REFUSED: {self.error}{told}"
+
+    def write(self, folder: Folder) -> list[Path]:
+        """Write ``files`` (see :meth:`_Result.write`); a refused one has none: raises its ``error``."""
+        if self.error is not None:
+            raise self.error
+        return super().write(folder)
+
+
+def _option_words(option: Alternative) -> str:
+    call = {"design": "design again", "make": "make"}.get(option.what) or (
+        "cut" if "material" in option.changes else "print_pattern"
+    )
+    return f"{call} with " + ", ".join(f"{k}={_value(k, v)}" for k, v in option.changes.items())
+
+
+def _value(name: str, value: Any) -> str:
+    """A keyword's value as a Python caller types it (numbers as ``%g``, numpy's too)."""
+    if name == "scale" and value is None:
+        return "'auto'"
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    return f"{float(value):g}" if number else repr(value)
+
+
 @dataclass(repr=False, eq=False)
-class CutResult(_Result):
+class CutResult(_Refusable):
     """A verified laser cut: the ``files`` (DXF, SVG, PNG, manifest) named after ``stem``, the
     ``material``, the ``manifest`` and any ``warnings``; ``readback_ok`` is false only for a
-    forced cut whose verifier failed."""
+    forced cut whose verifier failed. A refused cut has ``ok`` false, no files, its ``error``
+    (``problems``) and the ``alternatives`` (``advice``) that pass."""
 
     files: dict[str, bytes]
     manifest: dict[str, Any]
@@ -221,16 +274,20 @@ class CutResult(_Result):
     readback_ok: bool = True
     outcome: CutOutcome | None = None
     inputs: tuple[Path, ...] = ()
+    error: CheckFailed | None = None
+    alternatives: list[Alternative] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
-        return self.readback_ok
+        return self.error is None and self.readback_ok
 
     @property
     def n_sheets(self) -> int:
         return len(self.manifest.get("sheets", []))
 
     def summary(self) -> str:
+        if self.error is not None:
+            return self._refusal("cut")
         sheets = self.manifest.get("sheets", [])
         metres = sum(s.get("cut_length_mm", 0.0) for s in sheets) / 1000
         minutes = sum(s.get("cut_time_s", 0.0) for s in sheets) / 60
@@ -248,9 +305,11 @@ class CutResult(_Result):
 
 
 @dataclass(repr=False, eq=False)
-class PrintResult(_Result):
+class PrintResult(_Refusable):
     """A verified print: the ``files`` (3MF, STL, PNG, manifest, ...) named after ``stem``, the
-    ``scale``, the ``printer``'s name, the one-line ``description`` and the notes (``messages``)."""
+    ``scale``, the ``printer``'s name, the one-line ``description`` and the notes (``messages``).
+    A refused print has ``ok`` false, no files, the ``scale`` asked for (nan: ``"auto"``), its
+    ``error`` (``problems``) and the ``alternatives`` (``advice``) that pass."""
 
     files: dict[str, Any]
     scale: float
@@ -260,12 +319,16 @@ class PrintResult(_Result):
     messages: list[str] = field(default_factory=list)
     outcome: PrintOutcome | None = None
     inputs: tuple[Path, ...] = ()
+    error: CheckFailed | None = None
+    alternatives: list[Alternative] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
-        return True  # a print whose checks fail raises CheckFailed: nothing is returned
+        return self.error is None
 
     def summary(self) -> str:
+        if self.error is not None:
+            return self._refusal("print")
         return f"print {self.stem}: {self.description}"
 
     def _written(self) -> dict[str, bytes | str]:

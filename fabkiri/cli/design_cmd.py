@@ -25,6 +25,7 @@ from ..api.design import (  # noqa: F401 (names tests and benches import from he
 from ..api.designers import design_by_kind, design_kinds
 from ..api.progress import ProgressLine, on_terminal
 from ..design.core import conformance as conf
+from ..design.core.stages import listening
 from ..design.quad.initial import INITS
 from ..errors import InputError
 from ..fabricate.cut.materials import HINGE_KINDS
@@ -69,8 +70,9 @@ def cmd_design(args: argparse.Namespace) -> int:
         kind=args.lattice,
         trim=args.trim,
     )
-    notify, done = _notes()
-    out = design_by_kind(request, notify=notify)
+    notify, heard, done = _notes()
+    with listening(heard):
+        out = design_by_kind(request, notify=notify)
     done()
     out.write(args.output, preview=not args.no_preview)
     if args.json:
@@ -81,14 +83,22 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 
 def _notes():
-    """design's notes on stderr as they are; on a terminal each with the time so far after it, and
-    the total at the end. No ETA: the retries, the minimax finish and the continuation are decided
-    as the design goes, so no share of the work is known; and the status is a line of its own
-    because the solver's log also writes to stderr."""
+    """design's notes on stderr as they are; on a terminal each with the time so far after it, a
+    line with the ETA of a stage whose steps are known (the continuation's, the minimax steps') as
+    each step ends, and the total at the end. The retries are decided as the design goes, so the
+    ETA is the stage's, not the design's; the status is a line of its own because the solver's log
+    also writes to stderr. Returns the notes' callback, the stages' listener and the end."""
     if not sys.stderr.isatty():
-        return (lambda text: print(text, file=sys.stderr)), (lambda: None)
-    show = on_terminal(sys.stderr, ProgressLine("design"), in_place=False)
-    return (lambda text: show("designing", None, text)), (lambda: show("done", None, ""))
+        return (lambda text: print(text, file=sys.stderr)), None, (lambda: None)
+    status = ProgressLine("design", per_stage=True)
+    show = on_terminal(sys.stderr, status, in_place=False)
+
+    def heard(stage: str, fraction: float) -> None:
+        text = status.line(stage, fraction)  # a stage's start only starts its clock
+        if fraction > 0:
+            print(text, file=sys.stderr, flush=True)
+
+    return (lambda text: show("designing", None, text)), heard, (lambda: show("done", None, ""))
 
 
 def _jsonable(v):

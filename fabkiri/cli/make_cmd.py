@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..api.maker import MAKE_STEPS, make
-from ..api.progress import ProgressLine, on_terminal, with_steps
+from ..api.progress import ProgressLine, on_terminal
 from ..design.core import conformance as conf
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
@@ -19,7 +19,7 @@ def _progress():
     if not sys.stderr.isatty():
         return (lambda text: print(text, file=sys.stderr)), (lambda: None)
     show = on_terminal(sys.stderr, ProgressLine("make", len(MAKE_STEPS)))
-    return with_steps(show, len(MAKE_STEPS)), (lambda: show("", None, ""))
+    return show, (lambda: show("", None, ""))
 
 
 def cmd_make(args: argparse.Namespace) -> int:

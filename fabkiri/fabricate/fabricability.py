@@ -19,11 +19,12 @@ import numpy as np
 import shapely
 import shapely.errors
 
-from ..errors import CheckFailed, FabricationError
+from ..errors import CheckFailed, FabricationError, Param, cli_text
 from ..pattern import thinness as fab
 from ..pattern.model import Pattern
 from .cut.hingekinds import hinge_kind
 from .cut.materials import HINGE_KINDS, Material, available, load_material
+from .fabricability_text import summary_lines  # noqa: F401 (its callers read it from here)
 from .print.job import print_style
 from .print.printers import Printer, available_printers, load_printer
 
@@ -76,9 +77,18 @@ class CutMinimum:
     exact: float | None = None  # unrounded
 
     def advice(self) -> str:
+        """The advice in the command line's words (``--scale ≥ ...``)."""
+        return cli_text(self.advice_parts())
+
+    def advice_parts(self) -> tuple:
+        """The advice as message parts: ``scale ≥ ...`` to a library caller, ``--scale ≥ ...`` on the
+        command line (:class:`~fabkiri.errors.Param`)."""
         if self.scale is None:
-            return f"no scale works ({self.limit})"
-        return f"cut at --scale ≥ {self.scale:g}, --width ≥ {self.width_mm:g} mm (or --scale auto)"
+            return (f"no scale works ({self.limit})",)
+        return (
+            "cut at ", Param("scale"), f" ≥ {self.scale:g}, ", Param("width"),
+            f" ≥ {self.width_mm:g} mm (or ", Param("scale", "auto"), ")",
+        )  # fmt: skip
 
     def to_dict(self) -> dict:
         return {
@@ -130,9 +140,9 @@ def check_webs(
         need = cut_minimum(corners / scale, material, kind)
         raise CheckFailed(
             f"tile {t} is {w[t]:.3g} mm wide at its thinnest{what} at scale {scale:.4g}, thinner than the minimum "
-            f"web {material.min_web_mm:g} mm of {material.name} ({len(bad)} tile(s) too thin); "
-            + need.advice()
-            + ("; or use a smaller --gap" if shrinks else "")
+            f"web {material.min_web_mm:g} mm of {material.name} ({len(bad)} tile(s) too thin); ",
+            *need.advice_parts(),
+            *(SMALLER_GAP if shrinks else ()),
         )
 
 
@@ -143,8 +153,13 @@ def lost_edge(
     need = cut_minimum(corners / scale, material, kind)
     return CheckFailed(
         f"tile {tile} loses an edge once shrunk by gap/2 ({shrink_of(material, kind):g} mm) at scale "
-        f"{scale:.4g}; {need.advice()}; or use a smaller --gap"
+        f"{scale:.4g}; ",
+        *need.advice_parts(),
+        *SMALLER_GAP,
     )
+
+
+SMALLER_GAP = ("; or use a smaller ", Param("gap_mm", flag="--gap"))  # a material field: --gap
 
 
 # ------------------------------------------------------------------ printing
@@ -166,16 +181,32 @@ class PrintMinimum:
         )
 
     def advice(self, printer: str) -> str:
+        """The advice in the command line's words (``--scale ≥ ...``)."""
+        return cli_text(self.advice_parts(printer))
+
+    def advice_parts(self, printer: str, at: float = 1.0) -> tuple:
+        """The advice as message parts (``scale ≥ ...`` to a library caller, ``--scale ≥ ...`` on the
+        command line), for the pattern at scale ``at`` (the scales it names are of the pattern at 1)."""
         if self.min_scale is None:
-            return f"no scale works ({self.limit})"
-        top = (
-            ""
-            if self.max_scale is None
-            else f"; the bed of {printer} takes up to --scale {self.max_scale:g}"
-        )
+            return (f"no scale works ({self.limit})",)
+        least = self.min_scale if at == 1.0 else ceil_sig(self.min_scale * at)
         if not self.possible:
-            return f"it needs --scale ≥ {self.min_scale:g} but the bed of {printer} takes at most {self.max_scale:g}"
-        return f"print at --scale ≥ {self.min_scale:g} (or --scale auto){top}"
+            return (
+                "it needs ", Param("scale"), f" ≥ {least:g} but the bed of {printer} takes at most "
+                f"{self.max_scale:g}",
+            )  # fmt: skip
+        top: tuple = ()
+        if self.max_scale is not None:
+            most = self.max_scale if at == 1.0 else floor_sig(self.max_scale * at)
+            top = (f"; the bed of {printer} takes up to ", Param("scale", most, "g"))
+        return (
+            "print at ",
+            Param("scale"),
+            f" ≥ {least:g} (or ",
+            Param("scale", "auto"),
+            ")",
+            *top,
+        )
 
     def to_dict(self, at: float = 1.0) -> dict:
         ok = (
@@ -449,43 +480,6 @@ def summary(pattern: Pattern, prints=None) -> dict:
             rows[style] = m.to_dict()
     out["print"] = pr
     return out
-
-
-def summary_lines(s: dict) -> list[str]:
-    """The summary as a few text lines (design's stderr, ``info``)."""
-    lines = [
-        f"fabricability: thinnest tile {s['thinnest_tile_mm']:.3g} mm (tile {s['thinnest_tile']}), shortest edge "
-        f"{s['shortest_edge_mm']:.3g} mm, closest hinge pair "
-        + ("n/a" if s["closest_hinge_pair_mm"] is None else f"{s['closest_hinge_pair_mm']:.3g} mm")
-    ]
-    cells = []
-    for mat, kinds in s["cut"].items():
-        part = []
-        for kind, m in kinds.items():
-            part.append(
-                f"{kind} never"
-                if m["min_scale"] is None
-                else f"{kind} ≥ {m['min_scale']:g}× ({m['min_width_mm']:g} mm)"
-            )
-        cells.append(f"{mat}: " + ", ".join(part))
-    lines.append("  cut (--scale, --width): " + "; ".join(cells))
-    if s.get("print"):
-        cells = []
-        for pr, styles in s["print"].items():
-            part = []
-            for style, m in styles.items():
-                if m["min_scale"] is None:
-                    part.append(f"{style} never")
-                else:
-                    bed = "" if m["max_scale"] is None else f"..{m['max_scale']:g}"
-                    low = "" if m.get("exact", True) or "lower bound" not in m["limit"] else " from"
-                    part.append(
-                        f"{style}{low} {m['min_scale']:g}{bed}×"
-                        + ("" if m["fits_bed"] else " (bed too small)")
-                    )
-            cells.append(f"{pr}: " + ", ".join(part))
-        lines.append("  print (--scale): " + "; ".join(cells))
-    return lines
 
 
 def _rule(style: str) -> PlanRule:  # (a style's module names its rule: planrules.py)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..errors import CheckFailed
+from ..errors import CheckFailed, Param
 from ..pattern.model import Pattern
 from ..verify import Check, Report, verify_pattern
 from ..verify.pattern_checks import state_check_id
@@ -86,8 +86,9 @@ def closes_gate(
         )
         which = "in both states" if len(states) == 2 else f"in closed state {states[0]}"
         raise CheckFailed(
-            f"the pattern does not close {which} {at}: {msg}; nothing {done} "
-            f"(--force {does} it anyway)"
+            f"the pattern does not close {which} {at}: {msg}; nothing {done} (",
+            Param("force", True),
+            f" {does} it anyway)",
         )
     out.warnings.append(f"{done} with --force although the pattern does not close: {msg}")
     return out

@@ -252,6 +252,7 @@ def test_cut_scale_auto_names_the_read_back_refusal_at_the_largest_scale_tried()
     top = 0.5
     for _ in range(api_cut.AUTO_STEPS):
         top = fb.ceil_sig(top * api_cut.AUTO_STEP)
-    text = str(exc.value)
+    text = exc.value.cli_message()  # the command line's words; str() is the library's
     assert text.startswith(f"--scale auto: refused from --scale 0.5 up to {top:g}")
     assert text.endswith(f"16 pieces at --scale {top:g}") and exc.value.exit_code == 1
+    assert str(exc.value).startswith(f"scale='auto': refused from scale=0.5 up to {top:g}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 from fabkiri.api.cut import CutOutcome, cut_files, cut_material, design_intent
@@ -60,8 +61,14 @@ def test_the_design_intent_chooses_material_and_hinge_unless_a_material_is_named
 
 def test_refusals_raise_and_return_nothing(square):
     material, _ = cut_material(square)
-    with pytest.raises(InputError, match="--scale 1e\\+300 puts the pattern"):
+    with pytest.raises(InputError, match="^scale 1e\\+300 puts the pattern") as big:
         cut_files(square, CutOptions(material=material, scale=1e300))
+    assert big.value.cli_message().startswith("--scale 1e+300 puts the pattern")
     thin = with_contracted_states(standard_pattern(3, 3, tile_size=2.0))
-    with pytest.raises(CheckFailed, match="thinner than the minimum web .* \\(or --scale auto\\)"):
+    with pytest.raises(
+        CheckFailed, match="thinner than the minimum web .* \\(or scale='auto'\\)"
+    ) as refused:
         cut_files(thin, CutOptions(material=material))
+    assert re.search(
+        "thinner than the minimum web .* \\(or --scale auto\\)", refused.value.cli_message()
+    )

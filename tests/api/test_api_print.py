@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 from fabkiri.api.print import PrintOptions, PrintOutcome, print_pattern
@@ -68,9 +69,13 @@ def test_scale_auto_prints_at_the_smallest_accepted_scale(square):
 def test_refusals_raise_and_return_nothing(square):
     small = with_contracted_states(standard_pattern(3, 3, tile_size=3.0))
     with pytest.raises(
-        FabricationError, match=r"\(at --scale 1\); print at --scale ≥ [0-9.]+ \(or --scale auto\)"
-    ):
+        FabricationError, match=r"\(at scale=1\); print at scale ≥ [0-9.]+ \(or scale='auto'\)"
+    ) as refused:  # the library's words; the command line's below
         print_pattern(small, PrintOptions(style="strips"))
+    assert re.search(
+        r"\(at --scale 1\); print at --scale ≥ [0-9.]+ \(or --scale auto\)",
+        refused.value.cli_message(),
+    )
     with pytest.raises(InputError, match="marks=True engraves strip pads .* needs style='strips'"):
         print_pattern(square, PrintOptions(marks=True))
     # a library caller's scale text other than "auto" is bad input in one line (it was a TypeError)

@@ -192,3 +192,27 @@ def test_design_refuses_a_size_that_is_not_a_length(size):
     """The CLI checks --size; a library caller is refused by the target itself, before any design."""
     with pytest.raises(InputError, match="size must be a length"):
         fabkiri.design("circle", tiles="8x8", size=size)
+
+
+def test_design_progress_hears_the_share_of_a_stage(monkeypatch):
+    from fabkiri.api import front
+    from fabkiri.design.core import stages
+
+    real = front.design_by_kind
+
+    def with_steps(request, notify):
+        for k in range(3):
+            stages.step("continuation", k, 2)
+        return real(request, notify=notify)
+
+    monkeypatch.setattr(front, "design_by_kind", with_steps)
+    heard = []
+    fabkiri.design("circle", tiles="3x3", rigid=True, progress=lambda *a: heard.append(a))
+    shares = [a for a in heard if a[0] == "continuation"]
+    assert shares == [
+        ("continuation", 0.0, "continuation 0%"),
+        ("continuation", 0.5, "continuation 50%"),
+        ("continuation", 1.0, "continuation 100%"),
+    ]
+    stages.step("continuation", 1, 2)  # after the call nobody listens
+    assert len([a for a in heard if a[0] == "continuation"]) == 3

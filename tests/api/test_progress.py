@@ -11,7 +11,7 @@ import fabkiri
 import pytest
 from fabkiri.api.display import result_html
 from fabkiri.api.maker_result import MakeResult
-from fabkiri.api.progress import ProgressLine, clock_text, on_terminal, with_steps
+from fabkiri.api.progress import ProgressLine, clock_text, on_terminal, three_args
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -49,17 +49,37 @@ def test_progress_line_without_steps_and_at_time_zero():
     assert clock_text(3725) == "1:02:05" and clock_text(-1) == "0:00"
 
 
+def test_per_stage_eta_is_timed_from_the_stage_start():
+    clock = FakeClock()
+    line = ProgressLine("design", clock=clock, per_stage=True)
+    clock.now += 60  # a minute of guesses before the continuation starts
+    assert line.line("continuation", 0.0) == "design: continuation 0 %  1:00 elapsed"
+    clock.now += 10
+    assert line.line("continuation", 0.25) == (
+        "design: continuation 25 %  1:10 elapsed, ~0:30 left"
+    )  # the stage's 10 s for a quarter, not the design's 70 s
+    clock.now += 20
+    assert line.line("minimax", 0.5) == "design: minimax 50 %  1:30 elapsed, ~0:00 left"
+
+
 def test_terminal_status_line_sits_under_the_messages():
     stream, clock = io.StringIO(), FakeClock()
     show = on_terminal(stream, ProgressLine("make", steps=4, clock=clock))
-    heard = with_steps(show, 4)
-    heard("make: design ...")
+    show("design", 0.0, "make: design ...")
     clock.now += 30
-    heard("make: design ok in 30 s")
+    show("design", 0.25, "make: design ok in 30 s")
     show("", None, "")  # the end: the status line is cleared
     text = stream.getvalue()
     assert "make: design ...\n" in text and "make: design ok in 30 s\n" in text
     assert "[1/4] 25 %  0:30 elapsed, ~1:30 left" in text and text.endswith("\r\033[K")
+
+
+def test_three_args_takes_either_callback():
+    heard: list = []
+    three_args(heard.append)("cut", 0.5, "make: cut ...")  # one argument: the line alone
+    told = three_args(lambda stage, fraction, text: heard.append((stage, fraction, text)))
+    told("cut", 0.5, "make: cut ok")
+    assert heard == ["make: cut ...", ("cut", 0.5, "make: cut ok")]
 
 
 class _Page(HTMLParser):

@@ -6,15 +6,18 @@ import io
 import sys
 
 import pytest
+from fabkiri.api.progress import three_args
 from fabkiri.cli import make_cmd
+from fabkiri.design.core import stages
 
-LINES = [
-    "make: circle at 60 mm, acrylic-3 living, 6x6 tiles (given)",
-    "make: design ...",
-    "make: design ok in 1.0 s",
-    "make: cut ...",
-    "make: cut ok in 0.5 s",
+STEPS = [  # (stage, share of the steps done, line) as make reports them
+    ("make", 0.0, "make: circle at 60 mm, acrylic-3 living, 6x6 tiles (given)"),
+    ("design", 0.0, "make: design ..."),
+    ("design", 0.25, "make: design ok in 1.0 s"),
+    ("cut", 0.25, "make: cut ..."),
+    ("cut", 0.5, "make: cut ok in 0.5 s"),
 ]
+LINES = [line for _, _, line in STEPS]
 
 
 class _Made:
@@ -32,8 +35,9 @@ def quick_make(monkeypatch):
     """make's lines without a minute of making."""
 
     def fake(*args, progress, **kwargs):
-        for line in LINES:
-            progress(line)
+        told = three_args(progress)
+        for stage, fraction, line in STEPS:
+            told(stage, fraction, line)
         return _Made()
 
     monkeypatch.setattr(make_cmd, "make", fake)
@@ -87,6 +91,8 @@ def quick_design(monkeypatch):
 
     def fake(request, notify):
         notify(NOTE)
+        for k in range(3):  # a stage whose steps are known reports each
+            stages.step("continuation", k, 2)
         return _Designed()
 
     monkeypatch.setattr(design_cmd, "design_by_kind", fake)
@@ -105,5 +111,9 @@ def test_design_on_a_terminal_says_the_time_so_far(quick_design, tmp_path, monke
     assert main(["design", "--tiles", "4x4", "-o", str(tmp_path / "p.json")]) == 0
     lines = screen.getvalue().splitlines()
     assert lines[0] == NOTE and lines[-1] == f"wrote {tmp_path / 'p.json'}"
-    assert lines[1] == "design: designing  0:00 elapsed" and lines[2].startswith("design: done  ")
-    assert "left" not in screen.getvalue()  # no share of the work is known, so no ETA
+    assert lines[1] == "design: designing  0:00 elapsed"
+    assert lines[2].startswith("design: continuation 50 %  0:00 elapsed, ~")
+    assert lines[3].startswith("design: continuation 100 %  ") and lines[4].startswith(
+        "design: done"
+    )
+    assert len(lines) == 6  # the stage's start is not a line: only steps done say how long is left

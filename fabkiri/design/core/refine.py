@@ -21,6 +21,7 @@ import numpy as np
 
 from ...errors import InputError
 from ..quad.solve import DesignRequest, DesignResult, design, design_problem
+from . import stages
 from .conformance import deployed
 
 LAWSON_STEPS = 10
@@ -73,7 +74,8 @@ def refine_minimax(
         )
     walk = _Steps(req, np.asarray(start_mm, float), gamma, backtrack)
     best, trace, spent, since = None, [], 0.0, 0
-    for _ in range(steps):
+    for k in range(steps):
+        stages.step("minimax", k, steps)
         result = design(replace(req, start=walk.X, fit_weights=walk.weights, second_opinion=False))
         spent += result.report["time_s"]
         h = deployed(result.pattern.nodes, result.pattern.topology, target)["hausdorff_rel"]
@@ -90,6 +92,7 @@ def refine_minimax(
         if patience is not None and since >= patience:
             break
         walk.next(result, better, vetoed)
+    stages.step("minimax", steps, steps)
     return (best[1] if best else None), trace, spent
 
 

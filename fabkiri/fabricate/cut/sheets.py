@@ -181,8 +181,9 @@ def _scale(raw: np.ndarray, options: CutOptions, kind: str) -> float:
         need = fb.cut_minimum(raw, mat, kind)
         if need.scale is None:
             raise CheckFailed(
-                f"--{'scale' if options.scale == 'auto' else 'width'} auto: {mat.name} with "
-                f"{kind} hinges: {need.advice()}"
+                Param("scale" if options.scale == "auto" else "width", "auto"),
+                f": {mat.name} with {kind} hinges: ",
+                *need.advice_parts(),
             )
         return need.scale
     if options.width is not None:
