@@ -14,7 +14,10 @@ them (as :mod:`fabkiri.kdtree` does for the KD-tree). :func:`splu` and :func:`sp
 the arguments SciPy's wrappers give it, for the inputs fabkiri passes (float64 CSC/CSR, a dense right-hand
 side); any other input, an exactly singular system, an installed UMFPACK (which SciPy's ``spsolve``
 would use), a public package already loaded or another SciPy layout go through SciPy's own functions.
-Same compiled code, same arguments: the results are SciPy's to the bit.
+Same compiled code, same arguments: the results are SciPy's to the bit. One difference remains, as for
+the KD-tree: a module loaded here is not bound as an attribute of its package when the package loads
+later (``sys.modules`` and ``from``-imports find it; ``scipy.sparse.csgraph._traversal`` spelt as an
+attribute does not; SciPy itself never spells its private modules that way).
 """
 
 from __future__ import annotations
