@@ -116,8 +116,18 @@ SUMMARIES = {
 # scipy._lib.array_api_compat.numpy): numpy.f2py alone pulls charset_normalizer, numpy.testing unittest, and
 # numpy.polynomial is large; a share of every command's start-up. They are bound lazily instead: loaded
 # on first attribute access. (Not numpy.random, which scipy._lib._util uses as it loads, nor numpy.ma, which
-# every np.unique call asks.)
-DEFERRED = ("numpy.f2py", "numpy.testing", "numpy.polynomial")
+# every np.unique call asks.) The string and record-array modules, ctypeslib (it loads ctypes) and the
+# numpy.core shim: the same, for less.
+DEFERRED = (
+    "numpy.f2py",
+    "numpy.testing",
+    "numpy.polynomial",
+    "numpy.strings",
+    "numpy.char",
+    "numpy.rec",
+    "numpy.ctypeslib",
+    "numpy.core",
+)
 
 
 def defer_unused_numpy() -> list[str]:

@@ -271,3 +271,98 @@ def test_a_print_loads_neither_the_cutter_nor_its_svg_writer(tmp_path):
         & mods
     )
     assert not any(m.split(".")[0] in ("svgwrite", "ezdxf", "trimesh", "matplotlib") for m in mods)
+
+
+@pytest.fixture(scope="module")
+def design_modules(tmp_path_factory) -> dict[str, str]:
+    """Every module the rigid 8x8 design's process loaded (it converges without the full solver's CG),
+    by name, with its type's name (one process for the tests that read it)."""
+    out = tmp_path_factory.mktemp("design") / "p.json"
+    code = (
+        "import sys\nfrom fabkiri.cli.main import main\n"
+        f"main(['design', '--tiles', '8x8', '--target', 'circle', '--rigid', '--no-preview', '-o', {str(out)!r}])\n"
+        "print('\\n'.join(f'{k} {type(v).__name__}' for k, v in list(sys.modules.items())))"
+    )
+    lines = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout.splitlines()
+    assert out.exists()
+    return dict(line.split(" ", 1) for line in lines if line.count(" ") == 1)
+
+
+def test_a_design_uses_superlu_and_csgraph_without_scipy_linalg(design_modules):
+    # issue #36: SuperLU and the graph routines come from their compiled modules alone
+    # (fabkiri/sparse_alone.py), not through scipy.sparse.linalg (which loads scipy.linalg) or the
+    # scipy.sparse.csgraph package (whose Laplacian module loads scipy.sparse.linalg)
+    assert "scipy.sparse.linalg._dsolve._superlu" in design_modules  # SuperLU was used
+    assert "scipy.sparse.csgraph._traversal" in design_modules  # so were the graph routines
+    assert not {"scipy.linalg", "scipy.sparse.linalg", "scipy.sparse.csgraph"} & set(design_modules)
+
+
+def test_a_design_defers_numpys_string_and_record_modules(design_modules):
+    # scipy's `from numpy import *` loaded them for nothing
+    for name in ("numpy.strings", "numpy.char", "numpy.rec", "numpy.ctypeslib", "numpy.core"):
+        assert design_modules.get(name) == "_LazyModule", name
+
+
+def test_a_cut_loads_neither_svgwrite_nor_scipy_linalg(tmp_path):
+    # the SVG is written with ElementTree (svgwrite's import compiled its path grammar); the read-back's
+    # convex hull loads SciPy's LAPACK wrappers alone, the assembly fit SuperLU alone
+    from fabkiri.templates import template_dir
+
+    src = str(template_dir("patterns") / "standard-8x8.json")
+    mods = _modules_after(["cut", src, "-o", str(tmp_path / "c")])
+    assert (tmp_path / "c" / "standard-8x8.svg").exists()
+    assert "scipy.spatial._qhull" in mods and "scipy.linalg.cython_lapack" in mods
+    assert not {"svgwrite", "scipy.linalg", "scipy.sparse.linalg", "scipy.sparse.csgraph"} & mods
+
+
+def test_superlu_and_csgraph_alone_are_scipys_before_and_after_their_packages():
+    # the same compiled code with the same arguments: bit-identical answers, one SuperLU class
+    code = """
+import sys
+import numpy as np
+from scipy import sparse
+from fabkiri import sparse_alone as sa
+
+rng = np.random.default_rng(3)
+n = 40
+A = sparse.random(n, n, density=0.15, random_state=4, format="csc") + 4 * sparse.identity(n, format="csc")
+b, B = rng.normal(size=n), rng.normal(size=(n, 3))
+G = sparse.random(30, 30, density=0.04, random_state=5, format="csr")
+G = (G + G.T).tocsr()
+N = (A + A.T).tocsc()
+
+
+def answers():
+    out = [sa.spsolve(A.copy(), b), sa.spsolve(A.tocsr(), b), sa.spsolve(A.copy(), B)]
+    out.append(sa.spsolve(A.copy(), b[:, None]))
+    for lu in (sa.splu(A.copy(), permc_spec="COLAMD"),
+               sa.splu(N.copy(), permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True}),
+               sa.splu(N.copy(), permc_spec="MMD_ATA", options={"SymmetricMode": True})):
+        out += [lu.solve(b), lu.perm_c, lu.perm_r, lu.L.toarray(), lu.U.toarray()]
+    out += list(sa.csgraph.connected_components(G, directed=False))
+    out += list(sa.csgraph.breadth_first_order(G, 0, directed=False, return_predecessors=True))
+    out.append(sa.csgraph.dijkstra(G, directed=False, indices=[0, 3], unweighted=True, min_only=True))
+    return out, type(sa.splu(A.copy()))
+
+
+alone, cls = answers()
+packages = [m for m in ("scipy.linalg", "scipy.sparse.linalg", "scipy.sparse.csgraph") if m in sys.modules]
+import scipy.sparse.csgraph, scipy.sparse.linalg
+sa.csgraph = sa._Graphs()  # resolve the routines from the packages now
+public, cls2 = answers()
+same = all(np.array_equal(x, y) and np.asarray(x).dtype == np.asarray(y).dtype
+           for x, y in zip(alone, public))
+print(packages == [] or packages, same, len(alone) == len(public), cls is cls2 is scipy.sparse.linalg.SuperLU)
+"""
+    assert _printed(code) == ["True", "True", "True", "True"]
+
+
+def test_an_exactly_singular_spsolve_is_scipys_nan_answer():
+    # SuperLU alone reports the singular system; SciPy's own spsolve then answers it (NaN, warned)
+    from fabkiri.sparse_alone import spsolve
+    from scipy import sparse
+
+    x = spsolve(sparse.csc_matrix((4, 4)), np.ones(4))
+    assert x.shape == (4,) and np.isnan(x).all()

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import sparse
-from scipy.sparse.linalg import spsolve
+
+from ...sparse_alone import spsolve
 
 
 class PeriodicCubic:
