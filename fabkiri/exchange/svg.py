@@ -1,4 +1,4 @@
-"""SVG, the cut files' second drawing format: written (ElementTree, the bytes svgwrite wrote) and read (any SVG, and fast for
+"""SVG, the cut files' second drawing format: written (svgwrite) and read (any SVG, and fast for
 fabkiri's own layout).
 
 The writer: millimetre-sized, 1 user unit = 1 mm, one group per layer. The drawing is y-up; SVG is
@@ -83,51 +83,24 @@ def layer_paths(polylines, groups, height: float) -> list[str]:
     return out
 
 
-def _element(tag: str, attribs: dict[str, str]) -> ET.Element:
-    """An element with its attributes in sorted order (as svgwrite writes them)."""
-    el = ET.Element(tag)
-    for key, value in sorted(attribs.items()):
-        el.set(key, value)
-    return el
-
-
 def svg_bytes(sheet: SheetDrawing, colors: str = "default", stroke_mm: float = STROKE_MM) -> bytes:
-    """The sheet as SVG (UTF-8): the bytes svgwrite's full-profile ``Drawing`` writes (sorted attributes,
-    an empty ``<defs />``), built with ElementTree directly (svgwrite's import compiles its path grammar)."""
+    """The sheet as SVG (UTF-8)."""
+    import svgwrite  # loaded with the first SVG written, not by its readers
+
     W, H = sheet.width, sheet.height
-    root = _element(
-        "svg",
-        {
-            "width": f"{_num(W)}mm",
-            "height": f"{_num(H)}mm",
-            "viewBox": f"0 0 {_num(W)} {_num(H)}",
-            "xmlns:inkscape": INKSCAPE_NS,
-            "xmlns": "http://www.w3.org/2000/svg",
-            "xmlns:xlink": "http://www.w3.org/1999/xlink",
-            "xmlns:ev": "http://www.w3.org/2001/xml-events",
-            "baseProfile": "full",
-            "version": "1.1",
-        },
-    )
-    root.append(ET.Element("defs"))
+    dwg = svgwrite.Drawing(size=(f"{_num(W)}mm", f"{_num(H)}mm"), profile="full", debug=False)
+    dwg.attribs["viewBox"] = f"0 0 {_num(W)} {_num(H)}"
+    dwg.attribs["xmlns:inkscape"] = INKSCAPE_NS
     for name in LAYERS:
-        g = _element(
-            "g",
-            {
-                "id": name,
-                "fill": "none",
-                "stroke": COLORS[colors][name][0],
-                "stroke-width": _num(stroke_mm),
-                "stroke-linejoin": "round",
-                "inkscape:groupmode": "layer",
-                "inkscape:label": name,
-            },
-        )
+        stroke = COLORS[colors][name][0]
+        g = dwg.g(id=name, fill="none", stroke=stroke, stroke_width=_num(stroke_mm))
+        g.attribs["stroke-linejoin"] = "round"
+        g.attribs["inkscape:groupmode"] = "layer"
+        g.attribs["inkscape:label"] = name
         for d in layer_paths(sheet.layers[name], sheet.groups[name], H):
-            g.append(_element("path", {"d": d}))
-        root.append(g)
-    text = ET.tostring(root, encoding="utf-8").decode("utf-8")
-    return ('<?xml version="1.0" encoding="utf-8" ?>\n' + text + "\n").encode("utf-8")
+            g.add(dwg.path(d=d))
+        dwg.add(g)
+    return ('<?xml version="1.0" encoding="utf-8" ?>\n' + dwg.tostring() + "\n").encode("utf-8")
 
 
 # ------------------------------------------------------------------ fabkiri's own layout
