@@ -116,7 +116,8 @@ def test_make_refuses_a_size_no_count_fits_naming_the_size(monkeypatch):
 
 
 @pytest.mark.slow  # a 4x4 design, print and deploy, then the named make (~20 CPU s)
-def test_the_line_an_early_refusal_names_was_run_and_makes_it(tmp_path, run_cli):
+@pytest.mark.xdist_group("make-circle-60mm")  # shares its designs (shared_designs)
+def test_the_line_an_early_refusal_names_was_run_and_makes_it(tmp_path, run_cli, shared_designs):
     out = tmp_path / "o"
     args = ("make", "circle", "--size", "60", "--printer", "prusa-mk4", "--tiles", "8x8")
     code, stdout, err = run_cli(*args, "-o", out)

@@ -55,6 +55,7 @@ def cone_tube(tmp_path_factory):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("tube-cone")  # one worker designs the module's cone
 def test_cone_in_every_state_converges_verifies_and_changes_non_uniformly(cone_tube):
     out, _ = cone_tube
     assert out.valid, out.problems
@@ -80,6 +81,7 @@ def test_cone_in_every_state_converges_verifies_and_changes_non_uniformly(cone_t
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("tube-cone")  # one worker designs the module's cone
 def test_cone_tube_cli_info_cut_and_3d(cone_tube, tmp_path, run_cli):
     _, path = cone_tube
     code, out, _ = run_cli("info", path, "--check")

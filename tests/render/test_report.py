@@ -73,6 +73,7 @@ def report(tmp_path_factory):
     return out
 
 
+@pytest.mark.xdist_group("render-report")  # one worker makes the module's report
 def test_every_section_is_there_and_self_contained(report):
     page = report.read_text()
     for s in SECTIONS:
@@ -119,6 +120,7 @@ def _dom(page, tmp_path):
     CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')"
 )
 @pytest.mark.slow
+@pytest.mark.xdist_group("render-report")  # one worker makes the module's report
 def test_chromium_loads_it_clean_and_draws_it(report, tmp_path):
     dom = _dom(report, tmp_path)
     assert 'data-loaded="1"' in dom  # the page's script ran to the end
@@ -135,6 +137,7 @@ def test_chromium_loads_it_clean_and_draws_it(report, tmp_path):
 @pytest.mark.skipif(
     CHROMIUM is None, reason="chromium is not installed (Debian package 'chromium')"
 )
+@pytest.mark.xdist_group("render-report")  # one worker makes the module's report
 def test_error_hook_counts_a_script_error(report, tmp_path):
     # the check can fail: the same page with a broken script reports it
     bad = tmp_path / "bad.html"

@@ -56,8 +56,10 @@ _skip = pytest.mark.skipif(
 
 
 def needs_browser(test):
-    """A browser test: skipped without chromium or playwright; slow (a page and a browser each)."""
-    return pytest.mark.slow(_skip(test))
+    """A browser test: skipped without chromium or playwright; slow (a page and a browser each). The
+    browser tests share one xdist_group, so --dist loadgroup makes the module's pages and browser on one
+    worker, not on both."""
+    return pytest.mark.xdist_group("viewer-pages")(pytest.mark.slow(_skip(test)))
 
 
 def _patterns() -> dict:
