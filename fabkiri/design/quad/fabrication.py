@@ -187,16 +187,6 @@ SOFT = 0.002  # normalised: the soft min/max of the strip rows are at most this 
 STRIP_SMOOTH = 0.002  # ... and their smooth max over the eight axis gaps
 
 
-def _soft_min0(v: Dual) -> Dual:
-    """A smooth lower bound of ``min(v, 0)``."""
-    return (v - (v * v + SOFT * SOFT).sqrt()) * 0.5
-
-
-def _soft_max0(v: Dual) -> Dual:
-    """A smooth upper bound of ``max(v, 0)``."""
-    return (v + (v * v + SOFT * SOFT).sqrt()) * 0.5
-
-
 def _strip_box(x, quads, t, c, end):
     """Hinge corner ``c`` of quads ``t``, the unit direction of its seam (to corner ``end``) and the inward
     normal of that edge (tiles counter-clockwise)."""
@@ -227,16 +217,21 @@ def strip_rows(
     ph, e_h, n_h = _strip_box(x, quads, t, ch, eh)
     pk, e_k, n_k = _strip_box(x, quads, t, ck, ek)
 
-    def extent(e, n, u, lower):
+    def extents(e, n, u):
+        """The box's lower and upper extent along u: smooth bounds of min(., 0) and max(., 0) of its axes'
+        components, at most ``SOFT`` to the safe side (the two bounds share their square root)."""
         eu, nu = vec_dot(e, u), vec_dot(n, u)
-        soft = _soft_min0 if lower else _soft_max0
-        return eu * a0 + soft(eu) * along + soft(nu) * across
+        re, rn = (eu * eu + SOFT * SOFT).sqrt(), (nu * nu + SOFT * SOFT).sqrt()
+        base = eu * a0
+        lower = base + (eu - re) * 0.5 * along + (nu - rn) * 0.5 * across
+        return lower, base + (eu + re) * 0.5 * along + (nu + rn) * 0.5 * across
 
     gaps = []
     for u in (e_h, n_h, e_k, n_k):
         dp = vec_dot(vec_sub(pk, ph), u)
-        gaps.append(dp + extent(e_k, n_k, u, True) - extent(e_h, n_h, u, False))
-        gaps.append(-dp + extent(e_h, n_h, u, True) - extent(e_k, n_k, u, False))
+        (lo_h, hi_h), (lo_k, hi_k) = extents(e_h, n_h, u), extents(e_k, n_k, u)
+        gaps.append(dp + lo_k - hi_h)
+        gaps.append(-dp + lo_h - hi_k)
     while len(gaps) > 1:  # a balanced tree of smooth maxima: at most 3 · STRIP_SMOOTH below the max
         gaps = [smooth_max(a, b, STRIP_SMOOTH) for a, b in zip(gaps[::2], gaps[1::2])]
     return gaps[0] - clearance

@@ -46,6 +46,30 @@ def ineq_family(name: str, quads: np.ndarray, rows_of, nv: int, meta: dict) -> F
         1,
         meta=meta,
         nv=nv,
-        res=lambda x: np.asarray(rows_of(values_only(x), None).v),
+        res=_recent(lambda x: np.asarray(rows_of(values_only(x), None).v)),
         active=active,
     )
+
+
+RECENT = 4  # the residual-only calls a family remembers (a solver re-checks a point it checked a few calls ago)
+
+
+def _recent(res):
+    """``res`` remembering its last ``RECENT`` points: the solvers ask the inequalities' values at the same
+    nodes again (about a quarter of a fabrication-aware design's residual-only calls), and these rows are the
+    costly ones. The same values, as copies."""
+    memo: list[tuple[tuple, np.ndarray]] = []
+
+    def cached(x):
+        x = np.asarray(x)
+        key = (x.shape, x.dtype.str, x.tobytes())  # bits, not ==: -0.0 is not 0.0 here
+        for i, (k, v) in enumerate(memo):
+            if k == key:
+                memo.insert(0, memo.pop(i))
+                return v.copy()
+        v = res(x)
+        memo.insert(0, (key, v.copy()))
+        del memo[RECENT:]
+        return v
+
+    return cached
