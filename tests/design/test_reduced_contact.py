@@ -75,3 +75,24 @@ def test_a_large_tile_over_a_tile_far_from_its_centre_is_a_violated_row():
     g, nodes, _ = cc.measure(moved, 1)
     bad = np.flatnonzero(g < -CONTACT_MARGIN)
     assert len(bad) and (nodes[bad, 0] == 0).any()
+
+
+def test_rows_below_the_margin_come_from_the_pairs_that_may_touch_alone():
+    """``measure(..., below)`` leaves out only pairs whose every row is above ``below``: the rows below it are
+    the whole measure's, in the same order, on closed states pushed far from the standard ones."""
+    fam, cc, S = _contact(12, 12)
+    rng = np.random.default_rng(5)
+    fewer = 0
+    for noise in (0.0, 0.3, 0.6):
+        for s, x in enumerate(cc.configs(S + noise * rng.normal(size=S.shape))):
+            whole, some = cc.measure(x, s + 1), cc.measure(x, s + 1, CONTACT_MARGIN)
+            fewer += len(some[0]) < len(whole[0])
+            for m in (0.5 * CONTACT_MARGIN, CONTACT_MARGIN):
+                a, b = np.flatnonzero(whole[0] < m), np.flatnonzero(some[0] < m)
+                assert all(np.array_equal(u[a], v[b]) for u, v in zip(whole, some))
+    assert fewer == 6
+    # the merit's rows: below the margin only, with their values the whole measure's
+    x = cc.configs(S + 0.6 * rng.normal(size=S.shape))
+    r, J = cc.active(x, 1.0, 1.0)
+    g = np.concatenate([cc.measure(c, s + 1)[0] for s, c in enumerate(x)])
+    assert len(r) and np.array_equal(r, g[g < CONTACT_MARGIN] - CONTACT_MARGIN)

@@ -150,3 +150,29 @@ def test_pattern_rows_are_written_one_encode_per_row_as_before():
     for arr in cases:
         for indent in ("  ", "    "):
             assert io._rows(arr, indent) == per_row(arr, indent), arr.shape
+
+
+def test_dense_rows_come_only_when_asked_and_a_violating_trial_needs_none(monkeypatch):
+    """The dense path (small lattices) judges a trial step by its inequality values alone: its fit rows (the
+    target projections) are formed when ``r`` is first asked for, once, and are the rows of a fresh
+    evaluation; its normal matrix is the one formed from them."""
+    from fabkiri.design.quad.solve import DesignProblem
+
+    prob = DesignProblem(DesignRequest(6, 6, T.load_target("ellipse", 100.0), rigid=True))
+    fam = prob.rigid_family
+    merit = rigid_merit(prob)
+    assert merit._tiles is not None
+    S, _ = fam.fit(prob.X0, np.pi / 4)
+    p = np.concatenate([S[:, 0], S[:, 1], [0.3]])
+    fits = []
+    for f in merit.fits:
+        monkeypatch.setattr(f, "fn", lambda x, fn=f.fn, n=f.name: fits.append(n) or fn(x))
+    ev = merit.evaluate(p)
+    assert fits == [] and ev.gviol >= 0.0
+    r = ev.r
+    assert len(fits) == len(merit.fits)
+    assert ev.r is r and len(fits) == len(merit.fits)  # once
+    again = merit.evaluate(p)
+    H, g = ev.normal()
+    H2, g2 = again.normal()
+    assert np.array_equal(r, again.r) and np.array_equal(H, H2) and np.array_equal(g, g2)

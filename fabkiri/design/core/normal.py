@@ -62,6 +62,8 @@ class NormalEquations:
         self.lu: Callable[[np.ndarray], np.ndarray] | None = None  # the last factorisation's solve
         self.factorisations = 0
         self.cg_steps = 0
+        # (J, JᵀJ) of the last call: a refused step asks again with the same J and another μ
+        self._gram: tuple | None = None
 
     def _factor(self, A) -> Callable[[np.ndarray], np.ndarray]:
         self.factorisations += 1
@@ -95,8 +97,9 @@ class NormalEquations:
     ) -> np.ndarray:
         from scipy.sparse.linalg import LinearOperator, cg
 
-        A = (J.T @ J).tocsr()
-        A = A + mu * sparse.identity(A.shape[0], format="csr")
+        if self._gram is None or self._gram[0] is not J:
+            self._gram = (J, (J.T @ J).tocsr())
+        A = self._gram[1] + mu * sparse.identity(J.shape[1], format="csr")
         b = -(J.T @ r)
         if self.lu is not None:
             M = LinearOperator(A.shape, matvec=self.lu)

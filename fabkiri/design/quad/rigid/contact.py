@@ -53,8 +53,11 @@ class ClosedContact:
         """Closed state 1 (``Z S``) and closed state 2 turned back a quarter (``Y S``)."""
         return self.blocks[0][0] @ S, self.blocks[1][0] @ S
 
-    def measure(self, x: np.ndarray, state: int):
-        """``(g, nodes (m, 3), grads (m, 3, 2))`` of state ``state`` (1 or 2) on its configuration ``x``."""
+    def measure(self, x: np.ndarray, state: int, below: float | None = None):
+        """``(g, nodes (m, 3), grads (m, 3, 2))`` of state ``state`` (1 or 2) on its configuration ``x``.
+
+        ``below``: only the pairs that may have a row below it (``_may_touch``); the rows left out are all
+        above it, and the rows kept are the same, in the same order."""
         tiles = self.blocks[state - 1][1][self.ring]
         q = x[tiles]  # (R, 4, 2)
         pairs = _near_pairs(q)
@@ -63,6 +66,8 @@ class ClosedContact:
             np.abs(self.c[pairs[:, 0]] - self.c[pairs[:, 1]]),
         )
         pairs = pairs[far >= 2]
+        if below is not None:
+            pairs = pairs[_may_touch(q, pairs, below)]
         # every corner of one tile against the other tile, both ways
         a = np.concatenate([pairs[:, 0], pairs[:, 1]]).repeat(4)  # the corner's tile
         b = np.concatenate([pairs[:, 1], pairs[:, 0]]).repeat(4)  # the tile it must stay out of
@@ -85,20 +90,32 @@ class ClosedContact:
         grads = np.stack([dv, -dv - de, de], 1)
         return g, nodes, grads
 
-    def _measured(self, xs) -> list:
-        """``measure`` of both states, kept for the same arrays (the merit asks for the values, then the rows)."""
-        if self._last is None or any(a is not b for a, b in zip(self._last[0], xs)):
-            self._last = (tuple(xs), [self.measure(x, s + 1) for s, x in enumerate(xs)])
-        return self._last[1]
+    def _measured(self, xs, margin: float = CONTACT_MARGIN) -> list:
+        """``measure`` of both states, kept for the same arrays (the merit asks for the values, then the rows):
+        every row below ``margin``, and from the pairs that may hold one only while ``margin`` is at most
+        ``CONTACT_MARGIN`` (the merit's rows and the sign of the smallest value need no more)."""
+        below = CONTACT_MARGIN if margin <= CONTACT_MARGIN else None
+        if (
+            self._last is None
+            or self._last[1] != below
+            or any(a is not b for a, b in zip(self._last[0], xs))
+        ):
+            self._last = (
+                tuple(xs),
+                below,
+                [self.measure(x, s + 1, below) for s, x in enumerate(xs)],
+            )
+        return self._last[2]
 
     def values(self, xs) -> dict:
-        """Every contact row's value per state, on ``configs``' arrays."""
+        """The contact rows' values per state, on ``configs``' arrays: every row below ``CONTACT_MARGIN``
+        (those above it bar nothing: only a negative value is a violation) and some of the others."""
         return {NAMES[s]: m[0] for s, m in enumerate(self._measured(xs))}
 
     def active(self, xs, margin_scale: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
         """Rows below ``margin_scale · CONTACT_MARGIN``, times ``scale``: ``(r, ∂r/∂p)`` (dense, P columns)."""
         rs, Js = [np.zeros(0)], [np.zeros((0, 2 * self.nf + 1))]
-        for s, (g, nodes, grads) in enumerate(self._measured(xs)):
+        for s, (g, nodes, grads) in enumerate(self._measured(xs, margin_scale * CONTACT_MARGIN)):
             act = np.flatnonzero(g < margin_scale * CONTACT_MARGIN)
             if not len(act):
                 continue
@@ -112,6 +129,29 @@ class ClosedContact:
         return np.concatenate(rs), np.vstack(Js)
 
 
+def _may_touch(q: np.ndarray, pairs: np.ndarray, below: float) -> np.ndarray:
+    """Which ``pairs`` of tiles ``q`` may have a row (a corner of one against the other, ``measure``) below
+    ``below``. A corner ``v`` of tile a lies within ``R_a`` (its farthest corner) of a's corner mean ``c_a``, so
+    its outward distance from an edge of tile b (unit normal ``n``, through ``p``) is
+    ``n·(v - p) >= n·(c_a - p) - R_a``; a row is the largest of these over b's edges. Exact for any
+    quadrilateral (no convexity needed); a pair is left out only when both ways are clear of ``below`` by more
+    than round-off."""
+    cen = q.mean(1)
+    rad = np.linalg.norm(q - cen[:, None], axis=-1).max(1)
+    e = np.roll(q, -1, 1) - q
+    n = (
+        np.stack([e[..., 1], -e[..., 0]], -1)
+        / np.maximum(np.linalg.norm(e, axis=-1), 1e-300)[..., None]
+    )
+    slack = below + 1e-9 * (1.0 + float(np.abs(q).max(initial=0.0)))
+    keep = np.zeros(len(pairs), bool)
+    for a, b in ((pairs[:, 0], pairs[:, 1]), (pairs[:, 1], pairs[:, 0])):
+        # the least outward distance of any corner of a from b's edges, over its best edge
+        off = np.einsum("mkd,mkd->mk", n[b], cen[a][:, None, :] - q[b]).max(1) - rad[a]
+        keep |= off <= slack
+    return keep
+
+
 def _near_pairs(q: np.ndarray) -> np.ndarray:
     """Pairs ``(i, j)``, i < j, of tiles ``q`` (R, 4, 2) whose circumscribed circles (about the corners' mean)
     come within ``REACH`` median edges of each other. A tile's own size counts: a tile many edges long meets
@@ -121,10 +161,15 @@ def _near_pairs(q: np.ndarray) -> np.ndarray:
     rad = np.linalg.norm(q - cen[:, None], axis=-1).max(1)
     edge = float(np.median(np.linalg.norm(q[:, 1] - q[:, 0], axis=1)))
     gap = REACH * max(edge, 1e-12)
-    # a pair is found from its larger tile's ball: |ci - cj| <= ri + rj + gap <= 2 max(ri, rj) + gap
-    hits = KDTree(cen).query_ball_point(cen, 2 * rad + gap)
-    i = np.repeat(np.arange(len(q)), [len(h) for h in hits])
-    j = np.concatenate([np.asarray(h, dtype=np.int64) for h in hits] + [np.zeros(0, np.int64)])
+    # a pair is found from its larger tile's ball: |ci - cj| <= ri + rj + gap <= 2 max(ri, rj) + gap; the pairs of
+    # tiles up to 1.5 median radii in one query, each larger tile's (rare) from its own ball
+    cut = min(float(rad.max()), 1.5 * float(np.median(rad)))
+    tree = KDTree(cen)
+    small = tree.query_pairs(2 * cut + gap, output_type="ndarray").astype(np.int64).reshape(-1, 2)
+    large = np.flatnonzero(rad > cut)
+    hits = tree.query_ball_point(cen[large], 2 * rad[large] + gap) if len(large) else []
+    i = np.concatenate([small[:, 0], np.repeat(large, [len(h) for h in hits])])
+    j = np.concatenate([small[:, 1]] + [np.asarray(h, dtype=np.int64) for h in hits])
     lo, hi = np.minimum(i, j), np.maximum(i, j)
     code = np.unique(lo[lo < hi] * len(q) + hi[lo < hi])
     a, b = np.divmod(code, len(q))

@@ -15,8 +15,9 @@ if TYPE_CHECKING:
 class _Evaluation:
     """The merit (or hard-fit) rows of one member ``p`` and, on demand, its normal matrix or Jacobian.
 
-    The dense path hands over all rows ``r`` and, formed on the first ask, the dense Jacobian ``J`` of the
-    first ``len(J)`` of them and, for the regulariser rows after those, ``reg = (tile corners, JᵀJ, Jᵀr)``;
+    The dense path hands over its rows ``r`` (``rows``, formed on the first ask: a trial step refused for a new
+    inequality violation needs none) and, formed on the first ask, the dense Jacobian ``J`` of the first
+    ``len(J)`` of them and, for the regulariser rows after those, ``reg = (tile corners, JᵀJ, Jᵀr)``;
     the block path computes its sparse rows only when asked (a step refused for a new inequality violation
     needs none).
     """
@@ -28,12 +29,13 @@ class _Evaluation:
         Xc,
         gviol: float,
         hard: bool,
-        r=None,
+        rows=None,
         dense=None,
         values: dict | None = None,
     ):
         self.merit, self.p, self.Xc, self.gviol, self.hard = merit, p, Xc, gviol, hard
-        self._r = r
+        self._r: np.ndarray | None = None
+        self._lazy = rows  # dense path: () -> the rows
         self._k: tuple | None = None  # block path: the contact rows and their Jacobian
         self._blocks: tuple | None = None
         self._J: np.ndarray | None = None
@@ -67,7 +69,9 @@ class _Evaluation:
     @property
     def r(self) -> np.ndarray:
         """The rows (block path: without their Jacobians, which only an accepted step needs)."""
-        if self._r is None:
+        if self._r is None and self._lazy is not None:
+            self._r = self._lazy()
+        elif self._r is None:
             r = self.merit.rows(self.Xc, self.hard, self._values, jacobians=False)[0]
             self._r = np.concatenate([r, self._contact()[0]])
         return self._r
@@ -84,7 +88,7 @@ class _Evaluation:
             H, g = self.merit.normal(r[: len(r) - len(Jk)], Jx, Jc, self.p)
             return H + Jk.T @ Jk, g + Jk.T @ r[len(r) - len(Jk) :]
         J = self._J
-        H, g = J.T @ J, J.T @ self._r[: len(J)]
+        H, g = J.T @ J, J.T @ self.r[: len(J)]
         if self._reg is not None:
             _, Hr, gr = self._reg
             k = len(gr)

@@ -210,14 +210,12 @@ class _Merit:
         values = self.ineq_values(Xc)
         return _Evaluation(self, p, Xc, self.ineq_violation(Xc, values), hard, values=values)
 
-    def _node_rows(self, X: np.ndarray, hard: bool, s: float) -> tuple[list, list, float]:
-        """The node blocks of the dense path: ``(rows, pend, smallest inequality)``; ``pend`` holds each block's
-        ``(scale, () -> stencil Jacobian, rows or None)`` in row order, the gradients formed only when asked."""
+    def _node_rows(self, X: np.ndarray, hard: bool, s: float, ineq: list) -> tuple[list, list]:
+        """The node blocks of the dense path: ``(rows, pend)``; ``pend`` holds each block's ``(scale, () -> stencil
+        Jacobian, rows or None)`` in row order, the gradients formed only when asked. ``ineq``: the inequality
+        families' values on ``X``."""
         rs: list[np.ndarray] = []
-        pend: list[
-            tuple[float, Any, np.ndarray | None]
-        ] = []  # pend: (scale, () -> stencil Jacobian, rows or None) of each node block, in row order
-        gmin = np.inf
+        pend: list[tuple[float, Any, np.ndarray | None]] = []
         for f in self.fits:
             if not (hard and f.meta.get("soft")):
                 r, J = f.fn(X)
@@ -228,21 +226,20 @@ class _Merit:
                 r, J = f.fn(X)
                 rs.append(self.w * r)
                 pend.append((self.w, lambda J=J: J, None))
-        for f in self.ineqs:
-            r = f.residual(X)
-            gmin = min(gmin, float(r.min(initial=np.inf)))
+        for f, r in zip(self.ineqs, ineq):
             v = r - self.margin[f.name] * (0.5 if hard else 1.0)
             act = np.flatnonzero(v < 0)
             if len(act):  # rarely
                 rs.append(s * v[act])
                 # the gradients only when asked, and of the active rows only where the family can
                 pend.append((s, lambda f=f, m=v < 0: f.stencil_where(X, m), act))
-        return rs, pend, gmin
+        return rs, pend
 
     def _evaluate_dense(self, p: np.ndarray, hard: bool) -> _Evaluation:
-        """The rows of member ``p`` now, their dense reduced Jacobian (node rows through ``∂x/∂p`` at the nodes
-        they touch, tile-shape rows from ``TileShapeRows``, inequality rows only where active) on demand: LM
-        asks only for ``r`` at a trial step, and most trials (step-limit halvings, refused steps) end there."""
+        """The inequality values of member ``p`` now, its rows when ``r`` is first asked for, their dense reduced
+        Jacobian (node rows through ``∂x/∂p`` at the nodes they touch, tile-shape rows from ``TileShapeRows``,
+        inequality rows only where active) when a step asks: LM refuses a trial step that adds a violation on
+        the values alone (``lm._limited``: most step-limit halvings), and most other trials end at ``r``."""
         S, psi = self.unpack(p)
         c = self.fam.grid(S)
         X, w = self.fam.nodes(S, psi, c), self._state_2(S)
@@ -250,31 +247,36 @@ class _Merit:
         assert t is not None, "evaluate takes the dense path only with the tile-shape rows"
         tc = tile_corners(c, t.quads)
         s = 1.0 if hard else self.sq
-        rs, pend, gmin = self._node_rows(X, hard, s)
+        ineq = [f.residual(X) for f in self.ineqs]
         g = tc.cross.reshape(-1)
-        gmin = min(gmin, float(g.min(initial=np.inf)))
-        v = g - t.margin * (0.5 if hard else 1.0)
-        flat = np.flatnonzero(v < 0)
-        if len(flat):
-            rs.append(s * v[flat])
+        gmin = min([float(v.min(initial=np.inf)) for v in ineq] + [float(g.min(initial=np.inf))])
         if self.contact is not None and self.contact.barrier:
             gmin = min(
                 [gmin]
                 + [float(g.min(initial=np.inf)) for g in self.contact.values((c, w)).values()]
             )
-        rk, Jk = self.contact_rows((X, c, w), hard)
-        rs.append(rk)
-        r = np.concatenate(rs) if rs else np.zeros(0)
-        rr = None
-        if (
-            not hard
-        ):  # the regulariser rows come last; their normal-matrix block is formed from the buffer
-            rr = self.w * t.rows.residual(tc)
-            r = np.concatenate([r, rr])
+        got: dict = {}
+
+        def rows() -> np.ndarray:
+            """The rows (once): the regulariser's last, its normal-matrix block formed from the buffer."""
+            if not got:
+                rs, pend = self._node_rows(X, hard, s, ineq)
+                v = g - t.margin * (0.5 if hard else 1.0)
+                flat = np.flatnonzero(v < 0)
+                if len(flat):
+                    rs.append(s * v[flat])
+                rk, Jk = self.contact_rows((X, c, w), hard)
+                rs.append(rk)
+                rr = None if hard else self.w * t.rows.residual(tc)
+                r = np.concatenate(rs if rr is None else [*rs, rr])
+                got.update(r=r, pend=pend, flat=flat, Jk=Jk, rr=rr)
+            return got["r"]
 
         def dense():
             """``(J, reg)``: the Jacobian of the rows before the regulariser's, and ``(tc, JᵀJ, Jᵀr)`` of those."""
-            Js = [sc * self._node_jacobian(stencil(), S, psi, rows) for sc, stencil, rows in pend]
+            rows()
+            flat, Jk, rr = got["flat"], got["Jk"], got["rr"]
+            Js = [sc * self._node_jacobian(stencil(), S, psi, r) for sc, stencil, r in got["pend"]]
             if len(flat):
                 Js.append(s * t.convexity_jacobian(tc, flat))
             Js.append(Jk if self._half is None else self._half.through(Jk))
@@ -285,7 +287,7 @@ class _Merit:
                 o += len(Jb)
             return J, None if rr is None else (tc, *t.regularizer_normal(tc, rr, self.w))
 
-        return _Evaluation(self, p, (X, c, w), max(0.0, -gmin), hard, r, dense=dense)
+        return _Evaluation(self, p, (X, c, w), max(0.0, -gmin), hard, rows=rows, dense=dense)
 
     def _node_jacobian(
         self, J, S: np.ndarray, psi: float, rows: np.ndarray | None = None
