@@ -233,7 +233,8 @@ class DesignProblem:
             xmm = self._rigid_refinement(sc, res.pattern.nodes)
             # (a redesign with ``coarse_refit`` asks the outline rows: this level would be the same design twice)
             redo = req.symmetry and level["fit"] == "outline" and not req.coarse_refit
-            redo = redo and max(rc, cc) <= TIPS_LEVEL_MAX
+            # a bottom level starts from rescaled already: refitted tips only it has no other chain to leave
+            redo = redo and COARSE_MIN <= min(rc, cc) and max(rc, cc) <= TIPS_LEVEL_MAX
             if redo and self._start_overlaps(xmm):
                 res, level, xmm = self._tips_level(sub, sc, (res, level, xmm))
             how = "closed-state grid resampled in the rigid family"
