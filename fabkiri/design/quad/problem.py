@@ -40,8 +40,8 @@ GAP_MARGIN = (
 )
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 # the largest mirrored level refitted tips only from rescaled where its fine start overlaps (``_tips_level``):
-# the peanut's 32x32 level so refitted sent its 64x64 design from 0.110 to 0.285 % (and the minimax finish
-# to 49 CPU s against 6); the star's 16x16 one is what its 32x32 and 64x64 designs need
+# larger levels so refitted sent the peanut's 64x64 design to a worse fit and a far longer finish, the star's
+# 16x16 one is what its 32x32 and 64x64 designs need (docs/design-solver.md, measured there)
 TIPS_LEVEL_MAX = 16
 
 # the designer of a whole request (``solve._design``, with its progress flag): a coarse level and a rigid route
