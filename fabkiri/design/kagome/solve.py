@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy import sparse
 from scipy.optimize import least_squares
-from scipy.sparse.linalg import splu
+from scipy.sparse.linalg import LinearOperator, splu
 
 from ..core.stencils import Family
 from .constraints import stacked
@@ -161,6 +161,28 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
     return Solve(x, it, float(cost), float(np.abs(c).max(initial=0.0)), True)
 
 
+class Jacobian(LinearOperator):
+    """A sparse Jacobian as an operator with its own products, ``J @ x`` and ``Jᵀ @ x``: the same products
+    the least-squares solver forms from the matrix itself, through fewer of scipy's operator layers
+    (its inner LSMR takes a few hundred of them per step)."""
+
+    def __init__(self, J: sparse.csr_matrix):
+        self.J, self.JT = J, J.T
+        super().__init__(J.dtype, J.shape)
+
+    def _matvec(self, x):
+        return self.J @ x
+
+    def _rmatvec(self, x):
+        return self.JT @ x
+
+    def _matmat(self, X):
+        return self.J @ X
+
+    def _rmatmat(self, X):
+        return self.JT @ X
+
+
 def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
     """A point near the family from a start far from it: penalty least squares (the equalities weighted
     by ``LAND_WEIGHT`` beside the soft rows; scipy's trust-region reflective method), for the pull-back to
@@ -177,7 +199,9 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
 
     def jac(v):
         x = v.reshape(x0.shape)
-        return sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
+        return Jacobian(
+            sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
+        )
 
     sol = least_squares(
         fun,
