@@ -141,7 +141,7 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
         it += 1
         if A is None:
             _, A = rows.equalities(x)
-        d = _step(*normal, A, lam).reshape(x.shape)
+        d = _step(normal[0], normal[1], normal[2], A, lam).reshape(x.shape)
         xn, ok, _ = pull_back(rows.eq, x + d)
         sn = rows.soft(xn, jac=False) if ok else np.full(1, np.inf)
         cn = float(0.5 * sn @ sn)
