@@ -193,6 +193,7 @@ def fit_rows(
         *([KP.pair_family(standard, PAIR_MARGIN)] if pairs else []),
         *fab,
     ]
+    eq, fit, ineq = ([KS.reusing_structure(f) for f in fams] for fams in (eq, fit, ineq))
     rows = KS.Rows(eq, fit, ineq, {}, INEQ_WEIGHT)
     return rows, x0, tuple(a for a, _ in axes)
 
@@ -276,7 +277,7 @@ def _min_gap(standard: Pattern, x: np.ndarray) -> float:
 
 def _result(standard, target, rows, x, shift, converged, axes, its, trace) -> KagomeDesign:
     scale = standard.tile_size
-    r, _ = KS.stacked(rows.eq, x)
+    r = KS.residuals(rows.eq, x)
     nodes = x * scale + shift
     order = KR.tip_order(standard)
     d = np.abs(target.signed_distance(nodes[order]))

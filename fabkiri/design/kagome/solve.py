@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy import sparse
 from scipy.optimize import least_squares
-from scipy.sparse.linalg import splu
+from scipy.sparse.linalg import LinearOperator, splu
 
 from ..core.stencils import Family
 from .constraints import stacked
@@ -56,7 +56,7 @@ class Rows:
             w = self.weights.get(f.name, 1.0) if f.kind == "fit" else self.ineq_weight
             if jac:
                 r, J = f(x)
-                Js.append(sparse.diags(np.broadcast_to(w, r.shape).astype(float)) @ J)
+                Js.append(row_scaled(J, np.broadcast_to(w, r.shape).astype(float)))
             else:
                 r = f.residual(x)
             rs.append(w * r)
@@ -65,6 +65,51 @@ class Rows:
 
     def equalities(self, x: np.ndarray):
         return stacked(self.eq, x)
+
+    def equality_residuals(self, x: np.ndarray) -> np.ndarray:
+        """The equalities' residuals alone (the same values as :meth:`equalities`, no Jacobian)."""
+        return residuals(self.eq, x)
+
+
+def reusing_structure(f: Family) -> Family:
+    """``f`` giving the last call's stencil node array again whenever its nodes are the same: ``Family``
+    keeps its Jacobian's sparsity by that array's identity, and a family that builds the array anew on
+    every call (most do) would otherwise sort the same structure on every call."""
+    last: list[np.ndarray] = []
+
+    def fn(x):
+        r, J = f.fn(x)
+        if isinstance(J, tuple):
+            if last and last[0].shape == J[0].shape and np.array_equal(last[0], J[0]):
+                J = (last[0], J[1])
+            else:
+                last[:] = [J[0]]
+        return r, J
+
+    return replace(f, fn=fn, _pattern=None)
+
+
+def residuals(fams: list[Family], x: np.ndarray) -> np.ndarray:
+    """The residuals of ``fams`` at ``x``, as :func:`stacked` gives them, without their Jacobian."""
+    return np.concatenate([f.residual(x) for f in fams])
+
+
+def row_scaled(J: sparse.spmatrix, w: np.ndarray) -> sparse.csr_matrix:
+    """``diags(w) @ J`` as scipy's sparse product gives it, entry for entry and in its order (the order
+    the landing's matrix-vector products sum in), without the general product: the entries scaled,
+    zeros dropped and each row's entries last first."""
+    if not (sparse.isspmatrix_csr(J) and J.has_canonical_format):
+        return sparse.diags(w) @ J
+    counts = np.diff(J.indptr)
+    v = np.repeat(w, counts) * J.data
+    keep = v != 0
+    row = np.repeat(np.arange(J.shape[0]), counts)[keep][::-1]
+    order = np.argsort(row, kind="stable")
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(row, minlength=J.shape[0]))])
+    return sparse.csr_matrix(
+        (v[keep][::-1][order], J.indices[keep][::-1][order], indptr.astype(J.indptr.dtype)),
+        shape=J.shape,
+    )
 
 
 @dataclass(frozen=True)
@@ -85,16 +130,18 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
     solve moves the design further than the steps along the family, which stop in a nearer minimum)."""
     x, ok, _ = pull_back(rows.eq, land(rows, np.asarray(x0, float)), max_iter=40)
     if not ok:
-        c, _ = rows.equalities(x)
+        c = rows.equality_residuals(x)
         return Solve(np.asarray(x0, float), 0, np.inf, float(np.abs(c).max()), False)
     lam = LAMBDA0
     s, S = rows.soft(x)
     cost = 0.5 * s @ s
     it = 0
+    A, normal = None, _normal(S, s)  # both change only with x: a rejected step keeps them
     while it < max_iter:
         it += 1
-        _, A = rows.equalities(x)
-        d = _step(S, s, A, lam).reshape(x.shape)
+        if A is None:
+            _, A = rows.equalities(x)
+        d = _step(normal[0], normal[1], normal[2], A, lam).reshape(x.shape)
         xn, ok, _ = pull_back(rows.eq, x + d)
         sn = rows.soft(xn, jac=False) if ok else np.full(1, np.inf)
         cn = float(0.5 * sn @ sn)
@@ -102,6 +149,7 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
             done = cost - cn <= tol * max(cost, 1e-300)
             x, cost = xn, cn
             s, S = rows.soft(x)
+            A, normal = None, _normal(S, s)
             lam = max(lam / 3.0, LAMBDA_MIN)
             if done:
                 break
@@ -109,8 +157,30 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
             lam *= 4.0
             if lam > LAMBDA_MAX:
                 break
-    c, _ = rows.equalities(x)
+    c = rows.equality_residuals(x)
     return Solve(x, it, float(cost), float(np.abs(c).max(initial=0.0)), True)
+
+
+class Jacobian(LinearOperator):
+    """A sparse Jacobian as an operator with its own products, ``J @ x`` and ``Jᵀ @ x``: the same products
+    the least-squares solver forms from the matrix itself, through fewer of scipy's operator layers
+    (its inner LSMR takes a few hundred of them per step)."""
+
+    def __init__(self, J: sparse.csr_matrix):
+        self.J, self.JT = J, J.T
+        super().__init__(J.dtype, J.shape)
+
+    def _matvec(self, x):
+        return self.J @ x
+
+    def _rmatvec(self, x):
+        return self.JT @ x
+
+    def _matmat(self, X):
+        return self.J @ X
+
+    def _rmatmat(self, X):
+        return self.JT @ X
 
 
 def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
@@ -125,11 +195,13 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
 
     def fun(v):
         x = v.reshape(x0.shape)
-        return np.concatenate([LAND_WEIGHT * rows.equalities(x)[0], rows.soft(x, jac=False)])
+        return np.concatenate([LAND_WEIGHT * rows.equality_residuals(x), rows.soft(x, jac=False)])
 
     def jac(v):
         x = v.reshape(x0.shape)
-        return sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
+        return Jacobian(
+            sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
+        )
 
     sol = least_squares(
         fun,
@@ -146,16 +218,49 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
 
 
 def _kkt(H: sparse.spmatrix, A: sparse.spmatrix):
-    m = A.shape[0]
-    return splu(sparse.bmat([[H, A.T], [A, -KKT_REG * sparse.identity(m)]], format="csc"))
+    return splu(kkt_matrix(H, A))
 
 
-def _step(S: sparse.csr_matrix, s: np.ndarray, A: sparse.csr_matrix, lam: float) -> np.ndarray:
-    """The tangent step of the linearised problem (Marquardt's scaling: λ times diag(SᵀS), floored)."""
+def kkt_matrix(H: sparse.spmatrix, A: sparse.spmatrix) -> sparse.csc_matrix:
+    """``[[H, Aᵀ], [A, -KKT_REG I]]`` in canonical CSC, entry for entry as ``sparse.bmat`` builds it (the
+    factorisation sees the same matrix), assembled from the columns directly: column ``j < N`` is ``H``'s
+    column then ``A``'s, column ``N + i`` is ``A``'s row ``i`` then the regularisation."""
+    H, Ac, Ar = H.tocsc(), A.tocsc(), A.tocsr()
+    for M in (H, Ac, Ar):
+        M.sum_duplicates()
+    N, m = H.shape[0], A.shape[0]
+    hc, ac, ar = np.diff(H.indptr), np.diff(Ac.indptr), np.diff(Ar.indptr)
+    counts = np.concatenate([hc + ac, ar + 1])
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    # each entry's place: its column's start, then its rank among the column's entries
+    h_at = np.repeat(indptr[:N], hc) + np.arange(H.nnz) - np.repeat(H.indptr[:-1], hc)
+    a_at = np.repeat(indptr[:N] + hc, ac) + np.arange(Ac.nnz) - np.repeat(Ac.indptr[:-1], ac)
+    t_at = np.repeat(indptr[N:-1], ar) + np.arange(Ar.nnz) - np.repeat(Ar.indptr[:-1], ar)
+    d_at = indptr[N + 1 :] - 1
+    data = np.empty(indptr[-1])
+    rows = np.empty(indptr[-1], dtype=np.int32)
+    for at, v, r in (
+        (h_at, H.data, H.indices),
+        (a_at, Ac.data, Ac.indices + N),
+        (t_at, Ar.data, Ar.indices),
+        (d_at, np.full(m, -KKT_REG), np.arange(N, N + m)),
+    ):
+        data[at], rows[at] = v, r
+    K = sparse.csc_matrix((data, rows, indptr.astype(np.int32)), shape=(N + m, N + m))
+    K.has_sorted_indices = True
+    return K
+
+
+def _normal(S: sparse.csr_matrix, s: np.ndarray):
+    """``(SᵀS, -Sᵀs, diag(SᵀS))``: the soft rows' normal equations at the iterate."""
     H = (S.T @ S).tocsc()
-    dg = H.diagonal()
+    return H, -(S.T @ s), H.diagonal()
+
+
+def _step(H: sparse.csc_matrix, g: np.ndarray, dg: np.ndarray, A: sparse.csr_matrix, lam: float):
+    """The tangent step of the linearised problem (Marquardt's scaling: λ times diag(SᵀS), floored)."""
     D = sparse.diags(lam * np.maximum(dg, 1e-6 * max(dg.max(initial=0.0), 1.0)))
-    rhs = np.concatenate([-(S.T @ s), np.zeros(A.shape[0])])
+    rhs = np.concatenate([g, np.zeros(A.shape[0])])
     return _kkt(H + D, A).solve(rhs)[: H.shape[0]]
 
 
@@ -163,25 +268,20 @@ def pull_back(eq: list[Family], x: np.ndarray, tol: float = ON_FAMILY, max_iter:
     """Minimum-norm Newton steps onto the equalities (sparse KKT): ``(x, converged, steps)``."""
     N = x.size
     for k in range(max_iter):
-        r, J = stacked(eq, x)
+        r = residuals(eq, x)  # the Jacobian only for a step
         if np.abs(r).max(initial=0.0) <= tol:
             return x, True, k
         if not np.isfinite(r).all():
             break
+        r, J = stacked(eq, x)
         dx = _kkt(sparse.identity(N, format="csc"), J).solve(np.concatenate([np.zeros(N), -r]))[:N]
         x = x + dx.reshape(x.shape)
-    r, _ = stacked(eq, x)
+    r = residuals(eq, x)
     return x, bool(np.abs(r).max(initial=0.0) <= tol), max_iter
 
 
 def project(eq: list[Family], x: np.ndarray, tol: float = 1e-13, max_iter: int = 30):
-    """Minimum-norm Gauss-Newton steps onto the equalities (dense least squares, to rounding):
-    ``(x, converged, steps)``."""
-    for k in range(max_iter):
-        r, J = stacked(eq, x)
-        if np.abs(r).max(initial=0.0) <= tol:
-            return x, True, k
-        dx = np.linalg.lstsq(J.toarray(), -r, rcond=1e-10)[0]
-        x = x + dx.reshape(x.shape)
-    r, _ = stacked(eq, x)
-    return x, bool(np.abs(r).max(initial=0.0) <= tol), max_iter
+    """Minimum-norm Newton steps onto the equalities to rounding: ``(x, converged, steps)``; the
+    pull-back's steps with a tighter tolerance. (Dense least-squares steps took as many tries at the
+    rounding floor, ~1e-13 on a 12x21 lattice, and each cost a dense SVD.)"""
+    return pull_back(eq, x, tol, max_iter)

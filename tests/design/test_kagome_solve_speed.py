@@ -1,0 +1,50 @@
+"""The kagome solver's assembly shortcuts give the matrices the general scipy operations gave."""
+
+from __future__ import annotations
+
+import numpy as np
+from fabkiri.design.kagome import fit as KF
+from fabkiri.design.kagome import solve as KS
+from fabkiri.design.targets import lookup as TG
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
+from scipy import sparse
+
+
+def _rows():
+    std = standard_kagome(4, 5, tile_size=12.0)
+    rows, x0, _ = KF.fit_rows(std, TG.circle().scaled_to(60.0), pairs=True)
+    return rows, x0 + 0.2 * np.random.default_rng(3).standard_normal(x0.shape)
+
+
+def _same(A, B) -> bool:
+    return (
+        A.shape == B.shape
+        and A.indptr.tolist() == B.indptr.tolist()
+        and A.indices.tolist() == B.indices.tolist()
+        and np.array_equal(A.data, B.data)
+    )
+
+
+def test_row_scaling_and_the_kkt_matrix_are_scipys_entry_for_entry():
+    rows, x = _rows()
+    w_rng = np.random.default_rng(4)
+    for f in rows.eq + rows.fit + rows.ineq:
+        r, J = f(x)
+        assert np.array_equal(r, f.residual(x)), f.name
+        w = w_rng.random(r.shape) * (w_rng.random(r.shape) > 0.3)
+        assert _same(KS.row_scaled(J, w), sparse.diags(w) @ J), f.name
+    s, S = rows.soft(x)
+    _, A = rows.equalities(x)
+    H = (S.T @ S).tocsc() + sparse.identity(S.shape[1])
+    want = sparse.bmat([[H, A.T], [A, -KS.KKT_REG * sparse.identity(A.shape[0])]], format="csc")
+    assert _same(KS.kkt_matrix(H, A), want)
+
+
+def test_the_landing_operator_multiplies_as_its_matrix():
+    rows, x = _rows()
+    _, J = rows.equalities(x)
+    op = KS.Jacobian(J)
+    v, u = np.arange(J.shape[1], dtype=float), np.arange(J.shape[0], dtype=float)
+    assert np.array_equal(op.matvec(v), J @ v) and np.array_equal(op.rmatvec(u), J.T @ u)
+    X = np.stack([v, -v], 1)
+    assert np.array_equal(op.matmat(X), J @ X)
