@@ -14,13 +14,33 @@ back from the written files, needs only the hull).
 
 from __future__ import annotations
 
-import importlib
+import importlib.machinery
+import importlib.util
+import os
 import sys
-
-from .sparse_alone import load_alone
 
 _NAME = "scipy.spatial._ckdtree"
 _classes: dict[str, type] = {}
+
+
+def _load_extension(name: str = _NAME):
+    """``name`` (a compiled module of ``scipy.spatial``) loaded from its file, its package's
+    ``__init__`` not run."""
+    import scipy
+
+    loader = (importlib.machinery.ExtensionFileLoader, importlib.machinery.EXTENSION_SUFFIXES)
+    finder = importlib.machinery.FileFinder(os.path.join(scipy.__path__[0], "spatial"), loader)
+    spec = finder.find_spec(name)
+    if spec is None or spec.loader is None:
+        raise ImportError(name)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # before running it, as the import system does
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module
 
 
 def _scipy_class(module: str, name: str):
@@ -31,7 +51,7 @@ def _scipy_class(module: str, name: str):
             cls = getattr(importlib.import_module("scipy.spatial"), name)
         else:
             try:
-                cls = getattr(load_alone(module), name)
+                cls = getattr(_load_extension(module), name)
             except ImportError:
                 cls = getattr(importlib.import_module("scipy.spatial"), name)
         _classes[name] = cls
@@ -52,8 +72,10 @@ def hull_class():
     """The ``ConvexHull`` class, loaded on first call (as :func:`tree_class`)."""
     if "ConvexHull" not in _classes and "scipy.linalg" not in sys.modules:
         # the compiled qhull module imports SciPy's LAPACK wrappers: those alone too, not scipy.linalg
+        from .sparse_alone import _load_alone
+
         try:
-            load_alone("scipy.linalg.cython_lapack")
+            _load_alone("scipy.linalg.cython_lapack")
         except ImportError:
             pass
     return _scipy_class("scipy.spatial._qhull", "ConvexHull")

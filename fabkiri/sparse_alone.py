@@ -38,7 +38,7 @@ _GRAPH_MODULES = {
 }
 
 
-def load_alone(name: str):
+def _load_alone(name: str):
     """SciPy's module ``name`` (compiled or Python) loaded from its file, its packages' ``__init__``
     not run; the one in ``sys.modules`` if there is one."""
     if name in sys.modules:
@@ -68,7 +68,7 @@ def _graph_function(name: str):
     if _GRAPH not in sys.modules and name in _GRAPH_MODULES:
         try:
             for part in _GRAPH_MODULES[name]:
-                module = load_alone(f"{_GRAPH}.{part}")
+                module = _load_alone(f"{_GRAPH}.{part}")
             return getattr(module, name)
         except (ImportError, AttributeError):
             pass
@@ -100,7 +100,7 @@ def _superlu():
     if "scipy.sparse.linalg" in sys.modules or _umfpack[0]:
         return None
     try:
-        return load_alone(_LU)
+        return _load_alone(_LU)
     except ImportError:
         return None
 
