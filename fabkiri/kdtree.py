@@ -70,14 +70,6 @@ def KDTree(points):  # noqa: N802  (stands for the class it builds)
 
 def hull_class():
     """The ``ConvexHull`` class, loaded on first call (as :func:`tree_class`)."""
-    if "ConvexHull" not in _classes and "scipy.linalg" not in sys.modules:
-        # the compiled qhull module imports SciPy's LAPACK wrappers: those alone too, not scipy.linalg
-        from .sparse_alone import _load_alone
-
-        try:
-            _load_alone("scipy.linalg.cython_lapack")
-        except ImportError:
-            pass
     return _scipy_class("scipy.spatial._qhull", "ConvexHull")
 
 

@@ -64,9 +64,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse.linalg import splu, spsolve
 
 from ..pattern.model import Pattern
-from ..sparse_alone import splu, spsolve
 from .contact import GapTerm, blend_term, contact_figures, hinge_gaps
 from .drivers.registry import AUTO, Drivers, PathDriver, path_driver
 from .drivers.rotations import (  # noqa: F401  (re-exported: the rotations driver lived here)

@@ -34,11 +34,11 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 from scipy import sparse
+from scipy.sparse.linalg import splu
 
 from ..errors import InputError
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from ..sparse_alone import splu
 from .deploy import closed_states
 
 STATES = ("closed state 1", "deployed", "closed state 2")

@@ -29,9 +29,9 @@ from functools import cached_property
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse import csgraph
 
 from ..errors import PatternError
-from ..sparse_alone import csgraph
 from .kinds.tessellation import DEFAULT_KIND, Tessellation, tessellation
 
 STATES = (1, 2)

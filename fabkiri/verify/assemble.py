@@ -129,7 +129,7 @@ def fit_assembly(pattern: Pattern, C: np.ndarray, state: int, Y0: np.ndarray) ->
     motion fixed: the gauge), stopped when a step
     moves no corner by more than 1 nm or after MAX_ITER steps.
     """
-    from ..sparse_alone import spsolve
+    from scipy.sparse.linalg import spsolve
 
     asm = Assembly(pattern, C, state)
     if asm.H == 0:

@@ -170,8 +170,7 @@ def leave_one_out_residual(source: np.ndarray, target: np.ndarray) -> np.ndarray
 def snap_corners(corners: np.ndarray, eps: float) -> np.ndarray:
     """Corners closer than ``eps`` (transitively) moved onto one representative."""
     from scipy import sparse
-
-    from ..sparse_alone import csgraph
+    from scipy.sparse import csgraph
 
     pts = corners.reshape(-1, 2)
     pairs = KDTree(pts).query_pairs(eps, output_type="ndarray")

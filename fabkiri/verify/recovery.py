@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
+from scipy.sparse import csgraph
 
 from ..errors import VerifyError
 from ..exchange.linework import JOIN_MM, SNAP_MM, Linework
 from ..kdtree import KDTree
-from ..sparse_alone import csgraph
 from .hingeread import PLAIN, HingeReading, reading, register_reading
 from .manifest import Allowances
 from .matching import match_by_shape

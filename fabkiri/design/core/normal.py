@@ -6,8 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 from scipy import sparse
-
-from ...sparse_alone import splu
+from scipy.sparse.linalg import splu
 
 MAX_CG = 10  # CG steps on a stale factorisation before a fresh one (64x64, CG to 1e-3: 10 beat 5, 20, 40)
 

@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import sparse
-
-from ...sparse_alone import spsolve
+from scipy.sparse.linalg import spsolve
 
 
 class PeriodicCubic:

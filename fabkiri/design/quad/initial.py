@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse.linalg import spsolve
 
 from ...errors import InputError, Param, SolveError
 from ...pattern import geometry
-from ...sparse_alone import spsolve
 from ..core.stencils import Stencils
 from ..targets.curve import Target
 from .inverse_map import inverse_harmonic_map

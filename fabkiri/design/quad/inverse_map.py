@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import shapely
 from scipy import sparse
+from scipy.sparse.linalg import splu
 
 from ...kdtree import KDTree
-from ...sparse_alone import splu
 from ..targets.curve import Target
 
 SHARP_DEG = 20.0  # a vertex turning by more than this is a corner a tip should start on

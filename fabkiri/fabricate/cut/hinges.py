@@ -17,13 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 from scipy import sparse
+from scipy.sparse import csgraph
 
 from ...errors import FabricationError
 from ...kdtree import KDTree
 from ...pattern import thinness as fab
 from ...pattern.kinds.tessellation import tessellation
 from ...pattern.model import Pattern
-from ...sparse_alone import csgraph
 
 GRID = 1e-6  # mm: every coordinate written is snapped to this grid
 MITRE_LIMIT = 10.0  # exact kerf offsets down to 11.5° corners (shapely default 5: 23°)

@@ -19,8 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
-
-from ....sparse_alone import csgraph
+from scipy.sparse import csgraph
 
 # two levels: the third makes the rows of ``Eᵀ K E`` about twice as long for a quarter fewer vertices, and
 # the sparse product ``(Eᵀ K E) Z[core]`` then costs more than the dense one saves (128x128 grid block)

@@ -35,10 +35,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse.linalg import splu
 
 from ....errors import SolveError
 from ....pattern.topology import SpanningTree
-from ....sparse_alone import splu
 from ...core.stencils import Stencils
 from .core import GridCore, grid_core
 

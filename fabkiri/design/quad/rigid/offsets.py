@@ -33,10 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse.linalg import splu
 
 from ....errors import SolveError
 from ....pattern.topology import SpanningTree
-from ....sparse_alone import splu
 from ...core.stencils import Stencils
 from .family import RigidFamily
 
