@@ -85,3 +85,27 @@ def test_the_16x16_heart_is_met_from_rescaled_without_refitting_the_coarse_level
     assert not any(refits)  # main designed the coarse start again, its levels refitted (and missed)
     h = deployed(res.pattern.nodes, res.pattern.topology, req.target)["hausdorff_rel"]
     assert h <= 0.02
+
+
+@pytest.mark.parametrize(("solver", "designs"), [(routes.REDUCED_NAME, 1), (routes.FULL_NAME, 2)])
+def test_the_rigid_design_is_not_solved_again_reduced_only_when_it_was_the_reduced_member(
+    monkeypatch, solver, designs
+):
+    """``_solve_via_rigid``: where the rigid design (full solver's second opinion asked) answered with the
+    reduced member itself and that fails a non-rigid check, the reduced-only design would solve the same
+    member again and fail the same check; after the full solver's answer it is another design."""
+    asked = []
+
+    def design_whole(sub):
+        asked.append(sub.solver)
+        report = {"iterations": {}, "shape_matching": "ls", "solver": solver, "coarse": None}
+        return SimpleNamespace(
+            converged=True, pattern=SimpleNamespace(nodes=np.zeros((4, 2))), report=report
+        )
+
+    monkeypatch.setattr(routes, "_acceptable", lambda prob, X: False)
+    monkeypatch.setattr(routes, "_why_not", lambda prob, X: "a family")
+    req = DesignRequest(16, 16, load_target("heart", 100.0))
+    prob = SimpleNamespace(req=req, L0=1.0, design_whole=design_whole)
+    assert routes._solve_via_rigid(prob, lambda msg: None, {}) is None
+    assert asked == ["auto", "reduced"][:designs]

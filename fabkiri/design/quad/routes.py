@@ -347,6 +347,8 @@ def _solve_via_rigid(prob: DesignProblem, log, iters: dict, tag: str = ""):
             f"the {'rigid-family' if name == 'rigid' else 'reduced-only'} design fails a non-rigid family check "
             f"({_why_not(prob, X)})"
         )
+        if attempt.solver == "auto" and res.report["solver"] == REDUCED_NAME:
+            break  # its answer was the reduced member itself: the reduced-only design is the same nodes
     log("the full solver takes over")
     return None
 
