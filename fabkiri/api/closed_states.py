@@ -13,6 +13,7 @@ from ..design.targets.lookup import Target, load_target
 from ..errors import InputError, Param
 from ..pattern import geometry
 from ..pattern.model import Pattern
+from ..pattern.overlap import overlap_depths
 
 
 def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
@@ -47,7 +48,7 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
 def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
     """Pairs of tiles that penetrate each other deeper than ``tol`` (mm).
 
-    The verifier's measure (:func:`fabkiri.verify.geom.overlap_depths`): the
+    The verifier's measure (:func:`fabkiri.pattern.overlap.overlap_depths`): the
     separating-axis penetration depth for convex pairs, intersection area over
     the mean edge otherwise. A length, so it compares with the closure
     tolerance directly; an intersection area does not (a sliver along a shared
@@ -55,8 +56,6 @@ def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
     its own: a rigid 64x64 ellipse was rejected for 1.4e-9 mm² slivers whose
     depth was 3.8e-10 tile sizes). A self-intersecting tile is the pair (t, t).
     """
-    from ..verify.geom import overlap_depths
-
     crossed = geometry.self_intersecting_tiles(corners)
     valid = np.ones(len(corners), dtype=bool)
     valid[crossed] = False

@@ -29,7 +29,6 @@ from dataclasses import replace
 
 from ..design.core.refine import refine_minimax
 from ..design.quad.solve import DesignRequest, design
-from ..verify import verify_pattern
 from .design_judge import DesignAttempt, _hausdorff, _rank, refinement_attempt
 
 # from this many tiles (the coarse-to-fine sizes; below it the full solver's second opinion and the guesses in
@@ -175,5 +174,8 @@ def _steps(
 
 def _fails(outcome: DesignAttempt, shape_tol: tuple) -> set[str]:
     """The names of the ``verify`` checks the outcome's pattern (with its closed states) fails."""
+    # the finish alone needs the verifier: a design without it loads none of it
+    from ..verify import verify_pattern
+
     whole = outcome.pattern.with_contracted(outcome.states).with_parity(0)
     return {c.name for c in verify_pattern(whole, shape_tol=shape_tol).failed()}

@@ -25,7 +25,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from .. import __version__
+from .. import __version__, blas
 from ..errors import FabkiriError
 from ..fileio import inputs_scope, note_inputs, refuse_input
 
@@ -172,6 +172,7 @@ def single_thread_blas_process(command: str | None) -> bool:
     if any(v in os.environ for v in BLAS_THREAD_VARS):
         return False
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    blas.started_single = True
     return True
 
 

@@ -294,3 +294,45 @@ def test_a_design_defers_numpys_string_and_record_modules(design_modules):
     # scipy's `from numpy import *` loaded them for nothing
     for name in ("numpy.strings", "numpy.char", "numpy.rec", "numpy.ctypeslib", "numpy.core"):
         assert design_modules.get(name) == "_LazyModule", name
+
+
+def test_a_design_loads_neither_the_verifier_nor_threadpoolctl(tmp_path):
+    # issue #36: the closed states' overlap check reached the verifier's package (its pattern checks, the
+    # deployment path and its drivers: ~25 modules a design never calls) through verify.geom; and with
+    # OpenBLAS started on one thread by the CLI, the solver's threadpoolctl scan of every loaded library
+    # had nothing to limit
+    code = (
+        "import sys\nfrom fabkiri.cli.main import main\n"
+        f"main(['design', '--tiles', '4x4', '--target', 'circle', '--rigid', '--no-preview', '-o', "
+        f"{str(tmp_path / 'p.json')!r}])\n"
+        "print('\\n'.join(sys.modules))"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in cli.BLAS_THREAD_VARS}
+    mods = set(
+        subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+        ).stdout.split()
+    )
+    assert (tmp_path / "p.json").exists()
+    assert "fabkiri.pattern.overlap" in mods  # the overlap check ran
+    assert not {m for m in mods if m == "fabkiri.verify" or m.startswith("fabkiri.verify.")}
+    assert "fabkiri.mechanics.deploy" not in mods and "threadpoolctl" not in mods
+
+
+def test_a_library_design_still_holds_blas_to_one_thread(monkeypatch):
+    # no CLI start-up here (numpy was loaded first): the solver limits BLAS itself, and so it does where the
+    # CLI's OPENBLAS_NUM_THREADS cannot reach (a BLAS other than OpenBLAS)
+    from fabkiri import blas
+    from fabkiri.design.quad.solve import single_thread_blas
+    from threadpoolctl import threadpool_info
+
+    def blas_threads() -> set[int]:
+        return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+
+    assert not blas.single_threaded()
+    with single_thread_blas():
+        assert blas_threads() == {1}
+    monkeypatch.setattr(blas, "started_single", True)
+    assert blas.single_threaded()
+    monkeypatch.setattr(np.__config__, "CONFIG", {"Build Dependencies": {"blas": {"name": "mkl"}}})
+    assert not blas.single_threaded()

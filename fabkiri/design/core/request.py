@@ -81,6 +81,9 @@ class DesignRequest:
     # --init coarse: refit a coarse level whose tips-only outline misses ``second_opinion_above`` with the outline
     # rows (``DesignProblem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
     coarse_refit: bool = False
+    # ... and whether ``solve._design`` does so on its own (False: the caller asks the refit where it needs it,
+    # as the rigid-first route does after its other start, ``routes._solve_rigid_first``)
+    coarse_refit_on_miss: bool = True
     # with ``coarse_refit``: refit the levels that miss by more than this share instead (None: the shape tolerance;
     # the minimax finish asks its own, smaller, threshold)
     coarse_refit_above: float | None = None
@@ -189,6 +192,19 @@ def via_rigid_applies(req: DesignRequest) -> bool:
         and not req.contracted
         and req.target is not None
         and (req.rows * req.cols >= VIA_RIGID_TILES or req.init == VIA_RIGID_INIT)
+    )
+
+
+def coarse_refit_applies(req: DesignRequest, coarse: dict | None) -> bool:
+    """Whether a design of ``req`` whose start was ``coarse`` (its report's ``coarse``: None without coarse levels)
+    can be designed again with its coarse levels refitted with the outline rows (``coarse_refit``): not a refit
+    already, the outline rows asked, and not a level that had them (a mirrored level)."""
+    return (
+        not req.coarse_refit
+        and req.outline
+        and coarse is not None
+        and req.target is not None
+        and coarse.get("fit") != "outline"
     )
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from ...errors import SolveError
 from ...pattern.model import Pattern
 from ..core.conformance import deployed as deployed_conformance
-from ..core.request import VIA_RIGID_TILES
+from ..core.request import VIA_RIGID_TILES, coarse_refit_applies
 from ..targets.lookup import Target
 from . import constraints as C
 from .initial import initial_guess
@@ -247,29 +247,49 @@ def _polish(prob: DesignProblem, X: np.ndarray, log, iters: dict, polished: list
 def _solve_rigid_first(prob: DesignProblem, log, iters: dict):
     """The rigid family's closest member to the target (reduced solver only, from each of ``RIGID_FIRST_INITS``)
     that passes every family of the non-rigid problem: ``(X, mode, solver)`` if its outline is within the shape
-    tolerance (``second_opinion_above``), else None and the full solver takes over."""
-    best = None
+    tolerance (``second_opinion_above``), else None and the full solver takes over. A coarse start whose
+    tips-only levels miss is refitted (``coarse_refit``) only where no start meets: the 16x16 heart's refit
+    missed too (4.61 %), and rescaled met (1.42 %)."""
+    best, refit = None, None
     for init in RIGID_FIRST_INITS:
         sub = replace(
-            prob.req, rigid=True, init=init, name="", solver="reduced", second_opinion=False
+            prob.req,
+            rigid=True,
+            init=init,
+            name="",
+            solver="reduced",
+            second_opinion=False,
+            coarse_refit_on_miss=False,
         )
-        res = prob.design_whole(sub)  # a rigid design of the same target is a whole design
-        iters.update({f"rigid_{init}_{k}": v for k, v in res.report["iterations"].items()})
-        X = res.pattern.nodes / prob.L0
-        if not (res.converged and _acceptable(prob, X)):
-            log(f"rigid family from {init}: fails a non-rigid family check ({_why_not(prob, X)})")
-            continue
-        h = deployed_conformance(res.pattern.nodes, res.pattern.topology, prob.target)[
-            "hausdorff_rel"
-        ]
-        log(f"rigid family from {init}: outline within {h:.2%} of the target size")
-        if best is None or h < best[0]:
-            best = (h, X, res.report["shape_matching"], res.report["solver"])
-        if h <= RIGID_FIRST_GOOD:
+        best, res = _rigid_member(prob, sub, init, best, log, iters)
+        if coarse_refit_applies(sub, res.report["coarse"]):
+            refit = replace(sub, coarse_refit=True)
+        if best is not None and best[0] <= RIGID_FIRST_GOOD:
             break
+    if refit is not None and (best is None or best[0] > prob.req.second_opinion_above):
+        log(
+            "no start within the shape tolerance: coarse again, the levels that miss refitted (outline rows)"
+        )
+        best, _ = _rigid_member(prob, refit, f"{refit.init}_refit", best, log, iters)
     if best is None or best[0] > prob.req.second_opinion_above:
         return _rigid_full_first(prob, log, iters)
     return best[1:]
+
+
+def _rigid_member(prob: DesignProblem, sub, name: str, best, log, iters: dict) -> tuple:
+    """``(best, res)``: the rigid design of ``sub`` (``res``), and ``best`` ``(h, X, mode, solver)`` replaced by it
+    where it passes every non-rigid family and its outline is closer (``h``, of the target's size)."""
+    res = prob.design_whole(sub)  # a rigid design of the same target is a whole design
+    iters.update({f"rigid_{name}_{k}": v for k, v in res.report["iterations"].items()})
+    X = res.pattern.nodes / prob.L0
+    if not (res.converged and _acceptable(prob, X)):
+        log(f"rigid family from {name}: fails a non-rigid family check ({_why_not(prob, X)})")
+        return best, res
+    h = deployed_conformance(res.pattern.nodes, res.pattern.topology, prob.target)["hausdorff_rel"]
+    log(f"rigid family from {name}: outline within {h:.2%} of the target size")
+    if best is None or h < best[0]:
+        best = (h, X, res.report["shape_matching"], res.report["solver"])
+    return best, res
 
 
 def _rigid_full_first(prob: DesignProblem, log, iters: dict):
@@ -327,6 +347,8 @@ def _solve_via_rigid(prob: DesignProblem, log, iters: dict, tag: str = ""):
             f"the {'rigid-family' if name == 'rigid' else 'reduced-only'} design fails a non-rigid family check "
             f"({_why_not(prob, X)})"
         )
+        if attempt.solver == "auto" and res.report["solver"] == REDUCED_NAME:
+            break  # its answer was the reduced member itself: the reduced-only design is the same nodes
     log("the full solver takes over")
     return None
 

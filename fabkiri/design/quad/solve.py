@@ -36,18 +36,14 @@ in ``normal.py``; their names stay importable from here.
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from dataclasses import replace
 
 import numpy as np
 
-try:  # single-threaded BLAS: the solver's vector operations are too small to gain from threads, and on a
-    # loaded machine OpenBLAS threads contend (measured: a 16k-vector dot took hundreds of times longer)
-    from threadpoolctl import ThreadpoolController
-except ImportError:  # pragma: no cover
-    ThreadpoolController = None
-
+from ... import blas
 from ...pattern.model import Pattern
 from ..core.conformance import deployed as deployed_conformance
 from ..core.request import (  # noqa: F401  (re-exported: callers import these from here)
@@ -57,6 +53,7 @@ from ..core.request import (  # noqa: F401  (re-exported: callers import these f
     VIA_RIGID_TILES,
     DesignRequest,
     DesignResult,
+    coarse_refit_applies,
     reduced_applies,
     rigid_first_applies,
     via_rigid_applies,
@@ -92,13 +89,17 @@ _BLAS = None  # one controller per process: finding the loaded BLAS libraries is
 
 
 def single_thread_blas():
-    """Context manager that limits BLAS to one thread (a no-op without threadpoolctl)."""
+    """Context manager that limits BLAS to one thread: the solver's vector operations are too small to gain from
+    threads, and on a loaded machine OpenBLAS threads contend. A no-op where OpenBLAS started with one thread
+    (the CLI starts it so, ``fabkiri/blas.py``) and without threadpoolctl."""
     global _BLAS
-    if ThreadpoolController is None:  # pragma: no cover
-        import contextlib
-
+    if blas.single_threaded():
         return contextlib.nullcontext()
     if _BLAS is None:
+        try:
+            from threadpoolctl import ThreadpoolController
+        except ImportError:  # pragma: no cover
+            return contextlib.nullcontext()
         _BLAS = ThreadpoolController()
     return _BLAS.limit(limits=1, user_api="blas")
 
@@ -163,11 +164,10 @@ def _coarse_refit(
     again with its coarse levels refitted where their tips-only outline misses it (``coarse_refit``); the
     converged design with the closer outline is kept. Not every time: from a better coarse start the 32x32 heart
     ended at 3.96 % instead of 1.61 %, while the drop's 64x64 design went from 22.16 % to 0.22 %."""
-    if req.coarse_refit or not req.outline or prob.coarse is None or req.target is None:
+    # (a mirrored level has the outline rows already, ``DesignProblem._coarse_level``: it would be the same design)
+    if not (req.coarse_refit_on_miss and coarse_refit_applies(req, prob.coarse)):
         return result
-    # a mirrored level has the outline rows already (``DesignProblem._coarse_level``): it would be the same design
-    if prob.coarse.get("fit") == "outline":
-        return result
+    assert req.target is not None
     h = deployed_conformance(result.pattern.nodes, result.pattern.topology, req.target)
     if result.converged and h["hausdorff_rel"] <= req.second_opinion_above:
         return result
