@@ -126,6 +126,67 @@ def shared_designs():
     patch.undo()
 
 
+# the solvers' designs already made in this test session, by the solver and a digest of its inputs
+_SOLVES: dict[tuple[str, str], object] = {}
+
+
+def _memoised(real, name: str):
+    """``real`` (a design solver) answering each set of inputs once per test session, with a deep copy."""
+    import copy
+    import hashlib
+    import pickle
+
+    def solve(*args, **kwargs):
+        try:
+            data = pickle.dumps((args, sorted(kwargs.items())), protocol=5)
+        except (pickle.PicklingError, TypeError, AttributeError):  # rows built of closures
+            return real(*args, **kwargs)
+        key = (name, hashlib.sha256(data).hexdigest())
+        if key not in _SOLVES:
+            _SOLVES[key] = real(*args, **kwargs)
+        return copy.deepcopy(_SOLVES[key])
+
+    solve.real = real  # type: ignore[attr-defined]
+    return solve
+
+
+@pytest.fixture
+def shared_solves():
+    """The two design solvers, each set of inputs solved once per test session.
+
+    One level below ``shared_designs`` and ``shared_kagome_designs``: tests whose front-door calls
+    differ (another option, the CLI and the API, a fabrication limit) often solve the same problem
+    first, e.g. the free design a fabrication-aware kagome design starts from. For the test's duration
+    the kagome fit (``fabkiri.design.kagome.fit.design``) and the quad solver
+    (``fabkiri.design.quad.solve.design``) are replaced, in every loaded module that holds them, by a
+    memo keyed by a digest of their pickled arguments (calls whose arguments do not pickle, such as the
+    kagome fabrication rows, are solved afresh); each call gets its own deep copy. Both solvers are
+    deterministic. A test that patches anything inside a solver must not take this fixture (the memo
+    would keep what the patched solver gave). As the others, tests that share a solve carry one
+    ``xdist_group`` mark."""
+    import sys
+
+    # every module that binds a solver by name is loaded first, so none binds the memo past the test
+    import fabkiri.api.continuation  # noqa: F401
+    import fabkiri.api.design  # noqa: F401
+    import fabkiri.api.design_minimax  # noqa: F401
+    import fabkiri.api.kagome  # noqa: F401
+    import fabkiri.design
+    import fabkiri.design.core.refine  # noqa: F401
+    from fabkiri.design.kagome import fit
+    from fabkiri.design.quad import solve
+
+    fabkiri.design.design  # noqa: B018 (the package's lazy name, bound to the real solver now)
+    patch = pytest.MonkeyPatch()
+    for real, name in ((fit.design, "kagome fit"), (solve.design, "quad solver")):
+        memo = _memoised(real, name)
+        for module in list(sys.modules.values()):
+            if getattr(module, "__dict__", {}).get("design") is real:
+                patch.setattr(module, "design", memo)
+    yield
+    patch.undo()
+
+
 def pytest_collection_modifyitems(config, items):
     """Modules with slow tests first, and a module's slow tests first in it (stable otherwise): under
     xdist a worker takes the next test when it has finished one, so the long ones start early and the
