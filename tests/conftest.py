@@ -130,18 +130,49 @@ def shared_designs():
 _SOLVES: dict[tuple[str, str], object] = {}
 
 
+def _digest(value, h) -> None:
+    """Feed ``value`` to the hash ``h`` by what defines it: a dataclass by its fields (not the caches a
+    pattern, its topology or a target fill in on first use), an array by its dtype, shape and bytes.
+    Raises TypeError on anything else (a function: the kagome fabrication rows)."""
+    import dataclasses
+
+    import numpy as np
+
+    if value is None or isinstance(value, (bool, int, float, str, bytes, np.generic)):
+        h.update(repr((type(value).__name__, value)).encode())
+    elif isinstance(value, np.ndarray):
+        h.update(f"array {value.dtype} {value.shape}".encode())
+        h.update(np.ascontiguousarray(value).tobytes())
+    elif isinstance(value, (tuple, list)):
+        h.update(f"{type(value).__name__} {len(value)}".encode())
+        for item in value:
+            _digest(item, h)
+    elif isinstance(value, dict):
+        h.update(f"dict {len(value)}".encode())
+        for key in sorted(value, key=repr):
+            _digest(key, h)
+            _digest(value[key], h)
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        h.update(f"{type(value).__module__}.{type(value).__qualname__}".encode())
+        for field in dataclasses.fields(value):
+            h.update(field.name.encode())
+            _digest(getattr(value, field.name), h)
+    else:
+        raise TypeError(f"no digest for {type(value).__name__}")
+
+
 def _memoised(real, name: str):
     """``real`` (a design solver) answering each set of inputs once per test session, with a deep copy."""
     import copy
     import hashlib
-    import pickle
 
     def solve(*args, **kwargs):
+        h = hashlib.sha256()
         try:
-            data = pickle.dumps((args, sorted(kwargs.items())), protocol=5)
-        except (pickle.PicklingError, TypeError, AttributeError):  # rows built of closures
+            _digest((args, kwargs), h)
+        except TypeError:  # rows built of closures: solved afresh
             return real(*args, **kwargs)
-        key = (name, hashlib.sha256(data).hexdigest())
+        key = (name, h.hexdigest())
         if key not in _SOLVES:
             _SOLVES[key] = real(*args, **kwargs)
         return copy.deepcopy(_SOLVES[key])
@@ -159,8 +190,8 @@ def shared_solves():
     first, e.g. the free design a fabrication-aware kagome design starts from. For the test's duration
     the kagome fit (``fabkiri.design.kagome.fit.design``) and the quad solver
     (``fabkiri.design.quad.solve.design``) are replaced, in every loaded module that holds them, by a
-    memo keyed by a digest of their pickled arguments (calls whose arguments do not pickle, such as the
-    kagome fabrication rows, are solved afresh); each call gets its own deep copy. Both solvers are
+    memo keyed by a digest of their arguments (``_digest``: what defines them, not their caches; calls
+    whose arguments hold a function, such as the kagome fabrication rows, are solved afresh); each call gets its own deep copy. Both solvers are
     deterministic. A test that patches anything inside a solver must not take this fixture (the memo
     would keep what the patched solver gave). As the others, tests that share a solve carry one
     ``xdist_group`` mark."""
