@@ -177,7 +177,6 @@ def _memoised(real, name: str):
             _SOLVES[key] = real(*args, **kwargs)
         return copy.deepcopy(_SOLVES[key])
 
-    solve.real = real  # type: ignore[attr-defined]
     return solve
 
 
@@ -191,10 +190,10 @@ def shared_solves():
     the kagome fit (``fabkiri.design.kagome.fit.design``) and the quad solver
     (``fabkiri.design.quad.solve.design``) are replaced, in every loaded module that holds them, by a
     memo keyed by a digest of their arguments (``_digest``: what defines them, not their caches; calls
-    whose arguments hold a function, such as the kagome fabrication rows, are solved afresh); each call gets its own deep copy. Both solvers are
-    deterministic. A test that patches anything inside a solver must not take this fixture (the memo
-    would keep what the patched solver gave). As the others, tests that share a solve carry one
-    ``xdist_group`` mark."""
+    whose arguments hold a function, such as the kagome fabrication rows, are solved afresh); each call
+    gets its own deep copy. Both solvers are deterministic. A test that patches anything inside a solver
+    must not take this fixture (the memo would keep what the patched solver gave). As the others, tests
+    that share a solve carry one ``xdist_group`` mark."""
     import sys
 
     # every module that binds a solver by name is loaded first, so none binds the memo past the test
