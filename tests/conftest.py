@@ -126,6 +126,97 @@ def shared_designs():
     patch.undo()
 
 
+# the solvers' designs already made in this test session, by the solver and a digest of its inputs
+_SOLVES: dict[tuple[str, str], object] = {}
+
+
+def _digest(value, h) -> None:
+    """Feed ``value`` to the hash ``h`` by what defines it: a dataclass by its fields (not the caches a
+    pattern, its topology or a target fill in on first use), an array by its dtype, shape and bytes.
+    Raises TypeError on anything else (a function: the kagome fabrication rows)."""
+    import dataclasses
+
+    import numpy as np
+
+    if value is None or isinstance(value, (bool, int, float, str, bytes, np.generic)):
+        h.update(repr((type(value).__name__, value)).encode())
+    elif isinstance(value, np.ndarray):
+        h.update(f"array {value.dtype} {value.shape}".encode())
+        h.update(np.ascontiguousarray(value).tobytes())
+    elif isinstance(value, (tuple, list)):
+        h.update(f"{type(value).__name__} {len(value)}".encode())
+        for item in value:
+            _digest(item, h)
+    elif isinstance(value, dict):
+        h.update(f"dict {len(value)}".encode())
+        for key in sorted(value, key=repr):
+            _digest(key, h)
+            _digest(value[key], h)
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        h.update(f"{type(value).__module__}.{type(value).__qualname__}".encode())
+        for field in dataclasses.fields(value):
+            h.update(field.name.encode())
+            _digest(getattr(value, field.name), h)
+    else:
+        raise TypeError(f"no digest for {type(value).__name__}")
+
+
+def _memoised(real, name: str):
+    """``real`` (a design solver) answering each set of inputs once per test session, with a deep copy."""
+    import copy
+    import hashlib
+
+    def solve(*args, **kwargs):
+        h = hashlib.sha256()
+        try:
+            _digest((args, kwargs), h)
+        except TypeError:  # rows built of closures: solved afresh
+            return real(*args, **kwargs)
+        key = (name, h.hexdigest())
+        if key not in _SOLVES:
+            _SOLVES[key] = real(*args, **kwargs)
+        return copy.deepcopy(_SOLVES[key])
+
+    return solve
+
+
+@pytest.fixture
+def shared_solves():
+    """The two design solvers, each set of inputs solved once per test session.
+
+    One level below ``shared_designs`` and ``shared_kagome_designs``: tests whose front-door calls
+    differ (another option, the CLI and the API, a fabrication limit) often solve the same problem
+    first, e.g. the free design a fabrication-aware kagome design starts from. For the test's duration
+    the kagome fit (``fabkiri.design.kagome.fit.design``) and the quad solver
+    (``fabkiri.design.quad.solve.design``) are replaced, in every loaded module that holds them, by a
+    memo keyed by a digest of their arguments (``_digest``: what defines them, not their caches; calls
+    whose arguments hold a function, such as the kagome fabrication rows, are solved afresh); each call
+    gets its own deep copy. Both solvers are deterministic. A test that patches anything inside a solver
+    must not take this fixture (the memo would keep what the patched solver gave). As the others, tests
+    that share a solve carry one ``xdist_group`` mark."""
+    import sys
+
+    # every module that binds a solver by name is loaded first, so none binds the memo past the test
+    import fabkiri.api.continuation  # noqa: F401
+    import fabkiri.api.design  # noqa: F401
+    import fabkiri.api.design_minimax  # noqa: F401
+    import fabkiri.api.kagome  # noqa: F401
+    import fabkiri.design
+    import fabkiri.design.core.refine  # noqa: F401
+    from fabkiri.design.kagome import fit
+    from fabkiri.design.quad import solve
+
+    fabkiri.design.design  # noqa: B018 (the package's lazy name, bound to the real solver now)
+    patch = pytest.MonkeyPatch()
+    for real, name in ((fit.design, "kagome fit"), (solve.design, "quad solver")):
+        memo = _memoised(real, name)
+        for module in list(sys.modules.values()):
+            if getattr(module, "__dict__", {}).get("design") is real:
+                patch.setattr(module, "design", memo)
+    yield
+    patch.undo()
+
+
 def pytest_collection_modifyitems(config, items):
     """Modules with slow tests first, and a module's slow tests first in it (stable otherwise): under
     xdist a worker takes the next test when it has finished one, so the long ones start early and the
