@@ -22,7 +22,6 @@ from fabkiri.design.quad.solve import DesignRequest
 from fabkiri.design.targets.lookup import load_target
 
 DROP = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "drop.csv")
-PEANUT = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "peanut.csv")
 
 
 def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
@@ -165,24 +164,20 @@ def test_a_design_that_fails_on_overlaps_alone_is_redesigned_and_a_valid_redesig
 
 
 @pytest.mark.slow
-def test_the_mirrored_32x32_peanut_fits_no_worse_than_the_16x16_one():
-    """bench/shapes.py's peanut, ``--symmetry x``, CLI defaults: main kept the 32x32 design's 0.31 % (below the
-    rigid gate's 0.4 %) above the 16x16 one's 0.24 %; a non-rigid design is finished from 0.3 % at 32x32
-    (FREE_FINISH_ABOVE), and the steps bring it to about 0.21 %. Both mirror images, no overlapping tiles."""
-    target = load_target(PEANUT, 100)
-    h = {}
-    for n in (16, 32):
-        out = design_pattern(PatternRequest(tiles=(n, n), target=PEANUT, size=100, symmetry="x"))
-        assert out.success, out.problems
-        h[n] = conf.deployed(out.pattern.nodes, out.pattern.topology, target)["hausdorff_rel"]
-        assert h[n] == pytest.approx(out.report["conformance"]["deployed"]["hausdorff_rel"])
-        checks = out.report["checks"]
-        assert (
-            checks["overlaps_deployed"]
-            == checks["overlaps_state_1"]
-            == checks["overlaps_state_2"]
-            == 0
-        )
+def test_the_mirrored_64x64_star_is_finished_below_the_rigid_gate():
+    """bench/shapes.py's star, ``--symmetry y``, CLI defaults (about 20 CPU s): main kept its design's 0.18 %, below
+    the rigid gate's floor (0.25 %), and the mirrored 96x96 star rose above it (0.24 %). A non-rigid design is
+    finished past ``gate`` (0.15 % at 64x64), and the steps bring it under that (0.10-0.12 %)."""
+    out = design_pattern(PatternRequest(tiles=(64, 64), target="star", size=100, symmetry="y"))
+    assert out.success, out.problems
+    h = conf.deployed(out.pattern.nodes, out.pattern.topology, load_target("star", 100))
+    assert h["hausdorff_rel"] == pytest.approx(
+        out.report["conformance"]["deployed"]["hausdorff_rel"]
+    )
+    checks = out.report["checks"]
+    assert (
+        checks["overlaps_deployed"] == checks["overlaps_state_1"] == checks["overlaps_state_2"] == 0
+    )
     finish = [a for a in out.report["attempts"] if a["init"] == "minimax refinement"]
     assert len(finish) == 1 and finish[0]["kept"]
-    assert h[32] <= h[16]
+    assert h["hausdorff_rel"] <= gate(DesignRequest(rows=64, cols=64, symmetry="y"))
