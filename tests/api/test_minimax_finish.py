@@ -181,3 +181,24 @@ def test_the_mirrored_64x64_star_is_finished_below_the_rigid_gate():
     finish = [a for a in out.report["attempts"] if a["init"] == "minimax refinement"]
     assert len(finish) == 1 and finish[0]["kept"]
     assert h["hausdorff_rel"] <= gate(DesignRequest(rows=64, cols=64, symmetry="y"))
+
+
+def test_a_design_under_the_rigid_gate_gets_the_steps_only(monkeypatch):
+    """A non-rigid design finished under the rigid gate (``gate``) gets Lawson's steps and no refitted redesign:
+    the free 64x64 peanut (0.21 %) paid 54 CPU s for steps and redesign against its design's 14, and kept its own.
+    Above the rigid gate the steps that leave more than REFIT_ABOVE still ask for the redesign."""
+    from fabkiri.api import design_minimax as dm
+
+    big = DesignRequest(rows=64, cols=64, target=load_target("heart", 100))
+    asked: list = []
+    monkeypatch.setattr(dm, "design", lambda r: asked.append(r) or "result")
+    monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
+    monkeypatch.setattr(dm, "_steps", lambda req, start, judge: (None, [0.003], 1.0))
+    redesign = _outcome(0.009, [], True, overlaps_state_1=0)
+    under = _outcome(0.0021, [], True)
+    assert applies(big, {}, under)
+    assert dm.minimax_finish(big, under, lambda r: redesign, [], lambda t: None) is None
+    assert asked == []
+    above = _outcome(0.004, [], True)
+    dm.minimax_finish(big, above, lambda r: redesign, [], lambda t: None)
+    assert len(asked) == 1 and asked[0].coarse_refit
