@@ -127,8 +127,8 @@ def minimax_finish(
     refit, left = None, min(h0, _hausdorff(cand.report) if cand else h0) if valid else float("inf")
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it (not
     # for a symmetric design: its levels have the outline rows already, ``DesignProblem._coarse_level``, the same design)
-    # nor for a design under the rigid gate (``gate``): its steps alone (the free 64x64 peanut, 0.21 %: steps and
-    # refit 54 CPU s against the design's 14, no better design)
+    # nor for a design under the rigid gate (``gate``): its steps alone (the free 64x64 peanut, 0.21 %: the
+    # redesign and its steps cost twice the steps alone and found no better design; docs/design-solver.md)
     polish = valid and h0 <= _rigid_gate(req)
     if (
         not req.coarse_refit

@@ -185,7 +185,7 @@ def test_the_mirrored_64x64_star_is_finished_below_the_rigid_gate():
 
 def test_a_design_under_the_rigid_gate_gets_the_steps_only(monkeypatch):
     """A non-rigid design finished under the rigid gate (``gate``) gets Lawson's steps and no refitted redesign:
-    the free 64x64 peanut (0.21 %) paid 54 CPU s for steps and redesign against its design's 14, and kept its own.
+    the free 64x64 peanut (0.21 %) paid for the redesign and its steps twice what the steps cost, and kept its own.
     Above the rigid gate the steps that leave more than REFIT_ABOVE still ask for the redesign."""
     from fabkiri.api import design_minimax as dm
 
