@@ -62,7 +62,7 @@ FINISH_FLOOR = 0.0025
 # a non-rigid design (free or mirrored) is finished above this share at 32x32 tiles, scaled and with no floor:
 # under the rigid gate the star's 48x48 and 96x96 designs kept 0.24 % and 0.11 % (its 32x32 and 64x64 ones 0.07 %
 # and 0.09 %), the mirrored star's 96x96 one 0.24 % (64x64: 0.18 %), the mirrored peanut's 32x32 one 0.31 % (16x16:
-# 0.24 %); finished 0.07 %, 0.07 %, ... (docs/design-solver.md, "Minimax finish below the rigid gate")
+# 0.24 %); finished 0.069 %, 0.071 %, 0.115 %, 0.205 % (docs/design-solver.md, "Minimax finish below the rigid gate")
 FREE_FINISH_ABOVE = 0.003
 
 
