@@ -17,7 +17,8 @@ and the steps run from that too: the 32x32
 drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the refitted ones.
 
 Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
-resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer. A step the
+resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a non-rigid
+(free or mirrored) design has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``). A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
@@ -57,6 +58,11 @@ THRESHOLD_TILES = 32
 # the finish's gate scales down to this share and no further: below it the finish's 2-6 designs bought at most
 # about 0.1 % of the size, and the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) would pay them dearly
 FINISH_FLOOR = 0.0025
+# a non-rigid design (free or mirrored) is finished above this share at 32x32 tiles, scaled and with no floor:
+# under the rigid gate the star's 48x48 and 96x96 designs kept 0.24 % and 0.11 % (its 32x32 and 64x64 ones 0.07 %
+# and 0.09 %), the mirrored star's 96x96 one 0.24 % (64x64: 0.18 %), the mirrored peanut's 32x32 one 0.31 % (16x16:
+# 0.24 %); finished 0.069 %, 0.071 %, 0.115 %, 0.205 % (docs/design-solver.md, "Minimax finish below the rigid gate")
+FREE_FINISH_ABOVE = 0.003
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -64,9 +70,21 @@ def threshold(share: float, req: DesignRequest) -> float:
     return share * THRESHOLD_TILES / max(req.rows, req.cols)
 
 
+def gate(req: DesignRequest) -> float:
+    """The share of the size past which ``req``'s design is finished: ``FINISH_ABOVE`` scaled to its lattice
+    (``threshold``) down to ``FINISH_FLOOR`` for a rigid request, ``FREE_FINISH_ABOVE`` scaled for the others."""
+    if req.rigid:
+        return _rigid_gate(req)
+    return threshold(FREE_FINISH_ABOVE, req)
+
+
+def _rigid_gate(req: DesignRequest) -> float:
+    return max(threshold(FINISH_ABOVE, req), FINISH_FLOOR)
+
+
 def applies(req: DesignRequest, contracted: dict, best) -> bool:
-    """A valid deployed-target design from ``MINIMAX_TILES`` tiles that misses by more than ``FINISH_ABOVE``
-    (scaled to its lattice, ``threshold``), or one that fails on overlapping tiles alone (``overlapping_only``),
+    """A valid deployed-target design from ``MINIMAX_TILES`` tiles that misses by more than its ``gate``,
+    or one that fails on overlapping tiles alone (``overlapping_only``),
     without fabrication rows (the continuation refines those) or a floor on the opening (``refine_to_floor``
     does)."""
     return (
@@ -77,10 +95,7 @@ def applies(req: DesignRequest, contracted: dict, best) -> bool:
         and req.fabrication is None
         and not req.min_opening
         and req.rows * req.cols >= MINIMAX_TILES
-        and (
-            not best.valid
-            or _hausdorff(best.report) > max(threshold(FINISH_ABOVE, req), FINISH_FLOOR)
-        )
+        and (not best.valid or _hausdorff(best.report) > gate(req))
     )
 
 
@@ -111,7 +126,15 @@ def minimax_finish(
     refit, left = None, min(h0, _hausdorff(cand.report) if cand else h0) if valid else float("inf")
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it (not
     # for a symmetric design: its levels have the outline rows already, ``DesignProblem._coarse_level``, the same design)
-    if not req.coarse_refit and not req.symmetry and left > threshold(REFIT_ABOVE, req):
+    # nor for a design under the rigid gate (``gate``): its steps alone (the free 64x64 peanut, 0.21 %: the
+    # redesign and its steps cost twice the steps alone and found no better design; docs/design-solver.md)
+    polish = valid and h0 <= _rigid_gate(req)
+    if (
+        not req.coarse_refit
+        and not req.symmetry
+        and not polish
+        and left > threshold(REFIT_ABOVE, req)
+    ):
         # its coarse levels refitted where they miss by more than the finish's own threshold (not only past the
         # shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted 0.31 %)
         again = replace(req, init="coarse", start=None, coarse_refit=True)
