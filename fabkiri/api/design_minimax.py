@@ -17,8 +17,8 @@ and the steps run from that too: the 32x32
 drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the refitted ones.
 
 Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
-resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a non-rigid
-(free or mirrored) design has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``). A step the
+resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a free design
+(neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``). A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
@@ -58,10 +58,11 @@ THRESHOLD_TILES = 32
 # the finish's gate scales down to this share and no further: below it the finish's 2-6 designs bought at most
 # about 0.1 % of the size, and the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) would pay them dearly
 FINISH_FLOOR = 0.0025
-# a non-rigid design (free or mirrored) is finished above this share at 32x32 tiles, scaled and with no floor:
-# under the rigid gate the star's 48x48 and 96x96 designs kept 0.24 % and 0.11 % (its 32x32 and 64x64 ones 0.07 %
-# and 0.09 %), the mirrored star's 96x96 one 0.24 % (64x64: 0.18 %), the mirrored peanut's 32x32 one 0.31 % (16x16:
-# 0.24 %); finished 0.069 %, 0.071 %, 0.115 %, 0.205 % (docs/design-solver.md, "Minimax finish below the rigid gate")
+# a free design is finished above this share at 32x32 tiles, scaled and with no floor: under the rigid gate the
+# star's 48x48 and 96x96 designs kept 0.24 % and 0.11 % (its 32x32 and 64x64 ones 0.07 % and 0.09 %); finished
+# 0.069 % and 0.071 % (docs/design-solver.md, "Minimax finish below the rigid gate"). A mirrored design keeps the
+# rigid gate: finished below it, the mirrored stars at 64x64 and 96x96 cost 4x the free ones
+# (symmetry is asked to cost less than the free design, issue #37)
 FREE_FINISH_ABOVE = 0.003
 
 
@@ -72,8 +73,9 @@ def threshold(share: float, req: DesignRequest) -> float:
 
 def gate(req: DesignRequest) -> float:
     """The share of the size past which ``req``'s design is finished: ``FINISH_ABOVE`` scaled to its lattice
-    (``threshold``) down to ``FINISH_FLOOR`` for a rigid request, ``FREE_FINISH_ABOVE`` scaled for the others."""
-    if req.rigid:
+    (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE`` scaled for a
+    free one."""
+    if req.rigid or req.symmetry:
         return _rigid_gate(req)
     return threshold(FREE_FINISH_ABOVE, req)
 

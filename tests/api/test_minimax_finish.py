@@ -62,17 +62,20 @@ def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
 
 
 def test_a_non_rigid_design_is_finished_below_the_rigid_gate():
-    """Free and mirrored designs: the gate follows the lattice with no floor (FREE_FINISH_ABOVE). Under the
-    rigid gate the free star's 48x48 design kept 0.24 % (its 32x32 one 0.07 %), the mirrored star's 96x96 one
-    0.24 % (64x64: 0.18 %), the mirrored peanut's 32x32 one 0.31 % (16x16: 0.24 %)."""
+    """Free designs: the gate follows the lattice with no floor (FREE_FINISH_ABOVE). Under the rigid gate the
+    free star's 48x48 design kept 0.24 % (its 32x32 one 0.07 %). Mirrored designs keep the rigid gate: finished
+    below it they cost about 4x the free ones (symmetric star 64x64 and 96x96)."""
     tgt = load_target("star", 100)
     for n, h in ((48, 0.0024), (96, 0.0011), (96, 0.0024)):
         miss = Attempt(None, {"conformance": {"deployed": {"hausdorff_rel": h}}}, [], True, {})
         assert applies(DesignRequest(rows=n, cols=n, target=tgt), {}, miss)
-        assert applies(DesignRequest(rows=n, cols=n, target=tgt, symmetry="y"), {}, miss)
+        assert not applies(DesignRequest(rows=n, cols=n, target=tgt, symmetry="y"), {}, miss)
         assert not applies(DesignRequest(rows=n, cols=n, target=tgt, rigid=True), {}, miss)
     assert gate(DesignRequest(rows=32, cols=32, target=tgt)) == FREE_FINISH_ABOVE
     assert gate(DesignRequest(rows=96, cols=96, target=tgt)) == pytest.approx(FREE_FINISH_ABOVE / 3)
+    assert gate(DesignRequest(rows=96, cols=96, target=tgt, symmetry="y")) == gate(
+        DesignRequest(rows=96, cols=96, target=tgt, rigid=True)
+    )
     # the star 64x64 (0.09 %) and the mirrored ellipse 96x96 (0.014 %) are not finished
     for n, h in ((64, 0.0009), (96, 0.00014)):
         close = Attempt(None, {"conformance": {"deployed": {"hausdorff_rel": h}}}, [], True, {})
@@ -161,26 +164,6 @@ def test_a_design_that_fails_on_overlaps_alone_is_redesigned_and_a_valid_redesig
     got = dm.minimax_finish(big, overlapping, lambda r: redesign, attempts, lambda t: None)
     assert got is redesign and attempts[-1]["kept"]
     assert len(asked) == 1 and asked[0].coarse_refit and asked[0].init == "coarse"
-
-
-@pytest.mark.slow
-def test_the_mirrored_64x64_star_is_finished_below_the_rigid_gate():
-    """bench/shapes.py's star, ``--symmetry y``, CLI defaults (about 20 CPU s): main kept its design's 0.18 %, below
-    the rigid gate's floor (0.25 %), and the mirrored 96x96 star rose above it (0.24 %). A non-rigid design is
-    finished past ``gate`` (0.15 % at 64x64), and the steps bring it under that (0.10-0.12 %)."""
-    out = design_pattern(PatternRequest(tiles=(64, 64), target="star", size=100, symmetry="y"))
-    assert out.success, out.problems
-    h = conf.deployed(out.pattern.nodes, out.pattern.topology, load_target("star", 100))
-    assert h["hausdorff_rel"] == pytest.approx(
-        out.report["conformance"]["deployed"]["hausdorff_rel"]
-    )
-    checks = out.report["checks"]
-    assert (
-        checks["overlaps_deployed"] == checks["overlaps_state_1"] == checks["overlaps_state_2"] == 0
-    )
-    finish = [a for a in out.report["attempts"] if a["init"] == "minimax refinement"]
-    assert len(finish) == 1 and finish[0]["kept"]
-    assert h["hausdorff_rel"] <= gate(DesignRequest(rows=64, cols=64, symmetry="y"))
 
 
 def test_a_design_under_the_rigid_gate_gets_the_steps_only(monkeypatch):
