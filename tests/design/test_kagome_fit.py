@@ -274,7 +274,7 @@ def test_lawson_steps_on_a_cut_lattice_grow_the_weights_by_the_square_root_of_th
 
     p = standard_kagome(2, 3, tile_size=10.0)
     rows, x0, _ = KF.fit_rows(p, load_target("circle", 30.0), symmetry=False)
-    for power in (KF.CUT_LAWSON_POWER, 1.0):
+    for power in (KF.DAMPED_LAWSON_POWER, 1.0):
         w = KF.lawson(rows, x0, power)
         for f in rows.fit:
             miss = np.abs(f.residual(x0))
@@ -282,4 +282,4 @@ def test_lawson_steps_on_a_cut_lattice_grow_the_weights_by_the_square_root_of_th
             assert miss[b] > 0 and w[f.name][a] < 1.0e3**0.5  # not clipped
             ratio = (w[f.name][a] / w[f.name][b]) ** 2
             assert ratio == pytest.approx((miss[a] / miss[b]) ** power, rel=1e-9), f.name
-    assert KF.CUT_LAWSON_POWER == 0.5
+    assert KF.DAMPED_LAWSON_POWER == 0.5

@@ -54,11 +54,11 @@ INEQ_WEIGHT = 100.0
 LAWSON_STEPS = 8
 FROM_BEST = False  # True: each Lawson step starts from the best design so far (6x11 heart: same best, 7.38 %)
 WEIGHT_RANGE = (1e-3, 1e3)  # squared Lawson weights relative to their mean
-# on a lattice cut to the outline each Lawson step multiplies a row's squared weight by the square root of
-# its miss over the mean miss: the full ratio overshoots there, the worst point moving from step to step
-# (7x14 heart cut to 59 tiles: 2.42 % -> 0.92 %); the whole block keeps the full ratio, which fits it
-# better (docs/kagome.md, "Damped Lawson steps on a cut lattice")
-CUT_LAWSON_POWER = 0.5
+# damped=True: each Lawson step multiplies a row's squared weight by the square root of its miss over the
+# mean miss; the full ratio overshoots on a lattice cut to the outline, the worst point moving from step to
+# step (7x14 heart cut to 59 tiles: 2.42 % -> 0.92 %), but fits the whole block better (docs/kagome.md,
+# "Damped Lawson steps on a cut lattice")
+DAMPED_LAWSON_POWER = 0.5
 MIRROR_TOL = 1e-3  # a target this close to mirror symmetric (of its size) gets the lattice's mirror
 
 
@@ -217,7 +217,7 @@ def lawson(rows: KS.Rows, x: np.ndarray, power: float = 1.0) -> dict:
     return out
 
 
-def design(
+def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door passes)
     standard: Pattern,
     target: Target,
     *,
@@ -228,6 +228,7 @@ def design(
     fab: Sequence[Family] = (),
     start: np.ndarray | None = None,
     pairs: bool = False,
+    damped: bool = False,
 ) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
@@ -238,14 +239,15 @@ def design(
     non-adjacent tiles) at a price in fit. ``fab``: fabrication inequalities (normalised by
     ``standard``'s tile size, :mod:`fabkiri.design.kagome.fabrication`); ``start``: deployed nodes (mm) to start
     from instead of the initial guess (a continuation from an earlier design); ``pairs``: rows keeping
-    tiles that share no hinge apart (across a hole or a row-end notch, :mod:`fabkiri.design.kagome.pairs`).
+    tiles that share no hinge apart (across a hole or a row-end notch, :mod:`fabkiri.design.kagome.pairs`);
+    ``damped``: Lawson steps by the square root of the misses (``DAMPED_LAWSON_POWER``).
     """
     lo, hi = target.bbox
     shift = 0.5 * (lo + hi)
     centred = target.transformed(1.0, -shift)
     scale = standard.tile_size
     rows, x, axes = fit_rows(standard, centred, symmetry, convex, fab, pairs)
-    power = CUT_LAWSON_POWER if "trimmed_from" in (standard.lattice or {}) else 1.0
+    power = DAMPED_LAWSON_POWER if damped else 1.0
     if start is not None:
         x = (np.asarray(start, float) - shift) / scale
     best, trace, its, cands = None, [], 0, []
