@@ -265,10 +265,9 @@ def test_cli_kagome_symmetry_that_the_lattice_lacks_is_refused(tmp_path, run_cli
     assert not (tmp_path / "k.json").exists()
 
 
-def test_lawson_steps_on_a_cut_lattice_grow_the_weights_by_the_square_root_of_the_miss():
-    """Damped Lawson steps (a lattice cut to the outline): a row that misses four times another gets twice
-    its squared weight; the whole block's steps keep the full ratio (docs/kagome.md, "Damped Lawson
-    steps on a cut lattice")."""
+def test_damped_lawson_steps_grow_the_weights_by_the_square_root_of_the_miss():
+    """The damped Lawson route: a row that misses four times another gets twice its squared weight; the
+    full route keeps the full ratio (docs/kagome.md, "Other Lawson routes on a cut lattice")."""
     from fabkiri.design.kagome import fit as KF
     from fabkiri.design.targets.lookup import load_target
 

@@ -54,10 +54,10 @@ INEQ_WEIGHT = 100.0
 LAWSON_STEPS = 8
 FROM_BEST = False  # True: each Lawson step starts from the best design so far (6x11 heart: same best, 7.38 %)
 WEIGHT_RANGE = (1e-3, 1e3)  # squared Lawson weights relative to their mean
-# damped=True: each Lawson step multiplies a row's squared weight by the square root of its miss over the
-# mean miss; the full ratio overshoots on a lattice cut to the outline, the worst point moving from step to
-# step (7x14 heart cut to 59 tiles: 2.42 % -> 0.92 %), but fits the whole block better (docs/kagome.md,
-# "Damped Lawson steps on a cut lattice")
+# lawson_route="damped": each Lawson step multiplies a row's squared weight by the square root of its miss
+# over the mean miss; the full ratio overshoots on a lattice cut to the outline, the worst point moving
+# from step to step (7x14 heart cut to 59 tiles: 2.42 % -> 0.92 %), but fits the whole block better
+# (docs/kagome.md, "Other Lawson routes on a cut lattice")
 DAMPED_LAWSON_POWER = 0.5
 MIRROR_TOL = 1e-3  # a target this close to mirror symmetric (of its size) gets the lattice's mirror
 
@@ -228,7 +228,7 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
     fab: Sequence[Family] = (),
     start: np.ndarray | None = None,
     pairs: bool = False,
-    damped: bool = False,
+    lawson_route: str = "full",
 ) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
@@ -240,14 +240,15 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
     ``standard``'s tile size, :mod:`fabkiri.design.kagome.fabrication`); ``start``: deployed nodes (mm) to start
     from instead of the initial guess (a continuation from an earlier design); ``pairs``: rows keeping
     tiles that share no hinge apart (across a hole or a row-end notch, :mod:`fabkiri.design.kagome.pairs`);
-    ``damped``: Lawson steps by the square root of the misses (``DAMPED_LAWSON_POWER``).
+    ``lawson_route``: ``"full"`` (each Lawson step by the full miss ratio, from the last step), ``"damped"``
+    (by its square root, ``DAMPED_LAWSON_POWER``) or ``"from best"`` (full, from the best design so far).
     """
     lo, hi = target.bbox
     shift = 0.5 * (lo + hi)
     centred = target.transformed(1.0, -shift)
     scale = standard.tile_size
     rows, x, axes = fit_rows(standard, centred, symmetry, convex, fab, pairs)
-    power = DAMPED_LAWSON_POWER if damped else 1.0
+    power = DAMPED_LAWSON_POWER if lawson_route == "damped" else 1.0
     if start is not None:
         x = (np.asarray(start, float) - shift) / scale
     best, trace, its, cands = None, [], 0, []
@@ -264,7 +265,7 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
             cands.append((float(h), xp * scale + shift))
             if best is None or h < best[0]:
                 best = (h, xp)
-        x = best[1] if (best is not None and FROM_BEST) else sol.x
+        x = best[1] if (best is not None and (FROM_BEST or lawson_route == "from best")) else sol.x
     xb = best[1] if best else xp
     out = _result(standard, target, rows, xb, shift, best is not None, axes, its, tuple(trace))
     return replace(out, candidates=tuple(sorted(cands, key=lambda c: c[0])))
