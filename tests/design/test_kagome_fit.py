@@ -270,3 +270,22 @@ def test_cli_kagome_symmetry_that_the_lattice_lacks_is_refused(tmp_path, run_cli
     )
     assert code == 2 and "no mirror about the y axis" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "k.json").exists()
+
+
+def test_damped_lawson_steps_grow_the_weights_by_the_square_root_of_the_miss():
+    """The damped Lawson route: a row that misses four times another gets twice its squared weight; the
+    full route keeps the full ratio (docs/kagome.md, "Other Lawson routes on a cut lattice")."""
+    from fabkiri.design.kagome import fit as KF
+    from fabkiri.design.targets.lookup import load_target
+
+    p = standard_kagome(2, 3, tile_size=10.0)
+    rows, x0, _ = KF.fit_rows(p, load_target("circle", 30.0), symmetry=False)
+    for power in (KF.DAMPED_LAWSON_POWER, 1.0):
+        w = KF.lawson(rows, x0, power)
+        for f in rows.fit:
+            miss = np.abs(f.residual(x0))
+            a, b = np.argsort(miss)[[-1, len(miss) // 2]]
+            assert miss[b] > 0 and w[f.name][a] < 1.0e3**0.5  # not clipped
+            ratio = (w[f.name][a] / w[f.name][b]) ** 2
+            assert ratio == pytest.approx((miss[a] / miss[b]) ** power, rel=1e-9), f.name
+    assert KF.DAMPED_LAWSON_POWER == 0.5

@@ -125,3 +125,19 @@ def test_the_front_door_cuts_a_lattice_chosen_from_the_outline_or_asked_to(
     if tiles is None:
         assert (seen["rows"], seen["cols"]) == KT.block_for(load_target("circle", 120.0), 66)
         assert "cut to the outline" in notes[0] and "chosen from the outline" in notes[0]
+
+
+@pytest.mark.slow
+def test_the_heart_chosen_from_the_outline_meets_the_2_percent_shape():
+    """`design --lattice kagome --target heart --size 120` cuts a 7x14 block to the outline; its full Lawson
+    steps miss the 2 % shape, so it is designed again by other Lawson routes and the nearest kept (measured
+    with the tests' pinned kernels 3.27 % -> 1.16 %, with this machine's default ones 2.42 -> 0.92 %;
+    docs/kagome.md "Other Lawson routes on a cut lattice")."""
+    from fabkiri.api.kagome import choose_lattice, design_kagome
+
+    rows, cols, _ = choose_lattice(None, load_target("heart", 120.0), trim=True)
+    out = design_kagome(rows, cols, "heart", 120.0, trim=True)
+    r = out.report
+    assert (rows, cols) == (7, 14) and r["status"] == "converged"
+    assert r["verify_failed"] == []  # closed in both states, no overlaps, the shape met
+    assert r["conformance"]["hausdorff_rel"] <= 0.02 and out.valid
