@@ -69,3 +69,15 @@ def test_the_contact_rows_read_the_bases_rows():
     r2, J2 = lazy.active(xs, 1e6, 1.0)
     assert len(r) and np.array_equal(r, r2) and np.array_equal(J, J2)
     assert fresh._y is None
+
+
+def test_the_fit_is_the_block_matrix_least_squares():
+    """``fit`` fills its matrix in place: the seeds are those of ``lstsq`` over the ``np.block`` matrix, bit for bit."""
+    fam, st, std = _built(9, 7)
+    X = std.nodes + np.random.default_rng(5).normal(scale=0.01, size=std.nodes.shape)
+    psi = 0.7
+    c, s = np.cos(psi), np.sin(psi)
+    K = np.block([[c * fam.Zn, -s * fam.Y], [s * fam.Y, c * fam.Zn]])
+    sol = np.linalg.lstsq(K, np.concatenate([X[:, 0], X[:, 1]]), rcond=None)[0]
+    S, gap = fam.fit(X, psi)
+    assert np.array_equal(S, np.stack([sol[: fam.n_seeds], sol[fam.n_seeds :]], -1)) and gap > 0

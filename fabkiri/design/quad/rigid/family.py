@@ -253,7 +253,12 @@ class RigidFamily:
         c, s = np.cos(psi), np.sin(psi)
         V, nf = self.Zn.shape
         # x = c Zn Sx - s Y Sy ; y = c Zn Sy + s Y Sx
-        K = np.block([[c * self.Zn, -s * self.Y], [s * self.Y, c * self.Zn]])
+        # filled in place: ``np.block`` of the four products made each as a temporary first (the same numbers)
+        K = np.empty((2 * V, 2 * nf))
+        np.multiply(c, self.Zn, out=K[:V, :nf])
+        np.multiply(-s, self.Y, out=K[:V, nf:])
+        np.multiply(s, self.Y, out=K[V:, :nf])
+        np.multiply(c, self.Zn, out=K[V:, nf:])
         rhs = np.concatenate([X[:, 0], X[:, 1]])
         sol, *_ = np.linalg.lstsq(K, rhs, rcond=None)
         S = np.stack([sol[:nf], sol[nf:]], -1)
