@@ -61,7 +61,7 @@ class RigidFamily:
     # a ``Y`` other than the parts' (``mirror.centred``); the parts' own is made on first use
     given_Y: np.ndarray | None = field(default=None, repr=False)
     _core: GridCore | None = field(default=None, init=False, repr=False)
-    # ``Zn`` and the parts' ``Y`` (dense (V, nf) each, 68 MB at 128x128), made on first use: the large lattices'
+    # ``Zn`` and the parts' ``Y`` (dense (V, nf) each, the largest arrays here), made on first use: the large lattices'
     # solves read the rows of a few nodes (``rows``) and ``Y S`` once
     _zn: np.ndarray | None = field(default=None, init=False, repr=False)
     _y: np.ndarray | None = field(default=None, init=False, repr=False)
