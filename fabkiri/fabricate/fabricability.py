@@ -12,8 +12,9 @@ scale is found by bisection on those very checks (:func:`print_minimum`), and th
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
@@ -110,19 +111,27 @@ def ligament_never(material: Material) -> str:
     return ""
 
 
-def cut_minimum(corners: np.ndarray, material: Material, kind: str) -> CutMinimum:
+def cut_minimum(corners: np.ndarray, material: Material, kind: str, memo=None) -> CutMinimum:
     """Smallest scale of the closed state ``corners`` (pattern units) that ``cut`` accepts for ``kind``."""
     why = hinge_kind(kind).never(material)
     if why:
         return CutMinimum(None, None, -1, why)
     shrink = shrink_of(material, kind)
-    s, t, limit = fab.min_scale(
-        corners, material.min_web_mm, shrink, min_edge=material.min_web_mm if shrink else 0.0
-    )
+    web = material.min_web_mm
+    s, t, limit = _kept(memo, fab.min_scale, corners, web, shrink, web if shrink else 0.0)
     if not np.isfinite(s):
         return CutMinimum(None, None, t, "a tile is degenerate")
     scale = ceil_sig(s)
     return CutMinimum(scale, ceil_sig(scale * closed_span(corners)), t, limit, s)
+
+
+def _kept(memo: dict | None, fn: Callable, first, *args) -> Any:
+    """``fn(first, *args)`` kept in ``memo`` by ``fn, *args``: the summary's (presets ask alike of state 1)."""
+    if memo is None:
+        return fn(first, *args)
+    if (fn, *args) not in memo:
+        memo[(fn, *args)] = fn(first, *args)
+    return memo[(fn, *args)]
 
 
 def check_webs(
@@ -399,6 +408,7 @@ def print_bound(
     printer: Printer,
     state: int = 1,
     corners: np.ndarray | None = None,
+    memo: dict | None = None,
 ) -> PrintMinimum:
     """The smallest print scale in closed form, no plan geometry (``exact`` False).
 
@@ -407,7 +417,7 @@ def print_bound(
     clearance (:func:`fabkiri.pattern.thinness.strip_clearance_scales`, their boxes: a bound, so
     ``print`` accepts it) and at which every strip pad has its area (a vectorised bisection on the pads,
     band ∩ shrunk tile, only for pads short at the other two). Pinned: the pivot spacing only, a lower
-    bound (``print`` also checks the slivers beside the clearances)."""
+    bound (``print`` also checks the slivers beside the clearances). ``memo``: see :func:`_kept`."""
     top_ = pattern.topology
     if top_.n_hinges == 0:
         return PrintMinimum(
@@ -417,16 +427,12 @@ def print_bound(
     if c is None:
         return PrintMinimum(None, None, "the pattern does not close: nothing to hinge")
     d = 0.5 * printer.gap_mm
-    folds = [top_.fold(s).fold_corner_ends for s in (1, 2) if s == state or s in pattern.contracted]
-    pairs = np.concatenate(
-        [fab.coincident_hinges(top_.hinge_tiles, top_.hinge_corner, f, top_.n_tiles) for f in folds]
-    )
-    face = fab.strip_faces(np.unique(pairs, axis=0), top_.n_hinges)
-    if len(pairs) and (face[pairs[:, 0]] == face[pairs[:, 1]]).any():
+    face, clash = _kept(memo, fab.hinge_faces, top_, state, tuple(pattern.contracted))
+    if clash:
         return PrintMinimum(
             None, None, "hinges that coincide in a closed state cannot take opposite faces"
         )
-    s_shrink, t_shrink, _ = fab.min_scale(c, fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
+    s_shrink, t_shrink, _ = _kept(memo, fab.min_scale, c, fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
     return _rule(style).bound(pattern, c, printer, s_shrink, state, face)
 
 
@@ -458,23 +464,24 @@ def summary(pattern: Pattern, prints=None) -> dict:
         **fab.measures(c1, top.hinge_tiles, top.hinge_corner),
     }
     cut = {}
+    memo: dict = {}  # what presets ask alike of closed state 1 (``_kept``)
     for name in available():
         mat = load_material(name)
-        cut[name] = {kind: cut_minimum(c1, mat, kind).to_dict() for kind in HINGE_KINDS}
+        cut[name] = {kind: cut_minimum(c1, mat, kind, memo).to_dict() for kind in HINGE_KINDS}
     out["cut"] = cut
     if prints is None:
         prints = tuple((name, PRINT_STYLES) for name in available_printers())
     pr: dict = {}
-    memo: dict = {}
+    bounds: dict = {}
     for name, styles in prints or ():
         p = load_printer(name)
         rows = pr.setdefault(p.name, {})
         for style in styles:
             # styles with one plan rule, and presets that differ only in the bed, share a bound
             key = (_rule(style), _plan_key(p, style))
-            if key not in memo:
-                memo[key] = print_bound(pattern, style, p, 1, c1)
-            m = memo[key]
+            if key not in bounds:
+                bounds[key] = print_bound(pattern, style, p, 1, c1, memo)
+            m = bounds[key]
             bed = bed_scale(pattern, style, 1, p, c1)
             m = PrintMinimum(m.min_scale, None if bed is None else floor_sig(bed), m.limit, m.exact)
             rows[style] = m.to_dict()

@@ -157,23 +157,26 @@ def _walk_tips(
     a = tiles.reshape(-1)
     b = np.roll(tiles, -1, axis=1).reshape(-1)
     t = np.repeat(np.arange(T), n)
-    hole = set()
+    # the boundary half-edges: every tile edge (tile, lower node, upper node) that is no hole edge
+    bd = np.ones(len(a), dtype=bool)
     if len(hole_nodes):
-        n0, n1 = hole_nodes, np.roll(hole_nodes, -1, axis=1)
-        for tt, x, y in zip(hole_tiles.ravel().tolist(), n0.ravel().tolist(), n1.ravel().tolist()):
-            hole.add((tt, min(x, y), max(x, y)))
-    # boundary half-edges keyed by (tile, start node): a hinge bordering no hole (a kagome row's end
-    # tile) starts two boundary edges, one per tile, so the node alone does not name the edge
-    nxt = {}
-    users: dict[int, list[int]] = {}
-    for tt, x, y in zip(t.tolist(), a.tolist(), b.tolist()):
-        users.setdefault(x, []).append(tt)
-        if (tt, min(x, y), max(x, y)) not in hole:
-            nxt[(tt, x)] = y
+        h0, h1 = hole_nodes.ravel(), np.roll(hole_nodes, -1, axis=1).ravel()
+        k = min(hole_tiles.size, h0.size)
+        base = 1 + max(T, *(int(v.max(initial=0)) for v in (a, h0, hole_tiles)))
+        hole = _edge_codes(hole_tiles.ravel()[:k], h0[:k], h1[:k], base)
+        bd = ~np.isin(_edge_codes(t, a, b, base), hole)
+    # keyed by (tile, start node): a hinge bordering no hole (a kagome row's end tile) starts two boundary
+    # edges, one per tile, so the node alone does not name the edge
+    nxt = dict(zip(zip(t[bd].tolist(), a[bd].tolist()), b[bd].tolist()))
     free = set(free_nodes.tolist())
     if not free:
         return np.zeros(0, dtype=np.int64)
     start = int(free_nodes[0])
+    # the tiles at each node the walk can reach, in the tiles' order
+    near = np.isin(a, np.append(b[bd], start))
+    users: dict[int, list[int]] = {}
+    for tt, x in zip(t[near].tolist(), a[near].tolist()):
+        users.setdefault(x, []).append(tt)
     order: list[int] = []
     key: tuple[int, int] | None = (users[start][0], start)
     for _ in range(len(nxt) + 1):
@@ -189,6 +192,12 @@ def _walk_tips(
     if len(order) != len(free):  # not one simple boundary cycle
         return np.asarray(free_nodes)
     return np.asarray(order, dtype=np.int64)
+
+
+def _edge_codes(t: np.ndarray, x: np.ndarray, y: np.ndarray, base: int) -> np.ndarray:
+    """One integer per edge ``(tile, min node, max node)`` (``base`` above every tile and node)."""
+    t, x, y = (np.asarray(v, dtype=np.int64) for v in (t, x, y))
+    return (t * base + np.minimum(x, y)) * base + np.maximum(x, y)
 
 
 def closed_outline(corners: np.ndarray, eps: float | None = None) -> np.ndarray:

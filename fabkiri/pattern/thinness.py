@@ -214,6 +214,17 @@ def coincident_hinges(
     return np.unique(pairs, axis=0) if len(pairs) else np.zeros((0, 2), np.int64)
 
 
+def hinge_faces(top_, state: int, contracted) -> tuple[np.ndarray, bool]:
+    """``strip_faces`` of the hinges that meet in closed state ``state`` and in each closed state of
+    ``contracted`` (a topology's, a pattern's), and whether two hinges that meet got the same face."""
+    folds = [top_.fold(s).fold_corner_ends for s in (1, 2) if s == state or s in contracted]
+    pairs = np.concatenate(
+        [coincident_hinges(top_.hinge_tiles, top_.hinge_corner, f, top_.n_tiles) for f in folds]
+    )
+    face = strip_faces(np.unique(pairs, axis=0), top_.n_hinges)
+    return face, bool(len(pairs) and (face[pairs[:, 0]] == face[pairs[:, 1]]).any())
+
+
 def strip_faces(pairs: np.ndarray, n_hinges: int) -> np.ndarray:
     """Face per hinge (0 top, 1 bottom): hinges that meet go on opposite faces, the lowest of each group on
     top (the two-colouring ``fabkiri.fabricate.cut.hinges.assign_faces`` makes from the placed states).

@@ -130,7 +130,7 @@ def test_large_lattice_maps_go_through_the_core_and_the_tiles():
     assert fam._core is not None  # the grid went through the core
     assert np.abs(fam.nodes(S, psi) - reference(fam)).max() <= 1e-13 * scale
     moved = centred(fam)
-    assert moved._tau is None
+    assert moved.given_Y is not None  # its nodes take Y S, not the parts' τ S
     assert np.abs(moved.nodes(S, psi) - reference(moved)).max() <= 1e-13 * scale
     small = _family(8, 8)  # small lattices keep the plain products, bit for bit
     S8 = S[: small.n_seeds]

@@ -44,14 +44,18 @@ class ClosedContact:
         d = RING
         self.ring = np.flatnonzero((r < d) | (r >= M - d) | (c < d) | (c >= N - d))
         self.r, self.c = r[self.ring], c[self.ring]
-        # (basis, tile corners as rows of the basis) per closed state
-        self.blocks = ((fam.Z, fam.node_vertex[st.tiles]), (fam.Y, st.tiles))
+        # (rows of the basis, tile corners as rows of the basis) per closed state; Y's rows made as asked
+        self.fam = fam
+        self.blocks = (
+            (lambda n: fam.Z[n], fam.node_vertex[st.tiles]),
+            (lambda n: fam.rows(n)[1], st.tiles),
+        )
         self.nf = fam.n_seeds
         self._last: tuple | None = None
 
     def configs(self, S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closed state 1 (``Z S``) and closed state 2 turned back a quarter (``Y S``)."""
-        return self.blocks[0][0] @ S, self.blocks[1][0] @ S
+        return self.fam.Z @ S, self.fam.Y @ S
 
     def measure(self, x: np.ndarray, state: int, below: float | None = None):
         """``(g, nodes (m, 3), grads (m, 3, 2))`` of state ``state`` (1 or 2) on its configuration ``x``.
@@ -119,11 +123,11 @@ class ClosedContact:
             act = np.flatnonzero(g < margin_scale * CONTACT_MARGIN)
             if not len(act):
                 continue
-            B = self.blocks[s][0]
             n, gr = nodes[act], grads[act]
+            B = self.blocks[s][0](n)
             J = np.zeros((len(act), 2 * self.nf + 1))
-            J[:, : self.nf] = np.einsum("mk,mkf->mf", gr[..., 0], B[n])
-            J[:, self.nf : 2 * self.nf] = np.einsum("mk,mkf->mf", gr[..., 1], B[n])
+            J[:, : self.nf] = np.einsum("mk,mkf->mf", gr[..., 0], B)
+            J[:, self.nf : 2 * self.nf] = np.einsum("mk,mkf->mf", gr[..., 1], B)
             rs.append(scale * (g[act] - margin_scale * CONTACT_MARGIN))
             Js.append(scale * J)
         return np.concatenate(rs), np.vstack(Js)

@@ -56,12 +56,46 @@ class RigidFamily:
     midpoint: np.ndarray  # (m, 3) grid vertices (z, a, b): c_z = (c_a + c_b) / 2
     seeds: np.ndarray  # (nf,) free grid vertices
     Z: np.ndarray  # (G, nf) closed-state-1 grid = Z @ S
-    Zn: np.ndarray  # (V, nf) Z at each node's grid vertex
-    Y: np.ndarray  # (V, nf) tile-translation part minus σ Zn, per node
+    # (τ per tile, tile of each node, σ per node (V, 1)): ``Y = τ[tile] - σ Zn``
+    parts: tuple = field(repr=False)
+    # a ``Y`` other than the parts' (``mirror.centred``); the parts' own is made on first use
+    given_Y: np.ndarray | None = field(default=None, repr=False)
     _core: GridCore | None = field(default=None, init=False, repr=False)
-    # (Y, τ per tile, tile of each node, σ per node (V, 1)) as ``build`` made them: ``Y @ S`` per tile while ``Y`` is
-    # that array (a family made from this one with another ``Y``, e.g. ``mirror.centred``, has none)
-    _tau: tuple | None = field(default=None, init=False, repr=False)
+    # ``Zn`` and the parts' ``Y`` (dense (V, nf) each, the largest arrays here), made on first use: the large lattices'
+    # solves read the rows of a few nodes (``rows``) and ``Y S`` once
+    _zn: np.ndarray | None = field(default=None, init=False, repr=False)
+    _y: np.ndarray | None = field(default=None, init=False, repr=False)
+
+    @property
+    def Zn(self) -> np.ndarray:
+        """``(V, nf)``: ``Z`` at each node's grid vertex."""
+        if self._zn is None:
+            self._zn = self.Z[self.node_vertex]
+        return self._zn
+
+    @property
+    def Y(self) -> np.ndarray:
+        """``(V, nf)``: the tile-translation part minus σ ``Zn``, per node."""
+        if self.given_Y is not None:
+            return self.given_Y
+        if self._y is None:
+            tau, use_t, sigma = self.parts
+            if self._zn is None:  # σ Zn made in place of a temporary Zn (the same products)
+                zn = self.Z[self.node_vertex]
+                zn *= sigma
+            else:
+                zn = sigma * self._zn
+            self._y = tau[use_t]
+            self._y -= zn
+        return self._y
+
+    def rows(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(Zn[nodes], Y[nodes])``, the same numbers, without making ``Zn`` or ``Y`` whole."""
+        zn = self.Z[self.node_vertex[nodes]] if self._zn is None else self._zn[nodes]
+        if self.given_Y is not None or self._y is not None:
+            return zn, self.Y[nodes]
+        tau, use_t, sigma = self.parts
+        return zn, tau[use_t[nodes]] - sigma[nodes] * zn
 
     @property
     def n_seeds(self) -> int:
@@ -132,11 +166,7 @@ class RigidFamily:
             tau[child] = tau[parent] - 2.0 * sigma[parent, None] * Z[hinge_vertex[tree.hinges[lvl]]]
         use_t = np.empty(st.n_nodes, dtype=np.int64)
         use_t[tl.ravel()] = np.repeat(np.arange(T), 4)
-        Zn = Z[node_vertex]
-        Y = np.ascontiguousarray(tau[use_t] - sigma[use_t, None] * Zn)
-        fam = cls(node_vertex, mid, seeds, Z, np.ascontiguousarray(Zn), Y)
-        fam._tau = (Y, tau, use_t, sigma[use_t, None])
-        return fam
+        return cls(node_vertex, mid, seeds, Z, (tau, use_t, sigma[use_t, None]))
 
     @classmethod
     def of_standard(cls, st: Stencils, tree: Callable[[], SpanningTree]) -> RigidFamily:
@@ -187,10 +217,9 @@ class RigidFamily:
 
     def _translations(self, S: np.ndarray, a: np.ndarray) -> np.ndarray:
         """``Y S`` given ``a = Zn S``; on a large lattice as ``(τ S)[tile] - σ a`` (T tile rows, not V nodes)."""
-        t = self._tau
-        if len(self.Z) <= LARGE_GRID or t is None or t[0] is not self.Y:
+        if len(self.Z) <= LARGE_GRID or self.given_Y is not None:
             return self.Y @ S
-        _, tau, use_t, sigma = t
+        tau, use_t, sigma = self.parts
         return (tau @ S)[use_t] - sigma * a
 
     def jacobian(self, S: np.ndarray, psi: float) -> np.ndarray:
@@ -200,7 +229,7 @@ class RigidFamily:
     def jacobian_at(self, S: np.ndarray, psi: float, nodes: np.ndarray | None = None) -> np.ndarray:
         """``∂x[nodes]/∂p`` as ``(n, 2, 2 nf + 1)``: coordinate ``d`` of node ``i`` in ``[i, d]`` (all nodes
         when ``nodes`` is None)."""
-        Zn, Y = (self.Zn, self.Y) if nodes is None else (self.Zn[nodes], self.Y[nodes])
+        Zn, Y = (self.Zn, self.Y) if nodes is None else self.rows(nodes)
         c, s = np.cos(psi), np.sin(psi)
         n, nf = Zn.shape
         D = np.empty((n, 2, 2 * nf + 1))
@@ -224,7 +253,12 @@ class RigidFamily:
         c, s = np.cos(psi), np.sin(psi)
         V, nf = self.Zn.shape
         # x = c Zn Sx - s Y Sy ; y = c Zn Sy + s Y Sx
-        K = np.block([[c * self.Zn, -s * self.Y], [s * self.Y, c * self.Zn]])
+        # filled in place: ``np.block`` of the four products made each as a temporary first (the same numbers)
+        K = np.empty((2 * V, 2 * nf))
+        np.multiply(c, self.Zn, out=K[:V, :nf])
+        np.multiply(-s, self.Y, out=K[:V, nf:])
+        np.multiply(s, self.Y, out=K[V:, :nf])
+        np.multiply(c, self.Zn, out=K[V:, nf:])
         rhs = np.concatenate([X[:, 0], X[:, 1]])
         sol, *_ = np.linalg.lstsq(K, rhs, rcond=None)
         S = np.stack([sol[:nf], sol[nf:]], -1)

@@ -43,7 +43,7 @@ FLIPPED = {"x": 1, "y": 0}  # the coordinate the mirror negates: "x" is y -> -y,
 
 def centred(fam: RigidFamily) -> RigidFamily:
     """The same family with the translation gauge at the nodes' mean (symmetric under a mirror)."""
-    return replace(fam, Y=np.ascontiguousarray(fam.Y - fam.Y.mean(0)))
+    return replace(fam, given_Y=np.ascontiguousarray(fam.Y - fam.Y.mean(0)))
 
 
 def standard_grid(rows: int, cols: int) -> np.ndarray:
