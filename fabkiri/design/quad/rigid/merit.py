@@ -120,36 +120,3 @@ def reduced_normal(J: sparse.csr_matrix, D: np.ndarray, r: np.ndarray, dense_jd:
         return JD.T @ JD, JD.T @ r
     H = (J.T @ J).tocsr()
     return D.T @ (H @ D), D.T @ (J.T @ r)
-
-
-class KeptGridBlock:
-    """The regulariser rows' grid block ``Zᵀ (JᵀJ) Z`` of one LM run on the block path (large lattices), formed at
-    the run's first point and kept for the later ones, a quasi-Newton block: forming it is most of a step's cost
-    there, and over a run the tile shapes move little (64x64 rigid circle: the same iterations, the fit and the
-    regulariser within 1e-6 of the block formed at every point). The gradient and the other grid rows (the
-    active convexity rows, few) are exact at every point; ``reduced._Merit.staged`` gives each run its own."""
-
-    def __init__(self, n_reg: int):
-        self.n_reg = n_reg  # the grid rows' first n_reg are the regulariser's
-        self.H: np.ndarray | None = None
-
-    @classmethod
-    def of(cls, grid_regs) -> KeptGridBlock:
-        """The kept block of a merit whose grid rows start with ``grid_regs`` (the regulariser: two rows a pair of
-        tile corners, lengths then angles)."""
-        return cls(sum(2 * len(f.meta["rows"].first) for f in grid_regs))
-
-    def normal(self, merit: _Merit):
-        """``(Jc, rc) -> (H, g)`` of ``merit``'s grid rows, as ``merit._grid_normal`` with the kept block."""
-
-        def grid(Jc, rc: np.ndarray):
-            n = self.n_reg
-            if self.H is None:
-                self.H = merit._grid_normal(Jc[:n], rc[:n])[0]
-            JC = merit._grid_to_p(Jc[n:])  # the active rows through ∂c/∂p
-            core = merit.fam.core
-            gg = (Jc.T @ rc).reshape(-1, 2)  # Jcᵀ rc by grid vertex and coordinate
-            g = [core.ZcT @ (core.ET @ gg[:, d]) for d in (0, 1)]
-            return self.H + JC.T @ JC, np.concatenate([*g, [0.0]])
-
-        return grid

@@ -32,7 +32,7 @@ from ..constraints import convexity
 from ..objective import regularizer, tile_corners
 from .contact import ClosedContact
 from .family import RigidFamily
-from .merit import KeptGridBlock, _Evaluation, reduced_normal
+from .merit import _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
 from .steps import hard_fit, levenberg_marquardt
 from .tiles import TileShapeRows
@@ -94,7 +94,6 @@ class _Merit:
         self.w = float(np.sqrt(reg_weight))
         self.sq = float(np.sqrt(rho))
         self.scaling = scaling
-        self._kept: KeptGridBlock | None = None  # a staged merit's on the block path
         G, nf = fam.Z.shape
         # the dense path needs the grid families to be exactly the regulariser and tile convexity
         self._tiles = None
@@ -118,7 +117,6 @@ class _Merit:
         """The same rows with another penalty weight and LM scaling (sharing every precomputed array)."""
         new = copy.copy(self)
         new.sq, new.scaling = float(np.sqrt(rho)), scaling
-        new._kept = KeptGridBlock.of(new.grid_regs) if self._tiles is None else None
         return new
 
     def with_contact(self, contact: ClosedContact) -> _Merit:
@@ -326,7 +324,7 @@ class _Merit:
         """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
         nx = Jx.shape[0]
         Hx, gx = reduced_normal(*self._touched(Jx, p), r[:nx], DENSE_JD)
-        Hc, gc = (self._grid_normal if self._kept is None else self._kept.normal(self))(Jc, r[nx:])
+        Hc, gc = self._grid_normal(Jc, r[nx:])
         return Hx + Hc, gx + gc
 
     def _grid_to_p(self, Jc) -> np.ndarray:
@@ -338,8 +336,10 @@ class _Merit:
 
     def _grid_normal(self, Jc, rc: np.ndarray):
         """``Cᵀ JcᵀJc C`` and ``Cᵀ Jcᵀ rc``. C = ∂c/∂p is block-diagonal (Z for x, Z for y, nothing for ψ):
-        above the dense threshold assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y} (no 2G × P matrix in memory),
-        through ``Z = E Z[core]`` (``core.py``): the dense products run over a quarter of the grid vertices."""
+        above the dense threshold the matrix is assembled as ``Zᵀ (Jaᵀ Jb) Z``, a in {x, y}, a third of the
+        work of the product through a dense C (and no 2G × P matrix in memory), and
+        through the family's sparse factor ``Z = E Z[core]`` (``core.py``): the dense products run
+        over the core's vertices (about a quarter of them) instead of all G grid vertices."""
         nf = self.nf
         P = 2 * nf + 1
         if Jc.shape[0] * P <= DENSE_JD:
