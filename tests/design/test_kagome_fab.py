@@ -124,8 +124,7 @@ def test_hinge_without_material_is_refused_for_kagome(run_cli, tmp_path):
 
 
 @pytest.mark.slow  # the quick loop takes the rows above; this is the whole path, design to cut
-@pytest.mark.xdist_group("kagome-heart-6x11-free")  # its free fit: test_kagome_fit (shared_solves)
-def test_heart_for_acrylic_meets_the_web_and_cuts_at_scale_1(run_cli, tmp_path, shared_solves):
+def test_heart_for_acrylic_meets_the_web_and_cuts_at_scale_1(run_cli, tmp_path):
     """A 6x11 heart at 120 mm: the free design has 1.06 mm tiles (cut needs 3 mm); designed for acrylic-3
     its thinnest tile is at least 3 mm and ``cut`` (which defaults to the design's material, at scale 1)
     writes verified files."""
