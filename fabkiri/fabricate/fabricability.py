@@ -126,12 +126,12 @@ def cut_minimum(corners: np.ndarray, material: Material, kind: str, memo=None) -
 
 
 def _kept(memo: dict | None, fn: Callable, first, *args) -> Any:
-    """``fn(first, *args)`` kept in ``memo`` by ``fn, *args``: the summary's (presets ask alike of state 1)."""
-    if memo is None:
-        return fn(first, *args)
-    if (fn, *args) not in memo:
-        memo[(fn, *args)] = fn(first, *args)
-    return memo[(fn, *args)]
+    """``fn(first, *args)`` kept in ``memo`` (the summary's: presets ask alike of state 1) by ``fn``, ``first``'s
+    identity (the summary holds it while the memo lives) and ``args``."""
+    key = (fn, id(first), *args)
+    if memo is not None and key not in memo:
+        memo[key] = fn(first, *args)
+    return fn(first, *args) if memo is None else memo[key]
 
 
 def check_webs(
