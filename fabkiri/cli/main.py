@@ -28,7 +28,6 @@ from pathlib import Path
 from .. import __version__, blas
 from ..errors import FabkiriError
 from ..fileio import inputs_scope, note_inputs, refuse_input
-from . import heap
 
 COMMANDS = [
     "fabkiri.cli.pattern_cmds",
@@ -253,6 +252,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         command = _command(argv)
         fresh = command in SUMMARIES and "numpy" not in sys.modules
         if fresh:  # before the modules load: their long-lived blocks then sit below the kept ones
+            from . import heap  # a command's module, not `fabkiri --help`'s
+
             heap.keep_freed_memory(command)
         with modules_frozen(fresh):
             if command in SUMMARIES:  # a command loads numpy; `fabkiri --help` does not
