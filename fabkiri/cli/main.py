@@ -251,6 +251,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.simplefilter("ignore")
         command = _command(argv)
         fresh = command in SUMMARIES and "numpy" not in sys.modules
+        if fresh:  # before the modules load: their long-lived blocks then sit below the kept ones
+            from . import heap  # a command's module, not `fabkiri --help`'s
+
+            heap.keep_freed_memory(command)
         with modules_frozen(fresh):
             if command in SUMMARIES:  # a command loads numpy; `fabkiri --help` does not
                 single_thread_blas_process(command)

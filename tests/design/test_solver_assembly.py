@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from fabkiri.design.core.stencils import Family, jac
+from fabkiri.design.core.stencils import Family, StencilPattern, jac
 from fabkiri.design.quad import constraints as C
 from fabkiri.design.quad.objective import regularizer
 from fabkiri.design.quad.solve import DesignRequest
@@ -34,6 +34,22 @@ def test_stencil_jacobian_sums_repeated_nodes_like_the_coo_matrix():
     for i in range(m):
         cols = J.indices[J.indptr[i] : J.indptr[i + 1]]
         assert np.array_equal(cols, np.unique(2 * nodes[i, :, None] + np.arange(2)))
+
+
+def test_merged_entries_are_numpys_reduceat_sums_to_the_bit():
+    # a repeated node's entries are summed by gathers (``stencils._Runs``), not by reduceat over every entry:
+    # the same bits, signed zeros included, for runs of 2 to 7 entries; a run of 8 or more keeps reduceat
+    rng = np.random.default_rng(2)
+    for m, k, nv in ((400, 6, 40), (200, 4, 3), (60, 12, 2), (50, 3, 1000)):
+        nodes = rng.integers(0, nv, size=(m, k))
+        grads = rng.normal(size=(m, k, 2)) * 10.0 ** rng.integers(-8, 8, size=(m, k, 1))
+        grads[rng.random((m, k, 2)) < 0.2] = 0.0
+        grads[rng.random((m, k, 2)) < 0.1] = -0.0
+        pat = StencilPattern(m, nv, nodes)
+        ref = np.add.reduceat(grads.reshape(-1)[pat.order], pat.starts)
+        got = pat.matrix(grads).data
+        assert np.array_equal(got.view(np.int64), ref.view(np.int64))
+    assert not StencilPattern(60, 2, rng.integers(0, 2, size=(60, 12)))._runs.short  # 12 entries
 
 
 def test_a_family_reuses_its_pattern_only_for_the_same_stencil():

@@ -55,18 +55,52 @@ class StencilPattern:
         self.indices = c[self.starts].astype(np.int32)
         counts = first.reshape(m, -1).sum(1) if k else np.zeros(m, dtype=np.intp)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+        self._runs = _Runs(self.order, self.starts) if self.merged else None
 
     def matrix(self, grads: np.ndarray) -> sparse.csr_matrix:
         """The Jacobian with gradients ``(m, k, 2)`` on this pattern (canonical CSR)."""
-        v = np.asarray(grads, dtype=float).reshape(-1)[self.order]
-        if self.merged and len(v):
-            v = np.add.reduceat(v, self.starts)
+        g = np.asarray(grads, dtype=float).reshape(-1)
+        if self._runs is not None and self._runs.short:
+            v = self._runs.sums(g)
+        else:
+            v = g[self.order]
+            if self.merged and len(v):
+                v = np.add.reduceat(v, self.starts)
         J = sparse.csr_matrix(
             (v, self.indices.copy(), self.indptr.copy()), shape=self.shape, copy=False
         )
         J.has_sorted_indices = True
         J.has_canonical_format = True
         return J
+
+
+class _Runs:
+    """The merged entries of a stencil pattern summed as ``np.add.reduceat`` sums them, without gathering every
+    entry first: a run of entries (one node repeated in a row) is its first entry plus the sum of the others in
+    order (numpy's reduction of a run shorter than its pairwise block, 8), so each entry is one gather and the
+    runs of two or more get their few additions. ``short``: no run is 8 entries or longer."""
+
+    def __init__(self, order: np.ndarray, starts: np.ndarray):
+        lens = np.diff(np.append(starts, len(order)))
+        self.first = order[starts]
+        self.multi = np.flatnonzero(lens > 1)
+        ms, ml = starts[self.multi], lens[self.multi]
+        self.short = bool(len(lens) == 0 or lens.max() < 8)
+        # the second entry of every run of two or more, then each later entry where its run reaches that far
+        self.second = order[ms + 1]
+        self.later = [
+            (sel := np.flatnonzero(ml > j), order[ms[sel] + j])
+            for j in range(2, int(ml.max(initial=0)))
+        ]
+
+    def sums(self, g: np.ndarray) -> np.ndarray:
+        v = g[self.first]
+        if len(self.multi):
+            rest = g[self.second]
+            for sel, idx in self.later:
+                rest[sel] += g[idx]
+            v[self.multi] += rest
+        return v
 
 
 def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray):
