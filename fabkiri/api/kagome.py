@@ -257,6 +257,7 @@ def _free_design(std, tgt, symmetry, accept, limited: bool, damp=(False, 0.0)):
     d = design(std, tgt, symmetry=symmetry)
     if damp[0] and not limited:
         d, pattern, rejected = _other_lawson_routes(std, tgt, symmetry, accept, damp[1], d)
+        symmetry = symmetry if d.symmetry else False  # the routes may have kept a free design
     else:
         pattern, rejected = _first_closing(d, accept)
     if limited or (pattern is not None and not rejected):
@@ -271,15 +272,20 @@ def _free_design(std, tgt, symmetry, accept, limited: bool, damp=(False, 0.0)):
 def _other_lawson_routes(std, tgt, symmetry, accept, enough: float, d):
     """``(design, pattern, rejected)``: ``d``, its nearest closing candidate and how many nearer were
     passed over, or, while that misses ``enough`` (a fraction of the size) or none closes, the nearer of it
-    and a design by the next Lawson route (damped, then from the best design so far). The Lawson path on
-    a cut lattice turns on the arithmetic's last bits; another route gives other candidates (docs/kagome.md,
-    "Other Lawson routes on a cut lattice": 7x14 heart cut to 59 tiles 2.42 -> 0.92 %, with the tests'
-    pinned kernels 3.27 -> 1.16 %)."""
+    and a design by the next route: without the mirror, when ``d`` took one the lattice and the target
+    share (``symmetry`` True, not asked for by name), then damped, then from the best design so far
+    (those two without the mirror once a design without it is the nearer). A mirror halves the family's
+    freedom, and on the heart cut from a block with C odd it costs the fit (docs/kagome.md, "The mirror on
+    a cut heart": 6x11 cut to 40 tiles 4.60 -> 1.81 %, 12x21 cut to 141 5.90 -> 2.63 %). The Lawson path
+    on a cut lattice turns on the arithmetic's last bits; another route gives other candidates
+    (docs/kagome.md, "Other Lawson routes on a cut lattice": 7x14 heart cut to 59 tiles 2.42 -> 0.92 %,
+    with the tests' pinned kernels 3.27 -> 1.16 %)."""
     pattern, rejected = _first_closing(d, accept)
-    for route in ("damped", "from best"):
+    free = [("full", False)] if symmetry is True and d.symmetry else []
+    for route, sym in [*free, ("damped", symmetry), ("from best", symmetry)]:
         if pattern is not None and d.candidates[rejected][0] <= enough:
             break
-        dd = design(std, tgt, symmetry=symmetry, lawson_route=route)
+        dd = design(std, tgt, symmetry=sym if d.symmetry else False, lawson_route=route)
         pd, rd = _first_closing(dd, accept)
         if pd is not None and (pattern is None or dd.candidates[rd][0] < d.candidates[rejected][0]):
             d, pattern, rejected = dd, pd, rd
