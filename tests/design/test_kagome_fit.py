@@ -156,7 +156,8 @@ def test_a_heart_closes_in_both_states_without_overlaps_and_reports_its_conforma
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("rows, cols, size, bound", [(6, 11, 120.0, 0.055), (12, 21, 240.0, 0.12)])
+# the 12x21 heart at 240 mm (measured 9.84 %, within 12 %) is checked by `bench/kagome.py --check`
+@pytest.mark.parametrize("rows, cols, size, bound", [(6, 11, 120.0, 0.055)])
 def test_a_free_heart_at_two_sizes_closes_without_overlaps(
     rows, cols, size, bound, shared_kagome_designs
 ):
