@@ -192,6 +192,17 @@ CHECKS = (
             and r["conformance"]["hausdorff_rel"] <= 0.12
         ),
     ),
+    (
+        "circle:10x17+trim:180",
+        "the 10x17 block cut to a 180 mm circle (>= 120 tiles) meets every check within 1.5 %",
+        lambda r, failed: (
+            r["trimmed_tiles"] >= 120
+            and r["status"] == "converged"
+            and r["verify_failed"] == []
+            and r["conformance"]["hausdorff_rel"] <= 0.015
+            and r["valid"]
+        ),
+    ),
 )
 
 
