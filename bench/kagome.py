@@ -203,6 +203,17 @@ CHECKS = (
             and r["valid"]
         ),
     ),
+    (
+        "ellipse:5x19:198",
+        "the 5x19 ellipse at 198 mm, the vertical mirror imposed, meets every check within 1.5 %",
+        lambda r, failed: (
+            r["status"] == "converged"
+            and r["max_equality_residual"] <= 1e-10
+            and failed == set()
+            and r["conformance"]["hausdorff_rel"] <= 0.015
+            and r["symmetry"] == ["y"]
+        ),
+    ),
 )
 
 

@@ -136,11 +136,8 @@ def test_a_circle_on_a_symmetric_lattice_meets_every_check(shared_kagome_designs
     assert max(_mirror_error(out.pattern, "y"), _mirror_error(out.pattern, "x")) <= 1e-9
 
 
-@pytest.mark.slow
-def test_an_ellipse_on_a_lattice_of_its_aspect_meets_every_check(shared_kagome_designs):
-    """5x19: measured 0.94 % of the size (vertical mirror only: R odd has no horizontal one)."""
-    out, failed, h = _front_door(shared_kagome_designs, 5, 19, "ellipse", 198.0)
-    assert not failed and h <= 0.015 and out.report["symmetry"] == ["y"]
+# the 5x19 ellipse at 198 mm (a lattice of its aspect, the vertical mirror only) meeting every check within
+# 1.5 %: `bench/kagome.py --check` (the circle above and the heart below take the same path)
 
 
 @pytest.mark.slow
