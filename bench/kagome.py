@@ -214,6 +214,16 @@ CHECKS = (
             and r["symmetry"] == ["y"]
         ),
     ),
+    (
+        "heart:6x10:120",
+        "the 6x10 heart at 120 mm, every first candidate overlapping, closes with convex holes within 15 %",
+        lambda r, failed: (
+            r["convex_holes"] is True
+            and r["max_equality_residual"] <= 1e-10
+            and failed == {"target shape"}
+            and r["conformance"]["hausdorff_rel"] <= 0.15
+        ),
+    ),
 )
 
 
