@@ -224,6 +224,17 @@ CHECKS = (
             and r["conformance"]["hausdorff_rel"] <= 0.15
         ),
     ),
+    (
+        "heart:auto+trim:120",
+        "the heart's lattice chosen from the outline, 7x14 cut to it, meets every check within 2 %",
+        lambda r, failed: (
+            r["block"] == [7, 14]
+            and r["status"] == "converged"
+            and r["verify_failed"] == []
+            and r["conformance"]["hausdorff_rel"] <= 0.02
+            and r["valid"]
+        ),
+    ),
 )
 
 
