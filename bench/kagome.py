@@ -235,6 +235,18 @@ CHECKS = (
             and r["valid"]
         ),
     ),
+    (
+        "egg:7x9:120",
+        "the egg 7x9 at 120 mm closes with the pair rows, not convex holes, within 4 %",
+        lambda r, failed: (
+            r["status"] == "converged"
+            and r["max_equality_residual"] <= 1e-10
+            and r["pair_rows"] is True
+            and r["convex_holes"] is False
+            and failed == {"target shape"}
+            and r["conformance"]["hausdorff_rel"] <= 0.04
+        ),
+    ),
 )
 
 
