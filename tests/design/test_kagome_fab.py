@@ -125,12 +125,12 @@ def test_hinge_without_material_is_refused_for_kagome(run_cli, tmp_path):
 
 @pytest.mark.slow  # the quick loop takes the rows above; this is the whole path, design to cut
 def test_heart_for_acrylic_meets_the_web_and_cuts_at_scale_1(run_cli, tmp_path):
-    """A 6x11 heart at 120 mm: the free design has 1.06 mm tiles (cut needs 3 mm); designed for acrylic-3
-    its thinnest tile is at least 3 mm and ``cut`` (which defaults to the design's material, at scale 1)
-    writes verified files."""
+    """A 4x7 heart at 80 mm: the free design's tiles are too thin for acrylic-3 (as the 6x11 heart's at
+    120 mm, 1.06 mm where cut needs 3 mm), so it is designed again with the rows; its thinnest tile is at
+    least 3 mm and ``cut`` (which defaults to the design's material, at scale 1) writes verified files."""
     out = tmp_path / "h.json"
     code, _, err = run_cli(
-        "design", "--lattice", "kagome", "--tiles", "6x11", "--target", "heart", "--size", "120",
+        "design", "--lattice", "kagome", "--tiles", "4x7", "--target", "heart", "--size", "80",
         "--symmetry", "none", "--material", "acrylic-3", "-o", out,
     )  # fmt: skip
     assert out.exists() and "fabrication (acrylic-3 tape): met" in err, err
@@ -138,6 +138,9 @@ def test_heart_for_acrylic_meets_the_web_and_cuts_at_scale_1(run_cli, tmp_path):
     assert report["max_equality_residual"] <= 1e-10
     fr = report["fabrication"]
     assert fr["met"] and fr["thinnest_tile_mm"] >= 3.0 - fab.WEB_SLACK_MM
+    # the free design missed the limits: designed again with the rows (its Hausdorff kept beside)
+    assert fr["without_limits_hausdorff_rel"] is not None
+    assert fr["route"] in ("continuation", "initial guess")
     code, _, err = run_cli("cut", out, "-o", tmp_path / "cut")
     assert code == 0 and "verifier passed" in err, err
     assert json.loads((tmp_path / "cut" / "manifest.json").read_text())["scale"] == 1.0

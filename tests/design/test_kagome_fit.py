@@ -136,11 +136,8 @@ def test_a_circle_on_a_symmetric_lattice_meets_every_check(shared_kagome_designs
     assert max(_mirror_error(out.pattern, "y"), _mirror_error(out.pattern, "x")) <= 1e-9
 
 
-@pytest.mark.slow
-def test_an_ellipse_on_a_lattice_of_its_aspect_meets_every_check(shared_kagome_designs):
-    """5x19: measured 0.94 % of the size (vertical mirror only: R odd has no horizontal one)."""
-    out, failed, h = _front_door(shared_kagome_designs, 5, 19, "ellipse", 198.0)
-    assert not failed and h <= 0.015 and out.report["symmetry"] == ["y"]
+# the 5x19 ellipse at 198 mm (a lattice of its aspect, the vertical mirror only) meeting every check within
+# 1.5 %: `bench/kagome.py --check` (the circle above and the heart below take the same path)
 
 
 @pytest.mark.slow
@@ -156,7 +153,8 @@ def test_a_heart_closes_in_both_states_without_overlaps_and_reports_its_conforma
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("rows, cols, size, bound", [(6, 11, 120.0, 0.055), (12, 21, 240.0, 0.12)])
+# the 12x21 heart at 240 mm (measured 9.84 %, within 12 %) is checked by `bench/kagome.py --check`
+@pytest.mark.parametrize("rows, cols, size, bound", [(6, 11, 120.0, 0.055)])
 def test_a_free_heart_at_two_sizes_closes_without_overlaps(
     rows, cols, size, bound, shared_kagome_designs
 ):
@@ -173,20 +171,36 @@ def test_a_free_heart_at_two_sizes_closes_without_overlaps(
     assert r["conformance"]["hausdorff_rel"] <= bound
 
 
-@pytest.mark.slow
-@pytest.mark.xdist_group("kagome-heart-6x10-120")  # shares its design (shared_kagome_designs)
-def test_when_every_candidate_overlaps_the_front_door_designs_again_with_convex_holes(
-    shared_kagome_designs,
-):
-    """6x10 heart at 120 mm: every candidate of the first design had tiles crossing a hole (deployed
-    overlaps); the second, with every hole corner at most 175°, closes without overlaps (measured 13.3 %)."""
+# the 6x10 heart at 120 mm, whose first designs' candidates all overlap, closing with convex holes within
+# 15 %: `bench/kagome.py --check`; the route itself, below, on a lattice small enough for one design
+@pytest.mark.slow  # one design of a 4x5 lattice
+def test_when_no_candidate_closes_the_front_door_designs_again_with_convex_holes(monkeypatch):
+    """The front door's last route: when no candidate of the designs before closes without overlaps (the
+    6x10 heart's all have tiles crossing a hole), it designs again with every hole corner at most 175°.
+    Here the designs before it are given no candidate (not solved), so the route is the one taken: the
+    convex-hole design is the one reported, closed in both states without overlaps."""
+    from types import SimpleNamespace
+
+    from fabkiri.api import kagome as AK
     from fabkiri.verify import verify_pattern
 
-    out = shared_kagome_designs(6, 10, "heart", 120.0)
+    real, routes = AK.design, []
+
+    def design(*args, **kw):
+        routes.append("convex" if kw.get("convex") else "pairs" if kw.get("pairs") else "first")
+        return real(*args, **kw) if kw.get("convex") else SimpleNamespace(candidates=())
+
+    monkeypatch.setattr(AK, "design", design)
+    out = AK.design_kagome(4, 5, "heart", 80.0)
     r = out.report
-    assert r["convex_holes"] is True and r["max_equality_residual"] <= 1e-10
-    assert {c.name for c in verify_pattern(out.pattern, tol_mm=0.05).failed()} == {"target shape"}
-    assert r["conformance"]["hausdorff_rel"] <= 0.15
+    assert routes == ["first", "pairs", "convex"]
+    assert (
+        r["convex_holes"] is True
+        and r["pair_rows"] is False
+        and r["max_equality_residual"] <= 1e-10
+    )
+    assert r["status"] == "converged"
+    assert {c.name for c in verify_pattern(out.pattern, tol_mm=0.05).failed()} <= {"target shape"}
 
 
 def test_convex_rows_bound_the_hole_corners_only():

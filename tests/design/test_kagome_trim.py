@@ -79,18 +79,8 @@ def test_the_block_for_a_count_keeps_about_that_many_tiles():
         assert 90 <= len(KT.kept_tiles(rows, cols, target)) <= 170
 
 
-@pytest.mark.slow
-def test_a_126_tile_circle_cut_to_the_outline_fits_within_1_5_percent():
-    """The issue's goal at a size a maker uses: the 10x17 block bent whole onto a 180 mm circle misses
-    (its corners; a 9x15 2.83 %), cut to the circle it closes without overlaps within 1.5 %."""
-    from fabkiri.api.kagome import design_kagome
-
-    out = design_kagome(10, 17, "circle", 180.0, trim=True)
-    assert out.report["trimmed_tiles"] >= 120
-    assert out.report["status"] == "converged"
-    assert out.report["verify_failed"] == []
-    assert out.report["conformance"]["hausdorff_rel"] <= 0.015
-    assert out.valid
+# the 10x17 block cut to a 180 mm circle (126 tiles) within 1.5 %: `bench/kagome.py --check` (the path
+# of a cut lattice, in the suite: test_kagome_aspect.py's 6x11 cut to the circle)
 
 
 def test_trim_on_a_quad_design_is_refused_in_one_line(tmp_path, run_cli):
@@ -127,17 +117,36 @@ def test_the_front_door_cuts_a_lattice_chosen_from_the_outline_or_asked_to(
         assert "cut to the outline" in notes[0] and "chosen from the outline" in notes[0]
 
 
-@pytest.mark.slow
-def test_the_heart_chosen_from_the_outline_meets_the_2_percent_shape():
-    """`design --lattice kagome --target heart --size 120` cuts a 7x14 block to the outline; its full Lawson
-    steps miss the 2 % shape, so it is designed again by other Lawson routes and the nearest kept (measured
-    with the tests' pinned kernels 3.27 % -> 1.16 %, with this machine's default ones 2.42 -> 0.92 %;
-    docs/kagome.md "Other Lawson routes on a cut lattice")."""
-    from fabkiri.api.kagome import choose_lattice, design_kagome
+def test_the_heart_lattice_chosen_from_the_outline_is_a_7x14_block():
+    """`design --lattice kagome --target heart --size 120` cuts a 7x14 block to the outline; that design meets
+    the 2 % shape by the other Lawson routes (measured with the tests' pinned kernels 3.27 % -> 1.16 %, with
+    this machine's default ones 2.42 -> 0.92 %; docs/kagome.md "Other Lawson routes on a cut lattice"), a
+    claim `bench/kagome.py --check` checks; the routes themselves, below, on a smaller block."""
+    from fabkiri.api.kagome import choose_lattice
 
     rows, cols, _ = choose_lattice(None, load_target("heart", 120.0), trim=True)
-    out = design_kagome(rows, cols, "heart", 120.0, trim=True)
+    assert (rows, cols) == (7, 14)
+
+
+@pytest.mark.slow  # three designs of an 18-tile cut lattice
+def test_a_cut_lattice_that_misses_the_shape_is_designed_again_by_other_lawson_routes(monkeypatch):
+    """A 4x7 block cut to an 80 mm heart misses the 2 % shape by its full Lawson steps: the front door
+    designs it again damped and from the best design so far, and keeps the nearest that closes (measured:
+    full 8.66 %, damped 7.89 %, from best 9.45 %)."""
+    from fabkiri.api import kagome as AK
+
+    real, designs = AK.design, []
+
+    def design(*args, **kw):
+        designs.append((kw.get("lawson_route", "full"), real(*args, **kw)))
+        return designs[-1][1]
+
+    monkeypatch.setattr(AK, "design", design)
+    out = AK.design_kagome(4, 7, "heart", 80.0, trim=True)
     r = out.report
-    assert (rows, cols) == (7, 14) and r["status"] == "converged"
-    assert r["verify_failed"] == []  # closed in both states, no overlaps, the shape met
-    assert r["conformance"]["hausdorff_rel"] <= 0.02 and out.valid
+    assert [route for route, _ in designs] == ["full", "damped", "from best"]
+    assert r["status"] == "converged" and r["verify_failed"] == ["target shape"]
+    h = r["conformance"]["hausdorff_rel"]
+    # another route's design is kept: nearer than every candidate of the full steps
+    assert h < min(c[0] for c in designs[0][1].candidates)
+    assert any(h == pytest.approx(c[0], rel=1e-9) for _, d in designs[1:] for c in d.candidates)
