@@ -36,6 +36,12 @@ def test_stencil_jacobian_sums_repeated_nodes_like_the_coo_matrix():
         assert np.array_equal(cols, np.unique(2 * nodes[i, :, None] + np.arange(2)))
 
 
+def test_a_family_with_no_rows_has_an_empty_jacobian():
+    # a small cut kagome lattice can leave a row family empty (the 3x5 heart cut to 6 tiles at 60 mm)
+    J = jac(0, 7, np.zeros((0, 3), dtype=int), np.zeros((0, 3, 2)))
+    assert J.shape == (0, 14) and J.nnz == 0 and list(J.indptr) == [0]
+
+
 def test_merged_entries_are_numpys_reduceat_sums_to_the_bit():
     # a repeated node's entries are summed by gathers (``stencils._Runs``), not by reduceat over every entry:
     # the same bits, signed zeros included, for runs of 2 to 7 entries; a run of 8 or more keeps reduceat

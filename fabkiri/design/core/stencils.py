@@ -53,7 +53,7 @@ class StencilPattern:
         self.starts = np.flatnonzero(first)
         self.merged = len(self.starts) < len(c)  # a node repeated in some row
         self.indices = c[self.starts].astype(np.int32)
-        counts = first.reshape(m, -1).sum(1) if k else np.zeros(m, dtype=np.intp)
+        counts = first.reshape(m, 2 * k).sum(1) if k else np.zeros(m, dtype=np.intp)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
         self._runs = _Runs(self.order, self.starts) if self.merged else None
 
