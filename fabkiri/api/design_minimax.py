@@ -18,7 +18,8 @@ drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the 
 
 Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
 resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a free design
-(neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``). A step the
+(neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``), and none from
+``FREE_FINISH_ALL_TILES`` tiles a side. A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
@@ -64,6 +65,11 @@ FINISH_FLOOR = 0.0025
 # rigid gate: finished below it, the mirrored stars at 64x64 and 96x96 cost 4x the free ones
 # (symmetry is asked to cost less than the free design, issue #37)
 FREE_FINISH_ABOVE = 0.003
+# from this many tiles a side a free design is finished whatever its miss: under the free gate the ellipse's
+# 48x48 and 64x64 designs (0.151 %, 0.060 %) and the star's 64x64 one (0.090 %) sat above smaller lattices'
+# designs; finished 0.036 %, 0.032 % and 0.062 % (docs/design-solver.md, "Every free design from 48 tiles a side
+# finished"). Below it the finish's 2-6 designs would cost a 32x32 design several times its own time
+FREE_FINISH_ALL_TILES = 48
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -74,9 +80,11 @@ def threshold(share: float, req: DesignRequest) -> float:
 def gate(req: DesignRequest) -> float:
     """The share of the size past which ``req``'s design is finished: ``FINISH_ABOVE`` scaled to its lattice
     (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE`` scaled for a
-    free one."""
+    free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side."""
     if req.rigid or req.symmetry:
         return _rigid_gate(req)
+    if max(req.rows, req.cols) >= FREE_FINISH_ALL_TILES:
+        return 0.0
     return threshold(FREE_FINISH_ABOVE, req)
 
 
