@@ -209,3 +209,41 @@ def test_a_design_under_the_rigid_gate_gets_the_steps_only(monkeypatch):
     above = _outcome(0.004, [], True)
     dm.minimax_finish(big, above, lambda r: redesign, [], lambda t: None)
     assert len(asked) == 1 and asked[0].coarse_refit
+
+
+def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route(monkeypatch):
+    """The free 96x96 peanut's steps (and its refitted redesign's) stalled at 0.249 %, above its 64x64 design's
+    0.211 %: a second route from the best design with Lawson's exponent 1 came to 0.203 %. Only from
+    SECOND_ROUTE_TILES tiles a side, for a free request, above the free gate."""
+    from fabkiri.api import design_minimax as dm
+
+    tgt = load_target("heart", 100)
+    routes: list = []
+    second = _outcome(0.002, [], True)
+
+    def steps(req, start, judge, gamma=dm.MINIMAX_GAMMA):
+        routes.append((start, gamma))
+        return (second if gamma == dm.SECOND_ROUTE_GAMMA else None), [0.003], 1.0
+
+    monkeypatch.setattr(dm, "_steps", steps)
+    monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
+    monkeypatch.setattr(dm, "design", lambda r: "result")
+    redesign = _outcome(0.009, [], True)
+    stalled = _outcome(0.0025, [], True)
+    big = DesignRequest(rows=96, cols=96, target=tgt)
+    assert dm.SECOND_ROUTE_TILES == 96 and dm.SECOND_ROUTE_GAMMA == 1.0
+    got = dm.minimax_finish(big, stalled, lambda r: redesign, [], lambda t: None)
+    assert got is second and routes[-1] == (stalled, dm.SECOND_ROUTE_GAMMA)
+    # not at 64x64, not for a rigid or mirrored request, not under the free gate (0.1 % at 96x96)
+    for req, h in (
+        (DesignRequest(rows=64, cols=64, target=tgt), 0.0025),
+        (DesignRequest(rows=96, cols=96, target=tgt, rigid=True), 0.0025),
+        (DesignRequest(rows=96, cols=96, target=tgt, symmetry="y"), 0.0025),
+        (big, 0.0009),
+    ):
+        routes.clear()
+        assert (
+            dm.minimax_finish(req, _outcome(h, [], True), lambda r: redesign, [], lambda t: None)
+            is None
+        )
+        assert all(g == dm.MINIMAX_GAMMA for _, g in routes)
