@@ -18,7 +18,8 @@ drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the 
 
 Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
 resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a free design
-(neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``). A step the
+(neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``), and none from
+``FREE_FINISH_ALL_TILES`` tiles a side. A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
@@ -64,6 +65,16 @@ FINISH_FLOOR = 0.0025
 # rigid gate: finished below it, the mirrored stars at 64x64 and 96x96 cost 4x the free ones
 # (symmetry is asked to cost less than the free design, issue #37)
 FREE_FINISH_ABOVE = 0.003
+# from this many tiles a side a free design is finished whatever its miss: under the free gate the ellipse's
+# 48x48 and 64x64 designs (0.151 %, 0.060 %) and the star's 64x64 one (0.090 %) sat above smaller lattices'
+# designs; finished 0.036 %, 0.032 % and 0.062 % (docs/design-solver.md, "Every free design from 48 tiles a side
+# finished"). Below it the finish's 2-6 designs would cost a 32x32 design several times its own time
+FREE_FINISH_ALL_TILES = 48
+# from this many tiles a side a free design the finish leaves above the free gate gets a second Lawson route: from
+# the best design, fresh weights, Lawson's exponent 1 (the free 96x96 peanut's steps stalled at 0.249 %, above its
+# 64x64's 0.211 %; the second route's first step 0.203 %; the heart, drop and bean at 96x96 kept their designs)
+SECOND_ROUTE_TILES = 96
+SECOND_ROUTE_GAMMA = 1.0
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -74,9 +85,11 @@ def threshold(share: float, req: DesignRequest) -> float:
 def gate(req: DesignRequest) -> float:
     """The share of the size past which ``req``'s design is finished: ``FINISH_ABOVE`` scaled to its lattice
     (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE`` scaled for a
-    free one."""
+    free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side."""
     if req.rigid or req.symmetry:
         return _rigid_gate(req)
+    if max(req.rows, req.cols) >= FREE_FINISH_ALL_TILES:
+        return 0.0
     return threshold(FREE_FINISH_ABOVE, req)
 
 
@@ -148,6 +161,11 @@ def minimax_finish(
             for c in (refit, more):
                 if c is not None and (cand is None or _rank(c) < _rank(cand)):
                     cand = c
+    start = cand if cand is not None and _closer(cand, best) else best
+    more, more_trace, more_secs = _second_route(req, start, judge)
+    if more is not None and (cand is None or _rank(more) < _rank(cand)):
+        cand = more
+    trace, secs = trace + more_trace, secs + more_secs
     # a valid design replaces an overlapping one; a valid one only with a smaller Hausdorff distance
     better = cand is not None and (
         _rank(cand) < _rank(best)
@@ -174,8 +192,28 @@ def minimax_finish(
     return cand if better else None
 
 
-def _steps(
+def _closer(cand: DesignAttempt, best: DesignAttempt) -> bool:
+    return not best.valid or _hausdorff(cand.report) < _hausdorff(best.report)
+
+
+def _second_route(
     req: DesignRequest, start: DesignAttempt, judge: Callable
+) -> tuple[DesignAttempt | None, list[float], float]:
+    """Lawson's steps again from ``start`` (the finish's best valid design) with ``SECOND_ROUTE_GAMMA``, for a free
+    design from ``SECOND_ROUTE_TILES`` tiles a side still above the free gate; else nothing."""
+    if (
+        req.rigid
+        or req.symmetry
+        or max(req.rows, req.cols) < SECOND_ROUTE_TILES
+        or not start.valid
+        or _hausdorff(start.report) <= threshold(FREE_FINISH_ABOVE, req)
+    ):
+        return None, [], 0.0
+    return _steps(req, start, judge, gamma=SECOND_ROUTE_GAMMA)
+
+
+def _steps(
+    req: DesignRequest, start: DesignAttempt, judge: Callable, gamma: float = MINIMAX_GAMMA
 ) -> tuple[DesignAttempt | None, list[float], float]:
     """Lawson's steps from the outcome ``start``: the best step's ``_check`` outcome that passes every check
     (None if none does), the Hausdorff distance of every step and their seconds."""
@@ -189,7 +227,7 @@ def _steps(
         replace(req, start=None),
         start.pattern.nodes,
         steps=MINIMAX_STEPS,
-        gamma=MINIMAX_GAMMA,
+        gamma=gamma,
         accept=valid,
         patience=MINIMAX_PATIENCE,
         backtrack=MINIMAX_BACKTRACK,
