@@ -258,7 +258,7 @@ def faulty_runner(job):
     return run_job(job)
 
 
-@pytest.mark.slow  # ~17 s quiet: waits out a 10 s job time-out and the restart of the hung worker
+@pytest.mark.slow  # waits out a 10 s job time-out and the restart of the hung worker (docs/speed.md)
 def test_a_raising_a_hanging_and_a_killed_job_are_recorded_or_retried(tmp_path, monkeypatch):
     import cloudpickle
     from distributed import Client, LocalCluster
