@@ -3,6 +3,7 @@
     PYTHONPATH=. python3 bench/shapes.py [--sizes 16,32] [--quick] [--fit outline,tips] [--targets a,b]
     PYTHONPATH=. python3 bench/shapes.py --table [--sizes 16,32,48,64,96] [--targets heart,star]
                                          [--modes rigid,free,sym] [--timeout 900]
+    PYTHONPATH=. python3 bench/shapes.py --check [--claims heart-48-no-worse]
 
 Every design runs through the CLI (`design ... --json --no-preview`, default initial-guess order, retries
 included), so the figures are what a user gets. Per line: Hausdorff distance of the boundary-tip polygon to
@@ -18,6 +19,10 @@ no mirror symmetry) × sizes × {rigid, non-rigid, symmetric (non-rigid, `--symm
 per cell the exit code, the Hausdorff distance (% of the size) and the wall time, with the CPU time of the
 design process and the load average before and after each row (the box is shared). Each design runs in its
 own process under `nice` and `--timeout` seconds; `--targets`, `--sizes` and `--modes` pick a subset.
+
+`--check` checks the claims the test suite leaves to this bench (a fit figure at one large size, whose code a
+smaller test still runs; CONTRIBUTING.md lists them): one line each, `ok` or `MISSED` with why, and exits 1
+when one misses. `--claims` picks some of `CLAIMS` by name.
 """
 
 from __future__ import annotations
@@ -159,6 +164,55 @@ def table(args, out: Path) -> None:
             )
 
 
+def _designed(target: str, n: int) -> tuple[float, dict]:
+    """The CLI-default non-rigid design at 100 mm through the Python front door: its Hausdorff share,
+    measured again from the pattern, and its report; raises AssertionError on a failed check."""
+    from fabkiri.api.design import PatternRequest, design_pattern
+    from fabkiri.design.core import conformance as conf
+    from fabkiri.design.targets.lookup import load_target
+
+    out = design_pattern(PatternRequest(tiles=(n, n), target=target, size=100))
+    assert out.success, f"{target} {n}x{n}: {out.problems}"
+    h = conf.deployed(out.pattern.nodes, out.pattern.topology, load_target(target, 100))
+    reported = out.report["conformance"]["deployed"]["hausdorff_rel"]
+    assert abs(h["hausdorff_rel"] - reported) <= max(1e-6 * abs(reported), 1e-12), (h, reported)
+    k = out.report["checks"]
+    assert k["overlaps_deployed"] == k["overlaps_state_1"] == k["overlaps_state_2"] == 0, k
+    return h["hausdorff_rel"], out.report
+
+
+def heart_48_no_worse() -> str:
+    """Was tests/api/test_minimax_finish.py::test_the_48x48_heart_fits_no_worse_than_the_32x32_one (about a
+    minute of CPU): the heart, non-rigid, CLI defaults, fits no worse at 48x48 than at 32x32, the 48x48 design
+    finished by one kept minimax refinement (its gate follows the lattice). The suite's 32x32 drop test
+    still runs the finish."""
+    h32, _ = _designed("heart", 32)
+    h48, report = _designed("heart", 48)
+    assert h48 <= h32, f"48x48 {100 * h48:.3f} % > 32x32 {100 * h32:.3f} %"
+    finish = [a for a in report["attempts"] if a["init"] == "minimax refinement"]
+    assert len(finish) == 1 and finish[0]["kept"], [a["init"] for a in report["attempts"]]
+    return f"48x48 {100 * h48:.3f} % <= 32x32 {100 * h32:.3f} %, finish kept"
+
+
+CLAIMS = {"heart-48-no-worse": heart_48_no_worse}
+
+
+def check(names: list[str]) -> int:
+    """Run the named claims; 1 when one misses."""
+    import os
+
+    missed = 0
+    for name in names:
+        load0, t0 = os.getloadavg()[0], time.process_time()
+        try:
+            verdict = "ok      " + CLAIMS[name]()
+        except AssertionError as exc:
+            verdict, missed = f"MISSED  {exc}", missed + 1
+        cpu = time.process_time() - t0
+        print(f"{name:<24} {verdict}  ({cpu:.0f} CPU s, load {load0:.1f})", flush=True)
+    return 1 if missed else 0
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument(
@@ -176,7 +230,11 @@ def main() -> None:
         "--modes", default=",".join(MODES), help="--table: rigid, free, sym (comma-separated)"
     )
     ap.add_argument("--timeout", type=float, default=900.0, help="--table: seconds per design")
+    ap.add_argument("--check", action="store_true", help="the suite's claims checked here (exit 1)")
+    ap.add_argument("--claims", default=",".join(CLAIMS), help="--check: comma-separated names")
     args = ap.parse_args()
+    if args.check:
+        raise SystemExit(check(args.claims.split(",")))
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="fabkiri-shapes-"))
     out.mkdir(parents=True, exist_ok=True)
     import os

@@ -260,9 +260,16 @@ def deployment_gif(
         0.02, 0.98, "", transform=ax.transAxes, ha="left", va="top", fontsize=15, weight="bold"
     )
     marks = path.mark_frames()
+    # what a frame changes is drawn over the rest, drawn once (the legend's and the scale's text was most of
+    # a frame's drawing); in the full draw's order (by z-order, then as added), so the pixels are the same
+    moving = [a for a in (tiles, lines, dots, state, head) if a is not None]
+    for a in moving:
+        a.set_animated(True)
+    fig.canvas.draw()
+    still = cast("FigureCanvasAgg", fig.canvas).copy_from_bbox(fig.bbox)
 
     images = [
-        _draw_frame(fig, path, f, values, (tiles, lines, dots, head, state), marks, title)
+        _draw_frame(fig, path, f, values, (tiles, lines, dots, head, state), marks, title, still)
         for f in idx
     ]
     plt.close(fig)
@@ -298,8 +305,10 @@ def _draw_frame(
     artists: tuple,
     marks: dict[str, int],
     title: str,
+    still: object,
 ) -> Image.Image:
-    """Frame ``f`` drawn into the figure's artists ``(tiles, lines, dots, head, state)``, as an image."""
+    """Frame ``f`` drawn into the figure's artists ``(tiles, lines, dots, head, state)`` over ``still`` (the
+    figure drawn without them), as an image."""
     from PIL import Image
 
     tiles, lines, dots, head, state = artists
@@ -310,8 +319,10 @@ def _draw_frame(
         dots.set_offsets(path.centres[f])
     head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
     state.set_text(_state_label(path.t[f], marks, path.t, f))
-    fig.canvas.draw()
-    rgb = np.asarray(cast("FigureCanvasAgg", fig.canvas).buffer_rgba())[
-        ..., :3
-    ]  # _pyplot draws with Agg
+    canvas = cast("FigureCanvasAgg", fig.canvas)
+    canvas.restore_region(still)
+    for a in (tiles, lines, dots, state, head):
+        if a is not None:
+            fig.draw_artist(a)
+    rgb = np.asarray(canvas.buffer_rgba())[..., :3]  # _pyplot draws with Agg
     return Image.fromarray(np.ascontiguousarray(rgb))
