@@ -9,6 +9,8 @@ from fabkiri.design.kagome import constraints as K
 from fabkiri.design.kagome import rows as KR
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
+from .kagome_routes import design_solving_only
+
 
 def _fd_check(fam, x, h=1e-6):
     r, J = fam(x)
@@ -179,19 +181,9 @@ def test_when_no_candidate_closes_the_front_door_designs_again_with_convex_holes
     6x10 heart's all have tiles crossing a hole), it designs again with every hole corner at most 175°.
     Here the designs before it are given no candidate (not solved), so the route is the one taken: the
     convex-hole design is the one reported, closed in both states without overlaps."""
-    from types import SimpleNamespace
-
-    from fabkiri.api import kagome as AK
     from fabkiri.verify import verify_pattern
 
-    real, routes = AK.design, []
-
-    def design(*args, **kw):
-        routes.append("convex" if kw.get("convex") else "pairs" if kw.get("pairs") else "first")
-        return real(*args, **kw) if kw.get("convex") else SimpleNamespace(candidates=())
-
-    monkeypatch.setattr(AK, "design", design)
-    out = AK.design_kagome(4, 5, "heart", 80.0)
+    out, routes = design_solving_only(monkeypatch, "convex", 4, 5, "heart", 80.0)
     r = out.report
     assert routes == ["first", "pairs", "convex"]
     assert (

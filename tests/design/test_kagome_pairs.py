@@ -8,6 +8,8 @@ import pytest
 from fabkiri.design.kagome import pairs as KP
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
+from .kagome_routes import design_solving_only
+
 
 def _fd_error(fam, x, h=1e-6):
     r, J = fam(x)
@@ -64,19 +66,9 @@ def test_when_no_candidate_closes_the_front_door_designs_again_with_the_pair_row
     sharing no hinge apart, and keeps that design when it is nearer. Here the first design is given no
     candidate (not solved), so the route is the one taken: the pair-row design is the one reported, closed
     in both states without overlaps and without convex holes."""
-    from types import SimpleNamespace
-
-    from fabkiri.api import kagome as AK
     from fabkiri.verify import verify_pattern
 
-    real, routes = AK.design, []
-
-    def design(*args, **kw):
-        routes.append("convex" if kw.get("convex") else "pairs" if kw.get("pairs") else "first")
-        return real(*args, **kw) if kw.get("pairs") else SimpleNamespace(candidates=())
-
-    monkeypatch.setattr(AK, "design", design)
-    out = AK.design_kagome(4, 5, "heart", 80.0)
+    out, routes = design_solving_only(monkeypatch, "pairs", 4, 5, "heart", 80.0)
     r = out.report
     assert routes == ["first", "pairs"]
     assert r["status"] == "converged" and r["max_equality_residual"] <= 1e-10
