@@ -86,11 +86,16 @@ def gate(req: DesignRequest) -> float:
     """The share of the size past which ``req``'s design is finished: ``FINISH_ABOVE`` scaled to its lattice
     (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE`` scaled for a
     free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side."""
-    if req.rigid or req.symmetry:
+    if not _free(req):
         return _rigid_gate(req)
     if max(req.rows, req.cols) >= FREE_FINISH_ALL_TILES:
         return 0.0
     return threshold(FREE_FINISH_ABOVE, req)
+
+
+def _free(req: DesignRequest) -> bool:
+    """Neither rigid nor mirrored: the request the free gate and the second route are for."""
+    return not (req.rigid or req.symmetry)
 
 
 def _rigid_gate(req: DesignRequest) -> float:
@@ -202,8 +207,7 @@ def _second_route(
     """Lawson's steps again from ``start`` (the finish's best valid design) with ``SECOND_ROUTE_GAMMA``, for a free
     design from ``SECOND_ROUTE_TILES`` tiles a side still above the free gate; else nothing."""
     if (
-        req.rigid
-        or req.symmetry
+        not _free(req)
         or max(req.rows, req.cols) < SECOND_ROUTE_TILES
         or not start.valid
         or _hausdorff(start.report) <= threshold(FREE_FINISH_ABOVE, req)
