@@ -128,10 +128,12 @@ def cut_minimum(corners: np.ndarray, material: Material, kind: str, memo=None) -
 def _kept(memo: dict | None, fn: Callable, first, *args) -> Any:
     """``fn(first, *args)`` kept in ``memo`` (the summary's: presets ask alike of state 1) by ``fn``, ``first``'s
     identity (the summary holds it while the memo lives) and ``args``."""
+    if memo is None:
+        return fn(first, *args)
     key = (fn, id(first), *args)
-    if memo is not None and key not in memo:
+    if key not in memo:
         memo[key] = fn(first, *args)
-    return fn(first, *args) if memo is None else memo[key]
+    return memo[key]
 
 
 def check_webs(
