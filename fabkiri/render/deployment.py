@@ -266,7 +266,7 @@ def deployment_gif(
     for a in moving:
         a.set_animated(True)
     fig.canvas.draw()
-    still = cast("FigureCanvasAgg", fig.canvas).copy_from_bbox(fig.bbox)
+    still = (cast("FigureCanvasAgg", fig.canvas).copy_from_bbox(fig.bbox), moving)
 
     images = [
         _draw_frame(fig, path, f, values, (tiles, lines, dots, head, state), marks, title, still)
@@ -305,10 +305,10 @@ def _draw_frame(
     artists: tuple,
     marks: dict[str, int],
     title: str,
-    still: object,
+    still: tuple[object, list],
 ) -> Image.Image:
     """Frame ``f`` drawn into the figure's artists ``(tiles, lines, dots, head, state)`` over ``still`` (the
-    figure drawn without them), as an image."""
+    figure drawn without them, and those of them drawn, in draw order), as an image."""
     from PIL import Image
 
     tiles, lines, dots, head, state = artists
@@ -320,9 +320,9 @@ def _draw_frame(
     head.set_text(f"{title + '   ' if title else ''}t = {path.t[f]:.3f}   E = {path.energy[f]:.2e}")
     state.set_text(_state_label(path.t[f], marks, path.t, f))
     canvas = cast("FigureCanvasAgg", fig.canvas)
-    canvas.restore_region(still)
-    for a in (tiles, lines, dots, state, head):
-        if a is not None:
-            fig.draw_artist(a)
+    backdrop, moving = still
+    canvas.restore_region(backdrop)
+    for a in moving:
+        fig.draw_artist(a)
     rgb = np.asarray(canvas.buffer_rgba())[..., :3]  # _pyplot draws with Agg
     return Image.fromarray(np.ascontiguousarray(rgb))
