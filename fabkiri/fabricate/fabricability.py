@@ -131,9 +131,7 @@ def _kept(memo: dict | None, fn: Callable, first, *args) -> Any:
     if memo is None:
         return fn(first, *args)
     key = (fn, id(first), *args)
-    if key not in memo:
-        memo[key] = fn(first, *args)
-    return memo[key]
+    return memo[key] if key in memo else memo.setdefault(key, fn(first, *args))
 
 
 def check_webs(
