@@ -70,9 +70,11 @@ FREE_FINISH_ABOVE = 0.003
 # designs; finished 0.036 %, 0.032 % and 0.062 % (docs/design-solver.md, "Every free design from 48 tiles a side
 # finished"). Below it the finish's 2-6 designs would cost a 32x32 design several times its own time
 FREE_FINISH_ALL_TILES = 48
-# from this many tiles a side a free design the finish leaves above the free gate gets a second Lawson route: from
-# the best design, fresh weights, Lawson's exponent 1 (the free 96x96 peanut's steps stalled at 0.249 %, above its
-# 64x64's 0.211 %; the second route's first step 0.203 %; the heart, drop and bean at 96x96 kept their designs)
+# from this many tiles a side a design (free or rigid, not mirrored) the finish leaves above the free gate gets a
+# second Lawson route: from the best design, fresh weights, Lawson's exponent 1 (the free 96x96 peanut's steps
+# stalled at 0.249 %, above its 64x64's 0.211 %; the second route's first step 0.203 %; the heart, drop and bean at
+# 96x96 kept their designs; the rigid peanut and bean alike: docs/design-solver.md, "The second route for rigid
+# designs"). A rigid design is finished only above the rigid gate: the rigid circles (0.21-0.22 %) are not
 SECOND_ROUTE_TILES = 96
 SECOND_ROUTE_GAMMA = 1.0
 
@@ -94,7 +96,7 @@ def gate(req: DesignRequest) -> float:
 
 
 def _free(req: DesignRequest) -> bool:
-    """Neither rigid nor mirrored: the request the free gate and the second route are for."""
+    """Neither rigid nor mirrored: the request the free gate is for."""
     return not (req.rigid or req.symmetry)
 
 
@@ -205,9 +207,10 @@ def _second_route(
     req: DesignRequest, start: DesignAttempt, judge: Callable
 ) -> tuple[DesignAttempt | None, list[float], float]:
     """Lawson's steps again from ``start`` (the finish's best valid design) with ``SECOND_ROUTE_GAMMA``, for a free
-    design from ``SECOND_ROUTE_TILES`` tiles a side still above the free gate; else nothing."""
+    or rigid (not mirrored) design from ``SECOND_ROUTE_TILES`` tiles a side still above the free gate; else
+    nothing."""
     if (
-        not _free(req)
+        req.symmetry
         or max(req.rows, req.cols) < SECOND_ROUTE_TILES
         or not start.valid
         or _hausdorff(start.report) <= threshold(FREE_FINISH_ABOVE, req)

@@ -207,10 +207,9 @@ def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route
     assert dm.SECOND_ROUTE_TILES == 96 and dm.SECOND_ROUTE_GAMMA == 1.0
     got = dm.minimax_finish(big, stalled, lambda r: redesign, [], lambda t: None)
     assert got is second and routes[-1] == (stalled, dm.SECOND_ROUTE_GAMMA)
-    # not at 64x64, not for a rigid or mirrored request, not under the free gate (0.1 % at 96x96)
+    # not at 64x64, not for a mirrored request, not under the free gate (0.1 % at 96x96)
     for req, h in (
         (DesignRequest(rows=64, cols=64, target=tgt), 0.0025),
-        (DesignRequest(rows=96, cols=96, target=tgt, rigid=True), 0.0025),
         (DesignRequest(rows=96, cols=96, target=tgt, symmetry="y"), 0.0025),
         (big, 0.0009),
     ):
@@ -220,3 +219,31 @@ def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route
             is None
         )
         assert all(g == dm.MINIMAX_GAMMA for _, g in routes)
+
+
+def test_a_rigid_96x96_design_left_above_the_free_gate_gets_the_second_route_too(monkeypatch):
+    """The rigid 96x96 peanut's finish stalled at 0.249 % as the free one's did, above its 64x64 design's 0.21 %:
+    the second route (exponent 1, from the best design) came to 0.203 % for it too. A rigid request reaches the
+    second route only through the finish, above the rigid gate: the 64x64 and 128x128 rigid circles (0.21 %,
+    0.22 %) are not finished, so they pay nothing for it; a mirrored request still does not get it."""
+    from fabkiri.api import design_minimax as dm
+
+    tgt = load_target("heart", 100)
+    routes: list = []
+    second = _outcome(0.002, [], True)
+
+    def steps(req, start, judge, gamma=dm.MINIMAX_GAMMA):
+        routes.append((start, gamma))
+        return (second if gamma == dm.SECOND_ROUTE_GAMMA else None), [0.003], 1.0
+
+    monkeypatch.setattr(dm, "_steps", steps)
+    monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
+    monkeypatch.setattr(dm, "design", lambda r: "result")
+    stalled = _outcome(0.0035, [], True)
+    rigid = DesignRequest(rows=96, cols=96, target=tgt, rigid=True)
+    assert applies(rigid, {}, stalled)
+    got = dm.minimax_finish(rigid, stalled, lambda r: _outcome(0.009, [], True), [], lambda t: None)
+    assert got is second and routes[-1] == (stalled, dm.SECOND_ROUTE_GAMMA)
+    for n in (64, 128):
+        circle = DesignRequest(rows=n, cols=n, target=load_target("circle", 100), rigid=True)
+        assert not applies(circle, {}, _outcome(0.0022, [], True))
