@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from fabkiri.design.kagome import fit as KF
 from fabkiri.design.kagome import solve as KS
@@ -48,3 +50,21 @@ def test_the_landing_operator_multiplies_as_its_matrix():
     assert np.array_equal(op.matvec(v), J @ v) and np.array_equal(op.rmatvec(u), J.T @ u)
     X = np.stack([v, -v], 1)
     assert np.array_equal(op.matmat(X), J @ X)
+
+
+def test_a_family_is_evaluated_once_per_point_and_gives_the_same_rows():
+    std = standard_kagome(4, 5, tile_size=12.0)
+    rows, x0, _ = KF.fit_rows(std, TG.circle().scaled_to(60.0))
+    calls = []
+    f = rows.fit[0]
+    counted = KS.reusing_structure(
+        replace(f, fn=lambda x: (calls.append(1), f.fn(x))[1], _pattern=None)
+    )
+    r1, J1 = counted(x0)
+    r2 = counted.residual(x0.copy())  # the same point, another array: no new evaluation
+    r2[:] = np.nan  # a caller writing into its rows leaves the kept ones alone
+    r3, J3 = counted(x0)
+    assert len(calls) == 1 and np.array_equal(r1, r3) and _same(J1, J3)
+    counted(x0 + 1e-9)
+    assert len(calls) == 2
+    assert np.array_equal(counted(x0)[0], f(x0)[0]) and len(calls) == 3
