@@ -48,6 +48,20 @@ def test_rows_and_the_whole_bases_are_the_eager_ones(rows, cols):
     )
 
 
+@pytest.mark.parametrize("zn_first", [False, True])
+def test_y_by_blocks_of_nodes_is_the_whole_formula_to_the_bit(monkeypatch, zn_first):
+    # ``Y`` subtracts σ Zn block by block (no second (V, nf) array): blocks of 5 nodes, with and without ``Zn``
+    # made first, give the eager formula's bits
+    from fabkiri.design.quad.rigid import family
+
+    monkeypatch.setattr(family, "Y_BLOCK", 5)
+    fam, _, _ = _built(8, 6)
+    _, Y = _eager(fam)
+    if zn_first:
+        assert fam.Zn.shape == Y.shape  # made and kept before Y
+    assert np.array_equal(fam.Y.view(np.int64), Y.view(np.int64))
+
+
 def test_a_jacobian_at_a_few_nodes_makes_no_whole_basis():
     fam, st, std = _built(10, 12)
     S = np.random.default_rng(3).normal(size=(fam.n_seeds, 2))

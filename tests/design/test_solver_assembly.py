@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from fabkiri.design.core.stencils import Family, StencilPattern, jac
+from fabkiri.design.core.stencils import Family, StackedJacobian, StencilPattern, jac
 from fabkiri.design.quad import constraints as C
 from fabkiri.design.quad.objective import regularizer
 from fabkiri.design.quad.solve import DesignRequest
@@ -56,6 +56,40 @@ def test_merged_entries_are_numpys_reduceat_sums_to_the_bit():
         got = pat.matrix(grads).data
         assert np.array_equal(got.view(np.int64), ref.view(np.int64))
     assert not StencilPattern(60, 2, rng.integers(0, 2, size=(60, 12)))._runs.short  # 12 entries
+
+
+def _same_bits(a: sparse.csr_matrix, b: sparse.csr_matrix) -> bool:
+    return (
+        a.shape == b.shape
+        and np.array_equal(a.data.view(np.int64), b.data.view(np.int64))
+        and np.array_equal(a.indices, b.indices)
+        and np.array_equal(a.indptr, b.indptr)
+    )
+
+
+def test_coordinate_columns_are_scipys_slices_and_transposes_to_the_bit():
+    # the grid block's ``J[:, d::2]`` and their transposes straight from a stencil's gradients (``StackedJacobian``):
+    # the same entries in the same order and the same bits as scipy's slicing and conversion of the stacked
+    # CSR, with repeated nodes, signed zeros, an inequality block after the stencil, a run of 8 (the fallback)
+    rng = np.random.default_rng(4)
+    short = []
+    for m, k, nv in ((400, 6, 40), (200, 4, 3), (60, 12, 2), (50, 3, 1000), (1, 1, 1)):
+        nodes = rng.integers(0, nv, size=(m, k))
+        grads = rng.normal(size=(m, k, 2)) * 10.0 ** rng.integers(-8, 8, size=(m, k, 1))
+        grads[rng.random((m, k, 2)) < 0.2] = 0.0
+        grads[rng.random((m, k, 2)) < 0.1] = -0.0
+        fam = Family("rows", "reg", lambda x, n=nodes, g=grads: (np.zeros(len(n)), (n, g)), nv=nv)
+        extra = 0.3 * jac(7, nv, rng.integers(0, nv, size=(7, 3)), rng.normal(size=(7, 3, 2)))
+        w = float(rng.random())
+        for after in ([], [extra]):
+            _, block = fam.block(np.zeros((nv, 2)), w)
+            got = StackedJacobian([block, *after], 2 * nv)
+            J = sparse.vstack([w * jac(m, nv, nodes, grads), *after], format="csr")
+            assert _same_bits(got.csr(), J)
+            for Jd, Gd, Td in zip((J[:, 0::2], J[:, 1::2]), got.columns(), got.transposes()):
+                assert _same_bits(Gd, Jd.tocsr()) and _same_bits(Td, Jd.T.tocsr())
+        short.append(fam._columns[1].short)
+    assert short == [True, True, False, True, True]  # 12 entries on two nodes: the fallback
 
 
 def test_a_family_reuses_its_pattern_only_for_the_same_stencil():

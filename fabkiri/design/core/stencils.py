@@ -55,7 +55,8 @@ class StencilPattern:
         self.indices = c[self.starts].astype(np.int32)
         counts = first.reshape(m, 2 * k).sum(1) if k else np.zeros(m, dtype=np.intp)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-        self._runs = _Runs(self.order, self.starts) if self.merged else None
+        lens = np.diff(np.append(self.starts, len(self.order)))
+        self._runs = _Runs(self.order, self.starts, lens) if self.merged else None
 
     def matrix(self, grads: np.ndarray) -> sparse.csr_matrix:
         """The Jacobian with gradients ``(m, k, 2)`` on this pattern (canonical CSR)."""
@@ -78,10 +79,10 @@ class _Runs:
     """The merged entries of a stencil pattern summed as ``np.add.reduceat`` sums them, without gathering every
     entry first: a run of entries (one node repeated in a row) is its first entry plus the sum of the others in
     order (numpy's reduction of a run shorter than its pairwise block, 8), so each entry is one gather and the
-    runs of two or more get their few additions. ``short``: no run is 8 entries or longer."""
+    runs of two or more get their few additions (``lens``: the entries of each run). ``short``: no run is 8
+    entries or longer."""
 
-    def __init__(self, order: np.ndarray, starts: np.ndarray):
-        lens = np.diff(np.append(starts, len(order)))
+    def __init__(self, order: np.ndarray, starts: np.ndarray, lens: np.ndarray):
         self.first = order[starts]
         self.multi = np.flatnonzero(lens > 1)
         ms, ml = starts[self.multi], lens[self.multi]
@@ -101,6 +102,130 @@ class _Runs:
                 rest[sel] += g[idx]
             v[self.multi] += rest
         return v
+
+
+def _indptr(row: np.ndarray, m: int) -> np.ndarray:
+    """CSR row pointers of entries in row order, ``row`` the row of each."""
+    return np.concatenate([[0], np.cumsum(np.bincount(row, minlength=m))]).astype(np.int32)
+
+
+class CoordinateColumns:
+    """The x and y columns of a stencil Jacobian over the nodes, ``J[:, d::2]`` (CSR, ``jac``'s ``J``), and their
+    transposes ``J[:, d::2].T.tocsr()``, as index tables: the same entries in the same order and each value the
+    same sum of the same gradients (``_Runs``), so the four matrices come straight from the gradients, bit for
+    bit what scipy's slicing and conversion of ``J`` give, without the 2n-column matrix or its pattern.
+
+    In a row of ``J`` the entries sort by column ``2 node + d``, a repeated node's in stencil order: the x
+    entries are the row's nodes sorted stably, the y entries the same with every gradient index one higher.
+    A transpose orders the entries by node, then by row (``csr_tocsc``): one permutation ``t`` of the values.
+    ``short``: no node repeats 8 times in a row (else ``StencilPattern`` sums by ``reduceat``)."""
+
+    def __init__(self, m: int, n: int, nodes: np.ndarray):
+        k = nodes.shape[1]
+        on = np.argsort(nodes, axis=1, kind="stable")
+        sn = np.take_along_axis(nodes, on, 1)
+        first = np.ones((m, k), dtype=bool)
+        first[:, 1:] = sn[:, 1:] != sn[:, :-1]
+        starts = np.flatnonzero(first)
+        lens = np.diff(np.append(starts, m * k))
+        self.runs = _Runs((2 * (on + k * np.arange(m)[:, None])).reshape(-1), starts, lens)
+        self.short = self.runs.short
+        node = sn.reshape(-1)[starts]
+        row = np.repeat(np.arange(m), first.sum(1))
+        self.shape = (m, n)
+        self.indices, self.indptr = node.astype(np.int32), _indptr(row, m)
+        self.t = np.argsort(node, kind="stable")
+        self.t_indices, self.t_indptr = row[self.t].astype(np.int32), _indptr(node, n)
+
+    def matrices(self, grads: np.ndarray, scale: float, d: int):
+        """``scale ·`` coordinate ``d``'s columns (CSR, m × n) and their transpose (CSR, n × m)."""
+        v = self.runs.sums(np.asarray(grads, dtype=float).reshape(-1)[d:])
+        v *= scale
+        return (
+            sparse.csr_matrix((v, self.indices, self.indptr), shape=self.shape, copy=False),
+            sparse.csr_matrix(
+                (v[self.t], self.t_indices, self.t_indptr), shape=self.shape[::-1], copy=False
+            ),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class StencilBlock:
+    """``scale ·`` the per-row stencil Jacobian ``(nodes, grads)`` of ``family``, unassembled (``Family.block``)."""
+
+    family: Family
+    nodes: np.ndarray
+    grads: np.ndarray
+    scale: float
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.nodes)
+
+    def matrix(self) -> sparse.csr_matrix:
+        return self.scale * self.family._csr(len(self.nodes), self.nodes, self.grads)
+
+
+class StackedJacobian:
+    """A Jacobian kept as its blocks of rows, each a CSR matrix or a ``StencilBlock``. ``csr`` stacks them;
+    ``columns`` and ``transposes`` give its x and y columns over the nodes and their transposes, the same arrays
+    as ``J[:, d::2].tocsr()`` and its ``.T.tocsr()``, a stencil block's straight from its gradients
+    (``CoordinateColumns``)."""
+
+    def __init__(self, blocks: list, n_cols: int):
+        self.blocks = blocks
+        m = sum(b.n_rows if isinstance(b, StencilBlock) else b.shape[0] for b in blocks)
+        self.shape = (m, n_cols)
+        self._csr: sparse.csr_matrix | None = None
+        self._by: list | None = None
+
+    def csr(self) -> sparse.csr_matrix:
+        """The stacked CSR matrix."""
+        if self._csr is None:
+            mats = [b.matrix() if isinstance(b, StencilBlock) else b for b in self.blocks]
+            self._csr = sparse.vstack(mats, format="csr") if mats else sparse.csr_matrix(self.shape)
+        return self._csr
+
+    def __matmul__(self, other):
+        return self.csr() @ other
+
+    def _coordinates(self) -> list:
+        """``[(J[:, 0::2], its transpose), (J[:, 1::2], its transpose)]``, formed once."""
+        if self._by is None:
+            parts = [self._block_coordinates(b) for b in self.blocks]
+            if len(parts) == 1:
+                self._by = parts[0]
+            elif not parts:
+                m, n = self.shape[0], self.shape[1] // 2
+                self._by = [(sparse.csr_matrix((m, n)), sparse.csr_matrix((n, m)))] * 2
+            else:  # the blocks' rows one after another: in a transpose, their columns
+                self._by = [
+                    (
+                        sparse.vstack([p[d][0] for p in parts], format="csr"),
+                        sparse.hstack([p[d][1] for p in parts], format="csr"),
+                    )
+                    for d in (0, 1)
+                ]
+        return self._by
+
+    @staticmethod
+    def _block_coordinates(b) -> list:
+        if isinstance(b, StencilBlock):
+            cols = b.family._columns_of(b.n_rows, b.nodes)
+            if cols.short:
+                return [cols.matrices(b.grads, b.scale, d) for d in (0, 1)]
+            b = b.matrix()
+        return [(Jd, Jd.T.tocsr()) for Jd in (b[:, 0::2].tocsr(), b[:, 1::2].tocsr())]
+
+    def columns(self) -> tuple[sparse.csr_matrix, sparse.csr_matrix]:
+        """``(J[:, 0::2], J[:, 1::2])`` as CSR matrices over the nodes."""
+        (Ja, _), (Jb, _) = self._coordinates()
+        return Ja, Jb
+
+    def transposes(self) -> tuple[sparse.csr_matrix, sparse.csr_matrix]:
+        """The transposes of ``columns`` (CSR)."""
+        (_, AT), (_, BT) = self._coordinates()
+        return AT, BT
 
 
 def corner_angle(x: np.ndarray, tiles: np.ndarray, t: np.ndarray, k: np.ndarray):
@@ -175,6 +300,8 @@ class Family:
 
     # the CSR structure of the last stencil Jacobian, reused while its node array is the same object
     _pattern: StencilPattern | None = field(default=None, repr=False, compare=False)
+    # the same for its coordinate columns (``block``'s Jacobians split by coordinate), with the nodes they are of
+    _columns: tuple | None = field(default=None, repr=False, compare=False)
 
     def __call__(self, x: np.ndarray):
         """Residuals ``r`` and their Jacobian (CSR)."""
@@ -184,10 +311,28 @@ class Family:
         return r, J
 
     def _csr(self, m: int, nodes: np.ndarray, grads: np.ndarray) -> sparse.csr_matrix:
+        return self._pattern_of(m, nodes).matrix(grads)
+
+    def _pattern_of(self, m: int, nodes: np.ndarray) -> StencilPattern:
         pat = self._pattern
         if pat is None or pat.nodes is not nodes or pat.shape != (m, 2 * self.nv):
             pat = self._pattern = StencilPattern(m, self.nv, nodes)
-        return pat.matrix(grads)
+        return pat
+
+    def _columns_of(self, m: int, nodes: np.ndarray) -> CoordinateColumns:
+        """The ``CoordinateColumns`` of the stencil ``nodes``, kept while they are the same array."""
+        kept = self._columns
+        if kept is None or kept[0] is not nodes or kept[1].shape != (m, self.nv):
+            kept = self._columns = (nodes, CoordinateColumns(m, self.nv, nodes))
+        return kept[1]
+
+    def block(self, x: np.ndarray, scale: float):
+        """Residuals and ``scale ·`` their Jacobian as a block of ``StackedJacobian``: a per-row stencil kept
+        unassembled (``StencilBlock``), else the scaled CSR matrix."""
+        r, J = self.fn(x)
+        if isinstance(J, tuple):
+            return r, StencilBlock(self, J[0], J[1], scale)
+        return r, scale * J
 
     def rows_jacobian(
         self, x: np.ndarray, rows: np.ndarray, m: int | None = None

@@ -73,10 +73,15 @@ def grid_core(midpoint: np.ndarray, Z: np.ndarray, levels: int = LEVELS) -> Grid
     core = np.flatnonzero(keep)
     E = T[:, core].tocsr()
     Zc = np.ascontiguousarray(Z[core])
-    if np.abs(E @ Zc - Z).max(initial=0.0) > 1e-12 * max(1.0, float(np.abs(Z).max(initial=0.0))):
+    if _largest(E @ Zc - Z) > 1e-12 * max(1.0, _largest(Z)):
         core, E = np.arange(G), sparse.identity(G, format="csr")  # pragma: no cover - rows exact
         Zc = np.ascontiguousarray(Z)
     return GridCore(core, E, E.T.tocsr(), Zc, np.ascontiguousarray(Zc.T))
+
+
+def _largest(a: np.ndarray) -> float:
+    """``np.abs(a).max(initial=0.0)``, without the (G, nf) array of absolute values."""
+    return float(np.maximum(a.max(initial=0.0), -a.min(initial=0.0)))
 
 
 def _independent_rows(A: sparse.csr_matrix, pivot: np.ndarray) -> np.ndarray:

@@ -46,6 +46,8 @@ from .core import GridCore, grid_core
 # ``E (Z[core] S)``, the tiles' ``τ S``): the same maps to round-off; smaller lattices keep ``Z S`` and ``Y S``
 # (at 48x48 the two ways cost the same)
 LARGE_GRID = 4000
+# nodes per block when ``Y`` is formed
+Y_BLOCK = 4096
 
 
 @dataclass(eq=False)
@@ -80,13 +82,14 @@ class RigidFamily:
             return self.given_Y
         if self._y is None:
             tau, use_t, sigma = self.parts
-            if self._zn is None:  # σ Zn made in place of a temporary Zn (the same products)
-                zn = self.Z[self.node_vertex]
-                zn *= sigma
-            else:
-                zn = sigma * self._zn
-            self._y = tau[use_t]
-            self._y -= zn
+            y = tau[use_t]
+            # σ Zn subtracted by blocks of nodes: the same numbers without a second (V, nf) array, whose fresh
+            # pages cost more than the arithmetic at 128x128
+            for a in range(0, len(y), Y_BLOCK):
+                b = slice(a, a + Y_BLOCK)
+                zn = self.Z[self.node_vertex[b]] if self._zn is None else self._zn[b]
+                y[b] -= sigma[b] * zn
+            self._y = y
         return self._y
 
     def rows(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -44,7 +44,7 @@ class HalfBlocks:
         """``(C P)ᵀ JcᵀJc (C P)`` and ``(C P)ᵀ Jcᵀ rc``, with ``C`` = ∂c/∂p (``Z`` per coordinate, no ψ), by
         the coordinate blocks of ``reduced._Merit._grid_normal``, each over the columns its coordinate reaches."""
         Zb = self.ZB(Z)
-        Jd = [Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()]
+        Jd = list(Jc.columns())  # ``StackedJacobian``: J[:, 0::2] and J[:, 1::2]
         H, g = np.zeros((self.nq, self.nq)), np.zeros(self.nq)
         # the unsymmetric merit's choice (by p's width): by q's, the 48x48 grid's went dense, and slower
         if Jc.shape[0] * self.np <= dense_jd:

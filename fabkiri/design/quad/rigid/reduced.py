@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from scipy import sparse
 
-from ...core.stencils import Family, Stencils
+from ...core.stencils import Family, StackedJacobian, Stencils
 from ..constraints import convexity
 from ..objective import regularizer, tile_corners
 from .contact import ClosedContact
@@ -161,14 +161,15 @@ class _Merit:
     def rows(self, Xc, hard: bool = False, values: dict | None = None, jacobians: bool = True):
         """Residuals and Jacobians of the merit (or of the hard-fit rows): ``(r, Jx, Jc)``.
 
-        ``r`` stacks the node rows (``Jx``, CSR over the nodes) and then the grid rows (``Jc``, over the grid).
+        ``r`` stacks the node rows (``Jx``, CSR over the nodes) and then the grid rows (``Jc``, over the grid, a
+        ``StackedJacobian``: the grid block takes its coordinate columns, not the CSR).
         The contact rows are ``contact_rows``' (``_Evaluation`` appends them).
         ``values``: the inequality values of ``Xc`` when already known (``ineq_values``). Without
         ``jacobians`` only ``r`` (``Jx``, ``Jc`` None): a trial step needs no Jacobian unless it is accepted.
         """
         X, c, _ = Xc
         values = self.ineq_values(Xc) if values is None else values
-        blocks = []
+        blocks: list[tuple[np.ndarray, StackedJacobian | None]] = []
         for arr, fits, regs, ineqs in (
             (X, self.fits, self.regs, self.ineqs),
             (c, [], self.grid_regs, self.grid_ineqs),
@@ -181,10 +182,10 @@ class _Merit:
                 rs.append(r)
                 Js.append(J)
             if not hard:
-                for f in regs:
-                    r, J = f(arr) if jacobians else (f.residual(arr), None)
+                for f in regs:  # a stencil's rows kept unassembled (``StackedJacobian``)
+                    r, J = f.block(arr, self.w) if jacobians else (f.residual(arr), None)
                     rs.append(self.w * r)
-                    Js.append(None if J is None else self.w * J)
+                    Js.append(J)
             for f in ineqs:
                 m = self.margin[f.name] * (0.5 if hard else 1.0)
                 v = values[f.name] - m
@@ -198,9 +199,9 @@ class _Merit:
             if not jacobians:
                 blocks.append((r, None))
                 continue
-            blocks.append((r, sparse.vstack(Js, format="csr") if Js else sparse.csr_matrix((0, n))))
+            blocks.append((r, StackedJacobian(Js, n)))
         (rx, Jx), (rc, Jc) = blocks
-        return np.concatenate([rx, rc]), Jx, Jc
+        return np.concatenate([rx, rc]), (Jx if Jx is None else Jx.csr()), Jc
 
     def evaluate(self, p: np.ndarray, hard: bool = False) -> _Evaluation:
         """Member ``p``: its nodes, grid, inequality violation and (merit or hard-fit) rows."""
@@ -332,7 +333,7 @@ class _Merit:
         if self._C is not None:
             return Jc @ self._C
         Z = self.fam.Z
-        return np.hstack([Jc[:, 0::2] @ Z, Jc[:, 1::2] @ Z, np.zeros((Jc.shape[0], 1))])
+        return np.hstack([J @ Z for J in Jc.columns()] + [np.zeros((Jc.shape[0], 1))])
 
     def _grid_normal(self, Jc, rc: np.ndarray):
         """``Cᵀ JcᵀJc C`` and ``Cᵀ Jcᵀ rc``. C = ∂c/∂p is block-diagonal (Z for x, Z for y, nothing for ψ):
@@ -346,9 +347,8 @@ class _Merit:
             JC = self._grid_to_p(Jc)
             return JC.T @ JC, JC.T @ rc
         core = self.fam.core
-        Ja, Jb = Jc[:, 0::2].tocsr(), Jc[:, 1::2].tocsr()
-        # the transposes converted once each (a CSC @ CSR product converts its right factor every time)
-        AT, BT = Ja.T.tocsr(), Jb.T.tocsr()
+        # the transposes as CSR (a CSC @ CSR product converts its right factor every time)
+        (Ja, Jb), (AT, BT) = Jc.columns(), Jc.transposes()
         H = np.zeros((P, P))
         H[:nf, :nf] = core.quadratic(AT @ Ja)
         H[nf : 2 * nf, nf : 2 * nf] = core.quadratic(BT @ Jb)
