@@ -43,7 +43,9 @@ def test_a_chosen_lattice_that_misses_gives_way_to_the_first_next_one_that_meets
     assert [t["tiles"] for t in aspect["tried"]] == [[7, 14], [8, 16], [8, 15]]
     assert [t["valid"] for t in aspect["tried"]] == [False, False, True]
     assert "3.23 %" in notes[1] and "8x16" in notes[1]  # the miss and the next lattice, said
-    assert aspect["note"] == notes[-1] and "8x15" in notes[-1] and "kept instead of 7x14" in notes[-1]
+    assert (
+        aspect["note"] == notes[-1] and "8x15" in notes[-1] and "kept instead of 7x14" in notes[-1]
+    )
 
 
 def test_the_next_lattices_stop_at_the_first_that_meets(monkeypatch):
