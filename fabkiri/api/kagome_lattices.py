@@ -28,7 +28,7 @@ Notify = Callable[[str], None] | None
 
 
 def next_lattices(
-    out, design_on: Callable, target: Target, aspect: dict, notify: Notify, i_know=False
+    out, design_on: Callable, target: Target, aspect: dict, notify: Notify, i_know: bool = False
 ):
     """``(outcome, aspect report)``: ``out`` and ``aspect`` when ``out`` meets the shape; else the first
     design on the next ``NEXT_LATTICES`` lattices of the outline (``design_on((rows, cols))``) that meets
