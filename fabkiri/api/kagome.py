@@ -41,6 +41,7 @@ from ..pattern.kinds.kagome.lattice import standard_kagome, trimmed_kagome
 from ..pattern.model import Pattern
 from ..pattern.thinness import pal_bound
 from ..verify import verify_pattern
+from . import kagome_lattices as KL
 from .design_opening import check_floor
 from .design_opening import judge as judge_opening
 from .design_opening import summary_lines as opening_lines
@@ -402,7 +403,8 @@ def design_kagome_pattern(
     """The kagome front door for a :class:`~.design.PatternRequest` (``fabkiri design --lattice kagome``):
     refuses the quad-only options, resolves the fabrication limits as the quad designer does, then
     :func:`design_kagome` (the target defaults to a circle; without ``tiles`` the lattice is chosen from
-    the outline and cut to it, with ``tiles`` it is the whole block unless ``trim``)."""
+    the outline and cut to it, and the next lattices of the outline's aspect are designed when it misses
+    the shape (:mod:`.kagome_lattices`); with ``tiles`` it is the whole block unless ``trim``)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     target = request.target or "circle"
     tgt = load_target(target, request.size)
@@ -415,20 +417,27 @@ def design_kagome_pattern(
         if notify is not None and aspect["note"]:  # a lattice refused above gets no advice
             notify(aspect["note"])
     limits, intent = request.fabrication_limits(tgt)
-    out = design_kagome(
-        rows,
-        cols,
-        target,
-        request.size,
-        tol=request.tol,
-        shape_tol=request.shape_tol,
-        name=request.name,
-        symmetry=SYMMETRY[request.symmetry],
-        fabrication=limits,
-        intent=intent,
-        min_opening=request.min_opening,
-        trim=trim,
-    )
+
+    def design_on(lattice: tuple[int, int]) -> KagomeOutcome:
+        return design_kagome(
+            *lattice,
+            target,
+            request.size,
+            tol=request.tol,
+            shape_tol=request.shape_tol,
+            name=request.name,
+            symmetry=SYMMETRY[request.symmetry],
+            fabrication=limits,
+            intent=intent,
+            min_opening=request.min_opening,
+            trim=trim,
+        )
+
+    out = design_on((rows, cols))
+    if request.tiles is None:  # a chosen lattice that misses: the next ones of the outline's aspect
+        out, aspect = KL.next_lattices(out, design_on, tgt, aspect, notify, request.i_know)
+    elif trim and notify is not None and (hint := KL.next_lattice_hint(out, rows, cols, tgt)):
+        notify(hint)  # a lattice the user names is kept
     out.report["aspect"] = aspect
     return out
 

@@ -105,7 +105,8 @@ def test_the_front_door_cuts_a_lattice_chosen_from_the_outline_or_asked_to(
 
     def fake(rows, cols, target, size=None, **kw):
         seen.update(rows=rows, cols=cols, trim=kw["trim"])
-        return AK.KagomeOutcome(None, {}, False, (rows, cols))  # type: ignore[arg-type]
+        report = {"shape": {"status": "met"}}
+        return AK.KagomeOutcome(None, report, False, (rows, cols))  # type: ignore[arg-type]
 
     monkeypatch.setattr(AK, "design_kagome", fake)
     notes: list[str] = []

@@ -65,22 +65,34 @@ def aspect_fit(rows: int, cols: int, target: Target) -> AspectFit:
 def suggest(target: Target, n_tiles: int = DEFAULT_TILES) -> AspectFit:
     """The R x C (R, C >= 2, at most ``MAX_TILES`` tiles) with about ``n_tiles`` tiles whose aspect is
     nearest ``WIDER`` times the target's; among equally near ones the tile count nearest ``n_tiles``."""
-    want = WIDER * target_aspect(target)
+    fits = ranked(target, n_tiles)
+    if fits:
+        return fits[0]
+    n = min(
+        max(int(n_tiles), 4), MAX_TILES
+    )  # no lattice of about that count: the nearest at any count
+    return suggest(target, DEFAULT_TILES) if n != DEFAULT_TILES else aspect_fit(2, 2, target)
+
+
+def ranked(target: Target, n_tiles: int = DEFAULT_TILES) -> list[AspectFit]:
+    """Every R x C of about ``n_tiles`` tiles (within ``COUNT_SLACK``) whose aspect brackets ``WIDER``
+    times the target's, in the order :func:`suggest` prefers them (its choice first, then the next ones:
+    the lattices to try when the first misses)."""
+    aspect = target_aspect(target)
+    want = WIDER * aspect
     n = min(max(int(n_tiles), 4), MAX_TILES)
     lo, hi = max(4, int(np.floor(n * (1 - COUNT_SLACK)))), int(np.ceil(n * (1 + COUNT_SLACK)))
-    best: tuple | None = None
+    keys: list[tuple] = []
     for rows in range(2, n // 2 + 1):
         # aspect C / (√3 R): the columns that bracket the wanted one, checked on the lattice itself
         c0 = int(np.floor(want * np.sqrt(3.0) * rows))
         for cols in {max(c0, 2), max(c0 + 1, 2)}:
             if not lo <= rows * cols <= min(hi, MAX_TILES):
                 continue
-            miss = abs(np.log(lattice_aspect(rows, cols) / want))
-            key = (round(miss, 3), abs(rows * cols - n), rows, cols)
-            best = key if best is None or key < best else best
-    if best is None:  # no lattice of about that count: the nearest aspect at any count
-        return suggest(target, DEFAULT_TILES) if n != DEFAULT_TILES else aspect_fit(2, 2, target)
-    return aspect_fit(best[-2], best[-1], target)
+            lattice = lattice_aspect(rows, cols)
+            miss = abs(np.log(lattice / want))
+            keys.append((round(miss, 3), abs(rows * cols - n), rows, cols, lattice))
+    return [AspectFit((r, c), lat, aspect) for *_, r, c, lat in sorted(keys)]
 
 
 def _off_wanted(fit: AspectFit) -> float:

@@ -27,9 +27,19 @@ SAMPLES = 2000  # target points of the polygon the tile centres are tested again
 def block_for(target: Target, n_tiles: int) -> tuple[int, int]:
     """The R x C block whose cut keeps about ``n_tiles``: the aspect rule's lattice
     (:func:`kagome_aspect.suggest`) for ``n_tiles`` over the share of its bounding box the target fills."""
+    return KA.suggest(target, _block_count(target, n_tiles)).tiles
+
+
+def blocks_for(target: Target, n_tiles: int) -> list[tuple[int, int]]:
+    """The blocks of :func:`block_for`'s count in the aspect rule's order (:func:`kagome_aspect.ranked`):
+    its choice first, then the lattices next to it."""
+    return [fit.tiles for fit in KA.ranked(target, _block_count(target, n_tiles))]
+
+
+def _block_count(target: Target, n_tiles: int) -> int:
     lo, hi = target.bbox
     fill = abs(target.area) / float(np.prod(hi - lo))
-    return KA.suggest(target, int(round(n_tiles / max(fill, 0.05)))).tiles
+    return int(round(n_tiles / max(fill, 0.05)))
 
 
 def kept_tiles(rows: int, cols: int, target: Target) -> np.ndarray:
