@@ -92,6 +92,8 @@ def shared_kagome_designs(monkeypatch):
 
 # quad designs already made in this test session, by their request
 _QUAD_DESIGNS: dict[str, object] = {}
+# make's deployments of them, by the pattern and the arguments
+_QUAD_DEPLOYS: dict[str, object] = {}
 
 
 @pytest.fixture
@@ -104,12 +106,17 @@ def shared_designs():
     real one keyed by the request; each call gets its own deep copy and its ``notify`` hears the design's
     notes in their order, as from a fresh design. The design is deterministic (no random start unless
     the request names a seed, which is in the key). As ``shared_kagome_designs``, tests that share a
-    design carry one ``xdist_group`` mark."""
+    design carry one ``xdist_group`` mark.
+
+    Make's deploy step is shared the same way (``fabkiri.api.deploy.deploy_pattern``, keyed by the
+    pattern as written and exactly, and the arguments): a make that runs its options, and the line it
+    names, deploys the same design again."""
     import copy
 
-    from fabkiri.api import design
+    from fabkiri.api import deploy, design
 
     real = design.design_pattern
+    real_deploy = deploy.deploy_pattern
 
     def design_pattern(request, notify=None):
         key = repr(request)
@@ -120,8 +127,21 @@ def shared_designs():
             notify(text)
         return out
 
+    def deploy_pattern(pattern, *args, **kwargs):
+        import numpy as np
+        from fabkiri.exchange.pattern_json import dumps
+
+        exact = [pattern.nodes, *(pattern.contracted[s] for s in sorted(pattern.contracted))]
+        key = repr(
+            (dumps(pattern), [np.asarray(a).tobytes() for a in exact], args, sorted(kwargs.items()))
+        )
+        if key not in _QUAD_DEPLOYS:
+            _QUAD_DEPLOYS[key] = real_deploy(pattern, *args, **kwargs)
+        return copy.deepcopy(_QUAD_DEPLOYS[key])
+
     patch = pytest.MonkeyPatch()  # its own: a test's monkeypatch.undo() leaves the memo in place
     patch.setattr(design, "design_pattern", design_pattern)
+    patch.setattr(deploy, "deploy_pattern", deploy_pattern)
     yield design_pattern
     patch.undo()
 

@@ -718,6 +718,7 @@ def report_workspace(workspace, made_folders):
     return workspace
 
 
+@pytest.mark.xdist_group("bad-input-report")  # made_folders made on one worker
 @pytest.mark.parametrize("case", sorted(REPORT_CASES))
 def test_report_refuses_a_folder_of_another_pattern_or_kind(case, report_workspace, run_cli):
     argv, words = REPORT_CASES[case]
@@ -729,6 +730,7 @@ def test_report_refuses_a_folder_of_another_pattern_or_kind(case, report_workspa
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("bad-input-report")  # made_folders made on one worker
 def test_report_reads_its_own_folders_and_older_ones(report_workspace, run_cli):
     code, _, err = run_cli(
         "report", "good.json", "--cut", "C", "--print", "P", "--deploy", "D", "--tolerance", "T",

@@ -20,6 +20,9 @@ from fabkiri.pattern import standard_pattern
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 from fabkiri.verify import verify_layout
 
+# the module fixtures (cut folders of every hinge kind) are made on one worker, not on both
+pytestmark = pytest.mark.xdist_group("file-readers")
+
 HINGES = ("tape", "separate", "ligament")
 
 

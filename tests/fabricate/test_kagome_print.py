@@ -55,6 +55,7 @@ def test_a_kagome_closed_state_joins_three_hinges_at_every_merge_corner_and_two_
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("kagome-4x4-printed")  # the printed fixture made on one worker
 def test_standard_kagome_prints_verified_at_the_auto_scale(printed):
     out, notes = printed
     assert out.job.style == "tiles-and-strips" and out.job.printer.name == "prusa-mk4"
@@ -80,6 +81,7 @@ def test_standard_kagome_prints_verified_at_the_auto_scale(printed):
     ]
 
 
+@pytest.mark.xdist_group("kagome-4x4-printed")  # the printed fixture made on one worker
 def test_the_verifier_rejects_printed_kagome_tiles_of_another_size(printed, k44):
     out, _ = printed
     k = out.scale

@@ -13,6 +13,9 @@ from fabkiri.verify import verify_layout
 
 from ..conftest import TEMPLATES
 
+# the module fixtures (cut folders of every hinge kind) are made on one worker, not on both
+pytestmark = pytest.mark.xdist_group("verify-cut-files")
+
 PATTERN = TEMPLATES / "patterns" / "circle-8x8.json"
 
 

@@ -17,6 +17,9 @@ from .. import layout_fixtures as lf
 from .. import layout_mutations as lm
 from ..conftest import TEMPLATES
 
+# the module fixtures (cut folders of every hinge kind) are made on one worker, not on both
+pytestmark = pytest.mark.xdist_group("verify-variants")
+
 VALID = [
     "re-save R2018",
     "LINE segments",
