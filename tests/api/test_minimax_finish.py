@@ -184,13 +184,12 @@ def test_a_design_under_the_rigid_gate_gets_the_steps_only(monkeypatch):
     assert len(asked) == 1 and asked[0].coarse_refit
 
 
-def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route(monkeypatch):
-    """The free 96x96 peanut's steps (and its refitted redesign's) stalled at 0.249 %, above its 64x64 design's
-    0.211 %: a second route from the best design with Lawson's exponent 1 came to 0.203 %. Only from
-    SECOND_ROUTE_TILES tiles a side, for a free request, above the free gate."""
+@pytest.fixture
+def second_route(monkeypatch):
+    """The finish's steps faked: the second route (Lawson's exponent 1) gives a 0.2 % design, the first none;
+    returns ``(routes, second)``, every route asked as ``(start, gamma)`` and the second route's design."""
     from fabkiri.api import design_minimax as dm
 
-    tgt = load_target("heart", 100)
     routes: list = []
     second = _outcome(0.002, [], True)
 
@@ -201,6 +200,17 @@ def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route
     monkeypatch.setattr(dm, "_steps", steps)
     monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
     monkeypatch.setattr(dm, "design", lambda r: "result")
+    return routes, second
+
+
+def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route(second_route):
+    """The free 96x96 peanut's steps (and its refitted redesign's) stalled at 0.249 %, above its 64x64 design's
+    0.211 %: a second route from the best design with Lawson's exponent 1 came to 0.203 %. Only from
+    SECOND_ROUTE_TILES tiles a side, for a free request, above the free gate."""
+    from fabkiri.api import design_minimax as dm
+
+    routes, second = second_route
+    tgt = load_target("heart", 100)
     redesign = _outcome(0.009, [], True)
     stalled = _outcome(0.0025, [], True)
     big = DesignRequest(rows=96, cols=96, target=tgt)
@@ -221,24 +231,15 @@ def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route
         assert all(g == dm.MINIMAX_GAMMA for _, g in routes)
 
 
-def test_a_rigid_96x96_design_left_above_the_free_gate_gets_the_second_route_too(monkeypatch):
+def test_a_rigid_96x96_design_left_above_the_free_gate_gets_the_second_route_too(second_route):
     """The rigid 96x96 peanut's finish stalled at 0.249 % as the free one's did, above its 64x64 design's 0.21 %:
     the second route (exponent 1, from the best design) came to 0.203 % for it too. A rigid request reaches the
     second route only through the finish, above the rigid gate: the 64x64 and 128x128 rigid circles (0.21 %,
     0.22 %) are not finished, so they pay nothing for it; a mirrored request still does not get it."""
     from fabkiri.api import design_minimax as dm
 
+    routes, second = second_route
     tgt = load_target("heart", 100)
-    routes: list = []
-    second = _outcome(0.002, [], True)
-
-    def steps(req, start, judge, gamma=dm.MINIMAX_GAMMA):
-        routes.append((start, gamma))
-        return (second if gamma == dm.SECOND_ROUTE_GAMMA else None), [0.003], 1.0
-
-    monkeypatch.setattr(dm, "_steps", steps)
-    monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
-    monkeypatch.setattr(dm, "design", lambda r: "result")
     stalled = _outcome(0.0035, [], True)
     rigid = DesignRequest(rows=96, cols=96, target=tgt, rigid=True)
     assert applies(rigid, {}, stalled)
