@@ -68,10 +68,15 @@ def suggest(target: Target, n_tiles: int = DEFAULT_TILES) -> AspectFit:
     fits = ranked(target, n_tiles)
     if fits:
         return fits[0]
-    n = min(
-        max(int(n_tiles), 4), MAX_TILES
-    )  # no lattice of about that count: the nearest at any count
-    return suggest(target, DEFAULT_TILES) if n != DEFAULT_TILES else aspect_fit(2, 2, target)
+    # no lattice of about that count: the nearest at the default count, else the smallest lattice
+    if _count(n_tiles) != DEFAULT_TILES:
+        return suggest(target, DEFAULT_TILES)
+    return aspect_fit(2, 2, target)
+
+
+def _count(n_tiles: int) -> int:
+    """The tile count the rule looks around: ``n_tiles`` clamped to 4 .. ``MAX_TILES``."""
+    return min(max(int(n_tiles), 4), MAX_TILES)
 
 
 def ranked(target: Target, n_tiles: int = DEFAULT_TILES) -> list[AspectFit]:
@@ -80,7 +85,7 @@ def ranked(target: Target, n_tiles: int = DEFAULT_TILES) -> list[AspectFit]:
     the lattices to try when the first misses)."""
     aspect = target_aspect(target)
     want = WIDER * aspect
-    n = min(max(int(n_tiles), 4), MAX_TILES)
+    n = _count(n_tiles)
     lo, hi = max(4, int(np.floor(n * (1 - COUNT_SLACK)))), int(np.ceil(n * (1 + COUNT_SLACK)))
     keys: list[tuple] = []
     for rows in range(2, n // 2 + 1):
