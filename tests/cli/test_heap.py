@@ -16,6 +16,8 @@ glibc = pytest.mark.skipif(
     or "glibc" not in " ".join(__import__("platform").libc_ver()),
     reason="mallopt is glibc's",
 )
+# a small design command, its output file appended
+DESIGN8 = "design --tiles 8x8 --target circle --rigid --no-preview -o".split()
 
 
 @glibc
@@ -27,8 +29,7 @@ def test_a_design_process_keeps_freed_blocks_before_its_modules_load(tmp_path):
         "    return calls[-1][-1]\n"
         "heap.keep_freed_memory = spy\n"
         "from fabkiri.cli.main import main\n"
-        f"main(['design', '--tiles', '8x8', '--target', 'circle', '--rigid', '--no-preview', '-o', "
-        f"{str(tmp_path / 'p.json')!r}])\n"
+        f"main({[*DESIGN8, str(tmp_path / 'p.json')]!r})\n"
         "print(calls)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -42,17 +43,5 @@ def test_only_the_commands_that_make_large_arrays_and_not_a_library_caller(monke
     monkeypatch.setattr(heap, "keep_freed_memory", calls.append)
     # this test process has numpy loaded: a library caller's heap is its own
     assert "numpy" in sys.modules
-    cli.main(
-        [
-            "design",
-            "--tiles",
-            "8x8",
-            "--target",
-            "circle",
-            "--rigid",
-            "--no-preview",
-            "-o",
-            str(tmp_path / "p.json"),
-        ]
-    )
+    cli.main([*DESIGN8, str(tmp_path / "p.json")])
     assert calls == [] and (tmp_path / "p.json").exists()
