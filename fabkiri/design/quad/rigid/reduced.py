@@ -201,7 +201,7 @@ class _Merit:
                 continue
             blocks.append((r, StackedJacobian(Js, n)))
         (rx, Jx), (rc, Jc) = blocks
-        return np.concatenate([rx, rc]), (Jx if Jx is None else Jx.csr()), Jc
+        return np.concatenate([rx, rc]), None if Jx is None else Jx.csr(), Jc
 
     def evaluate(self, p: np.ndarray, hard: bool = False) -> _Evaluation:
         """Member ``p``: its nodes, grid, inequality violation and (merit or hard-fit) rows."""
