@@ -44,3 +44,13 @@ length_mm = bounded(
 def parse_tiles(text: str) -> tuple[int, int]:
     """``ROWSxCOLS`` -> (rows, cols), both >= 1 (the library's :func:`~fabkiri.pattern.tilecount.tile_count`)."""
     return tile_count(text, "--tiles")
+
+
+def add_i_know(p: argparse.ArgumentParser) -> None:
+    """``--i-know`` (``new``, ``design``): here, not in a command's module, so that ``design`` does not load
+    ``new``'s command module and what it imports."""
+    p.add_argument(
+        "--i-know",
+        action="store_true",
+        help="try a lattice larger than the largest tested (the refusal says what it would need)",
+    )

@@ -31,8 +31,7 @@ from ..errors import InputError
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
 from ..fileio import check_output_file
-from .argtypes import bounded, length_mm, parse_tiles
-from .pattern_cmds import add_i_know
+from .argtypes import add_i_know, bounded, length_mm, parse_tiles
 
 
 def cmd_design(args: argparse.Namespace) -> int:

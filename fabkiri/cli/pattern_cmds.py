@@ -18,7 +18,7 @@ from ..pattern.kinds.periodic.sheet import standard_tube
 from ..pattern.kinds.tessellation import kinds, tessellation
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening
-from .argtypes import bounded, parse_tiles
+from .argtypes import add_i_know, bounded, parse_tiles
 from .tube_cmd import cmd_export_tube3d
 
 
@@ -128,14 +128,6 @@ def cmd_export(args: argparse.Namespace) -> int:
         atomic_write(args.output, out.text)
     print(out.said, file=sys.stderr)
     return 0
-
-
-def add_i_know(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--i-know",
-        action="store_true",
-        help="try a lattice larger than the largest tested (the refusal says what it would need)",
-    )
 
 
 def register(sub: argparse._SubParsersAction) -> None:
