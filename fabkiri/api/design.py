@@ -34,13 +34,6 @@ from ..pattern.kinds.tessellation import DEFAULT_KIND
 from ..pattern.model import Pattern
 from ..pattern.thinness import pal_bound
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
-from .continuation import (  # noqa: F401 (re-exported)
-    CONTINUATION,
-    CONTINUATION_MARGIN,
-    LIMITS_COST_TILES,
-    continuation,
-    limits_note,
-)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
@@ -194,6 +187,9 @@ def design_pattern(
     first: list[dict] = []
     best, cont, tried = None, None, _continuation_first(request, req, contracted)
     if tried:  # the rows from the start wall the fit in
+        # the continuation's module loads where it runs: a design without fabrication limits never does
+        from .continuation import LIMITS_COST_TILES, continuation, limits_note
+
         cont = continuation(request, req, target, shape_tol, first, design_pattern)
         if cont is not None and _good(cont):
             return _outcome(cont, first, messages, target)
@@ -218,6 +214,8 @@ def design_pattern(
             "fabkiri: the fabrication-aware design misses the shape; trying a continuation from the design "
             "without the fabrication rows"
         )
+        from .continuation import continuation
+
         cont = continuation(request, req, target, shape_tol, attempts, design_pattern)
     if cont is not None and _rank(cont) < _rank(best):
         best = cont
