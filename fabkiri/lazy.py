@@ -27,6 +27,29 @@ def lazy_getattr(package: str, where: dict[str, str]) -> Callable[[str], Any]:
     return __getattr__
 
 
+class NamesOverSubmodules(ModuleType):
+    """A lazy package with a name that is also one of its submodules' (``mechanics.contract``, the function
+    in ``mechanics/contract.py``). Loading a submodule makes the import system set it as the package's
+    attribute of that name; the name in ``__over__`` is kept instead, as an eager ``from .contract import
+    contract`` left it, whichever loads first."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if (
+            isinstance(value, ModuleType)
+            and name in self.__dict__.get("__over__", ())
+            and value.__name__ == f"{self.__name__}.{name}"
+        ):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+def names_over_submodules(package: str, names: tuple[str, ...]) -> None:
+    """Let each of ``names`` (loaded lazily) win over the submodule of that name of ``package``."""
+    module = sys.modules[package]
+    module.__dict__["__over__"] = frozenset(names)
+    module.__class__ = NamesOverSubmodules
+
+
 class CallablePackage(ModuleType):
     """A subpackage whose name is also a top-level door (``fabkiri.design``, ``fabkiri.verify``):
     calling the package calls the door, and its submodules stay where they are."""
