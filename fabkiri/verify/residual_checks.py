@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mechanics.deploy import place_rigid, rigid_angles
+from ..mechanics.rigid_path import place_rigid, rigid_angles
 from ..pattern import geometry
 from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
