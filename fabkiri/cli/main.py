@@ -156,9 +156,10 @@ def defer_unused_numpy() -> list[str]:
 
 
 # commands whose work is vector-sized BLAS (``design()`` already holds BLAS to one thread, see
-# design/solve.single_thread_blas): OpenBLAS's thread pools (numpy's and scipy's) then only cost their start and
-# their spinning workers, a measurable share of a small design's process and more wall time on a loaded box.
-SINGLE_THREAD_BLAS = ("design",)
+# design/solve.single_thread_blas; a cut's linear algebra is sparse or a few hundred unknowns): OpenBLAS's thread
+# pools (numpy's and scipy's) then only cost their start and their spinning workers, a measurable share of a
+# small design's or cut's process and more wall time on a loaded box.
+SINGLE_THREAD_BLAS = ("design", "cut")
 BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
 
 
