@@ -208,6 +208,13 @@ def test_blas_threads_follow_the_user():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
     )
     assert run.stdout.split() == ["False", "False", "None"]
+    # a cut's linear algebra is sparse or small too (issue #36): its process starts OpenBLAS on one thread
+    code = "from fabkiri.cli.main import single_thread_blas_process as s\nprint(s('cut'))"
+    env.pop("OMP_NUM_THREADS")
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+    )
+    assert run.stdout.split() == ["True"]
 
 
 def test_kdtree_is_scipys_class_before_and_after_scipy_spatial():
@@ -235,6 +242,13 @@ def test_cut_loads_neither_the_solver_nor_scipy_spatial(tmp_path):
     assert "scipy.spatial._qhull" in mods  # the hull was used
     assert (
         not {"fabkiri.design.quad.solve", "fabkiri.api.design", "scipy.spatial", "scipy.special"}
+        & mods
+    )
+    # the pattern checks' rigid path comes from mechanics.rigid_path, not through mechanics.deploy (which
+    # loads the deployment drivers, the elastic path and contact)
+    assert "fabkiri.mechanics.rigid_path" in mods
+    assert (
+        not {"fabkiri.mechanics.deploy", "fabkiri.mechanics.drivers", "fabkiri.mechanics.elastic"}
         & mods
     )
     # the sheet preview and the assembly map are drawn with Pillow (fabricate/pngcanvas.py), not matplotlib
@@ -294,6 +308,42 @@ def test_a_design_defers_numpys_string_and_record_modules(design_modules):
     # scipy's `from numpy import *` loaded them for nothing
     for name in ("numpy.strings", "numpy.char", "numpy.rec", "numpy.ctypeslib", "numpy.core"):
         assert design_modules.get(name) == "_LazyModule", name
+
+
+def test_a_design_loads_no_other_commands_module_nor_what_it_never_calls(design_modules):
+    # issue #36: design_cmd took `--i-know` from `new`'s command module (which loads the tube command and
+    # `info`'s report); `mechanics`' package loaded `describe`'s report, the tube frames and the seams for a
+    # design that contracts only; the continuation in the fabrication limits loaded for every design
+    assert (
+        "fabkiri.cli.design_cmd" in design_modules
+        and "fabkiri.mechanics.contract" in design_modules
+    )
+    for name in (
+        "fabkiri.cli.pattern_cmds",
+        "fabkiri.cli.tube_cmd",
+        "fabkiri.mechanics.info",
+        "fabkiri.mechanics.tube",
+        "fabkiri.pattern.kinds.periodic.sheet",
+        "fabkiri.api.continuation",
+    ):
+        assert name not in design_modules, name
+
+
+def test_mechanics_contract_is_the_function_whichever_loads_first():
+    # the lazy package keeps `mechanics.contract` the function, as its eager `from .contract import contract`
+    # did, also once the submodule of that name is loaded (the import system sets it on the package)
+    code = (
+        "import sys\nimport fabkiri.mechanics as M\nfirst = M.contract\n"
+        "import fabkiri.mechanics.contract\nfrom fabkiri.mechanics.contract import contract\n"
+        "print(callable(first), first is M.contract is contract, 'fabkiri.mechanics.info' in sys.modules)"
+    )
+    assert _printed(code) == ["True", "True", "False"]
+    code = (
+        "from fabkiri.mechanics.contract import contract\nimport fabkiri.mechanics as M\n"
+        "from fabkiri.mechanics import describe\nfrom fabkiri.mechanics.info import describe as d\n"
+        "print(M.contract is contract, M.describe is describe is d, M.info.__name__)"
+    )
+    assert _printed(code) == ["True", "True", "fabkiri.mechanics.info"]
 
 
 def test_a_design_loads_neither_the_verifier_nor_threadpoolctl(tmp_path):
