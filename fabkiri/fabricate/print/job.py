@@ -15,15 +15,17 @@ from typing import TYPE_CHECKING, Any
 
 from ...errors import FabricationError
 from ...registry import Registry
-from . import geometry as printgeom
-from . import pingeom
-from .printers import Printer
-from .solid import Body
 
+# the plan geometry and the solids are annotations here: a style lookup (a cut's web checks, a design's
+# fabricability summary) loads neither
 if TYPE_CHECKING:
     from ...pattern.model import Pattern
     from ..planrules import PlanRule
+    from . import geometry as printgeom
+    from . import pingeom
     from .checks import MeshReport
+    from .printers import Printer
+    from .solid import Body
 
 
 @dataclass(frozen=True, eq=False)
