@@ -14,7 +14,6 @@ from ..errors import CheckFailed, InputError
 from ..exchange.file_formats import format_of, pattern_format
 from ..exchange.obj import import_obj
 from ..mechanics.contract import adopt_state_labels, contract
-from ..mechanics.info import DEFAULT_TOL
 from ..pattern.model import Pattern
 
 
@@ -109,6 +108,8 @@ def export_pattern(
 def _closure_tol(pattern: Pattern) -> float:
     """The closure a computed state must meet, in tile sizes: the info tolerance, or the optimiser
     tier for files recorded at import as closing to an optimiser's precision."""
+    # imported here: a command that only reads patterns (cut, print) does not load `info`'s report
+    from ..mechanics.info import DEFAULT_TOL
     from ..verify.tolerances import TIER_OPTIMISED, tier_name
 
     source = (pattern.design or {}).get("source")

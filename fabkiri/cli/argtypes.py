@@ -1,13 +1,19 @@
-"""Argument types shared by the commands: a number parsed and range-checked, one line on refusal."""
+"""Argument types shared by the commands: a number parsed and range-checked, one line on refusal; the
+options and the pattern reader several commands share (here, not in one command's module, so that a command
+does not load another's)."""
 
 from __future__ import annotations
 
 import argparse
 import math
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from .. import limits
 from ..pattern.tilecount import tile_count
+
+if TYPE_CHECKING:
+    from ..pattern.model import Pattern
 
 
 def bounded(
@@ -39,6 +45,27 @@ length_mm = bounded(
     f"size must be a positive length up to {limits.MAX_LENGTH_MM:g} mm, " + "got {text!r}",
 )
 """A length in mm: finite, positive, at most :data:`limits.MAX_LENGTH_MM` (``--size``, ``--min-feature``)."""
+
+
+_positive = bounded(
+    float,
+    lambda v: 0 < v < float("inf"),
+    "expected a number",
+    "expected a positive finite number, got {text!r}",
+)
+_nonneg = bounded(
+    float,
+    lambda v: 0 <= v < float("inf"),
+    "expected a number",
+    "expected a finite number >= 0, got {text!r}",
+)
+
+
+def load_any(path: str) -> Pattern:
+    """A pattern from ``pattern.json`` or, by suffix, any readable format (a design ``.obj``, ...)."""
+    from ..api.patterns import load_pattern  # not for `design`, which reads no pattern
+
+    return load_pattern(path)
 
 
 def parse_tiles(text: str) -> tuple[int, int]:

@@ -15,8 +15,8 @@ from ..fabricate.cut.layout import LAYOUTS
 from ..fabricate.cut.materials import HINGE_KINDS, available
 from ..fabricate.cut.sheets import FORMATS, CutOptions
 from ..fileio import atomic_write_many
+from .argtypes import _nonneg, _positive, load_any
 from .asked import asked, options_on_stdout
-from .pattern_cmds import _nonneg, _positive, load_any
 
 
 def _formats(text: str) -> tuple[str, ...]:

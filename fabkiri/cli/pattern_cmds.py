@@ -7,7 +7,7 @@ import json
 import sys
 
 from .. import limits
-from ..api.patterns import export_pattern, import_pattern, load_pattern
+from ..api.patterns import export_pattern, import_pattern
 from ..errors import CheckFailed, InputError
 from ..exchange.file_formats import format_names
 from ..exchange.pattern_json import write_pattern
@@ -18,27 +18,8 @@ from ..pattern.kinds.periodic.sheet import standard_tube
 from ..pattern.kinds.tessellation import kinds, tessellation
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening
-from .argtypes import add_i_know, bounded, parse_tiles
+from .argtypes import _nonneg, _positive, add_i_know, load_any, parse_tiles  # noqa: F401 (read from here)
 from .tube_cmd import cmd_export_tube3d
-
-
-def load_any(path: str) -> Pattern:
-    """A pattern from ``pattern.json`` or, by suffix, any readable format (a design ``.obj``, ...)."""
-    return load_pattern(path)
-
-
-_positive = bounded(
-    float,
-    lambda v: 0 < v < float("inf"),
-    "expected a number",
-    "expected a positive finite number, got {text!r}",
-)
-_nonneg = bounded(
-    float,
-    lambda v: 0 <= v < float("inf"),
-    "expected a number",
-    "expected a finite number >= 0, got {text!r}",
-)
 
 
 def cmd_new(args: argparse.Namespace) -> int:
