@@ -245,10 +245,21 @@ def test_cut_loads_neither_the_solver_nor_scipy_spatial(tmp_path):
         & mods
     )
     # the pattern checks' rigid path comes from mechanics.rigid_path, not through mechanics.deploy (which
-    # loads the deployment drivers, the elastic path and contact)
-    assert "fabkiri.mechanics.rigid_path" in mods
+    # loads the deployment drivers, the elastic path and contact); the web checks' print-style lookup loads no
+    # print plan geometry; the pattern reader and the shared options come without `new`'s command module
+    # and `info`'s report
+    assert "fabkiri.mechanics.rigid_path" in mods and "fabkiri.fabricate.print.job" in mods
     assert (
-        not {"fabkiri.mechanics.deploy", "fabkiri.mechanics.drivers", "fabkiri.mechanics.elastic"}
+        not {
+            "fabkiri.mechanics.deploy",
+            "fabkiri.mechanics.drivers",
+            "fabkiri.mechanics.elastic",
+            "fabkiri.fabricate.print.geometry",
+            "fabkiri.fabricate.print.pingeom",
+            "fabkiri.fabricate.print.solid",
+            "fabkiri.cli.pattern_cmds",
+            "fabkiri.mechanics.info",
+        }
         & mods
     )
     # the sheet preview and the assembly map are drawn with Pillow (fabricate/pngcanvas.py), not matplotlib
