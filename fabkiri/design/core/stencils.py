@@ -368,7 +368,7 @@ class Family:
         """The Jacobian (CSR, every row's sparsity) of the rows in ``act`` at least, as :meth:`stencil_where`."""
         if self.active is None:
             return self(x)[1]
-        return jac(len(act), self.nv, *self.active(x, act))
+        return self._csr(len(act), *self.active(x, act))  # every row's nodes: the kept structure
 
 
 # ------------------------------------------------------------------ stencils
