@@ -45,7 +45,7 @@ def _strip_check(pattern: Pattern, plan, printer: Printer) -> None:
 def _pin_check(pattern: Pattern, plan, printer: Printer) -> None:
     from .print import pingeom
 
-    pingeom.pin_plan(pattern, plan, printer)
+    pingeom.check_pins(pattern, plan, printer)
 
 
 def _pin_fields(printer: Printer) -> tuple:

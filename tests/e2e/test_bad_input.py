@@ -825,22 +825,32 @@ def test_a_sweep_job_records_every_failure_and_the_summary_counts_it_once(monkey
 # ------------------------------------------------------------------ memory bounds
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("command", ["info", "verify"])
-def test_a_huge_valid_pattern_is_refused_before_it_is_parsed(command, tmp_path, run_cli):
-    """A valid 200 MB pattern.json (good.json padded with spaces, written in a blink): its parse alone
-    would take ~21x the file; refused from its size with the extrapolated cost, before any reading."""
-    path = tmp_path / "huge.json"
-    with path.open("w") as fh:
-        fh.write(GOOD)
-        block = " " * 2**20
+@pytest.fixture(scope="module")
+def huge_pattern(tmp_path_factory):
+    """A valid 200 MB pattern.json (good.json padded with spaces) in a folder of its own, and that folder's
+    snapshot; written once for both commands (each reads it only to refuse it) and removed after them."""
+    folder = tmp_path_factory.mktemp("huge")
+    path = folder / "huge.json"
+    with path.open("wb") as fh:
+        fh.write(GOOD.encode())
+        block = b" " * 2**20
         for _ in range(200):
             fh.write(block)
-    before = snapshot(tmp_path)
+    yield path, snapshot(folder)
+    path.unlink()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", ["info", "verify"])
+@pytest.mark.xdist_group("bad-input-huge")  # huge_pattern written on one worker
+def test_a_huge_valid_pattern_is_refused_before_it_is_parsed(command, huge_pattern, run_cli):
+    """A valid 200 MB pattern.json (written in a blink): its parse alone would take ~21x the file;
+    refused from its size with the extrapolated cost, before any reading, the file untouched."""
+    path, before = huge_pattern
     code, _, err = run_cli(command, path)
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert "200 MB pattern file needs about" in err and "GB" in err and "largest tested" in err, err
-    assert snapshot(tmp_path) == before
+    assert snapshot(path.parent) == before
 
 
 # ------------------------------------------------------------------------ tube

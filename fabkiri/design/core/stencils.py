@@ -32,6 +32,12 @@ def jac(m: int, nvar_nodes: int, nodes: np.ndarray, grads: np.ndarray) -> sparse
     return StencilPattern(m, nvar_nodes, nodes).matrix(grads)
 
 
+def _same(kept: np.ndarray, nodes: np.ndarray) -> bool:
+    """Whether a stencil's node array is the one a CSR structure was built for: the same object, or equal
+    entries (most families build their node array afresh on every call, with the same entries)."""
+    return kept is nodes or (kept.shape == nodes.shape and np.array_equal(kept, nodes))
+
+
 class StencilPattern:
     """The CSR structure of a stencil Jacobian (rows of ``k`` nodes, ``2k`` entries before merging a node
     repeated in a row), sorted and merged once: a family whose stencil nodes are fixed fills only the values
@@ -315,14 +321,14 @@ class Family:
 
     def _pattern_of(self, m: int, nodes: np.ndarray) -> StencilPattern:
         pat = self._pattern
-        if pat is None or pat.nodes is not nodes or pat.shape != (m, 2 * self.nv):
+        if pat is None or pat.shape != (m, 2 * self.nv) or not _same(pat.nodes, nodes):
             pat = self._pattern = StencilPattern(m, self.nv, nodes)
         return pat
 
     def _columns_of(self, m: int, nodes: np.ndarray) -> CoordinateColumns:
         """The ``CoordinateColumns`` of the stencil ``nodes``, kept while they are the same array."""
         kept = self._columns
-        if kept is None or kept[0] is not nodes or kept[1].shape != (m, self.nv):
+        if kept is None or kept[1].shape != (m, self.nv) or not _same(kept[0], nodes):
             kept = self._columns = (nodes, CoordinateColumns(m, self.nv, nodes))
         return kept[1]
 
@@ -362,7 +368,7 @@ class Family:
         """The Jacobian (CSR, every row's sparsity) of the rows in ``act`` at least, as :meth:`stencil_where`."""
         if self.active is None:
             return self(x)[1]
-        return jac(len(act), self.nv, *self.active(x, act))
+        return self._csr(len(act), *self.active(x, act))  # every row's nodes: the kept structure
 
 
 # ------------------------------------------------------------------ stencils

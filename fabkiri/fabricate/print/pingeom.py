@@ -137,6 +137,28 @@ class PinPlan:
 
 def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
     """Plan print-in-place pins, or refuse with the reason the geometry does not allow them."""
+    levels, g, foreign, slot = _admitted(pattern, plan, printer)
+    phase = pivot_phases(plan, g)
+    return PinPlan(
+        levels=levels,
+        geometry=g,
+        level=2 * slot,
+        phase=phase,
+        foreign=tuple(foreign),
+        foreign_phase=tuple(_foreign_phases(plan, g, foreign, phase)),
+    )
+
+
+def check_pins(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> None:
+    """Refuse as :func:`pin_plan` does, without turning the pivots' polygons (which never refuses): for
+    a caller that asks only whether pins print at this size."""
+    _admitted(pattern, plan, printer)
+
+
+def _admitted(
+    pattern: Pattern, plan: ClosedPlan, printer: Printer
+) -> tuple[PinLevels, PinGeometry, list[np.ndarray], np.ndarray]:
+    """Every refusal of :func:`pin_plan`, in its order; the levels, geometry, foreign corners and slots."""
     from ...pattern.residuals import hinge_sums
 
     stack = pin_stack(pattern)
@@ -164,16 +186,7 @@ def pin_plan(pattern: Pattern, plan: ClosedPlan, printer: Printer) -> PinPlan:
         )
     foreign = foreign_corners(pattern, plan)
     _refuse_slivers(plan, g, printer, foreign)
-    slot = pin_slots(pattern, plan, stack)
-    phase = pivot_phases(plan, g)
-    return PinPlan(
-        levels=levels,
-        geometry=g,
-        level=2 * slot,
-        phase=phase,
-        foreign=tuple(foreign),
-        foreign_phase=tuple(_foreign_phases(plan, g, foreign, phase)),
-    )
+    return levels, g, foreign, pin_slots(pattern, plan, stack)
 
 
 def _refuse_close_pivots(plan: ClosedPlan, g: PinGeometry, printer: Printer) -> None:

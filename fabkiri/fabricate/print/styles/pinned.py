@@ -139,7 +139,7 @@ def _pinned_plans(pattern: Pattern, state: int, printer: Printer) -> str | None:
     """Why pinned hinges cannot be printed at this size on this bed (``None``: they can)."""
     try:
         plan = printgeom.closed_plan(pattern, state, printer)
-        pingeom.pin_plan(pattern, plan, printer)
+        pingeom.check_pins(pattern, plan, printer)
         fits(plan.bounds, printer, "the closed pattern")
     except FabricationError as exc:
         return str(exc)
