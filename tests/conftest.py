@@ -10,7 +10,16 @@ from pathlib import Path
 # as measured on another; the fit's sensitivity itself is an open item of docs/kagome.md.
 os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
 
+import numpy  # noqa: E402, F401  (loaded before the limit below: it finds the libraries loaded)
 import pytest  # noqa: E402
+import scipy.linalg  # noqa: E402, F401  (scipy's own OpenBLAS)
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+# One BLAS thread in the test processes, as the CLI's `design` runs (cli.main.single_thread_blas_process):
+# under `-n 2` each worker's OpenBLAS pool otherwise spins threads on the other worker's core (a 16x16
+# kagome family's dense rank: 10.6 CPU s with the default pool, 1.5 with one thread, loaded 2-core box).
+# Set here, not by the environment, so the CLI processes the tests start are left as a user's are.
+threadpool_limits(1, user_api="blas")
 
 REPO = Path(__file__).resolve().parents[1]
 # the shared folder sits beside the main checkout, or two levels up from a worktree

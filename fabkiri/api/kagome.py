@@ -379,13 +379,16 @@ def _meets(limits: FabricationLimits | None, faces) -> Callable[[Pattern], bool]
 def _first_closing(d, accept: Callable[[Pattern], bool]) -> tuple[Pattern | None, int]:
     """The design's nearest candidate that ``accept``s and whose closed states pass every check but the
     shape (a Lawson step can fold a row's end tile onto its neighbour in a closed state, which only
-    contraction shows), and how many nearer ones were rejected; None when none passes."""
+    contraction shows), and how many nearer ones were rejected; None when none passes. The shape is left
+    out of the checks (verified without its target): only the shape check reads it, and the candidate's
+    Hausdorff distance is known."""
     for k, (_, nodes) in enumerate(d.candidates):
         pattern = replace(d.pattern, nodes=nodes)
         if not accept(pattern):
             continue
         pattern = with_contracted_states(pattern)
-        if not [c for c in verify_pattern(pattern).failed() if c.name != "target shape"]:
+        design = {key: v for key, v in (pattern.design or {}).items() if key != "target"}
+        if not [c for c in verify_pattern(replace(pattern, design=design)).failed()]:
             return pattern, k
     return None, len(d.candidates)
 

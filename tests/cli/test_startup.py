@@ -385,14 +385,17 @@ def test_a_library_design_still_holds_blas_to_one_thread(monkeypatch):
     # CLI's OPENBLAS_NUM_THREADS cannot reach (a BLAS other than OpenBLAS)
     from fabkiri import blas
     from fabkiri.design.quad.solve import single_thread_blas
-    from threadpoolctl import threadpool_info
+    from threadpoolctl import threadpool_info, threadpool_limits
 
     def blas_threads() -> set[int]:
         return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
 
     assert not blas.single_threaded()
-    with single_thread_blas():
-        assert blas_threads() == {1}
+    # the test processes run BLAS on one thread (tests/conftest.py): two here, so the limit has work to do
+    with threadpool_limits(2, user_api="blas"):
+        assert blas_threads() == {2}
+        with single_thread_blas():
+            assert blas_threads() == {1}
     monkeypatch.setattr(blas, "started_single", True)
     assert blas.single_threaded()
     monkeypatch.setattr(np.__config__, "CONFIG", {"Build Dependencies": {"blas": {"name": "mkl"}}})

@@ -50,6 +50,14 @@ def test_the_landing_operator_multiplies_as_its_matrix():
     assert np.array_equal(op.matvec(v), J @ v) and np.array_equal(op.rmatvec(u), J.T @ u)
     X = np.stack([v, -v], 1)
     assert np.array_equal(op.matmat(X), J @ X)
+    # the compiled kernels' products (random floats, so the order of the sums shows), and scipy's own
+    # path for a column or an integer vector
+    rng = np.random.default_rng(5)
+    v, u = rng.standard_normal(J.shape[1]), rng.standard_normal(J.shape[0])
+    assert np.array_equal(op.matvec(v), J @ v) and np.array_equal(op.rmatvec(u), J.T @ u)
+    assert np.array_equal(op.matvec(v[:, None]), (J @ v)[:, None])
+    n = np.arange(J.shape[1])
+    assert np.array_equal(op.matvec(n), J @ n)
 
 
 def test_a_family_is_evaluated_once_per_point_and_gives_the_same_rows():

@@ -30,6 +30,13 @@ from scipy.sparse.linalg import LinearOperator, splu
 from ..core.stencils import Family
 from .constraints import stacked
 
+try:  # the compiled kernels behind scipy's sparse matrix-vector product (Jacobian, below)
+    from scipy.sparse import _sparsetools
+
+    _MATVEC: dict | None = {"csr": _sparsetools.csr_matvec, "csc": _sparsetools.csc_matvec}
+except (ImportError, AttributeError):  # another SciPy layout: its public product
+    _MATVEC = None
+
 KKT_REG = 1e-12  # the (2,2) block: regularises the dependent equality rows
 ON_FAMILY = 1e-12  # the pull-back's tolerance on max |equality|
 LAMBDA0 = 1e-3
@@ -173,11 +180,23 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
 class Jacobian(LinearOperator):
     """A sparse Jacobian as an operator with its own products, ``J @ x`` and ``Jᵀ @ x``: the same products
     the least-squares solver forms from the matrix itself, through fewer of scipy's operator layers
-    (its inner LSMR takes a few hundred of them per step)."""
+    (its inner LSMR takes a few hundred of them per step). A vector product goes straight to the compiled
+    kernel scipy's own product calls (``csr_matvec`` for ``J``, ``csc_matvec`` for ``Jᵀ``, into zeros), so
+    the sums are the same to the bit; anything but a float vector of the right length takes scipy's
+    general path."""
 
     def __init__(self, J: sparse.csr_matrix):
         self.J, self.JT = J, J.T
         super().__init__(J.dtype, J.shape)
+        self._kernels = [_kernel(M) for M in (self.J, self.JT)]
+
+    def matvec(self, x):
+        k = self._kernels[0]
+        return _product(k, x) if k and _vector(k, x) else super().matvec(x)
+
+    def rmatvec(self, x):
+        k = self._kernels[1]
+        return _product(k, x) if k and _vector(k, x) else super().rmatvec(x)
 
     def _matvec(self, x):
         return self.J @ x
@@ -190,6 +209,27 @@ class Jacobian(LinearOperator):
 
     def _rmatmat(self, X):
         return self.JT @ X
+
+
+def _kernel(M) -> tuple | None:
+    """``(kernel, rows, cols, indptr, indices, data)`` of scipy's compiled product for a float CSR or CSC
+    matrix (None: another matrix, or no such kernel in this SciPy)."""
+    if _MATVEC is None or M.format not in _MATVEC or M.dtype != np.float64:
+        return None
+    return (_MATVEC[M.format], M.shape[0], M.shape[1], M.indptr, M.indices, M.data)
+
+
+def _vector(k: tuple, x) -> bool:
+    """Whether ``x`` is a float vector of the kernel's matrix width."""
+    return x.__class__ is np.ndarray and x.shape == (k[2],) and x.dtype == np.float64
+
+
+def _product(k: tuple, x: np.ndarray) -> np.ndarray:
+    """``M @ x`` as scipy's ``_matmul_vector`` forms it: zeros, then the format's compiled kernel."""
+    kernel, m, n, indptr, indices, data = k
+    out = np.zeros(m)
+    kernel(m, n, indptr, indices, data, x, out)
+    return out
 
 
 def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
