@@ -76,3 +76,24 @@ def test_a_family_is_evaluated_once_per_point_and_gives_the_same_rows():
     counted(x0 + 1e-9)
     assert len(calls) == 2
     assert np.array_equal(counted(x0)[0], f(x0)[0]) and len(calls) == 3
+
+
+def test_a_scipy_whose_kernels_differ_gets_the_public_product(monkeypatch):
+    """The compiled kernels are scipy's private module: this SciPy's pass the probe; one whose kernel takes
+    other arguments (or gives another product) is not used, and the operator multiplies through scipy."""
+    from scipy.sparse import _sparsetools
+
+    assert KS.compiled_matvec() is not None  # the fast path is the one the suite runs
+    with (
+        monkeypatch.context() as m
+    ):  # scipy's own product calls these too: patched for the probe only
+        m.setattr(_sparsetools, "csc_matvec", lambda *a: None)  # writes nothing: a wrong product
+        assert KS.compiled_matvec() is None
+        m.setattr(_sparsetools, "csr_matvec", lambda n: None)  # another signature: TypeError
+        assert KS.compiled_matvec() is None
+    monkeypatch.setattr(KS, "_MATVEC", None)
+    rows, x = _rows()
+    _, J = rows.equalities(x)
+    op = KS.Jacobian(J)
+    v = np.random.default_rng(6).standard_normal(J.shape[1])
+    assert op._kernels == [None, None] and np.array_equal(op.matvec(v), J @ v)

@@ -30,12 +30,27 @@ from scipy.sparse.linalg import LinearOperator, splu
 from ..core.stencils import Family
 from .constraints import stacked
 
-try:  # the compiled kernels behind scipy's sparse matrix-vector product (Jacobian, below)
-    from scipy.sparse import _sparsetools
 
-    _MATVEC: dict | None = {"csr": _sparsetools.csr_matvec, "csc": _sparsetools.csc_matvec}
-except (ImportError, AttributeError):  # another SciPy layout: its public product
-    _MATVEC = None
+def compiled_matvec() -> dict | None:
+    """The compiled kernels behind scipy's sparse matrix-vector product (``Jacobian``, below), by format,
+    when they take the arguments ``_product`` gives them and give a small product right; None otherwise
+    (a private module: another SciPy may move or change them, and the public product is used)."""
+    try:
+        from scipy.sparse import _sparsetools
+
+        kernels = {"csr": _sparsetools.csr_matvec, "csc": _sparsetools.csc_matvec}
+        probe = sparse.csr_matrix(np.array([[1.0, 2.0], [0.0, 3.0]]))
+        for fmt, kernel in kernels.items():
+            m, out = probe.asformat(fmt), np.zeros(2)
+            kernel(2, 2, m.indptr, m.indices, m.data, np.array([1.0, 1.0]), out)
+            if not np.array_equal(out, [3.0, 3.0]):
+                return None
+    except (ImportError, AttributeError, TypeError, ValueError):
+        return None
+    return kernels
+
+
+_MATVEC = compiled_matvec()
 
 KKT_REG = 1e-12  # the (2,2) block: regularises the dependent equality rows
 ON_FAMILY = 1e-12  # the pull-back's tolerance on max |equality|
