@@ -304,7 +304,7 @@ class Family:
     # mask ``act`` left zero (an inequality's gradient is asked only where it is inside its margin)
     active: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
-    # the CSR structure of the last stencil Jacobian, reused while its node array is the same object
+    # the CSR structure of the last stencil Jacobian, reused while its node array has the same entries (``_same``)
     _pattern: StencilPattern | None = field(default=None, repr=False, compare=False)
     # the same for its coordinate columns (``block``'s Jacobians split by coordinate), with the nodes they are of
     _columns: tuple | None = field(default=None, repr=False, compare=False)
@@ -326,7 +326,7 @@ class Family:
         return pat
 
     def _columns_of(self, m: int, nodes: np.ndarray) -> CoordinateColumns:
-        """The ``CoordinateColumns`` of the stencil ``nodes``, kept while they are the same array."""
+        """The ``CoordinateColumns`` of the stencil ``nodes``, kept while they have the same entries."""
         kept = self._columns
         if kept is None or kept[1].shape != (m, self.nv) or not _same(kept[0], nodes):
             kept = self._columns = (nodes, CoordinateColumns(m, self.nv, nodes))
