@@ -47,13 +47,13 @@ length_mm = bounded(
 """A length in mm: finite, positive, at most :data:`limits.MAX_LENGTH_MM` (``--size``, ``--min-feature``)."""
 
 
-_positive = bounded(
+positive_number = bounded(
     float,
     lambda v: 0 < v < float("inf"),
     "expected a number",
     "expected a positive finite number, got {text!r}",
 )
-_nonneg = bounded(
+nonnegative_number = bounded(
     float,
     lambda v: 0 <= v < float("inf"),
     "expected a number",

@@ -15,7 +15,7 @@ from ..fabricate.cut.layout import LAYOUTS
 from ..fabricate.cut.materials import HINGE_KINDS, available
 from ..fabricate.cut.sheets import FORMATS, CutOptions
 from ..fileio import atomic_write_many
-from .argtypes import _nonneg, _positive, load_any
+from .argtypes import load_any, nonnegative_number, positive_number
 from .asked import asked, options_on_stdout
 
 
@@ -166,7 +166,11 @@ def _add_sheet_args(p: argparse.ArgumentParser) -> None:
         "--sheet", default="600x400", metavar="WxH", help="sheet size in mm (default 600x400)"
     )
     p.add_argument(
-        "--margin", type=_nonneg, default=5.0, metavar="MM", help="sheet margin (default 5)"
+        "--margin",
+        type=nonnegative_number,
+        default=5.0,
+        metavar="MM",
+        help="sheet margin (default 5)",
     )
     p.add_argument(
         "--layout",
@@ -205,7 +209,7 @@ def _add_material_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--strain-limit", type=float, metavar="EPS")
     p.add_argument("--gap", type=float, metavar="MM", help="gap between ligament-sheet tiles")
     p.add_argument(
-        "--ligament-width", type=_positive, metavar="MM", help="force the ligament width"
+        "--ligament-width", type=positive_number, metavar="MM", help="force the ligament width"
     )
 
 
@@ -215,7 +219,7 @@ def _add_tolerance_args(p: argparse.ArgumentParser) -> None:
         "--tol-mm",
         "--tol",
         dest="tol",
-        type=_positive,
+        type=positive_number,
         metavar="MM",
         help="verification tolerance in mm for the pattern and the read-back (default: the material's); "
         "angle residuals count as their displacement at the tile size",
@@ -232,7 +236,7 @@ def _add_drawing_args(p: argparse.ArgumentParser) -> None:
     """What the sheets carry besides the cuts: labels, the reference square, notes, the SVG stroke."""
     p.add_argument(
         "--label-height",
-        type=_positive,
+        type=positive_number,
         metavar="MM",
         help="tile ID height (default: the material's)",
     )
@@ -241,7 +245,7 @@ def _add_drawing_args(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--reference",
-        type=_nonneg,
+        type=nonnegative_number,
         default=50.0,
         metavar="MM",
         help="side of the uncompensated reference square (0: none; default 50)",
@@ -254,7 +258,7 @@ def _add_drawing_args(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--stroke",
-        type=_positive,
+        type=positive_number,
         default=STROKE_MM,
         metavar="MM",
         help=f"SVG stroke width (default {STROKE_MM:g}: visible in viewers; the colour tells the laser "

@@ -10,8 +10,7 @@ from ..errors import CheckFailed
 from ..fileio import atomic_write_many
 from ..mechanics.drivers.registry import AUTO, driver_names
 from ..mechanics.tube import path_lines
-from .argtypes import bounded
-from .pattern_cmds import load_any
+from .argtypes import bounded, load_any
 
 
 def cmd_deploy(args: argparse.Namespace) -> int:

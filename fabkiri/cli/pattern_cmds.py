@@ -18,7 +18,7 @@ from ..pattern.kinds.periodic.sheet import standard_tube
 from ..pattern.kinds.tessellation import kinds, tessellation
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening
-from .argtypes import _nonneg, _positive, add_i_know, load_any, parse_tiles  # noqa: F401 (read from here)
+from .argtypes import add_i_know, load_any, parse_tiles, positive_number
 from .tube_cmd import cmd_export_tube3d
 
 
@@ -139,7 +139,7 @@ def _register_new(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--tile-size",
-        type=_positive,
+        type=positive_number,
         default=10.0,
         metavar="MM",
         help="tile edge in mm (default 10)",
@@ -177,7 +177,7 @@ def _register_import(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--scale",
-        type=_positive,
+        type=positive_number,
         default=1.0,
         metavar="MM",
         help="millimetres per file unit (default 1)",
@@ -196,13 +196,13 @@ def _register_info(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--tol",
-        type=_positive,
+        type=positive_number,
         default=DEFAULT_TOL,
         help=f"closure tolerance relative to the mean tile edge (default {DEFAULT_TOL:g})",
     )
     p.add_argument(
         "--tol-rad",
-        type=_positive,
+        type=positive_number,
         default=DEFAULT_TOL_RAD,
         help=f"angle tolerance in radians (default {DEFAULT_TOL_RAD:g})",
     )
@@ -238,12 +238,16 @@ def _register_export(sub: argparse._SubParsersAction) -> None:
         help="tube3d: K copies around the circumference",
     )
     p.add_argument(
-        "--thickness", type=_positive, default=1.0, metavar="MM", help="tube3d: plate thickness"
+        "--thickness",
+        type=positive_number,
+        default=1.0,
+        metavar="MM",
+        help="tube3d: plate thickness",
     )
     p.add_argument("--no-gif", action="store_true", help="tube3d: skip the 3D deployment GIF")
     p.add_argument(
         "--unit",
-        type=_positive,
+        type=positive_number,
         metavar="MM",
         help="pykirigami: mm per file unit (default: the mean tile edge, so tiles are about 1 unit)",
     )

@@ -11,12 +11,12 @@ from ..api.print import PrintOptions, print_pattern
 from ..fabricate.print import mesh
 from ..fabricate.print.printers import available_printers
 from ..fileio import atomic_write_many
+from .argtypes import load_any, positive_number
 from .asked import asked, options_on_stdout
-from .pattern_cmds import _positive, load_any
 
 
 def _scale_auto(text: str):
-    return "auto" if text.strip().lower() == "auto" else _positive(text)
+    return "auto" if text.strip().lower() == "auto" else positive_number(text)
 
 
 # (dest, flag, default) of the options every suggested line keeps, and of the printer field overrides,
@@ -116,7 +116,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         ("axial-clearance", "clearance between stacked parts"),
     ]:
         p.add_argument(
-            f"--{flag}", type=_positive, metavar="MM", help=f"override the preset's {what}"
+            f"--{flag}", type=positive_number, metavar="MM", help=f"override the preset's {what}"
         )
     p.add_argument(
         "--marks",

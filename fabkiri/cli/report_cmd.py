@@ -9,7 +9,7 @@ from pathlib import Path
 from ..api.report_folders import check_report_folders
 from ..errors import InputError
 from ..fileio import atomic_write
-from .pattern_cmds import load_any
+from .argtypes import load_any
 
 
 def cmd_report(args: argparse.Namespace) -> int:

@@ -8,8 +8,7 @@ import sys
 
 from ..fileio import atomic_write_many
 from ..pattern.fingerprint import KEY, fingerprint
-from .argtypes import bounded
-from .pattern_cmds import _nonneg, _positive, load_any
+from .argtypes import bounded, load_any, nonnegative_number, positive_number
 
 _count = bounded(
     int,
@@ -72,14 +71,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file", help="pattern (.json or design .obj)")
     p.add_argument(
         "--kerf-sd",
-        type=_nonneg,
+        type=nonnegative_number,
         default=0.02,
         metavar="MM",
         help="sd of each tile edge's position along its normal (default 0.02)",
     )
     p.add_argument(
         "--hinge-sd",
-        type=_nonneg,
+        type=nonnegative_number,
         default=0.05,
         metavar="MM",
         help="sd of each pivot's position off its tile corner, per axis (default 0.05)",
@@ -88,7 +87,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument(
         "--scale",
-        type=_positive,
+        type=positive_number,
         default=1.0,
         metavar="K",
         help="tiles cut K times the pattern's size",

@@ -7,8 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import CheckFailed, InputError
-from .argtypes import bounded
-from .pattern_cmds import load_any
+from .argtypes import bounded, load_any
 
 _steps = bounded(
     int,

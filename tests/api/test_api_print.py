@@ -88,7 +88,7 @@ def test_refusals_raise_and_return_nothing(square):
 def test_a_pattern_closing_one_way_has_its_reassembly_checks_moot_by_id():
     """Closed state 1 of the paper's contractible example does not close: the verifier's (c) checks
     (ids ``...reassembled.state1...``) are moot, said once, and the print succeeds in state 2 only."""
-    from fabkiri.cli.pattern_cmds import load_any
+    from fabkiri.cli.argtypes import load_any
 
     from tests.conftest import ref
 
