@@ -19,7 +19,8 @@ drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the 
 Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
 resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a free design
 (neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``), and none from
-``FREE_FINISH_ALL_TILES`` tiles a side. A step the
+``FREE_FINISH_ALL_TILES`` tiles a side (a rigid one from ``RIGID_FINISH_ALL_TILES``, under the rigid gate with
+cheaper steps, ``CHEAP_PATIENCE``). A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
@@ -74,9 +75,20 @@ FREE_FINISH_ALL_TILES = 48
 # second Lawson route: from the best design, fresh weights, Lawson's exponent 1 (the free 96x96 peanut's steps
 # stalled at 0.249 %, above its 64x64's 0.211 %; the second route's first step 0.203 %; the heart, drop and bean at
 # 96x96 kept their designs; the rigid peanut and bean alike: docs/design-solver.md, "The second route for rigid
-# designs"). A rigid design is finished only above the rigid gate: the rigid circles (0.21-0.22 %) are not
+# designs"). A rigid design under the rigid gate takes it with the cheaper steps (``CHEAP_PATIENCE``)
 SECOND_ROUTE_TILES = 96
 SECOND_ROUTE_GAMMA = 1.0
+# a rigid design under the rigid gate gets cheaper steps (``_cheap``, ``finish_step``): the reduced solver's first LM
+# scaling only (a warm-started step from a converged design: the other scaling's second start gave the lower merit
+# in 2 of the 64x64 rigid circle's 6 steps, at half of each step's cost), no stiffer second stage after a feasible
+# first (its 10 iterations pulled the fit back: the circle's finish 0.144 % with them, 0.007 % without) and this patience, stopping at the first step that comes no closer (docs/design-solver.md,
+# "A cheaper finish for rigid designs")
+CHEAP_PATIENCE = 1
+# from this many tiles a side a rigid (not mirrored) design is finished whatever its miss, as a free one from
+# ``FREE_FINISH_ALL_TILES``: the rigid star's and ellipse's 48x48 designs (0.24 %, 0.15 %) sat above their 32x32
+# ones (0.07 %, 0.11 %); finished with the cheaper steps 0.069 % and 0.037 %, at 2-4x their CPU, the 64x64 and
+# 128x128 rigid circles at 3-4x (docs/design-solver.md, "A cheaper finish for rigid designs")
+RIGID_FINISH_ALL_TILES = 48
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -87,7 +99,10 @@ def threshold(share: float, req: DesignRequest) -> float:
 def gate(req: DesignRequest) -> float:
     """The share of the size past which ``req``'s design is finished: ``FINISH_ABOVE`` scaled to its lattice
     (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE`` scaled for a
-    free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side."""
+    free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
+    ``RIGID_FINISH_ALL_TILES``."""
+    if req.rigid and not req.symmetry and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES:
+        return 0.0
     if not _free(req):
         return _rigid_gate(req)
     if max(req.rows, req.cols) >= FREE_FINISH_ALL_TILES:
@@ -143,14 +158,19 @@ def minimax_finish(
     distance (ranking no worse, failing no ``verify`` check ``best`` passes), else None. From an overlapping
     ``best`` only the refitted redesign and its steps, kept when valid. The attempt is recorded either way."""
     h0, valid = _hausdorff(best.report), bool(best.valid)
+    polish = valid and h0 <= _rigid_gate(req)
+    # a rigid design under the rigid gate: the cheaper steps (``CHEAP_PATIENCE``), asked by the steps' request
+    stepped = replace(req, finish_step=True) if polish and _cheap(req) else req
+    fails, seen = _memo(shape_tol), list[DesignAttempt]()
+    if stepped is not req:  # every judged step kept: ``_verified`` falls back on them
+        judge = _recording(judge, seen)
     # no steps from an overlapping design (``overlapping_only``): the refitted redesign, and the steps from that
-    cand, trace, secs = _steps(req, best, judge) if valid else (None, [], 0.0)
+    cand, trace, secs = _steps(stepped, best, judge) if valid else (None, [], 0.0)
     refit, left = None, min(h0, _hausdorff(cand.report) if cand else h0) if valid else float("inf")
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it (not
     # for a symmetric design: its levels have the outline rows already, ``DesignProblem._coarse_level``, the same design)
     # nor for a design under the rigid gate (``gate``): its steps alone (the free 64x64 peanut, 0.21 %: the
     # redesign and its steps cost twice the steps alone and found no better design; docs/design-solver.md)
-    polish = valid and h0 <= _rigid_gate(req)
     if (
         not req.coarse_refit
         and not req.symmetry
@@ -169,17 +189,18 @@ def minimax_finish(
                 if c is not None and (cand is None or _rank(c) < _rank(cand)):
                     cand = c
     start = cand if cand is not None and _closer(cand, best) else best
-    more, more_trace, more_secs = _second_route(req, start, judge)
+    more, more_trace, more_secs = _second_route(stepped, start, judge)
     if more is not None and (cand is None or _rank(more) < _rank(cand)):
         cand = more
     trace, secs = trace + more_trace, secs + more_secs
+    cand = _verified(cand, seen, best, fails)
     # a valid design replaces an overlapping one; a valid one only with a smaller Hausdorff distance
     better = cand is not None and (
         _rank(cand) < _rank(best)
         if not valid
         else _hausdorff(cand.report) < h0
         and _rank(cand) <= _rank(best)
-        and _fails(cand, shape_tol) <= _fails(best, shape_tol)
+        and fails(cand) <= fails(best)
     )
     attempts.append(
         refinement_attempt(
@@ -203,6 +224,44 @@ def _closer(cand: DesignAttempt, best: DesignAttempt) -> bool:
     return not best.valid or _hausdorff(cand.report) < _hausdorff(best.report)
 
 
+def _memo(shape_tol: tuple) -> Callable[[DesignAttempt], set[str]]:
+    """``_fails`` of each outcome once (the finish's outcomes live as long as it does)."""
+    known: dict[int, set[str]] = {}
+
+    def fails(outcome: DesignAttempt) -> set[str]:
+        if id(outcome) not in known:
+            known[id(outcome)] = _fails(outcome, shape_tol)
+        return known[id(outcome)]
+
+    return fails
+
+
+def _recording(judge: Callable, seen: list) -> Callable:
+    """``judge`` that keeps every outcome it gives in ``seen``."""
+
+    def judged(result):
+        seen.append(judge(result))
+        return seen[-1]
+
+    return judged
+
+
+def _verified(cand, seen: list, best: DesignAttempt, fails: Callable):
+    """``cand``, or where it fails a ``verify`` check ``best`` passes, the best-ranked valid step of ``seen``
+    closer than ``best`` that fails none (the cheaper steps' 128x128 rigid circle: its closest step, 0.012 %,
+    left a tile edge under the verifier's minimum, its second 0.081 % did not)."""
+    if cand is None or not seen or not best.valid or fails(cand) <= fails(best):
+        return cand
+    closer = [c for c in seen if c.valid and c is not cand and _closer(c, best)]
+    return next((c for c in sorted(closer, key=_rank) if fails(c) <= fails(best)), cand)
+
+
+def _cheap(req: DesignRequest) -> bool:
+    """Whether ``req``'s design, under the rigid gate, is finished with the cheaper steps (``CHEAP_PATIENCE``):
+    a rigid request's, not a mirrored one's."""
+    return req.rigid and not req.symmetry
+
+
 def _second_route(
     req: DesignRequest, start: DesignAttempt, judge: Callable
 ) -> tuple[DesignAttempt | None, list[float], float]:
@@ -223,7 +282,8 @@ def _steps(
     req: DesignRequest, start: DesignAttempt, judge: Callable, gamma: float = MINIMAX_GAMMA
 ) -> tuple[DesignAttempt | None, list[float], float]:
     """Lawson's steps from the outcome ``start``: the best step's ``_check`` outcome that passes every check
-    (None if none does), the Hausdorff distance of every step and their seconds."""
+    (None if none does), the Hausdorff distance of every step and their seconds; the cheaper steps
+    (``CHEAP_PATIENCE``) where ``req`` asks ``finish_step``."""
     checked: dict[int, DesignAttempt] = {}
 
     def valid(result) -> bool:
@@ -236,8 +296,10 @@ def _steps(
         steps=MINIMAX_STEPS,
         gamma=gamma,
         accept=valid,
-        patience=MINIMAX_PATIENCE,
+        patience=CHEAP_PATIENCE if req.finish_step else MINIMAX_PATIENCE,
         backtrack=MINIMAX_BACKTRACK,
+        # a vetoed first step does not end the cheaper steps (the rigid 64x64 peanut's, 0.139 %, overlapped)
+        count_first_veto=not req.finish_step,
     )
     return (checked.get(id(refined)) if refined is not None else None), trace, secs
 

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.design_minimax import (
     FINISH_ABOVE,
+    FINISH_FLOOR,
     FREE_FINISH_ABOVE,
     FREE_FINISH_ALL_TILES,
     MINIMAX_TILES,
@@ -45,11 +47,12 @@ def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
     assert applies(
         DesignRequest(rows=64, cols=64, target=tgt), {}, Attempt(None, between, [], True, {})
     )
-    # ... down to a floor: the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) are not finished
+    # ... down to a floor for a mirrored request (a rigid one is finished from 48 tiles a side whatever its miss,
+    # with cheaper steps: test_a_rigid_design_from_48_tiles_is_finished_with_the_cheaper_steps)
     circles = {"conformance": {"deployed": {"hausdorff_rel": 0.0022}}}
     for n in (64, 128):
         assert not applies(
-            DesignRequest(rows=n, cols=n, target=tgt, rigid=True),
+            DesignRequest(rows=n, cols=n, target=tgt, symmetry="y"),
             {},
             Attempt(None, circles, [], True, {}),
         )
@@ -71,14 +74,11 @@ def test_a_non_rigid_design_is_finished_below_the_rigid_gate():
         miss = Attempt(None, {"conformance": {"deployed": {"hausdorff_rel": h}}}, [], True, {})
         assert applies(DesignRequest(rows=n, cols=n, target=tgt), {}, miss)
         assert not applies(DesignRequest(rows=n, cols=n, target=tgt, symmetry="y"), {}, miss)
-        assert not applies(DesignRequest(rows=n, cols=n, target=tgt, rigid=True), {}, miss)
     assert gate(DesignRequest(rows=32, cols=32, target=tgt)) == FREE_FINISH_ABOVE
     assert gate(DesignRequest(rows=40, cols=40, target=tgt)) == pytest.approx(
         FREE_FINISH_ABOVE * 0.8
     )
-    assert gate(DesignRequest(rows=96, cols=96, target=tgt, symmetry="y")) == gate(
-        DesignRequest(rows=96, cols=96, target=tgt, rigid=True)
-    )
+    assert gate(DesignRequest(rows=96, cols=96, target=tgt, symmetry="y")) == FINISH_FLOOR
     # the mirrored star 64x64 (0.09 %) and the mirrored ellipse 96x96 (0.014 %) are not finished
     for n, h in ((64, 0.0009), (96, 0.00014)):
         close = Attempt(None, {"conformance": {"deployed": {"hausdorff_rel": h}}}, [], True, {})
@@ -89,7 +89,7 @@ def test_a_free_design_from_48_tiles_a_side_is_finished_whatever_its_miss():
     """Under the free gate (0.2 % at 48x48, 0.15 % at 64x64, 0.1 % at 96x96) the free ellipse's 48x48 design kept
     0.151 % above its 32x32 one's 0.109 %, and the free star's 64x64 one 0.090 % above its finished 48x48 one's
     0.069 %: from FREE_FINISH_ALL_TILES tiles a side every free design is finished (0.036 %, 0.062 %). A 32x32
-    design, a rigid and a mirrored one keep their gates."""
+    design and a mirrored one keep their gates (a rigid one: RIGID_FINISH_ALL_TILES)."""
     tgt = load_target("ellipse", 100)
 
     def missing(h: float) -> Attempt:
@@ -99,7 +99,6 @@ def test_a_free_design_from_48_tiles_a_side_is_finished_whatever_its_miss():
     for n, h in ((48, 0.00151), (64, 0.0006), (96, 0.00063), (128, 1e-6)):
         free = DesignRequest(rows=n, cols=n, target=tgt)
         assert gate(free) == 0.0 and applies(free, {}, missing(h))
-        assert not applies(DesignRequest(rows=n, cols=n, target=tgt, rigid=True), {}, missing(h))
         assert not applies(DesignRequest(rows=n, cols=n, target=tgt, symmetry="x"), {}, missing(h))
     # a 48-tile side alone is enough (a 24x48 lattice); the 32x32 ellipse (0.109 %) is not finished
     assert applies(DesignRequest(rows=24, cols=48, target=tgt), {}, missing(0.00151))
@@ -234,8 +233,7 @@ def test_a_free_96x96_design_left_above_the_free_gate_gets_a_second_lawson_route
 def test_a_rigid_96x96_design_left_above_the_free_gate_gets_the_second_route_too(second_route):
     """The rigid 96x96 peanut's finish stalled at 0.249 % as the free one's did, above its 64x64 design's 0.21 %:
     the second route (exponent 1, from the best design) came to 0.203 % for it too. A rigid request reaches the
-    second route only through the finish, above the rigid gate: the 64x64 and 128x128 rigid circles (0.21 %,
-    0.22 %) are not finished, so they pay nothing for it; a mirrored request still does not get it."""
+    second route from 96 tiles a side, above the free gate's share; a mirrored request still does not get it."""
     from fabkiri.api import design_minimax as dm
 
     routes, second = second_route
@@ -245,6 +243,105 @@ def test_a_rigid_96x96_design_left_above_the_free_gate_gets_the_second_route_too
     assert applies(rigid, {}, stalled)
     got = dm.minimax_finish(rigid, stalled, lambda r: _outcome(0.009, [], True), [], lambda t: None)
     assert got is second and routes[-1] == (stalled, dm.SECOND_ROUTE_GAMMA)
-    for n in (64, 128):
-        circle = DesignRequest(rows=n, cols=n, target=load_target("circle", 100), rigid=True)
-        assert not applies(circle, {}, _outcome(0.0022, [], True))
+    mirrored = replace(rigid, symmetry="y")
+    routes.clear()
+    assert dm.minimax_finish(mirrored, stalled, lambda r: stalled, [], lambda t: None) is None
+    assert all(g == dm.MINIMAX_GAMMA for _, g in routes)
+
+
+def test_a_rigid_design_from_48_tiles_is_finished_with_the_cheaper_steps(monkeypatch):
+    """Under the rigid gate the rigid star's and ellipse's 48x48 designs kept 0.24 % and 0.15 %, above their 32x32
+    ones (0.07 %, 0.11 %), and finishing them cost the 64x64 rigid circle (0.214 %) about 6x its design. From
+    RIGID_FINISH_ALL_TILES tiles a side a rigid design is finished whatever its miss, and one under the rigid
+    gate with the cheaper steps (``finish_step``: the reduced solver's first LM scaling, no stiffer stage) and
+    patience 1, a vetoed first step not counted (64x64 circle: main's steps 0.137 % for 17.8 CPU s of steps; the
+    cheaper ones 0.007 %, 7.6 CPU s the whole design). A free design under the rigid gate, a rigid one above it
+    and a 32x32 one keep the full steps or gate."""
+    from fabkiri.api import design_minimax as dm
+
+    asked: list = []
+
+    def refine(req, start, **kw):
+        asked.append((req, kw["patience"] if kw["count_first_veto"] != req.finish_step else None))
+        return None, [0.003], 1.0
+
+    monkeypatch.setattr(dm, "refine_minimax", refine)
+    monkeypatch.setattr(dm, "design", lambda r: "result")
+    circle = load_target("circle", 100)
+    assert dm.RIGID_FINISH_ALL_TILES == 48 and dm.CHEAP_PATIENCE == 1
+    start = Attempt(
+        type("P", (), {"nodes": None})(), _outcome(0.00214, [], True).report, [], True, {}
+    )
+    for n in (48, 64, 128):
+        rigid = DesignRequest(rows=n, cols=n, target=circle, rigid=True)
+        assert gate(rigid) == 0.0 and applies(rigid, {}, start)
+        asked.clear()
+        dm.minimax_finish(rigid, start, lambda r: start, [], lambda t: None)
+        assert asked and all(r.finish_step and p == dm.CHEAP_PATIENCE for r, p in asked)
+    # a free design under the rigid gate and a rigid one above it: the full steps
+    above = Attempt(start.pattern, _outcome(0.004, [], True).report, [], True, {})
+    for req, outcome in (
+        (DesignRequest(rows=64, cols=64, target=circle), start),
+        (DesignRequest(rows=64, cols=64, target=circle, rigid=True), above),
+    ):
+        asked.clear()
+        dm.minimax_finish(req, outcome, lambda r, o=outcome: o, [], lambda t: None)
+        assert asked and not any(r.finish_step or p != dm.MINIMAX_PATIENCE for r, p in asked)
+    assert not applies(DesignRequest(rows=32, cols=32, target=circle, rigid=True), {}, start)
+
+
+def test_a_finish_step_runs_the_first_lm_scaling_without_the_stiffer_stage(monkeypatch):
+    """A cheaper finish step (``finish_step``) asks the reduced solver's first LM scaling only (the other
+    scaling's second start ran on every step of the 64x64 rigid circle's finish: its weighted fit rows miss by
+    more than FULL_ABOVE) and no stiffer second stage after a feasible first (its 10 iterations on every step
+    pulled the fit back: 64x64 rigid circle 0.144 % with it, 0.007 % without)."""
+    from fabkiri.design.quad import routes
+    from fabkiri.design.quad.rigid.reduced import POLISH_STEPS
+    from fabkiri.design.quad.solve import design
+
+    seen: list = []
+    real = routes.solve_reduced
+
+    def spy(*args, **kwargs):
+        seen.append((args[6].scalings, args[6].polish_steps))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(routes, "solve_reduced", spy)
+    tgt = load_target("circle", 100)
+    for step, want in ((False, (routes.SCALINGS, POLISH_STEPS)), (True, (routes.SCALINGS[:1], 0))):
+        seen.clear()
+        out = design(
+            DesignRequest(
+                rows=8, cols=8, target=tgt, rigid=True, solver="reduced", finish_step=step
+            )
+        )
+        assert out.converged and seen == [want]
+    assert len(routes.SCALINGS) == 2 and POLISH_STEPS > 0
+
+
+def test_the_cheaper_steps_fall_back_on_the_closest_step_that_passes_verify(monkeypatch):
+    """The 128x128 rigid circle's cheaper steps came to 0.012 % at their third, but that design left a tile edge
+    under the verifier's minimum, so the finish kept nothing (0.221 %); its second step (0.081 %) fails no check
+    the design passes and is kept instead. The full steps keep their rule: the closest step or nothing."""
+    from fabkiri.api import design_minimax as dm
+
+    pattern = type("P", (), {"nodes": None})()
+    start, near, nearer = (
+        Attempt(pattern, _outcome(h, [], True).report, [], True, {})
+        for h in (0.0022, 0.0008, 0.00012)
+    )
+    judged = {"near": near, "nearer": nearer}
+
+    def refine(req, start_nodes, **kw):
+        assert all(kw["accept"](r) for r in judged)
+        return "nearer", [0.0008, 0.00012], 1.0
+
+    monkeypatch.setattr(dm, "refine_minimax", refine)
+    monkeypatch.setattr(dm, "_fails", lambda o, tol: {"tiles min edge"} if o is nearer else set())
+    circle = load_target("circle", 100)
+    rigid = DesignRequest(rows=128, cols=128, target=circle, rigid=True)
+    attempts: list = []
+    assert dm.minimax_finish(rigid, start, judged.get, attempts, lambda t: None) is near
+    assert attempts[-1]["kept"] and attempts[-1]["hausdorff_max_rel"] == 0.0008
+    free = DesignRequest(rows=128, cols=128, target=circle)
+    assert dm.minimax_finish(free, start, judged.get, [], lambda t: None) is None

@@ -55,6 +55,7 @@ def refine_minimax(
     accept: Callable[[DesignResult], bool] | None = None,
     patience: int | None = None,
     backtrack: bool = False,
+    count_first_veto: bool = True,
 ) -> tuple[DesignResult | None, list[float], float]:
     """Lawson steps from the design ``start_mm`` (deployed nodes, mm) under ``req``'s rows.
 
@@ -66,7 +67,8 @@ def refine_minimax(
     ``patience`` (optional): stop after that many steps in a row that found no better candidate.
     ``backtrack``: a step the caller vetoes is not stepped from; the next starts again from the best step so far
     (the start at first) with half the exponent (``_Steps``), and a vetoed step closer than the best does not
-    count against ``patience``."""
+    count against ``patience``; with ``count_first_veto`` False, nor does one vetoed before any candidate (a
+    patience of 1 would end the steps at a vetoed first step)."""
     target = req.target
     if target is None:  # the steps are judged by their Hausdorff distance to the deployed target
         raise InputError(
@@ -88,7 +90,9 @@ def refine_minimax(
         if better:
             best, since = (h, result), -1
         # a vetoed step that came closer is not one without progress: the weights work, the next step backtracks
-        since += not (backtrack and vetoed and closer and best is not None)
+        since += not (
+            backtrack and vetoed and closer and (best is not None or not count_first_veto)
+        )
         if patience is not None and since >= patience:
             break
         walk.next(result, better, vetoed)

@@ -91,6 +91,9 @@ class DesignRequest:
     fit_weights: dict | None = (
         None  # fit family name -> row weights (``refine.py``: towards the minimax fit)
     )
+    # a minimax finish's cheaper step (``api/design_minimax.py``), warm-started from a converged rigid design: the
+    # reduced solver's first LM scaling only and no stiffer second stage after a feasible first (``routes._solve_reduced``)
+    finish_step: bool = False
 
     def validate(self) -> None:
         if (

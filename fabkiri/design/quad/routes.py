@@ -25,7 +25,7 @@ from .problem import DesignProblem, _acceptable, _mean_edge, _objective, _why_no
 from .rigid import outline
 from .rigid.family import RigidFamily
 from .rigid.mirror import Mirror
-from .rigid.reduced import SCALINGS, ReducedSearch, fit_miss, solve_reduced
+from .rigid.reduced import POLISH_STEPS, SCALINGS, ReducedSearch, fit_miss, solve_reduced
 
 REDUCED_NAME = "closed-form rigid family (reduced Levenberg-Marquardt)"
 FULL_NAME = "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU"
@@ -114,7 +114,9 @@ def _reduced_from(
             log,
             max_iter=req.max_iter,
             miss_tol=np.inf if small else FULL_ABOVE,
-            scalings=scalings,
+            # a finish step: its first scaling, no stiffer stage after a feasible first (``finish_step``)
+            scalings=scalings[:1] if req.finish_step else scalings,
+            polish_steps=0 if req.finish_step else POLISH_STEPS,
         ),
         S0=S0,
         mirror=mirror,

@@ -393,6 +393,8 @@ class ReducedSearch:
     max_iter: int = 200
     miss_tol: float = 0.0
     scalings: tuple[str, ...] = SCALINGS
+    # the stiffer stage's cap after a first stage that ends feasible (a minimax finish step: 0, ``finish_step``)
+    polish_steps: int = POLISH_STEPS
 
 
 def solve_reduced(
@@ -460,7 +462,7 @@ def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):
         for n, (rho, stall_tol, cap) in enumerate(STAGES):
             merit = judge.staged(rho, scaling if n == 0 else "marquardt")
             if n and judge.ineq_violation(judge.state(p)) == 0.0:
-                cap = min(cap, POLISH_STEPS)
+                cap = min(cap, how.polish_steps)
             p, X, k = levenberg_marquardt(merit, p, min(cap, how.max_iter), stall_tol, how.log)
             iters[f"reduced_{tag}{scaling}_rho_{rho:g}"] = k
             fit_max = max(
