@@ -85,10 +85,15 @@ SECOND_ROUTE_GAMMA = 1.0
 # "A cheaper finish for rigid designs")
 CHEAP_PATIENCE = 1
 # from this many tiles a side a rigid (not mirrored) design is finished whatever its miss, as a free one from
-# ``FREE_FINISH_ALL_TILES``: the rigid star's and ellipse's 48x48 designs (0.24 %, 0.15 %) sat above their 32x32
-# ones (0.07 %, 0.11 %); finished with the cheaper steps 0.069 % and 0.037 %, at 2-4x their CPU, the 64x64 and
-# 128x128 rigid circles at 3-4x (docs/design-solver.md, "A cheaper finish for rigid designs")
+# ``FREE_FINISH_ALL_TILES``, unless its tips alone fit (``_tips_fit``): the rigid star's and ellipse's 48x48 designs
+# (0.24 %, 0.15 %) sat above their 32x32 ones (0.07 %, 0.11 %); finished with the cheaper steps 0.045 % and 0.037 %
+# (docs/design-solver.md, "A cheaper finish for rigid designs")
 RIGID_FINISH_ALL_TILES = 48
+# ... but not where its coarse level, fitted by the tiles' tips alone, already meets the outline within this share
+# of the size: an outline without a feature the least-squares fit smooths over, whose design the floor's reason
+# spares (the rigid circles' levels 0.10-0.20 %, their 64x64 and 128x128 designs 0.21 %, 0.22 %: finished they
+# cost 2.6x and 3.3x; the star's and ellipse's levels 0.4-17 %: docs/design-solver.md, "Session 49 (rig49)")
+TIPS_FIT_WITHIN = FINISH_FLOOR
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -96,18 +101,27 @@ def threshold(share: float, req: DesignRequest) -> float:
     return share * THRESHOLD_TILES / max(req.rows, req.cols)
 
 
-def gate(req: DesignRequest) -> float:
-    """The share of the size past which ``req``'s design is finished: ``FINISH_ABOVE`` scaled to its lattice
-    (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE`` scaled for a
-    free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
-    ``RIGID_FINISH_ALL_TILES``."""
-    if req.rigid and not req.symmetry and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES:
+def gate(req: DesignRequest, report: dict | None = None) -> float:
+    """The share of the size past which ``req``'s design (its ``report``) is finished: ``FINISH_ABOVE`` scaled to
+    its lattice (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE``
+    scaled for a free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
+    ``RIGID_FINISH_ALL_TILES`` whose tips alone do not fit (``_tips_fit``)."""
+    rigid_all = req.rigid and not req.symmetry and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
+    if rigid_all and not _tips_fit(report):
         return 0.0
     if not _free(req):
         return _rigid_gate(req)
     if max(req.rows, req.cols) >= FREE_FINISH_ALL_TILES:
         return 0.0
     return threshold(FREE_FINISH_ABOVE, req)
+
+
+def _tips_fit(report: dict | None) -> bool:
+    """Whether the design of ``report`` came from a coarse level fitted by its tips alone that met the outline within
+    ``TIPS_FIT_WITHIN`` of the size (``DesignProblem._coarse_level``)."""
+    level = (report or {}).get("coarse") or {}
+    h = level.get("hausdorff_rel")
+    return level.get("fit") == "tips" and h is not None and h <= TIPS_FIT_WITHIN
 
 
 def _free(req: DesignRequest) -> bool:
@@ -132,7 +146,7 @@ def applies(req: DesignRequest, contracted: dict, best) -> bool:
         and req.fabrication is None
         and not req.min_opening
         and req.rows * req.cols >= MINIMAX_TILES
-        and (not best.valid or _hausdorff(best.report) > gate(req))
+        and (not best.valid or _hausdorff(best.report) > gate(req, best.report))
     )
 
 
