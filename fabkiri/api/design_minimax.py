@@ -19,8 +19,8 @@ drop ended at 1.78 % from its tips-only levels (16x16: 0.92 %), 0.51 % from the 
 Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles and scale with the lattice's
 resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a free design
 (neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``), and none from
-``FREE_FINISH_ALL_TILES`` tiles a side (a rigid one from ``RIGID_FINISH_ALL_TILES``, under the rigid gate with
-cheaper steps, ``CHEAP_PATIENCE``). A step the
+``FREE_FINISH_ALL_TILES`` tiles a side (a rigid one from ``RIGID_FINISH_ALL_TILES`` where its tips-only coarse
+level misses the outline by more than the floor, under the rigid gate with cheaper steps, ``CHEAP_PATIENCE``). A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """

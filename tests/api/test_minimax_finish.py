@@ -271,6 +271,7 @@ def test_a_rigid_design_from_48_tiles_is_finished_with_the_cheaper_steps(monkeyp
     monkeypatch.setattr(dm, "design", lambda r: "result")
     circle = load_target("circle", 100)
     assert dm.RIGID_FINISH_ALL_TILES == 48 and dm.CHEAP_PATIENCE == 1
+    # (a start with no tips-only coarse level that fits: ``_tips_fit``, the next test)
     start = Attempt(
         type("P", (), {"nodes": None})(), _outcome(0.00214, [], True).report, [], True, {}
     )
