@@ -85,15 +85,10 @@ SECOND_ROUTE_GAMMA = 1.0
 # "A cheaper finish for rigid designs")
 CHEAP_PATIENCE = 1
 # from this many tiles a side a rigid (not mirrored) design is finished whatever its miss, as a free one from
-# ``FREE_FINISH_ALL_TILES``, unless its tips alone fit (``_tips_fit``): the rigid star's and ellipse's 48x48 designs
-# (0.24 %, 0.15 %) sat above their 32x32 ones (0.07 %, 0.11 %); finished with the cheaper steps 0.045 % and 0.037 %
-# (docs/design-solver.md, "A cheaper finish for rigid designs")
+# ``FREE_FINISH_ALL_TILES``, where its tips alone miss (``_tips_miss``): the rigid star's 48x48 and 96x96 designs
+# (0.24 %, 0.11 %) sat above its 32x32 and 64x64 ones (0.07 %, 0.09 %); finished with the cheaper steps 0.045 % and
+# 0.032 % (docs/design-solver.md, "A cheaper finish for rigid designs", "Session 49 (rig49)")
 RIGID_FINISH_ALL_TILES = 48
-# ... but not where its coarse level, fitted by the tiles' tips alone, already meets the outline within this share
-# of the size: an outline without a feature the least-squares fit smooths over, whose design the floor's reason
-# spares (the rigid circles' levels 0.10-0.20 %, their 64x64 and 128x128 designs 0.21 %, 0.22 %: finished they
-# cost 2.6x and 3.3x; the star's and ellipse's levels 0.4-17 %: docs/design-solver.md, "Session 49 (rig49)")
-TIPS_FIT_WITHIN = FINISH_FLOOR
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -105,9 +100,9 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     """The share of the size past which ``req``'s design (its ``report``) is finished: ``FINISH_ABOVE`` scaled to
     its lattice (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE``
     scaled for a free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
-    ``RIGID_FINISH_ALL_TILES`` whose tips alone do not fit (``_tips_fit``)."""
+    ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``)."""
     rigid_all = req.rigid and not req.symmetry and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
-    if rigid_all and not _tips_fit(report):
+    if rigid_all and _tips_miss(req, report):
         return 0.0
     if not _free(req):
         return _rigid_gate(req)
@@ -116,12 +111,17 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     return threshold(FREE_FINISH_ABOVE, req)
 
 
-def _tips_fit(report: dict | None) -> bool:
-    """Whether the design of ``report`` came from a coarse level fitted by its tips alone that met the outline within
-    ``TIPS_FIT_WITHIN`` of the size (``DesignProblem._coarse_level``)."""
+def _tips_miss(req: DesignRequest, report: dict | None) -> bool:
+    """Whether the design of ``report`` has no coarse level fitted by its tips alone that met the outline within the
+    shape tolerance its levels are judged by (``second_opinion_above``, ``DesignProblem._coarse_level``). Such a
+    level fits the outline but where the fine lattice resolves a feature it cannot: there the least-squares fit
+    leaves its largest miss, the finish's case (the rigid star's levels 10-17 %, the drop's 13 %). Where the tips
+    alone fit, the design keeps the rigid gate: the rigid circles (levels 0.10-0.20 %, their 64x64 and 128x128
+    designs 0.21 %, 0.22 %: finished, 2.6x and 3.3x their CPU), and the peanut's and bean's 64x64 designs (levels
+    0.64 %, 0.77 %: finished, 0.14 %, under the 96x96 ones that main's full finish leaves at 0.20 % and 0.17 %)."""
     level = (report or {}).get("coarse") or {}
     h = level.get("hausdorff_rel")
-    return level.get("fit") == "tips" and h is not None and h <= TIPS_FIT_WITHIN
+    return not (level.get("fit") == "tips" and h is not None and h <= req.second_opinion_above)
 
 
 def _free(req: DesignRequest) -> bool:
