@@ -13,6 +13,12 @@ from __future__ import annotations
 import numpy as np
 
 
+def _next(a: np.ndarray, shift: int = 1) -> np.ndarray:
+    """``np.roll(a, -shift, 0)`` (the next corner's values; an index copy, cheaper than ``np.roll``)."""
+    k = len(a)
+    return a[(np.arange(k) + shift) % k]
+
+
 def _normal(a0, a1, b0, b1):
     """Inward unit normal of the CCW edge a -> b (as ``dual.inward_normal``)."""
     e0, e1 = b0 - a0, b1 - a1
@@ -24,15 +30,15 @@ def _clipped_boundary(P: tuple, Q: tuple) -> np.ndarray:
     """``print_rows._clipped_boundary`` on ``(x, y)`` pairs of ``(corners, rows)`` arrays (rows last: the
     broadcasts run over long contiguous rows)."""
     a0, a1 = np.ascontiguousarray(P[0]), np.ascontiguousarray(P[1])
-    ab0, ab1 = np.roll(a0, -1, 0) - a0, np.roll(a1, -1, 0) - a1
+    ab0, ab1 = _next(a0) - a0, _next(a1) - a1
     # Q's edge j first, P's edges next, the rows last (contiguous: strided broadcasts cost three times as much)
     c0, c1 = np.ascontiguousarray(Q[0])[:, None], np.ascontiguousarray(Q[1])[:, None]
-    n0, n1 = c1 - np.roll(c1, -1, 0), np.roll(c0, -1, 0) - c0
+    n0, n1 = c1 - _next(c1), _next(c0) - c0
     f0 = n0 * (a0 - c0) + n1 * (a1 - c1)
     # an edge's end is the next edge's start: the same operations on the same corner
-    f1 = np.roll(f0, -1, 1)
+    f1 = f0[:, _next(np.arange(len(a0)))]
     out0 = f0 < 0
-    out1 = np.roll(out0, -1, 1)
+    out1 = out0[:, _next(np.arange(len(a0)))]
     both = out0 & out1
     empty = both[0]
     for b in both[1:]:  # an edge of P outside an edge of Q is outside Q
@@ -107,8 +113,8 @@ def _shrunk(c0: np.ndarray, c1: np.ndarray, shrink: float) -> tuple:
     """``print_rows._shrunk``: every corner moved by ``shrink`` times its mitre vector."""
     if not shrink:
         return c0, c1
-    na = _normal(np.roll(c0, 1, 0), np.roll(c1, 1, 0), c0, c1)
-    nb = _normal(c0, c1, np.roll(c0, -1, 0), np.roll(c1, -1, 0))
+    na = _normal(_next(c0, -1), _next(c1, -1), c0, c1)
+    nb = _normal(c0, c1, _next(c0), _next(c1))
     s = (na[0] * nb[0] + na[1] * nb[1]) + 1.0
     return c0 + (na[0] + nb[0]) / s * shrink, c1 + (na[1] + nb[1]) / s * shrink
 
@@ -123,13 +129,12 @@ def _dot(a: tuple, b: tuple) -> np.ndarray:
     return a[0] * b[0] + a[1] * b[1]
 
 
-def _mitre(x, quads, rows, j) -> tuple:
-    """``fabrication._mitre`` (the polygon all of ``quads``' nodes)."""
-    n = quads.shape[1]
-    p0, p1 = _at(x, quads, rows, (j - 1) % n)
-    h0, h1 = _at(x, quads, rows, j)
-    q0, q1 = _at(x, quads, rows, (j + 1) % n)
-    na, nb = _normal(p0, p1, h0, h1), _normal(h0, h1, q0, q1)
+def _mitres(x, quads) -> tuple:
+    """``fabrication._mitre`` at every corner of every polygon of ``quads`` (all of its nodes), once: ``(x, y)``
+    arrays indexed ``[corner, polygon]`` (the rows ask each corner's mitre twice)."""
+    c0, c1 = x[quads.T, 0], x[quads.T, 1]
+    na = _normal(_next(c0, -1), _next(c1, -1), c0, c1)
+    nb = _normal(c0, c1, _next(c0), _next(c1))
     s = _dot(na, nb) + 1.0
     return (na[0] + nb[0]) / s, (na[1] + nb[1]) / s
 
@@ -156,13 +161,14 @@ def width_values(x, quads, width: float, shrink: float, sel, smooth: float) -> n
     n = quads.shape[1]
     rows, e, a, b = _edges(x, quads, sel)
     nrm = _normal(*a, *b)
+    mitre = _mitres(x, quads) if shrink else None
     far = []
     for off in range(2, n):
         j = (e + off) % n
         q0, q1 = _at(x, quads, rows, j)
         g = _dot(nrm, (q0 - a[0], q1 - a[1]))
-        if shrink:
-            g = g + (_dot(nrm, _mitre(x, quads, rows, j)) - 1.0) * shrink
+        if mitre is not None:
+            g = g + (_dot(nrm, (mitre[0][j, rows], mitre[1][j, rows])) - 1.0) * shrink
         far.append(g)
     top = far[0]
     for g in far[1:]:
@@ -177,7 +183,9 @@ def shrunk_edge_values(x, quads, shrink: float, min_edge: float, sel) -> np.ndar
     E0, E1 = b[0] - a[0], b[1] - a[1]
     ln = np.sqrt(E0 * E0 + E1 * E1)
     u = E0 / ln, E1 / ln
-    ma, mb = _mitre(x, quads, rows, e), _mitre(x, quads, rows, (e + 1) % quads.shape[1])
+    m0, m1 = _mitres(x, quads)
+    f = (e + 1) % quads.shape[1]
+    ma, mb = (m0[e, rows], m1[e, rows]), (m0[f, rows], m1[f, rows])
     return ln + _dot(u, (mb[0] - ma[0], mb[1] - ma[1])) * shrink - min_edge
 
 
