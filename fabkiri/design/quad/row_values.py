@@ -209,20 +209,19 @@ def strip_values(x, quads, pairs: tuple, box: tuple, soft: float, smooth: float)
     ph, e_h, n_h = _strip_box(x, quads, t, ch, eh)
     pk, e_k, n_k = _strip_box(x, quads, t, ck, ek)
 
-    def extents(e, n, u):
+    # the four axes at once, a row each: the same operations per axis as the Dual path's loop over them
+    u = np.stack([e_h[0], n_h[0], e_k[0], n_k[0]]), np.stack([e_h[1], n_h[1], e_k[1], n_k[1]])
+
+    def extents(e, n):
         eu, nu = _dot(e, u), _dot(n, u)
         re, rn = np.sqrt(eu * eu + soft * soft), np.sqrt(nu * nu + soft * soft)
         base = eu * a0
         lower = base + (eu - re) * 0.5 * along + (nu - rn) * 0.5 * across
         return lower, base + (eu + re) * 0.5 * along + (nu + rn) * 0.5 * across
 
-    d = (pk[0] - ph[0], pk[1] - ph[1])
-    gaps = []
-    for u in (e_h, n_h, e_k, n_k):
-        dp = _dot(d, u)
-        (lo_h, hi_h), (lo_k, hi_k) = extents(e_h, n_h, u), extents(e_k, n_k, u)
-        gaps.append(dp + lo_k - hi_h)
-        gaps.append(-dp + lo_h - hi_k)
-    while len(gaps) > 1:
-        gaps = [_smooth_max(a, b, smooth) for a, b in zip(gaps[::2], gaps[1::2])]
-    return gaps[0] - clearance
+    dp = _dot((pk[0] - ph[0], pk[1] - ph[1]), u)
+    (lo_h, hi_h), (lo_k, hi_k) = extents(e_h, n_h), extents(e_k, n_k)
+    # the balanced tree of smooth maxima: each axis's two gaps, then the axes in pairs, then the two pairs
+    top = _smooth_max(dp + lo_k - hi_h, -dp + lo_h - hi_k, smooth)
+    top = _smooth_max(top[0::2], top[1::2], smooth)
+    return _smooth_max(top[0], top[1], smooth) - clearance
