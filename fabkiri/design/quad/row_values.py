@@ -1,11 +1,12 @@
 """The fabrication rows' values alone, on plain arrays: a residual-only call (:func:`~..core.dual.values_only`)
-of the strip pad rows without the :class:`~..core.dual.Dual` wrapping and with every clipping edge at once.
+of the strip pad, strip clearance, width and shrunk edge rows without the :class:`~..core.dual.Dual` wrapping.
 
-Each value is computed by the same IEEE operations in the same order as the Dual path (``print_rows.pad_rows``),
-so the bits are the same (``tests/design/test_print_rows.py`` compares them): only the layout changes (the
-Cyrus-Beck clipping of every edge of one polygon against every edge of the other is one broadcast instead of
-a loop of small ones). The solvers ask these values at every trial step, the gradients only where a row is
-active.
+Each value is computed by the same IEEE operations in the same order as the Dual path (``print_rows.pad_rows``,
+``fabrication.strip_rows``, ``width_rows``, ``shrunk_edge_rows``), so the bits are the same
+(``tests/design/test_print_rows.py`` compares them); only the layout changes: the pads' Cyrus-Beck clipping
+of every edge of one polygon against every edge of the other in one broadcast instead of a loop of small
+ones, each corner's mitre once, the strip rows' four axes at once. The solvers ask these values at every
+trial step, the gradients only where a row is active.
 """
 
 from __future__ import annotations
