@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import shapely
@@ -72,6 +74,27 @@ def test_residual_only_rows_carry_no_gradients_and_the_same_values():
     dual = PR.pad_rows(x, *args, *PR.strip_pad(MK4, 4.0))
     assert plain.g is None and dual.g.shape == (len(dual.v), 16)
     assert np.array_equal(plain.v, dual.v)
+
+
+@pytest.mark.parametrize(("n", "noise", "unit"), [(6, 0.02, 12.0), (5, 0.15, 4.0), (4, 0.4, 2.0)])
+def test_residual_only_rows_are_the_dual_rows_to_the_bit(n, noise, unit):
+    """The residual-only values (plain arrays, ``row_values.py``) are the bytes of the Dual path's values: on
+    lattices from nearly standard to folded tiles (empty clips, obtuse hinge corners), in both closed states,
+    at a continuation's first step and without shrink, every fabrication family."""
+    p = standard_pattern(n, n, tile_size=1.0)
+    stc = Stencils.from_pattern(p)
+    full = F.FabricationLimits(**{**MK4.to_dict(), "min_hole_mm": 0.5})
+    limits = [
+        full,
+        full.step(0.25, 0.02),
+        replace(full, shrink_mm=0.0),
+        replace(full, print_state=2),
+    ]
+    for seed in range(4):
+        x = p.nodes + noise * np.random.default_rng(seed).standard_normal(p.nodes.shape)
+        for lim in limits:
+            for f in F.families(stc, len(x), lim, unit, p.nodes):
+                assert f.residual(x).tobytes() == np.asarray(f(x)[0]).tobytes(), (f.name, seed, lim)
 
 
 def test_gradients_of_the_active_rows_only_are_the_full_jacobians_rows():

@@ -93,6 +93,11 @@ def values_only(x: np.ndarray) -> np.ndarray:
     return np.asarray(x).view(_Values)
 
 
+def is_values_only(x: np.ndarray) -> bool:
+    """Whether ``x`` was marked by :func:`values_only` (a row function may then take a plain-array path)."""
+    return isinstance(x, _Values)
+
+
 def dual_corner(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k: np.ndarray):
     """Corner ``k`` (per row) of quad ``rows`` as a 2-vector of :class:`Dual` seeded on its 2n coordinates
     (n = ``quads.shape[1]``: any polygon arity, the kagome's triangles and hexagonal holes too); values only

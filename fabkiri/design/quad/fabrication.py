@@ -30,8 +30,8 @@ from dataclasses import asdict, dataclass, fields, replace
 import numpy as np
 
 from ...pattern import thinness as fab
-from ..core.dual import Dual, dual_corner, inward_normal, vec_dot, vec_sub
-from . import print_rows
+from ..core.dual import Dual, dual_corner, inward_normal, is_values_only, vec_dot, vec_sub
+from . import print_rows, row_values
 from .constraints import Family, Stencils
 from .row_family import ineq_family, pick
 
@@ -125,6 +125,8 @@ def width_rows(
     """``max_j dist(q_j, line e) - width`` for every quad and edge e (rows ordered quad-major; ``sel``: those
     rows only); any arity: a triangle has one far corner (the row is its altitude, exact), more are folded by
     smooth maxima."""
+    if is_values_only(x):  # a residual-only call: the same bits on plain arrays
+        return Dual(row_values.width_values(x, quads, width, shrink, sel, SMOOTH), None)
     rows, e, a, b = _edges(x, quads, sel)
     n = inward_normal(a, b)
     far = []
@@ -158,6 +160,8 @@ def shrunk_edge_rows(
     x: np.ndarray, quads: np.ndarray, shrink: float, min_edge: float, sel: np.ndarray | None = None
 ) -> Dual:
     """Signed length of every shrunk edge (rows ``sel`` only, if given) minus ``min_edge``."""
+    if is_values_only(x):
+        return Dual(row_values.shrunk_edge_values(x, quads, shrink, min_edge, sel), None)
     rows, e, a, b = _edges(x, quads, sel)
     E = vec_sub(b, a)
     ln = vec_dot(E, E).sqrt()
@@ -213,6 +217,9 @@ def strip_rows(
     towards corners ``eh``, ``ek``; ``box = (a0, along, across, clearance)``, :func:`strip_box`: the box
     ``[a0, a0 + along]`` along the seam, ``[0, across]`` into the tile) minus ``clearance``; soft min/max and
     the smooth max over the eight axis gaps are all on the safe side."""
+    if is_values_only(x):
+        v = row_values.strip_values(x, quads, (t, ch, eh, ck, ek), box, SOFT, STRIP_SMOOTH)
+        return Dual(v, None)
     a0, along, across, clearance = box
     ph, e_h, n_h = _strip_box(x, quads, t, ch, eh)
     pk, e_k, n_k = _strip_box(x, quads, t, ck, ek)

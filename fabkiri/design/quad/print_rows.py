@@ -20,9 +20,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.dual import Dual, dual_corner, inward_normal, roll, stack, vec_dot, vec_sub
+from ..core.dual import (
+    Dual,
+    dual_corner,
+    inward_normal,
+    is_values_only,
+    roll,
+    stack,
+    vec_dot,
+    vec_sub,
+)
 from .constraints import Family, Stencils
 from .row_family import ineq_family, pick
+from .row_values import pad_values
 
 if TYPE_CHECKING:  # fabrication.py builds on this module's rows
     from .fabrication import FabricationLimits
@@ -118,7 +128,12 @@ def pad_rows(
 ) -> Dual:
     """Pad area over ``width`` minus ``need`` over ``width`` for every pad of :func:`pad_polygons`: the band
     ``[t0, t0 + width]`` along the seam (own ``corner`` to ``end``), ``reach + shrink`` either side of it,
-    clipped by the own tile shrunk by ``shrink`` (mitre); ``t0`` from both tiles' hinge corners."""
+    clipped by the own tile shrunk by ``shrink`` (mitre); ``t0`` from both tiles' hinge corners. A residual-only
+    call takes :func:`~.row_values.pad_values` (the same bits, a fraction of the time)."""
+    if is_values_only(x):
+        return Dual(
+            pad_values(x, polys, corner, end, other_corner, shrink, width, reach, need), None
+        )
     n = polys.shape[1] // 2
     rows = np.arange(len(polys))
     p = dual_corner(x, polys, rows, corner)
