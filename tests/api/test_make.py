@@ -98,7 +98,8 @@ def test_a_design_that_opens_little_is_warned_about():
     assert "opens little" in floored[1] and "sets a floor" not in floored[1]
 
 
-def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
+@pytest.mark.xdist_group("make-circle-60mm-acrylic")  # shares its design (shared_designs)
+def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, shared_designs, monkeypatch):
     from fabkiri.api import cut
 
     def refuse(pattern, options, **kw):
