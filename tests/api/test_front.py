@@ -171,7 +171,8 @@ def test_api_names_every_front_door():
 
 
 @pytest.mark.slow
-def test_make_reports_each_step_with_its_share():
+def test_make_reports_each_step_with_its_share(shared_designs):
+    # shared_designs: the second make (the one-argument callback) deploys and designs nothing again
     heard = []
     result = fabkiri.make(
         "circle", 120, material="acrylic-3", tiles="6x6", progress=lambda *a: heard.append(a)

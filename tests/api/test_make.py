@@ -21,7 +21,8 @@ from ..e2e.test_bad_input import snapshot
 
 
 @pytest.mark.slow  # ~4 CPU s with the verifier; the quick loop runs the same steps in the test below
-def test_make_cuts_a_circle_end_to_end(tmp_path, run_cli):
+@pytest.mark.xdist_group("make-circle-60mm-acrylic")  # its design, deploy shared
+def test_make_cuts_a_circle_end_to_end(tmp_path, shared_designs, run_cli):
     # 60 mm circle with acrylic-3 tape: make chooses 6x6 (8x8 tiles would be 4.7 mm, under 2 x 3 mm)
     out = tmp_path / "circle"
     code, _, err = run_cli("make", "circle", "--size", "60", "--material", "acrylic-3", "-o", out)
@@ -41,7 +42,8 @@ def test_make_cuts_a_circle_end_to_end(tmp_path, run_cli):
 
 
 @pytest.mark.slow
-def test_make_from_python_keeps_files_until_written(tmp_path):
+@pytest.mark.xdist_group("make-circle-60mm-acrylic")  # its design, deploy shared
+def test_make_from_python_keeps_files_until_written(tmp_path, shared_designs):
     result = fabkiri.make("circle", size=60, material="acrylic-3", hinge="separate", tiles=(6, 6))
     assert isinstance(result, fabkiri.MakeResult)
     assert result.ok and result.exit_code == 0 and result.output is None
@@ -96,7 +98,8 @@ def test_a_design_that_opens_little_is_warned_about():
     assert "opens little" in floored[1] and "sets a floor" not in floored[1]
 
 
-def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, monkeypatch):
+@pytest.mark.xdist_group("make-circle-60mm-acrylic")  # its design shared
+def test_a_refused_cut_stops_and_keeps_the_design(tmp_path, shared_designs, monkeypatch):
     from fabkiri.api import cut
 
     def refuse(pattern, options, **kw):
@@ -223,7 +226,9 @@ def test_the_make_line_under_a_cut_refusal_makes_it(tmp_path, monkeypatch, run_c
 
 
 @pytest.mark.slow  # a whole make of a 6x6 circle (~9 s on a loaded machine)
-def test_a_failed_deploy_check_still_writes_the_report(tmp_path, monkeypatch):
+@pytest.mark.xdist_group("make-circle-60mm-acrylic")  # its design, deploy shared
+def test_a_failed_deploy_check_still_writes_the_report(tmp_path, shared_designs, monkeypatch):
+    # shared_designs before monkeypatch: the patch below is undone first, then the memo
     # the real deploy, its outcome marked as one with collisions (a real collision case is not cheap)
     from dataclasses import replace
 
