@@ -111,11 +111,8 @@ def _mitre(x, quads, rows, j, n: int | None = None):
 def _edges(x: np.ndarray, quads: np.ndarray, sel: np.ndarray | None = None):
     """Every quad's edge e (quad-major; rows ``sel`` of them only, if given): row quads, e, and the edge's two
     ends."""
+    rows, e = row_values.edge_index(quads, sel)
     n = quads.shape[1]
-    rows = np.repeat(np.arange(len(quads)), n)
-    e = np.tile(np.arange(n), len(quads))
-    if sel is not None:
-        rows, e = rows[sel], e[sel]
     return rows, e, dual_corner(x, quads, rows, e), dual_corner(x, quads, rows, (e + 1) % n)
 
 

@@ -146,13 +146,20 @@ def _smooth_max(a: np.ndarray, b: np.ndarray, eps: float) -> np.ndarray:
     return (a + b) * 0.5 + np.sqrt(h * h + eps * eps) - eps
 
 
-def _edges(x, quads, sel):
-    """``fabrication._edges``: rows, edge index and the two ends of every quad's edge (rows ``sel``)."""
+def edge_index(quads: np.ndarray, sel: np.ndarray | None = None):
+    """``(rows, e)``: the quad and edge of every quad's edge e (quad-major; rows ``sel`` of them only)."""
     n = quads.shape[1]
     rows = np.repeat(np.arange(len(quads)), n)
     e = np.tile(np.arange(n), len(quads))
     if sel is not None:
         rows, e = rows[sel], e[sel]
+    return rows, e
+
+
+def _edges(x, quads, sel):
+    """``fabrication._edges``: rows, edge index and the two ends of every quad's edge (rows ``sel``)."""
+    rows, e = edge_index(quads, sel)
+    n = quads.shape[1]
     return rows, e, _at(x, quads, rows, e), _at(x, quads, rows, (e + 1) % n)
 
 
