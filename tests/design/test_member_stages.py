@@ -2,8 +2,8 @@
 ``routes.MEMBER_STAGE_TILES`` started from its coarse design tries the stiffer penalty stage alone first
 (``reduced.MEMBER_STAGE``): there its start, the coarse design's member, is close to the fine design and the soft
 stage's detour cost iterations and fit (issue #36's 64x64 circle); where that stage alone does not stall close to
-the target, the two stages run from the start as before. A coarse level never tries it: at 96x96 and 128x128 the
-changed start of the level above ended further off."""
+the target, the two stages run from the start as before. Neither larger lattices (96x96 and 128x128 ended further
+off with it) nor a coarse level of one (it would change the start of the level above) try it."""
 
 from __future__ import annotations
 
