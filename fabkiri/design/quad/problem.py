@@ -226,6 +226,7 @@ class DesignProblem:
             # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
             outline=False,
             fabrication=req.fabrication,
+            coarse_level=True,
         )
         res, level = self._coarse_level(sub)
         sc = standard_pattern(rc, cc, tile_size=1.0)

@@ -34,7 +34,7 @@ from .contact import ClosedContact
 from .family import RigidFamily
 from .merit import _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
-from .steps import hard_fit, levenberg_marquardt
+from .steps import exact_fit, fit_miss, levenberg_marquardt, stiffer_alone
 from .tiles import TileShapeRows
 
 # (penalty weight, stall tolerance, iteration cap) per stage, softest first as in the full solver: a stiff
@@ -53,6 +53,11 @@ SCALINGS = ("marquardt", "levenberg")
 # so it gets this many (64x64 rigid circle: 40 steps -> 10, about half the time, fit 0.2005 -> 0.1962 mm,
 # regulariser +1.6 %)
 POLISH_STEPS = 10
+# A level started from its coarse level's design (coarse to fine) can try the stiffer weight alone first
+# (``steps.stiffer_alone``): that design ends at the weight's margins, and where the fine design is close, the soft
+# stage's detour (corners into their margins for the fit, pushed out again) costs iterations and fit (64x64 rigid
+# circle: 31 iterations to 0.214 % of the size, against 14 to 0.197 %). docs/speed.md, "Ninth wave".
+MEMBER_STAGE = (STAGES[-1][0], STAGES[0][1], 25)
 
 
 # families that see only tile shapes: on a member every tile is a rigid copy of its closed-state-1 grid cell,
@@ -358,13 +363,6 @@ class _Merit:
         return H, np.concatenate([*g, [0.0]])
 
 
-def fit_miss(fits: list[Family], X: np.ndarray) -> float:
-    """Largest |fit row| relative to its target's size (both in normalised units)."""
-    return max(
-        (float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0
-    )
-
-
 # below this many entries in the reduced Jacobian J D it is formed densely (measured, 1 thread: faster than
 # the sparse JᵀJ up to 32x32, slower at 64x64 with 1.7e7 entries)
 DENSE_JD = 4e6
@@ -384,7 +382,9 @@ def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> lis
 class ReducedSearch:
     """How :func:`solve_reduced` weighs and searches: the regulariser's weight in the merit, ``fit_tol`` of a
     hard fit (absolute), ``mean_edge(X)`` the unit of its 1 % "nearly exact" threshold, the log, the LM
-    iteration cap, the fit miss that ends the scalings early and the LM scalings to start with."""
+    iteration cap, the fit miss that ends the scalings early, the LM scalings to start with and the
+    ``(penalty weight, stall tolerance, iteration cap)`` of the stiffer stage tried alone first from a coarse
+    design's member (``MEMBER_STAGE``; None: the stages only)."""
 
     reg_weight: float
     fit_tol: float
@@ -395,6 +395,7 @@ class ReducedSearch:
     scalings: tuple[str, ...] = SCALINGS
     # the stiffer stage's cap after a first stage that ends feasible (a minimax finish step: 0, ``finish_step``)
     polish_steps: int = POLISH_STEPS
+    member: tuple[float, float, int] | None = None
 
 
 def solve_reduced(
@@ -457,23 +458,27 @@ def solve_reduced(
 def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):
     """The stages from ``p0`` with each LM scaling in turn (``how.scalings``): ``(p, X, mode)`` of the best."""
     best = None
+    stages: tuple[tuple[float, float, int], ...]
     for scaling in how.scalings:
-        p = p0
-        for n, (rho, stall_tol, cap) in enumerate(STAGES):
+        p, stages = p0, STAGES
+        # (with the first scaling only: the circles it is for need no second)
+        alone = how.member is not None and not tag and scaling == how.scalings[0]
+        first = stiffer_alone(judge, p0, scaling, iters, how) if alone else None
+        if first is not None:
+            p, X, merit = first
+            stages = ()
+            hard = exact_fit(merit, p, X, f"{scaling}_member", iters, how)
+            if hard is not None:
+                return hard
+        for n, (rho, stall_tol, cap) in enumerate(stages):
             merit = judge.staged(rho, scaling if n == 0 else "marquardt")
             if n and judge.ineq_violation(judge.state(p)) == 0.0:
                 cap = min(cap, how.polish_steps)
             p, X, k = levenberg_marquardt(merit, p, min(cap, how.max_iter), stall_tol, how.log)
             iters[f"reduced_{tag}{scaling}_rho_{rho:g}"] = k
-            fit_max = max(
-                (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
-                default=0.0,
-            )
-            if merit.fits and fit_max < 1e-2 * how.mean_edge(X):
-                Xh, ph, kh = hard_fit(merit, p, how.fit_tol)
-                iters[f"reduced_{tag}{scaling}_hard"] = kh
-                if Xh is not None:  # an exact fit: nothing left to compare
-                    return ph, Xh, "hard"
+            hard = exact_fit(merit, p, X, f"{tag}{scaling}", iters, how)
+            if hard is not None:  # an exact fit: nothing left to compare
+                return hard
         ev = judge.evaluate(p)
         cost = float(ev.r @ ev.r)
         miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)

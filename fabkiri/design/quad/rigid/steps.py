@@ -1,5 +1,5 @@
 """The reduced problem's two step loops, both on the LM core (``lm.py``): Levenberg-Marquardt on the
-merit and the hard-fit projection."""
+merit and the hard-fit projection; and the runs of them a search makes (``reduced._search``)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,9 @@ from ...core.lm import Damping, Stopping
 from ...core.lm import levenberg_marquardt as lm_core
 
 if TYPE_CHECKING:
+    from ...core.stencils import Family
     from .merit import _Evaluation
-    from .reduced import _Merit
+    from .reduced import ReducedSearch, _Merit
 
 MAX_STALL = 3  # a stage stops after this many accepted steps in a row that each gain less than its stall tolerance
 
@@ -119,3 +120,43 @@ def hard_fit(merit: _Merit, p: np.ndarray, fit_tol: float, max_iter: int = 40):
         accept="decrease",
     )
     return (pt.ev.X if np.abs(pt.r).max(initial=0.0) <= fit_tol else None), pt.x, it
+
+
+def fit_miss(fits: list[Family], X: np.ndarray) -> float:
+    """Largest |fit row| relative to its target's size (both in normalised units)."""
+    return max(
+        (float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0
+    )
+
+
+def exact_fit(merit, p, X, key: str, iters: dict, how: ReducedSearch):
+    """``(p, X, "hard")`` where the fit is within 1 % of a tile and the hard-fit projection makes it exact."""
+    fit_max = max(
+        (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
+        default=0.0,
+    )
+    if merit.fits and fit_max < 1e-2 * how.mean_edge(X):
+        Xh, ph, kh = hard_fit(merit, p, how.fit_tol)
+        iters[f"reduced_{key}_hard"] = kh
+        if Xh is not None:
+            return ph, Xh, "hard"
+    return None
+
+
+def stiffer_alone(judge, p0, scaling: str, iters: dict, how: ReducedSearch):
+    """The stiffer stage alone from a coarse design's member ``p0`` (``how.member``): ``(p, X, merit)`` where it
+    stalls before its cap, feasible, with its fit within ``how.miss_tol``; else None, and the stages run from
+    ``p0`` as before. Where the fine level must move far (star, ellipse, heart at 48-64 tiles) this stage crawls
+    along its wall to the cap, or stalls with the fit still off, and would end further off."""
+    assert how.member is not None
+    rho, stall_tol, cap = how.member
+    merit = judge.staged(rho, scaling)
+    p, X, k = levenberg_marquardt(merit, p0, min(cap, how.max_iter), stall_tol, how.log)
+    iters[f"reduced_{scaling}_member_rho_{rho:g}"] = k
+    miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
+    if k < cap and judge.ineq_violation(judge.state(p)) == 0.0 and miss <= how.miss_tol:
+        return p, X, merit
+    how.log(
+        f"the stiffer stage alone ({k} iterations, misses by {miss:.3%}): the stages from the start"
+    )
+    return None
