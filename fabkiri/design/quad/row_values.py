@@ -114,10 +114,8 @@ def _shrunk(c0: np.ndarray, c1: np.ndarray, shrink: float) -> tuple:
     """``print_rows._shrunk``: every corner moved by ``shrink`` times its mitre vector."""
     if not shrink:
         return c0, c1
-    na = _normal(_next(c0, -1), _next(c1, -1), c0, c1)
-    nb = _normal(c0, c1, _next(c0), _next(c1))
-    s = (na[0] * nb[0] + na[1] * nb[1]) + 1.0
-    return c0 + (na[0] + nb[0]) / s * shrink, c1 + (na[1] + nb[1]) / s * shrink
+    m0, m1 = _mitre_vectors(c0, c1)
+    return c0 + m0 * shrink, c1 + m1 * shrink
 
 
 def _at(x: np.ndarray, quads: np.ndarray, rows: np.ndarray, k) -> tuple:
@@ -133,7 +131,11 @@ def _dot(a: tuple, b: tuple) -> np.ndarray:
 def _mitres(x, quads) -> tuple:
     """``fabrication._mitre`` at every corner of every polygon of ``quads`` (all of its nodes), once: ``(x, y)``
     arrays indexed ``[corner, polygon]`` (the rows ask each corner's mitre twice)."""
-    c0, c1 = x[quads.T, 0], x[quads.T, 1]
+    return _mitre_vectors(x[quads.T, 0], x[quads.T, 1])
+
+
+def _mitre_vectors(c0: np.ndarray, c1: np.ndarray) -> tuple:
+    """The mitre vector at every corner of ``(x, y)`` arrays indexed ``[corner, polygon]``."""
     na = _normal(_next(c0, -1), _next(c1, -1), c0, c1)
     nb = _normal(c0, c1, _next(c0), _next(c1))
     s = _dot(na, nb) + 1.0
