@@ -78,7 +78,7 @@ FREE_FINISH_ALL_TILES = 48
 # designs"). A rigid design under the rigid gate takes it with the cheaper steps (``CHEAP_PATIENCE``)
 SECOND_ROUTE_TILES = 96
 SECOND_ROUTE_GAMMA = 1.0
-# a rigid design under the rigid gate gets cheaper steps (``_cheap``, ``finish_step``): the reduced solver's first LM
+# a rigid design under the rigid gate gets cheaper steps (``_rigid_unmirrored``, ``finish_step``): the reduced solver's first LM
 # scaling only (a warm-started step from a converged design: the other scaling's second start gave the lower merit
 # in 2 of the 64x64 rigid circle's 6 steps, at half of each step's cost), no stiffer second stage after a feasible
 # first (its 10 iterations pulled the fit back: the circle's finish 0.144 % with them, 0.007 % without) and this patience, stopping at the first step that comes no closer (docs/design-solver.md,
@@ -101,7 +101,7 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     its lattice (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE``
     scaled for a free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
     ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``)."""
-    rigid_all = req.rigid and not req.symmetry and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
+    rigid_all = _rigid_unmirrored(req) and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
     if rigid_all and _tips_miss(req, report):
         return 0.0
     if not _free(req):
@@ -174,7 +174,7 @@ def minimax_finish(
     h0, valid = _hausdorff(best.report), bool(best.valid)
     polish = valid and h0 <= _rigid_gate(req)
     # a rigid design under the rigid gate: the cheaper steps (``CHEAP_PATIENCE``), asked by the steps' request
-    stepped = replace(req, finish_step=True) if polish and _cheap(req) else req
+    stepped = replace(req, finish_step=True) if polish and _rigid_unmirrored(req) else req
     fails, seen = _memo(shape_tol), list[DesignAttempt]()
     if stepped is not req:  # every judged step kept: ``_verified`` falls back on them
         judge = _recording(judge, seen)
@@ -240,12 +240,12 @@ def _closer(cand: DesignAttempt, best: DesignAttempt) -> bool:
 
 def _memo(shape_tol: tuple) -> Callable[[DesignAttempt], set[str]]:
     """``_fails`` of each outcome once (the finish's outcomes live as long as it does)."""
-    known: dict[int, set[str]] = {}
+    known: dict[int, tuple[DesignAttempt, set[str]]] = {}  # the outcome kept too: its id is not reused
 
     def fails(outcome: DesignAttempt) -> set[str]:
         if id(outcome) not in known:
-            known[id(outcome)] = _fails(outcome, shape_tol)
-        return known[id(outcome)]
+            known[id(outcome)] = (outcome, _fails(outcome, shape_tol))
+        return known[id(outcome)][1]
 
     return fails
 
@@ -270,9 +270,9 @@ def _verified(cand, seen: list, best: DesignAttempt, fails: Callable):
     return next((c for c in sorted(closer, key=_rank) if fails(c) <= fails(best)), cand)
 
 
-def _cheap(req: DesignRequest) -> bool:
-    """Whether ``req``'s design, under the rigid gate, is finished with the cheaper steps (``CHEAP_PATIENCE``):
-    a rigid request's, not a mirrored one's."""
+def _rigid_unmirrored(req: DesignRequest) -> bool:
+    """A rigid request, not a mirrored one: the one whose design under the rigid gate is finished with the cheaper
+    steps (``CHEAP_PATIENCE``), and from ``RIGID_FINISH_ALL_TILES`` whatever its miss where its tips alone miss."""
     return req.rigid and not req.symmetry
 
 
