@@ -240,7 +240,8 @@ def _closer(cand: DesignAttempt, best: DesignAttempt) -> bool:
 
 def _memo(shape_tol: tuple) -> Callable[[DesignAttempt], set[str]]:
     """``_fails`` of each outcome once (the finish's outcomes live as long as it does)."""
-    known: dict[int, tuple[DesignAttempt, set[str]]] = {}  # the outcome kept too: its id is not reused
+    # the outcome kept beside its fails, so that its id is not reused while the finish runs
+    known: dict[int, tuple[DesignAttempt, set[str]]] = {}
 
     def fails(outcome: DesignAttempt) -> set[str]:
         if id(outcome) not in known:

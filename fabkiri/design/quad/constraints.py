@@ -236,3 +236,8 @@ def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:
         return J @ x.reshape(-1), J
 
     return Family(f"symmetry_{axis}", "eq", fn, 1, nv=nv)
+
+
+def exact_fits(fits: list[Family]) -> list[Family]:
+    """The fit rows an exact fit drives to zero (not the soft outline rows, whose minimum is not zero)."""
+    return [f for f in fits if not f.meta.get("soft")]

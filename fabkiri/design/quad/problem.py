@@ -413,11 +413,6 @@ def _mean_edge(prob: DesignProblem, X: np.ndarray) -> float:
     return geometry.mean_edge_length(X[prob.st.tiles])
 
 
-def exact_fits(fits: list[C.Family]) -> list[C.Family]:
-    """The fit rows an exact fit drives to zero (not the soft outline rows, whose minimum is not zero)."""
-    return [f for f in fits if not f.meta.get("soft")]
-
-
 def family_residuals(prob: DesignProblem, X: np.ndarray, L: float) -> dict:
     out = {}
     for f in prob.families:

@@ -19,9 +19,10 @@ from ..core.conformance import deployed as deployed_conformance
 from ..core.request import VIA_RIGID_TILES, coarse_refit_applies
 from ..targets.lookup import Target
 from . import constraints as C
+from .constraints import exact_fits
 from .initial import initial_guess
 from .penalty import _solve_full
-from .problem import DesignProblem, _acceptable, _mean_edge, _objective, _why_not, exact_fits
+from .problem import DesignProblem, _acceptable, _mean_edge, _objective, _why_not
 from .rigid import outline
 from .rigid.family import RigidFamily
 from .rigid.mirror import Mirror

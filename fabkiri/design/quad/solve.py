@@ -70,7 +70,6 @@ from .problem import (  # noqa: F401  (re-exported: callers import these from he
     _mean_edge,
     _objective,
     _why_not,
-    exact_fits,
     family_residuals,
 )
 from .rigid import offset_outline, outline

@@ -28,7 +28,7 @@ import numpy as np
 from scipy import sparse
 
 from ...core.stencils import Family, StackedJacobian, Stencils
-from ..constraints import convexity
+from ..constraints import convexity, exact_fits
 from ..objective import regularizer, tile_corners
 from .contact import ClosedContact
 from .family import RigidFamily
@@ -481,7 +481,7 @@ def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):
                 return hard
         ev = judge.evaluate(p)
         cost = float(ev.r @ ev.r)
-        miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
+        miss = fit_miss(exact_fits(merit.fits), X)
         viol = ev.gviol
         how.log(
             f"reduced ({scaling} start): merit {cost:.4e}, fit misses by {miss:.3%} of the target size"

@@ -9,6 +9,7 @@ import numpy as np
 
 from ...core.lm import Damping, Stopping
 from ...core.lm import levenberg_marquardt as lm_core
+from ..constraints import exact_fits
 
 if TYPE_CHECKING:
     from ...core.stencils import Family
@@ -132,7 +133,7 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
 def exact_fit(merit, p, X, key: str, iters: dict, how: ReducedSearch):
     """``(p, X, "hard")`` where the fit is within 1 % of a tile and the hard-fit projection makes it exact."""
     fit_max = max(
-        (float(np.abs(f.residual(X)).max()) for f in merit.fits if not f.meta.get("soft")),
+        (float(np.abs(f.residual(X)).max()) for f in exact_fits(merit.fits)),
         default=0.0,
     )
     if merit.fits and fit_max < 1e-2 * how.mean_edge(X):
@@ -153,7 +154,7 @@ def stiffer_alone(judge, p0, scaling: str, iters: dict, how: ReducedSearch):
     merit = judge.staged(rho, scaling)
     p, X, k = levenberg_marquardt(merit, p0, min(cap, how.max_iter), stall_tol, how.log)
     iters[f"reduced_{scaling}_member_rho_{rho:g}"] = k
-    miss = fit_miss([f for f in merit.fits if not f.meta.get("soft")], X)
+    miss = fit_miss(exact_fits(merit.fits), X)
     if k < cap and judge.ineq_violation(judge.state(p)) == 0.0 and miss <= how.miss_tol:
         return p, X, merit
     how.log(
