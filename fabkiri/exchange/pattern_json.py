@@ -26,6 +26,7 @@ from ..pattern.model import Pattern
 from ..schemas import load_schema, schema_problem
 from ..schemas import short as _short
 from .file_formats import PatternFormat, register_format
+from .indented import indented
 
 FORMAT = "fabkiri.pattern"
 VERSION = 1
@@ -161,6 +162,9 @@ def read_pattern(path: str | os.PathLike) -> Pattern:
 
 def jsonable(value: Any) -> Any:
     """``value`` with numpy arrays, scalars and tuples made plain JSON values (non-finite floats None)."""
+    # most values are floats (coordinates): the float branch's answer, asked first
+    if type(value) is float:
+        return value if math.isfinite(value) else None
     if isinstance(value, dict):
         return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -219,9 +223,7 @@ def dumps(pattern: Pattern) -> str:
         ]
         parts.append('  "contracted": {\n' + ",\n".join(states) + "\n  }")
     if pattern.design:
-        design = json.dumps(jsonable(pattern.design), indent=2, sort_keys=True).replace(
-            "\n", "\n  "
-        )
+        design = indented(jsonable(pattern.design)).replace("\n", "\n  ")
         parts.append(f'  "design": {design}')
     return "{\n" + ",\n".join(parts) + "\n}\n"
 

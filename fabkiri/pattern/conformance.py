@@ -86,8 +86,9 @@ def measure(outline: np.ndarray, target: np.ndarray, size: float | None = None) 
     B = np.asarray(target, float).reshape(-1, 2)
     size = float(size_of(B) if size is None else size)
     h = size / SAMPLES_PER_SIZE
-    Ad, Bd = densify(A, h), densify(B, h)
-    dA, fA = _to_curve(Ad, Bd, KDTree(Bd))
+    Ad = densify(A, h)
+    Bd, tree = _target_samples(B, h)
+    dA, fA = _to_curve(Ad, Bd, tree)
     dB, fB = _to_curve(Bd, Ad, KDTree(Ad))
     wA = _arc_weights(Ad)
     wB = _arc_weights(Bd)
@@ -116,6 +117,24 @@ def measure(outline: np.ndarray, target: np.ndarray, size: float | None = None) 
         "size_definition": SIZE_DEFINITION,
         "worst": worst,
     }
+
+
+def _target_samples(target: np.ndarray, h: float):
+    """The target's samples at spacing ``h`` and their KD-tree. The last target's are kept: a design
+    measures several outlines against one target (its coarse level, each start, the report), and the
+    tree of the same samples is the same tree (the same nearest samples, the same figures)."""
+    key = (target.shape, target.tobytes(), h)
+    last = _LAST_TARGET.get("entry")
+    if last is not None and last[0] == key:
+        return last[1], last[2]
+    dense = densify(target, h)
+    dense.flags.writeable = False  # shared by every measure against this target
+    tree = KDTree(dense)
+    _LAST_TARGET["entry"] = (key, dense, tree)
+    return dense, tree
+
+
+_LAST_TARGET: dict = {}
 
 
 def _arc_weights(dense: np.ndarray) -> np.ndarray:

@@ -298,3 +298,24 @@ def test_the_suggested_tile_count_reaches_the_tolerance(tmp_path, run_cli):
         tmp_path / "b.json",
     )
     assert code == 0 and json.loads(out)["shape"]["deployed"]["status"] == "met"
+
+
+def test_outlines_measured_against_one_target_share_its_samples_and_tree(monkeypatch):
+    """A design measures several outlines against one target (its coarse level, each start, the report): the
+    target's dense samples and KD-tree are made once, and every figure is the one a fresh measure gives."""
+    target = circle(50.0, 4096)
+    outlines = [circle(49.0, 32), circle(51.0, 40, 0.1), circle(49.0, 32)]
+    fresh = []
+    for outline in outlines:
+        pc._LAST_TARGET.clear()
+        fresh.append(pc.measure(outline, target))
+    built = []
+    real = pc.KDTree
+    monkeypatch.setattr(pc, "KDTree", lambda pts: built.append(len(pts)) or real(pts))
+    pc._LAST_TARGET.clear()
+    shared = [pc.measure(outline, target) for outline in outlines]
+    assert json.dumps(shared) == json.dumps(fresh)  # the same bits
+    # one tree for the target, one per outline
+    assert len(built) == 1 + len(outlines)
+    pc.measure(outlines[0], target * 2.0)  # another target: its own samples
+    assert len(built) == 3 + len(outlines)
