@@ -502,7 +502,7 @@ def test_continuation_is_tried_and_the_kept_design_keeps_the_rows():
     """The 4x4 heart at 80 mm for acrylic-3 misses the shape (it does without rows too, its thinnest tile
     0.46 mm): the continuation from the design without the rows is tried, and the design kept, whichever
     attempt won, has every tile at least 3 mm wide. (The 8x8 heart at 150 mm takes the same attempts, the
-    continuation with its refinement and then every guess, in twice the time.)"""
+    continuation with its refinement and then every guess; docs/speed.md, session 50.)"""
     from fabkiri.api.design import PatternRequest, design_pattern
 
     out = design_pattern(
