@@ -571,9 +571,10 @@ def test_print_state_defaults_to_the_designs_intent(monkeypatch):
 
 @pytest.mark.slow
 def test_ellipse_for_prusa_mk4_prints_the_state_that_fits_with_no_flags(run_cli, tmp_path):
-    """The 8x8 2:1 ellipse at 200 mm closes about 120 x 230 mm in one state, off prusa-mk4's 250 x 210 mm bed,
-    and about 199 x 99 mm in the other: the design picks the state that fits, raises that state's strip rows,
-    stores it, and `print p.json` prints it; the 3MF slices when prusa-slicer is installed."""
+    """The 6x6 2:1 ellipse at 200 mm closes about 114 x 231 mm in one state, off prusa-mk4's 250 x 210 mm bed,
+    and about 200 x 96 mm in the other (8x8: 130 x 229 and 199 x 98): the design picks the state that fits,
+    raises that state's strip rows, stores it, and `print p.json` prints it; the 3MF slices when prusa-slicer
+    is installed."""
     import shutil
     import subprocess
 
@@ -581,7 +582,7 @@ def test_ellipse_for_prusa_mk4_prints_the_state_that_fits_with_no_flags(run_cli,
     code, _, err = run_cli(
         "design",
         "--tiles",
-        "8x8",
+        "6x6",
         "--target",
         "ellipse",
         "--size",
