@@ -155,6 +155,31 @@ def shared_designs():
     patch.undo()
 
 
+# tube designs already made in this test session, by their arguments
+_TUBE_DESIGNS: dict[str, object] = {}
+
+
+@pytest.fixture
+def shared_tube_designs():
+    """``fabkiri.api.tube.design_tube_pattern``, each set of arguments designed once per test session.
+
+    The large-axial-change tube (``cylinder:113.137,135`` on 6x8 tiles) is checked by the tube design
+    tests and by the deployment path tests (its radius along the path, and `deploy`'s report of it). A
+    tube design is deterministic; each call gets its own deep copy. Nothing is patched: the tests call
+    the returned function. Tests that share a design carry one ``xdist_group`` mark, as above."""
+    import copy
+
+    from fabkiri.api.tube import design_tube_pattern
+
+    def design(*args, **kwargs):
+        key = repr((args, sorted(kwargs.items())))
+        if key not in _TUBE_DESIGNS:
+            _TUBE_DESIGNS[key] = design_tube_pattern(*args, **kwargs)
+        return copy.deepcopy(_TUBE_DESIGNS[key])
+
+    return design
+
+
 def pytest_collection_modifyitems(config, items):
     """Modules with slow tests first, and a module's slow tests first in it (stable otherwise): under
     xdist a worker takes the next test when it has finished one, so the long ones start early and the

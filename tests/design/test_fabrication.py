@@ -499,13 +499,14 @@ def test_a_continuation_step_is_the_full_limits_on_the_design_grown(fraction):
 
 @pytest.mark.slow
 def test_continuation_is_tried_and_the_kept_design_keeps_the_rows():
-    """The 8x8 heart at 150 mm for acrylic-3 misses the shape (it does without rows too): the continuation
-    from the design without the rows is tried, and the design kept, whichever attempt won, has every tile
-    at least 3 mm wide."""
+    """The 4x4 heart at 80 mm for acrylic-3 misses the shape (it does without rows too, its thinnest tile
+    0.46 mm): the continuation from the design without the rows is tried, and the design kept, whichever
+    attempt won, has every tile at least 3 mm wide. (The 8x8 heart at 150 mm takes the same attempts, the
+    continuation with its refinement and then every guess; docs/speed.md, session 50.)"""
     from fabkiri.api.design import PatternRequest, design_pattern
 
     out = design_pattern(
-        PatternRequest(tiles=(8, 8), target="heart", size=150, material="acrylic-3", quiet=True)
+        PatternRequest(tiles=(4, 4), target="heart", size=80, material="acrylic-3", quiet=True)
     )
     cont = [a for a in out.report["attempts"] if a["init"].startswith("continuation")]
     assert len(cont) == 1 and cont[0]["hausdorff_max_rel"] > 0
@@ -570,9 +571,10 @@ def test_print_state_defaults_to_the_designs_intent(monkeypatch):
 
 @pytest.mark.slow
 def test_ellipse_for_prusa_mk4_prints_the_state_that_fits_with_no_flags(run_cli, tmp_path):
-    """The 8x8 2:1 ellipse at 200 mm closes about 120 x 230 mm in one state, off prusa-mk4's 250 x 210 mm bed,
-    and about 199 x 99 mm in the other: the design picks the state that fits, raises that state's strip rows,
-    stores it, and `print p.json` prints it; the 3MF slices when prusa-slicer is installed."""
+    """The 6x6 2:1 ellipse at 200 mm closes about 114 x 231 mm in one state, off prusa-mk4's 250 x 210 mm bed,
+    and about 200 x 96 mm in the other (8x8: 130 x 229 and 199 x 98): the design picks the state that fits,
+    raises that state's strip rows, stores it, and `print p.json` prints it; the 3MF slices when prusa-slicer
+    is installed."""
     import shutil
     import subprocess
 
@@ -580,7 +582,7 @@ def test_ellipse_for_prusa_mk4_prints_the_state_that_fits_with_no_flags(run_cli,
     code, _, err = run_cli(
         "design",
         "--tiles",
-        "8x8",
+        "6x6",
         "--target",
         "ellipse",
         "--size",

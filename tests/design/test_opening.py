@@ -295,12 +295,15 @@ def test_a_missed_shape_never_advises_a_guess_already_tried():
     assert "not tried: --init standard, rescaled, conformal" in why
 
 
-@pytest.mark.slow  # a 16x16 rigid design and its refinement (~30 CPU s); the row's quick test is the 6x6 circle
+@pytest.mark.slow  # a 15x15 rigid design and its refinement; the row's quick test is the 6x6 circle
 def test_a_star_at_150_mm_opens_30_percent_and_still_meets_its_shape():
+    """Every guess misses under the floor (rescaled 3.0 %, standard 14 %) and the minimax refinement under
+    it meets the shape (1.81 %) and is kept, as for the 16x16 star; the 15x15 star's figures are the same
+    with the tests' BLAS kernel pin and without it (docs/speed.md, session 50)."""
     from fabkiri.api.design import PatternRequest, design_pattern
 
     out = design_pattern(
-        PatternRequest(tiles=(16, 16), target="star", size=150, rigid=True, min_opening=0.3)
+        PatternRequest(tiles=(15, 15), target="star", size=150, rigid=True, min_opening=0.3)
     )
     o = out.report["opening"]
     assert o["hole_fraction"] >= 0.3

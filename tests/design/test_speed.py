@@ -139,16 +139,24 @@ def test_a_mid_size_non_rigid_design_is_a_rigid_member_when_that_meets_the_shape
 
 @pytest.mark.slow
 def test_the_full_solver_takes_over_when_no_rigid_member_meets_the_shape():
+    """A 16x16 target no rigid member meets (a shape tolerance of 1e-5): the reduced members, then the rigid
+    design with the full solver's second opinion (``via_rigid``), then the full solver over all nodes. The
+    superellipse takes the route the ellipse did (coarse, coarse refitted, the rigid design, the takeover) with
+    a full solve that converges from its first schedule: the ellipse's stalled and restarted, its stiff
+    restart and the polish are test_second_opinion.py's."""
     from fabkiri.design.quad.solve import DesignRequest, design
     from fabkiri.design.targets import lookup as T
 
-    res = design(DesignRequest(16, 16, T.load_target("ellipse", 100.0), second_opinion_above=1e-5))
+    res = design(
+        DesignRequest(16, 16, T.load_target("superellipse", 100.0), second_opinion_above=1e-5)
+    )
     assert not res.report["rigid_first"] and res.report["solver"].startswith(
         "sparse Levenberg-Marquardt"
     )
-    assert any(
-        k.startswith("rigid_coarse_") for k in res.report["iterations"]
-    )  # it was tried first
+    iters = res.report["iterations"]
+    assert any(k.startswith("rigid_coarse_") for k in iters)  # it was tried first
+    assert any(k.startswith("via_rigid_") for k in iters)  # then the rigid design, which missed too
+    assert any(k.startswith("lm_") for k in iters)  # the full solver over all nodes
 
 
 @pytest.mark.slow

@@ -695,6 +695,8 @@ def test_pinned_refuses_patterns_that_are_not_rigid_deployable(printer):
 
 
 @pytest.mark.slow
+# one worker imports build123d (OpenCascade, a heavy import) for both STEP tests
+@pytest.mark.xdist_group("build123d")
 def test_step_has_the_same_volume(tmp_path, printer2):
     pytest.importorskip("build123d")
     from fabkiri.fabricate.print import step as cad
@@ -1029,6 +1031,7 @@ def test_pinned_sweep_along_the_deployment(printer):
 
 
 @pytest.mark.slow  # a STEP per bed through build123d; the quick loop prints without STEP
+@pytest.mark.xdist_group("build123d")
 def test_cli_step_per_bed(tmp_path, run_cli):
     pytest.importorskip("build123d")
     from fabkiri.fabricate.print import step as cad

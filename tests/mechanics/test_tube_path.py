@@ -11,12 +11,14 @@ from fabkiri.pattern.kinds.periodic.sheet import seam_map, seam_of
 
 
 @pytest.mark.slow
-def test_designed_tube_stays_a_cylinder_but_its_radius_overshoots_on_the_path():
+# the large-axial-change design, shared with the deploy test below and tests/design/test_tube_design.py
+@pytest.mark.xdist_group("tube-113-135")
+def test_designed_tube_stays_a_cylinder_but_its_radius_overshoots_on_the_path(shared_tube_designs):
     """The large-axial-change design deploys rigidly; every frame's seam is a translation (so the radius
     is the same all along the axis at every instant), yet the radius does not change monotonically: on
     the way to closed state 2 it passes above its final value (Fig. 5B's "nonuniform radial change
     throughout the deployment and contraction process", in time, not along the axis)."""
-    pat = design_tube_pattern((6, 8), "cylinder:113.137,135").pattern
+    pat = shared_tube_designs((6, 8), "cylinder:113.137,135").pattern
     path = deployment_path(pat, steps=40)
     assert path.kind == "rigid"
     seam = seam_of(pat)
@@ -57,13 +59,16 @@ def test_deploy_reports_the_standard_tubes_radius_in_every_frame(tmp_path, run_c
 
 
 @pytest.mark.slow
-def test_deploy_says_when_a_designed_tubes_radius_overshoots(tmp_path, run_cli):
+@pytest.mark.xdist_group("tube-113-135")
+def test_deploy_says_when_a_designed_tubes_radius_overshoots(
+    tmp_path, run_cli, shared_tube_designs
+):
     """The large-axial-change design's radius passes beyond its ends on the way to closed state 2, and
     `deploy` reports where."""
     from fabkiri.exchange.pattern_json import write_pattern
 
     src = tmp_path / "a.json"
-    write_pattern(design_tube_pattern((6, 8), "cylinder:113.137,135").pattern, src)
+    write_pattern(shared_tube_designs((6, 8), "cylinder:113.137,135").pattern, src)
     code, _, err = run_cli("deploy", src, "-o", tmp_path / "dep", "--no-frames")
     assert code == 0, err
     line = next(x for x in err.splitlines() if "deployed -> closed state 2" in x)
