@@ -33,7 +33,8 @@ def test_the_peanuts_16x16_level_comes_from_rescaled_where_its_coarse_start_miss
 
 
 def test_a_level_whose_rescaled_design_misses_further_keeps_its_coarse_start():
-    """The drop's 16x16 level of its 32x32 chain (y mirror) misses by 1.5 %, from rescaled by about 21 %: kept."""
+    """The drop's 16x16 level of its 32x32 chain (y mirror) misses by 1.5 %, from rescaled by 0.73 %, past the good
+    outline: the first kept."""
     level = design_problem(_mirrored(32, _target("drop"), "y")).coarse
     assert level is not None and level["fit"] == "outline"
     assert "coarse_start_hausdorff_rel" not in level
