@@ -22,7 +22,14 @@ from . import constraints as C
 from .constraints import exact_fits
 from .initial import initial_guess
 from .penalty import _solve_full
-from .problem import DesignProblem, _acceptable, _mean_edge, _objective, _why_not
+from .problem import (
+    RIGID_FIRST_GOOD,
+    DesignProblem,
+    _acceptable,
+    _mean_edge,
+    _objective,
+    _why_not,
+)
 from .rigid import outline
 from .rigid.family import RigidFamily
 from .rigid.mirror import Mirror
@@ -51,7 +58,6 @@ FULL_ABOVE = 2.5e-3
 FULL_MAX_TILES = 32 * 32
 # the rigid-first route (``request.VIA_RIGID_FIRST_TILES``): its starts, and the outline that ends the search
 RIGID_FIRST_INITS = ("coarse", "rescaled")
-RIGID_FIRST_GOOD = 5e-3
 # ... and up to this many tiles, where no reduced member meets the shape, the rigid design with the full
 # solver's second opinion next (the CLI's last guess, ``_solve_via_rigid``), before the full solver over all
 # nodes: the 16x16 heart (100 mm) went through the conformal, rescaled and standard full solves (missed,
