@@ -481,3 +481,25 @@ def test_full_steps_that_leave_a_tips_missing_design_above_its_threshold_are_fol
         asked.clear()
         dm.minimax_finish(req, designed(0.0087, level), judge, [], lambda t: None)
         assert asked and not any(step for step, _ in asked), (n, asked)
+
+
+def test_a_free_design_from_the_rigid_family_reports_that_design_s_coarse_level(monkeypatch):
+    """The finish reads a design's tips-only coarse level (``_tips_miss``); a free design answered by the rigid
+    family came coarse to fine too, but its report's ``coarse`` was None (its own problem starts from rescaled),
+    so every free design looked like one whose tips miss. It reports the rigid design's level now."""
+    from types import SimpleNamespace
+
+    import numpy as np
+    from fabkiri.design.quad import routes
+
+    level = {"fit": "tips", "hausdorff_rel": 0.0064, "used": True}
+    rigid = SimpleNamespace(
+        converged=True,
+        pattern=SimpleNamespace(nodes=np.zeros((4, 2))),
+        report={"coarse": level, "shape_matching": "soft", "solver": "reduced", "iterations": {}},
+    )
+    monkeypatch.setattr(routes, "_acceptable", lambda prob, X: True)
+    req = DesignRequest(32, 32, load_target("heart", 100.0))
+    prob = SimpleNamespace(req=req, L0=1.0, via_coarse=None, design_whole=lambda sub: rigid)
+    assert routes._solve_via_rigid(prob, lambda msg: None, {}) is not None
+    assert prob.via_coarse is level
