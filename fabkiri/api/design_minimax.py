@@ -20,7 +20,9 @@ Both thresholds, ``FINISH_ABOVE`` and ``REFIT_ABOVE``, are shares at 32x32 tiles
 resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked to come closer; a free design
 (neither rigid nor mirrored) has its own, lower, gate with no floor (``gate``, ``FREE_FINISH_ABOVE``), and none from
 ``FREE_FINISH_ALL_TILES`` tiles a side (a rigid one from ``RIGID_FINISH_ALL_TILES`` where its tips-only coarse
-level misses the outline by more than the shape tolerance, under the rigid gate with cheaper steps, ``CHEAP_PATIENCE``). A step the
+level misses the outline by more than the shape tolerance, under the rigid gate with cheaper steps, ``CHEAP_PATIENCE``;
+a free one whose tips alone miss as well, ``_cheap``; after the full steps where they leave such a design above its
+lattice's threshold, ``_cheap_after_full``). A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
