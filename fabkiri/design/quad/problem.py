@@ -66,6 +66,8 @@ class DesignProblem:
         base = std.nodes.copy()
         self.n = len(base)
         self.coarse: dict[str, Any] | None = None
+        # the coarse level of the rigid design that answered a non-rigid request (``routes._solve_via_rigid``)
+        self.via_coarse: dict[str, Any] | None = None
         # (seeds in mm, ψ) when the start is a rigid-family member (coarse to fine)
         self.start_member: tuple[np.ndarray, float] | None = None
         self.unfold: dict | None = (

@@ -367,6 +367,8 @@ def _solve_via_rigid(prob: DesignProblem, log, iters: dict, tag: str = ""):
         iters.update({f"{tag}{name}_{k}": v for k, v in res.report["iterations"].items()})
         X = res.pattern.nodes / prob.L0
         if res.converged and _acceptable(prob, X):
+            # the free design's start: its report's ``coarse`` (read by the minimax finish, ``_tips_miss``)
+            prob.via_coarse = res.report["coarse"]
             return X, res.report["shape_matching"], res.report["solver"]
         log(
             f"the {'rigid-family' if name == 'rigid' else 'reduced-only'} design fails a non-rigid family check "

@@ -300,7 +300,7 @@ def _report(
         "regularizer": energy(prob.of("reg")[0], X),
         "factorisations": prob._normal.factorisations if prob._normal else 0,
         "cg_iterations": prob._normal.cg_steps if prob._normal else 0,
-        "coarse": prob.coarse,
+        "coarse": prob.coarse if prob.coarse is not None else prob.via_coarse,
         "solver": solver,
         "rigid_first": rigid_first,
     }
