@@ -58,6 +58,8 @@ LAMBDA0 = 1e-3
 LAND_WEIGHT = 30.0  # the equalities' weight while landing on the family
 LAND_INEQ_WEIGHT = 10.0  # and the inequalities' (heavier ones hold the equalities off: 6x10 heart)
 LAND_NFEV = 100
+LAND_STALL = (10, 1e-3)  # the landing stops when its last 10 evaluations lowered its cost < 0.1 %
+LM_STALL = (10, 1e-3)  # and the steps along the family when their last 10 did
 LAMBDA_MIN, LAMBDA_MAX = 1e-9, 1e8
 
 
@@ -166,9 +168,9 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
     lam = LAMBDA0
     s, S = rows.soft(x)
     cost = 0.5 * s @ s
-    it = 0
+    it, costs = 0, [cost]
     A, normal = None, _normal(S, s)  # both change only with x: a rejected step keeps them
-    while it < max_iter:
+    while it < max_iter and not stalled(costs, *LM_STALL):
         it += 1
         if A is None:
             _, A = rows.equalities(x)
@@ -188,6 +190,7 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
             lam *= 4.0
             if lam > LAMBDA_MAX:
                 break
+        costs.append(cost)
     c = rows.equality_residuals(x)
     return Solve(x, it, float(cost), float(np.abs(c).max(initial=0.0)), True)
 
@@ -257,9 +260,22 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
         ineq=[f for f in rows.ineq if f.meta.get("land", True)],
     )
 
+    best: list = [
+        np.inf,
+        x0.ravel(),
+    ]  # the lowest cost evaluated (the trust region's iterate) and where
+    costs: list[float] = []
+
     def fun(v):
         x = v.reshape(x0.shape)
-        return np.concatenate([LAND_WEIGHT * rows.equality_residuals(x), rows.soft(x, jac=False)])
+        r = np.concatenate([LAND_WEIGHT * rows.equality_residuals(x), rows.soft(x, jac=False)])
+        c = 0.5 * float(r @ r)
+        if c < best[0]:
+            best[:] = [c, v.copy()]
+        costs.append(best[0])
+        if stalled(costs, *LAND_STALL):
+            raise _Stalled
+        return r
 
     def jac(v):
         x = v.reshape(x0.shape)
@@ -267,18 +283,33 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
             sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
         )
 
-    sol = least_squares(
-        fun,
-        x0.ravel(),
-        jac=jac,
-        method="trf",
-        tr_solver="lsmr",
-        max_nfev=max_nfev,
-        xtol=1e-12,
-        ftol=1e-12,
-        gtol=1e-12,
-    )
+    try:
+        sol = least_squares(
+            fun,
+            x0.ravel(),
+            jac=jac,
+            method="trf",
+            tr_solver="lsmr",
+            max_nfev=max_nfev,
+            xtol=1e-12,
+            ftol=1e-12,
+            gtol=1e-12,
+        )
+    except (
+        _Stalled
+    ):  # its iterate is the lowest point evaluated (a step is taken when the cost falls)
+        return best[1].reshape(x0.shape)
     return sol.x.reshape(x0.shape)
+
+
+class _Stalled(Exception):
+    """The landing's cost stopped falling (``LAND_STALL``): it ends where it is."""
+
+
+def stalled(costs: list[float], window: int, rel: float) -> bool:
+    """Whether the last ``window`` entries of ``costs`` (each the cost so far) lowered it by less than
+    ``rel`` of it."""
+    return len(costs) > window and costs[-1] > (1.0 - rel) * costs[-1 - window]
 
 
 def _kkt(H: sparse.spmatrix, A: sparse.spmatrix):
