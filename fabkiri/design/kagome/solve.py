@@ -58,8 +58,10 @@ LAMBDA0 = 1e-3
 LAND_WEIGHT = 30.0  # the equalities' weight while landing on the family
 LAND_INEQ_WEIGHT = 10.0  # and the inequalities' (heavier ones hold the equalities off: 6x10 heart)
 LAND_NFEV = 100
-LAND_STALL = (10, 1e-3)  # the landing stops when its last 10 evaluations lowered its cost < 0.1 %
-LM_STALL = (10, 1e-3)  # and the steps along the family when their last 10 did
+LM_STALL = (
+    10,
+    1e-3,
+)  # the steps along the family stop when their last 10 accepted ones lowered it < 0.1 %
 LAMBDA_MIN, LAMBDA_MAX = 1e-9, 1e8
 
 
@@ -156,7 +158,8 @@ class Solve:
 
 def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> Solve:
     """Levenberg-Marquardt along the family from ``x0`` (n, 2), landed and pulled onto it first; stops when
-    a step lowers the soft cost by less than ``tol`` relative, or after ``max_iter`` steps.
+    a step lowers the soft cost by less than ``tol`` relative, when the last accepted steps have stalled
+    (``LM_STALL``), or after ``max_iter`` steps.
 
     Every start is landed, a warm one (a Lawson step) too: measured on the 6x11 heart, pulling a warm start
     back directly left the Lawson steps at 10.4 -> 9.8 %, landing it again reached 7.4 % (the penalty
@@ -170,7 +173,7 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
     cost = 0.5 * s @ s
     it, costs = 0, [cost]
     A, normal = None, _normal(S, s)  # both change only with x: a rejected step keeps them
-    while it < max_iter and not stalled(costs, *LM_STALL):
+    while it < max_iter:
         it += 1
         if A is None:
             _, A = rows.equalities(x)
@@ -184,13 +187,13 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
             s, S = rows.soft(x)
             A, normal = None, _normal(S, s)
             lam = max(lam / 3.0, LAMBDA_MIN)
-            if done:
+            costs.append(cost)
+            if done or stalled(costs, *LM_STALL):
                 break
         else:
             lam *= 4.0
             if lam > LAMBDA_MAX:
                 break
-        costs.append(cost)
     c = rows.equality_residuals(x)
     return Solve(x, it, float(cost), float(np.abs(c).max(initial=0.0)), True)
 
@@ -260,22 +263,9 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
         ineq=[f for f in rows.ineq if f.meta.get("land", True)],
     )
 
-    best: list = [
-        np.inf,
-        x0.ravel(),
-    ]  # the lowest cost evaluated (the trust region's iterate) and where
-    costs: list[float] = []
-
     def fun(v):
         x = v.reshape(x0.shape)
-        r = np.concatenate([LAND_WEIGHT * rows.equality_residuals(x), rows.soft(x, jac=False)])
-        c = 0.5 * float(r @ r)
-        if c < best[0]:
-            best[:] = [c, v.copy()]
-        costs.append(best[0])
-        if stalled(costs, *LAND_STALL):
-            raise _Stalled
-        return r
+        return np.concatenate([LAND_WEIGHT * rows.equality_residuals(x), rows.soft(x, jac=False)])
 
     def jac(v):
         x = v.reshape(x0.shape)
@@ -283,32 +273,23 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
             sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
         )
 
-    try:
-        sol = least_squares(
-            fun,
-            x0.ravel(),
-            jac=jac,
-            method="trf",
-            tr_solver="lsmr",
-            max_nfev=max_nfev,
-            xtol=1e-12,
-            ftol=1e-12,
-            gtol=1e-12,
-        )
-    except (
-        _Stalled
-    ):  # its iterate is the lowest point evaluated (a step is taken when the cost falls)
-        return best[1].reshape(x0.shape)
+    sol = least_squares(
+        fun,
+        x0.ravel(),
+        jac=jac,
+        method="trf",
+        tr_solver="lsmr",
+        max_nfev=max_nfev,
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+    )
     return sol.x.reshape(x0.shape)
 
 
-class _Stalled(Exception):
-    """The landing's cost stopped falling (``LAND_STALL``): it ends where it is."""
-
-
 def stalled(costs: list[float], window: int, rel: float) -> bool:
-    """Whether the last ``window`` entries of ``costs`` (each the cost so far) lowered it by less than
-    ``rel`` of it."""
+    """Whether the last ``window`` entries of ``costs`` (the cost after each accepted step) lowered it by
+    less than ``rel`` of it: the solve has stalled."""
     return len(costs) > window and costs[-1] > (1.0 - rel) * costs[-1 - window]
 
 
