@@ -133,6 +133,21 @@ def test_the_fit_moves_along_the_family_and_lands_on_it():
     assert ok and np.abs(K.stacked(rows.eq, xp)[0]).max() <= 1e-13
 
 
+def test_a_solve_whose_steps_have_stalled_stops_before_its_cap():
+    """The steps along the family stop once their last ``LM_STALL`` accepted steps lowered the soft cost
+    by less than its share (the 4x5 circle's solve: 26 steps; it ran to the cap of 60 before)."""
+    from fabkiri.design.kagome import fit as KF
+    from fabkiri.design.kagome import solve as KS
+    from fabkiri.design.targets import lookup as TG
+
+    assert KS.stalled([1.0] * 11, 10, 1e-3) and not KS.stalled([1.0] * 10, 10, 1e-3)
+    assert not KS.stalled([1.0] + [0.99] * 10, 10, 1e-3)
+    std = standard_kagome(4, 5, tile_size=12.0)
+    rows, x0, _ = KF.fit_rows(std, TG.circle().scaled_to(60.0))
+    sol = KS.solve(rows, x0, max_iter=60)
+    assert sol.on_family and sol.max_equality <= 1e-12 and sol.iterations < 60
+
+
 @pytest.mark.parametrize("state", [1, 2])
 def test_rigid_family_jacobians_match_finite_differences(state):
     p = standard_kagome(3, 4, angle_deg=50.0)

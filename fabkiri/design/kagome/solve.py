@@ -58,6 +58,10 @@ LAMBDA0 = 1e-3
 LAND_WEIGHT = 30.0  # the equalities' weight while landing on the family
 LAND_INEQ_WEIGHT = 10.0  # and the inequalities' (heavier ones hold the equalities off: 6x10 heart)
 LAND_NFEV = 100
+LM_STALL = (
+    10,
+    1e-3,
+)  # the steps along the family stop when their last 10 accepted ones lowered it < 0.1 %
 LAMBDA_MIN, LAMBDA_MAX = 1e-9, 1e8
 
 
@@ -154,7 +158,8 @@ class Solve:
 
 def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> Solve:
     """Levenberg-Marquardt along the family from ``x0`` (n, 2), landed and pulled onto it first; stops when
-    a step lowers the soft cost by less than ``tol`` relative, or after ``max_iter`` steps.
+    a step lowers the soft cost by less than ``tol`` relative, when the last accepted steps have stalled
+    (``LM_STALL``), or after ``max_iter`` steps.
 
     Every start is landed, a warm one (a Lawson step) too: measured on the 6x11 heart, pulling a warm start
     back directly left the Lawson steps at 10.4 -> 9.8 %, landing it again reached 7.4 % (the penalty
@@ -166,7 +171,7 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
     lam = LAMBDA0
     s, S = rows.soft(x)
     cost = 0.5 * s @ s
-    it = 0
+    it, costs = 0, [cost]
     A, normal = None, _normal(S, s)  # both change only with x: a rejected step keeps them
     while it < max_iter:
         it += 1
@@ -182,7 +187,8 @@ def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> 
             s, S = rows.soft(x)
             A, normal = None, _normal(S, s)
             lam = max(lam / 3.0, LAMBDA_MIN)
-            if done:
+            costs.append(cost)
+            if done or stalled(costs, *LM_STALL):
                 break
         else:
             lam *= 4.0
@@ -279,6 +285,12 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
         gtol=1e-12,
     )
     return sol.x.reshape(x0.shape)
+
+
+def stalled(costs: list[float], window: int, rel: float) -> bool:
+    """Whether the last ``window`` entries of ``costs`` (the cost after each accepted step) lowered it by
+    less than ``rel`` of it: the solve has stalled."""
+    return len(costs) > window and costs[-1] > (1.0 - rel) * costs[-1 - window]
 
 
 def _kkt(H: sparse.spmatrix, A: sparse.spmatrix):
