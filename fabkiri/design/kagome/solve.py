@@ -58,10 +58,8 @@ LAMBDA0 = 1e-3
 LAND_WEIGHT = 30.0  # the equalities' weight while landing on the family
 LAND_INEQ_WEIGHT = 10.0  # and the inequalities' (heavier ones hold the equalities off: 6x10 heart)
 LAND_NFEV = 100
-LM_STALL = (
-    10,
-    1e-3,
-)  # the steps along the family stop when their last 10 accepted ones lowered it < 0.1 %
+# the steps along the family stop when their last 10 accepted ones lowered the soft cost by < 0.1 %
+LM_STALL = (10, 1e-3)
 LAMBDA_MIN, LAMBDA_MAX = 1e-9, 1e8
 
 
