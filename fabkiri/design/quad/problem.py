@@ -320,9 +320,9 @@ class DesignProblem:
         """A mirrored level up to ``TIPS_LEVEL_MAX`` tiles a side, fitted with the outline rows from its own coarse
         level, that misses by more than ``RIGID_FIRST_GOOD``: that level from rescaled as well (the rigid-first
         route's second start for a 16x16 request, ``routes._solve_rigid_first``), kept where it converges within
-        ``RIGID_FIRST_GOOD``. The
-        peanut's 16x16 level from its 8x8 one missed by 0.56 %, from rescaled 0.24 % (its 16x16 design's); its
-        32x32 and 64x64 designs from the first 0.31 % and 0.11 %, above its 16x16 and 48x48 designs.
+        ``RIGID_FIRST_GOOD``. The peanut's 16x16 level from its 8x8 one missed by 0.56 %, from rescaled 0.24 %
+        (its 16x16 design's); its 32x32 and 64x64 designs from the first 0.31 % and 0.11 %, above its 16x16 and
+        48x48 designs.
         ``(result, level)`` of the one kept."""
         _, info = level
         if sub.init != "coarse" or max(sub.rows, sub.cols) > TIPS_LEVEL_MAX:
