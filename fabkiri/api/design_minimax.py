@@ -91,6 +91,11 @@ CHEAP_PATIENCE = 1
 # (0.24 %, 0.11 %) sat above its 32x32 and 64x64 ones (0.07 %, 0.09 %); finished with the cheaper steps 0.045 % and
 # 0.032 % (docs/design-solver.md, "A cheaper finish for rigid designs", "Session 49 (rig49)")
 RIGID_FINISH_ALL_TILES = 48
+# a mirrored design from ``SECOND_ROUTE_TILES`` tiles a side still above the free gate (which an unmirrored one
+# would take a second route from) gets one cheaper step instead (``_mirrored_step``): the mirrored 96x96 star
+# (0.242 %, above its 64x64 design's 0.182 %) came to 0.097 % in one step at half its free design's CPU, 0.046 %
+# in six at twice it (docs/design-solver.md, "Session 50 (symstar50)")
+MIRRORED_STEPS = 1
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -106,6 +111,8 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     rigid_all = _rigid_unmirrored(req) and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
     if rigid_all and _tips_miss(req, report):
         return 0.0
+    if _mirrored_step(req):
+        return min(_rigid_gate(req), threshold(FREE_FINISH_ABOVE, req))
     if not _free(req):
         return _rigid_gate(req)
     if max(req.rows, req.cols) >= FREE_FINISH_ALL_TILES:
@@ -247,7 +254,13 @@ def _cheap(req: DesignRequest, report: dict) -> bool:
     """Whether ``req``'s design (its ``report``) under the rigid gate gets the cheaper steps: a rigid (not mirrored)
     one, and a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
     steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)")."""
-    return _rigid_unmirrored(req) or (_free(req) and _tips_miss(req, report))
+    return _rigid_unmirrored(req) or (_free(req) and _tips_miss(req, report)) or _mirrored_step(req)
+
+
+def _mirrored_step(req: DesignRequest) -> bool:
+    """A mirrored request from ``SECOND_ROUTE_TILES`` tiles a side: past the free gate its design gets
+    ``MIRRORED_STEPS`` cheaper steps (the second route's size and gate, which a mirrored design does not take)."""
+    return bool(req.symmetry) and max(req.rows, req.cols) >= SECOND_ROUTE_TILES
 
 
 def _cheap_after_full(req: DesignRequest, best: DesignAttempt, cand) -> bool:
@@ -344,7 +357,7 @@ def _steps(
     refined, trace, secs = refine_minimax(
         replace(req, start=None),
         start.pattern.nodes,
-        steps=MINIMAX_STEPS,
+        steps=MIRRORED_STEPS if req.finish_step and _mirrored_step(req) else MINIMAX_STEPS,
         gamma=gamma,
         accept=valid,
         patience=CHEAP_PATIENCE if req.finish_step else MINIMAX_PATIENCE,
