@@ -91,10 +91,11 @@ CHEAP_PATIENCE = 1
 # (0.24 %, 0.11 %) sat above its 32x32 and 64x64 ones (0.07 %, 0.09 %); finished with the cheaper steps 0.045 % and
 # 0.032 % (docs/design-solver.md, "A cheaper finish for rigid designs", "Session 49 (rig49)")
 RIGID_FINISH_ALL_TILES = 48
-# a mirrored design from ``SECOND_ROUTE_TILES`` tiles a side still above the free gate (which an unmirrored one
-# would take a second route from) gets one cheaper step instead (``_mirrored_step``): the mirrored 96x96 star
-# (0.242 %, above its 64x64 design's 0.182 %) came to 0.097 % in one step at half its free design's CPU, 0.046 %
-# in six at twice it (docs/design-solver.md, "Session 50 (symstar50)")
+# a mirrored design from ``SECOND_ROUTE_TILES`` tiles a side above the free gate (which an unmirrored one would
+# take a second route from) and further from the outline than its own coarse level gets this many cheaper steps
+# (``_mirrored_step``): the mirrored 96x96 star (0.242 %, level 0.225 %, above its 64x64 design's 0.182 %) came to
+# 0.097 % in one step under its free design's CPU, 0.046 % in six at twice it (docs/design-solver.md, "Session
+# 50 (symstar50)")
 MIRRORED_STEPS = 1
 
 
@@ -111,7 +112,7 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     rigid_all = _rigid_unmirrored(req) and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
     if rigid_all and _tips_miss(req, report):
         return 0.0
-    if _mirrored_step(req):
+    if _mirrored_step(req, report):
         return min(_rigid_gate(req), threshold(FREE_FINISH_ABOVE, req))
     if not _free(req):
         return _rigid_gate(req)
@@ -254,13 +255,24 @@ def _cheap(req: DesignRequest, report: dict) -> bool:
     """Whether ``req``'s design (its ``report``) under the rigid gate gets the cheaper steps: a rigid (not mirrored)
     one, and a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
     steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)")."""
-    return _rigid_unmirrored(req) or (_free(req) and _tips_miss(req, report)) or _mirrored_step(req)
+    return (
+        _rigid_unmirrored(req)
+        or (_free(req) and _tips_miss(req, report))
+        or _mirrored_step(req, report)
+    )
 
 
-def _mirrored_step(req: DesignRequest) -> bool:
-    """A mirrored request from ``SECOND_ROUTE_TILES`` tiles a side: past the free gate its design gets
-    ``MIRRORED_STEPS`` cheaper steps (the second route's size and gate, which a mirrored design does not take)."""
-    return bool(req.symmetry) and max(req.rows, req.cols) >= SECOND_ROUTE_TILES
+def _mirrored_step(req: DesignRequest, report: dict | None) -> bool:
+    """Whether ``req`` is mirrored, from ``SECOND_ROUTE_TILES`` tiles a side (the second route's size, which a
+    mirrored design does not take), and its design (``report``) misses by more than its coarse level, the design at
+    half its tiles (a mirrored level is fitted with the outline rows, ``DesignProblem._coarse_level``, so twice the
+    tiles should come no further): past the free gate it gets ``MIRRORED_STEPS`` cheaper steps. The mirrored
+    96x96 heart and drop (0.188 %, 0.143 %) came closer than their levels and keep the rigid gate (the heart's
+    design already costs more CPU than its free one)."""
+    level = (report or {}).get("coarse") or {}
+    h = level.get("hausdorff_rel")
+    big = bool(req.symmetry) and max(req.rows, req.cols) >= SECOND_ROUTE_TILES
+    return big and h is not None and _hausdorff(report or {}) > h
 
 
 def _cheap_after_full(req: DesignRequest, best: DesignAttempt, cand) -> bool:
@@ -357,7 +369,7 @@ def _steps(
     refined, trace, secs = refine_minimax(
         replace(req, start=None),
         start.pattern.nodes,
-        steps=MIRRORED_STEPS if req.finish_step and _mirrored_step(req) else MINIMAX_STEPS,
+        steps=MIRRORED_STEPS if req.finish_step and req.symmetry else MINIMAX_STEPS,
         gamma=gamma,
         accept=valid,
         patience=CHEAP_PATIENCE if req.finish_step else MINIMAX_PATIENCE,
