@@ -22,7 +22,8 @@ resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked
 ``FREE_FINISH_ALL_TILES`` tiles a side (a rigid one from ``RIGID_FINISH_ALL_TILES`` where its tips-only coarse
 level misses the outline by more than the shape tolerance, under the rigid gate with cheaper steps, ``CHEAP_PATIENCE``;
 a free one whose tips alone miss as well, ``_cheap``; after the full steps where they leave such a design above its
-lattice's threshold, ``_cheap_after_full``). A step the
+lattice's threshold, ``_cheap_after_full``; a mirrored one from ``SECOND_ROUTE_TILES`` past the free gate and further
+than its coarse level, one cheaper step, ``_mirrored_step``). A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
@@ -91,6 +92,12 @@ CHEAP_PATIENCE = 1
 # (0.24 %, 0.11 %) sat above its 32x32 and 64x64 ones (0.07 %, 0.09 %); finished with the cheaper steps 0.045 % and
 # 0.032 % (docs/design-solver.md, "A cheaper finish for rigid designs", "Session 49 (rig49)")
 RIGID_FINISH_ALL_TILES = 48
+# a mirrored design from ``SECOND_ROUTE_TILES`` tiles a side above the free gate (which an unmirrored one would
+# take a second route from) and further from the outline than its own coarse level gets this many cheaper steps
+# (``_mirrored_step``): the mirrored 96x96 star (0.242 %, level 0.225 %, above its 64x64 design's 0.182 %) came to
+# 0.097 % in one step under its free design's CPU, 0.046 % in six at twice it (docs/design-solver.md, "Session
+# 50 (symstar50)")
+MIRRORED_STEPS = 1
 
 
 def threshold(share: float, req: DesignRequest) -> float:
@@ -102,10 +109,13 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     """The share of the size past which ``req``'s design (its ``report``) is finished: ``FINISH_ABOVE`` scaled to
     its lattice (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE``
     scaled for a free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
-    ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``)."""
+    ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``); the free gate's share scaled, under the
+    rigid gate, for a mirrored one from ``SECOND_ROUTE_TILES`` further than its coarse level (``_mirrored_step``)."""
     rigid_all = _rigid_unmirrored(req) and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
     if rigid_all and _tips_miss(req, report):
         return 0.0
+    if _mirrored_step(req, report):
+        return min(_rigid_gate(req), threshold(FREE_FINISH_ABOVE, req))
     if not _free(req):
         return _rigid_gate(req)
     if max(req.rows, req.cols) >= FREE_FINISH_ALL_TILES:
@@ -247,7 +257,24 @@ def _cheap(req: DesignRequest, report: dict) -> bool:
     """Whether ``req``'s design (its ``report``) under the rigid gate gets the cheaper steps: a rigid (not mirrored)
     one, and a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
     steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)")."""
-    return _rigid_unmirrored(req) or (_free(req) and _tips_miss(req, report))
+    return (
+        _rigid_unmirrored(req)
+        or (_free(req) and _tips_miss(req, report))
+        or _mirrored_step(req, report)
+    )
+
+
+def _mirrored_step(req: DesignRequest, report: dict | None) -> bool:
+    """Whether ``req`` is mirrored, from ``SECOND_ROUTE_TILES`` tiles a side (the second route's size, which a
+    mirrored design does not take), and its design (``report``) misses by more than its coarse level, the design at
+    half its tiles (a mirrored level is fitted with the outline rows, ``DesignProblem._coarse_level``, so twice the
+    tiles should come no further): past the free gate it gets ``MIRRORED_STEPS`` cheaper steps. The mirrored
+    96x96 heart and drop came closer than their levels (0.65 % against 0.93 %, 0.26 % against 0.38 %) and keep the
+    rigid gate, above which they take the full steps."""
+    level = (report or {}).get("coarse") or {}
+    h = level.get("hausdorff_rel")
+    big = bool(req.symmetry) and max(req.rows, req.cols) >= SECOND_ROUTE_TILES
+    return big and h is not None and _hausdorff(report or {}) > h
 
 
 def _cheap_after_full(req: DesignRequest, best: DesignAttempt, cand) -> bool:
@@ -344,7 +371,7 @@ def _steps(
     refined, trace, secs = refine_minimax(
         replace(req, start=None),
         start.pattern.nodes,
-        steps=MINIMAX_STEPS,
+        steps=MIRRORED_STEPS if req.finish_step and req.symmetry else MINIMAX_STEPS,
         gamma=gamma,
         accept=valid,
         patience=CHEAP_PATIENCE if req.finish_step else MINIMAX_PATIENCE,

@@ -87,6 +87,54 @@ def test_a_non_rigid_design_is_finished_below_the_rigid_gate():
         assert not applies(DesignRequest(rows=n, cols=n, target=tgt, symmetry="y"), {}, close)
 
 
+def test_a_mirrored_96x96_design_further_than_its_level_gets_one_cheaper_step(monkeypatch):
+    """The mirrored star's 96x96 design (0.242 %) sat above its 64x64 one (0.182 %) and above its own coarse level
+    (the 48x48 design, fitted with the outline rows: 0.225 %), under the rigid gate (0.25 %) that every mirrored
+    design kept. Six cheaper steps took it to 0.046 % at twice its free design's CPU, one to 0.097 % under it. From
+    SECOND_ROUTE_TILES tiles a side a mirrored design past the free gate and further than its level gets
+    MIRRORED_STEPS cheaper steps; one above the rigid gate keeps the full steps; one closer than its level (the
+    mirrored heart's and drop's 96x96 designs), one with no level, the mirrored ellipse's (0.0135 %) and a 64x64
+    one are not finished."""
+    from fabkiri.api import design_minimax as dm
+
+    asked: list = []
+
+    def refine(req, start, **kw):
+        asked.append((req.finish_step, kw["steps"], kw["patience"]))
+        return None, [0.001], 1.0
+
+    monkeypatch.setattr(dm, "refine_minimax", refine)
+    star = load_target("star", 100)
+    mirrored = DesignRequest(rows=96, cols=96, target=star, symmetry="y")
+    nodes = type("P", (), {"nodes": None})()
+
+    def designed(h: float, level: float | None) -> Attempt:
+        coarse = None if level is None else {"fit": "outline", "hausdorff_rel": level}
+        return Attempt(nodes, _outcome(h, [], True).report | {"coarse": coarse}, [], True, {})
+
+    start = designed(0.00242, 0.00225)
+    assert dm.MIRRORED_STEPS == 1 and applies(mirrored, {}, start)
+    assert gate(mirrored, start.report) == pytest.approx(FREE_FINISH_ABOVE / 3)
+    dm.minimax_finish(mirrored, start, lambda r: start, [], lambda t: None)
+    assert asked == [(True, dm.MIRRORED_STEPS, dm.CHEAP_PATIENCE)]
+    # above the rigid gate (0.25 %): the full steps, as before
+    above = designed(0.003, 0.00225)
+    asked.clear()
+    dm.minimax_finish(mirrored, above, lambda r: above, [], lambda t: None)
+    assert asked and all(a == (False, dm.MINIMAX_STEPS, dm.MINIMAX_PATIENCE) for a in asked)
+    for n, h, level in (
+        (96, 0.00188, 0.003),
+        (96, 0.00242, None),
+        (96, 0.000135, 0.0003),
+        (64, 0.00182, 0.0015),
+    ):
+        req = replace(mirrored, rows=n, cols=n)
+        assert not applies(req, {}, designed(h, level)), (n, h, level)
+        assert gate(req, designed(h, level).report) == FINISH_FLOOR
+    # further than its level but under the free gate (0.1 % at 96x96)
+    assert not applies(mirrored, {}, designed(0.0009, 0.0008))
+
+
 def test_a_free_design_from_48_tiles_a_side_is_finished_whatever_its_miss():
     """Under the free gate (0.2 % at 48x48, 0.15 % at 64x64, 0.1 % at 96x96) the free ellipse's 48x48 design kept
     0.151 % above its 32x32 one's 0.109 %, and the free star's 64x64 one 0.090 % above its finished 48x48 one's
