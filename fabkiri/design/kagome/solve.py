@@ -166,7 +166,8 @@ def solve(
 
     Every start is landed, a warm one (a Lawson step) too: measured on the 6x11 heart, pulling a warm start
     back directly left the Lawson steps at 10.4 -> 9.8 %, landing it again reached 7.4 % (the penalty
-    solve moves the design further than the steps along the family, which stop in a nearer minimum)."""
+    solve moves the design further than the steps along the family, which stop in a nearer minimum).
+    ``warm``: the start is a Lawson step's, whose landing stops when stalled (``LAND_STALL``)."""
     stall = LAND_STALL if warm else None
     x, ok, _ = pull_back(rows.eq, land(rows, np.asarray(x0, float), stall=stall), max_iter=40)
     if not ok:
