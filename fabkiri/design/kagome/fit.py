@@ -255,7 +255,7 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
     for step in range(refine_steps + 1):
         if step:
             rows = replace(rows, weights=lawson(rows, x, power))
-        sol = KS.solve(rows, x, max_iter=max_iter)
+        sol = KS.solve(rows, x, max_iter=max_iter, warm=step > 0)
         its += sol.iterations
         xp, ok, k = KS.project(rows.eq, sol.x)
         its += k

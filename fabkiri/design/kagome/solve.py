@@ -60,6 +60,9 @@ LAND_INEQ_WEIGHT = 10.0  # and the inequalities' (heavier ones hold the equaliti
 LAND_NFEV = 100
 # the steps along the family stop when their last 10 accepted ones lowered the soft cost by < 0.1 %
 LM_STALL = (10, 1e-3)
+# a warm landing (a Lawson step's) stops when its last 40 evaluations lowered the penalty cost by < 0.01 %
+# (shorter or looser windows cost the 6x10 heart's convex-hole claim: docs/kagome.md)
+LAND_STALL = (40, 1e-4)
 LAMBDA_MIN, LAMBDA_MAX = 1e-9, 1e8
 
 
@@ -154,15 +157,19 @@ class Solve:
     on_family: bool  # the start was pulled onto the family (else x is the start)
 
 
-def solve(rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9) -> Solve:
+def solve(
+    rows: Rows, x0: np.ndarray, max_iter: int = 60, tol: float = 1e-9, warm: bool = False
+) -> Solve:
     """Levenberg-Marquardt along the family from ``x0`` (n, 2), landed and pulled onto it first; stops when
     a step lowers the soft cost by less than ``tol`` relative, when the last accepted steps have stalled
     (``LM_STALL``), or after ``max_iter`` steps.
 
     Every start is landed, a warm one (a Lawson step) too: measured on the 6x11 heart, pulling a warm start
     back directly left the Lawson steps at 10.4 -> 9.8 %, landing it again reached 7.4 % (the penalty
-    solve moves the design further than the steps along the family, which stop in a nearer minimum)."""
-    x, ok, _ = pull_back(rows.eq, land(rows, np.asarray(x0, float)), max_iter=40)
+    solve moves the design further than the steps along the family, which stop in a nearer minimum).
+    ``warm``: the start is a Lawson step's, whose landing stops when stalled (``LAND_STALL``)."""
+    stall = LAND_STALL if warm else None
+    x, ok, _ = pull_back(rows.eq, land(rows, np.asarray(x0, float), stall=stall), max_iter=40)
     if not ok:
         c = rows.equality_residuals(x)
         return Solve(np.asarray(x0, float), 0, np.inf, float(np.abs(c).max()), False)
@@ -251,19 +258,38 @@ def _product(k: tuple, x: np.ndarray) -> np.ndarray:
     return out
 
 
-def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
+class _Stalled(Exception):
+    """Raised from the landing's function when its evaluations have stalled (``LAND_STALL``)."""
+
+
+def land(
+    rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV, stall: tuple[int, float] | None = None
+) -> np.ndarray:
     """A point near the family from a start far from it: penalty least squares (the equalities weighted
     by ``LAND_WEIGHT`` beside the soft rows; scipy's trust-region reflective method), for the pull-back to
-    finish. The pull-back alone diverges from the initial guess of a heart (|c| ~ 1 there)."""
+    finish. The pull-back alone diverges from the initial guess of a heart (|c| ~ 1 there). ``stall``
+    (window, rel): stop once the last ``window`` evaluations lowered the lowest cost by < ``rel`` of it and
+    return the lowest point evaluated (the trust region's iterate)."""
     rows = replace(
         rows,
         ineq_weight=min(rows.ineq_weight, LAND_INEQ_WEIGHT),
         ineq=[f for f in rows.ineq if f.meta.get("land", True)],
     )
 
+    best: list = [np.inf, x0.ravel()]
+    lows: list[float] = []
+
     def fun(v):
         x = v.reshape(x0.shape)
-        return np.concatenate([LAND_WEIGHT * rows.equality_residuals(x), rows.soft(x, jac=False)])
+        f = np.concatenate([LAND_WEIGHT * rows.equality_residuals(x), rows.soft(x, jac=False)])
+        if stall is not None:
+            c = 0.5 * float(f @ f)
+            if c < best[0]:
+                best[0], best[1] = c, v.copy()
+            lows.append(best[0])
+            if stalled(lows, *stall):
+                raise _Stalled
+        return f
 
     def jac(v):
         x = v.reshape(x0.shape)
@@ -271,17 +297,20 @@ def land(rows: Rows, x0: np.ndarray, max_nfev: int = LAND_NFEV) -> np.ndarray:
             sparse.vstack([LAND_WEIGHT * rows.equalities(x)[1], rows.soft(x)[1]]).tocsr()
         )
 
-    sol = least_squares(
-        fun,
-        x0.ravel(),
-        jac=jac,
-        method="trf",
-        tr_solver="lsmr",
-        max_nfev=max_nfev,
-        xtol=1e-12,
-        ftol=1e-12,
-        gtol=1e-12,
-    )
+    try:
+        sol = least_squares(
+            fun,
+            x0.ravel(),
+            jac=jac,
+            method="trf",
+            tr_solver="lsmr",
+            max_nfev=max_nfev,
+            xtol=1e-12,
+            ftol=1e-12,
+            gtol=1e-12,
+        )
+    except _Stalled:
+        return best[1].reshape(x0.shape)
     return sol.x.reshape(x0.shape)
 
 
