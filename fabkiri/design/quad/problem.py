@@ -298,9 +298,7 @@ class DesignProblem:
         if sub.symmetry:
             alt = self.design_whole(replace(sub, outline=True))
             if alt.converged:
-                return self._rescaled_level(
-                    sub, (alt, {"fit": "outline", "hausdorff_rel": miss(alt)})
-                )
+                return self._rescaled_level(sub, alt, miss)
         res = self.design_whole(sub)
         h = miss(res)
         level = {"fit": "tips", "hausdorff_rel": h}
@@ -316,31 +314,25 @@ class DesignProblem:
             return alt, {**level, "fit": "outline", "hausdorff_rel": h_alt}
         return res, level
 
-    def _rescaled_level(self, sub: DesignRequest, level: tuple) -> tuple:
-        """A mirrored level up to ``TIPS_LEVEL_MAX`` tiles a side, fitted with the outline rows from its own coarse
-        level, that misses by more than ``RIGID_FIRST_GOOD``: that level from rescaled as well (the rigid-first
-        route's second start for a 16x16 request, ``routes._solve_rigid_first``), kept where it converges within
-        ``RIGID_FIRST_GOOD``. The peanut's 16x16 level from its 8x8 one missed by 0.56 %, from rescaled 0.24 %
-        (its 16x16 design's); its 32x32 and 64x64 designs from the first 0.31 % and 0.11 %, above its 16x16 and
-        48x48 designs.
-        ``(result, level)`` of the one kept."""
-        _, info = level
-        if sub.init != "coarse" or max(sub.rows, sub.cols) > TIPS_LEVEL_MAX:
-            return level
-        if info["hausdorff_rel"] <= RIGID_FIRST_GOOD:
-            return level
+    def _rescaled_level(self, sub: DesignRequest, level, miss) -> tuple:
+        """``(result, how)`` of a mirrored level fitted with the outline rows (``level``, measured by ``miss``).
+        One up to ``TIPS_LEVEL_MAX`` tiles a side that misses by more than ``RIGID_FIRST_GOOD`` is designed from
+        rescaled as well (the rigid-first route's second start for a 16x16 request, ``routes._solve_rigid_first``),
+        that one kept where it converges within ``RIGID_FIRST_GOOD``. The peanut's 16x16 level from its 8x8 one
+        missed by 0.56 %, from rescaled 0.24 % (its 16x16 design's); its 32x32 and 64x64 designs from the first
+        0.31 % and 0.11 %, above its 16x16 and 48x48 designs."""
+        h = miss(level)
+        how = {"fit": "outline", "hausdorff_rel": h}
+        small = sub.init == "coarse" and max(sub.rows, sub.cols) <= TIPS_LEVEL_MAX
+        if not small or h <= RIGID_FIRST_GOOD:
+            return level, how
         alt = self.design_whole(replace(sub, outline=True, init="rescaled"))
-        assert sub.target is not None, "a coarse level is built only for a deployed target"
-        h = deployed(alt.pattern.nodes, alt.pattern.topology, sub.target)["hausdorff_rel"]
+        h_alt = miss(alt)
         # kept only where it reaches the good outline: the star's 16x16 level from rescaled came closer (0.59
         # against 1.70 %) but its 32x32 design further (0.45 against 0.24 %), and the finish then cost 6x its CPU
-        if not (alt.converged and h <= RIGID_FIRST_GOOD):
-            return level
-        return alt, {
-            **info,
-            "hausdorff_rel": h,
-            "coarse_start_hausdorff_rel": info["hausdorff_rel"],
-        }
+        if not (alt.converged and h_alt <= RIGID_FIRST_GOOD):
+            return level, how
+        return alt, {**how, "hausdorff_rel": h_alt, "coarse_start_hausdorff_rel": h}
 
     def _start_overlaps(self, x_mm: np.ndarray) -> bool:
         """Whether the fine start (``start_member``, nodes ``x_mm``) has tiles of a closed state overlapping by
