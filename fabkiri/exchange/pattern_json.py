@@ -26,7 +26,6 @@ from ..pattern.model import Pattern
 from ..schemas import load_schema, schema_problem
 from ..schemas import short as _short
 from .file_formats import PatternFormat, register_format
-from .indented import indented
 
 FORMAT = "fabkiri.pattern"
 VERSION = 1
@@ -223,7 +222,9 @@ def dumps(pattern: Pattern) -> str:
         ]
         parts.append('  "contracted": {\n' + ",\n".join(states) + "\n  }")
     if pattern.design:
-        design = indented(jsonable(pattern.design)).replace("\n", "\n  ")
+        design = json.dumps(jsonable(pattern.design), indent=2, sort_keys=True).replace(
+            "\n", "\n  "
+        )
         parts.append(f'  "design": {design}')
     return "{\n" + ",\n".join(parts) + "\n}\n"
 
