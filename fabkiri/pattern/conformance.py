@@ -18,6 +18,8 @@ relative figures are fractions of it.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import shapely
 
@@ -123,18 +125,14 @@ def _target_samples(target: np.ndarray, h: float):
     """The target's samples at spacing ``h`` and their KD-tree. The last target's are kept: a design
     measures several outlines against one target (its coarse level, each start, the report), and the
     tree of the same samples is the same tree (the same nearest samples, the same figures)."""
-    key = (target.shape, target.tobytes(), h)
-    last = _LAST_TARGET.get("entry")
-    if last is not None and last[0] == key:
-        return last[1], last[2]
-    dense = densify(target, h)
+    return _samples_of(target.tobytes(), target.shape, h)
+
+
+@functools.lru_cache(maxsize=1)
+def _samples_of(data: bytes, shape: tuple, h: float):
+    dense = densify(np.frombuffer(data).reshape(shape), h)
     dense.flags.writeable = False  # shared by every measure against this target
-    tree = KDTree(dense)
-    _LAST_TARGET["entry"] = (key, dense, tree)
-    return dense, tree
-
-
-_LAST_TARGET: dict = {}
+    return dense, KDTree(dense)
 
 
 def _arc_weights(dense: np.ndarray) -> np.ndarray:

@@ -307,12 +307,12 @@ def test_outlines_measured_against_one_target_share_its_samples_and_tree(monkeyp
     outlines = [circle(49.0, 32), circle(51.0, 40, 0.1), circle(49.0, 32)]
     fresh = []
     for outline in outlines:
-        pc._LAST_TARGET.clear()
+        pc._samples_of.cache_clear()
         fresh.append(pc.measure(outline, target))
     built = []
     real = pc.KDTree
     monkeypatch.setattr(pc, "KDTree", lambda pts: built.append(len(pts)) or real(pts))
-    pc._LAST_TARGET.clear()
+    pc._samples_of.cache_clear()
     shared = [pc.measure(outline, target) for outline in outlines]
     assert json.dumps(shared) == json.dumps(fresh)  # the same bits
     # one tree for the target, one per outline
