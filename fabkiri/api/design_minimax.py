@@ -81,11 +81,12 @@ FREE_FINISH_ALL_TILES = 48
 # designs"). A rigid design under the rigid gate takes it with the cheaper steps (``CHEAP_PATIENCE``)
 SECOND_ROUTE_TILES = 96
 SECOND_ROUTE_GAMMA = 1.0
-# a rigid design under the rigid gate gets cheaper steps (``_rigid_unmirrored``, ``finish_step``): the reduced solver's first LM
-# scaling only (a warm-started step from a converged design: the other scaling's second start gave the lower merit
-# in 2 of the 64x64 rigid circle's 6 steps, at half of each step's cost), no stiffer second stage after a feasible
-# first (its 10 iterations pulled the fit back: the circle's finish 0.144 % with them, 0.007 % without) and this patience, stopping at the first step that comes no closer (docs/design-solver.md,
-# "A cheaper finish for rigid designs")
+# a rigid design under the rigid gate gets cheaper steps (``_rigid_unmirrored``, ``finish_step``): the reduced
+# solver's first LM scaling only (a warm-started step from a converged design: the other scaling's second start gave
+# the lower merit in 2 of the 64x64 rigid circle's 6 steps, at half of each step's cost), no stiffer second stage
+# after a feasible first (its 10 iterations pulled the fit back: the circle's finish 0.144 % with them, 0.007 %
+# without) and this patience, stopping at the first step that comes no closer (docs/design-solver.md, "A cheaper
+# finish for rigid designs")
 CHEAP_PATIENCE = 1
 # from this many tiles a side a rigid (not mirrored) design is finished whatever its miss, as a free one from
 # ``FREE_FINISH_ALL_TILES``, where its tips alone miss (``_tips_miss``): the rigid star's 48x48 and 96x96 designs
@@ -131,9 +132,14 @@ def _tips_miss(req: DesignRequest, report: dict | None) -> bool:
     alone fit, the design keeps the rigid gate: the rigid circles (levels 0.10-0.20 %, their 64x64 and 128x128
     designs 0.21 %, 0.22 %: finished, 2.6x and 3.3x their CPU), and the peanut's and bean's 64x64 designs (levels
     0.64 %, 0.77 %: finished, 0.14 %, under the 96x96 ones that main's full finish leaves at 0.20 % and 0.17 %)."""
-    level = (report or {}).get("coarse") or {}
+    level = _level(report)
     h = level.get("hausdorff_rel")
     return not (level.get("fit") == "tips" and h is not None and h <= req.second_opinion_above)
+
+
+def _level(report: dict | None) -> dict:
+    """The coarse level a design's ``report`` names (``report["coarse"]``: its fit and Hausdorff distance), or {}."""
+    return (report or {}).get("coarse") or {}
 
 
 def _free(req: DesignRequest) -> bool:
@@ -255,8 +261,9 @@ def minimax_finish(
 
 def _cheap(req: DesignRequest, report: dict) -> bool:
     """Whether ``req``'s design (its ``report``) under the rigid gate gets the cheaper steps: a rigid (not mirrored)
-    one, and a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
-    steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)")."""
+    one, a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
+    steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)"), and a mirrored
+    one that ``_mirrored_step`` names (``MIRRORED_STEPS`` of them, ``_steps``)."""
     return (
         _rigid_unmirrored(req)
         or (_free(req) and _tips_miss(req, report))
@@ -271,8 +278,7 @@ def _mirrored_step(req: DesignRequest, report: dict | None) -> bool:
     tiles should come no further): past the free gate it gets ``MIRRORED_STEPS`` cheaper steps. The mirrored
     96x96 heart and drop came closer than their levels (0.65 % against 0.93 %, 0.26 % against 0.38 %) and keep the
     rigid gate, above which they take the full steps."""
-    level = (report or {}).get("coarse") or {}
-    h = level.get("hausdorff_rel")
+    h = _level(report).get("hausdorff_rel")
     big = bool(req.symmetry) and max(req.rows, req.cols) >= SECOND_ROUTE_TILES
     return big and h is not None and _hausdorff(report or {}) > h
 
