@@ -38,9 +38,9 @@ from .rigid.reduced import (
     POLISH_STEPS,
     SCALINGS,
     ReducedSearch,
-    fit_miss,
     solve_reduced,
 )
+from .rigid.steps import fit_miss
 
 REDUCED_NAME = "closed-form rigid family (reduced Levenberg-Marquardt)"
 FULL_NAME = "sparse Levenberg-Marquardt (penalty continuation) + Gauss-Newton projection, SuperLU"
