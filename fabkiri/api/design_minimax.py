@@ -139,19 +139,22 @@ def _tips_miss(req: DesignRequest, report: dict | None) -> bool:
 
 
 def _redesigned(req: DesignRequest, report: dict | None) -> bool:
-    """Whether ``req``'s design (its ``report``), unmirrored, from ``RIGID_FINISH_ALL_TILES`` tiles a side and under
-    the rigid gate, came from a tips-only coarse level that fits within the shape tolerance (``_tips_miss``) but
-    misses by more than that gate: then it is designed again from the levels refitted with the outline rows, as a
-    design above the gate is, and the closer kept, with no steps (the rigid and free 96x96 ellipse, 0.063 % from
-    its 0.43 % level, 0.0066 % redesigned; a mirrored level has the outline rows already). The circles' levels fit
-    within the gate (issue #36's 64x64 and 128x128 rows keep their cost; docs/design-solver.md, "Session 51")."""
+    """Whether ``req``'s design (its ``report``), unmirrored, from ``RIGID_FINISH_ALL_TILES`` tiles a side and within
+    the free gate's share (``threshold(FREE_FINISH_ABOVE)``, under the rigid gate), came from a tips-only coarse
+    level that fits within the shape tolerance (``_tips_miss``) but misses by more than the rigid gate: then it is
+    designed again from the levels refitted with the outline rows, as a design above the gate is, and the closer
+    kept, with no steps (the rigid and free 96x96 ellipse, 0.063 % from its 0.43 % level, 0.0066 % redesigned; a
+    mirrored level has the outline rows already). The circles' levels fit within the gate (issue #36's 64x64 and
+    128x128 rows keep their cost); the peanut's and bean's 64x64 designs, past the free gate's share, paid 2-3x
+    their CPU for redesigns further than they (docs/design-solver.md, "Session 51 (ell51)")."""
     h, level = _hausdorff(report or {}), _level(report).get("hausdorff_rel")
     return (
         not req.symmetry
         and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
         and not _tips_miss(req, report)
         and level is not None
-        and h <= _rigid_gate(req) < level
+        and h <= threshold(FREE_FINISH_ABOVE, req)
+        and _rigid_gate(req) < level
     )
 
 
