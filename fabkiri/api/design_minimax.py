@@ -238,16 +238,8 @@ def minimax_finish(
         and not req.symmetry
         and (not polish and left > threshold(REFIT_ABOVE, req) or redesigned)
     ):
-        # its coarse levels refitted where they miss by more than the finish's own threshold (not only past the
-        # shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted 0.31 %)
-        again = replace(req, init="coarse", start=None, coarse_refit=True)
-        refit = judge(design(replace(again, coarse_refit_above=threshold(FINISH_ABOVE, req))))
-        secs += float(refit.report["time_s"])
-        if refit.valid and not redesigned:
-            more, more_trace, more_secs = _steps(req, refit, judge)
-            trace, secs = trace + more_trace, secs + more_secs
-        else:
-            more = None
+        refit, more, more_trace, more_secs = _refitted(req, judge, steps=not redesigned)
+        trace, secs = trace + more_trace, secs + more_secs
         for c in (refit, more) if refit.valid else ():
             if c is not None and (cand is None or _rank(c) < _rank(cand)):
                 cand = c
@@ -287,6 +279,20 @@ def minimax_finish(
             f"of the size ({len(trace)} steps)"
         )
     return cand if better else None
+
+
+def _refitted(req: DesignRequest, judge: Callable, steps: bool):
+    """``req``'s design again from its coarse levels refitted where they miss by more than the finish's own threshold
+    (not only past the shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted
+    0.31 %), and where ``steps`` Lawson's steps from it when it is valid: the redesign's outcome, the steps' best
+    (or None), their trace and the seconds of both."""
+    again = replace(req, init="coarse", start=None, coarse_refit=True)
+    refit = judge(design(replace(again, coarse_refit_above=threshold(FINISH_ABOVE, req))))
+    secs = float(refit.report["time_s"])
+    if not (refit.valid and steps):
+        return refit, None, [], secs
+    more, trace, more_secs = _steps(req, refit, judge)
+    return refit, more, trace, secs + more_secs
 
 
 def _cheap(req: DesignRequest, report: dict) -> bool:
