@@ -23,7 +23,8 @@ resolution (``threshold``: 32/n for n tiles a side), so a larger design is asked
 level misses the outline by more than the shape tolerance, under the rigid gate with cheaper steps, ``CHEAP_PATIENCE``;
 a free one whose tips alone miss as well, ``_cheap``; after the full steps where they leave such a design above its
 lattice's threshold, ``_cheap_after_full``; a mirrored one from ``SECOND_ROUTE_TILES`` past the free gate and further
-than its coarse level, one cheaper step, ``_mirrored_step``). A step the
+than its coarse level, one cheaper step, ``_mirrored_step``; one under the rigid gate whose tips-only level misses past
+it is designed again from refitted levels, ``_redesigned``). A step the
 front door vetoes (a closed state overlapping) is not stepped from: the next goes back to the best step with half
 the exponent (``backtrack`` in ``refine_minimax``).
 """
@@ -137,6 +138,26 @@ def _tips_miss(req: DesignRequest, report: dict | None) -> bool:
     return not (level.get("fit") == "tips" and h is not None and h <= req.second_opinion_above)
 
 
+def _redesigned(req: DesignRequest, report: dict | None) -> bool:
+    """Whether ``req``'s design (its ``report``), unmirrored, from ``RIGID_FINISH_ALL_TILES`` tiles a side and within
+    the free gate's share (``threshold(FREE_FINISH_ABOVE)``, under the rigid gate), came from a tips-only coarse
+    level that fits within the shape tolerance (``_tips_miss``) but misses by more than the rigid gate: then it is
+    designed again from the levels refitted with the outline rows, as a design above the gate is, and the closer
+    kept, with no steps (the rigid and free 96x96 ellipse, 0.063 % from its 0.43 % level, 0.0066 % redesigned; a
+    mirrored level has the outline rows already). The circles' levels fit within the gate (issue #36's 64x64 and
+    128x128 rows keep their cost); the peanut's and bean's 64x64 designs, past the free gate's share, paid 2-3x
+    their CPU for redesigns further than they (docs/design-solver.md, "Session 51 (ell51)")."""
+    h, level = _hausdorff(report or {}), _level(report).get("hausdorff_rel")
+    return (
+        not req.symmetry
+        and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
+        and not _tips_miss(req, report)
+        and level is not None
+        and h <= threshold(FREE_FINISH_ABOVE, req)
+        and _rigid_gate(req) < level
+    )
+
+
 def _level(report: dict | None) -> dict:
     """The coarse level a design's ``report`` names (``report["coarse"]``: its fit and Hausdorff distance), or {}."""
     return (report or {}).get("coarse") or {}
@@ -164,7 +185,11 @@ def applies(req: DesignRequest, contracted: dict, best) -> bool:
         and req.fabrication is None
         and not req.min_opening
         and req.rows * req.cols >= MINIMAX_TILES
-        and (not best.valid or _hausdorff(best.report) > gate(req, best.report))
+        and (
+            not best.valid
+            or _hausdorff(best.report) > gate(req, best.report)
+            or _redesigned(req, best.report)
+        )
     )
 
 
@@ -197,30 +222,27 @@ def minimax_finish(
     fails, seen = _memo(shape_tol), list[DesignAttempt]()
     if stepped is not req:  # every judged step kept: ``_verified`` falls back on them
         judge = _recording(judge, seen)
-    # no steps from an overlapping design (``overlapping_only``): the refitted redesign, and the steps from that
-    cand, trace, secs = _steps(stepped, best, judge) if valid else (None, [], 0.0)
+    # no steps from an overlapping design (``overlapping_only``): the refitted redesign, and the steps from that;
+    # none either for a design under its gate let in by ``_redesigned``: the redesign alone
+    gated = valid and h0 > gate(req, best.report)
+    cand, trace, secs = _steps(stepped, best, judge) if gated else (None, [], 0.0)
+    redesigned = valid and _redesigned(req, best.report)
     refit, left = None, min(h0, _hausdorff(cand.report) if cand else h0) if valid else float("inf")
     # still past REFIT_ABOVE: another basin, the design from refitted coarse levels and the steps from it (not
     # for a symmetric design: its levels have the outline rows already, ``DesignProblem._coarse_level``, the same design)
     # nor for a design under the rigid gate (``gate``): its steps alone (the free 64x64 peanut, 0.21 %: the
-    # redesign and its steps cost twice the steps alone and found no better design; docs/design-solver.md)
+    # redesign and its steps cost twice the steps alone and found no better design; docs/design-solver.md) but
+    # one whose tips-only level misses past that gate (``_redesigned``): the redesign alone
     if (
         not req.coarse_refit
         and not req.symmetry
-        and not polish
-        and left > threshold(REFIT_ABOVE, req)
+        and (not polish and left > threshold(REFIT_ABOVE, req) or redesigned)
     ):
-        # its coarse levels refitted where they miss by more than the finish's own threshold (not only past the
-        # shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted 0.31 %)
-        again = replace(req, init="coarse", start=None, coarse_refit=True)
-        refit = judge(design(replace(again, coarse_refit_above=threshold(FINISH_ABOVE, req))))
-        secs += float(refit.report["time_s"])
-        if refit.valid:
-            more, more_trace, more_secs = _steps(req, refit, judge)
-            trace, secs = trace + more_trace, secs + more_secs
-            for c in (refit, more):
-                if c is not None and (cand is None or _rank(c) < _rank(cand)):
-                    cand = c
+        refit, more, more_trace, more_secs = _refitted(req, judge, steps=not redesigned)
+        trace, secs = trace + more_trace, secs + more_secs
+        for c in (refit, more) if refit.valid else ():
+            if c is not None and (cand is None or _rank(c) < _rank(cand)):
+                cand = c
     start = cand if cand is not None and _closer(cand, best) else best
     more, more_trace, more_secs = _second_route(stepped, start, judge)
     if more is not None and (cand is None or _rank(more) < _rank(cand)):
@@ -257,6 +279,20 @@ def minimax_finish(
             f"of the size ({len(trace)} steps)"
         )
     return cand if better else None
+
+
+def _refitted(req: DesignRequest, judge: Callable, steps: bool):
+    """``req``'s design again from its coarse levels refitted where they miss by more than the finish's own threshold
+    (not only past the shape tolerance: the 32x32 peanut's steps left 0.40 %, with its 16x16 level refitted
+    0.31 %), and where ``steps`` Lawson's steps from it when it is valid: the redesign's outcome, the steps' best
+    (or None), their trace and the seconds of both."""
+    again = replace(req, init="coarse", start=None, coarse_refit=True)
+    refit = judge(design(replace(again, coarse_refit_above=threshold(FINISH_ABOVE, req))))
+    secs = float(refit.report["time_s"])
+    if not (refit.valid and steps):
+        return refit, None, [], secs
+    more, trace, more_secs = _steps(req, refit, judge)
+    return refit, more, trace, secs + more_secs
 
 
 def _cheap(req: DesignRequest, report: dict) -> bool:

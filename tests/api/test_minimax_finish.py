@@ -354,6 +354,8 @@ def test_a_rigid_design_whose_tips_alone_miss_is_finished_whatever_its_miss():
     keep the rigid gate (finished, issue #36's rows cost 2.6x and 3.3x), as do the peanut's 64x64 one (level
     0.64 %). A design with no tips-only level (from the rescaled guess, or an outline-fitted level) is finished
     too; a mirrored request and a 32x32 one keep the rigid gate."""
+    from fabkiri.api import design_minimax as dm
+
     star, circle = load_target("star", 100), load_target("circle", 100)
 
     def designed(h: float, level: dict | None) -> Attempt:
@@ -373,9 +375,12 @@ def test_a_rigid_design_whose_tips_alone_miss_is_finished_whatever_its_miss():
         rigid_gate = max(FINISH_FLOOR, threshold(FINISH_ABOVE, rigid))
         assert gate(rigid, designed(h, near).report) == rigid_gate
         assert not applies(rigid, {}, designed(h, near))
-    # the peanut's 64x64 design (0.211 %, level 0.64 %): under the level's tolerance, the rigid gate
+    # the peanut's 64x64 design (0.211 %, level 0.64 %): under the level's tolerance, the rigid gate; past the
+    # free gate's share, no refitted redesign either (``_redesigned``)
     peanut = DesignRequest(rows=64, cols=64, target=circle, rigid=True)
     assert peanut.second_opinion_above == 0.02
+    level = designed(0.00211, {**near, "hausdorff_rel": 0.0064}).report
+    assert gate(peanut, level) == FINISH_FLOOR and not dm._redesigned(peanut, level)
     assert not applies(peanut, {}, designed(0.00211, {**near, "hausdorff_rel": 0.0064}))
     assert applies(peanut, {}, designed(0.00211, {**near, "hausdorff_rel": 0.021}))
     assert not applies(
@@ -551,3 +556,58 @@ def test_a_free_design_from_the_rigid_family_reports_that_design_s_coarse_level(
     prob = SimpleNamespace(req=req, L0=1.0, via_coarse=None, design_whole=lambda sub: rigid)
     assert routes._solve_via_rigid(prob, lambda msg: None, {}) is not None
     assert prob.via_coarse is level
+
+
+def test_a_design_under_its_gate_whose_tips_level_misses_past_it_is_redesigned_from_refitted_levels(
+    monkeypatch,
+):
+    """The ellipse's 48x48, 64x64 and 96x96 designs sat under the rigid gate (0.151, 0.060, 0.063 %), so a rigid one
+    was not finished and rose 32->48 and 64->96; the free 96x96 one's steps stalled at 0.050 %, above its 64x64's
+    0.032 %. Their tips-only levels fit within the shape tolerance but miss by more than the rigid gate; designed
+    again from levels refitted with the outline rows they come to 0.026, 0.016 and 0.007 %. Such a design (rigid
+    or free, from 48 tiles a side, within the free gate's share) gets the refitted redesign, no steps where its
+    gate asks none, and the closer design is kept; not one whose level fits within the gate (the circles), one
+    whose tips alone miss (the cheaper steps' case), a mirrored one, a 32x32 one, or one past the free gate's
+    share (the 64x64 peanut and bean: their redesigns came further, at 2-3x their CPU)."""
+    from fabkiri.api import design_minimax as dm
+
+    pattern = type("P", (), {"nodes": None})()
+
+    def designed(h: float, level: float | None) -> Attempt:
+        report = _outcome(h, [], True).report
+        report["coarse"] = {"fit": "tips", "hausdorff_rel": level} if level else None
+        return Attempt(pattern, report, [], True, {})
+
+    asked: list = []
+    stepped: list = []
+    monkeypatch.setattr(dm, "design", lambda r: asked.append(r) or "result")
+    monkeypatch.setattr(dm, "_fails", lambda outcome, tol: set())
+    monkeypatch.setattr(
+        dm, "_steps", lambda req, start, judge, gamma=0.5: stepped.append(start) or (None, [], 1.0)
+    )
+    ellipse = load_target("ellipse", 100)
+    for n, h, level in ((48, 0.00151, 0.0107), (64, 0.0006, 0.0119), (96, 0.00063, 0.0043)):
+        for rigid in (True, False):
+            req = DesignRequest(rows=n, cols=n, target=ellipse, rigid=rigid)
+            start, redesign = designed(h, level), designed(0.000066, None)
+            assert applies(req, {}, start), (n, rigid)
+            asked.clear(), stepped.clear()
+            got = dm.minimax_finish(req, start, {"result": redesign}.get, [], lambda t: None)
+            assert got is redesign
+            assert len(asked) == 1 and asked[0].coarse_refit and asked[0].init == "coarse"
+            # a rigid one under its gate gets no steps; a free one from 48 tiles keeps its steps (gate 0)
+            assert stepped == ([] if rigid else [start]), (n, rigid)
+    # a level within the rigid gate (the 64x64 circle's 0.13 %), a level past the shape tolerance (the star's),
+    # mirrored, 32x32, a design past the free gate's share (the 64x64 peanut's 0.211 %, level 0.64 %): no redesign
+    for n, h, level, symmetry in (
+        (64, 0.0006, 0.0013, None),
+        (64, 0.0006, 0.17, None),
+        (96, 0.0006, 0.0043, "y"),
+        (32, 0.0006, 0.034, None),
+        (64, 0.00211, 0.0064, None),
+    ):
+        req = DesignRequest(rows=n, cols=n, target=ellipse, rigid=True, symmetry=symmetry)
+        asked.clear()
+        start, redesign = designed(h, level), designed(0.000066, None)
+        dm.minimax_finish(req, start, {"result": redesign}.get, [], lambda t: None)
+        assert not dm._redesigned(req, start.report) and asked == [], (n, level)
