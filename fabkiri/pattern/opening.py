@@ -139,7 +139,7 @@ def _closed_area(corners: np.ndarray) -> float:
 def _coverage_area(c: np.ndarray, grid: float) -> float | None:
     """The outline's area by a coverage union of the quads ``c`` snapped to ``grid`` (GEOS's precision model), or
     None: tiles other than quads, or snapped tiles that are not a coverage (they overlap, or a shared
-    edge's ends fell in different grid cells).
+    edge's ends fell in different grid cells, also half a cell further on).
 
     A quad pattern's closed state meets edge to edge, end to end (its edge pairs), so once the shared
     corners round to the same grid point the tiles form a coverage and GEOS joins them along their shared
@@ -148,15 +148,21 @@ def _coverage_area(c: np.ndarray, grid: float) -> float | None:
     an edge (1e-8 of the area apart on a 5x19 ellipse): they keep the general union."""
     if c.ndim != 3 or c.shape[1] != 4 or not grid > 0 or not np.isfinite(c).all():
         return None
-    # pointwise: each corner rounded to the grid as union_all(grid_size=grid) rounds its input, nothing else
-    polys = shapely.set_precision(shapely.polygons(c), grid, mode="pointwise")
-    try:
-        if not (shapely.is_valid(polys).all() and shapely.coverage_is_valid(polys)):
-            return None
-        area = _outline_area(shapely.coverage_union_all(polys))
-    except shapely.errors.GEOSException:
-        return None
-    return area if area > 0 else None
+    # pointwise: each corner rounded to the grid as union_all(grid_size=grid) rounds its input, nothing else;
+    # where the copies of a shared corner (round-off apart) straddle a cell's edge, the tiles shifted by half a
+    # cell (the area is the same) round them together
+    for shift in (0.0, 0.5 * grid):
+        polys = shapely.set_precision(
+            shapely.polygons(c + shift if shift else c), grid, mode="pointwise"
+        )
+        try:
+            if not (shapely.is_valid(polys).all() and shapely.coverage_is_valid(polys)):
+                continue
+            area = _outline_area(shapely.coverage_union_all(polys))
+        except shapely.errors.GEOSException:
+            continue
+        return area if area > 0 else None
+    return None
 
 
 def _outline_area(u) -> float:

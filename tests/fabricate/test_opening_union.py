@@ -76,3 +76,40 @@ def test_triangles_keep_the_general_union(monkeypatch):
     c = np.asarray(closed_corners(p, 1), float)
     assert op._coverage_area(c, 1e-7 * float(np.ptp(c.reshape(-1, 2), 0).max())) is None
     assert op._closed_area(c) == _general(c)
+
+
+def _cell_edge(x: float, grid: float) -> float:
+    """Where GEOS's ``grid`` rounding of x-coordinates near ``x`` turns from one cell to the next."""
+
+    def snapped(v: float) -> float:
+        return shapely.get_x(shapely.set_precision(shapely.Point(v, 0.0), grid))
+
+    lo, hi = x - 0.25 * grid, x + 0.25 * grid
+    assert snapped(lo) != snapped(hi)
+    for _ in range(60):
+        m = 0.5 * (lo + hi)
+        lo, hi = (m, hi) if snapped(m) == snapped(lo) else (lo, m)
+    return 0.5 * (lo + hi)
+
+
+def test_a_shared_corner_split_by_a_grid_cell_edge_takes_the_coverage_half_a_cell_on(monkeypatch):
+    # a 2 x 2 block whose centre corner sits on the edge of a 1e-7-of-the-extent cell, one of its four copies
+    # round-off apart on the other side: snapped, that tile's edges do not match its neighbours', so no
+    # coverage; half a cell further on they round together (the 128x128 rigid circle's closed state 1 had one)
+    grid = 1e-7 * 2.0
+    mid = _cell_edge(1.0 + 0.5 * grid, grid)
+    quads = np.array(
+        [
+            [[0, 0], [mid, 0], [mid - 1e-13, 1], [0, 1]],
+            [[mid, 0], [2, 0], [2, 1], [mid + 1e-13, 1]],
+            [[0, 1], [mid - 1e-13, 1], [mid, 2], [0, 2]],
+            [[mid - 1e-13, 1], [2, 1], [2, 2], [mid, 2]],
+        ],
+        float,
+    )
+    snapped = shapely.set_precision(shapely.polygons(quads), grid, mode="pointwise")
+    assert not shapely.coverage_is_valid(snapped)
+    want = _general(quads)
+    _no_general_union(monkeypatch)
+    assert op._closed_area(quads) == pytest.approx(want, rel=1e-12)
+    assert want == pytest.approx(4.0, rel=1e-12)
