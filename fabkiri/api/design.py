@@ -37,6 +37,7 @@ from .closed_states import closed_outline_fit, overlapping_tiles, parse_contract
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
+from .design_mirror import mirror_note, with_mirrored
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_report import DesignAttempt, DesignReport
@@ -204,7 +205,7 @@ def design_pattern(
         )
     attempts = first
     if best is None:
-        best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
+        best, attempts = with_mirrored(request, req, target, contracted, shape_tol, say, _attempts)
         attempts = first + attempts
     judge = _judge(contracted, request, target, shape_tol)
     if minimax_applies(req, contracted, best):  # the largest miss, after the least-squares fit
@@ -220,6 +221,7 @@ def design_pattern(
     if cont is not None and _rank(cont) < _rank(best):
         best = cont
     best = refine_to_floor(req, best, judge, attempts, say) or best  # a floor that cost the shape
+    best.report.update(mirror_note(req, request, attempts))
     return _outcome(best, attempts, messages, target)
 
 
