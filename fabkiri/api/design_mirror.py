@@ -14,13 +14,19 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
+from shapely.geometry import MultiPoint
+
 from ..design.core.request import MIRROR_TOL
-from ..errors import SolveError
+from ..errors import InputError, SolveError
 from ..mechanics.path import RIGID_TOL_RAD
 from .design_judge import _hausdorff
 
 # a mirrored design within this share of the target's size ends the search (the unmirrored route is not run)
 MIRRORED_ENOUGH = 5e-4
+# elongated: the bounding box's longer side this many times the shorter; non-convex: the area below this share
+# of the convex hull's (the peanut 2:1 and non-convex, the 2:1 ellipse; the circle is neither)
+ELONGATED = 1.2
+CONVEX_SHARE = 0.98
 
 
 def mirror_axis(request, req) -> str | None:
@@ -42,7 +48,20 @@ def mirror_axis(request, req) -> str | None:
     # one axis only (heart, star): their mirrored designs were further in 9 of the table's 10 cells, at up to
     # the unmirrored design's cost again; symmetric about both, the mirrored design about x
     both = all(req.target.mirror_error(a) <= MIRROR_TOL for a in ("x", "y"))
-    return "x" if both else None
+    if not (both and _stalls(req.target)):
+        return None
+    # the mirror keeps the fold states only with an even count of the rows it maps (constraints.symmetry)
+    return "x" if req.rows % 2 == 0 else "y" if req.cols % 2 == 0 else None
+
+
+def _stalls(target) -> bool:
+    """Elongated or non-convex: where the rigid family's LM stops in worse local minima (``quad/routes.py``). A
+    round convex target (the circle of issue #36's speed rows) keeps its one route: at 64x64 its mirrored design
+    was closer but cost three times as much."""
+    lo, hi = target.bbox
+    span = hi - lo
+    hull = MultiPoint(target.points).convex_hull.area
+    return bool(span.max() >= ELONGATED * span.min() or abs(target.area) < CONVEX_SHARE * hull)
 
 
 def _rigid_valid(outcome) -> bool:
@@ -70,7 +89,7 @@ def with_mirrored(
             shape_tol,
             say,
         )
-    except SolveError as exc:
+    except (InputError, SolveError) as exc:
         say(f"fabkiri: no design mirrored about {axis} ({exc}); the unmirrored design only")
         return attempts_of(request, req, target, contracted, shape_tol, say)
     for a in m_attempts:

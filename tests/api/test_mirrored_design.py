@@ -43,3 +43,11 @@ def test_mirror_axis_only_for_rigid_requests_without_a_symmetry():
     for one_axis in ("heart", str(Path(PEANUT).with_name("drop.csv"))):  # symmetric about y only
         req = DesignRequest(rows=8, cols=8, target=load_target(one_axis, 100), rigid=True)
         assert mirror_axis(rigid, req) is None
+    # symmetric about both axes but round and convex: the circle keeps its one route (issue #36's rows)
+    circle = DesignRequest(rows=8, cols=8, target=load_target("circle", 100), rigid=True)
+    assert mirror_axis(rigid, circle) is None
+    ellipse = DesignRequest(rows=8, cols=8, target=load_target("ellipse", 100), rigid=True)
+    assert mirror_axis(rigid, ellipse) == "x"
+    # the x mirror needs an even row count, the y mirror an even column count
+    assert mirror_axis(rigid, DesignRequest(rows=5, cols=6, target=peanut, rigid=True)) == "y"
+    assert mirror_axis(rigid, DesignRequest(rows=5, cols=5, target=peanut, rigid=True)) is None
