@@ -1,12 +1,11 @@
 """The mirrored design of a rigid request whose target is mirror-symmetric (issue #37).
 
-A rigid request without ``--symmetry`` on a target symmetric about both axes is also designed mirrored
-(the reduced solve over half the seeds): the mirrored family is a subset of the unmirrored one, but the
-unmirrored route's LM often stops in a worse local minimum (rigid 48x48 peanut). The mirrored design runs
-first; where it is valid, rigid-deployable and within ``MIRRORED_ENOUGH`` of the size, it is kept and the
-unmirrored route is skipped; otherwise the unmirrored route runs and the closer valid design is kept. The
-kept design's report says ``mirrored`` (the axis) and why. Figures: docs/design-solver.md, "Session 51
-(mir51)".
+A rigid request without a symmetry, on an elongated or non-convex target symmetric about both axes, is also
+designed mirrored (``--symmetry``: the reduced solve over half the seeds). The mirrored designs are a subset
+of the unmirrored ones, but the unmirrored route's LM can stop in a worse local minimum (rigid 48x48 peanut).
+Both designs run to the end (guesses, finish, refinements) and the closer valid rigid-deployable one is kept;
+the kept mirrored design's report says ``mirrored`` (the axis) and why. Figures: docs/design-solver.md,
+"Session 51 (mir51)".
 """
 
 from __future__ import annotations
@@ -21,8 +20,6 @@ from ..errors import InputError, SolveError
 from ..mechanics.path import RIGID_TOL_RAD
 from .design_judge import _hausdorff
 
-# a mirrored design within this share of the target's size ends the search (the unmirrored route is not run)
-MIRRORED_ENOUGH = 5e-4
 # elongated: the bounding box's longer side this many times the shorter; non-convex: the area below this share
 # of the convex hull's (the peanut 2:1 and non-convex, the 2:1 ellipse; the circle is neither)
 ELONGATED = 1.2
@@ -70,55 +67,29 @@ def _rigid_valid(outcome) -> bool:
     return bool(outcome.valid and hinge is not None and hinge <= RIGID_TOL_RAD)
 
 
-def with_mirrored(
-    request, req, target, contracted, shape_tol, say: Callable[[str], None], attempts_of: Callable
-):
-    """``attempts_of``'s ``(best, attempts)``, with the mirrored design tried first where :func:`mirror_axis`
-    applies; the mirrored attempts are recorded with ``"mirrored": axis``. Where the mirrored design is kept,
-    ``req.symmetry`` is set to its axis: the steps after the guesses (the minimax finish) refine it as the
-    mirrored request they would refine for ``--symmetry``."""
-    axis = mirror_axis(request, req)
-    if axis is None:
-        return attempts_of(request, req, target, contracted, shape_tol, say)
+def keep_closer(request, axis: str, design: Callable, notify: Callable[[str], None] | None):
+    """``design`` (the front door) of ``request`` mirrored about ``axis`` and unmirrored (an explicit
+    ``symmetry="none"``): the mirrored outcome where it is valid, rigid-deployable and closer, else the
+    unmirrored one. The kept report lists both designs' attempts (the mirrored ones marked) and their time."""
+    own = design(replace(request, symmetry="none"), notify)
     try:
-        mirrored, m_attempts = attempts_of(
-            replace(request, symmetry=axis),
-            replace(req, symmetry=axis),
-            target,
-            contracted,
-            shape_tol,
-            say,
-        )
-    except (InputError, SolveError) as exc:
-        say(f"fabkiri: no design mirrored about {axis} ({exc}); the unmirrored design only")
-        return attempts_of(request, req, target, contracted, shape_tol, say)
-    for a in m_attempts:
+        mirrored = design(replace(request, symmetry=axis), notify)
+    except (InputError, SolveError):  # no mirrored lattice or guess: the unmirrored design stands
+        return own
+    m_h, h = _hausdorff(mirrored.report), _hausdorff(own.report)
+    for a in mirrored.report["attempts"]:
         a["mirrored"] = axis
-    m_ok, m_h = _rigid_valid(mirrored), _hausdorff(mirrored.report)
-    if m_ok and m_h <= MIRRORED_ENOUGH:
-        req.symmetry = axis
-        return mirrored, m_attempts
-    say(
-        f"fabkiri: the design mirrored about {axis} (the target is symmetric) "
-        f"{'is' if m_ok else 'is not'} valid, Hausdorff {m_h:.3%} of the size; trying the unmirrored design too"
-    )
-    best, attempts = attempts_of(request, req, target, contracted, shape_tol, say)
-    if m_ok and (not best.valid or m_h < _hausdorff(best.report)):
-        best, req.symmetry = mirrored, axis
-    return best, m_attempts + attempts
-
-
-def mirror_note(req, request, attempts: list[dict]) -> dict:
-    """The report's ``mirrored`` (axis) and ``mirrored_why`` where the kept design is the mirrored one of a request
-    without ``--symmetry`` (read off the attempts: a later finish replaces the report), else {}."""
-    if not req.symmetry or request.symmetry:
-        return {}
-    own = [
-        a["hausdorff_max_rel"] for a in attempts if "mirrored" not in a and "hausdorff_max_rel" in a
-    ]
-    why = (
-        f"closer than the unmirrored design (Hausdorff {min(own):.3%} of the size)"
-        if own
-        else f"within {MIRRORED_ENOUGH:.2%} of the size, the unmirrored design not tried"
-    )
-    return {"mirrored": req.symmetry, "mirrored_why": why}
+    kept = mirrored if _rigid_valid(mirrored) and (not own.valid or m_h < h) else own
+    other = own if kept is mirrored else mirrored
+    report = kept.report
+    report["attempts"] = mirrored.report["attempts"] + own.report["attempts"]
+    report["time_s_total"] = float(sum(a["time_s"] for a in report["attempts"]))
+    if kept is mirrored:
+        report["mirrored"] = axis
+        report["mirrored_why"] = (
+            f"closer than the unmirrored design (Hausdorff {m_h:.3%} vs {h:.3%} of the size)"
+            if own.valid
+            else "the unmirrored design is not valid"
+        )
+    kept.messages[:0] = other.messages
+    return kept
