@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
-from shapely.geometry import MultiPoint
+from shapely.geometry import Polygon
 
 from ..design.core.request import MIRROR_TOL
 from ..errors import InputError, SolveError
@@ -44,21 +44,26 @@ def mirror_axis(request, req) -> str | None:
         return None
     # one axis only (heart, star): their mirrored designs were further in 9 of the table's 10 cells, at up to
     # the unmirrored design's cost again; symmetric about both, the mirrored design about x
-    both = all(req.target.mirror_error(a) <= MIRROR_TOL for a in ("x", "y"))
-    if not (both and _stalls(req.target)):
+    t = req.target
+    poly = Polygon(t.points)
+    centroid = poly.centroid  # off either axis: not symmetric about both (before the dearer test)
+    if max(abs(centroid.x), abs(centroid.y)) > MIRROR_TOL * t.size or not _stalls(t, poly):
+        return None
+    if any(t.mirror_error(a) > MIRROR_TOL for a in ("x", "y")):
         return None
     # the mirror keeps the fold states only with an even count of the rows it maps (constraints.symmetry)
     return "x" if req.rows % 2 == 0 else "y" if req.cols % 2 == 0 else None
 
 
-def _stalls(target) -> bool:
+def _stalls(target, poly: Polygon) -> bool:
     """Elongated or non-convex: where the rigid family's LM stops in worse local minima (``quad/routes.py``). A
     round convex target (the circle of issue #36's speed rows) keeps its one route: at 64x64 its mirrored design
     was closer but cost three times as much."""
     lo, hi = target.bbox
     span = hi - lo
-    hull = MultiPoint(target.points).convex_hull.area
-    return bool(span.max() >= ELONGATED * span.min() or abs(target.area) < CONVEX_SHARE * hull)
+    if span.max() >= ELONGATED * span.min():
+        return True
+    return bool(poly.area < CONVEX_SHARE * poly.convex_hull.area)
 
 
 def _rigid_valid(outcome) -> bool:
