@@ -42,8 +42,8 @@ def mirror_axis(request, req) -> str | None:
         or req.target is None
     ):
         return None
-    # one axis only (heart, star): their mirrored designs were further in 9 of the table's 10 cells, at up to
-    # the unmirrored design's cost again; symmetric about both, the mirrored design about x
+    # one axis only (heart, star): their mirrored designs were mostly further, at up to the unmirrored
+    # design's cost again; symmetric about both, the mirrored design about x
     t = req.target
     poly = Polygon(t.points)
     centroid = poly.centroid  # off either axis: not symmetric about both (before the dearer test)
@@ -57,8 +57,8 @@ def mirror_axis(request, req) -> str | None:
 
 def _stalls(target, poly: Polygon) -> bool:
     """Elongated or non-convex: where the rigid family's LM stops in worse local minima (``quad/routes.py``). A
-    round convex target (the circle of issue #36's speed rows) keeps its one route: at 64x64 its mirrored design
-    was closer but cost three times as much."""
+    round convex target (the circle of issue #36's speed rows) keeps its one route: its mirrored design was
+    closer at 64x64 but much dearer (docs/design-solver.md, mir51)."""
     lo, hi = target.bbox
     span = hi - lo
     if span.max() >= ELONGATED * span.min():
