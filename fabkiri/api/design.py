@@ -37,6 +37,7 @@ from .closed_states import closed_outline_fit, overlapping_tiles, parse_contract
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_minimax import applies as minimax_applies
 from .design_minimax import minimax_finish
+from .design_mirror import keep_closer, mirror_axis
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_report import DesignAttempt, DesignReport
@@ -177,11 +178,14 @@ def design_pattern(
         if notify is not None:
             notify(text)
 
+    asked = request.symmetry is not None  # "none" too: an explicit free request is never mirrored
     if (
         request.symmetry == "none"
     ):  # the CLI's explicit "free"; a quad design is free without a symmetry
         request = replace(request, symmetry=None)
     request, req, target, contracted = _solver_request(request)
+    if not asked and (axis := mirror_axis(request, req)):  # both designs, the closer kept
+        return keep_closer(request, axis, design_pattern, notify)
     shape_tol = conf.parse_shape_tol(request.shape_tol)
     req.second_opinion_above = _tol_rel(shape_tol, target)
     first: list[dict] = []

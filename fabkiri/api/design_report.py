@@ -59,6 +59,9 @@ class AttemptRecord(TypedDict):
     hausdorff_max_rel: NotRequired[float]
     shape: NotRequired[str]  # "met" or "missed"
     kept: NotRequired[bool]  # a refinement: whether it replaced the design
+    mirrored: NotRequired[
+        str
+    ]  # the axis of a mirrored design tried for a request without a symmetry
 
 
 class DesignReport(TypedDict):
@@ -87,6 +90,10 @@ class DesignReport(TypedDict):
     minimax: NotRequired[dict[str, Any]]
     closed_outline_fit: NotRequired[dict[str, Any]]
     preview: NotRequired[str]  # the preview PNG's name, beside the pattern
+    mirrored: NotRequired[
+        str
+    ]  # a request without a symmetry answered by the design mirrored about this axis
+    mirrored_why: NotRequired[str]
 
 
 class KagomeReport(TypedDict):

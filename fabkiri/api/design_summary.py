@@ -41,6 +41,11 @@ def summary_lines(path, report: DesignReport) -> list[str]:
             f"{c['spacing_mean_mm']:.3g} mm"
         )
     out.append("; ".join(parts))
+    if report.get("mirrored"):  # a request without --symmetry answered by the mirrored design
+        out.append(
+            f"kept the design mirrored about {report['mirrored']} (the target is symmetric): "
+            f"{report.get('mirrored_why', '')}"
+        )
     out += opening_lines(report)
     fr = report.get("fabrication")
     if fr:

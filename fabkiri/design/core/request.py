@@ -34,6 +34,10 @@ VIA_RIGID_INIT = "rigid"
 VIA_RIGID_FIRST_TILES = 16 * 16
 
 
+# a target this close to mirror-symmetric (share of its size, Target.mirror_error) may be designed mirrored
+MIRROR_TOL = 1e-3
+
+
 @dataclass
 class DesignRequest:
     """What to design. Targets are in mm."""
@@ -160,7 +164,7 @@ class DesignRequest:
                 self.target,
                 *[v for v in self.contracted.values() if isinstance(v, Target)],
             ]:
-                if tgt is not None and tgt.mirror_error(self.symmetry) > 1e-3:
+                if tgt is not None and tgt.mirror_error(self.symmetry) > MIRROR_TOL:
                     raise InputError(
                         f"target {tgt.name!r} is not symmetric about the {self.symmetry} axis, so ",
                         Param("symmetry", self.symmetry),
