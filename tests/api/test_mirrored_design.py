@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.design_mirror import mirror_axis
+from fabkiri.api.design_report import report_problem
 from fabkiri.api.design_summary import summary_lines
 from fabkiri.design.quad.solve import DesignRequest
 from fabkiri.design.targets.lookup import load_target
@@ -14,7 +16,7 @@ from fabkiri.mechanics.path import RIGID_TOL_RAD
 PEANUT = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "peanut.csv")
 
 
-def test_rigid_peanut_keeps_its_closer_mirrored_design():
+def test_rigid_peanut_keeps_its_closer_mirrored_design(tmp_path):
     """The rigid 16x16 peanut (symmetric about x): the unmirrored route stops at 0.37 % of the size, the
     mirrored one reaches 0.17 %; the closer one is kept, rigid-deployable, and the report and the CLI's lines
     say it is mirrored."""
@@ -29,6 +31,11 @@ def test_rigid_peanut_keeps_its_closer_mirrored_design():
     )
     assert report["conformance"]["deployed"]["hausdorff_rel"] < min(unmirrored)
     assert any("mirrored about x" in line for line in summary_lines(None, report))
+    out.write(tmp_path / "p.json", preview=False)
+    written = json.loads((tmp_path / "p.json").read_text())["design"]["report"]
+    # the schema names the new keys
+    assert written["mirrored"] == "x" and report_problem(written) is None
+    assert report_problem({**written, "mirrored": "z"}) is not None
 
 
 def test_mirror_axis_only_for_rigid_requests_without_a_symmetry():
