@@ -28,7 +28,8 @@ CONVEX_SHARE = 0.98
 
 def mirror_axis(request, req) -> str | None:
     """The axis to mirror a rigid request's design about, or None where the policy does not apply: an explicit
-    symmetry, guess or solver, a closed-state target, fabrication rows or a target not symmetric about both axes.
+    symmetry, guess or solver, a closed-state target, fabrication rows, a target neither elongated nor non-convex
+    (``_elongated_or_non_convex``) or not symmetric about both axes, or no even count of mirrored rows or columns.
     """
     if (
         not request.rigid
@@ -47,7 +48,7 @@ def mirror_axis(request, req) -> str | None:
     t = req.target
     poly = Polygon(t.points)
     centroid = poly.centroid  # off either axis: not symmetric about both (before the dearer test)
-    if max(abs(centroid.x), abs(centroid.y)) > MIRROR_TOL * t.size or not _stalls(t, poly):
+    if max(abs(centroid.x), abs(centroid.y)) > MIRROR_TOL * t.size or not _elongated_or_non_convex(t, poly):
         return None
     if any(t.mirror_error(a) > MIRROR_TOL for a in ("x", "y")):
         return None
@@ -55,7 +56,7 @@ def mirror_axis(request, req) -> str | None:
     return "x" if req.rows % 2 == 0 else "y" if req.cols % 2 == 0 else None
 
 
-def _stalls(target, poly: Polygon) -> bool:
+def _elongated_or_non_convex(target, poly: Polygon) -> bool:
     """Elongated or non-convex: where the rigid family's LM stops in worse local minima (``quad/routes.py``). A
     round convex target (the circle of issue #36's speed rows) keeps its one route: its mirrored design was
     closer at 64x64 but much dearer (docs/design-solver.md, mir51)."""
