@@ -48,7 +48,8 @@ def mirror_axis(request, req) -> str | None:
     t = req.target
     poly = Polygon(t.points)
     centroid = poly.centroid  # off either axis: not symmetric about both (before the dearer test)
-    if max(abs(centroid.x), abs(centroid.y)) > MIRROR_TOL * t.size or not _elongated_or_non_convex(t, poly):
+    off_centre = max(abs(centroid.x), abs(centroid.y)) > MIRROR_TOL * t.size
+    if off_centre or not _elongated_or_non_convex(t, poly):
         return None
     if any(t.mirror_error(a) > MIRROR_TOL for a in ("x", "y")):
         return None
