@@ -161,8 +161,8 @@ def test_the_32x32_peanut_fits_no_worse_than_the_16x16_one():
     """bench/shapes.py's peanut, non-rigid, CLI defaults: the 32x32 design from its tips-only coarse levels ends
     at 0.44 %, above the 16x16 one's 0.33 %; the finish's steps leave more than REFIT_ABOVE (0.39 %, without the
     redesign), so it redesigns from refitted coarse levels (0.37 %) and steps from there (0.31 %), kept. Both pass
-    every check; the reported figure is the pattern's own measure. (The drop took the same route at twice the
-    CPU: docs/speed.md.)"""
+    every check; the reported figure is the pattern's own measure. (The drop takes the same route:
+    docs/speed.md.)"""
     target = load_target(PEANUT, 100)
     h = {}
     for n in (16, 32):
