@@ -72,6 +72,8 @@ def ligament_check(
         if cuts
         else None
     )
+    if lines is not None:  # asked once per hinge: its index built once, not per call
+        shapely.prepare(lines)
     missing, severed = [], []
     for h in np.asarray(hinges, dtype=int).tolist():
         a, b = sorted((int(A[h]), int(B[h])))
@@ -80,7 +82,7 @@ def ligament_check(
             missing.append(h)
             continue
         inner = shapely.buffer(strips[cand], -TOUCH_MM / 5, join_style="mitre", mitre_limit=10.0)
-        if lines is not None and shapely.intersects(inner, lines).all():
+        if lines is not None and shapely.intersects(lines, inner).all():
             severed.append(h)
     bad = missing + severed
     first = min(bad) if bad else None

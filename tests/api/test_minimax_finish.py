@@ -25,6 +25,7 @@ from fabkiri.design.quad.solve import DesignRequest
 from fabkiri.design.targets.lookup import load_target
 
 DROP = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "drop.csv")
+PEANUT = str(Path(__file__).resolve().parents[2] / "bench" / "data" / "peanut.csv")
 
 
 def test_the_finish_applies_to_large_valid_deployed_target_designs_only():
@@ -156,15 +157,16 @@ def test_a_free_design_from_48_tiles_a_side_is_finished_whatever_its_miss():
 
 
 @pytest.mark.slow
-def test_the_32x32_drop_fits_no_worse_than_the_16x16_one():
-    """bench/shapes.py's drop, non-rigid, CLI defaults: main ended at 0.92 % (16x16) and 1.78 % (32x32, its
-    tips-only coarse levels' basin, least squares); the finish's steps leave more than REFIT_ABOVE, so it redesigns
-    from refitted coarse levels and steps from there (0.40 %). Both pass every check; the reported figure is
-    the pattern's own measure."""
-    target = load_target(DROP, 100)
+def test_the_32x32_peanut_fits_no_worse_than_the_16x16_one():
+    """bench/shapes.py's peanut, non-rigid, CLI defaults: the 32x32 design from its tips-only coarse levels ends
+    at 0.44 %, above the 16x16 one's 0.33 %; the finish's steps leave more than REFIT_ABOVE (0.39 %, without the
+    redesign), so it redesigns from refitted coarse levels (0.37 %) and steps from there (0.31 %), kept. Both pass
+    every check; the reported figure is the pattern's own measure. (The drop takes the same route:
+    docs/speed.md.)"""
+    target = load_target(PEANUT, 100)
     h = {}
     for n in (16, 32):
-        out = design_pattern(PatternRequest(tiles=(n, n), target=DROP, size=100))
+        out = design_pattern(PatternRequest(tiles=(n, n), target=PEANUT, size=100))
         assert out.success, out.problems
         nodes, top = out.pattern.nodes, out.pattern.topology
         h[n] = conf.deployed(nodes, top, target)["hausdorff_rel"]
@@ -176,6 +178,7 @@ def test_the_32x32_drop_fits_no_worse_than_the_16x16_one():
         )
     finish = [a for a in out.report["attempts"] if a["init"] == "minimax refinement"]
     assert len(finish) == 1 and finish[0]["kept"]
+    assert finish[0]["refit_hausdorff_rel"] is not None  # the refitted redesign was made
     assert h[32] <= h[16]
 
 

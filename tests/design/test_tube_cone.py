@@ -138,9 +138,10 @@ def test_gif_label_gives_a_cones_end_radii():
 @pytest.mark.slow
 def test_cone_between_two_cylinders_fails_honestly_and_points_to_closed_cone(tmp_path, run_cli):
     """The issue's contract (cylinders when closed) with a deployed cone: not converged, exit 1, figures
-    printed, the best iterate written marked invalid, and the opt-in named."""
+    printed, the best iterate written marked invalid, and the opt-in named. On 4x4 tiles: no lattice meets a
+    deployed cone between two cylinders, and the smaller one stops the same way sooner (docs/speed.md)."""
     out = tmp_path / "c.json"
-    code, text, _ = run_cli("design", "--tube", SPEC, "--tiles", "6x8", "-o", out)
+    code, text, _ = run_cli("design", "--tube", SPEC, "--tiles", "4x4", "-o", out)
     assert code == 1
     assert "not converged" in text and "--closed cone" in text
     assert json.loads(out.read_text())["design"]["valid"] is False
