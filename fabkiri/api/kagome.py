@@ -255,9 +255,11 @@ def _free_design(std, tgt, symmetry, accept, limited: bool, damp=(False, 0.0)):
     nearer of the two (``paired``: the second). Measured (docs/kagome.md, "What limits the fit"): free 6x11 heart 4.54 ->
     4.30 %. With fabrication limits the routes below follow instead (candidates pass over for the limits
     too)."""
-    d = design(std, tgt, symmetry=symmetry)
+    # the solves of each mirror choice's designs: the other Lawson routes begin with the same ones
+    shared: dict = {}
+    d = design(std, tgt, symmetry=symmetry, solves=shared.setdefault(symmetry, {}))
     if damp[0] and not limited:
-        d, pattern, rejected = _other_lawson_routes(std, tgt, symmetry, accept, damp[1], d)
+        d, pattern, rejected = _other_lawson_routes(std, tgt, symmetry, accept, damp[1], d, shared)
         symmetry = symmetry if d.symmetry else False  # the routes may have kept a free design
     else:
         pattern, rejected = _first_closing(d, accept)
@@ -270,7 +272,7 @@ def _free_design(std, tgt, symmetry, accept, limited: bool, damp=(False, 0.0)):
     return d, pattern, rejected, False
 
 
-def _other_lawson_routes(std, tgt, symmetry, accept, enough: float, d):
+def _other_lawson_routes(std, tgt, symmetry, accept, enough: float, d, shared=None):
     """``(design, pattern, rejected)``: ``d``, its nearest closing candidate and how many nearer were
     passed over, or, while that misses ``enough`` (a fraction of the size) or none closes, the nearer of it
     and a design by the next route: without the mirror, when ``d`` took one the lattice and the target
@@ -280,13 +282,16 @@ def _other_lawson_routes(std, tgt, symmetry, accept, enough: float, d):
     a cut heart": 6x11 cut to 40 tiles 4.60 -> 1.81 %, 12x21 cut to 141 5.90 -> 2.63 %). The Lawson path
     on a cut lattice turns on the arithmetic's last bits; another route gives other candidates
     (docs/kagome.md, "Other Lawson routes on a cut lattice": 7x14 heart cut to 59 tiles 2.42 -> 0.92 %,
-    with the tests' pinned kernels 3.27 -> 1.16 %)."""
+    with the tests' pinned kernels 3.27 -> 1.16 %). ``shared``: the solves made so far, by mirror choice
+    (``fit.design``'s ``solves``)."""
+    shared = {} if shared is None else shared
     pattern, rejected = _first_closing(d, accept)
     free = [("full", False)] if symmetry is True and d.symmetry else []
     for route, sym in [*free, ("damped", symmetry), ("from best", symmetry)]:
         if pattern is not None and d.candidates[rejected][0] <= enough:
             break
-        dd = design(std, tgt, symmetry=sym if d.symmetry else False, lawson_route=route)
+        sym = sym if d.symmetry else False
+        dd = design(std, tgt, symmetry=sym, lawson_route=route, solves=shared.setdefault(sym, {}))
         pd, rd = _first_closing(dd, accept)
         if pd is not None and (pattern is None or dd.candidates[rd][0] < d.candidates[rejected][0]):
             d, pattern, rejected = dd, pd, rd

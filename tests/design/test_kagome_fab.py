@@ -12,6 +12,8 @@ from fabkiri.design.quad.fabrication import FabricationLimits
 from fabkiri.pattern import thinness as fab
 from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
 
+from .kagome_routes import ACRYLIC_OPEN_GROUP, ACRYLIC_OPEN_HEART
+
 # every row kind at once, in tile edges (the rows are built at unit_mm = 1)
 LIMITS = FabricationLimits(
     min_width_mm=0.3,
@@ -124,15 +126,16 @@ def test_hinge_without_material_is_refused_for_kagome(run_cli, tmp_path):
 
 
 @pytest.mark.slow  # the quick loop takes the rows above; this is the whole path, design to cut
-def test_heart_for_acrylic_meets_the_web_and_cuts_at_scale_1(run_cli, tmp_path):
+@pytest.mark.xdist_group(ACRYLIC_OPEN_GROUP)  # shares its design with test_opening.py's kagome test
+def test_heart_for_acrylic_meets_the_web_and_cuts_at_scale_1(
+    run_cli, tmp_path, shared_kagome_designs
+):
     """A 4x7 heart at 80 mm: the free design's tiles are too thin for acrylic-3 (as the 6x11 heart's at
     120 mm, 1.06 mm where cut needs 3 mm), so it is designed again with the rows; its thinnest tile is at
-    least 3 mm and ``cut`` (which defaults to the design's material, at scale 1) writes verified files."""
+    least 3 mm and ``cut`` (which defaults to the design's material, at scale 1) writes verified files.
+    The design carries an opening floor too (``ACRYLIC_OPEN_HEART``), which test_opening.py checks."""
     out = tmp_path / "h.json"
-    code, _, err = run_cli(
-        "design", "--lattice", "kagome", "--tiles", "4x7", "--target", "heart", "--size", "80",
-        "--symmetry", "none", "--material", "acrylic-3", "-o", out,
-    )  # fmt: skip
+    code, _, err = run_cli(*ACRYLIC_OPEN_HEART, "-o", out)
     assert out.exists() and "fabrication (acrylic-3 tape): met" in err, err
     report = json.loads(out.read_text())["design"]["report"]
     assert report["max_equality_residual"] <= 1e-10

@@ -14,7 +14,7 @@ def _routes(monkeypatch, symmetry, first_axes, near: dict):
     (each fake design's nearest candidate at ``near[route, free]``), and the design kept."""
     calls: list[tuple[str, object]] = []
 
-    def fake_design(std, tgt, *, symmetry, lawson_route="full"):
+    def fake_design(std, tgt, *, symmetry, lawson_route="full", solves=None):
         calls.append((lawson_route, symmetry))
         axes = () if symmetry is False else first_axes
         return SimpleNamespace(symmetry=axes, candidates=[(near[lawson_route, not axes], None)])

@@ -152,3 +152,32 @@ def test_a_cut_lattice_that_misses_the_shape_is_designed_again_by_other_lawson_r
     # another route's design is kept: nearer than every candidate of the full steps
     assert h < min(c[0] for c in designs[0][1].candidates)
     assert any(h == pytest.approx(c[0], rel=1e-9) for _, d in designs[1:] for c in d.candidates)
+
+
+def test_a_solve_asked_again_with_the_same_start_and_weights_is_taken_from_the_earlier_design(
+    monkeypatch,
+):
+    """``fit.design(solves=...)``: the Lawson routes of one lattice share their first solve (the initial
+    guess, uniform weights); a route's own steps (other weights) are solved; without ``solves`` each is."""
+    from fabkiri.design.kagome import fit as KF
+    from fabkiri.design.kagome import solve as KS
+
+    calls: list[bool] = []
+
+    def solve(rows, x0, max_iter=60, tol=1e-9, warm=False):  # a stand-in: the start, as if solved
+        calls.append(warm)
+        return KS.Solve(np.asarray(x0, float), 0, 1.0, 0.0, True)
+
+    monkeypatch.setattr(KS, "solve", solve)
+    std, target = standard_kagome(2, 3, tile_size=10.0), load_target("circle", 30.0)
+    solves: dict = {}
+    full = KF.design(std, target, symmetry=False, refine_steps=2, solves=solves)
+    assert calls == [False, True, True]
+    again = KF.design(std, target, symmetry=False, refine_steps=2, solves=solves)
+    assert len(calls) == 3 and np.array_equal(
+        again.pattern.nodes, full.pattern.nodes
+    )  # the same solves
+    KF.design(std, target, symmetry=False, refine_steps=2, solves=solves, lawson_route="damped")
+    assert calls[3:] == [True, True]  # the first solve shared, the damped steps solved
+    KF.design(std, target, symmetry=False, refine_steps=2, lawson_route="damped")
+    assert calls[5:] == [False, True, True]  # no solves given: all three solved

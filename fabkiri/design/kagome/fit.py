@@ -229,6 +229,7 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
     start: np.ndarray | None = None,
     pairs: bool = False,
     lawson_route: str = "full",
+    solves: dict | None = None,
 ) -> KagomeDesign:
     """A reconfigurable kagome on ``standard``'s tiles whose deployed tips follow ``target`` (mm).
 
@@ -242,6 +243,8 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
     tiles that share no hinge apart (across a hole or a row-end notch, :mod:`fabkiri.design.kagome.pairs`);
     ``lawson_route``: ``"full"`` (each Lawson step by the full miss ratio, from the last step), ``"damped"``
     (by its square root, ``DAMPED_LAWSON_POWER``) or ``"from best"`` (full, from the best design so far).
+    ``solves``: the solves of earlier designs with the same rows (lattice, target, mirrors, options), by
+    their start and weights; a solve asked again is taken from it (:func:`_solve_once`).
     """
     lo, hi = target.bbox
     shift = 0.5 * (lo + hi)
@@ -255,7 +258,7 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
     for step in range(refine_steps + 1):
         if step:
             rows = replace(rows, weights=lawson(rows, x, power))
-        sol = KS.solve(rows, x, max_iter=max_iter, warm=step > 0)
+        sol = _solve_once(solves, rows, x, max_iter, step > 0)
         its += sol.iterations
         xp, ok, k = KS.project(rows.eq, sol.x)
         its += k
@@ -269,6 +272,19 @@ def design(  # noqa: PLR0913 (the fit's routes, each a keyword the front door pa
     xb = best[1] if best else xp
     out = _result(standard, target, rows, xb, shift, best is not None, axes, its, tuple(trace))
     return replace(out, candidates=tuple(sorted(cands, key=lambda c: c[0])))
+
+
+def _solve_once(solves: dict | None, rows: KS.Rows, x: np.ndarray, max_iter: int, warm: bool):
+    """``KS.solve(rows, x, ...)``, or the same solve of an earlier design with these rows from ``solves``
+    (keyed by the start and the Lawson weights, to the bit): the Lawson routes of one lattice begin with the
+    same solve, and "from best" repeats the full route's steps while its last step is the best."""
+    if solves is None:
+        return KS.solve(rows, x, max_iter=max_iter, warm=warm)
+    weights = tuple((k, np.asarray(w).tobytes()) for k, w in sorted(rows.weights.items()))
+    key = (x.shape, x.tobytes(), weights, max_iter, warm)
+    if key not in solves:
+        solves[key] = KS.solve(rows, x, max_iter=max_iter, warm=warm)
+    return solves[key]
 
 
 def _no_fold(standard: Pattern, x: np.ndarray) -> bool:
