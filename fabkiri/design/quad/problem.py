@@ -25,6 +25,7 @@ from ..core.normal import NormalEquations, nested_dissection
 from ..core.request import DesignRequest, DesignResult, reduced_applies
 from ..targets.lookup import Target
 from . import constraints as C
+from .chain import CHAIN_BOTTOM, level_of, rescaled_bottom
 from .fabrication import families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer, weighted
@@ -212,6 +213,8 @@ class DesignProblem:
         cc += int(req.symmetry == "y" and cc % 2 == 1)
         if req.target is None or min(rc, cc) < 4:
             return initial_guess(base, st, req.target, "rescaled")
+        # a target with no mirror: the chain's bottom a 32x32 level from rescaled (``chain.py``)
+        rc, cc, init = level_of(req, rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled")
         sub = DesignRequest(
             rc,
             cc,
@@ -220,7 +223,7 @@ class DesignProblem:
             symmetry=req.symmetry,
             holes=req.holes,
             contracted=dict(req.contracted),
-            init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
+            init=init,
             tol=req.tol,
             reg_weight=req.reg_weight,
             max_iter=req.max_iter,
@@ -262,6 +265,8 @@ class DesignProblem:
             "folded_tiles": int((area <= 0).sum()),
             **level,
         }
+        if rescaled_bottom(req):  # the finish reads it (``design_minimax.gate``)
+            self.coarse["rescaled_bottom"] = CHAIN_BOTTOM
         if self.unfold is not None:
             self.coarse["unfold"] = self.unfold
         # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
