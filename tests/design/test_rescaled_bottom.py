@@ -73,7 +73,7 @@ def test_a_rigid_design_from_the_rescaled_bottom_is_finished_whatever_its_miss()
     """The bean's 96x96 design from that chain (0.045 %, its 48x48 level 0.36 %, within the shape tolerance) came
     above its 64x64 one (0.040 %): finished (gate 0, the cheaper steps), 0.039 %, and not redesigned from refitted
     levels (``_redesigned``, the halving chain's case). The same design from a halving chain keeps the rigid gate
-    (issue #36's circles)."""
+    (issue #36's circles). The free one from that chain gets the cheaper steps, from a halving chain the full ones."""
     from fabkiri.api import design_minimax as dm
 
     def designed(level: dict) -> Attempt:
@@ -89,3 +89,7 @@ def test_a_rigid_design_from_the_rescaled_bottom_is_finished_whatever_its_miss()
         assert gate(rigid, designed(level).report) == max(
             FINISH_FLOOR, threshold(FINISH_ABOVE, rigid)
         )
+    # the free design of that chain takes the cheaper steps too (its full steps stalled at 0.043 % at 96x96)
+    free = DesignRequest(96, 96, _target("bean"))
+    assert dm._cheap(free, designed({**level, "rescaled_bottom": 32}).report)
+    assert not dm._cheap(free, designed(level).report)
