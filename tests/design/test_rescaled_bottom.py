@@ -1,7 +1,7 @@
 """A large rigid-family design of a target with no mirror bottoms its coarse chain at a 32x32 level from rescaled
-and is finished whatever its miss (``quad/chain.py``, ``design_minimax._rescaled_bottom``; issue #37: the bean's
-48x48, 64x64 and 96x96 designs from the halving chain, 0.238, 0.234 and 0.173 % of the size, sat above its
-32x32 design's 0.148 %). The rule's decision is tested on the request alone, the coarse level's design stubbed."""
+(with the outline rows) and is finished whatever its miss (``quad/chain.py``, ``design_minimax._rescaled_bottom``;
+issue #37: the bean's 48x48, 64x64 and 96x96 designs from the halving chain, 0.238, 0.234 and 0.173 % of the size,
+sat above its 32x32 design's 0.148 %). The rule's decision is tested on the request alone, the level stubbed."""
 
 from __future__ import annotations
 
@@ -40,10 +40,11 @@ def _target(name: str):
     ("n", "level", "init"), [(48, 32, "rescaled"), (64, 32, "rescaled"), (96, 48, "coarse")]
 )
 def test_the_beans_chain_bottoms_at_a_32x32_level_from_rescaled(monkeypatch, n, level, init):
-    """The bean has no mirror about either axis: 48 and 64 from a 32x32 level from rescaled, 96 from a 48x48 level
-    (whose own level is that 32x32 one). A free request answered by the rigid family asks the same rigid request."""
+    """The bean has no mirror about either axis: 48 and 64 from a 32x32 level from rescaled with the outline rows,
+    96 from a 48x48 level tips only (whose own level is that 32x32 one). A free request answered by the rigid
+    family asks the same rigid request."""
     sub = _level_asked(monkeypatch, DesignRequest(n, n, _target("bean"), rigid=True, init="coarse"))
-    assert (sub.rows, sub.cols, sub.init) == (level, level, init)
+    assert (sub.rows, sub.cols, sub.init, sub.outline) == (level, level, init, init == "rescaled")
 
 
 @pytest.mark.parametrize(
@@ -66,7 +67,11 @@ def test_a_mirrored_target_or_a_smaller_lattice_keeps_the_halving_chain(
             n, n, _target(name), rigid=rigid, init="coarse", solver="auto" if rigid else "full"
         ),
     )
-    assert (sub.rows, sub.init) == (n // 2, "coarse" if n // 2 >= 16 else "rescaled")
+    assert (sub.rows, sub.init, sub.outline) == (
+        n // 2,
+        "coarse" if n // 2 >= 16 else "rescaled",
+        False,
+    )
 
 
 def test_a_rigid_design_from_the_rescaled_bottom_is_finished_whatever_its_miss():

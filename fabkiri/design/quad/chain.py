@@ -5,8 +5,9 @@ A coarse-to-fine start halves the lattice down to a bottom level that starts fro
 either axis through its bounding box's centre (``mirrorless``: the bean of issue #37's table; the heart, star and
 drop have one such axis, the ellipse, peanut and circle two) that chain ended the 48x48, 64x64 and 96x96 designs
 above the 32x32 design, whose start is rescaled (``BIG_RIGID_INITS``' second guess): the rigid bean 0.238, 0.234
-and 0.173 % of the size against 0.148 %. A chain whose bottom is a ``CHAIN_BOTTOM`` level from rescaled (48 and 64 from 32, 96 from 48 from 32: a lattice
-ratio of 1.5 where needed, which the rigid family's resampling takes) came to 0.056, 0.040 and 0.039 %
+and 0.173 % of the size against 0.148 %. A chain whose bottom is a ``CHAIN_BOTTOM`` level from rescaled with the outline rows (48 and 64 from 32, 96 from 48
+from 32: a lattice ratio of 1.5 where needed, which the rigid family's resampling takes) came to 0.063, 0.040 and
+0.039 %
 (docs/design-solver.md, "Session 51 (pb51)" and "Session 52 (bean52)"). Only on the rigid-family refinement (a
 rigid request, and a free one answered by the rigid family), from ``CHAIN_FROM`` tiles a side, unmirrored: a
 mirror-symmetric target's chain, issue #36's circles included, is left as it was.
@@ -43,10 +44,13 @@ def rescaled_bottom(req: DesignRequest) -> bool:
     )
 
 
-def level_of(req: DesignRequest, rows: int, cols: int, init: str) -> tuple[int, int, str]:
-    """The coarse level (rows, cols, init) of ``req``, whose halved level is ``rows`` x ``cols`` from ``init``:
-    under ``rescaled_bottom``, no smaller than ``CHAIN_BOTTOM`` a side, and from rescaled where it is that size."""
+def level_of(req: DesignRequest, rows: int, cols: int, init: str) -> tuple[int, int, str, bool]:
+    """The coarse level (rows, cols, init, outline rows) of ``req``, whose halved level is ``rows`` x ``cols`` from
+    ``init``, tips only: under ``rescaled_bottom``, no smaller than ``CHAIN_BOTTOM`` a side, and where it is that
+    size from rescaled with the outline rows (the 32x32 design's own fit: tips only from rescaled, the bean's level
+    missed by 3.1 % and cost 3-4x its whole 48x48 design on main)."""
     if not rescaled_bottom(req):
-        return rows, cols, init
+        return rows, cols, init, False
     rows, cols = max(rows, CHAIN_BOTTOM), max(cols, CHAIN_BOTTOM)
-    return rows, cols, "rescaled" if min(rows, cols) <= CHAIN_BOTTOM else init
+    bottom = min(rows, cols) <= CHAIN_BOTTOM
+    return rows, cols, "rescaled" if bottom else init, bottom

@@ -214,7 +214,9 @@ class DesignProblem:
         if req.target is None or min(rc, cc) < 4:
             return initial_guess(base, st, req.target, "rescaled")
         # a target with no mirror: the chain's bottom a 32x32 level from rescaled (``chain.py``)
-        rc, cc, init = level_of(req, rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled")
+        rc, cc, init, bottom = level_of(
+            req, rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled"
+        )
         sub = DesignRequest(
             rc,
             cc,
@@ -231,8 +233,8 @@ class DesignProblem:
             coarse_refit=req.coarse_refit,
             coarse_refit_above=req.coarse_refit_above,
             # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
-            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
-            outline=False,
+            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles); the rescaled bottom has them
+            outline=bottom,
             fabrication=req.fabrication,
             coarse_level=True,
         )
@@ -290,7 +292,8 @@ class DesignProblem:
         (``second_opinion_above``, or ``coarse_refit_above``), again with the outline rows, keeping the closer converged outline. The
         tips-only fit lets tips bunch on their arcs: the drop's 16x16 and 32x32 levels sat at a Hausdorff distance
         of 40 % of its size (tips on their arcs to 0.47 %), and the 64x64 design they started ended at 22 %.
-        A symmetric level is fitted with the outline rows first, tips only where that does not converge."""
+        A symmetric level is fitted with the outline rows first, tips only where that does not converge; a level
+        that asks them (``sub.outline``: the rescaled bottom, ``chain.py``) has them alone."""
         target = sub.target
         assert target is not None, "a coarse level is built only for a deployed target"
 
@@ -306,10 +309,12 @@ class DesignProblem:
                 return self._rescaled_level(sub, alt, miss)
         res = self.design_whole(sub)
         h = miss(res)
-        level = {"fit": "tips", "hausdorff_rel": h}
+        level = {"fit": "outline" if sub.outline else "tips", "hausdorff_rel": h}
         above = self.req.coarse_refit_above
-        if not self.req.coarse_refit or h <= (
-            self.req.second_opinion_above if above is None else above
+        if (
+            sub.outline
+            or not self.req.coarse_refit
+            or h <= (self.req.second_opinion_above if above is None else above)
         ):
             return res, level
         alt = self.design_whole(replace(sub, outline=True))
