@@ -163,8 +163,9 @@ def _redesigned(req: DesignRequest, report: dict | None) -> bool:
 def _rescaled_bottom(report: dict | None) -> bool:
     """Whether the design of ``report`` came from a chain whose bottom level started from rescaled (a target with no
     mirror, ``quad/chain.py``): finished whatever its miss where rigid, the cheaper steps under the rigid gate (the
-    rigid 96x96 bean, 0.045 % from that chain, above its 64x64 design's 0.040 %: 0.039 %), and no refitted redesign
-    (``_redesigned``): its levels are that other chain already (docs/design-solver.md, "Session 52 (bean52)")."""
+    rigid 96x96 bean from that chain, 0.112 %, under the gate and above its 64x64 design's 0.040 %: 0.040 %), and no
+    refitted redesign (``_redesigned``): its levels are that other chain already (docs/design-solver.md, "Session 52
+    (bean52)")."""
     return bool(_level(report).get("rescaled_bottom"))
 
 
@@ -309,8 +310,8 @@ def _cheap(req: DesignRequest, report: dict) -> bool:
     """Whether ``req``'s design (its ``report``) under the rigid gate gets the cheaper steps: a rigid (not mirrored)
     one, a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
     steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)") or whose chain
-    bottoms at a level from rescaled (``_rescaled_bottom``: the free 96x96 bean's full steps stalled at 0.043 %, above
-    its 64x64 design), and a mirrored one that ``_mirrored_step`` names (``MIRRORED_STEPS`` of them, ``_steps``)."""
+    bottoms at a level from rescaled (``_rescaled_bottom``: from a tips-only bottom the free 96x96 bean's full steps
+    stalled at 0.043 %, above its 64x64 design), and a mirrored one that ``_mirrored_step`` names (``MIRRORED_STEPS`` of them, ``_steps``)."""
     return (
         _rigid_unmirrored(req)
         or (_free(req) and (_tips_miss(req, report) or _rescaled_bottom(report)))

@@ -75,9 +75,9 @@ def test_a_mirrored_target_or_a_smaller_lattice_keeps_the_halving_chain(
 
 
 def test_a_rigid_design_from_the_rescaled_bottom_is_finished_whatever_its_miss():
-    """The bean's 96x96 design from that chain (0.045 %, its 48x48 level 0.36 %, within the shape tolerance) came
-    above its 64x64 one (0.040 %): finished (gate 0, the cheaper steps), 0.039 %, and not redesigned from refitted
-    levels (``_redesigned``, the halving chain's case). The same design from a halving chain keeps the rigid gate
+    """A design from that chain under the rigid gate (the bean's 96x96 one from a tips-only bottom: 0.045 %, its
+    48x48 level 0.36 %, within the shape tolerance, above its 64x64 design's 0.040 %) is finished (gate 0, the
+    cheaper steps), and not redesigned from refitted levels (``_redesigned``, the halving chain's case). The same design from a halving chain keeps the rigid gate
     (issue #36's circles). The free one from that chain gets the cheaper steps, from a halving chain the full ones."""
     from fabkiri.api import design_minimax as dm
 
@@ -94,7 +94,7 @@ def test_a_rigid_design_from_the_rescaled_bottom_is_finished_whatever_its_miss()
         assert gate(rigid, designed(level).report) == max(
             FINISH_FLOOR, threshold(FINISH_ABOVE, rigid)
         )
-    # the free design of that chain takes the cheaper steps too (its full steps stalled at 0.043 % at 96x96)
+    # the free design of that chain takes the cheaper steps too (the full ones stalled at 0.043 % at 96x96)
     free = DesignRequest(96, 96, _target("bean"))
     assert dm._cheap(free, designed({**level, "rescaled_bottom": 32}).report)
     assert not dm._cheap(free, designed(level).report)

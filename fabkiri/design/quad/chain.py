@@ -5,12 +5,12 @@ A coarse-to-fine start halves the lattice down to a bottom level that starts fro
 either axis through its bounding box's centre (``mirrorless``: the bean of issue #37's table; the heart, star and
 drop have one such axis, the ellipse, peanut and circle two) that chain ended the 48x48, 64x64 and 96x96 designs
 above the 32x32 design, whose start is rescaled (``BIG_RIGID_INITS``' second guess): the rigid bean 0.238, 0.234
-and 0.173 % of the size against 0.148 %. A chain whose bottom is a ``CHAIN_BOTTOM`` level from rescaled with the outline rows (48 and 64 from 32, 96 from 48
-from 32: a lattice ratio of 1.5 where needed, which the rigid family's resampling takes) came to 0.063, 0.040 and
-0.039 %
-(docs/design-solver.md, "Session 51 (pb51)" and "Session 52 (bean52)"). Only on the rigid-family refinement (a
-rigid request, and a free one answered by the rigid family), from ``CHAIN_FROM`` tiles a side, unmirrored: a
-mirror-symmetric target's chain, issue #36's circles included, is left as it was.
+and 0.173 % of the size against 0.148 %. A chain whose bottom is a ``CHAIN_BOTTOM`` level from rescaled with the
+outline rows (48 and 64 from 32, 96 from 48 from 32: a lattice ratio of 1.5 where needed, which the rigid family's
+resampling takes), its designs finished (``api/design_minimax._rescaled_bottom``), came to 0.063, 0.0402 and
+0.0401 %, at 0.4-1.0x main's CPU (docs/design-solver.md, "Session 51 (pb51)" and "Session 52 (bean52)"). Only on
+the rigid-family refinement (a rigid request, and a free one answered by the rigid family), from ``CHAIN_FROM``
+tiles a side, unmirrored: a mirror-symmetric target's chain, issue #36's circles included, is left as it was.
 """
 
 from __future__ import annotations
