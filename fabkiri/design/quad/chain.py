@@ -54,3 +54,11 @@ def level_of(req: DesignRequest, rows: int, cols: int, init: str) -> tuple[int, 
     rows, cols = max(rows, CHAIN_BOTTOM), max(cols, CHAIN_BOTTOM)
     bottom = min(rows, cols) <= CHAIN_BOTTOM
     return rows, cols, "rescaled" if bottom else init, bottom
+
+
+def keep_bottom(h_bottom: float, halving_converged: bool, h_halving: float) -> bool:
+    """Whether a converged rescaled bottom level (Hausdorff ``h_bottom``) is kept over the halving chain's level
+    (``h_halving``, ``halving_converged``): where it fits the target closer or that level did not converge. Else
+    the design goes main's way: the rescaled bottom was tuned on the bean alone, and a heart rotated by 20 degrees
+    lost its 48x48 design from it (docs/design-solver.md, "Session 52 (bean52)")."""
+    return not halving_converged or h_bottom < h_halving

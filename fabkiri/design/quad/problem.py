@@ -25,7 +25,7 @@ from ..core.normal import NormalEquations, nested_dissection
 from ..core.request import DesignRequest, DesignResult, reduced_applies
 from ..targets.lookup import Target
 from . import constraints as C
-from .chain import CHAIN_BOTTOM, level_of, rescaled_bottom
+from .chain import CHAIN_BOTTOM, keep_bottom, level_of
 from .fabrication import families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer, weighted
@@ -213,10 +213,9 @@ class DesignProblem:
         cc += int(req.symmetry == "y" and cc % 2 == 1)
         if req.target is None or min(rc, cc) < 4:
             return initial_guess(base, st, req.target, "rescaled")
+        halved = (rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled")
         # a target with no mirror: the chain's bottom a 32x32 level from rescaled (``chain.py``)
-        rc, cc, init, bottom = level_of(
-            req, rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled"
-        )
+        rc, cc, init, bottom = level_of(req, *halved)
         sub = DesignRequest(
             rc,
             cc,
@@ -238,7 +237,8 @@ class DesignProblem:
             fabrication=req.fabrication,
             coarse_level=True,
         )
-        res, level = self._coarse_level(sub)
+        sub, res, level, chained = self._guarded_level(sub, bottom, halved)
+        rc, cc = sub.rows, sub.cols
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
             xmm = self._rigid_refinement(sc, res.pattern.nodes)
@@ -267,7 +267,7 @@ class DesignProblem:
             "folded_tiles": int((area <= 0).sum()),
             **level,
         }
-        if rescaled_bottom(req):  # the finish reads it (``design_minimax.gate``)
+        if chained:  # the finish reads it (``design_minimax.gate``)
             self.coarse["rescaled_bottom"] = CHAIN_BOTTOM
         if self.unfold is not None:
             self.coarse["unfold"] = self.unfold
@@ -277,6 +277,23 @@ class DesignProblem:
             return initial_guess(base, st, req.target, "rescaled")
         L0 = geometry.mean_edge_length(c)
         return xmm / L0, L0
+
+    def _guarded_level(self, sub: DesignRequest, bottom: bool, halved: tuple[int, int, str]):
+        """``(sub, result, how, chained)``: the coarse level ``sub`` asks, where it is the rescaled bottom
+        (``bottom``, ``chain.py``) kept only where ``keep_bottom`` says, else the halving chain's level ``halved``
+        (rows, cols, init) as main designs it; ``chained`` whether the chain bottomed at the rescaled level (here,
+        or in the level's own chain)."""
+        res, level = self._coarse_level(sub)
+        if not bottom:
+            return sub, res, level, bool((res.report.get("coarse") or {}).get("rescaled_bottom"))
+        rows, cols, init = halved
+        half = replace(sub, rows=rows, cols=cols, init=init, outline=False)
+        if res.converged:  # an unconverged bottom is no start: the halving level alone
+            h_res, h_level = self._coarse_level(half)
+            if keep_bottom(level["hausdorff_rel"], h_res.converged, h_level["hausdorff_rel"]):
+                return sub, res, level, True
+            return half, h_res, h_level, False
+        return (half, *self._coarse_level(half), False)
 
     def design_whole(self, req: DesignRequest) -> DesignResult:
         """A whole design of ``req`` (a coarse level, a rigid route) by this problem's ``whole_design``."""
