@@ -5,6 +5,8 @@ sat above its 32x32 design's 0.148 %). The rule's decision is tested on the requ
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytest
 from fabkiri.api.design_minimax import FINISH_ABOVE, FINISH_FLOOR, applies, gate, threshold
 from fabkiri.api.design_report import DesignAttempt as Attempt
@@ -98,3 +100,46 @@ def test_a_rigid_design_from_the_rescaled_bottom_is_finished_whatever_its_miss()
     free = DesignRequest(96, 96, _target("bean"))
     assert dm._cheap(free, designed({**level, "rescaled_bottom": 32}).report)
     assert not dm._cheap(free, designed(level).report)
+
+
+class _Mapped(Exception):
+    """Raised by the stubbed resampling with the coarse level it was given."""
+
+
+@pytest.mark.parametrize(
+    ("bottom", "halving", "kept"),
+    [
+        ((True, 0.010), (True, 0.020), 32),  # converged and closer: the rescaled bottom
+        ((True, 0.030), (True, 0.020), 24),  # further than the halving level: main's chain
+        ((False, 0.010), (True, 0.020), 24),  # unconverged (the rotated heart's case): main's chain
+        ((True, 0.030), (False, 0.020), 32),  # the halving level unconverged: the bottom
+    ],
+)
+def test_the_rescaled_bottom_is_kept_only_where_it_converged_and_fits_closer(
+    monkeypatch, bottom, halving, kept
+):
+    """The guard: a 48x48 bean's 32x32 level from rescaled is the start only where it converged and misses the
+    target by less than the halving chain's 24x24 level; else the design starts from that level, main's way (a
+    heart rotated by 20 degrees lost its 48x48 design from an unconverged bottom). Levels stubbed."""
+    asked: list[tuple[int, str, bool]] = []
+
+    def level(self, sub):
+        asked.append((sub.rows, sub.init, sub.outline))
+        ok, h = bottom if sub.init == "rescaled" else halving
+        res = SimpleNamespace(converged=ok, pattern=SimpleNamespace(nodes=sub.rows), report={})
+        return res, {"fit": "outline" if sub.outline else "tips", "hausdorff_rel": h}
+
+    def mapped(self, coarse, nodes):
+        raise _Mapped(nodes)
+
+    monkeypatch.setattr(DesignProblem, "_coarse_level", level)
+    monkeypatch.setattr(DesignProblem, "_rigid_refinement", mapped)
+    with pytest.raises(_Mapped) as taken:
+        DesignProblem(
+            DesignRequest(48, 48, _target("bean"), rigid=True, init="coarse"),
+            whole_design=lambda r, p: None,  # type: ignore[arg-type,return-value]
+        )
+    assert taken.value.args[0] == kept
+    # the halving level designed once: beside a converged bottom, or as the start
+    assert asked[0] == (32, "rescaled", True)
+    assert asked[1:] == [(24, "coarse", False)]
