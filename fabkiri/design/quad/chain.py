@@ -11,6 +11,9 @@ resampling takes), its designs finished (``api/design_minimax._rescaled_bottom``
 0.0401 %, at 0.4-1.0x main's CPU (docs/design-solver.md, "Session 51 (pb51)" and "Session 52 (bean52)"). Only on
 the rigid-family refinement (a rigid request, and a free one answered by the rigid family), from ``CHAIN_FROM``
 tiles a side, unmirrored: a mirror-symmetric target's chain, issue #36's circles included, is left as it was.
+The bottom is kept only where it converged and fits the target closer than the halving chain's own level
+(``keep_bottom``, ``DesignProblem._guarded_level``); else the design is main's (a heart rotated by 20 degrees,
+whose bottom converged further than its halving level; docs/design-solver.md, "The guard (bean52, second helper)").
 """
 
 from __future__ import annotations

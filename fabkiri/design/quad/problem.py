@@ -214,7 +214,7 @@ class DesignProblem:
         if req.target is None or min(rc, cc) < 4:
             return initial_guess(base, st, req.target, "rescaled")
         halved = (rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled")
-        # a target with no mirror: the chain's bottom a 32x32 level from rescaled (``chain.py``)
+        # a target with no mirror: the chain's bottom a 32x32 level from rescaled where it fits closer (``chain.py``)
         rc, cc, init, bottom = level_of(req, *halved)
         sub = DesignRequest(
             rc,
