@@ -111,10 +111,11 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     """The share of the size past which ``req``'s design (its ``report``) is finished: ``FINISH_ABOVE`` scaled to
     its lattice (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE``
     scaled for a free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
-    ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``); the free gate's share scaled, under the
+    ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``) or whose chain bottoms at a level from
+    rescaled (``_rescaled_bottom``); the free gate's share scaled, under the
     rigid gate, for a mirrored one from ``SECOND_ROUTE_TILES`` further than its coarse level (``_mirrored_step``)."""
     rigid_all = _rigid_unmirrored(req) and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
-    if rigid_all and _tips_miss(req, report):
+    if rigid_all and (_tips_miss(req, report) or _rescaled_bottom(report)):
         return 0.0
     if _mirrored_step(req, report):
         return min(_rigid_gate(req), threshold(FREE_FINISH_ABOVE, req))
@@ -152,10 +153,20 @@ def _redesigned(req: DesignRequest, report: dict | None) -> bool:
         not req.symmetry
         and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
         and not _tips_miss(req, report)
+        and not _rescaled_bottom(report)
         and level is not None
         and h <= threshold(FREE_FINISH_ABOVE, req)
         and _rigid_gate(req) < level
     )
+
+
+def _rescaled_bottom(report: dict | None) -> bool:
+    """Whether the design of ``report`` came from a chain whose bottom level started from rescaled (a target with no
+    mirror, ``quad/chain.py``): finished whatever its miss where rigid, the cheaper steps under the rigid gate (the
+    rigid 96x96 bean from that chain, 0.112 %, under the gate and above its 64x64 design's 0.040 %: 0.040 %), and no
+    refitted redesign (``_redesigned``): its levels are that other chain already (docs/design-solver.md, "Session 52
+    (bean52)")."""
+    return bool(_level(report).get("rescaled_bottom"))
 
 
 def _level(report: dict | None) -> dict:
@@ -298,11 +309,12 @@ def _refitted(req: DesignRequest, judge: Callable, steps: bool):
 def _cheap(req: DesignRequest, report: dict) -> bool:
     """Whether ``req``'s design (its ``report``) under the rigid gate gets the cheaper steps: a rigid (not mirrored)
     one, a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
-    steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)"), and a mirrored
-    one that ``_mirrored_step`` names (``MIRRORED_STEPS`` of them, ``_steps``)."""
+    steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)") or whose chain
+    bottoms at a level from rescaled (``_rescaled_bottom``: from a tips-only bottom the free 96x96 bean's full steps
+    stalled at 0.043 %, above its 64x64 design), and a mirrored one that ``_mirrored_step`` names (``MIRRORED_STEPS`` of them, ``_steps``)."""
     return (
         _rigid_unmirrored(req)
-        or (_free(req) and _tips_miss(req, report))
+        or (_free(req) and (_tips_miss(req, report) or _rescaled_bottom(report)))
         or _mirrored_step(req, report)
     )
 

@@ -25,6 +25,7 @@ from ..core.normal import NormalEquations, nested_dissection
 from ..core.request import DesignRequest, DesignResult, reduced_applies
 from ..targets.lookup import Target
 from . import constraints as C
+from .chain import CHAIN_BOTTOM, keep_bottom, level_of
 from .fabrication import families as fabrication_families
 from .initial import coarse_tile_map, initial_guess
 from .objective import energy, regularizer, weighted
@@ -212,6 +213,9 @@ class DesignProblem:
         cc += int(req.symmetry == "y" and cc % 2 == 1)
         if req.target is None or min(rc, cc) < 4:
             return initial_guess(base, st, req.target, "rescaled")
+        halved = (rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled")
+        # a target with no mirror: the chain's bottom a 32x32 level from rescaled where it fits closer (``chain.py``)
+        rc, cc, init, bottom = level_of(req, *halved)
         sub = DesignRequest(
             rc,
             cc,
@@ -220,7 +224,7 @@ class DesignProblem:
             symmetry=req.symmetry,
             holes=req.holes,
             contracted=dict(req.contracted),
-            init="coarse" if min(rc, cc) >= COARSE_MIN else "rescaled",
+            init=init,
             tol=req.tol,
             reg_weight=req.reg_weight,
             max_iter=req.max_iter,
@@ -228,12 +232,13 @@ class DesignProblem:
             coarse_refit=req.coarse_refit,
             coarse_refit_above=req.coarse_refit_above,
             # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
-            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles)
-            outline=False,
+            # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles); the rescaled bottom has them
+            outline=bottom,
             fabrication=req.fabrication,
             coarse_level=True,
         )
-        res, level = self._coarse_level(sub)
+        sub, res, level, chained = self._guarded_level(sub, bottom, halved)
+        rc, cc = sub.rows, sub.cols
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
             xmm = self._rigid_refinement(sc, res.pattern.nodes)
@@ -262,6 +267,8 @@ class DesignProblem:
             "folded_tiles": int((area <= 0).sum()),
             **level,
         }
+        if chained:  # the finish reads it (``design_minimax.gate``)
+            self.coarse["rescaled_bottom"] = CHAIN_BOTTOM
         if self.unfold is not None:
             self.coarse["unfold"] = self.unfold
         # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
@@ -270,6 +277,23 @@ class DesignProblem:
             return initial_guess(base, st, req.target, "rescaled")
         L0 = geometry.mean_edge_length(c)
         return xmm / L0, L0
+
+    def _guarded_level(self, sub: DesignRequest, bottom: bool, halved: tuple[int, int, str]):
+        """``(sub, result, how, chained)``: the coarse level ``sub`` asks, where it is the rescaled bottom
+        (``bottom``, ``chain.py``) kept only where ``keep_bottom`` says, else the halving chain's level ``halved``
+        (rows, cols, init) as main designs it; ``chained`` whether the chain bottomed at the rescaled level (here,
+        or in the level's own chain)."""
+        res, level = self._coarse_level(sub)
+        if not bottom:
+            return sub, res, level, bool((res.report.get("coarse") or {}).get("rescaled_bottom"))
+        rows, cols, init = halved
+        half = replace(sub, rows=rows, cols=cols, init=init, outline=False)
+        if res.converged:  # an unconverged bottom is no start: the halving level alone
+            h_res, h_level = self._coarse_level(half)
+            if keep_bottom(level["hausdorff_rel"], h_res.converged, h_level["hausdorff_rel"]):
+                return sub, res, level, True
+            return half, h_res, h_level, False
+        return (half, *self._coarse_level(half), False)
 
     def design_whole(self, req: DesignRequest) -> DesignResult:
         """A whole design of ``req`` (a coarse level, a rigid route) by this problem's ``whole_design``."""
@@ -285,7 +309,8 @@ class DesignProblem:
         (``second_opinion_above``, or ``coarse_refit_above``), again with the outline rows, keeping the closer converged outline. The
         tips-only fit lets tips bunch on their arcs: the drop's 16x16 and 32x32 levels sat at a Hausdorff distance
         of 40 % of its size (tips on their arcs to 0.47 %), and the 64x64 design they started ended at 22 %.
-        A symmetric level is fitted with the outline rows first, tips only where that does not converge."""
+        A symmetric level is fitted with the outline rows first, tips only where that does not converge; a level
+        that asks them (``sub.outline``: the rescaled bottom, ``chain.py``) has them alone."""
         target = sub.target
         assert target is not None, "a coarse level is built only for a deployed target"
 
@@ -301,10 +326,12 @@ class DesignProblem:
                 return self._rescaled_level(sub, alt, miss)
         res = self.design_whole(sub)
         h = miss(res)
-        level = {"fit": "tips", "hausdorff_rel": h}
+        level = {"fit": "outline" if sub.outline else "tips", "hausdorff_rel": h}
         above = self.req.coarse_refit_above
-        if not self.req.coarse_refit or h <= (
-            self.req.second_opinion_above if above is None else above
+        if (
+            sub.outline
+            or not self.req.coarse_refit
+            or h <= (self.req.second_opinion_above if above is None else above)
         ):
             return res, level
         alt = self.design_whole(replace(sub, outline=True))
