@@ -311,7 +311,8 @@ def _cheap(req: DesignRequest, report: dict) -> bool:
     one, a free one whose tips alone miss (``_tips_miss``: the free 48x48-96x96 stars and 96x96 drop, whose full
     steps stalled above the rigid cells' cheaper ones; docs/design-solver.md, "Session 50 (drop50)") or whose chain
     bottoms at a level from rescaled (``_rescaled_bottom``: from a tips-only bottom the free 96x96 bean's full steps
-    stalled at 0.043 %, above its 64x64 design), and a mirrored one that ``_mirrored_step`` names (``MIRRORED_STEPS`` of them, ``_steps``)."""
+    stalled at 0.043 %, above its 64x64 design), and a mirrored one that ``_mirrored_step`` names
+    (``MIRRORED_STEPS`` of them, ``_steps``)."""
     return (
         _rigid_unmirrored(req)
         or (_free(req) and (_tips_miss(req, report) or _rescaled_bottom(report)))

@@ -8,11 +8,11 @@ above the 32x32 design, whose start is rescaled (``BIG_RIGID_INITS``' second gue
 and 0.173 % of the size against 0.148 %. A chain whose bottom is a ``CHAIN_BOTTOM`` level from rescaled with the
 outline rows (48 and 64 from 32, 96 from 48 from 32: a lattice ratio of 1.5 where needed, which the rigid family's
 resampling takes), its designs finished (``api/design_minimax._rescaled_bottom``), came to 0.063, 0.0402 and
-0.0401 %, at 0.4-1.0x main's CPU (docs/design-solver.md, "Session 51 (pb51)" and "Session 52 (bean52)"). Only on
+0.0401 % (docs/design-solver.md, "Session 51 (pb51)" and "Session 52 (bean52)"). Only on
 the rigid-family refinement (a rigid request, and a free one answered by the rigid family), from ``CHAIN_FROM``
 tiles a side, unmirrored: a mirror-symmetric target's chain, issue #36's circles included, is left as it was.
 The bottom is kept only where it converged and fits the target closer than the halving chain's own level
-(``keep_bottom``, ``DesignProblem._guarded_level``); else the design is main's (a heart rotated by 20 degrees,
+(``keep_bottom``, ``DesignProblem._guarded_level``); else the design takes the halving chain (a heart rotated by 20 degrees,
 whose bottom converged further than its halving level; docs/design-solver.md, "The guard (bean52, second helper)").
 """
 
@@ -51,7 +51,7 @@ def level_of(req: DesignRequest, rows: int, cols: int, init: str) -> tuple[int, 
     """The coarse level (rows, cols, init, outline rows) of ``req``, whose halved level is ``rows`` x ``cols`` from
     ``init``, tips only: under ``rescaled_bottom``, no smaller than ``CHAIN_BOTTOM`` a side, and where it is that
     size from rescaled with the outline rows (the 32x32 design's own fit: tips only from rescaled, the bean's level
-    missed by 3.1 % and cost 3-4x its whole 48x48 design on main)."""
+    missed by 3.1 % and cost more than the whole design it started)."""
     if not rescaled_bottom(req):
         return rows, cols, init, False
     rows, cols = max(rows, CHAIN_BOTTOM), max(cols, CHAIN_BOTTOM)
@@ -62,6 +62,6 @@ def level_of(req: DesignRequest, rows: int, cols: int, init: str) -> tuple[int, 
 def keep_bottom(h_bottom: float, halving_converged: bool, h_halving: float) -> bool:
     """Whether a converged rescaled bottom level (Hausdorff ``h_bottom``) is kept over the halving chain's level
     (``h_halving``, ``halving_converged``): where it fits the target closer or that level did not converge. Else
-    the design goes main's way: the rescaled bottom was tuned on the bean alone, and a heart rotated by 20 degrees
+    the design takes the halving chain: the rescaled bottom was tuned on the bean alone, and a heart rotated by 20 degrees
     lost its 48x48 design from it (docs/design-solver.md, "Session 52 (bean52)")."""
     return not halving_converged or h_bottom < h_halving
