@@ -153,8 +153,7 @@ def mirror_axes(
     if symmetry is False:
         return []
     out = []
-    lo, hi = target.bbox
-    centred = target.transformed(1.0, -0.5 * (lo + hi))
+    centred = target.centred()
     for axis in ("y", "x") if symmetry is True else (str(symmetry),):
         m = KR.mirror_map(standard, axis)
         fits = centred.mirror_error(axis) <= MIRROR_TOL

@@ -30,8 +30,7 @@ CHAIN_BOTTOM = 32
 def mirrorless(target: Target) -> bool:
     """Whether ``target``, centred on its bounding box, is further than ``MIRROR_TOL`` from a mirror about either
     axis (``Target.mirror_error``, the test ``--symmetry`` asks)."""
-    lo, hi = target.bbox
-    centred = target.transformed(1.0, -0.5 * (lo + hi))
+    centred = target.centred()
     return all(centred.mirror_error(axis) > MIRROR_TOL for axis in ("x", "y"))
 
 

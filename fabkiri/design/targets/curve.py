@@ -206,6 +206,11 @@ class Target:
         )
         return new
 
+    def centred(self) -> Target:
+        """The same curve shifted so that its bounding box's centre is the origin (``transformed``)."""
+        lo, hi = self.bbox
+        return self.transformed(shift=-0.5 * (lo + hi))
+
     def scaled_to(self, size: float) -> Target:
         """Scaled about its bounding-box centre to ``size`` (larger dimension) and centred on the origin."""
         lo, hi = self.bbox

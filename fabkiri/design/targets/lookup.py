@@ -79,8 +79,7 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
             tgt = Target(tgt.name, curve, tgt.points, source=tgt.source)
         if size:
             return tgt.scaled_to(size)
-        lo, hi = tgt.bbox
-        return tgt.transformed(shift=-0.5 * (lo + hi))
+        return tgt.centred()
     raise InputError(
         f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)"
     )
