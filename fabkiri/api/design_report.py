@@ -59,9 +59,8 @@ class AttemptRecord(TypedDict):
     hausdorff_max_rel: NotRequired[float]
     shape: NotRequired[str]  # "met" or "missed"
     kept: NotRequired[bool]  # a refinement: whether it replaced the design
-    mirrored: NotRequired[
-        str
-    ]  # the axis of a mirrored design tried for a request without a symmetry
+    # the axis of a mirrored design tried for a request without a symmetry
+    mirrored: NotRequired[str]
 
 
 class DesignReport(TypedDict):
@@ -90,9 +89,8 @@ class DesignReport(TypedDict):
     minimax: NotRequired[dict[str, Any]]
     closed_outline_fit: NotRequired[dict[str, Any]]
     preview: NotRequired[str]  # the preview PNG's name, beside the pattern
-    mirrored: NotRequired[
-        str
-    ]  # a request without a symmetry answered by the design mirrored about this axis
+    # a request without a symmetry answered by the design mirrored about this axis
+    mirrored: NotRequired[str]
     mirrored_why: NotRequired[str]
 
 
