@@ -8,7 +8,8 @@ import pytest
 from fabkiri.design.core.request import DesignRequest
 from fabkiri.design.quad import penalty as P
 from fabkiri.design.quad import routes as R
-from fabkiri.design.quad.problem import DesignProblem, _acceptable, _objective
+from fabkiri.design.quad.measures import _acceptable, _objective
+from fabkiri.design.quad.problem import DesignProblem
 from fabkiri.design.targets import lookup as T
 
 

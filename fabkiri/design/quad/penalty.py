@@ -14,7 +14,8 @@ from scipy import sparse
 from ..core.lm import Damping, Stopping, levenberg_marquardt
 from . import constraints as C
 from .constraints import exact_fits
-from .problem import DesignProblem, _ineq_values, _mean_edge, family_residuals
+from .measures import _ineq_values, _mean_edge, family_residuals
+from .problem import DesignProblem
 
 STALL = (
     1e-6  # a penalty stage ends after 3 accepted steps that each lower the merit by less than this

@@ -21,15 +21,9 @@ from ..targets.lookup import Target
 from . import constraints as C
 from .constraints import exact_fits
 from .initial import initial_guess
+from .measures import _acceptable, _mean_edge, _objective, _why_not
 from .penalty import _solve_full
-from .problem import (
-    RIGID_FIRST_GOOD,
-    DesignProblem,
-    _acceptable,
-    _mean_edge,
-    _objective,
-    _why_not,
-)
+from .problem import RIGID_FIRST_GOOD, DesignProblem
 from .rigid import outline
 from .rigid.family import RigidFamily
 from .rigid.mirror import Mirror

@@ -59,12 +59,7 @@ from ..core.request import (  # noqa: F401  (re-exported: callers import these f
     via_rigid_applies,
 )
 from ..targets.lookup import Target
-from .objective import energy
-from .penalty import _solve_full
-from .problem import (  # noqa: F401  (re-exported: callers import these from here)
-    CONVEX_MARGIN,
-    GAP_MARGIN,
-    DesignProblem,
+from .measures import (  # noqa: F401  (re-exported: callers import these from here)
     _acceptable,
     _ineq_values,
     _mean_edge,
@@ -72,6 +67,9 @@ from .problem import (  # noqa: F401  (re-exported: callers import these from he
     _why_not,
     family_residuals,
 )
+from .objective import energy
+from .penalty import _solve_full
+from .problem import CONVEX_MARGIN, GAP_MARGIN, DesignProblem  # noqa: F401  (re-exported)
 from .rigid import offset_outline, outline
 from .routes import (
     FULL_NAME,
