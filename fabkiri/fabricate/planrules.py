@@ -123,11 +123,11 @@ def _pad_areas(
         ],
         1,
     )
-    shrunk = fab.shrunk_quads(tiles, d)
+    shrunk, edges = fab.shrunk_tiles(tiles, d)
     band = np.repeat(band, 2, axis=0)
     # a degenerate tile (a bow-tie, a zero-length seam) has no pad: it gets no polygon, area 0
     ok = (
-        (fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM)
+        (edges.min(-1) > fab.EDGE_EPS_MM)
         & np.isfinite(band).all((1, 2))
         & np.isfinite(shrunk).all((1, 2))
     )
