@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -132,3 +133,28 @@ def test_pads_that_hold_the_needed_rectangle_are_the_pads_not_short(name, printe
         assert (every[held] >= need).all() and np.array_equal(first[~held], every[~held])
         held_any, short_any = held_any + held.sum(), short_any + (every < need).sum()
     assert held_any and short_any
+
+
+def test_a_degenerate_pad_is_neither_held_nor_warned_about():
+    """A tile whose edge turns back (its mitre 0/0) has no pad: the first pass gives it the same area, 0, and
+    no warning the plain clipping does not give (its frames' NaN are compared, never held)."""
+    p = read_pattern(DATA / "heart-16x16-rigid.json")
+    top, c = p.topology, np.array(p.contracted[1], float)
+    t = int(top.hinge_tiles[0, 0])
+    c[t] = c[t, 0] + np.array([[0, 0], [1, 0], [0.5, 0], [0, 1]]) * 0.2 * p.tile_size
+    ends, pr, H = (
+        top.fold(1).fold_corner_ends,
+        fabricability.load_printer("prusa-mk4"),
+        top.n_hinges,
+    )
+    need = 0.25 * pr.strip_width_mm * min(pr.strip_reach_mm, pr.strip_width_mm)
+    args = (c, top.hinge_tiles, top.hinge_corner, ends, pr, np.full(H, 3.0), np.arange(H))
+    with warnings.catch_warnings(record=True) as plain:
+        warnings.simplefilter("always")
+        every = planrules._pad_areas(*args)
+    with warnings.catch_warnings(record=True) as first_pass:
+        warnings.simplefilter("always")
+        first = planrules._pad_areas(*args, need)
+    assert every[0, 0] == first[0, 0] == 0.0 and np.isinf(first).any()
+    assert [str(w.message) for w in first_pass] == [str(w.message) for w in plain]
+    assert np.array_equal(first.min(1) < need, every.min(1) < need)
