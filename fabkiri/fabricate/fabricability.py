@@ -118,7 +118,7 @@ def cut_minimum(corners: np.ndarray, material: Material, kind: str, memo=None) -
         return CutMinimum(None, None, -1, why)
     shrink = shrink_of(material, kind)
     web = material.min_web_mm
-    s, t, limit = _kept(memo, fab.min_scale, corners, web, shrink, web if shrink else 0.0)
+    s, t, limit = _kept(memo, fab.TileScales, corners)(web, shrink, web if shrink else 0.0)
     if not np.isfinite(s):
         return CutMinimum(None, None, t, "a tile is degenerate")
     scale = ceil_sig(s)
@@ -432,7 +432,7 @@ def print_bound(
         return PrintMinimum(
             None, None, "hinges that coincide in a closed state cannot take opposite faces"
         )
-    s_shrink, t_shrink, _ = _kept(memo, fab.min_scale, c, fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
+    s_shrink, t_shrink, _ = _kept(memo, fab.TileScales, c)(fab.EDGE_EPS_MM, d, fab.EDGE_EPS_MM)
     return _rule(style).bound(pattern, c, printer, s_shrink, state, face)
 
 

@@ -102,9 +102,17 @@ def _strip_bound(
 
 
 def _pad_areas(
-    c, hinge_tiles, hinge_corner, ends, printer: Printer, scale: np.ndarray, which: np.ndarray
+    c,
+    hinge_tiles,
+    hinge_corner,
+    ends,
+    printer: Printer,
+    scale: np.ndarray,
+    which: np.ndarray,
+    need: float | None = None,
 ):
-    """Area of both pads (band ∩ tile shrunk by gap/2) of hinges ``which`` at their ``scale``: ``(n, 2)``."""
+    """Area of both pads (band ∩ tile shrunk by gap/2) of hinges ``which`` at their ``scale``: ``(n, 2)``.
+    With ``need``, a convex pad shown to hold a rectangle of that area or more is not clipped: inf."""
     d = 0.5 * printer.gap_mm
     w, R = printer.strip_width_mm, printer.strip_reach_mm + d
     cs = c[hinge_tiles[which]] * scale[:, None, None, None]  # (n, 2, 4, 2)
@@ -123,11 +131,11 @@ def _pad_areas(
         ],
         1,
     )
-    shrunk = fab.shrunk_quads(tiles, d)
+    shrunk, edges = fab.shrunk_tiles(tiles, d)
     band = np.repeat(band, 2, axis=0)
     # a degenerate tile (a bow-tie, a zero-length seam) has no pad: it gets no polygon, area 0
     ok = (
-        (fab.shrunk_edges(tiles, d).min(-1) > fab.EDGE_EPS_MM)
+        (edges.min(-1) > fab.EDGE_EPS_MM)
         & np.isfinite(band).all((1, 2))
         & np.isfinite(shrunk).all((1, 2))
     )
@@ -136,10 +144,38 @@ def _pad_areas(
     if geometry.strictly_convex(b).all() and geometry.strictly_convex(t).all():
         # convex pads (a design's tiles are convex): clipped in numpy, for every pad at once (GEOS was
         # slow at 128x128); a concave or bow-tie tile keeps GEOS, and its refusal
+        if need is not None:  # the others' exact areas are asked only whether they are below it
+            held = ok & _holds(shrunk, p, e, n, t0, w, R, need)
+            area[held], ok = np.inf, ok & ~held
+            b, t = band[ok], shrunk[ok]
         area[ok] = geometry.clipped_areas(t, b)
     else:
         area[ok] = shapely.area(shapely.intersection(shapely.polygons(b), shapely.polygons(t)))
     return area.reshape(-1, 2)
+
+
+HELD_ALONG, HELD_ACROSS = (0.125, 0.875), (0.5, 0.875)  # the rectangle a pad is shown to hold
+
+
+def _holds(shrunk, p, e, n, t0, w: float, R: float, need: float) -> np.ndarray:
+    """Which pads (band ∩ ``shrunk`` tile; the hinges' frames ``p, e, n, t0``, both sides of each) hold a
+    rectangle of area ``need`` or more: the band's middle three quarters along the seam, from half to seven
+    eighths of its reach on the tile's side (inside the band by an eighth of its sides, far more than
+    round-off), when each of its corners is inside the convex shrunk tile by more than round-off."""
+    (a0, a1), (b0, b1) = HELD_ALONG, HELD_ACROSS
+    if not ((a1 - a0) * w * (b1 - b0) * R >= need * (1 + 1e-9) and min(w, R) > 0):
+        return np.zeros(len(shrunk), dtype=bool)
+    along = t0[:, None] + np.array([a0, a1, a1, a0]) * w  # (H, 4)
+    across = np.array([b0, b0, b1, b1]) * R
+    corner = p[:, None] + along[..., None] * e[:, None]  # (H, 4, 2), then each side's (2H, 4, 2):
+    q = (corner[:, None] + across[:, None] * n[:, :, None]).reshape(-1, 4, 2)
+    size = np.maximum(np.abs(q).max((1, 2)), np.abs(shrunk).max((1, 2)))
+    orient = np.sign(geometry.signed_areas(shrunk))[:, None, None]
+    edge = np.roll(shrunk, -1, 1) - shrunk
+    inner = orient * geometry.cross2(
+        edge[:, :, None], q[:, None] - shrunk[:, :, None]
+    )  # (2H, 4, 4)
+    return (inner > (1e-9 * size * size)[:, None, None]).all((1, 2))
 
 
 def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) -> float | None:
@@ -147,7 +183,9 @@ def _pad_scale(c, hinge_tiles, hinge_corner, ends, printer: Printer, s0: float) 
     need = 0.25 * printer.strip_width_mm * min(printer.strip_reach_mm, printer.strip_width_mm)
     H = len(hinge_tiles)
     short = np.flatnonzero(
-        _pad_areas(c, hinge_tiles, hinge_corner, ends, printer, np.full(H, s0), np.arange(H)).min(1)
+        _pad_areas(
+            c, hinge_tiles, hinge_corner, ends, printer, np.full(H, s0), np.arange(H), need
+        ).min(1)
         < need
     )
     if not len(short):

@@ -130,7 +130,8 @@ def clipped_areas(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
     Sutherland-Hodgman, the subject clipped by each edge of the clip polygon in turn, for every pair at once.
 
     Each polygon is kept as a fixed number of corners, repeated at the end where it has fewer (a repeated
-    corner is an edge of length 0: it adds nothing to the clipping or to the area)."""
+    corner is an edge of length 0: it adds nothing to the clipping or to the area). An edge with every
+    corner of a polygon on its inner side leaves that polygon as it is: only the others are clipped by it."""
     orient = np.sign(signed_areas(clip))[:, None]
     P = np.asarray(subject, float)
     if not len(P):
@@ -142,20 +143,42 @@ def clipped_areas(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
         f = orient * cross2(
             (d - c)[:, None], P - c[:, None]
         )  # >= 0: on the inner side of edge c -> d
-        Q = np.roll(P, -1, 1)
-        fq = np.roll(f, -1, 1)
-        inside, crosses = f >= 0, (f >= 0) != (fq >= 0)
-        den = np.where(crosses, f - fq, 1.0)
-        cut = P + (Q - P) * (f / den)[..., None]
-        pts = np.stack([P, cut], 2).reshape(
-            len(P), -1, 2
-        )  # each corner, then where its edge crosses
-        keep = np.stack([inside, crosses], 2).reshape(len(P), -1)
-        count = keep.sum(1)
-        live &= count > 0
-        order = np.argsort(~keep, axis=1, kind="stable")[:, : max(int(count.max(initial=0)), 1)]
-        last = np.maximum(count - 1, 0)[:, None]
-        order = np.take_along_axis(order, np.minimum(np.arange(order.shape[1]), last), 1)
-        P = np.take_along_axis(pts, order[..., None], 1)
+        cut = np.flatnonzero(~(f >= 0).all(1))
+        if not len(cut):
+            continue
+        if len(cut) == len(P):
+            P, count = _clip_by_edge(P, f, 1)
+            live &= count > 0
+            continue
+        Pc, count = _clip_by_edge(P[cut], f[cut], P.shape[1])
+        live[cut] &= count > 0
+        out = np.empty((len(P), Pc.shape[1], 2))
+        out[:, : P.shape[1]] = P
+        out[:, P.shape[1] :] = P[:, -1:]  # a polygon left as it is, its last corner repeated
+        out[cut] = Pc
+        P = out
     area = 0.5 * np.abs(cross2(P, np.roll(P, -1, 1)).sum(1))
     return np.where(live, area, 0.0)
+
+
+def _clip_by_edge(P: np.ndarray, f: np.ndarray, least: int) -> tuple[np.ndarray, np.ndarray]:
+    """Polygons ``P`` ``(n, k, 2)`` clipped by the edge whose inner side is ``f >= 0`` (``f`` the corners'
+    signed distances): each corner kept where inside, then the point where its edge crosses, if it does.
+    The kept points in order, the last repeated up to the most kept or ``least`` (the first point where
+    none is kept), and how many each kept."""
+    Q = np.roll(P, -1, 1)
+    fq = np.roll(f, -1, 1)
+    inside, crosses = f >= 0, (f >= 0) != (fq >= 0)
+    den = np.where(crosses, f - fq, 1.0)
+    cut = P + (Q - P) * (f / den)[..., None]
+    pts = np.stack([P, cut], 2).reshape(len(P), -1, 2)  # each corner, then where its edge crosses
+    keep = np.stack([inside, crosses], 2).reshape(len(P), -1)
+    rank = np.cumsum(keep, 1)
+    count = rank[:, -1]
+    m = max(int(count.max(initial=0)), least)
+    r, col = np.nonzero(keep)
+    order = np.zeros((len(P), m), dtype=np.intp)
+    order[r, rank[r, col] - 1] = col  # the i-th kept point of each polygon
+    last = np.maximum(count - 1, 0)[:, None]
+    order = np.take_along_axis(order, np.minimum(np.arange(m), last), 1)
+    return np.take_along_axis(pts, order[..., None], 1), count

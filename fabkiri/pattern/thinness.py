@@ -17,9 +17,11 @@ has a closed form (:func:`min_scale`). Pure numpy, millimetres or any unit.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
 
 from .geometry import cross2, dot2
 
@@ -88,6 +90,16 @@ def shrunk_quads(corners: np.ndarray, shrink: float) -> np.ndarray:
     return corners + shrink * _mitres(_frame(corners)[1])
 
 
+def shrunk_tiles(corners: np.ndarray, shrink: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`shrunk_quads` and :func:`shrunk_edges` of the same tiles, their frames computed once."""
+    corners = np.asarray(corners, dtype=float)
+    u, n, L = _frame(corners)
+    if not shrink:
+        return corners.copy(), L
+    m = _mitres(n)
+    return corners + shrink * m, L + shrink * dot2(u, np.roll(m, -1, axis=-2) - m)
+
+
 def min_scale(
     corners: np.ndarray, width: float, shrink: float = 0.0, min_edge: float = 0.0
 ) -> tuple[float, int, str]:
@@ -98,29 +110,58 @@ def min_scale(
     Exact: distances and shrunk edge lengths are linear in ``s`` (module docstring), so each tile's
     threshold is ``max_e min_j (width + b_je) / a_je`` (and the edges' own), no search.
     """
-    corners = np.asarray(corners, dtype=float)
-    T = len(corners)
-    if T == 0:
-        return 0.0, -1, ""
-    u, n, L = _frame(corners)
-    a = _distances(corners, n)  # (T, e, j)
-    b = np.zeros_like(a)
-    if shrink:
+    return TileScales(corners)(width, shrink, min_edge)
+
+
+class TileScales:
+    """:func:`min_scale` of one placed state for many widths and shrinks: the tiles' frames, distances
+    and mitre terms, which do not depend on them, computed once, and each answer kept (the fabricability
+    summary asks for every material's web and every printer's gap, some alike)."""
+
+    def __init__(self, corners: np.ndarray) -> None:
+        corners = np.asarray(corners, dtype=float)
+        self.n_tiles = len(corners)
+        self.answers: dict[tuple, tuple[float, int, str]] = {}
+        if not self.n_tiles:
+            return
+        self.u, self.n, self.L = _frame(corners)
+        self.a = _distances(corners, self.n)  # (T, e, j)
+
+    @cached_property
+    def losses(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per unit shrink, what each corner-to-edge distance and each edge's length lose (a shrink's)."""
+        u, n = self.u, self.n
         m = _mitres(n)
-        b = shrink * (1.0 - dot2(n[..., :, None, :], m[..., None, :, :]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        need = np.where(a > 0, (width + b) / a, np.inf)
-    s_width = need.min(-1).max(-1)  # (T,)
-    s_edges = np.zeros(T)
-    if shrink:
-        m = _mitres(n)
-        loss = -shrink * dot2(u, np.roll(m, -1, axis=-2) - m)  # shrunk edge = s L - loss
+        return 1.0 - dot2(n[..., :, None, :], m[..., None, :, :]), dot2(
+            u, np.roll(m, -1, axis=-2) - m
+        )
+
+    def __call__(
+        self, width: float, shrink: float = 0.0, min_edge: float = 0.0
+    ) -> tuple[float, int, str]:
+        key = (width, shrink, min_edge)
+        if key not in self.answers:
+            self.answers[key] = self._answer(width, shrink, min_edge)
+        return self.answers[key]
+
+    def _answer(self, width: float, shrink: float, min_edge: float) -> tuple[float, int, str]:
+        T = self.n_tiles
+        if T == 0:
+            return 0.0, -1, ""
+        a, L = self.a, self.L
+        b = shrink * self.losses[0] if shrink else np.zeros_like(a)
         with np.errstate(divide="ignore", invalid="ignore"):
-            s_edges = np.where(L > 0, (loss + max(min_edge, EDGE_EPS_MM)) / L, np.inf).max(-1)
-    s = np.maximum(s_width, s_edges)
-    t = int(np.argmax(s))
-    reason = "width" if s_width[t] >= s_edges[t] else "edge"
-    return float(s[t]), t, reason
+            need = np.where(a > 0, (width + b) / a, np.inf)
+        s_width = need.min(-1).max(-1)  # (T,)
+        s_edges = np.zeros(T)
+        if shrink:
+            loss = -shrink * self.losses[1]  # shrunk edge = s L - loss
+            with np.errstate(divide="ignore", invalid="ignore"):
+                s_edges = np.where(L > 0, (loss + max(min_edge, EDGE_EPS_MM)) / L, np.inf).max(-1)
+        s = np.maximum(s_width, s_edges)
+        t = int(np.argmax(s))
+        reason = "width" if s_width[t] >= s_edges[t] else "edge"
+        return float(s[t]), t, reason
 
 
 def polygon_width(points: np.ndarray) -> float:
@@ -211,7 +252,15 @@ def coincident_hinges(
     b = hc[hinge_tiles[:, 1], fold_ends[:, 1]]
     ok = (a >= 0) & (b >= 0) & (a != b)
     pairs = np.sort(np.stack([a[ok], b[ok]], 1), axis=1)
-    return np.unique(pairs, axis=0) if len(pairs) else np.zeros((0, 2), np.int64)
+    return unique_pairs(pairs, len(hinge_tiles))
+
+
+def unique_pairs(pairs: np.ndarray, n: int) -> np.ndarray:
+    """``np.unique(pairs, axis=0)`` of index pairs ``(P, 2)`` in ``range(n)`` (int64): one integer per pair
+    sorted, as the rows sort, without the row-wise sort of ``axis=0``."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    key = np.unique(pairs[:, 0] * np.int64(n) + pairs[:, 1])
+    return np.stack([key // n, key % n], 1)
 
 
 def hinge_faces(top_, state: int, contracted) -> tuple[np.ndarray, bool]:
@@ -221,7 +270,7 @@ def hinge_faces(top_, state: int, contracted) -> tuple[np.ndarray, bool]:
     pairs = np.concatenate(
         [coincident_hinges(top_.hinge_tiles, top_.hinge_corner, f, top_.n_tiles) for f in folds]
     )
-    face = strip_faces(np.unique(pairs, axis=0), top_.n_hinges)
+    face = strip_faces(unique_pairs(pairs, top_.n_hinges), top_.n_hinges)
     return face, bool(len(pairs) and (face[pairs[:, 0]] == face[pairs[:, 1]]).any())
 
 
@@ -229,31 +278,29 @@ def strip_faces(pairs: np.ndarray, n_hinges: int) -> np.ndarray:
     """Face per hinge (0 top, 1 bottom): hinges that meet go on opposite faces, the lowest of each group on
     top (the two-colouring ``fabkiri.fabricate.cut.hinges.assign_faces`` makes from the placed states).
 
-    The last few answers are kept: a design's fabricability summary asks the same for every printer preset
-    (a breadth-first pass in Python, a quarter of an 8x8 summary each)."""
+    The last few answers are kept: a design's fabricability summary asks the same for every printer preset."""
     pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
     return _strip_faces(pairs.tobytes(), int(n_hinges)).copy()
 
 
 @lru_cache(maxsize=8)
 def _strip_faces(pairs_bytes: bytes, n_hinges: int) -> np.ndarray:
+    """A breadth-first search from the lowest hinge of each group gives every hinge the face opposite to
+    the one it is reached from, so the parity of its depth, whatever the order of the search (an odd
+    cycle included): the depths of one search from an extra node joined to each group's lowest hinge."""
     pairs = np.frombuffer(pairs_bytes, dtype=np.int64).reshape(-1, 2)
-    face = np.full(n_hinges, -1, dtype=np.int64)
-    nbr: list[list[int]] = [[] for _ in range(n_hinges)]
-    for i, j in pairs.tolist():
-        nbr[i].append(j)
-        nbr[j].append(i)
-    for root in range(n_hinges):
-        if face[root] >= 0:
-            continue
-        face[root] = 0
-        queue = [root]
-        for h in queue:  # breadth first: the order assign_faces colours in
-            for g in sorted(nbr[h]):
-                if face[g] < 0:
-                    face[g] = 1 - face[h]
-                    queue.append(g)
-    return face
+    H = n_hinges
+    if not len(pairs):
+        return np.zeros(H, dtype=np.int64)
+    g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(H, H))
+    _, group = csgraph.connected_components(g, directed=False)
+    lowest = np.full(group.max() + 1, H)
+    np.minimum.at(lowest, group, np.arange(H))
+    rows = np.concatenate([pairs[:, 0], np.full(len(lowest), H)])
+    cols = np.concatenate([pairs[:, 1], lowest])
+    joined = sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(H + 1, H + 1))
+    depth = csgraph.shortest_path(joined.tocsr(), directed=False, unweighted=True, indices=H)[:H]
+    return (depth.astype(np.int64) - 1) % 2
 
 
 def same_face_pairs(hinge_tiles: np.ndarray, face: np.ndarray, n_tiles: int):

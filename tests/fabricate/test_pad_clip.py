@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 import shapely
 from fabkiri.exchange.pattern_json import read_pattern
 from fabkiri.fabricate import fabricability, planrules
+from fabkiri.mechanics.contract import contract
 from fabkiri.pattern import geometry
 
 DATA = Path(__file__).parents[1] / "data"
@@ -110,3 +112,49 @@ def test_same_face_pairs_are_listed_as_the_loop_listed_them(name):
         want = _same_face_pairs_by_loop(top.hinge_tiles, face, top.n_tiles)
         assert len(got) == 5 and all(np.array_equal(a, b) for a, b in zip(got, want))
         assert len(got[0]) > 0
+
+
+@pytest.mark.parametrize("name", ["heart-16x16-rigid.json", "star-16x16-nonrigid.json"])
+@pytest.mark.parametrize("printer", ["prusa-mk4", "bambu-x1-petg"])  # two gaps
+def test_pads_that_hold_the_needed_rectangle_are_the_pads_not_short(name, printer):
+    """The summary's first pass clips only the pads not shown to hold the needed area: the short pads
+    are those of clipping every pad, at scales where some pads are short, some barely not, and boundary
+    tiles' pads among them; every pad left unclipped really has the area (GEOS)."""
+    p = read_pattern(DATA / name)
+    top, c = p.topology, np.asarray(contract(p, 1).corners, float)  # as the summary closes it
+    ends, pr, H = top.fold(1).fold_corner_ends, fabricability.load_printer(printer), top.n_hinges
+    need = 0.25 * pr.strip_width_mm * min(pr.strip_reach_mm, pr.strip_width_mm)
+    held_any = short_any = 0
+    for scale in (0.5, 1.0, 1.6, 2.2, 3.0, 6.0):
+        args = (c, top.hinge_tiles, top.hinge_corner, ends, pr, np.full(H, scale), np.arange(H))
+        every, first = planrules._pad_areas(*args), planrules._pad_areas(*args, need)
+        assert np.array_equal(first.min(1) < need, every.min(1) < need)
+        held = np.isinf(first)
+        assert (every[held] >= need).all() and np.array_equal(first[~held], every[~held])
+        held_any, short_any = held_any + held.sum(), short_any + (every < need).sum()
+    assert held_any and short_any
+
+
+def test_a_degenerate_pad_is_neither_held_nor_warned_about():
+    """A tile whose edge turns back (its mitre 0/0) has no pad: the first pass gives it the same area, 0, and
+    no warning the plain clipping does not give (its frames' NaN are compared, never held)."""
+    p = read_pattern(DATA / "heart-16x16-rigid.json")
+    top, c = p.topology, np.array(p.contracted[1], float)
+    t = int(top.hinge_tiles[0, 0])
+    c[t] = c[t, 0] + np.array([[0, 0], [1, 0], [0.5, 0], [0, 1]]) * 0.2 * p.tile_size
+    ends, pr, H = (
+        top.fold(1).fold_corner_ends,
+        fabricability.load_printer("prusa-mk4"),
+        top.n_hinges,
+    )
+    need = 0.25 * pr.strip_width_mm * min(pr.strip_reach_mm, pr.strip_width_mm)
+    args = (c, top.hinge_tiles, top.hinge_corner, ends, pr, np.full(H, 3.0), np.arange(H))
+    with warnings.catch_warnings(record=True) as plain:
+        warnings.simplefilter("always")
+        every = planrules._pad_areas(*args)
+    with warnings.catch_warnings(record=True) as first_pass:
+        warnings.simplefilter("always")
+        first = planrules._pad_areas(*args, need)
+    assert every[0, 0] == first[0, 0] == 0.0 and np.isinf(first).any()
+    assert [str(w.message) for w in first_pass] == [str(w.message) for w in plain]
+    assert np.array_equal(first.min(1) < need, every.min(1) < need)

@@ -14,15 +14,15 @@ from fabkiri.pattern import thinness
 DATA = Path(__file__).parents[1] / "data"
 
 
-def _counted(monkeypatch, name: str) -> list:
+def _counted(monkeypatch, name: str, owner=thinness) -> list:
     calls: list = []
-    real = getattr(thinness, name)
+    real = getattr(owner, name)
 
     def count(*a, **k):
         calls.append(a[1:])
         return real(*a, **k)
 
-    monkeypatch.setattr(thinness, name, count)
+    monkeypatch.setattr(owner, name, count)
     return calls
 
 
@@ -47,8 +47,10 @@ def test_the_summary_is_each_presets_own_answer(name):
 def test_the_summary_measures_each_shrink_and_the_hinge_faces_once(monkeypatch):
     p = read_pattern(DATA / "circle-16x16-rigid.json")
     want = fabricability.summary(p)
-    scales = _counted(monkeypatch, "min_scale")
+    scales = _counted(monkeypatch, "_answer", thinness.TileScales)
+    tiles = _counted(monkeypatch, "__init__", thinness.TileScales)
     folds = _counted(monkeypatch, "coincident_hinges")
     assert fabricability.summary(p) == want
-    assert scales and len(scales) == len(set(scales))  # one call per (web, shrink, edge)
+    assert scales and len(scales) == len(set(scales))  # one answer per (web, shrink, edge)
+    assert len(tiles) == 1  # the tiles' geometry once for all of them
     assert 0 < len(folds) <= 2  # once per closed state's fold rule, not per printer
