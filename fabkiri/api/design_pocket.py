@@ -1,0 +1,33 @@
+"""The first attempt for an outline with a deep pocket that the own split cannot take (an L or a boot
+given N x N tiles): the lattice split with a corner in the pocket (``design/quad/pocket_split.py``),
+started coarse to fine; the non-rigid request answered by the rigid family from that start."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ..design.quad.pocket_split import pocket_split
+from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest
+
+POCKET_INIT = "pocket"  # the attempt's name among the guesses (report ``attempts``)
+
+
+def pocket_request(req: DesignRequest) -> DesignRequest | None:
+    """The pocket attempt's request for ``req`` (a front-door request without ``--init`` or corners),
+    or None where it does not apply: a symmetry, closed-state targets, fabrication rows, parallelogram
+    holes, another solver than auto, or no pocket split (``pocket_split``)."""
+    if (
+        req.target is None
+        or req.symmetry
+        or req.contracted
+        or req.fabrication is not None
+        or req.holes != "rhombus"
+        or req.solver != "auto"
+    ):
+        return None
+    split = pocket_split(req.target, req.rows, req.cols)
+    if split is None:
+        return None
+    if req.rigid:
+        return replace(req, target=split, init="coarse")
+    return replace(req, target=split, init=VIA_RIGID_INIT, via_rigid_init="coarse")
