@@ -40,7 +40,7 @@ from .design_minimax import minimax_finish
 from .design_mirror import keep_closer, mirror_axis
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
-from .design_pocket import POCKET_INIT, pocket_request
+from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request
 from .design_report import DesignAttempt, DesignReport
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .designers import TakesTiles, register_designer
@@ -371,11 +371,11 @@ def _attempts(
     inits = _inits(request, req, target)
     pocket = not (request.init or request.corners) and req.rows * req.cols < BIG_TILES
     best, attempts = None, list[dict]()
-    for init in inits + [POCKET_INIT] * pocket:  # from 32x32 rigid designs start coarse anyway
+    for init in inits + [POCKET_INIT] * (POCKET_TRIES * pocket):  # from 32x32 rigid starts coarse
         last = init in (VIA_RIGID_INIT, POCKET_INIT)  # last resorts for a miss, not second opinions
         if last and best is not None and best.valid and _shape_met(best.report):
             break
-        if (sub := pocket_request(req) if init == POCKET_INIT else req) is None:
+        if (sub := pocket_request(req, attempts) if init == POCKET_INIT else req) is None:
             break  # no pocket split for this outline
         req.init = init if sub is req else req.init
         try:

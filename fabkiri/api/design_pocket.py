@@ -1,21 +1,24 @@
 """The first attempt for an outline with a deep pocket that the own split cannot take (an L or a boot
-given N x N tiles): the lattice split with a corner in the pocket (``design/quad/pocket_split.py``),
-started coarse to fine; the non-rigid request answered by the rigid family from that start."""
+given N x N tiles), tried when every other guess missed: the lattice split with a corner in the pocket
+(``design/quad/pocket_split.py``), started coarse to fine; the non-rigid request answered by the rigid family
+from that start."""
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from ..design.quad.pocket_split import pocket_split
+from ..design.quad.pocket_split import SHIFTS, pocket_split
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest
 
-POCKET_INIT = "pocket"  # the attempt's name among the guesses (report ``attempts``)
+POCKET_INIT = "pocket"  # the attempts' name among the guesses (report ``attempts``)
+POCKET_TRIES = len(SHIFTS)
 
 
-def pocket_request(req: DesignRequest) -> DesignRequest | None:
-    """The pocket attempt's request for ``req`` (a front-door request without ``--init`` or corners),
-    or None where it does not apply: a symmetry, closed-state targets, fabrication rows, parallelogram
-    holes, another solver than auto, or no pocket split (``pocket_split``)."""
+def pocket_request(req: DesignRequest, attempts: list[dict] | None = None) -> DesignRequest | None:
+    """The next pocket attempt's request for ``req`` (a front-door request without ``--init`` or corners)
+    after the front door's ``attempts`` so far (one per shift of ``SHIFTS``), or None where it does not
+    apply: a symmetry, closed-state targets, fabrication rows, parallelogram holes, another solver than
+    auto, or no pocket split (``pocket_split``)."""
     if (
         req.target is None
         or req.symmetry
@@ -25,7 +28,8 @@ def pocket_request(req: DesignRequest) -> DesignRequest | None:
         or req.solver != "auto"
     ):
         return None
-    split = pocket_split(req.target, req.rows, req.cols)
+    k = sum(a["init"] == POCKET_INIT for a in attempts or [])
+    split = pocket_split(req.target, req.rows, req.cols, SHIFTS[k])
     if split is None:
         return None
     if req.rigid:

@@ -6,7 +6,9 @@ an L's pocket and its reflex corner, with a convex one, in the middle of a side;
 map onto that split folds tiles, and the rescaled and standard guesses run the side across the pocket.
 Here that lattice corner moves to the middle of the pocket's inward turn (the reflex corner of an L, the
 floor of a U's gap): the two sides meeting there go into the pocket from either end, and the coarse to
-fine start (its 8x8 level from the rescaled guess) follows them in.
+fine start (its 8x8 level from the rescaled guess) follows them in. Which tip lands nearest the corner
+decides whether the closed states overlap there (the boot at 16x16: pass or not within a tip spacing), so
+the front door tries the middle and half a tip spacing either side (:data:`SHIFTS`).
 """
 
 from __future__ import annotations
@@ -19,6 +21,11 @@ from ..targets.pockets import pockets
 from .corner_split import default_folds, with_corners
 
 SAMPLES = 4096  # curve samples the inward turn is summed over
+SHIFTS = (
+    0.0,
+    -0.5,
+    0.5,
+)  # tip spacings from the turn's middle, tried in turn (``api/design_pocket.py``)
 ON_POCKET = 1e-3  # of the size: a sample or split point this near the pocket lies on its wall
 
 
@@ -37,9 +44,10 @@ def inward_turn_middle(target: Target, pocket: shapely.Polygon) -> float:
     return float(u[order[int(np.searchsorted(run, 0.5 * run[-1]))]])
 
 
-def pocket_split(target: Target, rows: int, cols: int) -> Target | None:
+def pocket_split(target: Target, rows: int, cols: int, shift: float = 0.0) -> Target | None:
     """``target`` with the one own split corner on its deepest pocket's wall moved to the middle of the
-    pocket's inward turn, where the pattern's harmonic map onto the own split folds tiles; else None."""
+    pocket's inward turn (and ``shift`` mean tip spacings along the outline from there), where the pattern's
+    harmonic map onto the own split folds tiles; else None."""
     found = pockets(target)
     if not found or not default_folds(target, rows, cols):
         return None
@@ -50,7 +58,7 @@ def pocket_split(target: Target, rows: int, cols: int) -> Target | None:
     if len(on) != 1:
         return None
     c = corners.copy()
-    c[on[0]] = inward_turn_middle(target, wall)
+    c[on[0]] = inward_turn_middle(target, wall) + shift / (2 * (rows + cols))  # tips on the outline
     c = np.mod(c - c[0], 1.0) + c[0]  # CCW from BL, as Target expects
     if not np.all(np.diff(c) > 0):
         return None  # the turn's middle lies past a neighbouring corner: no split of this kind
