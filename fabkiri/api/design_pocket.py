@@ -16,9 +16,9 @@ POCKET_TRIES = len(SHIFTS)
 
 def pocket_request(req: DesignRequest, attempts: list[dict] | None = None) -> DesignRequest | None:
     """The next pocket attempt's request for ``req`` (a front-door request without ``--init`` or corners)
-    after the front door's ``attempts`` so far (one per shift of ``SHIFTS``), or None where it does not
-    apply: a symmetry, closed-state targets, fabrication rows, parallelogram holes, another solver than
-    auto, or no pocket split (``pocket_split``)."""
+    after the front door's ``attempts`` so far (one per shift of ``SHIFTS``, the next only after one that met
+    the shape but failed a check), or None where it does not apply: a symmetry, closed-state targets,
+    fabrication rows, parallelogram holes, another solver than auto, or no pocket split (``pocket_split``)."""
     if (
         req.target is None
         or req.symmetry
@@ -29,6 +29,8 @@ def pocket_request(req: DesignRequest, attempts: list[dict] | None = None) -> De
     ):
         return None
     k = sum(a["init"] == POCKET_INIT for a in attempts or [])
+    if k and (attempts or [{}])[-1].get("shape") != "met":
+        return None  # the shifts are for overlaps at the corner of a fit that met, not for a miss
     split = pocket_split(req.target, req.rows, req.cols, SHIFTS[k])
     if split is None:
         return None

@@ -49,6 +49,22 @@ def test_the_boots_pocket_attempt_meets_the_shape(rigid):
     assert outcome.report["conformance"]["deployed"]["hausdorff_rel"] < 0.02
 
 
+def test_the_next_pocket_attempt_shifts_the_corner_only_after_a_fit_that_met():
+    _, req, _, _ = _solver_request(
+        PatternRequest(tiles=(16, 16), target=BOOT, size=100, rigid=True)
+    )
+    first = pocket_request(req, [{"init": "rescaled", "shape": "missed"}])
+    assert first is not None
+    overlapped = [{"init": "pocket", "shape": "met"}]  # met the shape, failed a check (overlaps)
+    second = pocket_request(req, overlapped)
+    assert second is not None
+    step = second.target.corners[2] - first.target.corners[2]
+    assert step == pytest.approx(
+        -0.5 / 64
+    )  # half the spacing of the 64 boundary tips, back along the curve
+    assert pocket_request(req, [{"init": "pocket", "shape": "missed"}]) is None
+
+
 @pytest.mark.slow  # the front door's guesses first (about 6 rigid, 15 non-rigid CPU s)
 @pytest.mark.parametrize("rigid", [True, False])
 def test_the_boot_passes_at_16x16_by_default(rigid):

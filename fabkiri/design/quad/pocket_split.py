@@ -8,7 +8,8 @@ Here that lattice corner moves to the middle of the pocket's inward turn (the re
 floor of a U's gap): the two sides meeting there go into the pocket from either end, and the coarse to
 fine start (its 8x8 level from the rescaled guess) follows them in. Which tip lands nearest the corner
 decides whether the closed states overlap there (the boot at 16x16: pass or not within a tip spacing), so
-the front door tries the middle and half a tip spacing either side (:data:`SHIFTS`).
+the front door tries the middle and, while a design meets the shape but overlaps, half a tip spacing either
+side (:data:`SHIFTS`).
 """
 
 from __future__ import annotations
