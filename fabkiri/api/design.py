@@ -40,6 +40,7 @@ from .design_minimax import minimax_finish
 from .design_mirror import keep_closer, mirror_axis
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
+from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request
 from .design_report import DesignAttempt, DesignReport
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .designers import TakesTiles, register_designer
@@ -348,9 +349,7 @@ def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -
         return [request.init]
     if request.rigid and req.rows * req.cols >= BIG_TILES:
         return list(BIG_RIGID_INITS)
-    if (
-        target is None
-    ):  # closed-state targets only: every guess is the standard pattern, retries repeat it
+    if target is None:  # closed-state targets only: every guess is the standard pattern
         return [AUTO_INITS[0]]
     if via_rigid_applies(req):  # answered by the rigid family, coarse to fine, whatever the guess
         return ["coarse"]
@@ -370,14 +369,18 @@ def _attempts(
 ) -> tuple[DesignAttempt, list[dict]]:
     """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
+    pocket = not (request.init or request.corners) and req.rows * req.cols < BIG_TILES
     best, attempts = None, list[dict]()
-    for init in inits:
-        if init == VIA_RIGID_INIT and best is not None and best.valid and _shape_met(best.report):
-            break  # the rigid family is the last resort for a miss, not a second opinion
-        req.init = init
+    for init in inits + [POCKET_INIT] * (POCKET_TRIES * pocket):  # from 32x32 rigid starts coarse
+        last = init in (VIA_RIGID_INIT, POCKET_INIT)  # last resorts for a miss, not second opinions
+        if last and best is not None and best.valid and _shape_met(best.report):
+            break
+        if (sub := pocket_request(req, attempts) if init == POCKET_INIT else req) is None:
+            break  # no pocket split for this outline
+        req.init = init if sub is req else req.init
         try:
             result = design(
-                req, progress=(req.rows * req.cols >= 256 or request.verbose) and not request.quiet
+                sub, progress=(req.rows * req.cols >= 256 or request.verbose) and not request.quiet
             )
         except SolveError as exc:
             if len(inits) == 1:
