@@ -107,6 +107,40 @@ def _locate(img: np.ndarray, tri: np.ndarray, q: np.ndarray, k: int = 16):
     return tri[near[rows, best]], wbest / wbest.sum(1, keepdims=True)
 
 
+SQUARE_CORNERS = np.array(
+    [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+)  # where sides 0..3 start
+
+
+def square_boundary(
+    tgt: Target, u: np.ndarray, tip_q: np.ndarray, tip_side: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The unit square's points of the boundary nodes at curve parameters ``u`` (each on the arc of its side,
+    the tips' fractions ``tip_q`` bending it) and the tips' curve parameters."""
+    fixed = np.full((len(u), 2), np.nan)
+    tip_u = np.empty(len(tip_side))
+    for s in range(4):
+        a, b = tgt.arc_range(s)
+        uu = np.mod(u - a, 1.0) + a
+        on = (uu >= a) & (uu < b)
+        tq = tip_q[tip_side == s]
+        f_tip = [tq[:, 0], tq[:, 1], 1 - tq[:, 0], 1 - tq[:, 1]][s]
+        f = _arc_fraction(tgt, s, uu[on], np.sort(f_tip))
+        fixed[on] = _square_point(s, f)
+        order = np.argsort(uu[on])  # the tips go on the curve itself, by the same fractions
+        tip_u[tip_side == s] = np.interp(
+            f_tip, np.append(f[order], 1.0), np.append(uu[on][order], b)
+        )
+    # a node on a corner where the curve's parameter wraps can fall off both arcs by round-off (the mod
+    # above): it is that corner of the square (left unset, the KD-tree of the map refused its NaN)
+    off = np.flatnonzero(np.isnan(fixed[:, 0]))
+    if len(off):
+        starts = np.array([tgt.arc_range(s)[0] for s in range(4)])
+        gap = np.abs(np.mod(u[off, None] - starts + 0.5, 1.0) - 0.5)
+        fixed[off] = SQUARE_CORNERS[gap.argmin(1)]
+    return fixed, tip_u
+
+
 class TargetMesh:
     """A target meshed once, its inner nodes' Laplacian factorised: the map for any four corners
     (the target's own or others') and any lattice is then two triangular solves and a point search."""
@@ -134,21 +168,7 @@ class TargetMesh:
         tgt = with_corners(self.target, corners)
         lo, hi = base.min(0), base.max(0)
         q = (base - lo) / (hi - lo)
-        tip_q = q[tip_nodes]
-        fixed = np.empty((len(self.u), 2))
-        tip_u = np.empty(len(tip_nodes))
-        for s in range(4):
-            a, b = tgt.arc_range(s)
-            uu = np.mod(self.u - a, 1.0) + a
-            on = (uu >= a) & (uu < b)
-            tq = tip_q[tip_side == s]
-            f_tip = [tq[:, 0], tq[:, 1], 1 - tq[:, 0], 1 - tq[:, 1]][s]
-            f = _arc_fraction(tgt, s, uu[on], np.sort(f_tip))
-            fixed[on] = _square_point(s, f)
-            order = np.argsort(uu[on])  # the tips go on the curve itself, by the same fractions
-            tip_u[tip_side == s] = np.interp(
-                f_tip, np.append(f[order], 1.0), np.append(uu[on][order], b)
-            )
+        fixed, tip_u = square_boundary(tgt, self.u, q[tip_nodes], tip_side)
         img = np.full((len(self.nodes), 2), np.nan)
         img[: len(self.u)] = fixed
         rhs = -(self.Lfb @ fixed)
