@@ -1,13 +1,14 @@
-"""The lattice turned onto a target's mirror axis (issue #37): the design of a turned outline is the turned design.
+"""The lattice laid along a target's mirror axis (issue #37): the design of a turned outline, turned back.
 
-A cut pattern can be laid at any angle, but the quad lattice's rows run along the drawing's x and y axes, and an
-outline with a mirror axis off both (a heart drawn leaning 20 degrees) was fitted worse than the same outline
-upright: 16x16 and 64x64 rigid missed the 2 % tolerance where the upright heart met it (docs/design-solver.md,
-"Session 53 (rot53)"). Where the outline has a mirror axis (``targets.axes.mirror_axis_deg``) and neither lattice
-axis is one, the front door designs the outline turned so that its axis lies on the nearer lattice axis (on the
-requested one under ``--symmetry``), then turns every node of the design and of both closed states back: the
-pattern, its stored target and the report's shape verdict are the user's outline as given, and the report
-says ``lattice_angle_deg``. An outline with no mirror axis (the bean) keeps the lattice on its drawing's axes.
+A cut pattern can be laid at any angle, but the quad lattice's rows run along the drawing's x and y axes. Where
+the outline has a mirror axis (``targets.axes.mirror_axis_deg``) and neither drawing axis is one (a heart drawn
+leaning 20 degrees), :func:`lattice_angle` finds the angle that lays a lattice axis on it, and
+:func:`turned_design` designs the outline turned by minus that angle, then turns every node of the design and of
+both closed states back: the pattern, its stored target and the report's shape verdict are the user's outline
+as given, and the report says ``lattice_angle_deg``. Without ``--lattice-angle`` the turned lattice is a retry
+for a design that fails on the drawing's axes, the better kept; ``--symmetry`` about an axis the outline has
+only turned is met on the turned lattice. An outline with no mirror axis (the bean) keeps the drawing's axes.
+Figures: docs/design-solver.md, "Session 53 (rot53)".
 """
 
 from __future__ import annotations
@@ -81,28 +82,33 @@ def turned_design(
     request: PatternRequest, user: Target, angle: float, design: Callable, notify
 ) -> DesignOutcome:
     """``design`` (the front door) of ``request`` with the lattice laid at ``angle`` (:func:`_turned`). Where that
-    angle was chosen here (no ``request.lattice_angle``) and its design fails, the design on the drawing's axes
-    too, the better of the two kept (``_rank``): the turned lattice is never worse than the drawing's."""
-    out = _turned(request, user, angle, design, notify)
-    out.report["lattice_angle_deg"] = float(angle)
-    if out.success or request.lattice_angle is not None:
+    angle was chosen here (no ``request.lattice_angle``) and no ``--symmetry`` asks it, it is a retry: the design on
+    the drawing's axes first, the turned one only where that fails, the better of the two kept (``_rank``). A
+    design that passes on the drawing's axes is left as it was (the turned one fared worse at 32x32 and 64x64 on
+    the rotated heart, docs/design-solver.md, "Session 53 (rot53)")."""
+    if request.lattice_angle is not None or request.symmetry in AXIS_DEG:
+        out = _turned(request, user, angle, design, notify)
+        out.report["lattice_angle_deg"] = float(angle)
         return out
+    own = design(replace(request, lattice_angle=0.0), notify)
+    if own.success:
+        return own
     note = (
-        f"fabkiri: the design with the lattice along the outline's mirror axis ({angle:.1f}°) fails; "
-        "designing on the drawing's axes too"
+        f"fabkiri: the design on the drawing's axes fails; trying the lattice along the outline's mirror "
+        f"axis ({angle:.1f}°)"
     )
-    out.messages.append(note)
+    own.messages.append(note)
     if notify is not None:
         notify(note)
-    own = design(replace(request, lattice_angle=0.0), notify)
+    out = _turned(request, user, angle, design, notify)
     for a in out.report["attempts"]:
         a["lattice_angle_deg"] = float(angle)
-    kept = out if _rank(cast(Any, out)) <= _rank(cast(Any, own)) else own
+    kept = out if _rank(cast(Any, out)) < _rank(cast(Any, own)) else own
     report = kept.report
-    report["attempts"] = out.report["attempts"] + own.report["attempts"]
+    report["attempts"] = own.report["attempts"] + out.report["attempts"]
     report["time_s_total"] = float(sum(a["time_s"] for a in report["attempts"]))
     report["lattice_angle_deg"] = float(angle) if kept is out else 0.0
-    kept.messages[:0] = (own if kept is out else out).messages
+    kept.messages[:] = [*own.messages, *out.messages]
     return kept
 
 

@@ -63,14 +63,19 @@ def test_turned_design_is_the_turned_back_design_of_the_turned_outline(tmp_path)
     """Every node of the design and of both closed states is the turned outline's design turned back; the stored
     target and the shape verdict are the user's outline; the report says the lattice's angle."""
     rot = _heart(20)
-    # within a tolerance it meets: a miss would be weighed against the drawing's axes (next test)
+    angle = lattice_angle(PatternRequest(tiles=(8, 8), target=rot, rigid=True), rot)
     out = design_pattern(
         PatternRequest(
-            tiles=(8, 8), target=rot, rigid=True, quiet=True, init="rescaled", shape_tol="10%"
+            tiles=(8, 8),
+            target=rot,
+            rigid=True,
+            quiet=True,
+            init="rescaled",
+            shape_tol="10%",
+            lattice_angle=angle,
         )
     )
-    angle = out.report["lattice_angle_deg"]
-    assert abs(angle - 20) < 0.05
+    assert out.report["lattice_angle_deg"] == angle
     inner, shift = turned(rot, -angle)
     own = design_pattern(
         PatternRequest(
@@ -105,9 +110,10 @@ def test_kagome_refuses_a_lattice_angle():
         design_kagome_pattern(PatternRequest(tiles=(4, 4), target="circle", lattice_angle=10.0))
 
 
-def test_a_turned_design_that_fails_is_weighed_against_the_drawing_axes_one():
-    """Where the lattice along the axis misses (a 4x4 heart at 0.1 mm), the design on the drawing's axes runs too
-    and the better is kept; the report lists both designs' attempts, the turned ones marked."""
+def test_the_turned_lattice_is_a_retry_for_a_design_that_fails():
+    """Where the design on the drawing's axes misses (a 4x4 heart at 0.1 mm) the lattice along the axis is tried
+    too and the better is kept; the report lists both designs' attempts, the turned ones marked. One that passes
+    on the drawing's axes (at 20 %) is left as it was."""
     rot = _heart(20)
     req = PatternRequest(tiles=(4, 4), target=rot, rigid=True, quiet=True, init="rescaled")
     out = design_pattern(replace(req, shape_tol="0.1mm"))
@@ -120,7 +126,10 @@ def test_a_turned_design_that_fails_is_weighed_against_the_drawing_axes_one():
     assert out.report["lattice_angle_deg"] == (
         marked[0]["lattice_angle_deg"] if turned_h < own_h else 0
     )
-    assert any("drawing's axes too" in m for m in out.messages)
+    assert any("trying the lattice along the outline's mirror axis" in m for m in out.messages)
+    passed = design_pattern(replace(req, shape_tol="20%"))
+    assert passed.success and len(passed.report["attempts"]) == 1
+    assert "lattice_angle_deg" not in passed.report
     # an explicit angle is not second-guessed
     given = design_pattern(replace(req, shape_tol="0.1mm", lattice_angle=20.0))
     assert len(given.report["attempts"]) == 1 and given.report["lattice_angle_deg"] == 20.0
