@@ -83,33 +83,56 @@ def turned_design(
 ) -> DesignOutcome:
     """``design`` (the front door) of ``request`` with the lattice laid at ``angle`` (:func:`_turned`). Where that
     angle was chosen here (no ``request.lattice_angle``) and no ``--symmetry`` asks it, it is a retry: the design on
-    the drawing's axes first, the turned one only where that fails, the better of the two kept (``_rank``). A
-    design that passes on the drawing's axes is left as it was (the turned one fared worse at 32x32 and 64x64 on
-    the rotated heart, docs/design-solver.md, "Session 53 (rot53)")."""
+    the drawing's axes first; where that fails, the turned lattice mirrored about the outline's axis (the reduced
+    solve, where the mirrored count is even and no explicit free request forbids it), then unmirrored where that
+    fails too; the best kept (``_rank``). A design that passes on the drawing's axes is left as it was (turned,
+    the rotated heart's 32x32 and 64x64 designs and the rotated drop's 48x48 one fared worse, docs/design-solver.md,
+    "Session 53 (rot53)")."""
     if request.lattice_angle is not None or request.symmetry in AXIS_DEG:
         out = _turned(request, user, angle, design, notify)
         out.report["lattice_angle_deg"] = float(angle)
         return out
-    own = design(replace(request, lattice_angle=0.0), notify)
-    if own.success:
-        return own
+    tried = [design(replace(request, lattice_angle=0.0), notify)]
+    if tried[0].success:
+        return tried[0]
     note = (
         f"fabkiri: the design on the drawing's axes fails; trying the lattice along the outline's mirror "
         f"axis ({angle:.1f}°)"
     )
-    own.messages.append(note)
+    tried[0].messages.append(note)
     if notify is not None:
         notify(note)
-    out = _turned(request, user, angle, design, notify)
-    for a in out.report["attempts"]:
-        a["lattice_angle_deg"] = float(angle)
-    kept = out if _rank(cast(Any, out)) < _rank(cast(Any, own)) else own
+    for symmetry in _retries(request, user, angle):
+        out = _turned(replace(request, symmetry=symmetry), user, angle, design, notify)
+        for a in out.report["attempts"]:
+            a["lattice_angle_deg"] = float(angle)
+            if symmetry in AXIS_DEG:
+                a["mirrored"] = str(symmetry)
+        out.report["lattice_angle_deg"] = float(angle)
+        if symmetry in AXIS_DEG:
+            out.report["mirrored"] = symmetry
+            out.report["mirrored_why"] = "the outline's mirror axis, on the lattice turned onto it"
+        tried.append(out)
+        if out.success:
+            break
+    kept = min(tried, key=lambda o: _rank(cast(Any, o)))  # the first of equals: the drawing's axes
     report = kept.report
-    report["attempts"] = own.report["attempts"] + out.report["attempts"]
+    report["attempts"] = [a for o in tried for a in o.report["attempts"]]
     report["time_s_total"] = float(sum(a["time_s"] for a in report["attempts"]))
-    report["lattice_angle_deg"] = float(angle) if kept is out else 0.0
-    kept.messages[:] = [*own.messages, *out.messages]
+    report.setdefault("lattice_angle_deg", 0.0)
+    kept.messages[:] = [m for o in tried for m in o.messages]
     return kept
+
+
+def _retries(request: PatternRequest, user: Target, angle: float) -> list[str | None]:
+    """The symmetries of the turned retries: the lattice axis the outline's mirror axis turns onto, where the
+    mirror keeps the fold states (an even count of the rows or columns it maps) and the request is not explicitly
+    free ("none"); then the request's own."""
+    rms = axis_distances(turned(user, -angle)[0], list(AXIS_DEG.values()))[0]
+    axis = list(AXIS_DEG)[int(np.argmin(rms))]
+    rows, cols = request.tiles or (1, 1)
+    even = (rows if axis == "x" else cols) % 2 == 0
+    return ([axis] if even and request.symmetry != "none" else []) + [request.symmetry]
 
 
 def _turned(
@@ -167,7 +190,13 @@ def _in_user_frame(report: dict, pattern: Pattern, user, tol: tuple, ratio: floa
         if isinstance(part, dict):
             for k in REL_KEYS:
                 if k in part:
-                    v = part[k]
-                    part[k] = [x * ratio for x in v] if isinstance(v, list) else v * ratio
+                    part[k] = _scaled(part[k], ratio)
     annotate_misses(report, report.get("attempts", []), user, pattern)
     report["fabricability"] = fabricability.summary(pattern)
+
+
+def _scaled(value, ratio: float):
+    """``value`` (a figure, a list of them, or None where a step did not run) times ``ratio``."""
+    if isinstance(value, list):
+        return [_scaled(v, ratio) for v in value]
+    return None if value is None else value * ratio
