@@ -100,6 +100,7 @@ def test_turned_design_is_the_turned_back_design_of_the_turned_outline(tmp_path)
     measured = conf.deployed(out.pattern.nodes, out.pattern.topology, rot)
     assert out.report["conformance"]["deployed"]["hausdorff_rel"] == measured["hausdorff_rel"]
     assert out.report["shape"]["deployed"]["tol_mm"] == pytest.approx(0.1 * rot.size)
+    assert any("laid at 20.0° along the outline's mirror axis" in line for line in out.summary())
     out.write(tmp_path / "p.json", preview=False)
     assert report_problem(out.pattern.design["report"]) is None
     assert report_problem({**out.pattern.design["report"], "lattice_angle_deg": "20"}) is not None
