@@ -23,6 +23,7 @@ from ..design.core import conformance as conf
 from ..design.core.request import MIRROR_TOL
 from ..design.targets.axes import axis_distances, mirror_axis_deg, rotation, turned
 from ..design.targets.lookup import Target
+from ..errors import InputError, SolveError
 from ..fabricate import fabricability
 from ..pattern.model import Pattern
 from .design_judge import _rank, _shape_met
@@ -103,7 +104,10 @@ def turned_design(
     if notify is not None:
         notify(note)
     for symmetry in _retries(request, user, angle):
-        out = _turned(replace(request, symmetry=symmetry), user, angle, design, notify)
+        try:
+            out = _turned(replace(request, symmetry=symmetry), user, angle, design, notify)
+        except (InputError, SolveError):  # no mirrored lattice or guess: the next retry
+            continue
         for a in out.report["attempts"]:
             a["lattice_angle_deg"] = float(angle)
             if symmetry in AXIS_DEG:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fabkiri.api.design import PatternRequest, design_pattern
 from fabkiri.api.design_report import report_problem
-from fabkiri.api.design_turn import lattice_angle
+from fabkiri.api.design_turn import lattice_angle, turned_design
 from fabkiri.api.kagome import design_kagome_pattern
 from fabkiri.design.core import conformance as conf
 from fabkiri.design.core.request import MIRROR_TOL
@@ -134,3 +134,22 @@ def test_the_turned_lattice_is_a_retry_for_a_design_that_fails():
     # an explicit angle is not second-guessed
     given = design_pattern(replace(req, shape_tol="0.1mm", lattice_angle=20.0))
     assert len(given.report["attempts"]) == 1 and given.report["lattice_angle_deg"] == 20.0
+
+
+def test_a_refused_mirrored_retry_leaves_the_unmirrored_one():
+    """A mirrored turned design that cannot be made (InputError: here refused outright) is skipped, not raised."""
+    rot = _heart(20)
+
+    def refusing(request, notify=None):
+        if request.symmetry == "y":
+            raise InputError("no mirrored lattice")
+        return design_pattern(request, notify)
+
+    req = PatternRequest(
+        tiles=(4, 4), target=rot, rigid=True, quiet=True, init="rescaled", shape_tol="0.1mm"
+    )
+    out = turned_design(req, rot, lattice_angle(req, rot), refusing, None)
+    attempts = out.report["attempts"]
+    assert (
+        len(attempts) == 2 and "mirrored" not in attempts[1] and "lattice_angle_deg" in attempts[1]
+    )
