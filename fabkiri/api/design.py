@@ -22,7 +22,7 @@ import numpy as np
 from .. import limits
 from ..design.core import conformance as conf
 from ..design.quad.corner_split import with_corners
-from ..design.quad.fabrication import FabricationLimits, smallest_size
+from ..design.quad.fabrication import FabricationLimits
 from ..design.quad.rigid.offset_outline import preferred_holes
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
 from ..design.targets.lookup import Target, load_target
@@ -32,7 +32,6 @@ from ..fabricate import design_limits, fabricability
 from ..fileio import atomic_write
 from ..pattern.kinds.tessellation import DEFAULT_KIND
 from ..pattern.model import Pattern
-from ..pattern.thinness import pal_bound
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
 from .design_judge import CLOSURE_TOL, _check, _fit_miss, _hausdorff, _rank, _shape_met  # noqa: F401 (re-exported)
 from .design_minimax import applies as minimax_applies
@@ -43,8 +42,9 @@ from .design_opening import judge as judge_opening
 from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request
 from .design_report import DesignAttempt, DesignReport
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
+from .design_turn import lattice_angle, turned_design
 from .designers import TakesTiles, register_designer
-from .print_tiles import check_tiles
+from .print_tiles import check_room, check_tiles
 from .shape_limits import annotate as annotate_misses
 
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
@@ -66,13 +66,13 @@ class PatternRequest(TakesTiles):  # tiles: "8x8" is taken too, as the CLI's --t
 
     tiles: tuple[int, int] | None  # rows, cols (None: kagome chooses them from the outline)
     trim: bool = False  # kagome: the R x C block cut to the outline (design/kagome/trim.py)
-    target: str | None = None  # a name from templates/targets or a .csv/.json/.svg file
+    # a name from templates/targets, a .csv/.json/.svg file, or the curve itself
+    target: str | Target | None = None
     size: float | None = None  # the target's larger dimension in mm (named targets default to 100)
     rigid: bool = False
     symmetry: str | None = None  # "x" or "y"
-    holes: str | None = (
-        None  # None: rhombus, but parallelogram where offset_outline.preferred_holes says
-    )
+    # None: rhombus, but parallelogram where offset_outline.preferred_holes says
+    holes: str | None = None
     contracted_target: tuple[str, ...] = ()  # "STATE:NAME|FILE", "STATE:rect" or "STATE:rect=RATIO"
     init: str | None = None  # None: the retry order of AUTO_INITS / BIG_RIGID_INITS
     solver: str = "auto"
@@ -93,9 +93,10 @@ class PatternRequest(TakesTiles):  # tiles: "8x8" is taken too, as the CLI's --t
     i_know: bool = False
     verbose: bool = False  # solver progress on stderr even for small solves
     quiet: bool = False  # no solver progress even for big solves (a sweep's workers)
-    kind: str = (
-        DEFAULT_KIND  # the tessellation kind: which front door designs it (api/designers.py)
-    )
+    # the tessellation kind: which front door designs it (api/designers.py)
+    kind: str = DEFAULT_KIND
+    # degrees the lattice is laid at, counter-clockwise (None: on the outline's mirror axis, api/design_turn.py)
+    lattice_angle: float | None = None
 
     def fabrication_limits(self, target: Target | None) -> tuple[FabricationLimits | None, dict]:
         """The mm limits of ``--material/--hinge/--printer/--style/--min-feature/--min-hole`` for
@@ -184,6 +185,12 @@ def design_pattern(
         request.symmetry == "none"
     ):  # the CLI's explicit "free"; a quad design is free without a symmetry
         request = replace(request, symmetry=None)
+    user = _target(request)
+    if user is not None and (
+        angle := lattice_angle(request, user)
+    ):  # designed turned onto its axes
+        free = "none" if asked and not request.symmetry else request.symmetry
+        return turned_design(replace(request, symmetry=free), user, angle, design_pattern, notify)
     request, req, target, contracted = _solver_request(request)
     if not asked and (axis := mirror_axis(request, req)):  # both designs, the closer kept
         return keep_closer(request, axis, design_pattern, notify)
@@ -261,9 +268,7 @@ def _solver_request(
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
-    target = load_target(request.target, request.size) if request.target else None
-    if target is not None and request.corners is not None:
-        target = with_corners(target, np.asarray(request.corners, float))
+    target = _target(request)
     contracted: dict[int, object] = {}
     for text in request.contracted_target or []:
         s, spec = parse_contracted(text, request.size)
@@ -278,7 +283,7 @@ def _solver_request(
     if (
         fab_limits is not None and target is not None
     ):  # a request no design can meet: say so before solving
-        _check_room(rows, cols, fab_limits, target)
+        check_room(rows, cols, fab_limits, target)
         if request.corners is None:  # too narrow to print (not estimated for a lattice on corners)
             check_tiles(rows, cols, target, request.printer, intent.get("style"))
     holes = (
@@ -320,6 +325,16 @@ def _solver_request(
     return request, req, target, contracted
 
 
+def _target(request: PatternRequest) -> Target | None:
+    """The request's target curve (by name or file, scaled to its size) with its given corners."""
+    target = request.target
+    if isinstance(target, str):
+        target = load_target(target, request.size)
+    if target is not None and request.corners is not None:
+        target = with_corners(target, np.asarray(request.corners, float))
+    return target
+
+
 def _check_size(request: PatternRequest, req: DesignRequest, contracted: dict) -> None:
     """The tile count within what the solver that will run was measured at (:mod:`fabkiri.limits`)."""
     family = via_rigid_applies(req) or (
@@ -328,19 +343,6 @@ def _check_size(request: PatternRequest, req: DesignRequest, contracted: dict) -
     limits.check_tiles(
         req.rows, req.cols, "design rigid" if family else "design full", request.i_know
     )
-
-
-def _check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Target) -> None:
-    """InputError when ``rows`` x ``cols`` tiles wide enough for ``fab_limits`` cannot fit inside the target."""
-    least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
-    if least is not None:
-        raise InputError(
-            f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
-            f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
-            f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
-            f"{abs(target.area):.4g} mm²; the smallest size that could work is ",
-            Param("size", least, ".4g"),
-        )
 
 
 def _inits(request: PatternRequest, req: DesignRequest, target: Target | None) -> list[str]:

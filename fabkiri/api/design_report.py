@@ -61,6 +61,8 @@ class AttemptRecord(TypedDict):
     kept: NotRequired[bool]  # a refinement: whether it replaced the design
     # the axis of a mirrored design tried for a request without a symmetry
     mirrored: NotRequired[str]
+    # the lattice's angle of a design tried along the outline's mirror axis (api/design_turn.py)
+    lattice_angle_deg: NotRequired[float]
 
 
 class DesignReport(TypedDict):
@@ -92,6 +94,8 @@ class DesignReport(TypedDict):
     # a request without a symmetry answered by the design mirrored about this axis
     mirrored: NotRequired[str]
     mirrored_why: NotRequired[str]
+    # the lattice's angle in degrees, counter-clockwise from the drawing's axes (api/design_turn.py)
+    lattice_angle_deg: NotRequired[float]
 
 
 class KagomeReport(TypedDict):

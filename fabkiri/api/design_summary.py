@@ -43,8 +43,16 @@ def summary_lines(path, report: DesignReport) -> list[str]:
     out.append("; ".join(parts))
     if report.get("mirrored"):  # a request without --symmetry answered by the mirrored design
         out.append(
-            f"kept the design mirrored about {report['mirrored']} (the target is symmetric): "
+            f"kept the design mirrored about {report['mirrored']} (the target is symmetric"
+            f"{', on the turned lattice' if report.get('lattice_angle_deg') else ''}): "
             f"{report.get('mirrored_why', '')}"
+        )
+    if report.get(
+        "lattice_angle_deg"
+    ):  # api/design_turn.py: the pattern turned back onto the outline
+        out.append(
+            f"the lattice is laid at {report['lattice_angle_deg']:.1f}° along the outline's mirror axis "
+            "(the design of the turned outline, turned back)"
         )
     out += opening_lines(report)
     fr = report.get("fabrication")

@@ -53,7 +53,7 @@ if TYPE_CHECKING:
     from .design import PatternRequest
 
 # options of the quad design that have no kagome counterpart yet
-UNSUPPORTED = ("rigid", "holes", "contracted_target")
+UNSUPPORTED = ("rigid", "holes", "contracted_target", "lattice_angle")
 
 
 @dataclass(frozen=True)
@@ -415,6 +415,10 @@ def design_kagome_pattern(
     the shape (:mod:`.kagome_lattices`); with ``tiles`` it is the whole block unless ``trim``)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     target = request.target or "circle"
+    if not isinstance(
+        target, str
+    ):  # a curve: the quad front door's turned outline (api/design_turn.py)
+        raise InputError("a kagome design takes its target by name or file")
     tgt = load_target(target, request.size)
     # a lattice chosen from the outline is cut to it: cut, the circle, ellipse and heart fit nearer than
     # the whole block at every count measured (docs/kagome.md, "A lattice cut to the outline")

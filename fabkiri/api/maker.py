@@ -27,7 +27,6 @@ from ..errors import FabkiriError, InputError, Param
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from ..pattern.tilecount import tile_count
-from .design import _check_room
 from .maker_design import (  # noqa: F401 (_opening_lines re-exported)
     StepRun,
     _opening_lines,
@@ -38,7 +37,7 @@ from .maker_design import cpu_s as _cpu
 from .maker_early import narrow_of, refuse_narrow
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
-from .print_tiles import least_tile_mm
+from .print_tiles import check_room, least_tile_mm
 from .progress import three_args
 
 Progress = Callable[[str], None]  # a step's lines
@@ -184,7 +183,7 @@ def _plan(  # noqa: PLR0913 (make()'s options, checked before any design)
     )
     # the design's own refusals, before any step starts: too many tiles, tiles too wide to fit, tolerance
     limits.check_tiles(*choice.tiles, "design full", False)
-    _check_room(*choice.tiles, fab, curve)
+    check_room(*choice.tiles, fab, curve)
     conf.parse_shape_tol(shape_tol)
     stem = Path(str(target)).stem if Path(str(target)).suffix else str(target)
     if output is not None:

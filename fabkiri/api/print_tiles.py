@@ -21,11 +21,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.targets.lookup import Target
-from ..errors import CheckFailed
+from ..errors import CheckFailed, InputError, Param
 from ..fabricate import fabricability as fb
 from ..fabricate.print.printers import load_printer
 from ..pattern.kinds.quad.lattice import standard_pattern
+from ..pattern.thinness import pal_bound
 from .maker_tiles import tile_width_mm
 
 # the standard pattern the bound is taken on: 4x4 has corner, edge and inner tiles (every count from
@@ -123,3 +125,16 @@ def check_tiles(
         narrow = narrow_tiles(target, (rows, cols), printer, style)
         if narrow is not None:
             raise CheckFailed(narrow.reason())
+
+
+def check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Target) -> None:
+    """InputError when ``rows`` x ``cols`` tiles wide enough for ``fab_limits`` cannot fit inside the target."""
+    least = smallest_size(target.size, abs(target.area), rows * cols, fab_limits)
+    if least is not None:
+        raise InputError(
+            f"{rows}x{cols} tiles each at least {fab_limits.required_width_mm():.3g} mm wide ({fab_limits.source}) "
+            f"cannot fit a {target.size:.4g} mm {target.name}: they cover at least "
+            f"{pal_bound(rows * cols, fab_limits.required_width_mm()):.4g} mm² (Pál) but the target has "
+            f"{abs(target.area):.4g} mm²; the smallest size that could work is ",
+            Param("size", least, ".4g"),
+        )

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 import numpy as np
@@ -49,6 +50,7 @@ def cmd_design(args: argparse.Namespace) -> int:
         size=args.size,
         rigid=args.rigid,
         symmetry=args.symmetry,
+        lattice_angle=args.lattice_angle,
         holes=args.holes,
         contracted_target=tuple(args.contracted_target or ()),
         init=args.init,
@@ -196,6 +198,13 @@ def _add_target_args(p: argparse.ArgumentParser) -> None:
         help="reflection symmetry about the x axis (y -> -y) or the y axis (x -> -x); none: free "
         "(the default for quads; a kagome design otherwise takes every mirror its lattice and "
         "target share)",
+    )
+    p.add_argument(
+        "--lattice-angle",
+        type=bounded(float, math.isfinite, "expected degrees", "a finite angle, got {text!r}"),
+        metavar="DEG",
+        help="quad: lay the lattice at DEG degrees counter-clockwise (0: along the drawing's axes); "
+        "default: along the outline's mirror axis where neither drawing axis is one",
     )
     p.add_argument(
         "--holes",
