@@ -181,14 +181,11 @@ def design_pattern(
             notify(text)
 
     asked = request.symmetry is not None  # "none" too: an explicit free request is never mirrored
-    if (
-        request.symmetry == "none"
-    ):  # the CLI's explicit "free"; a quad design is free without a symmetry
+    # the CLI's explicit "free"; a quad design is free without a symmetry
+    if request.symmetry == "none":
         request = replace(request, symmetry=None)
     user = _target(request)
-    if user is not None and (
-        angle := lattice_angle(request, user)
-    ):  # designed turned onto its axes
+    if user is not None and (angle := lattice_angle(request, user)):  # laid along its mirror axis
         free = "none" if asked and not request.symmetry else request.symmetry
         return turned_design(replace(request, symmetry=free), user, angle, design_pattern, notify)
     request, req, target, contracted = _solver_request(request)
