@@ -17,15 +17,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import cast
 
-import numpy as np
-
 from .. import limits
 from ..design.core import conformance as conf
-from ..design.quad.corner_split import with_corners
 from ..design.quad.fabrication import FabricationLimits
 from ..design.quad.rigid.offset_outline import preferred_holes
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest, design, via_rigid_applies
-from ..design.targets.lookup import Target, load_target
+from ..design.targets.lookup import Target
 from ..errors import FabkiriError, InputError, Param, SolveError
 from ..exchange.pattern_json import dumps
 from ..fabricate import design_limits, fabricability
@@ -42,7 +39,7 @@ from .design_opening import judge as judge_opening
 from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request
 from .design_report import DesignAttempt, DesignReport
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
-from .design_turn import lattice_angle, turned_design
+from .design_turn import loaded_or_turned, request_target
 from .designers import TakesTiles, register_designer
 from .print_tiles import check_room, check_tiles
 from .shape_limits import annotate as annotate_misses
@@ -180,14 +177,13 @@ def design_pattern(
         if notify is not None:
             notify(text)
 
+    request, turned = loaded_or_turned(request, design_pattern, notify)
+    if turned is not None:
+        return turned
     asked = request.symmetry is not None  # "none" too: an explicit free request is never mirrored
     # the CLI's explicit "free"; a quad design is free without a symmetry
     if request.symmetry == "none":
         request = replace(request, symmetry=None)
-    user = _target(request)
-    if user is not None and (angle := lattice_angle(request, user)):  # laid along its mirror axis
-        free = "none" if asked and not request.symmetry else request.symmetry
-        return turned_design(replace(request, symmetry=free), user, angle, design_pattern, notify)
     request, req, target, contracted = _solver_request(request)
     if not asked and (axis := mirror_axis(request, req)):  # both designs, the closer kept
         return keep_closer(request, axis, design_pattern, notify)
@@ -265,7 +261,7 @@ def _solver_request(
     rows, cols = request.tiles
     if rows < 2 or cols < 2:
         raise InputError(f"inverse design needs at least 2x2 tiles, got {rows}x{cols}")
-    target = _target(request)
+    target = request_target(request)
     contracted: dict[int, object] = {}
     for text in request.contracted_target or []:
         s, spec = parse_contracted(text, request.size)
@@ -320,16 +316,6 @@ def _solver_request(
     if sized:
         _check_size(request, req, contracted)
     return request, req, target, contracted
-
-
-def _target(request: PatternRequest) -> Target | None:
-    """The request's target curve (by name or file, scaled to its size) with its given corners."""
-    target = request.target
-    if isinstance(target, str):
-        target = load_target(target, request.size)
-    if target is not None and request.corners is not None:
-        target = with_corners(target, np.asarray(request.corners, float))
-    return target
 
 
 def _check_size(request: PatternRequest, req: DesignRequest, contracted: dict) -> None:

@@ -21,8 +21,9 @@ import numpy as np
 
 from ..design.core import conformance as conf
 from ..design.core.request import MIRROR_TOL
+from ..design.quad.inverse_map import with_corners
 from ..design.targets.axes import axis_distances, mirror_axis_deg, rotation, turned
-from ..design.targets.lookup import Target
+from ..design.targets.lookup import Target, load_target
 from ..errors import InputError, SolveError
 from ..fabricate import fabricability
 from ..pattern.model import Pattern
@@ -79,21 +80,64 @@ def _aspect(target: Target, degrees: float) -> float:
     return float(w / h)
 
 
+def request_target(request: PatternRequest) -> Target | None:
+    """The request's target curve (by name or file, scaled to its size) with its given corners."""
+    target = request.target
+    if isinstance(target, str):
+        target = load_target(target, request.size)
+    if target is not None and request.corners is not None:
+        target = with_corners(target, np.asarray(request.corners, float))
+    return target
+
+
+def loaded_or_turned(
+    request: PatternRequest, design: Callable, notify
+) -> tuple[PatternRequest, DesignOutcome | None]:
+    """``request`` with its curve loaded once (the front door's designs below take the curve itself), and
+    its design where the lattice may leave the drawing's axes (:func:`turned_or_retried`), else None."""
+    if (user := request_target(request)) is None:
+        return request, None
+    request = replace(request, target=user)
+    return request, turned_or_retried(request, user, design, notify)
+
+
+def turned_or_retried(
+    request: PatternRequest, user: Target, design: Callable, notify
+) -> DesignOutcome | None:
+    """``design`` (the front door) of ``request`` where the lattice may leave the drawing's axes, else None (the
+    front door designs it on them). Asked (``--lattice-angle``, or ``--symmetry`` about an axis the outline has
+    only turned): :func:`turned_design` at once. By default the design on the drawing's axes, and only where it
+    fails the outline's mirror axis is sought (a scan of :func:`lattice_angle`, not paid by a design that passes)
+    and the turned lattice tried as its retry."""
+    if request.lattice_angle is not None or request.symmetry in AXIS_DEG:
+        angle = lattice_angle(request, user)
+        return turned_design(request, user, angle, design, notify) if angle else None
+    first = design(replace(request, lattice_angle=0.0), notify)
+    if first.success or not (angle := lattice_angle(request, user)):
+        return first
+    return turned_design(request, user, angle, design, notify, first)
+
+
 def turned_design(
-    request: PatternRequest, user: Target, angle: float, design: Callable, notify
+    request: PatternRequest,
+    user: Target,
+    angle: float,
+    design: Callable,
+    notify,
+    first: DesignOutcome | None = None,
 ) -> DesignOutcome:
     """``design`` (the front door) of ``request`` with the lattice laid at ``angle`` (:func:`_turned`). Where that
     angle was chosen here (no ``request.lattice_angle``) and no ``--symmetry`` asks it, it is a retry: the design on
     the drawing's axes first; where that fails, the turned lattice mirrored about the outline's axis (the reduced
     solve, where the mirrored count is even and no explicit free request forbids it), then unmirrored where that
-    fails too; the best kept (``_rank``). A design that passes on the drawing's axes is left as it was (turned,
+    fails too; the best kept (``_rank``); ``first``, where given, is the design on the drawing's axes. A design that passes on the drawing's axes is left as it was (turned,
     the rotated heart's 32x32 and 64x64 designs and the rotated drop's 48x48 one fared worse, docs/design-solver.md,
     "Session 53 (rot53)")."""
     if request.lattice_angle is not None or request.symmetry in AXIS_DEG:
         out = _turned(request, user, angle, design, notify)
         out.report["lattice_angle_deg"] = float(angle)
         return out
-    tried = [design(replace(request, lattice_angle=0.0), notify)]
+    tried = [first or design(replace(request, lattice_angle=0.0), notify)]
     if tried[0].success:
         return tried[0]
     note = (
