@@ -22,11 +22,8 @@ from ..targets.pockets import pockets
 from .corner_split import default_folds, with_corners
 
 SAMPLES = 4096  # curve samples the inward turn is summed over
-SHIFTS = (
-    0.0,
-    -0.5,
-    0.5,
-)  # tip spacings from the turn's middle, tried in turn (``api/design_pocket.py``)
+# tip spacings from the turn's middle, tried in turn (``api/design_pocket.py``)
+SHIFTS = (0.0, -0.5, 0.5)
 ON_POCKET = 1e-3  # of the size: a sample or split point this near the pocket lies on its wall
 
 

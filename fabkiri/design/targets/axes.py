@@ -38,9 +38,8 @@ def axis_distances(target: Target, degrees) -> tuple[np.ndarray, np.ndarray]:
     rms, err = [], []
     for deg in np.atleast_1d(np.asarray(degrees, float)):
         c, s = np.cos(np.radians(2 * deg)), np.sin(np.radians(2 * deg))
-        dist, _ = tree.query(
-            pts @ np.array([[c, s], [s, -c]])
-        )  # the reflection about the line at ``deg``
+        # the reflection about the line at ``deg``
+        dist, _ = tree.query(pts @ np.array([[c, s], [s, -c]]))
         rms.append(float(np.sqrt(np.mean(dist**2))))
         err.append(max(0.0, float(dist.max()) - spacing))
     return np.array(rms) / target.size, np.array(err) / target.size
