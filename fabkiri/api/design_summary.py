@@ -47,9 +47,8 @@ def summary_lines(path, report: DesignReport) -> list[str]:
             f"{', on the turned lattice' if report.get('lattice_angle_deg') else ''}): "
             f"{report.get('mirrored_why', '')}"
         )
-    if report.get(
-        "lattice_angle_deg"
-    ):  # api/design_turn.py: the pattern turned back onto the outline
+    # api/design_turn.py: the pattern turned back onto the outline
+    if report.get("lattice_angle_deg"):
         out.append(
             f"the lattice is laid at {report['lattice_angle_deg']:.1f}° along the outline's mirror axis "
             "(the design of the turned outline, turned back)"

@@ -415,9 +415,8 @@ def design_kagome_pattern(
     the shape (:mod:`.kagome_lattices`); with ``tiles`` it is the whole block unless ``trim``)."""
     check_options(**{k: getattr(request, k) for k in UNSUPPORTED})
     target = request.target or "circle"
-    if not isinstance(
-        target, str
-    ):  # a curve: the quad front door's turned outline (api/design_turn.py)
+    # a curve: the quad front door's loaded or turned outline (api/design_turn.py)
+    if not isinstance(target, str):
         raise InputError("a kagome design takes its target by name or file")
     tgt = load_target(target, request.size)
     # a lattice chosen from the outline is cut to it: cut, the circle, ellipse and heart fit nearer than

@@ -204,7 +204,8 @@ def _add_target_args(p: argparse.ArgumentParser) -> None:
         type=bounded(float, math.isfinite, "expected degrees", "a finite angle, got {text!r}"),
         metavar="DEG",
         help="quad: lay the lattice at DEG degrees counter-clockwise (0: along the drawing's axes); "
-        "default: along the outline's mirror axis where neither drawing axis is one",
+        "default: the drawing's axes, then along the outline's mirror axis where that design fails and "
+        "neither drawing axis is one",
     )
     p.add_argument(
         "--holes",
