@@ -153,3 +153,21 @@ def test_a_refused_mirrored_retry_leaves_the_unmirrored_one():
     assert (
         len(attempts) == 2 and "mirrored" not in attempts[1] and "lattice_angle_deg" in attempts[1]
     )
+
+
+def test_the_mirror_axis_is_sought_only_after_a_design_fails(monkeypatch):
+    """A design that passes on the drawing's axes pays no axis test or scan; one that fails asks both once."""
+    from fabkiri.api import design_turn
+
+    calls = []
+    for name in ("axis_distances", "mirror_axis_deg"):
+        real = getattr(design_turn, name)
+        monkeypatch.setattr(
+            design_turn, name, lambda *a, _n=name, _f=real: calls.append(_n) or _f(*a)
+        )
+    req = PatternRequest(tiles=(4, 4), target=_heart(20), rigid=True, quiet=True, init="rescaled")
+    assert design_pattern(replace(req, shape_tol="20%")).success and calls == []
+    design_pattern(replace(req, shape_tol="0.1mm"))
+    assert (
+        calls[:2] == ["axis_distances", "mirror_axis_deg"] and calls.count("mirror_axis_deg") == 1
+    )
