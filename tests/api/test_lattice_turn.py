@@ -64,30 +64,11 @@ def test_turned_design_is_the_turned_back_design_of_the_turned_outline(tmp_path)
     target and the shape verdict are the user's outline; the report says the lattice's angle."""
     rot = _heart(20)
     angle = lattice_angle(PatternRequest(tiles=(8, 8), target=rot, rigid=True), rot)
-    out = design_pattern(
-        PatternRequest(
-            tiles=(8, 8),
-            target=rot,
-            rigid=True,
-            quiet=True,
-            init="rescaled",
-            shape_tol="10%",
-            lattice_angle=angle,
-        )
-    )
+    base = PatternRequest(tiles=(8, 8), target=rot, rigid=True, quiet=True, init="rescaled")
+    out = design_pattern(replace(base, shape_tol="10%", lattice_angle=angle))
     assert out.report["lattice_angle_deg"] == angle
     inner, shift = turned(rot, -angle)
-    own = design_pattern(
-        PatternRequest(
-            tiles=(8, 8),
-            target=inner,
-            rigid=True,
-            quiet=True,
-            init="rescaled",
-            lattice_angle=0,
-            shape_tol="10mm",
-        )
-    )
+    own = design_pattern(replace(base, target=inner, lattice_angle=0, shape_tol="10mm"))
     assert "lattice_angle_deg" not in own.report
 
     def back(p):
