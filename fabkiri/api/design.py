@@ -356,7 +356,8 @@ def _attempts(
     inits = _inits(request, req, target)
     pocket = not (request.init or request.corners) and req.rows * req.cols < BIG_TILES
     best, attempts = None, list[dict]()
-    for init in inits + [POCKET_INIT] * (POCKET_TRIES * pocket):  # from 32x32 rigid starts coarse
+    # after the guesses, up to POCKET_TRIES pocket attempts (design_pocket.py) below BIG_TILES
+    for init in inits + [POCKET_INIT] * (POCKET_TRIES * pocket):
         last = init in (VIA_RIGID_INIT, POCKET_INIT)  # last resorts for a miss, not second opinions
         if last and best is not None and best.valid and _shape_met(best.report):
             break

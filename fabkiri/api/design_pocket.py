@@ -28,8 +28,9 @@ def pocket_request(req: DesignRequest, attempts: list[dict] | None = None) -> De
         or req.solver != "auto"
     ):
         return None
-    k = sum(a["init"] == POCKET_INIT for a in attempts or [])
-    if k and (attempts or [{}])[-1].get("shape") != "met":
+    attempts = attempts or []
+    k = sum(a["init"] == POCKET_INIT for a in attempts)
+    if k and attempts[-1].get("shape") != "met":
         return None  # the shifts are for overlaps at the corner of a fit that met, not for a miss
     split = pocket_split(req.target, req.rows, req.cols, SHIFTS[k])
     if split is None:
