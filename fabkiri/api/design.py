@@ -363,6 +363,8 @@ def _attempts(
             break
         if (sub := pocket_request(req, attempts) if init == POCKET_INIT else req) is None:
             break  # no pocket split for this outline
+        if sub is not req:
+            say("fabkiri: every guess misses; trying a lattice corner in the outline's pocket")
         req.init = init if sub is req else req.init
         try:
             result = design(
@@ -397,14 +399,16 @@ def _attempts(
             and (miss <= RETRY_FIT_ABOVE or outcome.report.get("rigid_first"))
         ):
             break  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
-        if outcome.valid and init != inits[-1]:
+        if (
+            outcome.valid and init in inits[:-1]
+        ):  # a pocket attempt is followed only after an overlap
             why = (
                 f"misses the target by {miss:.2%} of its size"
                 if miss > RETRY_FIT_ABOVE
                 else f"misses the shape tolerance (Hausdorff {_hausdorff(outcome.report):.2%} of the size)"
             )
             say(f"fabkiri: design from the {init} guess {why}; trying the next guess too")
-        elif len(inits) > 1 and init != inits[-1]:
+        elif len(inits) > 1 and init in inits[:-1]:
             say(f"fabkiri: design from the {init} guess failed ({outcome.problems[0]}); retrying")
     if best is None:
         raise SolveError(
