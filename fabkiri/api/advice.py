@@ -5,8 +5,9 @@ for: another material or hinge kind (``cut``'s web and edge rules in closed form
 :func:`fabkiri.fabricate.fabricability.cut_minimum`), another printer or print style (``print``'s plan
 checks and the bed at that scale, :func:`~fabkiri.fabricate.fabricability.print_refusal`), the smallest
 scale of the process asked for, and the ``fabkiri design`` line (with the equivalent ``fabkiri make``
-line) that keeps the size when the design's own up-front room check (Pál's bound,
-:func:`fabkiri.design.quad.fabrication.smallest_size`) does not rule it out. Nothing is suggested that was not checked. The front doors raise :class:`Refused` (exit 1: a
+line) that keeps the size when the design's own up-front checks (Pál's bound,
+:func:`fabkiri.design.quad.fabrication.smallest_size`, and a print style's least tile width,
+:func:`.print_tiles.narrow_tiles`) do not refuse it. Nothing is suggested that was not checked. The front doors raise :class:`Refused` (exit 1: a
 check failed, whatever the flags) carrying the alternatives; the CLI prints them under the refusal.
 """
 
@@ -29,13 +30,14 @@ from ..fabricate.cut.materials import (
 from ..fabricate.print.printers import available_printers, load_printer
 from ..pattern.model import Pattern
 from .print_options import DEFAULT_STYLE, PrintOptions, minimum, printer_for
+from .print_tiles import narrow_tiles
 
 if TYPE_CHECKING:
     from ..fabricate.cut.sheets import CutOptions
 
 CUT_GATE = "cut's web and edge rules at this scale (closed form)"
 PRINT_GATE = "print's plan checks and bed at this scale"
-DESIGN_GATE = "design's up-front room check (Pál) at this size"
+DESIGN_GATE = "design's up-front checks at this size (room (Pál), a print style's least tile width)"
 
 
 @dataclass(frozen=True)
@@ -377,7 +379,8 @@ def design_line(
     """The ``fabkiri design`` line that makes the pattern's design again, for ``process`` (``material``
     and ``hinge``, or ``printer`` and ``style``), at the size asked for (the design's ``--size`` times
     ``scale``); None when the pattern has no stored design target the CLI can name, the design was
-    already made for this process at this size, or the up-front room check rules the size out."""
+    already made for this process at this size, or the design's own up-front checks refuse it (the
+    room check rules the size out, or the tiles are too narrow for the print style)."""
     from ..design.quad.fabrication import smallest_size
     from ..design.targets.lookup import named_targets, target_from_dict
     from ..fabricate import design_limits
@@ -407,6 +410,10 @@ def design_line(
     rows, cols = int(lattice["rows"]), int(lattice["cols"])
     if limits is None or smallest_size(size, abs(target.area), rows * cols, limits) is not None:
         return None
+    if "printer" in process and narrow_tiles(
+        target, (rows, cols), process["printer"], process["style"]
+    ):
+        return None  # the design refuses tiles too narrow for the print style up front too
     opts = design.get("options") or {}
     flags = [
         "--material" if "material" in process else "--printer",
@@ -427,8 +434,8 @@ def design_line(
     return Alternative(
         "design",
         command,
-        f"a design made for {' '.join(process.values())} at --size {size:g}, which the room check "
-        f"does not rule out (a necessary condition; then "
+        f"a design made for {' '.join(process.values())} at --size {size:g}, which the design's "
+        f"up-front checks do not refuse (a necessary condition, not designed; then "
         f"`fabkiri {'cut' if 'material' in process else 'print'} {new}`)",
         DESIGN_GATE,
         {**process, "size": size},

@@ -99,8 +99,32 @@ class _Attempt:
 
 def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> StepRun:
     """Design at ``plan.tiles``; after a shape miss, the retries and options of this module. ``checks``
-    are, by process, the steps (cut or print, deploy) an alternative must pass before it is named."""
-    first = _attempt(result, plan, say)
+    are, by process, the steps (cut or print, deploy) an alternative must pass before it is named. A miss
+    left at the end words its tile count from every count designed here (:func:`_trend_checked`)."""
+    ran: list[_Attempt] = []
+    return _trend_checked(result, _design_step(result, plan, say, checks, ran), ran)
+
+
+def _trend_checked(result: MakeResult, run: StepRun, ran: list[_Attempt]) -> StepRun:
+    """``run`` with its miss line's tile count checked against the designs of ``ran`` at two or more
+    counts (their measured trend, ``conformance.tile_trend``, also in the figures as ``tile_trend``)
+    instead of the one design's 1/tiles per side estimate."""
+    points = [[*a.tiles.tiles, a.figures["hausdorff_rel"]] for a in ran if a.miss is not None]
+    report = ((result.pattern.design or {}) if result.pattern else {}).get("report") or {}
+    j = (report.get("shape") or {}).get("deployed") or {}
+    c = (report.get("conformance") or {}).get("deployed")
+    if run.ok or j.get("status") != "missed" or not c or len({(r, k) for r, k, _ in points}) < 2:
+        return run
+    result.figures["tile_trend"] = conf.tile_trend(points, float(j["tol_rel"]))
+    line = "fabkiri: design failed: " + conf.describe_miss("deployed", {**j, "trend": points}, c)
+    head = "fabkiri: design failed: shape missed (deployed)"
+    return run._replace(details=[line if d.startswith(head) else d for d in run.details])
+
+
+def _design_step(
+    result: MakeResult, plan, say: Progress, checks: Checks, ran: list[_Attempt]
+) -> StepRun:
+    first = _attempt(result, plan, say, ran)
     miss = first.miss
     if first.run.ok or miss is None or miss <= 1:
         return first.run  # met, or failed for another reason than the shape
@@ -109,7 +133,8 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
             f"no other tile count tried: the miss is {miss:.1f}x the tolerance, more than the "
             f"{RETRY_WITHIN:g}x a neighbouring count is likely to close"
         )
-        return _fallbacks(result, plan, say, checks, [first], _with_details(first.run, [note]))
+        run = _with_details(first.run, [note])
+        return _fallbacks(result, plan, say, checks, [first], run, ran)
     target, fab = _target_and_limits(plan, plan.size)
     tried = [first]
     for choice in retry_tiles(target, fab, plan.tiles, plan.least_tile_mm)[:MAX_RETRIES]:
@@ -124,7 +149,7 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
             f"trying {r}x{c} tiles {how} ({choice.reason}); about {first.cpu_s:.0f} CPU s more"
         )
         try:
-            attempt = _attempt(result, replace(plan, tiles=choice), say)
+            attempt = _attempt(result, replace(plan, tiles=choice), say, ran)
         except FabkiriError as exc:  # a count the design refuses up front: the next one
             say(f"make: {r}x{c} tiles refused by the design ({exc.cli_message()}); not counted")
             continue
@@ -140,20 +165,28 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
     run = _keep_best(result, tried)
     if result.alternatives:
         return run
-    return _fallbacks(result, plan, say, checks, tried, run)
+    return _fallbacks(result, plan, say, checks, tried, run, ran)
 
 
 def _fallbacks(
-    result: MakeResult, plan, say: Progress, checks: Checks, tried: list[_Attempt], run: StepRun
+    result: MakeResult,
+    plan,
+    say: Progress,
+    checks: Checks,
+    tried: list[_Attempt],
+    run: StepRun,
+    ran: list[_Attempt],
 ) -> StepRun:
     """Tiles, counts and retries missed: the larger size (tiles make chose), then the other options of
     :mod:`.maker_options`, each run before it is named (a count of this process, with tiles make
-    chose, is adopted instead); ``run`` (the missed design's) with the lines saying what was tried."""
+    chose, is adopted instead); ``run`` (the missed design's) with the lines saying what was tried. Each
+    design run is added to ``ran``."""
     larger: list[_Attempt] = []
     lines = _larger_size(result, plan, say, checks, larger)
+    ran += larger
     if result.alternatives:
         return _with_details(run, lines)
-    adopted, more = _other_options(result, plan, say, checks, tried + larger)
+    adopted, more = _other_options(result, plan, say, checks, tried + larger, ran=ran)
     return _with_details(adopted or run, lines + more)
 
 
@@ -173,11 +206,13 @@ def _other_options(
     tried: list[_Attempt],
     base_cpu: float | None = None,
     max_runs: int | None = None,
+    ran: list[_Attempt] | None = None,
 ) -> tuple[StepRun | None, list[str]]:
     """The options of :mod:`.maker_options`, likeliest first, run until one passes (named, or adopted:
     a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
     designs (``max_runs``, read when called) ran or they cost :data:`~.maker_options.BUDGET` times the first
-    design (``base_cpu`` without ``tried``); the adopted run and the lines."""
+    design (``base_cpu`` without ``tried``); the adopted run and the lines. Each design run is added to
+    ``ran``."""
     max_runs = mo.MAX_RUNS if max_runs is None else max_runs
     first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
     own = result.tiles.tiles
@@ -200,7 +235,7 @@ def _other_options(
             f"{'to use it' if adopt else 'to name it'} if it makes; about {first_cpu:.0f} CPU s more"
         )
         try:
-            attempt = _attempt(MakeResult.of_plan(other), other, say)
+            attempt = _attempt(MakeResult.of_plan(other), other, say, ran)
         except FabkiriError as exc:  # refused up front (room, tiles): not counted
             lines.append(f"{option.name}: refused by the design ({exc.cli_message()})")
             continue
@@ -273,12 +308,17 @@ def cpu_s() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def _attempt(result: MakeResult, plan, say: Progress) -> _Attempt:
+def _attempt(
+    result: MakeResult, plan, say: Progress, ran: list[_Attempt] | None = None
+) -> _Attempt:
     start = cpu_s()
     run = _design(result, plan, say)
-    return _Attempt(
+    out = _Attempt(
         plan.tiles, run, result.pattern, dict(result.figures), cpu_s() - start, plan.size
     )
+    if ran is not None:
+        ran.append(out)
+    return out
 
 
 def _rc(tiles: TilesChoice) -> str:

@@ -256,3 +256,19 @@ def test_cut_scale_auto_names_the_read_back_refusal_at_the_largest_scale_tried()
     assert text.startswith(f"--scale auto: refused from --scale 0.5 up to {top:g}")
     assert text.endswith(f"16 pieces at --scale {top:g}") and exc.value.exit_code == 1
     assert str(exc.value).startswith(f"scale='auto': refused from scale=0.5 up to {top:g}")
+
+
+def test_a_design_line_is_named_only_where_the_design_would_not_refuse_it_up_front():
+    # circle-8x8-rigid printed on prusa-mk4 at half size: 8x8 tiles of a 50 mm circle are about 3.9 mm
+    # wide, narrower than the 8.7 mm the style needs; the design refuses them before solving, so no
+    # design line (nor its make line) is named, while the room check alone would pass it
+    from fabkiri.api.print_tiles import narrow_tiles
+    from fabkiri.design.targets.lookup import load_target
+
+    p = read_pattern(PATTERNS / "circle-8x8-rigid.json")
+    got = alternatives(p, "print", 0.5, options=PrintOptions(printer="prusa-mk4"))
+    assert got and not [a for a in got if a.what in ("design", "make")]
+    assert narrow_tiles(load_target("circle", 50), (8, 8), "prusa-mk4", "tiles-and-strips")
+    # cut at the same size: acrylic-3's web passes the room check, and the design line stays
+    cut = alternatives(p, "cut", 0.5, options=None)
+    assert [a.changes["size"] for a in cut if a.what == "design"] == [50.0]

@@ -28,6 +28,13 @@ def test_the_design_report_written_into_pattern_json_validates(circle, tmp_path)
     assert report_problem(broken) == "top level: 'shape' is a required property"
     bad = {**written, "attempts": [{"init": "conformal", "status": "converged"}]}
     assert "attempts/0" in str(report_problem(bad))
+    # a withheld tile estimate names the count and why (api/shape_limits.py)
+    missed = {"status": "missed", "tol_rel": 0.02, "hausdorff_rel": 0.05}
+    held = {**missed, "estimate_withheld": {"tiles": [28, 28], "why": "rows bind"}}
+    assert report_problem({**written, "shape": {"deployed": held}}) is None
+    for broken_estimate in ({"tiles": [28, 28]}, {"tiles": [28], "why": "rows bind"}):
+        shape = {"deployed": {**missed, "estimate_withheld": broken_estimate}}
+        assert "estimate_withheld" in str(report_problem({**written, "shape": shape}))
 
 
 def test_one_summary_and_one_residual_name_on_every_design_outcome(circle, tmp_path):

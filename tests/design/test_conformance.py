@@ -152,7 +152,9 @@ def test_design_shape_tol_missed_is_written_and_exits_1(tmp_path, run_cli):
     conf = rep["conformance"]["deployed"]
     assert conf["hausdorff_rel"] > 0.005 and rep["shape"]["deployed"]["status"] == "missed"
     lines = [ln for ln in err.splitlines() if "shape missed" in ln]
-    assert len(lines) == 1 and "tiles would reach it" in lines[0] and "by " in lines[0]
+    assert (
+        len(lines) == 1 and "tiles if the miss falls as 1/tiles" in lines[0] and "by " in lines[0]
+    )
     assert (tmp_path / "c.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the same design within a looser tolerance passes, and --no-preview writes no picture
     out2 = tmp_path / "d.json"
@@ -259,7 +261,7 @@ def test_a_miss_of_many_tip_spacings_is_called_a_local_minimum_and_promises_no_t
         and j["spacings"] == pytest.approx(13.0 / 1.9)
     )
     line = describe_miss("deployed", j, basin)
-    assert "local minimum" in line and "tiles would reach" not in line and "\n" not in line
+    assert "local minimum" in line and "tiles if the miss falls" not in line and "\n" not in line
 
 
 @pytest.mark.slow

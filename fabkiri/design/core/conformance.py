@@ -21,9 +21,13 @@ from ...pattern import conformance as pc
 from ..targets.curve import Target
 
 DEFAULT_SHAPE_TOL = "2%"
-# a miss of more than this many mean tip spacings is a local minimum, not the lattice's resolution (measured:
-# resolution misses 0.1-0.4 spacings, the leaf SVG's bad basin 7, the heart's 32x32 local minimum 2)
-LOCAL_MINIMUM_SPACINGS = 1.0
+# a miss of more than this many mean tip spacings is no chord cut off between tips (a chord of length s
+# misses a corner no sharper than a right angle by at most s / 2): a local minimum or a limit of the lattice,
+# not its resolution (measured: resolution misses 0.1-0.4 spacings, the leaf SVG's bad basin 7, the heart's
+# 32x32 local minimum 2, a U whose lattice skips its hollow 1; docs/design-solver.md, adv54)
+LOCAL_MINIMUM_SPACINGS = 0.5
+# the largest count per side a trend of misses is extrapolated to (the largest rigid design fabkiri.limits tested)
+TREND_MAX_TILES = 128
 SPLINE_SAMPLES = (
     4096  # a spline target as a polygon: chord error ~1e-5 of the size for the named shapes
 )
@@ -105,11 +109,13 @@ def parse_shape_tol(text: str) -> tuple[float, str]:
 def judge(conf: dict, tol: tuple[float, str], tiles: tuple[int, int] | None = None) -> dict:
     """``{"status": "met" | "missed", "tol_mm", "hausdorff_mm", "by_mm", ...}`` of one measured outline.
 
-    A miss suggests a lattice: the Hausdorff distance of a converged design is bounded by the tip spacing
-    (a stretch between two tips is cut off as a chord), which scales as 1 / tiles per side, so the
-    estimate scales the tile count by Hausdorff / tolerance (``bench/shapes.py`` measures the trend).
-    A miss larger than the mean tip spacing is no chord cut off: the solve ended in a local minimum, and
-    no tile count is promised (``local_minimum``).
+    A miss estimates a lattice: the Hausdorff distance of a converged design whose tips follow the outline
+    is bounded by the tip spacing (a stretch between two tips is cut off as a chord), which scales as
+    1 / tiles per side, so the estimate scales the tile count by Hausdorff / tolerance (``bench/shapes.py``
+    measures the trend). It is an estimate from one size, worded as one: ``make`` checks it against the
+    counts it designed (:func:`tile_trend`), the design against its up-front checks (api/shape_limits.py).
+    A miss larger than half the mean tip spacing is no chord cut off: the solve ended in a local minimum,
+    or the lattice does not follow the outline, and no tile count is estimated (``local_minimum``).
     """
     value, unit = tol
     tol_mm = value * conf["size_mm"] if unit == "rel" else value
@@ -145,6 +151,13 @@ def _local_minimum_note(j: Mapping[str, Any]) -> str:
         if pocket
         else ""
     )
+    filled = j.get("pocket_filled")
+    if filled:  # api/shape_limits.py: no pocket run across, the deepest one measured
+        note += (
+            f"; the target has a pocket {filled['depth_mm']:.3g} mm deep (deepest at "
+            f"({filled['deepest'][0]:.1f}, {filled['deepest'][1]:.1f}) mm), {100 * filled['covered']:.0f} % of "
+            f"which the outline fills (none where it follows the target)"
+        )
     strip = (pocket or {}).get("strip")
     if strip:  # corner_split.bent_strip: what make picks for this outline
         r, c = strip["tiles"]
@@ -168,7 +181,8 @@ def _local_minimum_note(j: Mapping[str, Any]) -> str:
 
 
 def describe_miss(label: str, j: Mapping[str, Any], conf: Mapping[str, Any]) -> str:
-    """One line for a missed shape tolerance."""
+    """One line for a missed shape tolerance. ``j["trend"]`` (``[[rows, cols, hausdorff_rel], ...]``, the
+    designs ``make`` ran of this outline at other counts) words the tile count from their measured trend."""
     x, y = conf["worst"]["at"]
     line = (
         f"shape missed ({label}): Hausdorff {j['hausdorff_mm']:.3g} mm ({100 * j['hausdorff_rel']:.2f} % of "
@@ -177,10 +191,66 @@ def describe_miss(label: str, j: Mapping[str, Any], conf: Mapping[str, Any]) -> 
     )
     if j.get("local_minimum"):
         line += (
-            f"; that is {j['spacings']:.1f} tip spacings, not a chord cut off: a local minimum, which more "
-            f"tiles alone may not fix" + _local_minimum_note(j)
+            f"; that is {j['spacings']:.2g} tip spacings, more than the half spacing a chord cut off between "
+            f"tips misses by: a local minimum or a limit of the lattice, which more tiles alone may not fix"
+            + _local_minimum_note(j)
         )
+    if len({(r, c) for r, c, _ in j.get("trend") or ()}) >= 2:
+        return line + "; " + trend_words(tile_trend(j["trend"], j["tol_rel"]))
+    if "estimate_withheld" in j:  # api/shape_limits.py: more tiles are no remedy at this size
+        line += f"; no tile count is estimated: {j['estimate_withheld']['why']}"
     elif "suggested_tiles" in j:
         r, c = j["suggested_tiles"]
-        line += f"; about {r}x{c} tiles would reach it (estimate: Hausdorff ~ 1/tiles per side)"
+        line += (
+            f"; about {r}x{c} tiles if the miss falls as 1/tiles per side (a chord cut off between tips), "
+            f"an estimate from this one size, not designed"
+        )
     return line
+
+
+def tile_trend(points, tol_rel: float) -> dict[str, Any]:
+    """The trend of the misses of designs at several counts (``[[rows, cols, hausdorff_rel], ...]``, the
+    best at each count): ``rate``, the fitted p of Hausdorff ~ tiles per side^-p (least squares in logs);
+    ``tiles``, the count that rate reaches the tolerance at (at most 1/tiles: a faster measured rate is
+    not extrapolated), None where the misses do not fall or it lies past :data:`TREND_MAX_TILES`."""
+    best: dict[tuple[int, int], float] = {}
+    for r, c, h in points:
+        best[(int(r), int(c))] = min(float(h), best.get((int(r), int(c)), math.inf))
+    counts = sorted(best, key=lambda t: t[0] * t[1])
+    n = np.sqrt([r * c for r, c in counts])
+    h = np.array([best[t] for t in counts])
+    rate = float(-np.polyfit(np.log(n), np.log(h), 1)[0])
+    out: dict[str, Any] = {
+        "designed": [[r, c, best[(r, c)]] for r, c in counts],
+        "rate": rate,
+        "tiles": None,
+    }
+    if rate > 0:
+        r, c = counts[-1]  # from the largest count designed
+        f = (h[-1] / tol_rel) ** (1.0 / min(rate, 1.0))
+        want = [int(2 * math.ceil(k * f / 2)) for k in (r, c)]
+        if max(want) <= TREND_MAX_TILES:
+            out["tiles"] = want
+    return out
+
+
+def trend_words(trend: Mapping[str, Any]) -> str:
+    """What :func:`tile_trend` measured, as a clause: the counts designed and what their trend says."""
+    seen = ", ".join(f"{r}x{c} {100 * h:.2f} %" for r, c, h in trend["designed"])
+    p = trend["rate"]
+    if p <= 0:
+        return (
+            f"the misses did not fall with tiles ({seen}): no tile count is estimated to reach it"
+        )
+    how = "at least as fast as" if p >= 1 else f"slower than (as tiles^-{p:.2g})"
+    if trend["tiles"] is None:
+        return (
+            f"the misses fell {how} 1/tiles per side ({seen}), too slowly for any count up to "
+            f"{TREND_MAX_TILES}x{TREND_MAX_TILES} to reach it at that rate"
+        )
+    r, c = trend["tiles"]
+    rate = "1/tiles per side" if p >= 1 else "that rate"
+    return (
+        f"the misses fell {how} 1/tiles per side ({seen}): about {r}x{c} tiles at {rate}, "
+        f"an estimate from these designs, not designed"
+    )
