@@ -81,7 +81,7 @@ def test_only_a_search_that_asks_keeps_a_block(monkeypatch):
 
 
 @pytest.mark.parametrize("limit,kept", [(8 * 8, True), (10 * 10, False)])
-def test_the_lattice_asked_for_above_the_limit_keeps_it(monkeypatch, limit, kept):
+def test_a_lattice_above_the_limit_keeps_it_on_every_level(monkeypatch, limit, kept):
     asked: list[tuple[int, bool]] = []
     solve = routes.solve_reduced
 
@@ -91,7 +91,6 @@ def test_the_lattice_asked_for_above_the_limit_keeps_it(monkeypatch, limit, kept
 
     monkeypatch.setattr(routes, "solve_reduced", spy)
     monkeypatch.setattr(routes, "KEEP_BLOCK_TILES", limit)
-    design(DesignRequest(10, 10, T.load_target("circle", 100.0), rigid=True))
-    top = max(n for n, _ in asked)
-    assert {k for n, k in asked if n == top} == {kept}
-    assert not any(k for n, k in asked if n < top)  # never a coarse level
+    design(DesignRequest(10, 10, T.load_target("circle", 100.0), rigid=True, init="coarse"))
+    assert len({n for n, _ in asked}) == 2  # the 10x10 lattice and its 5x5 coarse level
+    assert {k for _, k in asked} == {kept}

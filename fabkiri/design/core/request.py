@@ -104,6 +104,8 @@ class DesignRequest:
     # a coarse level of a larger design (``DesignProblem._coarse_guess``), not the lattice asked for: the reduced
     # solver's stiffer-stage attempt is for the top level only (``routes.MEMBER_STAGE_TILES``)
     coarse_level: bool = False
+    # a coarse level's: the tile count of the lattice asked for, the chain's top (``routes.KEEP_BLOCK_TILES``)
+    chain_tiles: int = 0
 
     def validate(self) -> None:
         if (

@@ -72,9 +72,9 @@ MIRRORED_STARTS = ("standard", "conformal", "rescaled")
 # alone first (``MEMBER_STAGE``): measured closer at 48x48 and 64x64 (the rigid circle 0.214 -> 0.197 % at 64),
 # further at 96x96 and 128x128; never on a coarse level, which would change the start of the level above
 MEMBER_STAGE_TILES = (48 * 48, 64 * 64)
-# above this many tiles the lattice asked for (never a coarse level, nor a symmetric or contact rerun) keeps
-# each stage's regulariser grid block (``steps.stage``): there forming it is most of a step; issue #37's
-# table (up to 96x96) keeps the block formed at every step
+# above this many tiles the lattice asked for and its coarse levels (not a symmetric design, nor a contact
+# rerun) keep each stage's regulariser grid block (``steps.stage``): there forming it is most of a step; issue
+# #37's table (up to 96x96) keeps the block formed at every step
 KEEP_BLOCK_TILES = 96 * 96
 
 
@@ -138,7 +138,7 @@ def _reduced_from(
             scalings=scalings[:1] if req.finish_step else scalings,
             polish_steps=0 if req.finish_step else POLISH_STEPS,
             member=MEMBER_STAGE if member else None,
-            keep_block=not (req.coarse_level or mirror) and req.rows * req.cols > KEEP_BLOCK_TILES,
+            keep_block=not mirror and (req.chain_tiles or req.rows * req.cols) > KEEP_BLOCK_TILES,
         ),
         S0=S0,
         mirror=mirror,

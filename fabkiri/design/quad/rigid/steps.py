@@ -134,9 +134,9 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
 def stage(judge, rho: float, scaling: str, how: ReducedSearch, tag: str):
     """The merit of one stage of a search (``reduced._search``): ``judge`` at ``rho`` and ``scaling``, with the
     regulariser's grid block kept through the stage (``merit.KeptGridBlock``) where ``how.keep_block`` asks and
-    the search is not a contact rerun (``tag``); on the block path only."""
+    the search is not a contact rerun (``tag``); not on the dense path (``TileShapeRows``)."""
     merit = judge.staged(rho, scaling)
-    if not how.keep_block or tag or merit._tiles is not None or merit._C is not None:
+    if not how.keep_block or tag or merit._tiles is not None:
         return merit
     merit._kept = KeptGridBlock(merit, len(merit.grid_regs))
     return merit
