@@ -3,6 +3,9 @@ above ``routes.KEEP_BLOCK_TILES`` tiles only, forced onto a small lattice here."
 
 from __future__ import annotations
 
+from dataclasses import replace
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from fabkiri.design.quad import routes
@@ -43,6 +46,20 @@ def test_transposed_product_is_the_stacked_csr_transpose_times_r(monkeypatch):
     assert np.abs(got - want).max() <= 1e-13 * np.abs(want).max()
 
 
+def test_the_regularisers_transposed_product_is_its_jacobians(monkeypatch):
+    judge, p = _block_merit(monkeypatch)
+    reg, c = judge.grid_regs[0], judge.state(p)[1]
+    r, J = reg(c)
+    y = np.random.default_rng(2).normal(size=len(r))
+    want = (J.T @ y).reshape(-1, 2)
+    got = reg.meta["transposed"](c, y)
+    assert np.abs(got - want).max() <= 1e-13 * np.abs(want).max()
+    # and against finite differences of the residuals along a direction: yᵀ J v
+    v, h = np.random.default_rng(3).normal(size=c.shape), 1e-6
+    fd = y @ (reg.residual(c + h * v) - reg.residual(c - h * v)) / (2 * h)
+    assert abs(fd - float((got * v).sum())) <= 1e-6 * abs(fd)
+
+
 def test_a_stage_keeps_the_regularisers_block_of_its_first_point_and_nothing_else(monkeypatch):
     judge, p = _block_merit(monkeypatch)
     every, kept = judge.staged(1e4, "marquardt"), _keeping(judge)
@@ -56,6 +73,8 @@ def test_a_stage_keeps_the_regularisers_block_of_its_first_point_and_nothing_els
     q = p + 0.1 * rng.normal(size=p.shape) * np.r_[np.ones(len(p) - 1), 0.0]
     H1, g1 = every.evaluate(q).normal()
     K1, k1 = kept.evaluate(q).normal()
+    # the block formed, a later point's regulariser rows come without their stencil
+    assert isinstance(kept.rows(kept.state(q))[2].blocks[0], M.TransposedBlock)
     assert np.abs(k1 - g1).max() <= 1e-12 * np.abs(g1).max()
     n = len(judge.grid_regs)
 
@@ -80,8 +99,34 @@ def test_only_a_search_that_asks_keeps_a_block(monkeypatch):
     assert _keeping(small)._kept is None  # the dense path has no grid block to keep
 
 
-@pytest.mark.parametrize("limit,kept", [(8 * 8, True), (10 * 10, False)])
-def test_a_lattice_above_the_limit_keeps_it_on_every_level(monkeypatch, limit, kept):
+def _asking(prob_req, level):
+    return SimpleNamespace(req=prob_req, coarse=level)
+
+
+TIPS = {"used": True, "fit": "tips", "hausdorff_rel": 0.002}
+
+
+@pytest.mark.parametrize(
+    "tiles,level,kept",
+    [
+        (97, TIPS, True),
+        (96, TIPS, False),  # issue #37's table keeps forming it
+        (97, None, False),  # no coarse level: a rescaled start, a warm-started finish step
+        (97, {**TIPS, "used": False}, False),
+        (97, {**TIPS, "fit": "outline"}, False),
+        (97, {**TIPS, "rescaled_bottom": 32}, False),  # the finish follows whatever the miss
+        (97, {**TIPS, "hausdorff_rel": 0.0026}, False),  # past the finish's floor (the star's 8 %)
+    ],
+)
+def test_only_a_large_chain_from_a_close_tips_level_keeps_the_block(tiles, level, kept):
+    req = DesignRequest(tiles, tiles, T.load_target("circle", 100.0), rigid=True)
+    assert routes.keeps_block(_asking(req, level)) is kept
+    # a coarse level of such a chain is judged by the chain's top
+    sub = replace(req, rows=tiles // 2, cols=tiles // 2, chain_tiles=tiles * tiles)
+    assert routes.keeps_block(_asking(sub, level)) is kept
+
+
+def test_a_lattice_above_the_limit_keeps_it_where_its_level_fits(monkeypatch):
     asked: list[tuple[int, bool]] = []
     solve = routes.solve_reduced
 
@@ -90,7 +135,8 @@ def test_a_lattice_above_the_limit_keeps_it_on_every_level(monkeypatch, limit, k
         return solve(fam, st, X0, psi0, families, margin, how, **kw)
 
     monkeypatch.setattr(routes, "solve_reduced", spy)
-    monkeypatch.setattr(routes, "KEEP_BLOCK_TILES", limit)
+    monkeypatch.setattr(routes, "KEEP_BLOCK_TILES", 8 * 8)
+    monkeypatch.setattr(routes, "FINISH_FLOOR", 1.0)
     design(DesignRequest(10, 10, T.load_target("circle", 100.0), rigid=True, init="coarse"))
-    assert len({n for n, _ in asked}) == 2  # the 10x10 lattice and its 5x5 coarse level
-    assert {k for _, k in asked} == {kept}
+    # the 10x10 lattice from its 5x5 level keeps it; the 5x5 level, started from rescaled, does not
+    assert sorted(set(asked)) == [(60, False), (220, True)]  # their nodes

@@ -136,6 +136,15 @@ class KeptGridBlock:
         self.n_blocks = n_blocks  # the grid rows' first blocks: the regulariser's
         self.H: np.ndarray | None = None
 
+    def block(self, f, x: np.ndarray, scale: float):
+        """``f.block(x, scale)`` (residuals, Jacobian block) of a regulariser on the grid; once this block is
+        formed, where ``f`` gives ``Jᵀ y`` without its stencil (``meta["transposed"]``), the residuals with a
+        ``TransposedBlock``: the gradient is all a later point asks of those rows."""
+        if self.H is None or "transposed" not in f.meta:
+            return f.block(x, scale)
+        r = f.residual(x)
+        return r, TransposedBlock(f, x, scale, len(r))
+
     def normal(self, Jc, rc: np.ndarray):
         """``(H, g)`` of ``merit``'s grid rows ``Jc`` (a ``StackedJacobian``), as ``merit._grid_normal``'s but
         with the regulariser's block kept."""
@@ -153,13 +162,29 @@ class KeptGridBlock:
         return H, np.concatenate([*g, [0.0]])
 
 
+class TransposedBlock:
+    """``scale ·`` the Jacobian of family ``f``'s ``m`` rows at ``x`` as a block of a ``StackedJacobian`` that
+    gives only ``Jᵀ y`` (``f.meta["transposed"]``, no stencil formed): a kept grid block's later points."""
+
+    def __init__(self, f, x: np.ndarray, scale: float, m: int):
+        self.f, self.x, self.scale = f, x, scale
+        self.shape = (m, 2 * f.nv)
+
+    def transposed(self, y: np.ndarray) -> np.ndarray:
+        """``Jᵀ y`` as ``(n, 2)`` (node, coordinate)."""
+        return self.f.meta["transposed"](self.x, self.scale * y)
+
+
 def _transposed_product(J: StackedJacobian, r: np.ndarray) -> np.ndarray:
     """``Jᵀ r`` as ``(n, 2)`` (node, coordinate), a stencil block's summed from its gradients by node."""
     n = J.shape[1] // 2
     out = np.zeros((n, 2))
     o = 0
     for b in J.blocks:
-        if isinstance(b, StencilBlock):
+        if isinstance(b, TransposedBlock):
+            m = b.shape[0]
+            out += b.transposed(r[o : o + m])
+        elif isinstance(b, StencilBlock):
             m, k = b.nodes.shape
             w = (
                 np.asarray(b.grads, dtype=float).reshape(m, k, 2)

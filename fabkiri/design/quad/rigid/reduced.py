@@ -183,9 +183,13 @@ class _Merit:
                 r, J = f(arr) if jacobians else (f.residual(arr), None)
                 rs.append(r)
                 Js.append(J)
+            kept = self._kept if arr is c else None  # a stage's kept grid block (``steps.stage``)
             if not hard:
                 for f in regs:  # a stencil's rows kept unassembled (``StackedJacobian``)
-                    r, J = f.block(arr, self.w) if jacobians else (f.residual(arr), None)
+                    if not jacobians:
+                        r, J = f.residual(arr), None
+                    else:
+                        r, J = f.block(arr, self.w) if kept is None else kept.block(f, arr, self.w)
                     rs.append(self.w * r)
                     Js.append(J)
             for f in ineqs:
