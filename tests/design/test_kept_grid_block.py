@@ -52,7 +52,9 @@ def test_the_regularisers_transposed_product_is_its_jacobians(monkeypatch):
     r, J = reg(c)
     y = np.random.default_rng(2).normal(size=len(r))
     want = (J.T @ y).reshape(-1, 2)
-    got = reg.meta["transposed"](c, y)
+    lean, transposed = reg.meta["lean"](c)
+    assert np.array_equal(lean, r)
+    got = transposed(y)
     assert np.abs(got - want).max() <= 1e-13 * np.abs(want).max()
     # and against finite differences of the residuals along a direction: yᵀ J v
     v, h = np.random.default_rng(3).normal(size=c.shape), 1e-6

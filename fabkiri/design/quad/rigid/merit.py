@@ -138,12 +138,12 @@ class KeptGridBlock:
 
     def block(self, f, x: np.ndarray, scale: float):
         """``f.block(x, scale)`` (residuals, Jacobian block) of a regulariser on the grid; once this block is
-        formed, where ``f`` gives ``Jᵀ y`` without its stencil (``meta["transposed"]``), the residuals with a
+        formed, where ``f`` gives ``Jᵀ y`` without its stencil (``meta["lean"]``), the residuals with a
         ``TransposedBlock``: the gradient is all a later point asks of those rows."""
-        if self.H is None or "transposed" not in f.meta:
+        if self.H is None or "lean" not in f.meta:
             return f.block(x, scale)
-        r = f.residual(x)
-        return r, TransposedBlock(f, x, scale, len(r))
+        r, transposed = f.meta["lean"](x)
+        return r, TransposedBlock(transposed, scale, len(r), f.nv)
 
     def normal(self, Jc, rc: np.ndarray):
         """``(H, g)`` of ``merit``'s grid rows ``Jc`` (a ``StackedJacobian``), as ``merit._grid_normal``'s but
@@ -163,16 +163,17 @@ class KeptGridBlock:
 
 
 class TransposedBlock:
-    """``scale ·`` the Jacobian of family ``f``'s ``m`` rows at ``x`` as a block of a ``StackedJacobian`` that
-    gives only ``Jᵀ y`` (``f.meta["transposed"]``, no stencil formed): a kept grid block's later points."""
+    """``scale ·`` the Jacobian ``J`` of ``m`` rows over ``nv`` nodes as a block of a ``StackedJacobian`` that
+    gives only ``Jᵀ y`` (``transposed``, a family's ``meta["lean"]``, no stencil formed): a kept grid block's
+    later points."""
 
-    def __init__(self, f, x: np.ndarray, scale: float, m: int):
-        self.f, self.x, self.scale = f, x, scale
-        self.shape = (m, 2 * f.nv)
+    def __init__(self, transposed, scale: float, m: int, nv: int):
+        self._transposed, self.scale = transposed, scale
+        self.shape = (m, 2 * nv)
 
     def transposed(self, y: np.ndarray) -> np.ndarray:
-        """``Jᵀ y`` as ``(n, 2)`` (node, coordinate)."""
-        return self.f.meta["transposed"](self.x, self.scale * y)
+        """``Jᵀ y`` as ``(nv, 2)`` (node, coordinate)."""
+        return self._transposed(self.scale * y)
 
 
 def _transposed_product(J: StackedJacobian, r: np.ndarray) -> np.ndarray:
