@@ -35,6 +35,7 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from ..design.core.refine import refine_minimax
+from ..design.core.request import FINISH_FLOOR
 from ..design.quad.solve import DesignRequest, design
 from .design_judge import DesignAttempt, _hausdorff, _rank, refinement_attempt
 
@@ -61,9 +62,6 @@ FINISH_ABOVE = 0.004
 # keep is too large for a 64x64 one (the 48x48 heart kept 0.37 %, the 32x32 one 0.34 %; the 48x48 drop's steps
 # left 0.71 % in its tips-only basin, below the 1 % that asks for the refitted redesign, at 32x32 0.40 %)
 THRESHOLD_TILES = 32
-# the finish's gate scales down to this share and no further: below it the finish's 2-6 designs bought at most
-# about 0.1 % of the size, and the 64x64 and 128x128 rigid circles (0.21 %, 0.22 %) would pay them dearly
-FINISH_FLOOR = 0.0025
 # a free design is finished above this share at 32x32 tiles, scaled and with no floor: under the rigid gate the
 # star's 48x48 and 96x96 designs kept 0.24 % and 0.11 % (its 32x32 and 64x64 ones 0.07 % and 0.09 %); finished
 # 0.069 % and 0.071 % (docs/design-solver.md, "Minimax finish below the rigid gate"). A mirrored design keeps the

@@ -36,6 +36,11 @@ VIA_RIGID_FIRST_TILES = 16 * 16
 
 # a target this close to mirror-symmetric (share of its size, Target.mirror_error) may be designed mirrored
 MIRROR_TOL = 1e-3
+# the minimax finish's gate (``api/design_minimax.gate``) scales down to this share of the size and no further:
+# below it the finish's 2-6 designs bought at most about 0.1 % of the size, and the 64x64 and 128x128 rigid
+# circles (0.21 %, 0.22 %) would pay them dearly. Here because the rigid route's kept grid block reads it too
+# (``routes.keeps_block``)
+FINISH_FLOOR = 0.0025
 
 
 @dataclass
@@ -104,6 +109,8 @@ class DesignRequest:
     # a coarse level of a larger design (``DesignProblem._coarse_guess``), not the lattice asked for: the reduced
     # solver's stiffer-stage attempt is for the top level only (``routes.MEMBER_STAGE_TILES``)
     coarse_level: bool = False
+    # a coarse level's: the tile count of the lattice asked for, the chain's top (``routes.KEEP_BLOCK_TILES``)
+    chain_tiles: int = 0
 
     def validate(self) -> None:
         if (

@@ -114,12 +114,33 @@ def regularizer(st: Stencils, nv: int) -> Family:
         g *= w
         return rows.residual(tc), (nodes, g)
 
+    def lean(x):
+        """The residuals at ``x`` and ``y -> Jᵀ y`` as ``(nv, 2)`` (node, coordinate), ``J`` the rows' Jacobian
+        (``fn``'s) without its stencil: each tile corner's length and angle take their rows' ``y`` first (a row
+        adds it at its first corner and subtracts it at its second), then one gradient per corner goes to its
+        three nodes (a corner's length moves with its own and the next node, its angle with those and the
+        previous one)."""
+        tc = tile_corners(x, tl)
+
+        def transposed(y):
+            nc = flat.size
+            yl, ya = w * y[:m], w * y[m:]
+            Yl = np.bincount(i, yl, minlength=nc) - np.bincount(j, yl, minlength=nc)
+            Ya = np.bincount(i, ya, minlength=nc) - np.bincount(j, ya, minlength=nc)
+            el = (tc.A / tc.length[..., None]).reshape(-1, 2) * Yl[:, None]
+            ga, gb = tc.ga.reshape(-1, 2) * Ya[:, None], tc.gb.reshape(-1, 2) * Ya[:, None]
+            at = np.concatenate([flat, nxt, prv])
+            v = np.concatenate([-(el + ga + gb), el + ga, gb])
+            return np.stack([np.bincount(at, v[:, d], minlength=nv) for d in (0, 1)], -1)
+
+        return rows.residual(tc), transposed
+
     return Family(
         "regularizer",
         "reg",
         fn,
         0,
-        meta={"rows": rows},
+        meta={"rows": rows, "lean": lean},
         nv=nv,
         res=lambda x: rows.residual(tile_corners(x, tl)),
     )

@@ -235,6 +235,7 @@ class DesignProblem:
             outline=bottom,
             fabrication=req.fabrication,
             coarse_level=True,
+            chain_tiles=req.chain_tiles or req.rows * req.cols,
         )
         sub, res, level, chained = self._guarded_level(sub, bottom, halved)
         rc, cc = sub.rows, sub.cols

@@ -16,7 +16,7 @@ import numpy as np
 from ...errors import SolveError
 from ...pattern.model import Pattern
 from ..core.conformance import deployed as deployed_conformance
-from ..core.request import VIA_RIGID_TILES, coarse_refit_applies
+from ..core.request import FINISH_FLOOR, VIA_RIGID_TILES, coarse_refit_applies
 from ..targets.lookup import Target
 from . import constraints as C
 from .constraints import exact_fits
@@ -72,6 +72,27 @@ MIRRORED_STARTS = ("standard", "conformal", "rescaled")
 # alone first (``MEMBER_STAGE``): measured closer at 48x48 and 64x64 (the rigid circle 0.214 -> 0.197 % at 64),
 # further at 96x96 and 128x128; never on a coarse level, which would change the start of the level above
 MEMBER_STAGE_TILES = (48 * 48, 64 * 64)
+# above this many tiles the lattice asked for and its coarse levels (not a symmetric design, nor a contact
+# rerun) keep each stage's regulariser grid block (``steps.stage``, ``keeps_block``): there forming it is most of
+# a step; issue #37's table (up to 96x96) keeps the block formed at every step
+KEEP_BLOCK_TILES = 96 * 96
+
+
+def keeps_block(prob: DesignProblem) -> bool:
+    """Whether ``prob``'s reduced search keeps each stage's regulariser grid block: a lattice of a chain above
+    ``KEEP_BLOCK_TILES`` tiles started from a coarse level fitted by its tips alone within ``FINISH_FLOOR`` of the
+    size (not a rescaled bottom). From a level further off (``api/design_minimax``: the tips missing, a rescaled
+    bottom, a level past the rigid gate) the design is the start of a minimax finish whose steps stop at the
+    first that comes no closer, so a start moved by the kept block moves where they stop (the 128x128 rigid star,
+    0.0246 -> 0.0311 %, docs/speed.md, "Session 51 (big51)"); a warm-started finish step has no coarse level."""
+    req, level = prob.req, prob.coarse or {}
+    return (
+        (req.chain_tiles or req.rows * req.cols) > KEEP_BLOCK_TILES
+        and bool(level.get("used"))
+        and level.get("fit") == "tips"
+        and not level.get("rescaled_bottom")
+        and level.get("hausdorff_rel", np.inf) <= FINISH_FLOOR
+    )
 
 
 def _solve_reduced(prob: DesignProblem, log, iters: dict):
@@ -134,6 +155,7 @@ def _reduced_from(
             scalings=scalings[:1] if req.finish_step else scalings,
             polish_steps=0 if req.finish_step else POLISH_STEPS,
             member=MEMBER_STAGE if member else None,
+            keep_block=not mirror and keeps_block(prob),
         ),
         S0=S0,
         mirror=mirror,

@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy import sparse
 
+from ...core.stencils import StackedJacobian, StencilBlock
+
 if TYPE_CHECKING:
     from .reduced import _Merit
 
@@ -120,3 +122,79 @@ def reduced_normal(J: sparse.csr_matrix, D: np.ndarray, r: np.ndarray, dense_jd:
         return JD.T @ JD, JD.T @ r
     H = (J.T @ J).tocsr()
     return D.T @ (H @ D), D.T @ (J.T @ r)
+
+
+class KeptGridBlock:
+    """The regulariser rows' grid block ``Zᵀ (JᵀJ) Z`` of one LM run (a stage) on the block path, formed at the
+    run's first point and kept for its later points, a quasi-Newton block: on the largest lattices forming it is
+    most of a step's cost, and over one stage the tile shapes move little. The gradient and the block of the
+    active convexity rows (few) are each point's own, so the run descends the same merit by the same rules;
+    ``steps.stage`` gives each stage its own."""
+
+    def __init__(self, merit: _Merit, n_blocks: int):
+        self.merit = merit
+        self.n_blocks = n_blocks  # the grid rows' first blocks: the regulariser's
+        self.H: np.ndarray | None = None
+
+    def block(self, f, x: np.ndarray, scale: float):
+        """``f.block(x, scale)`` (residuals, Jacobian block) of a regulariser on the grid; once this block is
+        formed, where ``f`` gives ``Jᵀ y`` without its stencil (``meta["lean"]``), the residuals with a
+        ``TransposedBlock``: the gradient is all a later point asks of those rows."""
+        if self.H is None or "lean" not in f.meta:
+            return f.block(x, scale)
+        r, transposed = f.meta["lean"](x)
+        return r, TransposedBlock(transposed, scale, len(r), f.nv)
+
+    def normal(self, Jc, rc: np.ndarray):
+        """``(H, g)`` of ``merit``'s grid rows ``Jc`` (a ``StackedJacobian``), as ``merit._grid_normal``'s but
+        with the regulariser's block kept."""
+        merit, n = self.merit, self.n_blocks
+        reg, act = (type(Jc)(bs, Jc.shape[1]) for bs in (Jc.blocks[:n], Jc.blocks[n:]))
+        if self.H is None:
+            self.H = merit._grid_normal(reg, rc[: reg.shape[0]])[0]
+        core = merit.fam.core
+        grad = _transposed_product(Jc, rc)  # Jcᵀ rc by grid vertex and coordinate
+        g = [core.ZcT @ (core.ET @ grad[:, d]) for d in (0, 1)]
+        H = self.H
+        if act.shape[0]:
+            JC = merit._grid_to_p(act)
+            H = H + JC.T @ JC
+        return H, np.concatenate([*g, [0.0]])
+
+
+class TransposedBlock:
+    """``scale ·`` the Jacobian ``J`` of ``m`` rows over ``nv`` nodes as a block of a ``StackedJacobian`` that
+    gives only ``Jᵀ y`` (``transposed``, a family's ``meta["lean"]``, no stencil formed): a kept grid block's
+    later points."""
+
+    def __init__(self, transposed, scale: float, m: int, nv: int):
+        self._transposed, self.scale = transposed, scale
+        self.shape = (m, 2 * nv)
+
+    def transposed(self, y: np.ndarray) -> np.ndarray:
+        """``Jᵀ y`` as ``(nv, 2)`` (node, coordinate)."""
+        return self._transposed(self.scale * y)
+
+
+def _transposed_product(J: StackedJacobian, r: np.ndarray) -> np.ndarray:
+    """``Jᵀ r`` as ``(n, 2)`` (node, coordinate), a stencil block's summed from its gradients by node."""
+    n = J.shape[1] // 2
+    out = np.zeros((n, 2))
+    o = 0
+    for b in J.blocks:
+        if isinstance(b, TransposedBlock):
+            m = b.shape[0]
+            out += b.transposed(r[o : o + m])
+        elif isinstance(b, StencilBlock):
+            m, k = b.nodes.shape
+            w = (
+                np.asarray(b.grads, dtype=float).reshape(m, k, 2)
+                * (b.scale * r[o : o + m])[:, None, None]
+            )
+            for d in (0, 1):
+                out[:, d] += np.bincount(b.nodes.reshape(-1), w[..., d].reshape(-1), minlength=n)
+        else:
+            m = b.shape[0]
+            out += (b.T @ r[o : o + m]).reshape(n, 2)
+        o += m
+    return out

@@ -21,21 +21,21 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from scipy import sparse
 
 from ...core.stencils import Family, StackedJacobian, Stencils
-from ..constraints import convexity, exact_fits
-from ..objective import regularizer, tile_corners
+from ..constraints import exact_fits
+from ..objective import tile_corners
 from .contact import ClosedContact
 from .family import RigidFamily
-from .merit import _Evaluation, reduced_normal
+from .merit import KeptGridBlock, _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
-from .steps import exact_fit, fit_miss, levenberg_marquardt, stiffer_alone
-from .tiles import TileShapeRows
+from .steps import exact_fit, fit_miss, levenberg_marquardt, stage, stiffer_alone
+from .tiles import TILE_SHAPE, TileShapeRows, grid_families
 
 # (penalty weight, stall tolerance, iteration cap) per stage, softest first as in the full solver: a stiff
 # inequality wall from the start leaves LM crawling along it (16x16 rigid circle: 300 iterations to a
@@ -60,11 +60,6 @@ POLISH_STEPS = 10
 MEMBER_STAGE = (STAGES[-1][0], STAGES[0][1], 25)
 
 
-# families that see only tile shapes: on a member every tile is a rigid copy of its closed-state-1 grid cell,
-# so they are evaluated on the grid c = Z S (G vertices, no ψ) instead of the V deployed nodes
-TILE_SHAPE = ("regularizer", "convexity")
-
-
 class _Merit:
     """Stacked residuals of the reduced problem and their Jacobians.
 
@@ -74,6 +69,8 @@ class _Merit:
     costs about a third of ``Dᵀ JᵀJ D`` on the nodes (G ≈ V/2 grid vertices, no ψ column). With ``contact``
     the closed states' contact rows follow (``contact.py``, on ``Z S`` and ``Y S``; dense, few active).
     """
+
+    _kept: KeptGridBlock | None = None  # a stage's kept regulariser block (``steps.stage``)
 
     def __init__(
         self,
@@ -186,9 +183,13 @@ class _Merit:
                 r, J = f(arr) if jacobians else (f.residual(arr), None)
                 rs.append(r)
                 Js.append(J)
+            kept = self._kept if arr is c else None  # a stage's kept grid block (``steps.stage``)
             if not hard:
                 for f in regs:  # a stencil's rows kept unassembled (``StackedJacobian``)
-                    r, J = f.block(arr, self.w) if jacobians else (f.residual(arr), None)
+                    if not jacobians:
+                        r, J = f.residual(arr), None
+                    else:
+                        r, J = f.block(arr, self.w) if kept is None else kept.block(f, arr, self.w)
                     rs.append(self.w * r)
                     Js.append(J)
             for f in ineqs:
@@ -330,7 +331,9 @@ class _Merit:
         """Reduced Gauss-Newton matrix and gradient: ``Dᵀ JxᵀJx D + Cᵀ JcᵀJc C`` and ``Dᵀ Jxᵀ rx + Cᵀ Jcᵀ rc``."""
         nx = Jx.shape[0]
         Hx, gx = reduced_normal(*self._touched(Jx, p), r[:nx], DENSE_JD)
-        Hc, gc = self._grid_normal(Jc, r[nx:])
+        Hc, gc = (
+            self._grid_normal(Jc, r[nx:]) if self._kept is None else self._kept.normal(Jc, r[nx:])
+        )
         return Hx + Hc, gx + gc
 
     def _grid_to_p(self, Jc) -> np.ndarray:
@@ -368,23 +371,13 @@ class _Merit:
 DENSE_JD = 4e6
 
 
-def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
-    """The ``TILE_SHAPE`` families among ``families``, rebuilt on the closed-state-1 grid of ``fam``."""
-    G = fam.Z.shape[0]
-    # only ``tiles``, ``rows`` and ``cols`` are read by these families; the hinge and fold fields still index
-    # deployed nodes and are not used on the grid
-    grid = replace(st, tiles=fam.node_vertex[st.tiles], n_nodes=G)
-    build = {"regularizer": lambda: regularizer(grid, G), "convexity": lambda: convexity(grid, G)}
-    return [build[f.name]() for f in families if f.name in TILE_SHAPE]
-
-
 @dataclass(frozen=True)
 class ReducedSearch:
     """How :func:`solve_reduced` weighs and searches: the regulariser's weight in the merit, ``fit_tol`` of a
     hard fit (absolute), ``mean_edge(X)`` the unit of its 1 % "nearly exact" threshold, the log, the LM
     iteration cap, the fit miss that ends the scalings early, the LM scalings to start with and the
     ``(penalty weight, stall tolerance, iteration cap)`` of the stiffer stage tried alone first from a coarse
-    design's member (``MEMBER_STAGE``; None: the stages only)."""
+    design's member (``MEMBER_STAGE``; None: the stages only); ``keep_block``: ``steps.stage``'s."""
 
     reg_weight: float
     fit_tol: float
@@ -396,6 +389,7 @@ class ReducedSearch:
     # the stiffer stage's cap after a first stage that ends feasible (a minimax finish step: 0, ``finish_step``)
     polish_steps: int = POLISH_STEPS
     member: tuple[float, float, int] | None = None
+    keep_block: bool = False
 
 
 def solve_reduced(
@@ -471,7 +465,7 @@ def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):
             if hard is not None:
                 return hard
         for n, (rho, stall_tol, cap) in enumerate(stages):
-            merit = judge.staged(rho, scaling if n == 0 else "marquardt")
+            merit = stage(judge, rho, scaling if n == 0 else "marquardt", how, tag)
             if n and judge.ineq_violation(judge.state(p)) == 0.0:
                 cap = min(cap, how.polish_steps)
             p, X, k = levenberg_marquardt(merit, p, min(cap, how.max_iter), stall_tol, how.log)

@@ -10,6 +10,7 @@ import numpy as np
 from ...core.lm import Damping, Stopping
 from ...core.lm import levenberg_marquardt as lm_core
 from ..constraints import exact_fits
+from .merit import KeptGridBlock
 
 if TYPE_CHECKING:
     from ...core.stencils import Family
@@ -128,6 +129,17 @@ def fit_miss(fits: list[Family], X: np.ndarray) -> float:
     return max(
         (float(np.abs(f.residual(X)).max()) / f.meta["target"].size for f in fits), default=0.0
     )
+
+
+def stage(judge, rho: float, scaling: str, how: ReducedSearch, tag: str):
+    """The merit of one stage of a search (``reduced._search``): ``judge`` at ``rho`` and ``scaling``, with the
+    regulariser's grid block kept through the stage (``merit.KeptGridBlock``) where ``how.keep_block`` asks and
+    the search is not a contact rerun (``tag``); not on the dense path (``TileShapeRows``)."""
+    merit = judge.staged(rho, scaling)
+    if not how.keep_block or tag or merit._tiles is not None:
+        return merit
+    merit._kept = KeptGridBlock(merit, len(merit.grid_regs))
+    return merit
 
 
 def exact_fit(merit, p, X, key: str, iters: dict, how: ReducedSearch):

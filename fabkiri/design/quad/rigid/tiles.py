@@ -6,11 +6,29 @@ difference of two corners' rows (``TileShapeRows``).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy import sparse
 
-from ..objective import NEXT, PREV, RegularizerRows, TileCorners
+from ...core.stencils import Family, Stencils
+from ..constraints import convexity
+from ..objective import NEXT, PREV, RegularizerRows, TileCorners, regularizer
 from .family import RigidFamily
+
+# families that see only tile shapes: on a member every tile is a rigid copy of its closed-state-1 grid cell,
+# so they are evaluated on the grid c = Z S (G vertices, no ψ) instead of the V deployed nodes
+TILE_SHAPE = ("regularizer", "convexity")
+
+
+def grid_families(fam: RigidFamily, st: Stencils, families: list[Family]) -> list[Family]:
+    """The ``TILE_SHAPE`` families among ``families``, rebuilt on the closed-state-1 grid of ``fam``."""
+    G = fam.Z.shape[0]
+    # only ``tiles``, ``rows`` and ``cols`` are read by these families; the hinge and fold fields still index
+    # deployed nodes and are not used on the grid
+    grid = replace(st, tiles=fam.node_vertex[st.tiles], n_nodes=G)
+    build = {"regularizer": lambda: regularizer(grid, G), "convexity": lambda: convexity(grid, G)}
+    return [build[f.name]() for f in families if f.name in TILE_SHAPE]
 
 
 class TileShapeRows:
