@@ -58,15 +58,21 @@ def _to_curve(points: np.ndarray, curve_dense: np.ndarray, tree):
     _, j = tree.query(points)
     best_d = np.full(len(points), np.inf)
     best_f = np.zeros_like(points)
+    # x and y apart: numpy's sums over a row of two are a loop per row; ``a x + b y`` and ``sqrt(x² + y²)`` are
+    # the same operations in the same order as ``.sum(1)`` and ``norm(axis=1)``, so the same bits
+    px, py = points[:, 0], points[:, 1]
     for a, b in ((j - 1) % n, j), (j, (j + 1) % n):
         A, B = curve_dense[a], curve_dense[b]
-        ab = B - A
-        t = np.clip(((points - A) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
-        foot = A + t[:, None] * ab
-        d = np.linalg.norm(points - foot, axis=1)
+        ax, ay = A[:, 0], A[:, 1]
+        abx, aby = B[:, 0] - ax, B[:, 1] - ay
+        t = (px - ax) * abx + (py - ay) * aby
+        t = np.clip(t / np.maximum(abx * abx + aby * aby, 1e-300), 0.0, 1.0)
+        fx, fy = ax + t * abx, ay + t * aby
+        dx, dy = px - fx, py - fy
+        d = np.sqrt(dx * dx + dy * dy)
         better = d < best_d
         best_d = np.where(better, d, best_d)
-        best_f = np.where(better[:, None], foot, best_f)
+        best_f = np.where(better[:, None], np.stack([fx, fy], -1), best_f)
     return best_d, best_f
 
 
