@@ -45,7 +45,7 @@ def densify(polygon: np.ndarray, h: float) -> np.ndarray:
     idx = np.repeat(np.arange(len(p)), k)
     start = np.cumsum(k) - k
     f = (np.arange(k.sum()) - np.repeat(start, k)) / np.repeat(k, k)
-    return p[idx] + f[:, None] * (q - p)[idx]
+    return p.take(idx, axis=0) + f[:, None] * (q - p).take(idx, axis=0)
 
 
 def _lengths(v: np.ndarray) -> np.ndarray:
@@ -64,10 +64,11 @@ def _to_curve(points: np.ndarray, curve_dense: np.ndarray, tree):
     best_d = np.full(len(points), np.inf)
     best_f = np.zeros_like(points)
     # x and y apart: numpy's sums over a row of two are a loop per row; ``a x + b y`` and ``sqrt(x² + y²)`` are
-    # the same operations in the same order as ``.sum(1)`` and ``norm(axis=1)``, so the same bits
+    # the same operations in the same order as ``.sum(1)`` and ``norm(axis=1)``, so the same bits (and rows
+    # gathered by ``take``, the same copies as indexing by an array, without its general indexing)
     px, py = points[:, 0], points[:, 1]
     for a, b in ((j - 1) % n, j), (j, (j + 1) % n):
-        A, B = curve_dense[a], curve_dense[b]
+        A, B = curve_dense.take(a, axis=0), curve_dense.take(b, axis=0)
         ax, ay = A[:, 0], A[:, 1]
         abx, aby = B[:, 0] - ax, B[:, 1] - ay
         t = (px - ax) * abx + (py - ay) * aby
