@@ -17,7 +17,7 @@ from shapely.geometry import Polygon
 
 from ..design.core.request import MIRROR_TOL
 from ..errors import InputError, SolveError
-from ..mechanics.path import RIGID_TOL_RAD
+from ..pattern.residuals import RIGID_TOL_RAD
 from .design_judge import _hausdorff
 
 # elongated: the bounding box's longer side this many times the shorter; non-convex: the area below this share

@@ -17,6 +17,7 @@ import numpy as np
 from ..design.quad.corner_split import bent_strip
 from ..design.quad.fabrication import FabricationLimits, smallest_size
 from ..design.targets.curve import Target
+from .print_tiles import tile_width_mm
 
 STANDARD_TILES = (16, 12, 8, 6, 4)  # N x N, largest first
 # a fabrication-aware 16x16 design costs many times a 12x12 one (issue 32)
@@ -24,8 +25,6 @@ MAX_AUTO = 12
 # the estimated tile width must be this many times the process's thinnest feature: tiles vary in size
 # across a design (thinner where the outline turns), so the mean width needs room above the minimum
 COMFORT = 2.0
-# a deployed rotating-squares pattern's tiles cover about this share of its outline (the rest is holes)
-TILE_COVER = 0.5
 # after a shape miss, a retry may have thinner tiles than the first choice: the design's fabrication rows
 # still hold every tile to the feature; the comfort only guessed which count is likely to fit
 RETRY_COMFORT = 1.5
@@ -48,11 +47,6 @@ def min_feature_mm(limits: FabricationLimits) -> float:
     """The thinnest feature the process needs of a tile (mm): its width (with the shrink), the seam a
     printed strip runs along, or the distance between two of its hinges."""
     return float(max(limits.required_width_mm(), limits.hinge_edge_mm, limits.hinge_spacing_mm))
-
-
-def tile_width_mm(target: Target, n_tiles: int) -> float:
-    """Mean width of ``n_tiles`` square tiles covering :data:`TILE_COVER` of the target's area (mm)."""
-    return float(np.sqrt(TILE_COVER * abs(target.area) / n_tiles))
 
 
 def resplit(target: Target, choice: TilesChoice) -> TilesChoice:

@@ -10,7 +10,7 @@ meet that, and a print-aware design at such a count paid a whole continuation be
 standard pattern with unit tiles, whose smallest scale is then its tile edge in mm (8.70 mm for
 prusa-mk4 tiles-and-strips, 7.40 mm pinned). It is the same on every standard count and in either closed
 state (tests), so it is a property of the preset and the style. :func:`narrow_tiles` compares it with the
-width ``make`` estimates for the tiles of an outline (:func:`.maker_tiles.tile_width_mm`: square tiles
+width ``make`` estimates for the tiles of an outline (:func:`tile_width_mm`: square tiles
 covering half of it, as the standard pattern's do deployed at 45°): ``make`` and ``design --printer``
 refuse such a request before any design (exit 1, as a design that misses), naming the counts and size
 at which the tiles are that wide.
@@ -28,8 +28,9 @@ from ..fabricate import fabricability as fb
 from ..fabricate.print.printers import load_printer
 from ..pattern.kinds.quad.lattice import standard_pattern
 from ..pattern.thinness import pal_bound
-from .maker_tiles import tile_width_mm
 
+# a deployed rotating-squares pattern's tiles cover about this share of its outline (the rest is holes)
+TILE_COVER = 0.5
 # the standard pattern the bound is taken on: 4x4 has corner, edge and inner tiles (every count from
 # 2x2 to 64x64 gives the same bound, tests)
 STANDARD = (4, 4)
@@ -78,6 +79,12 @@ class NarrowTiles:
             f"or a pin at each hinge corner, kept apart); {count} are that wide, and {r}x{c} from "
             f"--size {self.size_for:g}; not designed"
         )
+
+
+def tile_width_mm(target: Target, n_tiles: int) -> float:
+    """Mean width of ``n_tiles`` square tiles covering :data:`TILE_COVER` of the target's area (mm): the width
+    ``make`` chooses its tile count by and ``narrow_tiles`` refuses below a style's least."""
+    return float(math.sqrt(TILE_COVER * abs(target.area) / n_tiles))
 
 
 def narrow_tiles(

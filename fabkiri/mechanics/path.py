@@ -15,12 +15,11 @@ from ..errors import CheckFailed, InputError
 from ..pattern import geometry
 from ..pattern.kinds.tessellation import tessellation
 from ..pattern.model import Pattern
-from ..pattern.residuals import hinge_sums
+from ..pattern.residuals import RIGID_TOL_RAD, hinge_sums
 from .collisions import CollisionReport, collisions
 from .contract import contract_both
 
 CLOSURE_TOL = 1e-9  # relative to the mean tile edge, as in `fabkiri info`
-RIGID_TOL_RAD = 1e-9  # hinge sums below this: rigid-deployable
 MARKS = {"closed state 1": 0.0, "deployed": 0.5, "closed state 2": 1.0}
 
 

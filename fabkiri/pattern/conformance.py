@@ -24,7 +24,7 @@ import numpy as np
 import shapely
 
 from ..kdtree import KDTree
-from .geometry import kabsch
+from .geometry import dot2, kabsch
 
 SAMPLES_PER_SIZE = 4000  # sampling spacing h = size / this: Hausdorff exact to 1.25e-4 of the size
 SIZE_DEFINITION = "larger side of the target's bounding box"
@@ -40,12 +40,17 @@ def densify(polygon: np.ndarray, h: float) -> np.ndarray:
     """Points of the closed polygon at spacing at most ``h``, its vertices included, in order."""
     p = np.asarray(polygon, float)
     q = np.roll(p, -1, 0)
-    seg = np.linalg.norm(q - p, axis=1)
+    seg = _lengths(q - p)
     k = np.maximum(1, np.ceil(seg / h).astype(np.int64))
     idx = np.repeat(np.arange(len(p)), k)
     start = np.cumsum(k) - k
     f = (np.arange(k.sum()) - np.repeat(start, k)) / np.repeat(k, k)
-    return p[idx] + f[:, None] * (q - p)[idx]
+    return p.take(idx, axis=0) + f[:, None] * (q - p).take(idx, axis=0)
+
+
+def _lengths(v: np.ndarray) -> np.ndarray:
+    """``norm(v, axis=1)`` of ``(n, 2)`` vectors, bit for bit: ``sqrt(x² + y²)`` without numpy's loop per row."""
+    return np.sqrt(dot2(v, v))
 
 
 def _to_curve(points: np.ndarray, curve_dense: np.ndarray, tree):
@@ -58,15 +63,22 @@ def _to_curve(points: np.ndarray, curve_dense: np.ndarray, tree):
     _, j = tree.query(points)
     best_d = np.full(len(points), np.inf)
     best_f = np.zeros_like(points)
+    # x and y apart: numpy's sums over a row of two are a loop per row; ``a x + b y`` and ``sqrt(x² + y²)`` are
+    # the same operations in the same order as ``.sum(1)`` and ``norm(axis=1)``, so the same bits (and rows
+    # gathered by ``take``, the same copies as indexing by an array, without its general indexing)
+    px, py = points[:, 0], points[:, 1]
     for a, b in ((j - 1) % n, j), (j, (j + 1) % n):
-        A, B = curve_dense[a], curve_dense[b]
-        ab = B - A
-        t = np.clip(((points - A) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
-        foot = A + t[:, None] * ab
-        d = np.linalg.norm(points - foot, axis=1)
+        A, B = curve_dense.take(a, axis=0), curve_dense.take(b, axis=0)
+        ax, ay = A[:, 0], A[:, 1]
+        abx, aby = B[:, 0] - ax, B[:, 1] - ay
+        t = (px - ax) * abx + (py - ay) * aby
+        t = np.clip(t / np.maximum(abx * abx + aby * aby, 1e-300), 0.0, 1.0)
+        fx, fy = ax + t * abx, ay + t * aby
+        dx, dy = px - fx, py - fy
+        d = np.sqrt(dx * dx + dy * dy)
         better = d < best_d
         best_d = np.where(better, d, best_d)
-        best_f = np.where(better[:, None], foot, best_f)
+        best_f = np.where(better[:, None], np.stack([fx, fy], -1), best_f)
     return best_d, best_f
 
 
@@ -104,7 +116,7 @@ def measure(outline: np.ndarray, target: np.ndarray, size: float | None = None) 
     pa, pb = _polygon(A), _polygon(B)
     sym = float(shapely.symmetric_difference(pa, pb).area)
     union = float(shapely.union(pa, pb).area)
-    gaps = np.linalg.norm(np.roll(A, -1, 0) - A, axis=1)
+    gaps = _lengths(np.roll(A, -1, 0) - A)
     return {
         "hausdorff_mm": haus,
         "hausdorff_rel": haus / size,
@@ -137,7 +149,7 @@ def _samples_of(data: bytes, shape: tuple, h: float):
 
 def _arc_weights(dense: np.ndarray) -> np.ndarray:
     """Arc-length weights (summing to 1) of the points of a closed dense polyline."""
-    seg = np.linalg.norm(np.roll(dense, -1, 0) - dense, axis=1)
+    seg = _lengths(np.roll(dense, -1, 0) - dense)
     w = 0.5 * (seg + np.roll(seg, 1))
     return w / max(float(w.sum()), 1e-300)
 

@@ -16,6 +16,8 @@ import numpy as np
 from . import geometry
 from .model import Pattern
 
+RIGID_TOL_RAD = 1e-9  # hinge sums below this: rigid-deployable
+
 
 @dataclass(frozen=True, eq=False)
 class StateResiduals:

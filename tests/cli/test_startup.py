@@ -324,7 +324,8 @@ def test_a_design_defers_numpys_string_and_record_modules(design_modules):
 def test_a_design_loads_no_other_commands_module_nor_what_it_never_calls(design_modules):
     # issue #36: design_cmd took `--i-know` from `new`'s command module (which loads the tube command and
     # `info`'s report); `mechanics`' package loaded `describe`'s report, the tube frames and the seams for a
-    # design that contracts only; the continuation in the fabrication limits loaded for every design
+    # design that contracts only; the continuation in the fabrication limits loaded for every design; the
+    # deployment path for a constant, make's tile chooser, the large lattices' grid core and the offsets' family
     assert (
         "fabkiri.cli.design_cmd" in design_modules
         and "fabkiri.mechanics.contract" in design_modules
@@ -336,6 +337,10 @@ def test_a_design_loads_no_other_commands_module_nor_what_it_never_calls(design_
         "fabkiri.mechanics.tube",
         "fabkiri.pattern.kinds.periodic.sheet",
         "fabkiri.api.continuation",
+        "fabkiri.mechanics.path",
+        "fabkiri.api.maker_tiles",
+        "fabkiri.design.quad.rigid.core",
+        "fabkiri.design.quad.rigid.offsets",
     ):
         assert name not in design_modules, name
 

@@ -57,7 +57,8 @@ class PeriodicCubic:
         flat = x[0] + np.mod(u.ravel() - x[0], x[-1] - x[0])
         i = np.clip(np.searchsorted(x, flat, side="right") - 1, 0, len(x) - 2)
         t = (flat - x[i])[:, None]
-        a, b, d, e = c[0, i], c[1, i], c[2, i], c[3, i]
+        # the pieces' coefficients: ``take`` makes indexing's copies without its general indexing
+        a, b, d, e = c.take(i, axis=1)
         if nu == 0:
             out = ((a * t + b) * t + d) * t + e
         elif nu == 1:
@@ -75,11 +76,11 @@ class PeriodicCubic:
         flat = x[0] + np.mod(u.ravel() - x[0], x[-1] - x[0])
         i = np.clip(np.searchsorted(x, flat, side="right") - 1, 0, len(x) - 2)
         t = (flat - x[i])[:, None]
-        a, b, d = c[0, i], c[1, i], c[2, i]
+        a, b, d, e = c.take(i, axis=1)
         a3t = 3 * a * t
         shape = (*u.shape, c.shape[2])
         return (
-            (((a * t + b) * t + d) * t + c[3, i]).reshape(shape),
+            (((a * t + b) * t + d) * t + e).reshape(shape),
             ((a3t + 2 * b) * t + d).reshape(shape),
             (2 * a3t + 2 * b).reshape(shape),
         )

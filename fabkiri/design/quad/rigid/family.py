@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import sparse
@@ -40,7 +41,9 @@ from scipy.sparse.linalg import splu
 from ....errors import SolveError
 from ....pattern.topology import SpanningTree
 from ...core.stencils import Stencils
-from .core import GridCore, grid_core
+
+if TYPE_CHECKING:
+    from .core import GridCore
 
 # above this many grid vertices (64x64 tiles and up) ``grid`` and ``nodes`` take the cheaper products (the core's
 # ``E (Z[core] S)``, the tiles' ``τ S``): the same maps to round-off; smaller lattices keep ``Z S`` and ``Y S``
@@ -108,6 +111,9 @@ class RigidFamily:
     def core(self) -> GridCore:
         """``Z = E Z[core]`` with a sparse ``E`` (``core.py``), made on first use."""
         if self._core is None:
+            # loaded here: only the large lattices' products (``LARGE_GRID``) use the core
+            from .core import grid_core
+
             self._core = grid_core(self.midpoint, self.Z)
         return self._core
 

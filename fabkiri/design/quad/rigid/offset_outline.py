@@ -15,11 +15,11 @@ on circle fit + w·E_reg + ρ|min(0, g − m)|², with two inequality rows per h
 from __future__ import annotations
 
 from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..closed_families import ClosedGrid
-from .offsets import OffsetFamily
 from .outline import (
     PSI_DEPLOYED,
     REG_WEIGHT,
@@ -29,6 +29,9 @@ from .outline import (
     outline_space,
     square_affine,
 )
+
+if TYPE_CHECKING:
+    from .offsets import OffsetFamily
 
 # |t| above T_SOFT is penalised like any inequality inside its margin; T_HARD is never crossed (step
 # limiting). A hard wall alone at the soft bound left LM halving every step that touched it: 5x5 ended at
@@ -149,6 +152,9 @@ def _square_rows(
 def solve_offset_outline(prob, log, iters: dict, t_start=None):
     """``(X, mode, fitted)`` like ``outline.solve_outline`` (X: deployed nodes at ψ = π/4, then each target
     state's grid), or None when a square cannot be exact."""
+    # loaded here: the offsets' family is this solver's alone, and it applies to few requests (``applies``)
+    from .offsets import OffsetFamily
+
     req, st = prob.req, prob.st
     fam = OffsetFamily.build(st, prob.std.topology.spanning_tree(0))
     states = sorted(prob.grids)
