@@ -37,7 +37,7 @@ from .design_mirror import keep_closer, mirror_axis
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_report import DesignAttempt, DesignReport
-from .design_strip import LAST_INIT, LAST_TRIES, last_request
+from .design_strip import LAST_INIT, LAST_TRIES, last_request, strip_note
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .design_turn import loaded_or_turned, request_target
 from .designers import TakesTiles, register_designer
@@ -382,6 +382,7 @@ def _attempts(
             continue
         req.rigid_first = False  # tried once: later guesses go to the full solver
         outcome = _check(result, contracted, request, target, shape_tol)
+        outcome.report.update(strip_note(init, sub, req))  # the lattice a strip attempt used
         miss, shape_met = _fit_miss(outcome.report), _shape_met(outcome.report)
         attempts.append(
             {

@@ -8,6 +8,8 @@ from __future__ import annotations
 from dataclasses import replace
 from functools import lru_cache
 
+import numpy as np
+
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest
 from ..design.quad.strip_split import strip_splits
 from ..design.targets.curve import Target
@@ -71,3 +73,23 @@ def last_request(
         f"the lattice as a strip bent along the outline: {sub.rows}x{sub.cols} tiles for the "
         f"{req.rows}x{req.cols} asked, its corners at {corners} mm",
     )
+
+
+def strip_note(init: str, sub: DesignRequest, req: DesignRequest) -> dict:
+    """The report's ``strip`` for a strip attempt's design (empty for any other): the lattice used, the one
+    asked, its corners on the outline and why."""
+    if init != STRIP_INIT or sub.target is None:
+        return {}
+    corners = np.round(sub.target.corner_points(), 3).tolist()
+    why = (
+        f"every design on the {req.rows}x{req.cols} lattice missed (its sides ran across the outline's hollow); "
+        f"a strip of {sub.rows}x{sub.cols} tiles bends along the outline, its ends at four of its corners"
+    )
+    return {
+        "strip": {
+            "tiles": [sub.rows, sub.cols],
+            "asked": [req.rows, req.cols],
+            "corners_mm": corners,
+            "why": why,
+        }
+    }
