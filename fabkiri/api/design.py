@@ -37,7 +37,7 @@ from .design_mirror import keep_closer, mirror_axis
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_report import DesignAttempt, DesignReport
-from .design_strip import LAST_INIT, LAST_TRIES, last_request, strip_note
+from .design_strip import LAST_INIT, LAST_TRIES, last_request, strip_design, strip_note
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .design_turn import loaded_or_turned, request_target
 from .designers import TakesTiles, register_designer
@@ -211,6 +211,7 @@ def design_pattern(
     if best is None:
         best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
         attempts = first + attempts
+        req = strip_design(req, best)  # a strip's design is finished on its own lattice
     judge = _judge(contracted, request, target, shape_tol)
     if minimax_applies(req, contracted, best):  # the largest miss, after the least-squares fit
         best = minimax_finish(req, best, judge, attempts, say, shape_tol) or best

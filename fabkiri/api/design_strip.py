@@ -10,6 +10,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..design.quad.inverse_map import with_corners
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest
 from ..design.quad.strip_split import strip_splits
 from ..design.targets.curve import Target
@@ -46,10 +47,7 @@ def strip_request(req: DesignRequest, attempts: list[dict]) -> DesignRequest | N
     if k >= len(splits):
         return None
     split, (rows, cols) = splits[k]
-    sub = replace(req, target=split, rows=rows, cols=cols)
-    if req.rigid:
-        return replace(sub, init="conformal")  # on a re-split target: the fold-free start
-    return replace(sub, init=VIA_RIGID_INIT, via_rigid_init="conformal")
+    return _on_strip(replace(req, target=split, rows=rows, cols=cols))
 
 
 def last_request(
@@ -89,7 +87,24 @@ def strip_note(init: str, sub: DesignRequest, req: DesignRequest) -> dict:
         "strip": {
             "tiles": [sub.rows, sub.cols],
             "asked": [req.rows, req.cols],
+            "corners": [float(u) for u in sub.target.corners],
             "corners_mm": corners,
             "why": why,
         }
     }
+
+
+def strip_design(req: DesignRequest, best) -> DesignRequest:
+    """``req`` as the strip attempt asked it where ``best`` (a ``_check`` outcome) is a strip's design (its
+    report's ``strip``): the finishes after the attempts refine that lattice, not the one asked; else ``req``."""
+    st = best.report.get("strip") if best is not None else None
+    if not st or req.target is None:
+        return req
+    split = with_corners(req.target, np.asarray(st["corners"], float))
+    return _on_strip(replace(req, target=split, rows=st["tiles"][0], cols=st["tiles"][1]))
+
+
+def _on_strip(sub: DesignRequest) -> DesignRequest:
+    if sub.rigid:
+        return replace(sub, init="conformal")  # on a re-split target: the fold-free start
+    return replace(sub, init=VIA_RIGID_INIT, via_rigid_init="conformal")
