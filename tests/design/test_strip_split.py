@@ -70,4 +70,9 @@ def test_the_u_passes_at_16x16_by_default():
     assert out.exit_code == 0
     assert out.report["attempts"][-1]["init"] == "strip"
     assert out.report["strip"]["asked"] == [16, 16]
-    assert out.pattern.lattice.rows * out.pattern.lattice.cols <= 256
+    lattice = out.pattern.lattice
+    assert [lattice["rows"], lattice["cols"]] == out.report["strip"]["tiles"]
+    assert (
+        lattice["rows"] != lattice["cols"]
+        and 0.95 * 256 <= lattice["rows"] * lattice["cols"] <= 256
+    )
