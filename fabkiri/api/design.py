@@ -36,8 +36,8 @@ from .design_minimax import minimax_finish
 from .design_mirror import keep_closer, mirror_axis
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
-from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request
 from .design_report import DesignAttempt, DesignReport
+from .design_strip import LAST_INIT, LAST_TRIES, last_request, strip_design, strip_note
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .design_turn import loaded_or_turned, request_target
 from .designers import TakesTiles, register_designer
@@ -211,6 +211,7 @@ def design_pattern(
     if best is None:
         best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
         attempts = first + attempts
+        req = strip_design(req, best)  # a strip's design is finished on its own lattice
     judge = _judge(contracted, request, target, shape_tol)
     if minimax_applies(req, contracted, best):  # the largest miss, after the least-squares fit
         best = minimax_finish(req, best, judge, attempts, say, shape_tol) or best
@@ -354,17 +355,19 @@ def _attempts(
 ) -> tuple[DesignAttempt, list[dict]]:
     """The best outcome (``_rank``) over the guesses of :func:`_inits`, and each attempt's figures."""
     inits = _inits(request, req, target)
-    pocket = not (request.init or request.corners) and req.rows * req.cols < BIG_TILES
+    last_ok = not (request.init or request.corners)
     best, attempts = None, list[dict]()
-    # after the guesses, up to POCKET_TRIES pocket attempts (design_pocket.py) below BIG_TILES
-    for init in inits + [POCKET_INIT] * (POCKET_TRIES * pocket):
-        last = init in (VIA_RIGID_INIT, POCKET_INIT)  # last resorts for a miss, not second opinions
+    # after the guesses, the pocket attempts below BIG_TILES then the bent strips (design_strip.py)
+    for init in inits + [LAST_INIT] * (LAST_TRIES * last_ok):
+        last = init in (VIA_RIGID_INIT, LAST_INIT)  # last resorts for a miss, not second opinions
         if last and best is not None and best.valid and _shape_met(best.report):
             break
-        if (sub := pocket_request(req, attempts) if init == POCKET_INIT else req) is None:
-            break  # no pocket split for this outline
-        if sub is not req:
-            say("fabkiri: every guess misses; trying a lattice corner in the outline's pocket")
+        sub = req
+        if init == LAST_INIT:
+            if (found := last_request(req, attempts, req.rows * req.cols < BIG_TILES)) is None:
+                break  # no pocket split or bent strip (left) for this outline
+            init, sub, what = found
+            say(f"fabkiri: every guess misses; trying {what}")
         req.init = init if sub is req else req.init
         try:
             result = design(
@@ -380,6 +383,7 @@ def _attempts(
             continue
         req.rigid_first = False  # tried once: later guesses go to the full solver
         outcome = _check(result, contracted, request, target, shape_tol)
+        outcome.report.update(strip_note(init, sub, req))  # the lattice a strip attempt used
         miss, shape_met = _fit_miss(outcome.report), _shape_met(outcome.report)
         attempts.append(
             {
@@ -390,6 +394,11 @@ def _attempts(
                 "fit_max_rel_size": miss,
                 "hausdorff_max_rel": _hausdorff(outcome.report),
                 "shape": "met" if shape_met else "missed",
+                **(
+                    {"tiles": [sub.rows, sub.cols]}
+                    if sub.rows != req.rows or sub.cols != req.cols
+                    else {}
+                ),
             }
         )
         best = outcome if best is None or _rank(outcome) < _rank(best) else best

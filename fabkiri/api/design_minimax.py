@@ -283,6 +283,8 @@ def minimax_finish(
         if cand.report.get("coarse") is None:  # a warm-started step: its start came coarse to fine
             cand.report["coarse"] = best.report.get("coarse")
         cand.report["minimax"] = {"from_hausdorff_rel": h0, "steps_hausdorff_rel": trace}
+        if "strip" in best.report:  # refined on the bent strip's lattice (api/design_strip.py)
+            cand.report["strip"] = best.report["strip"]
         say(
             f"fabkiri: minimax refinement: Hausdorff {100 * h0:.2f} % -> {100 * _hausdorff(cand.report):.2f} % "
             f"of the size ({len(trace)} steps)"

@@ -59,6 +59,9 @@ class AttemptRecord(TypedDict):
     hausdorff_max_rel: NotRequired[float]
     shape: NotRequired[str]  # "met" or "missed"
     kept: NotRequired[bool]  # a refinement: whether it replaced the design
+    tiles: NotRequired[
+        list[int]
+    ]  # rows, cols of an attempt on another lattice than asked (a bent strip)
     # the axis of a mirrored design tried for a request without a symmetry
     mirrored: NotRequired[str]
     # the lattice's angle of a design tried along the outline's mirror axis (api/design_turn.py)
@@ -96,6 +99,8 @@ class DesignReport(TypedDict):
     mirrored_why: NotRequired[str]
     # the lattice's angle in degrees, counter-clockwise from the drawing's axes (api/design_turn.py)
     lattice_angle_deg: NotRequired[float]
+    # the lattice of a strip bent along the outline, in place of the N x N asked (api/design_strip.py)
+    strip: NotRequired[dict[str, Any]]
 
 
 class KagomeReport(TypedDict):

@@ -53,6 +53,11 @@ def summary_lines(path, report: DesignReport) -> list[str]:
             f"the lattice is laid at {report['lattice_angle_deg']:.1f}° along the outline's mirror axis "
             "(the design of the turned outline, turned back)"
         )
+    if st := report.get("strip"):  # api/design_strip.py: other rows and columns than asked
+        out.append(
+            f"the lattice is {st['tiles'][0]}x{st['tiles'][1]} tiles, not the {st['asked'][0]}x{st['asked'][1]} asked: "
+            f"{st['why']}"
+        )
     out += opening_lines(report)
     fr = report.get("fabrication")
     if fr:

@@ -103,9 +103,9 @@ class DesignRequest:
     # a minimax finish's cheaper step (``api/design_minimax.py``), warm-started from a converged rigid design: the
     # reduced solver's first LM scaling only and no stiffer second stage after a feasible first (``routes._solve_reduced``)
     finish_step: bool = False
-    # the rigid sub-solve's guess for a non-rigid request below VIA_RIGID_TILES (from it: coarse); the pocket
-    # split's attempt (``api/design_pocket.py``) asks coarse
-    via_rigid_init: str = "rescaled"
+    # the rigid sub-solve's guess for a non-rigid request (None: rescaled below VIA_RIGID_TILES, coarse from
+    # it); the pocket split's attempt (``api/design_pocket.py``) asks coarse, the bent strip's conformal
+    via_rigid_init: str | None = None
     # a coarse level of a larger design (``DesignProblem._coarse_guess``), not the lattice asked for: the reduced
     # solver's stiffer-stage attempt is for the top level only (``routes.MEMBER_STAGE_TILES``)
     coarse_level: bool = False

@@ -367,7 +367,7 @@ def _solve_via_rigid(prob: DesignProblem, log, iters: dict, tag: str = ""):
     sub = replace(
         prob.req,
         rigid=True,
-        init="coarse" if big else prob.req.via_rigid_init,
+        init=prob.req.via_rigid_init or ("coarse" if big else "rescaled"),
         name="",
         second_opinion=prob.req.second_opinion and not big,
     )

@@ -1,0 +1,91 @@
+"""A bent strip for an outline the square lattice cannot follow (a U, a horseshoe: a hollow between two
+arms), given N x N tiles.
+
+On a U the own split and the pocket split (``pocket_split.py``) leave the lattice's side to dive into the
+gap and come back out; one lattice corner cannot start on both of the gap's inner corners, and every guess
+ran the side across the gap. A U is a strip bent twice: with the lattice's corners at the arms' ends, one
+long side runs round the outside, the other round the gap, and the fold-free start of ``inverse_map.py``
+(the ``conformal`` guess on a re-split target) bends the lattice along it. The strip has about as many tiles
+as the N x N asked, in rows and columns of the aspect its start is least distorted at.
+
+``corner_split.bent_strip`` (make's) splits at sharp polyline vertices only; here the corners are where the
+outline turns convexly by :data:`CORNER_DEG` within :data:`CORNER_SPAN` of its size, rounded or sharp.
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import numpy as np
+
+from ..targets.curve import Target
+from .corner_split import MAX_CANDIDATES, MIN_ACROSS, default_folds, distortion
+from .inverse_map import TargetMesh, with_corners
+
+SAMPLES = 4096  # curve samples the turning is summed over
+CORNER_SPAN = (
+    0.15  # of the size: the stretch of outline a corner turns within (a rounded corner's arc)
+)
+CORNER_DEG = 60.0  # a stretch turning convexly by this much holds a corner
+PROBE_TILES = 256  # the candidates are scored on lattices of about this many tiles (16x16)
+# aspects (columns over rows) scored: quarter octaves from 1 to 16 (the other turn of each split swaps them)
+ASPECTS = 2.0 ** (np.arange(17) / 4.0)
+
+
+def turn_corners(target: Target) -> np.ndarray:
+    """Curve parameters of the outline's convex corners: the middle of the turning in each stretch of
+    :data:`CORNER_SPAN` of the size that turns convexly by at least :data:`CORNER_DEG`, strongest first,
+    stretches apart by a span."""
+    u = np.linspace(0.0, 1.0, SAMPLES, endpoint=False)
+    p = target.point(u)
+    a, b = p - np.roll(p, 1, 0), np.roll(p, -1, 0) - p
+    turn = np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(1))  # CCW: convex > 0
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(b, axis=1))])
+    perimeter, half = s[-1], 0.5 * CORNER_SPAN * target.size
+    s = s[:-1]
+    # turning within +-half of each sample, the curve taken three times over so windows wrap
+    s3 = np.concatenate([s - perimeter, s, s + perimeter])
+    c3 = np.concatenate([[0.0], np.cumsum(np.tile(turn, 3))])
+    lo, hi = np.searchsorted(s3, s - half), np.searchsorted(s3, s + half, "right")
+    window = c3[hi] - c3[lo]
+    found: list[float] = []
+    left = window.copy()
+    while len(found) < MAX_CANDIDATES and left.max() >= np.radians(CORNER_DEG):
+        i = int(np.argmax(left))
+        k = np.arange(lo[i], hi[i])  # the window's samples (indices into the tripled curve)
+        run = np.cumsum(turn[k % SAMPLES])
+        mid = k[min(int(np.searchsorted(run, 0.5 * run[-1])), len(k) - 1)] % SAMPLES
+        found.append(float(u[mid]))
+        near = np.abs(np.mod(s - s[mid] + 0.5 * perimeter, perimeter) - 0.5 * perimeter) < 2 * half
+        left[near] = -np.inf
+    return np.sort(np.asarray(found))
+
+
+def strip_shape(n: int, aspect: float) -> tuple[int, int]:
+    """Rows and columns of at most ``n`` tiles (about as many) at ``aspect`` (columns over rows), at least
+    :data:`MIN_ACROSS` either way."""
+    rows = max(MIN_ACROSS, round(float(np.sqrt(n / aspect))))
+    return rows, max(MIN_ACROSS, n // rows)
+
+
+def strip_splits(target: Target, rows: int, cols: int) -> list[tuple[Target, tuple[int, int]]]:
+    """Where the pattern's harmonic map onto ``target``'s own split folds tiles at ``rows`` x ``cols``: the
+    target re-split at four of its convex corners (:func:`turn_corners`), each with the rows x columns of
+    about ``rows * cols`` tiles its fold-free start is least distorted at (``corner_split.distortion``,
+    scored at :data:`PROBE_TILES`), least distorted first, those distorted less than the own split's at the
+    same count; else none."""
+    corners = turn_corners(target)
+    if len(corners) < 4 or not default_folds(target, rows, cols):
+        return []
+    mesh = TargetMesh(target)
+    shapes = [strip_shape(PROBE_TILES, a) for a in ASPECTS]
+    shapes += [(c, r) for r, c in shapes]
+    side = round(float(np.sqrt(PROBE_TILES)))
+    own = distortion(mesh, target.default_corner_split(), side, side)
+    scored = []
+    for quad in list(combinations(corners, 4))[:MAX_CANDIDATES]:
+        d, rc = min((distortion(mesh, np.asarray(quad), *rc), rc) for rc in shapes)
+        if d < own:
+            scored.append((d, quad, strip_shape(rows * cols, rc[1] / rc[0])))
+    scored.sort(key=lambda x: x[0])
+    return [(with_corners(target, np.asarray(q)), rc) for _, q, rc in scored]

@@ -1,0 +1,78 @@
+"""A strip bent along the outline (``design/quad/strip_split.py``, ``api/design_strip.py``): an asymmetric U
+(arms 25 and 20 mm wide, 70 and 50 mm tall, a 35 mm gap, every corner rounded with radius 5; 100 mm) given
+16x16 tiles, which every guess and the pocket attempt missed (21 % and more: the lattice's side ran across
+the gap)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fabkiri.api.design import PatternRequest, _check, _solver_request, design_pattern
+from fabkiri.api.design_strip import last_request, strip_request
+from fabkiri.design.core import conformance as conf
+from fabkiri.design.quad.solve import design
+from fabkiri.design.quad.strip_split import strip_splits, turn_corners
+from fabkiri.design.targets.lookup import load_target
+
+from .test_opening import DATA
+
+U = str(DATA / "uasym.csv")
+# the U's convex corners in the file (its bounding box 80 x 70 mm): both arms' ends, the bottom's two
+CONVEX = np.array([[0, 0], [80, 0], [80, 50], [60, 50], [25, 70], [0, 70]], float)
+
+
+def _in_file(p: np.ndarray) -> np.ndarray:
+    return p * 80 / 100 + [40.0, 35.0]  # centred and scaled to 100 mm by load_target
+
+
+def test_the_corners_of_a_rounded_outline_are_where_it_turns():
+    found = _in_file(load_target(U, 100).point(turn_corners(load_target(U, 100))))
+    assert len(found) == 6  # the two inner corners turn inward: none of them
+    d = np.linalg.norm(found[:, None] - CONVEX[None], axis=2)
+    assert d.min(0).max() < 2.5  # each corner's rounded arc middle, 1.5 mm from the box's corner
+
+
+@pytest.mark.parametrize("name", ["heart", "ellipse", "circle"])
+def test_an_outline_whose_start_does_not_fold_keeps_its_lattice(name):
+    assert strip_splits(load_target(name, 100), 16, 16) == []
+
+
+def test_the_strips_come_after_the_pocket_attempt_with_about_the_tiles_asked():
+    _, req, _, _ = _solver_request(PatternRequest(tiles=(16, 16), target=U, size=100, rigid=True))
+    first = last_request(req, [], pocket=True)
+    assert first is not None and first[0] == "pocket"
+    tried = [{"init": "pocket", "shape": "missed"}]
+    for _ in range(3):
+        found = last_request(req, tried, pocket=True)
+        assert found is not None and found[0] == "strip"
+        sub = found[1]
+        assert sub.rows != sub.cols and 0.95 * 256 <= sub.rows * sub.cols <= 256
+        tried.append({"init": "strip", "shape": "missed"})
+    assert last_request(req, tried, pocket=True) is None
+
+
+@pytest.mark.parametrize("rigid", [True, False])
+def test_a_strip_along_the_u_meets_the_shape(rigid):
+    request, req, target, contracted = _solver_request(
+        PatternRequest(tiles=(16, 16), target=U, size=100, rigid=rigid, quiet=True)
+    )
+    # the second split: the four arms' ends (the first, round the bottom's right corner, misses by 2.2 %)
+    sub = strip_request(req, [{"init": "strip"}])
+    assert sub is not None and sub.init == ("conformal" if rigid else "rigid")
+    outcome = _check(design(sub), contracted, request, target, conf.parse_shape_tol("2%"))
+    assert outcome.valid  # converged, both states close, no tile pair overlaps
+    assert outcome.report["conformance"]["deployed"]["hausdorff_rel"] < 0.02
+
+
+@pytest.mark.slow  # every guess and the pocket attempt first (about 28 rigid CPU s)
+def test_the_u_passes_at_16x16_by_default():
+    out = design_pattern(PatternRequest(tiles=(16, 16), target=U, size=100, rigid=True, quiet=True))
+    assert out.exit_code == 0
+    assert out.report["attempts"][-1]["init"] == "strip"
+    assert out.report["strip"]["asked"] == [16, 16]
+    lattice = out.pattern.lattice
+    assert [lattice["rows"], lattice["cols"]] == out.report["strip"]["tiles"]
+    assert (
+        lattice["rows"] != lattice["cols"]
+        and 0.95 * 256 <= lattice["rows"] * lattice["cols"] <= 256
+    )
