@@ -190,8 +190,9 @@ def test_a_four_dimensional_counter_rotating_rigid_subfamily_exists(rows, cols):
 def test_a_pull_back_that_fails_never_leaves_the_family_further_than_its_start():
     """The 8x8 heart (a lattice of the wrong aspect): the landing from the initial guess stops with
     equalities at ~0.25, from where full Newton steps onto the family diverge (~1e11 in ten steps; the
-    design was then written with nodes ~5e6 mm). Damped steps never raise the residual: the design of one
-    solve without refinement ends no further from the family than its initial guess, near the target."""
+    design was then written with nodes ~5e6 mm). A pull-back that fails gives the nearest point it
+    reached: the design of one solve without refinement ends no further from the family than its initial
+    guess, near the target."""
     from fabkiri.design.kagome import fit as KF
     from fabkiri.design.kagome import solve as KS
     from fabkiri.design.targets import lookup as TG

@@ -64,7 +64,6 @@ LM_STALL = (10, 1e-3)
 # (shorter or looser windows cost the 6x10 heart's convex-hole claim: docs/kagome.md)
 LAND_STALL = (40, 1e-4)
 LAMBDA_MIN, LAMBDA_MAX = 1e-9, 1e8
-DAMP_HALVINGS = 30  # a damped pull-back's step halvings before it gives up
 
 
 @dataclass(frozen=True)
@@ -369,52 +368,27 @@ def _step(H: sparse.csc_matrix, g: np.ndarray, dg: np.ndarray, A: sparse.csr_mat
 
 
 def pull_back(eq: list[Family], x: np.ndarray, tol: float = ON_FAMILY, max_iter: int = 8):
-    """Minimum-norm Newton steps onto the equalities (sparse KKT): ``(x, converged, steps)``. Full steps
-    first; when they do not converge, damped ones from the same start (:func:`_damped_pull_back`): a
-    full Newton step far from the family can raise the residual by orders (8x8 heart: 0.25 -> 3e11 in ten
-    steps), and a point it leaves behind is no design."""
-    x0 = x
-    for k in range(max_iter):
+    """Minimum-norm Newton steps onto the equalities (sparse KKT): ``(x, converged, steps)``. When they do
+    not converge, ``x`` is the point of smallest residual they reached (the start included): far from the
+    family a full Newton step can raise the residual by orders (8x8 heart: 0.25 -> 3e11 in ten steps),
+    and the last point of such a run is no design."""
+    N = x.size
+    nearest, least = x, np.inf
+    for k in range(max_iter + 1):
         r = residuals(eq, x)  # the Jacobian only for a step
-        if np.abs(r).max(initial=0.0) <= tol:
-            return x, True, k
+        worst = np.abs(r).max(initial=0.0)
+        if worst <= tol:
+            return x, True, min(k, max_iter)
         if not np.isfinite(r).all():
             break
-        x = x + _newton_step(eq, x).reshape(x.shape)
-    r = residuals(eq, x)
-    if np.abs(r).max(initial=0.0) <= tol:
-        return x, True, max_iter
-    return _damped_pull_back(eq, x0, tol, max_iter)
-
-
-def _newton_step(eq: list[Family], x: np.ndarray) -> np.ndarray:
-    """The minimum-norm Newton step onto the equalities at ``x`` (flat)."""
-    N = x.size
-    r, J = stacked(eq, x)
-    return _kkt(sparse.identity(N, format="csc"), J).solve(np.concatenate([np.zeros(N), -r]))[:N]
-
-
-def _damped_pull_back(eq: list[Family], x: np.ndarray, tol: float, max_iter: int):
-    """Newton steps onto the equalities, each halved until the largest residual falls (at most
-    ``DAMP_HALVINGS`` times: then the steps stop): ``(x, converged, steps)``, ``x`` the point of smallest
-    residual reached (never above the start's)."""
-    worst = float(np.abs(residuals(eq, x)).max(initial=0.0))
-    for k in range(max_iter):
-        if worst <= tol:
-            return x, True, k
-        if not np.isfinite(worst):
+        if worst < least:
+            nearest, least = x, worst
+        if k == max_iter:
             break
-        dx, t = _newton_step(eq, x).reshape(x.shape), 1.0
-        for _ in range(DAMP_HALVINGS):
-            xn = x + t * dx
-            rn = float(np.abs(residuals(eq, xn)).max(initial=0.0))
-            if rn < worst:
-                x, worst = xn, rn
-                break
-            t *= 0.5
-        else:
-            break
-    return x, bool(worst <= tol), max_iter
+        r, J = stacked(eq, x)
+        dx = _kkt(sparse.identity(N, format="csc"), J).solve(np.concatenate([np.zeros(N), -r]))[:N]
+        x = x + dx.reshape(x.shape)
+    return nearest, False, max_iter
 
 
 def project(eq: list[Family], x: np.ndarray, tol: float = 1e-13, max_iter: int = 30):
