@@ -8,6 +8,9 @@ closed state's outline) and the target (its polyline vertices, or a dense sampli
   either curve to the other curve, so a stretch of the target left uncovered counts as much as a tip off
   the curve. Both curves are sampled at a spacing ``h`` of the size / ``SAMPLES_PER_SIZE`` (vertices
   always included) and measured to the exact segments of the other, so the figure is exact to ``h / 2``.
+  Curves longer than ``MAX_SAMPLES * h`` together are both sampled at their length / ``MAX_SAMPLES``
+  instead (the figures then exact to half that, ``sampling_mm`` in the result): the memory and time stay
+  bounded for any outline.
 * **Mean distance** both ways (outline → target, target → outline), over arc length.
 * **1 − IoU** of the enclosed regions, |A Δ B| / |A ∪ B| in [0, 1], and |A Δ B| / |target| beside it.
 * **Tip spacing**: distances between consecutive outline vertices, min and mean.
@@ -27,6 +30,11 @@ from ..kdtree import KDTree
 from .geometry import dot2, kabsch
 
 SAMPLES_PER_SIZE = 4000  # sampling spacing h = size / this: Hausdorff exact to 1.25e-4 of the size
+# at most this many samples of the two curves together (and of one by densify): curves longer than 25 sizes
+# (an outline far off its target, a diverged design's) are sampled at their length over this instead, and
+# the miss measured to that spacing; the nearest-sample queries of points far from a curve visit most of
+# its samples, so the count bounds the time as well as the memory
+MAX_SAMPLES = 25 * SAMPLES_PER_SIZE
 SIZE_DEFINITION = "larger side of the target's bounding box"
 
 
@@ -36,9 +44,24 @@ def size_of(polygon: np.ndarray) -> float:
     return float((p.max(0) - p.min(0)).max())
 
 
-def densify(polygon: np.ndarray, h: float) -> np.ndarray:
-    """Points of the closed polygon at spacing at most ``h``, its vertices included, in order."""
+def perimeter(polygon: np.ndarray) -> float:
+    """The length of the closed polygon."""
     p = np.asarray(polygon, float)
+    return float(np.linalg.norm(np.roll(p, -1, 0) - p, axis=1).sum())
+
+
+def spacing(polygon: np.ndarray, h: float) -> float:
+    """The sampling spacing :func:`densify` uses for the closed polygon: ``h``, or its perimeter over
+    ``MAX_SAMPLES`` when that is larger."""
+    return max(h, perimeter(polygon) / MAX_SAMPLES)
+
+
+def densify(polygon: np.ndarray, h: float) -> np.ndarray:
+    """Points of the closed polygon at spacing at most :func:`spacing` (``h`` unless the polygon is longer
+    than ``MAX_SAMPLES`` of it), its vertices included, in order: at most ``MAX_SAMPLES`` + its vertex
+    count points."""
+    p = np.asarray(polygon, float)
+    h = spacing(p, h)
     q = np.roll(p, -1, 0)
     seg = _lengths(q - p)
     k = np.maximum(1, np.ceil(seg / h).astype(np.int64))
@@ -100,6 +123,7 @@ def measure(outline: np.ndarray, target: np.ndarray, size: float | None = None) 
     B = np.asarray(target, float).reshape(-1, 2)
     size = float(size_of(B) if size is None else size)
     h = size / SAMPLES_PER_SIZE
+    h = max(h, (perimeter(A) + perimeter(B)) / MAX_SAMPLES)
     Ad = densify(A, h)
     Bd, tree = _target_samples(B, h)
     dA, fA = _to_curve(Ad, Bd, tree)
@@ -117,7 +141,7 @@ def measure(outline: np.ndarray, target: np.ndarray, size: float | None = None) 
     sym = float(shapely.symmetric_difference(pa, pb).area)
     union = float(shapely.union(pa, pb).area)
     gaps = _lengths(np.roll(A, -1, 0) - A)
-    return {
+    out = {
         "hausdorff_mm": haus,
         "hausdorff_rel": haus / size,
         "mean_outline_to_target_mm": float(wA @ dA),
@@ -131,6 +155,9 @@ def measure(outline: np.ndarray, target: np.ndarray, size: float | None = None) 
         "size_definition": SIZE_DEFINITION,
         "worst": worst,
     }
+    if h > size / SAMPLES_PER_SIZE:  # curves too long for the usual spacing: the one used instead
+        out["sampling_mm"] = h
+    return out
 
 
 def _target_samples(target: np.ndarray, h: float):

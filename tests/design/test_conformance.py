@@ -321,3 +321,20 @@ def test_outlines_measured_against_one_target_share_its_samples_and_tree(monkeyp
     assert len(built) == 1 + len(outlines)
     pc.measure(outlines[0], target * 2.0)  # another target: its own samples
     assert len(built) == 3 + len(outlines)
+
+
+def test_an_outline_far_off_its_target_is_sampled_within_a_bound():
+    """An outline a million times the target's size (a diverged design's) is sampled at its length over
+    ``MAX_SAMPLES``, not at the target's spacing (some 1e10 points), and the target with it; the miss is
+    measured to that spacing, which the result states."""
+    target = star_shaped([50.0] * 12)
+    outline = 1e6 * target
+    dense = pc.densify(outline, 100.0 / pc.SAMPLES_PER_SIZE)
+    assert len(dense) <= pc.MAX_SAMPLES + len(outline)
+    m = pc.measure(outline, target)
+    assert m["sampling_mm"] == pytest.approx(
+        (pc.perimeter(outline) + pc.perimeter(target)) / pc.MAX_SAMPLES
+    )
+    exact = 1e6 * 50.0 - 50.0  # the outline's vertices are the farthest points from the target
+    assert abs(m["hausdorff_mm"] - exact) <= 0.5 * m["sampling_mm"]
+    assert "sampling_mm" not in pc.measure(1.5 * target, target)

@@ -185,3 +185,26 @@ def test_a_four_dimensional_counter_rotating_rigid_subfamily_exists(rows, cols):
     path = deployment_path(q, 20)
     assert path.energy.max() <= 1e-20 and path.collisions.collision_free()
     assert max(path.state_mismatch.values()) <= 1e-9 * p.tile_size
+
+
+def test_a_pull_back_that_fails_never_leaves_the_family_further_than_its_start():
+    """The 8x8 heart (a lattice of the wrong aspect): the landing from the initial guess stops with
+    equalities at ~0.25, from where full Newton steps onto the family diverge (~1e11 in ten steps; the
+    design was then written with nodes ~5e6 mm). A pull-back that fails gives the nearest point it
+    reached: the design of one solve without refinement ends no further from the family than its initial
+    guess, near the target."""
+    from fabkiri.design.kagome import fit as KF
+    from fabkiri.design.kagome import solve as KS
+    from fabkiri.design.targets import lookup as TG
+
+    target = TG.load_target("heart", None)
+    span = np.ptp(standard_kagome(8, 8, tile_size=1.0).nodes, 0).max()
+    std = standard_kagome(8, 8, tile_size=target.size / span)
+    lo, hi = target.bbox
+    rows, x0, _ = KF.fit_rows(std, target.transformed(1.0, -0.5 * (lo + hi)))
+    x1 = KS.land(rows, x0)
+    xp, ok, _ = KS.project(rows.eq, x1)
+    assert np.abs(rows.equality_residuals(xp)).max() <= np.abs(rows.equality_residuals(x1)).max()
+    d = KF.design(std, target, refine_steps=0)
+    assert d.max_equality <= np.abs(rows.equality_residuals(x0)).max()
+    assert np.abs(d.pattern.nodes).max() <= 2 * target.size

@@ -368,19 +368,27 @@ def _step(H: sparse.csc_matrix, g: np.ndarray, dg: np.ndarray, A: sparse.csr_mat
 
 
 def pull_back(eq: list[Family], x: np.ndarray, tol: float = ON_FAMILY, max_iter: int = 8):
-    """Minimum-norm Newton steps onto the equalities (sparse KKT): ``(x, converged, steps)``."""
+    """Minimum-norm Newton steps onto the equalities (sparse KKT): ``(x, converged, steps)``. When they do
+    not converge, ``x`` is the point of smallest residual they reached (the start included): far from the
+    family a full Newton step can raise the residual by orders (8x8 heart: 0.25 -> 3e11 in ten steps),
+    and the last point of such a run is no design."""
     N = x.size
-    for k in range(max_iter):
+    nearest, least = x, np.inf
+    for k in range(max_iter + 1):
         r = residuals(eq, x)  # the Jacobian only for a step
-        if np.abs(r).max(initial=0.0) <= tol:
-            return x, True, k
+        worst = np.abs(r).max(initial=0.0)
+        if worst <= tol:
+            return x, True, min(k, max_iter)
         if not np.isfinite(r).all():
+            break
+        if worst < least:
+            nearest, least = x, worst
+        if k == max_iter:
             break
         r, J = stacked(eq, x)
         dx = _kkt(sparse.identity(N, format="csc"), J).solve(np.concatenate([np.zeros(N), -r]))[:N]
         x = x + dx.reshape(x.shape)
-    r = residuals(eq, x)
-    return x, bool(np.abs(r).max(initial=0.0) <= tol), max_iter
+    return nearest, False, max_iter
 
 
 def project(eq: list[Family], x: np.ndarray, tol: float = 1e-13, max_iter: int = 30):
