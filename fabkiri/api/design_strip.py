@@ -22,9 +22,8 @@ STRIP_TRIES = 3  # the least distorted splits tried in turn, the next only after
 LAST_TRIES = POCKET_TRIES + STRIP_TRIES
 
 
-@lru_cache(
-    maxsize=4
-)  # one scoring of the splits for a design's attempts (a Target hashes by identity)
+# one scoring of the splits for a design's attempts (a Target hashes by identity)
+@lru_cache(maxsize=4)
 def _splits(target: Target, rows: int, cols: int) -> tuple:
     return tuple(strip_splits(target, rows, cols)[:STRIP_TRIES])
 
