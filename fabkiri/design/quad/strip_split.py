@@ -23,9 +23,8 @@ from .corner_split import MAX_CANDIDATES, MIN_ACROSS, default_folds, distortion
 from .inverse_map import TargetMesh, with_corners
 
 SAMPLES = 4096  # curve samples the turning is summed over
-CORNER_SPAN = (
-    0.15  # of the size: the stretch of outline a corner turns within (a rounded corner's arc)
-)
+# of the size: the stretch of outline a corner turns within (a rounded corner's arc)
+CORNER_SPAN = 0.15
 CORNER_DEG = 60.0  # a stretch turning convexly by this much holds a corner
 PROBE_TILES = 256  # the candidates are scored on lattices of about this many tiles (16x16)
 # aspects (columns over rows) scored: quarter octaves from 1 to 16 (the other turn of each split swaps them)
