@@ -61,8 +61,8 @@ def turn_corners(target: Target) -> np.ndarray:
 
 
 def strip_shape(n: int, aspect: float) -> tuple[int, int]:
-    """Rows and columns of at most ``n`` tiles (about as many) at ``aspect`` (columns over rows), at least
-    :data:`MIN_ACROSS` either way."""
+    """Rows and columns of about ``n`` tiles at ``aspect`` (columns over rows), at least :data:`MIN_ACROSS`
+    either way: at most ``n`` unless that floor binds (a 6x6 asked on a long strip gets 12x4)."""
     rows = max(MIN_ACROSS, round(float(np.sqrt(n / aspect))))
     return rows, max(MIN_ACROSS, n // rows)
 
