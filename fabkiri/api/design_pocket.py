@@ -14,19 +14,26 @@ POCKET_INIT = "pocket"  # the attempts' name among the guesses (report ``attempt
 POCKET_TRIES = len(SHIFTS)
 
 
-def pocket_request(req: DesignRequest, attempts: list[dict] | None = None) -> DesignRequest | None:
-    """The next pocket attempt's request for ``req`` (a front-door request without ``--init`` or corners)
-    after the front door's ``attempts`` so far (one per shift of ``SHIFTS``, the next only after one that met
-    the shape but failed a check), or None where it does not apply: a symmetry, closed-state targets,
-    fabrication rows, parallelogram holes, another solver than auto, or no pocket split (``pocket_split``)."""
-    if (
+def resplit_applies(req: DesignRequest) -> bool:
+    """Whether a last attempt on a re-split outline (a pocket's here, a bent strip's in ``design_strip.py``)
+    may answer ``req``: a target, and no symmetry, closed-state targets, fabrication rows, parallelogram
+    holes or other solver than auto (each of those is designed on the split it asked for)."""
+    return not (
         req.target is None
         or req.symmetry
         or req.contracted
         or req.fabrication is not None
         or req.holes != "rhombus"
         or req.solver != "auto"
-    ):
+    )
+
+
+def pocket_request(req: DesignRequest, attempts: list[dict] | None = None) -> DesignRequest | None:
+    """The next pocket attempt's request for ``req`` (a front-door request without ``--init`` or corners)
+    after the front door's ``attempts`` so far (one per shift of ``SHIFTS``, the next only after one that met
+    the shape but failed a check), or None where it does not apply: a symmetry, closed-state targets,
+    fabrication rows, parallelogram holes, another solver than auto, or no pocket split (``pocket_split``)."""
+    if not resplit_applies(req) or req.target is None:
         return None
     attempts = attempts or []
     k = sum(a["init"] == POCKET_INIT for a in attempts)

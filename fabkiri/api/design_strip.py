@@ -14,7 +14,7 @@ from ..design.quad.inverse_map import with_corners
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest
 from ..design.quad.strip_split import strip_splits
 from ..design.targets.curve import Target
-from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request
+from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request, resplit_applies
 
 LAST_INIT = "last"  # the front door's slot for these attempts, named by the one it runs
 STRIP_INIT = "strip"  # the attempts' name among the guesses (report ``attempts``)
@@ -32,14 +32,7 @@ def strip_request(req: DesignRequest, attempts: list[dict]) -> DesignRequest | N
     """The next strip attempt's request for ``req`` after the front door's ``attempts`` so far, or None where
     it does not apply (as ``pocket_request``: a symmetry, closed-state targets, fabrication rows,
     parallelogram holes, another solver than auto) or no split is left."""
-    if (
-        req.target is None
-        or req.symmetry
-        or req.contracted
-        or req.fabrication is not None
-        or req.holes != "rhombus"
-        or req.solver != "auto"
-    ):
+    if not resplit_applies(req) or req.target is None:
         return None
     k = sum(a["init"] == STRIP_INIT for a in attempts)
     splits = _splits(req.target, req.rows, req.cols)
