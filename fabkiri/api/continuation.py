@@ -197,7 +197,7 @@ def _free_design(
     cannot be built (a non-convex target) and a non-rigid request may be answered in the rigid family, that
     family alone first (the steps are taken in it; 16x16 heart at 200 mm: the same design as the guesses in
     turn, which ended there, in about half their time), the guesses only when it misses the shape.
-    Returns the valid design (or None) and the wall seconds spent."""
+    Returns the valid design on the lattice asked (or None) and the wall seconds spent."""
     free = replace(
         request,
         material=None,
@@ -215,7 +215,9 @@ def _free_design(
         if first.success:
             return first, spent
     out = redesign(free)
-    return (out if out.valid else None), spent + out.report.get("time_s_total", 0.0)
+    # a bent strip's design (design_strip.py) is on another lattice than the rows are raised on
+    usable = out.valid and not out.report.get("strip")
+    return (out if usable else None), spent + out.report.get("time_s_total", 0.0)
 
 
 def _rigid_first(request: PatternRequest, req: DesignRequest) -> bool:
