@@ -33,6 +33,7 @@ from ..fabricate.print.printers import load_printer
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
 from .design_judge import DesignAttempt, _check, _fit_miss, _hausdorff, _rank, _shape_met
+from .design_strip import strip_design
 
 if TYPE_CHECKING:  # design.py imports this module
     from .design import DesignOutcome, PatternRequest
@@ -68,8 +69,8 @@ def continuation(
 ):
     """The design without fabrication rows (:func:`_free_design`), then the rows raised from it: in one jump
     to the full limits (``JUMP``), else in steps (``CONTINUATION``), each warm started from the last; a last
-    step that does not converge is tried in the rigid family (where it may) from the last converged step.
-    Returns the ``_check`` outcome, or None when the design without the rows fails."""
+    step that does not converge is tried in the rigid family (where it may) from the last converged step; on a
+    bent strip's lattice where that design is one. The ``_check`` outcome, or None where it fails."""
     free, spent = _free_design(request, req, redesign)  # wall s, as the attempts
     if free is None:
         return None
@@ -77,6 +78,7 @@ def continuation(
     def judge(result):
         return _check(result, {}, request, target, shape_tol)
 
+    req = strip_design(req, free)  # a bent strip's design: the rows are raised on its lattice
     req = _print_state(req, request.printer, free)
     # a non-rigid request below 32x32 steps in the rigid family when it may (a member meets every non-rigid
     # equality): with the full solver the steps from 7/8 of the limits on stalled against closed holes
@@ -135,7 +137,14 @@ def continuation(
         "shape_held_to": held,  # the design without the rows is fraction 0
     }
     attempts.append(_attempt(outcome, how, spent))
+    outcome.report.update(_strip_of(free))
     return outcome
+
+
+def _strip_of(free: DesignOutcome) -> dict:
+    """The report's ``strip`` of a design without the rows that is a bent strip's (design_strip.py): the
+    continuation's design is on that lattice, not the one asked."""
+    return {"strip": free.report["strip"]} if free.report.get("strip") else {}
 
 
 def _jump_or_steps(req: DesignRequest, X: np.ndarray, init: str, judge, spent: float, trace: list):
@@ -197,7 +206,7 @@ def _free_design(
     cannot be built (a non-convex target) and a non-rigid request may be answered in the rigid family, that
     family alone first (the steps are taken in it; 16x16 heart at 200 mm: the same design as the guesses in
     turn, which ended there, in about half their time), the guesses only when it misses the shape.
-    Returns the valid design on the lattice asked (or None) and the wall seconds spent."""
+    Returns the valid design (or None; a bent strip's is on its own lattice) and the wall seconds spent."""
     free = replace(
         request,
         material=None,
@@ -215,9 +224,7 @@ def _free_design(
         if first.success:
             return first, spent
     out = redesign(free)
-    # a bent strip's design (design_strip.py) is on another lattice than the rows are raised on
-    usable = out.valid and not out.report.get("strip")
-    return (out if usable else None), spent + out.report.get("time_s_total", 0.0)
+    return (out if out.valid else None), spent + out.report.get("time_s_total", 0.0)
 
 
 def _rigid_first(request: PatternRequest, req: DesignRequest) -> bool:

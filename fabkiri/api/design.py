@@ -211,7 +211,7 @@ def design_pattern(
     if best is None:
         best, attempts = _attempts(request, req, target, contracted, shape_tol, say)
         attempts = first + attempts
-        req = strip_design(req, best)  # a strip's design is finished on its own lattice
+    req = strip_design(req, best)  # a strip's (or its continuation's) finishes on its lattice
     judge = _judge(contracted, request, target, shape_tol)
     if minimax_applies(req, contracted, best):  # the largest miss, after the least-squares fit
         best = minimax_finish(req, best, judge, attempts, say, shape_tol) or best

@@ -78,13 +78,15 @@ def test_the_u_passes_at_16x16_by_default():
     )
 
 
-@pytest.mark.slow  # the continuation's design without the rows, its guesses and strips (about 10 CPU s)
-def test_a_fabrication_design_of_the_u_raises_its_rows_on_the_lattice_asked():
-    # the design without the rows came back as a strip of other rows and columns; raising the rows from its
+@pytest.mark.slow  # the continuation's design without the rows, its guesses and strips (about 9 CPU s)
+def test_a_fabrication_design_of_the_u_raises_its_rows_on_the_strip():
+    # the design without the rows comes back as a strip of other rows and columns; raising the rows from its
     # nodes on the 6x6 asked ended in an internal error (numpy's "Incompatible dimensions")
     out = design_pattern(
         PatternRequest(tiles=(6, 6), target=U, size=100, material="card-0.3", quiet=True)
     )
-    lattice = out.pattern.lattice
-    assert (lattice["rows"], lattice["cols"]) == (6, 6) and "strip" not in out.report
-    assert out.report["fabrication"]["limits"]
+    lattice, report = out.pattern.lattice, out.report
+    assert report["strip"]["asked"] == [6, 6]
+    assert [lattice["rows"], lattice["cols"]] == report["strip"]["tiles"] != [6, 6]
+    assert report["fabrication"]["limits"] and "continuation" in report
+    assert out.exit_code == 0
