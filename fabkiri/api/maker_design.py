@@ -438,7 +438,9 @@ def _design(result: MakeResult, plan, say: Progress) -> StepRun:
     result.pattern = outcome.pattern
     report = outcome.report
     result.figures = _design_figures(report)
-    details = [line for line in outcome.summary(name) if line.startswith("fabkiri: design failed")]
+    # the failure, and the lattice a bent strip used in place of the tiles make chose (design_strip.py)
+    keep = ("fabkiri: design failed", "the lattice is")
+    details = [line for line in outcome.summary(name) if line.startswith(keep)]
     details = _opening_lines(report) + details
     return StepRun(
         outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details

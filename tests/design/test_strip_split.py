@@ -90,3 +90,12 @@ def test_a_fabrication_design_of_the_u_raises_its_rows_on_the_strip():
     assert [lattice["rows"], lattice["cols"]] == report["strip"]["tiles"] != [6, 6]
     assert report["fabrication"]["limits"] and "continuation" in report
     assert out.exit_code == 0
+
+
+@pytest.mark.slow  # make's design, cut, deploy and report of the U (about 12 CPU s)
+def test_make_makes_the_u_for_card_and_says_its_lattice(tmp_path, run_cli):
+    code, out, err = run_cli("make", U, "--size", "100", "--material", "card-0.3", "-o", tmp_path)
+    assert code == 0, err[-2000:]
+    (line,) = [x for x in (out + err).splitlines() if x.strip().startswith("the lattice is")]
+    assert "not the 6x6 asked" in line
+    assert (tmp_path / "cut" / "uasym.dxf").is_file()
