@@ -408,9 +408,8 @@ def _attempts(
             and (miss <= RETRY_FIT_ABOVE or outcome.report.get("rigid_first"))
         ):
             break  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
-        if (
-            outcome.valid and init in inits[:-1]
-        ):  # a pocket attempt is followed only after an overlap
+        # the retry notes are the guesses' (not the last's): the last attempts announce themselves
+        if outcome.valid and init in inits[:-1]:
             why = (
                 f"misses the target by {miss:.2%} of its size"
                 if miss > RETRY_FIT_ABOVE

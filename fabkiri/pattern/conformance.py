@@ -47,7 +47,7 @@ def size_of(polygon: np.ndarray) -> float:
 def perimeter(polygon: np.ndarray) -> float:
     """The length of the closed polygon."""
     p = np.asarray(polygon, float)
-    return float(np.linalg.norm(np.roll(p, -1, 0) - p, axis=1).sum())
+    return float(_lengths(np.roll(p, -1, 0) - p).sum())
 
 
 def spacing(polygon: np.ndarray, h: float) -> float:
