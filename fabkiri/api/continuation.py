@@ -33,7 +33,7 @@ from ..fabricate.print.printers import load_printer
 from ..mechanics.contract import contract
 from ..pattern.model import Pattern
 from .design_judge import DesignAttempt, _check, _fit_miss, _hausdorff, _rank, _shape_met
-from .design_strip import strip_design
+from .design_strip import strip_design, strip_of
 
 if TYPE_CHECKING:  # design.py imports this module
     from .design import DesignOutcome, PatternRequest
@@ -137,14 +137,8 @@ def continuation(
         "shape_held_to": held,  # the design without the rows is fraction 0
     }
     attempts.append(_attempt(outcome, how, spent))
-    outcome.report.update(_strip_of(free))
+    outcome.report.update(strip_of(free.report))
     return outcome
-
-
-def _strip_of(free: DesignOutcome) -> dict:
-    """The report's ``strip`` of a design without the rows that is a bent strip's (design_strip.py): the
-    continuation's design is on that lattice, not the one asked."""
-    return {"strip": free.report["strip"]} if free.report.get("strip") else {}
 
 
 def _jump_or_steps(req: DesignRequest, X: np.ndarray, init: str, judge, spent: float, trace: list):

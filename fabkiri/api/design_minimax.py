@@ -38,6 +38,7 @@ from ..design.core.refine import refine_minimax
 from ..design.core.request import FINISH_FLOOR
 from ..design.quad.solve import DesignRequest, design
 from .design_judge import DesignAttempt, _hausdorff, _rank, refinement_attempt
+from .design_strip import strip_of
 
 # from this many tiles (the coarse-to-fine sizes; below it the full solver's second opinion and the guesses in
 # turn already weigh several fits, and a 16x16 design would pay several times its own time)
@@ -283,8 +284,7 @@ def minimax_finish(
         if cand.report.get("coarse") is None:  # a warm-started step: its start came coarse to fine
             cand.report["coarse"] = best.report.get("coarse")
         cand.report["minimax"] = {"from_hausdorff_rel": h0, "steps_hausdorff_rel": trace}
-        if "strip" in best.report:  # refined on the bent strip's lattice (api/design_strip.py)
-            cand.report["strip"] = best.report["strip"]
+        cand.report.update(strip_of(best.report))  # refined on the bent strip's lattice
         say(
             f"fabkiri: minimax refinement: Hausdorff {100 * h0:.2f} % -> {100 * _hausdorff(cand.report):.2f} % "
             f"of the size ({len(trace)} steps)"

@@ -5,8 +5,10 @@ fold-free map of the strip onto the outline; the non-rigid request answered by t
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -84,6 +86,12 @@ def strip_note(init: str, sub: DesignRequest, req: DesignRequest) -> dict:
             "why": why,
         }
     }
+
+
+def strip_of(report: Mapping[str, Any]) -> dict:
+    """``{"strip": ...}`` of a design's ``report`` where it is a bent strip's, else empty: what a design refined
+    or continued from it (minimax, the fabrication continuation) keeps, its lattice being the strip's."""
+    return {"strip": report["strip"]} if report.get("strip") else {}
 
 
 def strip_design(req: DesignRequest, best) -> DesignRequest:
