@@ -363,7 +363,20 @@ class Target:
         return self._default_corners()
 
     def _default_corners(self) -> np.ndarray:
-        """Split where rays from the bounding-box centre to its corners meet the curve."""
+        """Split where rays from the bounding-box centre to its corners meet the curve.
+
+        Where the rays meet a curve that is not star-shaped about that centre out of order (an E,
+        a comb), split at the curve's farthest points along the four diagonals instead: those are
+        vertices of its convex hull, met by a simple curve in the hull's own CCW order.
+        """
+        c = self._ray_corners()
+        if (np.diff(np.mod(c - c[0], 1.0)) > 0).all():
+            return c
+        d = self._dense
+        k = [int(np.argmax(d @ np.array(v))) for v in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        return self._dense_u[k]
+
+    def _ray_corners(self) -> np.ndarray:
         d = self._dense
         lo, hi = d.min(0), d.max(0)
         c = 0.5 * (lo + hi)
