@@ -53,8 +53,15 @@ def turn_corners(target: Target) -> np.ndarray:
         i = int(np.argmax(left))
         k = np.arange(lo[i], hi[i])  # the window's samples (indices into the tripled curve)
         run = np.cumsum(turn[k % SAMPLES])
-        mid = k[min(int(np.searchsorted(run, 0.5 * run[-1])), len(k) - 1)] % SAMPLES
-        found.append(float(u[mid]))
+        at = [
+            k[min(int(np.searchsorted(run, f * run[-1])), len(k) - 1)] % SAMPLES
+            for f in (0.25, 0.5, 0.75)
+        ]
+        # a stretch turning enough for two corners (a strip's rounded end, a crescent's tip) holds two
+        found.extend(
+            float(u[j]) for j in (at[::2] if left[i] >= np.radians(2 * CORNER_DEG) else at[1:2])
+        )
+        mid = at[1]
         near = np.abs(np.mod(s - s[mid] + 0.5 * perimeter, perimeter) - 0.5 * perimeter) < 2 * half
         left[near] = -np.inf
     return np.sort(np.asarray(found))
@@ -71,20 +78,18 @@ def strip_splits(target: Target, rows: int, cols: int) -> list[tuple[Target, tup
     """Where the pattern's harmonic map onto ``target``'s own split folds tiles at ``rows`` x ``cols``: the
     target re-split at four of its convex corners (:func:`turn_corners`), each with the rows x columns of
     about ``rows * cols`` tiles its fold-free start is least distorted at (``corner_split.distortion``,
-    scored at :data:`PROBE_TILES`), least distorted first, those distorted less than the own split's at the
-    same count; else none."""
+    scored at :data:`PROBE_TILES`), least distorted first; else none. Every split is kept, not only those
+    less distorted than the own split: a crescent's strip, its ends narrowing to the tips, scores a hair
+    above the own split's folding start, and meets where every guess misses."""
     corners = turn_corners(target)
     if len(corners) < 4 or not default_folds(target, rows, cols):
         return []
     mesh = TargetMesh(target)
     shapes = [strip_shape(PROBE_TILES, a) for a in ASPECTS]
     shapes += [(c, r) for r, c in shapes]
-    side = round(float(np.sqrt(PROBE_TILES)))
-    own = distortion(mesh, target.default_corner_split(), side, side)
     scored = []
     for quad in list(combinations(corners, 4))[:MAX_CANDIDATES]:
         d, rc = min((distortion(mesh, np.asarray(quad), *rc), rc) for rc in shapes)
-        if d < own:
-            scored.append((d, quad, strip_shape(rows * cols, rc[1] / rc[0])))
+        scored.append((d, quad, strip_shape(rows * cols, rc[1] / rc[0])))
     scored.sort(key=lambda x: x[0])
     return [(with_corners(target, np.asarray(q)), rc) for _, q, rc in scored]
