@@ -156,7 +156,7 @@ def defer_unused_numpy() -> list[str]:
 
 
 # what every command's modules but coupon's load through a dozen nested imports, loaded first from `main`, at the
-# foot of the call stack: CPython 3.11 keeps Python frames in 16 KiB chunks and unmaps a chunk as soon as the
+# foot of the call stack: CPython 3.11 keeps Python frames in fixed-size chunks and unmaps a chunk as soon as the
 # frame at its start returns, and the docstring processing numpy.ma and scipy.linalg run as they load crossed a
 # chunk's end there thousands of times in a design's process, an mmap, a page fault and an munmap each
 # (docs/speed.md, "Session 55 (imp55)"). Loaded from here they run inside the first chunk, which stays.
