@@ -155,6 +155,27 @@ def defer_unused_numpy() -> list[str]:
     return done
 
 
+# what every command's modules but coupon's load through a dozen nested imports, loaded first from `main`, at the
+# foot of the call stack: CPython 3.11 keeps Python frames in fixed-size chunks and unmaps a chunk as soon as the
+# frame at its start returns, and the docstring processing numpy.ma and scipy.linalg run as they load crossed a
+# chunk's end there thousands of times in a design's process, an mmap, a page fault and an munmap each
+# (docs/speed.md, "Session 55 (imp55)"). Loaded from here they run inside the first chunk, which stays.
+# (scipy.sparse.csgraph loads scipy.sparse.linalg, and it scipy.linalg.)
+PRELOAD = ("numpy.ma", "scipy.sparse.csgraph")
+PRELOAD_SKIPS = ("coupon",)  # its module loads no numerics
+
+
+def preload_libraries(command: str | None) -> list[str]:
+    """Import ``PRELOAD`` for a command in ``SUMMARIES`` but ``PRELOAD_SKIPS`` (before its modules, which load
+    the same); returns the names it imported. A no-op in a process that has them (a library caller's)."""
+    if command not in SUMMARIES or command in PRELOAD_SKIPS:
+        return []
+    done = [name for name in PRELOAD if name not in sys.modules]
+    for name in done:
+        importlib.import_module(name)
+    return done
+
+
 # commands whose work is vector-sized BLAS (``design()`` already holds BLAS to one thread, see
 # design/solve.single_thread_blas; a cut's linear algebra is sparse or a few hundred unknowns): OpenBLAS's thread
 # pools (numpy's and scipy's) then only cost their start and their spinning workers, a measurable share of a
@@ -260,6 +281,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if command in SUMMARIES:  # a command loads numpy; `fabkiri --help` does not
                 single_thread_blas_process(command)
                 defer_unused_numpy()
+                preload_libraries(command)
             parser = build_parser(command)
         args = parser.parse_args(argv)
         return _run(args)

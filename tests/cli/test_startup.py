@@ -345,6 +345,42 @@ def test_a_design_loads_no_other_commands_module_nor_what_it_never_calls(design_
         assert name not in design_modules, name
 
 
+def test_a_command_loads_numpy_ma_and_scipy_linalg_before_its_own_modules(tmp_path):
+    # imported a dozen imports deep, their docstring processing crossed a frame chunk's end of CPython 3.11
+    # thousands of times (an mmap and munmap each): `main` loads them first, at the foot of the stack
+    code = (
+        "import sys\nimport fabkiri.cli.main as m\nparser = m.build_parser\n"
+        "def build(command):\n"
+        "    print(*(n in sys.modules for n in (*m.PRELOAD, 'scipy.linalg', 'fabkiri.api')))\n"
+        "    return parser(command)\n"
+        "m.build_parser, m._run = build, lambda args: 0\n"
+        f"m.main(['design', '--tiles', '8x8', '--target', 'circle', '-o', {str(tmp_path / 'p.json')!r}])\n"
+    )
+    assert _printed(code) == ["True", "True", "True", "False"]
+
+
+@pytest.mark.slow
+def test_every_command_preloaded_loads_the_libraries_anyway():
+    # the preload changes where they load, never what a command loads: each command's own modules load them
+    # (coupon's none, so it is skipped); one fresh interpreter per command, all at once
+    code = (
+        "import sys\nfrom fabkiri.cli.main import PRELOAD, build_parser\nbuild_parser(sys.argv[1])\n"
+        "print(all(m in sys.modules for m in PRELOAD), any(m in sys.modules for m in PRELOAD))"
+    )
+    runs = {
+        name: subprocess.Popen(
+            [sys.executable, "-c", code, name], stdout=subprocess.PIPE, text=True
+        )
+        for name in cli.SUMMARIES
+    }
+    for name, proc in runs.items():
+        out, _ = proc.communicate()
+        assert proc.returncode == 0, name
+        skipped = name in cli.PRELOAD_SKIPS
+        assert out.split() == (["False", "False"] if skipped else ["True", "True"]), name
+    assert cli.preload_libraries("coupon") == [] and cli.preload_libraries(None) == []
+
+
 def test_mechanics_contract_is_the_function_whichever_loads_first():
     # the lazy package keeps `mechanics.contract` the function, as its eager `from .contract import contract`
     # did, also once the submodule of that name is loaded (the import system sets it on the package)
