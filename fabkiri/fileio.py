@@ -109,9 +109,9 @@ def read_input(
         )
     note_inputs(p)
     try:
-        return p.read_text("utf-8")
+        return p.read_text("utf-8-sig")  # a byte-order mark (Windows editors) is no text
     except UnicodeDecodeError:
-        raise error(f"{p}: not a text file") from None
+        raise error(f"{p}: not a UTF-8 text file") from None
     except OSError as exc:
         raise error(f"{p}: cannot be read ({exc.strerror})") from None
 
