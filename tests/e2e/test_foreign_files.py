@@ -10,12 +10,15 @@ import json
 
 import numpy as np
 import pytest
+from fabkiri.api.patterns import import_pattern
 from fabkiri.design.targets.lookup import load_target
 from fabkiri.errors import InputError, PatternError
 from fabkiri.exchange.fold import fold_text, loads_fold
 from fabkiri.exchange.pattern_json import dumps
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern
+from fabkiri.pattern.kinds.kagome.lattice import standard_kagome
+from fabkiri.verify.pattern_checks import topology_checks
 
 SQUARE = [[0, 0], [40, 0], [40, 30], [0, 30]]
 ROWS = "0,0\n40,0\n40,30\n0,30\n"
@@ -141,3 +144,18 @@ def test_clockwise_fold_faces_are_turned_as_obj_faces_are():
     pat = _read(_fold(faces_vertices=[f[::-1] for f in _fold()["faces_vertices"]]))
     assert np.array_equal(pat.tiles, PATTERN.tiles)  # verify failed "tiles counter-clockwise"
     assert np.allclose(pat.contracted[2], PATTERN.contracted[2])
+
+
+def test_a_kagome_fold_file_keeps_its_kind_at_a_scale(tmp_path):
+    kagome = with_contracted_states(standard_kagome(3, 3, tile_size=10.0))
+    d = json.loads(fold_text(kagome)) | {"frame_unit": "unit"}
+    (tmp_path / "k.fold").write_text(json.dumps(d))
+    pat = import_pattern(str(tmp_path / "k.fold"), scale=2.0)  # was: "every tile must be a quad"
+    assert pat.kind == "kagome" and np.allclose(pat.nodes, kagome.nodes * 2.0)
+
+
+@pytest.mark.parametrize("tiles", [(1, 4), (2, 2), (3, 2)])
+def test_a_kagome_lattice_without_holes_passes_its_topology_check(tiles):
+    # new --lattice kagome --tiles 2x2 wrote a pattern verify failed and export refused
+    checks = topology_checks(standard_kagome(*tiles, tile_size=10.0))
+    assert [c.ok for c in checks] == [True], checks[0].detail
