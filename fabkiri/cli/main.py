@@ -20,6 +20,7 @@ import gc
 import importlib
 import os
 import re
+import signal
 import sys
 import warnings
 from collections.abc import Sequence
@@ -307,8 +308,21 @@ def _run(args: argparse.Namespace) -> int:
         return 3
 
 
+def _interrupted(signum, frame) -> None:
+    raise KeyboardInterrupt  # as Ctrl-C: the writer undoes a half-done move and removes its scratch
+
+
 def entry() -> None:
-    sys.exit(main())
+    """The ``fabkiri`` program: a kill (TERM, HUP) stops it as Ctrl-C does, with one line."""
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), _interrupted)
+    try:
+        code = main()
+    except KeyboardInterrupt:  # during start-up, before a command runs
+        print("fabkiri: interrupted; nothing was written", file=sys.stderr)
+        code = 130
+    sys.exit(code)
 
 
 if __name__ == "__main__":
