@@ -34,6 +34,23 @@ OUTLINES = {
     "crlf-closed.csv": "x,y\r\n0,0\r\n40,0\r\n40,30\r\n0,30\r\n0,0\r\n",
 }
 
+SVG = '<svg xmlns="http://www.w3.org/2000/svg" {}>{}</svg>'
+OUTLINES |= {
+    # scaled by a group's and its own transform: was read as 40 x 30 (as if untransformed)
+    "transformed.svg": SVG.format(
+        'width="100mm" height="100mm" viewBox="0 0 100 100"',
+        '<g transform="translate(5,5)"><path transform="scale(0.5,1)" d="M0 0H80V30H0Z"/></g>',
+    ),
+    # 1 user unit = 0.2646 mm (a 96 dpi viewBox in a mm-sized page): was read as 151.2 x 113.4
+    "px-viewbox.svg": SVG.format(
+        'width="400mm" height="400mm" viewBox="0 0 1511.811 1511.811"',
+        '<path d="M0 0H151.1811V113.3858H0Z"/>',
+    ),
+    "inch.svg": SVG.format(
+        'width="4in" height="3in" viewBox="0 0 4 3"', '<path d="M0 0H1.5748V1.1811H0Z"/>'
+    ),
+}
+
 # name: (file text, words of the refusal)
 BAD_OUTLINES = {
     "xyz.csv": ("0,0,5\n40,0,5\n40,30,5\n0,30,5\n", "3 numbers"),  # was read as its x, y
@@ -57,7 +74,7 @@ def _write(path, text):
 def test_an_outline_reads_as_the_shape_its_file_holds(name, tmp_path):
     tgt = load_target(str(_write(tmp_path / name, OUTLINES[name])))
     assert len(tgt.points) == 4
-    assert np.allclose(np.ptp(tgt.points, axis=0), [40.0, 30.0])
+    assert np.allclose(np.ptp(tgt.points, axis=0), [40.0, 30.0], rtol=1e-5)
 
 
 @pytest.mark.parametrize("name", sorted(BAD_OUTLINES))

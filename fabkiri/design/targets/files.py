@@ -11,6 +11,7 @@ import numpy as np
 
 from ... import limits
 from ...errors import InputError
+from ...exchange.svg import outline_path
 from ...fileio import read_input
 from .curve import Target
 from .shapes import SHAPES
@@ -109,18 +110,13 @@ def from_svg_path(
 
 
 def read_svg(path: Path, curve: str = "polyline") -> Target:
-    from lxml import etree
-
-    try:
-        tree = etree.parse(str(path))
-    except (OSError, etree.XMLSyntaxError) as exc:
-        raise InputError(f"{path}: not a readable SVG file ({exc})") from None
-    paths = tree.getroot().iter("{http://www.w3.org/2000/svg}path", "path")
-    for el in paths:
-        d = el.get("d")
-        if d:
-            return from_svg_path(d, path.stem, curve)
-    raise InputError(f"{path}: the SVG has no <path d=...> element")
+    """The first path of an SVG file in mm, as drawn: its transforms and the file's units applied."""
+    found = outline_path(path)
+    if found is None:
+        raise InputError(f"{path}: the SVG has no <path d=...> element")
+    d, mm = found
+    tgt = from_svg_path(d, path.stem, curve)
+    return Target(tgt.name, tgt.kind, tgt.points * mm)
 
 
 def read_points_file(path: Path) -> Target:
