@@ -27,7 +27,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .. import __version__, blas
-from ..errors import FabkiriError
+from ..errors import FabkiriError, InputError
 from ..fileio import inputs_scope, note_inputs, refuse_input
 
 COMMANDS = [
@@ -275,6 +275,8 @@ def _run(args: argparse.Namespace) -> int:
             limits.check_file_size(f)
         note_inputs(*files)
         if isinstance(getattr(args, "output", None), str):
+            if args.output == "-":  # a file named '-' is never what was meant
+                raise InputError("-o -: fabkiri writes files, not standard output; give a name")
             refuse_input(args.output)
         code = args.func(args)
         return int(code or 0)

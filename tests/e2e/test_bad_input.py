@@ -346,6 +346,7 @@ CASES = {
         (),
     ),
     "info missing file": (["info", "missing.json"], 2, "no such file", ()),
+    "new -o - (stdout)": (["new", "--tiles", "2x2", "-o", "-"], 2, "not standard output", ()),
     "new no such folder": (
         ["new", "--tiles", "2x2", "-o", "nofolder/x.json"],
         2,

@@ -14,6 +14,7 @@ from fabkiri.api.patterns import import_pattern
 from fabkiri.design.targets.lookup import load_target
 from fabkiri.errors import InputError, PatternError
 from fabkiri.exchange.fold import fold_text, loads_fold
+from fabkiri.exchange.obj import read_obj
 from fabkiri.exchange.pattern_json import dumps
 from fabkiri.mechanics import with_contracted_states
 from fabkiri.pattern import standard_pattern
@@ -176,3 +177,10 @@ def test_a_kagome_lattice_without_holes_passes_its_topology_check(tiles):
     # new --lattice kagome --tiles 2x2 wrote a pattern verify failed and export refused
     checks = topology_checks(standard_kagome(*tiles, tile_size=10.0))
     assert [c.ok for c in checks] == [True], checks[0].detail
+
+
+def test_obj_faces_may_count_vertices_back_from_the_last(tmp_path):
+    square = "v 0 0 0\nv 10 0 0\nv 10 10 0\nv 0 10 0\n"
+    (tmp_path / "rel.obj").write_text(square + "f -4 -3 -2 -1\n")  # was: "references vertex -4"
+    (tmp_path / "abs.obj").write_text(square + "f 1 2 3 4\n")
+    assert np.array_equal(read_obj(tmp_path / "rel.obj")[1], read_obj(tmp_path / "abs.obj")[1])
