@@ -109,9 +109,9 @@ def read_input(
         )
     note_inputs(p)
     try:
-        return p.read_text("utf-8")
+        return p.read_text("utf-8-sig")  # a byte-order mark (Windows editors) is no text
     except UnicodeDecodeError:
-        raise error(f"{p}: not a text file") from None
+        raise error(f"{p}: not a UTF-8 text file") from None
     except OSError as exc:
         raise error(f"{p}: cannot be read ({exc.strerror})") from None
 
@@ -209,24 +209,30 @@ def _move_in(dests: list[Path], staged: list[Path], scratch: Path) -> None:
             backup = None
             if dest.exists() or dest.is_symlink():
                 backup = scratch / f"old-{i}"
+            done.append((dest, backup))  # before the move: a signal between them must undo it
+            if backup is not None:
                 os.replace(dest, backup)
-            done.append((dest, backup))
             os.replace(tmp, dest)
     except BaseException:
-        for dest, backup in reversed(done):
-            try:
-                if backup is not None and backup.exists():
-                    os.replace(backup, dest)
-                elif backup is None:
-                    dest.unlink(missing_ok=True)
-            except OSError:
-                pass
-        for folder in reversed(made):
-            try:
-                folder.rmdir()
-            except OSError:
-                pass
+        _undo(done, made)
         raise
+
+
+def _undo(done: list[tuple[Path, Path | None]], made: list[Path]) -> None:
+    """Put back what :func:`_move_in` replaced and remove the folders it made."""
+    for dest, backup in reversed(done):
+        try:
+            if backup is not None and backup.exists():
+                os.replace(backup, dest)
+            elif backup is None:
+                dest.unlink(missing_ok=True)
+        except OSError:
+            pass
+    for folder in reversed(made):
+        try:
+            folder.rmdir()
+        except OSError:
+            pass
 
 
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> Path:

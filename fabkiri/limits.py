@@ -299,6 +299,10 @@ def coordinate_problem(
         if short.any():
             t = int(np.flatnonzero(short)[0])
             return f"tile {t} has two coinciding corners (an edge of {edge[t].min():.3g} mm)"
+        tiny = edge.min(1) < MIN_LENGTH_MM
+        if tiny.any():  # as check_scale: below a micrometre the geometry checks break
+            t = int(np.flatnonzero(tiny)[0])
+            return f"tile {t} has an edge of {edge[t].min():.3g} mm (at least {MIN_LENGTH_MM:g} mm)"
     return None
 
 

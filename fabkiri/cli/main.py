@@ -20,13 +20,14 @@ import gc
 import importlib
 import os
 import re
+import signal
 import sys
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
 from .. import __version__, blas
-from ..errors import FabkiriError
+from ..errors import FabkiriError, InputError
 from ..fileio import inputs_scope, note_inputs, refuse_input
 
 COMMANDS = [
@@ -296,6 +297,8 @@ def _run(args: argparse.Namespace) -> int:
             limits.check_file_size(f)
         note_inputs(*files)
         if isinstance(getattr(args, "output", None), str):
+            if args.output == "-":  # a file named '-' is never what was meant
+                raise InputError("-o -: fabkiri writes files, not standard output; give a name")
             refuse_input(args.output)
         code = args.func(args)
         return int(code or 0)
@@ -329,8 +332,21 @@ def _run(args: argparse.Namespace) -> int:
         return 3
 
 
+def _interrupted(signum, frame) -> None:
+    raise KeyboardInterrupt  # as Ctrl-C: the writer undoes a half-done move and removes its scratch
+
+
 def entry() -> None:
-    sys.exit(main())
+    """The ``fabkiri`` program: a kill (TERM, HUP) stops it as Ctrl-C does, with one line."""
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), _interrupted)
+    try:
+        code = main()
+    except KeyboardInterrupt:  # during start-up, before a command runs
+        print("fabkiri: interrupted; nothing was written", file=sys.stderr)
+        code = 130
+    sys.exit(code)
 
 
 if __name__ == "__main__":

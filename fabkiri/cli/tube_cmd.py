@@ -13,6 +13,12 @@ from ..api.patterns import load_pattern
 from ..fileio import atomic_write, atomic_write_many, check_output_file, check_output_folder
 from .argtypes import parse_tiles
 
+# design options a tube design does not use, with their defaults
+NOT_FOR_TUBES = dict.fromkeys(
+    "target size trim symmetry lattice_angle holes contracted_target init material hinge printer "
+    "style min_feature min_hole min_opening json".split()
+) | {"lattice": "quad", "solver": "auto", "shape_tol": "2%", "fit": "outline"}
+
 
 def cmd_design_tube(args: argparse.Namespace) -> int:
     """``design --tube SPEC --tiles ROWSxCOLS``: write the tube's sheet; exit 1 unless it converged and
@@ -22,6 +28,9 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
 
     if args.tiles is None:
         raise InputError("--tube designs need --tiles ROWSxCOLS")
+    unused = [k for k, v in NOT_FOR_TUBES.items() if getattr(args, k) not in (v, None, False)]
+    if unused:  # they were silently ignored: a tube's sheet is set by --tube alone
+        raise InputError(f"--{unused[0].replace('_', '-')} does not apply to --tube designs")
     rows, cols = parse_tiles(args.tiles)
     check_output_file(args.output)
     out = design_tube_pattern(

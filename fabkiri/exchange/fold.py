@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import __version__, limits
 from ..errors import PatternError
+from ..pattern import geometry
 from ..pattern.kinds.tessellation import kind_of_arity
 from ..pattern.model import Pattern
 from .file_formats import PatternFormat, register_format
@@ -92,26 +93,36 @@ def fold_text(pattern: Pattern) -> str:
     return _object(fold_dict(pattern)) + "\n"
 
 
+# mm per FOLD ``frame_unit`` (the spec's list); "unit" or none: unitless, ``--scale`` gives the mm
+UNITS_MM = {"unit": None, "mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "pt": 25.4 / 72}
+UNITS_MM |= {"um": 1e-3, "nm": 1e-6}
+
+
 def _array(data: dict, key: str, source: str, width: int | None = None) -> np.ndarray:
     if key not in data:
         raise PatternError(f"{source}: no {key} (a fabkiri pattern needs vertices and faces)")
     try:
-        a = np.asarray(data[key], dtype=float)
+        a = np.asarray(data[key])
     except (TypeError, ValueError):
-        raise PatternError(f"{source}: {key} is not a rectangular array of numbers") from None
+        a = np.asarray(None)
+    rows = data[key] if isinstance(data[key], list) else []
+    flags = any(isinstance(v, bool) for r in rows if isinstance(r, list) for v in r)
+    if a.dtype.kind not in "iuf" or flags:  # strings, true/false, nulls, ragged rows: not numbers
+        raise PatternError(f"{source}: {key} is not a rectangular array of numbers")
     if a.ndim != 2 or (width is not None and a.shape[1] != width):
         raise PatternError(
             f"{source}: {key} must have {width} entries per row, got shape {a.shape}"
         )
-    return a
+    return a.astype(float)
 
 
 def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
     """A pattern from a FOLD object: key frame deployed, frames tagged with a closed state stored.
 
     Frames without our state tag are read as closed states 1, 2 in order when
-    they are 2D and inherit the mesh. The faces' arity names the kind (quads, kagome triangles);
-    z must be 0.
+    they are 2D and inherit the mesh (a folded 3D form of another tool is no closed state). The faces'
+    arity names the kind (quads, kagome triangles); z must be 0. Faces listed clockwise overall are
+    reversed, as OBJ import does.
     """
     if not isinstance(data, dict):
         raise PatternError(f"{source}: expected a FOLD JSON object")
@@ -136,49 +147,88 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
         or tiles.max(initial=0) >= len(coords)
     ):
         raise PatternError(f"{source}: faces_vertices must be vertex indices 0..{len(coords) - 1}")
-    contracted = {}
-    for k, frame in enumerate(data.get("file_frames", []) or [], 1):
-        if not isinstance(frame, dict) or "vertices_coords" not in frame:
-            continue
-        state = frame.get(STATE_KEY, k)
-        if state not in (1, 2) or state in contracted:
-            continue
-        xy = _array(frame, "vertices_coords", f"{source} frame {k}")[:, :2]
-        if len(xy) != len(coords):
-            raise PatternError(
-                f"{source} frame {k}: {len(xy)} vertices, the key frame has {len(coords)}"
-            )
-        contracted[int(state)] = xy[tiles]
+    if geometry.signed_areas(coords[tiles]).sum() < 0:
+        tiles = tiles[:, ::-1]
     return Pattern(
         nodes=coords,
         tiles=tiles,
-        contracted=contracted,
+        contracted=_closed_frames(data, tiles, len(coords), source),
         kind=kind,
         name=str(data.get("file_title", "")) or source,
         design={"source": {"fold": source, "file_creator": data.get("file_creator")}},
     )
 
 
-def loads_fold(text: str, source: str = "fold") -> Pattern:
+def _closed_frames(data: dict, tiles: np.ndarray, n: int, source: str) -> dict[int, np.ndarray]:
+    """The closed states among ``file_frames``: tagged ones, then untagged 2D frames on the same mesh."""
+    contracted: dict[int, np.ndarray] = {}
+    untagged = 0
+    for k, frame in enumerate(data.get("file_frames", []) or [], 1):
+        if not isinstance(frame, dict) or "vertices_coords" not in frame:
+            continue
+        if STATE_KEY not in frame:
+            own = frame.get("faces_vertices")
+            if "3D" in (frame.get("frame_attributes") or []) or (
+                own is not None and not np.array_equal(np.asarray(own), data["faces_vertices"])
+            ):
+                continue
+            untagged += 1
+        state = frame.get(STATE_KEY, untagged)
+        if state not in (1, 2) or state in contracted:
+            continue
+        xyz = _array(frame, "vertices_coords", f"{source} frame {k}")
+        if len(xyz) != n:
+            raise PatternError(f"{source} frame {k}: {len(xyz)} vertices, the key frame has {n}")
+        if xyz.shape[1] > 2 and np.abs(xyz[:, 2:]).max(initial=0.0) > 0:
+            if STATE_KEY in frame:
+                raise PatternError(f"{source} frame {k}: closed state {state} has z != 0")
+            untagged -= 1  # a folded form: no closed state
+            continue
+        contracted[int(state)] = xyz[:, :2][tiles]
+    return contracted
+
+
+def _unit_mm(data: Any, scale: float, source: str) -> float:
+    """mm per file coordinate: the key frame's ``frame_unit``, or ``scale`` for a unitless file."""
+    unit = data.get("frame_unit", "unit") if isinstance(data, dict) else "unit"
+    if unit not in UNITS_MM:
+        raise PatternError(
+            f"{source}: unknown frame_unit {unit!r} (FOLD units: {', '.join(UNITS_MM)})"
+        )
+    mm = UNITS_MM[unit]
+    if mm is None:
+        return scale
+    if scale != 1.0:
+        raise PatternError(
+            f"{source}: its frame_unit is {unit!r}; --scale is for files without a unit"
+        )
+    return mm
+
+
+def loads_fold(text: str, source: str = "fold", scale: float = 1.0) -> Pattern:
+    """A FOLD file's pattern in mm (its ``frame_unit``, or ``scale`` mm per unit when it has none)."""
     from ..limits import loads_json  # depth, integer and float bounds, as pattern.json
 
-    return pattern_from_fold(loads_json(text, source, PatternError), source)
-
-
-def _read_fold(path: Path, scale: float) -> Pattern:
-    """A ``.fold`` file, its coordinates times ``scale`` (mm per file unit)."""
-    from .pattern_json import _read_text
-
-    pat = loads_fold(_read_text(path), str(path))
-    if scale != 1.0:
+    data = loads_json(text, source, PatternError)
+    mm = _unit_mm(data, scale, source)
+    pat = pattern_from_fold(data, source)
+    if mm != 1.0:
         pat = Pattern(
-            nodes=pat.nodes * scale,
+            nodes=pat.nodes * mm,
             tiles=pat.tiles,
-            contracted={k: v * scale for k, v in pat.contracted.items()},
+            contracted={k: v * mm for k, v in pat.contracted.items()},
+            kind=pat.kind,
             name=pat.name,
             design=pat.design,
         )
-    return limits.check_pattern(pat, str(path))
+    return pat
+
+
+def _read_fold(path: Path, scale: float) -> Pattern:
+    """A ``.fold`` file in mm: its ``frame_unit``, or ``scale`` mm per file unit."""
+    from .pattern_json import _read_text
+
+    return limits.check_pattern(loads_fold(_read_text(path), str(path), scale), str(path))
 
 
 def _fold_said(pattern: Pattern, state: str, output: str, unit: float | None) -> str:

@@ -42,7 +42,9 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
         if tag == "v":
             verts.append(_obj_vertex(rest, f"{source}: line {lineno}"))
         elif tag == "f":
-            faces.append(_obj_face(rest, f"{source}: line {lineno}", faces[0] if faces else None))
+            face = _obj_face(rest, f"{source}: line {lineno}", faces[0] if faces else None)
+            # a negative index counts back from the last vertex so far (the OBJ spec)
+            faces.append([i if i >= 0 else len(verts) + 1 + i for i in face])
         # other records (vn, vt, o, g, s, usemtl, ...) carry nothing a pattern needs
     if not verts:
         raise PatternError(f"{source}: no vertices (empty or not an OBJ file)")

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import VerifyError
+from ..errors import InputError, VerifyError
 from .drawing import COLORS, DECIMALS, LAYERS, SheetDrawing
 from .file_formats import DrawingFormat, register_format
 from .linework import MM_PER_PX, NON_CUT_LAYERS, Linework, Polylines
@@ -300,6 +300,26 @@ def _declared_mm(attr: Any, height_px: float) -> float:
         return float(m.group(1)) * _UNIT_MM[m.group(2)] / height_px
     except ValueError:
         return MM_PER_PX
+
+
+def outline_path(p: Path) -> tuple[str, float] | None:
+    """The first ``<path>`` of any SVG with every transform and the viewBox applied (svgelements), as
+    path data, and mm per unit of it (the root's declared size; a root without a physical unit keeps
+    its user units as mm). None when the file has no path; :class:`InputError` when it is no SVG."""
+    import svgelements as se
+
+    try:
+        svg = se.SVG.parse(str(p), reify=True)
+    except Exception as exc:  # svgelements raises many kinds on bad XML
+        raise InputError(f"{p}: not a readable SVG file ({exc})") from None
+    path = next((e for e in svg.elements() if isinstance(e, se.Path) and len(e)), None)
+    if path is None:
+        return None
+    height = str(svg.values.get("height") or "")
+    if re.search(r"(mm|cm|in|pt|pc)\s*$", height):
+        return path.d(), _declared_mm(height, float(svg.height))
+    box = svg.viewbox
+    return path.d(), (box.width / float(svg.width) if box is not None and svg.width else 1.0)
 
 
 def _svg_mm(

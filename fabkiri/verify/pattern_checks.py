@@ -161,7 +161,10 @@ def topology_checks(pattern: Pattern) -> list[Check]:
     if lat.get("rows") and lat.get("cols") and counts is not None:
         m, n = int(lat["rows"]), int(lat["cols"])
         holes, free, holeless = counts(m, n)
-        bad += abs(K - holes) + abs(len(top.free_nodes) - free) + abs(len(orphan) - holeless)
+        bad += abs(K - holes) + abs(len(top.free_nodes) - free)
+        bad += (
+            abs(len(orphan) - holeless) if K else 0
+        )  # a lattice without holes: no hinge borders one
         detail += f"; a {m}x{n} lattice expects {holes} holes and {free} free corners"
         if holeless:
             detail += f" and {holeless} hinges bordering no hole"

@@ -286,6 +286,12 @@ CASES = {
         "largest tested",
         (),
     ),
+    "design --tube with --target": (
+        ["design", "--tube", "cylinder:100,60", "--tiles", "4x4", "--target", "t.csv", "-o", "o"],
+        2,
+        "--target does not apply to --tube",
+        (),
+    ),
     "design tube 1e308 mm": (
         ["design", "--tube", "cylinder:1e308,1e308", "--tiles", "4x4", "-o", "o.json"],
         2,
@@ -340,6 +346,7 @@ CASES = {
         (),
     ),
     "info missing file": (["info", "missing.json"], 2, "no such file", ()),
+    "new -o - (stdout)": (["new", "--tiles", "2x2", "-o", "-"], 2, "not standard output", ()),
     "new no such folder": (
         ["new", "--tiles", "2x2", "-o", "nofolder/x.json"],
         2,

@@ -9,7 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ... import limits
 from ...errors import InputError
+from ...exchange.svg import outline_path
+from ...fileio import read_input
 from .curve import Target
 from .shapes import SHAPES
 
@@ -67,6 +70,11 @@ def from_points(points, curve: str = "polyline", name: str = "points") -> Target
         raise InputError(f"{name}: points must be a list of [x, y] numbers") from None
     if pts.ndim != 2 or pts.shape[1] != 2:
         raise InputError(f"{name}: points must be pairs [x, y], got shape {pts.shape}")
+    far = np.abs(pts).max(initial=0.0)
+    if far > limits.MAX_COORD_MM and np.isfinite(far):  # a unit mistake, as in a pattern
+        raise InputError(
+            f"{name}: a point lies {far:.3g} mm from the origin (at most {limits.MAX_COORD_MM:g} mm)"
+        )
     if curve not in ("polyline", "spline"):
         raise InputError(f"{name}: curve must be 'polyline' or 'spline', not {curve!r}")
     return Target(name, curve, pts)
@@ -102,26 +110,18 @@ def from_svg_path(
 
 
 def read_svg(path: Path, curve: str = "polyline") -> Target:
-    from lxml import etree
-
-    try:
-        tree = etree.parse(str(path))
-    except (OSError, etree.XMLSyntaxError) as exc:
-        raise InputError(f"{path}: not a readable SVG file ({exc})") from None
-    paths = tree.getroot().iter("{http://www.w3.org/2000/svg}path", "path")
-    for el in paths:
-        d = el.get("d")
-        if d:
-            return from_svg_path(d, path.stem, curve)
-    raise InputError(f"{path}: the SVG has no <path d=...> element")
+    """The first path of an SVG file in mm, as drawn: its transforms and the file's units applied."""
+    found = outline_path(path)
+    if found is None:
+        raise InputError(f"{path}: the SVG has no <path d=...> element")
+    d, mm = found
+    tgt = from_svg_path(d, path.stem, curve)
+    return Target(tgt.name, tgt.kind, tgt.points * mm)
 
 
 def read_points_file(path: Path) -> Target:
     """CSV (``x,y`` per line, optional header) or JSON (list of points or a target description)."""
-    try:
-        text = path.read_text("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot be read ({exc})") from None
+    text = read_input(path, max_bytes=limits.MAX_PATTERN_BYTES, what="target file")
     if path.suffix.lower() == ".json":
         try:
             data = json.loads(text)
@@ -130,19 +130,54 @@ def read_points_file(path: Path) -> Target:
         if isinstance(data, list):
             return from_points(data, "polyline", path.stem)
         return from_spec(data, path.stem)
+    rows = _csv_rows(text, path)
+    if not rows:
+        raise InputError(f"{path}: no x,y rows")
+    return from_points(rows, "polyline", path.stem)
+
+
+def _fields(line: str) -> list[str]:
+    """A line's fields: split at ``;`` (then a comma is a decimal comma, as spreadsheets in many
+    locales write it), else at commas and white space; quotes around a field dropped."""
+    if ";" in line:
+        parts = [p.strip().replace(",", ".") for p in line.split(";")]
+    else:
+        parts = re.split(r"[,\s]+", line)
+    return [p.strip().strip("\"'") for p in parts if p.strip()]
+
+
+def _xy_columns(names: list[str]) -> tuple[int, int] | None:
+    """The columns a header names x and y (``x``, ``X [mm]``, ``y (mm)``), or None."""
+    bare = [re.sub(r"[\s_]*[(\[].*$", "", n).strip().lower() for n in names]
+    if "x" in bare and "y" in bare:
+        return bare.index("x"), bare.index("y")
+    return None
+
+
+def _csv_rows(text: str, path: Path) -> list[list[float]]:
+    """The x,y rows of a points CSV; header lines before the first row may name the x and y columns."""
     rows: list[list[float]] = []
+    columns = None
     for lineno, line in enumerate(text.splitlines(), 1):
         line = line.split("#", 1)[0].strip()
         if not line:
             continue
-        parts = [p for p in re.split(r"[,;\s]+", line) if p]
+        parts = _fields(line)
         try:
-            vals = [float(p) for p in parts[:2]]
+            vals = [float(p) for p in parts]
         except ValueError:
             if not rows:
-                continue  # a header line
+                columns = _xy_columns(parts) or columns  # a header line
+                continue
             raise InputError(f"{path}: line {lineno}: {line!r} is not 'x,y'") from None
-        if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
+        if columns is not None and len(vals) > max(columns):
+            vals = [vals[columns[0]], vals[columns[1]]]
+        elif len(vals) != 2:
+            raise InputError(
+                f"{path}: line {lineno}: {len(vals)} numbers, expected two (x,y); "
+                "a header line naming the columns x and y picks them from more"
+            )
+        if not all(math.isfinite(v) for v in vals):
             raise InputError(f"{path}: line {lineno}: expected two finite numbers x,y")
         rows.append(vals)
-    return from_points(rows, "polyline", path.stem)
+    return rows

@@ -79,10 +79,22 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
             tgt = Target(tgt.name, curve, tgt.points, source=tgt.source)
         if size:
             return tgt.scaled_to(size)
+        _check_own_size(tgt, p)
         return tgt.centred()
     raise InputError(
         f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)"
     )
+
+
+def _check_own_size(tgt: Target, path: Path) -> None:
+    """A file read at its own coordinates must span a length, as ``size`` must (a file in metres or
+    micrometres read as mm would design a pattern no other command can read)."""
+    extent = float(np.ptp(tgt.points, axis=0).max())
+    if not limits.MIN_LENGTH_MM <= extent <= limits.MAX_LENGTH_MM:
+        raise InputError(
+            f"target file {path} spans {extent:.3g} mm, outside [{limits.MIN_LENGTH_MM:g}, "
+            f"{limits.MAX_LENGTH_MM:g}] mm (its coordinates are read as mm; give a size to scale it)"
+        )
 
 
 def target_from_dict(d: dict, name: str = "target") -> Target:
