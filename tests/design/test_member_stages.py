@@ -3,7 +3,8 @@
 (``reduced.MEMBER_STAGE``): there its start, the coarse design's member, is close to the fine design and the soft
 stage's detour cost iterations and fit (issue #36's 64x64 circle); where that stage alone does not stall close to
 the target, the two stages run from the start as before. Neither larger lattices (96x96 and 128x128 ended further
-off with it) nor a coarse level of one (it would change the start of the level above) try it."""
+off with it) nor a coarse level of one (it would change the start of the level above) try it, but for a lattice
+above ``routes.KEEP_BLOCK_TILES`` that keeps its regulariser block (``MEMBER_STAGE_KEPT``)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ import pytest
 from fabkiri.design.core.conformance import deployed
 from fabkiri.design.core.request import DesignRequest
 from fabkiri.design.quad import routes
+from fabkiri.design.quad.rigid import reduced as R
+from fabkiri.design.quad.rigid import steps
 from fabkiri.design.quad.solve import design
 from fabkiri.design.targets.lookup import load_target
 
@@ -72,3 +75,32 @@ def test_the_stiffer_stage_alone_fits_a_48x48_circle_closer_in_fewer_iterations(
     h_both, its_both, residual_both = run()
     assert its < its_both and h <= h_both
     assert residual <= max(residual_both, 1e-11)
+
+
+def test_a_lattice_that_keeps_its_block_takes_the_stiffer_stage_alone_keeping_it(monkeypatch):
+    """Above ``routes.KEEP_BLOCK_TILES`` (forced low here, on the block path) the top level started from a close
+    tips-fitted coarse design tries ``MEMBER_STAGE_KEPT``, with the stage's regulariser block kept."""
+    monkeypatch.setattr(routes, "KEEP_BLOCK_TILES", 8 * 8)
+    monkeypatch.setattr(routes, "FINISH_FLOOR", 1.0)
+    monkeypatch.setattr(R, "DENSE_JD", 0)
+    asked: list = []
+    search, lm = routes.ReducedSearch, steps.levenberg_marquardt
+
+    def spy(*args, **kw):
+        asked.append((kw["member"], kw["keep_block"]))
+        return search(*args, **kw)
+
+    runs: list = []
+
+    def lm_spy(merit, p, max_iter, stall_tol, log, max_stall=steps.MAX_STALL):
+        runs.append((merit._kept is not None, max_stall))
+        return lm(merit, p, max_iter, stall_tol, log, max_stall)
+
+    monkeypatch.setattr(routes, "ReducedSearch", spy)
+    monkeypatch.setattr(steps, "levenberg_marquardt", lm_spy)
+    res = _circle(10)
+    assert res.converged and res.report["coarse"]["fit"] == "tips"
+    # the 5x5 level (a coarse level, from rescaled) neither; the 10x10 level both
+    assert asked == [(None, False), (R.MEMBER_STAGE_KEPT, True)]
+    assert R.MEMBER_STAGE_KEPT[-1] == 2 < steps.MAX_STALL
+    assert runs[-1] == (True, 2) and ALONE in res.report["iterations"]

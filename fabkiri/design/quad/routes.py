@@ -29,6 +29,7 @@ from .rigid.family import RigidFamily
 from .rigid.mirror import Mirror
 from .rigid.reduced import (
     MEMBER_STAGE,
+    MEMBER_STAGE_KEPT,
     POLISH_STEPS,
     SCALINGS,
     ReducedSearch,
@@ -70,7 +71,8 @@ MIRRORED_STARTS = ("standard", "conformal", "rescaled")
 
 # the lattices (tiles, least and most) whose top level, started from its coarse design, tries the stiffer stage
 # alone first (``MEMBER_STAGE``): measured closer at 48x48 and 64x64 (the rigid circle 0.214 -> 0.197 % at 64),
-# further at 96x96 and 128x128; never on a coarse level, which would change the start of the level above
+# further at 96x96 and 128x128 (forming the regulariser block at every step; above ``KEEP_BLOCK_TILES`` a level that
+# keeps it tries ``MEMBER_STAGE_KEPT``); never on a coarse level, which would change the start of the level above
 MEMBER_STAGE_TILES = (48 * 48, 64 * 64)
 # above this many tiles the lattice asked for and its coarse levels (not a symmetric design, nor a contact
 # rerun) keep each stage's regulariser grid block (``steps.stage``, ``keeps_block``): there forming it is most of
@@ -134,9 +136,15 @@ def _reduced_from(
         mirror = Mirror.build(fam, req.rows, req.cols, req.symmetry)
         log(f"mirror symmetry {req.symmetry}: {mirror.P.shape[1]} reduced unknowns")
     small = req.rows * req.cols <= FULL_ALWAYS_TILES and not tag
-    # from a coarse design's member (``_start``), on the lattice asked for only
+    # from a coarse design's member (``_start``), on the lattice asked for only; above the bounds where the level
+    # keeps its regulariser block, and nowhere a minimax finish follows (``keeps_block``)
     lo, hi = MEMBER_STAGE_TILES
-    member = S0 is not None and not req.coarse_level and lo <= req.rows * req.cols <= hi
+    keep = not mirror and keeps_block(prob)
+    member = None
+    if S0 is not None and not req.coarse_level:
+        member = (
+            MEMBER_STAGE if lo <= req.rows * req.cols <= hi else MEMBER_STAGE_KEPT if keep else None
+        )
     X, mode, its = solve_reduced(
         fam,
         prob.st,
@@ -154,8 +162,8 @@ def _reduced_from(
             # a finish step: its first scaling, no stiffer stage after a feasible first (``finish_step``)
             scalings=scalings[:1] if req.finish_step else scalings,
             polish_steps=0 if req.finish_step else POLISH_STEPS,
-            member=MEMBER_STAGE if member else None,
-            keep_block=not mirror and keeps_block(prob),
+            member=member,
+            keep_block=keep,
         ),
         S0=S0,
         mirror=mirror,

@@ -34,7 +34,7 @@ from .contact import ClosedContact
 from .family import RigidFamily
 from .merit import KeptGridBlock, _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
-from .steps import exact_fit, fit_miss, levenberg_marquardt, stage, stiffer_alone
+from .steps import MAX_STALL, exact_fit, fit_miss, levenberg_marquardt, stage, stiffer_alone
 from .tiles import TILE_SHAPE, TileShapeRows, grid_families
 
 # (penalty weight, stall tolerance, iteration cap) per stage, softest first as in the full solver: a stiff
@@ -57,7 +57,11 @@ POLISH_STEPS = 10
 # (``steps.stiffer_alone``): that design ends at the weight's margins, and where the fine design is close, the soft
 # stage's detour (corners into their margins for the fit, pushed out again) costs iterations and fit (64x64 rigid
 # circle: 31 iterations to 0.214 % of the size, against 14 to 0.197 %). docs/speed.md, "Ninth wave".
-MEMBER_STAGE = (STAGES[-1][0], STAGES[0][1], 25)
+MEMBER_STAGE = (STAGES[-1][0], STAGES[0][1], 25, MAX_STALL)
+# ... and above 96x96 tiles, where the stage keeps its regulariser block (``routes.keeps_block``): one step fewer
+# at its end, two small gains in a row (128x128 rigid circle: 31 iterations of the two stages to 0.22062 % of the
+# size; this stage alone 13 to 0.22039 %, 14 with three to 0.22064 %). docs/speed.md, "Session 55 (big55)".
+MEMBER_STAGE_KEPT = (STAGES[-1][0], STAGES[0][1], 25, 2)
 
 
 class _Merit:
@@ -376,8 +380,8 @@ class ReducedSearch:
     """How :func:`solve_reduced` weighs and searches: the regulariser's weight in the merit, ``fit_tol`` of a
     hard fit (absolute), ``mean_edge(X)`` the unit of its 1 % "nearly exact" threshold, the log, the LM
     iteration cap, the fit miss that ends the scalings early, the LM scalings to start with and the
-    ``(penalty weight, stall tolerance, iteration cap)`` of the stiffer stage tried alone first from a coarse
-    design's member (``MEMBER_STAGE``; None: the stages only); ``keep_block``: ``steps.stage``'s."""
+    ``(penalty weight, stall tolerance, iteration cap, small gains in a row)`` of the stiffer stage tried alone
+    first from a coarse design's member (``MEMBER_STAGE``; None: the stages only); ``keep_block``: ``steps.stage``'s."""
 
     reg_weight: float
     fit_tol: float
@@ -388,7 +392,7 @@ class ReducedSearch:
     scalings: tuple[str, ...] = SCALINGS
     # the stiffer stage's cap after a first stage that ends feasible (a minimax finish step: 0, ``finish_step``)
     polish_steps: int = POLISH_STEPS
-    member: tuple[float, float, int] | None = None
+    member: tuple[float, float, int, int] | None = None
     keep_block: bool = False
 
 

@@ -84,7 +84,9 @@ class _HardMember(_Member):
         return -(float(self.r @ Jdp) + 0.5 * float(Jdp @ Jdp))
 
 
-def levenberg_marquardt(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log):
+def levenberg_marquardt(
+    merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: float, log, max_stall: int = MAX_STALL
+):
     """Levenberg-Marquardt on the merit; returns ``p, X, iterations``.
 
     The damping multiplies a scaling matrix (``_Member.step``), so it starts at 1e-3 itself and
@@ -95,7 +97,7 @@ def levenberg_marquardt(merit: _Merit, p: np.ndarray, max_iter: int, stall_tol: 
         start,
         start.moved,
         Damping(1e-3, 1e16),
-        Stopping(max_iter, stall_tol, MAX_STALL),
+        Stopping(max_iter, stall_tol, max_stall),
         log=log,
         label=f"reduced rho={merit.sq**2:g}",
     )
@@ -160,11 +162,12 @@ def stiffer_alone(judge, p0, scaling: str, iters: dict, how: ReducedSearch):
     """The stiffer stage alone from a coarse design's member ``p0`` (``how.member``): ``(p, X, merit)`` where it
     stalls before its cap, feasible, with its fit within ``how.miss_tol``; else None, and the stages run from
     ``p0`` as before. Where the fine level must move far (star, ellipse, heart at 48-64 tiles) this stage crawls
-    along its wall to the cap, or stalls with the fit still off, and would end further off."""
+    along its wall to the cap, or stalls with the fit still off, and would end further off. The stage keeps its
+    regulariser block where ``how.keep_block`` asks (``stage``)."""
     assert how.member is not None
-    rho, stall_tol, cap = how.member
-    merit = judge.staged(rho, scaling)
-    p, X, k = levenberg_marquardt(merit, p0, min(cap, how.max_iter), stall_tol, how.log)
+    rho, stall_tol, cap, max_stall = how.member
+    merit = stage(judge, rho, scaling, how, "")
+    p, X, k = levenberg_marquardt(merit, p0, min(cap, how.max_iter), stall_tol, how.log, max_stall)
     iters[f"reduced_{scaling}_member_rho_{rho:g}"] = k
     miss = fit_miss(exact_fits(merit.fits), X)
     if k < cap and judge.ineq_violation(judge.state(p)) == 0.0 and miss <= how.miss_tol:
