@@ -16,6 +16,7 @@ import numpy as np
 
 from ..design.quad.corner_split import bent_strip
 from ..design.quad.fabrication import FabricationLimits, smallest_size
+from ..design.quad.strip_split import turn_corners
 from ..design.targets.curve import Target
 from .print_tiles import tile_width_mm
 
@@ -41,6 +42,12 @@ class TilesChoice:
     given: bool = False  # the user named the tiles
     # the target's split parameters BL, BR, TR, TL when make re-split it (None: the target's own)
     corners: tuple[float, float, float, float] | None = None
+    asked: tuple[int, int] | None = None  # the N x N make chose before a re-split (None: ``tiles``)
+
+    @property
+    def count(self) -> tuple[int, int]:
+        """The N x N make chose (or the user named), before any re-split into a strip."""
+        return self.asked or self.tiles
 
 
 def min_feature_mm(limits: FabricationLimits) -> float:
@@ -51,10 +58,11 @@ def min_feature_mm(limits: FabricationLimits) -> float:
 
 def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
     """``choice`` with the lattice's corners and rows x columns of ``corner_split.bent_strip`` (an L, a
-    crescent: an outline whose own split folds the start). Not for tiles the user named (``--tiles``):
-    those keep the target's corners (a JSON target's ``"corners"`` sets them)."""
+    crescent, a U: an outline whose own split folds the start), its corners at sharp vertices or where the
+    outline turns (``strip_split.turn_corners``: a rounded U has no sharp vertex). Not for tiles the user
+    named (``--tiles``): those keep the target's corners (a JSON target's ``"corners"`` sets them)."""
     rows, cols = choice.tiles
-    strip = bent_strip(target, rows, cols)
+    strip = bent_strip(target, rows, cols, turn_corners(target))
     if strip is None:
         return choice
     split, tiles, d, d0 = strip
@@ -65,7 +73,9 @@ def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
         f"outline's own split at {rows}x{cols}, where the start folds tiles)"
     )
     c = tuple(float(v) for v in split.corners)
-    return replace(choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]))
+    return replace(
+        choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]), asked=(rows, cols)
+    )
 
 
 def choose_tiles(
@@ -110,6 +120,28 @@ def choose_tiles(
         f"that could work is --size {least:.4g})"
     )
     return resplit(target, TilesChoice((n, n), why, w, feature))
+
+
+def denser_tiles(
+    target: Target, limits: FabricationLimits, first: TilesChoice, least_mm: float = 0.0
+) -> TilesChoice | None:
+    """After a far miss at ``first`` (tiles make chose): the next count of :data:`STANDARD_TILES` up (at most
+    :data:`MAX_AUTO`) whose tiles stay :data:`RETRY_COMFORT` times the process's thinnest feature and at
+    least ``least_mm``, re-split as :func:`choose_tiles` would; None when there is none. A pocket or an arm
+    the lattice did not follow needs more tiles across it, not a neighbouring count (the T at 100 mm for
+    card-0.3: the 4x4 strip missed 3.5x the tolerance, 6x6 met)."""
+    feature = min_feature_mm(limits)
+    n = first.count[0] * first.count[1]
+    for m in sorted(k for k in STANDARD_TILES if n < k * k and k <= MAX_AUTO):
+        w = tile_width_mm(target, m * m)
+        if w < RETRY_COMFORT * feature or w < least_mm:
+            return None  # more tiles are only narrower
+        why = (
+            f"more tiles across the outline's arms: tiles about {w:.3g} mm wide, at least "
+            f"{RETRY_COMFORT:g}x the {feature:.3g} mm {limits.source} needs"
+        )
+        return resplit(target, TilesChoice((m, m), why, w, feature))
+    return None
 
 
 def given_tiles(tiles: tuple[int, int], target: Target, limits: FabricationLimits) -> TilesChoice:

@@ -1,0 +1,96 @@
+"""``make`` on outlines the square lattice cannot follow (session 55): its own bent strip at rounded corners
+(``corner_split.bent_strip`` fed by ``strip_split.turn_corners``), the next standard count after a far miss
+(``maker_tiles.denser_tiles``) and the summary naming the lattice the design used."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from fabkiri.api import maker_tiles
+from fabkiri.api.maker_once import name_lattice
+from fabkiri.api.maker_result import MakeResult
+from fabkiri.design.quad import corner_split as cs
+from fabkiri.design.quad.strip_split import turn_corners
+from fabkiri.design.targets.lookup import load_target
+from fabkiri.fabricate import design_limits
+
+from ..design.test_opening import DATA
+
+U = str(
+    DATA / "uasym.csv"
+)  # the lead's asymmetric U, every corner rounded (radius 5): no sharp vertex
+ELL = str(DATA / "letter-l.csv")
+
+
+def _limits(target, material=None, printer=None):
+    fab, _ = design_limits.resolve(material, None, printer, None, None, None, target)
+    assert fab is not None
+    return fab
+
+
+@pytest.mark.slow  # the U's splits scored at 36 and 64 tiles (~2 CPU s)
+def test_makes_strip_takes_the_rounded_corners_of_a_u():
+    u = load_target(U, 100)
+    assert cs.bent_strip(u, 6, 6) is None  # the sharp vertices alone: none on a rounded outline
+    strip = cs.bent_strip(u, 6, 6, turn_corners(u))
+    assert strip is not None
+    split, (rows, cols), d, d0 = strip
+    assert d <= cs.RESPLIT_GAIN * d0 and max(rows, cols) >= 3 * min(rows, cols)
+    # the lattice's corners sit on the U's convex corners (within a rounding radius of the box's)
+    found = u.point(turn_corners(u))
+    for p in split.corner_points():
+        assert np.linalg.norm(found - p, axis=1).min() < 1e-6
+    card = _limits(u, material="card-0.3")
+    choice = maker_tiles.choose_tiles(u, card, card.source)
+    assert choice.tiles == (rows, cols) and choice.asked == (6, 6) and choice.count == (6, 6)
+    assert choice.corners is not None and "bends round the outline's pocket" in choice.reason
+
+
+def test_sharp_vertices_keep_their_own_split():
+    # the L's corners found by their turning are its sharp vertices: the candidates do not change
+    ell = load_target(ELL, 100)
+    sharp = cs.candidate_splits(ell)
+    both = cs.candidate_splits(ell, turn_corners(ell))
+    assert len(both) == len(sharp)
+    assert all(np.array_equal(a, b) for a, b in zip(sharp, both, strict=True))
+
+
+@pytest.mark.slow  # the L's splits scored (~1 CPU s)
+def test_a_far_miss_tries_the_next_count_up_at_the_size():
+    ell = load_target(ELL, 100)
+    card = _limits(ell, material="card-0.3")
+    first = maker_tiles.choose_tiles(ell, card, card.source)
+    assert (
+        first.tiles == (4, 4) and first.corners is None
+    )  # no strip of 16 or 36 tiles bends enough
+    denser = maker_tiles.denser_tiles(ell, card, first)
+    assert denser is not None and denser.count == (6, 6)
+    assert (
+        denser.corners is not None and denser.tiles[0] * denser.tiles[1] > 36
+    )  # the strip, re-split
+    feature = maker_tiles.min_feature_mm(card)
+    assert denser.tile_width_mm >= maker_tiles.RETRY_COMFORT * feature
+    # none once the next count's tiles would be thinner than the retry's comfort
+    small = load_target(ELL, 60)
+    first = maker_tiles.choose_tiles(small, card, card.source)
+    assert maker_tiles.denser_tiles(small, card, first) is None
+
+
+@pytest.mark.parametrize("given", [False, True])
+def test_the_summary_names_the_lattice_the_design_bent(given):
+    chose = maker_tiles.TilesChoice((6, 6), "the largest ...", 8.8, 4.1, given=given)
+    result = MakeResult("u.csv", 100.0, "cut", "card-0.3 ligament", chose, "u")
+    report = {"strip": {"tiles": [14, 4], "asked": [6, 6]}}
+    result.pattern = SimpleNamespace(design={"report": report})  # type: ignore[assignment]
+    name_lattice(result)
+    assert result.tiles.tiles == (14, 4) and result.tiles.count == (6, 6)
+    assert result.tiles.given == given
+    first = result.summary()[0]
+    assert "14x4 tiles" in first and "6x6 asked" in first
+    assert result.to_dict()["tiles"] == [14, 4]
+    # a design on the lattice asked is named as it was
+    result.tiles, report["strip"] = chose, None
+    name_lattice(result)
+    assert result.tiles is chose
