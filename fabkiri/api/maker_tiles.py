@@ -16,7 +16,6 @@ import numpy as np
 
 from ..design.quad.corner_split import bent_strip
 from ..design.quad.fabrication import FabricationLimits, smallest_size
-from ..design.quad.strip_split import turn_corners
 from ..design.targets.curve import Target
 from .print_tiles import tile_width_mm
 
@@ -58,11 +57,10 @@ def min_feature_mm(limits: FabricationLimits) -> float:
 
 def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
     """``choice`` with the lattice's corners and rows x columns of ``corner_split.bent_strip`` (an L, a
-    crescent, a U: an outline whose own split folds the start), its corners at sharp vertices or where the
-    outline turns (``strip_split.turn_corners``: a rounded U has no sharp vertex). Not for tiles the user
-    named (``--tiles``): those keep the target's corners (a JSON target's ``"corners"`` sets them)."""
+    crescent: an outline whose own split folds the start). Not for tiles the user named (``--tiles``):
+    those keep the target's corners (a JSON target's ``"corners"`` sets them)."""
     rows, cols = choice.tiles
-    strip = bent_strip(target, rows, cols, turn_corners(target))
+    strip = bent_strip(target, rows, cols)
     if strip is None:
         return choice
     split, tiles, d, d0 = strip

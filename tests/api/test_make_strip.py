@@ -1,18 +1,15 @@
-"""``make`` on outlines the square lattice cannot follow (session 55): its own bent strip at rounded corners
-(``corner_split.bent_strip`` fed by ``strip_split.turn_corners``), the next standard count after a far miss
-(``maker_tiles.denser_tiles``) and the summary naming the lattice the design used."""
+"""``make`` on outlines the square lattice cannot follow (session 55): the next standard count after a far
+miss (``maker_tiles.denser_tiles``) and the summary naming the lattice the design used (a bent strip of the
+design step's own, ``design_strip.py``)."""
 
 from __future__ import annotations
 
 from types import SimpleNamespace
 
-import numpy as np
 import pytest
 from fabkiri.api import maker_tiles
 from fabkiri.api.maker_once import name_lattice
 from fabkiri.api.maker_result import MakeResult
-from fabkiri.design.quad import corner_split as cs
-from fabkiri.design.quad.strip_split import turn_corners
 from fabkiri.design.targets.lookup import load_target
 from fabkiri.fabricate import design_limits
 
@@ -28,33 +25,6 @@ def _limits(target, material=None, printer=None):
     fab, _ = design_limits.resolve(material, None, printer, None, None, None, target)
     assert fab is not None
     return fab
-
-
-@pytest.mark.slow  # the U's splits scored at 36 and 64 tiles (~2 CPU s)
-def test_makes_strip_takes_the_rounded_corners_of_a_u():
-    u = load_target(U, 100)
-    assert cs.bent_strip(u, 6, 6) is None  # the sharp vertices alone: none on a rounded outline
-    strip = cs.bent_strip(u, 6, 6, turn_corners(u))
-    assert strip is not None
-    split, (rows, cols), d, d0 = strip
-    assert d <= cs.RESPLIT_GAIN * d0 and max(rows, cols) >= 3 * min(rows, cols)
-    # the lattice's corners sit on the U's convex corners (within a rounding radius of the box's)
-    found = u.point(turn_corners(u))
-    for p in split.corner_points():
-        assert np.linalg.norm(found - p, axis=1).min() < 1e-6
-    card = _limits(u, material="card-0.3")
-    choice = maker_tiles.choose_tiles(u, card, card.source)
-    assert choice.tiles == (rows, cols) and choice.asked == (6, 6) and choice.count == (6, 6)
-    assert choice.corners is not None and "bends round the outline's pocket" in choice.reason
-
-
-def test_sharp_vertices_keep_their_own_split():
-    # the L's corners found by their turning are its sharp vertices: the candidates do not change
-    ell = load_target(ELL, 100)
-    sharp = cs.candidate_splits(ell)
-    both = cs.candidate_splits(ell, turn_corners(ell))
-    assert len(both) == len(sharp)
-    assert all(np.array_equal(a, b) for a, b in zip(sharp, both, strict=True))
 
 
 @pytest.mark.slow  # the L's splits scored (~1 CPU s)

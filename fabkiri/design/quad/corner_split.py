@@ -7,8 +7,8 @@ every guess ran across it instead (21-33 % Hausdorff). An L is a strip bent once
 corners at the strip's two ends and as many rows as the strip is long in tile widths, the reflex corner
 sits alone on the inner arc and the fold-free start (:mod:`.inverse_map`) bends the lattice round it.
 
-The candidates are the default split and every four of the outline's convex sharp vertices (and of the
-rounded corners a caller finds, ``strip_split.turn_corners``), in CCW order; each is scored by its fold-free start's :func:`distortion`; the least wins: the start the solver has least
+The candidates are the default split and every four of the outline's convex sharp vertices, in CCW
+order; each is scored by its fold-free start's :func:`distortion`; the least wins: the start the solver has least
 to move.
 """
 
@@ -36,8 +36,6 @@ RESPLIT_GAIN = 0.5
 # (2.57 %) but overlapped 30 times while deploying; 4 across (16x4) deployed rigidly, collision-free
 MIN_ACROSS = 4
 NEXT_COUNT = {4: 6, 6: 8, 8: 12}  # make's N x N counts to the next one up (at most its 12x12)
-# of the perimeter (curve parameter): a corner found by its turning this near a sharp vertex is that vertex
-SAME_CORNER = 0.02
 
 
 def _stencils(rows: int, cols: int) -> tuple[np.ndarray, Stencils]:
@@ -67,35 +65,28 @@ def distortion(mesh: TargetMesh, corners: np.ndarray, rows: int, cols: int) -> f
     return float(np.abs(np.log(d1 / d2)).mean() + np.log(area).std())
 
 
-def candidate_splits(target: Target, corners: np.ndarray | None = None) -> list[np.ndarray]:
-    """The default split and every CCW four of the convex sharp vertices and of ``corners`` (curve
-    parameters of convex corners found otherwise: rounded ones) farther than :data:`SAME_CORNER` from
-    every sharp one (parameters BL, BR, TR, TL; one turn of each: the other turns are the same lattice
-    with rows and columns swapped)."""
+def candidate_splits(target: Target) -> list[np.ndarray]:
+    """The default split and every CCW four of the convex sharp vertices (parameters BL, BR, TR, TL;
+    one turn of each: the other turns are the same lattice with rows and columns swapped)."""
     u = sharp_params(target)
     p = target.points
     k = np.searchsorted(target._u[:-1], u)
     a, b = p[k] - p[k - 1], p[(k + 1) % len(p)] - p[k]
     convex = u[(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) > 0]
-    if corners is not None and len(corners):
-        gap = np.abs(np.mod(np.asarray(corners)[:, None] - convex[None, :] + 0.5, 1.0) - 0.5)
-        far = gap.min(axis=1) > SAME_CORNER if len(convex) else np.ones(len(corners), bool)
-        convex = np.concatenate([convex, np.asarray(corners)[far]])
     quads = [np.asarray(q) for q in combinations(np.sort(convex), 4)][:MAX_CANDIDATES]
     return [target.default_corner_split(), *quads]
 
 
 def best_split(
-    target: Target, shapes: list[tuple[int, int]], corners: np.ndarray | None = None
+    target: Target, shapes: list[tuple[int, int]]
 ) -> tuple[Target, tuple[int, int], float, float]:
-    """The target re-split (at :func:`candidate_splits` of ``corners``) and the ``(rows, cols)`` of
-    ``shapes`` whose fold-free start is least distorted, that distortion, and the default split's at
-    ``shapes[0]``."""
+    """The target re-split and the ``(rows, cols)`` of ``shapes`` whose fold-free start is least
+    distorted, that distortion, and the default split's at ``shapes[0]``."""
     mesh = TargetMesh(target)
     default = target.default_corner_split()
     best = (target, shapes[0], distortion(mesh, default, *shapes[0]))
     first = best[2]
-    for c in candidate_splits(target, corners):
+    for c in candidate_splits(target):
         for rc in shapes:
             d = distortion(mesh, c, *rc)
             if d < best[2]:
@@ -114,20 +105,18 @@ def lattice_shapes(n: int) -> list[tuple[int, int]]:
 
 
 def bent_strip(
-    target: Target, rows: int, cols: int, corners: np.ndarray | None = None
+    target: Target, rows: int, cols: int
 ) -> tuple[Target, tuple[int, int], float, float] | None:
     """The re-split target, its ``(rows, cols)``, distortion and the own split's, when the pattern's
     harmonic map onto ``target``'s own split folds tiles at ``rows`` x ``cols`` and a re-split's start is
     distorted less than :data:`RESPLIT_GAIN` times the own split's: over the shapes of these tiles, else
     of the next standard count's (a strip :data:`MIN_ACROSS` tiles across needs about as many tiles as
-    it is long in widths; the design's fabrication rows still hold every tile's width). The splits are
-    at the sharp convex vertices and ``corners`` (``strip_split.turn_corners``: rounded ones too; the
-    caller's, that module importing this one). None: keep it."""
+    it is long in widths; the design's fabrication rows still hold every tile's width). None: keep it."""
     if not default_folds(target, rows, cols):
         return None
     up = NEXT_COUNT.get(rows) if rows == cols else None
     for n in [rows * cols] + ([up * up] if up else []):
-        split, tiles, d, d0 = best_split(target, [(rows, cols), *lattice_shapes(n)], corners)
+        split, tiles, d, d0 = best_split(target, [(rows, cols), *lattice_shapes(n)])
         if split is not target and d <= RESPLIT_GAIN * d0:
             return split, tiles, d, d0
     return None
