@@ -8,8 +8,10 @@ design did, the progress line says so; none starts once they cost :data:`RETRY_B
 the design (the summary says which count missed and why the next was tried). With ``--tiles`` given,
 the count is the user's: one that meets is only named, once its cut or print and deploy steps have
 run too, as a ``fabkiri make ... --tiles RxC`` line (a checked alternative, never a count already
-tried). A farther miss (a reflex corner, a pocket) is not retried: neighbouring counts move the
-outline by about a tile, not by several tolerances; the step says so.
+tried). A farther miss (a reflex corner, a pocket) is not retried at neighbouring counts: they move the
+outline by about a tile, not by several tolerances; with tiles make chose, the next standard count up at
+the same size is designed once instead (``maker_tiles.denser_tiles``: more tiles across an arm), and used if
+it meets the shape (the held-out T and the letter L at 100 mm for card-0.3).
 
 When tiles ``make`` chose still miss (far, or after its retries), the smallest larger size of
 :data:`SIZE_STEPS` at which ``make`` would choose more tiles is made on a scratch result (design, cut or
@@ -288,12 +290,12 @@ def _larger_size(
     ... --size S`` line when its design meets the shape and every step of ``checks`` passes."""
     if plan.tiles.given:
         return []
-    count = plan.tiles.count[0] * plan.tiles.count[1]  # the N x N chosen, not a strip's lattice
+    count = plan.tiles.tiles[0] * plan.tiles.tiles[1]
     for k in SIZE_STEPS:
         size = float(math.ceil(plan.size * k / 10.0) * 10)
         target, fab = _target_and_limits(plan, size)
         choice = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
-        if choice.count[0] * choice.count[1] > count:
+        if choice.tiles[0] * choice.tiles[1] > count:
             break
     else:
         return [f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"]
