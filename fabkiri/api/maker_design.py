@@ -41,7 +41,7 @@ from . import maker_options as mo
 from .maker_once import StepRun, name_lattice
 from .maker_once import design_once as _design  # tests replace it here
 from .maker_result import MakeResult
-from .maker_tiles import TilesChoice, choose_tiles, denser_tiles, retry_tiles
+from .maker_tiles import TilesChoice, choose_tiles, denser_tiles, fewer_tiles, retry_tiles
 
 Progress = Callable[[str], None]
 
@@ -136,7 +136,10 @@ def _design_step(
         return _fallbacks(result, plan, say, checks, tried, run, ran)
     target, fab = _target_and_limits(plan, plan.size)
     tried = [first]
-    for choice in retry_tiles(target, fab, plan.tiles, plan.least_tile_mm)[:MAX_RETRIES]:
+    retries = retry_tiles(target, fab, plan.tiles, plan.least_tile_mm)
+    if not retries and not plan.tiles.given:  # no larger count wide enough: a smaller one
+        retries = fewer_tiles(target, fab, plan.tiles)
+    for choice in retries[:MAX_RETRIES]:
         r, c = choice.tiles
         spent = sum(a.cpu_s for a in tried[1:])
         if spent > RETRY_BUDGET * first.cpu_s:

@@ -10,6 +10,7 @@ import pytest
 from fabkiri.api import maker_tiles
 from fabkiri.api.maker_once import name_lattice
 from fabkiri.api.maker_result import MakeResult
+from fabkiri.api.print_tiles import least_tile_mm
 from fabkiri.design.targets.lookup import load_target
 from fabkiri.fabricate import design_limits
 
@@ -64,3 +65,17 @@ def test_the_summary_names_the_lattice_the_design_bent(given):
     result.tiles, report["strip"] = chose, None
     name_lattice(result)
     assert result.tiles is chose
+
+
+@pytest.mark.slow  # the boot's counts (~0.5 CPU s)
+def test_a_near_miss_with_no_wider_count_left_tries_fewer_tiles():
+    boot = load_target(str(DATA / "boot.csv"), 100)
+    prusa = _limits(boot, printer="prusa-mk4")
+    least = least_tile_mm("prusa-mk4", "tiles-and-strips")
+    first = maker_tiles.choose_tiles(boot, prusa, prusa.source, least)
+    assert first.tiles == (6, 6)
+    assert maker_tiles.retry_tiles(boot, prusa, first, least) == []  # 7x7 is under the 8.7 mm tile
+    [fewer] = maker_tiles.fewer_tiles(boot, prusa, first)
+    assert fewer.tiles == (4, 4) and fewer.tile_width_mm > first.tile_width_mm
+    smallest = maker_tiles.TilesChoice((4, 4), "", 1.0, 1.0)
+    assert maker_tiles.fewer_tiles(boot, prusa, smallest) == []
