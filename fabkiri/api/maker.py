@@ -27,14 +27,10 @@ from ..errors import FabkiriError, InputError, Param
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from ..pattern.tilecount import tile_count
-from .maker_design import (  # noqa: F401 (_opening_lines re-exported)
-    StepRun,
-    _opening_lines,
-    design_step,
-    options_after_refusal,
-)
+from .maker_design import StepRun, design_step, options_after_refusal
 from .maker_design import cpu_s as _cpu
 from .maker_early import narrow_of, refuse_narrow
+from .maker_once import opening_lines as _opening_lines  # noqa: F401 (re-exported)
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
 from .print_tiles import check_room, least_tile_mm

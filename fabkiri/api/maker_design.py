@@ -8,8 +8,10 @@ design did, the progress line says so; none starts once they cost :data:`RETRY_B
 the design (the summary says which count missed and why the next was tried). With ``--tiles`` given,
 the count is the user's: one that meets is only named, once its cut or print and deploy steps have
 run too, as a ``fabkiri make ... --tiles RxC`` line (a checked alternative, never a count already
-tried). A farther miss (a reflex corner, a pocket) is not retried: neighbouring counts move the
-outline by about a tile, not by several tolerances; the step says so.
+tried). A farther miss (a reflex corner, a pocket) is not retried at neighbouring counts: they move the
+outline by about a tile, not by several tolerances; with tiles make chose, the next standard count up at
+the same size is designed once instead (``maker_tiles.denser_tiles``: more tiles across an arm), and used if
+it meets the shape (the held-out T and the letter L at 100 mm for card-0.3).
 
 When tiles ``make`` chose still miss (far, or after its retries), the smallest larger size of
 :data:`SIZE_STEPS` at which ``make`` would choose more tiles is made on a scratch result (design, cut or
@@ -29,29 +31,19 @@ import shlex
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 from ..design.core import conformance as conf
 from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
 from . import maker_options as mo
-from .design_report import DesignReport
+from .maker_once import StepRun, name_lattice
+from .maker_once import design_once as _design  # tests replace it here
 from .maker_result import MakeResult
-from .maker_tiles import TilesChoice, choose_tiles, retry_tiles
+from .maker_tiles import TilesChoice, choose_tiles, denser_tiles, fewer_tiles, retry_tiles
 
 Progress = Callable[[str], None]
-
-
-class StepRun(NamedTuple):
-    """What one step of ``make`` did: whether it passed, its exit code, its one-line figures, its files
-    (by name in the run's folder) and the lines it adds below them."""
-
-    ok: bool
-    exit_code: int
-    figures: str
-    files: dict[str, Any]
-    details: list[str]
 
 
 StepFn = Callable[[MakeResult, Any, Progress], StepRun]
@@ -102,7 +94,9 @@ def design_step(result: MakeResult, plan, say: Progress, checks: Checks) -> Step
     are, by process, the steps (cut or print, deploy) an alternative must pass before it is named. A miss
     left at the end words its tile count from every count designed here (:func:`_trend_checked`)."""
     ran: list[_Attempt] = []
-    return _trend_checked(result, _design_step(result, plan, say, checks, ran), ran)
+    run = _trend_checked(result, _design_step(result, plan, say, checks, ran), ran)
+    name_lattice(result)
+    return run
 
 
 def _trend_checked(result: MakeResult, run: StepRun, ran: list[_Attempt]) -> StepRun:
@@ -129,15 +123,23 @@ def _design_step(
     if first.run.ok or miss is None or miss <= 1:
         return first.run  # met, or failed for another reason than the shape
     if miss > RETRY_WITHIN:
+        denser = _denser(result, plan, say, first, ran)
+        if denser is not None and denser.run.ok:
+            return _adopt(result, denser, [first, denser])
+        tried = [first] if denser is None else [first, denser]
         note = (
-            f"no other tile count tried: the miss is {miss:.1f}x the tolerance, more than the "
+            f"no neighbouring tile count tried: the miss is {miss:.1f}x the tolerance, more than the "
             f"{RETRY_WITHIN:g}x a neighbouring count is likely to close"
+            + (f"; {denser.line()} at this size" if denser is not None else "")
         )
-        run = _with_details(first.run, [note])
-        return _fallbacks(result, plan, say, checks, [first], run, ran)
+        run = _with_details(_keep_best(result, tried) if denser else first.run, [note])
+        return _fallbacks(result, plan, say, checks, tried, run, ran)
     target, fab = _target_and_limits(plan, plan.size)
     tried = [first]
-    for choice in retry_tiles(target, fab, plan.tiles, plan.least_tile_mm)[:MAX_RETRIES]:
+    retries = retry_tiles(target, fab, plan.tiles, plan.least_tile_mm)
+    if not retries and not plan.tiles.given:  # no larger count wide enough: a smaller one
+        retries = fewer_tiles(target, fab, plan.tiles)
+    for choice in retries[:MAX_RETRIES]:
         r, c = choice.tiles
         spent = sum(a.cpu_s for a in tried[1:])
         if spent > RETRY_BUDGET * first.cpu_s:
@@ -166,6 +168,29 @@ def _design_step(
     if result.alternatives:
         return run
     return _fallbacks(result, plan, say, checks, tried, run, ran)
+
+
+def _denser(
+    result: MakeResult, plan, say: Progress, first: _Attempt, ran: list[_Attempt]
+) -> _Attempt | None:
+    """After a far miss with tiles make chose: the design at the next standard count up at this size
+    (``maker_tiles.denser_tiles``), None when there is none or the design refuses it up front."""
+    if plan.tiles.given:
+        return None
+    target, fab = _target_and_limits(plan, plan.size)
+    choice = denser_tiles(target, fab, plan.tiles, plan.least_tile_mm)
+    if choice is None:
+        return None
+    say(
+        f"make: the design at {_rc(plan.tiles)} missed the shape ({first.miss:.2f}x the tolerance); "
+        f"trying {_rc(choice)} tiles at {plan.size:g} mm to use it if it meets the shape "
+        f"({choice.reason}); about {first.cpu_s:.0f} CPU s more"
+    )
+    try:
+        return _attempt(result, replace(plan, tiles=choice), say, ran)
+    except FabkiriError as exc:  # a count the design refuses up front
+        say(f"make: {_rc(choice)} tiles refused by the design ({exc.cli_message()}); not counted")
+        return None
 
 
 def _fallbacks(
@@ -415,70 +440,3 @@ def make_command(plan, tiles: tuple[int, int] | None, output: Path | None, tag: 
     if plan.min_opening is not None:
         words += ["--min-opening", f"{plan.min_opening:g}"]
     return shlex.join([*words, "-o", str(Path(out))])
-
-
-def _design(result: MakeResult, plan, say: Progress) -> StepRun:
-    from .design import PatternRequest, design_pattern
-
-    request = PatternRequest(
-        tiles=plan.tiles.tiles,
-        target=plan.target,
-        size=plan.size,
-        material=plan.material,
-        hinge=plan.hinge if plan.material else None,
-        printer=plan.printer,
-        style=plan.style if plan.printer else None,
-        shape_tol=plan.shape_tol,
-        min_opening=plan.min_opening,
-        corners=plan.tiles.corners,
-    )
-    outcome = design_pattern(request, notify=say)
-    name = f"{plan.stem}.json"
-    files = {str(Path(k).name): v for k, v in outcome.files(name).items()}
-    result.pattern = outcome.pattern
-    report = outcome.report
-    result.figures = _design_figures(report)
-    # the failure, and the lattice a bent strip used in place of the tiles make chose (design_strip.py)
-    keep = ("fabkiri: design failed", "the lattice is")
-    details = [line for line in outcome.summary(name) if line.startswith(keep)]
-    details = _opening_lines(report) + details
-    return StepRun(
-        outcome.success, outcome.exit_code, _design_line(outcome.status, report), files, details
-    )
-
-
-def _design_figures(report: DesignReport) -> dict[str, Any]:
-    """Hausdorff of the deployed outline (share of the size) and its tolerance; the deployment amount
-    (``report["opening"]``, from the ``opening`` work) when the design reports it."""
-    out: dict[str, Any] = {}
-    c = (report.get("conformance") or {}).get("deployed")
-    if c:
-        out["hausdorff_rel"] = float(c["hausdorff_rel"])
-        out["hausdorff_mm"] = float(c["hausdorff_mm"])
-        out["shape_tol_rel"] = float(report["shape"]["deployed"]["tol_rel"])
-    fr = report.get("fabrication") or {}
-    out["rows_active"] = sum((fr.get("active") or {}).values()) if fr else 0
-    if isinstance(report.get("opening"), dict):  # the seam: shown as reported
-        out["opening"] = report["opening"]
-    return out
-
-
-def _design_line(status: str, report: DesignReport) -> str:
-    c = (report.get("conformance") or {}).get("deployed")
-    shape = (
-        f", Hausdorff {100 * c['hausdorff_rel']:.2f} % of the size "
-        f"(tol {100 * report['shape']['deployed']['tol_rel']:.2g} %)"
-        if c
-        else ""
-    )
-    fr = report.get("fabrication") or {}
-    active = sum(fr.get("active", {}).values()) if fr else 0
-    said = "" if status == "ok" else f"{status}, "
-    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active"
-
-
-def _opening_lines(report: Mapping[str, Any]) -> list[str]:
-    """How much the design opens and, below 10 %, the warning (as design says them, naming make's option)."""
-    from .design_opening import summary_lines
-
-    return summary_lines(report, "make")

@@ -41,6 +41,12 @@ class TilesChoice:
     given: bool = False  # the user named the tiles
     # the target's split parameters BL, BR, TR, TL when make re-split it (None: the target's own)
     corners: tuple[float, float, float, float] | None = None
+    asked: tuple[int, int] | None = None  # the N x N make chose before a re-split (None: ``tiles``)
+
+    @property
+    def count(self) -> tuple[int, int]:
+        """The N x N make chose (or the user named), before any re-split into a strip."""
+        return self.asked or self.tiles
 
 
 def min_feature_mm(limits: FabricationLimits) -> float:
@@ -65,7 +71,9 @@ def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
         f"outline's own split at {rows}x{cols}, where the start folds tiles)"
     )
     c = tuple(float(v) for v in split.corners)
-    return replace(choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]))
+    return replace(
+        choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]), asked=(rows, cols)
+    )
 
 
 def choose_tiles(
@@ -110,6 +118,43 @@ def choose_tiles(
         f"that could work is --size {least:.4g})"
     )
     return resplit(target, TilesChoice((n, n), why, w, feature))
+
+
+def denser_tiles(
+    target: Target, limits: FabricationLimits, first: TilesChoice, least_mm: float = 0.0
+) -> TilesChoice | None:
+    """After a far miss at ``first`` (tiles make chose): the next count of :data:`STANDARD_TILES` up (at most
+    :data:`MAX_AUTO`) whose tiles stay :data:`RETRY_COMFORT` times the process's thinnest feature and at
+    least ``least_mm``, re-split as :func:`choose_tiles` would; None when there is none. A pocket or an arm
+    the lattice did not follow needs more tiles across it, not a neighbouring count (the T at 100 mm for
+    card-0.3: the 4x4 strip missed 3.5x the tolerance, 6x6 met)."""
+    feature = min_feature_mm(limits)
+    n = first.count[0] * first.count[1]
+    for m in sorted(k for k in STANDARD_TILES if n < k * k and k <= MAX_AUTO):
+        w = tile_width_mm(target, m * m)
+        if w < RETRY_COMFORT * feature or w < least_mm:
+            return None  # more tiles are only narrower
+        why = (
+            f"more tiles across the outline's arms: tiles about {w:.3g} mm wide, at least "
+            f"{RETRY_COMFORT:g}x the {feature:.3g} mm {limits.source} needs"
+        )
+        return resplit(target, TilesChoice((m, m), why, w, feature))
+    return None
+
+
+def fewer_tiles(target: Target, limits: FabricationLimits, first: TilesChoice) -> list[TilesChoice]:
+    """After a near miss at ``first`` (tiles make chose) with no larger count wide enough to retry: the next
+    count of :data:`STANDARD_TILES` down (at least 4x4), re-split as :func:`choose_tiles` would; wider tiles
+    leave the fabrication rows room (the boot at 100 mm on prusa-mk4: 6x6 missed 2.34 %, 4x4 met). Empty
+    where ``first`` is the fewest."""
+    n = first.count[0] * first.count[1]
+    fewer = [k for k in STANDARD_TILES if k * k < n]
+    if not fewer:
+        return []
+    m = max(fewer)
+    w = tile_width_mm(target, m * m)
+    why = f"fewer, wider tiles (about {w:.3g} mm): room for the {limits.source} limits"
+    return [resplit(target, TilesChoice((m, m), why, w, min_feature_mm(limits)))]
 
 
 def given_tiles(tiles: tuple[int, int], target: Target, limits: FabricationLimits) -> TilesChoice:

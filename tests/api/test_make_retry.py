@@ -85,8 +85,8 @@ def test_given_tiles_that_miss_name_a_count_that_then_makes_it(tmp_path, run_cli
     assert json.loads((tmp_path / "o-5x5" / "make.json").read_text())["ok"]
 
 
-@pytest.mark.slow  # one 4x4 design (~3 CPU s)
-def test_a_far_miss_is_not_retried_and_names_nothing(monkeypatch):
+@pytest.mark.slow  # the 4x4 and 6x6 designs (~8 CPU s)
+def test_a_far_miss_tries_only_the_next_count_up_and_names_nothing(monkeypatch):
     from fabkiri.api import maker_options
 
     # the retries and the larger size alone: the other processes' options (which name card-0.3 tape
@@ -94,8 +94,10 @@ def test_a_far_miss_is_not_retried_and_names_nothing(monkeypatch):
     monkeypatch.setattr(maker_options, "MAX_RUNS", 0)
     result = fabkiri.make("circle", size=60, material="card-0.3", shape_tol="0.5%")
     assert not result.ok and result.failed is not None and result.failed.name == "design"
-    assert result.tiles.tiles == (4, 4) and result.retried == [] and result.alternatives == []
-    assert any("no other tile count tried" in d for d in result.failed.details)
+    # no neighbouring count (5x5): the next standard count up (6x6), closer, kept as the run's design
+    assert [r.split(" ")[0] for r in result.retried] == ["4x4", "6x6"] and result.alternatives == []
+    assert result.tiles.tiles == (6, 6) and "missed" in result.retried[1]
+    assert any("no neighbouring tile count tried" in d for d in result.failed.details)
     assert result.option_lines() == []
 
 
