@@ -53,11 +53,10 @@ def summary_lines(path, report: DesignReport) -> list[str]:
             f"the lattice is laid at {report['lattice_angle_deg']:.1f}° along the outline's mirror axis "
             "(the design of the turned outline, turned back)"
         )
-    if st := report.get("strip"):  # api/design_strip.py: other rows and columns than asked
-        out.append(
-            f"the lattice is {st['tiles'][0]}x{st['tiles'][1]} tiles, not the {st['asked'][0]}x{st['asked'][1]} asked: "
-            f"{st['why']}"
-        )
+    if st := report.get(
+        "strip"
+    ):  # api/design_strip.py: other rows and columns than asked, or its corners
+        out.append(_strip_line(st))
     out += opening_lines(report)
     fr = report.get("fabrication")
     if fr:
@@ -101,3 +100,12 @@ def _preview(pattern: Pattern, report: DesignReport, output) -> tuple[Path, byte
     return path, conformance_png(
         pattern, report.get("conformance") or {}, report.get("shape") or {}
     )
+
+
+def _strip_line(st: dict) -> str:
+    """The bent strip's line: its rows and columns where they differ from those asked (the floor of tiles
+    across can leave a small count asked as it was, only its corners moved)."""
+    (r, c), (ar, ac) = st["tiles"], st["asked"]
+    if (r, c) == (ar, ac):
+        return f"the {r}x{c} tiles asked are laid as a strip bent along the outline: {st['why']}"
+    return f"the lattice is {r}x{c} tiles, not the {ar}x{ac} asked: {st['why']}"
