@@ -10,9 +10,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from fabkiri.api.design import PatternRequest, _check, _solver_request, design_pattern
+from fabkiri.api.design_minimax import gate
 from fabkiri.api.design_strip import last_request, strip_request
 from fabkiri.design.core import conformance as conf
-from fabkiri.design.quad.solve import design
+from fabkiri.design.quad.solve import DesignRequest, design
 from fabkiri.design.quad.strip_split import strip_splits, turn_corners
 from fabkiri.design.targets.lookup import load_target
 
@@ -136,3 +137,11 @@ def test_make_makes_the_u_for_card_and_says_its_lattice(tmp_path, run_cli):
     (line,) = [x for x in (out + err).splitlines() if x.strip().startswith("the lattice is")]
     assert "not the 6x6 asked" in line
     assert (tmp_path / "cut" / "uasym.dxf").is_file()
+
+
+def test_a_strips_design_is_finished_whatever_its_miss_whatever_its_start():
+    # coarse to fine, its tips-only level met: under the rigid floor (0.25 %) the C's 64x64 strip was kept unfinished
+    req = DesignRequest(145, 28, load_target(U, 100), rigid=True)
+    level = {"coarse": {"fit": "tips", "hausdorff_rel": 0.01}}
+    assert gate(req, level) > 0.002  # a design that is no strip's keeps the rigid gate
+    assert gate(req, {**level, "strip": {"tiles": [145, 28], "start": "coarse"}}) == 0.0
