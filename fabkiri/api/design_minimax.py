@@ -110,11 +110,14 @@ def gate(req: DesignRequest, report: dict | None = None) -> float:
     """The share of the size past which ``req``'s design (its ``report``) is finished: ``FINISH_ABOVE`` scaled to
     its lattice (``threshold``) down to ``FINISH_FLOOR`` for a rigid or mirrored request, ``FREE_FINISH_ABOVE``
     scaled for a free one, none (0) for a free one from ``FREE_FINISH_ALL_TILES`` tiles a side and a rigid one from
-    ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``) or whose chain bottoms at a level from
-    rescaled (``_rescaled_bottom``); the free gate's share scaled, under the
+    ``RIGID_FINISH_ALL_TILES`` whose tips alone miss (``_tips_miss``), whose chain bottoms at a level from
+    rescaled (``_rescaled_bottom``) or that is a bent strip's (``strip_of``: from its fold-free start it has no
+    coarse level and is finished so, coarse to fine it stays so); the free gate's share scaled, under the
     rigid gate, for a mirrored one from ``SECOND_ROUTE_TILES`` further than its coarse level (``_mirrored_step``)."""
     rigid_all = _rigid_unmirrored(req) and max(req.rows, req.cols) >= RIGID_FINISH_ALL_TILES
-    if rigid_all and (_tips_miss(req, report) or _rescaled_bottom(report)):
+    if rigid_all and (
+        _tips_miss(req, report) or _rescaled_bottom(report) or strip_of(report or {})
+    ):
         return 0.0
     if _mirrored_step(req, report):
         return min(_rigid_gate(req), threshold(FREE_FINISH_ABOVE, req))

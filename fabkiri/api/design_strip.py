@@ -1,7 +1,10 @@
 """The last attempts for an outline the N x N lattice cannot follow, tried when every guess and the pocket
 attempts (``design_pocket.py``) missed: the lattice as a strip bent along the outline (a U, a horseshoe;
 ``design/quad/strip_split.py``), about as many tiles as asked in other rows and columns, started from the
-fold-free map of the strip onto the outline; the non-rigid request answered by the rigid family from it."""
+fold-free map of the strip onto the outline; the non-rigid request answered by the rigid family from it. On the
+front door's big lattices (from 32x32 asked, where its own rigid guesses start coarse to fine) a split whose
+fold-free start misses is tried again coarse to fine, the chain's bottom level from that start: from it the long
+fine strip converged with the outline's corners cut off (a local minimum), where its halved level met."""
 
 from __future__ import annotations
 
@@ -12,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..design.quad.corner_split import MIN_ACROSS
 from ..design.quad.inverse_map import with_corners
 from ..design.quad.solve import VIA_RIGID_INIT, DesignRequest
 from ..design.quad.strip_split import strip_splits
@@ -20,8 +24,10 @@ from .design_pocket import POCKET_INIT, POCKET_TRIES, pocket_request, resplit_ap
 
 LAST_INIT = "last"  # the front door's slot for these attempts, named by the one it runs
 STRIP_INIT = "strip"  # the attempts' name among the guesses (report ``attempts``)
+STRIP_COARSE_INIT = "strip coarse"  # the same split again, coarse to fine from its fold-free start
 STRIP_TRIES = 3  # the least distorted splits tried in turn, the next only after a failed one
-LAST_TRIES = POCKET_TRIES + STRIP_TRIES
+LAST_TRIES = POCKET_TRIES + 2 * STRIP_TRIES
+STARTS = {STRIP_INIT: "conformal", STRIP_COARSE_INIT: "coarse"}  # each attempt's start on the strip
 
 
 # one scoring of the splits for a design's attempts (a Target hashes by identity)
@@ -30,18 +36,27 @@ def _splits(target: Target, rows: int, cols: int) -> tuple:
     return tuple(strip_splits(target, rows, cols)[:STRIP_TRIES])
 
 
-def strip_request(req: DesignRequest, attempts: list[dict]) -> DesignRequest | None:
-    """The next strip attempt's request for ``req`` after the front door's ``attempts`` so far, or None where
-    it does not apply (as ``pocket_request``: a symmetry, closed-state targets, fabrication rows,
-    parallelogram holes, another solver than auto) or no split is left."""
+def strip_request(
+    req: DesignRequest, attempts: list[dict], big: bool
+) -> tuple[str, DesignRequest] | None:
+    """The next strip attempt ``(its name, its request)`` for ``req`` after the front door's ``attempts`` so far, or
+    None where it does not apply (as ``pocket_request``: a symmetry, closed-state targets, fabrication rows,
+    parallelogram holes, another solver than auto) or no split is left. Each split from its fold-free start, then
+    where ``big`` (the lattice asked is one the front door designs coarse to fine) and the strip halves to a level
+    at least ``MIN_ACROSS`` across, coarse to fine from that start."""
     if not resplit_applies(req) or req.target is None:
         return None
-    k = sum(a["init"] == STRIP_INIT for a in attempts)
-    splits = _splits(req.target, req.rows, req.cols)
-    if k >= len(splits):
+    plan = [
+        (split, rc, init)
+        for split, rc in _splits(req.target, req.rows, req.cols)
+        for init in STARTS
+        if init == STRIP_INIT or (big and min(rc) // 2 >= MIN_ACROSS)
+    ]
+    k = sum(a["init"] in STARTS for a in attempts)
+    if k >= len(plan):
         return None
-    split, (rows, cols) = splits[k]
-    return _on_strip(replace(req, target=split, rows=rows, cols=cols))
+    split, (rows, cols), init = plan[k]
+    return init, _on_strip(replace(req, target=split, rows=rows, cols=cols), STARTS[init])
 
 
 def last_request(
@@ -55,14 +70,18 @@ def last_request(
         sub = pocket_request(req, attempts)
         if sub is not None:
             return POCKET_INIT, sub, "a lattice corner in the outline's pocket"
-    sub = strip_request(req, attempts)
-    if sub is None or sub.target is None:
+    found = strip_request(req, attempts, not pocket)
+    if found is None:
+        return None
+    init, sub = found
+    if sub.target is None:
         return None
     corners = "; ".join(f"({x:.3g}, {y:.3g})" for x, y in sub.target.corner_points())
+    how = ", coarse to fine" if init == STRIP_COARSE_INIT else ""
     return (
-        STRIP_INIT,
+        init,
         sub,
-        f"the lattice as a strip bent along the outline: {sub.rows}x{sub.cols} tiles for the "
+        f"the lattice as a strip bent along the outline{how}: {sub.rows}x{sub.cols} tiles for the "
         f"{req.rows}x{req.cols} asked, its corners at {corners} mm",
     )
 
@@ -70,7 +89,7 @@ def last_request(
 def strip_note(init: str, sub: DesignRequest, req: DesignRequest) -> dict:
     """The report's ``strip`` for a strip attempt's design (empty for any other): the lattice used, the one
     asked, its corners on the outline and why."""
-    if init != STRIP_INIT or sub.target is None:
+    if init not in STARTS or sub.target is None:
         return {}
     corners = np.round(sub.target.corner_points(), 3).tolist()
     why = (
@@ -83,6 +102,7 @@ def strip_note(init: str, sub: DesignRequest, req: DesignRequest) -> dict:
             "asked": [req.rows, req.cols],
             "corners": [float(u) for u in sub.target.corners],
             "corners_mm": corners,
+            "start": STARTS[init],
             "why": why,
         }
     }
@@ -101,10 +121,13 @@ def strip_design(req: DesignRequest, best) -> DesignRequest:
     if not st or req.target is None:
         return req
     split = with_corners(req.target, np.asarray(st["corners"], float))
-    return _on_strip(replace(req, target=split, rows=st["tiles"][0], cols=st["tiles"][1]))
+    strip = replace(req, target=split, rows=st["tiles"][0], cols=st["tiles"][1])
+    return _on_strip(strip, st.get("start", "conformal"))
 
 
-def _on_strip(sub: DesignRequest) -> DesignRequest:
+def _on_strip(sub: DesignRequest, start: str) -> DesignRequest:
+    """``sub`` on a re-split target from ``start``: the fold-free start (conformal), or coarse to fine from it."""
+    sub = replace(sub, coarse_bottom="conformal")
     if sub.rigid:
-        return replace(sub, init="conformal")  # on a re-split target: the fold-free start
-    return replace(sub, init=VIA_RIGID_INIT, via_rigid_init="conformal")
+        return replace(sub, init=start)
+    return replace(sub, init=VIA_RIGID_INIT, via_rigid_init=start)

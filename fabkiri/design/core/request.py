@@ -87,6 +87,9 @@ class DesignRequest:
         True  # a mid-size non-rigid design tries the rigid family first (VIA_RIGID_FIRST_TILES)
     )
     coarse_solver: str | None = None  # --init coarse: the coarse levels' solver (None: ``solver``)
+    # --init coarse: the guess the chain's bottom level starts from; a bent strip's is its fold-free start,
+    # conformal (``api/design_strip.py``): from rescaled the strip's bottom level starts straight
+    coarse_bottom: str = "rescaled"
     # --init coarse: refit a coarse level whose tips-only outline misses ``second_opinion_above`` with the outline
     # rows (``DesignProblem._coarse_level``); ``solve._design`` sets it when the design from the tips-only levels misses
     coarse_refit: bool = False

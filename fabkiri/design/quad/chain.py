@@ -42,6 +42,8 @@ def rescaled_bottom(req: DesignRequest) -> bool:
         and not req.symmetry
         and min(req.rows, req.cols) >= CHAIN_FROM
         and req.target is not None
+        and req.coarse_bottom
+        == "rescaled"  # a bent strip's chain bottoms at its own fold-free start
         and mirrorless(req.target)
     )
 

@@ -211,8 +211,8 @@ class DesignProblem:
         rc += int(req.symmetry == "x" and rc % 2 == 1)
         cc += int(req.symmetry == "y" and cc % 2 == 1)
         if req.target is None or min(rc, cc) < 4:
-            return initial_guess(base, st, req.target, "rescaled")
-        halved = (rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else "rescaled")
+            return initial_guess(base, st, req.target, req.coarse_bottom)
+        halved = (rc, cc, "coarse" if min(rc, cc) >= COARSE_MIN else req.coarse_bottom)
         # a target with no mirror: the chain's bottom a 32x32 level from rescaled where it fits closer (``chain.py``)
         rc, cc, init, bottom = level_of(req, *halved)
         sub = DesignRequest(
@@ -230,6 +230,7 @@ class DesignProblem:
             solver=req.coarse_solver or req.solver,
             coarse_refit=req.coarse_refit,
             coarse_refit_above=req.coarse_refit_above,
+            coarse_bottom=req.coarse_bottom,
             # the coarse level is only a start: tips-only keeps its grid unfolded when resampled
             # (with the outline rows a rigid 8x8 ellipse's grid folded 4 fine tiles); the rescaled bottom has them
             outline=bottom,
@@ -274,7 +275,7 @@ class DesignProblem:
         # an unconverged coarse design or a map that folds tiles is no better a start than rescaled
         self.coarse["used"] = bool(res.converged and not (area <= 0).any())
         if not self.coarse["used"]:
-            return initial_guess(base, st, req.target, "rescaled")
+            return initial_guess(base, st, req.target, req.coarse_bottom)
         L0 = geometry.mean_edge_length(c)
         return xmm / L0, L0
 
