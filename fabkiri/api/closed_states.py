@@ -11,9 +11,10 @@ import numpy as np
 
 from ..design.targets.lookup import Target, load_target
 from ..errors import InputError, Param
+from ..mechanics.contract import placed_through_hinge
 from ..pattern import geometry
 from ..pattern.model import Pattern
-from ..pattern.overlap import overlap_depths
+from ..pattern.overlap import convex, overlap_depths, sat_penetration
 
 
 def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
@@ -45,7 +46,9 @@ def parse_contracted(text: str, size: float | None) -> tuple[int, object]:
     return state, load_target(what, size)
 
 
-def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
+def overlapping_tiles(
+    corners: np.ndarray, tol: float, pattern: Pattern | None = None, state: int | None = None
+) -> list[tuple[int, int]]:
     """Pairs of tiles that penetrate each other deeper than ``tol`` (mm).
 
     The verifier's measure (:func:`fabkiri.pattern.overlap.overlap_depths`): the
@@ -55,6 +58,9 @@ def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
     edge of a closed state grows with the edge length, and GEOS snapping adds
     its own: a rigid 64x64 ellipse was rejected for 1.4e-9 mm² slivers whose
     depth was 3.8e-10 tile sizes). A self-intersecting tile is the pair (t, t).
+    With ``pattern`` and the closed ``state`` the ``corners`` are of, two convex neighbours found deeper are
+    measured again in their own relative pose (``placed_through_hinge``): they touch along the folded gap's
+    edges, and the placement's accumulated loop closures alone can read as a depth there.
     """
     crossed = geometry.self_intersecting_tiles(corners)
     valid = np.ones(len(corners), dtype=bool)
@@ -62,7 +68,30 @@ def overlapping_tiles(corners: np.ndarray, tol: float) -> list[tuple[int, int]]:
     out = [(int(t), int(t)) for t in crossed]
     i, j, depth = overlap_depths(corners)
     bad = (depth > tol) & valid[i] & valid[j]
-    return out + list(zip(i[bad].tolist(), j[bad].tolist()))
+    i, j = i[bad], j[bad]
+    if pattern is not None and state is not None and len(i):
+        apart = _apart_as_neighbours(pattern, state, i, j, tol)
+        i, j = i[~apart], j[~apart]
+    return out + list(zip(i.tolist(), j.tolist()))
+
+
+def _apart_as_neighbours(
+    pattern: Pattern, state: int, i: np.ndarray, j: np.ndarray, tol: float
+) -> np.ndarray:
+    """Which pairs ``(i, j)`` (``i < j``) are convex neighbours that penetrate no deeper than ``tol`` in closed
+    state ``state`` with ``j`` placed from ``i`` through their hinge."""
+    top, T = pattern.topology, pattern.topology.n_tiles
+    keys = top.hinge_tiles.min(axis=1) * T + top.hinge_tiles.max(axis=1)
+    order = np.argsort(keys)
+    at = np.minimum(np.searchsorted(keys, i * T + j, sorter=order), len(keys) - 1)
+    hinge = order[at]
+    x = pattern.corners()
+    near = (keys[hinge] == i * T + j) & convex(x[i]) & convex(x[j])
+    apart = np.zeros(len(i), dtype=bool)
+    if near.any():
+        placed = placed_through_hinge(pattern, state, hinge[near], i[near])
+        apart[near] = sat_penetration(x[i[near]], placed) <= tol
+    return apart
 
 
 def closed_outline_fit(

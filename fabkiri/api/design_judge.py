@@ -96,11 +96,11 @@ def _check(
         checks[f"closure_{s}_rel"] = rel
         if not rel <= CLOSURE_TOL:
             problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
-    for label, corners in [
-        ("deployed", pattern.corners()),
-        *[(f"state {s}", contracted_states[s]) for s in (1, 2)],
+    for label, corners, state in [
+        ("deployed", pattern.corners(), None),
+        *[(f"state {s}", contracted_states[s], s) for s in (1, 2)],
     ]:
-        ov = overlapping_tiles(corners, CLOSURE_TOL * size)
+        ov = overlapping_tiles(corners, CLOSURE_TOL * size, pattern, state)
         checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
         if ov:
             where = "the deployed state" if label == "deployed" else label

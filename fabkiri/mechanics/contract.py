@@ -122,6 +122,23 @@ def contract(pattern: Pattern, state: int) -> Contraction:
     )
 
 
+def placed_through_hinge(
+    pattern: Pattern, state: int, hinges: np.ndarray, frm: np.ndarray
+) -> np.ndarray:
+    """The corners (mm) of the tile across each hinge of ``hinges`` from the tile ``frm``, in closed state ``state``
+    with ``frm`` left where it is deployed: one hinge turn, the pair's own relative pose. ``contract`` places a
+    tile through the spanning tree's path from its root, so two neighbours on different branches differ by the
+    loop closures of every hole between the branches as well (the rigid 128x128 bean: neighbours' shared corners
+    apart by 1.1e-9 tile sizes, each hole closing within 1e-11)."""
+    top = pattern.topology
+    a, b = top.hinge_tiles[hinges].T
+    other = np.where(a == frm, b, a)
+    sign = np.where(a == frm, 1.0, -1.0)
+    h = pattern.nodes[top.hinge_node[hinges]][:, None, :]
+    phi = (sign * hinge_turns(pattern, state)[hinges])[:, None]
+    return geometry.rotate(pattern.nodes[top.tiles[other]] - h, phi) + h
+
+
 def contract_both(pattern: Pattern) -> dict[int, Contraction]:
     return {s: contract(pattern, s) for s in pattern.topology.states}
 
