@@ -35,15 +35,15 @@ def mirrorless(target: Target) -> bool:
 
 
 def rescaled_bottom(req: DesignRequest) -> bool:
-    """Whether ``req``'s coarse chain bottoms at a ``CHAIN_BOTTOM`` level from rescaled (the module's rule)."""
+    """Whether ``req``'s coarse chain bottoms at a ``CHAIN_BOTTOM`` level from rescaled (the module's rule); a
+    bent strip's chain bottoms at its own fold-free start (``DesignRequest.coarse_bottom``)."""
     return (
         reduced_applies(req)
         and req.solver != "full"
         and not req.symmetry
         and min(req.rows, req.cols) >= CHAIN_FROM
         and req.target is not None
-        and req.coarse_bottom
-        == "rescaled"  # a bent strip's chain bottoms at its own fold-free start
+        and req.coarse_bottom == "rescaled"
         and mirrorless(req.target)
     )
 
