@@ -130,16 +130,18 @@ def denser_tiles(
     card-0.3: the 4x4 strip missed 3.5x the tolerance, 6x6 met)."""
     feature = min_feature_mm(limits)
     n = first.count[0] * first.count[1]
-    for m in sorted(k for k in STANDARD_TILES if n < k * k and k <= MAX_AUTO):
-        w = tile_width_mm(target, m * m)
-        if w < RETRY_COMFORT * feature or w < least_mm:
-            return None  # more tiles are only narrower
-        why = (
-            f"more tiles across the outline's arms: tiles about {w:.3g} mm wide, at least "
-            f"{RETRY_COMFORT:g}x the {feature:.3g} mm {limits.source} needs"
-        )
-        return resplit(target, TilesChoice((m, m), why, w, feature))
-    return None
+    more = [k for k in STANDARD_TILES if n < k * k and k <= MAX_AUTO]
+    if not more:
+        return None
+    m = min(more)
+    w = tile_width_mm(target, m * m)
+    if w < RETRY_COMFORT * feature or w < least_mm:
+        return None  # more tiles are only narrower
+    why = (
+        f"more tiles across the outline's arms: tiles about {w:.3g} mm wide, at least "
+        f"{RETRY_COMFORT:g}x the {feature:.3g} mm {limits.source} needs"
+    )
+    return resplit(target, TilesChoice((m, m), why, w, feature))
 
 
 def fewer_tiles(target: Target, limits: FabricationLimits, first: TilesChoice) -> list[TilesChoice]:
