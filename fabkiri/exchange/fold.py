@@ -94,8 +94,16 @@ def fold_text(pattern: Pattern) -> str:
 
 
 # mm per FOLD ``frame_unit`` (the spec's list); "unit" or none: unitless, ``--scale`` gives the mm
-UNITS_MM = {"unit": None, "mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "pt": 25.4 / 72}
-UNITS_MM |= {"um": 1e-3, "nm": 1e-6}
+UNITS_MM = {
+    "unit": None,
+    "mm": 1.0,
+    "cm": 10.0,
+    "m": 1000.0,
+    "in": 25.4,
+    "pt": 25.4 / 72,
+    "um": 1e-3,
+    "nm": 1e-6,
+}
 
 
 def _array(data: dict, key: str, source: str, width: int | None = None) -> np.ndarray:
