@@ -162,9 +162,8 @@ def topology_checks(pattern: Pattern) -> list[Check]:
         m, n = int(lat["rows"]), int(lat["cols"])
         holes, free, holeless = counts(m, n)
         bad += abs(K - holes) + abs(len(top.free_nodes) - free)
-        bad += (
-            abs(len(orphan) - holeless) if K else 0
-        )  # a lattice without holes: no hinge borders one
+        # a lattice without holes (a 2x2 kagome, a quad strip): no hinge borders one
+        bad += abs(len(orphan) - holeless) if K else 0
         detail += f"; a {m}x{n} lattice expects {holes} holes and {free} free corners"
         if holeless:
             detail += f" and {holeless} hinges bordering no hole"
