@@ -115,8 +115,7 @@ def read_svg(path: Path, curve: str = "polyline") -> Target:
     if found is None:
         raise InputError(f"{path}: the SVG has no <path d=...> element")
     d, mm = found
-    tgt = from_svg_path(d, path.stem, curve)
-    return Target(tgt.name, tgt.kind, tgt.points * mm)
+    return from_svg_path(d, path.stem, curve).transformed(mm)
 
 
 def read_points_file(path: Path) -> Target:
