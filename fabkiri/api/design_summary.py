@@ -107,5 +107,5 @@ def _strip_line(st: dict) -> str:
     across can leave a small count asked as it was, only its corners moved)."""
     (r, c), (ar, ac) = st["tiles"], st["asked"]
     if (r, c) == (ar, ac):
-        return f"the {r}x{c} tiles asked are laid as a strip bent along the outline: {st['why']}"
+        return f"the lattice is the {r}x{c} tiles asked, laid as a strip bent along the outline: {st['why']}"
     return f"the lattice is {r}x{c} tiles, not the {ar}x{ac} asked: {st['why']}"
