@@ -71,7 +71,7 @@ def design_once(result: MakeResult, plan, say: Progress) -> StepRun:
     details = [line for line in outcome.summary(name) if line.startswith(keep)]
     details = opening_lines(report) + details
     return StepRun(
-        outcome.success, outcome.exit_code, _line(outcome.status, report), files, details
+        outcome.success, outcome.exit_code, _line(outcome.status, result.figures), files, details
     )
 
 
@@ -91,18 +91,16 @@ def _figures(report: DesignReport) -> dict[str, Any]:
     return out
 
 
-def _line(status: str, report: DesignReport) -> str:
-    c = (report.get("conformance") or {}).get("deployed")
+def _line(status: str, figures: dict[str, Any]) -> str:
+    """The design step's one line, from its :func:`_figures`."""
     shape = (
-        f", Hausdorff {100 * c['hausdorff_rel']:.2f} % of the size "
-        f"(tol {100 * report['shape']['deployed']['tol_rel']:.2g} %)"
-        if c
+        f"Hausdorff {100 * figures['hausdorff_rel']:.2f} % of the size "
+        f"(tol {100 * figures['shape_tol_rel']:.2g} %), "
+        if "hausdorff_rel" in figures
         else ""
     )
-    fr = report.get("fabrication") or {}
-    active = sum(fr.get("active", {}).values()) if fr else 0
     said = "" if status == "ok" else f"{status}, "
-    return f"{said}{shape.lstrip(', ')}, {active} fabrication rows active"
+    return f"{said}{shape}{figures['rows_active']} fabrication rows active"
 
 
 def opening_lines(report: Mapping[str, Any]) -> list[str]:
