@@ -42,3 +42,14 @@ def test_a_crescent_whose_start_folds_is_offered_its_strip():
     assert min(rows, cols) >= 4 and abs(rows * cols - 256) <= max(rows, cols)
     ends = tgt.point(tgt.corners)
     assert (np.abs(ends[:, 0] - 23.0) < 2.0).all()  # all four corners at the two tips
+
+
+def test_a_sharp_tip_turning_for_two_corners_holds_one():
+    # a lightning bolt's acute vertices turn >= 120 degrees at one sample: its two quarter points were the
+    # same parameter, and the split through both refused the user's outline ("corners ... CCW order", exit 2)
+    pts = np.array([(40, 100), (85, 100), (60, 62), (80, 62), (30, 0), (42, 45), (20, 45)], float)
+    tgt = Target("bolt", "polyline", pts[::-1])
+    found = turn_corners(tgt)
+    assert len(found) >= 4 and (np.diff(found) > 0).all()
+    for split, _ in strip_splits(tgt, 16, 16):
+        assert (np.diff(split.corners) > 0).all()

@@ -58,8 +58,9 @@ def turn_corners(target: Target) -> np.ndarray:
             for f in (0.25, 0.5, 0.75)
         ]
         # a stretch turning enough for two corners (a strip's rounded end, a crescent's tip) holds two
+        # (a sharp vertex turns all at one sample: its two quarter points are one corner)
         found.extend(
-            float(u[j]) for j in (at[::2] if left[i] >= np.radians(2 * CORNER_DEG) else at[1:2])
+            float(u[j]) for j in set(at[::2] if left[i] >= np.radians(2 * CORNER_DEG) else at[1:2])
         )
         mid = at[1]
         near = np.abs(np.mod(s - s[mid] + 0.5 * perimeter, perimeter) - 0.5 * perimeter) < 2 * half
