@@ -22,6 +22,7 @@ from ..design.targets.pockets import pocket_covered, pockets
 from ..errors import CheckFailed, InputError
 from ..pattern.conformance import boundary_tip_order
 from ..pattern.model import Pattern
+from .design_strip import STARTS as STRIP_STARTS
 from .print_tiles import check_room, check_tiles
 
 
@@ -51,11 +52,18 @@ def annotate(
             lat = pattern.lattice or {}
             rows, cols = int(lat.get("rows", 0)), int(lat.get("cols", 0))
             strip = bent_strip(target, rows, cols) if min(rows, cols) >= 2 else None
-            if strip is not None:  # what make does with these tiles (design/quad/corner_split.py)
+            # what make does with these tiles (design/quad/corner_split.py), unless the design tried it
+            if strip is not None and not _strip_tried(attempts, strip[1]):
                 j["pocket"]["strip"] = {
                     "tiles": list(strip[1]),
                     "corners": strip[0].corner_points().tolist(),
                 }
+
+
+def _strip_tried(attempts: list[dict], tiles) -> bool:
+    """Whether one of ``attempts`` was a bent strip (``design_strip.py``) of ``tiles``, either way round."""
+    want = sorted(int(n) for n in tiles)
+    return any(a["init"] in STRIP_STARTS and sorted(a.get("tiles") or ()) == want for a in attempts)
 
 
 def _filled(j: dict, target: Target, outline) -> None:

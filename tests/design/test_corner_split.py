@@ -109,3 +109,23 @@ def test_a_target_on_its_own_split_keeps_the_pattern_s_map():
     assert cs.default_folds(star, 8, 8)
     with pytest.raises(SolveError, match="folds"):
         initial_guess(base, st, star, "conformal")
+
+
+@pytest.mark.parametrize("tried", [[], [{"init": "strip", "tiles": [4, 16]}]])
+def test_a_strip_the_design_tried_is_not_advised_again(tried):
+    """The miss names make's bent strip only when the design did not try a strip of those tiles: an M at
+    16x16 missed on its 42x6 strip, then advised the same 42x6 strip."""
+    import dataclasses
+
+    from fabkiri.api.shape_limits import annotate
+
+    ell = load_target(ELL, None)
+    sp = standard_pattern(8, 8, tile_size=1.0)
+    box = ell.point(np.linspace(0.0, 1.0, 400))
+    lo, hi = box.min(0), box.max(0)  # the lattice's square outline runs across the L's pocket
+    nodes = (sp.nodes - sp.nodes.min(0)) / np.ptp(sp.nodes, 0) * (hi - lo) + lo
+    report = {"shape": {"deployed": {"status": "missed", "local_minimum": True}}}
+    annotate(report, [{"init": "rescaled"}, *tried], ell, dataclasses.replace(sp, nodes=nodes))
+    pocket = report["shape"]["deployed"]["pocket"]
+    assert pocket["covered"] == pytest.approx(1.0)
+    assert ("strip" in pocket) == (not tried)
