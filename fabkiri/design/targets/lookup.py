@@ -81,7 +81,7 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
         _check_own_size(tgt, p)
         return tgt.centred()
     raise InputError(
-        f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)"
+        f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg/.dxf file)"
     )
 
 
