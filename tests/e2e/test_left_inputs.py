@@ -161,3 +161,13 @@ def test_a_design_whose_preview_is_a_folder_writes_nothing(tmp_path, run_cli):
     # was: exit 3 (IsADirectoryError) with o.json written
     assert code == 2 and "o.png is a folder" in _one_line(err)  # now before the solve
     assert not out.exists()
+
+
+def test_a_triangulated_mesh_is_refused_naming_its_file(tmp_path, run_cli):
+    d = json.loads(fold_text(PATTERN))
+    d["faces_vertices"] = [t for a, b, c, e in d["faces_vertices"] for t in ([a, b, c], [a, c, e])]
+    d.pop("file_frames")
+    (tmp_path / "tri.fold").write_text(json.dumps(d))  # a quad mesh another tool triangulated
+    code, _, err = run_cli("import", tmp_path / "tri.fold", "-o", tmp_path / "o.json")
+    line = _one_line(err)  # was: "node 4 is shared by 3 tiles ...", no file named
+    assert code == 2 and f"{tmp_path / 'tri.fold'}: node" in line and "shared by" in line
