@@ -41,7 +41,7 @@ from .design_strip import LAST_INIT, LAST_TRIES, last_request, strip_design, str
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .design_turn import loaded_or_turned, request_target
 from .designers import TakesTiles, register_designer
-from .print_tiles import check_room, check_tiles, tile_width_mm
+from .print_tiles import check_micrometre, check_room, check_tiles
 from .shape_limits import annotate as annotate_misses
 
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
@@ -269,12 +269,7 @@ def _solver_request(
     if target is None and not contracted:
         outline = Param("contracted_target", shown='"STATE:NAME"', cli_value="STATE:NAME")
         raise InputError("give ", Param("target"), ", or ", outline, " for a closed-state outline")
-    if target is not None and tile_width_mm(target, rows * cols) < limits.MIN_LENGTH_MM:
-        raise InputError(
-            f"{rows}x{cols} tiles of a {target.size:.3g} mm target would be under {limits.MIN_LENGTH_MM:g} mm: give a larger ",
-            Param("size"),
-            " or fewer tiles",
-        )
+    check_micrometre(rows, cols, target)  # tiles under a micrometre: no solve
     fab_limits, intent = request.fabrication_limits(target)
     check_floor(request.min_opening)
     if (
