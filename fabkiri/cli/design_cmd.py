@@ -168,7 +168,7 @@ def _add_target_args(p: argparse.ArgumentParser) -> None:
         "--target",
         metavar="NAME|FILE",
         help="deployed target: a name from templates/targets (circle, ellipse, heart, ...) or a "
-        ".csv/.json points file or an .svg path",
+        ".csv/.json points file, or an .svg/.dxf drawing of one closed outline",
     )
     p.add_argument(
         "--size",
