@@ -26,6 +26,10 @@ from .errors import InputError
 _INPUTS: contextvars.ContextVar[tuple[Path, ...] | None] = contextvars.ContextVar(
     "fabkiri_inputs", default=None
 )
+# the files the running command has put in place (a list per :func:`inputs_scope`; None outside one)
+_WRITTEN: contextvars.ContextVar[list[Path] | None] = contextvars.ContextVar(
+    "fabkiri_written", default=None
+)
 
 
 def _umask() -> int:
@@ -44,12 +48,18 @@ def _publish_mode(fd_or_path) -> None:
 
 @contextmanager
 def inputs_scope():
-    """One command's record of the files it reads (the CLI opens one per run)."""
-    token = _INPUTS.set(())
+    """One command's record of the files it reads and writes (the CLI opens one per run)."""
+    token, wrote = _INPUTS.set(()), _WRITTEN.set([])
     try:
         yield
     finally:
         _INPUTS.reset(token)
+        _WRITTEN.reset(wrote)
+
+
+def written() -> list[Path]:
+    """The files the running command has put in place so far, complete (an interrupt says them)."""
+    return list(_WRITTEN.get() or [])
 
 
 def note_inputs(*paths: str | os.PathLike) -> None:
@@ -154,6 +164,8 @@ def _check_destination(dest: Path) -> None:
 
 
 def _root_folder(root: Path) -> Path:
+    if root.exists() and not root.is_dir():
+        raise InputError(f"output folder {root} is a file, not a folder")
     if not root.is_dir():
         raise InputError(f"output folder {root} does not exist")
     if not os.access(root, os.W_OK):
@@ -210,6 +222,7 @@ def _move_in(dests: list[Path], staged: list[Path], scratch: Path) -> None:
             if dest.exists() or dest.is_symlink():
                 backup = scratch / f"old-{i}"
             done.append((dest, backup))  # before the move: a signal between them must undo it
+            _record(dest)
             if backup is not None:
                 os.replace(dest, backup)
             os.replace(tmp, dest)
@@ -218,9 +231,16 @@ def _move_in(dests: list[Path], staged: list[Path], scratch: Path) -> None:
         raise
 
 
+def _record(dest: Path, put: bool = True) -> None:
+    record = _WRITTEN.get()
+    if record is not None:
+        record.append(dest) if put else record.remove(dest)
+
+
 def _undo(done: list[tuple[Path, Path | None]], made: list[Path]) -> None:
     """Put back what :func:`_move_in` replaced and remove the folders it made."""
     for dest, backup in reversed(done):
+        _record(dest, put=False)
         try:
             if backup is not None and backup.exists():
                 os.replace(backup, dest)
@@ -254,6 +274,20 @@ def check_output_file(path: str | os.PathLike) -> None:
     _root_folder(path.parent if str(path.parent) else Path("."))
 
 
+def check_output_parent(path: str | os.PathLike) -> None:
+    """Up-front check of any output, file or folder: the folder that takes its files (an existing output
+    folder, else the one it goes in) exists and is writable, before a command's work rather than after."""
+    _root_folder(_scratch_root(Path(path)))
+
+
+def _scratch_root(path: Path) -> Path:
+    """Where a writer's scratch goes for the output ``path``: an existing folder itself (a mount point,
+    a USB stick, takes no rename from its parent's file system), else the folder it goes in."""
+    if path.is_dir():
+        return path
+    return path.parent if str(path.parent) else Path(".")
+
+
 def check_output_folder(folder: str | os.PathLike) -> None:
     """Up-front check of a folder output: a folder (or creatable as one), not an input."""
     folder = Path(folder)
@@ -261,17 +295,17 @@ def check_output_folder(folder: str | os.PathLike) -> None:
     _refuse_link_loop(folder)
     if folder.exists() and not folder.is_dir():
         raise InputError(f"output {folder} exists and is not a folder")
-    _root_folder(folder.parent if str(folder.parent) else Path("."))
+    _root_folder(_scratch_root(folder))
 
 
 def atomic_write_many(folder: str | os.PathLike, files: Mapping[str, bytes | str]) -> list[Path]:
     """Write several files into ``folder`` (created if missing) all-or-nothing.
 
     Every destination is checked before anything is written; everything is
-    written to a scratch folder beside ``folder`` and moved in only when every
-    file is complete (see :func:`publish`).
+    written to a scratch folder in ``folder`` (beside it when it is new) and
+    moved in only when every file is complete (see :func:`publish`).
     """
     folder = Path(folder)
     check_output_folder(folder)
-    root = folder.parent if str(folder.parent) else Path(".")
+    root = _scratch_root(folder)
     return publish({folder / name: data for name, data in files.items()}, root)

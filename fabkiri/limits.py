@@ -314,6 +314,15 @@ def check_pattern(pattern, source: str):
     return pattern
 
 
+def check_designed(pattern) -> None:
+    """:class:`InputError` when a designed ``pattern`` has coordinates every reader refuses
+    (:func:`coordinate_problem`): a target too small for its tile count, refused rather than written."""
+    if problem := coordinate_problem(pattern.nodes, pattern.tiles, pattern.contracted):
+        raise InputError(
+            f"the design's {problem}: give a larger ", Param("size"), " or fewer tiles"
+        )
+
+
 def _index(a: np.ndarray, bad: np.ndarray) -> int:
     i = int(np.flatnonzero(bad)[0])
     return i // a.shape[1] if a.ndim == 3 else i  # a per-tile corner array: the tile

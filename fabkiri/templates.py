@@ -7,6 +7,7 @@ package as ``fabkiri._templates``.
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 
 _REPO_TEMPLATES = Path(__file__).resolve().parents[1] / "templates"
@@ -18,3 +19,15 @@ def template_dir(kind: str) -> Path:
     if repo.is_dir():
         return repo
     return Path(__file__).resolve().parent / "_templates" / kind
+
+
+def nearest(name: str, names: list[str]) -> str:
+    """`` (did you mean 'card-0.3'?)`` for the presets nearest ``name`` (case ignored): those it begins,
+    else the closest by :mod:`difflib`; ``""`` when none is near."""
+    lower = {n.lower(): n for n in names}
+    found = [n for n in lower if n.startswith(name.lower())] or difflib.get_close_matches(
+        name.lower(), list(lower), n=1, cutoff=0.6
+    )
+    if not found:
+        return ""
+    return f" (did you mean {' or '.join(repr(lower[n]) for n in found)}?)"

@@ -26,7 +26,7 @@ from ..design.targets.lookup import Target
 from ..errors import FabkiriError, InputError, Param, SolveError
 from ..exchange.pattern_json import dumps
 from ..fabricate import design_limits, fabricability
-from ..fileio import atomic_write
+from ..fileio import publish
 from ..pattern.kinds.tessellation import DEFAULT_KIND
 from ..pattern.model import Pattern
 from .closed_states import closed_outline_fit, overlapping_tiles, parse_contracted  # noqa: F401 (re-exported)
@@ -41,7 +41,7 @@ from .design_strip import LAST_INIT, LAST_TRIES, last_request, strip_design, str
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .design_turn import loaded_or_turned, request_target
 from .designers import TakesTiles, register_designer
-from .print_tiles import check_room, check_tiles
+from .print_tiles import check_micrometre, check_room, check_tiles
 from .shape_limits import annotate as annotate_misses
 
 AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init is not given
@@ -146,11 +146,8 @@ class DesignOutcome:
         return out
 
     def write(self, output, preview: bool = True) -> None:
-        """Write the pattern (atomically) and its preview, as ``fabkiri design`` does."""
-        png = _preview(self.pattern, self.report, output) if preview else None
-        atomic_write(output, dumps(self.pattern))
-        if png is not None:
-            png[0].write_bytes(png[1])
+        """Write the pattern and its preview, all or nothing, as ``fabkiri design`` does."""
+        publish(self.files(output, preview), Path(output).parent)
 
     @property
     def max_equality_residual(self) -> float:
@@ -272,6 +269,7 @@ def _solver_request(
     if target is None and not contracted:
         outline = Param("contracted_target", shown='"STATE:NAME"', cli_value="STATE:NAME")
         raise InputError("give ", Param("target"), ", or ", outline, " for a closed-state outline")
+    check_micrometre(rows, cols, target)  # tiles under a micrometre: no solve
     fab_limits, intent = request.fabrication_limits(target)
     check_floor(request.min_opening)
     if (
@@ -448,6 +446,7 @@ def _outcome(
         lattice=pattern.lattice,
         design=meta,
     )
+    limits.check_designed(pattern)  # a target too small for its tiles: refused, not written
     report["fabricability"] = fabricability.summary(pattern)  # every material and printer preset
     floor = ((pattern.design or {}).get("options") or {}).get("min_opening")
     too_closed = judge_opening(pattern, report, floor)  # the floor read back on the final design

@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..errors import CheckFailed, InputError
+from ..errors import CheckFailed, InputError, PatternError
 from ..exchange.file_formats import format_of, pattern_format
 from ..exchange.obj import import_obj
 from ..mechanics.contract import adopt_state_labels, contract
@@ -22,15 +22,27 @@ def load_pattern(path: str, scale: float = 1.0, *, fallback: str = "json") -> Pa
     fmt = format_of(path, fallback)
     if fmt.read is None:
         raise InputError(f"{path}: fabkiri writes {fmt.name} files but cannot read them")
-    pattern = fmt.read(Path(path), scale)
+    pattern = _naming(path, fmt.read, Path(path), scale)
     return adopt_state_labels(pattern) if fmt.adopt_labels else pattern
+
+
+def _naming(path: str, read, *args, **kwargs) -> Pattern:
+    """``read(*args, **kwargs)``; a mesh check's error (:mod:`fabkiri.pattern.topology`: a node of three
+    tiles, a node of none), which names no file, names ``path``."""
+    try:
+        return read(*args, **kwargs)
+    except PatternError as exc:
+        if str(exc).startswith(str(path)):
+            raise
+        raise PatternError(f"{path}: {exc}") from None
 
 
 def import_pattern(path: str, contracted: list[str] | tuple = (), scale: float = 1.0) -> Pattern:
     """``fabkiri import``: a design in any readable format (OBJ when the suffix says nothing), or an
     OBJ design with its contracted OBJ files as closed states 1 and 2."""
     if contracted:
-        return with_import_tier(adopt_state_labels(import_obj(path, list(contracted), scale=scale)))
+        design = _naming(path, import_obj, path, list(contracted), scale=scale)
+        return with_import_tier(adopt_state_labels(design))
     return with_import_tier(load_pattern(path, scale, fallback="obj"))
 
 

@@ -26,6 +26,7 @@ from ..design.targets.lookup import Target
 from ..errors import CheckFailed, InputError, Param
 from ..fabricate import fabricability as fb
 from ..fabricate.print.printers import load_printer
+from ..limits import MIN_LENGTH_MM
 from ..pattern.kinds.quad.lattice import standard_pattern
 from ..pattern.thinness import pal_bound
 
@@ -132,6 +133,18 @@ def check_tiles(
         narrow = narrow_tiles(target, (rows, cols), printer, style)
         if narrow is not None:
             raise CheckFailed(narrow.reason())
+
+
+def check_micrometre(rows: int, cols: int, target: Target | None) -> None:
+    """InputError when ``rows`` x ``cols`` tiles of ``target`` (:func:`tile_width_mm`) would be narrower than
+    the micrometre every reader asks of a tile edge (:data:`fabkiri.limits.MIN_LENGTH_MM`)."""
+    if target is not None and tile_width_mm(target, rows * cols) < MIN_LENGTH_MM:
+        raise InputError(
+            f"{rows}x{cols} tiles of a {target.size:.3g} mm target would be under {MIN_LENGTH_MM:g} mm: "
+            "give a larger ",
+            Param("size"),
+            " or fewer tiles",
+        )
 
 
 def check_room(rows: int, cols: int, fab_limits: FabricationLimits, target: Target) -> None:

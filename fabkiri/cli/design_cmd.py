@@ -23,6 +23,7 @@ from ..api.design import (  # noqa: F401 (names tests and benches import from he
     design_pattern,
     overlapping_tiles,
 )
+from ..api.design_summary import preview_path
 from ..api.designers import design_by_kind, design_kinds
 from ..api.progress import ProgressLine, on_terminal
 from ..design.core import conformance as conf
@@ -32,6 +33,7 @@ from ..errors import InputError
 from ..fabricate.cut.materials import HINGE_KINDS
 from ..fabricate.fabricability import PRINT_STYLES
 from ..fileio import check_output_file
+from ..pattern.kinds.tessellation import DEFAULT_KIND
 from .argtypes import add_i_know, bounded, length_mm, parse_tiles
 
 
@@ -44,6 +46,8 @@ def cmd_design(args: argparse.Namespace) -> int:
         raise InputError("--closed applies to --tube designs only")
     tiles = None if args.tiles is None else parse_tiles(args.tiles)
     check_output_file(args.output)  # fail before a long solve, not after
+    if not args.no_preview and args.lattice == DEFAULT_KIND:  # a quad design writes its preview too
+        check_output_file(preview_path(args.output))
     request = PatternRequest(
         tiles=tiles,
         target=args.target,
@@ -164,7 +168,7 @@ def _add_target_args(p: argparse.ArgumentParser) -> None:
         "--target",
         metavar="NAME|FILE",
         help="deployed target: a name from templates/targets (circle, ellipse, heart, ...) or a "
-        ".csv/.json points file or an .svg path",
+        ".csv/.json points file, or an .svg/.dxf drawing of one closed outline",
     )
     p.add_argument(
         "--size",

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from .. import __version__, blas
 from ..errors import FabkiriError, InputError
-from ..fileio import inputs_scope, note_inputs, refuse_input
+from ..fileio import check_output_parent, inputs_scope, note_inputs, refuse_input, written
 
 COMMANDS = [
     "fabkiri.cli.pattern_cmds",
@@ -300,6 +300,7 @@ def _run(args: argparse.Namespace) -> int:
             if args.output == "-":  # a file named '-' is never what was meant
                 raise InputError("-o -: fabkiri writes files, not standard output; give a name")
             refuse_input(args.output)
+            check_output_parent(args.output)  # a read-only folder: refused before the work
         code = args.func(args)
         return int(code or 0)
     except FabkiriError as exc:
@@ -312,7 +313,7 @@ def _run(args: argparse.Namespace) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         return 1
     except KeyboardInterrupt:
-        print("fabkiri: interrupted; nothing was written", file=sys.stderr)
+        print(f"fabkiri: interrupted; {_on_disk()}", file=sys.stderr)
         return 130
     except (
         MemoryError
@@ -330,6 +331,14 @@ def _run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 3
+
+
+def _on_disk() -> str:
+    """What an interrupted command left: the files it had put in place (each complete), or nothing."""
+    done = written()
+    if not done:
+        return "nothing was written"
+    return f"{', '.join(map(str, done))} written (complete), nothing else"
 
 
 def _interrupted(signum, frame) -> None:

@@ -52,7 +52,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "cut or print at the size, deploy, report",
     )
     p.add_argument(
-        "target", help="a named target (circle, star, ...) or a .csv/.json points file or .svg path"
+        "target",
+        help="a named target (circle, star, ...) or a .csv/.json points file, or an .svg/.dxf drawing of one closed outline",
     )
     p.add_argument(
         "--size", required=True, type=length_mm, metavar="MM", help="the target's larger dimension"

@@ -57,6 +57,8 @@ def cmd_import(args: argparse.Namespace) -> int:
         f"{len(pattern.contracted)} contracted state(s) stored",
         file=sys.stderr,
     )
+    if up := ((pattern.design or {}).get("source") or {}).get("up_axis"):
+        print(f"note: every y is 0: read as a Y-up export, up axis {up}", file=sys.stderr)
     for problem in info.problems():
         print(f"note: {problem}", file=sys.stderr)
     return 0

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from ..api.print import PrintOptions, print_pattern
+from ..errors import InputError
 from ..fabricate.print import mesh
 from ..fabricate.print.printers import available_printers
 from ..fileio import atomic_write_many
@@ -25,7 +26,7 @@ PRINT_FLAGS = (
     ("state", "--state", None),
     ("step", "--step", False),
     ("marks", "--marks", False),
-    ("material", "--material", "acrylic-3"),
+    ("material", "--material", None),
     ("force", "--force", False),
 )
 PRINTER_FLAGS = tuple(
@@ -39,6 +40,12 @@ PRINTER_FLAGS = tuple(
 
 def cmd_print(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
+    if (
+        args.material is not None and not args.marks
+    ):  # else read by nothing: a material asked for in vain
+        raise InputError(
+            "--material is the laser material of --marks; give --marks too, or drop it"
+        )
     pattern = load_any(args.file)
     options = PrintOptions(
         style=args.style,
@@ -54,7 +61,7 @@ def cmd_print(args: argparse.Namespace) -> int:
         axial_clearance=args.axial_clearance,
         step=args.step,
         marks=args.marks,
-        material=args.material,
+        material=args.material or PrintOptions.material,
         force=args.force,
     )
     with options_on_stdout():
@@ -126,7 +133,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--material",
-        default="acrylic-3",
+        default=None,
         metavar="NAME|FILE.json",
         help="laser material for --marks (default acrylic-3)",
     )

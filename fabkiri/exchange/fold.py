@@ -181,7 +181,7 @@ def _closed_frames(data: dict, tiles: np.ndarray, n: int, source: str) -> dict[i
             ):
                 continue
             untagged += 1
-        state = frame.get(STATE_KEY, untagged)
+        state = _state_tag(frame, untagged, f"{source} frame {k}")
         if state not in (1, 2) or state in contracted:
             continue
         xyz = _array(frame, "vertices_coords", f"{source} frame {k}")
@@ -194,6 +194,19 @@ def _closed_frames(data: dict, tiles: np.ndarray, n: int, source: str) -> dict[i
             continue
         contracted[int(state)] = xyz[:, :2][tiles]
     return contracted
+
+
+def _state_tag(frame: dict, untagged: int, where: str) -> int | str:
+    """A frame's closed state: its tag (1, 2, also written "1", "2"; "deployed" is the key frame's) or,
+    untagged, ``untagged``; any other tag is refused rather than the frame skipped."""
+    tag = frame.get(STATE_KEY, untagged)
+    if tag in ("1", "2"):
+        return int(tag)
+    if tag == "deployed" or (type(tag) is int and tag in (1, 2)) or STATE_KEY not in frame:
+        return tag
+    raise PatternError(
+        f"{where}: {STATE_KEY} is {json.dumps(tag)}; expected 1 or 2 (a closed state)"
+    )
 
 
 def _unit_mm(data: Any, scale: float, source: str) -> float:

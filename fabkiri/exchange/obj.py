@@ -32,7 +32,14 @@ _OTHER_TILES = " or kagome triangles"
 def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
     """Vertices ``(n, 2)`` and 0-based faces ``(T, n)`` of an OBJ text: quads, or the tiles of
     another kind (kagome triangles), all faces of one kind."""
-    verts: list[tuple[float, float]] = []
+    verts, faces, _ = _parse(text, source)
+    return verts, faces
+
+
+def _parse(text: str, source: str) -> tuple[np.ndarray, np.ndarray, str]:
+    """:func:`parse_obj`'s vertices and faces, and the file's up axis (``z``, or ``y``: see :func:`_plane`)."""
+    verts: list[tuple[float, ...]] = []
+    lines: list[int] = []
     faces: list[list[int]] = []
     for lineno, raw in enumerate(text.splitlines(), 1):
         line = raw.split("#", 1)[0].strip()
@@ -41,6 +48,7 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
         tag, *rest = line.split()
         if tag == "v":
             verts.append(_obj_vertex(rest, f"{source}: line {lineno}"))
+            lines.append(lineno)
         elif tag == "f":
             face = _obj_face(rest, f"{source}: line {lineno}", faces[0] if faces else None)
             # a negative index counts back from the last vertex so far (the OBJ spec)
@@ -58,11 +66,26 @@ def parse_obj(text: str, source: str = "obj") -> tuple[np.ndarray, np.ndarray]:
             f"{source}: face {i} references vertex {int(f[i][bad[i]][0])}, "
             f"but the file has vertices 1..{len(verts)}"
         )
-    return np.asarray(verts, dtype=float), f - 1
+    xy, up = _plane(np.asarray(verts, dtype=float), lines, source)
+    return xy, f - 1, up
 
 
-def _obj_vertex(rest: list[str], where: str) -> tuple[float, float]:
-    """``x, y`` of an OBJ ``v`` record (a z must be 0: patterns are planar)."""
+def _plane(v: np.ndarray, lines: list[int], source: str) -> tuple[np.ndarray, str]:
+    """The pattern plane of vertices ``v`` ``(n, 3)``: ``x, y`` when every z is 0; ``x, -z`` when every y
+    is 0 (Blender's default OBJ export, Y up, turns its ground plane x, y into x, -z); else refused."""
+    if not v[:, 2].any():
+        return v[:, :2], "z"
+    if not v[:, 1].any():
+        return np.column_stack([v[:, 0], -v[:, 2]]), "y"
+    i = int(np.flatnonzero(v[:, 2])[0])
+    raise PatternError(
+        f"{source}: line {lines[i]}: vertex has z = {v[i, 2]:g}; patterns are planar: every z = 0 "
+        "(or every y = 0, a Y-up export)"
+    )
+
+
+def _obj_vertex(rest: list[str], where: str) -> tuple[float, ...]:
+    """``x, y, z`` of an OBJ ``v`` record (z 0 when not given)."""
     try:
         vals = [float(t) for t in rest[:3]]
     except ValueError:
@@ -71,9 +94,7 @@ def _obj_vertex(rest: list[str], where: str) -> tuple[float, float]:
         raise PatternError(f"{where}: a vertex needs at least x and y")
     if not all(math.isfinite(v) for v in vals):
         raise PatternError(f"{where}: non-finite vertex coordinate")
-    if len(vals) == 3 and vals[2] != 0.0:
-        raise PatternError(f"{where}: vertex has z = {vals[2]}; patterns are planar (z = 0)")
-    return vals[0], vals[1]
+    return (*vals, 0.0)[:3]
 
 
 def _obj_face(rest: list[str], where: str, first: list[int] | None) -> list[int]:
@@ -95,7 +116,12 @@ def _obj_face(rest: list[str], where: str, first: list[int] | None) -> list[int]
 
 
 def read_obj(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
-    return parse_obj(_read_text(path), str(path))
+    verts, faces, _ = _read(path)
+    return verts, faces
+
+
+def _read(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, str]:
+    return _parse(_read_text(path), str(path))
 
 
 def import_obj(
@@ -116,13 +142,13 @@ def import_obj(
         raise PatternError(f"scale must be a positive number of mm per OBJ unit, got {scale}")
     if len(contracted) > 2:
         raise PatternError(f"at most two contracted files (states 1 and 2), got {len(contracted)}")
-    verts, faces = read_obj(design)
+    verts, faces, up = _read(design)
     flip = geometry.signed_areas(verts[faces]).sum() < 0
     if flip:
         faces = faces[:, ::-1]
     states: dict[int, np.ndarray] = {}
     for i, path in enumerate(contracted, 1):
-        cv, cf = read_obj(path)
+        cv, cf, _ = _read(path)
         if flip:
             cf = cf[:, ::-1]
         if cf.shape != faces.shape or not np.array_equal(cf, faces):
@@ -145,6 +171,7 @@ def import_obj(
                 "contracted": [Path(p).name for p in contracted],
                 "scale_mm_per_unit": scale,
                 "reversed_tiles": bool(flip),
+                **({"up_axis": "y (read x, -z as x, y)"} if up == "y" else {}),
             }
         },
     )

@@ -303,23 +303,64 @@ def _declared_mm(attr: Any, height_px: float) -> float:
 
 
 def outline_path(p: Path) -> tuple[str, float] | None:
-    """The first ``<path>`` of any SVG with every transform and the viewBox applied (svgelements), as
-    path data, and mm per unit of it (the root's declared size; a root without a physical unit keeps
-    its user units as mm). None when the file has no path; :class:`InputError` when it is no SVG."""
+    """The one closed curve of any SVG (a ``<path>`` subpath, ``<rect>``, ``<circle>``, ``<ellipse>``,
+    ``<polygon>``) with every transform and the viewBox applied (svgelements), as path data, and mm per
+    unit of it (the root's declared size; a root without a physical unit keeps its user units as mm).
+    None when the file draws nothing; :class:`InputError` when it is no SVG, or draws no closed curve or
+    several (which of them is the outline is the user's to say, not the first one's by chance)."""
     import svgelements as se
 
     try:
         svg = se.SVG.parse(str(p), reify=True)
     except Exception as exc:  # svgelements raises many kinds on bad XML
         raise InputError(f"{p}: not a readable SVG file ({exc})") from None
-    path = next((e for e in svg.elements() if isinstance(e, se.Path) and len(e)), None)
-    if path is None:
-        return None
     height = str(svg.values.get("height") or "")
     if re.search(r"(mm|cm|in|pt|pc)\s*$", height):
-        return path.d(), _declared_mm(height, float(svg.height))
-    box = svg.viewbox
-    return path.d(), (box.width / float(svg.width) if box is not None and svg.width else 1.0)
+        mm = _declared_mm(height, float(svg.height))
+    else:
+        box = svg.viewbox
+        mm = box.width / float(svg.width) if box is not None and svg.width else 1.0
+    curves = [
+        sub
+        for e in svg.elements()
+        if isinstance(e, se.Shape) and not isinstance(e, se.SimpleLine)
+        for sub in _curves(se.Path(e))
+    ]
+    if not curves:
+        return None
+    closed = [c for c in curves if _closed(c)]
+    if len(closed) != 1:
+        sizes = ", ".join(_size(c, mm) for c in (closed or curves)[:3])
+        if not closed:
+            raise InputError(f"{p}: no closed curve, only open ones ({sizes}); close the outline")
+        more = ", ..." if len(closed) > 3 else ""
+        raise InputError(
+            f"{p}: {len(closed)} closed curves ({sizes}{more}); which is the outline? a target file "
+            "holds one: leave only it in the file"
+        )
+    return closed[0].d(), mm
+
+
+def _curves(path) -> list:
+    """The subpaths of a shape as paths, transforms applied; a lone move (no segment) is no curve."""
+    import svgelements as se
+
+    path.reify()
+    return [c for c in (se.Path(s) for s in path.as_subpaths()) if len(c) > 1]
+
+
+def _closed(curve) -> bool:
+    """A curve closed by ``Z``, or ending where it starts (to a millionth of its size)."""
+    import svgelements as se
+
+    x0, y0, x1, y1 = curve.bbox()
+    gap = abs(complex(*curve.first_point) - complex(*curve.current_point))
+    return isinstance(curve[-1], se.Close) or gap <= 1e-6 * max(x1 - x0, y1 - y0)
+
+
+def _size(curve, mm: float) -> str:
+    x0, y0, x1, y1 = curve.bbox()
+    return f"{(x1 - x0) * mm:.3g} x {(y1 - y0) * mm:.3g} mm"
 
 
 def _svg_mm(

@@ -11,6 +11,7 @@ import numpy as np
 
 from ... import limits
 from ...errors import InputError
+from ...exchange.dxf.outline import dxf_outline
 from ...exchange.svg import outline_path
 from ...fileio import read_input
 from .curve import Target
@@ -116,6 +117,11 @@ def read_svg(path: Path, curve: str = "polyline") -> Target:
         raise InputError(f"{path}: the SVG has no <path d=...> element")
     d, mm = found
     return from_svg_path(d, path.stem, curve).transformed(mm)
+
+
+def read_dxf(path: Path) -> Target:
+    """The one closed outline of a DXF drawing, in mm (:func:`~fabkiri.exchange.dxf.outline.dxf_outline`)."""
+    return from_points(dxf_outline(path), "polyline", path.stem)
 
 
 def read_points_file(path: Path) -> Target:

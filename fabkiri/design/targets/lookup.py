@@ -17,7 +17,7 @@ from ... import limits
 from ...errors import InputError
 from ...templates import template_dir
 from .curve import SIDES, Target
-from .files import from_points, from_spec, from_svg_path, read_points_file, read_svg
+from .files import from_points, from_spec, from_svg_path, read_dxf, read_points_file, read_svg
 from .projector import ARC_PAD, Projector
 from .shapes import SHAPES, circle, ellipse, heart, polygon, rectangle, star, superellipse
 
@@ -69,12 +69,11 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
     if named.exists() and not p.exists():
         tgt = read_points_file(named)
         return tgt.scaled_to(size or DEFAULT_SIZE)
-    if p.suffix.lower() in (".csv", ".txt", ".json", ".svg") or p.exists():
+    if p.suffix.lower() in (".csv", ".txt", ".json", ".svg", ".dxf") or p.exists():
         if not p.exists():
             raise InputError(f"target file {p} does not exist")
-        tgt = (
-            read_svg(p, curve or "polyline") if p.suffix.lower() == ".svg" else read_points_file(p)
-        )
+        readers = {".svg": lambda p: read_svg(p, curve or "polyline"), ".dxf": read_dxf}
+        tgt = readers.get(p.suffix.lower(), read_points_file)(p)
         if curve and curve != tgt.kind:
             tgt = Target(tgt.name, curve, tgt.points, source=tgt.source)
         if size:
@@ -82,7 +81,7 @@ def load_target(ref: str, size: float | None = None, curve: str | None = None) -
         _check_own_size(tgt, p)
         return tgt.centred()
     raise InputError(
-        f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg file)"
+        f"unknown target {ref!r} (named targets: {', '.join(named_targets())}; or give a .csv/.json/.svg/.dxf file)"
     )
 
 

@@ -17,7 +17,7 @@ from ...errors import FabricationError, InputError, Param
 from ...fileio import read_input
 from ...limits import MAX_PRESET_BYTES, loads_json
 from ...schemas import load_schema, schema_problem
-from ...templates import template_dir
+from ...templates import nearest, template_dir
 
 HINGE_KINDS = ("tape", "ligament", "separate")
 DEFAULT_MATERIAL = (
@@ -131,7 +131,8 @@ def load_material(name_or_path: str) -> Material:
         path = MATERIALS_DIR / f"{name_or_path}.json"
         if not path.exists():
             raise InputError(
-                f"unknown material {name_or_path!r} (presets: {', '.join(available())})"
+                f"unknown material {name_or_path!r}{nearest(name_or_path, available())}; "
+                f"presets: {', '.join(available())}"
             )
     text = read_input(path, max_bytes=MAX_PRESET_BYTES, what="material preset")
     data = loads_json(text, f"material file {path}")

@@ -17,7 +17,7 @@ from ...errors import FabricationError, InputError
 from ...fileio import read_input
 from ...limits import MAX_PRESET_BYTES, loads_json
 from ...schemas import load_schema, schema_problem
-from ...templates import template_dir
+from ...templates import nearest, template_dir
 
 PRINTERS_DIR = template_dir("printers")
 DEFAULT_PRINTER = "prusa-mk4"
@@ -247,12 +247,13 @@ def load_printer(name_or_path: str | None = None) -> Printer:
     """A preset by name (``templates/printers/NAME.json``) or by path to a JSON file."""
     name = name_or_path or DEFAULT_PRINTER
     path = Path(name)
-    shipped = not (path.suffix == ".json" and path.is_file())
+    shipped = path.suffix.lower() != ".json"  # a missing FILE.json is no such file, not a preset
     if shipped:
         path = PRINTERS_DIR / f"{name}.json"
         if not path.is_file():
             raise InputError(
-                f"unknown printer {name!r}; presets: {', '.join(available_printers())}"
+                f"unknown printer {name!r}{nearest(name, available_printers())}; "
+                f"presets: {', '.join(available_printers())}"
             )
     text = read_input(path, max_bytes=MAX_PRESET_BYTES, what="printer preset")
     return printer_from_dict(

@@ -14,7 +14,7 @@ from ...planrules import STRIP_PLAN
 from .. import geometry as printgeom
 from ..job import PrintJob, PrintStyle, Realised, StyleChecks, centre_shift, fits, register_style
 from ..printers import Printer
-from ..solid import Body, Prism, manifold_of, section_polys, translate_body
+from ..solid import SECTION_NOISE_MM, Body, Prism, manifold_of, section_polys, translate_body
 
 if TYPE_CHECKING:
     from ..checks import MeshReport
@@ -137,9 +137,13 @@ def clearances(r: Realised, rep: MeshReport) -> None:
         zs = zs[1:]
         planned = shapely.union_all(list(design_t) + list(design_s[~job.strips.top]))
         got = shapely.union_all(section_polys(hinges_m, lv["bottom"]))
-        off = float(shapely.area(shapely.symmetric_difference(planned, got)))
-        if off > 1e-6 * max(1.0, planned.area):
-            rep.problems.append(f"the base sheet deviates from its plan by {off:.3g} mm²")
+        diff = shapely.symmetric_difference(planned, got)
+        # slivers thinner than the mesh's vertex noise are no deviation (a bound on their area failed
+        # large sheets, whose outlines are long: docs/bad-input.md, hard56)
+        if shapely.area(shapely.buffer(diff, -SECTION_NOISE_MM)) > 0:
+            rep.problems.append(
+                f"the base sheet deviates from its plan by {shapely.area(diff):.3g} mm²"
+            )
     for z in zs:
         parts = section_polys(tiles_m, z)
         sparts = section_polys(hinges_m, z)

@@ -1,0 +1,51 @@
+"""A DXF drawing's one closed outline, as a design target (``design --target shape.dxf``).
+
+CAD tools draw an outline as a closed LWPOLYLINE (bulges for arcs), a CIRCLE, ELLIPSE or SPLINE, or
+as loose LINEs and ARCs meeting end to end (LibreCAD's way). The cut-file reader
+(:func:`~.reader.read_cut_dxf`: blocks exploded, curves flattened to 1 µm, ``$INSUNITS`` to mm) gives
+every curve; loose ones are joined by shapely's ``polygonize``, their ends snapped to a
+:data:`GRID_MM` grid first (an arc's computed end misses its line's by round-off). Exactly one closed curve must result:
+with several, which is the outline is the user's to say.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import shapely
+from shapely.geometry import MultiLineString
+from shapely.ops import polygonize
+
+from ...errors import InputError, VerifyError
+from .reader import read_cut_dxf
+
+GRID_MM = 1e-6
+
+
+def dxf_outline(p: Path) -> np.ndarray:
+    """The ``(n, 2)`` corners (mm) of the one closed outline a DXF draws, or :class:`InputError`."""
+    try:
+        lw = read_cut_dxf(p)
+    except VerifyError as exc:
+        raise InputError(str(exc)) from None
+    rings = [pts for pts, closed in zip(lw.polylines, lw.closed) if closed]
+    loose = [pts for pts, closed in zip(lw.polylines, lw.closed) if not closed]
+    if loose:  # noded (split where they cross), then the loops they close
+        lines = shapely.unary_union(shapely.set_precision(MultiLineString(loose), GRID_MM))
+        rings += [
+            np.asarray(poly.exterior.coords)[:-1] for poly in polygonize(shapely.get_parts(lines))
+        ]
+    if len(rings) == 1:
+        return rings[0]
+    if not lw.polylines:
+        raise InputError(f"{p}: the drawing has no lines or curves")
+    if not rings:
+        raise InputError(
+            f"{p}: no closed outline ({len(loose)} open curve(s) that close no loop); close it"
+        )
+    sizes = ", ".join(f"{w:.3g} x {h:.3g} mm" for w, h in (np.ptp(r, axis=0) for r in rings[:3]))
+    raise InputError(
+        f"{p}: {len(rings)} closed curves ({sizes}{', ...' if len(rings) > 3 else ''}); which is the "
+        "outline? a target file holds one: leave only it in the drawing"
+    )
