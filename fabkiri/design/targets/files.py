@@ -11,7 +11,6 @@ import numpy as np
 
 from ... import limits
 from ...errors import InputError
-from ...exchange.svg import outline_path
 from ...fileio import read_input
 from .curve import Target
 from .shapes import SHAPES
@@ -111,6 +110,9 @@ def from_svg_path(
 
 def read_svg(path: Path, curve: str = "polyline") -> Target:
     """The first path of an SVG file in mm, as drawn: its transforms and the file's units applied."""
+    # the cut drawings' SVG module, loaded here: a design of a named target or points reads no SVG
+    from ...exchange.svg import outline_path
+
     found = outline_path(path)
     if found is None:
         raise InputError(f"{path}: the SVG has no <path d=...> element")
