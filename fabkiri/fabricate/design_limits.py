@@ -14,9 +14,8 @@ from ..design.targets.curve import Target
 from ..errors import FabricationError, InputError, Param
 from .cut.hingekinds import hinge_kind
 from .cut.materials import HINGE_KINDS, Material, load_material
-from .print import geometry as printgeom
 from .print.job import print_style
-from .print.printers import Printer, load_printer
+from .print.printers import Printer, load_printer, min_pad_mm2
 
 PAD_MARGIN_DEG = (
     5.0  # above the corner angle at which a strip pad reaches the printer's minimum area
@@ -70,7 +69,7 @@ def strip_limits(printer: Printer) -> dict:
     out.update(
         strip_clearance_mm=printer.radial_clearance_mm, strip_width_mm=w, strip_reach_mm=reach
     )
-    out["strip_pad_mm2"] = printgeom.min_pad_mm2(printer)  # the pad area print's plan asks
+    out["strip_pad_mm2"] = min_pad_mm2(printer)  # the pad area print's plan asks
     out["hinge_edge_mm"] = (
         w + printer.gap_mm
     )  # the strip runs w along the seam from the shrunk corner

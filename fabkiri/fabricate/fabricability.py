@@ -280,11 +280,11 @@ def bed_scale(
         print_style(style).tiles is None
     ):  # no tiles printed (strips): the bed does not bound the pattern
         return None
-    from .print.geometry import closed_corners
+    if corners is None:  # design gives them: the plan geometry is loaded only without
+        from .print.geometry import closed_corners
 
-    c = corners if corners is not None else closed_corners(pattern, state)
-    w = np.ptp(c[..., 0])
-    h = np.ptp(c[..., 1])
+        corners = closed_corners(pattern, state)
+    w, h = np.ptp(corners[..., 0]), np.ptp(corners[..., 1])
     bx, by, _ = printer.bed_mm
     return float(min(bx / w, by / h) * (1 - 1e-12)) if w > 0 and h > 0 else None
 

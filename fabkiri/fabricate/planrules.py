@@ -213,10 +213,12 @@ def _pin_bound(
     spacing, linear in the scale; a lower bound (the sliver check beside the clearances is not modelled)."""
     from ..pattern.kinds.tessellation import tessellation
     from ..pattern.residuals import hinge_sums
-    from .print import pingeom
+    from .print import pinsizes
 
     try:
-        g = pingeom.pin_geometry(printer, pingeom.pin_levels(printer, pingeom.pin_stack(pattern)))
+        g = pinsizes.pin_geometry(
+            printer, pinsizes.pin_levels(printer, pinsizes.pin_stack(pattern))
+        )
     except FabricationError as exc:
         return PrintMinimum(None, None, str(exc))
     if (

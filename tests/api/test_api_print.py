@@ -129,6 +129,7 @@ def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
     from dataclasses import replace
 
     from fabkiri.fabricate.print import job as printjob
+    from fabkiri.fabricate.print.build import StyleChecks
     from fabkiri.fabricate.print.styles import strips as strips_style
 
     monkeypatch.setattr(printjob._STYLES, "members", dict(printjob._STYLES.members))
@@ -137,7 +138,7 @@ def test_a_print_style_brings_its_own_checks_and_options(square, monkeypatch):
         return replace(strips_style.build(pattern, state, pr), style="fussy-strips")
 
     def checks(pattern, r, rep):
-        return printjob.StyleChecks(
+        return StyleChecks(
             problems=[f"fussy: {r.job.style} {r.job.plan.n_hinges} hinges"], notes=["note: fussy"]
         )
 

@@ -345,6 +345,32 @@ def test_a_design_loads_no_other_commands_module_nor_what_it_never_calls(design_
         assert name not in design_modules, name
 
 
+def test_a_design_sizes_every_hinge_kind_and_print_style_by_their_rules_alone(design_modules):
+    # issue #36: the summary's cut and print sizes ask every kind's and style's rules; their cutting, the
+    # print jobs, plans, solids and pin plans (with dataclasses a design never makes) stay unloaded, and so
+    # does the cut drawings' SVG module a named target never reads
+    assert {
+        "fabkiri.fabricate.cut.hingekinds.ligament",
+        "fabkiri.fabricate.print.styles.rules",
+        "fabkiri.fabricate.print.pinsizes",
+    } <= set(design_modules)
+    for name in (
+        "fabkiri.fabricate.cut.hingekinds.cutting",
+        "fabkiri.fabricate.cut.hingekinds.ligament_cut",
+        "fabkiri.fabricate.cut.hingekinds.tape_cut",
+        "fabkiri.fabricate.cut.hinges",
+        "fabkiri.fabricate.print.build",
+        "fabkiri.fabricate.print.styles.pinned",
+        "fabkiri.fabricate.print.styles.strips",
+        "fabkiri.fabricate.print.geometry",
+        "fabkiri.fabricate.print.pingeom",
+        "fabkiri.fabricate.print.solid",
+        "fabkiri.exchange.svg",
+        "fabkiri.exchange.drawing",
+    ):
+        assert name not in design_modules, name
+
+
 def test_a_command_loads_numpy_ma_and_scipy_linalg_before_its_own_modules(tmp_path):
     # imported a dozen imports deep, their docstring processing crossed a frame chunk's end of CPython 3.11
     # thousands of times (an mmap and munmap each): `main` loads them first, at the foot of the stack

@@ -11,8 +11,6 @@ import numpy as np
 
 from ... import limits
 from ...errors import InputError
-from ...exchange.dxf.outline import dxf_outline
-from ...exchange.svg import outline_path
 from ...fileio import read_input
 from .curve import Target
 from .shapes import SHAPES
@@ -112,6 +110,9 @@ def from_svg_path(
 
 def read_svg(path: Path, curve: str = "polyline") -> Target:
     """The first path of an SVG file in mm, as drawn: its transforms and the file's units applied."""
+    # the cut drawings' SVG module, loaded here: a design of a named target or points reads no SVG
+    from ...exchange.svg import outline_path
+
     found = outline_path(path)
     if found is None:
         raise InputError(f"{path}: the SVG has no <path d=...> element")
@@ -121,6 +122,9 @@ def read_svg(path: Path, curve: str = "polyline") -> Target:
 
 def read_dxf(path: Path) -> Target:
     """The one closed outline of a DXF drawing, in mm (:func:`~fabkiri.exchange.dxf.outline.dxf_outline`)."""
+    # the cut drawings' DXF reader (ezdxf), loaded here as the SVG one is above
+    from ...exchange.dxf.outline import dxf_outline
+
     return from_points(dxf_outline(path), "polyline", path.stem)
 
 

@@ -38,7 +38,8 @@ from ...fileio import atomic_write_many
 from ...pattern import thinness as fab
 from ...pattern.model import Pattern
 from ..gcpause import gc_paused
-from .hingekinds import SheetRead, hinge_kind
+from .hingekinds import hinge_kind
+from .hingekinds.cutting import SheetRead
 from .sheets import CutResult
 
 # one sheet's polylines per layer, as the DXF or the SVG read-back gives them

@@ -29,7 +29,8 @@ from ..gcpause import gc_paused
 from . import hinges as hg
 from . import layout as lay
 from .formats import sheet_format, sheet_format_names
-from .hingekinds import Cutting, HingeKind, SheetCut, hinge_kind
+from .hingekinds import HingeKind, hinge_kind
+from .hingekinds.cutting import Cutting, SheetCut
 from .labels import MIN_LABEL_MM, add_notes, engrave_labels
 from .manifest import cut_manifest, sheet_names
 from .materials import Material

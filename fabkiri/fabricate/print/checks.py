@@ -16,7 +16,8 @@ import shapely
 
 from ...errors import FabricationError
 from . import geometry as printgeom
-from .job import Realised, print_style
+from .build import Realised
+from .job import print_style
 from .solid import SECTION_NOISE_MM, edge_defects, float32_defects, manifold_of, section_polys
 
 

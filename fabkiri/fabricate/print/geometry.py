@@ -35,7 +35,7 @@ from ...kdtree import KDTree
 from ...mechanics.contract import contract
 from ...pattern.kinds.tessellation import tessellation
 from ...pattern.model import Pattern
-from .printers import Printer
+from .printers import Printer, min_pad_mm2
 
 CLOSURE_TOL_REL = 1e-6  # loop closure accepted for printing, in tile sizes
 COINCIDE_TOL_REL = 1e-6  # two hinge points closer than this (tile sizes) coincide
@@ -371,11 +371,6 @@ def strip_outlines(plan: ClosedPlan, printer: Printer, check: bool = True) -> St
     over = min(POCKET_OVERSHOOT_MM, 0.25 * printer.gap_mm)
     pocket = _pockets(pair, band_frame=(p, e, n), t=(t0, t1), R=R, over=over)
     return Strips(outline=outline, pads=pads, top=plan.top.copy(), pocket=pocket)
-
-
-def min_pad_mm2(printer: Printer) -> float:
-    """The least area of a strip's pad on each of its tiles (``design --printer`` keeps it too)."""
-    return 0.25 * printer.strip_width_mm * min(printer.strip_reach_mm, printer.strip_width_mm)
 
 
 def _seam_entry(plan: ClosedPlan, pair: np.ndarray, span: float) -> np.ndarray:

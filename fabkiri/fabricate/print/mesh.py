@@ -25,8 +25,9 @@ from ...errors import FabricationError
 from ...pattern.model import Pattern
 from ...verify.printmanifest import PrintManifest
 from . import geometry as printgeom
+from .build import PrintJob, Realised, scaled
 from .checks import MeshReport, TileCheck, check_meshes, check_printed_tiles, read_back_files
-from .job import STYLES, PrintJob, Realised, print_style, scaled
+from .job import STYLES, print_style
 from .printers import Printer
 from .solid import Body, Prism, bed_grid, float32_defects, realise, to_trimesh
 from .styles.pinned import pinned_scale_range, sweep_pinned

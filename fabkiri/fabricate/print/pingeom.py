@@ -3,10 +3,10 @@
 The hinges that coincide in a closed state are stacked coaxially, two ear
 levels per hinge: tile A of a hinge owns the lower ear and the pin, tile B the
 ring. A kind whose closed states join ``hole_arity / 2`` hinges at a point
-stacks that many (quads two, four ear levels; kagome three, six). Here: the
-levels and radii from the printer preset, where each pin sits and which levels
-it uses (or why the geometry refuses pins), the turn of each pivot's polygons,
-and the slivers a pivot clearance leaves beside a tile's outline.
+stacks that many (quads two, four ear levels; kagome three, six). Here: where
+each pin sits and which levels it uses (or why the geometry refuses pins), the
+turn of each pivot's polygons, and the slivers a pivot clearance leaves beside a
+tile's outline; the levels and radii from the printer preset are :mod:`.pinsizes`.
 """
 
 from __future__ import annotations
@@ -23,98 +23,11 @@ from ...pattern.kinds.tessellation import tessellation
 from ...pattern.model import Pattern
 from . import geometry as printgeom
 from .geometry import CIRCLE_SEGMENTS, ClosedPlan, grow_back, regular_polygon
+from .pinsizes import PinGeometry, PinLevels, pin_geometry, pin_levels, pin_stack
 from .pinslots import pin_slots
 from .printers import Printer
 
 MASK_MARGIN_MM = 1e-3  # the tile check masks the pivot clearances with this margin
-
-
-def pin_stack(pattern: Pattern) -> int:
-    """Hinges stacked coaxially at one pivot: as many as a closed state of the pattern's kind joins
-    at a point (``hole_arity / 2``: two for quads, three for kagome), two ear levels each."""
-    return max(2, tessellation(pattern.kind).hole_arity // 2)
-
-
-@dataclass(frozen=True)
-class PinLevels:
-    """Z layout of the ear levels of a pinned print (mm): two per stacked hinge."""
-
-    thickness: float
-    ear: float
-    axial: float
-    count: int = 4  # ear levels, 2 × the hinges stacked at a pivot
-
-    def level(self, k: int) -> tuple[float, float]:
-        z0 = k * (self.ear + self.axial)
-        return z0, z0 + self.ear
-
-    def gaps(self) -> list[float]:
-        """The middle of every axial gap between two ear levels (mm)."""
-        return [self.level(k)[1] + 0.5 * self.axial for k in range(self.count - 1)]
-
-
-def pin_levels(printer: Printer, stack: int = 2) -> PinLevels:
-    """The ear levels of ``stack`` coaxial hinges in the preset's pinned tile thickness, or
-    :class:`FabricationError` if an ear would be under three layers."""
-    T = printer.pin.tile_thickness_mm
-    az = printer.axial_clearance_mm
-    n = 2 * stack
-    ear = (T - (n - 1) * az) / n
-    if ear < 3 * printer.layer_mm - 1e-9:
-        raise FabricationError(
-            f"pinned hinges need {n} stacked ears ({stack} hinges at a pivot): a {T:g} mm tile leaves "
-            f"{ear:.2f} mm per ear after {n - 1} {az:g} mm axial clearances, under three layers "
-            f"({3 * printer.layer_mm:g} mm); raise the preset's pin.tile_thickness_mm (--tile-thickness "
-            f"{ceil_mm(n * 3 * printer.layer_mm + (n - 1) * az):g})"
-        )
-    return PinLevels(thickness=T, ear=ear, axial=az, count=n)
-
-
-def ceil_mm(v: float) -> float:
-    """``v`` rounded up to 0.1 mm (a thickness to suggest)."""
-    return float(np.ceil(v * 10 - 1e-9) / 10)
-
-
-@dataclass(frozen=True)
-class PinGeometry:
-    """Radii of one pin joint (mm). The pin flares upward (retains the ring)."""
-
-    ear: float  # ear disc radius
-    hollow: float  # the other tiles are cleared to this radius around the pivot
-    pin_bottom: float
-    pin_top: float
-    hole_bottom: float  # ring hole, horizontal radius
-    hole_top: float
-
-
-def pin_geometry(printer: Printer, levels: PinLevels) -> PinGeometry:
-    c = printer.radial_clearance_mm
-    r = printer.pin.ear_radius_mm
-    rp = printer.pin.pin_radius_mm
-    flare = 2.0 * c  # the ring's narrowest hole is smaller than the pin's widest point
-    slope = flare / levels.ear
-    ch = float(c * np.sqrt(1.0 + slope * slope))  # horizontal clearance giving c normal to the cone
-    g = PinGeometry(
-        ear=r,
-        hollow=r + c,
-        pin_bottom=rp,
-        pin_top=rp + flare,
-        hole_bottom=rp + ch,
-        hole_top=rp + flare + ch,
-    )
-    wall = r - g.hole_top
-    if wall < 2 * printer.nozzle_mm - 1e-9:
-        raise FabricationError(
-            f"pinned hinges: the ear ring wall is {wall:.2f} mm (ear radius {r:g} mm, pin {rp:g} mm, clearance "
-            f"{c:g} mm, ears {levels.ear:.2f} mm thick), under two nozzle widths ({2 * printer.nozzle_mm:g} mm); "
-            "raise pin.ear_radius_mm, or the tile thickness (--tile-thickness: thicker ears flare the pin "
-            "less)"
-        )
-    if rp < printer.nozzle_mm:
-        raise FabricationError(
-            f"pin radius {rp:g} mm is under one nozzle width ({printer.nozzle_mm:g} mm)"
-        )
-    return g
 
 
 @dataclass(frozen=True, eq=False)

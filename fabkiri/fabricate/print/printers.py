@@ -205,6 +205,12 @@ MATERIALS: dict[str, MaterialSettings] = {
 }
 
 
+def min_pad_mm2(printer: Printer) -> float:
+    """The least area of a strip's pad on each of its tiles (print's plan; ``design --printer`` keeps
+    it too)."""
+    return 0.25 * printer.strip_width_mm * min(printer.strip_reach_mm, printer.strip_width_mm)
+
+
 def available_printers() -> list[str]:
     return sorted(p.stem for p in PRINTERS_DIR.glob("*.json"))
 

@@ -17,7 +17,7 @@ from ...errors import FabricationError
 from ...pattern.model import Pattern
 from ...verify.manifest import CutManifest
 from . import geometry as printgeom
-from .job import Realised
+from .build import Realised
 from .solid import manifold_of, section_polys
 
 

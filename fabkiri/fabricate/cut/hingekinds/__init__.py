@@ -7,71 +7,28 @@ tell the maker how the tiles join. The kinds are one module each (``tape``,
 ``ligament``, ``separate``), loaded on first use as trimesh loads its file-format
 handlers; a new kind is one module that calls :func:`register` and one line in
 the built-in table of :data:`_KINDS` (and, in :mod:`..materials`, the name in ``HINGE_KINDS``).
+
+A built-in kind's module holds its rules (sizing, layouts, labels, assembly steps); its cutting
+(``prepare``, ``draw``, ``recover``) is a sibling module named by :attr:`HingeKind.cutter`, loaded
+when a cut or a read-back first asks: a design sizes every kind for its summary and loads none of
+the cut geometry. A kind may instead define the three methods itself.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+import importlib
 from typing import TYPE_CHECKING, Any
-
-import numpy as np
 
 from ....errors import InputError
 from ....registry import Registry
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from ....exchange.drawing import SheetDrawing
     from ....pattern.model import Pattern
-    from ..hinges import LigamentDesign
-    from ..layout import Placement
     from ..materials import Material
-
-
-@dataclass
-class Cutting:
-    """What a hinge kind makes of a closed state before the parts are placed (mm).
-
-    ``corners`` are the tile corners as cut (a kind may snap them), ``regions``
-    each tile's label region (its core, for shrunk tiles), ``parts`` the shapely
-    polygons the layout places, ``offset`` the kerf offset of the cut outlines and
-    ``shrink`` how far each tile was shrunk.
-    """
-
-    corners: np.ndarray
-    regions: np.ndarray
-    parts: np.ndarray
-    label_margin: float
-    offset: float = 0.0
-    shrink: float = 0.0
-    ligament: LigamentDesign | None = None
-    strips: np.ndarray | None = None  # ligament strips, closed-state coordinates
-    warnings: list[str] = field(default_factory=list)
-
-
-@dataclass(frozen=True)
-class SheetCut:
-    """One sheet's share of a cut, handed to :meth:`HingeKind.draw`."""
-
-    index: int  # 0-based sheet
-    tiles: np.ndarray  # the tiles placed on it
-    place: Placement
-    sheet_of: np.ndarray  # (T,) sheet of every tile
-    hinge_tiles: np.ndarray  # (H, 2) tiles A, B of every hinge
-    corners: np.ndarray  # (T, 4, 2) every tile's corners as placed
-    regions: np.ndarray  # (T, 4, 2) every tile's label region as placed
-
-
-@dataclass(frozen=True)
-class SheetRead:
-    """One written sheet as the read-back sees it, handed to :meth:`HingeKind.recover`."""
-
-    cut: Sequence[tuple[np.ndarray, bool]]  # the CUT polylines as read, ``(points, closed)``
-    polys: np.ndarray  # a shapely polygon per closed CUT polyline
-    is_ref: np.ndarray  # which closed polylines are the reference square
-    square: np.ndarray | None  # the reference square's corners, if it is on this sheet
-    sheet: int  # 1-based
-    manifest: dict  # the cut's manifest (kerf offset, hinge features)
+    from .cutting import Cutting, SheetCut, SheetRead
 
 
 class HingeKind:
@@ -91,6 +48,7 @@ class HingeKind:
     )
     one_piece = False  # the sheet comes out as one piece joined by itself: no tape, nothing to join
     cut_apart = False  # every tile is cut on its own: a tape piece spans one corner pair, tiles are placed by ID
+    cutter = ""  # the module with this kind's prepare, draw and recover (functions taking the kind first)
 
     def shrink(self, material: Material) -> float:
         """How far ``cut`` shrinks every tile (mm)."""
@@ -132,7 +90,14 @@ class HingeKind:
     def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
         """The read-back's pieces the laser leaves on one written sheet, and the holes in them
         (shapely polygons, mm)."""
-        raise NotImplementedError
+        return self._cuts().recover(self, sheet)
+
+    def _cuts(self) -> Any:
+        """The kind's cutting module, imported at a cut's or read-back's first call (a design never
+        makes one)."""
+        if not self.cutter:
+            raise NotImplementedError(f"hinge kind {self.name!r} names no cutter")
+        return importlib.import_module(self.cutter)
 
     def check_layout(self, layout: str) -> None:
         """Refuse a layout this kind cannot be cut in, with one line saying what to use."""
@@ -153,12 +118,14 @@ class HingeKind:
         options: Any,
     ) -> Cutting:
         """The parts, label regions and offsets of the closed state ``corners`` (mm)."""
-        raise NotImplementedError
+        return self._cuts().prepare(
+            self, pattern, corners, tile_polys, mat, state=state, scale=scale, options=options
+        )
 
     def draw(self, sd: SheetDrawing, sheet: SheetCut, cutting: Cutting) -> list[dict]:
         """Add one sheet's cut linework to ``sd``; returns the hinge features the
         manifest declares for the verifier (ligament spans)."""
-        raise NotImplementedError
+        return self._cuts().draw(self, sd, sheet, cutting)
 
 
 # built-in kinds, imported when first asked for (their modules call register())

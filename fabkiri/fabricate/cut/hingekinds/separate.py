@@ -1,23 +1,16 @@
 """Separate tiles: each tile cut on its own, offset by half the kerf, laid out
 exploded or nested; both corners of every hinge carry the partner tile's ID and
-the face letter, so the maker finds which corners join."""
+the face letter, so the maker finds which corners join. The cutting is :mod:`.separate_cut`."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
-
-import numpy as np
-import shapely
+from typing import TYPE_CHECKING
 
 from ....errors import InputError
-from .. import hinges as hg
-from . import Cutting, HingeKind, register
+from . import HingeKind, register
 
 if TYPE_CHECKING:
-    from ....exchange.drawing import SheetDrawing
-    from ....pattern.model import Pattern
     from ..materials import Material
-    from . import SheetCut, SheetRead
 
 
 class Separate(HingeKind):
@@ -25,6 +18,7 @@ class Separate(HingeKind):
     default_layout = "exploded"
     both_corner_labels = True
     cut_apart = True
+    cutter = "fabkiri.fabricate.cut.hingekinds.separate_cut"
 
     def check_layout(self, layout: str) -> None:
         if layout == "in-place":
@@ -32,36 +26,6 @@ class Separate(HingeKind):
                 "separate tiles are offset by half the kerf and would overlap in place; "
                 "use --layout exploded or nested"
             )
-
-    def prepare(
-        self,
-        pattern: Pattern,
-        corners: np.ndarray,
-        tile_polys: np.ndarray,
-        mat: Material,
-        *,
-        state: int,
-        scale: float,
-        options: Any,
-    ) -> Cutting:
-        offset = mat.kerf_offset_mm
-        return Cutting(
-            corners, corners, hg.kerf_outset(tile_polys, offset), label_margin=0.5, offset=offset
-        )
-
-    def draw(self, sd: SheetDrawing, sheet: SheetCut, cutting: Cutting) -> list[dict]:
-        for t in sheet.tiles:  # each part turned and moved as placed
-            ring = np.asarray(cutting.parts[t].exterior.coords)[:-1]
-            sd.add("CUT", sheet.place.apply(np.array([t]), ring[None])[0], True)
-        return []
-
-    def recover(self, sheet: SheetRead) -> tuple[np.ndarray, np.ndarray]:
-        # every closed outline but the reference square, less the kerf offset
-        off = sheet.manifest["kerf_offset_mm"]
-        pieces = shapely.buffer(
-            sheet.polys[~sheet.is_ref], -off, join_style="mitre", mitre_limit=hg.MITRE_LIMIT
-        )
-        return pieces, np.array([])
 
     def hinge_spacing(self, material: Material) -> float:
         return 0.0  # tiles cut apart: nothing on the tile between two hinges

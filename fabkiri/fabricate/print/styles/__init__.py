@@ -1,1 +1,2 @@
-"""Print styles, one module each; each registers itself with :func:`..printjob.register_style`."""
+"""Print styles: the built-ins' rules in :mod:`.rules` (registered with :func:`..job.register_style`),
+their building one module each."""

@@ -18,20 +18,10 @@ import shapely
 
 from ....errors import FabricationError
 from ....pattern.model import Pattern
-from ...planrules import PIN_PLAN
 from .. import geometry as printgeom
 from .. import pingeom
+from ..build import PrintJob, Realised, StyleChecks, centre_shift, fits, scaled
 from ..geometry import regular_polygon
-from ..job import (
-    PrintJob,
-    PrintStyle,
-    Realised,
-    StyleChecks,
-    centre_shift,
-    fits,
-    register_style,
-    scaled,
-)
 from ..printers import Printer
 from ..solid import Body, Prism, manifold_of, section_polys, translate_body
 
@@ -380,25 +370,3 @@ def pinned_checks(pattern: Pattern, r: Realised, rep: MeshReport) -> StyleChecks
             f"({sweep.worst})"
         )
     return out
-
-
-def pin_limits(printer: Printer) -> dict:
-    """What pins ask of the tiles (``design --style pinned``): pivots far enough apart for two ears."""
-    hollow = printer.pin.ear_radius_mm + printer.radial_clearance_mm
-    return {"hinge_spacing_mm": 2.0 * hollow + 2.0 * printer.nozzle_mm}
-
-
-PINNED = register_style(
-    PrintStyle(
-        "pinned",
-        build,
-        clearances,
-        tiles=tiles,
-        advise=pinned_advice,
-        checks=pinned_checks,
-        own_tile_thickness=True,
-        strip_hinges=False,
-        limits=pin_limits,
-        plan=PIN_PLAN,
-    )
-)

@@ -15,10 +15,8 @@ from shapely.geometry import Polygon
 
 from ....errors import FabricationError
 from ....pattern.model import Pattern
-from ...design_limits import strip_limits
-from ...planrules import STRIP_PLAN
 from .. import geometry as printgeom
-from ..job import PrintJob, PrintStyle, Realised, register_style
+from ..build import PrintJob, Realised
 from ..printers import Printer
 from ..solid import Body, Prism
 
@@ -151,8 +149,3 @@ def clearances(r: Realised, rep: MeshReport) -> None:
                     f"strip parts {rep.min_clearance_mm:.3f} mm apart on bed 1, "
                     f"under the part spacing {pr.part_spacing_mm:g} mm"
                 )
-
-
-STRIPS = register_style(
-    PrintStyle("strips", build, clearances, loose_strips=True, limits=strip_limits, plan=STRIP_PLAN)
-)

@@ -9,10 +9,8 @@ import shapely
 
 from ....errors import FabricationError
 from ....pattern.model import Pattern
-from ...design_limits import strip_limits
-from ...planrules import STRIP_PLAN
 from .. import geometry as printgeom
-from ..job import PrintJob, PrintStyle, Realised, StyleChecks, centre_shift, fits, register_style
+from ..build import PrintJob, Realised, StyleChecks, centre_shift, fits
 from ..printers import Printer
 from ..solid import SECTION_NOISE_MM, Body, Prism, manifold_of, section_polys, translate_body
 
@@ -214,18 +212,3 @@ def _reassembly(check_id: str) -> bool:
     """Whether a layout-verifier check is one of (c), the cut tiles reassembled into a closed state
     (ids ``GROUP.reassembled.stateS.WHAT``)."""
     return ".reassembled.state" in check_id
-
-
-TILES_AND_STRIPS = register_style(
-    PrintStyle(
-        "tiles-and-strips",
-        build,
-        clearances,
-        tiles=tiles,
-        body_per_material=True,
-        checks=layout_checks,
-        has_layout=True,
-        limits=strip_limits,
-        plan=STRIP_PLAN,
-    )
-)
