@@ -30,7 +30,7 @@ from .initial import coarse_tile_map, initial_guess
 from .objective import regularizer, weighted
 from .opening_rows import opening_families
 from .rigid.contact import CONTACT_MARGIN, ClosedContact
-from .rigid.family import RigidFamily, resample_grid
+from .rigid.family import EXACT_GRID, RigidFamily, resample_grid
 from .rigid.mirror import centred
 from .rigid.unfold import convex_member
 
@@ -399,7 +399,11 @@ class DesignProblem:
         st_c = C.Stencils.from_pattern(coarse)
         fam_c = RigidFamily.of_standard(st_c, lambda: coarse.topology.spanning_tree(0))
         psi = RigidFamily.deployment_angle(x_mm, st_c)
-        S_c, _ = fam_c.fit(x_mm, psi)
+        # a large lattice's coarse level is a reduced solve's member: its seeds from its seed tiles alone
+        top = (self.req.rows + 1) * (self.req.cols + 1) > EXACT_GRID
+        S_c = fam_c.member_seeds(x_mm, psi) if top else None
+        if S_c is None:
+            S_c, _ = fam_c.fit(x_mm, psi)
         grid = resample_grid(
             fam_c.grid(S_c).reshape(st_c.rows + 1, st_c.cols + 1, 2), self.req.rows, self.req.cols
         )

@@ -31,7 +31,7 @@ from ...core.stencils import Family, StackedJacobian, Stencils
 from ..constraints import exact_fits
 from ..objective import tile_corners
 from .contact import ClosedContact
-from .family import RigidFamily
+from .family import EXACT_GRID, RigidFamily
 from .merit import KeptGridBlock, _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
 from .steps import MAX_STALL, exact_fit, fit_miss, levenberg_marquardt, stage, stiffer_alone
@@ -144,6 +144,13 @@ class _Merit:
 
     def _state_2(self, S: np.ndarray) -> np.ndarray | None:
         return None if self.contact is None else self.fam.Y @ S
+
+    def closed(self, p: np.ndarray, Xc) -> tuple[np.ndarray, np.ndarray]:
+        """Both closed states ``(c, Y S)`` of member ``p`` whose ``state`` is ``Xc``: ``Y S`` by the tiles'
+        translations (``RigidFamily.translations``), without making the dense ``Y`` of a large lattice."""
+        S, _ = self.unpack(p)
+        c = Xc[1]
+        return c, self.fam.translations(S, c[self.fam.node_vertex])
 
     def contact_rows(self, Xc, hard: bool) -> tuple[np.ndarray, np.ndarray]:
         """The active contact rows and their dense ``∂r/∂p`` (none without contact rows)."""
@@ -434,10 +441,18 @@ def solve_reduced(
     pushing = judge.with_contact(ClosedContact(fam, st, barrier=False))
 
     def rank(p, X, mode) -> tuple:
-        """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit."""
+        """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit.
+        The merit only orders two overlapping results (a result apart ends the loop below, or wins on the
+        second key): it is evaluated, with the contact rows, only for an overlapping one."""
+        Xc = judge.state(p)
+        gap = min(
+            float(g.min(initial=np.inf))
+            for g in touching.contact.values(touching.closed(p, Xc)).values()
+        )
+        if gap >= 0.0:
+            return (judge.ineq_violation(Xc) > 0, False, 0.0), X, mode, p
         ev = touching.evaluate(p)
-        gap = min(float(g.min(initial=np.inf)) for g in touching.contact.values(ev.Xc[1:]).values())
-        return (judge.ineq_violation(judge.state(p)) > 0, gap < 0.0, float(ev.r @ ev.r)), X, mode
+        return (judge.ineq_violation(Xc) > 0, True, float(ev.r @ ev.r)), X, mode, p
 
     best = rank(p, X, mode)
     # from the overlapping result first, then (if that ends violating an inequality) from the start, where the
@@ -450,7 +465,12 @@ def solve_reduced(
             break
         how.log(f"closed-state tiles overlap: again with the contact rows, from {where}")
         best = min(best, rank(*_search(merit, start, tag, iters, how)), key=lambda b: b[0])
-    return best[1], best[2], iters
+    _, X, mode, p = best
+    if (
+        mirror is None and len(fam.Z) > EXACT_GRID
+    ):  # the member's own nodes, its rows met to round-off
+        X = fam.exact_nodes(*judge.unpack(p))
+    return X, mode, iters
 
 
 def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):
