@@ -200,9 +200,6 @@ class MirroredMerit:
     def state(self, q: np.ndarray):
         return self.inner.state(self.P @ q)
 
-    def closed(self, q: np.ndarray, Xc) -> tuple[np.ndarray, np.ndarray]:
-        return self.inner.closed(self.P @ q, Xc)
-
     def with_contact(self, contact) -> MirroredMerit:
         if self.axis is None:
             return MirroredMerit(self.inner.with_contact(contact), self.P, None, self.halves)

@@ -145,13 +145,6 @@ class _Merit:
     def _state_2(self, S: np.ndarray) -> np.ndarray | None:
         return None if self.contact is None else self.fam.Y @ S
 
-    def closed(self, p: np.ndarray, Xc) -> tuple[np.ndarray, np.ndarray]:
-        """Both closed states ``(c, Y S)`` of member ``p`` whose ``state`` is ``Xc``: ``Y S`` by the tiles'
-        translations (``RigidFamily.translations``), without making the dense ``Y`` of a large lattice."""
-        S, _ = self.unpack(p)
-        c = Xc[1]
-        return c, self.fam.translations(S, c[self.fam.node_vertex])
-
     def contact_rows(self, Xc, hard: bool) -> tuple[np.ndarray, np.ndarray]:
         """The active contact rows and their dense ``∂r/∂p`` (none without contact rows)."""
         if self.contact is None:
@@ -414,14 +407,10 @@ def solve_reduced(
     S0: np.ndarray | None = None,
     mirror: Mirror | None = None,
 ):
-    """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
-    start is already a member).
-
-    Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
-    driven to ``how.fit_tol`` (absolute, normalised units), else "least-squares".
-    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is then over
-    ``q``.
-    """
+    """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0``, a member):
+    ``(X, mode, iterations)``, ``mode`` "hard" when the fit rows were driven to ``how.fit_tol`` (absolute,
+    normalised units), else "least-squares"; above ``EXACT_GRID``, no mirror, ``X`` by ``exact_nodes``.
+    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is over ``q``."""
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes)
         S0, _ = fam.fit(X0, psi0)
     p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
@@ -441,18 +430,13 @@ def solve_reduced(
     pushing = judge.with_contact(ClosedContact(fam, st, barrier=False))
 
     def rank(p, X, mode) -> tuple:
-        """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit.
-        The merit only orders two overlapping results (a result apart ends the loop below, or wins on the
-        second key): it is evaluated, with the contact rows, only for an overlapping one."""
+        """Feasible on its own inequalities, then apart in the closed states, then (overlapping only) the merit."""
         Xc = judge.state(p)
-        gap = min(
-            float(g.min(initial=np.inf))
-            for g in touching.contact.values(touching.closed(p, Xc)).values()
-        )
-        if gap >= 0.0:
-            return (judge.ineq_violation(Xc) > 0, False, 0.0), X, mode, p
-        ev = touching.evaluate(p)
-        return (judge.ineq_violation(Xc) > 0, True, float(ev.r @ ev.r)), X, mode, p
+        S, _ = judge.unpack(p if mirror is None else mirror.P @ p)
+        xs = (Xc[1], fam.translations(S, Xc[1][fam.node_vertex]))  # Y S, no dense Y
+        gap = min(float(g.min(initial=np.inf)) for g in touching.contact.values(xs).values())
+        r = np.zeros(0) if gap >= 0.0 else touching.evaluate(p).r
+        return (judge.ineq_violation(Xc) > 0, gap < 0.0, float(r @ r)), X, mode, p
 
     best = rank(p, X, mode)
     # from the overlapping result first, then (if that ends violating an inequality) from the start, where the
@@ -466,9 +450,7 @@ def solve_reduced(
         how.log(f"closed-state tiles overlap: again with the contact rows, from {where}")
         best = min(best, rank(*_search(merit, start, tag, iters, how)), key=lambda b: b[0])
     _, X, mode, p = best
-    if (
-        mirror is None and len(fam.Z) > EXACT_GRID
-    ):  # the member's own nodes, its rows met to round-off
+    if mirror is None and len(fam.Z) > EXACT_GRID:
         X = fam.exact_nodes(*judge.unpack(p))
     return X, mode, iters
 
