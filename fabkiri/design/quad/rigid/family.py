@@ -286,11 +286,11 @@ class RigidFamily:
         D[:, 1, -1] = -s * a[:, 1] + c * b[:, 0]
         return D
 
-    def seeds_for_grid(self, grid: np.ndarray) -> np.ndarray:
-        """Seeds ``S`` whose closed-state-1 grid is closest to ``grid`` ``(G, 2)`` (least squares); above
-        ``EXACT_GRID`` by the normal equations through the core (``Zᵀ Z = Zcᵀ (Eᵀ E) Zc``, ``Zᵀ grid = Zcᵀ (Eᵀ grid)``):
+    def seeds_for_grid(self, grid: np.ndarray, normal: bool = False) -> np.ndarray:
+        """Seeds ``S`` whose closed-state-1 grid is closest to ``grid`` ``(G, 2)`` (least squares); with
+        ``normal``, above ``EXACT_GRID``, by the normal equations through the core (``Zᵀ Z = Zcᵀ (Eᵀ E) Zc``, ``Zᵀ grid = Zcᵀ (Eᵀ grid)``):
         ``Z`` holds the identity on its seed rows and the rest are means of them, so ``Zᵀ Z`` is well conditioned."""
-        if len(self.Z) <= EXACT_GRID:
+        if not normal or len(self.Z) <= EXACT_GRID:
             S, *_ = np.linalg.lstsq(self.Z, grid, rcond=None)
             return S
         core = self.core

@@ -409,7 +409,7 @@ def solve_reduced(
 ):
     """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0``, a member):
     ``(X, mode, iterations)``, ``mode`` "hard" when the fit rows were driven to ``how.fit_tol`` (absolute,
-    normalised units), else "least-squares"; above ``EXACT_GRID``, no mirror, ``X`` by ``exact_nodes``.
+    normalised units), else "least-squares"; above ``EXACT_GRID`` with ``how.keep_block``, ``X`` by ``exact_nodes``.
     ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is over ``q``."""
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes)
         S0, _ = fam.fit(X0, psi0)
@@ -450,7 +450,7 @@ def solve_reduced(
         how.log(f"closed-state tiles overlap: again with the contact rows, from {where}")
         best = min(best, rank(*_search(merit, start, tag, iters, how)), key=lambda b: b[0])
     _, X, mode, p = best
-    if mirror is None and len(fam.Z) > EXACT_GRID:
+    if how.keep_block and len(fam.Z) > EXACT_GRID:
         X = fam.exact_nodes(*judge.unpack(p))
     return X, mode, iters
 
