@@ -129,7 +129,7 @@ def test_the_rescaled_bottom_is_kept_only_where_it_converged_and_fits_closer(
         res = SimpleNamespace(converged=ok, pattern=SimpleNamespace(nodes=sub.rows), report={})
         return res, {"fit": "outline" if sub.outline else "tips", "hausdorff_rel": h}
 
-    def mapped(self, coarse, nodes):
+    def mapped(self, coarse, nodes, cheap=False):
         raise _Mapped(nodes)
 
     monkeypatch.setattr(DesignProblem, "_coarse_level", level)

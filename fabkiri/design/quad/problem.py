@@ -21,7 +21,7 @@ from ...pattern.kinds.quad.lattice import standard_pattern
 from ...pattern.model import Pattern
 from ..core.conformance import deployed
 from ..core.normal import NormalEquations, nested_dissection
-from ..core.request import DesignRequest, DesignResult, reduced_applies
+from ..core.request import FINISH_FLOOR, DesignRequest, DesignResult, reduced_applies
 from ..targets.lookup import Target
 from . import constraints as C
 from .chain import CHAIN_BOTTOM, keep_bottom, level_of
@@ -30,7 +30,7 @@ from .initial import coarse_tile_map, initial_guess
 from .objective import regularizer, weighted
 from .opening_rows import opening_families
 from .rigid.contact import CONTACT_MARGIN, ClosedContact
-from .rigid.family import RigidFamily, resample_grid
+from .rigid.family import EXACT_GRID, RigidFamily, resample_grid
 from .rigid.mirror import centred
 from .rigid.unfold import convex_member
 
@@ -242,7 +242,10 @@ class DesignProblem:
         rc, cc = sub.rows, sub.cols
         sc = standard_pattern(rc, cc, tile_size=1.0)
         if reduced_applies(req) and req.solver != "full":
-            xmm = self._rigid_refinement(sc, res.pattern.nodes)
+            # from a tips-fitted level within FINISH_FLOOR (``routes.keeps_block``: no minimax finish follows, whose
+            # stops move with any start) the start's seeds by the cheaper fits of a large lattice, round-off apart
+            near = level["fit"] == "tips" and level["hausdorff_rel"] <= FINISH_FLOOR
+            xmm = self._rigid_refinement(sc, res.pattern.nodes, near and not chained)
             # (a redesign with ``coarse_refit`` asks the outline rows: this level would be the same design twice)
             redo = req.symmetry and level["fit"] == "outline" and not req.coarse_refit
             # a bottom level starts from rescaled already: refitted tips only it has no other chain to leave
@@ -390,22 +393,31 @@ class DesignProblem:
         self.start_member, self.unfold = kept
         return outline_level
 
-    def _rigid_refinement(self, coarse: Pattern, x_mm: np.ndarray) -> np.ndarray:
+    def _rigid_refinement(
+        self, coarse: Pattern, x_mm: np.ndarray, cheap: bool = False
+    ) -> np.ndarray:
         """Fine start (mm) from a coarse rigid design: its closed-state-1 grid resampled to this lattice.
 
         The coarse design is a member of its own rigid family at its deployment angle ψ (every hole opens
-        to 2ψ); the fine start is the fine member nearest the resampled grid, deployed to the same ψ.
+        to 2ψ); the fine start is the fine member nearest the resampled grid, deployed to the same ψ. ``cheap``:
+        above ``EXACT_GRID``, the coarse seeds by ``member_seeds`` and the fine ones by the normal equations.
         """
         st_c = C.Stencils.from_pattern(coarse)
         fam_c = RigidFamily.of_standard(st_c, lambda: coarse.topology.spanning_tree(0))
         psi = RigidFamily.deployment_angle(x_mm, st_c)
-        S_c, _ = fam_c.fit(x_mm, psi)
+        # a large lattice's coarse level is a reduced solve's member: its seeds from its seed tiles alone
+        cheap = cheap and (self.req.rows + 1) * (self.req.cols + 1) > EXACT_GRID
+        S_c = fam_c.member_seeds(x_mm, psi) if cheap else None
+        if S_c is None:
+            S_c, _ = fam_c.fit(x_mm, psi)
         grid = resample_grid(
             fam_c.grid(S_c).reshape(st_c.rows + 1, st_c.cols + 1, 2), self.req.rows, self.req.cols
         )
         fam = self.rigid_family
         # the nearest fine member can fold cells the resampled grid does not: repaired (``unfold.py``)
-        S, self.unfold = convex_member(fam, fam.node_vertex[self.st.tiles], grid.reshape(-1, 2))
+        S, self.unfold = convex_member(
+            fam, fam.node_vertex[self.st.tiles], grid.reshape(-1, 2), normal=cheap
+        )
         self.start_member = (
             S,
             psi,

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import sparse
+from scipy.linalg import cho_factor, cho_solve
 from scipy.sparse.linalg import splu
 
 from ....errors import SolveError
@@ -49,6 +50,12 @@ if TYPE_CHECKING:
 # ``E (Z[core] S)``, the tiles' ``τ S``): the same maps to round-off; smaller lattices keep ``Z S`` and ``Y S``
 # (at 48x48 the two ways cost the same)
 LARGE_GRID = 4000
+# above this many grid vertices (above 96x96 tiles, past issue #37's table, whose outputs stay the lstsq fits'
+# and products'): a fine start's seeds by the normal equations (``seeds_for_grid``), a coarse member's from its
+# seed tiles (``member_seeds``), a reduced solve's result by ``exact_nodes``
+EXACT_GRID = 97 * 97
+# a pattern within this of a member (relative to its largest coordinate) is that member (``member_seeds``)
+MEMBER_ROUNDOFF = 1e-11
 # nodes per block when ``Y`` is formed
 Y_BLOCK = 4096
 
@@ -65,6 +72,9 @@ class RigidFamily:
     parts: tuple = field(repr=False)
     # a ``Y`` other than the parts' (``mirror.centred``); the parts' own is made on first use
     given_Y: np.ndarray | None = field(default=None, repr=False)
+    # (midpoint rows A (csc), LU of their dependent columns, dependent vertices, the spanning tree's steps
+    # (child tiles, parent tiles, 2 σ_parent, hinge grid vertex) per level): ``exact_nodes``' (``build``'s own)
+    exact: tuple | None = field(default=None, repr=False)
     _core: GridCore | None = field(default=None, init=False, repr=False)
     # ``Zn`` and the parts' ``Y`` (dense (V, nf) each, the largest arrays here), made on first use: the large lattices'
     # solves read the rows of a few nodes (``rows``) and ``Y S`` once
@@ -170,12 +180,16 @@ class RigidFamily:
         tau = np.zeros(
             (T, len(seeds))
         )  # τ_T = J (tau[T] @ S); τ_root = 0 fixes the translation gauge
+        steps = []
         for lvl in tree.levels():
             child, parent = tree.children[lvl], tree.parents[lvl]
-            tau[child] = tau[parent] - 2.0 * sigma[parent, None] * Z[hinge_vertex[tree.hinges[lvl]]]
+            steps.append((child, parent, 2.0 * sigma[parent, None], hinge_vertex[tree.hinges[lvl]]))
+            tau[child] = tau[parent] - steps[-1][2] * Z[steps[-1][3]]
         use_t = np.empty(st.n_nodes, dtype=np.int64)
         use_t[tl.ravel()] = np.repeat(np.arange(T), 4)
-        return cls(node_vertex, mid, seeds, Z, (tau, use_t, sigma[use_t, None]))
+        return cls(
+            node_vertex, mid, seeds, Z, (tau, use_t, sigma[use_t, None]), exact=(Am, lu, dep, steps)
+        )
 
     @classmethod
     def of_standard(cls, st: Stencils, tree: Callable[[], SpanningTree]) -> RigidFamily:
@@ -220,11 +234,31 @@ class RigidFamily:
         """Deployed nodes ``(V, 2)`` at deployment angle ``psi`` (``grid``: ``self.grid(S)`` when known)."""
         # Zn S is the grid's rows: the product over the G grid vertices, not the V nodes (twice as many)
         a = (self.grid(S) if grid is None else grid)[self.node_vertex]
-        b = self._translations(S, a)
+        b = self.translations(S, a)
         c, s = np.cos(psi), np.sin(psi)
         return np.stack([c * a[:, 0] - s * b[:, 1], c * a[:, 1] + s * b[:, 0]], -1)
 
-    def _translations(self, S: np.ndarray, a: np.ndarray) -> np.ndarray:
+    def exact_nodes(self, S: np.ndarray, psi: float) -> np.ndarray:
+        """``nodes(S, psi)`` with the family's rows met to round-off of the coordinates: the grid solved from
+        the seeds by the midpoint rows (the build's LU, refined twice) instead of ``Z S``, whose stored
+        round-off leaves them off by some hundred times more, and the tile translations integrated on that
+        grid along the spanning tree (``build``'s ``τ``) instead of ``τ S``. The same member otherwise."""
+        assert self.exact is not None and self.given_Y is None, "a built family's own gauge"
+        A, lu, dep, steps = self.exact
+        c = np.zeros((len(self.Z), 2))
+        c[self.seeds] = S
+        for _ in range(3):  # the solve, then two refinements on its residual
+            c[dep] -= lu.solve(A @ c)
+        _, use_t, sigma = self.parts
+        t = np.zeros((int(use_t.max()) + 1, 2))
+        for child, parent, two_sigma, vertex in steps:
+            t[child] = t[parent] - two_sigma * c[vertex]
+        a = c[self.node_vertex]
+        b = t[use_t] - sigma * a
+        co, si = np.cos(psi), np.sin(psi)
+        return np.stack([co * a[:, 0] - si * b[:, 1], co * a[:, 1] + si * b[:, 0]], -1)
+
+    def translations(self, S: np.ndarray, a: np.ndarray) -> np.ndarray:
         """``Y S`` given ``a = Zn S``; on a large lattice as ``(τ S)[tile] - σ a`` (T tile rows, not V nodes)."""
         if len(self.Z) <= LARGE_GRID or self.given_Y is not None:
             return self.Y @ S
@@ -252,10 +286,34 @@ class RigidFamily:
         D[:, 1, -1] = -s * a[:, 1] + c * b[:, 0]
         return D
 
-    def seeds_for_grid(self, grid: np.ndarray) -> np.ndarray:
-        """Seeds ``S`` whose closed-state-1 grid is closest to ``grid`` ``(G, 2)`` (least squares)."""
-        S, *_ = np.linalg.lstsq(self.Z, grid, rcond=None)
-        return S
+    def seeds_for_grid(self, grid: np.ndarray, normal: bool = False) -> np.ndarray:
+        """Seeds ``S`` whose closed-state-1 grid is closest to ``grid`` ``(G, 2)`` (least squares); with
+        ``normal``, above ``EXACT_GRID``, by the normal equations through the core (``Zᵀ Z = Zcᵀ (Eᵀ E) Zc``, ``Zᵀ grid = Zcᵀ (Eᵀ grid)``):
+        ``Z`` holds the identity on its seed rows and the rest are means of them, so ``Zᵀ Z`` is well conditioned."""
+        if not normal or len(self.Z) <= EXACT_GRID:
+            S, *_ = np.linalg.lstsq(self.Z, grid, rcond=None)
+            return S
+        core = self.core
+        ZtZ = core.ZcT @ ((core.ET @ core.E) @ core.Zc)
+        return cho_solve(cho_factor(ZtZ), core.ZcT @ (core.ET @ grid))
+
+    def member_seeds(self, X: np.ndarray, psi: float) -> np.ndarray | None:
+        """Seeds of ``X`` where it is a member of this family at ``psi`` to round-off (a reduced solve's result),
+        by least squares over the nodes of the tiles at a seed vertex alone; None where the member they give
+        is further than round-off from ``X`` at any node (then ``fit`` over all nodes is the nearest)."""
+        _, use_t, _ = self.parts
+        at_seed = np.isin(use_t, use_t[np.isin(self.node_vertex, self.seeds)])
+        nodes = np.flatnonzero(at_seed)
+        zn, y = self.rows(nodes)
+        c, s = np.cos(psi), np.sin(psi)
+        nf = self.n_seeds
+        K = np.empty((2 * len(nodes), 2 * nf))
+        K[: len(nodes), :nf], K[: len(nodes), nf:] = c * zn, -s * y
+        K[len(nodes) :, :nf], K[len(nodes) :, nf:] = s * y, c * zn
+        sol, *_ = np.linalg.lstsq(K, np.concatenate([X[nodes, 0], X[nodes, 1]]), rcond=None)
+        S = np.stack([sol[:nf], sol[nf:]], -1)
+        off = float(np.abs(self.nodes(S, psi) - X).max())
+        return S if off <= MEMBER_ROUNDOFF * float(np.abs(X).max()) else None
 
     def fit(self, X: np.ndarray, psi: float) -> tuple[np.ndarray, float]:
         """Seeds ``S`` whose pattern at ``psi`` is closest to ``X`` (least squares), and the rms gap."""

@@ -31,7 +31,7 @@ from ...core.stencils import Family, StackedJacobian, Stencils
 from ..constraints import exact_fits
 from ..objective import tile_corners
 from .contact import ClosedContact
-from .family import RigidFamily
+from .family import EXACT_GRID, RigidFamily
 from .merit import KeptGridBlock, _Evaluation, reduced_normal
 from .mirror import Mirror, MirroredMerit, symmetric_member
 from .steps import MAX_STALL, exact_fit, fit_miss, levenberg_marquardt, stage, stiffer_alone
@@ -407,14 +407,10 @@ def solve_reduced(
     S0: np.ndarray | None = None,
     mirror: Mirror | None = None,
 ):
-    """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0`` when the
-    start is already a member).
-
-    Returns ``(X, mode, iterations)`` with ``mode`` "hard" when the fit rows were
-    driven to ``how.fit_tol`` (absolute, normalised units), else "least-squares".
-    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is then over
-    ``q``.
-    """
+    """Fit within the rigid family from the member nearest ``X0`` at ``psi0`` (or from seeds ``S0``, a member):
+    ``(X, mode, iterations)``, ``mode`` "hard" when the fit rows were driven to ``how.fit_tol`` (absolute,
+    normalised units), else "least-squares"; above ``EXACT_GRID`` with ``how.keep_block``, ``X`` by ``exact_nodes``.
+    ``mirror``: the symmetric members' map ``p = P q`` and axis rows (``mirror.py``); the solve is over ``q``."""
     if S0 is None:  # the member nearest X0 (a least-squares fit over all nodes)
         S0, _ = fam.fit(X0, psi0)
     p0 = np.concatenate([S0[:, 0], S0[:, 1], [psi0]])
@@ -434,10 +430,13 @@ def solve_reduced(
     pushing = judge.with_contact(ClosedContact(fam, st, barrier=False))
 
     def rank(p, X, mode) -> tuple:
-        """Feasible on the solver's own inequalities first, then apart in the closed states, then the merit."""
-        ev = touching.evaluate(p)
-        gap = min(float(g.min(initial=np.inf)) for g in touching.contact.values(ev.Xc[1:]).values())
-        return (judge.ineq_violation(judge.state(p)) > 0, gap < 0.0, float(ev.r @ ev.r)), X, mode
+        """Feasible on its own inequalities, then apart in the closed states, then (overlapping only) the merit."""
+        Xc = judge.state(p)
+        S, _ = judge.unpack(p if mirror is None else mirror.P @ p)
+        xs = (Xc[1], fam.translations(S, Xc[1][fam.node_vertex]))  # Y S, no dense Y
+        gap = min(float(g.min(initial=np.inf)) for g in touching.contact.values(xs).values())
+        r = np.zeros(0) if gap >= 0.0 else touching.evaluate(p).r
+        return (judge.ineq_violation(Xc) > 0, gap < 0.0, float(r @ r)), X, mode, p
 
     best = rank(p, X, mode)
     # from the overlapping result first, then (if that ends violating an inequality) from the start, where the
@@ -450,7 +449,10 @@ def solve_reduced(
             break
         how.log(f"closed-state tiles overlap: again with the contact rows, from {where}")
         best = min(best, rank(*_search(merit, start, tag, iters, how)), key=lambda b: b[0])
-    return best[1], best[2], iters
+    _, X, mode, p = best
+    if how.keep_block and len(fam.Z) > EXACT_GRID:
+        X = fam.exact_nodes(*judge.unpack(p))
+    return X, mode, iters
 
 
 def _search(judge, p0, tag: str, iters: dict, how: ReducedSearch):

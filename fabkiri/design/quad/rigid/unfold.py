@@ -23,18 +23,20 @@ WEIGHTS = 10.0 ** np.arange(0, 9)  # penalty continuation
 STEPS = 15  # Gauss-Newton steps per weight
 
 
-def convex_member(fam: RigidFamily, quads: np.ndarray, grid: np.ndarray) -> tuple[np.ndarray, dict]:
+def convex_member(
+    fam: RigidFamily, quads: np.ndarray, grid: np.ndarray, normal: bool = False
+) -> tuple[np.ndarray, dict]:
     """Seeds ``S`` of the member nearest ``grid`` ``(G, 2)``; when that member folds a cell of ``quads`` (CCW
     grid vertex indices), of the nearest member whose cells are all convex with margin instead. Also a
     summary: corners below the margin and folded cells before, the largest vertex move (in units of the mean
-    cell size) and whether the result folds nothing."""
+    cell size) and whether the result folds nothing. ``normal``: ``seeds_for_grid``'s."""
     Z = fam.Z
     G, nf = Z.shape
     conv = corner_convexity("unfold", quads, G)
     c = grid[quads]
     l2 = float(np.mean(0.5 * np.abs(_cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]))))
     eps = MARGIN * l2
-    S = fam.seeds_for_grid(grid)
+    S = fam.seeds_for_grid(grid, normal)
     g0 = conv.residual(Z @ S)
     folded = int(_folded(Z @ S, quads).sum())
     info = {
