@@ -1,0 +1,76 @@
+"""A design that passes but is poor for its size keeps searching (api/design_search.py, issue #37)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+from fabkiri.api import design as front
+from fabkiri.api.design import PatternRequest, _solver_request
+from fabkiri.api.design_report import DesignAttempt
+from fabkiri.api.design_search import TILE_SHARE, expected_fit, poor_for_size
+from fabkiri.design.core import conformance as conf
+
+
+def _outcome(h: float, tiles: tuple[int, int]) -> DesignAttempt:
+    """A judged design that passes every check, Hausdorff ``h`` of the size, on ``tiles``."""
+    report = {
+        "status": "converged",
+        "time_s": 0.0,
+        "conformance": {"deployed": {"hausdorff_rel": h}},
+        "shape": {"deployed": {"status": "met"}},
+        "fit": {},
+        "checks": {},
+        "tiles": tiles,
+    }
+    return DesignAttempt(pattern=None, report=report, problems=[], valid=True, states={})  # type: ignore[arg-type]
+
+
+def _run(monkeypatch, guess_h: float, strip_h: float) -> tuple[DesignAttempt, list[dict]]:
+    """The front door's attempts on a 32x32 rigid request whose coarse guess passes at ``guess_h`` and whose one
+    strip (72x14) at ``strip_h``: the solver, the judge and the strip's request stood in for."""
+    request, req, target, contracted = _solver_request(
+        PatternRequest(tiles=(32, 32), target="circle", rigid=True)
+    )
+    monkeypatch.setattr(front, "design", lambda sub, progress=False: sub)
+    monkeypatch.setattr(
+        front,
+        "_check",
+        lambda sub, *a: _outcome(strip_h if sub.rows == 72 else guess_h, (sub.rows, sub.cols)),
+    )
+    strips = iter([("strip", replace(req, rows=72, cols=14), "a strip")])
+    monkeypatch.setattr(front, "last_request", lambda *a: next(strips, None))
+    monkeypatch.setattr(front, "strip_note", lambda *a: {})
+    best, attempts = front._attempts(
+        request, req, target, contracted, conf.parse_shape_tol("2%"), lambda s: None
+    )
+    return best, attempts
+
+
+def test_a_pass_poor_for_its_size_tries_the_last_attempts_and_keeps_the_closest(monkeypatch):
+    # the crescent's 32x32: 1.34 % from the coarse guess, its strip 0.28 %
+    best, attempts = _run(monkeypatch, 0.0134, 0.0028)
+    assert [a["init"] for a in attempts] == ["coarse", "strip"]  # the rescaled guess skipped
+    assert best.report["tiles"] == (72, 14)
+
+
+def test_a_strip_further_than_the_pass_is_not_kept(monkeypatch):
+    best, attempts = _run(monkeypatch, 0.0134, 0.015)
+    assert [a["init"] for a in attempts] == ["coarse", "strip"]
+    assert best.report["tiles"] == (32, 32)
+
+
+def test_a_pass_within_the_expected_fit_ends_the_search(monkeypatch):
+    best, attempts = _run(monkeypatch, 0.9 * TILE_SHARE / 32, 0.0001)
+    assert [a["init"] for a in attempts] == ["coarse"]
+
+
+@pytest.mark.parametrize(
+    ("tiles", "h"),
+    # issue #37's worst cells for their size (docs/design-solver.md, session 53's table): the 16x16 heart (rigid
+    # and free), the mirrored 16x16 star, the 96x96 free peanut and mirrored heart
+    [(16, 0.0142), (16, 0.017), (96, 0.00203), (96, 0.00188), (64, 0.00273)],
+)
+def test_the_tables_worst_cells_are_not_poor_for_their_size(tiles, h):
+    _, req, _, _ = _solver_request(PatternRequest(tiles=(tiles, tiles), target="circle"))
+    assert h < expected_fit(req) and not poor_for_size(req, _outcome(h, (tiles, tiles)))
