@@ -42,7 +42,7 @@ from .design_search import (
     attempt_record,
     poor_for_size,
     retry_note,
-    search_note,
+    searched_on,
     strip_why,
     with_why,
 )
@@ -369,14 +369,10 @@ def _attempts(
         last = init in (VIA_RIGID_INIT, LAST_INIT)  # last resorts for a miss, not second opinions
         if passed is not None and init != LAST_INIT:
             continue
-        if (
-            last
-            and best is not None
-            and best.valid
-            and _shape_met(best.report)
-            and not poor_for_size(req, best)
-        ):
-            break
+        if last and best is not None and best.valid and _shape_met(best.report):
+            if not poor_for_size(req, best):
+                break
+            passed = passed or searched_on(req, best, say)  # a pass past RETRY_FIT_ABOVE's retries
         sub = req
         if init == LAST_INIT:
             if (found := last_request(req, attempts, req.rows * req.cols < BIG_TILES)) is None:
@@ -410,8 +406,7 @@ def _attempts(
         ):  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
             if last or not last_ok or not poor_for_size(req, outcome):
                 break
-            passed = outcome
-            say(search_note(req, outcome))
+            passed = searched_on(req, outcome, say)
             continue
         retry_note(init, inits, outcome, say)
     if best is None:

@@ -46,13 +46,17 @@ def poor_for_size(req: DesignRequest, outcome: DesignAttempt | None) -> bool:
     )
 
 
-def search_note(req: DesignRequest, outcome: DesignAttempt) -> str:
-    """What the front door says when ``outcome`` passes but the search goes on (``poor_for_size``)."""
-    return (
+def searched_on(
+    req: DesignRequest, outcome: DesignAttempt, say: Callable[[str], None]
+) -> DesignAttempt:
+    """``outcome``, a design that passes but is poor for its size (``poor_for_size``), after saying that the
+    search goes on past it."""
+    say(
         f"fabkiri: the design meets the shape but misses by {_hausdorff(outcome.report):.2%} of the size, more "
         f"than {TILE_SHARE:.2g} of a tile ({expected_fit(req):.2%}) on {req.rows}x{req.cols} tiles; "
         "trying the last attempts too, the closest kept"
     )
+    return outcome
 
 
 def with_why(note: dict, why: str | None) -> dict:

@@ -12,23 +12,27 @@ from fabkiri.api.design_search import TILE_SHARE, expected_fit, poor_for_size
 from fabkiri.design.core import conformance as conf
 
 
-def _outcome(h: float, tiles: tuple[int, int]) -> DesignAttempt:
-    """A judged design that passes every check, Hausdorff ``h`` of the size, on ``tiles``."""
+def _outcome(h: float, tiles: tuple[int, int], tips: float = 0.0) -> DesignAttempt:
+    """A judged design that passes every check, Hausdorff ``h`` of the size, its tips ``tips`` off, on ``tiles``;
+    past 2 % it misses the shape."""
     report = {
         "status": "converged",
         "time_s": 0.0,
         "conformance": {"deployed": {"hausdorff_rel": h}},
-        "shape": {"deployed": {"status": "met"}},
-        "fit": {},
+        "shape": {"deployed": {"status": "met" if h <= 0.02 else "missed"}},
+        "fit": {"deployed": {"max_rel_size": tips}},
         "checks": {},
         "tiles": tiles,
     }
     return DesignAttempt(pattern=None, report=report, problems=[], valid=True, states={})  # type: ignore[arg-type]
 
 
-def _run(monkeypatch, guess_h: float, strip_h: float) -> tuple[DesignAttempt, list[dict]]:
+def _run(
+    monkeypatch, guess_h: float, strip_h: float, tips: float = 0.0
+) -> tuple[DesignAttempt, list[dict]]:
     """The front door's attempts on a 32x32 rigid request whose coarse guess passes at ``guess_h`` and whose one
-    strip (72x14) at ``strip_h``: the solver, the judge and the strip's request stood in for."""
+    strip (72x14) at ``strip_h`` (the rescaled guess misses): the solver, the judge and the strip's request stood
+    in for."""
     request, req, target, contracted = _solver_request(
         PatternRequest(tiles=(32, 32), target="circle", rigid=True)
     )
@@ -36,7 +40,11 @@ def _run(monkeypatch, guess_h: float, strip_h: float) -> tuple[DesignAttempt, li
     monkeypatch.setattr(
         front,
         "_check",
-        lambda sub, *a: _outcome(strip_h if sub.rows == 72 else guess_h, (sub.rows, sub.cols)),
+        lambda sub, *a: _outcome(
+            strip_h if sub.rows == 72 else {"rescaled": 0.25}.get(sub.init, guess_h),
+            (sub.rows, sub.cols),
+            tips,
+        ),
     )
     strips = iter([("strip", replace(req, rows=72, cols=14), "a strip")])
     monkeypatch.setattr(front, "last_request", lambda *a: next(strips, None))
@@ -51,6 +59,13 @@ def test_a_pass_poor_for_its_size_tries_the_last_attempts_and_keeps_the_closest(
     # the crescent's 32x32: 1.34 % from the coarse guess, its strip 0.28 %
     best, attempts = _run(monkeypatch, 0.0134, 0.0028)
     assert [a["init"] for a in attempts] == ["coarse", "strip"]  # the rescaled guess skipped
+    assert best.report["tiles"] == (72, 14)
+
+
+def test_a_pass_retried_for_its_tips_goes_on_to_the_last_attempts(monkeypatch):
+    # the crescent's coarse design met with its tips 1.0 % off: the rescaled guess (missed), then its strip
+    best, attempts = _run(monkeypatch, 0.0134, 0.0028, tips=0.01)
+    assert [a["init"] for a in attempts] == ["coarse", "rescaled", "strip"]
     assert best.report["tiles"] == (72, 14)
 
 
