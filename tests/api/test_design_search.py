@@ -7,6 +7,7 @@ from dataclasses import replace
 import pytest
 from fabkiri.api import design as front
 from fabkiri.api.design import PatternRequest, _solver_request
+from fabkiri.api.design_minimax import MINIMAX_TILES, applies
 from fabkiri.api.design_report import DesignAttempt
 from fabkiri.api.design_search import TILE_SHARE, expected_fit, poor_for_size
 from fabkiri.design.core import conformance as conf
@@ -89,3 +90,14 @@ def test_a_pass_within_the_expected_fit_ends_the_search(monkeypatch):
 def test_the_tables_worst_cells_are_not_poor_for_their_size(tiles, h):
     _, req, _, _ = _solver_request(PatternRequest(tiles=(tiles, tiles), target="circle"))
     assert h < expected_fit(req) and not poor_for_size(req, _outcome(h, (tiles, tiles)))
+
+
+def test_a_strips_design_is_finished_from_the_tiles_asked():
+    # the arch's 12x85 strip for the 32x32 asked has 1020 tiles: finished as the 32x32 design it stands for
+    _, req, _, _ = _solver_request(PatternRequest(tiles=(32, 32), target="circle", rigid=True))
+    strip = replace(req, rows=12, cols=85)
+    assert strip.rows * strip.cols < MINIMAX_TILES
+    best = _outcome(0.0018, (12, 85))
+    assert not applies(strip, {}, best)
+    best.report["strip"] = {"tiles": [12, 85], "asked": [32, 32]}
+    assert applies(strip, {}, best)
