@@ -40,9 +40,9 @@ from .design_report import DesignAttempt, DesignReport
 from .design_search import (
     RETRY_FIT_ABOVE,
     attempt_record,
+    last_note,
     poor_for_size,
     retry_note,
-    searched_on,
     strip_why,
     with_why,
 )
@@ -367,18 +367,18 @@ def _attempts(
     # after the guesses, the pocket attempts below BIG_TILES then the bent strips (design_strip.py)
     for init in inits + [LAST_INIT] * (LAST_TRIES * last_ok):
         last = init in (VIA_RIGID_INIT, LAST_INIT)  # last resorts for a miss, not second opinions
-        if passed is not None and init != LAST_INIT:
-            continue
         if last and best is not None and best.valid and _shape_met(best.report):
             if not poor_for_size(req, best):
                 break
-            passed = passed or searched_on(req, best, say)  # a pass past RETRY_FIT_ABOVE's retries
+            passed = passed or best  # a pass past RETRY_FIT_ABOVE's retries
+        if passed is not None and init != LAST_INIT:
+            continue  # the guesses left and the rigid family's answer skipped
         sub = req
         if init == LAST_INIT:
             if (found := last_request(req, attempts, req.rows * req.cols < BIG_TILES)) is None:
                 break  # no pocket split or bent strip (left) for this outline
             init, sub, what = found
-            say(f"fabkiri: {'trying' if passed else 'every guess misses; trying'} {what}")
+            say(last_note(req, passed, attempts, what))
         req.init = init if sub is req else req.init
         try:
             result = design(
@@ -406,7 +406,7 @@ def _attempts(
         ):  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
             if last or not last_ok or not poor_for_size(req, outcome):
                 break
-            passed = searched_on(req, outcome, say)
+            passed = outcome
             continue
         retry_note(init, inits, outcome, say)
     if best is None:

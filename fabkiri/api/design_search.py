@@ -17,7 +17,8 @@ from collections.abc import Callable
 
 from ..design.quad.solve import DesignRequest
 from .design_judge import DesignAttempt, _fit_miss, _hausdorff, _shape_met
-from .design_pocket import resplit_applies
+from .design_pocket import POCKET_INIT, resplit_applies
+from .design_strip import STARTS
 
 # a design passing but further from the outline than this share of a tile is poor for its size (the worst cells
 # of issue #37's table: the 16x16 heart 0.23 of a tile, the mirrored 16x16 star 0.27)
@@ -46,17 +47,21 @@ def poor_for_size(req: DesignRequest, outcome: DesignAttempt | None) -> bool:
     )
 
 
-def searched_on(
-    req: DesignRequest, outcome: DesignAttempt, say: Callable[[str], None]
-) -> DesignAttempt:
-    """``outcome``, a design that passes but is poor for its size (``poor_for_size``), after saying that the
-    search goes on past it."""
-    say(
-        f"fabkiri: the design meets the shape but misses by {_hausdorff(outcome.report):.2%} of the size, more "
-        f"than {TILE_SHARE:.2g} of a tile ({expected_fit(req):.2%}) on {req.rows}x{req.cols} tiles; "
-        "trying the last attempts too, the closest kept"
+def last_note(
+    req: DesignRequest, passed: DesignAttempt | None, attempts: list[dict], what: str
+) -> str:
+    """What the front door says as it tries ``what``, a last attempt, after ``attempts``: after a miss, or after
+    ``passed``, a design that passes but is poor for its size (``poor_for_size``; said at its first last
+    attempt: where none applies the search ends unsaid)."""
+    if passed is None:
+        return f"fabkiri: every guess misses; trying {what}"
+    if any(a["init"] in (POCKET_INIT, *STARTS) for a in attempts):
+        return f"fabkiri: trying {what}"
+    return (
+        f"fabkiri: the design meets the shape but misses by {_hausdorff(passed.report):.2%} of the size, more "
+        f"than {TILE_SHARE:.2g} of a tile ({expected_fit(req):.2%}) on {req.rows}x{req.cols} tiles; trying "
+        f"{what} too, the closest kept"
     )
-    return outcome
 
 
 def with_why(note: dict, why: str | None) -> dict:

@@ -29,7 +29,7 @@ def _outcome(h: float, tiles: tuple[int, int], tips: float = 0.0) -> DesignAttem
 
 
 def _run(
-    monkeypatch, guess_h: float, strip_h: float, tips: float = 0.0
+    monkeypatch, guess_h: float, strip_h: float, tips: float = 0.0, said: list | None = None
 ) -> tuple[DesignAttempt, list[dict]]:
     """The front door's attempts on a 32x32 rigid request whose coarse guess passes at ``guess_h`` and whose one
     strip (72x14) at ``strip_h`` (the rescaled guess misses): the solver, the judge and the strip's request stood
@@ -47,11 +47,16 @@ def _run(
             tips,
         ),
     )
-    strips = iter([("strip", replace(req, rows=72, cols=14), "a strip")])
+    strips = iter([("strip", replace(req, rows=72, cols=14), "a strip")] if strip_h else [])
     monkeypatch.setattr(front, "last_request", lambda *a: next(strips, None))
     monkeypatch.setattr(front, "strip_note", lambda *a: {})
     best, attempts = front._attempts(
-        request, req, target, contracted, conf.parse_shape_tol("2%"), lambda s: None
+        request,
+        req,
+        target,
+        contracted,
+        conf.parse_shape_tol("2%"),
+        (said if said is not None else []).append,
     )
     return best, attempts
 
@@ -61,6 +66,16 @@ def test_a_pass_poor_for_its_size_tries_the_last_attempts_and_keeps_the_closest(
     best, attempts = _run(monkeypatch, 0.0134, 0.0028)
     assert [a["init"] for a in attempts] == ["coarse", "strip"]  # the rescaled guess skipped
     assert best.report["tiles"] == (72, 14)
+
+
+def test_a_pass_poor_for_its_size_with_no_last_attempt_is_kept_unsaid(monkeypatch):
+    # the heart's 32x32 coarse design, 1.61 % before its finish: no strip or pocket for it
+    said: list[str] = []
+    best, attempts = _run(monkeypatch, 0.0161, 0.0, said=said)
+    assert [a["init"] for a in attempts] == ["coarse"] and said == []
+    said_strip: list[str] = []
+    _run(monkeypatch, 0.0161, 0.003, said=said_strip)
+    assert len(said_strip) == 1 and "more than 0.33 of a tile" in said_strip[0]
 
 
 def test_a_pass_retried_for_its_tips_goes_on_to_the_last_attempts(monkeypatch):
