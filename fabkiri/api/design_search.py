@@ -3,12 +3,12 @@
 The front door's attempts stop at the first design that passes (``design._attempts``). On an outline the N x N
 lattice follows only roughly that first pass ends the search before the last attempts (the pocket, the bent
 strips: ``design_strip.py``), which would come closer: the crescent at 32x32 met at 1.34 % of the size from the
-coarse guess (1.09 % finished), where its 72x14 strip meets at 0.28 % and its 16x16 design, a strip, at 0.36 %.
+coarse guess (1.09 % finished), where its 73x14 strip meets at 0.125 % coarse to fine and its 16x16 design, a
+strip, at 0.36 %.
 A design that passes but misses by more than ``TILE_SHARE`` of a tile (the size over the lattice's tiles a side,
 ``expected_fit``) is poor for its size: the guesses left are skipped, the last attempts run after it as after a
-miss, and the best design (``_rank``: the closest of those that pass) is kept. Every cell of issue #37's table
-comes within 0.27 of a tile or less (docs/design-solver.md, "Session 56 (rise56)"), so the rule does not run
-there.
+miss, and the best design (``_rank``: the closest of those that pass) is kept. On issue #37's table it finds
+no last attempt where it fires (docs/design-solver.md, "Session 56 (rise56)"): the same designs.
 """
 
 from __future__ import annotations
@@ -20,8 +20,9 @@ from .design_judge import DesignAttempt, _fit_miss, _hausdorff, _shape_met
 from .design_pocket import POCKET_INIT, resplit_applies
 from .design_strip import STARTS
 
-# a design passing but further from the outline than this share of a tile is poor for its size (the worst cells
-# of issue #37's table: the 16x16 heart 0.23 of a tile, the mirrored 16x16 star 0.27)
+# a design passing but further from the outline than this share of a tile is poor for its size (issue #37's table
+# passes within 0.27 of one before their finishes but the 32x32 and 64x64 hearts' and 48x48 drop's, which have no
+# last attempt; the 32x32 crescent 0.43)
 TILE_SHARE = 1 / 3
 # a valid design whose least-squares fit misses by more than this fraction of the target size is retried
 # from the next guess and the closest valid fit kept (ellipse 16x16: rescaled 1.86 %, standard 0.08 %)

@@ -98,9 +98,9 @@ def test_a_pass_within_the_expected_fit_ends_the_search(monkeypatch):
 
 @pytest.mark.parametrize(
     ("tiles", "h"),
-    # issue #37's worst cells for their size (docs/design-solver.md, session 53's table): the 16x16 heart (rigid
-    # and free), the mirrored 16x16 star, the 96x96 free peanut and mirrored heart
-    [(16, 0.0142), (16, 0.017), (96, 0.00203), (96, 0.00188), (64, 0.00273)],
+    # issue #37's worst passes for their size (docs/design-solver.md, "Session 56 (rise56)"): the 16x16 ellipse's
+    # conformal guess, heart and mirrored star, the 96x96 free peanut and mirrored heart, the 64x64 mirrored drop
+    [(16, 0.0168), (16, 0.0142), (16, 0.017), (96, 0.00203), (96, 0.00188), (64, 0.00273)],
 )
 def test_the_tables_worst_cells_are_not_poor_for_their_size(tiles, h):
     _, req, _, _ = _solver_request(PatternRequest(tiles=(tiles, tiles), target="circle"))
