@@ -37,6 +37,15 @@ from .design_mirror import keep_closer, mirror_axis
 from .design_opening import check_floor, refine_to_floor
 from .design_opening import judge as judge_opening
 from .design_report import DesignAttempt, DesignReport
+from .design_search import (
+    RETRY_FIT_ABOVE,
+    attempt_record,
+    last_note,
+    poor_for_size,
+    retry_note,
+    strip_why,
+    with_why,
+)
 from .design_strip import LAST_INIT, LAST_TRIES, last_request, strip_design, strip_note
 from .design_summary import _preview, preview_path, summary_lines  # noqa: F401 (preview_path re-exported)
 from .design_turn import loaded_or_turned, request_target
@@ -52,9 +61,6 @@ AUTO_INITS = ("conformal", "rescaled", "standard")  # tried in turn when --init 
 # rectangle and a points file worse), so the usual order stays there.
 BIG_RIGID_INITS = ("coarse", "rescaled")
 BIG_TILES = 32 * 32
-# a valid design whose least-squares fit misses by more than this fraction of the target size is retried
-# from the next guess and the closest valid fit kept (ellipse 16x16: rescaled 1.86 %, standard 0.08 %)
-RETRY_FIT_ABOVE = 5e-3
 
 
 @dataclass
@@ -355,17 +361,22 @@ def _attempts(
     inits = _inits(request, req, target)
     last_ok = not (request.init or request.corners)
     best, attempts = None, list[dict]()
+    passed = None  # a design that passed but is poor for its size (design_search.py): only last attempts after it
     # after the guesses, the pocket attempts below BIG_TILES then the bent strips (design_strip.py)
     for init in inits + [LAST_INIT] * (LAST_TRIES * last_ok):
         last = init in (VIA_RIGID_INIT, LAST_INIT)  # last resorts for a miss, not second opinions
         if last and best is not None and best.valid and _shape_met(best.report):
-            break
+            if not poor_for_size(req, best):
+                break
+            passed = passed or best  # a pass past RETRY_FIT_ABOVE's retries
+        if passed is not None and init != LAST_INIT:
+            continue  # the guesses left and the rigid family's answer skipped
         sub = req
         if init == LAST_INIT:
             if (found := last_request(req, attempts, req.rows * req.cols < BIG_TILES)) is None:
                 break  # no pocket split or bent strip (left) for this outline
             init, sub, what = found
-            say(f"fabkiri: every guess misses; trying {what}")
+            say(last_note(req, passed, attempts, what))
         req.init = init if sub is req else req.init
         try:
             result = design(
@@ -381,41 +392,21 @@ def _attempts(
             continue
         req.rigid_first = False  # tried once: later guesses go to the full solver
         outcome = _check(result, contracted, request, target, shape_tol)
-        outcome.report.update(strip_note(init, sub, req))  # the lattice a strip attempt used
+        # the lattice a strip attempt used, and why
+        outcome.report.update(with_why(strip_note(init, sub, req), strip_why(req, passed)))
         miss, shape_met = _fit_miss(outcome.report), _shape_met(outcome.report)
-        attempts.append(
-            {
-                "init": init,
-                "status": outcome.report["status"],
-                "problems": outcome.problems,
-                "time_s": outcome.report["time_s"],
-                "fit_max_rel_size": miss,
-                "hausdorff_max_rel": _hausdorff(outcome.report),
-                "shape": "met" if shape_met else "missed",
-                **(
-                    {"tiles": [sub.rows, sub.cols]}
-                    if sub.rows != req.rows or sub.cols != req.cols
-                    else {}
-                ),
-            }
-        )
+        attempts.append(attempt_record(init, outcome, (sub.rows, sub.cols), (req.rows, req.cols)))
         best = outcome if best is None or _rank(outcome) < _rank(best) else best
         if (
             outcome.valid
             and shape_met
             and (miss <= RETRY_FIT_ABOVE or outcome.report.get("rigid_first"))
-        ):
-            break  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
-        # the retry notes are the guesses' (not the last's): the last attempts announce themselves
-        if outcome.valid and init in inits[:-1]:
-            why = (
-                f"misses the target by {miss:.2%} of its size"
-                if miss > RETRY_FIT_ABOVE
-                else f"misses the shape tolerance (Hausdorff {_hausdorff(outcome.report):.2%} of the size)"
-            )
-            say(f"fabkiri: design from the {init} guess {why}; trying the next guess too")
-        elif len(inits) > 1 and init in inits[:-1]:
-            say(f"fabkiri: design from the {init} guess failed ({outcome.problems[0]}); retrying")
+        ):  # a rigid member's tips sit off the curve between seeds: the outline (shape_met) judges it
+            if last or not last_ok or not poor_for_size(req, outcome):
+                break
+            passed = outcome
+            continue
+        retry_note(init, inits, outcome, say)
     if best is None:
         raise SolveError(
             "no initial guess could be built: " + "; ".join(a["problems"][0] for a in attempts)

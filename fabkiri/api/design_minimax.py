@@ -186,7 +186,8 @@ def _rigid_gate(req: DesignRequest) -> float:
 
 
 def applies(req: DesignRequest, contracted: dict, best) -> bool:
-    """A valid deployed-target design from ``MINIMAX_TILES`` tiles that misses by more than its ``gate``,
+    """A valid deployed-target design from ``MINIMAX_TILES`` tiles asked (``_tiles_asked``) that misses by more
+    than its ``gate``,
     or one that fails on overlapping tiles alone (``overlapping_only``),
     without fabrication rows (the continuation refines those) or a floor on the opening (``refine_to_floor``
     does)."""
@@ -197,13 +198,21 @@ def applies(req: DesignRequest, contracted: dict, best) -> bool:
         and not contracted
         and req.fabrication is None
         and not req.min_opening
-        and req.rows * req.cols >= MINIMAX_TILES
+        and _tiles_asked(req, best.report) >= MINIMAX_TILES
         and (
             not best.valid
             or _hausdorff(best.report) > gate(req, best.report)
             or _redesigned(req, best.report)
         )
     )
+
+
+def _tiles_asked(req: DesignRequest, report: dict) -> int:
+    """The tiles asked of ``req``'s design (its ``report``): a bent strip's lattice (``strip_of``) has at most as
+    many as asked, in other rows and columns (the arch's 12x85 for the 32x32 asked, 1020 tiles: unfinished below
+    ``MINIMAX_TILES`` at 0.18 %, above its 16x16 strip's 0.13 %; finished 0.08 %)."""
+    asked = strip_of(report).get("strip", {}).get("asked")
+    return int(asked[0] * asked[1]) if asked else req.rows * req.cols
 
 
 def overlapping_only(outcome: DesignAttempt) -> bool:
