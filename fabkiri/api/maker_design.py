@@ -239,7 +239,7 @@ def _other_options(
     """The options of :mod:`.maker_options`, likeliest first, run until one passes (named, or adopted:
     a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
     designs (``max_runs``, read when called) ran or they cost :data:`~.maker_options.BUDGET` times the first
-    design (``base_cpu`` without ``tried``); the adopted run and the lines. Each design run is added to
+    design (``base_cpu`` without ``tried``; 0: the first option's own design); the adopted run and the lines. Each design run is added to
     ``ran``."""
     max_runs = mo.MAX_RUNS if max_runs is None else max_runs
     first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
@@ -275,6 +275,8 @@ def _other_options(
             lines.append(f"{option.name}: refused by the design ({exc.cli_message()})")
             continue
         runs.append(attempt)
+        if not tried and base_cpu == 0 and len(runs) == 1:  # no design before: budget on this one
+            first_cpu = attempt.cpu_s
         if attempt.run.ok and adopt:
             result.pattern, result.figures = attempt.pattern, attempt.figures
             return _adopt(result, attempt, [*tried, attempt]), lines

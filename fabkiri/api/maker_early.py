@@ -134,7 +134,7 @@ def skip_narrow_arms(
     larger: list[_Attempt] = []
     lines = _larger_size(result, plan, say, checks, larger)
     if not result.alternatives:
-        first = larger[0].cpu_s if larger else None
+        first = larger[0].cpu_s if larger else 0.0  # 0: budgeted on the first option's design
         _, more = _other_options(result, plan, say, checks, larger, first, ran=larger)
         lines += more
     if not result.alternatives:
