@@ -135,7 +135,7 @@ def skip_narrow_arms(
     lines = _larger_size(result, plan, say, checks, larger)
     if not result.alternatives:
         first = larger[0].cpu_s if larger else 0.0  # 0: budgeted on the first option's design
-        _, more = _other_options(result, plan, say, checks, larger, first, ran=larger)
+        _, more = _other_options(result, plan, say, checks, larger, first, ran=[])
         lines += more
     if not result.alternatives:
         lines.append("no larger size or option designed here made it: no size is named")
