@@ -27,9 +27,9 @@ from ..errors import FabkiriError, InputError, Param
 from ..fabricate import design_limits
 from ..fileio import atomic_write_many, check_output_folder, input_named_by
 from ..pattern.tilecount import tile_count
-from .maker_design import StepRun, design_step, options_after_refusal
+from .maker_design import StepRun, arms_of, design_step, options_after_refusal
 from .maker_design import cpu_s as _cpu
-from .maker_early import narrow_of, refuse_narrow
+from .maker_early import narrow_of, refuse_narrow, skip_narrow_arms
 from .maker_once import opening_lines as _opening_lines  # noqa: F401 (re-exported)
 from .maker_result import MANIFEST, MakeResult, Step
 from .maker_tiles import TilesChoice, choose_tiles, given_tiles
@@ -266,10 +266,14 @@ def refusal_alternatives(result: MakeResult, plan: _Plan, step: str, error: Fabk
 def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     """The design at the plan's tiles, and after a shape miss other counts and options
     (:mod:`.maker_design`); an alternative is named only once it also passes its cut or print and deploy.
-    Tiles too narrow for the print style are refused before any design (:mod:`.maker_early`)."""
+    Tiles too narrow for the print style are refused before any design (:mod:`.maker_early`), and arms
+    too narrow for a strip's tiles are not designed at this size (:mod:`.maker_arms`): larger sizes are."""
     narrow = narrow_of(plan)
     if narrow is not None:
         return refuse_narrow(result, plan, say, CHECKS, narrow)
+    arms = arms_of(plan)
+    if arms is not None:
+        return skip_narrow_arms(result, plan, say, CHECKS, arms)
     return design_step(result, plan, say, CHECKS)
 
 

@@ -20,7 +20,8 @@ six-point star for prusa-mk4 at 150 mm misses at 6x6 and 7x7, and is made at 190
 When that does not make it either, the options of :mod:`.maker_options` (other counts, styles or hinge
 kinds, presets, the other process) are run the same way, likeliest first, and the first that makes it
 is named (the heart at 200 mm on prusa-mk4 misses 8.6 % at 8x8 and 17.7 % at 250 mm; pp-0.5 tape
-makes it at 200 mm); also when a cut or print refusal names nothing that passes.
+makes it at 200 mm); also when a cut or print refusal names nothing that passes. A size or option
+whose arms cannot hold a strip's tiles across (:mod:`.maker_arms`) is not designed: the bound is a floor.
 """
 
 from __future__ import annotations
@@ -34,10 +35,12 @@ from pathlib import Path
 from typing import Any
 
 from ..design.core import conformance as conf
+from ..design.quad.corner_split import MIN_ACROSS
 from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from ..fabricate import design_limits
 from . import maker_options as mo
+from .maker_arms import NarrowArms, narrow_arms
 from .maker_once import StepRun, name_lattice
 from .maker_once import design_once as _design  # tests replace it here
 from .maker_result import MakeResult
@@ -236,7 +239,7 @@ def _other_options(
     """The options of :mod:`.maker_options`, likeliest first, run until one passes (named, or adopted:
     a count of this process with tiles make chose, after a miss), :data:`~.maker_options.MAX_RUNS`
     designs (``max_runs``, read when called) ran or they cost :data:`~.maker_options.BUDGET` times the first
-    design (``base_cpu`` without ``tried``); the adopted run and the lines. Each design run is added to
+    design (``base_cpu`` without ``tried``; 0: the first option's own design); the adopted run and the lines. Each design run is added to
     ``ran``."""
     max_runs = mo.MAX_RUNS if max_runs is None else max_runs
     first_cpu = tried[0].cpu_s if tried else float(base_cpu or 1.0)
@@ -246,6 +249,7 @@ def _other_options(
     start = cpu_s()
     runs: list[_Attempt] = []
     lines: list[str] = []
+    narrow: list[str] = []  # options whose arms cannot hold a strip's tiles across
     while order := mo.ranked(every, done):
         spent = sum(a.cpu_s for a in runs)
         if len(runs) >= max_runs or spent > mo.BUDGET * first_cpu:
@@ -254,6 +258,12 @@ def _other_options(
         option = order[0]
         every.remove(option)
         other = mo.plan_of(plan, option)
+        arms = arms_of(other)
+        if arms is not None:  # no count of it meets at this size: not designed
+            narrow.append(
+                f"{option.name} ({arms.arm_mm / arms.across:.3g} < {arms.need_mm:.3g} mm)"
+            )
+            continue
         adopt = option.group == 0 and not plan.tiles.given and bool(tried)
         say(
             f"make: trying {option.name} at {plan.size:g} mm ({mo.GROUPS[option.group]}), "
@@ -265,6 +275,8 @@ def _other_options(
             lines.append(f"{option.name}: refused by the design ({exc.cli_message()})")
             continue
         runs.append(attempt)
+        if not tried and base_cpu == 0 and len(runs) == 1:  # no design before: budget on this one
+            first_cpu = attempt.cpu_s
         if attempt.run.ok and adopt:
             result.pattern, result.figures = attempt.pattern, attempt.figures
             return _adopt(result, attempt, [*tried, attempt]), lines
@@ -277,6 +289,10 @@ def _other_options(
             result.alternatives = [named]
             break
         done += mo.tried_of(other, [attempt])  # what it missed by rules out options no looser
+    if narrow:
+        lines.insert(
+            0, f"not designed, the arms too narrow for {MIN_ACROSS} tiles: " + "; ".join(narrow)
+        )
     if runs or lines:
         lines.append(
             f"the options ran {len(runs)} design(s), CPU {sum(a.cpu_s for a in runs):.1f} s "
@@ -294,14 +310,22 @@ def _larger_size(
     if plan.tiles.given:
         return []
     count = plan.tiles.tiles[0] * plan.tiles.tiles[1]
+    skipped: list[str] = []
     for k in SIZE_STEPS:
         size = float(math.ceil(plan.size * k / 10.0) * 10)
         target, fab = _target_and_limits(plan, size)
         choice = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
-        if choice.tiles[0] * choice.tiles[1] > count:
+        if choice.tiles[0] * choice.tiles[1] <= count:
+            continue
+        arms = narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
+        if arms is None:
             break
+        skipped.append(f"{size:g} mm not designed: {arms.reason()}")
     else:
-        return [f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"]
+        return skipped + [
+            f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"
+            + (" with arms that hold them" if skipped else "")
+        ]
     bigger = replace(plan, size=size, tiles=choice)
     say(f"make: trying {size:g} mm, where make chooses {_rc(choice)} tiles, to name it if it makes")
     scratch = MakeResult.of_plan(bigger)
@@ -313,8 +337,19 @@ def _larger_size(
     )
     if named:
         result.alternatives = [named]
-        return [f"at {size:g} mm: {attempt.line()}, {plan.process} and deploy pass"]
-    return [f"at {size:g} mm ({_rc(choice)} tiles) it does not make either: {attempt.line()}"]
+        return skipped + [f"at {size:g} mm: {attempt.line()}, {plan.process} and deploy pass"]
+    return skipped + [
+        f"at {size:g} mm ({_rc(choice)} tiles) it does not make either: {attempt.line()}"
+    ]
+
+
+def arms_of(plan) -> NarrowArms | None:
+    """The plan's outline at its size when its arms cannot hold a strip's tiles of its process
+    (:mod:`.maker_arms`); None when they can, or the tiles are the user's (``--tiles``)."""
+    if plan.tiles.given:
+        return None
+    target, fab = _target_and_limits(plan, plan.size)
+    return narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
 
 
 def _target_and_limits(plan, size: float):

@@ -22,6 +22,7 @@ from dataclasses import replace
 from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from . import maker_options as mo
+from .maker_arms import NarrowArms
 from .maker_design import (
     Checks,
     Progress,
@@ -29,6 +30,7 @@ from .maker_design import (
     _Attempt,
     _attempt,
     _checked_alternative,
+    _larger_size,
     _other_options,
     _target_and_limits,
     cpu_s,
@@ -115,3 +117,29 @@ def _candidates(plan, narrow: NarrowTiles):
 def _tag(plan, other, sized: bool) -> str:
     """The named line's output folder beside the run's: the size when the tiles stay (``--size S --tiles``)."""
     return f"{other.size:g}mm" if other.size != plan.size and not sized else ""
+
+
+def skip_narrow_arms(
+    result: MakeResult, plan, say: Progress, checks: Checks, arms: NarrowArms
+) -> StepRun:
+    """The asked size not designed, its arms too narrow for a strip's tiles (:mod:`.maker_arms`): make's
+    larger sizes and then the options, each run before it is named and skipped where the arms are too
+    narrow too (exit 1, as a design that misses); nothing is named that was not designed and met."""
+    reason = arms.reason()
+    say(f"make: {reason}; no count is designed at {plan.size:g} mm, larger sizes and options are")
+    result.refused = (
+        True  # as a cut or print refusal: its options on stdout, one runnable line each
+    )
+    start = cpu_s()
+    larger: list[_Attempt] = []
+    lines = _larger_size(result, plan, say, checks, larger)
+    if not result.alternatives:
+        first = larger[0].cpu_s if larger else 0.0  # 0: budgeted on the first option's design
+        _, more = _other_options(result, plan, say, checks, larger, first, ran=[])
+        lines += more
+    if not result.alternatives:
+        lines.append("no larger size or option designed here made it: no size is named")
+    lines.append(
+        f"the sizes and options cost CPU {cpu_s() - start:.1f} s (no design at the size asked)"
+    )
+    return StepRun(False, 1, f"not designed: {reason}", {}, lines)

@@ -1,0 +1,63 @@
+"""Arms too narrow for a strip's tiles are a lower bound on the sizes ``make`` designs at
+(:mod:`fabkiri.api.maker_arms`): the size asked is skipped, the larger sizes of its ladder start above
+the bound, and no size is named that was not designed and met. The designs are stubbed (cheap)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import fabkiri
+import pytest
+from fabkiri.api import maker, maker_design, maker_options
+from fabkiri.api.maker_arms import arm_width_mm
+from fabkiri.api.maker_design import arms_of
+from fabkiri.api.maker_once import StepRun
+from fabkiri.design.targets.lookup import load_target
+
+LETTER_L = str(Path(__file__).resolve().parents[1] / "data" / "letter-l.csv")
+
+
+def test_the_letter_ls_arm_is_its_bar_width():
+    # the L's bars are 25 mm wide at 100 mm (a 60 x 100 mm outline), and the width scales with the size
+    assert arm_width_mm(load_target(LETTER_L, 100)) == pytest.approx(25.0, abs=0.3)
+    assert arm_width_mm(load_target(LETTER_L, 200)) == pytest.approx(50.0, abs=0.6)
+    # a disc has no arm narrower than itself
+    assert arm_width_mm(load_target("circle", 100)) == pytest.approx(100.0, abs=0.2)
+
+
+def _missing(designed):
+    def design(result, plan, say):  # every design misses by 3x the tolerance, recorded
+        designed.append((plan.process, plan.printer, plan.size))
+        result.figures = {"hausdorff_rel": 0.06, "shape_tol_rel": 0.02}
+        return StepRun(False, 1, "shape missed", {}, [])
+
+    return design
+
+
+def test_make_designs_no_size_whose_arms_are_too_narrow_and_names_none_unmet(monkeypatch):
+    # the L's 25 mm bar at 100 mm holds 4 tiles of 6.25 mm, under prusa-mk4's 8.70 mm: no count meets
+    # there (docs/maker-kit.md), nor at 130 mm (8.1 mm); the ladder's first size past the bound is 150 mm
+    designed: list[tuple] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])  # the ladder alone
+    result = fabkiri.make(LETTER_L, size=100, printer="prusa-mk4")
+    assert not result.ok and result.exit_code == 1 and result.pattern is None
+    assert designed == [("print", "prusa-mk4", 150.0)]
+    assert result.alternatives == []
+    details = result.steps[0].details
+    assert any(d.startswith("130 mm not designed: at 130 mm the letter-l's arms") for d in details)
+    assert "no larger size or option designed here made it: no size is named" in details
+
+
+def test_the_bound_is_the_processs_own_and_leaves_the_users_tiles_alone():
+    plan = maker._plan(LETTER_L, 100, None, None, "prusa-mk4", None, None, "2%", None, None)
+    arms = arms_of(plan)
+    assert arms is not None and arms.arm_mm / arms.across < arms.need_mm == pytest.approx(
+        8.7, abs=0.05
+    )
+    # a cut's thinnest feature (card-0.3: 4.1 mm) fits 4 times across the same arm: designed as before
+    cut = maker._plan(LETTER_L, 100, "card-0.3", None, None, None, None, "2%", None, None)
+    assert arms_of(cut) is None
+    # tiles the user named are designed as asked
+    given = maker._plan(LETTER_L, 100, None, None, "prusa-mk4", None, (4, 4), "2%", None, None)
+    assert arms_of(given) is None
