@@ -33,7 +33,7 @@ STARTS = {STRIP_INIT: "conformal", STRIP_COARSE_INIT: "coarse"}  # each attempt'
 # one scoring of the splits for a design's attempts (a Target hashes by identity)
 @lru_cache(maxsize=4)
 def _splits(target: Target, rows: int, cols: int) -> tuple:
-    return tuple(strip_splits(target, rows, cols)[:STRIP_TRIES])
+    return tuple(strip_splits(target, rows, cols, STRIP_TRIES)[:STRIP_TRIES])
 
 
 def strip_request(

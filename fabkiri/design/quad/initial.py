@@ -178,7 +178,8 @@ def initial_guess(
     off = np.mod(target.corners - target.default_corner_split() + 0.5, 1.0) - 0.5  # parameters wrap
     resplit = bool(np.abs(off).max() > 1e-9)
     if (area <= 0).any() and resplit:
-        x = inverse_harmonic_map(base, st.tip_nodes, st.tip_side, target.transformed(1.0 / L0))
+        tgt = target.transformed(1.0 / L0)
+        x = inverse_harmonic_map(base, st.tip_nodes, st.tip_side, tgt, st.tiles)
         area = geometry.signed_areas(x[st.tiles])
     if (area <= 0).any():
         raise SolveError(

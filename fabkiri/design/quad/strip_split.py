@@ -17,6 +17,8 @@ from __future__ import annotations
 from itertools import combinations
 
 import numpy as np
+from scipy import sparse
+from scipy.sparse.linalg import spsolve
 
 from ..targets.curve import Target
 from .corner_split import MAX_CANDIDATES, MIN_ACROSS, default_folds, distortion
@@ -75,13 +77,61 @@ def strip_shape(n: int, aspect: float) -> tuple[int, int]:
     return rows, max(MIN_ACROSS, n // rows)
 
 
-def strip_splits(target: Target, rows: int, cols: int) -> list[tuple[Target, tuple[int, int]]]:
+def _cotan_laplacian(nodes: np.ndarray, tri: np.ndarray) -> sparse.csr_matrix:
+    """The cotangent Laplacian of a triangulation: its quadratic form is a piecewise linear function's
+    Dirichlet energy."""
+    i = np.concatenate([tri[:, (k + 1) % 3] for k in range(3)])
+    j = np.concatenate([tri[:, (k + 2) % 3] for k in range(3)])
+    o = np.concatenate([tri[:, k] for k in range(3)])
+    a, b = nodes[i] - nodes[o], nodes[j] - nodes[o]
+    w = 0.5 * (a * b).sum(1) / np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+    n = len(nodes)
+    W = sparse.csr_matrix(
+        (np.concatenate([w, w]), (np.concatenate([i, j]), np.concatenate([j, i]))), (n, n)
+    )
+    return (sparse.diags(np.asarray(W.sum(1)).ravel()) - W).tocsr()
+
+
+def modulus(mesh: TargetMesh, corners: np.ndarray) -> float:
+    """Rows over columns of the rectangle the outline split at ``corners`` (BL, BR, TR, TL) maps onto
+    conformally: the Dirichlet energy of the harmonic function 0 on the left arc, 1 on the right, free on
+    the bottom and top (a W x H rectangle: H / W)."""
+    L = _cotan_laplacian(mesh.nodes, mesh.tri)
+    nb, u = len(mesh.u), mesh.u
+
+    def arc(a: float, b: float) -> np.ndarray:
+        return np.mod(u - a, 1.0) <= np.mod(b - a, 1.0)
+
+    fixed = np.zeros(len(mesh.nodes), bool)
+    fixed[:nb] = arc(corners[1], corners[2]) | arc(corners[3], corners[0])
+    used = np.zeros(len(mesh.nodes), bool)
+    used[mesh.tri.ravel()] = True
+    fixed |= ~used
+    phi = np.zeros(len(mesh.nodes))
+    phi[:nb][arc(corners[1], corners[2])] = 1.0
+    free = np.flatnonzero(~fixed)
+    phi[free] = spsolve(L[free][:, free].tocsc(), -(L[free][:, fixed] @ phi[fixed]))
+    return float(phi @ (L @ phi))
+
+
+def conformal_shape(mesh: TargetMesh, corners: np.ndarray, n: int) -> tuple[int, int]:
+    """Rows and columns of about ``n`` tiles at the split's conformal :func:`modulus`: a rotating-squares
+    pattern deploys about conformally, so its strip is as long for its width as the outline's."""
+    return strip_shape(n, 1.0 / modulus(mesh, corners))
+
+
+def strip_splits(
+    target: Target, rows: int, cols: int, tries: int = 1
+) -> list[tuple[Target, tuple[int, int]]]:
     """Where the pattern's harmonic map onto ``target``'s own split folds tiles at ``rows`` x ``cols``: the
     target re-split at four of its convex corners (:func:`turn_corners`), each with the rows x columns of
     about ``rows * cols`` tiles its fold-free start is least distorted at (``corner_split.distortion``,
     scored at :data:`PROBE_TILES`), least distorted first; else none. Every split is kept, not only those
     less distorted than the own split: a crescent's strip, its ends narrowing to the tips, scores a hair
-    above the own split's folding start, and meets where every guess misses."""
+    above the own split's folding start, and meets where every guess misses. Where fewer than ``tries``
+    fours are found, each is offered again at its :func:`conformal_shape` (where that differs): on an S
+    the least distorted start (by arc length along both sides, its inner side changing sides) is 42x6 for
+    16x16 asked, where the conformal strip is about 60x4."""
     corners = turn_corners(target)
     if len(corners) < 4 or not default_folds(target, rows, cols):
         return []
@@ -93,4 +143,9 @@ def strip_splits(target: Target, rows: int, cols: int) -> list[tuple[Target, tup
         d, rc = min((distortion(mesh, np.asarray(quad), *rc), rc) for rc in shapes)
         scored.append((d, quad, strip_shape(rows * cols, rc[1] / rc[0])))
     scored.sort(key=lambda x: x[0])
-    return [(with_corners(target, np.asarray(q)), rc) for _, q, rc in scored]
+    found = [(np.asarray(q), rc) for _, q, rc in scored]
+    for q, rc in found[: max(0, tries - len(found))]:
+        again = conformal_shape(mesh, q, rows * cols)
+        if again != rc:
+            found.append((q, again))
+    return [(with_corners(target, q), rc) for q, rc in found]
