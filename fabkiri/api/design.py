@@ -42,6 +42,7 @@ from .design_search import (
     attempt_record,
     last_note,
     poor_for_size,
+    replaces,
     retry_note,
     strip_why,
     with_why,
@@ -396,7 +397,7 @@ def _attempts(
         outcome.report.update(with_why(strip_note(init, sub, req), strip_why(req, passed)))
         miss, shape_met = _fit_miss(outcome.report), _shape_met(outcome.report)
         attempts.append(attempt_record(init, outcome, (sub.rows, sub.cols), (req.rows, req.cols)))
-        best = outcome if best is None or _rank(outcome) < _rank(best) else best
+        best = outcome if replaces(outcome, best, passed) else best
         if (
             outcome.valid
             and shape_met

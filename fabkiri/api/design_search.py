@@ -16,7 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..design.quad.solve import DesignRequest
-from .design_judge import DesignAttempt, _fit_miss, _hausdorff, _shape_met
+from ..pattern.opening import OPENS_LITTLE, opening
+from .design_judge import DesignAttempt, _fit_miss, _hausdorff, _rank, _shape_met
 from .design_pocket import POCKET_INIT, resplit_applies
 from .design_strip import STARTS
 
@@ -45,6 +46,24 @@ def poor_for_size(req: DesignRequest, outcome: DesignAttempt | None) -> bool:
         and _shape_met(outcome.report)
         and resplit_applies(req)
         and _hausdorff(outcome.report) > expected_fit(req)
+    )
+
+
+def replaces(
+    outcome: DesignAttempt, best: DesignAttempt | None, passed: DesignAttempt | None
+) -> bool:
+    """Whether ``outcome`` is kept over ``best`` (``_rank``). After ``passed``, a design poor for its size, not
+    where it opens little (holes under ``OPENS_LITTLE`` of the deployed sheet) and ``passed`` did not: a closer
+    fit is no gain to a maker whose sheet barely opens (the T at 48x48: 0.89 % opening 15 %, its strip 0.18 %
+    opening 2.5 %)."""
+    if best is None:
+        return True
+    if _rank(outcome) >= _rank(best):
+        return False
+    return passed is None or not (
+        opening(outcome.pattern).hole_fraction
+        < OPENS_LITTLE
+        <= opening(passed.pattern).hole_fraction
     )
 
 

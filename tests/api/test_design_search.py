@@ -3,19 +3,30 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import pytest
 from fabkiri.api import design as front
+from fabkiri.api import design_search
 from fabkiri.api.design import PatternRequest, _solver_request
 from fabkiri.api.design_minimax import MINIMAX_TILES, applies
 from fabkiri.api.design_report import DesignAttempt
 from fabkiri.api.design_search import TILE_SHARE, expected_fit, poor_for_size
 from fabkiri.design.core import conformance as conf
+from fabkiri.pattern.opening import OPENS_LITTLE
 
 
-def _outcome(h: float, tiles: tuple[int, int], tips: float = 0.0) -> DesignAttempt:
-    """A judged design that passes every check, Hausdorff ``h`` of the size, its tips ``tips`` off, on ``tiles``;
-    past 2 % it misses the shape."""
+@pytest.fixture(autouse=True)
+def _holes(monkeypatch):
+    """The stand-in designs' opening: their pattern is its hole fraction."""
+    monkeypatch.setattr(design_search, "opening", lambda p: SimpleNamespace(hole_fraction=p))
+
+
+def _outcome(
+    h: float, tiles: tuple[int, int], tips: float = 0.0, holes: float = 0.2
+) -> DesignAttempt:
+    """A judged design that passes every check, Hausdorff ``h`` of the size, its tips ``tips`` off, on ``tiles``,
+    opening ``holes`` of its sheet; past 2 % it misses the shape."""
     report = {
         "status": "converged",
         "time_s": 0.0,
@@ -25,11 +36,16 @@ def _outcome(h: float, tiles: tuple[int, int], tips: float = 0.0) -> DesignAttem
         "checks": {},
         "tiles": tiles,
     }
-    return DesignAttempt(pattern=None, report=report, problems=[], valid=True, states={})  # type: ignore[arg-type]
+    return DesignAttempt(pattern=holes, report=report, problems=[], valid=True, states={})  # type: ignore[arg-type]
 
 
 def _run(
-    monkeypatch, guess_h: float, strip_h: float, tips: float = 0.0, said: list | None = None
+    monkeypatch,
+    guess_h: float,
+    strip_h: float,
+    tips: float = 0.0,
+    said: list | None = None,
+    strip_holes: float = 0.2,
 ) -> tuple[DesignAttempt, list[dict]]:
     """The front door's attempts on a 32x32 rigid request whose coarse guess passes at ``guess_h`` and whose one
     strip (72x14) at ``strip_h`` (the rescaled guess misses): the solver, the judge and the strip's request stood
@@ -45,6 +61,7 @@ def _run(
             strip_h if sub.rows == 72 else {"rescaled": 0.25}.get(sub.init, guess_h),
             (sub.rows, sub.cols),
             tips,
+            strip_holes if sub.rows == 72 else 0.15,
         ),
     )
     strips = iter([("strip", replace(req, rows=72, cols=14), "a strip")] if strip_h else [])
@@ -89,6 +106,14 @@ def test_a_strip_further_than_the_pass_is_not_kept(monkeypatch):
     best, attempts = _run(monkeypatch, 0.0134, 0.015)
     assert [a["init"] for a in attempts] == ["coarse", "strip"]
     assert best.report["tiles"] == (32, 32)
+
+
+@pytest.mark.parametrize("holes", [0.025, 0.12])
+def test_a_closer_strip_that_opens_little_is_not_kept_over_a_pass_that_opens(monkeypatch, holes):
+    # the T at 48x48: its coarse design 0.89 % opening 15 %, its strip 0.18 % opening 2.5 %
+    best, attempts = _run(monkeypatch, 0.0134, 0.0028, strip_holes=holes)
+    assert [a["init"] for a in attempts] == ["coarse", "strip"]
+    assert best.report["tiles"] == ((32, 32) if holes < OPENS_LITTLE else (72, 14))
 
 
 def test_a_pass_within_the_expected_fit_ends_the_search(monkeypatch):
