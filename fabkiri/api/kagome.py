@@ -187,6 +187,7 @@ def design_kagome(  # noqa: PLR0913 (the options of `fabkiri design --lattice ka
         # the price of the limits: the design without them (None: it met them already)
         report["fabrication"]["without_limits_hausdorff_rel"] = free
         report["fabrication"]["route"] = route
+    size_limits.check_designed(pattern)  # a target too small for its tiles: refused, not written
     # every material's smallest cut scale (the print rows of this summary assume quad faces: left out)
     report["fabricability"] = fabricability.summary(pattern, prints=())
     too_closed = judge_opening(pattern, report, min_opening)  # the opening figures, the floor met
