@@ -80,13 +80,9 @@ def _apart_as_neighbours(
 ) -> np.ndarray:
     """Which pairs ``(i, j)`` (``i < j``) are convex neighbours that penetrate no deeper than ``tol`` in closed
     state ``state`` with ``j`` placed from ``i`` through their hinge."""
-    top, T = pattern.topology, pattern.topology.n_tiles
-    keys = top.hinge_tiles.min(axis=1) * T + top.hinge_tiles.max(axis=1)
-    order = np.argsort(keys)
-    at = np.minimum(np.searchsorted(keys, i * T + j, sorter=order), len(keys) - 1)
-    hinge = order[at]
+    hinge = np.asarray(pattern.topology.tile_adjacency[i, j]).ravel() - 1  # -1: no hinge between
     x = pattern.corners()
-    near = (keys[hinge] == i * T + j) & convex(x[i]) & convex(x[j])
+    near = (hinge >= 0) & convex(x[i]) & convex(x[j])
     apart = np.zeros(len(i), dtype=bool)
     if near.any():
         placed = placed_through_hinge(pattern, state, hinge[near], i[near])
