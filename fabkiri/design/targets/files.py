@@ -109,13 +109,16 @@ def from_svg_path(
 
 
 def read_svg(path: Path, curve: str = "polyline") -> Target:
-    """The first path of an SVG file in mm, as drawn: its transforms and the file's units applied."""
+    """The one closed curve of an SVG file in mm, as drawn (:func:`~fabkiri.exchange.svg.outline_path`): its
+    transforms and the file's units applied."""
     # the cut drawings' SVG module, loaded here: a design of a named target or points reads no SVG
     from ...exchange.svg import outline_path
 
     found = outline_path(path)
     if found is None:
-        raise InputError(f"{path}: the SVG has no <path d=...> element")
+        raise InputError(
+            f"{path}: the SVG draws no curve (a <path>, <rect>, <circle>, <ellipse> or <polygon>)"
+        )
     d, mm = found
     return from_svg_path(d, path.stem, curve).transformed(mm)
 
