@@ -33,11 +33,13 @@ _memo: dict[tuple, float] = {}
 
 def arm_width_mm(target: Target) -> float:
     """The outline's arm width (mm): the diameter of the widest disc whose sweep inside the outline (its
-    morphological opening) leaves out at most :data:`ARM_SHARE` of the area. Memoised by outline."""
-    key = (target.name, float(target.size), float(target.area), len(target.dense))
+    morphological opening) leaves out at most :data:`ARM_SHARE` of the area. Memoised by outline shape,
+    as a share of its size: make's larger sizes of one outline scale it, not measure it again."""
+    size = float(target.size)
+    key = (target.name, len(target.dense), round(float(target.area) / size**2, 9))
     if key not in _memo:
-        _memo[key] = _arm_width(target)
-    return _memo[key]
+        _memo[key] = _arm_width(target) / size
+    return _memo[key] * size
 
 
 def _arm_width(target: Target) -> float:
