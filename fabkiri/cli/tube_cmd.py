@@ -20,6 +20,11 @@ NOT_FOR_TUBES = dict.fromkeys(
 ) | {"lattice": "quad", "solver": "auto", "shape_tol": "2%", "fit": "outline"}
 
 
+def options_not_for_tubes(args: argparse.Namespace) -> list[str]:
+    """The design options given away from their defaults that a tube design does not use."""
+    return [k for k, v in NOT_FOR_TUBES.items() if getattr(args, k) not in (v, None, False)]
+
+
 def cmd_design_tube(args: argparse.Namespace) -> int:
     """``design --tube SPEC --tiles ROWSxCOLS``: write the tube's sheet; exit 1 unless it converged and
     verified (the best iterate is still written, marked ``design.valid = false``)."""
@@ -28,7 +33,7 @@ def cmd_design_tube(args: argparse.Namespace) -> int:
 
     if args.tiles is None:
         raise InputError("--tube designs need --tiles ROWSxCOLS")
-    unused = [k for k, v in NOT_FOR_TUBES.items() if getattr(args, k) not in (v, None, False)]
+    unused = options_not_for_tubes(args)
     if unused:  # they were silently ignored: a tube's sheet is set by --tube alone
         raise InputError(f"--{unused[0].replace('_', '-')} does not apply to --tube designs")
     rows, cols = parse_tiles(args.tiles)
