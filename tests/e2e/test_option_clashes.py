@@ -30,6 +30,12 @@ def pattern(tmp_path):
         (["print", "--printer", "mine.json"], "mine.json: no such file"),  # was "unknown printer"
         # was read by nothing: print's --material is the laser material of --marks
         (["print", "--material", "card-0.3"], "give --marks too"),
+        # hard57: each was read by nothing, exit 0
+        (["cut", "--material", "card-0.3", "--hinge", "tape", "--ligament-width", "1"], "ligament"),
+        (["cut", "--material", "acrylic-3", "--gap", "1"], "--gap is read by ligament hinges only"),
+        (["cut", "--no-labels", "--label-height", "5"], "--label-height sizes the labels"),
+        (["print", "--style", "pinned", "--strip-width", "3"], "read by nothing in pinned"),
+        (["print", "--style", "strips", "--axial-clearance", "0.3"], "read by nothing in strips"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, list) else None,
 )
