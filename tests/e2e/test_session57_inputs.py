@@ -1,5 +1,6 @@
 """What session 56 left and session 57 found (docs/bad-input.md, "Session 57 (hard57)"): a pattern with a
-tile removed by hand, a FOLD whose key frame is a folded form, DXF files with nothing fabkiri reads.
+tile removed by hand, a FOLD whose key frame is a folded form, DXF files with nothing fabkiri reads, a
+viewer page over another pattern's cut, a print coupon's laser notes, an earlier run's files left beside.
 """
 
 from __future__ import annotations
@@ -129,3 +130,20 @@ def test_view_refuses_the_cut_folder_of_another_pattern(tmp_path, run_cli):
     # was: exit 0, a page showing the 4x4's sheets and pieces as the 3x3's
     assert code == 2 and "made from another pattern" in _one_line(err)
     assert not (tmp_path / "v.html").exists()
+
+
+def test_a_print_coupon_refuses_the_laser_notes(tmp_path, run_cli):
+    code, _, err = run_cli("coupon", "--printer", "prusa-mk4", "--notes", "-o", tmp_path / "c")
+    assert code == 2 and "--notes" in _one_line(err)  # was: exit 0, --notes read by nothing
+    assert not (tmp_path / "c").exists()
+
+
+def test_a_cut_into_the_folder_of_an_earlier_cut_names_its_files(tmp_path, run_cli):
+    for name, n in (("p", 3), ("q", 2)):
+        (tmp_path / f"{name}.json").write_text(dumps(standard_pattern(n, n, tile_size=20.0)))
+    out = tmp_path / "out"
+    assert run_cli("cut", tmp_path / "p.json", "--material", "card-0.3", "-o", out)[0] == 0
+    code, _, err = run_cli("cut", tmp_path / "q.json", "--material", "card-0.3", "-o", out)
+    # was: p.dxf, p.png and p.svg silently beside q's files and q's manifest
+    assert code == 0 and "also holds p.dxf, p.png, p.svg of an earlier run" in err
+    assert (out / "p.dxf").exists()  # named, not deleted: they are the user's files
