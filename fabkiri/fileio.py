@@ -13,10 +13,11 @@ one of them, whatever path (symlink, ``./x``, hard link) names it.
 from __future__ import annotations
 
 import contextvars
+import json
 import os
 import shutil
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -309,3 +310,19 @@ def atomic_write_many(folder: str | os.PathLike, files: Mapping[str, bytes | str
     check_output_folder(folder)
     root = _scratch_root(folder)
     return publish({folder / name: data for name, data in files.items()}, root)
+
+
+def left_over(folder: str | os.PathLike, names: Iterable[str]) -> list[str]:
+    """The files an earlier run's ``manifest.json`` in ``folder`` lists that a run writing ``names`` leaves
+    in place (a cut of another pattern into the same folder): to be named, never silently beside the
+    new ones. Empty when there is no readable manifest."""
+    try:
+        old = json.loads((Path(folder) / "manifest.json").read_text("utf-8")).get("files")
+    except (OSError, ValueError, AttributeError):
+        return []
+    if not isinstance(old, list):
+        return []
+    keep = set(names)
+    return sorted(
+        str(f) for f in old if isinstance(f, str) and f not in keep and (Path(folder) / f).is_file()
+    )

@@ -63,7 +63,20 @@ def cut_material(
     for setting in settings:
         key, value = parse_setting(setting)
         changes[key] = value
+    given = [k for k in ("strain_limit", "gap_mm") if changes.get(k) is not None]
+    _refuse_ligament_only(hinge or material.hinge, given)
     return material.override(**changes), hinge
+
+
+def _refuse_ligament_only(hinge: str, given: Iterable[str]) -> None:
+    """Settings only ligament hinges read, given for another kind: refused rather than read by nothing."""
+    for name in given if hinge != "ligament" else ():
+        raise InputError(
+            Param(name, flag="--" + name.removesuffix("_mm").replace("_", "-")),
+            f" is read by ligament hinges only; these are {hinge} hinges: give ",
+            Param("hinge", "ligament"),
+            ", or drop it",
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,6 +99,10 @@ def cut_files(
     """Cut ``pattern`` as ``options`` say (a tube: its flat sheet and seam), then read the files back.
     A refusal of the web and edge rules raises :class:`~fabkiri.api.advice.Refused` naming the options
     that pass (``ask``: how the command was given, so that each is a line that runs)."""
+    if options.ligament_width is not None:
+        _refuse_ligament_only(options.hinge or options.material.hinge, ["ligament_width"])
+    if options.label_height is not None and not options.labels:
+        raise InputError(Param("label_height"), " sizes the labels; there are none (no labels)")
     if isinstance(
         options.scale, float
     ):  # numbers that would overflow the geometry: one line, up front

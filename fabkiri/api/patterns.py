@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..errors import CheckFailed, InputError, PatternError
+from ..errors import CheckFailed, InputError, Param, PatternError
 from ..exchange.file_formats import format_of, pattern_format
 from ..exchange.obj import import_obj
 from ..mechanics.contract import adopt_state_labels, contract
@@ -99,6 +99,12 @@ def export_pattern(
     fmt = pattern_format(fmt_name, writable=True)
     if fmt.write is None:  # (pattern_format refused it already)
         raise InputError(f"fabkiri cannot write {fmt.name} files")
+    if unit is not None and not fmt.takes_unit:  # else read by nothing
+        raise InputError(Param("unit"), f" is read by nothing: {fmt.name} files are written in mm")
+    if fmt.every_state and state != "deployed":
+        raise InputError(
+            Param("state"), f" is read by nothing: a {fmt.name} file holds every state"
+        )
     need = fmt.closed_states(state)
     if need:
         from ..fabricate.gate import (  # lazy: `design` imports the CLI's readers

@@ -27,7 +27,7 @@ from ..pattern.model import Pattern
 from ..verify.printmanifest import PrintManifest
 from .advice import Ask, Refused, print_alternatives
 from .intent import design_intent
-from .print_options import DEFAULT_STYLE, PrintOptions, minimum, printer_for
+from .print_options import DEFAULT_STYLE, PrintOptions, minimum, printer_for, refuse_unread
 
 AUTO = Param("scale", "auto")  # first part of the refusal of --scale auto (no scale prints it)
 
@@ -97,6 +97,7 @@ def print_pattern(
     state = int(options.state or design_intent(pattern, "state") or 1)
     options = replace(options, state=state)
     style = options.style or design_intent(pattern, "style") or DEFAULT_STYLE
+    refuse_unread(style, options)
     printer = printer_for(options.printer or design_intent(pattern, "printer"), style, options)
     made_from = fingerprint(pattern)  # before scaling: the manifest names the input pattern
     pattern, seam_files, seam_entry = tube_cut_inputs(pattern, state, "print")  # a tube: flat sheet
@@ -303,12 +304,6 @@ def _laser_files(pattern: Pattern, job, material: str, stem: str, source: str) -
     from ..fabricate.cut.readback import verify_result
     from ..fabricate.print.marks import marked_cut
 
-    if not print_style(job.style).loose_strips:
-        raise InputError(
-            Param("marks", True),
-            " engraves strip pads on laser-cut tiles: it needs ",
-            Param("style", "strips"),
-        )
     res, n = marked_cut(
         pattern, job.state, job.strips, job.plan.corners, load_material(material), stem, source
     )

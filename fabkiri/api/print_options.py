@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..errors import InputError, Param
 from ..fabricate import fabricability as fb
 from ..fabricate.print.job import print_style
 from ..fabricate.print.printers import load_printer
@@ -63,3 +64,24 @@ def printer_for(name: str | None, style: str, o: PrintOptions):
         radial_clearance_mm=o.radial_clearance,
         axial_clearance_mm=o.axial_clearance,
     )
+
+
+def refuse_unread(style: str, o: PrintOptions) -> None:
+    """Refuse, before any work, an option ``style`` reads nothing of: strip sizes for pinned hinges, the
+    axial clearance of pins for strip hinges, pad marks for tiles that are printed."""
+    kind = print_style(style)
+    pins = ["strip_thickness", "strip_width", "strip_reach"]  # what pin hinges leave unread
+    unread = ["axial_clearance"] if kind.strip_hinges else pins
+    for name in unread:
+        if getattr(o, name) is not None:
+            raise InputError(
+                Param(name),
+                f" is read by nothing in {style} prints; drop it, or choose another ",
+                Param("style"),
+            )
+    if o.marks and not kind.loose_strips:
+        raise InputError(
+            Param("marks", True),
+            " engraves strip pads on laser-cut tiles: it needs ",
+            Param("style", "strips"),
+        )

@@ -8,12 +8,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
-from ..errors import InputError
 from ..pattern.model import Pattern
 from ..render.viewer import cut_sheets, viewer_data, viewer_page
 from .deploy import DeployOutcome, deploy_pattern
+from .report_folders import check_report_folders
 
 
 @dataclass(frozen=True, eq=False)
@@ -33,8 +32,7 @@ def view_pattern(pattern: Pattern, steps: int = 40, *, cut: str | None = None) -
     cut`` folder of this pattern (its assembly pieces on hover, its sheets at true scale).
 
     A pattern that does not close has no path: :class:`fabkiri.errors.CheckFailed`, as ``deploy``."""
-    if cut is not None and not (Path(cut) / "manifest.json").is_file():
-        raise InputError(f"--cut {cut}: not a fabkiri cut folder (no manifest.json)")
+    check_report_folders(pattern, {"--cut": cut})  # a cut folder, of this pattern
     pieces, sheets = cut_sheets(cut)
     out = deploy_pattern(pattern, steps, frames=False)
     data = viewer_data(pattern, out.path, pieces=pieces, problems=out.problems, sheets=sheets)

@@ -15,6 +15,10 @@ def cmd_coupon(args: argparse.Namespace) -> int:
 
     if (args.material is None) == (args.printer is None):
         raise InputError("give --material NAME (laser coupon) or --printer NAME (print coupon)")
+    if args.notes and args.printer is not None:  # else read by nothing
+        raise InputError(
+            "--notes is the laser coupon's NOTES layer; a --printer coupon has none: drop it"
+        )
     if args.material is not None:
         from ..fabricate.cut.materials import load_material
 

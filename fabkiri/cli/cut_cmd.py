@@ -14,7 +14,7 @@ from ..fabricate.cut.formats import sheet_format_names
 from ..fabricate.cut.layout import LAYOUTS
 from ..fabricate.cut.materials import HINGE_KINDS, available
 from ..fabricate.cut.sheets import FORMATS, CutOptions
-from ..fileio import atomic_write_many
+from ..fileio import atomic_write_many, left_over
 from .argtypes import load_any, nonnegative_number, positive_number
 from .asked import asked, options_on_stdout
 
@@ -107,7 +107,13 @@ def cmd_cut(args: argparse.Namespace) -> int:
     with options_on_stdout():
         cut = cut_files(pattern, options, use_verifier=not args.no_verify, ask=ask)
     rb, result = cut.readback, cut.result
+    stale = left_over(out, cut.files)
     written = atomic_write_many(out, cut.files)
+    if stale:
+        print(
+            f"note: {out} also holds {', '.join(stale)} of an earlier run, not of this one",
+            file=sys.stderr,
+        )
     for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if not rb.ok:

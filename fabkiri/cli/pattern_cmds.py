@@ -96,6 +96,11 @@ def _fabricability(pattern: Pattern) -> dict:
 def cmd_export(args: argparse.Namespace) -> int:
     if args.format == "tube3d":  # a tube's rolled states: not a pattern format (cli/tube_cmd.py)
         return cmd_export_tube3d(args)
+    given = [
+        f for f, v in (("--copies", args.copies), ("--thickness", args.thickness)) if v is not None
+    ]
+    if given or args.no_gif:  # else read by nothing
+        raise InputError(f"{(given + ['--no-gif'])[0]} is for --format tube3d, not {args.format}")
     out = export_pattern(
         load_any(args.file),
         args.format,
@@ -235,16 +240,14 @@ def _register_export(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--copies",
         type=int,
-        default=1,
         metavar="K",
-        help="tube3d: K copies around the circumference",
+        help="tube3d: K copies around the circumference (default 1)",
     )
     p.add_argument(
         "--thickness",
         type=positive_number,
-        default=1.0,
         metavar="MM",
-        help="tube3d: plate thickness",
+        help="tube3d: plate thickness (default 1)",
     )
     p.add_argument("--no-gif", action="store_true", help="tube3d: skip the 3D deployment GIF")
     p.add_argument(

@@ -11,7 +11,7 @@ from ..api.print import PrintOptions, print_pattern
 from ..errors import InputError
 from ..fabricate.print import mesh
 from ..fabricate.print.printers import available_printers
-from ..fileio import atomic_write_many
+from ..fileio import atomic_write_many, left_over
 from .argtypes import load_any, positive_number
 from .asked import asked, options_on_stdout
 
@@ -73,7 +73,13 @@ def cmd_print(args: argparse.Namespace) -> int:
             notify=lambda text: print(text, file=sys.stderr),
             ask=asked(args, PRINT_FLAGS, PRINTER_FLAGS, args.printer),
         )
+    stale = left_over(args.output, out.files)
     atomic_write_many(args.output, out.files)
+    if stale:
+        print(
+            f"note: {args.output} also holds {', '.join(stale)} of an earlier run, not of this one",
+            file=sys.stderr,
+        )
     print(
         f"wrote {len(out.files)} files to {args.output}: {out.describe()}, {time.perf_counter() - t0:.1f} s",
         file=sys.stderr,

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from ..api.patterns import load_pattern
+from ..errors import InputError
 from ..fileio import atomic_write, atomic_write_many, check_output_file, check_output_folder
 from .argtypes import parse_tiles
 
@@ -57,13 +58,16 @@ def cmd_export_tube3d(args: argparse.Namespace) -> int:
     """``export FILE --format tube3d -o DIR``: every state rolled onto its tube (OBJ, STL, PNG, GIF)."""
     from ..api.tube import tube_3d_files
 
+    if args.unit is not None or args.state != "deployed":  # else read by nothing
+        flag = "--unit" if args.unit is not None else "--state"
+        raise InputError(f"{flag} is read by nothing: tube3d writes every state, in mm")
     check_output_folder(args.output)
     pattern = load_pattern(args.file)
     files = tube_3d_files(
         pattern,
         stem=Path(args.file).stem,
-        copies=args.copies,
-        thickness=args.thickness,
+        copies=1 if args.copies is None else args.copies,
+        thickness=1.0 if args.thickness is None else args.thickness,
         gif=not args.no_gif,
     )
     atomic_write_many(args.output, files)

@@ -73,7 +73,8 @@ class PatternFormat:
     ``{file name: text}``; ``closed_states(state)`` the closed states it needs stored first (with
     ``every_state``, the file holds both and the gate checks both); ``said(pattern, state, output,
     unit)`` the line ``export`` prints. ``suffixes`` (lower case, with the dot) choose it on reading;
-    ``adopt_labels``: a file whose closed states are not labelled 1 and 2 by fabkiri's fold rule.
+    ``adopt_labels``: a file whose closed states are not labelled 1 and 2 by fabkiri's fold rule;
+    ``takes_unit``: ``write`` scales by ``unit`` (others are in mm and refuse one).
     """
 
     family: ClassVar[str] = "pattern"
@@ -86,6 +87,7 @@ class PatternFormat:
     every_state: bool = False
     adopt_labels: bool = True  # the closed states' labels are fixed from the fold parity on reading
     said: Callable[[Pattern, str, str, float | None], str] | None = None
+    takes_unit: bool = False  # whether ``write`` reads its ``unit`` (mm per file unit)
 
 
 @dataclass(frozen=True)

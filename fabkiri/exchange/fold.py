@@ -134,6 +134,7 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
     """
     if not isinstance(data, dict):
         raise PatternError(f"{source}: expected a FOLD JSON object")
+    _refuse_folded_key_frame(data, source)
     coords = _array(data, "vertices_coords", source)
     if coords.shape[1] == 3:
         if np.abs(coords[:, 2]).max(initial=0.0) > 0:
@@ -165,6 +166,31 @@ def pattern_from_fold(data: Any, source: str = "fold") -> Pattern:
         name=str(data.get("file_title", "")) or source,
         design={"source": {"fold": source, "file_creator": data.get("file_creator")}},
     )
+
+
+def _refuse_folded_key_frame(data: dict, source: str) -> None:
+    """A key frame classed ``foldedForm`` (and not ``creasePattern``) is a folded state, not the flat
+    cut pattern read as the deployed state: refused, naming a frame classed as the flat pattern."""
+    classes = _classes(data)
+    if "foldedForm" not in classes or "creasePattern" in classes:
+        return
+    frames = data.get("file_frames") or []
+    flat = [
+        k
+        for k, f in enumerate(frames if isinstance(frames, list) else [], 1)
+        if "creasePattern" in _classes(f)
+    ]
+    hint = f"; its frame {flat[0]} is a creasePattern: make that the key frame" if flat else ""
+    raise PatternError(
+        f"{source}: the key frame is a foldedForm (a folded state), not the flat pattern fabkiri "
+        f"reads as the deployed state{hint}"
+    )
+
+
+def _classes(frame: Any) -> list:
+    """A frame's ``frame_classes`` (nothing for a malformed one)."""
+    got = frame.get("frame_classes") if isinstance(frame, dict) else None
+    return got if isinstance(got, list) else []
 
 
 def _closed_frames(data: dict, tiles: np.ndarray, n: int, source: str) -> dict[int, np.ndarray]:

@@ -32,6 +32,7 @@ class Linework:
         default_factory=list
     )  # per polyline: its layer or group name ("" if none)
     colours: list[str] = field(default_factory=list)  # per polyline: its stroke colour ("" if none)
+    unread: list[str] = field(default_factory=list)  # what the file holds that is no polyline here
 
     def add(self, pts: np.ndarray, closed: bool, layer: str = "CUT", colour: str = "") -> None:
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
@@ -56,6 +57,11 @@ class Linework:
             self.layer_found,
             [self.layers[i] for i in keep],
             [self.colours[i] for i in keep],
+            self.unread
+            + [
+                f"{self.layers[i]}-layer curve"
+                for i in sorted(set(range(len(self.layers))) - set(keep))
+            ],
         )
 
     def cut_classes(self) -> list[Linework]:

@@ -161,5 +161,6 @@ register_format(
         write=_write,
         closed_states=lambda state: (_start(state),),
         said=_said,
+        takes_unit=True,
     )
 )

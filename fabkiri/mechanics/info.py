@@ -13,6 +13,7 @@ import numpy as np
 
 from ..pattern import geometry
 from ..pattern.kinds.tessellation import tessellation
+from ..pattern.lattice_counts import topology_count
 from ..pattern.model import Pattern
 from ..pattern.opening import Opening, opening
 from ..pattern.residuals import hinge_sums, state_residuals
@@ -62,6 +63,7 @@ class PatternInfo:
     )  # "deployed" / "state_S" -> design.conformance measure
     tube: dict | None = None  # a periodic pattern's tube per state (mechanics.tube.tube_report)
     opening: dict = field(default_factory=dict)  # how much it opens (pattern.opening), to_dict form
+    topology_problem: str | None = None  # the tiles form no lattice (pattern.lattice_counts)
 
     def seam_problems(self) -> list[str]:
         """A tube's closed states whose seam is not a pure translation (a rigid motion for a tube recorded
@@ -79,7 +81,11 @@ class PatternInfo:
 
     @property
     def closes_both(self) -> bool:
-        return all(s.closes for s in self.states) and not self.seam_problems()
+        return (
+            all(s.closes for s in self.states)
+            and not self.seam_problems()
+            and not self.topology_problem
+        )
 
     @property
     def supplied_ok(self) -> bool:
@@ -87,7 +93,7 @@ class PatternInfo:
 
     def problems(self) -> list[str]:
         """One sentence per failed check (empty when the pattern closes in both states)."""
-        out = []
+        out = [self.topology_problem] if self.topology_problem else []
         for s in self.states:
             if not s.closes:
                 out.append(
@@ -195,6 +201,7 @@ def describe(
         rigid_deployable=quad_rigid and bool(np.abs(hs).max(initial=0.0) <= tol_rad),
         tolerance_rel=tol,
         tolerance_rad=tol_rad,
+        topology_problem=topology_count(pattern).problem(),
     )
     closed = {}
     for s in STATES:

@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import CheckFailed, InputError
 from ..pattern import geometry
 from ..pattern.kinds.tessellation import tessellation
+from ..pattern.lattice_counts import topology_count
 from ..pattern.model import Pattern
 from ..pattern.residuals import RIGID_TOL_RAD, hinge_sums
 from .collisions import CollisionReport, collisions
@@ -211,8 +212,12 @@ def node_positions(pattern: Pattern, corners: np.ndarray) -> np.ndarray:
 def closed_states(pattern: Pattern, tol: float = CLOSURE_TOL) -> dict[int, np.ndarray]:
     """Per-tile corners of both closed states, Kabsch-aligned to the deployed state.
 
-    Raises :class:`CheckFailed` (with the closure figures) if a state does not close.
+    Raises :class:`CheckFailed` (with the closure figures) if a state does not close, or if the tiles
+    form no lattice (a closed state with a gap: ``verify``'s topology check).
     """
+    problem = topology_count(pattern).problem()
+    if problem:
+        raise CheckFailed(f"{problem}; it has no deployment path")
     both = contract_both(pattern)
     size = pattern.tile_size
     for s, c in both.items():

@@ -31,7 +31,7 @@ import shapely
 
 from ..mechanics.contract import contract
 from ..pattern import geometry
-from ..pattern.kinds.tessellation import tessellation
+from ..pattern.lattice_counts import topology_count
 from ..pattern.model import Pattern
 from ..pattern.topology import STATES
 from .closed_checks import closed_state_checks
@@ -146,41 +146,17 @@ def tile_checks(pattern: Pattern, tol: Tolerances) -> list[Check]:
 def topology_checks(pattern: Pattern) -> list[Check]:
     """Counts (topology in docs/algorithm.md#verifier-checks): one hole per independent cycle of the tile graph,
     every hinge a corner of one or two holes (or as many hole-less hinges as the kind's lattice has)."""
-    top = pattern.topology
-    tess = tessellation(pattern.kind)
-    T, H, K = top.n_tiles, top.n_hinges, top.n_holes
-    expected = H - T + 1
-    holes_per_hinge = (top.gap_face >= 0).sum(axis=1)
-    orphan = np.flatnonzero(holes_per_hinge == 0) if K else np.zeros(0, dtype=np.int64)
-    bad = abs(K - expected)
-    lat = pattern.lattice or {}
-    detail = (
-        f"{T} tiles, {H} hinges, {len(top.free_nodes)} free corners, {K} holes (cycles: {expected})"
-    )
-    counts = tess.lattice_counts
-    if lat.get("rows") and lat.get("cols") and counts is not None:
-        m, n = int(lat["rows"]), int(lat["cols"])
-        holes, free, holeless = counts(m, n)
-        bad += abs(K - holes) + abs(len(top.free_nodes) - free)
-        # a lattice without holes (a 2x2 kagome, a quad strip): no hinge borders one
-        bad += abs(len(orphan) - holeless) if K else 0
-        detail += f"; a {m}x{n} lattice expects {holes} holes and {free} free corners"
-        if holeless:
-            detail += f" and {holeless} hinges bordering no hole"
-    elif tess.hinges_border_holes:
-        bad += len(orphan)
-    if len(orphan):
-        detail += f"; hinges bordering no hole: {orphan[:10].tolist()}"
+    count = topology_count(pattern)
     return [
         Check(
             "topology",
-            ok=bad == 0,
-            value=int(bad),
+            ok=count.bad == 0,
+            value=count.bad,
             tol=0,
             unit="count",
             group="tiles",
-            worst=f"hinge {int(orphan[0])}" if len(orphan) else None,
-            detail=detail,
+            worst=f"hinge {int(count.orphan[0])}" if len(count.orphan) else None,
+            detail=count.detail,
         )
     ]
 

@@ -30,6 +30,12 @@ def pattern(tmp_path):
         (["print", "--printer", "mine.json"], "mine.json: no such file"),  # was "unknown printer"
         # was read by nothing: print's --material is the laser material of --marks
         (["print", "--material", "card-0.3"], "give --marks too"),
+        # hard57: each was read by nothing, exit 0
+        (["cut", "--material", "card-0.3", "--hinge", "tape", "--ligament-width", "1"], "ligament"),
+        (["cut", "--material", "acrylic-3", "--gap", "1"], "--gap is read by ligament hinges only"),
+        (["cut", "--no-labels", "--label-height", "5"], "--label-height sizes the labels"),
+        (["print", "--style", "pinned", "--strip-width", "3"], "read by nothing in pinned"),
+        (["print", "--style", "strips", "--axial-clearance", "0.3"], "read by nothing in strips"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, list) else None,
 )
@@ -48,3 +54,22 @@ def test_a_designed_sheet_prints_despite_the_mesh_noise(tmp_path, run_cli):
     code, _, err = run_cli("print", DATA / "rect-8x8-120mm.json", "-o", tmp_path / "P")
     assert code == 0, err
     assert (tmp_path / "P" / "rect-8x8-120mm.3mf").exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["--format", "obj", "--copies", "3"], "--copies is for --format tube3d"),
+        (["--format", "fold", "--no-gif"], "--no-gif is for --format tube3d"),
+        (["--format", "obj", "--unit", "2"], "--unit is read by nothing"),
+        (["--format", "fold", "--state", "1"], "a fold file holds every state"),
+        (["--format", "tube3d", "--state", "1"], "tube3d writes every state"),
+    ],
+    ids=lambda v: " ".join(v) if isinstance(v, list) else None,
+)
+def test_an_export_option_of_another_format_is_refused(argv, words, tmp_path, run_cli):
+    (tmp_path / "p.json").write_text(dumps(standard_pattern(2, 2, tile_size=20.0)))
+    code, _, err = run_cli("export", tmp_path / "p.json", *argv, "-o", tmp_path / "out")
+    lines = err.strip().splitlines()  # hard57: each was read by nothing, exit 0
+    assert code == 2 and len(lines) == 1 and words in lines[0], err
+    assert sorted(os.listdir(tmp_path)) == ["p.json"]

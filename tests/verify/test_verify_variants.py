@@ -81,8 +81,7 @@ def bases(tmp_path_factory):
                     h,
                     "--material",
                     "pp-0.5",
-                    "--gap",
-                    "1.5",
+                    *(["--gap", "1.5"] if h == "ligament" else []),  # read by ligaments only
                     "--formats",
                     "dxf,svg",
                     "--no-verify",
@@ -259,7 +258,8 @@ def _cut_bases(root, pattern, hinges=("tape", "separate", "ligament"), args=()):
     out = {}
     for h in hinges:
         d = root / h
-        argv = ["cut", str(pj), "--hinge", h, "--material", "pp-0.5", "--gap", "1", *args]
+        gap = ["--gap", "1"] if h == "ligament" else []  # read by ligaments only
+        argv = ["cut", str(pj), "--hinge", h, "--material", "pp-0.5", *gap, *args]
         assert main([*argv, "--formats", "dxf", "--no-verify", "-o", str(d)]) == 0
         out[h] = lm.load_base(d, "dxf", p)
     return out

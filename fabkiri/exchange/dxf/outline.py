@@ -10,6 +10,7 @@ with several, which is the outline is the user's to say.
 
 from __future__ import annotations
 
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +40,7 @@ def dxf_outline(p: Path) -> np.ndarray:
     if len(rings) == 1:
         return rings[0]
     if not lw.polylines:
-        raise InputError(f"{p}: the drawing has no lines or curves")
+        raise InputError(f"{p}: {_nothing_read(lw.unread)}")
     if not rings:
         raise InputError(
             f"{p}: no closed outline ({len(loose)} open curve(s) that close no loop); close it"
@@ -49,3 +50,17 @@ def dxf_outline(p: Path) -> np.ndarray:
         f"{p}: {len(rings)} closed curves ({sizes}{', ...' if len(rings) > 3 else ''}); which is the "
         "outline? a target file holds one: leave only it in the drawing"
     )
+
+
+def _nothing_read(unread: list[str]) -> str:
+    """Why a drawing gave no curve: empty (Inkscape's R12 export writes only its paths), or what it
+    holds instead, counted by kind."""
+    if not unread:
+        return (
+            "the drawing is empty, no lines or curves (Inkscape's R12 DXF export leaves out every "
+            "rectangle, circle, ellipse and polygon: convert them with Path > Object to Path, or "
+            "save as its R14 DXF)"
+        )
+    kinds = Counter(unread)
+    held = ", ".join(f"{n} {k}" for k, n in kinds.most_common())
+    return f"no lines or curves to read as an outline; the drawing holds {held}"

@@ -257,6 +257,7 @@ def _read_dxf_full(p: Path, layer_name: str = "CUT") -> Linework:
     for prim in disassemble.to_primitives(disassemble.recursive_decompose(doc.modelspace()), flat):
         e = prim.entity
         if e is None or e.dxftype() not in CURVE_TYPES or prim.path is None:
+            lw.unread.append(e.dxftype() if e is not None else "entity")
             continue
         layer = e.dxf.layer.upper()
         aci = e.dxf.get("color", 256)
