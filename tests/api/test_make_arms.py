@@ -61,3 +61,36 @@ def test_the_bound_is_the_processs_own_and_leaves_the_users_tiles_alone():
     # tiles the user named are designed as asked
     given = maker._plan(LETTER_L, 100, None, None, "prusa-mk4", None, (4, 4), "2%", None, None)
     assert arms_of(given) is None
+
+
+def test_an_early_refusal_designs_no_size_whose_arms_are_too_narrow(monkeypatch):
+    # 4x4 tiles of the L at 60 mm are 6.2 mm, under prusa-mk4's 8.70 mm: refused before any design; by the
+    # tile estimate 4x4 is wide enough from 90 mm, but there the 22.5 mm bar holds 4 tiles of 5.6 mm: the
+    # size make designs is the first (10 mm steps) whose bar holds them, 140 mm, and nothing unmet is named
+    designed: list[tuple] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    result = fabkiri.make(LETTER_L, size=60, printer="prusa-mk4")
+    assert result.exit_code == 1 and result.alternatives == []
+    assert designed == [("print", "prusa-mk4", 140.0)]
+    why, details = result.steps[0].figures, result.steps[0].details
+    assert "4x4 would be from about 90 mm (the same estimate; no size was checked)" in why
+    assert "--size" not in why
+    assert any(
+        d.startswith("140 mm, where make chooses") and "arms hold 4 tiles" in d for d in details
+    )
+    assert "no size or option designed here made it: no size is named" in details
+
+
+def test_an_early_refusal_does_not_design_the_count_make_would_skip_for_its_arms(monkeypatch):
+    # 8x8 asked of the L at 100 mm: make's own count there (4x4) is not designed, its bar being too narrow
+    # (as make alone would skip 100 mm); the 8x8 at 170 mm, where the bar holds 4 tiles, is
+    designed: list[tuple] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    result = fabkiri.make(LETTER_L, size=100, printer="prusa-mk4", tiles=(8, 8))
+    assert designed == [("print", "prusa-mk4", 170.0)]
+    assert any(
+        d.startswith("4x4 tiles at 100 mm (make's choice there): not designed: at 100 mm")
+        for d in result.steps[0].details
+    )
