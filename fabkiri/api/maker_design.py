@@ -343,10 +343,11 @@ def _larger_size(
     ]
 
 
-def arms_of(plan) -> NarrowArms | None:
+def arms_of(plan, given_too: bool = False) -> NarrowArms | None:
     """The plan's outline at its size when its arms cannot hold a strip's tiles of its process
-    (:mod:`.maker_arms`); None when they can, or the tiles are the user's (``--tiles``)."""
-    if plan.tiles.given:
+    (:mod:`.maker_arms`); None when they can, or the tiles are the user's (``--tiles``) and not
+    ``given_too``."""
+    if plan.tiles.given and not given_too:
         return None
     target, fab = _target_and_limits(plan, plan.size)
     return narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
