@@ -314,13 +314,13 @@ def _larger_size(
     for k in SIZE_STEPS:
         size = float(math.ceil(plan.size * k / 10.0) * 10)
         target, fab = _target_and_limits(plan, size)
-        choice = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
-        if choice.tiles[0] * choice.tiles[1] <= count:
-            continue
         arms = narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
-        if arms is None:
+        if arms is not None:  # before make's count there: a bent strip's split costs seconds
+            skipped.append(f"{size:g} mm not designed: {arms.reason()}")
+            continue
+        choice = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
+        if choice.tiles[0] * choice.tiles[1] > count:
             break
-        skipped.append(f"{size:g} mm not designed: {arms.reason()}")
     else:
         return skipped + [
             f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"

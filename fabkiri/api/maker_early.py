@@ -28,6 +28,7 @@ from ..errors import FabkiriError
 from . import maker_options as mo
 from .maker_arms import NarrowArms, narrow_arms
 from .maker_design import (
+    SIZE_STEPS,
     Checks,
     Progress,
     StepRun,
@@ -105,7 +106,8 @@ def _candidates(plan, narrow: NarrowTiles):
     """``(label, plan, sized)`` of the first two options of the module docstring, where they apply; in
     place of the plan, the :class:`NarrowArms` of a size whose arms cannot hold a strip's tiles (not
     designed). The size of the second is where the tiles asked are wide enough by the estimate, or the
-    first size (:data:`~.print_tiles.SIZE_STEP_MM` steps) past it whose arms hold them, the larger."""
+    first size (:data:`~.print_tiles.SIZE_STEP_MM` steps) past it whose arms hold them, the larger, up to
+    make's own ladder (twice the size asked; past it, not designed)."""
     target, fab = _target_and_limits(plan, plan.size)
     auto = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
     if (
@@ -115,7 +117,12 @@ def _candidates(plan, narrow: NarrowTiles):
         label = f"{'x'.join(map(str, auto.tiles))} tiles at {plan.size:g} mm (make's choice there)"
         arms = narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
         yield label, arms or replace(plan, tiles=auto), False
-    size, arms_from = _size_arms_hold(plan, narrow.size_for)
+    held = _size_arms_hold(plan, narrow.size_for)
+    if held is None:
+        arms = _arms_at(plan, narrow.size_for)
+        yield f"{narrow.size_for:g} mm, where the tiles asked are wide enough", arms, False
+        return
+    size, arms_from = held
     bigger, fab = _target_and_limits(plan, size)
     why = f" (the arms hold {MIN_ACROSS} tiles from there)" if arms_from else ""
     if plan.tiles.given:
@@ -128,15 +135,18 @@ def _candidates(plan, narrow: NarrowTiles):
         yield label, replace(plan, size=size, tiles=tiles), True
 
 
-def _size_arms_hold(plan, size: float) -> tuple[float, bool]:
+def _size_arms_hold(plan, size: float) -> tuple[float, bool] | None:
     """``size``, or the first size past it (in :data:`~.print_tiles.SIZE_STEP_MM` steps) at which the
     outline's arms hold a strip's tiles of the plan's process (:mod:`.maker_arms`: the arm width is linear
-    in the size); whether it moved."""
+    in the size); whether it moved. None past make's own ladder (``SIZE_STEPS``' largest times the size
+    asked): such a size is not designed."""
     arms = _arms_at(plan, size)
     if arms is None:
         return size, False
     ratio = arms.need_mm * arms.across / arms.arm_mm
     moved = math.ceil(size * ratio / SIZE_STEP_MM) * SIZE_STEP_MM
+    if moved > SIZE_STEPS[-1] * plan.size:  # beyond make's own ladder: not designed
+        return None
     while _arms_at(plan, moved) is not None:
         moved += SIZE_STEP_MM  # round-off of the measured width
     return float(moved), True

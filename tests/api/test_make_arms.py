@@ -64,13 +64,13 @@ def test_the_bound_is_the_processs_own_and_leaves_the_users_tiles_alone():
 
 
 def test_an_early_refusal_designs_no_size_whose_arms_are_too_narrow(monkeypatch):
-    # 4x4 tiles of the L at 60 mm are 6.2 mm, under prusa-mk4's 8.70 mm: refused before any design; by the
+    # 4x4 tiles of the L at 80 mm are 8.2 mm, under prusa-mk4's 8.70 mm: refused before any design; by the
     # tile estimate 4x4 is wide enough from 90 mm, but there the 22.5 mm bar holds 4 tiles of 5.6 mm: the
     # size make designs is the first (10 mm steps) whose bar holds them, 140 mm, and nothing unmet is named
     designed: list[tuple] = []
     monkeypatch.setattr(maker_design, "_design", _missing(designed))
     monkeypatch.setattr(maker_options, "options", lambda plan: [])
-    result = fabkiri.make(LETTER_L, size=60, printer="prusa-mk4")
+    result = fabkiri.make(LETTER_L, size=80, printer="prusa-mk4")
     assert result.exit_code == 1 and result.alternatives == []
     assert designed == [("print", "prusa-mk4", 140.0)]
     why, details = result.steps[0].figures, result.steps[0].details
@@ -136,3 +136,34 @@ def test_make_designs_the_tiles_given_saying_the_arms_are_too_narrow(monkeypatch
     assert designed[0] == ("print", "prusa-mk4", 100.0)  # as asked
     warned = [h for h in heard if h.startswith("make: warning: at 100 mm the letter-l's arms")]
     assert len(warned) == 1 and "the 4x4 tiles given may miss the shape" in warned[0]
+
+
+def test_an_early_refusal_designs_no_size_past_makes_own_ladder(monkeypatch):
+    # 4x4 of the L at 40 mm are 4.1 mm wide; by the estimate they are wide enough from 90 mm, where the bar
+    # (22.5 mm) holds 4 tiles of 5.6 mm only; the bar holds them from 140 mm, past twice the size asked
+    designed: list[tuple] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    result = fabkiri.make(LETTER_L, size=40, printer="prusa-mk4")
+    assert designed == [] and result.alternatives == []
+    assert any(
+        d.startswith("90 mm, where the tiles asked are wide enough: not designed: at 90 mm")
+        for d in result.steps[0].details
+    )
+
+
+def test_the_ladder_asks_no_count_of_a_size_whose_arms_are_too_narrow(monkeypatch):
+    # make's count at a size is a bent strip's split for an outline with arms (seconds of CPU): a rung the
+    # arms rule out is skipped before it is asked
+    asked: list[float] = []
+    choose = maker_design.choose_tiles
+
+    def counting(target, *args):
+        asked.append(float(target.size))
+        return choose(target, *args)
+
+    monkeypatch.setattr(maker_design, "choose_tiles", counting)
+    monkeypatch.setattr(maker_design, "_design", _missing([]))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    fabkiri.make(LETTER_L, size=100, printer="prusa-mk4")
+    assert asked == [150.0]  # 130 mm (an 8.1 mm tile across the bar) is not asked
