@@ -167,3 +167,24 @@ def test_the_ladder_asks_no_count_of_a_size_whose_arms_are_too_narrow(monkeypatc
     monkeypatch.setattr(maker_options, "options", lambda plan: [])
     fabkiri.make(LETTER_L, size=100, printer="prusa-mk4")
     assert asked == [150.0]  # 130 mm (an 8.1 mm tile across the bar) is not asked
+
+
+def test_make_splits_each_count_once_per_size(monkeypatch):
+    # every setting of make's options asks for its count at the size; an outline with arms is split for a
+    # bent strip at each count (seconds each): the hand at 120 mm on prusa-mk4 split 4 counts 26 times
+    from collections import Counter
+
+    from fabkiri.api import maker_tiles
+
+    splits: Counter = Counter()
+    split = maker_tiles.bent_strip
+
+    def counting(target, rows, cols):
+        splits[(float(target.size), rows, cols)] += 1
+        return split(target, rows, cols)
+
+    monkeypatch.setattr(maker_tiles, "bent_strip", counting)
+    monkeypatch.setattr(maker_tiles, "_strips", {}, raising=False)
+    monkeypatch.setattr(maker_design, "_design", _missing([]))
+    fabkiri.make(LETTER_L, size=100, printer="prusa-mk4")
+    assert len(splits) >= 2 and max(splits.values()) == 1, splits
