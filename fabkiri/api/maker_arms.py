@@ -26,7 +26,7 @@ from ..errors import FabkiriError
 from ..pattern.kinds.tessellation import DEFAULT_KIND
 from .design_turn import request_target
 from .maker_tiles import min_feature_mm
-from .print_tiles import least_tile_mm, narrow_tiles
+from .print_tiles import check_micrometre, check_room, check_tiles, least_tile_mm
 
 # the share of the outline's area lying in parts narrower than its arm width: a fifth is an arm (the
 # star's points and the boot's toe are smaller shares and do not count)
@@ -108,19 +108,21 @@ def request_arms(request) -> NarrowArms | None:
     """``design``'s request (a :class:`~.design.PatternRequest` of a quad lattice for a material or a
     printer) when its outline's arms cannot hold a strip's tiles of that process (:func:`narrow_arms`,
     the rule make skips a size by); None when they can, or the request has no such outline or process,
-    or is bad input (the design refuses it with its own message)."""
+    or is bad input or refused up front (the design refuses it with its own message)."""
     if request.kind != DEFAULT_KIND or request.tiles is None or request.corners is not None:
         return None
     if request.target is None or not (request.printer or request.material):
         return None
-    try:
+    rows, cols = request.tiles
+    try:  # the design's own up-front refusals come first: no warning before them (print_tiles)
         target = request_target(request)
         limits, intent = request.fabrication_limits(target)
+        if target is None or limits is None:
+            return None
+        check_micrometre(rows, cols, target)
+        check_room(rows, cols, limits, target)
+        check_tiles(rows, cols, target, request.printer, intent.get("style"))
         least = least_tile_mm(request.printer, str(intent["style"])) if request.printer else 0.0
     except FabkiriError:
         return None
-    if target is None or limits is None:
-        return None
-    if request.printer and narrow_tiles(target, request.tiles, request.printer, intent["style"]):
-        return None  # the design refuses those tiles up front, saying why (print_tiles)
     return narrow_arms(target, limits, least, limits.source)
