@@ -267,13 +267,18 @@ def _design(result: MakeResult, plan: _Plan, say: Progress) -> StepRun:
     """The design at the plan's tiles, and after a shape miss other counts and options
     (:mod:`.maker_design`); an alternative is named only once it also passes its cut or print and deploy.
     Tiles too narrow for the print style are refused before any design (:mod:`.maker_early`), and arms
-    too narrow for a strip's tiles are not designed at this size (:mod:`.maker_arms`): larger sizes are."""
+    too narrow for a strip's tiles are not designed at this size (:mod:`.maker_arms`): larger sizes are
+    (the tiles given, ``--tiles``, are, with a warning)."""
     narrow = narrow_of(plan)
     if narrow is not None:
         return refuse_narrow(result, plan, say, CHECKS, narrow)
-    arms = arms_of(plan)
-    if arms is not None:
+    arms = arms_of(plan, given_too=True)
+    if arms is not None and not plan.tiles.given:
         return skip_narrow_arms(result, plan, say, CHECKS, arms)
+    if (
+        arms is not None
+    ):  # the user's tiles: designed as asked, with the figure (as design --printer)
+        say(f"make: {arms.warning(plan.tiles.tiles)}")
     return design_step(result, plan, say, CHECKS)
 
 

@@ -22,7 +22,11 @@ from scipy.optimize import bisect
 from ..design.quad.corner_split import MIN_ACROSS
 from ..design.quad.fabrication import FabricationLimits
 from ..design.targets.curve import Target
+from ..errors import FabkiriError
+from ..pattern.kinds.tessellation import DEFAULT_KIND
+from .design_turn import request_target
 from .maker_tiles import min_feature_mm
+from .print_tiles import check_micrometre, check_room, check_tiles, least_tile_mm
 
 # the share of the outline's area lying in parts narrower than its arm width: a fifth is an arm (the
 # star's points and the boot's toe are smaller shares and do not count)
@@ -76,6 +80,16 @@ class NarrowArms:
             f"than the {self.need_mm:.3g} mm tile {self.fabrication} needs"
         )
 
+    def warning(self, tiles: tuple[int, int]) -> str:
+        """The line of a design at ``tiles`` the user gave (``design --printer/--material``, ``make
+        --tiles``): designed as asked, with the figure make skips its own counts by."""
+        r, c = tiles
+        return (
+            f"warning: {self.reason()}; make designs none of its own counts at such a size (none met "
+            f"in its surveys, docs/maker-kit.md), so the {r}x{c} tiles given may miss the shape or "
+            "not print; they are designed as given"
+        )
+
 
 def narrow_arms(
     target: Target, limits: FabricationLimits, least_mm: float, fabrication: str
@@ -88,3 +102,27 @@ def narrow_arms(
     if arm / MIN_ACROSS >= need:
         return None
     return NarrowArms(target.name, float(target.size), arm, need, MIN_ACROSS, fabrication)
+
+
+def request_arms(request) -> NarrowArms | None:
+    """``design``'s request (a :class:`~.design.PatternRequest` of a quad lattice for a material or a
+    printer) when its outline's arms cannot hold a strip's tiles of that process (:func:`narrow_arms`,
+    the rule make skips a size by); None when they can, or the request has no such outline or process,
+    or is bad input or refused up front (the design refuses it with its own message)."""
+    if request.kind != DEFAULT_KIND or request.tiles is None or request.corners is not None:
+        return None
+    if request.target is None or not (request.printer or request.material):
+        return None
+    rows, cols = request.tiles
+    try:  # the design's own up-front refusals come first: no warning before them (print_tiles)
+        target = request_target(request)
+        limits, intent = request.fabrication_limits(target)
+        if target is None or limits is None:
+            return None
+        check_micrometre(rows, cols, target)
+        check_room(rows, cols, limits, target)
+        check_tiles(rows, cols, target, request.printer, intent.get("style"))
+        least = least_tile_mm(request.printer, str(intent["style"])) if request.printer else 0.0
+    except FabkiriError:
+        return None
+    return narrow_arms(target, limits, least, limits.source)

@@ -314,13 +314,13 @@ def _larger_size(
     for k in SIZE_STEPS:
         size = float(math.ceil(plan.size * k / 10.0) * 10)
         target, fab = _target_and_limits(plan, size)
-        choice = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
-        if choice.tiles[0] * choice.tiles[1] <= count:
-            continue
         arms = narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
-        if arms is None:
+        if arms is not None:  # before make's count there: a bent strip's split costs seconds
+            skipped.append(f"{size:g} mm not designed: {arms.reason()}")
+            continue
+        choice = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
+        if choice.tiles[0] * choice.tiles[1] > count:
             break
-        skipped.append(f"{size:g} mm not designed: {arms.reason()}")
     else:
         return skipped + [
             f"no larger size up to {SIZE_STEPS[-1]:g}x gives make more tiles"
@@ -343,10 +343,11 @@ def _larger_size(
     ]
 
 
-def arms_of(plan) -> NarrowArms | None:
+def arms_of(plan, given_too: bool = False) -> NarrowArms | None:
     """The plan's outline at its size when its arms cannot hold a strip's tiles of its process
-    (:mod:`.maker_arms`); None when they can, or the tiles are the user's (``--tiles``)."""
-    if plan.tiles.given:
+    (:mod:`.maker_arms`); None when they can, or the tiles are the user's (``--tiles``) and not
+    ``given_too``."""
+    if plan.tiles.given and not given_too:
         return None
     target, fab = _target_and_limits(plan, plan.size)
     return narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)

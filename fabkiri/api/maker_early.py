@@ -8,22 +8,27 @@ run before it is named (design, print and deploy on a scratch result, nothing wr
 likeliest first, at most :data:`~.maker_options.MAX_RUNS` designs in all:
 
 1. this printer and style at this size, on the count ``make`` would choose there (the most room for
-   the strips: likeliest to meet, and the fewest tiles, the cheapest design);
+   the strips: likeliest to meet, and the fewest tiles, the cheapest design), unless the arms are too
+   narrow there (:mod:`.maker_arms`: then not designed, and said so);
 2. the tiles asked for at the size from which they are wide enough (``--tiles`` given; without it,
-   ``make``'s own choice at that size);
+   ``make``'s own choice at that size), or from which the outline's arms hold a strip's tiles
+   (:mod:`.maker_arms`), the larger;
 3. the other options of :mod:`.maker_options` (counts, styles, presets, the other process), as after a
    missed design.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
+from ..design.quad.corner_split import MIN_ACROSS
 from ..design.targets.lookup import load_target
 from ..errors import FabkiriError
 from . import maker_options as mo
-from .maker_arms import NarrowArms
+from .maker_arms import NarrowArms, narrow_arms
 from .maker_design import (
+    SIZE_STEPS,
     Checks,
     Progress,
     StepRun,
@@ -37,7 +42,7 @@ from .maker_design import (
 )
 from .maker_result import MakeResult
 from .maker_tiles import choose_tiles, given_tiles
-from .print_tiles import NarrowTiles, narrow_tiles
+from .print_tiles import SIZE_STEP_MM, NarrowTiles, narrow_tiles
 
 
 def narrow_of(plan) -> NarrowTiles | None:
@@ -67,6 +72,9 @@ def refuse_narrow(
     for label, other, sized in _candidates(plan, narrow):
         if len(tried) >= mo.MAX_RUNS:
             break
+        if isinstance(other, NarrowArms):  # no count meets there (maker_arms): not designed
+            lines.append(f"{label}: not designed: {other.reason()}")
+            continue
         say(f"make: trying {label}, to name it if it makes")
         try:
             attempt = _attempt(MakeResult.of_plan(other), other, say)
@@ -88,12 +96,18 @@ def refuse_narrow(
         first = tried[0].cpu_s if tried else None
         _, more = _other_options(result, plan, say, checks, tried, first, max_runs=left)
         lines += more
+    if not result.alternatives:
+        lines.append("no size or option designed here made it: no size is named")
     lines.append(f"the options cost CPU {cpu_s() - start:.1f} s (no design at the tiles asked)")
     return StepRun(False, 1, f"refused before any design: {reason}", {}, lines)
 
 
 def _candidates(plan, narrow: NarrowTiles):
-    """``(label, plan, sized)`` of the first two options of the module docstring, where they apply."""
+    """``(label, plan, sized)`` of the first two options of the module docstring, where they apply; in
+    place of the plan, the :class:`NarrowArms` of a size whose arms cannot hold a strip's tiles (not
+    designed). The size of the second is where the tiles asked are wide enough by the estimate, or the
+    first size (:data:`~.print_tiles.SIZE_STEP_MM` steps) past it whose arms hold them, the larger, up to
+    make's own ladder (twice the size asked; past it, not designed)."""
     target, fab = _target_and_limits(plan, plan.size)
     auto = choose_tiles(target, fab, plan.fabrication, plan.least_tile_mm)
     if (
@@ -101,17 +115,47 @@ def _candidates(plan, narrow: NarrowTiles):
         and narrow_tiles(target, auto.tiles, plan.printer, plan.style) is None
     ):
         label = f"{'x'.join(map(str, auto.tiles))} tiles at {plan.size:g} mm (make's choice there)"
-        yield label, replace(plan, tiles=auto), False
-    size = narrow.size_for
+        arms = narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
+        yield label, arms or replace(plan, tiles=auto), False
+    held = _size_arms_hold(plan, narrow.size_for)
+    if held is None:
+        arms = _arms_at(plan, narrow.size_for)
+        yield f"{narrow.size_for:g} mm, where the tiles asked are wide enough", arms, False
+        return
+    size, arms_from = held
     bigger, fab = _target_and_limits(plan, size)
+    why = f" (the arms hold {MIN_ACROSS} tiles from there)" if arms_from else ""
     if plan.tiles.given:
         tiles = given_tiles(plan.tiles.tiles, bigger, fab)
-        label = f"{'x'.join(map(str, tiles.tiles))} tiles at {size:g} mm"
+        label = f"{'x'.join(map(str, tiles.tiles))} tiles at {size:g} mm{why}"
         yield label, replace(plan, size=size, tiles=tiles), False
     else:
         tiles = choose_tiles(bigger, fab, plan.fabrication, plan.least_tile_mm)
-        label = f"{size:g} mm, where make chooses {'x'.join(map(str, tiles.tiles))} tiles"
+        label = f"{size:g} mm, where make chooses {'x'.join(map(str, tiles.tiles))} tiles{why}"
         yield label, replace(plan, size=size, tiles=tiles), True
+
+
+def _size_arms_hold(plan, size: float) -> tuple[float, bool] | None:
+    """``size``, or the first size past it (in :data:`~.print_tiles.SIZE_STEP_MM` steps) at which the
+    outline's arms hold a strip's tiles of the plan's process (:mod:`.maker_arms`: the arm width is linear
+    in the size); whether it moved. None past make's own ladder (``SIZE_STEPS``' largest times the size
+    asked): such a size is not designed."""
+    arms = _arms_at(plan, size)
+    if arms is None:
+        return size, False
+    ratio = arms.need_mm * arms.across / arms.arm_mm
+    moved = math.ceil(size * ratio / SIZE_STEP_MM) * SIZE_STEP_MM
+    if moved > SIZE_STEPS[-1] * plan.size:  # beyond make's own ladder: not designed
+        return None
+    while _arms_at(plan, moved) is not None:
+        moved += SIZE_STEP_MM  # round-off of the measured width
+    return float(moved), True
+
+
+def _arms_at(plan, size: float) -> NarrowArms | None:
+    """The plan's outline at ``size`` when its arms cannot hold a strip's tiles (:mod:`.maker_arms`)."""
+    target, fab = _target_and_limits(plan, size)
+    return narrow_arms(target, fab, plan.least_tile_mm, plan.fabrication)
 
 
 def _tag(plan, other, sized: bool) -> str:

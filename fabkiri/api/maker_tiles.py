@@ -28,6 +28,7 @@ COMFORT = 2.0
 # after a shape miss, a retry may have thinner tiles than the first choice: the design's fabrication rows
 # still hold every tile to the feature; the comfort only guessed which count is likely to fit
 RETRY_COMFORT = 1.5
+_strips: dict[tuple, object] = {}  # bent_strip by outline and count (_bent_strip)
 
 
 @dataclass(frozen=True)
@@ -60,7 +61,7 @@ def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
     crescent: an outline whose own split folds the start). Not for tiles the user named (``--tiles``):
     those keep the target's corners (a JSON target's ``"corners"`` sets them)."""
     rows, cols = choice.tiles
-    strip = bent_strip(target, rows, cols)
+    strip = _bent_strip(target, rows, cols)
     if strip is None:
         return choice
     split, tiles, d, d0 = strip
@@ -74,6 +75,16 @@ def resplit(target: Target, choice: TilesChoice) -> TilesChoice:
     return replace(
         choice, tiles=tiles, reason=why, corners=(c[0], c[1], c[2], c[3]), asked=(rows, cols)
     )
+
+
+def _bent_strip(target: Target, rows: int, cols: int):
+    """``corner_split.bent_strip``, memoised by outline (its points at its size) and count: make asks
+    each setting of its options for its count at one size, mostly the same few counts (the hand at
+    120 mm on prusa-mk4: 26 splits of 4 counts, docs/maker-kit.md)."""
+    key = (target.name, np.asarray(target.dense, float).tobytes(), rows, cols)
+    if key not in _strips:
+        _strips[key] = bent_strip(target, rows, cols)
+    return _strips[key]
 
 
 def choose_tiles(

@@ -13,7 +13,8 @@ state (tests), so it is a property of the preset and the style. :func:`narrow_ti
 width ``make`` estimates for the tiles of an outline (:func:`tile_width_mm`: square tiles
 covering half of it, as the standard pattern's do deployed at 45°): ``make`` and ``design --printer``
 refuse such a request before any design (exit 1, as a design that misses), naming the counts and size
-at which the tiles are that wide.
+at which the tiles are that wide by the estimate, said to be unchecked (``make`` names a size only once it
+designed it there, :mod:`.maker_early`).
 """
 
 from __future__ import annotations
@@ -77,8 +78,8 @@ class NarrowTiles:
             f"{r}x{c} tiles of a {self.size_mm:g} mm {self.target} would be about {self.width_mm:.3g} mm "
             f"wide (square tiles covering half its area), narrower than the {self.need_mm:.3g} mm tile "
             f"{self.fabrication} needs (print's own minimum on the standard pattern: a tile carries a strip "
-            f"or a pin at each hinge corner, kept apart); {count} are that wide, and {r}x{c} from "
-            f"--size {self.size_for:g}; not designed"
+            f"or a pin at each hinge corner, kept apart); {count} are that wide, and {r}x{c} would be "
+            f"from about {self.size_for:g} mm (the same estimate; no size was checked); not designed"
         )
 
 

@@ -61,3 +61,130 @@ def test_the_bound_is_the_processs_own_and_leaves_the_users_tiles_alone():
     # tiles the user named are designed as asked
     given = maker._plan(LETTER_L, 100, None, None, "prusa-mk4", None, (4, 4), "2%", None, None)
     assert arms_of(given) is None
+
+
+def test_an_early_refusal_designs_no_size_whose_arms_are_too_narrow(monkeypatch):
+    # 4x4 tiles of the L at 80 mm are 8.2 mm, under prusa-mk4's 8.70 mm: refused before any design; by the
+    # tile estimate 4x4 is wide enough from 90 mm, but there the 22.5 mm bar holds 4 tiles of 5.6 mm: the
+    # size make designs is the first (10 mm steps) whose bar holds them, 140 mm, and nothing unmet is named
+    designed: list[tuple] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    result = fabkiri.make(LETTER_L, size=80, printer="prusa-mk4")
+    assert result.exit_code == 1 and result.alternatives == []
+    assert designed == [("print", "prusa-mk4", 140.0)]
+    why, details = result.steps[0].figures, result.steps[0].details
+    assert "4x4 would be from about 90 mm (the same estimate; no size was checked)" in why
+    assert "--size" not in why
+    assert any(
+        d.startswith("140 mm, where make chooses") and "arms hold 4 tiles" in d for d in details
+    )
+    assert "no size or option designed here made it: no size is named" in details
+
+
+def test_an_early_refusal_does_not_design_the_count_make_would_skip_for_its_arms(monkeypatch):
+    # 8x8 asked of the L at 100 mm: make's own count there (4x4) is not designed, its bar being too narrow
+    # (as make alone would skip 100 mm); the 8x8 at 170 mm, where the bar holds 4 tiles, is
+    designed: list[tuple] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    result = fabkiri.make(LETTER_L, size=100, printer="prusa-mk4", tiles=(8, 8))
+    assert designed == [("print", "prusa-mk4", 170.0)]
+    assert any(
+        d.startswith("4x4 tiles at 100 mm (make's choice there): not designed: at 100 mm")
+        for d in result.steps[0].details
+    )
+
+
+@pytest.mark.parametrize(
+    "how, tiles, warned",
+    [
+        (("--printer", "prusa-mk4"), "4x4", True),  # 10.3 mm tiles, but the 25 mm bar holds 6.2 mm
+        (("--material", "card-0.3"), "4x4", False),  # the card's 4.1 mm feature: 4 fit across
+        (("--printer", "prusa-mk4"), "8x8", False),  # refused up front for the tiles (print_tiles)
+    ],
+)
+def test_design_for_a_process_says_before_solving_that_the_arms_are_too_narrow(
+    monkeypatch, run_cli, tmp_path, how, tiles, warned
+):
+    from fabkiri.cli import design_cmd
+    from fabkiri.errors import InputError
+
+    def stub(request, notify):  # reached after the warning: no solve
+        raise InputError("stub reached")
+
+    monkeypatch.setattr(design_cmd, "design_by_kind", stub)
+    args = ("design", "--tiles", tiles, "--target", LETTER_L, "--size", "100", *how)
+    _, _, err = run_cli(*args, "-o", tmp_path / "p.json", "--no-preview")
+    line = (
+        "warning: at 100 mm the letter-l's arms are about 25 mm wide (20% of its area lies in narrower "
+        "parts): 4 tiles across (the fewest a strip along an arm has) would be 6.24 mm, narrower than "
+        f"the 8.7 mm tile prusa-mk4 tiles-and-strips needs; make designs none of its own counts at such "
+        f"a size (none met in its surveys, docs/maker-kit.md), so the {tiles} tiles given may miss the "
+        "shape or not print; they are designed as given"
+    )
+    assert (line in err.splitlines()) == warned, err
+    assert "stub reached" in err  # the warning is said before the design, which runs as asked
+
+
+def test_make_designs_the_tiles_given_saying_the_arms_are_too_narrow(monkeypatch):
+    designed: list[tuple] = []
+    heard: list[str] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    fabkiri.make(LETTER_L, size=100, printer="prusa-mk4", tiles=(4, 4), progress=heard.append)
+    assert designed[0] == ("print", "prusa-mk4", 100.0)  # as asked
+    warned = [h for h in heard if h.startswith("make: warning: at 100 mm the letter-l's arms")]
+    assert len(warned) == 1 and "the 4x4 tiles given may miss the shape" in warned[0]
+
+
+def test_an_early_refusal_designs_no_size_past_makes_own_ladder(monkeypatch):
+    # 4x4 of the L at 40 mm are 4.1 mm wide; by the estimate they are wide enough from 90 mm, where the bar
+    # (22.5 mm) holds 4 tiles of 5.6 mm only; the bar holds them from 140 mm, past twice the size asked
+    designed: list[tuple] = []
+    monkeypatch.setattr(maker_design, "_design", _missing(designed))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    result = fabkiri.make(LETTER_L, size=40, printer="prusa-mk4")
+    assert designed == [] and result.alternatives == []
+    assert any(
+        d.startswith("90 mm, where the tiles asked are wide enough: not designed: at 90 mm")
+        for d in result.steps[0].details
+    )
+
+
+def test_the_ladder_asks_no_count_of_a_size_whose_arms_are_too_narrow(monkeypatch):
+    # make's count at a size is a bent strip's split for an outline with arms (seconds of CPU): a rung the
+    # arms rule out is skipped before it is asked
+    asked: list[float] = []
+    choose = maker_design.choose_tiles
+
+    def counting(target, *args):
+        asked.append(float(target.size))
+        return choose(target, *args)
+
+    monkeypatch.setattr(maker_design, "choose_tiles", counting)
+    monkeypatch.setattr(maker_design, "_design", _missing([]))
+    monkeypatch.setattr(maker_options, "options", lambda plan: [])
+    fabkiri.make(LETTER_L, size=100, printer="prusa-mk4")
+    assert asked == [150.0]  # 130 mm (an 8.1 mm tile across the bar) is not asked
+
+
+def test_make_splits_each_count_once_per_size(monkeypatch):
+    # every setting of make's options asks for its count at the size; an outline with arms is split for a
+    # bent strip at each count (seconds each): the hand at 120 mm on prusa-mk4 split 4 counts 26 times
+    from collections import Counter
+
+    from fabkiri.api import maker_tiles
+
+    splits: Counter = Counter()
+    split = maker_tiles.bent_strip
+
+    def counting(target, rows, cols):
+        splits[(float(target.size), rows, cols)] += 1
+        return split(target, rows, cols)
+
+    monkeypatch.setattr(maker_tiles, "bent_strip", counting)
+    monkeypatch.setattr(maker_tiles, "_strips", {}, raising=False)
+    monkeypatch.setattr(maker_design, "_design", _missing([]))
+    fabkiri.make(LETTER_L, size=100, printer="prusa-mk4")
+    assert len(splits) >= 2 and max(splits.values()) == 1, splits

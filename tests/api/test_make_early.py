@@ -56,7 +56,8 @@ def test_make_refuses_16x16_heart_at_200_on_prusa_mk4_before_any_design(monkeypa
     assert why.startswith("refused before any design: 16x16 tiles of a 200 mm heart")
     for figure in ("about 6.57 mm wide", "the 8.7 mm tile prusa-mk4 tiles-and-strips needs"):
         assert figure in why
-    assert "up to 12x12 tiles are that wide, and 16x16 from --size 270" in why
+    assert "up to 12x12 tiles are that wide, and 16x16 would be from about 270 mm" in why
+    assert "no size was checked" in why and "--size" not in why
     assert result.refused and result.option_lines() == ["# options: none passes the same checks"]
     # the count and the size it names are wide enough, and one less is not
     heart = load_target("heart", 200)
@@ -112,7 +113,9 @@ def test_make_refuses_a_size_no_count_fits_naming_the_size(monkeypatch):
     result = fabkiri.make("heart", size=60, printer="prusa-mk4")  # 4x4 tiles: 7.9 mm
     assert result.exit_code == 1 and result.tiles.tiles == (4, 4) and not result.tiles.given
     assert "no count of 2x2 or more" not in result.steps[0].figures
-    assert "4x4 from --size 70" in result.steps[0].figures
+    assert "4x4 would be from about 70 mm (the same estimate; no size was checked)" in (
+        result.steps[0].figures
+    )
 
 
 @pytest.mark.slow  # a 4x4 design, print and deploy, then the named make (~20 CPU s)
