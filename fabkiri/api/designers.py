@@ -52,5 +52,21 @@ def designer(kind: str) -> Designer:
 
 
 def design_by_kind(request: PatternRequest, notify: Callable[[str], None] | None = None):
-    """Design ``request`` with the front door of its tessellation kind (``request.kind``)."""
-    return designer(request.kind)(request, notify=notify)
+    """Design ``request`` with the front door of its tessellation kind (``request.kind``); a design for a
+    material or printer whose outline's arms cannot hold its tiles is warned of first (make's rule)."""
+    front_door = designer(request.kind)
+    if notify is not None:
+        _warn_arms(request, notify)
+    return front_door(request, notify=notify)
+
+
+def _warn_arms(request: PatternRequest, notify: Callable[[str], None]) -> None:
+    """make's arm rule (api/maker_arms.py) said before the solve; the user's tiles are designed as
+    given. Loaded only for a material or printer (a plain design never loads make's modules)."""
+    if request.tiles is None or not (request.printer or request.material):
+        return
+    from .maker_arms import request_arms
+
+    arms = request_arms(request)
+    if arms is not None:
+        notify(arms.warning(request.tiles))

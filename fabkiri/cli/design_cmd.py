@@ -76,7 +76,6 @@ def cmd_design(args: argparse.Namespace) -> int:
         trim=args.trim,
     )
     notify, heard, done = _notes()
-    _warn_arms(request, notify)
     with listening(heard):
         out = design_by_kind(request, notify=notify)
     done()
@@ -86,18 +85,6 @@ def cmd_design(args: argparse.Namespace) -> int:
     for line in out.summary(args.output):
         print(line, file=sys.stderr)
     return out.exit_code
-
-
-def _warn_arms(request: PatternRequest, notify) -> None:
-    """make's arm rule (api/maker_arms.py) for a design for a material or printer, said before the
-    solve; the user's tiles are designed as given. Loaded only then (a plain design never calls it)."""
-    if request.tiles is None or not (request.printer or request.material):
-        return
-    from ..api.maker_arms import request_arms
-
-    arms = request_arms(request)
-    if arms is not None:
-        notify(arms.warning(request.tiles))
 
 
 def _notes():

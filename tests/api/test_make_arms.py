@@ -107,13 +107,13 @@ def test_an_early_refusal_does_not_design_the_count_make_would_skip_for_its_arms
 def test_design_for_a_process_says_before_solving_that_the_arms_are_too_narrow(
     monkeypatch, run_cli, tmp_path, how, tiles, warned
 ):
-    from fabkiri.cli import design_cmd
+    from fabkiri.api import designers
     from fabkiri.errors import InputError
 
     def stub(request, notify):  # reached after the warning: no solve
         raise InputError("stub reached")
 
-    monkeypatch.setattr(design_cmd, "design_by_kind", stub)
+    monkeypatch.setattr(designers, "designer", lambda kind: stub)
     args = ("design", "--tiles", tiles, "--target", LETTER_L, "--size", "100", *how)
     _, _, err = run_cli(*args, "-o", tmp_path / "p.json", "--no-preview")
     line = (
