@@ -91,3 +91,15 @@ def test_a_fine_strips_fold_free_start_is_meshed_finer_until_it_does_not_fold(mo
     assert folded() == 0
     monkeypatch.setattr(inverse_map, "MESH_REFINE", ())
     assert folded() > 0  # on the target's own mesh alone
+
+
+def test_a_flat_triangle_of_the_mesh_leaves_the_modulus_as_it_was():
+    # a forked tail's mesh held a triangle of no area: its cotangent weight was 0/0, the modulus NaN and
+    # make's design an internal error
+    rect = _outline(box(0, 0, 100, 20).exterior, "r", 240)
+    corners = _at(rect, [(0, 0), (100, 0), (100, 20), (0, 20)])
+    mesh = TargetMesh(rect)
+    e = modulus(mesh, corners)
+    a, b = mesh.tri[0, :2]
+    mesh.tri = np.vstack([mesh.tri, [a, b, a]])
+    assert modulus(mesh, corners) == e

@@ -31,6 +31,8 @@ CORNER_DEG = 60.0  # a stretch turning convexly by this much holds a corner
 PROBE_TILES = 256  # the candidates are scored on lattices of about this many tiles (16x16)
 # aspects (columns over rows) scored: quarter octaves from 1 to 16 (the other turn of each split swaps them)
 ASPECTS = 2.0 ** (np.arange(17) / 4.0)
+# a triangle this small a share of the mesh's median triangle is flat (round-off of a collinear three)
+FLAT = 1e-9
 
 
 def turn_corners(target: Target) -> np.ndarray:
@@ -92,11 +94,20 @@ def _cotan_laplacian(nodes: np.ndarray, tri: np.ndarray) -> sparse.csr_matrix:
     return (sparse.diags(np.asarray(W.sum(1)).ravel()) - W).tocsr()
 
 
+def _proper(nodes: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """``tri`` without its flat triangles (a forked tail's mesh has some): their cotangent weights are
+    infinite, and they hold no area for the energy."""
+    a, b = nodes[tri[:, 1]] - nodes[tri[:, 0]], nodes[tri[:, 2]] - nodes[tri[:, 0]]
+    area = np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+    return tri[area > FLAT * np.median(area)]
+
+
 def modulus(mesh: TargetMesh, corners: np.ndarray) -> float:
     """Rows over columns of the rectangle the outline split at ``corners`` (BL, BR, TR, TL) maps onto
     conformally: the Dirichlet energy of the harmonic function 0 on the left arc, 1 on the right, free on
     the bottom and top (a W x H rectangle: H / W)."""
-    L = _cotan_laplacian(mesh.nodes, mesh.tri)
+    tri = _proper(mesh.nodes, mesh.tri)
+    L = _cotan_laplacian(mesh.nodes, tri)
     nb, u = len(mesh.u), mesh.u
 
     def arc(a: float, b: float) -> np.ndarray:
@@ -105,7 +116,7 @@ def modulus(mesh: TargetMesh, corners: np.ndarray) -> float:
     fixed = np.zeros(len(mesh.nodes), bool)
     fixed[:nb] = arc(corners[1], corners[2]) | arc(corners[3], corners[0])
     used = np.zeros(len(mesh.nodes), bool)
-    used[mesh.tri.ravel()] = True
+    used[tri.ravel()] = True
     fixed |= ~used
     phi = np.zeros(len(mesh.nodes))
     phi[:nb][arc(corners[1], corners[2])] = 1.0
