@@ -319,6 +319,17 @@ def check_pattern(pattern, source: str):
 SLIVER_RATIO = 100.0
 
 
+def sliver(nodes: np.ndarray, tiles: np.ndarray, corners: dict | None = None) -> str | None:
+    """The coordinate problem (:func:`coordinate_problem`: a sliver, or any coordinate no file reader takes) of a
+    designed pattern whose typical tile edge is ``SLIVER_RATIO`` times the least length: one tile squeezed among
+    tiles of a sane size, a failed design (the design search judges it invalid, as an overlap), not a target too
+    small for its tiles (:func:`check_designed` says so); else None."""
+    problem = coordinate_problem(nodes, tiles, corners)
+    return (
+        problem if problem and _typical_edge(nodes, tiles) >= SLIVER_RATIO * MIN_LENGTH_MM else None
+    )
+
+
 def check_designed(pattern) -> None:
     """Refuse a designed ``pattern`` with coordinates every reader refuses (:func:`coordinate_problem`), rather
     than write it: :class:`InputError` for a target too small for its tile count; :class:`CheckFailed` (the
@@ -326,14 +337,19 @@ def check_designed(pattern) -> None:
     problem = coordinate_problem(pattern.nodes, pattern.tiles, pattern.contracted)
     if not problem:
         return
-    q = np.asarray(pattern.nodes, dtype=float)[np.asarray(pattern.tiles)]
-    typical = float(np.median(np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2)))
-    if typical >= SLIVER_RATIO * MIN_LENGTH_MM:
+    if sliver(pattern.nodes, pattern.tiles, pattern.contracted):
         raise CheckFailed(
-            f"design failed: {problem}, a sliver among edges of {typical:.3g} mm, which no file reader "
-            "takes: not written (fewer tiles, or a larger --size)"
+            f"design failed: {problem}, a sliver among edges of "
+            f"{_typical_edge(pattern.nodes, pattern.tiles):.3g} mm, which no file reader takes: not written "
+            "(fewer tiles, or a larger --size)"
         )
     raise InputError(f"the design's {problem}: give a larger ", Param("size"), " or fewer tiles")
+
+
+def _typical_edge(nodes: np.ndarray, tiles: np.ndarray) -> float:
+    """The median tile edge, mm."""
+    q = np.asarray(nodes, dtype=float)[np.asarray(tiles)]
+    return float(np.median(np.linalg.norm(q - np.roll(q, -1, axis=1), axis=2)))
 
 
 def _index(a: np.ndarray, bad: np.ndarray) -> int:

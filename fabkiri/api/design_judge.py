@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import limits
 from ..design.core import conformance as conf
 from ..design.targets.lookup import Target
 from ..fabricate import design_limits
@@ -82,7 +83,7 @@ def refinement_attempt(
 def _check(
     result, contracted, request: PatternRequest, target: Target | None, shape_tol: tuple
 ) -> DesignAttempt:
-    """Contract, check closure, overlaps and outlines: the judged :class:`DesignAttempt`."""
+    """Contract, check closure, overlaps, squeezed tiles and outlines: the judged :class:`DesignAttempt`."""
     pattern = result.pattern
     report = dict(result.report)
     size = pattern.tile_size
@@ -96,15 +97,7 @@ def _check(
         checks[f"closure_{s}_rel"] = rel
         if not rel <= CLOSURE_TOL:
             problems.append(f"state {s} does not close (loop closure {rel:.2e} tile sizes)")
-    for label, corners, state in [
-        ("deployed", pattern.corners(), None),
-        *[(f"state {s}", contracted_states[s], s) for s in (1, 2)],
-    ]:
-        ov = overlapping_tiles(corners, CLOSURE_TOL * size, pattern, state)
-        checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
-        if ov:
-            where = "the deployed state" if label == "deployed" else label
-            problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
+    problems += _overlaps_and_slivers(pattern, contracted_states, checks)
     if (
         request.printer
     ):  # in the state `print` makes: a design that does not fit the bed ranks below one that does
@@ -139,6 +132,25 @@ def _check(
         report["status"] = "unconverged"
         report["problems"] = problems
     return DesignAttempt(pattern, report, problems, valid, contracted_states)
+
+
+def _overlaps_and_slivers(pattern: Pattern, contracted_states: dict, checks: dict) -> list[str]:
+    """The overlapping tile pairs of each state (counted in ``checks``) and a tile squeezed to an edge no file
+    reader takes (``limits.sliver``: the drop's point at 96x96 tiles, squeezed by the finish's steps), each an
+    invalid design's problem."""
+    problems, size = [], pattern.tile_size
+    for label, corners, state in [
+        ("deployed", pattern.corners(), None),
+        *[(f"state {s}", contracted_states[s], s) for s in (1, 2)],
+    ]:
+        ov = overlapping_tiles(corners, CLOSURE_TOL * size, pattern, state)
+        checks[f"overlaps_{label.replace(' ', '_')}"] = len(ov)
+        if ov:
+            where = "the deployed state" if label == "deployed" else label
+            problems.append(f"{len(ov)} overlapping tile pairs in {where} (first {ov[0]})")
+    if squeezed := limits.sliver(pattern.nodes, pattern.tiles, contracted_states):
+        problems.append(squeezed)
+    return problems
 
 
 def _conformance(
