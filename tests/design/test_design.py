@@ -38,6 +38,7 @@ def _families(rows=4, cols=6):
         C.notch_pairs(st, 2, nv),
         C.non_overlap(st, nv),
         C.convexity(st, nv),
+        C.least_edges(st, nv, 0.3, 0.2),
         C.symmetry(st, std.nodes, "x", nv),
         C.symmetry(st, std.nodes, "y", nv),
         C.rectangle_outline(st, 1, nv),

@@ -58,6 +58,7 @@ __all__ = [
     "hole_opposite_sides",
     "inside_polygon",
     "jac",
+    "least_edges",
     "nearest_chords",
     "non_overlap",
     "notch_pairs",
@@ -175,6 +176,37 @@ def non_overlap(st: Stencils, nv: int) -> Family:
 def convexity(st: Stencils, nv: int, margin: float = 0.0) -> Family:
     """Deployed tiles stay convex and counter-clockwise."""
     return corner_convexity("convexity", st.tiles, nv, margin)
+
+
+def least_edges(st: Stencils, nv: int, floor: float, margin: float = 0.5) -> Family:
+    """No tile edge shorter than ``floor`` (node units): ``|e_k|² / floor² - 1 >= 0``, one row per tile edge
+    ``e_k`` (corner ``k`` to ``k + 1``).
+
+    Convexity allows a needle (two corners nearly coinciding, ``cross >= 0`` still) and no file reader takes
+    an edge of under a micrometre. The rows are scaled so that a collapsed edge violates its row by 1, more
+    than any other row's violation in tile units, so the step limit bars the collapse; with ``margin`` they
+    act only on an edge below ``√(1 + margin) floor``."""
+    quads = st.tiles
+    p, q = quads.ravel(), np.roll(quads, -1, 1).ravel()
+    inv = 1.0 / (floor * floor)
+
+    def values(x):
+        E = x[q] - x[p]
+        return E, (E * E).sum(1) * inv - 1.0
+
+    def fn(x):
+        E, g = values(x)
+        return g, (np.stack([p, q], -1), np.stack([-2.0 * inv * E, 2.0 * inv * E], 1))
+
+    return Family(
+        "least_edges",
+        "ineq",
+        fn,
+        0,
+        meta={"margin": margin, "floor": floor},
+        nv=nv,
+        res=lambda x: values(x)[1],
+    )
 
 
 def symmetry(st: Stencils, base: np.ndarray, axis: str, nv: int) -> Family:

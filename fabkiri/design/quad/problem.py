@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from scipy import sparse
 
+from ... import limits
 from ...errors import SolveError
 from ...pattern import geometry
 from ...pattern.conformance import boundary_tip_order
@@ -38,6 +39,10 @@ CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay 
 GAP_MARGIN = (
     0.005  # gap angles at hinges: the penalty acts before the hard limit g >= 0 stops a step
 )
+# no tile edge shorter than this many of the readers' least length (``limits.MIN_LENGTH_MM``): a row per edge
+# (``constraints.least_edges``), inactive above it. A floor in mm, not a share of the tile: the drop's point takes
+# a needle tile at every lattice size (docs/design-solver.md, "edge57, Session 57")
+LEAST_EDGE_FLOORS = 2.0
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 # the largest mirrored level refitted tips only from rescaled where its fine start overlaps (``_tips_level``):
 # larger levels so refitted sent the peanut's 64x64 design to a worse fit and a far longer finish, the star's
@@ -151,7 +156,8 @@ class DesignProblem:
         fam += self._closed_state_families()
         fam += self._fit_families()
         fam.append(regularizer(st, nv))
-        fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
+        floor = LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM / L0  # in tile units
+        fam += [C.non_overlap(st, nv), C.convexity(st, nv), C.least_edges(st, nv, floor)]
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
         fam += opening_families(st, nv, req.min_opening, base)
         if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
