@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fabkiri import limits
 from fabkiri.design.quad import constraints as C
-from fabkiri.design.quad.problem import LEAST_EDGE_FLOORS
+from fabkiri.design.quad.problem import LEAST_EDGE_FLOORS, LEAST_EDGE_SHARE
 from fabkiri.design.quad.solve import DesignProblem, DesignRequest
 from fabkiri.design.targets import lookup as T
 from fabkiri.exchange.pattern_json import read_pattern
@@ -46,10 +46,19 @@ def test_the_rows_are_inactive_on_sane_designs(name):
 
 
 @pytest.mark.parametrize("size", [1.0, 100.0])
-def test_the_floor_is_in_mm_whatever_the_tile_unit(size):
+def test_the_floor_is_in_mm_on_tiles_of_a_sane_size(size):
     prob = DesignProblem(
         DesignRequest(rows=4, cols=4, target=T.circle().transformed(size), rigid=True)
     )
     fam = next(f for f in prob.families if f.name == "least_edges")
     assert fam.kind == "ineq" and prob.margin["least_edges"] == fam.meta["margin"]
     assert fam.meta["floor"] * prob.L0 == pytest.approx(LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM)
+
+
+def test_on_tiny_tiles_the_floor_is_a_share_of_the_tile_unit():
+    prob = DesignProblem(
+        DesignRequest(rows=4, cols=4, target=T.circle().transformed(0.01), rigid=True)
+    )
+    fam = next(f for f in prob.families if f.name == "least_edges")
+    assert prob.L0 < LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM / LEAST_EDGE_SHARE
+    assert fam.meta["floor"] == LEAST_EDGE_SHARE

@@ -43,6 +43,9 @@ GAP_MARGIN = (
 # (``constraints.least_edges``), inactive above it. A floor in mm, not a share of the tile: the drop's point takes
 # a needle tile at every lattice size (docs/design-solver.md, "edge57, Session 57")
 LEAST_EDGE_FLOORS = 2.0
+# ... but at most this share of the tile unit: tiles of a few micrometres are not reshaped by a floor of a sizable
+# share of them (a target too small for its tile count is refused with its advice, ``limits.check_designed``)
+LEAST_EDGE_SHARE = 0.01
 COARSE_MIN = 16  # --init coarse: a level with fewer tiles a side than this starts from rescaled
 # the largest mirrored level refitted tips only from rescaled where its fine start overlaps (``_tips_level``):
 # larger levels so refitted sent the peanut's 64x64 design to a worse fit and a far longer finish, the star's
@@ -156,7 +159,7 @@ class DesignProblem:
         fam += self._closed_state_families()
         fam += self._fit_families()
         fam.append(regularizer(st, nv))
-        floor = LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM / L0  # in tile units
+        floor = min(LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM / L0, LEAST_EDGE_SHARE)  # tile units
         fam += [C.non_overlap(st, nv), C.convexity(st, nv), C.least_edges(st, nv, floor)]
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
         fam += opening_families(st, nv, req.min_opening, base)
