@@ -436,7 +436,8 @@ def _steps(
         return bool(checked[id(result)].valid)
 
     refined, trace, secs = refine_minimax(
-        replace(req, start=None),
+        # the least-edge rows in the steps alone: they squeeze the tile at a point (the 96x96 drop's)
+        replace(req, start=None, least_edge=True),
         start.pattern.nodes,
         steps=MIRRORED_STEPS if req.finish_step and req.symmetry else MINIMAX_STEPS,
         gamma=gamma,

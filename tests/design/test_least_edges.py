@@ -1,5 +1,6 @@
 """The least tile-edge rows (``constraints.least_edges``): a needle tile violates them, a sane one leaves them
-inactive, and the solver's problem carries them in tile units (their Jacobian is checked in test_design.py)."""
+inactive, and the solver's problem carries them in tile units (their Jacobian is checked in test_design.py), in a
+minimax finish's steps only."""
 
 from __future__ import annotations
 
@@ -48,7 +49,9 @@ def test_the_rows_are_inactive_on_sane_designs(name):
 @pytest.mark.parametrize("size", [1.0, 100.0])
 def test_the_floor_is_in_mm_on_tiles_of_a_sane_size(size):
     prob = DesignProblem(
-        DesignRequest(rows=4, cols=4, target=T.circle().transformed(size), rigid=True)
+        DesignRequest(
+            rows=4, cols=4, target=T.circle().transformed(size), rigid=True, least_edge=True
+        )
     )
     fam = next(f for f in prob.families if f.name == "least_edges")
     assert fam.kind == "ineq" and prob.margin["least_edges"] == fam.meta["margin"]
@@ -57,8 +60,29 @@ def test_the_floor_is_in_mm_on_tiles_of_a_sane_size(size):
 
 def test_on_tiny_tiles_the_floor_is_a_share_of_the_tile_unit():
     prob = DesignProblem(
-        DesignRequest(rows=4, cols=4, target=T.circle().transformed(0.01), rigid=True)
+        DesignRequest(
+            rows=4, cols=4, target=T.circle().transformed(0.01), rigid=True, least_edge=True
+        )
     )
     fam = next(f for f in prob.families if f.name == "least_edges")
     assert prob.L0 < LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM / LEAST_EDGE_SHARE
     assert fam.meta["floor"] == LEAST_EDGE_SHARE
+
+
+def test_the_rows_are_in_the_minimax_finish_steps_only(monkeypatch):
+    """Always on, the rows moved cells whose designs never come near the floor (the solvers' trial steps pass
+    edges through zero on the way): a design's problem has none, a finish step's has them."""
+    from fabkiri.api import design_minimax as dm
+
+    req = DesignRequest(rows=4, cols=4, target=T.circle().transformed(100.0), rigid=True)
+    assert not any(f.name == "least_edges" for f in DesignProblem(req).families)
+    asked: list = []
+
+    def refine(step, start, **kw):
+        asked.append(step.least_edge)
+        return None, [], 0.0
+
+    monkeypatch.setattr(dm, "refine_minimax", refine)
+    start = type("A", (), {"pattern": type("P", (), {"nodes": None})()})()
+    dm._steps(req, start, lambda r: r)
+    assert asked == [True] and not req.least_edge

@@ -32,12 +32,10 @@ def _one_line(err: str) -> str:
 
 
 def test_a_design_under_a_micrometre_is_refused_not_written(tmp_path, run_cli):
-    # 12 x 9 µm: tiles of about 3 µm (a 40 x 30 µm target, once refused here, now has a design whose least
-    # edge is 2.3 µm, kept there by the solver's least-edge rows)
-    (tmp_path / "t.csv").write_text("0,0\n0.012,0\n0.012,0.009\n0,0.009\n")
+    (tmp_path / "t.csv").write_text("0,0\n0.04,0\n0.04,0.03\n0,0.03\n")
     out = tmp_path / "o.json"
     code, _, err = run_cli("design", "--tiles", "4x4", "--target", tmp_path / "t.csv", "-o", out)
-    # was: exit 0, a pattern with sub-micrometre edges that every later command refused
+    # was: exit 0, a pattern with 0.56 µm edges that every later command refused
     assert code == 2 and "the design's tile" in _one_line(err) and "--size" in err
     assert sorted(os.listdir(tmp_path)) == ["t.csv"]
 

@@ -106,6 +106,10 @@ class DesignRequest:
     # a minimax finish's cheaper step (``api/design_minimax.py``), warm-started from a converged rigid design: the
     # reduced solver's first LM scaling only and no stiffer second stage after a feasible first (``routes._solve_reduced``)
     finish_step: bool = False
+    # a minimax finish's step (``api/design_minimax.py``): the least tile-edge rows (``constraints.least_edges``) in
+    # its solve. Off elsewhere: a solve's trial steps pass edges through zero on the way, and the rows moved cells
+    # whose designs never come near the floor (docs/design-solver.md, "edge57, Session 57", "fx57, Session 57")
+    least_edge: bool = False
     # the rigid sub-solve's guess for a non-rigid request (None: rescaled below VIA_RIGID_TILES, coarse from
     # it); the pocket split's attempt (``api/design_pocket.py``) asks coarse, the bent strip's conformal
     via_rigid_init: str | None = None

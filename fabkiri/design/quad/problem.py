@@ -39,10 +39,11 @@ CONVEX_MARGIN = 0.02  # cross(next - v, prev - v) >= 0.02 l^2: tile angles stay 
 GAP_MARGIN = (
     0.005  # gap angles at hinges: the penalty acts before the hard limit g >= 0 stops a step
 )
-# no tile edge shorter than this many of the readers' least length (``limits.MIN_LENGTH_MM``): a row per edge
-# (``constraints.least_edges``), inactive above it. A floor in mm, not a share of the tile: the drop's point takes
-# a needle tile at every lattice size (docs/design-solver.md, "edge57, Session 57")
-LEAST_EDGE_FLOORS = 2.0
+# in a minimax finish's steps no tile edge shorter than this many of the readers' least length
+# (``limits.MIN_LENGTH_MM``): a row per edge (``constraints.least_edges``), inactive above it. A floor in mm, not a
+# share of the tile: the drop's point takes a needle tile at every lattice size; twice the least length held the
+# 96x96 drop's point tile too wide for the steps to fit it (docs/design-solver.md, "edge57", "fx57, Session 57")
+LEAST_EDGE_FLOORS = 1.2
 # ... but at most this share of the tile unit: tiles of a few micrometres are not reshaped by a floor of a sizable
 # share of them (a target too small for its tile count is refused with its advice, ``limits.check_designed``)
 LEAST_EDGE_SHARE = 0.01
@@ -159,8 +160,12 @@ class DesignProblem:
         fam += self._closed_state_families()
         fam += self._fit_families()
         fam.append(regularizer(st, nv))
-        floor = min(LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM / L0, LEAST_EDGE_SHARE)  # tile units
-        fam += [C.non_overlap(st, nv), C.convexity(st, nv), C.least_edges(st, nv, floor)]
+        fam += [C.non_overlap(st, nv), C.convexity(st, nv)]
+        if req.least_edge:  # a minimax finish's step only (``DesignRequest.least_edge``)
+            floor = min(
+                LEAST_EDGE_FLOORS * limits.MIN_LENGTH_MM / L0, LEAST_EDGE_SHARE
+            )  # tile units
+            fam.append(C.least_edges(st, nv, floor))
         fam += fabrication_families(st, nv, req.fabrication, L0, base)
         fam += opening_families(st, nv, req.min_opening, base)
         if req.fit_weights:  # a weighted fit (``refine.py``); reports measure the unweighted rows
