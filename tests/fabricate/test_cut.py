@@ -186,6 +186,11 @@ def test_ligament_strain_rule_and_warning():
         hg.ligament_design(
             p, small, gap=4.0, width_max=3.5, min_web=3.5, kerf=0.1, strain_limit=0.9
         )
+    # just past the limit: the strain is printed with the digits that tell it from the limit
+    hair = hg.ligament_design(
+        p, small, gap=4.0, width_max=0.5, min_web=0.4, kerf=0.1, strain_limit=0.157
+    )
+    assert "strain 0.1571 at hinge" in hair.warnings[0] and "limit 0.157 " in hair.warnings[0]
 
 
 # ------------------------------------------------------------------ full pipeline, read back
