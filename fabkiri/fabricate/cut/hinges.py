@@ -457,21 +457,15 @@ def ligament_design(
     worst = float(strains.max())
     if worst > strain_limit:
         h = int(np.argmax(strains))
+        # the digits that tell the strain from the limit (not "0.3 exceeds 0.3")
+        ws = next(
+            (t for d in range(3, 13) if (t := f"{worst:.{d}g}") != f"{strain_limit:g}"), repr(worst)
+        )
         warnings.append(
-            f"ligament strain {_past(worst, strain_limit)} at hinge {h} exceeds the material's limit "
-            f"{strain_limit:g} "
+            f"ligament strain {ws} at hinge {h} exceeds the material's limit {strain_limit:g} "
             f"(w {w:.3g} mm, L {lengths[h]:.3g} mm, Δθ {np.degrees(turn_rad):.0f}°); use a larger gap"
         )
     return LigamentDesign(w, turn_rad, lengths, strains, apex, warnings)
-
-
-def _past(value: float, limit: float) -> str:
-    """``value`` to 3 significant digits, more where that would print it as ``limit`` ("0.3 exceeds 0.3")."""
-    for digits in range(3, 13):
-        text = f"{value:.{digits}g}"
-        if text != f"{limit:g}":
-            return text
-    return repr(value)
 
 
 def ligament_strips(apex: np.ndarray, width: float, embed: float) -> np.ndarray:
